@@ -1,0 +1,37 @@
+#include "runtime/app/frame_loop.h"
+
+namespace sffd {
+
+const char* phase_name(Phase phase) {
+    switch (phase) {
+        case Phase::input: return "input";
+        case Phase::animation: return "animation";
+        case Phase::deformation: return "deformation";
+        case Phase::picking: return "picking";
+        case Phase::rendering: return "rendering";
+        case Phase::present: return "present";
+    }
+    return "?";
+}
+
+void Schedule::add(Phase phase, std::string name, SystemFn fn) {
+    m_phases[static_cast<std::size_t>(phase)].push_back({std::move(name), std::move(fn)});
+}
+
+void Schedule::run_frame(ecs::Registry& registry, const FrameContext& frame) const {
+    if (m_observer.frame_begin) m_observer.frame_begin(frame);
+    for (std::size_t p = 0; p < phase_count; ++p) {
+        const auto phase = static_cast<Phase>(p);
+        if (m_observer.phase_begin) m_observer.phase_begin(phase);
+        for (const Entry& system : m_phases[p]) {
+            if (m_observer.system_begin) m_observer.system_begin(phase, system.name);
+            system.fn(registry, frame);
+            if (m_observer.system_end) m_observer.system_end(phase, system.name);
+        }
+        registry.flush();
+        if (m_observer.phase_end) m_observer.phase_end(phase);
+    }
+    if (m_observer.frame_end) m_observer.frame_end(frame);
+}
+
+}  // namespace sffd

@@ -1,0 +1,127 @@
+// Sparse-set component storage: `sparse[entity.index]` -> position in the packed arrays `dense`
+// (entities) and `data` (components). Add and remove are O(1); removal swaps the last element into the
+// hole, so iteration runs backwards and removing the current element while iterating is safe.
+//
+// Change tracking: every storage shares the registry's tick counter. emplace/patch/mark_changed stamp
+// the component with a new tick, and the storage remembers its latest tick, so a system can ask "did
+// anything of this type change since I last looked?" in O(1), then compare per-entity stamps only for
+// the few entities it cares about (e.g. the deformer re-runs only for point clouds whose lattice moved).
+#pragma once
+
+#include <cassert>
+#include <cstdint>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "runtime/ecs/entity.h"
+
+namespace sffd::ecs {
+
+class StorageBase {
+public:
+    static constexpr std::uint32_t npos = 0xffffffffu;
+
+    explicit StorageBase(std::uint64_t* tick) : m_tick(tick) {}
+    virtual ~StorageBase() = default;
+    StorageBase(const StorageBase&) = delete;
+    StorageBase& operator=(const StorageBase&) = delete;
+
+    bool contains(Entity e) const {
+        return e.index < m_sparse.size() && m_sparse[e.index] != npos && m_dense[m_sparse[e.index]] == e;
+    }
+    std::size_t size() const { return m_dense.size(); }
+    const std::vector<Entity>& entities() const { return m_dense; }
+    // Latest change stamp of anything in this storage (add, remove, patch, mark_changed).
+    std::uint64_t version() const { return m_version; }
+    // Change stamp of one entity's component; 0 when absent.
+    std::uint64_t version(Entity e) const { return contains(e) ? m_stamps[m_sparse[e.index]] : 0; }
+    void mark_changed(Entity e) {
+        assert(contains(e));
+        m_stamps[m_sparse[e.index]] = m_version = ++*m_tick;
+    }
+    virtual void remove(Entity e) = 0;
+    virtual void clear() = 0;
+
+protected:
+    std::uint32_t position(Entity e) const { return m_sparse[e.index]; }
+
+    std::uint32_t push_entity(Entity e) {
+        if (e.index >= m_sparse.size()) m_sparse.resize(std::size_t(e.index) + 1, npos);
+        const auto pos = static_cast<std::uint32_t>(m_dense.size());
+        m_sparse[e.index] = pos;
+        m_dense.push_back(e);
+        m_stamps.push_back(m_version = ++*m_tick);
+        return pos;
+    }
+
+    // Swap-and-pop of the entity bookkeeping; returns the freed position (the caller moves data).
+    std::uint32_t pop_entity(Entity e) {
+        const std::uint32_t pos = m_sparse[e.index];
+        const Entity last = m_dense.back();
+        m_dense[pos] = last;
+        m_stamps[pos] = m_stamps.back();
+        m_sparse[last.index] = pos;
+        m_sparse[e.index] = npos;
+        m_dense.pop_back();
+        m_stamps.pop_back();
+        m_version = ++*m_tick;
+        return pos;
+    }
+
+    std::vector<std::uint32_t> m_sparse;
+    std::vector<Entity> m_dense;
+    std::vector<std::uint64_t> m_stamps;
+    std::uint64_t m_version = 0;
+    std::uint64_t* m_tick;
+};
+
+template <class C>
+class Storage final : public StorageBase {
+public:
+    using StorageBase::StorageBase;
+
+    template <class... Args>
+    C& emplace(Entity e, Args&&... args) {
+        if (contains(e)) {
+            C& slot = m_data[position(e)];
+            slot = C{std::forward<Args>(args)...};
+            mark_changed(e);
+            return slot;
+        }
+        push_entity(e);
+        if constexpr (std::is_aggregate_v<C>)
+            return m_data.push_back(C{std::forward<Args>(args)...}), m_data.back();
+        else
+            return m_data.emplace_back(std::forward<Args>(args)...);
+    }
+
+    void remove(Entity e) override {
+        if (!contains(e)) return;
+        const std::uint32_t pos = pop_entity(e);
+        if (pos != m_data.size() - 1) m_data[pos] = std::move(m_data.back());
+        m_data.pop_back();
+    }
+
+    void clear() override {
+        for (const Entity e : m_dense) m_sparse[e.index] = npos;
+        m_dense.clear();
+        m_stamps.clear();
+        m_data.clear();
+        m_version = ++*m_tick;
+    }
+
+    C& get(Entity e) { assert(contains(e)); return m_data[position(e)]; }
+    const C& get(Entity e) const { assert(contains(e)); return m_data[position(e)]; }
+    C* try_get(Entity e) { return contains(e) ? &m_data[position(e)] : nullptr; }
+    const C* try_get(Entity e) const { return contains(e) ? &m_data[position(e)] : nullptr; }
+
+    // Unchecked access by packed position (views use it after checking membership).
+    C& at(std::uint32_t pos) { return m_data[pos]; }
+    std::uint32_t position_of(Entity e) const { return position(e); }
+
+private:
+    std::vector<C> m_data;
+};
+
+}  // namespace sffd::ecs

@@ -1,0 +1,75 @@
+// Components shared by several systems. Plain aggregates: no behaviour, no GL names, no pointers.
+// Authored data (SplatCloud) is never overwritten by derived data: the deformer writes its own output
+// component (systems/ffd), the renderer reads whichever is present.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+namespace sffd {
+
+struct Name {
+    std::string value;
+};
+
+// Placement in the world. Point positions are stored relative to SplatCloud::origin (double), so scans
+// far from the world origin (offsets of 1e6) keep float precision.
+struct Transform {
+    glm::dvec3 translation{0.0};
+    glm::dquat rotation{1.0, 0.0, 0.0, 0.0};
+    glm::dvec3 scale{1.0};
+};
+
+// Material of a splat cloud: flat per-splat colours, or a texture looked up at each splat's uv.
+struct SplatMaterial {
+    std::string texture_path;              // empty: use per-splat colours (or `base_color`)
+    int texture_width = 0, texture_height = 0;
+    std::vector<std::uint8_t> texture_rgba8;  // decoded texels, row 0 at v = 0, sRGB-encoded
+    glm::vec4 base_color{0.8f, 0.8f, 0.8f, 1.0f};  // linear RGBA when no texture and no colours
+    float specular = 0.3f;
+    float shininess = 32.0f;
+};
+
+// Authored point cloud: one splat per point. Arrays are structure-of-arrays and either empty or of
+// length `size()`. Splat i is the ellipse centred at origin + positions[i], spanned by axis_u[i] and
+// axis_v[i] (their lengths are the radii; a circular splat has |axis_u| = |axis_v|), facing normals[i].
+struct SplatCloud {
+    glm::dvec3 origin{0.0};                 // world offset of every position (double precision)
+    std::vector<glm::vec3> positions;
+    std::vector<glm::vec3> normals;         // unit length
+    std::vector<glm::vec3> axis_u;          // tangent axis scaled by radius
+    std::vector<glm::vec3> axis_v;          // bitangent axis scaled by radius (normal x axis_u direction)
+    std::vector<std::uint32_t> colors;      // RGBA8, sRGB-encoded, R in the low byte
+    std::vector<glm::vec2> uvs;             // texture coordinates (when the material has a texture)
+    SplatMaterial material;
+
+    std::size_t size() const { return positions.size(); }
+};
+
+// Perspective camera looking down its local -Z; placed by the entity's Transform or by look-at fields.
+struct Camera {
+    glm::dvec3 eye{0.0, 0.0, 3.0};
+    glm::dvec3 target{0.0};
+    glm::dvec3 up{0.0, 1.0, 0.0};
+    float fov_y_degrees = 45.0f;
+    float near_plane = 0.01f;
+    float far_plane = 100.0f;
+};
+
+// Directional light (direction the light travels, world space) in linear RGB.
+struct DirectionalLight {
+    glm::vec3 direction{-0.4f, -0.6f, -0.7f};
+    glm::vec3 color{1.0f};
+    float intensity = 1.0f;
+};
+
+struct AmbientLight {
+    glm::vec3 color{1.0f};
+    float intensity = 0.15f;
+};
+
+}  // namespace sffd

@@ -1,0 +1,52 @@
+// Shader binding points and shared buffer layouts, defined once for GLSL and C++.
+// GLSL: #include "common/bindings.h" (the shader loader resolves it). C++: #include "shaders/common/bindings.h".
+#ifndef SFFD_BINDINGS_H
+#define SFFD_BINDINGS_H
+
+// --- SSBO binding points --------------------------------------------------------------------------
+#define SFFD_SSBO_SPLATS_IN        0   // GpuSplat[]: rest splats (authored cloud, uploaded once)
+#define SFFD_SSBO_SPLATS_OUT       1   // GpuSplat[]: deformed splats written by the FFD compute pass
+#define SFFD_SSBO_CONTROL_POINTS   2   // vec4[]: lattice control points (or displacements), xyz + pad
+#define SFFD_SSBO_VISIBLE          3   // uint[]: indices of splats that survived culling
+#define SFFD_SSBO_DRAW_INDIRECT    4   // DrawArraysIndirectCommand
+#define SFFD_SSBO_SPLATS_DRAW      5   // GpuSplat[]: the buffer a render pass reads (deformed or rest)
+#define SFFD_SSBO_STATS            6   // uint counters written by compute passes (e.g. inverted splats)
+
+// --- UBO binding points ---------------------------------------------------------------------------
+#define SFFD_UBO_FRAME             0   // camera matrices, viewport, lights
+#define SFFD_UBO_FFD               1   // lattice parameters for the deformation pass
+
+// --- Texture units --------------------------------------------------------------------------------
+#define SFFD_TEX_MATERIAL          0
+#define SFFD_TEX_ACCUM_COLOR       1
+#define SFFD_TEX_ACCUM_NORMAL      2
+#define SFFD_TEX_DEPTH             3
+
+// GpuSplat, std430, 64 bytes; the same layout for rest and deformed splats, so a render pass reads
+// either one. Positions are relative to the cloud's origin (SplatCloud::origin).
+//   vec4 center;   // xyz position; w = colour, RGBA8 packed (uintBitsToFloat)
+//   vec4 normal;   // xyz unit normal; w = 1 (0 marks a splat flipped by an inverted lattice cell)
+//   vec4 axis_u;   // xyz tangent axis scaled by its radius; w = texture u
+//   vec4 axis_v;   // xyz bitangent axis scaled by its radius; w = texture v
+#define SFFD_GPU_SPLAT_BYTES 64
+
+#ifdef __cplusplus
+namespace sffd::gpu {
+struct alignas(16) GpuSplat {
+    float center[4];
+    float normal[4];
+    float axis_u[4];
+    float axis_v[4];
+};
+static_assert(sizeof(GpuSplat) == SFFD_GPU_SPLAT_BYTES);
+}  // namespace sffd::gpu
+#else
+struct GpuSplat {
+    vec4 center;
+    vec4 normal;
+    vec4 axis_u;
+    vec4 axis_v;
+};
+#endif
+
+#endif  // SFFD_BINDINGS_H

@@ -1,0 +1,34 @@
+// Subcommand registry for the `splatffd` tool. A command is a free function taking its arguments
+// (argv after the subcommand name) and returning the process exit code. Each command file registers
+// itself:  SFFD_COMMAND(deform, "deform a PLY file with a lattice", run_deform);
+// Exit codes: 0 success, 1 failure (bad input: the message names the file and the problem),
+// 2 usage error or not implemented.
+#pragma once
+
+#include <functional>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+namespace sffd::cli {
+
+using Args = std::span<const std::string>;
+using CommandFn = int (*)(Args args);
+
+struct Command {
+    std::string name;
+    std::string summary;
+    CommandFn run = nullptr;
+};
+
+std::vector<Command>& commands();
+
+struct Registrar {
+    Registrar(const char* name, const char* summary, CommandFn run);
+};
+
+}  // namespace sffd::cli
+
+#define SFFD_COMMAND(name, summary, fn) \
+    static const ::sffd::cli::Registrar sffd_command_registrar_##name(#name, summary, fn)

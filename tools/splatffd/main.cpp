@@ -1,0 +1,85 @@
+// splatffd: the engine's command-line front end. See `splatffd --help`.
+#include <algorithm>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "tools/splatffd/command.h"
+
+namespace sffd::cli {
+
+std::vector<Command>& commands() {
+    static std::vector<Command> all;
+    return all;
+}
+
+Registrar::Registrar(const char* name, const char* summary, CommandFn run) {
+    commands().push_back({name, summary, run});
+}
+
+}  // namespace sffd::cli
+
+namespace {
+
+// Every subcommand the tool knows, in help order; files register the implementations.
+struct Known {
+    const char* name;
+    const char* summary;
+};
+constexpr Known known_commands[] = {
+    {"view", "open the interactive editor on a scene"},
+    {"render", "render frames of a scene to PNG/EXR (headless without a display)"},
+    {"deform", "deform a PLY point cloud with a lattice"},
+    {"profile", "measure frame time per system and pass"},
+    {"pick", "ray-pick a control point or surface point and print it as JSON"},
+    {"convert", "convert point clouds and meshes between formats, estimating normals and radii"},
+    {"info", "print counts, bounds, attributes and lattices of a file"},
+};
+
+const sffd::cli::Command* find(const std::string& name) {
+    for (const auto& c : sffd::cli::commands())
+        if (c.name == name) return &c;
+    return nullptr;
+}
+
+void print_help() {
+    std::printf(
+        "splatffd %s: real-time point-splat engine with free-form-deformation lattices\n\n"
+        "usage: splatffd <command> [options]     (splatffd <command> --help for a command's options)\n\n"
+        "commands:\n",
+        SFFD_VERSION);
+    for (const Known& k : known_commands) {
+        const auto* c = find(k.name);
+        std::printf("  %-9s %s%s\n", k.name, c && !c->summary.empty() ? c->summary.c_str() : k.summary,
+                    c ? "" : " (not implemented yet)");
+    }
+    for (const auto& c : sffd::cli::commands()) {
+        const bool listed = std::any_of(std::begin(known_commands), std::end(known_commands),
+                                        [&](const Known& k) { return c.name == k.name; });
+        if (!listed) std::printf("  %-9s %s\n", c.name.c_str(), c.summary.c_str());
+    }
+    std::printf("\noptions:\n  --help     this text\n  --version  print the version\n");
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    std::vector<std::string> args(argv + 1, argv + argc);
+    if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+        print_help();
+        return args.empty() ? 2 : 0;
+    }
+    if (args[0] == "--version") {
+        std::printf("splatffd %s\n", SFFD_VERSION);
+        return 0;
+    }
+    const std::string name = args[0];
+    if (const auto* c = find(name)) return c->run(sffd::cli::Args(args).subspan(1));
+    for (const Known& k : known_commands)
+        if (name == k.name) {
+            std::fprintf(stderr, "splatffd %s: not implemented yet\n", name.c_str());
+            return 2;
+        }
+    std::fprintf(stderr, "splatffd: unknown command '%s' (see splatffd --help)\n", name.c_str());
+    return 2;
+}
