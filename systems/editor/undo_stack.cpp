@@ -1,0 +1,26 @@
+#include "systems/editor/undo_stack.h"
+
+namespace sffd::editor {
+
+bool UndoStack::push(std::unique_ptr<Command> command) {
+    if (!command || command->empty()) return false;
+    m_commands.resize(m_next);  // a new step after undo forgets the undone future
+    m_commands.push_back(std::move(command));
+    if (m_limit > 0 && m_commands.size() > m_limit) m_commands.erase(m_commands.begin());
+    m_next = m_commands.size();
+    return true;
+}
+
+bool UndoStack::undo(ecs::Registry& registry) {
+    if (!can_undo()) return false;
+    m_commands[--m_next]->undo(registry);
+    return true;
+}
+
+bool UndoStack::redo(ecs::Registry& registry) {
+    if (!can_redo()) return false;
+    m_commands[m_next++]->redo(registry);
+    return true;
+}
+
+}  // namespace sffd::editor

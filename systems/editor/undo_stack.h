@@ -1,0 +1,173 @@
+// One undo stack for everything the editor changes: selections, lattice edits, pins, keyframes.
+// A command stores the state before and after (not a diff, not a closure over live pointers), so
+// undo/redo restore exactly the bits that were there: a lattice undone and redone is bit-identical.
+//
+//   UndoStack& undo = registry.resource<EditorState>().undo;
+//   undo.record<Lattice>(registry, lattice_entity, "stretch", [&](Lattice& l) { ... });   // one step
+//
+//   ComponentEdit<Lattice> drag(registry, e, "twist");   // begin of a drag: snapshot `before`
+//   ... patch the lattice every frame while dragging ...
+//   undo.push(drag.finish(registry));                     // mouse up: snapshot `after`, one step
+//
+// Any component type works (the animation clip, the picking engineer's selection...): the stack is
+// generic over what it stores. A component that is absent before (or after) is stored as "absent", so
+// adding or removing a component is undoable too. Restoring goes through registry.patch<C>() so other
+// systems (deformer, picking) see the change stamp move.
+#pragma once
+
+#include <cstddef>
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "runtime/ecs/registry.h"
+
+namespace sffd::editor {
+
+class Command {
+public:
+    virtual ~Command() = default;
+    virtual void undo(ecs::Registry& registry) const = 0;
+    virtual void redo(ecs::Registry& registry) const = 0;
+    // True when undo and redo would both leave the registry as it is (nothing worth a step).
+    virtual bool empty() const { return false; }
+    const std::string& label() const { return m_label; }
+
+protected:
+    explicit Command(std::string label) : m_label(std::move(label)) {}
+
+private:
+    std::string m_label;
+};
+
+namespace detail {
+template <class C>
+bool same_state(const std::optional<C>& a, const std::optional<C>& b) {
+    if (a.has_value() != b.has_value()) return false;
+    if (!a) return true;
+    if constexpr (requires(const C& x, const C& y) { { x == y } -> std::convertible_to<bool>; })
+        return *a == *b;
+    else
+        return false;  // no equality: keep the step (harmless)
+}
+
+template <class C>
+void restore(ecs::Registry& registry, ecs::Entity e, const std::optional<C>& state) {
+    if (!registry.valid(e)) return;  // entity deleted since: nothing to restore into
+    if (state) {
+        if (registry.has<C>(e))
+            registry.patch<C>(e) = *state;
+        else
+            registry.emplace<C>(e, *state);
+    } else {
+        registry.remove<C>(e);
+    }
+}
+}  // namespace detail
+
+// Before/after snapshots of one component of one entity.
+template <class C>
+class ComponentChange final : public Command {
+public:
+    ComponentChange(std::string label, ecs::Entity entity, std::optional<C> before, std::optional<C> after)
+        : Command(std::move(label)), m_entity(entity), m_before(std::move(before)), m_after(std::move(after)) {}
+
+    void undo(ecs::Registry& registry) const override { detail::restore(registry, m_entity, m_before); }
+    void redo(ecs::Registry& registry) const override { detail::restore(registry, m_entity, m_after); }
+    bool empty() const override { return detail::same_state(m_before, m_after); }
+
+    ecs::Entity entity() const { return m_entity; }
+    const std::optional<C>& before() const { return m_before; }
+    const std::optional<C>& after() const { return m_after; }
+
+private:
+    ecs::Entity m_entity;
+    std::optional<C> m_before;
+    std::optional<C> m_after;
+};
+
+// Several changes undone and redone as one step (e.g. resampling a lattice also clears its selection).
+// Undo runs the parts in reverse order.
+class CommandGroup final : public Command {
+public:
+    explicit CommandGroup(std::string label) : Command(std::move(label)) {}
+    void add(std::unique_ptr<Command> part) {
+        if (part && !part->empty()) m_parts.push_back(std::move(part));
+    }
+    void undo(ecs::Registry& registry) const override {
+        for (std::size_t i = m_parts.size(); i-- > 0;) m_parts[i]->undo(registry);
+    }
+    void redo(ecs::Registry& registry) const override {
+        for (const auto& p : m_parts) p->redo(registry);
+    }
+    bool empty() const override { return m_parts.empty(); }
+    std::size_t size() const { return m_parts.size(); }
+
+private:
+    std::vector<std::unique_ptr<Command>> m_parts;
+};
+
+// Snapshot of one component taken now; finish() snapshots again and returns the command. Used for
+// drags: the edit is applied live every frame, the step is recorded once at the end.
+template <class C>
+class ComponentEdit {
+public:
+    ComponentEdit(const ecs::Registry& registry, ecs::Entity entity, std::string label)
+        : m_entity(entity), m_label(std::move(label)), m_before(snapshot(registry, entity)) {}
+
+    ecs::Entity entity() const { return m_entity; }
+    const std::optional<C>& before() const { return m_before; }
+
+    std::unique_ptr<ComponentChange<C>> finish(const ecs::Registry& registry) {
+        return std::make_unique<ComponentChange<C>>(m_label, m_entity, m_before, snapshot(registry, m_entity));
+    }
+
+    static std::optional<C> snapshot(const ecs::Registry& registry, ecs::Entity e) {
+        if (!registry.valid(e)) return std::nullopt;
+        if (const C* c = registry.try_get<C>(e)) return *c;
+        return std::nullopt;
+    }
+
+private:
+    ecs::Entity m_entity;
+    std::string m_label;
+    std::optional<C> m_before;
+};
+
+class UndoStack {
+public:
+    explicit UndoStack(std::size_t limit = 256) : m_limit(limit) {}
+
+    // Adds an already-applied step; drops the redo history. Empty commands are ignored (returns false).
+    bool push(std::unique_ptr<Command> command);
+
+    // Applies `edit` to C of `entity` (through patch<C>) and records it as one step. Returns false and
+    // records nothing if the entity has no C.
+    template <class C, class Fn>
+    bool record(ecs::Registry& registry, ecs::Entity entity, std::string label, Fn&& edit) {
+        if (!registry.valid(entity) || !registry.has<C>(entity)) return false;
+        ComponentEdit<C> change(registry, entity, std::move(label));
+        edit(registry.patch<C>(entity));
+        return push(change.finish(registry));
+    }
+
+    bool undo(ecs::Registry& registry);
+    bool redo(ecs::Registry& registry);
+    bool can_undo() const { return m_next > 0; }
+    bool can_redo() const { return m_next < m_commands.size(); }
+    void clear() { m_commands.clear(); m_next = 0; }
+
+    std::size_t size() const { return m_commands.size(); }
+    std::size_t position() const { return m_next; }  // commands [0, position) are applied
+    const Command& at(std::size_t i) const { return *m_commands[i]; }
+    std::size_t limit() const { return m_limit; }
+
+private:
+    std::vector<std::unique_ptr<Command>> m_commands;
+    std::size_t m_next = 0;
+    std::size_t m_limit;
+};
+
+}  // namespace sffd::editor
