@@ -1,0 +1,307 @@
+#include "runtime/gfx/context.h"
+
+#include <EGL/egl.h>
+#include <EGL/eglext.h>
+#include <GLFW/glfw3.h>
+
+#include <atomic>
+#include <cstdlib>
+#include <mutex>
+
+#include "runtime/core/log.h"
+#include "runtime/gfx/gl.h"
+
+namespace sffd::gfx {
+
+namespace {
+
+std::atomic<std::uint64_t> g_gl_errors{0};
+
+const char* source_name(GLenum source) {
+    switch (source) {
+        case GL_DEBUG_SOURCE_API: return "api";
+        case GL_DEBUG_SOURCE_WINDOW_SYSTEM: return "window-system";
+        case GL_DEBUG_SOURCE_SHADER_COMPILER: return "shader-compiler";
+        case GL_DEBUG_SOURCE_THIRD_PARTY: return "third-party";
+        case GL_DEBUG_SOURCE_APPLICATION: return "application";
+        default: return "other";
+    }
+}
+
+const char* type_name(GLenum type) {
+    switch (type) {
+        case GL_DEBUG_TYPE_ERROR: return "error";
+        case GL_DEBUG_TYPE_DEPRECATED_BEHAVIOR: return "deprecated";
+        case GL_DEBUG_TYPE_UNDEFINED_BEHAVIOR: return "undefined-behaviour";
+        case GL_DEBUG_TYPE_PORTABILITY: return "portability";
+        case GL_DEBUG_TYPE_PERFORMANCE: return "performance";
+        case GL_DEBUG_TYPE_MARKER: return "marker";
+        default: return "other";
+    }
+}
+
+// The one GL error path: every context registers this callback, so no code checks glGetError().
+void GLAPIENTRY debug_callback(GLenum source, GLenum type, GLuint id, GLenum severity, GLsizei length,
+                               const GLchar* message, const void* /*user*/) {
+    if (type == GL_DEBUG_TYPE_PUSH_GROUP || type == GL_DEBUG_TYPE_POP_GROUP || type == GL_DEBUG_TYPE_MARKER) return;
+    const std::string_view text(message, length < 0 ? std::char_traits<char>::length(message) : std::size_t(length));
+    const std::string line = log::str("GL ", type_name(type), " (", source_name(source), ", id ", id, "): ", text);
+    // Compile errors come back from load_program() as results mapped to file:line; the raw copy the
+    // driver also sends here would only repeat them with source-string numbers.
+    if (source == GL_DEBUG_SOURCE_SHADER_COMPILER) {
+        log::debug(line);
+    } else if (type == GL_DEBUG_TYPE_ERROR) {
+        ++g_gl_errors;
+        log::error(line);
+    } else if (severity == GL_DEBUG_SEVERITY_HIGH || severity == GL_DEBUG_SEVERITY_MEDIUM) {
+        log::warn(line);
+    } else {
+        log::debug(line);
+    }
+}
+
+void install_debug_callback() {
+    GLint flags = 0;
+    glGetIntegerv(GL_CONTEXT_FLAGS, &flags);
+    glEnable(GL_DEBUG_OUTPUT);
+    // Synchronous: the callback runs inside the offending call, so a breakpoint shows the culprit.
+    glEnable(GL_DEBUG_OUTPUT_SYNCHRONOUS);
+    glDebugMessageCallback(debug_callback, nullptr);
+    glDebugMessageControl(GL_DONT_CARE, GL_DONT_CARE, GL_DONT_CARE, 0, nullptr, GL_TRUE);
+    if (!(flags & GL_CONTEXT_FLAG_DEBUG_BIT)) log::debug("GL context is not a debug context; errors may be missed");
+}
+
+std::string gl_string(GLenum name) {
+    const auto* s = reinterpret_cast<const char*>(glGetString(name));
+    return s ? s : "";
+}
+
+// --- EGL: one display per process, initialised once and never terminated (terminating and
+// re-initialising Mesa's surfaceless display between tests is slow and has leaked in the past; the
+// display is a process-wide singleton anyway). Contexts are created and destroyed freely.
+struct EglDisplay {
+    EGLDisplay display = EGL_NO_DISPLAY;
+    EGLConfig config = nullptr;
+    std::string error;
+};
+
+const char* egl_error_name(EGLint e) {
+    switch (e) {
+        case EGL_SUCCESS: return "EGL_SUCCESS";
+        case EGL_NOT_INITIALIZED: return "EGL_NOT_INITIALIZED";
+        case EGL_BAD_ACCESS: return "EGL_BAD_ACCESS";
+        case EGL_BAD_ALLOC: return "EGL_BAD_ALLOC";
+        case EGL_BAD_ATTRIBUTE: return "EGL_BAD_ATTRIBUTE";
+        case EGL_BAD_CONFIG: return "EGL_BAD_CONFIG";
+        case EGL_BAD_CONTEXT: return "EGL_BAD_CONTEXT";
+        case EGL_BAD_DISPLAY: return "EGL_BAD_DISPLAY";
+        case EGL_BAD_MATCH: return "EGL_BAD_MATCH";
+        case EGL_BAD_PARAMETER: return "EGL_BAD_PARAMETER";
+        case EGL_BAD_SURFACE: return "EGL_BAD_SURFACE";
+        default: return "EGL error";
+    }
+}
+
+const EglDisplay& egl_display() {
+    static const EglDisplay d = [] {
+        EglDisplay out;
+        out.display = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+        if (out.display == EGL_NO_DISPLAY) {
+            out.error = log::str("eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA): ", egl_error_name(eglGetError()),
+                                 " (is libegl-mesa0 installed?)");
+            return out;
+        }
+        EGLint major = 0, minor = 0;
+        if (!eglInitialize(out.display, &major, &minor)) {
+            out.error = log::str("eglInitialize(): ", egl_error_name(eglGetError()));
+            out.display = EGL_NO_DISPLAY;
+            return out;
+        }
+        const EGLint attribs[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
+        EGLint count = 0;
+        if (!eglChooseConfig(out.display, attribs, &out.config, 1, &count) || count == 0) {
+            // Surfaceless needs no surface type; accept any GL-capable config.
+            const EGLint any_gl[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
+            if (!eglChooseConfig(out.display, any_gl, &out.config, 1, &count) || count == 0) out.config = nullptr;
+        }
+        return out;
+    }();
+    return d;
+}
+
+// GLFW is initialised when the first window opens and terminated when the last one closes.
+std::mutex g_glfw_mutex;
+int g_glfw_windows = 0;
+
+void glfw_error(int code, const char* description) { log::error("GLFW error ", code, ": ", description); }
+
+}  // namespace
+
+struct GlContext::Impl {
+    bool headless = true;
+    EGLContext egl_context = EGL_NO_CONTEXT;
+    GLFWwindow* window = nullptr;
+    FramebufferSize size;
+    bool close_requested = false;
+    std::string renderer;
+    std::string version;
+
+    ~Impl() {
+        if (window) {
+            if (glfwGetCurrentContext() == window) glfwMakeContextCurrent(nullptr);
+            glfwDestroyWindow(window);
+            std::lock_guard lock(g_glfw_mutex);
+            if (--g_glfw_windows == 0) glfwTerminate();
+        }
+        if (egl_context != EGL_NO_CONTEXT) {
+            const EGLDisplay display = egl_display().display;
+            if (eglGetCurrentContext() == egl_context)
+                eglMakeCurrent(display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+            eglDestroyContext(display, egl_context);
+        }
+    }
+};
+
+GlContext::GlContext() = default;
+GlContext::~GlContext() = default;
+GlContext::GlContext(GlContext&&) noexcept = default;
+GlContext& GlContext::operator=(GlContext&&) noexcept = default;
+
+void GlContext::make_current() {
+    assert(m_impl);
+    if (m_impl->window) {
+        glfwMakeContextCurrent(m_impl->window);
+    } else if (!eglMakeCurrent(egl_display().display, EGL_NO_SURFACE, EGL_NO_SURFACE, m_impl->egl_context)) {
+        log::error("eglMakeCurrent(): ", egl_error_name(eglGetError()));
+    }
+}
+
+void GlContext::release_current() {
+    assert(m_impl);
+    if (m_impl->window) glfwMakeContextCurrent(nullptr);
+    else eglMakeCurrent(egl_display().display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+}
+
+void GlContext::swap_buffers() {
+    if (m_impl && m_impl->window) glfwSwapBuffers(m_impl->window);
+}
+
+void GlContext::poll_events() {
+    if (m_impl && m_impl->window) glfwPollEvents();
+}
+
+bool GlContext::should_close() const {
+    if (!m_impl) return true;
+    return m_impl->close_requested || (m_impl->window && glfwWindowShouldClose(m_impl->window));
+}
+
+void GlContext::request_close() {
+    if (!m_impl) return;
+    m_impl->close_requested = true;
+    if (m_impl->window) glfwSetWindowShouldClose(m_impl->window, GLFW_TRUE);
+}
+
+bool GlContext::is_headless() const { return !m_impl || m_impl->headless; }
+
+FramebufferSize GlContext::framebuffer_size() const {
+    if (!m_impl) return {};
+    if (m_impl->window) {
+        FramebufferSize s;
+        glfwGetFramebufferSize(m_impl->window, &s.width, &s.height);
+        return s;
+    }
+    return m_impl->size;
+}
+
+GLFWwindow* GlContext::window() const { return m_impl ? m_impl->window : nullptr; }
+
+const std::string& GlContext::renderer() const {
+    static const std::string none;
+    return m_impl ? m_impl->renderer : none;
+}
+
+const std::string& GlContext::version() const {
+    static const std::string none;
+    return m_impl ? m_impl->version : none;
+}
+
+bool display_available() {
+    const char* x = std::getenv("DISPLAY");
+    const char* wl = std::getenv("WAYLAND_DISPLAY");
+    return (x && *x) || (wl && *wl);
+}
+
+std::uint64_t debug_error_count() { return g_gl_errors.load(); }
+
+namespace {
+
+Result<GlContext> finish(GlContext context, GlContext::Impl& impl, bool debug) {
+    impl.renderer = gl_string(GL_RENDERER);
+    impl.version = gl_string(GL_VERSION);
+    GLint major = 0, minor = 0;
+    glGetIntegerv(GL_MAJOR_VERSION, &major);
+    glGetIntegerv(GL_MINOR_VERSION, &minor);
+    if (major * 10 + minor < 45)
+        return make_error(log::str("create_context(): need OpenGL 4.5 core, got ", impl.version, " (", impl.renderer, ")"));
+    if (debug) install_debug_callback();
+    log::debug("GL context: ", impl.headless ? "headless EGL" : "window", ", ", impl.renderer, ", ", impl.version);
+    return context;
+}
+
+}  // namespace
+
+Result<GlContext> create_context(const ContextOptions& options) {
+    GlContext context;
+    context.m_impl = std::make_unique<GlContext::Impl>();
+    GlContext::Impl& impl = *context.m_impl;
+    impl.size = {options.width, options.height};
+
+    if (!options.headless && display_available()) {
+        impl.headless = false;
+        {
+            std::lock_guard lock(g_glfw_mutex);
+            if (g_glfw_windows == 0) {
+                glfwSetErrorCallback(glfw_error);
+                if (!glfwInit()) return make_error("create_context(): glfwInit() failed (is DISPLAY valid?)");
+            }
+            ++g_glfw_windows;  // balanced by ~Impl even when window creation fails below
+        }
+        glfwDefaultWindowHints();
+        glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
+        glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
+        glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+        glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+        glfwWindowHint(GLFW_OPENGL_DEBUG_CONTEXT, options.debug ? GLFW_TRUE : GLFW_FALSE);
+        glfwWindowHint(GLFW_VISIBLE, options.visible ? GLFW_TRUE : GLFW_FALSE);
+        glfwWindowHint(GLFW_DEPTH_BITS, 24);
+        impl.window = glfwCreateWindow(options.width, options.height, options.title.c_str(), nullptr, nullptr);
+        if (!impl.window) {
+            std::lock_guard lock(g_glfw_mutex);
+            if (--g_glfw_windows == 0) glfwTerminate();
+            impl.headless = true;  // nothing left for ~Impl to release
+            return make_error("create_context(): glfwCreateWindow() failed for an OpenGL 4.5 core context");
+        }
+        glfwMakeContextCurrent(impl.window);
+        glfwSwapInterval(1);
+        return finish(std::move(context), impl, options.debug);
+    }
+
+    const EglDisplay& egl = egl_display();
+    if (egl.display == EGL_NO_DISPLAY) return make_error("create_context(): " + egl.error);
+    if (!eglBindAPI(EGL_OPENGL_API))
+        return make_error(log::str("create_context(): eglBindAPI(EGL_OPENGL_API): ", egl_error_name(eglGetError())));
+    // 4.5 core exactly: llvmpipe on Debian 12 refuses 4.6.
+    const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4,
+                              EGL_CONTEXT_MINOR_VERSION, 5,
+                              EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                              EGL_CONTEXT_OPENGL_DEBUG, options.debug ? EGL_TRUE : EGL_FALSE,
+                              EGL_NONE};
+    impl.egl_context = eglCreateContext(egl.display, egl.config, EGL_NO_CONTEXT, attribs);
+    if (impl.egl_context == EGL_NO_CONTEXT)
+        return make_error(log::str("create_context(): eglCreateContext(OpenGL 4.5 core): ", egl_error_name(eglGetError())));
+    if (!eglMakeCurrent(egl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, impl.egl_context))
+        return make_error(log::str("create_context(): eglMakeCurrent(surfaceless): ", egl_error_name(eglGetError())));
+    return finish(std::move(context), impl, options.debug);
+}
+
+}  // namespace sffd::gfx

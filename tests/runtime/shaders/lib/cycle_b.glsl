@@ -1,0 +1,2 @@
+// b includes a: a cycle.
+#include "../cycle_a.glsl"

@@ -1,0 +1,68 @@
+// Window context test: a real GLFW window with a GL 4.5 core debug context (label `xvfb`; tools/test.sh
+// runs it under `xvfb-run -a`). Without a display it skips, unless SFFD_REQUIRE_DISPLAY=1 (set by
+// tools/test.sh) makes a missing display a failure, so CI cannot pass it silently.
+#include <gtest/gtest.h>
+
+#include <GLFW/glfw3.h>
+
+#include <cstdlib>
+
+#include "runtime/gfx/context.h"
+#include "runtime/gfx/render_target.h"
+
+using namespace sffd;
+
+TEST(Window, OpensCore45WindowAndPresentsAnOffscreenTarget) {
+    if (!gfx::display_available()) {
+        const char* require = std::getenv("SFFD_REQUIRE_DISPLAY");
+        if (require && std::string(require) == "1") FAIL() << "no DISPLAY: run under xvfb-run -a";
+        GTEST_SKIP() << "no DISPLAY (run under xvfb-run -a)";
+    }
+    auto created = gfx::create_context({.width = 96, .height = 64, .title = "SplatFFD window test"});
+    ASSERT_TRUE(created.ok()) << created.message();
+    gfx::GlContext ctx = std::move(created).value();
+    EXPECT_FALSE(ctx.is_headless());
+    ASSERT_NE(ctx.window(), nullptr);
+    EXPECT_EQ(glfwGetCurrentContext(), ctx.window());
+    const gfx::FramebufferSize size = ctx.framebuffer_size();
+    EXPECT_EQ(size.width, 96);
+    EXPECT_EQ(size.height, 64);
+    GLint major = 0, minor = 0, profile = 0, flags = 0;
+    glGetIntegerv(GL_MAJOR_VERSION, &major);
+    glGetIntegerv(GL_MINOR_VERSION, &minor);
+    glGetIntegerv(GL_CONTEXT_PROFILE_MASK, &profile);
+    glGetIntegerv(GL_CONTEXT_FLAGS, &flags);
+    EXPECT_GE(major * 10 + minor, 45);
+    EXPECT_TRUE(profile & GL_CONTEXT_CORE_PROFILE_BIT);
+    EXPECT_TRUE(flags & GL_CONTEXT_FLAG_DEBUG_BIT);
+
+    // The same offscreen path as headless: render into a target, blit it to the window, read it back.
+    const std::uint64_t errors = gfx::debug_error_count();
+    auto target = gfx::RenderTarget::create({.label = "test.window_target", .width = 48, .height = 32,
+                                             .color = {{"color", gfx::ColorFormat::rgba8}}});
+    ASSERT_TRUE(target.ok()) << target.message();
+    const float green[4] = {0.0f, 1.0f, 0.0f, 1.0f};
+    target->clear_color("color", green);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glClearColor(1.0f, 0.0f, 0.0f, 1.0f);
+    glClear(GL_COLOR_BUFFER_BIT);
+    target->blit_to_default_framebuffer("color", size.width, size.height);
+    std::uint8_t pixel[4] = {};
+    glReadBuffer(GL_BACK);
+    glReadPixels(size.width / 2, size.height / 2, 1, 1, GL_RGBA, GL_UNSIGNED_BYTE, pixel);
+    EXPECT_EQ(pixel[0], 0);
+    EXPECT_EQ(pixel[1], 255);
+    ctx.swap_buffers();
+    ctx.poll_events();
+    EXPECT_FALSE(ctx.should_close());
+    ctx.request_close();
+    EXPECT_TRUE(ctx.should_close());
+    EXPECT_EQ(gfx::debug_error_count(), errors);
+}
+
+TEST(Window, HeadlessFlagForcesEglEvenWithADisplay) {
+    auto created = gfx::create_context({.headless = true, .width = 8, .height = 8});
+    ASSERT_TRUE(created.ok()) << created.message();
+    EXPECT_TRUE(created->is_headless());
+    EXPECT_EQ(created->window(), nullptr);
+}
