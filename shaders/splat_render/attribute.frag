@@ -1,0 +1,23 @@
+#version 450
+// HQ pass 2: additive blending of weighted attributes into two RGBA32F targets. Depth test against the
+// visibility pass (LEQUAL, no depth writes) keeps only splats within eps of the visible surface.
+//   accum_color  = sum(w * linear rgb), sum(w)
+//   accum_normal = sum(w * world normal), sum(w * view-axis depth)
+#include "splat_render/raycast.glsl"
+
+layout(location = 5) flat in vec4 v_color;
+layout(location = 6) flat in vec3 v_normal;
+
+layout(location = 0) out vec4 accum_color;
+layout(location = 1) out vec4 accum_normal;
+
+void main() {
+    vec3 ray;
+    float r2;
+    vec3 p = raycast_splat(ray, r2);
+    gl_FragDepth = window_depth(p.z);
+    // Smooth radial kernel that reaches 0 at the ellipse's edge: no visible disc borders.
+    float w = (1.0 - r2) * (1.0 - r2) + 1e-6;
+    accum_color = vec4(w * v_color.rgb, w);
+    accum_normal = vec4(w * v_normal, w * -p.z);
+}

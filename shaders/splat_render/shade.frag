@@ -1,0 +1,27 @@
+#version 450
+// HQ pass 3: normalise the blended attributes and shade (deferred Blinn-Phong, linear space). Pixels no
+// splat reached get the background (alpha 0 when transparent) and depth -1 (the CPU maps it to +inf).
+#include "splat_render/lighting.glsl"
+
+layout(binding = SFFD_TEX_ACCUM_COLOR) uniform sampler2D accum_color;
+layout(binding = SFFD_TEX_ACCUM_NORMAL) uniform sampler2D accum_normal;
+
+layout(location = 0) out vec4 out_color;
+layout(location = 1) out vec4 out_aux;
+
+void main() {
+    ivec2 pixel = ivec2(gl_FragCoord.xy);
+    vec4 c = texelFetch(accum_color, pixel, 0);
+    if (c.w <= 0.0) {
+        out_color = frame.background;
+        out_aux = vec4(0.0, 0.0, 0.0, -1.0);
+        return;
+    }
+    vec4 nz = texelFetch(accum_normal, pixel, 0);
+    vec3 albedo = c.rgb / c.w;
+    vec3 n = nz.xyz;
+    float len = length(n);
+    n = len > 0.0 ? n / len : vec3(0.0, 0.0, 1.0);
+    out_color = vec4(shade_blinn_phong(albedo, n, pixel_to_eye_world()), 1.0);
+    out_aux = vec4(n, nz.w / c.w);
+}

@@ -1,0 +1,25 @@
+// Camera matrices and a framing camera, in double precision (scenes far from the origin keep float
+// precision because the renderer composes view * model in double and uploads the product as float).
+#pragma once
+
+#include <glm/glm.hpp>
+
+#include "runtime/scene/components.h"
+
+namespace sffd::render {
+
+glm::dmat4 view_matrix(const Camera& camera);
+// OpenGL clip convention (z in [-1, 1]), symmetric frustum, vertical field of view.
+glm::dmat4 projection_matrix(const Camera& camera, double aspect);
+// Model matrix of a point cloud: Transform * translate(origin) (positions are relative to the origin).
+glm::dmat4 model_matrix(const Transform* transform, const glm::dvec3& origin);
+
+// A camera that frames a bounding sphere: looks at its centre from `direction` (towards the camera),
+// distance chosen so the sphere fits the smaller field of view with a margin; near/far around it.
+Camera framing_camera(const glm::dvec3& center, double radius, double aspect,
+                      glm::dvec3 direction = glm::dvec3(0.0, 0.0, 1.0), float fov_y_degrees = 45.0f);
+
+// Depth along the camera's view axis (positive in front) of a world point.
+double view_depth(const Camera& camera, const glm::dvec3& world);
+
+}  // namespace sffd::render

@@ -1,0 +1,461 @@
+// Splat render system: GPU state, passes and frame capture. See splat_render.h for the data flow.
+#include "systems/splat_render/splat_render.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+#include <vector>
+
+#include <glm/gtc/matrix_inverse.hpp>
+
+#include "runtime/core/log.h"
+#include "runtime/gfx/gl_object.h"
+#include "runtime/gfx/shader.h"
+#include "runtime/gfx/splat_store.h"
+#include "runtime/scene/components.h"
+#include "shaders/common/bindings.h"
+#include "shaders/splat_render/frame_block.h"
+#include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/splat_pack.h"
+
+namespace sffd::render {
+
+namespace {
+
+constexpr std::uint32_t cull_group_size = 128;  // local_size_x of shaders/splat_render/cull.comp
+
+// Per point cloud GPU objects owned by the renderer (the splats themselves live in GpuSplatStore).
+struct CloudGpu {
+    gfx::Buffer visible;    // uint[2 * capacity]: sprite list from 0, quad list from `capacity`
+    gfx::Buffer commands;   // two DrawArraysIndirectCommands: sprites, quads
+    gfx::Buffer frame_ubo;  // FrameBlock for this cloud
+    std::uint32_t capacity = 0;
+    gfx::Texture texture;   // material texture (sRGB), when the material has one
+    std::uint64_t texture_version = 0;
+    BoundingSphere bounds;  // cloud space, for the framing camera
+    std::uint64_t bounds_version = 0;
+    const SplatMaterial* material = nullptr;  // valid during one render_system call
+    std::uint32_t count = 0;
+    GLuint splats = 0;      // draw buffer this frame
+};
+
+}  // namespace
+
+// Registry resource: everything the renderer owns on the GPU.
+struct SplatRenderState {
+    gfx::Program cull;
+    std::array<gfx::Program, 2> visibility, attribute, preview;  // [0] sprites, [1] quads
+    gfx::Program shade;
+    gfx::VertexArray vao;  // empty: splats come from SSBOs
+    float max_point_size = 1.0f;
+
+    int width = 0, height = 0;
+    gfx::Texture color, aux, depth, accum_color, accum_normal;
+    gfx::Framebuffer output_fbo, accum_fbo, depth_fbo;
+
+    std::unordered_map<ecs::Entity, CloudGpu> clouds;
+    bool failed = false;
+};
+
+namespace {
+
+Result<gfx::Program> splat_program(const char* fragment, const char* label, int pass, int quad) {
+    return gfx::load_program({{GL_VERTEX_SHADER, "splat_render/splat.vert"}, {GL_FRAGMENT_SHADER, fragment}}, label,
+                             {{"PASS", std::to_string(pass)}, {"SHAPE_QUAD", std::to_string(quad)}});
+}
+
+gfx::Texture make_target(GLenum format, int w, int h, const char* label) {
+    gfx::Texture t = gfx::Texture::create(label, GL_TEXTURE_2D);
+    glTextureStorage2D(t.id(), 1, format, w, h);
+    glTextureParameteri(t.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(t.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    return t;
+}
+
+void ensure_targets(SplatRenderState& s, int w, int h) {
+    if (s.width == w && s.height == h && s.output_fbo) return;
+    s.width = w, s.height = h;
+    s.color = make_target(GL_RGBA16F, w, h, "render.color");
+    s.aux = make_target(GL_RGBA32F, w, h, "render.normal_depth");
+    s.depth = make_target(GL_DEPTH_COMPONENT32F, w, h, "render.depth");
+    s.accum_color = make_target(GL_RGBA32F, w, h, "render.accum_color");
+    s.accum_normal = make_target(GL_RGBA32F, w, h, "render.accum_normal");
+
+    s.output_fbo = gfx::Framebuffer::create("render.output");
+    glNamedFramebufferTexture(s.output_fbo.id(), GL_COLOR_ATTACHMENT0, s.color.id(), 0);
+    glNamedFramebufferTexture(s.output_fbo.id(), GL_COLOR_ATTACHMENT1, s.aux.id(), 0);
+    glNamedFramebufferTexture(s.output_fbo.id(), GL_DEPTH_ATTACHMENT, s.depth.id(), 0);
+    const GLenum two[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glNamedFramebufferDrawBuffers(s.output_fbo.id(), 2, two);
+
+    s.accum_fbo = gfx::Framebuffer::create("render.accum");
+    glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT0, s.accum_color.id(), 0);
+    glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT1, s.accum_normal.id(), 0);
+    glNamedFramebufferTexture(s.accum_fbo.id(), GL_DEPTH_ATTACHMENT, s.depth.id(), 0);
+    glNamedFramebufferDrawBuffers(s.accum_fbo.id(), 2, two);
+
+    s.depth_fbo = gfx::Framebuffer::create("render.visibility");
+    glNamedFramebufferTexture(s.depth_fbo.id(), GL_DEPTH_ATTACHMENT, s.depth.id(), 0);
+    glNamedFramebufferDrawBuffer(s.depth_fbo.id(), GL_NONE);
+}
+
+void upload_texture(CloudGpu& gpu, const SplatMaterial& m) {
+    if (m.texture_rgba8.empty() || m.texture_width <= 0 || m.texture_height <= 0 ||
+        m.texture_rgba8.size() < std::size_t(m.texture_width) * std::size_t(m.texture_height) * 4) {
+        gpu.texture.reset();
+        return;
+    }
+    gpu.texture = gfx::Texture::create("render.material", GL_TEXTURE_2D);
+    const int levels = 1 + int(std::floor(std::log2(std::max(m.texture_width, m.texture_height))));
+    glTextureStorage2D(gpu.texture.id(), levels, GL_SRGB8_ALPHA8, m.texture_width, m.texture_height);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    // Row 0 of the texels is v = 0, which is also GL's first row (t = 0).
+    glTextureSubImage2D(gpu.texture.id(), 0, 0, 0, m.texture_width, m.texture_height, GL_RGBA, GL_UNSIGNED_BYTE,
+                        m.texture_rgba8.data());
+    glGenerateTextureMipmap(gpu.texture.id());
+    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+}
+
+// Uploads clouds whose change stamp moved into GpuSplatStore.rest and refreshes the renderer's own
+// per-cloud objects; drops objects of clouds that no longer exist.
+void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& store) {
+    for (auto it = s.clouds.begin(); it != s.clouds.end();)
+        it = reg.valid(it->first) && reg.has<SplatCloud>(it->first) ? std::next(it) : s.clouds.erase(it);
+    for (auto it = store.clouds.begin(); it != store.clouds.end();)
+        it = reg.valid(it->first) && reg.has<SplatCloud>(it->first) ? std::next(it) : store.clouds.erase(it);
+
+    reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
+        const std::uint64_t version = reg.version<SplatCloud>(e);
+        gfx::GpuSplats& splats = store.clouds[e];
+        const auto n = static_cast<std::uint32_t>(cloud.size());
+        if (!splats.rest || splats.rest_version != version) {
+            const std::vector<gpu::GpuSplat> packed = pack_splats(cloud);
+            if (!splats.rest || splats.count != n) {
+                splats.rest = gfx::Buffer::create("splats.rest");
+                glNamedBufferData(splats.rest.id(), GLsizeiptr(std::max<std::size_t>(packed.size(), 1) * sizeof(gpu::GpuSplat)),
+                                  nullptr, GL_DYNAMIC_DRAW);
+                if (splats.count != n) splats.has_deformed = false;
+                splats.count = n;
+            }
+            if (!packed.empty())
+                glNamedBufferSubData(splats.rest.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data());
+            splats.rest_version = version;
+        }
+        CloudGpu& gpu = s.clouds[e];
+        if (!gpu.frame_ubo) {
+            gpu.frame_ubo = gfx::Buffer::create("render.frame_block");
+            glNamedBufferData(gpu.frame_ubo.id(), sizeof(gpu::FrameBlock), nullptr, GL_DYNAMIC_DRAW);
+            gpu.commands = gfx::Buffer::create("render.draw_commands");
+            glNamedBufferData(gpu.commands.id(), 8 * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_DRAW);
+        }
+        if (gpu.capacity < n || !gpu.visible) {
+            gpu.capacity = std::max<std::uint32_t>(n, 1);
+            gpu.visible = gfx::Buffer::create("render.visible");
+            glNamedBufferData(gpu.visible.id(), GLsizeiptr(2 * std::size_t(gpu.capacity) * sizeof(std::uint32_t)), nullptr,
+                              GL_DYNAMIC_DRAW);
+        }
+        if (gpu.texture_version != version) {
+            upload_texture(gpu, cloud.material);
+            gpu.texture_version = version;
+        }
+        if (gpu.bounds_version != version) {
+            gpu.bounds = bounding_sphere(cloud);
+            gpu.bounds_version = version;
+        }
+        gpu.material = &cloud.material;
+        gpu.count = std::min(n, splats.count);
+        gpu.splats = splats.draw_buffer();
+    });
+}
+
+struct ViewSetup {
+    Camera camera;
+    glm::dmat4 view{1.0};
+    glm::dmat4 projection{1.0};
+};
+
+ViewSetup choose_camera(ecs::Registry& reg, const SplatRenderState& s, double aspect) {
+    ViewSetup v;
+    bool found = false;
+    reg.view<const Camera>().each([&](const Camera& c) {
+        if (!found) v.camera = c, found = true;
+    });
+    if (!found) {
+        // Frame every cloud: union of their world-space bounding spheres.
+        glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+        std::vector<std::pair<glm::dvec3, double>> balls;
+        reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
+            auto it = s.clouds.find(e);
+            if (it == s.clouds.end() || cloud.size() == 0) return;
+            const glm::dmat4 m = model_matrix(reg.try_get<Transform>(e), cloud.origin);
+            const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])),
+                                           glm::length(glm::dvec3(m[2]))});
+            const glm::dvec3 c = glm::dvec3(m * glm::dvec4(it->second.bounds.center, 1.0));
+            balls.emplace_back(c, it->second.bounds.radius * scale);
+            lo = glm::min(lo, c - it->second.bounds.radius * scale);
+            hi = glm::max(hi, c + it->second.bounds.radius * scale);
+        });
+        glm::dvec3 center(0.0);
+        double radius = 1.0;
+        if (!balls.empty()) {
+            center = 0.5 * (lo + hi);
+            radius = 0.0;
+            for (const auto& [c, r] : balls) radius = std::max(radius, glm::length(c - center) + r);
+        }
+        v.camera = framing_camera(center, radius, aspect);
+    }
+    v.view = view_matrix(v.camera);
+    v.projection = projection_matrix(v.camera, aspect);
+    return v;
+}
+
+gpu::FrameBlock frame_block(ecs::Registry& reg, const RenderSettings& settings, const ViewSetup& view,
+                            float max_point_size) {
+    gpu::FrameBlock b{};
+    b.projection = glm::mat4(view.projection);
+    b.view_to_world = glm::mat4(glm::inverse(view.view));
+    b.viewport = glm::vec4(float(settings.width), float(settings.height), 1.0f / float(settings.width),
+                           1.0f / float(settings.height));
+    b.params = glm::vec4(settings.visibility_epsilon, max_point_size, settings.culling ? 1.0f : 0.0f, 0.0f);
+    std::uint32_t lights = 0;
+    reg.view<const DirectionalLight>().each([&](const DirectionalLight& l) {
+        if (lights >= SFFD_MAX_LIGHTS) return;
+        b.light_dir[lights] = glm::vec4(-glm::normalize(l.direction), 0.0f);
+        b.light_color[lights] = glm::vec4(l.color * l.intensity, 0.0f);
+        ++lights;
+    });
+    bool has_ambient = false;
+    reg.view<const AmbientLight>().each([&](const AmbientLight& a) {
+        b.ambient += glm::vec4(a.color * a.intensity, 0.0f);
+        has_ambient = true;
+    });
+    if (lights == 0 && !has_ambient) {  // an unlit scene gets the default key light and ambient
+        const DirectionalLight l;
+        const AmbientLight a;
+        b.light_dir[0] = glm::vec4(-glm::normalize(l.direction), 0.0f);
+        b.light_color[0] = glm::vec4(l.color * l.intensity, 0.0f);
+        b.ambient = glm::vec4(a.color * a.intensity, 0.0f);
+        lights = 1;
+    }
+    b.background = glm::vec4(settings.background.value_or(glm::vec3(0.0f)), 0.0f);
+    b.counts = glm::uvec4(0u, lights, 0u, 0u);
+    return b;
+}
+
+void draw_cloud(const std::array<gfx::Program, 2>& programs, const CloudGpu& gpu) {
+    glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.visible.id());
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
+    glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
+    glUseProgram(programs[0].id());
+    glDrawArraysIndirect(GL_POINTS, nullptr);
+    glUseProgram(programs[1].id());
+    glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(4 * sizeof(std::uint32_t)));
+}
+
+}  // namespace
+
+Status init_render_state(ecs::Registry& registry) {
+    SplatRenderState s;
+    auto cull = gfx::load_compute_program("splat_render/cull.comp", "render.cull");
+    if (!cull) return make_error(cull.message());
+    s.cull = std::move(cull.value());
+    for (int quad = 0; quad < 2; ++quad) {
+        auto vis = splat_program("splat_render/visibility.frag", quad ? "render.visibility.quads" : "render.visibility", 0, quad);
+        if (!vis) return make_error(vis.message());
+        auto attr = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute", 1, quad);
+        if (!attr) return make_error(attr.message());
+        auto prev = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2, quad);
+        if (!prev) return make_error(prev.message());
+        s.visibility[quad] = std::move(vis.value());
+        s.attribute[quad] = std::move(attr.value());
+        s.preview[quad] = std::move(prev.value());
+    }
+    auto shade = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
+                                    {GL_FRAGMENT_SHADER, "splat_render/shade.frag"}},
+                                   "render.shade");
+    if (!shade) return make_error(shade.message());
+    s.shade = std::move(shade.value());
+    s.vao = gfx::VertexArray::create("render.empty");
+    GLfloat range[2] = {1.0f, 1.0f};
+    glGetFloatv(GL_POINT_SIZE_RANGE, range);
+    s.max_point_size = range[1];
+    registry.set_resource<SplatRenderState>(std::move(s));
+    return {};
+}
+
+void release_render_state(ecs::Registry& registry) { registry.erase_resource<SplatRenderState>(); }
+
+void render_system(ecs::Registry& reg, const FrameContext& frame) {
+    if (!reg.try_resource<SplatRenderState>()) {
+        if (Status st = init_render_state(reg); !st) {
+            log::error("render_system(): ", st.message());
+            SplatRenderState failed;
+            failed.failed = true;
+            reg.set_resource<SplatRenderState>(std::move(failed));
+        }
+    }
+    SplatRenderState& s = reg.resource<SplatRenderState>();
+    if (s.failed) return;
+    if (!reg.try_resource<RenderSettings>()) reg.set_resource<RenderSettings>();
+    const RenderSettings settings = reg.resource<RenderSettings>();
+    if (!reg.try_resource<gfx::GpuSplatStore>()) reg.set_resource<gfx::GpuSplatStore>();
+    if (!reg.try_resource<RenderStats>()) reg.set_resource<RenderStats>();
+    RenderStats& stats = reg.resource<RenderStats>();
+    stats = RenderStats{};
+    stats.frame = frame.frame;
+
+    using clock = std::chrono::steady_clock;
+    const auto t_start = clock::now();
+    auto t_lap = t_start;
+    auto lap = [&](double& slot) {
+        if (!settings.time_passes) return;
+        glFinish();
+        const auto now = clock::now();
+        slot += std::chrono::duration<double, std::milli>(now - t_lap).count();
+        t_lap = now;
+    };
+
+    const int w = std::max(settings.width, 1), h = std::max(settings.height, 1);
+    ensure_targets(s, w, h);
+    sync_clouds(reg, s, reg.resource<gfx::GpuSplatStore>());
+
+    const ViewSetup view = choose_camera(reg, s, double(w) / double(h));
+    const gpu::FrameBlock common = frame_block(reg, settings, view, s.max_point_size);
+
+    // Per-cloud uniforms, then culling and compaction.
+    glUseProgram(s.cull.id());
+    std::vector<CloudGpu*> drawn;
+    reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
+        CloudGpu& gpu = s.clouds[e];
+        if (gpu.count == 0 || gpu.splats == 0) return;
+        gpu::FrameBlock b = common;
+        const glm::dmat4 mv = view.view * model_matrix(reg.try_get<Transform>(e), cloud.origin);
+        b.model_view = glm::mat4(mv);
+        b.normal_view = glm::mat4(glm::mat3(glm::inverseTranspose(glm::dmat3(mv))));
+        b.params.w = gpu.texture ? 1.0f : 0.0f;
+        b.material = glm::vec4(gpu.material->specular, gpu.material->shininess, 0.0f, 0.0f);
+        b.counts.x = gpu.count;
+        b.counts.z = gpu.capacity;
+        glNamedBufferSubData(gpu.frame_ubo.id(), 0, sizeof b, &b);
+        const std::uint32_t reset[8] = {0, 1, 0, 0, 6, 0, 0, 0};
+        glNamedBufferSubData(gpu.commands.id(), 0, sizeof reset, reset);
+        glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.visible.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, gpu.commands.id());
+        glDispatchCompute((gpu.count + cull_group_size - 1) / cull_group_size, 1, 1);
+        stats.splats += gpu.count;
+        drawn.push_back(&gpu);
+    });
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    lap(stats.cull_ms);
+    if (settings.time_passes)
+        for (const CloudGpu* gpu : drawn) {
+            std::uint32_t cmd[8] = {};
+            glGetNamedBufferSubData(gpu->commands.id(), 0, sizeof cmd, cmd);
+            stats.visible_points += cmd[0];
+            stats.visible_quads += cmd[5];
+        }
+
+    const glm::vec4 background = common.background;
+    const glm::vec4 no_hit(0.0f, 0.0f, 0.0f, -1.0f);
+    const float far_depth = 1.0f;
+    glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 0, &background.x);
+    glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 1, &no_hit.x);
+    glClearNamedFramebufferfv(s.output_fbo.id(), GL_DEPTH, 0, &far_depth);
+    glViewport(0, 0, w, h);
+    glBindVertexArray(s.vao.id());
+    glEnable(GL_PROGRAM_POINT_SIZE);
+    glDisable(GL_CULL_FACE);
+    glDisable(GL_BLEND);
+    glEnable(GL_DEPTH_TEST);
+    glDepthMask(GL_TRUE);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+
+    if (settings.quality == Quality::preview) {
+        glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
+        glDepthFunc(GL_LESS);
+        for (const CloudGpu* gpu : drawn) draw_cloud(s.preview, *gpu);
+        lap(stats.preview_ms);
+    } else {
+        // 1. visibility: eps-offset depth only
+        glBindFramebuffer(GL_FRAMEBUFFER, s.depth_fbo.id());
+        glDepthFunc(GL_LESS);
+        for (const CloudGpu* gpu : drawn) draw_cloud(s.visibility, *gpu);
+        lap(stats.visibility_ms);
+        // 2. attributes: additive, depth-tested against the offset surface, no depth writes
+        const glm::vec4 zero(0.0f);
+        glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 0, &zero.x);
+        glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 1, &zero.x);
+        glBindFramebuffer(GL_FRAMEBUFFER, s.accum_fbo.id());
+        glDepthFunc(GL_LEQUAL);
+        glDepthMask(GL_FALSE);
+        glEnable(GL_BLEND);
+        glBlendEquation(GL_FUNC_ADD);
+        glBlendFunc(GL_ONE, GL_ONE);
+        for (const CloudGpu* gpu : drawn) draw_cloud(s.attribute, *gpu);
+        glDisable(GL_BLEND);
+        glDepthMask(GL_TRUE);
+        lap(stats.attribute_ms);
+        // 3. normalise + shade (material of the first cloud: shading is deferred)
+        glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
+        glDisable(GL_DEPTH_TEST);
+        if (!drawn.empty()) glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, drawn.front()->frame_ubo.id());
+        glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s.accum_color.id());
+        glBindTextureUnit(SFFD_TEX_ACCUM_NORMAL, s.accum_normal.id());
+        glUseProgram(s.shade.id());
+        if (!drawn.empty()) glDrawArrays(GL_TRIANGLES, 0, 3);
+        glEnable(GL_DEPTH_TEST);
+        lap(stats.shade_ms);
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glBindVertexArray(0);
+    glUseProgram(0);
+    if (settings.time_passes)
+        stats.total_ms = std::chrono::duration<double, std::milli>(clock::now() - t_start).count();
+}
+
+Result<FrameImage> capture_frame(ecs::Registry& registry) {
+    const SplatRenderState* s = registry.try_resource<SplatRenderState>();
+    if (!s || s->failed || !s->output_fbo) return make_error("capture_frame(): nothing rendered yet");
+    const int w = s->width, h = s->height;
+    const std::size_t n = std::size_t(w) * std::size_t(h);
+    std::vector<glm::vec4> color(n), aux(n);
+    glGetTextureImage(s->color.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(n * sizeof(glm::vec4)), color.data());
+    glGetTextureImage(s->aux.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(n * sizeof(glm::vec4)), aux.data());
+    FrameImage img;
+    img.width = w, img.height = h;
+    img.color.resize(n), img.depth.resize(n), img.normal.resize(n);
+    for (int y = 0; y < h; ++y) {  // GL rows are bottom-up, images top-down
+        const std::size_t src_row = std::size_t(h - 1 - y) * std::size_t(w), dst_row = std::size_t(y) * std::size_t(w);
+        for (int x = 0; x < w; ++x) {
+            const glm::vec4& c = color[src_row + std::size_t(x)];
+            const glm::vec4& a = aux[src_row + std::size_t(x)];
+            const bool hit = c.w > 0.0f && a.w >= 0.0f;
+            img.color[dst_row + std::size_t(x)] = hit ? c : glm::vec4(0.0f);
+            img.depth[dst_row + std::size_t(x)] = hit ? a.w : std::numeric_limits<float>::infinity();
+            img.normal[dst_row + std::size_t(x)] = hit ? glm::vec3(a) : glm::vec3(0.0f);
+        }
+    }
+    return img;
+}
+
+GLuint output_framebuffer(const ecs::Registry& registry) {
+    const SplatRenderState* s = registry.try_resource<SplatRenderState>();
+    return s ? s->output_fbo.id() : 0;
+}
+
+GLuint output_color_texture(const ecs::Registry& registry) {
+    const SplatRenderState* s = registry.try_resource<SplatRenderState>();
+    return s ? s->color.id() : 0;
+}
+
+}  // namespace sffd::render

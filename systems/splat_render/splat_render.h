@@ -1,0 +1,67 @@
+// Splat render system (rendering phase): surface splatting of every SplatCloud in the registry.
+//
+//   reads   SplatCloud (+ Transform), Camera, DirectionalLight, AmbientLight, RenderSettings (resource),
+//           GpuSplatStore draw_buffer() (deformed splats written by the FFD system, else rest)
+//   writes  GpuSplatStore.rest (uploads a cloud when its change stamp moves), SplatRenderState (resource:
+//           its GL programs, per-cloud cull buffers and textures, the offscreen targets), RenderStats
+//
+// HQ (Botsch et al. 2005): cull + compact -> visibility (depth, eps-offset ray-cast ellipses) -> attribute
+// (additive RGBA32F: w*colour, w; w*normal, w*depth) -> normalise + deferred Blinn-Phong. Preview: one pass
+// of opaque ray-cast ellipses. Output: a linear RGBA16F colour target plus an RGBA32F target with world
+// normal and view-axis depth; capture_frame() reads both back into a FrameImage (PNG/EXR writers in
+// image_io.h). A scene without a Camera is framed automatically; without lights it gets a default one.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+
+#include <glm/glm.hpp>
+
+#include "runtime/app/frame_loop.h"
+#include "runtime/core/result.h"
+#include "runtime/ecs/registry.h"
+#include "runtime/gfx/gl.h"
+#include "systems/splat_render/image_io.h"
+
+namespace sffd::render {
+
+enum class Quality : std::uint8_t { hq, preview };
+
+// Registry resource; zero-initialised fields are the defaults.
+struct RenderSettings {
+    Quality quality = Quality::hq;
+    int width = 1280;
+    int height = 720;
+    std::optional<glm::vec3> background;  // linear RGB for display; captured frames keep alpha 0 there
+    bool culling = true;                  // compute-pass back-face + frustum culling (off: classify only)
+    float visibility_epsilon = 1.0f;      // HQ depth offset along the view ray, in units of each splat's radius
+    bool time_passes = false;             // glFinish after each pass and record CPU times in RenderStats
+};
+
+// Registry resource written by render_system; pass times only when RenderSettings::time_passes.
+struct RenderStats {
+    std::uint64_t frame = 0;
+    std::uint32_t splats = 0;           // splats submitted (all clouds)
+    std::uint32_t visible_points = 0;   // after culling, drawn as sprites (only with time_passes)
+    std::uint32_t visible_quads = 0;    // after culling, drawn as quads (only with time_passes)
+    double cull_ms = 0, visibility_ms = 0, attribute_ms = 0, shade_ms = 0, preview_ms = 0, total_ms = 0;
+};
+
+// Compiles the programs and creates the state resource (SplatRenderState). Needs a current GL 4.5
+// context. render_system calls it on first use; call it yourself to get shader errors as a Status.
+Status init_render_state(ecs::Registry& registry);
+
+void render_system(ecs::Registry& registry, const FrameContext& frame);
+
+// Reads the last rendered frame back (call after render_system, same context).
+Result<FrameImage> capture_frame(ecs::Registry& registry);
+
+// The offscreen framebuffer holding the last frame (colour attachment 0 linear RGBA16F, attachment 1
+// normal+depth, depth attachment), for overlays and presenting; 0 before the first frame.
+GLuint output_framebuffer(const ecs::Registry& registry);
+GLuint output_color_texture(const ecs::Registry& registry);
+
+// Frees the state's GL objects (while the context is current): erases the SplatRenderState resource.
+void release_render_state(ecs::Registry& registry);
+
+}  // namespace sffd::render
