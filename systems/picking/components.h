@@ -1,0 +1,77 @@
+// Picking components and resources: plain data. Owned by the picking system (systems/picking); the
+// editor (systems/editor) writes PickRequest and LatticeSelection, reads PickResult.
+//
+//   registry.set_resource<picking::PickRequest>(picking::request_at_pixel(view, {320.5, 240.5}));
+//   ... picking phase runs picking_system() ...
+//   const picking::PickHit& hit = registry.resource<picking::PickResult>().hit;
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "runtime/ecs/entity.h"
+#include "systems/picking/screen_view.h"
+
+namespace sffd::picking {
+
+enum class PickKind : std::uint8_t { none, control_point, surface };
+const char* pick_kind_name(PickKind kind);  // "none", "control_point", "surface"
+
+// One pick's answer. `entity` is the lattice entity (control point) or the point-cloud entity
+// (surface); `index` is the control point's flat index (i*(m+1)+j)*(n+1)+k or the splat's index.
+struct PickHit {
+    PickKind kind = PickKind::none;
+    ecs::Entity entity = ecs::null_entity;
+    std::uint32_t index = 0;
+    glm::dvec3 position{0.0};  // world-space hit point (the control point itself for control points)
+    double distance = 0.0;     // from the ray origin to `position`, world units
+
+    explicit operator bool() const { return kind != PickKind::none; }
+};
+
+// What to pick. Either an explicit world ray (has_screen = false: only the geometry along the ray
+// counts, control points are spheres of PickSettings radius), or a ray through a screen point of a
+// ScreenView (has_screen = true: additionally, a control point whose projection lies within
+// `tolerance_px` of the cursor wins over the surface, as the lattice is drawn over the model).
+struct PickQuery {
+    Ray ray;
+    bool has_screen = false;
+    ScreenView screen;
+    glm::dvec2 cursor{0.0};      // screen point the ray goes through (pixels, y down)
+    double tolerance_px = 6.0;   // control points within this many pixels of the cursor win
+    bool xray = false;           // control points hidden behind the surface can be picked
+    bool control_points = true;  // consider lattice control points
+    bool surfaces = true;        // consider splat surfaces
+};
+
+PickQuery query_from_ray(const Ray& ray);
+PickQuery query_at_pixel(const ScreenView& view, glm::dvec2 screen);
+
+// Resource: a pick for the picking phase. `pending` is cleared by picking_system when answered.
+struct PickRequest {
+    bool pending = false;
+    PickQuery query;
+};
+
+// Resource: the last answered pick. `serial` increases by one per answered request.
+struct PickResult {
+    PickHit hit;
+    std::uint64_t serial = 0;
+    std::uint64_t frame = 0;
+};
+
+// Resource: picking tunables.
+struct PickSettings {
+    // Control-point sphere radius for explicit rays, as a fraction of the lattice's smallest cell edge.
+    double control_point_radius_fraction = 0.08;
+};
+
+// On a lattice entity: the selected control points, as sorted unique flat indices. Changed only
+// through the selection functions in selection.h (the editor records them for undo).
+struct LatticeSelection {
+    std::vector<std::uint32_t> indices;
+};
+
+}  // namespace sffd::picking

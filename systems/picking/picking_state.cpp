@@ -1,0 +1,417 @@
+// Embree side of picking: one function per step (device, scenes, geometry fill, refresh, ray casts), one
+// error callback for the device. Who owns what: PickingState::Impl owns the device and both scenes; each
+// GeomRecord owns its RTCGeometry (released on destruction) and the CPU copies of splat axes that the
+// ellipse filter reads through the geometry's user pointer.
+#include "systems/picking/picking_state.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <unordered_map>
+#include <vector>
+
+#include <embree3/rtcore.h>
+
+#include "runtime/core/log.h"
+#include "runtime/scene/components.h"
+#include "systems/ffd/components.h"
+#include "systems/picking/splat_source.h"
+#include "systems/picking/world_space.h"
+
+namespace sffd::picking {
+namespace {
+
+// What a geometry was built from; a refresh rebuilds it when any of these moved.
+struct Stamp {
+    int source = 0;               // SplatSource::Kind, or -1 for lattices
+    std::uint64_t data = 0;       // change stamp of the data component
+    std::uint64_t transform = 0;  // change stamp of the entity's Transform
+    double param = 0.0;           // control-point radius fraction (lattices)
+    std::size_t count = 0;
+    bool operator==(const Stamp&) const = default;
+};
+
+struct GeomRecord {
+    ecs::Entity entity;
+    RTCGeometry geometry = nullptr;
+    unsigned id = RTC_INVALID_GEOMETRY_ID;
+    Stamp stamp;
+    bool discs = false;
+    // Ellipse filter inputs (discs only), anchor-relative float, indexed by primitive id.
+    std::vector<glm::vec3> centres, axis_u, axis_v;
+
+    GeomRecord() = default;
+    GeomRecord(const GeomRecord&) = delete;
+    GeomRecord& operator=(const GeomRecord&) = delete;
+    ~GeomRecord() {
+        if (geometry) rtcReleaseGeometry(geometry);
+    }
+};
+
+using RecordMap = std::unordered_map<std::uint64_t, std::unique_ptr<GeomRecord>>;
+
+void embree_error(void*, RTCError code, const char* message) {
+    log::error("embree: error ", int(code), ": ", message ? message : "(no message)");
+}
+
+RTCDevice create_device() {
+    RTCDevice device = rtcNewDevice(nullptr);
+    if (!device) {
+        log::error("PickingState(): rtcNewDevice failed (error ", int(rtcGetDeviceError(nullptr)), ")");
+        return nullptr;
+    }
+    rtcSetDeviceErrorFunction(device, embree_error, nullptr);
+    if (!rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_POINT_GEOMETRY_SUPPORTED))
+        log::error("PickingState(): this Embree build has no point geometry; picking will find nothing");
+    if (!rtcGetDeviceProperty(device, RTC_DEVICE_PROPERTY_FILTER_FUNCTION_SUPPORTED))
+        log::warn("PickingState(): Embree without filter functions: splats are picked as circles");
+    return device;
+}
+
+RTCScene create_scene(RTCDevice device) {
+    RTCScene scene = rtcNewScene(device);
+    // Deformed splats move every edit: a fast (low quality) rebuild beats a slow build plus fast traversal
+    // for one ray per click.
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_DYNAMIC);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_LOW);
+    return scene;
+}
+
+// Largest singular value of [a b]: the radius of the circle around the ellipse {a x + b y : x²+y² <= 1}
+// (larger than max(|a|, |b|) once deformation shears the axes).
+float ellipse_bounding_radius(const glm::vec3& a, const glm::vec3& b) {
+    const float A = glm::dot(a, a), B = glm::dot(a, b), C = glm::dot(b, b);
+    const float half_diff = 0.5f * (A - C);
+    return std::sqrt(std::max(0.0f, 0.5f * (A + C) + std::sqrt(half_diff * half_diff + B * B)));
+}
+
+// Intersection/occlusion filter: Embree tested the bounding disc; keep the hit only when the hit point
+// lies in the splat's ellipse, i.e. when its least-squares coordinates (x, y) in the basis (a, b)
+// satisfy x² + y² <= 1.
+void ellipse_filter(const RTCFilterFunctionNArguments* args) {
+    const auto* rec = static_cast<const GeomRecord*>(args->geometryUserPtr);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+        const float t = RTCRayN_tfar(args->ray, args->N, i);
+        const glm::vec3 org{RTCRayN_org_x(args->ray, args->N, i), RTCRayN_org_y(args->ray, args->N, i),
+                            RTCRayN_org_z(args->ray, args->N, i)};
+        const glm::vec3 dir{RTCRayN_dir_x(args->ray, args->N, i), RTCRayN_dir_y(args->ray, args->N, i),
+                            RTCRayN_dir_z(args->ray, args->N, i)};
+        const glm::vec3 d = org + t * dir - rec->centres[prim];
+        const glm::vec3& a = rec->axis_u[prim];
+        const glm::vec3& b = rec->axis_v[prim];
+        const float A = glm::dot(a, a), B = glm::dot(a, b), C = glm::dot(b, b);
+        const float det = A * C - B * B;
+        if (!(det > 1e-12f * A * C)) continue;  // degenerate axes: keep Embree's disc answer
+        const float ad = glm::dot(a, d), bd = glm::dot(b, d);
+        const float x = (C * ad - B * bd) / det;
+        const float y = (A * bd - B * ad) / det;
+        if (x * x + y * y > 1.0f + 1e-5f) args->valid[i] = 0;
+    }
+}
+
+// Fills (or refills) a point cloud's geometry buffers from its splats, in world space minus the anchor.
+void fill_surface(GeomRecord& rec, const SplatSource& src, const glm::dmat4& model, const glm::dvec3& anchor) {
+    const std::size_t n = src.positions.size();
+    const glm::dmat3 linear(model);
+    const glm::mat3 linear_f(linear);
+    const glm::mat3 normal_f(glm::transpose(glm::inverse(linear)));
+    const bool has_axes = src.axis_u.size() == n && src.axis_v.size() == n;
+    auto* vertex = static_cast<float*>(rtcGetGeometryBufferData(rec.geometry, RTC_BUFFER_TYPE_VERTEX, 0));
+    float* normal = rec.discs
+        ? static_cast<float*>(rtcGetGeometryBufferData(rec.geometry, RTC_BUFFER_TYPE_NORMAL, 0))
+        : nullptr;
+    rec.centres.resize(rec.discs ? n : 0);
+    rec.axis_u.resize(rec.discs ? n : 0);
+    rec.axis_v.resize(rec.discs ? n : 0);
+
+    // Without tangent axes a splat has no size: fall back to the mean spacing of the bounding box.
+    float fallback_radius = 0.0f;
+    if (!has_axes && n > 0) {
+        glm::vec3 lo(std::numeric_limits<float>::max()), hi(std::numeric_limits<float>::lowest());
+        for (const glm::vec3& p : src.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+        fallback_radius = glm::length(linear_f * (hi - lo)) / std::sqrt(float(n));
+    }
+    const glm::dvec3 shift = src.origin;
+    for (std::size_t i = 0; i < n; ++i) {
+        const glm::dvec3 world = glm::dvec3(model * glm::dvec4(shift + glm::dvec3(src.positions[i]), 1.0));
+        const glm::vec3 c(world - anchor);
+        float radius = fallback_radius;
+        if (has_axes) {
+            const glm::vec3 a = linear_f * src.axis_u[i];
+            const glm::vec3 b = linear_f * src.axis_v[i];
+            radius = ellipse_bounding_radius(a, b);
+            if (rec.discs) rec.axis_u[i] = a, rec.axis_v[i] = b;
+        }
+        vertex[4 * i + 0] = c.x;
+        vertex[4 * i + 1] = c.y;
+        vertex[4 * i + 2] = c.z;
+        vertex[4 * i + 3] = radius;
+        if (rec.discs) {
+            rec.centres[i] = c;
+            glm::vec3 nn = normal_f * src.normals[i];
+            const float len = glm::length(nn);
+            nn = len > 0.0f ? nn / len : glm::vec3(0, 0, 1);
+            normal[3 * i + 0] = nn.x;
+            normal[3 * i + 1] = nn.y;
+            normal[3 * i + 2] = nn.z;
+        }
+    }
+    rtcUpdateGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+    if (rec.discs) rtcUpdateGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_NORMAL, 0);
+    rtcCommitGeometry(rec.geometry);
+}
+
+// Control points as spheres; radius a fraction of the smallest (world) cell edge of the lattice.
+void fill_controls(GeomRecord& rec, const Lattice& lattice, const glm::dmat4& model, const glm::dvec3& anchor,
+                   double fraction) {
+    const glm::dmat3 linear(model);
+    double edge = std::numeric_limits<double>::max();
+    for (int a = 0; a < 3; ++a)
+        edge = std::min(edge, glm::length(linear * lattice.axes[a]) / std::max(1, lattice.divisions[a]));
+    if (!(edge > 0.0) || !std::isfinite(edge)) edge = 1.0;
+    const float radius = float(fraction * edge);
+    auto* vertex = static_cast<float*>(rtcGetGeometryBufferData(rec.geometry, RTC_BUFFER_TYPE_VERTEX, 0));
+    for (std::size_t i = 0; i < lattice.current.size(); ++i) {
+        const glm::vec3 c(glm::dvec3(model * glm::dvec4(lattice.current[i], 1.0)) - anchor);
+        vertex[4 * i + 0] = c.x;
+        vertex[4 * i + 1] = c.y;
+        vertex[4 * i + 2] = c.z;
+        vertex[4 * i + 3] = radius;
+    }
+    rtcUpdateGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_VERTEX, 0);
+    rtcCommitGeometry(rec.geometry);
+}
+
+// New Embree geometry sized for `count` primitives, attached to `scene`.
+void create_geometry(RTCDevice device, RTCScene scene, GeomRecord& rec, RTCGeometryType type, std::size_t count) {
+    rec.geometry = rtcNewGeometry(device, type);
+    rec.discs = type == RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT;
+    rtcSetGeometryBuildQuality(rec.geometry, RTC_BUILD_QUALITY_LOW);
+    rtcSetNewGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), count);
+    if (rec.discs) {
+        rtcSetNewGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), count);
+        rtcSetGeometryUserData(rec.geometry, &rec);
+        rtcSetGeometryIntersectFilterFunction(rec.geometry, ellipse_filter);
+        rtcSetGeometryOccludedFilterFunction(rec.geometry, ellipse_filter);
+    }
+    rec.id = rtcAttachGeometry(scene, rec.geometry);
+}
+
+void release_geometry(RTCScene scene, RecordMap& map, RecordMap::iterator it) {
+    rtcDetachGeometry(scene, it->second->id);
+    map.erase(it);
+}
+
+RTCRayHit make_rayhit(const glm::dvec3& origin, const glm::dvec3& direction, double tfar) {
+    RTCRayHit rh{};
+    rh.ray.org_x = float(origin.x), rh.ray.org_y = float(origin.y), rh.ray.org_z = float(origin.z);
+    rh.ray.dir_x = float(direction.x), rh.ray.dir_y = float(direction.y), rh.ray.dir_z = float(direction.z);
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = std::isfinite(tfar) ? float(tfar) : std::numeric_limits<float>::infinity();
+    rh.ray.mask = 0xffffffffu;
+    rh.ray.flags = 0;
+    rh.ray.time = 0.0f;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    return rh;
+}
+
+}  // namespace
+
+struct PickingState::Impl {
+    RTCDevice device = nullptr;
+    RTCScene surfaces = nullptr;
+    RTCScene controls = nullptr;
+    RecordMap surface_records, control_records;               // by entity bits
+    std::unordered_map<unsigned, ecs::Entity> surface_ids, control_ids;  // geometry id -> entity
+    glm::dvec3 anchor{0.0};
+    bool anchored = false;
+    // Registry stamps of the last refresh: when none moved, refresh() returns at once.
+    std::array<std::uint64_t, 4> seen{~0ull, ~0ull, ~0ull, ~0ull};
+    double seen_fraction = -1.0;
+    Stats stats;
+
+    Impl() : device(create_device()), surfaces(create_scene(device)), controls(create_scene(device)) {
+        rtcCommitScene(surfaces);  // empty scenes are valid to trace
+        rtcCommitScene(controls);
+    }
+    ~Impl() {
+        surface_records.clear();
+        control_records.clear();
+        if (surfaces) rtcReleaseScene(surfaces);
+        if (controls) rtcReleaseScene(controls);
+        if (device) rtcReleaseDevice(device);
+    }
+
+    bool refresh_surfaces(ecs::Registry& registry);
+    bool refresh_controls(ecs::Registry& registry, double fraction);
+    std::optional<RayHit> intersect(RTCScene scene, const std::unordered_map<unsigned, ecs::Entity>& ids,
+                                    const Ray& ray, double tfar) const;
+};
+
+PickingState::PickingState() : m_impl(std::make_unique<Impl>()) {}
+PickingState::~PickingState() = default;
+PickingState::PickingState(PickingState&&) noexcept = default;
+PickingState& PickingState::operator=(PickingState&&) noexcept = default;
+
+const PickingState::Stats& PickingState::stats() const { return m_impl->stats; }
+std::size_t PickingState::surface_geometry_count() const { return m_impl->surface_records.size(); }
+std::size_t PickingState::control_geometry_count() const { return m_impl->control_records.size(); }
+
+bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
+    bool changed = false;
+    // Entities that died or lost their cloud: detach their geometry (its id becomes free for reuse).
+    for (auto it = surface_records.begin(); it != surface_records.end();) {
+        const ecs::Entity e = it->second->entity;
+        if (!registry.valid(e) || !registry.has<SplatCloud>(e)) {
+            surface_ids.erase(it->second->id);
+            auto doomed = it++;
+            release_geometry(surfaces, surface_records, doomed);
+            ++stats.geometries_released;
+            changed = true;
+        } else {
+            ++it;
+        }
+    }
+    for (auto [e, cloud] : registry.view<const SplatCloud>()) {
+        const SplatSource src = splat_source(registry, e);
+        if (!anchored && !src.positions.empty()) {
+            anchor = glm::dvec3(model_matrix(registry.try_get<Transform>(e)) * glm::dvec4(src.origin, 1.0));
+            anchored = true;
+        }
+        const Stamp stamp{int(src.kind), src.version, registry.version<Transform>(e), 0.0, src.positions.size()};
+        auto it = surface_records.find(e.bits());
+        if (it != surface_records.end() && it->second->stamp == stamp) continue;
+        const bool discs = src.normals.size() == src.positions.size();
+        if (it != surface_records.end() &&
+            (it->second->stamp.count != stamp.count || it->second->discs != discs || stamp.count == 0)) {
+            surface_ids.erase(it->second->id);
+            release_geometry(surfaces, surface_records, it);
+            ++stats.geometries_released;
+            it = surface_records.end();
+            changed = true;
+        }
+        if (stamp.count == 0) continue;
+        if (it == surface_records.end()) {
+            auto rec = std::make_unique<GeomRecord>();
+            rec->entity = e;
+            create_geometry(device, surfaces, *rec,
+                            discs ? RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT : RTC_GEOMETRY_TYPE_SPHERE_POINT,
+                            stamp.count);
+            surface_ids[rec->id] = e;
+            it = surface_records.emplace(e.bits(), std::move(rec)).first;
+            ++stats.geometries_created;
+        } else {
+            ++stats.geometries_updated;
+        }
+        it->second->stamp = stamp;
+        fill_surface(*it->second, src, model_matrix(registry.try_get<Transform>(e)), anchor);
+        changed = true;
+    }
+    if (changed) {
+        rtcCommitScene(surfaces);
+        ++stats.surface_commits;
+    }
+    return changed;
+}
+
+bool PickingState::Impl::refresh_controls(ecs::Registry& registry, double fraction) {
+    bool changed = false;
+    for (auto it = control_records.begin(); it != control_records.end();) {
+        const ecs::Entity e = it->second->entity;
+        if (!registry.valid(e) || !registry.has<Lattice>(e)) {
+            control_ids.erase(it->second->id);
+            auto doomed = it++;
+            release_geometry(controls, control_records, doomed);
+            ++stats.geometries_released;
+            changed = true;
+        } else {
+            ++it;
+        }
+    }
+    for (auto [e, lattice] : registry.view<const Lattice>()) {
+        if (!anchored && !lattice.current.empty()) {
+            anchor = glm::dvec3(model_matrix(registry.try_get<Transform>(e)) * glm::dvec4(lattice.origin, 1.0));
+            anchored = true;
+        }
+        const Stamp stamp{-1, registry.version<Lattice>(e), registry.version<Transform>(e), fraction,
+                          lattice.current.size()};
+        auto it = control_records.find(e.bits());
+        if (it != control_records.end() && it->second->stamp == stamp) continue;
+        if (it != control_records.end() && (it->second->stamp.count != stamp.count || stamp.count == 0)) {
+            control_ids.erase(it->second->id);
+            release_geometry(controls, control_records, it);
+            ++stats.geometries_released;
+            it = control_records.end();
+            changed = true;
+        }
+        if (stamp.count == 0) continue;
+        if (it == control_records.end()) {
+            auto rec = std::make_unique<GeomRecord>();
+            rec->entity = e;
+            create_geometry(device, controls, *rec, RTC_GEOMETRY_TYPE_SPHERE_POINT, stamp.count);
+            control_ids[rec->id] = e;
+            it = control_records.emplace(e.bits(), std::move(rec)).first;
+            ++stats.geometries_created;
+        } else {
+            ++stats.geometries_updated;
+        }
+        it->second->stamp = stamp;
+        fill_controls(*it->second, lattice, model_matrix(registry.try_get<Transform>(e)), anchor, fraction);
+        changed = true;
+    }
+    if (changed) {
+        rtcCommitScene(controls);
+        ++stats.control_commits;
+    }
+    return changed;
+}
+
+bool PickingState::refresh(ecs::Registry& registry, const PickSettings& settings) {
+    Impl& s = *m_impl;
+    ++s.stats.refresh_calls;
+    const std::array<std::uint64_t, 4> now{registry.storage_version<SplatCloud>(), splat_source_storage_version(registry),
+                                           registry.storage_version<Transform>(), registry.storage_version<Lattice>()};
+    if (now == s.seen && settings.control_point_radius_fraction == s.seen_fraction) return false;
+    const bool a = s.refresh_surfaces(registry);
+    const bool b = s.refresh_controls(registry, settings.control_point_radius_fraction);
+    s.seen = now;
+    s.seen_fraction = settings.control_point_radius_fraction;
+    return a || b;
+}
+
+std::optional<PickingState::RayHit> PickingState::Impl::intersect(
+    RTCScene scene, const std::unordered_map<unsigned, ecs::Entity>& ids, const Ray& ray, double tfar) const {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh = make_rayhit(ray.origin - anchor, ray.direction, tfar);
+    rtcIntersect1(scene, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+    const auto it = ids.find(rh.hit.geomID);
+    if (it == ids.end()) return std::nullopt;
+    return RayHit{it->second, rh.hit.primID, double(rh.ray.tfar)};
+}
+
+std::optional<PickingState::RayHit> PickingState::intersect_surfaces(const Ray& ray, double tfar) const {
+    return m_impl->intersect(m_impl->surfaces, m_impl->surface_ids, ray, tfar);
+}
+
+std::optional<PickingState::RayHit> PickingState::intersect_controls(const Ray& ray, double tfar) const {
+    return m_impl->intersect(m_impl->controls, m_impl->control_ids, ray, tfar);
+}
+
+bool PickingState::surface_between(const glm::dvec3& from, const glm::dvec3& to) const {
+    const glm::dvec3 d = to - from;
+    const double len = glm::length(d);
+    if (!(len > 0.0)) return false;
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh = make_rayhit(from - m_impl->anchor, d / len, len * (1.0 - 1e-3));
+    rtcOccluded1(m_impl->surfaces, &context, &rh.ray);
+    return rh.ray.tfar == -std::numeric_limits<float>::infinity();
+}
+
+}  // namespace sffd::picking

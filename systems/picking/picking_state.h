@@ -1,0 +1,78 @@
+// PickingState: the picking system's Embree state (device, two scenes, geometry-id maps), held as a
+// registry resource and created on the first pick. Move-only RAII owner; Embree headers stay in the .cpp.
+//
+// Two scenes, following the Embree tutorials (point_geometry, dynamic_scene):
+//   surfaces  one RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT geometry per point-cloud entity: centre, radius
+//             = the longer splat axis, normal; an intersection filter trims the disc to the splat's
+//             ellipse (axis_u, axis_v). Data: the deformer's CPU output (DeformedSplats) when the
+//             cloud has one, else the authored SplatCloud. Clouds without normals become sphere points.
+//   controls  one RTC_GEOMETRY_TYPE_SPHERE_POINT geometry per lattice entity (current control points).
+// Geometry id -> entity (with generation) and primitive id -> splat / control-point index.
+//
+// refresh() is lazy: it compares the registry's change stamps with those the scenes were built from and
+// touches only what moved (rtcUpdateGeometryBuffer + rtcCommitGeometry per geometry, then one
+// rtcCommitScene per scene). It is called by pick(), never every frame.
+//
+// Precision: Embree works in float, so every position is stored relative to an `anchor` (the origin of
+// the first point cloud seen), and rays are shifted by it; scans 1e6 units from the world origin pick
+// as precisely as scans near it.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+
+#include <glm/glm.hpp>
+
+#include "runtime/ecs/registry.h"
+#include "systems/picking/components.h"
+
+namespace sffd::picking {
+
+class PickingState {
+public:
+    PickingState();
+    ~PickingState();
+    PickingState(PickingState&&) noexcept;
+    PickingState& operator=(PickingState&&) noexcept;
+    PickingState(const PickingState&) = delete;
+    PickingState& operator=(const PickingState&) = delete;
+
+    // Counters for tests and the benchmark: how much work refreshes did.
+    struct Stats {
+        std::uint64_t refresh_calls = 0;      // refresh() invocations
+        std::uint64_t surface_commits = 0;    // rtcCommitScene on the surfaces scene
+        std::uint64_t control_commits = 0;    // rtcCommitScene on the controls scene
+        std::uint64_t geometries_created = 0;
+        std::uint64_t geometries_updated = 0; // in-place buffer updates (same entity, data moved)
+        std::uint64_t geometries_released = 0;
+    };
+    const Stats& stats() const;
+
+    // Brings both scenes up to date with the registry. Returns true when a scene was committed.
+    bool refresh(ecs::Registry& registry, const PickSettings& settings = {});
+
+    // Closest hit along the ray in (tnear, tfar], in world units from ray.origin (direction unit length).
+    struct RayHit {
+        ecs::Entity entity = ecs::null_entity;
+        std::uint32_t index = 0;
+        double t = 0.0;
+    };
+    std::optional<RayHit> intersect_surfaces(const Ray& ray, double tfar) const;
+    std::optional<RayHit> intersect_controls(const Ray& ray, double tfar) const;
+    // True when a surface lies on the segment from `from` to `to` (excluding a small end margin, so a
+    // control point sitting on the surface is not hidden by the splat it touches).
+    bool surface_between(const glm::dvec3& from, const glm::dvec3& to) const;
+
+    // Number of geometries in each scene (for tests: ids are released when entities die).
+    std::size_t surface_geometry_count() const;
+    std::size_t control_geometry_count() const;
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace sffd::picking
