@@ -1,0 +1,36 @@
+#include "systems/animation/animation_system.h"
+
+#include "runtime/core/log.h"
+#include "systems/animation/components.h"
+#include "systems/animation/evaluate.h"
+#include "systems/ffd/components.h"
+
+namespace sffd {
+
+void animation_system(ecs::Registry& registry, const FrameContext& frame) {
+    std::vector<glm::dvec3> pose;
+    registry.view<const AnimationClip, AnimationState, const Lattice>().each(
+        [&](ecs::Entity e, const AnimationClip& clip, AnimationState& state, const Lattice& lattice) {
+            if (state.rebase) {
+                state.anchor_clock = frame.time;
+                state.rebase = false;
+            }
+            state.raw_time = clip_raw_time(clip, state, frame.time);
+            state.time = map_clip_time(clip, state.raw_time);
+            // Validation is cheap next to evaluation (both O(bound points)); a bad clip (e.g. after the
+            // lattice was resampled to fewer points) is skipped and reported once per distinct error.
+            if (Status valid = validate_clip(clip, lattice.rest.size()); !valid) {
+                if (state.error != valid.message()) log::error("animation_system(): ", valid.message());
+                state.error = valid.message();
+                state.last_pose.clear();
+                return;
+            }
+            state.error.clear();
+            evaluate_pose(clip, lattice, state.time, pose);
+            if (pose == state.last_pose && lattice.current.size() == pose.size()) return;
+            registry.patch<Lattice>(e).current = pose;
+            state.last_pose.swap(pose);
+        });
+}
+
+}  // namespace sffd
