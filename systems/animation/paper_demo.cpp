@@ -46,7 +46,7 @@ AnimationClip make_paper_demo_clip(const Lattice& lattice) {
             clip, "local stretch",
             block(lattice, {frac(d.x, 0.3), frac(d.y, 0.3), frac(d.z, 0.6)},
                   {frac(d.x, 0.7), frac(d.y, 0.7), d.z - 1}));
-        add_pulse(clip.tracks[t], 0.0, 0.35 * U);
+        add_pulse(clip.tracks[t], 0.0, 0.5 * U);
     }
     // 2. Local twist: the upper front quadrant of interior points, about U through its rest centroid.
     {

@@ -1,6 +1,6 @@
 // The built-in demo clip: the paper's four cases (Beddiaf & Babahenini, Figs. 3-6 / 8-11) in sequence,
 // 96 frames at 24 fps (4 s, looping), one second per case:
-//   frames  0-23  local stretch   a block of interior control points in the upper middle pulled along +U
+//   frames  0-23  local stretch   a block of interior control points in the upper middle pulled by 0.5 U
 //   frames 24-47  local twist     the upper front quadrant of interior points turned 90 deg about U
 //                                 through its rest centroid
 //   frames 48-71  global stretch  every control point; layer k moves by (k/n - 1/2) * 0.6 U, so the
