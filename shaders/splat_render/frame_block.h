@@ -6,7 +6,7 @@
 #define SFFD_MAX_LIGHTS 4
 
 #ifdef __cplusplus
-#include <glm/glm.hpp>
+// C++: include <glm/glm.hpp> before this header (the GLSL include resolver does not evaluate #ifdef).
 namespace sffd::gpu {
 struct FrameBlock {
 #define SFFD_MAT4 glm::mat4

@@ -9,6 +9,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include <glm/glm.hpp>
 #include <glm/gtc/matrix_inverse.hpp>
 
 #include "runtime/core/log.h"

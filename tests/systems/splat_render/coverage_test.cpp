@@ -1,0 +1,214 @@
+// Coverage under deformation (elliptical axes from the lattice's Jacobian close the gaps that fixed-radius
+// splats open), splats beyond the point-size limit, splats centred just off-screen, texture lookup at uv.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "systems/ffd/deform.h"
+#include "systems/ffd/lattice.h"
+#include "tests/systems/splat_render/gl_fixture.h"
+#include "tests/systems/splat_render/test_scenes.h"
+
+using namespace sffd;
+using namespace sffd::render;
+using namespace sffd::render::test;
+
+namespace {
+
+constexpr std::size_t paper_splats = 59650;
+
+// Deforms `cloud` through a 2x2x2-division Bernstein lattice around the unit sphere whose control points
+// are scaled `factor` times along x: x' = factor * x inside (Bernstein reproduces linear maps exactly).
+SplatCloud stretch_x(const SplatCloud& cloud, double factor) {
+    Lattice lattice = ffd::make_lattice(glm::dvec3(-1.2), {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)},
+                                        glm::ivec3(2, 2, 2));
+    for (glm::dvec3& p : lattice.current) p.x *= factor;
+    SplatCloud out = cloud;
+    ffd::PointsIn in{cloud.positions.data(), cloud.normals.data(), cloud.axis_u.data(), cloud.axis_v.data(),
+                     cloud.size(), cloud.origin};
+    ffd::PointsOut o{out.positions.data(), out.normals.data(), out.axis_u.data(), out.axis_v.data()};
+    auto stats = ffd::deform(lattice, in, o);
+    EXPECT_TRUE(stats.ok()) << (stats.ok() ? "" : stats.message());
+    if (stats.ok()) {
+        EXPECT_EQ(stats->inside, cloud.size());
+    }
+    return out;
+}
+
+struct Coverage {
+    int inside = 0, holes = 0, far_side = 0;
+};
+
+Coverage coverage(const FrameImage& img, const Camera& cam, glm::dvec3 scale) {
+    Coverage c;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+            const glm::dvec3 d = pixel_ray(cam, x, y, img.width, img.height);
+            if (!hit_ellipsoid(cam.eye, d, scale * 0.97)) continue;
+            ++c.inside;
+            if (!img.covered(x, y)) {
+                ++c.holes;
+                continue;
+            }
+            if (std::abs(double(img.depth[img.index(x, y)]) - *hit_ellipsoid(cam.eye, d, scale)) > 0.05) ++c.far_side;
+        }
+    return c;
+}
+
+}  // namespace
+
+class Coverage_ : public GlRenderTest {};
+
+TEST_F(Coverage_, SphereStretchedTwiceByALatticeStaysClosed) {
+    const Camera cam = add_camera(6.0);
+    add_light({-1.0f, -0.3f, -0.5f});
+    const SplatCloud stretched = stretch_x(fibonacci_sphere(paper_splats), 2.0);
+    // The lattice stretched the axes along x: tangent axes gained length, normals tilted by J^-T.
+    add_cloud(stretched);
+    for (Quality q : {Quality::hq, Quality::preview}) {
+        const FrameImage img = render(q, 512, 512);
+        const Coverage c = coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));
+        EXPECT_GT(c.inside, 40000);
+        EXPECT_EQ(c.holes, 0) << (q == Quality::hq ? "hq" : "preview");
+        EXPECT_EQ(c.far_side, 0) << (q == Quality::hq ? "hq" : "preview");
+    }
+}
+
+TEST_F(Coverage_, FixedRadiusSplatsWouldOpenHolesUnderTheSameStretch) {
+    const Camera cam = add_camera(6.0);
+    add_light({-1.0f, -0.3f, -0.5f});
+    const SplatCloud rest = fibonacci_sphere(paper_splats);
+    SplatCloud fixed = stretch_x(rest, 2.0);
+    // Same deformed centres and normals, but discs of the rest radius (axes not deformed).
+    for (std::size_t i = 0; i < fixed.size(); ++i) {
+        const float r = glm::length(rest.axis_u[i]);
+        const glm::vec3 n = glm::normalize(fixed.normals[i]);
+        const glm::vec3 a = std::abs(n.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+        const glm::vec3 t = glm::normalize(glm::cross(a, n));
+        fixed.axis_u[i] = t * r;
+        fixed.axis_v[i] = glm::cross(n, t) * r;
+    }
+    add_cloud(fixed);
+    const FrameImage img = render(Quality::hq, 512, 512);
+    const Coverage c = coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));
+    // Thousands of uncovered pixels or far-side pixels showing through.
+    EXPECT_GT(c.holes + c.far_side, c.inside / 50) << "holes " << c.holes << " far side " << c.far_side;
+}
+
+TEST_F(Coverage_, SplatLargerThanThePointSizeLimitIsDrawnWhole) {
+    add_camera(2.0);
+    add_light({0.0f, 0.0f, -1.0f});
+    SplatCloud one;
+    one.positions = {glm::vec3(0.0f)};
+    one.normals = {glm::vec3(0, 0, 1)};
+    one.axis_u = {glm::vec3(0.5f, 0, 0)};
+    one.axis_v = {glm::vec3(0, 0.5f, 0)};
+    add_cloud(one);
+    const Camera cam = reg.get<Camera>(*[&] {
+        std::optional<ecs::Entity> e;
+        reg.view<const Camera>().each([&](ecs::Entity id, const Camera&) { e = id; });
+        return e;
+    }());
+    for (Quality q : {Quality::hq, Quality::preview}) {
+        const FrameImage img = render(q, 512, 512);
+        const RenderStats stats = reg.resource<RenderStats>();
+        EXPECT_EQ(stats.visible_quads, 1u);  // ~309 px across: beyond the 255 px sprite limit
+        int expected = 0, got = 0, mismatched = 0;
+        for (int y = 0; y < 512; ++y)
+            for (int x = 0; x < 512; ++x) {
+                const glm::dvec3 d = pixel_ray(cam, x, y, 512, 512);
+                const glm::dvec3 p = cam.eye + d * (cam.eye.z / -d.z);
+                const bool in = glm::length(glm::dvec2(p)) <= 0.5;
+                expected += in;
+                got += img.covered(x, y);
+                mismatched += in != img.covered(x, y);
+            }
+        EXPECT_GT(expected, 70000);
+        EXPECT_LE(mismatched, 2 * int(2 * std::numbers::pi * 155 * 0.02) + 8) << "expected " << expected << " got " << got;
+    }
+}
+
+TEST_F(Coverage_, SplatsCentredJustOffScreenCoverTheBorder) {
+    const Camera& cam_ref = add_camera(2.0);
+    const Camera cam = cam_ref;
+    add_light({0.0f, 0.0f, -1.0f});
+    // The frame sees |x|, |y| <= tan(22.5 deg) * 2 on the z = 0 plane. A ring of splats centred 0.03 outside
+    // that square, radius 0.06: only they can cover the outermost pixels.
+    const double edge = std::tan(std::numbers::pi / 8.0) * 2.0;
+    SplatCloud ring;
+    auto add = [&](double x, double y) {
+        ring.positions.emplace_back(float(x), float(y), 0.0f);
+        ring.normals.emplace_back(0, 0, 1);
+        ring.axis_u.emplace_back(0.06f, 0, 0);
+        ring.axis_v.emplace_back(0, 0.06f, 0);
+    };
+    for (double s = -0.95; s <= 0.95; s += 0.04) {
+        add(edge + 0.03, s), add(-edge - 0.03, s), add(s, edge + 0.03), add(s, -edge - 0.03);
+    }
+    add_cloud(ring);
+    for (Quality q : {Quality::hq, Quality::preview}) {
+        const int n = 256;
+        const FrameImage img = render(q, n, n);
+        int uncovered = 0;
+        for (int i = 0; i < n; ++i)
+            for (int k : {0, 1, n - 2, n - 1}) {
+                uncovered += !img.covered(i, k);
+                uncovered += !img.covered(k, i);
+            }
+        EXPECT_EQ(uncovered, 0) << (q == Quality::hq ? "hq" : "preview");
+        EXPECT_FALSE(img.covered(n / 2, n / 2));
+        EXPECT_GT(reg.resource<RenderStats>().visible_quads, 0u);
+        (void)cam;
+    }
+}
+
+TEST_F(Coverage_, TextureColoursLandWhereTheUvSays) {
+    // Quadrants: u < 0.5 / >= 0.5 and v < 0.5 / >= 0.5 in four colours; lit by ambient only (albedo shows).
+    const ecs::Entity ce = reg.create();
+    Camera cam;
+    cam.eye = glm::dvec3(-2.9, 0.7, 0.2);
+    cam.near_plane = 0.05f;
+    reg.emplace<Camera>(ce, cam);
+    reg.emplace<AmbientLight>(reg.create(), AmbientLight{glm::vec3(1.0f), 1.0f});
+    SplatCloud sphere = fibonacci_sphere(paper_splats);
+    sphere.material.specular = 0.0f;
+    const int tw = 64, th = 32;
+    const std::uint8_t quad_colors[4][3] = {{230, 20, 20}, {20, 200, 20}, {20, 20, 230}, {230, 230, 20}};
+    sphere.material.texture_width = tw, sphere.material.texture_height = th;
+    for (int y = 0; y < th; ++y)
+        for (int x = 0; x < tw; ++x) {
+            const int q = (x >= tw / 2 ? 1 : 0) + (y >= th / 2 ? 2 : 0);
+            for (int c = 0; c < 3; ++c) sphere.material.texture_rgba8.push_back(quad_colors[q][c]);
+            sphere.material.texture_rgba8.push_back(255);
+        }
+    add_cloud(std::move(sphere));
+    for (Quality q : {Quality::hq, Quality::preview}) {
+        const FrameImage img = render(q, 384, 384);
+        int checked = 0, wrong = 0;
+        int seen[4] = {0, 0, 0, 0};
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x) {
+                const glm::dvec3 d = pixel_ray(cam, x, y, img.width, img.height);
+                if (!hit_ellipsoid(cam.eye, d, glm::dvec3(0.97))) continue;
+                const glm::dvec3 p = cam.eye + d * *hit_ellipsoid(cam.eye, d, glm::dvec3(1.0));
+                double u = std::atan2(p.z, p.x) / (2.0 * std::numbers::pi);
+                if (u < 0) u += 1.0;
+                const double v = std::asin(std::clamp(p.y, -1.0, 1.0)) / std::numbers::pi + 0.5;
+                const auto near = [](double a, double b) { return std::abs(a - b) < 0.03; };
+                if (near(u, 0.5) || near(u, 0.0) || near(u, 1.0) || near(v, 0.5)) continue;  // texel borders
+                const int quadrant = (u >= 0.5 ? 1 : 0) + (v >= 0.5 ? 2 : 0);
+                ++checked;
+                ++seen[quadrant];
+                const glm::vec4 c = img.color[img.index(x, y)];
+                for (int k = 0; k < 3; ++k)
+                    if (std::abs(double(encode_srgb8(c[k])) - quad_colors[quadrant][k]) > 12) {
+                        ++wrong;
+                        break;
+                    }
+            }
+        EXPECT_GT(checked, 30000);
+        for (int k = 0; k < 4; ++k) EXPECT_GT(seen[k], 2000) << "quadrant " << k << " not in view";
+        EXPECT_LT(wrong, checked / 200) << (q == Quality::hq ? "hq" : "preview");
+    }
+}

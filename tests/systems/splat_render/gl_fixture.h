@@ -1,0 +1,98 @@
+// Headless EGL context (llvmpipe) shared by the GL render tests of one process, plus helpers that render
+// a registry and compute analytic references (ray-sphere / ray-ellipsoid per pixel).
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <optional>
+
+#include <glm/glm.hpp>
+
+#include "runtime/ecs/registry.h"
+#include "runtime/gfx/context.h"
+#include "runtime/scene/components.h"
+#include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/image_io.h"
+#include "systems/splat_render/splat_render.h"
+
+namespace sffd::render::test {
+
+class GlRenderTest : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        auto ctx = gfx::create_context({.headless = true, .width = 64, .height = 64});
+        ASSERT_TRUE(ctx.ok()) << ctx.message();
+        context().emplace(std::move(ctx.value()));
+    }
+    static void TearDownTestSuite() { context().reset(); }
+    static std::optional<gfx::GlContext>& context() {
+        static std::optional<gfx::GlContext> c;
+        return c;
+    }
+    void TearDown() override { release_render_state(reg); }
+
+    // Camera at (0, 0, distance) looking at the origin, 45 degrees vertical field of view.
+    Camera& add_camera(double distance = 3.0) {
+        const ecs::Entity e = reg.create();
+        Camera c;
+        c.eye = glm::dvec3(0.0, 0.0, distance);
+        c.near_plane = 0.05f;
+        c.far_plane = 20.0f;
+        return reg.emplace<Camera>(e, c);
+    }
+    void add_light(glm::vec3 direction, float ambient = 0.1f) {
+        reg.emplace<DirectionalLight>(reg.create(), DirectionalLight{direction, glm::vec3(1.0f), 1.0f});
+        reg.emplace<AmbientLight>(reg.create(), AmbientLight{glm::vec3(1.0f), ambient});
+    }
+    ecs::Entity add_cloud(SplatCloud cloud) {
+        const ecs::Entity e = reg.create();
+        reg.emplace<SplatCloud>(e, std::move(cloud));
+        return e;
+    }
+
+    FrameImage render(Quality quality, int w, int h, bool culling = true) {
+        RenderSettings s;
+        s.quality = quality, s.width = w, s.height = h, s.culling = culling, s.time_passes = true;
+        reg.set_resource<RenderSettings>(s);
+        render_system(reg, FrameContext{});
+        auto img = capture_frame(reg);
+        EXPECT_TRUE(img.ok()) << (img.ok() ? "" : img.message());
+        if (const char* dir = std::getenv("SFFD_RENDER_TEST_OUT"); dir && img.ok()) {  // for looking at the images
+            const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+            const std::string name = std::string(info->test_suite_name()) + "." + info->name() + "." +
+                                     (quality == Quality::hq ? "hq" : "preview") + ".png";
+            (void)write_png(std::filesystem::path(dir) / name, to_rgba8(img.value()));
+        }
+        return img.ok() ? std::move(img.value()) : FrameImage{};
+    }
+
+    ecs::Registry reg;
+};
+
+// World-space ray through the centre of pixel (x, y) (row 0 at the top), scaled so that its component
+// along the view axis is 1: the hit parameter t of eye + t * dir is the view-axis depth.
+inline glm::dvec3 pixel_ray(const Camera& cam, int x, int y, int w, int h) {
+    const glm::dmat4 p = projection_matrix(cam, double(w) / double(h));
+    const double nx = (x + 0.5) / w * 2.0 - 1.0, ny = 1.0 - (y + 0.5) / h * 2.0;
+    const glm::dvec3 view_dir(nx / p[0][0], ny / p[1][1], -1.0);
+    return glm::dmat3(glm::inverse(view_matrix(cam))) * view_dir;
+}
+
+// View-axis depth of the first hit of the ray with the ellipsoid |(p - c) / scale| = 1, or nullopt.
+inline std::optional<double> hit_ellipsoid(const glm::dvec3& eye, const glm::dvec3& dir, const glm::dvec3& scale,
+                                           const glm::dvec3& center = glm::dvec3(0.0)) {
+    const glm::dvec3 o = (eye - center) / scale, d = dir / scale;
+    const double a = glm::dot(d, d), b = 2.0 * glm::dot(o, d), c = glm::dot(o, o) - 1.0;
+    const double disc = b * b - 4.0 * a * c;
+    if (disc < 0.0) return std::nullopt;
+    const double t = (-b - std::sqrt(disc)) / (2.0 * a);
+    if (t <= 0.0) return std::nullopt;
+    return t;
+}
+
+inline double luminance(const glm::vec4& c) { return 0.2126 * double(c.x) + 0.7152 * double(c.y) + 0.0722 * double(c.z); }
+
+}  // namespace sffd::render::test
