@@ -1,0 +1,30 @@
+// The one place that lists which system runs in which phase (the phase order itself is written once, in
+// runtime/app/frame_loop.h). One add() line per system, in the order they run within the phase. System
+// owners add their own line when their system lands; keep this file compiling with whatever exists.
+#include "tools/splatffd/engine.h"
+
+#include "runtime/app/app.h"
+
+namespace sffd {
+
+Schedule make_engine_schedule(const EngineScheduleOptions& options) {
+    Schedule s;
+
+    // --- input: window events -> editor tools -> edit commands on lattices (editor) -----------------
+
+    // --- animation: clips write lattice control points at the frame time (animation) ----------------
+
+    // --- deformation: re-deform point clouds whose rest data or lattices changed (ffd) --------------
+
+    // --- picking: only when a pick was requested (picking) ------------------------------------------
+
+    // --- rendering: splat passes, overlays, UI, capture (splat_render, editor overlay) ---------------
+
+    // --- present: blit the PresentSource to the window, window UI on top (editor), swap -------------
+    if (options.present) s.add(Phase::present, "present.blit", app::present_blit_system);
+    if (options.present) s.add(Phase::present, "present.swap", app::present_swap_system);
+
+    return s;
+}
+
+}  // namespace sffd
