@@ -1,0 +1,29 @@
+// Writing splat clouds (owned by the content engineer, issue 5). Every save is atomic (temp + rename).
+//
+// PLY (binary little-endian by default, or ascii): vertex properties
+//   x y z                 float (cloud.origin == 0) or double world coordinates (origin != 0, so other
+//                         tools see the scan in place); "comment sffd_origin ox oy oz" records the origin
+//   nx ny nz              float (when the cloud has normals)
+//   red green blue alpha  uchar, sRGB (when it has colours)
+//   u v                   float (when it has texture coordinates; texture row 0 at v = 0)
+//   axis_ux .. axis_vz    float: the splat's tangent axes scaled by its radii
+// plus "comment TextureFile <texture_path>" when the material names a texture file (the pixels are not
+// stored in PLY; GLB embeds them). read_ply_geometry() reads all of these back.
+// GLB/glTF: see gltf_io.h.
+#pragma once
+
+#include <filesystem>
+
+#include "runtime/assets/ply.h"
+#include "runtime/core/result.h"
+#include "runtime/scene/components.h"
+
+namespace sffd::assets {
+
+Status save_splat_ply(const SplatCloud& cloud, const std::filesystem::path& path,
+                      ply::Format format = ply::Format::binary_little_endian);
+Status save_splat_glb(const SplatCloud& cloud, const std::filesystem::path& path, const std::string& name = "cloud");
+// By extension: .ply, .glb, .gltf.
+Status save_splat_cloud(const SplatCloud& cloud, const std::filesystem::path& path, const std::string& name = "cloud");
+
+}  // namespace sffd::assets

@@ -1,0 +1,676 @@
+#include "runtime/assets/gltf_io.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <unordered_set>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/gtx/quaternion.hpp>
+#include <nlohmann/json.hpp>
+#include <stb/stb_image_write.h>
+#include <tiny_gltf.h>
+
+#include "runtime/core/atomic_file.h"
+#include "runtime/core/log.h"
+
+namespace sffd::assets {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+constexpr int kFloat = 5126, kUByte = 5121, kUShort = 5123, kUInt = 5125, kByte = 5120, kShort = 5122;
+
+// sRGB bytes <-> linear unsigned short: 16 bits are enough for every one of the 256 sRGB levels to
+// come back exactly (tested), so COLOR_0 is both standard (linear) and lossless.
+double srgb_to_linear(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); }
+double linear_to_srgb(double c) { return c <= 0.0031308 ? c * 12.92 : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055; }
+
+std::uint16_t srgb8_to_linear16(std::uint32_t c) {
+    return static_cast<std::uint16_t>(std::lround(srgb_to_linear(static_cast<double>(c) / 255.0) * 65535.0));
+}
+std::uint32_t linear_to_srgb8(double linear) {
+    return static_cast<std::uint32_t>(std::lround(std::clamp(linear_to_srgb(std::clamp(linear, 0.0, 1.0)), 0.0, 1.0) * 255.0));
+}
+
+std::string base64(const std::string& in) {
+    static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    out.reserve((in.size() + 2) / 3 * 4);
+    std::size_t i = 0;
+    for (; i + 2 < in.size(); i += 3) {
+        const std::uint32_t v = (std::uint32_t(std::uint8_t(in[i])) << 16) | (std::uint32_t(std::uint8_t(in[i + 1])) << 8) | std::uint8_t(in[i + 2]);
+        out += t[v >> 18];
+        out += t[(v >> 12) & 63];
+        out += t[(v >> 6) & 63];
+        out += t[v & 63];
+    }
+    if (i < in.size()) {
+        std::uint32_t v = std::uint32_t(std::uint8_t(in[i])) << 16;
+        if (i + 1 < in.size()) v |= std::uint32_t(std::uint8_t(in[i + 1])) << 8;
+        out += t[v >> 18];
+        out += t[(v >> 12) & 63];
+        out += i + 1 < in.size() ? t[(v >> 6) & 63] : '=';
+        out += '=';
+    }
+    return out;
+}
+
+struct BinBuilder {
+    std::string bin;
+    json views = json::array();
+    json accessors = json::array();
+
+    int view(const void* data, std::size_t bytes, int target) {
+        while (bin.size() % 4) bin.push_back('\0');
+        json v = {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}};
+        if (target) v["target"] = target;
+        bin.append(static_cast<const char*>(data), bytes);
+        views.push_back(v);
+        return static_cast<int>(views.size()) - 1;
+    }
+    template <class T>
+    int accessor(const std::vector<T>& data, int component_type, const char* type, std::size_t components, bool normalized = false) {
+        const int v = view(data.data(), data.size() * sizeof(T), 34962);
+        json a = {{"bufferView", v}, {"componentType", component_type}, {"count", data.size()}, {"type", type}};
+        if (normalized) a["normalized"] = true;
+        (void)components;
+        accessors.push_back(a);
+        return static_cast<int>(accessors.size()) - 1;
+    }
+};
+
+json vec(const glm::dvec3& v) { return json::array({v.x, v.y, v.z}); }
+
+void png_append(void* context, void* data, int size) {
+    static_cast<std::string*>(context)->append(static_cast<const char*>(data), static_cast<std::size_t>(size));
+}
+
+// ------------------------------------------------------------------------------------------------
+// Reading helpers
+
+json to_json(const tinygltf::Value& v, int depth = 0) {
+    if (depth > 64) return nullptr;
+    if (v.IsBool()) return v.Get<bool>();
+    if (v.IsInt()) return v.Get<int>();
+    if (v.IsNumber()) return v.GetNumberAsDouble();
+    if (v.IsString()) return v.Get<std::string>();
+    if (v.IsArray()) {
+        json a = json::array();
+        for (std::size_t i = 0; i < v.ArrayLen(); ++i) a.push_back(to_json(v.Get(static_cast<int>(i)), depth + 1));
+        return a;
+    }
+    if (v.IsObject()) {
+        json o = json::object();
+        for (const std::string& k : v.Keys()) o[k] = to_json(v.Get(k), depth + 1);
+        return o;
+    }
+    return nullptr;
+}
+
+std::size_t component_size(int type) {
+    switch (type) {
+        case kByte: case kUByte: return 1;
+        case kShort: case kUShort: return 2;
+        case kUInt: case kFloat: return 4;
+        default: return 0;
+    }
+}
+
+// Reads an accessor as `components` doubles per element, checking every offset against the buffer
+// (hostile files point accessors past the end). Normalised integers map to [0,1] / [-1,1].
+Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, int components, const std::string& src, const char* what) {
+    auto fail = [&](const std::string& why) { return make_error(src + ": " + what + ": " + why); };
+    if (index < 0 || static_cast<std::size_t>(index) >= m.accessors.size()) return fail("accessor index out of range");
+    const tinygltf::Accessor& a = m.accessors[static_cast<std::size_t>(index)];
+    if (a.sparse.isSparse) return fail("sparse accessors are not supported");
+    if (tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type)) != components)
+        return fail("expected " + std::to_string(components) + " components per element");
+    const std::size_t csize = component_size(a.componentType);
+    if (csize == 0) return fail("unsupported component type " + std::to_string(a.componentType));
+    const std::size_t elem = csize * static_cast<std::size_t>(components);
+    std::vector<double> out;
+    if (a.count == 0) return out;
+    if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= m.bufferViews.size()) return fail("accessor has no valid bufferView");
+    const tinygltf::BufferView& bv = m.bufferViews[static_cast<std::size_t>(a.bufferView)];
+    if (bv.buffer < 0 || static_cast<std::size_t>(bv.buffer) >= m.buffers.size()) return fail("bufferView has no valid buffer");
+    const std::vector<unsigned char>& data = m.buffers[static_cast<std::size_t>(bv.buffer)].data;
+    const std::size_t stride = bv.byteStride ? bv.byteStride : elem;
+    if (stride < elem) return fail("byteStride smaller than an element");
+    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset) return fail("bufferView exceeds its buffer");
+    if (a.byteOffset > bv.byteLength) return fail("accessor offset exceeds its bufferView");
+    const std::size_t avail = bv.byteLength - a.byteOffset;
+    if (a.count > avail / stride + 1 || (a.count - 1) * stride + elem > avail) return fail("accessor exceeds its bufferView");
+    out.resize(a.count * static_cast<std::size_t>(components));
+    const unsigned char* base = data.data() + bv.byteOffset + a.byteOffset;
+    for (std::size_t i = 0; i < a.count; ++i) {
+        const unsigned char* p = base + i * stride;
+        for (int c = 0; c < components; ++c, p += csize) {
+            double v = 0.0;
+            switch (a.componentType) {
+                case kFloat: { float f; std::memcpy(&f, p, 4); v = static_cast<double>(f); break; }
+                case kUByte: v = *p; if (a.normalized) v /= 255.0; break;
+                case kByte: { std::int8_t x; std::memcpy(&x, p, 1); v = x; if (a.normalized) v = std::max(v / 127.0, -1.0); break; }
+                case kUShort: { std::uint16_t x; std::memcpy(&x, p, 2); v = x; if (a.normalized) v /= 65535.0; break; }
+                case kShort: { std::int16_t x; std::memcpy(&x, p, 2); v = x; if (a.normalized) v = std::max(v / 32767.0, -1.0); break; }
+                case kUInt: { std::uint32_t x; std::memcpy(&x, p, 4); v = x; break; }
+            }
+            if (!std::isfinite(v)) return fail("non-finite value at element " + std::to_string(i));
+            out[i * static_cast<std::size_t>(components) + static_cast<std::size_t>(c)] = v;
+        }
+    }
+    return out;
+}
+
+glm::dmat4 node_matrix(const tinygltf::Node& n) {
+    if (n.matrix.size() == 16) return glm::make_mat4(n.matrix.data());
+    glm::dmat4 m(1.0);
+    if (n.translation.size() == 3) m = glm::translate(m, glm::dvec3(n.translation[0], n.translation[1], n.translation[2]));
+    if (n.rotation.size() == 4) m = m * glm::mat4_cast(glm::normalize(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2])));
+    if (n.scale.size() == 3) m = glm::scale(m, glm::dvec3(n.scale[0], n.scale[1], n.scale[2]));
+    return m;
+}
+
+Transform node_trs(const tinygltf::Node& n) {
+    Transform t;
+    if (n.translation.size() == 3) t.translation = glm::dvec3(n.translation[0], n.translation[1], n.translation[2]);
+    if (n.rotation.size() == 4) t.rotation = glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2]);
+    if (n.scale.size() == 3) t.scale = glm::dvec3(n.scale[0], n.scale[1], n.scale[2]);
+    return t;
+}
+
+Result<Image> gltf_image(const tinygltf::Model& m, int texture, const std::string& src) {
+    if (texture < 0 || static_cast<std::size_t>(texture) >= m.textures.size()) return make_error(src + ": texture index out of range");
+    const int source = m.textures[static_cast<std::size_t>(texture)].source;
+    if (source < 0 || static_cast<std::size_t>(source) >= m.images.size()) return make_error(src + ": texture has no image");
+    const tinygltf::Image& im = m.images[static_cast<std::size_t>(source)];
+    if (im.width <= 0 || im.height <= 0 || im.component < 1 || im.component > 4 || im.bits != 8 ||
+        im.image.size() != static_cast<std::size_t>(im.width) * static_cast<std::size_t>(im.height) * static_cast<std::size_t>(im.component))
+        return make_error(src + ": image " + std::to_string(source) + " was not decoded to 8-bit pixels");
+    Image out;
+    out.width = im.width;
+    out.height = im.height;
+    const std::size_t n = static_cast<std::size_t>(im.width) * static_cast<std::size_t>(im.height);
+    out.rgba8.resize(n * 4);
+    for (std::size_t i = 0; i < n; ++i) {
+        const unsigned char* p = &im.image[i * static_cast<std::size_t>(im.component)];
+        std::uint8_t px[4] = {p[0], p[0], p[0], 255};
+        if (im.component >= 3) { px[1] = p[1]; px[2] = p[2]; }
+        if (im.component == 2) px[3] = p[1];
+        if (im.component == 4) px[3] = p[3];
+        std::memcpy(&out.rgba8[i * 4], px, 4);
+    }
+    return out;
+}
+
+// Appends one primitive's data to `g` (world transform `world`); for our splat nodes `exact` receives
+// the stored arrays untouched instead.
+Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim, const glm::dmat4& world, const std::string& src,
+                      Geometry& g, std::unordered_map<int, int>& material_map, SplatCloud* exact) {
+    if (prim.mode != TINYGLTF_MODE_POINTS && prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+        prim.mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+        log::warn(src, ": skipping a primitive with mode ", prim.mode, " (lines)");
+        return {};
+    }
+    auto attr = [&](const char* name) {
+        auto it = prim.attributes.find(name);
+        return it == prim.attributes.end() ? -1 : it->second;
+    };
+    const int ip = attr("POSITION");
+    if (ip < 0) return make_error(src + ": primitive without POSITION");
+    auto pos = read_accessor(m, ip, 3, src, "POSITION");
+    if (!pos) return pos.error();
+    const std::size_t n = pos->size() / 3;
+    const std::size_t base = g.positions.size();
+    const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(world)));
+    const glm::dmat3 linear(world);
+
+    std::vector<double> nrm, col, uv, au, av;
+    int col_components = 0;
+    if (int i = attr("NORMAL"); i >= 0) {
+        auto r = read_accessor(m, i, 3, src, "NORMAL");
+        if (!r) return r.error();
+        nrm = std::move(*r);
+    }
+    if (int i = attr("COLOR_0"); i >= 0) {
+        const int comps = m.accessors.size() > static_cast<std::size_t>(i) && m.accessors[static_cast<std::size_t>(i)].type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
+        auto r = read_accessor(m, i, comps, src, "COLOR_0");
+        if (!r) return r.error();
+        col = std::move(*r);
+        col_components = comps;
+    }
+    if (int i = attr("TEXCOORD_0"); i >= 0) {
+        auto r = read_accessor(m, i, 2, src, "TEXCOORD_0");
+        if (!r) return r.error();
+        uv = std::move(*r);
+    }
+    if (int iu = attr("_AXIS_U"), iv = attr("_AXIS_V"); iu >= 0 && iv >= 0) {
+        auto ru = read_accessor(m, iu, 3, src, "_AXIS_U");
+        if (!ru) return ru.error();
+        auto rv = read_accessor(m, iv, 3, src, "_AXIS_V");
+        if (!rv) return rv.error();
+        au = std::move(*ru);
+        av = std::move(*rv);
+    }
+    for (const auto* a : {&nrm, &uv, &au, &av})
+        if (!a->empty() && a->size() / (a == &uv ? 2 : 3) != n) return make_error(src + ": attribute counts differ from POSITION");
+    if (!col.empty() && col.size() / static_cast<std::size_t>(col_components) != n) return make_error(src + ": COLOR_0 count differs from POSITION");
+
+    auto colour = [&](std::size_t i) {
+        const std::size_t k = i * static_cast<std::size_t>(col_components);
+        const std::uint32_t a = col_components == 4 ? static_cast<std::uint32_t>(std::lround(std::clamp(col[k + 3], 0.0, 1.0) * 255.0)) : 255u;
+        return linear_to_srgb8(col[k]) | (linear_to_srgb8(col[k + 1]) << 8) | (linear_to_srgb8(col[k + 2]) << 16) | (a << 24);
+    };
+
+    if (exact) {
+        SplatCloud& c = *exact;
+        c.positions.resize(n);
+        for (std::size_t i = 0; i < n; ++i) c.positions[i] = glm::vec3(static_cast<float>((*pos)[3 * i]), static_cast<float>((*pos)[3 * i + 1]), static_cast<float>((*pos)[3 * i + 2]));
+        auto fill3 = [&](const std::vector<double>& src3, std::vector<glm::vec3>& dst) {
+            dst.resize(src3.size() / 3);
+            for (std::size_t i = 0; i < dst.size(); ++i) dst[i] = glm::vec3(static_cast<float>(src3[3 * i]), static_cast<float>(src3[3 * i + 1]), static_cast<float>(src3[3 * i + 2]));
+        };
+        fill3(nrm, c.normals);
+        fill3(au, c.axis_u);
+        fill3(av, c.axis_v);
+        c.uvs.resize(uv.size() / 2);
+        for (std::size_t i = 0; i < c.uvs.size(); ++i) c.uvs[i] = glm::vec2(static_cast<float>(uv[2 * i]), static_cast<float>(uv[2 * i + 1]));
+        c.colors.resize(col.empty() ? 0 : n);
+        for (std::size_t i = 0; i < c.colors.size(); ++i) c.colors[i] = colour(i);
+        if (prim.material >= 0 && static_cast<std::size_t>(prim.material) < m.materials.size()) {
+            const tinygltf::Material& mat = m.materials[static_cast<std::size_t>(prim.material)];
+            const auto& f = mat.pbrMetallicRoughness.baseColorFactor;
+            if (f.size() == 4) c.material.base_color = glm::vec4(static_cast<float>(f[0]), static_cast<float>(f[1]), static_cast<float>(f[2]), static_cast<float>(f[3]));
+            const json extras = to_json(mat.extras);
+            if (extras.is_object()) {
+                if (extras.contains("sffd_specular") && extras["sffd_specular"].is_number()) c.material.specular = extras["sffd_specular"].get<float>();
+                if (extras.contains("sffd_shininess") && extras["sffd_shininess"].is_number()) c.material.shininess = extras["sffd_shininess"].get<float>();
+                if (extras.contains("sffd_texture_path") && extras["sffd_texture_path"].is_string()) c.material.texture_path = extras["sffd_texture_path"].get<std::string>();
+            }
+            if (mat.pbrMetallicRoughness.baseColorTexture.index >= 0) {
+                auto img = gltf_image(m, mat.pbrMetallicRoughness.baseColorTexture.index, src);
+                if (!img) return img.error();
+                c.material.texture_width = img->width;
+                c.material.texture_height = img->height;
+                c.material.texture_rgba8 = std::move(img->rgba8);
+            }
+        }
+        return {};
+    }
+
+    for (std::size_t i = 0; i < n; ++i)
+        g.positions.push_back(glm::dvec3(world * glm::dvec4((*pos)[3 * i], (*pos)[3 * i + 1], (*pos)[3 * i + 2], 1.0)));
+    // Per-point attributes must cover every point of the Geometry: fill gaps with defaults once any
+    // primitive has the attribute.
+    auto pad = [&](auto& arr, auto value) {
+        if (arr.size() < base) arr.resize(base, value);
+    };
+    if (!nrm.empty() || !g.normals.empty()) {
+        pad(g.normals, glm::vec3(0.0f));
+        for (std::size_t i = 0; i < n; ++i) {
+            glm::dvec3 v = nrm.empty() ? glm::dvec3(0.0) : normal_matrix * glm::dvec3(nrm[3 * i], nrm[3 * i + 1], nrm[3 * i + 2]);
+            if (glm::length(v) > 0.0) v = glm::normalize(v);
+            g.normals.emplace_back(v);
+        }
+    }
+    if (!col.empty() || !g.colors.empty()) {
+        pad(g.colors, 0xffffffffu);
+        for (std::size_t i = 0; i < n; ++i) g.colors.push_back(col.empty() ? 0xffffffffu : colour(i));
+    }
+    if (!uv.empty() || !g.uvs.empty()) {
+        pad(g.uvs, glm::vec2(0.0f));
+        for (std::size_t i = 0; i < n; ++i) g.uvs.emplace_back(uv.empty() ? glm::vec2(0.0f) : glm::vec2(static_cast<float>(uv[2 * i]), static_cast<float>(uv[2 * i + 1])));
+    }
+    if (!au.empty()) {
+        pad(g.axis_u, glm::vec3(0.0f));
+        pad(g.axis_v, glm::vec3(0.0f));
+        for (std::size_t i = 0; i < n; ++i) {
+            g.axis_u.emplace_back(linear * glm::dvec3(au[3 * i], au[3 * i + 1], au[3 * i + 2]));
+            g.axis_v.emplace_back(linear * glm::dvec3(av[3 * i], av[3 * i + 1], av[3 * i + 2]));
+        }
+    }
+
+    // Material: base colour factor and texture, shared by all triangles of this primitive.
+    int material = -1;
+    if (prim.material >= 0 && static_cast<std::size_t>(prim.material) < m.materials.size()) {
+        auto it = material_map.find(prim.material);
+        if (it != material_map.end()) {
+            material = it->second;
+        } else {
+            const tinygltf::Material& mat = m.materials[static_cast<std::size_t>(prim.material)];
+            MeshMaterial mm;
+            const auto& f = mat.pbrMetallicRoughness.baseColorFactor;
+            if (f.size() == 4) mm.base_color = glm::vec4(static_cast<float>(f[0]), static_cast<float>(f[1]), static_cast<float>(f[2]), static_cast<float>(f[3]));
+            if (mat.pbrMetallicRoughness.baseColorTexture.index >= 0) {
+                auto img = gltf_image(m, mat.pbrMetallicRoughness.baseColorTexture.index, src);
+                if (img) {
+                    mm.texture = static_cast<int>(g.textures.size());
+                    g.textures.push_back(std::move(*img));
+                } else {
+                    log::warn(img.message());
+                }
+            }
+            material = static_cast<int>(g.materials.size());
+            g.materials.push_back(mm);
+            material_map[prim.material] = material;
+        }
+    }
+
+    if (prim.mode == TINYGLTF_MODE_POINTS) {
+        if (!g.triangles.empty()) log::warn(src, ": file mixes points and triangles; points are sampled with the surface only if they have faces");
+        return {};
+    }
+    std::vector<std::uint32_t> idx;
+    if (prim.indices >= 0) {
+        auto r = read_accessor(m, prim.indices, 1, src, "indices");
+        if (!r) return r.error();
+        idx.reserve(r->size());
+        for (double d : *r) {
+            if (d < 0 || d >= static_cast<double>(n)) return make_error(src + ": index " + std::to_string(static_cast<long long>(d)) + " out of range (" + std::to_string(n) + " vertices)");
+            idx.push_back(static_cast<std::uint32_t>(d));
+        }
+    } else {
+        idx.resize(n);
+        for (std::size_t i = 0; i < n; ++i) idx[i] = static_cast<std::uint32_t>(i);
+    }
+    auto tri = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+        g.triangles.push_back(static_cast<std::uint32_t>(base) + a);
+        g.triangles.push_back(static_cast<std::uint32_t>(base) + b);
+        g.triangles.push_back(static_cast<std::uint32_t>(base) + c);
+        g.triangle_material.push_back(material);
+    };
+    // A mirroring transform flips the winding; keep faces pointing the same way.
+    const bool flip = glm::determinant(linear) < 0.0;
+    auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) { flip ? tri(a, c, b) : tri(a, b, c); };
+    if (prim.mode == TINYGLTF_MODE_TRIANGLES) {
+        for (std::size_t i = 0; i + 2 < idx.size() + 0 && i + 2 < idx.size(); i += 3) emit(idx[i], idx[i + 1], idx[i + 2]);
+    } else if (prim.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+        for (std::size_t i = 0; i + 2 < idx.size(); ++i) i % 2 ? emit(idx[i + 1], idx[i], idx[i + 2]) : emit(idx[i], idx[i + 1], idx[i + 2]);
+    } else {
+        for (std::size_t i = 1; i + 1 < idx.size(); ++i) emit(idx[0], idx[i], idx[i + 1]);
+    }
+    return {};
+}
+
+}  // namespace
+
+Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds, const std::string& sffd_scene_json) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const bool binary = ext == ".glb";
+    if (!binary && ext != ".gltf") return make_error(path.string() + ": expected a .gltf or .glb file name");
+
+    BinBuilder b;
+    json nodes = json::array(), meshes = json::array(), materials = json::array(), textures = json::array(), images = json::array();
+    json roots = json::array();
+    for (const GltfCloudOut& out : clouds) {
+        const SplatCloud& c = *out.cloud;
+        const std::size_t n = c.size();
+        auto sized = [&](std::size_t s) { return s == 0 || s == n; };
+        if (!sized(c.normals.size()) || !sized(c.colors.size()) || !sized(c.uvs.size()) || !sized(c.axis_u.size()) || c.axis_u.size() != c.axis_v.size())
+            return make_error(path.string() + ": cloud '" + out.name + "' has attribute arrays of the wrong length");
+        json attributes = json::object();
+        if (n > 0) {
+            const int ip = b.accessor(c.positions, kFloat, "VEC3", 3);
+            glm::vec3 lo(c.positions[0]), hi(c.positions[0]);
+            for (const auto& p : c.positions) {
+                lo = glm::min(lo, p);
+                hi = glm::max(hi, p);
+            }
+            b.accessors[ip]["min"] = {lo.x, lo.y, lo.z};
+            b.accessors[ip]["max"] = {hi.x, hi.y, hi.z};
+            attributes["POSITION"] = ip;
+            if (!c.normals.empty()) attributes["NORMAL"] = b.accessor(c.normals, kFloat, "VEC3", 3);
+            if (!c.colors.empty()) {
+                std::vector<std::uint16_t> lin(n * 4);
+                for (std::size_t i = 0; i < n; ++i) {
+                    const std::uint32_t col = c.colors[i];
+                    lin[4 * i] = srgb8_to_linear16(col & 255u);
+                    lin[4 * i + 1] = srgb8_to_linear16((col >> 8) & 255u);
+                    lin[4 * i + 2] = srgb8_to_linear16((col >> 16) & 255u);
+                    lin[4 * i + 3] = static_cast<std::uint16_t>((col >> 24) * 257u);  // alpha is linear already
+                }
+                const int v = b.view(lin.data(), lin.size() * 2, 34962);
+                b.accessors.push_back({{"bufferView", v}, {"componentType", kUShort}, {"count", n}, {"type", "VEC4"}, {"normalized", true}});
+                attributes["COLOR_0"] = static_cast<int>(b.accessors.size()) - 1;
+            }
+            if (!c.uvs.empty()) attributes["TEXCOORD_0"] = b.accessor(c.uvs, kFloat, "VEC2", 2);
+            if (!c.axis_u.empty()) {
+                attributes["_AXIS_U"] = b.accessor(c.axis_u, kFloat, "VEC3", 3);
+                attributes["_AXIS_V"] = b.accessor(c.axis_v, kFloat, "VEC3", 3);
+            }
+        }
+        json material = {{"name", out.name + ".material"},
+                         {"pbrMetallicRoughness",
+                          {{"baseColorFactor", {c.material.base_color.x, c.material.base_color.y, c.material.base_color.z, c.material.base_color.w}},
+                           {"metallicFactor", 0.0},
+                           {"roughnessFactor", 1.0}}},
+                         {"extras", {{"sffd_specular", c.material.specular}, {"sffd_shininess", c.material.shininess}}}};
+        if (!c.material.texture_path.empty()) material["extras"]["sffd_texture_path"] = c.material.texture_path;
+        if (!c.material.texture_rgba8.empty()) {
+            const int w = c.material.texture_width, h = c.material.texture_height;
+            if (w <= 0 || h <= 0 || c.material.texture_rgba8.size() != static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4)
+                return make_error(path.string() + ": cloud '" + out.name + "' has a texture of the wrong size");
+            std::string png;
+            if (!stbi_write_png_to_func(png_append, &png, w, h, 4, c.material.texture_rgba8.data(), w * 4))
+                return make_error(path.string() + ": cannot encode the texture as PNG");
+            const int v = b.view(png.data(), png.size(), 0);
+            images.push_back({{"bufferView", v}, {"mimeType", "image/png"}});
+            textures.push_back({{"source", images.size() - 1}, {"sampler", 0}});
+            material["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", textures.size() - 1}};
+        }
+        materials.push_back(material);
+        json prim = {{"mode", 0}, {"attributes", attributes}, {"material", materials.size() - 1}};
+        meshes.push_back({{"name", out.name}, {"primitives", json::array({prim})}});
+
+        const Transform t = out.transform ? *out.transform : Transform{};
+        json parent = {{"name", out.name},
+                       {"translation", vec(t.translation)},
+                       {"rotation", {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w}},
+                       {"scale", vec(t.scale)},
+                       {"children", {nodes.size() + 1}},
+                       {"extras", {{"sffd_cloud", out.id}}}};
+        json child = {{"name", out.name + ".origin"}, {"translation", vec(c.origin)}, {"mesh", meshes.size() - 1}};
+        roots.push_back(nodes.size());
+        nodes.push_back(parent);
+        nodes.push_back(child);
+    }
+
+    json doc = {{"asset", {{"version", "2.0"}, {"generator", "SplatFFD " SFFD_VERSION}}},
+                {"scene", 0},
+                {"scenes", {{{"name", "scene"}, {"nodes", roots}}}},
+                {"nodes", nodes}};
+    if (!meshes.empty()) doc["meshes"] = meshes;
+    if (!materials.empty()) doc["materials"] = materials;
+    if (!textures.empty()) {
+        doc["textures"] = textures;
+        doc["images"] = images;
+        doc["samplers"] = {{{"magFilter", 9729}, {"minFilter", 9729}, {"wrapS", 10497}, {"wrapT", 10497}}};
+    }
+    if (!sffd_scene_json.empty()) {
+        json ext_json = json::parse(sffd_scene_json, nullptr, false);
+        if (ext_json.is_discarded()) return make_error(path.string() + ": write_gltf(): scene extension is not valid JSON");
+        doc["extensionsUsed"] = {"SFFD_scene"};
+        doc["extensions"] = {{"SFFD_scene", ext_json}};
+    }
+    while (b.bin.size() % 4) b.bin.push_back('\0');
+    if (!b.bin.empty()) {
+        doc["accessors"] = b.accessors;
+        doc["bufferViews"] = b.views;
+        json buffer = {{"byteLength", b.bin.size()}};
+        if (!binary) buffer["uri"] = "data:application/octet-stream;base64," + base64(b.bin);
+        doc["buffers"] = {buffer};
+    }
+    std::string text = doc.dump(binary ? -1 : 1);
+    if (!binary) return write_file_atomic(path, text + "\n");
+
+    while (text.size() % 4) text.push_back(' ');
+    std::string glb;
+    auto u32 = [&](std::uint32_t v) { glb.append(reinterpret_cast<const char*>(&v), 4); };
+    const std::size_t total = 12 + 8 + text.size() + (b.bin.empty() ? 0 : 8 + b.bin.size());
+    if (total > 0xffffffffu) return make_error(path.string() + ": scene too large for a GLB file (4 GiB)");
+    glb.reserve(total);
+    u32(0x46546C67u);  // "glTF"
+    u32(2);
+    u32(static_cast<std::uint32_t>(total));
+    u32(static_cast<std::uint32_t>(text.size()));
+    u32(0x4E4F534Au);  // "JSON"
+    glb += text;
+    if (!b.bin.empty()) {
+        u32(static_cast<std::uint32_t>(b.bin.size()));
+        u32(0x004E4942u);  // "BIN\0"
+        glb += b.bin;
+    }
+    return write_file_atomic(path, glb);
+}
+
+Result<GltfContents> read_gltf(const fs::path& path) {
+    const std::string src = path.string();
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) return make_error(src + ": no such file");
+    tinygltf::TinyGLTF loader;
+    tinygltf::Model m;
+    std::string err, warn;
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    bool ok = false;
+    try {
+        ok = ext == ".glb" ? loader.LoadBinaryFromFile(&m, &err, &warn, src) : loader.LoadASCIIFromFile(&m, &err, &warn, src);
+    } catch (const std::exception& e) {  // tinygltf's JSON parser may throw on hostile input
+        return make_error(src + ": invalid glTF: " + e.what());
+    }
+    if (!ok) {
+        while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
+        return make_error(src + ": invalid glTF: " + (err.empty() ? std::string("unknown error") : err.substr(0, 500)));
+    }
+    GltfContents out;
+    out.other.source = src;
+    if (auto it = m.extensions.find("SFFD_scene"); it != m.extensions.end()) out.sffd_scene_json = to_json(it->second).dump();
+
+    std::unordered_map<int, int> material_map;
+    std::unordered_set<int> visiting;
+    std::vector<int> roots;
+    if (!m.scenes.empty()) {
+        const int s = m.defaultScene >= 0 && static_cast<std::size_t>(m.defaultScene) < m.scenes.size() ? m.defaultScene : 0;
+        roots = m.scenes[static_cast<std::size_t>(s)].nodes;
+    } else {
+        // No scene: every node that is nobody's child is a root.
+        std::vector<char> is_child(m.nodes.size(), 0);
+        for (const auto& n : m.nodes)
+            for (int c : n.children)
+                if (c >= 0 && static_cast<std::size_t>(c) < m.nodes.size()) is_child[static_cast<std::size_t>(c)] = 1;
+        for (std::size_t i = 0; i < m.nodes.size(); ++i)
+            if (!is_child[i]) roots.push_back(static_cast<int>(i));
+    }
+
+    std::function<Status(int, const glm::dmat4&, int)> visit = [&](int index, const glm::dmat4& parent, int depth) -> Status {
+        if (index < 0 || static_cast<std::size_t>(index) >= m.nodes.size()) return make_error(src + ": node index " + std::to_string(index) + " out of range");
+        if (depth > 256 || !visiting.insert(index).second) return make_error(src + ": node hierarchy has a cycle");
+        const tinygltf::Node& node = m.nodes[static_cast<std::size_t>(index)];
+        const glm::dmat4 world = parent * node_matrix(node);
+        const json extras = to_json(node.extras);
+        if (extras.is_object() && extras.contains("sffd_cloud") && node.children.size() == 1) {
+            // One of our splat nodes: keep the arrays exactly as stored, Transform and origin apart.
+            const int child = node.children[0];
+            if (child < 0 || static_cast<std::size_t>(child) >= m.nodes.size()) return make_error(src + ": bad child of splat node");
+            const tinygltf::Node& cn = m.nodes[static_cast<std::size_t>(child)];
+            GltfCloudIn cloud;
+            cloud.name = node.name;
+            cloud.id = extras["sffd_cloud"].is_number_integer() ? extras["sffd_cloud"].get<int>() : -1;
+            cloud.transform = node_trs(node);
+            if (cn.translation.size() == 3) cloud.cloud.origin = glm::dvec3(cn.translation[0], cn.translation[1], cn.translation[2]);
+            if (cn.mesh >= 0 && static_cast<std::size_t>(cn.mesh) < m.meshes.size()) {
+                const auto& prims = m.meshes[static_cast<std::size_t>(cn.mesh)].primitives;
+                if (prims.size() != 1 || prims[0].mode != TINYGLTF_MODE_POINTS) return make_error(src + ": splat node '" + node.name + "' must hold one POINTS primitive");
+                Geometry unused;
+                if (auto s = read_primitive(m, prims[0], glm::dmat4(1.0), src, unused, material_map, &cloud.cloud); !s) return s;
+            }
+            const std::size_t n = cloud.cloud.size();
+            for (const auto& p : cloud.cloud.positions)
+                if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return make_error(src + ": splat node '" + node.name + "' has a non-finite position");
+            if ((!cloud.cloud.axis_u.empty() && cloud.cloud.axis_u.size() != n) || (!cloud.cloud.normals.empty() && cloud.cloud.normals.size() != n))
+                return make_error(src + ": splat node '" + node.name + "' has attribute arrays of the wrong length");
+            out.clouds.push_back(std::move(cloud));
+        } else {
+            if (node.mesh >= 0) {
+                if (static_cast<std::size_t>(node.mesh) >= m.meshes.size()) return make_error(src + ": mesh index out of range");
+                for (const auto& prim : m.meshes[static_cast<std::size_t>(node.mesh)].primitives)
+                    if (auto s = read_primitive(m, prim, world, src, out.other, material_map, nullptr); !s) return s;
+            }
+            for (int c : node.children)
+                if (auto s = visit(c, world, depth + 1); !s) return s;
+        }
+        visiting.erase(index);
+        return {};
+    };
+    for (int r : roots)
+        if (auto s = visit(r, glm::dmat4(1.0), 0); !s) return s.error();
+    // Attribute arrays padded lazily: complete them to the point count.
+    Geometry& g = out.other;
+    const std::size_t n = g.positions.size();
+    if (!g.normals.empty()) g.normals.resize(n, glm::vec3(0.0f));
+    if (!g.colors.empty()) g.colors.resize(n, 0xffffffffu);
+    if (!g.uvs.empty()) g.uvs.resize(n, glm::vec2(0.0f));
+    if (!g.axis_u.empty()) {
+        g.axis_u.resize(n, glm::vec3(0.0f));
+        g.axis_v.resize(n, glm::vec3(0.0f));
+    }
+    for (const auto& p : g.positions)
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return make_error(src + ": a node transform or position is not finite");
+    g.attributes = {"POSITION"};
+    if (!g.normals.empty()) g.attributes.push_back("NORMAL");
+    if (!g.colors.empty()) g.attributes.push_back("COLOR_0");
+    if (!g.uvs.empty()) g.attributes.push_back("TEXCOORD_0");
+    if (!g.axis_u.empty()) g.attributes.push_back("_AXIS_U/_AXIS_V");
+    return out;
+}
+
+Result<Geometry> read_gltf_geometry(const fs::path& path) {
+    auto contents = read_gltf(path);
+    if (!contents) return contents.error();
+    Geometry g = std::move(contents->other);
+    // Our splat nodes join the rest in world space (positions, normals and axes transformed).
+    bool single = contents->clouds.size() == 1 && g.positions.empty();
+    for (GltfCloudIn& c : contents->clouds) {
+        const Transform& t = c.transform;
+        const glm::dmat4 world = glm::translate(glm::dmat4(1.0), t.translation) * glm::mat4_cast(t.rotation) * glm::scale(glm::dmat4(1.0), t.scale);
+        const glm::dmat3 linear(world);
+        const glm::dmat3 nm = glm::transpose(glm::inverse(linear));
+        const std::size_t base = g.positions.size();
+        const std::size_t n = c.cloud.size();
+        for (const auto& p : c.cloud.positions) g.positions.push_back(glm::dvec3(world * glm::dvec4(c.cloud.origin + glm::dvec3(p), 1.0)));
+        auto extend = [&](auto& dst, const auto& src_arr, auto fn, auto def) {
+            if (src_arr.empty() && dst.empty()) return;
+            dst.resize(base, def);
+            for (std::size_t i = 0; i < n; ++i) dst.push_back(src_arr.empty() ? def : fn(src_arr[i]));
+        };
+        extend(g.normals, c.cloud.normals, [&](const glm::vec3& v) { return glm::vec3(glm::normalize(nm * glm::dvec3(v))); }, glm::vec3(0.0f));
+        extend(g.axis_u, c.cloud.axis_u, [&](const glm::vec3& v) { return glm::vec3(linear * glm::dvec3(v)); }, glm::vec3(0.0f));
+        extend(g.axis_v, c.cloud.axis_v, [&](const glm::vec3& v) { return glm::vec3(linear * glm::dvec3(v)); }, glm::vec3(0.0f));
+        extend(g.colors, c.cloud.colors, [](std::uint32_t v) { return v; }, 0xffffffffu);
+        extend(g.uvs, c.cloud.uvs, [](const glm::vec2& v) { return v; }, glm::vec2(0.0f));
+        if (single) {
+            g.splat_material = c.cloud.material;
+            const bool identity = t.translation == glm::dvec3(0.0) && t.rotation == glm::dquat(1, 0, 0, 0) && t.scale == glm::dvec3(1.0);
+            if (identity) {
+                g.has_origin = true;
+                g.origin = c.cloud.origin;
+            }
+        }
+    }
+    const std::size_t n = g.positions.size();
+    if (!g.normals.empty()) g.normals.resize(n, glm::vec3(0.0f));
+    if (!g.colors.empty()) g.colors.resize(n, 0xffffffffu);
+    if (!g.uvs.empty()) g.uvs.resize(n, glm::vec2(0.0f));
+    if (!g.axis_u.empty()) {
+        g.axis_u.resize(n, glm::vec3(0.0f));
+        g.axis_v.resize(n, glm::vec3(0.0f));
+    }
+    if (g.positions.empty()) return make_error(path.string() + ": no points or triangles in the glTF scene");
+    return g;
+}
+
+}  // namespace sffd::assets

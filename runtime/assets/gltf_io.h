@@ -1,0 +1,53 @@
+// glTF 2.0 / GLB reading and writing of splat clouds (owned by the content engineer, issue 5).
+// tinygltf reads (it validates the JSON and resolves buffers, data URIs and images); we write the JSON
+// ourselves with nlohmann::json so the layout below is exactly what content/README.md documents.
+//
+// A splat cloud is written as two nodes, so it shows in any glTF viewer as a point cloud:
+//   node "<name>"        TRS = the entity's Transform, extras {"sffd_cloud": <id>}, children [origin node]
+//   node "<name>.origin" translation = SplatCloud::origin (double), mesh = one POINTS primitive with
+//                        POSITION (float, relative to the origin), NORMAL, COLOR_0 (unsigned short
+//                        normalised, linear RGBA, converts back to the sRGB bytes exactly), TEXCOORD_0,
+//                        _AXIS_U and _AXIS_V (float VEC3: tangent axes scaled by the splat radii), and a
+//                        material (baseColorFactor, baseColorTexture as an embedded PNG, extras
+//                        sffd_specular / sffd_shininess).
+// Reading such a file back gives the same bytes for every stored array (round-trip tests).
+#pragma once
+
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "runtime/assets/import.h"
+#include "runtime/core/result.h"
+#include "runtime/scene/components.h"
+
+namespace sffd::assets {
+
+struct GltfCloudOut {
+    std::string name;
+    int id = -1;                    // written as extras.sffd_cloud (scene files refer to clouds by it)
+    const Transform* transform = nullptr;
+    const SplatCloud* cloud = nullptr;
+};
+
+// Writes .glb (binary) or .gltf (JSON with an embedded base64 buffer) by extension, atomically.
+// `sffd_scene_json`, when not empty, becomes the top-level extensions.SFFD_scene object.
+Status write_gltf(const std::filesystem::path& path, const std::vector<GltfCloudOut>& clouds,
+                  const std::string& sffd_scene_json = {});
+
+struct GltfCloudIn {
+    std::string name;
+    int id = -1;
+    Transform transform;
+    SplatCloud cloud;
+};
+
+struct GltfContents {
+    std::vector<GltfCloudIn> clouds;   // our splat nodes, exactly as stored
+    Geometry other;                    // every other mesh/point primitive, in world space
+    std::string sffd_scene_json;       // extensions.SFFD_scene as JSON text (empty when absent)
+};
+
+Result<GltfContents> read_gltf(const std::filesystem::path& path);
+
+}  // namespace sffd::assets

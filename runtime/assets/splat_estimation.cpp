@@ -1,0 +1,232 @@
+#include "runtime/assets/splat_estimation.h"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+
+#include <nanoflann.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace sffd::assets {
+
+namespace {
+
+struct PointAdaptor {
+    std::span<const glm::vec3> pts;
+    std::size_t kdtree_get_point_count() const { return pts.size(); }
+    float kdtree_get_pt(std::size_t i, std::size_t d) const { return pts[i][static_cast<int>(d)]; }
+    template <class BBox>
+    bool kdtree_get_bbox(BBox&) const { return false; }
+};
+
+using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointAdaptor>, PointAdaptor, 3,
+                                                   std::uint32_t>;
+
+}  // namespace
+
+Neighbours find_neighbours(std::span<const glm::vec3> points, int k) {
+    Neighbours nb;
+    nb.k = k;
+    const std::size_t n = points.size();
+    nb.index.assign(n * static_cast<std::size_t>(k), 0);
+    nb.dist2.assign(n * static_cast<std::size_t>(k), 0.0f);
+    if (n < 2 || k <= 0) return nb;
+    PointAdaptor adaptor{points};
+    KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
+    tree.buildIndex();
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::vector<std::uint32_t> idx(static_cast<std::size_t>(k) + 1);
+        std::vector<float> d2(static_cast<std::size_t>(k) + 1);
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            const float q[3] = {points[i].x, points[i].y, points[i].z};
+            const std::size_t found = tree.knnSearch(q, static_cast<std::size_t>(k) + 1, idx.data(), d2.data());
+            std::size_t out = 0;
+            std::uint32_t last = static_cast<std::uint32_t>(i == 0 ? 1 : 0);
+            float last_d = 0.0f;
+            for (std::size_t j = 0; j < found && out < static_cast<std::size_t>(k); ++j) {
+                if (idx[j] == i) continue;
+                nb.index[i * k + out] = idx[j];
+                nb.dist2[i * k + out] = d2[j];
+                last = idx[j];
+                last_d = d2[j];
+                ++out;
+            }
+            for (; out < static_cast<std::size_t>(k); ++out) {
+                nb.index[i * k + out] = last;
+                nb.dist2[i * k + out] = last_d;
+            }
+        }
+    });
+    return nb;
+}
+
+void symmetric_eigen(const glm::dmat3& input, glm::dvec3& values, glm::dmat3& vectors) {
+    double a[3][3];
+    double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+    for (int i = 0; i < 3; ++i)
+        for (int j = 0; j < 3; ++j) a[i][j] = input[j][i];
+    for (int sweep = 0; sweep < 50; ++sweep) {
+        const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        const double diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+        if (off <= 1e-30 * diag || off == 0.0) break;
+        for (int p = 0; p < 2; ++p) {
+            for (int q = p + 1; q < 3; ++q) {
+                if (a[p][q] == 0.0) continue;
+                const double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+                const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
+                for (int k = 0; k < 3; ++k) {  // A = J^T A J
+                    const double akp = a[k][p], akq = a[k][q];
+                    a[k][p] = c * akp - s * akq;
+                    a[k][q] = s * akp + c * akq;
+                }
+                for (int k = 0; k < 3; ++k) {
+                    const double apk = a[p][k], aqk = a[q][k];
+                    a[p][k] = c * apk - s * aqk;
+                    a[q][k] = s * apk + c * aqk;
+                }
+                for (int k = 0; k < 3; ++k) {
+                    const double vkp = v[k][p], vkq = v[k][q];
+                    v[k][p] = c * vkp - s * vkq;
+                    v[k][q] = s * vkp + c * vkq;
+                }
+            }
+        }
+    }
+    int order[3] = {0, 1, 2};
+    std::sort(order, order + 3, [&](int x, int y) { return a[x][x] < a[y][y]; });
+    for (int c = 0; c < 3; ++c) {
+        values[c] = a[order[c]][order[c]];
+        vectors[c] = glm::dvec3(v[0][order[c]], v[1][order[c]], v[2][order[c]]);
+    }
+}
+
+std::vector<glm::vec3> pca_normals(std::span<const glm::vec3> points, const Neighbours& nb) {
+    std::vector<glm::vec3> normals(points.size(), glm::vec3(0, 0, 1));
+    const std::size_t k = static_cast<std::size_t>(nb.k);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+            glm::dvec3 mean(points[i]);
+            for (std::size_t j = 0; j < k; ++j) mean += glm::dvec3(points[nb.index[i * k + j]]);
+            mean /= static_cast<double>(k + 1);
+            glm::dmat3 cov(0.0);
+            auto add = [&](const glm::vec3& p) {
+                const glm::dvec3 d = glm::dvec3(p) - mean;
+                cov += glm::outerProduct(d, d);
+            };
+            add(points[i]);
+            for (std::size_t j = 0; j < k; ++j) add(points[nb.index[i * k + j]]);
+            glm::dvec3 values;
+            glm::dmat3 vectors;
+            symmetric_eigen(cov, values, vectors);
+            if (values[2] <= 0.0) continue;  // all neighbours coincide
+            const glm::dvec3 n = vectors[0];
+            const double len = glm::length(n);
+            if (len > 0.0 && std::isfinite(len)) normals[i] = glm::vec3(n / len);
+        }
+    });
+    return normals;
+}
+
+void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std::span<glm::vec3> normals) {
+    const std::size_t n = points.size();
+    const std::size_t k = static_cast<std::size_t>(nb.k);
+    if (n == 0) return;
+    // Symmetric adjacency (CSR): the k-NN relation is not symmetric, the tree must be able to use both.
+    std::vector<std::uint32_t> degree(n + 1, 0);
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < k; ++j) {
+            const std::uint32_t o = nb.index[i * k + j];
+            if (o == i) continue;
+            ++degree[i + 1];
+            ++degree[o + 1];
+        }
+    for (std::size_t i = 0; i < n; ++i) degree[i + 1] += degree[i];
+    std::vector<std::uint32_t> adj(degree[n]);
+    std::vector<std::uint32_t> fill(degree.begin(), degree.end() - 1);
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t j = 0; j < k; ++j) {
+            const std::uint32_t o = nb.index[i * k + j];
+            if (o == i) continue;
+            adj[fill[i]++] = o;
+            adj[fill[o]++] = static_cast<std::uint32_t>(i);
+        }
+
+    // Seeds in order of decreasing z: the first unvisited one starts a new component.
+    std::vector<std::uint32_t> by_z(n);
+    for (std::size_t i = 0; i < n; ++i) by_z[i] = static_cast<std::uint32_t>(i);
+    std::sort(by_z.begin(), by_z.end(), [&](std::uint32_t a, std::uint32_t b) { return points[a].z > points[b].z; });
+
+    std::vector<char> done(n, 0);
+    using Item = std::pair<float, std::pair<std::uint32_t, std::uint32_t>>;  // weight, (parent, node)
+    std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
+    for (std::uint32_t seed : by_z) {
+        if (done[seed]) continue;
+        if (normals[seed].z < 0.0f) normals[seed] = -normals[seed];
+        heap.push({0.0f, {seed, seed}});
+        while (!heap.empty()) {
+            const auto [w, edge] = heap.top();
+            heap.pop();
+            const auto [parent, node] = edge;
+            if (done[node]) continue;
+            done[node] = 1;
+            if (node != parent && glm::dot(normals[node], normals[parent]) < 0.0f) normals[node] = -normals[node];
+            for (std::uint32_t e = degree[node]; e < degree[node + 1]; ++e) {
+                const std::uint32_t o = adj[e];
+                if (!done[o]) heap.push({1.0f - std::abs(glm::dot(normals[node], normals[o])), {node, o}});
+            }
+        }
+    }
+}
+
+std::vector<float> estimate_radii(const Neighbours& nb, int kth, float scale) {
+    const std::size_t n = nb.k > 0 ? nb.index.size() / static_cast<std::size_t>(nb.k) : 0;
+    std::vector<float> radii(n, 0.0f);
+    if (n == 0) return radii;
+    kth = std::clamp(kth, 1, nb.k);
+    for (std::size_t i = 0; i < n; ++i)
+        radii[i] = scale * std::sqrt(nb.dist2[i * nb.k + static_cast<std::size_t>(kth - 1)]);
+    std::vector<float> sorted = radii;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<long>(n / 2), sorted.end());
+    const float median = sorted[n / 2];
+    if (median > 0.0f)
+        for (float& r : radii) r = std::clamp(r, 0.25f * median, 4.0f * median);
+    return radii;
+}
+
+glm::vec3 any_tangent(const glm::vec3& n) {
+    const float sign = std::copysign(1.0f, n.z);
+    const float a = -1.0f / (sign + n.z);
+    const float b = n.x * n.y * a;
+    return glm::vec3(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
+}
+
+void make_circular_axes(std::span<const glm::vec3> normals, std::span<const float> radii, std::vector<glm::vec3>& axis_u,
+                        std::vector<glm::vec3>& axis_v) {
+    axis_u.resize(normals.size());
+    axis_v.resize(normals.size());
+    for (std::size_t i = 0; i < normals.size(); ++i) {
+        const glm::vec3 t = glm::normalize(any_tangent(normals[i]));
+        const glm::vec3 b = glm::normalize(glm::cross(normals[i], t));
+        axis_u[i] = t * radii[i];
+        axis_v[i] = b * radii[i];
+    }
+}
+
+void estimate_splats(SplatCloud& cloud, const EstimateOptions& options) {
+    const bool want_normals = options.normals || (options.radii && cloud.normals.size() != cloud.size());
+    if (!want_normals && !options.radii) return;
+    const int k = std::max(options.k, 8);
+    const Neighbours nb = find_neighbours(cloud.positions, k);
+    if (want_normals) {
+        cloud.normals = pca_normals(cloud.positions, nb);
+        orient_normals(cloud.positions, nb, cloud.normals);
+    }
+    if (options.radii) {
+        const std::vector<float> radii = estimate_radii(nb, 8, 1.0f);
+        make_circular_axes(cloud.normals, radii, cloud.axis_u, cloud.axis_v);
+    }
+}
+
+}  // namespace sffd::assets
