@@ -4,6 +4,7 @@
 #include "tools/splatffd/engine.h"
 
 #include "runtime/app/app.h"
+#include "systems/picking/picking_system.h"
 
 namespace sffd {
 
@@ -17,6 +18,7 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
     // --- deformation: re-deform point clouds whose rest data or lattices changed (ffd) --------------
 
     // --- picking: only when a pick was requested (picking) ------------------------------------------
+    s.add(Phase::picking, "picking", picking::picking_system);
 
     // --- rendering: splat passes, overlays, UI, capture (splat_render, editor overlay) ---------------
 
