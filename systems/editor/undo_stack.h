@@ -138,7 +138,8 @@ private:
 
 class UndoStack {
 public:
-    explicit UndoStack(std::size_t limit = 256) : m_limit(limit) {}
+    UndoStack() = default;
+    explicit UndoStack(std::size_t limit) : m_limit(limit) {}
 
     // Adds an already-applied step; drops the redo history. Empty commands are ignored (returns false).
     bool push(std::unique_ptr<Command> command);
@@ -167,7 +168,7 @@ public:
 private:
     std::vector<std::unique_ptr<Command>> m_commands;
     std::size_t m_next = 0;
-    std::size_t m_limit;
+    std::size_t m_limit = 256;
 };
 
 }  // namespace sffd::editor

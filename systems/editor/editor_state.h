@@ -1,0 +1,98 @@
+// EditorState: the editor's singleton resource (set by `splatffd view` and by tests). Plain data plus
+// the undo stack. The window (or the replayer) appends this frame's InputEvents to `events`; the
+// editor's input system (editor_system.h) consumes them in the input phase and turns them into camera
+// moves, selections and lattice edits (recorded on `undo`). Requests the input system cannot carry out
+// itself (save, screenshot, quit: they need the scene path, the GL context or the window) are flags the
+// view loop handles after the frame.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "runtime/ecs/entity.h"
+#include "systems/editor/camera_controller.h"
+#include "systems/editor/gizmo.h"
+#include "systems/editor/input_record.h"
+#include "systems/editor/lattice_tools.h"
+#include "systems/editor/undo_stack.h"
+#include "systems/ffd/components.h"
+
+namespace sffd::editor {
+
+enum class Tool : std::uint8_t { select, move, twist, brush };
+const char* tool_name(Tool tool);
+
+enum class PivotMode : std::uint8_t { centroid, picked_point };
+
+// A stretch or twist as the user last applied it (in lattice space), so "set key" can key it.
+struct LastEdit {
+    enum class Kind : std::uint8_t { none, stretch, twist } kind = Kind::none;
+    ecs::Entity lattice = ecs::null_entity;
+    std::vector<std::uint32_t> points;
+    glm::dvec3 displacement{0.0};
+    double angle = 0.0;  // radians
+    glm::dvec3 axis{0.0, 0.0, 1.0};
+    glm::dvec3 pivot{0.0};
+};
+
+// What a held mouse button is doing.
+struct Drag {
+    enum class Kind : std::uint8_t { none, pending_click, box, orbit, pan, move, twist, brush } kind = Kind::none;
+    MouseButton button = MouseButton::left;
+    std::uint8_t modifiers = 0;
+    glm::dvec2 start{0.0};      // cursor at press
+    glm::dvec2 last{0.0};       // cursor at the previous event
+    Camera camera;              // the camera when the tool drag began (tools drag in its view)
+    ecs::Entity lattice = ecs::null_entity;
+    std::vector<glm::dvec3> start_points;  // lattice current at press (tools apply from it: no drift)
+    std::optional<Lattice> before;         // undo snapshot
+    std::vector<std::uint32_t> points;     // edited control points
+    glm::dvec3 pivot_world{0.0};
+    glm::dvec3 axis_world{0.0, 0.0, 1.0};
+    double angle = 0.0;                    // accumulated twist (unbounded)
+    glm::dvec3 displacement_world{0.0};
+};
+
+struct EditorState {
+    // --- tool settings (panels and shortcuts change them) ---
+    Tool tool = Tool::select;
+    AxisMode move_axis = AxisMode::view_plane;
+    AxisMode twist_axis = AxisMode::view;
+    glm::dvec3 custom_axis{0.0, 0.0, 1.0};
+    PivotMode pivot_mode = PivotMode::centroid;
+    glm::dvec3 picked_pivot{0.0};   // world; set by alt+click on the surface
+    bool has_picked_pivot = false;
+    ToolScope scope = ToolScope::local;
+    bool pin_outer_layer = true;
+    bool xray = false;
+    bool show_lattice = true;
+    double click_tolerance_px = 8.0;
+
+    // --- what is being edited ---
+    ecs::Entity camera = ecs::null_entity;          // entity with the Camera the view uses
+    ecs::Entity active_lattice = ecs::null_entity;  // lattice the tools work on
+    ecs::Entity selected_entity = ecs::null_entity; // outliner / inspector selection
+    Viewport viewport;
+
+    UndoStack undo;
+
+    // --- input of this frame (filled by the window or the replayer, consumed by the input system) ---
+    std::vector<InputEvent> events;
+    glm::dvec2 cursor{0.0};
+    Drag drag;
+    LastEdit last_edit;
+
+    // --- requests for the view loop ---
+    bool request_save = false;
+    bool request_screenshot = false;
+    bool request_quit = false;
+    bool request_frame_selection = false;
+
+    std::string status;  // last message for the status bar (also logged)
+};
+
+}  // namespace sffd::editor

@@ -1,0 +1,649 @@
+#include "systems/editor/editor_system.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/gtc/matrix_inverse.hpp>
+
+#include "runtime/core/log.h"
+#include "runtime/scene/components.h"
+#include "systems/editor/selection_edit.h"
+#include "systems/ffd/components.h"
+#include "systems/picking/components.h"
+#include "systems/picking/picking_system.h"
+#include "systems/picking/selection.h"
+#include "systems/picking/world_space.h"
+#if SFFD_EDITOR_HAS_ANIMATION
+#include "systems/animation/components.h"
+#include "systems/animation/editing.h"
+#endif
+
+namespace sffd::editor {
+
+const char* tool_name(Tool tool) {
+    switch (tool) {
+        case Tool::select: return "select";
+        case Tool::move: return "move";
+        case Tool::twist: return "twist";
+        case Tool::brush: return "brush";
+    }
+    return "?";
+}
+
+namespace {
+
+constexpr double drag_threshold_px = 3.0;
+
+void say(EditorState& state, std::string message) {
+    log::info("editor: ", message);
+    state.status = std::move(message);
+}
+
+Camera* camera_of(ecs::Registry& registry, EditorState& state) {
+    if (registry.valid(state.camera))
+        if (Camera* c = registry.try_get<Camera>(state.camera)) return c;
+    return nullptr;
+}
+
+picking::ScreenView screen_view(const Camera& camera, const Viewport& vp) {
+    return picking::make_screen_view(camera, {vp.width, vp.height});
+}
+
+glm::dmat4 lattice_model(const ecs::Registry& registry, ecs::Entity lattice) {
+    return picking::model_matrix(registry.try_get<Transform>(lattice));
+}
+
+const Lattice* active_lattice(const ecs::Registry& registry, const EditorState& state) {
+    return registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
+}
+
+std::vector<std::uint32_t> selection_of(const ecs::Registry& registry, ecs::Entity lattice) {
+    if (const auto* s = registry.try_get<picking::LatticeSelection>(lattice)) return s->indices;
+    return {};
+}
+
+picking::PickHit pick_at(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor,
+                         bool control_points, bool surfaces) {
+    picking::PickQuery q = picking::query_at_pixel(screen_view(camera, state.viewport), cursor);
+    q.tolerance_px = state.click_tolerance_px;
+    q.xray = state.xray;
+    q.control_points = control_points;
+    q.surfaces = surfaces;
+    return picking::pick(registry, picking::picking_state(registry), q);
+}
+
+void click_select(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor,
+                  std::uint8_t modifiers) {
+    const picking::SelectMode mode = picking::select_mode(modifiers & mods::shift, modifiers & mods::ctrl);
+    const picking::PickHit hit = pick_at(registry, state, camera, cursor, true, true);
+    if (hit.kind == picking::PickKind::control_point) {
+        state.active_lattice = hit.entity;
+        state.selected_entity = hit.entity;
+        const std::uint32_t picked[] = {hit.index};
+        const picking::LatticeSelection current{selection_of(registry, hit.entity)};
+        set_selection(registry, state, hit.entity, picking::select(current, picked, mode).indices, "select");
+        say(state, log::str("picked control point ", hit.index));
+        return;
+    }
+    if (hit.kind == picking::PickKind::surface) state.selected_entity = hit.entity;
+    if (mode == picking::SelectMode::replace && registry.valid(state.active_lattice))
+        set_selection(registry, state, state.active_lattice, {}, "deselect");
+}
+
+void box_select(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 a, glm::dvec2 b,
+                std::uint8_t modifiers) {
+    if (!active_lattice(registry, state)) return;
+    const picking::SelectMode mode = picking::select_mode(modifiers & mods::shift, modifiers & mods::ctrl);
+    const std::vector<std::uint32_t> inside = picking::control_points_in_rect(
+        registry, picking::picking_state(registry), state.active_lattice, screen_view(camera, state.viewport),
+        picking::ScreenRect{a, b}, !state.xray);
+    picking::LatticeSelection current{selection_of(registry, state.active_lattice)};
+    set_selection(registry, state, state.active_lattice, picking::select(current, inside, mode).indices, "box select");
+    say(state, log::str("box selected ", inside.size(), " control points"));
+}
+
+void brush_dab(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor,
+               picking::SelectMode mode) {
+    if (!active_lattice(registry, state)) return;
+    const picking::PickHit hit = pick_at(registry, state, camera, cursor, false, true);
+    if (hit.kind != picking::PickKind::surface) return;
+    const auto local = picking::surface_hit_in_lattice_space(registry, state.active_lattice, hit);
+    if (!local) return;
+    const auto picked = picking::brush_select(registry.get<Lattice>(state.active_lattice), *local, {});
+    picking::LatticeSelection current{selection_of(registry, state.active_lattice)};
+    set_selection(registry, state, state.active_lattice, picking::select(current, picked, mode).indices, "brush");
+}
+
+// Pivot and axis of a tool in world space.
+glm::dvec3 tool_pivot(const ecs::Registry& registry, const EditorState& state, std::span<const std::uint32_t> points) {
+    if (state.pivot_mode == PivotMode::picked_point && state.has_picked_pivot) return state.picked_pivot;
+    const Lattice* lattice = active_lattice(registry, state);
+    if (!lattice) return glm::dvec3(0.0);
+    return glm::dvec3(lattice_model(registry, state.active_lattice) * glm::dvec4(centroid(*lattice, points), 1.0));
+}
+
+// Applies the drag's current displacement / angle to the lattice, from the snapshot.
+void apply_drag(ecs::Registry& registry, const Drag& drag) {
+    if (!registry.valid(drag.lattice) || !registry.has<Lattice>(drag.lattice)) return;
+    const glm::dmat4 model = lattice_model(registry, drag.lattice);
+    const glm::dmat4 inverse = glm::inverse(model);
+    Lattice& lattice = registry.patch<Lattice>(drag.lattice);
+    if (lattice.current.size() != drag.start_points.size()) return;
+    if (drag.kind == Drag::Kind::move) {
+        const glm::dvec3 d = glm::dvec3(inverse * glm::dvec4(drag.displacement_world, 0.0));
+        stretch_points(drag.start_points, lattice.current, drag.points, d);
+    } else {
+        const glm::dvec3 pivot = glm::dvec3(inverse * glm::dvec4(drag.pivot_world, 1.0));
+        const glm::dvec3 axis = glm::dvec3(inverse * glm::dvec4(drag.axis_world, 0.0));
+        twist_points(drag.start_points, lattice.current, drag.points, pivot, axis, drag.angle);
+    }
+}
+
+void remember_edit(ecs::Registry& registry, EditorState& state, const Drag& drag) {
+    const glm::dmat4 inverse = glm::inverse(lattice_model(registry, drag.lattice));
+    LastEdit& e = state.last_edit;
+    e.lattice = drag.lattice;
+    e.points = drag.points;
+    if (drag.kind == Drag::Kind::move) {
+        e.kind = LastEdit::Kind::stretch;
+        e.displacement = glm::dvec3(inverse * glm::dvec4(drag.displacement_world, 0.0));
+    } else {
+        e.kind = LastEdit::Kind::twist;
+        e.angle = drag.angle;
+        e.axis = glm::dvec3(inverse * glm::dvec4(drag.axis_world, 0.0));
+        e.pivot = glm::dvec3(inverse * glm::dvec4(drag.pivot_world, 1.0));
+    }
+}
+
+bool begin_tool_drag(ecs::Registry& registry, EditorState& state, const Camera& camera, Drag& drag) {
+    const Lattice* lattice = active_lattice(registry, state);
+    if (!lattice) return false;
+    drag.points = editable_selection(registry, state);
+    if (drag.points.empty()) {
+        say(state, state.pin_outer_layer && !selection_of(registry, state.active_lattice).empty()
+                       ? "only pinned (outer layer) points selected: unpin with p, or go global with l"
+                       : "nothing selected to edit");
+        return false;
+    }
+    drag.kind = state.tool == Tool::move ? Drag::Kind::move : Drag::Kind::twist;
+    drag.camera = camera;
+    drag.lattice = state.active_lattice;
+    drag.start_points = lattice->current;
+    drag.before = *lattice;
+    drag.pivot_world = tool_pivot(registry, state, drag.points);
+    drag.axis_world = axis_direction(state.twist_axis, camera, state.custom_axis);
+    drag.angle = 0.0;
+    drag.displacement_world = glm::dvec3(0.0);
+    return true;
+}
+
+void finish_tool_drag(ecs::Registry& registry, EditorState& state, Drag& drag) {
+    if (!registry.valid(drag.lattice) || !registry.has<Lattice>(drag.lattice)) return;
+    const bool is_move = drag.kind == Drag::Kind::move;
+    auto change = std::make_unique<ComponentChange<Lattice>>(is_move ? "stretch" : "twist", drag.lattice, drag.before,
+                                                             registry.get<Lattice>(drag.lattice));
+    if (state.undo.push(std::move(change))) {
+        remember_edit(registry, state, drag);
+        say(state, is_move ? log::str("stretched ", drag.points.size(), " control points")
+                           : log::str("twisted ", drag.points.size(), " control points by ",
+                                      glm::degrees(drag.angle), " degrees"));
+    }
+}
+
+glm::dvec3 move_displacement(const EditorState& state, const Drag& drag, glm::dvec2 cursor) {
+    const Camera& cam = drag.camera;
+    if (state.move_axis == AxisMode::view_plane)
+        return drag_in_view_plane(cam, state.viewport, drag.pivot_world, drag.start, cursor);
+    if (state.move_axis == AxisMode::view) {
+        // Along the viewing direction: upward drag pushes away, one pixel = one pixel's size at the pivot.
+        const double depth = glm::dot(drag.pivot_world - cam.eye, glm::normalize(cam.target - cam.eye));
+        const double pixel = 2.0 * depth * std::tan(glm::radians(double(cam.fov_y_degrees)) * 0.5) / state.viewport.height;
+        return glm::normalize(cam.target - cam.eye) * ((drag.start.y - cursor.y) * pixel);
+    }
+    return drag_along_axis(cam, state.viewport, drag.pivot_world, axis_direction(state.move_axis, cam, state.custom_axis),
+                           drag.start, cursor);
+}
+
+void handle_move(ecs::Registry& registry, EditorState& state, Camera& camera, glm::dvec2 cursor) {
+    Drag& drag = state.drag;
+    const glm::dvec2 delta = cursor - drag.last;
+    switch (drag.kind) {
+        case Drag::Kind::none: break;
+        case Drag::Kind::pending_click:
+            if (glm::length(cursor - drag.start) > drag_threshold_px) drag.kind = Drag::Kind::box;
+            break;
+        case Drag::Kind::box: break;
+        case Drag::Kind::orbit: orbit(camera, delta); break;
+        case Drag::Kind::pan: pan(camera, state.viewport, delta); break;
+        case Drag::Kind::move:
+            drag.displacement_world = move_displacement(state, drag, cursor);
+            apply_drag(registry, drag);
+            break;
+        case Drag::Kind::twist:
+            drag.angle += drag_angle(drag.camera, state.viewport, drag.pivot_world, drag.axis_world, drag.last, cursor);
+            apply_drag(registry, drag);
+            break;
+        case Drag::Kind::brush:
+            brush_dab(registry, state, camera, cursor,
+                      drag.modifiers & mods::ctrl ? picking::SelectMode::remove : picking::SelectMode::add);
+            break;
+    }
+    drag.last = cursor;
+}
+
+void handle_press(ecs::Registry& registry, EditorState& state, Camera& camera, const InputEvent& e) {
+    Drag& drag = state.drag;
+    if (drag.kind != Drag::Kind::none) return;  // one gesture at a time
+    drag = Drag{};
+    drag.button = e.button;
+    drag.modifiers = e.modifiers;
+    drag.start = drag.last = state.cursor;
+    if (e.button == MouseButton::right) {
+        drag.kind = (e.modifiers & mods::shift) ? Drag::Kind::pan : Drag::Kind::orbit;
+        return;
+    }
+    if (e.button == MouseButton::middle) {
+        drag.kind = Drag::Kind::pan;
+        return;
+    }
+    if (e.modifiers & mods::alt) {  // pivot at a picked surface point
+        const picking::PickHit hit = pick_at(registry, state, camera, state.cursor, false, true);
+        if (hit) {
+            state.picked_pivot = hit.position;
+            state.has_picked_pivot = true;
+            state.pivot_mode = PivotMode::picked_point;
+            say(state, "pivot set to the picked surface point");
+        }
+        return;
+    }
+    const bool plain = (e.modifiers & (mods::shift | mods::ctrl)) == 0;
+    if (plain && (state.tool == Tool::move || state.tool == Tool::twist) && begin_tool_drag(registry, state, camera, drag))
+        return;
+    if (state.tool == Tool::brush) {
+        drag.kind = Drag::Kind::brush;
+        brush_dab(registry, state, camera, state.cursor, picking::select_mode(e.modifiers & mods::shift, e.modifiers & mods::ctrl));
+        return;
+    }
+    drag.kind = Drag::Kind::pending_click;
+}
+
+void handle_release(ecs::Registry& registry, EditorState& state, Camera& camera, const InputEvent& e) {
+    Drag& drag = state.drag;
+    if (drag.kind == Drag::Kind::none || drag.button != e.button) return;
+    switch (drag.kind) {
+        case Drag::Kind::pending_click: click_select(registry, state, camera, drag.start, drag.modifiers); break;
+        case Drag::Kind::box: box_select(registry, state, camera, drag.start, state.cursor, drag.modifiers); break;
+        case Drag::Kind::move:
+        case Drag::Kind::twist: finish_tool_drag(registry, state, drag); break;
+        default: break;
+    }
+    drag = Drag{};
+}
+
+void cancel_drag(ecs::Registry& registry, EditorState& state) {
+    Drag& drag = state.drag;
+    if ((drag.kind == Drag::Kind::move || drag.kind == Drag::Kind::twist) && registry.valid(drag.lattice) &&
+        registry.has<Lattice>(drag.lattice))
+        registry.patch<Lattice>(drag.lattice).current = drag.start_points;
+    drag = Drag{};
+    say(state, "cancelled");
+}
+
+void set_axis(EditorState& state, AxisMode mode) {
+    if (state.tool == Tool::twist) {
+        state.twist_axis = mode;
+    } else {
+        state.move_axis = state.move_axis == mode ? AxisMode::view_plane : mode;  // pressing again frees it
+        if (mode != AxisMode::view) state.twist_axis = mode;
+    }
+    say(state, log::str("axis: ", axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis)));
+}
+
+void handle_text(ecs::Registry& registry, EditorState& state, const std::string& text) {
+    // Numeric entry: "dx dy dz" (commas allowed) for move, "degrees" for twist.
+    std::string cleaned = text;
+    std::replace(cleaned.begin(), cleaned.end(), ',', ' ');
+    double v[3] = {0, 0, 0};
+    int n = 0;
+    const char* p = cleaned.c_str();
+    while (n < 3) {
+        char* end = nullptr;
+        const double x = std::strtod(p, &end);
+        if (end == p) break;
+        v[n++] = x;
+        p = end;
+    }
+    if (state.tool == Tool::twist && n >= 1) apply_twist(registry, state, v[0]);
+    else if (state.tool == Tool::move && n == 3) apply_stretch(registry, state, {v[0], v[1], v[2]});
+    else say(state, "numeric entry '" + text + "': move takes 'dx dy dz', twist takes 'degrees'");
+}
+
+void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e) {
+    const bool ctrl = e.modifiers & mods::ctrl, shift = e.modifiers & mods::shift;
+    const std::string& k = e.key;
+    if (state.drag.kind != Drag::Kind::none) {
+        if (k == "escape") cancel_drag(registry, state);
+        return;  // no other shortcuts mid-gesture
+    }
+    if (ctrl) {
+        if (k == "z" && shift) redo(registry, state);
+        else if (k == "z") undo(registry, state);
+        else if (k == "y") redo(registry, state);
+        else if (k == "s") state.request_save = true;
+        else if (k == "a") select_all(registry, state);
+        else if (k == "q") state.request_quit = true;
+        return;
+    }
+    if (k == "q") state.tool = Tool::select, say(state, "tool: select");
+    else if (k == "g" || k == "w") state.tool = Tool::move, say(state, "tool: move");
+    else if (k == "r") state.tool = Tool::twist, say(state, "tool: twist");
+    else if (k == "b") state.tool = Tool::brush, say(state, "tool: brush");
+    else if (k == "x") set_axis(state, AxisMode::x);
+    else if (k == "y") set_axis(state, AxisMode::y);
+    else if (k == "z") set_axis(state, AxisMode::z);
+    else if (k == "v") set_axis(state, AxisMode::view);
+    else if (k == "c") set_axis(state, AxisMode::custom);
+    else if (k == "a") select_all(registry, state);
+    else if (k == "escape") clear_selection(registry, state);
+    else if (k == "f") frame_selection(registry, state);
+    else if (k == "p") state.pin_outer_layer = !state.pin_outer_layer,
+                       say(state, state.pin_outer_layer ? "outer layer pinned" : "outer layer unpinned");
+    else if (k == "l") state.scope = state.scope == ToolScope::local ? ToolScope::global : ToolScope::local,
+                       say(state, state.scope == ToolScope::local ? "scope: local (selection)" : "scope: global (all points)");
+    else if (k == "t") state.xray = !state.xray, say(state, state.xray ? "x-ray on" : "x-ray off");
+    else if (k == "o") state.pivot_mode = state.pivot_mode == PivotMode::centroid ? PivotMode::picked_point : PivotMode::centroid;
+    else if (k == "home") reset_lattice(registry, state);
+    else if (k == "k" && shift) delete_keys_at_time(registry, state);
+    else if (k == "k") key_last_edit(registry, state);
+    else if (k == "space") toggle_play(registry, state);
+    else if (k == "left") scrub_to(registry, state, clip_time(registry, state) - 1.0 / 24.0);
+    else if (k == "right") scrub_to(registry, state, clip_time(registry, state) + 1.0 / 24.0);
+    else if (k == "f12") state.request_screenshot = true;
+}
+
+#if SFFD_EDITOR_HAS_ANIMATION
+AnimationState* animation_state(ecs::Registry& registry, const EditorState& state) {
+    return registry.valid(state.active_lattice) ? registry.try_get<AnimationState>(state.active_lattice) : nullptr;
+}
+#endif
+
+}  // namespace
+
+void set_selection(ecs::Registry& registry, EditorState& state, ecs::Entity lattice, std::vector<std::uint32_t> indices,
+                   const char* label) {
+    if (!registry.valid(lattice) || !registry.has<Lattice>(lattice)) return;
+    const auto* current = registry.try_get<picking::LatticeSelection>(lattice);
+    if (current && current->indices == indices) return;
+    if (!current && indices.empty()) return;
+    ComponentEdit<picking::LatticeSelection> edit(registry, lattice, label);
+    if (current) registry.patch<picking::LatticeSelection>(lattice).indices = std::move(indices);
+    else registry.emplace<picking::LatticeSelection>(lattice, picking::LatticeSelection{std::move(indices)});
+    state.undo.push(edit.finish(registry));
+}
+
+std::vector<std::uint32_t> editable_selection(const ecs::Registry& registry, const EditorState& state) {
+    const Lattice* lattice = active_lattice(registry, state);
+    if (!lattice) return {};
+    const std::vector<std::uint32_t> sel = selection_of(registry, state.active_lattice);
+    return editable_points(*lattice, sel, state.scope, state.pin_outer_layer);
+}
+
+bool scene_bounds(const ecs::Registry& registry, glm::dvec3& lo, glm::dvec3& hi) {
+    bool any = false;
+    lo = glm::dvec3(std::numeric_limits<double>::max());
+    hi = -lo;
+    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
+        const glm::dmat4 model = picking::model_matrix(registry.try_get<Transform>(e));
+        glm::dvec3 a(std::numeric_limits<double>::max()), b(-std::numeric_limits<double>::max());
+        for (const glm::vec3& p : cloud.positions) {
+            const glm::dvec3 w = glm::dvec3(model * glm::dvec4(cloud.origin + glm::dvec3(p), 1.0));
+            a = glm::min(a, w), b = glm::max(b, w);
+        }
+        if (!cloud.positions.empty()) lo = glm::min(lo, a), hi = glm::max(hi, b), any = true;
+    });
+    return any;
+}
+
+EditorState& setup_editor(ecs::Registry& registry, const Viewport& viewport) {
+    EditorState* state = registry.try_resource<EditorState>();
+    if (!state) state = &registry.set_resource<EditorState>();
+    state->viewport = viewport;
+    if (!registry.valid(state->camera) || !registry.has<Camera>(state->camera)) {
+        state->camera = ecs::null_entity;
+        registry.view<Camera>().each([&](ecs::Entity e, Camera&) { state->camera = e; });
+    }
+    if (!registry.valid(state->camera)) {
+        const ecs::Entity e = registry.create();
+        registry.emplace<Name>(e, Name{"editor camera"});
+        Camera& cam = registry.emplace<Camera>(e);
+        glm::dvec3 lo, hi;
+        if (scene_bounds(registry, lo, hi)) {
+            cam.eye = glm::dvec3(0.35, 0.3, 1.0);  // direction only; framing sets the distance
+            const glm::dvec3 corners[2] = {lo, hi};
+            frame_points(cam, viewport, corners, 1.05);
+            cam.near_plane = float(glm::length(hi - lo) * 1e-3);
+        }
+        state->camera = e;
+    }
+    if (!registry.valid(state->active_lattice) || !registry.has<Lattice>(state->active_lattice)) {
+        state->active_lattice = ecs::null_entity;
+        registry.view<Lattice>().each([&](ecs::Entity e, Lattice&) { state->active_lattice = e; });
+    }
+#if SFFD_EDITOR_HAS_ANIMATION
+    registry.view<AnimationState>().each([&](ecs::Entity, AnimationState& s) { sffd::pause(s); });
+#endif
+    return *state;
+}
+
+void editor_input_system(ecs::Registry& registry, const FrameContext&) {
+    EditorState* state = registry.try_resource<EditorState>();
+    if (!state) return;
+    Camera* camera = camera_of(registry, *state);
+    std::vector<InputEvent> events = std::move(state->events);
+    state->events.clear();
+    for (const InputEvent& e : events) {
+        camera = camera_of(registry, *state);  // undo may have touched components: look it up again
+        if (!camera) break;
+        switch (e.kind) {
+            case InputKind::move:
+                state->cursor = e.position;
+                handle_move(registry, *state, *camera, e.position);
+                break;
+            case InputKind::press: handle_press(registry, *state, *camera, e); break;
+            case InputKind::release: handle_release(registry, *state, *camera, e); break;
+            case InputKind::scroll: zoom(*camera, e.scroll); break;
+            case InputKind::key: handle_key(registry, *state, e); break;
+            case InputKind::text: handle_text(registry, *state, e.key); break;
+        }
+    }
+    if (state->request_frame_selection) {
+        state->request_frame_selection = false;
+        frame_selection(registry, *state);
+    }
+}
+
+void undo(ecs::Registry& registry, EditorState& state) {
+    if (state.drag.kind != Drag::Kind::none) return;
+    const std::size_t at = state.undo.position();
+    if (state.undo.undo(registry)) say(state, "undo " + state.undo.at(at - 1).label());
+    else say(state, "nothing to undo");
+}
+
+void redo(ecs::Registry& registry, EditorState& state) {
+    if (state.drag.kind != Drag::Kind::none) return;
+    const std::size_t at = state.undo.position();
+    if (state.undo.redo(registry)) say(state, "redo " + state.undo.at(at).label());
+    else say(state, "nothing to redo");
+}
+
+void select_all(ecs::Registry& registry, EditorState& state) {
+    const Lattice* lattice = active_lattice(registry, state);
+    if (!lattice) return;
+    std::vector<std::uint32_t> all(lattice->current.size());
+    for (std::uint32_t i = 0; i < all.size(); ++i) all[i] = i;
+    set_selection(registry, state, state.active_lattice, std::move(all), "select all");
+}
+
+void clear_selection(ecs::Registry& registry, EditorState& state) {
+    if (active_lattice(registry, state)) set_selection(registry, state, state.active_lattice, {}, "deselect");
+}
+
+bool apply_stretch(ecs::Registry& registry, EditorState& state, const glm::dvec3& displacement) {
+    Camera* camera = camera_of(registry, state);
+    if (!camera || state.drag.kind != Drag::Kind::none) return false;
+    const Tool tool = state.tool;
+    state.tool = Tool::move;
+    Drag drag;
+    const bool ok = begin_tool_drag(registry, state, *camera, drag);
+    state.tool = tool;
+    if (!ok) return false;
+    drag.displacement_world = displacement;
+    apply_drag(registry, drag);
+    finish_tool_drag(registry, state, drag);
+    return true;
+}
+
+bool apply_twist(ecs::Registry& registry, EditorState& state, double degrees) {
+    Camera* camera = camera_of(registry, state);
+    if (!camera || state.drag.kind != Drag::Kind::none) return false;
+    const Tool tool = state.tool;
+    state.tool = Tool::twist;
+    Drag drag;
+    const bool ok = begin_tool_drag(registry, state, *camera, drag);
+    state.tool = tool;
+    if (!ok) return false;
+    drag.angle = glm::radians(degrees);
+    apply_drag(registry, drag);
+    finish_tool_drag(registry, state, drag);
+    return true;
+}
+
+void reset_lattice(ecs::Registry& registry, EditorState& state) {
+    if (!active_lattice(registry, state)) return;
+    if (state.undo.record<Lattice>(registry, state.active_lattice, "reset", [](Lattice& l) { l.current = l.rest; }))
+        say(state, "lattice reset to rest");
+}
+
+void frame_selection(ecs::Registry& registry, EditorState& state) {
+    Camera* camera = camera_of(registry, state);
+    if (!camera) return;
+    std::vector<glm::dvec3> points;
+    if (const Lattice* lattice = active_lattice(registry, state)) {
+        const glm::dmat4 model = lattice_model(registry, state.active_lattice);
+        for (std::uint32_t i : selection_of(registry, state.active_lattice))
+            if (i < lattice->current.size()) points.push_back(glm::dvec3(model * glm::dvec4(lattice->current[i], 1.0)));
+    }
+    if (points.size() < 2) {
+        glm::dvec3 lo, hi;
+        if (scene_bounds(registry, lo, hi)) points.push_back(lo), points.push_back(hi);
+    }
+    frame_points(*camera, state.viewport, points, 1.2);
+}
+
+double clip_time(const ecs::Registry& registry, const EditorState& state) {
+#if SFFD_EDITOR_HAS_ANIMATION
+    if (registry.valid(state.active_lattice))
+        if (const auto* s = registry.try_get<AnimationState>(state.active_lattice)) return s->time;
+#else
+    (void)registry, (void)state;
+#endif
+    return 0.0;
+}
+
+void scrub_to(ecs::Registry& registry, EditorState& state, double time) {
+#if SFFD_EDITOR_HAS_ANIMATION
+    if (AnimationState* s = animation_state(registry, state)) {
+        const auto* clip = registry.try_get<AnimationClip>(state.active_lattice);
+        const double duration = clip ? clip->duration : 1.0;
+        sffd::scrub(registry.patch<AnimationState>(state.active_lattice), std::clamp(time, 0.0, duration));
+        (void)s;
+    }
+#else
+    (void)registry, (void)state, (void)time;
+#endif
+}
+
+void toggle_play(ecs::Registry& registry, EditorState& state) {
+#if SFFD_EDITOR_HAS_ANIMATION
+    bool any_playing = false;
+    registry.view<AnimationState>().each([&](ecs::Entity, AnimationState& s) { any_playing |= s.playing; });
+    registry.view<AnimationState>().each([&](ecs::Entity e, AnimationState&) {
+        AnimationState& s = registry.patch<AnimationState>(e);
+        if (any_playing) sffd::pause(s);
+        else sffd::play(s);
+    });
+    say(state, any_playing ? "paused" : "playing");
+#else
+    say(state, "animation system not built");
+    (void)registry;
+#endif
+}
+
+bool key_last_edit(ecs::Registry& registry, EditorState& state) {
+#if SFFD_EDITOR_HAS_ANIMATION
+    const LastEdit& edit = state.last_edit;
+    if (edit.kind == LastEdit::Kind::none || !registry.valid(edit.lattice) || !registry.has<Lattice>(edit.lattice)) {
+        say(state, "set key: stretch or twist something first");
+        return false;
+    }
+    const ecs::Entity e = edit.lattice;
+    auto group = std::make_unique<CommandGroup>("set key");
+    ComponentEdit<AnimationClip> clip_edit(registry, e, "clip");
+    ComponentEdit<AnimationState> state_edit(registry, e, "animation state");
+    if (!registry.has<AnimationClip>(e)) {
+        AnimationClip clip;
+        clip.name = "editor";
+        attach_clip(registry, e, std::move(clip), false);
+    }
+    const double time = registry.get<AnimationState>(e).time;
+    AnimationClip& clip = registry.patch<AnimationClip>(e);
+    const TrackKind kind = edit.kind == LastEdit::Kind::stretch ? TrackKind::stretch : TrackKind::twist;
+    std::size_t track = clip.tracks.size();
+    for (std::size_t t = 0; t < clip.tracks.size(); ++t) {
+        const AnimationTrack& tr = clip.tracks[t];
+        if (tr.kind == kind && tr.points == edit.points &&
+            (kind == TrackKind::stretch || (tr.axis == edit.axis && tr.has_pivot && tr.pivot == edit.pivot)))
+            track = t;
+    }
+    if (track == clip.tracks.size()) {
+        track = kind == TrackKind::stretch
+                    ? add_stretch_track(clip, "stretch " + std::to_string(clip.tracks.size()), edit.points)
+                    : add_twist_track(clip, "twist " + std::to_string(clip.tracks.size()), edit.points, edit.axis, edit.pivot);
+    }
+    Keyframe key;
+    key.time = time;
+    key.value = kind == TrackKind::stretch ? edit.displacement : glm::dvec3(glm::degrees(edit.angle), 0.0, 0.0);
+    sffd::set_key(clip.tracks[track], key);
+    clip.duration = std::max(clip.duration, time);
+    group->add(clip_edit.finish(registry));
+    group->add(state_edit.finish(registry));
+    state.undo.push(std::move(group));
+    say(state, log::str("key set at ", time, " s on track ", clip.tracks[track].name));
+    return true;
+#else
+    say(state, "set key: animation system not built");
+    (void)registry;
+    return false;
+#endif
+}
+
+bool delete_keys_at_time(ecs::Registry& registry, EditorState& state) {
+#if SFFD_EDITOR_HAS_ANIMATION
+    const ecs::Entity e = state.active_lattice;
+    if (!registry.valid(e) || !registry.has<AnimationClip>(e) || !registry.has<AnimationState>(e)) return false;
+    const double time = registry.get<AnimationState>(e).time;
+    ComponentEdit<AnimationClip> clip_edit(registry, e, "delete key");
+    bool removed = false;
+    AnimationClip& clip = registry.patch<AnimationClip>(e);
+    for (AnimationTrack& track : clip.tracks) removed |= sffd::delete_key(track, time);
+    if (removed) state.undo.push(clip_edit.finish(registry));
+    say(state, removed ? log::str("deleted keys at ", time, " s") : log::str("no key at ", time, " s"));
+    return removed;
+#else
+    (void)registry, (void)state;
+    return false;
+#endif
+}
+
+}  // namespace sffd::editor

@@ -1,0 +1,61 @@
+// The editor's input system (phase `input`, runtime/app/frame_loop.h).
+//   reads   EditorState::events (resource; the window or the replayer fills it), Camera, Lattice,
+//           Transform, SplatCloud / DeformedSplats (through picking), AnimationClip/State (timeline keys)
+//   writes  Camera (orbit, pan, zoom, frame), Lattice::current (stretch, twist, reset; via patch so the
+//           deformer re-runs), picking::LatticeSelection, AnimationClip (set/delete key), AnimationState
+//           (play/pause/scrub), EditorState (tools, drag, undo stack, requests)
+// Does nothing when the registry has no EditorState. Picks synchronously through the picking library
+// (picking::pick on the PickingState resource): a click is answered in the frame it happens in, so a
+// replayed session is deterministic frame by frame.
+//
+// Mouse: left click selects a control point (shift adds, ctrl removes, empty space clears), left drag
+// box-selects (same modifiers); with the move/twist tool a plain left drag edits the selection; brush
+// tool: left drag paints the control points with the most influence under the surface; alt+left click
+// sets the twist pivot to the picked surface point. Right drag orbits, middle drag (or shift+right)
+// pans, wheel zooms. Keys: see README.md (q/g/r/b tools, x/y/z/v/c axes, ctrl+z/ctrl+shift+z/ctrl+y,
+// ctrl+s, f frame, a select all, escape, p pins, l local/global, t x-ray, home reset, k/shift+k keys,
+// space play/pause, left/right step, f12 screenshot).
+#pragma once
+
+#include <span>
+#include <string>
+
+#include "runtime/app/frame_loop.h"
+#include "runtime/ecs/registry.h"
+#include "systems/editor/editor_state.h"
+
+namespace sffd::editor {
+
+void editor_input_system(ecs::Registry& registry, const FrameContext& frame);
+
+// Creates the EditorState resource (if absent), picks the camera (first Camera entity; creates one
+// framing every point cloud when there is none) and the first lattice as active, pauses animation
+// clips (edits of a paused clip's lattice survive; space plays). Returns the state.
+EditorState& setup_editor(ecs::Registry& registry, const Viewport& viewport);
+
+// Operations behind the shortcuts and panels; each is one undo step (none when nothing changes).
+void undo(ecs::Registry& registry, EditorState& state);
+void redo(ecs::Registry& registry, EditorState& state);
+void select_all(ecs::Registry& registry, EditorState& state);
+void clear_selection(ecs::Registry& registry, EditorState& state);
+// Numeric entry: stretch by `displacement` / twist by `degrees` (world units, current axis and pivot
+// settings) the editable points of the active lattice.
+bool apply_stretch(ecs::Registry& registry, EditorState& state, const glm::dvec3& displacement);
+bool apply_twist(ecs::Registry& registry, EditorState& state, double degrees);
+void reset_lattice(ecs::Registry& registry, EditorState& state);  // current = rest
+void frame_selection(ecs::Registry& registry, EditorState& state);
+// World-space box of every point cloud (authored positions); false when there is none.
+bool scene_bounds(const ecs::Registry& registry, glm::dvec3& lo, glm::dvec3& hi);
+// Keys the last stretch/twist at the clip's current time (adds a track bound to its points when
+// needed, and a clip when the lattice has none); delete_keys_at_time removes every key at the current time.
+bool key_last_edit(ecs::Registry& registry, EditorState& state);
+bool delete_keys_at_time(ecs::Registry& registry, EditorState& state);
+// Clip time of the active lattice's clip (0 without animation) and scrubbing to a time.
+double clip_time(const ecs::Registry& registry, const EditorState& state);
+void scrub_to(ecs::Registry& registry, EditorState& state, double time);
+void toggle_play(ecs::Registry& registry, EditorState& state);
+
+// The world-space control points the edit tools would move, and their pivot and axis.
+std::vector<std::uint32_t> editable_selection(const ecs::Registry& registry, const EditorState& state);
+
+}  // namespace sffd::editor
