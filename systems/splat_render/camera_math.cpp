@@ -2,9 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
+#include <utility>
+#include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
+
+#include "systems/splat_render/splat_pack.h"
 
 namespace sffd::render {
 
@@ -40,6 +45,37 @@ Camera framing_camera(const glm::dvec3& center, double radius, double aspect, gl
     c.near_plane = float(std::max((distance - radius) * 0.5, distance * 1e-3));
     c.far_plane = float(distance + radius * 2.0);
     return c;
+}
+
+Camera scene_camera(const ecs::Registry& registry, double aspect) {
+    bool found = false;
+    Camera camera;
+    registry.view<const Camera>().each([&](const Camera& c) {
+        if (!found) camera = c, found = true;
+    });
+    if (found) return camera;
+    // Frame every cloud: union of their world-space bounding spheres (same as render_system's framing).
+    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    std::vector<std::pair<glm::dvec3, double>> balls;
+    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
+        if (cloud.size() == 0) return;
+        const BoundingSphere b = bounding_sphere(cloud);
+        const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), cloud.origin);
+        const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])),
+                                       glm::length(glm::dvec3(m[2]))});
+        const glm::dvec3 c = glm::dvec3(m * glm::dvec4(b.center, 1.0));
+        balls.emplace_back(c, b.radius * scale);
+        lo = glm::min(lo, c - b.radius * scale);
+        hi = glm::max(hi, c + b.radius * scale);
+    });
+    glm::dvec3 center(0.0);
+    double radius = 1.0;
+    if (!balls.empty()) {
+        center = 0.5 * (lo + hi);
+        radius = 0.0;
+        for (const auto& [c, r] : balls) radius = std::max(radius, glm::length(c - center) + r);
+    }
+    return framing_camera(center, radius, aspect);
 }
 
 double view_depth(const Camera& camera, const glm::dvec3& world) {

@@ -4,6 +4,7 @@
 
 #include <glm/glm.hpp>
 
+#include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
 
 namespace sffd::render {
@@ -18,6 +19,12 @@ glm::dmat4 model_matrix(const Transform* transform, const glm::dvec3& origin);
 // distance chosen so the sphere fits the smaller field of view with a margin; near/far around it.
 Camera framing_camera(const glm::dvec3& center, double radius, double aspect,
                       glm::dvec3 direction = glm::dvec3(0.0, 0.0, 1.0), float fov_y_degrees = 45.0f);
+
+// The camera a scene is seen through: its first Camera entity, else framing_camera() around the union of
+// every non-empty cloud's world-space bounding sphere (bounding_sphere(), model_matrix()). The one
+// definition of the default camera, shared by render_system, `splatffd pick` and anything else that must
+// see what `splatffd render` draws. Computes the bounds on each call (O(splats)).
+Camera scene_camera(const ecs::Registry& registry, double aspect);
 
 // Depth along the camera's view axis (positive in front) of a world point.
 double view_depth(const Camera& camera, const glm::dvec3& world);
