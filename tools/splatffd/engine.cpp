@@ -4,6 +4,7 @@
 #include "tools/splatffd/engine.h"
 
 #include "runtime/app/app.h"
+#include "systems/animation/animation_system.h"
 #include "systems/picking/picking_system.h"
 
 namespace sffd {
@@ -14,6 +15,7 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
     // --- input: window events -> editor tools -> edit commands on lattices (editor) -----------------
 
     // --- animation: clips write lattice control points at the frame time (animation) ----------------
+    s.add(Phase::animation, "animation", animation_system);
 
     // --- deformation: re-deform point clouds whose rest data or lattices changed (ffd) --------------
 
