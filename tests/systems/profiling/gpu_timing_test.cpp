@@ -88,7 +88,9 @@ TEST_F(GpuTiming, QueriesResolveForEveryPassWithoutWaitingDuringFrames) {
         ASSERT_EQ(profiler.frames().size(), 8u);
         for (const auto& f : profiler.frames())
             for (const auto& s : f.scopes) {
-                if (s.kind == ScopeKind::pass) EXPECT_GE(s.gpu_ms, 0.0) << profiler.name(s.name);
+                if (s.kind == ScopeKind::pass) {
+                    EXPECT_GE(s.gpu_ms, 0.0) << profiler.name(s.name);
+                }
             }
         const ProfileReport r = build_report(profiler, {}, machine_info(true));
         EXPECT_EQ(r.gpu_timing, "queries");

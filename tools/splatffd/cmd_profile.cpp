@@ -1,0 +1,708 @@
+// splatffd profile: frame-time profiling of the engine's schedule, parameter sweeps, regression checks
+// against a baseline, and the seed paper's timing table. The measuring machinery is systems/profiling;
+// this file sets up runs (scene, context, schedule, what changes every frame) and prints results.
+//
+// Parts of the engine land at different times (scene loading, the FFD system, the renderer); the
+// __has_include guards let this command build and profile whatever exists.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <map>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "runtime/app/clock.h"
+#include "runtime/core/atomic_file.h"
+#include "runtime/gfx/context.h"
+#include "systems/profiling/paper_ffd.h"
+#include "systems/profiling/profiler.h"
+#include "systems/profiling/report.h"
+#include "systems/profiling/svg_plot.h"
+#include "systems/profiling/synthetic.h"
+#include "tools/splatffd/command.h"
+
+#if __has_include("tools/splatffd/engine.h")
+#include "tools/splatffd/engine.h"
+#define SFFD_PROFILE_HAS_ENGINE 1
+#endif
+#if __has_include("runtime/assets/scene.h")
+#include "runtime/assets/scene.h"
+#define SFFD_PROFILE_HAS_SCENES 1
+#endif
+#if __has_include("systems/ffd/deform.h")
+#include "systems/ffd/deform.h"
+#define SFFD_PROFILE_HAS_FFD 1
+#endif
+#if __has_include("systems/splat_render/splat_render.h")
+#include "systems/splat_render/splat_render.h"
+#define SFFD_PROFILE_HAS_RENDER 1
+#endif
+
+namespace sffd {
+namespace {
+
+using namespace profiling;
+
+constexpr const char* usage_text =
+    "usage: splatffd profile [SCENE] [options]\n"
+    "  SCENE                 built-in name (sphere, face), a scene/point-cloud file, or synthetic:N\n"
+    "                        (a sphere of N splats with an 11^3 lattice). Default: sphere\n"
+    "  --frames N            measured frames (default 120)\n"
+    "  --warmup W            frames run before measuring (default 10)\n"
+    "  --quality hq|preview  render quality (default hq)\n"
+    "  --backend cpu|gpu     deformation backend (default gpu; cpu runs without a GL context when the\n"
+    "                        renderer is not wanted)\n"
+    "  --sync                time GPU passes with glFinish + CPU clock instead of timer queries\n"
+    "                        (timer queries are not trustworthy on llvmpipe)\n"
+    "  --drive CASE|none     deform every lattice each frame with a paper case, animated over time:\n"
+    "                        'global twist' (default), 'global stretch', 'local twist', 'local stretch'\n"
+    "  --json F --csv F --svg F --trace F   write the report / per-frame CSV / frame-time chart /\n"
+    "                        Chrome trace-event JSON (open in ui.perfetto.dev)\n"
+    "  --compare BASE.json   exit 3 when a system or pass is slower than in BASE by more than the\n"
+    "                        measured spread (see systems/profiling/README.md)\n"
+    "  --sweep K=V,.. ..     sweep points=60k,250k,1m lattice=4,11,21 backend=cpu,gpu\n"
+    "                        basis=bernstein,bspline (any subset); prints a table; --svg PREFIX writes\n"
+    "                        PREFIX_points.svg and PREFIX_lattice.svg; --json F writes all rows\n"
+    "  --paper               the seed paper's table: sphere and face, 11^3 control points, four cases;\n"
+    "                        naive paper CPU algorithm vs our fast CPU path (and GPU paths when built)\n"
+    "  --naive-frames N      frames of the naive paper algorithm per case (default 1; ~10-60 s each)\n";
+
+int usage_error(const std::string& message) {
+    std::fprintf(stderr, "splatffd profile: %s\n%s", message.c_str(), usage_text);
+    return 2;
+}
+
+struct Options {
+    std::string scene = "sphere";
+    int frames = 120;
+    int warmup = 10;
+    std::string quality = "hq";
+    std::string backend = "gpu";
+    bool sync = false;
+    std::string drive = "global twist";
+    std::string json, csv, svg, trace, compare;
+    std::vector<std::string> sweep;
+    bool paper = false;
+    int naive_frames = 1;
+};
+
+bool parse_int(const std::string& s, int& out) {
+    char* end = nullptr;
+    const long v = std::strtol(s.c_str(), &end, 10);
+    if (end == s.c_str() || *end != '\0' || v < 0 || v > 10'000'000) return false;
+    out = static_cast<int>(v);
+    return true;
+}
+
+// 60k -> 60000, 1m -> 1000000.
+bool parse_count(std::string s, double& out) {
+    double mult = 1.0;
+    if (!s.empty() && (s.back() == 'k' || s.back() == 'K')) mult = 1e3, s.pop_back();
+    else if (!s.empty() && (s.back() == 'm' || s.back() == 'M')) mult = 1e6, s.pop_back();
+    char* end = nullptr;
+    const double v = std::strtod(s.c_str(), &end);
+    if (s.empty() || *end != '\0' || !(v > 0)) return false;
+    out = v * mult;
+    return true;
+}
+
+const PaperCase* find_case(const std::string& name) {
+    for (const auto& c : paper_cases)
+        if (name == c.name) return &c;
+    return nullptr;
+}
+
+Status write_text(const std::string& path, const std::string& text) { return write_file_atomic(path, text); }
+
+std::optional<std::string> read_text(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    if (!f) return std::nullopt;
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+double median(std::vector<double> v) { return compute_stats(std::move(v)).p50; }
+
+// ---------------------------------------------------------------------------------------------- scenes
+
+// Creates the scene's entities. synthetic:N (and the built-ins when scene loading has not landed) make a
+// Fibonacci sphere with an 11^3 Bernstein lattice around it.
+Status load(ecs::Registry& registry, const std::string& scene, bool* synthetic) {
+    *synthetic = false;
+    double count = 0.0;
+    std::string synthetic_count;
+    if (scene.rfind("synthetic:", 0) == 0) synthetic_count = scene.substr(10);
+#if !SFFD_PROFILE_HAS_SCENES
+    else if (scene == "sphere") synthetic_count = "59650";
+    else if (scene == "face") synthetic_count = "40880";
+#endif
+    if (!synthetic_count.empty()) {
+        if (!parse_count(synthetic_count, count)) return make_error(scene + ": bad synthetic point count");
+        *synthetic = true;
+        const ecs::Entity cloud = registry.create();
+        registry.emplace<Name>(cloud, Name{"synthetic sphere"});
+        const SplatCloud& c = registry.emplace<SplatCloud>(cloud, synthetic_sphere(static_cast<std::size_t>(count)));
+        const ecs::Entity lattice = registry.create();
+        registry.emplace<Lattice>(lattice, paper_lattice(c, 10));
+        registry.emplace<Deformers>(cloud, Deformers{{lattice}});
+        return {};
+    }
+#if SFFD_PROFILE_HAS_SCENES
+    return load_scene(registry, scene);
+#else
+    return make_error(scene + ": scene loading is not built yet (use sphere, face or synthetic:N)");
+#endif
+}
+
+// Harness system (animation phase): every lattice follows a paper case whose strength oscillates with
+// the frame time, so every frame is a fresh deformation (the FFD system skips unchanged lattices).
+SystemFn drive_system(PaperCase c) {
+    return [c](ecs::Registry& registry, const FrameContext& frame) {
+        const double amount = 0.5 + 0.5 * std::sin(2.0 * M_PI * frame.time / 2.0 + 0.3);
+        std::vector<ecs::Entity> lattices;
+        for (auto [e, l] : registry.view<const Lattice>()) {
+            (void)l;
+            lattices.push_back(e);
+        }
+        for (ecs::Entity e : lattices) apply_paper_case(registry.patch<Lattice>(e), c, amount);
+    };
+}
+
+#if SFFD_PROFILE_HAS_FFD
+// CPU deformation through the FFD engineer's fast path, for schedules without the FFD system (and for
+// the sweep's cpu backend). Output goes to a harness-owned buffer: nothing downstream reads it.
+struct HarnessDeformOutput {
+    std::vector<glm::vec3> positions, normals, axis_u, axis_v;
+};
+void harness_cpu_deform(ecs::Registry& registry, const FrameContext&) {
+    auto* out = registry.try_resource<HarnessDeformOutput>();
+    if (!out) out = &registry.set_resource<HarnessDeformOutput>();
+    for (auto [e, cloud, deformers] : registry.view<const SplatCloud, const Deformers>()) {
+        (void)e;
+        const std::size_t n = cloud.size();
+        out->positions.resize(n), out->normals.resize(n), out->axis_u.resize(n), out->axis_v.resize(n);
+        ffd::PointsIn in{cloud.positions.data(), cloud.normals.empty() ? nullptr : cloud.normals.data(),
+                         cloud.axis_u.empty() ? nullptr : cloud.axis_u.data(),
+                         cloud.axis_v.empty() ? nullptr : cloud.axis_v.data(), n, cloud.origin};
+        ffd::PointsOut o{out->positions.data(), out->normals.data(), out->axis_u.data(), out->axis_v.data()};
+        for (ecs::Entity le : deformers.lattices) {
+            const Lattice* l = registry.try_get<Lattice>(le);
+            if (!l) continue;
+            (void)ffd::deform(*l, in, o, ffd::Backend::fast);
+            in = ffd::PointsIn{o.positions, o.normals, o.axis_u, o.axis_v, n, cloud.origin};  // chain in place
+        }
+    }
+}
+#endif
+
+// ---------------------------------------------------------------------------------------------- one run
+
+struct RunSetup {
+    std::string scene;
+    int frames = 120, warmup = 10;
+    std::string quality = "hq", backend = "gpu", drive = "global twist";
+    bool sync = false;
+    int lattice_points = 0;           // > 0: replace every lattice's divisions (control points per axis)
+    std::string basis;                // "": keep
+    bool deformation_only = false;    // sweeps: no renderer
+};
+
+// Member order matters: the profiler's GL queries must be deleted before the context.
+struct RunOutput {
+    gfx::GlContext context;
+    std::unique_ptr<Profiler> profiler;
+    ProfileReport report;
+    std::size_t points = 0;
+};
+
+Result<RunOutput> run_profile(const RunSetup& s) {
+    RunOutput out;
+    const bool want_render = !s.deformation_only;
+#if SFFD_PROFILE_HAS_RENDER
+    const bool need_gl = s.backend == "gpu" || want_render;
+#else
+    const bool need_gl = s.backend == "gpu";
+#endif
+    bool have_gl = false;
+    if (need_gl) {
+        auto ctx = gfx::create_context({.headless = true, .width = 1280, .height = 720, .debug = false});
+        if (!ctx) {
+            if (s.backend == "gpu") return make_error("profile: --backend gpu needs a GL context: " + ctx.message());
+        } else {
+            out.context = std::move(ctx.value());
+            have_gl = true;
+        }
+    }
+    // Declared after `out`, so it dies first: GL objects in its resources need the context.
+    auto registry_owner = std::make_unique<ecs::Registry>();
+    ecs::Registry& registry = *registry_owner;
+    bool synthetic = false;
+    if (Status st = load(registry, s.scene, &synthetic); !st) return st.error();
+    for (auto [e, c] : registry.view<const SplatCloud>()) {
+        (void)e;
+        out.points += c.size();
+    }
+    if (s.lattice_points > 0 || !s.basis.empty()) {
+        std::vector<ecs::Entity> ls;
+        for (auto [e, l] : registry.view<const Lattice>()) {
+            (void)l;
+            ls.push_back(e);
+        }
+        for (ecs::Entity e : ls) {
+            Lattice& l = registry.patch<Lattice>(e);
+            if (s.lattice_points > 0) {
+                Lattice fresh = l;
+                fresh.divisions = glm::ivec3(s.lattice_points - 1);
+                fresh.rest.resize(fresh.size());
+                const glm::ivec3 d = fresh.divisions;
+                for (int i = 0; i <= d.x; ++i)
+                    for (int j = 0; j <= d.y; ++j)
+                        for (int k = 0; k <= d.z; ++k)
+                            fresh.rest[fresh.index(i, j, k)] = fresh.origin + (double(i) / d.x) * fresh.axes[0] +
+                                                               (double(j) / d.y) * fresh.axes[1] +
+                                                               (double(k) / d.z) * fresh.axes[2];
+                fresh.current = fresh.rest;
+                l = std::move(fresh);
+            }
+            if (s.basis == "bspline") l.basis = LatticeBasis::bspline;
+            if (s.basis == "bernstein") l.basis = LatticeBasis::bernstein;
+        }
+    }
+
+    Schedule schedule;
+    std::string schedule_kind = "harness";
+#if SFFD_PROFILE_HAS_ENGINE
+    if (!s.deformation_only) {
+        schedule = make_engine_schedule({.present = false});
+        schedule_kind = "engine";
+    }
+#endif
+    if (s.drive != "none") {
+        const PaperCase* c = find_case(s.drive);
+        if (!c) return make_error("profile: unknown --drive case '" + s.drive + "'");
+        schedule.add(Phase::animation, "profile.drive", drive_system(*c));
+    }
+    bool has_deformer = !schedule.systems(Phase::deformation).empty();
+#if SFFD_PROFILE_HAS_FFD
+    if (!has_deformer && (s.backend == "cpu" || !have_gl)) {
+        schedule.add(Phase::deformation, "ffd.cpu_fast", harness_cpu_deform);
+        has_deformer = true;
+    }
+#endif
+    if (!has_deformer && s.backend == "gpu" && s.deformation_only)
+        return make_error("profile: the GPU deformation path is not built yet");
+#if SFFD_PROFILE_HAS_RENDER
+    if (have_gl) {
+        auto& rs = registry.set_resource<render::RenderSettings>();
+        rs.quality = s.quality == "preview" ? render::Quality::preview : render::Quality::hq;
+    }
+#endif
+
+    GpuTiming timing = GpuTiming::none;
+    if (have_gl) timing = s.sync ? GpuTiming::sync : GpuTiming::queries;
+    out.profiler = std::make_unique<Profiler>(ProfilerSettings{.gpu = timing});
+    out.profiler->attach(schedule, registry);
+    Clock clock({.fixed_dt = 1.0 / 60.0});
+    for (int i = 0; i < s.warmup; ++i) schedule.run_frame(registry, clock.tick());
+    out.profiler->clear();
+    for (int i = 0; i < s.frames; ++i) schedule.run_frame(registry, clock.tick());
+    out.profiler->resolve_all();
+    out.profiler->detach(schedule, registry);
+
+    Config config{{"scene", s.scene},
+                  {"synthetic_scene", synthetic},
+                  {"points", static_cast<double>(out.points)},
+                  {"frames", static_cast<double>(s.frames)},
+                  {"warmup", static_cast<double>(s.warmup)},
+                  {"quality", s.quality},
+                  {"backend", s.backend},
+                  {"drive", s.drive},
+                  {"schedule", schedule_kind},
+                  {"clock", std::string("fixed 1/60 s")}};
+    if (s.lattice_points > 0) config.emplace_back("lattice", static_cast<double>(s.lattice_points));
+    if (!s.basis.empty()) config.emplace_back("basis", s.basis);
+    out.report = build_report(*out.profiler, std::move(config), machine_info(have_gl));
+#if SFFD_PROFILE_HAS_RENDER
+    if (have_gl) render::release_render_state(registry);
+#endif
+    registry_owner.reset();
+    return out;
+}
+
+// ---------------------------------------------------------------------------------------------- compare
+
+int compare_with(const ProfileReport& current, const std::string& base_path) {
+    const auto text = read_text(base_path);
+    if (!text) {
+        std::fprintf(stderr, "%s: cannot read the baseline report\n", base_path.c_str());
+        return 1;
+    }
+    auto base = report_from_json(*text, base_path);
+    if (!base) {
+        std::fprintf(stderr, "%s\n", base.message().c_str());
+        return 1;
+    }
+    const auto rows = compare_reports(*base, current);
+    std::printf("\ncompare with %s:\n%s", base_path.c_str(), to_text(rows).c_str());
+    const auto slower = std::count_if(rows.begin(), rows.end(), [](const Regression& r) { return r.slower; });
+    if (slower > 0) {
+        std::printf("%lld regression(s): slower than the baseline by more than the measured spread\n",
+                    static_cast<long long>(slower));
+        return 3;
+    }
+    std::printf("no regression\n");
+    return 0;
+}
+
+int write_outputs(const Options& o, const RunOutput& r) {
+    auto save = [](const std::string& path, const std::string& text) {
+        if (path.empty()) return true;
+        if (Status st = write_text(path, text); !st) {
+            std::fprintf(stderr, "%s\n", st.message().c_str());
+            return false;
+        }
+        std::printf("wrote %s\n", path.c_str());
+        return true;
+    };
+    bool ok = save(o.json, to_json(r.report));
+    ok &= save(o.csv, to_csv(*r.profiler));
+    ok &= save(o.trace, to_chrome_trace(*r.profiler, "splatffd profile " + o.scene));
+    ok &= save(o.svg, frame_svg(*r.profiler, "splatffd profile " + o.scene + ": time per frame"));
+    return ok ? 0 : 1;
+}
+
+// ---------------------------------------------------------------------------------------------- sweep
+
+struct SweepRow {
+    double points = 0;
+    int lattice = 0;
+    std::string backend, basis;
+    double deform_p50 = -1, deform_p95 = -1, frame_p50 = -1;
+    std::string note;
+};
+
+int run_sweep(const Options& o) {
+    std::map<std::string, std::vector<std::string>> axes{
+        {"points", {"60k"}}, {"lattice", {"11"}}, {"backend", {"cpu"}}, {"basis", {"bernstein"}}};
+    for (const auto& kv : o.sweep) {
+        const auto eq = kv.find('=');
+        if (eq == std::string::npos) return usage_error("--sweep: expected KEY=V1,V2,... got '" + kv + "'");
+        const std::string key = kv.substr(0, eq);
+        if (!axes.count(key)) return usage_error("--sweep: unknown key '" + key + "' (points, lattice, backend, basis)");
+        std::vector<std::string> values;
+        std::stringstream ss(kv.substr(eq + 1));
+        for (std::string v; std::getline(ss, v, ',');)
+            if (!v.empty()) values.push_back(v);
+        if (values.empty()) return usage_error("--sweep: no values for '" + key + "'");
+        for (const auto& v : values) {
+            double d = 0;
+            int n = 0;
+            if (key == "points" && !parse_count(v, d)) return usage_error("--sweep: bad point count '" + v + "'");
+            if (key == "lattice" && (!parse_int(v, n) || n < 2 || n > 65))
+                return usage_error("--sweep: lattice takes control points per axis, 2..65, got '" + v + "'");
+            if (key == "backend" && v != "cpu" && v != "gpu") return usage_error("--sweep: backend cpu|gpu");
+            if (key == "basis" && v != "bernstein" && v != "bspline") return usage_error("--sweep: basis bernstein|bspline");
+        }
+        axes[key] = values;
+    }
+    std::vector<SweepRow> rows;
+    std::printf("sweep: %d measured frames + %d warm-up per configuration, deformation phase only, drive '%s'\n",
+                o.frames, o.warmup, o.drive.c_str());
+    std::printf("%9s %7s %7s %9s %12s %12s %12s  %s\n", "points", "lattice", "backend", "basis", "deform p50",
+                "deform p95", "frame p50", "note");
+    std::string machine_line, timing_line;
+    for (const auto& backend : axes["backend"])
+        for (const auto& basis : axes["basis"])
+            for (const auto& lat : axes["lattice"])
+                for (const auto& pts : axes["points"]) {
+                    SweepRow row;
+                    parse_count(pts, row.points);
+                    parse_int(lat, row.lattice);
+                    row.backend = backend;
+                    row.basis = basis;
+                    RunSetup s;
+                    s.scene = "synthetic:" + std::to_string(static_cast<long long>(row.points));
+                    s.frames = o.frames;
+                    s.warmup = o.warmup;
+                    s.backend = backend;
+                    s.sync = true;  // one number per pass that includes the GPU work
+                    s.drive = o.drive;
+                    s.lattice_points = row.lattice;
+                    s.basis = basis;
+                    s.deformation_only = true;
+                    auto r = run_profile(s);
+                    if (!r) {
+                        row.note = r.message();
+                    } else {
+                        for (const auto& ph : r->report.phases)
+                            if (ph.name == "deformation") row.deform_p50 = ph.cpu_ms.p50, row.deform_p95 = ph.cpu_ms.p95;
+                        row.frame_p50 = r->report.frame_ms.p50;
+                        machine_line = r->report.machine.cpu + ", " + std::to_string(r->report.machine.cores) + " cores" +
+                                       (r->report.machine.gl_renderer.empty() ? "" : ", GL " + r->report.machine.gl_renderer);
+                        timing_line = r->report.gpu_timing;
+                    }
+                    std::printf("%9.0f %7d %7s %9s %12.3f %12.3f %12.3f  %s\n", row.points, row.lattice,
+                                row.backend.c_str(), row.basis.c_str(), row.deform_p50, row.deform_p95, row.frame_p50,
+                                row.note.c_str());
+                    std::fflush(stdout);
+                    rows.push_back(row);
+                }
+    std::printf("machine: %s\n", machine_line.c_str());
+
+    if (!o.svg.empty()) {
+        // Time vs points: one series per (backend, basis, lattice). Time vs lattice: per (backend, basis, points).
+        auto chart = [&](bool by_points) {
+            LineChart c;
+            c.title = by_points ? "FFD deformation time vs point count" : "FFD deformation time vs lattice size";
+            c.x_label = by_points ? "splats" : "control points per axis (lattice n x n x n)";
+            c.y_label = "deformation time per frame, median (ms)";
+            c.log_x = by_points;
+            c.log_y = true;
+            std::map<std::string, Series> series;
+            std::vector<std::string> order;
+            for (const auto& r : rows) {
+                if (r.deform_p50 <= 0) continue;
+                char key[128];
+                if (by_points) std::snprintf(key, sizeof key, "%s %s, %d^3", r.backend.c_str(), r.basis.c_str(), r.lattice);
+                else std::snprintf(key, sizeof key, "%s %s, %s pts", r.backend.c_str(), r.basis.c_str(), tick_label(r.points).c_str());
+                if (!series.count(key)) order.push_back(key), series[key].name = key;
+                series[key].points.emplace_back(by_points ? r.points : double(r.lattice), r.deform_p50);
+            }
+            for (const auto& k : order) {
+                auto& pts = series[k].points;
+                std::sort(pts.begin(), pts.end());
+                c.series.push_back(series[k]);
+            }
+            return render_svg(c);
+        };
+        for (bool by_points : {true, false}) {
+            const std::string path = o.svg + (by_points ? "_points.svg" : "_lattice.svg");
+            if (Status st = write_text(path, chart(by_points)); !st) {
+                std::fprintf(stderr, "%s\n", st.message().c_str());
+                return 1;
+            }
+            std::printf("wrote %s\n", path.c_str());
+        }
+    }
+    if (!o.json.empty()) {
+        std::string j = "{\n  \"format\": \"splatffd-sweep\",\n  \"machine\": \"" + machine_line + "\",\n  \"rows\": [\n";
+        for (std::size_t i = 0; i < rows.size(); ++i) {
+            const auto& r = rows[i];
+            char buf[512];
+            std::snprintf(buf, sizeof buf,
+                          "    {\"points\": %.0f, \"lattice\": %d, \"backend\": \"%s\", \"basis\": \"%s\", "
+                          "\"deform_p50_ms\": %.6f, \"deform_p95_ms\": %.6f, \"frame_p50_ms\": %.6f}%s\n",
+                          r.points, r.lattice, r.backend.c_str(), r.basis.c_str(), r.deform_p50, r.deform_p95,
+                          r.frame_p50, i + 1 < rows.size() ? "," : "");
+            j += buf;
+        }
+        j += "  ]\n}\n";
+        if (Status st = write_text(o.json, j); !st) {
+            std::fprintf(stderr, "%s\n", st.message().c_str());
+            return 1;
+        }
+        std::printf("wrote %s\n", o.json.c_str());
+    }
+    const bool any_failed = std::any_of(rows.begin(), rows.end(), [](const SweepRow& r) { return r.deform_p50 < 0; });
+    return any_failed ? 1 : 0;
+}
+
+// ---------------------------------------------------------------------------------------------- paper
+
+struct PaperRow {
+    std::string object, method;
+    std::size_t points = 0;
+    std::vector<double> case_ms;  // per case: median ms per frame (-1: not available)
+    std::string note;
+};
+
+int run_paper(const Options& o) {
+    std::printf("The seed paper's experiment (section IV): 11x11x11 = 1331 control points, Bernstein basis,\n"
+                "positions + normals deformed every frame; time per frame = deformation only.\n"
+                "Paper (Pentium Dual-Core 2.7 GHz, GeForce 9500 GT): CPU %.2f FPS (~%.0f s/frame), "
+                "GPU vertex shader up to %.0f FPS (~%.0f ms), x%.0f.\n\n",
+                paper_cpu_fps, 1.0 / paper_cpu_fps, paper_gpu_fps, 1000.0 / paper_gpu_fps, paper_speedup);
+    std::vector<PaperRow> rows;
+    for (const char* object : {"sphere", "face"}) {
+        ecs::Registry registry;
+        bool synthetic = false;
+        if (Status st = load(registry, object, &synthetic); !st) {
+            std::fprintf(stderr, "%s\n", st.message().c_str());
+            return 1;
+        }
+        // The largest cloud of the scene is the paper's object.
+        const SplatCloud* cloud = nullptr;
+        for (auto [e, c] : registry.view<const SplatCloud>()) {
+            (void)e;
+            if (!cloud || c.size() > cloud->size()) cloud = &c;
+        }
+        if (!cloud) {
+            std::fprintf(stderr, "%s: no point cloud in the scene\n", object);
+            return 1;
+        }
+        const std::string label = std::string(object) + (synthetic ? " (synthetic stand-in)" : "");
+        Lattice lattice = paper_lattice(*cloud, 10);
+        std::vector<glm::vec3> pos, nrm;
+
+        PaperRow naive{label, "paper CPU (naive triple sum, 1 thread)", cloud->size(), {}, ""};
+        for (const auto& pc : paper_cases) {
+            std::vector<double> ms;
+            for (int f = 0; f < o.naive_frames; ++f) {
+                apply_paper_case(lattice, pc, 0.5 + 0.5 * std::sin(0.7 * (f + 1)));
+                const auto t0 = std::chrono::steady_clock::now();
+                paper_ffd_naive(lattice, *cloud, pos, nrm);
+                ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+            }
+            naive.case_ms.push_back(median(ms));
+            std::printf("  %-8s %-15s naive  %10.1f ms\n", object, pc.name, naive.case_ms.back());
+            std::fflush(stdout);
+        }
+        rows.push_back(naive);
+
+#if SFFD_PROFILE_HAS_FFD
+        PaperRow fast{label, "ours CPU fast (factorised, AVX-512, TBB)", cloud->size(), {}, ""};
+        pos.assign(cloud->size(), {});
+        nrm.assign(cloud->size(), {});
+        for (const auto& pc : paper_cases) {
+            std::vector<double> ms;
+            ffd::PointsIn in{cloud->positions.data(), cloud->normals.data(), nullptr, nullptr, cloud->size(), cloud->origin};
+            ffd::PointsOut out{pos.data(), nrm.data(), nullptr, nullptr};
+            for (int f = 0; f < std::max(3, o.frames / 4) + 2; ++f) {
+                apply_paper_case(lattice, pc, 0.5 + 0.5 * std::sin(0.7 * (f + 1)));
+                const auto t0 = std::chrono::steady_clock::now();
+                auto r = ffd::deform(lattice, in, out, ffd::Backend::fast);
+                const double t = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+                if (!r) {
+                    std::fprintf(stderr, "%s\n", r.message().c_str());
+                    return 1;
+                }
+                if (f >= 2) ms.push_back(t);  // two warm-up frames
+            }
+            fast.case_ms.push_back(median(ms));
+        }
+        rows.push_back(fast);
+#else
+        rows.push_back({label, "ours CPU fast", cloud->size(), {-1, -1, -1, -1}, "not built yet"});
+#endif
+        rows.push_back({label, "ours GPU compute", cloud->size(), {-1, -1, -1, -1}, "not built yet"});
+        rows.push_back({label, "paper mode (vertex shader)", cloud->size(), {-1, -1, -1, -1}, "not built yet"});
+    }
+
+    const MachineInfo m = machine_info(false);
+    std::printf("\nmachine: %s, %u cores, %s\n", m.cpu.c_str(), m.cores, m.os.c_str());
+    std::printf("%-30s %-42s", "object (splats)", "method");
+    for (const auto& pc : paper_cases) std::printf(" %15s", pc.name);
+    std::printf(" %10s %9s\n", "FPS", "speed-up");
+    for (const auto& r : rows) {
+        const std::string obj = r.object + " (" + std::to_string(r.points) + ")";
+        std::printf("%-30s %-42s", obj.c_str(), r.method.c_str());
+        double sum = 0;
+        int n = 0;
+        for (double ms : r.case_ms) {
+            if (ms < 0) std::printf(" %15s", "-");
+            else std::printf(" %12.2f ms", ms), sum += ms, ++n;
+        }
+        // Speed-up against the naive row of the same object, on the mean over the four cases.
+        double naive_mean = 0;
+        for (const auto& q : rows)
+            if (q.object == r.object && q.method.rfind("paper CPU", 0) == 0) {
+                for (double ms : q.case_ms) naive_mean += ms / 4.0;
+            }
+        if (n > 0) {
+            const double mean = sum / n;
+            std::printf(" %10.2f %8.0fx", 1000.0 / mean, naive_mean / mean);
+        } else {
+            std::printf(" %10s %9s  %s", "-", "-", r.note.c_str());
+        }
+        std::printf("\n");
+    }
+    std::printf("%-30s %-42s %63s %10.2f %8s\n", "paper (59,650 / 40,880)", "paper CPU", "", paper_cpu_fps, "1x");
+    std::printf("%-30s %-42s %63s %10.2f %8.0fx\n", "paper (59,650 / 40,880)", "paper GPU (vertex shader)", "",
+                paper_gpu_fps, paper_speedup);
+    return 0;
+}
+
+// ---------------------------------------------------------------------------------------------- main
+
+int run_profile_command(cli::Args args) {
+    Options o;
+    bool scene_given = false;
+    for (std::size_t i = 0; i < args.size(); ++i) {
+        const std::string& a = args[i];
+        auto value = [&](std::string& out) {
+            if (i + 1 >= args.size()) return false;
+            out = args[++i];
+            return true;
+        };
+        auto int_value = [&](int& out) {
+            std::string v;
+            return value(v) && parse_int(v, out);
+        };
+        if (a == "--help" || a == "-h") {
+            std::printf("%s", usage_text);
+            return 0;
+        } else if (a == "--frames") {
+            if (!int_value(o.frames) || o.frames < 1) return usage_error("--frames takes a positive integer");
+        } else if (a == "--warmup") {
+            if (!int_value(o.warmup)) return usage_error("--warmup takes a non-negative integer");
+        } else if (a == "--naive-frames") {
+            if (!int_value(o.naive_frames) || o.naive_frames < 1) return usage_error("--naive-frames takes a positive integer");
+        } else if (a == "--quality") {
+            if (!value(o.quality) || (o.quality != "hq" && o.quality != "preview")) return usage_error("--quality hq|preview");
+        } else if (a == "--backend") {
+            if (!value(o.backend) || (o.backend != "cpu" && o.backend != "gpu")) return usage_error("--backend cpu|gpu");
+        } else if (a == "--drive") {
+            if (!value(o.drive) || (o.drive != "none" && !find_case(o.drive)))
+                return usage_error("--drive takes 'local stretch', 'local twist', 'global stretch', 'global twist' or none");
+        } else if (a == "--sync") {
+            o.sync = true;
+        } else if (a == "--paper") {
+            o.paper = true;
+        } else if (a == "--json" || a == "--csv" || a == "--svg" || a == "--trace" || a == "--compare") {
+            std::string& target = a == "--json" ? o.json : a == "--csv" ? o.csv : a == "--svg" ? o.svg
+                                : a == "--trace" ? o.trace : o.compare;
+            if (!value(target)) return usage_error(a + " takes a file name");
+        } else if (a == "--sweep") {
+            while (i + 1 < args.size() && args[i + 1].rfind("--", 0) != 0) o.sweep.push_back(args[++i]);
+            if (o.sweep.empty()) return usage_error("--sweep takes KEY=V1,V2 arguments");
+        } else if (!a.empty() && a[0] == '-') {
+            return usage_error("unknown option '" + a + "'");
+        } else if (!scene_given) {
+            o.scene = a;
+            scene_given = true;
+        } else {
+            return usage_error("more than one scene given ('" + o.scene + "', '" + a + "')");
+        }
+    }
+    if (o.paper) return run_paper(o);
+    if (!o.sweep.empty()) return run_sweep(o);
+
+    RunSetup s;
+    s.scene = o.scene;
+    s.frames = o.frames;
+    s.warmup = o.warmup;
+    s.quality = o.quality;
+    s.backend = o.backend;
+    s.sync = o.sync;
+    s.drive = o.drive;
+    auto r = run_profile(s);
+    if (!r) {
+        std::fprintf(stderr, "%s\n", r.message().c_str());
+        return 1;
+    }
+    std::printf("%s", to_text(r->report).c_str());
+    if (int rc = write_outputs(o, *r); rc != 0) return rc;
+    if (!o.compare.empty()) return compare_with(r->report, o.compare);
+    return 0;
+}
+
+}  // namespace
+}  // namespace sffd
+
+SFFD_COMMAND(profile, "measure frame time per system and pass; sweeps, --compare, --paper", sffd::run_profile_command);
