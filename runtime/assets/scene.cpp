@@ -1,0 +1,419 @@
+#include "runtime/assets/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <unordered_map>
+
+#include <nlohmann/json.hpp>
+
+#include "runtime/assets/builtin_scenes.h"
+#include "runtime/assets/gltf_io.h"
+#include "runtime/assets/import.h"
+#include "runtime/core/log.h"
+#include "runtime/scene/components.h"
+#include "systems/ffd/components.h"
+
+namespace sffd {
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+namespace {
+
+struct Extension {
+    SceneSaveFn save;
+    SceneLoadFn load;
+};
+
+std::map<std::string, Extension>& extensions() {
+    static std::map<std::string, Extension> all;
+    return all;
+}
+
+constexpr int kSceneVersion = 1;
+constexpr int kMaxDivisions = 64;
+
+json vec3(const glm::dvec3& v) { return json::array({v.x, v.y, v.z}); }
+json vec3f(const glm::vec3& v) { return json::array({v.x, v.y, v.z}); }
+
+json transform_json(const Transform& t) {
+    return {{"translation", vec3(t.translation)}, {"rotation", {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w}}, {"scale", vec3(t.scale)}};
+}
+
+// Strict readers: every number must be present, numeric and finite (hostile files).
+struct Reader {
+    std::string where;
+    double num(const json& j, const char* key) const {
+        if (!j.is_object() || !j.contains(key) || !j[key].is_number()) throw std::runtime_error(where + ": '" + key + "' must be a number");
+        const double v = j[key].get<double>();
+        if (!std::isfinite(v)) throw std::runtime_error(where + ": '" + key + "' is not finite");
+        return v;
+    }
+    double num_or(const json& j, const char* key, double def) const { return j.is_object() && j.contains(key) ? num(j, key) : def; }
+    glm::dvec3 v3(const json& j, const char* key) const {
+        if (!j.is_object() || !j.contains(key) || !j[key].is_array() || j[key].size() != 3) throw std::runtime_error(where + ": '" + key + "' must be [x, y, z]");
+        glm::dvec3 v;
+        for (int i = 0; i < 3; ++i) {
+            const json& e = j[key][static_cast<std::size_t>(i)];
+            if (!e.is_number() || !std::isfinite(e.get<double>())) throw std::runtime_error(where + ": '" + key + "' has a non-finite or non-numeric entry");
+            v[i] = e.get<double>();
+        }
+        return v;
+    }
+    glm::dvec3 v3_or(const json& j, const char* key, glm::dvec3 def) const { return j.is_object() && j.contains(key) ? v3(j, key) : def; }
+    int integer(const json& j, const char* key) const {
+        if (!j.is_object() || !j.contains(key) || !j[key].is_number_integer()) throw std::runtime_error(where + ": '" + key + "' must be an integer");
+        const auto v = j[key].get<long long>();
+        if (v < -1 || v > 1'000'000'000) throw std::runtime_error(where + ": '" + key + "' out of range");
+        return static_cast<int>(v);
+    }
+    std::string str_or(const json& j, const char* key, const std::string& def) const {
+        if (!j.is_object() || !j.contains(key)) return def;
+        if (!j[key].is_string()) throw std::runtime_error(where + ": '" + key + "' must be a string");
+        return j[key].get<std::string>();
+    }
+    Transform transform(const json& j) const {
+        Transform t;
+        if (!j.is_object() || !j.contains("transform")) return t;
+        const json& tj = j["transform"];
+        t.translation = v3_or(tj, "translation", glm::dvec3(0.0));
+        t.scale = v3_or(tj, "scale", glm::dvec3(1.0));
+        if (tj.contains("rotation")) {
+            const json& q = tj["rotation"];
+            if (!q.is_array() || q.size() != 4) throw std::runtime_error(where + ": rotation must be [x, y, z, w]");
+            double c[4];
+            for (std::size_t i = 0; i < 4; ++i) {
+                if (!q[i].is_number() || !std::isfinite(q[i].get<double>())) throw std::runtime_error(where + ": rotation is not finite");
+                c[i] = q[i].get<double>();
+            }
+            t.rotation = glm::dquat(c[3], c[0], c[1], c[2]);
+        }
+        return t;
+    }
+    std::vector<glm::dvec3> points(const json& j, const char* key, std::size_t count) const {
+        if (!j.contains(key) || !j[key].is_array() || j[key].size() != 3 * count)
+            throw std::runtime_error(where + ": '" + key + "' must hold " + std::to_string(3 * count) + " numbers");
+        std::vector<glm::dvec3> out(count);
+        const json& a = j[key];
+        for (std::size_t i = 0; i < 3 * count; ++i) {
+            if (!a[i].is_number() || !std::isfinite(a[i].get<double>())) throw std::runtime_error(where + ": '" + key + "' has a non-finite or non-numeric entry");
+            out[i / 3][static_cast<int>(i % 3)] = a[i].get<double>();
+        }
+        return out;
+    }
+};
+
+json points_json(const std::vector<glm::dvec3>& pts) {
+    json a = json::array();
+    for (const auto& p : pts) {
+        a.push_back(p.x);
+        a.push_back(p.y);
+        a.push_back(p.z);
+    }
+    return a;
+}
+
+std::string name_of(const ecs::Registry& r, ecs::Entity e, const std::string& fallback) {
+    const Name* n = r.try_get<Name>(e);
+    return n && !n->value.empty() ? n->value : fallback;
+}
+
+Status load_scene_file(ecs::Registry& r, const fs::path& path) {
+    auto contents = assets::read_gltf(path);
+    if (!contents) return contents.error();
+    const std::string src = path.string();
+    std::unordered_map<int, ecs::Entity> by_id;
+    std::vector<ecs::Entity> created;
+    auto rollback = [&](Error e) -> Status {
+        for (ecs::Entity x : created)
+            if (r.valid(x)) r.destroy(x);
+        return e;
+    };
+    bool have_camera = false;
+    try {
+        json scene = contents->sffd_scene_json.empty() ? json::object() : json::parse(contents->sffd_scene_json);
+        if (!scene.is_object()) return make_error(src + ": SFFD_scene must be an object");
+        if (scene.contains("version") && (!scene["version"].is_number_integer() || scene["version"].get<int>() > kSceneVersion))
+            return make_error(src + ": SFFD_scene version not supported (this build reads version " + std::to_string(kSceneVersion) + ")");
+        Reader rd{src + ": SFFD_scene"};
+        auto remember = [&](int id, ecs::Entity e) {
+            if (id >= 0 && !by_id.emplace(id, e).second) throw std::runtime_error(src + ": SFFD_scene: duplicate id " + std::to_string(id));
+        };
+        for (auto& c : contents->clouds) {
+            const ecs::Entity e = r.create();
+            created.push_back(e);
+            r.emplace<Name>(e, Name{c.name});
+            r.emplace<Transform>(e, c.transform);
+            r.emplace<SplatCloud>(e, std::move(c.cloud));
+            remember(c.id, e);
+        }
+        if (!contents->other.positions.empty()) {
+            // Ordinary meshes or points in a glTF file become one more cloud.
+            auto cloud = assets::make_splat_cloud(contents->other, {});
+            if (!cloud) return rollback(cloud.error());
+            const ecs::Entity e = r.create();
+            created.push_back(e);
+            r.emplace<Name>(e, Name{path.stem().string()});
+            r.emplace<Transform>(e, Transform{});
+            r.emplace<SplatCloud>(e, std::move(*cloud));
+        }
+        if (scene.contains("lattices")) {
+            if (!scene["lattices"].is_array()) throw std::runtime_error(src + ": SFFD_scene: 'lattices' must be an array");
+            for (const json& lj : scene["lattices"]) {
+                Reader lr{src + ": SFFD_scene lattice"};
+                Lattice l;
+                l.origin = lr.v3(lj, "origin");
+                if (!lj.contains("axes") || !lj["axes"].is_array() || lj["axes"].size() != 3) throw std::runtime_error(lr.where + ": 'axes' must hold 3 vectors");
+                for (std::size_t a = 0; a < 3; ++a) {
+                    json wrap = {{"axis", lj["axes"][a]}};
+                    l.axes[a] = lr.v3(wrap, "axis");
+                }
+                if (std::abs(glm::determinant(glm::dmat3(l.axes[0], l.axes[1], l.axes[2]))) < 1e-300)
+                    throw std::runtime_error(lr.where + ": axes are degenerate (zero volume)");
+                {
+                    json wrap = {{"divisions", lj.value("divisions", json())}};
+                    const glm::dvec3 d = lr.v3(wrap, "divisions");
+                    for (int a = 0; a < 3; ++a)
+                        if (d[a] != std::floor(d[a]) || d[a] < 1 || d[a] > kMaxDivisions)
+                            throw std::runtime_error(lr.where + ": divisions must be integers in 1.." + std::to_string(kMaxDivisions));
+                    l.divisions = glm::ivec3(d);
+                }
+                const std::string basis = lr.str_or(lj, "basis", "bernstein");
+                if (basis == "bernstein") l.basis = LatticeBasis::bernstein;
+                else if (basis == "bspline") l.basis = LatticeBasis::bspline;
+                else throw std::runtime_error(lr.where + ": unknown basis '" + basis + "'");
+                l.rest = lr.points(lj, "rest", l.size());
+                l.current = lj.contains("current") ? lr.points(lj, "current", l.size()) : l.rest;
+                const ecs::Entity e = r.create();
+                created.push_back(e);
+                r.emplace<Name>(e, Name{lr.str_or(lj, "name", "lattice")});
+                r.emplace<Transform>(e, lr.transform(lj));
+                r.emplace<Lattice>(e, std::move(l));
+                remember(lr.integer(lj, "id"), e);
+            }
+        }
+        if (scene.contains("deformers")) {
+            if (!scene["deformers"].is_array()) throw std::runtime_error(src + ": SFFD_scene: 'deformers' must be an array");
+            for (const json& dj : scene["deformers"]) {
+                const int cid = rd.integer(dj, "cloud");
+                auto it = by_id.find(cid);
+                if (it == by_id.end() || !r.has<SplatCloud>(it->second)) throw std::runtime_error(src + ": SFFD_scene: deformer refers to missing cloud " + std::to_string(cid));
+                if (!dj.contains("lattices") || !dj["lattices"].is_array()) throw std::runtime_error(src + ": SFFD_scene: deformer needs a 'lattices' array");
+                Deformers d;
+                for (const json& lid : dj["lattices"]) {
+                    if (!lid.is_number_integer()) throw std::runtime_error(src + ": SFFD_scene: lattice ids must be integers");
+                    auto lt = by_id.find(lid.get<int>());
+                    if (lt == by_id.end() || !r.has<Lattice>(lt->second))
+                        throw std::runtime_error(src + ": SFFD_scene: deformer refers to missing lattice " + lid.dump());
+                    d.lattices.push_back(lt->second);
+                }
+                r.emplace<Deformers>(it->second, std::move(d));
+            }
+        }
+        if (scene.contains("cameras")) {
+            if (!scene["cameras"].is_array()) throw std::runtime_error(src + ": SFFD_scene: 'cameras' must be an array");
+            for (const json& cj : scene["cameras"]) {
+                Reader cr{src + ": SFFD_scene camera"};
+                Camera c;
+                c.eye = cr.v3(cj, "eye");
+                c.target = cr.v3(cj, "target");
+                c.up = cr.v3_or(cj, "up", c.up);
+                c.fov_y_degrees = static_cast<float>(cr.num_or(cj, "fov_y_degrees", c.fov_y_degrees));
+                c.near_plane = static_cast<float>(cr.num_or(cj, "near", c.near_plane));
+                c.far_plane = static_cast<float>(cr.num_or(cj, "far", c.far_plane));
+                if (!(c.fov_y_degrees > 0.0f && c.fov_y_degrees < 180.0f) || !(c.near_plane > 0.0f) || !(c.far_plane > c.near_plane))
+                    throw std::runtime_error(cr.where + ": fov must be in (0, 180) and 0 < near < far");
+                const ecs::Entity e = r.create();
+                created.push_back(e);
+                r.emplace<Name>(e, Name{cr.str_or(cj, "name", "camera")});
+                r.emplace<Camera>(e, c);
+                have_camera = true;
+                if (cj.contains("id")) remember(cr.integer(cj, "id"), e);
+            }
+        }
+        if (scene.contains("directional_lights")) {
+            if (!scene["directional_lights"].is_array()) throw std::runtime_error(src + ": SFFD_scene: 'directional_lights' must be an array");
+            for (const json& lj : scene["directional_lights"]) {
+                Reader lr{src + ": SFFD_scene directional light"};
+                DirectionalLight d;
+                d.direction = glm::vec3(lr.v3(lj, "direction"));
+                d.color = glm::vec3(lr.v3_or(lj, "color", glm::dvec3(d.color)));
+                d.intensity = static_cast<float>(lr.num_or(lj, "intensity", static_cast<double>(d.intensity)));
+                const ecs::Entity e = r.create();
+                created.push_back(e);
+                r.emplace<Name>(e, Name{lr.str_or(lj, "name", "light")});
+                r.emplace<DirectionalLight>(e, d);
+                if (lj.contains("id")) remember(lr.integer(lj, "id"), e);
+            }
+        }
+        if (scene.contains("ambient_lights")) {
+            if (!scene["ambient_lights"].is_array()) throw std::runtime_error(src + ": SFFD_scene: 'ambient_lights' must be an array");
+            for (const json& lj : scene["ambient_lights"]) {
+                Reader lr{src + ": SFFD_scene ambient light"};
+                AmbientLight a;
+                a.color = glm::vec3(lr.v3_or(lj, "color", glm::dvec3(a.color)));
+                a.intensity = static_cast<float>(lr.num_or(lj, "intensity", static_cast<double>(a.intensity)));
+                const ecs::Entity e = r.create();
+                created.push_back(e);
+                r.emplace<Name>(e, Name{lr.str_or(lj, "name", "ambient")});
+                r.emplace<AmbientLight>(e, a);
+                if (lj.contains("id")) remember(lr.integer(lj, "id"), e);
+            }
+        }
+        if (scene.contains("extensions")) {
+            if (!scene["extensions"].is_object()) throw std::runtime_error(src + ": SFFD_scene: 'extensions' must be an object");
+            for (const auto& [key, value] : scene["extensions"].items()) {
+                auto it = extensions().find(key);
+                if (it == extensions().end() || !it->second.load) {
+                    log::debug(src, ": scene extension '", key, "' has no registered loader; skipped");
+                    continue;
+                }
+                const SceneEntityOf entity_of = [&](int id) {
+                    auto f = by_id.find(id);
+                    return f == by_id.end() ? ecs::null_entity : f->second;
+                };
+                if (auto s = it->second.load(r, value.dump(), entity_of); !s)
+                    return rollback(make_error(src + ": scene extension '" + key + "': " + s.message()));
+            }
+        }
+    } catch (const std::exception& e) {
+        std::string what = e.what();
+        if (what.rfind(src, 0) != 0) what = src + ": SFFD_scene: " + what;
+        return rollback(make_error(what));
+    }
+    if (!have_camera && r.count<Camera>() == 0) {
+        // A file without a camera still opens framed.
+        glm::dvec3 lo(1e300), hi(-1e300);
+        for (ecs::Entity e : created)
+            if (const SplatCloud* c = r.try_get<SplatCloud>(e))
+                for (const auto& p : c->positions) {
+                    lo = glm::min(lo, c->origin + glm::dvec3(p));
+                    hi = glm::max(hi, c->origin + glm::dvec3(p));
+                }
+        if (lo.x <= hi.x) assets::add_default_view(r, lo, hi, glm::dvec3(0.3, 0.3, 1.0));
+    }
+    return {};
+}
+
+}  // namespace
+
+std::vector<std::string> builtin_scene_names() { return {"sphere", "face"}; }
+
+void register_scene_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn) {
+    extensions()[key] = Extension{std::move(save_fn), std::move(load_fn)};
+}
+
+void unregister_scene_extension(const std::string& key) { extensions().erase(key); }
+
+Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
+    if (assets::is_builtin_scene(name_or_path)) return assets::load_builtin_scene(r, name_or_path);
+    const fs::path path(name_or_path);
+    std::error_code ec;
+    if (!fs::exists(path, ec))
+        return make_error(name_or_path + ": no such file or built-in scene (built-ins: sphere, face)");
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    if (ext == ".gltf" || ext == ".glb") return load_scene_file(r, path);
+    auto cloud = assets::import_splat_cloud(path);
+    if (!cloud) return cloud.error();
+    glm::dvec3 lo(1e300), hi(-1e300);
+    for (const auto& p : cloud->positions) {
+        lo = glm::min(lo, cloud->origin + glm::dvec3(p));
+        hi = glm::max(hi, cloud->origin + glm::dvec3(p));
+    }
+    const ecs::Entity e = r.create();
+    r.emplace<Name>(e, Name{path.stem().string()});
+    r.emplace<Transform>(e, Transform{});
+    r.emplace<SplatCloud>(e, std::move(*cloud));
+    if (r.count<Camera>() == 0) assets::add_default_view(r, lo, hi, glm::dvec3(0.3, 0.3, 1.0));
+    return {};
+}
+
+Status save_scene(const ecs::Registry& r, const fs::path& path) {
+    // Stable ids: clouds, then lattices, cameras, lights, in entity order.
+    std::unordered_map<ecs::Entity, int> ids;
+    std::vector<ecs::Entity> clouds, lattices, cameras, suns, ambients;
+    r.each_entity([&](ecs::Entity e) {
+        if (r.has<SplatCloud>(e)) clouds.push_back(e);
+        if (r.has<Lattice>(e)) lattices.push_back(e);
+        if (r.has<Camera>(e)) cameras.push_back(e);
+        if (r.has<DirectionalLight>(e)) suns.push_back(e);
+        if (r.has<AmbientLight>(e)) ambients.push_back(e);
+    });
+    int next = 0;
+    for (const auto* list : {&clouds, &lattices, &cameras, &suns, &ambients})
+        for (ecs::Entity e : *list) ids.emplace(e, next++);
+    const SceneIdOf id_of = [&](ecs::Entity e) {
+        auto it = ids.find(e);
+        return it == ids.end() ? -1 : it->second;
+    };
+
+    json scene = {{"version", kSceneVersion}};
+    json lj = json::array();
+    for (ecs::Entity e : lattices) {
+        const Lattice& l = r.get<Lattice>(e);
+        json j = {{"id", ids[e]},
+                  {"name", name_of(r, e, "lattice")},
+                  {"origin", vec3(l.origin)},
+                  {"axes", {vec3(l.axes[0]), vec3(l.axes[1]), vec3(l.axes[2])}},
+                  {"divisions", {l.divisions.x, l.divisions.y, l.divisions.z}},
+                  {"basis", l.basis == LatticeBasis::bernstein ? "bernstein" : "bspline"},
+                  {"rest", points_json(l.rest)},
+                  {"current", points_json(l.current)}};
+        if (const Transform* t = r.try_get<Transform>(e)) j["transform"] = transform_json(*t);
+        lj.push_back(j);
+    }
+    scene["lattices"] = lj;
+    json dj = json::array();
+    for (ecs::Entity e : clouds)
+        if (const Deformers* d = r.try_get<Deformers>(e)) {
+            json list = json::array();
+            for (ecs::Entity l : d->lattices)
+                if (int id = id_of(l); id >= 0 && r.has<Lattice>(l)) list.push_back(id);
+            dj.push_back({{"cloud", ids[e]}, {"lattices", list}});
+        }
+    scene["deformers"] = dj;
+    json cj = json::array();
+    for (ecs::Entity e : cameras) {
+        const Camera& c = r.get<Camera>(e);
+        cj.push_back({{"id", ids[e]}, {"name", name_of(r, e, "camera")}, {"eye", vec3(c.eye)}, {"target", vec3(c.target)}, {"up", vec3(c.up)},
+                      {"fov_y_degrees", c.fov_y_degrees}, {"near", c.near_plane}, {"far", c.far_plane}});
+    }
+    scene["cameras"] = cj;
+    json sj = json::array();
+    for (ecs::Entity e : suns) {
+        const DirectionalLight& d = r.get<DirectionalLight>(e);
+        sj.push_back({{"id", ids[e]}, {"name", name_of(r, e, "light")}, {"direction", vec3f(d.direction)}, {"color", vec3f(d.color)}, {"intensity", d.intensity}});
+    }
+    scene["directional_lights"] = sj;
+    json aj = json::array();
+    for (ecs::Entity e : ambients) {
+        const AmbientLight& a = r.get<AmbientLight>(e);
+        aj.push_back({{"id", ids[e]}, {"name", name_of(r, e, "ambient")}, {"color", vec3f(a.color)}, {"intensity", a.intensity}});
+    }
+    scene["ambient_lights"] = aj;
+    json ext = json::object();
+    for (const auto& [key, fns] : extensions()) {
+        if (!fns.save) continue;
+        auto text = fns.save(r, id_of);
+        if (!text) return make_error(path.string() + ": scene extension '" + key + "': " + text.message());
+        if (text->empty()) continue;
+        json v = json::parse(*text, nullptr, false);
+        if (v.is_discarded()) return make_error(path.string() + ": scene extension '" + key + "' returned invalid JSON");
+        ext[key] = v;
+    }
+    if (!ext.empty()) scene["extensions"] = ext;
+
+    std::vector<assets::GltfCloudOut> out;
+    for (ecs::Entity e : clouds) {
+        assets::GltfCloudOut c;
+        c.name = name_of(r, e, "cloud" + std::to_string(ids[e]));
+        c.id = ids[e];
+        c.transform = r.try_get<Transform>(e);
+        c.cloud = &r.get<SplatCloud>(e);
+        out.push_back(c);
+    }
+    return assets::write_gltf(path, out, scene.dump());
+}
+
+}  // namespace sffd

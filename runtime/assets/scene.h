@@ -1,0 +1,50 @@
+// Scenes: built-in names, importable files and our glTF scene files (owned by the content engineer,
+// issue 5). The file format is documented in content/README.md.
+//
+//   load_scene(registry, "sphere")            built-in: textured sphere, 59,650 splats, 11x11x11 lattice
+//   load_scene(registry, "face")              built-in: real head scan, 40,880 splats, 11x11x11 lattice
+//                                             (made by tools/fetch_content.sh into paths::cache_dir())
+//   load_scene(registry, "scan.ply")          any importable file (PLY, OBJ, OFF, glTF/GLB): one cloud
+//   load_scene(registry, "saved.glb")         a saved scene: clouds, lattices, deformer bindings, camera,
+//                                             lights and every registered extension's data
+//   save_scene(registry, "out.glb")           atomic; .glb or .gltf
+//
+// Loaded entities: point clouds get Name, Transform, SplatCloud (+ Deformers when bound to lattices);
+// lattices get Name, Transform, Lattice; cameras get Name + Camera; lights Name + DirectionalLight or
+// AmbientLight. Loading adds to the registry; it does not clear it.
+//
+// Extensions: a system that cannot be a dependency of assets (animation, editor) stores its own data in
+// the scene file by registering a pair of functions, explicitly, at start-up (no static initialisers):
+//     register_scene_extension("animation", save_clips, load_clips);
+// save_fn returns a JSON text (or an empty string for "nothing to store"); it refers to entities through
+// `id_of(entity)` (-1 for entities the file does not hold). load_fn receives that JSON text and
+// `entity_of(id)` to find the loaded entities again. It runs after all clouds, lattices, cameras and
+// lights exist. Unknown extension keys in a file are kept out of the registry and reported at debug level.
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "runtime/core/result.h"
+#include "runtime/ecs/entity.h"
+#include "runtime/ecs/registry.h"
+
+namespace sffd {
+
+Status load_scene(ecs::Registry& registry, const std::string& name_or_path);
+Status save_scene(const ecs::Registry& registry, const std::filesystem::path& path);
+std::vector<std::string> builtin_scene_names();
+
+using SceneIdOf = std::function<int(ecs::Entity)>;
+using SceneEntityOf = std::function<ecs::Entity(int)>;
+using SceneSaveFn = std::function<Result<std::string>(const ecs::Registry&, const SceneIdOf& id_of)>;
+using SceneLoadFn = std::function<Status(ecs::Registry&, std::string_view json, const SceneEntityOf& entity_of)>;
+
+// Registers (or replaces) the extension stored under `key` in the file's SFFD_scene.extensions object.
+void register_scene_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn);
+void unregister_scene_extension(const std::string& key);
+
+}  // namespace sffd

