@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/core/paths.h"
 #include "tools/splatffd/command.h"
 
 namespace sffd::cli {
@@ -58,7 +59,8 @@ void print_help() {
                                         [&](const Known& k) { return c.name == k.name; });
         if (!listed) std::printf("  %-9s %s\n", c.name.c_str(), c.summary.c_str());
     }
-    std::printf("\noptions:\n  --help     this text\n  --version  print the version\n");
+    std::printf("\noptions:\n  --help     this text\n  --version  print the version\n"
+                "  --paths    print where shaders, content and the cache are found\n");
 }
 
 }  // namespace
@@ -71,6 +73,11 @@ int main(int argc, char** argv) {
     }
     if (args[0] == "--version") {
         std::printf("splatffd %s\n", SFFD_VERSION);
+        return 0;
+    }
+    if (args[0] == "--paths") {  // shaders and content are found relative to the executable (paths.h)
+        std::printf("shaders %s\ncontent %s\ncache %s\n", sffd::paths::shader_dir().c_str(),
+                    sffd::paths::content_dir().c_str(), sffd::paths::cache_dir().c_str());
         return 0;
     }
     const std::string name = args[0];

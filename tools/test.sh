@@ -1,0 +1,54 @@
+#!/usr/bin/env bash
+# tools/test.sh [--asan]: install what is missing, fetch content, configure and build (release preset, or
+# asan = ASan+UBSan), then run every test: ctest for the cpu, gl and slow labels (GL tests make their own
+# headless EGL context) and the xvfb-labelled window tests under `xvfb-run -a`.
+# Ends with one line "test.sh: N passed, N failed"; exits non-zero if anything failed.
+set -euo pipefail
+cd "$(dirname "${BASH_SOURCE[0]}")/.."
+root=$(pwd)
+
+preset=release
+for arg in "$@"; do
+  case $arg in
+    --asan) preset=asan ;;
+    -h|--help) sed -n '2,5p' "$0"; exit 0 ;;
+    *) echo "test.sh: unknown option $arg (usage: tools/test.sh [--asan])" >&2; exit 2 ;;
+  esac
+done
+
+tools/bootstrap.sh
+if [[ -x tools/fetch_content.sh ]]; then tools/fetch_content.sh; fi
+
+jobs=$(nproc 2>/dev/null || echo 2)
+cmake --preset "$preset" -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
+cmake --build --preset "$preset" -j"$jobs"
+
+# LeakSanitizer: Mesa/EGL/GLFW keep driver state alive until exit; tools/lsan.supp names only those.
+export LSAN_OPTIONS="suppressions=$root/tools/lsan.supp:print_suppressions=0"
+export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
+# Make a missing display a failure in the window tests instead of a skip.
+export SFFD_REQUIRE_DISPLAY=1
+
+logs=$(mktemp -d)
+trap 'rm -rf "$logs"' EXIT
+status=0
+echo "== ctest (cpu, gl, slow): build/$preset"
+ctest --preset "$preset" -LE xvfb -j"$jobs" 2>&1 | tee "$logs/main.log" || status=1
+echo "== ctest (xvfb) under xvfb-run -a"
+if ctest --test-dir "build/$preset" -N -L xvfb | grep -q "Total Tests: 0"; then
+  echo "no xvfb tests" > "$logs/xvfb.log"
+else
+  xvfb-run -a -s "-screen 0 1280x1024x24" ctest --preset "$preset" -L xvfb 2>&1 | tee "$logs/xvfb.log" || status=1
+fi
+
+# Sum ctest's "N% tests passed, F tests failed out of T" lines.
+passed=0 failed=0
+while read -r f t; do
+  passed=$((passed + t - f)); failed=$((failed + f))
+done < <(sed -nE 's/.*tests passed, ([0-9]+) tests? failed out of ([0-9]+).*/\1 \2/p' "$logs"/*.log)
+if ((passed + failed == 0)); then
+  echo "test.sh: no test ran" >&2
+  exit 1
+fi
+echo "test.sh: $passed passed, $failed failed"
+((failed == 0 && status == 0))
