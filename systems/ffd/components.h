@@ -37,4 +37,28 @@ struct Deformers {
     std::vector<ecs::Entity> lattices;
 };
 
+// Derived output of the deformation phase on a point-cloud entity (authored SplatCloud stays as loaded).
+// Written by ffd_system only. Positions are relative to `origin` (= the cloud's SplatCloud::origin).
+// When the GPU path ran, the deformed splats live in GpuSplatStore::clouds[e].deformed and the CPU arrays
+// are left empty (`cpu_valid == false`); bounds, inverted count and version are always valid.
+struct DeformedSplats {
+    glm::dvec3 origin{0.0};
+    std::vector<glm::vec3> positions;
+    std::vector<glm::vec3> normals;
+    std::vector<glm::vec3> axis_u;
+    std::vector<glm::vec3> axis_v;
+    bool cpu_valid = false;              // the arrays above hold the current deformation
+    bool gpu_valid = false;              // GpuSplatStore's `deformed` buffer holds it
+    glm::dvec3 bounds_min{0.0};          // world-space box that never under-covers the deformed splats
+    glm::dvec3 bounds_max{0.0};          // (from the control points' displacement hull, see README)
+    std::size_t inverted = 0;            // inside splats whose Jacobian has det < 0 (normal flipped)
+    std::uint64_t version = 0;           // bumped every time the output is rewritten
+
+    // Inputs this output was computed from (change stamps), so the system skips unchanged clouds.
+    std::uint64_t seen_cloud = 0;
+    std::uint64_t seen_deformers = 0;
+    std::vector<std::uint64_t> seen_lattices;
+    bool seen_force_cpu = false;
+};
+
 }  // namespace sffd

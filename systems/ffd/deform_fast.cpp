@@ -1,0 +1,417 @@
+// Fast float kernels (compiled with -O3 -ffp-contract=fast; the vector width follows the build: 16 lanes
+// with AVX-512 (-march=native on this machine), 8 with AVX2).
+//
+// Bernstein (dense): W points in the W lanes of one vector; the u-basis (and its derivative) stays in
+// registers while every control point's displacement is broadcast, and the sum is factorised
+// Q[i][j] = Σ_k ΔP B_k(u), R[i] = Σ_j Q B_j(t), D = Σ_i R B_i(s): ~9.2k multiply-adds per point for an
+// 11³ lattice with normals and axes. Sparse: the same lanes, but only moved control points are summed.
+// B-spline: one point at a time; ΔP lives in a zero-bordered grid stored x,y,z,0 so the four k-neighbours
+// of one (i,j) are 16 contiguous floats (one vector load), 16 loads per point.
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <cstring>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "systems/ffd/deform_kernels.h"
+#include "systems/ffd/lattice.h"
+
+namespace sffd::ffd::detail {
+
+namespace {
+
+#if defined(__AVX512F__)
+constexpr int W = 16;
+#elif defined(__AVX__)
+constexpr int W = 8;
+#else
+constexpr int W = 4;
+#endif
+typedef float vf __attribute__((vector_size(W * sizeof(float))));
+typedef float v16 __attribute__((vector_size(64)));
+typedef float v4 __attribute__((vector_size(16)));
+
+constexpr int kMaxB = kMaxDivisions + 1;
+
+inline vf loadv(const float* p) { vf v; std::memcpy(&v, p, sizeof v); return v; }
+inline void storev(float* p, vf v) { std::memcpy(p, &v, sizeof v); }
+inline vf splat(float x) { return vf{} + x; }
+
+// Up to W points gathered from the cloud: clamped local coordinates in, displacement D and its
+// derivatives G[c*3+a] = ∂D_c/∂(s,t,u)_a out.
+struct Group {
+    alignas(64) float s[W], t[W], u[W];
+    alignas(64) float D[3][W];
+    alignas(64) float G[9][W];
+    std::uint32_t idx[W];
+    int n = 0;
+};
+
+// Bernstein basis of degree L (b[0..L]) and its derivative (db) for W parameters at once.
+inline void bernstein(vf s, int L, vf* b, vf* db) {
+    const vf one = splat(1.0f), r = one - s;
+    b[0] = one;
+    for (int d = 1; d < L; ++d) {  // degree d-1 -> d
+        b[d] = s * b[d - 1];
+        for (int i = d - 1; i >= 1; --i) b[i] = r * b[i] + s * b[i - 1];
+        b[0] = r * b[0];
+    }
+    const float fl = float(L);  // b holds degree L-1 now: dB(L,i) = L (B(L-1,i-1) - B(L-1,i))
+    db[0] = -fl * b[0];
+    for (int i = 1; i < L; ++i) db[i] = fl * (b[i - 1] - b[i]);
+    db[L] = fl * b[L - 1];
+    b[L] = s * b[L - 1];
+    for (int i = L - 1; i >= 1; --i) b[i] = r * b[i] + s * b[i - 1];
+    b[0] = r * b[0];
+}
+
+template <int KC, bool Full>
+void bernstein_group(const Prepared& P, Group& g) {
+    const int L = P.L, M = P.M;
+    const int K = KC ? KC : P.N + 1;
+    constexpr int KA = KC ? KC : kMaxB;
+    vf bs[kMaxB], dbs[kMaxB], bt[kMaxB], dbt[kMaxB], bu[KA], dbu[KA];
+    bernstein(loadv(g.s), L, bs, dbs);
+    bernstein(loadv(g.t), M, bt, dbt);
+    bernstein(loadv(g.u), K - 1, bu, dbu);
+    vf X[3] = {}, Fs[3] = {}, Ft[3] = {}, Fu[3] = {};
+    const float* dp = P.dp4.data();
+    const std::uint8_t* nz = P.row_nonzero.data();
+    for (int i = 0; i <= L; ++i) {
+        vf R[3] = {}, Rt[3] = {}, Ru[3] = {};
+        for (int j = 0; j <= M; ++j) {
+            const int row = i * (M + 1) + j;
+            if (!nz[row]) continue;
+            const float* c = dp + std::size_t(row) * K * 4;
+            vf q0 = {}, q1 = {}, q2 = {}, w0 = {}, w1 = {}, w2 = {};
+            for (int k = 0; k < K; ++k) {
+                q0 += bu[k] * c[4 * k + 0];
+                q1 += bu[k] * c[4 * k + 1];
+                q2 += bu[k] * c[4 * k + 2];
+                if constexpr (Full) {
+                    w0 += dbu[k] * c[4 * k + 0];
+                    w1 += dbu[k] * c[4 * k + 1];
+                    w2 += dbu[k] * c[4 * k + 2];
+                }
+            }
+            R[0] += q0 * bt[j], R[1] += q1 * bt[j], R[2] += q2 * bt[j];
+            if constexpr (Full) {
+                Rt[0] += q0 * dbt[j], Rt[1] += q1 * dbt[j], Rt[2] += q2 * dbt[j];
+                Ru[0] += w0 * bt[j], Ru[1] += w1 * bt[j], Ru[2] += w2 * bt[j];
+            }
+        }
+        for (int c = 0; c < 3; ++c) {
+            X[c] += R[c] * bs[i];
+            if constexpr (Full) {
+                Fs[c] += R[c] * dbs[i];
+                Ft[c] += Rt[c] * bs[i];
+                Fu[c] += Ru[c] * bs[i];
+            }
+        }
+    }
+    for (int c = 0; c < 3; ++c) {
+        storev(g.D[c], X[c]);
+        if constexpr (Full) {
+            storev(g.G[c * 3 + 0], Fs[c]);
+            storev(g.G[c * 3 + 1], Ft[c]);
+            storev(g.G[c * 3 + 2], Fu[c]);
+        }
+    }
+}
+
+template <bool Full>
+void sparse_group(const Prepared& P, Group& g) {
+    vf bs[kMaxB], dbs[kMaxB], bt[kMaxB], dbt[kMaxB], bu[kMaxB], dbu[kMaxB];
+    bernstein(loadv(g.s), P.L, bs, dbs);
+    bernstein(loadv(g.t), P.M, bt, dbt);
+    bernstein(loadv(g.u), P.N, bu, dbu);
+    vf X[3] = {}, Fs[3] = {}, Ft[3] = {}, Fu[3] = {};
+    for (const Prepared::Moved& m : P.moved) {
+        const vf st = bs[m.i] * bt[m.j];
+        const vf w = st * bu[m.k];
+        for (int c = 0; c < 3; ++c) X[c] += w * m.d[c];
+        if constexpr (Full) {
+            const vf ws = dbs[m.i] * bt[m.j] * bu[m.k];
+            const vf wt = bs[m.i] * dbt[m.j] * bu[m.k];
+            const vf wu = st * dbu[m.k];
+            for (int c = 0; c < 3; ++c) {
+                Fs[c] += ws * m.d[c];
+                Ft[c] += wt * m.d[c];
+                Fu[c] += wu * m.d[c];
+            }
+        }
+    }
+    for (int c = 0; c < 3; ++c) {
+        storev(g.D[c], X[c]);
+        if constexpr (Full) {
+            storev(g.G[c * 3 + 0], Fs[c]);
+            storev(g.G[c * 3 + 1], Ft[c]);
+            storev(g.G[c * 3 + 2], Fu[c]);
+        }
+    }
+}
+
+// Cubic B-spline weights for the 4 neighbours c-1..c+2 of fractional position f, and derivatives.
+inline void bspline_weights(float f, float w[4], float dw[4], float scale) {
+    const float f2 = f * f, f3 = f2 * f, r = 1.0f - f;
+    w[0] = r * r * r * (1.0f / 6.0f);
+    w[1] = (3.0f * f3 - 6.0f * f2 + 4.0f) * (1.0f / 6.0f);
+    w[2] = (-3.0f * f3 + 3.0f * f2 + 3.0f * f + 1.0f) * (1.0f / 6.0f);
+    w[3] = f3 * (1.0f / 6.0f);
+    dw[0] = -0.5f * r * r * scale;
+    dw[1] = (1.5f * f2 - 2.0f * f) * scale;
+    dw[2] = (-1.5f * f2 + f + 0.5f) * scale;
+    dw[3] = 0.5f * f2 * scale;
+}
+inline void cell(float x, int n, int& c, float& f) {
+    const float gx = x * float(n);
+    c = std::min(int(gx), n - 1);
+    f = gx - float(c);
+}
+inline v4 lanes4(v16 r) {
+    const v4 a = __builtin_shufflevector(r, r, 0, 1, 2, 3), b = __builtin_shufflevector(r, r, 4, 5, 6, 7);
+    const v4 c = __builtin_shufflevector(r, r, 8, 9, 10, 11), d = __builtin_shufflevector(r, r, 12, 13, 14, 15);
+    return (a + b) + (c + d);
+}
+inline v16 expand4(const float w[4]) {
+    return v16{w[0], w[0], w[0], w[0], w[1], w[1], w[1], w[1], w[2], w[2], w[2], w[2], w[3], w[3], w[3], w[3]};
+}
+
+template <bool Full>
+void bspline_group(const Prepared& P, Group& g) {
+    const int PM = P.M + 3, PK = P.N + 3;
+    for (int lane = 0; lane < g.n; ++lane) {
+        int ci, cj, ck;
+        float fs, ft, fu, ws[4], dws[4], wt[4], dwt[4], wu[4], dwu[4];
+        cell(g.s[lane], P.L, ci, fs);
+        cell(g.t[lane], P.M, cj, ft);
+        cell(g.u[lane], P.N, ck, fu);
+        bspline_weights(fs, ws, dws, float(P.L));
+        bspline_weights(ft, wt, dwt, float(P.M));
+        bspline_weights(fu, wu, dwu, float(P.N));
+        // Padded index = index + 1, so neighbour c-1 of cell c sits at padded c.
+        const float* base = P.grid.data() + ((std::size_t(ci) * PM + cj) * PK + ck) * 4;
+        v16 acc = {}, accs = {}, acct = {};
+        for (int a = 0; a < 4; ++a)
+            for (int b = 0; b < 4; ++b) {
+                v16 d;
+                std::memcpy(&d, base + (std::size_t(a) * PM + b) * PK * 4, sizeof d);
+                acc += d * (ws[a] * wt[b]);
+                if constexpr (Full) {
+                    accs += d * (dws[a] * wt[b]);
+                    acct += d * (ws[a] * dwt[b]);
+                }
+            }
+        const v16 wu16 = expand4(wu);
+        const v4 x = lanes4(acc * wu16);
+        for (int c = 0; c < 3; ++c) g.D[c][lane] = x[c];
+        if constexpr (Full) {
+            const v4 xs = lanes4(accs * wu16), xt = lanes4(acct * wu16), xu = lanes4(acc * expand4(dwu));
+            for (int c = 0; c < 3; ++c) {
+                g.G[c * 3 + 0][lane] = xs[c];
+                g.G[c * 3 + 1][lane] = xt[c];
+                g.G[c * 3 + 2][lane] = xu[c];
+            }
+        }
+    }
+}
+
+using GroupFn = void (*)(const Prepared&, Group&);
+
+template <bool Full>
+GroupFn pick_bernstein(int K) {
+    switch (K) {
+        case 2: return bernstein_group<2, Full>;
+        case 3: return bernstein_group<3, Full>;
+        case 4: return bernstein_group<4, Full>;
+        case 5: return bernstein_group<5, Full>;
+        case 6: return bernstein_group<6, Full>;
+        case 7: return bernstein_group<7, Full>;
+        case 8: return bernstein_group<8, Full>;
+        case 9: return bernstein_group<9, Full>;
+        case 10: return bernstein_group<10, Full>;
+        case 11: return bernstein_group<11, Full>;
+        case 12: return bernstein_group<12, Full>;
+        default: return bernstein_group<0, Full>;
+    }
+}
+
+// Writes one group back: X' = X + D, J = I + G M⁻¹, n' = cof(J) n / |.|, axes J a. Returns inverted count.
+int finish_group(const Prepared& P, const Group& g, const PointsIn& in, const PointsOut& out, bool full) {
+    const bool want_n = in.normals && out.normals, want_u = in.axis_u && out.axis_u, want_v = in.axis_v && out.axis_v;
+    alignas(64) float px[W], py[W], pz[W];
+    for (int l = 0; l < W; ++l) {
+        const glm::vec3 p = in.positions[g.idx[l < g.n ? l : 0]];
+        px[l] = p.x, py[l] = p.y, pz[l] = p.z;
+    }
+    const vf X = loadv(px) + loadv(g.D[0]), Y = loadv(py) + loadv(g.D[1]), Z = loadv(pz) + loadv(g.D[2]);
+    storev(px, X), storev(py, Y), storev(pz, Z);
+    for (int l = 0; l < g.n; ++l) out.positions[g.idx[l]] = glm::vec3(px[l], py[l], pz[l]);
+    if (!full) return 0;
+    // J[r][c] (row r, column c) = δ + Σ_a G[r][a] M⁻¹[a][c]
+    vf J[3][3];
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) {
+            vf v = splat(r == c ? 1.0f : 0.0f);
+            for (int a = 0; a < 3; ++a) v += loadv(g.G[r * 3 + a]) * P.minv[a * 3 + c];
+            J[r][c] = v;
+        }
+    // Columns a, b, c of J; cofactor columns b×c, c×a, a×b.
+    const vf ax = J[0][0], ay = J[1][0], az = J[2][0];
+    const vf bx = J[0][1], by = J[1][1], bz = J[2][1];
+    const vf cx = J[0][2], cy = J[1][2], cz = J[2][2];
+    const vf bcx = by * cz - bz * cy, bcy = bz * cx - bx * cz, bcz = bx * cy - by * cx;
+    const vf cax = cy * az - cz * ay, cay = cz * ax - cx * az, caz = cx * ay - cy * ax;
+    const vf abx = ay * bz - az * by, aby = az * bx - ax * bz, abz = ax * by - ay * bx;
+    const vf det = ax * bcx + ay * bcy + az * bcz;
+    int inverted = 0;
+    alignas(64) float detv[W];
+    storev(detv, det);
+    for (int l = 0; l < g.n; ++l) inverted += detv[l] < 0.0f;
+    alignas(64) float nx[W], ny[W], nz[W];
+    auto gather = [&](const glm::vec3* src) {
+        for (int l = 0; l < W; ++l) {
+            const glm::vec3 v = src[g.idx[l < g.n ? l : 0]];
+            nx[l] = v.x, ny[l] = v.y, nz[l] = v.z;
+        }
+    };
+    auto scatter = [&](glm::vec3* dst) {
+        for (int l = 0; l < g.n; ++l) dst[g.idx[l]] = glm::vec3(nx[l], ny[l], nz[l]);
+    };
+    if (want_n) {
+        gather(in.normals);
+        const vf n0 = loadv(nx), n1 = loadv(ny), n2 = loadv(nz);
+        vf ox = bcx * n0 + cax * n1 + abx * n2, oy = bcy * n0 + cay * n1 + aby * n2, oz = bcz * n0 + caz * n1 + abz * n2;
+        storev(nx, ox), storev(ny, oy), storev(nz, oz);
+        for (int l = 0; l < W; ++l) {
+            const float len = std::sqrt(nx[l] * nx[l] + ny[l] * ny[l] + nz[l] * nz[l]);
+            const float inv = len > 0.0f ? 1.0f / len : 1.0f;
+            nx[l] *= inv, ny[l] *= inv, nz[l] *= inv;
+        }
+        scatter(out.normals);
+    }
+    auto axis = [&](const glm::vec3* src, glm::vec3* dst) {
+        gather(src);
+        const vf v0 = loadv(nx), v1 = loadv(ny), v2 = loadv(nz);
+        storev(nx, ax * v0 + bx * v1 + cx * v2);
+        storev(ny, ay * v0 + by * v1 + cy * v2);
+        storev(nz, az * v0 + bz * v1 + cz * v2);
+        scatter(dst);
+    };
+    if (want_u) axis(in.axis_u, out.axis_u);
+    if (want_v) axis(in.axis_v, out.axis_v);
+    return inverted;
+}
+
+}  // namespace
+
+int lane_width() { return W; }
+
+Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin) {
+    Prepared P;
+    P.L = l.divisions.x, P.M = l.divisions.y, P.N = l.divisions.z;
+    P.basis = l.basis;
+    const glm::dmat3 minv = inverse_axes(l);
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) P.minv[r * 3 + c] = float(minv[c][r]);
+    const glm::dvec3 stu0 = minv * (cloud_origin - l.origin);
+    for (int a = 0; a < 3; ++a) P.stu0[a] = float(stu0[a]);
+    const int L = P.L, M = P.M, N = P.N;
+    glm::ivec3 lo(1 << 30), hi(-1);
+    for (int i = 0; i <= L; ++i)
+        for (int j = 0; j <= M; ++j)
+            for (int k = 0; k <= N; ++k) {
+                const std::size_t c = l.index(i, j, k);
+                const glm::dvec3 d = l.current[c] - l.rest[c];
+                if (d == glm::dvec3(0.0)) continue;
+                P.moved.push_back({i, j, k, {float(d.x), float(d.y), float(d.z)}});
+                lo = glm::min(lo, glm::ivec3(i, j, k));
+                hi = glm::max(hi, glm::ivec3(i, j, k));
+            }
+    if (l.basis == LatticeBasis::bernstein) {
+        P.dp4.assign(l.size() * 4, 0.0f);
+        P.row_nonzero.assign(std::size_t(L + 1) * (M + 1), 0);
+        for (const auto& m : P.moved) {
+            float* d = &P.dp4[l.index(m.i, m.j, m.k) * 4];
+            d[0] = m.d[0], d[1] = m.d[1], d[2] = m.d[2];
+            P.row_nonzero[std::size_t(m.i) * (M + 1) + m.j] = 1;
+        }
+    } else {
+        const int PM = M + 3, PK = N + 3;
+        P.grid.assign(std::size_t(L + 3) * PM * PK * 4, 0.0f);
+        for (const auto& m : P.moved) {
+            float* d = &P.grid[((std::size_t(m.i + 1) * PM + (m.j + 1)) * PK + (m.k + 1)) * 4];
+            d[0] = m.d[0], d[1] = m.d[1], d[2] = m.d[2];
+        }
+        // Control point i influences l·s in (i-2, i+2): points outside the moved points' support are
+        // unchanged and skipped.
+        if (P.moved.empty()) {
+            for (int a = 0; a < 3; ++a) P.cull_lo[a] = 2.0f, P.cull_hi[a] = -1.0f;  // nothing inside
+        } else {
+            for (int a = 0; a < 3; ++a) {
+                const float n = float(l.divisions[a]);
+                P.cull_lo[a] = (float(lo[a]) - 2.0f) / n;
+                P.cull_hi[a] = (float(hi[a]) + 2.0f) / n;
+            }
+        }
+    }
+    return P;
+}
+
+DeformStats run_fast(const Prepared& P, const PointsIn& in, const PointsOut& out, bool sparse) {
+    const bool full = (in.normals && out.normals) || (in.axis_u && out.axis_u) || (in.axis_v && out.axis_v);
+    GroupFn fn;
+    if (P.basis == LatticeBasis::bspline)
+        fn = full ? bspline_group<true> : bspline_group<false>;
+    else if (sparse)
+        fn = full ? sparse_group<true> : sparse_group<false>;
+    else
+        fn = full ? pick_bernstein<true>(P.N + 1) : pick_bernstein<false>(P.N + 1);
+    const bool nothing_moved = P.moved.empty();
+    std::atomic<std::size_t> inside_total{0}, inverted_total{0};
+    const float lo = float(-kInsideSlack), hi = float(1.0 + kInsideSlack);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, in.count, 2048), [&](const tbb::blocked_range<std::size_t>& r) {
+        std::size_t n_in = 0, n_inv = 0;
+        Group g;
+        auto flush = [&] {
+            if (g.n == 0) return;
+            for (int l = g.n; l < W; ++l) g.s[l] = g.s[0], g.t[l] = g.t[0], g.u[l] = g.u[0];
+            fn(P, g);
+            n_inv += std::size_t(finish_group(P, g, in, out, full));
+            g.n = 0;
+        };
+        for (std::size_t p = r.begin(); p != r.end(); ++p) {
+            const glm::vec3 x = in.positions[p];
+            const float s = P.stu0[0] + P.minv[0] * x.x + P.minv[1] * x.y + P.minv[2] * x.z;
+            const float t = P.stu0[1] + P.minv[3] * x.x + P.minv[4] * x.y + P.minv[5] * x.z;
+            const float u = P.stu0[2] + P.minv[6] * x.x + P.minv[7] * x.y + P.minv[8] * x.z;
+            const bool is_inside = s >= lo && s <= hi && t >= lo && t <= hi && u >= lo && u <= hi;
+            n_in += is_inside;
+            // Unchanged points: outside, nothing moved, or (B-spline) outside the moved points' support.
+            const bool culled = !is_inside || nothing_moved ||
+                                (P.basis == LatticeBasis::bspline &&
+                                 (s <= P.cull_lo[0] || s >= P.cull_hi[0] || t <= P.cull_lo[1] || t >= P.cull_hi[1] ||
+                                  u <= P.cull_lo[2] || u >= P.cull_hi[2]));
+            if (culled) {
+                if (out.positions != in.positions) out.positions[p] = x;
+                if (in.normals && out.normals && out.normals != in.normals) out.normals[p] = in.normals[p];
+                if (in.axis_u && out.axis_u && out.axis_u != in.axis_u) out.axis_u[p] = in.axis_u[p];
+                if (in.axis_v && out.axis_v && out.axis_v != in.axis_v) out.axis_v[p] = in.axis_v[p];
+                continue;
+            }
+            g.s[g.n] = std::clamp(s, 0.0f, 1.0f);
+            g.t[g.n] = std::clamp(t, 0.0f, 1.0f);
+            g.u[g.n] = std::clamp(u, 0.0f, 1.0f);
+            g.idx[g.n] = std::uint32_t(p);
+            if (++g.n == W) flush();
+        }
+        flush();
+        inside_total += n_in;
+        inverted_total += n_inv;
+    });
+    return DeformStats{inside_total.load(), inverted_total.load(), Backend::fast};
+}
+
+}  // namespace sffd::ffd::detail

@@ -1,0 +1,40 @@
+// Internal interface between deform.cpp (API, validation, reference path) and deform_fast.cpp (the float
+// kernels). Not part of the public API.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "systems/ffd/deform.h"
+
+namespace sffd::ffd::detail {
+
+// A lattice prepared for the float kernels: displacements ΔP = current − rest relative to nothing (they
+// are differences, so far-away lattices lose no precision), the inverse axes and the cloud's offset in
+// local coordinates (computed in double: local = stu0 + M⁻¹ p for a point p relative to the cloud origin).
+struct Prepared {
+    int L = 1, M = 1, N = 1;                  // divisions
+    LatticeBasis basis = LatticeBasis::bernstein;
+    std::vector<float> dp4;                   // Bernstein: ΔP as x,y,z,0 per control point, flat index
+    std::vector<std::uint8_t> row_nonzero;    // Bernstein: (i,j) rows with any nonzero ΔP
+    struct Moved {
+        int i, j, k;
+        float d[3];
+    };
+    std::vector<Moved> moved;                 // sparse path: moved control points only
+    std::vector<float> grid;                  // B-spline: zero-bordered ΔP grid, (L+3)(M+3)(N+3) x,y,z,0
+    float minv[9] = {};                       // row-major M⁻¹
+    float stu0[3] = {};                       // M⁻¹ (cloud origin − lattice origin)
+    float cull_lo[3] = {0, 0, 0};             // local box outside which ΔP has no influence (B-spline)
+    float cull_hi[3] = {1, 1, 1};
+};
+
+Prepared prepare(const Lattice& lattice, const glm::dvec3& cloud_origin);
+
+// Runs the fast (dense Bernstein / B-spline) or sparse kernel over all points with TBB.
+DeformStats run_fast(const Prepared& prepared, const PointsIn& in, const PointsOut& out, bool sparse);
+
+// Lane width the fast kernels were compiled for (16 with AVX-512, 8 with AVX2).
+int lane_width();
+
+}  // namespace sffd::ffd::detail

@@ -1,0 +1,102 @@
+#include "systems/ffd/lattice.h"
+
+#include <cmath>
+
+namespace sffd::ffd {
+
+std::vector<glm::dvec3> rest_grid(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes,
+                                  const glm::ivec3& d) {
+    std::vector<glm::dvec3> grid;
+    grid.reserve(std::size_t(d.x + 1) * (d.y + 1) * (d.z + 1));
+    for (int i = 0; i <= d.x; ++i)
+        for (int j = 0; j <= d.y; ++j)
+            for (int k = 0; k <= d.z; ++k)
+                grid.push_back(origin + (double(i) / d.x) * axes[0] + (double(j) / d.y) * axes[1] +
+                               (double(k) / d.z) * axes[2]);
+    return grid;
+}
+
+Lattice make_lattice(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes, const glm::ivec3& divisions,
+                     LatticeBasis basis) {
+    Lattice l;
+    l.origin = origin;
+    l.axes = axes;
+    l.divisions = divisions;
+    l.basis = basis;
+    l.rest = rest_grid(origin, axes, divisions);
+    l.current = l.rest;
+    return l;
+}
+
+static bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+Status validate(const Lattice& l, const std::string& what) {
+    for (int a = 0; a < 3; ++a)
+        if (l.divisions[a] < 1 || l.divisions[a] > kMaxDivisions)
+            return make_error(what + ": divisions must be between 1 and " + std::to_string(kMaxDivisions) +
+                              " per axis (got " + std::to_string(l.divisions[a]) + ")");
+    if (!finite(l.origin)) return make_error(what + ": origin is not finite");
+    for (int a = 0; a < 3; ++a)
+        if (!finite(l.axes[a])) return make_error(what + ": axis " + "STU"[a] + " is not finite");
+    const double scale = glm::length(l.axes[0]) * glm::length(l.axes[1]) * glm::length(l.axes[2]);
+    const double det = glm::determinant(axes_matrix(l));
+    if (!(scale > 0.0) || !(std::abs(det) > 1e-9 * scale))
+        return make_error(what + ": zero-volume box (axes S, T, U are degenerate or coplanar)");
+    const std::size_t n = l.size();
+    if (l.rest.size() != n)
+        return make_error(what + ": expected " + std::to_string(n) + " rest control points, got " +
+                          std::to_string(l.rest.size()));
+    if (l.current.size() != n)
+        return make_error(what + ": expected " + std::to_string(n) + " control points, got " +
+                          std::to_string(l.current.size()));
+    for (std::size_t c = 0; c < n; ++c) {
+        if (!finite(l.current[c])) return make_error(what + ": control point " + std::to_string(c) + " is not finite");
+        if (!finite(l.rest[c])) return make_error(what + ": rest control point " + std::to_string(c) + " is not finite");
+    }
+    return {};
+}
+
+glm::dmat3 axes_matrix(const Lattice& l) { return glm::dmat3(l.axes[0], l.axes[1], l.axes[2]); }
+
+glm::dmat3 inverse_axes(const Lattice& l) {
+    const glm::dvec3 &S = l.axes[0], &T = l.axes[1], &U = l.axes[2];
+    const glm::dvec3 r0 = glm::cross(T, U) / glm::dot(glm::cross(T, U), S);
+    const glm::dvec3 r1 = glm::cross(S, U) / glm::dot(glm::cross(S, U), T);
+    const glm::dvec3 r2 = glm::cross(S, T) / glm::dot(glm::cross(S, T), U);
+    return glm::transpose(glm::dmat3(r0, r1, r2));  // rows r0, r1, r2
+}
+
+glm::dvec3 local_coords(const Lattice& l, const glm::dvec3& world) { return inverse_axes(l) * (world - l.origin); }
+
+bool rest_is_uniform(const Lattice& l) {
+    const auto grid = rest_grid(l.origin, l.axes, l.divisions);
+    if (grid.size() != l.rest.size()) return false;
+    const double scale = glm::length(l.axes[0]) + glm::length(l.axes[1]) + glm::length(l.axes[2]);
+    for (std::size_t c = 0; c < grid.size(); ++c)
+        if (glm::length(grid[c] - l.rest[c]) > 1e-12 * scale) return false;
+    return true;
+}
+
+Box deformed_bounds(const Lattice& l, const Box& in) {
+    if (in.empty) return in;
+    glm::dvec3 dlo(0.0), dhi(0.0);
+    Box hull;
+    for (std::size_t c = 0; c < l.current.size(); ++c) {
+        const glm::dvec3 d = l.current[c] - l.rest[c];
+        dlo = glm::min(dlo, d);
+        dhi = glm::max(dhi, d);
+        hull.add(l.current[c]);
+    }
+    Box out{in.lo + dlo, in.hi + dhi, false};
+    if (l.basis == LatticeBasis::bernstein && rest_is_uniform(l)) {
+        // Inside points land in the control points' convex hull; outside points stay in `in`.
+        // Pad by the inside slack: a point up to kInsideSlack outside is deformed as if on the face.
+        const glm::dvec3 pad(kInsideSlack * (glm::length(l.axes[0]) + glm::length(l.axes[1]) + glm::length(l.axes[2])));
+        const glm::dvec3 lo = glm::min(hull.lo - pad, in.lo), hi = glm::max(hull.hi + pad, in.hi);
+        out.lo = glm::max(out.lo, lo);
+        out.hi = glm::min(out.hi, hi);
+    }
+    return out;
+}
+
+}  // namespace sffd::ffd

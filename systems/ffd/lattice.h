@@ -1,0 +1,70 @@
+// Lattice helpers (math convention: ../shared/notes/ffd-math.md and README.md in this folder).
+// Everything here is double precision and works relative to the lattice origin, so lattices far from the
+// world origin (offsets of 1e6) keep their accuracy.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "runtime/core/result.h"
+#include "systems/ffd/components.h"
+
+namespace sffd::ffd {
+
+// Largest supported division count per axis (the issue asks for at least 32).
+inline constexpr int kMaxDivisions = 64;
+// Local coordinates within [-kInsideSlack, 1 + kInsideSlack] count as inside (and are clamped to [0,1]):
+// points exactly on a face, edge or corner deform even when float rounding puts them a hair outside.
+// Every path (reference, fast, sparse, GPU) uses the same slack so they agree at the boundary.
+inline constexpr double kInsideSlack = 1e-6;
+
+// P0[i][j][k] = X0 + (i/l) S + (j/m) T + (k/n) U, flat index (i*(m+1)+j)*(n+1)+k.
+std::vector<glm::dvec3> rest_grid(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes,
+                                  const glm::ivec3& divisions);
+
+// A lattice at rest (rest == current == rest_grid).
+Lattice make_lattice(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes,
+                     const glm::ivec3& divisions, LatticeBasis basis = LatticeBasis::bernstein);
+
+// Checks divisions (1..kMaxDivisions), finite origin/axes/control points, control-point counts and a
+// non-degenerate box (|det[S T U]| relative to |S||T||U| above 1e-9). Messages start with `what`
+// (a file name or "lattice").
+Status validate(const Lattice& lattice, const std::string& what = "lattice");
+
+// M = [S T U] (columns) and its inverse (rows (T×U)/((T×U)·S), (S×U)/((S×U)·T), (S×T)/((S×T)·U)).
+glm::dmat3 axes_matrix(const Lattice& lattice);
+glm::dmat3 inverse_axes(const Lattice& lattice);
+
+// (s,t,u) = M⁻¹ (X − X0), X in world space.
+glm::dvec3 local_coords(const Lattice& lattice, const glm::dvec3& world);
+// Inside test, faces inclusive (with kInsideSlack).
+inline bool inside(const glm::dvec3& stu) {
+    return stu.x >= -kInsideSlack && stu.x <= 1.0 + kInsideSlack && stu.y >= -kInsideSlack &&
+           stu.y <= 1.0 + kInsideSlack && stu.z >= -kInsideSlack && stu.z <= 1.0 + kInsideSlack;
+}
+
+// True when rest equals the uniform grid of (origin, axes, divisions) to 1e-12 relative: then the
+// displacement form equals the classic Σ P B form and Bernstein's convex-hull property bounds the result.
+bool rest_is_uniform(const Lattice& lattice);
+
+// Axis-aligned world box.
+struct Box {
+    glm::dvec3 lo{0.0};
+    glm::dvec3 hi{0.0};
+    bool empty = true;
+    void add(const glm::dvec3& p) {
+        if (empty) { lo = hi = p; empty = false; return; }
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+};
+
+// A box that contains every point the lattice can produce from points in `in` (all deformed points,
+// inside or outside the lattice): in ⊕ [min(0,ΔP), max(0,ΔP)] (the weights are non-negative and sum to
+// at most 1 for both bases), intersected for a uniform-rest Bernstein lattice with hull(P) ∪ in.
+Box deformed_bounds(const Lattice& lattice, const Box& in);
+
+}  // namespace sffd::ffd
