@@ -93,26 +93,43 @@ glm::dvec3 track_pivot(const AnimationTrack& track, const std::vector<glm::dvec3
     return n ? sum / double(n) : sum;
 }
 
-glm::dvec3 twist_point(const glm::dvec3& p, const glm::dvec3& pivot, const glm::dvec3& axis, double degrees) {
-    // Reduce in degrees (fmod is exact) so whole turns are exactly the identity.
-    double r = std::fmod(degrees, 360.0);
-    if (r < 0.0) r += 360.0;
-    if (r >= 360.0 || r == 0.0 || !std::isfinite(r)) return p;
-    double c, s;
-    if (r == 90.0) { c = 0.0; s = 1.0; }
-    else if (r == 180.0) { c = -1.0; s = 0.0; }
-    else if (r == 270.0) { c = 0.0; s = -1.0; }
-    else {
-        const double rad = r * (std::numbers::pi / 180.0);
-        c = std::cos(rad);
-        s = std::sin(rad);
+namespace {
+
+// One twist as a rotation ready to apply: sines and cosines once per track, not per point.
+struct Twist {
+    bool identity = true;
+    glm::dvec3 pivot{0.0}, k{0.0};
+    double c = 1.0, s = 0.0;
+
+    Twist(const glm::dvec3& pivot_, const glm::dvec3& axis, double degrees) : pivot(pivot_) {
+        // Reduce in degrees (fmod is exact) so whole turns are exactly the identity.
+        double r = std::fmod(degrees, 360.0);
+        if (r < 0.0) r += 360.0;
+        const double len = glm::length(axis);
+        if (r >= 360.0 || r == 0.0 || !std::isfinite(r) || !(len > 0.0)) return;
+        identity = false;
+        k = axis / len;
+        if (r == 90.0) { c = 0.0; s = 1.0; }
+        else if (r == 180.0) { c = -1.0; s = 0.0; }
+        else if (r == 270.0) { c = 0.0; s = -1.0; }
+        else {
+            const double rad = r * (std::numbers::pi / 180.0);
+            c = std::cos(rad);
+            s = std::sin(rad);
+        }
     }
-    const double len = glm::length(axis);
-    if (!(len > 0.0)) return p;
-    const glm::dvec3 k = axis / len;
-    const glm::dvec3 d = p - pivot;
-    // Rodrigues' rotation formula.
-    return pivot + d * c + glm::cross(k, d) * s + k * (glm::dot(k, d) * (1.0 - c));
+    glm::dvec3 apply(const glm::dvec3& p) const {
+        if (identity) return p;
+        const glm::dvec3 d = p - pivot;
+        // Rodrigues' rotation formula.
+        return pivot + d * c + glm::cross(k, d) * s + k * (glm::dot(k, d) * (1.0 - c));
+    }
+};
+
+}  // namespace
+
+glm::dvec3 twist_point(const glm::dvec3& p, const glm::dvec3& pivot, const glm::dvec3& axis, double degrees) {
+    return Twist(pivot, axis, degrees).apply(p);
 }
 
 void evaluate_pose(const AnimationClip& clip, const Lattice& lattice, double clip_time, std::vector<glm::dvec3>& out) {
@@ -125,9 +142,10 @@ void evaluate_pose(const AnimationClip& clip, const Lattice& lattice, double cli
             for (std::uint32_t idx : track.points)
                 if (idx < out.size()) out[idx] += value;
         } else {
-            const glm::dvec3 pivot = track_pivot(track, lattice.rest);
+            const Twist twist(track_pivot(track, lattice.rest), track.axis, value.x);
+            if (twist.identity) continue;
             for (std::uint32_t idx : track.points)
-                if (idx < out.size()) out[idx] = twist_point(out[idx], pivot, track.axis, value.x);
+                if (idx < out.size()) out[idx] = twist.apply(out[idx]);
         }
     }
 }
