@@ -14,10 +14,10 @@ layout(location = 1) out vec4 accum_normal;
 void main() {
     vec3 ray;
     float r2;
-    vec3 p = raycast_splat(ray, r2);
-    gl_FragDepth = window_depth(p.z);
+    float t = raycast_splat(ray, r2);
+    gl_FragDepth = window_depth(t);
     // Smooth radial kernel that reaches 0 at the ellipse's edge: no visible disc borders.
     float w = (1.0 - r2) * (1.0 - r2) + 1e-6;
     accum_color = vec4(w * v_color.rgb, w);
-    accum_normal = vec4(w * v_normal, w * -p.z);
+    accum_normal = vec4(w * v_normal, w * t);
 }

@@ -5,24 +5,20 @@
 #include "common/bindings.h"
 #include "splat_render/frame_block.h"
 
+// The loop has a constant bound so the compiler unrolls it and indexes the light arrays with constants
+// (llvmpipe turns a dynamic UBO index into a per-lane gather); lights past counts.y have zero colour.
+// pow() is spelled exp2(log2()) for the same reason: it is the cheap form on llvmpipe.
 vec3 shade_blinn_phong(vec3 albedo, vec3 n, vec3 to_eye) {
     vec3 color = frame.ambient.rgb * albedo;
-    for (uint i = 0u; i < frame.counts.y; ++i) {
+    for (int i = 0; i < SFFD_MAX_LIGHTS; ++i) {
+        if (uint(i) >= frame.counts.y) break;
         vec3 l = frame.light_dir[i].xyz;
-        float ndl = dot(n, l);
-        if (ndl <= 0.0) continue;
+        float ndl = max(dot(n, l), 0.0);
         vec3 h = normalize(l + to_eye);
-        float spec = pow(max(dot(n, h), 0.0), frame.material.y) * frame.material.x;
+        float spec = ndl > 0.0 ? exp2(frame.material.y * log2(max(dot(n, h), 1e-8))) * frame.material.x : 0.0;
         color += frame.light_color[i].rgb * (albedo * ndl + vec3(spec));
     }
     return color;
-}
-
-// World-space direction from the surface towards the eye for this pixel.
-vec3 pixel_to_eye_world() {
-    vec2 ndc = gl_FragCoord.xy * frame.viewport.zw * 2.0 - 1.0;
-    vec3 ray = vec3(ndc.x / frame.projection[0][0], ndc.y / frame.projection[1][1], -1.0);
-    return -normalize(mat3(frame.view_to_world) * ray);
 }
 
 #endif

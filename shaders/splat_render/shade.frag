@@ -1,10 +1,18 @@
 #version 450
 // HQ pass 3: normalise the blended attributes and shade (deferred Blinn-Phong, linear space). Pixels no
-// splat reached get the background (alpha 0 when transparent) and depth -1 (the CPU maps it to +inf).
+// splat reached keep the cleared background: the full-screen triangle lies on the far plane and the depth
+// test (NOTEQUAL against the cleared 1.0) rejects them before shading.
 #include "splat_render/lighting.glsl"
 
 layout(binding = SFFD_TEX_ACCUM_COLOR) uniform sampler2D accum_color;
 layout(binding = SFFD_TEX_ACCUM_NORMAL) uniform sampler2D accum_normal;
+
+// World-space direction from the surface towards the eye for this pixel.
+vec3 pixel_to_eye_world() {
+    vec2 ndc = gl_FragCoord.xy * frame.viewport.zw * 2.0 - 1.0;
+    vec3 ray = vec3(ndc.x / frame.projection[0][0], ndc.y / frame.projection[1][1], -1.0);
+    return -normalize(mat3(frame.view_to_world) * ray);
+}
 
 layout(location = 0) out vec4 out_color;
 layout(location = 1) out vec4 out_aux;

@@ -7,19 +7,29 @@
 // The fragment shaders ray-cast the splat's ellipse from these flat values.
 
 #include "splat_render/splat_common.glsl"
+#if PASS == 2
+#include "splat_render/lighting.glsl"
+#endif
 
 layout(std430, binding = SFFD_SSBO_SPLATS_DRAW) readonly buffer Splats { GpuSplat splats[]; };
 layout(std430, binding = SFFD_SSBO_VISIBLE) readonly buffer Visible { uint visible[]; };
 layout(binding = SFFD_TEX_MATERIAL) uniform sampler2D material_texture;
 
-layout(location = 0) flat out vec3 v_center;   // view space
-layout(location = 1) flat out vec3 v_dual_u;   // s = dot(v_dual_u, p - center): coordinates in the splat's (u, v) frame
+// The ray through a pixel is d = (x, y, -1) in view space (x, y from the pixel's NDC); every quantity
+// the ray cast needs is linear in d, so the vertex shader hands over coefficient vectors:
+//   t = v_consts.x / dot(v_plane, d)   (hit: p = t * d, view-axis depth t)
+//   s = t * dot(v_dual_u, d) - v_consts.y,  q = t * dot(v_dual_v, d) - v_consts.z,  inside: s^2 + q^2 <= 1
+layout(location = 0) flat out vec3 v_plane;   // plane normal u x v, oriented like the splat's normal
+layout(location = 1) flat out vec3 v_dual_u;  // dual axes: s = dot(v_dual_u, p - center)
 layout(location = 2) flat out vec3 v_dual_v;
-layout(location = 3) flat out vec3 v_plane;    // plane normal u x v, oriented like the splat's normal
-layout(location = 4) flat out float v_eps;     // visibility offset along the view ray (view-space units)
-#if PASS != 0
-layout(location = 5) flat out vec4 v_color;    // linear rgb
-layout(location = 6) flat out vec3 v_normal;   // world space shading normal
+layout(location = 3) flat out vec3 v_consts;  // dot(center, plane), dot(dual_u, center), dot(dual_v, center)
+layout(location = 4) flat out float v_eps;    // visibility offset along the view ray (view-space units)
+#if PASS == 1
+layout(location = 5) flat out vec4 v_color;   // linear rgb
+layout(location = 6) flat out vec3 v_normal;  // world space shading normal
+#elif PASS == 2
+layout(location = 5) flat out vec4 v_color;   // lit colour (preview shades per splat)
+layout(location = 6) flat out vec3 v_normal;  // world space shading normal
 #endif
 
 void main() {
@@ -36,10 +46,13 @@ void main() {
     vec3 shading_n = normalize(mat3(frame.normal_view) * s.normal.xyz);
     float r = ellipse_max_radius(u, v);
 
-    v_center = c;
-    v_dual_u = cross(v, n) / dot(cross(v, n), u);
-    v_dual_v = cross(n, u) / dot(cross(n, u), v);
-    v_plane = dot(n, shading_n) < 0.0 ? -n : n;
+    vec3 plane = dot(n, shading_n) < 0.0 ? -n : n;
+    vec3 dual_u = cross(v, n) / dot(cross(v, n), u);
+    vec3 dual_v = cross(n, u) / dot(cross(n, u), v);
+    v_plane = plane;
+    v_dual_u = dual_u;
+    v_dual_v = dual_v;
+    v_consts = vec3(dot(c, plane), dot(dual_u, c), dot(dual_v, c));
     v_eps = frame.params.x * r;
 #if PASS != 0
     vec4 color;
@@ -49,8 +62,14 @@ void main() {
         color = unpackUnorm4x8(floatBitsToUint(s.center.w));
         color.rgb = srgb_to_linear(color.rgb);
     }
+    vec3 world_n = normalize(mat3(frame.view_to_world) * shading_n);
+    v_normal = world_n;
+#if PASS == 2
+    // Preview: Blinn-Phong once per splat with its normal, towards the eye from the splat's centre.
+    vec3 to_eye = -normalize(mat3(frame.view_to_world) * c);
+    color.rgb = shade_blinn_phong(color.rgb, world_n, to_eye);
+#endif
     v_color = color;
-    v_normal = normalize(mat3(frame.view_to_world) * shading_n);
 #endif
 
 #if SHAPE_QUAD

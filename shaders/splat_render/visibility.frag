@@ -6,7 +6,7 @@
 void main() {
     vec3 ray;
     float r2;
-    vec3 p = raycast_splat(ray, r2);
-    p += normalize(ray) * v_eps;
-    gl_FragDepth = window_depth(p.z);
+    float t = raycast_splat(ray, r2);
+    // Pushed back by eps along the ray: the view-axis depth grows by eps / |ray| (ray.z = -1).
+    gl_FragDepth = window_depth(t + v_eps * inversesqrt(dot(ray, ray)));
 }

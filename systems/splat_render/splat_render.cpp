@@ -407,14 +407,17 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         glDepthMask(GL_TRUE);
         lap(stats.attribute_ms);
         // 3. normalise + shade (material of the first cloud: shading is deferred)
+        // Early depth test skips background pixels (depth still 1.0) before the shader runs.
         glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
-        glDisable(GL_DEPTH_TEST);
+        glDepthFunc(GL_NOTEQUAL);
+        glDepthMask(GL_FALSE);
         if (!drawn.empty()) glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, drawn.front()->frame_ubo.id());
         glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s.accum_color.id());
         glBindTextureUnit(SFFD_TEX_ACCUM_NORMAL, s.accum_normal.id());
         glUseProgram(s.shade.id());
         if (!drawn.empty()) glDrawArrays(GL_TRIANGLES, 0, 3);
-        glEnable(GL_DEPTH_TEST);
+        glDepthMask(GL_TRUE);
+        glDepthFunc(GL_LESS);
         lap(stats.shade_ms);
     }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);

@@ -1,0 +1,182 @@
+// Splat rendering on the current GL driver (llvmpipe here), 1280x720, the paper's scene: a unit sphere of
+// 59,650 splats seen from distance 3 (and 600,000 splats), preview and HQ, culling on and off.
+// Each iteration renders one frame and waits for it (glFinish) and is timed with a CPU clock
+// (UseManualTime): llvmpipe's GL_TIME_ELAPSED under-reports point rasterisation. Counters: visible splats
+// and per-pass milliseconds (a separate timed frame with glFinish between passes).
+//   build/<dir>/tools/bench/bench_render_splat --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "runtime/ecs/registry.h"
+#include "runtime/gfx/context.h"
+#include "runtime/gfx/gl.h"
+#include "runtime/gfx/gl_object.h"
+#include "runtime/scene/components.h"
+#include "systems/splat_render/splat_render.h"
+
+using namespace sffd;
+using namespace sffd::render;
+
+namespace {
+
+gfx::GlContext& context() {
+    static std::optional<gfx::GlContext> ctx;
+    if (!ctx) {
+        auto c = gfx::create_context({.headless = true, .width = 64, .height = 64, .debug = false});
+        if (!c) {
+            std::fprintf(stderr, "%s\n", c.message().c_str());
+            std::abort();
+        }
+        ctx.emplace(std::move(c.value()));
+    }
+    return *ctx;
+}
+
+// Fibonacci sphere, splat radius 0.8 * sqrt(4 pi / n) (discs overlap about twice), white.
+SplatCloud sphere(std::size_t n) {
+    SplatCloud c;
+    c.positions.resize(n), c.normals.resize(n), c.axis_u.resize(n), c.axis_v.resize(n);
+    c.colors.assign(n, 0xffc8c8c8u);
+    const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+    const double r = 0.8 * std::sqrt(4.0 * std::numbers::pi / double(n));
+    for (std::size_t i = 0; i < n; ++i) {
+        const double y = 1.0 - 2.0 * (double(i) + 0.5) / double(n);
+        const double rr = std::sqrt(std::max(0.0, 1.0 - y * y));
+        const glm::dvec3 nrm(std::cos(golden * double(i)) * rr, y, std::sin(golden * double(i)) * rr);
+        const glm::dvec3 a = std::abs(nrm.y) < 0.9 ? glm::dvec3(0, 1, 0) : glm::dvec3(1, 0, 0);
+        const glm::dvec3 t = glm::normalize(glm::cross(a, nrm));
+        c.positions[i] = glm::vec3(nrm);
+        c.normals[i] = glm::vec3(nrm);
+        c.axis_u[i] = glm::vec3(t * r);
+        c.axis_v[i] = glm::vec3(glm::cross(nrm, t) * r);
+    }
+    return c;
+}
+
+void bench_render(benchmark::State& state) {
+    context();
+    const auto n = std::size_t(state.range(0));
+    const auto quality = state.range(1) ? Quality::hq : Quality::preview;
+    const bool culling = state.range(2) != 0;
+    ecs::Registry reg;
+    reg.emplace<SplatCloud>(reg.create(), sphere(n));
+    Camera cam;
+    cam.eye = glm::dvec3(0, 0, 3);
+    cam.near_plane = 0.1f;
+    cam.far_plane = 10.0f;
+    reg.emplace<Camera>(reg.create(), cam);
+    reg.emplace<DirectionalLight>(reg.create(), DirectionalLight{});
+    RenderSettings settings;
+    settings.quality = quality, settings.width = 1280, settings.height = 720, settings.culling = culling;
+    reg.set_resource<RenderSettings>(settings);
+    FrameContext frame;
+    render_system(reg, frame);  // upload, compile, warm up
+    glFinish();
+    for (auto _ : state) {
+        const auto t0 = std::chrono::steady_clock::now();
+        render_system(reg, frame);
+        glFinish();
+        state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    // One extra frame with per-pass timing for the counters.
+    reg.resource<RenderSettings>().time_passes = true;
+    render_system(reg, frame);
+    const RenderStats& s = reg.resource<RenderStats>();
+    state.counters["visible"] = double(s.visible_points + s.visible_quads);
+    state.counters["quads"] = double(s.visible_quads);
+    state.counters["cull_ms"] = s.cull_ms;
+    if (quality == Quality::hq) {
+        state.counters["visibility_ms"] = s.visibility_ms;
+        state.counters["attribute_ms"] = s.attribute_ms;
+        state.counters["shade_ms"] = s.shade_ms;
+    } else {
+        state.counters["preview_ms"] = s.preview_ms;
+    }
+    release_render_state(reg);
+}
+
+// Calibration: the workload ../shared/notes/splatting.md measured on a quiet machine (60,000 round
+// 6 px point sprites, one opaque depth-tested pass, 1280x720: ~55 ms). Its time here tells how loaded the
+// machine is while the other benchmarks run.
+void bench_reference_points(benchmark::State& state) {
+    context();
+    const SplatCloud cloud = sphere(60000);
+    gfx::Buffer positions = gfx::Buffer::create("bench.positions");
+    std::vector<glm::vec4> p;
+    for (const glm::vec3& v : cloud.positions) p.emplace_back(v, 1.0f);
+    glNamedBufferData(positions.id(), GLsizeiptr(p.size() * sizeof(glm::vec4)), p.data(), GL_STATIC_DRAW);
+    const char* vs = "#version 450\nlayout(std430, binding = 0) readonly buffer P { vec4 pos[]; };\n"
+                     "uniform mat4 mvp;\nvoid main() { gl_Position = mvp * pos[gl_VertexID]; gl_PointSize = 6.0; }\n";
+    const char* fs = "#version 450\nout vec4 color;\nvoid main() { vec2 d = gl_PointCoord * 2.0 - 1.0;\n"
+                     "if (dot(d, d) > 1.0) discard; color = vec4(1.0); }\n";
+    gfx::Program program(glCreateProgram());
+    for (auto [stage, src] : {std::pair{GLenum(GL_VERTEX_SHADER), vs}, std::pair{GLenum(GL_FRAGMENT_SHADER), fs}}) {
+        const GLuint sh = glCreateShader(stage);
+        glShaderSource(sh, 1, &src, nullptr);
+        glCompileShader(sh);
+        glAttachShader(program.id(), sh);
+        glDeleteShader(sh);
+    }
+    glLinkProgram(program.id());
+    gfx::Texture color = gfx::Texture::create("bench.color", GL_TEXTURE_2D), depth = gfx::Texture::create("bench.depth", GL_TEXTURE_2D);
+    glTextureStorage2D(color.id(), 1, GL_RGBA8, 1280, 720);
+    glTextureStorage2D(depth.id(), 1, GL_DEPTH_COMPONENT32F, 1280, 720);
+    gfx::Framebuffer fbo = gfx::Framebuffer::create("bench.fbo");
+    glNamedFramebufferTexture(fbo.id(), GL_COLOR_ATTACHMENT0, color.id(), 0);
+    glNamedFramebufferTexture(fbo.id(), GL_DEPTH_ATTACHMENT, depth.id(), 0);
+    gfx::VertexArray vao = gfx::VertexArray::create("bench.vao");
+    Camera cam;
+    cam.eye = glm::dvec3(0, 0, 3);
+    const glm::mat4 mvp = glm::mat4(glm::perspective(glm::radians(45.0), 1280.0 / 720.0, 0.1, 10.0) *
+                                    glm::lookAt(cam.eye, cam.target, cam.up));
+    glProgramUniformMatrix4fv(program.id(), glGetUniformLocation(program.id(), "mvp"), 1, GL_FALSE, &mvp[0][0]);
+    auto frame = [&] {
+        const float clear[4] = {0, 0, 0, 0}, one = 1.0f;
+        glClearNamedFramebufferfv(fbo.id(), GL_COLOR, 0, clear);
+        glClearNamedFramebufferfv(fbo.id(), GL_DEPTH, 0, &one);
+        glBindFramebuffer(GL_FRAMEBUFFER, fbo.id());
+        glViewport(0, 0, 1280, 720);
+        glEnable(GL_DEPTH_TEST);
+        glEnable(GL_PROGRAM_POINT_SIZE);
+        glUseProgram(program.id());
+        glBindVertexArray(vao.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, positions.id());
+        glDrawArrays(GL_POINTS, 0, 60000);
+        glFinish();
+    };
+    frame();
+    for (auto _ : state) {
+        const auto t0 = std::chrono::steady_clock::now();
+        frame();
+        state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    }
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+}  // namespace
+
+BENCHMARK(bench_reference_points)->UseManualTime()->Unit(benchmark::kMillisecond)->MinTime(1.0);
+
+// Args: splats, hq (1) / preview (0), culling on (1) / off (0).
+BENCHMARK(bench_render)
+    ->ArgNames({"splats", "hq", "cull"})
+    ->Args({59650, 0, 1})
+    ->Args({59650, 1, 1})
+    ->Args({59650, 0, 0})
+    ->Args({59650, 1, 0})
+    ->Args({600000, 0, 1})
+    ->Args({600000, 1, 1})
+    ->Args({600000, 0, 0})
+    ->Args({600000, 1, 0})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(1.0);
