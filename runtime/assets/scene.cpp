@@ -305,8 +305,31 @@ void register_scene_extension(const std::string& key, SceneSaveFn save_fn, Scene
 
 void unregister_scene_extension(const std::string& key) { extensions().erase(key); }
 
+namespace {
+std::map<std::string, BuiltinSceneHook>& builtin_hooks() {
+    static std::map<std::string, BuiltinSceneHook> all;
+    return all;
+}
+
+Status load_builtin_with_hooks(ecs::Registry& r, const std::string& name) {
+    std::vector<ecs::Entity> before;
+    r.each_entity([&](ecs::Entity e) { before.push_back(e); });
+    if (Status s = assets::load_builtin_scene(r, name); !s) return s;
+    std::vector<ecs::Entity> created;
+    r.each_entity([&](ecs::Entity e) {
+        if (std::find(before.begin(), before.end(), e) == before.end()) created.push_back(e);
+    });
+    for (const auto& [key, hook] : builtin_hooks())
+        if (hook) hook(r, name, created);
+    return {};
+}
+}  // namespace
+
+void register_builtin_scene_hook(const std::string& key, BuiltinSceneHook hook) { builtin_hooks()[key] = std::move(hook); }
+void unregister_builtin_scene_hook(const std::string& key) { builtin_hooks().erase(key); }
+
 Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
-    if (assets::is_builtin_scene(name_or_path)) return assets::load_builtin_scene(r, name_or_path);
+    if (assets::is_builtin_scene(name_or_path)) return load_builtin_with_hooks(r, name_or_path);
     const fs::path path(name_or_path);
     std::error_code ec;
     if (!fs::exists(path, ec))

@@ -47,4 +47,12 @@ using SceneLoadFn = std::function<Status(ecs::Registry&, std::string_view json, 
 void register_scene_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn);
 void unregister_scene_extension(const std::string& key);
 
+// Built-in scenes have no file for an extension to read, so a system that adds defaults to them (the
+// animation engineer's paper demo clip) registers a hook that runs after a built-in scene's entities
+// exist, with the scene name and exactly the entities that load created. (Added by the animation engineer.)
+using BuiltinSceneHook =
+    std::function<void(ecs::Registry&, const std::string& scene, const std::vector<ecs::Entity>& created)>;
+void register_builtin_scene_hook(const std::string& key, BuiltinSceneHook hook);
+void unregister_builtin_scene_hook(const std::string& key);
+
 }  // namespace sffd
