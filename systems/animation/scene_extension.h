@@ -1,0 +1,30 @@
+// Animation in scene files and built-in scenes (runtime/assets/scene.h hooks; assets never links animation).
+//
+// register_animation_scene_hooks() registers, under the key "animation":
+//   - a scene extension: save_scene writes every lattice's clip into the glTF file's
+//     SFFD_scene.extensions.animation object, load_scene reads it back (exact round trip):
+//       { "version": 1,
+//         "clips": [ { "lattice": <scene id of the lattice entity>, "playing": true, "speed": 1.0,
+//                      "clip": { ...clip_io.h schema... } } ] }
+//   - a built-in scene hook: `sphere` and `face` get make_paper_demo_clip() on their lattice, playing.
+// Call it once at start-up (tools/splatffd/main.cpp does; tests call it themselves).
+#pragma once
+
+#include <functional>
+#include <string>
+#include <string_view>
+
+#include "runtime/core/result.h"
+#include "runtime/ecs/registry.h"
+
+namespace sffd {
+
+void register_animation_scene_hooks();
+void unregister_animation_scene_hooks();
+
+// The extension's two halves, usable without the hook registry (tests, tools).
+Result<std::string> save_animation_extension(const ecs::Registry& registry, const std::function<int(ecs::Entity)>& id_of);
+Status load_animation_extension(ecs::Registry& registry, std::string_view json,
+                                const std::function<ecs::Entity(int)>& entity_of);
+
+}  // namespace sffd

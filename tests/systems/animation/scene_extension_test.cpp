@@ -1,0 +1,115 @@
+// Clips in scene files (exact round trip through .glb and .gltf) and the demo clip on built-in scenes.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "runtime/assets/scene.h"
+#include "systems/animation/clip_io.h"
+#include "systems/animation/components.h"
+#include "systems/animation/editing.h"
+#include "systems/animation/paper_demo.h"
+#include "systems/animation/scene_extension.h"
+#include "systems/ffd/components.h"
+
+namespace sffd {
+namespace {
+
+struct Hooks {
+    Hooks() { register_animation_scene_hooks(); }
+    ~Hooks() { unregister_animation_scene_hooks(); }
+};
+
+ecs::Entity only_lattice(ecs::Registry& reg) {
+    ecs::Entity found = ecs::null_entity;
+    std::size_t n = 0;
+    reg.view<Lattice>().each([&](ecs::Entity e, Lattice&) { found = e; ++n; });
+    EXPECT_EQ(n, 1u);
+    return found;
+}
+
+TEST(AnimationScene, BuiltinSphereGetsThePaperDemoClip) {
+    Hooks hooks;
+    ecs::Registry reg;
+    ASSERT_TRUE(load_scene(reg, "sphere").ok());
+    const ecs::Entity e = only_lattice(reg);
+    ASSERT_TRUE(reg.has<AnimationClip>(e));
+    ASSERT_TRUE(reg.has<AnimationState>(e));
+    EXPECT_EQ(reg.get<Lattice>(e).divisions, glm::ivec3(10));
+    EXPECT_EQ(clip_to_string(reg.get<AnimationClip>(e)), clip_to_string(make_paper_demo_clip(reg.get<Lattice>(e))));
+    EXPECT_TRUE(reg.get<AnimationState>(e).playing);
+}
+
+TEST(AnimationScene, WithoutHooksBuiltinsHaveNoClip) {
+    ecs::Registry reg;
+    ASSERT_TRUE(load_scene(reg, "sphere").ok());
+    EXPECT_EQ(reg.count<AnimationClip>(), 0u);
+}
+
+TEST(AnimationScene, ClipsRoundTripThroughSceneFilesExactly) {
+    Hooks hooks;
+    for (const char* ext : {".glb", ".gltf"}) {
+        ecs::Registry reg;
+        ASSERT_TRUE(load_scene(reg, "sphere").ok());
+        const ecs::Entity e = only_lattice(reg);
+        // Make the clip awkward: an extra twist with many digits, a paused state at another speed.
+        AnimationClip& clip = reg.patch<AnimationClip>(e);
+        const std::size_t t = add_twist_track(clip, "extra", {5, 6, 7}, {1.0 / 3.0, 0.1, -7.25}, glm::dvec3(0.1, 1e-300, -0.0));
+        set_key(clip.tracks[t], {0.1, {720.0 + 1.0 / 7.0, 0, 0}, Interpolation::smooth, Easing::ease_out});
+        set_key(clip.tracks[t], {2.0 / 3.0, {-1e-12, 0, 0}, Interpolation::step, Easing::none});
+        clip.mode = PlayMode::ping_pong;
+        clip.speed = 0.3;
+        pause(reg.patch<AnimationState>(e));
+        reg.patch<AnimationState>(e).speed = 1.7;
+        const std::string before = clip_to_string(clip);
+
+        const auto path = std::filesystem::path(SFFD_BINARY_DIR) / (std::string("animation_scene_test") + ext);
+        Status saved = save_scene(reg, path);
+        ASSERT_TRUE(saved.ok()) << saved.message();
+        ecs::Registry back;
+        Status loaded = load_scene(back, path.string());
+        ASSERT_TRUE(loaded.ok()) << loaded.message();
+        const ecs::Entity b = only_lattice(back);
+        ASSERT_TRUE(back.has<AnimationClip>(b)) << ext;
+        EXPECT_EQ(clip_to_string(back.get<AnimationClip>(b)), before) << ext;
+        const AnimationClip& c = back.get<AnimationClip>(b);
+        const AnimationTrack& x = c.tracks.back();
+        EXPECT_EQ(x.keys[0].value.x, 720.0 + 1.0 / 7.0);
+        EXPECT_EQ(x.keys[1].time, 2.0 / 3.0);
+        EXPECT_EQ(x.axis.x, 1.0 / 3.0);
+        EXPECT_TRUE(std::signbit(x.pivot.z));
+        EXPECT_FALSE(back.get<AnimationState>(b).playing);
+        EXPECT_EQ(back.get<AnimationState>(b).speed, 1.7);
+        std::filesystem::remove(path);
+    }
+}
+
+TEST(AnimationScene, BadExtensionDataIsRefused) {
+    ecs::Registry reg;
+    const ecs::Entity lat = reg.create();
+    Lattice l;
+    l.divisions = {1, 1, 1};
+    l.rest.assign(8, glm::dvec3(0.0));
+    l.current = l.rest;
+    reg.emplace<Lattice>(lat, l);
+    const ecs::Entity other = reg.create();
+    auto entity_of = [&](int id) { return id == 0 ? lat : id == 1 ? other : ecs::null_entity; };
+    auto load = [&](const std::string& text) {
+        Status s = load_animation_extension(reg, text, entity_of);
+        return s.ok() ? std::string("ok") : s.message();
+    };
+    EXPECT_EQ(load(R"({"version": 1, "clips": [{"lattice": 1, "clip": {"duration": 1}}]})"),
+              "clips[0].lattice: 1 is not a lattice of this scene");
+    EXPECT_EQ(load(R"({"version": 2, "clips": []})"), "'version' must be 1");
+    EXPECT_EQ(load(R"({"version": 1, "clips": [{"lattice": 0, "clip": {"duration": -1}}]})"),
+              "clips[0].clip: duration: must be > 0");
+    EXPECT_EQ(load(R"({"version": 1, "clips": [{"lattice": 0, "clip": {"duration": 1,
+                 "tracks": [{"kind": "stretch", "points": [8]}]}}]})"),
+              "clips[0]: clip '': tracks[0]: control point 8 out of range (lattice has 8)");
+    EXPECT_EQ(reg.count<AnimationClip>(), 0u);  // nothing attached on failure
+    EXPECT_EQ(load(R"({"version": 1, "clips": [{"lattice": 0, "playing": false, "clip": {"duration": 1}}]})"), "ok");
+    EXPECT_TRUE(reg.has<AnimationClip>(lat));
+    EXPECT_FALSE(reg.get<AnimationState>(lat).playing);
+}
+
+}  // namespace
+}  // namespace sffd
