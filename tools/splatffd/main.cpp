@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "runtime/core/paths.h"
+#include "systems/animation/scene_extension.h"
 #include "tools/splatffd/command.h"
 
 namespace sffd::cli {
@@ -81,6 +82,8 @@ int main(int argc, char** argv) {
         return 0;
     }
     const std::string name = args[0];
+    // Start-up registrations of systems that store data in scene files (runtime/assets/scene.h hooks).
+    sffd::register_animation_scene_hooks();
     if (const auto* c = find(name)) return c->run(sffd::cli::Args(args).subspan(1));
     for (const Known& k : known_commands)
         if (name == k.name) {
