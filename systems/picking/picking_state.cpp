@@ -232,6 +232,7 @@ struct PickingState::Impl {
     // Registry stamps of the last refresh: when none moved, refresh() returns at once.
     std::array<std::uint64_t, 4> seen{~0ull, ~0ull, ~0ull, ~0ull};
     double seen_fraction = -1.0;
+    DeformCache deform_cache;  // CPU deformations of clouds whose deformed output is GPU-only
     Stats stats;
 
     Impl() : device(create_device()), surfaces(create_scene(device)), controls(create_scene(device)) {
@@ -268,6 +269,7 @@ bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
         const ecs::Entity e = it->second->entity;
         if (!registry.valid(e) || !registry.has<SplatCloud>(e)) {
             surface_ids.erase(it->second->id);
+            deform_cache.clouds.erase(e.bits());
             auto doomed = it++;
             release_geometry(surfaces, surface_records, doomed);
             ++stats.geometries_released;
@@ -277,7 +279,7 @@ bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
         }
     }
     for (auto [e, cloud] : registry.view<const SplatCloud>()) {
-        const SplatSource src = splat_source(registry, e);
+        const SplatSource src = splat_source(registry, e, deform_cache);
         if (!anchored && !src.positions.empty()) {
             anchor = glm::dvec3(model_matrix(registry.try_get<Transform>(e)) * glm::dvec4(src.origin, 1.0));
             anchored = true;
@@ -311,6 +313,7 @@ bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
         fill_surface(*it->second, src, model_matrix(registry.try_get<Transform>(e)), anchor);
         changed = true;
     }
+    stats.cpu_deformations = deform_cache.deformations;
     if (changed) {
         rtcCommitScene(surfaces);
         ++stats.surface_commits;

@@ -4,8 +4,9 @@
 // Two scenes, following the Embree tutorials (point_geometry, dynamic_scene):
 //   surfaces  one RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT geometry per point-cloud entity: centre, radius
 //             = the longer splat axis, normal; an intersection filter trims the disc to the splat's
-//             ellipse (axis_u, axis_v). Data: the deformer's CPU output (DeformedSplats) when the
-//             cloud has one, else the authored SplatCloud. Clouds without normals become sphere points.
+//             ellipse (axis_u, axis_v). Data: see splat_source.h (deformed output, picking's own CPU
+//             deformation when the output is GPU-only, or the authored SplatCloud). Clouds without
+//             normals become sphere points.
 //   controls  one RTC_GEOMETRY_TYPE_SPHERE_POINT geometry per lattice entity (current control points).
 // Geometry id -> entity (with generation) and primitive id -> splat / control-point index.
 //
@@ -47,6 +48,7 @@ public:
         std::uint64_t geometries_created = 0;
         std::uint64_t geometries_updated = 0; // in-place buffer updates (same entity, data moved)
         std::uint64_t geometries_released = 0;
+        std::uint64_t cpu_deformations = 0;   // clouds deformed on the CPU by picking (GPU-only output)
     };
     const Stats& stats() const;
 

@@ -1,25 +1,103 @@
 #include "systems/picking/splat_source.h"
 
+#include "runtime/core/log.h"
 #include "runtime/scene/components.h"
+#include "systems/ffd/components.h"
+#include "systems/ffd/deform.h"
 
 namespace sffd::picking {
+namespace {
 
-SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud) {
-    SplatSource src;
-    const SplatCloud* authored = registry.try_get<SplatCloud>(cloud);
-    if (!authored) return src;
-    src.kind = SplatSource::Kind::authored;
-    src.version = registry.version<SplatCloud>(cloud);
-    src.origin = authored->origin;
-    src.positions = authored->positions;
-    if (authored->normals.size() == authored->size()) src.normals = authored->normals;
-    if (authored->axis_u.size() == authored->size() && authored->axis_v.size() == authored->size()) {
-        src.axis_u = authored->axis_u;
-        src.axis_v = authored->axis_v;
+std::uint64_t mix(std::uint64_t h, std::uint64_t v) {
+    h ^= v + 0x9e3779b97f4a7c15ull + (h << 6) + (h >> 2);
+    return h;
+}
+
+template <class T>
+std::span<const T> if_sized(const std::vector<T>& v, std::size_t n) {
+    return v.size() == n ? std::span<const T>(v) : std::span<const T>();
+}
+
+// Key of the inputs of the CPU deformation: cloud, deformer list and every lattice's stamp.
+std::uint64_t deform_key(const ecs::Registry& registry, ecs::Entity cloud, const Deformers& deformers) {
+    std::uint64_t h = mix(registry.version<SplatCloud>(cloud), registry.version<Deformers>(cloud));
+    for (const ecs::Entity l : deformers.lattices) {
+        h = mix(h, l.bits());
+        h = mix(h, registry.valid(l) ? registry.version<Lattice>(l) : 0);
     }
+    return h;
+}
+
+void deform_on_cpu(const ecs::Registry& registry, const SplatCloud& cloud, const Deformers& deformers,
+                   DeformCache::Entry& out) {
+    const std::size_t n = cloud.size();
+    out.positions = cloud.positions;
+    out.normals = cloud.normals.size() == n ? cloud.normals : std::vector<glm::vec3>{};
+    const bool axes = cloud.axis_u.size() == n && cloud.axis_v.size() == n;
+    out.axis_u = axes ? cloud.axis_u : std::vector<glm::vec3>{};
+    out.axis_v = axes ? cloud.axis_v : std::vector<glm::vec3>{};
+    auto ptr = [](std::vector<glm::vec3>& v) { return v.empty() ? nullptr : v.data(); };
+    for (const ecs::Entity l : deformers.lattices) {
+        const Lattice* lattice = registry.valid(l) ? registry.try_get<Lattice>(l) : nullptr;
+        if (!lattice) continue;
+        // In place: each lattice deforms the previous one's output (allowed by ffd::deform).
+        const ffd::PointsIn in{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v), n, cloud.origin};
+        const ffd::PointsOut o{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v)};
+        const auto stats = ffd::deform(*lattice, in, o);
+        if (!stats) log::warn("picking: ", stats.message(), " (picking this cloud undeformed by that lattice)");
+    }
+}
+
+}  // namespace
+
+SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud_entity, DeformCache& cache) {
+    SplatSource src;
+    const SplatCloud* cloud = registry.try_get<SplatCloud>(cloud_entity);
+    if (!cloud) return src;
+    const std::size_t n = cloud->size();
+    src.origin = cloud->origin;
+
+    const DeformedSplats* deformed = registry.try_get<DeformedSplats>(cloud_entity);
+    if (deformed && deformed->cpu_valid && deformed->positions.size() == n) {
+        src.kind = SplatSource::Kind::deformed;
+        src.version = mix(registry.version<DeformedSplats>(cloud_entity), deformed->version);
+        src.origin = deformed->origin;
+        src.positions = deformed->positions;
+        src.normals = if_sized(deformed->normals, n);
+        if (deformed->axis_u.size() == n && deformed->axis_v.size() == n)
+            src.axis_u = deformed->axis_u, src.axis_v = deformed->axis_v;
+        cache.clouds.erase(cloud_entity.bits());
+        return src;
+    }
+
+    const Deformers* deformers = registry.try_get<Deformers>(cloud_entity);
+    if (deformers && !deformers->lattices.empty()) {
+        DeformCache::Entry& entry = cache.clouds[cloud_entity.bits()];
+        const std::uint64_t key = deform_key(registry, cloud_entity, *deformers);
+        if (entry.key != key || entry.positions.size() != n) {
+            deform_on_cpu(registry, *cloud, *deformers, entry);
+            entry.key = key;
+            ++cache.deformations;
+        }
+        src.kind = SplatSource::Kind::cpu_deformed;
+        src.version = key;
+        src.positions = entry.positions;
+        src.normals = if_sized(entry.normals, n);
+        if (entry.axis_u.size() == n && entry.axis_v.size() == n) src.axis_u = entry.axis_u, src.axis_v = entry.axis_v;
+        return src;
+    }
+
+    cache.clouds.erase(cloud_entity.bits());
+    src.kind = SplatSource::Kind::authored;
+    src.version = registry.version<SplatCloud>(cloud_entity);
+    src.positions = cloud->positions;
+    src.normals = if_sized(cloud->normals, n);
+    if (cloud->axis_u.size() == n && cloud->axis_v.size() == n) src.axis_u = cloud->axis_u, src.axis_v = cloud->axis_v;
     return src;
 }
 
-std::uint64_t splat_source_storage_version(const ecs::Registry&) { return 0; }
+std::uint64_t splat_source_storage_version(const ecs::Registry& registry) {
+    return mix(registry.storage_version<DeformedSplats>(), registry.storage_version<Deformers>());
+}
 
 }  // namespace sffd::picking

@@ -1,10 +1,16 @@
-// Which splats picking sees for a point-cloud entity: the deformer's CPU output when the cloud has one
-// (DeformedSplats, written by systems/ffd), otherwise the authored SplatCloud. Spans into the
-// components; valid until the registry changes.
+// Which splats picking sees for a point-cloud entity, in this order:
+//   1. the deformer's CPU output (DeformedSplats with cpu_valid, written by systems/ffd);
+//   2. a cloud with Deformers whose output lives only on the GPU: picking deforms the authored splats on
+//      the CPU itself (ffd::deform through each lattice in order) into `DeformCache`, keyed by the change
+//      stamps of the cloud, its Deformers and every lattice — recomputed only when a pick needs it;
+//   3. the authored SplatCloud.
+// The spans point into the components or the cache; valid until either changes.
 #pragma once
 
 #include <cstdint>
 #include <span>
+#include <unordered_map>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -13,16 +19,26 @@
 namespace sffd::picking {
 
 struct SplatSource {
-    enum class Kind : int { none, authored, deformed };
+    enum class Kind : int { none, authored, deformed, cpu_deformed };
     Kind kind = Kind::none;
-    std::uint64_t version = 0;  // change stamp of the component the spans point into
+    std::uint64_t version = 0;  // identifies the data (a change stamp or a hash of stamps)
     glm::dvec3 origin{0.0};     // positions are relative to this (entity space)
     std::span<const glm::vec3> positions, normals, axis_u, axis_v;
 };
 
-SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud);
+// Picking's own CPU deformation results, per cloud (entity bits).
+struct DeformCache {
+    struct Entry {
+        std::uint64_t key = 0;
+        std::vector<glm::vec3> positions, normals, axis_u, axis_v;
+    };
+    std::unordered_map<std::uint64_t, Entry> clouds;
+    std::uint64_t deformations = 0;  // CPU deformations run (tests check it stays lazy)
+};
 
-// Latest change stamp of the deformed-output storage (0 while no cloud has one).
+SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud, DeformCache& cache);
+
+// Changes whenever any deformer-related storage changes (DeformedSplats, Deformers).
 std::uint64_t splat_source_storage_version(const ecs::Registry& registry);
 
 }  // namespace sffd::picking
