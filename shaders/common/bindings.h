@@ -11,6 +11,7 @@
 #define SFFD_SSBO_DRAW_INDIRECT    4   // DrawArraysIndirectCommand
 #define SFFD_SSBO_SPLATS_DRAW      5   // GpuSplat[]: the buffer a render pass reads (deformed or rest)
 #define SFFD_SSBO_STATS            6   // uint counters written by compute passes (e.g. inverted splats)
+#define SFFD_SSBO_VISIBLE_SPLATS   7   // view-space records of visible sprite splats (splat_render cull pass)
 
 // --- UBO binding points ---------------------------------------------------------------------------
 #define SFFD_UBO_FRAME             0   // camera matrices, viewport, lights

@@ -5,16 +5,17 @@
 //   accum_normal = sum(w * world normal), sum(w * view-axis depth)
 #include "splat_render/raycast.glsl"
 
-layout(location = 5) flat in vec4 v_color;
-layout(location = 6) flat in vec3 v_normal;
+layout(location = 3) flat in vec4 v_color;
+layout(location = 4) flat in vec3 v_normal;
+
 
 layout(location = 0) out vec4 accum_color;
 layout(location = 1) out vec4 accum_normal;
 
 void main() {
     vec3 ray;
-    float r2;
-    float t = raycast_splat(ray, r2);
+    float r2, eps;
+    float t = raycast_splat(ray, r2, eps);
     gl_FragDepth = window_depth(t);
     // Smooth radial kernel that reaches 0 at the ellipse's edge: no visible disc borders.
     float w = (1.0 - r2) * (1.0 - r2) + 1e-6;

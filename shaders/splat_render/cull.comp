@@ -1,16 +1,17 @@
 #version 450
-// Culling and compaction: drops back-facing splats and splats outside the view frustum, and sorts the
-// survivors into two lists of the visible-index buffer: point sprites (slots from 0) and world-space quads
-// (slots from frame.counts.z) for splats a sprite cannot draw correctly (larger than the point-size limit,
-// crossing the near plane, or centred off-screen: sprites are clipped by their centre). Two
-// DrawArraysIndirectCommands follow: {points, 1, 0, 0} and {6, quads, 0, 0}.
-// With culling off (frame.params.z == 0) it only classifies.
+// Culling and compaction: drops back-facing splats and splats outside the view frustum. Survivors a point
+// sprite can draw get a view-space SplatRecord (the vertex shaders then only copy it); the others (larger
+// than the point-size limit, crossing the near plane, or centred off-screen: sprites are clipped by their
+// centre) go to the quad list as indices. Two DrawArraysIndirectCommands follow: {sprites, 1, 0, 0} and
+// {6, quads, 0, 0}. With culling off (frame.params.z == 0) nothing is dropped: back-facing sprites are
+// marked (plane.w < 0) and discarded per fragment, so the image is the same and the cost is visible.
 layout(local_size_x = 128) in;
 
-#include "splat_render/splat_common.glsl"
+#include "splat_render/splat_color.glsl"
 
 layout(std430, binding = SFFD_SSBO_SPLATS_DRAW) readonly buffer Splats { GpuSplat splats[]; };
-layout(std430, binding = SFFD_SSBO_VISIBLE) writeonly buffer Visible { uint visible[]; };
+layout(std430, binding = SFFD_SSBO_VISIBLE) writeonly buffer QuadList { uint quads[]; };
+layout(std430, binding = SFFD_SSBO_VISIBLE_SPLATS) writeonly buffer Records { SplatRecord records[]; };
 layout(std430, binding = SFFD_SSBO_DRAW_INDIRECT) buffer Commands {
     uint point_count, point_instances, point_first, point_base;
     uint quad_vertices, quad_count, quad_first, quad_base;
@@ -20,34 +21,36 @@ void main() {
     uint i = gl_GlobalInvocationID.x;
     if (i >= frame.counts.x) return;
     GpuSplat s = splats[i];
-    vec3 c = (frame.model_view * vec4(s.center.xyz, 1.0)).xyz;
-    vec3 u = mat3(frame.model_view) * s.axis_u.xyz;
-    vec3 v = mat3(frame.model_view) * s.axis_v.xyz;
-    float r = ellipse_max_radius(u, v);
-    if (!(r > 0.0) || dot(cross(u, v), cross(u, v)) <= 1e-20 * r * r * r * r) return;  // degenerate
+    SplatView o = splat_view(s);
+    vec3 n = cross(o.u, o.v);
+    if (!(o.r > 0.0) || dot(n, n) <= 1e-12 * o.r * o.r * o.r * o.r) return;  // degenerate (or NaN)
 
+    // Back-facing (a splat flipped by an inverted lattice cell, normal.w == 0, is drawn two-sided).
+    bool back = s.normal.w != 0.0 && dot(o.shading_n, o.c) > 0.0;
     if (frame.params.z != 0.0) {
-        // Back-facing (a splat flipped by an inverted lattice cell, normal.w == 0, is drawn two-sided).
-        vec3 n = mat3(frame.normal_view) * s.normal.xyz;
-        if (s.normal.w != 0.0 && dot(n, c) > 0.0) return;
+        if (back) return;
         // Frustum, as a bounding ball against the view-space planes of a symmetric perspective.
         float p00 = frame.projection[0][0], p11 = frame.projection[1][1];
         float near_plane = frame.projection[3][2] / (frame.projection[2][2] - 1.0);
         float far_plane = frame.projection[3][2] / (frame.projection[2][2] + 1.0);
-        float depth = -c.z;
-        if (depth + r < near_plane || depth - r > far_plane) return;
-        if ((depth - p00 * abs(c.x)) * inversesqrt(p00 * p00 + 1.0) < -r) return;
-        if ((depth - p11 * abs(c.y)) * inversesqrt(p11 * p11 + 1.0) < -r) return;
+        float depth = -o.c.z;
+        if (depth + o.r < near_plane || depth - o.r > far_plane) return;
+        if ((depth - p00 * abs(o.c.x)) * inversesqrt(p00 * p00 + 1.0) < -o.r) return;
+        if ((depth - p11 * abs(o.c.y)) * inversesqrt(p11 * p11 + 1.0) < -o.r) return;
     }
 
-    float size = sprite_size(c, r);
-    vec2 ndc = vec2(frame.projection[0][0] * c.x, frame.projection[1][1] * c.y) / -c.z;
-    bool quad = size < 0.0 || size > frame.params.y || any(greaterThan(abs(ndc), vec2(1.0)));
-    if (quad) {
-        uint slot = atomicAdd(quad_count, 1u);
-        visible[frame.counts.z + slot] = i;
-    } else {
-        uint slot = atomicAdd(point_count, 1u);
-        visible[slot] = i;
+    float size = sprite_size(o.c, o.r);
+    vec2 ndc = vec2(frame.projection[0][0] * o.c.x, frame.projection[1][1] * o.c.y) / -o.c.z;
+    if (size < 0.0 || size > frame.params.y || any(greaterThan(abs(ndc), vec2(1.0)))) {
+        quads[atomicAdd(quad_count, 1u)] = i;
+        return;
     }
+    SplatRecord rec;
+    splat_raycast_setup(o, rec.plane, rec.dual_u, rec.dual_v);
+    if (back) rec.plane.w = -1.0;
+    rec.center = vec4(o.c, size);
+    vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
+    rec.color = splat_color(s, o, world_n);
+    rec.normal = vec4(world_n, 0.0);
+    records[atomicAdd(point_count, 1u)] = rec;
 }

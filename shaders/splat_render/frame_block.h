@@ -30,7 +30,7 @@ layout(std140, binding = SFFD_UBO_FRAME) uniform FrameBlock {
     SFFD_VEC4 light_color[SFFD_MAX_LIGHTS];  // linear rgb * intensity
     SFFD_VEC4 material;       // x: specular, y: shininess
     SFFD_VEC4 background;     // linear rgba written where no splat covers the pixel
-    SFFD_UVEC4 counts;        // x: splats in the draw buffer, y: lights, z: first quad slot in the visible list
+    SFFD_UVEC4 counts;        // x: splats in the draw buffer, y: lights, w: 1 = preview (colours are lit)
 #ifdef __cplusplus
 };
 static_assert(sizeof(FrameBlock) == 4 * 64 + 6 * 16 + 2 * SFFD_MAX_LIGHTS * 16);

@@ -2,16 +2,17 @@
 // Preview: one pass of opaque ray-cast ellipses with true depth; the vertex shader lit each splat once.
 #include "splat_render/raycast.glsl"
 
-layout(location = 5) flat in vec4 v_color;
-layout(location = 6) flat in vec3 v_normal;
+layout(location = 3) flat in vec4 v_color;
+layout(location = 4) flat in vec3 v_normal;
+
 
 layout(location = 0) out vec4 out_color;   // linear rgb, alpha 1
 layout(location = 1) out vec4 out_aux;     // world normal, view-axis depth
 
 void main() {
     vec3 ray;
-    float r2;
-    float t = raycast_splat(ray, r2);
+    float r2, eps;
+    float t = raycast_splat(ray, r2, eps);
     gl_FragDepth = window_depth(t);
     out_color = vec4(v_color.rgb, 1.0);
     out_aux = vec4(v_normal, t);

@@ -1,15 +1,13 @@
-// Per-pixel ray-ellipse intersection shared by the splat fragment shaders.
+// Per-pixel ray-ellipse intersection shared by the splat fragment shaders (coefficients: SplatRecord).
 #ifndef SFFD_RAYCAST_GLSL
 #define SFFD_RAYCAST_GLSL
 
 #include "common/bindings.h"
 #include "splat_render/frame_block.h"
 
-layout(location = 0) flat in vec3 v_plane;
-layout(location = 1) flat in vec3 v_dual_u;
-layout(location = 2) flat in vec3 v_dual_v;
-layout(location = 3) flat in vec3 v_consts;
-layout(location = 4) flat in float v_eps;
+layout(location = 0) flat in vec4 v_plane;
+layout(location = 1) flat in vec4 v_dual_u;
+layout(location = 2) flat in vec4 v_dual_v;
 
 // View-space direction of the ray through this fragment's pixel centre, scaled to z = -1.
 vec3 pixel_ray() {
@@ -22,17 +20,19 @@ float window_depth(float t) {
     return 0.5 * (frame.projection[3][2] / t - frame.projection[2][2]) + 0.5;
 }
 
-// Intersects the pixel's ray with the splat's plane (see splat.vert for the linear form); discards
-// outside the ellipse and, with culling off, where the ray sees the splat's back. Returns the view-axis
-// depth t of the hit (p = t * ray); r2 = squared elliptical radius.
-float raycast_splat(out vec3 ray, out float r2) {
+// Intersects the pixel's ray with the splat's plane; discards outside the ellipse and back-facing splats
+// marked by the cull pass (culling off). Returns the view-axis depth t of the hit (p = t * ray) and the
+// squared elliptical radius r2.
+float raycast_splat(out vec3 ray, out float r2, out float eps) {
+    vec4 plane = v_plane;
+    if (plane.w < 0.0) discard;
+    eps = plane.w;
     ray = pixel_ray();
-    float denom = dot(ray, v_plane);
-    if (frame.params.z == 0.0 && denom > 0.0) discard;
-    float t = v_consts.x / denom;
+    float t = 1.0 / dot(plane.xyz, ray);
     if (!(t > 0.0)) discard;
-    float s = t * dot(v_dual_u, ray) - v_consts.y;
-    float q = t * dot(v_dual_v, ray) - v_consts.z;
+    vec4 du = v_dual_u, dv = v_dual_v;
+    float s = t * dot(du.xyz, ray) - du.w;
+    float q = t * dot(dv.xyz, ray) - dv.w;
     r2 = s * s + q * q;
     if (r2 > 1.0) discard;
     return t;

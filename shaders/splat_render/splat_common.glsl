@@ -1,10 +1,24 @@
-// Shared by the cull compute pass and the splat vertex shaders: the splat's screen-space footprint, so
-// the cull pass's point/quad decision and the sprite size the vertex shader sets always agree.
+// Shared by the cull compute pass and the splat vertex shaders: the view-space set-up of one splat (what
+// the fragment shaders' ray cast needs) and its screen-space footprint.
 #ifndef SFFD_SPLAT_COMMON_GLSL
 #define SFFD_SPLAT_COMMON_GLSL
 
 #include "common/bindings.h"
 #include "splat_render/frame_block.h"
+
+// A visible sprite splat, prepared by the cull pass so the vertex shaders of both HQ passes only copy it
+// (llvmpipe spends its time per primitive: vertex work runs once, in the compute pass). std430, 96 bytes.
+// The ray through a pixel is d = (x, y, -1) in view space; everything the ray cast needs is linear in d:
+//   t = 1 / dot(plane.xyz, d)                     view-axis depth of the hit p = t * d
+//   s = t * dot(dual_u.xyz, d) - dual_u.w,  q = t * dot(dual_v.xyz, d) - dual_v.w,  inside: s^2 + q^2 <= 1
+struct SplatRecord {
+    vec4 center;   // xyz view-space centre, w: sprite size in pixels
+    vec4 plane;    // xyz: plane normal / dot(center, normal), w: visibility offset eps (view units)
+    vec4 dual_u;   // xyz: dual axis (s = dot(dual_u, p - center)), w: dot(dual_u, center)
+    vec4 dual_v;
+    vec4 color;    // linear rgba (HQ: albedo; preview: lit colour)
+    vec4 normal;   // xyz world-space shading normal
+};
 
 // Largest radius of the ellipse {s*u + t*v : s^2 + t^2 <= 1}: sqrt of the Gram matrix's larger eigenvalue
 // (u and v need not be orthogonal after a deformation).
@@ -14,23 +28,54 @@ float ellipse_max_radius(vec3 u, vec3 v) {
     return sqrt(h + sqrt(max(0.25 * (a - c) * (a - c) + b * b, 0.0)));
 }
 
-// Conservative side length in pixels of a square sprite centred on the projected centre that holds the
-// projection of a ball of radius r at view-space centre c. Returns -1 when the ball crosses the near plane.
+// Side length in pixels of a square sprite centred on the projected centre that holds the projection of
+// a ball of radius r at view-space centre c; -1 when the ball crosses the near plane. Exact bound: for
+// p = c + e, |e| <= r, x_ndc(p) - x_ndc(c) = (P00 e.x + x_ndc(c) e.z) / (depth - e.z), which is at most
+// r * sqrt(P00^2 + x_ndc^2) / (depth - r).
 float sprite_size(vec3 c, float r) {
     float depth = -c.z;
     float near_depth = depth - r;
     // projection[3][2] / (projection[2][2] - 1) is the near-plane distance of a GL perspective matrix.
     float near_plane = frame.projection[3][2] / (frame.projection[2][2] - 1.0);
     if (near_depth <= near_plane) return -1.0;
-    float ndc_x = frame.projection[0][0] * c.x / depth;
-    float ndc_y = frame.projection[1][1] * c.y / depth;
-    float half_x = r * (frame.projection[0][0] + abs(ndc_x)) / near_depth * 0.5 * frame.viewport.x;
-    float half_y = r * (frame.projection[1][1] + abs(ndc_y)) / near_depth * 0.5 * frame.viewport.y;
-    return 2.0 * max(half_x, half_y) + 0.5;  // the bound is conservative already: no more margin (fragments cost)
+    float p00 = frame.projection[0][0], p11 = frame.projection[1][1];
+    float ndc_x = p00 * c.x / depth;
+    float ndc_y = p11 * c.y / depth;
+    float half_x = r * sqrt(p00 * p00 + ndc_x * ndc_x) / near_depth * 0.5 * frame.viewport.x;
+    float half_y = r * sqrt(p11 * p11 + ndc_y * ndc_y) / near_depth * 0.5 * frame.viewport.y;
+    return 2.0 * max(half_x, half_y) + 0.5;  // half a pixel for the rasteriser's rounding
 }
 
 vec3 srgb_to_linear(vec3 c) {
     return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
+}
+
+// View-space set-up of splat s (cloud space -> view space through frame.model_view).
+struct SplatView {
+    vec3 c, u, v;        // centre and axes
+    vec3 shading_n;      // unit shading normal (view space)
+    float r;             // largest ellipse radius
+};
+
+SplatView splat_view(GpuSplat s) {
+    SplatView o;
+    o.c = (frame.model_view * vec4(s.center.xyz, 1.0)).xyz;
+    o.u = mat3(frame.model_view) * s.axis_u.xyz;
+    o.v = mat3(frame.model_view) * s.axis_v.xyz;
+    o.shading_n = normalize(mat3(frame.normal_view) * s.normal.xyz);
+    o.r = ellipse_max_radius(o.u, o.v);
+    return o;
+}
+
+// Ray-cast coefficients (see SplatRecord) of a splat; the plane normal is oriented like the shading normal.
+void splat_raycast_setup(SplatView o, out vec4 plane, out vec4 dual_u, out vec4 dual_v) {
+    vec3 n = cross(o.u, o.v);
+    n = dot(n, o.shading_n) < 0.0 ? -n : n;
+    vec3 du = cross(o.v, n) / dot(cross(o.v, n), o.u);
+    vec3 dv = cross(n, o.u) / dot(cross(n, o.u), o.v);
+    plane = vec4(n / dot(o.c, n), frame.params.x * o.r);
+    dual_u = vec4(du, dot(du, o.c));
+    dual_v = vec4(dv, dot(dv, o.c));
 }
 
 #endif

@@ -27,10 +27,12 @@ namespace sffd::render {
 namespace {
 
 constexpr std::uint32_t cull_group_size = 128;  // local_size_x of shaders/splat_render/cull.comp
+constexpr std::size_t splat_record_bytes = 96;  // SplatRecord in shaders/splat_render/splat_common.glsl
 
 // Per point cloud GPU objects owned by the renderer (the splats themselves live in GpuSplatStore).
 struct CloudGpu {
-    gfx::Buffer visible;    // uint[2 * capacity]: sprite list from 0, quad list from `capacity`
+    gfx::Buffer records;    // SplatRecord[capacity]: visible sprites, prepared by the cull pass
+    gfx::Buffer quads;      // uint[capacity]: indices of visible splats drawn as quads
     gfx::Buffer commands;   // two DrawArraysIndirectCommands: sprites, quads
     gfx::Buffer frame_ubo;  // FrameBlock for this cloud
     std::uint32_t capacity = 0;
@@ -155,10 +157,13 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
             gpu.commands = gfx::Buffer::create("render.draw_commands");
             glNamedBufferData(gpu.commands.id(), 8 * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_DRAW);
         }
-        if (gpu.capacity < n || !gpu.visible) {
+        if (gpu.capacity < n || !gpu.records) {
             gpu.capacity = std::max<std::uint32_t>(n, 1);
-            gpu.visible = gfx::Buffer::create("render.visible");
-            glNamedBufferData(gpu.visible.id(), GLsizeiptr(2 * std::size_t(gpu.capacity) * sizeof(std::uint32_t)), nullptr,
+            gpu.records = gfx::Buffer::create("render.visible_splats");
+            glNamedBufferData(gpu.records.id(), GLsizeiptr(std::size_t(gpu.capacity) * splat_record_bytes), nullptr,
+                              GL_DYNAMIC_DRAW);
+            gpu.quads = gfx::Buffer::create("render.visible_quads");
+            glNamedBufferData(gpu.quads.id(), GLsizeiptr(std::size_t(gpu.capacity) * sizeof(std::uint32_t)), nullptr,
                               GL_DYNAMIC_DRAW);
         }
         if (gpu.texture_version != version) {
@@ -252,7 +257,8 @@ gpu::FrameBlock frame_block(ecs::Registry& reg, const RenderSettings& settings, 
 void draw_cloud(const std::array<gfx::Program, 2>& programs, const CloudGpu& gpu) {
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.visible.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
     glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
     glUseProgram(programs[0].id());
@@ -344,14 +350,16 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         b.params.w = gpu.texture ? 1.0f : 0.0f;
         b.material = glm::vec4(gpu.material->specular, gpu.material->shininess, 0.0f, 0.0f);
         b.counts.x = gpu.count;
-        b.counts.z = gpu.capacity;
+        b.counts.w = settings.quality == Quality::preview ? 1u : 0u;  // cull pass lights sprites in preview
         glNamedBufferSubData(gpu.frame_ubo.id(), 0, sizeof b, &b);
         const std::uint32_t reset[8] = {0, 1, 0, 0, 6, 0, 0, 0};
         glNamedBufferSubData(gpu.commands.id(), 0, sizeof reset, reset);
         glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.visible.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, gpu.commands.id());
+        glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
         glDispatchCompute((gpu.count + cull_group_size - 1) / cull_group_size, 1, 1);
         stats.splats += gpu.count;
         drawn.push_back(&gpu);
