@@ -22,6 +22,8 @@ struct Prepared {
         float d[3];
     };
     std::vector<Moved> moved;                 // sparse path: moved control points only
+    std::vector<std::uint8_t> need[3];        // sparse path: per axis, indices some moved point uses
+    std::vector<float> binom[3], binom1[3];   // C(n,i) and C(n-1,i) per axis
     std::vector<float> grid;                  // B-spline: zero-bordered ΔP grid, (L+3)(M+3)(N+3) x,y,z,0
     float minv[9] = {};                       // row-major M⁻¹
     float stu0[3] = {};                       // M⁻¹ (cloud origin − lattice origin)
