@@ -1,13 +1,14 @@
-// Picking benchmarks: ray-pick latency and the Embree refresh after a deformation, on a sphere of 59,650
-// splats (the built-in `sphere` scene's size) inside a 5x5x5 Bernstein lattice.
+// Picking benchmarks: ray-pick latency and the Embree refresh after a deformation, on the built-in
+// `sphere` scene (59,650 splats, 11x11x11 Bernstein lattice).
 //
 //   build/<dir>/tools/bench/bench_picking --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //
-// BM_RefreshAfterDeformation: the cloud's splats alternate between rest and a stretched copy (swapped in,
-// so no deformation math is timed) and refresh() rebuilds: buffer fill (world transform, ellipse axes),
+// BM_RefreshAfterDeformation: the cloud's deformed splats alternate between rest and a stretched copy
+// (swapped in, so no deformation math is timed) and refresh() rebuilds: buffer fill (world transform, ellipse axes),
 // rtcUpdateGeometryBuffer, rtcCommitGeometry, one rtcCommitScene (BVH build). BM_RefreshNewGeometry
-// times the same with a geometry created from scratch (entity replaced). BM_Pick* time one full pick on
-// an up-to-date scene.
+// times the same with a geometry created from scratch (entity replaced). BM_PickScreen / BM_PickRay time
+// one pick on an up-to-date scene; BM_PickAfterLatticeEdit the first pick after a lattice edit when the
+// deformed splats are GPU-only (picking's own CPU deformation + refresh + pick).
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -15,11 +16,15 @@
 #include <numbers>
 #include <random>
 
+#include <stdexcept>
+
+#include "runtime/assets/scene.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
 #include "systems/picking/picking_state.h"
 #include "systems/picking/picking_system.h"
+#include "systems/splat_render/camera_math.h"
 
 namespace {
 
@@ -36,67 +41,40 @@ double process_cpu_seconds() {
     return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
-// Fibonacci sphere of radius 1: near-uniform splats, radius chosen so neighbours overlap.
-SplatCloud fibonacci_sphere(std::size_t n) {
-    SplatCloud c;
-    const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
-    const float r = float(1.2 * std::sqrt(4.0 / double(n)));
-    for (std::size_t i = 0; i < n; ++i) {
-        const double y = 1.0 - 2.0 * (double(i) + 0.5) / double(n);
-        const double rad = std::sqrt(1.0 - y * y);
-        const double phi = golden * double(i);
-        const glm::vec3 p(float(std::cos(phi) * rad), float(y), float(std::sin(phi) * rad));
-        const glm::vec3 t = glm::normalize(glm::cross(std::abs(p.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0), p));
-        c.positions.push_back(p);
-        c.normals.push_back(p);
-        c.axis_u.push_back(r * t);
-        c.axis_v.push_back(r * glm::cross(p, t));
-        c.colors.push_back(0xffffffffu);
-    }
-    return c;
-}
-
-Lattice box_lattice(int d) {
-    Lattice l;
-    l.origin = glm::dvec3(-1.1);
-    l.axes = {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)};
-    l.divisions = glm::ivec3(d);
-    for (int i = 0; i <= d; ++i)
-        for (int j = 0; j <= d; ++j)
-            for (int k = 0; k <= d; ++k)
-                l.rest.push_back(l.origin + glm::dvec3(i, j, k) * (2.2 / d));
-    l.current = l.rest;
-    return l;
-}
-
+// The built-in `sphere` scene (59,650 splats, 11x11x11 Bernstein lattice, its camera) at 1280x720. The
+// deformed output is given as DeformedSplats (as ffd_system's CPU path writes it) alternating between
+// the rest splats and a copy stretched by 1.5 along y, so refresh timings contain no deformation math.
 struct Scene {
     ecs::Registry reg;
     ecs::Entity cloud, lattice;
-    std::vector<glm::vec3> stretched_positions, stretched_u, stretched_v;
-    Camera camera;
+    DeformedSplats rest, stretched;
     ScreenView view;
 
     Scene() {
-        cloud = reg.create();
-        SplatCloud c = fibonacci_sphere(kSplats);
-        // A stand-in deformation: stretch along y by 1.5 (axes stretch with it).
-        for (std::size_t i = 0; i < c.size(); ++i) {
-            stretched_positions.push_back(c.positions[i] * glm::vec3(1, 1.5f, 1));
-            stretched_u.push_back(c.axis_u[i] * glm::vec3(1, 1.5f, 1));
-            stretched_v.push_back(c.axis_v[i] * glm::vec3(1, 1.5f, 1));
-        }
-        reg.emplace<SplatCloud>(cloud, std::move(c));
-        lattice = reg.create();
-        reg.emplace<Lattice>(lattice, box_lattice(4));
-        camera.eye = {0.0, 0.0, 4.0};
-        camera.fov_y_degrees = 45.0f;
-        view = make_screen_view(camera, {1280, 720});
+        const Status st = load_scene(reg, "sphere");
+        if (!st) throw std::runtime_error(st.message());
+        reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud&) { cloud = e; });
+        reg.view<const Lattice>().each([&](ecs::Entity e, const Lattice&) { lattice = e; });
+        const SplatCloud& c = reg.get<SplatCloud>(cloud);
+        if (c.size() != kSplats) throw std::runtime_error("sphere scene: unexpected splat count");
+        rest.origin = c.origin;
+        rest.positions = c.positions;
+        rest.normals = c.normals;
+        rest.axis_u = c.axis_u;
+        rest.axis_v = c.axis_v;
+        rest.cpu_valid = true;
+        stretched = rest;
+        for (auto* v : {&stretched.positions, &stretched.axis_u, &stretched.axis_v})
+            for (glm::vec3& p : *v) p.y *= 1.5f;
+        reg.emplace<DeformedSplats>(cloud, rest);
+        view = make_screen_view(render::scene_camera(reg, 1280.0 / 720.0), {1280, 720});
     }
     void swap_deformation() {
-        SplatCloud& c = reg.patch<SplatCloud>(cloud);
-        std::swap(c.positions, stretched_positions);
-        std::swap(c.axis_u, stretched_u);
-        std::swap(c.axis_v, stretched_v);
+        DeformedSplats& d = reg.patch<DeformedSplats>(cloud);
+        std::swap(d.positions, stretched.positions);
+        std::swap(d.axis_u, stretched.axis_u);
+        std::swap(d.axis_v, stretched.axis_v);
+        ++d.version;
     }
 };
 
@@ -127,9 +105,11 @@ void BM_RefreshNewGeometry(benchmark::State& st) {
     for (auto _ : st) {
         st.PauseTiming();
         SplatCloud copy = s.reg.get<SplatCloud>(s.cloud);
+        DeformedSplats out = s.reg.get<DeformedSplats>(s.cloud);
         s.reg.destroy(s.cloud);
         s.cloud = s.reg.create();
         s.reg.emplace<SplatCloud>(s.cloud, std::move(copy));
+        s.reg.emplace<DeformedSplats>(s.cloud, std::move(out));
         st.ResumeTiming();
         const double t0 = process_cpu_seconds();
         benchmark::DoNotOptimize(state.refresh(s.reg));
@@ -148,8 +128,8 @@ void BM_RefreshUnchanged(benchmark::State& st) {
 }
 BENCHMARK(BM_RefreshUnchanged);
 
-// A full screen pick (control-point tolerance pass over 125 points + surface ray + control ray) at
-// random pixels of a 1280x720 view; about half the pixels hit the sphere.
+// A full screen pick (control-point tolerance pass over 1,331 points + surface ray + control ray) at
+// random pixels of the scene camera's 1280x720 view.
 void BM_PickScreen(benchmark::State& st) {
     Scene s;
     PickingState state;
@@ -174,11 +154,37 @@ void BM_PickRay(benchmark::State& st) {
     std::mt19937 rng(2);
     std::uniform_real_distribution<double> u(-0.6, 0.6);
     for (auto _ : st) {
-        PickQuery q = query_from_ray({{u(rng), u(rng), 4.0}, {0.0, 0.0, -1.0}});
+        PickQuery q = query_from_ray({{u(rng), u(rng), 4.0}, {0.0, 0.0, -1.0}});  // the sphere has radius 1
         q.control_points = false;
         benchmark::DoNotOptimize(pick(s.reg, state, q));
     }
 }
 BENCHMARK(BM_PickRay)->Unit(benchmark::kMicrosecond);
+
+// The editor's case: the deformed output lives on the GPU only (no CPU DeformedSplats), a control point
+// moved, then one click. Picking deforms the 59,650 splats on the CPU (ffd::deform, automatic backend),
+// refreshes the scene and casts: the latency of the first pick after an edit.
+void BM_PickAfterLatticeEdit(benchmark::State& st) {
+    Scene s;
+    s.reg.remove<DeformedSplats>(s.cloud);
+    PickingState state;
+    state.refresh(s.reg);
+    const PickQuery q = query_at_pixel(s.view, {640.0, 360.0});
+    double sign = 1.0;
+    double cpu = 0.0;
+    for (auto _ : st) {
+        st.PauseTiming();
+        Lattice& l = s.reg.patch<Lattice>(s.lattice);
+        l.current[l.index(5, 10, 5)].y += 0.2 * sign;
+        sign = -sign;
+        st.ResumeTiming();
+        const double t0 = process_cpu_seconds();
+        benchmark::DoNotOptimize(pick(s.reg, state, q));
+        cpu += process_cpu_seconds() - t0;
+    }
+    st.counters["process_cpu_ms"] = 1e3 * cpu / double(st.iterations());
+    st.counters["cpu_deformations"] = double(state.stats().cpu_deformations);
+}
+BENCHMARK(BM_PickAfterLatticeEdit)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
