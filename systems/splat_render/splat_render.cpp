@@ -12,13 +12,16 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/matrix_inverse.hpp>
 
+#include "runtime/app/app.h"
 #include "runtime/core/log.h"
+#include "runtime/gfx/context.h"
 #include "runtime/gfx/gl_object.h"
 #include "runtime/gfx/shader.h"
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
 #include "shaders/common/bindings.h"
 #include "shaders/splat_render/frame_block.h"
+#include "systems/ffd/components.h"
 #include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/splat_pack.h"
 
@@ -43,6 +46,7 @@ struct CloudGpu {
     const SplatMaterial* material = nullptr;  // valid during one render_system call
     std::uint32_t count = 0;
     GLuint splats = 0;      // draw buffer this frame
+    std::uint64_t cpu_deformed_version = 0;  // DeformedSplats::version uploaded into GpuSplats::deformed
 };
 
 }  // namespace
@@ -52,12 +56,16 @@ struct SplatRenderState {
     gfx::Program cull;
     std::array<gfx::Program, 2> visibility, attribute, preview;  // [0] sprites, [1] quads
     gfx::Program shade;
+    gfx::Program display;  // sRGB copy for a window (PresentSource)
     gfx::VertexArray vao;  // empty: splats come from SSBOs
     float max_point_size = 1.0f;
 
     int width = 0, height = 0;
     gfx::Texture color, aux, depth, accum_color, accum_normal;
     gfx::Framebuffer output_fbo, accum_fbo, depth_fbo;
+    gfx::Texture display_color;  // RGBA8 sRGB-encoded, only when presenting to a window
+    gfx::Framebuffer display_fbo;
+    int display_width = 0, display_height = 0;
 
     std::unordered_map<ecs::Entity, CloudGpu> clouds;
     bool failed = false;
@@ -173,6 +181,31 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
         if (gpu.bounds_version != version) {
             gpu.bounds = bounding_sphere(cloud);
             gpu.bounds_version = version;
+        }
+        // CPU deformation output (ffd's CPU path) that the GPU path did not write: upload it as `deformed`.
+        if (const auto* deformed = reg.try_get<DeformedSplats>(e);
+            deformed && deformed->cpu_valid && !deformed->gpu_valid && deformed->positions.size() == n) {
+            if (gpu.cpu_deformed_version != deformed->version || !splats.deformed) {
+                SplatCloud moved;
+                moved.positions = deformed->positions;
+                moved.normals = deformed->normals.size() == n ? deformed->normals : cloud.normals;
+                moved.axis_u = deformed->axis_u.size() == n ? deformed->axis_u : cloud.axis_u;
+                moved.axis_v = deformed->axis_v.size() == n ? deformed->axis_v : cloud.axis_v;
+                moved.colors = cloud.colors;
+                moved.uvs = cloud.uvs;
+                moved.material.base_color = cloud.material.base_color;
+                const std::vector<gpu::GpuSplat> packed = pack_splats(moved);
+                if (!splats.deformed) {
+                    splats.deformed = gfx::Buffer::create("splats.deformed");
+                    glNamedBufferData(splats.deformed.id(), GLsizeiptr(std::max<std::size_t>(n, 1) * sizeof(gpu::GpuSplat)),
+                                      nullptr, GL_DYNAMIC_DRAW);
+                }
+                if (!packed.empty())
+                    glNamedBufferSubData(splats.deformed.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)),
+                                         packed.data());
+                gpu.cpu_deformed_version = deformed->version;
+                splats.has_deformed = true;
+            }
         }
         gpu.material = &cloud.material;
         gpu.count = std::min(n, splats.count);
@@ -290,6 +323,11 @@ Status init_render_state(ecs::Registry& registry) {
                                    "render.shade");
     if (!shade) return make_error(shade.message());
     s.shade = std::move(shade.value());
+    auto display = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
+                                      {GL_FRAGMENT_SHADER, "splat_render/display.frag"}},
+                                     "render.display");
+    if (!display) return make_error(display.message());
+    s.display = std::move(display.value());
     s.vao = gfx::VertexArray::create("render.empty");
     GLfloat range[2] = {1.0f, 1.0f};
     glGetFloatv(GL_POINT_SIZE_RANGE, range);
@@ -427,6 +465,26 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         glDepthMask(GL_TRUE);
         glDepthFunc(GL_LESS);
         lap(stats.shade_ms);
+    }
+    // A window shows the frame through the present phase: publish an sRGB copy (headless runs skip it).
+    const auto* app_ctx = reg.try_resource<app::AppContext>();
+    if (app_ctx && app_ctx->context && !app_ctx->context->is_headless()) {
+        if (!s.display_fbo || s.display_width != w || s.display_height != h) {
+            s.display_color = make_target(GL_RGBA8, w, h, "render.display");
+            s.display_fbo = gfx::Framebuffer::create("render.display");
+            glNamedFramebufferTexture(s.display_fbo.id(), GL_COLOR_ATTACHMENT0, s.display_color.id(), 0);
+            s.display_width = w, s.display_height = h;
+        }
+        glBindFramebuffer(GL_FRAMEBUFFER, s.display_fbo.id());
+        glDisable(GL_DEPTH_TEST);
+        if (!drawn.empty()) glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, drawn.front()->frame_ubo.id());
+        glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s.color.id());
+        glUseProgram(s.display.id());
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glEnable(GL_DEPTH_TEST);
+        auto& present = reg.try_resource<app::PresentSource>() ? reg.resource<app::PresentSource>()
+                                                               : reg.set_resource<app::PresentSource>();
+        present = app::PresentSource{s.display_fbo.id(), GL_COLOR_ATTACHMENT0, w, h};
     }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glBindVertexArray(0);

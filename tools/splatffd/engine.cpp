@@ -6,6 +6,7 @@
 #include "runtime/app/app.h"
 #include "systems/animation/animation_system.h"
 #include "systems/picking/picking_system.h"
+#include "systems/splat_render/splat_render.h"
 
 namespace sffd {
 
@@ -23,6 +24,7 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
     s.add(Phase::picking, "picking", picking::picking_system);
 
     // --- rendering: splat passes, overlays, UI, capture (splat_render, editor overlay) ---------------
+    s.add(Phase::rendering, "splat_render", render::render_system);  // culling + HQ/preview splat passes
 
     // --- present: blit the PresentSource to the window, window UI on top (editor), swap -------------
     if (options.present) s.add(Phase::present, "present.blit", app::present_blit_system);
