@@ -1,0 +1,128 @@
+// `splatffd profile` end to end: the files it writes (JSON valid against the schema, trace parses),
+// --compare exit codes against a baseline with a planted slowdown, bad baselines and usage errors.
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "systems/profiling/json_schema.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string read_text(const fs::path& p) {
+    std::ifstream f(p);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+struct CmdResult {
+    int code = -1;
+    std::string out;
+};
+
+CmdResult profile(const std::string& args) {
+    std::string name = "sffd_profile_cmd_";
+    name += std::to_string(::getpid());
+    name += ".log";
+    const fs::path log = fs::temp_directory_path() / name;
+    std::string cmd = SFFD_SPLATFFD_EXE;
+    cmd += " profile ";
+    cmd += args;
+    cmd += " > ";
+    cmd += log.string();
+    cmd += " 2>&1";
+    const int status = std::system(cmd.c_str());
+    CmdResult r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    r.out = read_text(log);
+    fs::remove(log);
+    return r;
+}
+
+class ProfileCommand : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir = fs::temp_directory_path() / ("sffd_profile_dir_" + std::to_string(::getpid()));
+        fs::create_directories(dir);
+    }
+    void TearDown() override { fs::remove_all(dir); }
+    std::string path(const char* name) const { return (dir / name).string(); }
+    fs::path dir;
+};
+
+TEST_F(ProfileCommand, WritesSchemaValidJsonAndAParsableTrace) {
+    const CmdResult r = profile("synthetic:20k --backend cpu --frames 8 --warmup 2 --json " + path("p.json") +
+                          " --trace " + path("p.trace.json") + " --csv " + path("p.csv") + " --svg " + path("p.svg"));
+    ASSERT_EQ(r.code, 0) << r.out;
+    EXPECT_NE(r.out.find("frames: 8"), std::string::npos) << r.out;
+    const auto errors = sffd::profiling::validate_json(read_text(SFFD_PROFILE_SCHEMA), read_text(path("p.json")));
+    EXPECT_TRUE(errors.empty()) << errors.front();
+
+    const auto report = nlohmann::json::parse(read_text(path("p.json")));
+    EXPECT_EQ(report["config"]["points"], 20000);
+    EXPECT_EQ(report["frame"]["cpu_ms"]["n"], 8);
+    double systems = 0.0;
+    for (const auto& s : report["systems"]) systems += s["cpu_ms"]["mean"].get<double>();
+    EXPECT_LE(systems, report["frame"]["cpu_ms"]["mean"].get<double>());
+
+    const auto trace = nlohmann::json::parse(read_text(path("p.trace.json")));
+    int frames = 0;
+    for (const auto& e : trace["traceEvents"]) frames += e.value("cat", "") == "frame";
+    EXPECT_EQ(frames, 8);
+    EXPECT_EQ(read_text(path("p.svg")).rfind("<svg", 0), 0u);
+}
+
+TEST_F(ProfileCommand, CompareFailsOnAPlantedSlowdownAndPassesWithinTheSpread) {
+    ASSERT_EQ(profile("synthetic:20k --backend cpu --frames 10 --warmup 2 --json " + path("base.json")).code, 0);
+    auto base = nlohmann::json::parse(read_text(path("base.json")));
+    // Planted slowdown: a baseline in which every system and the frame were 20x faster than measured.
+    auto fast = base;
+    auto shrink = [](nlohmann::json& stats) {
+        for (const char* k : {"min", "mean", "p50", "p95", "p99", "max"}) stats[k] = stats[k].get<double>() / 20.0;
+    };
+    shrink(fast["frame"]["cpu_ms"]);
+    for (auto& s : fast["systems"]) shrink(s["cpu_ms"]);
+    std::ofstream(path("fast.json")) << fast.dump();
+    const CmdResult slow = profile("synthetic:20k --backend cpu --frames 10 --warmup 2 --compare " + path("fast.json"));
+    EXPECT_EQ(slow.code, 3) << slow.out;
+    EXPECT_NE(slow.out.find("SLOWER"), std::string::npos) << slow.out;
+
+    // A baseline 20x slower than now: nothing regressed.
+    auto sluggish = base;
+    auto grow = [](nlohmann::json& stats) {
+        for (const char* k : {"min", "mean", "p50", "p95", "p99", "max"}) stats[k] = stats[k].get<double>() * 20.0 + 1.0;
+    };
+    grow(sluggish["frame"]["cpu_ms"]);
+    for (auto& s : sluggish["systems"]) grow(s["cpu_ms"]);
+    std::ofstream(path("slow.json")) << sluggish.dump();
+    const CmdResult ok = profile("synthetic:20k --backend cpu --frames 10 --warmup 2 --compare " + path("slow.json"));
+    EXPECT_EQ(ok.code, 0) << ok.out;
+    EXPECT_NE(ok.out.find("no regression"), std::string::npos) << ok.out;
+}
+
+TEST_F(ProfileCommand, BadBaselineAndBadUsageAreReported) {
+    std::ofstream(path("bad.json")) << "{\"format\": \"splatffd-profile\", \"version\": 1";
+    const CmdResult bad = profile("synthetic:5k --backend cpu --frames 2 --warmup 0 --compare " + path("bad.json"));
+    EXPECT_EQ(bad.code, 1) << bad.out;
+    EXPECT_NE(bad.out.find(path("bad.json") + ": not valid JSON"), std::string::npos) << bad.out;
+    const CmdResult missing = profile("synthetic:5k --backend cpu --frames 2 --warmup 0 --compare " + path("nope.json"));
+    EXPECT_EQ(missing.code, 1) << missing.out;
+    EXPECT_NE(missing.out.find("nope.json"), std::string::npos) << missing.out;
+    EXPECT_EQ(profile("--frames zero").code, 2);
+    EXPECT_EQ(profile("--quality ultra").code, 2);
+    EXPECT_EQ(profile("--sweep points=abc").code, 2);
+    EXPECT_EQ(profile("--bogus").code, 2);
+}
+
+}  // namespace
