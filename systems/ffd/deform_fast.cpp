@@ -47,7 +47,46 @@ struct Group {
     alignas(64) float G[9][W];
     std::uint32_t idx[W];
     int n = 0;
+    bool contiguous = false;  // points first .. first+W-1 (full block): vector loads/stores, no gathers
+    std::size_t first = 0;
 };
+
+// Load / store W consecutive vec3 (AoS) as three vectors. AVX-512: three 16-float loads and permutes.
+inline void load_xyz(const glm::vec3* p, vf& x, vf& y, vf& z) {
+#if defined(__AVX512F__)
+    v16 a, b, c;
+    std::memcpy(&a, reinterpret_cast<const float*>(p), 64);
+    std::memcpy(&b, reinterpret_cast<const float*>(p) + 16, 64);
+    std::memcpy(&c, reinterpret_cast<const float*>(p) + 32, 64);
+    const v16 tx = __builtin_shufflevector(a, b, 0, 3, 6, 9, 12, 15, 18, 21, 24, 27, 30, 0, 0, 0, 0, 0);
+    x = __builtin_shufflevector(tx, c, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 17, 20, 23, 26, 29);
+    const v16 ty = __builtin_shufflevector(a, b, 1, 4, 7, 10, 13, 16, 19, 22, 25, 28, 31, 0, 0, 0, 0, 0);
+    y = __builtin_shufflevector(ty, c, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 18, 21, 24, 27, 30);
+    const v16 tz = __builtin_shufflevector(a, b, 2, 5, 8, 11, 14, 17, 20, 23, 26, 29, 0, 0, 0, 0, 0, 0);
+    z = __builtin_shufflevector(tz, c, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 16, 19, 22, 25, 28, 31);
+#else
+    alignas(64) float ax[W], ay[W], az[W];
+    for (int l = 0; l < W; ++l) ax[l] = p[l].x, ay[l] = p[l].y, az[l] = p[l].z;
+    x = loadv(ax), y = loadv(ay), z = loadv(az);
+#endif
+}
+inline void store_xyz(glm::vec3* p, vf x, vf y, vf z) {
+#if defined(__AVX512F__)
+    const v16 ta = __builtin_shufflevector(x, y, 0, 16, 0, 1, 17, 0, 2, 18, 0, 3, 19, 0, 4, 20, 0, 5);
+    const v16 a = __builtin_shufflevector(ta, z, 0, 1, 16, 3, 4, 17, 6, 7, 18, 9, 10, 19, 12, 13, 20, 15);
+    const v16 tb = __builtin_shufflevector(x, y, 21, 0, 6, 22, 0, 7, 23, 0, 8, 24, 0, 9, 25, 0, 10, 26);
+    const v16 b = __builtin_shufflevector(tb, z, 0, 21, 2, 3, 22, 5, 6, 23, 8, 9, 24, 11, 12, 25, 14, 15);
+    const v16 tc = __builtin_shufflevector(x, y, 0, 11, 27, 0, 12, 28, 0, 13, 29, 0, 14, 30, 0, 15, 31, 0);
+    const v16 c = __builtin_shufflevector(tc, z, 26, 1, 2, 27, 4, 5, 28, 7, 8, 29, 10, 11, 30, 13, 14, 31);
+    std::memcpy(reinterpret_cast<float*>(p), &a, 64);
+    std::memcpy(reinterpret_cast<float*>(p) + 16, &b, 64);
+    std::memcpy(reinterpret_cast<float*>(p) + 32, &c, 64);
+#else
+    alignas(64) float ax[W], ay[W], az[W];
+    storev(ax, x), storev(ay, y), storev(az, z);
+    for (int l = 0; l < W; ++l) p[l] = glm::vec3(ax[l], ay[l], az[l]);
+#endif
+}
 
 // Bernstein basis of degree L (b[0..L]) and its derivative (db) for W parameters at once.
 inline void bernstein(vf s, int L, vf* b, vf* db) {
@@ -174,23 +213,6 @@ void sparse_group(const Prepared& P, Group& g) {
     }
 }
 
-// Cubic B-spline weights for the 4 neighbours c-1..c+2 of fractional position f, and derivatives.
-inline void bspline_weights(float f, float w[4], float dw[4], float scale) {
-    const float f2 = f * f, f3 = f2 * f, r = 1.0f - f;
-    w[0] = r * r * r * (1.0f / 6.0f);
-    w[1] = (3.0f * f3 - 6.0f * f2 + 4.0f) * (1.0f / 6.0f);
-    w[2] = (-3.0f * f3 + 3.0f * f2 + 3.0f * f + 1.0f) * (1.0f / 6.0f);
-    w[3] = f3 * (1.0f / 6.0f);
-    dw[0] = -0.5f * r * r * scale;
-    dw[1] = (1.5f * f2 - 2.0f * f) * scale;
-    dw[2] = (-1.5f * f2 + f + 0.5f) * scale;
-    dw[3] = 0.5f * f2 * scale;
-}
-inline void cell(float x, int n, int& c, float& f) {
-    const float gx = x * float(n);
-    c = std::min(int(gx), n - 1);
-    f = gx - float(c);
-}
 inline v4 lanes4(v16 r) {
     const v4 a = __builtin_shufflevector(r, r, 0, 1, 2, 3), b = __builtin_shufflevector(r, r, 4, 5, 6, 7);
     const v4 c = __builtin_shufflevector(r, r, 8, 9, 10, 11), d = __builtin_shufflevector(r, r, 12, 13, 14, 15);
@@ -200,18 +222,45 @@ inline v16 expand4(const float w[4]) {
     return v16{w[0], w[0], w[0], w[0], w[1], w[1], w[1], w[1], w[2], w[2], w[2], w[2], w[3], w[3], w[3], w[3]};
 }
 
+typedef int vi __attribute__((vector_size(W * sizeof(int))));
+
+// Cell index and the 4 weights (and derivatives, scaled by n) for W parameters at once.
+struct AxisWeights {
+    alignas(64) int c[W];
+    alignas(64) float w[4][W], dw[4][W];
+};
+inline void bspline_axis(vf x, int n, AxisWeights& out) {
+    const vf gx = x * float(n);
+    vi c = __builtin_convertvector(gx, vi);
+    c = c > (n - 1) ? vi{} + (n - 1) : c;
+    const vf f = gx - __builtin_convertvector(c, vf);
+    const vf f2 = f * f, f3 = f2 * f, r = 1.0f - f, sc = splat(float(n));
+    std::memcpy(out.c, &c, sizeof c);
+    storev(out.w[0], r * r * r * (1.0f / 6.0f));
+    storev(out.w[1], (3.0f * f3 - 6.0f * f2 + 4.0f) * (1.0f / 6.0f));
+    storev(out.w[2], (-3.0f * f3 + 3.0f * f2 + 3.0f * f + 1.0f) * (1.0f / 6.0f));
+    storev(out.w[3], f3 * (1.0f / 6.0f));
+    storev(out.dw[0], -0.5f * r * r * sc);
+    storev(out.dw[1], (1.5f * f2 - 2.0f * f) * sc);
+    storev(out.dw[2], (-1.5f * f2 + f + 0.5f) * sc);
+    storev(out.dw[3], 0.5f * f2 * sc);
+}
+
 template <bool Full>
 void bspline_group(const Prepared& P, Group& g) {
     const int PM = P.M + 3, PK = P.N + 3;
+    AxisWeights as, at, au;
+    bspline_axis(loadv(g.s), P.L, as);
+    bspline_axis(loadv(g.t), P.M, at);
+    bspline_axis(loadv(g.u), P.N, au);
     for (int lane = 0; lane < g.n; ++lane) {
-        int ci, cj, ck;
-        float fs, ft, fu, ws[4], dws[4], wt[4], dwt[4], wu[4], dwu[4];
-        cell(g.s[lane], P.L, ci, fs);
-        cell(g.t[lane], P.M, cj, ft);
-        cell(g.u[lane], P.N, ck, fu);
-        bspline_weights(fs, ws, dws, float(P.L));
-        bspline_weights(ft, wt, dwt, float(P.M));
-        bspline_weights(fu, wu, dwu, float(P.N));
+        const int ci = as.c[lane], cj = at.c[lane], ck = au.c[lane];
+        const float ws[4] = {as.w[0][lane], as.w[1][lane], as.w[2][lane], as.w[3][lane]};
+        const float dws[4] = {as.dw[0][lane], as.dw[1][lane], as.dw[2][lane], as.dw[3][lane]};
+        const float wt[4] = {at.w[0][lane], at.w[1][lane], at.w[2][lane], at.w[3][lane]};
+        const float dwt[4] = {at.dw[0][lane], at.dw[1][lane], at.dw[2][lane], at.dw[3][lane]};
+        const float wu[4] = {au.w[0][lane], au.w[1][lane], au.w[2][lane], au.w[3][lane]};
+        const float dwu[4] = {au.dw[0][lane], au.dw[1][lane], au.dw[2][lane], au.dw[3][lane]};
         // Padded index = index + 1, so neighbour c-1 of cell c sits at padded c. Sum over a (s) first into
         // one accumulator per b (t), then combine: 16 FMAs per point for positions, 32 with derivatives.
         const float* base = P.grid.data() + ((std::size_t(ci) * PM + cj) * PK + ck) * 4;
@@ -263,14 +312,23 @@ GroupFn pick_bernstein(int K) {
 // Writes one group back: X' = X + D, J = I + G M⁻¹, n' = cof(J) n / |.|, axes J a. Returns inverted count.
 int finish_group(const Prepared& P, const Group& g, const PointsIn& in, const PointsOut& out, bool full) {
     const bool want_n = in.normals && out.normals, want_u = in.axis_u && out.axis_u, want_v = in.axis_v && out.axis_v;
-    alignas(64) float px[W], py[W], pz[W];
-    for (int l = 0; l < W; ++l) {
-        const glm::vec3 p = in.positions[g.idx[l < g.n ? l : 0]];
-        px[l] = p.x, py[l] = p.y, pz[l] = p.z;
-    }
-    const vf X = loadv(px) + loadv(g.D[0]), Y = loadv(py) + loadv(g.D[1]), Z = loadv(pz) + loadv(g.D[2]);
-    storev(px, X), storev(py, Y), storev(pz, Z);
-    for (int l = 0; l < g.n; ++l) out.positions[g.idx[l]] = glm::vec3(px[l], py[l], pz[l]);
+    alignas(64) float nx[W], ny[W], nz[W];
+    auto gather = [&](const glm::vec3* src, vf& x, vf& y, vf& z) {
+        if (g.contiguous) return load_xyz(src + g.first, x, y, z);
+        for (int l = 0; l < W; ++l) {
+            const glm::vec3 v = src[g.idx[l < g.n ? l : 0]];
+            nx[l] = v.x, ny[l] = v.y, nz[l] = v.z;
+        }
+        x = loadv(nx), y = loadv(ny), z = loadv(nz);
+    };
+    auto scatter = [&](glm::vec3* dst, vf x, vf y, vf z) {
+        if (g.contiguous) return store_xyz(dst + g.first, x, y, z);
+        storev(nx, x), storev(ny, y), storev(nz, z);
+        for (int l = 0; l < g.n; ++l) dst[g.idx[l]] = glm::vec3(nx[l], ny[l], nz[l]);
+    };
+    vf px, py, pz;
+    gather(in.positions, px, py, pz);
+    scatter(out.positions, px + loadv(g.D[0]), py + loadv(g.D[1]), pz + loadv(g.D[2]));
     if (!full) return 0;
     // J[r][c] (row r, column c) = δ + Σ_a G[r][a] M⁻¹[a][c]
     vf J[3][3];
@@ -285,42 +343,29 @@ int finish_group(const Prepared& P, const Group& g, const PointsIn& in, const Po
     const vf bx = J[0][1], by = J[1][1], bz = J[2][1];
     const vf cx = J[0][2], cy = J[1][2], cz = J[2][2];
     const vf bcx = by * cz - bz * cy, bcy = bz * cx - bx * cz, bcz = bx * cy - by * cx;
-    const vf cax = cy * az - cz * ay, cay = cz * ax - cx * az, caz = cx * ay - cy * ax;
-    const vf abx = ay * bz - az * by, aby = az * bx - ax * bz, abz = ax * by - ay * bx;
     const vf det = ax * bcx + ay * bcy + az * bcz;
     int inverted = 0;
     alignas(64) float detv[W];
     storev(detv, det);
     for (int l = 0; l < g.n; ++l) inverted += detv[l] < 0.0f;
-    alignas(64) float nx[W], ny[W], nz[W];
-    auto gather = [&](const glm::vec3* src) {
-        for (int l = 0; l < W; ++l) {
-            const glm::vec3 v = src[g.idx[l < g.n ? l : 0]];
-            nx[l] = v.x, ny[l] = v.y, nz[l] = v.z;
-        }
-    };
-    auto scatter = [&](glm::vec3* dst) {
-        for (int l = 0; l < g.n; ++l) dst[g.idx[l]] = glm::vec3(nx[l], ny[l], nz[l]);
-    };
     if (want_n) {
-        gather(in.normals);
-        const vf n0 = loadv(nx), n1 = loadv(ny), n2 = loadv(nz);
-        vf ox = bcx * n0 + cax * n1 + abx * n2, oy = bcy * n0 + cay * n1 + aby * n2, oz = bcz * n0 + caz * n1 + abz * n2;
-        storev(nx, ox), storev(ny, oy), storev(nz, oz);
-        for (int l = 0; l < W; ++l) {
-            const float len = std::sqrt(nx[l] * nx[l] + ny[l] * ny[l] + nz[l] * nz[l]);
-            const float inv = len > 0.0f ? 1.0f / len : 1.0f;
-            nx[l] *= inv, ny[l] *= inv, nz[l] *= inv;
-        }
-        scatter(out.normals);
+        const vf cax = cy * az - cz * ay, cay = cz * ax - cx * az, caz = cx * ay - cy * ax;
+        const vf abx = ay * bz - az * by, aby = az * bx - ax * bz, abz = ax * by - ay * bx;
+        vf n0, n1, n2;
+        gather(in.normals, n0, n1, n2);
+        const vf ox = bcx * n0 + cax * n1 + abx * n2, oy = bcy * n0 + cay * n1 + aby * n2,
+                 oz = bcz * n0 + caz * n1 + abz * n2;
+        const vf len2 = ox * ox + oy * oy + oz * oz;
+        alignas(64) float l2[W];
+        storev(l2, len2);
+        for (int l = 0; l < W; ++l) l2[l] = l2[l] > 0.0f ? 1.0f / std::sqrt(l2[l]) : 1.0f;  // vectorised
+        const vf inv = loadv(l2);
+        scatter(out.normals, ox * inv, oy * inv, oz * inv);
     }
     auto axis = [&](const glm::vec3* src, glm::vec3* dst) {
-        gather(src);
-        const vf v0 = loadv(nx), v1 = loadv(ny), v2 = loadv(nz);
-        storev(nx, ax * v0 + bx * v1 + cx * v2);
-        storev(ny, ay * v0 + by * v1 + cy * v2);
-        storev(nz, az * v0 + bz * v1 + cz * v2);
-        scatter(dst);
+        vf v0, v1, v2;
+        gather(src, v0, v1, v2);
+        scatter(dst, ax * v0 + bx * v1 + cx * v2, ay * v0 + by * v1 + cy * v2, az * v0 + bz * v1 + cz * v2);
     };
     if (want_u) axis(in.axis_u, out.axis_u);
     if (want_v) axis(in.axis_v, out.axis_v);
@@ -418,7 +463,7 @@ DeformStats run_fast(const Prepared& P, const PointsIn& in, const PointsOut& out
             n_inv += std::size_t(finish_group(P, g, in, out, full));
             g.n = 0;
         };
-        for (std::size_t p = r.begin(); p != r.end(); ++p) {
+        auto one = [&](std::size_t p) {
             const glm::vec3 x = in.positions[p];
             const float s = P.stu0[0] + P.minv[0] * x.x + P.minv[1] * x.y + P.minv[2] * x.z;
             const float t = P.stu0[1] + P.minv[3] * x.x + P.minv[4] * x.y + P.minv[5] * x.z;
@@ -435,14 +480,49 @@ DeformStats run_fast(const Prepared& P, const PointsIn& in, const PointsOut& out
                 if (in.normals && out.normals && out.normals != in.normals) out.normals[p] = in.normals[p];
                 if (in.axis_u && out.axis_u && out.axis_u != in.axis_u) out.axis_u[p] = in.axis_u[p];
                 if (in.axis_v && out.axis_v && out.axis_v != in.axis_v) out.axis_v[p] = in.axis_v[p];
-                continue;
+                return;
             }
             g.s[g.n] = std::clamp(s, 0.0f, 1.0f);
             g.t[g.n] = std::clamp(t, 0.0f, 1.0f);
             g.u[g.n] = std::clamp(u, 0.0f, 1.0f);
             g.idx[g.n] = std::uint32_t(p);
             if (++g.n == W) flush();
+        };
+        std::size_t p = r.begin();
+        if (!nothing_moved) {
+            // Whole blocks of W points that are all inside (and not culled) go straight to the kernel with
+            // vector loads; mixed blocks fall back to the per-point compaction above.
+            Group blk;
+            blk.contiguous = true;
+            blk.n = W;
+            const vf lov = splat(lo), hiv = splat(hi);
+            for (; p + W <= r.end(); p += W) {
+                vf x, y, z;
+                load_xyz(in.positions + p, x, y, z);
+                const vf s = P.stu0[0] + P.minv[0] * x + P.minv[1] * y + P.minv[2] * z;
+                const vf t = P.stu0[1] + P.minv[3] * x + P.minv[4] * y + P.minv[5] * z;
+                const vf u = P.stu0[2] + P.minv[6] * x + P.minv[7] * y + P.minv[8] * z;
+                auto outside = (s < lov) | (s > hiv) | (t < lov) | (t > hiv) | (u < lov) | (u > hiv);
+                if (P.basis == LatticeBasis::bspline)
+                    outside |= (s <= P.cull_lo[0]) | (s >= P.cull_hi[0]) | (t <= P.cull_lo[1]) | (t >= P.cull_hi[1]) |
+                               (u <= P.cull_lo[2]) | (u >= P.cull_hi[2]);
+                bool any_out = false;
+                for (int l = 0; l < W; ++l) any_out |= outside[l] != 0;
+                if (any_out) {
+                    for (int l = 0; l < W; ++l) one(p + std::size_t(l));
+                    continue;
+                }
+                const vf zero = splat(0.0f), onev = splat(1.0f);
+                storev(blk.s, s < zero ? zero : (s > onev ? onev : s));
+                storev(blk.t, t < zero ? zero : (t > onev ? onev : t));
+                storev(blk.u, u < zero ? zero : (u > onev ? onev : u));
+                blk.first = p;
+                fn(P, blk);
+                n_in += W;
+                n_inv += std::size_t(finish_group(P, blk, in, out, full));
+            }
         }
+        for (; p != r.end(); ++p) one(p);
         flush();
         inside_total += n_in;
         inverted_total += n_inv;
