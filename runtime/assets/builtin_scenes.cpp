@@ -80,12 +80,12 @@ SplatCloud make_sphere_cloud(std::size_t n) {
         c.uvs[i] = glm::vec2(static_cast<float>(lon / (2.0 * std::numbers::pi)), static_cast<float>(std::acos(std::clamp(z, -1.0, 1.0)) / std::numbers::pi));
     }
     const Neighbours nb = find_neighbours(c.positions, 8);
-    const std::vector<float> radii = estimate_radii(nb, 8, 1.0f);
+    const std::vector<float> radii = estimate_radii(nb, 6, 1.0f);
     c.axis_u.resize(n);
     c.axis_v.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
         const glm::vec3 nrm = c.normals[i];
-        glm::vec3 east = glm::cross(glm::vec3(0, 1, 0), nrm);  // direction of increasing longitude
+        glm::vec3 east = glm::cross(nrm, glm::vec3(0, 1, 0));  // direction of increasing longitude u
         east = glm::length(east) > 1e-4f ? glm::normalize(east) : glm::normalize(any_tangent(nrm));
         const glm::vec3 south = glm::normalize(glm::cross(nrm, east));
         c.axis_u[i] = east * radii[i];

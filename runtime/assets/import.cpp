@@ -770,8 +770,55 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
     const Geometry* g = &input;
     Geometry resampled;
     bool resampled_points = false;
-    if (input.triangle_count() > 0) {
-        auto s = sample_surface(input, options.splats ? options.splats : input.positions.size(), options.seed);
+    if (input.triangle_count() > 0 && options.splats == 0) {
+        // One splat per vertex used by a face (stray vertices are not part of the surface); normals are
+        // the area-weighted face normals unless the file has its own.
+        std::vector<glm::dvec3> acc(input.positions.size(), glm::dvec3(0.0));
+        std::vector<char> used(input.positions.size(), 0);
+        std::vector<std::int32_t> material_of(input.positions.size(), -1);
+        for (std::size_t t = 0; t < input.triangle_count(); ++t) {
+            const std::uint32_t a = input.triangles[3 * t], b = input.triangles[3 * t + 1], c = input.triangles[3 * t + 2];
+            const glm::dvec3 n = glm::cross(input.positions[b] - input.positions[a], input.positions[c] - input.positions[a]);
+            const std::int32_t m = input.triangle_material.empty() ? (input.materials.size() == 1 ? 0 : -1) : input.triangle_material[t];
+            for (std::uint32_t v : {a, b, c}) {
+                acc[v] += n;
+                used[v] = 1;
+                if (m >= 0) material_of[v] = m;
+            }
+        }
+        const bool bake = std::any_of(material_of.begin(), material_of.end(), [](std::int32_t m) { return m >= 0; });
+        const bool file_normals = input.normals.size() == input.positions.size();
+        resampled.source = input.source;
+        resampled.attributes = input.attributes;
+        resampled.splat_material = input.splat_material;
+        resampled.has_origin = input.has_origin;
+        resampled.origin = input.origin;
+        for (std::size_t i = 0; i < input.positions.size(); ++i) {
+            if (!used[i]) continue;
+            resampled.positions.push_back(input.positions[i]);
+            const double len = glm::length(acc[i]);
+            resampled.normals.push_back(file_normals ? input.normals[i] : (len > 0.0 ? glm::vec3(acc[i] / len) : glm::vec3(0.0f)));
+            if (bake) {
+                // Vertex colour x base colour x texture at the vertex's uv (materials are not kept per splat).
+                glm::vec4 col = input.colors.empty() ? glm::vec4(1.0f) : unpack_rgba(input.colors[i]);
+                if (const std::int32_t m = material_of[i]; m >= 0) {
+                    const MeshMaterial& mat = input.materials[static_cast<std::size_t>(m)];
+                    col *= mat.base_color;
+                    if (mat.texture >= 0 && !input.uvs.empty()) col *= sample_texture(input.textures[static_cast<std::size_t>(mat.texture)], input.uvs[i]);
+                }
+                resampled.colors.push_back(pack_rgba(col.x, col.y, col.z, col.w));
+            } else if (!input.colors.empty()) {
+                resampled.colors.push_back(input.colors[i]);
+            }
+            if (!input.uvs.empty()) resampled.uvs.push_back(input.uvs[i]);
+        }
+        // Degenerate faces only: let PCA decide.
+        if (std::any_of(resampled.normals.begin(), resampled.normals.end(), [](const glm::vec3& n) { return glm::length(n) < 0.5f; }))
+            resampled.normals.clear();
+        g = &resampled;
+        resampled_points = true;
+    } else if (input.triangle_count() > 0) {
+        auto s = sample_surface(input, options.splats, options.seed);
         if (!s) return s.error();
         resampled = std::move(*s);
         g = &resampled;
@@ -823,7 +870,7 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
     }
     cloud.colors = g->colors;
     cloud.material = g->splat_material;
-    if (!cloud.material.texture_rgba8.empty() && g->uvs.size() == g->positions.size()) cloud.uvs = g->uvs;
+    if (g->uvs.size() == g->positions.size()) cloud.uvs = g->uvs;
     const bool axes_ok = !resampled_points && g->axis_u.size() == g->positions.size();
     if (axes_ok) {
         cloud.axis_u = g->axis_u;

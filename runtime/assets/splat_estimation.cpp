@@ -224,7 +224,7 @@ void estimate_splats(SplatCloud& cloud, const EstimateOptions& options) {
         orient_normals(cloud.positions, nb, cloud.normals);
     }
     if (options.radii) {
-        const std::vector<float> radii = estimate_radii(nb, 8, 1.0f);
+        const std::vector<float> radii = estimate_radii(nb, 6, 1.0f);
         make_circular_axes(cloud.normals, radii, cloud.axis_u, cloud.axis_v);
     }
 }

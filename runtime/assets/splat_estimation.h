@@ -10,7 +10,7 @@
 // the whole component ends up facing outward. Sharp creases thinner than the neighbourhood can still
 // flip a region; meshes keep their face normals instead (import.cpp).
 //
-// Radii: radius_i = scale * distance to the k_r-th nearest neighbour (k_r = 8 by default), clamped to
+// Radii: radius_i = scale * distance to the k_r-th nearest neighbour (k_r = 6 by default), clamped to
 // 4x the cloud's median radius so isolated outliers do not become huge discs. For samples of roughly
 // even density this makes neighbouring discs overlap, so the rendered surface closes (the coverage test
 // in tests/assets/splat_estimation_test.cpp checks that every point of a sampled sphere lies on a disc).
@@ -44,7 +44,7 @@ std::vector<glm::vec3> pca_normals(std::span<const glm::vec3> points, const Neig
 void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std::span<glm::vec3> normals);
 
 // Splat radius per point from neighbour spacing (see above). `kth` <= nb.k.
-std::vector<float> estimate_radii(const Neighbours& nb, int kth = 8, float scale = 1.0f);
+std::vector<float> estimate_radii(const Neighbours& nb, int kth = 6, float scale = 1.0f);
 
 // Circular splats: axis_u, axis_v = orthonormal tangent basis of each normal scaled by the radius.
 void make_circular_axes(std::span<const glm::vec3> normals, std::span<const float> radii,

@@ -1,0 +1,354 @@
+// Importers (PLY, OBJ, OFF, glTF), exporters (PLY, GLB, glTF) and their round trips, hostile files, and
+// the Debian assimp-testmodels glTF samples.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <random>
+
+#include "runtime/assets/builtin_scenes.h"
+#include "runtime/assets/export.h"
+#include "runtime/assets/gltf_io.h"
+#include "runtime/assets/import.h"
+
+namespace fs = std::filesystem;
+using namespace sffd;
+using namespace sffd::assets;
+
+namespace {
+
+fs::path temp_dir() {
+    fs::path d = fs::temp_directory_path() / ("sffd_import_test_" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d;
+}
+
+fs::path write_text(const std::string& name, const std::string& text) {
+    const fs::path p = temp_dir() / name;
+    std::ofstream f(p, std::ios::binary);
+    f << text;
+    return p;
+}
+
+// A small cloud with every attribute; colours cover all 256 byte values in every channel.
+SplatCloud sample_cloud(std::size_t n, glm::dvec3 origin = glm::dvec3(0.0)) {
+    SplatCloud c = make_sphere_cloud(n);
+    c.origin = origin;
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::uint32_t b = static_cast<std::uint32_t>(i % 256);
+        c.colors[i] = b | (((b * 7) & 255u) << 8) | (((b * 13 + 5) & 255u) << 16) | (((255 - b) & 255u) << 24);
+    }
+    // A smaller texture keeps the GLB small; odd size checks the PNG row handling.
+    Image tex = make_sphere_texture(37, 19);
+    c.material.texture_width = tex.width;
+    c.material.texture_height = tex.height;
+    c.material.texture_rgba8 = tex.rgba8;
+    c.material.texture_rgba8[3] = 17;  // one translucent texel
+    c.material.specular = 0.7f;
+    c.material.shininess = 12.5f;
+    c.material.base_color = glm::vec4(0.25f, 0.5f, 0.75f, 1.0f);
+    return c;
+}
+
+template <class T>
+bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
+    return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(T)) == 0);
+}
+
+void expect_same_cloud(const SplatCloud& a, const SplatCloud& b, bool texture) {
+    EXPECT_EQ(a.origin, b.origin);
+    EXPECT_TRUE(same_bytes(a.positions, b.positions));
+    EXPECT_TRUE(same_bytes(a.normals, b.normals));
+    EXPECT_TRUE(same_bytes(a.axis_u, b.axis_u));
+    EXPECT_TRUE(same_bytes(a.axis_v, b.axis_v));
+    EXPECT_TRUE(same_bytes(a.colors, b.colors));
+    EXPECT_TRUE(same_bytes(a.uvs, b.uvs));
+    if (texture) {
+        EXPECT_EQ(a.material.texture_width, b.material.texture_width);
+        EXPECT_EQ(a.material.texture_height, b.material.texture_height);
+        EXPECT_TRUE(same_bytes(a.material.texture_rgba8, b.material.texture_rgba8));
+        EXPECT_EQ(a.material.specular, b.material.specular);
+        EXPECT_EQ(a.material.shininess, b.material.shininess);
+        EXPECT_EQ(a.material.base_color, b.material.base_color);
+    }
+}
+
+void expect_error(const Status& s, const fs::path& file, const std::string& needle) {
+    ASSERT_FALSE(s.ok()) << file << " was accepted";
+    EXPECT_NE(s.message().find(file.string()), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find(needle), std::string::npos) << s.message();
+}
+
+template <class T>
+Status status_of(const Result<T>& r) {
+    return r.ok() ? Status{} : Status{r.error()};
+}
+
+}  // namespace
+
+TEST(RoundTrip, GlbAndGltfStoreEveryArrayExactly) {
+    const SplatCloud c = sample_cloud(1000);
+    for (const char* name : {"rt.glb", "rt.gltf"}) {
+        const fs::path p = temp_dir() / name;
+        ASSERT_TRUE(save_splat_cloud(c, p).ok());
+        auto back = import_splat_cloud(p);
+        ASSERT_TRUE(back.ok()) << back.message();
+        expect_same_cloud(c, *back, true);
+    }
+}
+
+TEST(RoundTrip, GlbKeepsAFarOriginInDoublePrecision) {
+    const SplatCloud c = sample_cloud(300, glm::dvec3(4.0e6 + 0.123456789, -2.5e6, 1234.5));
+    const fs::path p = temp_dir() / "far.glb";
+    ASSERT_TRUE(save_splat_glb(c, p).ok());
+    auto back = import_splat_cloud(p);
+    ASSERT_TRUE(back.ok()) << back.message();
+    expect_same_cloud(c, *back, true);
+}
+
+TEST(RoundTrip, PlyBinaryAndAsciiStoreEveryArrayExactly) {
+    SplatCloud c = sample_cloud(1000);
+    for (auto fmt : {ply::Format::binary_little_endian, ply::Format::ascii}) {
+        const fs::path p = temp_dir() / "rt.ply";
+        ASSERT_TRUE(save_splat_ply(c, p, fmt).ok());
+        auto back = import_splat_cloud(p);
+        ASSERT_TRUE(back.ok()) << back.message();
+        expect_same_cloud(c, *back, false);  // PLY stores no texture pixels
+    }
+}
+
+TEST(RoundTrip, PlyFarCloudKeepsOriginAndPositionsToFloatPrecision) {
+    const SplatCloud c = sample_cloud(500, glm::dvec3(6.0e5, 4.0e6, -12.25));
+    const fs::path p = temp_dir() / "far.ply";
+    ASSERT_TRUE(save_splat_ply(c, p).ok());
+    auto back = import_splat_cloud(p);
+    ASSERT_TRUE(back.ok()) << back.message();
+    EXPECT_EQ(back->origin, c.origin);
+    ASSERT_EQ(back->size(), c.size());
+    for (std::size_t i = 0; i < c.size(); ++i)
+        for (int a = 0; a < 3; ++a)
+            EXPECT_LE(std::abs(back->positions[i][a] - c.positions[i][a]), 2.0f * std::numeric_limits<float>::epsilon()) << i;
+    EXPECT_TRUE(same_bytes(c.axis_u, back->axis_u));
+    EXPECT_TRUE(same_bytes(c.colors, back->colors));
+}
+
+TEST(Import, FarAwayScanIsRecentredOnItsBoundingBox) {
+    Geometry g;
+    g.source = "far";
+    std::mt19937 rng(1);
+    std::uniform_real_distribution<double> u(0, 10);
+    for (int i = 0; i < 500; ++i) g.positions.emplace_back(5.0e6 + u(rng), 3.0e6 + u(rng), 100.0 + 0.01 * u(rng));
+    auto c = make_splat_cloud(g, {});
+    ASSERT_TRUE(c.ok()) << c.message();
+    glm::dvec3 lo(1e300), hi(-1e300);
+    for (const auto& p : g.positions) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    EXPECT_EQ(c->origin, 0.5 * (lo + hi));
+    for (std::size_t i = 0; i < g.positions.size(); ++i)
+        EXPECT_NEAR(c->origin.x + static_cast<double>(c->positions[i].x), g.positions[i].x, 1e-6);  // float offsets stay precise
+}
+
+TEST(Import, ObjWithQuadsNegativeIndicesMaterialsAndSeams) {
+    write_text("cube.mtl", "newmtl red\nKd 1 0 0\nnewmtl blue\nKd 0 0 1\n");
+    const fs::path p = write_text("cube.obj",
+                                  "mtllib cube.mtl\n"
+                                  "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nv 9 9 9\n"
+                                  "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+                                  "usemtl red\nf 1/1 4/4 3/3 2/2\nf 5/1 6/2 7/3 8/4\n"
+                                  "usemtl blue\nf -9/1 -8/2 -4/3 -5/4\nf 2/1 3/2 7/3 6/4\nf 3/1 4/2 8/3 7/4\nf 4/1 1/2 5/3 8/4\n");
+    auto g = read_geometry(p);
+    ASSERT_TRUE(g.ok()) << g.message();
+    EXPECT_EQ(g->triangle_count(), 12u);
+    EXPECT_EQ(g->materials.size(), 2u);
+    EXPECT_EQ(g->uvs.size(), g->positions.size());
+    EXPECT_EQ(g->uvs[0], glm::vec2(0.0f, 1.0f));  // OBJ v flipped to the glTF convention
+    // One splat per used vertex (the stray v 9 9 9 is dropped), colour from the material.
+    auto c = make_splat_cloud(*g, {});
+    ASSERT_TRUE(c.ok()) << c.message();
+    for (const auto& pos : c->positions) EXPECT_LE(pos.x, 1.0f);
+    // Exactly N surface samples; red faces (z = 0 and z = 1) and blue faces only.
+    ImportOptions opt;
+    opt.splats = 600;
+    auto s = make_splat_cloud(*g, opt);
+    ASSERT_TRUE(s.ok()) << s.message();
+    ASSERT_EQ(s->size(), 600u);
+    std::size_t red = 0, blue = 0;
+    for (std::size_t i = 0; i < s->size(); ++i) {
+        const glm::vec3 q = glm::vec3(s->origin) + s->positions[i];
+        const std::uint32_t col = s->colors[i];
+        const bool on_z_face = std::abs(q.z) < 1e-5f || std::abs(q.z - 1.0f) < 1e-5f;
+        if (col == 0xff0000ffu) {
+            ++red;
+            EXPECT_TRUE(on_z_face) << q.x << " " << q.y << " " << q.z;
+        } else {
+            EXPECT_EQ(col, 0xffff0000u);
+            ++blue;
+        }
+        // Face normals point out of the unit cube.
+        const glm::vec3 out = glm::normalize(q - glm::vec3(0.5f));
+        EXPECT_GT(glm::dot(out, s->normals[i]), 0.0f);
+    }
+    EXPECT_NEAR(static_cast<double>(red) / 600.0, 2.0 / 6.0, 0.08);  // area-weighted
+}
+
+TEST(Import, OffWithColours) {
+    const fs::path p = write_text("tet.off",
+                                  "COFF\n# a tetrahedron\n4 4 6\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n0 0 1 255 255 255 255\n"
+                                  "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+    auto g = read_geometry(p);
+    ASSERT_TRUE(g.ok()) << g.message();
+    EXPECT_EQ(g->positions.size(), 4u);
+    EXPECT_EQ(g->triangle_count(), 4u);
+    ASSERT_EQ(g->colors.size(), 4u);
+    EXPECT_EQ(g->colors[1], 0xff00ff00u);
+}
+
+TEST(Import, PlyMeshWithFacesAndColours) {
+    const fs::path p = write_text("quad.ply",
+                                  "ply\nformat ascii 1.0\nelement vertex 5\nproperty double x\nproperty double y\nproperty double z\n"
+                                  "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+                                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+                                  "0 0 0 255 0 0\n1 0 0 255 0 0\n1 1 0 255 0 0\n0 1 0 255 0 0\n5 5 5 0 0 0\n4 0 1 2 3\n");
+    auto g = read_geometry(p);
+    ASSERT_TRUE(g.ok()) << g.message();
+    EXPECT_EQ(g->triangle_count(), 2u);
+    auto c = make_splat_cloud(*g, {});
+    ASSERT_TRUE(c.ok()) << c.message();
+    EXPECT_EQ(c->size(), 4u);  // the unused fifth vertex is not a splat
+    for (const auto& n : c->normals) EXPECT_NEAR(n.z, 1.0f, 1e-6f);
+}
+
+TEST(Import, ExactSplatCountsForPointsAndRefusalToInvent) {
+    Geometry g;
+    g.source = "points";
+    std::mt19937 rng(2);
+    std::uniform_real_distribution<double> u(-1, 1);
+    for (int i = 0; i < 2000; ++i) g.positions.emplace_back(u(rng), u(rng), 0.0);
+    ImportOptions opt;
+    opt.splats = 777;
+    auto c = make_splat_cloud(g, opt);
+    ASSERT_TRUE(c.ok()) << c.message();
+    EXPECT_EQ(c->size(), 777u);
+    opt.splats = 2001;
+    auto bad = make_splat_cloud(g, opt);
+    ASSERT_FALSE(bad.ok());
+    EXPECT_NE(bad.message().find("without faces"), std::string::npos);
+}
+
+struct Hostile {
+    const char* file;
+    std::string text;
+    const char* expected;
+};
+
+class HostileImport : public ::testing::TestWithParam<Hostile> {};
+
+TEST_P(HostileImport, IsRefusedWithTheFileName) {
+    const fs::path p = write_text(GetParam().file, GetParam().text);
+    expect_error(status_of(import_splat_cloud(p)), p, GetParam().expected);
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Files, HostileImport,
+    ::testing::Values(
+        Hostile{"nan.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\nnan 1 2\n",
+                "non-finite coordinate"},
+        Hostile{"inf_normal.ply",
+                "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\n"
+                "property float nz\nend_header\n0 0 0 inf 0 0\n",
+                "non-finite normal"},
+        Hostile{"noxyz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float a\nend_header\n1\n", "no x, y, z"},
+        Hostile{"badface.ply",
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\n"
+                "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
+                "refers to vertex 7"},
+        Hostile{"negface.ply",
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\n"
+                "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n",
+                "refers to vertex -1"},
+        Hostile{"badindex.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\n", "missing vertex 3"},
+        Hostile{"nan.obj", "v 0 0 nan\n", "non-finite"},
+        Hostile{"garbage.obj", "v 0 zero 0\n", "malformed number"},
+        Hostile{"huge.off", "OFF\n999999999 999999999 0\n0 0 0\n", "exceed the file"},
+        Hostile{"badmagic.off", "PLY\n1 0 0\n0 0 0\n", "bad magic"},
+        Hostile{"badidx.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n", "refers to vertex 3"},
+        Hostile{"empty.gltf", "", "invalid glTF"},
+        Hostile{"notjson.gltf", "{\"asset\": {\"version\": \"2.0\"}, \"nodes\": [", "invalid glTF"},
+        Hostile{"oob.gltf",
+                R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+                   "meshes":[{"primitives":[{"mode":0,"attributes":{"POSITION":0}}]}],
+                   "accessors":[{"bufferView":0,"componentType":5126,"count":1000,"type":"VEC3","min":[0,0,0],"max":[1,1,1]}],
+                   "bufferViews":[{"buffer":0,"byteLength":12}],
+                   "buffers":[{"byteLength":12,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAA"}]})",
+                "exceeds"},
+        Hostile{"cycle.gltf",
+                R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"children":[1]},{"children":[0]}]})", "cycle"},
+        Hostile{"nanmatrix.gltf",
+                R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0,"scale":[1e308,1e308,1e308],"children":[1]},{"mesh":0,"scale":[1e308,1,1]}],
+                   "meshes":[{"primitives":[{"mode":0,"attributes":{"POSITION":0}}]}],
+                   "accessors":[{"bufferView":0,"componentType":5126,"count":1,"type":"VEC3","min":[0,0,0],"max":[1,1,1]}],
+                   "bufferViews":[{"buffer":0,"byteLength":12}],
+                   "buffers":[{"byteLength":12,"uri":"data:application/octet-stream;base64,AACAPwAAgD8AAIA/"}]})",
+                "not finite"},
+        Hostile{"unknown.xyz", "1 2 3\n", "unknown file type"}),
+    [](const auto& param_info) {
+        std::string n = param_info.param.file;
+        for (char& ch : n)
+            if (!std::isalnum(static_cast<unsigned char>(ch))) ch = '_';
+        return n;
+    });
+
+TEST(Import, TruncatedGlbIsRefused) {
+    const SplatCloud c = sample_cloud(200);
+    const fs::path good = temp_dir() / "whole.glb";
+    ASSERT_TRUE(save_splat_glb(c, good).ok());
+    std::ifstream f(good, std::ios::binary);
+    std::string bytes((std::istreambuf_iterator<char>(f)), {});
+    for (std::size_t cut : {std::size_t{5}, std::size_t{20}, bytes.size() / 2, bytes.size() - 1}) {
+        const fs::path p = write_text("cut" + std::to_string(cut) + ".glb", bytes.substr(0, cut));
+        auto r = import_splat_cloud(p);
+        ASSERT_FALSE(r.ok()) << "accepted a GLB cut at " << cut;
+        EXPECT_NE(r.message().find(p.string()), std::string::npos) << r.message();
+    }
+}
+
+TEST(Import, MissingFileNamesIt) {
+    auto r = import_splat_cloud("/nonexistent/scan.ply");
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.message(), "/nonexistent/scan.ply: no such file");
+}
+
+// Debian's assimp-testmodels (tools/bootstrap.sh installs it): a real glTF 2.0 sample with a base-colour
+// texture, and two hostile samples from the assimp test suite.
+TEST(AssimpTestModels, TexturedBoxImportsWithTextureColours) {
+    const fs::path dir = "/usr/share/assimp/models/glTF2";
+    const fs::path glb = dir / "BoxTextured-glTF-Binary/BoxTextured.glb";
+    if (!fs::exists(glb)) GTEST_SKIP() << "assimp-testmodels not installed (apt-get install assimp-testmodels)";
+    for (const fs::path& p : {glb, dir / "BoxTextured-glTF/BoxTextured.gltf"}) {
+        auto g = read_geometry(p);
+        ASSERT_TRUE(g.ok()) << g.message();
+        EXPECT_EQ(g->triangle_count(), 12u);
+        ASSERT_EQ(g->textures.size(), 1u);
+        ImportOptions opt;
+        opt.splats = 2000;
+        auto c = make_splat_cloud(*g, opt);
+        ASSERT_TRUE(c.ok()) << c.message();
+        ASSERT_EQ(c->size(), 2000u);
+        // The texture (a logo on a light background) gives many distinct colours, not one flat colour.
+        std::vector<std::uint32_t> distinct(c->colors.begin(), c->colors.end());
+        std::sort(distinct.begin(), distinct.end());
+        distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+        EXPECT_GT(distinct.size(), 50u);
+    }
+    const fs::path bad = dir / "IndexOutOfRange/IndexOutOfRange.gltf";
+    if (fs::exists(bad)) {
+        auto r = import_splat_cloud(bad);
+        ASSERT_FALSE(r.ok());
+        EXPECT_NE(r.message().find(bad.string()), std::string::npos) << r.message();
+    }
+}
