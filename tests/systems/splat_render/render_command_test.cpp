@@ -1,0 +1,101 @@
+// `splatffd render` end to end (runs the built binary without DISPLAY): one PNG + one EXR per frame, frame k
+// alone equals frame k of a sequence, background option, usage and error exits.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "systems/splat_render/image_io.h"
+
+namespace fs = std::filesystem;
+using namespace sffd::render;
+
+namespace {
+
+const std::string binary = std::string(SFFD_BINARY_DIR) + "/tools/splatffd";
+
+int run(const std::string& args, std::string* output = nullptr) {
+    const fs::path log = fs::temp_directory_path() / ("sffd_render_cmd_" + std::to_string(::getpid()) + ".log");
+    const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY " + binary + " render " + args + " > " + log.string() + " 2>&1";
+    const int status = std::system(cmd.c_str());
+    if (output) {
+        std::ifstream in(log);
+        *output = std::string(std::istreambuf_iterator<char>(in), {});
+    }
+    fs::remove(log);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+fs::path fresh_dir(const std::string& name) {
+    const fs::path d = fs::temp_directory_path() / ("sffd_render_cmd_" + std::to_string(::getpid())) / name;
+    fs::remove_all(d);
+    return d;
+}
+
+}  // namespace
+
+TEST(RenderCommand, WritesOnePngAndOneExrWithoutADisplay) {
+    const fs::path out = fresh_dir("one");
+    std::string log;
+    ASSERT_EQ(run("--out " + out.string() + " --frames 0:0 --size 640x360", &log), 0) << log;
+    int files = 0;
+    for (const auto& e : fs::directory_iterator(out)) files += e.is_regular_file();
+    EXPECT_EQ(files, 2);
+    auto png = read_png(out / "frame_0000.png");
+    ASSERT_TRUE(png.ok()) << png.message();
+    EXPECT_EQ(png->width, 640);
+    EXPECT_EQ(png->height, 360);
+    EXPECT_EQ(png->at(0, 0)[3], 0);  // transparent background
+    auto exr = read_exr(out / "frame_0000.exr");
+    ASSERT_TRUE(exr.ok()) << exr.message();
+    ASSERT_EQ(exr->depth.size(), std::size_t(640 * 360));
+    ASSERT_EQ(exr->normal.size(), std::size_t(640 * 360));
+    // The default scene (textured sphere) is in the middle of the frame: finite depth, unit normals there.
+    const std::size_t c = exr->index(320, 180);
+    EXPECT_GT(exr->color[c].w, 0.99f);
+    EXPECT_TRUE(std::isfinite(exr->depth[c]));
+    EXPECT_NEAR(glm::length(exr->normal[c]), 1.0f, 0.01f);
+    EXPECT_TRUE(std::isinf(exr->depth[0]));
+    EXPECT_NE(log.find("frame 0"), std::string::npos);  // progress line
+}
+
+TEST(RenderCommand, FrameKAloneEqualsFrameKOfASequence) {
+    const fs::path seq = fresh_dir("seq"), alone = fresh_dir("alone");
+    std::string log;
+    ASSERT_EQ(run("sphere --out " + seq.string() + " --frames 0:3 --size 160x90 --format png --quality preview", &log), 0) << log;
+    ASSERT_EQ(run("sphere --out " + alone.string() + " --frames 3:3 --size 160x90 --format png --quality preview", &log), 0)
+        << log;
+    EXPECT_TRUE(fs::exists(seq / "frame_0000.png"));
+    EXPECT_FALSE(fs::exists(alone / "frame_0000.png"));
+    auto a = read_png(seq / "frame_0003.png");
+    auto b = read_png(alone / "frame_0003.png");
+    ASSERT_TRUE(a.ok() && b.ok());
+    int differing = 0;
+    for (std::size_t i = 0; i < a->pixels.size(); ++i) differing += std::abs(int(a->pixels[i]) - int(b->pixels[i])) > 2;
+    EXPECT_EQ(differing, 0);
+}
+
+TEST(RenderCommand, BackgroundFillsThePng) {
+    const fs::path out = fresh_dir("bg");
+    ASSERT_EQ(run("--out " + out.string() + " --size 96x54 --format png --background 1,0,0 --quality preview"), 0);
+    auto png = read_png(out / "frame_0000.png");
+    ASSERT_TRUE(png.ok());
+    EXPECT_FALSE(fs::exists(out / "frame_0000.exr"));
+    EXPECT_EQ(png->at(0, 0)[0], 255);
+    EXPECT_EQ(png->at(0, 0)[1], 0);
+    EXPECT_EQ(png->at(0, 0)[3], 255);
+}
+
+TEST(RenderCommand, BadInputExitsWithAMessage) {
+    std::string log;
+    EXPECT_EQ(run("--frames 0:0", &log), 2);  // no --out
+    EXPECT_NE(log.find("--out"), std::string::npos);
+    EXPECT_EQ(run("--out /tmp/x --size 0x10", &log), 2);
+    EXPECT_EQ(run("--out /tmp/x --frames 3:1", &log), 2);
+    EXPECT_EQ(run("--out /tmp/x --quality ultra", &log), 2);
+    const fs::path missing = fs::temp_directory_path() / "sffd_no_such_scene.ply";
+    EXPECT_EQ(run(missing.string() + " --out " + fresh_dir("bad").string(), &log), 1);
+    EXPECT_NE(log.find(missing.string()), std::string::npos) << log;
+}
