@@ -1,0 +1,139 @@
+// `splatffd pick` end to end: runs the built binary on the built-in sphere and checks its JSON against
+// the scene itself (a control point's projection, the sphere's surface), plus misses and bad input.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdio>
+#include <string>
+#include <sys/wait.h>
+
+#include <nlohmann/json.hpp>
+
+#include "runtime/assets/scene.h"
+#include "runtime/ecs/registry.h"
+#include "systems/ffd/components.h"
+#include "systems/picking/screen_view.h"
+#include "systems/picking/world_space.h"
+#include "systems/splat_render/camera_math.h"
+
+namespace sffd::picking {
+namespace {
+
+struct CliRun {
+    int exit_code = -1;
+    std::string out;  // stdout and stderr
+};
+
+CliRun run_pick(const std::string& args) {
+    const std::string cmd = std::string(SFFD_BINARY_DIR) + "/tools/splatffd pick " + args + " 2>&1";
+    CliRun r;
+    FILE* p = popen(cmd.c_str(), "r");
+    if (!p) return r;
+    std::array<char, 4096> buf{};
+    while (std::fgets(buf.data(), int(buf.size()), p)) r.out += buf.data();
+    const int status = pclose(p);
+    r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+struct Sphere {
+    ecs::Registry reg;
+    ecs::Entity lattice;
+    ScreenView view;
+    Sphere() {
+        const Status st = load_scene(reg, "sphere");
+        EXPECT_TRUE(st) << (st ? "" : st.message());
+        reg.view<const Lattice>().each([&](ecs::Entity e, const Lattice&) { lattice = e; });
+        view = make_screen_view(render::scene_camera(reg, 320.0 / 240.0), {320, 240});
+    }
+};
+
+TEST(PickCli, ControlPointAtItsProjectedPixel) {
+    Sphere s;
+    const std::vector<glm::dvec3> points = control_points_world(s.reg, s.lattice);
+    const Lattice& l = s.reg.get<Lattice>(s.lattice);
+    // The on-screen control point whose projection is farthest from every other one; pick at the pixel it
+    // falls in, in x-ray mode (so whether the sphere hides it does not matter).
+    std::vector<glm::dvec2> screen(points.size(), glm::dvec2(-1e9));
+    for (std::size_t i = 0; i < points.size(); ++i)
+        if (const auto q = project(s.view, points[i])) screen[i] = q->screen;
+    std::size_t target = 0;
+    double best = -1.0;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        if (screen[i].x < 0 || screen[i].y < 0 || screen[i].x >= 320 || screen[i].y >= 240) continue;
+        double nearest = 1e9;
+        for (std::size_t k = 0; k < points.size(); ++k)
+            if (k != i) nearest = std::min(nearest, glm::length(screen[k] - screen[i]));
+        if (nearest > best) best = nearest, target = i;
+    }
+    ASSERT_GT(best, 4.0) << "control points too crowded on screen for an unambiguous pick";
+    const glm::ivec2 pixel(glm::floor(screen[target]));
+    const CliRun r = run_pick("sphere --xray --size 320x240 --at " + std::to_string(pixel.x) + "," + std::to_string(pixel.y));
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_TRUE(j["hit"].get<bool>());
+    EXPECT_EQ(j["kind"], "control_point");
+    EXPECT_EQ(j["entity"].get<std::uint32_t>(), s.lattice.index);
+    EXPECT_EQ(j["index"].get<std::size_t>(), target);
+    const int n1 = l.divisions.z + 1, m1 = l.divisions.y + 1;
+    EXPECT_EQ(j["lattice_ijk"], nlohmann::json::array({int(target) / (m1 * n1), (int(target) / n1) % m1, int(target) % n1}));
+    for (int a = 0; a < 3; ++a) EXPECT_NEAR(j["position"][a].get<double>(), points[target][a], 1e-9);
+    EXPECT_NEAR(j["distance"].get<double>(), glm::length(points[target] - s.view.eye), 1e-9);
+}
+
+TEST(PickCli, SurfaceHitLiesOnTheUnitSphereOnThePixelRay) {
+    Sphere s;
+    const std::vector<glm::dvec3> points = control_points_world(s.reg, s.lattice);
+    const auto c = project(s.view, glm::dvec3(0.0));
+    ASSERT_TRUE(c);
+    // A pixel near the sphere's centre whose ray passes no control point closer than 0.05 (their pick
+    // spheres are 0.018): then only the surface can be hit (tolerance 0 turns off the screen rule).
+    glm::ivec2 pixel(-1);
+    Ray ray;
+    for (int d = 0; d < 40 && pixel.x < 0; ++d) {
+        const glm::ivec2 cand(glm::floor(c->screen + glm::dvec2(7.0 + d, 5.0 + d / 2)));
+        ray = ray_through(s.view, glm::dvec2(cand) + 0.5);
+        bool clear = true;
+        for (const glm::dvec3& p : points)
+            clear = clear && glm::length(glm::cross(p - ray.origin, ray.direction)) > 0.05;
+        if (clear) pixel = cand;
+    }
+    ASSERT_GE(pixel.x, 0) << "no clear pixel found";
+    const CliRun r = run_pick("sphere --size 320x240 --tolerance 0 --at " + std::to_string(pixel.x) + "," + std::to_string(pixel.y));
+    ASSERT_EQ(r.exit_code, 0) << r.out;
+    const auto j = nlohmann::json::parse(r.out);
+    ASSERT_TRUE(j["hit"].get<bool>()) << r.out;
+    ASSERT_EQ(j["kind"], "surface");
+    const glm::dvec3 p{j["position"][0].get<double>(), j["position"][1].get<double>(), j["position"][2].get<double>()};
+    EXPECT_NEAR(glm::length(p), 1.0, 0.01);  // on the unit sphere, up to the splats' flatness
+    EXPECT_LT(j["index"].get<std::size_t>(), 59650u);
+    EXPECT_NEAR(glm::length(glm::cross(p - ray.origin, ray.direction)), 0.0, 1e-5);  // on the pixel's ray
+    EXPECT_NEAR(j["distance"].get<double>(), glm::length(p - ray.origin), 1e-5);
+    EXPECT_LT(glm::dot(p, ray.direction), 0.0);  // the front side, facing the camera
+}
+
+TEST(PickCli, MissIsHitFalseAndExitZero) {
+    const CliRun r = run_pick("sphere --size 320x240 --at 0,0");
+    EXPECT_EQ(r.exit_code, 0);
+    EXPECT_EQ(nlohmann::json::parse(r.out), nlohmann::json::parse(R"({"hit":false,"pixel":[0,0]})"));
+}
+
+TEST(PickCli, BadInputExitCodesAndMessages) {
+    CliRun r = run_pick("/nonexistent/scene.ply --at 1,1");
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.out.find("/nonexistent/scene.ply"), std::string::npos) << r.out;
+    r = run_pick("sphere");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.out.find("--at X,Y is required"), std::string::npos) << r.out;
+    r = run_pick("sphere --at 3");
+    EXPECT_EQ(r.exit_code, 2);
+    r = run_pick("sphere --at 1,1 --size 0x10");
+    EXPECT_EQ(r.exit_code, 2);
+    r = run_pick("sphere --at 400,10 --size 320x240");
+    EXPECT_EQ(r.exit_code, 2);
+    EXPECT_NE(r.out.find("outside the 320x240 viewport"), std::string::npos) << r.out;
+}
+
+}  // namespace
+}  // namespace sffd::picking
