@@ -250,7 +250,7 @@ private:
     template <class R>
     struct Holder final : HolderBase {
         template <class... Args>
-        explicit Holder(Args&&... args) : value{std::forward<Args>(args)...} {}
+        explicit Holder(Args&&... args) : value(detail::make<R>(std::forward<Args>(args)...)) {}
         R value;
     };
 

@@ -18,6 +18,18 @@
 
 namespace sffd::ecs {
 
+namespace detail {
+// One construction rule for components and resources: braces for aggregates (`emplace<Pos>(e, 1.f, 2.f)`),
+// parentheses otherwise, so `std::vector<int>(3, 1)` means three ones whether it is added or replaced.
+template <class T, class... Args>
+T make(Args&&... args) {
+    if constexpr (std::is_aggregate_v<T>)
+        return T{std::forward<Args>(args)...};
+    else
+        return T(std::forward<Args>(args)...);
+}
+}  // namespace detail
+
 class StorageBase {
 public:
     static constexpr std::uint32_t npos = 0xffffffffu;
@@ -85,15 +97,14 @@ public:
     C& emplace(Entity e, Args&&... args) {
         if (contains(e)) {
             C& slot = m_data[position(e)];
-            slot = C{std::forward<Args>(args)...};
+            slot = detail::make<C>(std::forward<Args>(args)...);
             mark_changed(e);
             return slot;
         }
+        // Construct before touching the bookkeeping, so a throwing constructor leaves the storage intact.
+        C value = detail::make<C>(std::forward<Args>(args)...);
         push_entity(e);
-        if constexpr (std::is_aggregate_v<C>)
-            return m_data.push_back(C{std::forward<Args>(args)...}), m_data.back();
-        else
-            return m_data.emplace_back(std::forward<Args>(args)...);
+        return m_data.emplace_back(std::move(value));
     }
 
     void remove(Entity e) override {

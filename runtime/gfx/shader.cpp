@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <fstream>
-#include <regex>
 #include <sstream>
 
 #include "runtime/core/log.h"
@@ -182,21 +181,59 @@ Result<PreprocessedSource> preprocess_shader(const fs::path& root, const fs::pat
     return Preprocessor(root, defines).run(path);
 }
 
+namespace {
+
+// Parses "<id>:<line>[(<col>)]:" (Mesa, glslang) or "<id>(<line>) :" (NVIDIA) at the start of `s`; on
+// success `s` is left at the message.
+bool parse_log_location(std::string_view& s, std::size_t& id, std::size_t& line) {
+    auto number = [](std::string_view& t, std::size_t& out) {
+        std::size_t n = 0, v = 0;
+        while (n < t.size() && t[n] >= '0' && t[n] <= '9' && n < 9) v = v * 10 + std::size_t(t[n++] - '0');
+        if (n == 0) return false;
+        out = v;
+        t.remove_prefix(n);
+        return true;
+    };
+    std::string_view t = trim_left(s);
+    for (std::string_view prefix : {"ERROR: ", "WARNING: "})
+        if (t.substr(0, prefix.size()) == prefix) t.remove_prefix(prefix.size());
+    if (!number(t, id) || t.empty()) return false;
+    if (t.front() == ':') {
+        t.remove_prefix(1);
+        if (!number(t, line)) return false;
+        if (!t.empty() && t.front() == '(') {
+            const std::size_t close = t.find(')');
+            if (close == std::string_view::npos) return false;
+            t.remove_prefix(close + 1);
+        }
+        if (t.empty() || t.front() != ':') return false;
+    } else if (t.front() == '(') {
+        t.remove_prefix(1);
+        if (!number(t, line) || t.empty() || t.front() != ')') return false;
+        t = trim_left(t.substr(1));
+        if (t.empty() || t.front() != ':') return false;
+    } else {
+        return false;
+    }
+    t.remove_prefix(1);
+    if (!t.empty() && t.front() == ' ') t.remove_prefix(1);
+    s = t;
+    return true;
+}
+
+}  // namespace
+
 std::string map_shader_log(std::string_view log_text, const std::vector<fs::path>& files) {
-    // Mesa: "0:12(5): error: ...". Others: "ERROR: 0:12: ..." or "0(12) : error ...".
-    static const std::regex mesa(R"(^\s*(?:ERROR: |WARNING: )?(\d+):(\d+)(?:\(\d+\))?:\s?(.*)$)");
-    static const std::regex nvidia(R"(^\s*(\d+)\((\d+)\)\s*:\s?(.*)$)");
     std::string out;
     for (std::string_view line : split_lines(log_text)) {
         if (line.empty()) continue;
-        const std::string s(line);
-        std::smatch m;
-        if (std::regex_match(s, m, mesa) || std::regex_match(s, m, nvidia)) {
-            const std::size_t id = std::stoul(m[1].str());
+        std::string_view message = line;
+        std::size_t id = 0, line_no = 0;
+        if (parse_log_location(message, id, line_no)) {
             const std::string file = id < files.size() ? files[id].string() : log::str("<source ", id, ">");
-            out += log::str(file, ":", m[2].str(), ": ", m[3].str(), "\n");
+            out += log::str(file, ":", line_no, ": ", message, "\n");
         } else {
-            out += s + "\n";
+            out.append(line).push_back('\n');
         }
     }
     return trim_trailing(std::move(out));
