@@ -99,6 +99,9 @@ std::vector<double> axis_weights(LatticeBasis basis, int divisions, double x) {
 }  // namespace
 
 std::vector<double> control_point_weights(const Lattice& lattice, const glm::dvec3& point) {
+    // A malformed lattice (no cells, or control points not matching the divisions) has no weights.
+    if (glm::any(glm::lessThan(lattice.divisions, glm::ivec3(1))) || lattice.current.size() != lattice.size())
+        return std::vector<double>(lattice.current.size(), 0.0);
     std::vector<double> out(lattice.size(), 0.0);
     const auto local = lattice_local_coordinates(lattice, point);
     if (!local) return out;

@@ -2,6 +2,9 @@
 // tolerance, lazy refresh after the data moved, geometry-id -> entity mapping across entity reuse.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
+
 #include "runtime/ecs/registry.h"
 #include "systems/picking/components.h"
 #include "systems/picking/picking_state.h"
@@ -249,6 +252,30 @@ TEST(Picking, FarFromOriginKeepsPrecision) {
     ASSERT_EQ(hit.kind, PickKind::surface);
     EXPECT_EQ(hit.index, 43u);
     expect_near(hit.position, origin + glm::dvec3(0.031, 0.042, 0.0), 1e-5);
+}
+
+TEST(Picking, HostileDataIsSkippedNotCrashed) {
+    ecs::Registry reg;
+    const ecs::Entity cloud = reg.create();
+    SplatCloud c = disc_grid(4, 1.0, 0.4, 0.0);
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    c.positions[0] = {nan, 0.0f, 0.0f};        // splat 0: NaN centre
+    c.positions[1].z = inf;                    // splat 1: infinite centre
+    c.axis_u[2] = c.axis_v[2] = glm::vec3(0);  // splat 2: zero size
+    c.normals[3] = glm::vec3(0);               // splat 3: no normal
+    c.axis_u[5] = {nan, nan, nan};             // splat 5: NaN axis
+    reg.emplace<SplatCloud>(cloud, std::move(c));
+    const ecs::Entity lat = reg.create();
+    Lattice bad = box_lattice({0, 0, 5}, {1, 1, 6}, {1, 1, 1});
+    bad.current[3] = glm::dvec3(std::numeric_limits<double>::quiet_NaN());
+    reg.emplace<Lattice>(lat, bad);
+    PickingState state;
+    EXPECT_EQ(pick(reg, state, query_from_ray(down_from(2.0, 2.0))).index, 10u);  // healthy splats still pick
+    EXPECT_EQ(pick(reg, state, query_from_ray(down_from(2.0, 0.0))).kind, PickKind::none);  // zero-size splat 2
+    EXPECT_EQ(pick(reg, state, query_from_ray(down_from(0.0, 0.0))).kind, PickKind::control_point);  // P[0][0][1]
+    // A NaN or zero ray answers "nothing".
+    EXPECT_EQ(pick(reg, state, query_from_ray({{0, 0, 10}, {0, 0, 0}})).kind, PickKind::none);
+    EXPECT_EQ(pick(reg, state, query_from_ray({{std::nan(""), 0, 10}, {0, 0, -1}})).kind, PickKind::none);
 }
 
 TEST(PickingSystem, AnswersPendingRequestOnce) {

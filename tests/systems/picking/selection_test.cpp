@@ -165,6 +165,17 @@ TEST(Brush, BernsteinTopKMatchesIndependentWeights) {
 
     // Outside the lattice: no influence, nothing selected.
     EXPECT_TRUE(brush_select(l, l.origin - l.axes[0] * 0.1, {}).empty());
+    // Malformed lattices (no cells; control points not matching the divisions; flat box): nothing.
+    Lattice flat = l;
+    flat.divisions.y = 0;
+    EXPECT_TRUE(brush_select(flat, x, {}).empty());
+    Lattice short_points = l;
+    short_points.current.pop_back();
+    EXPECT_TRUE(brush_select(short_points, x, {}).empty());
+    Lattice degenerate = l;
+    degenerate.axes[2] = degenerate.axes[0];
+    EXPECT_FALSE(lattice_local_coordinates(degenerate, x));
+    EXPECT_TRUE(brush_select(degenerate, x, {}).empty());
 }
 
 TEST(Brush, BsplineTopKMatchesIndependentWeights) {
