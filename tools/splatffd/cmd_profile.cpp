@@ -4,6 +4,8 @@
 //
 // Parts of the engine land at different times (scene loading, the FFD system, the renderer); the
 // __has_include guards let this command build and profile whatever exists.
+#include <time.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -129,6 +131,14 @@ std::optional<std::string> read_text(const std::string& path) {
 
 double median(std::vector<double> v) { return compute_stats(std::move(v)).p50; }
 
+// CPU time of the calling thread in ms: on a loaded machine (other jobs competing for the cores) the
+// wall time of a single-threaded loop overstates its cost; its thread CPU time does not.
+double thread_cpu_ms() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
 // ---------------------------------------------------------------------------------------------- scenes
 
 // Creates the scene's entities. synthetic:N (and the built-ins when scene loading has not landed) make a
@@ -176,27 +186,48 @@ SystemFn drive_system(PaperCase c) {
 
 #if SFFD_PROFILE_HAS_FFD
 // CPU deformation through the FFD engineer's fast path, for schedules without the FFD system (and for
-// the sweep's cpu backend). Output goes to a harness-owned buffer: nothing downstream reads it.
-struct HarnessDeformOutput {
-    std::vector<glm::vec3> positions, normals, axis_u, axis_v;
-};
+// the sweep's cpu backend). Writes DeformedSplats like the FFD system's CPU path, so the renderer draws
+// the deformed cloud (it uploads cpu_valid output when version moves).
 void harness_cpu_deform(ecs::Registry& registry, const FrameContext&) {
-    auto* out = registry.try_resource<HarnessDeformOutput>();
-    if (!out) out = &registry.set_resource<HarnessDeformOutput>();
+    std::vector<ecs::Entity> clouds;
     for (auto [e, cloud, deformers] : registry.view<const SplatCloud, const Deformers>()) {
-        (void)e;
+        (void)cloud, (void)deformers;
+        clouds.push_back(e);
+    }
+    for (ecs::Entity e : clouds) {
+        if (!registry.has<DeformedSplats>(e)) registry.emplace<DeformedSplats>(e);
+        const SplatCloud& cloud = registry.get<SplatCloud>(e);
+        const Deformers& deformers = registry.get<Deformers>(e);
+        DeformedSplats& out = registry.patch<DeformedSplats>(e);
         const std::size_t n = cloud.size();
-        out->positions.resize(n), out->normals.resize(n), out->axis_u.resize(n), out->axis_v.resize(n);
-        ffd::PointsIn in{cloud.positions.data(), cloud.normals.empty() ? nullptr : cloud.normals.data(),
-                         cloud.axis_u.empty() ? nullptr : cloud.axis_u.data(),
-                         cloud.axis_v.empty() ? nullptr : cloud.axis_v.data(), n, cloud.origin};
-        ffd::PointsOut o{out->positions.data(), out->normals.data(), out->axis_u.data(), out->axis_v.data()};
+        out.origin = cloud.origin;
+        out.positions.resize(n), out.normals.resize(n), out.axis_u.resize(n), out.axis_v.resize(n);
+        ffd::PointsIn in{cloud.positions.data(), cloud.normals.size() == n ? cloud.normals.data() : nullptr,
+                         cloud.axis_u.size() == n ? cloud.axis_u.data() : nullptr,
+                         cloud.axis_v.size() == n ? cloud.axis_v.data() : nullptr, n, cloud.origin};
+        ffd::PointsOut o{out.positions.data(), out.normals.data(), out.axis_u.data(), out.axis_v.data()};
+        bool first = true;
         for (ecs::Entity le : deformers.lattices) {
             const Lattice* l = registry.try_get<Lattice>(le);
             if (!l) continue;
             (void)ffd::deform(*l, in, o, ffd::Backend::fast);
             in = ffd::PointsIn{o.positions, o.normals, o.axis_u, o.axis_v, n, cloud.origin};  // chain in place
+            first = false;
         }
+        if (first) {  // no lattice: the rest cloud
+            out.positions = cloud.positions, out.normals = cloud.normals;
+            out.axis_u = cloud.axis_u, out.axis_v = cloud.axis_v;
+        }
+        glm::dvec3 lo(1e300), hi(-1e300);
+        for (const auto& p : out.positions) {
+            lo = glm::min(lo, glm::dvec3(p));
+            hi = glm::max(hi, glm::dvec3(p));
+        }
+        out.bounds_min = cloud.origin + lo;
+        out.bounds_max = cloud.origin + hi;
+        out.cpu_valid = true;
+        out.gpu_valid = false;
+        ++out.version;
     }
 }
 #endif
@@ -509,7 +540,10 @@ int run_sweep(const Options& o) {
         }
         std::printf("wrote %s\n", o.json.c_str());
     }
-    const bool any_failed = std::any_of(rows.begin(), rows.end(), [](const SweepRow& r) { return r.deform_p50 < 0; });
+    // Configurations whose path is not built yet are skipped, not failed.
+    const bool any_failed = std::any_of(rows.begin(), rows.end(), [](const SweepRow& r) {
+        return r.deform_p50 < 0 && r.note.find("not built yet") == std::string::npos;
+    });
     return any_failed ? 1 : 0;
 }
 
@@ -550,20 +584,26 @@ int run_paper(const Options& o) {
         Lattice lattice = paper_lattice(*cloud, 10);
         std::vector<glm::vec3> pos, nrm;
 
-        PaperRow naive{label, "paper CPU (naive triple sum, 1 thread)", cloud->size(), {}, ""};
+        PaperRow naive{label, "paper CPU naive, wall (1 thread)", cloud->size(), {}, ""};
+        PaperRow naive_cpu{label, "paper CPU naive, thread CPU time", cloud->size(), {}, ""};
         for (const auto& pc : paper_cases) {
-            std::vector<double> ms;
+            std::vector<double> ms, cpu;
             for (int f = 0; f < o.naive_frames; ++f) {
                 apply_paper_case(lattice, pc, 0.5 + 0.5 * std::sin(0.7 * (f + 1)));
                 const auto t0 = std::chrono::steady_clock::now();
+                const double c0 = thread_cpu_ms();
                 paper_ffd_naive(lattice, *cloud, pos, nrm);
+                cpu.push_back(thread_cpu_ms() - c0);
                 ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
             }
             naive.case_ms.push_back(median(ms));
-            std::printf("  %-8s %-15s naive  %10.1f ms\n", object, pc.name, naive.case_ms.back());
+            naive_cpu.case_ms.push_back(median(cpu));
+            std::printf("  %-8s %-15s naive  wall %10.1f ms  thread CPU %10.1f ms\n", object, pc.name,
+                        naive.case_ms.back(), naive_cpu.case_ms.back());
             std::fflush(stdout);
         }
         rows.push_back(naive);
+        rows.push_back(naive_cpu);
 
 #if SFFD_PROFILE_HAS_FFD
         PaperRow fast{label, "ours CPU fast (factorised, AVX-512, TBB)", cloud->size(), {}, ""};
@@ -608,10 +648,11 @@ int run_paper(const Options& o) {
             if (ms < 0) std::printf(" %15s", "-");
             else std::printf(" %12.2f ms", ms), sum += ms, ++n;
         }
-        // Speed-up against the naive row of the same object, on the mean over the four cases.
+        // Speed-up against the naive algorithm's thread CPU time (what its wall time is on an idle core), on
+        // the mean over the four cases; the other rows are wall times, so under load the ratio is conservative.
         double naive_mean = 0;
         for (const auto& q : rows)
-            if (q.object == r.object && q.method.rfind("paper CPU", 0) == 0) {
+            if (q.object == r.object && q.method.rfind("paper CPU naive, thread CPU", 0) == 0) {
                 for (double ms : q.case_ms) naive_mean += ms / 4.0;
             }
         if (n > 0) {
