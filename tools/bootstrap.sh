@@ -17,6 +17,7 @@ PACKAGES=(
   libembree-dev libtbb-dev libnanoflann-dev       # picking (Embree 3), normals/radii estimation (k-NN)
   libimgui-dev                                    # editor UI
   libgtest-dev libgmock-dev libbenchmark-dev      # tests, benchmarks
+  assimp-testmodels                               # glTF samples for the import tests (tests/assets)
 )
 
 if ! command -v dpkg >/dev/null 2>&1; then
