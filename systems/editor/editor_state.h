@@ -82,6 +82,9 @@ struct EditorState {
 
     // --- input of this frame (filled by the window or the replayer, consumed by the input system) ---
     std::vector<InputEvent> events;
+    std::optional<InputReplayer> replay;  // --replay: events for each frame come from the recording
+    bool record = false;                  // --record: keep every consumed event (frame-stamped) in `recorded`
+    std::vector<InputEvent> recorded;
     glm::dvec2 cursor{0.0};
     Drag drag;
     LastEdit last_edit;

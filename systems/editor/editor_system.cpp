@@ -436,12 +436,16 @@ EditorState& setup_editor(ecs::Registry& registry, const Viewport& viewport) {
     return *state;
 }
 
-void editor_input_system(ecs::Registry& registry, const FrameContext&) {
+void editor_input_system(ecs::Registry& registry, const FrameContext& frame) {
     EditorState* state = registry.try_resource<EditorState>();
     if (!state) return;
     Camera* camera = camera_of(registry, *state);
-    std::vector<InputEvent> events = std::move(state->events);
+    std::vector<InputEvent> events;
+    if (state->replay) events = state->replay->take(frame.frame);
+    for (InputEvent& e : state->events) events.push_back(std::move(e));
     state->events.clear();
+    for (InputEvent& e : events) e.frame = frame.frame;
+    if (state->record) state->recorded.insert(state->recorded.end(), events.begin(), events.end());
     for (const InputEvent& e : events) {
         camera = camera_of(registry, *state);  // undo may have touched components: look it up again
         if (!camera) break;

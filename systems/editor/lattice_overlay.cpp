@@ -1,0 +1,186 @@
+#include "systems/editor/lattice_overlay.h"
+
+#include <cstddef>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "runtime/core/log.h"
+#include "runtime/gfx/gl.h"
+#include "runtime/gfx/gl_object.h"
+#include "runtime/gfx/shader.h"
+#include "systems/editor/camera_controller.h"
+#include "systems/editor/editor_system.h"
+#include "systems/ffd/components.h"
+#include "systems/picking/components.h"
+#include "systems/picking/world_space.h"
+#include "systems/splat_render/splat_render.h"
+
+namespace sffd::editor {
+
+struct LatticeOverlayState {
+    gfx::Program program;
+    gfx::VertexArray vao;
+    gfx::Buffer buffer;
+    std::size_t capacity = 0;  // vertices
+    bool failed = false;
+};
+
+OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const EditorState& state, ecs::Entity entity) {
+    OverlayGeometry g;
+    const Lattice* lattice = registry.try_get<Lattice>(entity);
+    if (!lattice || lattice->current.size() != lattice->size()) return g;
+    const glm::dmat4 model = picking::model_matrix(registry.try_get<Transform>(entity));
+    g.anchor = glm::dvec3(model * glm::dvec4(lattice->origin, 1.0));
+    std::vector<glm::vec3> p(lattice->current.size());
+    for (std::size_t c = 0; c < p.size(); ++c)
+        p[c] = glm::vec3(glm::dvec3(model * glm::dvec4(lattice->current[c], 1.0)) - g.anchor);
+
+    std::vector<std::uint8_t> selected(p.size(), 0);
+    if (const auto* sel = registry.try_get<picking::LatticeSelection>(entity))
+        for (std::uint32_t i : sel->indices)
+            if (i < selected.size()) selected[i] = 1;
+    const bool pins = state.pin_outer_layer && state.scope == ToolScope::local;
+    const std::vector<std::uint8_t> outer = outer_layer_mask(*lattice);
+    glm::dvec3 lo, hi;
+    std::vector<std::uint8_t> inside(p.size(), 0);
+    if (scene_bounds(registry, lo, hi)) {
+        // The box test is in world space: compare the transformed control points.
+        for (std::size_t c = 0; c < p.size(); ++c) {
+            const glm::dvec3 w = g.anchor + glm::dvec3(p[c]);
+            inside[c] = glm::all(glm::greaterThanEqual(w, lo)) && glm::all(glm::lessThanEqual(w, hi));
+        }
+    }
+    const bool active = entity == state.active_lattice;
+    g.points.reserve(p.size());
+    for (std::size_t c = 0; c < p.size(); ++c) {
+        glm::vec4 color = selected[c] ? overlay_selected
+                          : (pins && outer[c]) ? overlay_pinned
+                          : inside[c] ? overlay_inside
+                                      : overlay_outside;
+        if (!active) color.w *= 0.5f;
+        g.points.push_back({p[c], color, selected[c] ? 9.0f : 5.0f});
+    }
+    const glm::vec4 line_color = active ? glm::vec4(0.3f, 0.75f, 0.95f, 0.7f) : glm::vec4(0.5f, 0.5f, 0.5f, 0.4f);
+    const glm::ivec3 d = lattice->divisions;
+    auto edge = [&](std::size_t a, std::size_t b) {
+        g.lines.push_back({p[a], line_color, 1.0f});
+        g.lines.push_back({p[b], line_color, 1.0f});
+    };
+    for (int i = 0; i <= d.x; ++i)
+        for (int j = 0; j <= d.y; ++j)
+            for (int k = 0; k <= d.z; ++k) {
+                const std::size_t c = lattice->index(i, j, k);
+                if (i < d.x) edge(c, lattice->index(i + 1, j, k));
+                if (j < d.y) edge(c, lattice->index(i, j + 1, k));
+                if (k < d.z) edge(c, lattice->index(i, j, k + 1));
+            }
+    return g;
+}
+
+Status init_lattice_overlay(ecs::Registry& registry) {
+    if (registry.try_resource<LatticeOverlayState>()) return {};
+    auto program = gfx::load_program({{GL_VERTEX_SHADER, "editor/lattice.vert"}, {GL_FRAGMENT_SHADER, "editor/lattice.frag"}},
+                                     "editor.lattice");
+    LatticeOverlayState& s = registry.set_resource<LatticeOverlayState>();
+    if (!program) {
+        s.failed = true;
+        return make_error(program.message());
+    }
+    s.program = std::move(*program);
+    s.vao = gfx::VertexArray::create("editor.lattice.vao");
+    s.buffer = gfx::Buffer::create("editor.lattice.vertices");
+    const GLuint vao = s.vao.id();
+    glEnableVertexArrayAttrib(vao, 0);
+    glEnableVertexArrayAttrib(vao, 1);
+    glEnableVertexArrayAttrib(vao, 2);
+    glVertexArrayAttribFormat(vao, 0, 3, GL_FLOAT, GL_FALSE, offsetof(OverlayVertex, position));
+    glVertexArrayAttribFormat(vao, 1, 4, GL_FLOAT, GL_FALSE, offsetof(OverlayVertex, color));
+    glVertexArrayAttribFormat(vao, 2, 1, GL_FLOAT, GL_FALSE, offsetof(OverlayVertex, size));
+    for (GLuint a = 0; a < 3; ++a) glVertexArrayAttribBinding(vao, a, 0);
+    return {};
+}
+
+void release_lattice_overlay(ecs::Registry& registry) { registry.erase_resource<LatticeOverlayState>(); }
+
+void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
+    const EditorState* state = registry.try_resource<EditorState>();
+    if (!state || !state->show_lattice) return;
+    const GLuint fbo = render::output_framebuffer(registry);
+    if (fbo == 0 || !registry.valid(state->camera) || !registry.has<Camera>(state->camera)) return;
+    if (!registry.try_resource<LatticeOverlayState>()) {
+        if (Status st = init_lattice_overlay(registry); !st) log::error("lattice overlay: ", st.message());
+    }
+    LatticeOverlayState& s = registry.resource<LatticeOverlayState>();
+    if (s.failed) return;
+
+    GLint width = 0, height = 0;
+    GLint color_tex = 0;
+    glGetNamedFramebufferAttachmentParameteriv(fbo, GL_COLOR_ATTACHMENT0, GL_FRAMEBUFFER_ATTACHMENT_OBJECT_NAME, &color_tex);
+    if (color_tex == 0) return;
+    glGetTextureLevelParameteriv(GLuint(color_tex), 0, GL_TEXTURE_WIDTH, &width);
+    glGetTextureLevelParameteriv(GLuint(color_tex), 0, GL_TEXTURE_HEIGHT, &height);
+    const Camera& camera = registry.get<Camera>(state->camera);
+    const Viewport vp{width, height};
+    const glm::dmat4 view_proj = projection_matrix(camera, vp) * view_matrix(camera);
+
+    glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+    const GLenum draw0 = GL_COLOR_ATTACHMENT0;
+    glNamedFramebufferDrawBuffers(fbo, 1, &draw0);  // only the colour: normals/depth stay the surface's
+    glViewport(0, 0, width, height);
+    glEnable(GL_BLEND);
+    glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+    glEnable(GL_PROGRAM_POINT_SIZE);
+    glDepthMask(GL_FALSE);
+    glUseProgram(s.program.id());
+    glBindVertexArray(s.vao.id());
+    const GLint loc_vp = glGetUniformLocation(s.program.id(), "u_view_proj");
+    const GLint loc_alpha = glGetUniformLocation(s.program.id(), "u_alpha");
+    const GLint loc_points = glGetUniformLocation(s.program.id(), "u_points");
+
+    registry.view<const Lattice>().each([&](ecs::Entity e, const Lattice&) {
+        const OverlayGeometry g = build_lattice_overlay(registry, *state, e);
+        if (g.points.empty()) return;
+        const std::size_t count = g.points.size() + g.lines.size();
+        if (count > s.capacity) {
+            s.capacity = count * 2;
+            glNamedBufferData(s.buffer.id(), GLsizeiptr(s.capacity * sizeof(OverlayVertex)), nullptr, GL_STREAM_DRAW);
+        }
+        glNamedBufferSubData(s.buffer.id(), 0, GLsizeiptr(g.lines.size() * sizeof(OverlayVertex)), g.lines.data());
+        glNamedBufferSubData(s.buffer.id(), GLintptr(g.lines.size() * sizeof(OverlayVertex)),
+                             GLsizeiptr(g.points.size() * sizeof(OverlayVertex)), g.points.data());
+        glVertexArrayVertexBuffer(s.vao.id(), 0, s.buffer.id(), 0, sizeof(OverlayVertex));
+        const glm::mat4 m = glm::mat4(view_proj * glm::translate(glm::dmat4(1.0), g.anchor));
+        glUniformMatrix4fv(loc_vp, 1, GL_FALSE, &m[0][0]);
+        // Pass 1: everything (faint unless x-ray); pass 2: the visible part at full strength.
+        for (int pass = 0; pass < (state->xray ? 1 : 2); ++pass) {
+            if (pass == 0) glDisable(GL_DEPTH_TEST);
+            else glEnable(GL_DEPTH_TEST), glDepthFunc(GL_LEQUAL);
+            glUniform1f(loc_alpha, state->xray || pass == 1 ? 1.0f : 0.3f);
+            glUniform1i(loc_points, 0);
+            glDrawArrays(GL_LINES, 0, GLsizei(g.lines.size()));
+            glUniform1i(loc_points, 1);
+            glDrawArrays(GL_POINTS, GLint(g.lines.size()), GLsizei(g.points.size()));
+        }
+    });
+
+    glBindVertexArray(0);
+    glUseProgram(0);
+    glDepthMask(GL_TRUE);
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_BLEND);
+    glDisable(GL_PROGRAM_POINT_SIZE);
+    // Restore the render system's draw buffers (every colour attachment it has).
+    GLint max_attach = 0;
+    glGetIntegerv(GL_MAX_COLOR_ATTACHMENTS, &max_attach);
+    std::vector<GLenum> bufs;
+    for (GLint i = 0; i < max_attach; ++i) {
+        GLint type = GL_NONE;
+        glGetNamedFramebufferAttachmentParameteriv(fbo, GL_COLOR_ATTACHMENT0 + GLenum(i), GL_FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE, &type);
+        if (type == GL_NONE) break;
+        bufs.push_back(GL_COLOR_ATTACHMENT0 + GLenum(i));
+    }
+    glNamedFramebufferDrawBuffers(fbo, GLsizei(bufs.size()), bufs.data());
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
+
+}  // namespace sffd::editor

@@ -1,0 +1,47 @@
+// Lattice overlay (phase `rendering`, after the splat render system): draws every lattice's cell edges
+// and control points into the render system's output framebuffer, so the window and screenshots show
+// it. Selected points are orange and larger; pinned outer-layer points (local edits) blue-grey; points
+// inside the object's bounding box white; the rest cyan. Without x-ray, hidden parts are drawn faintly
+// and visible parts (depth-tested against the splats) fully; with x-ray everything is drawn fully.
+//   reads   Lattice, Transform, picking::LatticeSelection, EditorState (resource), Camera, SplatCloud
+//           (bounds), render output framebuffer (systems/splat_render)
+//   writes  the colour attachment of that framebuffer; LatticeOverlayState (resource: program, buffers)
+// Needs a current GL 4.5 context; does nothing without EditorState or before the first rendered frame.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "runtime/app/frame_loop.h"
+#include "runtime/core/result.h"
+#include "runtime/ecs/registry.h"
+#include "systems/editor/editor_state.h"
+
+namespace sffd::editor {
+
+// CPU part (testable without GL): one vertex per control point / line end.
+struct OverlayVertex {
+    glm::vec3 position;  // relative to the anchor
+    glm::vec4 color;
+    float size;
+};
+struct OverlayGeometry {
+    glm::dvec3 anchor{0.0};
+    std::vector<OverlayVertex> points;
+    std::vector<OverlayVertex> lines;  // pairs
+};
+// Colours of the overlay, exposed for tests.
+inline constexpr glm::vec4 overlay_selected{1.0f, 0.45f, 0.02f, 1.0f};
+inline constexpr glm::vec4 overlay_pinned{0.35f, 0.42f, 0.62f, 1.0f};
+inline constexpr glm::vec4 overlay_inside{0.95f, 0.95f, 0.95f, 1.0f};
+inline constexpr glm::vec4 overlay_outside{0.25f, 0.8f, 0.9f, 1.0f};
+
+OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const EditorState& state, ecs::Entity lattice);
+
+Status init_lattice_overlay(ecs::Registry& registry);
+void lattice_overlay_system(ecs::Registry& registry, const FrameContext& frame);
+void release_lattice_overlay(ecs::Registry& registry);
+
+}  // namespace sffd::editor

@@ -1,0 +1,489 @@
+#include "systems/editor/panels.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include <glm/gtc/quaternion.hpp>
+#include <imgui.h>
+
+#include "runtime/app/app.h"
+#include "runtime/assets/scene.h"
+#include "runtime/core/log.h"
+#include "runtime/scene/components.h"
+#include "systems/editor/editor_system.h"
+#include "systems/editor/selection_edit.h"
+#include "systems/ffd/components.h"
+#include "systems/picking/components.h"
+#include "systems/picking/world_space.h"
+#if SFFD_EDITOR_HAS_ANIMATION
+#include "systems/animation/components.h"
+#include "systems/animation/editing.h"
+#endif
+#if SFFD_EDITOR_HAS_PROFILING
+#include "systems/profiling/overlay.h"
+#endif
+
+namespace sffd::editor {
+
+namespace {
+
+// One inspector edit = one undo step: the value before the widget became active is kept, and the step is
+// recorded when the widget is released (continuous widgets change the component live in between).
+template <class C>
+struct PendingEdit {
+    ecs::Entity entity = ecs::null_entity;
+    std::optional<C> before;
+};
+
+template <class C>
+PendingEdit<C>& pending() {
+    static PendingEdit<C> p;  // UI state of the single editor window (main thread only)
+    return p;
+}
+
+// Call right after a widget that edits C of `e` in place; `changed` is the widget's return value and
+// `before` yields the value the component had before this frame's widget call (called only on activation).
+template <class C, class BeforeFn>
+void track_edit_fn(ecs::Registry& registry, EditorState& state, ecs::Entity e, BeforeFn&& before, bool changed,
+                   const char* label) {
+    PendingEdit<C>& p = pending<C>();
+    if (ImGui::IsItemActivated()) {
+        p.entity = e;
+        p.before = before();
+    }
+    if (changed) registry.mark_changed<C>(e);
+    if (ImGui::IsItemDeactivatedAfterEdit() && p.before && p.entity == e && registry.valid(e) && registry.has<C>(e)) {
+        state.undo.push(std::make_unique<ComponentChange<C>>(label, e, std::move(p.before), registry.get<C>(e)));
+        p.before.reset();
+    }
+}
+
+template <class C>
+void track_edit(ecs::Registry& registry, EditorState& state, ecs::Entity e, const C& before_value, bool changed,
+                const char* label) {
+    track_edit_fn<C>(registry, state, e, [&] { return before_value; }, changed, label);
+}
+
+bool input_dvec3(const char* label, glm::dvec3& v, const char* format = "%.4f") {
+    return ImGui::InputScalarN(label, ImGuiDataType_Double, &v.x, 3, nullptr, nullptr, format);
+}
+bool drag_dvec3(const char* label, glm::dvec3& v, float speed = 0.01f) {
+    return ImGui::DragScalarN(label, ImGuiDataType_Double, &v.x, 3, speed, nullptr, nullptr, "%.4f");
+}
+
+std::string entity_label(const ecs::Registry& registry, ecs::Entity e) {
+    std::string name = "entity " + std::to_string(e.index);
+    if (const Name* n = registry.try_get<Name>(e); n && !n->value.empty()) name = n->value;
+    std::string kind;
+    if (registry.has<SplatCloud>(e)) kind = "cloud";
+    else if (registry.has<Lattice>(e)) kind = "lattice";
+    else if (registry.has<Camera>(e)) kind = "camera";
+    else if (registry.has<DirectionalLight>(e) || registry.has<AmbientLight>(e)) kind = "light";
+    return kind.empty() ? name : name + "  [" + kind + "]";
+}
+
+void menu_bar(ecs::Registry& registry, EditorState& state) {
+    static char open_path[512] = "";
+    bool open_popup = false;
+    if (ImGui::BeginMainMenuBar()) {
+        if (ImGui::BeginMenu("File")) {
+            if (ImGui::MenuItem("Open scene...")) open_popup = true;
+            if (ImGui::MenuItem("Save scene", "Ctrl+S")) state.request_save = true;
+            if (ImGui::MenuItem("Screenshot", "F12")) state.request_screenshot = true;
+            ImGui::Separator();
+            if (ImGui::MenuItem("Quit", "Ctrl+Q")) state.request_quit = true;
+            ImGui::EndMenu();
+        }
+        if (ImGui::BeginMenu("Edit")) {
+            if (ImGui::MenuItem("Undo", "Ctrl+Z", false, state.undo.can_undo())) undo(registry, state);
+            if (ImGui::MenuItem("Redo", "Ctrl+Shift+Z", false, state.undo.can_redo())) redo(registry, state);
+            ImGui::Separator();
+            if (ImGui::MenuItem("Select all", "A")) select_all(registry, state);
+            if (ImGui::MenuItem("Deselect", "Esc")) clear_selection(registry, state);
+            if (ImGui::MenuItem("Reset lattice", "Home")) reset_lattice(registry, state);
+            ImGui::EndMenu();
+        }
+        if (ImGui::BeginMenu("View")) {
+            ImGui::MenuItem("X-ray", "T", &state.xray);
+            ImGui::MenuItem("Lattice", nullptr, &state.show_lattice);
+            if (ImGui::MenuItem("Frame selection", "F")) frame_selection(registry, state);
+            ImGui::EndMenu();
+        }
+        ImGui::EndMainMenuBar();
+    }
+    if (open_popup) ImGui::OpenPopup("Open scene");
+    if (ImGui::BeginPopupModal("Open scene", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
+        ImGui::TextUnformatted("Built-in name (sphere, face) or a file (.ply .obj .off .gltf .glb):");
+        ImGui::InputText("##path", open_path, sizeof open_path);
+        if (ImGui::Button("Open")) {
+            // Replace the scene: destroy every entity, load, re-run the editor set-up. The undo history
+            // refers to the old entities, so it is cleared.
+            ecs::Registry probe;
+            if (Status st = load_scene(probe, open_path); !st) {
+                state.status = st.message();
+            } else {
+                std::vector<ecs::Entity> all;
+                registry.each_entity([&](ecs::Entity e) { all.push_back(e); });
+                for (ecs::Entity e : all) registry.destroy(e);
+                if (Status st2 = load_scene(registry, open_path); !st2) state.status = st2.message();
+                state.undo.clear();
+                state.camera = state.active_lattice = state.selected_entity = ecs::null_entity;
+                state.last_edit = {};
+                setup_editor(registry, state.viewport);
+                state.status = std::string("opened ") + open_path;
+            }
+            ImGui::CloseCurrentPopup();
+        }
+        ImGui::SameLine();
+        if (ImGui::Button("Cancel")) ImGui::CloseCurrentPopup();
+        ImGui::EndPopup();
+    }
+}
+
+void outliner(ecs::Registry& registry, EditorState& state) {
+    ImGui::SetNextWindowPos(ImVec2(8, 28), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(240, 200), ImGuiCond_FirstUseEver);
+    if (ImGui::Begin("Outliner")) {
+        registry.each_entity([&](ecs::Entity e) {
+            const std::string label = entity_label(registry, e) + "##" + std::to_string(e.index);
+            if (ImGui::Selectable(label.c_str(), state.selected_entity == e)) {
+                state.selected_entity = e;
+                if (registry.has<Lattice>(e)) state.active_lattice = e;
+            }
+        });
+    }
+    ImGui::End();
+}
+
+void inspector(ecs::Registry& registry, EditorState& state) {
+    ImGui::SetNextWindowPos(ImVec2(8, 236), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(300, 330), ImGuiCond_FirstUseEver);
+    if (!ImGui::Begin("Inspector")) {
+        ImGui::End();
+        return;
+    }
+    const ecs::Entity e = state.selected_entity;
+    if (!registry.valid(e)) {
+        ImGui::TextDisabled("select an entity in the outliner");
+        ImGui::End();
+        return;
+    }
+    if (Name* n = registry.try_get<Name>(e); n && ImGui::CollapsingHeader("Name", ImGuiTreeNodeFlags_DefaultOpen)) {
+        char buf[256];
+        std::snprintf(buf, sizeof buf, "%s", n->value.c_str());
+        const Name before = *n;
+        const bool changed = ImGui::InputText("name", buf, sizeof buf);
+        if (changed) n->value = buf;
+        track_edit<Name>(registry, state, e, before, changed, "rename");
+    }
+    if (Transform* t = registry.try_get<Transform>(e); t && ImGui::CollapsingHeader("Transform", ImGuiTreeNodeFlags_DefaultOpen)) {
+        const Transform before = *t;
+        bool changed = drag_dvec3("translation", t->translation);
+        track_edit<Transform>(registry, state, e, before, changed, "move entity");
+        glm::dvec3 euler = glm::degrees(glm::eulerAngles(t->rotation));
+        changed = drag_dvec3("rotation (deg)", euler, 0.5f);
+        if (changed) t->rotation = glm::dquat(glm::radians(euler));
+        track_edit<Transform>(registry, state, e, before, changed, "rotate entity");
+        changed = drag_dvec3("scale", t->scale);
+        track_edit<Transform>(registry, state, e, before, changed, "scale entity");
+    }
+    if (SplatCloud* c = registry.try_get<SplatCloud>(e); c && ImGui::CollapsingHeader("SplatCloud", ImGuiTreeNodeFlags_DefaultOpen)) {
+        ImGui::Text("%zu splats%s%s", c->size(), c->colors.empty() ? "" : ", colours",
+                    c->material.texture_path.empty() ? "" : ", textured");
+        ImGui::Text("origin %.3f %.3f %.3f", c->origin.x, c->origin.y, c->origin.z);
+        // Material only: the splats themselves are authored data, edited through lattices.
+        SplatMaterial& m = c->material;
+        const SplatMaterial before_m = m;
+        const auto material_edit = [&](bool changed, const char* label) {
+            // The undo step stores the whole cloud (one undo mechanism for every component); it is copied
+            // only when a widget is grabbed, never per frame.
+            track_edit_fn<SplatCloud>(registry, state, e, [&] {
+                SplatCloud b = *c;
+                b.material = before_m;
+                return b;
+            }, changed, label);
+        };
+        bool ch = ImGui::ColorEdit4("base colour", &m.base_color.x);
+        material_edit(ch, "material colour");
+        ch = ImGui::SliderFloat("specular", &m.specular, 0.0f, 1.0f);
+        material_edit(ch, "material specular");
+        ch = ImGui::SliderFloat("shininess", &m.shininess, 1.0f, 256.0f);
+        material_edit(ch, "material shininess");
+    }
+    if (Camera* cam = registry.try_get<Camera>(e); cam && ImGui::CollapsingHeader("Camera", ImGuiTreeNodeFlags_DefaultOpen)) {
+        const Camera before = *cam;
+        bool ch = drag_dvec3("eye", cam->eye);
+        track_edit<Camera>(registry, state, e, before, ch, "camera eye");
+        ch = drag_dvec3("target", cam->target);
+        track_edit<Camera>(registry, state, e, before, ch, "camera target");
+        ch = ImGui::SliderFloat("fov y", &cam->fov_y_degrees, 5.0f, 120.0f);
+        track_edit<Camera>(registry, state, e, before, ch, "camera fov");
+    }
+    if (DirectionalLight* l = registry.try_get<DirectionalLight>(e); l && ImGui::CollapsingHeader("DirectionalLight", ImGuiTreeNodeFlags_DefaultOpen)) {
+        const DirectionalLight before = *l;
+        bool ch = ImGui::DragFloat3("direction", &l->direction.x, 0.01f);
+        track_edit<DirectionalLight>(registry, state, e, before, ch, "light direction");
+        ch = ImGui::ColorEdit3("colour", &l->color.x);
+        track_edit<DirectionalLight>(registry, state, e, before, ch, "light colour");
+        ch = ImGui::SliderFloat("intensity", &l->intensity, 0.0f, 10.0f);
+        track_edit<DirectionalLight>(registry, state, e, before, ch, "light intensity");
+    }
+    if (AmbientLight* a = registry.try_get<AmbientLight>(e); a && ImGui::CollapsingHeader("AmbientLight", ImGuiTreeNodeFlags_DefaultOpen)) {
+        const AmbientLight before = *a;
+        bool ch = ImGui::ColorEdit3("ambient colour", &a->color.x);
+        track_edit<AmbientLight>(registry, state, e, before, ch, "ambient colour");
+        ch = ImGui::SliderFloat("ambient intensity", &a->intensity, 0.0f, 2.0f);
+        track_edit<AmbientLight>(registry, state, e, before, ch, "ambient intensity");
+    }
+    if (const Lattice* l = registry.try_get<Lattice>(e); l && ImGui::CollapsingHeader("Lattice", ImGuiTreeNodeFlags_DefaultOpen)) {
+        ImGui::Text("divisions %d x %d x %d (%zu points), %s", l->divisions.x, l->divisions.y, l->divisions.z, l->size(),
+                    l->basis == LatticeBasis::bernstein ? "Bernstein" : "B-spline");
+        ImGui::Text("origin %.3f %.3f %.3f", l->origin.x, l->origin.y, l->origin.z);
+        if (const auto* sel = registry.try_get<picking::LatticeSelection>(e)) ImGui::Text("%zu selected", sel->indices.size());
+        ImGui::TextDisabled("edit shape and resolution in the Lattice panel");
+    }
+    if (const Deformers* d = registry.try_get<Deformers>(e); d && ImGui::CollapsingHeader("Deformers")) {
+        for (ecs::Entity l : d->lattices) ImGui::BulletText("%s", entity_label(registry, l).c_str());
+    }
+#if SFFD_EDITOR_HAS_ANIMATION
+    if (AnimationClip* clip = registry.try_get<AnimationClip>(e); clip && ImGui::CollapsingHeader("AnimationClip")) {
+        const AnimationClip before = *clip;
+        double duration = clip->duration;
+        const bool ch = ImGui::InputDouble("duration (s)", &duration, 0.1, 1.0, "%.3f");
+        if (ch && duration > 0.0) clip->duration = duration;
+        track_edit<AnimationClip>(registry, state, e, before, ch && duration > 0.0, "clip duration");
+        int mode = int(clip->mode);
+        const bool mch = ImGui::Combo("mode", &mode, "loop\0once\0ping-pong\0");
+        if (mch) clip->mode = PlayMode(mode);
+        track_edit<AnimationClip>(registry, state, e, before, mch, "clip mode");
+        ImGui::Text("%zu tracks", clip->tracks.size());
+    }
+#endif
+    ImGui::End();
+}
+
+void tools_panel(ecs::Registry& registry, EditorState& state) {
+    ImGui::SetNextWindowPos(ImVec2(float(state.viewport.width) - 300.0f, 28), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(292, 330), ImGuiCond_FirstUseEver);
+    if (ImGui::Begin("Tools")) {
+        int tool = int(state.tool);
+        ImGui::RadioButton("select (Q)", &tool, int(Tool::select));
+        ImGui::SameLine();
+        ImGui::RadioButton("move (G)", &tool, int(Tool::move));
+        ImGui::RadioButton("twist (R)", &tool, int(Tool::twist));
+        ImGui::SameLine();
+        ImGui::RadioButton("brush (B)", &tool, int(Tool::brush));
+        state.tool = Tool(tool);
+        int move_axis = int(state.move_axis);
+        ImGui::Combo("move axis", &move_axis, "view plane\0x\0y\0z\0view\0custom\0");
+        state.move_axis = AxisMode(move_axis);
+        int twist_axis = int(state.twist_axis) - 1;
+        ImGui::Combo("twist axis", &twist_axis, "x\0y\0z\0view\0custom\0");
+        state.twist_axis = AxisMode(twist_axis + 1);
+        input_dvec3("custom axis", state.custom_axis, "%.3f");
+        int pivot = int(state.pivot_mode);
+        ImGui::Combo("pivot", &pivot, "selection centroid\0picked point (alt+click)\0");
+        state.pivot_mode = PivotMode(pivot);
+        int scope = int(state.scope);
+        ImGui::RadioButton("local (selection)", &scope, int(ToolScope::local));
+        ImGui::SameLine();
+        ImGui::RadioButton("global", &scope, int(ToolScope::global));
+        state.scope = ToolScope(scope);
+        ImGui::Checkbox("pin outer layer (P)", &state.pin_outer_layer);
+        ImGui::SameLine();
+        ImGui::Checkbox("x-ray (T)", &state.xray);
+        ImGui::Separator();
+        static glm::dvec3 move_by{0.0, 0.1, 0.0};
+        static double twist_by = 45.0;
+        input_dvec3("##move", move_by, "%.3f");
+        ImGui::SameLine();
+        if (ImGui::Button("stretch")) apply_stretch(registry, state, move_by);
+        ImGui::InputDouble("##twist", &twist_by, 5.0, 45.0, "%.1f deg");
+        ImGui::SameLine();
+        if (ImGui::Button("twist")) apply_twist(registry, state, twist_by);
+        if (ImGui::Button("reset lattice")) reset_lattice(registry, state);
+        ImGui::SameLine();
+        if (ImGui::Button("frame (F)")) frame_selection(registry, state);
+        ImGui::Text("editable: %zu points", editable_selection(registry, state).size());
+    }
+    ImGui::End();
+}
+
+void lattice_panel(ecs::Registry& registry, EditorState& state) {
+    ImGui::SetNextWindowPos(ImVec2(float(state.viewport.width) - 300.0f, 366), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(292, 170), ImGuiCond_FirstUseEver);
+    if (ImGui::Begin("Lattice")) {
+        const Lattice* l = registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
+        if (!l) {
+            ImGui::TextDisabled("no lattice");
+        } else {
+            ImGui::Text("%s", entity_label(registry, state.active_lattice).c_str());
+            ImGui::Text("%d x %d x %d divisions, %s", l->divisions.x, l->divisions.y, l->divisions.z,
+                        l->basis == LatticeBasis::bernstein ? "Bernstein" : "B-spline");
+            glm::dvec3 lo, hi;
+            std::size_t inside = 0;
+            if (scene_bounds(registry, lo, hi)) {
+                const auto mask = inside_box_mask(*l, lo, hi);
+                inside = std::size_t(std::count(mask.begin(), mask.end(), std::uint8_t(1)));
+            }
+            const auto outer = outer_layer_mask(*l);
+            ImGui::Text("%zu inside the object's box (white), %zu outer (pinned: %s)", inside,
+                        std::size_t(std::count(outer.begin(), outer.end(), std::uint8_t(1))),
+                        state.pin_outer_layer ? "yes" : "no");
+            if (ImGui::Button(state.pin_outer_layer ? "unpin outer layer" : "pin outer layer"))
+                state.pin_outer_layer = !state.pin_outer_layer;
+            ImGui::SameLine();
+            if (ImGui::Button("reset")) reset_lattice(registry, state);
+        }
+    }
+    ImGui::End();
+}
+
+void timeline_panel(ecs::Registry& registry, EditorState& state) {
+    ImGui::SetNextWindowPos(ImVec2(256, float(state.viewport.height) - 120.0f), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(float(state.viewport.width) - 570.0f, 88), ImGuiCond_FirstUseEver);
+    if (ImGui::Begin("Timeline")) {
+#if SFFD_EDITOR_HAS_ANIMATION
+        const ecs::Entity e = state.active_lattice;
+        AnimationClip* clip = registry.valid(e) ? registry.try_get<AnimationClip>(e) : nullptr;
+        AnimationState* anim = registry.valid(e) ? registry.try_get<AnimationState>(e) : nullptr;
+        if (ImGui::Button(anim && anim->playing ? "pause" : "play")) toggle_play(registry, state);
+        ImGui::SameLine();
+        if (ImGui::Button("set key (K)")) key_last_edit(registry, state);
+        ImGui::SameLine();
+        if (ImGui::Button("delete key")) delete_keys_at_time(registry, state);
+        if (clip && anim) {
+            ImGui::SameLine();
+            float t = float(anim->time);
+            ImGui::SetNextItemWidth(-1);
+            if (ImGui::SliderFloat("##time", &t, 0.0f, float(clip->duration), "%.3f s")) scrub_to(registry, state, t);
+            // Key markers under the slider.
+            const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
+            ImDrawList* dl = ImGui::GetWindowDrawList();
+            for (const KeyRef& k : list_keys(*clip)) {
+                const float x = lo.x + (hi.x - lo.x) * float(k.time / clip->duration);
+                dl->AddTriangleFilled(ImVec2(x, hi.y - 6), ImVec2(x - 4, hi.y + 2), ImVec2(x + 4, hi.y + 2),
+                                      IM_COL32(255, 190, 40, 255));
+            }
+        } else {
+            ImGui::TextDisabled("no clip on this lattice: stretch or twist, then set key");
+        }
+#else
+        (void)registry, (void)state;
+        ImGui::TextDisabled("animation system not built");
+#endif
+    }
+    ImGui::End();
+}
+
+void profiler_panel(ecs::Registry& registry, EditorState& state) {
+    ImGui::SetNextWindowPos(ImVec2(8, float(state.viewport.height) - 250.0f), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(240, 218), ImGuiCond_FirstUseEver);
+    if (ImGui::Begin("Frame time")) {
+#if SFFD_EDITOR_HAS_PROFILING
+        if (const auto* o = registry.try_resource<profiling::ProfileOverlay>(); o && o->count > 0) {
+            ImGui::Text("%.1f ms (avg %.1f, %.1f FPS)", double(o->frame_last_ms), double(o->frame_avg_ms),
+                        o->frame_avg_ms > 0 ? 1000.0 / double(o->frame_avg_ms) : 0.0);
+            ImGui::PlotLines("##frame", o->frame_ms.data(), int(o->count), int(o->oldest()), nullptr, 0.0f,
+                             std::max(o->max_ms, 1.0f), ImVec2(-1, 50));
+            const float total = std::max(o->frame_avg_ms, 1e-3f);
+            for (const auto& s : o->systems) {
+                char text[128];
+                std::snprintf(text, sizeof text, "%s %.2f ms", s.name.c_str(), double(s.avg_ms));
+                ImGui::ProgressBar(std::clamp(s.avg_ms / total, 0.0f, 1.0f), ImVec2(-1, 0), text);
+            }
+        } else {
+            ImGui::TextDisabled("no profile yet");
+        }
+#else
+        (void)registry, (void)state;
+        ImGui::TextDisabled("profiling system not built");
+#endif
+    }
+    ImGui::End();
+}
+
+void status_bar(ecs::Registry& registry, EditorState& state) {
+    const ImGuiViewport* vp = ImGui::GetMainViewport();
+    ImGui::SetNextWindowPos(ImVec2(vp->Pos.x, vp->Pos.y + vp->Size.y - 24));
+    ImGui::SetNextWindowSize(ImVec2(vp->Size.x, 24));
+    ImGui::Begin("##status", nullptr, ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs |
+                                          ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing);
+    std::size_t selected = 0;
+    if (registry.valid(state.active_lattice))
+        if (const auto* s = registry.try_get<picking::LatticeSelection>(state.active_lattice)) selected = s->indices.size();
+    ImGui::Text("tool %s | axis %s | %s%s%s | %zu selected | undo %zu/%zu | %s", tool_name(state.tool),
+                axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis),
+                state.scope == ToolScope::local ? "local" : "global", state.pin_outer_layer ? " pinned" : "",
+                state.xray ? " x-ray" : "", selected, state.undo.position(), state.undo.size(), state.status.c_str());
+    ImGui::End();
+}
+
+void gizmo(ecs::Registry& registry, EditorState& state) {
+    ImDrawList* dl = ImGui::GetForegroundDrawList();
+    const Drag& d = state.drag;
+    if (d.kind == Drag::Kind::box) {
+        dl->AddRect(ImVec2(float(d.start.x), float(d.start.y)), ImVec2(float(state.cursor.x), float(state.cursor.y)),
+                    IM_COL32(255, 200, 60, 255));
+        dl->AddRectFilled(ImVec2(float(d.start.x), float(d.start.y)), ImVec2(float(state.cursor.x), float(state.cursor.y)),
+                          IM_COL32(255, 200, 60, 30));
+    }
+    if (state.tool != Tool::move && state.tool != Tool::twist) return;
+    if (!registry.valid(state.camera) || !registry.has<Camera>(state.camera)) return;
+    const Camera& cam = registry.get<Camera>(state.camera);
+    const std::vector<std::uint32_t> pts = editable_selection(registry, state);
+    if (pts.empty() && d.kind == Drag::Kind::none) return;
+    glm::dvec3 pivot = d.kind != Drag::Kind::none ? d.pivot_world : glm::dvec3(0.0);
+    if (d.kind == Drag::Kind::none) {
+        if (state.pivot_mode == PivotMode::picked_point && state.has_picked_pivot) {
+            pivot = state.picked_pivot;
+        } else if (const Lattice* l = registry.try_get<Lattice>(state.active_lattice)) {
+            pivot = glm::dvec3(picking::model_matrix(registry.try_get<Transform>(state.active_lattice)) *
+                               glm::dvec4(centroid(*l, pts), 1.0));
+        }
+    }
+    const glm::dvec3 c = project_to_pixel(cam, state.viewport, pivot);
+    if (c.z > 1.0) return;
+    const ImVec2 centre(float(c.x), float(c.y));
+    const AxisMode mode = state.tool == Tool::twist ? state.twist_axis : state.move_axis;
+    if (mode == AxisMode::view_plane) {
+        dl->AddCircle(centre, 14.0f, IM_COL32(255, 255, 255, 220), 24, 2.0f);
+    } else {
+        const glm::dvec3 axis = axis_direction(mode, cam, state.custom_axis);
+        const double size = 0.25 * glm::length(cam.eye - cam.target);
+        const glm::dvec3 a = project_to_pixel(cam, state.viewport, pivot - axis * size);
+        const glm::dvec3 b = project_to_pixel(cam, state.viewport, pivot + axis * size);
+        const ImU32 col = mode == AxisMode::x ? IM_COL32(240, 70, 70, 255)
+                          : mode == AxisMode::y ? IM_COL32(90, 220, 90, 255)
+                          : mode == AxisMode::z ? IM_COL32(80, 130, 255, 255)
+                                                : IM_COL32(230, 230, 230, 255);
+        if (a.z <= 1.0 && b.z <= 1.0) dl->AddLine(ImVec2(float(a.x), float(a.y)), ImVec2(float(b.x), float(b.y)), col, 2.0f);
+        if (state.tool == Tool::twist) dl->AddCircle(centre, 40.0f, col, 48, 2.0f);
+    }
+    dl->AddCircleFilled(centre, 4.0f, IM_COL32(255, 255, 255, 255));
+    if (d.kind == Drag::Kind::twist) {
+        char text[64];
+        std::snprintf(text, sizeof text, "%.1f deg", glm::degrees(d.angle));
+        dl->AddText(ImVec2(centre.x + 44, centre.y - 8), IM_COL32(255, 255, 255, 255), text);
+    }
+}
+
+}  // namespace
+
+void draw_panels(ecs::Registry& registry, const FrameContext&) {
+    EditorState* state = registry.try_resource<EditorState>();
+    if (!state) return;
+    menu_bar(registry, *state);
+    outliner(registry, *state);
+    inspector(registry, *state);
+    tools_panel(registry, *state);
+    lattice_panel(registry, *state);
+    timeline_panel(registry, *state);
+    profiler_panel(registry, *state);
+    status_bar(registry, *state);
+    gizmo(registry, *state);
+}
+
+}  // namespace sffd::editor

@@ -1,0 +1,362 @@
+#include "systems/editor/view_app.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <optional>
+
+#include <GLFW/glfw3.h>
+#include <imgui.h>
+#include <backends/imgui_impl_glfw.h>
+#include <backends/imgui_impl_opengl3.h>
+
+#include "runtime/app/app.h"
+#include "runtime/app/clock.h"
+#include "runtime/assets/scene.h"
+#include "runtime/core/atomic_file.h"
+#include "runtime/core/log.h"
+#include "runtime/gfx/context.h"
+#include "runtime/gfx/gl.h"
+#include "systems/editor/editor_system.h"
+#include "systems/editor/lattice_overlay.h"
+#include "systems/editor/panels.h"
+#include "systems/splat_render/image_io.h"
+#include "systems/splat_render/splat_render.h"
+#if SFFD_EDITOR_HAS_PROFILING
+#include "systems/profiling/profiler.h"
+#endif
+
+namespace sffd::editor {
+
+namespace {
+
+// Where GLFW callbacks deliver events. GLFW windows live on the main thread, one editor window per
+// process, so a file-level pointer is the simplest owner-free link from the C callbacks to the registry.
+ecs::Registry* g_registry = nullptr;
+bool g_ui = false;
+
+std::uint8_t glfw_mods(int m) {
+    return std::uint8_t(((m & GLFW_MOD_SHIFT) ? mods::shift : 0) | ((m & GLFW_MOD_CONTROL) ? mods::ctrl : 0) |
+                        ((m & GLFW_MOD_ALT) ? mods::alt : 0));
+}
+
+std::string glfw_key_name(int key) {
+    if (key >= GLFW_KEY_A && key <= GLFW_KEY_Z) return std::string(1, char('a' + (key - GLFW_KEY_A)));
+    if (key >= GLFW_KEY_0 && key <= GLFW_KEY_9) return std::string(1, char('0' + (key - GLFW_KEY_0)));
+    if (key >= GLFW_KEY_F1 && key <= GLFW_KEY_F12) return "f" + std::to_string(key - GLFW_KEY_F1 + 1);
+    switch (key) {
+        case GLFW_KEY_ESCAPE: return "escape";
+        case GLFW_KEY_ENTER: return "enter";
+        case GLFW_KEY_TAB: return "tab";
+        case GLFW_KEY_BACKSPACE: return "backspace";
+        case GLFW_KEY_DELETE: return "delete";
+        case GLFW_KEY_SPACE: return "space";
+        case GLFW_KEY_LEFT: return "left";
+        case GLFW_KEY_RIGHT: return "right";
+        case GLFW_KEY_UP: return "up";
+        case GLFW_KEY_DOWN: return "down";
+        case GLFW_KEY_HOME: return "home";
+        case GLFW_KEY_END: return "end";
+        case GLFW_KEY_MINUS: return "minus";
+        case GLFW_KEY_EQUAL: return "equal";
+        case GLFW_KEY_PERIOD: return "period";
+        case GLFW_KEY_PAGE_UP: return "pageup";
+        case GLFW_KEY_PAGE_DOWN: return "pagedown";
+        case GLFW_KEY_INSERT: return "insert";
+        case GLFW_KEY_COMMA: return "comma";
+        case GLFW_KEY_SLASH: return "slash";
+        default: return {};
+    }
+}
+
+EditorState* live_state() { return g_registry ? g_registry->try_resource<EditorState>() : nullptr; }
+bool ui_wants_mouse() { return g_ui && ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureMouse; }
+bool ui_wants_keyboard() { return g_ui && ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureKeyboard; }
+
+glm::dvec2 to_pixels(GLFWwindow* window, double x, double y) {
+    int ww = 0, wh = 0, fw = 0, fh = 0;
+    glfwGetWindowSize(window, &ww, &wh);
+    glfwGetFramebufferSize(window, &fw, &fh);
+    return {ww > 0 ? x * fw / ww : x, wh > 0 ? y * fh / wh : y};
+}
+
+void on_cursor(GLFWwindow* window, double x, double y) {
+    EditorState* s = live_state();
+    if (!s || s->replay) return;  // a replay owns the input
+    InputEvent e;
+    e.kind = InputKind::move;
+    e.position = to_pixels(window, x, y);
+    s->events.push_back(e);
+}
+
+void on_button(GLFWwindow*, int button, int action, int m) {
+    EditorState* s = live_state();
+    if (!s || s->replay) return;
+    InputEvent e;
+    e.kind = action == GLFW_PRESS ? InputKind::press : InputKind::release;
+    if (button == GLFW_MOUSE_BUTTON_LEFT) e.button = MouseButton::left;
+    else if (button == GLFW_MOUSE_BUTTON_RIGHT) e.button = MouseButton::right;
+    else if (button == GLFW_MOUSE_BUTTON_MIDDLE) e.button = MouseButton::middle;
+    else return;
+    // Presses over a panel belong to the panel; releases always reach the editor (ends its drags).
+    if (e.kind == InputKind::press && ui_wants_mouse()) return;
+    e.modifiers = glfw_mods(m);
+    s->events.push_back(e);
+}
+
+void on_scroll(GLFWwindow*, double, double dy) {
+    EditorState* s = live_state();
+    if (!s || s->replay || ui_wants_mouse()) return;
+    InputEvent e;
+    e.kind = InputKind::scroll;
+    e.scroll = dy;
+    s->events.push_back(e);
+}
+
+void on_key(GLFWwindow*, int key, int, int action, int m) {
+    EditorState* s = live_state();
+    if (!s || s->replay || action == GLFW_RELEASE || ui_wants_keyboard()) return;
+    std::string name = glfw_key_name(key);
+    if (name.empty()) return;
+    InputEvent e;
+    e.kind = InputKind::key;
+    e.key = std::move(name);
+    e.modifiers = glfw_mods(m);
+    s->events.push_back(e);
+}
+
+// View-only resource: options the request handler needs and the per-frame drag log for timing.
+struct ViewSession {
+    ViewOptions options;
+    std::string save_path;
+    int screenshot_count = 0;
+    std::vector<std::uint8_t> dragging;  // per frame: 1 when a tool drag was active
+    bool ui = false;
+};
+
+Status write_screenshot(ecs::Registry& registry, const std::filesystem::path& path) {
+    auto frame = render::capture_frame(registry);
+    if (!frame) return make_error(frame.message());
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext == ".exr") return render::write_exr(path, *frame);
+    if (ext == ".png") return render::write_png(path, render::to_rgba8(*frame, glm::vec3(0.0f)));
+    return make_error(path.string() + ": screenshot must end in .png or .exr");
+}
+
+// Rendering phase, after the overlay: save / screenshot / quit requests, present source, drag log.
+void requests_system(ecs::Registry& registry, const FrameContext& frame) {
+    EditorState* state = registry.try_resource<EditorState>();
+    ViewSession* session = registry.try_resource<ViewSession>();
+    if (!state || !session) return;
+    if (session->dragging.size() <= frame.frame) session->dragging.resize(frame.frame + 1, 0);
+    session->dragging[frame.frame] = state->drag.kind == Drag::Kind::move || state->drag.kind == Drag::Kind::twist;
+    if (state->request_save) {
+        state->request_save = false;
+        if (Status st = save_scene(registry, session->save_path); st) {
+            state->status = "saved " + session->save_path;
+            log::info("editor: ", state->status);
+        } else {
+            state->status = "save failed: " + st.message();
+            log::error("editor: ", state->status);
+        }
+    }
+    if (state->request_screenshot) {
+        state->request_screenshot = false;
+        const std::string path = "splatffd-screenshot-" + std::to_string(session->screenshot_count++) + ".png";
+        const Status st = write_screenshot(registry, path);
+        state->status = st ? "screenshot " + path : "screenshot failed: " + st.message();
+        log::info("editor: ", state->status);
+    }
+    if (state->request_quit)
+        if (auto* app = registry.try_resource<app::AppContext>()) app->quit_requested = true;
+    if (GLuint fbo = render::output_framebuffer(registry); fbo != 0) {
+        auto& src = registry.try_resource<app::PresentSource>() ? registry.resource<app::PresentSource>()
+                                                                : registry.set_resource<app::PresentSource>();
+        if (src.framebuffer == 0) {
+            src.framebuffer = fbo;
+            src.read_buffer = GL_COLOR_ATTACHMENT0;
+            const auto* settings = registry.try_resource<render::RenderSettings>();
+            src.width = settings ? settings->width : state->viewport.width;
+            src.height = settings ? settings->height : state->viewport.height;
+        }
+    }
+}
+
+// Present phase, between the blit and the swap: the ImGui panels.
+void ui_system(ecs::Registry& registry, const FrameContext& frame) {
+    ViewSession* session = registry.try_resource<ViewSession>();
+    if (!session || !session->ui) return;
+    ImGui_ImplOpenGL3_NewFrame();
+    ImGui_ImplGlfw_NewFrame();
+    ImGui::NewFrame();
+    draw_panels(registry, frame);
+    ImGui::Render();
+    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+}
+
+std::string default_save_path(const std::string& scene) {
+    const std::filesystem::path p(scene);
+    const std::string ext = p.extension().string();
+    if (ext == ".glb" || ext == ".gltf") return scene;
+    return (p.stem().empty() ? std::string("scene") : p.stem().string()) + ".glb";
+}
+
+double percentile(std::vector<double> v, double q) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    const double at = q * double(v.size() - 1);
+    const std::size_t lo = std::size_t(at);
+    const std::size_t hi = std::min(lo + 1, v.size() - 1);
+    return v[lo] + (v[hi] - v[lo]) * (at - double(lo));
+}
+
+}  // namespace
+
+int run_view(const ViewOptions& options, Schedule schedule) {
+    const bool headless = options.headless || !gfx::display_available();
+    if (!options.headless && headless) {
+        std::fprintf(stderr, "splatffd view: no display (DISPLAY is not set): run under `xvfb-run -a`, or pass --headless\n");
+        return 1;
+    }
+    auto ctx = gfx::create_context({.headless = headless, .width = options.width, .height = options.height,
+                                    .visible = true, .debug = true, .title = "SplatFFD editor: " + options.scene});
+    if (!ctx) {
+        std::fprintf(stderr, "splatffd view: %s\n", ctx.message().c_str());
+        return 1;
+    }
+    const gfx::FramebufferSize fb = ctx->framebuffer_size();
+    const Viewport viewport{fb.width > 0 ? fb.width : options.width, fb.height > 0 ? fb.height : options.height};
+
+    int exit_code = 0;
+    {
+        ecs::Registry registry;
+        if (Status st = load_scene(registry, options.scene); !st) {
+            std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
+            return 1;
+        }
+        auto& settings = registry.set_resource<render::RenderSettings>();
+        settings.width = viewport.width;
+        settings.height = viewport.height;
+        settings.quality = options.preview ? render::Quality::preview : render::Quality::hq;
+        settings.background = glm::vec3(0.045f, 0.05f, 0.06f);
+        if (Status st = render::init_render_state(registry); !st) {
+            std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
+            return 1;
+        }
+        if (Status st = init_lattice_overlay(registry); !st) {
+            std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
+            return 1;
+        }
+
+        EditorState& state = setup_editor(registry, viewport);
+        if (!options.replay.empty()) {
+            auto events = load_input_recording(options.replay);
+            if (!events) {
+                std::fprintf(stderr, "splatffd view: %s\n", events.message().c_str());
+                return 1;
+            }
+            state.replay.emplace(std::move(*events));
+        }
+        state.record = !options.record.empty();
+
+        ViewSession& session = registry.set_resource<ViewSession>();
+        session.options = options;
+        session.save_path = options.save_path.empty() ? default_save_path(options.scene) : options.save_path;
+        session.ui = options.ui && !headless;
+
+        g_registry = &registry;
+        g_ui = session.ui;
+        GLFWwindow* window = ctx->window();
+        if (window) {
+            // Ours first; ImGui's backend chains to them (install_callbacks = true).
+            glfwSetCursorPosCallback(window, on_cursor);
+            glfwSetMouseButtonCallback(window, on_button);
+            glfwSetScrollCallback(window, on_scroll);
+            glfwSetKeyCallback(window, on_key);
+        }
+        if (session.ui) {
+            IMGUI_CHECKVERSION();
+            ImGui::CreateContext();
+            ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini next to the user's files
+            ImGui::StyleColorsDark();
+            ImGui_ImplGlfw_InitForOpenGL(window, true);
+            ImGui_ImplOpenGL3_Init("#version 450");
+        }
+
+        schedule.add(Phase::rendering, "editor.overlay", lattice_overlay_system);
+        schedule.add(Phase::rendering, "editor.requests", requests_system);
+        if (window) {
+            schedule.add(Phase::present, "present.blit", app::present_blit_system);
+            schedule.add(Phase::present, "editor.ui", ui_system);
+            schedule.add(Phase::present, "present.swap", app::present_swap_system);
+        }
+
+#if SFFD_EDITOR_HAS_PROFILING
+        profiling::Profiler profiler({.gpu = profiling::GpuTiming::none, .keep_frames = true});
+        profiler.attach(schedule, registry);
+#endif
+        // Replays and fixed frame counts run on a fixed 1/60 s clock (frame k = time k/60, deterministic).
+        Clock clock = (!options.replay.empty() || options.frames > 0 || headless)
+                          ? Clock(ClockSettings{.fixed_dt = 1.0 / 60.0})
+                          : app::make_clock(&*ctx);
+        const app::RunResult run = app::run(registry, schedule, clock, &*ctx, {.max_frames = options.frames});
+        log::info("view: ", run.frames, " frames in ", run.seconds, " s");
+
+        if (!options.screenshot.empty()) {
+            if (Status st = write_screenshot(registry, options.screenshot); !st) {
+                std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
+                exit_code = 1;
+            }
+        }
+        if (!options.record.empty()) {
+            if (Status st = write_file_atomic(options.record, format_input_recording(state.recorded)); !st) {
+                std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
+                exit_code = 1;
+            }
+        }
+#if SFFD_EDITOR_HAS_PROFILING
+        // Frame times: all frames, and the frames in which a stretch/twist drag was live.
+        std::vector<double> all, drag;
+        for (const auto& f : profiler.frames()) {
+            if (f.frame == 0) continue;  // first frame: uploads and shader warm-up
+            all.push_back(f.total_ms);
+            if (f.frame < session.dragging.size() && session.dragging[f.frame]) drag.push_back(f.total_ms);
+        }
+        std::fprintf(stderr, "view: frame ms p50 %.2f p95 %.2f (n=%zu); while dragging p50 %.2f p95 %.2f (n=%zu)\n",
+                     percentile(all, 0.5), percentile(all, 0.95), all.size(), percentile(drag, 0.5),
+                     percentile(drag, 0.95), drag.size());
+        if (!options.timing_json.empty()) {
+            std::string json = "{\n  \"renderer\": \"" + ctx->renderer() + "\",\n  \"frames\": " + std::to_string(all.size()) +
+                               ",\n  \"frame_ms_p50\": " + std::to_string(percentile(all, 0.5)) +
+                               ",\n  \"frame_ms_p95\": " + std::to_string(percentile(all, 0.95)) +
+                               ",\n  \"drag_frames\": " + std::to_string(drag.size()) +
+                               ",\n  \"drag_frame_ms_p50\": " + std::to_string(percentile(drag, 0.5)) +
+                               ",\n  \"drag_frame_ms_p95\": " + std::to_string(percentile(drag, 0.95)) + "\n}\n";
+            if (Status st = write_file_atomic(options.timing_json, json); !st)
+                std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
+        }
+#endif
+        if (session.ui) {
+            ImGui_ImplOpenGL3_Shutdown();
+            ImGui_ImplGlfw_Shutdown();
+            ImGui::DestroyContext();
+        }
+        g_registry = nullptr;
+        g_ui = false;
+        if (window) {
+            glfwSetCursorPosCallback(window, nullptr);
+            glfwSetMouseButtonCallback(window, nullptr);
+            glfwSetScrollCallback(window, nullptr);
+            glfwSetKeyCallback(window, nullptr);
+        }
+        release_lattice_overlay(registry);
+        render::release_render_state(registry);
+        registry.erase_resource<app::PresentSource>();
+    }  // registry (and any GL state it still holds) goes before the context
+    return exit_code;
+}
+
+}  // namespace sffd::editor

@@ -1,0 +1,113 @@
+// splatffd view [SCENE] [options]: the interactive editor (systems/editor/view_app.h).
+#include <charconv>
+#include <cstdio>
+#include <string>
+
+#include "tools/splatffd/command.h"
+
+#if SFFD_EDITOR_HAS_VIEW
+#include "systems/editor/view_app.h"
+#include "tools/splatffd/engine.h"
+
+namespace {
+
+void usage() {
+    std::fprintf(stderr,
+                 "usage: splatffd view [SCENE] [options]\n"
+                 "  SCENE              built-in name (sphere, face) or a file (.ply .obj .off .gltf .glb); default sphere\n"
+                 "  --replay FILE      play a recorded input file (format: systems/editor/README.md)\n"
+                 "  --record FILE      write this session's input to FILE at exit\n"
+                 "  --frames N         exit after N frames\n"
+                 "  --screenshot PATH  write the last frame to PATH (.png or .exr) at exit\n"
+                 "  --save PATH        where ctrl+s saves (default: the scene file, or <scene>.glb)\n"
+                 "  --size WxH         window size (default 1280x720)\n"
+                 "  --quality hq|preview\n"
+                 "  --no-ui            no ImGui panels\n"
+                 "  --headless         no window (EGL); input only from --replay\n"
+                 "  --timing-json F    write frame-time statistics (all frames, frames with a live drag)\n"
+                 "Runs under X (use `xvfb-run -a` without a display). Keys and mouse: systems/editor/README.md\n");
+}
+
+bool parse_u64(const std::string& s, std::uint64_t& out) {
+    const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
+    return ec == std::errc() && p == s.data() + s.size();
+}
+
+int run_view_command(sffd::cli::Args args) {
+    sffd::editor::ViewOptions o;
+    bool have_scene = false;
+    for (std::size_t i = 0; i < args.size(); ++i) {
+        const std::string& a = args[i];
+        const auto value = [&](const char* name) -> const std::string* {
+            if (i + 1 >= args.size()) {
+                std::fprintf(stderr, "splatffd view: %s needs a value\n", name);
+                return nullptr;
+            }
+            return &args[++i];
+        };
+        if (a == "--help" || a == "-h") {
+            usage();
+            return 0;
+        } else if (a == "--replay") {
+            const auto* v = value("--replay");
+            if (!v) return 2;
+            o.replay = *v;
+        } else if (a == "--record") {
+            const auto* v = value("--record");
+            if (!v) return 2;
+            o.record = *v;
+        } else if (a == "--frames") {
+            const auto* v = value("--frames");
+            if (!v || !parse_u64(*v, o.frames) || o.frames == 0) {
+                std::fprintf(stderr, "splatffd view: --frames takes a positive integer\n");
+                return 2;
+            }
+        } else if (a == "--screenshot") {
+            const auto* v = value("--screenshot");
+            if (!v) return 2;
+            o.screenshot = *v;
+        } else if (a == "--save") {
+            const auto* v = value("--save");
+            if (!v) return 2;
+            o.save_path = *v;
+        } else if (a == "--timing-json") {
+            const auto* v = value("--timing-json");
+            if (!v) return 2;
+            o.timing_json = *v;
+        } else if (a == "--size") {
+            const auto* v = value("--size");
+            if (!v || std::sscanf(v->c_str(), "%dx%d", &o.width, &o.height) != 2 || o.width < 16 || o.height < 16 ||
+                o.width > 8192 || o.height > 8192) {
+                std::fprintf(stderr, "splatffd view: --size takes WxH (16..8192)\n");
+                return 2;
+            }
+        } else if (a == "--quality") {
+            const auto* v = value("--quality");
+            if (!v || (*v != "hq" && *v != "preview")) {
+                std::fprintf(stderr, "splatffd view: --quality takes hq or preview\n");
+                return 2;
+            }
+            o.preview = *v == "preview";
+        } else if (a == "--no-ui") {
+            o.ui = false;
+        } else if (a == "--headless") {
+            o.headless = true;
+        } else if (!a.empty() && a[0] == '-') {
+            std::fprintf(stderr, "splatffd view: unknown option '%s'\n", a.c_str());
+            usage();
+            return 2;
+        } else if (!have_scene) {
+            o.scene = a;
+            have_scene = true;
+        } else {
+            std::fprintf(stderr, "splatffd view: more than one scene given ('%s')\n", a.c_str());
+            return 2;
+        }
+    }
+    return sffd::editor::run_view(o, sffd::make_engine_schedule({.present = false}));
+}
+
+}  // namespace
+
+SFFD_COMMAND(view, "open the interactive editor on a scene", run_view_command);
+#endif
