@@ -7,6 +7,9 @@
 #include "systems/animation/animation_system.h"
 #include "systems/picking/picking_system.h"
 #include "systems/splat_render/splat_render.h"
+#if SFFD_EDITOR_HAS_INPUT_SYSTEM
+#include "systems/editor/editor_system.h"
+#endif
 
 namespace sffd {
 
@@ -14,6 +17,9 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
     Schedule s;
 
     // --- input: window events -> editor tools -> edit commands on lattices (editor) -----------------
+#if SFFD_EDITOR_HAS_INPUT_SYSTEM
+    s.add(Phase::input, "editor", editor::editor_input_system);  // no-op without an EditorState resource
+#endif
 
     // --- animation: clips write lattice control points at the frame time (animation) ----------------
     s.add(Phase::animation, "animation", animation_system);
