@@ -1,0 +1,131 @@
+// FFD evaluation shared by the compute pass (deform.comp) and paper mode (paper_mode.vert).
+// Convention: ../../systems/ffd/README.md (displacement form X' = X + Σ ΔP B B B, J = I + G M⁻¹, normals by
+// the cofactor of J). Control points arrive as displacements ΔP (vec4 xyz) in SSBO SFFD_SSBO_CONTROL_POINTS:
+// Bernstein: flat index (i*(m+1)+j)*(n+1)+k; B-spline: zero-bordered grid (l+3)(m+3)(n+3), index + 1.
+#ifndef FFD_COMMON_GLSL
+#define FFD_COMMON_GLSL
+
+#include "common/bindings.h"
+
+#define FFD_MAX_B 65   // kMaxDivisions + 1 (systems/ffd/lattice.h)
+
+layout(std140, binding = SFFD_UBO_FFD) uniform FfdBlock {
+    vec4 ffd_minv0;      // rows of M⁻¹ (xyz)
+    vec4 ffd_minv1;
+    vec4 ffd_minv2;
+    vec4 ffd_stu0;       // M⁻¹ (cloud origin − lattice origin)
+    ivec4 ffd_div;       // l, m, n, basis (0 bernstein, 1 bspline)
+    vec4 ffd_cull_lo;    // local box outside which nothing moves (xyz)
+    vec4 ffd_cull_hi;
+    uvec4 ffd_count;     // x: number of splats, y: 1 = nothing moved
+};
+
+layout(std430, binding = SFFD_SSBO_CONTROL_POINTS) readonly buffer FfdControlPoints {
+    vec4 ffd_dp[];
+};
+
+const float FFD_SLACK = 1e-6;
+
+void ffd_bernstein(float s, int L, out float b[FFD_MAX_B], out float db[FFD_MAX_B]) {
+    float r = 1.0 - s;
+    b[0] = 1.0;
+    for (int d = 1; d < L; ++d) {
+        b[d] = s * b[d - 1];
+        for (int i = d - 1; i >= 1; --i) b[i] = r * b[i] + s * b[i - 1];
+        b[0] = r * b[0];
+    }
+    float fl = float(L);
+    db[0] = -fl * b[0];
+    for (int i = 1; i < L; ++i) db[i] = fl * (b[i - 1] - b[i]);
+    db[L] = fl * b[L - 1];
+    b[L] = s * b[L - 1];
+    for (int i = L - 1; i >= 1; --i) b[i] = r * b[i] + s * b[i - 1];
+    b[0] = r * b[0];
+}
+
+void ffd_bspline_weights(float f, float n, out vec4 w, out vec4 dw) {
+    float f2 = f * f, f3 = f2 * f, r = 1.0 - f;
+    w = vec4(r * r * r, 3.0 * f3 - 6.0 * f2 + 4.0, -3.0 * f3 + 3.0 * f2 + 3.0 * f + 1.0, f3) / 6.0;
+    dw = vec4(-0.5 * r * r, 1.5 * f2 - 2.0 * f, -1.5 * f2 + f + 0.5, 0.5 * f2) * n;
+}
+
+// Local coordinates of a point relative to the cloud origin.
+vec3 ffd_local(vec3 p) {
+    return ffd_stu0.xyz + vec3(dot(ffd_minv0.xyz, p), dot(ffd_minv1.xyz, p), dot(ffd_minv2.xyz, p));
+}
+
+bool ffd_inside(vec3 stu) {
+    return all(greaterThanEqual(stu, vec3(-FFD_SLACK))) && all(lessThanEqual(stu, vec3(1.0 + FFD_SLACK)));
+}
+
+// Displacement D and its derivatives G = [∂D/∂s ∂D/∂t ∂D/∂u] (columns) at clamped local coordinates.
+void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
+    stu = clamp(stu, vec3(0.0), vec3(1.0));
+    int L = ffd_div.x, M = ffd_div.y, N = ffd_div.z;
+    D = vec3(0.0);
+    vec3 Fs = vec3(0.0), Ft = vec3(0.0), Fu = vec3(0.0);
+    if (ffd_div.w == 0) {
+        float bs[FFD_MAX_B], dbs[FFD_MAX_B], bt[FFD_MAX_B], dbt[FFD_MAX_B], bu[FFD_MAX_B], dbu[FFD_MAX_B];
+        ffd_bernstein(stu.x, L, bs, dbs);
+        ffd_bernstein(stu.y, M, bt, dbt);
+        ffd_bernstein(stu.z, N, bu, dbu);
+        for (int i = 0; i <= L; ++i) {
+            vec3 R = vec3(0.0), Rt = vec3(0.0), Ru = vec3(0.0);
+            for (int j = 0; j <= M; ++j) {
+                int base = (i * (M + 1) + j) * (N + 1);
+                vec3 q = vec3(0.0), w = vec3(0.0);
+                for (int k = 0; k <= N; ++k) {
+                    vec3 d = ffd_dp[base + k].xyz;
+                    q += bu[k] * d;
+                    w += dbu[k] * d;
+                }
+                R += q * bt[j];
+                Rt += q * dbt[j];
+                Ru += w * bt[j];
+            }
+            D += R * bs[i];
+            Fs += R * dbs[i];
+            Ft += Rt * bs[i];
+            Fu += Ru * bs[i];
+        }
+    } else {
+        vec3 g = stu * vec3(L, M, N);
+        ivec3 c = min(ivec3(g), ivec3(L, M, N) - 1);
+        vec3 f = g - vec3(c);
+        vec4 ws, dws, wt, dwt, wu, dwu;
+        ffd_bspline_weights(f.x, float(L), ws, dws);
+        ffd_bspline_weights(f.y, float(M), wt, dwt);
+        ffd_bspline_weights(f.z, float(N), wu, dwu);
+        int PM = M + 3, PK = N + 3;
+        for (int a = 0; a < 4; ++a)
+            for (int b = 0; b < 4; ++b) {
+                int base = ((c.x + a) * PM + (c.y + b)) * PK + c.z;
+                vec3 q = vec3(0.0), w = vec3(0.0);
+                for (int k = 0; k < 4; ++k) {
+                    vec3 d = ffd_dp[base + k].xyz;
+                    q += wu[k] * d;
+                    w += dwu[k] * d;
+                }
+                D += q * (ws[a] * wt[b]);
+                Fs += q * (dws[a] * wt[b]);
+                Ft += q * (ws[a] * dwt[b]);
+                Fu += w * (ws[a] * wt[b]);
+            }
+    }
+    G = mat3(Fs, Ft, Fu);
+}
+
+// J = I + G M⁻¹ (M⁻¹ given by rows).
+mat3 ffd_jacobian(mat3 G) {
+    mat3 minv = transpose(mat3(ffd_minv0.xyz, ffd_minv1.xyz, ffd_minv2.xyz));
+    return mat3(1.0) + G * minv;
+}
+
+vec3 ffd_cofactor_normal(mat3 J, vec3 n) {
+    vec3 a = J[0], b = J[1], c = J[2];
+    vec3 r = cross(b, c) * n.x + cross(c, a) * n.y + cross(a, b) * n.z;
+    float len = length(r);
+    return len > 0.0 ? r / len : r;
+}
+
+#endif

@@ -1,0 +1,165 @@
+#include "systems/ffd/ffd_gpu.h"
+
+#include <cstring>
+#include <optional>
+#include <vector>
+
+#include "runtime/gfx/context.h"
+#include "runtime/gfx/gl.h"
+#include "runtime/gfx/shader.h"
+#include "shaders/common/bindings.h"
+#include "systems/ffd/deform_kernels.h"
+#include "systems/ffd/lattice.h"
+
+namespace sffd::ffd {
+
+namespace {
+// std140 mirror of FfdBlock in shaders/ffd/ffd_common.glsl.
+struct FfdBlock {
+    float minv[3][4];
+    float stu0[4];
+    std::int32_t div[4];
+    float cull_lo[4];
+    float cull_hi[4];
+    std::uint32_t count[4];
+};
+static_assert(sizeof(FfdBlock) == 128);
+}  // namespace
+
+struct GpuDeformer::Impl {
+    std::optional<gfx::GlContext> context;  // only when created headless; destroyed last (declared first)
+    gfx::Program program;
+    gfx::Buffer ubo, control_points, stats, scratch;
+    std::size_t control_capacity = 0, scratch_capacity = 0;
+    std::uint64_t uploaded_stamp = 0;
+    bool uploaded_any = false;
+    std::uint64_t uploads = 0;
+    ~Impl() {  // GL objects before the context
+        program.reset(), ubo.reset(), control_points.reset(), stats.reset(), scratch.reset();
+    }
+};
+
+GpuDeformer::GpuDeformer(std::unique_ptr<Impl> impl) : m_impl(std::move(impl)) {}
+GpuDeformer::GpuDeformer(GpuDeformer&&) noexcept = default;
+GpuDeformer& GpuDeformer::operator=(GpuDeformer&&) noexcept = default;
+GpuDeformer::~GpuDeformer() = default;
+
+Result<GpuDeformer> GpuDeformer::create() {
+    auto impl = std::make_unique<Impl>();
+    auto program = gfx::load_compute_program("ffd/deform.comp", "ffd.deform");
+    if (!program) return program.error();
+    impl->program = std::move(*program);
+    impl->ubo = gfx::Buffer::create("ffd.lattice_block");
+    glNamedBufferData(impl->ubo.id(), sizeof(FfdBlock), nullptr, GL_DYNAMIC_DRAW);
+    impl->stats = gfx::Buffer::create("ffd.stats");
+    const std::uint32_t zero[2] = {0, 0};
+    glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_READ);
+    impl->control_points = gfx::Buffer::create("ffd.control_points");
+    return GpuDeformer(std::move(impl));
+}
+
+Result<GpuDeformer> GpuDeformer::create_headless() {
+    auto ctx = gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false});
+    if (!ctx) return ctx.error();
+    auto d = create();
+    if (!d) return d.error();
+    d->m_impl->context.emplace(std::move(*ctx));
+    return d;
+}
+
+std::uint64_t GpuDeformer::upload_count() const { return m_impl->uploads; }
+
+Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t stamp, const glm::dvec3& cloud_origin, GLuint in,
+                             GLuint out, std::uint32_t count) {
+    if (Status s = validate(lattice); !s) return s;
+    Impl& m = *m_impl;
+    // Same preparation as the CPU kernels (float displacements, M⁻¹, origin offset in double).
+    const detail::Prepared P = detail::prepare(lattice, cloud_origin);
+    FfdBlock block{};
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) block.minv[r][c] = P.minv[r * 3 + c];
+    for (int a = 0; a < 3; ++a) {
+        block.stu0[a] = P.stu0[a];
+        block.div[a] = lattice.divisions[a];
+        block.cull_lo[a] = P.cull_lo[a];
+        block.cull_hi[a] = P.cull_hi[a];
+    }
+    block.div[3] = lattice.basis == LatticeBasis::bspline ? 1 : 0;
+    block.count[0] = count;
+    block.count[1] = P.moved.empty() ? 1u : 0u;
+    glNamedBufferSubData(m.ubo.id(), 0, sizeof block, &block);
+    if (!m.uploaded_any || stamp == 0 || stamp != m.uploaded_stamp) {
+        const std::vector<float>& data = lattice.basis == LatticeBasis::bspline ? P.grid : P.dp4;
+        const std::size_t bytes = std::max<std::size_t>(data.size(), 4) * sizeof(float);
+        if (bytes > m.control_capacity) {
+            glNamedBufferData(m.control_points.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_DRAW);
+            m.control_capacity = bytes;
+        }
+        if (!data.empty()) glNamedBufferSubData(m.control_points.id(), 0, GLsizeiptr(data.size() * sizeof(float)), data.data());
+        m.uploaded_stamp = stamp;
+        m.uploaded_any = stamp != 0;
+        ++m.uploads;
+    }
+    glUseProgram(m.program.id());
+    glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, m.ubo.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, m.control_points.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_IN, in);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_OUT, out);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
+    if (count > 0) glDispatchCompute((count + 63) / 64, 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    return {};
+}
+
+DeformStats GpuDeformer::read_stats() {
+    std::uint32_t v[2] = {0, 0};
+    glGetNamedBufferSubData(m_impl->stats.id(), 0, sizeof v, v);
+    DeformStats s;
+    s.inverted = v[0];
+    s.inside = v[1];
+    s.backend = Backend::fast;
+    return s;
+}
+
+void GpuDeformer::reset_stats() {
+    const std::uint32_t zero[2] = {0, 0};
+    glNamedBufferSubData(m_impl->stats.id(), 0, sizeof zero, zero);
+}
+
+Result<DeformStats> GpuDeformer::deform(const Lattice& lattice, const PointsIn& in, const PointsOut& out) {
+    if (Status s = validate(lattice); !s) return s.error();
+    Impl& m = *m_impl;
+    std::vector<gpu::GpuSplat> splats(in.count);
+    for (std::size_t i = 0; i < in.count; ++i) {
+        gpu::GpuSplat& s = splats[i];
+        const glm::vec3 p = in.positions[i];
+        const glm::vec3 n = in.normals ? in.normals[i] : glm::vec3(0, 0, 1);
+        const glm::vec3 u = in.axis_u ? in.axis_u[i] : glm::vec3(0);
+        const glm::vec3 v = in.axis_v ? in.axis_v[i] : glm::vec3(0);
+        s = gpu::GpuSplat{{p.x, p.y, p.z, 0}, {n.x, n.y, n.z, 1}, {u.x, u.y, u.z, 0}, {v.x, v.y, v.z, 0}};
+    }
+    const std::size_t bytes = std::max<std::size_t>(splats.size(), 1) * sizeof(gpu::GpuSplat);
+    if (!m.scratch || bytes > m.scratch_capacity) {
+        m.scratch = gfx::Buffer::create("ffd.scratch_splats");
+        glNamedBufferData(m.scratch.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_COPY);
+        m.scratch_capacity = bytes;
+    }
+    if (!splats.empty())
+        glNamedBufferSubData(m.scratch.id(), 0, GLsizeiptr(splats.size() * sizeof(gpu::GpuSplat)), splats.data());
+    reset_stats();
+    if (Status s = dispatch(lattice, 0, in.origin, m.scratch.id(), m.scratch.id(), std::uint32_t(in.count)); !s)
+        return s.error();
+    if (!splats.empty())
+        glGetNamedBufferSubData(m.scratch.id(), 0, GLsizeiptr(splats.size() * sizeof(gpu::GpuSplat)), splats.data());
+    for (std::size_t i = 0; i < in.count; ++i) {
+        const gpu::GpuSplat& s = splats[i];
+        out.positions[i] = glm::vec3(s.center[0], s.center[1], s.center[2]);
+        if (in.normals && out.normals) out.normals[i] = glm::vec3(s.normal[0], s.normal[1], s.normal[2]);
+        if (in.axis_u && out.axis_u) out.axis_u[i] = glm::vec3(s.axis_u[0], s.axis_u[1], s.axis_u[2]);
+        if (in.axis_v && out.axis_v) out.axis_v[i] = glm::vec3(s.axis_v[0], s.axis_v[1], s.axis_v[2]);
+    }
+    DeformStats st = read_stats();
+    return st;
+}
+
+}  // namespace sffd::ffd

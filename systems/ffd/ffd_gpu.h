@@ -1,0 +1,48 @@
+// GPU FFD deformer: the compute pass shaders/ffd/deform.comp plus its lattice uniform block and
+// control-point buffer. Needs a current GL 4.5 context for every call (create_headless() makes one).
+//
+// ffd_system uses dispatch() on GpuSplatStore buffers (no CPU round trip); tests and `splatffd deform
+// --backend gpu` use deform(), which uploads CPU arrays, dispatches and reads back.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "runtime/core/result.h"
+#include "runtime/gfx/gl_object.h"
+#include "systems/ffd/deform.h"
+
+namespace sffd::ffd {
+
+class GpuDeformer {
+public:
+    // Compiles the compute program (context must be current).
+    static Result<GpuDeformer> create();
+    // Creates and owns a headless EGL context first (command-line use).
+    static Result<GpuDeformer> create_headless();
+
+    GpuDeformer(GpuDeformer&&) noexcept;
+    GpuDeformer& operator=(GpuDeformer&&) noexcept;
+    ~GpuDeformer();
+
+    // Deforms `count` GpuSplats from buffer `in` into `out` (may be the same buffer: in place) with the
+    // lattice. Control points are uploaded only when `lattice_stamp` differs from the last upload (pass 0
+    // to force). Positions in the buffers are relative to `cloud_origin`. Does not wait for the GPU.
+    Status dispatch(const Lattice& lattice, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin, GLuint in,
+                    GLuint out, std::uint32_t count);
+    // Inverted/inside counts accumulated since the last reset (reads back 8 bytes: waits for the GPU).
+    DeformStats read_stats();
+    void reset_stats();
+
+    // CPU arrays in and out (upload, dispatch, read back). Same contract as ffd::deform().
+    Result<DeformStats> deform(const Lattice& lattice, const PointsIn& in, const PointsOut& out);
+    // How many times dispatch() uploaded control points (tests check edits upload, unchanged frames don't).
+    std::uint64_t upload_count() const;
+
+private:
+    struct Impl;
+    explicit GpuDeformer(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> m_impl;
+};
+
+}  // namespace sffd::ffd

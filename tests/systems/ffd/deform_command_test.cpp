@@ -1,0 +1,230 @@
+// End-to-end tests of `splatffd deform`: the PyGeM case through the command (every backend that exists
+// here), other properties and order kept, ASCII / big-endian input, --bench JSON, refusals of bad input.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "runtime/assets/ply.h"
+#include "systems/ffd/lattice.h"
+#include "systems/ffd/lattice_io.h"
+#include "tests/systems/ffd/test_util.h"
+
+namespace sffd::ffd {
+namespace {
+
+namespace fs = std::filesystem;
+
+const std::string kTool = SFFD_BINARY_DIR "/tools/splatffd";
+
+struct RunResult {
+    int code = -1;
+    std::string out, err;
+};
+
+RunResult run(const std::string& args) {
+    const fs::path dir = fs::temp_directory_path();
+    const std::string o = (dir / "ffd_cmd_stdout.txt").string(), e = (dir / "ffd_cmd_stderr.txt").string();
+    const int status = std::system((kTool + " deform " + args + " >" + o + " 2>" + e).c_str());
+    RunResult r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::ifstream fo(o), fe(e);
+    std::stringstream so, se;
+    so << fo.rdbuf();
+    se << fe.rdbuf();
+    r.out = so.str(), r.err = se.str();
+    return r;
+}
+
+struct Rows {
+    std::vector<double> x, y, z, nx, ny, nz, red;
+};
+
+// Writes x y z (double) nx ny nz (float) red (uchar) rows.
+void write_ply(const fs::path& path, const Rows& rows, ply::Format format) {
+    ply::Header h;
+    h.format = format;
+    ply::Element e;
+    e.name = "vertex";
+    e.count = rows.x.size();
+    for (const char* n : {"x", "y", "z"}) e.properties.push_back({n, ply::Type::float64});
+    for (const char* n : {"nx", "ny", "nz"}) e.properties.push_back({n, ply::Type::float32});
+    e.properties.push_back({"red", ply::Type::uint8});
+    h.elements.push_back(e);
+    auto w = ply::Writer::create(path, h);
+    ASSERT_TRUE(w.ok()) << w.message();
+    ply::Chunk c;
+    c.reset(e);
+    c.rows = rows.x.size();
+    c.columns[0].values = rows.x, c.columns[1].values = rows.y, c.columns[2].values = rows.z;
+    c.columns[3].values = rows.nx, c.columns[4].values = rows.ny, c.columns[5].values = rows.nz;
+    c.columns[6].values = rows.red;
+    ASSERT_TRUE(w->write_rows(c).ok());
+    ASSERT_TRUE(w->finish().ok());
+}
+
+Rows read_ply(const fs::path& path, ply::Header* header = nullptr) {
+    Rows r;
+    auto rd = ply::Reader::open(path);
+    EXPECT_TRUE(rd.ok()) << (rd.ok() ? "" : rd.message());
+    if (!rd) return r;
+    if (header) *header = rd->header();
+    EXPECT_TRUE(rd->seek_element("vertex").ok());
+    ply::Chunk c;
+    while (true) {
+        auto n = rd->read_rows(4096, c);
+        if (!n || *n == 0) break;
+        auto col = [&](const char* name) { return c.columns[std::size_t(c.find(name))].values; };
+        auto app = [](std::vector<double>& dst, const std::vector<double>& src) { dst.insert(dst.end(), src.begin(), src.end()); };
+        app(r.x, col("x")), app(r.y, col("y")), app(r.z, col("z"));
+        app(r.nx, col("nx")), app(r.ny, col("ny")), app(r.nz, col("nz"));
+        app(r.red, col("red"));
+    }
+    return r;
+}
+
+struct PyGeM {
+    std::vector<double> orig, mod;
+    std::size_t n = 0;
+};
+
+PyGeM pygem() {
+    PyGeM p;
+    std::vector<std::size_t> shape;
+    EXPECT_TRUE(test::read_npy_f64(SFFD_SHARED_DIR "/testdata/pygem/meshpoints_sphere_orig.npy", p.orig, shape));
+    EXPECT_TRUE(test::read_npy_f64(SFFD_SHARED_DIR "/testdata/pygem/meshpoints_sphere_mod.npy", p.mod, shape));
+    p.n = p.orig.size() / 3;
+    return p;
+}
+
+class DeformCommand : public testing::Test {
+protected:
+    void SetUp() override {
+        if (!fs::exists(kTool)) GTEST_SKIP() << kTool << " not built";
+        dir = fs::temp_directory_path() / ("ffd_cmd_test_" + std::to_string(::getpid()));
+        fs::create_directories(dir);
+        const PyGeM p = pygem();
+        Rows rows;
+        for (std::size_t i = 0; i < p.n; ++i) {
+            const glm::dvec3 x(p.orig[3 * i], p.orig[3 * i + 1], p.orig[3 * i + 2]), n = glm::normalize(x);
+            rows.x.push_back(x.x), rows.y.push_back(x.y), rows.z.push_back(x.z);
+            rows.nx.push_back(float(n.x)), rows.ny.push_back(float(n.y)), rows.nz.push_back(float(n.z));
+            rows.red.push_back(double(i % 251));
+        }
+        input = rows;
+        write_ply(dir / "in.ply", rows, ply::Format::binary_little_endian);
+        write_ply(dir / "in_ascii.ply", rows, ply::Format::ascii);
+        write_ply(dir / "in_be.ply", rows, ply::Format::binary_big_endian);
+        ASSERT_TRUE(save_lattice(dir / "lattice.json", test::pygem_lattice()).ok());
+    }
+    void TearDown() override {
+        if (!dir.empty()) fs::remove_all(dir);
+    }
+    std::string p(const char* name) const { return (dir / name).string(); }
+
+    double max_error(const Rows& out) const {
+        const PyGeM g = pygem();
+        double worst = 0.0;
+        for (std::size_t i = 0; i < g.n; ++i)
+            worst = std::max(worst, glm::length(glm::dvec3(out.x[i], out.y[i], out.z[i]) -
+                                                glm::dvec3(g.mod[3 * i], g.mod[3 * i + 1], g.mod[3 * i + 2])));
+        return worst;
+    }
+
+    fs::path dir;
+    Rows input;
+};
+
+TEST_F(DeformCommand, PyGeMCaseReferenceAndCpu) {
+    RunResult r = run(p("in.ply") + " " + p("out_ref.ply") + " --lattice " + p("lattice.json") + " --backend reference");
+    ASSERT_EQ(r.code, 0) << r.err;
+    Rows out = read_ply(p("out_ref.ply"));
+    ASSERT_EQ(out.x.size(), input.x.size());
+    EXPECT_LT(max_error(out), 1e-9);  // PyGeM's own test checks 6 decimals
+    EXPECT_EQ(out.red, input.red);   // other properties kept, same order
+    for (const auto* in : {"in.ply", "in_ascii.ply", "in_be.ply"}) {
+        r = run(p(in) + " " + p("out_cpu.ply") + " --lattice " + p("lattice.json"));
+        ASSERT_EQ(r.code, 0) << r.err;
+        out = read_ply(p("out_cpu.ply"));
+        EXPECT_LT(max_error(out), 1e-4) << in;  // float path: 1e-6 of the 100-unit box
+        EXPECT_EQ(out.red, input.red);
+    }
+    // Normals: unit length; unchanged outside the lattice.
+    for (std::size_t i = 0; i < out.x.size(); ++i) {
+        EXPECT_NEAR(glm::length(glm::dvec3(out.nx[i], out.ny[i], out.nz[i])), 1.0, 1e-5);
+        if (out.x[i] == input.x[i] && out.y[i] == input.y[i] && out.z[i] == input.z[i]) {
+            EXPECT_EQ(out.nx[i], input.nx[i]);
+        }
+    }
+}
+
+TEST_F(DeformCommand, AsciiOutputAndBenchJson) {
+    const RunResult r = run(p("in.ply") + " " + p("out.ply") + " --lattice " + p("lattice.json") + " --ascii --bench 3");
+    ASSERT_EQ(r.code, 0) << r.err;
+    ply::Header h;
+    const Rows out = read_ply(p("out.ply"), &h);
+    EXPECT_EQ(h.format, ply::Format::ascii);
+    EXPECT_LT(max_error(out), 1e-4);
+    EXPECT_NE(r.out.find("\"points\":7200"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\"backend\":\"cpu\""), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\"median_ms\":"), std::string::npos) << r.out;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1);
+}
+
+TEST_F(DeformCommand, GpuBackendMatchesReference) {
+    const RunResult r = run(p("in.ply") + " " + p("out_gpu.ply") + " --lattice " + p("lattice.json") + " --backend gpu");
+    if (r.code != 0 && r.err.find("EGL") != std::string::npos) GTEST_SKIP() << "no EGL here: " << r.err;
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_LT(max_error(read_ply(p("out_gpu.ply"))), 1e-4);
+}
+
+TEST_F(DeformCommand, BadInputIsRefused) {
+    // Missing lattice option: usage.
+    EXPECT_EQ(run(p("in.ply") + " " + p("o.ply")).code, 2);
+    EXPECT_EQ(run(p("in.ply") + " " + p("o.ply") + " --lattice " + p("lattice.json") + " --backend cuda").code, 2);
+    // Bad lattice: wrong count.
+    {
+        std::ofstream f(p("bad.json"));
+        f << R"({"origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"divisions":[1,1,1],"control_points":[[0,0,0]]})";
+    }
+    RunResult r = run(p("in.ply") + " " + p("o.ply") + " --lattice " + p("bad.json"));
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("bad.json: expected 8 control_points"), std::string::npos) << r.err;
+    // Zero-volume box.
+    {
+        std::ofstream f(p("flat.json"));
+        f << R"({"origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,0]],"divisions":[1,1,1]})";
+    }
+    r = run(p("in.ply") + " " + p("o.ply") + " --lattice " + p("flat.json"));
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("flat.json: zero-volume box"), std::string::npos) << r.err;
+    // Malformed and truncated PLY.
+    {
+        std::ofstream f(p("junk.ply"));
+        f << "not a ply file\n";
+    }
+    r = run(p("junk.ply") + " " + p("o.ply") + " --lattice " + p("lattice.json"));
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("junk.ply"), std::string::npos) << r.err;
+    fs::copy_file(p("in.ply"), p("trunc.ply"));
+    fs::resize_file(p("trunc.ply"), fs::file_size(p("trunc.ply")) - 100);
+    r = run(p("trunc.ply") + " " + p("o.ply") + " --lattice " + p("lattice.json"));
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("trunc.ply"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(p("o.ply")));  // atomic: no half-written output
+    // No x y z.
+    {
+        std::ofstream f(p("noxyz.ply"));
+        f << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float a\nend_header\n1\n";
+    }
+    r = run(p("noxyz.ply") + " " + p("o.ply") + " --lattice " + p("lattice.json"));
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("noxyz.ply: vertex element has no x, y, z"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace sffd::ffd
