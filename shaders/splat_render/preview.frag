@@ -7,7 +7,9 @@ layout(location = 4) flat in vec3 v_normal;
 
 
 layout(location = 0) out vec4 out_color;   // linear rgb, alpha 1
-layout(location = 1) out vec4 out_aux;     // world normal, view-axis depth
+#if AUX
+layout(location = 1) out vec4 out_aux;     // world normal, view-axis depth (only when frames are captured)
+#endif
 
 void main() {
     vec3 ray;
@@ -15,5 +17,7 @@ void main() {
     float t = raycast_splat(ray, r2, eps);
     gl_FragDepth = window_depth(t);
     out_color = vec4(v_color.rgb, 1.0);
+#if AUX
     out_aux = vec4(v_normal, t);
+#endif
 }

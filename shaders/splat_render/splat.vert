@@ -12,7 +12,16 @@
 layout(std430, binding = SFFD_SSBO_SPLATS_DRAW) readonly buffer Splats { GpuSplat splats[]; };
 layout(std430, binding = SFFD_SSBO_VISIBLE) readonly buffer QuadList { uint quads[]; };
 #else
-layout(std430, binding = SFFD_SSBO_VISIBLE_SPLATS) readonly buffer Records { SplatRecord records[]; };
+// The SplatRecord array of the cull pass, bound as a vertex buffer (stride 96): the vertex fetcher reads
+// it far faster than per-lane SSBO loads on llvmpipe.
+layout(location = 0) in vec4 a_center;
+layout(location = 1) in vec4 a_plane;
+layout(location = 2) in vec4 a_dual_u;
+layout(location = 3) in vec4 a_dual_v;
+#if PASS != 0
+layout(location = 4) in vec4 a_color;
+layout(location = 5) in vec4 a_normal;
+#endif
 #endif
 
 layout(location = 0) flat out vec4 v_plane;   // plane.xyz, eps (< 0: back-facing, discard)
@@ -39,15 +48,14 @@ void main() {
     vec2 k = corners[gl_VertexID];
     gl_Position = frame.projection * vec4(o.c + k.x * o.u + k.y * o.v, 1.0);
 #else
-    SplatRecord rec = records[gl_VertexID];
-    v_plane = rec.plane;
-    v_dual_u = rec.dual_u;
-    v_dual_v = rec.dual_v;
+    v_plane = a_plane;
+    v_dual_u = a_dual_u;
+    v_dual_v = a_dual_v;
 #if PASS != 0
-    v_color = rec.color;
-    v_normal = rec.normal.xyz;
+    v_color = a_color;
+    v_normal = a_normal.xyz;
 #endif
-    gl_Position = frame.projection * vec4(rec.center.xyz, 1.0);
-    gl_PointSize = rec.center.w;
+    gl_Position = frame.projection * vec4(a_center.xyz, 1.0);
+    gl_PointSize = a_center.w;
 #endif
 }

@@ -54,13 +54,16 @@ struct CloudGpu {
 // Registry resource: everything the renderer owns on the GPU.
 struct SplatRenderState {
     gfx::Program cull;
-    std::array<gfx::Program, 2> visibility, attribute, preview;  // [0] sprites, [1] quads
+    std::array<gfx::Program, 2> visibility, attribute;  // [0] sprites, [1] quads
+    std::array<std::array<gfx::Program, 2>, 2> preview;  // [aux outputs][sprites, quads]
     gfx::Program shade;
     gfx::Program display;  // sRGB copy for a window (PresentSource)
-    gfx::VertexArray vao;  // empty: splats come from SSBOs
+    gfx::VertexArray vao;          // empty: quads read their splats from SSBOs
+    gfx::VertexArray records_vao;  // SplatRecord[] as vertex attributes 0..5 (buffer bound per cloud)
     float max_point_size = 1.0f;
 
     int width = 0, height = 0;
+    bool aux_valid = false;  // the last frame wrote the normal + depth target
     gfx::Texture color, aux, depth, accum_color, accum_normal;
     gfx::Framebuffer output_fbo, accum_fbo, depth_fbo;
     gfx::Texture display_color;  // RGBA8 sRGB-encoded, only when presenting to a window
@@ -73,9 +76,10 @@ struct SplatRenderState {
 
 namespace {
 
-Result<gfx::Program> splat_program(const char* fragment, const char* label, int pass, int quad) {
+Result<gfx::Program> splat_program(const char* fragment, const char* label, int pass, int quad, int aux = 1) {
     return gfx::load_program({{GL_VERTEX_SHADER, "splat_render/splat.vert"}, {GL_FRAGMENT_SHADER, fragment}}, label,
-                             {{"PASS", std::to_string(pass)}, {"SHAPE_QUAD", std::to_string(quad)}});
+                             {{"PASS", std::to_string(pass)}, {"SHAPE_QUAD", std::to_string(quad)},
+                              {"AUX", std::to_string(aux)}});
 }
 
 gfx::Texture make_target(GLenum format, int w, int h, const char* label) {
@@ -287,15 +291,18 @@ gpu::FrameBlock frame_block(ecs::Registry& reg, const RenderSettings& settings, 
     return b;
 }
 
-void draw_cloud(const std::array<gfx::Program, 2>& programs, const CloudGpu& gpu) {
+void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& programs, const CloudGpu& gpu) {
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
     glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
+    glVertexArrayVertexBuffer(s.records_vao.id(), 0, gpu.records.id(), 0, GLsizei(splat_record_bytes));
+    glBindVertexArray(s.records_vao.id());
     glUseProgram(programs[0].id());
     glDrawArraysIndirect(GL_POINTS, nullptr);
+    glBindVertexArray(s.vao.id());
     glUseProgram(programs[1].id());
     glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(4 * sizeof(std::uint32_t)));
 }
@@ -314,9 +321,12 @@ Status init_render_state(ecs::Registry& registry) {
         if (!attr) return make_error(attr.message());
         auto prev = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2, quad);
         if (!prev) return make_error(prev.message());
+        auto prev_noaux = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2, quad, 0);
+        if (!prev_noaux) return make_error(prev_noaux.message());
+        s.preview[0][quad] = std::move(prev_noaux.value());
         s.visibility[quad] = std::move(vis.value());
         s.attribute[quad] = std::move(attr.value());
-        s.preview[quad] = std::move(prev.value());
+        s.preview[1][quad] = std::move(prev.value());
     }
     auto shade = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
                                     {GL_FRAGMENT_SHADER, "splat_render/shade.frag"}},
@@ -329,6 +339,12 @@ Status init_render_state(ecs::Registry& registry) {
     if (!display) return make_error(display.message());
     s.display = std::move(display.value());
     s.vao = gfx::VertexArray::create("render.empty");
+    s.records_vao = gfx::VertexArray::create("render.splat_records");
+    for (GLuint a = 0; a < 6; ++a) {
+        glEnableVertexArrayAttrib(s.records_vao.id(), a);
+        glVertexArrayAttribFormat(s.records_vao.id(), a, 4, GL_FLOAT, GL_FALSE, a * 16);
+        glVertexArrayAttribBinding(s.records_vao.id(), a, 0);
+    }
     GLfloat range[2] = {1.0f, 1.0f};
     glGetFloatv(GL_POINT_SIZE_RANGE, range);
     s.max_point_size = range[1];
@@ -427,16 +443,20 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     glDepthMask(GL_TRUE);
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
 
+    // Without aux outputs only attachment 0 is written (the preview program variant has no aux output).
+    const GLenum with_aux[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1}, without_aux[2] = {GL_COLOR_ATTACHMENT0, GL_NONE};
+    glNamedFramebufferDrawBuffers(s.output_fbo.id(), 2, settings.aux_outputs ? with_aux : without_aux);
+    s.aux_valid = settings.aux_outputs;
     if (settings.quality == Quality::preview) {
         glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
         glDepthFunc(GL_LESS);
-        for (const CloudGpu* gpu : drawn) draw_cloud(s.preview, *gpu);
+        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.preview[settings.aux_outputs ? 1 : 0], *gpu);
         lap(stats.preview_ms);
     } else {
         // 1. visibility: eps-offset depth only
         glBindFramebuffer(GL_FRAMEBUFFER, s.depth_fbo.id());
         glDepthFunc(GL_LESS);
-        for (const CloudGpu* gpu : drawn) draw_cloud(s.visibility, *gpu);
+        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.visibility, *gpu);
         lap(stats.visibility_ms);
         // 2. attributes: additive, depth-tested against the offset surface, no depth writes
         const glm::vec4 zero(0.0f);
@@ -448,7 +468,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         glEnable(GL_BLEND);
         glBlendEquation(GL_FUNC_ADD);
         glBlendFunc(GL_ONE, GL_ONE);
-        for (const CloudGpu* gpu : drawn) draw_cloud(s.attribute, *gpu);
+        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.attribute, *gpu);
         glDisable(GL_BLEND);
         glDepthMask(GL_TRUE);
         lap(stats.attribute_ms);
@@ -500,7 +520,7 @@ Result<FrameImage> capture_frame(ecs::Registry& registry) {
     const std::size_t n = std::size_t(w) * std::size_t(h);
     std::vector<glm::vec4> color(n), aux(n);
     glGetTextureImage(s->color.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(n * sizeof(glm::vec4)), color.data());
-    glGetTextureImage(s->aux.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(n * sizeof(glm::vec4)), aux.data());
+    if (s->aux_valid) glGetTextureImage(s->aux.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(n * sizeof(glm::vec4)), aux.data());
     FrameImage img;
     img.width = w, img.height = h;
     img.color.resize(n), img.depth.resize(n), img.normal.resize(n);
@@ -509,10 +529,10 @@ Result<FrameImage> capture_frame(ecs::Registry& registry) {
         for (int x = 0; x < w; ++x) {
             const glm::vec4& c = color[src_row + std::size_t(x)];
             const glm::vec4& a = aux[src_row + std::size_t(x)];
-            const bool hit = c.w > 0.0f && a.w >= 0.0f;
+            const bool hit = c.w > 0.0f && (!s->aux_valid || a.w >= 0.0f);
             img.color[dst_row + std::size_t(x)] = hit ? c : glm::vec4(0.0f);
-            img.depth[dst_row + std::size_t(x)] = hit ? a.w : std::numeric_limits<float>::infinity();
-            img.normal[dst_row + std::size_t(x)] = hit ? glm::vec3(a) : glm::vec3(0.0f);
+            img.depth[dst_row + std::size_t(x)] = hit && s->aux_valid ? a.w : std::numeric_limits<float>::infinity();
+            img.normal[dst_row + std::size_t(x)] = hit && s->aux_valid ? glm::vec3(a) : glm::vec3(0.0f);
         }
     }
     return img;

@@ -36,6 +36,8 @@ struct RenderSettings {
     bool culling = true;                  // compute-pass back-face + frustum culling (off: classify only)
     float visibility_epsilon = 1.0f;      // HQ depth offset along the view ray, in units of each splat's radius
     bool time_passes = false;             // glFinish after each pass and record CPU times in RenderStats
+    bool aux_outputs = false;             // also write the normal + depth target (EXR Z, N; capture_frame's
+                                          // depth/normal); off for interaction: it costs the preview ~10%
 };
 
 // Registry resource written by render_system; pass times only when RenderSettings::time_passes.
@@ -53,7 +55,8 @@ Status init_render_state(ecs::Registry& registry);
 
 void render_system(ecs::Registry& registry, const FrameContext& frame);
 
-// Reads the last rendered frame back (call after render_system, same context).
+// Reads the last rendered frame back (call after render_system, same context). Depth and normals only
+// when RenderSettings::aux_outputs was on for that frame (else +inf and 0).
 Result<FrameImage> capture_frame(ecs::Registry& registry);
 
 // The offscreen framebuffer holding the last frame (colour attachment 0 linear RGBA16F, attachment 1

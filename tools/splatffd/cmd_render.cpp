@@ -174,6 +174,7 @@ int run_render(sffd::cli::Args args) {
                                                                                render::srgb_to_linear(background->z)))
                                          : std::nullopt;
         settings.culling = culling;
+        settings.aux_outputs = exr;  // Z and N channels
         registry.set_resource<render::RenderSettings>(settings);
         registry.set_resource<app::AppContext>(app::AppContext{&ctx.value(), false});
         if (Status st = render::init_render_state(registry); !st) {

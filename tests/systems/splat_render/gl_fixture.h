@@ -56,6 +56,7 @@ protected:
     FrameImage render(Quality quality, int w, int h, bool culling = true) {
         RenderSettings s;
         s.quality = quality, s.width = w, s.height = h, s.culling = culling, s.time_passes = true;
+        s.aux_outputs = true;
         reg.set_resource<RenderSettings>(s);
         render_system(reg, FrameContext{});
         auto img = capture_frame(reg);
