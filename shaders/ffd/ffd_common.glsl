@@ -26,21 +26,27 @@ layout(std430, binding = SFFD_SSBO_CONTROL_POINTS) readonly buffer FfdControlPoi
 
 const float FFD_SLACK = 1e-6;
 
+// Bernstein basis B(L,i,s) and derivative L (B(L-1,i-1) - B(L-1,i)) from powers and binomials.
 void ffd_bernstein(float s, int L, out float b[FFD_MAX_B], out float db[FFD_MAX_B]) {
     float r = 1.0 - s;
-    b[0] = 1.0;
-    for (int d = 1; d < L; ++d) {
-        b[d] = s * b[d - 1];
-        for (int i = d - 1; i >= 1; --i) b[i] = r * b[i] + s * b[i - 1];
-        b[0] = r * b[0];
+    float sp[FFD_MAX_B], rp[FFD_MAX_B];
+    sp[0] = 1.0;
+    rp[0] = 1.0;
+    for (int i = 1; i <= L; ++i) {
+        sp[i] = sp[i - 1] * s;
+        rp[i] = rp[i - 1] * r;
     }
+    float c = 1.0, c1 = 1.0;  // C(L,i), C(L-1,i)
+    float prev = 0.0;         // B(L-1,i-1)
     float fl = float(L);
-    db[0] = -fl * b[0];
-    for (int i = 1; i < L; ++i) db[i] = fl * (b[i - 1] - b[i]);
-    db[L] = fl * b[L - 1];
-    b[L] = s * b[L - 1];
-    for (int i = L - 1; i >= 1; --i) b[i] = r * b[i] + s * b[i - 1];
-    b[0] = r * b[0];
+    for (int i = 0; i <= L; ++i) {
+        b[i] = c * sp[i] * rp[L - i];
+        float cur = i <= L - 1 ? c1 * sp[i] * rp[L - 1 - i] : 0.0;  // B(L-1,i)
+        db[i] = fl * (prev - cur);
+        prev = cur;
+        c = c * float(L - i) / float(i + 1);
+        c1 = c1 * float(L - 1 - i) / float(i + 1);
+    }
 }
 
 void ffd_bspline_weights(float f, float n, out vec4 w, out vec4 dw) {

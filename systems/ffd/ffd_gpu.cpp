@@ -1,7 +1,9 @@
 #include "systems/ffd/ffd_gpu.h"
 
+#include <algorithm>
 #include <cstring>
 #include <optional>
+#include <unordered_map>
 #include <vector>
 
 #include "runtime/gfx/context.h"
@@ -29,13 +31,18 @@ static_assert(sizeof(FfdBlock) == 128);
 struct GpuDeformer::Impl {
     std::optional<gfx::GlContext> context;  // only when created headless; destroyed last (declared first)
     gfx::Program program;
-    gfx::Buffer ubo, control_points, stats, scratch;
-    std::size_t control_capacity = 0, scratch_capacity = 0;
-    std::uint64_t uploaded_stamp = 0;
-    bool uploaded_any = false;
+    gfx::Buffer ubo, stats, scratch;
+    struct Controls {
+        gfx::Buffer buffer;
+        std::size_t capacity = 0;
+        std::uint64_t stamp = 0;
+    };
+    std::unordered_map<std::uint64_t, Controls> controls;  // per key (lattice entity)
+    std::size_t scratch_capacity = 0;
     std::uint64_t uploads = 0;
     ~Impl() {  // GL objects before the context
-        program.reset(), ubo.reset(), control_points.reset(), stats.reset(), scratch.reset();
+        program.reset(), ubo.reset(), stats.reset(), scratch.reset();
+        controls.clear();
     }
 };
 
@@ -54,7 +61,6 @@ Result<GpuDeformer> GpuDeformer::create() {
     impl->stats = gfx::Buffer::create("ffd.stats");
     const std::uint32_t zero[2] = {0, 0};
     glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_READ);
-    impl->control_points = gfx::Buffer::create("ffd.control_points");
     return GpuDeformer(std::move(impl));
 }
 
@@ -69,8 +75,13 @@ Result<GpuDeformer> GpuDeformer::create_headless() {
 
 std::uint64_t GpuDeformer::upload_count() const { return m_impl->uploads; }
 
-Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t stamp, const glm::dvec3& cloud_origin, GLuint in,
-                             GLuint out, std::uint32_t count) {
+void GpuDeformer::retain_keys(const std::vector<std::uint64_t>& live) {
+    for (auto it = m_impl->controls.begin(); it != m_impl->controls.end();)
+        it = std::find(live.begin(), live.end(), it->first) == live.end() ? m_impl->controls.erase(it) : std::next(it);
+}
+
+Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp, const glm::dvec3& cloud_origin,
+                             GLuint in, GLuint out, std::uint32_t count) {
     if (Status s = validate(lattice); !s) return s;
     Impl& m = *m_impl;
     // Same preparation as the CPU kernels (float displacements, M⁻¹, origin offset in double).
@@ -88,21 +99,22 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t stamp, const 
     block.count[0] = count;
     block.count[1] = P.moved.empty() ? 1u : 0u;
     glNamedBufferSubData(m.ubo.id(), 0, sizeof block, &block);
-    if (!m.uploaded_any || stamp == 0 || stamp != m.uploaded_stamp) {
+    Impl::Controls& cp = m.controls[key];
+    if (!cp.buffer) cp.buffer = gfx::Buffer::create("ffd.control_points");
+    if (stamp == 0 || stamp != cp.stamp) {  // control points only when edited
         const std::vector<float>& data = lattice.basis == LatticeBasis::bspline ? P.grid : P.dp4;
         const std::size_t bytes = std::max<std::size_t>(data.size(), 4) * sizeof(float);
-        if (bytes > m.control_capacity) {
-            glNamedBufferData(m.control_points.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_DRAW);
-            m.control_capacity = bytes;
+        if (bytes > cp.capacity) {
+            glNamedBufferData(cp.buffer.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_DRAW);
+            cp.capacity = bytes;
         }
-        if (!data.empty()) glNamedBufferSubData(m.control_points.id(), 0, GLsizeiptr(data.size() * sizeof(float)), data.data());
-        m.uploaded_stamp = stamp;
-        m.uploaded_any = stamp != 0;
+        if (!data.empty()) glNamedBufferSubData(cp.buffer.id(), 0, GLsizeiptr(data.size() * sizeof(float)), data.data());
+        cp.stamp = stamp;
         ++m.uploads;
     }
     glUseProgram(m.program.id());
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, m.ubo.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, m.control_points.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, cp.buffer.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_IN, in);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_OUT, out);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
@@ -147,7 +159,7 @@ Result<DeformStats> GpuDeformer::deform(const Lattice& lattice, const PointsIn& 
     if (!splats.empty())
         glNamedBufferSubData(m.scratch.id(), 0, GLsizeiptr(splats.size() * sizeof(gpu::GpuSplat)), splats.data());
     reset_stats();
-    if (Status s = dispatch(lattice, 0, in.origin, m.scratch.id(), m.scratch.id(), std::uint32_t(in.count)); !s)
+    if (Status s = dispatch(lattice, ~std::uint64_t(0), 0, in.origin, m.scratch.id(), m.scratch.id(), std::uint32_t(in.count)); !s)
         return s.error();
     if (!splats.empty())
         glGetNamedBufferSubData(m.scratch.id(), 0, GLsizeiptr(splats.size() * sizeof(gpu::GpuSplat)), splats.data());

@@ -7,6 +7,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <vector>
 
 #include "runtime/core/result.h"
 #include "runtime/gfx/gl_object.h"
@@ -26,10 +27,13 @@ public:
     ~GpuDeformer();
 
     // Deforms `count` GpuSplats from buffer `in` into `out` (may be the same buffer: in place) with the
-    // lattice. Control points are uploaded only when `lattice_stamp` differs from the last upload (pass 0
-    // to force). Positions in the buffers are relative to `cloud_origin`. Does not wait for the GPU.
-    Status dispatch(const Lattice& lattice, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin, GLuint in,
-                    GLuint out, std::uint32_t count);
+    // lattice. Each `key` (e.g. the lattice entity) has its own control-point buffer, uploaded only when
+    // `lattice_stamp` differs from its last upload (stamp 0 always uploads). Positions in the buffers are
+    // relative to `cloud_origin`. Does not wait for the GPU.
+    Status dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin,
+                    GLuint in, GLuint out, std::uint32_t count);
+    // Forgets control-point buffers whose key is not in `live` (lattices that were destroyed).
+    void retain_keys(const std::vector<std::uint64_t>& live);
     // Inverted/inside counts accumulated since the last reset (reads back 8 bytes: waits for the GPU).
     DeformStats read_stats();
     void reset_stats();

@@ -1,0 +1,163 @@
+#include "systems/ffd/ffd_system.h"
+
+#include <optional>
+#include <vector>
+
+#include <EGL/egl.h>
+#include <GLFW/glfw3.h>
+
+#include "runtime/core/log.h"
+#include "runtime/gfx/gl.h"
+#include "runtime/gfx/splat_store.h"
+#include "runtime/scene/components.h"
+#include "shaders/common/bindings.h"
+#include "systems/ffd/components.h"
+#include "systems/ffd/deform.h"
+#include "systems/ffd/ffd_gpu.h"
+#include "systems/ffd/lattice.h"
+
+namespace sffd {
+
+namespace {
+
+// The system's GPU state (a registry resource, so it lives exactly as long as the registry's GL objects).
+struct FfdGpuState {
+    std::optional<ffd::GpuDeformer> deformer;
+    bool unavailable = false;  // compile failed once: stay on the CPU path
+};
+
+bool gl_context_current() { return eglGetCurrentContext() != EGL_NO_CONTEXT || glfwGetCurrentContext() != nullptr; }
+
+ffd::GpuDeformer* gpu_deformer(ecs::Registry& reg) {
+    auto* st = reg.try_resource<FfdGpuState>();
+    if (!st) st = &reg.set_resource<FfdGpuState>();
+    if (st->unavailable) return nullptr;
+    if (!st->deformer) {
+        auto d = ffd::GpuDeformer::create();
+        if (!d) {
+            log::warn("ffd_system: GPU path unavailable, deforming on the CPU (", d.message(), ")");
+            st->unavailable = true;
+            return nullptr;
+        }
+        st->deformer.emplace(std::move(*d));
+    }
+    return &*st->deformer;
+}
+
+}  // namespace
+
+void ffd_release_gpu(ecs::Registry& registry) { registry.erase_resource<FfdGpuState>(); }
+
+void ffd_system(ecs::Registry& reg, const FrameContext&) {
+    FfdSettings* settings = reg.try_resource<FfdSettings>();
+    const bool force_cpu = settings && settings->force_cpu;
+    // Collect first: emplacing DeformedSplats while iterating is a structural change.
+    std::vector<ecs::Entity> clouds;
+    reg.view<const SplatCloud, const Deformers>().each([&](ecs::Entity e, const SplatCloud&, const Deformers&) { clouds.push_back(e); });
+    for (ecs::Entity e : clouds) {
+        const SplatCloud& cloud = reg.get<SplatCloud>(e);
+        const Deformers& deformers = reg.get<Deformers>(e);
+        std::vector<ecs::Entity> lattices;
+        std::vector<std::uint64_t> stamps;
+        for (ecs::Entity le : deformers.lattices)
+            if (reg.valid(le) && reg.has<Lattice>(le)) {
+                lattices.push_back(le);
+                stamps.push_back(reg.version<Lattice>(le) ^ (le.bits() << 1));
+            }
+        const std::uint64_t cloud_v = reg.version<SplatCloud>(e), deformers_v = reg.version<Deformers>(e);
+        const DeformedSplats* seen = reg.try_get<DeformedSplats>(e);
+        if (seen && seen->seen_cloud == cloud_v && seen->seen_deformers == deformers_v && seen->seen_lattices == stamps &&
+            seen->seen_force_cpu == force_cpu)
+            continue;  // nothing this cloud depends on moved
+
+        if (!seen) reg.emplace<DeformedSplats>(e);
+        DeformedSplats& out = reg.patch<DeformedSplats>(e);
+        out.origin = cloud.origin;
+        out.seen_cloud = cloud_v, out.seen_deformers = deformers_v, out.seen_lattices = stamps;
+        out.seen_force_cpu = force_cpu;
+        out.inverted = 0;
+        ++out.version;
+        const std::size_t n = cloud.size();
+
+        // Bounds: the rest box grown by each lattice's displacement hull, in order (never under-covers).
+        ffd::Box box;
+        for (const glm::vec3& p : cloud.positions) box.add(cloud.origin + glm::dvec3(p));
+        for (ecs::Entity le : lattices)
+            if (ffd::validate(reg.get<Lattice>(le)).ok()) box = ffd::deformed_bounds(reg.get<Lattice>(le), box);
+        out.bounds_min = box.lo, out.bounds_max = box.hi;
+
+        // GPU path: the cloud's rest splats are on the GPU and current.
+        gfx::GpuSplatStore* store = force_cpu || !gl_context_current() ? nullptr : reg.try_resource<gfx::GpuSplatStore>();
+        gfx::GpuSplats* splats = nullptr;
+        if (store) {
+            auto it = store->clouds.find(e);
+            if (it != store->clouds.end() && it->second.rest && it->second.rest_version == cloud_v && it->second.count == n)
+                splats = &it->second;
+        }
+        ffd::GpuDeformer* gpu = splats ? gpu_deformer(reg) : nullptr;
+        if (gpu) {
+            const std::size_t bytes = std::max<std::size_t>(n, 1) * sizeof(gpu::GpuSplat);
+            if (!splats->deformed) {
+                splats->deformed = gfx::Buffer::create("splats.deformed");
+                glNamedBufferData(splats->deformed.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_COPY);
+            } else {
+                GLint64 size = 0;
+                glGetNamedBufferParameteri64v(splats->deformed.id(), GL_BUFFER_SIZE, &size);
+                if (std::size_t(size) < bytes) glNamedBufferData(splats->deformed.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_COPY);
+            }
+            gpu->reset_stats();
+            GLuint in = splats->rest.id();
+            bool ok = true;
+            if (lattices.empty() && n > 0)
+                glCopyNamedBufferSubData(in, splats->deformed.id(), 0, 0, GLsizeiptr(n * sizeof(gpu::GpuSplat)));
+            for (std::size_t d = 0; d < lattices.size(); ++d) {
+                const Lattice& l = reg.get<Lattice>(lattices[d]);
+                if (Status s = gpu->dispatch(l, lattices[d].bits(), stamps[d], cloud.origin, in, splats->deformed.id(),
+                                             std::uint32_t(n));
+                    !s) {
+                    log::warn("ffd_system: ", s.message(), " (lattice skipped)");
+                    if (d == 0 && n > 0)
+                        glCopyNamedBufferSubData(in, splats->deformed.id(), 0, 0, GLsizeiptr(n * sizeof(gpu::GpuSplat)));
+                    else if (d == 0) ok = false;
+                    in = splats->deformed.id();
+                    continue;
+                }
+                in = splats->deformed.id();
+            }
+            if (ok) {
+                out.inverted = gpu->read_stats().inverted;
+                splats->has_deformed = true;
+                ++splats->deformed_version;
+                out.gpu_valid = true;
+                out.cpu_valid = false;
+                out.positions.clear(), out.normals.clear(), out.axis_u.clear(), out.axis_v.clear();
+                if (settings) ++settings->gpu_runs;
+                continue;
+            }
+        }
+
+        // CPU path: first deformer reads the authored cloud, the next ones work in place.
+        out.positions = cloud.positions;
+        out.normals = cloud.normals;
+        out.axis_u = cloud.axis_u;
+        out.axis_v = cloud.axis_v;
+        auto ptr = [n](std::vector<glm::vec3>& v) { return v.size() == n ? v.data() : nullptr; };
+        for (ecs::Entity le : lattices) {
+            const ffd::PointsIn in{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v), n, cloud.origin};
+            const ffd::PointsOut o{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v)};
+            auto stats = ffd::deform(reg.get<Lattice>(le), in, o);
+            if (!stats) {
+                log::warn("ffd_system: ", stats.message(), " (lattice skipped)");
+                continue;
+            }
+            out.inverted += stats->inverted;
+        }
+        out.cpu_valid = true;
+        out.gpu_valid = false;
+        if (store)
+            if (auto it = store->clouds.find(e); it != store->clouds.end()) it->second.has_deformed = false;  // render re-uploads
+        if (settings) ++settings->cpu_runs;
+    }
+}
+
+}  // namespace sffd

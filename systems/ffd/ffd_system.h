@@ -1,0 +1,32 @@
+// ffd_system: the deformation phase (runtime/app/frame_loop.h). Reads SplatCloud + Deformers on point-cloud
+// entities and Lattice on the lattice entities they name; writes DeformedSplats (always: bounds, inverted
+// count, version) and either GpuSplatStore::clouds[e].deformed (GPU path) or DeformedSplats' CPU arrays.
+//
+// Skinning-style: a cloud is re-deformed only when its SplatCloud, its Deformers or one of its lattices'
+// change stamps (registry.version<Lattice>) moved; several deformers apply in order (each deforms the
+// previous one's output). GPU path when a GL context is current on this thread and GpuSplatStore holds
+// the cloud's up-to-date `rest` buffer (the render system uploads it); CPU otherwise (headless tools,
+// tests, or the first frame before the upload). Control points go to the GPU only when edited.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "runtime/app/frame_loop.h"
+#include "runtime/ecs/registry.h"
+
+namespace sffd {
+
+// Optional resource: settings and counters of the deformation phase.
+struct FfdSettings {
+    bool force_cpu = false;        // never use the GPU path (picking-heavy tools, comparisons)
+    std::uint64_t cpu_runs = 0;    // clouds deformed on the CPU so far
+    std::uint64_t gpu_runs = 0;    // clouds deformed on the GPU so far
+};
+
+void ffd_system(ecs::Registry& registry, const FrameContext& frame);
+
+// Drops the system's GPU state (call while the GL context is still current, before destroying it).
+void ffd_release_gpu(ecs::Registry& registry);
+
+}  // namespace sffd

@@ -1,0 +1,115 @@
+// GPU path (headless EGL, llvmpipe): the compute pass against the CPU reference (1e-5), ffd_system on
+// GpuSplatStore buffers, control points uploaded only when edited, nothing dispatched when nothing changed.
+#include <gtest/gtest.h>
+
+#include "runtime/ecs/registry.h"
+#include "runtime/gfx/context.h"
+#include "runtime/gfx/gl.h"
+#include "runtime/gfx/splat_store.h"
+#include "runtime/scene/components.h"
+#include "shaders/common/bindings.h"
+#include "systems/ffd/deform.h"
+#include "systems/ffd/ffd_gpu.h"
+#include "systems/ffd/ffd_system.h"
+#include "systems/ffd/lattice.h"
+#include "systems/ffd/operations.h"
+#include "tests/systems/ffd/test_util.h"
+
+namespace sffd {
+namespace {
+
+class FfdGl : public testing::Test {
+protected:
+    void SetUp() override {
+        auto c = gfx::create_context({.headless = true, .width = 16, .height = 16});
+        if (!c) GTEST_SKIP() << c.message();
+        ctx.emplace(std::move(*c));
+    }
+    std::optional<gfx::GlContext> ctx;
+};
+
+TEST_F(FfdGl, ComputePassMatchesCpuReference) {
+    auto gpu = ffd::GpuDeformer::create();
+    ASSERT_TRUE(gpu.ok()) << gpu.message();
+    ffd::test::Cloud c = ffd::test::fibonacci_sphere(20000);
+    c.origin = glm::dvec3(1e6, 0, 0);  // far from the world origin
+    for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline}) {
+        Lattice l = ffd::make_lattice(c.origin + glm::dvec3(-1.1), {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                                      {10, 10, 10}, basis);
+        ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.6, c.origin);
+        const std::size_t n = c.size();
+        std::vector<glm::vec3> gp(n), gn(n), gu(n), gv(n), rp(n), rn(n), ru(n), rv(n);
+        const ffd::PointsIn in{c.p.data(), c.n.data(), c.u.data(), c.v.data(), n, c.origin};
+        auto gs = gpu->deform(l, in, {gp.data(), gn.data(), gu.data(), gv.data()});
+        ASSERT_TRUE(gs.ok()) << gs.message();
+        auto rs = ffd::deform(l, in, {rp.data(), rn.data(), ru.data(), rv.data()}, ffd::Backend::reference);
+        ASSERT_TRUE(rs.ok());
+        EXPECT_EQ(gs->inside, rs->inside);
+        EXPECT_EQ(gs->inverted, rs->inverted);
+        for (std::size_t i = 0; i < n; ++i) {
+            ASSERT_LT(glm::length(gp[i] - rp[i]), 1e-5f * 2.2f) << i;
+            ASSERT_LT(glm::length(gn[i] - rn[i]), 1e-5f) << i;
+            ASSERT_LT(glm::length(gu[i] - ru[i]), 1e-5f * glm::length(ru[i]) + 1e-9f) << i;
+            ASSERT_LT(glm::length(gv[i] - rv[i]), 1e-5f * glm::length(rv[i]) + 1e-9f) << i;
+        }
+    }
+}
+
+TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
+    ecs::Registry reg;
+    const ffd::test::Cloud c = ffd::test::fibonacci_sphere(5000);
+    const ecs::Entity cloud = reg.create();
+    SplatCloud sc;
+    sc.positions = c.p, sc.normals = c.n, sc.axis_u = c.u, sc.axis_v = c.v;
+    reg.emplace<SplatCloud>(cloud, sc);
+    const ecs::Entity le = reg.create();
+    reg.emplace<Lattice>(le, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {5, 5, 5}));
+    reg.emplace<Deformers>(cloud, Deformers{{le}});
+    auto& settings = reg.set_resource<FfdSettings>();
+    auto& store = reg.set_resource<gfx::GpuSplatStore>();
+    {
+        // What the render system does: upload the authored splats as `rest`.
+        gfx::GpuSplats& s = store.clouds[cloud];
+        std::vector<gpu::GpuSplat> packed(c.size());
+        for (std::size_t i = 0; i < c.size(); ++i)
+            packed[i] = {{c.p[i].x, c.p[i].y, c.p[i].z, 0}, {c.n[i].x, c.n[i].y, c.n[i].z, 1}, {c.u[i].x, c.u[i].y, c.u[i].z, 0},
+                         {c.v[i].x, c.v[i].y, c.v[i].z, 0}};
+        s.rest = gfx::Buffer::create("test.rest");
+        glNamedBufferData(s.rest.id(), GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data(), GL_STATIC_DRAW);
+        s.count = std::uint32_t(c.size());
+        s.rest_version = reg.version<SplatCloud>(cloud);
+    }
+    ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.8, glm::dvec3(0.0));
+    ffd_system(reg, {});
+    EXPECT_EQ(settings.gpu_runs, 1u);
+    const gfx::GpuSplats& s = store.clouds[cloud];
+    ASSERT_TRUE(s.has_deformed);
+    EXPECT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
+    EXPECT_FALSE(reg.get<DeformedSplats>(cloud).cpu_valid);
+    std::vector<gpu::GpuSplat> back(c.size());
+    glGetNamedBufferSubData(s.deformed.id(), 0, GLsizeiptr(back.size() * sizeof(gpu::GpuSplat)), back.data());
+    std::vector<glm::vec3> rp(c.size()), rn(c.size());
+    ASSERT_TRUE(ffd::deform(reg.get<Lattice>(le), {c.p.data(), c.n.data(), nullptr, nullptr, c.size(), {}}, {rp.data(), rn.data()},
+                            ffd::Backend::reference)
+                    .ok());
+    const DeformedSplats& d = reg.get<DeformedSplats>(cloud);
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        const glm::vec3 p(back[i].center[0], back[i].center[1], back[i].center[2]);
+        ASSERT_LT(glm::length(p - rp[i]), 2.2e-5f);
+        ASSERT_LT(glm::length(glm::vec3(back[i].normal[0], back[i].normal[1], back[i].normal[2]) - rn[i]), 1e-5f);
+        ASSERT_TRUE(glm::all(glm::greaterThanEqual(glm::dvec3(p), d.bounds_min)) && glm::all(glm::lessThanEqual(glm::dvec3(p), d.bounds_max)));
+    }
+    const std::uint64_t version = s.deformed_version;
+    ffd_system(reg, {});  // nothing changed: no dispatch
+    EXPECT_EQ(s.deformed_version, version);
+    EXPECT_EQ(settings.gpu_runs, 1u);
+    ffd::stretch(reg.patch<Lattice>(le), {0}, {0.01, 0, 0});
+    ffd_system(reg, {});
+    EXPECT_EQ(settings.gpu_runs, 2u);
+    EXPECT_GT(s.deformed_version, version);
+    ffd_release_gpu(reg);
+    reg.erase_resource<gfx::GpuSplatStore>();
+}
+
+}  // namespace
+}  // namespace sffd

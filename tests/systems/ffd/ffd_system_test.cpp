@@ -1,0 +1,109 @@
+// ffd_system on the CPU path (no GL context): change detection, deformers in order, bounds, inverted count.
+#include <gtest/gtest.h>
+
+#include "runtime/core/log.h"
+#include "runtime/ecs/registry.h"
+#include "runtime/scene/components.h"
+#include "systems/ffd/components.h"
+#include "systems/ffd/deform.h"
+#include "systems/ffd/ffd_system.h"
+#include "systems/ffd/lattice.h"
+#include "systems/ffd/operations.h"
+#include "tests/systems/ffd/test_util.h"
+
+namespace sffd {
+namespace {
+
+struct Scene {
+    ecs::Registry reg;
+    ecs::Entity cloud, global, local;
+};
+
+void make_scene(Scene& s) {
+    const ffd::test::Cloud c = ffd::test::fibonacci_sphere(5000);
+    s.cloud = s.reg.create();
+    SplatCloud sc;
+    sc.origin = glm::dvec3(100, 0, 0);
+    sc.positions = c.p, sc.normals = c.n, sc.axis_u = c.u, sc.axis_v = c.v;
+    s.reg.emplace<SplatCloud>(s.cloud, std::move(sc));
+    s.global = s.reg.create();
+    s.reg.emplace<Lattice>(s.global, ffd::make_lattice({98.9, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                                                       {4, 4, 4}));
+    s.local = s.reg.create();
+    s.reg.emplace<Lattice>(s.local, ffd::make_lattice({100.2, 0.2, -0.5}, {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)},
+                                                      {3, 3, 3}, LatticeBasis::bspline));
+    s.reg.emplace<Deformers>(s.cloud, Deformers{{s.global, s.local}});
+    s.reg.set_resource<FfdSettings>();
+}
+
+TEST(FfdSystem, RunsOnlyWhenSomethingChanged) {
+    Scene s;
+    make_scene(s);
+    auto& settings = s.reg.resource<FfdSettings>();
+    ffd_system(s.reg, {});
+    EXPECT_EQ(settings.cpu_runs, 1u);
+    const DeformedSplats& d = s.reg.get<DeformedSplats>(s.cloud);
+    EXPECT_TRUE(d.cpu_valid);
+    const std::uint64_t v = d.version;
+    ffd_system(s.reg, {});
+    EXPECT_EQ(settings.cpu_runs, 1u);  // nothing moved
+    EXPECT_EQ(s.reg.get<DeformedSplats>(s.cloud).version, v);
+    ffd::twist(s.reg.patch<Lattice>(s.local), ffd::all_control_points(s.reg.get<Lattice>(s.local)), {0, 0, 1}, 0.3);
+    ffd_system(s.reg, {});
+    EXPECT_EQ(settings.cpu_runs, 2u);  // the local lattice's stamp moved
+    EXPECT_GT(s.reg.get<DeformedSplats>(s.cloud).version, v);
+    s.reg.patch<SplatCloud>(s.cloud);
+    ffd_system(s.reg, {});
+    EXPECT_EQ(settings.cpu_runs, 3u);  // the rest points changed
+    s.reg.patch<Deformers>(s.cloud).lattices.pop_back();
+    ffd_system(s.reg, {});
+    EXPECT_EQ(settings.cpu_runs, 4u);  // the deformer list changed
+}
+
+TEST(FfdSystem, DeformersApplyInOrderAndBoundsCover) {
+    Scene s;
+    make_scene(s);
+    Lattice& g = s.reg.patch<Lattice>(s.global);
+    ffd::twist_graded(g, ffd::all_control_points(g), {0, 1, 0}, 1.0, glm::dvec3(100, 0, 0));
+    Lattice& l = s.reg.patch<Lattice>(s.local);
+    ffd::stretch(l, ffd::select_range(l, {1, 1, 1}, {2, 2, 2}), {0.1, 0.05, 0.0});
+    ffd_system(s.reg, {});
+    const DeformedSplats& d = s.reg.get<DeformedSplats>(s.cloud);
+    const SplatCloud& c = s.reg.get<SplatCloud>(s.cloud);
+    ASSERT_EQ(d.positions.size(), c.size());
+    std::size_t changed_by_local = 0;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        const glm::dvec3 x = c.origin + glm::dvec3(c.positions[i]);
+        const ffd::ReferencePoint a = ffd::reference_point(s.reg.get<Lattice>(s.global), x);
+        const ffd::ReferencePoint b = ffd::reference_point(s.reg.get<Lattice>(s.local), a.position);
+        const glm::dvec3 got = d.origin + glm::dvec3(d.positions[i]);
+        ASSERT_LT(glm::length(got - b.position), 1e-5) << i;
+        changed_by_local += glm::length(b.position - a.position) > 1e-4;
+        ASSERT_TRUE(glm::all(glm::greaterThanEqual(got, d.bounds_min)) && glm::all(glm::lessThanEqual(got, d.bounds_max)));
+        // Normal through both Jacobians (cofactor = det · inverse transpose, composed).
+        const glm::dmat3 J = b.jacobian * a.jacobian;
+        const glm::dvec3 n = glm::normalize(glm::determinant(J) * glm::transpose(glm::inverse(J)) * glm::dvec3(c.normals[i]));
+        ASSERT_LT(glm::length(glm::dvec3(d.normals[i]) - n), 1e-4) << i;
+    }
+    EXPECT_GT(changed_by_local, 50u);
+    EXPECT_EQ(d.inverted, 0u);
+    // A mirrored global lattice: every splat inside it is reported inverted.
+    Lattice& m = s.reg.patch<Lattice>(s.global);
+    for (std::size_t i = 0; i < m.size(); ++i) m.current[i] = glm::dvec3(200.0 - m.rest[i].x, m.rest[i].y, m.rest[i].z);
+    s.reg.patch<Deformers>(s.cloud).lattices = {s.global};
+    ffd_system(s.reg, {});
+    EXPECT_EQ(s.reg.get<DeformedSplats>(s.cloud).inverted, c.size());
+}
+
+TEST(FfdSystem, BadLatticeIsSkippedWithAWarning) {
+    Scene s;
+    make_scene(s);
+    s.reg.patch<Lattice>(s.local).current[3].x = std::nan("");
+    log::ScopedLogCapture capture;
+    ffd_system(s.reg, {});
+    EXPECT_TRUE(capture.contains("control point 3 is not finite"));
+    EXPECT_TRUE(s.reg.get<DeformedSplats>(s.cloud).cpu_valid);
+}
+
+}  // namespace
+}  // namespace sffd
