@@ -32,6 +32,11 @@ public:
     // relative to `cloud_origin`. Does not wait for the GPU.
     Status dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin,
                     GLuint in, GLuint out, std::uint32_t count);
+    // Single-lattice form (key 0), kept for callers written against the first version of this API.
+    Status dispatch(const Lattice& lattice, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin, GLuint in,
+                    GLuint out, std::uint32_t count) {
+        return dispatch(lattice, 0, lattice_stamp, cloud_origin, in, out, count);
+    }
     // Forgets control-point buffers whose key is not in `live` (lattices that were destroyed).
     void retain_keys(const std::vector<std::uint64_t>& live);
     // Inverted/inside counts accumulated since the last reset (reads back 8 bytes: waits for the GPU).

@@ -5,6 +5,7 @@
 
 #include "runtime/app/app.h"
 #include "systems/animation/animation_system.h"
+#include "systems/ffd/ffd_system.h"
 #include "systems/picking/picking_system.h"
 #include "systems/splat_render/splat_render.h"
 #if SFFD_EDITOR_HAS_INPUT_SYSTEM
@@ -25,6 +26,7 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
     s.add(Phase::animation, "animation", animation_system);
 
     // --- deformation: re-deform point clouds whose rest data or lattices changed (ffd) --------------
+    s.add(Phase::deformation, "ffd", ffd_system);  // GPU compute when a context is current, else CPU
 
     // --- picking: only when a pick was requested (picking) ------------------------------------------
     s.add(Phase::picking, "picking", picking::picking_system);
