@@ -5,6 +5,7 @@
 #include "runtime/ecs/registry.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
+#include "runtime/gfx/render_target.h"
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
 #include "shaders/common/bindings.h"
@@ -13,7 +14,10 @@
 #include "systems/ffd/ffd_system.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/operations.h"
+#include "systems/ffd/paper_mode.h"
 #include "tests/systems/ffd/test_util.h"
+
+#include <glm/gtc/matrix_transform.hpp>
 
 namespace sffd {
 namespace {
@@ -109,6 +113,62 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     EXPECT_GT(s.deformed_version, version);
     ffd_release_gpu(reg);
     reg.erase_resource<gfx::GpuSplatStore>();
+}
+
+TEST_F(FfdGl, PaperModeDrawsTheSameImageAsTheComputePass) {
+    auto paper = ffd::PaperModeRenderer::create();
+    ASSERT_TRUE(paper.ok()) << paper.message();
+    auto gpu = ffd::GpuDeformer::create();
+    ASSERT_TRUE(gpu.ok());
+    const ffd::test::Cloud c = ffd::test::fibonacci_sphere(20000);
+    std::vector<gpu::GpuSplat> packed(c.size());
+    for (std::size_t i = 0; i < c.size(); ++i)
+        packed[i] = {{c.p[i].x, c.p[i].y, c.p[i].z, 0}, {c.n[i].x, c.n[i].y, c.n[i].z, 1}, {c.u[i].x, c.u[i].y, c.u[i].z, 0},
+                     {c.v[i].x, c.v[i].y, c.v[i].z, 0}};
+    const GLsizeiptr bytes = GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat));
+    gfx::Buffer rest = gfx::Buffer::create("test.rest"), deformed = gfx::Buffer::create("test.deformed");
+    glNamedBufferData(rest.id(), bytes, packed.data(), GL_STATIC_DRAW);
+    glNamedBufferData(deformed.id(), bytes, nullptr, GL_DYNAMIC_COPY);
+    Lattice l = ffd::make_lattice(glm::dvec3(-1.1), {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {10, 10, 10});
+    ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 1.2, glm::dvec3(0.0));
+    ffd::stretch(l, ffd::select_range(l, {0, 8, 0}, {10, 10, 10}), {0.3, 0.2, 0});
+    ASSERT_TRUE(gpu->dispatch(l, 1, 1, {}, rest.id(), deformed.id(), std::uint32_t(c.size())).ok());
+    auto target = gfx::RenderTarget::create({.label = "test.paper", .width = 128, .height = 128,
+                                             .color = {{"color", gfx::ColorFormat::rgba8}}});
+    ASSERT_TRUE(target.ok()) << target.message();
+    const glm::mat4 vp = glm::mat4(glm::scale(glm::mat4(1.0f), glm::vec3(0.6f, 0.6f, -0.3f)));
+    const float black[4] = {0, 0, 0, 1};
+    auto render = [&](bool paper_mode) {
+        target->bind();
+        target->clear_color("color", black);
+        target->clear_depth();
+        if (paper_mode) {
+            EXPECT_TRUE(paper->draw(l, 1, {}, rest.id(), std::uint32_t(c.size()), vp, 2.0f).ok());
+        } else {
+            paper->draw_deformed(deformed.id(), std::uint32_t(c.size()), vp, 2.0f);
+        }
+        return target->read_rgba8("color");
+    };
+    const auto a = render(true), b = render(false);
+    std::size_t covered = 0, different = 0;
+    for (std::size_t i = 0; i < a.size(); i += 4) {
+        covered += a[i] > 0;
+        different += std::abs(int(a[i]) - int(b[i])) > 2;
+    }
+    EXPECT_GT(covered, 128u * 128u / 5);   // the deformed sphere covers a good part of the image
+    EXPECT_LT(different, covered / 200);   // same splats, same place, same shading (float rounding aside)
+    // And it is deformed: the undeformed sphere differs.
+    paper->draw_deformed(rest.id(), 0, vp, 2.0f);
+    const auto und = [&] {
+        target->bind();
+        target->clear_color("color", black);
+        target->clear_depth();
+        paper->draw_deformed(rest.id(), std::uint32_t(c.size()), vp, 2.0f);
+        return target->read_rgba8("color");
+    }();
+    std::size_t moved = 0;
+    for (std::size_t i = 0; i < a.size(); i += 4) moved += (a[i] > 0) != (und[i] > 0);
+    EXPECT_GT(moved, 200u);
 }
 
 }  // namespace
