@@ -5,8 +5,9 @@
 //   accum_normal = sum(w * world normal), sum(w * view-axis depth)
 #include "splat_render/raycast.glsl"
 
-layout(location = 3) flat in vec4 v_color;
-layout(location = 4) flat in vec3 v_normal;
+#include "splat_render/splat_common.glsl"
+
+layout(location = 3) flat in vec3 v_normal;
 
 
 layout(location = 0) out vec4 accum_color;
@@ -14,11 +15,11 @@ layout(location = 1) out vec4 accum_normal;
 
 void main() {
     vec3 ray;
-    float r2, eps;
-    float t = raycast_splat(ray, r2, eps);
-    gl_FragDepth = window_depth(t);
+    float r2;
+    float t = raycast_splat(ray, r2);
+    gl_FragDepth = window_depth_inv(dot(v_plane.xyz, ray));
     // Smooth radial kernel that reaches 0 at the ellipse's edge: no visible disc borders.
     float w = (1.0 - r2) * (1.0 - r2) + 1e-6;
-    accum_color = vec4(w * v_color.rgb, w);
+    accum_color = vec4(w * unpack_color(v_plane.w), w);
     accum_normal = vec4(w * v_normal, w * t);
 }

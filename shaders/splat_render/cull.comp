@@ -4,7 +4,7 @@
 // than the point-size limit, crossing the near plane, or centred off-screen: sprites are clipped by their
 // centre) go to the quad list as indices. Two DrawArraysIndirectCommands follow: {sprites, 1, 0, 0} and
 // {6, quads, 0, 0}. With culling off (frame.params.z == 0) nothing is dropped: back-facing sprites are
-// marked (plane.w < 0) and discarded per fragment, so the image is the same and the cost is visible.
+// marked (plane.xyz = NaN) and discarded per fragment, so the image is the same and the cost is visible.
 layout(local_size_x = 128) in;
 
 #include "splat_render/splat_color.glsl"
@@ -47,10 +47,9 @@ void main() {
     }
     SplatRecord rec;
     splat_raycast_setup(o, rec.plane, rec.dual_u, rec.dual_v);
-    if (back) rec.plane.w = -1.0;
+    if (back) rec.plane.xyz = vec3(uintBitsToFloat(0x7fc00000u));  // NaN: every fragment discards
     rec.center = vec4(o.c, size);
     vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
-    rec.color = splat_color(s, o, world_n);
-    rec.normal = vec4(world_n, 0.0);
+    rec.normal = vec4(world_n, pack_color(splat_color(s, o, world_n).rgb));
     records[atomicAdd(point_count, 1u)] = rec;
 }

@@ -23,6 +23,7 @@ layout(std140, binding = SFFD_UBO_FRAME) uniform FrameBlock {
     SFFD_MAT4 normal_view;    // inverse transpose of model_view (upper 3x3 used)
     SFFD_MAT4 view_to_world;  // inverse view matrix (world normals, shading)
     SFFD_VEC4 viewport;       // width, height, 1/width, 1/height
+    SFFD_VEC4 ray_map;        // view ray of a pixel: (x, y) = gl_FragCoord.xy * ray_map.xy + ray_map.zw, z = -1
     SFFD_VEC4 params;         // x: visibility offset eps (times the splat radius), y: max point size,
                               // z: culling on (1) / off (0), w: material has a texture (1) / not (0)
     SFFD_VEC4 ambient;        // linear rgb * intensity
@@ -33,7 +34,7 @@ layout(std140, binding = SFFD_UBO_FRAME) uniform FrameBlock {
     SFFD_UVEC4 counts;        // x: splats in the draw buffer, y: lights, w: 1 = preview (colours are lit)
 #ifdef __cplusplus
 };
-static_assert(sizeof(FrameBlock) == 4 * 64 + 6 * 16 + 2 * SFFD_MAX_LIGHTS * 16);
+static_assert(sizeof(FrameBlock) == 4 * 64 + 7 * 16 + 2 * SFFD_MAX_LIGHTS * 16);
 }  // namespace sffd::gpu
 #else
 } frame;

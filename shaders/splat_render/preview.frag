@@ -2,8 +2,11 @@
 // Preview: one pass of opaque ray-cast ellipses with true depth; the vertex shader lit each splat once.
 #include "splat_render/raycast.glsl"
 
-layout(location = 3) flat in vec4 v_color;
-layout(location = 4) flat in vec3 v_normal;
+#include "splat_render/splat_common.glsl"
+
+#if AUX
+layout(location = 3) flat in vec3 v_normal;
+#endif
 
 
 layout(location = 0) out vec4 out_color;   // linear rgb, alpha 1
@@ -13,10 +16,10 @@ layout(location = 1) out vec4 out_aux;     // world normal, view-axis depth (onl
 
 void main() {
     vec3 ray;
-    float r2, eps;
-    float t = raycast_splat(ray, r2, eps);
-    gl_FragDepth = window_depth(t);
-    out_color = vec4(v_color.rgb, 1.0);
+    float r2;
+    float t = raycast_splat(ray, r2);
+    gl_FragDepth = window_depth_inv(dot(v_plane.xyz, ray));
+    out_color = vec4(unpack_color(v_plane.w), 1.0);
 #if AUX
     out_aux = vec4(v_normal, t);
 #endif

@@ -11,24 +11,22 @@ layout(location = 2) flat in vec4 v_dual_v;
 
 // View-space direction of the ray through this fragment's pixel centre, scaled to z = -1.
 vec3 pixel_ray() {
-    vec2 ndc = gl_FragCoord.xy * frame.viewport.zw * 2.0 - 1.0;
-    return vec3(ndc.x / frame.projection[0][0], ndc.y / frame.projection[1][1], -1.0);
+    return vec3(gl_FragCoord.xy * frame.ray_map.xy + frame.ray_map.zw, -1.0);
 }
 
-// Window depth of a point at view-axis depth t (view-space z = -t), as the fixed-function pipeline computes it.
-float window_depth(float t) {
-    return 0.5 * (frame.projection[3][2] / t - frame.projection[2][2]) + 0.5;
+// Window depth of a point at view-axis depth t (view-space z = -t), as the fixed-function pipeline
+// computes it, from 1/t (no division).
+float window_depth_inv(float inv_t) {
+    return 0.5 * (frame.projection[3][2] * inv_t - frame.projection[2][2]) + 0.5;
 }
+float window_depth(float t) { return window_depth_inv(1.0 / t); }
 
 // Intersects the pixel's ray with the splat's plane; discards outside the ellipse and back-facing splats
-// marked by the cull pass (culling off). Returns the view-axis depth t of the hit (p = t * ray) and the
-// squared elliptical radius r2.
-float raycast_splat(out vec3 ray, out float r2, out float eps) {
-    vec4 plane = v_plane;
-    if (plane.w < 0.0) discard;
-    eps = plane.w;
+// marked by the cull pass (culling off: plane NaN, so t is NaN). Returns the view-axis depth t of the hit
+// (p = t * ray) and the squared elliptical radius r2.
+float raycast_splat(out vec3 ray, out float r2) {
     ray = pixel_ray();
-    float t = 1.0 / dot(plane.xyz, ray);
+    float t = 1.0 / dot(v_plane.xyz, ray);
     if (!(t > 0.0)) discard;
     vec4 du = v_dual_u, dv = v_dual_v;
     float s = t * dot(du.xyz, ray) - du.w;

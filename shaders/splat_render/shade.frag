@@ -9,8 +9,7 @@ layout(binding = SFFD_TEX_ACCUM_NORMAL) uniform sampler2D accum_normal;
 
 // World-space direction from the surface towards the eye for this pixel.
 vec3 pixel_to_eye_world() {
-    vec2 ndc = gl_FragCoord.xy * frame.viewport.zw * 2.0 - 1.0;
-    vec3 ray = vec3(ndc.x / frame.projection[0][0], ndc.y / frame.projection[1][1], -1.0);
+    vec3 ray = vec3(gl_FragCoord.xy * frame.ray_map.xy + frame.ray_map.zw, -1.0);
     return -normalize(mat3(frame.view_to_world) * ray);
 }
 

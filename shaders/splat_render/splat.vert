@@ -19,17 +19,16 @@ layout(location = 1) in vec4 a_plane;
 layout(location = 2) in vec4 a_dual_u;
 layout(location = 3) in vec4 a_dual_v;
 #if PASS != 0
-layout(location = 4) in vec4 a_color;
-layout(location = 5) in vec4 a_normal;
+layout(location = 4) in vec4 a_normal;  // w: packed colour
 #endif
 #endif
 
-layout(location = 0) flat out vec4 v_plane;   // plane.xyz, eps (< 0: back-facing, discard)
+// PASS 0: v_plane.w = eps; PASS 1, 2: v_plane.w = packed colour (HQ albedo, preview lit; pack_color).
+layout(location = 0) flat out vec4 v_plane;
 layout(location = 1) flat out vec4 v_dual_u;
 layout(location = 2) flat out vec4 v_dual_v;
-#if PASS != 0
-layout(location = 3) flat out vec4 v_color;   // linear rgba (preview: lit)
-layout(location = 4) flat out vec3 v_normal;  // world space shading normal
+#if PASS == 1 || AUX
+layout(location = 3) flat out vec3 v_normal;  // world space shading normal
 #endif
 
 void main() {
@@ -37,11 +36,14 @@ void main() {
     GpuSplat s = splats[quads[gl_InstanceID]];
     SplatView o = splat_view(s);
     splat_raycast_setup(o, v_plane, v_dual_u, v_dual_v);
-    if (frame.params.z == 0.0 && s.normal.w != 0.0 && dot(o.shading_n, o.c) > 0.0) v_plane.w = -1.0;
+    if (frame.params.z == 0.0 && s.normal.w != 0.0 && dot(o.shading_n, o.c) > 0.0)
+        v_plane.xyz = vec3(uintBitsToFloat(0x7fc00000u));  // back-facing with culling off: discard
 #if PASS != 0
     vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
-    v_color = splat_color(s, o, world_n);
+    v_plane.w = pack_color(splat_color(s, o, world_n).rgb);
+#if PASS == 1 || AUX
     v_normal = world_n;
+#endif
 #endif
     // Two triangles (0,1,2) (2,1,3) over the corners (-1,-1) (1,-1) (-1,1) (1,1).
     const vec2 corners[6] = vec2[6](vec2(-1, -1), vec2(1, -1), vec2(-1, 1), vec2(-1, 1), vec2(1, -1), vec2(1, 1));
@@ -52,8 +54,10 @@ void main() {
     v_dual_u = a_dual_u;
     v_dual_v = a_dual_v;
 #if PASS != 0
-    v_color = a_color;
+    v_plane.w = a_normal.w;
+#if PASS == 1 || AUX
     v_normal = a_normal.xyz;
+#endif
 #endif
     gl_Position = frame.projection * vec4(a_center.xyz, 1.0);
     gl_PointSize = a_center.w;

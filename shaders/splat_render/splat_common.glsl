@@ -7,18 +7,32 @@
 #include "splat_render/frame_block.h"
 
 // A visible sprite splat, prepared by the cull pass so the vertex shaders of both HQ passes only copy it
-// (llvmpipe spends its time per primitive: vertex work runs once, in the compute pass). std430, 96 bytes.
-// The ray through a pixel is d = (x, y, -1) in view space; everything the ray cast needs is linear in d:
+// (llvmpipe spends its time per primitive: vertex work runs once, in the compute pass). std430, 80 bytes,
+// bound as a vertex buffer. The ray through a pixel is d = (x, y, -1) in view space; the ray cast is
+// linear in d:
 //   t = 1 / dot(plane.xyz, d)                     view-axis depth of the hit p = t * d
 //   s = t * dot(dual_u.xyz, d) - dual_u.w,  q = t * dot(dual_v.xyz, d) - dual_v.w,  inside: s^2 + q^2 <= 1
+// plane.xyz = NaN marks a back-facing splat kept with culling off (every fragment discards).
+// Colour travels packed (10-10-10 bits of sqrt(linear rgb)) so that, with the normal, every pass hands at
+// most four vec4 varyings per sprite to the rasteriser (each costs per-primitive set-up on llvmpipe).
 struct SplatRecord {
     vec4 center;   // xyz view-space centre, w: sprite size in pixels
     vec4 plane;    // xyz: plane normal / dot(center, normal), w: visibility offset eps (view units)
     vec4 dual_u;   // xyz: dual axis (s = dot(dual_u, p - center)), w: dot(dual_u, center)
     vec4 dual_v;
-    vec4 color;    // linear rgba (HQ: albedo; preview: lit colour)
-    vec4 normal;   // xyz world-space shading normal
+    vec4 normal;   // xyz world-space shading normal, w: packed colour (pack_color; HQ albedo, preview lit)
 };
+
+float pack_color(vec3 linear) {
+    uvec3 q = uvec3(round(sqrt(clamp(linear, 0.0, 1.0)) * 1023.0));
+    return uintBitsToFloat(q.r | (q.g << 10) | (q.b << 20));
+}
+
+vec3 unpack_color(float packed_color) {
+    uint bits = floatBitsToUint(packed_color);
+    vec3 c = vec3(uvec3(bits, bits >> 10, bits >> 20) & 1023u) * (1.0 / 1023.0);
+    return c * c;
+}
 
 // Largest radius of the ellipse {s*u + t*v : s^2 + t^2 <= 1}: sqrt of the Gram matrix's larger eigenvalue
 // (u and v need not be orthogonal after a deformation).
@@ -46,8 +60,9 @@ float sprite_size(vec3 c, float r) {
     return 2.0 * max(half_x, half_y) + 0.5;  // half a pixel for the rasteriser's rounding
 }
 
+// sRGB decode without the linear toe (below 0.04045 the two differ by < 3e-4): one pow, no select.
 vec3 srgb_to_linear(vec3 c) {
-    return mix(c / 12.92, pow((c + 0.055) / 1.055, vec3(2.4)), greaterThan(c, vec3(0.04045)));
+    return pow((c + 0.055) * (1.0 / 1.055), vec3(2.4));
 }
 
 // View-space set-up of splat s (cloud space -> view space through frame.model_view).

@@ -5,8 +5,9 @@
 
 void main() {
     vec3 ray;
-    float r2, eps;
-    float t = raycast_splat(ray, r2, eps);
+    float r2;
+    float t = raycast_splat(ray, r2);
+    float eps = v_plane.w;
     // Pushed back by eps along the ray: the view-axis depth grows by eps / |ray| (ray.z = -1).
     gl_FragDepth = window_depth(t + eps * inversesqrt(dot(ray, ray)));
 }

@@ -69,7 +69,8 @@ BoundingSphere bounding_sphere(const SplatCloud& cloud) {
     for (std::size_t i = 0; i < cloud.axis_u.size() && i < cloud.axis_v.size(); ++i)
         splat_r2 = std::max(splat_r2, double(std::max(glm::dot(cloud.axis_u[i], cloud.axis_u[i]),
                                                       glm::dot(cloud.axis_v[i], cloud.axis_v[i]))));
-    b.radius = std::sqrt(r2) + std::sqrt(splat_r2);
+    b.max_splat_radius = std::sqrt(splat_r2);
+    b.radius = std::sqrt(r2) + b.max_splat_radius;
     return b;
 }
 

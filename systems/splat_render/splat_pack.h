@@ -18,6 +18,7 @@ std::vector<gpu::GpuSplat> pack_splats(const SplatCloud& cloud);
 struct BoundingSphere {
     glm::dvec3 center{0.0};
     double radius = 0.0;
+    double max_splat_radius = 0.0;  // largest |axis_u|, |axis_v| (included in radius)
 };
 BoundingSphere bounding_sphere(const SplatCloud& cloud);
 

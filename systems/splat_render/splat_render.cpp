@@ -30,7 +30,7 @@ namespace sffd::render {
 namespace {
 
 constexpr std::uint32_t cull_group_size = 128;  // local_size_x of shaders/splat_render/cull.comp
-constexpr std::size_t splat_record_bytes = 96;  // SplatRecord in shaders/splat_render/splat_common.glsl
+constexpr std::size_t splat_record_bytes = 80;  // SplatRecord in shaders/splat_render/splat_common.glsl
 
 // Per point cloud GPU objects owned by the renderer (the splats themselves live in GpuSplatStore).
 struct CloudGpu {
@@ -59,7 +59,7 @@ struct SplatRenderState {
     gfx::Program shade;
     gfx::Program display;  // sRGB copy for a window (PresentSource)
     gfx::VertexArray vao;          // empty: quads read their splats from SSBOs
-    gfx::VertexArray records_vao;  // SplatRecord[] as vertex attributes 0..5 (buffer bound per cloud)
+    gfx::VertexArray records_vao;  // SplatRecord[] as vertex attributes 0..4 (buffer bound per cloud)
     float max_point_size = 1.0f;
 
     int width = 0, height = 0;
@@ -265,6 +265,9 @@ gpu::FrameBlock frame_block(ecs::Registry& reg, const RenderSettings& settings, 
     b.view_to_world = glm::mat4(glm::inverse(view.view));
     b.viewport = glm::vec4(float(settings.width), float(settings.height), 1.0f / float(settings.width),
                            1.0f / float(settings.height));
+    b.ray_map = glm::vec4(float(2.0 / (double(settings.width) * view.projection[0][0])),
+                          float(2.0 / (double(settings.height) * view.projection[1][1])),
+                          float(-1.0 / view.projection[0][0]), float(-1.0 / view.projection[1][1]));
     b.params = glm::vec4(settings.visibility_epsilon, max_point_size, settings.culling ? 1.0f : 0.0f, 0.0f);
     std::uint32_t lights = 0;
     reg.view<const DirectionalLight>().each([&](const DirectionalLight& l) {
@@ -291,6 +294,63 @@ gpu::FrameBlock frame_block(ecs::Registry& reg, const RenderSettings& settings, 
     return b;
 }
 
+// Pixel rectangle (x, y, width, height; GL's bottom-left origin) that holds every cloud's projection:
+// the deformer's world box when the cloud is deformed, else the rest bounding sphere; the whole frame
+// when a bound reaches behind the near plane or a deformed cloud has no box.
+glm::ivec4 screen_rect(ecs::Registry& reg, const ViewSetup& view, int w, int h) {
+    const glm::ivec4 full(0, 0, w, h);
+    const double p00 = view.projection[0][0], p11 = view.projection[1][1];
+    const double near_plane = double(view.camera.near_plane);
+    glm::dvec2 lo(1e30), hi(-1e30);
+    bool everything = false;
+    auto add_ball = [&](const glm::dvec3& world_center, double radius) {
+        const glm::dvec3 c = glm::dvec3(view.view * glm::dvec4(world_center, 1.0));
+        const double depth = -c.z, near_depth = depth - radius;
+        if (near_depth <= near_plane) {
+            everything = true;
+            return;
+        }
+        const glm::dvec2 ndc(p00 * c.x / depth, p11 * c.y / depth);
+        const glm::dvec2 half(radius * std::sqrt(p00 * p00 + ndc.x * ndc.x) / near_depth,
+                              radius * std::sqrt(p11 * p11 + ndc.y * ndc.y) / near_depth);
+        lo = glm::min(lo, ndc - half);
+        hi = glm::max(hi, ndc + half);
+    };
+    const auto* store = reg.try_resource<gfx::GpuSplatStore>();
+    const auto* state = reg.try_resource<SplatRenderState>();
+    reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
+        if (everything || cloud.size() == 0) return;
+        const auto sit = store ? store->clouds.find(e) : decltype(store->clouds.end()){};
+        const bool deformed = store && sit != store->clouds.end() && sit->second.has_deformed;
+        if (deformed) {
+            const auto* d = reg.try_get<DeformedSplats>(e);
+            if (!d || d->bounds_max.x < d->bounds_min.x) {
+                everything = true;
+                return;
+            }
+            // Box -> ball around it, grown by 4x the largest rest splat radius (the box holds the centres;
+            // deformed axes are longer by the local stretch).
+            const auto cit = state->clouds.find(e);
+            const double splat_r = cit != state->clouds.end() ? cit->second.bounds.max_splat_radius : 0.0;
+            add_ball(0.5 * (d->bounds_min + d->bounds_max), 0.5 * glm::length(d->bounds_max - d->bounds_min) + 4.0 * splat_r);
+            return;
+        }
+        const auto cit = state->clouds.find(e);
+        if (cit == state->clouds.end()) return;
+        const glm::dmat4 m = model_matrix(reg.try_get<Transform>(e), cloud.origin);
+        const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])),
+                                       glm::length(glm::dvec3(m[2]))});
+        add_ball(glm::dvec3(m * glm::dvec4(cit->second.bounds.center, 1.0)), cit->second.bounds.radius * scale);
+    });
+    if (everything) return full;
+    if (hi.x < lo.x) return glm::ivec4(0, 0, 0, 0);
+    const int x0 = std::clamp(int(std::floor((lo.x * 0.5 + 0.5) * w)) - 1, 0, w);
+    const int x1 = std::clamp(int(std::ceil((hi.x * 0.5 + 0.5) * w)) + 1, 0, w);
+    const int y0 = std::clamp(int(std::floor((lo.y * 0.5 + 0.5) * h)) - 1, 0, h);
+    const int y1 = std::clamp(int(std::ceil((hi.y * 0.5 + 0.5) * h)) + 1, 0, h);
+    return glm::ivec4(x0, y0, x1 - x0, y1 - y0);
+}
+
 void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& programs, const CloudGpu& gpu) {
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
@@ -315,9 +375,9 @@ Status init_render_state(ecs::Registry& registry) {
     if (!cull) return make_error(cull.message());
     s.cull = std::move(cull.value());
     for (int quad = 0; quad < 2; ++quad) {
-        auto vis = splat_program("splat_render/visibility.frag", quad ? "render.visibility.quads" : "render.visibility", 0, quad);
+        auto vis = splat_program("splat_render/visibility.frag", quad ? "render.visibility.quads" : "render.visibility", 0, quad, 0);
         if (!vis) return make_error(vis.message());
-        auto attr = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute", 1, quad);
+        auto attr = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute", 1, quad, 0);
         if (!attr) return make_error(attr.message());
         auto prev = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2, quad);
         if (!prev) return make_error(prev.message());
@@ -340,7 +400,7 @@ Status init_render_state(ecs::Registry& registry) {
     s.display = std::move(display.value());
     s.vao = gfx::VertexArray::create("render.empty");
     s.records_vao = gfx::VertexArray::create("render.splat_records");
-    for (GLuint a = 0; a < 6; ++a) {
+    for (GLuint a = 0; a < 5; ++a) {
         glEnableVertexArrayAttrib(s.records_vao.id(), a);
         glVertexArrayAttribFormat(s.records_vao.id(), a, 4, GL_FLOAT, GL_FALSE, a * 16);
         glVertexArrayAttribBinding(s.records_vao.id(), a, 0);
@@ -432,7 +492,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     const glm::vec4 no_hit(0.0f, 0.0f, 0.0f, -1.0f);
     const float far_depth = 1.0f;
     glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 0, &background.x);
-    glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 1, &no_hit.x);
+    if (settings.aux_outputs) glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 1, &no_hit.x);
     glClearNamedFramebufferfv(s.output_fbo.id(), GL_DEPTH, 0, &far_depth);
     glViewport(0, 0, w, h);
     glBindVertexArray(s.vao.id());
@@ -459,6 +519,11 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         for (const CloudGpu* gpu : drawn) draw_cloud(s, s.visibility, *gpu);
         lap(stats.visibility_ms);
         // 2. attributes: additive, depth-tested against the offset surface, no depth writes
+        // Accumulation and shading only inside the screen rectangle the clouds can cover (clears of two
+        // RGBA32F targets and the shading pass are a large part of a small scene's frame on llvmpipe).
+        const glm::ivec4 rect = screen_rect(reg, view, w, h);
+        glEnable(GL_SCISSOR_TEST);
+        glScissor(rect.x, rect.y, rect.z, rect.w);
         const glm::vec4 zero(0.0f);
         glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 0, &zero.x);
         glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 1, &zero.x);
@@ -482,6 +547,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         glBindTextureUnit(SFFD_TEX_ACCUM_NORMAL, s.accum_normal.id());
         glUseProgram(s.shade.id());
         if (!drawn.empty()) glDrawArrays(GL_TRIANGLES, 0, 3);
+        glDisable(GL_SCISSOR_TEST);
         glDepthMask(GL_TRUE);
         glDepthFunc(GL_LESS);
         lap(stats.shade_ms);

@@ -7,6 +7,7 @@
 #include <benchmark/benchmark.h>
 
 #include <chrono>
+#include <ctime>
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -27,6 +28,14 @@ using namespace sffd;
 using namespace sffd::render;
 
 namespace {
+
+// CPU time of the whole process (llvmpipe's rasteriser threads included): far steadier than wall time
+// while other jobs load the machine; on a quiet machine wall time is about this divided by the threads.
+double process_cpu_seconds() {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + double(ts.tv_nsec) * 1e-9;
+}
 
 gfx::GlContext& context() {
     static std::optional<gfx::GlContext> ctx;
@@ -81,12 +90,16 @@ void bench_render(benchmark::State& state) {
     FrameContext frame;
     render_system(reg, frame);  // upload, compile, warm up
     glFinish();
+    double cpu = 0.0;
     for (auto _ : state) {
         const auto t0 = std::chrono::steady_clock::now();
+        const double c0 = process_cpu_seconds();
         render_system(reg, frame);
         glFinish();
+        cpu += process_cpu_seconds() - c0;
         state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
+    state.counters["cpu_ms"] = 1e3 * cpu / double(state.iterations());
     // One extra frame with per-pass timing for the counters.
     reg.resource<RenderSettings>().time_passes = true;
     render_system(reg, frame);
@@ -154,11 +167,15 @@ void bench_reference_points(benchmark::State& state) {
         glFinish();
     };
     frame();
+    double cpu = 0.0;
     for (auto _ : state) {
         const auto t0 = std::chrono::steady_clock::now();
+        const double c0 = process_cpu_seconds();
         frame();
+        cpu += process_cpu_seconds() - c0;
         state.SetIterationTime(std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     }
+    state.counters["cpu_ms"] = 1e3 * cpu / double(state.iterations());
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 

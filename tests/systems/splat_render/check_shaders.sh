@@ -17,10 +17,10 @@ check() {  # file stage defines...
         echo "ok   $file $*"
     fi
 }
-for shape in 0 1; do for pass in 0 1 2; do check splat_render/splat.vert vert SHAPE_QUAD=$shape PASS=$pass; done; done
+for shape in 0 1; do for pass in 0 1 2; do for a in 0 1; do check splat_render/splat.vert vert SHAPE_QUAD=$shape PASS=$pass AUX=$a; done; done; done
 for q in 0 1; do check splat_render/visibility.frag frag SHAPE_QUAD=$q PASS=0; done
 for q in 0 1; do check splat_render/attribute.frag frag SHAPE_QUAD=$q PASS=1; done
-for q in 0 1; do check splat_render/preview.frag frag SHAPE_QUAD=$q PASS=2; done
+for q in 0 1; do for a in 0 1; do check splat_render/preview.frag frag SHAPE_QUAD=$q PASS=2 AUX=$a; done; done
 check splat_render/shade.frag frag
 check splat_render/fullscreen.vert vert
 check splat_render/cull.comp comp
