@@ -63,8 +63,9 @@ public:
         for (std::size_t i = lead.size(); i-- > 0;) {
             if (i >= lead.size()) continue;  // several entries removed during the call
             const Entity e = lead[i];
-            if (!contains_all(e)) continue;
-            call(fn, e);
+            // The lead storage holds e at position i by construction: only the others are looked up.
+            if (!contains_others(e)) continue;
+            call(fn, e, static_cast<std::uint32_t>(i));
         }
     }
 
@@ -97,17 +98,26 @@ private:
     bool contains_all(Entity e) const {
         return std::apply([&](auto*... s) { return (s->contains(e) && ...); }, m_storages);
     }
+    bool contains_others(Entity e) const {
+        return std::apply([&](auto*... s) { return ((s == m_lead || s->contains(e)) && ...); }, m_storages);
+    }
+    // Component of e, which sits at `lead_pos` in the lead storage.
+    template <class T>
+    T& get_at(Entity e, std::uint32_t lead_pos) const {
+        auto* s = std::get<Storage<std::remove_const_t<T>>*>(m_storages);
+        return s->at(s == m_lead ? lead_pos : s->position_of(e));
+    }
     template <class T>
     T& get(Entity e) const {
         auto* s = std::get<Storage<std::remove_const_t<T>>*>(m_storages);
         return s->at(s->position_of(e));
     }
     template <class Fn>
-    void call(Fn& fn, Entity e) const {
+    void call(Fn& fn, Entity e, std::uint32_t lead_pos) const {
         if constexpr (std::is_invocable_v<Fn&, Entity, C&...>)
-            fn(e, get<C>(e)...);
+            fn(e, get_at<C>(e, lead_pos)...);
         else
-            fn(get<C>(e)...);
+            fn(get_at<C>(e, lead_pos)...);
     }
 
     Storages m_storages;
