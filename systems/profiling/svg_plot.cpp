@@ -11,7 +11,7 @@ namespace {
 
 // Colour-blind-safe palette (Okabe-Ito), then greys.
 constexpr const char* palette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00",
-                                   "#56B4E9", "#000000", "#F0E442", "#777777", "#AA4499",
+                                   "#56B4E9", "#000000", "#882255", "#777777", "#AA4499",
                                    "#332288", "#117733"};
 constexpr const char* dashes[] = {"", "6,3", "2,3", "8,3,2,3"};
 
@@ -116,8 +116,25 @@ std::string render_svg(const LineChart& c) {
         lo = down(lo), hi = up(hi);
         if (hi <= lo) hi = lo * 10;
     };
-    if (c.log_x) expand_log(x0, x1);
-    else if (x1 == x0) x0 -= 1, x1 += 1;
+    std::vector<double> data_x;
+    if (c.x_ticks_at_data) {
+        for (const auto& s : c.series)
+            for (auto [x, y] : s.points)
+                if (std::find(data_x.begin(), data_x.end(), x) == data_x.end()) data_x.push_back(x);
+        std::sort(data_x.begin(), data_x.end());
+    }
+    if (c.x_ticks_at_data && !data_x.empty()) {
+        // Pad by a fraction of the range so the end markers sit inside the frame.
+        if (c.log_x) x0 /= 1.25, x1 *= 1.25;
+        else {
+            const double pad = x1 > x0 ? 0.06 * (x1 - x0) : 1.0;
+            x0 -= pad, x1 += pad;
+        }
+    } else if (c.log_x) {
+        expand_log(x0, x1);
+    } else if (x1 == x0) {
+        x0 -= 1, x1 += 1;
+    }
     if (c.log_y) expand_log(y0, y1);
     else {
         y0 = std::min(0.0, y0);
@@ -142,7 +159,7 @@ std::string render_svg(const LineChart& c) {
     o += "<text x=\"" + fmt("%.1f", (left + right) / 2) + "\" y=\"28\" text-anchor=\"middle\" font-size=\"17\" "
          "font-weight=\"bold\">" + escape(c.title) + "</text>\n";
     // Grid and ticks.
-    for (double t : nice_ticks(x0, x1, c.log_x)) {
+    for (double t : c.x_ticks_at_data && !data_x.empty() ? data_x : nice_ticks(x0, x1, c.log_x)) {
         const double x = tx(t);
         o += "<line x1=\"" + fmt("%.1f", x) + "\" y1=\"" + fmt("%.1f", top) + "\" x2=\"" + fmt("%.1f", x) +
              "\" y2=\"" + fmt("%.1f", bottom) + "\" stroke=\"#e4e4e4\"/>\n";
@@ -173,7 +190,7 @@ std::string render_svg(const LineChart& c) {
     for (std::size_t i = 0; i < c.series.size(); ++i) {
         const auto& s = c.series[i];
         const std::string colour = palette[i % std::size(palette)];
-        const std::string dash = dashes[(i / std::size(palette)) % std::size(dashes)];
+        const std::string dash = s.dashed ? "7,4" : dashes[(i / std::size(palette)) % std::size(dashes)];
         std::string pts;
         for (auto [x, y] : s.points) {
             if ((c.log_x && x <= 0) || (c.log_y && y <= 0)) continue;

@@ -11,6 +11,7 @@ namespace sffd::profiling {
 struct Series {
     std::string name;
     std::vector<std::pair<double, double>> points;  // (x, y), drawn in the given order
+    bool dashed = false;                            // e.g. one backend solid, the other dashed
 };
 
 struct LineChart {
@@ -20,6 +21,7 @@ struct LineChart {
     bool log_x = false;
     bool log_y = false;
     bool markers = true;
+    bool x_ticks_at_data = false;  // label the x axis at the data's x values (few distinct values)
     int width = 900, height = 560;
     std::vector<Series> series;
 };

@@ -14,6 +14,7 @@
 #include <fstream>
 #include <map>
 #include <optional>
+#include <unordered_map>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -39,6 +40,13 @@
 #if __has_include("systems/ffd/deform.h")
 #include "systems/ffd/deform.h"
 #define SFFD_PROFILE_HAS_FFD 1
+#endif
+#if __has_include("systems/ffd/ffd_gpu.h") && __has_include("systems/splat_render/splat_pack.h")
+#include "runtime/core/log.h"
+#include "systems/ffd/ffd_gpu.h"
+#include "systems/profiling/pass_timer.h"
+#include "systems/splat_render/splat_pack.h"
+#define SFFD_PROFILE_HAS_FFD_GPU 1
 #endif
 #if __has_include("systems/splat_render/splat_render.h")
 #include "systems/splat_render/splat_render.h"
@@ -232,6 +240,63 @@ void harness_cpu_deform(ecs::Registry& registry, const FrameContext&) {
 }
 #endif
 
+#if SFFD_PROFILE_HAS_FFD_GPU
+// GPU compute deformation through the FFD engineer's GpuDeformer (shaders/ffd/deform.comp), for
+// schedules without the FFD system (sweeps, the paper table): rest splats packed once into a buffer,
+// every lattice dispatched in order into `deformed`, the whole thing named as the pass "ffd.compute".
+struct HarnessGpuDeform {
+    std::optional<ffd::GpuDeformer> deformer;
+    struct Cloud {
+        gfx::Buffer rest, deformed;
+        std::uint32_t count = 0;
+    };
+    std::unordered_map<ecs::Entity, Cloud> clouds;
+    bool failed = false;
+};
+
+Status gpu_deform_all(ecs::Registry& registry) {
+    auto* st = registry.try_resource<HarnessGpuDeform>();
+    if (!st) st = &registry.set_resource<HarnessGpuDeform>();
+    if (st->failed) return make_error("profile: GPU deformer unavailable");
+    if (!st->deformer) {
+        auto d = ffd::GpuDeformer::create();
+        if (!d) {
+            st->failed = true;
+            return d.error();
+        }
+        st->deformer.emplace(std::move(d.value()));
+    }
+    auto scope = profiling::gpu_scope(registry, "ffd.compute");
+    for (auto [e, cloud, deformers] : registry.view<const SplatCloud, const Deformers>()) {
+        auto& c = st->clouds[e];
+        if (!c.rest) {
+            const auto packed = render::pack_splats(cloud);
+            c.count = static_cast<std::uint32_t>(packed.size());
+            const auto bytes = static_cast<GLsizeiptr>(std::max<std::size_t>(packed.size(), 1) * sizeof(packed[0]));
+            c.rest = gfx::Buffer::create("profile.rest");
+            c.deformed = gfx::Buffer::create("profile.deformed");
+            glNamedBufferData(c.rest.id(), bytes, packed.empty() ? nullptr : packed.data(), GL_STATIC_DRAW);
+            glNamedBufferData(c.deformed.id(), bytes, nullptr, GL_DYNAMIC_DRAW);
+        }
+        bool first = true;
+        for (ecs::Entity le : deformers.lattices) {
+            const Lattice* l = registry.try_get<Lattice>(le);
+            if (!l) continue;
+            if (Status s = st->deformer->dispatch(*l, registry.version<Lattice>(le), cloud.origin,
+                                                  first ? c.rest.id() : c.deformed.id(), c.deformed.id(), c.count);
+                !s)
+                return s;
+            first = false;
+        }
+    }
+    return {};
+}
+
+void harness_gpu_deform(ecs::Registry& registry, const FrameContext&) {
+    if (Status s = gpu_deform_all(registry); !s) log::error(s.message());
+}
+#endif
+
 // ---------------------------------------------------------------------------------------------- one run
 
 struct RunSetup {
@@ -323,6 +388,12 @@ Result<RunOutput> run_profile(const RunSetup& s) {
 #if SFFD_PROFILE_HAS_FFD
     if (!has_deformer && (s.backend == "cpu" || !have_gl)) {
         schedule.add(Phase::deformation, "ffd.cpu_fast", harness_cpu_deform);
+        has_deformer = true;
+    }
+#endif
+#if SFFD_PROFILE_HAS_FFD_GPU
+    if (!has_deformer && s.backend == "gpu" && have_gl) {
+        schedule.add(Phase::deformation, "ffd.gpu_compute", harness_gpu_deform);
         has_deformer = true;
     }
 #endif
@@ -493,8 +564,10 @@ int run_sweep(const Options& o) {
             c.title = by_points ? "FFD deformation time vs point count" : "FFD deformation time vs lattice size";
             c.x_label = by_points ? "splats" : "control points per axis (lattice n x n x n)";
             c.y_label = "deformation time per frame, median (ms)";
+            c.title += " (solid: CPU, dashed: GPU)";
             c.log_x = by_points;
             c.log_y = true;
+            c.x_ticks_at_data = true;
             std::map<std::string, Series> series;
             std::vector<std::string> order;
             for (const auto& r : rows) {
@@ -502,7 +575,7 @@ int run_sweep(const Options& o) {
                 char key[128];
                 if (by_points) std::snprintf(key, sizeof key, "%s %s, %d^3", r.backend.c_str(), r.basis.c_str(), r.lattice);
                 else std::snprintf(key, sizeof key, "%s %s, %s pts", r.backend.c_str(), r.basis.c_str(), tick_label(r.points).c_str());
-                if (!series.count(key)) order.push_back(key), series[key].name = key;
+                if (!series.count(key)) order.push_back(key), series[key].name = key, series[key].dashed = r.backend == "gpu";
                 series[key].points.emplace_back(by_points ? r.points : double(r.lattice), r.deform_p50);
             }
             for (const auto& k : order) {
@@ -630,7 +703,45 @@ int run_paper(const Options& o) {
 #else
         rows.push_back({label, "ours CPU fast", cloud->size(), {-1, -1, -1, -1}, "not built yet"});
 #endif
+#if SFFD_PROFILE_HAS_FFD_GPU
+        {
+            // Timed with glFinish + CPU clock (llvmpipe's timer queries are not trustworthy).
+            PaperRow gpu{label, "ours GPU compute (glFinish-timed)", cloud->size(), {}, ""};
+            auto ctx = gfx::create_context({.headless = true, .width = 64, .height = 64, .debug = false});
+            if (!ctx) {
+                gpu.case_ms = {-1, -1, -1, -1};
+                gpu.note = ctx.message();
+            } else {
+                gpu.note = ctx->renderer();
+                auto greg = std::make_unique<ecs::Registry>();  // dies before the context
+                const ecs::Entity ce = greg->create();
+                greg->emplace<SplatCloud>(ce, *cloud);
+                const ecs::Entity le = greg->create();
+                greg->emplace<Lattice>(le, lattice);
+                greg->emplace<Deformers>(ce, Deformers{{le}});
+                for (const auto& pc : paper_cases) {
+                    std::vector<double> ms;
+                    for (int f = 0; f < std::max(3, o.frames / 8) + 2; ++f) {
+                        apply_paper_case(greg->patch<Lattice>(le), pc, 0.5 + 0.5 * std::sin(0.7 * (f + 1)));
+                        glFinish();
+                        const auto t0 = std::chrono::steady_clock::now();
+                        if (Status st = gpu_deform_all(*greg); !st) {
+                            std::fprintf(stderr, "%s\n", st.message().c_str());
+                            return 1;
+                        }
+                        glFinish();
+                        const double t = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+                        if (f >= 2) ms.push_back(t);
+                    }
+                    gpu.case_ms.push_back(median(ms));
+                }
+                greg.reset();
+            }
+            rows.push_back(gpu);
+        }
+#else
         rows.push_back({label, "ours GPU compute", cloud->size(), {-1, -1, -1, -1}, "not built yet"});
+#endif
         rows.push_back({label, "paper mode (vertex shader)", cloud->size(), {-1, -1, -1, -1}, "not built yet"});
     }
 
