@@ -5,6 +5,10 @@
 // centre) go to the quad list as indices. Two DrawArraysIndirectCommands follow: {sprites, 1, 0, 0} and
 // {6, quads, 0, 0}. With culling off (frame.params.z == 0) nothing is dropped: back-facing sprites are
 // marked (plane.xyz = NaN) and discarded per fragment, so the image is the same and the cost is visible.
+//
+// Cheap tests first (back face from centre and normal only, then the frustum), so the two thirds of a
+// closed surface that face away cost little. Slots are reserved per workgroup (shared-memory counters,
+// one global atomic per group and list) instead of one global atomic per splat.
 layout(local_size_x = 128) in;
 
 #include "splat_render/splat_color.glsl"
@@ -17,39 +21,72 @@ layout(std430, binding = SFFD_SSBO_DRAW_INDIRECT) buffer Commands {
     uint quad_vertices, quad_count, quad_first, quad_base;
 };
 
-void main() {
-    uint i = gl_GlobalInvocationID.x;
-    if (i >= frame.counts.x) return;
-    GpuSplat s = splats[i];
-    SplatView o = splat_view(s);
-    vec3 n = cross(o.u, o.v);
-    if (!(o.r > 0.0) || dot(n, n) <= 1e-12 * o.r * o.r * o.r * o.r) return;  // degenerate (or NaN)
+shared uint group_points, group_quads, base_points, base_quads;
 
-    // Back-facing (a splat flipped by an inverted lattice cell, normal.w == 0, is drawn two-sided).
-    bool back = s.normal.w != 0.0 && dot(o.shading_n, o.c) > 0.0;
-    if (frame.params.z != 0.0) {
-        if (back) return;
+const uint KEEP_NONE = 0u, KEEP_SPRITE = 1u, KEEP_QUAD = 2u;
+
+void main() {
+    if (gl_LocalInvocationIndex == 0u) group_points = 0u, group_quads = 0u;
+    barrier();
+
+    uint i = gl_GlobalInvocationID.x;
+    uint keep = KEEP_NONE;
+    GpuSplat s;
+    vec3 c = vec3(0.0);
+    bool back = false;
+    float size = 0.0;
+    if (i < frame.counts.x) {
+        s = splats[i];
+        c = (frame.model_view * vec4(s.center.xyz, 1.0)).xyz;
+        // Back-facing (a splat flipped by an inverted lattice cell, normal.w == 0, is drawn two-sided).
+        back = s.normal.w != 0.0 && dot(mat3(frame.normal_view) * s.normal.xyz, c) > 0.0;
+        keep = back && frame.params.z != 0.0 ? KEEP_NONE : KEEP_SPRITE;
+    }
+    float r = 0.0;
+    if (keep != KEEP_NONE) {
+        vec3 u = mat3(frame.model_view) * s.axis_u.xyz;
+        vec3 v = mat3(frame.model_view) * s.axis_v.xyz;
+        r = ellipse_max_radius(u, v);
+        vec3 n = cross(u, v);
+        if (!(r > 0.0) || dot(n, n) <= 1e-12 * r * r * r * r) keep = KEEP_NONE;  // degenerate (or NaN)
+    }
+    if (keep != KEEP_NONE && frame.params.z != 0.0) {
         // Frustum, as a bounding ball against the view-space planes of a symmetric perspective.
         float p00 = frame.projection[0][0], p11 = frame.projection[1][1];
         float near_plane = frame.projection[3][2] / (frame.projection[2][2] - 1.0);
         float far_plane = frame.projection[3][2] / (frame.projection[2][2] + 1.0);
-        float depth = -o.c.z;
-        if (depth + o.r < near_plane || depth - o.r > far_plane) return;
-        if ((depth - p00 * abs(o.c.x)) * inversesqrt(p00 * p00 + 1.0) < -o.r) return;
-        if ((depth - p11 * abs(o.c.y)) * inversesqrt(p11 * p11 + 1.0) < -o.r) return;
+        float depth = -c.z;
+        if (depth + r < near_plane || depth - r > far_plane ||
+            (depth - p00 * abs(c.x)) * inversesqrt(p00 * p00 + 1.0) < -r ||
+            (depth - p11 * abs(c.y)) * inversesqrt(p11 * p11 + 1.0) < -r)
+            keep = KEEP_NONE;
+    }
+    if (keep != KEEP_NONE) {
+        size = sprite_size(c, r);
+        vec2 ndc = vec2(frame.projection[0][0] * c.x, frame.projection[1][1] * c.y) / -c.z;
+        if (size < 0.0 || size > frame.params.y || any(greaterThan(abs(ndc), vec2(1.0)))) keep = KEEP_QUAD;
     }
 
-    float size = sprite_size(o.c, o.r);
-    vec2 ndc = vec2(frame.projection[0][0] * o.c.x, frame.projection[1][1] * o.c.y) / -o.c.z;
-    if (size < 0.0 || size > frame.params.y || any(greaterThan(abs(ndc), vec2(1.0)))) {
-        quads[atomicAdd(quad_count, 1u)] = i;
-        return;
+    uint local = 0u;
+    if (keep == KEEP_SPRITE) local = atomicAdd(group_points, 1u);
+    else if (keep == KEEP_QUAD) local = atomicAdd(group_quads, 1u);
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) {
+        base_points = group_points > 0u ? atomicAdd(point_count, group_points) : 0u;
+        base_quads = group_quads > 0u ? atomicAdd(quad_count, group_quads) : 0u;
     }
-    SplatRecord rec;
-    splat_raycast_setup(o, rec.plane, rec.dual_u, rec.dual_v);
-    if (back) rec.plane.xyz = vec3(uintBitsToFloat(0x7fc00000u));  // NaN: every fragment discards
-    rec.center = vec4(o.c, size);
-    vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
-    rec.normal = vec4(world_n, pack_color(splat_color(s, o, world_n).rgb));
-    records[atomicAdd(point_count, 1u)] = rec;
+    barrier();
+
+    if (keep == KEEP_QUAD) {
+        quads[base_quads + local] = i;
+    } else if (keep == KEEP_SPRITE) {
+        SplatView o = splat_view(s);
+        SplatRecord rec;
+        splat_raycast_setup(o, rec.plane, rec.dual_u, rec.dual_v);
+        if (back) rec.plane.xyz = vec3(uintBitsToFloat(0x7fc00000u));  // NaN: every fragment discards
+        rec.center = vec4(o.c, size);
+        vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
+        rec.normal = vec4(world_n, pack_color(splat_color(s, o, world_n).rgb));
+        records[base_points + local] = rec;
+    }
 }

@@ -5,7 +5,10 @@
 #include <numbers>
 #include <vector>
 
+#include "runtime/gfx/splat_store.h"
+#include "systems/ffd/components.h"
 #include "systems/ffd/deform.h"
+#include "systems/splat_render/splat_pack.h"
 #include "systems/ffd/lattice.h"
 #include "tests/systems/splat_render/gl_fixture.h"
 #include "tests/systems/splat_render/test_scenes.h"
@@ -211,4 +214,42 @@ TEST_F(Coverage_, TextureColoursLandWhereTheUvSays) {
         for (int k = 0; k < 4; ++k) EXPECT_GT(seen[k], 2000) << "quadrant " << k << " not in view";
         EXPECT_LT(wrong, checked / 200) << (q == Quality::hq ? "hq" : "preview");
     }
+}
+
+// The renderer draws the deformer's output, not the authored cloud: the FFD system's GPU buffer
+// (GpuSplatStore::deformed with has_deformed) and its CPU output (DeformedSplats) both show the stretch.
+TEST_F(Coverage_, DrawsTheDeformersOutputInsteadOfTheRestCloud) {
+    const Camera cam = add_camera(6.0);
+    add_light({-1.0f, -0.3f, -0.5f});
+    const SplatCloud rest = fibonacci_sphere(paper_splats);
+    const SplatCloud stretched = stretch_x(rest, 2.0);
+    const ecs::Entity e = add_cloud(rest);
+
+    // CPU path: DeformedSplats with cpu_valid.
+    DeformedSplats& d = reg.emplace<DeformedSplats>(e);
+    d.positions = stretched.positions, d.normals = stretched.normals;
+    d.axis_u = stretched.axis_u, d.axis_v = stretched.axis_v;
+    d.cpu_valid = true, d.version = 1;
+    d.bounds_min = glm::dvec3(-2.1, -1.1, -1.1), d.bounds_max = glm::dvec3(2.1, 1.1, 1.1);
+    FrameImage img = render(Quality::hq, 256, 256);
+    Coverage c = coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));
+    EXPECT_GT(c.inside, 10000);
+    EXPECT_EQ(c.holes, 0);
+    EXPECT_EQ(c.far_side, 0);
+
+    // GPU path: the FFD pass wrote `deformed` (here: the unit sphere again) and marked it valid.
+    reg.remove<DeformedSplats>(e);
+    auto& gpu = reg.resource<gfx::GpuSplatStore>().clouds.at(e);
+    const std::vector<gpu::GpuSplat> packed = pack_splats(rest);
+    glNamedBufferSubData(gpu.deformed.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data());
+    gpu.has_deformed = true;
+    img = render(Quality::hq, 256, 256);
+    c = coverage(img, cam, glm::dvec3(1.0));
+    EXPECT_EQ(c.holes, 0);
+    EXPECT_EQ(c.far_side, 0);
+    int outside_unit_sphere = 0;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x)
+            outside_unit_sphere += img.covered(x, y) && !hit_ellipsoid(cam.eye, pixel_ray(cam, x, y, 256, 256), glm::dvec3(1.03));
+    EXPECT_EQ(outside_unit_sphere, 0);
 }
