@@ -11,7 +11,7 @@ check() {  # file stage defines...
     { head -n1 "$root/$file"; echo "#extension GL_GOOGLE_include_directive : require"
       for d in "$@"; do echo "#define ${d%%=*} ${d#*=}"; done
       tail -n +2 "$root/$file"; } > "$out"
-    if ! glslangValidator -G -S "$stage" -I"$root" -I"$root/$(dirname "$file")" "$out" > "$tmp/log" 2>&1; then
+    if ! glslangValidator -G -o "$tmp/out.spv" -S "$stage" -I"$root" -I"$root/$(dirname "$file")" "$out" > "$tmp/log" 2>&1; then
         echo "FAIL $file $*"; cat "$tmp/log"; status=1
     else
         echo "ok   $file $*"
