@@ -7,7 +7,15 @@
 
 #include "common/bindings.h"
 
+// The C++ side compiles one program per lattice shape with FFD_L/FFD_M/FFD_N (divisions) and FFD_MAXB
+// (largest + 1) defined: constant loop bounds and small arrays let the driver unroll and keep the basis in
+// registers (llvmpipe otherwise spills 65-float arrays to memory: ~15x slower). Without them, any lattice
+// up to kMaxDivisions works with the UBO's divisions.
+#ifdef FFD_MAXB
+#define FFD_MAX_B FFD_MAXB
+#else
 #define FFD_MAX_B 65   // kMaxDivisions + 1 (systems/ffd/lattice.h)
+#endif
 
 layout(std140, binding = SFFD_UBO_FFD) uniform FfdBlock {
     vec4 ffd_minv0;      // rows of M⁻¹ (xyz)
@@ -67,7 +75,11 @@ bool ffd_inside(vec3 stu) {
 // Displacement D and its derivatives G = [∂D/∂s ∂D/∂t ∂D/∂u] (columns) at clamped local coordinates.
 void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
     stu = clamp(stu, vec3(0.0), vec3(1.0));
+#ifdef FFD_L
+    const int L = FFD_L, M = FFD_M, N = FFD_N;
+#else
     int L = ffd_div.x, M = ffd_div.y, N = ffd_div.z;
+#endif
     D = vec3(0.0);
     vec3 Fs = vec3(0.0), Ft = vec3(0.0), Fu = vec3(0.0);
     if (ffd_div.w == 0) {

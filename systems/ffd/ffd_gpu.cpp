@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstring>
 #include <optional>
+#include <string>
 #include <unordered_map>
 #include <vector>
 
@@ -30,7 +31,8 @@ static_assert(sizeof(FfdBlock) == 128);
 
 struct GpuDeformer::Impl {
     std::optional<gfx::GlContext> context;  // only when created headless; destroyed last (declared first)
-    gfx::Program program;
+    gfx::Program program;                                      // generic (any divisions)
+    std::unordered_map<std::uint64_t, gfx::Program> specialised;  // per (l, m, n, basis)
     gfx::Buffer ubo, stats, scratch;
     struct Controls {
         gfx::Buffer buffer;
@@ -42,6 +44,7 @@ struct GpuDeformer::Impl {
     std::uint64_t uploads = 0;
     ~Impl() {  // GL objects before the context
         program.reset(), ubo.reset(), stats.reset(), scratch.reset();
+        specialised.clear();
         controls.clear();
     }
 };
@@ -112,7 +115,24 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
         cp.stamp = stamp;
         ++m.uploads;
     }
-    glUseProgram(m.program.id());
+    // Bernstein: a program specialised for this lattice shape (compiled once per shape; constant loop
+    // bounds, small arrays). B-spline reads 4 neighbours per axis whatever the size: generic program.
+    GLuint program = m.program.id();
+    const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) | (std::uint64_t(lattice.divisions.y) << 12) |
+                                std::uint64_t(lattice.divisions.z) | (std::uint64_t(lattice.basis) << 40);
+    auto sp = m.specialised.find(shape);
+    if (lattice.basis == LatticeBasis::bernstein && sp == m.specialised.end()) {
+        const int maxb = std::max({lattice.divisions.x, lattice.divisions.y, lattice.divisions.z}) + 1;
+        auto prog = gfx::load_compute_program("ffd/deform.comp", "ffd.deform.specialised",
+                                              {{"FFD_L", std::to_string(lattice.divisions.x)},
+                                               {"FFD_M", std::to_string(lattice.divisions.y)},
+                                               {"FFD_N", std::to_string(lattice.divisions.z)},
+                                               {"FFD_MAXB", std::to_string(maxb)}});
+        if (!prog) return prog.error();
+        sp = m.specialised.emplace(shape, std::move(*prog)).first;
+    }
+    if (lattice.basis == LatticeBasis::bernstein) program = sp->second.id();
+    glUseProgram(program);
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, m.ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, cp.buffer.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_IN, in);

@@ -1,0 +1,166 @@
+// FFD GPU benchmarks (headless EGL; on this machine Mesa llvmpipe, i.e. the GPU path runs on the CPU
+// cores): the compute pass on the paper's case (59,650 splats, 11x11x11 lattice, global twist, positions +
+// normals + axes), B-spline, 1M splats; and paper mode (deformation in the vertex shader every frame)
+// against drawing the compute pass's output. Times are glFinish-bounded wall clock.
+//   build/<dir>/tools/bench/bench_ffd_gpu --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <optional>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "runtime/gfx/context.h"
+#include "runtime/gfx/gl.h"
+#include "runtime/gfx/render_target.h"
+#include "shaders/common/bindings.h"
+#include "systems/ffd/ffd_gpu.h"
+#include "systems/ffd/lattice.h"
+#include "systems/ffd/operations.h"
+#include "systems/ffd/paper_mode.h"
+
+namespace {
+
+using namespace sffd;
+
+struct Gl {
+    std::optional<gfx::GlContext> ctx;
+    std::optional<ffd::GpuDeformer> deformer;
+    std::optional<ffd::PaperModeRenderer> paper;
+    std::optional<gfx::RenderTarget> target;
+    bool ok = false;
+    std::string error;
+};
+
+Gl& gl() {
+    static Gl g = [] {
+        Gl s;
+        auto c = gfx::create_context({.headless = true, .width = 512, .height = 512, .debug = false});
+        if (!c) return s.error = c.message(), std::move(s);
+        s.ctx.emplace(std::move(*c));
+        auto d = ffd::GpuDeformer::create();
+        if (!d) return s.error = d.message(), std::move(s);
+        s.deformer.emplace(std::move(*d));
+        auto p = ffd::PaperModeRenderer::create();
+        if (!p) return s.error = p.message(), std::move(s);
+        s.paper.emplace(std::move(*p));
+        auto t = gfx::RenderTarget::create({.label = "bench.ffd", .width = 512, .height = 512,
+                                            .color = {{"color", gfx::ColorFormat::rgba8}}});
+        if (!t) return s.error = t.message(), std::move(s);
+        s.target.emplace(std::move(*t));
+        s.ok = true;
+        return s;
+    }();
+    return g;
+}
+
+struct Splats {
+    gfx::Buffer rest, deformed;
+    std::uint32_t count = 0;
+};
+
+Splats& splats(std::size_t n) {
+    static std::vector<std::pair<std::size_t, Splats>> cache;
+    for (auto& [k, v] : cache)
+        if (k == n) return v;
+    std::vector<gpu::GpuSplat> packed(n);
+    const double golden = M_PI * (3.0 - std::sqrt(5.0));
+    for (std::size_t i = 0; i < n; ++i) {
+        const double y = 1.0 - 2.0 * (double(i) + 0.5) / double(n), r = std::sqrt(1.0 - y * y), th = golden * double(i);
+        const glm::vec3 p(float(r * std::cos(th)), float(y), float(r * std::sin(th)));
+        const glm::vec3 t = glm::normalize(glm::cross(p, std::abs(p.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0))) * 0.01f;
+        const glm::vec3 b = glm::cross(p, t);
+        packed[i] = {{p.x, p.y, p.z, 0}, {p.x, p.y, p.z, 1}, {t.x, t.y, t.z, 0}, {b.x, b.y, b.z, 0}};
+    }
+    cache.emplace_back(n, Splats{});
+    Splats& s = cache.back().second;
+    s.rest = gfx::Buffer::create("bench.rest");
+    s.deformed = gfx::Buffer::create("bench.deformed");
+    glNamedBufferData(s.rest.id(), GLsizeiptr(n * sizeof(gpu::GpuSplat)), packed.data(), GL_STATIC_DRAW);
+    glNamedBufferData(s.deformed.id(), GLsizeiptr(n * sizeof(gpu::GpuSplat)), nullptr, GL_DYNAMIC_COPY);
+    s.count = std::uint32_t(n);
+    return s;
+}
+
+Lattice twisted(LatticeBasis basis) {
+    Lattice l = ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                                  {10, 10, 10}, basis);
+    ffd::twist_graded(l, ffd::all_control_points(l), glm::dvec3(0, 1, 0), 0.6, glm::dvec3(0.0));
+    return l;
+}
+
+void compute(benchmark::State& state, LatticeBasis basis, std::size_t n) {
+    Gl& g = gl();
+    if (!g.ok) return state.SkipWithError(g.error.c_str());
+    Splats& s = splats(n);
+    const Lattice l = twisted(basis);
+    // Control points are uploaded once (stamp 1), as in the frame loop when only the view changes they
+    // are not re-sent; each iteration is one dispatch + glFinish. Warm-up: compiles the program specialised
+    // for this lattice shape.
+    (void)g.deformer->dispatch(l, 1, 1, {}, s.rest.id(), s.deformed.id(), s.count);
+    glFinish();
+    for (auto _ : state) {
+        (void)g.deformer->dispatch(l, 1, 1, {}, s.rest.id(), s.deformed.id(), s.count);
+        glFinish();
+    }
+    state.counters["points/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsIterationInvariantRate);
+}
+
+const glm::mat4 kViewProj = glm::scale(glm::mat4(1.0f), glm::vec3(0.6f, 0.6f, -0.3f));
+
+void paper_frame(benchmark::State& state, int passes) {
+    Gl& g = gl();
+    if (!g.ok) return state.SkipWithError(g.error.c_str());
+    Splats& s = splats(59650);
+    const Lattice l = twisted(LatticeBasis::bernstein);
+    const float black[4] = {0, 0, 0, 1};
+    (void)g.paper->draw(l, 1, {}, s.rest.id(), s.count, kViewProj, 2.0f);  // warm-up
+    glFinish();
+    for (auto _ : state) {
+        g.target->bind();
+        g.target->clear_color("color", black);
+        g.target->clear_depth();
+        for (int p = 0; p < passes; ++p) (void)g.paper->draw(l, 1, {}, s.rest.id(), s.count, kViewProj, 2.0f);
+        glFinish();
+    }
+}
+
+void skinning_frame(benchmark::State& state, int passes) {
+    Gl& g = gl();
+    if (!g.ok) return state.SkipWithError(g.error.c_str());
+    Splats& s = splats(59650);
+    const Lattice l = twisted(LatticeBasis::bernstein);
+    (void)g.deformer->dispatch(l, 1, 1, {}, s.rest.id(), s.deformed.id(), s.count);  // once per edit
+    glFinish();
+    const float black[4] = {0, 0, 0, 1};
+    for (auto _ : state) {
+        g.target->bind();
+        g.target->clear_color("color", black);
+        g.target->clear_depth();
+        for (int p = 0; p < passes; ++p) g.paper->draw_deformed(s.deformed.id(), s.count, kViewProj, 2.0f);
+        glFinish();
+    }
+}
+
+void BM_GpuCompute_Bernstein11_Full(benchmark::State& s) { compute(s, LatticeBasis::bernstein, 59650); }
+void BM_GpuCompute_BSpline11_Full(benchmark::State& s) { compute(s, LatticeBasis::bspline, 59650); }
+void BM_GpuCompute_Bernstein11_1M_Full(benchmark::State& s) { compute(s, LatticeBasis::bernstein, 1000000); }
+void BM_GpuCompute_BSpline11_1M_Full(benchmark::State& s) { compute(s, LatticeBasis::bspline, 1000000); }
+// A frame of 3 splat passes (visibility, attributes, shading in the HQ renderer): paper mode deforms in
+// every pass; skinning-style reads the compute output (deformation cost paid once per edit).
+void BM_PaperMode_Frame_3Passes(benchmark::State& s) { paper_frame(s, 3); }
+void BM_Skinning_Frame_3Passes(benchmark::State& s) { skinning_frame(s, 3); }
+void BM_PaperMode_Frame_1Pass(benchmark::State& s) { paper_frame(s, 1); }
+void BM_Skinning_Frame_1Pass(benchmark::State& s) { skinning_frame(s, 1); }
+
+BENCHMARK(BM_GpuCompute_Bernstein11_Full)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GpuCompute_BSpline11_Full)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GpuCompute_Bernstein11_1M_Full)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_GpuCompute_BSpline11_1M_Full)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_PaperMode_Frame_1Pass)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Skinning_Frame_1Pass)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_PaperMode_Frame_3Passes)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_Skinning_Frame_3Passes)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace
