@@ -52,36 +52,37 @@ TEST(PaperDemo, FourCasesOverNinetySixFrames) {
 TEST(PaperDemo, PeaksMatchTheDocumentedShapes) {
     const Lattice& l = demo_lattice();
     const AnimationClip clip = make_paper_demo_clip(l);
-    const glm::dvec3 U = l.axes[2];
-    // Local stretch peak: the bound block moved by exactly 0.5 U, everything else at rest.
+    const glm::dvec3 T = l.axes[1];  // up
+    // Local stretch peak: the bound block moved by exactly 0.4 T, everything else at rest.
     {
         const auto pose = evaluate_pose(clip, l, frame_time(12));
         const auto& pts = clip.tracks[0].points;
         for (std::size_t i = 0; i < pose.size(); ++i) {
             const bool bound = std::find(pts.begin(), pts.end(), i) != pts.end();
             // (near, not equal: the compiler may fuse the reference's multiply-add)
-            if (bound) EXPECT_NEAR(glm::length(pose[i] - (l.rest[i] + 0.5 * U)), 0.0, 1e-15);
+            if (bound) EXPECT_NEAR(glm::length(pose[i] - (l.rest[i] + 0.4 * T)), 0.0, 1e-15);
             else EXPECT_EQ(pose[i], l.rest[i]);
         }
     }
-    // Global stretch peak: an affine stretch along U about the middle plane, by 60%.
+    // Global stretch peak: an affine stretch along T about the middle plane, by 40%.
     {
         const auto pose = evaluate_pose(clip, l, frame_time(60));
-        const double mid = l.origin.z + 0.5 * U.z;
+        const double mid = l.origin.y + 0.5 * T.y;
         for (std::size_t i = 0; i < pose.size(); ++i) {
-            EXPECT_NEAR(pose[i].z, mid + 1.6 * (l.rest[i].z - mid), 1e-12);
+            EXPECT_NEAR(pose[i].y, mid + 1.4 * (l.rest[i].y - mid), 1e-12);
             EXPECT_EQ(pose[i].x, l.rest[i].x);
+            EXPECT_EQ(pose[i].z, l.rest[i].z);
         }
     }
-    // Global twist peak: layer k turned by (2k/n - 1) 90 degrees about the central U axis.
+    // Global twist peak: layer j turned by (2j/m - 1) 90 degrees about the central T axis.
     {
         const auto pose = evaluate_pose(clip, l, frame_time(84));
         const glm::dvec3 centre = l.origin + 0.5 * (l.axes[0] + l.axes[1] + l.axes[2]);
-        for (int k = 0; k <= 10; ++k) {
-            const double deg = (2.0 * k / 10.0 - 1.0) * 90.0;
-            const glm::dquat q = glm::angleAxis(deg * std::numbers::pi / 180.0, glm::dvec3(0, 0, 1));
+        for (int j = 0; j <= 10; ++j) {
+            const double deg = (2.0 * j / 10.0 - 1.0) * 90.0;
+            const glm::dquat q = glm::angleAxis(deg * std::numbers::pi / 180.0, glm::dvec3(0, 1, 0));
             for (int i = 0; i <= 10; i += 5)
-                for (int j = 0; j <= 10; j += 2) {
+                for (int k = 0; k <= 10; k += 2) {
                     const std::size_t idx = l.index(i, j, k);
                     EXPECT_NEAR(glm::length(pose[idx] - (centre + q * (l.rest[idx] - centre))), 0.0, 1e-12);
                 }
