@@ -9,8 +9,8 @@ void main() {
         float r2 = dot(d, d);
         if (r2 > 1.0) discard;
         // Dark rim so points read against any surface colour.
-        o_color = r2 > 0.55 ? vec4(0.02, 0.02, 0.02, v_color.a) : v_color;
+        o_color = r2 > 0.55 ? vec4(0.02, 0.02, 0.02, 1.0) : vec4(v_color.rgb, 1.0);
         return;
     }
-    o_color = v_color;
+    o_color = vec4(v_color.rgb, 1.0);
 }

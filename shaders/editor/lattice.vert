@@ -7,7 +7,6 @@ layout(location = 1) in vec4 a_color;
 layout(location = 2) in float a_size;
 
 uniform mat4 u_view_proj;
-uniform float u_alpha;
 
 out vec4 v_color;
 
@@ -16,5 +15,5 @@ void main() {
     // Pull the overlay a hair towards the camera so points sitting on the surface win the depth test.
     gl_Position.z -= 1e-4 * gl_Position.w;
     gl_PointSize = a_size;
-    v_color = vec4(a_color.rgb, a_color.a * u_alpha);
+    v_color = a_color;  // opacity is the blend constant (lattice_overlay.cpp)
 }

@@ -127,19 +127,21 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
     const GLenum draw0 = GL_COLOR_ATTACHMENT0;
     glNamedFramebufferDrawBuffers(fbo, 1, &draw0);  // only the colour: normals/depth stay the surface's
     glViewport(0, 0, width, height);
+    // Opacity comes from a constant blend factor and the result is opaque (alpha 1): the colour target
+    // holds straight alpha, and captures treat alpha > 0 as covered, so the lattice also shows where
+    // there is no surface behind it.
     glEnable(GL_BLEND);
-    glBlendFuncSeparate(GL_SRC_ALPHA, GL_ONE_MINUS_SRC_ALPHA, GL_ONE, GL_ONE_MINUS_SRC_ALPHA);
+    glBlendFuncSeparate(GL_CONSTANT_ALPHA, GL_ONE_MINUS_CONSTANT_ALPHA, GL_ONE, GL_ZERO);
     glEnable(GL_PROGRAM_POINT_SIZE);
     glDepthMask(GL_FALSE);
     glUseProgram(s.program.id());
     glBindVertexArray(s.vao.id());
     const GLint loc_vp = glGetUniformLocation(s.program.id(), "u_view_proj");
-    const GLint loc_alpha = glGetUniformLocation(s.program.id(), "u_alpha");
     const GLint loc_points = glGetUniformLocation(s.program.id(), "u_points");
 
     registry.view<const Lattice>().each([&](ecs::Entity e, const Lattice&) {
         const OverlayGeometry g = build_lattice_overlay(registry, *state, e);
-        if (g.points.empty()) return;
+        if (g.points.empty() || g.lines.empty()) return;
         const std::size_t count = g.points.size() + g.lines.size();
         if (count > s.capacity) {
             s.capacity = count * 2;
@@ -155,10 +157,12 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
         for (int pass = 0; pass < (state->xray ? 1 : 2); ++pass) {
             if (pass == 0) glDisable(GL_DEPTH_TEST);
             else glEnable(GL_DEPTH_TEST), glDepthFunc(GL_LEQUAL);
-            glUniform1f(loc_alpha, state->xray || pass == 1 ? 1.0f : 0.3f);
+            const float strength = state->xray || pass == 1 ? 1.0f : 0.3f;
             glUniform1i(loc_points, 0);
+            glBlendColor(0.0f, 0.0f, 0.0f, strength * g.lines.front().color.w);
             glDrawArrays(GL_LINES, 0, GLsizei(g.lines.size()));
             glUniform1i(loc_points, 1);
+            glBlendColor(0.0f, 0.0f, 0.0f, strength * g.points.front().color.w);
             glDrawArrays(GL_POINTS, GLint(g.lines.size()), GLsizei(g.points.size()));
         }
     });

@@ -139,6 +139,19 @@ struct ViewSession {
 Status write_screenshot(ecs::Registry& registry, const std::filesystem::path& path) {
     auto frame = render::capture_frame(registry);
     if (!frame) return make_error(frame.message());
+    // capture_frame keeps colour only where a splat was hit; the lattice overlay is also drawn where no
+    // surface is behind it (opaque, alpha 1), so take those pixels from the colour target itself.
+    if (const GLuint tex = render::output_color_texture(registry); tex != 0) {
+        const int w = frame->width, h = frame->height;
+        std::vector<glm::vec4> color(std::size_t(w) * std::size_t(h));
+        glGetTextureImage(tex, 0, GL_RGBA, GL_FLOAT, GLsizei(color.size() * sizeof(glm::vec4)), color.data());
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const glm::vec4& c = color[std::size_t(h - 1 - y) * std::size_t(w) + std::size_t(x)];
+                glm::vec4& dst = frame->color[frame->index(x, y)];
+                if (dst.w <= 0.0f && c.w >= 1.0f) dst = c;  // overlay over background
+            }
+    }
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     if (ext == ".exr") return render::write_exr(path, *frame);
@@ -242,6 +255,7 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         settings.height = viewport.height;
         settings.quality = options.preview ? render::Quality::preview : render::Quality::hq;
         settings.background = glm::vec3(0.045f, 0.05f, 0.06f);
+        settings.aux_outputs = !options.screenshot.empty();  // depth + normals for EXR screenshots
         if (Status st = render::init_render_state(registry); !st) {
             std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
             return 1;
@@ -328,13 +342,34 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         std::fprintf(stderr, "view: frame ms p50 %.2f p95 %.2f (n=%zu); while dragging p50 %.2f p95 %.2f (n=%zu)\n",
                      percentile(all, 0.5), percentile(all, 0.95), all.size(), percentile(drag, 0.5),
                      percentile(drag, 0.95), drag.size());
+        // Per system, median CPU time over the drag frames (where the time of a drag goes).
+        std::string per_system;
+        {
+            std::vector<std::pair<std::string, std::vector<double>>> rows;
+            for (const auto& f : profiler.frames()) {
+                if (f.frame == 0 || f.frame >= session.dragging.size() || !session.dragging[f.frame]) continue;
+                for (const auto& sc : f.scopes) {
+                    if (sc.kind != profiling::ScopeKind::system) continue;
+                    const std::string& name = profiler.name(sc.name);
+                    auto it = std::find_if(rows.begin(), rows.end(), [&](const auto& r) { return r.first == name; });
+                    if (it == rows.end()) rows.emplace_back(name, std::vector<double>{}), it = rows.end() - 1;
+                    it->second.push_back(sc.cpu_ms);
+                }
+            }
+            for (const auto& [name, ms] : rows) {
+                std::fprintf(stderr, "view:   while dragging, %-16s p50 %.2f ms\n", name.c_str(), percentile(ms, 0.5));
+                per_system += (per_system.empty() ? "" : ", ") + std::string("\"") + name + "\": " +
+                              std::to_string(percentile(ms, 0.5));
+            }
+        }
         if (!options.timing_json.empty()) {
             std::string json = "{\n  \"renderer\": \"" + ctx->renderer() + "\",\n  \"frames\": " + std::to_string(all.size()) +
                                ",\n  \"frame_ms_p50\": " + std::to_string(percentile(all, 0.5)) +
                                ",\n  \"frame_ms_p95\": " + std::to_string(percentile(all, 0.95)) +
                                ",\n  \"drag_frames\": " + std::to_string(drag.size()) +
                                ",\n  \"drag_frame_ms_p50\": " + std::to_string(percentile(drag, 0.5)) +
-                               ",\n  \"drag_frame_ms_p95\": " + std::to_string(percentile(drag, 0.95)) + "\n}\n";
+                               ",\n  \"drag_frame_ms_p95\": " + std::to_string(percentile(drag, 0.95)) +
+                               ",\n  \"drag_system_ms_p50\": {" + per_system + "}\n}\n";
             if (Status st = write_file_atomic(options.timing_json, json); !st)
                 std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
         }
