@@ -128,7 +128,8 @@ void add_default_view(ecs::Registry& r, const glm::dvec3& lo, const glm::dvec3& 
     const glm::dvec3 centre = 0.5 * (lo + hi);
     const double radius = std::max(0.5 * glm::length(hi - lo), 1e-6);
     const double fov = 40.0;
-    const double distance = radius / std::sin(glm::radians(fov) * 0.5) * 1.05;
+    // The bounding sphere fills ~90% of the view height (its corners may leave the frame; the object does not).
+    const double distance = radius / std::tan(glm::radians(fov) * 0.5) * 0.9;
     const ecs::Entity cam = r.create();
     r.emplace<Name>(cam, Name{"camera"});
     Camera c;

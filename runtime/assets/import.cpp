@@ -770,7 +770,13 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
     const Geometry* g = &input;
     Geometry resampled;
     bool resampled_points = false;
-    if (input.triangle_count() > 0 && options.splats == 0) {
+    std::size_t mesh_splats = options.splats;
+    if (input.triangle_count() > 0 && mesh_splats == 0 && options.min_mesh_splats > 0) {
+        std::vector<char> used(input.positions.size(), 0);
+        for (std::uint32_t v : input.triangles) used[v] = 1;
+        if (static_cast<std::size_t>(std::count(used.begin(), used.end(), 1)) < options.min_mesh_splats) mesh_splats = options.min_mesh_splats;
+    }
+    if (input.triangle_count() > 0 && mesh_splats == 0) {
         // One splat per vertex used by a face (stray vertices are not part of the surface); normals are
         // the area-weighted face normals unless the file has its own.
         std::vector<glm::dvec3> acc(input.positions.size(), glm::dvec3(0.0));
@@ -818,7 +824,7 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
         g = &resampled;
         resampled_points = true;
     } else if (input.triangle_count() > 0) {
-        auto s = sample_surface(input, options.splats, options.seed);
+        auto s = sample_surface(input, mesh_splats, options.seed);
         if (!s) return s.error();
         resampled = std::move(*s);
         g = &resampled;

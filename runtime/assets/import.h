@@ -66,6 +66,9 @@ struct ImportOptions {
     bool estimate_radii = false;   // re-estimate radii even when the file has splat axes
     int neighbours = 16;           // k for PCA and orientation
     std::uint32_t seed = 1;        // surface sampling is deterministic for a given seed
+    // Without `splats`, a mesh gives one splat per used vertex, unless it has fewer used vertices than
+    // this (a textured box has 24): then its surface is sampled with this many splats instead.
+    std::size_t min_mesh_splats = 20000;
 };
 
 Result<SplatCloud> make_splat_cloud(const Geometry& geometry, const ImportOptions& options);

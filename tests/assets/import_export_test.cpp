@@ -168,7 +168,9 @@ TEST(Import, ObjWithQuadsNegativeIndicesMaterialsAndSeams) {
     EXPECT_EQ(g->uvs.size(), g->positions.size());
     EXPECT_EQ(g->uvs[0], glm::vec2(0.0f, 1.0f));  // OBJ v flipped to the glTF convention
     // One splat per used vertex (the stray v 9 9 9 is dropped), colour from the material.
-    auto c = make_splat_cloud(*g, {});
+    ImportOptions vertices;
+    vertices.min_mesh_splats = 0;
+    auto c = make_splat_cloud(*g, vertices);
     ASSERT_TRUE(c.ok()) << c.message();
     for (const auto& pos : c->positions) EXPECT_LE(pos.x, 1.0f);
     // Exactly N surface samples; red faces (z = 0 and z = 1) and blue faces only.
@@ -217,9 +219,15 @@ TEST(Import, PlyMeshWithFacesAndColours) {
     auto g = read_geometry(p);
     ASSERT_TRUE(g.ok()) << g.message();
     EXPECT_EQ(g->triangle_count(), 2u);
-    auto c = make_splat_cloud(*g, {});
+    ImportOptions vertices;
+    vertices.min_mesh_splats = 0;
+    auto c = make_splat_cloud(*g, vertices);
     ASSERT_TRUE(c.ok()) << c.message();
     EXPECT_EQ(c->size(), 4u);  // the unused fifth vertex is not a splat
+    // By default a coarse mesh is sampled instead (too few vertices to cover the surface).
+    auto dense = make_splat_cloud(*g, {});
+    ASSERT_TRUE(dense.ok()) << dense.message();
+    EXPECT_EQ(dense->size(), 20000u);
     for (const auto& n : c->normals) EXPECT_NEAR(n.z, 1.0f, 1e-6f);
 }
 
