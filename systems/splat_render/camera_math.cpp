@@ -47,7 +47,7 @@ Camera framing_camera(const glm::dvec3& center, double radius, double aspect, gl
     return c;
 }
 
-Camera scene_camera(const ecs::Registry& registry, double aspect) {
+Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBounds& bounds) {
     bool found = false;
     Camera camera;
     registry.view<const Camera>().each([&](const Camera& c) {
@@ -59,7 +59,8 @@ Camera scene_camera(const ecs::Registry& registry, double aspect) {
     std::vector<std::pair<glm::dvec3, double>> balls;
     registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         if (cloud.size() == 0) return;
-        const BoundingSphere b = bounding_sphere(cloud);
+        const BoundingSphere b = bounds ? bounds(e, cloud) : bounding_sphere(cloud);
+        if (b.radius < 0.0) return;
         const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), cloud.origin);
         const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])),
                                        glm::length(glm::dvec3(m[2]))});

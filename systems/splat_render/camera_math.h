@@ -2,6 +2,8 @@
 // precision because the renderer composes view * model in double and uploads the product as float).
 #pragma once
 
+#include <functional>
+
 #include <glm/glm.hpp>
 
 #include "runtime/ecs/registry.h"
@@ -23,8 +25,11 @@ Camera framing_camera(const glm::dvec3& center, double radius, double aspect,
 // The camera a scene is seen through: its first Camera entity, else framing_camera() around the union of
 // every non-empty cloud's world-space bounding sphere (bounding_sphere(), model_matrix()). The one
 // definition of the default camera, shared by render_system, `splatffd pick` and anything else that must
-// see what `splatffd render` draws. Computes the bounds on each call (O(splats)).
-Camera scene_camera(const ecs::Registry& registry, double aspect);
+// see what `splatffd render` draws. `bounds` may supply cached per-cloud spheres (cloud space; a radius
+// < 0 skips the cloud); by default bounding_sphere() is computed on each call (O(splats)).
+struct BoundingSphere;
+using CloudBounds = std::function<BoundingSphere(ecs::Entity, const SplatCloud&)>;
+Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBounds& bounds = {});
 
 // Depth along the camera's view axis (positive in front) of a world point.
 double view_depth(const Camera& camera, const glm::dvec3& world);

@@ -225,34 +225,11 @@ struct ViewSetup {
 
 ViewSetup choose_camera(ecs::Registry& reg, const SplatRenderState& s, double aspect) {
     ViewSetup v;
-    bool found = false;
-    reg.view<const Camera>().each([&](const Camera& c) {
-        if (!found) v.camera = c, found = true;
+    // The one default-camera rule (camera_math.h), fed with the bounds cached per uploaded cloud.
+    v.camera = scene_camera(reg, aspect, [&](ecs::Entity e, const SplatCloud&) {
+        auto it = s.clouds.find(e);
+        return it == s.clouds.end() ? BoundingSphere{glm::dvec3(0.0), -1.0} : it->second.bounds;
     });
-    if (!found) {
-        // Frame every cloud: union of their world-space bounding spheres.
-        glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-        std::vector<std::pair<glm::dvec3, double>> balls;
-        reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
-            auto it = s.clouds.find(e);
-            if (it == s.clouds.end() || cloud.size() == 0) return;
-            const glm::dmat4 m = model_matrix(reg.try_get<Transform>(e), cloud.origin);
-            const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])),
-                                           glm::length(glm::dvec3(m[2]))});
-            const glm::dvec3 c = glm::dvec3(m * glm::dvec4(it->second.bounds.center, 1.0));
-            balls.emplace_back(c, it->second.bounds.radius * scale);
-            lo = glm::min(lo, c - it->second.bounds.radius * scale);
-            hi = glm::max(hi, c + it->second.bounds.radius * scale);
-        });
-        glm::dvec3 center(0.0);
-        double radius = 1.0;
-        if (!balls.empty()) {
-            center = 0.5 * (lo + hi);
-            radius = 0.0;
-            for (const auto& [c, r] : balls) radius = std::max(radius, glm::length(c - center) + r);
-        }
-        v.camera = framing_camera(center, radius, aspect);
-    }
     v.view = view_matrix(v.camera);
     v.projection = projection_matrix(v.camera, aspect);
     return v;
