@@ -7,8 +7,8 @@
 // marked (plane.xyz = NaN) and discarded per fragment, so the image is the same and the cost is visible.
 //
 // Cheap tests first (back face from centre and normal only, then the frustum), so the two thirds of a
-// closed surface that face away cost little. Slots are reserved per workgroup (shared-memory counters,
-// one global atomic per group and list) instead of one global atomic per splat.
+// closed surface that face away cost little. One global atomic per kept splat: per-workgroup slot
+// reservation needs barrier(), which llvmpipe runs as coroutines (measured: the pass became ~1.5x slower).
 layout(local_size_x = 128) in;
 
 #include "splat_render/splat_color.glsl"
@@ -21,14 +21,9 @@ layout(std430, binding = SFFD_SSBO_DRAW_INDIRECT) buffer Commands {
     uint quad_vertices, quad_count, quad_first, quad_base;
 };
 
-shared uint group_points, group_quads, base_points, base_quads;
-
 const uint KEEP_NONE = 0u, KEEP_SPRITE = 1u, KEEP_QUAD = 2u;
 
 void main() {
-    if (gl_LocalInvocationIndex == 0u) group_points = 0u, group_quads = 0u;
-    barrier();
-
     uint i = gl_GlobalInvocationID.x;
     uint keep = KEEP_NONE;
     GpuSplat s;
@@ -36,7 +31,9 @@ void main() {
     bool back = false;
     float size = 0.0;
     if (i < frame.counts.x) {
-        s = splats[i];
+        // Centre and normal first: the back-face test needs only them (llvmpipe loads SSBOs per lane).
+        s.center = splats[i].center;
+        s.normal = splats[i].normal;
         c = (frame.model_view * vec4(s.center.xyz, 1.0)).xyz;
         // Back-facing (a splat flipped by an inverted lattice cell, normal.w == 0, is drawn two-sided).
         back = s.normal.w != 0.0 && dot(mat3(frame.normal_view) * s.normal.xyz, c) > 0.0;
@@ -44,6 +41,8 @@ void main() {
     }
     float r = 0.0;
     if (keep != KEEP_NONE) {
+        s.axis_u = splats[i].axis_u;
+        s.axis_v = splats[i].axis_v;
         vec3 u = mat3(frame.model_view) * s.axis_u.xyz;
         vec3 v = mat3(frame.model_view) * s.axis_v.xyz;
         r = ellipse_max_radius(u, v);
@@ -67,18 +66,8 @@ void main() {
         if (size < 0.0 || size > frame.params.y || any(greaterThan(abs(ndc), vec2(1.0)))) keep = KEEP_QUAD;
     }
 
-    uint local = 0u;
-    if (keep == KEEP_SPRITE) local = atomicAdd(group_points, 1u);
-    else if (keep == KEEP_QUAD) local = atomicAdd(group_quads, 1u);
-    barrier();
-    if (gl_LocalInvocationIndex == 0u) {
-        base_points = group_points > 0u ? atomicAdd(point_count, group_points) : 0u;
-        base_quads = group_quads > 0u ? atomicAdd(quad_count, group_quads) : 0u;
-    }
-    barrier();
-
     if (keep == KEEP_QUAD) {
-        quads[base_quads + local] = i;
+        quads[atomicAdd(quad_count, 1u)] = i;
     } else if (keep == KEEP_SPRITE) {
         SplatView o = splat_view(s);
         SplatRecord rec;
@@ -87,6 +76,6 @@ void main() {
         rec.center = vec4(o.c, size);
         vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
         rec.normal = vec4(world_n, pack_color(splat_color(s, o, world_n).rgb));
-        records[base_points + local] = rec;
+        records[atomicAdd(point_count, 1u)] = rec;
     }
 }
