@@ -12,6 +12,8 @@
 #include <vector>
 
 #include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
@@ -135,30 +137,33 @@ void fill_surface(GeomRecord& rec, const SplatSource& src, const glm::dmat4& mod
         fallback_radius = glm::length(linear_f * (hi - lo)) / std::sqrt(float(n));
     }
     const glm::dvec3 shift = src.origin;
-    for (std::size_t i = 0; i < n; ++i) {
-        const glm::dvec3 world = glm::dvec3(model * glm::dvec4(shift + glm::dvec3(src.positions[i]), 1.0));
-        const glm::vec3 c(world - anchor);
-        float radius = fallback_radius;
-        if (has_axes) {
-            const glm::vec3 a = linear_f * src.axis_u[i];
-            const glm::vec3 b = linear_f * src.axis_v[i];
-            radius = ellipse_bounding_radius(a, b);
-            if (rec.discs) rec.axis_u[i] = a, rec.axis_v[i] = b;
+    // Independent per splat: split across cores (the BVH build that follows is parallel too).
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            const glm::dvec3 world = glm::dvec3(model * glm::dvec4(shift + glm::dvec3(src.positions[i]), 1.0));
+            const glm::vec3 c(world - anchor);
+            float radius = fallback_radius;
+            if (has_axes) {
+                const glm::vec3 a = linear_f * src.axis_u[i];
+                const glm::vec3 b = linear_f * src.axis_v[i];
+                radius = ellipse_bounding_radius(a, b);
+                if (rec.discs) rec.axis_u[i] = a, rec.axis_v[i] = b;
+            }
+            vertex[4 * i + 0] = c.x;
+            vertex[4 * i + 1] = c.y;
+            vertex[4 * i + 2] = c.z;
+            vertex[4 * i + 3] = radius;
+            if (rec.discs) {
+                rec.centres[i] = c;
+                glm::vec3 nn = normal_f * src.normals[i];
+                const float len = glm::length(nn);
+                nn = len > 0.0f ? nn / len : glm::vec3(0, 0, 1);
+                normal[3 * i + 0] = nn.x;
+                normal[3 * i + 1] = nn.y;
+                normal[3 * i + 2] = nn.z;
+            }
         }
-        vertex[4 * i + 0] = c.x;
-        vertex[4 * i + 1] = c.y;
-        vertex[4 * i + 2] = c.z;
-        vertex[4 * i + 3] = radius;
-        if (rec.discs) {
-            rec.centres[i] = c;
-            glm::vec3 nn = normal_f * src.normals[i];
-            const float len = glm::length(nn);
-            nn = len > 0.0f ? nn / len : glm::vec3(0, 0, 1);
-            normal[3 * i + 0] = nn.x;
-            normal[3 * i + 1] = nn.y;
-            normal[3 * i + 2] = nn.z;
-        }
-    }
+    });
     rtcUpdateGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_VERTEX, 0);
     if (rec.discs) rtcUpdateGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_NORMAL, 0);
     rtcCommitGeometry(rec.geometry);
