@@ -213,12 +213,12 @@ void sparse_group(const Prepared& P, Group& g) {
     }
 }
 
-inline v4 lanes4(v16 r) {
+__attribute__((always_inline)) inline v4 lanes4(v16 r) {
     const v4 a = __builtin_shufflevector(r, r, 0, 1, 2, 3), b = __builtin_shufflevector(r, r, 4, 5, 6, 7);
     const v4 c = __builtin_shufflevector(r, r, 8, 9, 10, 11), d = __builtin_shufflevector(r, r, 12, 13, 14, 15);
     return (a + b) + (c + d);
 }
-inline v16 expand4(const float w[4]) {
+__attribute__((always_inline)) inline v16 expand4(const float w[4]) {
     return v16{w[0], w[0], w[0], w[0], w[1], w[1], w[1], w[1], w[2], w[2], w[2], w[2], w[3], w[3], w[3], w[3]};
 }
 
