@@ -16,6 +16,7 @@
 // --- UBO binding points ---------------------------------------------------------------------------
 #define SFFD_UBO_FRAME             0   // camera matrices, viewport, lights
 #define SFFD_UBO_FFD               1   // lattice parameters for the deformation pass
+#define SFFD_UBO_FFD_CONTROL       2   // small Bernstein lattices: displacements as a UBO (uniform loads)
 
 // --- Texture units --------------------------------------------------------------------------------
 #define SFFD_TEX_MATERIAL          0

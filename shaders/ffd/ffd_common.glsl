@@ -32,6 +32,17 @@ layout(std430, binding = SFFD_SSBO_CONTROL_POINTS) readonly buffer FfdControlPoi
     vec4 ffd_dp[];
 };
 
+// Specialised Bernstein programs with few control points read them from a UBO: every invocation reads the
+// same element, which llvmpipe turns into one scalar load instead of a per-lane gather.
+#ifdef FFD_CP_UBO
+layout(std140, binding = SFFD_UBO_FFD_CONTROL) uniform FfdControlBlock {
+    vec4 ffd_dp_ubo[FFD_CP_UBO];
+};
+#define FFD_DP(i) ffd_dp_ubo[i]
+#else
+#define FFD_DP(i) ffd_dp[i]
+#endif
+
 const float FFD_SLACK = 1e-6;
 
 // Bernstein basis B(L,i,s) and derivative L (B(L-1,i-1) - B(L-1,i)) from powers and binomials.
@@ -93,7 +104,7 @@ void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
                 int base = (i * (M + 1) + j) * (N + 1);
                 vec3 q = vec3(0.0), w = vec3(0.0);
                 for (int k = 0; k <= N; ++k) {
-                    vec3 d = ffd_dp[base + k].xyz;
+                    vec3 d = FFD_DP(base + k).xyz;
                     q += bu[k] * d;
                     w += dbu[k] * d;
                 }

@@ -118,16 +118,20 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
     // Bernstein: a program specialised for this lattice shape (compiled once per shape; constant loop
     // bounds, small arrays). B-spline reads 4 neighbours per axis whatever the size: generic program.
     GLuint program = m.program.id();
+    GLint max_ubo = 0;
+    glGetIntegerv(GL_MAX_UNIFORM_BLOCK_SIZE, &max_ubo);
+    const bool cp_ubo = lattice.basis == LatticeBasis::bernstein && lattice.size() * 16 <= std::size_t(max_ubo);
     const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) | (std::uint64_t(lattice.divisions.y) << 12) |
                                 std::uint64_t(lattice.divisions.z) | (std::uint64_t(lattice.basis) << 40);
     auto sp = m.specialised.find(shape);
     if (lattice.basis == LatticeBasis::bernstein && sp == m.specialised.end()) {
         const int maxb = std::max({lattice.divisions.x, lattice.divisions.y, lattice.divisions.z}) + 1;
-        auto prog = gfx::load_compute_program("ffd/deform.comp", "ffd.deform.specialised",
-                                              {{"FFD_L", std::to_string(lattice.divisions.x)},
-                                               {"FFD_M", std::to_string(lattice.divisions.y)},
-                                               {"FFD_N", std::to_string(lattice.divisions.z)},
-                                               {"FFD_MAXB", std::to_string(maxb)}});
+        gfx::Defines defines = {{"FFD_L", std::to_string(lattice.divisions.x)},
+                                {"FFD_M", std::to_string(lattice.divisions.y)},
+                                {"FFD_N", std::to_string(lattice.divisions.z)},
+                                {"FFD_MAXB", std::to_string(maxb)}};
+        if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});
+        auto prog = gfx::load_compute_program("ffd/deform.comp", "ffd.deform.specialised", defines);
         if (!prog) return prog.error();
         sp = m.specialised.emplace(shape, std::move(*prog)).first;
     }
@@ -135,6 +139,7 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
     glUseProgram(program);
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, m.ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, cp.buffer.id());
+    if (cp_ubo) glBindBufferRange(GL_UNIFORM_BUFFER, SFFD_UBO_FFD_CONTROL, cp.buffer.id(), 0, GLsizeiptr(lattice.size() * 16));
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_IN, in);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_OUT, out);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
