@@ -129,9 +129,12 @@ const EglDisplay& egl_display() {
     return d;
 }
 
-// GLFW is initialised when the first window opens and terminated when the last one closes.
+// GLFW is initialised when the first window opens and stays initialised until the process exits:
+// glfwTerminate() closes the X display, which makes GLVND unload the Mesa driver; its remaining
+// allocations then show up in LeakSanitizer as leaks from an "<unknown module>" that no suppression can
+// name, and every later window would reload the driver. Windows themselves are destroyed normally.
 std::mutex g_glfw_mutex;
-int g_glfw_windows = 0;
+bool g_glfw_initialised = false;
 
 void glfw_error(int code, const char* description) { log::error("GLFW error ", code, ": ", description); }
 
@@ -150,8 +153,6 @@ struct GlContext::Impl {
         if (window) {
             if (glfwGetCurrentContext() == window) glfwMakeContextCurrent(nullptr);
             glfwDestroyWindow(window);
-            std::lock_guard lock(g_glfw_mutex);
-            if (--g_glfw_windows == 0) glfwTerminate();
         }
         if (egl_context != EGL_NO_CONTEXT) {
             const EGLDisplay display = egl_display().display;
@@ -260,11 +261,11 @@ Result<GlContext> create_context(const ContextOptions& options) {
         impl.headless = false;
         {
             std::lock_guard lock(g_glfw_mutex);
-            if (g_glfw_windows == 0) {
+            if (!g_glfw_initialised) {
                 glfwSetErrorCallback(glfw_error);
                 if (!glfwInit()) return make_error("create_context(): glfwInit() failed (is DISPLAY valid?)");
+                g_glfw_initialised = true;
             }
-            ++g_glfw_windows;  // balanced by ~Impl even when window creation fails below
         }
         glfwDefaultWindowHints();
         glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
@@ -276,9 +277,7 @@ Result<GlContext> create_context(const ContextOptions& options) {
         glfwWindowHint(GLFW_DEPTH_BITS, 24);
         impl.window = glfwCreateWindow(options.width, options.height, options.title.c_str(), nullptr, nullptr);
         if (!impl.window) {
-            std::lock_guard lock(g_glfw_mutex);
-            if (--g_glfw_windows == 0) glfwTerminate();
-            impl.headless = true;  // nothing left for ~Impl to release
+            impl.headless = true;
             return make_error("create_context(): glfwCreateWindow() failed for an OpenGL 4.5 core context");
         }
         glfwMakeContextCurrent(impl.window);
