@@ -1,0 +1,81 @@
+// `splatffd convert` and `splatffd info` as a user runs them: exit codes (0 ok, 1 bad input naming the
+// file, 2 usage), exact splat counts, and what `info` prints.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include "runtime/assets/import.h"
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct CliRun {
+    int code = -1;
+    std::string out;  // stdout + stderr
+};
+
+CliRun run(const std::string& args) {
+    const std::string cmd = std::string(SFFD_BINARY_DIR) + "/tools/splatffd " + args + " 2>&1";
+    CliRun r;
+    std::FILE* p = popen(cmd.c_str(), "r");
+    if (!p) return r;
+    std::array<char, 4096> buf{};
+    while (std::size_t n = std::fread(buf.data(), 1, buf.size(), p)) r.out.append(buf.data(), n);
+    const int status = pclose(p);
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+fs::path temp_dir() {
+    fs::path d = fs::temp_directory_path() / ("sffd_cli_test_" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d;
+}
+
+}  // namespace
+
+TEST(Cli, ConvertMeshToExactSplatCountAndInfoReportsIt) {
+    const fs::path obj = temp_dir() / "tri.obj";
+    std::ofstream(obj) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n";
+    const fs::path glb = temp_dir() / "tri.glb";
+    const CliRun c = run("convert " + obj.string() + " " + glb.string() + " --splats 1234");
+    ASSERT_EQ(c.code, 0) << c.out;
+    auto cloud = sffd::assets::import_splat_cloud(glb);
+    ASSERT_TRUE(cloud.ok()) << cloud.message();
+    EXPECT_EQ(cloud->size(), 1234u);
+    const CliRun i = run("info " + glb.string());
+    ASSERT_EQ(i.code, 0) << i.out;
+    EXPECT_NE(i.out.find("1234 splats"), std::string::npos) << i.out;
+    EXPECT_NE(i.out.find("axis_u/axis_v"), std::string::npos) << i.out;
+
+    const fs::path ply = temp_dir() / "tri.ply";
+    ASSERT_EQ(run("convert " + glb.string() + " " + ply.string()).code, 0);
+    const CliRun pi = run("info " + ply.string());
+    ASSERT_EQ(pi.code, 0) << pi.out;
+    EXPECT_NE(pi.out.find("element  vertex: 1234"), std::string::npos) << pi.out;
+    EXPECT_NE(pi.out.find("float axis_ux"), std::string::npos) << pi.out;
+}
+
+TEST(Cli, BadInputExitsOneAndNamesTheFile) {
+    const fs::path bad = temp_dir() / "bad.ply";
+    std::ofstream(bad) << "ply\nformat ascii 1.0\nelement vertex 99999999\nproperty float x\nend_header\n1\n";
+    for (const std::string& cmd : {"info " + bad.string(), "convert " + bad.string() + " " + (temp_dir() / "o.glb").string()}) {
+        const CliRun r = run(cmd);
+        EXPECT_EQ(r.code, 1) << r.out;
+        EXPECT_NE(r.out.find(bad.string()), std::string::npos) << r.out;
+    }
+    EXPECT_FALSE(fs::exists(temp_dir() / "o.glb"));
+}
+
+TEST(Cli, UsageErrorsExitTwo) {
+    EXPECT_EQ(run("convert").code, 2);
+    EXPECT_EQ(run("convert a.ply").code, 2);
+    EXPECT_EQ(run("convert a.ply b.ply --splats zero").code, 2);
+    EXPECT_EQ(run("convert a.ply b.ply --bogus").code, 2);
+    EXPECT_EQ(run("info").code, 2);
+}
