@@ -264,6 +264,7 @@ void bspline_group(const Prepared& P, Group& g) {
         // Padded index = index + 1, so neighbour c-1 of cell c sits at padded c. Sum over a (s) first into
         // one accumulator per b (t), then combine: 16 FMAs per point for positions, 32 with derivatives.
         const float* base = P.grid.data() + ((std::size_t(ci) * PM + cj) * PK + ck) * 4;
+#if defined(__AVX512F__)
         v16 acc[4] = {}, accs[4] = {};
         for (int a = 0; a < 4; ++a)
             for (int b = 0; b < 4; ++b) {
@@ -273,12 +274,28 @@ void bspline_group(const Prepared& P, Group& g) {
                 if constexpr (Full) accs[b] += d * dws[a];
             }
         const v16 x16 = acc[0] * wt[0] + acc[1] * wt[1] + acc[2] * wt[2] + acc[3] * wt[3];
+#else
+        // 16 ymm registers only: three accumulators (two ymm each) with combined weights.
+        v16 x16 = {}, s16 = {}, t16 = {};
+        for (int a = 0; a < 4; ++a)
+            for (int b = 0; b < 4; ++b) {
+                v16 d;
+                std::memcpy(&d, base + (std::size_t(a) * PM + b) * PK * 4, sizeof d);
+                x16 += d * (ws[a] * wt[b]);
+                if constexpr (Full) {
+                    s16 += d * (dws[a] * wt[b]);
+                    t16 += d * (ws[a] * dwt[b]);
+                }
+            }
+#endif
         const v16 wu16 = expand4(wu);
         const v4 x = lanes4(x16 * wu16);
         for (int c = 0; c < 3; ++c) g.D[c][lane] = x[c];
         if constexpr (Full) {
+#if defined(__AVX512F__)
             const v16 s16 = accs[0] * wt[0] + accs[1] * wt[1] + accs[2] * wt[2] + accs[3] * wt[3];
             const v16 t16 = acc[0] * dwt[0] + acc[1] * dwt[1] + acc[2] * dwt[2] + acc[3] * dwt[3];
+#endif
             const v4 xs = lanes4(s16 * wu16), xt = lanes4(t16 * wu16), xu = lanes4(x16 * expand4(dwu));
             for (int c = 0; c < 3; ++c) {
                 g.G[c * 3 + 0][lane] = xs[c];
