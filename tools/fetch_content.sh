@@ -16,7 +16,7 @@ for arg in "$@"; do
   case "$arg" in
     --dragon) want_dragon=1 ;;
     --force) force=1 ;;
-    -h|--help) sed -n '2,12p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
     *) echo "fetch_content.sh: unknown option '$arg'" >&2; exit 2 ;;
   esac
 done
