@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# tools/demo.sh: install what is missing, fetch content, build (release preset), then show the built-in
+# tools/demo.sh: install what is missing, build (release preset), fetch content, then show the built-in
 # sphere (59,650 splats): in the editor window when a display exists, otherwise render a few frames
 # headless into out/demo/ and print where they are. Extra arguments go to `splatffd view`/`render`.
 set -euo pipefail
@@ -7,12 +7,13 @@ cd "$(dirname "${BASH_SOURCE[0]}")/.."
 root=$(pwd)
 
 tools/bootstrap.sh
-if [[ -x tools/fetch_content.sh ]]; then tools/fetch_content.sh; fi
 
 jobs=$(nproc 2>/dev/null || echo 2)
 cmake --preset release -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
 cmake --build --preset release --target splatffd -j"$jobs"
 splatffd="$root/build/release/tools/splatffd"
+# Real content (the face scan) is fetched and converted by the freshly built binary.
+if [[ -x tools/fetch_content.sh ]]; then SPLATFFD="$splatffd" tools/fetch_content.sh; fi
 
 # A command another engineer has not landed yet says "not implemented yet" and exits 2.
 implemented() {

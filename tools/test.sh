@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# tools/test.sh [--asan]: install what is missing, fetch content, configure and build (release preset, or
-# asan = ASan+UBSan), then run every test: ctest for the cpu, gl and slow labels (GL tests make their own
+# tools/test.sh [--asan]: install what is missing, configure and build (release preset, or asan =
+# ASan+UBSan), fetch content, then run every test: ctest for the cpu, gl and slow labels (GL tests make their own
 # headless EGL context) and the xvfb-labelled window tests under `xvfb-run -a`.
 # Ends with one line "test.sh: N passed, N failed"; exits non-zero if anything failed.
 set -euo pipefail
@@ -17,11 +17,12 @@ for arg in "$@"; do
 done
 
 tools/bootstrap.sh
-if [[ -x tools/fetch_content.sh ]]; then tools/fetch_content.sh; fi
 
 jobs=$(nproc 2>/dev/null || echo 2)
 cmake --preset "$preset" -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
 cmake --build --preset "$preset" -j"$jobs"
+# Real content (the face scan) is fetched and converted by the freshly built binary.
+if [[ -x tools/fetch_content.sh ]]; then SPLATFFD="$root/build/$preset/tools/splatffd" tools/fetch_content.sh; fi
 
 # LeakSanitizer: Mesa/EGL/GLFW keep driver state alive until exit; tools/lsan.supp names only those.
 export LSAN_OPTIONS="suppressions=$root/tools/lsan.supp:print_suppressions=0"
