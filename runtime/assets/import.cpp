@@ -12,6 +12,7 @@
 
 #include <nanoflann.hpp>
 #include <stb/stb_image.h>
+#include <tbb/parallel_for.h>
 
 #include "runtime/assets/gltf_io.h"
 #include "runtime/assets/ply.h"
@@ -625,23 +626,40 @@ std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::si
     Adaptor3d adaptor{&pts};
     Tree3d tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
     tree.buildIndex();
+    // Neighbour lists in parallel blocks (the search dominates), concatenated in point order.
+    constexpr std::size_t kBlock = 8192;
+    const std::size_t blocks = (n + kBlock - 1) / kBlock;
+    std::vector<std::vector<std::uint32_t>> block_nbr(blocks), block_count(blocks);
+    std::vector<std::vector<float>> block_dist(blocks);
+    tbb::parallel_for(std::size_t{0}, blocks, [&](std::size_t b) {
+        std::vector<std::pair<std::uint32_t, double>> found;
+        nanoflann::SearchParams params(32, 0.0f, false);
+        const std::size_t end = std::min(n, (b + 1) * kBlock);
+        for (std::size_t i = b * kBlock; i < end; ++i) {
+            const double q[3] = {pts[i].x, pts[i].y, pts[i].z};
+            found.clear();
+            tree.radiusSearch(q, r2 * r2, found, params);
+            std::uint32_t taken = 0;
+            for (const auto& [j, d2] : found) {
+                if (j == i) continue;
+                if (taken >= 64) break;  // duplicates piled on one spot: bound the work
+                ++taken;
+                block_nbr[b].push_back(j);
+                block_dist[b].push_back(static_cast<float>(std::sqrt(d2)));
+            }
+            block_count[b].push_back(taken);
+        }
+    });
     std::vector<std::uint32_t> offsets(n + 1, 0);
     std::vector<std::uint32_t> nbr;
     std::vector<float> dist;
-    std::vector<std::pair<std::uint32_t, double>> found;
-    nanoflann::SearchParams params(32, 0.0f, false);
-    for (std::size_t i = 0; i < n; ++i) {
-        const double q[3] = {pts[i].x, pts[i].y, pts[i].z};
-        found.clear();
-        tree.radiusSearch(q, r2 * r2, found, params);
-        std::size_t taken = 0;
-        for (const auto& [j, d2] : found) {
-            if (j == i) continue;
-            if (taken++ >= 64) break;  // duplicates piled on one spot: bound the work
-            nbr.push_back(j);
-            dist.push_back(static_cast<float>(std::sqrt(d2)));
-        }
-        offsets[i + 1] = static_cast<std::uint32_t>(nbr.size());
+    for (std::size_t b = 0; b < blocks; ++b) {
+        const std::size_t first = b * kBlock;
+        for (std::size_t k = 0; k < block_count[b].size(); ++k) offsets[first + k + 1] = offsets[first + k] + block_count[b][k];
+        nbr.insert(nbr.end(), block_nbr[b].begin(), block_nbr[b].end());
+        dist.insert(dist.end(), block_dist[b].begin(), block_dist[b].end());
+        std::vector<std::uint32_t>().swap(block_nbr[b]);
+        std::vector<float>().swap(block_dist[b]);
     }
     std::vector<double> weight(n, 0.0);
     auto w = [&](float d) { const double x = 1.0 - static_cast<double>(d) / r2; return x * x * x * x * x * x * x * x; };
