@@ -788,6 +788,9 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
     const Geometry* g = &input;
     Geometry resampled;
     bool resampled_points = false;
+    constexpr std::size_t kMaxSplats = std::size_t(1) << 28;  // 268M: beyond that memory, not the file, is the limit
+    if (options.splats > kMaxSplats)
+        return make_error(input.source + ": " + std::to_string(options.splats) + " splats requested; at most " + std::to_string(kMaxSplats));
     std::size_t mesh_splats = options.splats;
     if (input.triangle_count() > 0 && mesh_splats == 0 && options.min_mesh_splats > 0) {
         std::vector<char> used(input.positions.size(), 0);
