@@ -55,6 +55,20 @@ double clip_time(const ecs::Registry& registry, const EditorState& state);
 void scrub_to(ecs::Registry& registry, EditorState& state, double time);
 void toggle_play(ecs::Registry& registry, EditorState& state);
 
+// Lattice settings (need systems/ffd's operations; false with a status message when not built or when
+// the operation fails). Each is one undo step; the selection is cleared where indices change meaning.
+//   resample: new divisions, same shape (Bernstein degree elevation is exact; lowering is a least-squares
+//             fit); mixed raise/lower per axis raises first, then lowers.
+//   set_basis: switches Bernstein / B-spline keeping the control points (the shape changes with the basis).
+//   fit: a rest lattice around the point clouds this lattice deforms (to_selection: only their points
+//        inside the box of the selected control points), same divisions and basis.
+//   apply_as_rest: bakes the current deformation into the clouds whose first deformer is this lattice
+//        (their authored splats change: nothing moves on screen) and makes the current shape the rest.
+bool resample_lattice(ecs::Registry& registry, EditorState& state, glm::ivec3 divisions);
+bool set_lattice_basis(ecs::Registry& registry, EditorState& state, LatticeBasis basis);
+bool fit_lattice_to(ecs::Registry& registry, EditorState& state, bool to_selection);
+bool apply_lattice_as_rest(ecs::Registry& registry, EditorState& state);
+
 // The world-space control points the edit tools would move, and their pivot and axis.
 std::vector<std::uint32_t> editable_selection(const ecs::Registry& registry, const EditorState& state);
 

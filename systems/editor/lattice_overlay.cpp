@@ -4,6 +4,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "runtime/app/app.h"
 #include "runtime/core/log.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/gl_object.h"
@@ -19,6 +20,7 @@ namespace sffd::editor {
 
 struct LatticeOverlayState {
     gfx::Program program;
+    gfx::Program display;  // refreshes the window's display copy (PresentSource) after the overlay
     gfx::VertexArray vao;
     gfx::Buffer buffer;
     std::size_t capacity = 0;  // vertices
@@ -87,6 +89,14 @@ Status init_lattice_overlay(ecs::Registry& registry) {
         return make_error(program.message());
     }
     s.program = std::move(*program);
+    auto display = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
+                                      {GL_FRAGMENT_SHADER, "editor/display.frag"}},
+                                     "editor.display");
+    if (!display) {
+        s.failed = true;
+        return make_error(display.message());
+    }
+    s.display = std::move(*display);
     s.vao = gfx::VertexArray::create("editor.lattice.vao");
     s.buffer = gfx::Buffer::create("editor.lattice.vertices");
     const GLuint vao = s.vao.id();
@@ -184,6 +194,25 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
         bufs.push_back(GL_COLOR_ATTACHMENT0 + GLenum(i));
     }
     glNamedFramebufferDrawBuffers(fbo, GLsizei(bufs.size()), bufs.data());
+
+    // A window shows render_system's sRGB display copy, made before this overlay: redo it.
+    const auto* present = registry.try_resource<app::PresentSource>();
+    if (present && present->framebuffer != 0 && present->framebuffer != fbo && present->width == width &&
+        present->height == height) {
+        const auto* settings = registry.try_resource<render::RenderSettings>();
+        const glm::vec3 bg = settings && settings->background ? *settings->background : glm::vec3(0.0f);
+        glBindFramebuffer(GL_FRAMEBUFFER, present->framebuffer);
+        glViewport(0, 0, width, height);
+        glDisable(GL_DEPTH_TEST);
+        glUseProgram(s.display.id());
+        glBindTextureUnit(0, GLuint(color_tex));
+        glUniform1i(glGetUniformLocation(s.display.id(), "u_linear_color"), 0);
+        glUniform3f(glGetUniformLocation(s.display.id(), "u_background"), bg.x, bg.y, bg.z);
+        glBindVertexArray(s.vao.id());  // any VAO: the triangle comes from gl_VertexID
+        glDrawArrays(GL_TRIANGLES, 0, 3);
+        glBindVertexArray(0);
+        glUseProgram(0);
+    }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 

@@ -313,7 +313,7 @@ void tools_panel(ecs::Registry& registry, EditorState& state) {
 
 void lattice_panel(ecs::Registry& registry, EditorState& state) {
     ImGui::SetNextWindowPos(ImVec2(float(state.viewport.width) - 300.0f, 366), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(292, 170), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(292, 250), ImGuiCond_FirstUseEver);
     if (ImGui::Begin("Lattice")) {
         const Lattice* l = registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
         if (!l) {
@@ -336,6 +336,28 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
                 state.pin_outer_layer = !state.pin_outer_layer;
             ImGui::SameLine();
             if (ImGui::Button("reset")) reset_lattice(registry, state);
+            ImGui::Separator();
+            // Resolution: edits a pending value; "resample" applies it keeping the current shape.
+            static glm::ivec3 divisions{0};
+            static ecs::Entity divisions_of = ecs::null_entity;
+            if (divisions_of != state.active_lattice || divisions == glm::ivec3(0)) {
+                divisions = l->divisions;
+                divisions_of = state.active_lattice;
+            }
+            ImGui::InputInt3("divisions", &divisions.x);
+            divisions = glm::clamp(divisions, glm::ivec3(1), glm::ivec3(64));
+            ImGui::SameLine();
+            if (ImGui::Button("resample")) {
+                resample_lattice(registry, state, divisions);
+                divisions = glm::ivec3(0);
+            }
+            int basis = int(l->basis);
+            if (ImGui::Combo("basis", &basis, "Bernstein\0cubic B-spline\0")) set_lattice_basis(registry, state, LatticeBasis(basis));
+            if (ImGui::Button("fit to object")) fit_lattice_to(registry, state, false);
+            ImGui::SameLine();
+            if (ImGui::Button("fit to selection")) fit_lattice_to(registry, state, true);
+            ImGui::SameLine();
+            if (ImGui::Button("apply as rest")) apply_lattice_as_rest(registry, state);
         }
     }
     ImGui::End();

@@ -19,6 +19,7 @@
 #include "runtime/core/log.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
+#include "runtime/gfx/render_target.h"
 #include "systems/editor/editor_system.h"
 #include "systems/editor/lattice_overlay.h"
 #include "systems/editor/panels.h"
@@ -208,6 +209,22 @@ void ui_system(ecs::Registry& registry, const FrameContext& frame) {
     draw_panels(registry, frame);
     ImGui::Render();
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    const ViewOptions& o = session->options;
+    if (!o.window_screenshot.empty() && o.frames > 0 && frame.frame + 1 == o.frames) {
+        // The default framebuffer before the swap: what the user sees, panels included.
+        GLint vp[4] = {0, 0, 0, 0};
+        glGetIntegerv(GL_VIEWPORT, vp);
+        render::Rgba8Image img;
+        img.width = vp[2], img.height = vp[3];
+        img.pixels.resize(std::size_t(img.width) * std::size_t(img.height) * 4);
+        glBindFramebuffer(GL_READ_FRAMEBUFFER, 0);
+        glReadBuffer(GL_BACK);
+        glPixelStorei(GL_PACK_ALIGNMENT, 1);
+        glReadPixels(0, 0, img.width, img.height, GL_RGBA, GL_UNSIGNED_BYTE, img.pixels.data());
+        gfx::flip_rows(img.pixels, std::size_t(img.width) * 4);
+        for (std::size_t i = 3; i < img.pixels.size(); i += 4) img.pixels[i] = 255;
+        if (Status st = render::write_png(o.window_screenshot, img); !st) log::error("view: ", st.message());
+    }
 }
 
 std::string default_save_path(const std::string& scene) {

@@ -31,6 +31,7 @@ struct ViewOptions {
     bool ui = true;           // ImGui panels (window only)
     bool preview = false;     // render quality preview instead of hq
     std::string timing_json;  // write frame-time statistics (all frames / frames with a tool drag) here
+    std::string window_screenshot;  // with --frames: the whole window (panels included) of the last frame, PNG
 };
 
 // Runs the editor on `schedule` (the engine's standard frame built without its present systems, see

@@ -25,6 +25,7 @@ void usage() {
                  "  --no-ui            no ImGui panels\n"
                  "  --headless         no window (EGL); input only from --replay\n"
                  "  --timing-json F    write frame-time statistics (all frames, frames with a live drag)\n"
+                 "  --window-screenshot PATH  with --frames: the last frame's whole window (panels too), PNG\n"
                  "Runs under X (use `xvfb-run -a` without a display). Keys and mouse: systems/editor/README.md\n");
 }
 
@@ -70,6 +71,10 @@ int run_view_command(sffd::cli::Args args) {
             const auto* v = value("--save");
             if (!v) return 2;
             o.save_path = *v;
+        } else if (a == "--window-screenshot") {
+            const auto* v = value("--window-screenshot");
+            if (!v) return 2;
+            o.window_screenshot = *v;
         } else if (a == "--timing-json") {
             const auto* v = value("--timing-json");
             if (!v) return 2;

@@ -11,6 +11,7 @@
 
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
+#include "systems/ffd/deform.h"
 #include "systems/picking/components.h"
 
 using namespace sffd;
@@ -216,4 +217,25 @@ TEST(EditorSystem, OrbitPanZoomMoveTheCamera) {
     const double d0 = glm::length(s.camera().eye - s.camera().target);
     s.run({wheel});
     EXPECT_LT(glm::length(s.camera().eye - s.camera().target), d0);
+}
+
+TEST(EditorSystem, ResampleKeepsTheShapeAndUndoRestoresTheLattice) {
+    Scene s;
+    const std::uint32_t a = idx(s.lat(), 1, 2, 1);
+    s.click(s.pixel_of(a));
+    s.run({Scene::key("g")});
+    ASSERT_TRUE(apply_stretch(s.reg, *s.state, {0.2, -0.1, 0.3}));
+    const Lattice before = s.lat();
+    ASSERT_TRUE(resample_lattice(s.reg, *s.state, {5, 4, 6}));
+    EXPECT_EQ(s.lat().divisions, glm::ivec3(5, 4, 6));
+    EXPECT_TRUE(s.selection().empty());  // indices of the old grid mean nothing in the new one
+    // Same deformation (Bernstein degree elevation is exact), checked against ffd's reference evaluator.
+    for (const glm::dvec3 p : {glm::dvec3(0.1, 0.2, -0.3), glm::dvec3(-0.7, 0.5, 0.6), glm::dvec3(0.0)}) {
+        const auto x0 = ffd::reference_point(before, p), x1 = ffd::reference_point(s.lat(), p);
+        EXPECT_NEAR(glm::length(x0.position - x1.position), 0.0, 1e-12);
+    }
+    s.run({Scene::key("z", mods::ctrl)});
+    EXPECT_EQ(s.lat().divisions, before.divisions);
+    EXPECT_TRUE(bit_equal(s.lat().current, before.current));
+    EXPECT_EQ(s.selection(), std::vector<std::uint32_t>{a});
 }
