@@ -29,6 +29,8 @@
 #include "systems/profiling/synthetic.h"
 #include "tools/splatffd/command.h"
 
+#include <nlohmann/json.hpp>
+
 #if __has_include("tools/splatffd/engine.h")
 #include "tools/splatffd/engine.h"
 #define SFFD_PROFILE_HAS_ENGINE 1
@@ -47,6 +49,13 @@
 #include "systems/profiling/pass_timer.h"
 #include "systems/splat_render/splat_pack.h"
 #define SFFD_PROFILE_HAS_FFD_GPU 1
+#endif
+#if SFFD_PROFILE_HAS_FFD_GPU && __has_include("systems/ffd/paper_mode.h")
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "runtime/gfx/render_target.h"
+#include "systems/ffd/paper_mode.h"
+#define SFFD_PROFILE_HAS_PAPER_MODE 1
 #endif
 #if __has_include("systems/splat_render/splat_render.h")
 #include "systems/splat_render/splat_render.h"
@@ -78,9 +87,11 @@ constexpr const char* usage_text =
     "  --sweep K=V,.. ..     sweep points=60k,250k,1m lattice=4,11,21 backend=cpu,gpu\n"
     "                        basis=bernstein,bspline (any subset); prints a table; --svg PREFIX writes\n"
     "                        PREFIX_points.svg and PREFIX_lattice.svg; --json F writes all rows\n"
+    "  --plot-sweep F.json   re-draw the plots of a sweep saved with --json (with --svg PREFIX)\n"
     "  --paper               the seed paper's table: sphere and face, 11^3 control points, four cases;\n"
     "                        naive paper CPU algorithm vs our fast CPU path (and GPU paths when built)\n"
-    "  --naive-frames N      frames of the naive paper algorithm per case (default 1; ~10-60 s each)\n";
+    "  --naive-frames N      frames of the naive paper algorithm per case (default 1; about a minute\n"
+    "                        each; 0 skips it)\n";
 
 int usage_error(const std::string& message) {
     std::fprintf(stderr, "splatffd profile: %s\n%s", message.c_str(), usage_text);
@@ -97,6 +108,7 @@ struct Options {
     std::string drive = "global twist";
     std::string json, csv, svg, trace, compare;
     std::vector<std::string> sweep;
+    std::string plot_sweep;
     bool paper = false;
     int naive_frames = 1;
 };
@@ -489,6 +501,77 @@ struct SweepRow {
     std::string note;
 };
 
+// Time vs points: one series per (backend, basis, lattice). Time vs lattice: per (backend, basis, points).
+int write_sweep_plots(const std::vector<SweepRow>& rows, const std::string& prefix) {
+    auto chart = [&](bool by_points) {
+        LineChart c;
+        c.title = by_points ? "FFD deformation time vs point count" : "FFD deformation time vs lattice size";
+        c.x_label = by_points ? "splats" : "control points per axis (lattice n x n x n)";
+        c.y_label = "deformation time per frame, median (ms)";
+        c.title += " (solid: CPU, dashed: GPU)";
+        c.log_x = by_points;
+        c.log_y = true;
+        c.x_ticks_at_data = true;
+        std::map<std::string, Series> series;
+        std::vector<std::string> order;
+        for (const auto& r : rows) {
+            if (r.deform_p50 <= 0) continue;
+            char key[128];
+            if (by_points) std::snprintf(key, sizeof key, "%s %s, %d^3", r.backend.c_str(), r.basis.c_str(), r.lattice);
+            else std::snprintf(key, sizeof key, "%s %s, %s pts", r.backend.c_str(), r.basis.c_str(), tick_label(r.points).c_str());
+            if (!series.count(key)) order.push_back(key), series[key].name = key, series[key].dashed = r.backend == "gpu";
+            series[key].points.emplace_back(by_points ? r.points : double(r.lattice), r.deform_p50);
+        }
+        for (const auto& k : order) {
+            auto& pts = series[k].points;
+            std::sort(pts.begin(), pts.end());
+            c.series.push_back(series[k]);
+        }
+        return render_svg(c);
+    };
+    for (bool by_points : {true, false}) {
+        const std::string path = prefix + (by_points ? "_points.svg" : "_lattice.svg");
+        if (Status st = write_text(path, chart(by_points)); !st) {
+            std::fprintf(stderr, "%s\n", st.message().c_str());
+            return 1;
+        }
+        std::printf("wrote %s\n", path.c_str());
+    }
+    return 0;
+}
+
+// --plot-sweep F.json: re-draws the plots of a sweep written with --json (no measuring).
+int plot_sweep(const std::string& path, const std::string& prefix) {
+    const auto text = read_text(path);
+    if (!text) {
+        std::fprintf(stderr, "%s: cannot read the sweep file\n", path.c_str());
+        return 1;
+    }
+    const auto j = nlohmann::json::parse(*text, nullptr, false);
+    if (j.is_discarded() || j.value("format", "") != "splatffd-sweep" || !j.contains("rows") || !j["rows"].is_array()) {
+        std::fprintf(stderr, "%s: not a sweep written by 'splatffd profile --sweep ... --json'\n", path.c_str());
+        return 1;
+    }
+    std::vector<SweepRow> rows;
+    try {
+        for (const auto& r : j["rows"]) {
+            SweepRow row;
+            row.points = r.at("points").get<double>();
+            row.lattice = r.at("lattice").get<int>();
+            row.backend = r.at("backend").get<std::string>();
+            row.basis = r.at("basis").get<std::string>();
+            row.deform_p50 = r.at("deform_p50_ms").get<double>();
+            row.deform_p95 = r.at("deform_p95_ms").get<double>();
+            row.frame_p50 = r.at("frame_p50_ms").get<double>();
+            rows.push_back(row);
+        }
+    } catch (const nlohmann::json::exception& e) {
+        std::fprintf(stderr, "%s: malformed sweep row: %s\n", path.c_str(), e.what());
+        return 1;
+    }
+    return write_sweep_plots(rows, prefix);
+}
+
 int run_sweep(const Options& o) {
     std::map<std::string, std::vector<std::string>> axes{
         {"points", {"60k"}}, {"lattice", {"11"}}, {"backend", {"cpu"}}, {"basis", {"bernstein"}}};
@@ -557,43 +640,8 @@ int run_sweep(const Options& o) {
                 }
     std::printf("machine: %s\n", machine_line.c_str());
 
-    if (!o.svg.empty()) {
-        // Time vs points: one series per (backend, basis, lattice). Time vs lattice: per (backend, basis, points).
-        auto chart = [&](bool by_points) {
-            LineChart c;
-            c.title = by_points ? "FFD deformation time vs point count" : "FFD deformation time vs lattice size";
-            c.x_label = by_points ? "splats" : "control points per axis (lattice n x n x n)";
-            c.y_label = "deformation time per frame, median (ms)";
-            c.title += " (solid: CPU, dashed: GPU)";
-            c.log_x = by_points;
-            c.log_y = true;
-            c.x_ticks_at_data = true;
-            std::map<std::string, Series> series;
-            std::vector<std::string> order;
-            for (const auto& r : rows) {
-                if (r.deform_p50 <= 0) continue;
-                char key[128];
-                if (by_points) std::snprintf(key, sizeof key, "%s %s, %d^3", r.backend.c_str(), r.basis.c_str(), r.lattice);
-                else std::snprintf(key, sizeof key, "%s %s, %s pts", r.backend.c_str(), r.basis.c_str(), tick_label(r.points).c_str());
-                if (!series.count(key)) order.push_back(key), series[key].name = key, series[key].dashed = r.backend == "gpu";
-                series[key].points.emplace_back(by_points ? r.points : double(r.lattice), r.deform_p50);
-            }
-            for (const auto& k : order) {
-                auto& pts = series[k].points;
-                std::sort(pts.begin(), pts.end());
-                c.series.push_back(series[k]);
-            }
-            return render_svg(c);
-        };
-        for (bool by_points : {true, false}) {
-            const std::string path = o.svg + (by_points ? "_points.svg" : "_lattice.svg");
-            if (Status st = write_text(path, chart(by_points)); !st) {
-                std::fprintf(stderr, "%s\n", st.message().c_str());
-                return 1;
-            }
-            std::printf("wrote %s\n", path.c_str());
-        }
-    }
+    if (!o.svg.empty())
+        if (int rc = write_sweep_plots(rows, o.svg); rc != 0) return rc;
     if (!o.json.empty()) {
         std::string j = "{\n  \"format\": \"splatffd-sweep\",\n  \"machine\": \"" + machine_line + "\",\n  \"rows\": [\n";
         for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -669,8 +717,12 @@ int run_paper(const Options& o) {
                 cpu.push_back(thread_cpu_ms() - c0);
                 ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
             }
-            naive.case_ms.push_back(median(ms));
-            naive_cpu.case_ms.push_back(median(cpu));
+            naive.case_ms.push_back(ms.empty() ? -1.0 : median(ms));
+            naive_cpu.case_ms.push_back(cpu.empty() ? -1.0 : median(cpu));
+            if (ms.empty()) {
+                naive.note = naive_cpu.note = "skipped (--naive-frames 0)";
+                continue;
+            }
             std::printf("  %-8s %-15s naive  wall %10.1f ms  thread CPU %10.1f ms\n", object, pc.name,
                         naive.case_ms.back(), naive_cpu.case_ms.back());
             std::fflush(stdout);
@@ -705,44 +757,107 @@ int run_paper(const Options& o) {
 #endif
 #if SFFD_PROFILE_HAS_FFD_GPU
         {
-            // Timed with glFinish + CPU clock (llvmpipe's timer queries are not trustworthy).
-            PaperRow gpu{label, "ours GPU compute (glFinish-timed)", cloud->size(), {}, ""};
+            // GPU rows, timed with glFinish + CPU clock (llvmpipe's timer queries are not trustworthy):
+            //   compute          the skinning-style compute pass alone (deform once per change);
+            //   compute + draw   that pass then the same point sprites drawn from the deformed buffer;
+            //   paper mode       the paper's design: deformation in the vertex shader of the point draw.
+            // Draws go to an offscreen 1024x768 target, camera framing the cloud; 2-pixel point sprites.
+            PaperRow gpu{label, "ours GPU compute (deform only)", cloud->size(), {}, ""};
+            PaperRow gpu_draw{label, "ours GPU compute + point draw", cloud->size(), {}, ""};
+            PaperRow paper_mode{label, "paper mode: vertex-shader deform + draw", cloud->size(), {}, ""};
             auto ctx = gfx::create_context({.headless = true, .width = 64, .height = 64, .debug = false});
             if (!ctx) {
-                gpu.case_ms = {-1, -1, -1, -1};
-                gpu.note = ctx.message();
+                gpu.case_ms = gpu_draw.case_ms = paper_mode.case_ms = {-1, -1, -1, -1};
+                gpu.note = gpu_draw.note = paper_mode.note = ctx.message();
             } else {
-                gpu.note = ctx->renderer();
                 auto greg = std::make_unique<ecs::Registry>();  // dies before the context
                 const ecs::Entity ce = greg->create();
                 greg->emplace<SplatCloud>(ce, *cloud);
                 const ecs::Entity le = greg->create();
                 greg->emplace<Lattice>(le, lattice);
                 greg->emplace<Deformers>(ce, Deformers{{le}});
-                for (const auto& pc : paper_cases) {
+                const int frames = std::max(3, o.frames / 8) + 2;
+                auto time_frames = [&](const PaperCase& pc, auto&& body) -> Result<double> {
                     std::vector<double> ms;
-                    for (int f = 0; f < std::max(3, o.frames / 8) + 2; ++f) {
+                    for (int f = 0; f < frames; ++f) {
                         apply_paper_case(greg->patch<Lattice>(le), pc, 0.5 + 0.5 * std::sin(0.7 * (f + 1)));
                         glFinish();
                         const auto t0 = std::chrono::steady_clock::now();
-                        if (Status st = gpu_deform_all(*greg); !st) {
-                            std::fprintf(stderr, "%s\n", st.message().c_str());
-                            return 1;
-                        }
+                        if (Status st = body(); !st) return st.error();
                         glFinish();
                         const double t = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-                        if (f >= 2) ms.push_back(t);
+                        if (f >= 2) ms.push_back(t);  // two warm-up frames
                     }
-                    gpu.case_ms.push_back(median(ms));
+                    return median(ms);
+                };
+                for (const auto& pc : paper_cases) {
+                    auto t = time_frames(pc, [&] { return gpu_deform_all(*greg); });
+                    if (!t) {
+                        std::fprintf(stderr, "%s\n", t.message().c_str());
+                        return 1;
+                    }
+                    gpu.case_ms.push_back(*t);
                 }
+#if SFFD_PROFILE_HAS_PAPER_MODE
+                auto target = gfx::RenderTarget::create(
+                    {.label = "profile.paper", .width = 1024, .height = 768, .color = {{"color", gfx::ColorFormat::rgba8}}});
+                auto paper = ffd::PaperModeRenderer::create();
+                if (!target || !paper) {
+                    std::fprintf(stderr, "%s\n", (!target ? target.message() : paper.message()).c_str());
+                    return 1;
+                }
+                glm::dvec3 lo = lattice.origin, hi = lattice.origin + lattice.axes[0] + lattice.axes[1] + lattice.axes[2];
+                const glm::dvec3 centre = 0.5 * (lo + hi) - cloud->origin;
+                const float radius = static_cast<float>(0.5 * glm::length(hi - lo));
+                const glm::mat4 view_proj =
+                    glm::perspective(glm::radians(45.0f), 1024.0f / 768.0f, 0.01f * radius, 10.0f * radius) *
+                    glm::lookAt(glm::vec3(centre) + glm::vec3(0, 0, 2.8f * radius), glm::vec3(centre), glm::vec3(0, 1, 0));
+                const float black[4] = {0, 0, 0, 0};
+                auto& st = greg->resource<HarnessGpuDeform>();
+                const auto& buffers = st.clouds.at(ce);
+                for (const auto& pc : paper_cases) {
+                    auto t = time_frames(pc, [&]() -> Status {
+                        if (Status s1 = gpu_deform_all(*greg); !s1) return s1;
+                        target->bind();
+                        target->clear_color("color", black);
+                        target->clear_depth();
+                        paper->draw_deformed(buffers.deformed.id(), buffers.count, view_proj, 2.0f);
+                        return {};
+                    });
+                    if (!t) {
+                        std::fprintf(stderr, "%s\n", t.message().c_str());
+                        return 1;
+                    }
+                    gpu_draw.case_ms.push_back(*t);
+                    auto tp = time_frames(pc, [&]() -> Status {
+                        target->bind();
+                        target->clear_color("color", black);
+                        target->clear_depth();
+                        return paper->draw(greg->get<Lattice>(le), greg->version<Lattice>(le), cloud->origin,
+                                           buffers.rest.id(), buffers.count, view_proj, 2.0f);
+                    });
+                    if (!tp) {
+                        std::fprintf(stderr, "%s\n", tp.message().c_str());
+                        return 1;
+                    }
+                    paper_mode.case_ms.push_back(*tp);
+                }
+                paper = make_error("done");  // GL objects go while the context is current
+                target = make_error("done");
+#else
+                gpu_draw.case_ms = paper_mode.case_ms = {-1, -1, -1, -1};
+                gpu_draw.note = paper_mode.note = "not built yet";
+#endif
                 greg.reset();
             }
             rows.push_back(gpu);
+            rows.push_back(gpu_draw);
+            rows.push_back(paper_mode);
         }
 #else
         rows.push_back({label, "ours GPU compute", cloud->size(), {-1, -1, -1, -1}, "not built yet"});
-#endif
         rows.push_back({label, "paper mode (vertex shader)", cloud->size(), {-1, -1, -1, -1}, "not built yet"});
+#endif
     }
 
     const MachineInfo m = machine_info(false);
@@ -764,11 +879,12 @@ int run_paper(const Options& o) {
         double naive_mean = 0;
         for (const auto& q : rows)
             if (q.object == r.object && q.method.rfind("paper CPU naive, thread CPU", 0) == 0) {
-                for (double ms : q.case_ms) naive_mean += ms / 4.0;
+                for (double ms : q.case_ms) naive_mean += ms < 0 ? -1e300 : ms / 4.0;
             }
         if (n > 0) {
             const double mean = sum / n;
-            std::printf(" %10.2f %8.0fx", 1000.0 / mean, naive_mean / mean);
+            if (naive_mean > 0) std::printf(" %10.2f %8.0fx", 1000.0 / mean, naive_mean / mean);
+            else std::printf(" %10.2f %9s", 1000.0 / mean, "-");
         } else {
             std::printf(" %10s %9s  %s", "-", "-", r.note.c_str());
         }
@@ -804,7 +920,7 @@ int run_profile_command(cli::Args args) {
         } else if (a == "--warmup") {
             if (!int_value(o.warmup)) return usage_error("--warmup takes a non-negative integer");
         } else if (a == "--naive-frames") {
-            if (!int_value(o.naive_frames) || o.naive_frames < 1) return usage_error("--naive-frames takes a positive integer");
+            if (!int_value(o.naive_frames)) return usage_error("--naive-frames takes a non-negative integer");
         } else if (a == "--quality") {
             if (!value(o.quality) || (o.quality != "hq" && o.quality != "preview")) return usage_error("--quality hq|preview");
         } else if (a == "--backend") {
@@ -820,6 +936,8 @@ int run_profile_command(cli::Args args) {
             std::string& target = a == "--json" ? o.json : a == "--csv" ? o.csv : a == "--svg" ? o.svg
                                 : a == "--trace" ? o.trace : o.compare;
             if (!value(target)) return usage_error(a + " takes a file name");
+        } else if (a == "--plot-sweep") {
+            if (!value(o.plot_sweep)) return usage_error("--plot-sweep takes a sweep JSON file");
         } else if (a == "--sweep") {
             while (i + 1 < args.size() && args[i + 1].rfind("--", 0) != 0) o.sweep.push_back(args[++i]);
             if (o.sweep.empty()) return usage_error("--sweep takes KEY=V1,V2 arguments");
@@ -831,6 +949,10 @@ int run_profile_command(cli::Args args) {
         } else {
             return usage_error("more than one scene given ('" + o.scene + "', '" + a + "')");
         }
+    }
+    if (!o.plot_sweep.empty()) {
+        if (o.svg.empty()) return usage_error("--plot-sweep needs --svg PREFIX");
+        return plot_sweep(o.plot_sweep, o.svg);
     }
     if (o.paper) return run_paper(o);
     if (!o.sweep.empty()) return run_sweep(o);
