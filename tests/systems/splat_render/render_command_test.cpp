@@ -61,12 +61,13 @@ TEST(RenderCommand, WritesOnePngAndOneExrWithoutADisplay) {
     EXPECT_NE(log.find("frame 0"), std::string::npos);  // progress line
 }
 
+// HQ: its result does not depend on the order the cull pass compacts splats in (depth is a min, colours a
+// sum); the preview's opaque discs may swap a few pixels where two splats' depths tie exactly.
 TEST(RenderCommand, FrameKAloneEqualsFrameKOfASequence) {
     const fs::path seq = fresh_dir("seq"), alone = fresh_dir("alone");
     std::string log;
-    ASSERT_EQ(run("sphere --out " + seq.string() + " --frames 0:3 --size 160x90 --format png --quality preview", &log), 0) << log;
-    ASSERT_EQ(run("sphere --out " + alone.string() + " --frames 3:3 --size 160x90 --format png --quality preview", &log), 0)
-        << log;
+    ASSERT_EQ(run("sphere --out " + seq.string() + " --frames 0:3 --size 160x90 --format png", &log), 0) << log;
+    ASSERT_EQ(run("sphere --out " + alone.string() + " --frames 3:3 --size 160x90 --format png", &log), 0) << log;
     EXPECT_TRUE(fs::exists(seq / "frame_0000.png"));
     EXPECT_FALSE(fs::exists(alone / "frame_0000.png"));
     auto a = read_png(seq / "frame_0003.png");
