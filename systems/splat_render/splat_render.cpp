@@ -385,6 +385,12 @@ Status init_render_state(ecs::Registry& registry) {
     GLfloat range[2] = {1.0f, 1.0f};
     glGetFloatv(GL_POINT_SIZE_RANGE, range);
     s.max_point_size = range[1];
+    // Upload the rest splats of the clouds already loaded: ffd_system's GPU path needs GpuSplatStore's
+    // rest buffers and runs before render_system, so without this the first frame of every run was
+    // deformed on the CPU and `render --frames k:k` differed (by float rounding) from frame k of a
+    // sequence once the built-in scenes animate. (Added by the animation engineer.)
+    if (!registry.try_resource<gfx::GpuSplatStore>()) registry.set_resource<gfx::GpuSplatStore>();
+    sync_clouds(registry, s, registry.resource<gfx::GpuSplatStore>());
     registry.set_resource<SplatRenderState>(std::move(s));
     return {};
 }
