@@ -45,7 +45,7 @@ float ellipse_max_radius(vec3 u, vec3 v) {
 // Side length in pixels of a square sprite centred on the projected centre that holds the projection of
 // a ball of radius r at view-space centre c; -1 when the ball crosses the near plane. Exact bound: for
 // p = c + e, |e| <= r, x_ndc(p) - x_ndc(c) = (P00 e.x + x_ndc(c) e.z) / (depth - e.z), which is at most
-// r * sqrt(P00^2 + x_ndc^2) / (depth - r).
+// r * sqrt(P00^2 + x_ndc^2) / (depth - r). Sprites cover pixels whose centres lie inside the square.
 float sprite_size(vec3 c, float r) {
     float depth = -c.z;
     float near_depth = depth - r;
@@ -57,7 +57,7 @@ float sprite_size(vec3 c, float r) {
     float ndc_y = p11 * c.y / depth;
     float half_x = r * sqrt(p00 * p00 + ndc_x * ndc_x) / near_depth * 0.5 * frame.viewport.x;
     float half_y = r * sqrt(p11 * p11 + ndc_y * ndc_y) / near_depth * 0.5 * frame.viewport.y;
-    return 2.0 * max(half_x, half_y) + 0.5;  // half a pixel for the rasteriser's rounding
+    return 2.0 * max(half_x, half_y);  // exact bound: no margin (tested: SpriteCoversExactlyItsAnalyticDisc)
 }
 
 // sRGB decode without the linear toe (below 0.04045 the two differ by < 3e-4): one pow, no select.

@@ -253,3 +253,39 @@ TEST_F(Coverage_, DrawsTheDeformersOutputInsteadOfTheRestCloud) {
             outside_unit_sphere += img.covered(x, y) && !hit_ellipsoid(cam.eye, pixel_ray(cam, x, y, 256, 256), glm::dvec3(1.03));
     EXPECT_EQ(outside_unit_sphere, 0);
 }
+
+// A sprite-sized splat covers exactly the pixels whose centres lie in its analytic disc: the sprite's
+// size bound leaves nothing out (no margin is added to it), at several sub-pixel positions.
+TEST_F(Coverage_, SpriteCoversExactlyItsAnalyticDisc) {
+    const Camera& cam_ref = add_camera(2.0);
+    const Camera cam = cam_ref;
+    add_light({0.0f, 0.0f, -1.0f});
+    const ecs::Entity e = reg.create();
+    for (const glm::vec3 centre : {glm::vec3(0.0f), glm::vec3(0.1037f, -0.0711f, 0.0f), glm::vec3(-0.3013f, 0.2559f, 0.05f)}) {
+        SplatCloud one;
+        one.positions = {centre};
+        one.normals = {glm::normalize(glm::vec3(0.2f, 0.1f, 1.0f))};
+        const glm::vec3 t = glm::normalize(glm::cross(glm::vec3(0, 1, 0), one.normals[0]));
+        one.axis_u = {t * 0.05f};
+        one.axis_v = {glm::cross(one.normals[0], t) * 0.05f};
+        if (reg.has<SplatCloud>(e)) reg.remove<SplatCloud>(e);
+        reg.emplace<SplatCloud>(e, one);
+        for (Quality q : {Quality::hq, Quality::preview}) {
+            const FrameImage img = render(q, 512, 512);
+            EXPECT_EQ(reg.resource<RenderStats>().visible_points, 1u);
+            int expected = 0, mismatched = 0;
+            for (int y = 0; y < 512; ++y)
+                for (int x = 0; x < 512; ++x) {
+                    const glm::dvec3 d = pixel_ray(cam, x, y, 512, 512);
+                    const glm::dvec3 n(one.normals[0]);
+                    const double t_hit = glm::dot(glm::dvec3(centre) - cam.eye, n) / glm::dot(d, n);
+                    const glm::dvec3 p = cam.eye + d * t_hit - glm::dvec3(centre);
+                    const bool in = glm::length(p) <= 0.05;
+                    expected += in;
+                    mismatched += in != img.covered(x, y);
+                }
+            EXPECT_GT(expected, 500);
+            EXPECT_LE(mismatched, 2) << "centre " << centre.x << "," << centre.y << (q == Quality::hq ? " hq" : " preview");
+        }
+    }
+}
