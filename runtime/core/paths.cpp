@@ -20,7 +20,8 @@ fs::path executable_path() {
 
 static bool has_data(const fs::path& root) {
     std::error_code ec;
-    return fs::is_directory(root / "shaders", ec) && fs::is_directory(root / "content", ec);
+    // shaders/ is always there; content/ may be created later (its cache is made at set-up time).
+    return fs::is_directory(root / "shaders" / "common", ec);
 }
 
 fs::path data_root() {
