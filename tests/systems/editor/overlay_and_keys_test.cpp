@@ -1,0 +1,87 @@
+// The overlay's CPU side (which control points show as selected / pinned / inside the object's box) and
+// the timeline's set key / delete key through the editor (undoable), without a window.
+#include <gtest/gtest.h>
+
+#include "runtime/scene/components.h"
+#include "systems/animation/components.h"
+#include "systems/editor/editor_system.h"
+#include "systems/editor/lattice_overlay.h"
+#include "systems/editor/selection_edit.h"
+#include "systems/ffd/components.h"
+
+using namespace sffd;
+using namespace sffd::editor;
+
+namespace {
+struct Scene {
+    ecs::Registry reg;
+    ecs::Entity lattice;
+    EditorState* state;
+    Scene() {
+        lattice = reg.create();
+        Lattice& l = reg.emplace<Lattice>(lattice);
+        l.divisions = {4, 4, 4};
+        l.origin = {-1, -1, -1};
+        l.axes = {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)};
+        for (int i = 0; i <= 4; ++i)
+            for (int j = 0; j <= 4; ++j)
+                for (int k = 0; k <= 4; ++k) l.rest.push_back(l.origin + glm::dvec3(i, j, k) * 0.5);
+        l.current = l.rest;
+        // A cloud whose box is [-0.6, 0.6]^3: the 27 control points at -0.5, 0, 0.5 per axis are inside.
+        const ecs::Entity cloud = reg.create();
+        SplatCloud& c = reg.emplace<SplatCloud>(cloud);
+        c.positions = {glm::vec3(-0.6f), glm::vec3(0.6f), glm::vec3(0.0f)};
+        reg.emplace<Camera>(reg.create());
+        state = &setup_editor(reg, Viewport{640, 480});
+    }
+};
+glm::vec4 colour_of(const OverlayGeometry& g, std::size_t i) { return g.points[i].color; }
+}  // namespace
+
+TEST(LatticeOverlay, ColoursShowSelectionPinsAndTheObjectsBox) {
+    Scene s;
+    const Lattice& l = s.reg.get<Lattice>(s.lattice);
+    const std::uint32_t selected = static_cast<std::uint32_t>(l.index(2, 2, 2));
+    set_selection(s.reg, *s.state, s.lattice, {selected}, "select");
+    const OverlayGeometry g = build_lattice_overlay(s.reg, *s.state, s.lattice);
+    ASSERT_EQ(g.points.size(), l.size());
+    EXPECT_EQ(g.lines.size(), 2u * 3u * 4u * 5u * 5u);  // 3 directions x 4 segments x 5x5 rows, 2 ends each
+    int inside = 0;
+    for (std::size_t c = 0; c < l.size(); ++c) {
+        const glm::vec4 col = colour_of(g, c);
+        if (c == selected) EXPECT_EQ(col, overlay_selected);
+        else if (col == overlay_inside) ++inside;
+    }
+    EXPECT_EQ(inside, 26);  // 27 inside the box, one of them selected
+    EXPECT_EQ(colour_of(g, l.index(0, 2, 2)), overlay_pinned);
+    EXPECT_GT(g.points[selected].size, g.points[l.index(1, 1, 1)].size);
+    // Unpinned (or global scope): the outer layer is shown as an ordinary point outside the box.
+    s.state->pin_outer_layer = false;
+    EXPECT_EQ(colour_of(build_lattice_overlay(s.reg, *s.state, s.lattice), l.index(0, 2, 2)), overlay_outside);
+}
+
+TEST(EditorKeys, SetKeyRecordsTheLastStretchAndUndoRemovesIt) {
+    Scene s;
+    const Lattice& l = s.reg.get<Lattice>(s.lattice);
+    const std::uint32_t p = static_cast<std::uint32_t>(l.index(2, 1, 2));
+    EXPECT_FALSE(key_last_edit(s.reg, *s.state));  // nothing edited yet
+    set_selection(s.reg, *s.state, s.lattice, {p}, "select");
+    ASSERT_TRUE(apply_stretch(s.reg, *s.state, {0.0, 0.25, 0.0}));
+    ASSERT_TRUE(key_last_edit(s.reg, *s.state));
+    ASSERT_TRUE(s.reg.has<AnimationClip>(s.lattice));
+    const AnimationClip& clip = s.reg.get<AnimationClip>(s.lattice);
+    ASSERT_EQ(clip.tracks.size(), 1u);
+    EXPECT_EQ(clip.tracks[0].kind, TrackKind::stretch);
+    EXPECT_EQ(clip.tracks[0].points, std::vector<std::uint32_t>{p});
+    ASSERT_EQ(clip.tracks[0].keys.size(), 1u);
+    EXPECT_EQ(clip.tracks[0].keys[0].value, glm::dvec3(0.0, 0.25, 0.0));
+    EXPECT_FALSE(s.reg.get<AnimationState>(s.lattice).playing);  // keys do not start playback
+    // Delete the key at the current time, then undo both steps: the clip is gone again.
+    ASSERT_TRUE(delete_keys_at_time(s.reg, *s.state));
+    EXPECT_TRUE(s.reg.get<AnimationClip>(s.lattice).tracks[0].keys.empty());
+    undo(s.reg, *s.state);
+    EXPECT_EQ(s.reg.get<AnimationClip>(s.lattice).tracks[0].keys.size(), 1u);
+    undo(s.reg, *s.state);
+    EXPECT_FALSE(s.reg.has<AnimationClip>(s.lattice));
+    EXPECT_FALSE(s.reg.has<AnimationState>(s.lattice));
+}
