@@ -43,20 +43,25 @@ double Profiler::now_ms() const {
 }
 
 std::uint32_t Profiler::intern(std::string_view name) {
+    // Fast path, no allocation: names usually come from stable storage (Schedule entries, literals), so
+    // the pointer finds the id; the content check guards against reused addresses.
+    if (auto it = m_pass_ids.find(name.data());
+        it != m_pass_ids.end() && m_names[it->second].size() == name.size() && m_names[it->second] == name)
+        return it->second;
     std::string key(name);
-    if (auto it = m_name_ids.find(key); it != m_name_ids.end()) return it->second;
-    const auto id = static_cast<std::uint32_t>(m_names.size());
-    m_names.push_back(key);
-    m_name_ids.emplace(std::move(key), id);
+    std::uint32_t id = 0;
+    if (auto it = m_name_ids.find(key); it != m_name_ids.end()) {
+        id = it->second;
+    } else {
+        id = static_cast<std::uint32_t>(m_names.size());
+        m_names.push_back(key);
+        m_name_ids.emplace(std::move(key), id);
+    }
+    m_pass_ids[name.data()] = id;
     return id;
 }
 
-std::uint32_t Profiler::intern_pass(const char* name) {
-    if (auto it = m_pass_ids.find(name); it != m_pass_ids.end()) return it->second;
-    const std::uint32_t id = intern(name);
-    m_pass_ids.emplace(name, id);
-    return id;
-}
+std::uint32_t Profiler::intern_pass(const char* name) { return intern(name); }
 
 FrameRecord& Profiler::current() { return m_settings.keep_frames ? m_frames.back() : m_scratch; }
 

@@ -123,7 +123,7 @@ private:
 
     std::vector<std::string> m_names;
     std::unordered_map<std::string, std::uint32_t> m_name_ids;
-    std::unordered_map<const char*, std::uint32_t> m_pass_ids;  // pointer cache for literal names
+    std::unordered_map<const char*, std::uint32_t> m_pass_ids;  // pointer cache (content-checked)
 
     std::vector<FrameRecord> m_frames;
     FrameRecord m_scratch;    // the open frame when frames are not kept
