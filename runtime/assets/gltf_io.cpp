@@ -10,6 +10,7 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/gtx/quaternion.hpp>
 #include <nlohmann/json.hpp>
+#include <stb/stb_image.h>
 #include <stb/stb_image_write.h>
 #include <tiny_gltf.h>
 
@@ -163,6 +164,18 @@ Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, i
         }
     }
     return out;
+}
+
+// Image decoding through tinygltf's stb loader, after refusing textures over 8192 x 8192 (decoded to RGBA
+// that is 256 MB; a hostile PNG header can claim 16000 x 16000 grey, which stb itself would accept).
+bool load_image_checked(tinygltf::Image* image, const int index, std::string* err, std::string* warn, int req_width, int req_height,
+                        const unsigned char* bytes, int size, void* user) {
+    int w = 0, h = 0, comp = 0;
+    if (size > 0 && stbi_info_from_memory(bytes, size, &w, &h, &comp) && static_cast<long long>(w) * h > (8192LL * 8192LL)) {
+        if (err) *err += "image " + std::to_string(index) + " is " + std::to_string(w) + "x" + std::to_string(h) + ", larger than 8192x8192\n";
+        return false;
+    }
+    return tinygltf::LoadImageData(image, index, err, warn, req_width, req_height, bytes, size, user);
 }
 
 glm::dmat4 node_matrix(const tinygltf::Node& n) {
@@ -532,6 +545,7 @@ Result<GltfContents> read_gltf(const fs::path& path) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) return make_error(src + ": no such file");
     tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(load_image_checked, nullptr);
     tinygltf::Model m;
     std::string err, warn;
     std::string ext = path.extension().string();

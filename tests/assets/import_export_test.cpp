@@ -303,6 +303,16 @@ INSTANTIATE_TEST_SUITE_P(
                    "bufferViews":[{"buffer":0,"byteLength":12}],
                    "buffers":[{"byteLength":12,"uri":"data:application/octet-stream;base64,AACAPwAAgD8AAIA/"}]})",
                 "not finite"},
+        Hostile{"hugeimage.gltf",
+                R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+                   "meshes":[{"primitives":[{"mode":0,"attributes":{"POSITION":0},"material":0}]}],
+                   "materials":[{"pbrMetallicRoughness":{"baseColorTexture":{"index":0}}}],
+                   "textures":[{"source":0}],
+                   "images":[{"uri":"data:image/png;base64,iVBORw0KGgoAAAANSUhEUgAAPoAAAD6ACAAAAABkFYACAAAAAElEQVQ1rwYe"}],
+                   "accessors":[{"bufferView":0,"componentType":5126,"count":1,"type":"VEC3","min":[0,0,0],"max":[1,1,1]}],
+                   "bufferViews":[{"buffer":0,"byteLength":12}],
+                   "buffers":[{"byteLength":12,"uri":"data:application/octet-stream;base64,AACAPwAAgD8AAIA/"}]})",
+                "larger than 8192x8192"},
         Hostile{"unknown.xyz", "1 2 3\n", "unknown file type"}),
     [](const auto& param_info) {
         std::string n = param_info.param.file;
