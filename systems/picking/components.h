@@ -27,6 +27,9 @@ struct PickHit {
     std::uint32_t index = 0;
     glm::dvec3 position{0.0};  // world-space hit point (the control point itself for control points)
     double distance = 0.0;     // from the ray origin to `position`, world units
+    // Surface hits: where on the splat, position = centre + x axis_u + y axis_v of the picked (deformed,
+    // world-space) splat, x² + y² <= 1. The brush maps it back through the authored axes.
+    glm::dvec2 splat_coords{0.0};
 
     explicit operator bool() const { return kind != PickKind::none; }
 };

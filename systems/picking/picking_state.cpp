@@ -411,6 +411,21 @@ std::optional<PickingState::RayHit> PickingState::intersect_controls(const Ray& 
     return m_impl->intersect(m_impl->controls, m_impl->control_ids, ray, tfar);
 }
 
+std::optional<glm::dvec2> PickingState::splat_coordinates(ecs::Entity cloud, std::uint32_t index,
+                                                           const glm::dvec3& world) const {
+    const auto it = m_impl->surface_records.find(cloud.bits());
+    if (it == m_impl->surface_records.end()) return std::nullopt;
+    const GeomRecord& rec = *it->second;
+    if (!rec.discs || index >= rec.centres.size() || index >= rec.axis_u.size()) return std::nullopt;
+    const glm::dvec3 d = world - m_impl->anchor - glm::dvec3(rec.centres[index]);
+    const glm::dvec3 a(rec.axis_u[index]), b(rec.axis_v[index]);
+    const double A = glm::dot(a, a), B = glm::dot(a, b), C = glm::dot(b, b);
+    const double det = A * C - B * B;
+    if (!(det > 1e-12 * A * C)) return std::nullopt;
+    const double ad = glm::dot(a, d), bd = glm::dot(b, d);
+    return glm::dvec2((C * ad - B * bd) / det, (A * bd - B * ad) / det);
+}
+
 bool PickingState::surface_between(const glm::dvec3& from, const glm::dvec3& to) const {
     const glm::dvec3 d = to - from;
     const double len = glm::length(d);

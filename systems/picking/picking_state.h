@@ -67,6 +67,11 @@ public:
     // control point sitting on the surface is not hidden by the splat it touches).
     bool surface_between(const glm::dvec3& from, const glm::dvec3& to) const;
 
+    // Coordinates (x, y) of a world point in a picked splat's frame, point = centre + x a + y b with a, b
+    // the splat's world-space axes as last refreshed (least squares). nullopt for unknown clouds, sphere
+    // clouds or degenerate axes.
+    std::optional<glm::dvec2> splat_coordinates(ecs::Entity cloud, std::uint32_t index, const glm::dvec3& world) const;
+
     // Number of geometries in each scene (for tests: ids are released when entities die).
     std::size_t surface_geometry_count() const;
     std::size_t control_geometry_count() const;

@@ -137,7 +137,12 @@ std::optional<glm::dvec3> surface_hit_in_lattice_space(const ecs::Registry& regi
     if (hit.kind != PickKind::surface || !registry.valid(hit.entity) || !registry.valid(lattice)) return std::nullopt;
     const SplatCloud* cloud = registry.try_get<SplatCloud>(hit.entity);
     if (!cloud || hit.index >= cloud->size()) return std::nullopt;
-    const glm::dvec3 rest = cloud->origin + glm::dvec3(cloud->positions[hit.index]);
+    glm::dvec3 rest = cloud->origin + glm::dvec3(cloud->positions[hit.index]);
+    // The hit point's place on the splat, carried back through the authored axes (first order: the
+    // deformed axes are J times the authored ones).
+    if (cloud->axis_u.size() == cloud->size() && cloud->axis_v.size() == cloud->size())
+        rest += hit.splat_coords.x * glm::dvec3(cloud->axis_u[hit.index]) +
+                hit.splat_coords.y * glm::dvec3(cloud->axis_v[hit.index]);
     const glm::dvec4 world = model_matrix(registry.try_get<Transform>(hit.entity)) * glm::dvec4(rest, 1.0);
     return glm::dvec3(glm::inverse(model_matrix(registry.try_get<Transform>(lattice))) * world);
 }

@@ -71,7 +71,8 @@ struct BrushOptions {
 std::vector<std::uint32_t> brush_select(const Lattice& lattice, const glm::dvec3& point, const BrushOptions& options);
 
 // Where a surface hit lies in the lattice's (undeformed) space: the authored rest position of the hit
-// splat, moved from its cloud's space into the lattice entity's space through both Transforms. For a
+// point (splat centre + splat_coords along the authored axes), moved from its cloud's space into the
+// lattice entity's space through both Transforms. For a
 // cloud with several deformers this is exact for the first lattice only (later lattices see the output of
 // earlier ones, which picking does not keep). nullopt when the hit is not a surface or the entity is gone.
 std::optional<glm::dvec3> surface_hit_in_lattice_space(const ecs::Registry& registry, ecs::Entity lattice,

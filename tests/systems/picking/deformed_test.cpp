@@ -6,6 +6,7 @@
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform.h"
 #include "systems/picking/picking_system.h"
+#include "systems/picking/selection.h"
 #include "test_scenes.h"
 
 namespace sffd::picking {
@@ -114,6 +115,35 @@ TEST(PickingDeformed, CpuDeformationMatchesFfdReference) {
     ASSERT_EQ(hit.kind, PickKind::surface);
     EXPECT_EQ(hit.index, 6u * 11u + 7u);
     EXPECT_NEAR(hit.position.z, ref.position.z, 2e-4);  // the disc plane is tilted slightly by the deformation
+}
+
+TEST(PickingDeformed, SurfaceHitMapsBackToItsRestPointOnTheSplat) {
+    // One large splat (radius 0.4) at (0.5, 0.5, 0.5) in a unit-cube lattice; moving the middle layer by
+    // (0.2, 0, 0) translates it by (0.1, 0, 0). A ray at (0.7, 0.3) then hits the splat at its own
+    // coordinates (0.6 - 0.5, 0.3 - 0.5) / 0.4 = (0.25, -0.5): the rest point is (0.6, 0.3, 0.5).
+    ecs::Registry reg;
+    const ecs::Entity lat = reg.create();
+    reg.emplace<Lattice>(lat, box_lattice({0, 0, 0}, {1, 1, 1}, {2, 2, 2}));
+    const ecs::Entity cloud = reg.create();
+    reg.emplace<SplatCloud>(cloud, disc_grid(1, 1.0, 0.4, 0.5, {0.5, 0.5}));
+    reg.emplace<Deformers>(cloud, Deformers{{lat}});
+    {
+        Lattice& l = reg.patch<Lattice>(lat);
+        for (int i = 0; i <= 2; ++i)
+            for (int j = 0; j <= 2; ++j) l.current[l.index(i, j, 1)].x += 0.2;
+    }
+    PickingState state;
+    PickQuery q = query_from_ray(down_from(0.7, 0.3));
+    q.control_points = false;
+    const PickHit hit = pick(reg, state, q);
+    ASSERT_EQ(hit.kind, PickKind::surface);
+    EXPECT_NEAR(hit.splat_coords.x, 0.25, 1e-5);
+    EXPECT_NEAR(hit.splat_coords.y, -0.5, 1e-5);
+    const auto rest = surface_hit_in_lattice_space(reg, lat, hit);
+    ASSERT_TRUE(rest);
+    EXPECT_NEAR(rest->x, 0.6, 1e-5);
+    EXPECT_NEAR(rest->y, 0.3, 1e-5);
+    EXPECT_NEAR(rest->z, 0.5, 1e-5);
 }
 
 }  // namespace

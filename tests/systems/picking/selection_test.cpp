@@ -193,18 +193,19 @@ TEST(Brush, SurfaceHitSelectsMostInfluentialControlPoints) {
     const ecs::Entity lat = reg.create();
     reg.emplace<Lattice>(lat, box_lattice({0, 0, 0}, {1, 1, 1}, {2, 2, 2}));
     const ecs::Entity cloud = reg.create();
-    reg.emplace<SplatCloud>(cloud, disc_grid(11, 0.1, 0.045, 0.3));  // splats at multiples of 0.1, z = 0.3
+    reg.emplace<SplatCloud>(cloud, disc_grid(11, 0.1, 0.045, 0.35));  // splats at multiples of 0.1, z = 0.35
     PickingState state;
-    // x-ray off and the ray starts inside the lattice box, above the sheet: the sheet is the first hit
-    // except where a control-point sphere is; (0.2, 0.7) is far from every control point.
-    const PickHit hit = pick(reg, state, query_from_ray({{0.2, 0.7, 0.9}, {0, 0, -1}}));
+    // The ray starts inside the lattice box above the sheet, off the centre of splat (2, 7) and far from
+    // every control point. The brush point is the hit point itself, (0.22, 0.68, 0.35), whose weights
+    // have no ties among the top three.
+    const PickHit hit = pick(reg, state, query_from_ray({{0.22, 0.68, 0.9}, {0, 0, -1}}));
     ASSERT_EQ(hit.kind, PickKind::surface);
     EXPECT_EQ(hit.index, 7u * 11u + 2u);
     const auto x = surface_hit_in_lattice_space(reg, lat, hit);
     ASSERT_TRUE(x);
-    EXPECT_NEAR(glm::length(*x - glm::dvec3(0.2, 0.7, 0.3)), 0.0, 1e-6);
+    EXPECT_NEAR(glm::length(*x - glm::dvec3(0.22, 0.68, 0.35)), 0.0, 1e-6);
     const Indices top = brush_select(reg.get<Lattice>(lat), *x, {.top_k = 3, .min_fraction = 0.0});
-    EXPECT_EQ(top, expected_top(reg.get<Lattice>(lat), {0.2, 0.7, 0.3}, 3));
+    EXPECT_EQ(top, expected_top(reg.get<Lattice>(lat), {0.22, 0.68, 0.35}, 3));
     // The first one carries the largest weight of all 27.
     const std::vector<double> w = control_point_weights(reg.get<Lattice>(lat), *x);
     EXPECT_DOUBLE_EQ(w[top[0]], *std::max_element(w.begin(), w.end()));
