@@ -122,6 +122,9 @@ glm::dvec3 choose_origin(const std::vector<glm::dvec3>& positions) {
 
 Result<Image> load_image(const fs::path& path) {
     int w = 0, h = 0, comp = 0;
+    // Same limit as glTF textures (gltf_io.cpp): the header's size is checked before decoding.
+    if (stbi_info(path.c_str(), &w, &h, &comp) && static_cast<long long>(w) * h > 8192LL * 8192LL)
+        return make_error(path.string() + ": image is " + std::to_string(w) + "x" + std::to_string(h) + ", larger than 8192x8192");
     stbi_uc* data = stbi_load(path.c_str(), &w, &h, &comp, 4);
     if (!data) return make_error(path.string() + ": cannot decode image: " + (stbi_failure_reason() ? stbi_failure_reason() : "?"));
     Image img;
