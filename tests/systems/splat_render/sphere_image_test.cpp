@@ -193,3 +193,32 @@ TEST_F(SphereImage, CullingDropsTheBackHalfAndKeepsTheImage) {
     EXPECT_LE(coverage_diff, 10);
     EXPECT_LT(color_diff / double(culled.color.size()), 0.002);
 }
+
+// A scene with only a point cloud: the renderer frames it (whole sphere in view, centred) and lights it
+// with the default key light (lit and unlit parts differ) plus ambient.
+TEST_F(SphereImage, SceneWithoutCameraOrLightsIsFramedAndLit) {
+    SplatCloud sphere = fibonacci_sphere(paper_splats, 2.0);
+    for (glm::vec3& p : sphere.positions) p += glm::vec3(10.0f, -3.0f, 4.0f);
+    add_cloud(std::move(sphere));
+    const FrameImage img = render(Quality::hq, 320, 180);
+    int covered = 0, min_x = 320, max_x = -1, min_y = 180, max_y = -1;
+    double lo = 1e9, hi = -1e9;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+            if (!img.covered(x, y)) continue;
+            ++covered;
+            min_x = std::min(min_x, x), max_x = std::max(max_x, x), min_y = std::min(min_y, y), max_y = std::max(max_y, y);
+            lo = std::min(lo, luminance(img.color[img.index(x, y)]));
+            hi = std::max(hi, luminance(img.color[img.index(x, y)]));
+        }
+    EXPECT_GT(covered, 5000);
+    // Entirely inside the frame (not touching the border) and roughly centred.
+    EXPECT_GT(min_x, 0);
+    EXPECT_LT(max_x, 319);
+    EXPECT_GT(min_y, 0);
+    EXPECT_LT(max_y, 179);
+    EXPECT_NEAR(0.5 * (min_x + max_x), 160.0, 4.0);
+    EXPECT_NEAR(0.5 * (min_y + max_y), 90.0, 4.0);
+    EXPECT_GT(lo, 0.0);        // ambient reaches the unlit side
+    EXPECT_GT(hi, 4.0 * lo);   // the key light makes a lit side
+}
