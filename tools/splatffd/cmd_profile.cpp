@@ -883,7 +883,8 @@ int run_paper(const Options& o) {
             }
         if (n > 0) {
             const double mean = sum / n;
-            if (naive_mean > 0) std::printf(" %10.2f %8.0fx", 1000.0 / mean, naive_mean / mean);
+            const double ratio = naive_mean / mean;
+            if (naive_mean > 0) std::printf(ratio < 10 ? " %10.2f %8.2fx" : " %10.2f %8.0fx", 1000.0 / mean, ratio);
             else std::printf(" %10.2f %9s", 1000.0 / mean, "-");
         } else {
             std::printf(" %10s %9s  %s", "-", "-", r.note.c_str());
