@@ -43,6 +43,10 @@
 #include "systems/ffd/deform.h"
 #define SFFD_PROFILE_HAS_FFD 1
 #endif
+#if __has_include("systems/ffd/ffd_system.h")
+#include "systems/ffd/ffd_system.h"
+#define SFFD_PROFILE_HAS_FFD_SYSTEM 1
+#endif
 #if __has_include("systems/ffd/ffd_gpu.h") && __has_include("systems/splat_render/splat_pack.h")
 #include "runtime/core/log.h"
 #include "systems/ffd/ffd_gpu.h"
@@ -418,6 +422,10 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     }
 #endif
 
+#if SFFD_PROFILE_HAS_FFD_SYSTEM
+    // The engine's FFD system picks GPU compute when a context is current; --backend cpu forces its CPU path.
+    registry.set_resource<FfdSettings>(FfdSettings{.force_cpu = s.backend == "cpu"});
+#endif
     GpuTiming timing = GpuTiming::none;
     if (have_gl) timing = s.sync ? GpuTiming::sync : GpuTiming::queries;
     out.profiler = std::make_unique<Profiler>(ProfilerSettings{.gpu = timing});
@@ -439,11 +447,21 @@ Result<RunOutput> run_profile(const RunSetup& s) {
                   {"drive", s.drive},
                   {"schedule", schedule_kind},
                   {"clock", std::string("fixed 1/60 s")}};
+#if SFFD_PROFILE_HAS_FFD_SYSTEM
+    // Which path the FFD system really took (it falls back to the CPU e.g. before the render upload).
+    if (const auto* fs = registry.try_resource<FfdSettings>()) {
+        config.emplace_back("ffd_cpu_runs", static_cast<double>(fs->cpu_runs));
+        config.emplace_back("ffd_gpu_runs", static_cast<double>(fs->gpu_runs));
+    }
+#endif
     if (s.lattice_points > 0) config.emplace_back("lattice", static_cast<double>(s.lattice_points));
     if (!s.basis.empty()) config.emplace_back("basis", s.basis);
     out.report = build_report(*out.profiler, std::move(config), machine_info(have_gl));
 #if SFFD_PROFILE_HAS_RENDER
     if (have_gl) render::release_render_state(registry);
+#endif
+#if SFFD_PROFILE_HAS_FFD_SYSTEM
+    if (have_gl) ffd_release_gpu(registry);
 #endif
     registry_owner.reset();
     return out;
