@@ -1,6 +1,7 @@
 #include "systems/ffd/ffd_system.h"
 
 #include <optional>
+#include <string_view>
 #include <vector>
 
 #include <EGL/egl.h>
@@ -28,6 +29,14 @@ struct FfdGpuState {
 
 bool gl_context_current() { return eglGetCurrentContext() != EGL_NO_CONTEXT || glfwGetCurrentContext() != nullptr; }
 
+// Mesa's software rasterizers run compute shaders on the CPU, far slower than the native CPU path.
+bool software_rasterizer() {
+    const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    if (!renderer) return false;
+    const std::string_view r(renderer);
+    return r.find("llvmpipe") != r.npos || r.find("softpipe") != r.npos || r.find("SWR") != r.npos;
+}
+
 ffd::GpuDeformer* gpu_deformer(ecs::Registry& reg) {
     auto* st = reg.try_resource<FfdGpuState>();
     if (!st) st = &reg.set_resource<FfdGpuState>();
@@ -50,7 +59,9 @@ void ffd_release_gpu(ecs::Registry& registry) { registry.erase_resource<FfdGpuSt
 
 void ffd_system(ecs::Registry& reg, const FrameContext&) {
     FfdSettings* settings = reg.try_resource<FfdSettings>();
-    const bool force_cpu = settings && settings->force_cpu;
+    const bool force_gpu = settings && settings->force_gpu;
+    const bool have_gl = gl_context_current();
+    const bool force_cpu = (settings && settings->force_cpu) || (have_gl && !force_gpu && software_rasterizer());
     // Collect first: emplacing DeformedSplats while iterating is a structural change.
     std::vector<ecs::Entity> clouds;
     reg.view<const SplatCloud, const Deformers>().each([&](ecs::Entity e, const SplatCloud&, const Deformers&) { clouds.push_back(e); });
@@ -87,7 +98,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
         out.bounds_min = box.lo, out.bounds_max = box.hi;
 
         // GPU path: the cloud's rest splats are on the GPU and current.
-        gfx::GpuSplatStore* store = force_cpu || !gl_context_current() ? nullptr : reg.try_resource<gfx::GpuSplatStore>();
+        gfx::GpuSplatStore* store = force_cpu || !have_gl ? nullptr : reg.try_resource<gfx::GpuSplatStore>();
         gfx::GpuSplats* splats = nullptr;
         if (store) {
             auto it = store->clouds.find(e);

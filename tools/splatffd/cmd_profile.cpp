@@ -423,8 +423,8 @@ Result<RunOutput> run_profile(const RunSetup& s) {
 #endif
 
 #if SFFD_PROFILE_HAS_FFD_SYSTEM
-    // The engine's FFD system picks GPU compute when a context is current; --backend cpu forces its CPU path.
-    registry.set_resource<FfdSettings>(FfdSettings{.force_cpu = s.backend == "cpu"});
+    // The engine's FFD system picks its CPU path on a software rasterizer; --backend forces either path.
+    registry.set_resource<FfdSettings>(FfdSettings{.force_cpu = s.backend == "cpu", .force_gpu = s.backend == "gpu"});
 #endif
     GpuTiming timing = GpuTiming::none;
     if (have_gl) timing = s.sync ? GpuTiming::sync : GpuTiming::queries;

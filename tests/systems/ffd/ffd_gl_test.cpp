@@ -70,6 +70,7 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     reg.emplace<Lattice>(le, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {5, 5, 5}));
     reg.emplace<Deformers>(cloud, Deformers{{le}});
     auto& settings = reg.set_resource<FfdSettings>();
+    settings.force_gpu = true;  // llvmpipe would otherwise pick the (faster) CPU path
     auto& store = reg.set_resource<gfx::GpuSplatStore>();
     {
         // What the render system does: upload the authored splats as `rest`.
@@ -111,6 +112,39 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     ffd_system(reg, {});
     EXPECT_EQ(settings.gpu_runs, 2u);
     EXPECT_GT(s.deformed_version, version);
+    ffd_release_gpu(reg);
+    reg.erase_resource<gfx::GpuSplatStore>();
+}
+
+TEST_F(FfdGl, SoftwareRasterizerGetsTheCpuPathUnlessTheGpuIsForced) {
+    const std::string renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    if (renderer.find("llvmpipe") == std::string::npos && renderer.find("softpipe") == std::string::npos)
+        GTEST_SKIP() << "hardware renderer: " << renderer;
+    ecs::Registry reg;
+    const ffd::test::Cloud c = ffd::test::fibonacci_sphere(2000);
+    const ecs::Entity cloud = reg.create();
+    SplatCloud sc;
+    sc.positions = c.p, sc.normals = c.n, sc.axis_u = c.u, sc.axis_v = c.v;
+    reg.emplace<SplatCloud>(cloud, sc);
+    const ecs::Entity le = reg.create();
+    reg.emplace<Lattice>(le, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {3, 3, 3}));
+    reg.emplace<Deformers>(cloud, Deformers{{le}});
+    auto& settings = reg.set_resource<FfdSettings>();
+    auto& store = reg.set_resource<gfx::GpuSplatStore>();
+    gfx::GpuSplats& s = store.clouds[cloud];
+    s.rest = gfx::Buffer::create("test.rest");
+    glNamedBufferData(s.rest.id(), GLsizeiptr(c.size() * sizeof(gpu::GpuSplat)), nullptr, GL_STATIC_DRAW);
+    s.count = std::uint32_t(c.size());
+    s.rest_version = reg.version<SplatCloud>(cloud);
+    ffd::stretch(reg.patch<Lattice>(le), {0}, {0.2, 0, 0});
+    ffd_system(reg, {});
+    EXPECT_EQ(settings.cpu_runs, 1u);
+    EXPECT_EQ(settings.gpu_runs, 0u);
+    EXPECT_TRUE(reg.get<DeformedSplats>(cloud).cpu_valid);
+    settings.force_gpu = true;  // a policy change re-runs the cloud on the compute pass
+    ffd_system(reg, {});
+    EXPECT_EQ(settings.gpu_runs, 1u);
+    EXPECT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
     ffd_release_gpu(reg);
     reg.erase_resource<gfx::GpuSplatStore>();
 }
