@@ -16,6 +16,7 @@
 #include "systems/ffd/deform.h"
 #include "systems/ffd/ffd_gpu.h"
 #include "systems/ffd/lattice.h"
+#include "systems/profiling/pass_timer.h"
 
 namespace sffd {
 
@@ -116,6 +117,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
                 glGetNamedBufferParameteri64v(splats->deformed.id(), GL_BUFFER_SIZE, &size);
                 if (std::size_t(size) < bytes) glNamedBufferData(splats->deformed.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_COPY);
             }
+            auto pass_scope = profiling::gpu_scope(reg, "ffd.compute");  // names the pass for the profiler
             gpu->reset_stats();
             GLuint in = splats->rest.id();
             bool ok = true;

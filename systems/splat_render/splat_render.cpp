@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <unordered_map>
 #include <vector>
 
@@ -22,6 +23,7 @@
 #include "shaders/common/bindings.h"
 #include "shaders/splat_render/frame_block.h"
 #include "systems/ffd/components.h"
+#include "systems/profiling/pass_timer.h"
 #include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/splat_pack.h"
 
@@ -435,8 +437,10 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     const gpu::FrameBlock common = frame_block(reg, settings, view, s.max_point_size);
 
     // Per-cloud uniforms, then culling and compaction.
-    glUseProgram(s.cull.id());
     std::vector<CloudGpu*> drawn;
+    std::optional<profiling::GpuScope> pass_scope;  // names each pass for the profiler (no-op without one)
+    pass_scope.emplace(reg, "render.cull");
+    glUseProgram(s.cull.id());
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         CloudGpu& gpu = s.clouds[e];
         if (gpu.count == 0 || gpu.splats == 0) return;
@@ -464,6 +468,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         drawn.push_back(&gpu);
     });
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    pass_scope.reset();
     lap(stats.cull_ms);
     if (settings.time_passes)
         for (const CloudGpu* gpu : drawn) {
@@ -495,13 +500,17 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     if (settings.quality == Quality::preview) {
         glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
         glDepthFunc(GL_LESS);
+        pass_scope.emplace(reg, "render.preview");
         for (const CloudGpu* gpu : drawn) draw_cloud(s, s.preview[settings.aux_outputs ? 1 : 0], *gpu);
+        pass_scope.reset();
         lap(stats.preview_ms);
     } else {
         // 1. visibility: eps-offset depth only
         glBindFramebuffer(GL_FRAMEBUFFER, s.depth_fbo.id());
         glDepthFunc(GL_LESS);
+        pass_scope.emplace(reg, "render.hq.visibility");
         for (const CloudGpu* gpu : drawn) draw_cloud(s, s.visibility, *gpu);
+        pass_scope.reset();
         lap(stats.visibility_ms);
         // 2. attributes: additive, depth-tested against the offset surface, no depth writes
         // Accumulation and shading only inside the screen rectangle the clouds can cover (clears of two
@@ -518,7 +527,9 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         glEnable(GL_BLEND);
         glBlendEquation(GL_FUNC_ADD);
         glBlendFunc(GL_ONE, GL_ONE);
+        pass_scope.emplace(reg, "render.hq.attribute");
         for (const CloudGpu* gpu : drawn) draw_cloud(s, s.attribute, *gpu);
+        pass_scope.reset();
         glDisable(GL_BLEND);
         glDepthMask(GL_TRUE);
         lap(stats.attribute_ms);
@@ -531,7 +542,9 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s.accum_color.id());
         glBindTextureUnit(SFFD_TEX_ACCUM_NORMAL, s.accum_normal.id());
         glUseProgram(s.shade.id());
+        pass_scope.emplace(reg, "render.hq.shade");
         if (!drawn.empty()) glDrawArrays(GL_TRIANGLES, 0, 3);
+        pass_scope.reset();
         glDisable(GL_SCISSOR_TEST);
         glDepthMask(GL_TRUE);
         glDepthFunc(GL_LESS);

@@ -11,6 +11,8 @@
 #include <unistd.h>
 
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <nlohmann/json.hpp>
 
 #include "systems/profiling/json_schema.h"
@@ -75,6 +77,11 @@ TEST_F(ProfileCommand, WritesSchemaValidJsonAndAParsableTrace) {
     double systems = 0.0;
     for (const auto& s : report["systems"]) systems += s["cpu_ms"]["mean"].get<double>();
     EXPECT_LE(systems, report["frame"]["cpu_ms"]["mean"].get<double>());
+    // The engine's own render passes are named for the profiler (systems/profiling/pass_timer.h).
+    std::vector<std::string> passes;
+    for (const auto& p : report["passes"]) passes.push_back(p["name"].get<std::string>());
+    for (const char* name : {"render.cull", "render.hq.visibility", "render.hq.attribute", "render.hq.shade"})
+        EXPECT_NE(std::find(passes.begin(), passes.end(), name), passes.end()) << name << " missing: " << report["passes"].dump();
 
     const auto trace = nlohmann::json::parse(read_text(path("p.trace.json")));
     int frames = 0;
