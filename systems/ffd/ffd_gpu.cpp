@@ -12,22 +12,10 @@
 #include "runtime/gfx/shader.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/deform_kernels.h"
+#include "systems/ffd/gpu_block.h"
 #include "systems/ffd/lattice.h"
 
 namespace sffd::ffd {
-
-namespace {
-// std140 mirror of FfdBlock in shaders/ffd/ffd_common.glsl.
-struct FfdBlock {
-    float minv[3][4];
-    float stu0[4];
-    std::int32_t div[4];
-    float cull_lo[4];
-    float cull_hi[4];
-    std::uint32_t count[4];
-};
-static_assert(sizeof(FfdBlock) == 128);
-}  // namespace
 
 struct GpuDeformer::Impl {
     std::optional<gfx::GlContext> context;  // only when created headless; destroyed last (declared first)
@@ -60,7 +48,7 @@ Result<GpuDeformer> GpuDeformer::create() {
     if (!program) return program.error();
     impl->program = std::move(*program);
     impl->ubo = gfx::Buffer::create("ffd.lattice_block");
-    glNamedBufferData(impl->ubo.id(), sizeof(FfdBlock), nullptr, GL_DYNAMIC_DRAW);
+    glNamedBufferData(impl->ubo.id(), sizeof(detail::FfdBlock), nullptr, GL_DYNAMIC_DRAW);
     impl->stats = gfx::Buffer::create("ffd.stats");
     const std::uint32_t zero[2] = {0, 0};
     glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_READ);
@@ -89,29 +77,12 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
     Impl& m = *m_impl;
     // Same preparation as the CPU kernels (float displacements, M⁻¹, origin offset in double).
     const detail::Prepared P = detail::prepare(lattice, cloud_origin);
-    FfdBlock block{};
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) block.minv[r][c] = P.minv[r * 3 + c];
-    for (int a = 0; a < 3; ++a) {
-        block.stu0[a] = P.stu0[a];
-        block.div[a] = lattice.divisions[a];
-        block.cull_lo[a] = P.cull_lo[a];
-        block.cull_hi[a] = P.cull_hi[a];
-    }
-    block.div[3] = lattice.basis == LatticeBasis::bspline ? 1 : 0;
-    block.count[0] = count;
-    block.count[1] = P.moved.empty() ? 1u : 0u;
+    const detail::FfdBlock block = detail::make_ffd_block(lattice, P, count);
     glNamedBufferSubData(m.ubo.id(), 0, sizeof block, &block);
     Impl::Controls& cp = m.controls[key];
     if (!cp.buffer) cp.buffer = gfx::Buffer::create("ffd.control_points");
     if (stamp == 0 || stamp != cp.stamp) {  // control points only when edited
-        const std::vector<float>& data = lattice.basis == LatticeBasis::bspline ? P.grid : P.dp4;
-        const std::size_t bytes = std::max<std::size_t>(data.size(), 4) * sizeof(float);
-        if (bytes > cp.capacity) {
-            glNamedBufferData(cp.buffer.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_DRAW);
-            cp.capacity = bytes;
-        }
-        if (!data.empty()) glNamedBufferSubData(cp.buffer.id(), 0, GLsizeiptr(data.size() * sizeof(float)), data.data());
+        detail::upload_control_points(cp.buffer.id(), cp.capacity, lattice, P);
         cp.stamp = stamp;
         ++m.uploads;
     }

@@ -6,20 +6,10 @@
 #include "runtime/gfx/shader.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/deform_kernels.h"
+#include "systems/ffd/gpu_block.h"
 #include "systems/ffd/lattice.h"
 
 namespace sffd::ffd {
-
-namespace {
-struct FfdBlock {  // std140 mirror of FfdBlock in shaders/ffd/ffd_common.glsl (same as ffd_gpu.cpp)
-    float minv[3][4];
-    float stu0[4];
-    std::int32_t div[4];
-    float cull_lo[4];
-    float cull_hi[4];
-    std::uint32_t count[4];
-};
-}  // namespace
 
 struct PaperModeRenderer::Impl {
     gfx::Program paper, plain;
@@ -46,7 +36,7 @@ Result<PaperModeRenderer> PaperModeRenderer::create() {
     impl->plain = std::move(*plain);
     impl->vao = gfx::VertexArray::create("ffd.paper_mode");
     impl->ubo = gfx::Buffer::create("ffd.paper_mode.lattice_block");
-    glNamedBufferData(impl->ubo.id(), sizeof(FfdBlock), nullptr, GL_DYNAMIC_DRAW);
+    glNamedBufferData(impl->ubo.id(), sizeof(detail::FfdBlock), nullptr, GL_DYNAMIC_DRAW);
     impl->controls = gfx::Buffer::create("ffd.paper_mode.control_points");
     return PaperModeRenderer(std::move(impl));
 }
@@ -56,27 +46,10 @@ Status PaperModeRenderer::draw(const Lattice& lattice, std::uint64_t stamp, cons
     if (Status s = validate(lattice); !s) return s;
     Impl& m = *m_impl;
     const detail::Prepared P = detail::prepare(lattice, cloud_origin);
-    FfdBlock block{};
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) block.minv[r][c] = P.minv[r * 3 + c];
-    for (int a = 0; a < 3; ++a) {
-        block.stu0[a] = P.stu0[a];
-        block.div[a] = lattice.divisions[a];
-        block.cull_lo[a] = P.cull_lo[a];
-        block.cull_hi[a] = P.cull_hi[a];
-    }
-    block.div[3] = lattice.basis == LatticeBasis::bspline ? 1 : 0;
-    block.count[0] = count;
-    block.count[1] = P.moved.empty() ? 1u : 0u;
+    const detail::FfdBlock block = detail::make_ffd_block(lattice, P, count);
     glNamedBufferSubData(m.ubo.id(), 0, sizeof block, &block);
     if (stamp == 0 || stamp != m.stamp) {
-        const std::vector<float>& data = lattice.basis == LatticeBasis::bspline ? P.grid : P.dp4;
-        const std::size_t bytes = std::max<std::size_t>(data.size(), 4) * sizeof(float);
-        if (bytes > m.controls_capacity) {
-            glNamedBufferData(m.controls.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_DRAW);
-            m.controls_capacity = bytes;
-        }
-        if (!data.empty()) glNamedBufferSubData(m.controls.id(), 0, GLsizeiptr(data.size() * sizeof(float)), data.data());
+        detail::upload_control_points(m.controls.id(), m.controls_capacity, lattice, P);
         m.stamp = stamp;
     }
     glUseProgram(m.paper.id());
