@@ -2,7 +2,9 @@
 // Culling and compaction: drops back-facing splats and splats outside the view frustum. Survivors a point
 // sprite can draw get a view-space SplatRecord (the vertex shaders then only copy it); the others (larger
 // than the point-size limit, crossing the near plane, or centred off-screen: sprites are clipped by their
-// centre) go to the quad list as indices. Two DrawArraysIndirectCommands follow: {sprites, 1, 0, 0} and
+// centre) go to the quad list as indices. A sprite is the square around the exact screen bounding box of
+// the splat's projected ellipse (ellipse_sprite), so foreshortened splats near a silhouette cost far fewer
+// fragments than a square around their bounding ball. Two DrawArraysIndirectCommands follow: {sprites, 1, 0, 0} and
 // {6, quads, 0, 0}. With culling off (frame.params.z == 0) nothing is dropped: back-facing sprites are
 // marked (plane.xyz = NaN) and discarded per fragment, so the image is the same and the cost is visible.
 //
@@ -29,7 +31,8 @@ void main() {
     GpuSplat s;
     vec3 c = vec3(0.0);
     bool back = false;
-    float size = 0.0;
+    vec3 u = vec3(0.0), v = vec3(0.0);
+    vec3 box = vec3(0.0);  // sprite: NDC centre (xy) and side in pixels (z), ellipse_sprite()
     if (i < frame.counts.x) {
         // Centre and normal first: the back-face test needs only them (llvmpipe loads SSBOs per lane).
         s.center = splats[i].center;
@@ -43,8 +46,8 @@ void main() {
     if (keep != KEEP_NONE) {
         s.axis_u = splats[i].axis_u;
         s.axis_v = splats[i].axis_v;
-        vec3 u = mat3(frame.model_view) * s.axis_u.xyz;
-        vec3 v = mat3(frame.model_view) * s.axis_v.xyz;
+        u = mat3(frame.model_view) * s.axis_u.xyz;
+        v = mat3(frame.model_view) * s.axis_v.xyz;
         r = ellipse_max_radius(u, v);
         vec3 n = cross(u, v);
         if (!(r > 0.0) || dot(n, n) <= 1e-12 * r * r * r * r) keep = KEEP_NONE;  // degenerate (or NaN)
@@ -61,9 +64,8 @@ void main() {
             keep = KEEP_NONE;
     }
     if (keep != KEEP_NONE) {
-        size = sprite_size(c, r);
-        vec2 ndc = vec2(frame.projection[0][0] * c.x, frame.projection[1][1] * c.y) / -c.z;
-        if (size < 0.0 || size > frame.params.y || any(greaterThan(abs(ndc), vec2(1.0)))) keep = KEEP_QUAD;
+        box = ellipse_sprite(c, u, v);
+        if (box.z < 0.0 || box.z > frame.params.y || any(greaterThan(abs(box.xy), vec2(1.0)))) keep = KEEP_QUAD;
     }
 
     if (keep == KEEP_QUAD) {
@@ -73,7 +75,7 @@ void main() {
         SplatRecord rec;
         splat_raycast_setup(o, rec.plane, rec.dual_u, rec.dual_v);
         if (back) rec.plane.xyz = vec3(uintBitsToFloat(0x7fc00000u));  // NaN: every fragment discards
-        rec.center = vec4(o.c, size);
+        rec.center = vec4(box.xy, o.c.z, box.z);
         vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
         rec.normal = vec4(world_n, pack_color(splat_color(s, o, world_n).rgb));
         records[atomicAdd(point_count, 1u)] = rec;

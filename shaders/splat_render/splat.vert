@@ -12,7 +12,7 @@
 layout(std430, binding = SFFD_SSBO_SPLATS_DRAW) readonly buffer Splats { GpuSplat splats[]; };
 layout(std430, binding = SFFD_SSBO_VISIBLE) readonly buffer QuadList { uint quads[]; };
 #else
-// The SplatRecord array of the cull pass, bound as a vertex buffer (stride 96): the vertex fetcher reads
+// The SplatRecord array of the cull pass, bound as a vertex buffer (stride 80): the vertex fetcher reads
 // it far faster than per-lane SSBO loads on llvmpipe.
 layout(location = 0) in vec4 a_center;
 layout(location = 1) in vec4 a_plane;
@@ -59,7 +59,9 @@ void main() {
     v_normal = a_normal.xyz;
 #endif
 #endif
-    gl_Position = frame.projection * vec4(a_center.xyz, 1.0);
+    // The sprite's centre in NDC. Its depth is irrelevant (every splat fragment shader writes gl_FragDepth)
+    // and z = 0 keeps the point inside the clip volume (near-crossing splats are quads).
+    gl_Position = vec4(a_center.xy, 0.0, 1.0);
     gl_PointSize = a_center.w;
 #endif
 }

@@ -16,7 +16,8 @@
 // Colour travels packed (10-10-10 bits of sqrt(linear rgb)) so that, with the normal, every pass hands at
 // most four vec4 varyings per sprite to the rasteriser (each costs per-primitive set-up on llvmpipe).
 struct SplatRecord {
-    vec4 center;   // xyz view-space centre, w: sprite size in pixels
+    vec4 center;   // xy: NDC centre of the sprite (ellipse_sprite), z: view-space z of the splat centre,
+                   // w: sprite side in pixels
     vec4 plane;    // xyz: plane normal / dot(center, normal), w: visibility offset eps (view units)
     vec4 dual_u;   // xyz: dual axis (s = dot(dual_u, p - center)), w: dot(dual_u, center)
     vec4 dual_v;
@@ -42,22 +43,26 @@ float ellipse_max_radius(vec3 u, vec3 v) {
     return sqrt(h + sqrt(max(0.25 * (a - c) * (a - c) + b * b, 0.0)));
 }
 
-// Side length in pixels of a square sprite centred on the projected centre that holds the projection of
-// a ball of radius r at view-space centre c; -1 when the ball crosses the near plane. Exact bound: for
-// p = c + e, |e| <= r, x_ndc(p) - x_ndc(c) = (P00 e.x + x_ndc(c) e.z) / (depth - e.z), which is at most
-// r * sqrt(P00^2 + x_ndc^2) / (depth - r). Sprites cover pixels whose centres lie inside the square.
-float sprite_size(vec3 c, float r) {
-    float depth = -c.z;
-    float near_depth = depth - r;
-    // projection[3][2] / (projection[2][2] - 1) is the near-plane distance of a GL perspective matrix.
+// Screen bounds of the perspective projection of the ellipse {c + u cos t + v sin t} (view space): the
+// projected conic's bounding box, from its dual (Sigg et al. 2006, Zwicker et al. 2004). With
+// s = (cos t, sin t, 1), D = diag(1, 1, -1), clip x = a.s and w = b.s, the extreme x = a.s / b.s are the
+// roots of x^2 (b D b) - 2 x (a D b) + a D a = 0. Written relative to the projected centre x0 (a - x0 b has
+// no third component) both terms under the root are positive: no cancellation for small, far splats.
+// Returns the NDC centre of the box (xy) and the side in pixels of the square sprite centred there that
+// holds it (z); z = -1 when the ellipse reaches the near plane. Sprites cover the pixels whose centres lie
+// inside the square, so every pixel centre the ellipse covers is drawn (SpriteCoversExactlyItsAnalyticDisc).
+// The C++ twin is ellipse_sprite() in systems/splat_render/cpu_cull.cpp.
+vec3 ellipse_sprite(vec3 c, vec3 u, vec3 v) {
     float near_plane = frame.projection[3][2] / (frame.projection[2][2] - 1.0);
-    if (near_depth <= near_plane) return -1.0;
-    float p00 = frame.projection[0][0], p11 = frame.projection[1][1];
-    float ndc_x = p00 * c.x / depth;
-    float ndc_y = p11 * c.y / depth;
-    float half_x = r * sqrt(p00 * p00 + ndc_x * ndc_x) / near_depth * 0.5 * frame.viewport.x;
-    float half_y = r * sqrt(p11 * p11 + ndc_y * ndc_y) / near_depth * 0.5 * frame.viewport.y;
-    return 2.0 * max(half_x, half_y);  // exact bound: no margin (tested: SpriteCoversExactlyItsAnalyticDisc)
+    vec2 z = vec2(u.z, v.z);
+    if (-c.z - length(z) <= near_plane) return vec3(0.0, 0.0, -1.0);
+    float q = dot(z, z) - c.z * c.z;  // b D b < 0: the rim stays in front of the eye
+    vec2 x0 = vec2(frame.projection[0][0] * c.x, frame.projection[1][1] * c.y) / -c.z;
+    vec2 ax = frame.projection[0][0] * vec2(u.x, v.x) + x0.x * z;
+    vec2 ay = frame.projection[1][1] * vec2(u.y, v.y) + x0.y * z;
+    vec2 off = vec2(dot(ax, z), dot(ay, z)) / -q;
+    vec2 half_extent = sqrt(off * off + vec2(dot(ax, ax), dot(ay, ay)) / -q);
+    return vec3(x0 + off, max(half_extent.x * frame.viewport.x, half_extent.y * frame.viewport.y));
 }
 
 // sRGB decode without the linear toe (below 0.04045 the two differ by < 3e-4): one pow, no select.
