@@ -7,6 +7,7 @@
 #include <atomic>
 #include <cstdlib>
 #include <mutex>
+#include <string_view>
 
 #include "runtime/core/log.h"
 #include "runtime/gfx/gl.h"
@@ -301,6 +302,13 @@ Result<GlContext> create_context(const ContextOptions& options) {
     if (!eglMakeCurrent(egl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, impl.egl_context))
         return make_error(log::str("create_context(): eglMakeCurrent(surfaceless): ", egl_error_name(eglGetError())));
     return finish(std::move(context), impl, options.debug);
+}
+
+bool software_rasterizer() {
+    const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
+    if (!renderer) return false;
+    const std::string_view r(renderer);
+    return r.find("llvmpipe") != r.npos || r.find("softpipe") != r.npos || r.find("SWR") != r.npos;
 }
 
 }  // namespace sffd::gfx

@@ -82,6 +82,11 @@ bool display_available();
 // options.headless is false, EGL surfaceless otherwise. Errors name the failing call.
 Result<GlContext> create_context(const ContextOptions& options);
 
+// True when the current context is one of Mesa's software rasterizers (llvmpipe, softpipe, SWR): its
+// "GPU" is the CPU, so systems prefer their native CPU paths there (ffd_system, the render cull).
+// False without a current context.
+bool software_rasterizer();
+
 // GL errors reported through the debug callback since process start (all contexts).
 std::uint64_t debug_error_count();
 

@@ -8,6 +8,7 @@
 #include <GLFW/glfw3.h>
 
 #include "runtime/core/log.h"
+#include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
@@ -29,14 +30,6 @@ struct FfdGpuState {
 };
 
 bool gl_context_current() { return eglGetCurrentContext() != EGL_NO_CONTEXT || glfwGetCurrentContext() != nullptr; }
-
-// Mesa's software rasterizers run compute shaders on the CPU, far slower than the native CPU path.
-bool software_rasterizer() {
-    const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-    if (!renderer) return false;
-    const std::string_view r(renderer);
-    return r.find("llvmpipe") != r.npos || r.find("softpipe") != r.npos || r.find("SWR") != r.npos;
-}
 
 ffd::GpuDeformer* gpu_deformer(ecs::Registry& reg) {
     auto* st = reg.try_resource<FfdGpuState>();
@@ -62,7 +55,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
     FfdSettings* settings = reg.try_resource<FfdSettings>();
     const bool force_gpu = settings && settings->force_gpu;
     const bool have_gl = gl_context_current();
-    const bool force_cpu = (settings && settings->force_cpu) || (have_gl && !force_gpu && software_rasterizer());
+    const bool force_cpu = (settings && settings->force_cpu) || (have_gl && !force_gpu && gfx::software_rasterizer());
     // Collect first: emplacing DeformedSplats while iterating is a structural change.
     std::vector<ecs::Entity> clouds;
     reg.view<const SplatCloud, const Deformers>().each([&](ecs::Entity e, const SplatCloud&, const Deformers&) { clouds.push_back(e); });

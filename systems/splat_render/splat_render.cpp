@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <span>
 #include <unordered_map>
 #include <vector>
 
@@ -25,6 +26,7 @@
 #include "systems/ffd/components.h"
 #include "systems/profiling/pass_timer.h"
 #include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/cpu_cull.h"
 #include "systems/splat_render/splat_pack.h"
 
 namespace sffd::render {
@@ -49,6 +51,13 @@ struct CloudGpu {
     std::uint32_t count = 0;
     GLuint splats = 0;      // draw buffer this frame
     std::uint64_t cpu_deformed_version = 0;  // DeformedSplats::version uploaded into GpuSplats::deformed
+
+    // CPU copies of what the GPU buffers hold, kept only when the CPU cull may run (cpu_cull.h).
+    std::vector<gpu::GpuSplat> cpu_rest;      // = GpuSplats::rest (SplatCloud change stamp cpu_rest_version)
+    std::uint64_t cpu_rest_version = 0;
+    std::vector<gpu::GpuSplat> cpu_deformed;  // = GpuSplats::deformed when the FFD system's CPU path wrote it
+    const std::vector<gpu::GpuSplat>* cpu_current = nullptr;  // the copy of the draw buffer, if any
+    CpuCullResult cpu_cull;
 };
 
 }  // namespace
@@ -73,6 +82,7 @@ struct SplatRenderState {
     int display_width = 0, display_height = 0;
 
     std::unordered_map<ecs::Entity, CloudGpu> clouds;
+    bool software = false;  // the context is a software rasterizer (gfx::software_rasterizer)
     bool failed = false;
 };
 
@@ -139,9 +149,15 @@ void upload_texture(CloudGpu& gpu, const SplatMaterial& m) {
     glTextureParameteri(gpu.texture.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
 }
 
+// Whether the CPU cull may run this frame, so CPU copies of the splats are worth keeping.
+bool cpu_cull_wanted(const SplatRenderState& s, CullPath path) {
+    return path == CullPath::cpu || (path == CullPath::automatic && s.software);
+}
+
 // Uploads clouds whose change stamp moved into GpuSplatStore.rest and refreshes the renderer's own
-// per-cloud objects; drops objects of clouds that no longer exist.
-void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& store) {
+// per-cloud objects; drops objects of clouds that no longer exist. keep_cpu: keep CPU copies of the
+// uploaded splats for the CPU cull (CloudGpu::cpu_current).
+void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& store, bool keep_cpu) {
     for (auto it = s.clouds.begin(); it != s.clouds.end();)
         it = reg.valid(it->first) && reg.has<SplatCloud>(it->first) ? std::next(it) : s.clouds.erase(it);
     for (auto it = store.clouds.begin(); it != store.clouds.end();)
@@ -150,9 +166,10 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         const std::uint64_t version = reg.version<SplatCloud>(e);
         gfx::GpuSplats& splats = store.clouds[e];
+        CloudGpu& gpu = s.clouds[e];
         const auto n = static_cast<std::uint32_t>(cloud.size());
         if (!splats.rest || splats.rest_version != version) {
-            const std::vector<gpu::GpuSplat> packed = pack_splats(cloud);
+            std::vector<gpu::GpuSplat> packed = pack_splats(cloud);
             if (!splats.rest || splats.count != n) {
                 splats.rest = gfx::Buffer::create("splats.rest");
                 glNamedBufferData(splats.rest.id(), GLsizeiptr(std::max<std::size_t>(packed.size(), 1) * sizeof(gpu::GpuSplat)),
@@ -163,8 +180,13 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
             if (!packed.empty())
                 glNamedBufferSubData(splats.rest.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data());
             splats.rest_version = version;
+            if (keep_cpu) gpu.cpu_rest = std::move(packed), gpu.cpu_rest_version = version;
         }
-        CloudGpu& gpu = s.clouds[e];
+        if (!keep_cpu) {
+            gpu.cpu_rest = {}, gpu.cpu_deformed = {}, gpu.cpu_cull = {};
+        } else if (gpu.cpu_rest_version != version || gpu.cpu_rest.size() != n) {
+            gpu.cpu_rest = pack_splats(cloud), gpu.cpu_rest_version = version;  // the CPU path was just chosen
+        }
         if (!gpu.frame_ubo) {
             gpu.frame_ubo = gfx::Buffer::create("render.frame_block");
             glNamedBufferData(gpu.frame_ubo.id(), sizeof(gpu::FrameBlock), nullptr, GL_DYNAMIC_DRAW);
@@ -200,7 +222,7 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
                 moved.colors = cloud.colors;
                 moved.uvs = cloud.uvs;
                 moved.material.base_color = cloud.material.base_color;
-                const std::vector<gpu::GpuSplat> packed = pack_splats(moved);
+                std::vector<gpu::GpuSplat> packed = pack_splats(moved);
                 if (!splats.deformed) {
                     splats.deformed = gfx::Buffer::create("splats.deformed");
                     glNamedBufferData(splats.deformed.id(), GLsizeiptr(std::max<std::size_t>(n, 1) * sizeof(gpu::GpuSplat)),
@@ -211,11 +233,22 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
                                          packed.data());
                 gpu.cpu_deformed_version = deformed->version;
                 splats.has_deformed = true;
+                if (keep_cpu) gpu.cpu_deformed = std::move(packed);
             }
         }
         gpu.material = &cloud.material;
         gpu.count = std::min(n, splats.count);
         gpu.splats = splats.draw_buffer();
+        // The CPU copy of the draw buffer: rest, or the CPU deformation uploaded above; none when the FFD
+        // compute pass wrote `deformed` (those splats exist only on the GPU).
+        gpu.cpu_current = nullptr;
+        if (keep_cpu && !splats.has_deformed && gpu.cpu_rest.size() == gpu.count) {
+            gpu.cpu_current = &gpu.cpu_rest;
+        } else if (keep_cpu && splats.has_deformed) {
+            const auto* d = reg.try_get<DeformedSplats>(e);
+            if (d && d->cpu_valid && !d->gpu_valid && gpu.cpu_deformed_version == d->version && gpu.cpu_deformed.size() == gpu.count)
+                gpu.cpu_current = &gpu.cpu_deformed;
+        }
     });
 }
 
@@ -392,7 +425,10 @@ Status init_render_state(ecs::Registry& registry) {
     // deformed on the CPU and `render --frames k:k` differed (by float rounding) from frame k of a
     // sequence once the built-in scenes animate. (Added by the animation engineer.)
     if (!registry.try_resource<gfx::GpuSplatStore>()) registry.set_resource<gfx::GpuSplatStore>();
-    sync_clouds(registry, s, registry.resource<gfx::GpuSplatStore>());
+    s.software = gfx::software_rasterizer();
+    const auto* settings = registry.try_resource<RenderSettings>();
+    sync_clouds(registry, s, registry.resource<gfx::GpuSplatStore>(),
+                cpu_cull_wanted(s, settings ? settings->cull_path : CullPath::automatic));
     registry.set_resource<SplatRenderState>(std::move(s));
     return {};
 }
@@ -431,7 +467,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
 
     const int w = std::max(settings.width, 1), h = std::max(settings.height, 1);
     ensure_targets(s, w, h);
-    sync_clouds(reg, s, reg.resource<gfx::GpuSplatStore>());
+    sync_clouds(reg, s, reg.resource<gfx::GpuSplatStore>(), cpu_cull_wanted(s, settings.cull_path));
 
     const ViewSetup view = choose_camera(reg, s, double(w) / double(h));
     const gpu::FrameBlock common = frame_block(reg, settings, view, s.max_point_size);
@@ -439,8 +475,8 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     // Per-cloud uniforms, then culling and compaction.
     std::vector<CloudGpu*> drawn;
     std::optional<profiling::GpuScope> pass_scope;  // names each pass for the profiler (no-op without one)
+    std::vector<const CloudGpu*> computed;  // clouds culled by the compute pass (counts read back for stats)
     pass_scope.emplace(reg, "render.cull");
-    glUseProgram(s.cull.id());
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         CloudGpu& gpu = s.clouds[e];
         if (gpu.count == 0 || gpu.splats == 0) return;
@@ -453,17 +489,40 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         b.counts.x = gpu.count;
         b.counts.w = settings.quality == Quality::preview ? 1u : 0u;  // cull pass lights sprites in preview
         glNamedBufferSubData(gpu.frame_ubo.id(), 0, sizeof b, &b);
-        const std::uint32_t reset[8] = {0, 1, 0, 0, 6, 0, 0, 0};
-        glNamedBufferSubData(gpu.commands.id(), 0, sizeof reset, reset);
-        glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, gpu.commands.id());
-        glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
-        // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its worker
-        // threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread time).
-        glDispatchCompute((gpu.count + cull_group_size - 1) / cull_group_size, 1, 1);
+        if (gpu.cpu_current && cpu_cull_wanted(s, settings.cull_path)) {
+            // CPU cull (cpu_cull.h): the same records, uploaded run by run into the buffers the draws read.
+            TexelView texels;
+            if (gpu.texture)
+                texels = {gpu.material->texture_rgba8.data(), gpu.material->texture_width, gpu.material->texture_height};
+            CpuCullResult& r = gpu.cpu_cull;
+            cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
+            CpuCullResult::for_each_run(r.records, r.record_counts, r.block, [&](std::size_t at, const SplatRecord* p, std::size_t k) {
+                glNamedBufferSubData(gpu.records.id(), GLintptr(at * sizeof(SplatRecord)), GLsizeiptr(k * sizeof(SplatRecord)), p);
+            });
+            CpuCullResult::for_each_run(r.quads, r.quad_counts, r.block, [&](std::size_t at, const std::uint32_t* p, std::size_t k) {
+                glNamedBufferSubData(gpu.quads.id(), GLintptr(at * sizeof(std::uint32_t)), GLsizeiptr(k * sizeof(std::uint32_t)), p);
+            });
+            const std::uint32_t commands[8] = {r.visible_records, 1, 0, 0, 6, r.visible_quads, 0, 0};
+            glNamedBufferSubData(gpu.commands.id(), 0, sizeof commands, commands);
+            stats.visible_points += r.visible_records;
+            stats.visible_quads += r.visible_quads;
+            ++stats.cpu_culled_clouds;
+        } else {
+            const std::uint32_t reset[8] = {0, 1, 0, 0, 6, 0, 0, 0};
+            glNamedBufferSubData(gpu.commands.id(), 0, sizeof reset, reset);
+            glUseProgram(s.cull.id());
+            glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
+            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, gpu.commands.id());
+            glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
+            // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its worker
+            // threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread time).
+            glDispatchCompute((gpu.count + cull_group_size - 1) / cull_group_size, 1, 1);
+            ++stats.compute_culled_clouds;
+            computed.push_back(&gpu);
+        }
         stats.splats += gpu.count;
         drawn.push_back(&gpu);
     });
@@ -471,7 +530,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     pass_scope.reset();
     lap(stats.cull_ms);
     if (settings.time_passes)
-        for (const CloudGpu* gpu : drawn) {
+        for (const CloudGpu* gpu : computed) {
             std::uint32_t cmd[8] = {};
             glGetNamedBufferSubData(gpu->commands.id(), 0, sizeof cmd, cmd);
             stats.visible_points += cmd[0];

@@ -5,10 +5,11 @@
 //   writes  GpuSplatStore.rest (uploads a cloud when its change stamp moves), SplatRenderState (resource:
 //           its GL programs, per-cloud cull buffers and textures, the offscreen targets), RenderStats
 //
-// HQ (Botsch et al. 2005): cull + compact -> visibility (depth, eps-offset ray-cast ellipses) -> attribute
-// (additive RGBA32F: w*colour, w; w*normal, w*depth) -> normalise + deferred Blinn-Phong. Preview: one pass
-// of opaque ray-cast ellipses. Output: a linear RGBA16F colour target plus an RGBA32F target with world
-// normal and view-axis depth; capture_frame() reads both back into a FrameImage (PNG/EXR writers in
+// HQ (Botsch et al. 2005): cull + compact (a compute pass, or cpu_cull.h on a software rasterizer) ->
+// visibility (depth, eps-offset ray-cast ellipses) -> attribute (additive RGBA32F: w*colour, w; w*normal,
+// w*depth) -> normalise + deferred Blinn-Phong. Preview: one pass of opaque ray-cast ellipses. Output: a
+// linear RGBA16F colour target plus an RGBA32F target with world normal and view-axis depth;
+// capture_frame() reads both back into a FrameImage (PNG/EXR writers in
 // image_io.h). A scene without a Camera is framed automatically; without lights it gets a default one.
 #pragma once
 
@@ -27,13 +28,20 @@ namespace sffd::render {
 
 enum class Quality : std::uint8_t { hq, preview };
 
+// Where culling and compaction run. automatic: on the CPU (cpu_cull.h) when the context is a software
+// rasterizer and the cloud's current splats are on the CPU (not deformed, or deformed by the FFD system's
+// CPU path); the compute pass otherwise. compute / cpu force one (cpu still falls back to compute for a
+// cloud deformed on the GPU: its splats exist only there).
+enum class CullPath : std::uint8_t { automatic, compute, cpu };
+
 // Registry resource; zero-initialised fields are the defaults.
 struct RenderSettings {
     Quality quality = Quality::hq;
     int width = 1280;
     int height = 720;
     std::optional<glm::vec3> background;  // linear RGB for display; captured frames keep alpha 0 there
-    bool culling = true;                  // compute-pass back-face + frustum culling (off: classify only)
+    bool culling = true;                  // back-face + frustum culling (off: classify only)
+    CullPath cull_path = CullPath::automatic;
     float visibility_epsilon = 1.0f;      // HQ depth offset along the view ray, in units of each splat's radius
     bool time_passes = false;             // glFinish after each pass and record CPU times in RenderStats
     bool aux_outputs = false;             // also write the normal + depth target (EXR Z, N; capture_frame's
@@ -44,8 +52,10 @@ struct RenderSettings {
 struct RenderStats {
     std::uint64_t frame = 0;
     std::uint32_t splats = 0;           // splats submitted (all clouds)
-    std::uint32_t visible_points = 0;   // after culling, drawn as sprites (only with time_passes)
-    std::uint32_t visible_quads = 0;    // after culling, drawn as quads (only with time_passes)
+    std::uint32_t visible_points = 0;   // after culling, drawn as sprites (compute path: only with time_passes)
+    std::uint32_t visible_quads = 0;    // after culling, drawn as quads (compute path: only with time_passes)
+    std::uint32_t cpu_culled_clouds = 0;      // clouds culled on the CPU this frame (CullPath)
+    std::uint32_t compute_culled_clouds = 0;  // clouds culled by the compute pass this frame
     double cull_ms = 0, visibility_ms = 0, attribute_ms = 0, shade_ms = 0, preview_ms = 0, total_ms = 0;
 };
 

@@ -1,0 +1,179 @@
+// CPU twin of shaders/splat_render/cull.comp. Every function mirrors the GLSL function of the same name
+// (splat_common.glsl, splat_color.glsl, lighting.glsl), in float, so both paths produce the same records.
+#include "systems/splat_render/cpu_cull.h"
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cmath>
+#include <limits>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace sffd::render {
+
+namespace {
+
+constexpr std::size_t block_splats = 4096;
+
+glm::vec3 xyz(const float (&v)[4]) { return glm::vec3(v[0], v[1], v[2]); }
+
+float ellipse_max_radius(const glm::vec3& u, const glm::vec3& v) {
+    const float a = glm::dot(u, u), b = glm::dot(u, v), c = glm::dot(v, v);
+    const float h = 0.5f * (a + c);
+    return std::sqrt(h + std::sqrt(std::max(0.25f * (a - c) * (a - c) + b * b, 0.0f)));
+}
+
+float pack_color(const glm::vec3& linear) {
+    const glm::vec3 q = glm::round(glm::sqrt(glm::clamp(linear, 0.0f, 1.0f)) * 1023.0f);
+    return std::bit_cast<float>(std::uint32_t(q.x) | (std::uint32_t(q.y) << 10) | (std::uint32_t(q.z) << 20));
+}
+
+// The shader's sRGB decode (no linear toe) of per-splat colours.
+glm::vec3 srgb_to_linear_approx(const glm::vec3& c) { return glm::pow((c + 0.055f) * (1.0f / 1.055f), glm::vec3(2.4f)); }
+
+// GL's sRGB decode of texels (exact curve), as a table.
+const std::array<float, 256>& srgb8_table() {
+    static const std::array<float, 256> table = [] {
+        std::array<float, 256> t{};
+        for (int i = 0; i < 256; ++i) {
+            const double c = i / 255.0;
+            t[std::size_t(i)] = float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
+        }
+        return t;
+    }();
+    return table;
+}
+
+// textureLod(material_texture, uv, 0): bilinear, repeat in u, clamp to edge in v, sRGB texels decoded
+// before filtering, alpha linear.
+glm::vec4 sample_texture(const TexelView& t, glm::vec2 uv) {
+    const auto& lut = srgb8_table();
+    const float x = uv.x * float(t.width) - 0.5f, y = uv.y * float(t.height) - 0.5f;
+    const float fx = std::floor(x), fy = std::floor(y);
+    const float ax = x - fx, ay = y - fy;
+    auto wrap = [](long i, int n) { return int(((i % n) + n) % n); };
+    const int x0 = wrap(long(fx), t.width), x1 = wrap(long(fx) + 1, t.width);
+    const int y0 = std::clamp(int(fy), 0, t.height - 1), y1 = std::clamp(int(fy) + 1, 0, t.height - 1);
+    auto texel = [&](int tx, int ty) {
+        const std::uint8_t* p = t.rgba8 + (std::size_t(ty) * std::size_t(t.width) + std::size_t(tx)) * 4;
+        return glm::vec4(lut[p[0]], lut[p[1]], lut[p[2]], float(p[3]) * (1.0f / 255.0f));
+    };
+    const glm::vec4 top = glm::mix(texel(x0, y0), texel(x1, y0), ax), bottom = glm::mix(texel(x0, y1), texel(x1, y1), ax);
+    return glm::mix(top, bottom, ay);
+}
+
+glm::vec3 shade_blinn_phong(const gpu::FrameBlock& f, const glm::vec3& albedo, const glm::vec3& n, const glm::vec3& to_eye) {
+    glm::vec3 color = glm::vec3(f.ambient) * albedo;
+    for (std::uint32_t i = 0; i < SFFD_MAX_LIGHTS && i < f.counts.y; ++i) {
+        const glm::vec3 l(f.light_dir[i]);
+        const float ndl = std::max(glm::dot(n, l), 0.0f);
+        const glm::vec3 h = glm::normalize(l + to_eye);
+        const float spec = ndl > 0.0f ? std::exp2(f.material.y * std::log2(std::max(glm::dot(n, h), 1e-8f))) * f.material.x : 0.0f;
+        color += glm::vec3(f.light_color[i]) * (albedo * ndl + glm::vec3(spec));
+    }
+    return color;
+}
+
+struct SplatView {
+    glm::vec3 c, u, v, shading_n;
+    float r;
+};
+
+}  // namespace
+
+glm::vec3 ellipse_sprite(const gpu::FrameBlock& f, const glm::vec3& c, const glm::vec3& u, const glm::vec3& v) {
+    const float near_plane = f.projection[3][2] / (f.projection[2][2] - 1.0f);
+    const glm::vec2 z(u.z, v.z);
+    if (-c.z - glm::length(z) <= near_plane) return glm::vec3(0.0f, 0.0f, -1.0f);
+    const float q = glm::dot(z, z) - c.z * c.z;
+    const glm::vec2 x0 = glm::vec2(f.projection[0][0] * c.x, f.projection[1][1] * c.y) / -c.z;
+    const glm::vec2 ax = f.projection[0][0] * glm::vec2(u.x, v.x) + x0.x * z;
+    const glm::vec2 ay = f.projection[1][1] * glm::vec2(u.y, v.y) + x0.y * z;
+    const glm::vec2 off = glm::vec2(glm::dot(ax, z), glm::dot(ay, z)) / -q;
+    const glm::vec2 half_extent = glm::sqrt(off * off + glm::vec2(glm::dot(ax, ax), glm::dot(ay, ay)) / -q);
+    return glm::vec3(x0 + off, std::max(half_extent.x * f.viewport.x, half_extent.y * f.viewport.y));
+}
+
+void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBlock& f, const TexelView& texture,
+                     CpuCullResult& out) {
+    const std::size_t n = splats.size();
+    const std::size_t blocks = (n + block_splats - 1) / block_splats;
+    out.block = block_splats;
+    if (out.records.size() < n) out.records.resize(n);
+    if (out.quads.size() < n) out.quads.resize(n);
+    out.record_counts.assign(blocks, 0u);
+    out.quad_counts.assign(blocks, 0u);
+
+    const glm::mat3 mv3(f.model_view), nv3(f.normal_view), v2w3(f.view_to_world);
+    const bool culling = f.params.z != 0.0f, textured = f.params.w != 0.0f && texture.rgba8 && texture.width > 0 &&
+                                                      texture.height > 0;
+    const bool lit = f.counts.w == 1u;
+    const float p00 = f.projection[0][0], p11 = f.projection[1][1];
+    const float near_plane = f.projection[3][2] / (f.projection[2][2] - 1.0f);
+    const float far_plane = f.projection[3][2] / (f.projection[2][2] + 1.0f);
+    const float side_x = 1.0f / std::sqrt(p00 * p00 + 1.0f), side_y = 1.0f / std::sqrt(p11 * p11 + 1.0f);
+    const float nan = std::numeric_limits<float>::quiet_NaN();
+
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t b = range.begin(); b != range.end(); ++b) {
+            const std::size_t begin = b * block_splats, end = std::min(n, begin + block_splats);
+            SplatRecord* records = out.records.data() + begin;
+            std::uint32_t* quads = out.quads.data() + begin;
+            std::uint32_t kept = 0, kept_quads = 0;
+            for (std::size_t i = begin; i < end; ++i) {
+                const gpu::GpuSplat& s = splats[i];
+                // Back face from centre and normal only (a flipped splat, normal.w == 0, is two-sided).
+                const glm::vec3 c = glm::vec3(f.model_view * glm::vec4(xyz(s.center), 1.0f));
+                const bool back = s.normal[3] != 0.0f && glm::dot(nv3 * xyz(s.normal), c) > 0.0f;
+                if (back && culling) continue;
+                const glm::vec3 u = mv3 * xyz(s.axis_u), v = mv3 * xyz(s.axis_v);
+                const float r = ellipse_max_radius(u, v);
+                const glm::vec3 cr = glm::cross(u, v);
+                if (!(r > 0.0f) || glm::dot(cr, cr) <= 1e-12f * r * r * r * r) continue;  // degenerate (or NaN)
+                if (culling) {
+                    const float depth = -c.z;
+                    if (depth + r < near_plane || depth - r > far_plane || (depth - p00 * std::abs(c.x)) * side_x < -r ||
+                        (depth - p11 * std::abs(c.y)) * side_y < -r)
+                        continue;
+                }
+                const glm::vec3 box = ellipse_sprite(f, c, u, v);
+                if (box.z < 0.0f || box.z > f.params.y || std::abs(box.x) > 1.0f || std::abs(box.y) > 1.0f) {
+                    quads[kept_quads++] = std::uint32_t(i);
+                    continue;
+                }
+                // splat_view + splat_raycast_setup
+                SplatView o{c, u, v, glm::normalize(nv3 * xyz(s.normal)), r};
+                glm::vec3 pn = cr;
+                if (glm::dot(pn, o.shading_n) < 0.0f) pn = -pn;
+                const glm::vec3 cu = glm::cross(o.v, pn), cv = glm::cross(pn, o.u);
+                const glm::vec3 du = cu / glm::dot(cu, o.u), dv = cv / glm::dot(cv, o.v);
+                SplatRecord& rec = records[kept++];
+                rec.plane = glm::vec4(pn / glm::dot(o.c, pn), f.params.x * o.r);
+                rec.dual_u = glm::vec4(du, glm::dot(du, o.c));
+                rec.dual_v = glm::vec4(dv, glm::dot(dv, o.c));
+                if (back) rec.plane.x = rec.plane.y = rec.plane.z = nan;  // culling off: every fragment discards
+                rec.center = glm::vec4(box.x, box.y, o.c.z, box.z);
+                const glm::vec3 world_n = glm::normalize(v2w3 * o.shading_n);
+                // splat_color
+                glm::vec3 color;
+                if (textured) {
+                    color = glm::vec3(sample_texture(texture, glm::vec2(s.axis_u[3], s.axis_v[3])));
+                } else {
+                    const std::uint32_t bits = std::bit_cast<std::uint32_t>(s.center[3]);
+                    color = srgb_to_linear_approx(glm::vec3(float(bits & 255u), float((bits >> 8) & 255u), float((bits >> 16) & 255u)) *
+                                                  (1.0f / 255.0f));
+                }
+                if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
+                rec.normal = glm::vec4(world_n, pack_color(color));
+            }
+            out.record_counts[b] = kept;
+            out.quad_counts[b] = kept_quads;
+        }
+    });
+    out.visible_records = out.visible_quads = 0;
+    for (std::size_t b = 0; b < blocks; ++b) out.visible_records += out.record_counts[b], out.visible_quads += out.quad_counts[b];
+}
+
+}  // namespace sffd::render
