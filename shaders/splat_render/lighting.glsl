@@ -8,9 +8,14 @@
 // The loop has a constant bound so the compiler unrolls it and indexes the light arrays with constants
 // (llvmpipe turns a dynamic UBO index into a per-lane gather); lights past counts.y have zero colour.
 // pow() is spelled exp2(log2()) for the same reason: it is the cheap form on llvmpipe.
+// LIGHTS: the bound, a define set per program variant to the scene's light count (llvmpipe runs both
+// sides of a branch under a mask, so a `break` saves nothing there: every compiled light costs).
+#ifndef LIGHTS
+#define LIGHTS SFFD_MAX_LIGHTS
+#endif
 vec3 shade_blinn_phong(vec3 albedo, vec3 n, vec3 to_eye) {
     vec3 color = frame.ambient.rgb * albedo;
-    for (int i = 0; i < SFFD_MAX_LIGHTS; ++i) {
+    for (int i = 0; i < LIGHTS; ++i) {
         if (uint(i) >= frame.counts.y) break;
         vec3 l = frame.light_dir[i].xyz;
         float ndl = max(dot(n, l), 0.0);

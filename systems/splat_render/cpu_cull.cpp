@@ -25,13 +25,23 @@ float ellipse_max_radius(const glm::vec3& u, const glm::vec3& v) {
     return std::sqrt(h + std::sqrt(std::max(0.25f * (a - c) * (a - c) + b * b, 0.0f)));
 }
 
+// GLSL round() (halves to even here, as llvmpipe rounds; nearbyint is also one instruction).
 float pack_color(const glm::vec3& linear) {
-    const glm::vec3 q = glm::round(glm::sqrt(glm::clamp(linear, 0.0f, 1.0f)) * 1023.0f);
-    return std::bit_cast<float>(std::uint32_t(q.x) | (std::uint32_t(q.y) << 10) | (std::uint32_t(q.z) << 20));
+    const glm::vec3 s = glm::sqrt(glm::clamp(linear, 0.0f, 1.0f)) * 1023.0f;
+    const auto q = [](float x) { return std::uint32_t(std::nearbyint(x)); };
+    return std::bit_cast<float>(q(s.x) | (q(s.y) << 10) | (q(s.z) << 20));
 }
 
-// The shader's sRGB decode (no linear toe) of per-splat colours.
-glm::vec3 srgb_to_linear_approx(const glm::vec3& c) { return glm::pow((c + 0.055f) * (1.0f / 1.055f), glm::vec3(2.4f)); }
+// The shader's decode of per-splat colours: unpackUnorm4x8, then srgb_to_linear (no linear toe), as a
+// table of the 256 byte values.
+const std::array<float, 256>& splat_srgb_table() {
+    static const std::array<float, 256> table = [] {
+        std::array<float, 256> t{};
+        for (int i = 0; i < 256; ++i) t[std::size_t(i)] = std::pow((float(i) / 255.0f + 0.055f) * (1.0f / 1.055f), 2.4f);
+        return t;
+    }();
+    return table;
+}
 
 // GL's sRGB decode of texels (exact curve), as a table.
 const std::array<float, 256>& srgb8_table() {
@@ -115,6 +125,7 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     const float far_plane = f.projection[3][2] / (f.projection[2][2] + 1.0f);
     const float side_x = 1.0f / std::sqrt(p00 * p00 + 1.0f), side_y = 1.0f / std::sqrt(p11 * p11 + 1.0f);
     const float nan = std::numeric_limits<float>::quiet_NaN();
+    const std::array<float, 256>& splat_lut = splat_srgb_table();
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const tbb::blocked_range<std::size_t>& range) {
         for (std::size_t b = range.begin(); b != range.end(); ++b) {
@@ -162,8 +173,7 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                     color = glm::vec3(sample_texture(texture, glm::vec2(s.axis_u[3], s.axis_v[3])));
                 } else {
                     const std::uint32_t bits = std::bit_cast<std::uint32_t>(s.center[3]);
-                    color = srgb_to_linear_approx(glm::vec3(float(bits & 255u), float((bits >> 8) & 255u), float((bits >> 16) & 255u)) *
-                                                  (1.0f / 255.0f));
+                    color = glm::vec3(splat_lut[bits & 255u], splat_lut[(bits >> 8) & 255u], splat_lut[(bits >> 16) & 255u]);
                 }
                 if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
                 rec.normal = glm::vec4(world_n, pack_color(color));

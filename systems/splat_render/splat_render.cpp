@@ -67,7 +67,7 @@ struct SplatRenderState {
     gfx::Program cull;
     std::array<gfx::Program, 2> visibility, attribute;  // [0] sprites, [1] quads
     std::array<std::array<gfx::Program, 2>, 2> preview;  // [aux outputs][sprites, quads]
-    gfx::Program shade;
+    std::array<gfx::Program, SFFD_MAX_LIGHTS + 1> shade;  // [lights]: compiled on first use (shade_program)
     gfx::Program display;  // sRGB copy for a window (PresentSource)
     gfx::VertexArray vao;          // empty: quads read their splats from SSBOs
     gfx::VertexArray records_vao;  // SplatRecord[] as vertex attributes 0..4 (buffer bound per cloud)
@@ -381,6 +381,22 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
 
 }  // namespace
 
+namespace {
+
+// The deferred shading program for `lights` directional lights (LIGHTS in lighting.glsl), compiled once.
+Status shade_program(SplatRenderState& s, std::uint32_t lights) {
+    gfx::Program& program = s.shade[std::min<std::uint32_t>(lights, SFFD_MAX_LIGHTS)];
+    if (program) return {};
+    auto shade = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
+                                    {GL_FRAGMENT_SHADER, "splat_render/shade.frag"}},
+                                   "render.shade", {{"LIGHTS", std::to_string(lights)}});
+    if (!shade) return make_error(shade.message());
+    program = std::move(shade.value());
+    return {};
+}
+
+}  // namespace
+
 Status init_render_state(ecs::Registry& registry) {
     SplatRenderState s;
     auto cull = gfx::load_compute_program("splat_render/cull.comp", "render.cull");
@@ -400,11 +416,8 @@ Status init_render_state(ecs::Registry& registry) {
         s.attribute[quad] = std::move(attr.value());
         s.preview[1][quad] = std::move(prev.value());
     }
-    auto shade = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
-                                    {GL_FRAGMENT_SHADER, "splat_render/shade.frag"}},
-                                   "render.shade");
-    if (!shade) return make_error(shade.message());
-    s.shade = std::move(shade.value());
+    // The shading program of the common case (one light) now, so shader errors surface here.
+    if (Status st = shade_program(s, 1); !st) return st;
     auto display = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
                                       {GL_FRAGMENT_SHADER, "splat_render/display.frag"}},
                                      "render.display");
@@ -595,12 +608,14 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         // 3. normalise + shade (material of the first cloud: shading is deferred)
         // Early depth test skips background pixels (depth still 1.0) before the shader runs.
         glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
+        glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s.accum_color.id());
+        glBindTextureUnit(SFFD_TEX_ACCUM_NORMAL, s.accum_normal.id());
         glDepthFunc(GL_NOTEQUAL);
         glDepthMask(GL_FALSE);
         if (!drawn.empty()) glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, drawn.front()->frame_ubo.id());
-        glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s.accum_color.id());
-        glBindTextureUnit(SFFD_TEX_ACCUM_NORMAL, s.accum_normal.id());
-        glUseProgram(s.shade.id());
+        const std::uint32_t lights = std::min<std::uint32_t>(common.counts.y, SFFD_MAX_LIGHTS);
+        if (Status st = shade_program(s, lights); !st) log::error("render_system(): ", st.message());
+        glUseProgram(s.shade[lights].id());
         pass_scope.emplace(reg, "render.hq.shade");
         if (!drawn.empty()) glDrawArrays(GL_TRIANGLES, 0, 3);
         pass_scope.reset();

@@ -26,6 +26,9 @@
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/gl_object.h"
 #include "runtime/scene/components.h"
+#include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/cpu_cull.h"
+#include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/splat_render.h"
 
 using namespace sffd;
@@ -186,7 +189,36 @@ void bench_reference_points(benchmark::State& state) {
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
+// The CPU cull alone (cpu_cull.h, no GL): the sphere from distance 3, preview (lit) or HQ colours.
+void bench_cpu_cull(benchmark::State& state) {
+    const auto n = std::size_t(state.range(0));
+    const SplatCloud cloud = sphere(n);
+    const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
+    Camera cam;
+    cam.eye = glm::dvec3(0, 0, 3);
+    gpu::FrameBlock f{};
+    f.model_view = glm::mat4(view_matrix(cam));
+    f.normal_view = f.model_view;
+    f.projection = glm::mat4(projection_matrix(cam, 1280.0 / 720.0));
+    f.view_to_world = glm::inverse(f.model_view);
+    f.viewport = glm::vec4(1280, 720, 1.0f / 1280, 1.0f / 720);
+    f.params = glm::vec4(1.0f, 255.0f, 1.0f, 0.0f);
+    f.light_dir[0] = glm::vec4(glm::normalize(glm::vec3(1, 1, 1)), 0);
+    f.light_color[0] = glm::vec4(1.0f);
+    f.material = glm::vec4(0.3f, 32.0f, 0, 0);
+    f.counts = glm::uvec4(std::uint32_t(n), 1u, 0u, state.range(1) ? 0u : 1u);
+    CpuCullResult out;
+    for (auto _ : state) {
+        cull_splats_cpu(splats, f, {}, out);
+        benchmark::DoNotOptimize(out.visible_records);
+    }
+    state.counters["visible"] = double(out.visible_records);
+    state.SetItemsProcessed(std::int64_t(state.iterations() * n));
+}
+
 }  // namespace
+
+BENCHMARK(bench_cpu_cull)->ArgNames({"splats", "hq"})->Args({59650, 0})->Args({59650, 1})->Args({600000, 0})->Args({600000, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 BENCHMARK(bench_reference_points)->UseManualTime()->Unit(benchmark::kMillisecond)->MinTime(1.0);
 

@@ -53,9 +53,11 @@ protected:
         return e;
     }
 
-    FrameImage render(Quality quality, int w, int h, bool culling = true) {
+    // path: automatic is the CPU cull on llvmpipe; CullPath::compute runs the compute pass.
+    FrameImage render(Quality quality, int w, int h, bool culling = true, CullPath path = CullPath::automatic) {
         RenderSettings s;
         s.quality = quality, s.width = w, s.height = h, s.culling = culling, s.time_passes = true;
+        s.cull_path = path;
         s.aux_outputs = true;
         reg.set_resource<RenderSettings>(s);
         render_system(reg, FrameContext{});
@@ -64,7 +66,8 @@ protected:
         if (const char* dir = std::getenv("SFFD_RENDER_TEST_OUT"); dir && img.ok()) {  // for looking at the images
             const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
             const std::string name = std::string(info->test_suite_name()) + "." + info->name() + "." +
-                                     (quality == Quality::hq ? "hq" : "preview") + ".png";
+                                     (quality == Quality::hq ? "hq" : "preview") +
+                                     (path == CullPath::compute ? ".compute" : "") + ".png";
             (void)write_png(std::filesystem::path(dir) / name, to_rgba8(img.value()));
         }
         return img.ok() ? std::move(img.value()) : FrameImage{};

@@ -1,4 +1,4 @@
-// CPU parts of the renderer: image files, sRGB, splat packing, camera matrices.
+// CPU parts of the renderer: image files, sRGB, splat packing, camera matrices, sprite bounds, CPU cull.
 #include <gtest/gtest.h>
 
 #include <bit>
@@ -6,10 +6,13 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <numbers>
+#include <random>
 
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/cpu_cull.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_pack.h"
 #include "tests/systems/splat_render/test_scenes.h"
@@ -163,4 +166,132 @@ TEST(RenderPack, BoundingSphereContainsEverySplat) {
     EXPECT_NEAR(glm::length(b.center), 0.0, 0.01);
     EXPECT_GE(b.radius, 2.0);
     EXPECT_LT(b.radius, 2.3);
+}
+
+namespace {
+
+// A frame block for a camera at (0, 0, distance) looking down -z, 45 degrees, 1280x720.
+gpu::FrameBlock test_frame(double distance = 3.0) {
+    Camera cam;
+    cam.eye = glm::dvec3(0.0, 0.0, distance);
+    cam.near_plane = 0.1f, cam.far_plane = 10.0f;
+    gpu::FrameBlock f{};
+    f.model_view = glm::mat4(view_matrix(cam));
+    f.normal_view = f.model_view;
+    f.projection = glm::mat4(projection_matrix(cam, 1280.0 / 720.0));
+    f.view_to_world = glm::inverse(f.model_view);
+    f.viewport = glm::vec4(1280.0f, 720.0f, 1.0f / 1280.0f, 1.0f / 720.0f);
+    f.params = glm::vec4(1.0f, 255.0f, 1.0f, 0.0f);
+    f.light_dir[0] = glm::vec4(glm::normalize(glm::vec3(0.3f, 0.5f, 1.0f)), 0.0f);
+    f.light_color[0] = glm::vec4(1.0f);
+    f.material = glm::vec4(0.3f, 32.0f, 0.0f, 0.0f);
+    f.counts = glm::uvec4(0u, 1u, 0u, 0u);
+    return f;
+}
+
+}  // namespace
+
+// The sprite box against brute force: project 4096 points of the ellipse's rim in double precision.
+// The square must hold every projected rim point (in pixels) and be no larger than the rim's box
+// (tight: its side is the box's larger side, its centre the box's centre).
+TEST(RenderSprite, EllipseBoxHoldsTheProjectedRimAndIsTight) {
+    const gpu::FrameBlock f = test_frame();
+    const glm::dmat4 proj(f.projection);
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> uni(-1.0, 1.0);
+    int checked = 0;
+    for (int trial = 0; trial < 500; ++trial) {
+        // Random view-space centre in front of the camera, random orientation and radii (some tiny, far).
+        const glm::dvec3 c(uni(rng) * 1.2, uni(rng) * 0.7, -2.0 - 3.0 * (uni(rng) + 1.0));
+        const glm::dvec3 n = glm::normalize(glm::dvec3(uni(rng), uni(rng), uni(rng)));
+        const glm::dvec3 t = glm::normalize(glm::cross(n, glm::dvec3(uni(rng), uni(rng), uni(rng))));
+        const double scale = trial % 3 == 0 ? 0.002 : 0.05;
+        const glm::dvec3 u = t * scale * (0.5 + 0.5 * (uni(rng) + 1.0)), v = glm::cross(n, t) * scale * (0.3 + (uni(rng) + 1.0));
+        const glm::vec3 box = ellipse_sprite(f, glm::vec3(c), glm::vec3(u), glm::vec3(v));
+        ASSERT_GT(box.z, 0.0f);
+        glm::dvec2 lo(1e30), hi(-1e30);
+        for (int k = 0; k < 4096; ++k) {
+            const double a = 2.0 * std::numbers::pi * k / 4096.0;
+            const glm::dvec4 clip = proj * glm::dvec4(c + u * std::cos(a) + v * std::sin(a), 1.0);
+            const glm::dvec2 px = (glm::dvec2(clip) / clip.w * 0.5 + 0.5) * glm::dvec2(1280.0, 720.0);
+            lo = glm::min(lo, px), hi = glm::max(hi, px);
+        }
+        const glm::dvec2 centre = (glm::dvec2(box.x, box.y) * 0.5 + 0.5) * glm::dvec2(1280.0, 720.0);
+        const double half = 0.5 * double(box.z);
+        const double tol = 1e-3 + 1e-5 * glm::length(centre);  // float evaluation
+        EXPECT_LE(centre.x - half, lo.x + tol) << trial;
+        EXPECT_GE(centre.x + half, hi.x - tol) << trial;
+        EXPECT_LE(centre.y - half, lo.y + tol) << trial;
+        EXPECT_GE(centre.y + half, hi.y - tol) << trial;
+        const glm::dvec2 extent = hi - lo;
+        EXPECT_NEAR(box.z, std::max(extent.x, extent.y), 2e-3 * std::max(1.0, std::max(extent.x, extent.y))) << trial;
+        ++checked;
+    }
+    EXPECT_EQ(checked, 500);
+    // Reaching the near plane: no box.
+    EXPECT_LT(ellipse_sprite(f, glm::vec3(0.0f, 0.0f, -0.12f), glm::vec3(0.0f, 0.0f, 0.05f), glm::vec3(0.05f, 0.0f, 0.0f)).z, 0.0f);
+}
+
+// The CPU cull against its definition: each splat classified by an independent double-precision
+// evaluation (back face, frustum ball, sprite vs quad), records in splat order, counts consistent.
+TEST(RenderCpuCull, ClassifiesEverySplatLikeTheDefinition) {
+    SplatCloud cloud = test::fibonacci_sphere(5000);
+    // A few splats too large for a sprite (quads) and one whose centre is off-screen left.
+    for (std::size_t i = 0; i < 5000; i += 53)
+        if (cloud.normals[i].z > 0.6f) cloud.axis_u[i] *= 40.0f, cloud.axis_v[i] *= 40.0f;
+    cloud.positions[1] = glm::vec3(-2.3f, 0.0f, 0.9f), cloud.normals[1] = glm::vec3(0, 0, 1);
+    cloud.axis_u[1] = glm::vec3(0.3f, 0, 0), cloud.axis_v[1] = glm::vec3(0, 0.3f, 0);
+    const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
+    for (bool lit : {false, true}) {
+        gpu::FrameBlock f = test_frame();
+        f.counts.w = lit ? 1u : 0u;
+        CpuCullResult out;
+        cull_splats_cpu(splats, f, {}, out);
+        const glm::dmat4 mv(f.model_view), proj(f.projection);
+        std::vector<std::uint32_t> sprites, quads;
+        for (std::uint32_t i = 0; i < splats.size(); ++i) {
+            const glm::dvec3 c = glm::dvec3(mv * glm::dvec4(glm::dvec3(cloud.positions[i]), 1.0));
+            if (glm::dot(glm::dvec3(cloud.normals[i]), c) > 0.0) continue;  // back-facing (view = world here)
+            const double r = std::max(glm::length(glm::dvec3(cloud.axis_u[i])), glm::length(glm::dvec3(cloud.axis_v[i])));
+            // The symmetric frustum's side planes through the eye, as a ball test.
+            const double p00 = proj[0][0], p11 = proj[1][1], depth = -c.z;
+            if ((depth - p00 * std::abs(c.x)) / std::sqrt(p00 * p00 + 1.0) < -r ||
+                (depth - p11 * std::abs(c.y)) / std::sqrt(p11 * p11 + 1.0) < -r)
+                continue;
+            const glm::vec3 box = ellipse_sprite(f, glm::vec3(c), glm::vec3(cloud.axis_u[i]), glm::vec3(cloud.axis_v[i]));
+            (box.z > 255.0f || std::abs(box.x) > 1.0f || std::abs(box.y) > 1.0f ? quads : sprites).push_back(i);
+        }
+        ASSERT_EQ(out.visible_records, sprites.size());
+        ASSERT_EQ(out.visible_quads, quads.size());
+        EXPECT_GE(quads.size(), 3u);   // the enlarged splats on the visible side, and the off-screen one
+        std::vector<std::uint32_t> got_quads;
+        std::vector<SplatRecord> got;
+        CpuCullResult::for_each_run(out.quads, out.quad_counts, out.block, [&](std::size_t, const std::uint32_t* p, std::size_t k) {
+            got_quads.insert(got_quads.end(), p, p + k);
+        });
+        CpuCullResult::for_each_run(out.records, out.record_counts, out.block, [&](std::size_t, const SplatRecord* p, std::size_t k) {
+            got.insert(got.end(), p, p + k);
+        });
+        EXPECT_EQ(got_quads, quads);
+        ASSERT_EQ(got.size(), sprites.size());
+        for (std::size_t k = 0; k < got.size(); ++k) {
+            const std::uint32_t i = sprites[k];
+            const glm::dvec3 c = glm::dvec3(mv * glm::dvec4(glm::dvec3(cloud.positions[i]), 1.0));
+            // The record's ray cast hits the splat centre: the ray through the centre gives t = depth,
+            // s = q = 0; and the plane is the splat's plane (normal . (p - c) = 0 <=> plane . p = 1).
+            const glm::dvec3 ray = c / -c.z;
+            const double t = 1.0 / glm::dot(glm::dvec3(got[k].plane), ray);
+            // (float set-up: near the silhouette the ray grazes the plane and rounding grows; 1e-2 of the
+            // splat's radius is far below a pixel here)
+            EXPECT_NEAR(t, -c.z, 1e-4 * -c.z) << i;
+            EXPECT_NEAR(t * glm::dot(glm::dvec3(got[k].dual_u), ray) - got[k].dual_u.w, 0.0, 1e-2) << i;
+            EXPECT_NEAR(t * glm::dot(glm::dvec3(got[k].dual_v), ray) - got[k].dual_v.w, 0.0, 1e-2) << i;
+            // The rim point c + u has elliptical radius 1.
+            const glm::dvec3 rim = c + glm::dvec3(cloud.axis_u[i]);
+            const double s = glm::dot(glm::dvec3(got[k].dual_u), rim) - got[k].dual_u.w, q = glm::dot(glm::dvec3(got[k].dual_v), rim) - got[k].dual_v.w;
+            EXPECT_NEAR(s * s + q * q, 1.0, 1e-2) << i;
+            EXPECT_NEAR(got[k].plane.w, f.params.x * glm::length(cloud.axis_u[i]), 1e-6) << i;
+            EXPECT_NEAR(glm::dot(glm::dvec3(got[k].normal), glm::dvec3(cloud.normals[i])), 1.0, 1e-5) << i;
+        }
+    }
 }
