@@ -7,12 +7,6 @@
 layout(binding = SFFD_TEX_ACCUM_COLOR) uniform sampler2D accum_color;
 layout(binding = SFFD_TEX_ACCUM_NORMAL) uniform sampler2D accum_normal;
 
-// World-space direction from the surface towards the eye for this pixel.
-vec3 pixel_to_eye_world() {
-    vec3 ray = vec3(gl_FragCoord.xy * frame.ray_map.xy + frame.ray_map.zw, -1.0);
-    return -normalize(mat3(frame.view_to_world) * ray);
-}
-
 layout(location = 0) out vec4 out_color;
 layout(location = 1) out vec4 out_aux;
 
@@ -21,16 +15,17 @@ void main() {
     // texelFetch (measured: 52.9 vs 55.8 ms per HQ frame of the 59,650-splat sphere, median of 3 each).
     vec2 uv = gl_FragCoord.xy * frame.viewport.zw;
     vec4 c = textureLod(accum_color, uv, 0.0);
-    if (c.w <= 0.0) {
-        out_color = frame.background;
-        out_aux = vec4(0.0, 0.0, 0.0, -1.0);
-        return;
-    }
     vec4 nz = textureLod(accum_normal, uv, 0.0);
-    vec3 albedo = c.rgb / c.w;
-    vec3 n = nz.xyz;
-    float len = length(n);
-    n = len > 0.0 ? n / len : vec3(0.0, 0.0, 1.0);
-    out_color = vec4(shade_blinn_phong(albedo, n, pixel_to_eye_world()), 1.0);
-    out_aux = vec4(n, nz.w / c.w);
+    // Reciprocals and inverse square roots, not divisions and lengths: llvmpipe shades every lane of a
+    // block, and this pass touches every covered pixel.
+    float inv_w = 1.0 / c.w;
+    float n2 = dot(nz.xyz, nz.xyz);
+    vec3 n = n2 > 0.0 ? nz.xyz * inversesqrt(n2) : vec3(0.0, 0.0, 1.0);
+    // World-space direction towards the eye: view_to_world is a rotation, so |R ray| = |ray|.
+    vec3 ray = vec3(gl_FragCoord.xy * frame.ray_map.xy + frame.ray_map.zw, -1.0);
+    vec3 to_eye = (mat3(frame.view_to_world) * ray) * -inversesqrt(dot(ray, ray));
+    vec3 color = shade_blinn_phong(c.rgb * inv_w, n, to_eye);
+    bool hit = c.w > 0.0;  // else a pixel with depth but no weight (cannot happen: kept for safety)
+    out_color = hit ? vec4(color, 1.0) : frame.background;
+    out_aux = hit ? vec4(n, nz.w * inv_w) : vec4(0.0, 0.0, 0.0, -1.0);
 }

@@ -21,7 +21,7 @@ for shape in 0 1; do for pass in 0 1 2; do for a in 0 1; do check splat_render/s
 for q in 0 1; do check splat_render/visibility.frag frag SHAPE_QUAD=$q PASS=0; done
 for q in 0 1; do check splat_render/attribute.frag frag SHAPE_QUAD=$q PASS=1; done
 for q in 0 1; do for a in 0 1; do check splat_render/preview.frag frag SHAPE_QUAD=$q PASS=2 AUX=$a; done; done
-check splat_render/shade.frag frag
+for l in 0 1 2 3 4; do check splat_render/shade.frag frag LIGHTS=$l; done
 check splat_render/fullscreen.vert vert
 check splat_render/cull.comp comp
 exit $status
