@@ -8,15 +8,28 @@
 
 layout(binding = SFFD_TEX_MATERIAL) uniform sampler2D material_texture;
 
+// TEXTURED and LIT (0 or 1) fix the two choices at compile time (the cull pass compiles a variant per
+// combination: llvmpipe would otherwise sample the texture and light every splat whatever the branch
+// says); left undefined, they are read per draw from frame.params.w and frame.counts.w.
 vec4 splat_color(GpuSplat s, SplatView o, vec3 world_n) {
     vec4 color;
-    if (frame.params.w != 0.0)
+#if defined(TEXTURED)
+    const bool textured = TEXTURED != 0;
+#else
+    bool textured = frame.params.w != 0.0;
+#endif
+#if defined(LIT)
+    const bool lit = LIT != 0;
+#else
+    bool lit = frame.counts.w == 1u;
+#endif
+    if (textured)
         color = textureLod(material_texture, vec2(s.axis_u.w, s.axis_v.w), 0.0);
     else {
         color = unpackUnorm4x8(floatBitsToUint(s.center.w));
         color.rgb = srgb_to_linear(color.rgb);
     }
-    if (frame.counts.w == 1u) color.rgb = shade_blinn_phong(color.rgb, world_n, -normalize(mat3(frame.view_to_world) * o.c));
+    if (lit) color.rgb = shade_blinn_phong(color.rgb, world_n, -normalize(mat3(frame.view_to_world) * o.c));
     return color;
 }
 

@@ -64,7 +64,9 @@ struct CloudGpu {
 
 // Registry resource: everything the renderer owns on the GPU.
 struct SplatRenderState {
-    gfx::Program cull;
+    // [textured][lit][lights]: cull pass variants (TEXTURED, LIT, LIGHTS in splat_color.glsl), compiled on
+    // first use (cull_program)
+    std::array<std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2>, 2> cull;
     std::array<gfx::Program, 2> visibility, attribute;  // [0] sprites, [1] quads
     std::array<std::array<gfx::Program, 2>, 2> preview;  // [aux outputs][sprites, quads]
     std::array<gfx::Program, SFFD_MAX_LIGHTS + 1> shade;  // [lights]: compiled on first use (shade_program)
@@ -383,6 +385,19 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
 
 namespace {
 
+// The cull pass variant for an (un)textured material, (un)lit colours and `lights` lights, compiled once.
+Status cull_program(SplatRenderState& s, bool textured, bool lit, std::uint32_t lights) {
+    lights = std::min<std::uint32_t>(lights, SFFD_MAX_LIGHTS);
+    gfx::Program& program = s.cull[textured][lit][lit ? lights : 0];
+    if (program) return {};
+    auto cull = gfx::load_compute_program("splat_render/cull.comp", "render.cull",
+                                          {{"TEXTURED", textured ? "1" : "0"}, {"LIT", lit ? "1" : "0"},
+                                           {"LIGHTS", std::to_string(lit ? lights : 0)}});
+    if (!cull) return make_error(cull.message());
+    program = std::move(cull.value());
+    return {};
+}
+
 // The deferred shading program for `lights` directional lights (LIGHTS in lighting.glsl), compiled once.
 Status shade_program(SplatRenderState& s, std::uint32_t lights) {
     gfx::Program& program = s.shade[std::min<std::uint32_t>(lights, SFFD_MAX_LIGHTS)];
@@ -399,9 +414,7 @@ Status shade_program(SplatRenderState& s, std::uint32_t lights) {
 
 Status init_render_state(ecs::Registry& registry) {
     SplatRenderState s;
-    auto cull = gfx::load_compute_program("splat_render/cull.comp", "render.cull");
-    if (!cull) return make_error(cull.message());
-    s.cull = std::move(cull.value());
+    if (Status st = cull_program(s, false, false, 1); !st) return st;
     for (int quad = 0; quad < 2; ++quad) {
         auto vis = splat_program("splat_render/visibility.frag", quad ? "render.visibility.quads" : "render.visibility", 0, quad, 0);
         if (!vis) return make_error(vis.message());
@@ -523,7 +536,9 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         } else {
             const std::uint32_t reset[8] = {0, 1, 0, 0, 6, 0, 0, 0};
             glNamedBufferSubData(gpu.commands.id(), 0, sizeof reset, reset);
-            glUseProgram(s.cull.id());
+            const bool textured = bool(gpu.texture), lit = b.counts.w == 1u;
+            if (Status st = cull_program(s, textured, lit, b.counts.y); !st) log::error("render_system(): ", st.message());
+            glUseProgram(s.cull[textured][lit][lit ? std::min<std::uint32_t>(b.counts.y, SFFD_MAX_LIGHTS) : 0].id());
             glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());

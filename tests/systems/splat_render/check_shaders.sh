@@ -24,4 +24,5 @@ for q in 0 1; do for a in 0 1; do check splat_render/preview.frag frag SHAPE_QUA
 for l in 0 1 2 3 4; do check splat_render/shade.frag frag LIGHTS=$l; done
 check splat_render/fullscreen.vert vert
 check splat_render/cull.comp comp
+for t in 0 1; do for l in 0 1; do check splat_render/cull.comp comp TEXTURED=$t LIT=$l LIGHTS=$((l * 2)); done; done
 exit $status
