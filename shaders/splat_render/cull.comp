@@ -41,6 +41,7 @@ void main() {
         // Back-facing (a splat flipped by an inverted lattice cell, normal.w == 0, is drawn two-sided).
         back = s.normal.w != 0.0 && dot(mat3(frame.normal_view) * s.normal.xyz, c) > 0.0;
         keep = back && frame.params.z != 0.0 ? KEEP_NONE : KEEP_SPRITE;
+        if (any(isnan(c)) || any(isinf(c))) keep = KEEP_NONE;  // nothing to draw (the CPU cull agrees)
     }
     float r = 0.0;
     if (keep != KEEP_NONE) {

@@ -137,6 +137,7 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 const gpu::GpuSplat& s = splats[i];
                 // Back face from centre and normal only (a flipped splat, normal.w == 0, is two-sided).
                 const glm::vec3 c = glm::vec3(f.model_view * glm::vec4(xyz(s.center), 1.0f));
+                if (!std::isfinite(c.x + c.y + c.z)) continue;  // NaN or infinite centre: nothing to draw
                 const bool back = s.normal[3] != 0.0f && glm::dot(nv3 * xyz(s.normal), c) > 0.0f;
                 if (back && culling) continue;
                 const glm::vec3 u = mv3 * xyz(s.axis_u), v = mv3 * xyz(s.axis_v);

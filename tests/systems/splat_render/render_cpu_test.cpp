@@ -1,6 +1,7 @@
 // CPU parts of the renderer: image files, sRGB, splat packing, camera matrices, sprite bounds, CPU cull.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <filesystem>
@@ -241,6 +242,12 @@ TEST(RenderCpuCull, ClassifiesEverySplatLikeTheDefinition) {
         if (cloud.normals[i].z > 0.6f) cloud.axis_u[i] *= 40.0f, cloud.axis_v[i] *= 40.0f;
     cloud.positions[1] = glm::vec3(-2.3f, 0.0f, 0.9f), cloud.normals[1] = glm::vec3(0, 0, 1);
     cloud.axis_u[1] = glm::vec3(0.3f, 0, 0), cloud.axis_v[1] = glm::vec3(0, 0.3f, 0);
+    // Non-finite centres (a broken deformation) are dropped, not drawn.
+    const std::size_t front = std::size_t(std::find_if(cloud.normals.begin(), cloud.normals.end(), [](const glm::vec3& n) {
+                                                 return n.z > 0.9f;
+                                             }) - cloud.normals.begin());
+    cloud.positions[front].x = std::numeric_limits<float>::quiet_NaN();
+    cloud.positions[front + 1].y = std::numeric_limits<float>::infinity();
     const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
     for (bool lit : {false, true}) {
         gpu::FrameBlock f = test_frame();
@@ -251,6 +258,7 @@ TEST(RenderCpuCull, ClassifiesEverySplatLikeTheDefinition) {
         std::vector<std::uint32_t> sprites, quads;
         for (std::uint32_t i = 0; i < splats.size(); ++i) {
             const glm::dvec3 c = glm::dvec3(mv * glm::dvec4(glm::dvec3(cloud.positions[i]), 1.0));
+            if (!std::isfinite(c.x + c.y + c.z)) continue;
             if (glm::dot(glm::dvec3(cloud.normals[i]), c) > 0.0) continue;  // back-facing (view = world here)
             const double r = std::max(glm::length(glm::dvec3(cloud.axis_u[i])), glm::length(glm::dvec3(cloud.axis_v[i])));
             // The symmetric frustum's side planes through the eye, as a ball test.
