@@ -23,6 +23,7 @@
 #define SFFD_TEX_ACCUM_COLOR       1
 #define SFFD_TEX_ACCUM_NORMAL      2
 #define SFFD_TEX_DEPTH             3
+#define SFFD_TEX_ACCUM_MATERIAL    4   // splat_render: sum(w * specular), sum(w * shininess) per pixel
 
 // GpuSplat, std430, 64 bytes; the same layout for rest and deformed splats, so a render pass reads
 // either one. Positions are relative to the cloud's origin (SplatCloud::origin).

@@ -3,6 +3,7 @@
 // visibility pass (LEQUAL, no depth writes) keeps only splats within eps of the visible surface.
 //   accum_color  = sum(w * linear rgb), sum(w)
 //   accum_normal = sum(w * world normal), sum(w * view-axis depth)
+//   accum_material (MATERIALS 1) = sum(w * specular), sum(w * shininess)
 #include "splat_render/raycast.glsl"
 
 #include "splat_render/splat_common.glsl"
@@ -12,6 +13,10 @@ layout(location = 3) flat in vec3 v_normal;
 
 layout(location = 0) out vec4 accum_color;
 layout(location = 1) out vec4 accum_normal;
+#if MATERIALS
+// Clouds with different materials in one frame: their specular and shininess blend like the colour.
+layout(location = 2) out vec4 accum_material;
+#endif
 
 void main() {
     vec3 ray;
@@ -22,4 +27,7 @@ void main() {
     float w = (1.0 - r2) * (1.0 - r2) + 1e-6;
     accum_color = vec4(w * unpack_color(v_plane.w), w);
     accum_normal = vec4(w * v_normal, w * t);
+#if MATERIALS
+    accum_material = vec4(w * frame.material.xy, 0.0, 0.0);
+#endif
 }

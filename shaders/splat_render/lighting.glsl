@@ -13,17 +13,22 @@
 #ifndef LIGHTS
 #define LIGHTS SFFD_MAX_LIGHTS
 #endif
-vec3 shade_blinn_phong(vec3 albedo, vec3 n, vec3 to_eye) {
+vec3 shade_blinn_phong(vec3 albedo, vec3 n, vec3 to_eye, float specular, float shininess) {
     vec3 color = frame.ambient.rgb * albedo;
     for (int i = 0; i < LIGHTS; ++i) {
         if (uint(i) >= frame.counts.y) break;
         vec3 l = frame.light_dir[i].xyz;
         float ndl = max(dot(n, l), 0.0);
         vec3 h = normalize(l + to_eye);
-        float spec = ndl > 0.0 ? exp2(frame.material.y * log2(max(dot(n, h), 1e-8))) * frame.material.x : 0.0;
+        float spec = ndl > 0.0 ? exp2(shininess * log2(max(dot(n, h), 1e-8))) * specular : 0.0;
         color += frame.light_color[i].rgb * (albedo * ndl + vec3(spec));
     }
     return color;
+}
+
+// With the material of the draw (frame.material: x specular, y shininess).
+vec3 shade_blinn_phong(vec3 albedo, vec3 n, vec3 to_eye) {
+    return shade_blinn_phong(albedo, n, to_eye, frame.material.x, frame.material.y);
 }
 
 #endif

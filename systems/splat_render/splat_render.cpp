@@ -67,9 +67,11 @@ struct SplatRenderState {
     // [textured][lit][lights]: cull pass variants (TEXTURED, LIT, LIGHTS in splat_color.glsl), compiled on
     // first use (cull_program)
     std::array<std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2>, 2> cull;
-    std::array<gfx::Program, 2> visibility, attribute;  // [0] sprites, [1] quads
+    std::array<gfx::Program, 2> visibility;  // [0] sprites, [1] quads
+    std::array<std::array<gfx::Program, 2>, 2> attribute;  // [clouds differ in material][sprites, quads]
     std::array<std::array<gfx::Program, 2>, 2> preview;  // [aux outputs][sprites, quads]
-    std::array<gfx::Program, SFFD_MAX_LIGHTS + 1> shade;  // [lights]: compiled on first use (shade_program)
+    // [clouds differ in material][lights]: compiled on first use (shade_program)
+    std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2> shade;
     gfx::Program display;  // sRGB copy for a window (PresentSource)
     gfx::VertexArray vao;          // empty: quads read their splats from SSBOs
     gfx::VertexArray records_vao;  // SplatRecord[] as vertex attributes 0..4 (buffer bound per cloud)
@@ -77,7 +79,7 @@ struct SplatRenderState {
 
     int width = 0, height = 0;
     bool aux_valid = false;  // the last frame wrote the normal + depth target
-    gfx::Texture color, aux, depth, accum_color, accum_normal;
+    gfx::Texture color, aux, depth, accum_color, accum_normal, accum_material;
     gfx::Framebuffer output_fbo, accum_fbo, depth_fbo;
     gfx::Texture display_color;  // RGBA8 sRGB-encoded, only when presenting to a window
     gfx::Framebuffer display_fbo;
@@ -90,10 +92,11 @@ struct SplatRenderState {
 
 namespace {
 
-Result<gfx::Program> splat_program(const char* fragment, const char* label, int pass, int quad, int aux = 1) {
+Result<gfx::Program> splat_program(const char* fragment, const char* label, int pass, int quad, int aux = 1,
+                                   int materials = 0) {
     return gfx::load_program({{GL_VERTEX_SHADER, "splat_render/splat.vert"}, {GL_FRAGMENT_SHADER, fragment}}, label,
                              {{"PASS", std::to_string(pass)}, {"SHAPE_QUAD", std::to_string(quad)},
-                              {"AUX", std::to_string(aux)}});
+                              {"AUX", std::to_string(aux)}, {"MATERIALS", std::to_string(materials)}});
 }
 
 gfx::Texture make_target(GLenum format, int w, int h, const char* label) {
@@ -112,6 +115,7 @@ void ensure_targets(SplatRenderState& s, int w, int h) {
     s.depth = make_target(GL_DEPTH_COMPONENT32F, w, h, "render.depth");
     s.accum_color = make_target(GL_RGBA32F, w, h, "render.accum_color");
     s.accum_normal = make_target(GL_RGBA32F, w, h, "render.accum_normal");
+    s.accum_material = make_target(GL_RG32F, w, h, "render.accum_material");
 
     s.output_fbo = gfx::Framebuffer::create("render.output");
     glNamedFramebufferTexture(s.output_fbo.id(), GL_COLOR_ATTACHMENT0, s.color.id(), 0);
@@ -123,6 +127,7 @@ void ensure_targets(SplatRenderState& s, int w, int h) {
     s.accum_fbo = gfx::Framebuffer::create("render.accum");
     glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT0, s.accum_color.id(), 0);
     glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT1, s.accum_normal.id(), 0);
+    glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT2, s.accum_material.id(), 0);
     glNamedFramebufferTexture(s.accum_fbo.id(), GL_DEPTH_ATTACHMENT, s.depth.id(), 0);
     glNamedFramebufferDrawBuffers(s.accum_fbo.id(), 2, two);
 
@@ -398,13 +403,14 @@ Status cull_program(SplatRenderState& s, bool textured, bool lit, std::uint32_t 
     return {};
 }
 
-// The deferred shading program for `lights` directional lights (LIGHTS in lighting.glsl), compiled once.
-Status shade_program(SplatRenderState& s, std::uint32_t lights) {
-    gfx::Program& program = s.shade[std::min<std::uint32_t>(lights, SFFD_MAX_LIGHTS)];
+// The deferred shading program for `lights` directional lights (LIGHTS in lighting.glsl), with one
+// material for the frame or blended ones (MATERIALS), compiled once.
+Status shade_program(SplatRenderState& s, bool materials, std::uint32_t lights) {
+    gfx::Program& program = s.shade[materials][std::min<std::uint32_t>(lights, SFFD_MAX_LIGHTS)];
     if (program) return {};
     auto shade = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
                                     {GL_FRAGMENT_SHADER, "splat_render/shade.frag"}},
-                                   "render.shade", {{"LIGHTS", std::to_string(lights)}});
+                                   "render.shade", {{"LIGHTS", std::to_string(lights)}, {"MATERIALS", materials ? "1" : "0"}});
     if (!shade) return make_error(shade.message());
     program = std::move(shade.value());
     return {};
@@ -420,17 +426,21 @@ Status init_render_state(ecs::Registry& registry) {
         if (!vis) return make_error(vis.message());
         auto attr = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute", 1, quad, 0);
         if (!attr) return make_error(attr.message());
+        auto attr_materials = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute",
+                                            1, quad, 0, 1);
+        if (!attr_materials) return make_error(attr_materials.message());
         auto prev = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2, quad);
         if (!prev) return make_error(prev.message());
         auto prev_noaux = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2, quad, 0);
         if (!prev_noaux) return make_error(prev_noaux.message());
         s.preview[0][quad] = std::move(prev_noaux.value());
         s.visibility[quad] = std::move(vis.value());
-        s.attribute[quad] = std::move(attr.value());
+        s.attribute[0][quad] = std::move(attr.value());
+        s.attribute[1][quad] = std::move(attr_materials.value());
         s.preview[1][quad] = std::move(prev.value());
     }
     // The shading program of the common case (one light) now, so shader errors surface here.
-    if (Status st = shade_program(s, 1); !st) return st;
+    if (Status st = shade_program(s, false, 1); !st) return st;
     auto display = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
                                       {GL_FRAGMENT_SHADER, "splat_render/display.frag"}},
                                      "render.display");
@@ -605,9 +615,18 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         const glm::ivec4 rect = screen_rect(reg, view, w, h);
         glEnable(GL_SCISSOR_TEST);
         glScissor(rect.x, rect.y, rect.z, rect.w);
+        // Clouds that differ in specular/shininess blend them into a third target (per-pixel materials);
+        // one material for every cloud is a uniform, as cheap as before.
+        const bool materials = std::any_of(drawn.begin(), drawn.end(), [&](const CloudGpu* g) {
+            return g->material->specular != drawn.front()->material->specular ||
+                   g->material->shininess != drawn.front()->material->shininess;
+        });
+        const GLenum accum_buffers[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+        glNamedFramebufferDrawBuffers(s.accum_fbo.id(), materials ? 3 : 2, accum_buffers);
         const glm::vec4 zero(0.0f);
         glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 0, &zero.x);
         glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 1, &zero.x);
+        if (materials) glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 2, &zero.x);
         glBindFramebuffer(GL_FRAMEBUFFER, s.accum_fbo.id());
         glDepthFunc(GL_LEQUAL);
         glDepthMask(GL_FALSE);
@@ -615,22 +634,23 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         glBlendEquation(GL_FUNC_ADD);
         glBlendFunc(GL_ONE, GL_ONE);
         pass_scope.emplace(reg, "render.hq.attribute");
-        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.attribute, *gpu);
+        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.attribute[materials], *gpu);
         pass_scope.reset();
         glDisable(GL_BLEND);
         glDepthMask(GL_TRUE);
         lap(stats.attribute_ms);
-        // 3. normalise + shade (material of the first cloud: shading is deferred)
-        // Early depth test skips background pixels (depth still 1.0) before the shader runs.
+        // 3. normalise + shade. Early depth test skips background pixels (depth still 1.0) before the
+        // shader runs.
         glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
         glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s.accum_color.id());
         glBindTextureUnit(SFFD_TEX_ACCUM_NORMAL, s.accum_normal.id());
+        glBindTextureUnit(SFFD_TEX_ACCUM_MATERIAL, s.accum_material.id());
         glDepthFunc(GL_NOTEQUAL);
         glDepthMask(GL_FALSE);
         if (!drawn.empty()) glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, drawn.front()->frame_ubo.id());
         const std::uint32_t lights = std::min<std::uint32_t>(common.counts.y, SFFD_MAX_LIGHTS);
-        if (Status st = shade_program(s, lights); !st) log::error("render_system(): ", st.message());
-        glUseProgram(s.shade[lights].id());
+        if (Status st = shade_program(s, materials, lights); !st) log::error("render_system(): ", st.message());
+        glUseProgram(s.shade[materials][lights].id());
         pass_scope.emplace(reg, "render.hq.shade");
         if (!drawn.empty()) glDrawArrays(GL_TRIANGLES, 0, 3);
         pass_scope.reset();
