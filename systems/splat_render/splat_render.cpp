@@ -386,10 +386,6 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(4 * sizeof(std::uint32_t)));
 }
 
-}  // namespace
-
-namespace {
-
 // The cull pass variant for an (un)textured material, (un)lit colours and `lights` lights, compiled once.
 Status cull_program(SplatRenderState& s, bool textured, bool lit, std::uint32_t lights) {
     lights = std::min<std::uint32_t>(lights, SFFD_MAX_LIGHTS);
