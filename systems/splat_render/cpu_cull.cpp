@@ -25,7 +25,7 @@ float ellipse_max_radius(const glm::vec3& u, const glm::vec3& v) {
     return std::sqrt(h + std::sqrt(std::max(0.25f * (a - c) * (a - c) + b * b, 0.0f)));
 }
 
-// GLSL round() (halves to even here, as llvmpipe rounds; nearbyint is also one instruction).
+// GLSL round() leaves halves to the implementation; nearbyint rounds them to even, in one instruction.
 float pack_color(const glm::vec3& linear) {
     const glm::vec3 s = glm::sqrt(glm::clamp(linear, 0.0f, 1.0f)) * 1023.0f;
     const auto q = [](float x) { return std::uint32_t(std::nearbyint(x)); };

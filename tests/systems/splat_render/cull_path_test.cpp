@@ -91,9 +91,9 @@ TEST_F(CullPath_, CpuAndComputeCullsRenderTheSameImage) {
             const ImageDiff d = diff(gpu, cpu);
             EXPECT_GT(d.covered_a, 30000) << what;
             EXPECT_LE(d.coverage_mismatch, 2) << what;
-            // Measured: texels filtered with llvmpipe's 8-bit weights vs float weights differ by <= 1/512
-            // (mean 7e-4 HQ, 1.1e-3 preview); in the preview a splat drawn first at an exact depth tie
-            // wins the pixel, and the compute pass's atomic compaction orders ties differently (2 pixels).
+            // Measured: the CPU's float-weight texture filtering and llvmpipe's differ by <= 1/512 (mean
+            // 7e-4 HQ, 1.1e-3 preview); in the preview a splat drawn first at an exact depth tie wins the
+            // pixel, and the compute pass's atomic compaction orders ties differently (2 pixels).
             EXPECT_LT(d.mean_color, 2e-3) << what;
             EXPECT_LE(d.over_2_percent, q == Quality::hq ? 0 : 10) << what;
             EXPECT_LT(d.max_depth, 1e-3) << what;
