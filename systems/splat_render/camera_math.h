@@ -8,6 +8,7 @@
 
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
+#include "shaders/splat_render/frame_block.h"
 
 namespace sffd::render {
 
@@ -33,5 +34,12 @@ Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBou
 
 // Depth along the camera's view axis (positive in front) of a world point.
 double view_depth(const Camera& camera, const glm::dvec3& world);
+
+// The camera's part of the splat passes' FrameBlock (shaders/splat_render/frame_block.h) for a
+// width x height frame: projection, view_to_world, viewport, the pixel-ray map, and model_view /
+// normal_view for a cloud whose positions are world positions (render_system replaces those two per cloud).
+// params = (visibility_epsilon, max_point_size, culling, 0); lights, material and counts are left zero.
+gpu::FrameBlock camera_frame_block(const glm::dmat4& view, const glm::dmat4& projection, int width, int height,
+                                   float visibility_epsilon, float max_point_size, bool culling);
 
 }  // namespace sffd::render

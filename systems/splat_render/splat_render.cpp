@@ -279,15 +279,8 @@ ViewSetup choose_camera(ecs::Registry& reg, const SplatRenderState& s, double as
 
 gpu::FrameBlock frame_block(ecs::Registry& reg, const RenderSettings& settings, const ViewSetup& view,
                             float max_point_size) {
-    gpu::FrameBlock b{};
-    b.projection = glm::mat4(view.projection);
-    b.view_to_world = glm::mat4(glm::inverse(view.view));
-    b.viewport = glm::vec4(float(settings.width), float(settings.height), 1.0f / float(settings.width),
-                           1.0f / float(settings.height));
-    b.ray_map = glm::vec4(float(2.0 / (double(settings.width) * view.projection[0][0])),
-                          float(2.0 / (double(settings.height) * view.projection[1][1])),
-                          float(-1.0 / view.projection[0][0]), float(-1.0 / view.projection[1][1]));
-    b.params = glm::vec4(settings.visibility_epsilon, max_point_size, settings.culling ? 1.0f : 0.0f, 0.0f);
+    gpu::FrameBlock b = camera_frame_block(view.view, view.projection, settings.width, settings.height,
+                                           settings.visibility_epsilon, max_point_size, settings.culling);
     std::uint32_t lights = 0;
     reg.view<const DirectionalLight>().each([&](const DirectionalLight& l) {
         if (lights >= SFFD_MAX_LIGHTS) return;

@@ -196,13 +196,7 @@ void bench_cpu_cull(benchmark::State& state) {
     const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
     Camera cam;
     cam.eye = glm::dvec3(0, 0, 3);
-    gpu::FrameBlock f{};
-    f.model_view = glm::mat4(view_matrix(cam));
-    f.normal_view = f.model_view;
-    f.projection = glm::mat4(projection_matrix(cam, 1280.0 / 720.0));
-    f.view_to_world = glm::inverse(f.model_view);
-    f.viewport = glm::vec4(1280, 720, 1.0f / 1280, 1.0f / 720);
-    f.params = glm::vec4(1.0f, 255.0f, 1.0f, 0.0f);
+    gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 1280.0 / 720.0), 1280, 720, 1.0f, 255.0f, true);
     f.light_dir[0] = glm::vec4(glm::normalize(glm::vec3(1, 1, 1)), 0);
     f.light_color[0] = glm::vec4(1.0f);
     f.material = glm::vec4(0.3f, 32.0f, 0, 0);

@@ -176,13 +176,7 @@ gpu::FrameBlock test_frame(double distance = 3.0) {
     Camera cam;
     cam.eye = glm::dvec3(0.0, 0.0, distance);
     cam.near_plane = 0.1f, cam.far_plane = 10.0f;
-    gpu::FrameBlock f{};
-    f.model_view = glm::mat4(view_matrix(cam));
-    f.normal_view = f.model_view;
-    f.projection = glm::mat4(projection_matrix(cam, 1280.0 / 720.0));
-    f.view_to_world = glm::inverse(f.model_view);
-    f.viewport = glm::vec4(1280.0f, 720.0f, 1.0f / 1280.0f, 1.0f / 720.0f);
-    f.params = glm::vec4(1.0f, 255.0f, 1.0f, 0.0f);
+    gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 1280.0 / 720.0), 1280, 720, 1.0f, 255.0f, true);
     f.light_dir[0] = glm::vec4(glm::normalize(glm::vec3(0.3f, 0.5f, 1.0f)), 0.0f);
     f.light_color[0] = glm::vec4(1.0f);
     f.material = glm::vec4(0.3f, 32.0f, 0.0f, 0.0f);
