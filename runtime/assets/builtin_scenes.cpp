@@ -114,19 +114,7 @@ SplatCloud make_sphere_cloud(std::size_t n) {
 fs::path face_cache_path() { return paths::cache_dir() / "face.glb"; }
 
 Lattice make_box_lattice(const glm::dvec3& lo, const glm::dvec3& hi, glm::ivec3 div, LatticeBasis basis) {
-    Lattice l;
-    l.origin = lo;
-    l.axes = {glm::dvec3(hi.x - lo.x, 0, 0), glm::dvec3(0, hi.y - lo.y, 0), glm::dvec3(0, 0, hi.z - lo.z)};
-    l.divisions = div;
-    l.basis = basis;
-    l.rest.resize(l.size());
-    for (int i = 0; i <= div.x; ++i)
-        for (int j = 0; j <= div.y; ++j)
-            for (int k = 0; k <= div.z; ++k)
-                l.rest[l.index(i, j, k)] = lo + l.axes[0] * (static_cast<double>(i) / div.x) + l.axes[1] * (static_cast<double>(j) / div.y) +
-                                           l.axes[2] * (static_cast<double>(k) / div.z);
-    l.current = l.rest;
-    return l;
+    return make_lattice(lo, {glm::dvec3(hi.x - lo.x, 0, 0), glm::dvec3(0, hi.y - lo.y, 0), glm::dvec3(0, 0, hi.z - lo.z)}, div, basis);
 }
 
 void add_default_view(ecs::Registry& r, const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec3& view_dir) {

@@ -18,7 +18,7 @@
 #include "runtime/core/result.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
-#include "systems/ffd/components.h"
+#include "runtime/scene/lattice.h"
 
 namespace sffd::assets {
 

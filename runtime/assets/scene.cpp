@@ -12,7 +12,7 @@
 #include "runtime/assets/import.h"
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
-#include "systems/ffd/components.h"
+#include "runtime/scene/lattice.h"
 
 namespace sffd {
 namespace fs = std::filesystem;
@@ -31,7 +31,6 @@ std::map<std::string, Extension>& extensions() {
 }
 
 constexpr int kSceneVersion = 1;
-constexpr int kMaxDivisions = 64;
 
 json vec3(const glm::dvec3& v) { return json::array({v.x, v.y, v.z}); }
 json vec3f(const glm::vec3& v) { return json::array({v.x, v.y, v.z}); }
@@ -174,8 +173,8 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
                     json wrap = {{"divisions", lj.value("divisions", json())}};
                     const glm::dvec3 d = lr.v3(wrap, "divisions");
                     for (int a = 0; a < 3; ++a)
-                        if (d[a] != std::floor(d[a]) || d[a] < 1 || d[a] > kMaxDivisions)
-                            throw std::runtime_error(lr.where + ": divisions must be integers in 1.." + std::to_string(kMaxDivisions));
+                        if (d[a] != std::floor(d[a]) || d[a] < 1 || d[a] > kMaxLatticeDivisions)
+                            throw std::runtime_error(lr.where + ": divisions must be integers in 1.." + std::to_string(kMaxLatticeDivisions));
                     l.divisions = glm::ivec3(d);
                 }
                 const std::string basis = lr.str_or(lj, "basis", "bernstein");

@@ -28,9 +28,23 @@ struct GpuDeformer::Impl {
         std::uint64_t stamp = 0;
     };
     std::unordered_map<std::uint64_t, Controls> controls;  // per key (lattice entity)
+    // Read-back slots for queue_stats(): 8 bytes each, persistently mapped (host memory, so copying the
+    // counters there is not a video-to-host migration); `fence` null = free.
+    struct Readback {
+        gfx::Buffer buffer;
+        const std::uint32_t* mapped = nullptr;
+        GLsync fence = nullptr;
+        std::uint64_t tag = 0;
+    };
+    std::vector<Readback> readbacks;
     std::size_t scratch_capacity = 0;
     std::uint64_t uploads = 0;
+    std::uint64_t sync_readbacks = 0;
+    GLint max_ubo = 0;  // GL_MAX_UNIFORM_BLOCK_SIZE, queried once (a glGet can stall a threaded driver)
     ~Impl() {  // GL objects before the context
+        for (Readback& r : readbacks)
+            if (r.fence) glDeleteSync(r.fence);
+        readbacks.clear();
         program.reset(), ubo.reset(), stats.reset(), scratch.reset();
         specialised.clear();
         controls.clear();
@@ -47,6 +61,7 @@ Result<GpuDeformer> GpuDeformer::create() {
     auto program = gfx::load_compute_program("ffd/deform.comp", "ffd.deform");
     if (!program) return program.error();
     impl->program = std::move(*program);
+    glGetIntegerv(GL_MAX_UNIFORM_BLOCK_SIZE, &impl->max_ubo);
     impl->ubo = gfx::Buffer::create("ffd.lattice_block");
     glNamedBufferData(impl->ubo.id(), sizeof(detail::FfdBlock), nullptr, GL_DYNAMIC_DRAW);
     impl->stats = gfx::Buffer::create("ffd.stats");
@@ -89,9 +104,7 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
     // Bernstein: a program specialised for this lattice shape (compiled once per shape; constant loop
     // bounds, small arrays). B-spline reads 4 neighbours per axis whatever the size: generic program.
     GLuint program = m.program.id();
-    GLint max_ubo = 0;
-    glGetIntegerv(GL_MAX_UNIFORM_BLOCK_SIZE, &max_ubo);
-    const bool cp_ubo = lattice.basis == LatticeBasis::bernstein && lattice.size() * 16 <= std::size_t(max_ubo);
+    const bool cp_ubo = lattice.basis == LatticeBasis::bernstein && lattice.size() * 16 <= std::size_t(m.max_ubo);
     const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) | (std::uint64_t(lattice.divisions.y) << 12) |
                                 std::uint64_t(lattice.divisions.z) | (std::uint64_t(lattice.basis) << 40);
     auto sp = m.specialised.find(shape);
@@ -122,6 +135,7 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
 DeformStats GpuDeformer::read_stats() {
     std::uint32_t v[2] = {0, 0};
     glGetNamedBufferSubData(m_impl->stats.id(), 0, sizeof v, v);
+    ++m_impl->sync_readbacks;
     DeformStats s;
     s.inverted = v[0];
     s.inside = v[1];
@@ -133,6 +147,49 @@ void GpuDeformer::reset_stats() {
     const std::uint32_t zero[2] = {0, 0};
     glNamedBufferSubData(m_impl->stats.id(), 0, sizeof zero, zero);
 }
+
+void GpuDeformer::queue_stats(std::uint64_t tag) {
+    Impl& m = *m_impl;
+    auto slot = std::find_if(m.readbacks.begin(), m.readbacks.end(), [](const Impl::Readback& r) { return !r.fence; });
+    if (slot == m.readbacks.end()) {
+        Impl::Readback r;
+        r.buffer = gfx::Buffer::create("ffd.stats_readback");
+        const GLbitfield flags = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
+        glNamedBufferStorage(r.buffer.id(), 2 * sizeof(std::uint32_t), nullptr, flags);
+        r.mapped = static_cast<const std::uint32_t*>(glMapNamedBufferRange(r.buffer.id(), 0, 2 * sizeof(std::uint32_t), flags));
+        if (!r.mapped) return;  // the GL error callback has reported why; these statistics are lost
+        m.readbacks.push_back(std::move(r));
+        slot = m.readbacks.end() - 1;
+    }
+    glCopyNamedBufferSubData(m.stats.id(), slot->buffer.id(), 0, 0, 2 * sizeof(std::uint32_t));
+    slot->fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    slot->tag = tag;
+}
+
+std::vector<GpuDeformer::TaggedStats> GpuDeformer::poll_stats() {
+    std::vector<TaggedStats> done;
+    for (Impl::Readback& r : m_impl->readbacks) {
+        if (!r.fence) continue;
+        // Zero timeout: asks, never waits. The flush bit makes sure the fence reaches the GPU.
+        const GLenum state = glClientWaitSync(r.fence, GL_SYNC_FLUSH_COMMANDS_BIT, 0);
+        if (state != GL_ALREADY_SIGNALED && state != GL_CONDITION_SATISFIED) continue;
+        glDeleteSync(r.fence);
+        r.fence = nullptr;
+        DeformStats s;
+        s.inverted = r.mapped[0];
+        s.inside = r.mapped[1];
+        s.backend = Backend::fast;
+        done.push_back({r.tag, s});
+    }
+    return done;
+}
+
+std::size_t GpuDeformer::pending_stats() const {
+    return std::size_t(std::count_if(m_impl->readbacks.begin(), m_impl->readbacks.end(),
+                                     [](const Impl::Readback& r) { return r.fence != nullptr; }));
+}
+
+std::uint64_t GpuDeformer::sync_readbacks() const { return m_impl->sync_readbacks; }
 
 Result<DeformStats> GpuDeformer::deform(const Lattice& lattice, const PointsIn& in, const PointsOut& out) {
     if (Status s = validate(lattice); !s) return s.error();
@@ -158,7 +215,7 @@ Result<DeformStats> GpuDeformer::deform(const Lattice& lattice, const PointsIn& 
     if (Status s = dispatch(lattice, ~std::uint64_t(0), 0, in.origin, m.scratch.id(), m.scratch.id(), std::uint32_t(in.count)); !s)
         return s.error();
     if (!splats.empty())
-        glGetNamedBufferSubData(m.scratch.id(), 0, GLsizeiptr(splats.size() * sizeof(gpu::GpuSplat)), splats.data());
+        glGetNamedBufferSubData(m.scratch.id(), 0, GLsizeiptr(splats.size() * sizeof(gpu::GpuSplat)), splats.data()), ++m.sync_readbacks;
     for (std::size_t i = 0; i < in.count; ++i) {
         const gpu::GpuSplat& s = splats[i];
         out.positions[i] = glm::vec3(s.center[0], s.center[1], s.center[2]);

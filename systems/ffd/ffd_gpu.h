@@ -1,8 +1,9 @@
 // GPU FFD deformer: the compute pass shaders/ffd/deform.comp plus its lattice uniform block and
 // control-point buffer. Needs a current GL 4.5 context for every call (create_headless() makes one).
 //
-// ffd_system uses dispatch() on GpuSplatStore buffers (no CPU round trip); tests and `splatffd deform
-// --backend gpu` use deform(), which uploads CPU arrays, dispatches and reads back.
+// ffd_system uses dispatch() on GpuSplatStore buffers (no CPU round trip) and queue_stats()/poll_stats()
+// for its statistics (they arrive a few frames late, nothing waits); tests and `splatffd deform --backend
+// gpu` use deform(), which uploads CPU arrays, dispatches and reads back.
 #pragma once
 
 #include <cstdint>
@@ -40,8 +41,22 @@ public:
     // Forgets control-point buffers whose key is not in `live` (lattices that were destroyed).
     void retain_keys(const std::vector<std::uint64_t>& live);
     // Inverted/inside counts accumulated since the last reset (reads back 8 bytes: waits for the GPU).
+    // Not for the frame path: use queue_stats()/poll_stats() there.
     DeformStats read_stats();
     void reset_stats();
+
+    // Non-blocking statistics: queue_stats() copies the counts accumulated since reset_stats() into a
+    // persistently mapped read-back buffer behind a fence and tags them; poll_stats() returns the tagged
+    // counts whose fence has signalled, without waiting (glClientWaitSync with a zero timeout).
+    struct TaggedStats {
+        std::uint64_t tag = 0;
+        DeformStats stats;
+    };
+    void queue_stats(std::uint64_t tag);
+    std::vector<TaggedStats> poll_stats();
+    std::size_t pending_stats() const;
+    // Synchronous read-backs so far (read_stats(), deform()): ffd_system's frame path must cause none.
+    std::uint64_t sync_readbacks() const;
 
     // CPU arrays in and out (upload, dispatch, read back). Same contract as ffd::deform().
     Result<DeformStats> deform(const Lattice& lattice, const PointsIn& in, const PointsOut& out);

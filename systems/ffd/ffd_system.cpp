@@ -1,6 +1,7 @@
 #include "systems/ffd/ffd_system.h"
 
 #include <optional>
+#include <unordered_map>
 #include <string_view>
 #include <vector>
 
@@ -14,10 +15,10 @@
 #include "runtime/scene/components.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/components.h"
-#include "systems/ffd/deform.h"
+#include "systems/ffd/deform_cloud.h"
 #include "systems/ffd/ffd_gpu.h"
 #include "systems/ffd/lattice.h"
-#include "systems/profiling/pass_timer.h"
+#include "runtime/app/pass_timer.h"
 
 namespace sffd {
 
@@ -27,7 +28,31 @@ namespace {
 struct FfdGpuState {
     std::optional<ffd::GpuDeformer> deformer;
     bool unavailable = false;  // compile failed once: stay on the CPU path
+    // Statistics in flight (GpuDeformer::queue_stats tag -> the output they were counted for).
+    struct Pending {
+        ecs::Entity cloud;
+        std::uint64_t version = 0;
+    };
+    std::unordered_map<std::uint64_t, Pending> pending;
+    std::uint64_t next_tag = 1;
 };
+
+// Inverted counts of earlier GPU runs that have arrived (never waits): each applies if it is newer than
+// the count the output holds.
+void collect_gpu_stats(ecs::Registry& reg) {
+    auto* st = reg.try_resource<FfdGpuState>();
+    if (!st || !st->deformer || st->pending.empty()) return;
+    for (const ffd::GpuDeformer::TaggedStats& t : st->deformer->poll_stats()) {
+        auto it = st->pending.find(t.tag);
+        if (it == st->pending.end()) continue;
+        const FfdGpuState::Pending p = it->second;
+        st->pending.erase(it);
+        DeformedSplats* out = reg.valid(p.cloud) ? reg.try_get<DeformedSplats>(p.cloud) : nullptr;
+        if (!out || p.version <= out->inverted_version) continue;
+        out->inverted = t.stats.inverted;  // statistics, not data: no change stamp
+        out->inverted_version = p.version;
+    }
+}
 
 bool gl_context_current() { return eglGetCurrentContext() != EGL_NO_CONTEXT || glfwGetCurrentContext() != nullptr; }
 
@@ -56,6 +81,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
     const bool force_gpu = settings && settings->force_gpu;
     const bool have_gl = gl_context_current();
     const bool force_cpu = (settings && settings->force_cpu) || (have_gl && !force_gpu && gfx::software_rasterizer());
+    if (have_gl) collect_gpu_stats(reg);
     // Collect first: emplacing DeformedSplats while iterating is a structural change.
     std::vector<ecs::Entity> clouds;
     reg.view<const SplatCloud, const Deformers>().each([&](ecs::Entity e, const SplatCloud&, const Deformers&) { clouds.push_back(e); });
@@ -80,13 +106,19 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
         out.origin = cloud.origin;
         out.seen_cloud = cloud_v, out.seen_deformers = deformers_v, out.seen_lattices = stamps;
         out.seen_force_cpu = force_cpu;
-        out.inverted = 0;
         ++out.version;
         const std::size_t n = cloud.size();
 
-        // Bounds: the rest box grown by each lattice's displacement hull, in order (never under-covers).
-        ffd::Box box;
-        for (const glm::vec3& p : cloud.positions) box.add(cloud.origin + glm::dvec3(p));
+        // Bounds from the control points only: the rest box (one pass over the splats when the cloud
+        // changes, cached) grown by each lattice's displacement hull, in order (never under-covers).
+        if (!out.has_rest_box || out.rest_box_cloud != cloud_v) {
+            ffd::Box rest;
+            for (const glm::vec3& p : cloud.positions) rest.add(cloud.origin + glm::dvec3(p));
+            out.rest_box_lo = rest.lo, out.rest_box_hi = rest.hi, out.rest_box_empty = rest.empty;
+            out.has_rest_box = true, out.rest_box_cloud = cloud_v;
+            if (settings) ++settings->cpu_splat_passes;
+        }
+        ffd::Box box{out.rest_box_lo, out.rest_box_hi, out.rest_box_empty};
         for (ecs::Entity le : lattices)
             if (ffd::validate(reg.get<Lattice>(le)).ok()) box = ffd::deformed_bounds(reg.get<Lattice>(le), box);
         out.bounds_min = box.lo, out.bounds_max = box.hi;
@@ -131,38 +163,29 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
                 in = splats->deformed.id();
             }
             if (ok) {
-                out.inverted = gpu->read_stats().inverted;
+                // The inverted count arrives a few frames later (collect_gpu_stats); until then `inverted`
+                // keeps the latest count that arrived.
+                auto& state = reg.resource<FfdGpuState>();
+                const std::uint64_t tag = state.next_tag++;
+                gpu->queue_stats(tag);
+                state.pending[tag] = {e, out.version};
                 splats->has_deformed = true;
                 ++splats->deformed_version;
                 out.gpu_valid = true;
                 out.cpu_valid = false;
                 out.positions.clear(), out.normals.clear(), out.axis_u.clear(), out.axis_v.clear();
-                if (settings) ++settings->gpu_runs;
+                if (settings) ++settings->gpu_runs, settings->gpu_sync_readbacks = gpu->sync_readbacks();
                 continue;
             }
         }
 
-        // CPU path: first deformer reads the authored cloud, the next ones work in place.
-        out.positions = cloud.positions;
-        out.normals = cloud.normals;
-        out.axis_u = cloud.axis_u;
-        out.axis_v = cloud.axis_v;
-        auto ptr = [n](std::vector<glm::vec3>& v) { return v.size() == n ? v.data() : nullptr; };
-        for (ecs::Entity le : lattices) {
-            const ffd::PointsIn in{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v), n, cloud.origin};
-            const ffd::PointsOut o{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v)};
-            auto stats = ffd::deform(reg.get<Lattice>(le), in, o);
-            if (!stats) {
-                log::warn("ffd_system: ", stats.message(), " (lattice skipped)");
-                continue;
-            }
-            out.inverted += stats->inverted;
-        }
-        out.cpu_valid = true;
+        // CPU path: the one CPU deformation step (also what picking asks for).
+        ffd::deform_cloud(reg, cloud, lattices, out, "ffd_system");
+        out.inverted_version = out.version;
         out.gpu_valid = false;
         if (store)
             if (auto it = store->clouds.find(e); it != store->clouds.end()) it->second.has_deformed = false;  // render re-uploads
-        if (settings) ++settings->cpu_runs;
+        if (settings) ++settings->cpu_runs, ++settings->cpu_splat_passes;
     }
 }
 

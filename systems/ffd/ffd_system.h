@@ -7,6 +7,8 @@
 // previous one's output). GPU path when a GL context is current on this thread and GpuSplatStore holds
 // the cloud's up-to-date `rest` buffer (the render system uploads it); CPU otherwise (headless tools,
 // tests, or the first frame before the upload). Control points go to the GPU only when edited.
+// GPU mode does no per-splat CPU work per frame: bounds come from the lattices' control points and a rest
+// box cached per cloud change, and the inverted count is read back a few frames late through a fence.
 // On a software rasterizer (Mesa llvmpipe/softpipe) the GPU path runs on the same CPU cores through a
 // shader JIT and is 10-15x slower than the vectorised CPU path (measured: 124 ms vs 8 ms for the
 // paper's 59,650 splats in an 11^3 Bernstein lattice), so there the CPU path is chosen and the render
@@ -27,6 +29,11 @@ struct FfdSettings {
     bool force_gpu = false;        // use the GPU path even on a software rasterizer (llvmpipe)
     std::uint64_t cpu_runs = 0;    // clouds deformed on the CPU so far
     std::uint64_t gpu_runs = 0;    // clouds deformed on the GPU so far
+    // GPU-resident frame, checked by tests: passes of the system over a cloud's splats on the CPU (the
+    // rest box when a cloud changes, each CPU deformation) and synchronous GPU read-backs by its deformer.
+    // In GPU mode both stay flat while only lattices change.
+    std::uint64_t cpu_splat_passes = 0;
+    std::uint64_t gpu_sync_readbacks = 0;
 };
 
 void ffd_system(ecs::Registry& registry, const FrameContext& frame);

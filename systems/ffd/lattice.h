@@ -14,20 +14,16 @@
 
 namespace sffd::ffd {
 
-// Largest supported division count per axis (the issue asks for at least 32).
-inline constexpr int kMaxDivisions = 64;
+// Largest supported division count per axis (the issue asks for at least 32): the runtime's constant.
+inline constexpr int kMaxDivisions = kMaxLatticeDivisions;
 // Local coordinates within [-kInsideSlack, 1 + kInsideSlack] count as inside (and are clamped to [0,1]):
 // points exactly on a face, edge or corner deform even when float rounding puts them a hair outside.
 // Every path (reference, fast, sparse, GPU) uses the same slack so they agree at the boundary.
 inline constexpr double kInsideSlack = 1e-6;
 
-// P0[i][j][k] = X0 + (i/l) S + (j/m) T + (k/n) U, flat index (i*(m+1)+j)*(n+1)+k.
-std::vector<glm::dvec3> rest_grid(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes,
-                                  const glm::ivec3& divisions);
-
-// A lattice at rest (rest == current == rest_grid).
-Lattice make_lattice(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes,
-                     const glm::ivec3& divisions, LatticeBasis basis = LatticeBasis::bernstein);
+// The rest grid and a lattice at rest: defined once, with the components (runtime/scene/lattice.h).
+using sffd::make_lattice;
+using sffd::rest_grid;
 
 // Checks divisions (1..kMaxDivisions), finite origin/axes/control points, control-point counts and a
 // non-degenerate box (|det[S T U]| relative to |S||T||U| above 1e-9). Messages start with `what`

@@ -1,9 +1,8 @@
 #include "systems/picking/splat_source.h"
 
-#include "runtime/core/log.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
-#include "systems/ffd/deform.h"
+#include "systems/ffd/deform_cloud.h"
 
 namespace sffd::picking {
 namespace {
@@ -26,26 +25,6 @@ std::uint64_t deform_key(const ecs::Registry& registry, ecs::Entity cloud, const
         h = mix(h, registry.valid(l) ? registry.version<Lattice>(l) : 0);
     }
     return h;
-}
-
-void deform_on_cpu(const ecs::Registry& registry, const SplatCloud& cloud, const Deformers& deformers,
-                   DeformCache::Entry& out) {
-    const std::size_t n = cloud.size();
-    out.positions = cloud.positions;
-    out.normals = cloud.normals.size() == n ? cloud.normals : std::vector<glm::vec3>{};
-    const bool axes = cloud.axis_u.size() == n && cloud.axis_v.size() == n;
-    out.axis_u = axes ? cloud.axis_u : std::vector<glm::vec3>{};
-    out.axis_v = axes ? cloud.axis_v : std::vector<glm::vec3>{};
-    auto ptr = [](std::vector<glm::vec3>& v) { return v.empty() ? nullptr : v.data(); };
-    for (const ecs::Entity l : deformers.lattices) {
-        const Lattice* lattice = registry.valid(l) ? registry.try_get<Lattice>(l) : nullptr;
-        if (!lattice) continue;
-        // In place: each lattice deforms the previous one's output (allowed by ffd::deform).
-        const ffd::PointsIn in{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v), n, cloud.origin};
-        const ffd::PointsOut o{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v)};
-        const auto stats = ffd::deform(*lattice, in, o);
-        if (!stats) log::warn("picking: ", stats.message(), " (picking this cloud undeformed by that lattice)");
-    }
 }
 
 }  // namespace
@@ -74,16 +53,17 @@ SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud_entity
     if (deformers && !deformers->lattices.empty()) {
         DeformCache::Entry& entry = cache.clouds[cloud_entity.bits()];
         const std::uint64_t key = deform_key(registry, cloud_entity, *deformers);
-        if (entry.key != key || entry.positions.size() != n) {
-            deform_on_cpu(registry, *cloud, *deformers, entry);
+        if (entry.key != key || entry.deformed.positions.size() != n) {
+            ffd::deform_cloud(registry, *cloud, deformers->lattices, entry.deformed, "picking");
             entry.key = key;
             ++cache.deformations;
         }
         src.kind = SplatSource::Kind::cpu_deformed;
         src.version = key;
-        src.positions = entry.positions;
-        src.normals = if_sized(entry.normals, n);
-        if (entry.axis_u.size() == n && entry.axis_v.size() == n) src.axis_u = entry.axis_u, src.axis_v = entry.axis_v;
+        const DeformedSplats& d = entry.deformed;
+        src.positions = d.positions;
+        src.normals = if_sized(d.normals, n);
+        if (d.axis_u.size() == n && d.axis_v.size() == n) src.axis_u = d.axis_u, src.axis_v = d.axis_v;
         return src;
     }
 

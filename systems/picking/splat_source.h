@@ -1,8 +1,8 @@
 // Which splats picking sees for a point-cloud entity, in this order:
 //   1. the deformer's CPU output (DeformedSplats with cpu_valid, written by systems/ffd);
-//   2. a cloud with Deformers whose output lives only on the GPU: picking deforms the authored splats on
-//      the CPU itself (ffd::deform through each lattice in order) into `DeformCache`, keyed by the change
-//      stamps of the cloud, its Deformers and every lattice — recomputed only when a pick needs it;
+//   2. a cloud with Deformers whose output lives only on the GPU: picking asks the FFD system for its CPU
+//      output (ffd::deform_cloud, the step ffd_system's CPU path runs) into `DeformCache`, keyed by the
+//      change stamps of the cloud, its Deformers and every lattice — recomputed only when a pick needs it;
 //   3. the authored SplatCloud.
 // The spans point into the components or the cache; valid until either changes.
 #pragma once
@@ -15,6 +15,7 @@
 #include <glm/glm.hpp>
 
 #include "runtime/ecs/registry.h"
+#include "systems/ffd/components.h"
 
 namespace sffd::picking {
 
@@ -26,11 +27,11 @@ struct SplatSource {
     std::span<const glm::vec3> positions, normals, axis_u, axis_v;
 };
 
-// Picking's own CPU deformation results, per cloud (entity bits).
+// CPU deformation results picking asked for, per cloud (entity bits).
 struct DeformCache {
     struct Entry {
         std::uint64_t key = 0;
-        std::vector<glm::vec3> positions, normals, axis_u, axis_v;
+        DeformedSplats deformed;  // ffd::deform_cloud's output (only the CPU arrays and origin are used)
     };
     std::unordered_map<std::uint64_t, Entry> clouds;
     std::uint64_t deformations = 0;  // CPU deformations run (tests check it stays lazy)

@@ -47,18 +47,8 @@ Lattice paper_lattice(const SplatCloud& cloud, int divisions) {
     lo -= 0.02 * extent;
     extent *= 1.04;
 
-    Lattice l;
-    l.origin = lo;
-    l.axes = {glm::dvec3(extent.x, 0, 0), glm::dvec3(0, extent.y, 0), glm::dvec3(0, 0, extent.z)};
-    l.divisions = glm::ivec3(divisions);
-    l.basis = LatticeBasis::bernstein;
-    l.rest.resize(l.size());
-    for (int i = 0; i <= divisions; ++i)
-        for (int j = 0; j <= divisions; ++j)
-            for (int k = 0; k <= divisions; ++k)
-                l.rest[l.index(i, j, k)] = l.origin + (double(i) / divisions) * l.axes[0] +
-                                           (double(j) / divisions) * l.axes[1] + (double(k) / divisions) * l.axes[2];
-    l.current = l.rest;
+    Lattice l = make_lattice(lo, {glm::dvec3(extent.x, 0, 0), glm::dvec3(0, extent.y, 0), glm::dvec3(0, 0, extent.z)},
+                             glm::ivec3(divisions), LatticeBasis::bernstein);
     return l;
 }
 

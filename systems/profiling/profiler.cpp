@@ -6,7 +6,7 @@
 
 #include "runtime/gfx/gl.h"
 #include "systems/profiling/overlay.h"
-#include "systems/profiling/pass_timer.h"
+#include "runtime/app/pass_timer.h"
 
 namespace sffd::profiling {
 

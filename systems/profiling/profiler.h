@@ -7,7 +7,7 @@
 //   auto report = profiling::build_report(profiler, config);
 //
 // CPU side: a steady_clock reading at each begin/end hook (two clock reads and one vector push per
-// scope: cheap enough to leave on in the editor). GPU side, per pass (systems/profiling/pass_timer.h):
+// scope: cheap enough to leave on in the editor). GPU side, per pass (runtime/app/pass_timer.h):
 //   - queries: a pair of GL_TIMESTAMP queries (glQueryCounter) per pass from a recycled pool, read back
 //     >= `query_latency` frames later only once GL_QUERY_RESULT_AVAILABLE says so: never stalls.
 //     Timestamps rather than GL_TIME_ELAPSED because passes nest ("hq" around "hq.visibility") and only

@@ -24,7 +24,7 @@
 #include "shaders/common/bindings.h"
 #include "shaders/splat_render/frame_block.h"
 #include "systems/ffd/components.h"
-#include "systems/profiling/pass_timer.h"
+#include "runtime/app/pass_timer.h"
 #include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/cpu_cull.h"
 #include "systems/splat_render/splat_pack.h"

@@ -50,7 +50,7 @@
 #if __has_include("systems/ffd/ffd_gpu.h") && __has_include("systems/splat_render/splat_pack.h")
 #include "runtime/core/log.h"
 #include "systems/ffd/ffd_gpu.h"
-#include "systems/profiling/pass_timer.h"
+#include "runtime/app/pass_timer.h"
 #include "systems/splat_render/splat_pack.h"
 #define SFFD_PROFILE_HAS_FFD_GPU 1
 #endif

@@ -116,6 +116,85 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     reg.erase_resource<gfx::GpuSplatStore>();
 }
 
+// GPU-resident deformation phase: after the first frame (which computes the cloud's rest box), lattice
+// edits cost the CPU nothing per splat and nothing waits for the GPU; the inverted count arrives a few
+// frames later through a fence and equals the CPU path's. Bounds equal the CPU path's and cover the
+// GPU's output.
+TEST_F(FfdGl, GpuPathTouchesNoPerSplatCpuArrayAfterTheFirstFrame) {
+    ecs::Registry reg;
+    const ffd::test::Cloud c = ffd::test::fibonacci_sphere(4000);
+    const ecs::Entity cloud = reg.create();
+    SplatCloud sc;
+    sc.positions = c.p, sc.normals = c.n, sc.axis_u = c.u, sc.axis_v = c.v;
+    reg.emplace<SplatCloud>(cloud, sc);
+    const ecs::Entity le = reg.create();
+    // Covers the upper part of the sphere only: outside points pass through (bounds need the rest box).
+    reg.emplace<Lattice>(le, ffd::make_lattice({-1.1, -0.2, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 1.4, 0), glm::dvec3(0, 0, 2.2)}, {4, 4, 4}));
+    reg.emplace<Deformers>(cloud, Deformers{{le}});
+    auto& settings = reg.set_resource<FfdSettings>();
+    settings.force_gpu = true;
+    auto& store = reg.set_resource<gfx::GpuSplatStore>();
+    {
+        gfx::GpuSplats& s = store.clouds[cloud];
+        std::vector<gpu::GpuSplat> packed(c.size());
+        for (std::size_t i = 0; i < c.size(); ++i)
+            packed[i] = {{c.p[i].x, c.p[i].y, c.p[i].z, 0}, {c.n[i].x, c.n[i].y, c.n[i].z, 1}, {c.u[i].x, c.u[i].y, c.u[i].z, 0},
+                         {c.v[i].x, c.v[i].y, c.v[i].z, 0}};
+        s.rest = gfx::Buffer::create("test.rest");
+        glNamedBufferData(s.rest.id(), GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data(), GL_STATIC_DRAW);
+        s.count = std::uint32_t(c.size());
+        s.rest_version = reg.version<SplatCloud>(cloud);
+    }
+    ffd_system(reg, {});
+    ASSERT_EQ(settings.gpu_runs, 1u);
+    EXPECT_EQ(settings.cpu_splat_passes, 1u);  // the rest box, once
+    for (int frame = 0; frame < 6; ++frame) {
+        Lattice& l = reg.patch<Lattice>(le);
+        ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.2, glm::dvec3(0.0));
+        ffd_system(reg, {});
+    }
+    EXPECT_EQ(settings.gpu_runs, 7u);
+    EXPECT_EQ(settings.cpu_splat_passes, 1u);
+    EXPECT_EQ(settings.gpu_sync_readbacks, 0u);
+    // A mirror in x on top: the splats inside invert. Their count arrives once the GPU is done.
+    {
+        Lattice& l = reg.patch<Lattice>(le);
+        for (std::size_t i = 0; i < l.size(); ++i) l.current[i].x = -l.current[i].x;
+    }
+    ffd_system(reg, {});
+    const DeformedSplats& d = reg.get<DeformedSplats>(cloud);
+    const std::uint64_t version = d.version;
+    glFinish();                // the test waits, the system never does
+    ffd_system(reg, {});       // nothing changed: no dispatch, but the statistics are collected
+    EXPECT_EQ(settings.gpu_runs, 8u);
+    EXPECT_EQ(d.version, version);
+    EXPECT_EQ(d.inverted_version, version);
+    EXPECT_EQ(settings.gpu_sync_readbacks, 0u);
+    EXPECT_EQ(settings.cpu_splat_passes, 1u);
+    // Against the CPU path: same inverted count, same bounds, and the GPU output lies inside them.
+    std::vector<gpu::GpuSplat> back(c.size());
+    glGetNamedBufferSubData(store.clouds[cloud].deformed.id(), 0, GLsizeiptr(back.size() * sizeof(gpu::GpuSplat)), back.data());
+    const std::size_t gpu_inverted = d.inverted;
+    const glm::dvec3 gpu_lo = d.bounds_min, gpu_hi = d.bounds_max;
+    settings.force_cpu = true;
+    ffd_system(reg, {});
+    EXPECT_EQ(settings.cpu_runs, 1u);
+    const DeformedSplats& cpu = reg.get<DeformedSplats>(cloud);
+    EXPECT_GT(cpu.inverted, 100u);
+    EXPECT_EQ(gpu_inverted, cpu.inverted);
+    EXPECT_EQ(gpu_lo, cpu.bounds_min);
+    EXPECT_EQ(gpu_hi, cpu.bounds_max);
+    std::size_t moved = 0;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        const glm::dvec3 p(back[i].center[0], back[i].center[1], back[i].center[2]);
+        moved += glm::length(p - glm::dvec3(c.p[i])) > 1e-3;
+        ASSERT_TRUE(glm::all(glm::greaterThanEqual(p, gpu_lo)) && glm::all(glm::lessThanEqual(p, gpu_hi))) << i;
+    }
+    EXPECT_GT(moved, 1000u);
+    ffd_release_gpu(reg);
+    reg.erase_resource<gfx::GpuSplatStore>();
+}
+
 TEST_F(FfdGl, SoftwareRasterizerGetsTheCpuPathUnlessTheGpuIsForced) {
     const std::string renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
     if (renderer.find("llvmpipe") == std::string::npos && renderer.find("softpipe") == std::string::npos)

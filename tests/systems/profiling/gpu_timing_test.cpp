@@ -6,7 +6,7 @@
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/gl_object.h"
-#include "systems/profiling/pass_timer.h"
+#include "runtime/app/pass_timer.h"
 #include "systems/profiling/profiler.h"
 #include "systems/profiling/report.h"
 

@@ -77,7 +77,7 @@ TEST_F(ProfileCommand, WritesSchemaValidJsonAndAParsableTrace) {
     double systems = 0.0;
     for (const auto& s : report["systems"]) systems += s["cpu_ms"]["mean"].get<double>();
     EXPECT_LE(systems, report["frame"]["cpu_ms"]["mean"].get<double>());
-    // The engine's own render passes are named for the profiler (systems/profiling/pass_timer.h).
+    // The engine's own render passes are named for the profiler (runtime/app/pass_timer.h).
     std::vector<std::string> passes;
     for (const auto& p : report["passes"]) passes.push_back(p["name"].get<std::string>());
     for (const char* name : {"render.cull", "render.hq.visibility", "render.hq.attribute", "render.hq.shade"})

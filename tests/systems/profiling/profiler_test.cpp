@@ -12,7 +12,7 @@
 #include "runtime/app/frame_loop.h"
 #include "systems/profiling/json_schema.h"
 #include "systems/profiling/overlay.h"
-#include "systems/profiling/pass_timer.h"
+#include "runtime/app/pass_timer.h"
 #include "systems/profiling/profiler.h"
 #include "systems/profiling/report.h"
 

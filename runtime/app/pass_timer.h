@@ -1,8 +1,10 @@
-// Naming GPU passes for the profiler, without depending on it.
+// Naming GPU passes for the profiler, without depending on it. Lives beside FrameObserver
+// (frame_loop.h): both are hooks the runtime offers so that the profiling harness (systems/profiling)
+// can time the frame from outside; systems include this header, never the profiler's.
 //
 // Systems that issue GL work (FFD compute, splat render passes) wrap each pass in a scope:
 //
-//   #include "systems/profiling/pass_timer.h"
+//   #include "runtime/app/pass_timer.h"
 //   {
 //       auto scope = profiling::gpu_scope(registry, "hq.visibility");
 //       glDrawArrays(...);

@@ -1,0 +1,24 @@
+// deform_cloud(): the CPU deformation step of a point cloud through its lattices, in order. The one CPU
+// chain: ffd_system's CPU path runs it, and picking asks for it when the deformer's output lives only on
+// the GPU (systems/picking/splat_source.cpp). The GPU chain is ffd_system's compute path (ffd_gpu.h).
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include "runtime/ecs/registry.h"
+#include "runtime/scene/components.h"
+#include "systems/ffd/components.h"
+
+namespace sffd::ffd {
+
+// Writes out.positions/normals/axis_u/axis_v (the authored arrays deformed by each lattice in `lattices`,
+// in order: the first reads the authored cloud, the next ones work in place), out.origin and
+// out.inverted; sets cpu_valid. Entities without a valid Lattice are skipped; a lattice that fails
+// validation is skipped with a warning "`who`: problem (lattice skipped)". Normals and splat axes are
+// deformed when they have the cloud's size (else copied as authored). Bounds, versions and the
+// change-detection stamps are the caller's.
+void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud, const std::vector<ecs::Entity>& lattices,
+                  DeformedSplats& out, const char* who = "ffd");
+
+}  // namespace sffd::ffd
