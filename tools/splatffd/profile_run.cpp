@@ -1,0 +1,217 @@
+// `splatffd profile`: one profiled run (scene, context, schedule, what changes every frame), and the helpers
+// the sweep and paper files share.
+#include "tools/splatffd/profile_run.h"
+
+#include <time.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "runtime/app/clock.h"
+#include "runtime/assets/scene.h"
+#include "runtime/core/atomic_file.h"
+#include "runtime/gfx/gl.h"
+#include "runtime/gfx/splat_store.h"
+#include "systems/ffd/components.h"
+#include "systems/ffd/ffd_system.h"
+#include "systems/profiling/synthetic.h"
+#include "systems/splat_render/splat_pack.h"
+#include "systems/splat_render/splat_render.h"
+#include "tools/splatffd/engine.h"
+
+namespace sffd::profile_cmd {
+
+using namespace profiling;
+
+bool parse_int(const std::string& s, int& out) {
+    char* end = nullptr;
+    const long v = std::strtol(s.c_str(), &end, 10);
+    if (end == s.c_str() || *end != '\0' || v < 0 || v > 10'000'000) return false;
+    out = static_cast<int>(v);
+    return true;
+}
+
+bool parse_count(std::string s, double& out) {
+    double mult = 1.0;
+    if (!s.empty() && (s.back() == 'k' || s.back() == 'K')) mult = 1e3, s.pop_back();
+    else if (!s.empty() && (s.back() == 'm' || s.back() == 'M')) mult = 1e6, s.pop_back();
+    char* end = nullptr;
+    const double v = std::strtod(s.c_str(), &end);
+    if (s.empty() || *end != '\0' || !(v > 0)) return false;
+    out = v * mult;
+    return true;
+}
+
+const PaperCase* find_case(const std::string& name) {
+    for (const auto& c : paper_cases)
+        if (name == c.name) return &c;
+    return nullptr;
+}
+
+Status write_text(const std::string& path, const std::string& text) { return write_file_atomic(path, text); }
+
+std::optional<std::string> read_text(const std::string& path) {
+    std::ifstream f(path, std::ios::binary);
+    if (!f) return std::nullopt;
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+double median(std::vector<double> v) { return compute_stats(std::move(v)).p50; }
+
+// On a loaded machine (other jobs competing for the cores) the wall time of a single-threaded loop
+// overstates its cost; its thread CPU time does not.
+double thread_cpu_ms() {
+    timespec ts{};
+    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+    return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
+Status load(ecs::Registry& registry, const std::string& scene, bool* synthetic) {
+    *synthetic = false;
+    if (scene.rfind("synthetic:", 0) != 0) return load_scene(registry, scene);
+    double count = 0.0;
+    if (!parse_count(scene.substr(10), count)) return make_error(scene + ": bad synthetic point count");
+    *synthetic = true;
+    const ecs::Entity cloud = registry.create();
+    registry.emplace<Name>(cloud, Name{"synthetic sphere"});
+    const SplatCloud& c = registry.emplace<SplatCloud>(cloud, synthetic_sphere(static_cast<std::size_t>(count)));
+    const ecs::Entity lattice = registry.create();
+    registry.emplace<Lattice>(lattice, paper_lattice(c, 10));
+    registry.emplace<Deformers>(cloud, Deformers{{lattice}});
+    return {};
+}
+
+void upload_rest_splats(ecs::Registry& registry) {
+    auto* store = registry.try_resource<gfx::GpuSplatStore>();
+    if (!store) store = &registry.set_resource<gfx::GpuSplatStore>();
+    for (auto [e, cloud] : registry.view<const SplatCloud>()) {
+        gfx::GpuSplats& s = store->clouds[e];
+        const std::vector<gpu::GpuSplat> packed = render::pack_splats(cloud);
+        s.rest = gfx::Buffer::create("splats.rest");
+        glNamedBufferData(s.rest.id(), GLsizeiptr(std::max<std::size_t>(packed.size(), 1) * sizeof(gpu::GpuSplat)),
+                          packed.empty() ? nullptr : packed.data(), GL_STATIC_DRAW);
+        s.count = static_cast<std::uint32_t>(packed.size());
+        s.rest_version = registry.version<SplatCloud>(e);
+    }
+}
+
+namespace {
+
+// Harness system (animation phase): every lattice follows a paper case whose strength oscillates with
+// the frame time, so every frame is a fresh deformation (the FFD system skips unchanged lattices).
+SystemFn drive_system(PaperCase c) {
+    return [c](ecs::Registry& registry, const FrameContext& frame) {
+        const double amount = 0.5 + 0.5 * std::sin(2.0 * M_PI * frame.time / 2.0 + 0.3);
+        std::vector<ecs::Entity> lattices;
+        for (auto [e, l] : registry.view<const Lattice>()) {
+            (void)l;
+            lattices.push_back(e);
+        }
+        for (ecs::Entity e : lattices) apply_paper_case(registry.patch<Lattice>(e), c, amount);
+    };
+}
+
+}  // namespace
+
+Result<RunOutput> run_profile(const RunSetup& s) {
+    RunOutput out;
+    const bool want_render = !s.deformation_only;
+    const bool need_gl = s.backend == "gpu" || want_render;
+    bool have_gl = false;
+    if (need_gl) {
+        auto ctx = gfx::create_context({.headless = true, .width = 1280, .height = 720, .debug = false});
+        if (!ctx) {
+            if (s.backend == "gpu") return make_error("profile: --backend gpu needs a GL context: " + ctx.message());
+        } else {
+            out.context = std::move(ctx.value());
+            have_gl = true;
+        }
+    }
+    // Declared after `out`, so it dies first: GL objects in its resources need the context.
+    auto registry_owner = std::make_unique<ecs::Registry>();
+    ecs::Registry& registry = *registry_owner;
+    bool synthetic = false;
+    if (Status st = load(registry, s.scene, &synthetic); !st) return st.error();
+    for (auto [e, c] : registry.view<const SplatCloud>()) {
+        (void)e;
+        out.points += c.size();
+    }
+    if (s.lattice_points > 0 || !s.basis.empty()) {
+        std::vector<ecs::Entity> ls;
+        for (auto [e, l] : registry.view<const Lattice>()) {
+            (void)l;
+            ls.push_back(e);
+        }
+        for (ecs::Entity e : ls) {
+            Lattice& l = registry.patch<Lattice>(e);
+            if (s.lattice_points > 0) l = make_lattice(l.origin, l.axes, glm::ivec3(s.lattice_points - 1), l.basis);
+            if (s.basis == "bspline") l.basis = LatticeBasis::bspline;
+            if (s.basis == "bernstein") l.basis = LatticeBasis::bernstein;
+        }
+    }
+
+    // The engine's frame; sweeps run its deformation phase alone (ffd_system, the same system).
+    Schedule schedule;
+    std::string schedule_kind = "engine";
+    if (!s.deformation_only) {
+        schedule = make_engine_schedule({.present = false});
+    } else {
+        schedule.add(Phase::deformation, "ffd", ffd_system);
+        schedule_kind = "deformation";
+        if (have_gl) upload_rest_splats(registry);  // the render system's upload, which this schedule lacks
+    }
+    if (s.drive != "none") {
+        const PaperCase* c = find_case(s.drive);
+        if (!c) return make_error("profile: unknown --drive case '" + s.drive + "'");
+        schedule.add(Phase::animation, "profile.drive", drive_system(*c));
+    }
+    if (have_gl && want_render) {
+        auto& rs = registry.set_resource<render::RenderSettings>();
+        rs.quality = s.quality == "preview" ? render::Quality::preview : render::Quality::hq;
+    }
+    // The FFD system picks its CPU path on a software rasterizer; --backend forces either path.
+    registry.set_resource<FfdSettings>(FfdSettings{.force_cpu = s.backend == "cpu", .force_gpu = s.backend == "gpu"});
+
+    GpuTiming timing = GpuTiming::none;
+    if (have_gl) timing = s.sync ? GpuTiming::sync : GpuTiming::queries;
+    out.profiler = std::make_unique<Profiler>(ProfilerSettings{.gpu = timing});
+    out.profiler->attach(schedule, registry);
+    Clock clock({.fixed_dt = 1.0 / 60.0});
+    for (int i = 0; i < s.warmup; ++i) schedule.run_frame(registry, clock.tick());
+    out.profiler->clear();
+    for (int i = 0; i < s.frames; ++i) schedule.run_frame(registry, clock.tick());
+    out.profiler->resolve_all();
+    out.profiler->detach(schedule, registry);
+
+    Config config{{"scene", s.scene},
+                  {"synthetic_scene", synthetic},
+                  {"points", static_cast<double>(out.points)},
+                  {"frames", static_cast<double>(s.frames)},
+                  {"warmup", static_cast<double>(s.warmup)},
+                  {"quality", s.quality},
+                  {"backend", s.backend},
+                  {"drive", s.drive},
+                  {"schedule", schedule_kind},
+                  {"clock", std::string("fixed 1/60 s")}};
+    // Which path the FFD system really took (it falls back to the CPU e.g. before the render upload).
+    if (const auto* fs = registry.try_resource<FfdSettings>()) {
+        config.emplace_back("ffd_cpu_runs", static_cast<double>(fs->cpu_runs));
+        config.emplace_back("ffd_gpu_runs", static_cast<double>(fs->gpu_runs));
+    }
+    if (s.lattice_points > 0) config.emplace_back("lattice", static_cast<double>(s.lattice_points));
+    if (!s.basis.empty()) config.emplace_back("basis", s.basis);
+    out.report = build_report(*out.profiler, std::move(config), machine_info(have_gl));
+    if (have_gl) {
+        render::release_render_state(registry);
+        ffd_release_gpu(registry);
+        registry.erase_resource<gfx::GpuSplatStore>();
+    }
+    registry_owner.reset();
+    return out;
+}
+
+}  // namespace sffd::profile_cmd
