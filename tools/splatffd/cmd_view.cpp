@@ -5,7 +5,6 @@
 
 #include "tools/splatffd/command.h"
 
-#if SFFD_EDITOR_HAS_VIEW
 #include "systems/editor/view_app.h"
 #include "tools/splatffd/engine.h"
 
@@ -115,4 +114,3 @@ int run_view_command(sffd::cli::Args args) {
 }  // namespace
 
 SFFD_COMMAND(view, "open the interactive editor on a scene", run_view_command);
-#endif
