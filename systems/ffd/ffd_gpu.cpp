@@ -144,8 +144,9 @@ DeformStats GpuDeformer::read_stats() {
 }
 
 void GpuDeformer::reset_stats() {
-    const std::uint32_t zero[2] = {0, 0};
-    glNamedBufferSubData(m_impl->stats.id(), 0, sizeof zero, zero);
+    // A clear in the command stream (null data = zeros): no CPU upload into a buffer that the previous
+    // frame's dispatch may still be using, so no implicit wait.
+    glClearNamedBufferData(m_impl->stats.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
 }
 
 void GpuDeformer::queue_stats(std::uint64_t tag) {
