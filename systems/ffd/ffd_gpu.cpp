@@ -149,7 +149,7 @@ void GpuDeformer::reset_stats() {
     glClearNamedBufferData(m_impl->stats.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
 }
 
-void GpuDeformer::queue_stats(std::uint64_t tag) {
+bool GpuDeformer::queue_stats(std::uint64_t tag) {
     Impl& m = *m_impl;
     auto slot = std::find_if(m.readbacks.begin(), m.readbacks.end(), [](const Impl::Readback& r) { return !r.fence; });
     if (slot == m.readbacks.end()) {
@@ -158,13 +158,14 @@ void GpuDeformer::queue_stats(std::uint64_t tag) {
         const GLbitfield flags = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
         glNamedBufferStorage(r.buffer.id(), 2 * sizeof(std::uint32_t), nullptr, flags);
         r.mapped = static_cast<const std::uint32_t*>(glMapNamedBufferRange(r.buffer.id(), 0, 2 * sizeof(std::uint32_t), flags));
-        if (!r.mapped) return;  // the GL error callback has reported why; these statistics are lost
+        if (!r.mapped) return false;  // the GL error callback has reported why; these statistics are lost
         m.readbacks.push_back(std::move(r));
         slot = m.readbacks.end() - 1;
     }
     glCopyNamedBufferSubData(m.stats.id(), slot->buffer.id(), 0, 0, 2 * sizeof(std::uint32_t));
     slot->fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
     slot->tag = tag;
+    return slot->fence != nullptr;
 }
 
 std::vector<GpuDeformer::TaggedStats> GpuDeformer::poll_stats() {

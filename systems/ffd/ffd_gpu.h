@@ -52,7 +52,7 @@ public:
         std::uint64_t tag = 0;
         DeformStats stats;
     };
-    void queue_stats(std::uint64_t tag);
+    bool queue_stats(std::uint64_t tag);  // false: no read-back slot (mapping failed, reported by GL)
     std::vector<TaggedStats> poll_stats();
     std::size_t pending_stats() const;
     // Synchronous read-backs so far (read_stats(), deform()): ffd_system's frame path must cause none.

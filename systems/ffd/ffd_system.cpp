@@ -1,13 +1,14 @@
 #include "systems/ffd/ffd_system.h"
 
 #include <optional>
-#include <unordered_map>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 #include <EGL/egl.h>
 #include <GLFW/glfw3.h>
 
+#include "runtime/app/pass_timer.h"
 #include "runtime/core/log.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
@@ -18,7 +19,6 @@
 #include "systems/ffd/deform_cloud.h"
 #include "systems/ffd/ffd_gpu.h"
 #include "systems/ffd/lattice.h"
-#include "runtime/app/pass_timer.h"
 
 namespace sffd {
 
@@ -167,8 +167,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
                 // keeps the latest count that arrived.
                 auto& state = reg.resource<FfdGpuState>();
                 const std::uint64_t tag = state.next_tag++;
-                gpu->queue_stats(tag);
-                state.pending[tag] = {e, out.version};
+                if (gpu->queue_stats(tag)) state.pending[tag] = {e, out.version};
                 splats->has_deformed = true;
                 ++splats->deformed_version;
                 out.gpu_valid = true;

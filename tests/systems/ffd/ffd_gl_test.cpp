@@ -32,6 +32,21 @@ protected:
     std::optional<gfx::GlContext> ctx;
 };
 
+// What the render system does: upload the authored splats as the cloud's `rest` buffer.
+gfx::GpuSplatStore& upload_rest(ecs::Registry& reg, ecs::Entity cloud, const ffd::test::Cloud& c) {
+    auto& store = reg.set_resource<gfx::GpuSplatStore>();
+    gfx::GpuSplats& s = store.clouds[cloud];
+    std::vector<gpu::GpuSplat> packed(c.size());
+    for (std::size_t i = 0; i < c.size(); ++i)
+        packed[i] = {{c.p[i].x, c.p[i].y, c.p[i].z, 0}, {c.n[i].x, c.n[i].y, c.n[i].z, 1}, {c.u[i].x, c.u[i].y, c.u[i].z, 0},
+                     {c.v[i].x, c.v[i].y, c.v[i].z, 0}};
+    s.rest = gfx::Buffer::create("test.rest");
+    glNamedBufferData(s.rest.id(), GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data(), GL_STATIC_DRAW);
+    s.count = std::uint32_t(c.size());
+    s.rest_version = reg.version<SplatCloud>(cloud);
+    return store;
+}
+
 TEST_F(FfdGl, ComputePassMatchesCpuReference) {
     auto gpu = ffd::GpuDeformer::create();
     ASSERT_TRUE(gpu.ok()) << gpu.message();
@@ -71,19 +86,7 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     reg.emplace<Deformers>(cloud, Deformers{{le}});
     auto& settings = reg.set_resource<FfdSettings>();
     settings.force_gpu = true;  // llvmpipe would otherwise pick the (faster) CPU path
-    auto& store = reg.set_resource<gfx::GpuSplatStore>();
-    {
-        // What the render system does: upload the authored splats as `rest`.
-        gfx::GpuSplats& s = store.clouds[cloud];
-        std::vector<gpu::GpuSplat> packed(c.size());
-        for (std::size_t i = 0; i < c.size(); ++i)
-            packed[i] = {{c.p[i].x, c.p[i].y, c.p[i].z, 0}, {c.n[i].x, c.n[i].y, c.n[i].z, 1}, {c.u[i].x, c.u[i].y, c.u[i].z, 0},
-                         {c.v[i].x, c.v[i].y, c.v[i].z, 0}};
-        s.rest = gfx::Buffer::create("test.rest");
-        glNamedBufferData(s.rest.id(), GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data(), GL_STATIC_DRAW);
-        s.count = std::uint32_t(c.size());
-        s.rest_version = reg.version<SplatCloud>(cloud);
-    }
+    auto& store = upload_rest(reg, cloud, c);
     ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.8, glm::dvec3(0.0));
     ffd_system(reg, {});
     EXPECT_EQ(settings.gpu_runs, 1u);
@@ -133,18 +136,7 @@ TEST_F(FfdGl, GpuPathTouchesNoPerSplatCpuArrayAfterTheFirstFrame) {
     reg.emplace<Deformers>(cloud, Deformers{{le}});
     auto& settings = reg.set_resource<FfdSettings>();
     settings.force_gpu = true;
-    auto& store = reg.set_resource<gfx::GpuSplatStore>();
-    {
-        gfx::GpuSplats& s = store.clouds[cloud];
-        std::vector<gpu::GpuSplat> packed(c.size());
-        for (std::size_t i = 0; i < c.size(); ++i)
-            packed[i] = {{c.p[i].x, c.p[i].y, c.p[i].z, 0}, {c.n[i].x, c.n[i].y, c.n[i].z, 1}, {c.u[i].x, c.u[i].y, c.u[i].z, 0},
-                         {c.v[i].x, c.v[i].y, c.v[i].z, 0}};
-        s.rest = gfx::Buffer::create("test.rest");
-        glNamedBufferData(s.rest.id(), GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data(), GL_STATIC_DRAW);
-        s.count = std::uint32_t(c.size());
-        s.rest_version = reg.version<SplatCloud>(cloud);
-    }
+    auto& store = upload_rest(reg, cloud, c);
     ffd_system(reg, {});
     ASSERT_EQ(settings.gpu_runs, 1u);
     EXPECT_EQ(settings.cpu_splat_passes, 1u);  // the rest box, once
