@@ -5,7 +5,6 @@
 
 #include "tools/splatffd/command.h"
 
-#if SFFD_EDITOR_HAS_VIEW
 #include "systems/editor/view_app.h"
 #include "tools/splatffd/engine.h"
 
@@ -109,10 +108,9 @@ int run_view_command(sffd::cli::Args args) {
             return 2;
         }
     }
-    return sffd::editor::run_view(o, sffd::make_engine_schedule({.present = false}));
+    return sffd::editor::run_view(o, sffd::make_engine_schedule({.present = true, .editor = true}));
 }
 
 }  // namespace
 
 SFFD_COMMAND(view, "open the interactive editor on a scene", run_view_command);
-#endif
