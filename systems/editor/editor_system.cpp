@@ -50,7 +50,7 @@ picking::ScreenView screen_view(const Camera& camera, const Viewport& vp) {
 }
 
 glm::dmat4 lattice_model(const ecs::Registry& registry, ecs::Entity lattice) {
-    return picking::model_matrix(registry.try_get<Transform>(lattice));
+    return model_matrix(registry.try_get<Transform>(lattice));
 }
 
 const Lattice* active_lattice(const ecs::Registry& registry, const EditorState& state) {
@@ -391,7 +391,7 @@ bool scene_bounds(const ecs::Registry& registry, glm::dvec3& lo, glm::dvec3& hi)
     lo = glm::dvec3(std::numeric_limits<double>::max());
     hi = -lo;
     registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
-        const glm::dmat4 model = picking::model_matrix(registry.try_get<Transform>(e));
+        const glm::dmat4 model = model_matrix(registry.try_get<Transform>(e));
         glm::dvec3 a(std::numeric_limits<double>::max()), b(-std::numeric_limits<double>::max());
         for (const glm::vec3& p : cloud.positions) {
             const glm::dvec3 w = glm::dvec3(model * glm::dvec4(cloud.origin + glm::dvec3(p), 1.0));

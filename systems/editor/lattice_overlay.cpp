@@ -30,7 +30,7 @@ OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const Edito
     OverlayGeometry g;
     const Lattice* lattice = registry.try_get<Lattice>(entity);
     if (!lattice || lattice->current.size() != lattice->size()) return g;
-    const glm::dmat4 model = picking::model_matrix(registry.try_get<Transform>(entity));
+    const glm::dmat4 model = model_matrix(registry.try_get<Transform>(entity));
     g.anchor = glm::dvec3(model * glm::dvec4(lattice->origin, 1.0));
     std::vector<glm::vec3> p(lattice->current.size());
     for (std::size_t c = 0; c < p.size(); ++c)

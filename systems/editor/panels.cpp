@@ -446,7 +446,7 @@ void gizmo(ecs::Registry& registry, EditorState& state) {
         if (state.pivot_mode == PivotMode::picked_point && state.has_picked_pivot) {
             pivot = state.picked_pivot;
         } else if (const Lattice* l = registry.try_get<Lattice>(state.active_lattice)) {
-            pivot = glm::dvec3(picking::model_matrix(registry.try_get<Transform>(state.active_lattice)) *
+            pivot = glm::dvec3(model_matrix(registry.try_get<Transform>(state.active_lattice)) *
                                glm::dvec4(centroid(*l, pts), 1.0));
         }
     }
