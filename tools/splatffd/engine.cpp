@@ -5,12 +5,12 @@
 
 #include "runtime/app/app.h"
 #include "systems/animation/animation_system.h"
-#include "systems/ffd/ffd_system.h"
-#include "systems/picking/picking_system.h"
-#include "systems/splat_render/splat_render.h"
 #include "systems/editor/editor_system.h"
 #include "systems/editor/lattice_overlay.h"
 #include "systems/editor/view_app.h"
+#include "systems/ffd/ffd_system.h"
+#include "systems/picking/picking_system.h"
+#include "systems/splat_render/splat_render.h"
 
 namespace sffd {
 
