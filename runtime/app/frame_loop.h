@@ -6,7 +6,8 @@
 //   deformation point clouds whose rest data or lattices changed are re-deformed (GPU compute or CPU)
 //   picking     only when a pick was requested: refresh the ray-casting scene, cast, store the hit
 //   rendering   culling, splat passes, shading, overlays, UI, frame capture
-//   present     swap the window, or read back and write files when headless
+//   present     sRGB display copy (after every overlay), blit and swap the window, or read back and write
+//               files when headless
 //
 // Systems are free functions `void system(ecs::Registry&, const FrameContext&)`; a Schedule holds them
 // per phase in registration order. Deferred structural changes are flushed after every phase.

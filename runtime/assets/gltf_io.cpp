@@ -16,6 +16,7 @@
 
 #include "runtime/core/atomic_file.h"
 #include "runtime/core/log.h"
+#include "runtime/scene/camera.h"
 
 namespace sffd::assets {
 namespace fs = std::filesystem;
@@ -650,7 +651,7 @@ Result<Geometry> read_gltf_geometry(const fs::path& path) {
     bool single = contents->clouds.size() == 1 && g.positions.empty();
     for (GltfCloudIn& c : contents->clouds) {
         const Transform& t = c.transform;
-        const glm::dmat4 world = glm::translate(glm::dmat4(1.0), t.translation) * glm::mat4_cast(t.rotation) * glm::scale(glm::dmat4(1.0), t.scale);
+        const glm::dmat4 world = model_matrix(&t);
         const glm::dmat3 linear(world);
         const glm::dmat3 nm = glm::transpose(glm::inverse(linear));
         const std::size_t base = g.positions.size();

@@ -25,6 +25,10 @@
 #define SFFD_TEX_DEPTH             3
 #define SFFD_TEX_ACCUM_MATERIAL    4   // splat_render: sum(w * specular), sum(w * shininess) per pixel
 
+// --- Uniform locations (explicit, so C++ never looks uniforms up by name) --------------------------
+#define SFFD_LOC_OVERLAY_VIEW_PROJ 0   // mat4 (locations 0..3): editor lattice overlay, anchor -> clip
+#define SFFD_LOC_OVERLAY_POINTS    4   // int: 1 round point sprites, 0 lines
+
 // GpuSplat, std430, 64 bytes; the same layout for rest and deformed splats, so a render pass reads
 // either one. Positions are relative to the cloud's origin (SplatCloud::origin).
 //   vec4 center;   // xyz position; w = colour, RGBA8 packed (uintBitsToFloat)

@@ -1,6 +1,8 @@
 #version 450 core
+#include "common/bindings.h"
+
 in vec4 v_color;
-uniform int u_points;  // 1: round point sprites, 0: lines
+layout(location = SFFD_LOC_OVERLAY_POINTS) uniform int u_points;  // 1: round point sprites, 0: lines
 layout(location = 0) out vec4 o_color;
 
 void main() {

@@ -2,11 +2,13 @@
 // Lattice overlay (systems/editor/lattice_overlay.cpp): control points as round sprites, cell edges as
 // lines. Positions are relative to `u_anchor` (the lattice origin), so lattices far from the world
 // origin stay precise in float; u_view_proj already contains the translation to the anchor.
+#include "common/bindings.h"
+
 layout(location = 0) in vec3 a_position;
 layout(location = 1) in vec4 a_color;
 layout(location = 2) in float a_size;
 
-uniform mat4 u_view_proj;
+layout(location = SFFD_LOC_OVERLAY_VIEW_PROJ) uniform mat4 u_view_proj;
 
 out vec4 v_color;
 

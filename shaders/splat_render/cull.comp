@@ -6,14 +6,15 @@
 // the splat's projected ellipse (ellipse_sprite), so foreshortened splats near a silhouette cost far fewer
 // fragments than a square around their bounding ball. Two DrawArraysIndirectCommands follow: {sprites, 1, 0, 0} and
 // {6, quads, 0, 0}. With culling off (frame.params.z == 0) nothing is dropped: back-facing sprites are
-// marked (plane.xyz = NaN) and discarded per fragment, so the image is the same and the cost is visible.
+// marked hidden (plane.xyz = 0, splat_record.h) and discarded per fragment, so the image is the same and
+// the cost is visible. Non-finite input is recognised from its bits (all_finite), never by NaN comparisons.
 //
 // Cheap tests first (back face from centre and normal only, then the frustum), so the two thirds of a
 // closed surface that face away cost little. One global atomic per kept splat: per-workgroup slot
 // reservation needs barrier(), which llvmpipe runs as coroutines (measured: the pass became ~1.5x slower).
-layout(local_size_x = 128) in;
-
 #include "splat_render/splat_color.glsl"
+
+layout(local_size_x = SFFD_CULL_GROUP_SIZE) in;
 
 layout(std430, binding = SFFD_SSBO_SPLATS_DRAW) readonly buffer Splats { GpuSplat splats[]; };
 layout(std430, binding = SFFD_SSBO_VISIBLE) writeonly buffer QuadList { uint quads[]; };
@@ -41,7 +42,8 @@ void main() {
         // Back-facing (a splat flipped by an inverted lattice cell, normal.w == 0, is drawn two-sided).
         back = s.normal.w != 0.0 && dot(mat3(frame.normal_view) * s.normal.xyz, c) > 0.0;
         keep = back && frame.params.z != 0.0 ? KEEP_NONE : KEEP_SPRITE;
-        if (any(isnan(c)) || any(isinf(c))) keep = KEEP_NONE;  // nothing to draw (the CPU cull agrees)
+        if (!all_finite(s.center.xyz) || !all_finite(s.normal.xyz) || !all_finite(c))
+            keep = KEEP_NONE;  // nothing to draw (the CPU cull agrees)
     }
     float r = 0.0;
     if (keep != KEEP_NONE) {
@@ -49,9 +51,13 @@ void main() {
         s.axis_v = splats[i].axis_v;
         u = mat3(frame.model_view) * s.axis_u.xyz;
         v = mat3(frame.model_view) * s.axis_v.xyz;
-        r = ellipse_max_radius(u, v);
         vec3 n = cross(u, v);
-        if (!(r > 0.0) || dot(n, n) <= 1e-12 * r * r * r * r) keep = KEEP_NONE;  // degenerate (or NaN)
+        if (!all_finite(s.axis_u.xyz) || !all_finite(s.axis_v.xyz) || !all_finite(u) || !all_finite(v)) {
+            keep = KEEP_NONE;
+        } else {
+            r = ellipse_max_radius(u, v);
+            if (r <= 0.0 || dot(n, n) <= 1e-12 * r * r * r * r) keep = KEEP_NONE;  // degenerate
+        }
     }
     if (keep != KEEP_NONE && frame.params.z != 0.0) {
         // Frustum, as a bounding ball against the view-space planes of a symmetric perspective.
@@ -75,7 +81,7 @@ void main() {
         SplatView o = splat_view(s);
         SplatRecord rec;
         splat_raycast_setup(o, rec.plane, rec.dual_u, rec.dual_v);
-        if (back) rec.plane.xyz = vec3(uintBitsToFloat(0x7fc00000u));  // NaN: every fragment discards
+        if (back) rec.plane.xyz = vec3(0.0);  // hidden (culling off): every fragment discards
         rec.center = vec4(box.xy, o.c.z, box.z);
         vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
         rec.normal = vec4(world_n, pack_color(splat_color(s, o, world_n).rgb));

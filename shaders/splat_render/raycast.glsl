@@ -21,13 +21,15 @@ float window_depth_inv(float inv_t) {
 }
 float window_depth(float t) { return window_depth_inv(1.0 / t); }
 
-// Intersects the pixel's ray with the splat's plane; discards outside the ellipse and back-facing splats
-// marked by the cull pass (culling off: plane NaN, so t is NaN). Returns the view-axis depth t of the hit
-// (p = t * ray) and the squared elliptical radius r2.
+// Intersects the pixel's ray with the splat's plane; discards outside the ellipse, where the plane is not in
+// front along the ray, and splats marked hidden by the cull pass (culling off, back-facing: plane.xyz = 0,
+// so the dot product is exactly 0; splat_record.h). Only comparisons of finite values: no NaN or infinity.
+// Returns the view-axis depth t of the hit (p = t * ray) and the squared elliptical radius r2.
 float raycast_splat(out vec3 ray, out float r2) {
     ray = pixel_ray();
-    float t = 1.0 / dot(v_plane.xyz, ray);
-    if (!(t > 0.0)) discard;
+    float inv_t = dot(v_plane.xyz, ray);
+    if (inv_t <= 0.0) discard;
+    float t = 1.0 / inv_t;
     vec4 du = v_dual_u, dv = v_dual_v;
     float s = t * dot(du.xyz, ray) - du.w;
     float q = t * dot(dv.xyz, ray) - dv.w;

@@ -12,7 +12,7 @@
 layout(std430, binding = SFFD_SSBO_SPLATS_DRAW) readonly buffer Splats { GpuSplat splats[]; };
 layout(std430, binding = SFFD_SSBO_VISIBLE) readonly buffer QuadList { uint quads[]; };
 #else
-// The SplatRecord array of the cull pass, bound as a vertex buffer (stride 80): the vertex fetcher reads
+// The SplatRecord array of the cull pass, bound as a vertex buffer (stride SFFD_SPLAT_RECORD_BYTES): the vertex fetcher reads
 // it far faster than per-lane SSBO loads on llvmpipe.
 layout(location = 0) in vec4 a_center;
 layout(location = 1) in vec4 a_plane;
@@ -37,7 +37,7 @@ void main() {
     SplatView o = splat_view(s);
     splat_raycast_setup(o, v_plane, v_dual_u, v_dual_v);
     if (frame.params.z == 0.0 && s.normal.w != 0.0 && dot(o.shading_n, o.c) > 0.0)
-        v_plane.xyz = vec3(uintBitsToFloat(0x7fc00000u));  // back-facing with culling off: discard
+        v_plane.xyz = vec3(0.0);  // back-facing with culling off: hidden (splat_record.h), every fragment discards
 #if PASS != 0
     vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
     v_plane.w = pack_color(splat_color(s, o, world_n).rgb);

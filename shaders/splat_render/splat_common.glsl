@@ -5,34 +5,30 @@
 
 #include "common/bindings.h"
 #include "splat_render/frame_block.h"
+#include "splat_render/splat_record.h"
 
-// A visible sprite splat, prepared by the cull pass so the vertex shaders of both HQ passes only copy it
-// (llvmpipe spends its time per primitive: vertex work runs once, in the compute pass). std430, 80 bytes,
-// bound as a vertex buffer. The ray through a pixel is d = (x, y, -1) in view space; the ray cast is
-// linear in d:
-//   t = 1 / dot(plane.xyz, d)                     view-axis depth of the hit p = t * d
-//   s = t * dot(dual_u.xyz, d) - dual_u.w,  q = t * dot(dual_v.xyz, d) - dual_v.w,  inside: s^2 + q^2 <= 1
-// plane.xyz = NaN marks a back-facing splat kept with culling off (every fragment discards).
-// Colour travels packed (10-10-10 bits of sqrt(linear rgb)) so that, with the normal, every pass hands at
-// most four vec4 varyings per sprite to the rasteriser (each costs per-primitive set-up on llvmpipe).
-struct SplatRecord {
-    vec4 center;   // xy: NDC centre of the sprite (ellipse_sprite), z: view-space z of the splat centre,
-                   // w: sprite side in pixels
-    vec4 plane;    // xyz: plane normal / dot(center, normal), w: visibility offset eps (view units)
-    vec4 dual_u;   // xyz: dual axis (s = dot(dual_u, p - center)), w: dot(dual_u, center)
-    vec4 dual_v;
-    vec4 normal;   // xyz world-space shading normal, w: packed colour (pack_color; HQ albedo, preview lit)
-};
-
+// Colour of a SplatRecord: the 30 bits r | g << 10 | b << 20 of sqrt(linear rgb), stored in a float's
+// mantissa (bits 0..22) and exponent (bits 23..29 plus one, so 1..128): always a normal, finite float, never
+// a NaN, infinity or denormal that a driver may canonicalise or flush on its way through a varying.
+// The C++ twin is pack_color() in systems/splat_render/cpu_cull.cpp.
 float pack_color(vec3 linear) {
     uvec3 q = uvec3(round(sqrt(clamp(linear, 0.0, 1.0)) * 1023.0));
-    return uintBitsToFloat(q.r | (q.g << 10) | (q.b << 20));
+    uint bits = q.r | (q.g << 10) | (q.b << 20);
+    return uintBitsToFloat((bits & 0x7fffffu) + (((bits >> 23) + 1u) << 23));
 }
 
 vec3 unpack_color(float packed_color) {
-    uint bits = floatBitsToUint(packed_color);
+    uint stored = floatBitsToUint(packed_color);
+    uint bits = (stored & 0x7fffffu) + (((stored >> 23) - 1u) << 23);
     vec3 c = vec3(uvec3(bits, bits >> 10, bits >> 20) & 1023u) * (1.0 / 1023.0);
     return c * c;
+}
+
+// Whether every component of v is finite, from its bits (exponent not all ones): isnan/isinf and
+// comparisons involving NaN are undefined in GLSL (a compiler may assume no NaN), integer tests are not.
+bool all_finite(vec3 v) {
+    uvec3 exponent = floatBitsToUint(v) & 0x7f800000u;
+    return all(notEqual(exponent, uvec3(0x7f800000u)));
 }
 
 // Largest radius of the ellipse {s*u + t*v : s^2 + t^2 <= 1}: sqrt of the Gram matrix's larger eigenvalue

@@ -7,32 +7,6 @@
 
 namespace sffd::editor {
 
-glm::dmat4 view_matrix(const Camera& camera) { return glm::lookAt(camera.eye, camera.target, camera.up); }
-
-glm::dmat4 projection_matrix(const Camera& camera, const Viewport& viewport) {
-    return glm::perspective(glm::radians(double(camera.fov_y_degrees)), viewport.aspect(),
-                            double(camera.near_plane), double(camera.far_plane));
-}
-
-Ray pixel_ray(const Camera& camera, const Viewport& viewport, glm::dvec2 pixel) {
-    // NDC of the pixel (y flipped: pixel rows go down, NDC y goes up).
-    const double nx = 2.0 * pixel.x / viewport.width - 1.0;
-    const double ny = 1.0 - 2.0 * pixel.y / viewport.height;
-    const double tan_half = std::tan(glm::radians(double(camera.fov_y_degrees)) * 0.5);
-    const glm::dvec3 forward = glm::normalize(camera.target - camera.eye);
-    const glm::dvec3 right = glm::normalize(glm::cross(forward, camera.up));
-    const glm::dvec3 up = glm::cross(right, forward);
-    const glm::dvec3 dir = forward + right * (nx * tan_half * viewport.aspect()) + up * (ny * tan_half);
-    return {camera.eye, glm::normalize(dir)};
-}
-
-glm::dvec3 project_to_pixel(const Camera& camera, const Viewport& viewport, const glm::dvec3& world) {
-    const glm::dvec4 clip = projection_matrix(camera, viewport) * view_matrix(camera) * glm::dvec4(world, 1.0);
-    if (clip.w <= 0.0) return {0.0, 0.0, 2.0};
-    const glm::dvec3 ndc = glm::dvec3(clip) / clip.w;
-    return {(ndc.x + 1.0) * 0.5 * viewport.width, (1.0 - ndc.y) * 0.5 * viewport.height, ndc.z};
-}
-
 void orbit(Camera& camera, glm::dvec2 pixel_delta, const OrbitSettings& settings) {
     const glm::dvec3 up = glm::normalize(camera.up);
     glm::dvec3 offset = camera.eye - camera.target;

@@ -1,36 +1,17 @@
 // Orbit / pan / zoom camera control and "frame the selection", as pure functions on the scene's
 // Camera component (eye, target, up, vertical fov). The window turns mouse gestures into these calls;
-// tests call them directly. Conventions shared with gizmo.h: pixel coordinates have (0,0) at the top
-// left of the viewport, y down (GLFW's cursor convention); the view is glm::lookAt(eye, target, up) and
-// the projection glm::perspective(fov_y, width/height, near, far), OpenGL clip space.
+// tests call them directly. Viewport, pixel rays and projections: runtime/scene/camera.h (pixel
+// coordinates with (0,0) at the top left of the viewport, y down, GLFW's cursor convention).
 #pragma once
 
 #include <span>
 
 #include <glm/glm.hpp>
 
+#include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
 
 namespace sffd::editor {
-
-struct Viewport {
-    int width = 1280;
-    int height = 720;
-    double aspect() const { return height > 0 ? double(width) / double(height) : 1.0; }
-};
-
-struct Ray {
-    glm::dvec3 origin{0.0};
-    glm::dvec3 direction{0.0, 0.0, -1.0};  // unit length
-};
-
-glm::dmat4 view_matrix(const Camera& camera);
-glm::dmat4 projection_matrix(const Camera& camera, const Viewport& viewport);
-
-// Ray from the eye through the centre of pixel (x, y) (fractional pixels allowed).
-Ray pixel_ray(const Camera& camera, const Viewport& viewport, glm::dvec2 pixel);
-// World point -> pixel (x, y) and NDC depth in z; w <= 0 (behind the eye) gives z > 1.
-glm::dvec3 project_to_pixel(const Camera& camera, const Viewport& viewport, const glm::dvec3& world);
 
 struct OrbitSettings {
     double radians_per_pixel = 0.008;

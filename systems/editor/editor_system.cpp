@@ -14,13 +14,9 @@
 #include "systems/picking/picking_system.h"
 #include "systems/picking/selection.h"
 #include "systems/picking/world_space.h"
-#if SFFD_EDITOR_HAS_ANIMATION
 #include "systems/animation/components.h"
 #include "systems/animation/editing.h"
-#endif
-#if SFFD_EDITOR_HAS_FFD_OPS
 #include "systems/ffd/operations.h"
-#endif
 
 namespace sffd::editor {
 
@@ -54,7 +50,7 @@ picking::ScreenView screen_view(const Camera& camera, const Viewport& vp) {
 }
 
 glm::dmat4 lattice_model(const ecs::Registry& registry, ecs::Entity lattice) {
-    return picking::model_matrix(registry.try_get<Transform>(lattice));
+    return model_matrix(registry.try_get<Transform>(lattice));
 }
 
 const Lattice* active_lattice(const ecs::Registry& registry, const EditorState& state) {
@@ -365,11 +361,9 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
     else if (k == "f12") state.request_screenshot = true;
 }
 
-#if SFFD_EDITOR_HAS_ANIMATION
 AnimationState* animation_state(ecs::Registry& registry, const EditorState& state) {
     return registry.valid(state.active_lattice) ? registry.try_get<AnimationState>(state.active_lattice) : nullptr;
 }
-#endif
 
 }  // namespace
 
@@ -397,7 +391,7 @@ bool scene_bounds(const ecs::Registry& registry, glm::dvec3& lo, glm::dvec3& hi)
     lo = glm::dvec3(std::numeric_limits<double>::max());
     hi = -lo;
     registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
-        const glm::dmat4 model = picking::model_matrix(registry.try_get<Transform>(e));
+        const glm::dmat4 model = model_matrix(registry.try_get<Transform>(e));
         glm::dvec3 a(std::numeric_limits<double>::max()), b(-std::numeric_limits<double>::max());
         for (const glm::vec3& p : cloud.positions) {
             const glm::dvec3 w = glm::dvec3(model * glm::dvec4(cloud.origin + glm::dvec3(p), 1.0));
@@ -433,9 +427,7 @@ EditorState& setup_editor(ecs::Registry& registry, const Viewport& viewport) {
         state->active_lattice = ecs::null_entity;
         registry.view<Lattice>().each([&](ecs::Entity e, Lattice&) { state->active_lattice = e; });
     }
-#if SFFD_EDITOR_HAS_ANIMATION
     registry.view<AnimationState>().each([&](ecs::Entity, AnimationState& s) { sffd::pause(s); });
-#endif
     return *state;
 }
 
@@ -549,30 +541,21 @@ void frame_selection(ecs::Registry& registry, EditorState& state) {
 }
 
 double clip_time(const ecs::Registry& registry, const EditorState& state) {
-#if SFFD_EDITOR_HAS_ANIMATION
     if (registry.valid(state.active_lattice))
         if (const auto* s = registry.try_get<AnimationState>(state.active_lattice)) return s->time;
-#else
-    (void)registry, (void)state;
-#endif
     return 0.0;
 }
 
 void scrub_to(ecs::Registry& registry, EditorState& state, double time) {
-#if SFFD_EDITOR_HAS_ANIMATION
     if (AnimationState* s = animation_state(registry, state)) {
         const auto* clip = registry.try_get<AnimationClip>(state.active_lattice);
         const double duration = clip ? clip->duration : 1.0;
         sffd::scrub(registry.patch<AnimationState>(state.active_lattice), std::clamp(time, 0.0, duration));
         (void)s;
     }
-#else
-    (void)registry, (void)state, (void)time;
-#endif
 }
 
 void toggle_play(ecs::Registry& registry, EditorState& state) {
-#if SFFD_EDITOR_HAS_ANIMATION
     bool any_playing = false;
     registry.view<AnimationState>().each([&](ecs::Entity, AnimationState& s) { any_playing |= s.playing; });
     registry.view<AnimationState>().each([&](ecs::Entity e, AnimationState&) {
@@ -581,14 +564,9 @@ void toggle_play(ecs::Registry& registry, EditorState& state) {
         else sffd::play(s);
     });
     say(state, any_playing ? "paused" : "playing");
-#else
-    say(state, "animation system not built");
-    (void)registry;
-#endif
 }
 
 bool key_last_edit(ecs::Registry& registry, EditorState& state) {
-#if SFFD_EDITOR_HAS_ANIMATION
     const LastEdit& edit = state.last_edit;
     if (edit.kind == LastEdit::Kind::none || !registry.valid(edit.lattice) || !registry.has<Lattice>(edit.lattice)) {
         say(state, "set key: stretch or twist something first");
@@ -628,15 +606,9 @@ bool key_last_edit(ecs::Registry& registry, EditorState& state) {
     state.undo.push(std::move(group));
     say(state, log::str("key set at ", time, " s on track ", clip.tracks[track].name));
     return true;
-#else
-    say(state, "set key: animation system not built");
-    (void)registry;
-    return false;
-#endif
 }
 
 bool delete_keys_at_time(ecs::Registry& registry, EditorState& state) {
-#if SFFD_EDITOR_HAS_ANIMATION
     const ecs::Entity e = state.active_lattice;
     if (!registry.valid(e) || !registry.has<AnimationClip>(e) || !registry.has<AnimationState>(e)) return false;
     const double time = registry.get<AnimationState>(e).time;
@@ -647,10 +619,6 @@ bool delete_keys_at_time(ecs::Registry& registry, EditorState& state) {
     if (removed) state.undo.push(clip_edit.finish(registry));
     say(state, removed ? log::str("deleted keys at ", time, " s") : log::str("no key at ", time, " s"));
     return removed;
-#else
-    (void)registry, (void)state;
-    return false;
-#endif
 }
 
 namespace {
@@ -686,7 +654,6 @@ std::vector<ecs::Entity> clouds_of(ecs::Registry& registry, ecs::Entity lattice,
 bool resample_lattice(ecs::Registry& registry, EditorState& state, glm::ivec3 divisions) {
     const Lattice* lattice = active_lattice(registry, state);
     if (!lattice) return false;
-#if SFFD_EDITOR_HAS_FFD_OPS
     if (divisions == lattice->divisions) return false;
     Lattice next = *lattice;
     const glm::ivec3 up = glm::max(divisions, lattice->divisions);
@@ -703,11 +670,6 @@ bool resample_lattice(ecs::Registry& registry, EditorState& state, glm::ivec3 di
     replace_lattice(registry, state, std::move(next), "resample");
     say(state, log::str("lattice resampled to ", divisions.x, "x", divisions.y, "x", divisions.z, " divisions"));
     return true;
-#else
-    (void)divisions;
-    say(state, "resample: ffd operations not built");
-    return false;
-#endif
 }
 
 bool set_lattice_basis(ecs::Registry& registry, EditorState& state, LatticeBasis basis) {
@@ -723,7 +685,6 @@ bool set_lattice_basis(ecs::Registry& registry, EditorState& state, LatticeBasis
 bool fit_lattice_to(ecs::Registry& registry, EditorState& state, bool to_selection) {
     const Lattice* lattice = active_lattice(registry, state);
     if (!lattice) return false;
-#if SFFD_EDITOR_HAS_FFD_OPS
     glm::dvec3 lo(-std::numeric_limits<double>::max()), hi(std::numeric_limits<double>::max());
     if (to_selection) {
         const auto sel = selection_of(registry, state.active_lattice);
@@ -749,17 +710,11 @@ bool fit_lattice_to(ecs::Registry& registry, EditorState& state, bool to_selecti
     replace_lattice(registry, state, std::move(*fitted), to_selection ? "fit to selection" : "fit to object");
     say(state, log::str("lattice fitted to ", points.size(), " points"));
     return true;
-#else
-    (void)to_selection;
-    say(state, "fit: ffd operations not built");
-    return false;
-#endif
 }
 
 bool apply_lattice_as_rest(ecs::Registry& registry, EditorState& state) {
     const Lattice* lattice = active_lattice(registry, state);
     if (!lattice) return false;
-#if SFFD_EDITOR_HAS_FFD_OPS
     auto group = std::make_unique<CommandGroup>("apply as rest");
     ComponentEdit<Lattice> lattice_edit(registry, state.active_lattice, "apply as rest");
     Lattice next = *lattice;
@@ -788,10 +743,6 @@ bool apply_lattice_as_rest(ecs::Registry& registry, EditorState& state) {
     state.last_edit = {};
     say(state, log::str("applied as rest (", clouds.size(), " clouds baked)"));
     return true;
-#else
-    say(state, "apply as rest: ffd operations not built");
-    return false;
-#endif
 }
 
 }  // namespace sffd::editor

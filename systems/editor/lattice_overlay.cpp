@@ -4,11 +4,11 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "runtime/app/app.h"
 #include "runtime/core/log.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/gl_object.h"
 #include "runtime/gfx/shader.h"
+#include "shaders/common/bindings.h"
 #include "systems/editor/camera_controller.h"
 #include "systems/editor/editor_system.h"
 #include "systems/ffd/components.h"
@@ -20,7 +20,6 @@ namespace sffd::editor {
 
 struct LatticeOverlayState {
     gfx::Program program;
-    gfx::Program display;  // refreshes the window's display copy (PresentSource) after the overlay
     gfx::VertexArray vao;
     gfx::Buffer buffer;
     std::size_t capacity = 0;  // vertices
@@ -31,7 +30,7 @@ OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const Edito
     OverlayGeometry g;
     const Lattice* lattice = registry.try_get<Lattice>(entity);
     if (!lattice || lattice->current.size() != lattice->size()) return g;
-    const glm::dmat4 model = picking::model_matrix(registry.try_get<Transform>(entity));
+    const glm::dmat4 model = model_matrix(registry.try_get<Transform>(entity));
     g.anchor = glm::dvec3(model * glm::dvec4(lattice->origin, 1.0));
     std::vector<glm::vec3> p(lattice->current.size());
     for (std::size_t c = 0; c < p.size(); ++c)
@@ -89,14 +88,6 @@ Status init_lattice_overlay(ecs::Registry& registry) {
         return make_error(program.message());
     }
     s.program = std::move(*program);
-    auto display = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
-                                      {GL_FRAGMENT_SHADER, "editor/display.frag"}},
-                                     "editor.display");
-    if (!display) {
-        s.failed = true;
-        return make_error(display.message());
-    }
-    s.display = std::move(*display);
     s.vao = gfx::VertexArray::create("editor.lattice.vao");
     s.buffer = gfx::Buffer::create("editor.lattice.vertices");
     const GLuint vao = s.vao.id();
@@ -146,8 +137,6 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
     glDepthMask(GL_FALSE);
     glUseProgram(s.program.id());
     glBindVertexArray(s.vao.id());
-    const GLint loc_vp = glGetUniformLocation(s.program.id(), "u_view_proj");
-    const GLint loc_points = glGetUniformLocation(s.program.id(), "u_points");
 
     registry.view<const Lattice>().each([&](ecs::Entity e, const Lattice&) {
         const OverlayGeometry g = build_lattice_overlay(registry, *state, e);
@@ -162,16 +151,16 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
                              GLsizeiptr(g.points.size() * sizeof(OverlayVertex)), g.points.data());
         glVertexArrayVertexBuffer(s.vao.id(), 0, s.buffer.id(), 0, sizeof(OverlayVertex));
         const glm::mat4 m = glm::mat4(view_proj * glm::translate(glm::dmat4(1.0), g.anchor));
-        glUniformMatrix4fv(loc_vp, 1, GL_FALSE, &m[0][0]);
+        glUniformMatrix4fv(SFFD_LOC_OVERLAY_VIEW_PROJ, 1, GL_FALSE, &m[0][0]);
         // Pass 1: everything (faint unless x-ray); pass 2: the visible part at full strength.
         for (int pass = 0; pass < (state->xray ? 1 : 2); ++pass) {
             if (pass == 0) glDisable(GL_DEPTH_TEST);
             else glEnable(GL_DEPTH_TEST), glDepthFunc(GL_LEQUAL);
             const float strength = state->xray || pass == 1 ? 1.0f : 0.3f;
-            glUniform1i(loc_points, 0);
+            glUniform1i(SFFD_LOC_OVERLAY_POINTS, 0);
             glBlendColor(0.0f, 0.0f, 0.0f, strength * g.lines.front().color.w);
             glDrawArrays(GL_LINES, 0, GLsizei(g.lines.size()));
-            glUniform1i(loc_points, 1);
+            glUniform1i(SFFD_LOC_OVERLAY_POINTS, 1);
             glBlendColor(0.0f, 0.0f, 0.0f, strength * g.points.front().color.w);
             glDrawArrays(GL_POINTS, GLint(g.lines.size()), GLsizei(g.points.size()));
         }
@@ -195,24 +184,6 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
     }
     glNamedFramebufferDrawBuffers(fbo, GLsizei(bufs.size()), bufs.data());
 
-    // A window shows render_system's sRGB display copy, made before this overlay: redo it.
-    const auto* present = registry.try_resource<app::PresentSource>();
-    if (present && present->framebuffer != 0 && present->framebuffer != fbo && present->width == width &&
-        present->height == height) {
-        const auto* settings = registry.try_resource<render::RenderSettings>();
-        const glm::vec3 bg = settings && settings->background ? *settings->background : glm::vec3(0.0f);
-        glBindFramebuffer(GL_FRAMEBUFFER, present->framebuffer);
-        glViewport(0, 0, width, height);
-        glDisable(GL_DEPTH_TEST);
-        glUseProgram(s.display.id());
-        glBindTextureUnit(0, GLuint(color_tex));
-        glUniform1i(glGetUniformLocation(s.display.id(), "u_linear_color"), 0);
-        glUniform3f(glGetUniformLocation(s.display.id(), "u_background"), bg.x, bg.y, bg.z);
-        glBindVertexArray(s.vao.id());  // any VAO: the triangle comes from gl_VertexID
-        glDrawArrays(GL_TRIANGLES, 0, 3);
-        glBindVertexArray(0);
-        glUseProgram(0);
-    }
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 

@@ -17,13 +17,9 @@
 #include "systems/ffd/components.h"
 #include "systems/picking/components.h"
 #include "systems/picking/world_space.h"
-#if SFFD_EDITOR_HAS_ANIMATION
 #include "systems/animation/components.h"
 #include "systems/animation/editing.h"
-#endif
-#if SFFD_EDITOR_HAS_PROFILING
 #include "systems/profiling/overlay.h"
-#endif
 
 namespace sffd::editor {
 
@@ -247,7 +243,6 @@ void inspector(ecs::Registry& registry, EditorState& state) {
     if (const Deformers* d = registry.try_get<Deformers>(e); d && ImGui::CollapsingHeader("Deformers")) {
         for (ecs::Entity l : d->lattices) ImGui::BulletText("%s", entity_label(registry, l).c_str());
     }
-#if SFFD_EDITOR_HAS_ANIMATION
     if (AnimationClip* clip = registry.try_get<AnimationClip>(e); clip && ImGui::CollapsingHeader("AnimationClip")) {
         const AnimationClip before = *clip;
         double duration = clip->duration;
@@ -260,7 +255,6 @@ void inspector(ecs::Registry& registry, EditorState& state) {
         track_edit<AnimationClip>(registry, state, e, before, mch, "clip mode");
         ImGui::Text("%zu tracks", clip->tracks.size());
     }
-#endif
     ImGui::End();
 }
 
@@ -367,7 +361,6 @@ void timeline_panel(ecs::Registry& registry, EditorState& state) {
     ImGui::SetNextWindowPos(ImVec2(256, float(state.viewport.height) - 120.0f), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowSize(ImVec2(float(state.viewport.width) - 570.0f, 88), ImGuiCond_FirstUseEver);
     if (ImGui::Begin("Timeline")) {
-#if SFFD_EDITOR_HAS_ANIMATION
         const ecs::Entity e = state.active_lattice;
         AnimationClip* clip = registry.valid(e) ? registry.try_get<AnimationClip>(e) : nullptr;
         AnimationState* anim = registry.valid(e) ? registry.try_get<AnimationState>(e) : nullptr;
@@ -392,10 +385,6 @@ void timeline_panel(ecs::Registry& registry, EditorState& state) {
         } else {
             ImGui::TextDisabled("no clip on this lattice: stretch or twist, then set key");
         }
-#else
-        (void)registry, (void)state;
-        ImGui::TextDisabled("animation system not built");
-#endif
     }
     ImGui::End();
 }
@@ -404,7 +393,6 @@ void profiler_panel(ecs::Registry& registry, EditorState& state) {
     ImGui::SetNextWindowPos(ImVec2(8, float(state.viewport.height) - 250.0f), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowSize(ImVec2(240, 218), ImGuiCond_FirstUseEver);
     if (ImGui::Begin("Frame time")) {
-#if SFFD_EDITOR_HAS_PROFILING
         if (const auto* o = registry.try_resource<profiling::ProfileOverlay>(); o && o->count > 0) {
             ImGui::Text("%.1f ms (avg %.1f, %.1f FPS)", double(o->frame_last_ms), double(o->frame_avg_ms),
                         o->frame_avg_ms > 0 ? 1000.0 / double(o->frame_avg_ms) : 0.0);
@@ -419,10 +407,6 @@ void profiler_panel(ecs::Registry& registry, EditorState& state) {
         } else {
             ImGui::TextDisabled("no profile yet");
         }
-#else
-        (void)registry, (void)state;
-        ImGui::TextDisabled("profiling system not built");
-#endif
     }
     ImGui::End();
 }
@@ -462,7 +446,7 @@ void gizmo(ecs::Registry& registry, EditorState& state) {
         if (state.pivot_mode == PivotMode::picked_point && state.has_picked_pivot) {
             pivot = state.picked_pivot;
         } else if (const Lattice* l = registry.try_get<Lattice>(state.active_lattice)) {
-            pivot = glm::dvec3(picking::model_matrix(registry.try_get<Transform>(state.active_lattice)) *
+            pivot = glm::dvec3(model_matrix(registry.try_get<Transform>(state.active_lattice)) *
                                glm::dvec4(centroid(*l, pts), 1.0));
         }
     }

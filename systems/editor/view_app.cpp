@@ -25,9 +25,7 @@
 #include "systems/editor/panels.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_render.h"
-#if SFFD_EDITOR_HAS_PROFILING
 #include "systems/profiling/profiler.h"
-#endif
 
 namespace sffd::editor {
 
@@ -160,7 +158,8 @@ Status write_screenshot(ecs::Registry& registry, const std::filesystem::path& pa
     return make_error(path.string() + ": screenshot must end in .png or .exr");
 }
 
-// Rendering phase, after the overlay: save / screenshot / quit requests, present source, drag log.
+}  // namespace
+
 void requests_system(ecs::Registry& registry, const FrameContext& frame) {
     EditorState* state = registry.try_resource<EditorState>();
     ViewSession* session = registry.try_resource<ViewSession>();
@@ -199,7 +198,6 @@ void requests_system(ecs::Registry& registry, const FrameContext& frame) {
     }
 }
 
-// Present phase, between the blit and the swap: the ImGui panels.
 void ui_system(ecs::Registry& registry, const FrameContext& frame) {
     ViewSession* session = registry.try_resource<ViewSession>();
     if (!session || !session->ui) return;
@@ -226,6 +224,8 @@ void ui_system(ecs::Registry& registry, const FrameContext& frame) {
         if (Status st = render::write_png(o.window_screenshot, img); !st) log::error("view: ", st.message());
     }
 }
+
+namespace {
 
 std::string default_save_path(const std::string& scene) {
     const std::filesystem::path p(scene);
@@ -317,18 +317,8 @@ int run_view(const ViewOptions& options, Schedule schedule) {
             ImGui_ImplOpenGL3_Init("#version 450");
         }
 
-        schedule.add(Phase::rendering, "editor.overlay", lattice_overlay_system);
-        schedule.add(Phase::rendering, "editor.requests", requests_system);
-        if (window) {
-            schedule.add(Phase::present, "present.blit", app::present_blit_system);
-            schedule.add(Phase::present, "editor.ui", ui_system);
-            schedule.add(Phase::present, "present.swap", app::present_swap_system);
-        }
-
-#if SFFD_EDITOR_HAS_PROFILING
         profiling::Profiler profiler({.gpu = profiling::GpuTiming::none, .keep_frames = true});
         profiler.attach(schedule, registry);
-#endif
         // Replays and fixed frame counts run on a fixed 1/60 s clock (frame k = time k/60, deterministic).
         Clock clock = (!options.replay.empty() || options.frames > 0 || headless)
                           ? Clock(ClockSettings{.fixed_dt = 1.0 / 60.0})
@@ -348,7 +338,6 @@ int run_view(const ViewOptions& options, Schedule schedule) {
                 exit_code = 1;
             }
         }
-#if SFFD_EDITOR_HAS_PROFILING
         // Frame times: all frames, and the frames in which a stretch/twist drag was live.
         std::vector<double> all, drag;
         for (const auto& f : profiler.frames()) {
@@ -390,7 +379,6 @@ int run_view(const ViewOptions& options, Schedule schedule) {
             if (Status st = write_file_atomic(options.timing_json, json); !st)
                 std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
         }
-#endif
         if (session.ui) {
             ImGui_ImplOpenGL3_Shutdown();
             ImGui_ImplGlfw_Shutdown();

@@ -1,8 +1,8 @@
 // `splatffd view [SCENE]`: the editor window. Opens a GLFW window through the foundation's context
 // (runtime/gfx/context.h), loads the scene (runtime/assets/scene.h), and runs the engine's standard
-// Schedule (tools/splatffd/engine.h; the editor input system is its input-phase line) plus the editor's
-// own systems: lattice overlay and request handling (save, screenshot, quit) in the rendering phase, and
-// in the present phase blit -> ImGui panels -> swap.
+// Schedule with the editor's systems (tools/splatffd/engine.cpp lists them: input system; lattice overlay
+// and request handling (save, screenshot, quit) in the rendering phase; in the present phase display copy
+// -> blit -> ImGui panels -> swap).
 //
 // Deterministic runs for tests and demos: `--replay FILE` feeds a recorded input file (input_record.h)
 // frame by frame on a fixed 1/60 s clock, `--frames N` exits after N frames, `--screenshot PATH` writes
@@ -15,6 +15,7 @@
 #include <string>
 
 #include "runtime/app/frame_loop.h"
+#include "runtime/ecs/registry.h"
 
 namespace sffd::editor {
 
@@ -34,9 +35,16 @@ struct ViewOptions {
     std::string window_screenshot;  // with --frames: the whole window (panels included) of the last frame, PNG
 };
 
-// Runs the editor on `schedule` (the engine's standard frame built without its present systems, see
-// tools/splatffd/cmd_view.cpp); the editor adds its rendering- and present-phase systems. Returns the
-// process exit code (0 ok, 1 bad input or failure, with a message naming the problem).
+// Runs the editor on `schedule`: the engine's standard frame with the editor's systems
+// (make_engine_schedule({.editor = true}), tools/splatffd/engine.cpp lists them). Returns the process exit
+// code (0 ok, 1 bad input or failure, with a message naming the problem).
 int run_view(const ViewOptions& options, Schedule schedule);
+
+// The editor's own systems besides the input system (editor_system.h) and the overlay (lattice_overlay.h),
+// listed in the engine's schedule. Both do nothing outside run_view (no view session resource).
+// Rendering phase, after the overlay: save / screenshot / quit requests, present source, drag log.
+void requests_system(ecs::Registry& registry, const FrameContext& frame);
+// Present phase, between the blit and the swap: the ImGui panels (window with panels only).
+void ui_system(ecs::Registry& registry, const FrameContext& frame);
 
 }  // namespace sffd::editor

@@ -60,7 +60,7 @@ std::vector<std::uint32_t> control_points_in_rect(ecs::Registry& registry, Picki
     const PickSettings* settings = registry.try_resource<PickSettings>();
     state.refresh(registry, settings ? *settings : PickSettings{});
     return control_points_in_rect(points, view, rect,
-                                  [&](const glm::dvec3& p) { return !state.surface_between(view.eye, p); });
+                                  [&](const glm::dvec3& p) { return !state.surface_between(view.camera.eye, p); });
 }
 
 std::optional<glm::dvec3> lattice_local_coordinates(const Lattice& lattice, const glm::dvec3& point) {

@@ -1,27 +1,18 @@
 // Where picking's inputs live in the world: a point cloud's splats at Transform(origin + position), a
-// lattice's control points at Transform(current[i]) (identity when the entity has no Transform).
+// lattice's control points at Transform(current[i]) (identity when the entity has no Transform; the model
+// matrix is runtime/scene/camera.h's).
 #pragma once
 
 #include <vector>
 
 #include <glm/glm.hpp>
-#include <glm/gtc/quaternion.hpp>
 
 #include "runtime/ecs/registry.h"
+#include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
 
 namespace sffd::picking {
-
-inline glm::dmat4 model_matrix(const Transform* t) {
-    if (!t) return glm::dmat4(1.0);
-    glm::dmat4 m = glm::mat4_cast(t->rotation);
-    m[0] *= t->scale.x;
-    m[1] *= t->scale.y;
-    m[2] *= t->scale.z;
-    m[3] = glm::dvec4(t->translation, 1.0);
-    return m;
-}
 
 // World positions of a lattice's current control points (empty when `lattice` has no Lattice).
 inline std::vector<glm::dvec3> control_points_world(const ecs::Registry& registry, ecs::Entity lattice) {

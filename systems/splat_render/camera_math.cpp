@@ -6,29 +6,10 @@
 #include <utility>
 #include <vector>
 
-#include <glm/gtc/matrix_transform.hpp>
-#include <glm/gtc/quaternion.hpp>
 
 #include "systems/splat_render/splat_pack.h"
 
 namespace sffd::render {
-
-glm::dmat4 view_matrix(const Camera& camera) { return glm::lookAt(camera.eye, camera.target, camera.up); }
-
-glm::dmat4 projection_matrix(const Camera& camera, double aspect) {
-    return glm::perspective(glm::radians(double(camera.fov_y_degrees)), aspect, double(camera.near_plane),
-                            double(camera.far_plane));
-}
-
-glm::dmat4 model_matrix(const Transform* transform, const glm::dvec3& origin) {
-    glm::dmat4 m(1.0);
-    if (transform) {
-        m = glm::translate(m, transform->translation);
-        m = m * glm::mat4_cast(transform->rotation);
-        m = glm::scale(m, transform->scale);
-    }
-    return glm::translate(m, origin);
-}
 
 Camera framing_camera(const glm::dvec3& center, double radius, double aspect, glm::dvec3 direction,
                       float fov_y_degrees) {
@@ -77,10 +58,6 @@ Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBou
         for (const auto& [c, r] : balls) radius = std::max(radius, glm::length(c - center) + r);
     }
     return framing_camera(center, radius, aspect);
-}
-
-double view_depth(const Camera& camera, const glm::dvec3& world) {
-    return glm::dot(world - camera.eye, glm::normalize(camera.target - camera.eye));
 }
 
 gpu::FrameBlock camera_frame_block(const glm::dmat4& view, const glm::dmat4& projection, int width, int height,

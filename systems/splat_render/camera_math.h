@@ -1,5 +1,5 @@
-// Camera matrices and a framing camera, in double precision (scenes far from the origin keep float
-// precision because the renderer composes view * model in double and uploads the product as float).
+// The renderer's cameras: a framing camera, the scene's default camera and the camera part of the
+// FrameBlock. The matrices themselves (view, projection, model) are runtime/scene/camera.h's.
 #pragma once
 
 #include <functional>
@@ -7,16 +7,11 @@
 #include <glm/glm.hpp>
 
 #include "runtime/ecs/registry.h"
+#include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
 #include "shaders/splat_render/frame_block.h"
 
 namespace sffd::render {
-
-glm::dmat4 view_matrix(const Camera& camera);
-// OpenGL clip convention (z in [-1, 1]), symmetric frustum, vertical field of view.
-glm::dmat4 projection_matrix(const Camera& camera, double aspect);
-// Model matrix of a point cloud: Transform * translate(origin) (positions are relative to the origin).
-glm::dmat4 model_matrix(const Transform* transform, const glm::dvec3& origin);
 
 // A camera that frames a bounding sphere: looks at its centre from `direction` (towards the camera),
 // distance chosen so the sphere fits the smaller field of view with a margin; near/far around it.
@@ -31,9 +26,6 @@ Camera framing_camera(const glm::dvec3& center, double radius, double aspect,
 struct BoundingSphere;
 using CloudBounds = std::function<BoundingSphere(ecs::Entity, const SplatCloud&)>;
 Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBounds& bounds = {});
-
-// Depth along the camera's view axis (positive in front) of a world point.
-double view_depth(const Camera& camera, const glm::dvec3& world);
 
 // The camera's part of the splat passes' FrameBlock (shaders/splat_render/frame_block.h) for a
 // width x height frame: projection, view_to_world, viewport, the pixel-ray map, and model_view /

@@ -6,7 +6,6 @@
 #include <array>
 #include <bit>
 #include <cmath>
-#include <limits>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -26,11 +25,15 @@ float ellipse_max_radius(const glm::vec3& u, const glm::vec3& v) {
 }
 
 // GLSL round() leaves halves to the implementation; nearbyint rounds them to even, in one instruction.
+// The 30 colour bits go to the mantissa and (plus one) the exponent: always a normal, finite float.
 float pack_color(const glm::vec3& linear) {
     const glm::vec3 s = glm::sqrt(glm::clamp(linear, 0.0f, 1.0f)) * 1023.0f;
     const auto q = [](float x) { return std::uint32_t(std::nearbyint(x)); };
-    return std::bit_cast<float>(q(s.x) | (q(s.y) << 10) | (q(s.z) << 20));
+    const std::uint32_t bits = q(s.x) | (q(s.y) << 10) | (q(s.z) << 20);
+    return std::bit_cast<float>((bits & 0x7fffffu) + (((bits >> 23) + 1u) << 23));
 }
+
+bool all_finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
 // The shader's decode of per-splat colours: unpackUnorm4x8, then srgb_to_linear (no linear toe), as a
 // table of the 256 byte values.
@@ -124,7 +127,6 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     const float near_plane = f.projection[3][2] / (f.projection[2][2] - 1.0f);
     const float far_plane = f.projection[3][2] / (f.projection[2][2] + 1.0f);
     const float side_x = 1.0f / std::sqrt(p00 * p00 + 1.0f), side_y = 1.0f / std::sqrt(p11 * p11 + 1.0f);
-    const float nan = std::numeric_limits<float>::quiet_NaN();
     const std::array<float, 256>& splat_lut = splat_srgb_table();
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const tbb::blocked_range<std::size_t>& range) {
@@ -137,13 +139,14 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 const gpu::GpuSplat& s = splats[i];
                 // Back face from centre and normal only (a flipped splat, normal.w == 0, is two-sided).
                 const glm::vec3 c = glm::vec3(f.model_view * glm::vec4(xyz(s.center), 1.0f));
-                if (!std::isfinite(c.x + c.y + c.z)) continue;  // NaN or infinite centre: nothing to draw
+                if (!all_finite(xyz(s.center)) || !all_finite(xyz(s.normal)) || !all_finite(c)) continue;  // nothing to draw
                 const bool back = s.normal[3] != 0.0f && glm::dot(nv3 * xyz(s.normal), c) > 0.0f;
                 if (back && culling) continue;
                 const glm::vec3 u = mv3 * xyz(s.axis_u), v = mv3 * xyz(s.axis_v);
+                if (!all_finite(xyz(s.axis_u)) || !all_finite(xyz(s.axis_v)) || !all_finite(u) || !all_finite(v)) continue;
                 const float r = ellipse_max_radius(u, v);
                 const glm::vec3 cr = glm::cross(u, v);
-                if (!(r > 0.0f) || glm::dot(cr, cr) <= 1e-12f * r * r * r * r) continue;  // degenerate (or NaN)
+                if (r <= 0.0f || glm::dot(cr, cr) <= 1e-12f * r * r * r * r) continue;  // degenerate
                 if (culling) {
                     const float depth = -c.z;
                     if (depth + r < near_plane || depth - r > far_plane || (depth - p00 * std::abs(c.x)) * side_x < -r ||
@@ -165,7 +168,7 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 rec.plane = glm::vec4(pn / glm::dot(o.c, pn), f.params.x * o.r);
                 rec.dual_u = glm::vec4(du, glm::dot(du, o.c));
                 rec.dual_v = glm::vec4(dv, glm::dot(dv, o.c));
-                if (back) rec.plane.x = rec.plane.y = rec.plane.z = nan;  // culling off: every fragment discards
+                if (back) rec.plane.x = rec.plane.y = rec.plane.z = 0.0f;  // hidden (culling off, splat_record.h)
                 rec.center = glm::vec4(box.x, box.y, o.c.z, box.z);
                 const glm::vec3 world_n = glm::normalize(v2w3 * o.shading_n);
                 // splat_color

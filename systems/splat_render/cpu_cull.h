@@ -18,18 +18,9 @@
 
 #include "shaders/common/bindings.h"
 #include "shaders/splat_render/frame_block.h"
+#include "shaders/splat_render/splat_record.h"
 
 namespace sffd::render {
-
-// SplatRecord of shaders/splat_render/splat_common.glsl (std430, 80 bytes): see there for the fields.
-struct SplatRecord {
-    glm::vec4 center;
-    glm::vec4 plane;
-    glm::vec4 dual_u;
-    glm::vec4 dual_v;
-    glm::vec4 normal;
-};
-static_assert(sizeof(SplatRecord) == 80);
 
 // The material texture as the shader samples it (sRGB RGBA8, row 0 at v = 0, repeat in u, clamp in v,
 // bilinear at level 0). Null texels: untextured (per-splat colours).

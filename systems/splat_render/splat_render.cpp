@@ -6,8 +6,8 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <optional>
 #include <span>
+#include <utility>
 #include <unordered_map>
 #include <vector>
 
@@ -23,6 +23,7 @@
 #include "runtime/scene/components.h"
 #include "shaders/common/bindings.h"
 #include "shaders/splat_render/frame_block.h"
+#include "shaders/splat_render/splat_record.h"
 #include "systems/ffd/components.h"
 #include "runtime/app/pass_timer.h"
 #include "systems/splat_render/camera_math.h"
@@ -32,9 +33,6 @@
 namespace sffd::render {
 
 namespace {
-
-constexpr std::uint32_t cull_group_size = 128;  // local_size_x of shaders/splat_render/cull.comp
-constexpr std::size_t splat_record_bytes = 80;  // SplatRecord in shaders/splat_render/splat_common.glsl
 
 // Per point cloud GPU objects owned by the renderer (the splats themselves live in GpuSplatStore).
 struct CloudGpu {
@@ -58,6 +56,40 @@ struct CloudGpu {
     std::vector<gpu::GpuSplat> cpu_deformed;  // = GpuSplats::deformed when the FFD system's CPU path wrote it
     const std::vector<gpu::GpuSplat>* cpu_current = nullptr;  // the copy of the draw buffer, if any
     CpuCullResult cpu_cull;
+};
+
+// Owner of a fence sync object (GLsync is not a GL name, so gfx::GlObject does not cover it): move-only,
+// deleted with its owner.
+class Fence {
+public:
+    Fence() = default;
+    explicit Fence(GLsync sync) : m_sync(sync) {}
+    Fence(Fence&& other) noexcept : m_sync(std::exchange(other.m_sync, nullptr)) {}
+    Fence& operator=(Fence&& other) noexcept {
+        if (this != &other) reset(), m_sync = std::exchange(other.m_sync, nullptr);
+        return *this;
+    }
+    Fence(const Fence&) = delete;
+    Fence& operator=(const Fence&) = delete;
+    ~Fence() { reset(); }
+    void reset() {
+        if (m_sync) glDeleteSync(m_sync);
+        m_sync = nullptr;
+    }
+    GLsync get() const { return m_sync; }
+    explicit operator bool() const { return m_sync != nullptr; }
+
+private:
+    GLsync m_sync = nullptr;
+};
+
+// One frame's visible counts on their way back (SplatRenderState::counts_ring).
+struct CountsSlot {
+    Fence fence;                  // signals when the copies of the compute-culled clouds' commands landed
+    std::uint64_t serial = 0;     // issue order
+    std::uint64_t frame = 0;      // FrameContext::frame of the frame that issued it
+    std::uint32_t cpu_points = 0, cpu_quads = 0;  // counts of the CPU-culled clouds, known at once
+    std::uint32_t gpu_clouds = 0;  // compute-culled clouds copied into the slot
 };
 
 }  // namespace
@@ -84,6 +116,22 @@ struct SplatRenderState {
     gfx::Texture display_color;  // RGBA8 sRGB-encoded, only when presenting to a window
     gfx::Framebuffer display_fbo;
     int display_width = 0, display_height = 0;
+
+    gfx::Buffer display_ubo;        // FrameBlock with the background, for the display copy
+    glm::vec4 last_background{0.0f};  // of the last rendered frame
+
+    // The compute cull's visible counts come back through this ring, never by waiting (issue 15): a
+    // persistently mapped buffer of counts_slot_count slots x counts_ring_clouds clouds x 8 uints.
+    static constexpr std::size_t counts_slot_count = 4;
+    gfx::Buffer command_reset;  // immutable {0, 1, 0, 0, 6, 0, 0, 0}: copied over the draw commands
+    gfx::Buffer counts_ring;
+    const std::uint32_t* counts_mapped = nullptr;
+    std::size_t counts_ring_clouds = 0;
+    std::array<CountsSlot, counts_slot_count> counts_slots;
+    std::uint64_t counts_issued = 0;  // serial of the last slot issued
+    std::uint64_t counts_serial = 0;  // serial of the counts below (0: none arrived yet)
+    std::uint64_t counts_frame = 0;
+    std::uint32_t counts_points = 0, counts_quads = 0;
 
     std::unordered_map<ecs::Entity, CloudGpu> clouds;
     bool software = false;  // the context is a software rasterizer (gfx::software_rasterizer)
@@ -203,7 +251,7 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
         if (gpu.capacity < n || !gpu.records) {
             gpu.capacity = std::max<std::uint32_t>(n, 1);
             gpu.records = gfx::Buffer::create("render.visible_splats");
-            glNamedBufferData(gpu.records.id(), GLsizeiptr(std::size_t(gpu.capacity) * splat_record_bytes), nullptr,
+            glNamedBufferData(gpu.records.id(), GLsizeiptr(std::size_t(gpu.capacity) * sizeof(SplatRecord)), nullptr,
                               GL_DYNAMIC_DRAW);
             gpu.quads = gfx::Buffer::create("render.visible_quads");
             glNamedBufferData(gpu.quads.id(), GLsizeiptr(std::size_t(gpu.capacity) * sizeof(std::uint32_t)), nullptr,
@@ -370,7 +418,7 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
     glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
-    glVertexArrayVertexBuffer(s.records_vao.id(), 0, gpu.records.id(), 0, GLsizei(splat_record_bytes));
+    glVertexArrayVertexBuffer(s.records_vao.id(), 0, gpu.records.id(), 0, GLsizei(SFFD_SPLAT_RECORD_BYTES));
     glBindVertexArray(s.records_vao.id());
     glUseProgram(programs[0].id());
     glDrawArraysIndirect(GL_POINTS, nullptr);
@@ -436,6 +484,9 @@ Status init_render_state(ecs::Registry& registry) {
     if (!display) return make_error(display.message());
     s.display = std::move(display.value());
     s.vao = gfx::VertexArray::create("render.empty");
+    s.command_reset = gfx::Buffer::create("render.draw_commands.reset");
+    const std::uint32_t reset[8] = {0, 1, 0, 0, 6, 0, 0, 0};
+    glNamedBufferStorage(s.command_reset.id(), sizeof reset, reset, 0);
     s.records_vao = gfx::VertexArray::create("render.splat_records");
     for (GLuint a = 0; a < 5; ++a) {
         glEnableVertexArrayAttrib(s.records_vao.id(), a);
@@ -460,53 +511,104 @@ Status init_render_state(ecs::Registry& registry) {
 
 void release_render_state(ecs::Registry& registry) { registry.erase_resource<SplatRenderState>(); }
 
-void render_system(ecs::Registry& reg, const FrameContext& frame) {
-    if (!reg.try_resource<SplatRenderState>()) {
-        if (Status st = init_render_state(reg); !st) {
-            log::error("render_system(): ", st.message());
-            SplatRenderState failed;
-            failed.failed = true;
-            reg.set_resource<SplatRenderState>(std::move(failed));
-        }
-    }
-    SplatRenderState& s = reg.resource<SplatRenderState>();
-    if (s.failed) return;
-    if (!reg.try_resource<RenderSettings>()) reg.set_resource<RenderSettings>();
-    const RenderSettings settings = reg.resource<RenderSettings>();
-    if (!reg.try_resource<gfx::GpuSplatStore>()) reg.set_resource<gfx::GpuSplatStore>();
-    if (!reg.try_resource<RenderStats>()) reg.set_resource<RenderStats>();
-    RenderStats& stats = reg.resource<RenderStats>();
-    stats = RenderStats{};
-    stats.frame = frame.frame;
+namespace {
 
-    using clock = std::chrono::steady_clock;
-    const auto t_start = clock::now();
-    auto t_lap = t_start;
-    auto lap = [&](double& slot) {
-        if (!settings.time_passes) return;
+// What the passes of one frame share: the settings, the camera, the per-cloud uniforms' common part and the
+// clouds that reached the draw lists (cull_pass fills `drawn`).
+struct FramePlan {
+    RenderSettings settings;
+    int width = 1, height = 1;
+    ViewSetup view;
+    gpu::FrameBlock common;
+    std::vector<CloudGpu*> drawn;
+};
+
+// CPU time per pass for RenderStats, only with RenderSettings::time_passes (glFinish after each pass).
+class PassLaps {
+public:
+    explicit PassLaps(bool enabled) : m_enabled(enabled) {}
+    void lap(double& slot) {
+        if (!m_enabled) return;
         glFinish();
         const auto now = clock::now();
-        slot += std::chrono::duration<double, std::milli>(now - t_lap).count();
-        t_lap = now;
-    };
+        slot += std::chrono::duration<double, std::milli>(now - m_lap).count();
+        m_lap = now;
+    }
+    double total_ms() const { return std::chrono::duration<double, std::milli>(clock::now() - m_start).count(); }
 
-    const int w = std::max(settings.width, 1), h = std::max(settings.height, 1);
-    ensure_targets(s, w, h);
-    sync_clouds(reg, s, reg.resource<gfx::GpuSplatStore>(), cpu_cull_wanted(s, settings.cull_path));
+private:
+    using clock = std::chrono::steady_clock;
+    bool m_enabled;
+    clock::time_point m_start = clock::now(), m_lap = m_start;
+};
 
-    const ViewSetup view = choose_camera(reg, s, double(w) / double(h));
-    const gpu::FrameBlock common = frame_block(reg, settings, view, s.max_point_size);
+// The ring that brings the compute cull's visible counts back without waiting: each frame copies the draw
+// commands of its compute-culled clouds into one slot of a persistently mapped buffer and fences it; a later
+// frame reads the slot once glClientWaitSync(fence, 0 timeout) says the copies landed.
+void ensure_counts_ring(SplatRenderState& s, std::size_t clouds) {
+    if (s.counts_ring && s.counts_ring_clouds >= clouds) return;
+    for (CountsSlot& slot : s.counts_slots) slot = CountsSlot{};  // in flight into the old ring: dropped
+    s.counts_ring_clouds = std::max<std::size_t>(clouds, 4);
+    const auto bytes = GLsizeiptr(SplatRenderState::counts_slot_count * s.counts_ring_clouds * 8 * sizeof(std::uint32_t));
+    const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
+    s.counts_ring = gfx::Buffer::create("render.visible_counts");
+    glNamedBufferStorage(s.counts_ring.id(), bytes, nullptr, map | GL_CLIENT_STORAGE_BIT);
+    s.counts_mapped = static_cast<const std::uint32_t*>(glMapNamedBufferRange(s.counts_ring.id(), 0, bytes, map));
+}
 
-    // Per-cloud uniforms, then culling and compaction.
-    std::vector<CloudGpu*> drawn;
-    std::optional<profiling::GpuScope> pass_scope;  // names each pass for the profiler (no-op without one)
-    std::vector<const CloudGpu*> computed;  // clouds culled by the compute pass (counts read back for stats)
-    pass_scope.emplace(reg, "render.cull");
+// Frees every slot whose fence has signalled (a zero-timeout poll) and keeps the newest one's counts.
+void collect_counts(SplatRenderState& s) {
+    for (std::size_t i = 0; i < s.counts_slots.size(); ++i) {
+        CountsSlot& slot = s.counts_slots[i];
+        if (!slot.fence) continue;
+        const GLenum state = glClientWaitSync(slot.fence.get(), 0, 0);
+        if (state != GL_ALREADY_SIGNALED && state != GL_CONDITION_SATISFIED) continue;
+        slot.fence.reset();
+        if (slot.serial <= s.counts_serial || !s.counts_mapped) continue;
+        std::uint32_t points = slot.cpu_points, quads = slot.cpu_quads;
+        const std::uint32_t* p = s.counts_mapped + i * s.counts_ring_clouds * 8;
+        for (std::uint32_t c = 0; c < slot.gpu_clouds; ++c) points += p[c * 8 + 0], quads += p[c * 8 + 5];
+        s.counts_serial = slot.serial, s.counts_frame = slot.frame;
+        s.counts_points = points, s.counts_quads = quads;
+    }
+}
+
+// Copies this frame's draw commands of the compute-culled clouds into a free slot of the ring and fences
+// it (the oldest slot when every one is still in flight: its counts are dropped, never waited for).
+void issue_counts(SplatRenderState& s, const std::vector<const CloudGpu*>& computed, std::uint32_t cpu_points,
+                  std::uint32_t cpu_quads, std::uint64_t frame) {
+    ensure_counts_ring(s, computed.size());
+    std::size_t at = 0;
+    for (std::size_t i = 0; i < s.counts_slots.size(); ++i) {
+        if (!s.counts_slots[i].fence) {
+            at = i;
+            break;
+        }
+        if (s.counts_slots[i].serial < s.counts_slots[at].serial) at = i;
+    }
+    for (std::size_t c = 0; c < computed.size(); ++c)
+        glCopyNamedBufferSubData(computed[c]->commands.id(), s.counts_ring.id(), 0,
+                                 GLintptr((at * s.counts_ring_clouds + c) * 8 * sizeof(std::uint32_t)),
+                                 8 * sizeof(std::uint32_t));
+    CountsSlot& slot = s.counts_slots[at];
+    slot.fence = Fence(glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0));
+    glFlush();  // a fence signals only once submitted; polls never flush (a headless run has no swap)
+    slot.serial = ++s.counts_issued, slot.frame = frame;
+    slot.cpu_points = cpu_points, slot.cpu_quads = cpu_quads;
+    slot.gpu_clouds = std::uint32_t(computed.size());
+}
+
+// Per-cloud uniforms, then culling and compaction of every cloud (the compute pass, or cpu_cull.h).
+void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderStats& stats) {
+    const RenderSettings& settings = plan.settings;
+    std::vector<const CloudGpu*> computed;  // clouds culled by the compute pass (counts come back later)
+    std::uint32_t cpu_points = 0, cpu_quads = 0;
+    auto scope = profiling::gpu_scope(reg, "render.cull");
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         CloudGpu& gpu = s.clouds[e];
         if (gpu.count == 0 || gpu.splats == 0) return;
-        gpu::FrameBlock b = common;
-        const glm::dmat4 mv = view.view * model_matrix(reg.try_get<Transform>(e), cloud.origin);
+        gpu::FrameBlock b = plan.common;
+        const glm::dmat4 mv = plan.view.view * model_matrix(reg.try_get<Transform>(e), cloud.origin);
         b.model_view = glm::mat4(mv);
         b.normal_view = glm::mat4(glm::mat3(glm::inverseTranspose(glm::dmat3(mv))));
         b.params.w = gpu.texture ? 1.0f : 0.0f;
@@ -529,12 +631,13 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
             });
             const std::uint32_t commands[8] = {r.visible_records, 1, 0, 0, 6, r.visible_quads, 0, 0};
             glNamedBufferSubData(gpu.commands.id(), 0, sizeof commands, commands);
-            stats.visible_points += r.visible_records;
-            stats.visible_quads += r.visible_quads;
+            cpu_points += r.visible_records;
+            cpu_quads += r.visible_quads;
             ++stats.cpu_culled_clouds;
         } else {
-            const std::uint32_t reset[8] = {0, 1, 0, 0, 6, 0, 0, 0};
-            glNamedBufferSubData(gpu.commands.id(), 0, sizeof reset, reset);
+            // Reset the counts on the GPU (a copy from an immutable buffer): a CPU upload into a buffer the
+            // GPU writes every frame makes drivers move it to host memory (NVIDIA's performance warning).
+            glCopyNamedBufferSubData(s.command_reset.id(), gpu.commands.id(), 0, 0, 8 * sizeof(std::uint32_t));
             const bool textured = bool(gpu.texture), lit = b.counts.w == 1u;
             if (Status st = cull_program(s, textured, lit, b.counts.y); !st) log::error("render_system(): ", st.message());
             glUseProgram(s.cull[textured][lit][lit ? std::min<std::uint32_t>(b.counts.y, SFFD_MAX_LIGHTS) : 0].id());
@@ -546,31 +649,28 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
             glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
             // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its worker
             // threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread time).
-            glDispatchCompute((gpu.count + cull_group_size - 1) / cull_group_size, 1, 1);
+            glDispatchCompute((gpu.count + SFFD_CULL_GROUP_SIZE - 1) / SFFD_CULL_GROUP_SIZE, 1, 1);
             ++stats.compute_culled_clouds;
             computed.push_back(&gpu);
         }
         stats.splats += gpu.count;
-        drawn.push_back(&gpu);
+        plan.drawn.push_back(&gpu);
     });
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
-    pass_scope.reset();
-    lap(stats.cull_ms);
-    if (settings.time_passes)
-        for (const CloudGpu* gpu : computed) {
-            std::uint32_t cmd[8] = {};
-            glGetNamedBufferSubData(gpu->commands.id(), 0, sizeof cmd, cmd);
-            stats.visible_points += cmd[0];
-            stats.visible_quads += cmd[5];
-        }
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
 
-    const glm::vec4 background = common.background;
+    issue_counts(s, computed, cpu_points, cpu_quads, stats.frame);
+}
+
+// Clears the output targets and sets the state every splat pass shares.
+void begin_splat_passes(SplatRenderState& s, const FramePlan& plan) {
+    const RenderSettings& settings = plan.settings;
+    const glm::vec4 background = plan.common.background;
     const glm::vec4 no_hit(0.0f, 0.0f, 0.0f, -1.0f);
     const float far_depth = 1.0f;
     glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 0, &background.x);
     if (settings.aux_outputs) glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 1, &no_hit.x);
     glClearNamedFramebufferfv(s.output_fbo.id(), GL_DEPTH, 0, &far_depth);
-    glViewport(0, 0, w, h);
+    glViewport(0, 0, plan.width, plan.height);
     glBindVertexArray(s.vao.id());
     glEnable(GL_PROGRAM_POINT_SIZE);
     glDisable(GL_CULL_FACE);
@@ -583,96 +683,186 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     const GLenum with_aux[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1}, without_aux[2] = {GL_COLOR_ATTACHMENT0, GL_NONE};
     glNamedFramebufferDrawBuffers(s.output_fbo.id(), 2, settings.aux_outputs ? with_aux : without_aux);
     s.aux_valid = settings.aux_outputs;
-    if (settings.quality == Quality::preview) {
-        glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
-        glDepthFunc(GL_LESS);
-        pass_scope.emplace(reg, "render.preview");
-        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.preview[settings.aux_outputs ? 1 : 0], *gpu);
-        pass_scope.reset();
-        lap(stats.preview_ms);
-    } else {
-        // 1. visibility: eps-offset depth only
-        glBindFramebuffer(GL_FRAMEBUFFER, s.depth_fbo.id());
-        glDepthFunc(GL_LESS);
-        pass_scope.emplace(reg, "render.hq.visibility");
-        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.visibility, *gpu);
-        pass_scope.reset();
-        lap(stats.visibility_ms);
-        // 2. attributes: additive, depth-tested against the offset surface, no depth writes
-        // Accumulation and shading only inside the screen rectangle the clouds can cover (clears of two
-        // RGBA32F targets and the shading pass are a large part of a small scene's frame on llvmpipe).
-        const glm::ivec4 rect = screen_rect(reg, view, w, h);
-        glEnable(GL_SCISSOR_TEST);
-        glScissor(rect.x, rect.y, rect.z, rect.w);
-        // Clouds that differ in specular/shininess blend them into a third target (per-pixel materials);
-        // one material for every cloud is a uniform, as cheap as before.
-        const bool materials = std::any_of(drawn.begin(), drawn.end(), [&](const CloudGpu* g) {
-            return g->material->specular != drawn.front()->material->specular ||
-                   g->material->shininess != drawn.front()->material->shininess;
-        });
-        const GLenum accum_buffers[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
-        glNamedFramebufferDrawBuffers(s.accum_fbo.id(), materials ? 3 : 2, accum_buffers);
-        const glm::vec4 zero(0.0f);
-        glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 0, &zero.x);
-        glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 1, &zero.x);
-        if (materials) glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 2, &zero.x);
-        glBindFramebuffer(GL_FRAMEBUFFER, s.accum_fbo.id());
-        glDepthFunc(GL_LEQUAL);
-        glDepthMask(GL_FALSE);
-        glEnable(GL_BLEND);
-        glBlendEquation(GL_FUNC_ADD);
-        glBlendFunc(GL_ONE, GL_ONE);
-        pass_scope.emplace(reg, "render.hq.attribute");
-        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.attribute[materials], *gpu);
-        pass_scope.reset();
-        glDisable(GL_BLEND);
-        glDepthMask(GL_TRUE);
-        lap(stats.attribute_ms);
-        // 3. normalise + shade. Early depth test skips background pixels (depth still 1.0) before the
-        // shader runs.
-        glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
-        glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s.accum_color.id());
-        glBindTextureUnit(SFFD_TEX_ACCUM_NORMAL, s.accum_normal.id());
-        glBindTextureUnit(SFFD_TEX_ACCUM_MATERIAL, s.accum_material.id());
-        glDepthFunc(GL_NOTEQUAL);
-        glDepthMask(GL_FALSE);
-        if (!drawn.empty()) glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, drawn.front()->frame_ubo.id());
-        const std::uint32_t lights = std::min<std::uint32_t>(common.counts.y, SFFD_MAX_LIGHTS);
-        if (Status st = shade_program(s, materials, lights); !st) log::error("render_system(): ", st.message());
-        glUseProgram(s.shade[materials][lights].id());
-        pass_scope.emplace(reg, "render.hq.shade");
-        if (!drawn.empty()) glDrawArrays(GL_TRIANGLES, 0, 3);
-        pass_scope.reset();
-        glDisable(GL_SCISSOR_TEST);
-        glDepthMask(GL_TRUE);
-        glDepthFunc(GL_LESS);
-        lap(stats.shade_ms);
+}
+
+// Preview: one pass of opaque ray-cast ellipses into the output targets.
+void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan) {
+    glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
+    glDepthFunc(GL_LESS);
+    auto scope = profiling::gpu_scope(reg, "render.preview");
+    for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.preview[plan.settings.aux_outputs ? 1 : 0], *gpu);
+}
+
+// HQ 1. visibility: eps-offset depth only.
+void visibility_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan) {
+    glBindFramebuffer(GL_FRAMEBUFFER, s.depth_fbo.id());
+    glDepthFunc(GL_LESS);
+    auto scope = profiling::gpu_scope(reg, "render.hq.visibility");
+    for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.visibility, *gpu);
+}
+
+// Whether the drawn clouds differ in specular/shininess: then they blend into a third target (per-pixel
+// materials); one material for every cloud is a uniform, as cheap as before.
+bool clouds_differ_in_material(const FramePlan& plan) {
+    return std::any_of(plan.drawn.begin(), plan.drawn.end(), [&](const CloudGpu* g) {
+        return g->material->specular != plan.drawn.front()->material->specular ||
+               g->material->shininess != plan.drawn.front()->material->shininess;
+    });
+}
+
+// HQ 2. attributes: additive, depth-tested against the offset surface, no depth writes; only inside the
+// screen rectangle the clouds can cover (`rect`: clears of two RGBA32F targets and the shading pass are a
+// large part of a small scene's frame on llvmpipe). Leaves the scissor test on for shade_pass.
+void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect,
+                    bool materials) {
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(rect.x, rect.y, rect.z, rect.w);
+    const GLenum accum_buffers[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glNamedFramebufferDrawBuffers(s.accum_fbo.id(), materials ? 3 : 2, accum_buffers);
+    const glm::vec4 zero(0.0f);
+    glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 0, &zero.x);
+    glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 1, &zero.x);
+    if (materials) glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 2, &zero.x);
+    glBindFramebuffer(GL_FRAMEBUFFER, s.accum_fbo.id());
+    glDepthFunc(GL_LEQUAL);
+    glDepthMask(GL_FALSE);
+    glEnable(GL_BLEND);
+    glBlendEquation(GL_FUNC_ADD);
+    glBlendFunc(GL_ONE, GL_ONE);
+    {
+        auto scope = profiling::gpu_scope(reg, "render.hq.attribute");
+        for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.attribute[materials], *gpu);
     }
-    // A window shows the frame through the present phase: publish an sRGB copy (headless runs skip it).
-    const auto* app_ctx = reg.try_resource<app::AppContext>();
-    if (app_ctx && app_ctx->context && !app_ctx->context->is_headless()) {
-        if (!s.display_fbo || s.display_width != w || s.display_height != h) {
-            s.display_color = make_target(GL_RGBA8, w, h, "render.display");
-            s.display_fbo = gfx::Framebuffer::create("render.display");
-            glNamedFramebufferTexture(s.display_fbo.id(), GL_COLOR_ATTACHMENT0, s.display_color.id(), 0);
-            s.display_width = w, s.display_height = h;
-        }
-        glBindFramebuffer(GL_FRAMEBUFFER, s.display_fbo.id());
-        glDisable(GL_DEPTH_TEST);
-        if (!drawn.empty()) glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, drawn.front()->frame_ubo.id());
-        glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s.color.id());
-        glUseProgram(s.display.id());
-        glDrawArrays(GL_TRIANGLES, 0, 3);
-        glEnable(GL_DEPTH_TEST);
-        auto& present = reg.try_resource<app::PresentSource>() ? reg.resource<app::PresentSource>()
-                                                               : reg.set_resource<app::PresentSource>();
-        present = app::PresentSource{s.display_fbo.id(), GL_COLOR_ATTACHMENT0, w, h};
+    glDisable(GL_BLEND);
+    glDepthMask(GL_TRUE);
+}
+
+// HQ 3. normalise + shade into the output targets. Early depth test skips background pixels (depth still
+// 1.0) before the shader runs. Ends the scissor test attribute_pass began.
+void shade_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, bool materials) {
+    glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
+    glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s.accum_color.id());
+    glBindTextureUnit(SFFD_TEX_ACCUM_NORMAL, s.accum_normal.id());
+    glBindTextureUnit(SFFD_TEX_ACCUM_MATERIAL, s.accum_material.id());
+    glDepthFunc(GL_NOTEQUAL);
+    glDepthMask(GL_FALSE);
+    if (!plan.drawn.empty()) glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, plan.drawn.front()->frame_ubo.id());
+    const std::uint32_t lights = std::min<std::uint32_t>(plan.common.counts.y, SFFD_MAX_LIGHTS);
+    if (Status st = shade_program(s, materials, lights); !st) log::error("render_system(): ", st.message());
+    glUseProgram(s.shade[materials][lights].id());
+    {
+        auto scope = profiling::gpu_scope(reg, "render.hq.shade");
+        if (!plan.drawn.empty()) glDrawArrays(GL_TRIANGLES, 0, 3);
     }
+    glDisable(GL_SCISSOR_TEST);
+    glDepthMask(GL_TRUE);
+    glDepthFunc(GL_LESS);
+}
+
+void end_splat_passes() {
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glBindVertexArray(0);
     glUseProgram(0);
-    if (settings.time_passes)
-        stats.total_ms = std::chrono::duration<double, std::milli>(clock::now() - t_start).count();
+}
+
+// The state resource, created on first use (a failed start is remembered: no retry every frame).
+SplatRenderState& render_state(ecs::Registry& reg) {
+    if (!reg.try_resource<SplatRenderState>()) {
+        if (Status st = init_render_state(reg); !st) {
+            log::error("render_system(): ", st.message());
+            SplatRenderState failed;
+            failed.failed = true;
+            reg.set_resource<SplatRenderState>(std::move(failed));
+        }
+    }
+    return reg.resource<SplatRenderState>();
+}
+
+}  // namespace
+
+void render_system(ecs::Registry& reg, const FrameContext& frame) {
+    SplatRenderState& s = render_state(reg);
+    if (s.failed) return;
+    if (!reg.try_resource<RenderSettings>()) reg.set_resource<RenderSettings>();
+    if (!reg.try_resource<gfx::GpuSplatStore>()) reg.set_resource<gfx::GpuSplatStore>();
+    if (!reg.try_resource<RenderStats>()) reg.set_resource<RenderStats>();
+    RenderStats& stats = reg.resource<RenderStats>();
+    stats = RenderStats{};
+    stats.frame = frame.frame;
+
+    FramePlan plan;
+    plan.settings = reg.resource<RenderSettings>();
+    PassLaps laps(plan.settings.time_passes);
+    plan.width = std::max(plan.settings.width, 1), plan.height = std::max(plan.settings.height, 1);
+    ensure_targets(s, plan.width, plan.height);
+    sync_clouds(reg, s, reg.resource<gfx::GpuSplatStore>(), cpu_cull_wanted(s, plan.settings.cull_path));
+    plan.view = choose_camera(reg, s, double(plan.width) / double(plan.height));
+    plan.common = frame_block(reg, plan.settings, plan.view, s.max_point_size);
+
+    cull_pass(reg, s, plan, stats);
+    laps.lap(stats.cull_ms);
+    begin_splat_passes(s, plan);
+    if (plan.settings.quality == Quality::preview) {
+        preview_pass(reg, s, plan);
+        laps.lap(stats.preview_ms);
+    } else {
+        visibility_pass(reg, s, plan);
+        laps.lap(stats.visibility_ms);
+        const bool materials = clouds_differ_in_material(plan);
+        attribute_pass(reg, s, plan, screen_rect(reg, plan.view, plan.width, plan.height), materials);
+        laps.lap(stats.attribute_ms);
+        shade_pass(reg, s, plan, materials);
+        laps.lap(stats.shade_ms);
+    }
+    end_splat_passes();
+    // Visible counts of the newest frame whose read-back has landed (with time_passes: this frame, the
+    // glFinish of the laps has completed it; otherwise usually a frame or two back). Never waits.
+    collect_counts(s);
+    stats.counts_frame = s.counts_frame;
+    stats.counts_valid = s.counts_serial != 0;
+    stats.visible_points = s.counts_points;
+    stats.visible_quads = s.counts_quads;
+    s.last_background = plan.common.background;
+    if (plan.settings.time_passes) stats.total_ms = laps.total_ms();
+}
+
+void display_system(ecs::Registry& reg, const FrameContext&) {
+    SplatRenderState* s = reg.try_resource<SplatRenderState>();
+    if (!s || s->failed || !s->output_fbo) return;
+    // Only a window shows the frame (headless runs capture the linear target).
+    const auto* app_ctx = reg.try_resource<app::AppContext>();
+    if (!app_ctx || !app_ctx->context || app_ctx->context->is_headless()) return;
+    const int w = s->width, h = s->height;
+    if (!s->display_fbo || s->display_width != w || s->display_height != h) {
+        s->display_color = make_target(GL_RGBA8, w, h, "render.display");
+        s->display_fbo = gfx::Framebuffer::create("render.display");
+        glNamedFramebufferTexture(s->display_fbo.id(), GL_COLOR_ATTACHMENT0, s->display_color.id(), 0);
+        s->display_width = w, s->display_height = h;
+    }
+    if (!s->display_ubo) {
+        s->display_ubo = gfx::Buffer::create("render.display_block");
+        glNamedBufferData(s->display_ubo.id(), sizeof(gpu::FrameBlock), nullptr, GL_DYNAMIC_DRAW);
+    }
+    gpu::FrameBlock b{};
+    b.background = s->last_background;
+    glNamedBufferSubData(s->display_ubo.id(), 0, sizeof b, &b);
+    glBindFramebuffer(GL_FRAMEBUFFER, s->display_fbo.id());
+    glViewport(0, 0, w, h);
+    glDisable(GL_DEPTH_TEST);
+    glDisable(GL_BLEND);
+    glDisable(GL_SCISSOR_TEST);
+    glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, s->display_ubo.id());
+    glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s->color.id());
+    glBindVertexArray(s->vao.id());  // empty: the triangle comes from gl_VertexID
+    glUseProgram(s->display.id());
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glEnable(GL_DEPTH_TEST);
+    glBindVertexArray(0);
+    glUseProgram(0);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    auto& present = reg.try_resource<app::PresentSource>() ? reg.resource<app::PresentSource>()
+                                                           : reg.set_resource<app::PresentSource>();
+    present = app::PresentSource{s->display_fbo.id(), GL_COLOR_ATTACHMENT0, w, h};
 }
 
 Result<FrameImage> capture_frame(ecs::Registry& registry) {

@@ -49,11 +49,16 @@ struct RenderSettings {
 };
 
 // Registry resource written by render_system; pass times only when RenderSettings::time_passes.
+// The visible counts come from the GPU without waiting for it: they are those of frame `counts_frame`, the
+// newest frame whose read-back has landed (with time_passes: this frame; otherwise usually a frame or two
+// back); counts_valid is false until the first one lands.
 struct RenderStats {
     std::uint64_t frame = 0;
-    std::uint32_t splats = 0;           // splats submitted (all clouds)
-    std::uint32_t visible_points = 0;   // after culling, drawn as sprites (compute path: only with time_passes)
-    std::uint32_t visible_quads = 0;    // after culling, drawn as quads (compute path: only with time_passes)
+    std::uint32_t splats = 0;           // splats submitted (all clouds), this frame
+    std::uint32_t visible_points = 0;   // after culling, drawn as sprites (all clouds), frame counts_frame
+    std::uint32_t visible_quads = 0;    // after culling, drawn as quads (all clouds), frame counts_frame
+    std::uint64_t counts_frame = 0;
+    bool counts_valid = false;
     std::uint32_t cpu_culled_clouds = 0;      // clouds culled on the CPU this frame (CullPath)
     std::uint32_t compute_culled_clouds = 0;  // clouds culled by the compute pass this frame
     double cull_ms = 0, visibility_ms = 0, attribute_ms = 0, shade_ms = 0, preview_ms = 0, total_ms = 0;
@@ -64,6 +69,11 @@ struct RenderStats {
 Status init_render_state(ecs::Registry& registry);
 
 void render_system(ecs::Registry& registry, const FrameContext& frame);
+
+// Display copy for a window (present phase, after every overlay has drawn into the output target): the
+// linear colour target over the background, sRGB-encoded into an RGBA8 texture, published as the
+// app::PresentSource that present_blit_system shows. Headless contexts skip it.
+void display_system(ecs::Registry& registry, const FrameContext& frame);
 
 // Reads the last rendered frame back (call after render_system, same context). Depth and normals only
 // when RenderSettings::aux_outputs was on for that frame (else +inf and 0).

@@ -108,7 +108,7 @@ int run_view_command(sffd::cli::Args args) {
             return 2;
         }
     }
-    return sffd::editor::run_view(o, sffd::make_engine_schedule({.present = false}));
+    return sffd::editor::run_view(o, sffd::make_engine_schedule({.present = true, .editor = true}));
 }
 
 }  // namespace

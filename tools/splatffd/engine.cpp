@@ -5,12 +5,12 @@
 
 #include "runtime/app/app.h"
 #include "systems/animation/animation_system.h"
+#include "systems/editor/editor_system.h"
+#include "systems/editor/lattice_overlay.h"
+#include "systems/editor/view_app.h"
 #include "systems/ffd/ffd_system.h"
 #include "systems/picking/picking_system.h"
 #include "systems/splat_render/splat_render.h"
-#if SFFD_EDITOR_HAS_INPUT_SYSTEM
-#include "systems/editor/editor_system.h"
-#endif
 
 namespace sffd {
 
@@ -18,9 +18,7 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
     Schedule s;
 
     // --- input: window events -> editor tools -> edit commands on lattices (editor) -----------------
-#if SFFD_EDITOR_HAS_INPUT_SYSTEM
     s.add(Phase::input, "editor", editor::editor_input_system);  // no-op without an EditorState resource
-#endif
 
     // --- animation: clips write lattice control points at the frame time (animation) ----------------
     s.add(Phase::animation, "animation", animation_system);
@@ -33,10 +31,19 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
 
     // --- rendering: splat passes, overlays, UI, capture (splat_render, editor overlay) ---------------
     s.add(Phase::rendering, "splat_render", render::render_system);  // culling + HQ/preview splat passes
+    if (options.editor) {
+        s.add(Phase::rendering, "editor.overlay", editor::lattice_overlay_system);  // into the linear target
+        s.add(Phase::rendering, "editor.requests", editor::requests_system);  // save, screenshot, quit
+    }
 
-    // --- present: blit the PresentSource to the window, window UI on top (editor), swap -------------
-    if (options.present) s.add(Phase::present, "present.blit", app::present_blit_system);
-    if (options.present) s.add(Phase::present, "present.swap", app::present_swap_system);
+    // --- present: sRGB display copy (after every overlay), blit it to the window, window UI on top
+    // (editor), swap ----------------------------------------------------------------------------------
+    if (options.present) {
+        s.add(Phase::present, "render.display", render::display_system);
+        s.add(Phase::present, "present.blit", app::present_blit_system);
+        if (options.editor) s.add(Phase::present, "editor.ui", editor::ui_system);
+        s.add(Phase::present, "present.swap", app::present_swap_system);
+    }
 
     return s;
 }

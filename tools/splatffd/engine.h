@@ -7,7 +7,8 @@
 namespace sffd {
 
 struct EngineScheduleOptions {
-    bool present = true;  // include app::present_blit_system/present_swap_system (window only)
+    bool present = true;  // the present phase: display copy, blit, swap (each does nothing headless)
+    bool editor = false;  // the editor's overlay, requests and panels (`splatffd view`)
 };
 
 Schedule make_engine_schedule(const EngineScheduleOptions& options = {});

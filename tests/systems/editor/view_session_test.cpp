@@ -64,7 +64,7 @@ TEST(ViewSession, ReplayedEditsShowInTheScreenshotAndTheSavedLatticeIsBitExact) 
     // --- the saved lattice: bit for bit what the editor's input system produces from the same events ---
     ecs::Registry expected;
     ASSERT_TRUE(load_scene(expected, "sphere").ok());
-    editor::EditorState& state = editor::setup_editor(expected, editor::Viewport{1280, 720});
+    editor::EditorState& state = editor::setup_editor(expected, Viewport{1280, 720});
     auto events = editor::load_input_recording(session);
     ASSERT_TRUE(events.ok()) << events.message();
     state.replay.emplace(*events);

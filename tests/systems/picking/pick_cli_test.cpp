@@ -79,7 +79,7 @@ TEST(PickCli, ControlPointAtItsProjectedPixel) {
     const int n1 = l.divisions.z + 1, m1 = l.divisions.y + 1;
     EXPECT_EQ(j["lattice_ijk"], nlohmann::json::array({int(target) / (m1 * n1), (int(target) / n1) % m1, int(target) % n1}));
     for (int a = 0; a < 3; ++a) EXPECT_NEAR(j["position"][a].get<double>(), points[target][a], 1e-9);
-    EXPECT_NEAR(j["distance"].get<double>(), glm::length(points[target] - s.view.eye), 1e-9);
+    EXPECT_NEAR(j["distance"].get<double>(), glm::length(points[target] - s.view.camera.eye), 1e-9);
 }
 
 TEST(PickCli, SurfaceHitLiesOnTheUnitSphereOnThePixelRay) {

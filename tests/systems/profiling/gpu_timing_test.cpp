@@ -2,6 +2,8 @@
 // profiler ever waiting during frames; --sync brackets each pass with glFinish so real GPU work shows.
 #include <gtest/gtest.h>
 
+#include <chrono>
+
 #include "runtime/app/clock.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
@@ -41,6 +43,19 @@ struct Burner {
         out = gfx::Buffer::create("test.burn.out");
         glNamedBufferData(out.id(), 64 * 256 * sizeof(float), nullptr, GL_DYNAMIC_DRAW);
     }
+    // Iterations that keep this GPU busy for at least `ms` (quadrupling from 1500, measured with glFinish),
+    // so the heavy pass is measurable on any implementation: 1500 take ~10 ms on llvmpipe, 0.04 ms on an H100.
+    int calibrate(double ms) const {
+        int iterations = 1500;
+        for (; iterations < (1 << 26); iterations *= 4) {
+            glFinish();
+            const auto t0 = std::chrono::steady_clock::now();
+            run(iterations);
+            glFinish();
+            if (std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() >= ms) break;
+        }
+        return iterations;
+    }
     void run(int iterations) const {
         glUseProgram(program.id());
         glUniform1i(glGetUniformLocation(program.id(), "iterations"), iterations);
@@ -60,12 +75,12 @@ protected:
     gfx::GlContext m_ctx;
 };
 
-Schedule burn_schedule(const Burner& burner) {
+Schedule burn_schedule(const Burner& burner, int iterations = 1500) {
     Schedule s;
-    s.add(Phase::deformation, "burn", [&burner](ecs::Registry& r, const FrameContext&) {
+    s.add(Phase::deformation, "burn", [&burner, iterations](ecs::Registry& r, const FrameContext&) {
         {
             auto heavy = gpu_scope(r, "burn.heavy");
-            burner.run(1500);
+            burner.run(iterations);
         }
         {
             auto empty = gpu_scope(r, "burn.empty");
@@ -107,7 +122,7 @@ TEST_F(GpuTiming, QueriesResolveForEveryPassWithoutWaitingDuringFrames) {
 TEST_F(GpuTiming, SyncModeChargesGpuWorkToThePassThatIssuedIt) {
     Burner burner;
     ecs::Registry registry;
-    Schedule schedule = burn_schedule(burner);
+    Schedule schedule = burn_schedule(burner, burner.calibrate(5.0));
     Profiler profiler({.gpu = profiling::GpuTiming::sync});
     profiler.attach(schedule, registry);
     Clock clock({.fixed_dt = 1.0 / 60.0});
@@ -118,8 +133,9 @@ TEST_F(GpuTiming, SyncModeChargesGpuWorkToThePassThatIssuedIt) {
     const TimingRow* empty = nullptr;
     for (const auto& p : r.passes) (p.name == "burn.heavy" ? heavy : empty) = &p;
     ASSERT_TRUE(heavy && empty && heavy->gpu_ms && empty->gpu_ms);
-    // The compute pass really runs inside its bracket: 25M sin() iterations take far longer than nothing.
-    EXPECT_GT(heavy->gpu_ms->p50, 10.0 * empty->gpu_ms->p50 + 0.1);
+    // The compute pass really runs inside its bracket: work calibrated to >= 5 ms takes far longer than
+    // nothing (relative to this implementation's empty bracket, plus 1 ms).
+    EXPECT_GT(heavy->gpu_ms->p50, 10.0 * empty->gpu_ms->p50 + 1.0);
     EXPECT_GE(r.systems[0].cpu_ms.p50, heavy->gpu_ms->p50);
     profiler.detach(schedule, registry);
 }

@@ -112,29 +112,31 @@ TEST_F(CullPath_, CpuCullFramesAreBitIdentical) {
     EXPECT_TRUE(a.depth == b.depth);
 }
 
-// automatic = CPU cull on llvmpipe while the splats are on the CPU: at rest, and when the FFD system
-// deformed them on the CPU (its choice on llvmpipe); the compute cull when the FFD compute pass wrote
-// them (force_gpu). Both deformations render the same image.
+// automatic = CPU cull on a software rasterizer while the splats are on the CPU: at rest, and when the
+// FFD system deformed them on the CPU; the compute cull when the FFD compute pass wrote them (force_gpu),
+// and always on a hardware GPU (gfx::software_rasterizer() false). Both deformations render the same image.
 TEST_F(CullPath_, AutomaticPathFollowsWhereTheSplatsAre) {
-    ASSERT_TRUE(gfx::software_rasterizer()) << "these tests run on llvmpipe";
+    const bool software = gfx::software_rasterizer();  // llvmpipe: the CPU cull while the splats are on the CPU
     add_camera(3.0);
     add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
     const ecs::Entity cloud = add_cloud(fibonacci_sphere(20000));
     render(Quality::hq, 320, 240);
-    EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, 1u);
-    EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 0u);
+    EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, software ? 1u : 0u);
+    EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, software ? 0u : 1u);
 
     const ecs::Entity le = reg.create();
     reg.emplace<Lattice>(le, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
                                                {4, 4, 4}));
     reg.emplace<Deformers>(cloud, Deformers{{le}});
     ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.9, glm::dvec3(0.0));
-    reg.set_resource<FfdSettings>();
+    reg.set_resource<FfdSettings>().force_cpu = true;
     ffd_system(reg, {});
     ASSERT_TRUE(reg.get<DeformedSplats>(cloud).cpu_valid);
     const FrameImage on_cpu = render(Quality::hq, 320, 240);
-    EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, 1u);
+    EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, software ? 1u : 0u);
+    EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, software ? 0u : 1u);
 
+    reg.resource<FfdSettings>().force_cpu = false;
     reg.resource<FfdSettings>().force_gpu = true;
     ffd_system(reg, {});
     ASSERT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);

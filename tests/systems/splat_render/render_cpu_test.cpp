@@ -297,3 +297,42 @@ TEST(RenderCpuCull, ClassifiesEverySplatLikeTheDefinition) {
         }
     }
 }
+
+// Culling off keeps back-facing sprites but marks them hidden with the explicit zero plane (splat_record.h),
+// never with NaN (GLSL leaves NaN comparisons undefined; NVIDIA folded them and drew nothing): every field
+// of every record is finite, the packed colour is a normal float (no denormal a driver may flush), and the
+// hidden records are exactly the back-facing sprites.
+TEST(RenderCpuCull, CullingOffMarksBackFacesHiddenWithFiniteValuesOnly) {
+    const SplatCloud cloud = test::fibonacci_sphere(4000);
+    const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
+    for (bool lit : {false, true}) {
+        gpu::FrameBlock f = test_frame();
+        f.params.z = 0.0f;  // culling off
+        f.counts.w = lit ? 1u : 0u;
+        CpuCullResult out;
+        cull_splats_cpu(splats, f, {}, out);
+        EXPECT_EQ(out.visible_records + out.visible_quads, splats.size());
+        std::vector<std::uint32_t> quads;
+        CpuCullResult::for_each_run(out.quads, out.quad_counts, out.block, [&](std::size_t, const std::uint32_t* p, std::size_t k) {
+            quads.insert(quads.end(), p, p + k);
+        });
+        std::size_t back_sprites = 0;
+        const glm::dmat4 mv(f.model_view);
+        for (std::uint32_t i = 0; i < splats.size(); ++i) {
+            const glm::dvec3 c = glm::dvec3(mv * glm::dvec4(glm::dvec3(cloud.positions[i]), 1.0));
+            const bool back = glm::dot(glm::dvec3(cloud.normals[i]), c) > 0.0;  // view = world here
+            back_sprites += back && std::find(quads.begin(), quads.end(), i) == quads.end();
+        }
+        ASSERT_GT(back_sprites, splats.size() / 4);
+        std::size_t hidden = 0;
+        CpuCullResult::for_each_run(out.records, out.record_counts, out.block, [&](std::size_t, const SplatRecord* p, std::size_t k) {
+            for (std::size_t r = 0; r < k; ++r) {
+                const float* v = &p[r].center.x;
+                for (int j = 0; j < 20; ++j) ASSERT_TRUE(std::isfinite(v[j])) << "field " << j;
+                EXPECT_TRUE(std::isnormal(p[r].normal.w)) << "packed colour";
+                hidden += p[r].plane.x == 0.0f && p[r].plane.y == 0.0f && p[r].plane.z == 0.0f;
+            }
+        });
+        EXPECT_EQ(hidden, back_sprites);
+    }
+}
