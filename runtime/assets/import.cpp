@@ -17,6 +17,7 @@
 #include "runtime/assets/gltf_io.h"
 #include "runtime/assets/ply.h"
 #include "runtime/assets/splat_estimation.h"
+#include "runtime/core/file_io.h"
 #include "runtime/core/log.h"
 
 namespace sffd::assets {
@@ -120,20 +121,62 @@ glm::dvec3 choose_origin(const std::vector<glm::dvec3>& positions) {
     return glm::dvec3(0.0);
 }
 
-Result<Image> load_image(const fs::path& path) {
+namespace {
+
+// Decoded texture budget per imported file (all of an OBJ's map_Kd images together), and per image; both
+// are checked on the sizes the image headers declare, before anything is decoded.
+constexpr std::uint64_t kMaxImagePixels = 8192ull * 8192ull;
+constexpr std::uint64_t kDecodedTextureBudget = std::uint64_t(1) << 30;
+// Fan triangulation turns a face of k indices into k - 2 triangles: a hostile file can declare lists of
+// 2^20 one-byte indices. Refused past this many triangles (400 MB of indices) before expanding further.
+constexpr std::size_t kMaxTriangles = std::size_t(1) << 25;
+constexpr std::uint32_t kMaxFaceVertices = 1u << 16;  // a polygon of more vertices is not a mesh face
+
+Result<Image> decode_image(const fs::path& path, std::uint64_t* budget_left) {
+    auto bytes = read_file(path, kMaxResourceBytes);
+    if (!bytes) return bytes.error();
+    const auto* data = reinterpret_cast<const stbi_uc*>(bytes->data());
+    const int size = static_cast<int>(std::min<std::size_t>(bytes->size(), 0x7fffffff));
     int w = 0, h = 0, comp = 0;
-    // Same limit as glTF textures (gltf_io.cpp): the header's size is checked before decoding.
-    if (stbi_info(path.c_str(), &w, &h, &comp) && static_cast<long long>(w) * h > 8192LL * 8192LL)
+    if (!stbi_info_from_memory(data, size, &w, &h, &comp) || w <= 0 || h <= 0)
+        return make_error(path.string() + ": cannot decode image: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown format"));
+    const std::uint64_t pixels = static_cast<std::uint64_t>(w) * static_cast<std::uint64_t>(h);
+    if (pixels > kMaxImagePixels)
         return make_error(path.string() + ": image is " + std::to_string(w) + "x" + std::to_string(h) + ", larger than 8192x8192");
-    stbi_uc* data = stbi_load(path.c_str(), &w, &h, &comp, 4);
-    if (!data) return make_error(path.string() + ": cannot decode image: " + (stbi_failure_reason() ? stbi_failure_reason() : "?"));
+    if (budget_left) {
+        if (pixels * 4 > *budget_left)
+            return make_error(path.string() + ": image is " + std::to_string(w) + "x" + std::to_string(h) + "; the textures of one file may decode to at most " +
+                              std::to_string(kDecodedTextureBudget >> 20) + " MiB in total");
+        *budget_left -= pixels * 4;
+    }
+    stbi_uc* pixels_rgba = stbi_load_from_memory(data, size, &w, &h, &comp, 4);
+    if (!pixels_rgba) return make_error(path.string() + ": cannot decode image: " + (stbi_failure_reason() ? stbi_failure_reason() : "?"));
     Image img;
     img.width = w;
     img.height = h;
-    img.rgba8.assign(data, data + static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4);
-    stbi_image_free(data);
+    img.rgba8.assign(pixels_rgba, pixels_rgba + static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4);
+    stbi_image_free(pixels_rgba);
     return img;
 }
+
+// A texture or material library named inside `owner`: refused (an error) when it lies outside owner's
+// folder or is not a regular file; a missing one is only a warning (the geometry is still usable).
+Result<Image> load_named_image(const fs::path& owner, const std::string& name, const std::string& source, std::uint64_t* budget_left,
+                               bool& missing) {
+    missing = false;
+    auto where = resolve_resource(owner, name);
+    if (!where) {
+        missing = where.message().size() >= 9 && where.message().compare(where.message().size() - 9, 9, "not found") == 0;
+        return where.error();
+    }
+    auto img = decode_image(*where, budget_left);
+    if (!img) return make_error(source + ": texture '" + name + "': " + img.message());
+    return img;
+}
+
+}  // namespace
+
+Result<Image> load_image(const fs::path& path) { return decode_image(path, nullptr); }
 
 Result<Geometry> read_ply_geometry(const fs::path& path) {
     auto reader = ply::Reader::open(path);
@@ -217,17 +260,26 @@ Result<Geometry> read_ply_geometry(const fs::path& path) {
         const int li = find_any(fe, {"vertex_indices", "vertex_index"});
         if (li < 0 || !fe.properties[li].is_list) return make_error(g.source + ": face element has no vertex_indices list");
         if (auto s = reader->seek_element("face"); !s) return s.error();
+        std::size_t faces_done = 0;
         while (true) {
             auto rows = reader->read_rows(1 << 16, chunk);
             if (!rows) return rows.error();
             if (*rows == 0) break;
             const ply::Column& c = chunk.columns[li];
+            const std::size_t faces_seen = faces_done;
+            faces_done += *rows;
             for (std::size_t r = 0; r < *rows; ++r) {
                 const std::uint32_t b = c.offsets[r], e = c.offsets[r + 1];
                 for (std::uint32_t k = b; k < e; ++k)
                     if (c.values[k] < 0 || c.values[k] >= static_cast<double>(n))
                         return make_error(g.source + ": face refers to vertex " + std::to_string(static_cast<long long>(c.values[k])) +
                                           " but there are only " + std::to_string(n));
+                if (e - b > kMaxFaceVertices)
+                    return make_error(g.source + ": face " + std::to_string(faces_seen + r) + " has " + std::to_string(e - b) + " vertices; at most " +
+                                      std::to_string(kMaxFaceVertices) + " per face (fan triangulation budget)");
+                if (e - b > 2 && g.triangles.size() / 3 + (e - b - 2) > kMaxTriangles)
+                    return make_error(g.source + ": faces expand to more than " + std::to_string(kMaxTriangles) +
+                                      " triangles (the import budget); face lists of up to " + std::to_string(e - b) + " vertices");
                 for (std::uint32_t k = b + 1; k + 1 < e; ++k) {
                     g.triangles.push_back(static_cast<std::uint32_t>(c.values[b]));
                     g.triangles.push_back(static_cast<std::uint32_t>(c.values[k]));
@@ -239,13 +291,16 @@ Result<Geometry> read_ply_geometry(const fs::path& path) {
         log::warn(g.source, ": face element comes before the vertex element; faces ignored");
     }
     if (!g.splat_material.texture_path.empty()) {
-        const fs::path tex = path.parent_path() / g.splat_material.texture_path;
-        if (auto img = load_image(tex); img) {
+        std::uint64_t budget = kDecodedTextureBudget;
+        bool missing = false;
+        if (auto img = load_named_image(path, g.splat_material.texture_path, g.source, &budget, missing); img) {
             g.splat_material.texture_width = img->width;
             g.splat_material.texture_height = img->height;
             g.splat_material.texture_rgba8 = std::move(img->rgba8);
-        } else {
+        } else if (missing) {
             log::warn(g.source, ": texture not loaded: ", img.message());
+        } else {
+            return img.error();
         }
     }
     if (auto s = check_geometry(g); !s) return s.error();
@@ -288,20 +343,6 @@ bool to_long(std::string_view t, long long& v) {
     return ec == std::errc() && p == t.data() + t.size();
 }
 
-Result<std::string> read_text(const fs::path& path, std::uintmax_t limit = std::uintmax_t(4) << 30) {
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec)) return make_error(path.string() + ": no such file");
-    const auto size = fs::file_size(path, ec);
-    if (ec) return make_error(path.string() + ": cannot stat");
-    if (size > limit) return make_error(path.string() + ": file too large");
-    std::ifstream f(path, std::ios::binary);
-    if (!f) return make_error(path.string() + ": cannot open");
-    std::string s(static_cast<std::size_t>(size), '\0');
-    f.read(s.data(), static_cast<std::streamsize>(size));
-    if (static_cast<std::uintmax_t>(f.gcount()) != size) return make_error(path.string() + ": read error");
-    return s;
-}
-
 template <class Fn>
 void for_each_line(std::string_view text, Fn&& fn) {
     std::size_t pos = 0, line = 0;
@@ -314,12 +355,21 @@ void for_each_line(std::string_view text, Fn&& fn) {
     }
 }
 
-void load_mtl(const fs::path& mtl_path, Geometry& g, std::unordered_map<std::string, int>& by_name) {
-    auto text = read_text(mtl_path, 64u << 20);
-    if (!text) {
-        log::warn(g.source, ": material library not loaded: ", text.message());
-        return;
+// Loads `name` (an mtllib line of the OBJ `obj`): an error when it is outside the OBJ's folder or not a
+// regular file, a warning when missing. Its map_Kd textures resolve inside the MTL's own folder.
+Status load_mtl(const fs::path& obj, const std::string& name, Geometry& g, std::unordered_map<std::string, int>& by_name,
+                std::uint64_t& texture_budget) {
+    auto mtl_path = resolve_resource(obj, name);
+    if (!mtl_path) {
+        if (mtl_path.message().size() >= 9 && mtl_path.message().compare(mtl_path.message().size() - 9, 9, "not found") == 0) {
+            log::warn(g.source, ": material library not loaded: ", mtl_path.message());
+            return {};
+        }
+        return mtl_path.error();
     }
+    auto text = read_file(*mtl_path, 64u << 20);
+    if (!text) return make_error(g.source + ": material library: " + text.message());
+    std::string error;
     int current = -1;
     for_each_line(*text, [&](std::string_view line, std::size_t) {
         LineCursor c{line};
@@ -344,8 +394,13 @@ void load_mtl(const fs::path& mtl_path, Geometry& g, std::unordered_map<std::str
             std::string file = c.rest();
             // Options such as "-s 1 1 1" come before the file name; the name is the last word.
             if (auto sp = file.find_last_of(' '); sp != std::string::npos) file = file.substr(sp + 1);
-            auto img = load_image(mtl_path.parent_path() / file);
+            bool missing = false;
+            auto img = load_named_image(*mtl_path, file, g.source, &texture_budget, missing);
             if (!img) {
+                if (!missing) {
+                    error = img.message();
+                    return false;
+                }
                 log::warn(g.source, ": texture not loaded: ", img.message());
                 return true;
             }
@@ -354,12 +409,15 @@ void load_mtl(const fs::path& mtl_path, Geometry& g, std::unordered_map<std::str
         }
         return true;
     });
+    if (!error.empty()) return make_error(error);
+    return {};
 }
 
 }  // namespace
 
 Result<Geometry> read_obj_geometry(const fs::path& path) {
-    auto text = read_text(path);
+    std::uint64_t texture_budget = kDecodedTextureBudget;
+    auto text = read_file(path, kMaxTextFileBytes);
     if (!text) return text.error();
     Geometry g;
     g.source = path.string();
@@ -437,7 +495,10 @@ Result<Geometry> read_obj_geometry(const fs::path& path) {
                 tri_mat.push_back(current_material);
             }
         } else if (key == "mtllib") {
-            load_mtl(path.parent_path() / c.rest(), g, materials);
+            if (Status st = load_mtl(path, c.rest(), g, materials, texture_budget); !st) {
+                error = st.message();
+                return false;
+            }
         } else if (key == "usemtl") {
             auto it = materials.find(c.rest());
             current_material = it == materials.end() ? -1 : it->second;
@@ -498,7 +559,7 @@ Result<Geometry> read_obj_geometry(const fs::path& path) {
 // OFF ([ST][C][N]OFF; vertex line: x y z [nx ny nz] [r g b [a]] [s t]; face line: n i0 .. [colour])
 
 Result<Geometry> read_off_geometry(const fs::path& path) {
-    auto text = read_text(path);
+    auto text = read_file(path, kMaxTextFileBytes);
     if (!text) return text.error();
     Geometry g;
     g.source = path.string();
@@ -574,6 +635,8 @@ Result<Geometry> read_off_geometry(const fs::path& path) {
                                   std::to_string(nv));
             idx.push_back(static_cast<std::uint32_t>(x));
         }
+        if (idx.size() > 2 && g.triangles.size() / 3 + idx.size() - 2 > kMaxTriangles)
+            return make_error(g.source + ": faces expand to more than " + std::to_string(kMaxTriangles) + " triangles (the import budget)");
         for (std::size_t k = 1; k + 1 < idx.size(); ++k) {
             g.triangles.push_back(idx[0]);
             g.triangles.push_back(idx[k]);
