@@ -60,8 +60,8 @@ Result<Lattice> parse_lattice_json(std::string_view text, const std::string& nam
     }
     if (!j.is_object()) return make_error(name + ": expected a JSON object");
     // A misspelt key ("controlpoints") would silently deform nothing: every key must be known.
-    for (const auto& [key, value] : j.items()) {
-        (void)value;
+    for (const auto& item : j.items()) {
+        const std::string& key = item.key();
         static constexpr const char* kKeys[] = {"origin", "axes", "divisions", "basis", "rest_control_points", "control_points"};
         if (std::none_of(std::begin(kKeys), std::end(kKeys), [&](const char* k) { return key == k; }))
             return make_error(name + ": unknown key \"" + key.substr(0, 80) +

@@ -79,3 +79,26 @@ TEST(Cli, UsageErrorsExitTwo) {
     EXPECT_EQ(run("convert a.ply b.ply --bogus").code, 2);
     EXPECT_EQ(run("info").code, 2);
 }
+
+// Issue 13: a glTF from the web must not leak local files into an export; --allow-outside-resources
+// is the explicit opt-in for trusted files.
+TEST(Cli, ConvertRefusesResourcesOutsideTheFileFolderUnlessAllowed) {
+    const fs::path root = temp_dir() / "exfil";
+    fs::remove_all(root);
+    fs::create_directories(root / "x");
+    fs::create_directories(root / "a" / "b");
+    std::ofstream(root / "x" / "secret.txt") << "SECRET123";
+    const fs::path gltf = root / "a" / "b" / "exfil.gltf";
+    std::ofstream(gltf) << R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+      "meshes":[{"primitives":[{"mode":0,"attributes":{"POSITION":0}}]}],
+      "accessors":[{"bufferView":0,"componentType":5121,"count":3,"type":"VEC3"}],
+      "bufferViews":[{"buffer":0,"byteLength":9}],"buffers":[{"uri":"%2e%2e/%2e%2e/x/secret.txt","byteLength":9}]})";
+    const fs::path leak = root / "leak.ply";
+    const CliRun r = run("convert " + gltf.string() + " " + leak.string() + " --ascii");
+    EXPECT_EQ(r.code, 1) << r.out;
+    EXPECT_NE(r.out.find(gltf.string() + ": resource '../../x/secret.txt' is outside the file's folder"), std::string::npos) << r.out;
+    EXPECT_FALSE(fs::exists(leak));
+    const CliRun ok = run("--allow-outside-resources convert " + gltf.string() + " " + leak.string() + " --ascii");
+    EXPECT_EQ(ok.code, 0) << ok.out;
+    EXPECT_TRUE(fs::exists(leak));
+}

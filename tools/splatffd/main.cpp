@@ -74,6 +74,12 @@ void print_help() {
 
 int main(int argc, char** argv) {
     std::vector<std::string> args(argv + 1, argv + argc);
+    // Global option: resources (textures, buffers, material libraries) may lie outside the folder of the
+    // file that names them. Off by default: a scene from the web must not read local files.
+    if (auto it = std::find(args.begin(), args.end(), "--allow-outside-resources"); it != args.end()) {
+        sffd::set_allow_outside_resources(true);
+        args.erase(it);
+    }
     if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
         print_help();
         return args.empty() ? 2 : 0;
@@ -88,12 +94,6 @@ int main(int argc, char** argv) {
         return 0;
     }
     const std::string name = args[0];
-    // Global option: resources (textures, buffers, material libraries) may lie outside the folder of the
-    // file that names them. Off by default: a scene from the web must not read local files.
-    if (auto it = std::find(args.begin(), args.end(), "--allow-outside-resources"); it != args.end()) {
-        sffd::set_allow_outside_resources(true);
-        args.erase(it);
-    }
     // Start-up registrations of systems that store data in scene files (runtime/assets/scene.h hooks).
     sffd::register_animation_scene_hooks();
     // SIGINT/SIGTERM remove unfinished outputs (runtime/core/atomic_file.h) and exit 130/143.
