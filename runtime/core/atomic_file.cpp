@@ -9,8 +9,10 @@
 #include <cerrno>
 #include <cstdlib>
 #include <cstring>
+#include <map>
 #include <mutex>
 #include <string>
+#include <vector>
 
 #include "runtime/core/log.h"
 
@@ -114,37 +116,78 @@ void install_interrupt_cleanup(const char* program) {
     install_handlers();
 }
 
-int remove_stale_temporaries(const fs::path& path) {
-    const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
-    const std::string name = path.filename().string();
-    std::string current(".");
-    current += name;
-    current += ".sffd-tmp-";
-    const std::string legacy = name + ".tmp-";
-    int removed = 0;
+namespace {
+
+// A temporary left by a process that is gone: which output it belongs to, and its path.
+struct Stale {
+    std::string output_name;
+    fs::path path;
+};
+
+// One scan per folder per process (a render sequence saves thousands of frames into one folder): the
+// stale temporaries found are remembered by output name and removed when that output is saved.
+std::mutex g_stale_mutex;
+std::map<std::string, std::vector<Stale>> g_stale_by_folder;
+
+std::vector<Stale> scan_folder(const fs::path& folder) {
+    std::vector<Stale> found;
     std::error_code ec;
     for (fs::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
         const std::string f = it->path().filename().string();
+        std::string output;
         long pid = -1;
-        if (f.rfind(current, 0) == 0) {
-            const std::string_view rest = std::string_view(f).substr(current.size());
+        if (const auto at = f.find(".sffd-tmp-"); f.size() > 1 && f[0] == '.' && at != std::string::npos && at > 1) {
+            // .<name>.sffd-tmp-<pid>-XXXXXX
+            const std::string_view rest = std::string_view(f).substr(at + 10);
             pid = leading_pid(rest);
-            if (pid < 0 || rest.size() <= std::to_string(pid).size() || rest[std::to_string(pid).size()] != '-') continue;
-        } else if (f.rfind(legacy, 0) == 0) {
-            const std::string_view rest = std::string_view(f).substr(legacy.size());
+            const std::size_t digits = pid < 0 ? 0 : std::to_string(pid).size();
+            if (pid < 0 || rest.size() <= digits || rest[digits] != '-') continue;
+            output = f.substr(1, at - 1);
+        } else if (const auto old = f.rfind(".tmp-"); old != std::string::npos && old > 0) {
+            // <name>.tmp-<pid> (before mkstemp)
+            const std::string_view rest = std::string_view(f).substr(old + 5);
             pid = leading_pid(rest);
             if (pid < 0 || rest.size() != std::to_string(pid).size()) continue;
+            output = f.substr(0, old);
         } else {
             continue;
         }
         if (pid == static_cast<long>(::getpid()) || pid_alive(pid)) continue;
         struct stat st {};
         if (::lstat(it->path().c_str(), &st) != 0 || !(S_ISREG(st.st_mode) || S_ISLNK(st.st_mode))) continue;
-        if (::unlink(it->path().c_str()) == 0) {
-            ++removed;
-            log::info(path.string(), ": removed a stale temporary file of an interrupted save (", f, ")");
+        found.push_back({output, it->path()});
+    }
+    return found;
+}
+
+}  // namespace
+
+int remove_stale_temporaries(const fs::path& path) {
+    const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
+    const std::string name = path.filename().string();
+    std::vector<Stale> mine;
+    {
+        std::lock_guard lock(g_stale_mutex);
+        std::error_code ec;
+        const std::string key = fs::weakly_canonical(fs::absolute(folder, ec), ec).string();
+        auto it = g_stale_by_folder.find(key);
+        if (it == g_stale_by_folder.end()) it = g_stale_by_folder.emplace(key, scan_folder(folder)).first;
+        auto& list = it->second;
+        for (auto s = list.begin(); s != list.end();) {
+            if (s->output_name == name) {
+                mine.push_back(std::move(*s));
+                s = list.erase(s);
+            } else {
+                ++s;
+            }
         }
     }
+    int removed = 0;
+    for (const Stale& s : mine)
+        if (::unlink(s.path.c_str()) == 0) {
+            ++removed;
+            log::info(path.string(), ": removed a stale temporary file of an interrupted save (", s.path.filename().string(), ")");
+        }
     return removed;
 }
 

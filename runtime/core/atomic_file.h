@@ -12,7 +12,8 @@
 //     exits 130/143 (handlers installed by the first AtomicFile);
 //   - stale temporaries of the same output left by a process that no longer exists (SIGKILL, power
 //     loss) are removed when the next save of that output starts (`.<name>.sffd-tmp-<pid>-*` and the
-//     older `<name>.tmp-<pid>`, only regular files or links, only when <pid> is not running).
+//     older `<name>.tmp-<pid>`, only regular files or links, only when <pid> is not running; each folder
+//     is scanned once per process, so a sequence of thousands of frames does not rescan it per frame).
 #pragma once
 
 #include <cstdio>

@@ -201,10 +201,13 @@ int run_render(sffd::cli::Args args) {
                                                        std::chrono::system_clock::now().time_since_epoch()).count());
         auto write_manifest = [&](long written_last, const char* state) {
             std::string frames = "[";
-            for (long k = first; k <= written_last; ++k) frames += (k > first ? "," : "") + std::to_string(k);
+            for (long k = first; k <= written_last; ++k) {
+                if (k > first) frames += ',';
+                frames += std::to_string(k);
+            }
             frames += "]";
-            char settings[512];
-            std::snprintf(settings, sizeof settings,
+            char fields[512];
+            std::snprintf(fields, sizeof fields,
                           "\"first\": %ld, \"last\": %ld, \"size\": [%ld, %ld], \"quality\": \"%s\", \"formats\": \"%s\", \"fps\": %.17g, "
                           "\"culling\": %s",
                           first, last, width, height, quality == render::Quality::hq ? "hq" : "preview",
@@ -216,7 +219,7 @@ int run_render(sffd::cli::Args args) {
             }
             const std::string text = std::string("{\"generator\": \"splatffd render " SFFD_VERSION "\", \"state\": \"") + state +
                                      "\", \"complete\": " + (std::string(state) == "complete" ? "true" : "false") +
-                                     ", \"started_unix\": " + started + ", \"scene\": \"" + scene_escaped + "\", " + settings +
+                                     ", \"started_unix\": " + started + ", \"scene\": \"" + scene_escaped + "\", " + fields +
                                      ", \"frames_written\": " + frames + "}\n";
             return write_file_atomic(manifest, text);
         };
