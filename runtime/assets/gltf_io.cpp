@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <unordered_map>
 #include <unordered_set>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -15,6 +16,7 @@
 #include <tiny_gltf.h>
 
 #include "runtime/core/atomic_file.h"
+#include "runtime/core/file_io.h"
 #include "runtime/core/log.h"
 #include "runtime/scene/camera.h"
 
@@ -167,16 +169,116 @@ Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, i
     return out;
 }
 
-// Image decoding through tinygltf's stb loader, after refusing textures over 8192 x 8192 (decoded to RGBA
-// that is 256 MB; a hostile PNG header can claim 16000 x 16000 grey, which stb itself would accept).
-bool load_image_checked(tinygltf::Image* image, const int index, std::string* err, std::string* warn, int req_width, int req_height,
-                        const unsigned char* bytes, int size, void* user) {
-    int w = 0, h = 0, comp = 0;
-    if (size > 0 && stbi_info_from_memory(bytes, size, &w, &h, &comp) && static_cast<long long>(w) * h > (8192LL * 8192LL)) {
-        if (err) *err += "image " + std::to_string(index) + " is " + std::to_string(w) + "x" + std::to_string(h) + ", larger than 8192x8192\n";
+// Every file tinygltf opens besides the glTF itself (buffer and image URIs) goes through these callbacks:
+// resolve_resource() keeps it inside the glTF's folder (no `..`, absolute paths, symlinks out, and no
+// current-directory fallback: tinygltf tries "<basedir>/uri" and then "./uri"; only the first is
+// answered), read_file() opens regular files only. The first refusal is kept and reported as the error.
+// Images are not decoded in tinygltf's callback: it records each image's declared size (stb header) and
+// keeps the encoded bytes; read_gltf() checks the total against kDecodedImageBudget and decodes after.
+constexpr std::uint64_t kMaxImagePixels = 8192ull * 8192ull;              // one image: 256 MB as RGBA8
+constexpr std::uint64_t kDecodedImageBudget = std::uint64_t(1) << 30;     // all images of one file, RGBA8
+constexpr std::uint64_t kMaxGltfBytes = std::uint64_t(2) << 30;           // the .gltf / .glb itself
+
+struct LoadContext {
+    fs::path owner;                 // the glTF file, for messages and resolution
+    std::string basedir;            // what tinygltf prefixes to URIs
+    std::string error;              // first refusal
+    std::unordered_map<std::string, fs::path> resolved;  // tinygltf's joined path -> checked path
+    std::uint64_t declared_bytes = 0;                     // decoded RGBA8 size of all images so far
+};
+
+void refuse(LoadContext& ctx, const std::string& message) {
+    if (ctx.error.empty()) ctx.error = message;
+}
+
+bool fs_exists(const std::string& joined, void* user) {
+    auto& ctx = *static_cast<LoadContext*>(user);
+    std::string uri;
+    const std::string prefix = ctx.basedir.empty() ? std::string() : (ctx.basedir.back() == '/' ? ctx.basedir : ctx.basedir + "/");
+    if (prefix.empty()) uri = joined;  // the glTF is in the current folder: both candidates are relative to it
+    else if (joined.rfind(prefix, 0) == 0) uri = joined.substr(prefix.size());
+    else return false;  // tinygltf's current-directory fallback: never
+    auto r = resolve_resource(ctx.owner, uri);
+    if (!r) {
+        refuse(ctx, r.message());
         return false;
     }
-    return tinygltf::LoadImageData(image, index, err, warn, req_width, req_height, bytes, size, user);
+    ctx.resolved[joined] = *r;
+    return true;
+}
+
+std::string fs_expand(const std::string& path, void*) { return path; }  // no ~ or $VAR expansion
+
+bool fs_read(std::vector<unsigned char>* out, std::string* err, const std::string& joined, void* user) {
+    auto& ctx = *static_cast<LoadContext*>(user);
+    auto it = ctx.resolved.find(joined);
+    if (it == ctx.resolved.end()) {
+        if (err) *err += "not a checked resource";
+        return false;
+    }
+    auto bytes = read_file(it->second, kMaxResourceBytes);
+    if (!bytes) {
+        refuse(ctx, ctx.owner.string() + ": " + bytes.message());
+        if (err) *err += bytes.message();
+        return false;
+    }
+    out->assign(bytes->begin(), bytes->end());
+    return true;
+}
+
+bool fs_write(std::string* err, const std::string&, const std::vector<unsigned char>&, void*) {
+    if (err) *err += "writing is not allowed while loading";
+    return false;
+}
+
+bool load_image_deferred(tinygltf::Image* image, const int index, std::string* err, std::string*, int, int, const unsigned char* bytes,
+                         int size, void* user) {
+    auto& ctx = *static_cast<LoadContext*>(user);
+    int w = 0, h = 0, comp = 0;
+    if (size <= 0 || !stbi_info_from_memory(bytes, size, &w, &h, &comp) || w <= 0 || h <= 0) {
+        if (err) *err += "image " + std::to_string(index) + ": unknown or corrupt image format\n";
+        refuse(ctx, ctx.owner.string() + ": image " + std::to_string(index) + ": unknown or corrupt image format");
+        return false;
+    }
+    const std::uint64_t pixels = static_cast<std::uint64_t>(w) * static_cast<std::uint64_t>(h);
+    if (pixels > kMaxImagePixels) {
+        refuse(ctx, ctx.owner.string() + ": image " + std::to_string(index) + " is " + std::to_string(w) + "x" + std::to_string(h) +
+                        ", larger than 8192x8192");
+        return false;
+    }
+    ctx.declared_bytes += pixels * 4;
+    if (ctx.declared_bytes > kDecodedImageBudget) {
+        refuse(ctx, ctx.owner.string() + ": images decode to more than " + std::to_string(kDecodedImageBudget >> 20) +
+                        " MiB in total (image " + std::to_string(index) + " is " + std::to_string(w) + "x" + std::to_string(h) +
+                        "); the budget per file is " + std::to_string(kDecodedImageBudget >> 20) + " MiB");
+        return false;
+    }
+    image->width = w;
+    image->height = h;
+    image->component = 0;  // 0 = still encoded (decode_images())
+    image->bits = 0;
+    image->image.assign(bytes, bytes + size);
+    return true;
+}
+
+// Decodes the images load_image_deferred() kept, to RGBA8 (the budget was checked on the declared sizes).
+Status decode_images(tinygltf::Model& m, const std::string& src) {
+    for (std::size_t i = 0; i < m.images.size(); ++i) {
+        tinygltf::Image& im = m.images[i];
+        if (im.component != 0 || im.image.empty()) continue;
+        int w = 0, h = 0, comp = 0;
+        stbi_uc* data = stbi_load_from_memory(im.image.data(), static_cast<int>(im.image.size()), &w, &h, &comp, 4);
+        if (!data)
+            return make_error(src + ": image " + std::to_string(i) + ": cannot decode: " +
+                              (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
+        im.width = w;
+        im.height = h;
+        im.component = 4;
+        im.bits = 8;
+        im.image.assign(data, data + static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4);
+        stbi_image_free(data);
+    }
+    return {};
 }
 
 glm::dmat4 node_matrix(const tinygltf::Node& n) {
@@ -543,24 +645,44 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
 
 Result<GltfContents> read_gltf(const fs::path& path) {
     const std::string src = path.string();
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec)) return make_error(src + ": no such file");
-    tinygltf::TinyGLTF loader;
-    loader.SetImageLoader(load_image_checked, nullptr);
-    tinygltf::Model m;
-    std::string err, warn;
+    auto bytes = read_file(path, kMaxGltfBytes);
+    if (!bytes) return bytes.error();
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const bool binary = ext == ".glb" || (bytes->size() >= 4 && bytes->compare(0, 4, "glTF") == 0);
+    // The JSON chunk's nesting is checked before tinygltf's recursive parser sees it (stack overflow).
+    std::string_view json_text = *bytes;
+    if (binary && bytes->size() >= 20) {
+        std::uint32_t len = 0;
+        std::memcpy(&len, bytes->data() + 12, 4);
+        json_text = std::string_view(*bytes).substr(20, std::min<std::size_t>(len, bytes->size() - 20));
+    }
+    if (Status s = check_json_depth(json_text, src); !s) return s.error();
+
+    LoadContext ctx;
+    ctx.owner = path;
+    ctx.basedir = path.parent_path().string();
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(load_image_deferred, &ctx);
+    loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, &ctx});
+    tinygltf::Model m;
+    std::string err, warn;
     bool ok = false;
     try {
-        ok = ext == ".glb" ? loader.LoadBinaryFromFile(&m, &err, &warn, src) : loader.LoadASCIIFromFile(&m, &err, &warn, src);
+        const auto* data = reinterpret_cast<const unsigned char*>(bytes->data());
+        ok = binary ? loader.LoadBinaryFromMemory(&m, &err, &warn, data, static_cast<unsigned int>(bytes->size()), ctx.basedir)
+                    : loader.LoadASCIIFromString(&m, &err, &warn, bytes->data(), static_cast<unsigned int>(bytes->size()), ctx.basedir);
+    } catch (const std::bad_alloc&) {
+        return make_error(src + ": out of memory while parsing the glTF");
     } catch (const std::exception& e) {  // tinygltf's JSON parser may throw on hostile input
         return make_error(src + ": invalid glTF: " + e.what());
     }
+    if (!ctx.error.empty()) return make_error(ctx.error);  // a refused resource, whatever tinygltf made of it
     if (!ok) {
         while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
         return make_error(src + ": invalid glTF: " + (err.empty() ? std::string("unknown error") : err.substr(0, 500)));
     }
+    if (Status s = decode_images(m, src); !s) return s.error();
     GltfContents out;
     out.other.source = src;
     if (auto it = m.extensions.find("SFFD_scene"); it != m.extensions.end()) out.sffd_scene_json = to_json(it->second).dump();
@@ -596,8 +718,21 @@ Result<GltfContents> read_gltf(const fs::path& path) {
             cloud.name = node.name;
             cloud.id = extras["sffd_cloud"].is_number_integer() ? extras["sffd_cloud"].get<int>() : -1;
             cloud.transform = node_trs(node);
+            // A zero quaternion has no rotation to normalise to, a zero scale flattens the cloud: refused (others
+            // are kept exactly as stored, for round trips).
+            const glm::dquat& q = cloud.transform.rotation;
+            if (!(glm::length(q) > 1e-12) || !std::isfinite(glm::length(q)))
+                return make_error(src + ": splat node '" + node.name + "': rotation is a zero or non-finite quaternion");
+            const glm::dvec3& sc = cloud.transform.scale;
+            if (sc.x == 0.0 || sc.y == 0.0 || sc.z == 0.0 || !std::isfinite(sc.x + sc.y + sc.z))
+                return make_error(src + ": splat node '" + node.name + "': scale has a zero or non-finite component");
+            for (int a = 0; a < 3; ++a)
+                if (!std::isfinite(cloud.transform.translation[a])) return make_error(src + ": splat node '" + node.name + "': translation is not finite");
             if (cn.translation.size() == 3) cloud.cloud.origin = glm::dvec3(cn.translation[0], cn.translation[1], cn.translation[2]);
-            if (cn.mesh >= 0 && static_cast<std::size_t>(cn.mesh) < m.meshes.size()) {
+            if (cn.mesh >= 0 && static_cast<std::size_t>(cn.mesh) >= m.meshes.size())
+                return make_error(src + ": splat node '" + node.name + "': mesh index " + std::to_string(cn.mesh) + " out of range (" +
+                                  std::to_string(m.meshes.size()) + " meshes)");
+            if (cn.mesh >= 0) {
                 const auto& prims = m.meshes[static_cast<std::size_t>(cn.mesh)].primitives;
                 if (prims.size() != 1 || prims[0].mode != TINYGLTF_MODE_POINTS) return make_error(src + ": splat node '" + node.name + "' must hold one POINTS primitive");
                 Geometry unused;
@@ -611,7 +746,9 @@ Result<GltfContents> read_gltf(const fs::path& path) {
             out.clouds.push_back(std::move(cloud));
         } else {
             if (node.mesh >= 0) {
-                if (static_cast<std::size_t>(node.mesh) >= m.meshes.size()) return make_error(src + ": mesh index out of range");
+                if (static_cast<std::size_t>(node.mesh) >= m.meshes.size())
+                    return make_error(src + ": node '" + node.name + "': mesh index " + std::to_string(node.mesh) + " out of range (" +
+                                      std::to_string(m.meshes.size()) + " meshes)");
                 for (const auto& prim : m.meshes[static_cast<std::size_t>(node.mesh)].primitives)
                     if (auto s = read_primitive(m, prim, world, src, out.other, material_map, nullptr); !s) return s;
             }

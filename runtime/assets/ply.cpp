@@ -1,5 +1,7 @@
 #include "runtime/assets/ply.h"
 
+#include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -10,6 +12,9 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <optional>
+
+#include "runtime/core/atomic_file.h"
 
 namespace sffd::ply {
 namespace fs = std::filesystem;
@@ -18,6 +23,7 @@ namespace {
 
 constexpr std::size_t kMaxHeaderBytes = 64 * 1024;
 constexpr std::size_t kBufferBytes = 1 << 20;
+constexpr std::size_t kMaxChunkListValues = std::size_t(1) << 22;  // 32 MB of doubles per chunk of list rows
 
 struct TypeInfo {
     Type type;
@@ -434,12 +440,20 @@ Result<Reader> Reader::open(const fs::path& path) {
     auto impl = std::make_unique<Impl>();
     impl->path = path;
     impl->name = path.string();
-    std::error_code ec;
-    if (!fs::is_regular_file(path, ec)) return impl->fail(fs::exists(path, ec) ? "not a regular file" : "no such file");
-    impl->size = fs::file_size(path, ec);
-    if (ec) return impl->fail("cannot stat: " + ec.message());
-    impl->file = std::fopen(path.c_str(), "rb");
-    if (!impl->file) return impl->fail(std::string("cannot open: ") + std::strerror(errno));
+    // O_NONBLOCK and fstat on the open descriptor: a FIFO or device named as input is refused, not waited on.
+    const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+    if (fd < 0) return impl->fail(errno == ENOENT ? std::string("no such file") : std::string("cannot open: ") + std::strerror(errno));
+    struct stat st {};
+    if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+        ::close(fd);
+        return impl->fail("not a regular file");
+    }
+    impl->size = static_cast<std::uint64_t>(st.st_size);
+    impl->file = ::fdopen(fd, "rb");
+    if (!impl->file) {
+        ::close(fd);
+        return impl->fail(std::string("cannot open: ") + std::strerror(errno));
+    }
 
     std::string head(static_cast<std::size_t>(std::min<std::uint64_t>(impl->size, kMaxHeaderBytes)), '\0');
     if (std::fread(head.data(), 1, head.size(), impl->file) != head.size()) return impl->fail("read error in header");
@@ -518,8 +532,21 @@ Result<std::size_t> Reader::read_rows(std::size_t max_rows, Chunk& chunk) {
         if (auto s = m.read_fixed_rows(e, n, chunk.columns); !s) return s.error();
         m.row += n;
     } else {
-        for (std::size_t r = 0; r < n; ++r, ++m.row)
+        // Rows with lists can be huge (2^20 entries each): a chunk stops early once it holds
+        // kMaxChunkListValues list entries, so callers can budget before the next chunk is expanded.
+        std::size_t r = 0;
+        for (; r < n; ++r, ++m.row) {
             if (auto s = m.read_row(e, &chunk.columns); !s) return s.error();
+            std::size_t values = 0;
+            for (std::size_t i = 0; i < e.properties.size(); ++i)
+                if (e.properties[i].is_list) values += chunk.columns[i].values.size();
+            if (values >= kMaxChunkListValues) {
+                ++r, ++m.row;
+                break;
+            }
+        }
+        chunk.rows = r;
+        return r;
     }
     chunk.rows = n;
     return n;
@@ -529,23 +556,16 @@ Result<std::size_t> Reader::read_rows(std::size_t max_rows, Chunk& chunk) {
 // Writer
 
 struct Writer::Impl {
-    fs::path path, tmp;
+    fs::path path;
     std::string name;
-    std::FILE* file = nullptr;
+    std::optional<AtomicFile> atomic;  // the temporary; removed unless finish() commits it
+    std::FILE* file = nullptr;         // atomic->file()
     Header header;
     bool swap = false;
     std::size_t element = 0;
     std::uint64_t row = 0;
     std::vector<char> out;
     bool finished = false;
-
-    ~Impl() {
-        if (file) std::fclose(file);
-        if (!finished && !tmp.empty()) {
-            std::error_code ec;
-            fs::remove(tmp, ec);
-        }
-    }
 
     Error fail(const std::string& why) const { return make_error(name + ": " + why); }
 
@@ -592,9 +612,10 @@ Result<Writer> Writer::create(const fs::path& path, const Header& header) {
     for (const Element& e : header.elements)
         if (e.count > 0 && e.properties.empty()) return impl->fail("element '" + e.name + "' has rows but no properties");
     impl->swap = (header.format == Format::binary_big_endian) == kLittleEndianHost;
-    impl->tmp = path.string() + ".tmp-" + std::to_string(getpid());
-    impl->file = std::fopen(impl->tmp.c_str(), "wb");
-    if (!impl->file) return impl->fail(std::string("cannot write: ") + std::strerror(errno));
+    auto atomic = AtomicFile::create(path);
+    if (!atomic) return atomic.error();
+    impl->atomic.emplace(std::move(*atomic));
+    impl->file = impl->atomic->file();
     const std::string text = header.to_string();
     impl->out.assign(text.begin(), text.end());
     if (auto s = impl->flush(); !s) return s.error();
@@ -659,15 +680,9 @@ Status Writer::finish() {
                           std::to_string(m.header.elements[i].count) + " rows");
     }
     if (auto s = m.flush(); !s) return s;
-    if (std::fflush(m.file) != 0) return m.fail(std::string("write failed: ") + std::strerror(errno));
-    if (fsync(fileno(m.file)) != 0) return m.fail(std::string("fsync failed: ") + std::strerror(errno));
-    const int rc = std::fclose(m.file);
     m.file = nullptr;
-    if (rc != 0) return m.fail(std::string("close failed: ") + std::strerror(errno));
-    std::error_code ec;
-    fs::rename(m.tmp, m.path, ec);
-    if (ec) return m.fail("cannot rename temporary file: " + ec.message());
     m.finished = true;
+    if (Status s = m.atomic->commit(); !s) return s;
     return {};
 }
 

@@ -75,8 +75,11 @@ struct Reader {
         Transform t;
         if (!j.is_object() || !j.contains("transform")) return t;
         const json& tj = j["transform"];
+        if (!tj.is_object()) throw std::runtime_error(where + ": 'transform' must be an object {translation, rotation, scale}");
         t.translation = v3_or(tj, "translation", glm::dvec3(0.0));
         t.scale = v3_or(tj, "scale", glm::dvec3(1.0));
+        if (t.scale.x == 0.0 || t.scale.y == 0.0 || t.scale.z == 0.0)
+            throw std::runtime_error(where + ": 'transform' 'scale' has a zero component (the transform would not be invertible)");
         if (tj.contains("rotation")) {
             const json& q = tj["rotation"];
             if (!q.is_array() || q.size() != 4) throw std::runtime_error(where + ": rotation must be [x, y, z, w]");
@@ -86,6 +89,8 @@ struct Reader {
                 c[i] = q[i].get<double>();
             }
             t.rotation = glm::dquat(c[3], c[0], c[1], c[2]);
+            const double len = glm::length(t.rotation);
+            if (!(len > 1e-12) || !std::isfinite(len)) throw std::runtime_error(where + ": 'transform' 'rotation' is a zero quaternion");
         }
         return t;
     }
@@ -222,6 +227,11 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
                 c.far_plane = static_cast<float>(cr.num_or(cj, "far", c.far_plane));
                 if (!(c.fov_y_degrees > 0.0f && c.fov_y_degrees < 180.0f) || !(c.near_plane > 0.0f) || !(c.far_plane > c.near_plane))
                     throw std::runtime_error(cr.where + ": fov must be in (0, 180) and 0 < near < far");
+                // eye = target has no view direction; an up vector along it (or zero) has no roll.
+                const glm::dvec3 view = c.target - c.eye;
+                if (!(glm::length(view) > 0.0)) throw std::runtime_error(cr.where + ": 'eye' equals 'target' (no view direction)");
+                if (!(glm::length(glm::cross(glm::normalize(view), glm::dvec3(c.up))) > 1e-9))
+                    throw std::runtime_error(cr.where + ": 'up' is zero or parallel to the view direction");
                 const ecs::Entity e = r.create();
                 created.push_back(e);
                 r.emplace<Name>(e, Name{cr.str_or(cj, "name", "camera")});

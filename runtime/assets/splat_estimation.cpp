@@ -4,26 +4,12 @@
 #include <cmath>
 #include <queue>
 
-#include <nanoflann.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "runtime/assets/point_tree.h"
+
 namespace sffd::assets {
-
-namespace {
-
-struct PointAdaptor {
-    std::span<const glm::vec3> pts;
-    std::size_t kdtree_get_point_count() const { return pts.size(); }
-    float kdtree_get_pt(std::size_t i, std::size_t d) const { return pts[i][static_cast<int>(d)]; }
-    template <class BBox>
-    bool kdtree_get_bbox(BBox&) const { return false; }
-};
-
-using KdTree = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<float, PointAdaptor>, PointAdaptor, 3,
-                                                   std::uint32_t>;
-
-}  // namespace
 
 Neighbours find_neighbours(std::span<const glm::vec3> points, int k) {
     Neighbours nb;
@@ -32,15 +18,13 @@ Neighbours find_neighbours(std::span<const glm::vec3> points, int k) {
     nb.index.assign(n * static_cast<std::size_t>(k), 0);
     nb.dist2.assign(n * static_cast<std::size_t>(k), 0.0f);
     if (n < 2 || k <= 0) return nb;
-    PointAdaptor adaptor{points};
-    KdTree tree(3, adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16));
-    tree.buildIndex();
+    const detail::PointTree<glm::vec3> tree(points);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
         std::vector<std::uint32_t> idx(static_cast<std::size_t>(k) + 1);
         std::vector<float> d2(static_cast<std::size_t>(k) + 1);
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
             const float q[3] = {points[i].x, points[i].y, points[i].z};
-            const std::size_t found = tree.knnSearch(q, static_cast<std::size_t>(k) + 1, idx.data(), d2.data());
+            const std::size_t found = tree.knn(q, static_cast<std::size_t>(k) + 1, idx.data(), d2.data());
             std::size_t out = 0;
             std::uint32_t last = static_cast<std::uint32_t>(i == 0 ? 1 : 0);
             float last_d = 0.0f;

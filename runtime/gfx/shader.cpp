@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "runtime/core/file_io.h"
 #include "runtime/core/log.h"
 #include "runtime/core/paths.h"
 
@@ -32,11 +33,9 @@ bool is_directive(std::string_view line, std::string_view name, std::string_view
 }
 
 Result<std::string> read_text(const fs::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return make_error(path.string() + ": cannot open shader file");
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
+    auto text = read_file(path, 16u << 20);  // runtime/core/file_io.h: regular files only
+    if (!text) return make_error(path.string() + ": cannot open shader file (" + text.message() + ")");
+    return text;
 }
 
 std::vector<std::string_view> split_lines(std::string_view text) {

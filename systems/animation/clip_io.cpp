@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "runtime/core/atomic_file.h"
+#include "runtime/core/file_io.h"
 #include <array>
 
 namespace sffd {
@@ -206,6 +207,7 @@ Result<AnimationClip> clip_from_json(const json& j, const std::string& source) {
 std::string clip_to_string(const AnimationClip& clip) { return clip_to_json(clip).dump(2) + "\n"; }
 
 Result<AnimationClip> parse_clip(std::string_view text, const std::string& source) {
+    if (Status s = check_json_depth(text, source); !s) return s.error();  // nlohmann's parser recurses
     json j;
     try {
         j = json::parse(text.begin(), text.end());
@@ -220,11 +222,9 @@ Status save_clip(const AnimationClip& clip, const std::filesystem::path& path) {
 }
 
 Result<AnimationClip> load_clip(const std::filesystem::path& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return make_error(path.string() + ": cannot open");
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parse_clip(text.str(), path.string());
+    auto text = read_file(path, kMaxJsonFileBytes);  // runtime/core/file_io.h: regular files only, size budget
+    if (!text) return text.error();
+    return parse_clip(*text, path.string());
 }
 
 }  // namespace sffd

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <sstream>
 
+#include "runtime/core/file_io.h"
+
 namespace sffd::editor {
 
 namespace {
@@ -157,11 +159,9 @@ Result<std::vector<InputEvent>> parse_input_recording(std::string_view text, std
 }
 
 Result<std::vector<InputEvent>> load_input_recording(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return make_error(path + ": cannot open input recording");
-    std::ostringstream s;
-    s << in.rdbuf();
-    return parse_input_recording(s.str(), path);
+    auto text = read_file(path, kMaxTextFileBytes);  // runtime/core/file_io.h: regular files only
+    if (!text) return make_error(path + ": cannot open input recording (" + text.message() + ")");
+    return parse_input_recording(*text, path);
 }
 
 std::string format_input_recording(std::span<const InputEvent> events) {

@@ -1,12 +1,13 @@
 #include "systems/ffd/lattice_io.h"
 
+#include <algorithm>
 #include <cmath>
-#include <fstream>
-#include <sstream>
+#include <iterator>
 
 #include <nlohmann/json.hpp>
 
 #include "runtime/core/atomic_file.h"
+#include "runtime/core/file_io.h"
 #include "systems/ffd/lattice.h"
 
 namespace sffd::ffd {
@@ -14,6 +15,10 @@ namespace sffd::ffd {
 using nlohmann::json;
 
 namespace {
+
+// Control points larger than this overflow when the basis sums them (1e308 passed as finite and deformed
+// to inf); 1e30 leaves room for every product and sum in double and in the float paths' offsets.
+constexpr double kMaxCoordinate = 1e30;
 
 // Reads a [x,y,z] array of finite numbers; `what` names it in messages.
 Result<glm::dvec3> vec3(const json& j, const std::string& name, const std::string& what) {
@@ -23,6 +28,7 @@ Result<glm::dvec3> vec3(const json& j, const std::string& name, const std::strin
         if (!j[a].is_number()) return make_error(name + ": " + what + " must be an array of 3 numbers");
         v[a] = j[a].get<double>();
         if (!std::isfinite(v[a])) return make_error(name + ": " + what + " is not finite");
+        if (std::abs(v[a]) > kMaxCoordinate) return make_error(name + ": " + what + " is larger than 1e30 in magnitude");
     }
     return v;
 }
@@ -45,6 +51,7 @@ Result<std::vector<glm::dvec3>> points(const json& j, const std::string& name, c
 }  // namespace
 
 Result<Lattice> parse_lattice_json(std::string_view text, const std::string& name) {
+    if (Status s = check_json_depth(text, name); !s) return s.error();
     json j;
     try {
         j = json::parse(text.begin(), text.end());
@@ -52,6 +59,14 @@ Result<Lattice> parse_lattice_json(std::string_view text, const std::string& nam
         return make_error(name + ": malformed JSON (" + std::string(e.what()) + ")");
     }
     if (!j.is_object()) return make_error(name + ": expected a JSON object");
+    // A misspelt key ("controlpoints") would silently deform nothing: every key must be known.
+    for (const auto& item : j.items()) {
+        const std::string& key = item.key();
+        static constexpr const char* kKeys[] = {"origin", "axes", "divisions", "basis", "rest_control_points", "control_points"};
+        if (std::none_of(std::begin(kKeys), std::end(kKeys), [&](const char* k) { return key == k; }))
+            return make_error(name + ": unknown key \"" + key.substr(0, 80) +
+                              "\" (expected origin, axes, divisions, basis, rest_control_points, control_points)");
+    }
     for (const char* key : {"origin", "axes", "divisions"})
         if (!j.contains(key)) return make_error(name + ": missing \"" + key + "\"");
     Lattice l;
@@ -105,11 +120,10 @@ Result<Lattice> parse_lattice_json(std::string_view text, const std::string& nam
 }
 
 Result<Lattice> load_lattice(const std::filesystem::path& path) {
-    std::ifstream f(path, std::ios::binary);
-    if (!f) return make_error(path.string() + ": cannot open lattice file");
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return parse_lattice_json(ss.str(), path.string());
+    // Regular files only (--lattice /dev/zero or a FIFO would read forever), within the JSON budget.
+    auto text = read_file(path, kMaxJsonFileBytes);
+    if (!text) return text.error();
+    return parse_lattice_json(*text, path.string());
 }
 
 std::string lattice_to_json(const Lattice& l) {

@@ -2,6 +2,9 @@
 // file, 2 usage), exact splat counts, and what `info` prints.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <array>
 #include <cstdio>
 #include <filesystem>
@@ -78,4 +81,54 @@ TEST(Cli, UsageErrorsExitTwo) {
     EXPECT_EQ(run("convert a.ply b.ply --splats zero").code, 2);
     EXPECT_EQ(run("convert a.ply b.ply --bogus").code, 2);
     EXPECT_EQ(run("info").code, 2);
+}
+
+// Issue 13: a glTF from the web must not leak local files into an export; --allow-outside-resources
+// is the explicit opt-in for trusted files.
+TEST(Cli, ConvertRefusesResourcesOutsideTheFileFolderUnlessAllowed) {
+    const fs::path root = temp_dir() / "exfil";
+    fs::remove_all(root);
+    fs::create_directories(root / "x");
+    fs::create_directories(root / "a" / "b");
+    std::ofstream(root / "x" / "secret.txt") << "SECRET123";
+    const fs::path gltf = root / "a" / "b" / "exfil.gltf";
+    std::ofstream(gltf) << R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+      "meshes":[{"primitives":[{"mode":0,"attributes":{"POSITION":0}}]}],
+      "accessors":[{"bufferView":0,"componentType":5121,"count":3,"type":"VEC3"}],
+      "bufferViews":[{"buffer":0,"byteLength":9}],"buffers":[{"uri":"%2e%2e/%2e%2e/x/secret.txt","byteLength":9}]})";
+    const fs::path leak = root / "leak.ply";
+    const CliRun r = run("convert " + gltf.string() + " " + leak.string() + " --ascii");
+    EXPECT_EQ(r.code, 1) << r.out;
+    EXPECT_NE(r.out.find(gltf.string() + ": resource '../../x/secret.txt' is outside the file's folder"), std::string::npos) << r.out;
+    EXPECT_FALSE(fs::exists(leak));
+    const CliRun ok = run("--allow-outside-resources convert " + gltf.string() + " " + leak.string() + " --ascii");
+    EXPECT_EQ(ok.code, 0) << ok.out;
+    EXPECT_TRUE(fs::exists(leak));
+}
+
+// Issue 13: running out of memory is a message and exit 1, never an uncaught std::bad_alloc (rc 134);
+// requests beyond the stated budget are refused before any work.
+TEST(Cli, OutOfMemoryIsAMessageAndOverBudgetRequestsAreRefusedEarly) {
+    const fs::path obj = temp_dir() / "oom.obj";
+    std::ofstream(obj) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n";
+    const double phys = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
+    if (phys < 322e9) {  // a machine with more memory than 2^28 splats need would start the work
+        const CliRun early = run("convert " + obj.string() + " " + (temp_dir() / "oom.ply").string() + " --splats 268435456");
+        EXPECT_EQ(early.code, 1) << early.out;
+        EXPECT_NE(early.out.find(obj.string() + ": sampling 268435456 splats needs about 322.1 GB (1.2 KB per splat)"), std::string::npos)
+            << early.out;
+    }
+    // Under a 300 MB address-space limit, sampling 2M splats (about 2.2 GB) runs out of memory.
+    CliRun r;
+    const std::string cmd = "sh -c 'ulimit -v 300000; exec " + std::string(SFFD_BINARY_DIR) + "/tools/splatffd convert " + obj.string() +
+                            " " + (temp_dir() / "oom.ply").string() + " --splats 2000000' 2>&1";
+    std::FILE* p = popen(cmd.c_str(), "r");
+    ASSERT_NE(p, nullptr);
+    std::array<char, 4096> buf{};
+    while (std::size_t n = std::fread(buf.data(), 1, buf.size(), p)) r.out.append(buf.data(), n);
+    const int status = pclose(p);
+    ASSERT_TRUE(WIFEXITED(status)) << "killed by a signal: " << r.out;
+    EXPECT_EQ(WEXITSTATUS(status), 1) << r.out;
+    EXPECT_NE(r.out.find("splatffd convert: out of memory"), std::string::npos) << r.out;
+    EXPECT_FALSE(fs::exists(temp_dir() / "oom.ply"));
 }

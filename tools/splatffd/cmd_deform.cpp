@@ -7,8 +7,11 @@
 // --bench N re-runs the deformation of every chunk N more times and prints one JSON line on stdout:
 // {"points":..,"backend":..,"median_ms":..,"points_per_s":..} (deformation only, no I/O).
 #include <algorithm>
+#include <cctype>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -159,6 +162,20 @@ int run_deform(sffd::cli::Args args) {
         }
     }
     if (pos.size() != 2 || lattice_path.empty()) return usage();
+    // The output is always PLY: another extension would put PLY bytes under a misleading name.
+    {
+        std::string ext = std::filesystem::path(pos[1]).extension().string();
+        for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+        if (ext != ".ply")
+            return fail(pos[1] + ": deform writes PLY files; name the output *.ply (got '" + ext + "'; use `splatffd convert` for other formats)");
+    }
+    // Writing over the input while streaming it would destroy the input on success.
+    {
+        std::error_code ec;
+        const bool same = std::filesystem::equivalent(pos[0], pos[1], ec) ||
+                          std::filesystem::weakly_canonical(pos[0], ec) == std::filesystem::weakly_canonical(pos[1], ec);
+        if (same) return fail(pos[1] + ": output is the input file; choose another output name");
+    }
 
     auto lattice = ffd::load_lattice(lattice_path);
     if (!lattice) return fail(lattice.message());
@@ -207,6 +224,12 @@ int run_deform(sffd::cli::Args args) {
                 }
                 auto ms = deformer.run(chunk, ix, iy, iz, inx, iny, inz, true);
                 if (!ms) return fail(lattice_path + ": " + ms.message());
+                // Outputs must be finite: a lattice that overflows must fail the run, not write inf.
+                for (std::size_t r = 0; r < *rows; ++r)
+                    for (int k : {ix, iy, iz, inx, iny, inz})
+                        if (k >= 0 && !std::isfinite(chunk.columns[std::size_t(k)].values[r]))
+                            return fail(lattice_path + ": deformed point " + std::to_string(points + r) + " of " + pos[0] +
+                                        " is not finite; nothing was written to " + pos[1]);
                 first_ms += *ms;
                 points += *rows;
             }

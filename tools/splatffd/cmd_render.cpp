@@ -7,6 +7,8 @@
 // grid with a clock of its own, so frame k alone is the same image as frame k of a sequence.
 // Files: DIR/frame_NNNN.png (8-bit sRGB with alpha; transparent background unless --background) and
 // DIR/frame_NNNN.exr (R G B A half linear, Z float view-axis depth, N.X N.Y N.Z half world normals).
+// DIR/render_manifest.json: settings, frames written by this run, and "state": running | complete |
+// failed (an interrupted run stays "running" with the frames it finished; SIGINT/SIGTERM exit 130/143).
 // A scene without a camera is framed automatically; without lights it gets a default key light.
 // Exit 0 ok, 1 bad scene or unwritable output (the message names the file), 2 usage.
 #include <chrono>
@@ -20,6 +22,7 @@
 #include "runtime/app/app.h"
 #include "runtime/app/clock.h"
 #include "runtime/assets/scene.h"
+#include "runtime/core/atomic_file.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/gfx/context.h"
 #include "systems/splat_render/image_io.h"
@@ -142,6 +145,14 @@ int run_render(sffd::cli::Args args) {
             return 2;
         }
     }
+    // Memory budget stated up front: the HQ passes keep about 40 bytes per pixel on the GPU and the capture
+    // about 30 on the CPU, so 8192x8192 (67M pixels, ~4.5 GB) is the most one frame may ask for.
+    constexpr long long kMaxPixels = 8192LL * 8192LL;
+    if (static_cast<long long>(width) * height > kMaxPixels) {
+        std::fprintf(stderr, "splatffd render: --size %ldx%ld is %lld pixels, more than the budget of %lld (8192x8192)\n", width, height,
+                     static_cast<long long>(width) * height, kMaxPixels);
+        return 2;
+    }
     if (out_dir.empty()) {
         std::fprintf(stderr, "splatffd render: --out DIR is required\n");
         usage();
@@ -183,6 +194,41 @@ int run_render(sffd::cli::Args args) {
         }
         const Schedule schedule = make_engine_schedule({.present = false});
         const long count = last - first + 1;
+        // DIR/render_manifest.json says which frames this run wrote and whether it finished, so frames of
+        // an interrupted run are not mistaken for a complete sequence (older frames may share the folder).
+        const std::filesystem::path manifest = std::filesystem::path(out_dir) / "render_manifest.json";
+        const std::string started = std::to_string(std::chrono::duration_cast<std::chrono::seconds>(
+                                                       std::chrono::system_clock::now().time_since_epoch()).count());
+        auto write_manifest = [&](long written_last, const char* state) {
+            std::string frames = "[";
+            for (long k = first; k <= written_last; ++k) {
+                if (k > first) frames += ',';
+                frames += std::to_string(k);
+            }
+            frames += "]";
+            char fields[512];
+            std::snprintf(fields, sizeof fields,
+                          "\"first\": %ld, \"last\": %ld, \"size\": [%ld, %ld], \"quality\": \"%s\", \"formats\": \"%s\", \"fps\": %.17g, "
+                          "\"culling\": %s",
+                          first, last, width, height, quality == render::Quality::hq ? "hq" : "preview",
+                          png && exr ? "png,exr" : png ? "png" : "exr", fps, culling ? "true" : "false");
+            std::string scene_escaped;
+            for (char ch : scene) {
+                if (ch == '"' || ch == '\\') scene_escaped += '\\';
+                if (static_cast<unsigned char>(ch) >= 0x20) scene_escaped += ch;
+            }
+            const std::string text = std::string("{\"generator\": \"splatffd render " SFFD_VERSION "\", \"state\": \"") + state +
+                                     "\", \"complete\": " + (std::string(state) == "complete" ? "true" : "false") +
+                                     ", \"started_unix\": " + started + ", \"scene\": \"" + scene_escaped + "\", " + fields +
+                                     ", \"frames_written\": " + frames + "}\n";
+            return write_file_atomic(manifest, text);
+        };
+        if (Status st = write_manifest(first - 1, "running"); !st) {
+            std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
+            render::release_render_state(registry);
+            return 1;
+        }
+        long written_last = first - 1;
         const auto start = std::chrono::steady_clock::now();
         for (long k = first; k <= last; ++k) {
             // A clock of its own per frame, seeked to frame k: the frame depends on k only.
@@ -214,6 +260,12 @@ int run_render(sffd::cli::Args args) {
                     break;
                 }
             }
+            written_last = k;
+            if (Status st = write_manifest(written_last, k == last ? "complete" : "running"); !st) {
+                std::fprintf(stderr, "\nsplatffd render: %s\n", st.message().c_str());
+                status = 1;
+                break;
+            }
             const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             const long done = k - first + 1;
             std::fprintf(stderr, "\rsplatffd render: frame %ld (%ld/%ld, %.0f%%) %.2f s/frame, ETA %.0f s   ", k, done,
@@ -222,6 +274,7 @@ int run_render(sffd::cli::Args args) {
             std::fflush(stderr);
         }
         std::fprintf(stderr, "\n");
+        if (status != 0) (void)write_manifest(written_last, "failed");
         render::release_render_state(registry);
     }
     return status;

@@ -1,9 +1,13 @@
 // splatffd: the engine's command-line front end. See `splatffd --help`.
 #include <algorithm>
 #include <cstdio>
+#include <exception>
+#include <new>
 #include <string>
 #include <vector>
 
+#include "runtime/core/atomic_file.h"
+#include "runtime/core/file_io.h"
 #include "runtime/core/paths.h"
 #include "systems/animation/scene_extension.h"
 #include "tools/splatffd/command.h"
@@ -61,13 +65,21 @@ void print_help() {
         if (!listed) std::printf("  %-9s %s\n", c.name.c_str(), c.summary.c_str());
     }
     std::printf("\noptions:\n  --help     this text\n  --version  print the version\n"
-                "  --paths    print where shaders, content and the cache are found\n");
+                "  --paths    print where shaders, content and the cache are found\n"
+                "  --allow-outside-resources  (with any command) let trusted files name textures, buffers and\n"
+                "             material libraries outside their own folder (refused by default)\n");
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
     std::vector<std::string> args(argv + 1, argv + argc);
+    // Global option: resources (textures, buffers, material libraries) may lie outside the folder of the
+    // file that names them. Off by default: a scene from the web must not read local files.
+    if (auto it = std::find(args.begin(), args.end(), "--allow-outside-resources"); it != args.end()) {
+        sffd::set_allow_outside_resources(true);
+        args.erase(it);
+    }
     if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
         print_help();
         return args.empty() ? 2 : 0;
@@ -84,7 +96,21 @@ int main(int argc, char** argv) {
     const std::string name = args[0];
     // Start-up registrations of systems that store data in scene files (runtime/assets/scene.h hooks).
     sffd::register_animation_scene_hooks();
-    if (const auto* c = find(name)) return c->run(sffd::cli::Args(args).subspan(1));
+    // SIGINT/SIGTERM remove unfinished outputs (runtime/core/atomic_file.h) and exit 130/143.
+    static const std::string program = "splatffd " + name;
+    sffd::install_interrupt_cleanup(program.c_str());
+    if (const auto* c = find(name)) {
+        // Budgets refuse declared sizes early; whatever still runs out of memory fails with a message.
+        try {
+            return c->run(sffd::cli::Args(args).subspan(1));
+        } catch (const std::bad_alloc&) {
+            std::fprintf(stderr, "splatffd %s: out of memory (the input needs more memory than is available)\n", name.c_str());
+            return 1;
+        } catch (const std::exception& e) {
+            std::fprintf(stderr, "splatffd %s: %s\n", name.c_str(), e.what());
+            return 1;
+        }
+    }
     for (const Known& k : known_commands)
         if (name == k.name) {
             std::fprintf(stderr, "splatffd %s: not implemented yet\n", name.c_str());

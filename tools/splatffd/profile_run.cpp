@@ -12,6 +12,7 @@
 #include "runtime/app/clock.h"
 #include "runtime/assets/scene.h"
 #include "runtime/core/atomic_file.h"
+#include "runtime/core/file_io.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/splat_store.h"
 #include "systems/ffd/components.h"
@@ -53,11 +54,9 @@ const PaperCase* find_case(const std::string& name) {
 Status write_text(const std::string& path, const std::string& text) { return write_file_atomic(path, text); }
 
 std::optional<std::string> read_text(const std::string& path) {
-    std::ifstream f(path, std::ios::binary);
-    if (!f) return std::nullopt;
-    std::stringstream ss;
-    ss << f.rdbuf();
-    return ss.str();
+    auto text = read_file(path, kMaxJsonFileBytes);  // runtime/core/file_io.h
+    if (!text) return std::nullopt;
+    return std::move(*text);
 }
 
 double median(std::vector<double> v) { return compute_stats(std::move(v)).p50; }

@@ -2,12 +2,18 @@
 // here), other properties and order kept, ASCII / big-endian input, --bench JSON, refusals of bad input.
 #include <gtest/gtest.h>
 
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <tuple>
 
 #include "runtime/assets/ply.h"
 #include "systems/ffd/lattice.h"
@@ -224,6 +230,109 @@ TEST_F(DeformCommand, BadInputIsRefused) {
     r = run(p("noxyz.ply") + " " + p("o.ply") + " --lattice " + p("lattice.json"));
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.err.find("noxyz.ply: vertex element has no x, y, z"), std::string::npos) << r.err;
+}
+
+// Issue 13: outputs that would be wrong or destructive, hostile lattices, and interruptions.
+TEST_F(DeformCommand, WrongExtensionSameFileAndNonRegularPathsAreRefused) {
+    const std::string lat = " --lattice " + p("lattice.json");
+    RunResult r = run(p("in.ply") + " " + p("out.glb") + lat);  // used to write PLY bytes under .glb
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find(p("out.glb") + ": deform writes PLY files; name the output *.ply (got '.glb'"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(p("out.glb")));
+
+    const auto before = fs::file_size(p("in.ply"));
+    for (const std::string& out : {p("in.ply"), (dir / "." / "in.ply").string()}) {
+        r = run(p("in.ply") + " " + out + lat);
+        EXPECT_EQ(r.code, 1);
+        EXPECT_NE(r.err.find(": output is the input file"), std::string::npos) << r.err;
+    }
+    fs::create_hard_link(p("in.ply"), p("hard.ply"));
+    r = run(p("in.ply") + " " + p("hard.ply") + lat);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find(p("hard.ply") + ": output is the input file"), std::string::npos) << r.err;
+    EXPECT_EQ(fs::file_size(p("in.ply")), before);
+    EXPECT_EQ(read_ply(p("in.ply")).x, input.x);
+
+    // A FIFO as lattice, /dev/zero as lattice, /dev/null as output: refused at once (used to hang,
+    // abort with std::bad_alloc, or replace /dev/null).
+    ASSERT_EQ(::mkfifo(p("fifo.json").c_str(), 0600), 0);
+    r = run(p("in.ply") + " " + p("o.ply") + " --lattice " + p("fifo.json"));
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find(p("fifo.json") + ": not a regular file (a FIFO)"), std::string::npos) << r.err;
+    r = run(p("in.ply") + " " + p("o.ply") + " --lattice /dev/zero");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("/dev/zero: not a regular file (a character device)"), std::string::npos) << r.err;
+    fs::create_directories(dir / "dev");
+    fs::create_symlink("/dev/null", dir / "dev" / "null.ply");
+    r = run(p("in.ply") + " " + (dir / "dev" / "null.ply").string() + lat);
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("not a regular file (a character device); refusing to replace it"), std::string::npos) << r.err;
+}
+
+TEST_F(DeformCommand, HugeControlPointsAndMisspeltKeysFailInsteadOfWritingNonsense) {
+    std::string cps = "[";
+    for (int i = 0; i < 8; ++i) cps += std::string(i ? "," : "") + "[" + (i == 7 ? "1e308" : std::to_string(100 * (i & 1))) + "," +
+                                       std::to_string(100 * ((i >> 1) & 1)) + "," + std::to_string(100 * ((i >> 2) & 1)) + "]";
+    cps += "]";
+    {
+        std::ofstream f(p("huge.json"));
+        f << R"({"origin":[0,0,0],"axes":[[100,0,0],[0,100,0],[0,0,100]],"divisions":[1,1,1],"control_points":)" << cps << "}";
+    }
+    RunResult r = run(p("in.ply") + " " + p("o.ply") + " --lattice " + p("huge.json"));  // used to exit 0 writing inf
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find(p("huge.json") + ": control_points[7] is larger than 1e30 in magnitude"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(p("o.ply")));
+    {
+        std::ofstream f(p("typo.json"));
+        f << R"({"origin":[0,0,0],"axes":[[100,0,0],[0,100,0],[0,0,100]],"divisions":[1,1,1],"controlpoints":[]})";
+    }
+    r = run(p("in.ply") + " " + p("o.ply") + " --lattice " + p("typo.json"));  // used to deform nothing and exit 0
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find(p("typo.json") + ": unknown key \"controlpoints\""), std::string::npos) << r.err;
+}
+
+// Runs `splatffd deform` with --bench (the deformation repeated many times keeps it busy), sends `sig`
+// once its temporary exists, and returns the exit code; stderr goes to `err`.
+int deform_and_signal(const std::string& args, const fs::path& dir, int sig, const fs::path& err) {
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+        const std::string cmd = "exec " + kTool + " deform " + args + " 2>" + err.string() + " >/dev/null";
+        ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+        ::_exit(127);
+    }
+    bool sent = false;
+    for (int i = 0; i < 20000 && !sent; ++i) {  // up to 20 s for the temporary to appear
+        for (const auto& e : fs::directory_iterator(dir))
+            if (e.path().filename().string().find(".sffd-tmp-") != std::string::npos) {
+                ::kill(pid, sig);
+                sent = true;
+                break;
+            }
+        if (!sent) ::usleep(1000);
+        int status = 0;
+        if (!sent && ::waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : (WIFSIGNALED(status) ? 1000 + WTERMSIG(status) : -1);
+}
+
+TEST_F(DeformCommand, SigintAndSigtermRemoveTheTemporaryAndKeepTheOldOutput) {
+    const std::string args = p("in.ply") + " " + p("res.ply") + " --lattice " + p("lattice.json") + " --backend reference --bench 100000";
+    for (const auto& [sig, code, word] : {std::tuple{SIGINT, 130, "interrupted (SIGINT)"}, std::tuple{SIGTERM, 143, "terminated (SIGTERM)"}}) {
+        {
+            std::ofstream(p("res.ply")) << "old output";
+        }
+        const int rc = deform_and_signal(args, dir, sig, dir / "err.txt");
+        std::ifstream in(dir / "err.txt");
+        const std::string err((std::istreambuf_iterator<char>(in)), {});
+        EXPECT_EQ(rc, code) << err;
+        EXPECT_NE(err.find(std::string("splatffd deform: ") + word + "; unfinished output removed"), std::string::npos) << err;
+        for (const auto& e : fs::directory_iterator(dir))
+            EXPECT_EQ(e.path().filename().string().find("sffd-tmp"), std::string::npos) << e.path();
+        std::ifstream old(p("res.ply"));
+        EXPECT_EQ(std::string((std::istreambuf_iterator<char>(old)), {}), "old output");
+    }
 }
 
 }  // namespace

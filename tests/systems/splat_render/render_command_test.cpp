@@ -2,6 +2,10 @@
 // alone equals frame k of a sequence, background option, usage and error exits.
 #include <gtest/gtest.h>
 
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -42,7 +46,7 @@ TEST(RenderCommand, WritesOnePngAndOneExrWithoutADisplay) {
     ASSERT_EQ(run("--out " + out.string() + " --frames 0:0 --size 640x360", &log), 0) << log;
     int files = 0;
     for (const auto& e : fs::directory_iterator(out)) files += e.is_regular_file();
-    EXPECT_EQ(files, 2);
+    EXPECT_EQ(files, 3);  // frame_0000.png, frame_0000.exr, render_manifest.json
     auto png = read_png(out / "frame_0000.png");
     ASSERT_TRUE(png.ok()) << png.message();
     EXPECT_EQ(png->width, 640);
@@ -105,4 +109,71 @@ TEST(RenderCommand, BadInputExitsWithAMessage) {
     const fs::path missing = fs::temp_directory_path() / "sffd_no_such_scene.ply";
     EXPECT_EQ(run(missing.string() + " --out " + fresh_dir("bad").string(), &log), 1);
     EXPECT_NE(log.find(missing.string()), std::string::npos) << log;
+}
+
+// Issue 13: DIR/render_manifest.json tells which frames this run wrote and whether it finished.
+TEST(RenderCommand, ManifestListsTheFramesAndSaysWhetherTheRunCompleted) {
+    const fs::path out = fresh_dir("manifest");
+    std::string log;
+    ASSERT_EQ(run("sphere --out " + out.string() + " --frames 2:3 --size 64x36 --format png --quality preview", &log), 0) << log;
+    std::ifstream in(out / "render_manifest.json");
+    const std::string m((std::istreambuf_iterator<char>(in)), {});
+    EXPECT_NE(m.find("\"state\": \"complete\", \"complete\": true"), std::string::npos) << m;
+    EXPECT_NE(m.find("\"frames_written\": [2,3]"), std::string::npos) << m;
+    EXPECT_NE(m.find("\"size\": [64, 36], \"quality\": \"preview\", \"formats\": \"png\""), std::string::npos) << m;
+    EXPECT_NE(m.find("\"scene\": \"sphere\""), std::string::npos) << m;
+    // A frame that cannot be written (its name is taken by a folder): the run fails and says so.
+    const fs::path bad = fresh_dir("manifest_failed");
+    fs::create_directories(bad / "frame_0001.png");
+    EXPECT_EQ(run("sphere --out " + bad.string() + " --frames 0:2 --size 64x36 --format png --quality preview", &log), 1) << log;
+    std::ifstream in2(bad / "render_manifest.json");
+    const std::string f((std::istreambuf_iterator<char>(in2)), {});
+    EXPECT_NE(f.find("\"state\": \"failed\", \"complete\": false"), std::string::npos) << f;
+    EXPECT_NE(f.find("\"frames_written\": [0]"), std::string::npos) << f;
+}
+
+TEST(RenderCommand, SizeOverTheStatedMemoryBudgetIsRefusedUpFront) {
+    std::string log;
+    EXPECT_EQ(run("--out /tmp/x --size 16384x16384", &log), 2);
+    EXPECT_NE(log.find("--size 16384x16384 is 268435456 pixels, more than the budget of 67108864 (8192x8192)"), std::string::npos) << log;
+}
+
+// Issue 13: SIGTERM during a sequence exits 143 with a message, leaves no temporary files, and the
+// manifest still says the run did not complete and lists only the frames it finished.
+TEST(RenderCommand, InterruptedSequenceLeavesAnIncompleteManifestAndNoTemporaries) {
+    const fs::path out = fresh_dir("interrupted");
+    fs::create_directories(out);
+    const fs::path log = out.parent_path() / "interrupted.log";
+    const pid_t pid = ::fork();
+    if (pid == 0) {
+        const std::string cmd = "exec env -u DISPLAY -u WAYLAND_DISPLAY " + binary + " render sphere --out " + out.string() +
+                                " --frames 0:100000 --size 64x36 --format png --quality preview 2>" + log.string();
+        ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
+        ::_exit(127);
+    }
+    bool sent = false;
+    for (int i = 0; i < 60000 && !sent; ++i) {  // up to 60 s for the first frame
+        if (fs::exists(out / "frame_0001.png")) {
+            ::kill(pid, SIGTERM);
+            sent = true;
+        } else {
+            ::usleep(1000);
+        }
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ASSERT_TRUE(sent);
+    std::ifstream lin(log);
+    const std::string err((std::istreambuf_iterator<char>(lin)), {});
+    ASSERT_TRUE(WIFEXITED(status)) << err;
+    EXPECT_EQ(WEXITSTATUS(status), 143) << err;
+    EXPECT_NE(err.find("splatffd render: terminated (SIGTERM)"), std::string::npos) << err;
+    std::ifstream in(out / "render_manifest.json");
+    const std::string m((std::istreambuf_iterator<char>(in)), {});
+    EXPECT_NE(m.find("\"state\": \"running\", \"complete\": false"), std::string::npos) << m;
+    // Frame 0 was finished; frame 1's file may exist before the manifest records it (the manifest is
+    // written after each frame's files, so it never lists a frame that is not complete).
+    EXPECT_NE(m.find("\"frames_written\": [0"), std::string::npos) << m;
+    EXPECT_EQ(m.find("100000]"), std::string::npos) << m;
+    for (const auto& e : fs::directory_iterator(out)) EXPECT_EQ(e.path().filename().string().find("sffd-tmp"), std::string::npos) << e.path();
 }
