@@ -274,3 +274,31 @@ Status validate(const GaussianCloud& g, const std::string& what) {
 }
 
 }  // namespace sffd::gaussian
+
+namespace sffd::gaussian {
+
+void store_to_chunk(const GaussianCloud& g, const PlyLayout& l, bool opacity, ply::Chunk& chunk) {
+    const int K = sh_coeffs(g.sh_degree);
+    auto col = [&](int i) -> std::vector<double>& { return chunk.columns[std::size_t(i)].values; };
+    for (std::size_t r = 0; r < chunk.rows && r < g.size(); ++r) {
+        const glm::dvec3 p = g.origin + glm::dvec3(g.positions[r]);
+        const int xyz[3] = {l.x, l.y, l.z};
+        for (int c = 0; c < 3; ++c) {
+            // Unchanged values keep the file's exact number (a double column stays bit-exact).
+            if (float(col(xyz[c])[r]) != float(p[c])) col(xyz[c])[r] = p[c];
+            if (float(std::exp(col(l.scale[c])[r])) != g.scales[r][c])
+                col(l.scale[c])[r] = std::log(std::max(double(g.scales[r][c]), 1e-30));
+            col(l.dc[c])[r] = g.sh[r * std::size_t(K) * 3 + std::size_t(c)];
+            for (int k = 1; k < K; ++k)
+                col(l.rest[std::size_t(c * (K - 1) + (k - 1))])[r] = g.sh[(r * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(c)];
+        }
+        const glm::quat q = g.rotations[r];
+        const double w = col(l.rot[0])[r], x = col(l.rot[1])[r], y = col(l.rot[2])[r], z = col(l.rot[3])[r];
+        const double len = std::sqrt(w * w + x * x + y * y + z * z);
+        if (glm::quat(float(w / len), float(x / len), float(y / len), float(z / len)) != q)
+            col(l.rot[0])[r] = q.w, col(l.rot[1])[r] = q.x, col(l.rot[2])[r] = q.y, col(l.rot[3])[r] = q.z;
+        if (opacity) col(l.opacity)[r] = logit(g.opacities[r]);
+    }
+}
+
+}  // namespace sffd::gaussian

@@ -73,3 +73,12 @@ double logit(double p);
 Status validate(const GaussianCloud& cloud, const std::string& what);
 
 }  // namespace sffd::gaussian
+
+namespace sffd::gaussian {
+
+// Writes Gaussians [0, chunk.rows) of `g` back into the columns `layout` names (x y z, f_dc, f_rest, scale,
+// rot; opacity too when `opacity`), leaving every other column of the chunk as read: `deform` keeps
+// the file's other properties and types.
+void store_to_chunk(const GaussianCloud& g, const PlyLayout& layout, bool opacity, ply::Chunk& chunk);
+
+}  // namespace sffd::gaussian

@@ -6,6 +6,7 @@
 #include "runtime/app/app.h"
 #include "systems/animation/animation_system.h"
 #include "systems/ffd/ffd_system.h"
+#include "systems/gaussian/gaussian_system.h"
 #include "systems/picking/picking_system.h"
 #include "systems/splat_render/splat_render.h"
 #if SFFD_EDITOR_HAS_INPUT_SYSTEM
@@ -27,6 +28,7 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
 
     // --- deformation: re-deform point clouds whose rest data or lattices changed (ffd) --------------
     s.add(Phase::deformation, "ffd", ffd_system);  // GPU compute when a context is current, else CPU
+    s.add(Phase::deformation, "gaussian", gaussian_deform_system);  // 3D Gaussian clouds, CPU
 
     // --- picking: only when a pick was requested (picking) ------------------------------------------
     s.add(Phase::picking, "picking", picking::picking_system);
