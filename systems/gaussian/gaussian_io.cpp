@@ -7,6 +7,7 @@
 #include <cstring>
 #include <memory>
 
+#include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/sh.h"
 
 namespace sffd::gaussian {
@@ -250,7 +251,8 @@ Result<GaussianCloud> read_gaussians(const fs::path& path) {
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     if (ext == ".ply") return read_ply(path);
     if (ext == ".splat") return read_splat(path);
-    return make_error(path.string() + ": unknown Gaussian splat format '" + ext + "' (expected .ply or .splat)");
+    if (ext == ".glb" || ext == ".gltf") return read_gltf(path);
+    return make_error(path.string() + ": unknown Gaussian splat format '" + ext + "' (expected .ply, .splat, .glb or .gltf)");
 }
 
 Status validate(const GaussianCloud& g, const std::string& what) {
