@@ -11,7 +11,10 @@
 
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/lattice_io.h"
+#include "runtime/assets/builtin_scenes.h"
 #include "systems/ffd/operations.h"
+#include "systems/gaussian/from_splats.h"
+#include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_io.h"
 
@@ -33,9 +36,9 @@ fs::path temp(const std::string& name) {
     return d / name;
 }
 
-RunResult run(const std::string& args) {
+RunResult run(const std::string& args, const std::string& command = "deform") {
     const std::string o = temp("stdout.txt").string(), e = temp("stderr.txt").string();
-    const int status = std::system((kTool + " deform " + args + " >" + o + " 2>" + e).c_str());
+    const int status = std::system((kTool + " " + command + " " + args + " >" + o + " 2>" + e).c_str());
     RunResult r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     std::stringstream so, se;
@@ -104,6 +107,27 @@ TEST(GaussianDeformCommand, RefusesGpuBackendAndBadFiles) {
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.err.find(bad.string() + ": vertex 0: non-finite 'scale_2'"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(out));  // nothing half-written
+}
+
+TEST(GaussianConvertCommand, BuiltinSphereToGaussiansAndBetweenFormats) {
+    const fs::path ply = temp("sphere.ply"), glb = temp("sphere.glb");
+    RunResult r = run("sphere " + ply.string() + " --gaussians --splats 1000", "convert");
+    ASSERT_EQ(r.code, 0) << r.err;
+    auto g = gaussian::read_ply(ply);
+    ASSERT_TRUE(g) << g.message();
+    const GaussianCloud expect = gaussian::gaussians_from_splats(assets::make_sphere_cloud(1000));
+    ASSERT_EQ(g->size(), 1000u);
+    for (std::size_t i = 0; i < g->size(); ++i) EXPECT_EQ(g->positions[i], expect.positions[i]);
+    EXPECT_EQ(g->sh, expect.sh);
+    r = run(ply.string() + " " + glb.string() + " --gaussians", "convert");  // Gaussian file in, KHR glb out
+    ASSERT_EQ(r.code, 0) << r.err;
+    auto back = gaussian::read_gltf(glb);
+    ASSERT_TRUE(back) << back.message();
+    EXPECT_EQ(back->positions, g->positions);
+    EXPECT_EQ(back->sh, g->sh);
+    r = run("sphere " + temp("x.obj").string() + " --gaussians", "convert");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("Gaussians are written as .ply (3DGS) or .glb"), std::string::npos) << r.err;
 }
 
 }  // namespace
