@@ -60,8 +60,11 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
                 for (int c = 0; c < 3; ++c) n2 += glm::dot(j[c], j[c]);
                 const bool singular = !(std::abs(glm::determinant(j)) > 1e-12 * n2 * std::sqrt(n2));  // as polar_decomposition
                 bad += singular;
-                const glm::dmat3 sigma = j * covariance(glm::dvec3(in.scales[i]), glm::dquat(in.rotations[i])) * glm::transpose(j);
-                const ScaleRotation sr = decompose_covariance(sigma);
+                const glm::dmat3 rq = glm::mat3_cast(glm::dquat(in.rotations[i]));
+                const glm::dvec3 s(in.scales[i]);
+                const glm::dmat3 a = j * glm::dmat3(rq[0] * s.x, rq[1] * s.y, rq[2] * s.z);  // deformed axes J R S
+                // Σ' = (JRS)(JRS)ᵀ; the deformed axes, orthonormalised, are a close guess of its eigenvectors.
+                const ScaleRotation sr = decompose_covariance(a * glm::transpose(a), orthonormalize(j * rq));
                 out.scales[i] = glm::vec3(sr.scale);
                 out.rotations[i] = glm::quat(sr.rotation);
                 if (K == 1) {

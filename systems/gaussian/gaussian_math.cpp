@@ -12,13 +12,17 @@ glm::dmat3 covariance(const glm::dvec3& scale, const glm::dquat& q) {
     return m * glm::transpose(m);
 }
 
-SymEigen sym_eigen(const glm::dmat3& in) {
-    // Cyclic Jacobi: each rotation zeroes one off-diagonal entry; converges quadratically and never
-    // needs the eigenvalues to be distinct (no characteristic polynomial, no deflation).
-    double a[3][3];
+SymEigen sym_eigen(const glm::dmat3& in) { return sym_eigen(in, glm::dmat3(1.0)); }
+
+SymEigen sym_eigen(const glm::dmat3& in, const glm::dmat3& guess) {
+    // Cyclic Jacobi on Gᵀ A G: each rotation zeroes one off-diagonal entry; converges quadratically and
+    // never needs the eigenvalues to be distinct (no characteristic polynomial, no deflation). A good
+    // guess G leaves little to rotate (one sweep instead of four to six).
+    const glm::dmat3 sym = 0.5 * (in + glm::transpose(in));
+    const glm::dmat3 rotated = glm::transpose(guess) * sym * guess;
+    double a[3][3], v[3][3];
     for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) a[r][c] = 0.5 * (in[c][r] + in[r][c]);
-    double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+        for (int c = 0; c < 3; ++c) a[r][c] = 0.5 * (rotated[c][r] + rotated[r][c]), v[r][c] = guess[c][r];
     double norm = 0.0;
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c) norm += a[r][c] * a[r][c];
@@ -62,14 +66,28 @@ SymEigen sym_eigen(const glm::dmat3& in) {
     return e;
 }
 
+glm::dmat3 orthonormalize(const glm::dmat3& m) {
+    glm::dvec3 a = m[0], b = m[1];
+    const double la = glm::length(a);
+    if (!(la > 1e-300)) return glm::dmat3(1.0);
+    a /= la;
+    b -= glm::dot(a, b) * a;
+    const double lb = glm::length(b);
+    if (!(lb > 1e-12 * glm::length(m[1]))) return glm::dmat3(1.0);
+    b /= lb;
+    return glm::dmat3(a, b, glm::cross(a, b));
+}
+
 glm::dquat quat_from_rotation(const glm::dmat3& r) {
     glm::dquat q = glm::normalize(glm::quat_cast(r));
     if (q.w < 0.0) q = -q;
     return q;
 }
 
-ScaleRotation decompose_covariance(const glm::dmat3& sigma) {
-    const SymEigen e = sym_eigen(sigma);
+ScaleRotation decompose_covariance(const glm::dmat3& sigma) { return decompose_covariance(sigma, glm::dmat3(1.0)); }
+
+ScaleRotation decompose_covariance(const glm::dmat3& sigma, const glm::dmat3& guess) {
+    const SymEigen e = sym_eigen(sigma, guess);
     ScaleRotation out;
     for (int i = 0; i < 3; ++i) out.scale[i] = std::sqrt(std::max(0.0, e.values[i]));
     out.rotation = quat_from_rotation(e.vectors);
@@ -85,13 +103,15 @@ Polar polar_decomposition(const glm::dmat3& j) {
         p.ok = false;
         return p;
     }
-    // Newton iteration X ← (ζX + ζ⁻¹X⁻ᵀ)/2 with determinant scaling ζ = |det X|^(-1/3) (Higham): the
+    // Newton iteration X ← (ζX + ζ⁻¹X⁻ᵀ)/2 with Frobenius-norm scaling ζ = (‖X⁻¹‖/‖X‖)^½ (Higham): the
     // orthogonal factor of the polar decomposition in a handful of steps, keeping the sign of det J.
     glm::dmat3 x = j;
     for (int it = 0; it < 40; ++it) {
-        const double d = std::abs(glm::determinant(x));
-        const double zeta = std::cbrt(1.0 / d);
-        const glm::dmat3 next = 0.5 * (zeta * x + (1.0 / zeta) * glm::transpose(glm::inverse(x)));
+        const glm::dmat3 inv_t = glm::transpose(glm::inverse(x));
+        double nx = 0.0, ni = 0.0;
+        for (int c = 0; c < 3; ++c) nx += glm::dot(x[c], x[c]), ni += glm::dot(inv_t[c], inv_t[c]);
+        const double zeta = std::sqrt(std::sqrt(ni / nx));
+        const glm::dmat3 next = 0.5 * (zeta * x + (1.0 / zeta) * inv_t);
         double change = 0.0, size = 0.0;
         for (int c = 0; c < 3; ++c) {
             const glm::dvec3 dc = next[c] - x[c];

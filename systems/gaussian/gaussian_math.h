@@ -20,6 +20,9 @@ struct SymEigen {
     glm::dmat3 vectors{1.0};  // columns are the eigenvectors
 };
 SymEigen sym_eigen(const glm::dmat3& a);
+// The same, starting from an orthogonal guess of the eigenvectors (columns), e.g. the deformed axes
+// of a Gaussian: fewer Jacobi sweeps. Any orthogonal guess gives the same decomposition.
+SymEigen sym_eigen(const glm::dmat3& a, const glm::dmat3& guess);
 
 // Scale (standard deviations, sqrt of the eigenvalues; negative rounding noise clamps to 0) and unit
 // rotation with Σ = R S Sᵀ Rᵀ. The axis order is the eigenvalue order (largest first).
@@ -28,6 +31,11 @@ struct ScaleRotation {
     glm::dquat rotation{1.0, 0.0, 0.0, 0.0};
 };
 ScaleRotation decompose_covariance(const glm::dmat3& sigma);
+ScaleRotation decompose_covariance(const glm::dmat3& sigma, const glm::dmat3& guess);
+
+// Gram–Schmidt orthonormalisation of the columns of m (a guess for sym_eigen); identity columns where
+// m is degenerate.
+glm::dmat3 orthonormalize(const glm::dmat3& m);
 
 // J = R U with R orthogonal (det R = sign det J: a reflection when the map inverts) and U symmetric
 // positive definite. `ok` is false when J is singular or nearly (|det J| <= 1e-12 ‖J‖³); then R = I.

@@ -105,19 +105,22 @@ const Tables& tables() {
 
 template <int N>
 void band_rotation(int band, const glm::dmat3& rt, float (&out)[N][N]) {
-    const Tables& t = tables();
     // B[j][m] = Y_{l,m}(Rᵀ d_j); the rotated function's values at d_j are B c, so D = A⁻¹ B.
-    const std::vector<double> b = band_matrix(band, [&] {
-        std::vector<glm::dvec3> d = t.dirs[band];
-        for (glm::dvec3& v : d) v = rt * v;
-        return d;
-    }());
-    const std::vector<double>& ainv = t.inv[band];
+    // Fixed-size arrays: this runs once per deformed Gaussian, no heap allocation.
+    const Tables& t = tables();
+    const int first = band * band;
+    double b[N][N];
+    double y[16];
+    for (int j = 0; j < N; ++j) {
+        sh_basis(band, rt * t.dirs[band][std::size_t(j)], y);
+        for (int m = 0; m < N; ++m) b[j][m] = y[first + m];
+    }
+    const double* ainv = t.inv[band].data();
     for (int r = 0; r < N; ++r)
         for (int c = 0; c < N; ++c) {
-            double s = 0.0;
-            for (int k = 0; k < N; ++k) s += ainv[std::size_t(r * N + k)] * b[std::size_t(k * N + c)];
-            out[r][c] = float(s);
+            double sum = 0.0;
+            for (int k = 0; k < N; ++k) sum += ainv[r * N + k] * b[k][c];
+            out[r][c] = float(sum);
         }
 }
 

@@ -89,6 +89,26 @@ TEST(GaussianMath, SymEigenRandomAndRepeatedEigenvalues) {
     }
 }
 
+TEST(GaussianMath, SymEigenFromAnyOrthogonalGuess) {
+    // The warm start only changes the work, never the result: random, reflected, exact and degenerate
+    // guesses all give a correct decomposition.
+    std::mt19937 rng(7);
+    for (int t = 0; t < 100; ++t) {
+        const glm::dmat3 m = random_matrix(rng);
+        const glm::dmat3 a = m * glm::transpose(m);
+        glm::dmat3 guess = glm::mat3_cast(random_quat(rng));
+        if (t % 2) guess[1] = -guess[1];
+        for (const glm::dmat3& g : {guess, sym_eigen(a).vectors, orthonormalize(m), orthonormalize(glm::dmat3(0.0))}) {
+            const SymEigen e = sym_eigen(a, g);
+            const glm::dmat3 d(e.values[0], 0, 0, 0, e.values[1], 0, 0, 0, e.values[2]);
+            EXPECT_LT(max_abs_diff(e.vectors * d * glm::transpose(e.vectors), a), 1e-12);
+            EXPECT_NEAR(glm::determinant(e.vectors), 1.0, 1e-12);
+            EXPECT_GE(e.values[0], e.values[1]);
+            EXPECT_GE(e.values[1], e.values[2]);
+        }
+    }
+}
+
 TEST(GaussianMath, DecomposeCovarianceRoundTrips) {
     std::mt19937 rng(3);
     for (int t = 0; t < 200; ++t) {
