@@ -8,6 +8,7 @@ layout(local_size_x = 64) in;
 layout(std430, binding = SFFD_GAUSS_SSBO_IN) readonly buffer Gaussians { GpuGaussian gaussians[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_SH) readonly buffer Sh { float sh[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_PROJECTED) writeonly buffer Projected { GpuProjected projected[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_FRAMES) readonly buffer Frames { vec4 frames[]; };
 
 uniform mat4 u_view;        // cloud (origin-relative) -> camera, composed in double on the CPU
 uniform vec3 u_eye;         // camera position relative to the cloud origin
@@ -17,6 +18,7 @@ uniform vec2 u_limit;       // 1.3 x tan(half fov) per axis (3DGS clamps x/z, y/
 uniform float u_near;
 uniform uint u_count;
 uniform int u_degree;
+uniform int u_frames;       // 1: evaluate the SH at frameᵀ d (GaussianCloud::sh_frames)
 
 const float C0 = 0.28209479177387814;
 const float C1 = 0.4886025119029199;
@@ -78,6 +80,8 @@ void main() {
     const vec2 center = vec2(0.5 * u_size.x + u_focal * t.x / depth, 0.5 * u_size.y - u_focal * t.y / depth);
     o.center_depth_radius = vec4(center, depth, ceil(3.0 * sqrt(lmax)));
     o.conic_opacity = vec4(c / det, -b / det, a / det, g.pos_opacity.w);
-    o.color = vec4(sh_color(i, normalize(g.pos_opacity.xyz - u_eye)), 0.0);
+    vec3 dir = normalize(g.pos_opacity.xyz - u_eye);
+    if (u_frames != 0) dir = transpose(mat3(frames[3u * i].xyz, frames[3u * i + 1u].xyz, frames[3u * i + 2u].xyz)) * dir;
+    o.color = vec4(sh_color(i, dir), 0.0);
     projected[i] = o;
 }

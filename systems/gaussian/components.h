@@ -34,6 +34,11 @@ struct GaussianCloud {
     std::vector<float> opacities;
     int sh_degree = 0;
     std::vector<float> sh;  // size() * sh_coeffs(sh_degree) * 3
+    // Derived clouds only (deformation with ShMode::rotate_view): when not empty, the colour of splat i
+    // along d is evaluated at sh_frames[i]ᵀ d (its SH coefficients were left unrotated; the frame is the
+    // orthogonal polar factor of the deformation, a reflection when the cell inverted). Authored clouds
+    // and files never carry frames (writers refuse them: bake_sh_frames() first).
+    std::vector<glm::mat3> sh_frames;
 
     std::size_t size() const { return positions.size(); }
 };

@@ -20,6 +20,26 @@ constexpr std::size_t kBlock = 1 << 16;
 
 Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out, ffd::Backend backend,
                            bool copy_opacities) {
+    return deform(lattice, in, out, DeformOptions{backend, copy_opacities, ShMode::rotate_coefficients});
+}
+
+void bake_sh_frames(GaussianCloud& g) {
+    if (g.sh_frames.size() != g.size()) return g.sh_frames.clear();
+    const std::size_t K = std::size_t(sh_coeffs(g.sh_degree));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i)
+            if (K > 1 && g.sh_frames[i] != glm::mat3(1.0f))
+                sh_rotate(sh_rotation(glm::dmat3(g.sh_frames[i]), g.sh_degree), &g.sh[i * K * 3], &g.sh[i * K * 3]);
+    });
+    g.sh_frames.clear();
+}
+
+Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out, const DeformOptions& options) {
+    const ffd::Backend backend = options.backend;
+    const bool copy_opacities = options.copy_opacities;
+    const bool view_mode = options.sh == ShMode::rotate_view;
+    if (!view_mode && !in.sh_frames.empty())
+        return make_error("gaussian::deform(): the cloud carries SH frames (view-direction mode): bake_sh_frames() first");
     const std::size_t n = in.size();
     const int K = sh_coeffs(in.sh_degree);
     if (in.scales.size() != n || in.rotations.size() != n || in.sh.size() != n * std::size_t(K) * 3)
@@ -29,7 +49,11 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
         out.sh_degree = in.sh_degree;
         out.positions.resize(n), out.scales.resize(n), out.rotations.resize(n), out.sh.resize(in.sh.size());
         if (copy_opacities) out.opacities = in.opacities;
+        out.sh_frames = in.sh_frames;
     }
+    // Frames are kept when present; the view mode starts them at identity.
+    if (view_mode && out.sh_frames.size() != n) out.sh_frames.assign(n, glm::mat3(1.0f));
+    const bool frames_in = in.sh_frames.size() == n;
     DeformStats total;
     std::vector<glm::mat3> jac(std::min(n, kBlock));
     for (std::size_t first = 0; first < n; first += kBlock) {
@@ -72,8 +96,9 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
                     continue;
                 }
                 const Polar p = polar_decomposition(j);
-                if (!p.ok) {
+                if (!p.ok || view_mode) {
                     if (&out != &in) std::copy(sh_in, sh_in + K * 3, sh_out);
+                    if (p.ok && view_mode) out.sh_frames[i] = glm::mat3(p.rotation) * (frames_in ? in.sh_frames[i] : glm::mat3(1.0f));
                     continue;
                 }
                 sh_rotate(sh_rotation(p.rotation, in.sh_degree), sh_in, sh_out);

@@ -8,6 +8,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 
 #include "runtime/core/result.h"
 #include "systems/ffd/components.h"
@@ -22,9 +23,26 @@ struct DeformStats {
     std::size_t degenerate = 0;  // J (near) singular: the covariance collapses, SH left unrotated
 };
 
-// Writes `out` (positions, scales, rotations, sh; opacities copied when `copy_opacities`) from `in`.
-// `out` may be `in` (chained lattices deform in place). Lattice errors read "lattice: problem".
+// How view-dependent colour follows the deformation (the issue asks for both, measured):
+//   rotate_coefficients: the SH coefficients are rotated by R (per-band matrices, once per deformation);
+//   rotate_view: the coefficients are kept and R is stored in GaussianCloud::sh_frames; renderers evaluate
+//                the SH at Rᵀ d (one 3x3 product per splat per frame, no coefficient work when deforming).
+enum class ShMode : std::uint8_t { rotate_coefficients, rotate_view };
+
+struct DeformOptions {
+    ffd::Backend backend = ffd::Backend::automatic;
+    bool copy_opacities = true;
+    ShMode sh = ShMode::rotate_coefficients;
+};
+
+// Writes `out` (positions, scales, rotations, sh or sh_frames; opacities copied when `copy_opacities`)
+// from `in`. `out` may be `in` (chained lattices deform in place; frames compose). Lattice errors read
+// "lattice: problem".
+Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out, const DeformOptions& options);
 Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out,
                            ffd::Backend backend = ffd::Backend::automatic, bool copy_opacities = true);
+
+// Rotates each splat's coefficients by its sh_frames entry and clears the frames (before writing a file).
+void bake_sh_frames(GaussianCloud& cloud);
 
 }  // namespace sffd::gaussian

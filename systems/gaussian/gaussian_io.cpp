@@ -272,6 +272,8 @@ Status validate(const GaussianCloud& g, const std::string& what) {
     }
     for (float v : g.sh)
         if (!std::isfinite(v)) return make_error(what + ": non-finite SH coefficient");
+    if (!g.sh_frames.empty())
+        return make_error(what + ": the cloud carries per-splat SH frames (view-direction mode): bake_sh_frames() before writing");
     return {};
 }
 

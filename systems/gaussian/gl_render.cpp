@@ -28,6 +28,7 @@ Result<GlRenderer> create_gl_renderer() {
     r.sh = gfx::Buffer::create("gaussian.sh");
     r.projected = gfx::Buffer::create("gaussian.projected");
     r.order = gfx::Buffer::create("gaussian.order");
+    r.frames = gfx::Buffer::create("gaussian.sh_frames");
     return r;
 }
 
@@ -73,6 +74,15 @@ Result<ReferenceImage> render_gl(GlRenderer& r, const GaussianCloud& g, const Ca
     upload(r.gaussians, in.data(), in.size() * sizeof(gpu::GpuGaussian));
     upload(r.sh, g.sh.data(), g.sh.size() * sizeof(float));
     upload(r.projected, nullptr, n * sizeof(gpu::GpuProjected));
+    const bool frames = g.sh_frames.size() == n && n > 0;
+    if (frames) {
+        std::vector<glm::vec4> cols(n * 3);
+        for (std::size_t i = 0; i < n; ++i)
+            for (std::size_t c = 0; c < 3; ++c) cols[i * 3 + c] = glm::vec4(g.sh_frames[i][int(c)], 0.0f);
+        upload(r.frames, cols.data(), cols.size() * sizeof(glm::vec4));
+    } else {
+        upload(r.frames, nullptr, 0);
+    }
 
     const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up) * glm::translate(glm::dmat4(1.0), g.origin);
     const double tan_half = std::tan(glm::radians(double(cam.fov_y_degrees)) * 0.5);
@@ -85,9 +95,11 @@ Result<ReferenceImage> render_gl(GlRenderer& r, const GaussianCloud& g, const Ca
     set(pp, "u_near", float(o.near_plane));
     glProgramUniform1ui(pp, glGetUniformLocation(pp, "u_count"), GLuint(n));
     glProgramUniform1i(pp, glGetUniformLocation(pp, "u_degree"), g.sh_degree);
+    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_frames"), frames ? 1 : 0);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, r.gaussians.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, r.sh.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, r.frames.id());
     glUseProgram(pp);
     if (n > 0) glDispatchCompute(GLuint((n + 63) / 64), 1, 1);
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);

@@ -21,7 +21,7 @@ struct GlRenderer {
     gfx::Program project;
     gfx::Program splat;
     gfx::VertexArray vao;
-    gfx::Buffer gaussians, sh, projected, order;
+    gfx::Buffer gaussians, sh, projected, order, frames;
     gfx::Texture color;
     gfx::Framebuffer framebuffer;
     int width = 0, height = 0;

@@ -63,7 +63,9 @@ ReferenceImage render_reference(const GaussianCloud& g, const Camera& cam, const
         s.x0 = std::max(0, int(std::floor(px - radius))), s.x1 = std::min(o.width - 1, int(std::ceil(px + radius)));
         s.y0 = std::max(0, int(std::floor(py - radius))), s.y1 = std::min(o.height - 1, int(std::ceil(py + radius)));
         if (s.x0 > s.x1 || s.y0 > s.y1) continue;
-        s.color = sh_color(g.sh_degree, &g.sh[i * std::size_t(K) * 3], glm::vec3(glm::normalize(world - cam.eye)));
+        glm::vec3 dir(glm::normalize(world - cam.eye));
+        if (g.sh_frames.size() == g.size()) dir = glm::transpose(g.sh_frames[i]) * dir;  // view-direction mode
+        s.color = sh_color(g.sh_degree, &g.sh[i * std::size_t(K) * 3], dir);
         s.opacity = opac[i];
         s.depth = depth;
         splats.push_back(s);

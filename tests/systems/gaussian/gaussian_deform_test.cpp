@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
 #include <random>
 
 #include <glm/gtc/quaternion.hpp>
@@ -14,6 +15,8 @@
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
+#include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/gaussian/sh.h"
@@ -197,6 +200,49 @@ TEST(GaussianDeform, OutsideGaussiansAreUnchangedAndInversionIsCounted) {
         const glm::vec3 d = glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f));
         EXPECT_LT(glm::length(sh_color(3, &out.sh[i * 48], glm::vec3(f * glm::dvec3(d))) - sh_color(3, &h.sh[i * 48], d)), 2e-5f);
     }
+}
+
+TEST(GaussianDeform, ViewDirectionModeEqualsCoefficientRotation) {
+    // rotate_view keeps the coefficients and stores the polar rotation R per splat; evaluating at Rᵀd
+    // must give the colours of rotate_coefficients, also after two chained (in-place) deformations.
+    const Lattice l = twisted_lattice();
+    const Lattice m = twisted_lattice(LatticeBasis::bspline, 5);
+    const GaussianCloud g = random_cloud(300, 3, 0.8, 0.03, 12);
+    GaussianCloud coef = g, view = g;
+    DeformOptions vo;
+    vo.sh = ShMode::rotate_view;
+    for (const Lattice* lat : {&l, &m}) {
+        ASSERT_TRUE(deform(*lat, coef, coef));
+        ASSERT_TRUE(deform(*lat, view, view, vo));
+    }
+    ASSERT_EQ(view.sh_frames.size(), g.size());
+    EXPECT_EQ(view.sh, g.sh);  // untouched
+    EXPECT_EQ(view.positions, coef.positions);
+    EXPECT_EQ(view.scales, coef.scales);
+    std::mt19937 rng(13);
+    std::normal_distribution<float> nd;
+    for (std::size_t i = 0; i < g.size(); ++i)
+        for (int s = 0; s < 10; ++s) {
+            const glm::vec3 d = glm::normalize(glm::vec3(nd(rng), nd(rng), nd(rng)));
+            const glm::vec3 a = sh_color(3, &coef.sh[i * 48], d);
+            const glm::vec3 b = sh_color(3, &view.sh[i * 48], glm::transpose(view.sh_frames[i]) * d);
+            EXPECT_LT(glm::length(a - b), 3e-5f) << i;
+        }
+    // Same images; writers refuse frames until they are baked into the coefficients.
+    ReferenceOptions o;
+    o.width = o.height = 96;
+    Camera cam;
+    cam.eye = {0.3, 0.4, 3.0};
+    const double p = psnr(render_reference(coef, cam, o), render_reference(view, cam, o));
+    EXPECT_GT(p, 70.0) << p;
+    const auto path = std::filesystem::temp_directory_path() / "sffd_view_mode.ply";
+    auto refused = write_ply(path, view);
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.message().find("bake_sh_frames()"), std::string::npos) << refused.message();
+    EXPECT_FALSE(deform(l, view, coef));  // coefficient mode on a cloud with frames is refused too
+    bake_sh_frames(view);
+    EXPECT_TRUE(view.sh_frames.empty());
+    for (std::size_t k = 0; k < view.sh.size(); ++k) EXPECT_NEAR(view.sh[k], coef.sh[k], 3e-5) << k;
 }
 
 TEST(GaussianDeform, SystemRunsOnlyWhenSomethingChanged) {

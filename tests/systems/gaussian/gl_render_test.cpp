@@ -90,6 +90,14 @@ TEST_F(GaussianGl, MatchesCpuReference) {
     ASSERT_TRUE(deform(l, sphere, deformed));
     o.width = 200, o.height = 150;
     compare(*renderer, deformed, camera_at({0.0, 1.0, 5.0}), o, "deformed sphere");
+    // View-direction mode: SH evaluated at frameᵀ d on the GPU as in the reference.
+    GaussianCloud view;
+    DeformOptions vo;
+    vo.sh = ShMode::rotate_view;
+    GaussianCloud colourful = random_cloud(2000, 2);
+    ASSERT_TRUE(deform(l, colourful, view, vo));
+    ASSERT_FALSE(view.sh_frames.empty());
+    compare(*renderer, view, camera_at({0.0, 1.0, 4.0}), o, "view-direction SH frames");
     // Far from the origin (the view matrix carries the cloud origin in double).
     GaussianCloud far = random_cloud(500, 1);
     far.origin = glm::dvec3(1e5, -2e4, 3e4);
