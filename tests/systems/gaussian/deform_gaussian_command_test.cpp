@@ -17,6 +17,7 @@
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_io.h"
+#include "systems/splat_render/image_io.h"
 
 namespace {
 
@@ -128,6 +129,28 @@ TEST(GaussianConvertCommand, BuiltinSphereToGaussiansAndBetweenFormats) {
     r = run("sphere " + temp("x.obj").string() + " --gaussians", "convert");
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.err.find("Gaussians are written as .ply (3DGS) or .glb"), std::string::npos) << r.err;
+}
+
+TEST(GaussianRenderCommand, RendersAGaussianFileToPng) {
+    const fs::path ply = temp("r_sphere.ply"), dir = temp("render_out");
+    ASSERT_EQ(run("sphere " + ply.string() + " --gaussians --splats 20000", "convert").code, 0);
+    RunResult r = run(ply.string() + " --out " + dir.string() + " --size 160x120 --background 1,1,1", "render");
+    if (r.code == 1 && r.err.find("EGL") != std::string::npos) GTEST_SKIP() << "no EGL: " << r.err;
+    ASSERT_EQ(r.code, 0) << r.err;
+    auto png = render::read_png(dir / "frame_0000.png");
+    ASSERT_TRUE(png) << png.message();
+    ASSERT_EQ(png->width, 160);
+    // The sphere fills the middle (not white: its colours are dark or saturated), the corners are the
+    // white background.
+    const std::uint8_t* mid = png->at(80, 60);
+    EXPECT_LT(int(mid[0]) + int(mid[1]) + int(mid[2]), 600);
+    const std::uint8_t* corner = png->at(2, 2);
+    EXPECT_EQ(corner[0], 255);
+    EXPECT_EQ(corner[1], 255);
+    EXPECT_EQ(corner[2], 255);
+    EXPECT_EQ(corner[3], 255);
+    r = run(temp("absent.splat").string() + " --out " + dir.string(), "render");
+    EXPECT_NE(r.code, 0);
 }
 
 }  // namespace
