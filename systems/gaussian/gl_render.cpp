@@ -50,20 +50,15 @@ void set(GLuint program, const char* name, glm::vec3 v) {
 
 Result<ReferenceImage> render_gl(GlRenderer& r, const GaussianCloud& g, const Camera& cam, const ReferenceOptions& o,
                                  const std::vector<float>* opacity_override) {
+    if (Status s = upload_gl(r, g, opacity_override); !s) return s.error();
+    return draw_gl(r, cam, o);
+}
+
+Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>* opacity_override) {
     const std::vector<float>& opac = opacity_override ? *opacity_override : g.opacities;
     const std::size_t n = g.size();
     if (opac.size() != n || g.sh.size() != n * std::size_t(sh_coeffs(g.sh_degree)) * 3)
-        return make_error("render_gl(): cloud arrays differ in size");
-    if (o.width < 1 || o.height < 1) return make_error("render_gl(): empty image");
-    if (r.width != o.width || r.height != o.height) {
-        r.color = gfx::Texture::create("gaussian.color", GL_TEXTURE_2D);
-        glTextureStorage2D(r.color.id(), 1, GL_RGBA32F, o.width, o.height);
-        r.framebuffer = gfx::Framebuffer::create("gaussian.target");
-        glNamedFramebufferTexture(r.framebuffer.id(), GL_COLOR_ATTACHMENT0, r.color.id(), 0);
-        if (glCheckNamedFramebufferStatus(r.framebuffer.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-            return make_error("render_gl(): RGBA32F framebuffer incomplete");
-        r.width = o.width, r.height = o.height;
-    }
+        return make_error("upload_gl(): cloud arrays differ in size");
     // Upload (positions relative to the origin; the view matrix carries the origin, composed in double).
     std::vector<gpu::GpuGaussian> in(n);
     for (std::size_t i = 0; i < n; ++i) {
@@ -74,8 +69,7 @@ Result<ReferenceImage> render_gl(GlRenderer& r, const GaussianCloud& g, const Ca
     upload(r.gaussians, in.data(), in.size() * sizeof(gpu::GpuGaussian));
     upload(r.sh, g.sh.data(), g.sh.size() * sizeof(float));
     upload(r.projected, nullptr, n * sizeof(gpu::GpuProjected));
-    const bool frames = g.sh_frames.size() == n && n > 0;
-    if (frames) {
+    if (g.sh_frames.size() == n && n > 0) {
         std::vector<glm::vec4> cols(n * 3);
         for (std::size_t i = 0; i < n; ++i)
             for (std::size_t c = 0; c < 3; ++c) cols[i * 3 + c] = glm::vec4(g.sh_frames[i][int(c)], 0.0f);
@@ -84,18 +78,35 @@ Result<ReferenceImage> render_gl(GlRenderer& r, const GaussianCloud& g, const Ca
         upload(r.frames, nullptr, 0);
     }
 
-    const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up) * glm::translate(glm::dmat4(1.0), g.origin);
+    r.count = n, r.sh_degree = g.sh_degree, r.origin = g.origin;
+    r.has_frames = g.sh_frames.size() == n && n > 0;
+    return {};
+}
+
+Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const ReferenceOptions& o) {
+    if (o.width < 1 || o.height < 1) return make_error("draw_gl(): empty image");
+    const std::size_t n = r.count;
+    if (r.width != o.width || r.height != o.height) {
+        r.color = gfx::Texture::create("gaussian.color", GL_TEXTURE_2D);
+        glTextureStorage2D(r.color.id(), 1, GL_RGBA32F, o.width, o.height);
+        r.framebuffer = gfx::Framebuffer::create("gaussian.target");
+        glNamedFramebufferTexture(r.framebuffer.id(), GL_COLOR_ATTACHMENT0, r.color.id(), 0);
+        if (glCheckNamedFramebufferStatus(r.framebuffer.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+            return make_error("draw_gl(): RGBA32F framebuffer incomplete");
+        r.width = o.width, r.height = o.height;
+    }
+    const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up) * glm::translate(glm::dmat4(1.0), r.origin);
     const double tan_half = std::tan(glm::radians(double(cam.fov_y_degrees)) * 0.5);
     const GLuint pp = r.project.id();
     glProgramUniformMatrix4fv(pp, glGetUniformLocation(pp, "u_view"), 1, GL_FALSE, glm::value_ptr(glm::mat4(view)));
-    set(pp, "u_eye", glm::vec3(cam.eye - g.origin));
+    set(pp, "u_eye", glm::vec3(cam.eye - r.origin));
     set(pp, "u_size", glm::vec2(float(o.width), float(o.height)));
     set(pp, "u_focal", float(o.height / (2.0 * tan_half)));
     set(pp, "u_limit", glm::vec2(float(1.3 * tan_half * o.width / o.height), float(1.3 * tan_half)));
     set(pp, "u_near", float(o.near_plane));
     glProgramUniform1ui(pp, glGetUniformLocation(pp, "u_count"), GLuint(n));
-    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_degree"), g.sh_degree);
-    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_frames"), frames ? 1 : 0);
+    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_degree"), r.sh_degree);
+    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_frames"), r.has_frames ? 1 : 0);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, r.gaussians.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, r.sh.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());

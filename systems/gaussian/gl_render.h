@@ -25,13 +25,21 @@ struct GlRenderer {
     gfx::Texture color;
     gfx::Framebuffer framebuffer;
     int width = 0, height = 0;
+    std::size_t count = 0;    // Gaussians resident (upload_gl)
+    int sh_degree = 0;
+    bool has_frames = false;  // the resident cloud carries SH frames
+    glm::dvec3 origin{0.0};
     double sort_ms = 0.0;  // CPU time of the last frame's depth sort (readback + sort + upload)
 };
 
 // Compiles the programs (errors name the shader file and line).
 Result<GlRenderer> create_gl_renderer();
 
-// Renders like render_reference() (same camera model, background blended in) and reads the image back.
+// Uploads a cloud; it stays resident for draw_gl() until the next upload.
+Status upload_gl(GlRenderer& renderer, const GaussianCloud& cloud, const std::vector<float>* opacities = nullptr);
+// One frame of the resident cloud: projection, depth sort, splatting, image readback.
+Result<ReferenceImage> draw_gl(GlRenderer& renderer, const Camera& camera, const ReferenceOptions& options);
+// upload_gl + draw_gl: renders like render_reference() (same camera model, background blended in).
 Result<ReferenceImage> render_gl(GlRenderer& renderer, const GaussianCloud& cloud, const Camera& camera,
                                  const ReferenceOptions& options, const std::vector<float>* opacities = nullptr);
 
