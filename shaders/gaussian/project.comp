@@ -51,7 +51,8 @@ vec3 sh_color(uint i, vec3 d) {
 }
 
 void main() {
-    const uint i = gl_GlobalInvocationID.x;
+    // 2D grid of groups for clouds over 64 x 65,535 Gaussians (the guaranteed groups per dimension).
+    const uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * 64u + gl_LocalInvocationID.x;
     if (i >= u_count) return;
     GpuProjected o;
     o.center_depth_radius = vec4(0.0);

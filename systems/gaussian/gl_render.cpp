@@ -112,7 +112,10 @@ Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const Reference
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, r.frames.id());
     glUseProgram(pp);
-    if (n > 0) glDispatchCompute(GLuint((n + 63) / 64), 1, 1);
+    if (n > 0) {
+        const std::size_t groups = (n + 63) / 64, gx = std::min<std::size_t>(groups, std::max(1u, r.max_groups_x));
+        glDispatchCompute(GLuint(gx), GLuint((groups + gx - 1) / gx), 1);
+    }
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
 
     // Depth sort on the CPU (stable, like the reference): read back depth and radius only.

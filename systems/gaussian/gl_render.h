@@ -30,6 +30,10 @@ struct GlRenderer {
     bool has_frames = false;  // the resident cloud carries SH frames
     glm::dvec3 origin{0.0};
     double sort_ms = 0.0;  // CPU time of the last frame's depth sort (readback + sort + upload)
+    // Work groups per row of the projection dispatch. GL guarantees only 65,535 groups per dimension
+    // (64 × 65,535 = 4.19M Gaussians), so larger clouds are dispatched as a 2D grid; tests lower this to
+    // exercise the grid with small clouds.
+    unsigned max_groups_x = 65535;
 };
 
 // Compiles the programs (errors name the shader file and line).

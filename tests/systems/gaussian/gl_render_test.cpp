@@ -104,6 +104,22 @@ TEST_F(GaussianGl, MatchesCpuReference) {
     compare(*renderer, far, camera_at(far.origin + glm::dvec3(0, 0, 3.0), far.origin), o, "far from the origin");
 }
 
+TEST_F(GaussianGl, LargeCloudsAreDispatchedAsAGrid) {
+    // Clouds beyond 64 x 65,535 Gaussians need a 2D dispatch; with 3 groups per row, 3,000 Gaussians
+    // take a 3 x 16 grid (the last row partly empty) and must render exactly as in one row.
+    ReferenceOptions o;
+    o.width = 96, o.height = 72;
+    const GaussianCloud g = random_cloud(3000, 1);
+    const Camera cam = camera_at({0.2, 0.3, 3.5});
+    auto one_row = render_gl(*renderer, g, cam, o);
+    ASSERT_TRUE(one_row) << one_row.message();
+    renderer->max_groups_x = 3;
+    auto grid = render_gl(*renderer, g, cam, o);
+    ASSERT_TRUE(grid) << grid.message();
+    EXPECT_EQ(grid->color, one_row->color);
+    EXPECT_GT(psnr(*grid, render_reference(g, cam, o)), 40.0);
+}
+
 TEST_F(GaussianGl, EmptyCloudGivesTheBackground) {
     ReferenceOptions o;
     o.width = o.height = 8;
