@@ -9,6 +9,7 @@
 #define SFFD_GAUSS_SSBO_PROJECTED 2   // GpuProjected[]: written by project.comp, read by the splat pass
 #define SFFD_GAUSS_SSBO_ORDER     3   // uint[]: visible Gaussians, front to back
 #define SFFD_GAUSS_SSBO_FRAMES    4   // vec4[3] per Gaussian: columns of its SH frame (view-direction mode)
+#define SFFD_GAUSS_SSBO_DEPTH     5   // float[]: view depth of each drawn Gaussian, −1 when not drawn (sort keys)
 
 // GpuGaussian, std430, 48 bytes:
 //   vec4 pos_opacity;  // xyz centre relative to the origin, w linear opacity

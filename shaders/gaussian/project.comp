@@ -9,6 +9,7 @@ layout(std430, binding = SFFD_GAUSS_SSBO_IN) readonly buffer Gaussians { GpuGaus
 layout(std430, binding = SFFD_GAUSS_SSBO_SH) readonly buffer Sh { float sh[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_PROJECTED) writeonly buffer Projected { GpuProjected projected[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_FRAMES) readonly buffer Frames { vec4 frames[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_DEPTH) writeonly buffer Depth { float depth_keys[]; };
 
 uniform mat4 u_view;        // cloud (origin-relative) -> camera, composed in double on the CPU
 uniform vec3 u_eye;         // camera position relative to the cloud origin
@@ -61,6 +62,7 @@ void main() {
     const GpuGaussian g = gaussians[i];
     const vec3 t = (u_view * vec4(g.pos_opacity.xyz, 1.0)).xyz;
     const float depth = -t.z;
+    depth_keys[i] = -1.0;
     if (!(depth >= u_near)) { projected[i] = o; return; }
     // Σ = R S Sᵀ Rᵀ from the quaternion (w, x, y, z).
     const float w = g.rotation.x, x = g.rotation.y, y = g.rotation.z, z = g.rotation.w;
@@ -77,6 +79,7 @@ void main() {
     const float a = dot(jx, v * jx) + 0.3, b = dot(jx, v * jy), c = dot(jy, v * jy) + 0.3;
     const float det = a * c - b * b;
     if (!(det > 0.0)) { projected[i] = o; return; }
+    depth_keys[i] = depth;
     const float mid = 0.5 * (a + c), lmax = mid + sqrt(max(0.1, mid * mid - det));
     const vec2 center = vec2(0.5 * u_size.x + u_focal * t.x / depth, 0.5 * u_size.y - u_focal * t.y / depth);
     o.center_depth_radius = vec4(center, depth, ceil(3.0 * sqrt(lmax)));

@@ -3,7 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstring>
 #include <numeric>
+
+#include <tbb/parallel_sort.h>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
@@ -29,6 +32,7 @@ Result<GlRenderer> create_gl_renderer() {
     r.projected = gfx::Buffer::create("gaussian.projected");
     r.order = gfx::Buffer::create("gaussian.order");
     r.frames = gfx::Buffer::create("gaussian.sh_frames");
+    r.depth = gfx::Buffer::create("gaussian.depth_keys");
     return r;
 }
 
@@ -59,6 +63,7 @@ Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>
     const std::size_t n = g.size();
     if (opac.size() != n || g.sh.size() != n * std::size_t(sh_coeffs(g.sh_degree)) * 3)
         return make_error("upload_gl(): cloud arrays differ in size");
+    if (n >= (std::size_t(1) << 31)) return make_error("upload_gl(): more than 2^31 Gaussians in one draw");
     // Upload (positions relative to the origin; the view matrix carries the origin, composed in double).
     std::vector<gpu::GpuGaussian> in(n);
     for (std::size_t i = 0; i < n; ++i) {
@@ -69,6 +74,7 @@ Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>
     upload(r.gaussians, in.data(), in.size() * sizeof(gpu::GpuGaussian));
     upload(r.sh, g.sh.data(), g.sh.size() * sizeof(float));
     upload(r.projected, nullptr, n * sizeof(gpu::GpuProjected));
+    upload(r.depth, nullptr, n * sizeof(float));
     if (g.sh_frames.size() == n && n > 0) {
         std::vector<glm::vec4> cols(n * 3);
         for (std::size_t i = 0; i < n; ++i)
@@ -111,6 +117,7 @@ Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const Reference
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, r.sh.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, r.frames.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEPTH, r.depth.id());
     glUseProgram(pp);
     if (n > 0) {
         const std::size_t groups = (n + 63) / 64, gx = std::min<std::size_t>(groups, std::max(1u, r.max_groups_x));
@@ -118,17 +125,23 @@ Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const Reference
     }
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
 
-    // Depth sort on the CPU (stable, like the reference): read back depth and radius only.
+    // Depth sort on the CPU: read back the depth keys only (4 bytes per Gaussian) and sort
+    // (depth bits, index) pairs: positive floats order like their bit patterns, and the index breaks
+    // ties, so the order equals the reference's stable sort (and is deterministic).
     const auto t0 = std::chrono::steady_clock::now();
-    std::vector<gpu::GpuProjected> proj(n);
-    if (n > 0) glGetNamedBufferSubData(r.projected.id(), 0, GLsizeiptr(n * sizeof(gpu::GpuProjected)), proj.data());
-    std::vector<std::uint32_t> order;
-    order.reserve(n);
+    std::vector<float> depth(n);
+    if (n > 0) glGetNamedBufferSubData(r.depth.id(), 0, GLsizeiptr(n * sizeof(float)), depth.data());
+    std::vector<std::uint64_t> keys;
+    keys.reserve(n);
     for (std::size_t i = 0; i < n; ++i)
-        if (proj[i].center_depth_radius[3] > 0.0f) order.push_back(std::uint32_t(i));
-    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
-        return proj[a].center_depth_radius[2] < proj[b].center_depth_radius[2];
-    });
+        if (depth[i] > 0.0f) {
+            std::uint32_t bits;
+            std::memcpy(&bits, &depth[i], 4);
+            keys.push_back(std::uint64_t(bits) << 32 | std::uint64_t(i));
+        }
+    tbb::parallel_sort(keys.begin(), keys.end());
+    std::vector<std::uint32_t> order(keys.size());
+    for (std::size_t k = 0; k < keys.size(); ++k) order[k] = std::uint32_t(keys[k] & 0xffffffffu);
     upload(r.order, order.data(), order.size() * sizeof(std::uint32_t));
     r.sort_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 

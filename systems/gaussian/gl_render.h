@@ -1,6 +1,6 @@
 // GL 4.5 renderer of 3D Gaussians (issue 17), first version: a compute pass projects every Gaussian
 // (EWA conic, SH colour: shaders/gaussian/project.comp), the visible ones are sorted by view depth on
-// the CPU (a GPU radix sort does not exist yet), and one instanced quad per Gaussian is blended front to
+// the CPU (depth keys read back, 4 bytes per Gaussian; a GPU radix sort does not exist yet), and one instanced quad per Gaussian is blended front to
 // back into an RGBA32F target (shaders/gaussian/splat.{vert,frag}). The images match the CPU reference
 // renderer (reference_render.h: same conventions, same pixel boxes) within the PSNR the GL test states.
 // Owns its GL objects (move-only); create and use it with a GL context current, destroy it before the
@@ -21,7 +21,7 @@ struct GlRenderer {
     gfx::Program project;
     gfx::Program splat;
     gfx::VertexArray vao;
-    gfx::Buffer gaussians, sh, projected, order, frames;
+    gfx::Buffer gaussians, sh, projected, order, frames, depth;
     gfx::Texture color;
     gfx::Framebuffer framebuffer;
     int width = 0, height = 0;
