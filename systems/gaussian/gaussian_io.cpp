@@ -8,6 +8,7 @@
 #include <memory>
 
 #include "systems/gaussian/gaussian_gltf.h"
+#include "systems/gaussian/gaussian_spz.h"
 #include "systems/gaussian/sh.h"
 
 namespace sffd::gaussian {
@@ -252,7 +253,8 @@ Result<GaussianCloud> read_gaussians(const fs::path& path) {
     if (ext == ".ply") return read_ply(path);
     if (ext == ".splat") return read_splat(path);
     if (ext == ".glb" || ext == ".gltf") return read_gltf(path);
-    return make_error(path.string() + ": unknown Gaussian splat format '" + ext + "' (expected .ply, .splat, .glb or .gltf)");
+    if (ext == ".spz") return read_spz(path);
+    return make_error(path.string() + ": unknown Gaussian splat format '" + ext + "' (expected .ply, .splat, .spz, .glb or .gltf)");
 }
 
 Status validate(const GaussianCloud& g, const std::string& what) {
