@@ -124,9 +124,11 @@ static DeformStats run_reference(const Lattice& l, const PointsIn& in, const Poi
                 if (in.normals && out.normals) out.normals[p] = in.normals[p];
                 if (in.axis_u && out.axis_u) out.axis_u[p] = in.axis_u[p];
                 if (in.axis_v && out.axis_v) out.axis_v[p] = in.axis_v[p];
+                if (out.jacobians) out.jacobians[p] = glm::mat3(1.0f);
                 continue;
             }
             ++n_in;
+            if (out.jacobians) out.jacobians[p] = glm::mat3(rp.jacobian);
             const double det = glm::determinant(rp.jacobian);
             n_inv += det < 0.0;
             if (in.normals && out.normals) {

@@ -44,6 +44,9 @@ struct PointsOut {
     glm::vec3* normals = nullptr;
     glm::vec3* axis_u = nullptr;
     glm::vec3* axis_v = nullptr;
+    // Optional: the world Jacobian J per point (identity outside the lattice), for consumers that need
+    // all of it (3D Gaussians: Σ' = J Σ Jᵀ and the polar rotation of J, systems/gaussian).
+    glm::mat3* jacobians = nullptr;
 };
 
 struct DeformStats {

@@ -386,6 +386,16 @@ int finish_group(const Prepared& P, const Group& g, const PointsIn& in, const Po
     };
     if (want_u) axis(in.axis_u, out.axis_u);
     if (want_v) axis(in.axis_v, out.axis_v);
+    if (out.jacobians) {
+        alignas(64) float jv[9][W];
+        for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c) storev(jv[c * 3 + r], J[r][c]);
+        for (int l = 0; l < g.n; ++l) {
+            glm::mat3& dst = out.jacobians[g.contiguous ? g.first + std::size_t(l) : g.idx[l]];
+            for (int c = 0; c < 3; ++c)
+                for (int r = 0; r < 3; ++r) dst[c][r] = jv[c * 3 + r][l];
+        }
+    }
     return inverted;
 }
 
@@ -459,7 +469,8 @@ Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin) {
 }
 
 DeformStats run_fast(const Prepared& P, const PointsIn& in, const PointsOut& out, bool sparse) {
-    const bool full = (in.normals && out.normals) || (in.axis_u && out.axis_u) || (in.axis_v && out.axis_v);
+    const bool full =
+        (in.normals && out.normals) || (in.axis_u && out.axis_u) || (in.axis_v && out.axis_v) || out.jacobians;
     GroupFn fn;
     if (P.basis == LatticeBasis::bspline)
         fn = full ? bspline_group<true> : bspline_group<false>;
@@ -497,6 +508,7 @@ DeformStats run_fast(const Prepared& P, const PointsIn& in, const PointsOut& out
                 if (in.normals && out.normals && out.normals != in.normals) out.normals[p] = in.normals[p];
                 if (in.axis_u && out.axis_u && out.axis_u != in.axis_u) out.axis_u[p] = in.axis_u[p];
                 if (in.axis_v && out.axis_v && out.axis_v != in.axis_v) out.axis_v[p] = in.axis_v[p];
+                if (out.jacobians) out.jacobians[p] = glm::mat3(1.0f);
                 return;
             }
             g.s[g.n] = std::clamp(s, 0.0f, 1.0f);

@@ -1,4 +1,4 @@
-// splatffd convert IN OUT [--splats N] [--normals] [--radii] [--ascii] [--seed S] [--neighbours K]
+// splatffd convert IN OUT [--splats N] [--normals] [--radii] [--ascii] [--seed S] [--neighbours K] [--gaussians]
 // Converts point clouds and meshes (PLY, OBJ, OFF, glTF/GLB, or a built-in scene name) into splat
 // clouds (PLY, GLB, glTF). Meshes are sampled on their surface; raw points get normals and radii.
 #include <unistd.h>
@@ -12,6 +12,7 @@
 #include "runtime/assets/export.h"
 #include "runtime/assets/import.h"
 #include "tools/splatffd/command.h"
+#include "tools/splatffd/convert_gaussians.h"
 
 namespace {
 
@@ -25,7 +26,9 @@ void usage() {
                  "  --radii          re-estimate splat radii and axes from neighbour spacing\n"
                  "  --neighbours K   neighbourhood size for normals (default 16)\n"
                  "  --seed S         surface sampling seed (default 1)\n"
-                 "  --ascii          write ASCII PLY\n");
+                 "  --ascii          write ASCII PLY\n"
+                 "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .glb KHR_gaussian_splatting); IN may also be\n"
+                 "                   a Gaussian file (.splat, 3DGS .ply, KHR .glb)\n");
 }
 
 bool parse_size(const std::string& s, std::size_t& out) {
@@ -44,7 +47,7 @@ int run_convert(sffd::cli::Args args) {
     using namespace sffd;
     std::string in, out;
     assets::ImportOptions opt;
-    bool ascii = false;
+    bool ascii = false, gaussians = false;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         auto value = [&](std::size_t& dst) {
@@ -80,6 +83,8 @@ int run_convert(sffd::cli::Args args) {
             opt.estimate_radii = true;
         } else if (a == "--ascii") {
             ascii = true;
+        } else if (a == "--gaussians") {
+            gaussians = true;
         } else if (!a.empty() && a[0] == '-') {
             std::fprintf(stderr, "splatffd convert: unknown option '%s'\n", a.c_str());
             usage();
@@ -97,6 +102,7 @@ int run_convert(sffd::cli::Args args) {
         usage();
         return 2;
     }
+    if (gaussians && in != "sphere" && cli::is_gaussian_file(in)) return cli::write_gaussians(in, nullptr, out, ascii);
     const auto t0 = std::chrono::steady_clock::now();
     Result<SplatCloud> cloud = make_error("");
     if (in == "sphere") {
@@ -132,6 +138,7 @@ int run_convert(sffd::cli::Args args) {
         std::fprintf(stderr, "splatffd convert: %s\n", cloud.message().c_str());
         return 1;
     }
+    if (gaussians) return cli::write_gaussians(in, &*cloud, out, ascii);
     const auto t2 = std::chrono::steady_clock::now();
     Status s = ascii ? assets::save_splat_ply(*cloud, out, ply::Format::ascii)
                      : assets::save_splat_cloud(*cloud, out, std::filesystem::path(in).stem().string());

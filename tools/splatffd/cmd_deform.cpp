@@ -21,7 +21,9 @@
 #include "systems/ffd/ffd_gpu.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/lattice_io.h"
+#include "systems/gaussian/gaussian_io.h"
 #include "tools/splatffd/command.h"
+#include "tools/splatffd/deform_gaussians.h"
 
 namespace {
 
@@ -187,6 +189,9 @@ int run_deform(sffd::cli::Args args) {
     const ply::Element& ve = in_header.elements[std::size_t(vi)];
     const int ix = ve.find("x"), iy = ve.find("y"), iz = ve.find("z");
     if (ix < 0 || iy < 0 || iz < 0) return fail(pos[0] + ": vertex element has no x, y, z properties");
+    // 3D Gaussian splats (3DGS PLY): covariances and SH follow the lattice too (tools/splatffd/deform_gaussians.cpp).
+    if (gaussian::is_gaussian_element(ve))
+        return cli::deform_gaussian_ply(pos[0], pos[1], *lattice, lattice_path, backend, bench, ascii);
     for (int k : {ix, iy, iz})
         if (ve.properties[std::size_t(k)].is_list) return fail(pos[0] + ": x, y, z must be scalar properties");
     int inx = ve.find("nx"), iny = ve.find("ny"), inz = ve.find("nz");

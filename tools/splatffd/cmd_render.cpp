@@ -28,6 +28,8 @@
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_render.h"
 #include "tools/splatffd/command.h"
+#include "tools/splatffd/convert_gaussians.h"
+#include "tools/splatffd/render_gaussians.h"
 #include "tools/splatffd/engine.h"
 
 namespace {
@@ -165,6 +167,8 @@ int run_render(sffd::cli::Args args) {
         return 1;
     }
 
+    // 3D Gaussian files (3DGS PLY, .splat, KHR glb): one frame through the Gaussian renderer.
+    if (scene_given && cli::is_gaussian_file(scene)) return cli::render_gaussians(scene, out_dir, int(width), int(height), background);
     // Offscreen rendering needs no window: EGL surfaceless works with or without a display.
     auto ctx = gfx::create_context({.headless = true, .width = int(width), .height = int(height), .debug = false});
     if (!ctx) {

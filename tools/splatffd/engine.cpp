@@ -9,6 +9,7 @@
 #include "systems/editor/lattice_overlay.h"
 #include "systems/editor/view_app.h"
 #include "systems/ffd/ffd_system.h"
+#include "systems/gaussian/gaussian_system.h"
 #include "systems/picking/picking_system.h"
 #include "systems/splat_render/splat_render.h"
 
@@ -25,6 +26,7 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
 
     // --- deformation: re-deform point clouds whose rest data or lattices changed (ffd) --------------
     s.add(Phase::deformation, "ffd", ffd_system);  // GPU compute when a context is current, else CPU
+    s.add(Phase::deformation, "gaussian", gaussian_deform_system);  // 3D Gaussian clouds, CPU
 
     // --- picking: only when a pick was requested (picking) ------------------------------------------
     s.add(Phase::picking, "picking", picking::picking_system);

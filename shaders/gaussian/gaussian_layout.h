@@ -1,0 +1,54 @@
+// Buffer layouts and binding points of the Gaussian GL renderer (systems/gaussian/gl_render.h), shared
+// by GLSL (#include "gaussian/gaussian_layout.h") and C++ (#include "shaders/gaussian/gaussian_layout.h").
+// The passes bind their own buffers before every dispatch/draw, so these points are local to them.
+#ifndef SFFD_GAUSSIAN_LAYOUT_H
+#define SFFD_GAUSSIAN_LAYOUT_H
+
+#define SFFD_GAUSS_SSBO_IN        0   // GpuGaussian[]: centre (relative to the cloud origin), rotation, scale
+#define SFFD_GAUSS_SSBO_SH        1   // float[]: SH coefficients, GaussianCloud::sh layout
+#define SFFD_GAUSS_SSBO_PROJECTED 2   // GpuProjected[]: written by project.comp, read by the splat pass
+#define SFFD_GAUSS_SSBO_ORDER     3   // uint[]: visible Gaussians, front to back
+#define SFFD_GAUSS_SSBO_FRAMES    4   // vec4[3] per Gaussian: columns of its SH frame (view-direction mode)
+#define SFFD_GAUSS_SSBO_DEPTH     5   // float[]: view depth of each drawn Gaussian, −1 when not drawn (sort keys)
+
+// GpuGaussian, std430, 48 bytes:
+//   vec4 pos_opacity;  // xyz centre relative to the origin, w linear opacity
+//   vec4 rotation;     // unit quaternion (w, x, y, z)
+//   vec4 scale;        // xyz linear standard deviations, w unused
+// GpuProjected, std430, 48 bytes:
+//   vec4 center_depth_radius;  // pixel centre (x right, y DOWN, pixel (i,j) centred at i+0.5, j+0.5),
+//                              // view depth, footprint radius in pixels (0 = not drawn)
+//   vec4 conic_opacity;        // inverse 2D covariance (a, b, c) of [[a b][b c]], opacity
+//   vec4 color;                // rgb from the SH, w unused
+#define SFFD_GPU_GAUSSIAN_BYTES 48
+#define SFFD_GPU_PROJECTED_BYTES 48
+
+#ifdef __cplusplus
+namespace sffd::gpu {
+struct alignas(16) GpuGaussian {
+    float pos_opacity[4];
+    float rotation[4];
+    float scale[4];
+};
+struct alignas(16) GpuProjected {
+    float center_depth_radius[4];
+    float conic_opacity[4];
+    float color[4];
+};
+static_assert(sizeof(GpuGaussian) == SFFD_GPU_GAUSSIAN_BYTES);
+static_assert(sizeof(GpuProjected) == SFFD_GPU_PROJECTED_BYTES);
+}  // namespace sffd::gpu
+#else
+struct GpuGaussian {
+    vec4 pos_opacity;
+    vec4 rotation;
+    vec4 scale;
+};
+struct GpuProjected {
+    vec4 center_depth_radius;
+    vec4 conic_opacity;
+    vec4 color;
+};
+#endif
+
+#endif

@@ -1,0 +1,91 @@
+#version 450 core
+// Per Gaussian: EWA projection to a 2D conic with the 0.3 px² low-pass, footprint radius, SH colour.
+// The same steps as the CPU reference (systems/gaussian/reference_render.cpp), in float.
+#include "gaussian/gaussian_layout.h"
+
+layout(local_size_x = 64) in;
+
+layout(std430, binding = SFFD_GAUSS_SSBO_IN) readonly buffer Gaussians { GpuGaussian gaussians[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_SH) readonly buffer Sh { float sh[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_PROJECTED) writeonly buffer Projected { GpuProjected projected[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_FRAMES) readonly buffer Frames { vec4 frames[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_DEPTH) writeonly buffer Depth { float depth_keys[]; };
+
+uniform mat4 u_view;        // cloud (origin-relative) -> camera, composed in double on the CPU
+uniform vec3 u_eye;         // camera position relative to the cloud origin
+uniform vec2 u_size;        // image width, height
+uniform float u_focal;      // pixels
+uniform vec2 u_limit;       // 1.3 x tan(half fov) per axis (3DGS clamps x/z, y/z for the Jacobian)
+uniform float u_near;
+uniform uint u_count;
+uniform int u_degree;
+uniform int u_frames;       // 1: evaluate the SH at frameᵀ d (GaussianCloud::sh_frames)
+
+const float C0 = 0.28209479177387814;
+const float C1 = 0.4886025119029199;
+const float C2[5] = float[5](1.0925484305920792, -1.0925484305920792, 0.31539156525252005, -1.0925484305920792, 0.5462742152960396);
+const float C3[7] = float[7](-0.5900435899266435, 2.890611442640554, -0.4570457994644658, 0.3731763325901154,
+                             -0.4570457994644658, 1.445305721320277, -0.5900435899266435);
+
+vec3 coeff(uint base, int k) { uint o = base + uint(k) * 3u; return vec3(sh[o], sh[o + 1u], sh[o + 2u]); }
+
+vec3 sh_color(uint i, vec3 d) {
+    const int K = (u_degree + 1) * (u_degree + 1);
+    const uint base = i * uint(K) * 3u;
+    vec3 c = C0 * coeff(base, 0);
+    if (u_degree >= 1) {
+        float x = d.x, y = d.y, z = d.z;
+        c += -C1 * y * coeff(base, 1) + C1 * z * coeff(base, 2) - C1 * x * coeff(base, 3);
+        if (u_degree >= 2) {
+            float xx = x * x, yy = y * y, zz = z * z, xy = x * y, yz = y * z, xz = x * z;
+            c += C2[0] * xy * coeff(base, 4) + C2[1] * yz * coeff(base, 5) + C2[2] * (2.0 * zz - xx - yy) * coeff(base, 6) +
+                 C2[3] * xz * coeff(base, 7) + C2[4] * (xx - yy) * coeff(base, 8);
+            if (u_degree >= 3) {
+                c += C3[0] * y * (3.0 * xx - yy) * coeff(base, 9) + C3[1] * xy * z * coeff(base, 10) +
+                     C3[2] * y * (4.0 * zz - xx - yy) * coeff(base, 11) + C3[3] * z * (2.0 * zz - 3.0 * xx - 3.0 * yy) * coeff(base, 12) +
+                     C3[4] * x * (4.0 * zz - xx - yy) * coeff(base, 13) + C3[5] * z * (xx - yy) * coeff(base, 14) +
+                     C3[6] * x * (xx - 3.0 * yy) * coeff(base, 15);
+            }
+        }
+    }
+    return max(c + 0.5, vec3(0.0));
+}
+
+void main() {
+    // 2D grid of groups for clouds over 64 x 65,535 Gaussians (the guaranteed groups per dimension).
+    const uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * 64u + gl_LocalInvocationID.x;
+    if (i >= u_count) return;
+    GpuProjected o;
+    o.center_depth_radius = vec4(0.0);
+    o.conic_opacity = vec4(0.0);
+    o.color = vec4(0.0);
+    const GpuGaussian g = gaussians[i];
+    const vec3 t = (u_view * vec4(g.pos_opacity.xyz, 1.0)).xyz;
+    const float depth = -t.z;
+    depth_keys[i] = -1.0;
+    if (!(depth >= u_near)) { projected[i] = o; return; }
+    // Σ = R S Sᵀ Rᵀ from the quaternion (w, x, y, z).
+    const float w = g.rotation.x, x = g.rotation.y, y = g.rotation.z, z = g.rotation.w;
+    const mat3 r = mat3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y),
+                        2.0 * (x * y - w * z), 1.0 - 2.0 * (x * x + z * z), 2.0 * (y * z + w * x),
+                        2.0 * (x * z + w * y), 2.0 * (y * z - w * x), 1.0 - 2.0 * (x * x + y * y));
+    const mat3 m = r * mat3(g.scale.x, 0.0, 0.0, 0.0, g.scale.y, 0.0, 0.0, 0.0, g.scale.z);
+    const mat3 wv = mat3(u_view);
+    const mat3 v = wv * (m * transpose(m)) * transpose(wv);
+    const float tx = clamp(t.x / depth, -u_limit.x, u_limit.x) * depth;
+    const float ty = clamp(t.y / depth, -u_limit.y, u_limit.y) * depth;
+    const vec3 jx = vec3(u_focal / depth, 0.0, u_focal * tx / (depth * depth));
+    const vec3 jy = vec3(0.0, -u_focal / depth, -u_focal * ty / (depth * depth));
+    const float a = dot(jx, v * jx) + 0.3, b = dot(jx, v * jy), c = dot(jy, v * jy) + 0.3;
+    const float det = a * c - b * b;
+    if (!(det > 0.0)) { projected[i] = o; return; }
+    depth_keys[i] = depth;
+    const float mid = 0.5 * (a + c), lmax = mid + sqrt(max(0.1, mid * mid - det));
+    const vec2 center = vec2(0.5 * u_size.x + u_focal * t.x / depth, 0.5 * u_size.y - u_focal * t.y / depth);
+    o.center_depth_radius = vec4(center, depth, ceil(3.0 * sqrt(lmax)));
+    o.conic_opacity = vec4(c / det, -b / det, a / det, g.pos_opacity.w);
+    vec3 dir = normalize(g.pos_opacity.xyz - u_eye);
+    if (u_frames != 0) dir = transpose(mat3(frames[3u * i].xyz, frames[3u * i + 1u].xyz, frames[3u * i + 2u].xyz)) * dir;
+    o.color = vec4(sh_color(i, dir), 0.0);
+    projected[i] = o;
+}

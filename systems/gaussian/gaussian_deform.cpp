@@ -1,0 +1,113 @@
+#include "systems/gaussian/gaussian_deform.h"
+
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <vector>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "systems/gaussian/gaussian_math.h"
+#include "systems/gaussian/sh.h"
+
+namespace sffd::gaussian {
+
+namespace {
+// Jacobians are produced per block so the scratch stays small (36 bytes per Gaussian per block).
+constexpr std::size_t kBlock = 1 << 16;
+}  // namespace
+
+Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out, ffd::Backend backend,
+                           bool copy_opacities) {
+    return deform(lattice, in, out, DeformOptions{backend, copy_opacities, ShMode::rotate_coefficients});
+}
+
+void bake_sh_frames(GaussianCloud& g) {
+    if (g.sh_frames.size() != g.size()) return g.sh_frames.clear();
+    const std::size_t K = std::size_t(sh_coeffs(g.sh_degree));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i)
+            if (K > 1 && g.sh_frames[i] != glm::mat3(1.0f))
+                sh_rotate(sh_rotation(glm::dmat3(g.sh_frames[i]), g.sh_degree), &g.sh[i * K * 3], &g.sh[i * K * 3]);
+    });
+    g.sh_frames.clear();
+}
+
+Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out, const DeformOptions& options) {
+    const ffd::Backend backend = options.backend;
+    const bool copy_opacities = options.copy_opacities;
+    const bool view_mode = options.sh == ShMode::rotate_view;
+    if (!view_mode && !in.sh_frames.empty())
+        return make_error("gaussian::deform(): the cloud carries SH frames (view-direction mode): bake_sh_frames() first");
+    const std::size_t n = in.size();
+    const int K = sh_coeffs(in.sh_degree);
+    if (in.scales.size() != n || in.rotations.size() != n || in.sh.size() != n * std::size_t(K) * 3)
+        return make_error("gaussian::deform(): cloud arrays differ in size");
+    if (&out != &in) {
+        out.origin = in.origin;
+        out.sh_degree = in.sh_degree;
+        out.positions.resize(n), out.scales.resize(n), out.rotations.resize(n), out.sh.resize(in.sh.size());
+        if (copy_opacities) out.opacities = in.opacities;
+        out.sh_frames = in.sh_frames;
+    }
+    // Frames are kept when present; the view mode starts them at identity.
+    if (view_mode && out.sh_frames.size() != n) out.sh_frames.assign(n, glm::mat3(1.0f));
+    const bool frames_in = in.sh_frames.size() == n;
+    DeformStats total;
+    std::vector<glm::mat3> jac(std::min(n, kBlock));
+    for (std::size_t first = 0; first < n; first += kBlock) {
+        const std::size_t count = std::min(kBlock, n - first);
+        const ffd::PointsIn pin{in.positions.data() + first, nullptr, nullptr, nullptr, count, in.origin};
+        ffd::PointsOut pout{out.positions.data() + first, nullptr, nullptr, nullptr};
+        pout.jacobians = jac.data();
+        auto stats = ffd::deform(lattice, pin, pout, backend);
+        if (!stats) return stats.error();
+        total.inside += stats->inside;
+        total.inverted += stats->inverted;
+        std::atomic<std::size_t> degenerate{0};
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+            std::size_t bad = 0;
+            for (std::size_t b = r.begin(); b != r.end(); ++b) {
+                const std::size_t i = first + b;
+                const float* sh_in = &in.sh[i * std::size_t(K) * 3];
+                float* sh_out = &out.sh[i * std::size_t(K) * 3];
+                if (jac[b] == glm::mat3(1.0f)) {  // outside the lattice or not moved by it
+                    if (&out != &in) {
+                        out.scales[i] = in.scales[i], out.rotations[i] = in.rotations[i];
+                        std::copy(sh_in, sh_in + K * 3, sh_out);
+                    }
+                    continue;
+                }
+                const glm::dmat3 j(jac[b]);
+                double n2 = 0.0;
+                for (int c = 0; c < 3; ++c) n2 += glm::dot(j[c], j[c]);
+                const bool singular = !(std::abs(glm::determinant(j)) > 1e-12 * n2 * std::sqrt(n2));  // as polar_decomposition
+                bad += singular;
+                const glm::dmat3 rq = glm::mat3_cast(glm::dquat(in.rotations[i]));
+                const glm::dvec3 s(in.scales[i]);
+                const glm::dmat3 a = j * glm::dmat3(rq[0] * s.x, rq[1] * s.y, rq[2] * s.z);  // deformed axes J R S
+                // Σ' = (JRS)(JRS)ᵀ; the deformed axes, orthonormalised, are a close guess of its eigenvectors.
+                const ScaleRotation sr = decompose_covariance(a * glm::transpose(a), orthonormalize(j * rq));
+                out.scales[i] = glm::vec3(sr.scale);
+                out.rotations[i] = glm::quat(sr.rotation);
+                if (K == 1) {
+                    if (&out != &in) std::copy(sh_in, sh_in + 3, sh_out);
+                    continue;
+                }
+                const Polar p = polar_decomposition(j);
+                if (!p.ok || view_mode) {
+                    if (&out != &in) std::copy(sh_in, sh_in + K * 3, sh_out);
+                    if (p.ok && view_mode) out.sh_frames[i] = glm::mat3(p.rotation) * (frames_in ? in.sh_frames[i] : glm::mat3(1.0f));
+                    continue;
+                }
+                sh_rotate(sh_rotation(p.rotation, in.sh_degree), sh_in, sh_out);
+            }
+            degenerate += bad;
+        });
+        total.degenerate += degenerate.load();
+    }
+    return total;
+}
+
+}  // namespace sffd::gaussian

@@ -1,0 +1,48 @@
+// CPU deformation of 3D Gaussians through an FFD lattice (issue 17):
+//   centre  μ' = FFD(μ)                      (the ffd system's own evaluator, systems/ffd/deform.h)
+//   shape   Σ' = J Σ Jᵀ, J the world Jacobian at μ (first-order push-forward of the density), stored
+//           back as scale + rotation (symmetric eigen-decomposition)
+//   colour  SH rotated by R, the rotation of the polar decomposition J = R U (a reflection when the
+//           cell inverts: the SH are transformed by the orthogonal R either way)
+// Gaussians outside the lattice (J = I) are copied unchanged; opacities are never changed.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "runtime/core/result.h"
+#include "systems/ffd/components.h"
+#include "systems/ffd/deform.h"
+#include "systems/gaussian/components.h"
+
+namespace sffd::gaussian {
+
+struct DeformStats {
+    std::size_t inside = 0;      // Gaussians inside the lattice
+    std::size_t inverted = 0;    // det J < 0
+    std::size_t degenerate = 0;  // J (near) singular: the covariance collapses, SH left unrotated
+};
+
+// How view-dependent colour follows the deformation (the issue asks for both, measured):
+//   rotate_coefficients: the SH coefficients are rotated by R (per-band matrices, once per deformation);
+//   rotate_view: the coefficients are kept and R is stored in GaussianCloud::sh_frames; renderers evaluate
+//                the SH at Rᵀ d (one 3x3 product per splat per frame, no coefficient work when deforming).
+enum class ShMode : std::uint8_t { rotate_coefficients, rotate_view };
+
+struct DeformOptions {
+    ffd::Backend backend = ffd::Backend::automatic;
+    bool copy_opacities = true;
+    ShMode sh = ShMode::rotate_coefficients;
+};
+
+// Writes `out` (positions, scales, rotations, sh or sh_frames; opacities copied when `copy_opacities`)
+// from `in`. `out` may be `in` (chained lattices deform in place; frames compose). Lattice errors read
+// "lattice: problem".
+Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out, const DeformOptions& options);
+Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out,
+                           ffd::Backend backend = ffd::Backend::automatic, bool copy_opacities = true);
+
+// Rotates each splat's coefficients by its sh_frames entry and clears the frames (before writing a file).
+void bake_sh_frames(GaussianCloud& cloud);
+
+}  // namespace sffd::gaussian

@@ -1,0 +1,336 @@
+#include "systems/gaussian/gaussian_gltf.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <nlohmann/json.hpp>
+#include <tiny_gltf.h>
+
+#include "runtime/core/atomic_file.h"
+#include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_math.h"
+#include "systems/gaussian/sh.h"
+
+namespace sffd::gaussian {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr int kFloat = 5126, kUByte = 5121, kUShort = 5123, kByte = 5120, kShort = 5122;
+const std::string kExt = "KHR_gaussian_splatting";
+
+std::size_t component_size(int type) {
+    switch (type) {
+        case kFloat: return 4;
+        case kUByte: case kByte: return 1;
+        case kUShort: case kShort: return 2;
+        default: return 0;
+    }
+}
+
+// Reads an accessor as `components` doubles per element, every offset checked against its buffer.
+Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, int components, const std::string& what) {
+    auto fail = [&](const std::string& why) { return make_error(what + ": " + why); };
+    if (index < 0 || std::size_t(index) >= m.accessors.size()) return fail("accessor index out of range");
+    const tinygltf::Accessor& a = m.accessors[std::size_t(index)];
+    if (a.sparse.isSparse) return fail("sparse accessors are not supported");
+    if (tinygltf::GetNumComponentsInType(std::uint32_t(a.type)) != components)
+        return fail("expected " + std::to_string(components) + " components per element");
+    const std::size_t csize = component_size(a.componentType);
+    if (csize == 0) return fail("unsupported component type " + std::to_string(a.componentType));
+    const std::size_t elem = csize * std::size_t(components);
+    std::vector<double> out;
+    if (a.count == 0) return out;
+    if (a.bufferView < 0 || std::size_t(a.bufferView) >= m.bufferViews.size()) return fail("accessor has no valid bufferView");
+    const tinygltf::BufferView& bv = m.bufferViews[std::size_t(a.bufferView)];
+    if (bv.buffer < 0 || std::size_t(bv.buffer) >= m.buffers.size()) return fail("bufferView has no valid buffer");
+    const std::vector<unsigned char>& data = m.buffers[std::size_t(bv.buffer)].data;
+    const std::size_t stride = bv.byteStride ? bv.byteStride : elem;
+    if (stride < elem) return fail("byteStride smaller than an element");
+    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset) return fail("bufferView exceeds its buffer");
+    if (a.byteOffset > bv.byteLength) return fail("accessor offset exceeds its bufferView");
+    const std::size_t avail = bv.byteLength - a.byteOffset;
+    if (a.count > avail / stride + 1 || (a.count - 1) * stride + elem > avail) return fail("accessor exceeds its bufferView");
+    out.resize(a.count * std::size_t(components));
+    const unsigned char* base = data.data() + bv.byteOffset + a.byteOffset;
+    for (std::size_t i = 0; i < a.count; ++i) {
+        const unsigned char* p = base + i * stride;
+        for (int c = 0; c < components; ++c, p += csize) {
+            double v = 0.0;
+            switch (a.componentType) {
+                case kFloat: { float f; std::memcpy(&f, p, 4); v = double(f); break; }
+                case kUByte: v = *p; if (a.normalized) v /= 255.0; break;
+                case kByte: { std::int8_t x; std::memcpy(&x, p, 1); v = x; if (a.normalized) v = std::max(v / 127.0, -1.0); break; }
+                case kUShort: { std::uint16_t x; std::memcpy(&x, p, 2); v = x; if (a.normalized) v /= 65535.0; break; }
+                case kShort: { std::int16_t x; std::memcpy(&x, p, 2); v = x; if (a.normalized) v = std::max(v / 32767.0, -1.0); break; }
+            }
+            if (!std::isfinite(v)) return fail("non-finite value at element " + std::to_string(i));
+            out[i * std::size_t(components) + std::size_t(c)] = v;
+        }
+    }
+    return out;
+}
+
+glm::dmat4 node_matrix(const tinygltf::Node& n) {
+    if (n.matrix.size() == 16) return glm::make_mat4(n.matrix.data());
+    glm::dmat4 m(1.0);
+    if (n.translation.size() == 3) m = glm::translate(m, glm::dvec3(n.translation[0], n.translation[1], n.translation[2]));
+    if (n.rotation.size() == 4) m = m * glm::mat4_cast(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2]));
+    if (n.scale.size() == 3) m = glm::scale(m, glm::dvec3(n.scale[0], n.scale[1], n.scale[2]));
+    return m;
+}
+
+std::string sh_name(int l, int n) {
+    return kExt + ":SH_DEGREE_" + std::to_string(l) + "_COEF_" + std::to_string(n);
+}
+
+Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim, const std::string& where) {
+    auto attr = [&](const std::string& name) {
+        auto it = prim.attributes.find(name);
+        return it == prim.attributes.end() ? -1 : it->second;
+    };
+    for (const char* name : {"POSITION", "KHR_gaussian_splatting:ROTATION", "KHR_gaussian_splatting:SCALE", "KHR_gaussian_splatting:OPACITY"})
+        if (attr(name) < 0) return make_error(where + ": missing attribute " + name);
+    auto pos = read_accessor(m, attr("POSITION"), 3, where + ": POSITION");
+    if (!pos) return pos.error();
+    const std::size_t n = pos->size() / 3;
+    auto get = [&](const std::string& name, int comps) -> Result<std::vector<double>> {
+        auto v = read_accessor(m, attr(name), comps, where + ": " + name);
+        if (v && v->size() != n * std::size_t(comps))
+            return make_error(where + ": " + name + " has " + std::to_string(v->size() / std::size_t(comps)) + " elements, POSITION " + std::to_string(n));
+        return v;
+    };
+    auto rot = get(kExt + ":ROTATION", 4);
+    if (!rot) return rot.error();
+    auto scale = get(kExt + ":SCALE", 3);
+    if (!scale) return scale.error();
+    auto opacity = get(kExt + ":OPACITY", 1);
+    if (!opacity) return opacity.error();
+    int degree = 0;
+    for (int l = 1; l <= 3; ++l) {
+        int present = 0;
+        for (int c = 0; c <= 2 * l; ++c) present += attr(sh_name(l, c)) >= 0;
+        if (present == 0) break;
+        if (present != 2 * l + 1)
+            return make_error(where + ": SH degree " + std::to_string(l) + " is partial (" + std::to_string(present) + " of " +
+                              std::to_string(2 * l + 1) + " coefficients)");
+        degree = l;
+    }
+    GaussianCloud g;
+    g.sh_degree = degree;
+    const int K = sh_coeffs(degree);
+    g.sh.assign(n * std::size_t(K) * 3, 0.0f);
+    if (attr(sh_name(0, 0)) >= 0) {
+        auto dc = get(sh_name(0, 0), 3);
+        if (!dc) return dc.error();
+        for (std::size_t i = 0; i < n; ++i)
+            for (int c = 0; c < 3; ++c) g.sh[i * std::size_t(K) * 3 + std::size_t(c)] = float((*dc)[i * 3 + std::size_t(c)]);
+    } else if (attr("COLOR_0") >= 0) {
+        const int comps = m.accessors[std::size_t(attr("COLOR_0"))].type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
+        auto col = get("COLOR_0", comps);
+        if (!col) return col.error();
+        for (std::size_t i = 0; i < n; ++i)
+            for (int c = 0; c < 3; ++c)
+                g.sh[i * std::size_t(K) * 3 + std::size_t(c)] = float(((*col)[i * std::size_t(comps) + std::size_t(c)] - 0.5) / kShC0);
+    } else {
+        return make_error(where + ": missing attribute " + sh_name(0, 0) + " (and no COLOR_0)");
+    }
+    for (int l = 1; l <= degree; ++l)
+        for (int c = 0; c <= 2 * l; ++c) {
+            auto v = get(sh_name(l, c), 3);
+            if (!v) return v.error();
+            const std::size_t k = std::size_t(l * l + c);
+            for (std::size_t i = 0; i < n; ++i)
+                for (std::size_t ch = 0; ch < 3; ++ch) g.sh[(i * std::size_t(K) + k) * 3 + ch] = float((*v)[i * 3 + ch]);
+        }
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto fail = [&](const char* why) { return make_error(where + ": Gaussian " + std::to_string(i) + ": " + why); };
+        g.positions.emplace_back(float((*pos)[i * 3]), float((*pos)[i * 3 + 1]), float((*pos)[i * 3 + 2]));
+        const glm::dvec3 s((*scale)[i * 3], (*scale)[i * 3 + 1], (*scale)[i * 3 + 2]);
+        if (s.x < 0 || s.y < 0 || s.z < 0) return fail("negative scale (KHR_gaussian_splatting scales are linear; log-space data from the review draft?)");
+        g.scales.push_back(glm::vec3(s));
+        const double o = (*opacity)[i];
+        if (o < 0.0 || o > 1.0) return fail("opacity outside [0, 1]");
+        g.opacities.push_back(float(o));
+        const glm::dvec4 q((*rot)[i * 4], (*rot)[i * 4 + 1], (*rot)[i * 4 + 2], (*rot)[i * 4 + 3]);  // x y z w
+        const double len = glm::length(q);
+        if (!(len > 1e-30)) return fail("zero-length rotation quaternion");
+        g.rotations.emplace_back(float(q.w / len), float(q.x / len), float(q.y / len), float(q.z / len));
+    }
+    return g;
+}
+
+void append(GaussianCloud& a, const GaussianCloud& b, int degree) {
+    const int ka = sh_coeffs(a.sh_degree), kb = sh_coeffs(b.sh_degree), k = sh_coeffs(degree);
+    std::vector<float> sh;
+    sh.reserve((a.size() + b.size()) * std::size_t(k) * 3);
+    for (std::size_t i = 0; i < a.size(); ++i)
+        sh.insert(sh.end(), a.sh.begin() + std::ptrdiff_t(i * std::size_t(ka) * 3), a.sh.begin() + std::ptrdiff_t((i * std::size_t(ka) + std::size_t(k)) * 3));
+    for (std::size_t i = 0; i < b.size(); ++i)
+        sh.insert(sh.end(), b.sh.begin() + std::ptrdiff_t(i * std::size_t(kb) * 3), b.sh.begin() + std::ptrdiff_t((i * std::size_t(kb) + std::size_t(k)) * 3));
+    a.sh = std::move(sh);
+    a.sh_degree = degree;
+    a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
+    a.scales.insert(a.scales.end(), b.scales.begin(), b.scales.end());
+    a.rotations.insert(a.rotations.end(), b.rotations.begin(), b.rotations.end());
+    a.opacities.insert(a.opacities.end(), b.opacities.begin(), b.opacities.end());
+}
+
+}  // namespace
+
+void apply_affine(GaussianCloud& g, const glm::dmat3& a, const glm::dvec3& t) {
+    const int K = sh_coeffs(g.sh_degree);
+    const Polar p = polar_decomposition(a);
+    const ShRotation rot = sh_rotation(p.rotation, g.sh_degree);
+    for (std::size_t i = 0; i < g.size(); ++i) {
+        g.positions[i] = glm::vec3(a * (g.origin + glm::dvec3(g.positions[i])) + t - g.origin);
+        const ScaleRotation sr = decompose_covariance(a * covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i])) * glm::transpose(a));
+        g.scales[i] = glm::vec3(sr.scale);
+        g.rotations[i] = glm::quat(sr.rotation);
+        if (K > 1 && p.ok) sh_rotate(rot, &g.sh[i * std::size_t(K) * 3], &g.sh[i * std::size_t(K) * 3]);
+    }
+}
+
+Result<GaussianCloud> read_gltf(const fs::path& path) {
+    const std::string src = path.string();
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) return make_error(src + ": no such file");
+    tinygltf::TinyGLTF loader;
+    tinygltf::Model m;
+    std::string err, warn;
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    bool ok = false;
+    try {
+        ok = ext == ".glb" ? loader.LoadBinaryFromFile(&m, &err, &warn, src) : loader.LoadASCIIFromFile(&m, &err, &warn, src);
+    } catch (const std::exception& e) {  // tinygltf's JSON parser may throw on hostile input
+        return make_error(src + ": invalid glTF: " + e.what());
+    }
+    if (!ok) {
+        while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
+        return make_error(src + ": invalid glTF: " + (err.empty() ? std::string("unknown error") : err.substr(0, 500)));
+    }
+    std::vector<GaussianCloud> parts;
+    std::vector<int> visiting;
+    std::function<Status(int, const glm::dmat4&)> visit = [&](int index, const glm::dmat4& parent) -> Status {
+        if (index < 0 || std::size_t(index) >= m.nodes.size()) return make_error(src + ": node index " + std::to_string(index) + " out of range");
+        if (visiting.size() > 256 || std::find(visiting.begin(), visiting.end(), index) != visiting.end())
+            return make_error(src + ": node hierarchy has a cycle");
+        visiting.push_back(index);
+        const tinygltf::Node& node = m.nodes[std::size_t(index)];
+        const glm::dmat4 world = parent * node_matrix(node);
+        if (node.mesh >= 0 && std::size_t(node.mesh) < m.meshes.size()) {
+            const auto& prims = m.meshes[std::size_t(node.mesh)].primitives;
+            for (std::size_t p = 0; p < prims.size(); ++p) {
+                if (prims[p].extensions.find(kExt) == prims[p].extensions.end()) continue;
+                const std::string where = src + ": mesh " + std::to_string(node.mesh) + " primitive " + std::to_string(p);
+                if (prims[p].mode != TINYGLTF_MODE_POINTS) return make_error(where + ": KHR_gaussian_splatting needs mode POINTS");
+                auto g = read_primitive(m, prims[p], where);
+                if (!g) return g.error();
+                if (world != glm::dmat4(1.0)) apply_affine(*g, glm::dmat3(world), glm::dvec3(world[3]));
+                parts.push_back(std::move(*g));
+            }
+        }
+        for (int c : node.children)
+            if (Status s = visit(c, world); !s) return s;
+        visiting.pop_back();
+        return {};
+    };
+    std::vector<int> roots;
+    if (!m.scenes.empty()) {
+        const std::size_t s = m.defaultScene >= 0 && std::size_t(m.defaultScene) < m.scenes.size() ? std::size_t(m.defaultScene) : 0;
+        roots = m.scenes[s].nodes;
+    } else {
+        for (std::size_t i = 0; i < m.nodes.size(); ++i) roots.push_back(int(i));
+    }
+    for (int r : roots)
+        if (Status s = visit(r, glm::dmat4(1.0)); !s) return s.error();
+    if (parts.empty()) return make_error(src + ": no KHR_gaussian_splatting primitive");
+    int degree = 3;
+    for (const GaussianCloud& p : parts) degree = std::min(degree, p.sh_degree);
+    GaussianCloud out;
+    out.sh_degree = degree;
+    for (const GaussianCloud& p : parts) append(out, p, degree);
+    return out;
+}
+
+Status write_glb(const fs::path& path, const GaussianCloud& g) {
+    if (Status s = validate(g, path.string()); !s) return s;
+    const std::size_t n = g.size();
+    const int K = sh_coeffs(g.sh_degree);
+    std::string bin;
+    nlohmann::json views = nlohmann::json::array(), accessors = nlohmann::json::array(), attributes = nlohmann::json::object();
+    auto add = [&](const std::string& name, const void* data, std::size_t bytes, int component, const char* type, bool normalized,
+                   const nlohmann::json& lo = {}, const nlohmann::json& hi = {}) {
+        while (bin.size() % 4) bin.push_back('\0');
+        views.push_back({{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}, {"target", 34962}});
+        bin.append(static_cast<const char*>(data), bytes);
+        nlohmann::json a = {{"bufferView", views.size() - 1}, {"componentType", component}, {"count", n}, {"type", type}};
+        if (normalized) a["normalized"] = true;
+        if (!lo.is_null()) a["min"] = lo, a["max"] = hi;
+        accessors.push_back(a);
+        attributes[name] = accessors.size() - 1;
+    };
+    glm::vec3 lo(0.0f), hi(0.0f);
+    if (n > 0) lo = hi = g.positions[0];
+    for (const glm::vec3& p : g.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+    add("POSITION", g.positions.data(), n * 12, kFloat, "VEC3", false, {lo.x, lo.y, lo.z}, {hi.x, hi.y, hi.z});
+    std::vector<unsigned char> color(n * 4);
+    std::vector<float> rot(n * 4), tmp(n * 3);
+    for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t c = 0; c < 3; ++c)
+            color[i * 4 + c] = static_cast<unsigned char>(std::lround(std::clamp(0.5 + kShC0 * double(g.sh[i * std::size_t(K) * 3 + c]), 0.0, 1.0) * 255.0));
+        color[i * 4 + 3] = static_cast<unsigned char>(std::lround(double(g.opacities[i]) * 255.0));
+        const glm::quat q = g.rotations[i];
+        rot[i * 4] = q.x, rot[i * 4 + 1] = q.y, rot[i * 4 + 2] = q.z, rot[i * 4 + 3] = q.w;
+    }
+    add("COLOR_0", color.data(), color.size(), kUByte, "VEC4", true);
+    add(kExt + ":ROTATION", rot.data(), rot.size() * 4, kFloat, "VEC4", false);
+    add(kExt + ":SCALE", g.scales.data(), n * 12, kFloat, "VEC3", false);
+    add(kExt + ":OPACITY", g.opacities.data(), n * 4, kFloat, "SCALAR", false);
+    for (int l = 0; l <= g.sh_degree; ++l)
+        for (int c = 0; c <= 2 * l; ++c) {
+            const std::size_t k = std::size_t(l * l + c);
+            for (std::size_t i = 0; i < n; ++i)
+                for (std::size_t ch = 0; ch < 3; ++ch) tmp[i * 3 + ch] = g.sh[(i * std::size_t(K) + k) * 3 + ch];
+            add(sh_name(l, c), tmp.data(), n * 12, kFloat, "VEC3", false);
+        }
+    while (bin.size() % 4) bin.push_back('\0');
+    nlohmann::json node = {{"mesh", 0}, {"name", "gaussians"}};
+    if (g.origin != glm::dvec3(0.0)) node["translation"] = {g.origin.x, g.origin.y, g.origin.z};
+    const nlohmann::json doc = {
+        {"asset", {{"version", "2.0"}, {"generator", "splatffd"}}},
+        {"extensionsUsed", {kExt}},
+        {"scene", 0},
+        {"scenes", {{{"nodes", {0}}}}},
+        {"nodes", {node}},
+        {"meshes", {{{"primitives", {{{"attributes", attributes}, {"mode", 0},
+                                      {"extensions", {{kExt, {{"kernel", "ellipse"}, {"colorSpace", "srgb_rec709_display"},
+                                                              {"sortingMethod", "cameraDistance"}, {"projection", "perspective"}}}}}}}}}}},
+        {"buffers", {{{"byteLength", bin.size()}}}},
+        {"bufferViews", views},
+        {"accessors", accessors},
+    };
+    std::string text = doc.dump();
+    while (text.size() % 4) text.push_back(' ');
+    const std::uint64_t total = 12 + 8 + text.size() + 8 + bin.size();
+    if (total > 0xffffffffu) return make_error(path.string() + ": too many Gaussians for a GLB file (4 GiB)");
+    std::string glb;
+    glb.reserve(std::size_t(total));
+    auto u32 = [&](std::uint32_t v) { glb.append(reinterpret_cast<const char*>(&v), 4); };
+    u32(0x46546C67u), u32(2), u32(std::uint32_t(total));
+    u32(std::uint32_t(text.size())), u32(0x4E4F534Au);
+    glb += text;
+    u32(std::uint32_t(bin.size())), u32(0x004E4942u);
+    glb += bin;
+    return write_file_atomic(path, glb);
+}
+
+}  // namespace sffd::gaussian

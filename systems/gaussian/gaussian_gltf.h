@@ -1,0 +1,39 @@
+// glTF 2.0 `KHR_gaussian_splatting` (Khronos, ratified; issue 17): read (.glb / .gltf through tinygltf) and
+// write (.glb) 3D Gaussian clouds.
+//
+// Conventions of the extension (ratified text; the earlier review draft stored SCALE in log space,
+// which the ratified text and @playcanvas/splat-transform 3.x do not):
+//   POSITION                                  VEC3 float
+//   KHR_gaussian_splatting:ROTATION           VEC4 (x, y, z, w), float or normalised byte/short
+//   KHR_gaussian_splatting:SCALE              VEC3 LINEAR standard deviations, float or (normalised) byte/short
+//   KHR_gaussian_splatting:OPACITY            SCALAR LINEAR [0, 1], float or normalised ubyte/ushort
+//   KHR_gaussian_splatting:SH_DEGREE_0_COEF_0 VEC3 float, the DC coefficients (colour = 0.5 + C0·dc)
+//   KHR_gaussian_splatting:SH_DEGREE_l_COEF_n VEC3 float (RGB) per coefficient, l = 1..3, n = 0..2l
+//     (n in the 3DGS / Condon–Shortley order, i.e. our k = l² + n)
+//   COLOR_0                                   optional fallback (we write it; we read it only when
+//                                             SH_DEGREE_0_COEF_0 is absent)
+// Reading: every POINTS primitive with the extension in the default scene, placed by its node's world
+// matrix (a non-rigid node matrix is applied like a deformation: Σ' = A Σ Aᵀ, SH rotated by the polar
+// rotation of A); primitives of different SH degrees are merged at the lowest degree. Errors name the
+// file and the problem (missing attribute, count mismatch, partial SH degree, negative scale, opacity
+// outside [0,1], non-finite values, accessors outside their buffers).
+// Coordinates are taken as they are: note that splat-transform treats PLY data as rotated 180° about
+// Z relative to glTF (its PLY -> GLB conversion turns x, y into −x, −y); we read both files as stored.
+#pragma once
+
+#include <filesystem>
+
+#include "runtime/core/result.h"
+#include "systems/gaussian/components.h"
+
+namespace sffd::gaussian {
+
+Result<GaussianCloud> read_gltf(const std::filesystem::path& path);
+// One node (translation = cloud.origin) with one POINTS primitive; written atomically. .glb only.
+Status write_glb(const std::filesystem::path& path, const GaussianCloud& cloud);
+
+// Applies x -> A x + t (world space, double) to a cloud in place: centres, Σ' = A Σ Aᵀ, SH rotated by the
+// polar rotation of A. Used for glTF node matrices.
+void apply_affine(GaussianCloud& cloud, const glm::dmat3& a, const glm::dvec3& t);
+
+}  // namespace sffd::gaussian

@@ -1,0 +1,310 @@
+#include "systems/gaussian/gaussian_io.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+
+#include "systems/gaussian/gaussian_gltf.h"
+#include "systems/gaussian/gaussian_spz.h"
+#include "systems/gaussian/sh.h"
+
+namespace sffd::gaussian {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::size_t kChunkRows = 1 << 16;
+
+std::string rest_name(int i) { return "f_rest_" + std::to_string(i); }
+
+}  // namespace
+
+float sigmoid(double x) { return float(1.0 / (1.0 + std::exp(-x))); }
+
+double logit(double p) {
+    if (!(p > 0.0)) return -kMaxLogit;
+    if (!(p < 1.0)) return kMaxLogit;
+    return std::clamp(std::log(p / (1.0 - p)), -kMaxLogit, kMaxLogit);
+}
+
+bool is_gaussian_element(const ply::Element& v) {
+    return v.find("f_dc_0") >= 0 && v.find("opacity") >= 0 && v.find("scale_0") >= 0 && v.find("rot_0") >= 0;
+}
+
+Result<PlyLayout> ply_layout(const ply::Element& v, const std::string& name) {
+    PlyLayout l;
+    std::string missing;
+    auto need = [&](const std::string& prop, int& slot) {
+        slot = v.find(prop);
+        if (slot < 0) missing += (missing.empty() ? "" : ", ") + prop;
+        else if (v.properties[std::size_t(slot)].is_list) missing += (missing.empty() ? "" : ", ") + prop + " (is a list)";
+    };
+    need("x", l.x), need("y", l.y), need("z", l.z);
+    for (int c = 0; c < 3; ++c) need("f_dc_" + std::to_string(c), l.dc[c]);
+    need("opacity", l.opacity);
+    for (int c = 0; c < 3; ++c) need("scale_" + std::to_string(c), l.scale[c]);
+    for (int c = 0; c < 4; ++c) need("rot_" + std::to_string(c), l.rot[c]);
+    if (!missing.empty()) return make_error(name + ": not a 3DGS PLY: vertex element lacks " + missing);
+    int count = 0;
+    for (const ply::Property& p : v.properties)
+        if (p.name.rfind("f_rest_", 0) == 0) ++count;
+    for (int i = 0; i < count; ++i) {
+        const int at = v.find(rest_name(i));
+        if (at < 0 || v.properties[std::size_t(at)].is_list)
+            return make_error(name + ": " + std::to_string(count) + " f_rest properties but no scalar " + rest_name(i));
+        l.rest.push_back(at);
+    }
+    l.degree = -1;
+    for (int d = 0; d <= 3; ++d)
+        if (count == 3 * (sh_coeffs(d) - 1)) l.degree = d;
+    if (l.degree < 0)
+        return make_error(name + ": " + std::to_string(count) +
+                          " f_rest properties: expected 0, 9, 24 or 45 (SH degree 0, 1, 2 or 3)");
+    return l;
+}
+
+Status append_from_chunk(const ply::Chunk& chunk, const PlyLayout& l, std::uint64_t first_row, const std::string& name,
+                         GaussianCloud& out) {
+    const int K = sh_coeffs(l.degree);
+    auto col = [&](int i) -> const std::vector<double>& { return chunk.columns[std::size_t(i)].values; };
+    for (std::size_t r = 0; r < chunk.rows; ++r) {
+        auto bad = [&](int prop, const char* why) {
+            return make_error(name + ": vertex " + std::to_string(first_row + r) + ": " + why + " '" +
+                              chunk.element.properties[std::size_t(prop)].name + "'");
+        };
+        // Every read column must be finite (NaN scales or rotations would poison a whole render).
+        for (int p : {l.x, l.y, l.z, l.dc[0], l.dc[1], l.dc[2], l.opacity, l.scale[0], l.scale[1], l.scale[2], l.rot[0],
+                      l.rot[1], l.rot[2], l.rot[3]})
+            if (!std::isfinite(col(p)[r])) return bad(p, "non-finite");
+        for (int p : l.rest)
+            if (!std::isfinite(col(p)[r])) return bad(p, "non-finite");
+        out.positions.emplace_back(float(col(l.x)[r]), float(col(l.y)[r]), float(col(l.z)[r]));
+        glm::vec3 s;
+        for (int c = 0; c < 3; ++c) {
+            const double e = std::exp(col(l.scale[c])[r]);
+            if (!std::isfinite(float(e))) return bad(l.scale[c], "scale overflows (log scale too large) in");
+            s[c] = float(e);
+        }
+        out.scales.push_back(s);
+        const glm::dvec4 q(col(l.rot[0])[r], col(l.rot[1])[r], col(l.rot[2])[r], col(l.rot[3])[r]);
+        const double len = glm::length(q);
+        if (!(len > 1e-30)) return bad(l.rot[0], "zero-length rotation quaternion at");
+        out.rotations.emplace_back(float(q[0] / len), float(q[1] / len), float(q[2] / len), float(q[3] / len));
+        out.opacities.push_back(sigmoid(col(l.opacity)[r]));
+        for (int k = 0; k < K; ++k)
+            for (int c = 0; c < 3; ++c)
+                out.sh.push_back(k == 0 ? float(col(l.dc[c])[r])
+                                        : float(col(l.rest[std::size_t(c * (K - 1) + (k - 1))])[r]));
+    }
+    return {};
+}
+
+ply::Element ply_element(int degree, std::uint64_t count) {
+    ply::Element e;
+    e.name = "vertex";
+    e.count = count;
+    auto add = [&](const std::string& n) { e.properties.push_back({n, ply::Type::float32, false, ply::Type::uint8}); };
+    for (const char* n : {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"}) add(n);
+    for (int i = 0; i < 3 * (sh_coeffs(degree) - 1); ++i) add(rest_name(i));
+    add("opacity");
+    for (const char* n : {"scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"}) add(n);
+    return e;
+}
+
+void fill_chunk(const GaussianCloud& g, std::size_t first, std::size_t count, ply::Chunk& chunk) {
+    const int K = sh_coeffs(g.sh_degree);
+    chunk.reset(ply_element(g.sh_degree, count));
+    chunk.rows = count;
+    for (ply::Column& c : chunk.columns) c.values.resize(count);
+    auto col = [&](int i) -> std::vector<double>& { return chunk.columns[std::size_t(i)].values; };
+    const int rest0 = 9, opacity = rest0 + 3 * (K - 1), scale0 = opacity + 1, rot0 = scale0 + 3;
+    for (std::size_t r = 0; r < count; ++r) {
+        const std::size_t i = first + r;
+        const glm::dvec3 p = g.origin + glm::dvec3(g.positions[i]);
+        for (int c = 0; c < 3; ++c) {
+            col(c)[r] = p[c];
+            col(3 + c)[r] = 0.0;
+            col(6 + c)[r] = g.sh[(i * std::size_t(K)) * 3 + std::size_t(c)];
+            for (int k = 1; k < K; ++k)
+                col(rest0 + c * (K - 1) + (k - 1))[r] = g.sh[(i * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(c)];
+            // log(0) is -inf: a flat Gaussian keeps a tiny finite log scale instead.
+            col(scale0 + c)[r] = std::log(std::max(double(g.scales[i][c]), 1e-30));
+        }
+        col(opacity)[r] = logit(g.opacities[i]);
+        const glm::quat q = g.rotations[i];
+        col(rot0)[r] = q.w, col(rot0 + 1)[r] = q.x, col(rot0 + 2)[r] = q.y, col(rot0 + 3)[r] = q.z;
+    }
+}
+
+Result<GaussianCloud> read_ply(const fs::path& path) {
+    auto reader = ply::Reader::open(path);
+    if (!reader) return reader.error();
+    const std::string name = path.string();
+    const int vi = reader->header().find("vertex");
+    if (vi < 0) return make_error(name + ": no vertex element");
+    const ply::Element& ve = reader->header().elements[std::size_t(vi)];
+    auto layout = ply_layout(ve, name);
+    if (!layout) return layout.error();
+    GaussianCloud g;
+    g.sh_degree = layout->degree;
+    // ply::Reader::open() refused counts the file cannot hold, so reserving the declared count is safe.
+    g.positions.reserve(ve.count), g.scales.reserve(ve.count), g.rotations.reserve(ve.count);
+    g.opacities.reserve(ve.count), g.sh.reserve(ve.count * std::uint64_t(sh_coeffs(g.sh_degree)) * 3);
+    if (auto s = reader->seek_element("vertex"); !s) return s.error();
+    ply::Chunk chunk;
+    std::uint64_t row = 0;
+    while (true) {
+        auto rows = reader->read_rows(kChunkRows, chunk);
+        if (!rows) return rows.error();
+        if (*rows == 0) break;
+        if (auto s = append_from_chunk(chunk, *layout, row, name, g); !s) return s.error();
+        row += *rows;
+    }
+    return g;
+}
+
+Status write_ply(const fs::path& path, const GaussianCloud& g, ply::Format format) {
+    if (auto s = validate(g, path.string()); !s) return s;
+    ply::Header h;
+    h.format = format;
+    h.comments.push_back("3D Gaussian splats (3DGS layout) written by splatffd");
+    h.elements.push_back(ply_element(g.sh_degree, g.size()));
+    // ply::Writer writes `<path>.tmp-<pid>`, fsyncs and renames: the same atomic save as
+    // runtime/core/atomic_file.h, streaming (no second copy of the file in memory).
+    auto writer = ply::Writer::create(path, h);
+    if (!writer) return writer.error();
+    ply::Chunk chunk;
+    for (std::size_t first = 0; first < g.size(); first += kChunkRows) {
+        fill_chunk(g, first, std::min(kChunkRows, g.size() - first), chunk);
+        if (auto s = writer->write_rows(chunk); !s) return s;
+    }
+    return writer->finish();
+}
+
+namespace {
+
+struct FileCloser {
+    void operator()(std::FILE* f) const { std::fclose(f); }
+};
+using File = std::unique_ptr<std::FILE, FileCloser>;
+
+// The one place `.splat` opens its file (to be switched to the shared read-file helper).
+Result<File> open_splat_file(const fs::path& path, std::uint64_t& size) {
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec))
+        return make_error(path.string() + ": " + (fs::exists(path, ec) ? "not a regular file" : "no such file"));
+    size = fs::file_size(path, ec);
+    if (ec) return make_error(path.string() + ": cannot stat: " + ec.message());
+    File f(std::fopen(path.c_str(), "rb"));
+    if (!f) return make_error(path.string() + ": cannot open: " + std::strerror(errno));
+    return f;
+}
+
+}  // namespace
+
+Result<GaussianCloud> read_splat(const fs::path& path) {
+    const std::string name = path.string();
+    std::uint64_t size = 0;
+    auto file = open_splat_file(path, size);
+    if (!file) return file.error();
+    if (size % 32 != 0)
+        return make_error(name + ": size " + std::to_string(size) + " bytes is not a multiple of 32 (.splat rows are 32 bytes; truncated?)");
+    const std::size_t n = size / 32;
+    GaussianCloud g;
+    g.sh_degree = 0;
+    g.positions.reserve(n), g.scales.reserve(n), g.rotations.reserve(n), g.opacities.reserve(n), g.sh.reserve(n * 3);
+    std::vector<unsigned char> buf(32 * 8192);
+    for (std::size_t first = 0; first < n; first += 8192) {
+        const std::size_t rows = std::min<std::size_t>(8192, n - first);
+        if (std::fread(buf.data(), 32, rows, file->get()) != rows)
+            return make_error(name + ": truncated at splat " + std::to_string(first));
+        for (std::size_t r = 0; r < rows; ++r) {
+            const unsigned char* p = buf.data() + r * 32;
+            float f[6];
+            std::memcpy(f, p, sizeof f);  // little-endian host (checked in ply.cpp's kLittleEndianHost too)
+            for (int k = 0; k < 6; ++k)
+                if (!std::isfinite(f[k]))
+                    return make_error(name + ": splat " + std::to_string(first + r) + ": non-finite " +
+                                      (k < 3 ? "position" : "scale"));
+            if (f[3] < 0 || f[4] < 0 || f[5] < 0)
+                return make_error(name + ": splat " + std::to_string(first + r) + ": negative scale");
+            g.positions.emplace_back(f[0], f[1], f[2]);
+            g.scales.emplace_back(f[3], f[4], f[5]);
+            const unsigned char* rgba = p + 24;
+            for (int c = 0; c < 3; ++c) g.sh.push_back(float((rgba[c] / 255.0 - 0.5) / kShC0));
+            g.opacities.push_back(float(rgba[3] / 255.0));
+            const unsigned char* rb = p + 28;
+            glm::dvec4 q((rb[0] - 128) / 128.0, (rb[1] - 128) / 128.0, (rb[2] - 128) / 128.0, (rb[3] - 128) / 128.0);
+            const double len = glm::length(q);
+            if (!(len > 0.0)) return make_error(name + ": splat " + std::to_string(first + r) + ": zero-length rotation");
+            q /= len;
+            g.rotations.emplace_back(float(q[0]), float(q[1]), float(q[2]), float(q[3]));
+        }
+    }
+    return g;
+}
+
+Result<GaussianCloud> read_gaussians(const fs::path& path) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext == ".ply") return read_ply(path);
+    if (ext == ".splat") return read_splat(path);
+    if (ext == ".glb" || ext == ".gltf") return read_gltf(path);
+    if (ext == ".spz") return read_spz(path);
+    return make_error(path.string() + ": unknown Gaussian splat format '" + ext + "' (expected .ply, .splat, .spz, .glb or .gltf)");
+}
+
+Status validate(const GaussianCloud& g, const std::string& what) {
+    const std::size_t n = g.size();
+    if (g.sh_degree < 0 || g.sh_degree > 3) return make_error(what + ": SH degree " + std::to_string(g.sh_degree) + " outside 0..3");
+    if (g.scales.size() != n || g.rotations.size() != n || g.opacities.size() != n ||
+        g.sh.size() != n * std::size_t(sh_coeffs(g.sh_degree)) * 3)
+        return make_error(what + ": array sizes differ from the " + std::to_string(n) + " positions");
+    for (std::size_t i = 0; i < n; ++i) {
+        const auto fail = [&](const char* why) { return make_error(what + ": Gaussian " + std::to_string(i) + ": " + why); };
+        const glm::vec3 p = g.positions[i], s = g.scales[i];
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return fail("non-finite position");
+        if (!(s.x >= 0 && s.y >= 0 && s.z >= 0) || !std::isfinite(s.x + s.y + s.z)) return fail("scale negative or not finite");
+        if (!(g.opacities[i] >= 0.0f && g.opacities[i] <= 1.0f)) return fail("opacity outside [0, 1]");
+        const glm::quat q = g.rotations[i];
+        if (!(std::abs(glm::dot(q, q) - 1.0f) < 1e-3f)) return fail("rotation is not a unit quaternion");
+    }
+    for (float v : g.sh)
+        if (!std::isfinite(v)) return make_error(what + ": non-finite SH coefficient");
+    if (!g.sh_frames.empty())
+        return make_error(what + ": the cloud carries per-splat SH frames (view-direction mode): bake_sh_frames() before writing");
+    return {};
+}
+
+}  // namespace sffd::gaussian
+
+namespace sffd::gaussian {
+
+void store_to_chunk(const GaussianCloud& g, const PlyLayout& l, bool opacity, ply::Chunk& chunk) {
+    const int K = sh_coeffs(g.sh_degree);
+    auto col = [&](int i) -> std::vector<double>& { return chunk.columns[std::size_t(i)].values; };
+    for (std::size_t r = 0; r < chunk.rows && r < g.size(); ++r) {
+        const glm::dvec3 p = g.origin + glm::dvec3(g.positions[r]);
+        const int xyz[3] = {l.x, l.y, l.z};
+        for (int c = 0; c < 3; ++c) {
+            // Unchanged values keep the file's exact number (a double column stays bit-exact).
+            if (float(col(xyz[c])[r]) != float(p[c])) col(xyz[c])[r] = p[c];
+            if (float(std::exp(col(l.scale[c])[r])) != g.scales[r][c])
+                col(l.scale[c])[r] = std::log(std::max(double(g.scales[r][c]), 1e-30));
+            col(l.dc[c])[r] = g.sh[r * std::size_t(K) * 3 + std::size_t(c)];
+            for (int k = 1; k < K; ++k)
+                col(l.rest[std::size_t(c * (K - 1) + (k - 1))])[r] = g.sh[(r * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(c)];
+        }
+        const glm::quat q = g.rotations[r];
+        const double w = col(l.rot[0])[r], x = col(l.rot[1])[r], y = col(l.rot[2])[r], z = col(l.rot[3])[r];
+        const double len = std::sqrt(w * w + x * x + y * y + z * z);
+        if (glm::quat(float(w / len), float(x / len), float(y / len), float(z / len)) != q)
+            col(l.rot[0])[r] = q.w, col(l.rot[1])[r] = q.x, col(l.rot[2])[r] = q.y, col(l.rot[3])[r] = q.z;
+        if (opacity) col(l.opacity)[r] = logit(g.opacities[r]);
+    }
+}
+
+}  // namespace sffd::gaussian

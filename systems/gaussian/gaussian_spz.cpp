@@ -1,0 +1,142 @@
+#include "systems/gaussian/gaussian_spz.h"
+
+#include <zlib.h>
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+#include <vector>
+
+namespace sffd::gaussian {
+namespace fs = std::filesystem;
+
+namespace {
+
+constexpr std::uint32_t kMagic = 0x5053474e;  // "NGSP"
+constexpr double kColorScale = 0.15;
+
+struct Inflater {
+    z_stream z{};
+    bool ready = false;
+    ~Inflater() {
+        if (ready) inflateEnd(&z);
+    }
+};
+
+std::uint32_t u32(const unsigned char* p) { return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24; }
+
+}  // namespace
+
+Result<GaussianCloud> read_spz(const fs::path& path) {
+    const std::string name = path.string();
+    auto fail = [&](const std::string& why) { return make_error(name + ": " + why); };
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec)) return fail(fs::exists(path, ec) ? "not a regular file" : "no such file");
+    const std::uint64_t size = fs::file_size(path, ec);
+    if (ec) return fail("cannot stat: " + ec.message());
+    std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), std::fclose);
+    if (!f) return fail(std::string("cannot open: ") + std::strerror(errno));
+    std::vector<unsigned char> file(static_cast<std::size_t>(size));
+    if (size > 0 && std::fread(file.data(), 1, file.size(), f.get()) != file.size()) return fail("read error");
+    if (file.size() >= 8 && u32(file.data()) == kMagic)
+        return fail("SPZ version " + std::to_string(u32(file.data() + 4)) +
+                    " (uncompressed container, zstd streams) is not supported: re-encode as version 3 "
+                    "(splat-transform in.spz --spz-version 3 out.spz)");
+    if (file.size() < 2 || file[0] != 0x1f || file[1] != 0x8b) return fail("not an SPZ file (no gzip stream)");
+
+    Inflater inf;
+    if (inflateInit2(&inf.z, 16 + MAX_WBITS) != Z_OK) return fail("zlib initialisation failed");
+    inf.ready = true;
+    inf.z.next_in = file.data();
+    inf.z.avail_in = uInt(std::min<std::size_t>(file.size(), 0xffffffffu));
+    // Inflates exactly `n` bytes into `dst`; false when the stream ends or is corrupt first.
+    auto take = [&](unsigned char* dst, std::size_t n, std::string& why) {
+        while (n > 0) {
+            const uInt chunk = uInt(std::min<std::size_t>(n, 1u << 30));
+            inf.z.next_out = dst;
+            inf.z.avail_out = chunk;
+            const int rc = inflate(&inf.z, Z_NO_FLUSH);
+            const std::size_t got = chunk - inf.z.avail_out;
+            dst += got, n -= got;
+            if (n == 0) return true;
+            if (rc == Z_STREAM_END || (rc == Z_BUF_ERROR && inf.z.avail_in == 0)) {
+                why = "truncated data";
+                return false;
+            }
+            if (rc != Z_OK) {
+                why = std::string("corrupt gzip stream (") + (inf.z.msg ? inf.z.msg : "zlib error") + ")";
+                return false;
+            }
+        }
+        return true;
+    };
+    unsigned char h[16];
+    std::string why;
+    if (!take(h, sizeof h, why)) return fail(why == "truncated data" ? "truncated header" : why);
+    if (u32(h) != kMagic) return fail("not an SPZ file (bad magic)");
+    const std::uint32_t version = u32(h + 4), n = u32(h + 8);
+    const int degree = h[12], frac = h[13];
+    if (version < 2 || version > 3) return fail("unsupported SPZ version " + std::to_string(version) + " (2 and 3 are read)");
+    if (degree > 3) return fail("unsupported SH degree " + std::to_string(degree) + " (0..3)");
+    if (frac > 30) return fail("fractional bits " + std::to_string(frac) + " out of range");
+    const std::size_t rest = std::size_t(3 * (sh_coeffs(degree) - 1));
+    const std::size_t per = 9 + 1 + 3 + 3 + (version == 2 ? 3 : 4) + rest;
+    // Deflate expands at most ~1032:1: refuse counts the compressed file cannot hold before allocating.
+    if (double(n) * double(per) > double(file.size()) * 1032.0 + 1024.0)
+        return fail("declares " + std::to_string(n) + " splats, more than its " + std::to_string(file.size()) +
+                    " compressed bytes can hold");
+    std::vector<unsigned char> data(std::size_t(n) * per);
+    if (!take(data.data(), data.size(), why)) return fail(why);
+
+    GaussianCloud g;
+    g.sh_degree = degree;
+    const int K = sh_coeffs(degree);
+    g.positions.resize(n), g.scales.resize(n), g.rotations.resize(n), g.opacities.resize(n);
+    g.sh.assign(std::size_t(n) * std::size_t(K) * 3, 0.0f);
+    const unsigned char* pos = data.data();
+    const unsigned char* alpha = pos + std::size_t(n) * 9;
+    const unsigned char* color = alpha + n;
+    const unsigned char* scale = color + std::size_t(n) * 3;
+    const unsigned char* rot = scale + std::size_t(n) * 3;
+    const unsigned char* sh = rot + std::size_t(n) * (version == 2 ? 3 : 4);
+    const double unit = 1.0 / double(1u << frac);
+    for (std::size_t i = 0; i < n; ++i) {
+        for (int c = 0; c < 3; ++c) {
+            const unsigned char* p = pos + i * 9 + std::size_t(c) * 3;
+            std::int32_t v = std::int32_t(std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16);
+            if (v & 0x800000) v -= 0x1000000;  // sign-extend 24 bits
+            g.positions[i][c] = float(v * unit);
+            g.scales[i][c] = float(std::exp(scale[i * 3 + std::size_t(c)] / 16.0 - 10.0));
+            g.sh[i * std::size_t(K) * 3 + std::size_t(c)] = float((color[i * 3 + std::size_t(c)] / 255.0 - 0.5) / kColorScale);
+        }
+        g.opacities[i] = float(alpha[i] / 255.0);
+        double q[4] = {0, 0, 0, 0};  // x y z w
+        if (version == 2) {
+            for (int c = 0; c < 3; ++c) q[c] = rot[i * 3 + std::size_t(c)] / 127.5 - 1.0;
+            q[3] = std::sqrt(std::max(0.0, 1.0 - (q[0] * q[0] + q[1] * q[1] + q[2] * q[2])));
+        } else {
+            std::uint32_t packed = u32(rot + i * 4);
+            const unsigned largest = packed >> 30;
+            double sum = 0.0;
+            for (int j = 3; j >= 0; --j) {
+                if (unsigned(j) == largest) continue;
+                const double mag = double(packed & 511u) / 511.0 * std::sqrt(0.5);
+                const bool negative = (packed >> 9) & 1u;
+                packed >>= 10;
+                q[j] = negative ? -mag : mag;
+                sum += mag * mag;
+            }
+            q[largest] = std::sqrt(std::max(0.0, 1.0 - sum));
+        }
+        const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        g.rotations[i] = len > 0.0 ? glm::quat(float(q[3] / len), float(q[0] / len), float(q[1] / len), float(q[2] / len))
+                                   : glm::quat(1, 0, 0, 0);
+        for (std::size_t k = 0; k < rest; ++k)  // (k/3 + 1) coefficient, k%3 channel: our layout shifted by one triple
+            g.sh[i * std::size_t(K) * 3 + 3 + k] = float((sh[i * rest + k] - 128) / 128.0);
+    }
+    return g;
+}
+
+}  // namespace sffd::gaussian

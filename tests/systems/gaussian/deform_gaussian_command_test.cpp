@@ -1,0 +1,156 @@
+// `splatffd deform` on 3DGS PLY files: same result as the library, --bench JSON, refusals.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <random>
+#include <sstream>
+
+#include "systems/ffd/lattice.h"
+#include "systems/ffd/lattice_io.h"
+#include "runtime/assets/builtin_scenes.h"
+#include "systems/ffd/operations.h"
+#include "systems/gaussian/from_splats.h"
+#include "systems/gaussian/gaussian_gltf.h"
+#include "systems/gaussian/gaussian_deform.h"
+#include "systems/gaussian/gaussian_io.h"
+#include "systems/splat_render/image_io.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace sffd;
+
+const std::string kTool = SFFD_BINARY_DIR "/tools/splatffd";
+
+struct RunResult {
+    int code = -1;
+    std::string out, err;
+};
+
+fs::path temp(const std::string& name) {
+    const fs::path d = fs::temp_directory_path() / ("sffd_gauss_cmd_" + std::to_string(getpid()));
+    fs::create_directories(d);
+    return d / name;
+}
+
+RunResult run(const std::string& args, const std::string& command = "deform") {
+    const std::string o = temp("stdout.txt").string(), e = temp("stderr.txt").string();
+    const int status = std::system((kTool + " " + command + " " + args + " >" + o + " 2>" + e).c_str());
+    RunResult r;
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    std::stringstream so, se;
+    so << std::ifstream(o).rdbuf();
+    se << std::ifstream(e).rdbuf();
+    r.out = so.str(), r.err = se.str();
+    return r;
+}
+
+GaussianCloud cloud(std::size_t n) {
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(-1, 1);
+    GaussianCloud g;
+    g.sh_degree = 3;
+    for (std::size_t i = 0; i < n; ++i) {
+        g.positions.emplace_back(u(rng), u(rng), u(rng));
+        g.scales.emplace_back(0.02f + 0.01f * u(rng), 0.03f, 0.005f);
+        g.rotations.push_back(glm::normalize(glm::quat(1.0f + u(rng), u(rng), u(rng), u(rng))));
+        g.opacities.push_back(0.6f);
+        for (int k = 0; k < 48; ++k) g.sh.push_back(0.3f * u(rng));
+    }
+    return g;
+}
+
+TEST(GaussianDeformCommand, MatchesTheLibraryAndPrintsBenchJson) {
+    const GaussianCloud g = cloud(70000);  // more than one 65,536-row chunk
+    const fs::path in = temp("in.ply"), out = temp("out.ply"), lat = temp("lat.json");
+    ASSERT_TRUE(gaussian::write_ply(in, g));
+    Lattice l = ffd::make_lattice({-1.2, -1.2, -1.2}, {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)}, {4, 4, 4});
+    ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.5, glm::dvec3(0.0));
+    ASSERT_TRUE(ffd::save_lattice(lat, l));
+    const RunResult r = run(in.string() + " " + out.string() + " --lattice " + lat.string() + " --bench 2");
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.out.find("{\"gaussians\":70000,\"sh_degree\":3,\"backend\":\"cpu\",\"median_ms\":"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\"gaussians_per_s\":"), std::string::npos);
+    auto got = gaussian::read_ply(out);
+    ASSERT_TRUE(got) << got.message();
+    auto src = gaussian::read_ply(in);
+    ASSERT_TRUE(src);
+    GaussianCloud expect;
+    ASSERT_TRUE(gaussian::deform(l, *src, expect));
+    ASSERT_EQ(got->size(), expect.size());
+    for (std::size_t i = 0; i < got->size(); ++i) {
+        EXPECT_EQ(got->positions[i], expect.positions[i]);
+        EXPECT_LT(glm::length(got->scales[i] - expect.scales[i]), 1e-6f * glm::length(expect.scales[i]));
+        EXPECT_LT(std::abs(std::abs(glm::dot(got->rotations[i], expect.rotations[i])) - 1.0f), 1e-6f);
+        EXPECT_EQ(got->opacities[i], src->opacities[i]);
+    }
+    EXPECT_EQ(got->sh, expect.sh);
+}
+
+TEST(GaussianDeformCommand, RefusesGpuBackendAndBadFiles) {
+    const fs::path in = temp("small.ply"), out = temp("o.ply"), lat = temp("l.json");
+    ASSERT_TRUE(gaussian::write_ply(in, cloud(10)));
+    ASSERT_TRUE(ffd::save_lattice(lat, ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {2, 2, 2})));
+    RunResult r = run(in.string() + " " + out.string() + " --lattice " + lat.string() + " --backend gpu");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find(in.string() + ": 3D Gaussian files deform on the CPU only"), std::string::npos) << r.err;
+    const fs::path bad = temp("bad.ply");
+    std::ofstream(bad) << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                          "property float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\nproperty float opacity\n"
+                          "property float scale_0\nproperty float scale_1\nproperty float scale_2\nproperty float rot_0\n"
+                          "property float rot_1\nproperty float rot_2\nproperty float rot_3\nend_header\n"
+                          "0 0 0 0 0 0 0 0 0 nan 1 0 0 0\n";
+    r = run(bad.string() + " " + out.string() + " --lattice " + lat.string());
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find(bad.string() + ": vertex 0: non-finite 'scale_2'"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(out));  // nothing half-written
+}
+
+TEST(GaussianConvertCommand, BuiltinSphereToGaussiansAndBetweenFormats) {
+    const fs::path ply = temp("sphere.ply"), glb = temp("sphere.glb");
+    RunResult r = run("sphere " + ply.string() + " --gaussians --splats 1000", "convert");
+    ASSERT_EQ(r.code, 0) << r.err;
+    auto g = gaussian::read_ply(ply);
+    ASSERT_TRUE(g) << g.message();
+    const GaussianCloud expect = gaussian::gaussians_from_splats(assets::make_sphere_cloud(1000));
+    ASSERT_EQ(g->size(), 1000u);
+    for (std::size_t i = 0; i < g->size(); ++i) EXPECT_EQ(g->positions[i], expect.positions[i]);
+    EXPECT_EQ(g->sh, expect.sh);
+    r = run(ply.string() + " " + glb.string() + " --gaussians", "convert");  // Gaussian file in, KHR glb out
+    ASSERT_EQ(r.code, 0) << r.err;
+    auto back = gaussian::read_gltf(glb);
+    ASSERT_TRUE(back) << back.message();
+    EXPECT_EQ(back->positions, g->positions);
+    EXPECT_EQ(back->sh, g->sh);
+    r = run("sphere " + temp("x.obj").string() + " --gaussians", "convert");
+    EXPECT_EQ(r.code, 1);
+    EXPECT_NE(r.err.find("Gaussians are written as .ply (3DGS) or .glb"), std::string::npos) << r.err;
+}
+
+TEST(GaussianRenderCommand, RendersAGaussianFileToPng) {
+    const fs::path ply = temp("r_sphere.ply"), dir = temp("render_out");
+    ASSERT_EQ(run("sphere " + ply.string() + " --gaussians --splats 20000", "convert").code, 0);
+    RunResult r = run(ply.string() + " --out " + dir.string() + " --size 160x120 --background 1,1,1", "render");
+    if (r.code == 1 && r.err.find("EGL") != std::string::npos) GTEST_SKIP() << "no EGL: " << r.err;
+    ASSERT_EQ(r.code, 0) << r.err;
+    auto png = render::read_png(dir / "frame_0000.png");
+    ASSERT_TRUE(png) << png.message();
+    ASSERT_EQ(png->width, 160);
+    // The sphere fills the middle (not white: its colours are dark or saturated), the corners are the
+    // white background.
+    const std::uint8_t* mid = png->at(80, 60);
+    EXPECT_LT(int(mid[0]) + int(mid[1]) + int(mid[2]), 600);
+    const std::uint8_t* corner = png->at(2, 2);
+    EXPECT_EQ(corner[0], 255);
+    EXPECT_EQ(corner[1], 255);
+    EXPECT_EQ(corner[2], 255);
+    EXPECT_EQ(corner[3], 255);
+    r = run(temp("absent.splat").string() + " --out " + dir.string(), "render");
+    EXPECT_NE(r.code, 0);
+}
+
+}  // namespace

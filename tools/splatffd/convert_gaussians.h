@@ -1,0 +1,19 @@
+// `splatffd convert IN OUT --gaussians` (issue 17): writes 3D Gaussians (3DGS PLY, or glTF
+// KHR_gaussian_splatting .glb). IN is either a Gaussian file (.splat, 3DGS PLY, KHR .glb/.gltf) or any
+// surface-splat input, converted by gaussian::gaussians_from_splats (flat Gaussians, σ = 0.7 × radius).
+#pragma once
+
+#include <string>
+
+namespace sffd {
+struct SplatCloud;
+}
+
+namespace sffd::cli {
+
+// True when `in` is a file whose contents are already Gaussians (convert then skips the surface path).
+bool is_gaussian_file(const std::string& in);
+// Writes `out` from the Gaussian file `in` (when `surface` is null) or from `surface`. Returns the exit code.
+int write_gaussians(const std::string& in, const SplatCloud* surface, const std::string& out, bool ascii);
+
+}  // namespace sffd::cli
