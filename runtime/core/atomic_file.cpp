@@ -1,6 +1,7 @@
 #include "runtime/core/atomic_file.h"
 
 #include <fcntl.h>
+#include <pthread.h>
 #include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -246,10 +247,19 @@ Result<AtomicFile> AtomicFile::create(const fs::path& path) {
     base += std::to_string(::getpid());
     base += "-XXXXXX";
     std::string templ = (folder / base).string();
+    // SIGINT/SIGTERM are held while the temporary is created and registered, so a signal never finds a
+    // temporary it does not know about (it is delivered, and the temporary removed, right after).
+    sigset_t hold, previous;
+    sigemptyset(&hold);
+    sigaddset(&hold, SIGINT);
+    sigaddset(&hold, SIGTERM);
+    pthread_sigmask(SIG_BLOCK, &hold, &previous);
     const int fd = ::mkostemp(templ.data(), O_CLOEXEC);
-    if (fd < 0) return impl->fail(std::string("cannot write: ") + std::strerror(errno));
+    const int mkstemp_errno = errno;
+    if (fd >= 0) impl->slot = register_temporary(templ);
+    pthread_sigmask(SIG_SETMASK, &previous, nullptr);
+    if (fd < 0) return impl->fail(std::string("cannot write: ") + std::strerror(mkstemp_errno));
     impl->tmp = templ;
-    impl->slot = register_temporary(templ);
     if (::fchmod(fd, mode) != 0) {
         ::close(fd);
         return impl->fail(std::string("cannot set permissions: ") + std::strerror(errno));

@@ -34,7 +34,9 @@ struct RunResult {
 
 RunResult run(const std::string& args) {
     const fs::path dir = fs::temp_directory_path();
-    const std::string o = (dir / "ffd_cmd_stdout.txt").string(), e = (dir / "ffd_cmd_stderr.txt").string();
+    // Per-process names: test binaries of several build trees may run at once on one machine.
+    const std::string id = std::to_string(::getpid());
+    const std::string o = (dir / ("ffd_cmd_stdout_" + id + ".txt")).string(), e = (dir / ("ffd_cmd_stderr_" + id + ".txt")).string();
     const int status = std::system((kTool + " deform " + args + " >" + o + " 2>" + e).c_str());
     RunResult r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
