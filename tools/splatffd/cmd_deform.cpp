@@ -467,6 +467,10 @@ int deform_in_memory(const Options& o) {
 int run_deform(sffd::cli::Args args) {
     Options o;
     if (int code = parse_options(args, o); code >= 0) return code;
+    if (o.lattice_source.empty() && !cli::is_scene_path(o.files[0])) {
+        std::fprintf(stderr, "splatffd deform: --lattice is needed unless IN is a scene file holding a lattice\n");
+        return usage();
+    }
     const bool ply_in = lower_ext(o.files[0]) == ".ply", ply_out = lower_ext(o.files[1]) == ".ply";
     if (cli::is_json_path(o.files[1])) return fail(o.files[1] + ": deform writes a point cloud (.ply .glb .gltf); to export a lattice: splatffd convert SCENE.glb L.json");
     return ply_in && ply_out ? deform_ply_stream(o) : deform_in_memory(o);
