@@ -19,6 +19,7 @@
 #include "systems/animation/editing.h"
 #endif
 #if SFFD_EDITOR_HAS_FFD_OPS
+#include "systems/editor/lattice_manage.h"
 #include "systems/ffd/operations.h"
 #endif
 
@@ -329,6 +330,9 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
         if (k == "escape") cancel_drag(registry, state);
         return;  // no other shortcuts mid-gesture
     }
+#if SFFD_EDITOR_HAS_FFD_OPS
+    if (handle_lattice_key(registry, state, e)) return;  // add/remove/refit/order/export/import (lattice_manage.h)
+#endif
     if (ctrl) {
         if (k == "z" && shift) redo(registry, state);
         else if (k == "z") undo(registry, state);

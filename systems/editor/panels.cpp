@@ -13,6 +13,7 @@
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
 #include "systems/editor/editor_system.h"
+#include "systems/editor/lattice_manage.h"
 #include "systems/editor/selection_edit.h"
 #include "systems/ffd/components.h"
 #include "systems/picking/components.h"
@@ -502,6 +503,7 @@ void draw_panels(ecs::Registry& registry, const FrameContext&) {
     inspector(registry, *state);
     tools_panel(registry, *state);
     lattice_panel(registry, *state);
+    lattices_panel(registry, *state);  // lattice_manage.h
     timeline_panel(registry, *state);
     profiler_panel(registry, *state);
     status_bar(registry, *state);
