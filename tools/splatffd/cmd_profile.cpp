@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <cstdlib>
 #include <fstream>
 #include <map>
@@ -917,6 +918,31 @@ int run_paper(const Options& o) {
 
 // ---------------------------------------------------------------------------------------------- main
 
+// Every input and output path checked before measuring (`--compare nosuch.json` used to fail only after
+// the whole run): the baseline must read and parse as a report, each output's folder must exist.
+int check_paths_before_work(const Options& o) {
+    if (!o.compare.empty()) {
+        const auto text = read_text(o.compare);
+        if (!text) {
+            std::fprintf(stderr, "%s: cannot read the baseline report\n", o.compare.c_str());
+            return 1;
+        }
+        if (auto base = report_from_json(*text, o.compare); !base) {
+            std::fprintf(stderr, "%s\n", base.message().c_str());
+            return 1;
+        }
+    }
+    for (const std::string* out : {&o.json, &o.csv, &o.trace}) {
+        if (out->empty()) continue;
+        const std::filesystem::path folder = std::filesystem::path(*out).parent_path();
+        if (!folder.empty() && !std::filesystem::is_directory(folder)) {
+            std::fprintf(stderr, "%s: folder %s does not exist\n", out->c_str(), folder.string().c_str());
+            return 1;
+        }
+    }
+    return 0;
+}
+
 int run_profile_command(cli::Args args) {
     Options o;
     bool scene_given = false;
@@ -969,6 +995,7 @@ int run_profile_command(cli::Args args) {
             return usage_error("more than one scene given ('" + o.scene + "', '" + a + "')");
         }
     }
+    if (int rc = check_paths_before_work(o); rc != 0) return rc;
     if (!o.plot_sweep.empty()) {
         if (o.svg.empty()) return usage_error("--plot-sweep needs --svg PREFIX");
         return plot_sweep(o.plot_sweep, o.svg);

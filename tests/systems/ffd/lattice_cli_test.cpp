@@ -316,6 +316,14 @@ TEST_F(LatticeCli, OptionErrorsNameTheOption) {
     r = run("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit:99");
     EXPECT_EQ(r.code, 1);
     EXPECT_TRUE(has(r.out, "fit:99: divisions must be integers in 1..64")) << r.out;
+    // profile checks its paths before measuring: one line, the file named, nothing measured.
+    r = run("profile sphere --compare " + p("nosuch.json"));
+    EXPECT_EQ(r.code, 1);
+    EXPECT_EQ(r.out, p("nosuch.json") + ": cannot read the baseline report\n");
+    r = run("profile sphere --json " + p("no/such/folder/p.json"));
+    EXPECT_EQ(r.code, 1);
+    EXPECT_TRUE(has(r.out, "does not exist")) << r.out;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;
     // Built-in scene names are accepted by convert like by the other commands.
     r = run("convert sphere " + p("s.ply") + " --splats 500");
     EXPECT_EQ(r.code, 0) << r.out;
