@@ -166,10 +166,11 @@ Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::
     aligned.shape = FitShape::box;
     auto box = fit_in_frame(positions, origin, aligned, world);
     if (options.shape == FitShape::box || positions.size() < 2 || !box) return box;
-    // Near-isotropic clouds (a sphere) have no meaningful principal axes: keep whichever box is smaller.
+    // Near-isotropic clouds (a sphere) have no meaningful principal axes: the oriented box is kept only
+    // when it is at least 5% smaller than the axis-aligned one.
     auto oriented = fit_in_frame(positions, origin, options, principal_frame(positions));
     if (!oriented) return oriented;
-    return box_volume(*oriented) < box_volume(*box) * (1.0 - 1e-9) ? oriented : box;
+    return box_volume(*oriented) < 0.95 * box_volume(*box) ? oriented : box;
 }
 
 bool is_fit_spec(std::string_view text) { return text == "fit" || text.rfind("fit:", 0) == 0; }

@@ -119,6 +119,13 @@ TEST(FfdOperations, OrientedFitFindsTheRotatedBox) {
     ASSERT_TRUE(ob.ok() && bb.ok());
     for (int a = 0; a < 3; ++a) EXPECT_LT(glm::length(ob->axes[std::size_t(a)] - bb->axes[std::size_t(a)]), 1e-9);
     EXPECT_LT(glm::length(ob->origin - bb->origin), 1e-9);
+    // A sphere has no principal axes: the oriented fit keeps the axis-aligned box (not 5% smaller).
+    const test::Cloud sphere = test::fibonacci_sphere(2000, 1.0);
+    auto os = fit_lattice(sphere.p, {}, FitOptions{{2, 2, 2}, LatticeBasis::bernstein, 0.05, FitShape::oriented});
+    auto bs = fit_lattice(sphere.p, {}, FitOptions{{2, 2, 2}, LatticeBasis::bernstein, 0.05, FitShape::box});
+    ASSERT_TRUE(os.ok() && bs.ok());
+    EXPECT_EQ(os->axes, bs->axes);
+    EXPECT_EQ(os->origin, bs->origin);
 }
 
 TEST(FfdOperations, FitSpecParsesAndRoundTrips) {
