@@ -164,13 +164,19 @@ Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::
     const std::array<glm::dvec3, 3> world{glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)};
     FitOptions aligned = options;
     aligned.shape = FitShape::box;
-    auto box = fit_in_frame(positions, origin, aligned, world);
-    if (options.shape == FitShape::box || positions.size() < 2 || !box) return box;
+    if (options.shape == FitShape::box || positions.size() < 2) return fit_in_frame(positions, origin, aligned, world);
     // Near-isotropic clouds (a sphere) have no meaningful principal axes: the oriented box is kept only
-    // when it is at least 5% smaller than the axis-aligned one.
-    auto oriented = fit_in_frame(positions, origin, options, principal_frame(positions));
-    if (!oriented) return oriented;
-    return box_volume(*oriented) < 0.95 * box_volume(*box) ? oriented : box;
+    // when its tight box (no padding) is at least 5% smaller than the axis-aligned one.
+    const std::array<glm::dvec3, 3> frame = principal_frame(positions);
+    FitOptions tight = options;
+    tight.padding = 0.0;
+    aligned.padding = 0.0;
+    auto tight_oriented = fit_in_frame(positions, origin, tight, frame);
+    auto tight_box = fit_in_frame(positions, origin, aligned, world);
+    if (!tight_oriented || !tight_box) return tight_box ? tight_oriented : tight_box;
+    if (box_volume(*tight_oriented) < 0.95 * box_volume(*tight_box)) return fit_in_frame(positions, origin, options, frame);
+    aligned.padding = options.padding;
+    return fit_in_frame(positions, origin, aligned, world);
 }
 
 bool is_fit_spec(std::string_view text) { return text == "fit" || text.rfind("fit:", 0) == 0; }
