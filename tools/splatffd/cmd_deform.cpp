@@ -7,8 +7,9 @@
 //
 // PLY in, PLY out: streams the file through the lattices in chunks (peak memory stays far below 256 MB
 // whatever the file size): every element is copied in order, `vertex` rows get deformed x y z, nx ny nz
-// and the splat axes axis_u* axis_v* (J·axis) when present; a file with normals and a `radius` property
-// but no axes gets circular axes created from them (then deformed), appended as float properties. All
+// and the splat axes axis_u* axis_v* (J·axis) when present; a file with normals but no axes gets circular
+// axes created (then deformed), appended as float properties: from its `radius` property, or from radii
+// estimated from neighbour spacing as import does (this case holds every position in memory). All
 // other properties are copied with their types. Points outside the lattice are unchanged, points on its
 // faces are inside. The output is binary little-endian (or ASCII with --ascii) and atomic.
 // Any other input or output (.glb/.gltf/.obj/.off): the cloud is loaded whole (import estimates normals
@@ -51,7 +52,8 @@ constexpr const char* kUsage =
     "  SOURCE   L.json | scene.glb (the lattices bound to its cloud) | fit[:L,M,N][,pad=P][,obb][,bspline]\n"
     "           (default: the lattices stored in IN when IN is a scene file)\n"
     "  --lattice-name NAME  the lattice of that name in a scene file\n"
-    "  splat axes (axis_u*, axis_v*) are deformed; from normals + radius they are created first\n";
+    "  splat axes (axis_u*, axis_v*) are deformed; from normals (+ radius, or radii estimated from\n"
+    "  neighbour spacing) they are created first\n";
 
 int usage(bool asked = false) {
     std::fputs(kUsage, asked ? stdout : stderr);
@@ -107,9 +109,10 @@ void set3(ply::Chunk& c, const int* cols, std::size_t r, const glm::dvec3& w) {
     for (int a = 0; a < 3; ++a) c.columns[std::size_t(cols[a])].values[r] = w[a];
 }
 
-// Circular axes from the chunk's normals and radius column, in the columns add_axis_properties() made
-// (same convention as import: assets::make_circular_axes).
-void create_axes(ply::Chunk& c, const VertexColumns& cols) {
+// Circular axes from the chunk's normals and its radius column (or `estimated` radii, one per vertex of
+// the file, this chunk's from row `first`), in the columns add_axis_properties() made (same convention
+// as import: assets::make_circular_axes).
+void create_axes(ply::Chunk& c, const VertexColumns& cols, const std::vector<float>& estimated, std::size_t first) {
     for (const int a : {cols.u[0], cols.u[1], cols.u[2], cols.v[0], cols.v[1], cols.v[2]}) c.columns[std::size_t(a)].values.resize(c.rows);
     std::vector<glm::vec3> n(c.rows), u, v;
     std::vector<float> radius(c.rows);
@@ -117,7 +120,7 @@ void create_axes(ply::Chunk& c, const VertexColumns& cols) {
         const glm::dvec3 nn = get3(c, cols.n, r);
         const double len = glm::length(nn);
         n[r] = len > 0.0 ? glm::vec3(nn / len) : glm::vec3(0, 0, 1);
-        radius[r] = float(c.columns[std::size_t(cols.radius)].values[r]);
+        radius[r] = cols.radius >= 0 ? float(c.columns[std::size_t(cols.radius)].values[r]) : estimated[first + r];
     }
     assets::make_circular_axes(n, radius, u, v);
     for (std::size_t r = 0; r < c.rows; ++r) set3(c, cols.u, r, glm::dvec3(u[r])), set3(c, cols.v, r, glm::dvec3(v[r]));
@@ -326,6 +329,17 @@ int deform_ply_stream(const Options& o) {
     }
     auto chain = lattice_chain(o, fit_points, fit_origin, nullptr);
     if (!chain) return fail(chain.message());
+    // Normals but neither axes nor a radius: radii from neighbour spacing, exactly as import estimates
+    // them (6th nearest neighbour, clamped to 4x the median). Needs every position in memory (~60 bytes
+    // per point: positions and a 6-neighbour table), unlike the rest of the stream.
+    std::vector<float> estimated_radii;
+    const bool estimate = !cols.axes() && cols.normals() && cols.radius < 0;
+    if (estimate) {
+        glm::dvec3 o_unused(0.0);
+        auto pts = fit_points.empty() ? read_ply_positions(in_path, o_unused) : Result<std::vector<glm::vec3>>(std::move(fit_points));
+        if (!pts) return fail(pts.message());
+        if (pts->size() >= 2) estimated_radii = assets::estimate_radii(assets::find_neighbours(*pts, 6), 6, 1.0f);
+    }
 
     std::optional<ffd::GpuDeformer> gpu;
     if (o.backend == "gpu") {
@@ -336,7 +350,7 @@ int deform_ply_stream(const Options& o) {
 
     ply::Header out_header = in_header;
     out_header.format = o.ascii ? ply::Format::ascii : ply::Format::binary_little_endian;
-    const bool create = !cols.axes() && cols.normals() && cols.radius >= 0;
+    const bool create = !cols.axes() && cols.normals() && (cols.radius >= 0 || !estimated_radii.empty());
     if (create) add_axis_properties(out_header.elements[std::size_t(vi)], cols);
     auto writer = ply::Writer::create(o.files[1], out_header);
     if (!writer) return fail(writer.message());
@@ -358,7 +372,7 @@ int deform_ply_stream(const Options& o) {
                 if (create) {
                     chunk.element = out_header.elements[std::size_t(vi)];
                     chunk.columns.resize(chunk.element.properties.size());
-                    create_axes(chunk, cols);
+                    create_axes(chunk, cols, estimated_radii, points);
                 }
                 for (int r = 0; r < o.bench; ++r) {  // timing runs first (on a copy of the input)
                     auto ms = deformer.run(chunk, cols, false);
@@ -377,9 +391,9 @@ int deform_ply_stream(const Options& o) {
     const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
     std::string what = o.files[1] + ": positions";
     what += cols.normals() ? ", normals" : " (no normals in the input)";
-    if (cols.axes()) what += create ? ", splat axes (created from normals and radius)" : ", splat axes";
-    else what += cols.normals() ? "; no splat axes (the input has no axis_u*/axis_v* or radius properties: `splatffd convert IN OUT` estimates them)"
-                                : "; no splat axes (the input has no axes or normals)";
+    if (cols.axes()) what += !create ? ", splat axes" : estimate ? ", splat axes (created from normals and radii estimated from neighbour spacing)"
+                                                                 : ", splat axes (created from normals and radius)";
+    else what += "; no splat axes (the input has no normals: `splatffd convert IN OUT` estimates them)";
     what += " deformed by " + std::to_string(chain->lattices.size()) + " lattice" + (chain->lattices.size() == 1 ? " " : "s ") + joined(chain->names);
     print_summary(what.c_str(), points, o.backend, first_ms, total_s, deformer.inverted);
     if (o.bench > 0) {

@@ -1,5 +1,6 @@
 // `splatffd deform`'s output rendered: a 2x stretch along x of the paper's sphere (59,650 splats) through
-// the command, from a PLY with splat axes, a PLY with only normals and a radius, and a GLB scene, must
+// the command, from a PLY with splat axes, a PLY with only normals and a radius, a PLY with only normals
+// (radii estimated from neighbour spacing), and a GLB scene, must
 // render closed (no pixel inside the stretched ellipsoid uncovered, no far-side pixel showing through),
 // as the engine's own deformation path does (tests/systems/splat_render/coverage_test.cpp). Before the
 // command deformed the axes, the stretched splats kept their rest radius and the render had holes.
@@ -31,13 +32,15 @@ int run(const std::string& args) {
     return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
-// x y z nx ny nz radius (no axes): the command must create the axes.
-void save_radius_ply(const SplatCloud& c, const fs::path& path) {
+// x y z nx ny nz radius (no axes): the command must create the axes; without the radius (with_radius
+// false) it estimates the radii from neighbour spacing first.
+void save_radius_ply(const SplatCloud& c, const fs::path& path, bool with_radius = true) {
     ply::Header h;
     ply::Element e;
     e.name = "vertex";
     e.count = c.size();
-    for (const char* n : {"x", "y", "z", "nx", "ny", "nz", "radius"}) e.properties.push_back({n, ply::Type::float32});
+    for (const char* n : {"x", "y", "z", "nx", "ny", "nz", "radius"})
+        if (with_radius || std::string(n) != "radius") e.properties.push_back({n, ply::Type::float32});
     h.elements.push_back(e);
     auto w = ply::Writer::create(path, h);
     ASSERT_TRUE(w.ok());
@@ -47,7 +50,7 @@ void save_radius_ply(const SplatCloud& c, const fs::path& path) {
     for (std::size_t i = 0; i < c.size(); ++i) {
         for (int a = 0; a < 3; ++a) ch.columns[std::size_t(a)].values.push_back(c.positions[i][a]);
         for (int a = 0; a < 3; ++a) ch.columns[std::size_t(3 + a)].values.push_back(c.normals[i][a]);
-        ch.columns[6].values.push_back(double(glm::length(c.axis_u[i])));
+        if (with_radius) ch.columns[6].values.push_back(double(glm::length(c.axis_u[i])));
     }
     ASSERT_TRUE(w->write_rows(ch).ok());
     ASSERT_TRUE(w->finish().ok());
@@ -90,6 +93,7 @@ TEST_F(DeformOutputRender, TwiceStretchedSphereFromTheCommandHasNoHoles) {
     const SplatCloud rest = fibonacci_sphere(59650);
     ASSERT_TRUE(assets::save_splat_ply(rest, dir / "axes.ply").ok());
     save_radius_ply(rest, dir / "radius.ply");
+    save_radius_ply(rest, dir / "normals.ply", false);
     ASSERT_TRUE(assets::save_splat_cloud(rest, dir / "sphere.glb").ok());
     // x' = 2x inside [-1.2, 1.2]^3 (Bernstein reproduces the linear map exactly).
     Lattice lattice = ffd::make_lattice(glm::dvec3(-1.2), {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)},
@@ -99,7 +103,7 @@ TEST_F(DeformOutputRender, TwiceStretchedSphereFromTheCommandHasNoHoles) {
 
     const Camera cam = add_camera(6.0);
     add_light({-1.0f, -0.3f, -0.5f});
-    for (const std::string in : {"axes.ply", "radius.ply", "sphere.glb"}) {
+    for (const std::string in : {"axes.ply", "radius.ply", "normals.ply", "sphere.glb"}) {
         const fs::path out = dir / ("out_" + fs::path(in).stem().string() + (in == "sphere.glb" ? ".glb" : ".ply"));
         ASSERT_EQ(run("deform " + (dir / in).string() + " " + out.string() + " --lattice " + (dir / "stretch.json").string()), 0) << in;
         auto cloud = assets::import_splat_cloud(out);

@@ -291,9 +291,59 @@ TEST_F(LatticeCli, DeformWritesDeformedSplatAxes) {
             EXPECT_GT(mean_after, 1.4 * mean_before) << in;
         }
     }
+    // Normals but no radius: radii estimated from neighbour spacing exactly as import does (identity fit,
+    // so the written axes are the created ones: lengths = assets::estimate_radii).
+    {
+        ply::Header h;
+        ply::Element e;
+        e.name = "vertex";
+        e.count = cloud.size();
+        for (const char* n : {"x", "y", "z", "nx", "ny", "nz"}) e.properties.push_back({n, ply::Type::float32});
+        h.elements.push_back(e);
+        auto w = ply::Writer::create(p("normals.ply"), h);
+        ASSERT_TRUE(w.ok());
+        ply::Chunk c;
+        c.reset(e);
+        c.rows = cloud.size();
+        for (std::size_t i = 0; i < cloud.size(); ++i) {
+            for (int a = 0; a < 3; ++a) c.columns[std::size_t(a)].values.push_back(cloud.positions[i][a]);
+            for (int a = 0; a < 3; ++a) c.columns[std::size_t(3 + a)].values.push_back(cloud.normals[i][a]);
+        }
+        ASSERT_TRUE(w->write_rows(c).ok());
+        ASSERT_TRUE(w->finish().ok());
+        const CliRun est = run("deform " + p("normals.ply") + " " + p("est.ply") + " --lattice fit:2");
+        ASSERT_EQ(est.code, 0) << est.out;
+        EXPECT_TRUE(has(est.out, "splat axes (created from normals and radii estimated from neighbour spacing)")) << est.out;
+        std::vector<glm::vec3> rel;
+        for (const glm::vec3& q : cloud.positions) rel.push_back(q - cloud.positions[0]);
+        const std::vector<float> radii = assets::estimate_radii(assets::find_neighbours(rel, 6), 6, 1.0f);
+        const auto u = column3(p("est.ply"), "axis_ux", "axis_uy", "axis_uz");
+        ASSERT_EQ(u.size(), radii.size());
+        for (std::size_t i = 0; i < u.size(); ++i) {
+            EXPECT_NEAR(glm::length(u[i]), double(radii[i]), 1e-6) << i;
+            EXPECT_NEAR(glm::dot(u[i], glm::dvec3(cloud.normals[i])), 0.0, 1e-6) << i;  // tangent
+        }
+    }
     // Positions only (no normals): said plainly.
-    const CliRun r = run("deform " + p("radius.ply") + " " + p("o.ply") + " --lattice fit:2");
+    {
+        ply::Header h;
+        ply::Element e;
+        e.name = "vertex";
+        e.count = 3;
+        for (const char* n : {"x", "y", "z"}) e.properties.push_back({n, ply::Type::float32});
+        h.elements.push_back(e);
+        auto w = ply::Writer::create(p("xyz.ply"), h);
+        ASSERT_TRUE(w.ok());
+        ply::Chunk c;
+        c.reset(e);
+        c.rows = 3;
+        c.columns[0].values = {0, 1, 0}, c.columns[1].values = {0, 0, 1}, c.columns[2].values = {0, 0, 0};
+        ASSERT_TRUE(w->write_rows(c).ok());
+        ASSERT_TRUE(w->finish().ok());
+    }
+    const CliRun r = run("deform " + p("xyz.ply") + " " + p("o.ply") + " --lattice fit:2");
     ASSERT_EQ(r.code, 0) << r.out;
+    EXPECT_TRUE(has(r.out, "positions (no normals in the input); no splat axes (the input has no normals")) << r.out;
     EXPECT_TRUE(has(r.out, "deformed by 1 lattice 'fit:2,2,2,pad=0.05'")) << r.out;
 }
 
