@@ -318,7 +318,7 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
     if (ImGui::Begin("Lattice")) {
         const Lattice* l = registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
         if (!l) {
-            ImGui::TextDisabled("no lattice");
+            ImGui::TextDisabled("no lattice: shift+a adds one (Lattices panel)");
         } else {
             ImGui::Text("%s", entity_label(registry, state.active_lattice).c_str());
             ImGui::Text("%d x %d x %d divisions, %s", l->divisions.x, l->divisions.y, l->divisions.z,
