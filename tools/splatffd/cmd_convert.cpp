@@ -107,9 +107,10 @@ int export_lattice_json(const std::string& in, const std::string& out, const Lat
     return 0;
 }
 
-// OUT .glb/.gltf with --lattice: the cloud and its lattice(s), bound in order.
+// OUT .glb/.gltf with --lattice: the cloud and its lattice(s), bound in order. `loaded`: the JSON or
+// scene source, read before the import (a bad file fails before the work).
 sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const std::string& name, const LatticeRequest& req,
-                               const std::string& out, std::string& note) {
+                               const sffd::cli::LatticeChain& loaded, const std::string& out, std::string& note) {
     using namespace sffd;
     cli::LatticeChain chain;
     if (ffd::is_fit_spec(req.source)) {
@@ -120,9 +121,7 @@ sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const std::string&
         chain.lattices.push_back(std::move(*l));
         note = ", lattice " + ffd::fit_spec_string(*fit) + " bound to it";
     } else {
-        auto c = cli::load_lattice_source(req.source, req.name);
-        if (!c) return c.error();
-        chain = std::move(*c);
+        chain = loaded;
         note = ", " + std::to_string(chain.lattices.size()) + " lattice(s) from " + req.source + " bound to it";
     }
     return cli::save_cloud_with_lattices(cloud, name, chain.lattices, out);
@@ -204,11 +203,21 @@ int run_convert(sffd::cli::Args args) {
         std::fprintf(stderr, "splatffd convert: --lattice-name needs --lattice SCENE.glb (or OUT .json)\n");
         return 2;
     }
-    if (ffd::is_fit_spec(lattice.source))
-        if (auto fit = ffd::parse_fit_spec(lattice.source); !fit) {  // before the (possibly long) import
+    // The lattice source is checked before the (possibly long) import.
+    cli::LatticeChain loaded;
+    if (ffd::is_fit_spec(lattice.source)) {
+        if (auto fit = ffd::parse_fit_spec(lattice.source); !fit) {
             std::fprintf(stderr, "splatffd convert: --lattice %s\n", fit.message().c_str());
             return 2;
         }
+    } else if (!lattice.source.empty()) {
+        auto c = cli::load_lattice_source(lattice.source, lattice.name);
+        if (!c) {
+            std::fprintf(stderr, "splatffd convert: %s\n", c.message().c_str());
+            return 1;
+        }
+        loaded = std::move(*c);
+    }
     const auto t0 = std::chrono::steady_clock::now();
     Result<SplatCloud> cloud = make_error("");
     if (in == "sphere") {
@@ -243,7 +252,7 @@ int run_convert(sffd::cli::Args args) {
     std::string lattice_note;
     Status s = lattice.source.empty() ? (ascii ? assets::save_splat_ply(*cloud, out, ply::Format::ascii)
                                                : assets::save_splat_cloud(*cloud, out, std::filesystem::path(in).stem().string()))
-                                      : save_with_lattice(*cloud, std::filesystem::path(in).stem().string(), lattice, out, lattice_note);
+                                      : save_with_lattice(*cloud, std::filesystem::path(in).stem().string(), lattice, loaded, out, lattice_note);
     if (!s) {
         std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
         return 1;

@@ -411,6 +411,13 @@ int deform_ply_stream(const Options& o) {
 int deform_in_memory(const Options& o) {
     const std::string& in_path = o.files[0];
     if (o.bench > 0) return fail("--bench works on PLY input and output only");
+    // A JSON or scene lattice source is read before the (possibly long) import.
+    std::optional<cli::LatticeChain> early;
+    if (!o.lattice_source.empty() && !ffd::is_fit_spec(o.lattice_source)) {
+        auto c = cli::load_lattice_source(o.lattice_source, o.lattice_name);
+        if (!c) return fail(c.message());
+        early = std::move(*c);
+    }
     ecs::Registry scene;
     SplatCloud cloud;
     std::string cloud_name = std::filesystem::path(in_path).stem().string();
@@ -437,7 +444,7 @@ int deform_in_memory(const Options& o) {
         cloud = std::move(*c);
         estimated = " (normals/radii estimated by import where the input had none)";
     }
-    auto chain = lattice_chain(o, cloud.positions, cloud.origin, in_scene ? &scene : nullptr);
+    auto chain = early ? Result<cli::LatticeChain>(std::move(*early)) : lattice_chain(o, cloud.positions, cloud.origin, in_scene ? &scene : nullptr);
     if (!chain) return fail(chain.message());
 
     const auto t_start = Clock::now();
