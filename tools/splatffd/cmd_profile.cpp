@@ -119,10 +119,9 @@ struct Options {
 };
 
 bool parse_int(const std::string& s, int& out) {
-    char* end = nullptr;
-    const long v = std::strtol(s.c_str(), &end, 10);
-    if (end == s.c_str() || *end != '\0' || v < 0 || v > 10'000'000) return false;
-    out = static_cast<int>(v);
+    auto v = cli::parse_integer("", s, 0, 10'000'000);  // the shared number parser (the caller names the option)
+    if (!v) return false;
+    out = static_cast<int>(*v);
     return true;
 }
 

@@ -366,6 +366,12 @@ TEST_F(LatticeCli, OptionErrorsNameTheOption) {
     r = run("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit:99");
     EXPECT_EQ(r.code, 1);
     EXPECT_TRUE(has(r.out, "fit:99: divisions must be integers in 1..64")) << r.out;
+    r = run("view sphere --frames -3");
+    EXPECT_EQ(r.code, 2);
+    EXPECT_TRUE(has(r.out, "--frames: expected an integer in 1..1000000000, got '-3'")) << r.out;
+    r = run("pick sphere --at 1,1 --tolerance abc");
+    EXPECT_EQ(r.code, 2);
+    EXPECT_TRUE(has(r.out, "--tolerance: expected a number in 0..1e+06, got 'abc'")) << r.out;
     // profile checks its paths before measuring: one line, the file named, nothing measured.
     r = run("profile sphere --compare " + p("nosuch.json"));
     EXPECT_EQ(r.code, 1);
