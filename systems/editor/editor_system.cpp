@@ -62,6 +62,16 @@ const Lattice* active_lattice(const ecs::Registry& registry, const EditorState& 
     return registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
 }
 
+// Undoing an added lattice (or redoing a removal) leaves the active entity without a Lattice: another
+// lattice, if any, becomes active, so the panels and tools do not show "no lattice" beside lattices.
+void keep_an_active_lattice(ecs::Registry& registry, EditorState& state) {
+    if (active_lattice(registry, state)) return;
+    state.active_lattice = ecs::null_entity;
+    registry.view<Lattice>().each([&](ecs::Entity e, Lattice&) {
+        if (!state.active_lattice) state.active_lattice = e;
+    });
+}
+
 std::vector<std::uint32_t> selection_of(const ecs::Registry& registry, ecs::Entity lattice) {
     if (const auto* s = registry.try_get<picking::LatticeSelection>(lattice)) return s->indices;
     return {};
@@ -479,6 +489,7 @@ void undo(ecs::Registry& registry, EditorState& state) {
     const std::size_t at = state.undo.position();
     if (state.undo.undo(registry)) say(state, "undo " + state.undo.at(at - 1).label());
     else say(state, "nothing to undo");
+    keep_an_active_lattice(registry, state);
 }
 
 void redo(ecs::Registry& registry, EditorState& state) {
@@ -486,6 +497,7 @@ void redo(ecs::Registry& registry, EditorState& state) {
     const std::size_t at = state.undo.position();
     if (state.undo.redo(registry)) say(state, "redo " + state.undo.at(at).label());
     else say(state, "nothing to redo");
+    keep_an_active_lattice(registry, state);
 }
 
 void select_all(ecs::Registry& registry, EditorState& state) {

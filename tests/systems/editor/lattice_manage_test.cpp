@@ -104,6 +104,15 @@ TEST(LatticeManage, AddSeveralReorderRefitRemoveEachOneUndoStep) {
     EXPECT_NEAR(s.y, std::sin(0.5235987755982988), 1e-3);
     EXPECT_EQ(ed.state->undo.size(), 2u);
 
+    // Undoing the second add makes the first active again (not "no lattice"); redo brings it back.
+    ed.key("z", mods::ctrl);
+    EXPECT_EQ(ed.lattice_count(), 1u);
+    EXPECT_EQ(ed.state->active_lattice, first);
+    ed.key("z", mods::ctrl | mods::shift);
+    EXPECT_EQ(ed.lattice_count(), 2u);
+    EXPECT_EQ(ed.order(), (std::vector<ecs::Entity>{first, second}));
+    EXPECT_EQ(ed.reg.get<Name>(second).value, "scan.lattice2");
+    ed.state->active_lattice = second;
     // pageup: the active (second) lattice moves first; undo puts it back; redo again.
     ed.key("pageup");
     EXPECT_EQ(ed.order(), (std::vector<ecs::Entity>{second, first}));
