@@ -14,7 +14,8 @@
 //   ctrl+e           export the active lattice as JSON (LatticeFitSettings::json_path)
 //   ctrl+i           import that JSON into the active lattice (or as a new lattice on the target cloud
 //                    when there is none)
-// Panel: "Lattices" (lattices_panel, view builds): the same actions and the fit settings.
+// Panel: the "lattices" section of the Lattice panel (lattice_manager_section, window builds): the same
+// actions, the clouds' lattice order and the fit settings.
 #pragma once
 
 #include <string>
@@ -50,7 +51,7 @@ bool import_lattice_json(ecs::Registry& registry, EditorState& state, const std:
 // True when the key was one of the above (consumed).
 bool handle_lattice_key(ecs::Registry& registry, EditorState& state, const InputEvent& event);
 
-// ImGui panel "Lattices" (defined in lattices_panel.cpp; window builds only).
-void lattices_panel(ecs::Registry& registry, EditorState& state);
+// ImGui section drawn inside the Lattice panel's window (defined in lattices_panel.cpp; window builds only).
+void lattice_manager_section(ecs::Registry& registry, EditorState& state);
 
 }  // namespace sffd::editor

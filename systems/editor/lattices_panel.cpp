@@ -1,6 +1,8 @@
-// The "Lattices" panel (lattice_manage.h): the clouds and the lattices each follows, in order; add /
-// remove / refit with the fit settings (shape, padding, divisions, basis); order; export / import JSON.
-// Every button calls the same function as its key, so each action is one undo step.
+// The "lattices" section at the top of the Lattice panel (lattice_manage.h): the clouds and the lattices
+// each follows, in order (click one to make it active); add / remove / refit with the fit settings (shape,
+// padding, divisions, basis); order; export / import JSON. Every button calls the same function as its
+// key, so each action is one undo step. (A section, not a window of its own: the panels' fixed layout at
+// 1280x720 has no room for another window.)
 #include <cstdio>
 #include <string>
 
@@ -13,17 +15,17 @@ namespace sffd::editor {
 
 namespace {
 
-std::string label_of(const ecs::Registry& r, ecs::Entity e, const char* fallback) {
+std::string name_of(const ecs::Registry& r, ecs::Entity e, const char* fallback) {
     const Name* n = r.try_get<Name>(e);
-    return (n && !n->value.empty() ? n->value : std::string(fallback)) + "##" + std::to_string(e.index);
+    return n && !n->value.empty() ? n->value : std::string(fallback);
 }
 
 }  // namespace
 
-void lattices_panel(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(float(state.viewport.width) - 300.0f, 620), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(292, 260), ImGuiCond_FirstUseEver);
-    if (ImGui::Begin("Lattices")) {
+void lattice_manager_section(ecs::Registry& registry, EditorState& state) {
+    const bool none = !registry.valid(state.active_lattice) || !registry.has<Lattice>(state.active_lattice);
+    ImGui::SetNextItemOpen(true, none ? ImGuiCond_Always : ImGuiCond_Once);
+    if (ImGui::CollapsingHeader("lattices: add, remove, order, JSON")) {
         LatticeFitSettings& settings = lattice_fit_settings(registry);
         // Clouds and their ordered lattices; clicking a lattice makes it active.
         std::vector<ecs::Entity> clouds;
@@ -31,7 +33,7 @@ void lattices_panel(ecs::Registry& registry, EditorState& state) {
             if (registry.has<SplatCloud>(e)) clouds.push_back(e);
         });
         for (ecs::Entity c : clouds) {
-            ImGui::TextUnformatted(label_of(registry, c, "cloud").c_str());
+            ImGui::TextUnformatted(name_of(registry, c, "cloud").c_str());
             const auto list = lattices_of(registry, c);
             if (list.empty()) ImGui::TextDisabled("  no lattice: add one (shift+a)");
             for (std::size_t i = 0; i < list.size(); ++i) {
@@ -39,7 +41,8 @@ void lattices_panel(ecs::Registry& registry, EditorState& state) {
                 std::snprintf(prefix, sizeof prefix, "  %zu. ", i + 1);
                 ImGui::TextUnformatted(prefix);
                 ImGui::SameLine();
-                if (ImGui::Selectable(label_of(registry, list[i], "lattice").c_str(), list[i] == state.active_lattice))
+                const std::string label = name_of(registry, list[i], "lattice") + "##" + std::to_string(list[i].index);
+                if (ImGui::Selectable(label.c_str(), list[i] == state.active_lattice))
                     state.active_lattice = list[i];
             }
         }
@@ -56,11 +59,11 @@ void lattices_panel(ecs::Registry& registry, EditorState& state) {
         if (ImGui::Button("add (shift+a)")) add_lattice(registry, state);
         ImGui::SameLine();
         if (ImGui::Button("refit (shift+f)")) refit_lattice(registry, state);
-        ImGui::SameLine();
         if (ImGui::Button("remove (del)")) remove_lattice(registry, state);
-        if (ImGui::Button("earlier (pgup)")) move_lattice_in_order(registry, state, -1);
         ImGui::SameLine();
-        if (ImGui::Button("later (pgdn)")) move_lattice_in_order(registry, state, +1);
+        if (ImGui::Button("up (pgup)")) move_lattice_in_order(registry, state, -1);
+        ImGui::SameLine();
+        if (ImGui::Button("down (pgdn)")) move_lattice_in_order(registry, state, +1);
         ImGui::Separator();
         char path[512];
         std::snprintf(path, sizeof path, "%s", settings.json_path.c_str());
@@ -68,8 +71,8 @@ void lattices_panel(ecs::Registry& registry, EditorState& state) {
         if (ImGui::Button("export (ctrl+e)")) export_lattice_json(registry, state, settings.json_path);
         ImGui::SameLine();
         if (ImGui::Button("import (ctrl+i)")) import_lattice_json(registry, state, settings.json_path);
+        ImGui::Separator();
     }
-    ImGui::End();
 }
 
 }  // namespace sffd::editor

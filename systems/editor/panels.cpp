@@ -316,9 +316,10 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
     ImGui::SetNextWindowPos(ImVec2(float(state.viewport.width) - 300.0f, 366), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowSize(ImVec2(292, 250), ImGuiCond_FirstUseEver);
     if (ImGui::Begin("Lattice")) {
+        lattice_manager_section(registry, state);  // add / remove / order / JSON (lattice_manage.h)
         const Lattice* l = registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
         if (!l) {
-            ImGui::TextDisabled("no lattice: shift+a adds one (Lattices panel)");
+            ImGui::TextDisabled("no lattice: shift+a adds one");
         } else {
             ImGui::Text("%s", entity_label(registry, state.active_lattice).c_str());
             ImGui::Text("%d x %d x %d divisions, %s", l->divisions.x, l->divisions.y, l->divisions.z,
@@ -503,7 +504,6 @@ void draw_panels(ecs::Registry& registry, const FrameContext&) {
     inspector(registry, *state);
     tools_panel(registry, *state);
     lattice_panel(registry, *state);
-    lattices_panel(registry, *state);  // lattice_manage.h
     timeline_panel(registry, *state);
     profiler_panel(registry, *state);
     status_bar(registry, *state);
