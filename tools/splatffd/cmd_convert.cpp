@@ -265,4 +265,4 @@ int run_convert(sffd::cli::Args args) {
 
 }  // namespace
 
-SFFD_COMMAND(convert, "convert point clouds and meshes between formats, estimating normals and radii", run_convert);
+SFFD_COMMAND(convert, "convert point clouds and meshes, estimating normals and radii; add or export lattices", run_convert);

@@ -499,4 +499,4 @@ int run_deform(sffd::cli::Args args) {
 
 }  // namespace
 
-SFFD_COMMAND(deform, "deform a point cloud with a lattice JSON, a scene's lattices or a fitted lattice (PLY streamed; --backend cpu|gpu|reference, --bench N)", run_deform);
+SFFD_COMMAND(deform, "deform a point cloud by a lattice JSON, a scene's lattices or fit:… (PLY streamed, axes too)", run_deform);
