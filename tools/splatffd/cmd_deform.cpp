@@ -1,4 +1,5 @@
 // splatffd deform IN OUT [--lattice SOURCE [--lattice-name NAME]] [--backend cpu|gpu|reference] [--bench N] [--ascii]
+//                        [--estimate-radii]
 //
 // SOURCE: a lattice JSON file, a scene file (.glb/.gltf: the lattices bound to its cloud, in order, or
 // the one named by --lattice-name), or a fit spec `fit[:L,M,N][,pad=P][,obb][,bspline]` (a rest lattice
@@ -9,7 +10,8 @@
 // whatever the file size): every element is copied in order, `vertex` rows get deformed x y z, nx ny nz
 // and the splat axes axis_u* axis_v* (J·axis) when present; a file with normals but no axes gets circular
 // axes created (then deformed), appended as float properties: from its `radius` property, or from radii
-// estimated from neighbour spacing as import does (this case holds every position in memory). All
+// estimated from neighbour spacing as import does (this case holds every position in memory: by default
+// up to 4M points, beyond that with --estimate-radii). All
 // other properties are copied with their types. Points outside the lattice are unchanged, points on its
 // faces are inside. The output is binary little-endian (or ASCII with --ascii) and atomic.
 // Any other input or output (.glb/.gltf/.obj/.off): the cloud is loaded whole (import estimates normals
@@ -45,6 +47,7 @@ using namespace sffd;
 using Clock = std::chrono::steady_clock;
 
 constexpr std::size_t kChunkRows = 1 << 17;  // ~131k rows: ~10 MB of double columns for 10 properties
+constexpr std::uint64_t kEstimateMaxPoints = 4'000'000;  // default limit of the in-memory radius estimate
 
 constexpr const char* kUsage =
     "usage: splatffd deform IN OUT [--lattice SOURCE [--lattice-name NAME]] [--backend cpu|gpu|reference] [--bench N] [--ascii]\n"
@@ -53,7 +56,9 @@ constexpr const char* kUsage =
     "           (default: the lattices stored in IN when IN is a scene file)\n"
     "  --lattice-name NAME  the lattice of that name in a scene file\n"
     "  splat axes (axis_u*, axis_v*) are deformed; from normals (+ radius, or radii estimated from\n"
-    "  neighbour spacing) they are created first\n";
+    "  neighbour spacing) they are created first\n"
+    "  --estimate-radii  estimate radii for PLY input with normals only even beyond 4M points\n"
+    "                    (the estimate holds every position: ~75 bytes per point)\n";
 
 int usage(bool asked = false) {
     std::fputs(kUsage, asked ? stdout : stderr);
@@ -210,6 +215,7 @@ struct Options {
     std::string lattice_source, lattice_name, backend = "cpu";
     int bench = 0;
     bool ascii = false;
+    bool estimate_radii = false;  // --estimate-radii: whatever the point count
 };
 
 // -1: parsed; otherwise the exit code (0 after --help, 2 after a usage error).
@@ -236,6 +242,8 @@ int parse_options(sffd::cli::Args args, Options& o) {
             o.bench = int(*n);
         } else if (a == "--ascii") {
             o.ascii = true;
+        } else if (a == "--estimate-radii") {
+            o.estimate_radii = true;
         } else if (!a.empty() && a[0] == '-') {
             std::fprintf(stderr, "splatffd deform: unknown option '%s'\n", a.c_str());
             return usage();
@@ -331,9 +339,12 @@ int deform_ply_stream(const Options& o) {
     if (!chain) return fail(chain.message());
     // Normals but neither axes nor a radius: radii from neighbour spacing, exactly as import estimates
     // them (6th nearest neighbour, clamped to 4x the median). Needs every position in memory (~60 bytes
-    // per point: positions and a 6-neighbour table), unlike the rest of the stream.
+    // per point: positions and a 6-neighbour table), unlike the rest of the stream: done by default up to
+    // kEstimateMaxPoints (~300 MB), beyond that only with --estimate-radii (a 20M-point scan keeps
+    // streaming in ~32 MB and is told how to get axes).
     std::vector<float> estimated_radii;
-    const bool estimate = !cols.axes() && cols.normals() && cols.radius < 0;
+    const bool wants_estimate = !cols.axes() && cols.normals() && cols.radius < 0;
+    const bool estimate = wants_estimate && (o.estimate_radii || ve.count <= kEstimateMaxPoints);
     if (estimate) {
         glm::dvec3 o_unused(0.0);
         auto pts = fit_points.empty() ? read_ply_positions(in_path, o_unused) : Result<std::vector<glm::vec3>>(std::move(fit_points));
@@ -393,6 +404,9 @@ int deform_ply_stream(const Options& o) {
     what += cols.normals() ? ", normals" : " (no normals in the input)";
     if (cols.axes()) what += !create ? ", splat axes" : estimate ? ", splat axes (created from normals and radii estimated from neighbour spacing)"
                                                                  : ", splat axes (created from normals and radius)";
+    else if (wants_estimate)
+        what += "; no splat axes (no radius property, and " + std::to_string(ve.count) +
+                " points are more than deform estimates radii for while streaming: pass --estimate-radii, ~75 bytes per point)";
     else what += "; no splat axes (the input has no normals: `splatffd convert IN OUT` estimates them)";
     what += " deformed by " + std::to_string(chain->lattices.size()) + " lattice" + (chain->lattices.size() == 1 ? " " : "s ") + joined(chain->names);
     print_summary(what.c_str(), points, o.backend, first_ms, total_s, deformer.inverted);
