@@ -28,7 +28,9 @@ struct RunResult {
 
 RunResult run(const std::string& args) {
     const fs::path dir = fs::temp_directory_path();
-    const std::string o = (dir / "ffd_cmd_stdout.txt").string(), e = (dir / "ffd_cmd_stderr.txt").string();
+    // Per process: ctest -j runs the cases of this file in parallel processes.
+    const std::string tag = std::to_string(::getpid());
+    const std::string o = (dir / ("ffd_cmd_stdout_" + tag + ".txt")).string(), e = (dir / ("ffd_cmd_stderr_" + tag + ".txt")).string();
     const int status = std::system((kTool + " deform " + args + " >" + o + " 2>" + e).c_str());
     RunResult r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
