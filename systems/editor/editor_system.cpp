@@ -16,6 +16,7 @@
 #include "systems/picking/world_space.h"
 #include "systems/animation/components.h"
 #include "systems/animation/editing.h"
+#include "systems/editor/lattice_manage.h"
 #include "systems/ffd/operations.h"
 
 namespace sffd::editor {
@@ -55,6 +56,16 @@ glm::dmat4 lattice_model(const ecs::Registry& registry, ecs::Entity lattice) {
 
 const Lattice* active_lattice(const ecs::Registry& registry, const EditorState& state) {
     return registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
+}
+
+// Undoing an added lattice (or redoing a removal) leaves the active entity without a Lattice: another
+// lattice, if any, becomes active, so the panels and tools do not show "no lattice" beside lattices.
+void keep_an_active_lattice(ecs::Registry& registry, EditorState& state) {
+    if (active_lattice(registry, state)) return;
+    state.active_lattice = ecs::null_entity;
+    registry.view<Lattice>().each([&](ecs::Entity e, Lattice&) {
+        if (!state.active_lattice) state.active_lattice = e;
+    });
 }
 
 std::vector<std::uint32_t> selection_of(const ecs::Registry& registry, ecs::Entity lattice) {
@@ -325,6 +336,7 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
         if (k == "escape") cancel_drag(registry, state);
         return;  // no other shortcuts mid-gesture
     }
+    if (handle_lattice_key(registry, state, e)) return;  // add/remove/refit/order/export/import (lattice_manage.h)
     if (ctrl) {
         if (k == "z" && shift) redo(registry, state);
         else if (k == "z") undo(registry, state);
@@ -467,6 +479,7 @@ void undo(ecs::Registry& registry, EditorState& state) {
     const std::size_t at = state.undo.position();
     if (state.undo.undo(registry)) say(state, "undo " + state.undo.at(at - 1).label());
     else say(state, "nothing to undo");
+    keep_an_active_lattice(registry, state);
 }
 
 void redo(ecs::Registry& registry, EditorState& state) {
@@ -474,6 +487,7 @@ void redo(ecs::Registry& registry, EditorState& state) {
     const std::size_t at = state.undo.position();
     if (state.undo.redo(registry)) say(state, "redo " + state.undo.at(at).label());
     else say(state, "nothing to redo");
+    keep_an_active_lattice(registry, state);
 }
 
 void select_all(ecs::Registry& registry, EditorState& state) {

@@ -3,7 +3,8 @@
 //           Transform, SplatCloud / DeformedSplats (through picking), AnimationClip/State (timeline keys)
 //   writes  Camera (orbit, pan, zoom, frame), Lattice::current (stretch, twist, reset; via patch so the
 //           deformer re-runs), picking::LatticeSelection, AnimationClip (set/delete key), AnimationState
-//           (play/pause/scrub), EditorState (tools, drag, undo stack, requests)
+//           (play/pause/scrub), EditorState (tools, drag, undo stack, requests); through lattice_manage.h
+//           lattice entities (Name, Transform, Lattice: add/remove/refit/import) and clouds' Deformers
 // Does nothing when the registry has no EditorState. Picks synchronously through the picking library
 // (picking::pick on the PickingState resource): a click is answered in the frame it happens in, so a
 // replayed session is deterministic frame by frame.

@@ -13,6 +13,7 @@
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
 #include "systems/editor/editor_system.h"
+#include "systems/editor/lattice_manage.h"
 #include "systems/editor/selection_edit.h"
 #include "systems/ffd/components.h"
 #include "systems/picking/components.h"
@@ -309,9 +310,10 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
     ImGui::SetNextWindowPos(ImVec2(float(state.viewport.width) - 300.0f, 366), ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowSize(ImVec2(292, 250), ImGuiCond_FirstUseEver);
     if (ImGui::Begin("Lattice")) {
+        lattice_manager_section(registry, state);  // add / remove / order / JSON (lattice_manage.h)
         const Lattice* l = registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
         if (!l) {
-            ImGui::TextDisabled("no lattice");
+            ImGui::TextDisabled("no lattice: shift+a adds one");
         } else {
             ImGui::Text("%s", entity_label(registry, state.active_lattice).c_str());
             ImGui::Text("%d x %d x %d divisions, %s", l->divisions.x, l->divisions.y, l->divisions.z,

@@ -21,6 +21,7 @@
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/render_target.h"
 #include "systems/editor/editor_system.h"
+#include "systems/editor/lattice_manage.h"
 #include "systems/editor/lattice_overlay.h"
 #include "systems/editor/panels.h"
 #include "systems/splat_render/image_io.h"
@@ -296,6 +297,8 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         ViewSession& session = registry.set_resource<ViewSession>();
         session.options = options;
         session.save_path = options.save_path.empty() ? default_save_path(options.scene) : options.save_path;
+        // Lattice JSON export/import (ctrl+e / ctrl+i) next to the scene's save: <save>.lattice.json.
+        lattice_fit_settings(registry).json_path = std::filesystem::path(session.save_path).replace_extension(".lattice.json").string();
         session.ui = options.ui && !headless;
 
         g_registry = &registry;

@@ -1,7 +1,12 @@
 #include "systems/ffd/operations.h"
 
 #include <algorithm>
+#include <array>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
 
 #include "systems/ffd/deform.h"
 #include "systems/ffd/lattice.h"
@@ -59,28 +64,178 @@ void reset(Lattice& l) { l.current = l.rest; }
 
 Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::dvec3& origin, glm::ivec3 divisions,
                             LatticeBasis basis, double padding) {
-    if (positions.empty()) return make_error("fit_lattice(): no points");
-    if (!(padding >= 0.0) || !std::isfinite(padding)) return make_error("fit_lattice(): padding must be >= 0");
-    Box box;
-    for (const glm::vec3& p : positions) {
-        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-            return make_error("fit_lattice(): a point is not finite");
-        box.add(origin + glm::dvec3(p));
+    return fit_lattice(positions, origin, FitOptions{divisions, basis, padding, FitShape::box});
+}
+
+namespace {
+
+// Eigenvectors (columns) of a symmetric 3x3 matrix by cyclic Jacobi rotations (converges to machine
+// precision in a handful of sweeps for 3x3).
+glm::dmat3 symmetric_eigenvectors(glm::dmat3 a) {
+    glm::dmat3 v(1.0);
+    for (int sweep = 0; sweep < 50; ++sweep) {
+        const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+        const double scale = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
+        if (off <= 1e-30 * scale || off == 0.0) break;
+        for (int p = 0; p < 2; ++p)
+            for (int q = p + 1; q < 3; ++q) {
+                if (a[p][q] == 0.0) continue;
+                const double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
+                const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+                const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
+                glm::dmat3 r(1.0);  // rotation in the (p, q) plane: a <- rᵀ a r, v <- v r
+                r[p][p] = c, r[q][q] = c, r[q][p] = s, r[p][q] = -s;
+                a = glm::transpose(r) * a * r;
+                v = v * r;
+            }
     }
-    glm::dvec3 extent = box.hi - box.lo;
+    return v;
+}
+
+// The frame of the oriented box: principal axes of the points, each assigned (sign included) to the
+// world axis it is closest to (the permutation with the largest total |cos|).
+std::array<glm::dvec3, 3> principal_frame(const std::vector<glm::vec3>& positions) {
+    glm::dvec3 mean(0.0);
+    for (const glm::vec3& p : positions) mean += glm::dvec3(p);
+    mean /= double(positions.size());
+    glm::dmat3 cov(0.0);
+    for (const glm::vec3& p : positions) {
+        const glm::dvec3 d = glm::dvec3(p) - mean;
+        cov += glm::outerProduct(d, d);
+    }
+    const glm::dmat3 v = symmetric_eigenvectors(cov);
+    static constexpr int kPerms[6][3] = {{0, 1, 2}, {0, 2, 1}, {1, 0, 2}, {1, 2, 0}, {2, 0, 1}, {2, 1, 0}};
+    int best = 0;
+    double best_score = -1.0;
+    for (int p = 0; p < 6; ++p) {
+        double score = 0.0;
+        for (int a = 0; a < 3; ++a) score += std::abs(v[kPerms[p][a]][a]);  // eigenvector kPerms[p][a] on world axis a
+        if (score > best_score + 1e-12) best_score = score, best = p;
+    }
+    std::array<glm::dvec3, 3> frame;
+    for (int a = 0; a < 3; ++a) {
+        glm::dvec3 e = glm::normalize(v[kPerms[best][a]]);
+        if (e[a] < 0.0) e = -e;
+        frame[std::size_t(a)] = e;
+    }
+    return frame;
+}
+
+}  // namespace
+
+// The fit along `frame` (shape box: the world axes, projected exactly as an AABB).
+static Result<Lattice> fit_in_frame(const std::vector<glm::vec3>& positions, const glm::dvec3& origin, const FitOptions& options,
+                                    const std::array<glm::dvec3, 3>& frame) {
+    const bool box = options.shape == FitShape::box;
+    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    for (const glm::vec3& p : positions) {
+        const glm::dvec3 w = box ? origin + glm::dvec3(p) : glm::dvec3(p);
+        for (int a = 0; a < 3; ++a) {
+            const double d = box ? w[a] : glm::dot(w, frame[std::size_t(a)]);
+            lo[a] = std::min(lo[a], d), hi[a] = std::max(hi[a], d);
+        }
+    }
+    glm::dvec3 extent = hi - lo;
     const double largest = std::max({extent.x, extent.y, extent.z});
     const double thickness = largest > 0.0 ? 1e-3 * largest : 1e-3;
     for (int a = 0; a < 3; ++a)
         if (extent[a] < thickness) {  // flat or collinear along this axis: grow it symmetrically
-            box.lo[a] -= 0.5 * (thickness - extent[a]);
+            lo[a] -= 0.5 * (thickness - extent[a]);
             extent[a] = thickness;
         }
-    const double pad = padding * std::max({extent.x, extent.y, extent.z});
-    const glm::dvec3 lo = box.lo - pad, size = extent + 2.0 * pad;
-    Lattice l = make_lattice(lo, {glm::dvec3(size.x, 0, 0), glm::dvec3(0, size.y, 0), glm::dvec3(0, 0, size.z)},
-                             divisions, basis);
+    const double pad = options.padding * std::max({extent.x, extent.y, extent.z});
+    const glm::dvec3 start = lo - pad, size = extent + 2.0 * pad;
+    glm::dvec3 corner = box ? start : origin;
+    if (!box)
+        for (int a = 0; a < 3; ++a) corner += start[a] * frame[std::size_t(a)];
+    Lattice l = make_lattice(corner, {frame[0] * size.x, frame[1] * size.y, frame[2] * size.z}, options.divisions, options.basis);
     if (Status s = validate(l, "fit_lattice()"); !s) return s.error();
     return l;
+}
+
+static double box_volume(const Lattice& l) { return std::abs(glm::determinant(glm::dmat3(l.axes[0], l.axes[1], l.axes[2]))); }
+
+Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::dvec3& origin, const FitOptions& options) {
+    if (positions.empty()) return make_error("fit_lattice(): no points");
+    if (!(options.padding >= 0.0) || !std::isfinite(options.padding)) return make_error("fit_lattice(): padding must be >= 0");
+    for (const glm::vec3& p : positions)
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            return make_error("fit_lattice(): a point is not finite");
+    const std::array<glm::dvec3, 3> world{glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)};
+    FitOptions aligned = options;
+    aligned.shape = FitShape::box;
+    if (options.shape == FitShape::box || positions.size() < 2) return fit_in_frame(positions, origin, aligned, world);
+    // Near-isotropic clouds (a sphere) have no meaningful principal axes: the oriented box is kept only
+    // when its tight box (no padding) is at least 5% smaller than the axis-aligned one.
+    const std::array<glm::dvec3, 3> frame = principal_frame(positions);
+    FitOptions tight = options;
+    tight.padding = 0.0;
+    aligned.padding = 0.0;
+    auto tight_oriented = fit_in_frame(positions, origin, tight, frame);
+    auto tight_box = fit_in_frame(positions, origin, aligned, world);
+    if (!tight_oriented || !tight_box) return tight_box ? tight_oriented : tight_box;
+    if (box_volume(*tight_oriented) < 0.95 * box_volume(*tight_box)) return fit_in_frame(positions, origin, options, frame);
+    aligned.padding = options.padding;
+    return fit_in_frame(positions, origin, aligned, world);
+}
+
+bool is_fit_spec(std::string_view text) { return text == "fit" || text.rfind("fit:", 0) == 0; }
+
+Result<FitOptions> parse_fit_spec(std::string_view text) {
+    const std::string whole(text);
+    if (!is_fit_spec(text)) return make_error(whole + ": a fit spec reads fit[:L,M,N][,pad=P][,obb][,bspline]");
+    FitOptions o;
+    if (text == "fit") return o;
+    std::string_view rest = text.substr(4);
+    std::vector<int> divs;
+    bool seen_words = false;
+    while (!rest.empty() || (divs.empty() && !seen_words)) {
+        const std::size_t comma = rest.find(',');
+        const std::string part(rest.substr(0, comma));
+        rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 1);
+        if (part.empty()) return make_error(whole + ": empty item (fit[:L,M,N][,pad=P][,obb][,bspline])");
+        if (std::isdigit(static_cast<unsigned char>(part[0])) || part[0] == '-' || part[0] == '+') {
+            if (seen_words || divs.size() == 3) return make_error(whole + ": divisions come first, at most three (L,M,N)");
+            char* end = nullptr;
+            const long v = std::strtol(part.c_str(), &end, 10);
+            if (*end != '\0' || v < 1 || v > kMaxDivisions)
+                return make_error(whole + ": divisions must be integers in 1.." + std::to_string(kMaxDivisions) + ", got '" + part + "'");
+            divs.push_back(int(v));
+        } else if (part.rfind("pad=", 0) == 0) {
+            seen_words = true;
+            const std::string v = part.substr(4);
+            char* end = nullptr;
+            const double d = std::strtod(v.c_str(), &end);
+            if (v.empty() || *end != '\0' || !std::isfinite(d) || d < 0.0 || d > 10.0)
+                return make_error(whole + ": pad must be a number in 0..10 (× the largest extent), got '" + v + "'");
+            o.padding = d;
+        } else if (part == "obb" || part == "oriented") {
+            seen_words = true, o.shape = FitShape::oriented;
+        } else if (part == "box" || part == "aabb") {
+            seen_words = true, o.shape = FitShape::box;
+        } else if (part == "bspline") {
+            seen_words = true, o.basis = LatticeBasis::bspline;
+        } else if (part == "bernstein") {
+            seen_words = true, o.basis = LatticeBasis::bernstein;
+        } else {
+            return make_error(whole + ": unknown item '" + part + "' (fit[:L,M,N][,pad=P][,obb][,bspline])");
+        }
+        if (rest.empty()) break;
+    }
+    if (divs.size() == 1) o.divisions = glm::ivec3(divs[0]);
+    else if (divs.size() == 3) o.divisions = glm::ivec3(divs[0], divs[1], divs[2]);
+    else if (!divs.empty()) return make_error(whole + ": give one division count (D) or three (L,M,N)");
+    return o;
+}
+
+std::string fit_spec_string(const FitOptions& o) {
+    char pad[64];
+    for (int digits = 1; digits <= 17; ++digits) {  // shortest text that reads back to the same double
+        std::snprintf(pad, sizeof pad, "%.*g", digits, o.padding);
+        if (std::strtod(pad, nullptr) == o.padding) break;
+    }
+    return "fit:" + std::to_string(o.divisions.x) + "," + std::to_string(o.divisions.y) + "," + std::to_string(o.divisions.z) +
+           ",pad=" + pad + (o.shape == FitShape::oriented ? ",obb" : "") + (o.basis == LatticeBasis::bspline ? ",bspline" : "");
 }
 
 Status apply_as_rest(Lattice& l, const BakeTarget* bake) {

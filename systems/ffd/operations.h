@@ -3,7 +3,10 @@
 // registry.patch<Lattice>(e) so the deformation phase sees the change.
 #pragma once
 
+#include <cstdint>
 #include <optional>
+#include <string>
+#include <string_view>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -37,6 +40,25 @@ void reset(Lattice& lattice);
 // axis gets a minimum thickness of 1e-3 × the largest extent (or 1e-3 when all points coincide).
 Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::dvec3& origin, glm::ivec3 divisions,
                             LatticeBasis basis = LatticeBasis::bernstein, double padding = 0.05);
+
+// How a lattice is fitted around a cloud (the `splatffd convert/deform --lattice fit:…` spec, the editor's
+// add/refit). `oriented`: the box along the principal axes of the points (PCA of their covariance), each
+// principal axis assigned to the world axis it is closest to (sign included), so divisions (l, m, n) still
+// run roughly along x, y, z and an axis-aligned object gets its axis-aligned box.
+enum class FitShape : std::uint8_t { box, oriented };
+struct FitOptions {
+    glm::ivec3 divisions{10, 10, 10};  // as the built-in scenes' lattices (11 control points per axis)
+    LatticeBasis basis = LatticeBasis::bernstein;
+    double padding = 0.05;             // × the box's largest extent, on every side
+    FitShape shape = FitShape::box;
+};
+Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::dvec3& origin, const FitOptions& options);
+
+// "fit[:L,M,N][,pad=P][,obb|,box][,bspline|,bernstein]" (one division count D means D,D,D). Errors name
+// the offending part, e.g. "fit:4,x: divisions must be integers in 1..64".
+bool is_fit_spec(std::string_view text);  // "fit" or "fit:…"
+Result<FitOptions> parse_fit_spec(std::string_view text);
+std::string fit_spec_string(const FitOptions& options);  // canonical form, parses back to the same options
 
 // The current shape becomes the rest lattice (the deformation becomes the identity). Pass the cloud's
 // positions/normals/axes to bake the current deformation into them first, so nothing moves on screen.

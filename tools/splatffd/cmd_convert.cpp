@@ -1,26 +1,35 @@
 // splatffd convert IN OUT [--splats N] [--normals] [--radii] [--ascii] [--seed S] [--neighbours K] [--gaussians]
+//                        [--lattice fit[:L,M,N][,pad=P][,obb][,bspline] | L.json | scene.glb] [--lattice-name NAME]
 // Converts point clouds and meshes (PLY, OBJ, OFF, glTF/GLB, or a built-in scene name) into splat
 // clouds (PLY, GLB, glTF). Meshes are sampled on their surface; raw points get normals and radii.
+// --lattice stores a lattice bound to the cloud in the scene file (OUT .glb/.gltf): fitted around the
+// cloud, or taken from a lattice JSON / another scene. OUT .json exports a lattice instead: IN's own
+// (a scene file; --lattice-name picks one of several) or the --lattice one.
 #include <unistd.h>
 
 #include <chrono>
 #include <cstdint>
+#include <optional>
 #include <cstdio>
 #include <string>
 
 #include "runtime/assets/builtin_scenes.h"
 #include "runtime/assets/export.h"
 #include "runtime/assets/import.h"
+#include "runtime/assets/scene.h"
+#include "systems/ffd/lattice_io.h"
+#include "systems/ffd/operations.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/convert_gaussians.h"
+#include "tools/splatffd/lattice_source.h"
 
 namespace {
 
 void usage() {
     std::fprintf(stderr,
                  "usage: splatffd convert IN OUT [options]\n"
-                 "  IN   .ply .obj .off .gltf .glb, or the built-in scene 'sphere'\n"
-                 "  OUT  .ply (binary little-endian; --ascii for text) .glb .gltf\n"
+                 "  IN   .ply .obj .off .gltf .glb, or a built-in scene name (sphere, face)\n"
+                 "  OUT  .ply (binary little-endian; --ascii for text) .glb .gltf, or .json: a lattice (see below)\n"
                  "  --splats N       exactly N splats (meshes: sampled on the surface; points: thinned evenly)\n"
                  "  --normals        re-estimate normals (PCA of k nearest neighbours, MST-oriented)\n"
                  "  --radii          re-estimate splat radii and axes from neighbour spacing\n"
@@ -28,19 +37,100 @@ void usage() {
                  "  --seed S         surface sampling seed (default 1)\n"
                  "  --ascii          write ASCII PLY\n"
                  "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .glb KHR_gaussian_splatting); IN may also be\n"
-                 "                   a Gaussian file (.splat, 3DGS .ply, KHR .glb)\n");
+                 "                   a Gaussian file (.splat, 3DGS .ply, KHR .glb)\n"
+                 "  --lattice SRC    store a lattice bound to the cloud (OUT .glb/.gltf) or write it (OUT .json):\n"
+                 "                   fit[:L,M,N][,pad=P][,obb][,bspline]  fitted around the cloud: L,M,N divisions\n"
+                 "                   (default 10,10,10), pad x the largest extent per side (0.05), obb: oriented box\n"
+                 "                   (principal axes), bspline: cubic B-spline basis (default Bernstein);\n"
+                 "                   L.json or scene.glb: that lattice (a scene's lattices bound to its cloud)\n"
+                 "  --lattice-name N the lattice of that name in a scene file (IN for OUT .json, or --lattice)\n"
+                 "  OUT .json without --lattice exports IN's lattice (IN a scene file or a built-in scene)\n");
 }
 
-bool parse_size(const std::string& s, std::size_t& out) {
-    try {
-        std::size_t used = 0;
-        const unsigned long long v = std::stoull(s, &used);
-        if (used != s.size()) return false;
-        out = static_cast<std::size_t>(v);
-        return true;
-    } catch (...) {
-        return false;
+struct LatticeRequest {
+    std::string source;  // --lattice
+    std::string name;    // --lattice-name
+};
+
+// OUT .json: a lattice from IN (a scene) or from --lattice, written as lattice JSON.
+int export_lattice_json(const std::string& in, const std::string& out, const LatticeRequest& req) {
+    using namespace sffd;
+    cli::LatticeChain chain;
+    if (req.source.empty() || sffd::ffd::is_fit_spec(req.source)) {
+        if (req.source.empty() && !cli::is_scene_path(in) && !assets::is_builtin_scene(in)) {
+            std::fprintf(stderr, "splatffd convert: %s: not a scene file; to write a fitted lattice add --lattice fit[:L,M,N]\n", in.c_str());
+            return 1;
+        }
+        ecs::Registry r;
+        if (Status s = load_scene(r, in); !s) {
+            std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
+            return 1;
+        }
+        if (req.source.empty()) {
+            auto c = cli::pick_scene_lattices(r, in, req.name);
+            if (!c) {
+                std::fprintf(stderr, "splatffd convert: %s\n", c.message().c_str());
+                return 1;
+            }
+            chain = std::move(*c);
+        } else {
+            auto fit = ffd::parse_fit_spec(req.source);
+            std::vector<glm::vec3> pts;
+            glm::dvec3 origin(0.0);
+            r.each_entity([&](ecs::Entity e) {
+                if (const SplatCloud* c = r.try_get<SplatCloud>(e); c && pts.empty()) pts = c->positions, origin = c->origin;
+            });
+            auto l = fit ? ffd::fit_lattice(pts, origin, *fit) : Result<Lattice>(fit.error());
+            if (!l) {
+                std::fprintf(stderr, "splatffd convert: %s\n", l.message().c_str());
+                return 1;
+            }
+            chain.lattices.push_back(std::move(*l));
+            chain.names.push_back(req.source);
+        }
+    } else {
+        auto c = cli::load_lattice_source(req.source, req.name);
+        if (!c) {
+            std::fprintf(stderr, "splatffd convert: %s\n", c.message().c_str());
+            return 1;
+        }
+        chain = std::move(*c);
     }
+    if (chain.lattices.size() != 1) {
+        std::string names;
+        for (const auto& n : chain.names) names += (names.empty() ? "'" : ", '") + n + "'";
+        std::fprintf(stderr, "splatffd convert: %s: the cloud is deformed by %zu lattices (%s) in order; a lattice JSON holds one: choose it with --lattice-name NAME\n",
+                     in.c_str(), chain.lattices.size(), names.c_str());
+        return 1;
+    }
+    if (Status s = ffd::save_lattice(out, chain.lattices[0]); !s) {
+        std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
+        return 1;
+    }
+    const Lattice& l = chain.lattices[0];
+    std::fprintf(stderr, "wrote %s: lattice '%s', %s, divisions %d x %d x %d\n", out.c_str(), chain.names[0].c_str(),
+                 l.basis == LatticeBasis::bernstein ? "bernstein" : "bspline", l.divisions.x, l.divisions.y, l.divisions.z);
+    return 0;
+}
+
+// OUT .glb/.gltf with --lattice: the cloud and its lattice(s), bound in order. `loaded`: the JSON or
+// scene source, read before the import (a bad file fails before the work).
+sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const std::string& name, const LatticeRequest& req,
+                               const sffd::cli::LatticeChain& loaded, const std::string& out, std::string& note) {
+    using namespace sffd;
+    cli::LatticeChain chain;
+    if (ffd::is_fit_spec(req.source)) {
+        auto fit = ffd::parse_fit_spec(req.source);
+        if (!fit) return fit.error();
+        auto l = ffd::fit_lattice(cloud.positions, cloud.origin, *fit);
+        if (!l) return l.error();
+        chain.lattices.push_back(std::move(*l));
+        note = ", lattice " + ffd::fit_spec_string(*fit) + " bound to it";
+    } else {
+        chain = loaded;
+        note = ", " + std::to_string(chain.lattices.size()) + " lattice(s) from " + req.source + " bound to it";
+    }
+    return cli::save_cloud_with_lattices(cloud, name, chain.lattices, out);
 }
 
 int run_convert(sffd::cli::Args args) {
@@ -48,35 +138,45 @@ int run_convert(sffd::cli::Args args) {
     std::string in, out;
     assets::ImportOptions opt;
     bool ascii = false, gaussians = false;
+    LatticeRequest lattice;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
-        auto value = [&](std::size_t& dst) {
-            if (i + 1 >= args.size() || !parse_size(args[i + 1], dst)) {
-                std::fprintf(stderr, "splatffd convert: %s needs a non-negative integer\n", a.c_str());
-                return false;
+        // Every number goes through cli::parse_integer (one message format, the option named).
+        auto value = [&](long long min, long long max) -> std::optional<long long> {
+            if (i + 1 >= args.size()) {
+                std::fprintf(stderr, "splatffd convert: %s needs a value\n", a.c_str());
+                return std::nullopt;
             }
-            ++i;
-            return true;
+            auto v = cli::parse_integer(a, args[++i], min, max);
+            if (!v) std::fprintf(stderr, "splatffd convert: %s\n", v.message().c_str());
+            return v ? std::optional<long long>(*v) : std::nullopt;
+        };
+        auto text = [&]() -> std::optional<std::string> {
+            if (i + 1 >= args.size()) {
+                std::fprintf(stderr, "splatffd convert: %s needs a value\n", a.c_str());
+                return std::nullopt;
+            }
+            return args[++i];
         };
         if (a == "--help" || a == "-h") {
             usage();
             return 0;
         } else if (a == "--splats") {
-            if (!value(opt.splats) || opt.splats == 0) {
-                if (opt.splats == 0) std::fprintf(stderr, "splatffd convert: --splats must be at least 1\n");
-                return 2;
-            }
+            auto v = value(1, 1'000'000'000);
+            if (!v) return 2;
+            opt.splats = static_cast<std::size_t>(*v);
         } else if (a == "--neighbours") {
-            std::size_t k = 0;
-            if (!value(k) || k < 4 || k > 128) {
-                std::fprintf(stderr, "splatffd convert: --neighbours must be in 4..128\n");
-                return 2;
-            }
-            opt.neighbours = static_cast<int>(k);
+            auto v = value(4, 128);
+            if (!v) return 2;
+            opt.neighbours = static_cast<int>(*v);
         } else if (a == "--seed") {
-            std::size_t s = 0;
-            if (!value(s)) return 2;
-            opt.seed = static_cast<std::uint32_t>(s);
+            auto v = value(0, 4294967295LL);
+            if (!v) return 2;
+            opt.seed = static_cast<std::uint32_t>(*v);
+        } else if (a == "--lattice" || a == "--lattice-name") {
+            auto v = text();
+            if (!v) return 2;
+            (a == "--lattice" ? lattice.source : lattice.name) = *v;
         } else if (a == "--normals") {
             opt.estimate_normals = true;
         } else if (a == "--radii") {
@@ -103,10 +203,45 @@ int run_convert(sffd::cli::Args args) {
         return 2;
     }
     if (gaussians && in != "sphere" && cli::is_gaussian_file(in)) return cli::write_gaussians(in, nullptr, out, ascii);
+    if (cli::is_json_path(out)) return export_lattice_json(in, out, lattice);
+    if (!lattice.source.empty() && !cli::is_scene_path(out)) {
+        std::fprintf(stderr, "splatffd convert: %s: a PLY file cannot hold a lattice; write a scene (.glb/.gltf) or the lattice alone (.json)\n", out.c_str());
+        return 2;
+    }
+    if (!lattice.name.empty() && lattice.source.empty()) {
+        std::fprintf(stderr, "splatffd convert: --lattice-name needs --lattice SCENE.glb (or OUT .json)\n");
+        return 2;
+    }
+    // The lattice source is checked before the (possibly long) import.
+    cli::LatticeChain loaded;
+    if (ffd::is_fit_spec(lattice.source)) {
+        if (auto fit = ffd::parse_fit_spec(lattice.source); !fit) {
+            std::fprintf(stderr, "splatffd convert: --lattice %s\n", fit.message().c_str());
+            return 2;
+        }
+    } else if (!lattice.source.empty()) {
+        auto c = cli::load_lattice_source(lattice.source, lattice.name);
+        if (!c) {
+            std::fprintf(stderr, "splatffd convert: %s\n", c.message().c_str());
+            return 1;
+        }
+        loaded = std::move(*c);
+    }
     const auto t0 = std::chrono::steady_clock::now();
     Result<SplatCloud> cloud = make_error("");
     if (in == "sphere") {
         cloud = assets::make_sphere_cloud(opt.splats ? opt.splats : assets::kSphereSplats);
+    } else if (assets::is_builtin_scene(in)) {
+        // Other built-in scenes (face) come from their cached file: the scene's first cloud, as stored.
+        ecs::Registry r;
+        if (Status st = load_scene(r, in); !st) {
+            std::fprintf(stderr, "splatffd convert: %s\n", st.message().c_str());
+            return 1;
+        }
+        r.each_entity([&](ecs::Entity e) {
+            if (const SplatCloud* c = r.try_get<SplatCloud>(e); c && !cloud) cloud = *c;
+        });
+        if (!cloud) cloud = make_error(in + ": built-in scene has no point cloud");
     } else {
         auto g = assets::read_geometry(in);
         if (!g) {
@@ -140,18 +275,20 @@ int run_convert(sffd::cli::Args args) {
     }
     if (gaussians) return cli::write_gaussians(in, &*cloud, out, ascii);
     const auto t2 = std::chrono::steady_clock::now();
-    Status s = ascii ? assets::save_splat_ply(*cloud, out, ply::Format::ascii)
-                     : assets::save_splat_cloud(*cloud, out, std::filesystem::path(in).stem().string());
+    std::string lattice_note;
+    Status s = lattice.source.empty() ? (ascii ? assets::save_splat_ply(*cloud, out, ply::Format::ascii)
+                                               : assets::save_splat_cloud(*cloud, out, std::filesystem::path(in).stem().string()))
+                                      : save_with_lattice(*cloud, std::filesystem::path(in).stem().string(), lattice, loaded, out, lattice_note);
     if (!s) {
         std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
         return 1;
     }
     const auto t3 = std::chrono::steady_clock::now();
-    std::fprintf(stderr, "wrote %s: %zu splats (import + estimation %.2f s, write %.2f s)\n", out.c_str(), cloud->size(),
-                 std::chrono::duration<double>(t2 - t0).count(), std::chrono::duration<double>(t3 - t2).count());
+    std::fprintf(stderr, "wrote %s: %zu splats%s (import + estimation %.2f s, write %.2f s)\n", out.c_str(), cloud->size(),
+                 lattice_note.c_str(), std::chrono::duration<double>(t2 - t0).count(), std::chrono::duration<double>(t3 - t2).count());
     return 0;
 }
 
 }  // namespace
 
-SFFD_COMMAND(convert, "convert point clouds and meshes between formats, estimating normals and radii", run_convert);
+SFFD_COMMAND(convert, "convert point clouds and meshes, estimating normals and radii; add or export lattices", run_convert);

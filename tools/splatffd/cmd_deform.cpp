@@ -1,22 +1,40 @@
-// splatffd deform IN.ply OUT.ply --lattice L.json [--backend cpu|gpu|reference] [--bench N] [--ascii]
+// splatffd deform IN OUT [--lattice SOURCE [--lattice-name NAME]] [--backend cpu|gpu|reference] [--bench N] [--ascii]
+//                        [--estimate-radii]
 //
-// Streams the PLY file through the lattice in chunks (peak memory stays far below 256 MB whatever the
-// file size): every element is copied in order, `vertex` rows get deformed x y z (and nx ny nz when
-// present), all other properties are copied with their types. Points outside the lattice are unchanged,
-// points on its faces are inside. The output is binary little-endian (or ASCII with --ascii) and atomic.
+// SOURCE: a lattice JSON file, a scene file (.glb/.gltf: the lattices bound to its cloud, in order, or
+// the one named by --lattice-name), or a fit spec `fit[:L,M,N][,pad=P][,obb][,bspline]` (a rest lattice
+// fitted around IN: the identity, useful to add splat axes). Without --lattice, IN must be a scene file
+// holding a lattice (the editor's save): its own lattices are used.
+//
+// PLY in, PLY out: streams the file through the lattices in chunks (peak memory stays far below 256 MB
+// whatever the file size): every element is copied in order, `vertex` rows get deformed x y z, nx ny nz
+// and the splat axes axis_u* axis_v* (J·axis) when present; a file with normals but no axes gets circular
+// axes created (then deformed), appended as float properties: from its `radius` property, or from radii
+// estimated from neighbour spacing as import does (this case holds every position in memory: by default
+// up to 4M points, beyond that with --estimate-radii). All
+// other properties are copied with their types. Points outside the lattice are unchanged, points on its
+// faces are inside. The output is binary little-endian (or ASCII with --ascii) and atomic.
+// Any other input or output (.glb/.gltf/.obj/.off): the cloud is loaded whole (import estimates normals
+// and radii where missing), deformed (positions, normals, axes) and saved by OUT's extension.
+// The last line on stderr says what was written (positions, normals, axes: deformed / created / absent).
 // --bench N re-runs the deformation of every chunk N more times and prints one JSON line on stdout:
 // {"points":..,"backend":..,"median_ms":..,"points_per_s":..} (deformation only, no I/O).
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "runtime/assets/export.h"
+#include "runtime/assets/import.h"
 #include "runtime/assets/ply.h"
+#include "runtime/assets/scene.h"
+#include "runtime/assets/splat_estimation.h"
+#include "systems/ffd/operations.h"
 #include "systems/ffd/deform.h"
 #include "systems/ffd/ffd_gpu.h"
 #include "systems/ffd/lattice.h"
@@ -24,6 +42,7 @@
 #include "systems/gaussian/gaussian_io.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/deform_gaussians.h"
+#include "tools/splatffd/lattice_source.h"
 
 namespace {
 
@@ -31,11 +50,22 @@ using namespace sffd;
 using Clock = std::chrono::steady_clock;
 
 constexpr std::size_t kChunkRows = 1 << 17;  // ~131k rows: ~10 MB of double columns for 10 properties
+constexpr std::uint64_t kEstimateMaxPoints = 4'000'000;  // default limit of the in-memory radius estimate
 
-int usage() {
-    std::fprintf(stderr,
-                 "usage: splatffd deform IN.ply OUT.ply --lattice L.json [--backend cpu|gpu|reference] [--bench N] [--ascii]\n");
-    return 2;
+constexpr const char* kUsage =
+    "usage: splatffd deform IN OUT [--lattice SOURCE [--lattice-name NAME]] [--backend cpu|gpu|reference] [--bench N] [--ascii]\n"
+    "  IN, OUT  .ply (streamed, every property kept) or .glb .gltf (OUT also .ply); IN also .obj .off\n"
+    "  SOURCE   L.json | scene.glb (the lattices bound to its cloud) | fit[:L,M,N][,pad=P][,obb][,bspline]\n"
+    "           (default: the lattices stored in IN when IN is a scene file)\n"
+    "  --lattice-name NAME  the lattice of that name in a scene file\n"
+    "  splat axes (axis_u*, axis_v*) are deformed; from normals (+ radius, or radii estimated from\n"
+    "  neighbour spacing) they are created first\n"
+    "  --estimate-radii  estimate radii for PLY input with normals only even beyond 4M points\n"
+    "                    (the estimate holds every position: ~75 bytes per point)\n";
+
+int usage(bool asked = false) {
+    std::fputs(kUsage, asked ? stdout : stderr);
+    return asked ? 0 : 2;
 }
 
 int fail(const std::string& message) {
@@ -43,178 +73,325 @@ int fail(const std::string& message) {
     return 1;
 }
 
-// Deforms one chunk's vertex rows in place (double columns). Returns the deformation time in ms.
+// Vertex columns the deformation reads and writes (-1: absent).
+struct VertexColumns {
+    int x = -1, y = -1, z = -1;
+    int n[3] = {-1, -1, -1};
+    int u[3] = {-1, -1, -1}, v[3] = {-1, -1, -1};
+    int radius = -1;
+    bool normals() const { return n[0] >= 0 && n[1] >= 0 && n[2] >= 0; }
+    bool axes() const { return u[0] >= 0 && u[1] >= 0 && u[2] >= 0 && v[0] >= 0 && v[1] >= 0 && v[2] >= 0; }
+};
+
+int scalar_property(const ply::Element& e, const char* name) {
+    const int i = e.find(name);
+    return i >= 0 && !e.properties[std::size_t(i)].is_list ? i : -1;
+}
+
+VertexColumns find_columns(const ply::Element& ve) {
+    VertexColumns c;
+    c.x = ve.find("x"), c.y = ve.find("y"), c.z = ve.find("z");
+    const char* n[3] = {"nx", "ny", "nz"};
+    const char* u[3] = {"axis_ux", "axis_uy", "axis_uz"};
+    const char* v[3] = {"axis_vx", "axis_vy", "axis_vz"};
+    for (int a = 0; a < 3; ++a) c.n[a] = scalar_property(ve, n[a]), c.u[a] = scalar_property(ve, u[a]), c.v[a] = scalar_property(ve, v[a]);
+    if (!c.normals()) c.n[0] = c.n[1] = c.n[2] = -1;
+    if (!c.axes()) c.u[0] = c.u[1] = c.u[2] = c.v[0] = c.v[1] = c.v[2] = -1;
+    c.radius = scalar_property(ve, "radius");
+    return c;
+}
+
+// Appends float axis_u*/axis_v* properties to the vertex element (created from normals and radius).
+void add_axis_properties(ply::Element& ve, VertexColumns& c) {
+    const char* names[6] = {"axis_ux", "axis_uy", "axis_uz", "axis_vx", "axis_vy", "axis_vz"};
+    for (int a = 0; a < 6; ++a) {
+        (a < 3 ? c.u[a] : c.v[a - 3]) = int(ve.properties.size());
+        ve.properties.push_back({names[a], ply::Type::float32});
+    }
+}
+
+glm::dvec3 get3(const ply::Chunk& c, const int* cols, std::size_t r) {
+    return {c.columns[std::size_t(cols[0])].values[r], c.columns[std::size_t(cols[1])].values[r], c.columns[std::size_t(cols[2])].values[r]};
+}
+void set3(ply::Chunk& c, const int* cols, std::size_t r, const glm::dvec3& w) {
+    for (int a = 0; a < 3; ++a) c.columns[std::size_t(cols[a])].values[r] = w[a];
+}
+
+// Circular axes from the chunk's normals and its radius column (or `estimated` radii, one per vertex of
+// the file, this chunk's from row `first`), in the columns add_axis_properties() made (same convention
+// as import: assets::make_circular_axes).
+void create_axes(ply::Chunk& c, const VertexColumns& cols, const std::vector<float>& estimated, std::size_t first) {
+    for (const int a : {cols.u[0], cols.u[1], cols.u[2], cols.v[0], cols.v[1], cols.v[2]}) c.columns[std::size_t(a)].values.resize(c.rows);
+    std::vector<glm::vec3> n(c.rows), u, v;
+    std::vector<float> radius(c.rows);
+    for (std::size_t r = 0; r < c.rows; ++r) {
+        const glm::dvec3 nn = get3(c, cols.n, r);
+        const double len = glm::length(nn);
+        n[r] = len > 0.0 ? glm::vec3(nn / len) : glm::vec3(0, 0, 1);
+        radius[r] = cols.radius >= 0 ? float(c.columns[std::size_t(cols.radius)].values[r]) : estimated[first + r];
+    }
+    assets::make_circular_axes(n, radius, u, v);
+    for (std::size_t r = 0; r < c.rows; ++r) set3(c, cols.u, r, glm::dvec3(u[r])), set3(c, cols.v, r, glm::dvec3(v[r]));
+}
+
+// Deforms one chunk's vertex rows in place (double columns) through every lattice in order. Returns the
+// deformation time in ms.
 struct ChunkDeformer {
-    const Lattice& lattice;
+    const std::vector<Lattice>& lattices;
     std::string backend;  // cpu | gpu | reference
     ffd::GpuDeformer* gpu = nullptr;
-    std::vector<glm::vec3> p, n, op, on;
+    std::vector<glm::vec3> p, n, u, v, op, on, ou, ov;
     std::size_t inverted = 0;
+    ply::Chunk scratch;
 
-    Result<double> run(ply::Chunk& c, int ix, int iy, int iz, int inx, int iny, int inz, bool write) {
+    Result<double> run(ply::Chunk& c, const VertexColumns& cols, bool write) {
+        ply::Chunk* target = &c;
+        if (!write) {  // timing run: deform a copy, the chunk stays the input
+            scratch = c;
+            target = &scratch;
+        }
+        double ms = 0.0;
+        for (const Lattice& l : lattices) {
+            auto t = run_one(l, *target, cols, write);
+            if (!t) return t.error();
+            ms += *t;
+        }
+        return ms;
+    }
+
+    Result<double> run_one(const Lattice& lattice, ply::Chunk& c, const VertexColumns& cols, bool count) {
         const std::size_t rows = c.rows;
-        auto& X = c.columns[std::size_t(ix)].values;
-        auto& Y = c.columns[std::size_t(iy)].values;
-        auto& Z = c.columns[std::size_t(iz)].values;
-        const bool normals = inx >= 0 && iny >= 0 && inz >= 0;
+        const int xyz[3] = {cols.x, cols.y, cols.z};
+        const bool normals = cols.normals(), axes = cols.axes();
         if (backend == "reference") {
             // Double in, double out: no float rounding at all.
             const auto t0 = Clock::now();
-            std::vector<glm::dvec3> pos(rows), nrm(normals ? rows : 0);
             std::size_t inv = 0;
             for (std::size_t r = 0; r < rows; ++r) {
-                const ffd::ReferencePoint rp = ffd::reference_point(lattice, {X[r], Y[r], Z[r]});
-                pos[r] = rp.position;
+                const ffd::ReferencePoint rp = ffd::reference_point(lattice, get3(c, xyz, r));
+                if (!rp.inside) continue;
+                set3(c, xyz, r, rp.position);
+                const glm::dmat3& J = rp.jacobian;
                 if (normals) {
-                    const glm::dvec3 nin(c.columns[std::size_t(inx)].values[r], c.columns[std::size_t(iny)].values[r],
-                                         c.columns[std::size_t(inz)].values[r]);
-                    glm::dvec3 nn = nin;
-                    if (rp.inside) {
-                        const glm::dmat3& J = rp.jacobian;
-                        nn = glm::cross(J[1], J[2]) * nin.x + glm::cross(J[2], J[0]) * nin.y + glm::cross(J[0], J[1]) * nin.z;
-                        const double len = glm::length(nn);
-                        if (len > 0) nn /= len;
-                        inv += glm::determinant(J) < 0.0;
-                    }
-                    nrm[r] = nn;
+                    const glm::dvec3 nin = get3(c, cols.n, r);
+                    glm::dvec3 nn = glm::cross(J[1], J[2]) * nin.x + glm::cross(J[2], J[0]) * nin.y + glm::cross(J[0], J[1]) * nin.z;
+                    const double len = glm::length(nn);
+                    if (len > 0) nn /= len;
+                    set3(c, cols.n, r, nn);
                 }
+                if (axes) set3(c, cols.u, r, J * get3(c, cols.u, r)), set3(c, cols.v, r, J * get3(c, cols.v, r));
+                inv += glm::determinant(J) < 0.0;
             }
-            const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-            if (write) {
-                inverted += inv;
-                for (std::size_t r = 0; r < rows; ++r) {
-                    X[r] = pos[r].x, Y[r] = pos[r].y, Z[r] = pos[r].z;
-                    if (normals) {
-                        c.columns[std::size_t(inx)].values[r] = nrm[r].x;
-                        c.columns[std::size_t(iny)].values[r] = nrm[r].y;
-                        c.columns[std::size_t(inz)].values[r] = nrm[r].z;
-                    }
-                }
-            }
-            return ms;
+            if (count) inverted += inv;
+            return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
         }
         // Float paths work relative to the lattice origin (far-away scans keep their precision).
         const glm::dvec3 o = lattice.origin;
-        p.resize(rows), op.resize(rows);
-        n.resize(normals ? rows : 0), on.resize(normals ? rows : 0);
-        for (std::size_t r = 0; r < rows; ++r) p[r] = glm::vec3(glm::dvec3(X[r], Y[r], Z[r]) - o);
-        if (normals)
-            for (std::size_t r = 0; r < rows; ++r)
-                n[r] = glm::vec3(float(c.columns[std::size_t(inx)].values[r]), float(c.columns[std::size_t(iny)].values[r]),
-                                 float(c.columns[std::size_t(inz)].values[r]));
-        const ffd::PointsIn in{p.data(), normals ? n.data() : nullptr, nullptr, nullptr, rows, o};
-        const ffd::PointsOut out{op.data(), normals ? on.data() : nullptr, nullptr, nullptr};
+        auto size = [rows](std::vector<glm::vec3>& a, bool used) { a.resize(used ? rows : 0); };
+        size(p, true), size(op, true), size(n, normals), size(on, normals);
+        size(u, axes), size(v, axes), size(ou, axes), size(ov, axes);
+        for (std::size_t r = 0; r < rows; ++r) {
+            p[r] = glm::vec3(get3(c, xyz, r) - o);
+            if (normals) n[r] = glm::vec3(get3(c, cols.n, r));
+            if (axes) u[r] = glm::vec3(get3(c, cols.u, r)), v[r] = glm::vec3(get3(c, cols.v, r));
+        }
+        const ffd::PointsIn in{p.data(), normals ? n.data() : nullptr, axes ? u.data() : nullptr, axes ? v.data() : nullptr, rows, o};
+        const ffd::PointsOut out{op.data(), normals ? on.data() : nullptr, axes ? ou.data() : nullptr, axes ? ov.data() : nullptr};
         const auto t0 = Clock::now();
         Result<ffd::DeformStats> stats = backend == "gpu" ? gpu->deform(lattice, in, out) : ffd::deform(lattice, in, out);
         const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
         if (!stats) return stats.error();
-        if (write) {
-            inverted += stats->inverted;
-            for (std::size_t r = 0; r < rows; ++r) {
-                // Unchanged points keep their exact double coordinates.
-                if (op[r] == p[r] && (!normals || on[r] == n[r])) continue;
-                const glm::dvec3 w = o + glm::dvec3(op[r]);
-                X[r] = w.x, Y[r] = w.y, Z[r] = w.z;
-                if (normals) {
-                    c.columns[std::size_t(inx)].values[r] = on[r].x;
-                    c.columns[std::size_t(iny)].values[r] = on[r].y;
-                    c.columns[std::size_t(inz)].values[r] = on[r].z;
-                }
-            }
+        if (count) inverted += stats->inverted;
+        for (std::size_t r = 0; r < rows; ++r) {
+            // Unchanged points keep their exact double values.
+            if (op[r] == p[r] && (!normals || on[r] == n[r]) && (!axes || (ou[r] == u[r] && ov[r] == v[r]))) continue;
+            set3(c, xyz, r, o + glm::dvec3(op[r]));
+            if (normals) set3(c, cols.n, r, glm::dvec3(on[r]));
+            if (axes) set3(c, cols.u, r, glm::dvec3(ou[r])), set3(c, cols.v, r, glm::dvec3(ov[r]));
         }
         return ms;
     }
 };
 
-int run_deform(sffd::cli::Args args) {
-    std::vector<std::string> pos;
-    std::string lattice_path, backend = "cpu";
+struct Options {
+    std::vector<std::string> files;
+    std::string lattice_source, lattice_name, backend = "cpu";
     int bench = 0;
     bool ascii = false;
+    bool estimate_radii = false;  // --estimate-radii: whatever the point count
+};
+
+// -1: parsed; otherwise the exit code (0 after --help, 2 after a usage error).
+int parse_options(sffd::cli::Args args, Options& o) {
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         auto next = [&]() -> std::optional<std::string> {
             if (i + 1 >= args.size()) return std::nullopt;
             return args[++i];
         };
-        if (a == "--help" || a == "-h") return usage();
-        if (a == "--lattice") {
+        if (a == "--help" || a == "-h") return usage(true);
+        if (a == "--lattice" || a == "--lattice-name") {
             auto v = next();
-            if (!v) return usage();
-            lattice_path = *v;
+            if (!v) return std::fprintf(stderr, "splatffd deform: %s needs a value\n", a.c_str()), usage();
+            (a == "--lattice" ? o.lattice_source : o.lattice_name) = *v;
         } else if (a == "--backend") {
             auto v = next();
             if (!v || (*v != "cpu" && *v != "gpu" && *v != "reference")) return usage();
-            backend = *v;
+            o.backend = *v;
         } else if (a == "--bench") {
             auto v = next();
-            if (!v) return usage();
-            try {
-                bench = std::stoi(*v);
-            } catch (...) {
-                return usage();
-            }
-            if (bench < 0) return usage();
+            auto n = v ? cli::parse_integer("--bench", *v, 0, 1'000'000) : Result<long long>(make_error("--bench needs a value"));
+            if (!n) return std::fprintf(stderr, "splatffd deform: %s\n", n.message().c_str()), 2;
+            o.bench = int(*n);
         } else if (a == "--ascii") {
-            ascii = true;
+            o.ascii = true;
+        } else if (a == "--estimate-radii") {
+            o.estimate_radii = true;
         } else if (!a.empty() && a[0] == '-') {
+            std::fprintf(stderr, "splatffd deform: unknown option '%s'\n", a.c_str());
             return usage();
         } else {
-            pos.push_back(a);
+            o.files.push_back(a);
         }
     }
-    if (pos.size() != 2 || lattice_path.empty()) return usage();
-    // The output is always PLY: another extension would put PLY bytes under a misleading name.
-    {
-        std::string ext = std::filesystem::path(pos[1]).extension().string();
-        for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-        if (ext != ".ply")
-            return fail(pos[1] + ": deform writes PLY files; name the output *.ply (got '" + ext + "'; use `splatffd convert` for other formats)");
-    }
-    // Writing over the input while streaming it would destroy the input on success.
-    {
-        std::error_code ec;
-        const bool same = std::filesystem::equivalent(pos[0], pos[1], ec) ||
-                          std::filesystem::weakly_canonical(pos[0], ec) == std::filesystem::weakly_canonical(pos[1], ec);
-        if (same) return fail(pos[1] + ": output is the input file; choose another output name");
-    }
+    if (o.files.size() != 2) return usage();
+    return -1;
+}
 
-    auto lattice = ffd::load_lattice(lattice_path);
-    if (!lattice) return fail(lattice.message());
-    auto reader = ply::Reader::open(pos[0]);
+std::string lower_ext(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    return ext;
+}
+
+std::string joined(const std::vector<std::string>& names) {
+    std::string s;
+    for (const std::string& n : names) s += (s.empty() ? "'" : ", '") + n + "'";
+    return s;
+}
+
+// The lattices for a cloud whose points are `positions` (relative to `origin`; used by a fit spec only).
+// `scene` is IN's registry when IN is a scene file (its own lattices are the default source).
+Result<cli::LatticeChain> lattice_chain(const Options& o, const std::vector<glm::vec3>& positions, const glm::dvec3& origin,
+                                        const ecs::Registry* scene) {
+    if (o.lattice_source.empty()) {
+        if (!scene) return make_error(o.files[0] + ": no --lattice given (a lattice JSON, a scene file or fit:…), and IN is not a scene file");
+        return cli::pick_scene_lattices(*scene, o.files[0], o.lattice_name);
+    }
+    if (ffd::is_fit_spec(o.lattice_source)) {
+        auto fit = ffd::parse_fit_spec(o.lattice_source);
+        if (!fit) return fit.error();
+        auto l = ffd::fit_lattice(positions, origin, *fit);
+        if (!l) return make_error(o.files[0] + ": " + l.message());
+        return cli::LatticeChain{{std::move(*l)}, {ffd::fit_spec_string(*fit)}, {}};
+    }
+    return cli::load_lattice_source(o.lattice_source, o.lattice_name);
+}
+
+// x y z of a PLY's vertices relative to the first one (for a fit spec on a streamed file).
+Result<std::vector<glm::vec3>> read_ply_positions(const std::string& file, glm::dvec3& origin) {
+    auto reader = ply::Reader::open(file);
+    if (!reader) return reader.error();
+    const ply::Element& ve = reader->header().elements[std::size_t(reader->header().find("vertex"))];
+    const int xyz[3] = {ve.find("x"), ve.find("y"), ve.find("z")};
+    if (auto s = reader->seek_element("vertex"); !s) return s.error();
+    std::vector<glm::vec3> out;
+    ply::Chunk chunk;
+    while (true) {
+        auto rows = reader->read_rows(kChunkRows, chunk);
+        if (!rows) return rows.error();
+        if (*rows == 0) break;
+        for (std::size_t r = 0; r < *rows; ++r) {
+            const glm::dvec3 w = get3(chunk, xyz, r);
+            if (out.empty()) origin = w;
+            out.push_back(glm::vec3(w - origin));
+        }
+    }
+    return out;
+}
+
+void print_summary(const char* what, std::size_t points, const std::string& backend, double first_ms, double total_s, std::size_t inverted) {
+    std::fprintf(stderr, "splatffd deform: %zu points (%s backend), deformation %.1f ms (%.3g points/s), total with I/O %.2f s (%.3g points/s), %zu inverted\n",
+                 points, backend.c_str(), first_ms, first_ms > 0 ? double(points) / (first_ms * 1e-3) : 0.0, total_s,
+                 total_s > 0 ? double(points) / total_s : 0.0, inverted);
+    std::fprintf(stderr, "splatffd deform: wrote %s\n", what);
+}
+
+// Outputs must be finite: a lattice that overflows fails the run instead of writing inf (index of the
+// first bad row, or -1).
+long first_non_finite_row(const ply::Chunk& c, const VertexColumns& cols) {
+    for (std::size_t r = 0; r < c.rows; ++r)
+        for (int k : {cols.x, cols.y, cols.z, cols.n[0], cols.n[1], cols.n[2], cols.u[0], cols.u[1], cols.u[2], cols.v[0], cols.v[1], cols.v[2]})
+            if (k >= 0 && !std::isfinite(c.columns[std::size_t(k)].values[r])) return static_cast<long>(r);
+    return -1;
+}
+
+// PLY in, PLY out, streamed.
+int deform_ply_stream(const Options& o) {
+    const std::string& in_path = o.files[0];
+    auto reader = ply::Reader::open(in_path);
     if (!reader) return fail(reader.message());
     const ply::Header& in_header = reader->header();
     const int vi = in_header.find("vertex");
-    if (vi < 0) return fail(pos[0] + ": no vertex element");
+    if (vi < 0) return fail(in_path + ": no vertex element");
     const ply::Element& ve = in_header.elements[std::size_t(vi)];
-    const int ix = ve.find("x"), iy = ve.find("y"), iz = ve.find("z");
-    if (ix < 0 || iy < 0 || iz < 0) return fail(pos[0] + ": vertex element has no x, y, z properties");
+    VertexColumns cols = find_columns(ve);
+    if (cols.x < 0 || cols.y < 0 || cols.z < 0) return fail(in_path + ": vertex element has no x, y, z properties");
+    for (int k : {cols.x, cols.y, cols.z})
+        if (ve.properties[std::size_t(k)].is_list) return fail(in_path + ": x, y, z must be scalar properties");
+
+    std::vector<glm::vec3> fit_points;
+    glm::dvec3 fit_origin(0.0);
+    if (ffd::is_fit_spec(o.lattice_source)) {
+        auto pts = read_ply_positions(in_path, fit_origin);
+        if (!pts) return fail(pts.message());
+        fit_points = std::move(*pts);
+    }
+    auto chain = lattice_chain(o, fit_points, fit_origin, nullptr);
+    if (!chain) return fail(chain.message());
     // 3D Gaussian splats (3DGS PLY): covariances and SH follow the lattice too (tools/splatffd/deform_gaussians.cpp).
-    if (gaussian::is_gaussian_element(ve))
-        return cli::deform_gaussian_ply(pos[0], pos[1], *lattice, lattice_path, backend, bench, ascii);
-    for (int k : {ix, iy, iz})
-        if (ve.properties[std::size_t(k)].is_list) return fail(pos[0] + ": x, y, z must be scalar properties");
-    int inx = ve.find("nx"), iny = ve.find("ny"), inz = ve.find("nz");
-    if (inx < 0 || iny < 0 || inz < 0 || ve.properties[std::size_t(inx)].is_list) inx = iny = inz = -1;
+    if (gaussian::is_gaussian_element(ve)) {
+        if (chain->lattices.size() != 1)
+            return fail(in_path + ": 3D Gaussian files are deformed by one lattice at a time (got " +
+                        std::to_string(chain->lattices.size()) + "); choose one with --lattice-name");
+        return cli::deform_gaussian_ply(in_path, o.files[1], chain->lattices[0], o.lattice_source, o.backend, o.bench, o.ascii);
+    }
+    // Normals but neither axes nor a radius: radii from neighbour spacing, exactly as import estimates
+    // them (6th nearest neighbour, clamped to 4x the median). Needs every position in memory (~60 bytes
+    // per point: positions and a 6-neighbour table), unlike the rest of the stream: done by default up to
+    // kEstimateMaxPoints (~300 MB), beyond that only with --estimate-radii (a 20M-point scan keeps
+    // streaming in ~32 MB and is told how to get axes).
+    std::vector<float> estimated_radii;
+    const bool wants_estimate = !cols.axes() && cols.normals() && cols.radius < 0;
+    const bool estimate = wants_estimate && (o.estimate_radii || ve.count <= kEstimateMaxPoints);
+    if (estimate) {
+        glm::dvec3 o_unused(0.0);
+        auto pts = fit_points.empty() ? read_ply_positions(in_path, o_unused) : Result<std::vector<glm::vec3>>(std::move(fit_points));
+        if (!pts) return fail(pts.message());
+        if (pts->size() >= 2) estimated_radii = assets::estimate_radii(assets::find_neighbours(*pts, 6), 6, 1.0f);
+    }
 
     std::optional<ffd::GpuDeformer> gpu;
-    if (backend == "gpu") {
+    if (o.backend == "gpu") {
         auto g = ffd::GpuDeformer::create_headless();
         if (!g) return fail(g.message());
         gpu.emplace(std::move(*g));
     }
 
     ply::Header out_header = in_header;
-    out_header.format = ascii ? ply::Format::ascii : ply::Format::binary_little_endian;
-    auto writer = ply::Writer::create(pos[1], out_header);
+    out_header.format = o.ascii ? ply::Format::ascii : ply::Format::binary_little_endian;
+    const bool create = !cols.axes() && cols.normals() && (cols.radius >= 0 || !estimated_radii.empty());
+    if (create) add_axis_properties(out_header.elements[std::size_t(vi)], cols);
+    auto writer = ply::Writer::create(o.files[1], out_header);
     if (!writer) return fail(writer.message());
 
-    ChunkDeformer deformer{*lattice, backend, gpu ? &*gpu : nullptr, {}, {}, {}, {}, 0};
-    std::vector<double> rep_ms(std::size_t(bench), 0.0);
+    ChunkDeformer deformer{chain->lattices, o.backend, gpu ? &*gpu : nullptr, {}, {}, {}, {}, {}, {}, {}, {}, 0, {}};
+    std::vector<double> rep_ms(std::size_t(o.bench), 0.0);
     double first_ms = 0.0;
     std::size_t points = 0;
     const auto t_start = Clock::now();
     ply::Chunk chunk;
+    const std::string lattice_label = o.lattice_source.empty() ? in_path : o.lattice_source;
     for (const ply::Element& e : in_header.elements) {
         if (auto s = reader->seek_element(e.name); !s) return fail(s.message());
         while (true) {
@@ -222,19 +399,21 @@ int run_deform(sffd::cli::Args args) {
             if (!rows) return fail(rows.message());
             if (*rows == 0) break;
             if (e.name == "vertex") {
-                for (int r = 0; r < bench; ++r) {  // timing runs first (the chunk is still the input)
-                    auto ms = deformer.run(chunk, ix, iy, iz, inx, iny, inz, false);
-                    if (!ms) return fail(lattice_path + ": " + ms.message());
+                if (create) {
+                    chunk.element = out_header.elements[std::size_t(vi)];
+                    chunk.columns.resize(chunk.element.properties.size());
+                    create_axes(chunk, cols, estimated_radii, points);
+                }
+                for (int r = 0; r < o.bench; ++r) {  // timing runs first (on a copy of the input)
+                    auto ms = deformer.run(chunk, cols, false);
+                    if (!ms) return fail(lattice_label + ": " + ms.message());
                     rep_ms[std::size_t(r)] += *ms;
                 }
-                auto ms = deformer.run(chunk, ix, iy, iz, inx, iny, inz, true);
-                if (!ms) return fail(lattice_path + ": " + ms.message());
-                // Outputs must be finite: a lattice that overflows must fail the run, not write inf.
-                for (std::size_t r = 0; r < *rows; ++r)
-                    for (int k : {ix, iy, iz, inx, iny, inz})
-                        if (k >= 0 && !std::isfinite(chunk.columns[std::size_t(k)].values[r]))
-                            return fail(lattice_path + ": deformed point " + std::to_string(points + r) + " of " + pos[0] +
-                                        " is not finite; nothing was written to " + pos[1]);
+                auto ms = deformer.run(chunk, cols, true);
+                if (!ms) return fail(lattice_label + ": " + ms.message());
+                if (const long bad = first_non_finite_row(chunk, cols); bad >= 0)
+                    return fail(lattice_label + ": deformed point " + std::to_string(points + std::size_t(bad)) + " of " + in_path +
+                                " is not finite; nothing was written to " + o.files[1]);
                 first_ms += *ms;
                 points += *rows;
             }
@@ -243,19 +422,131 @@ int run_deform(sffd::cli::Args args) {
     }
     if (auto s = writer->finish(); !s) return fail(s.message());
     const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
-    std::fprintf(stderr, "splatffd deform: %zu points (%s backend), deformation %.1f ms (%.3g points/s), total with I/O %.2f s (%.3g points/s), %zu inverted\n",
-                 points, backend.c_str(), first_ms, first_ms > 0 ? double(points) / (first_ms * 1e-3) : 0.0, total_s,
-                 total_s > 0 ? double(points) / total_s : 0.0, deformer.inverted);
-    if (bench > 0) {
+    std::string what = o.files[1] + ": positions";
+    what += cols.normals() ? ", normals" : " (no normals in the input)";
+    if (cols.axes()) what += !create ? ", splat axes" : estimate ? ", splat axes (created from normals and radii estimated from neighbour spacing)"
+                                                                 : ", splat axes (created from normals and radius)";
+    else if (wants_estimate)
+        what += "; no splat axes (no radius property, and " + std::to_string(ve.count) +
+                " points are more than deform estimates radii for while streaming: pass --estimate-radii, ~75 bytes per point)";
+    else what += "; no splat axes (the input has no normals: `splatffd convert IN OUT` estimates them)";
+    what += " deformed by " + std::to_string(chain->lattices.size()) + " lattice" + (chain->lattices.size() == 1 ? " " : "s ") + joined(chain->names);
+    print_summary(what.c_str(), points, o.backend, first_ms, total_s, deformer.inverted);
+    if (o.bench > 0) {
         std::sort(rep_ms.begin(), rep_ms.end());
         const double median = rep_ms.size() % 2 ? rep_ms[rep_ms.size() / 2]
                                                 : 0.5 * (rep_ms[rep_ms.size() / 2 - 1] + rep_ms[rep_ms.size() / 2]);
         std::printf("{\"points\":%zu,\"backend\":\"%s\",\"median_ms\":%.4f,\"min_ms\":%.4f,\"runs\":%d,\"points_per_s\":%.4g}\n",
-                    points, backend.c_str(), median, rep_ms.front(), bench, median > 0 ? double(points) / (median * 1e-3) : 0.0);
+                    points, o.backend.c_str(), median, rep_ms.front(), o.bench, median > 0 ? double(points) / (median * 1e-3) : 0.0);
     }
     return 0;
 }
 
+// Any other input or output: the whole cloud in memory (a scene's cloud, or an import that estimates
+// missing normals and radii), deformed with its axes, saved by OUT's extension.
+int deform_in_memory(const Options& o) {
+    const std::string& in_path = o.files[0];
+    if (o.bench > 0) return fail("--bench works on PLY input and output only");
+    // A JSON or scene lattice source is read before the (possibly long) import.
+    std::optional<cli::LatticeChain> early;
+    if (!o.lattice_source.empty() && !ffd::is_fit_spec(o.lattice_source)) {
+        auto c = cli::load_lattice_source(o.lattice_source, o.lattice_name);
+        if (!c) return fail(c.message());
+        early = std::move(*c);
+    }
+    ecs::Registry scene;
+    SplatCloud cloud;
+    std::string cloud_name = std::filesystem::path(in_path).stem().string();
+    const bool in_scene = cli::is_scene_path(in_path);
+    std::string estimated;
+    if (in_scene) {
+        if (Status s = load_scene(scene, in_path); !s) return fail(s.message());
+        std::vector<ecs::Entity> clouds;
+        scene.each_entity([&](ecs::Entity e) {
+            if (scene.has<SplatCloud>(e)) clouds.push_back(e);
+        });
+        if (clouds.empty()) return fail(in_path + ": no point cloud");
+        ecs::Entity chosen = clouds.size() == 1 ? clouds[0] : ecs::null_entity;
+        if (!chosen && o.lattice_source.empty()) {
+            auto own = cli::pick_scene_lattices(scene, in_path, o.lattice_name);
+            if (own && own->cloud) chosen = own->cloud;
+        }
+        if (!chosen) return fail(in_path + ": " + std::to_string(clouds.size()) + " point clouds; deform works on one (the one bound to the chosen lattice)");
+        cloud = scene.get<SplatCloud>(chosen);
+        if (const Name* n = scene.try_get<Name>(chosen)) cloud_name = n->value;
+    } else {
+        auto c = assets::import_splat_cloud(in_path);
+        if (!c) return fail(c.message());
+        cloud = std::move(*c);
+        estimated = " (normals/radii estimated by import where the input had none)";
+    }
+    auto chain = early ? Result<cli::LatticeChain>(std::move(*early)) : lattice_chain(o, cloud.positions, cloud.origin, in_scene ? &scene : nullptr);
+    if (!chain) return fail(chain.message());
+
+    const auto t_start = Clock::now();
+    const std::size_t n = cloud.size();
+    if (cloud.axis_u.size() != n || cloud.axis_v.size() != n) cloud.axis_u.clear(), cloud.axis_v.clear();
+    if (cloud.normals.size() != n) cloud.normals.clear();
+    std::optional<ffd::GpuDeformer> gpu;
+    if (o.backend == "gpu") {
+        auto g = ffd::GpuDeformer::create_headless();
+        if (!g) return fail(g.message());
+        gpu.emplace(std::move(*g));
+    }
+    double ms = 0.0;
+    std::size_t inverted = 0;
+    auto ptr = [](std::vector<glm::vec3>& v) { return v.empty() ? nullptr : v.data(); };
+    for (const Lattice& l : chain->lattices) {
+        const ffd::PointsIn in{cloud.positions.data(), ptr(cloud.normals), ptr(cloud.axis_u), ptr(cloud.axis_v), n, cloud.origin};
+        const ffd::PointsOut out{cloud.positions.data(), ptr(cloud.normals), ptr(cloud.axis_u), ptr(cloud.axis_v)};
+        const auto t0 = Clock::now();
+        auto stats = o.backend == "gpu"         ? gpu->deform(l, in, out)
+                     : o.backend == "reference" ? ffd::deform(l, in, out, ffd::Backend::reference)
+                                                : ffd::deform(l, in, out);
+        ms += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        if (!stats) return fail((o.lattice_source.empty() ? in_path : o.lattice_source) + ": " + stats.message());
+        inverted += stats->inverted;
+    }
+    for (std::size_t i = 0; i < n; ++i)
+        if (!std::isfinite(cloud.positions[i].x) || !std::isfinite(cloud.positions[i].y) || !std::isfinite(cloud.positions[i].z))
+            return fail((o.lattice_source.empty() ? in_path : o.lattice_source) + ": deformed point " + std::to_string(i) + " of " +
+                        in_path + " is not finite; nothing was written to " + o.files[1]);
+    const std::string ext = lower_ext(o.files[1]);
+    Status saved = o.ascii && ext == ".ply" ? assets::save_splat_ply(cloud, o.files[1], ply::Format::ascii)
+                                            : assets::save_splat_cloud(cloud, o.files[1], cloud_name);
+    if (!saved) return fail(saved.message());
+    const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
+    std::string what = o.files[1] + ": positions";
+    what += cloud.normals.empty() ? "" : ", normals";
+    what += cloud.axis_u.empty() ? "; no splat axes" : ", splat axes";
+    what += " deformed by " + std::to_string(chain->lattices.size()) + " lattice" + (chain->lattices.size() == 1 ? " " : "s ") +
+            joined(chain->names) + estimated;
+    print_summary(what.c_str(), n, o.backend, ms, total_s, inverted);
+    return 0;
+}
+
+int run_deform(sffd::cli::Args args) {
+    Options o;
+    if (int code = parse_options(args, o); code >= 0) return code;
+    if (o.lattice_source.empty() && !cli::is_scene_path(o.files[0])) {
+        std::fprintf(stderr, "splatffd deform: --lattice is needed unless IN is a scene file holding a lattice\n");
+        return usage();
+    }
+    const bool ply_in = lower_ext(o.files[0]) == ".ply", ply_out = lower_ext(o.files[1]) == ".ply";
+    if (cli::is_json_path(o.files[1])) return fail(o.files[1] + ": deform writes a point cloud (.ply .glb .gltf); to export a lattice: splatffd convert SCENE.glb L.json");
+    // The output's format follows its extension; anything else would put bytes under a misleading name.
+    if (const std::string ext = lower_ext(o.files[1]); ext != ".ply" && ext != ".glb" && ext != ".gltf")
+        return fail(o.files[1] + ": deform writes .ply, .glb or .gltf files (got '" + ext + "')");
+    // Writing over the input while streaming it would destroy the input on success.
+    {
+        std::error_code ec;
+        const bool same = std::filesystem::equivalent(o.files[0], o.files[1], ec) ||
+                          std::filesystem::weakly_canonical(o.files[0], ec) == std::filesystem::weakly_canonical(o.files[1], ec);
+        if (same) return fail(o.files[1] + ": output is the input file; choose another output name");
+    }
+    return ply_in && ply_out ? deform_ply_stream(o) : deform_in_memory(o);
+}
+
 }  // namespace
 
-SFFD_COMMAND(deform, "deform a PLY file with a lattice (streaming; --backend cpu|gpu|reference, --bench N)", run_deform);
+SFFD_COMMAND(deform, "deform a point cloud by a lattice JSON, a scene's lattices or fit:… (PLY streamed, axes too)", run_deform);

@@ -130,8 +130,18 @@ void summarise_registry(const ecs::Registry& reg) {
         }
         std::printf("  lattice  '%s': %s, divisions %d x %d x %d (%zu control points), %zu displaced (max %.4g)\n", n ? n->value.c_str() : "?",
                     l.basis == LatticeBasis::bernstein ? "bernstein" : "bspline", l.divisions.x, l.divisions.y, l.divisions.z, l.size(), moved, max_move);
-        print_bounds("    ", l.origin, l.origin + l.axes[0] + l.axes[1] + l.axes[2]);
+        const bool aligned = l.axes[0].y == 0 && l.axes[0].z == 0 && l.axes[1].x == 0 && l.axes[1].z == 0 && l.axes[2].x == 0 && l.axes[2].y == 0;
+        if (aligned) {
+            print_bounds("    ", l.origin, l.origin + l.axes[0] + l.axes[1] + l.axes[2]);
+        } else {  // an oriented box: origin and edge vectors
+            std::printf("    origin   [%.6g, %.6g, %.6g]\n", l.origin.x, l.origin.y, l.origin.z);
+            for (int a = 0; a < 3; ++a)
+                std::printf("    axis %c   [%.6g, %.6g, %.6g]  (length %.6g)\n", "STU"[a], l.axes[std::size_t(a)].x, l.axes[std::size_t(a)].y,
+                            l.axes[std::size_t(a)].z, glm::length(l.axes[std::size_t(a)]));
+        }
     });
+    if (reg.count<Lattice>() == 0 && reg.count<SplatCloud>() > 0)
+        std::printf("  lattices none (add one: splatffd convert IN OUT.glb --lattice fit[:L,M,N], or shift+a in splatffd view)\n");
     reg.view<const Camera>().each([&](const Camera& c) {
         std::printf("  camera   eye [%.4g, %.4g, %.4g] target [%.4g, %.4g, %.4g] fov %.1f\n", c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y,
                     c.target.z, static_cast<double>(c.fov_y_degrees));

@@ -88,15 +88,12 @@ int run_pick(sffd::cli::Args args) {
                 return 2;
             }
         } else if (a == "--tolerance" && has_value) {
-            try {
-                tolerance = std::stod(args[++i]);
-            } catch (...) {
-                tolerance = -1;
-            }
-            if (!(tolerance >= 0.0) || !std::isfinite(tolerance)) {
-                std::fprintf(stderr, "splatffd pick: --tolerance expects a number of pixels >= 0\n");
+            auto t = sffd::cli::parse_number("--tolerance", args[++i], 0.0, 1e6);  // the shared number parser
+            if (!t) {
+                std::fprintf(stderr, "splatffd pick: %s (pixels)\n", t.message().c_str());
                 return 2;
             }
+            tolerance = *t;
         } else if (a == "--xray") {
             xray = true;
         } else if (!a.empty() && a[0] != '-' && !scene_given) {

@@ -28,11 +28,6 @@ void usage() {
                  "Runs under X (use `xvfb-run -a` without a display). Keys and mouse: systems/editor/README.md\n");
 }
 
-bool parse_u64(const std::string& s, std::uint64_t& out) {
-    const auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), out);
-    return ec == std::errc() && p == s.data() + s.size();
-}
-
 int run_view_command(sffd::cli::Args args) {
     sffd::editor::ViewOptions o;
     bool have_scene = false;
@@ -58,10 +53,13 @@ int run_view_command(sffd::cli::Args args) {
             o.record = *v;
         } else if (a == "--frames") {
             const auto* v = value("--frames");
-            if (!v || !parse_u64(*v, o.frames) || o.frames == 0) {
-                std::fprintf(stderr, "splatffd view: --frames takes a positive integer\n");
+            if (!v) return 2;
+            auto n = sffd::cli::parse_integer("--frames", *v, 1, 1'000'000'000);  // the shared number parser
+            if (!n) {
+                std::fprintf(stderr, "splatffd view: %s\n", n.message().c_str());
                 return 2;
             }
+            o.frames = std::uint64_t(*n);
         } else if (a == "--screenshot") {
             const auto* v = value("--screenshot");
             if (!v) return 2;

@@ -11,6 +11,8 @@
 #include <string_view>
 #include <vector>
 
+#include "runtime/core/result.h"
+
 namespace sffd::cli {
 
 using Args = std::span<const std::string>;
@@ -23,6 +25,12 @@ struct Command {
 };
 
 std::vector<Command>& commands();
+
+// The one number parser of every command's options: the whole text must be a decimal integer in
+// [min, max]. Error: "--splats: expected an integer in 1..1000000000, got '-5'".
+Result<long long> parse_integer(std::string_view option, std::string_view text, long long min, long long max);
+// Same for real numbers (finite, in [min, max]).
+Result<double> parse_number(std::string_view option, std::string_view text, double min, double max);
 
 struct Registrar {
     Registrar(const char* name, const char* summary, CommandFn run);

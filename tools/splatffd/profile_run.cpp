@@ -20,6 +20,7 @@
 #include "systems/profiling/synthetic.h"
 #include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/splat_render.h"
+#include "tools/splatffd/command.h"
 #include "tools/splatffd/engine.h"
 
 namespace sffd::profile_cmd {
@@ -27,10 +28,9 @@ namespace sffd::profile_cmd {
 using namespace profiling;
 
 bool parse_int(const std::string& s, int& out) {
-    char* end = nullptr;
-    const long v = std::strtol(s.c_str(), &end, 10);
-    if (end == s.c_str() || *end != '\0' || v < 0 || v > 10'000'000) return false;
-    out = static_cast<int>(v);
+    auto v = cli::parse_integer("", s, 0, 10'000'000);  // the shared number parser (the caller names the option)
+    if (!v) return false;
+    out = static_cast<int>(*v);
     return true;
 }
 

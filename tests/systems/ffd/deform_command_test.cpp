@@ -237,10 +237,19 @@ TEST_F(DeformCommand, BadInputIsRefused) {
 // Issue 13: outputs that would be wrong or destructive, hostile lattices, and interruptions.
 TEST_F(DeformCommand, WrongExtensionSameFileAndNonRegularPathsAreRefused) {
     const std::string lat = " --lattice " + p("lattice.json");
-    RunResult r = run(p("in.ply") + " " + p("out.glb") + lat);  // used to write PLY bytes under .glb
+    // The format follows the extension: .glb used to get PLY bytes; now it is a binary glTF.
+    RunResult r = run(p("in.ply") + " " + p("out.glb") + lat);
+    EXPECT_EQ(r.code, 0) << r.err;
+    {
+        std::ifstream f(p("out.glb"), std::ios::binary);
+        char magic[4] = {};
+        f.read(magic, 4);
+        EXPECT_EQ(std::string(magic, 4), "glTF");
+    }
+    r = run(p("in.ply") + " " + p("out.xyz") + lat);  // an extension no writer has is refused
     EXPECT_EQ(r.code, 1);
-    EXPECT_NE(r.err.find(p("out.glb") + ": deform writes PLY files; name the output *.ply (got '.glb'"), std::string::npos) << r.err;
-    EXPECT_FALSE(fs::exists(p("out.glb")));
+    EXPECT_NE(r.err.find(p("out.xyz") + ": deform writes .ply, .glb or .gltf files (got '.xyz')"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(p("out.xyz")));
 
     const auto before = fs::file_size(p("in.ply"));
     for (const std::string& out : {p("in.ply"), (dir / "." / "in.ply").string()}) {

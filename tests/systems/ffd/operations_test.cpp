@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include "systems/ffd/deform.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/operations.h"
@@ -68,6 +70,96 @@ TEST(FfdOperations, FitLatticeWithPaddingAndDegenerateInput) {
     }
     EXPECT_FALSE(fit_lattice({}, {}, {2, 2, 2}).ok());
     EXPECT_NE(fit_lattice({{0, NAN, 0}}, {}, {2, 2, 2}).message().find("not finite"), std::string::npos);
+}
+
+// Points on a regular 9x7x5 grid of a box with half-extents (3, 2, 1), rotated by R and moved to c:
+// the grid is symmetric in the box frame, so its covariance is diagonal there and PCA recovers R's
+// columns exactly (to rounding); the oriented fit is then that box grown by the padding.
+TEST(FfdOperations, OrientedFitFindsTheRotatedBox) {
+    const glm::dmat3 R = glm::dmat3(glm::rotate(glm::dmat4(1.0), 0.5, glm::normalize(glm::dvec3(1, 2, 3))));
+    const glm::dvec3 half(3, 2, 1), c(100, -50, 7);
+    std::vector<glm::vec3> pts;
+    for (int i = 0; i <= 8; ++i)
+        for (int j = 0; j <= 6; ++j)
+            for (int k = 0; k <= 4; ++k) {
+                const glm::dvec3 q(-half.x + 2 * half.x * i / 8, -half.y + 2 * half.y * j / 6, -half.z + 2 * half.z * k / 4);
+                pts.push_back(glm::vec3(R * q));  // relative to the origin c
+            }
+    FitOptions o;
+    o.shape = FitShape::oriented;
+    o.padding = 0.1;
+    o.divisions = {4, 3, 2};
+    auto l = fit_lattice(pts, c, o);
+    ASSERT_TRUE(l.ok()) << l.message();
+    // 0.5 rad about (1,2,3): each box axis stays closest to its own world axis, signs kept positive.
+    for (int a = 0; a < 3; ++a) {
+        const glm::dvec3 e = glm::normalize(l->axes[std::size_t(a)]);
+        EXPECT_NEAR(std::abs(glm::dot(e, R[a])), 1.0, 1e-6) << "axis " << a;
+        EXPECT_GT(e[a], 0.0);
+        EXPECT_NEAR(glm::length(l->axes[std::size_t(a)]), 2 * half[a] + 2 * 0.1 * 6.0, 1e-5) << "axis " << a;
+    }
+    const glm::dvec3 centre = l->origin + 0.5 * (l->axes[0] + l->axes[1] + l->axes[2]);
+    EXPECT_LT(glm::length(centre - c), 1e-5);
+    EXPECT_EQ(l->divisions, glm::ivec3(4, 3, 2));
+    EXPECT_EQ(l->rest, l->current);
+    for (const auto& p : pts) EXPECT_TRUE(inside(local_coords(*l, c + glm::dvec3(p))));
+    // Its volume is the box's (6+1.2)(4+1.2)(2+1.2); the axis-aligned fit of the same points is larger.
+    auto aabb = fit_lattice(pts, c, FitOptions{{4, 3, 2}, LatticeBasis::bernstein, 0.1, FitShape::box});
+    ASSERT_TRUE(aabb.ok());
+    const auto volume = [](const Lattice& x) { return std::abs(glm::determinant(glm::dmat3(x.axes[0], x.axes[1], x.axes[2]))); };
+    EXPECT_NEAR(volume(*l), 7.2 * 5.2 * 3.2, 1e-4);
+    EXPECT_GT(volume(*aabb), 1.5 * volume(*l));
+    // An axis-aligned object: the oriented fit is the box fit.
+    std::vector<glm::vec3> aligned;
+    for (int i = 0; i <= 4; ++i)
+        for (int j = 0; j <= 2; ++j)
+            for (int k = 0; k <= 1; ++k) aligned.push_back(glm::vec3(float(i), 0.5f * float(j), 2.0f * float(k)));
+    auto ob = fit_lattice(aligned, {}, FitOptions{{2, 2, 2}, LatticeBasis::bernstein, 0.0, FitShape::oriented});
+    auto bb = fit_lattice(aligned, {}, FitOptions{{2, 2, 2}, LatticeBasis::bernstein, 0.0, FitShape::box});
+    ASSERT_TRUE(ob.ok() && bb.ok());
+    for (int a = 0; a < 3; ++a) EXPECT_LT(glm::length(ob->axes[std::size_t(a)] - bb->axes[std::size_t(a)]), 1e-9);
+    EXPECT_LT(glm::length(ob->origin - bb->origin), 1e-9);
+    // A sphere has no principal axes: the oriented fit keeps the axis-aligned box (not 5% smaller).
+    const test::Cloud sphere = test::fibonacci_sphere(2000, 1.0);
+    auto os = fit_lattice(sphere.p, {}, FitOptions{{2, 2, 2}, LatticeBasis::bernstein, 0.05, FitShape::oriented});
+    auto bs = fit_lattice(sphere.p, {}, FitOptions{{2, 2, 2}, LatticeBasis::bernstein, 0.05, FitShape::box});
+    ASSERT_TRUE(os.ok() && bs.ok());
+    EXPECT_EQ(os->axes, bs->axes);
+    EXPECT_EQ(os->origin, bs->origin);
+}
+
+TEST(FfdOperations, FitSpecParsesAndRoundTrips) {
+    auto d = parse_fit_spec("fit");
+    ASSERT_TRUE(d.ok());
+    EXPECT_EQ(d->divisions, glm::ivec3(10));
+    EXPECT_EQ(d->shape, FitShape::box);
+    EXPECT_EQ(d->basis, LatticeBasis::bernstein);
+    EXPECT_EQ(d->padding, 0.05);
+    auto f = parse_fit_spec("fit:4,5,6,pad=0.2,obb,bspline");
+    ASSERT_TRUE(f.ok()) << f.message();
+    EXPECT_EQ(f->divisions, glm::ivec3(4, 5, 6));
+    EXPECT_EQ(f->padding, 0.2);
+    EXPECT_EQ(f->shape, FitShape::oriented);
+    EXPECT_EQ(f->basis, LatticeBasis::bspline);
+    auto g = parse_fit_spec(fit_spec_string(*f));
+    ASSERT_TRUE(g.ok());
+    EXPECT_EQ(g->divisions, f->divisions);
+    EXPECT_EQ(g->padding, f->padding);
+    EXPECT_EQ(g->shape, f->shape);
+    EXPECT_EQ(g->basis, f->basis);
+    EXPECT_EQ(parse_fit_spec("fit:3")->divisions, glm::ivec3(3));
+    EXPECT_EQ(parse_fit_spec("fit:pad=0")->padding, 0.0);
+    const std::pair<const char*, const char*> bad[] = {
+        {"fit:", "empty item"},        {"fit:0", "1..64"},          {"fit:65", "1..64"},
+        {"fit:4,x", "unknown item 'x'"}, {"fit:4,5", "one division count"}, {"fit:1,2,3,4", "at most three"},
+        {"fit:pad=-1", "pad must be"},  {"fit:pad=abc", "pad must be"}, {"fit:obb,4", "divisions come first"},
+        {"fits", "a fit spec reads"},  {"fit:4,,4,4", "empty item"}};
+    for (const auto& [spec, want] : bad) {
+        auto r = parse_fit_spec(spec);
+        ASSERT_FALSE(r.ok()) << spec;
+        EXPECT_NE(r.message().find(want), std::string::npos) << spec << " -> " << r.message();
+        EXPECT_EQ(r.message().rfind(spec, 0), 0u) << r.message();  // the message starts with the spec
+    }
 }
 
 TEST(FfdOperations, ApplyAsRestBakesTheShape) {

@@ -1,0 +1,124 @@
+#include "tools/splatffd/lattice_source.h"
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+
+#include "runtime/assets/scene.h"
+#include "systems/ffd/lattice_io.h"
+
+namespace sffd::cli {
+
+namespace {
+
+std::string lower_ext(const std::string& path) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return ext;
+}
+
+std::string name_of(const ecs::Registry& r, ecs::Entity e) {
+    const Name* n = r.try_get<Name>(e);
+    return n && !n->value.empty() ? n->value : "lattice";
+}
+
+std::string quoted_list(const std::vector<std::string>& names) {
+    std::string s;
+    for (const std::string& n : names) s += (s.empty() ? "'" : ", '") + n + "'";
+    return s;
+}
+
+}  // namespace
+
+bool is_scene_path(const std::string& path) {
+    const std::string e = lower_ext(path);
+    return e == ".glb" || e == ".gltf";
+}
+
+bool is_json_path(const std::string& path) { return lower_ext(path) == ".json"; }
+
+Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::string& file, const std::string& name) {
+    std::vector<ecs::Entity> all;
+    r.each_entity([&](ecs::Entity e) {
+        if (r.has<Lattice>(e)) all.push_back(e);
+    });
+    std::vector<std::string> all_names;
+    for (ecs::Entity e : all) all_names.push_back(name_of(r, e));
+    if (all.empty())
+        return make_error(file + ": has no lattice (add one: splatffd convert " + file +
+                          " OUT.glb --lattice fit, or in the editor: shift+a)");
+    LatticeChain chain;
+    if (!name.empty()) {
+        std::vector<ecs::Entity> hits;
+        for (ecs::Entity e : all)
+            if (name_of(r, e) == name) hits.push_back(e);
+        if (hits.empty()) return make_error(file + ": no lattice named '" + name + "' (lattices: " + quoted_list(all_names) + ")");
+        if (hits.size() > 1) return make_error(file + ": " + std::to_string(hits.size()) + " lattices are named '" + name + "'");
+        chain.lattices.push_back(r.get<Lattice>(hits[0]));
+        chain.names.push_back(name);
+        r.each_entity([&](ecs::Entity c) {
+            if (const Deformers* d = r.try_get<Deformers>(c); d && r.has<SplatCloud>(c) && !chain.cloud &&
+                                                              std::find(d->lattices.begin(), d->lattices.end(), hits[0]) != d->lattices.end())
+                chain.cloud = c;
+        });
+        return chain;
+    }
+    // The deformed clouds and their chains.
+    std::vector<ecs::Entity> bound_clouds;
+    r.each_entity([&](ecs::Entity c) {
+        if (const Deformers* d = r.try_get<Deformers>(c); d && r.has<SplatCloud>(c) && !d->lattices.empty()) bound_clouds.push_back(c);
+    });
+    if (bound_clouds.size() == 1) {
+        for (ecs::Entity l : r.get<Deformers>(bound_clouds[0]).lattices)
+            if (r.valid(l) && r.has<Lattice>(l)) {
+                chain.lattices.push_back(r.get<Lattice>(l));
+                chain.names.push_back(name_of(r, l));
+            }
+        chain.cloud = bound_clouds[0];
+        return chain;
+    }
+    if (bound_clouds.empty() && all.size() == 1) {
+        chain.lattices.push_back(r.get<Lattice>(all[0]));
+        chain.names.push_back(all_names[0]);
+        return chain;
+    }
+    return make_error(file + ": " + std::to_string(all.size()) + " lattices (" + quoted_list(all_names) + ")" +
+                      (bound_clouds.size() > 1 ? " bound to " + std::to_string(bound_clouds.size()) + " clouds" : "") +
+                      "; choose one with --lattice-name NAME");
+}
+
+Result<LatticeChain> load_lattice_source(const std::string& source, const std::string& name) {
+    if (is_scene_path(source)) {
+        ecs::Registry r;
+        if (Status s = load_scene(r, source); !s) return s.error();
+        return pick_scene_lattices(r, source, name);
+    }
+    if (!name.empty()) return make_error(source + ": --lattice-name needs a scene file (.glb/.gltf), not a lattice JSON");
+    auto l = ffd::load_lattice(source);
+    if (!l) return l.error();
+    LatticeChain chain;
+    chain.lattices.push_back(std::move(*l));
+    chain.names.push_back(std::filesystem::path(source).stem().string());
+    return chain;
+}
+
+Status save_cloud_with_lattices(SplatCloud cloud, const std::string& cloud_name, const std::vector<Lattice>& lattices,
+                                const std::string& path) {
+    ecs::Registry r;
+    const ecs::Entity c = r.create();
+    r.emplace<Name>(c, Name{cloud_name});
+    r.emplace<Transform>(c, Transform{});
+    r.emplace<SplatCloud>(c, std::move(cloud));
+    Deformers d;
+    for (std::size_t i = 0; i < lattices.size(); ++i) {
+        const ecs::Entity l = r.create();
+        r.emplace<Name>(l, Name{cloud_name + ".lattice" + (i ? std::to_string(i + 1) : std::string())});
+        r.emplace<Transform>(l, Transform{});
+        r.emplace<Lattice>(l, lattices[i]);
+        d.lattices.push_back(l);
+    }
+    if (!d.lattices.empty()) r.emplace<Deformers>(c, std::move(d));
+    return save_scene(r, path);
+}
+
+}  // namespace sffd::cli
