@@ -172,8 +172,6 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
                     json wrap = {{"axis", lj["axes"][a]}};
                     l.axes[a] = lr.v3(wrap, "axis");
                 }
-                if (std::abs(glm::determinant(glm::dmat3(l.axes[0], l.axes[1], l.axes[2]))) < 1e-300)
-                    throw std::runtime_error(lr.where + ": axes are degenerate (zero volume)");
                 {
                     json wrap = {{"divisions", lj.value("divisions", json())}};
                     const glm::dvec3 d = lr.v3(wrap, "divisions");
@@ -186,8 +184,14 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
                 if (basis == "bernstein") l.basis = LatticeBasis::bernstein;
                 else if (basis == "bspline") l.basis = LatticeBasis::bspline;
                 else throw std::runtime_error(lr.where + ": unknown basis '" + basis + "'");
+                {  // the box first (as lattice files do), then the same rules for the whole lattice
+                    Lattice probe = l;
+                    probe.rest = probe.current = rest_grid(l.origin, l.axes, l.divisions);
+                    if (Status s = validate_lattice(probe, lr.where); !s) throw std::runtime_error(s.message());
+                }
                 l.rest = lr.points(lj, "rest", l.size());
                 l.current = lj.contains("current") ? lr.points(lj, "current", l.size()) : l.rest;
+                if (Status s = validate_lattice(l, lr.where); !s) throw std::runtime_error(s.message());
                 const ecs::Entity e = r.create();
                 created.push_back(e);
                 r.emplace<Name>(e, Name{lr.str_or(lj, "name", "lattice")});

@@ -8,10 +8,12 @@
 
 #include <array>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
 
+#include "runtime/core/result.h"
 #include "runtime/ecs/entity.h"
 
 namespace sffd {
@@ -47,6 +49,12 @@ struct Deformers {
 // The one place the grid is built (FFD operations, lattice files, built-in scenes, profiling).
 std::vector<glm::dvec3> rest_grid(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes,
                                   const glm::ivec3& divisions);
+
+// The one set of rules every lattice meets (scene files, lattice files, the deformers): divisions
+// 1..kMaxLatticeDivisions, finite origin/axes/control points, (l+1)(m+1)(n+1) rest and current control
+// points, a non-degenerate box (|det[S T U]| relative to |S||T||U| above 1e-9). Messages start with
+// `what` (a file name or "lattice").
+Status validate_lattice(const Lattice& lattice, const std::string& what = "lattice");
 
 // A lattice at rest (rest == current == rest_grid).
 Lattice make_lattice(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes, const glm::ivec3& divisions,

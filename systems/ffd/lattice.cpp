@@ -4,34 +4,6 @@
 
 namespace sffd::ffd {
 
-static bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-
-Status validate(const Lattice& l, const std::string& what) {
-    for (int a = 0; a < 3; ++a)
-        if (l.divisions[a] < 1 || l.divisions[a] > kMaxDivisions)
-            return make_error(what + ": divisions must be between 1 and " + std::to_string(kMaxDivisions) +
-                              " per axis (got " + std::to_string(l.divisions[a]) + ")");
-    if (!finite(l.origin)) return make_error(what + ": origin is not finite");
-    for (int a = 0; a < 3; ++a)
-        if (!finite(l.axes[a])) return make_error(what + ": axis " + "STU"[a] + " is not finite");
-    const double scale = glm::length(l.axes[0]) * glm::length(l.axes[1]) * glm::length(l.axes[2]);
-    const double det = glm::determinant(axes_matrix(l));
-    if (!(scale > 0.0) || !(std::abs(det) > 1e-9 * scale))
-        return make_error(what + ": zero-volume box (axes S, T, U are degenerate or coplanar)");
-    const std::size_t n = l.size();
-    if (l.rest.size() != n)
-        return make_error(what + ": expected " + std::to_string(n) + " rest control points, got " +
-                          std::to_string(l.rest.size()));
-    if (l.current.size() != n)
-        return make_error(what + ": expected " + std::to_string(n) + " control points, got " +
-                          std::to_string(l.current.size()));
-    for (std::size_t c = 0; c < n; ++c) {
-        if (!finite(l.current[c])) return make_error(what + ": control point " + std::to_string(c) + " is not finite");
-        if (!finite(l.rest[c])) return make_error(what + ": rest control point " + std::to_string(c) + " is not finite");
-    }
-    return {};
-}
-
 glm::dmat3 axes_matrix(const Lattice& l) { return glm::dmat3(l.axes[0], l.axes[1], l.axes[2]); }
 
 glm::dmat3 inverse_axes(const Lattice& l) {

@@ -25,10 +25,8 @@ inline constexpr double kInsideSlack = 1e-6;
 using sffd::make_lattice;
 using sffd::rest_grid;
 
-// Checks divisions (1..kMaxDivisions), finite origin/axes/control points, control-point counts and a
-// non-degenerate box (|det[S T U]| relative to |S||T||U| above 1e-9). Messages start with `what`
-// (a file name or "lattice").
-Status validate(const Lattice& lattice, const std::string& what = "lattice");
+// Divisions, finiteness, counts and a non-degenerate box: the runtime's one rule set (validate_lattice).
+inline Status validate(const Lattice& lattice, const std::string& what = "lattice") { return validate_lattice(lattice, what); }
 
 // M = [S T U] (columns) and its inverse (rows (T×U)/((T×U)·S), (S×U)/((S×U)·T), (S×T)/((S×T)·U)).
 glm::dmat3 axes_matrix(const Lattice& lattice);

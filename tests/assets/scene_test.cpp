@@ -270,6 +270,16 @@ INSTANTIATE_TEST_SUITE_P(
                  "unknown basis"}),
     [](const auto& param_info) { return std::string(param_info.param.label); });
 
+// Scene lattices meet the same rules as lattice files and the deformers (validate_lattice in
+// runtime/scene/lattice.h): a box that is flat relative to its edges (|det| / (|S||T||U|) = 7e-13) is
+// refused at load, not skipped with a warning by every deformation afterwards.
+INSTANTIATE_TEST_SUITE_P(
+    LatticeRules, HostileScene,
+    ::testing::Values(BadScene{"nearly_flat_axes",
+                               R"({"lattices":[{"id":0,"origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[1,1,1e-12]],"divisions":[1,1,1],"rest":[]}]})",
+                               "zero-volume box"}),
+    [](const auto& param_info) { return std::string(param_info.param.label); });
+
 TEST(Scene, UnknownNameSaysWhatExists) {
     ecs::Registry r;
     auto s = load_scene(r, "teapot");

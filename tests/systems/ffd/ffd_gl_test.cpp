@@ -32,6 +32,18 @@ protected:
     std::optional<gfx::GlContext> ctx;
 };
 
+// A point cloud with the test points, deformed by one lattice.
+std::pair<ecs::Entity, ecs::Entity> add_cloud_and_lattice(ecs::Registry& reg, const ffd::test::Cloud& c, Lattice lattice) {
+    const ecs::Entity cloud = reg.create();
+    SplatCloud sc;
+    sc.positions = c.p, sc.normals = c.n, sc.axis_u = c.u, sc.axis_v = c.v;
+    reg.emplace<SplatCloud>(cloud, std::move(sc));
+    const ecs::Entity le = reg.create();
+    reg.emplace<Lattice>(le, std::move(lattice));
+    reg.emplace<Deformers>(cloud, Deformers{{le}});
+    return {cloud, le};
+}
+
 // What the render system does: upload the authored splats as the cloud's `rest` buffer.
 gfx::GpuSplatStore& upload_rest(ecs::Registry& reg, ecs::Entity cloud, const ffd::test::Cloud& c) {
     auto& store = reg.set_resource<gfx::GpuSplatStore>();
@@ -77,13 +89,7 @@ TEST_F(FfdGl, ComputePassMatchesCpuReference) {
 TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     ecs::Registry reg;
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(5000);
-    const ecs::Entity cloud = reg.create();
-    SplatCloud sc;
-    sc.positions = c.p, sc.normals = c.n, sc.axis_u = c.u, sc.axis_v = c.v;
-    reg.emplace<SplatCloud>(cloud, sc);
-    const ecs::Entity le = reg.create();
-    reg.emplace<Lattice>(le, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {5, 5, 5}));
-    reg.emplace<Deformers>(cloud, Deformers{{le}});
+    const auto [cloud, le] = add_cloud_and_lattice(reg, c, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {5, 5, 5}));
     auto& settings = reg.set_resource<FfdSettings>();
     settings.force_gpu = true;  // llvmpipe would otherwise pick the (faster) CPU path
     auto& store = upload_rest(reg, cloud, c);
@@ -126,14 +132,8 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
 TEST_F(FfdGl, GpuPathTouchesNoPerSplatCpuArrayAfterTheFirstFrame) {
     ecs::Registry reg;
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(4000);
-    const ecs::Entity cloud = reg.create();
-    SplatCloud sc;
-    sc.positions = c.p, sc.normals = c.n, sc.axis_u = c.u, sc.axis_v = c.v;
-    reg.emplace<SplatCloud>(cloud, sc);
-    const ecs::Entity le = reg.create();
     // Covers the upper part of the sphere only: outside points pass through (bounds need the rest box).
-    reg.emplace<Lattice>(le, ffd::make_lattice({-1.1, -0.2, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 1.4, 0), glm::dvec3(0, 0, 2.2)}, {4, 4, 4}));
-    reg.emplace<Deformers>(cloud, Deformers{{le}});
+    const auto [cloud, le] = add_cloud_and_lattice(reg, c, ffd::make_lattice({-1.1, -0.2, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 1.4, 0), glm::dvec3(0, 0, 2.2)}, {4, 4, 4}));
     auto& settings = reg.set_resource<FfdSettings>();
     settings.force_gpu = true;
     auto& store = upload_rest(reg, cloud, c);
@@ -193,13 +193,7 @@ TEST_F(FfdGl, SoftwareRasterizerGetsTheCpuPathUnlessTheGpuIsForced) {
         GTEST_SKIP() << "hardware renderer: " << renderer;
     ecs::Registry reg;
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(2000);
-    const ecs::Entity cloud = reg.create();
-    SplatCloud sc;
-    sc.positions = c.p, sc.normals = c.n, sc.axis_u = c.u, sc.axis_v = c.v;
-    reg.emplace<SplatCloud>(cloud, sc);
-    const ecs::Entity le = reg.create();
-    reg.emplace<Lattice>(le, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {3, 3, 3}));
-    reg.emplace<Deformers>(cloud, Deformers{{le}});
+    const auto [cloud, le] = add_cloud_and_lattice(reg, c, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {3, 3, 3}));
     auto& settings = reg.set_resource<FfdSettings>();
     auto& store = reg.set_resource<gfx::GpuSplatStore>();
     gfx::GpuSplats& s = store.clouds[cloud];
