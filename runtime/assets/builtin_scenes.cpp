@@ -160,7 +160,7 @@ bool is_builtin_scene(const std::string& name) { return name == "sphere" || name
 
 namespace {
 
-void add_cloud_with_lattice(ecs::Registry& r, const std::string& name, SplatCloud cloud, const glm::dvec3& view_dir) {
+ecs::Entity add_cloud_with_lattice(ecs::Registry& r, const std::string& name, SplatCloud cloud, const glm::dvec3& view_dir) {
     glm::dvec3 lo(1e300), hi(-1e300);
     for (const auto& p : cloud.positions) {
         lo = glm::min(lo, cloud.origin + glm::dvec3(p));
@@ -178,13 +178,16 @@ void add_cloud_with_lattice(ecs::Registry& r, const std::string& name, SplatClou
     r.emplace<SplatCloud>(e, std::move(cloud));
     r.emplace<Deformers>(e, Deformers{{lat}});
     add_default_view(r, lo - pad, hi + pad, view_dir);
+    return e;
 }
 
 }  // namespace
 
 Status load_builtin_scene(ecs::Registry& r, const std::string& name) {
     if (name == "sphere") {
-        add_cloud_with_lattice(r, "sphere", make_sphere_cloud(), glm::dvec3(0.35, 0.3, 1.0));
+        const ecs::Entity sphere = add_cloud_with_lattice(r, "sphere", make_sphere_cloud(), glm::dvec3(0.35, 0.3, 1.0));
+        // make_sphere_cloud samples the unit sphere at the origin: the ground-truth renderer traces it.
+        r.emplace<ExactSphere>(sphere, ExactSphere{});
         return {};
     }
     if (name == "face") {

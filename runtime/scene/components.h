@@ -50,6 +50,14 @@ struct SplatCloud {
     std::size_t size() const { return positions.size(); }
 };
 
+// On a point-cloud entity whose splats sample a known analytic surface (the built-in sphere): the sphere
+// in cloud space (relative to SplatCloud::origin). Authored data, read by the ground-truth ray tracer
+// (systems/splat_render/ground_truth.h), which renders this surface instead of the splats.
+struct ExactSphere {
+    glm::dvec3 center{0.0};
+    double radius = 1.0;
+};
+
 // Perspective camera looking down its local -Z; placed by the entity's Transform or by look-at fields.
 struct Camera {
     glm::dvec3 eye{0.0, 0.0, 3.0};

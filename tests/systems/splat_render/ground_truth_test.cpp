@@ -1,0 +1,196 @@
+// Ground-truth ray tracer (ground_truth.h) against analytic facts, and the image metrics (image_compare.h)
+// against hand-computed values.
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "runtime/assets/builtin_scenes.h"
+#include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/ground_truth.h"
+#include "systems/splat_render/image_compare.h"
+
+namespace sffd::render {
+namespace {
+
+// Unit sphere at the origin seen from +Z at distance `d`, 45 deg vertical field of view, one light from
+// the eye's direction (white, intensity 1) and ambient 0.2.
+ReferenceScene axis_scene(int w, int h, double d, const SplatMaterial& material) {
+    ReferenceScene s;
+    s.width = w, s.height = h;
+    Camera cam;
+    cam.eye = glm::dvec3(0.0, 0.0, d);
+    cam.target = glm::dvec3(0.0);
+    cam.fov_y_degrees = 45.0f;
+    cam.near_plane = 0.1f;
+    cam.far_plane = 100.0f;
+    s.view = view_matrix(cam);
+    s.projection = projection_matrix(cam, double(w) / double(h));
+    s.material = &material;
+    s.lights.ambient = glm::dvec3(0.2);
+    s.lights.to_light = {glm::dvec3(0.0, 0.0, 1.0)};
+    s.lights.color = {glm::dvec3(1.0)};
+    return s;
+}
+
+// A 4 x 2 texture of distinct colours (sRGB bytes).
+SplatMaterial four_by_two() {
+    SplatMaterial m;
+    m.texture_width = 4, m.texture_height = 2;
+    for (int i = 0; i < 8; ++i) {
+        const auto b = std::uint8_t(20 + 28 * i);
+        m.texture_rgba8.insert(m.texture_rgba8.end(), {b, std::uint8_t(255 - b), std::uint8_t(7 * i), 255});
+    }
+    return m;
+}
+
+double decode(std::uint8_t c) {
+    const double v = c / 255.0;
+    return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+}
+
+TEST(GroundTruth, CentrePixelSeesTheExpectedUvNormalDepthAndShade) {
+    const SplatMaterial m = four_by_two();
+    const ReferenceScene s = axis_scene(65, 65, 4.0, m);  // odd size: pixel (32, 32) is on the view axis
+    auto img = render_reference(s);
+    ASSERT_TRUE(img) << img.message();
+    const std::size_t k = img->index(32, 32);
+    ASSERT_EQ(img->color[k].w, 1.0f);
+    EXPECT_NEAR(img->depth[k], 3.0, 1e-5);  // eye at 4, surface at z = 1
+    EXPECT_NEAR(img->normal[k].z, 1.0, 1e-6);
+    // Hit (0, 0, 1): longitude atan2(1, 0) = pi/2 -> u = 0.25, colatitude pi/2 -> v = 0.5. In the 4 x 2
+    // texture that is the corner of texels (0..1, 0..1): bilinear weights 1/4 each (magnified: level 0).
+    EXPECT_NEAR(sphere_uv(glm::dvec3(0, 0, 1)).x, 0.25, 1e-12);
+    EXPECT_NEAR(sphere_uv(glm::dvec3(0, 0, 1)).y, 0.5, 1e-12);
+    for (int c = 0; c < 3; ++c) {
+        double albedo = 0.0;
+        for (int t : {0, 1, 4, 5}) albedo += 0.25 * decode(m.texture_rgba8[std::size_t(4 * t + c)]);
+        // n = l = to_eye: ndl = 1, n.h = 1 -> spec = specular. colour = albedo (ambient + 1) + specular.
+        EXPECT_NEAR(img->color[k][c], albedo * 1.2 + double(m.specular), 2e-5) << "channel " << c;
+    }
+}
+
+TEST(GroundTruth, SilhouetteIsTheAnalyticDisc) {
+    SplatMaterial m;  // untextured: base colour
+    const int w = 201, h = 201;
+    const double d = 3.0;
+    const ReferenceScene s = axis_scene(w, h, d, m);
+    auto img = render_reference(s);
+    ASSERT_TRUE(img) << img.message();
+    // Angular radius asin(1/d); on screen tan(asin(1/d)) / tan(fov/2) * h/2 pixels.
+    const double r_px = std::tan(std::asin(1.0 / d)) / std::tan(glm::radians(22.5)) * h / 2.0;
+    int mismatches = 0, covered = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const double dx = x + 0.5 - w / 2.0, dy = y + 0.5 - h / 2.0;
+            const double r = std::sqrt(dx * dx + dy * dy);
+            const bool inside = img->covered(x, y);
+            covered += inside;
+            if (std::abs(r - r_px) > 0.01 && inside != (r < r_px)) ++mismatches;
+        }
+    EXPECT_EQ(mismatches, 0);
+    EXPECT_NEAR(covered, std::numbers::pi * r_px * r_px, 2.0 * std::numbers::pi * r_px * 0.5);
+    // The rim is lit by ambient and a grazing light: darker than the centre, never black.
+    EXPECT_GT(img->color[img->index(100, 100)].x, img->color[img->index(100, 100 - int(r_px) + 1)].x);
+}
+
+// A lattice that scales space by 1.5 about the origin is an affine map, which Bernstein lattices reproduce
+// exactly: the traced tessellation of F(sphere) must match the analytic sphere of radius 1.5, texture
+// coordinates included (the uv of a deformed point is the uv of its rest point).
+TEST(GroundTruth, DeformedPathMatchesTheAnalyticScaledSphere) {
+    const SplatMaterial tex = [] {
+        SplatMaterial m;
+        const assets::Image img = assets::make_sphere_texture(256, 128);
+        m.texture_width = img.width, m.texture_height = img.height, m.texture_rgba8 = img.rgba8;
+        return m;
+    }();
+    ReferenceScene scaled = axis_scene(160, 120, 6.0, tex);
+    Lattice l = assets::make_box_lattice(glm::dvec3(-1.1), glm::dvec3(1.1), glm::ivec3(4), LatticeBasis::bernstein);
+    for (std::size_t i = 0; i < l.size(); ++i) l.current[i] = 1.5 * l.rest[i];
+    scaled.lattices = {l};
+    ReferenceSettings fine;
+    fine.longitude_steps = 1024, fine.colatitude_steps = 512;
+    auto traced = render_reference(scaled, fine);
+    ASSERT_TRUE(traced) << traced.message();
+    ReferenceScene analytic = axis_scene(160, 120, 6.0, tex);
+    analytic.radius = 1.5;
+    auto exact = render_reference(analytic);
+    ASSERT_TRUE(exact) << exact.message();
+    auto cmp = compare_images(*traced, *exact);
+    ASSERT_TRUE(cmp) << cmp.message();
+    EXPECT_GT(cmp->pixels, 4000u);  // pi * 37.4^2 px
+    std::printf("traced vs analytic: PSNR %.2f dB, SSIM %.5f\n", cmp->psnr, cmp->ssim);
+    EXPECT_GT(cmp->psnr, 45.0);
+    EXPECT_GT(cmp->ssim, 0.995);
+    int coverage_diff = 0;
+    for (std::size_t k = 0; k < exact->color.size(); ++k) coverage_diff += (exact->color[k].w > 0) != (traced->color[k].w > 0);
+    EXPECT_LE(coverage_diff, 4);  // only pixel centres within float rounding of the silhouette
+}
+
+TEST(GroundTruth, ReferenceSceneOfTheBuiltinSphere) {
+    ecs::Registry reg;
+    ASSERT_TRUE(assets::load_builtin_scene(reg, "sphere"));
+    auto s = reference_scene(reg, 320, 180);
+    ASSERT_TRUE(s) << s.message();
+    EXPECT_EQ(s->radius, 1.0);
+    EXPECT_EQ(s->center, glm::dvec3(0.0));
+    EXPECT_TRUE(s->lattices.empty());  // at rest: the analytic path
+    ASSERT_EQ(s->lights.to_light.size(), 1u);
+    ecs::Registry empty;
+    auto none = reference_scene(empty, 320, 180);
+    ASSERT_FALSE(none);
+    EXPECT_NE(none.message().find("no point cloud with an exact surface"), std::string::npos);
+}
+
+// FrameImage of w x 1 grey pixels given in sRGB (alpha 1; alpha 0 where grey < 0).
+FrameImage grey_row(std::initializer_list<double> srgb) {
+    FrameImage f;
+    f.width = int(srgb.size()), f.height = 1;
+    for (double g : srgb) {
+        const float lin = g < 0 ? 0.0f : srgb_to_linear(float(g));
+        f.color.push_back(glm::vec4(lin, lin, lin, g < 0 ? 0.0f : 1.0f));
+    }
+    return f;
+}
+
+TEST(ImageCompare, PsnrAndSsimOfHandComputedCases) {
+    // Grey 0.5 vs 0.25 everywhere: MSE = 0.0625, PSNR = 10 log10(16) = 12.041 dB. Constant images have no
+    // variance, so SSIM = (2 mu_a mu_b + C1) / (mu_a^2 + mu_b^2 + C1) = (0.25 + 1e-4) / (0.3125 + 1e-4).
+    auto r = compare_images(grey_row({0.5, 0.5, 0.5}), grey_row({0.25, 0.25, 0.25}));
+    ASSERT_TRUE(r) << r.message();
+    EXPECT_EQ(r->pixels, 3u);
+    EXPECT_NEAR(r->mse, 0.0625, 1e-6);
+    EXPECT_NEAR(r->psnr, 10.0 * std::log10(16.0), 1e-4);
+    EXPECT_NEAR(r->ssim, (0.25 + 1e-4) / (0.3125 + 1e-4), 1e-5);
+    // One differing pixel of two: MSE = 0.25^2 / 2.
+    auto half = compare_images(grey_row({0.5, 0.75}), grey_row({0.5, 0.5}));
+    ASSERT_TRUE(half);
+    EXPECT_NEAR(half->psnr, 10.0 * std::log10(2.0 / 0.0625), 1e-4);
+}
+
+TEST(ImageCompare, MaskIsThePixelsCoveredInEitherImage) {
+    // Pixel 2 is background in both: ignored. Pixel 1 is covered in one only: compared against black.
+    auto r = compare_images(grey_row({0.5, 0.5, -1}), grey_row({0.5, -1, -1}));
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->pixels, 2u);
+    EXPECT_NEAR(r->mse, 0.25 / 2.0, 1e-6);
+    auto whole = compare_images(grey_row({0.5, 0.5, -1}), grey_row({0.5, -1, -1}), false);
+    ASSERT_TRUE(whole);
+    EXPECT_EQ(whole->pixels, 3u);
+}
+
+TEST(ImageCompare, IdenticalImagesAreInfiniteAndOne) {
+    const FrameImage a = grey_row({0.1, 0.9, 0.3, -1, 0.7});
+    auto r = compare_images(a, a);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->psnr, std::numeric_limits<double>::infinity());
+    EXPECT_NEAR(r->ssim, 1.0, 1e-12);
+    auto bad = compare_images(a, grey_row({0.1}));
+    ASSERT_FALSE(bad);
+    EXPECT_EQ(bad.message(), "images differ in size: 5x1 vs 1x1");
+}
+
+}  // namespace
+}  // namespace sffd::render
