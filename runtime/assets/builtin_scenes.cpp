@@ -96,6 +96,19 @@ SplatCloud make_sphere_cloud(std::size_t n) {
         c.axis_u[i] = east * radii[i];
         c.axis_v[i] = south * radii[i];
     }
+    // uv frame: the gradients of u = longitude / 2 pi and v = colatitude / pi on the unit sphere (east / (2 pi
+    // sin(colatitude)) and south / pi) applied to the axes.
+    c.uv_axes.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const glm::dvec3 p(c.positions[i]);
+        const double sin_colat = std::max(std::sqrt(p.x * p.x + p.z * p.z), 1e-6);
+        const glm::dvec3 east = glm::dvec3(-p.z, 0.0, p.x) / sin_colat;
+        const glm::dvec3 south = glm::cross(glm::dvec3(c.normals[i]), east);
+        const glm::dvec3 grad_u = east / (2.0 * std::numbers::pi * sin_colat), grad_v = south / std::numbers::pi;
+        const glm::dvec3 au(c.axis_u[i]), av(c.axis_v[i]);
+        c.uv_axes[i] = glm::vec4(float(glm::dot(grad_u, au)), float(glm::dot(grad_v, au)), float(glm::dot(grad_u, av)),
+                                 float(glm::dot(grad_v, av)));
+    }
     Image tex = make_sphere_texture();
     c.material.texture_width = tex.width;
     c.material.texture_height = tex.height;

@@ -45,6 +45,10 @@ struct SplatCloud {
     std::vector<glm::vec3> axis_v;          // bitangent axis scaled by radius (normal x axis_u direction)
     std::vector<std::uint32_t> colors;      // RGBA8, sRGB-encoded, R in the low byte
     std::vector<glm::vec2> uvs;             // texture coordinates (when the material has a texture)
+    // uv derivatives along the splat's axes: the point positions[i] + s * axis_u[i] + t * axis_v[i] has
+    // uv = uvs[i] + s * uv_axes[i].xy + t * uv_axes[i].zw (first order). Per axis, so they hold for the
+    // deformed axes too (FFD maps the axes by the Jacobian). Empty: one texture lookup per splat.
+    std::vector<glm::vec4> uv_axes;
     SplatMaterial material;
 
     std::size_t size() const { return positions.size(); }

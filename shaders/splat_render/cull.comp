@@ -18,6 +18,9 @@ layout(local_size_x = 128) in;
 layout(std430, binding = SFFD_SSBO_SPLATS_DRAW) readonly buffer Splats { GpuSplat splats[]; };
 layout(std430, binding = SFFD_SSBO_VISIBLE) writeonly buffer QuadList { uint quads[]; };
 layout(std430, binding = SFFD_SSBO_VISIBLE_SPLATS) writeonly buffer Records { SplatRecord records[]; };
+#if TEXTURED
+layout(std430, binding = SFFD_SSBO_UV_AXES) readonly buffer UvAxes { vec4 uv_axes[]; };
+#endif
 layout(std430, binding = SFFD_SSBO_DRAW_INDIRECT) buffer Commands {
     uint point_count, point_instances, point_first, point_base;
     uint quad_vertices, quad_count, quad_first, quad_base;
@@ -79,6 +82,11 @@ void main() {
         rec.center = vec4(box.xy, o.c.z, box.z);
         vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
         rec.normal = vec4(world_n, pack_color(splat_color(s, o, world_n).rgb));
+#if TEXTURED
+        rec.uv = splat_uv_frame(s, uv_axes[i]);
+#else
+        rec.uv = vec4(0.0);
+#endif
         records[atomicAdd(point_count, 1u)] = rec;
     }
 }

@@ -23,8 +23,8 @@ float window_depth(float t) { return window_depth_inv(1.0 / t); }
 
 // Intersects the pixel's ray with the splat's plane; discards outside the ellipse and back-facing splats
 // marked by the cull pass (culling off: plane NaN, so t is NaN). Returns the view-axis depth t of the hit
-// (p = t * ray) and the squared elliptical radius r2.
-float raycast_splat(out vec3 ray, out float r2) {
+// (p = t * ray), its splat coordinates st (p = centre + st.x * axis_u + st.y * axis_v) and r2 = |st|^2.
+float raycast_splat(out vec3 ray, out float r2, out vec2 st) {
     ray = pixel_ray();
     float t = 1.0 / dot(v_plane.xyz, ray);
     if (!(t > 0.0)) discard;
@@ -33,7 +33,24 @@ float raycast_splat(out vec3 ray, out float r2) {
     float q = t * dot(dv.xyz, ray) - dv.w;
     r2 = s * s + q * q;
     if (r2 > 1.0) discard;
+    st = vec2(s, q);
     return t;
+}
+float raycast_splat(out vec3 ray, out float r2) {
+    vec2 st;
+    return raycast_splat(ray, r2, st);
+}
+
+// Derivatives of the splat coordinates st along window x (xy) and y (zw) at this fragment, exact for the
+// ray cast above: ray = (x * ray_map.x + ray_map.z, y * ray_map.y + ray_map.w, -1), t = 1 / dot(plane, ray),
+// s = t dot(dual_u, ray) - dual_u.w, so ds/dx = t ray_map.x (dual_u.x - plane.x (s + dual_u.w)). Analytic,
+// not dFdx: fragments outside the ellipse have discarded, and neighbouring pixels may be other splats.
+vec4 splat_st_gradients(float t, vec2 st) {
+    vec2 a = st + vec2(v_dual_u.w, v_dual_v.w);
+    vec2 scale = t * frame.ray_map.xy;
+    vec2 ds = scale * (v_dual_u.xy - v_plane.xy * a.x);  // (ds/dx, ds/dy)
+    vec2 dq = scale * (v_dual_v.xy - v_plane.xy * a.y);  // (dq/dx, dq/dy)
+    return vec4(ds.x, dq.x, ds.y, dq.y);
 }
 
 #endif

@@ -4,6 +4,7 @@
 //   SHAPE_QUAD 1: a world-space parallelogram c +- u +- v per splat (two triangles, instanced over the quad
 //                 list), for splats a sprite cannot draw; set up here from the splat itself
 //   PASS 0 visibility, 1 attribute, 2 preview (the later two pass colour and normal on)
+//   TEXTURED 1 (attribute pass of a textured cloud): the splat's uv frame goes on to the fragment shader
 // The fragment shaders ray-cast the splat's ellipse from the flat values (see SplatRecord).
 
 #include "splat_render/splat_common.glsl"
@@ -11,6 +12,9 @@
 #include "splat_render/splat_color.glsl"
 layout(std430, binding = SFFD_SSBO_SPLATS_DRAW) readonly buffer Splats { GpuSplat splats[]; };
 layout(std430, binding = SFFD_SSBO_VISIBLE) readonly buffer QuadList { uint quads[]; };
+#if PASS == 1 && TEXTURED
+layout(std430, binding = SFFD_SSBO_UV_AXES) readonly buffer UvAxes { vec4 uv_axes[]; };
+#endif
 #else
 // The SplatRecord array of the cull pass, bound as a vertex buffer (stride 80): the vertex fetcher reads
 // it far faster than per-lane SSBO loads on llvmpipe.
@@ -21,6 +25,9 @@ layout(location = 3) in vec4 a_dual_v;
 #if PASS != 0
 layout(location = 4) in vec4 a_normal;  // w: packed colour
 #endif
+#if PASS == 1 && TEXTURED
+layout(location = 5) in vec4 a_uv;      // splat_uv_frame
+#endif
 #endif
 
 // PASS 0: v_plane.w = eps; PASS 1, 2: v_plane.w = packed colour (HQ albedo, preview lit; pack_color).
@@ -30,10 +37,16 @@ layout(location = 2) flat out vec4 v_dual_v;
 #if PASS == 1 || AUX
 layout(location = 3) flat out vec3 v_normal;  // world space shading normal
 #endif
+#if PASS == 1 && TEXTURED
+layout(location = 4) flat out vec4 v_uv;  // splat_uv_frame
+#endif
 
 void main() {
 #if SHAPE_QUAD
     GpuSplat s = splats[quads[gl_InstanceID]];
+#if PASS == 1 && TEXTURED
+    v_uv = splat_uv_frame(s, uv_axes[quads[gl_InstanceID]]);
+#endif
     SplatView o = splat_view(s);
     splat_raycast_setup(o, v_plane, v_dual_u, v_dual_v);
     if (frame.params.z == 0.0 && s.normal.w != 0.0 && dot(o.shading_n, o.c) > 0.0)
@@ -53,6 +66,9 @@ void main() {
     v_plane = a_plane;
     v_dual_u = a_dual_u;
     v_dual_v = a_dual_v;
+#if PASS == 1 && TEXTURED
+    v_uv = a_uv;
+#endif
 #if PASS != 0
     v_plane.w = a_normal.w;
 #if PASS == 1 || AUX

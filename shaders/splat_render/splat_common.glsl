@@ -7,7 +7,7 @@
 #include "splat_render/frame_block.h"
 
 // A visible sprite splat, prepared by the cull pass so the vertex shaders of both HQ passes only copy it
-// (llvmpipe spends its time per primitive: vertex work runs once, in the compute pass). std430, 80 bytes,
+// (llvmpipe spends its time per primitive: vertex work runs once, in the compute pass). std430, 96 bytes,
 // bound as a vertex buffer. The ray through a pixel is d = (x, y, -1) in view space; the ray cast is
 // linear in d:
 //   t = 1 / dot(plane.xyz, d)                     view-axis depth of the hit p = t * d
@@ -22,7 +22,17 @@ struct SplatRecord {
     vec4 dual_u;   // xyz: dual axis (s = dot(dual_u, p - center)), w: dot(dual_u, center)
     vec4 dual_v;
     vec4 normal;   // xyz world-space shading normal, w: packed colour (pack_color; HQ albedo, preview lit)
+    vec4 uv;       // textured clouds: xy uv at the centre, z / w: packHalf2x16 of the uv derivatives along
+                   // axis_u / axis_v (splat_uv_frame); the HQ attribute pass samples the texture per pixel
 };
+
+// The uv frame of a splat as the fragment shaders read it: uv at the centre, and the uv derivatives along
+// the two axes (SplatCloud::uv_axes) packed as halves. The derivatives are per axis, so they stay valid
+// when a lattice deforms the axes: the point centre + s * axis_u + t * axis_v maps to uv + s du + t dv
+// before and after (first order).
+vec4 splat_uv_frame(GpuSplat s, vec4 uv_axes) {
+    return vec4(s.axis_u.w, s.axis_v.w, uintBitsToFloat(packHalf2x16(uv_axes.xy)), uintBitsToFloat(packHalf2x16(uv_axes.zw)));
+}
 
 float pack_color(vec3 linear) {
     uvec3 q = uvec3(round(sqrt(clamp(linear, 0.0, 1.0)) * 1023.0));

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 
+#include <glm/gtc/packing.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -178,6 +179,14 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 }
                 if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
                 rec.normal = glm::vec4(world_n, pack_color(color));
+                // splat_uv_frame
+                if (textured) {
+                    const glm::vec4 a = texture.uv_axes ? texture.uv_axes[i] : glm::vec4(0.0f);
+                    rec.uv = glm::vec4(s.axis_u[3], s.axis_v[3], std::bit_cast<float>(glm::packHalf2x16(glm::vec2(a.x, a.y))),
+                                       std::bit_cast<float>(glm::packHalf2x16(glm::vec2(a.z, a.w))));
+                } else {
+                    rec.uv = glm::vec4(0.0f);
+                }
             }
             out.record_counts[b] = kept;
             out.quad_counts[b] = kept_quads;

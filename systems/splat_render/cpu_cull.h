@@ -21,21 +21,23 @@
 
 namespace sffd::render {
 
-// SplatRecord of shaders/splat_render/splat_common.glsl (std430, 80 bytes): see there for the fields.
+// SplatRecord of shaders/splat_render/splat_common.glsl (std430, 96 bytes): see there for the fields.
 struct SplatRecord {
     glm::vec4 center;
     glm::vec4 plane;
     glm::vec4 dual_u;
     glm::vec4 dual_v;
     glm::vec4 normal;
+    glm::vec4 uv;
 };
-static_assert(sizeof(SplatRecord) == 80);
+static_assert(sizeof(SplatRecord) == 96);
 
 // The material texture as the shader samples it (sRGB RGBA8, row 0 at v = 0, repeat in u, clamp in v,
 // bilinear at level 0). Null texels: untextured (per-splat colours).
 struct TexelView {
     const std::uint8_t* rgba8 = nullptr;
     int width = 0, height = 0;
+    const glm::vec4* uv_axes = nullptr;  // SplatCloud::uv_axes, one per splat (null: zero derivatives)
 };
 
 // Output of cull_splats_cpu. The splats are processed in fixed blocks of `block` splats; block b's

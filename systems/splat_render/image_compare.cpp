@@ -29,7 +29,7 @@ Result<ImageComparison> compare_images(const FrameImage& a, const FrameImage& b,
     std::vector<double> ya(n), yb(n);
     std::vector<unsigned char> mask(n);
     ImageComparison r;
-    double sum = 0.0;
+    double sum = 0.0, sum_both = 0.0;
     for (std::size_t k = 0; k < n; ++k) {
         const glm::dvec3 ca = display_rgb(a.color[k]), cb = display_rgb(b.color[k]);
         ya[k] = 0.299 * ca.x + 0.587 * ca.y + 0.114 * ca.z;
@@ -39,6 +39,8 @@ Result<ImageComparison> compare_images(const FrameImage& a, const FrameImage& b,
         const glm::dvec3 d = ca - cb;
         sum += glm::dot(d, d);
         ++r.pixels;
+        if (a.color[k].w > 0.0f && b.color[k].w > 0.0f) sum_both += glm::dot(d, d), ++r.pixels_both;
+        else if (a.color[k].w > 0.0f || b.color[k].w > 0.0f) ++r.pixels_one;
     }
     if (r.pixels == 0) {
         r.psnr = std::numeric_limits<double>::infinity();
@@ -46,6 +48,8 @@ Result<ImageComparison> compare_images(const FrameImage& a, const FrameImage& b,
     }
     r.mse = sum / (3.0 * double(r.pixels));
     r.psnr = r.mse > 0.0 ? 10.0 * std::log10(1.0 / r.mse) : std::numeric_limits<double>::infinity();
+    const double mse_both = r.pixels_both ? sum_both / (3.0 * double(r.pixels_both)) : 0.0;
+    r.psnr_both = mse_both > 0.0 ? 10.0 * std::log10(1.0 / mse_both) : std::numeric_limits<double>::infinity();
 
     constexpr int radius = 5;
     std::array<double, 2 * radius + 1> g{};

@@ -22,6 +22,10 @@ struct ImageComparison {
     double psnr = 0.0;  // dB, +inf for identical images
     double ssim = 1.0;
     std::size_t pixels = 0;  // pixels compared (the mask)
+    // Diagnostics: the part of the mask covered in both images (shading and texture, no silhouette error),
+    // and the pixels covered in exactly one (silhouette disagreement).
+    double psnr_both = 0.0;
+    std::size_t pixels_both = 0, pixels_one = 0;
 };
 
 // Errors: sizes differ ("images differ in size: WxH vs WxH"); an empty mask gives pixels = 0, psnr = inf.

@@ -34,7 +34,7 @@ namespace sffd::render {
 namespace {
 
 constexpr std::uint32_t cull_group_size = 128;  // local_size_x of shaders/splat_render/cull.comp
-constexpr std::size_t splat_record_bytes = 80;  // SplatRecord in shaders/splat_render/splat_common.glsl
+constexpr std::size_t splat_record_bytes = 96;  // SplatRecord in shaders/splat_render/splat_common.glsl
 
 // Per point cloud GPU objects owned by the renderer (the splats themselves live in GpuSplatStore).
 struct CloudGpu {
@@ -44,6 +44,8 @@ struct CloudGpu {
     gfx::Buffer frame_ubo;  // FrameBlock for this cloud
     std::uint32_t capacity = 0;
     gfx::Texture texture;   // material texture (sRGB), when the material has one
+    gfx::Buffer uv_axes;    // vec4[count]: SplatCloud::uv_axes (zeros when absent), when textured
+    const std::vector<glm::vec4>* uv_axes_cpu = nullptr;  // the cloud's, valid during one render_system call
     std::uint64_t texture_version = 0;
     BoundingSphere bounds;  // cloud space, for the framing camera
     std::uint64_t bounds_version = 0;
@@ -68,7 +70,8 @@ struct SplatRenderState {
     // first use (cull_program)
     std::array<std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2>, 2> cull;
     std::array<gfx::Program, 2> visibility;  // [0] sprites, [1] quads
-    std::array<std::array<gfx::Program, 2>, 2> attribute;  // [clouds differ in material][sprites, quads]
+    // [textured: per-pixel texture lookups][clouds differ in material][sprites, quads]
+    std::array<std::array<std::array<gfx::Program, 2>, 2>, 2> attribute;
     std::array<std::array<gfx::Program, 2>, 2> preview;  // [aux outputs][sprites, quads]
     // [clouds differ in material][lights]: compiled on first use (shade_program)
     std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2> shade;
@@ -93,10 +96,12 @@ struct SplatRenderState {
 namespace {
 
 Result<gfx::Program> splat_program(const char* fragment, const char* label, int pass, int quad, int aux = 1,
-                                   int materials = 0) {
+                                   int materials = 0, int textured = -1) {
+    gfx::Defines defines{{"PASS", std::to_string(pass)}, {"SHAPE_QUAD", std::to_string(quad)},
+                         {"AUX", std::to_string(aux)}, {"MATERIALS", std::to_string(materials)}};
+    if (textured >= 0) defines.push_back({"TEXTURED", std::to_string(textured)});  // else read per draw
     return gfx::load_program({{GL_VERTEX_SHADER, "splat_render/splat.vert"}, {GL_FRAGMENT_SHADER, fragment}}, label,
-                             {{"PASS", std::to_string(pass)}, {"SHAPE_QUAD", std::to_string(quad)},
-                              {"AUX", std::to_string(aux)}, {"MATERIALS", std::to_string(materials)}});
+                             defines);
 }
 
 gfx::Texture make_target(GLenum format, int w, int h, const char* label) {
@@ -150,10 +155,27 @@ void upload_texture(CloudGpu& gpu, const SplatMaterial& m) {
     glTextureSubImage2D(gpu.texture.id(), 0, 0, 0, m.texture_width, m.texture_height, GL_RGBA, GL_UNSIGNED_BYTE,
                         m.texture_rgba8.data());
     glGenerateTextureMipmap(gpu.texture.id());
-    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    // Mipmapped: the HQ attribute pass filters per pixel with textureGrad (the cull's per-splat lookups ask
+    // for level 0 explicitly).
+    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
     glTextureParameteri(gpu.texture.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTextureParameteri(gpu.texture.id(), GL_TEXTURE_WRAP_S, GL_REPEAT);
     glTextureParameteri(gpu.texture.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+}
+
+// The uv frames the textured passes read (SFFD_SSBO_UV_AXES), zeros for a cloud without them (then every
+// fragment samples the splat's centre uv at level 0).
+void upload_uv_axes(CloudGpu& gpu, const SplatCloud& cloud) {
+    if (!gpu.texture) {
+        gpu.uv_axes.reset();
+        return;
+    }
+    std::vector<glm::vec4> zeros;
+    const std::vector<glm::vec4>* data = &cloud.uv_axes;
+    if (cloud.uv_axes.size() != cloud.size()) zeros.assign(cloud.size(), glm::vec4(0.0f)), data = &zeros;
+    gpu.uv_axes = gfx::Buffer::create("render.uv_axes");
+    glNamedBufferData(gpu.uv_axes.id(), GLsizeiptr(std::max<std::size_t>(data->size(), 1) * sizeof(glm::vec4)),
+                      data->empty() ? nullptr : data->data(), GL_STATIC_DRAW);
 }
 
 // Whether the CPU cull may run this frame, so CPU copies of the splats are worth keeping.
@@ -211,8 +233,10 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
         }
         if (gpu.texture_version != version) {
             upload_texture(gpu, cloud.material);
+            upload_uv_axes(gpu, cloud);
             gpu.texture_version = version;
         }
+        gpu.uv_axes_cpu = gpu.texture && cloud.uv_axes.size() == n ? &cloud.uv_axes : nullptr;
         if (gpu.bounds_version != version) {
             gpu.bounds = bounding_sphere(cloud);
             gpu.bounds_version = version;
@@ -370,6 +394,7 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
     glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
+    if (gpu.texture) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
     glVertexArrayVertexBuffer(s.records_vao.id(), 0, gpu.records.id(), 0, GLsizei(splat_record_bytes));
     glBindVertexArray(s.records_vao.id());
     glUseProgram(programs[0].id());
@@ -413,19 +438,19 @@ Status init_render_state(ecs::Registry& registry) {
     for (int quad = 0; quad < 2; ++quad) {
         auto vis = splat_program("splat_render/visibility.frag", quad ? "render.visibility.quads" : "render.visibility", 0, quad, 0);
         if (!vis) return make_error(vis.message());
-        auto attr = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute", 1, quad, 0);
-        if (!attr) return make_error(attr.message());
-        auto attr_materials = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute",
-                                            1, quad, 0, 1);
-        if (!attr_materials) return make_error(attr_materials.message());
+        for (int textured = 0; textured < 2; ++textured)
+            for (int materials = 0; materials < 2; ++materials) {
+                auto attr = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute",
+                                          1, quad, 0, materials, textured);
+                if (!attr) return make_error(attr.message());
+                s.attribute[textured][materials][quad] = std::move(attr.value());
+            }
         auto prev = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2, quad);
         if (!prev) return make_error(prev.message());
         auto prev_noaux = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2, quad, 0);
         if (!prev_noaux) return make_error(prev_noaux.message());
         s.preview[0][quad] = std::move(prev_noaux.value());
         s.visibility[quad] = std::move(vis.value());
-        s.attribute[0][quad] = std::move(attr.value());
-        s.attribute[1][quad] = std::move(attr_materials.value());
         s.preview[1][quad] = std::move(prev.value());
     }
     // The shading program of the common case (one light) now, so shader errors surface here.
@@ -437,7 +462,7 @@ Status init_render_state(ecs::Registry& registry) {
     s.display = std::move(display.value());
     s.vao = gfx::VertexArray::create("render.empty");
     s.records_vao = gfx::VertexArray::create("render.splat_records");
-    for (GLuint a = 0; a < 5; ++a) {
+    for (GLuint a = 0; a < GLuint(splat_record_bytes / 16); ++a) {
         glEnableVertexArrayAttrib(s.records_vao.id(), a);
         glVertexArrayAttribFormat(s.records_vao.id(), a, 4, GL_FLOAT, GL_FALSE, a * 16);
         glVertexArrayAttribBinding(s.records_vao.id(), a, 0);
@@ -518,7 +543,8 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
             // CPU cull (cpu_cull.h): the same records, uploaded run by run into the buffers the draws read.
             TexelView texels;
             if (gpu.texture)
-                texels = {gpu.material->texture_rgba8.data(), gpu.material->texture_width, gpu.material->texture_height};
+                texels = {gpu.material->texture_rgba8.data(), gpu.material->texture_width, gpu.material->texture_height,
+                          gpu.uv_axes_cpu ? gpu.uv_axes_cpu->data() : nullptr};
             CpuCullResult& r = gpu.cpu_cull;
             cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
             CpuCullResult::for_each_run(r.records, r.record_counts, r.block, [&](std::size_t at, const SplatRecord* p, std::size_t k) {
@@ -543,6 +569,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, gpu.commands.id());
+            if (textured) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
             glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
             // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its worker
             // threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread time).
@@ -623,7 +650,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         glBlendEquation(GL_FUNC_ADD);
         glBlendFunc(GL_ONE, GL_ONE);
         pass_scope.emplace(reg, "render.hq.attribute");
-        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.attribute[materials], *gpu);
+        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.attribute[gpu->texture ? 1 : 0][materials], *gpu);
         pass_scope.reset();
         glDisable(GL_BLEND);
         glDepthMask(GL_TRUE);

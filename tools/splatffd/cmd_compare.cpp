@@ -2,7 +2,8 @@
 //
 // PSNR and SSIM between two frames (systems/splat_render/image_compare.h): over the object (pixels covered
 // in either image) by default, over every pixel with --whole-image. Prints one line:
-//   psnr_db=37.12 ssim=0.9876 pixels=140233 mse=1.94e-04
+//   psnr_db=37.12 ssim=0.9876 pixels=140233 mse=1.94e-04 psnr_both_db=38.50 pixels_both=139000 pixels_one=1233
+// (the last three: the pixels covered in both images alone, and the silhouette disagreement)
 // Exit 0 ok, 1 unreadable file or size mismatch (the message names the file), 2 usage.
 #include <cstdio>
 #include <string>
@@ -47,7 +48,8 @@ int run_compare(sffd::cli::Args args) {
         std::fprintf(stderr, "%s vs %s: %s\n", files[0].c_str(), files[1].c_str(), r.message().c_str());
         return 1;
     }
-    std::printf("psnr_db=%.2f ssim=%.4f pixels=%zu mse=%.3e\n", r->psnr, r->ssim, r->pixels, r->mse);
+    std::printf("psnr_db=%.2f ssim=%.4f pixels=%zu mse=%.3e psnr_both_db=%.2f pixels_both=%zu pixels_one=%zu\n", r->psnr,
+                r->ssim, r->pixels, r->mse, r->psnr_both, r->pixels_both, r->pixels_one);
     return 0;
 }
 
