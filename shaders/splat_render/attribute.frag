@@ -5,9 +5,9 @@
 //   accum_normal = sum(w * world normal), sum(w * view-axis depth)
 //   accum_material (MATERIALS 1) = sum(w * specular), sum(w * shininess)
 // TEXTURED 1: the colour is the material texture at this pixel's uv, from the splat's uv frame (v_uv,
-// splat_uv_frame) at the fragment's splat coordinates, filtered with mip levels from the exact screen-space
-// derivatives (textureGrad): texture detail finer than the splats survives (issue 14). TEXTURED 0: the
-// splat's one colour (v_plane.w).
+// splat_uv_frame) at the fragment's splat coordinates, filtered trilinearly at the splat's mip level
+// (splat_texture_lod): texture detail finer than the splats survives (issue 14). TEXTURED 0: the splat's
+// one colour (v_plane.w).
 #include "splat_render/raycast.glsl"
 
 #include "splat_render/splat_common.glsl"
@@ -35,10 +35,10 @@ void main() {
     // Smooth radial kernel that reaches 0 at the ellipse's edge: no visible disc borders.
     float w = (1.0 - r2) * (1.0 - r2) + 1e-6;
 #if TEXTURED
+    // uv at this pixel from the splat's uv frame; the mip level is the splat's (v_plane.w, set up once per
+    // splat by the cull pass: splat_texture_lod), trilinear between levels.
     vec2 du = unpackHalf2x16(floatBitsToUint(v_uv.z)), dv = unpackHalf2x16(floatBitsToUint(v_uv.w));
-    vec4 g = splat_st_gradients(t, st);  // (ds/dx, dt/dx, ds/dy, dt/dy)
-    vec2 uv = v_uv.xy + st.x * du + st.y * dv;
-    vec3 albedo = textureGrad(material_texture, uv, g.x * du + g.y * dv, g.z * du + g.w * dv).rgb;
+    vec3 albedo = textureLod(material_texture, v_uv.xy + st.x * du + st.y * dv, v_plane.w).rgb;
 #else
     vec3 albedo = unpack_color(v_plane.w);
 #endif

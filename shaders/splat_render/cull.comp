@@ -81,9 +81,18 @@ void main() {
         if (back) rec.plane.xyz = vec3(uintBitsToFloat(0x7fc00000u));  // NaN: every fragment discards
         rec.center = vec4(box.xy, o.c.z, box.z);
         vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
+#if TEXTURED && !LIT
+        rec.normal = vec4(world_n, 0.0);  // HQ samples the texture per pixel: the mip level goes here below
+#else
         rec.normal = vec4(world_n, pack_color(splat_color(s, o, world_n).rgb));
+#endif
 #if TEXTURED
-        rec.uv = splat_uv_frame(s, uv_axes[i]);
+        vec4 uv_axes_i = uv_axes[i];
+        rec.uv = splat_uv_frame(s, uv_axes_i);
+#if !LIT
+        // HQ: the attribute pass samples the texture per pixel; the colour slot carries the mip level.
+        rec.normal.w = splat_texture_lod(o.c, rec.plane, rec.dual_u, rec.dual_v, uv_axes_i, vec2(textureSize(material_texture, 0)));
+#endif
 #else
         rec.uv = vec4(0.0);
 #endif

@@ -41,16 +41,4 @@ float raycast_splat(out vec3 ray, out float r2) {
     return raycast_splat(ray, r2, st);
 }
 
-// Derivatives of the splat coordinates st along window x (xy) and y (zw) at this fragment, exact for the
-// ray cast above: ray = (x * ray_map.x + ray_map.z, y * ray_map.y + ray_map.w, -1), t = 1 / dot(plane, ray),
-// s = t dot(dual_u, ray) - dual_u.w, so ds/dx = t ray_map.x (dual_u.x - plane.x (s + dual_u.w)). Analytic,
-// not dFdx: fragments outside the ellipse have discarded, and neighbouring pixels may be other splats.
-vec4 splat_st_gradients(float t, vec2 st) {
-    vec2 a = st + vec2(v_dual_u.w, v_dual_v.w);
-    vec2 scale = t * frame.ray_map.xy;
-    vec2 ds = scale * (v_dual_u.xy - v_plane.xy * a.x);  // (ds/dx, ds/dy)
-    vec2 dq = scale * (v_dual_v.xy - v_plane.xy * a.y);  // (dq/dx, dq/dy)
-    return vec4(ds.x, dq.x, ds.y, dq.y);
-}
-
 #endif

@@ -30,7 +30,8 @@ layout(location = 5) in vec4 a_uv;      // splat_uv_frame
 #endif
 #endif
 
-// PASS 0: v_plane.w = eps; PASS 1, 2: v_plane.w = packed colour (HQ albedo, preview lit; pack_color).
+// PASS 0: v_plane.w = eps; PASS 1, 2: v_plane.w = packed colour (HQ albedo, preview lit; pack_color);
+// PASS 1 TEXTURED: v_plane.w = the splat's mip level (splat_texture_lod).
 layout(location = 0) flat out vec4 v_plane;
 layout(location = 1) flat out vec4 v_dual_u;
 layout(location = 2) flat out vec4 v_dual_v;
@@ -44,16 +45,22 @@ layout(location = 4) flat out vec4 v_uv;  // splat_uv_frame
 void main() {
 #if SHAPE_QUAD
     GpuSplat s = splats[quads[gl_InstanceID]];
-#if PASS == 1 && TEXTURED
-    v_uv = splat_uv_frame(s, uv_axes[quads[gl_InstanceID]]);
-#endif
     SplatView o = splat_view(s);
     splat_raycast_setup(o, v_plane, v_dual_u, v_dual_v);
+#if PASS == 1 && TEXTURED
+    vec4 uv_axes_i = uv_axes[quads[gl_InstanceID]];
+    v_uv = splat_uv_frame(s, uv_axes_i);
+    float lod = splat_texture_lod(o.c, v_plane, v_dual_u, v_dual_v, uv_axes_i, vec2(textureSize(material_texture, 0)));
+#endif
     if (frame.params.z == 0.0 && s.normal.w != 0.0 && dot(o.shading_n, o.c) > 0.0)
         v_plane.xyz = vec3(uintBitsToFloat(0x7fc00000u));  // back-facing with culling off: discard
 #if PASS != 0
     vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
+#if PASS == 1 && TEXTURED
+    v_plane.w = lod;
+#else
     v_plane.w = pack_color(splat_color(s, o, world_n).rgb);
+#endif
 #if PASS == 1 || AUX
     v_normal = world_n;
 #endif

@@ -171,7 +171,9 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 const glm::vec3 world_n = glm::normalize(v2w3 * o.shading_n);
                 // splat_color
                 glm::vec3 color;
-                if (textured) {
+                if (textured && !lit) {
+                    color = glm::vec3(0.0f);  // HQ samples the texture per pixel (the slot gets the mip level below)
+                } else if (textured) {
                     color = glm::vec3(sample_texture(texture, glm::vec2(s.axis_u[3], s.axis_v[3])));
                 } else {
                     const std::uint32_t bits = std::bit_cast<std::uint32_t>(s.center[3]);
@@ -184,6 +186,15 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                     const glm::vec4 a = texture.uv_axes ? texture.uv_axes[i] : glm::vec4(0.0f);
                     rec.uv = glm::vec4(s.axis_u[3], s.axis_v[3], std::bit_cast<float>(glm::packHalf2x16(glm::vec2(a.x, a.y))),
                                        std::bit_cast<float>(glm::packHalf2x16(glm::vec2(a.z, a.w))));
+                    if (!lit) {  // splat_texture_lod: HQ samples per pixel, the colour slot carries the mip level
+                        const glm::vec2 scale = -o.c.z * glm::vec2(f.ray_map.x, f.ray_map.y);
+                        const glm::vec2 ds = scale * (glm::vec2(rec.dual_u) - glm::vec2(rec.plane) * rec.dual_u.w);
+                        const glm::vec2 dq = scale * (glm::vec2(rec.dual_v) - glm::vec2(rec.plane) * rec.dual_v.w);
+                        const glm::vec2 size(float(texture.width), float(texture.height));
+                        const glm::vec2 ddx = (ds.x * glm::vec2(a.x, a.y) + dq.x * glm::vec2(a.z, a.w)) * size;
+                        const glm::vec2 ddy = (ds.y * glm::vec2(a.x, a.y) + dq.y * glm::vec2(a.z, a.w)) * size;
+                        rec.normal.w = 0.5f * std::log2(std::max(std::max(glm::dot(ddx, ddx), glm::dot(ddy, ddy)), 1e-20f));
+                    }
                 } else {
                     rec.uv = glm::vec4(0.0f);
                 }
