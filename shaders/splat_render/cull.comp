@@ -81,7 +81,13 @@ void main() {
         if (back) rec.plane.xyz = vec3(uintBitsToFloat(0x7fc00000u));  // NaN: every fragment discards
         rec.center = vec4(box.xy, o.c.z, box.z);
         vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
-#if TEXTURED && !LIT
+#if TEXTURED && LIT
+        // Preview: lighting factors; the texture is sampled per pixel (SplatRecord).
+        vec3 diffuse, specular;
+        splat_light_factors(o, world_n, diffuse, specular);
+        rec.normal = vec4(world_n, pack_light(diffuse));
+        rec.plane.w = pack_light(specular);
+#elif TEXTURED
         rec.normal = vec4(world_n, 0.0);  // HQ samples the texture per pixel: the mip level goes here below
 #else
         rec.normal = vec4(world_n, pack_color(splat_color(s, o, world_n).rgb));
@@ -89,9 +95,11 @@ void main() {
 #if TEXTURED
         vec4 uv_axes_i = uv_axes[i];
         rec.uv = splat_uv_frame(s, uv_axes_i);
-#if !LIT
-        // HQ: the attribute pass samples the texture per pixel; the colour slot carries the mip level.
-        rec.normal.w = splat_texture_lod(o.c, rec.plane, rec.dual_u, rec.dual_v, uv_axes_i, vec2(textureSize(material_texture, 0)));
+        float lod = splat_texture_lod(o.c, rec.plane, rec.dual_u, rec.dual_v, uv_axes_i, vec2(textureSize(material_texture, 0)));
+#if LIT
+        rec.center.z = lod;   // preview
+#else
+        rec.normal.w = lod;   // HQ: the colour slot carries the mip level
 #endif
 #else
         rec.uv = vec4(0.0);

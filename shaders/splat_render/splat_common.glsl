@@ -25,6 +25,12 @@ struct SplatRecord {
     vec4 uv;       // textured clouds: xy uv at the centre, z / w: packHalf2x16 of the uv derivatives along
                    // axis_u / axis_v (splat_uv_frame); the HQ attribute pass samples the texture per pixel
 };
+// Textured clouds sample the texture per pixel, so some slots change meaning:
+//   HQ (unlit records):   normal.w = mip level (splat_texture_lod)
+//   preview (lit):        normal.w = pack_light(diffuse factor), plane.w = pack_light(specular term) (the
+//                         preview has no visibility pass, so no eps), center.z = mip level
+// (pixel colour = texture * diffuse + specular: splat_light_factors).
+
 
 // The uv frame of a splat as the fragment shaders read it: uv at the centre, and the uv derivatives along
 // the two axes (SplatCloud::uv_axes) packed as halves. The derivatives are per axis, so they stay valid
@@ -60,6 +66,10 @@ vec3 unpack_color(float packed_color) {
     vec3 c = vec3(uvec3(bits, bits >> 10, bits >> 20) & 1023u) * (1.0 / 1023.0);
     return c * c;
 }
+
+// Lighting factors (>= 0, up to 4: brighter saturates) packed like colours.
+float pack_light(vec3 factor) { return pack_color(factor * 0.25); }
+vec3 unpack_light(float packed_factor) { return unpack_color(packed_factor) * 4.0; }
 
 // Largest radius of the ellipse {s*u + t*v : s^2 + t^2 <= 1}: sqrt of the Gram matrix's larger eigenvalue
 // (u and v need not be orthogonal after a deformation).

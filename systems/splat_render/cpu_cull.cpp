@@ -44,37 +44,6 @@ const std::array<float, 256>& splat_srgb_table() {
     return table;
 }
 
-// GL's sRGB decode of texels (exact curve), as a table.
-const std::array<float, 256>& srgb8_table() {
-    static const std::array<float, 256> table = [] {
-        std::array<float, 256> t{};
-        for (int i = 0; i < 256; ++i) {
-            const double c = i / 255.0;
-            t[std::size_t(i)] = float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
-        }
-        return t;
-    }();
-    return table;
-}
-
-// textureLod(material_texture, uv, 0): bilinear, repeat in u, clamp to edge in v, sRGB texels decoded
-// before filtering, alpha linear.
-glm::vec4 sample_texture(const TexelView& t, glm::vec2 uv) {
-    const auto& lut = srgb8_table();
-    const float x = uv.x * float(t.width) - 0.5f, y = uv.y * float(t.height) - 0.5f;
-    const float fx = std::floor(x), fy = std::floor(y);
-    const float ax = x - fx, ay = y - fy;
-    auto wrap = [](long i, int n) { return int(((i % n) + n) % n); };
-    const int x0 = wrap(long(fx), t.width), x1 = wrap(long(fx) + 1, t.width);
-    const int y0 = std::clamp(int(fy), 0, t.height - 1), y1 = std::clamp(int(fy) + 1, 0, t.height - 1);
-    auto texel = [&](int tx, int ty) {
-        const std::uint8_t* p = t.rgba8 + (std::size_t(ty) * std::size_t(t.width) + std::size_t(tx)) * 4;
-        return glm::vec4(lut[p[0]], lut[p[1]], lut[p[2]], float(p[3]) * (1.0f / 255.0f));
-    };
-    const glm::vec4 top = glm::mix(texel(x0, y0), texel(x1, y0), ax), bottom = glm::mix(texel(x0, y1), texel(x1, y1), ax);
-    return glm::mix(top, bottom, ay);
-}
-
 glm::vec3 shade_blinn_phong(const gpu::FrameBlock& f, const glm::vec3& albedo, const glm::vec3& n, const glm::vec3& to_eye) {
     glm::vec3 color = glm::vec3(f.ambient) * albedo;
     for (std::uint32_t i = 0; i < SFFD_MAX_LIGHTS && i < f.counts.y; ++i) {
@@ -85,6 +54,21 @@ glm::vec3 shade_blinn_phong(const gpu::FrameBlock& f, const glm::vec3& albedo, c
         color += glm::vec3(f.light_color[i]) * (albedo * ndl + glm::vec3(spec));
     }
     return color;
+}
+
+// blinn_phong_factors of lighting.glsl: colour = albedo * diffuse + specular.
+void blinn_phong_factors(const gpu::FrameBlock& f, const glm::vec3& n, const glm::vec3& to_eye, glm::vec3& diffuse,
+                         glm::vec3& specular) {
+    diffuse = glm::vec3(f.ambient);
+    specular = glm::vec3(0.0f);
+    for (std::uint32_t i = 0; i < SFFD_MAX_LIGHTS && i < f.counts.y; ++i) {
+        const glm::vec3 l(f.light_dir[i]);
+        const float ndl = std::max(glm::dot(n, l), 0.0f);
+        const glm::vec3 h = glm::normalize(l + to_eye);
+        const float spec = ndl > 0.0f ? std::exp2(f.material.y * std::log2(std::max(glm::dot(n, h), 1e-8f))) * f.material.x : 0.0f;
+        diffuse += glm::vec3(f.light_color[i]) * ndl;
+        specular += glm::vec3(f.light_color[i]) * spec;
+    }
 }
 
 struct SplatView {
@@ -169,35 +153,36 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 if (back) rec.plane.x = rec.plane.y = rec.plane.z = nan;  // culling off: every fragment discards
                 rec.center = glm::vec4(box.x, box.y, o.c.z, box.z);
                 const glm::vec3 world_n = glm::normalize(v2w3 * o.shading_n);
-                // splat_color
-                glm::vec3 color;
-                if (textured && !lit) {
-                    color = glm::vec3(0.0f);  // HQ samples the texture per pixel (the slot gets the mip level below)
-                } else if (textured) {
-                    color = glm::vec3(sample_texture(texture, glm::vec2(s.axis_u[3], s.axis_v[3])));
-                } else {
-                    const std::uint32_t bits = std::bit_cast<std::uint32_t>(s.center[3]);
-                    color = glm::vec3(splat_lut[bits & 255u], splat_lut[(bits >> 8) & 255u], splat_lut[(bits >> 16) & 255u]);
-                }
-                if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
-                rec.normal = glm::vec4(world_n, pack_color(color));
-                // splat_uv_frame
                 if (textured) {
+                    // splat_uv_frame, splat_texture_lod; the texture is sampled per pixel (SplatRecord)
                     const glm::vec4 a = texture.uv_axes ? texture.uv_axes[i] : glm::vec4(0.0f);
                     rec.uv = glm::vec4(s.axis_u[3], s.axis_v[3], std::bit_cast<float>(glm::packHalf2x16(glm::vec2(a.x, a.y))),
                                        std::bit_cast<float>(glm::packHalf2x16(glm::vec2(a.z, a.w))));
-                    if (!lit) {  // splat_texture_lod: HQ samples per pixel, the colour slot carries the mip level
-                        const glm::vec2 scale = -o.c.z * glm::vec2(f.ray_map.x, f.ray_map.y);
-                        const glm::vec2 ds = scale * (glm::vec2(rec.dual_u) - glm::vec2(rec.plane) * rec.dual_u.w);
-                        const glm::vec2 dq = scale * (glm::vec2(rec.dual_v) - glm::vec2(rec.plane) * rec.dual_v.w);
-                        const glm::vec2 size(float(texture.width), float(texture.height));
-                        const glm::vec2 ddx = (ds.x * glm::vec2(a.x, a.y) + dq.x * glm::vec2(a.z, a.w)) * size;
-                        const glm::vec2 ddy = (ds.y * glm::vec2(a.x, a.y) + dq.y * glm::vec2(a.z, a.w)) * size;
-                        rec.normal.w = 0.5f * std::log2(std::max(std::max(glm::dot(ddx, ddx), glm::dot(ddy, ddy)), 1e-20f));
+                    const glm::vec2 scale = -o.c.z * glm::vec2(f.ray_map.x, f.ray_map.y);
+                    const glm::vec2 ds = scale * (glm::vec2(rec.dual_u) - glm::vec2(rec.plane) * rec.dual_u.w);
+                    const glm::vec2 dq = scale * (glm::vec2(rec.dual_v) - glm::vec2(rec.plane) * rec.dual_v.w);
+                    const glm::vec2 size(float(texture.width), float(texture.height));
+                    const glm::vec2 ddx = (ds.x * glm::vec2(a.x, a.y) + dq.x * glm::vec2(a.z, a.w)) * size;
+                    const glm::vec2 ddy = (ds.y * glm::vec2(a.x, a.y) + dq.y * glm::vec2(a.z, a.w)) * size;
+                    const float lod = 0.5f * std::log2(std::max(std::max(glm::dot(ddx, ddx), glm::dot(ddy, ddy)), 1e-20f));
+                    if (lit) {  // preview: lighting factors (splat_light_factors), the mip level in center.z
+                        glm::vec3 diffuse, specular;
+                        blinn_phong_factors(f, world_n, -glm::normalize(v2w3 * o.c), diffuse, specular);
+                        rec.normal = glm::vec4(world_n, pack_color(diffuse * 0.25f));  // pack_light
+                        rec.plane.w = pack_color(specular * 0.25f);
+                        rec.center.z = lod;
+                    } else {  // HQ: the colour slot carries the mip level
+                        rec.normal = glm::vec4(world_n, lod);
                     }
-                } else {
-                    rec.uv = glm::vec4(0.0f);
+                    continue;
                 }
+                // splat_color
+                glm::vec3 color;
+                const std::uint32_t bits = std::bit_cast<std::uint32_t>(s.center[3]);
+                color = glm::vec3(splat_lut[bits & 255u], splat_lut[(bits >> 8) & 255u], splat_lut[(bits >> 16) & 255u]);
+                if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
+                rec.normal = glm::vec4(world_n, pack_color(color));
+                rec.uv = glm::vec4(0.0f);
             }
             out.record_counts[b] = kept;
             out.quad_counts[b] = kept_quads;

@@ -72,7 +72,8 @@ struct SplatRenderState {
     std::array<gfx::Program, 2> visibility;  // [0] sprites, [1] quads
     // [textured: per-pixel texture lookups][clouds differ in material][sprites, quads]
     std::array<std::array<std::array<gfx::Program, 2>, 2>, 2> attribute;
-    std::array<std::array<gfx::Program, 2>, 2> preview;  // [aux outputs][sprites, quads]
+    // [textured: per-pixel texture lookups][aux outputs][sprites, quads]
+    std::array<std::array<std::array<gfx::Program, 2>, 2>, 2> preview;
     // [clouds differ in material][lights]: compiled on first use (shade_program)
     std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2> shade;
     gfx::Program display;  // sRGB copy for a window (PresentSource)
@@ -445,13 +446,14 @@ Status init_render_state(ecs::Registry& registry) {
                 if (!attr) return make_error(attr.message());
                 s.attribute[textured][materials][quad] = std::move(attr.value());
             }
-        auto prev = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2, quad);
-        if (!prev) return make_error(prev.message());
-        auto prev_noaux = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2, quad, 0);
-        if (!prev_noaux) return make_error(prev_noaux.message());
-        s.preview[0][quad] = std::move(prev_noaux.value());
+        for (int textured = 0; textured < 2; ++textured)
+            for (int aux = 0; aux < 2; ++aux) {
+                auto prev = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2,
+                                          quad, aux, 0, textured);
+                if (!prev) return make_error(prev.message());
+                s.preview[textured][aux][quad] = std::move(prev.value());
+            }
         s.visibility[quad] = std::move(vis.value());
-        s.preview[1][quad] = std::move(prev.value());
     }
     // The shading program of the common case (one light) now, so shader errors surface here.
     if (Status st = shade_program(s, false, 1); !st) return st;
@@ -614,7 +616,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
         glDepthFunc(GL_LESS);
         pass_scope.emplace(reg, "render.preview");
-        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.preview[settings.aux_outputs ? 1 : 0], *gpu);
+        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.preview[gpu->texture ? 1 : 0][settings.aux_outputs ? 1 : 0], *gpu);
         pass_scope.reset();
         lap(stats.preview_ms);
     } else {
