@@ -6,6 +6,7 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstring>
 #include <limits>
 
 #include <glm/gtc/packing.hpp>
@@ -39,6 +40,19 @@ const std::array<float, 256>& splat_srgb_table() {
     static const std::array<float, 256> table = [] {
         std::array<float, 256> t{};
         for (int i = 0; i < 256; ++i) t[std::size_t(i)] = std::pow((float(i) / 255.0f + 0.055f) * (1.0f / 1.055f), 2.4f);
+        return t;
+    }();
+    return table;
+}
+
+// GL's sRGB decode of texels (exact curve), as a table.
+const std::array<float, 256>& srgb8_table() {
+    static const std::array<float, 256> table = [] {
+        std::array<float, 256> t{};
+        for (int i = 0; i < 256; ++i) {
+            const double c = i / 255.0;
+            t[std::size_t(i)] = float(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
+        }
         return t;
     }();
     return table;
@@ -100,6 +114,7 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     if (out.quads.size() < n) out.quads.resize(n);
     out.record_counts.assign(blocks, 0u);
     out.quad_counts.assign(blocks, 0u);
+    out.flat_counts.assign(blocks, 0u);
 
     const glm::mat3 mv3(f.model_view), nv3(f.normal_view), v2w3(f.view_to_world);
     const bool culling = f.params.z != 0.0f, textured = f.params.w != 0.0f && texture.rgba8 && texture.width > 0 &&
@@ -111,13 +126,17 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     const float side_x = 1.0f / std::sqrt(p00 * p00 + 1.0f), side_y = 1.0f / std::sqrt(p11 * p11 + 1.0f);
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const std::array<float, 256>& splat_lut = splat_srgb_table();
+    const std::array<float, 256>& texel_lut = srgb8_table();
+    const bool flat_ok = textured && texture.uniform_radius;
+    if (flat_ok && out.flat_records.size() < n) out.flat_records.resize(n);
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const tbb::blocked_range<std::size_t>& range) {
         for (std::size_t b = range.begin(); b != range.end(); ++b) {
             const std::size_t begin = b * block_splats, end = std::min(n, begin + block_splats);
             SplatRecord* records = out.records.data() + begin;
             std::uint32_t* quads = out.quads.data() + begin;
-            std::uint32_t kept = 0, kept_quads = 0;
+            SplatRecord* flat_records = flat_ok ? out.flat_records.data() + begin : nullptr;
+            std::uint32_t kept = 0, kept_quads = 0, kept_flat = 0;
             for (std::size_t i = begin; i < end; ++i) {
                 const gpu::GpuSplat& s = splats[i];
                 // Back face from centre and normal only (a flipped splat, normal.w == 0, is two-sided).
@@ -165,6 +184,28 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                     const glm::vec2 ddx = (ds.x * glm::vec2(a.x, a.y) + dq.x * glm::vec2(a.z, a.w)) * size;
                     const glm::vec2 ddy = (ds.y * glm::vec2(a.x, a.y) + dq.y * glm::vec2(a.z, a.w)) * size;
                     const float lod = 0.5f * std::log2(std::max(std::max(glm::dot(ddx, ddx), glm::dot(ddy, ddy)), 1e-20f));
+                    if (flat_ok && lod < 16.0f) {
+                        // One colour under the whole footprint (|s|, |t| <= 1) and the filter's reach (two texels
+                        // of the coarser level, in level-0 texels): draw it flat (CpuCullResult::flat_records).
+                        const float reach = (std::abs(a.x) + std::abs(a.z)) * size.x, reach_v = (std::abs(a.y) + std::abs(a.w)) * size.y;
+                        const float margin = 2.0f * std::exp2(std::ceil(std::max(lod, 0.0f))) + 1.0f;
+                        const float fu = rec.uv.x - std::floor(rec.uv.x);
+                        const int tx = std::min(int(fu * size.x), texture.width - 1);
+                        const int ty = std::clamp(int(std::floor(rec.uv.y * size.y)), 0, texture.height - 1);
+                        const std::size_t texel = std::size_t(ty) * std::size_t(texture.width) + std::size_t(tx);
+                        if (std::max(reach, reach_v) + margin < float(texture.uniform_radius[texel])) {
+                            const std::uint8_t* p = texture.rgba8 + 4 * texel;
+                            glm::vec3 color(texel_lut[p[0]], texel_lut[p[1]], texel_lut[p[2]]);
+                            if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
+                            SplatRecord& flat = flat_records[kept_flat++];
+                            flat = rec;
+                            flat.plane.w = f.params.x * o.r;
+                            flat.normal = glm::vec4(world_n, pack_color(color));
+                            flat.uv = glm::vec4(0.0f);
+                            --kept;  // the slot in `records` is reused
+                            continue;
+                        }
+                    }
                     if (lit) {  // preview: lighting factors (splat_light_factors), the mip level in center.z
                         glm::vec3 diffuse, specular;
                         blinn_phong_factors(f, world_n, -glm::normalize(v2w3 * o.c), diffuse, specular);
@@ -186,10 +227,42 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
             }
             out.record_counts[b] = kept;
             out.quad_counts[b] = kept_quads;
+            out.flat_counts[b] = kept_flat;
         }
     });
-    out.visible_records = out.visible_quads = 0;
-    for (std::size_t b = 0; b < blocks; ++b) out.visible_records += out.record_counts[b], out.visible_quads += out.quad_counts[b];
+    out.visible_records = out.visible_quads = out.visible_flat = 0;
+    for (std::size_t b = 0; b < blocks; ++b)
+        out.visible_records += out.record_counts[b], out.visible_quads += out.quad_counts[b], out.visible_flat += out.flat_counts[b];
+}
+
+std::vector<std::uint16_t> uniform_texel_radius(const std::uint8_t* rgba8, int w, int h) {
+    const std::size_t n = std::size_t(std::max(w, 0)) * std::size_t(std::max(h, 0));
+    std::vector<std::uint16_t> d(n, 0);
+    if (!rgba8 || n == 0) return d;
+    auto px = [&](int x, int y) {
+        std::uint32_t v;
+        std::memcpy(&v, rgba8 + 4 * (std::size_t(y) * std::size_t(w) + std::size_t(x)), 4);
+        return v;
+    };
+    constexpr std::uint16_t far = 65535;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            bool edge = x == 0 || y == 0 || x == w - 1 || y == h - 1;
+            for (int dy = -1; dy <= 1 && !edge; ++dy)
+                for (int dx = -1; dx <= 1 && !edge; ++dx) edge = px(x + dx, y + dy) != px(x, y);
+            d[std::size_t(y) * std::size_t(w) + std::size_t(x)] = edge ? 0 : far;
+        }
+    // Two chamfer passes with unit weights over the 8-neighbourhood: exact Chebyshev distances.
+    auto at = [&](int x, int y) -> std::uint16_t& { return d[std::size_t(y) * std::size_t(w) + std::size_t(x)]; };
+    auto relax = [&](int x, int y, int nx, int ny) {
+        if (nx < 0 || ny < 0 || nx >= w || ny >= h) return;
+        at(x, y) = std::uint16_t(std::min<int>(at(x, y), at(nx, ny) + 1));
+    };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) relax(x, y, x - 1, y), relax(x, y, x - 1, y - 1), relax(x, y, x, y - 1), relax(x, y, x + 1, y - 1);
+    for (int y = h - 1; y >= 0; --y)
+        for (int x = w - 1; x >= 0; --x) relax(x, y, x + 1, y), relax(x, y, x + 1, y + 1), relax(x, y, x, y + 1), relax(x, y, x - 1, y + 1);
+    return d;
 }
 
 }  // namespace sffd::render

@@ -38,13 +38,15 @@ constexpr std::size_t splat_record_bytes = 96;  // SplatRecord in shaders/splat_
 
 // Per point cloud GPU objects owned by the renderer (the splats themselves live in GpuSplatStore).
 struct CloudGpu {
-    gfx::Buffer records;    // SplatRecord[capacity]: visible sprites, prepared by the cull pass
+    gfx::Buffer records;    // SplatRecord[2 capacity]: visible sprites, prepared by the cull pass; from
+                            // `capacity` on, a textured cloud's sprites of one texture colour (CPU cull)
     gfx::Buffer quads;      // uint[capacity]: indices of visible splats drawn as quads
-    gfx::Buffer commands;   // two DrawArraysIndirectCommands: sprites, quads
+    gfx::Buffer commands;   // three DrawArraysIndirectCommands: sprites, quads, flat-coloured sprites
     gfx::Buffer frame_ubo;  // FrameBlock for this cloud
     std::uint32_t capacity = 0;
     gfx::Texture texture;   // material texture (sRGB), when the material has one
     gfx::Buffer uv_axes;    // vec4[count]: SplatCloud::uv_axes (zeros when absent), when textured
+    std::vector<std::uint16_t> uniform_radius;  // uniform_texel_radius() of the texture (CPU cull)
     const std::vector<glm::vec4>* uv_axes_cpu = nullptr;  // the cloud's, valid during one render_system call
     std::uint64_t texture_version = 0;
     BoundingSphere bounds;  // cloud space, for the framing camera
@@ -167,10 +169,13 @@ void upload_texture(CloudGpu& gpu, const SplatMaterial& m) {
 // The uv frames the textured passes read (SFFD_SSBO_UV_AXES), zeros for a cloud without them (then every
 // fragment samples the splat's centre uv at level 0).
 void upload_uv_axes(CloudGpu& gpu, const SplatCloud& cloud) {
+    gpu.uniform_radius.clear();
     if (!gpu.texture) {
         gpu.uv_axes.reset();
         return;
     }
+    const SplatMaterial& m = cloud.material;
+    gpu.uniform_radius = uniform_texel_radius(m.texture_rgba8.data(), m.texture_width, m.texture_height);
     std::vector<glm::vec4> zeros;
     const std::vector<glm::vec4>* data = &cloud.uv_axes;
     if (cloud.uv_axes.size() != cloud.size()) zeros.assign(cloud.size(), glm::vec4(0.0f)), data = &zeros;
@@ -221,12 +226,12 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
             gpu.frame_ubo = gfx::Buffer::create("render.frame_block");
             glNamedBufferData(gpu.frame_ubo.id(), sizeof(gpu::FrameBlock), nullptr, GL_DYNAMIC_DRAW);
             gpu.commands = gfx::Buffer::create("render.draw_commands");
-            glNamedBufferData(gpu.commands.id(), 8 * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_DRAW);
+            glNamedBufferData(gpu.commands.id(), 12 * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_DRAW);
         }
         if (gpu.capacity < n || !gpu.records) {
             gpu.capacity = std::max<std::uint32_t>(n, 1);
             gpu.records = gfx::Buffer::create("render.visible_splats");
-            glNamedBufferData(gpu.records.id(), GLsizeiptr(std::size_t(gpu.capacity) * splat_record_bytes), nullptr,
+            glNamedBufferData(gpu.records.id(), GLsizeiptr(2 * std::size_t(gpu.capacity) * splat_record_bytes), nullptr,
                               GL_DYNAMIC_DRAW);
             gpu.quads = gfx::Buffer::create("render.visible_quads");
             glNamedBufferData(gpu.quads.id(), GLsizeiptr(std::size_t(gpu.capacity) * sizeof(std::uint32_t)), nullptr,
@@ -388,7 +393,10 @@ glm::ivec4 screen_rect(ecs::Registry& reg, const ViewSetup& view, int w, int h) 
     return glm::ivec4(x0, y0, x1 - x0, y1 - y0);
 }
 
-void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& programs, const CloudGpu& gpu) {
+// programs: [sprites, quads] for the cloud; flat: the program for a textured cloud's flat-coloured sprites
+// (CpuCullResult::flat_records: the untextured variant of the pass; null for passes without colour).
+void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& programs, const CloudGpu& gpu,
+                const gfx::Program* flat = nullptr) {
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
@@ -403,6 +411,11 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     glBindVertexArray(s.vao.id());
     glUseProgram(programs[1].id());
     glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(4 * sizeof(std::uint32_t)));
+    if (gpu.texture) {
+        glBindVertexArray(s.records_vao.id());
+        glUseProgram(flat ? flat->id() : programs[0].id());
+        glDrawArraysIndirect(GL_POINTS, reinterpret_cast<const void*>(8 * sizeof(std::uint32_t)));
+    }
 }
 
 // The cull pass variant for an (un)textured material, (un)lit colours and `lights` lights, compiled once.
@@ -546,7 +559,8 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
             TexelView texels;
             if (gpu.texture)
                 texels = {gpu.material->texture_rgba8.data(), gpu.material->texture_width, gpu.material->texture_height,
-                          gpu.uv_axes_cpu ? gpu.uv_axes_cpu->data() : nullptr};
+                          gpu.uv_axes_cpu ? gpu.uv_axes_cpu->data() : nullptr,
+                          gpu.uv_axes_cpu && !gpu.uniform_radius.empty() ? gpu.uniform_radius.data() : nullptr};
             CpuCullResult& r = gpu.cpu_cull;
             cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
             CpuCullResult::for_each_run(r.records, r.record_counts, r.block, [&](std::size_t at, const SplatRecord* p, std::size_t k) {
@@ -555,13 +569,17 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
             CpuCullResult::for_each_run(r.quads, r.quad_counts, r.block, [&](std::size_t at, const std::uint32_t* p, std::size_t k) {
                 glNamedBufferSubData(gpu.quads.id(), GLintptr(at * sizeof(std::uint32_t)), GLsizeiptr(k * sizeof(std::uint32_t)), p);
             });
-            const std::uint32_t commands[8] = {r.visible_records, 1, 0, 0, 6, r.visible_quads, 0, 0};
+            CpuCullResult::for_each_run(r.flat_records, r.flat_counts, r.block, [&](std::size_t at, const SplatRecord* p, std::size_t k) {
+                glNamedBufferSubData(gpu.records.id(), GLintptr((gpu.capacity + at) * sizeof(SplatRecord)),
+                                     GLsizeiptr(k * sizeof(SplatRecord)), p);
+            });
+            const std::uint32_t commands[12] = {r.visible_records, 1, 0, 0, 6, r.visible_quads, 0, 0, r.visible_flat, 1, gpu.capacity, 0};
             glNamedBufferSubData(gpu.commands.id(), 0, sizeof commands, commands);
-            stats.visible_points += r.visible_records;
+            stats.visible_points += r.visible_records + r.visible_flat;
             stats.visible_quads += r.visible_quads;
             ++stats.cpu_culled_clouds;
         } else {
-            const std::uint32_t reset[8] = {0, 1, 0, 0, 6, 0, 0, 0};
+            const std::uint32_t reset[12] = {0, 1, 0, 0, 6, 0, 0, 0, 0, 1, gpu.capacity, 0};  // no flat list
             glNamedBufferSubData(gpu.commands.id(), 0, sizeof reset, reset);
             const bool textured = bool(gpu.texture), lit = b.counts.w == 1u;
             if (Status st = cull_program(s, textured, lit, b.counts.y); !st) log::error("render_system(): ", st.message());
@@ -616,7 +634,8 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
         glDepthFunc(GL_LESS);
         pass_scope.emplace(reg, "render.preview");
-        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.preview[gpu->texture ? 1 : 0][settings.aux_outputs ? 1 : 0], *gpu);
+        const int aux = settings.aux_outputs ? 1 : 0;
+        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.preview[gpu->texture ? 1 : 0][aux], *gpu, &s.preview[0][aux][0]);
         pass_scope.reset();
         lap(stats.preview_ms);
     } else {
@@ -652,7 +671,8 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         glBlendEquation(GL_FUNC_ADD);
         glBlendFunc(GL_ONE, GL_ONE);
         pass_scope.emplace(reg, "render.hq.attribute");
-        for (const CloudGpu* gpu : drawn) draw_cloud(s, s.attribute[gpu->texture ? 1 : 0][materials], *gpu);
+        for (const CloudGpu* gpu : drawn)
+            draw_cloud(s, s.attribute[gpu->texture ? 1 : 0][materials], *gpu, &s.attribute[0][materials][0]);
         pass_scope.reset();
         glDisable(GL_BLEND);
         glDepthMask(GL_TRUE);
