@@ -8,7 +8,11 @@
 #include <gtest/gtest.h>
 
 #include "runtime/assets/builtin_scenes.h"
+#include <random>
+
 #include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/cpu_cull.h"
+#include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/ground_truth.h"
 #include "systems/splat_render/image_compare.h"
 
@@ -190,6 +194,75 @@ TEST(ImageCompare, IdenticalImagesAreInfiniteAndOne) {
     auto bad = compare_images(a, grey_row({0.1}));
     ASSERT_FALSE(bad);
     EXPECT_EQ(bad.message(), "images differ in size: 5x1 vs 1x1");
+}
+
+// uniform_texel_radius against a brute-force Chebyshev distance to the nearest "edge" texel (border, or
+// another colour among its 8 neighbours), and the property the cull relies on: every texel closer than
+// that distance has the centre's colour.
+TEST(TextureRegions, UniformRadiusIsTheChebyshevDistanceToAColourChange) {
+    const int w = 41, h = 29;
+    std::mt19937 rng(3);
+    std::vector<std::uint8_t> tex(std::size_t(w * h) * 4, 255);
+    // Rectangles of three colours over a grey field.
+    for (int r = 0; r < 12; ++r) {
+        const int x0 = int(rng() % w), y0 = int(rng() % h), x1 = std::min(w, x0 + 2 + int(rng() % 15)), y1 = std::min(h, y0 + 2 + int(rng() % 10));
+        const auto c = std::uint8_t(60 * (1 + rng() % 3));
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) tex[std::size_t(y * w + x) * 4] = c;
+    }
+    auto colour = [&](int x, int y) { return tex[std::size_t(y * w + x) * 4]; };
+    auto edge = [&](int x, int y) {
+        if (x == 0 || y == 0 || x == w - 1 || y == h - 1) return true;
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx)
+                if (colour(x + dx, y + dy) != colour(x, y)) return true;
+        return false;
+    };
+    const std::vector<std::uint16_t> d = uniform_texel_radius(tex.data(), w, h);
+    ASSERT_EQ(d.size(), std::size_t(w * h));
+    int interior = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            int best = 1 << 30;
+            for (int yy = 0; yy < h; ++yy)
+                for (int xx = 0; xx < w; ++xx)
+                    if (edge(xx, yy)) best = std::min(best, std::max(std::abs(xx - x), std::abs(yy - y)));
+            ASSERT_EQ(int(d[std::size_t(y * w + x)]), best) << x << "," << y;
+            interior += best > 1;
+            for (int yy = std::max(0, y - best + 1); yy < std::min(h, y + best); ++yy)
+                for (int xx = std::max(0, x - best + 1); xx < std::min(w, x + best); ++xx) ASSERT_EQ(colour(xx, yy), colour(x, y));
+        }
+    EXPECT_GT(interior, 100);
+}
+
+// The CPU cull moves the built-in sphere's sprites whose footprint is one texture colour to the flat list
+// (most of a checker's cells) and keeps the rest textured; without the distance map nothing is flat, and
+// the two lists together are the same sprites.
+TEST(TextureRegions, CpuCullDrawsOneColourFootprintsFlat) {
+    const SplatCloud cloud = assets::make_sphere_cloud();
+    const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
+    Camera cam;
+    cam.eye = glm::dvec3(0.0, 0.0, 4.0);
+    gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 16.0 / 9.0), 1280, 720, 0.1f, 255.0f, true);
+    f.params.w = 1.0f;
+    f.counts.y = 1;
+    f.light_dir[0] = glm::vec4(0, 0, 1, 0);
+    f.light_color[0] = glm::vec4(1.0f);
+    const std::vector<std::uint16_t> radius = uniform_texel_radius(cloud.material.texture_rgba8.data(), cloud.material.texture_width,
+                                                                   cloud.material.texture_height);
+    for (bool lit : {false, true}) {
+        f.counts.w = lit ? 1u : 0u;
+        TexelView texels{cloud.material.texture_rgba8.data(), cloud.material.texture_width, cloud.material.texture_height,
+                         cloud.uv_axes.data(), radius.data()};
+        CpuCullResult with, without;
+        cull_splats_cpu(splats, f, texels, with);
+        texels.uniform_radius = nullptr;
+        cull_splats_cpu(splats, f, texels, without);
+        EXPECT_EQ(without.visible_flat, 0u);
+        EXPECT_EQ(with.visible_records + with.visible_flat, without.visible_records);
+        EXPECT_GT(with.visible_flat, without.visible_records / 3) << "lit " << lit;
+        EXPECT_GT(with.visible_records, without.visible_records / 10) << "lit " << lit;  // edges stay textured
+    }
 }
 
 }  // namespace
