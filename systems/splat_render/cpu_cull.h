@@ -81,6 +81,8 @@ struct CpuCullResult {
 
 // Culls and compacts `splats` exactly as cull.comp does with `frame` (model_view, projection, params,
 // counts.w = 1 lights the colours for preview, ...). frame.counts.x is ignored: the span's size counts.
+// One difference: with TexelView::uniform_radius, a textured cloud's one-colour sprites go to
+// flat_records (cull.comp keeps every textured sprite in the textured list).
 void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBlock& frame, const TexelView& texture,
                      CpuCullResult& out);
 

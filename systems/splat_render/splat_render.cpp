@@ -560,7 +560,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
             if (gpu.texture)
                 texels = {gpu.material->texture_rgba8.data(), gpu.material->texture_width, gpu.material->texture_height,
                           gpu.uv_axes_cpu ? gpu.uv_axes_cpu->data() : nullptr,
-                          gpu.uv_axes_cpu && !gpu.uniform_radius.empty() ? gpu.uniform_radius.data() : nullptr};
+                          gpu.uniform_radius.empty() ? nullptr : gpu.uniform_radius.data()};
             CpuCullResult& r = gpu.cpu_cull;
             cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
             CpuCullResult::for_each_run(r.records, r.record_counts, r.block, [&](std::size_t at, const SplatRecord* p, std::size_t k) {
