@@ -184,7 +184,7 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                     const glm::vec2 ddx = (ds.x * glm::vec2(a.x, a.y) + dq.x * glm::vec2(a.z, a.w)) * size;
                     const glm::vec2 ddy = (ds.y * glm::vec2(a.x, a.y) + dq.y * glm::vec2(a.z, a.w)) * size;
                     const float lod = 0.5f * std::log2(std::max(std::max(glm::dot(ddx, ddx), glm::dot(ddy, ddy)), 1e-20f));
-                    if (flat_ok && lod < 16.0f) {
+                    if (flat_ok && lod < 16.0f && std::abs(rec.uv.x) < 1e6f && std::abs(rec.uv.y) < 1e6f) {  // (false for NaN)
                         // One colour under the whole footprint (|s|, |t| <= 1) and the filter's reach (two texels
                         // of the coarser level, in level-0 texels): draw it flat (CpuCullResult::flat_records).
                         const float reach = (std::abs(a.x) + std::abs(a.z)) * size.x, reach_v = (std::abs(a.y) + std::abs(a.w)) * size.y;

@@ -10,6 +10,7 @@
 #include "runtime/assets/builtin_scenes.h"
 #include <random>
 
+#include "systems/ffd/deform.h"
 #include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/cpu_cull.h"
 #include "systems/splat_render/splat_pack.h"
@@ -194,6 +195,57 @@ TEST(ImageCompare, IdenticalImagesAreInfiniteAndOne) {
     auto bad = compare_images(a, grey_row({0.1}));
     ASSERT_FALSE(bad);
     EXPECT_EQ(bad.message(), "images differ in size: 5x1 vs 1x1");
+}
+
+// The built-in sphere's uv frames: the rim point c + s axis_u + t axis_v, pushed onto the sphere, has the uv
+// that the frame predicts (first order: within 5% of the frame's uv step; the second-order term grows like
+// the splat radius times cot(colatitude)), away from the poles and the seam.
+TEST(UvFrame, BuiltinSphereFramesPredictTheUvOfTheRim) {
+    const SplatCloud c = assets::make_sphere_cloud(20000);
+    ASSERT_EQ(c.uv_axes.size(), c.size());
+    int checked = 0;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        const glm::dvec2 uv0 = glm::dvec2(c.uvs[i]);
+        if (uv0.y < 0.3 || uv0.y > 0.7 || uv0.x < 0.05 || uv0.x > 0.95) continue;
+        for (double a = 0.0; a < 6.28; a += 0.7) {
+            const double s = std::cos(a), t = std::sin(a);
+            const glm::dvec3 p = glm::dvec3(c.positions[i]) + s * glm::dvec3(c.axis_u[i]) + t * glm::dvec3(c.axis_v[i]);
+            const glm::dvec2 exact = sphere_uv(glm::normalize(p));
+            const glm::dvec4 f(c.uv_axes[i]);
+            const glm::dvec2 step = s * glm::dvec2(f.x, f.y) + t * glm::dvec2(f.z, f.w);
+            ASSERT_LT(glm::length(uv0 + step - exact), 0.05 * glm::length(step) + 1e-6) << i;
+            ++checked;
+        }
+    }
+    EXPECT_GT(checked, 30000);
+}
+
+// Why the uv frame survives FFD: the FFD maps a splat's axes by its Jacobian, so the deformed rim point
+// c' + s u' + t v' is F(c + s u + t v) to first order, and the rest point (hence the uv) of a deformed rim
+// point is the rest rim point. Checked for a random lattice with the CPU deformation the renderer uses.
+TEST(UvFrame, DeformedAxesMapTheRestRimToTheDeformedRim) {
+    const SplatCloud c = assets::make_sphere_cloud(2000);
+    Lattice l = assets::make_box_lattice(glm::dvec3(-1.2), glm::dvec3(1.2), glm::ivec3(4), LatticeBasis::bernstein);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> jitter(-0.15, 0.15);
+    for (glm::dvec3& p : l.current) p += glm::dvec3(jitter(rng), jitter(rng), jitter(rng));
+    const std::size_t n = c.size();
+    std::vector<glm::vec3> pos(n), au(n), av(n);
+    ASSERT_TRUE(ffd::deform(l, {c.positions.data(), nullptr, c.axis_u.data(), c.axis_v.data(), n, c.origin},
+                            {pos.data(), nullptr, au.data(), av.data()}));
+    // The rim points themselves, deformed as points.
+    std::vector<glm::vec3> rim(n);
+    for (double a : {0.3, 2.1, 4.4}) {
+        for (std::size_t i = 0; i < n; ++i)
+            rim[i] = c.positions[i] + float(std::cos(a)) * c.axis_u[i] + float(std::sin(a)) * c.axis_v[i];
+        std::vector<glm::vec3> moved(n);
+        ASSERT_TRUE(ffd::deform(l, {rim.data(), nullptr, nullptr, nullptr, n, c.origin}, {moved.data(), nullptr, nullptr, nullptr}));
+        for (std::size_t i = 0; i < n; ++i) {
+            const glm::dvec3 predicted = glm::dvec3(pos[i]) + std::cos(a) * glm::dvec3(au[i]) + std::sin(a) * glm::dvec3(av[i]);
+            const double step = glm::length(predicted - glm::dvec3(pos[i]));
+            ASSERT_LT(glm::length(predicted - glm::dvec3(moved[i])), 0.05 * step) << i;
+        }
+    }
 }
 
 // uniform_texel_radius against a brute-force Chebyshev distance to the nearest "edge" texel (border, or
