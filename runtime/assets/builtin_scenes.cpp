@@ -96,6 +96,19 @@ SplatCloud make_sphere_cloud(std::size_t n) {
         c.axis_u[i] = east * radii[i];
         c.axis_v[i] = south * radii[i];
     }
+    // uv frame: the gradients of u = longitude / 2 pi and v = colatitude / pi on the unit sphere (east / (2 pi
+    // sin(colatitude)) and south / pi) applied to the axes.
+    c.uv_axes.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const glm::dvec3 p(c.positions[i]);
+        const double sin_colat = std::max(std::sqrt(p.x * p.x + p.z * p.z), 1e-6);
+        const glm::dvec3 east = glm::dvec3(-p.z, 0.0, p.x) / sin_colat;
+        const glm::dvec3 south = glm::cross(glm::dvec3(c.normals[i]), east);
+        const glm::dvec3 grad_u = east / (2.0 * std::numbers::pi * sin_colat), grad_v = south / std::numbers::pi;
+        const glm::dvec3 au(c.axis_u[i]), av(c.axis_v[i]);
+        c.uv_axes[i] = glm::vec4(float(glm::dot(grad_u, au)), float(glm::dot(grad_v, au)), float(glm::dot(grad_u, av)),
+                                 float(glm::dot(grad_v, av)));
+    }
     Image tex = make_sphere_texture();
     c.material.texture_width = tex.width;
     c.material.texture_height = tex.height;
@@ -148,7 +161,7 @@ bool is_builtin_scene(const std::string& name) { return name == "sphere" || name
 
 namespace {
 
-void add_cloud_with_lattice(ecs::Registry& r, const std::string& name, SplatCloud cloud, const glm::dvec3& view_dir) {
+ecs::Entity add_cloud_with_lattice(ecs::Registry& r, const std::string& name, SplatCloud cloud, const glm::dvec3& view_dir) {
     glm::dvec3 lo(1e300), hi(-1e300);
     for (const auto& p : cloud.positions) {
         lo = glm::min(lo, cloud.origin + glm::dvec3(p));
@@ -166,13 +179,16 @@ void add_cloud_with_lattice(ecs::Registry& r, const std::string& name, SplatClou
     r.emplace<SplatCloud>(e, std::move(cloud));
     r.emplace<Deformers>(e, Deformers{{lat}});
     add_default_view(r, lo - pad, hi + pad, view_dir);
+    return e;
 }
 
 }  // namespace
 
 Status load_builtin_scene(ecs::Registry& r, const std::string& name) {
     if (name == "sphere") {
-        add_cloud_with_lattice(r, "sphere", make_sphere_cloud(), glm::dvec3(0.35, 0.3, 1.0));
+        const ecs::Entity sphere = add_cloud_with_lattice(r, "sphere", make_sphere_cloud(), glm::dvec3(0.35, 0.3, 1.0));
+        // make_sphere_cloud samples the unit sphere at the origin: the ground-truth renderer traces it.
+        r.emplace<ExactSphere>(sphere, ExactSphere{});
         return {};
     }
     if (name == "face") {

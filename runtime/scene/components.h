@@ -45,9 +45,21 @@ struct SplatCloud {
     std::vector<glm::vec3> axis_v;          // bitangent axis scaled by radius (normal x axis_u direction)
     std::vector<std::uint32_t> colors;      // RGBA8, sRGB-encoded, R in the low byte
     std::vector<glm::vec2> uvs;             // texture coordinates (when the material has a texture)
+    // uv derivatives along the splat's axes: the point positions[i] + s * axis_u[i] + t * axis_v[i] has
+    // uv = uvs[i] + s * uv_axes[i].xy + t * uv_axes[i].zw (first order). Per axis, so they hold for the
+    // deformed axes too (FFD maps the axes by the Jacobian). Empty: one texture lookup per splat.
+    std::vector<glm::vec4> uv_axes;
     SplatMaterial material;
 
     std::size_t size() const { return positions.size(); }
+};
+
+// On a point-cloud entity whose splats sample a known analytic surface (the built-in sphere): the sphere
+// in cloud space (relative to SplatCloud::origin). Authored data, read by the ground-truth ray tracer
+// (systems/splat_render/ground_truth.h), which renders this surface instead of the splats.
+struct ExactSphere {
+    glm::dvec3 center{0.0};
+    double radius = 1.0;
 };
 
 // Perspective camera looking down its local -Z; placed by the entity's Transform or by look-at fields.

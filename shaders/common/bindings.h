@@ -12,6 +12,7 @@
 #define SFFD_SSBO_SPLATS_DRAW      5   // GpuSplat[]: the buffer a render pass reads (deformed or rest)
 #define SFFD_SSBO_STATS            6   // uint counters written by compute passes (e.g. inverted splats)
 #define SFFD_SSBO_VISIBLE_SPLATS   7   // view-space records of visible sprite splats (splat_render cull pass)
+#define SFFD_SSBO_UV_AXES          8   // vec4[]: per-splat uv derivatives along axis_u (xy) and axis_v (zw)
 
 // --- UBO binding points ---------------------------------------------------------------------------
 #define SFFD_UBO_FRAME             0   // camera matrices, viewport, lights

@@ -5,9 +5,11 @@
 // centre) go to the quad list as indices. A sprite is the square around the exact screen bounding box of
 // the splat's projected ellipse (ellipse_sprite), so foreshortened splats near a silhouette cost far fewer
 // fragments than a square around their bounding ball. Two DrawArraysIndirectCommands follow: {sprites, 1, 0, 0} and
-// {6, quads, 0, 0}. With culling off (frame.params.z == 0) nothing is dropped: back-facing sprites are
-// marked hidden (plane.xyz = 0, splat_record.h) and discarded per fragment, so the image is the same and
-// the cost is visible. Non-finite input is recognised from its bits (all_finite), never by NaN comparisons.
+// {6, quads, 0, 0} (a third, the CPU cull's flat-coloured sprites of a textured cloud, stays empty here:
+// this pass textures every sprite of a textured cloud per pixel). With culling off (frame.params.z == 0)
+// nothing is dropped: back-facing sprites are marked hidden (plane.xyz = 0, splat_record.h) and discarded
+// per fragment, so the image is the same and the cost is visible. Non-finite input is recognised from its
+// bits (all_finite), never by NaN comparisons.
 //
 // Cheap tests first (back face from centre and normal only, then the frustum), so the two thirds of a
 // closed surface that face away cost little. One global atomic per kept splat: per-workgroup slot
@@ -19,6 +21,9 @@ layout(local_size_x = SFFD_CULL_GROUP_SIZE) in;
 layout(std430, binding = SFFD_SSBO_SPLATS_DRAW) readonly buffer Splats { GpuSplat splats[]; };
 layout(std430, binding = SFFD_SSBO_VISIBLE) writeonly buffer QuadList { uint quads[]; };
 layout(std430, binding = SFFD_SSBO_VISIBLE_SPLATS) writeonly buffer Records { SplatRecord records[]; };
+#if TEXTURED
+layout(std430, binding = SFFD_SSBO_UV_AXES) readonly buffer UvAxes { vec4 uv_axes[]; };
+#endif
 layout(std430, binding = SFFD_SSBO_DRAW_INDIRECT) buffer Commands {
     uint point_count, point_instances, point_first, point_base;
     uint quad_vertices, quad_count, quad_first, quad_base;
@@ -84,7 +89,29 @@ void main() {
         if (back) rec.plane.xyz = vec3(0.0);  // hidden (culling off): every fragment discards
         rec.center = vec4(box.xy, o.c.z, box.z);
         vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
+#if TEXTURED && LIT
+        // Preview: lighting factors; the texture is sampled per pixel (SplatRecord).
+        vec3 diffuse, specular;
+        splat_light_factors(o, world_n, diffuse, specular);
+        rec.normal = vec4(world_n, pack_light(diffuse));
+        rec.plane.w = pack_light(specular);
+#elif TEXTURED
+        rec.normal = vec4(world_n, 0.0);  // HQ samples the texture per pixel: the mip level goes here below
+#else
         rec.normal = vec4(world_n, pack_color(splat_color(s, o, world_n).rgb));
+#endif
+#if TEXTURED
+        vec4 uv_axes_i = uv_axes[i];
+        rec.uv = splat_uv_frame(s, uv_axes_i);
+        float lod = splat_texture_lod(o.c, rec.plane, rec.dual_u, rec.dual_v, uv_axes_i, vec2(textureSize(material_texture, 0)));
+#if LIT
+        rec.center.z = lod;   // preview
+#else
+        rec.normal.w = lod;   // HQ: the colour slot carries the mip level
+#endif
+#else
+        rec.uv = vec4(0.0);
+#endif
         records[atomicAdd(point_count, 1u)] = rec;
     }
 }

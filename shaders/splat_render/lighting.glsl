@@ -26,6 +26,22 @@ vec3 shade_blinn_phong(vec3 albedo, vec3 n, vec3 to_eye, float specular, float s
     return color;
 }
 
+// The two factors of shade_blinn_phong: colour = albedo * diffuse + specular (the textured preview lights
+// once per splat and textures per pixel). Same loop as above.
+void blinn_phong_factors(vec3 n, vec3 to_eye, float specular, float shininess, out vec3 diffuse, out vec3 spec_sum) {
+    diffuse = frame.ambient.rgb;
+    spec_sum = vec3(0.0);
+    for (int i = 0; i < LIGHTS; ++i) {
+        if (uint(i) >= frame.counts.y) break;
+        vec3 l = frame.light_dir[i].xyz;
+        float ndl = max(dot(n, l), 0.0);
+        vec3 h = normalize(l + to_eye);
+        float spec = ndl > 0.0 ? exp2(shininess * log2(max(dot(n, h), 1e-8))) * specular : 0.0;
+        diffuse += frame.light_color[i].rgb * ndl;
+        spec_sum += frame.light_color[i].rgb * spec;
+    }
+}
+
 // With the material of the draw (frame.material: x specular, y shininess).
 vec3 shade_blinn_phong(vec3 albedo, vec3 n, vec3 to_eye) {
     return shade_blinn_phong(albedo, n, to_eye, frame.material.x, frame.material.y);

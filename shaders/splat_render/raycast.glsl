@@ -24,8 +24,9 @@ float window_depth(float t) { return window_depth_inv(1.0 / t); }
 // Intersects the pixel's ray with the splat's plane; discards outside the ellipse, where the plane is not in
 // front along the ray, and splats marked hidden by the cull pass (culling off, back-facing: plane.xyz = 0,
 // so the dot product is exactly 0; splat_record.h). Only comparisons of finite values: no NaN or infinity.
-// Returns the view-axis depth t of the hit (p = t * ray) and the squared elliptical radius r2.
-float raycast_splat(out vec3 ray, out float r2) {
+// Returns the view-axis depth t of the hit (p = t * ray), its splat coordinates st
+// (p = centre + st.x * axis_u + st.y * axis_v) and the squared elliptical radius r2 = |st|^2.
+float raycast_splat(out vec3 ray, out float r2, out vec2 st) {
     ray = pixel_ray();
     float inv_t = dot(v_plane.xyz, ray);
     if (inv_t <= 0.0) discard;
@@ -35,7 +36,12 @@ float raycast_splat(out vec3 ray, out float r2) {
     float q = t * dot(dv.xyz, ray) - dv.w;
     r2 = s * s + q * q;
     if (r2 > 1.0) discard;
+    st = vec2(s, q);
     return t;
+}
+float raycast_splat(out vec3 ray, out float r2) {
+    vec2 st;
+    return raycast_splat(ray, r2, st);
 }
 
 #endif

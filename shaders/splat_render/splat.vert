@@ -4,13 +4,23 @@
 //   SHAPE_QUAD 1: a world-space parallelogram c +- u +- v per splat (two triangles, instanced over the quad
 //                 list), for splats a sprite cannot draw; set up here from the splat itself
 //   PASS 0 visibility, 1 attribute, 2 preview (the later two pass colour and normal on)
+//   TEXTURED 1 (attribute and preview passes of a textured cloud): the splat's uv frame and mip level go on
+//                 to the fragment shader, which samples the texture per pixel (preview: with the splat's
+//                 lighting factors instead of a lit colour)
 // The fragment shaders ray-cast the splat's ellipse from the flat values (see SplatRecord).
 
 #include "splat_render/splat_common.glsl"
+#ifndef TEXTURED
+#define TEXTURED 0
+#endif
+#define UV_FRAME (PASS != 0 && TEXTURED)
 #if SHAPE_QUAD
 #include "splat_render/splat_color.glsl"
 layout(std430, binding = SFFD_SSBO_SPLATS_DRAW) readonly buffer Splats { GpuSplat splats[]; };
 layout(std430, binding = SFFD_SSBO_VISIBLE) readonly buffer QuadList { uint quads[]; };
+#if UV_FRAME
+layout(std430, binding = SFFD_SSBO_UV_AXES) readonly buffer UvAxes { vec4 uv_axes[]; };
+#endif
 #else
 // The SplatRecord array of the cull pass, bound as a vertex buffer (stride SFFD_SPLAT_RECORD_BYTES): the vertex fetcher reads
 // it far faster than per-lane SSBO loads on llvmpipe.
@@ -21,14 +31,25 @@ layout(location = 3) in vec4 a_dual_v;
 #if PASS != 0
 layout(location = 4) in vec4 a_normal;  // w: packed colour
 #endif
+#if UV_FRAME
+layout(location = 5) in vec4 a_uv;      // splat_uv_frame
+#endif
 #endif
 
-// PASS 0: v_plane.w = eps; PASS 1, 2: v_plane.w = packed colour (HQ albedo, preview lit; pack_color).
+// PASS 0: v_plane.w = eps; PASS 1, 2: v_plane.w = packed colour (HQ albedo, preview lit; pack_color);
+// PASS 1 TEXTURED: v_plane.w = the splat's mip level (splat_texture_lod); PASS 2 TEXTURED: v_plane.w =
+// the packed diffuse factor, v_light = (packed specular term, mip level) (SplatRecord).
 layout(location = 0) flat out vec4 v_plane;
 layout(location = 1) flat out vec4 v_dual_u;
 layout(location = 2) flat out vec4 v_dual_v;
 #if PASS == 1 || AUX
 layout(location = 3) flat out vec3 v_normal;  // world space shading normal
+#endif
+#if UV_FRAME
+layout(location = 4) flat out vec4 v_uv;  // splat_uv_frame
+#endif
+#if PASS == 2 && TEXTURED
+layout(location = 5) flat out vec2 v_light;
 #endif
 
 void main() {
@@ -40,7 +61,21 @@ void main() {
         v_plane.xyz = vec3(0.0);  // back-facing with culling off: hidden (splat_record.h), every fragment discards
 #if PASS != 0
     vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
+#if UV_FRAME
+    vec4 uv_axes_i = uv_axes[quads[gl_InstanceID]];
+    v_uv = splat_uv_frame(s, uv_axes_i);
+    float lod = splat_texture_lod(o.c, v_plane, v_dual_u, v_dual_v, uv_axes_i, vec2(textureSize(material_texture, 0)));
+#if PASS == 1
+    v_plane.w = lod;
+#else
+    vec3 diffuse, specular;
+    splat_light_factors(o, world_n, diffuse, specular);
+    v_plane.w = pack_light(diffuse);
+    v_light = vec2(pack_light(specular), lod);
+#endif
+#else
     v_plane.w = pack_color(splat_color(s, o, world_n).rgb);
+#endif
 #if PASS == 1 || AUX
     v_normal = world_n;
 #endif
@@ -58,6 +93,12 @@ void main() {
 #if PASS == 1 || AUX
     v_normal = a_normal.xyz;
 #endif
+#endif
+#if UV_FRAME
+    v_uv = a_uv;
+#endif
+#if PASS == 2 && TEXTURED
+    v_light = vec2(a_plane.w, a_center.z);
 #endif
     // The sprite's centre in NDC. Its depth is irrelevant (every splat fragment shader writes gl_FragDepth)
     // and z = 0 keeps the point inside the clip volume (near-crossing splats are quads).

@@ -33,4 +33,10 @@ vec4 splat_color(GpuSplat s, SplatView o, vec3 world_n) {
     return color;
 }
 
+// The textured preview's per-splat lighting: pixel colour = texture * diffuse + specular.
+void splat_light_factors(SplatView o, vec3 world_n, out vec3 diffuse, out vec3 specular) {
+    blinn_phong_factors(world_n, -normalize(mat3(frame.view_to_world) * o.c), frame.material.x, frame.material.y,
+                        diffuse, specular);
+}
+
 #endif

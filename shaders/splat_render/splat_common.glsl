@@ -7,6 +7,45 @@
 #include "splat_render/frame_block.h"
 #include "splat_render/splat_record.h"
 
+// Two halves in one float that survives any varying or store: packHalf2x16 less each half's lowest mantissa
+// bit (30 bits), stored like pack_color (mantissa, exponent plus one): always normal and finite. A raw
+// packHalf2x16 with a zero upper half is a denormal, which GLSL lets a driver flush to zero.
+// C++ twin: pack_halves() in systems/splat_render/cpu_cull.cpp.
+float pack_halves(vec2 v) {
+    uint h = packHalf2x16(v);
+    uint bits = ((h & 0xffffu) >> 1) | ((h >> 17) << 15);
+    return uintBitsToFloat((bits & 0x7fffffu) + (((bits >> 23) + 1u) << 23));
+}
+vec2 unpack_halves(float packed_halves) {
+    uint stored = floatBitsToUint(packed_halves);
+    uint bits = (stored & 0x7fffffu) + (((stored >> 23) - 1u) << 23);
+    return unpackHalf2x16(((bits & 0x7fffu) << 1) | ((bits >> 15) << 17));
+}
+
+// The uv frame of a splat as the fragment shaders read it: uv at the centre, and the uv derivatives along
+// the two axes (SplatCloud::uv_axes) packed as halves (pack_halves). The derivatives are per axis, so they stay valid
+// when a lattice deforms the axes: the point centre + s * axis_u + t * axis_v maps to uv + s du + t dv
+// before and after (first order).
+vec4 splat_uv_frame(GpuSplat s, vec4 uv_axes) {
+    return vec4(s.axis_u.w, s.axis_v.w, pack_halves(uv_axes.xy), pack_halves(uv_axes.zw));
+}
+
+// Mip level of a splat's texture footprint, once per splat (GL's LOD, the larger side of the pixel's
+// footprint in texels, at the splat's centre: it changes little across a splat of a few pixels). The
+// attribute pass samples with it (textureLod with a flat LOD): per-fragment derivatives (textureGrad) made
+// the HQ frame of the textured sphere ~1.5x slower on llvmpipe, for 51.4 instead of 51.x dB.
+// d(s, t)/d(window x, y) of raycast.glsl's ray cast, at the centre: ray = (x ray_map.x + ray_map.z, ...,
+// -1), t = 1 / dot(plane, ray) = -c.z there, s = t dot(dual_u, ray) - dual_u.w, so
+// ds/dx = t ray_map.x (dual_u.x - plane.x dual_u.w) (s = 0). C++ twin in cpu_cull.cpp.
+float splat_texture_lod(vec3 c, vec4 plane, vec4 dual_u, vec4 dual_v, vec4 uv_axes, vec2 texture_size) {
+    vec2 scale = -c.z * frame.ray_map.xy;
+    vec2 ds = scale * (dual_u.xy - plane.xy * dual_u.w);
+    vec2 dq = scale * (dual_v.xy - plane.xy * dual_v.w);
+    vec2 ddx = (ds.x * uv_axes.xy + dq.x * uv_axes.zw) * texture_size;
+    vec2 ddy = (ds.y * uv_axes.xy + dq.y * uv_axes.zw) * texture_size;
+    return 0.5 * log2(max(max(dot(ddx, ddx), dot(ddy, ddy)), 1e-20));
+}
+
 // Colour of a SplatRecord: the 30 bits r | g << 10 | b << 20 of sqrt(linear rgb), stored in a float's
 // mantissa (bits 0..22) and exponent (bits 23..29 plus one, so 1..128): always a normal, finite float, never
 // a NaN, infinity or denormal that a driver may canonicalise or flush on its way through a varying.
@@ -30,6 +69,10 @@ bool all_finite(vec3 v) {
     uvec3 exponent = floatBitsToUint(v) & 0x7f800000u;
     return all(notEqual(exponent, uvec3(0x7f800000u)));
 }
+
+// Lighting factors (>= 0, up to 4: brighter saturates) packed like colours.
+float pack_light(vec3 factor) { return pack_color(factor * 0.25); }
+vec3 unpack_light(float packed_factor) { return unpack_color(packed_factor) * 4.0; }
 
 // Largest radius of the ellipse {s*u + t*v : s^2 + t^2 <= 1}: sqrt of the Gram matrix's larger eigenvalue
 // (u and v need not be orthogonal after a deformation).

@@ -11,7 +11,7 @@
 
 // A visible sprite splat, prepared by the cull pass (or its CPU twin, cpu_cull.h) so the vertex shaders of
 // both HQ passes only copy it (llvmpipe spends its time per primitive: vertex work runs once, in the cull).
-// std430, 80 bytes, bound as a vertex buffer (attributes 0..4). The ray through a pixel is d = (x, y, -1)
+// std430, 96 bytes, bound as a vertex buffer (attributes 0..5). The ray through a pixel is d = (x, y, -1)
 // in view space; the ray cast is linear in d:
 //   t = 1 / dot(plane.xyz, d)                     view-axis depth of the hit p = t * d
 //   s = t * dot(dual_u.xyz, d) - dual_u.w,  q = t * dot(dual_v.xyz, d) - dual_v.w,  inside: s^2 + q^2 <= 1
@@ -22,7 +22,13 @@
 // Colour travels packed (pack_color in splat_common.glsl: 10-10-10 bits of sqrt(linear rgb), stored as a
 // normal float) so that, with the normal, every pass hands at most four vec4 varyings per sprite to the
 // rasteriser (each costs per-primitive set-up on llvmpipe).
-#define SFFD_SPLAT_RECORD_BYTES 80
+// Textured clouds sample the texture per pixel through the uv frame, so some slots change meaning:
+//   HQ (unlit records):   normal.w = mip level (splat_texture_lod)
+//   preview (lit):        normal.w = pack_light(diffuse factor), plane.w = pack_light(specular term) (the
+//                         preview has no visibility pass, so no eps), center.z = mip level
+// (pixel colour = texture * diffuse + specular: splat_light_factors). The CPU cull's flat-coloured sprites
+// of a textured cloud (third indirect draw) keep the untextured meaning and uv = 0.
+#define SFFD_SPLAT_RECORD_BYTES 96
 
 #ifdef __cplusplus
 namespace sffd::render {
@@ -39,6 +45,8 @@ struct SplatRecord {
     SFFD_VEC4 dual_u;  // xyz: dual axis (s = dot(dual_u, p - center)), w: dot(dual_u, center)
     SFFD_VEC4 dual_v;
     SFFD_VEC4 normal;  // xyz world-space shading normal, w: packed colour (HQ albedo, preview lit)
+    SFFD_VEC4 uv;      // textured clouds: xy uv at the centre, z / w: the uv derivatives along axis_u / axis_v,
+                       // two halves each (pack_halves, splat_uv_frame); untextured: 0
 };
 #undef SFFD_VEC4
 #ifdef __cplusplus

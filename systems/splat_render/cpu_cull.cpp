@@ -6,7 +6,9 @@
 #include <array>
 #include <bit>
 #include <cmath>
+#include <cstring>
 
+#include <glm/gtc/packing.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -30,6 +32,15 @@ float pack_color(const glm::vec3& linear) {
     const glm::vec3 s = glm::sqrt(glm::clamp(linear, 0.0f, 1.0f)) * 1023.0f;
     const auto q = [](float x) { return std::uint32_t(std::nearbyint(x)); };
     const std::uint32_t bits = q(s.x) | (q(s.y) << 10) | (q(s.z) << 20);
+    return std::bit_cast<float>((bits & 0x7fffffu) + (((bits >> 23) + 1u) << 23));
+}
+
+// pack_halves of splat_common.glsl: two halves (packHalf2x16) less their lowest mantissa bit, 30 bits in
+// all, stored like pack_color so the float is normal and finite (a raw packHalf2x16 with a zero upper half
+// is a denormal, which GLSL lets a driver flush to zero).
+float pack_halves(const glm::vec2& v) {
+    const std::uint32_t h = glm::packHalf2x16(v);
+    const std::uint32_t bits = ((h & 0xffffu) >> 1) | ((h >> 17) << 15);
     return std::bit_cast<float>((bits & 0x7fffffu) + (((bits >> 23) + 1u) << 23));
 }
 
@@ -59,24 +70,6 @@ const std::array<float, 256>& srgb8_table() {
     return table;
 }
 
-// textureLod(material_texture, uv, 0): bilinear, repeat in u, clamp to edge in v, sRGB texels decoded
-// before filtering, alpha linear.
-glm::vec4 sample_texture(const TexelView& t, glm::vec2 uv) {
-    const auto& lut = srgb8_table();
-    const float x = uv.x * float(t.width) - 0.5f, y = uv.y * float(t.height) - 0.5f;
-    const float fx = std::floor(x), fy = std::floor(y);
-    const float ax = x - fx, ay = y - fy;
-    auto wrap = [](long i, int n) { return int(((i % n) + n) % n); };
-    const int x0 = wrap(long(fx), t.width), x1 = wrap(long(fx) + 1, t.width);
-    const int y0 = std::clamp(int(fy), 0, t.height - 1), y1 = std::clamp(int(fy) + 1, 0, t.height - 1);
-    auto texel = [&](int tx, int ty) {
-        const std::uint8_t* p = t.rgba8 + (std::size_t(ty) * std::size_t(t.width) + std::size_t(tx)) * 4;
-        return glm::vec4(lut[p[0]], lut[p[1]], lut[p[2]], float(p[3]) * (1.0f / 255.0f));
-    };
-    const glm::vec4 top = glm::mix(texel(x0, y0), texel(x1, y0), ax), bottom = glm::mix(texel(x0, y1), texel(x1, y1), ax);
-    return glm::mix(top, bottom, ay);
-}
-
 glm::vec3 shade_blinn_phong(const gpu::FrameBlock& f, const glm::vec3& albedo, const glm::vec3& n, const glm::vec3& to_eye) {
     glm::vec3 color = glm::vec3(f.ambient) * albedo;
     for (std::uint32_t i = 0; i < SFFD_MAX_LIGHTS && i < f.counts.y; ++i) {
@@ -87,6 +80,21 @@ glm::vec3 shade_blinn_phong(const gpu::FrameBlock& f, const glm::vec3& albedo, c
         color += glm::vec3(f.light_color[i]) * (albedo * ndl + glm::vec3(spec));
     }
     return color;
+}
+
+// blinn_phong_factors of lighting.glsl: colour = albedo * diffuse + specular.
+void blinn_phong_factors(const gpu::FrameBlock& f, const glm::vec3& n, const glm::vec3& to_eye, glm::vec3& diffuse,
+                         glm::vec3& specular) {
+    diffuse = glm::vec3(f.ambient);
+    specular = glm::vec3(0.0f);
+    for (std::uint32_t i = 0; i < SFFD_MAX_LIGHTS && i < f.counts.y; ++i) {
+        const glm::vec3 l(f.light_dir[i]);
+        const float ndl = std::max(glm::dot(n, l), 0.0f);
+        const glm::vec3 h = glm::normalize(l + to_eye);
+        const float spec = ndl > 0.0f ? std::exp2(f.material.y * std::log2(std::max(glm::dot(n, h), 1e-8f))) * f.material.x : 0.0f;
+        diffuse += glm::vec3(f.light_color[i]) * ndl;
+        specular += glm::vec3(f.light_color[i]) * spec;
+    }
 }
 
 struct SplatView {
@@ -118,6 +126,7 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     if (out.quads.size() < n) out.quads.resize(n);
     out.record_counts.assign(blocks, 0u);
     out.quad_counts.assign(blocks, 0u);
+    out.flat_counts.assign(blocks, 0u);
 
     const glm::mat3 mv3(f.model_view), nv3(f.normal_view), v2w3(f.view_to_world);
     const bool culling = f.params.z != 0.0f, textured = f.params.w != 0.0f && texture.rgba8 && texture.width > 0 &&
@@ -128,13 +137,17 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     const float far_plane = f.projection[3][2] / (f.projection[2][2] + 1.0f);
     const float side_x = 1.0f / std::sqrt(p00 * p00 + 1.0f), side_y = 1.0f / std::sqrt(p11 * p11 + 1.0f);
     const std::array<float, 256>& splat_lut = splat_srgb_table();
+    const std::array<float, 256>& texel_lut = srgb8_table();
+    const bool flat_ok = textured && texture.uniform_radius;
+    if (flat_ok && out.flat_records.size() < n) out.flat_records.resize(n);
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const tbb::blocked_range<std::size_t>& range) {
         for (std::size_t b = range.begin(); b != range.end(); ++b) {
             const std::size_t begin = b * block_splats, end = std::min(n, begin + block_splats);
             SplatRecord* records = out.records.data() + begin;
             std::uint32_t* quads = out.quads.data() + begin;
-            std::uint32_t kept = 0, kept_quads = 0;
+            SplatRecord* flat_records = flat_ok ? out.flat_records.data() + begin : nullptr;
+            std::uint32_t kept = 0, kept_quads = 0, kept_flat = 0;
             for (std::size_t i = begin; i < end; ++i) {
                 const gpu::GpuSplat& s = splats[i];
                 // Back face from centre and normal only (a flipped splat, normal.w == 0, is two-sided).
@@ -171,23 +184,97 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 if (back) rec.plane.x = rec.plane.y = rec.plane.z = 0.0f;  // hidden (culling off, splat_record.h)
                 rec.center = glm::vec4(box.x, box.y, o.c.z, box.z);
                 const glm::vec3 world_n = glm::normalize(v2w3 * o.shading_n);
+                if (textured) {
+                    // splat_uv_frame, splat_texture_lod; the texture is sampled per pixel (SplatRecord)
+                    const glm::vec4 a = texture.uv_axes ? texture.uv_axes[i] : glm::vec4(0.0f);
+                    rec.uv = glm::vec4(s.axis_u[3], s.axis_v[3], pack_halves(glm::vec2(a.x, a.y)),
+                                       pack_halves(glm::vec2(a.z, a.w)));
+                    const glm::vec2 scale = -o.c.z * glm::vec2(f.ray_map.x, f.ray_map.y);
+                    const glm::vec2 ds = scale * (glm::vec2(rec.dual_u) - glm::vec2(rec.plane) * rec.dual_u.w);
+                    const glm::vec2 dq = scale * (glm::vec2(rec.dual_v) - glm::vec2(rec.plane) * rec.dual_v.w);
+                    const glm::vec2 size(float(texture.width), float(texture.height));
+                    const glm::vec2 ddx = (ds.x * glm::vec2(a.x, a.y) + dq.x * glm::vec2(a.z, a.w)) * size;
+                    const glm::vec2 ddy = (ds.y * glm::vec2(a.x, a.y) + dq.y * glm::vec2(a.z, a.w)) * size;
+                    const float lod = 0.5f * std::log2(std::max(std::max(glm::dot(ddx, ddx), glm::dot(ddy, ddy)), 1e-20f));
+                    if (flat_ok && lod < 16.0f && std::abs(rec.uv.x) < 1e6f && std::abs(rec.uv.y) < 1e6f) {  // (false for NaN)
+                        // One colour under the whole footprint (|s|, |t| <= 1) and the filter's reach (two texels
+                        // of the coarser level, in level-0 texels): draw it flat (CpuCullResult::flat_records).
+                        const float reach = (std::abs(a.x) + std::abs(a.z)) * size.x, reach_v = (std::abs(a.y) + std::abs(a.w)) * size.y;
+                        const float margin = 2.0f * std::exp2(std::ceil(std::max(lod, 0.0f))) + 1.0f;
+                        const float fu = rec.uv.x - std::floor(rec.uv.x);
+                        const int tx = std::min(int(fu * size.x), texture.width - 1);
+                        const int ty = std::clamp(int(std::floor(rec.uv.y * size.y)), 0, texture.height - 1);
+                        const std::size_t texel = std::size_t(ty) * std::size_t(texture.width) + std::size_t(tx);
+                        if (std::max(reach, reach_v) + margin < float(texture.uniform_radius[texel])) {
+                            const std::uint8_t* p = texture.rgba8 + 4 * texel;
+                            glm::vec3 color(texel_lut[p[0]], texel_lut[p[1]], texel_lut[p[2]]);
+                            if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
+                            SplatRecord& flat = flat_records[kept_flat++];
+                            flat = rec;
+                            flat.plane.w = f.params.x * o.r;
+                            flat.normal = glm::vec4(world_n, pack_color(color));
+                            flat.uv = glm::vec4(0.0f);
+                            --kept;  // the slot in `records` is reused
+                            continue;
+                        }
+                    }
+                    if (lit) {  // preview: lighting factors (splat_light_factors), the mip level in center.z
+                        glm::vec3 diffuse, specular;
+                        blinn_phong_factors(f, world_n, -glm::normalize(v2w3 * o.c), diffuse, specular);
+                        rec.normal = glm::vec4(world_n, pack_color(diffuse * 0.25f));  // pack_light
+                        rec.plane.w = pack_color(specular * 0.25f);
+                        rec.center.z = lod;
+                    } else {  // HQ: the colour slot carries the mip level
+                        rec.normal = glm::vec4(world_n, lod);
+                    }
+                    continue;
+                }
                 // splat_color
                 glm::vec3 color;
-                if (textured) {
-                    color = glm::vec3(sample_texture(texture, glm::vec2(s.axis_u[3], s.axis_v[3])));
-                } else {
-                    const std::uint32_t bits = std::bit_cast<std::uint32_t>(s.center[3]);
-                    color = glm::vec3(splat_lut[bits & 255u], splat_lut[(bits >> 8) & 255u], splat_lut[(bits >> 16) & 255u]);
-                }
+                const std::uint32_t bits = std::bit_cast<std::uint32_t>(s.center[3]);
+                color = glm::vec3(splat_lut[bits & 255u], splat_lut[(bits >> 8) & 255u], splat_lut[(bits >> 16) & 255u]);
                 if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
                 rec.normal = glm::vec4(world_n, pack_color(color));
+                rec.uv = glm::vec4(0.0f);
             }
             out.record_counts[b] = kept;
             out.quad_counts[b] = kept_quads;
+            out.flat_counts[b] = kept_flat;
         }
     });
-    out.visible_records = out.visible_quads = 0;
-    for (std::size_t b = 0; b < blocks; ++b) out.visible_records += out.record_counts[b], out.visible_quads += out.quad_counts[b];
+    out.visible_records = out.visible_quads = out.visible_flat = 0;
+    for (std::size_t b = 0; b < blocks; ++b)
+        out.visible_records += out.record_counts[b], out.visible_quads += out.quad_counts[b], out.visible_flat += out.flat_counts[b];
+}
+
+std::vector<std::uint16_t> uniform_texel_radius(const std::uint8_t* rgba8, int w, int h) {
+    const std::size_t n = std::size_t(std::max(w, 0)) * std::size_t(std::max(h, 0));
+    std::vector<std::uint16_t> d(n, 0);
+    if (!rgba8 || n == 0) return d;
+    auto px = [&](int x, int y) {
+        std::uint32_t v;
+        std::memcpy(&v, rgba8 + 4 * (std::size_t(y) * std::size_t(w) + std::size_t(x)), 4);
+        return v;
+    };
+    constexpr std::uint16_t far = 65535;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            bool edge = x == 0 || y == 0 || x == w - 1 || y == h - 1;
+            for (int dy = -1; dy <= 1 && !edge; ++dy)
+                for (int dx = -1; dx <= 1 && !edge; ++dx) edge = px(x + dx, y + dy) != px(x, y);
+            d[std::size_t(y) * std::size_t(w) + std::size_t(x)] = edge ? 0 : far;
+        }
+    // Two chamfer passes with unit weights over the 8-neighbourhood: exact Chebyshev distances.
+    auto at = [&](int x, int y) -> std::uint16_t& { return d[std::size_t(y) * std::size_t(w) + std::size_t(x)]; };
+    auto relax = [&](int x, int y, int nx, int ny) {
+        if (nx < 0 || ny < 0 || nx >= w || ny >= h) return;
+        at(x, y) = std::uint16_t(std::min<int>(at(x, y), at(nx, ny) + 1));
+    };
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) relax(x, y, x - 1, y), relax(x, y, x - 1, y - 1), relax(x, y, x, y - 1), relax(x, y, x + 1, y - 1);
+    for (int y = h - 1; y >= 0; --y)
+        for (int x = w - 1; x >= 0; --x) relax(x, y, x + 1, y), relax(x, y, x + 1, y + 1), relax(x, y, x, y + 1), relax(x, y, x - 1, y + 1);
+    return d;
 }
 
 }  // namespace sffd::render

@@ -27,7 +27,17 @@ namespace sffd::render {
 struct TexelView {
     const std::uint8_t* rgba8 = nullptr;
     int width = 0, height = 0;
+    const glm::vec4* uv_axes = nullptr;  // SplatCloud::uv_axes, one per splat (null: zero derivatives)
+    const std::uint16_t* uniform_radius = nullptr;  // uniform_texel_radius() of the texels (null: none)
 };
+
+// For each texel (row-major, level 0): its Chebyshev distance to the nearest texel whose 8-neighbourhood
+// holds another colour (border texels count as such, so u's wrap needs no special case). Every texel
+// closer than that to it has its colour. The CPU cull uses it to find splats whose whole texture footprint
+// (at their mip level, with the filter's reach) is one colour: those are drawn with a flat colour by the
+// programs without per-pixel texture lookups, which cost llvmpipe about as much as the rest of the
+// attribute pass.
+std::vector<std::uint16_t> uniform_texel_radius(const std::uint8_t* rgba8, int width, int height);
 
 // Output of cull_splats_cpu. The splats are processed in fixed blocks of `block` splats; block b's
 // visible sprites are records[b * block, b * block + record_counts[b]) (and likewise its quad indices), so
@@ -39,8 +49,13 @@ struct CpuCullResult {
     std::vector<std::uint32_t> quads;          // size: the splat count (runs per block)
     std::vector<std::uint32_t> record_counts;  // per block
     std::vector<std::uint32_t> quad_counts;    // per block
+    // Textured clouds: sprites whose texture footprint is one colour (TexelView::uniform_radius) are not
+    // in `records` but here, with that colour packed like an untextured splat's (runs per block).
+    std::vector<SplatRecord> flat_records;
+    std::vector<std::uint32_t> flat_counts;    // per block
     std::uint32_t visible_records = 0;         // sums of the counts
     std::uint32_t visible_quads = 0;
+    std::uint32_t visible_flat = 0;
 
     // Calls fn(first_output_index, pointer, count) for each non-empty run, in order.
     template <class T, class Fn>
@@ -56,6 +71,8 @@ struct CpuCullResult {
 
 // Culls and compacts `splats` exactly as cull.comp does with `frame` (model_view, projection, params,
 // counts.w = 1 lights the colours for preview, ...). frame.counts.x is ignored: the span's size counts.
+// One difference: with TexelView::uniform_radius, a textured cloud's one-colour sprites go to
+// flat_records (cull.comp keeps every textured sprite in the textured list).
 void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBlock& frame, const TexelView& texture,
                      CpuCullResult& out);
 

@@ -34,14 +34,22 @@ namespace sffd::render {
 
 namespace {
 
+// Three DrawArraysIndirectCommands per cloud: sprites {n, 1, 0, 0}, quads {6, n, 0, 0}, and a textured
+// cloud's flat-coloured sprites {n, 1, capacity, 0} (CPU cull only; the compute cull leaves n = 0).
+constexpr std::size_t draw_command_words = 12;
+
 // Per point cloud GPU objects owned by the renderer (the splats themselves live in GpuSplatStore).
 struct CloudGpu {
-    gfx::Buffer records;    // SplatRecord[capacity]: visible sprites, prepared by the cull pass
+    gfx::Buffer records;    // SplatRecord[2 capacity]: visible sprites, prepared by the cull pass; from
+                            // `capacity` on, a textured cloud's sprites of one texture colour (CPU cull)
     gfx::Buffer quads;      // uint[capacity]: indices of visible splats drawn as quads
-    gfx::Buffer commands;   // two DrawArraysIndirectCommands: sprites, quads
+    gfx::Buffer commands;   // three DrawArraysIndirectCommands: sprites, quads, flat-coloured sprites
     gfx::Buffer frame_ubo;  // FrameBlock for this cloud
     std::uint32_t capacity = 0;
     gfx::Texture texture;   // material texture (sRGB), when the material has one
+    gfx::Buffer uv_axes;    // vec4[count]: SplatCloud::uv_axes (zeros when absent), when textured
+    std::vector<std::uint16_t> uniform_radius;  // uniform_texel_radius() of the texture (CPU cull)
+    const std::vector<glm::vec4>* uv_axes_cpu = nullptr;  // the cloud's, valid during one render_system call
     std::uint64_t texture_version = 0;
     BoundingSphere bounds;  // cloud space, for the framing camera
     std::uint64_t bounds_version = 0;
@@ -100,13 +108,15 @@ struct SplatRenderState {
     // first use (cull_program)
     std::array<std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2>, 2> cull;
     std::array<gfx::Program, 2> visibility;  // [0] sprites, [1] quads
-    std::array<std::array<gfx::Program, 2>, 2> attribute;  // [clouds differ in material][sprites, quads]
-    std::array<std::array<gfx::Program, 2>, 2> preview;  // [aux outputs][sprites, quads]
+    // [textured: per-pixel texture lookups][clouds differ in material][sprites, quads]
+    std::array<std::array<std::array<gfx::Program, 2>, 2>, 2> attribute;
+    // [textured: per-pixel texture lookups][aux outputs][sprites, quads]
+    std::array<std::array<std::array<gfx::Program, 2>, 2>, 2> preview;
     // [clouds differ in material][lights]: compiled on first use (shade_program)
     std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2> shade;
     gfx::Program display;  // sRGB copy for a window (PresentSource)
     gfx::VertexArray vao;          // empty: quads read their splats from SSBOs
-    gfx::VertexArray records_vao;  // SplatRecord[] as vertex attributes 0..4 (buffer bound per cloud)
+    gfx::VertexArray records_vao;  // SplatRecord[] as vertex attributes 0..5 (buffer bound per cloud)
     float max_point_size = 1.0f;
 
     int width = 0, height = 0;
@@ -121,9 +131,10 @@ struct SplatRenderState {
     glm::vec4 last_background{0.0f};  // of the last rendered frame
 
     // The compute cull's visible counts come back through this ring, never by waiting (issue 15): a
-    // persistently mapped buffer of counts_slot_count slots x counts_ring_clouds clouds x 8 uints.
+    // persistently mapped buffer of counts_slot_count slots x counts_ring_clouds clouds x draw_command_words
+    // uints (all three draw commands).
     static constexpr std::size_t counts_slot_count = 4;
-    gfx::Buffer command_reset;  // immutable {0, 1, 0, 0, 6, 0, 0, 0}: copied over the draw commands
+    gfx::Buffer command_reset;  // immutable {0, 1, 0, 0, 6, 0, 0, 0, 0, 1, 0, 0}: copied over the draw commands
     gfx::Buffer counts_ring;
     const std::uint32_t* counts_mapped = nullptr;
     std::size_t counts_ring_clouds = 0;
@@ -141,10 +152,12 @@ struct SplatRenderState {
 namespace {
 
 Result<gfx::Program> splat_program(const char* fragment, const char* label, int pass, int quad, int aux = 1,
-                                   int materials = 0) {
+                                   int materials = 0, int textured = -1) {
+    gfx::Defines defines{{"PASS", std::to_string(pass)}, {"SHAPE_QUAD", std::to_string(quad)},
+                         {"AUX", std::to_string(aux)}, {"MATERIALS", std::to_string(materials)}};
+    if (textured >= 0) defines.push_back({"TEXTURED", std::to_string(textured)});  // else read per draw
     return gfx::load_program({{GL_VERTEX_SHADER, "splat_render/splat.vert"}, {GL_FRAGMENT_SHADER, fragment}}, label,
-                             {{"PASS", std::to_string(pass)}, {"SHAPE_QUAD", std::to_string(quad)},
-                              {"AUX", std::to_string(aux)}, {"MATERIALS", std::to_string(materials)}});
+                             defines);
 }
 
 gfx::Texture make_target(GLenum format, int w, int h, const char* label) {
@@ -198,10 +211,30 @@ void upload_texture(CloudGpu& gpu, const SplatMaterial& m) {
     glTextureSubImage2D(gpu.texture.id(), 0, 0, 0, m.texture_width, m.texture_height, GL_RGBA, GL_UNSIGNED_BYTE,
                         m.texture_rgba8.data());
     glGenerateTextureMipmap(gpu.texture.id());
-    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    // Mipmapped: the HQ attribute pass filters per pixel with textureGrad (the cull's per-splat lookups ask
+    // for level 0 explicitly).
+    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
     glTextureParameteri(gpu.texture.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     glTextureParameteri(gpu.texture.id(), GL_TEXTURE_WRAP_S, GL_REPEAT);
     glTextureParameteri(gpu.texture.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+}
+
+// The uv frames the textured passes read (SFFD_SSBO_UV_AXES), zeros for a cloud without them (then every
+// fragment samples the splat's centre uv at level 0).
+void upload_uv_axes(CloudGpu& gpu, const SplatCloud& cloud) {
+    gpu.uniform_radius.clear();
+    if (!gpu.texture) {
+        gpu.uv_axes.reset();
+        return;
+    }
+    const SplatMaterial& m = cloud.material;
+    gpu.uniform_radius = uniform_texel_radius(m.texture_rgba8.data(), m.texture_width, m.texture_height);
+    std::vector<glm::vec4> zeros;
+    const std::vector<glm::vec4>* data = &cloud.uv_axes;
+    if (cloud.uv_axes.size() != cloud.size()) zeros.assign(cloud.size(), glm::vec4(0.0f)), data = &zeros;
+    gpu.uv_axes = gfx::Buffer::create("render.uv_axes");
+    glNamedBufferData(gpu.uv_axes.id(), GLsizeiptr(std::max<std::size_t>(data->size(), 1) * sizeof(glm::vec4)),
+                      data->empty() ? nullptr : data->data(), GL_STATIC_DRAW);
 }
 
 // Whether the CPU cull may run this frame, so CPU copies of the splats are worth keeping.
@@ -246,12 +279,12 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
             gpu.frame_ubo = gfx::Buffer::create("render.frame_block");
             glNamedBufferData(gpu.frame_ubo.id(), sizeof(gpu::FrameBlock), nullptr, GL_DYNAMIC_DRAW);
             gpu.commands = gfx::Buffer::create("render.draw_commands");
-            glNamedBufferData(gpu.commands.id(), 8 * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_DRAW);
+            glNamedBufferData(gpu.commands.id(), draw_command_words * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_DRAW);
         }
         if (gpu.capacity < n || !gpu.records) {
             gpu.capacity = std::max<std::uint32_t>(n, 1);
             gpu.records = gfx::Buffer::create("render.visible_splats");
-            glNamedBufferData(gpu.records.id(), GLsizeiptr(std::size_t(gpu.capacity) * sizeof(SplatRecord)), nullptr,
+            glNamedBufferData(gpu.records.id(), GLsizeiptr(2 * std::size_t(gpu.capacity) * sizeof(SplatRecord)), nullptr,
                               GL_DYNAMIC_DRAW);
             gpu.quads = gfx::Buffer::create("render.visible_quads");
             glNamedBufferData(gpu.quads.id(), GLsizeiptr(std::size_t(gpu.capacity) * sizeof(std::uint32_t)), nullptr,
@@ -259,8 +292,10 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
         }
         if (gpu.texture_version != version) {
             upload_texture(gpu, cloud.material);
+            upload_uv_axes(gpu, cloud);
             gpu.texture_version = version;
         }
+        gpu.uv_axes_cpu = gpu.texture && cloud.uv_axes.size() == n ? &cloud.uv_axes : nullptr;
         if (gpu.bounds_version != version) {
             gpu.bounds = bounding_sphere(cloud);
             gpu.bounds_version = version;
@@ -411,13 +446,17 @@ glm::ivec4 screen_rect(ecs::Registry& reg, const ViewSetup& view, int w, int h) 
     return glm::ivec4(x0, y0, x1 - x0, y1 - y0);
 }
 
-void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& programs, const CloudGpu& gpu) {
+// programs: [sprites, quads] for the cloud; flat: the program for a textured cloud's flat-coloured sprites
+// (CpuCullResult::flat_records: the untextured variant of the pass; null for passes without colour).
+void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& programs, const CloudGpu& gpu,
+                const gfx::Program* flat = nullptr) {
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
     glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
+    if (gpu.texture) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
     glVertexArrayVertexBuffer(s.records_vao.id(), 0, gpu.records.id(), 0, GLsizei(SFFD_SPLAT_RECORD_BYTES));
     glBindVertexArray(s.records_vao.id());
     glUseProgram(programs[0].id());
@@ -425,6 +464,11 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     glBindVertexArray(s.vao.id());
     glUseProgram(programs[1].id());
     glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(4 * sizeof(std::uint32_t)));
+    if (gpu.texture) {
+        glBindVertexArray(s.records_vao.id());
+        glUseProgram(flat ? flat->id() : programs[0].id());
+        glDrawArraysIndirect(GL_POINTS, reinterpret_cast<const void*>(8 * sizeof(std::uint32_t)));
+    }
 }
 
 // The cull pass variant for an (un)textured material, (un)lit colours and `lights` lights, compiled once.
@@ -461,20 +505,21 @@ Status init_render_state(ecs::Registry& registry) {
     for (int quad = 0; quad < 2; ++quad) {
         auto vis = splat_program("splat_render/visibility.frag", quad ? "render.visibility.quads" : "render.visibility", 0, quad, 0);
         if (!vis) return make_error(vis.message());
-        auto attr = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute", 1, quad, 0);
-        if (!attr) return make_error(attr.message());
-        auto attr_materials = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute",
-                                            1, quad, 0, 1);
-        if (!attr_materials) return make_error(attr_materials.message());
-        auto prev = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2, quad);
-        if (!prev) return make_error(prev.message());
-        auto prev_noaux = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2, quad, 0);
-        if (!prev_noaux) return make_error(prev_noaux.message());
-        s.preview[0][quad] = std::move(prev_noaux.value());
+        for (int textured = 0; textured < 2; ++textured)
+            for (int materials = 0; materials < 2; ++materials) {
+                auto attr = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute",
+                                          1, quad, 0, materials, textured);
+                if (!attr) return make_error(attr.message());
+                s.attribute[textured][materials][quad] = std::move(attr.value());
+            }
+        for (int textured = 0; textured < 2; ++textured)
+            for (int aux = 0; aux < 2; ++aux) {
+                auto prev = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2,
+                                          quad, aux, 0, textured);
+                if (!prev) return make_error(prev.message());
+                s.preview[textured][aux][quad] = std::move(prev.value());
+            }
         s.visibility[quad] = std::move(vis.value());
-        s.attribute[0][quad] = std::move(attr.value());
-        s.attribute[1][quad] = std::move(attr_materials.value());
-        s.preview[1][quad] = std::move(prev.value());
     }
     // The shading program of the common case (one light) now, so shader errors surface here.
     if (Status st = shade_program(s, false, 1); !st) return st;
@@ -485,10 +530,10 @@ Status init_render_state(ecs::Registry& registry) {
     s.display = std::move(display.value());
     s.vao = gfx::VertexArray::create("render.empty");
     s.command_reset = gfx::Buffer::create("render.draw_commands.reset");
-    const std::uint32_t reset[8] = {0, 1, 0, 0, 6, 0, 0, 0};
+    const std::uint32_t reset[draw_command_words] = {0, 1, 0, 0, 6, 0, 0, 0, 0, 1, 0, 0};
     glNamedBufferStorage(s.command_reset.id(), sizeof reset, reset, 0);
     s.records_vao = gfx::VertexArray::create("render.splat_records");
-    for (GLuint a = 0; a < 5; ++a) {
+    for (GLuint a = 0; a < GLuint(SFFD_SPLAT_RECORD_BYTES / 16); ++a) {
         glEnableVertexArrayAttrib(s.records_vao.id(), a);
         glVertexArrayAttribFormat(s.records_vao.id(), a, 4, GL_FLOAT, GL_FALSE, a * 16);
         glVertexArrayAttribBinding(s.records_vao.id(), a, 0);
@@ -549,7 +594,7 @@ void ensure_counts_ring(SplatRenderState& s, std::size_t clouds) {
     if (s.counts_ring && s.counts_ring_clouds >= clouds) return;
     for (CountsSlot& slot : s.counts_slots) slot = CountsSlot{};  // in flight into the old ring: dropped
     s.counts_ring_clouds = std::max<std::size_t>(clouds, 4);
-    const auto bytes = GLsizeiptr(SplatRenderState::counts_slot_count * s.counts_ring_clouds * 8 * sizeof(std::uint32_t));
+    const auto bytes = GLsizeiptr(SplatRenderState::counts_slot_count * s.counts_ring_clouds * draw_command_words * sizeof(std::uint32_t));
     const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
     s.counts_ring = gfx::Buffer::create("render.visible_counts");
     glNamedBufferStorage(s.counts_ring.id(), bytes, nullptr, map | GL_CLIENT_STORAGE_BIT);
@@ -566,8 +611,12 @@ void collect_counts(SplatRenderState& s) {
         slot.fence.reset();
         if (slot.serial <= s.counts_serial || !s.counts_mapped) continue;
         std::uint32_t points = slot.cpu_points, quads = slot.cpu_quads;
-        const std::uint32_t* p = s.counts_mapped + i * s.counts_ring_clouds * 8;
-        for (std::uint32_t c = 0; c < slot.gpu_clouds; ++c) points += p[c * 8 + 0], quads += p[c * 8 + 5];
+        const std::uint32_t* p = s.counts_mapped + i * s.counts_ring_clouds * draw_command_words;
+        for (std::uint32_t c = 0; c < slot.gpu_clouds; ++c) {
+            const std::uint32_t* commands = p + c * draw_command_words;
+            points += commands[0] + commands[8];  // sprites + flat-coloured sprites
+            quads += commands[5];
+        }
         s.counts_serial = slot.serial, s.counts_frame = slot.frame;
         s.counts_points = points, s.counts_quads = quads;
     }
@@ -588,8 +637,8 @@ void issue_counts(SplatRenderState& s, const std::vector<const CloudGpu*>& compu
     }
     for (std::size_t c = 0; c < computed.size(); ++c)
         glCopyNamedBufferSubData(computed[c]->commands.id(), s.counts_ring.id(), 0,
-                                 GLintptr((at * s.counts_ring_clouds + c) * 8 * sizeof(std::uint32_t)),
-                                 8 * sizeof(std::uint32_t));
+                                 GLintptr((at * s.counts_ring_clouds + c) * draw_command_words * sizeof(std::uint32_t)),
+                                 draw_command_words * sizeof(std::uint32_t));
     CountsSlot& slot = s.counts_slots[at];
     slot.fence = Fence(glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0));
     glFlush();  // a fence signals only once submitted; polls never flush (a headless run has no swap)
@@ -620,7 +669,9 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             // CPU cull (cpu_cull.h): the same records, uploaded run by run into the buffers the draws read.
             TexelView texels;
             if (gpu.texture)
-                texels = {gpu.material->texture_rgba8.data(), gpu.material->texture_width, gpu.material->texture_height};
+                texels = {gpu.material->texture_rgba8.data(), gpu.material->texture_width, gpu.material->texture_height,
+                          gpu.uv_axes_cpu ? gpu.uv_axes_cpu->data() : nullptr,
+                          gpu.uniform_radius.empty() ? nullptr : gpu.uniform_radius.data()};
             CpuCullResult& r = gpu.cpu_cull;
             cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
             CpuCullResult::for_each_run(r.records, r.record_counts, r.block, [&](std::size_t at, const SplatRecord* p, std::size_t k) {
@@ -629,15 +680,20 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             CpuCullResult::for_each_run(r.quads, r.quad_counts, r.block, [&](std::size_t at, const std::uint32_t* p, std::size_t k) {
                 glNamedBufferSubData(gpu.quads.id(), GLintptr(at * sizeof(std::uint32_t)), GLsizeiptr(k * sizeof(std::uint32_t)), p);
             });
-            const std::uint32_t commands[8] = {r.visible_records, 1, 0, 0, 6, r.visible_quads, 0, 0};
+            CpuCullResult::for_each_run(r.flat_records, r.flat_counts, r.block, [&](std::size_t at, const SplatRecord* p, std::size_t k) {
+                glNamedBufferSubData(gpu.records.id(), GLintptr((gpu.capacity + at) * sizeof(SplatRecord)),
+                                     GLsizeiptr(k * sizeof(SplatRecord)), p);
+            });
+            const std::uint32_t commands[draw_command_words] = {r.visible_records, 1, 0, 0, 6, r.visible_quads, 0, 0, r.visible_flat, 1, gpu.capacity, 0};
             glNamedBufferSubData(gpu.commands.id(), 0, sizeof commands, commands);
-            cpu_points += r.visible_records;
+            cpu_points += r.visible_records + r.visible_flat;
             cpu_quads += r.visible_quads;
             ++stats.cpu_culled_clouds;
         } else {
             // Reset the counts on the GPU (a copy from an immutable buffer): a CPU upload into a buffer the
             // GPU writes every frame makes drivers move it to host memory (NVIDIA's performance warning).
-            glCopyNamedBufferSubData(s.command_reset.id(), gpu.commands.id(), 0, 0, 8 * sizeof(std::uint32_t));
+            // The third command (flat-coloured sprites) stays empty: only the CPU cull fills it.
+            glCopyNamedBufferSubData(s.command_reset.id(), gpu.commands.id(), 0, 0, draw_command_words * sizeof(std::uint32_t));
             const bool textured = bool(gpu.texture), lit = b.counts.w == 1u;
             if (Status st = cull_program(s, textured, lit, b.counts.y); !st) log::error("render_system(): ", st.message());
             glUseProgram(s.cull[textured][lit][lit ? std::min<std::uint32_t>(b.counts.y, SFFD_MAX_LIGHTS) : 0].id());
@@ -646,6 +702,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, gpu.commands.id());
+            if (textured) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
             glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
             // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its worker
             // threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread time).
@@ -690,7 +747,8 @@ void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan
     glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
     glDepthFunc(GL_LESS);
     auto scope = profiling::gpu_scope(reg, "render.preview");
-    for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.preview[plan.settings.aux_outputs ? 1 : 0], *gpu);
+    const int aux = plan.settings.aux_outputs ? 1 : 0;
+    for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.preview[gpu->texture ? 1 : 0][aux], *gpu, &s.preview[0][aux][0]);
 }
 
 // HQ 1. visibility: eps-offset depth only.
@@ -731,7 +789,8 @@ void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePl
     glBlendFunc(GL_ONE, GL_ONE);
     {
         auto scope = profiling::gpu_scope(reg, "render.hq.attribute");
-        for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.attribute[materials], *gpu);
+        for (const CloudGpu* gpu : plan.drawn)
+            draw_cloud(s, s.attribute[gpu->texture ? 1 : 0][materials], *gpu, &s.attribute[0][materials][0]);
     }
     glDisable(GL_BLEND);
     glDepthMask(GL_TRUE);

@@ -19,7 +19,10 @@ check() {  # file stage defines...
 }
 for shape in 0 1; do for pass in 0 1 2; do for a in 0 1; do check splat_render/splat.vert vert SHAPE_QUAD=$shape PASS=$pass AUX=$a; done; done; done
 for q in 0 1; do check splat_render/visibility.frag frag SHAPE_QUAD=$q PASS=0; done
-for q in 0 1; do for m in 0 1; do check splat_render/attribute.frag frag SHAPE_QUAD=$q PASS=1 MATERIALS=$m; done; done
+for q in 0 1; do for m in 0 1; do for t in 0 1; do check splat_render/attribute.frag frag SHAPE_QUAD=$q PASS=1 MATERIALS=$m TEXTURED=$t; done; done; done
+for shape in 0 1; do check splat_render/splat.vert vert SHAPE_QUAD=$shape PASS=1 AUX=0 TEXTURED=1; done
+for shape in 0 1; do for a in 0 1; do check splat_render/splat.vert vert SHAPE_QUAD=$shape PASS=2 AUX=$a TEXTURED=1; done; done
+for q in 0 1; do for a in 0 1; do check splat_render/preview.frag frag SHAPE_QUAD=$q PASS=2 AUX=$a TEXTURED=1; done; done
 for q in 0 1; do for a in 0 1; do check splat_render/preview.frag frag SHAPE_QUAD=$q PASS=2 AUX=$a; done; done
 for m in 0 1; do for l in 0 1 2 3 4; do check splat_render/shade.frag frag LIGHTS=$l MATERIALS=$m; done; done
 check splat_render/fullscreen.vert vert

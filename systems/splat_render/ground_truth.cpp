@@ -1,0 +1,388 @@
+// Ground-truth ray tracer (see ground_truth.h). Embree stays in this file.
+#include "systems/splat_render/ground_truth.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <optional>
+
+#include <embree3/rtcore.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include "systems/ffd/deform.h"
+#include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/splat_pack.h"
+
+namespace sffd::render {
+
+namespace {
+
+double srgb_decode(double c) { return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4); }
+
+// d(u, v) of sphere_uv for a displacement dp of the unit direction d (the radial part of dp is ignored to
+// first order by the formulas below).
+glm::dvec2 sphere_uv_differential(const glm::dvec3& d, const glm::dvec3& dp) {
+    const double rxz2 = std::max(d.x * d.x + d.z * d.z, 1e-300);
+    const double dlon = (d.x * dp.z - d.z * dp.x) / rxz2;
+    const double dcolat = -dp.y / std::sqrt(rxz2);
+    return {dlon / (2.0 * std::numbers::pi), dcolat / std::numbers::pi};
+}
+
+// Where the ray o + t*dir meets the plane through p with normal n (t may be any sign); nullopt if parallel.
+std::optional<glm::dvec3> ray_plane(const glm::dvec3& o, const glm::dvec3& dir, const glm::dvec3& p, const glm::dvec3& n) {
+    const double den = glm::dot(dir, n);
+    if (std::abs(den) < 1e-12) return std::nullopt;
+    return o + dir * (glm::dot(p - o, n) / den);
+}
+
+// One surface hit: world position, unit normal (oriented towards the ray origin's side as the surface's
+// outward normal), the rest point on the sphere as a unit direction, and the linear map from a world
+// displacement on the tangent plane at the hit to the rest displacement (identity at rest).
+struct Hit {
+    glm::dvec3 position{0.0}, normal{0.0}, rest_dir{0.0};
+    glm::dmat3 to_rest{1.0};
+};
+
+// The deformed sphere: Embree scene over the tessellation, with the rest points and FFD normals.
+class DeformedSphere {
+public:
+    DeformedSphere(const ReferenceScene& scene, const ReferenceSettings& settings) : scene_(scene) {
+        const int nu = std::max(settings.longitude_steps, 8), nv = std::max(settings.colatitude_steps, 4);
+        cols_ = nu + 1;
+        const std::size_t count = std::size_t(nu + 1) * std::size_t(nv + 1);
+        rest_.resize(count);
+        std::vector<glm::vec3> pos(count), nrm(count);
+        for (int j = 0; j <= nv; ++j)
+            for (int i = 0; i <= nu; ++i) {
+                const double lon = 2.0 * std::numbers::pi * i / nu, colat = std::numbers::pi * j / nv;
+                const glm::dvec3 d(std::sin(colat) * std::cos(lon), std::cos(colat), std::sin(colat) * std::sin(lon));
+                const std::size_t k = std::size_t(j) * std::size_t(cols_) + std::size_t(i);
+                rest_[k] = d;
+                pos[k] = glm::vec3(d * scene.radius);  // relative to the sphere centre (the deform origin)
+                nrm[k] = glm::vec3(d);
+            }
+        for (const Lattice& l : scene.lattices) {
+            const ffd::PointsIn in{pos.data(), nrm.data(), nullptr, nullptr, count, scene.center};
+            const ffd::PointsOut out{pos.data(), nrm.data(), nullptr, nullptr};
+            auto st = ffd::deform(l, in, out);
+            if (!st) {
+                error_ = st.message();
+                return;
+            }
+        }
+        normals_ = std::move(nrm);
+        device_ = rtcNewDevice(nullptr);
+        if (!device_) {
+            error_ = "render_reference(): rtcNewDevice failed";
+            return;
+        }
+        scene_rtc_ = rtcNewScene(device_);
+        RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* v = static_cast<float*>(
+            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), count));
+        for (std::size_t k = 0; k < count; ++k) v[3 * k] = pos[k].x, v[3 * k + 1] = pos[k].y, v[3 * k + 2] = pos[k].z;
+        const std::size_t tris = std::size_t(nu) * std::size_t(nv) * 2;
+        auto* idx = static_cast<std::uint32_t*>(
+            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), tris));
+        std::size_t t = 0;
+        for (int j = 0; j < nv; ++j)
+            for (int i = 0; i < nu; ++i) {
+                const auto a = std::uint32_t(j * cols_ + i), b = a + 1, c = a + std::uint32_t(cols_), d = c + 1;
+                idx[3 * t] = a, idx[3 * t + 1] = c, idx[3 * t + 2] = b, ++t;
+                idx[3 * t] = b, idx[3 * t + 1] = c, idx[3 * t + 2] = d, ++t;
+            }
+        indices_.assign(idx, idx + 3 * tris);
+        rtcCommitGeometry(geom);
+        rtcAttachGeometry(scene_rtc_, geom);
+        rtcReleaseGeometry(geom);
+        rtcSetSceneBuildQuality(scene_rtc_, RTC_BUILD_QUALITY_HIGH);
+        rtcCommitScene(scene_rtc_);
+        positions_ = std::move(pos);
+    }
+    ~DeformedSphere() {
+        if (scene_rtc_) rtcReleaseScene(scene_rtc_);
+        if (device_) rtcReleaseDevice(device_);
+    }
+    DeformedSphere(const DeformedSphere&) = delete;
+    DeformedSphere& operator=(const DeformedSphere&) = delete;
+
+    const std::string& error() const { return error_; }
+
+    std::optional<Hit> trace(const glm::dvec3& origin, const glm::dvec3& dir) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        RTCRayHit rh{};
+        const glm::dvec3 o = origin - scene_.center;
+        rh.ray.org_x = float(o.x), rh.ray.org_y = float(o.y), rh.ray.org_z = float(o.z);
+        rh.ray.dir_x = float(dir.x), rh.ray.dir_y = float(dir.y), rh.ray.dir_z = float(dir.z);
+        rh.ray.tnear = 0.0f;
+        rh.ray.tfar = std::numeric_limits<float>::infinity();
+        rh.ray.mask = ~0u;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene_rtc_, &ctx, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+        const std::uint32_t* tri = &indices_[3 * std::size_t(rh.hit.primID)];
+        const double bu = rh.hit.u, bv = rh.hit.v, bw = 1.0 - bu - bv;
+        Hit h;
+        h.position = origin + dir * double(rh.ray.tfar);
+        const glm::dvec3 ra = rest_[tri[0]], rb = rest_[tri[1]], rc = rest_[tri[2]];
+        h.rest_dir = glm::normalize(bw * ra + bu * rb + bv * rc);
+        h.normal = glm::normalize(bw * glm::dvec3(normals_[tri[0]]) + bu * glm::dvec3(normals_[tri[1]]) +
+                                  bv * glm::dvec3(normals_[tri[2]]));
+        // Tangent-plane map world -> rest from the triangle's edges (the FFD is affine at this scale).
+        const glm::dvec3 pa = positions_[tri[0]], pb = positions_[tri[1]], pc = positions_[tri[2]];
+        const glm::dvec3 e1 = pb - pa, e2 = pc - pa, f1 = rb - ra, f2 = rc - ra;  // unit directions
+        const glm::dvec3 gn = glm::cross(e1, e2);
+        if (glm::dot(gn, gn) > 0.0) {
+            // dq = a e1 + b e2 (+ gn, dropped) -> dp = a f1 + b f2: [f1 f2 0] * inverse([e1 e2 gn]).
+            h.to_rest = glm::dmat3(f1, f2, glm::dvec3(0.0)) * glm::inverse(glm::dmat3(e1, e2, gn));
+        } else {
+            h.to_rest = glm::dmat3(0.0);  // pole triangle (degenerate): no uv derivative
+        }
+        return h;
+    }
+
+private:
+    const ReferenceScene& scene_;
+    int cols_ = 0;
+    std::vector<glm::dvec3> rest_;
+    std::vector<glm::vec3> positions_, normals_;
+    std::vector<std::uint32_t> indices_;
+    RTCDevice device_ = nullptr;
+    RTCScene scene_rtc_ = nullptr;
+    std::string error_;
+};
+
+std::optional<Hit> trace_sphere(const ReferenceScene& scene, const glm::dvec3& origin, const glm::dvec3& dir) {
+    const glm::dvec3 oc = origin - scene.center;
+    const double a = glm::dot(dir, dir), b = glm::dot(oc, dir), c = glm::dot(oc, oc) - scene.radius * scene.radius;
+    const double disc = b * b - a * c;
+    if (disc < 0.0) return std::nullopt;
+    const double sq = std::sqrt(disc);
+    double t = (-b - sq) / a;
+    if (t <= 0.0) t = (-b + sq) / a;
+    if (t <= 0.0) return std::nullopt;
+    Hit h;
+    h.position = origin + dir * t;
+    h.normal = glm::normalize(h.position - scene.center);
+    h.rest_dir = h.normal;
+    h.to_rest = glm::dmat3(1.0 / scene.radius);  // a world displacement is a displacement of d times 1/r
+    return h;
+}
+
+}  // namespace
+
+glm::dvec2 sphere_uv(const glm::dvec3& d) {
+    double lon = std::atan2(d.z, d.x);
+    if (lon < 0.0) lon += 2.0 * std::numbers::pi;
+    return {lon / (2.0 * std::numbers::pi), std::acos(std::clamp(d.y, -1.0, 1.0)) / std::numbers::pi};
+}
+
+ReferenceTexture::ReferenceTexture(const SplatMaterial& m) {
+    if (m.texture_width <= 0 || m.texture_height <= 0 ||
+        m.texture_rgba8.size() < std::size_t(m.texture_width) * std::size_t(m.texture_height) * 4)
+        return;
+    Level base;
+    base.width = m.texture_width, base.height = m.texture_height;
+    base.texels.resize(std::size_t(base.width) * std::size_t(base.height));
+    std::array<float, 256> lut{};
+    for (int i = 0; i < 256; ++i) lut[std::size_t(i)] = float(srgb_decode(i / 255.0));
+    for (std::size_t k = 0; k < base.texels.size(); ++k) {
+        const std::uint8_t* p = &m.texture_rgba8[4 * k];
+        base.texels[k] = glm::vec4(lut[p[0]], lut[p[1]], lut[p[2]], float(p[3]) / 255.0f);
+    }
+    levels_.push_back(std::move(base));
+    while (levels_.back().width > 1 || levels_.back().height > 1) {
+        const Level& prev = levels_.back();
+        Level next;
+        next.width = std::max(prev.width / 2, 1), next.height = std::max(prev.height / 2, 1);
+        next.texels.resize(std::size_t(next.width) * std::size_t(next.height));
+        for (int y = 0; y < next.height; ++y)
+            for (int x = 0; x < next.width; ++x) {
+                glm::vec4 sum(0.0f);
+                for (int dy = 0; dy < 2; ++dy)
+                    for (int dx = 0; dx < 2; ++dx) {
+                        const int sx = std::min(2 * x + dx, prev.width - 1), sy = std::min(2 * y + dy, prev.height - 1);
+                        sum += prev.texels[std::size_t(sy) * std::size_t(prev.width) + std::size_t(sx)];
+                    }
+                next.texels[std::size_t(y) * std::size_t(next.width) + std::size_t(x)] = sum * 0.25f;
+            }
+        levels_.push_back(std::move(next));
+    }
+}
+
+glm::dvec4 ReferenceTexture::bilinear(const glm::dvec2& uv, int level) const {
+    const Level& l = levels_[std::size_t(std::clamp(level, 0, int(levels_.size()) - 1))];
+    const double x = uv.x * l.width - 0.5, y = uv.y * l.height - 0.5;
+    const double fx = std::floor(x), fy = std::floor(y), ax = x - fx, ay = y - fy;
+    auto wrap = [](long i, int n) { return int(((i % n) + n) % n); };
+    const int x0 = wrap(long(fx), l.width), x1 = wrap(long(fx) + 1, l.width);
+    const int y0 = std::clamp(int(fy), 0, l.height - 1), y1 = std::clamp(int(fy) + 1, 0, l.height - 1);
+    auto t = [&](int tx, int ty) { return glm::dvec4(l.texels[std::size_t(ty) * std::size_t(l.width) + std::size_t(tx)]); };
+    return glm::mix(glm::mix(t(x0, y0), t(x1, y0), ax), glm::mix(t(x0, y1), t(x1, y1), ax), ay);
+}
+
+glm::dvec4 ReferenceTexture::trilinear(const glm::dvec2& uv, const glm::dvec2& dx, const glm::dvec2& dy) const {
+    const glm::dvec2 size(levels_[0].width, levels_[0].height);
+    const double rho = std::max(glm::length(dx * size), glm::length(dy * size));
+    const double lambda = rho > 0.0 ? std::log2(rho) : -1.0;
+    if (!(lambda > 0.0)) return bilinear(uv, 0);  // magnification (and NaN derivatives): level 0
+    const double q = double(levels_.size() - 1);
+    if (lambda >= q) return bilinear(uv, int(q));
+    const int d1 = int(std::floor(lambda));
+    const double f = lambda - d1;
+    return glm::mix(bilinear(uv, d1), bilinear(uv, d1 + 1), f);
+}
+
+glm::dvec3 shade_reference(const ReferenceLights& lights, const glm::dvec3& albedo, const glm::dvec3& n,
+                           const glm::dvec3& to_eye, double specular, double shininess) {
+    glm::dvec3 color = lights.ambient * albedo;
+    for (std::size_t i = 0; i < lights.to_light.size(); ++i) {
+        const glm::dvec3 l = lights.to_light[i];
+        const double ndl = std::max(glm::dot(n, l), 0.0);
+        const glm::dvec3 h = glm::normalize(l + to_eye);
+        const double spec = ndl > 0.0 ? std::pow(std::max(glm::dot(n, h), 1e-8), shininess) * specular : 0.0;
+        color += lights.color[i] * (albedo * ndl + glm::dvec3(spec));
+    }
+    return color;
+}
+
+ReferenceLights scene_lights(const ecs::Registry& reg) {
+    ReferenceLights out;
+    bool has_ambient = false;
+    reg.view<const DirectionalLight>().each([&](const DirectionalLight& l) {
+        if (out.to_light.size() >= 4) return;  // SFFD_MAX_LIGHTS
+        out.to_light.push_back(-glm::normalize(glm::dvec3(glm::vec3(glm::normalize(l.direction)))));
+        out.color.push_back(glm::dvec3(l.color * l.intensity));
+    });
+    reg.view<const AmbientLight>().each([&](const AmbientLight& a) {
+        out.ambient += glm::dvec3(a.color * a.intensity);
+        has_ambient = true;
+    });
+    if (out.to_light.empty() && !has_ambient) {
+        const DirectionalLight l;
+        const AmbientLight a;
+        out.to_light.push_back(-glm::normalize(glm::dvec3(l.direction)));
+        out.color.push_back(glm::dvec3(l.color * l.intensity));
+        out.ambient = glm::dvec3(a.color * a.intensity);
+    }
+    return out;
+}
+
+Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int height) {
+    if (width < 1 || height < 1) return make_error("reference_scene(): empty image size");
+    ReferenceScene s;
+    s.width = width, s.height = height;
+    const SplatCloud* cloud = nullptr;
+    std::string problem;
+    reg.view<const SplatCloud, const ExactSphere>().each([&](ecs::Entity e, const SplatCloud& c, const ExactSphere& sphere) {
+        if (cloud) return;
+        cloud = &c;
+        const Transform* t = reg.try_get<Transform>(e);
+        const glm::dmat4 m = model_matrix(t, c.origin);
+        if (glm::dmat3(m) != glm::dmat3(1.0)) problem = "the sphere's Transform rotates or scales it (not supported)";
+        s.center = glm::dvec3(m * glm::dvec4(sphere.center, 1.0));
+        s.radius = sphere.radius;
+        s.material = &c.material;
+        if (const Deformers* d = reg.try_get<Deformers>(e))
+            for (ecs::Entity l : d->lattices)
+                if (reg.valid(l) && reg.has<Lattice>(l)) {
+                    const Lattice& lat = reg.get<Lattice>(l);
+                    if (ffd::moved_count(lat) > 0) s.lattices.push_back(lat);
+                }
+    });
+    if (!cloud) return make_error("reference_scene(): no point cloud with an exact surface (ExactSphere) in the scene");
+    if (!problem.empty()) return make_error("reference_scene(): " + problem);
+    const double aspect = double(width) / double(height);
+    const Camera cam = scene_camera(reg, aspect);
+    s.view = view_matrix(cam);
+    s.projection = projection_matrix(cam, aspect);
+    s.lights = scene_lights(reg);
+    return s;
+}
+
+Result<FrameImage> render_reference(const ReferenceScene& scene, const ReferenceSettings& settings) {
+    if (scene.width < 1 || scene.height < 1 || !scene.material) return make_error("render_reference(): incomplete scene");
+    std::optional<DeformedSphere> deformed;
+    if (!scene.lattices.empty()) {
+        deformed.emplace(scene, settings);
+        if (!deformed->error().empty()) return make_error(deformed->error());
+    }
+    const ReferenceTexture texture(*scene.material);
+    const glm::dvec3 base = glm::dvec3(glm::vec3(scene.material->base_color));
+    const double specular = scene.material->specular, shininess = scene.material->shininess;
+    const glm::dmat4 inv_view = glm::inverse(scene.view);
+    const glm::dvec3 eye = glm::dvec3(inv_view[3]);
+    const glm::dmat3 to_world(inv_view);
+    const double p00 = scene.projection[0][0], p11 = scene.projection[1][1];
+    const int w = scene.width, h = scene.height;
+    // World direction of the ray through window position (wx, wy) (GL: origin bottom-left, pixel centres
+    // at +0.5), scaled so its view-space z is -1.
+    auto ray_dir = [&](double wx, double wy) {
+        const double nx = 2.0 * wx / w - 1.0, ny = 2.0 * wy / h - 1.0;
+        return to_world * glm::dvec3(nx / p00, ny / p11, -1.0);
+    };
+    auto trace = [&](const glm::dvec3& dir) {
+        return deformed ? deformed->trace(eye, dir) : trace_sphere(scene, eye, dir);
+    };
+    auto shade = [&](const Hit& hit, const glm::dvec3& dir, const glm::dvec4& tex) {
+        const glm::dvec3 albedo = texture.empty() ? base : glm::dvec3(tex);
+        return shade_reference(scene.lights, albedo, hit.normal, -glm::normalize(dir), specular, shininess);
+    };
+
+    FrameImage img;
+    img.width = w, img.height = h;
+    const std::size_t n = std::size_t(w) * std::size_t(h);
+    img.color.assign(n, glm::vec4(0.0f));
+    img.depth.assign(n, std::numeric_limits<float>::infinity());
+    img.normal.assign(n, glm::vec3(0.0f));
+    const glm::dvec3 view_axis = -glm::dvec3(inv_view[2]);
+    const int ss = std::max(settings.supersample, 0);
+    tbb::parallel_for(tbb::blocked_range<int>(0, h), [&](const tbb::blocked_range<int>& rows) {
+        for (int y = rows.begin(); y != rows.end(); ++y) {
+            const double wy = double(h - 1 - y) + 0.5;
+            for (int x = 0; x < w; ++x) {
+                const double wx = double(x) + 0.5;
+                const glm::dvec3 dir = ray_dir(wx, wy);
+                const std::optional<Hit> hit = trace(dir);
+                if (!hit) continue;
+                glm::dvec3 color(0.0);
+                if (ss == 0) {
+                    glm::dvec4 tex(0.0);
+                    if (!texture.empty()) {
+                        // Exact uv derivatives: the neighbouring pixels' rays cut with the tangent plane.
+                        auto duv = [&](double ox, double oy) {
+                            const auto q = ray_plane(eye, ray_dir(wx + ox, wy + oy), hit->position, hit->normal);
+                            if (!q) return glm::dvec2(0.0);
+                            return sphere_uv_differential(hit->rest_dir, hit->to_rest * (*q - hit->position));
+                        };
+                        tex = texture.trilinear(sphere_uv(hit->rest_dir), duv(1.0, 0.0), duv(0.0, 1.0));
+                    }
+                    color = shade(*hit, dir, tex);
+                } else {
+                    int hits = 0;
+                    for (int sy = 0; sy < ss; ++sy)
+                        for (int sx = 0; sx < ss; ++sx) {
+                            const glm::dvec3 d = ray_dir(double(x) + (sx + 0.5) / ss, double(h - 1 - y) + (sy + 0.5) / ss);
+                            const std::optional<Hit> sub = trace(d);
+                            if (!sub) continue;
+                            const glm::dvec4 tex = texture.empty() ? glm::dvec4(0.0) : texture.bilinear(sphere_uv(sub->rest_dir));
+                            color += shade(*sub, d, tex);
+                            ++hits;
+                        }
+                    color = hits ? color / double(hits) : shade(*hit, dir, texture.empty() ? glm::dvec4(0.0)
+                                                                                           : texture.bilinear(sphere_uv(hit->rest_dir)));
+                }
+                const std::size_t k = img.index(x, y);
+                img.color[k] = glm::vec4(glm::vec3(color), 1.0f);
+                img.depth[k] = float(glm::dot(hit->position - eye, view_axis));
+                img.normal[k] = glm::vec3(hit->normal);
+            }
+        }
+    });
+    return img;
+}
+
+}  // namespace sffd::render

@@ -1,0 +1,321 @@
+// Ground-truth ray tracer (ground_truth.h) against analytic facts, and the image metrics (image_compare.h)
+// against hand-computed values.
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "runtime/assets/builtin_scenes.h"
+#include <random>
+
+#include "systems/ffd/deform.h"
+#include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/cpu_cull.h"
+#include "systems/splat_render/splat_pack.h"
+#include "systems/splat_render/ground_truth.h"
+#include "systems/splat_render/image_compare.h"
+
+namespace sffd::render {
+namespace {
+
+// Unit sphere at the origin seen from +Z at distance `d`, 45 deg vertical field of view, one light from
+// the eye's direction (white, intensity 1) and ambient 0.2.
+ReferenceScene axis_scene(int w, int h, double d, const SplatMaterial& material) {
+    ReferenceScene s;
+    s.width = w, s.height = h;
+    Camera cam;
+    cam.eye = glm::dvec3(0.0, 0.0, d);
+    cam.target = glm::dvec3(0.0);
+    cam.fov_y_degrees = 45.0f;
+    cam.near_plane = 0.1f;
+    cam.far_plane = 100.0f;
+    s.view = view_matrix(cam);
+    s.projection = projection_matrix(cam, double(w) / double(h));
+    s.material = &material;
+    s.lights.ambient = glm::dvec3(0.2);
+    s.lights.to_light = {glm::dvec3(0.0, 0.0, 1.0)};
+    s.lights.color = {glm::dvec3(1.0)};
+    return s;
+}
+
+// A 4 x 2 texture of distinct colours (sRGB bytes).
+SplatMaterial four_by_two() {
+    SplatMaterial m;
+    m.texture_width = 4, m.texture_height = 2;
+    for (int i = 0; i < 8; ++i) {
+        const auto b = std::uint8_t(20 + 28 * i);
+        m.texture_rgba8.insert(m.texture_rgba8.end(), {b, std::uint8_t(255 - b), std::uint8_t(7 * i), 255});
+    }
+    return m;
+}
+
+double decode(std::uint8_t c) {
+    const double v = c / 255.0;
+    return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
+}
+
+TEST(GroundTruth, CentrePixelSeesTheExpectedUvNormalDepthAndShade) {
+    const SplatMaterial m = four_by_two();
+    const ReferenceScene s = axis_scene(65, 65, 4.0, m);  // odd size: pixel (32, 32) is on the view axis
+    auto img = render_reference(s);
+    ASSERT_TRUE(img) << img.message();
+    const std::size_t k = img->index(32, 32);
+    ASSERT_EQ(img->color[k].w, 1.0f);
+    EXPECT_NEAR(img->depth[k], 3.0, 1e-5);  // eye at 4, surface at z = 1
+    EXPECT_NEAR(img->normal[k].z, 1.0, 1e-6);
+    // Hit (0, 0, 1): longitude atan2(1, 0) = pi/2 -> u = 0.25, colatitude pi/2 -> v = 0.5. In the 4 x 2
+    // texture that is the corner of texels (0..1, 0..1): bilinear weights 1/4 each (magnified: level 0).
+    EXPECT_NEAR(sphere_uv(glm::dvec3(0, 0, 1)).x, 0.25, 1e-12);
+    EXPECT_NEAR(sphere_uv(glm::dvec3(0, 0, 1)).y, 0.5, 1e-12);
+    for (int c = 0; c < 3; ++c) {
+        double albedo = 0.0;
+        for (int t : {0, 1, 4, 5}) albedo += 0.25 * decode(m.texture_rgba8[std::size_t(4 * t + c)]);
+        // n = l = to_eye: ndl = 1, n.h = 1 -> spec = specular. colour = albedo (ambient + 1) + specular.
+        EXPECT_NEAR(img->color[k][c], albedo * 1.2 + double(m.specular), 2e-5) << "channel " << c;
+    }
+}
+
+TEST(GroundTruth, SilhouetteIsTheAnalyticDisc) {
+    SplatMaterial m;  // untextured: base colour
+    const int w = 201, h = 201;
+    const double d = 3.0;
+    const ReferenceScene s = axis_scene(w, h, d, m);
+    auto img = render_reference(s);
+    ASSERT_TRUE(img) << img.message();
+    // Angular radius asin(1/d); on screen tan(asin(1/d)) / tan(fov/2) * h/2 pixels.
+    const double r_px = std::tan(std::asin(1.0 / d)) / std::tan(glm::radians(22.5)) * h / 2.0;
+    int mismatches = 0, covered = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const double dx = x + 0.5 - w / 2.0, dy = y + 0.5 - h / 2.0;
+            const double r = std::sqrt(dx * dx + dy * dy);
+            const bool inside = img->covered(x, y);
+            covered += inside;
+            if (std::abs(r - r_px) > 0.01 && inside != (r < r_px)) ++mismatches;
+        }
+    EXPECT_EQ(mismatches, 0);
+    EXPECT_NEAR(covered, std::numbers::pi * r_px * r_px, 2.0 * std::numbers::pi * r_px * 0.5);
+    // The rim is lit by ambient and a grazing light: darker than the centre, never black.
+    EXPECT_GT(img->color[img->index(100, 100)].x, img->color[img->index(100, 100 - int(r_px) + 1)].x);
+}
+
+// A lattice that scales space by 1.5 about the origin is an affine map, which Bernstein lattices reproduce
+// exactly: the traced tessellation of F(sphere) must match the analytic sphere of radius 1.5, texture
+// coordinates included (the uv of a deformed point is the uv of its rest point).
+TEST(GroundTruth, DeformedPathMatchesTheAnalyticScaledSphere) {
+    const SplatMaterial tex = [] {
+        SplatMaterial m;
+        const assets::Image img = assets::make_sphere_texture(256, 128);
+        m.texture_width = img.width, m.texture_height = img.height, m.texture_rgba8 = img.rgba8;
+        return m;
+    }();
+    ReferenceScene scaled = axis_scene(160, 120, 6.0, tex);
+    Lattice l = assets::make_box_lattice(glm::dvec3(-1.1), glm::dvec3(1.1), glm::ivec3(4), LatticeBasis::bernstein);
+    for (std::size_t i = 0; i < l.size(); ++i) l.current[i] = 1.5 * l.rest[i];
+    scaled.lattices = {l};
+    ReferenceSettings fine;
+    fine.longitude_steps = 1024, fine.colatitude_steps = 512;
+    auto traced = render_reference(scaled, fine);
+    ASSERT_TRUE(traced) << traced.message();
+    ReferenceScene analytic = axis_scene(160, 120, 6.0, tex);
+    analytic.radius = 1.5;
+    auto exact = render_reference(analytic);
+    ASSERT_TRUE(exact) << exact.message();
+    auto cmp = compare_images(*traced, *exact);
+    ASSERT_TRUE(cmp) << cmp.message();
+    EXPECT_GT(cmp->pixels, 4000u);  // pi * 37.4^2 px
+    std::printf("traced vs analytic: PSNR %.2f dB, SSIM %.5f\n", cmp->psnr, cmp->ssim);
+    EXPECT_GT(cmp->psnr, 45.0);
+    EXPECT_GT(cmp->ssim, 0.995);
+    int coverage_diff = 0;
+    for (std::size_t k = 0; k < exact->color.size(); ++k) coverage_diff += (exact->color[k].w > 0) != (traced->color[k].w > 0);
+    EXPECT_LE(coverage_diff, 4);  // only pixel centres within float rounding of the silhouette
+}
+
+TEST(GroundTruth, ReferenceSceneOfTheBuiltinSphere) {
+    ecs::Registry reg;
+    ASSERT_TRUE(assets::load_builtin_scene(reg, "sphere"));
+    auto s = reference_scene(reg, 320, 180);
+    ASSERT_TRUE(s) << s.message();
+    EXPECT_EQ(s->radius, 1.0);
+    EXPECT_EQ(s->center, glm::dvec3(0.0));
+    EXPECT_TRUE(s->lattices.empty());  // at rest: the analytic path
+    ASSERT_EQ(s->lights.to_light.size(), 1u);
+    ecs::Registry empty;
+    auto none = reference_scene(empty, 320, 180);
+    ASSERT_FALSE(none);
+    EXPECT_NE(none.message().find("no point cloud with an exact surface"), std::string::npos);
+}
+
+// FrameImage of w x 1 grey pixels given in sRGB (alpha 1; alpha 0 where grey < 0).
+FrameImage grey_row(std::initializer_list<double> srgb) {
+    FrameImage f;
+    f.width = int(srgb.size()), f.height = 1;
+    for (double g : srgb) {
+        const float lin = g < 0 ? 0.0f : srgb_to_linear(float(g));
+        f.color.push_back(glm::vec4(lin, lin, lin, g < 0 ? 0.0f : 1.0f));
+    }
+    return f;
+}
+
+TEST(ImageCompare, PsnrAndSsimOfHandComputedCases) {
+    // Grey 0.5 vs 0.25 everywhere: MSE = 0.0625, PSNR = 10 log10(16) = 12.041 dB. Constant images have no
+    // variance, so SSIM = (2 mu_a mu_b + C1) / (mu_a^2 + mu_b^2 + C1) = (0.25 + 1e-4) / (0.3125 + 1e-4).
+    auto r = compare_images(grey_row({0.5, 0.5, 0.5}), grey_row({0.25, 0.25, 0.25}));
+    ASSERT_TRUE(r) << r.message();
+    EXPECT_EQ(r->pixels, 3u);
+    EXPECT_NEAR(r->mse, 0.0625, 1e-6);
+    EXPECT_NEAR(r->psnr, 10.0 * std::log10(16.0), 1e-4);
+    EXPECT_NEAR(r->ssim, (0.25 + 1e-4) / (0.3125 + 1e-4), 1e-5);
+    // One differing pixel of two: MSE = 0.25^2 / 2.
+    auto half = compare_images(grey_row({0.5, 0.75}), grey_row({0.5, 0.5}));
+    ASSERT_TRUE(half);
+    EXPECT_NEAR(half->psnr, 10.0 * std::log10(2.0 / 0.0625), 1e-4);
+}
+
+TEST(ImageCompare, MaskIsThePixelsCoveredInEitherImage) {
+    // Pixel 2 is background in both: ignored. Pixel 1 is covered in one only: compared against black.
+    auto r = compare_images(grey_row({0.5, 0.5, -1}), grey_row({0.5, -1, -1}));
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->pixels, 2u);
+    EXPECT_NEAR(r->mse, 0.25 / 2.0, 1e-6);
+    auto whole = compare_images(grey_row({0.5, 0.5, -1}), grey_row({0.5, -1, -1}), false);
+    ASSERT_TRUE(whole);
+    EXPECT_EQ(whole->pixels, 3u);
+}
+
+TEST(ImageCompare, IdenticalImagesAreInfiniteAndOne) {
+    const FrameImage a = grey_row({0.1, 0.9, 0.3, -1, 0.7});
+    auto r = compare_images(a, a);
+    ASSERT_TRUE(r);
+    EXPECT_EQ(r->psnr, std::numeric_limits<double>::infinity());
+    EXPECT_NEAR(r->ssim, 1.0, 1e-12);
+    auto bad = compare_images(a, grey_row({0.1}));
+    ASSERT_FALSE(bad);
+    EXPECT_EQ(bad.message(), "images differ in size: 5x1 vs 1x1");
+}
+
+// The built-in sphere's uv frames: the rim point c + s axis_u + t axis_v, pushed onto the sphere, has the uv
+// that the frame predicts (first order: within 5% of the frame's uv step; the second-order term grows like
+// the splat radius times cot(colatitude)), away from the poles and the seam.
+TEST(UvFrame, BuiltinSphereFramesPredictTheUvOfTheRim) {
+    const SplatCloud c = assets::make_sphere_cloud(20000);
+    ASSERT_EQ(c.uv_axes.size(), c.size());
+    int checked = 0;
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        const glm::dvec2 uv0 = glm::dvec2(c.uvs[i]);
+        if (uv0.y < 0.3 || uv0.y > 0.7 || uv0.x < 0.05 || uv0.x > 0.95) continue;
+        for (double a = 0.0; a < 6.28; a += 0.7) {
+            const double s = std::cos(a), t = std::sin(a);
+            const glm::dvec3 p = glm::dvec3(c.positions[i]) + s * glm::dvec3(c.axis_u[i]) + t * glm::dvec3(c.axis_v[i]);
+            const glm::dvec2 exact = sphere_uv(glm::normalize(p));
+            const glm::dvec4 f(c.uv_axes[i]);
+            const glm::dvec2 step = s * glm::dvec2(f.x, f.y) + t * glm::dvec2(f.z, f.w);
+            ASSERT_LT(glm::length(uv0 + step - exact), 0.05 * glm::length(step) + 1e-6) << i;
+            ++checked;
+        }
+    }
+    EXPECT_GT(checked, 30000);
+}
+
+// Why the uv frame survives FFD: the FFD maps a splat's axes by its Jacobian, so the deformed rim point
+// c' + s u' + t v' is F(c + s u + t v) to first order, and the rest point (hence the uv) of a deformed rim
+// point is the rest rim point. Checked for a random lattice with the CPU deformation the renderer uses.
+TEST(UvFrame, DeformedAxesMapTheRestRimToTheDeformedRim) {
+    const SplatCloud c = assets::make_sphere_cloud(2000);
+    Lattice l = assets::make_box_lattice(glm::dvec3(-1.2), glm::dvec3(1.2), glm::ivec3(4), LatticeBasis::bernstein);
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<double> jitter(-0.15, 0.15);
+    for (glm::dvec3& p : l.current) p += glm::dvec3(jitter(rng), jitter(rng), jitter(rng));
+    const std::size_t n = c.size();
+    std::vector<glm::vec3> pos(n), au(n), av(n);
+    ASSERT_TRUE(ffd::deform(l, {c.positions.data(), nullptr, c.axis_u.data(), c.axis_v.data(), n, c.origin},
+                            {pos.data(), nullptr, au.data(), av.data()}));
+    // The rim points themselves, deformed as points.
+    std::vector<glm::vec3> rim(n);
+    for (double a : {0.3, 2.1, 4.4}) {
+        for (std::size_t i = 0; i < n; ++i)
+            rim[i] = c.positions[i] + float(std::cos(a)) * c.axis_u[i] + float(std::sin(a)) * c.axis_v[i];
+        std::vector<glm::vec3> moved(n);
+        ASSERT_TRUE(ffd::deform(l, {rim.data(), nullptr, nullptr, nullptr, n, c.origin}, {moved.data(), nullptr, nullptr, nullptr}));
+        for (std::size_t i = 0; i < n; ++i) {
+            const glm::dvec3 predicted = glm::dvec3(pos[i]) + std::cos(a) * glm::dvec3(au[i]) + std::sin(a) * glm::dvec3(av[i]);
+            const double step = glm::length(predicted - glm::dvec3(pos[i]));
+            ASSERT_LT(glm::length(predicted - glm::dvec3(moved[i])), 0.05 * step) << i;
+        }
+    }
+}
+
+// uniform_texel_radius against a brute-force Chebyshev distance to the nearest "edge" texel (border, or
+// another colour among its 8 neighbours), and the property the cull relies on: every texel closer than
+// that distance has the centre's colour.
+TEST(TextureRegions, UniformRadiusIsTheChebyshevDistanceToAColourChange) {
+    const int w = 41, h = 29;
+    std::mt19937 rng(3);
+    std::vector<std::uint8_t> tex(std::size_t(w * h) * 4, 255);
+    // Rectangles of three colours over a grey field.
+    for (int r = 0; r < 12; ++r) {
+        const int x0 = int(rng() % w), y0 = int(rng() % h), x1 = std::min(w, x0 + 2 + int(rng() % 15)), y1 = std::min(h, y0 + 2 + int(rng() % 10));
+        const auto c = std::uint8_t(60 * (1 + rng() % 3));
+        for (int y = y0; y < y1; ++y)
+            for (int x = x0; x < x1; ++x) tex[std::size_t(y * w + x) * 4] = c;
+    }
+    auto colour = [&](int x, int y) { return tex[std::size_t(y * w + x) * 4]; };
+    auto edge = [&](int x, int y) {
+        if (x == 0 || y == 0 || x == w - 1 || y == h - 1) return true;
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx)
+                if (colour(x + dx, y + dy) != colour(x, y)) return true;
+        return false;
+    };
+    const std::vector<std::uint16_t> d = uniform_texel_radius(tex.data(), w, h);
+    ASSERT_EQ(d.size(), std::size_t(w * h));
+    int interior = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            int best = 1 << 30;
+            for (int yy = 0; yy < h; ++yy)
+                for (int xx = 0; xx < w; ++xx)
+                    if (edge(xx, yy)) best = std::min(best, std::max(std::abs(xx - x), std::abs(yy - y)));
+            ASSERT_EQ(int(d[std::size_t(y * w + x)]), best) << x << "," << y;
+            interior += best > 1;
+            for (int yy = std::max(0, y - best + 1); yy < std::min(h, y + best); ++yy)
+                for (int xx = std::max(0, x - best + 1); xx < std::min(w, x + best); ++xx) ASSERT_EQ(colour(xx, yy), colour(x, y));
+        }
+    EXPECT_GT(interior, 100);
+}
+
+// The CPU cull moves the built-in sphere's sprites whose footprint is one texture colour to the flat list
+// (most of a checker's cells) and keeps the rest textured; without the distance map nothing is flat, and
+// the two lists together are the same sprites.
+TEST(TextureRegions, CpuCullDrawsOneColourFootprintsFlat) {
+    const SplatCloud cloud = assets::make_sphere_cloud();
+    const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
+    Camera cam;
+    cam.eye = glm::dvec3(0.0, 0.0, 4.0);
+    gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 16.0 / 9.0), 1280, 720, 0.1f, 255.0f, true);
+    f.params.w = 1.0f;
+    f.counts.y = 1;
+    f.light_dir[0] = glm::vec4(0, 0, 1, 0);
+    f.light_color[0] = glm::vec4(1.0f);
+    const std::vector<std::uint16_t> radius = uniform_texel_radius(cloud.material.texture_rgba8.data(), cloud.material.texture_width,
+                                                                   cloud.material.texture_height);
+    for (bool lit : {false, true}) {
+        f.counts.w = lit ? 1u : 0u;
+        TexelView texels{cloud.material.texture_rgba8.data(), cloud.material.texture_width, cloud.material.texture_height,
+                         cloud.uv_axes.data(), radius.data()};
+        CpuCullResult with, without;
+        cull_splats_cpu(splats, f, texels, with);
+        texels.uniform_radius = nullptr;
+        cull_splats_cpu(splats, f, texels, without);
+        EXPECT_EQ(without.visible_flat, 0u);
+        EXPECT_EQ(with.visible_records + with.visible_flat, without.visible_records);
+        EXPECT_GT(with.visible_flat, without.visible_records / 3) << "lit " << lit;
+        EXPECT_GT(with.visible_records, without.visible_records / 10) << "lit " << lit;  // edges stay textured
+    }
+}
+
+}  // namespace
+}  // namespace sffd::render

@@ -1,0 +1,166 @@
+// splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N] [--format png,exr]
+//
+// Ground-truth frames (systems/splat_render/ground_truth.h): the exact surface behind the scene's cloud
+// (the built-in `sphere`), deformed by the lattices as the demo clip poses them at frame k (time k / fps),
+// ray traced on the CPU with the render command's camera, lights, material and texture. Files are named
+// like `splatffd render`'s (DIR/frame_NNNN.png / .exr), so `splatffd compare` can pair them.
+// Exit 0 ok, 1 bad scene / no exact surface / unwritable output, 2 usage.
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <system_error>
+
+#include "runtime/app/clock.h"
+#include "runtime/assets/scene.h"
+#include "runtime/ecs/registry.h"
+#include "systems/animation/animation_system.h"
+#include "systems/splat_render/ground_truth.h"
+#include "systems/splat_render/image_io.h"
+#include "tools/splatffd/command.h"
+
+namespace {
+
+using namespace sffd;
+
+void usage() {
+    std::fprintf(stderr,
+                 "usage: splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N]\n"
+                 "                          [--format png,exr] [--fps F]\n"
+                 "  SCENE            a scene whose cloud has an exact surface (built-in: sphere; default)\n"
+                 "  --out DIR        output folder (created); files frame_NNNN.png / frame_NNNN.exr\n"
+                 "  --frames A:B     frame range, inclusive (default 0:0); frame k is at time k / fps\n"
+                 "  --size WxH       image size in pixels (default 1280x720)\n"
+                 "  --supersample N  N x N rays per pixel, box-filtered (default 0: one ray, trilinear mip)\n"
+                 "  --format LIST    png, exr or png,exr (default png,exr)\n"
+                 "  --fps F          frames per second of the clip clock (default 24)\n");
+}
+
+bool parse_pair(const std::string& s, char sep, long& a, long& b) {
+    const auto at = s.find(sep);
+    if (at == std::string::npos) return false;
+    try {
+        std::size_t n1 = 0, n2 = 0;
+        a = std::stol(s.substr(0, at), &n1);
+        b = std::stol(s.substr(at + 1), &n2);
+        return n1 == at && n2 == s.size() - at - 1;
+    } catch (...) {
+        return false;
+    }
+}
+
+int run_reference(sffd::cli::Args args) {
+    std::string scene = "sphere", out_dir;
+    bool scene_given = false, png = true, exr = true;
+    long first = 0, last = 0, width = 1280, height = 720, supersample = 0;
+    double fps = 24.0;
+    for (std::size_t i = 0; i < args.size(); ++i) {
+        const std::string& a = args[i];
+        const bool has_value = i + 1 < args.size();
+        auto bad = [&](const char* what) {
+            std::fprintf(stderr, "splatffd reference: %s '%s'\n", what, has_value ? args[i + 1].c_str() : "");
+            return 2;
+        };
+        if (a == "--help" || a == "-h") {
+            usage();
+            return 0;
+        } else if (a == "--out" && has_value) {
+            out_dir = args[++i];
+        } else if (a == "--frames" && has_value) {
+            if (!parse_pair(args[i + 1], ':', first, last) || first < 0 || last < first)
+                return bad("--frames expects A:B with 0 <= A <= B, got");
+            ++i;
+        } else if (a == "--size" && has_value) {
+            if (!parse_pair(args[i + 1], 'x', width, height) || width < 1 || height < 1 || width > 16384 || height > 16384)
+                return bad("--size expects WxH (1..16384), got");
+            ++i;
+        } else if (a == "--supersample" && has_value) {
+            try {
+                std::size_t used = 0;
+                supersample = std::stol(args[i + 1], &used);
+                if (used != args[i + 1].size()) supersample = -1;
+            } catch (...) {
+                supersample = -1;
+            }
+            if (supersample < 0 || supersample > 16) return bad("--supersample expects 0..16, got");
+            ++i;
+        } else if (a == "--format" && has_value) {
+            const std::string& f = args[i + 1];
+            png = f == "png" || f == "png,exr" || f == "exr,png";
+            exr = f == "exr" || f == "png,exr" || f == "exr,png";
+            if (!png && !exr) return bad("--format expects png, exr or png,exr, got");
+            ++i;
+        } else if (a == "--fps" && has_value) {
+            try {
+                fps = std::stod(args[i + 1]);
+            } catch (...) {
+                fps = 0;
+            }
+            if (!(fps > 0.0 && fps < 1e6)) return bad("--fps expects a positive number, got");
+            ++i;
+        } else if (!a.empty() && a[0] != '-' && !scene_given) {
+            scene = a;
+            scene_given = true;
+        } else {
+            std::fprintf(stderr, "splatffd reference: unknown or incomplete option '%s'\n", a.c_str());
+            usage();
+            return 2;
+        }
+    }
+    if (out_dir.empty()) {
+        std::fprintf(stderr, "splatffd reference: --out DIR is required\n");
+        usage();
+        return 2;
+    }
+    std::error_code ec;
+    std::filesystem::create_directories(out_dir, ec);
+    if (ec || !std::filesystem::is_directory(out_dir)) {
+        std::fprintf(stderr, "%s: cannot create output folder (%s)\n", out_dir.c_str(), ec.message().c_str());
+        return 1;
+    }
+    ecs::Registry registry;
+    if (Status st = load_scene(registry, scene); !st) {
+        std::fprintf(stderr, "%s\n", st.message().c_str());
+        return 1;
+    }
+    render::ReferenceSettings settings;
+    settings.supersample = int(supersample);
+    for (long k = first; k <= last; ++k) {
+        // The clip's pose at frame k, as `splatffd render` reaches it (a clock of its own, seeked to k / fps).
+        Clock clock(ClockSettings{.fixed_dt = 1.0 / fps});
+        clock.seek(double(k) / fps);
+        FrameContext frame = clock.tick();
+        frame.frame = std::uint64_t(k);
+        animation_system(registry, frame);
+        auto ref = render::reference_scene(registry, int(width), int(height));
+        if (!ref) {
+            std::fprintf(stderr, "%s: %s\n", scene.c_str(), ref.message().c_str());
+            return 1;
+        }
+        auto image = render::render_reference(*ref, settings);
+        if (!image) {
+            std::fprintf(stderr, "%s: %s\n", scene.c_str(), image.message().c_str());
+            return 1;
+        }
+        char name[32];
+        std::snprintf(name, sizeof name, "frame_%04ld", k);
+        const std::filesystem::path base = std::filesystem::path(out_dir) / name;
+        if (png) {
+            if (Status st = render::write_png(base.string() + ".png", render::to_rgba8(*image)); !st) {
+                std::fprintf(stderr, "%s\n", st.message().c_str());
+                return 1;
+            }
+        }
+        if (exr) {
+            if (Status st = render::write_exr(base.string() + ".exr", *image); !st) {
+                std::fprintf(stderr, "%s\n", st.message().c_str());
+                return 1;
+            }
+        }
+        std::fprintf(stderr, "splatffd reference: frame %ld\n", k);
+    }
+    return 0;
+}
+
+}  // namespace
+
+SFFD_COMMAND(reference, "ray trace the exact surface behind a scene (ground truth for image quality)", run_reference);
