@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "runtime/assets/export.h"
 #include "runtime/assets/ply.h"
@@ -110,6 +111,36 @@ struct LatticeCli : testing::Test {
 
     fs::path dir;
 };
+
+// Writes a PLY whose vertex element has exactly the float properties `names`, columns[k] holding the
+// values of property k (the inputs with fewer properties than our own files, which deform completes).
+void write_vertex_ply(const std::string& path, const std::vector<const char*>& names, std::vector<std::vector<double>> columns) {
+    ply::Header h;
+    ply::Element e;
+    e.name = "vertex";
+    e.count = columns.empty() ? 0 : columns[0].size();
+    for (const char* n : names) e.properties.push_back({n, ply::Type::float32});
+    h.elements.push_back(e);
+    auto w = ply::Writer::create(path, h);
+    ASSERT_TRUE(w.ok()) << w.message();
+    ply::Chunk c;
+    c.reset(e);
+    c.rows = e.count;
+    for (std::size_t k = 0; k < columns.size(); ++k) c.columns[k].values = std::move(columns[k]);
+    ASSERT_TRUE(w->write_rows(c).ok());
+    ASSERT_TRUE(w->finish().ok());
+}
+
+// x y z nx ny nz of every splat, as columns for write_vertex_ply().
+std::vector<std::vector<double>> position_normal_columns(const SplatCloud& cloud) {
+    std::vector<std::vector<double>> cols(6);
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+        for (int a = 0; a < 3; ++a) {
+            cols[std::size_t(a)].push_back(cloud.positions[i][a]);
+            cols[std::size_t(3 + a)].push_back(cloud.normals[i][a]);
+        }
+    return cols;
+}
 
 // Reads one float-triple property group of every vertex.
 std::vector<glm::dvec3> column3(const std::string& file, const char* a, const char* b, const char* c) {
@@ -249,24 +280,9 @@ TEST_F(LatticeCli, DeformWritesDeformedSplatAxes) {
     ASSERT_TRUE(save_lattice(p("L.json"), L).ok());
     ASSERT_TRUE(assets::save_splat_ply(cloud, p("axes.ply")).ok());
     {  // x y z nx ny nz radius
-        ply::Header h;
-        ply::Element e;
-        e.name = "vertex";
-        e.count = cloud.size();
-        for (const char* n : {"x", "y", "z", "nx", "ny", "nz", "radius"}) e.properties.push_back({n, ply::Type::float32});
-        h.elements.push_back(e);
-        auto w = ply::Writer::create(p("radius.ply"), h);
-        ASSERT_TRUE(w.ok());
-        ply::Chunk c;
-        c.reset(e);
-        c.rows = cloud.size();
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
-            for (int a = 0; a < 3; ++a) c.columns[std::size_t(a)].values.push_back(cloud.positions[i][a]);
-            for (int a = 0; a < 3; ++a) c.columns[std::size_t(3 + a)].values.push_back(cloud.normals[i][a]);
-            c.columns[6].values.push_back(0.05);
-        }
-        ASSERT_TRUE(w->write_rows(c).ok());
-        ASSERT_TRUE(w->finish().ok());
+        auto cols = position_normal_columns(cloud);
+        cols.emplace_back(cloud.size(), 0.05);
+        ASSERT_NO_FATAL_FAILURE(write_vertex_ply(p("radius.ply"), {"x", "y", "z", "nx", "ny", "nz", "radius"}, std::move(cols)));
     }
     for (const std::string in : {"axes.ply", "radius.ply"}) {
         for (const std::string backend : {"cpu", "reference"}) {
@@ -294,23 +310,8 @@ TEST_F(LatticeCli, DeformWritesDeformedSplatAxes) {
     // Normals but no radius: radii estimated from neighbour spacing exactly as import does (identity fit,
     // so the written axes are the created ones: lengths = assets::estimate_radii).
     {
-        ply::Header h;
-        ply::Element e;
-        e.name = "vertex";
-        e.count = cloud.size();
-        for (const char* n : {"x", "y", "z", "nx", "ny", "nz"}) e.properties.push_back({n, ply::Type::float32});
-        h.elements.push_back(e);
-        auto w = ply::Writer::create(p("normals.ply"), h);
-        ASSERT_TRUE(w.ok());
-        ply::Chunk c;
-        c.reset(e);
-        c.rows = cloud.size();
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
-            for (int a = 0; a < 3; ++a) c.columns[std::size_t(a)].values.push_back(cloud.positions[i][a]);
-            for (int a = 0; a < 3; ++a) c.columns[std::size_t(3 + a)].values.push_back(cloud.normals[i][a]);
-        }
-        ASSERT_TRUE(w->write_rows(c).ok());
-        ASSERT_TRUE(w->finish().ok());
+        ASSERT_NO_FATAL_FAILURE(
+            write_vertex_ply(p("normals.ply"), {"x", "y", "z", "nx", "ny", "nz"}, position_normal_columns(cloud)));
         const CliRun est = run("deform " + p("normals.ply") + " " + p("est.ply") + " --lattice fit:2");
         ASSERT_EQ(est.code, 0) << est.out;
         EXPECT_TRUE(has(est.out, "splat axes (created from normals and radii estimated from neighbour spacing)")) << est.out;
@@ -328,22 +329,7 @@ TEST_F(LatticeCli, DeformWritesDeformedSplatAxes) {
         }
     }
     // Positions only (no normals): said plainly.
-    {
-        ply::Header h;
-        ply::Element e;
-        e.name = "vertex";
-        e.count = 3;
-        for (const char* n : {"x", "y", "z"}) e.properties.push_back({n, ply::Type::float32});
-        h.elements.push_back(e);
-        auto w = ply::Writer::create(p("xyz.ply"), h);
-        ASSERT_TRUE(w.ok());
-        ply::Chunk c;
-        c.reset(e);
-        c.rows = 3;
-        c.columns[0].values = {0, 1, 0}, c.columns[1].values = {0, 0, 1}, c.columns[2].values = {0, 0, 0};
-        ASSERT_TRUE(w->write_rows(c).ok());
-        ASSERT_TRUE(w->finish().ok());
-    }
+    ASSERT_NO_FATAL_FAILURE(write_vertex_ply(p("xyz.ply"), {"x", "y", "z"}, {{0, 1, 0}, {0, 0, 1}, {0, 0, 0}}));
     const CliRun r = run("deform " + p("xyz.ply") + " " + p("o.ply") + " --lattice fit:2");
     ASSERT_EQ(r.code, 0) << r.out;
     EXPECT_TRUE(has(r.out, "positions (no normals in the input); no splat axes (the input has no normals")) << r.out;
