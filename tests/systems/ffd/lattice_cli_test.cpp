@@ -112,6 +112,13 @@ struct LatticeCli : testing::Test {
     fs::path dir;
 };
 
+// Runs `args` and expects exit status `code` with `message` in the output (refusals and their wording).
+void expect_refusal(const std::string& args, int code, const std::string& message) {
+    const CliRun r = run(args);
+    EXPECT_EQ(r.code, code) << args;
+    EXPECT_TRUE(has(r.out, message)) << r.out;
+}
+
 // Writes a PLY whose vertex element has exactly the float properties `names`, columns[k] holding the
 // values of property k (the inputs with fewer properties than our own files, which deform completes).
 void write_vertex_ply(const std::string& path, const std::vector<const char*>& names, std::vector<std::vector<double>> columns) {
@@ -201,19 +208,13 @@ TEST_F(LatticeCli, ConvertStoresAFittedLatticeAndExportsItAsJson) {
     ASSERT_EQ(r.code, 0) << r.out;
     ASSERT_TRUE(load_lattice(p("obb.json")).ok());
     // Refusals: PLY cannot hold a lattice; a bad spec fails before the import; no lattice to export.
-    r = run("convert " + p("grid.ply") + " " + p("x.ply") + " --lattice fit");
-    EXPECT_EQ(r.code, 2);
-    EXPECT_TRUE(has(r.out, "cannot hold a lattice")) << r.out;
-    r = run("convert " + p("grid.ply") + " " + p("x.glb") + " --lattice fit:4,q");
-    EXPECT_EQ(r.code, 2);
-    EXPECT_TRUE(has(r.out, "fit:4,q: unknown item 'q'")) << r.out;
-    r = run("convert " + p("grid.ply") + " " + p("x.json"));
-    EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(has(r.out, "not a scene file")) << r.out;
+    expect_refusal("convert " + p("grid.ply") + " " + p("x.ply") + " --lattice fit", 2,
+                   "cannot hold a lattice");
+    expect_refusal("convert " + p("grid.ply") + " " + p("x.glb") + " --lattice fit:4,q", 2,
+                   "fit:4,q: unknown item 'q'");
+    expect_refusal("convert " + p("grid.ply") + " " + p("x.json"), 1, "not a scene file");
     ASSERT_EQ(run("convert " + p("grid.ply") + " " + p("plain.glb")).code, 0);
-    r = run("convert " + p("plain.glb") + " " + p("x.json"));
-    EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(has(r.out, "plain.glb: has no lattice")) << r.out;
+    expect_refusal("convert " + p("plain.glb") + " " + p("x.json"), 1, "plain.glb: has no lattice");
 }
 
 TEST_F(LatticeCli, DeformTakesTheLatticeFromASceneFile) {
@@ -237,19 +238,17 @@ TEST_F(LatticeCli, DeformTakesTheLatticeFromASceneFile) {
     Lattice other = L;
     reset(other);
     save_grid_scene("two.glb", {}, {L, other});
-    r = run("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb"));
-    EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(has(r.out, "two.glb: 2 lattices ('L0', 'L1'); choose one with --lattice-name NAME")) << r.out;
+    expect_refusal("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb"), 1,
+                   "two.glb: 2 lattices ('L0', 'L1'); choose one with --lattice-name NAME");
     r = run("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb") + " --lattice-name L0");
     ASSERT_EQ(r.code, 0) << r.out;
     EXPECT_EQ(column3(p("c.ply"), "x", "y", "z"), a);
-    r = run("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb") + " --lattice-name nope");
-    EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(has(r.out, "two.glb: no lattice named 'nope' (lattices: 'L0', 'L1')")) << r.out;
+    expect_refusal(
+        "deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb") + " --lattice-name nope",
+        1, "two.glb: no lattice named 'nope' (lattices: 'L0', 'L1')");
     save_grid_scene("none.glb", {});
-    r = run("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("none.glb"));
-    EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(has(r.out, "none.glb: has no lattice")) << r.out;
+    expect_refusal("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("none.glb"), 1,
+                   "none.glb: has no lattice");
 
     // A bound chain applies in order (the engine's order): stretch, then the rest lattice (identity).
     save_grid_scene("chain.glb", {L, other});
@@ -349,18 +348,13 @@ TEST_F(LatticeCli, OptionErrorsNameTheOption) {
     EXPECT_EQ(r.code, 2);
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;  // one line, not two contradicting ones
     EXPECT_TRUE(has(r.out, "--splats: expected an integer")) << r.out;
-    r = run("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit --bench 1x");
-    EXPECT_EQ(r.code, 2);
-    EXPECT_TRUE(has(r.out, "--bench: expected an integer in 0..1000000, got '1x'")) << r.out;
-    r = run("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit:99");
-    EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(has(r.out, "fit:99: divisions must be integers in 1..64")) << r.out;
-    r = run("view sphere --frames -3");
-    EXPECT_EQ(r.code, 2);
-    EXPECT_TRUE(has(r.out, "--frames: expected an integer in 1..1000000000, got '-3'")) << r.out;
-    r = run("pick sphere --at 1,1 --tolerance abc");
-    EXPECT_EQ(r.code, 2);
-    EXPECT_TRUE(has(r.out, "--tolerance: expected a number in 0..1e+06, got 'abc'")) << r.out;
+    expect_refusal("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit --bench 1x", 2,
+                   "--bench: expected an integer in 0..1000000, got '1x'");
+    expect_refusal("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit:99", 1,
+                   "fit:99: divisions must be integers in 1..64");
+    expect_refusal("view sphere --frames -3", 2, "--frames: expected an integer in 1..1000000000, got '-3'");
+    expect_refusal("pick sphere --at 1,1 --tolerance abc", 2,
+                   "--tolerance: expected a number in 0..1e+06, got 'abc'");
     // profile checks its paths before measuring: one line, the file named, nothing measured.
     r = run("profile sphere --compare " + p("nosuch.json"));
     EXPECT_EQ(r.code, 1);
