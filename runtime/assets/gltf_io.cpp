@@ -124,51 +124,6 @@ std::size_t component_size(int type) {
     }
 }
 
-// Reads an accessor as `components` doubles per element, checking every offset against the buffer
-// (hostile files point accessors past the end). Normalised integers map to [0,1] / [-1,1].
-Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, int components, const std::string& src, const char* what) {
-    auto fail = [&](const std::string& why) { return make_error(src + ": " + what + ": " + why); };
-    if (index < 0 || static_cast<std::size_t>(index) >= m.accessors.size()) return fail("accessor index out of range");
-    const tinygltf::Accessor& a = m.accessors[static_cast<std::size_t>(index)];
-    if (a.sparse.isSparse) return fail("sparse accessors are not supported");
-    if (tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type)) != components)
-        return fail("expected " + std::to_string(components) + " components per element");
-    const std::size_t csize = component_size(a.componentType);
-    if (csize == 0) return fail("unsupported component type " + std::to_string(a.componentType));
-    const std::size_t elem = csize * static_cast<std::size_t>(components);
-    std::vector<double> out;
-    if (a.count == 0) return out;
-    if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= m.bufferViews.size()) return fail("accessor has no valid bufferView");
-    const tinygltf::BufferView& bv = m.bufferViews[static_cast<std::size_t>(a.bufferView)];
-    if (bv.buffer < 0 || static_cast<std::size_t>(bv.buffer) >= m.buffers.size()) return fail("bufferView has no valid buffer");
-    const std::vector<unsigned char>& data = m.buffers[static_cast<std::size_t>(bv.buffer)].data;
-    const std::size_t stride = bv.byteStride ? bv.byteStride : elem;
-    if (stride < elem) return fail("byteStride smaller than an element");
-    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset) return fail("bufferView exceeds its buffer");
-    if (a.byteOffset > bv.byteLength) return fail("accessor offset exceeds its bufferView");
-    const std::size_t avail = bv.byteLength - a.byteOffset;
-    if (a.count > avail / stride + 1 || (a.count - 1) * stride + elem > avail) return fail("accessor exceeds its bufferView");
-    out.resize(a.count * static_cast<std::size_t>(components));
-    const unsigned char* base = data.data() + bv.byteOffset + a.byteOffset;
-    for (std::size_t i = 0; i < a.count; ++i) {
-        const unsigned char* p = base + i * stride;
-        for (int c = 0; c < components; ++c, p += csize) {
-            double v = 0.0;
-            switch (a.componentType) {
-                case kFloat: { float f; std::memcpy(&f, p, 4); v = static_cast<double>(f); break; }
-                case kUByte: v = *p; if (a.normalized) v /= 255.0; break;
-                case kByte: { std::int8_t x; std::memcpy(&x, p, 1); v = x; if (a.normalized) v = std::max(v / 127.0, -1.0); break; }
-                case kUShort: { std::uint16_t x; std::memcpy(&x, p, 2); v = x; if (a.normalized) v /= 65535.0; break; }
-                case kShort: { std::int16_t x; std::memcpy(&x, p, 2); v = x; if (a.normalized) v = std::max(v / 32767.0, -1.0); break; }
-                case kUInt: { std::uint32_t x; std::memcpy(&x, p, 4); v = x; break; }
-            }
-            if (!std::isfinite(v)) return fail("non-finite value at element " + std::to_string(i));
-            out[i * static_cast<std::size_t>(components) + static_cast<std::size_t>(c)] = v;
-        }
-    }
-    return out;
-}
-
 // Every file tinygltf opens besides the glTF itself (buffer and image URIs) goes through these callbacks:
 // resolve_resource() keeps it inside the glTF's folder (no `..`, absolute paths, symlinks out, and no
 // current-directory fallback: tinygltf tries "<basedir>/uri" and then "./uri"; only the first is
@@ -337,7 +292,7 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     };
     const int ip = attr("POSITION");
     if (ip < 0) return make_error(src + ": primitive without POSITION");
-    auto pos = read_accessor(m, ip, 3, src, "POSITION");
+    auto pos = read_gltf_accessor(m, ip, 3, src, "POSITION");
     if (!pos) return pos.error();
     const std::size_t n = pos->size() / 3;
     const std::size_t base = g.positions.size();
@@ -347,26 +302,26 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     std::vector<double> nrm, col, uv, au, av;
     int col_components = 0;
     if (int i = attr("NORMAL"); i >= 0) {
-        auto r = read_accessor(m, i, 3, src, "NORMAL");
+        auto r = read_gltf_accessor(m, i, 3, src, "NORMAL");
         if (!r) return r.error();
         nrm = std::move(*r);
     }
     if (int i = attr("COLOR_0"); i >= 0) {
         const int comps = m.accessors.size() > static_cast<std::size_t>(i) && m.accessors[static_cast<std::size_t>(i)].type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
-        auto r = read_accessor(m, i, comps, src, "COLOR_0");
+        auto r = read_gltf_accessor(m, i, comps, src, "COLOR_0");
         if (!r) return r.error();
         col = std::move(*r);
         col_components = comps;
     }
     if (int i = attr("TEXCOORD_0"); i >= 0) {
-        auto r = read_accessor(m, i, 2, src, "TEXCOORD_0");
+        auto r = read_gltf_accessor(m, i, 2, src, "TEXCOORD_0");
         if (!r) return r.error();
         uv = std::move(*r);
     }
     if (int iu = attr("_AXIS_U"), iv = attr("_AXIS_V"); iu >= 0 && iv >= 0) {
-        auto ru = read_accessor(m, iu, 3, src, "_AXIS_U");
+        auto ru = read_gltf_accessor(m, iu, 3, src, "_AXIS_U");
         if (!ru) return ru.error();
-        auto rv = read_accessor(m, iv, 3, src, "_AXIS_V");
+        auto rv = read_gltf_accessor(m, iv, 3, src, "_AXIS_V");
         if (!rv) return rv.error();
         au = std::move(*ru);
         av = std::move(*rv);
@@ -481,7 +436,7 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     }
     std::vector<std::uint32_t> idx;
     if (prim.indices >= 0) {
-        auto r = read_accessor(m, prim.indices, 1, src, "indices");
+        auto r = read_gltf_accessor(m, prim.indices, 1, src, "indices");
         if (!r) return r.error();
         idx.reserve(r->size());
         for (double d : *r) {
@@ -512,6 +467,92 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
 }
 
 }  // namespace
+
+Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& m, int index, int components, const std::string& src,
+                                               const std::string& what) {
+    auto fail = [&](const std::string& why) { return make_error(src + ": " + what + ": " + why); };
+    if (index < 0 || static_cast<std::size_t>(index) >= m.accessors.size()) return fail("accessor index out of range");
+    const tinygltf::Accessor& a = m.accessors[static_cast<std::size_t>(index)];
+    if (a.sparse.isSparse) return fail("sparse accessors are not supported");
+    if (tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type)) != components)
+        return fail("expected " + std::to_string(components) + " components per element");
+    const std::size_t csize = component_size(a.componentType);
+    if (csize == 0) return fail("unsupported component type " + std::to_string(a.componentType));
+    const std::size_t elem = csize * static_cast<std::size_t>(components);
+    std::vector<double> out;
+    if (a.count == 0) return out;
+    if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= m.bufferViews.size()) return fail("accessor has no valid bufferView");
+    const tinygltf::BufferView& bv = m.bufferViews[static_cast<std::size_t>(a.bufferView)];
+    if (bv.buffer < 0 || static_cast<std::size_t>(bv.buffer) >= m.buffers.size()) return fail("bufferView has no valid buffer");
+    const std::vector<unsigned char>& data = m.buffers[static_cast<std::size_t>(bv.buffer)].data;
+    const std::size_t stride = bv.byteStride ? bv.byteStride : elem;
+    if (stride < elem) return fail("byteStride smaller than an element");
+    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset) return fail("bufferView exceeds its buffer");
+    if (a.byteOffset > bv.byteLength) return fail("accessor offset exceeds its bufferView");
+    const std::size_t avail = bv.byteLength - a.byteOffset;
+    if (a.count > avail / stride + 1 || (a.count - 1) * stride + elem > avail) return fail("accessor exceeds its bufferView");
+    out.resize(a.count * static_cast<std::size_t>(components));
+    const unsigned char* base = data.data() + bv.byteOffset + a.byteOffset;
+    for (std::size_t i = 0; i < a.count; ++i) {
+        const unsigned char* p = base + i * stride;
+        for (int c = 0; c < components; ++c, p += csize) {
+            double v = 0.0;
+            switch (a.componentType) {
+                case kFloat: { float f; std::memcpy(&f, p, 4); v = static_cast<double>(f); break; }
+                case kUByte: v = *p; if (a.normalized) v /= 255.0; break;
+                case kByte: { std::int8_t x; std::memcpy(&x, p, 1); v = x; if (a.normalized) v = std::max(v / 127.0, -1.0); break; }
+                case kUShort: { std::uint16_t x; std::memcpy(&x, p, 2); v = x; if (a.normalized) v /= 65535.0; break; }
+                case kShort: { std::int16_t x; std::memcpy(&x, p, 2); v = x; if (a.normalized) v = std::max(v / 32767.0, -1.0); break; }
+                case kUInt: { std::uint32_t x; std::memcpy(&x, p, 4); v = x; break; }
+            }
+            if (!std::isfinite(v)) return fail("non-finite value at element " + std::to_string(i));
+            out[i * static_cast<std::size_t>(components) + static_cast<std::size_t>(c)] = v;
+        }
+    }
+    return out;
+}
+
+Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
+    const std::string src = path.string();
+    auto bytes = read_file(path, kMaxGltfBytes);
+    if (!bytes) return bytes.error();
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const bool binary = ext == ".glb" || (bytes->size() >= 4 && bytes->compare(0, 4, "glTF") == 0);
+    // The JSON chunk's nesting is checked before tinygltf's recursive parser sees it (stack overflow).
+    std::string_view json_text = *bytes;
+    if (binary && bytes->size() >= 20) {
+        std::uint32_t len = 0;
+        std::memcpy(&len, bytes->data() + 12, 4);
+        json_text = std::string_view(*bytes).substr(20, std::min<std::size_t>(len, bytes->size() - 20));
+    }
+    if (Status s = check_json_depth(json_text, src); !s) return s;
+
+    LoadContext ctx;
+    ctx.owner = path;
+    ctx.basedir = path.parent_path().string();
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(load_image_deferred, &ctx);
+    loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, &ctx});
+    std::string err, warn;
+    bool ok = false;
+    try {
+        const auto* data = reinterpret_cast<const unsigned char*>(bytes->data());
+        ok = binary ? loader.LoadBinaryFromMemory(&m, &err, &warn, data, static_cast<unsigned int>(bytes->size()), ctx.basedir)
+                    : loader.LoadASCIIFromString(&m, &err, &warn, bytes->data(), static_cast<unsigned int>(bytes->size()), ctx.basedir);
+    } catch (const std::bad_alloc&) {
+        return make_error(src + ": out of memory while parsing the glTF");
+    } catch (const std::exception& e) {  // tinygltf's JSON parser may throw on hostile input
+        return make_error(src + ": invalid glTF: " + e.what());
+    }
+    if (!ctx.error.empty()) return make_error(ctx.error);  // a refused resource, whatever tinygltf made of it
+    if (!ok) {
+        while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
+        return make_error(src + ": invalid glTF: " + (err.empty() ? std::string("unknown error") : err.substr(0, 500)));
+    }
+    return decode_images(m, src);
+}
+
 
 Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds, const std::string& sffd_scene_json) {
     std::string ext = path.extension().string();
@@ -645,44 +686,8 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
 
 Result<GltfContents> read_gltf(const fs::path& path) {
     const std::string src = path.string();
-    auto bytes = read_file(path, kMaxGltfBytes);
-    if (!bytes) return bytes.error();
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    const bool binary = ext == ".glb" || (bytes->size() >= 4 && bytes->compare(0, 4, "glTF") == 0);
-    // The JSON chunk's nesting is checked before tinygltf's recursive parser sees it (stack overflow).
-    std::string_view json_text = *bytes;
-    if (binary && bytes->size() >= 20) {
-        std::uint32_t len = 0;
-        std::memcpy(&len, bytes->data() + 12, 4);
-        json_text = std::string_view(*bytes).substr(20, std::min<std::size_t>(len, bytes->size() - 20));
-    }
-    if (Status s = check_json_depth(json_text, src); !s) return s.error();
-
-    LoadContext ctx;
-    ctx.owner = path;
-    ctx.basedir = path.parent_path().string();
-    tinygltf::TinyGLTF loader;
-    loader.SetImageLoader(load_image_deferred, &ctx);
-    loader.SetFsCallbacks(tinygltf::FsCallbacks{fs_exists, fs_expand, fs_read, fs_write, &ctx});
     tinygltf::Model m;
-    std::string err, warn;
-    bool ok = false;
-    try {
-        const auto* data = reinterpret_cast<const unsigned char*>(bytes->data());
-        ok = binary ? loader.LoadBinaryFromMemory(&m, &err, &warn, data, static_cast<unsigned int>(bytes->size()), ctx.basedir)
-                    : loader.LoadASCIIFromString(&m, &err, &warn, bytes->data(), static_cast<unsigned int>(bytes->size()), ctx.basedir);
-    } catch (const std::bad_alloc&) {
-        return make_error(src + ": out of memory while parsing the glTF");
-    } catch (const std::exception& e) {  // tinygltf's JSON parser may throw on hostile input
-        return make_error(src + ": invalid glTF: " + e.what());
-    }
-    if (!ctx.error.empty()) return make_error(ctx.error);  // a refused resource, whatever tinygltf made of it
-    if (!ok) {
-        while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
-        return make_error(src + ": invalid glTF: " + (err.empty() ? std::string("unknown error") : err.substr(0, 500)));
-    }
-    if (Status s = decode_images(m, src); !s) return s.error();
+    if (Status s = load_gltf_model(path, m); !s) return s.error();
     GltfContents out;
     out.other.source = src;
     if (auto it = m.extensions.find("SFFD_scene"); it != m.extensions.end()) out.sffd_scene_json = to_json(it->second).dump();

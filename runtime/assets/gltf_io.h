@@ -21,6 +21,10 @@
 #include "runtime/core/result.h"
 #include "runtime/scene/components.h"
 
+namespace tinygltf {
+class Model;
+}
+
 namespace sffd::assets {
 
 struct GltfCloudOut {
@@ -49,5 +53,17 @@ struct GltfContents {
 };
 
 Result<GltfContents> read_gltf(const std::filesystem::path& path);
+
+// The guarded tinygltf load behind read_gltf(), for every reader of glTF (also systems/gaussian): the file
+// size limit, the JSON nesting check before tinygltf's recursive parser, buffer and image URIs resolved
+// inside the glTF's folder only (resolve_resource), an image pixel budget, images decoded to RGBA8.
+// Errors read "file: problem".
+Status load_gltf_model(const std::filesystem::path& path, tinygltf::Model& model);
+
+// Accessor `index` of `model` as `components` doubles per element, every offset checked against its
+// buffer (hostile files point accessors past the end). Normalised integers map to [0,1] / [-1,1]; float,
+// (unsigned) byte, (unsigned) short and unsigned int components. Errors read "src: what: problem".
+Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& model, int index, int components,
+                                               const std::string& src, const std::string& what);
 
 }  // namespace sffd::assets

@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <queue>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "runtime/assets/point_tree.h"
+#include "runtime/scene/sym_eigen.h"
 
 namespace sffd::assets {
 
@@ -46,44 +48,13 @@ Neighbours find_neighbours(std::span<const glm::vec3> points, int k) {
 }
 
 void symmetric_eigen(const glm::dmat3& input, glm::dvec3& values, glm::dmat3& vectors) {
-    double a[3][3];
-    double v[3][3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) a[i][j] = input[j][i];
-    for (int sweep = 0; sweep < 50; ++sweep) {
-        const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-        const double diag = a[0][0] * a[0][0] + a[1][1] * a[1][1] + a[2][2] * a[2][2];
-        if (off <= 1e-30 * diag || off == 0.0) break;
-        for (int p = 0; p < 2; ++p) {
-            for (int q = p + 1; q < 3; ++q) {
-                if (a[p][q] == 0.0) continue;
-                const double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-                const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
-                const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
-                for (int k = 0; k < 3; ++k) {  // A = J^T A J
-                    const double akp = a[k][p], akq = a[k][q];
-                    a[k][p] = c * akp - s * akq;
-                    a[k][q] = s * akp + c * akq;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double apk = a[p][k], aqk = a[q][k];
-                    a[p][k] = c * apk - s * aqk;
-                    a[q][k] = s * apk + c * aqk;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double vkp = v[k][p], vkq = v[k][q];
-                    v[k][p] = c * vkp - s * vkq;
-                    v[k][q] = s * vkp + c * vkq;
-                }
-            }
-        }
-    }
-    int order[3] = {0, 1, 2};
-    std::sort(order, order + 3, [&](int x, int y) { return a[x][x] < a[y][y]; });
-    for (int c = 0; c < 3; ++c) {
-        values[c] = a[order[c]][order[c]];
-        vectors[c] = glm::dvec3(v[0][order[c]], v[1][order[c]], v[2][order[c]]);
-    }
+    // Stops once the off-diagonal mass is 1e-30 of the diagonal's (or exactly zero); skips only exact zeros.
+    constexpr double zero_only = std::numeric_limits<double>::denorm_min();  // |x| < denorm_min ⇔ x == 0
+    const JacobiRule rule{.max_sweeps = 50, .relative = 1e-30, .relative_to_diagonal = true, .floor = zero_only,
+                          .skip_below = zero_only};
+    const Eigen3 e = jacobi_eigen(input, glm::dmat3(1.0), rule, EigenOrder::ascending);
+    values = e.values;
+    vectors = e.vectors;
 }
 
 std::vector<glm::vec3> pca_normals(std::span<const glm::vec3> points, const Neighbours& nb) {

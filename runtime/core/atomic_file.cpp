@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/core/file_io.h"
 #include "runtime/core/log.h"
 
 namespace sffd {
@@ -89,15 +90,6 @@ mode_t current_umask() {
         return m;
     }();
     return mask;
-}
-
-const char* kind_of(mode_t m) {
-    if (S_ISFIFO(m)) return "a FIFO";
-    if (S_ISCHR(m)) return "a character device";
-    if (S_ISBLK(m)) return "a block device";
-    if (S_ISSOCK(m)) return "a socket";
-    if (S_ISDIR(m)) return "a folder";
-    return "not a regular file";
 }
 
 bool pid_alive(long pid) { return pid > 0 && (::kill(static_cast<pid_t>(pid), 0) == 0 || errno == EPERM); }
@@ -235,7 +227,7 @@ Result<AtomicFile> AtomicFile::create(const fs::path& path) {
         struct stat st {};
         if (::stat(impl->target.c_str(), &st) == 0) {
             if (!S_ISREG(st.st_mode))
-                return impl->fail(std::string("not a regular file (") + kind_of(st.st_mode) + "); refusing to replace it");
+                return impl->fail(std::string("not a regular file (") + file_kind(st.st_mode) + "); refusing to replace it");
             mode = st.st_mode & 07777;
         }
     }

@@ -17,17 +17,8 @@ namespace {
 
 std::atomic<bool> g_allow_outside{false};
 
-const char* kind_of(mode_t m) {
-    if (S_ISFIFO(m)) return "a FIFO";
-    if (S_ISCHR(m)) return "a character device";
-    if (S_ISBLK(m)) return "a block device";
-    if (S_ISSOCK(m)) return "a socket";
-    if (S_ISDIR(m)) return "a folder";
-    return "not a regular file";
-}
-
 Error not_regular(const fs::path& path, mode_t m) {
-    const std::string kind = kind_of(m);
+    const std::string kind = file_kind(m);
     return make_error(path.string() + ": not a regular file" + (kind == "not a regular file" ? "" : " (" + kind + ")"));
 }
 
@@ -40,6 +31,15 @@ struct Fd {
 };
 
 }  // namespace
+
+const char* file_kind(mode_t m) {
+    if (S_ISFIFO(m)) return "a FIFO";
+    if (S_ISCHR(m)) return "a character device";
+    if (S_ISBLK(m)) return "a block device";
+    if (S_ISSOCK(m)) return "a socket";
+    if (S_ISDIR(m)) return "a folder";
+    return "not a regular file";
+}
 
 Status check_regular_file(const fs::path& path) {
     struct stat st {};
@@ -110,7 +110,7 @@ Result<fs::path> resolve_resource(const fs::path& owner, std::string_view uri) {
         const auto [f_end, r_it] = std::mismatch(folder.begin(), folder.end(), real.begin(), real.end());
         if (f_end != folder.end()) return outside();
     }
-    if (!S_ISREG(st.st_mode)) return make_error(owner.string() + ": " + quoted + " is " + kind_of(st.st_mode) + ", not a regular file");
+    if (!S_ISREG(st.st_mode)) return make_error(owner.string() + ": " + quoted + " is " + file_kind(st.st_mode) + ", not a regular file");
     return real;
 }
 

@@ -11,6 +11,8 @@
 #include <string>
 #include <string_view>
 
+#include <sys/types.h>
+
 #include "runtime/core/result.h"
 
 namespace sffd {
@@ -24,6 +26,10 @@ inline constexpr std::uint64_t kMaxResourceBytes = std::uint64_t(2) << 30;   // 
 // `limit` bytes and reads it whole. Errors: `path: no such file`, `path: not a regular file`,
 // `path: file is N bytes, more than the L-byte limit`, `path: cannot read: ...`, `path: out of memory`.
 Result<std::string> read_file(const std::filesystem::path& path, std::uint64_t limit);
+
+// What a non-regular file is, for messages ("a FIFO", "a character device", "a block device", "a socket",
+// "a folder"; "not a regular file" for anything else): readers here and atomic saving name it alike.
+const char* file_kind(mode_t mode);
 
 // Same checks without reading: a regular file that exists (for readers that stream, e.g. PLY).
 Status check_regular_file(const std::filesystem::path& path);

@@ -12,6 +12,17 @@
 
 namespace sffd {
 
+// Change stamps of the inputs a deformation output was computed from: the authored cloud, its Deformers,
+// and per live lattice (in Deformers order) its Lattice version mixed with its entity bits, so that
+// swapping one lattice for another also counts as a change. Kept by DeformedSplats and
+// DeformedGaussians (systems/gaussian); filled by ffd::deform_inputs() (systems/ffd/deform_inputs.h).
+struct DeformInputStamps {
+    std::uint64_t cloud = 0;
+    std::uint64_t deformers = 0;
+    std::vector<std::uint64_t> lattices;
+    bool operator==(const DeformInputStamps&) const = default;
+};
+
 // Derived output of the deformation phase on a point-cloud entity (authored SplatCloud stays as loaded).
 // Written by ffd_system only. Positions are relative to `origin` (= the cloud's SplatCloud::origin).
 // When the GPU path ran, the deformed splats live in GpuSplatStore::clouds[e].deformed and the CPU arrays
@@ -40,9 +51,7 @@ struct DeformedSplats {
     std::uint64_t rest_box_cloud = 0;    // SplatCloud change stamp the box is of
 
     // Inputs this output was computed from (change stamps), so the system skips unchanged clouds.
-    std::uint64_t seen_cloud = 0;
-    std::uint64_t seen_deformers = 0;
-    std::vector<std::uint64_t> seen_lattices;
+    DeformInputStamps seen;
     bool seen_force_cpu = false;
 };
 

@@ -71,7 +71,6 @@ ReferencePoint reference_point(const Lattice& l, const glm::dvec3& world) {
     if (!inside(stu)) return r;
     r.inside = true;
     stu = glm::clamp(stu, glm::dvec3(0.0), glm::dvec3(1.0));
-    const int L = l.divisions.x, M = l.divisions.y, N = l.divisions.z;
     // Per-axis weights from the closed forms (independent of the fast path's recurrences).
     std::vector<double> w[3], dw[3];
     for (int a = 0; a < 3; ++a) {
@@ -89,18 +88,13 @@ ReferencePoint reference_point(const Lattice& l, const glm::dvec3& world) {
         }
     }
     glm::dvec3 D(0.0), Ds(0.0), Dt(0.0), Du(0.0);
-    for (int i = 0; i <= L; ++i)
-        for (int j = 0; j <= M; ++j)
-            for (int k = 0; k <= N; ++k) {
-                const std::size_t c = l.index(i, j, k);
-                const glm::dvec3 d = l.current[c] - l.rest[c];
-                if (d == glm::dvec3(0.0)) continue;
-                const double bs = w[0][i], bt = w[1][j], bu = w[2][k];
-                D += d * (bs * bt * bu);
-                Ds += d * (dw[0][i] * bt * bu);
-                Dt += d * (bs * dw[1][j] * bu);
-                Du += d * (bs * bt * dw[2][k]);
-            }
+    for_each_moved(l, [&](int i, int j, int k, const glm::dvec3& d) {
+        const double bs = w[0][i], bt = w[1][j], bu = w[2][k];
+        D += d * (bs * bt * bu);
+        Ds += d * (dw[0][i] * bt * bu);
+        Dt += d * (bs * dw[1][j] * bu);
+        Du += d * (bs * bt * dw[2][k]);
+    });
     r.position = world + D;
     r.jacobian = glm::dmat3(1.0) + glm::dmat3(Ds, Dt, Du) * inverse_axes(l);
     return r;

@@ -51,6 +51,19 @@ struct Group {
     std::size_t first = 0;
 };
 
+// Writes a kernel's sums into the group: D_c = X[c], and with Full the derivatives G[c*3+a] = (Fs, Ft, Fu)[c].
+template <bool Full>
+inline void store_group(Group& g, const vf (&X)[3], const vf (&Fs)[3], const vf (&Ft)[3], const vf (&Fu)[3]) {
+    for (int c = 0; c < 3; ++c) {
+        storev(g.D[c], X[c]);
+        if constexpr (Full) {
+            storev(g.G[c * 3 + 0], Fs[c]);
+            storev(g.G[c * 3 + 1], Ft[c]);
+            storev(g.G[c * 3 + 2], Fu[c]);
+        }
+    }
+}
+
 // Load / store W consecutive vec3 (AoS) as three vectors. AVX-512: three 16-float loads and permutes.
 inline void load_xyz(const glm::vec3* p, vf& x, vf& y, vf& z) {
 #if defined(__AVX512F__)
@@ -150,14 +163,7 @@ void bernstein_group(const Prepared& P, Group& g) {
             }
         }
     }
-    for (int c = 0; c < 3; ++c) {
-        storev(g.D[c], X[c]);
-        if constexpr (Full) {
-            storev(g.G[c * 3 + 0], Fs[c]);
-            storev(g.G[c * 3 + 1], Ft[c]);
-            storev(g.G[c * 3 + 2], Fu[c]);
-        }
-    }
+    store_group<Full>(g, X, Fs, Ft, Fu);
 }
 
 // Bernstein basis values B(L,i,s) and derivatives for the indices flagged in `need` only, from powers
@@ -203,14 +209,7 @@ void sparse_group(const Prepared& P, Group& g) {
             }
         }
     }
-    for (int c = 0; c < 3; ++c) {
-        storev(g.D[c], X[c]);
-        if constexpr (Full) {
-            storev(g.G[c * 3 + 0], Fs[c]);
-            storev(g.G[c * 3 + 1], Ft[c]);
-            storev(g.G[c * 3 + 2], Fu[c]);
-        }
-    }
+    store_group<Full>(g, X, Fs, Ft, Fu);
 }
 
 __attribute__((always_inline)) inline v4 lanes4(v16 r) {
@@ -414,16 +413,11 @@ Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin) {
     for (int a = 0; a < 3; ++a) P.stu0[a] = float(stu0[a]);
     const int L = P.L, M = P.M, N = P.N;
     glm::ivec3 lo(1 << 30), hi(-1);
-    for (int i = 0; i <= L; ++i)
-        for (int j = 0; j <= M; ++j)
-            for (int k = 0; k <= N; ++k) {
-                const std::size_t c = l.index(i, j, k);
-                const glm::dvec3 d = l.current[c] - l.rest[c];
-                if (d == glm::dvec3(0.0)) continue;
-                P.moved.push_back({i, j, k, {float(d.x), float(d.y), float(d.z)}});
-                lo = glm::min(lo, glm::ivec3(i, j, k));
-                hi = glm::max(hi, glm::ivec3(i, j, k));
-            }
+    for_each_moved(l, [&](int i, int j, int k, const glm::dvec3& d) {
+        P.moved.push_back({i, j, k, {float(d.x), float(d.y), float(d.z)}});
+        lo = glm::min(lo, glm::ivec3(i, j, k));
+        hi = glm::max(hi, glm::ivec3(i, j, k));
+    });
     for (int a = 0; a < 3; ++a) {
         const int n = l.divisions[a];
         P.need[a].assign(std::size_t(n) + 1, 0);

@@ -17,6 +17,7 @@
 #include "shaders/common/bindings.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform_cloud.h"
+#include "systems/ffd/deform_inputs.h"
 #include "systems/ffd/ffd_gpu.h"
 #include "systems/ffd/lattice.h"
 
@@ -87,24 +88,17 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
     reg.view<const SplatCloud, const Deformers>().each([&](ecs::Entity e, const SplatCloud&, const Deformers&) { clouds.push_back(e); });
     for (ecs::Entity e : clouds) {
         const SplatCloud& cloud = reg.get<SplatCloud>(e);
-        const Deformers& deformers = reg.get<Deformers>(e);
-        std::vector<ecs::Entity> lattices;
-        std::vector<std::uint64_t> stamps;
-        for (ecs::Entity le : deformers.lattices)
-            if (reg.valid(le) && reg.has<Lattice>(le)) {
-                lattices.push_back(le);
-                stamps.push_back(reg.version<Lattice>(le) ^ (le.bits() << 1));
-            }
-        const std::uint64_t cloud_v = reg.version<SplatCloud>(e), deformers_v = reg.version<Deformers>(e);
+        const ffd::DeformInputs inputs = ffd::deform_inputs<SplatCloud>(reg, e);
+        const std::vector<ecs::Entity>& lattices = inputs.lattices;
+        const std::uint64_t cloud_v = inputs.stamps.cloud;
         const DeformedSplats* seen = reg.try_get<DeformedSplats>(e);
-        if (seen && seen->seen_cloud == cloud_v && seen->seen_deformers == deformers_v && seen->seen_lattices == stamps &&
-            seen->seen_force_cpu == force_cpu)
+        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu)
             continue;  // nothing this cloud depends on moved
 
         if (!seen) reg.emplace<DeformedSplats>(e);
         DeformedSplats& out = reg.patch<DeformedSplats>(e);
         out.origin = cloud.origin;
-        out.seen_cloud = cloud_v, out.seen_deformers = deformers_v, out.seen_lattices = stamps;
+        out.seen = inputs.stamps;
         out.seen_force_cpu = force_cpu;
         ++out.version;
         const std::size_t n = cloud.size();
@@ -150,7 +144,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
                 glCopyNamedBufferSubData(in, splats->deformed.id(), 0, 0, GLsizeiptr(n * sizeof(gpu::GpuSplat)));
             for (std::size_t d = 0; d < lattices.size(); ++d) {
                 const Lattice& l = reg.get<Lattice>(lattices[d]);
-                if (Status s = gpu->dispatch(l, lattices[d].bits(), stamps[d], cloud.origin, in, splats->deformed.id(),
+                if (Status s = gpu->dispatch(l, lattices[d].bits(), inputs.stamps.lattices[d], cloud.origin, in, splats->deformed.id(),
                                              std::uint32_t(n));
                     !s) {
                     log::warn("ffd_system: ", s.message(), " (lattice skipped)");

@@ -40,6 +40,20 @@ inline bool inside(const glm::dvec3& stu) {
            stu.y <= 1.0 + kInsideSlack && stu.z >= -kInsideSlack && stu.z <= 1.0 + kInsideSlack;
 }
 
+// Calls f(i, j, k, d) for every control point that moved, d = current − rest ≠ 0, in flat-index order:
+// the displacement form of the deformation sums over these only (the reference evaluator and the fast
+// path's sparse setup both walk them this way).
+template <class F>
+void for_each_moved(const Lattice& l, F&& f) {
+    for (int i = 0; i <= l.divisions.x; ++i)
+        for (int j = 0; j <= l.divisions.y; ++j)
+            for (int k = 0; k <= l.divisions.z; ++k) {
+                const std::size_t c = l.index(i, j, k);
+                const glm::dvec3 d = l.current[c] - l.rest[c];
+                if (d != glm::dvec3(0.0)) f(i, j, k, d);
+            }
+}
+
 // True when rest equals the uniform grid of (origin, axes, divisions) to 1e-12 relative: then the
 // displacement form equals the classic Σ P B form and Bernstein's convex-hull property bounds the result.
 bool rest_is_uniform(const Lattice& lattice);

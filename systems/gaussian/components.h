@@ -24,6 +24,8 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "systems/ffd/components.h"  // DeformInputStamps
+
 namespace sffd {
 
 struct GaussianCloud {
@@ -56,9 +58,7 @@ struct DeformedGaussians {
     std::uint64_t version = 0;         // bumped on every rewrite
 
     // Change stamps this output was computed from (the system skips unchanged clouds).
-    std::uint64_t seen_cloud = 0;
-    std::uint64_t seen_deformers = 0;
-    std::vector<std::uint64_t> seen_lattices;
+    DeformInputStamps seen;
 };
 
 }  // namespace sffd

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
+#include "runtime/assets/gltf_io.h"
 #include "runtime/core/atomic_file.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_math.h"
@@ -23,59 +24,16 @@ namespace fs = std::filesystem;
 
 namespace {
 
-constexpr int kFloat = 5126, kUByte = 5121, kUShort = 5123, kByte = 5120, kShort = 5122;
+constexpr int kFloat = 5126, kUByte = 5121, kUInt = 5125;
 const std::string kExt = "KHR_gaussian_splatting";
 
-std::size_t component_size(int type) {
-    switch (type) {
-        case kFloat: return 4;
-        case kUByte: case kByte: return 1;
-        case kUShort: case kShort: return 2;
-        default: return 0;
-    }
-}
-
-// Reads an accessor as `components` doubles per element, every offset checked against its buffer.
-Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, int components, const std::string& what) {
-    auto fail = [&](const std::string& why) { return make_error(what + ": " + why); };
-    if (index < 0 || std::size_t(index) >= m.accessors.size()) return fail("accessor index out of range");
-    const tinygltf::Accessor& a = m.accessors[std::size_t(index)];
-    if (a.sparse.isSparse) return fail("sparse accessors are not supported");
-    if (tinygltf::GetNumComponentsInType(std::uint32_t(a.type)) != components)
-        return fail("expected " + std::to_string(components) + " components per element");
-    const std::size_t csize = component_size(a.componentType);
-    if (csize == 0) return fail("unsupported component type " + std::to_string(a.componentType));
-    const std::size_t elem = csize * std::size_t(components);
-    std::vector<double> out;
-    if (a.count == 0) return out;
-    if (a.bufferView < 0 || std::size_t(a.bufferView) >= m.bufferViews.size()) return fail("accessor has no valid bufferView");
-    const tinygltf::BufferView& bv = m.bufferViews[std::size_t(a.bufferView)];
-    if (bv.buffer < 0 || std::size_t(bv.buffer) >= m.buffers.size()) return fail("bufferView has no valid buffer");
-    const std::vector<unsigned char>& data = m.buffers[std::size_t(bv.buffer)].data;
-    const std::size_t stride = bv.byteStride ? bv.byteStride : elem;
-    if (stride < elem) return fail("byteStride smaller than an element");
-    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset) return fail("bufferView exceeds its buffer");
-    if (a.byteOffset > bv.byteLength) return fail("accessor offset exceeds its bufferView");
-    const std::size_t avail = bv.byteLength - a.byteOffset;
-    if (a.count > avail / stride + 1 || (a.count - 1) * stride + elem > avail) return fail("accessor exceeds its bufferView");
-    out.resize(a.count * std::size_t(components));
-    const unsigned char* base = data.data() + bv.byteOffset + a.byteOffset;
-    for (std::size_t i = 0; i < a.count; ++i) {
-        const unsigned char* p = base + i * stride;
-        for (int c = 0; c < components; ++c, p += csize) {
-            double v = 0.0;
-            switch (a.componentType) {
-                case kFloat: { float f; std::memcpy(&f, p, 4); v = double(f); break; }
-                case kUByte: v = *p; if (a.normalized) v /= 255.0; break;
-                case kByte: { std::int8_t x; std::memcpy(&x, p, 1); v = x; if (a.normalized) v = std::max(v / 127.0, -1.0); break; }
-                case kUShort: { std::uint16_t x; std::memcpy(&x, p, 2); v = x; if (a.normalized) v /= 65535.0; break; }
-                case kShort: { std::int16_t x; std::memcpy(&x, p, 2); v = x; if (a.normalized) v = std::max(v / 32767.0, -1.0); break; }
-            }
-            if (!std::isfinite(v)) return fail("non-finite value at element " + std::to_string(i));
-            out[i * std::size_t(components) + std::size_t(c)] = v;
-        }
-    }
-    return out;
+// The attributes KHR_gaussian_splatting allows: float or normalised (unsigned) byte / short, never
+// unsigned int (which the shared reader also accepts, for indices).
+Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, int components, const std::string& where,
+                                          const std::string& name) {
+    if (index >= 0 && std::size_t(index) < m.accessors.size() && m.accessors[std::size_t(index)].componentType == kUInt)
+        return make_error(where + ": " + name + ": unsupported component type " + std::to_string(kUInt));
+    return assets::read_gltf_accessor(m, index, components, where, name);
 }
 
 glm::dmat4 node_matrix(const tinygltf::Node& n) {
@@ -98,11 +56,11 @@ Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::P
     };
     for (const char* name : {"POSITION", "KHR_gaussian_splatting:ROTATION", "KHR_gaussian_splatting:SCALE", "KHR_gaussian_splatting:OPACITY"})
         if (attr(name) < 0) return make_error(where + ": missing attribute " + name);
-    auto pos = read_accessor(m, attr("POSITION"), 3, where + ": POSITION");
+    auto pos = read_accessor(m, attr("POSITION"), 3, where, "POSITION");
     if (!pos) return pos.error();
     const std::size_t n = pos->size() / 3;
     auto get = [&](const std::string& name, int comps) -> Result<std::vector<double>> {
-        auto v = read_accessor(m, attr(name), comps, where + ": " + name);
+        auto v = read_accessor(m, attr(name), comps, where, name);
         if (v && v->size() != n * std::size_t(comps))
             return make_error(where + ": " + name + " has " + std::to_string(v->size() / std::size_t(comps)) + " elements, POSITION " + std::to_string(n));
         return v;
@@ -202,21 +160,8 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
     const std::string src = path.string();
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) return make_error(src + ": no such file");
-    tinygltf::TinyGLTF loader;
     tinygltf::Model m;
-    std::string err, warn;
-    std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    bool ok = false;
-    try {
-        ok = ext == ".glb" ? loader.LoadBinaryFromFile(&m, &err, &warn, src) : loader.LoadASCIIFromFile(&m, &err, &warn, src);
-    } catch (const std::exception& e) {  // tinygltf's JSON parser may throw on hostile input
-        return make_error(src + ": invalid glTF: " + e.what());
-    }
-    if (!ok) {
-        while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
-        return make_error(src + ": invalid glTF: " + (err.empty() ? std::string("unknown error") : err.substr(0, 500)));
-    }
+    if (Status s = assets::load_gltf_model(path, m); !s) return s.error();
     std::vector<GaussianCloud> parts;
     std::vector<int> visiting;
     std::function<Status(int, const glm::dmat4&)> visit = [&](int index, const glm::dmat4& parent) -> Status {

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <utility>
 
+#include "runtime/scene/sym_eigen.h"
+
 namespace sffd::gaussian {
 
 glm::dmat3 covariance(const glm::dvec3& scale, const glm::dquat& q) {
@@ -15,53 +17,14 @@ glm::dmat3 covariance(const glm::dvec3& scale, const glm::dquat& q) {
 SymEigen sym_eigen(const glm::dmat3& in) { return sym_eigen(in, glm::dmat3(1.0)); }
 
 SymEigen sym_eigen(const glm::dmat3& in, const glm::dmat3& guess) {
-    // Cyclic Jacobi on Gᵀ A G: each rotation zeroes one off-diagonal entry; converges quadratically and
-    // never needs the eigenvalues to be distinct (no characteristic polynomial, no deflation). A good
-    // guess G leaves little to rotate (one sweep instead of four to six).
+    // Jacobi on Gᵀ A G (runtime/scene/sym_eigen.h): a good guess G leaves little to rotate (one sweep instead
+    // of four to six). Stops at 1e-32 of the squared Frobenius norm or below 1e-300 absolute.
     const glm::dmat3 sym = 0.5 * (in + glm::transpose(in));
     const glm::dmat3 rotated = glm::transpose(guess) * sym * guess;
-    double a[3][3], v[3][3];
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) a[r][c] = 0.5 * (rotated[c][r] + rotated[r][c]), v[r][c] = guess[c][r];
-    double norm = 0.0;
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) norm += a[r][c] * a[r][c];
-    const double tiny = 1e-300;
-    for (int sweep = 0; sweep < 64; ++sweep) {
-        const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
-        if (off <= 1e-32 * norm || off < tiny) break;
-        for (int p = 0; p < 2; ++p)
-            for (int q = p + 1; q < 3; ++q) {
-                const double apq = a[p][q];
-                if (std::abs(apq) < tiny) continue;
-                const double theta = (a[q][q] - a[p][p]) / (2.0 * apq);
-                const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
-                const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
-                // A ← Gᵀ A G with G the rotation in the (p, q) plane.
-                for (int k = 0; k < 3; ++k) {
-                    const double akp = a[k][p], akq = a[k][q];
-                    a[k][p] = c * akp - s * akq;
-                    a[k][q] = s * akp + c * akq;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double apk = a[p][k], aqk = a[q][k];
-                    a[p][k] = c * apk - s * aqk;
-                    a[q][k] = s * apk + c * aqk;
-                }
-                for (int k = 0; k < 3; ++k) {
-                    const double vkp = v[k][p], vkq = v[k][q];
-                    v[k][p] = c * vkp - s * vkq;
-                    v[k][q] = s * vkp + c * vkq;
-                }
-            }
-    }
-    int order[3] = {0, 1, 2};
-    std::sort(order, order + 3, [&](int x, int y) { return a[x][x] > a[y][y]; });
+    const Eigen3 j = jacobi_eigen(0.5 * (rotated + glm::transpose(rotated)), guess, JacobiRule{}, EigenOrder::descending);
     SymEigen e;
-    for (int i = 0; i < 3; ++i) {
-        e.values[i] = a[order[i]][order[i]];
-        e.vectors[i] = glm::dvec3(v[0][order[i]], v[1][order[i]], v[2][order[i]]);
-    }
+    e.values = j.values;
+    e.vectors = j.vectors;
     if (glm::determinant(e.vectors) < 0.0) e.vectors[2] = -e.vectors[2];
     return e;
 }

@@ -4,6 +4,7 @@
 
 #include "runtime/core/log.h"
 #include "systems/ffd/components.h"
+#include "systems/ffd/deform_inputs.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
 
@@ -16,21 +17,13 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         [&](ecs::Entity e, const GaussianCloud&, const Deformers&) { clouds.push_back(e); });
     for (ecs::Entity e : clouds) {
         const GaussianCloud& cloud = reg.get<GaussianCloud>(e);
-        const Deformers& deformers = reg.get<Deformers>(e);
-        std::vector<ecs::Entity> lattices;
-        std::vector<std::uint64_t> stamps;
-        for (ecs::Entity le : deformers.lattices)
-            if (reg.valid(le) && reg.has<Lattice>(le)) {
-                lattices.push_back(le);
-                stamps.push_back(reg.version<Lattice>(le) ^ (le.bits() << 1));
-            }
-        const std::uint64_t cloud_v = reg.version<GaussianCloud>(e), deformers_v = reg.version<Deformers>(e);
+        const ffd::DeformInputs inputs = ffd::deform_inputs<GaussianCloud>(reg, e);
+        const std::vector<ecs::Entity>& lattices = inputs.lattices;
         const DeformedGaussians* seen = reg.try_get<DeformedGaussians>(e);
-        if (seen && seen->seen_cloud == cloud_v && seen->seen_deformers == deformers_v && seen->seen_lattices == stamps)
-            continue;  // nothing this cloud depends on moved
+        if (seen && seen->seen == inputs.stamps) continue;  // nothing this cloud depends on moved
         if (!seen) reg.emplace<DeformedGaussians>(e);
         DeformedGaussians& out = reg.patch<DeformedGaussians>(e);
-        out.seen_cloud = cloud_v, out.seen_deformers = deformers_v, out.seen_lattices = stamps;
+        out.seen = inputs.stamps;
         out.inverted = out.degenerate = 0;
         ++out.version;
         // Opacities are not copied (a deformation never changes them): readers use the authored cloud's.

@@ -6,6 +6,7 @@
 #include "runtime/core/log.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/render_target.h"
+#include "tests/runtime/gl_version.h"
 #include "runtime/gfx/shader.h"
 
 using namespace sffd;
@@ -53,14 +54,10 @@ TEST(GlContext, HeadlessIsCore45DebugWithoutWindow) {
     EXPECT_EQ(ctx.framebuffer_size().height, 32);
     EXPECT_FALSE(ctx.renderer().empty());
     EXPECT_NE(ctx.version().find("4.5"), std::string::npos) << ctx.version();
-    GLint major = 0, minor = 0, profile = 0, flags = 0;
-    glGetIntegerv(GL_MAJOR_VERSION, &major);
-    glGetIntegerv(GL_MINOR_VERSION, &minor);
-    glGetIntegerv(GL_CONTEXT_PROFILE_MASK, &profile);
-    glGetIntegerv(GL_CONTEXT_FLAGS, &flags);
-    EXPECT_EQ(major * 10 + minor, 45);
-    EXPECT_TRUE(profile & GL_CONTEXT_CORE_PROFILE_BIT);
-    EXPECT_TRUE(flags & GL_CONTEXT_FLAG_DEBUG_BIT);
+    const test::CurrentContext current = test::current_context();
+    EXPECT_EQ(current.version, 45);
+    EXPECT_TRUE(current.core);
+    EXPECT_TRUE(current.debug);
     ctx.request_close();
     EXPECT_TRUE(ctx.should_close());
 }

@@ -12,6 +12,7 @@
 #include "runtime/app/app.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/render_target.h"
+#include "tests/runtime/gl_version.h"
 
 using namespace sffd;
 
@@ -30,14 +31,10 @@ TEST(Window, OpensCore45WindowAndPresentsAnOffscreenTarget) {
     const gfx::FramebufferSize size = ctx.framebuffer_size();
     EXPECT_EQ(size.width, 96);
     EXPECT_EQ(size.height, 64);
-    GLint major = 0, minor = 0, profile = 0, flags = 0;
-    glGetIntegerv(GL_MAJOR_VERSION, &major);
-    glGetIntegerv(GL_MINOR_VERSION, &minor);
-    glGetIntegerv(GL_CONTEXT_PROFILE_MASK, &profile);
-    glGetIntegerv(GL_CONTEXT_FLAGS, &flags);
-    EXPECT_GE(major * 10 + minor, 45);
-    EXPECT_TRUE(profile & GL_CONTEXT_CORE_PROFILE_BIT);
-    EXPECT_TRUE(flags & GL_CONTEXT_FLAG_DEBUG_BIT);
+    const test::CurrentContext current = test::current_context();
+    EXPECT_GE(current.version, 45);
+    EXPECT_TRUE(current.core);
+    EXPECT_TRUE(current.debug);
 
     // The same offscreen path as headless: render into a target, blit it to the window, read it back.
     const std::uint64_t errors = gfx::debug_error_count();

@@ -8,8 +8,7 @@
 #include <vector>
 
 #include "systems/ffd/deform.h"
-#include "systems/ffd/lattice.h"
-#include "systems/ffd/operations.h"
+#include "tools/bench/paper_case.h"
 
 namespace {
 
@@ -22,10 +21,8 @@ struct Points {
 
 Points sphere(std::size_t count) {
     Points s;
-    const double golden = M_PI * (3.0 - std::sqrt(5.0));
     for (std::size_t i = 0; i < count; ++i) {
-        const double y = 1.0 - 2.0 * (double(i) + 0.5) / double(count), r = std::sqrt(1.0 - y * y), th = golden * double(i);
-        const glm::dvec3 n(r * std::cos(th), y, r * std::sin(th));
+        const glm::dvec3 n = bench::fibonacci_sphere(i, count);
         const glm::dvec3 t = glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
         s.p.push_back(glm::vec3(n));
         s.n.push_back(glm::vec3(n));
@@ -36,12 +33,7 @@ Points sphere(std::size_t count) {
     return s;
 }
 
-Lattice twisted(LatticeBasis basis) {
-    Lattice l = ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
-                                  {10, 10, 10}, basis);
-    ffd::twist_graded(l, ffd::all_control_points(l), glm::dvec3(0, 1, 0), 0.6, glm::dvec3(0.0));
-    return l;
-}
+Lattice twisted(LatticeBasis basis) { return bench::twisted_lattice(basis); }
 
 void run(benchmark::State& state, const Lattice& l, Points& s, bool full, ffd::Backend b) {
     const ffd::PointsIn in{s.p.data(), full ? s.n.data() : nullptr, full ? s.u.data() : nullptr,

@@ -16,9 +16,8 @@
 #include "runtime/gfx/render_target.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/ffd_gpu.h"
-#include "systems/ffd/lattice.h"
-#include "systems/ffd/operations.h"
 #include "systems/ffd/paper_mode.h"
+#include "tools/bench/paper_case.h"
 
 namespace {
 
@@ -65,10 +64,8 @@ Splats& splats(std::size_t n) {
     for (auto& [k, v] : cache)
         if (k == n) return v;
     std::vector<gpu::GpuSplat> packed(n);
-    const double golden = M_PI * (3.0 - std::sqrt(5.0));
     for (std::size_t i = 0; i < n; ++i) {
-        const double y = 1.0 - 2.0 * (double(i) + 0.5) / double(n), r = std::sqrt(1.0 - y * y), th = golden * double(i);
-        const glm::vec3 p(float(r * std::cos(th)), float(y), float(r * std::sin(th)));
+        const glm::vec3 p(bench::fibonacci_sphere(i, n));
         const glm::vec3 t = glm::normalize(glm::cross(p, std::abs(p.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0))) * 0.01f;
         const glm::vec3 b = glm::cross(p, t);
         packed[i] = {{p.x, p.y, p.z, 0}, {p.x, p.y, p.z, 1}, {t.x, t.y, t.z, 0}, {b.x, b.y, b.z, 0}};
@@ -83,12 +80,7 @@ Splats& splats(std::size_t n) {
     return s;
 }
 
-Lattice twisted(LatticeBasis basis) {
-    Lattice l = ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
-                                  {10, 10, 10}, basis);
-    ffd::twist_graded(l, ffd::all_control_points(l), glm::dvec3(0, 1, 0), 0.6, glm::dvec3(0.0));
-    return l;
-}
+Lattice twisted(LatticeBasis basis) { return bench::twisted_lattice(basis); }
 
 void compute(benchmark::State& state, LatticeBasis basis, std::size_t n) {
     Gl& g = gl();

@@ -21,6 +21,7 @@
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_io.h"
+#include "tools/bench/paper_case.h"
 
 namespace {
 
@@ -31,10 +32,8 @@ GaussianCloud sphere_gaussians(std::size_t count, int degree) {
     g.sh_degree = degree;
     std::mt19937 rng(1);
     std::uniform_real_distribution<float> u(-0.5f, 0.5f);
-    const double golden = M_PI * (3.0 - std::sqrt(5.0));
     for (std::size_t i = 0; i < count; ++i) {
-        const double y = 1.0 - 2.0 * (double(i) + 0.5) / double(count), r = std::sqrt(1.0 - y * y), th = golden * double(i);
-        const glm::dvec3 n(r * std::cos(th), y, r * std::sin(th));
+        const glm::dvec3 n = bench::fibonacci_sphere(i, count);
         g.positions.push_back(glm::vec3(n));
         g.scales.emplace_back(0.01f, 0.01f, 0.001f);  // flat along the local z = the normal
         g.rotations.push_back(glm::quat(glm::rotation(glm::dvec3(0, 0, 1), n)));

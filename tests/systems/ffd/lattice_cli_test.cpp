@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "runtime/assets/export.h"
 #include "runtime/assets/ply.h"
@@ -111,6 +112,43 @@ struct LatticeCli : testing::Test {
     fs::path dir;
 };
 
+// Runs `args` and expects exit status `code` with `message` in the output (refusals and their wording).
+void expect_refusal(const std::string& args, int code, const std::string& message) {
+    const CliRun r = run(args);
+    EXPECT_EQ(r.code, code) << args;
+    EXPECT_TRUE(has(r.out, message)) << r.out;
+}
+
+// Writes a PLY whose vertex element has exactly the float properties `names`, columns[k] holding the
+// values of property k (the inputs with fewer properties than our own files, which deform completes).
+void write_vertex_ply(const std::string& path, const std::vector<const char*>& names, std::vector<std::vector<double>> columns) {
+    ply::Header h;
+    ply::Element e;
+    e.name = "vertex";
+    e.count = columns.empty() ? 0 : columns[0].size();
+    for (const char* n : names) e.properties.push_back({n, ply::Type::float32});
+    h.elements.push_back(e);
+    auto w = ply::Writer::create(path, h);
+    ASSERT_TRUE(w.ok()) << w.message();
+    ply::Chunk c;
+    c.reset(e);
+    c.rows = e.count;
+    for (std::size_t k = 0; k < columns.size(); ++k) c.columns[k].values = std::move(columns[k]);
+    ASSERT_TRUE(w->write_rows(c).ok());
+    ASSERT_TRUE(w->finish().ok());
+}
+
+// x y z nx ny nz of every splat, as columns for write_vertex_ply().
+std::vector<std::vector<double>> position_normal_columns(const SplatCloud& cloud) {
+    std::vector<std::vector<double>> cols(6);
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+        for (int a = 0; a < 3; ++a) {
+            cols[std::size_t(a)].push_back(cloud.positions[i][a]);
+            cols[std::size_t(3 + a)].push_back(cloud.normals[i][a]);
+        }
+    return cols;
+}
+
 // Reads one float-triple property group of every vertex.
 std::vector<glm::dvec3> column3(const std::string& file, const char* a, const char* b, const char* c) {
     std::vector<glm::dvec3> out;
@@ -170,19 +208,13 @@ TEST_F(LatticeCli, ConvertStoresAFittedLatticeAndExportsItAsJson) {
     ASSERT_EQ(r.code, 0) << r.out;
     ASSERT_TRUE(load_lattice(p("obb.json")).ok());
     // Refusals: PLY cannot hold a lattice; a bad spec fails before the import; no lattice to export.
-    r = run("convert " + p("grid.ply") + " " + p("x.ply") + " --lattice fit");
-    EXPECT_EQ(r.code, 2);
-    EXPECT_TRUE(has(r.out, "cannot hold a lattice")) << r.out;
-    r = run("convert " + p("grid.ply") + " " + p("x.glb") + " --lattice fit:4,q");
-    EXPECT_EQ(r.code, 2);
-    EXPECT_TRUE(has(r.out, "fit:4,q: unknown item 'q'")) << r.out;
-    r = run("convert " + p("grid.ply") + " " + p("x.json"));
-    EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(has(r.out, "not a scene file")) << r.out;
+    expect_refusal("convert " + p("grid.ply") + " " + p("x.ply") + " --lattice fit", 2,
+                   "cannot hold a lattice");
+    expect_refusal("convert " + p("grid.ply") + " " + p("x.glb") + " --lattice fit:4,q", 2,
+                   "fit:4,q: unknown item 'q'");
+    expect_refusal("convert " + p("grid.ply") + " " + p("x.json"), 1, "not a scene file");
     ASSERT_EQ(run("convert " + p("grid.ply") + " " + p("plain.glb")).code, 0);
-    r = run("convert " + p("plain.glb") + " " + p("x.json"));
-    EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(has(r.out, "plain.glb: has no lattice")) << r.out;
+    expect_refusal("convert " + p("plain.glb") + " " + p("x.json"), 1, "plain.glb: has no lattice");
 }
 
 TEST_F(LatticeCli, DeformTakesTheLatticeFromASceneFile) {
@@ -206,19 +238,17 @@ TEST_F(LatticeCli, DeformTakesTheLatticeFromASceneFile) {
     Lattice other = L;
     reset(other);
     save_grid_scene("two.glb", {}, {L, other});
-    r = run("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb"));
-    EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(has(r.out, "two.glb: 2 lattices ('L0', 'L1'); choose one with --lattice-name NAME")) << r.out;
+    expect_refusal("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb"), 1,
+                   "two.glb: 2 lattices ('L0', 'L1'); choose one with --lattice-name NAME");
     r = run("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb") + " --lattice-name L0");
     ASSERT_EQ(r.code, 0) << r.out;
     EXPECT_EQ(column3(p("c.ply"), "x", "y", "z"), a);
-    r = run("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb") + " --lattice-name nope");
-    EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(has(r.out, "two.glb: no lattice named 'nope' (lattices: 'L0', 'L1')")) << r.out;
+    expect_refusal(
+        "deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb") + " --lattice-name nope",
+        1, "two.glb: no lattice named 'nope' (lattices: 'L0', 'L1')");
     save_grid_scene("none.glb", {});
-    r = run("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("none.glb"));
-    EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(has(r.out, "none.glb: has no lattice")) << r.out;
+    expect_refusal("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("none.glb"), 1,
+                   "none.glb: has no lattice");
 
     // A bound chain applies in order (the engine's order): stretch, then the rest lattice (identity).
     save_grid_scene("chain.glb", {L, other});
@@ -249,24 +279,9 @@ TEST_F(LatticeCli, DeformWritesDeformedSplatAxes) {
     ASSERT_TRUE(save_lattice(p("L.json"), L).ok());
     ASSERT_TRUE(assets::save_splat_ply(cloud, p("axes.ply")).ok());
     {  // x y z nx ny nz radius
-        ply::Header h;
-        ply::Element e;
-        e.name = "vertex";
-        e.count = cloud.size();
-        for (const char* n : {"x", "y", "z", "nx", "ny", "nz", "radius"}) e.properties.push_back({n, ply::Type::float32});
-        h.elements.push_back(e);
-        auto w = ply::Writer::create(p("radius.ply"), h);
-        ASSERT_TRUE(w.ok());
-        ply::Chunk c;
-        c.reset(e);
-        c.rows = cloud.size();
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
-            for (int a = 0; a < 3; ++a) c.columns[std::size_t(a)].values.push_back(cloud.positions[i][a]);
-            for (int a = 0; a < 3; ++a) c.columns[std::size_t(3 + a)].values.push_back(cloud.normals[i][a]);
-            c.columns[6].values.push_back(0.05);
-        }
-        ASSERT_TRUE(w->write_rows(c).ok());
-        ASSERT_TRUE(w->finish().ok());
+        auto cols = position_normal_columns(cloud);
+        cols.emplace_back(cloud.size(), 0.05);
+        ASSERT_NO_FATAL_FAILURE(write_vertex_ply(p("radius.ply"), {"x", "y", "z", "nx", "ny", "nz", "radius"}, std::move(cols)));
     }
     for (const std::string in : {"axes.ply", "radius.ply"}) {
         for (const std::string backend : {"cpu", "reference"}) {
@@ -294,23 +309,8 @@ TEST_F(LatticeCli, DeformWritesDeformedSplatAxes) {
     // Normals but no radius: radii estimated from neighbour spacing exactly as import does (identity fit,
     // so the written axes are the created ones: lengths = assets::estimate_radii).
     {
-        ply::Header h;
-        ply::Element e;
-        e.name = "vertex";
-        e.count = cloud.size();
-        for (const char* n : {"x", "y", "z", "nx", "ny", "nz"}) e.properties.push_back({n, ply::Type::float32});
-        h.elements.push_back(e);
-        auto w = ply::Writer::create(p("normals.ply"), h);
-        ASSERT_TRUE(w.ok());
-        ply::Chunk c;
-        c.reset(e);
-        c.rows = cloud.size();
-        for (std::size_t i = 0; i < cloud.size(); ++i) {
-            for (int a = 0; a < 3; ++a) c.columns[std::size_t(a)].values.push_back(cloud.positions[i][a]);
-            for (int a = 0; a < 3; ++a) c.columns[std::size_t(3 + a)].values.push_back(cloud.normals[i][a]);
-        }
-        ASSERT_TRUE(w->write_rows(c).ok());
-        ASSERT_TRUE(w->finish().ok());
+        ASSERT_NO_FATAL_FAILURE(
+            write_vertex_ply(p("normals.ply"), {"x", "y", "z", "nx", "ny", "nz"}, position_normal_columns(cloud)));
         const CliRun est = run("deform " + p("normals.ply") + " " + p("est.ply") + " --lattice fit:2");
         ASSERT_EQ(est.code, 0) << est.out;
         EXPECT_TRUE(has(est.out, "splat axes (created from normals and radii estimated from neighbour spacing)")) << est.out;
@@ -328,22 +328,7 @@ TEST_F(LatticeCli, DeformWritesDeformedSplatAxes) {
         }
     }
     // Positions only (no normals): said plainly.
-    {
-        ply::Header h;
-        ply::Element e;
-        e.name = "vertex";
-        e.count = 3;
-        for (const char* n : {"x", "y", "z"}) e.properties.push_back({n, ply::Type::float32});
-        h.elements.push_back(e);
-        auto w = ply::Writer::create(p("xyz.ply"), h);
-        ASSERT_TRUE(w.ok());
-        ply::Chunk c;
-        c.reset(e);
-        c.rows = 3;
-        c.columns[0].values = {0, 1, 0}, c.columns[1].values = {0, 0, 1}, c.columns[2].values = {0, 0, 0};
-        ASSERT_TRUE(w->write_rows(c).ok());
-        ASSERT_TRUE(w->finish().ok());
-    }
+    ASSERT_NO_FATAL_FAILURE(write_vertex_ply(p("xyz.ply"), {"x", "y", "z"}, {{0, 1, 0}, {0, 0, 1}, {0, 0, 0}}));
     const CliRun r = run("deform " + p("xyz.ply") + " " + p("o.ply") + " --lattice fit:2");
     ASSERT_EQ(r.code, 0) << r.out;
     EXPECT_TRUE(has(r.out, "positions (no normals in the input); no splat axes (the input has no normals")) << r.out;
@@ -363,18 +348,13 @@ TEST_F(LatticeCli, OptionErrorsNameTheOption) {
     EXPECT_EQ(r.code, 2);
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;  // one line, not two contradicting ones
     EXPECT_TRUE(has(r.out, "--splats: expected an integer")) << r.out;
-    r = run("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit --bench 1x");
-    EXPECT_EQ(r.code, 2);
-    EXPECT_TRUE(has(r.out, "--bench: expected an integer in 0..1000000, got '1x'")) << r.out;
-    r = run("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit:99");
-    EXPECT_EQ(r.code, 1);
-    EXPECT_TRUE(has(r.out, "fit:99: divisions must be integers in 1..64")) << r.out;
-    r = run("view sphere --frames -3");
-    EXPECT_EQ(r.code, 2);
-    EXPECT_TRUE(has(r.out, "--frames: expected an integer in 1..1000000000, got '-3'")) << r.out;
-    r = run("pick sphere --at 1,1 --tolerance abc");
-    EXPECT_EQ(r.code, 2);
-    EXPECT_TRUE(has(r.out, "--tolerance: expected a number in 0..1e+06, got 'abc'")) << r.out;
+    expect_refusal("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit --bench 1x", 2,
+                   "--bench: expected an integer in 0..1000000, got '1x'");
+    expect_refusal("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit:99", 1,
+                   "fit:99: divisions must be integers in 1..64");
+    expect_refusal("view sphere --frames -3", 2, "--frames: expected an integer in 1..1000000000, got '-3'");
+    expect_refusal("pick sphere --at 1,1 --tolerance abc", 2,
+                   "--tolerance: expected a number in 0..1e+06, got 'abc'");
     // profile checks its paths before measuring: one line, the file named, nothing measured.
     r = run("profile sphere --compare " + p("nosuch.json"));
     EXPECT_EQ(r.code, 1);
