@@ -12,7 +12,7 @@
 #include "runtime/assets/import.h"
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
-#include "runtime/scene/lattice.h"
+#include "runtime/scene/lattice_json.h"
 
 namespace sffd {
 namespace fs = std::filesystem;
@@ -94,28 +94,7 @@ struct Reader {
         }
         return t;
     }
-    std::vector<glm::dvec3> points(const json& j, const char* key, std::size_t count) const {
-        if (!j.contains(key) || !j[key].is_array() || j[key].size() != 3 * count)
-            throw std::runtime_error(where + ": '" + key + "' must hold " + std::to_string(3 * count) + " numbers");
-        std::vector<glm::dvec3> out(count);
-        const json& a = j[key];
-        for (std::size_t i = 0; i < 3 * count; ++i) {
-            if (!a[i].is_number() || !std::isfinite(a[i].get<double>())) throw std::runtime_error(where + ": '" + key + "' has a non-finite or non-numeric entry");
-            out[i / 3][static_cast<int>(i % 3)] = a[i].get<double>();
-        }
-        return out;
-    }
 };
-
-json points_json(const std::vector<glm::dvec3>& pts) {
-    json a = json::array();
-    for (const auto& p : pts) {
-        a.push_back(p.x);
-        a.push_back(p.y);
-        a.push_back(p.z);
-    }
-    return a;
-}
 
 std::string name_of(const ecs::Registry& r, ecs::Entity e, const std::string& fallback) {
     const Name* n = r.try_get<Name>(e);
@@ -163,41 +142,23 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
         }
         if (scene.contains("lattices")) {
             if (!scene["lattices"].is_array()) throw std::runtime_error(src + ": SFFD_scene: 'lattices' must be an array");
-            for (const json& lj : scene["lattices"]) {
+            for (json& lj : scene["lattices"]) {
+                // The entry's own keys are read here and taken out; what is left is the lattice's JSON
+                // form, read by the one lattice reader (lattice files use it too) with its rules.
                 Reader lr{src + ": SFFD_scene lattice"};
-                Lattice l;
-                l.origin = lr.v3(lj, "origin");
-                if (!lj.contains("axes") || !lj["axes"].is_array() || lj["axes"].size() != 3) throw std::runtime_error(lr.where + ": 'axes' must hold 3 vectors");
-                for (std::size_t a = 0; a < 3; ++a) {
-                    json wrap = {{"axis", lj["axes"][a]}};
-                    l.axes[a] = lr.v3(wrap, "axis");
-                }
-                {
-                    json wrap = {{"divisions", lj.value("divisions", json())}};
-                    const glm::dvec3 d = lr.v3(wrap, "divisions");
-                    for (int a = 0; a < 3; ++a)
-                        if (d[a] != std::floor(d[a]) || d[a] < 1 || d[a] > kMaxLatticeDivisions)
-                            throw std::runtime_error(lr.where + ": divisions must be integers in 1.." + std::to_string(kMaxLatticeDivisions));
-                    l.divisions = glm::ivec3(d);
-                }
-                const std::string basis = lr.str_or(lj, "basis", "bernstein");
-                if (basis == "bernstein") l.basis = LatticeBasis::bernstein;
-                else if (basis == "bspline") l.basis = LatticeBasis::bspline;
-                else throw std::runtime_error(lr.where + ": unknown basis '" + basis + "'");
-                {  // the box first (as lattice files do), then the same rules for the whole lattice
-                    Lattice probe = l;
-                    probe.rest = probe.current = rest_grid(l.origin, l.axes, l.divisions);
-                    if (Status s = validate_lattice(probe, lr.where); !s) throw std::runtime_error(s.message());
-                }
-                l.rest = lr.points(lj, "rest", l.size());
-                l.current = lj.contains("current") ? lr.points(lj, "current", l.size()) : l.rest;
-                if (Status s = validate_lattice(l, lr.where); !s) throw std::runtime_error(s.message());
+                const std::string name = lr.str_or(lj, "name", "lattice");
+                const Transform transform = lr.transform(lj);
+                const int id = lr.integer(lj, "id");
+                if (lj.is_object())
+                    for (const char* key : {"id", "name", "transform"}) lj.erase(key);
+                auto l = lattice_from_json(lj, lr.where);
+                if (!l) throw std::runtime_error(l.message());
                 const ecs::Entity e = r.create();
                 created.push_back(e);
-                r.emplace<Name>(e, Name{lr.str_or(lj, "name", "lattice")});
-                r.emplace<Transform>(e, lr.transform(lj));
-                r.emplace<Lattice>(e, std::move(l));
-                remember(lr.integer(lj, "id"), e);
+                r.emplace<Name>(e, Name{name});
+                r.emplace<Transform>(e, transform);
+                r.emplace<Lattice>(e, std::move(*l));
+                remember(id, e);
             }
         }
         if (scene.contains("deformers")) {
@@ -387,17 +348,11 @@ Status save_scene(const ecs::Registry& r, const fs::path& path) {
     json scene = {{"version", kSceneVersion}};
     json lj = json::array();
     for (ecs::Entity e : lattices) {
-        const Lattice& l = r.get<Lattice>(e);
-        json j = {{"id", ids[e]},
-                  {"name", name_of(r, e, "lattice")},
-                  {"origin", vec3(l.origin)},
-                  {"axes", {vec3(l.axes[0]), vec3(l.axes[1]), vec3(l.axes[2])}},
-                  {"divisions", {l.divisions.x, l.divisions.y, l.divisions.z}},
-                  {"basis", l.basis == LatticeBasis::bernstein ? "bernstein" : "bspline"},
-                  {"rest", points_json(l.rest)},
-                  {"current", points_json(l.current)}};
+        json j = lattice_to_json(r.get<Lattice>(e));
+        j["id"] = ids[e];
+        j["name"] = name_of(r, e, "lattice");
         if (const Transform* t = r.try_get<Transform>(e)) j["transform"] = transform_json(*t);
-        lj.push_back(j);
+        lj.push_back(std::move(j));
     }
     scene["lattices"] = lj;
     json dj = json::array();

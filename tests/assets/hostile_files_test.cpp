@@ -25,6 +25,7 @@
 #include "runtime/core/file_io.h"
 #include "runtime/ecs/registry.h"
 #include "systems/ffd/lattice_io.h"
+#include "tests/assets/test_util.h"
 
 namespace fs = std::filesystem;
 using namespace sffd;
@@ -32,22 +33,9 @@ using namespace sffd;
 namespace {
 
 // A fresh folder per test: <tmp>/sffd_hostile_<pid>/<name>.
-fs::path fresh_dir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("sffd_hostile_" + std::to_string(::getpid())) / name;
-    fs::remove_all(d);
-    fs::create_directories(d);
-    return d;
-}
-
-void write(const fs::path& p, const std::string& bytes) {
-    if (p.has_parent_path()) fs::create_directories(p.parent_path());
-    std::ofstream(p, std::ios::binary) << bytes;
-}
-
-std::string slurp(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    return std::string((std::istreambuf_iterator<char>(in)), {});
-}
+fs::path fresh_dir(const std::string& name) { return test::fresh_dir("hostile", name); }
+using test::slurp;
+using test::write;
 
 // 3 ubyte VEC3 POSITIONs (9 bytes) read from the buffer at `uri`: the exfiltration file.
 std::string gltf_with_buffer(const std::string& uri, int byte_length = 9) {
