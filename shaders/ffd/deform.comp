@@ -5,13 +5,14 @@
 #include "ffd/ffd_common.glsl"
 
 layout(local_size_x = 64) in;
+#include "common/dispatch.glsl"
 
 layout(std430, binding = SFFD_SSBO_SPLATS_IN) readonly buffer SplatsIn { GpuSplat splats_in[]; };
 layout(std430, binding = SFFD_SSBO_SPLATS_OUT) writeonly buffer SplatsOut { GpuSplat splats_out[]; };
 layout(std430, binding = SFFD_SSBO_STATS) buffer Stats { uint stats[]; };  // [0] inverted, [1] inside
 
 void main() {
-    uint id = gl_GlobalInvocationID.x;
+    uint id = sffd_dispatch_index();
     if (id >= ffd_count.x) return;
     GpuSplat s = splats_in[id];
     vec3 stu = ffd_local(s.center.xyz);

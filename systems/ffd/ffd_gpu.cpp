@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "runtime/gfx/context.h"
+#include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/shader.h"
 #include "shaders/common/bindings.h"
@@ -127,7 +128,8 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_IN, in);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_OUT, out);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
-    if (count > 0) glDispatchCompute((count + 63) / 64, 1, 1);
+    // A 2D grid beyond 65,535 groups (4.19M splats): runtime/gfx/dispatch.h.
+    if (Status s = gfx::dispatch_1d(count, 64); !s) return s;
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     return {};
 }

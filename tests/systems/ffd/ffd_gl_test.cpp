@@ -4,6 +4,7 @@
 
 #include "runtime/ecs/registry.h"
 #include "runtime/gfx/context.h"
+#include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/render_target.h"
 #include "runtime/gfx/splat_store.h"
@@ -71,6 +72,42 @@ TEST_F(FfdGl, ComputePassMatchesCpuReference) {
             ASSERT_LT(glm::length(gu[i] - ru[i]), 1e-5f * glm::length(ru[i]) + 1e-9f) << i;
             ASSERT_LT(glm::length(gv[i] - rv[i]), 1e-5f * glm::length(rv[i]) + 1e-9f) << i;
         }
+    }
+}
+
+// Clouds beyond 65,535 work groups (4.19M splats) are deformed over a 2D grid (gfx::dispatch_1d). With 4
+// groups per row, 5,000 splats take a 4 x 20 grid (the last row partly empty): the output is bit-identical
+// to the one-row dispatch's, and the statistics count every splat once.
+TEST_F(FfdGl, GridDispatchDeformsExactlyAsOneRow) {
+    auto gpu = ffd::GpuDeformer::create();
+    ASSERT_TRUE(gpu.ok()) << gpu.message();
+    const ffd::test::Cloud c = ffd::test::fibonacci_sphere(5000);
+    for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline}) {
+        Lattice l = ffd::make_lattice(c.origin + glm::dvec3(-1.1), {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                                      {5, 4, 6}, basis);
+        ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.6, c.origin);
+        const std::size_t n = c.size();
+        const ffd::PointsIn in{c.p.data(), c.n.data(), c.u.data(), c.v.data(), n, c.origin};
+        std::vector<glm::vec3> p1(n), n1(n), u1(n), v1(n), p2(n, glm::vec3(-7.0f)), n2(n), u2(n), v2(n);
+        auto row = gpu->deform(l, in, {p1.data(), n1.data(), u1.data(), v1.data()});
+        ASSERT_TRUE(row.ok()) << row.message();
+        auto grid = [&] {
+            gfx::ScopedDispatchLimit four(4);
+            return gpu->deform(l, in, {p2.data(), n2.data(), u2.data(), v2.data()});
+        }();
+        ASSERT_TRUE(grid.ok()) << grid.message();
+        EXPECT_EQ(row->inside, n);  // the lattice holds the whole sphere: each splat counted once
+        EXPECT_EQ(grid->inside, row->inside);
+        EXPECT_EQ(grid->inverted, row->inverted);
+        std::size_t moved = 0;
+        for (std::size_t i = 0; i < n; ++i) {
+            ASSERT_EQ(p2[i], p1[i]) << i;
+            ASSERT_EQ(n2[i], n1[i]) << i;
+            ASSERT_EQ(u2[i], u1[i]) << i;
+            ASSERT_EQ(v2[i], v1[i]) << i;
+            moved += p1[i] != c.p[i];
+        }
+        EXPECT_GT(moved, n / 2);  // the twist moved most splats (the comparison is not of unchanged input)
     }
 }
 
