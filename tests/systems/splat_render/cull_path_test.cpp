@@ -115,8 +115,9 @@ TEST_F(CullPath_, CpuCullFramesAreBitIdentical) {
 
 // Clouds beyond 65,535 work groups (8.4M splats at 128 per group) are culled over a 2D grid
 // (gfx::dispatch_1d). With 4 groups per row, 20,000 splats take a 4 x 40 grid (the last row partly empty):
-// the visible set is the one-row dispatch's and the CPU cull's (culling off: every splat exactly once),
-// and the image is the same (depth exactly; colour up to the order of the compaction's atomics).
+// the visible counts are exactly the one-row dispatch's and the CPU cull's (culling off: every splat
+// exactly once), and the image is the same up to the order of the compaction's atomics, which differs
+// between any two compute-culled frames (measured on llvmpipe: depth 7e-7, colour 2.4e-4 at most).
 TEST_F(CullPath_, GridDispatchCullsTheSameSplatsAsOneRow) {
     add_camera(2.6);
     add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
@@ -143,9 +144,9 @@ TEST_F(CullPath_, GridDispatchCullsTheSameSplatsAsOneRow) {
         if (!culling) EXPECT_EQ(gs.visible_points + gs.visible_quads, 20000u) << what;
         const ImageDiff d = diff(grid, row);
         EXPECT_GT(d.covered_a, 10000) << what;
-        EXPECT_EQ(d.coverage_mismatch, 0) << what;
-        EXPECT_EQ(d.max_depth, 0.0) << what;
-        EXPECT_LT(d.max_color, 1e-5) << what;
+        EXPECT_LE(d.coverage_mismatch, 2) << what;
+        EXPECT_LT(d.max_depth, 1e-5) << what;
+        EXPECT_LT(d.max_color, 2e-3) << what;
     }
 }
 
