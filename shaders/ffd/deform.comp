@@ -4,14 +4,32 @@
 // normal.w toggles (1 -> 0) when the splat's cell is inverted (det J < 0); stats[0] counts them.
 #include "ffd/ffd_common.glsl"
 
-layout(local_size_x = 64) in;
+// FFD_LOCAL_SIZE: 64, or 256 with FFD_CP_SHARED (the shared copy, 16 KB for 11³ points, amortised over
+// more splats per group, and more groups resident per multiprocessor). GpuDeformer dispatches the same size.
+#ifndef FFD_LOCAL_SIZE
+#define FFD_LOCAL_SIZE 64
+#endif
+layout(local_size_x = FFD_LOCAL_SIZE) in;
+#include "common/dispatch.glsl"
 
 layout(std430, binding = SFFD_SSBO_SPLATS_IN) readonly buffer SplatsIn { GpuSplat splats_in[]; };
 layout(std430, binding = SFFD_SSBO_SPLATS_OUT) writeonly buffer SplatsOut { GpuSplat splats_out[]; };
 layout(std430, binding = SFFD_SSBO_STATS) buffer Stats { uint stats[]; };  // [0] inverted, [1] inside
 
 void main() {
-    uint id = gl_GlobalInvocationID.x;
+    uint id = sffd_dispatch_index();
+#ifdef FFD_CP_SHARED
+    // Every invocation of the group copies its share, then all wait (uniform control flow: before any
+    // return). Only the displacements' xyz travel.
+    for (uint c = gl_LocalInvocationIndex; c < uint(FFD_CP_SHARED); c += gl_WorkGroupSize.x) {
+        vec3 d = ffd_dp[c].xyz;
+        ffd_dp_shared[3u * c] = d.x;
+        ffd_dp_shared[3u * c + 1u] = d.y;
+        ffd_dp_shared[3u * c + 2u] = d.z;
+    }
+    memoryBarrierShared();
+    barrier();
+#endif
     if (id >= ffd_count.x) return;
     GpuSplat s = splats_in[id];
     vec3 stu = ffd_local(s.center.xyz);

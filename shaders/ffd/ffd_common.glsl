@@ -32,15 +32,24 @@ layout(std430, binding = SFFD_SSBO_CONTROL_POINTS) readonly buffer FfdControlPoi
     vec4 ffd_dp[];
 };
 
-// Specialised Bernstein programs with few control points read them from a UBO: every invocation reads the
-// same element, which llvmpipe turns into one scalar load instead of a per-lane gather.
-#ifdef FFD_CP_UBO
+// Where the dense Bernstein sum reads ΔP_i (FFD_DP(i), a vec3). Three kernels of the same arithmetic:
+// - FFD_CP_SHARED (compute only, GpuBernsteinKernel::shared): deform.comp copies the lattice's control
+//   points into shared memory once per work group (xyz only: 11³ points = 15,972 bytes, within GL's
+//   guaranteed 32 KB), so the (l+1)(m+1)(n+1) reads per point hit on-chip memory (every lane reads the same
+//   element: a broadcast) instead of the UBO's constant cache, which an 11³ lattice (21 KB) overflows.
+// - FFD_CP_UBO: read from a UBO: every invocation reads the same element, which llvmpipe turns into one
+//   scalar load instead of a per-lane gather (llvmpipe's best: barrier() costs it coroutine switches).
+// - neither: the SSBO (any lattice size).
+#if defined(FFD_CP_SHARED)
+shared float ffd_dp_shared[3 * FFD_CP_SHARED];
+#define FFD_DP(i) vec3(ffd_dp_shared[3 * (i)], ffd_dp_shared[3 * (i) + 1], ffd_dp_shared[3 * (i) + 2])
+#elif defined(FFD_CP_UBO)
 layout(std140, binding = SFFD_UBO_FFD_CONTROL) uniform FfdControlBlock {
     vec4 ffd_dp_ubo[FFD_CP_UBO];
 };
-#define FFD_DP(i) ffd_dp_ubo[i]
+#define FFD_DP(i) ffd_dp_ubo[i].xyz
 #else
-#define FFD_DP(i) ffd_dp[i]
+#define FFD_DP(i) ffd_dp[i].xyz
 #endif
 
 const float FFD_SLACK = 1e-6;
@@ -84,6 +93,9 @@ bool ffd_inside(vec3 stu) {
 }
 
 // Displacement D and its derivatives G = [∂D/∂s ∂D/∂t ∂D/∂u] (columns) at clamped local coordinates.
+// Both bases evaluate their 1D basis (and derivative) once per axis per point and sum factorised,
+// Σ_i B_i(s) Σ_j B_j(t) Σ_k B_k(u) ΔP_ijk; the B-spline reads only the 4×4×4 control points around the
+// point's cell.
 void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
     stu = clamp(stu, vec3(0.0), vec3(1.0));
 #ifdef FFD_L
@@ -104,7 +116,7 @@ void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
                 int base = (i * (M + 1) + j) * (N + 1);
                 vec3 q = vec3(0.0), w = vec3(0.0);
                 for (int k = 0; k <= N; ++k) {
-                    vec3 d = FFD_DP(base + k).xyz;
+                    vec3 d = FFD_DP(base + k);
                     q += bu[k] * d;
                     w += dbu[k] * d;
                 }

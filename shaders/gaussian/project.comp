@@ -4,6 +4,7 @@
 #include "gaussian/gaussian_layout.h"
 
 layout(local_size_x = 64) in;
+#include "common/dispatch.glsl"
 
 layout(std430, binding = SFFD_GAUSS_SSBO_IN) readonly buffer Gaussians { GpuGaussian gaussians[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_SH) readonly buffer Sh { float sh[]; };
@@ -53,7 +54,7 @@ vec3 sh_color(uint i, vec3 d) {
 
 void main() {
     // 2D grid of groups for clouds over 64 x 65,535 Gaussians (the guaranteed groups per dimension).
-    const uint i = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * 64u + gl_LocalInvocationID.x;
+    const uint i = sffd_dispatch_index();
     if (i >= u_count) return;
     GpuProjected o;
     o.center_depth_radius = vec4(0.0);

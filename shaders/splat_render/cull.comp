@@ -17,6 +17,7 @@
 #include "splat_render/splat_color.glsl"
 
 layout(local_size_x = SFFD_CULL_GROUP_SIZE) in;
+#include "common/dispatch.glsl"
 
 layout(std430, binding = SFFD_SSBO_SPLATS_DRAW) readonly buffer Splats { GpuSplat splats[]; };
 layout(std430, binding = SFFD_SSBO_VISIBLE) writeonly buffer QuadList { uint quads[]; };
@@ -32,7 +33,7 @@ layout(std430, binding = SFFD_SSBO_DRAW_INDIRECT) buffer Commands {
 const uint KEEP_NONE = 0u, KEEP_SPRITE = 1u, KEEP_QUAD = 2u;
 
 void main() {
-    uint i = gl_GlobalInvocationID.x;
+    uint i = sffd_dispatch_index();
     uint keep = KEEP_NONE;
     GpuSplat s;
     vec3 c = vec3(0.0);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "runtime/gfx/context.h"
+#include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/shader.h"
 #include "shaders/common/bindings.h"
@@ -41,6 +42,9 @@ struct GpuDeformer::Impl {
     std::uint64_t uploads = 0;
     std::uint64_t sync_readbacks = 0;
     GLint max_ubo = 0;  // GL_MAX_UNIFORM_BLOCK_SIZE, queried once (a glGet can stall a threaded driver)
+    GLint max_shared = 0;  // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, same
+    bool software = false;  // gfx::software_rasterizer(), for GpuBernsteinKernel::automatic
+    GpuBernsteinKernel kernel = GpuBernsteinKernel::automatic, last_kernel = GpuBernsteinKernel::automatic;
     ~Impl() {  // GL objects before the context
         for (Readback& r : readbacks)
             if (r.fence) glDeleteSync(r.fence);
@@ -62,6 +66,8 @@ Result<GpuDeformer> GpuDeformer::create() {
     if (!program) return program.error();
     impl->program = std::move(*program);
     glGetIntegerv(GL_MAX_UNIFORM_BLOCK_SIZE, &impl->max_ubo);
+    glGetIntegerv(GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, &impl->max_shared);
+    impl->software = gfx::software_rasterizer();
     impl->ubo = gfx::Buffer::create("ffd.lattice_block");
     glNamedBufferData(impl->ubo.id(), sizeof(detail::FfdBlock), nullptr, GL_DYNAMIC_DRAW);
     impl->stats = gfx::Buffer::create("ffd.stats");
@@ -80,6 +86,8 @@ Result<GpuDeformer> GpuDeformer::create_headless() {
 }
 
 std::uint64_t GpuDeformer::upload_count() const { return m_impl->uploads; }
+void GpuDeformer::set_bernstein_kernel(GpuBernsteinKernel kernel) { m_impl->kernel = kernel; }
+GpuBernsteinKernel GpuDeformer::last_bernstein_kernel() const { return m_impl->last_kernel; }
 
 void GpuDeformer::retain_keys(const std::vector<std::uint64_t>& live) {
     for (auto it = m_impl->controls.begin(); it != m_impl->controls.end();)
@@ -101,21 +109,32 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
         cp.stamp = stamp;
         ++m.uploads;
     }
-    // Bernstein: a program specialised for this lattice shape (compiled once per shape; constant loop
-    // bounds, small arrays). B-spline reads 4 neighbours per axis whatever the size: generic program.
+    // Bernstein: a program specialised for this lattice shape and kernel (compiled once each; constant
+    // loop bounds, small arrays). B-spline reads 4 neighbours per axis whatever the size: generic program.
     GLuint program = m.program.id();
-    const bool cp_ubo = lattice.basis == LatticeBasis::bernstein && lattice.size() * 16 <= std::size_t(m.max_ubo);
+    const bool bernstein = lattice.basis == LatticeBasis::bernstein;
+    const bool fits_shared = lattice.size() * 3 * sizeof(float) <= std::size_t(m.max_shared);
+    const bool cp_shared = bernstein && fits_shared &&
+                           (m.kernel == GpuBernsteinKernel::shared || (m.kernel == GpuBernsteinKernel::automatic && !m.software));
+    const bool cp_ubo = bernstein && !cp_shared && lattice.size() * 16 <= std::size_t(m.max_ubo);
+    const std::uint32_t local_size = cp_shared ? 256 : 64;  // deform.comp's FFD_LOCAL_SIZE
+    if (bernstein) m.last_kernel = cp_shared ? GpuBernsteinKernel::shared : GpuBernsteinKernel::direct;
     const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) | (std::uint64_t(lattice.divisions.y) << 12) |
-                                std::uint64_t(lattice.divisions.z) | (std::uint64_t(lattice.basis) << 40);
+                                std::uint64_t(lattice.divisions.z) | (std::uint64_t(lattice.basis) << 40) |
+                                (std::uint64_t(cp_shared) << 44);
     auto sp = m.specialised.find(shape);
-    if (lattice.basis == LatticeBasis::bernstein && sp == m.specialised.end()) {
+    if (bernstein && sp == m.specialised.end()) {
         const int maxb = std::max({lattice.divisions.x, lattice.divisions.y, lattice.divisions.z}) + 1;
         gfx::Defines defines = {{"FFD_L", std::to_string(lattice.divisions.x)},
                                 {"FFD_M", std::to_string(lattice.divisions.y)},
                                 {"FFD_N", std::to_string(lattice.divisions.z)},
                                 {"FFD_MAXB", std::to_string(maxb)}};
+        if (cp_shared) {
+            defines.push_back({"FFD_CP_SHARED", std::to_string(lattice.size())});
+            defines.push_back({"FFD_LOCAL_SIZE", std::to_string(local_size)});
+        }
         if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});
-        auto prog = gfx::load_compute_program("ffd/deform.comp", "ffd.deform.specialised", defines);
+        auto prog = gfx::load_compute_program("ffd/deform.comp", cp_shared ? "ffd.deform.shared" : "ffd.deform.specialised", defines);
         if (!prog) return prog.error();
         sp = m.specialised.emplace(shape, std::move(*prog)).first;
     }
@@ -127,7 +146,8 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_IN, in);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_OUT, out);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
-    if (count > 0) glDispatchCompute((count + 63) / 64, 1, 1);
+    // A 2D grid beyond 65,535 groups (4.19M splats): runtime/gfx/dispatch.h.
+    if (Status s = gfx::dispatch_1d(count, local_size); !s) return s;
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     return {};
 }

@@ -16,6 +16,15 @@
 
 namespace sffd::ffd {
 
+// How the compute pass's dense Bernstein sum reads the control points (shaders/ffd/ffd_common.glsl,
+// FFD_DP): the same arithmetic in the same order either way.
+enum class GpuBernsteinKernel {
+    automatic,  // shared on hardware GPUs, direct on a software rasterizer (llvmpipe: barrier() is costly)
+    direct,     // every invocation reads them from a UBO (when they fit GL_MAX_UNIFORM_BLOCK_SIZE) or the SSBO
+    shared,     // copied into shared memory once per 256-wide work group (when xyz fit
+                // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, >= 32 KB: up to 2,730 points; direct otherwise)
+};
+
 class GpuDeformer {
 public:
     // Compiles the compute program (context must be current).
@@ -62,6 +71,11 @@ public:
     Result<DeformStats> deform(const Lattice& lattice, const PointsIn& in, const PointsOut& out);
     // How many times dispatch() uploaded control points (tests check edits upload, unchanged frames don't).
     std::uint64_t upload_count() const;
+
+    // Bernstein kernel choice for later dispatches (default automatic), and the kernel the last Bernstein
+    // dispatch ran (direct or shared; automatic before any).
+    void set_bernstein_kernel(GpuBernsteinKernel kernel);
+    GpuBernsteinKernel last_bernstein_kernel() const;
 
 private:
     struct Impl;

@@ -11,6 +11,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/shader.h"
 #include "shaders/gaussian/gaussian_layout.h"
@@ -119,10 +120,7 @@ Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const Reference
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, r.frames.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEPTH, r.depth.id());
     glUseProgram(pp);
-    if (n > 0) {
-        const std::size_t groups = (n + 63) / 64, gx = std::min<std::size_t>(groups, std::max(1u, r.max_groups_x));
-        glDispatchCompute(GLuint(gx), GLuint((groups + gx - 1) / gx), 1);
-    }
+    if (Status st = gfx::dispatch_1d(n, 64, std::max(1u, r.max_groups_x)); !st) return st.error();
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
 
     // Depth sort on the CPU: read back the depth keys only (4 bytes per Gaussian) and sort

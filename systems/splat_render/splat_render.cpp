@@ -17,6 +17,7 @@
 #include "runtime/app/app.h"
 #include "runtime/core/log.h"
 #include "runtime/gfx/context.h"
+#include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl_object.h"
 #include "runtime/gfx/shader.h"
 #include "runtime/gfx/splat_store.h"
@@ -706,7 +707,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
             // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its worker
             // threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread time).
-            glDispatchCompute((gpu.count + SFFD_CULL_GROUP_SIZE - 1) / SFFD_CULL_GROUP_SIZE, 1, 1);
+            if (Status st = gfx::dispatch_1d(gpu.count, SFFD_CULL_GROUP_SIZE); !st) log::error("render_system(): ", st.message());
             ++stats.compute_culled_clouds;
             computed.push_back(&gpu);
         }

@@ -82,9 +82,11 @@ Splats& splats(std::size_t n) {
 
 Lattice twisted(LatticeBasis basis) { return bench::twisted_lattice(basis); }
 
-void compute(benchmark::State& state, LatticeBasis basis, std::size_t n) {
+void compute(benchmark::State& state, LatticeBasis basis, std::size_t n,
+             ffd::GpuBernsteinKernel kernel = ffd::GpuBernsteinKernel::automatic) {
     Gl& g = gl();
     if (!g.ok) return state.SkipWithError(g.error.c_str());
+    g.deformer->set_bernstein_kernel(kernel);
     Splats& s = splats(n);
     const Lattice l = twisted(basis);
     // Control points are uploaded once (stamp 1), as in the frame loop when only the view changes they
@@ -139,6 +141,19 @@ void BM_GpuCompute_Bernstein11_Full(benchmark::State& s) { compute(s, LatticeBas
 void BM_GpuCompute_BSpline11_Full(benchmark::State& s) { compute(s, LatticeBasis::bspline, 59650); }
 void BM_GpuCompute_Bernstein11_1M_Full(benchmark::State& s) { compute(s, LatticeBasis::bernstein, 1000000); }
 void BM_GpuCompute_BSpline11_1M_Full(benchmark::State& s) { compute(s, LatticeBasis::bspline, 1000000); }
+// The two Bernstein kernels forced (automatic: shared on a hardware GPU, direct on llvmpipe).
+void BM_GpuCompute_Bernstein11_Full_Direct(benchmark::State& s) {
+    compute(s, LatticeBasis::bernstein, 59650, ffd::GpuBernsteinKernel::direct);
+}
+void BM_GpuCompute_Bernstein11_Full_Shared(benchmark::State& s) {
+    compute(s, LatticeBasis::bernstein, 59650, ffd::GpuBernsteinKernel::shared);
+}
+void BM_GpuCompute_Bernstein11_1M_Full_Direct(benchmark::State& s) {
+    compute(s, LatticeBasis::bernstein, 1000000, ffd::GpuBernsteinKernel::direct);
+}
+void BM_GpuCompute_Bernstein11_1M_Full_Shared(benchmark::State& s) {
+    compute(s, LatticeBasis::bernstein, 1000000, ffd::GpuBernsteinKernel::shared);
+}
 // A frame of 3 splat passes (visibility, attributes, shading in the HQ renderer): paper mode deforms in
 // every pass; skinning-style reads the compute output (deformation cost paid once per edit).
 void BM_PaperMode_Frame_3Passes(benchmark::State& s) { paper_frame(s, 3); }
@@ -150,6 +165,10 @@ BENCHMARK(BM_GpuCompute_Bernstein11_Full)->Unit(benchmark::kMillisecond)->UseRea
 BENCHMARK(BM_GpuCompute_BSpline11_Full)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_GpuCompute_Bernstein11_1M_Full)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK(BM_GpuCompute_BSpline11_1M_Full)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GpuCompute_Bernstein11_Full_Direct)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GpuCompute_Bernstein11_Full_Shared)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GpuCompute_Bernstein11_1M_Full_Direct)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_GpuCompute_Bernstein11_1M_Full_Shared)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
 BENCHMARK(BM_PaperMode_Frame_1Pass)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Skinning_Frame_1Pass)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_PaperMode_Frame_3Passes)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -8,6 +8,10 @@
 
 #include <atomic>
 
+#include "systems/ffd/components.h"
+#include "systems/ffd/ffd_system.h"
+#include "systems/ffd/lattice.h"
+#include "systems/ffd/operations.h"
 #include "tests/systems/splat_render/gl_fixture.h"
 #include "tests/systems/splat_render/test_scenes.h"
 
@@ -123,6 +127,48 @@ TEST_F(Readback_, SteadyStateFramesNeverWaitAndCountsStillArrive) {
         EXPECT_GT(arrived, (last - first) / 2) << what;
         EXPECT_GE(reg.resource<RenderStats>().counts_frame + 8, last) << what;
     }
+}
+
+// The same with the FFD compute pass in the frame (ffd_system's GPU path, forced on llvmpipe): a lattice
+// edited every frame is re-uploaded and the cloud re-deformed on the GPU, the compute cull draws it, and
+// still nothing waits; the deformer's statistics arrive late through fences (DeformedSplats::
+// inverted_version moves on), and the system makes no pass over the splats on the CPU.
+TEST_F(Readback_, GpuDeformationFramesNeverWait) {
+    add_camera(2.6);
+    add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
+    const ecs::Entity cloud = add_cloud(fibonacci_sphere(20000));
+    const ecs::Entity le = reg.create();
+    reg.emplace<Lattice>(le, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                                               {4, 4, 4}));
+    reg.emplace<Deformers>(cloud, Deformers{{le}});
+    reg.set_resource<FfdSettings>().force_gpu = true;
+    RenderSettings s;
+    s.width = 320, s.height = 240, s.cull_path = CullPath::compute;
+    reg.set_resource<RenderSettings>(s);
+    const auto frame = [&](std::uint64_t f) {
+        ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.02, glm::dvec3(0.0));
+        ffd_system(reg, FrameContext{.frame = f});
+        render_system(reg, FrameContext{.frame = f});
+    };
+    render_system(reg, FrameContext{.frame = 1});  // uploads the rest buffer the compute pass reads
+    for (std::uint64_t f = 2; f < 10; ++f) frame(f);  // warm-up: programs, buffers, read-back slots
+    ASSERT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
+    const FfdSettings before = reg.resource<FfdSettings>();
+    const std::uint64_t stats_before = reg.get<DeformedSplats>(cloud).inverted_version;
+    g_buffer_reads = g_finishes = g_blocking_waits = g_maps = 0;
+    for (std::uint64_t f = 10; f < 40; ++f) frame(f);
+    EXPECT_EQ(g_buffer_reads.load(), 0);
+    EXPECT_EQ(g_finishes.load(), 0);
+    EXPECT_EQ(g_blocking_waits.load(), 0);
+    EXPECT_EQ(g_maps.load(), 0);
+    const FfdSettings& after = reg.resource<FfdSettings>();
+    EXPECT_EQ(after.gpu_runs, before.gpu_runs + 30);
+    EXPECT_EQ(after.cpu_runs, before.cpu_runs);
+    EXPECT_EQ(after.cpu_splat_passes, before.cpu_splat_passes);
+    EXPECT_EQ(after.gpu_sync_readbacks, before.gpu_sync_readbacks);
+    EXPECT_GT(reg.get<DeformedSplats>(cloud).inverted_version, stats_before);  // statistics still arrive
+    EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 1u);
+    ffd_release_gpu(reg);
 }
 
 // The interposition is live: a read-back in this process is seen (else the test above could not fail).
