@@ -70,6 +70,53 @@ int check_paths_before_work(const Options& o) {
 
 }  // namespace
 
+int usage_error(const std::string& message) {
+    std::fprintf(stderr, "splatffd profile: %s\n%s", message.c_str(), usage_text);
+    return 2;
+}
+
+namespace {
+
+int compare_with(const ProfileReport& current, const std::string& base_path) {
+    const auto text = read_text(base_path);
+    if (!text) {
+        std::fprintf(stderr, "%s: cannot read the baseline report\n", base_path.c_str());
+        return 1;
+    }
+    auto base = report_from_json(*text, base_path);
+    if (!base) {
+        std::fprintf(stderr, "%s\n", base.message().c_str());
+        return 1;
+    }
+    const auto rows = compare_reports(*base, current);
+    std::printf("\ncompare with %s:\n%s", base_path.c_str(), to_text(rows).c_str());
+    const auto slower = std::count_if(rows.begin(), rows.end(), [](const Regression& r) { return r.slower; });
+    if (slower > 0) {
+        std::printf("%lld regression(s): slower than the baseline by more than the measured spread\n",
+                    static_cast<long long>(slower));
+        return 3;
+    }
+    std::printf("no regression\n");
+    return 0;
+}
+
+int write_outputs(const Options& o, const RunOutput& r) {
+    auto save = [](const std::string& path, const std::string& text) {
+        if (path.empty()) return true;
+        if (Status st = write_text(path, text); !st) {
+            std::fprintf(stderr, "%s\n", st.message().c_str());
+            return false;
+        }
+        std::printf("wrote %s\n", path.c_str());
+        return true;
+    };
+    bool ok = save(o.json, to_json(r.report));
+    ok &= save(o.csv, to_csv(*r.profiler));
+    ok &= save(o.trace, to_chrome_trace(*r.profiler, "splatffd profile " + o.scene));
+    ok &= save(o.svg, frame_svg(*r.profiler, "splatffd profile " + o.scene + ": time per frame"));
+    return ok ? 0 : 1;
+}
+
 int run_profile_command(cli::Args args) {
     Options o;
     bool scene_given = false;
