@@ -1,9 +1,11 @@
 #include "systems/editor/panels.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include <glm/gtc/quaternion.hpp>
 #include <imgui.h>
@@ -14,6 +16,7 @@
 #include "runtime/scene/components.h"
 #include "systems/editor/editor_system.h"
 #include "systems/editor/lattice_manage.h"
+#include "systems/editor/panel_layout.h"
 #include "systems/editor/selection_edit.h"
 #include "systems/ffd/components.h"
 #include "systems/picking/components.h"
@@ -25,6 +28,37 @@
 namespace sffd::editor {
 
 namespace {
+
+// The layout of this frame (from the window size and last frame's collapsed flags) and the rectangles the
+// panels really got (what panel_rects() reports). UI state of the single editor window (main thread).
+struct LayoutState {
+    std::array<bool, panel_count> collapsed{};
+    std::array<PanelRect, panel_count> rects{};
+    float menu_height = 0.0f;
+    std::vector<NamedPanelRect> drawn;
+};
+LayoutState& layout_state() {
+    static LayoutState s;
+    return s;
+}
+
+void record_current_window(const char* name) {
+    const ImVec2 pos = ImGui::GetWindowPos(), size = ImGui::GetWindowSize();
+    layout_state().drawn.push_back({name, PanelRect{pos.x, pos.y, size.x, size.y}});
+}
+
+// Begin of a laid-out panel: placed and sized every frame (the user collapses panels, the layout moves
+// the others), not movable or resizable by hand (a moved panel would cover another).
+bool begin_panel(Panel p) {
+    LayoutState& ls = layout_state();
+    const PanelRect& r = ls.rects[std::size_t(p)];
+    ImGui::SetNextWindowPos(ImVec2(r.x, r.y), ImGuiCond_Always);
+    ImGui::SetNextWindowSize(ImVec2(r.w, r.h), ImGuiCond_Always);
+    const bool open = ImGui::Begin(panel_title(p), nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
+    ls.collapsed[std::size_t(p)] = ImGui::IsWindowCollapsed();
+    record_current_window(panel_title(p));
+    return open;
+}
 
 // One inspector edit = one undo step: the value before the widget became active is kept, and the step is
 // recorded when the widget is released (continuous widgets change the component live in between).
@@ -85,6 +119,8 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
     static char open_path[512] = "";
     bool open_popup = false;
     if (ImGui::BeginMainMenuBar()) {
+        layout_state().menu_height = ImGui::GetWindowSize().y;
+        record_current_window("##menu");
         if (ImGui::BeginMenu("File")) {
             if (ImGui::MenuItem("Open scene...")) open_popup = true;
             if (ImGui::MenuItem("Save scene", "Ctrl+S")) state.request_save = true;
@@ -140,9 +176,7 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
 }
 
 void outliner(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(8, 28), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(240, 200), ImGuiCond_FirstUseEver);
-    if (ImGui::Begin("Outliner")) {
+    if (begin_panel(Panel::outliner)) {
         registry.each_entity([&](ecs::Entity e) {
             const std::string label = entity_label(registry, e) + "##" + std::to_string(e.index);
             if (ImGui::Selectable(label.c_str(), state.selected_entity == e)) {
@@ -155,9 +189,7 @@ void outliner(ecs::Registry& registry, EditorState& state) {
 }
 
 void inspector(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(8, 236), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(300, 330), ImGuiCond_FirstUseEver);
-    if (!ImGui::Begin("Inspector")) {
+    if (!begin_panel(Panel::inspector)) {
         ImGui::End();
         return;
     }
@@ -260,9 +292,7 @@ void inspector(ecs::Registry& registry, EditorState& state) {
 }
 
 void tools_panel(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(float(state.viewport.width) - 300.0f, 28), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(292, 330), ImGuiCond_FirstUseEver);
-    if (ImGui::Begin("Tools")) {
+    if (begin_panel(Panel::tools)) {
         int tool = int(state.tool);
         ImGui::RadioButton("select (Q)", &tool, int(Tool::select));
         ImGui::SameLine();
@@ -307,9 +337,7 @@ void tools_panel(ecs::Registry& registry, EditorState& state) {
 }
 
 void lattice_panel(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(float(state.viewport.width) - 300.0f, 366), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(292, 250), ImGuiCond_FirstUseEver);
-    if (ImGui::Begin("Lattice")) {
+    if (begin_panel(Panel::lattice)) {
         lattice_manager_section(registry, state);  // add / remove / order / JSON (lattice_manage.h)
         const Lattice* l = registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
         if (!l) {
@@ -325,7 +353,7 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
                 inside = std::size_t(std::count(mask.begin(), mask.end(), std::uint8_t(1)));
             }
             const auto outer = outer_layer_mask(*l);
-            ImGui::Text("%zu inside the object's box (white), %zu outer (pinned: %s)", inside,
+            ImGui::TextWrapped("%zu inside the object's box (white), %zu outer (pinned: %s)", inside,
                         std::size_t(std::count(outer.begin(), outer.end(), std::uint8_t(1))),
                         state.pin_outer_layer ? "yes" : "no");
             if (ImGui::Button(state.pin_outer_layer ? "unpin outer layer" : "pin outer layer"))
@@ -340,9 +368,10 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
                 divisions = l->divisions;
                 divisions_of = state.active_lattice;
             }
+            ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x * 0.5f);
             ImGui::InputInt3("divisions", &divisions.x);
             divisions = glm::clamp(divisions, glm::ivec3(1), glm::ivec3(64));
-            ImGui::SameLine();
+            same_line_if_fits("resample");
             if (ImGui::Button("resample")) {
                 resample_lattice(registry, state, divisions);
                 divisions = glm::ivec3(0);
@@ -350,9 +379,9 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
             int basis = int(l->basis);
             if (ImGui::Combo("basis", &basis, "Bernstein\0cubic B-spline\0")) set_lattice_basis(registry, state, LatticeBasis(basis));
             if (ImGui::Button("fit to object")) fit_lattice_to(registry, state, false);
-            ImGui::SameLine();
+            same_line_if_fits("fit to selection");
             if (ImGui::Button("fit to selection")) fit_lattice_to(registry, state, true);
-            ImGui::SameLine();
+            same_line_if_fits("apply as rest");
             if (ImGui::Button("apply as rest")) apply_lattice_as_rest(registry, state);
         }
     }
@@ -360,9 +389,7 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
 }
 
 void timeline_panel(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(256, float(state.viewport.height) - 120.0f), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(float(state.viewport.width) - 570.0f, 88), ImGuiCond_FirstUseEver);
-    if (ImGui::Begin("Timeline")) {
+    if (begin_panel(Panel::timeline)) {
         const ecs::Entity e = state.active_lattice;
         AnimationClip* clip = registry.valid(e) ? registry.try_get<AnimationClip>(e) : nullptr;
         AnimationState* anim = registry.valid(e) ? registry.try_get<AnimationState>(e) : nullptr;
@@ -391,15 +418,18 @@ void timeline_panel(ecs::Registry& registry, EditorState& state) {
     ImGui::End();
 }
 
-void profiler_panel(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(8, float(state.viewport.height) - 250.0f), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(240, 218), ImGuiCond_FirstUseEver);
-    if (ImGui::Begin("Frame time")) {
+void profiler_panel(ecs::Registry& registry, EditorState&) {
+    if (begin_panel(Panel::frame_time)) {
         if (const auto* o = registry.try_resource<profiling::ProfileOverlay>(); o && o->count > 0) {
             ImGui::Text("%.1f ms (avg %.1f, %.1f FPS)", double(o->frame_last_ms), double(o->frame_avg_ms),
                         o->frame_avg_ms > 0 ? 1000.0 / double(o->frame_avg_ms) : 0.0);
-            ImGui::PlotLines("##frame", o->frame_ms.data(), int(o->count), int(o->oldest()), nullptr, 0.0f,
-                             std::max(o->max_ms, 1.0f), ImVec2(-1, 50));
+            // Scaled to the typical frame, not the ring's maximum: the first frame (shader compilation,
+            // uploads: seconds) made every later frame a flat line at the bottom of the graph.
+            const float scale = graph_scale(std::span<const float>(o->frame_ms.data(), o->count));
+            char overlay[48];
+            std::snprintf(overlay, sizeof overlay, "0..%.0f ms, %zu frames", double(scale), o->count);
+            ImGui::PlotLines("##frame", o->frame_ms.data(), int(o->count), int(o->oldest()), overlay, 0.0f, scale,
+                             ImVec2(ImGui::GetContentRegionAvail().x, 50));  // PlotLines (1.86) takes no -1 width: it drew a 1-px line
             const float total = std::max(o->frame_avg_ms, 1e-3f);
             for (const auto& s : o->systems) {
                 char text[128];
@@ -413,12 +443,21 @@ void profiler_panel(ecs::Registry& registry, EditorState& state) {
     ImGui::End();
 }
 
+// One text line with the window padding, and never below ImGui's minimum window height (which a
+// 24 px bar used to exceed, reaching 8 px below the window).
+float status_bar_height() {
+    const ImGuiStyle& style = ImGui::GetStyle();
+    return std::max(style.WindowMinSize.y, ImGui::GetTextLineHeight() + 2.0f * style.WindowPadding.y);
+}
+
 void status_bar(ecs::Registry& registry, EditorState& state) {
     const ImGuiViewport* vp = ImGui::GetMainViewport();
-    ImGui::SetNextWindowPos(ImVec2(vp->Pos.x, vp->Pos.y + vp->Size.y - 24));
-    ImGui::SetNextWindowSize(ImVec2(vp->Size.x, 24));
+    const float h = status_bar_height();
+    ImGui::SetNextWindowPos(ImVec2(vp->Pos.x, vp->Pos.y + vp->Size.y - h));
+    ImGui::SetNextWindowSize(ImVec2(vp->Size.x, h));
     ImGui::Begin("##status", nullptr, ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs |
                                           ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing);
+    record_current_window("##status");
     std::size_t selected = 0;
     if (registry.valid(state.active_lattice))
         if (const auto* s = registry.try_get<picking::LatticeSelection>(state.active_lattice)) selected = s->indices.size();
@@ -480,9 +519,28 @@ void gizmo(ecs::Registry& registry, EditorState& state) {
 
 }  // namespace
 
+void same_line_if_fits(const char* next_label) {
+    const ImGuiStyle& style = ImGui::GetStyle();
+    const float w = ImGui::CalcTextSize(next_label, nullptr, true).x + 2.0f * style.FramePadding.x;
+    const float right = ImGui::GetWindowPos().x + ImGui::GetWindowContentRegionMax().x;
+    if (ImGui::GetItemRectMax().x + style.ItemSpacing.x + w <= right) ImGui::SameLine();
+}
+
+const std::vector<NamedPanelRect>& panel_rects() { return layout_state().drawn; }
+
 void draw_panels(ecs::Registry& registry, const FrameContext&) {
     EditorState* state = registry.try_resource<EditorState>();
     if (!state) return;
+    LayoutState& ls = layout_state();
+    ls.drawn.clear();
+    const ImGuiViewport* vp = ImGui::GetMainViewport();
+    LayoutInput in;
+    in.width = vp->Size.x, in.height = vp->Size.y;
+    in.top = ls.menu_height > 0.0f ? ls.menu_height : ImGui::GetFrameHeight();
+    in.bottom = status_bar_height();
+    in.title = ImGui::GetFrameHeight();
+    in.collapsed = ls.collapsed;
+    ls.rects = layout_panels(in);
     menu_bar(registry, *state);
     outliner(registry, *state);
     inspector(registry, *state);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -127,6 +128,25 @@ void on_key(GLFWwindow*, int key, int, int action, int m) {
     s->events.push_back(e);
 }
 
+}  // namespace
+
+std::string user_config_file(const std::string& name) {
+    std::filesystem::path dir;
+    if (const char* xdg = std::getenv("XDG_CONFIG_HOME"); xdg && *xdg) dir = xdg;
+    else if (const char* home = std::getenv("HOME"); home && *home) dir = std::filesystem::path(home) / ".config";
+    else return {};
+    dir /= "splatffd";
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) {
+        log::warn("view: cannot create ", dir.string(), ": ", ec.message(), " (settings are not remembered)");
+        return {};
+    }
+    return (dir / name).string();
+}
+
+namespace {
+
 // View-only resource: options the request handler needs and the per-frame drag log for timing.
 struct ViewSession {
     ViewOptions options;
@@ -209,6 +229,20 @@ void ui_system(ecs::Registry& registry, const FrameContext& frame) {
     ImGui::Render();
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     const ViewOptions& o = session->options;
+    if (!o.panel_rects_json.empty() && o.frames > 0 && frame.frame + 1 == o.frames) {
+        // {"window": [w, h], "panels": [{"name": .., "x": .., "y": .., "w": .., "h": ..}, ..]}
+        const ImVec2 size = ImGui::GetMainViewport()->Size;
+        std::string json = "{\n  \"window\": [" + std::to_string(size.x) + ", " + std::to_string(size.y) + "],\n  \"panels\": [";
+        bool first = true;
+        for (const NamedPanelRect& p : panel_rects()) {
+            json += std::string(first ? "\n" : ",\n") + "    {\"name\": \"" + p.name + "\", \"x\": " + std::to_string(p.rect.x) +
+                    ", \"y\": " + std::to_string(p.rect.y) + ", \"w\": " + std::to_string(p.rect.w) +
+                    ", \"h\": " + std::to_string(p.rect.h) + "}";
+            first = false;
+        }
+        json += "\n  ]\n}\n";
+        if (Status st = write_file_atomic(o.panel_rects_json, json); !st) log::error("view: ", st.message());
+    }
     if (!o.window_screenshot.empty() && o.frames > 0 && frame.frame + 1 == o.frames) {
         // The default framebuffer before the swap: what the user sees, panels included.
         GLint vp[4] = {0, 0, 0, 0};
@@ -314,7 +348,11 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         if (session.ui) {
             IMGUI_CHECKVERSION();
             ImGui::CreateContext();
-            ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini next to the user's files
+            // The layout the user chose (collapsed panels) is remembered in a per-user config folder, never
+            // next to the user's files; replays start from the default layout and leave the file alone.
+            static std::string ini_path;  // ImGui keeps the pointer until DestroyContext
+            ini_path = options.replay.empty() ? user_config_file("imgui.ini") : std::string();
+            ImGui::GetIO().IniFilename = ini_path.empty() ? nullptr : ini_path.c_str();
             ImGui::StyleColorsDark();
             ImGui_ImplGlfw_InitForOpenGL(window, true);
             ImGui_ImplOpenGL3_Init("#version 450");
