@@ -57,6 +57,17 @@ struct Drag {
     glm::dvec3 displacement_world{0.0};
 };
 
+// Typed values after g / r (Blender habit: `g z 0.2 Enter`, `r x 45 Enter`). Pressing g/w/r starts an
+// entry; while it is active the number keys (0-9, minus, period, comma, space) go to `text` (space does
+// not play/pause), backspace edits, x/y/z set the axis as always, Enter applies (move: one value along
+// the x/y/z axis or three values dx dy dz; twist: degrees), Escape cancels. Any other key or a mouse
+// press ends the entry unapplied and then does what it always does (ctrl+q still quits).
+struct TypedEntry {
+    bool active = false;
+    Tool tool = Tool::move;
+    std::string text;
+};
+
 struct EditorState {
     // --- tool settings (panels and shortcuts change them) ---
     Tool tool = Tool::select;
@@ -88,6 +99,7 @@ struct EditorState {
     glm::dvec2 cursor{0.0};
     Drag drag;
     LastEdit last_edit;
+    TypedEntry typed;
 
     // --- requests for the view loop ---
     bool request_save = false;

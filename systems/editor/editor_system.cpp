@@ -243,6 +243,7 @@ void handle_move(ecs::Registry& registry, EditorState& state, Camera& camera, gl
 }
 
 void handle_press(ecs::Registry& registry, EditorState& state, Camera& camera, const InputEvent& e) {
+    state.typed = {};  // a click or drag ends a typed entry unapplied
     Drag& drag = state.drag;
     if (drag.kind != Drag::Kind::none) return;  // one gesture at a time
     drag = Drag{};
@@ -310,8 +311,100 @@ void set_axis(EditorState& state, AxisMode mode) {
     say(state, log::str("axis: ", axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis)));
 }
 
+// Up to three numbers of a numeric entry ("dx dy dz", commas allowed); returns how many were read.
+int parse_numbers(const std::string& text, double (&v)[3]) {
+    std::string cleaned = text;
+    std::replace(cleaned.begin(), cleaned.end(), ',', ' ');
+    int n = 0;
+    const char* p = cleaned.c_str();
+    while (n < 3) {
+        char* end = nullptr;
+        const double x = std::strtod(p, &end);
+        if (end == p) break;
+        v[n++] = x;
+        p = end;
+    }
+    while (*p == ' ') ++p;
+    return *p == '\0' ? n : -1;  // trailing junk: not a number list
+}
+
+const char* typed_char(const std::string& key) {
+    static const char* digits[] = {"0", "1", "2", "3", "4", "5", "6", "7", "8", "9"};
+    for (const char* d : digits)
+        if (key == d) return d;
+    if (key == "minus") return "-";
+    if (key == "period") return ".";
+    if (key == "comma") return ",";
+    if (key == "space") return " ";
+    return nullptr;
+}
+
+std::string typed_prompt(const EditorState& state) {
+    const TypedEntry& t = state.typed;
+    const AxisMode axis = t.tool == Tool::twist ? state.twist_axis : state.move_axis;
+    return std::string(t.tool == Tool::twist ? "twist " : "move ") + axis_mode_name(axis) + ": " + t.text +
+           "_  (Enter applies, Esc cancels)";
+}
+
+void apply_typed(ecs::Registry& registry, EditorState& state) {
+    TypedEntry t = std::move(state.typed);
+    state.typed = {};
+    double v[3] = {0, 0, 0};
+    const int n = parse_numbers(t.text, v);
+    if (t.tool == Tool::twist) {
+        if (n == 1) apply_twist(registry, state, v[0]);
+        else say(state, "typed twist '" + t.text + "': give one angle in degrees");
+        return;
+    }
+    const AxisMode axis = state.move_axis;
+    const bool along = axis == AxisMode::x || axis == AxisMode::y || axis == AxisMode::z || axis == AxisMode::custom;
+    if (n == 1 && along) {
+        const Camera* camera = camera_of(registry, state);
+        if (camera) apply_stretch(registry, state, axis_direction(axis, *camera, state.custom_axis) * v[0]);
+    } else if (n == 3) {
+        apply_stretch(registry, state, {v[0], v[1], v[2]});
+    } else {
+        say(state, "typed move '" + t.text + "': give one distance after x, y or z, or three values dx dy dz");
+    }
+}
+
+// Keys while a typed entry is active; false when the key ends the entry and is handled as usual.
+bool handle_typed_key(ecs::Registry& registry, EditorState& state, const InputEvent& e) {
+    TypedEntry& t = state.typed;
+    const std::string& k = e.key;
+    if ((e.modifiers & (mods::ctrl | mods::alt)) == 0) {
+        if (const char* c = typed_char(k)) {
+            t.text += c;
+            state.status = typed_prompt(state);
+            return true;
+        }
+        if (k == "backspace") {
+            if (!t.text.empty()) t.text.pop_back();
+            state.status = typed_prompt(state);
+            return true;
+        }
+        if (k == "x" || k == "y" || k == "z") {
+            set_axis(state, k == "x" ? AxisMode::x : k == "y" ? AxisMode::y : AxisMode::z);
+            state.status = typed_prompt(state);
+            return true;
+        }
+        if (k == "enter") {
+            apply_typed(registry, state);
+            return true;
+        }
+        if (k == "escape") {
+            state.typed = {};
+            say(state, "typed entry cancelled");
+            return true;
+        }
+    }
+    state.typed = {};
+    return false;
+}
+
 void handle_text(ecs::Registry& registry, EditorState& state, const std::string& text) {
     // Numeric entry: "dx dy dz" (commas allowed) for move, "degrees" for twist.
+    state.typed = {};
     std::string cleaned = text;
     std::replace(cleaned.begin(), cleaned.end(), ',', ' ');
     double v[3] = {0, 0, 0};
@@ -336,6 +429,7 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
         if (k == "escape") cancel_drag(registry, state);
         return;  // no other shortcuts mid-gesture
     }
+    if (state.typed.active && handle_typed_key(registry, state, e)) return;
     if (handle_lattice_key(registry, state, e)) return;  // add/remove/refit/order/export/import (lattice_manage.h)
     if (ctrl) {
         if (k == "z" && shift) redo(registry, state);
@@ -347,8 +441,12 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
         return;
     }
     if (k == "q") state.tool = Tool::select, say(state, "tool: select");
-    else if (k == "g" || k == "w") state.tool = Tool::move, say(state, "tool: move");
-    else if (k == "r") state.tool = Tool::twist, say(state, "tool: twist");
+    else if (k == "g" || k == "w" || k == "r") {
+        state.tool = k == "r" ? Tool::twist : Tool::move;
+        state.typed = TypedEntry{true, state.tool, {}};
+        say(state, std::string(k == "r" ? "tool: twist" : "tool: move") +
+                       " (drag, or type a value: x/y/z axis, number, Enter)");
+    }
     else if (k == "b") state.tool = Tool::brush, say(state, "tool: brush");
     else if (k == "x") set_axis(state, AxisMode::x);
     else if (k == "y") set_axis(state, AxisMode::y);

@@ -15,7 +15,8 @@
 // sets the twist pivot to the picked surface point. Right drag orbits, middle drag (or shift+right)
 // pans, wheel zooms. Keys: see README.md (q/g/r/b tools, x/y/z/v/c axes, ctrl+z/ctrl+shift+z/ctrl+y,
 // ctrl+s, f frame, a select all, escape, p pins, l local/global, t x-ray, home reset, k/shift+k keys,
-// space play/pause, left/right step, f12 screenshot).
+// space play/pause, left/right step, f12 screenshot). Typed values after g/r: `g z 0.2 enter`,
+// `r x 45 enter` (EditorState::typed; number keys and space go to the entry while it is active).
 #pragma once
 
 #include <span>

@@ -46,10 +46,14 @@ std::uint8_t glfw_mods(int m) {
 std::string glfw_key_name(int key) {
     if (key >= GLFW_KEY_A && key <= GLFW_KEY_Z) return std::string(1, char('a' + (key - GLFW_KEY_A)));
     if (key >= GLFW_KEY_0 && key <= GLFW_KEY_9) return std::string(1, char('0' + (key - GLFW_KEY_0)));
+    if (key >= GLFW_KEY_KP_0 && key <= GLFW_KEY_KP_9) return std::string(1, char('0' + (key - GLFW_KEY_KP_0)));  // typed values
     if (key >= GLFW_KEY_F1 && key <= GLFW_KEY_F12) return "f" + std::to_string(key - GLFW_KEY_F1 + 1);
     switch (key) {
         case GLFW_KEY_ESCAPE: return "escape";
-        case GLFW_KEY_ENTER: return "enter";
+        case GLFW_KEY_ENTER:
+        case GLFW_KEY_KP_ENTER: return "enter";
+        case GLFW_KEY_KP_DECIMAL: return "period";
+        case GLFW_KEY_KP_SUBTRACT: return "minus";
         case GLFW_KEY_TAB: return "tab";
         case GLFW_KEY_BACKSPACE: return "backspace";
         case GLFW_KEY_DELETE: return "delete";
@@ -232,13 +236,15 @@ void ui_system(ecs::Registry& registry, const FrameContext& frame) {
     if (!o.panel_rects_json.empty() && o.frames > 0 && frame.frame + 1 == o.frames) {
         // {"window": [w, h], "panels": [{"name": .., "x": .., "y": .., "w": .., "h": ..}, ..]}
         const ImVec2 size = ImGui::GetMainViewport()->Size;
-        std::string json = "{\n  \"window\": [" + std::to_string(size.x) + ", " + std::to_string(size.y) + "],\n  \"panels\": [";
-        bool first = true;
-        for (const NamedPanelRect& p : panel_rects()) {
-            json += std::string(first ? "\n" : ",\n") + "    {\"name\": \"" + p.name + "\", \"x\": " + std::to_string(p.rect.x) +
-                    ", \"y\": " + std::to_string(p.rect.y) + ", \"w\": " + std::to_string(p.rect.w) +
-                    ", \"h\": " + std::to_string(p.rect.h) + "}";
-            first = false;
+        char line[256];
+        std::snprintf(line, sizeof line, "{\n  \"window\": [%g, %g],\n  \"panels\": [", double(size.x), double(size.y));
+        std::string json = line;
+        const auto& rects = panel_rects();
+        for (std::size_t i = 0; i < rects.size(); ++i) {
+            const PanelRect& r = rects[i].rect;
+            std::snprintf(line, sizeof line, "%s\n    {\"name\": \"%s\", \"x\": %g, \"y\": %g, \"w\": %g, \"h\": %g}",
+                          i ? "," : "", rects[i].name.c_str(), double(r.x), double(r.y), double(r.w), double(r.h));
+            json += line;
         }
         json += "\n  ]\n}\n";
         if (Status st = write_file_atomic(o.panel_rects_json, json); !st) log::error("view: ", st.message());

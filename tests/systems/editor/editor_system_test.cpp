@@ -9,6 +9,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <gtest/gtest.h>
 
+#include "systems/animation/components.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform.h"
@@ -238,4 +239,89 @@ TEST(EditorSystem, ResampleKeepsTheShapeAndUndoRestoresTheLattice) {
     EXPECT_EQ(s.lat().divisions, before.divisions);
     EXPECT_TRUE(bit_equal(s.lat().current, before.current));
     EXPECT_EQ(s.selection(), std::vector<std::uint32_t>{a});
+}
+
+// Typed values after g / r (Blender habit), through key events as the window and replays send them.
+namespace {
+
+std::vector<InputEvent> keys(std::initializer_list<const char*> names) {
+    std::vector<InputEvent> out;
+    for (const char* k : names) out.push_back(Scene::key(k));
+    return out;
+}
+
+}  // namespace
+
+TEST(EditorSystem, TypedMoveAlongAnAxisAfterG) {
+    Scene s;
+    s.run({Scene::key("a")});  // select all: the inner 2x2x2 points are editable (outer layer pinned)
+    const std::vector<glm::dvec3> rest = s.lat().current;
+    const std::vector<std::uint32_t> editable = editable_selection(s.reg, *s.state);
+    ASSERT_EQ(editable.size(), 8u);
+    // An AnimationState on the lattice: space while typing must not start playback.
+    s.reg.emplace<AnimationState>(s.lattice).playing = false;
+    s.run(keys({"g", "z", "0", "period", "2", "5", "backspace"}));
+    EXPECT_TRUE(s.state->typed.active);
+    EXPECT_NE(s.state->status.find("move z: 0.2_"), std::string::npos) << s.state->status;
+    EXPECT_TRUE(bit_equal(s.lat().current, rest)) << "nothing moves before Enter";
+    s.run(keys({"space", "enter"}));
+    EXPECT_FALSE(s.reg.get<AnimationState>(s.lattice).playing) << "space went to the entry, not play/pause";
+    EXPECT_FALSE(s.state->typed.active);
+    for (std::size_t p = 0; p < rest.size(); ++p) {
+        const bool moved = std::find(editable.begin(), editable.end(), std::uint32_t(p)) != editable.end();
+        const glm::dvec3 want = rest[p] + (moved ? glm::dvec3(0, 0, 0.2) : glm::dvec3(0));
+        EXPECT_EQ(s.lat().current[p], want) << p;
+    }
+    EXPECT_EQ(s.state->undo.size(), 2u);  // select all, stretch
+}
+
+TEST(EditorSystem, TypedMoveWithThreeValuesAndNegativeNumbers) {
+    Scene s;
+    s.run({Scene::key("a")});
+    const std::vector<glm::dvec3> rest = s.lat().current;
+    const std::uint32_t inner = idx(s.lat(), 1, 1, 1);
+    s.run(keys({"g", "minus", "0", "period", "5", "space", "0", "comma", "1"}));
+    EXPECT_TRUE(s.state->typed.active);
+    s.run(keys({"enter"}));
+    EXPECT_EQ(s.lat().current[inner], rest[inner] + glm::dvec3(-0.5, 0, 1));
+}
+
+TEST(EditorSystem, TypedTwistAboutXMatchesTheNumericEntry) {
+    Scene typed, reference;
+    for (Scene* s : {&typed, &reference}) s->run({Scene::key("a")});
+    typed.run(keys({"r", "x", "4", "5", "enter"}));
+    reference.run({Scene::key("r"), Scene::key("x")});
+    reference.run({Scene::key("escape")});  // ends the entry (reference uses the text event below)
+    ASSERT_FALSE(reference.selection().empty());
+    InputEvent text;
+    text.kind = InputKind::text;
+    text.key = "45";
+    reference.run({text});
+    EXPECT_EQ(typed.state->twist_axis, AxisMode::x);
+    EXPECT_TRUE(bit_equal(typed.lat().current, reference.lat().current));
+    EXPECT_FALSE(bit_equal(typed.lat().current, typed.lat().rest));
+}
+
+TEST(EditorSystem, TypedEntryEscapeCancelsAndKeepsTheSelection) {
+    Scene s;
+    s.run({Scene::key("a")});
+    const std::vector<std::uint32_t> sel = s.selection();
+    const std::vector<glm::dvec3> rest = s.lat().current;
+    s.run(keys({"g", "x", "1", "escape"}));
+    EXPECT_FALSE(s.state->typed.active);
+    EXPECT_EQ(s.selection(), sel) << "Escape cancelled the entry, it did not deselect";
+    s.run(keys({"enter"}));
+    EXPECT_TRUE(bit_equal(s.lat().current, rest));
+    // Another key ends the entry unapplied and does its usual job; ctrl+q still quits.
+    s.run(keys({"g", "x", "1", "t"}));
+    EXPECT_FALSE(s.state->typed.active);
+    EXPECT_TRUE(s.state->xray);
+    s.run(keys({"g", "1"}));
+    s.run({Scene::key("q", mods::ctrl)});
+    EXPECT_TRUE(s.state->request_quit);
+    EXPECT_TRUE(bit_equal(s.lat().current, rest));
+    // A bad entry says why and changes nothing.
+    s.run(keys({"g", "y", "1", "space", "2", "enter"}));
+    EXPECT_NE(s.state->status.find("typed move"), std::string::npos) << s.state->status;
+    EXPECT_TRUE(bit_equal(s.lat().current, rest));
 }
