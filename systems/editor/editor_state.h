@@ -66,6 +66,7 @@ struct TypedEntry {
     bool active = false;
     Tool tool = Tool::move;
     std::string text;
+    bool axis_typed = false;  // an axis key was pressed in this entry
 };
 
 struct EditorState {
@@ -81,6 +82,12 @@ struct EditorState {
     bool pin_outer_layer = true;
     bool xray = false;
     bool show_lattice = true;
+    // Auto-key (n toggles; status bar and Timeline show it): every stretch/twist is also keyed at the clip
+    // time. Off: a stretch/twist of a lattice with a clip is "un-keyed" until k keys it; playing would
+    // replace it with the clip's pose, so the first play only warns and the second plays.
+    bool auto_key = false;
+    ecs::Entity unkeyed = ecs::null_entity;  // lattice with a stretch/twist since its last key
+    bool play_warned = false;
     double click_tolerance_px = 8.0;
 
     // --- what is being edited ---

@@ -198,6 +198,13 @@ void finish_tool_drag(ecs::Registry& registry, EditorState& state, Drag& drag) {
         say(state, is_move ? log::str("stretched ", drag.points.size(), " control points")
                            : log::str("twisted ", drag.points.size(), " control points by ",
                                       glm::degrees(drag.angle), " degrees"));
+        if (state.auto_key) {
+            const std::string edited = state.status;
+            if (key_last_edit(registry, state)) say(state, edited + " (auto-key: " + state.status + ")");
+        } else {
+            state.unkeyed = drag.lattice;
+            state.play_warned = false;
+        }
     }
 }
 
@@ -384,7 +391,13 @@ bool handle_typed_key(ecs::Registry& registry, EditorState& state, const InputEv
             return true;
         }
         if (k == "x" || k == "y" || k == "z") {
-            set_axis(state, k == "x" ? AxisMode::x : k == "y" ? AxisMode::y : AxisMode::z);
+            // The first axis key of an entry sets the axis (whatever the last entry left); the same key
+            // again frees it, as outside an entry.
+            const AxisMode mode = k == "x" ? AxisMode::x : k == "y" ? AxisMode::y : AxisMode::z;
+            if (!t.axis_typed && t.tool == Tool::move) state.move_axis = AxisMode::view_plane;
+            if (!t.axis_typed && t.tool == Tool::twist) state.twist_axis = AxisMode::view;
+            t.axis_typed = true;
+            set_axis(state, mode);
             state.status = typed_prompt(state);
             return true;
         }
@@ -466,6 +479,8 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
     else if (k == "k" && shift) delete_keys_at_time(registry, state);
     else if (k == "k") key_last_edit(registry, state);
     else if (k == "space") toggle_play(registry, state);
+    else if (k == "n") state.auto_key = !state.auto_key, say(state, state.auto_key ? "auto-key on: edits are keyed at the clip time"
+                                                                                   : "auto-key off");
     else if (k == "left") scrub_to(registry, state, clip_time(registry, state) - 1.0 / 24.0);
     else if (k == "right") scrub_to(registry, state, clip_time(registry, state) + 1.0 / 24.0);
     else if (k == "f12") state.request_screenshot = true;
@@ -670,6 +685,19 @@ void scrub_to(ecs::Registry& registry, EditorState& state, double time) {
 void toggle_play(ecs::Registry& registry, EditorState& state) {
     bool any_playing = false;
     registry.view<AnimationState>().each([&](ecs::Entity, AnimationState& s) { any_playing |= s.playing; });
+    // Playing poses the lattice from its clip: an un-keyed stretch/twist would silently vanish.
+    const ecs::Entity unkeyed = state.unkeyed;
+    if (!any_playing && registry.valid(unkeyed) && registry.has<AnimationClip>(unkeyed) && registry.has<Lattice>(unkeyed)) {
+        if (!state.play_warned) {
+            const Name* n = registry.try_get<Name>(unkeyed);
+            say(state, "playing would discard the un-keyed edit of " + (n && !n->value.empty() ? n->value : std::string("the lattice")) +
+                           ": k keys it, n turns auto-key on, space again plays anyway");
+            state.play_warned = true;
+            return;
+        }
+        state.unkeyed = ecs::null_entity;  // played anyway: the clip's pose replaces it
+        state.play_warned = false;
+    }
     registry.view<AnimationState>().each([&](ecs::Entity e, AnimationState&) {
         AnimationState& s = registry.patch<AnimationState>(e);
         if (any_playing) sffd::pause(s);
@@ -716,6 +744,7 @@ bool key_last_edit(ecs::Registry& registry, EditorState& state) {
     group->add(clip_edit.finish(registry));
     group->add(state_edit.finish(registry));
     state.undo.push(std::move(group));
+    if (state.unkeyed == e) state.unkeyed = ecs::null_entity, state.play_warned = false;
     say(state, log::str("key set at ", time, " s on track ", clip.tracks[track].name));
     return true;
 }

@@ -398,6 +398,8 @@ void timeline_panel(ecs::Registry& registry, EditorState& state) {
         if (ImGui::Button("set key (K)")) key_last_edit(registry, state);
         ImGui::SameLine();
         if (ImGui::Button("delete key")) delete_keys_at_time(registry, state);
+        ImGui::SameLine();
+        ImGui::Checkbox("auto-key (N)", &state.auto_key);
         if (clip && anim) {
             ImGui::SameLine();
             float t = float(anim->time);
@@ -461,10 +463,12 @@ void status_bar(ecs::Registry& registry, EditorState& state) {
     std::size_t selected = 0;
     if (registry.valid(state.active_lattice))
         if (const auto* s = registry.try_get<picking::LatticeSelection>(state.active_lattice)) selected = s->indices.size();
-    ImGui::Text("tool %s | axis %s | %s%s%s | %zu selected | undo %zu/%zu | %s", tool_name(state.tool),
+    ImGui::Text("tool %s | axis %s | %s%s%s | %zu selected | auto-key %s%s | undo %zu/%zu | %s", tool_name(state.tool),
                 axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis),
                 state.scope == ToolScope::local ? "local" : "global", state.pin_outer_layer ? " pinned" : "",
-                state.xray ? " x-ray" : "", selected, state.undo.position(), state.undo.size(), state.status.c_str());
+                state.xray ? " x-ray" : "", selected, state.auto_key ? "ON" : "off",
+                registry.valid(state.unkeyed) && registry.has<AnimationClip>(state.unkeyed) ? " (un-keyed edit)" : "",
+                state.undo.position(), state.undo.size(), state.status.c_str());
     ImGui::End();
 }
 

@@ -9,6 +9,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <gtest/gtest.h>
 
+#include "systems/animation/animation_system.h"
 #include "systems/animation/components.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
@@ -324,4 +325,51 @@ TEST(EditorSystem, TypedEntryEscapeCancelsAndKeepsTheSelection) {
     s.run(keys({"g", "y", "1", "space", "2", "enter"}));
     EXPECT_NE(s.state->status.find("typed move"), std::string::npos) << s.state->status;
     EXPECT_TRUE(bit_equal(s.lat().current, rest));
+}
+
+// Auto-key and the warning before play replaces an un-keyed edit.
+TEST(EditorSystem, PlayWarnsBeforeDiscardingAnUnkeyedEdit) {
+    Scene s;
+    s.run({Scene::key("a")});
+    s.run(keys({"g", "z", "0", "period", "2", "enter", "k"}));  // keyed stretch: the lattice gets a clip
+    ASSERT_TRUE(s.reg.has<AnimationClip>(s.lattice));
+    ASSERT_FALSE(s.reg.get<AnimationState>(s.lattice).playing);
+    EXPECT_FALSE(s.reg.valid(s.state->unkeyed));
+    s.run(keys({"right", "g", "z", "0", "period", "1", "enter"}));  // un-keyed edit at 1/24 s
+    EXPECT_EQ(s.state->unkeyed, s.lattice);
+    s.run(keys({"space"}));
+    EXPECT_FALSE(s.reg.get<AnimationState>(s.lattice).playing) << "first play only warns";
+    EXPECT_NE(s.state->status.find("un-keyed"), std::string::npos) << s.state->status;
+    s.run(keys({"space"}));
+    EXPECT_TRUE(s.reg.get<AnimationState>(s.lattice).playing) << "second play plays";
+    s.run(keys({"space"}));  // pause
+    EXPECT_FALSE(s.reg.get<AnimationState>(s.lattice).playing);
+    // Keying the edit removes the warning.
+    s.run(keys({"g", "z", "0", "period", "1", "enter", "k", "space"}));
+    EXPECT_TRUE(s.reg.get<AnimationState>(s.lattice).playing) << s.state->status;
+}
+
+TEST(EditorSystem, AutoKeyKeysEveryEditAtTheClipTime) {
+    Scene s;
+    s.run({Scene::key("a")});
+    s.run(keys({"n"}));
+    EXPECT_TRUE(s.state->auto_key);
+    s.run(keys({"g", "z", "0", "period", "2", "enter"}));
+    ASSERT_TRUE(s.reg.has<AnimationClip>(s.lattice));
+    s.run(keys({"right"}));
+    animation_system(s.reg, FrameContext{s.frame, s.frame / 60.0, 1 / 60.0});  // the clip time follows the scrub
+    ASSERT_NEAR(s.reg.get<AnimationState>(s.lattice).time, 1.0 / 24.0, 1e-12);
+    s.run(keys({"g", "z", "0", "period", "1", "enter"}));
+    const AnimationClip& clip = s.reg.get<AnimationClip>(s.lattice);
+    ASSERT_EQ(clip.tracks.size(), 1u);
+    ASSERT_EQ(clip.tracks[0].keys.size(), 2u);
+    EXPECT_DOUBLE_EQ(clip.tracks[0].keys[0].time, 0.0);
+    EXPECT_NEAR(clip.tracks[0].keys[1].time, 1.0 / 24.0, 1e-12);
+    EXPECT_EQ(clip.tracks[0].keys[0].value, glm::dvec3(0, 0, 0.2));
+    EXPECT_EQ(clip.tracks[0].keys[1].value, glm::dvec3(0, 0, 0.1));
+    EXPECT_FALSE(s.reg.valid(s.state->unkeyed));
+    s.run(keys({"space"}));
+    EXPECT_TRUE(s.reg.get<AnimationState>(s.lattice).playing) << "nothing un-keyed: plays at once";
+    s.run(keys({"space", "n"}));
+    EXPECT_FALSE(s.state->auto_key);
 }
