@@ -113,6 +113,11 @@ struct EditorState {
     bool request_screenshot = false;
     bool request_quit = false;
     bool request_frame_selection = false;
+    std::string save_as;  // non-empty: save there (File > Save as); it becomes the ctrl+s path
+
+    // --- files (file_browser.h) ---
+    std::string last_folder;    // where the dialogs open and saves/screenshots go by default ("" = current)
+    std::string settings_file;  // editor.ini that remembers last_folder ("" = nothing remembered: tests)
 
     std::string status;  // last message for the status bar (also logged)
 };

@@ -28,6 +28,12 @@ struct NamedPanelRect {
 };
 const std::vector<NamedPanelRect>& panel_rects();
 
+// The open (save = false) / save-as dialog: a file browser starting in EditorState::last_folder; Escape
+// or Cancel closes it. Needs a current ImGui frame; the dialog is drawn by draw_panels.
+struct EditorState;
+void open_file_dialog(EditorState& state, bool save);
+bool file_dialog_open();
+
 // SameLine() when a button labelled `next_label` still fits on the current line of the window, so rows
 // of buttons wrap in narrow panels instead of being cut at the window's edge.
 void same_line_if_fits(const char* next_label);

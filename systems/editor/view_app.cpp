@@ -22,6 +22,7 @@
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/render_target.h"
 #include "systems/editor/editor_system.h"
+#include "systems/editor/file_browser.h"
 #include "systems/editor/lattice_manage.h"
 #include "systems/editor/lattice_overlay.h"
 #include "systems/editor/panels.h"
@@ -122,7 +123,9 @@ void on_scroll(GLFWwindow*, double, double dy) {
 
 void on_key(GLFWwindow*, int key, int, int action, int m) {
     EditorState* s = live_state();
-    if (!s || s->replay || action == GLFW_RELEASE || ui_wants_keyboard()) return;
+    // ctrl+q quits even while a panel or the file dialog has the keyboard.
+    const bool quit = key == GLFW_KEY_Q && (m & GLFW_MOD_CONTROL);
+    if (!s || s->replay || action == GLFW_RELEASE || (ui_wants_keyboard() && !quit)) return;
     std::string name = glfw_key_name(key);
     if (name.empty()) return;
     InputEvent e;
@@ -191,6 +194,10 @@ void requests_system(ecs::Registry& registry, const FrameContext& frame) {
     if (!state || !session) return;
     if (session->dragging.size() <= frame.frame) session->dragging.resize(frame.frame + 1, 0);
     session->dragging[frame.frame] = state->drag.kind == Drag::Kind::move || state->drag.kind == Drag::Kind::twist;
+    if (!state->save_as.empty()) {  // File > Save as: the new ctrl+s target
+        session->save_path = std::move(state->save_as);
+        state->save_as.clear();
+    }
     if (state->request_save) {
         state->request_save = false;
         if (Status st = save_scene(registry, session->save_path); st) {
@@ -203,7 +210,9 @@ void requests_system(ecs::Registry& registry, const FrameContext& frame) {
     }
     if (state->request_screenshot) {
         state->request_screenshot = false;
-        const std::string path = "splatffd-screenshot-" + std::to_string(session->screenshot_count++) + ".png";
+        // In the last folder of the file dialogs (remembered between runs), else the current one.
+        const std::string name = "splatffd-screenshot-" + std::to_string(session->screenshot_count++) + ".png";
+        const std::string path = state->last_folder.empty() ? name : (std::filesystem::path(state->last_folder) / name).string();
         const Status st = write_screenshot(registry, path);
         state->status = st ? "screenshot " + path : "screenshot failed: " + st.message();
         log::info("editor: ", state->status);
@@ -272,7 +281,8 @@ std::string default_save_path(const std::string& scene) {
     const std::filesystem::path p(scene);
     const std::string ext = p.extension().string();
     if (ext == ".glb" || ext == ".gltf") return scene;
-    return (p.stem().empty() ? std::string("scene") : p.stem().string()) + ".glb";
+    // Next to the scene file (not in the current folder); a built-in name has no folder.
+    return (p.parent_path() / ((p.stem().empty() ? std::string("scene") : p.stem().string()) + ".glb")).string();
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -336,7 +346,18 @@ int run_view(const ViewOptions& options, Schedule schedule) {
 
         ViewSession& session = registry.set_resource<ViewSession>();
         session.options = options;
-        session.save_path = options.save_path.empty() ? default_save_path(options.scene) : options.save_path;
+        // The last folder of the file dialogs, remembered between runs (not for replays: deterministic).
+        if (options.replay.empty()) {
+            state.settings_file = user_config_file("editor.ini");
+            state.last_folder = load_last_folder(state.settings_file);
+        }
+        session.save_path = options.save_path;
+        if (session.save_path.empty()) {
+            session.save_path = default_save_path(options.scene);
+            // A built-in scene (no folder of its own) is saved in the last folder rather than the current one.
+            if (!state.last_folder.empty() && !std::filesystem::path(session.save_path).has_parent_path())
+                session.save_path = (std::filesystem::path(state.last_folder) / session.save_path).string();
+        }
         // Lattice JSON export/import (ctrl+e / ctrl+i) next to the scene's save: <save>.lattice.json.
         lattice_fit_settings(registry).json_path = std::filesystem::path(session.save_path).replace_extension(".lattice.json").string();
         session.ui = options.ui && !headless;
