@@ -82,6 +82,7 @@ struct EditorState {
     bool pin_outer_layer = true;
     bool xray = false;
     bool show_lattice = true;
+    bool lattice_cage_only = false;  // shift+t: the overlay draws only the box's 12 edges (+ selected points)
     // Auto-key (n toggles; status bar and Timeline show it): every stretch/twist is also keyed at the clip
     // time. Off: a stretch/twist of a lattice with a clip is "un-keyed" until k keys it; playing would
     // replace it with the clip's pose, so the first play only warns and the second plays.

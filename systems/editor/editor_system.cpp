@@ -473,6 +473,8 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
                        say(state, state.pin_outer_layer ? "outer layer pinned" : "outer layer unpinned");
     else if (k == "l") state.scope = state.scope == ToolScope::local ? ToolScope::global : ToolScope::local,
                        say(state, state.scope == ToolScope::local ? "scope: local (selection)" : "scope: global (all points)");
+    else if (k == "t" && shift) state.lattice_cage_only = !state.lattice_cage_only,
+                                say(state, state.lattice_cage_only ? "lattice: outer cage only" : "lattice: all points and cells");
     else if (k == "t") state.xray = !state.xray, say(state, state.xray ? "x-ray on" : "x-ray off");
     else if (k == "o") state.pivot_mode = state.pivot_mode == PivotMode::centroid ? PivotMode::picked_point : PivotMode::centroid;
     else if (k == "home") reset_lattice(registry, state);

@@ -251,6 +251,7 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
         if (ImGui::BeginMenu("View")) {
             ImGui::MenuItem("X-ray", "T", &state.xray);
             ImGui::MenuItem("Lattice", nullptr, &state.show_lattice);
+            ImGui::MenuItem("Lattice cage only", "Shift+T", &state.lattice_cage_only);
             ImGui::MenuItem("Auto-key", "N", &state.auto_key);
             if (ImGui::MenuItem("Frame selection", "F")) frame_selection(registry, state);
             ImGui::EndMenu();
@@ -562,10 +563,13 @@ void gizmo(ecs::Registry& registry, EditorState& state) {
     ImDrawList* dl = ImGui::GetForegroundDrawList();
     const Drag& d = state.drag;
     if (d.kind == Drag::Kind::box) {
-        dl->AddRect(ImVec2(float(d.start.x), float(d.start.y)), ImVec2(float(state.cursor.x), float(state.cursor.y)),
-                    IM_COL32(255, 200, 60, 255));
-        dl->AddRectFilled(ImVec2(float(d.start.x), float(d.start.y)), ImVec2(float(state.cursor.x), float(state.cursor.y)),
-                          IM_COL32(255, 200, 60, 30));
+        // Translucent fill under a 2-px outline with a dark 1-px edge outside it, visible on light and dark
+        // surfaces alike (a faint 1-px line was lost over the model).
+        const ImVec2 a(std::min(float(d.start.x), float(state.cursor.x)), std::min(float(d.start.y), float(state.cursor.y)));
+        const ImVec2 b(std::max(float(d.start.x), float(state.cursor.x)), std::max(float(d.start.y), float(state.cursor.y)));
+        dl->AddRectFilled(a, b, IM_COL32(255, 200, 60, 48));
+        dl->AddRect(ImVec2(a.x - 1.5f, a.y - 1.5f), ImVec2(b.x + 1.5f, b.y + 1.5f), IM_COL32(0, 0, 0, 200), 0.0f, 0, 1.0f);
+        dl->AddRect(a, b, IM_COL32(255, 200, 60, 255), 0.0f, 0, 2.0f);
     }
     if (state.tool != Tool::move && state.tool != Tool::twist) return;
     if (!registry.valid(state.camera) || !registry.has<Camera>(state.camera)) return;
