@@ -82,7 +82,16 @@ struct EditorState {
     bool pin_outer_layer = true;
     bool xray = false;
     bool show_lattice = true;
-    bool lattice_cage_only = false;  // shift+t: the overlay draws only the box's 12 edges (+ selected points)
+    bool lattice_cage_only = false;
+    // Preview while moving: while the camera or the lattice moves (orbit/pan/wheel, tool drags, brush,
+    // playback) the renderer draws in preview quality; after `refine_after` still frames it refines to
+    // the quality the view started with (RenderSettings::quality; `--quality preview` stays preview).
+    bool preview_while_moving = true;
+    int refine_after = 8;
+    int still_frames = 1 << 20;  // frames since the last movement
+    int rest_quality = -1;       // render::Quality the view started with (-1: not read yet)
+    bool previewing = false;     // this frame renders in preview because of movement (status bar)
+    Camera last_camera;          // camera at the end of the previous frame (movement by any means)  // shift+t: the overlay draws only the box's 12 edges (+ selected points)
     // Auto-key (n toggles; status bar and Timeline show it): every stretch/twist is also keyed at the clip
     // time. Off: a stretch/twist of a lattice with a clip is "un-keyed" until k keys it; playing would
     // replace it with the clip's pose, so the first play only warns and the second plays.

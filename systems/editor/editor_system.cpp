@@ -18,6 +18,7 @@
 #include "systems/animation/editing.h"
 #include "systems/editor/lattice_manage.h"
 #include "systems/ffd/operations.h"
+#include "systems/splat_render/splat_render.h"
 
 namespace sffd::editor {
 
@@ -492,6 +493,29 @@ AnimationState* animation_state(ecs::Registry& registry, const EditorState& stat
     return registry.valid(state.active_lattice) ? registry.try_get<AnimationState>(state.active_lattice) : nullptr;
 }
 
+// Preview while moving, HQ at rest (EditorState::preview_while_moving): writes RenderSettings::quality.
+void adapt_quality(ecs::Registry& registry, EditorState& state, bool scrolled) {
+    auto* settings = registry.try_resource<render::RenderSettings>();
+    if (!settings) return;
+    if (state.rest_quality < 0) {  // first frame: the quality the view started with, the camera as it is
+        state.rest_quality = int(settings->quality);
+        if (const Camera* cam = camera_of(registry, state)) state.last_camera = *cam;
+    }
+    const Drag::Kind k = state.drag.kind;
+    bool moving = scrolled || k == Drag::Kind::orbit || k == Drag::Kind::pan || k == Drag::Kind::move ||
+                  k == Drag::Kind::twist || k == Drag::Kind::brush;
+    registry.view<AnimationState>().each([&](ecs::Entity, AnimationState& a) { moving |= a.playing; });
+    if (const Camera* cam = camera_of(registry, state)) {
+        const Camera& l = state.last_camera;
+        moving |= cam->eye != l.eye || cam->target != l.target || cam->up != l.up || cam->fov_y_degrees != l.fov_y_degrees;
+        state.last_camera = *cam;
+    }
+    state.still_frames = moving ? 0 : std::min(state.still_frames + 1, 1 << 20);
+    const auto rest = render::Quality(state.rest_quality);
+    state.previewing = state.preview_while_moving && rest != render::Quality::preview && state.still_frames < state.refine_after;
+    settings->quality = state.previewing ? render::Quality::preview : rest;
+}
+
 }  // namespace
 
 void set_selection(ecs::Registry& registry, EditorState& state, ecs::Entity lattice, std::vector<std::uint32_t> indices,
@@ -587,6 +611,9 @@ void editor_input_system(ecs::Registry& registry, const FrameContext& frame) {
         state->request_frame_selection = false;
         frame_selection(registry, *state);
     }
+    adapt_quality(registry, *state, std::any_of(events.begin(), events.end(), [](const InputEvent& e) {
+                      return e.kind == InputKind::scroll;
+                  }));
 }
 
 void undo(ecs::Registry& registry, EditorState& state) {

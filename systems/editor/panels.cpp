@@ -26,6 +26,7 @@
 #include "systems/animation/components.h"
 #include "systems/animation/editing.h"
 #include "systems/profiling/overlay.h"
+#include "systems/splat_render/splat_render.h"
 
 namespace sffd::editor {
 
@@ -252,6 +253,7 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
             ImGui::MenuItem("X-ray", "T", &state.xray);
             ImGui::MenuItem("Lattice", nullptr, &state.show_lattice);
             ImGui::MenuItem("Lattice cage only", "Shift+T", &state.lattice_cage_only);
+            ImGui::MenuItem("Preview while moving", nullptr, &state.preview_while_moving);
             ImGui::MenuItem("Auto-key", "N", &state.auto_key);
             if (ImGui::MenuItem("Frame selection", "F")) frame_selection(registry, state);
             ImGui::EndMenu();
@@ -550,11 +552,15 @@ void status_bar(ecs::Registry& registry, EditorState& state) {
     std::size_t selected = 0;
     if (registry.valid(state.active_lattice))
         if (const auto* s = registry.try_get<picking::LatticeSelection>(state.active_lattice)) selected = s->indices.size();
-    ImGui::Text("tool %s | axis %s | %s%s%s | %zu selected | auto-key %s%s | undo %zu/%zu | %s", tool_name(state.tool),
+    const char* render = state.previewing ? "preview while moving"
+                         : state.rest_quality == int(render::Quality::preview) ? "preview"
+                                                                                : "HQ";
+    ImGui::Text("tool %s | axis %s | %s%s%s | %zu selected | auto-key %s%s | render %s | undo %zu/%zu | %s", tool_name(state.tool),
                 axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis),
                 state.scope == ToolScope::local ? "local" : "global", state.pin_outer_layer ? " pinned" : "",
                 state.xray ? " x-ray" : "", selected, state.auto_key ? "ON" : "off",
                 registry.valid(state.unkeyed) && registry.has<AnimationClip>(state.unkeyed) ? " (un-keyed edit)" : "",
+                render,
                 state.undo.position(), state.undo.size(), state.status.c_str());
     ImGui::End();
 }

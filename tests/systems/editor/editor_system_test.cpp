@@ -15,6 +15,7 @@
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform.h"
 #include "systems/picking/components.h"
+#include "systems/splat_render/splat_render.h"
 
 using namespace sffd;
 using namespace sffd::editor;
@@ -372,4 +373,39 @@ TEST(EditorSystem, AutoKeyKeysEveryEditAtTheClipTime) {
     EXPECT_TRUE(s.reg.get<AnimationState>(s.lattice).playing) << "nothing un-keyed: plays at once";
     s.run(keys({"space", "n"}));
     EXPECT_FALSE(s.state->auto_key);
+}
+
+// Preview while moving, HQ once the view has rested refine_after frames (RenderSettings through the registry).
+TEST(EditorSystem, PreviewWhileDraggingRefinesToHqAtRest) {
+    Scene s;
+    auto& settings = s.reg.set_resource<render::RenderSettings>();
+    settings.quality = render::Quality::hq;
+    s.run({});
+    EXPECT_EQ(settings.quality, render::Quality::hq) << "a still view starts in HQ";
+    // Orbit drag (right button): preview from the first moving frame.
+    s.run({Scene::move({300, 300}), Scene::press(0, MouseButton::right)});
+    s.run({Scene::move({340, 310})});
+    EXPECT_EQ(settings.quality, render::Quality::preview);
+    EXPECT_TRUE(s.state->previewing);
+    s.run({Scene::release(MouseButton::right)});  // the first still frame
+    EXPECT_EQ(settings.quality, render::Quality::preview);
+    for (int f = 2; f < s.state->refine_after; ++f) {
+        s.run({});
+        EXPECT_EQ(settings.quality, render::Quality::preview) << "still frame " << f;
+    }
+    s.run({});
+    EXPECT_EQ(settings.quality, render::Quality::hq) << "rested " << s.state->refine_after << " frames";
+    EXPECT_FALSE(s.state->previewing);
+    // The wheel and a stretch drag count as movement too; a view started in preview stays preview.
+    s.run({[] { InputEvent e; e.kind = InputKind::scroll; e.scroll = 1; return e; }()});
+    EXPECT_EQ(settings.quality, render::Quality::preview);
+    s.state->preview_while_moving = false;
+    s.run({});
+    EXPECT_EQ(settings.quality, render::Quality::hq) << "switched off: always the rest quality";
+    Scene p;
+    auto& ps = p.reg.set_resource<render::RenderSettings>();
+    ps.quality = render::Quality::preview;
+    p.run({Scene::move({300, 300}), Scene::press(0, MouseButton::right), Scene::move({350, 300})});
+    for (int f = 0; f < 12; ++f) p.run({});
+    EXPECT_EQ(ps.quality, render::Quality::preview);
 }
