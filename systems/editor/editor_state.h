@@ -123,6 +123,7 @@ struct EditorState {
     bool request_screenshot = false;
     bool request_quit = false;
     bool request_frame_selection = false;
+    bool request_open_dialog = false;  // ctrl+o: the panels open File > Open scene
     std::string save_as;  // non-empty: save there (File > Save as); it becomes the ctrl+s path
 
     // --- files (file_browser.h) ---

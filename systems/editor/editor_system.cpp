@@ -452,6 +452,7 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
         else if (k == "s") state.request_save = true;
         else if (k == "a") select_all(registry, state);
         else if (k == "q") state.request_quit = true;
+        else if (k == "o") state.request_open_dialog = true;
         return;
     }
     if (k == "q") state.tool = Tool::select, say(state, "tool: select");

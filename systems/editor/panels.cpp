@@ -232,7 +232,7 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
         layout_state().menu_height = ImGui::GetWindowSize().y;
         record_current_window("##menu");
         if (ImGui::BeginMenu("File")) {
-            if (ImGui::MenuItem("Open scene...")) open_popup = true;
+            if (ImGui::MenuItem("Open scene...", "Ctrl+O")) open_popup = true;
             if (ImGui::MenuItem("Save scene", "Ctrl+S")) state.request_save = true;
             if (ImGui::MenuItem("Save scene as...")) save_popup = true;
             if (ImGui::MenuItem("Screenshot", "F12")) state.request_screenshot = true;
@@ -260,6 +260,7 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
         }
         ImGui::EndMainMenuBar();
     }
+    if (state.request_open_dialog) open_popup = true, state.request_open_dialog = false;
     if (open_popup || save_popup) open_file_dialog(state, save_popup);
     file_dialog_window(registry, state);
 }

@@ -8,7 +8,9 @@
 #include <gtest/gtest.h>
 #include <imgui.h>
 
+#include "runtime/scene/components.h"
 #include "systems/editor/editor_state.h"
+#include "systems/editor/editor_system.h"
 #include "systems/editor/panels.h"
 
 using namespace sffd;
@@ -98,5 +100,18 @@ TEST(FileBrowser, DialogOpensAndEscapeClosesIt) {
     EXPECT_TRUE(frame(false));
     EXPECT_FALSE(frame(true)) << "Escape closes the dialog";
     EXPECT_FALSE(frame(false));
+    // ctrl+o (through the input system) opens it again.
+    InputEvent ctrl_o;
+    ctrl_o.kind = InputKind::key;
+    ctrl_o.key = "o";
+    ctrl_o.modifiers = mods::ctrl;
+    reg.emplace<Camera>(reg.create());
+    setup_editor(reg, state.viewport);
+    state.events = {ctrl_o};
+    editor_input_system(reg, FrameContext{});
+    EXPECT_TRUE(state.request_open_dialog);
+    frame(false);
+    EXPECT_TRUE(frame(false));
+    EXPECT_FALSE(state.request_open_dialog);
     ImGui::DestroyContext(ctx);
 }
