@@ -57,6 +57,18 @@ struct Drag {
     glm::dvec3 displacement_world{0.0};
 };
 
+// Typed values after g / r (Blender habit: `g z 0.2 Enter`, `r x 45 Enter`). Pressing g/w/r starts an
+// entry; while it is active the number keys (0-9, minus, period, comma, space) go to `text` (space does
+// not play/pause), backspace edits, x/y/z set the axis as always, Enter applies (move: one value along
+// the x/y/z axis or three values dx dy dz; twist: degrees), Escape cancels. Any other key or a mouse
+// press ends the entry unapplied and then does what it always does (ctrl+q still quits).
+struct TypedEntry {
+    bool active = false;
+    Tool tool = Tool::move;
+    std::string text;
+    bool axis_typed = false;  // an axis key was pressed in this entry
+};
+
 struct EditorState {
     // --- tool settings (panels and shortcuts change them) ---
     Tool tool = Tool::select;
@@ -70,6 +82,22 @@ struct EditorState {
     bool pin_outer_layer = true;
     bool xray = false;
     bool show_lattice = true;
+    bool lattice_cage_only = false;
+    // Preview while moving: while the camera or the lattice moves (orbit/pan/wheel, tool drags, brush,
+    // playback) the renderer draws in preview quality; after `refine_after` still frames it refines to
+    // the quality the view started with (RenderSettings::quality; `--quality preview` stays preview).
+    bool preview_while_moving = true;
+    int refine_after = 8;
+    int still_frames = 1 << 20;  // frames since the last movement
+    int rest_quality = -1;       // render::Quality the view started with (-1: not read yet)
+    bool previewing = false;     // this frame renders in preview because of movement (status bar)
+    Camera last_camera;          // camera at the end of the previous frame (movement by any means)  // shift+t: the overlay draws only the box's 12 edges (+ selected points)
+    // Auto-key (n toggles; status bar and Timeline show it): every stretch/twist is also keyed at the clip
+    // time. Off: a stretch/twist of a lattice with a clip is "un-keyed" until k keys it; playing would
+    // replace it with the clip's pose, so the first play only warns and the second plays.
+    bool auto_key = false;
+    ecs::Entity unkeyed = ecs::null_entity;  // lattice with a stretch/twist since its last key
+    bool play_warned = false;
     double click_tolerance_px = 8.0;
 
     // --- what is being edited ---
@@ -88,12 +116,19 @@ struct EditorState {
     glm::dvec2 cursor{0.0};
     Drag drag;
     LastEdit last_edit;
+    TypedEntry typed;
 
     // --- requests for the view loop ---
     bool request_save = false;
     bool request_screenshot = false;
     bool request_quit = false;
     bool request_frame_selection = false;
+    bool request_open_dialog = false;  // ctrl+o: the panels open File > Open scene
+    std::string save_as;  // non-empty: save there (File > Save as); it becomes the ctrl+s path
+
+    // --- files (file_browser.h) ---
+    std::string last_folder;    // where the dialogs open and saves/screenshots go by default ("" = current)
+    std::string settings_file;  // editor.ini that remembers last_folder ("" = nothing remembered: tests)
 
     std::string status;  // last message for the status bar (also logged)
 };

@@ -5,6 +5,7 @@
 //           deformer re-runs), picking::LatticeSelection, AnimationClip (set/delete key), AnimationState
 //           (play/pause/scrub), EditorState (tools, drag, undo stack, requests); through lattice_manage.h
 //           lattice entities (Name, Transform, Lattice: add/remove/refit/import) and clouds' Deformers
+//           render::RenderSettings::quality (resource; preview while the view moves, EditorState::preview_while_moving)
 // Does nothing when the registry has no EditorState. Picks synchronously through the picking library
 // (picking::pick on the PickingState resource): a click is answered in the frame it happens in, so a
 // replayed session is deterministic frame by frame.
@@ -15,7 +16,8 @@
 // sets the twist pivot to the picked surface point. Right drag orbits, middle drag (or shift+right)
 // pans, wheel zooms. Keys: see README.md (q/g/r/b tools, x/y/z/v/c axes, ctrl+z/ctrl+shift+z/ctrl+y,
 // ctrl+s, f frame, a select all, escape, p pins, l local/global, t x-ray, home reset, k/shift+k keys,
-// space play/pause, left/right step, f12 screenshot).
+// space play/pause, left/right step, f12 screenshot). Typed values after g/r: `g z 0.2 enter`,
+// `r x 45 enter` (EditorState::typed; number keys and space go to the entry while it is active).
 #pragma once
 
 #include <span>

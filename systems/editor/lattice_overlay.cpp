@@ -52,17 +52,33 @@ OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const Edito
         }
     }
     const bool active = entity == state.active_lattice;
+    const glm::ivec3 d = lattice->divisions;
+    // Cage only: the 12 edges of the lattice's box (points where at least two indices are on a face);
+    // selected points are still drawn so the selection stays visible.
+    const auto on_cage = [&](int i, int j, int k) {
+        return int(i == 0 || i == d.x) + int(j == 0 || j == d.y) + int(k == 0 || k == d.z) >= 2;
+    };
     g.points.reserve(p.size());
     for (std::size_t c = 0; c < p.size(); ++c) {
+        bool faint = false;  // cage only: a selected point inside the cage, small and translucent
+        if (state.lattice_cage_only) {
+            const int i = int(c / std::size_t((d.y + 1) * (d.z + 1)));
+            const int j = int((c / std::size_t(d.z + 1)) % std::size_t(d.y + 1));
+            const int k = int(c % std::size_t(d.z + 1));
+            if (!on_cage(i, j, k)) {
+                if (!selected[c]) continue;
+                faint = true;
+            }
+        }
         glm::vec4 color = selected[c] ? overlay_selected
                           : (pins && outer[c]) ? overlay_pinned
                           : inside[c] ? overlay_inside
                                       : overlay_outside;
         if (!active) color.w *= 0.5f;
-        g.points.push_back({p[c], color, selected[c] ? 9.0f : 5.0f});
+        if (faint) color.w *= 0.35f;
+        g.points.push_back({p[c], color, faint ? 3.0f : selected[c] ? 9.0f : 5.0f});
     }
     const glm::vec4 line_color = active ? glm::vec4(0.3f, 0.75f, 0.95f, 0.7f) : glm::vec4(0.5f, 0.5f, 0.5f, 0.4f);
-    const glm::ivec3 d = lattice->divisions;
     auto edge = [&](std::size_t a, std::size_t b) {
         g.lines.push_back({p[a], line_color, 1.0f});
         g.lines.push_back({p[b], line_color, 1.0f});
@@ -71,9 +87,11 @@ OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const Edito
         for (int j = 0; j <= d.y; ++j)
             for (int k = 0; k <= d.z; ++k) {
                 const std::size_t c = lattice->index(i, j, k);
-                if (i < d.x) edge(c, lattice->index(i + 1, j, k));
-                if (j < d.y) edge(c, lattice->index(i, j + 1, k));
-                if (k < d.z) edge(c, lattice->index(i, j, k + 1));
+                const bool cage = state.lattice_cage_only;
+                const bool fi = i == 0 || i == d.x, fj = j == 0 || j == d.y, fk = k == 0 || k == d.z;
+                if (i < d.x && (!cage || (fj && fk))) edge(c, lattice->index(i + 1, j, k));
+                if (j < d.y && (!cage || (fi && fk))) edge(c, lattice->index(i, j + 1, k));
+                if (k < d.z && (!cage || (fi && fj))) edge(c, lattice->index(i, j, k + 1));
             }
     return g;
 }

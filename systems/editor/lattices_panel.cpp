@@ -1,8 +1,8 @@
 // The "lattices" section at the top of the Lattice panel (lattice_manage.h): the clouds and the lattices
 // each follows, in order (click one to make it active); add / remove / refit with the fit settings (shape,
 // padding, divisions, basis); order; export / import JSON. Every button calls the same function as its
-// key, so each action is one undo step. (A section, not a window of its own: the panels' fixed layout at
-// 1280x720 has no room for another window.)
+// key, so each action is one undo step. (A section, not a window of its own: the right column (panel_layout.h)
+// holds Tools and Lattice.)
 #include <cstdio>
 #include <string>
 
@@ -10,6 +10,7 @@
 
 #include "runtime/scene/components.h"
 #include "systems/editor/lattice_manage.h"
+#include "systems/editor/panels.h"
 
 namespace sffd::editor {
 
@@ -57,19 +58,19 @@ void lattice_manager_section(ecs::Registry& registry, EditorState& state) {
         float pad = float(settings.fit.padding);
         if (ImGui::SliderFloat("padding", &pad, 0.0f, 0.5f, "%.3f")) settings.fit.padding = double(pad);
         if (ImGui::Button("add (shift+a)")) add_lattice(registry, state);
-        ImGui::SameLine();
+        same_line_if_fits("refit (shift+f)");
         if (ImGui::Button("refit (shift+f)")) refit_lattice(registry, state);
         if (ImGui::Button("remove (del)")) remove_lattice(registry, state);
-        ImGui::SameLine();
+        same_line_if_fits("up (pgup)");
         if (ImGui::Button("up (pgup)")) move_lattice_in_order(registry, state, -1);
-        ImGui::SameLine();
+        same_line_if_fits("down (pgdn)");
         if (ImGui::Button("down (pgdn)")) move_lattice_in_order(registry, state, +1);
         ImGui::Separator();
         char path[512];
         std::snprintf(path, sizeof path, "%s", settings.json_path.c_str());
         if (ImGui::InputText("json", path, sizeof path)) settings.json_path = path;
         if (ImGui::Button("export (ctrl+e)")) export_lattice_json(registry, state, settings.json_path);
-        ImGui::SameLine();
+        same_line_if_fits("import (ctrl+i)");
         if (ImGui::Button("import (ctrl+i)")) import_lattice_json(registry, state, settings.json_path);
         ImGui::Separator();
     }

@@ -1,9 +1,12 @@
 #include "systems/editor/panels.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 #include <glm/gtc/quaternion.hpp>
 #include <imgui.h>
@@ -13,7 +16,9 @@
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
 #include "systems/editor/editor_system.h"
+#include "systems/editor/file_browser.h"
 #include "systems/editor/lattice_manage.h"
+#include "systems/editor/panel_layout.h"
 #include "systems/editor/selection_edit.h"
 #include "systems/ffd/components.h"
 #include "systems/picking/components.h"
@@ -21,10 +26,42 @@
 #include "systems/animation/components.h"
 #include "systems/animation/editing.h"
 #include "systems/profiling/overlay.h"
+#include "systems/splat_render/splat_render.h"
 
 namespace sffd::editor {
 
 namespace {
+
+// The layout of this frame (from the window size and last frame's collapsed flags) and the rectangles the
+// panels really got (what panel_rects() reports). UI state of the single editor window (main thread).
+struct LayoutState {
+    std::array<bool, panel_count> collapsed{};
+    std::array<PanelRect, panel_count> rects{};
+    float menu_height = 0.0f;
+    std::vector<NamedPanelRect> drawn;
+};
+LayoutState& layout_state() {
+    static LayoutState s;
+    return s;
+}
+
+void record_current_window(const char* name) {
+    const ImVec2 pos = ImGui::GetWindowPos(), size = ImGui::GetWindowSize();
+    layout_state().drawn.push_back({name, PanelRect{pos.x, pos.y, size.x, size.y}});
+}
+
+// Begin of a laid-out panel: placed and sized every frame (the user collapses panels, the layout moves
+// the others), not movable or resizable by hand (a moved panel would cover another).
+bool begin_panel(Panel p) {
+    LayoutState& ls = layout_state();
+    const PanelRect& r = ls.rects[std::size_t(p)];
+    ImGui::SetNextWindowPos(ImVec2(r.x, r.y), ImGuiCond_Always);
+    ImGui::SetNextWindowSize(ImVec2(r.w, r.h), ImGuiCond_Always);
+    const bool open = ImGui::Begin(panel_title(p), nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
+    ls.collapsed[std::size_t(p)] = ImGui::IsWindowCollapsed();
+    record_current_window(panel_title(p));
+    return open;
+}
 
 // One inspector edit = one undo step: the value before the widget became active is kept, and the step is
 // recorded when the widget is released (continuous widgets change the component live in between).
@@ -81,13 +118,123 @@ std::string entity_label(const ecs::Registry& registry, ecs::Entity e) {
     return kind.empty() ? name : name + "  [" + kind + "]";
 }
 
+// The open / save dialog: a folder listing (file_browser.h) with ".." and sub-folders, files filtered by
+// extension, a name field (built-in scene names such as "sphere" can be typed), Escape or Cancel closes.
+struct FileDialog {
+    enum class Mode { open, save } mode = Mode::open;
+    std::filesystem::path folder;
+    std::vector<FolderEntry> entries;
+    std::string error;
+    char name[512] = "";
+};
+FileDialog& file_dialog() {
+    static FileDialog d;
+    return d;
+}
+
+void browse(FileDialog& d, const std::filesystem::path& folder) {
+    auto listed = list_folder(folder, d.mode == FileDialog::Mode::open ? openable_extensions() : saveable_extensions());
+    if (!listed) {
+        d.error = listed.message();
+        return;
+    }
+    std::error_code ec;
+    d.folder = std::filesystem::weakly_canonical(folder, ec);
+    if (ec) d.folder = folder;
+    d.entries = std::move(*listed);
+    d.error.clear();
+}
+
+void remember_folder(EditorState& state, const std::filesystem::path& folder) {
+    state.last_folder = folder.string();
+    save_last_folder(state.settings_file, state.last_folder);
+}
+
+void open_scene_file(ecs::Registry& registry, EditorState& state, const std::string& path) {
+    // Replace the scene: destroy every entity, load, re-run the editor set-up. The undo history refers
+    // to the old entities, so it is cleared.
+    ecs::Registry probe;
+    if (Status st = load_scene(probe, path); !st) {
+        state.status = st.message();
+        return;
+    }
+    std::vector<ecs::Entity> all;
+    registry.each_entity([&](ecs::Entity e) { all.push_back(e); });
+    for (ecs::Entity e : all) registry.destroy(e);
+    if (Status st2 = load_scene(registry, path); !st2) state.status = st2.message();
+    state.undo.clear();
+    state.camera = state.active_lattice = state.selected_entity = ecs::null_entity;
+    state.last_edit = {};
+    state.unkeyed = ecs::null_entity;
+    setup_editor(registry, state.viewport);
+    state.status = "opened " + path;
+}
+
+void file_dialog_window(ecs::Registry& registry, EditorState& state) {
+    FileDialog& d = file_dialog();
+    const char* title = d.mode == FileDialog::Mode::open ? "Open scene" : "Save scene as";
+    const ImGuiViewport* vp = ImGui::GetMainViewport();
+    ImGui::SetNextWindowPos(ImVec2(vp->Size.x * 0.5f, vp->Size.y * 0.5f), ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
+    ImGui::SetNextWindowSize(ImVec2(std::min(640.0f, vp->Size.x - 40.0f), std::min(460.0f, vp->Size.y - 80.0f)), ImGuiCond_Appearing);
+    if (!ImGui::BeginPopupModal(title, nullptr)) return;
+    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
+        ImGui::CloseCurrentPopup();
+        ImGui::EndPopup();
+        return;
+    }
+    ImGui::TextUnformatted(d.folder.string().c_str());
+    if (!d.error.empty()) ImGui::TextColored(ImVec4(1.0f, 0.45f, 0.4f, 1.0f), "%s", d.error.c_str());
+    const float list_h = ImGui::GetContentRegionAvail().y - 2.0f * ImGui::GetFrameHeightWithSpacing() - 4.0f;
+    std::string chosen;  // a file double-clicked: open/save it at once
+    if (ImGui::BeginChild("##files", ImVec2(0, std::max(list_h, 60.0f)), true)) {
+        std::filesystem::path enter;
+        for (const FolderEntry& e : d.entries) {
+            const std::string label = e.folder ? "[" + e.name + "]" : e.name;
+            if (ImGui::Selectable(label.c_str(), !e.folder && e.name == d.name, ImGuiSelectableFlags_AllowDoubleClick)) {
+                if (e.folder) enter = e.name == ".." ? d.folder.parent_path() : d.folder / e.name;
+                else {
+                    std::snprintf(d.name, sizeof d.name, "%s", e.name.c_str());
+                    if (ImGui::IsMouseDoubleClicked(0)) chosen = (d.folder / e.name).string();
+                }
+            }
+        }
+        if (!enter.empty()) browse(d, enter);
+    }
+    ImGui::EndChild();
+    ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x * 0.7f);
+    const bool entered = ImGui::InputText(d.mode == FileDialog::Mode::open ? "file or built-in name" : "file name", d.name,
+                                          sizeof d.name, ImGuiInputTextFlags_EnterReturnsTrue);
+    if (ImGui::Button(d.mode == FileDialog::Mode::open ? "Open" : "Save") || entered) {
+        const std::string name = d.name;
+        if (!name.empty()) {
+            const std::filesystem::path p(name);
+            // A bare built-in name ("sphere") is not a file in the folder; anything else is relative to it.
+            const bool builtin = d.mode == FileDialog::Mode::open && !p.has_extension() && !p.has_parent_path() &&
+                                 !std::filesystem::exists(d.folder / p);
+            chosen = builtin ? name : (p.is_absolute() ? p : d.folder / p).string();
+        }
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Cancel")) ImGui::CloseCurrentPopup();
+    if (!chosen.empty()) {
+        const std::filesystem::path p(chosen);
+        if (p.has_parent_path()) remember_folder(state, p.parent_path());
+        if (d.mode == FileDialog::Mode::open) open_scene_file(registry, state, chosen);
+        else state.save_as = chosen, state.request_save = true;
+        ImGui::CloseCurrentPopup();
+    }
+    ImGui::EndPopup();
+}
+
 void menu_bar(ecs::Registry& registry, EditorState& state) {
-    static char open_path[512] = "";
-    bool open_popup = false;
+    bool open_popup = false, save_popup = false;
     if (ImGui::BeginMainMenuBar()) {
+        layout_state().menu_height = ImGui::GetWindowSize().y;
+        record_current_window("##menu");
         if (ImGui::BeginMenu("File")) {
-            if (ImGui::MenuItem("Open scene...")) open_popup = true;
+            if (ImGui::MenuItem("Open scene...", "Ctrl+O")) open_popup = true;
             if (ImGui::MenuItem("Save scene", "Ctrl+S")) state.request_save = true;
+            if (ImGui::MenuItem("Save scene as...")) save_popup = true;
             if (ImGui::MenuItem("Screenshot", "F12")) state.request_screenshot = true;
             ImGui::Separator();
             if (ImGui::MenuItem("Quit", "Ctrl+Q")) state.request_quit = true;
@@ -105,44 +252,21 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
         if (ImGui::BeginMenu("View")) {
             ImGui::MenuItem("X-ray", "T", &state.xray);
             ImGui::MenuItem("Lattice", nullptr, &state.show_lattice);
+            ImGui::MenuItem("Lattice cage only", "Shift+T", &state.lattice_cage_only);
+            ImGui::MenuItem("Preview while moving", nullptr, &state.preview_while_moving);
+            ImGui::MenuItem("Auto-key", "N", &state.auto_key);
             if (ImGui::MenuItem("Frame selection", "F")) frame_selection(registry, state);
             ImGui::EndMenu();
         }
         ImGui::EndMainMenuBar();
     }
-    if (open_popup) ImGui::OpenPopup("Open scene");
-    if (ImGui::BeginPopupModal("Open scene", nullptr, ImGuiWindowFlags_AlwaysAutoResize)) {
-        ImGui::TextUnformatted("Built-in name (sphere, face) or a file (.ply .obj .off .gltf .glb):");
-        ImGui::InputText("##path", open_path, sizeof open_path);
-        if (ImGui::Button("Open")) {
-            // Replace the scene: destroy every entity, load, re-run the editor set-up. The undo history
-            // refers to the old entities, so it is cleared.
-            ecs::Registry probe;
-            if (Status st = load_scene(probe, open_path); !st) {
-                state.status = st.message();
-            } else {
-                std::vector<ecs::Entity> all;
-                registry.each_entity([&](ecs::Entity e) { all.push_back(e); });
-                for (ecs::Entity e : all) registry.destroy(e);
-                if (Status st2 = load_scene(registry, open_path); !st2) state.status = st2.message();
-                state.undo.clear();
-                state.camera = state.active_lattice = state.selected_entity = ecs::null_entity;
-                state.last_edit = {};
-                setup_editor(registry, state.viewport);
-                state.status = std::string("opened ") + open_path;
-            }
-            ImGui::CloseCurrentPopup();
-        }
-        ImGui::SameLine();
-        if (ImGui::Button("Cancel")) ImGui::CloseCurrentPopup();
-        ImGui::EndPopup();
-    }
+    if (state.request_open_dialog) open_popup = true, state.request_open_dialog = false;
+    if (open_popup || save_popup) open_file_dialog(state, save_popup);
+    file_dialog_window(registry, state);
 }
 
 void outliner(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(8, 28), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(240, 200), ImGuiCond_FirstUseEver);
-    if (ImGui::Begin("Outliner")) {
+    if (begin_panel(Panel::outliner)) {
         registry.each_entity([&](ecs::Entity e) {
             const std::string label = entity_label(registry, e) + "##" + std::to_string(e.index);
             if (ImGui::Selectable(label.c_str(), state.selected_entity == e)) {
@@ -155,9 +279,7 @@ void outliner(ecs::Registry& registry, EditorState& state) {
 }
 
 void inspector(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(8, 236), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(300, 330), ImGuiCond_FirstUseEver);
-    if (!ImGui::Begin("Inspector")) {
+    if (!begin_panel(Panel::inspector)) {
         ImGui::End();
         return;
     }
@@ -260,9 +382,7 @@ void inspector(ecs::Registry& registry, EditorState& state) {
 }
 
 void tools_panel(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(float(state.viewport.width) - 300.0f, 28), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(292, 330), ImGuiCond_FirstUseEver);
-    if (ImGui::Begin("Tools")) {
+    if (begin_panel(Panel::tools)) {
         int tool = int(state.tool);
         ImGui::RadioButton("select (Q)", &tool, int(Tool::select));
         ImGui::SameLine();
@@ -307,9 +427,7 @@ void tools_panel(ecs::Registry& registry, EditorState& state) {
 }
 
 void lattice_panel(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(float(state.viewport.width) - 300.0f, 366), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(292, 250), ImGuiCond_FirstUseEver);
-    if (ImGui::Begin("Lattice")) {
+    if (begin_panel(Panel::lattice)) {
         lattice_manager_section(registry, state);  // add / remove / order / JSON (lattice_manage.h)
         const Lattice* l = registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
         if (!l) {
@@ -325,7 +443,7 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
                 inside = std::size_t(std::count(mask.begin(), mask.end(), std::uint8_t(1)));
             }
             const auto outer = outer_layer_mask(*l);
-            ImGui::Text("%zu inside the object's box (white), %zu outer (pinned: %s)", inside,
+            ImGui::TextWrapped("%zu inside the object's box (white), %zu outer (pinned: %s)", inside,
                         std::size_t(std::count(outer.begin(), outer.end(), std::uint8_t(1))),
                         state.pin_outer_layer ? "yes" : "no");
             if (ImGui::Button(state.pin_outer_layer ? "unpin outer layer" : "pin outer layer"))
@@ -340,9 +458,10 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
                 divisions = l->divisions;
                 divisions_of = state.active_lattice;
             }
+            ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x * 0.5f);
             ImGui::InputInt3("divisions", &divisions.x);
             divisions = glm::clamp(divisions, glm::ivec3(1), glm::ivec3(64));
-            ImGui::SameLine();
+            same_line_if_fits("resample");
             if (ImGui::Button("resample")) {
                 resample_lattice(registry, state, divisions);
                 divisions = glm::ivec3(0);
@@ -350,9 +469,9 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
             int basis = int(l->basis);
             if (ImGui::Combo("basis", &basis, "Bernstein\0cubic B-spline\0")) set_lattice_basis(registry, state, LatticeBasis(basis));
             if (ImGui::Button("fit to object")) fit_lattice_to(registry, state, false);
-            ImGui::SameLine();
+            same_line_if_fits("fit to selection");
             if (ImGui::Button("fit to selection")) fit_lattice_to(registry, state, true);
-            ImGui::SameLine();
+            same_line_if_fits("apply as rest");
             if (ImGui::Button("apply as rest")) apply_lattice_as_rest(registry, state);
         }
     }
@@ -360,9 +479,7 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
 }
 
 void timeline_panel(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(256, float(state.viewport.height) - 120.0f), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(float(state.viewport.width) - 570.0f, 88), ImGuiCond_FirstUseEver);
-    if (ImGui::Begin("Timeline")) {
+    if (begin_panel(Panel::timeline)) {
         const ecs::Entity e = state.active_lattice;
         AnimationClip* clip = registry.valid(e) ? registry.try_get<AnimationClip>(e) : nullptr;
         AnimationState* anim = registry.valid(e) ? registry.try_get<AnimationState>(e) : nullptr;
@@ -371,6 +488,8 @@ void timeline_panel(ecs::Registry& registry, EditorState& state) {
         if (ImGui::Button("set key (K)")) key_last_edit(registry, state);
         ImGui::SameLine();
         if (ImGui::Button("delete key")) delete_keys_at_time(registry, state);
+        ImGui::SameLine();
+        ImGui::Checkbox("auto-key (N)", &state.auto_key);
         if (clip && anim) {
             ImGui::SameLine();
             float t = float(anim->time);
@@ -391,15 +510,18 @@ void timeline_panel(ecs::Registry& registry, EditorState& state) {
     ImGui::End();
 }
 
-void profiler_panel(ecs::Registry& registry, EditorState& state) {
-    ImGui::SetNextWindowPos(ImVec2(8, float(state.viewport.height) - 250.0f), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(240, 218), ImGuiCond_FirstUseEver);
-    if (ImGui::Begin("Frame time")) {
+void profiler_panel(ecs::Registry& registry, EditorState&) {
+    if (begin_panel(Panel::frame_time)) {
         if (const auto* o = registry.try_resource<profiling::ProfileOverlay>(); o && o->count > 0) {
             ImGui::Text("%.1f ms (avg %.1f, %.1f FPS)", double(o->frame_last_ms), double(o->frame_avg_ms),
                         o->frame_avg_ms > 0 ? 1000.0 / double(o->frame_avg_ms) : 0.0);
-            ImGui::PlotLines("##frame", o->frame_ms.data(), int(o->count), int(o->oldest()), nullptr, 0.0f,
-                             std::max(o->max_ms, 1.0f), ImVec2(-1, 50));
+            // Scaled to the typical frame, not the ring's maximum: the first frame (shader compilation,
+            // uploads: seconds) made every later frame a flat line at the bottom of the graph.
+            const float scale = graph_scale(std::span<const float>(o->frame_ms.data(), o->count));
+            char overlay[48];
+            std::snprintf(overlay, sizeof overlay, "0..%.0f ms, %zu frames", double(scale), o->count);
+            ImGui::PlotLines("##frame", o->frame_ms.data(), int(o->count), int(o->oldest()), overlay, 0.0f, scale,
+                             ImVec2(ImGui::GetContentRegionAvail().x, 50));  // PlotLines (1.86) takes no -1 width: it drew a 1-px line
             const float total = std::max(o->frame_avg_ms, 1e-3f);
             for (const auto& s : o->systems) {
                 char text[128];
@@ -413,19 +535,34 @@ void profiler_panel(ecs::Registry& registry, EditorState& state) {
     ImGui::End();
 }
 
+// One text line with the window padding, and never below ImGui's minimum window height (which a
+// 24 px bar used to exceed, reaching 8 px below the window).
+float status_bar_height() {
+    const ImGuiStyle& style = ImGui::GetStyle();
+    return std::max(style.WindowMinSize.y, ImGui::GetTextLineHeight() + 2.0f * style.WindowPadding.y);
+}
+
 void status_bar(ecs::Registry& registry, EditorState& state) {
     const ImGuiViewport* vp = ImGui::GetMainViewport();
-    ImGui::SetNextWindowPos(ImVec2(vp->Pos.x, vp->Pos.y + vp->Size.y - 24));
-    ImGui::SetNextWindowSize(ImVec2(vp->Size.x, 24));
+    const float h = status_bar_height();
+    ImGui::SetNextWindowPos(ImVec2(vp->Pos.x, vp->Pos.y + vp->Size.y - h));
+    ImGui::SetNextWindowSize(ImVec2(vp->Size.x, h));
     ImGui::Begin("##status", nullptr, ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs |
                                           ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing);
+    record_current_window("##status");
     std::size_t selected = 0;
     if (registry.valid(state.active_lattice))
         if (const auto* s = registry.try_get<picking::LatticeSelection>(state.active_lattice)) selected = s->indices.size();
-    ImGui::Text("tool %s | axis %s | %s%s%s | %zu selected | undo %zu/%zu | %s", tool_name(state.tool),
+    const char* render = state.previewing ? "preview while moving"
+                         : state.rest_quality == int(render::Quality::preview) ? "preview"
+                                                                                : "HQ";
+    ImGui::Text("tool %s | axis %s | %s%s%s | %zu selected | auto-key %s%s | render %s | undo %zu/%zu | %s", tool_name(state.tool),
                 axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis),
                 state.scope == ToolScope::local ? "local" : "global", state.pin_outer_layer ? " pinned" : "",
-                state.xray ? " x-ray" : "", selected, state.undo.position(), state.undo.size(), state.status.c_str());
+                state.xray ? " x-ray" : "", selected, state.auto_key ? "ON" : "off",
+                registry.valid(state.unkeyed) && registry.has<AnimationClip>(state.unkeyed) ? " (un-keyed edit)" : "",
+                render,
+                state.undo.position(), state.undo.size(), state.status.c_str());
     ImGui::End();
 }
 
@@ -433,10 +570,13 @@ void gizmo(ecs::Registry& registry, EditorState& state) {
     ImDrawList* dl = ImGui::GetForegroundDrawList();
     const Drag& d = state.drag;
     if (d.kind == Drag::Kind::box) {
-        dl->AddRect(ImVec2(float(d.start.x), float(d.start.y)), ImVec2(float(state.cursor.x), float(state.cursor.y)),
-                    IM_COL32(255, 200, 60, 255));
-        dl->AddRectFilled(ImVec2(float(d.start.x), float(d.start.y)), ImVec2(float(state.cursor.x), float(state.cursor.y)),
-                          IM_COL32(255, 200, 60, 30));
+        // Translucent fill under a 2-px outline with a dark 1-px edge outside it, visible on light and dark
+        // surfaces alike (a faint 1-px line was lost over the model).
+        const ImVec2 a(std::min(float(d.start.x), float(state.cursor.x)), std::min(float(d.start.y), float(state.cursor.y)));
+        const ImVec2 b(std::max(float(d.start.x), float(state.cursor.x)), std::max(float(d.start.y), float(state.cursor.y)));
+        dl->AddRectFilled(a, b, IM_COL32(255, 200, 60, 48));
+        dl->AddRect(ImVec2(a.x - 1.5f, a.y - 1.5f), ImVec2(b.x + 1.5f, b.y + 1.5f), IM_COL32(0, 0, 0, 200), 0.0f, 0, 1.0f);
+        dl->AddRect(a, b, IM_COL32(255, 200, 60, 255), 0.0f, 0, 2.0f);
     }
     if (state.tool != Tool::move && state.tool != Tool::twist) return;
     if (!registry.valid(state.camera) || !registry.has<Camera>(state.camera)) return;
@@ -480,9 +620,40 @@ void gizmo(ecs::Registry& registry, EditorState& state) {
 
 }  // namespace
 
+void same_line_if_fits(const char* next_label) {
+    const ImGuiStyle& style = ImGui::GetStyle();
+    const float w = ImGui::CalcTextSize(next_label, nullptr, true).x + 2.0f * style.FramePadding.x;
+    const float right = ImGui::GetWindowPos().x + ImGui::GetWindowContentRegionMax().x;
+    if (ImGui::GetItemRectMax().x + style.ItemSpacing.x + w <= right) ImGui::SameLine();
+}
+
+const std::vector<NamedPanelRect>& panel_rects() { return layout_state().drawn; }
+
+void open_file_dialog(EditorState& state, bool save) {
+    FileDialog& d = file_dialog();
+    d.mode = save ? FileDialog::Mode::save : FileDialog::Mode::open;
+    d.name[0] = '\0';
+    std::error_code ec;
+    browse(d, state.last_folder.empty() ? std::filesystem::current_path(ec) : std::filesystem::path(state.last_folder));
+    if (!d.error.empty()) browse(d, std::filesystem::current_path(ec));  // the remembered folder is gone
+    ImGui::OpenPopup(save ? "Save scene as" : "Open scene");
+}
+
+bool file_dialog_open() { return ImGui::IsPopupOpen("Open scene") || ImGui::IsPopupOpen("Save scene as"); }
+
 void draw_panels(ecs::Registry& registry, const FrameContext&) {
     EditorState* state = registry.try_resource<EditorState>();
     if (!state) return;
+    LayoutState& ls = layout_state();
+    ls.drawn.clear();
+    const ImGuiViewport* vp = ImGui::GetMainViewport();
+    LayoutInput in;
+    in.width = vp->Size.x, in.height = vp->Size.y;
+    in.top = ls.menu_height > 0.0f ? ls.menu_height : ImGui::GetFrameHeight();
+    in.bottom = status_bar_height();
+    in.title = ImGui::GetFrameHeight();
+    in.collapsed = ls.collapsed;
+    ls.rects = layout_panels(in);
     menu_bar(registry, *state);
     outliner(registry, *state);
     inspector(registry, *state);

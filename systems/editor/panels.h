@@ -6,12 +6,36 @@
 // Every action goes through the same functions as the keyboard shortcuts (editor_system.h).
 #pragma once
 
+#include <string>
+#include <vector>
+
 #include "runtime/app/frame_loop.h"
 #include "runtime/ecs/registry.h"
+#include "systems/editor/panel_layout.h"
 
 namespace sffd::editor {
 
 // Needs a current ImGui frame (between ImGui::NewFrame and ImGui::Render).
+// Panels are laid out from the window size every frame (panel_layout.h).
 void draw_panels(ecs::Registry& registry, const FrameContext& frame);
+
+// The windows the last draw_panels drew and where (ImGui's own position and size after Begin): the
+// laid-out panels by title, the menu bar ("##menu") and the status bar ("##status"). `splatffd view
+// --panel-rects-json` writes them; tests check they neither overlap nor leave the window.
+struct NamedPanelRect {
+    std::string name;
+    PanelRect rect;
+};
+const std::vector<NamedPanelRect>& panel_rects();
+
+// The open (save = false) / save-as dialog: a file browser starting in EditorState::last_folder; Escape
+// or Cancel closes it. Needs a current ImGui frame; the dialog is drawn by draw_panels.
+struct EditorState;
+void open_file_dialog(EditorState& state, bool save);
+bool file_dialog_open();
+
+// SameLine() when a button labelled `next_label` still fits on the current line of the window, so rows
+// of buttons wrap in narrow panels instead of being cut at the window's edge.
+void same_line_if_fits(const char* next_label);
 
 }  // namespace sffd::editor

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <memory>
@@ -21,6 +22,7 @@
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/render_target.h"
 #include "systems/editor/editor_system.h"
+#include "systems/editor/file_browser.h"
 #include "systems/editor/lattice_manage.h"
 #include "systems/editor/lattice_overlay.h"
 #include "systems/editor/panels.h"
@@ -45,10 +47,14 @@ std::uint8_t glfw_mods(int m) {
 std::string glfw_key_name(int key) {
     if (key >= GLFW_KEY_A && key <= GLFW_KEY_Z) return std::string(1, char('a' + (key - GLFW_KEY_A)));
     if (key >= GLFW_KEY_0 && key <= GLFW_KEY_9) return std::string(1, char('0' + (key - GLFW_KEY_0)));
+    if (key >= GLFW_KEY_KP_0 && key <= GLFW_KEY_KP_9) return std::string(1, char('0' + (key - GLFW_KEY_KP_0)));  // typed values
     if (key >= GLFW_KEY_F1 && key <= GLFW_KEY_F12) return "f" + std::to_string(key - GLFW_KEY_F1 + 1);
     switch (key) {
         case GLFW_KEY_ESCAPE: return "escape";
-        case GLFW_KEY_ENTER: return "enter";
+        case GLFW_KEY_ENTER:
+        case GLFW_KEY_KP_ENTER: return "enter";
+        case GLFW_KEY_KP_DECIMAL: return "period";
+        case GLFW_KEY_KP_SUBTRACT: return "minus";
         case GLFW_KEY_TAB: return "tab";
         case GLFW_KEY_BACKSPACE: return "backspace";
         case GLFW_KEY_DELETE: return "delete";
@@ -117,7 +123,9 @@ void on_scroll(GLFWwindow*, double, double dy) {
 
 void on_key(GLFWwindow*, int key, int, int action, int m) {
     EditorState* s = live_state();
-    if (!s || s->replay || action == GLFW_RELEASE || ui_wants_keyboard()) return;
+    // ctrl+q quits even while a panel or the file dialog has the keyboard.
+    const bool quit = key == GLFW_KEY_Q && (m & GLFW_MOD_CONTROL);
+    if (!s || s->replay || action == GLFW_RELEASE || (ui_wants_keyboard() && !quit)) return;
     std::string name = glfw_key_name(key);
     if (name.empty()) return;
     InputEvent e;
@@ -126,6 +134,25 @@ void on_key(GLFWwindow*, int key, int, int action, int m) {
     e.modifiers = glfw_mods(m);
     s->events.push_back(e);
 }
+
+}  // namespace
+
+std::string user_config_file(const std::string& name) {
+    std::filesystem::path dir;
+    if (const char* xdg = std::getenv("XDG_CONFIG_HOME"); xdg && *xdg) dir = xdg;
+    else if (const char* home = std::getenv("HOME"); home && *home) dir = std::filesystem::path(home) / ".config";
+    else return {};
+    dir /= "splatffd";
+    std::error_code ec;
+    std::filesystem::create_directories(dir, ec);
+    if (ec) {
+        log::warn("view: cannot create ", dir.string(), ": ", ec.message(), " (settings are not remembered)");
+        return {};
+    }
+    return (dir / name).string();
+}
+
+namespace {
 
 // View-only resource: options the request handler needs and the per-frame drag log for timing.
 struct ViewSession {
@@ -167,6 +194,10 @@ void requests_system(ecs::Registry& registry, const FrameContext& frame) {
     if (!state || !session) return;
     if (session->dragging.size() <= frame.frame) session->dragging.resize(frame.frame + 1, 0);
     session->dragging[frame.frame] = state->drag.kind == Drag::Kind::move || state->drag.kind == Drag::Kind::twist;
+    if (!state->save_as.empty()) {  // File > Save as: the new ctrl+s target
+        session->save_path = std::move(state->save_as);
+        state->save_as.clear();
+    }
     if (state->request_save) {
         state->request_save = false;
         if (Status st = save_scene(registry, session->save_path); st) {
@@ -179,7 +210,9 @@ void requests_system(ecs::Registry& registry, const FrameContext& frame) {
     }
     if (state->request_screenshot) {
         state->request_screenshot = false;
-        const std::string path = "splatffd-screenshot-" + std::to_string(session->screenshot_count++) + ".png";
+        // In the last folder of the file dialogs (remembered between runs), else the current one.
+        const std::string name = "splatffd-screenshot-" + std::to_string(session->screenshot_count++) + ".png";
+        const std::string path = state->last_folder.empty() ? name : (std::filesystem::path(state->last_folder) / name).string();
         const Status st = write_screenshot(registry, path);
         state->status = st ? "screenshot " + path : "screenshot failed: " + st.message();
         log::info("editor: ", state->status);
@@ -209,6 +242,22 @@ void ui_system(ecs::Registry& registry, const FrameContext& frame) {
     ImGui::Render();
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     const ViewOptions& o = session->options;
+    if (!o.panel_rects_json.empty() && o.frames > 0 && frame.frame + 1 == o.frames) {
+        // {"window": [w, h], "panels": [{"name": .., "x": .., "y": .., "w": .., "h": ..}, ..]}
+        const ImVec2 size = ImGui::GetMainViewport()->Size;
+        char line[256];
+        std::snprintf(line, sizeof line, "{\n  \"window\": [%g, %g],\n  \"panels\": [", double(size.x), double(size.y));
+        std::string json = line;
+        const auto& rects = panel_rects();
+        for (std::size_t i = 0; i < rects.size(); ++i) {
+            const PanelRect& r = rects[i].rect;
+            std::snprintf(line, sizeof line, "%s\n    {\"name\": \"%s\", \"x\": %g, \"y\": %g, \"w\": %g, \"h\": %g}",
+                          i ? "," : "", rects[i].name.c_str(), double(r.x), double(r.y), double(r.w), double(r.h));
+            json += line;
+        }
+        json += "\n  ]\n}\n";
+        if (Status st = write_file_atomic(o.panel_rects_json, json); !st) log::error("view: ", st.message());
+    }
     if (!o.window_screenshot.empty() && o.frames > 0 && frame.frame + 1 == o.frames) {
         // The default framebuffer before the swap: what the user sees, panels included.
         GLint vp[4] = {0, 0, 0, 0};
@@ -232,7 +281,8 @@ std::string default_save_path(const std::string& scene) {
     const std::filesystem::path p(scene);
     const std::string ext = p.extension().string();
     if (ext == ".glb" || ext == ".gltf") return scene;
-    return (p.stem().empty() ? std::string("scene") : p.stem().string()) + ".glb";
+    // Next to the scene file (not in the current folder); a built-in name has no folder.
+    return (p.parent_path() / ((p.stem().empty() ? std::string("scene") : p.stem().string()) + ".glb")).string();
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -296,7 +346,18 @@ int run_view(const ViewOptions& options, Schedule schedule) {
 
         ViewSession& session = registry.set_resource<ViewSession>();
         session.options = options;
-        session.save_path = options.save_path.empty() ? default_save_path(options.scene) : options.save_path;
+        // The last folder of the file dialogs, remembered between runs (not for replays: deterministic).
+        if (options.replay.empty()) {
+            state.settings_file = user_config_file("editor.ini");
+            state.last_folder = load_last_folder(state.settings_file);
+        }
+        session.save_path = options.save_path;
+        if (session.save_path.empty()) {
+            session.save_path = default_save_path(options.scene);
+            // A built-in scene (no folder of its own) is saved in the last folder rather than the current one.
+            if (!state.last_folder.empty() && !std::filesystem::path(session.save_path).has_parent_path())
+                session.save_path = (std::filesystem::path(state.last_folder) / session.save_path).string();
+        }
         // Lattice JSON export/import (ctrl+e / ctrl+i) next to the scene's save: <save>.lattice.json.
         lattice_fit_settings(registry).json_path = std::filesystem::path(session.save_path).replace_extension(".lattice.json").string();
         session.ui = options.ui && !headless;
@@ -314,7 +375,11 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         if (session.ui) {
             IMGUI_CHECKVERSION();
             ImGui::CreateContext();
-            ImGui::GetIO().IniFilename = nullptr;  // no imgui.ini next to the user's files
+            // The layout the user chose (collapsed panels) is remembered in a per-user config folder, never
+            // next to the user's files; replays start from the default layout and leave the file alone.
+            static std::string ini_path;  // ImGui keeps the pointer until DestroyContext
+            ini_path = options.replay.empty() ? user_config_file("imgui.ini") : std::string();
+            ImGui::GetIO().IniFilename = ini_path.empty() ? nullptr : ini_path.c_str();
             ImGui::StyleColorsDark();
             ImGui_ImplGlfw_InitForOpenGL(window, true);
             ImGui_ImplOpenGL3_Init("#version 450");

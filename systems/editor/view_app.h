@@ -33,7 +33,12 @@ struct ViewOptions {
     bool preview = false;     // render quality preview instead of hq
     std::string timing_json;  // write frame-time statistics (all frames / frames with a tool drag) here
     std::string window_screenshot;  // with --frames: the whole window (panels included) of the last frame, PNG
+    std::string panel_rects_json;   // with --frames: the panels' rectangles in the last frame (panels.h), JSON
 };
+
+// $XDG_CONFIG_HOME/splatffd/<name> (else ~/.config/splatffd/<name>), its folder created; empty when
+// neither variable is set or the folder cannot be made (then nothing is remembered).
+std::string user_config_file(const std::string& name);
 
 // Runs the editor on `schedule`: the engine's standard frame with the editor's systems
 // (make_engine_schedule({.editor = true}), tools/splatffd/engine.cpp lists them). Returns the process exit

@@ -25,6 +25,7 @@ void usage() {
                  "  --headless         no window (EGL); input only from --replay\n"
                  "  --timing-json F    write frame-time statistics (all frames, frames with a live drag)\n"
                  "  --window-screenshot PATH  with --frames: the last frame's whole window (panels too), PNG\n"
+                 "  --panel-rects-json PATH   with --frames: the panels' rectangles in the last frame, JSON\n"
                  "Runs under X (use `xvfb-run -a` without a display). Keys and mouse: systems/editor/README.md\n");
 }
 
@@ -72,6 +73,10 @@ int run_view_command(sffd::cli::Args args) {
             const auto* v = value("--window-screenshot");
             if (!v) return 2;
             o.window_screenshot = *v;
+        } else if (a == "--panel-rects-json") {
+            const auto* v = value("--panel-rects-json");
+            if (!v) return 2;
+            o.panel_rects_json = *v;
         } else if (a == "--timing-json") {
             const auto* v = value("--timing-json");
             if (!v) return 2;

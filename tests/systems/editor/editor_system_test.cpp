@@ -9,10 +9,13 @@
 #include <glm/gtc/quaternion.hpp>
 #include <gtest/gtest.h>
 
+#include "systems/animation/animation_system.h"
+#include "systems/animation/components.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform.h"
 #include "systems/picking/components.h"
+#include "systems/splat_render/splat_render.h"
 
 using namespace sffd;
 using namespace sffd::editor;
@@ -238,4 +241,171 @@ TEST(EditorSystem, ResampleKeepsTheShapeAndUndoRestoresTheLattice) {
     EXPECT_EQ(s.lat().divisions, before.divisions);
     EXPECT_TRUE(bit_equal(s.lat().current, before.current));
     EXPECT_EQ(s.selection(), std::vector<std::uint32_t>{a});
+}
+
+// Typed values after g / r (Blender habit), through key events as the window and replays send them.
+namespace {
+
+std::vector<InputEvent> keys(std::initializer_list<const char*> names) {
+    std::vector<InputEvent> out;
+    for (const char* k : names) out.push_back(Scene::key(k));
+    return out;
+}
+
+}  // namespace
+
+TEST(EditorSystem, TypedMoveAlongAnAxisAfterG) {
+    Scene s;
+    s.run({Scene::key("a")});  // select all: the inner 2x2x2 points are editable (outer layer pinned)
+    const std::vector<glm::dvec3> rest = s.lat().current;
+    const std::vector<std::uint32_t> editable = editable_selection(s.reg, *s.state);
+    ASSERT_EQ(editable.size(), 8u);
+    // An AnimationState on the lattice: space while typing must not start playback.
+    s.reg.emplace<AnimationState>(s.lattice).playing = false;
+    s.run(keys({"g", "z", "0", "period", "2", "5", "backspace"}));
+    EXPECT_TRUE(s.state->typed.active);
+    EXPECT_NE(s.state->status.find("move z: 0.2_"), std::string::npos) << s.state->status;
+    EXPECT_TRUE(bit_equal(s.lat().current, rest)) << "nothing moves before Enter";
+    s.run(keys({"space", "enter"}));
+    EXPECT_FALSE(s.reg.get<AnimationState>(s.lattice).playing) << "space went to the entry, not play/pause";
+    EXPECT_FALSE(s.state->typed.active);
+    for (std::size_t p = 0; p < rest.size(); ++p) {
+        const bool moved = std::find(editable.begin(), editable.end(), std::uint32_t(p)) != editable.end();
+        const glm::dvec3 want = rest[p] + (moved ? glm::dvec3(0, 0, 0.2) : glm::dvec3(0));
+        EXPECT_EQ(s.lat().current[p], want) << p;
+    }
+    EXPECT_EQ(s.state->undo.size(), 2u);  // select all, stretch
+}
+
+TEST(EditorSystem, TypedMoveWithThreeValuesAndNegativeNumbers) {
+    Scene s;
+    s.run({Scene::key("a")});
+    const std::vector<glm::dvec3> rest = s.lat().current;
+    const std::uint32_t inner = idx(s.lat(), 1, 1, 1);
+    s.run(keys({"g", "minus", "0", "period", "5", "space", "0", "comma", "1"}));
+    EXPECT_TRUE(s.state->typed.active);
+    s.run(keys({"enter"}));
+    EXPECT_EQ(s.lat().current[inner], rest[inner] + glm::dvec3(-0.5, 0, 1));
+}
+
+TEST(EditorSystem, TypedTwistAboutXMatchesTheNumericEntry) {
+    Scene typed, reference;
+    for (Scene* s : {&typed, &reference}) s->run({Scene::key("a")});
+    typed.run(keys({"r", "x", "4", "5", "enter"}));
+    reference.run({Scene::key("r"), Scene::key("x")});
+    reference.run({Scene::key("escape")});  // ends the entry (reference uses the text event below)
+    ASSERT_FALSE(reference.selection().empty());
+    InputEvent text;
+    text.kind = InputKind::text;
+    text.key = "45";
+    reference.run({text});
+    EXPECT_EQ(typed.state->twist_axis, AxisMode::x);
+    EXPECT_TRUE(bit_equal(typed.lat().current, reference.lat().current));
+    EXPECT_FALSE(bit_equal(typed.lat().current, typed.lat().rest));
+}
+
+TEST(EditorSystem, TypedEntryEscapeCancelsAndKeepsTheSelection) {
+    Scene s;
+    s.run({Scene::key("a")});
+    const std::vector<std::uint32_t> sel = s.selection();
+    const std::vector<glm::dvec3> rest = s.lat().current;
+    s.run(keys({"g", "x", "1", "escape"}));
+    EXPECT_FALSE(s.state->typed.active);
+    EXPECT_EQ(s.selection(), sel) << "Escape cancelled the entry, it did not deselect";
+    s.run(keys({"enter"}));
+    EXPECT_TRUE(bit_equal(s.lat().current, rest));
+    // Another key ends the entry unapplied and does its usual job; ctrl+q still quits.
+    s.run(keys({"g", "x", "1", "t"}));
+    EXPECT_FALSE(s.state->typed.active);
+    EXPECT_TRUE(s.state->xray);
+    s.run(keys({"g", "1"}));
+    s.run({Scene::key("q", mods::ctrl)});
+    EXPECT_TRUE(s.state->request_quit);
+    EXPECT_TRUE(bit_equal(s.lat().current, rest));
+    // A bad entry says why and changes nothing.
+    s.run(keys({"g", "y", "1", "space", "2", "enter"}));
+    EXPECT_NE(s.state->status.find("typed move"), std::string::npos) << s.state->status;
+    EXPECT_TRUE(bit_equal(s.lat().current, rest));
+}
+
+// Auto-key and the warning before play replaces an un-keyed edit.
+TEST(EditorSystem, PlayWarnsBeforeDiscardingAnUnkeyedEdit) {
+    Scene s;
+    s.run({Scene::key("a")});
+    s.run(keys({"g", "z", "0", "period", "2", "enter", "k"}));  // keyed stretch: the lattice gets a clip
+    ASSERT_TRUE(s.reg.has<AnimationClip>(s.lattice));
+    ASSERT_FALSE(s.reg.get<AnimationState>(s.lattice).playing);
+    EXPECT_FALSE(s.reg.valid(s.state->unkeyed));
+    s.run(keys({"right", "g", "z", "0", "period", "1", "enter"}));  // un-keyed edit at 1/24 s
+    EXPECT_EQ(s.state->unkeyed, s.lattice);
+    s.run(keys({"space"}));
+    EXPECT_FALSE(s.reg.get<AnimationState>(s.lattice).playing) << "first play only warns";
+    EXPECT_NE(s.state->status.find("un-keyed"), std::string::npos) << s.state->status;
+    s.run(keys({"space"}));
+    EXPECT_TRUE(s.reg.get<AnimationState>(s.lattice).playing) << "second play plays";
+    s.run(keys({"space"}));  // pause
+    EXPECT_FALSE(s.reg.get<AnimationState>(s.lattice).playing);
+    // Keying the edit removes the warning.
+    s.run(keys({"g", "z", "0", "period", "1", "enter", "k", "space"}));
+    EXPECT_TRUE(s.reg.get<AnimationState>(s.lattice).playing) << s.state->status;
+}
+
+TEST(EditorSystem, AutoKeyKeysEveryEditAtTheClipTime) {
+    Scene s;
+    s.run({Scene::key("a")});
+    s.run(keys({"n"}));
+    EXPECT_TRUE(s.state->auto_key);
+    s.run(keys({"g", "z", "0", "period", "2", "enter"}));
+    ASSERT_TRUE(s.reg.has<AnimationClip>(s.lattice));
+    s.run(keys({"right"}));
+    animation_system(s.reg, FrameContext{s.frame, s.frame / 60.0, 1 / 60.0});  // the clip time follows the scrub
+    ASSERT_NEAR(s.reg.get<AnimationState>(s.lattice).time, 1.0 / 24.0, 1e-12);
+    s.run(keys({"g", "z", "0", "period", "1", "enter"}));
+    const AnimationClip& clip = s.reg.get<AnimationClip>(s.lattice);
+    ASSERT_EQ(clip.tracks.size(), 1u);
+    ASSERT_EQ(clip.tracks[0].keys.size(), 2u);
+    EXPECT_DOUBLE_EQ(clip.tracks[0].keys[0].time, 0.0);
+    EXPECT_NEAR(clip.tracks[0].keys[1].time, 1.0 / 24.0, 1e-12);
+    EXPECT_EQ(clip.tracks[0].keys[0].value, glm::dvec3(0, 0, 0.2));
+    EXPECT_EQ(clip.tracks[0].keys[1].value, glm::dvec3(0, 0, 0.1));
+    EXPECT_FALSE(s.reg.valid(s.state->unkeyed));
+    s.run(keys({"space"}));
+    EXPECT_TRUE(s.reg.get<AnimationState>(s.lattice).playing) << "nothing un-keyed: plays at once";
+    s.run(keys({"space", "n"}));
+    EXPECT_FALSE(s.state->auto_key);
+}
+
+// Preview while moving, HQ once the view has rested refine_after frames (RenderSettings through the registry).
+TEST(EditorSystem, PreviewWhileDraggingRefinesToHqAtRest) {
+    Scene s;
+    auto& settings = s.reg.set_resource<render::RenderSettings>();
+    settings.quality = render::Quality::hq;
+    s.run({});
+    EXPECT_EQ(settings.quality, render::Quality::hq) << "a still view starts in HQ";
+    // Orbit drag (right button): preview from the first moving frame.
+    s.run({Scene::move({300, 300}), Scene::press(0, MouseButton::right)});
+    s.run({Scene::move({340, 310})});
+    EXPECT_EQ(settings.quality, render::Quality::preview);
+    EXPECT_TRUE(s.state->previewing);
+    s.run({Scene::release(MouseButton::right)});  // the first still frame
+    EXPECT_EQ(settings.quality, render::Quality::preview);
+    for (int f = 2; f < s.state->refine_after; ++f) {
+        s.run({});
+        EXPECT_EQ(settings.quality, render::Quality::preview) << "still frame " << f;
+    }
+    s.run({});
+    EXPECT_EQ(settings.quality, render::Quality::hq) << "rested " << s.state->refine_after << " frames";
+    EXPECT_FALSE(s.state->previewing);
+    // The wheel and a stretch drag count as movement too; a view started in preview stays preview.
+    s.run({[] { InputEvent e; e.kind = InputKind::scroll; e.scroll = 1; return e; }()});
+    EXPECT_EQ(settings.quality, render::Quality::preview);
+    s.state->preview_while_moving = false;
+    s.run({});
+    EXPECT_EQ(settings.quality, render::Quality::hq) << "switched off: always the rest quality";
+    Scene p;
+    auto& ps = p.reg.set_resource<render::RenderSettings>();
+    ps.quality = render::Quality::preview;
+    p.run({Scene::move({300, 300}), Scene::press(0, MouseButton::right), Scene::move({350, 300})});
+    for (int f = 0; f < 12; ++f) p.run({});
+    EXPECT_EQ(ps.quality, render::Quality::preview);
 }

@@ -60,6 +60,36 @@ TEST(LatticeOverlay, ColoursShowSelectionPinsAndTheObjectsBox) {
     EXPECT_EQ(colour_of(build_lattice_overlay(s.reg, *s.state, s.lattice), l.index(0, 2, 2)), overlay_outside);
 }
 
+TEST(LatticeOverlay, CageOnlyDrawsTheBoxEdgesAndTheSelection) {
+    Scene s;
+    const Lattice& l = s.reg.get<Lattice>(s.lattice);
+    const std::uint32_t centre = static_cast<std::uint32_t>(l.index(2, 2, 2));
+    set_selection(s.reg, *s.state, s.lattice, {centre}, "select");
+    InputEvent key;
+    key.kind = InputKind::key;
+    key.key = "t";
+    key.modifiers = mods::shift;
+    s.state->events = {key};
+    editor_input_system(s.reg, FrameContext{});
+    ASSERT_TRUE(s.state->lattice_cage_only);
+    EXPECT_FALSE(s.state->xray) << "shift+t is the cage, t alone x-ray";
+    const OverlayGeometry g = build_lattice_overlay(s.reg, *s.state, s.lattice);
+    EXPECT_EQ(g.lines.size(), 2u * 12u * 4u);          // 12 box edges of 4 segments, 2 ends each
+    EXPECT_EQ(g.points.size(), 8u + 12u * 3u + 1u);     // corners, edge points, and the selected centre
+    // Every line end lies on an edge of the box [-1, 1]^3 (two coordinates at +-1).
+    for (const OverlayVertex& v : g.lines) {
+        const glm::dvec3 w = g.anchor + glm::dvec3(v.position);
+        const int on = int(std::abs(std::abs(w.x) - 1.0) < 1e-6) + int(std::abs(std::abs(w.y) - 1.0) < 1e-6) +
+                       int(std::abs(std::abs(w.z) - 1.0) < 1e-6);
+        EXPECT_GE(on, 2);
+    }
+    // The selected centre is still shown, small and translucent, so select-all does not hide the model.
+    int faint = 0;
+    for (const OverlayVertex& v : g.points)
+        if (glm::vec3(v.color) == glm::vec3(overlay_selected) && v.size == 3.0f && v.color.w < 0.5f) ++faint;
+    EXPECT_EQ(faint, 1);
+}
+
 TEST(EditorKeys, SetKeyRecordsTheLastStretchAndUndoRemovesIt) {
     Scene s;
     const Lattice& l = s.reg.get<Lattice>(s.lattice);
