@@ -57,4 +57,9 @@ where=$("$script" --where)
 [[ $(sed -n 's/^cache //p' <<<"$where") -ef $(sed -n 's/^cache //p' <<<"$("$exe" --paths)") ]] ||
   { echo "install_test: installed fetch_content.sh writes to another cache than the binary reads: $where"; exit 1; }
 
+# `splatffd fetch` runs that installed script with the installed binary.
+fetch_where=$("$exe" fetch --where)
+[[ $(sed -n 's/^splatffd //p' <<<"$fetch_where") -ef $exe && $(sed -n 's/^cache //p' <<<"$fetch_where") -ef $(sed -n 's/^cache //p' <<<"$where") ]] ||
+  { echo "install_test: 'splatffd fetch --where' printed '$fetch_where', the script '$where'"; exit 1; }
+
 echo "install_test: ok"
