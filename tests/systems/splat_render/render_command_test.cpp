@@ -323,6 +323,7 @@ TEST(RenderCommand, TurntableOrbitsAndStartsAtTheSceneCamerasEye) {
 
 TEST(RenderCommand, VideoNamesFfmpegWhenItIsMissing) {
     const fs::path out = fresh_dir("video_missing");
+    fs::create_directories(out.parent_path());
     const fs::path log = out.parent_path() / "video_missing.log";
     // PATH without ffmpeg: refused before any frame is rendered, naming the package.
     const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY PATH=/nonexistent " + binary + " render sphere --out " + out.string() +
@@ -342,6 +343,7 @@ TEST(RenderCommand, VideoOfATurntableHasOneFramePerImage) {
         GTEST_SKIP() << "ffmpeg/ffprobe not installed: --video is optional (apt-get install ffmpeg: 91 packages, 157 MB, so "
                         "tools/bootstrap.sh does not install it)";
     const fs::path out = fresh_dir("video");
+    fs::create_directories(out.parent_path());  // the videos go next to the frames' folder
     for (const char* name : {"turn clip.mp4", "turn.gif"}) {
         const fs::path video = out.parent_path() / name;
         fs::remove(video);
