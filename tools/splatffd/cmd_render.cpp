@@ -414,6 +414,11 @@ int run_render(sffd::cli::Args args) {
     }
 
     // 3D Gaussian files (3DGS PLY, .splat, KHR glb): one frame through the Gaussian renderer.
+    if (scene_given && cli::is_gaussian_file(scene) && (camera || turntable > 0 || !video.empty())) {
+        std::fprintf(stderr, "splatffd render: %s: --camera, --turntable and --video are not supported for 3D Gaussian files yet (one frame, the file's view)\n",
+                     scene.c_str());
+        return 2;
+    }
     if (scene_given && cli::is_gaussian_file(scene)) return cli::render_gaussians(scene, out_dir, int(width), int(height), background);
     // Offscreen rendering needs no window: EGL surfaceless works with or without a display.
     auto ctx = gfx::create_context({.headless = true, .width = int(width), .height = int(height), .debug = false});

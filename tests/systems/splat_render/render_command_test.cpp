@@ -299,6 +299,12 @@ TEST(RenderCommand, DegenerateCamerasAreRefused) {
     EXPECT_NE(log.find("--size: expected an integer in 1..16384, got '-5'"), std::string::npos) << log;
     EXPECT_EQ(run(out + " --video clip.avi", &log), 2);
     EXPECT_NE(log.find("must end in .mp4 or .gif"), std::string::npos) << log;
+    // 3D Gaussian files take another renderer (one frame): the options are refused, not ignored.
+    const fs::path g = fresh_dir("cam_bad").parent_path() / "gaussians.ply";
+    fs::create_directories(g.parent_path());
+    ASSERT_EQ(std::system((binary + " convert sphere " + g.string() + " --gaussians > /dev/null 2>&1").c_str()), 0);
+    EXPECT_EQ(run(g.string() + out + " --turntable 3", &log), 2);
+    EXPECT_NE(log.find("not supported for 3D Gaussian files"), std::string::npos) << log;
 }
 
 TEST(RenderCommand, TurntableOrbitsAndStartsAtTheSceneCamerasEye) {
