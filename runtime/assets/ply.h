@@ -40,7 +40,8 @@
 // Validation (all errors name the file): bad magic, unknown format or type, properties outside an
 // element, truncated header (no end_header within 64 KiB), counts whose minimum row size cannot fit in
 // the rest of the file, list counts that are negative or exceed kMaxListLength, truncated or malformed
-// data rows (with the element name and row number).
+// data rows (with the element name and row number). Header lines with an unknown keyword (writers'
+// own notes, e.g. "Created by Blender3D ...") are skipped with a warning naming the file, line and keyword.
 #pragma once
 
 #include <cstdint>

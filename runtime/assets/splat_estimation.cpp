@@ -13,15 +13,17 @@
 
 namespace sffd::assets {
 
-Neighbours find_neighbours(std::span<const glm::vec3> points, int k) {
+Neighbours find_neighbours(std::span<const glm::vec3> points, int k, const ProgressFn& progress) {
     Neighbours nb;
     nb.k = k;
     const std::size_t n = points.size();
     nb.index.assign(n * static_cast<std::size_t>(k), 0);
     nb.dist2.assign(n * static_cast<std::size_t>(k), 0.0f);
     if (n < 2 || k <= 0) return nb;
+    ProgressCounter counter(progress, "finding neighbours", n);
     const detail::PointTree<glm::vec3> tree(points);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+        counter.add(r.size());
         std::vector<std::uint32_t> idx(static_cast<std::size_t>(k) + 1);
         std::vector<float> d2(static_cast<std::size_t>(k) + 1);
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
@@ -44,6 +46,7 @@ Neighbours find_neighbours(std::span<const glm::vec3> points, int k) {
             }
         }
     });
+    counter.done();
     return nb;
 }
 
@@ -57,10 +60,12 @@ void symmetric_eigen(const glm::dmat3& input, glm::dvec3& values, glm::dmat3& ve
     vectors = e.vectors;
 }
 
-std::vector<glm::vec3> pca_normals(std::span<const glm::vec3> points, const Neighbours& nb) {
+std::vector<glm::vec3> pca_normals(std::span<const glm::vec3> points, const Neighbours& nb, const ProgressFn& progress) {
     std::vector<glm::vec3> normals(points.size(), glm::vec3(0, 0, 1));
     const std::size_t k = static_cast<std::size_t>(nb.k);
+    ProgressCounter counter(progress, "estimating normals", points.size());
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+        counter.add(r.size());
         for (std::size_t i = r.begin(); i != r.end(); ++i) {
             glm::dvec3 mean(points[i]);
             for (std::size_t j = 0; j < k; ++j) mean += glm::dvec3(points[nb.index[i * k + j]]);
@@ -81,10 +86,11 @@ std::vector<glm::vec3> pca_normals(std::span<const glm::vec3> points, const Neig
             if (len > 0.0 && std::isfinite(len)) normals[i] = glm::vec3(n / len);
         }
     });
+    counter.done();
     return normals;
 }
 
-void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std::span<glm::vec3> normals) {
+void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std::span<glm::vec3> normals, const ProgressFn& progress) {
     const std::size_t n = points.size();
     const std::size_t k = static_cast<std::size_t>(nb.k);
     if (n == 0) return;
@@ -113,6 +119,8 @@ void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std
     for (std::size_t i = 0; i < n; ++i) by_z[i] = static_cast<std::uint32_t>(i);
     std::sort(by_z.begin(), by_z.end(), [&](std::uint32_t a, std::uint32_t b) { return points[a].z > points[b].z; });
 
+    ProgressCounter counter(progress, "orienting normals", n);
+    std::size_t visited = 0;
     std::vector<char> done(n, 0);
     using Item = std::pair<float, std::pair<std::uint32_t, std::uint32_t>>;  // weight, (parent, node)
     std::priority_queue<Item, std::vector<Item>, std::greater<Item>> heap;
@@ -126,6 +134,7 @@ void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std
             const auto [parent, node] = edge;
             if (done[node]) continue;
             done[node] = 1;
+            if (++visited % 4096 == 0) counter.add(4096);
             if (node != parent && glm::dot(normals[node], normals[parent]) < 0.0f) normals[node] = -normals[node];
             for (std::uint32_t e = degree[node]; e < degree[node + 1]; ++e) {
                 const std::uint32_t o = adj[e];
@@ -133,6 +142,7 @@ void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std
             }
         }
     }
+    counter.done();
 }
 
 std::vector<float> estimate_radii(const Neighbours& nb, int kth, float scale) {
@@ -173,14 +183,16 @@ void estimate_splats(SplatCloud& cloud, const EstimateOptions& options) {
     const bool want_normals = options.normals || (options.radii && cloud.normals.size() != cloud.size());
     if (!want_normals && !options.radii) return;
     const int k = std::max(options.k, 8);
-    const Neighbours nb = find_neighbours(cloud.positions, k);
+    const Neighbours nb = find_neighbours(cloud.positions, k, options.progress);
     if (want_normals) {
-        cloud.normals = pca_normals(cloud.positions, nb);
-        orient_normals(cloud.positions, nb, cloud.normals);
+        cloud.normals = pca_normals(cloud.positions, nb, options.progress);
+        orient_normals(cloud.positions, nb, cloud.normals, options.progress);
     }
     if (options.radii) {
+        report_progress(options.progress, "splat radii and axes", 0.0);
         const std::vector<float> radii = estimate_radii(nb, 6, 1.0f);
         make_circular_axes(cloud.normals, radii, cloud.axis_u, cloud.axis_v);
+        report_progress(options.progress, "splat radii and axes", 1.0);
     }
 }
 

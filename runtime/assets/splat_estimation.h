@@ -22,6 +22,7 @@
 
 #include <glm/glm.hpp>
 
+#include "runtime/core/progress.h"
 #include "runtime/scene/components.h"
 
 namespace sffd::assets {
@@ -34,14 +35,15 @@ struct Neighbours {
     std::vector<float> dist2;
 };
 
-Neighbours find_neighbours(std::span<const glm::vec3> points, int k);
+Neighbours find_neighbours(std::span<const glm::vec3> points, int k, const ProgressFn& progress = {});
 
 // Unit normals by PCA (eigenvector of the smallest eigenvalue of the neighbourhood covariance), not yet
 // oriented. Degenerate neighbourhoods (all points equal) get (0, 0, 1).
-std::vector<glm::vec3> pca_normals(std::span<const glm::vec3> points, const Neighbours& nb);
+std::vector<glm::vec3> pca_normals(std::span<const glm::vec3> points, const Neighbours& nb, const ProgressFn& progress = {});
 
 // Flips normals in place so that they agree along a minimum spanning tree of the k-NN graph (see above).
-void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std::span<glm::vec3> normals);
+void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std::span<glm::vec3> normals,
+                    const ProgressFn& progress = {});
 
 // Splat radius per point from neighbour spacing (see above). `kth` <= nb.k.
 std::vector<float> estimate_radii(const Neighbours& nb, int kth = 6, float scale = 1.0f);
@@ -60,6 +62,7 @@ struct EstimateOptions {
     bool normals = true;   // estimate normals (PCA + orientation)
     bool radii = true;     // estimate radii and axes
     int k = 16;            // neighbourhood for PCA and orientation
+    ProgressFn progress;   // each step's progress (splatffd convert prints it); may be empty
 };
 
 // Fills normals / axis_u / axis_v of `cloud` as requested (normals also when missing and radii wanted).

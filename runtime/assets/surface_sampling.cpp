@@ -17,7 +17,7 @@ namespace detail {
 // Weighted sample elimination (Yuksel 2015): removes the most crowded point until `keep` remain.
 // `area` is the surface area the points cover (for the neighbourhood radius). Returns the kept indices
 // in ascending order.
-std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::size_t keep, double area) {
+std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::size_t keep, double area, const ProgressFn& progress) {
     const std::size_t n = pts.size();
     std::vector<std::uint32_t> kept;
     if (keep >= n) {
@@ -27,6 +27,7 @@ std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::si
     }
     const double r_max = std::sqrt(area / (2.0 * std::sqrt(3.0) * static_cast<double>(keep)));
     const double r2 = 2.0 * r_max;
+    ProgressCounter searched(progress, "finding neighbours for thinning", n);
     PointTree<glm::dvec3> tree(pts);
     // Neighbour lists in parallel blocks (the search dominates), concatenated in point order.
     constexpr std::size_t kBlock = 8192;
@@ -37,6 +38,7 @@ std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::si
         std::vector<std::pair<std::uint32_t, double>> found;
         nanoflann::SearchParams params(32, 0.0f, false);
         const std::size_t end = std::min(n, (b + 1) * kBlock);
+        searched.add(end - b * kBlock);
         for (std::size_t i = b * kBlock; i < end; ++i) {
             const double q[3] = {pts[i].x, pts[i].y, pts[i].z};
             found.clear();
@@ -52,6 +54,8 @@ std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::si
             block_count[b].push_back(taken);
         }
     });
+    searched.done();
+    ProgressCounter thinned(progress, "thinning (sample elimination)", n - keep);
     std::vector<std::uint32_t> offsets(n + 1, 0);
     std::vector<std::uint32_t> nbr;
     std::vector<float> dist;
@@ -76,7 +80,7 @@ std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::si
         heap.pop();
         if (removed[i] || wt != weight[i]) continue;  // stale entry (weights only decrease)
         removed[i] = 1;
-        --alive;
+        if (--alive % 4096 == 0) thinned.add(4096);
         for (std::uint32_t e = offsets[i]; e < offsets[i + 1]; ++e) {
             const std::uint32_t j = nbr[e];
             if (removed[j]) continue;
@@ -84,6 +88,7 @@ std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::si
             heap.push({weight[j], j});
         }
     }
+    thinned.done();
     for (std::size_t i = 0; i < n; ++i)
         if (!removed[i]) kept.push_back(static_cast<std::uint32_t>(i));
     return kept;
@@ -106,7 +111,7 @@ glm::vec4 sample_texture(const Image& img, glm::vec2 uv) {
 
 }  // namespace detail
 
-Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::uint32_t seed) {
+Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::uint32_t seed, const ProgressFn& progress) {
     const std::size_t nt = mesh.triangle_count();
     if (nt == 0) return make_error(mesh.source + ": no triangles to sample");
     if (count == 0) return make_error(mesh.source + ": cannot sample 0 splats");
@@ -126,7 +131,9 @@ Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::ui
     std::vector<glm::dvec3> pos(candidates);
     std::vector<std::uint32_t> tri(candidates);
     std::vector<glm::dvec2> bary(candidates);
+    ProgressCounter sampled(progress, "sampling the surface", candidates);
     for (std::size_t i = 0; i < candidates; ++i) {
+        if (i % 4096 == 4095) sampled.add(4096);
         const double r = rng.uniform() * total;
         const std::size_t t = std::min<std::size_t>(static_cast<std::size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), r) - cumulative.begin()), nt - 1);
         double u = rng.uniform(), v = rng.uniform();
@@ -141,7 +148,8 @@ Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::ui
         tri[i] = static_cast<std::uint32_t>(t);
         bary[i] = glm::dvec2(u, v);
     }
-    std::vector<std::uint32_t> kept = eliminate(pos, count, total);
+    sampled.done();
+    std::vector<std::uint32_t> kept = eliminate(pos, count, total, progress);
     // Spatial locality for the renderer and the cache: order samples by triangle.
     std::stable_sort(kept.begin(), kept.end(), [&](std::uint32_t x, std::uint32_t y) { return tri[x] < tri[y]; });
 

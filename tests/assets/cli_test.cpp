@@ -9,7 +9,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "runtime/assets/import.h"
 
@@ -134,4 +136,47 @@ TEST(Cli, OutOfMemoryIsAMessageAndOverBudgetRequestsAreRefusedEarly) {
     EXPECT_EQ(WEXITSTATUS(status), 1) << r.out;
     EXPECT_NE(r.out.find("splatffd convert: out of memory"), std::string::npos) << r.out;
     EXPECT_FALSE(fs::exists(temp_dir() / "oom.ply"));
+}
+
+// Progress (issue 16): with --progress every step prints its start, each further 10 % and its end with
+// its time, in order; without it (stderr is a pipe here, not a terminal) no progress lines, but the
+// timing summary is printed always.
+TEST(Cli, ConvertProgressReportsEveryStepInOrderAndAlwaysTheTiming) {
+    const fs::path obj = temp_dir() / "progress.obj";
+    std::ofstream(obj) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n";
+    const fs::path ply = temp_dir() / "progress.ply";
+    const CliRun c = run("convert " + obj.string() + " " + ply.string() + " --splats 5000 --progress");
+    ASSERT_EQ(c.code, 0) << c.out;
+    const std::vector<std::string> steps = {"reading", "sampling the surface", "finding neighbours for thinning",
+                                            "thinning (sample elimination)", "finding neighbours", "splat radii and axes", "writing"};
+    std::istringstream lines(c.out);
+    std::string line;
+    std::size_t step = 0;
+    int last_percent = -1;
+    while (std::getline(lines, line)) {
+        if (line.rfind("convert: ", 0) != 0 || line.rfind("convert: done in", 0) == 0) continue;
+        ASSERT_LT(step, steps.size()) << "unexpected line after the last step: " << line << "\n" << c.out;
+        const std::string head = "convert: " + steps[step] + ": ";
+        ASSERT_EQ(line.rfind(head, 0), 0u) << "expected step '" << steps[step] << "', got: " << line << "\n" << c.out;
+        const int percent = std::stoi(line.substr(head.size()));
+        if (last_percent < 0) {
+            EXPECT_EQ(percent, 0) << line;  // every step announces its start
+        }
+        EXPECT_GE(percent, last_percent) << line;
+        last_percent = percent;
+        if (percent == 100) {
+            EXPECT_NE(line.find("% in "), std::string::npos) << line;  // the end carries the step's time
+            ++step;
+            last_percent = -1;
+        }
+    }
+    EXPECT_EQ(step, steps.size()) << c.out;
+    const auto done = c.out.find("convert: done in ");
+    ASSERT_NE(done, std::string::npos) << c.out;
+    for (const std::string& s : steps) EXPECT_NE(c.out.find(s + " ", done), std::string::npos) << s << "\n" << c.out;
+
+    const CliRun quiet = run("convert " + obj.string() + " " + ply.string() + " --splats 5000");
+    ASSERT_EQ(quiet.code, 0) << quiet.out;
+    EXPECT_EQ(quiet.out.find("%"), std::string::npos) << quiet.out;
+    EXPECT_NE(quiet.out.find("convert: done in "), std::string::npos) << quiet.out;
 }

@@ -13,6 +13,9 @@
 #include "runtime/assets/export.h"
 #include "runtime/assets/gltf_io.h"
 #include "runtime/assets/import.h"
+#include "runtime/core/log.h"
+
+#include <stb/stb_image_write.h>
 
 namespace fs = std::filesystem;
 using namespace sffd;
@@ -368,5 +371,132 @@ TEST(AssimpTestModels, TexturedBoxImportsWithTextureColours) {
         auto r = import_splat_cloud(bad);
         ASSERT_FALSE(r.ok());
         EXPECT_NE(r.message().find(bad.string()), std::string::npos) << r.message();
+    }
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Files from other tools (issue 16): Windows paths in OBJ/MTL, PLY headers with writers' own lines,
+// glTF 1.0 named as such. Hand-made files first, then the real assimp samples when installed.
+
+namespace {
+
+// A w x h PNG of one colour (RGBA8, R in the low byte as Geometry stores colours).
+void write_png(const fs::path& p, int w, int h, std::uint32_t rgba) {
+    fs::create_directories(p.parent_path());
+    std::vector<std::uint32_t> px(static_cast<std::size_t>(w * h), rgba);
+    ASSERT_NE(stbi_write_png(p.string().c_str(), w, h, 4, px.data(), w * 4), 0) << p;
+}
+
+}  // namespace
+
+TEST(ForeignFiles, ObjWithWindowsBackslashPathsKeepsItsTexture) {
+    const fs::path dir = temp_dir() / "obj_backslash";
+    fs::remove_all(dir);
+    write_png(dir / "maps" / "red.png", 2, 2, 0xff0000ffu);
+    fs::create_directories(dir / "lib");
+    std::ofstream(dir / "lib" / "m.mtl") << "newmtl red\r\nKd 1 1 1\r\nmap_Kd ..\\maps\\red.png\r\n";
+    // The MTL is in lib/, so "..\maps" stays inside the OBJ's folder only from the OBJ; the MTL's own
+    // textures resolve inside lib/: move the texture next to the MTL for the accepted case.
+    write_png(dir / "lib" / "tex" / "red.png", 2, 2, 0xff0000ffu);
+    std::ofstream(dir / "lib" / "ok.mtl") << "newmtl red\r\nKd 1 1 1\r\nmap_Kd .\\tex\\red.png\r\n";
+    const std::string tri = "usemtl red\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nf 1/1 2/2 3/3\n";
+    std::ofstream(dir / "ok.obj") << "mtllib .\\lib\\ok.mtl\n" << tri;
+    auto g = read_obj_geometry(dir / "ok.obj");
+    ASSERT_TRUE(g.ok()) << g.message();
+    ASSERT_EQ(g->textures.size(), 1u);
+    ASSERT_EQ(g->materials.size(), 1u);
+    EXPECT_EQ(g->materials[0].texture, 0);
+    ASSERT_EQ(g->textures[0].rgba8.size(), 16u);
+    EXPECT_EQ(g->textures[0].rgba8[0], 255);  // red
+    EXPECT_EQ(g->textures[0].rgba8[1], 0);
+
+    // A backslash ".." out of the MTL's folder is still an escape, refused like "../".
+    std::ofstream(dir / "escape.obj") << "mtllib lib\\m.mtl\n" << tri;
+    auto e = read_obj_geometry(dir / "escape.obj");
+    ASSERT_FALSE(e.ok());
+    EXPECT_NE(e.message().find((dir / "lib" / "m.mtl").string() + ": resource '../maps/red.png' is outside the file's folder"),
+              std::string::npos)
+        << e.message();
+}
+
+TEST(ForeignFiles, PlyHeaderWithUnknownLinesWarnsAndLoads) {
+    const fs::path p = write_text("created.ply",
+                                  "ply\nformat ascii 1.0\nCreated by Blender3D 247 - www.blender.org, source file: \n"
+                                  "obj_info num_cols 1\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                                  "end_header\n0 0 0\n1 0 0\n0 1 0\n");
+    log::ScopedLogCapture capture;
+    auto g = read_ply_geometry(p);
+    ASSERT_TRUE(g.ok()) << g.message();
+    EXPECT_EQ(g->positions.size(), 3u);
+    EXPECT_EQ(g->positions[1], glm::dvec3(1, 0, 0));
+    EXPECT_TRUE(capture.contains(p.string() + ": header line 3: unknown keyword 'Created', line ignored"));
+    EXPECT_FALSE(capture.contains("obj_info"));  // a known keyword: kept as a comment, no warning
+}
+
+TEST(ForeignFiles, PlyHeaderOfJunkLinesWarnsAFewTimesOnly) {
+    std::string text = "ply\nformat ascii 1.0\n";
+    for (int i = 0; i < 100; ++i) text += "junk" + std::to_string(i) + "\n";
+    text += "element vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n1 2 3\n";
+    const fs::path p = write_text("junk.ply", text);
+    log::ScopedLogCapture capture;
+    auto g = read_ply_geometry(p);
+    ASSERT_TRUE(g.ok()) << g.message();
+    std::size_t warnings = 0;
+    for (const auto& e : capture.entries())
+        if (e.message.find(p.string()) != std::string::npos) ++warnings;
+    EXPECT_EQ(warnings, 6u);  // five lines named, then one "further ... ignored"
+    EXPECT_TRUE(capture.contains("unknown keyword 'junk4'"));
+    EXPECT_FALSE(capture.contains("unknown keyword 'junk5'"));
+}
+
+TEST(ForeignFiles, Gltf1IsNamedAsUnsupported) {
+    const fs::path text = write_text("v1.gltf", R"({"asset": {"version": "1.0"}, "meshes": {"m": {"primitives": []}}, "scene": "s"})");
+    auto r = read_gltf_geometry(text);
+    ASSERT_FALSE(r.ok());
+    EXPECT_EQ(r.message(), text.string() + ": glTF 1.0 is not supported (asset.version \"1.0\"); convert it to glTF 2.0");
+
+    // Binary glTF 1.0 (KHR_binary_glTF): container version 1, then length, JSON length, format 0.
+    const std::string json = R"({"asset":{"version":"1.0.1"}} )";
+    std::string glb = "glTF";
+    auto u32 = [&](std::uint32_t v) { glb.append(reinterpret_cast<const char*>(&v), 4); };
+    u32(1);
+    u32(static_cast<std::uint32_t>(20 + json.size()));
+    u32(static_cast<std::uint32_t>(json.size()));
+    u32(0);
+    glb += json;
+    const fs::path bin = write_text("v1.glb", glb);
+    auto b = read_gltf_geometry(bin);
+    ASSERT_FALSE(b.ok());
+    EXPECT_EQ(b.message(), bin.string() + ": glTF 1.0 is not supported (asset.version \"1.0.1\"); convert it to glTF 2.0");
+
+    // glTF 2.0 with a broken body keeps tinygltf's own message.
+    const fs::path v2 = write_text("v2.gltf", R"({"asset": {"version": "2.0"}, "meshes": [{"primitives": [{"attributes": {"POSITION": 7}}]}]})");
+    auto r2 = read_gltf_geometry(v2);
+    ASSERT_FALSE(r2.ok());
+    EXPECT_EQ(r2.message().find("glTF 1.0"), std::string::npos) << r2.message();
+}
+
+TEST(AssimpTestModels, ForeignSamplesImport) {
+    const fs::path dir = "/usr/share/assimp/models";
+    if (!fs::exists(dir / "OBJ/spider.obj")) GTEST_SKIP() << "assimp-testmodels not installed (apt-get install assimp-testmodels)";
+    // spider.mtl names its five textures ".\SpiderTex.jpg" etc.; all ship next to it.
+    auto spider = read_obj_geometry(dir / "OBJ/spider.obj");
+    ASSERT_TRUE(spider.ok()) << spider.message();
+    ASSERT_EQ(spider->textures.size(), 5u);
+    for (const Image& t : spider->textures) EXPECT_GT(t.width, 0);
+
+    log::ScopedLogCapture capture;
+    const fs::path wuson = dir / "PLY/Wuson.ply";
+    auto w = read_ply_geometry(wuson);
+    ASSERT_TRUE(w.ok()) << w.message();
+    EXPECT_EQ(w->positions.size(), 11184u);
+    EXPECT_TRUE(capture.contains(wuson.string() + ": header line 3: unknown keyword 'Created', line ignored"));
+
+    for (const char* f : {"glTF/BoxTextured-glTF/BoxTextured.gltf", "glTF/BoxTextured-glTF-Binary/BoxTextured.glb"}) {
+        auto r = read_gltf_geometry(dir / f);
+        ASSERT_FALSE(r.ok()) << f;
+        EXPECT_NE(r.message().find((dir / f).string() + ": glTF 1.0 is not supported (asset.version \"1.0"), std::string::npos)
+            << r.message();
+        EXPECT_NE(r.message().find("convert it to glTF 2.0"), std::string::npos) << r.message();
     }
 }

@@ -37,4 +37,29 @@ if help=$("$exe" render --help 2>&1) || ! grep -q "not implemented yet" <<<"$hel
 else
   echo "install_test: 'render' not implemented yet; checked --version and data paths only"
 fi
+# Issue 16: the `face` scene's cache is made by tools/fetch_content.sh, which is installed with its helper;
+# the installed binary's message names the installed script, and that script uses the installed binary
+# and the cache that binary reads (no source tree, no build).
+script="$prefix/share/splatffd/tools/fetch_content.sh"
+[[ -x $script ]] || { echo "install_test: $script was not installed (or is not executable)"; exit 1; }
+[[ -f $prefix/share/splatffd/tools/fetch_content/snowden_to_obj.js ]] ||
+  { echo "install_test: fetch_content/snowden_to_obj.js not installed"; exit 1; }
+export XDG_CACHE_HOME="$tmp/xdg-cache"  # an empty cache, whichever folder the binary picks
+if face=$("$exe" render face --out "$tmp/face" --frames 0:0 --size 64x48 --format png 2>&1); then
+  echo "install_test: 'render face' succeeded without the face cache: $face"; exit 1
+fi
+grep -qF "run $(realpath "$script") once" <<<"$face" || grep -qF "run $script once" <<<"$face" ||
+  { echo "install_test: 'render face' does not name the installed $script: $face"; exit 1; }
+echo "install_test: render face says: $face"
+where=$("$script" --where)
+[[ $(sed -n 's/^splatffd //p' <<<"$where") -ef $exe ]] ||
+  { echo "install_test: installed fetch_content.sh would use another splatffd: $where"; exit 1; }
+[[ $(sed -n 's/^cache //p' <<<"$where") -ef $(sed -n 's/^cache //p' <<<"$("$exe" --paths)") ]] ||
+  { echo "install_test: installed fetch_content.sh writes to another cache than the binary reads: $where"; exit 1; }
+
+# `splatffd fetch` runs that installed script with the installed binary.
+fetch_where=$("$exe" fetch --where)
+[[ $(sed -n 's/^splatffd //p' <<<"$fetch_where") -ef $exe && $(sed -n 's/^cache //p' <<<"$fetch_where") -ef $(sed -n 's/^cache //p' <<<"$where") ]] ||
+  { echo "install_test: 'splatffd fetch --where' printed '$fetch_where', the script '$where'"; exit 1; }
+
 echo "install_test: ok"

@@ -1,4 +1,4 @@
-// splatffd convert IN OUT [--splats N] [--normals] [--radii] [--ascii] [--seed S] [--neighbours K] [--gaussians]
+// splatffd convert IN OUT [--splats N] [--normals] [--radii] [--ascii] [--progress] [--seed S] [--neighbours K] [--gaussians]
 //                        [--lattice fit[:L,M,N][,pad=P][,obb][,bspline] | L.json | scene.glb] [--lattice-name NAME]
 // Converts point clouds and meshes (PLY, OBJ, OFF, glTF/GLB, or a built-in scene name) into splat
 // clouds (PLY, GLB, glTF). Meshes are sampled on their surface; raw points get normals and radii.
@@ -22,6 +22,7 @@
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/convert_gaussians.h"
 #include "tools/splatffd/lattice_source.h"
+#include "tools/splatffd/progress.h"
 
 namespace {
 
@@ -36,6 +37,8 @@ void usage() {
                  "  --neighbours K   neighbourhood size for normals (default 16)\n"
                  "  --seed S         surface sampling seed (default 1)\n"
                  "  --ascii          write ASCII PLY\n"
+                 "  --progress       a line per step at its start, every 10 %% and its end (default: only when stderr\n"
+                 "                   is a terminal, for steps over a second); the timing summary is always printed\n"
                  "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .glb KHR_gaussian_splatting); IN may also be\n"
                  "                   a Gaussian file (.splat, 3DGS .ply, KHR .glb)\n"
                  "  --lattice SRC    store a lattice bound to the cloud (OUT .glb/.gltf) or write it (OUT .json):\n"
@@ -137,7 +140,7 @@ int run_convert(sffd::cli::Args args) {
     using namespace sffd;
     std::string in, out;
     assets::ImportOptions opt;
-    bool ascii = false, gaussians = false;
+    bool ascii = false, gaussians = false, progress = false;
     LatticeRequest lattice;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
@@ -183,6 +186,8 @@ int run_convert(sffd::cli::Args args) {
             opt.estimate_radii = true;
         } else if (a == "--ascii") {
             ascii = true;
+        } else if (a == "--progress") {
+            progress = true;
         } else if (a == "--gaussians") {
             gaussians = true;
         } else if (!a.empty() && a[0] == '-') {
@@ -227,6 +232,8 @@ int run_convert(sffd::cli::Args args) {
         }
         loaded = std::move(*c);
     }
+    cli::ProgressPrinter printer("convert", cli::ProgressPrinter::mode_for(progress));
+    opt.progress = printer.fn();
     const auto t0 = std::chrono::steady_clock::now();
     Result<SplatCloud> cloud = make_error("");
     if (in == "sphere") {
@@ -243,7 +250,9 @@ int run_convert(sffd::cli::Args args) {
         });
         if (!cloud) cloud = make_error(in + ": built-in scene has no point cloud");
     } else {
+        printer.report("reading", 0.0);
         auto g = assets::read_geometry(in);
+        printer.report("reading", 1.0);
         if (!g) {
             std::fprintf(stderr, "splatffd convert: %s\n", g.message().c_str());
             return 1;
@@ -276,6 +285,7 @@ int run_convert(sffd::cli::Args args) {
     if (gaussians) return cli::write_gaussians(in, &*cloud, out, ascii);
     const auto t2 = std::chrono::steady_clock::now();
     std::string lattice_note;
+    printer.report("writing", 0.0);
     Status s = lattice.source.empty() ? (ascii ? assets::save_splat_ply(*cloud, out, ply::Format::ascii)
                                                : assets::save_splat_cloud(*cloud, out, std::filesystem::path(in).stem().string()))
                                       : save_with_lattice(*cloud, std::filesystem::path(in).stem().string(), lattice, loaded, out, lattice_note);
@@ -283,9 +293,11 @@ int run_convert(sffd::cli::Args args) {
         std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
         return 1;
     }
+    printer.report("writing", 1.0);
     const auto t3 = std::chrono::steady_clock::now();
     std::fprintf(stderr, "wrote %s: %zu splats%s (import + estimation %.2f s, write %.2f s)\n", out.c_str(), cloud->size(),
                  lattice_note.c_str(), std::chrono::duration<double>(t2 - t0).count(), std::chrono::duration<double>(t3 - t2).count());
+    printer.summary();
     return 0;
 }
 

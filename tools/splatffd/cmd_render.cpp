@@ -1,5 +1,6 @@
 // splatffd render [SCENE] --out DIR [--frames A:B] [--size WxH] [--quality hq|preview] [--format png,exr]
 //                 [--background R,G,B] [--fps F] [--no-cull]
+//                 [--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV | --turntable N] [--video OUT.mp4|OUT.gif]
 //
 // Renders frames of a scene (built-in name or file; default `sphere`) through the engine's standard
 // schedule (tools/splatffd/engine.cpp: animation and deformation run before rendering), offscreen in a
@@ -10,14 +11,26 @@
 // DIR/render_manifest.json: settings, frames written by this run, and "state": running | complete |
 // failed (an interrupted run stays "running" with the frames it finished; SIGINT/SIGTERM exit 130/143).
 // A scene without a camera is framed automatically; without lights it gets a default key light.
+// --camera replaces the scene's camera for every frame; --turntable N renders frames 0..N-1 orbiting the
+// scene's bounds centre at the scene camera's distance and height (frame 0 = the scene camera's eye);
+// --video encodes the PNG frames with ffmpeg (optional: not installed by tools/bootstrap.sh).
 // Exit 0 ok, 1 bad scene or unwritable output (the message names the file), 2 usage.
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
+#include <limits>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <system_error>
+#include <vector>
 
 #include "runtime/app/app.h"
 #include "runtime/app/clock.h"
@@ -25,7 +38,9 @@
 #include "runtime/core/atomic_file.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/gfx/context.h"
+#include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/image_io.h"
+#include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/splat_render.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/convert_gaussians.h"
@@ -48,21 +63,194 @@ void usage() {
                  "  --format LIST    png, exr or png,exr (default png,exr)\n"
                  "  --background RGB sRGB colour 0..1 (e.g. 1,1,1) filling the PNG background (default transparent)\n"
                  "  --fps F          frames per second of the fixed-step clock (default 24, the demo clip's rate)\n"
-                 "  --no-cull        disable back-face/frustum culling (for comparisons)\n");
+                 "  --no-cull        disable back-face/frustum culling (for comparisons)\n"
+                 "  --camera E,T,U,F the camera for every frame: eye x,y,z, target x,y,z, up x,y,z, vertical fov in\n"
+                 "                   degrees (0..180); eye = target and up along the view direction are refused\n"
+                 "  --turntable N    N frames (0..N-1) orbiting the scene's bounds centre at the scene camera's\n"
+                 "                   distance and height, one turn; frame 0 is seen from the scene camera's eye\n"
+                 "  --video FILE     also encode the PNG frames as FILE (.mp4 H.264 or .gif) at --fps; needs ffmpeg\n");
 }
 
-bool parse_int_pair(const std::string& s, char sep, long& a, long& b) {
-    const auto at = s.find(sep);
-    if (at == std::string::npos) return false;
-    try {
-        std::size_t n1 = 0, n2 = 0;
-        const std::string first = s.substr(0, at), second = s.substr(at + 1);
-        a = std::stol(first, &n1);
-        b = std::stol(second, &n2);
-        return n1 == first.size() && n2 == second.size();
-    } catch (...) {
-        return false;
+// ---- --camera, --turntable ------------------------------------------------------------------------
+
+// Parses "ex,ey,ez,tx,ty,tz,ux,uy,uz,fov" and refuses cameras that have no view: eye = target, up
+// parallel to the view direction (or zero), fov outside (0, 180).
+std::string number_text(double v) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%g", v);
+    return buf;
+}
+
+Result<Camera> parse_camera(const std::string& text) {
+    std::vector<double> v;
+    std::size_t start = 0;
+    while (true) {
+        const std::size_t end = text.find(',', start);
+        auto n = cli::parse_number("--camera", text.substr(start, end == std::string::npos ? std::string::npos : end - start), -1e30, 1e30);
+        if (!n) return n.error();
+        v.push_back(*n);
+        if (end == std::string::npos) break;
+        start = end + 1;
     }
+    if (v.size() != 10)
+        return make_error("--camera expects 10 numbers eye x,y,z,target x,y,z,up x,y,z,fov; got " + std::to_string(v.size()) + " in '" + text + "'");
+    Camera c;
+    c.eye = glm::dvec3(v[0], v[1], v[2]);
+    c.target = glm::dvec3(v[3], v[4], v[5]);
+    c.up = glm::dvec3(v[6], v[7], v[8]);
+    const double fov = v[9];
+    const glm::dvec3 view = c.target - c.eye;
+    if (!(glm::length(view) > 1e-12 * std::max(1.0, glm::length(c.eye))))
+        return make_error("--camera: eye and target are the same point; the camera has no view direction");
+    if (!(glm::length(c.up) > 0.0) || glm::length(glm::cross(glm::normalize(view), glm::normalize(c.up))) < 1e-6)
+        return make_error("--camera: up (" + number_text(v[6]) + ", " + number_text(v[7]) + ", " + number_text(v[8]) +
+                          ") is parallel to the view direction (or zero); the image's up is undefined");
+    if (!(fov > 0.0 && fov < 180.0)) return make_error("--camera: fov " + number_text(fov) + " is outside (0, 180) degrees");
+    c.fov_y_degrees = static_cast<float>(fov);
+    return c;
+}
+
+struct SceneBounds {
+    glm::dvec3 center{0.0};
+    double radius = 1.0;
+};
+
+// The union of every non-empty cloud's world-space bounding sphere (as render::scene_camera frames it).
+SceneBounds scene_bounds(const ecs::Registry& registry) {
+    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    std::vector<std::pair<glm::dvec3, double>> balls;
+    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
+        if (cloud.size() == 0) return;
+        const render::BoundingSphere b = render::bounding_sphere(cloud);
+        const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), cloud.origin);
+        const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
+        const glm::dvec3 c = glm::dvec3(m * glm::dvec4(b.center, 1.0));
+        balls.emplace_back(c, b.radius * scale);
+        lo = glm::min(lo, c - b.radius * scale);
+        hi = glm::max(hi, c + b.radius * scale);
+    });
+    SceneBounds out;
+    if (balls.empty()) return out;
+    out.center = 0.5 * (lo + hi);
+    out.radius = 0.0;
+    for (const auto& [c, r] : balls) out.radius = std::max(out.radius, glm::length(c - out.center) + r);
+    out.radius = std::max(out.radius, 1e-9);
+    return out;
+}
+
+// Near and far planes that hold the whole scene from wherever the eye is (a camera given on the command
+// line has none of its own).
+void fit_clip_planes(Camera& c, const SceneBounds& b) {
+    const double d = glm::length(c.eye - b.center);
+    c.near_plane = static_cast<float>(std::max(d - 2.0 * b.radius, 1e-3 * std::max(d, b.radius)));
+    c.far_plane = static_cast<float>(d + 2.0 * b.radius);
+}
+
+// Makes `c` the camera every frame is seen through: render::scene_camera uses the first Camera entity.
+void use_camera(ecs::Registry& registry, const Camera& c) {
+    bool found = false;
+    registry.view<Camera>().each([&](Camera& existing) {
+        if (!found) existing = c, found = true;
+    });
+    if (!found) registry.emplace<Camera>(registry.create(), c);
+}
+
+// Frame k of n of the turntable: the scene camera's eye turned by 2 pi k / n about the axis through the
+// bounds centre along the camera's up; it looks at the centre (the orbit keeps distance and height).
+Camera turntable_camera(const Camera& scene, const SceneBounds& b, long k, long n) {
+    const glm::dvec3 up = glm::normalize(scene.up);
+    const glm::dvec3 offset = scene.eye - b.center;
+    const double height = glm::dot(offset, up);
+    glm::dvec3 radial = offset - height * up;
+    double r = glm::length(radial);
+    glm::dvec3 a = r > 1e-9 * std::max(1.0, glm::length(offset)) ? radial / r : glm::dvec3(0.0);
+    double h = height;
+    if (r <= 1e-9 * std::max(1.0, glm::length(offset))) {
+        // Looking straight along up: orbit at the same distance in the horizontal plane instead.
+        const glm::dvec3 t = std::abs(up.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0);
+        a = glm::normalize(glm::cross(up, t));
+        r = std::max(glm::length(offset), b.radius * 2.0);
+        h = 0.0;
+    }
+    const glm::dvec3 bb = glm::cross(up, a);
+    const double angle = 2.0 * glm::pi<double>() * double(k) / double(n);
+    Camera c = scene;
+    c.eye = b.center + h * up + r * (std::cos(angle) * a + std::sin(angle) * bb);
+    c.target = b.center;
+    c.up = up;
+    fit_clip_planes(c, b);
+    return c;
+}
+
+// ---- --video ---------------------------------------------------------------------------------------
+
+// The full path of `name` on PATH (an executable regular file), or "".
+std::string find_on_path(const std::string& name) {
+    const char* path = std::getenv("PATH");
+    std::string dirs = path ? path : "/usr/bin:/bin";
+    std::size_t start = 0;
+    while (start <= dirs.size()) {
+        const std::size_t end = std::min(dirs.find(':', start), dirs.size());
+        const std::string dir = dirs.substr(start, end - start);
+        const std::filesystem::path candidate = std::filesystem::path(dir.empty() ? "." : dir) / name;
+        std::error_code ec;
+        if (std::filesystem::is_regular_file(candidate, ec) && ::access(candidate.c_str(), X_OK) == 0) return candidate.string();
+        start = end + 1;
+    }
+    return {};
+}
+
+// Encodes DIR/frame_FIRST..LAST.png into `video` (.mp4: H.264 yuv420p, even size; .gif: per-clip palette)
+// through a temporary file renamed at the end, so a failed encode leaves no half video. ffmpeg runs with
+// an argument vector (no shell): paths with spaces or quotes are safe.
+Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir, long first, long last, double fps,
+                    const std::filesystem::path& video) {
+    const bool gif = video.extension() == ".gif";
+    const std::filesystem::path tmp = video.parent_path() / (video.filename().string() + ".tmp" + std::to_string(::getpid()));
+    char rate[64];
+    std::snprintf(rate, sizeof rate, "%.9g", fps);
+    std::vector<std::string> argv = {ffmpeg, "-nostdin", "-loglevel", "error", "-y", "-framerate", rate, "-start_number", std::to_string(first),
+                                     "-i", (dir / "frame_%04d.png").string(), "-frames:v", std::to_string(last - first + 1)};
+    if (gif) {
+        for (const char* a : {"-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse", "-loop", "0", "-f", "gif"}) argv.emplace_back(a);
+    } else {
+        for (const char* a : {"-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4"})
+            argv.emplace_back(a);
+    }
+    argv.push_back(tmp.string());
+    std::vector<char*> args;
+    for (std::string& a : argv) args.push_back(a.data());
+    args.push_back(nullptr);
+    pid_t pid = 0;
+    if (int err = posix_spawn(&pid, ffmpeg.c_str(), nullptr, nullptr, args.data(), environ); err != 0)
+        return make_error(video.string() + ": cannot run " + ffmpeg + ": " + std::strerror(err));
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
+    std::error_code ec;
+    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
+        std::filesystem::remove(tmp, ec);
+        return make_error(video.string() + ": ffmpeg failed (" +
+                          (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : std::string("killed")) + "); its messages are above");
+    }
+    std::filesystem::rename(tmp, video, ec);
+    if (ec) {
+        std::filesystem::remove(tmp, ec);
+        return make_error(video.string() + ": cannot write: " + ec.message());
+    }
+    return {};
+}
+
+// "A<sep>B", each part through cli::parse_integer (one message format, the option named).
+Status parse_int_pair(const std::string& option, const std::string& s, char sep, long long min, long long max, long& a, long& b) {
+    const auto at = s.find(sep);
+    if (at == std::string::npos) return make_error(option + ": expected two integers separated by '" + std::string(1, sep) + "', got '" + s + "'");
+    auto x = cli::parse_integer(option, s.substr(0, at), min, max);
+    if (!x) return x.error();
+    auto y = cli::parse_integer(option, s.substr(at + 1), min, max);
+    if (!y) return y.error();
+    a = static_cast<long>(*x);
+    b = static_cast<long>(*y);
+    return {};
 }
 
 std::optional<glm::vec3> parse_rgb(const std::string& s) {
@@ -92,6 +280,10 @@ int run_render(sffd::cli::Args args) {
     double fps = 24.0;  // the built-in demo clip (systems/animation/paper_demo.h) is authored at 24 fps
     render::Quality quality = render::Quality::hq;
     std::optional<glm::vec3> background;
+    std::optional<Camera> camera;
+    long turntable = 0;
+    bool frames_given = false;
+    std::string video;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         const bool has_value = i + 1 < args.size();
@@ -105,14 +297,35 @@ int run_render(sffd::cli::Args args) {
         } else if (a == "--out" && has_value) {
             out_dir = args[++i];
         } else if (a == "--frames" && has_value) {
-            if (!parse_int_pair(args[i + 1], ':', first, last) || first < 0 || last < first)
-                return bad("--frames expects A:B with 0 <= A <= B, got");
+            if (Status st = parse_int_pair("--frames", args[i + 1], ':', 0, 99'999'999, first, last); !st) {
+                std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
+                return 2;
+            }
+            if (last < first) return bad("--frames expects A:B with 0 <= A <= B, got");
+            frames_given = true;
             ++i;
         } else if (a == "--size" && has_value) {
-            if (!parse_int_pair(args[i + 1], 'x', width, height) || width < 1 || height < 1 || width > 16384 ||
-                height > 16384)
-                return bad("--size expects WxH (1..16384), got");
+            if (Status st = parse_int_pair("--size", args[i + 1], 'x', 1, 16384, width, height); !st) {
+                std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
+                return 2;
+            }
             ++i;
+        } else if (a == "--camera" && has_value) {
+            auto c = parse_camera(args[++i]);
+            if (!c) {
+                std::fprintf(stderr, "splatffd render: %s\n", c.message().c_str());
+                return 2;
+            }
+            camera = *c;
+        } else if (a == "--turntable" && has_value) {
+            auto n = cli::parse_integer("--turntable", args[++i], 1, 100'000);
+            if (!n) {
+                std::fprintf(stderr, "splatffd render: %s\n", n.message().c_str());
+                return 2;
+            }
+            turntable = static_cast<long>(*n);
+        } else if (a == "--video" && has_value) {
+            video = args[++i];
         } else if (a == "--quality" && has_value) {
             if (args[i + 1] == "hq") quality = render::Quality::hq;
             else if (args[i + 1] == "preview") quality = render::Quality::preview;
@@ -129,13 +342,12 @@ int run_render(sffd::cli::Args args) {
             if (!background) return bad("--background expects R,G,B in 0..1, got");
             ++i;
         } else if (a == "--fps" && has_value) {
-            try {
-                fps = std::stod(args[i + 1]);
-            } catch (...) {
-                fps = 0;
+            auto f = cli::parse_number("--fps", args[++i], 1e-6, 1e6);
+            if (!f) {
+                std::fprintf(stderr, "splatffd render: %s\n", f.message().c_str());
+                return 2;
             }
-            if (!(fps > 0.0 && fps < 1e6)) return bad("--fps expects a positive number, got");
-            ++i;
+            fps = *f;
         } else if (a == "--no-cull") {
             culling = false;
         } else if (!a.empty() && a[0] != '-' && !scene_given) {
@@ -160,6 +372,40 @@ int run_render(sffd::cli::Args args) {
         usage();
         return 2;
     }
+    if (turntable > 0 && camera) {
+        std::fprintf(stderr, "splatffd render: --turntable orbits the scene camera; it cannot be combined with --camera\n");
+        return 2;
+    }
+    if (turntable > 0 && frames_given) {
+        std::fprintf(stderr, "splatffd render: --turntable N renders frames 0..N-1; it cannot be combined with --frames\n");
+        return 2;
+    }
+    if (turntable > 0) first = 0, last = turntable - 1;
+    // --video: checked before any frame is rendered (format, ffmpeg, the folder it goes to).
+    std::string ffmpeg;
+    if (!video.empty()) {
+        const std::string ext = std::filesystem::path(video).extension().string();
+        if (ext != ".mp4" && ext != ".gif") {
+            std::fprintf(stderr, "splatffd render: --video %s: the file must end in .mp4 or .gif\n", video.c_str());
+            return 2;
+        }
+        if (!png) {
+            std::fprintf(stderr, "splatffd render: --video encodes the PNG frames; --format must include png\n");
+            return 2;
+        }
+        ffmpeg = find_on_path("ffmpeg");
+        if (ffmpeg.empty()) {
+            std::fprintf(stderr, "splatffd render: --video needs ffmpeg, which is not on PATH; install it (Debian/Ubuntu: "
+                                 "apt-get install ffmpeg) or encode the PNG frames yourself\n");
+            return 1;
+        }
+        const std::filesystem::path parent = std::filesystem::absolute(video).parent_path();
+        std::error_code vec;
+        if (!std::filesystem::is_directory(parent, vec) || ::access(parent.c_str(), W_OK) != 0) {
+            std::fprintf(stderr, "%s: cannot write the video: folder %s does not exist or is not writable\n", video.c_str(), parent.c_str());
+            return 1;
+        }
+    }
     std::error_code ec;
     std::filesystem::create_directories(out_dir, ec);
     if (ec || !std::filesystem::is_directory(out_dir)) {
@@ -168,6 +414,11 @@ int run_render(sffd::cli::Args args) {
     }
 
     // 3D Gaussian files (3DGS PLY, .splat, KHR glb): one frame through the Gaussian renderer.
+    if (scene_given && cli::is_gaussian_file(scene) && (camera || turntable > 0 || !video.empty())) {
+        std::fprintf(stderr, "splatffd render: %s: --camera, --turntable and --video are not supported for 3D Gaussian files yet (one frame, the file's view)\n",
+                     scene.c_str());
+        return 2;
+    }
     if (scene_given && cli::is_gaussian_file(scene)) return cli::render_gaussians(scene, out_dir, int(width), int(height), background);
     // Offscreen rendering needs no window: EGL surfaceless works with or without a display.
     auto ctx = gfx::create_context({.headless = true, .width = int(width), .height = int(height), .debug = false});
@@ -191,6 +442,13 @@ int run_render(sffd::cli::Args args) {
         settings.culling = culling;
         settings.aux_outputs = exr;  // Z and N channels
         registry.set_resource<render::RenderSettings>(settings);
+        // --camera / --turntable replace the scene camera (its clip planes are fitted to the scene).
+        const SceneBounds bounds = camera || turntable > 0 ? scene_bounds(registry) : SceneBounds{};
+        const Camera scene_view = turntable > 0 ? render::scene_camera(registry, double(width) / double(height)) : Camera{};
+        if (camera) {
+            fit_clip_planes(*camera, bounds);
+            use_camera(registry, *camera);
+        }
         registry.set_resource<app::AppContext>(app::AppContext{&ctx.value(), false});
         if (Status st = render::init_render_state(registry); !st) {
             std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
@@ -240,6 +498,7 @@ int run_render(sffd::cli::Args args) {
             clock.seek(double(k) / fps);
             FrameContext frame = clock.tick();
             frame.frame = std::uint64_t(k);
+            if (turntable > 0) use_camera(registry, turntable_camera(scene_view, bounds, k, turntable));
             schedule.run_frame(registry, frame);
             auto image = render::capture_frame(registry);
             if (!image) {
@@ -280,6 +539,13 @@ int run_render(sffd::cli::Args args) {
         std::fprintf(stderr, "\n");
         if (status != 0) (void)write_manifest(written_last, "failed");
         render::release_render_state(registry);
+    }
+    if (status == 0 && !video.empty()) {
+        if (Status st = encode_video(ffmpeg, out_dir, first, last, fps, video); !st) {
+            std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
+            return 1;
+        }
+        std::fprintf(stderr, "wrote %s: %ld frames at %g fps\n", video.c_str(), last - first + 1, fps);
     }
     return status;
 }

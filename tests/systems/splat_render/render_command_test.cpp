@@ -6,12 +6,19 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
+#include <initializer_list>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
+#include "runtime/assets/builtin_scenes.h"
+#include "runtime/assets/scene.h"
+#include "runtime/ecs/registry.h"
 #include "systems/splat_render/image_io.h"
+#include "systems/splat_render/splat_pack.h"
 
 namespace fs = std::filesystem;
 using namespace sffd::render;
@@ -176,4 +183,189 @@ TEST(RenderCommand, InterruptedSequenceLeavesAnIncompleteManifestAndNoTemporarie
     EXPECT_NE(m.find("\"frames_written\": [0"), std::string::npos) << m;
     EXPECT_EQ(m.find("100000]"), std::string::npos) << m;
     for (const auto& e : fs::directory_iterator(out)) EXPECT_EQ(e.path().filename().string().find("sffd-tmp"), std::string::npos) << e.path();
+}
+
+// ---- --camera, --turntable, --video (issue 16) ------------------------------------------------------
+
+namespace {
+
+// Pixels whose channels differ by more than 2 (of 255).
+int differing_pixels(const fs::path& a, const fs::path& b) {
+    auto x = read_png(a);
+    auto y = read_png(b);
+    if (!x.ok() || !y.ok() || x->pixels.size() != y->pixels.size()) return -1;
+    int n = 0;
+    for (std::size_t i = 0; i < x->pixels.size(); i += 4) {
+        bool d = false;
+        for (int c = 0; c < 4; ++c) d = d || std::abs(int(x->pixels[i + c]) - int(y->pixels[i + c])) > 2;
+        n += d;
+    }
+    return n;
+}
+
+std::string numbers(std::initializer_list<double> v) {
+    std::string s;
+    char buf[40];
+    for (double x : v) {
+        std::snprintf(buf, sizeof buf, "%.17g", x);
+        if (!s.empty()) s += ',';
+        s += buf;
+    }
+    return s;
+}
+
+// A scene file with one still cloud (the built-in sphere's points, no clip) seen by a known camera.
+struct CameraScene {
+    fs::path path;
+    sffd::Camera camera;
+    glm::dvec3 centre{0.0};  // the cloud's bounding-sphere centre in world space (= the scene bounds centre)
+};
+
+CameraScene camera_scene() {
+    CameraScene s;
+    s.path = fresh_dir("camera_scene");
+    fs::create_directories(s.path);
+    s.path /= "still.glb";
+    sffd::ecs::Registry r;
+    const sffd::SplatCloud cloud = sffd::assets::make_sphere_cloud(20000);
+    const sffd::render::BoundingSphere b = sffd::render::bounding_sphere(cloud);
+    s.centre = cloud.origin + b.center;
+    r.emplace<sffd::SplatCloud>(r.create(), cloud);
+    s.camera.eye = glm::dvec3(0.4, 0.9, 2.6);
+    s.camera.target = glm::dvec3(0.1, 0.0, 0.0);
+    s.camera.up = glm::dvec3(0.0, 1.0, 0.0);
+    s.camera.fov_y_degrees = 40.0f;
+    s.camera.near_plane = 0.5f;
+    s.camera.far_plane = 6.0f;
+    r.emplace<sffd::Camera>(r.create(), s.camera);
+    sffd::DirectionalLight light;
+    r.emplace<sffd::DirectionalLight>(r.create(), light);
+    EXPECT_TRUE(sffd::save_scene(r, s.path).ok());
+    return s;
+}
+
+std::string camera_option(const glm::dvec3& eye, const glm::dvec3& target, const glm::dvec3& up, double fov) {
+    return " --camera " + numbers({eye.x, eye.y, eye.z, target.x, target.y, target.z, up.x, up.y, up.z, fov});
+}
+
+}  // namespace
+
+TEST(RenderCommand, CameraOptionMovesTheViewAndMatchesTheSameSceneCamera) {
+    const CameraScene scene = camera_scene();
+    const fs::path own = fresh_dir("cam_own"), same = fresh_dir("cam_same"), other = fresh_dir("cam_other");
+    const std::string common = " --size 160x90 --format png --quality preview";
+    std::string log;
+    ASSERT_EQ(run(scene.path.string() + " --out " + own.string() + common, &log), 0) << log;
+    const sffd::Camera& c = scene.camera;
+    ASSERT_EQ(run(scene.path.string() + " --out " + same.string() + common + camera_option(c.eye, c.target, c.up, c.fov_y_degrees), &log), 0) << log;
+    ASSERT_EQ(run(scene.path.string() + " --out " + other.string() + common + camera_option({2.5, 0.2, -1.0}, {0, 0, 0}, {0, 1, 0}, 25.0), &log), 0)
+        << log;
+    // The same camera given on the command line draws the scene camera's image (only the clip planes,
+    // fitted to the scene, differ); another camera draws another image.
+    const int same_diff = differing_pixels(own / "frame_0000.png", same / "frame_0000.png");
+    const int other_diff = differing_pixels(own / "frame_0000.png", other / "frame_0000.png");
+    EXPECT_GE(same_diff, 0);
+    EXPECT_LE(same_diff, 160 * 90 / 200) << "more than 0.5 % of the pixels differ";
+    EXPECT_GT(other_diff, 160 * 90 / 10) << "the --camera view should differ from the scene camera's";
+    // The scene's coverage is not empty in either (a camera looking away would pass the test above).
+    auto png = read_png(other / "frame_0000.png");
+    ASSERT_TRUE(png.ok());
+    int covered = 0;
+    for (std::size_t i = 3; i < png->pixels.size(); i += 4) covered += png->pixels[i] > 0;
+    EXPECT_GT(covered, 160 * 90 / 50);
+}
+
+TEST(RenderCommand, DegenerateCamerasAreRefused) {
+    std::string log;
+    const std::string out = " --out " + fresh_dir("cam_bad").string();
+    EXPECT_EQ(run(out + " --camera 1,2,3,1,2,3,0,1,0,45", &log), 2);
+    EXPECT_NE(log.find("--camera: eye and target are the same point"), std::string::npos) << log;
+    EXPECT_EQ(run(out + " --camera 0,0,3,0,0,0,0,0,-2,45", &log), 2);
+    EXPECT_NE(log.find("--camera: up (0, 0, -2) is parallel to the view direction"), std::string::npos) << log;
+    EXPECT_EQ(run(out + " --camera 0,0,3,0,0,0,0,1,0,0", &log), 2);
+    EXPECT_NE(log.find("--camera: fov 0 is outside (0, 180) degrees"), std::string::npos) << log;
+    EXPECT_EQ(run(out + " --camera 0,0,3,0,0,0,0,1,0,180", &log), 2);
+    EXPECT_NE(log.find("--camera: fov 180 is outside (0, 180) degrees"), std::string::npos) << log;
+    EXPECT_EQ(run(out + " --camera 0,0,3,0,0,0,0,1,0", &log), 2);
+    EXPECT_NE(log.find("--camera expects 10 numbers"), std::string::npos) << log;
+    EXPECT_EQ(run(out + " --camera 0,0,3,0,nan,0,0,1,0,45", &log), 2);
+    EXPECT_NE(log.find("--camera: expected a number"), std::string::npos) << log;
+    EXPECT_EQ(run(out + " --turntable 0", &log), 2);
+    EXPECT_NE(log.find("--turntable: expected an integer in 1..100000, got '0'"), std::string::npos) << log;
+    EXPECT_EQ(run(out + " --turntable 4 --frames 0:3", &log), 2);
+    EXPECT_EQ(run(out + " --frames 0:abc", &log), 2);
+    EXPECT_NE(log.find("--frames: expected an integer"), std::string::npos) << log;
+    EXPECT_EQ(run(out + " --size 640x-5", &log), 2);
+    EXPECT_NE(log.find("--size: expected an integer in 1..16384, got '-5'"), std::string::npos) << log;
+    EXPECT_EQ(run(out + " --video clip.avi", &log), 2);
+    EXPECT_NE(log.find("must end in .mp4 or .gif"), std::string::npos) << log;
+    // 3D Gaussian files take another renderer (one frame): the options are refused, not ignored.
+    const fs::path g = fresh_dir("cam_bad").parent_path() / "gaussians.ply";
+    fs::create_directories(g.parent_path());
+    ASSERT_EQ(std::system((binary + " convert sphere " + g.string() + " --gaussians > /dev/null 2>&1").c_str()), 0);
+    EXPECT_EQ(run(g.string() + out + " --turntable 3", &log), 2);
+    EXPECT_NE(log.find("not supported for 3D Gaussian files"), std::string::npos) << log;
+}
+
+TEST(RenderCommand, TurntableOrbitsAndStartsAtTheSceneCamerasEye) {
+    const CameraScene scene = camera_scene();
+    const fs::path turn = fresh_dir("turntable"), start = fresh_dir("turntable_start");
+    const std::string common = " --size 160x90 --format png --quality preview";
+    std::string log;
+    ASSERT_EQ(run(scene.path.string() + " --out " + turn.string() + common + " --turntable 4", &log), 0) << log;
+    for (int k = 0; k < 4; ++k) EXPECT_TRUE(fs::exists(turn / ("frame_000" + std::to_string(k) + ".png"))) << k;
+    EXPECT_FALSE(fs::exists(turn / "frame_0004.png"));
+    // Frame 0 = the scene camera's eye looking at the bounds centre, as --camera gives it.
+    const glm::dvec3 up = glm::normalize(scene.camera.up);
+    ASSERT_EQ(run(scene.path.string() + " --out " + start.string() + common + camera_option(scene.camera.eye, scene.centre, up, scene.camera.fov_y_degrees),
+                  &log),
+              0)
+        << log;
+    EXPECT_EQ(differing_pixels(turn / "frame_0000.png", start / "frame_0000.png"), 0);
+    // The other frames see the scene from elsewhere (the cloud is still: only the camera moves).
+    for (int k = 1; k < 4; ++k)
+        EXPECT_GT(differing_pixels(turn / "frame_0000.png", turn / ("frame_000" + std::to_string(k) + ".png")), 100) << k;
+}
+
+TEST(RenderCommand, VideoNamesFfmpegWhenItIsMissing) {
+    const fs::path out = fresh_dir("video_missing");
+    fs::create_directories(out.parent_path());
+    const fs::path log = out.parent_path() / "video_missing.log";
+    // PATH without ffmpeg: refused before any frame is rendered, naming the package.
+    const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY PATH=/nonexistent " + binary + " render sphere --out " + out.string() +
+                            " --video " + (out.parent_path() / "v.mp4").string() + " > " + log.string() + " 2>&1";
+    const int status = std::system(cmd.c_str());
+    std::ifstream in(log);
+    const std::string text((std::istreambuf_iterator<char>(in)), {});
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 1) << text;
+    EXPECT_NE(text.find("--video needs ffmpeg, which is not on PATH; install it (Debian/Ubuntu: apt-get install ffmpeg)"), std::string::npos)
+        << text;
+    EXPECT_FALSE(fs::exists(out / "frame_0000.png"));
+}
+
+TEST(RenderCommand, VideoOfATurntableHasOneFramePerImage) {
+    if (std::system("command -v ffmpeg > /dev/null 2>&1 && command -v ffprobe > /dev/null 2>&1") != 0)
+        GTEST_SKIP() << "ffmpeg/ffprobe not installed: --video is optional (apt-get install ffmpeg: 91 packages, 157 MB, so "
+                        "tools/bootstrap.sh does not install it)";
+    const fs::path out = fresh_dir("video");
+    fs::create_directories(out.parent_path());  // the videos go next to the frames' folder
+    for (const char* name : {"turn clip.mp4", "turn.gif"}) {
+        const fs::path video = out.parent_path() / name;
+        fs::remove(video);
+        std::string log;
+        ASSERT_EQ(run("sphere --out " + out.string() + " --size 97x55 --format png --quality preview --turntable 5 --video '" + video.string() + "'", &log), 0)
+            << log;
+        ASSERT_TRUE(fs::exists(video)) << log;
+        const fs::path probe = out.parent_path() / "probe.txt";
+        const std::string cmd = "ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of csv=p=0 '" +
+                                video.string() + "' > " + probe.string();
+        ASSERT_EQ(std::system(cmd.c_str()), 0);
+        std::ifstream in(probe);
+        int frames = 0;
+        in >> frames;
+        EXPECT_EQ(frames, 5) << name;
+        for (const auto& e : fs::directory_iterator(out.parent_path()))
+            EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << "temporary left: " << e.path();
+    }
 }
