@@ -722,6 +722,22 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
     return write_file_atomic(path, glb);
 }
 
+namespace {
+
+// Attribute arrays are filled lazily (only once some primitive has them): complete every present one to
+// the point count with its neutral value (zero normal/uv/axes, opaque white colour).
+void pad_attributes(Geometry& g) {
+    const std::size_t n = g.positions.size();
+    if (!g.normals.empty()) g.normals.resize(n, glm::vec3(0.0f));
+    if (!g.colors.empty()) g.colors.resize(n, 0xffffffffu);
+    if (!g.uvs.empty()) g.uvs.resize(n, glm::vec2(0.0f));
+    if (!g.axis_u.empty()) {
+        g.axis_u.resize(n, glm::vec3(0.0f));
+        g.axis_v.resize(n, glm::vec3(0.0f));
+    }
+}
+
+}  // namespace
 
 Result<GltfContents> read_gltf(const fs::path& path) {
     const std::string src = path.string();
@@ -806,14 +822,7 @@ Result<GltfContents> read_gltf(const fs::path& path) {
         if (auto s = visit(r, glm::dmat4(1.0), 0); !s) return s.error();
     // Attribute arrays padded lazily: complete them to the point count.
     Geometry& g = out.other;
-    const std::size_t n = g.positions.size();
-    if (!g.normals.empty()) g.normals.resize(n, glm::vec3(0.0f));
-    if (!g.colors.empty()) g.colors.resize(n, 0xffffffffu);
-    if (!g.uvs.empty()) g.uvs.resize(n, glm::vec2(0.0f));
-    if (!g.axis_u.empty()) {
-        g.axis_u.resize(n, glm::vec3(0.0f));
-        g.axis_v.resize(n, glm::vec3(0.0f));
-    }
+    pad_attributes(g);
     for (const auto& p : g.positions)
         if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return make_error(src + ": a node transform or position is not finite");
     g.attributes = {"POSITION"};
@@ -857,14 +866,7 @@ Result<Geometry> read_gltf_geometry(const fs::path& path) {
             }
         }
     }
-    const std::size_t n = g.positions.size();
-    if (!g.normals.empty()) g.normals.resize(n, glm::vec3(0.0f));
-    if (!g.colors.empty()) g.colors.resize(n, 0xffffffffu);
-    if (!g.uvs.empty()) g.uvs.resize(n, glm::vec2(0.0f));
-    if (!g.axis_u.empty()) {
-        g.axis_u.resize(n, glm::vec3(0.0f));
-        g.axis_v.resize(n, glm::vec3(0.0f));
-    }
+    pad_attributes(g);
     if (g.positions.empty()) return make_error(path.string() + ": no points or triangles in the glTF scene");
     return g;
 }
