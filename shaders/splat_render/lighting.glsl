@@ -13,14 +13,20 @@
 #ifndef LIGHTS
 #define LIGHTS SFFD_MAX_LIGHTS
 #endif
+// One light's terms, shared by both loops below: ndl (diffuse cosine) and spec (Blinn-Phong highlight).
+void blinn_phong_light(int i, vec3 n, vec3 to_eye, float specular, float shininess, out float ndl, out float spec) {
+    vec3 l = frame.light_dir[i].xyz;
+    ndl = max(dot(n, l), 0.0);
+    vec3 h = normalize(l + to_eye);
+    spec = ndl > 0.0 ? exp2(shininess * log2(max(dot(n, h), 1e-8))) * specular : 0.0;
+}
+
 vec3 shade_blinn_phong(vec3 albedo, vec3 n, vec3 to_eye, float specular, float shininess) {
     vec3 color = frame.ambient.rgb * albedo;
     for (int i = 0; i < LIGHTS; ++i) {
         if (uint(i) >= frame.counts.y) break;
-        vec3 l = frame.light_dir[i].xyz;
-        float ndl = max(dot(n, l), 0.0);
-        vec3 h = normalize(l + to_eye);
-        float spec = ndl > 0.0 ? exp2(shininess * log2(max(dot(n, h), 1e-8))) * specular : 0.0;
+        float ndl, spec;
+        blinn_phong_light(i, n, to_eye, specular, shininess, ndl, spec);
         color += frame.light_color[i].rgb * (albedo * ndl + vec3(spec));
     }
     return color;
@@ -33,10 +39,8 @@ void blinn_phong_factors(vec3 n, vec3 to_eye, float specular, float shininess, o
     spec_sum = vec3(0.0);
     for (int i = 0; i < LIGHTS; ++i) {
         if (uint(i) >= frame.counts.y) break;
-        vec3 l = frame.light_dir[i].xyz;
-        float ndl = max(dot(n, l), 0.0);
-        vec3 h = normalize(l + to_eye);
-        float spec = ndl > 0.0 ? exp2(shininess * log2(max(dot(n, h), 1e-8))) * specular : 0.0;
+        float ndl, spec;
+        blinn_phong_light(i, n, to_eye, specular, shininess, ndl, spec);
         diffuse += frame.light_color[i].rgb * ndl;
         spec_sum += frame.light_color[i].rgb * spec;
     }
