@@ -319,8 +319,9 @@ void set_axis(EditorState& state, AxisMode mode) {
     say(state, log::str("axis: ", axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis)));
 }
 
-// Up to three numbers of a numeric entry ("dx dy dz", commas allowed); returns how many were read.
-int parse_numbers(const std::string& text, double (&v)[3]) {
+// Reads up to three leading numbers of a numeric entry ("dx dy dz", commas allowed) into v; returns how
+// many were read. trailing_junk (when given) tells whether anything but spaces follows them.
+int scan_numbers(const std::string& text, double (&v)[3], bool* trailing_junk = nullptr) {
     std::string cleaned = text;
     std::replace(cleaned.begin(), cleaned.end(), ',', ' ');
     int n = 0;
@@ -333,7 +334,15 @@ int parse_numbers(const std::string& text, double (&v)[3]) {
         p = end;
     }
     while (*p == ' ') ++p;
-    return *p == '\0' ? n : -1;  // trailing junk: not a number list
+    if (trailing_junk) *trailing_junk = *p != '\0';
+    return n;
+}
+
+// Up to three numbers of a numeric entry; returns how many were read, or -1 when junk follows them.
+int parse_numbers(const std::string& text, double (&v)[3]) {
+    bool junk = false;
+    const int n = scan_numbers(text, v, &junk);
+    return junk ? -1 : n;  // trailing junk: not a number list
 }
 
 const char* typed_char(const std::string& key) {
@@ -419,18 +428,8 @@ bool handle_typed_key(ecs::Registry& registry, EditorState& state, const InputEv
 void handle_text(ecs::Registry& registry, EditorState& state, const std::string& text) {
     // Numeric entry: "dx dy dz" (commas allowed) for move, "degrees" for twist.
     state.typed = {};
-    std::string cleaned = text;
-    std::replace(cleaned.begin(), cleaned.end(), ',', ' ');
     double v[3] = {0, 0, 0};
-    int n = 0;
-    const char* p = cleaned.c_str();
-    while (n < 3) {
-        char* end = nullptr;
-        const double x = std::strtod(p, &end);
-        if (end == p) break;
-        v[n++] = x;
-        p = end;
-    }
+    const int n = scan_numbers(text, v);  // the leading numbers; what follows them is not checked here
     if (state.tool == Tool::twist && n >= 1) apply_twist(registry, state, v[0]);
     else if (state.tool == Tool::move && n == 3) apply_stretch(registry, state, {v[0], v[1], v[2]});
     else say(state, "numeric entry '" + text + "': move takes 'dx dy dz', twist takes 'degrees'");
