@@ -14,27 +14,14 @@
 #include <vector>
 
 #include "runtime/assets/import.h"
+#include "tests/test_util/run_tool.h"
 
 namespace fs = std::filesystem;
 
 namespace {
 
-struct CliRun {
-    int code = -1;
-    std::string out;  // stdout + stderr
-};
-
-CliRun run(const std::string& args) {
-    const std::string cmd = std::string(SFFD_BINARY_DIR) + "/tools/splatffd " + args + " 2>&1";
-    CliRun r;
-    std::FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf{};
-    while (std::size_t n = std::fread(buf.data(), 1, buf.size(), p)) r.out.append(buf.data(), n);
-    const int status = pclose(p);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using sffd::test::CliRun;
+using sffd::test::run;
 
 fs::path temp_dir() {
     fs::path d = fs::temp_directory_path() / ("sffd_cli_test_" + std::to_string(::getpid()));

@@ -21,28 +21,15 @@
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/lattice_io.h"
 #include "systems/ffd/operations.h"
+#include "tests/test_util/run_tool.h"
 
 namespace sffd::ffd {
 namespace {
 
 namespace fs = std::filesystem;
 
-struct CliRun {
-    int code = -1;
-    std::string out;  // stdout + stderr
-};
-
-CliRun run(const std::string& args) {
-    const std::string cmd = std::string(SFFD_BINARY_DIR) + "/tools/splatffd " + args + " 2>&1";
-    CliRun r;
-    std::FILE* p = popen(cmd.c_str(), "r");
-    if (!p) return r;
-    std::array<char, 4096> buf{};
-    while (std::size_t n = std::fread(buf.data(), 1, buf.size(), p)) r.out.append(buf.data(), n);
-    const int status = pclose(p);
-    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-    return r;
-}
+using sffd::test::CliRun;
+using sffd::test::run;
 
 bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 

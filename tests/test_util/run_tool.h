@@ -1,0 +1,31 @@
+// Runs the built `splatffd` binary as a user does, for the command-line tests: the test executables are
+// compiled with SFFD_BINARY_DIR (tests/CMakeLists.txt, sffd_test) naming the build folder.
+#pragma once
+
+#include <sys/wait.h>
+
+#include <array>
+#include <cstdio>
+#include <string>
+
+namespace sffd::test {
+
+struct CliRun {
+    int code = -1;    // exit status; -1 when the command could not start or did not exit normally
+    std::string out;  // stdout + stderr
+};
+
+// `splatffd ARGS` through the shell (ARGS is pasted as written, so quote paths with spaces).
+inline CliRun run(const std::string& args) {
+    const std::string cmd = std::string(SFFD_BINARY_DIR) + "/tools/splatffd " + args + " 2>&1";
+    CliRun r;
+    std::FILE* p = popen(cmd.c_str(), "r");
+    if (!p) return r;
+    std::array<char, 4096> buf{};
+    while (std::size_t n = std::fread(buf.data(), 1, buf.size(), p)) r.out.append(buf.data(), n);
+    const int status = pclose(p);
+    r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    return r;
+}
+
+}  // namespace sffd::test
