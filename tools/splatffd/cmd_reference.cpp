@@ -17,6 +17,7 @@
 #include "systems/splat_render/ground_truth.h"
 #include "systems/splat_render/image_io.h"
 #include "tools/splatffd/command.h"
+#include "tools/splatffd/frame_files.h"
 
 namespace {
 
@@ -84,10 +85,7 @@ int run_reference(sffd::cli::Args args) {
             if (supersample < 0 || supersample > 16) return bad("--supersample expects 0..16, got");
             ++i;
         } else if (a == "--format" && has_value) {
-            const std::string& f = args[i + 1];
-            png = f == "png" || f == "png,exr" || f == "exr,png";
-            exr = f == "exr" || f == "png,exr" || f == "exr,png";
-            if (!png && !exr) return bad("--format expects png, exr or png,exr, got");
+            if (!cli::parse_image_formats(args[i + 1], png, exr)) return bad("--format expects png, exr or png,exr, got");
             ++i;
         } else if (a == "--fps" && has_value) {
             try {
@@ -111,12 +109,7 @@ int run_reference(sffd::cli::Args args) {
         usage();
         return 2;
     }
-    std::error_code ec;
-    std::filesystem::create_directories(out_dir, ec);
-    if (ec || !std::filesystem::is_directory(out_dir)) {
-        std::fprintf(stderr, "%s: cannot create output folder (%s)\n", out_dir.c_str(), ec.message().c_str());
-        return 1;
-    }
+    if (!cli::create_output_folder(out_dir)) return 1;
     ecs::Registry registry;
     if (Status st = load_scene(registry, scene); !st) {
         std::fprintf(stderr, "%s\n", st.message().c_str());
@@ -141,9 +134,7 @@ int run_reference(sffd::cli::Args args) {
             std::fprintf(stderr, "%s: %s\n", scene.c_str(), image.message().c_str());
             return 1;
         }
-        char name[32];
-        std::snprintf(name, sizeof name, "frame_%04ld", k);
-        const std::filesystem::path base = std::filesystem::path(out_dir) / name;
+        const std::filesystem::path base = cli::frame_file_base(out_dir, k);
         if (png) {
             if (Status st = render::write_png(base.string() + ".png", render::to_rgba8(*image)); !st) {
                 std::fprintf(stderr, "%s\n", st.message().c_str());

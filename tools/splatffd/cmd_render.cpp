@@ -43,6 +43,7 @@
 #include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/splat_render.h"
 #include "tools/splatffd/command.h"
+#include "tools/splatffd/frame_files.h"
 #include "tools/splatffd/convert_gaussians.h"
 #include "tools/splatffd/render_gaussians.h"
 #include "tools/splatffd/engine.h"
@@ -332,10 +333,7 @@ int run_render(sffd::cli::Args args) {
             else return bad("--quality expects hq or preview, got");
             ++i;
         } else if (a == "--format" && has_value) {
-            const std::string& f = args[i + 1];
-            png = f == "png" || f == "png,exr" || f == "exr,png";
-            exr = f == "exr" || f == "png,exr" || f == "exr,png";
-            if (!png && !exr) return bad("--format expects png, exr or png,exr, got");
+            if (!cli::parse_image_formats(args[i + 1], png, exr)) return bad("--format expects png, exr or png,exr, got");
             ++i;
         } else if (a == "--background" && has_value) {
             background = parse_rgb(args[i + 1]);
@@ -406,12 +404,7 @@ int run_render(sffd::cli::Args args) {
             return 1;
         }
     }
-    std::error_code ec;
-    std::filesystem::create_directories(out_dir, ec);
-    if (ec || !std::filesystem::is_directory(out_dir)) {
-        std::fprintf(stderr, "%s: cannot create output folder (%s)\n", out_dir.c_str(), ec.message().c_str());
-        return 1;
-    }
+    if (!cli::create_output_folder(out_dir)) return 1;
 
     // 3D Gaussian files (3DGS PLY, .splat, KHR glb): one frame through the Gaussian renderer.
     if (scene_given && cli::is_gaussian_file(scene) && (camera || turntable > 0 || !video.empty())) {
@@ -506,9 +499,7 @@ int run_render(sffd::cli::Args args) {
                 status = 1;
                 break;
             }
-            char name[32];
-            std::snprintf(name, sizeof name, "frame_%04ld", k);
-            const std::filesystem::path base = std::filesystem::path(out_dir) / name;
+            const std::filesystem::path base = cli::frame_file_base(out_dir, k);
             if (png) {
                 if (Status st = render::write_png(base.string() + ".png", render::to_rgba8(*image, settings.background)); !st) {
                     std::fprintf(stderr, "\n%s\n", st.message().c_str());
