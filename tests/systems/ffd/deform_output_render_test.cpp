@@ -62,27 +62,6 @@ double mean_axis_u(const SplatCloud& c) {
     return c.axis_u.empty() ? 0.0 : s / double(c.axis_u.size());
 }
 
-// Pixels inside the 2x1x1 ellipsoid's image (shrunk 3%), those left uncovered, and those whose depth is
-// not the near surface's (the far side showing through a gap).
-struct Coverage {
-    int inside = 0, holes = 0, far_side = 0;
-};
-Coverage coverage(const FrameImage& img, const Camera& cam) {
-    Coverage c;
-    const glm::dvec3 scale(2.0, 1.0, 1.0);
-    for (int y = 0; y < img.height; ++y)
-        for (int x = 0; x < img.width; ++x) {
-            const glm::dvec3 d = pixel_ray(cam, x, y, img.width, img.height);
-            if (!hit_ellipsoid(cam.eye, d, scale * 0.97)) continue;
-            ++c.inside;
-            if (!img.covered(x, y)) {
-                ++c.holes;
-                continue;
-            }
-            if (std::abs(double(img.depth[img.index(x, y)]) - *hit_ellipsoid(cam.eye, d, scale)) > 0.05) ++c.far_side;
-        }
-    return c;
-}
 
 class DeformOutputRender : public GlRenderTest {};
 
@@ -119,14 +98,14 @@ TEST_F(DeformOutputRender, TwiceStretchedSphereFromTheCommandHasNoHoles) {
             SplatCloud undeformed_axes = *cloud;
             undeformed_axes.axis_u = rest.axis_u, undeformed_axes.axis_v = rest.axis_v;
             const ecs::Entity c = add_cloud(std::move(undeformed_axes));
-            const Coverage k = coverage(render(Quality::hq, 512, 512), cam);
+            const Coverage k = ellipsoid_coverage(render(Quality::hq, 512, 512), cam, glm::dvec3(2.0, 1.0, 1.0));
             EXPECT_GT(k.holes + k.far_side, k.inside / 50) << "control: holes " << k.holes << " far side " << k.far_side;
             reg.destroy(c);
         }
         const ecs::Entity e = add_cloud(std::move(*cloud));
         for (Quality q : {Quality::hq, Quality::preview}) {
             const FrameImage img = render(q, 512, 512);
-            const Coverage c = coverage(img, cam);
+            const Coverage c = ellipsoid_coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));  // the 2x1x1 ellipsoid
             const char* qn = q == Quality::hq ? "hq" : "preview";
             EXPECT_GT(c.inside, 40000) << in << " " << qn;
             EXPECT_EQ(c.holes, 0) << in << " " << qn;

@@ -39,26 +39,6 @@ SplatCloud stretch_x(const SplatCloud& cloud, double factor) {
     return out;
 }
 
-struct Coverage {
-    int inside = 0, holes = 0, far_side = 0;
-};
-
-Coverage coverage(const FrameImage& img, const Camera& cam, glm::dvec3 scale) {
-    Coverage c;
-    for (int y = 0; y < img.height; ++y)
-        for (int x = 0; x < img.width; ++x) {
-            const glm::dvec3 d = pixel_ray(cam, x, y, img.width, img.height);
-            if (!hit_ellipsoid(cam.eye, d, scale * 0.97)) continue;
-            ++c.inside;
-            if (!img.covered(x, y)) {
-                ++c.holes;
-                continue;
-            }
-            if (std::abs(double(img.depth[img.index(x, y)]) - *hit_ellipsoid(cam.eye, d, scale)) > 0.05) ++c.far_side;
-        }
-    return c;
-}
-
 }  // namespace
 
 class Coverage_ : public GlRenderTest {};
@@ -71,7 +51,7 @@ TEST_F(Coverage_, SphereStretchedTwiceByALatticeStaysClosed) {
     add_cloud(stretched);
     for (Quality q : {Quality::hq, Quality::preview}) {
         const FrameImage img = render(q, 512, 512);
-        const Coverage c = coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));
+        const Coverage c = ellipsoid_coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));
         EXPECT_GT(c.inside, 40000);
         EXPECT_EQ(c.holes, 0) << (q == Quality::hq ? "hq" : "preview");
         EXPECT_EQ(c.far_side, 0) << (q == Quality::hq ? "hq" : "preview");
@@ -94,7 +74,7 @@ TEST_F(Coverage_, FixedRadiusSplatsWouldOpenHolesUnderTheSameStretch) {
     }
     add_cloud(fixed);
     const FrameImage img = render(Quality::hq, 512, 512);
-    const Coverage c = coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));
+    const Coverage c = ellipsoid_coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));
     // Thousands of uncovered pixels or far-side pixels showing through.
     EXPECT_GT(c.holes + c.far_side, c.inside / 50) << "holes " << c.holes << " far side " << c.far_side;
 }
@@ -252,7 +232,7 @@ TEST_F(Coverage_, DrawsTheDeformersOutputInsteadOfTheRestCloud) {
     d.cpu_valid = true, d.version = 1;
     d.bounds_min = glm::dvec3(-2.1, -1.1, -1.1), d.bounds_max = glm::dvec3(2.1, 1.1, 1.1);
     FrameImage img = render(Quality::hq, 256, 256);
-    Coverage c = coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));
+    Coverage c = ellipsoid_coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));
     EXPECT_GT(c.inside, 10000);
     EXPECT_EQ(c.holes, 0);
     EXPECT_EQ(c.far_side, 0);
@@ -264,7 +244,7 @@ TEST_F(Coverage_, DrawsTheDeformersOutputInsteadOfTheRestCloud) {
     glNamedBufferSubData(gpu.deformed.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data());
     gpu.has_deformed = true;
     img = render(Quality::hq, 256, 256);
-    c = coverage(img, cam, glm::dvec3(1.0));
+    c = ellipsoid_coverage(img, cam, glm::dvec3(1.0));
     EXPECT_EQ(c.holes, 0);
     EXPECT_EQ(c.far_side, 0);
     int outside_unit_sphere = 0;

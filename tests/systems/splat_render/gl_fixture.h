@@ -97,6 +97,28 @@ inline std::optional<double> hit_ellipsoid(const glm::dvec3& eye, const glm::dve
     return t;
 }
 
+// Pixels inside the image of the ellipsoid |p / scale| = 1 (shrunk 3%), those left uncovered (holes), and
+// those whose depth is not the near surface's (the far side showing through a gap).
+struct Coverage {
+    int inside = 0, holes = 0, far_side = 0;
+};
+
+inline Coverage ellipsoid_coverage(const FrameImage& img, const Camera& cam, glm::dvec3 scale) {
+    Coverage c;
+    for (int y = 0; y < img.height; ++y)
+        for (int x = 0; x < img.width; ++x) {
+            const glm::dvec3 d = pixel_ray(cam, x, y, img.width, img.height);
+            if (!hit_ellipsoid(cam.eye, d, scale * 0.97)) continue;
+            ++c.inside;
+            if (!img.covered(x, y)) {
+                ++c.holes;
+                continue;
+            }
+            if (std::abs(double(img.depth[img.index(x, y)]) - *hit_ellipsoid(cam.eye, d, scale)) > 0.05) ++c.far_side;
+        }
+    return c;
+}
+
 inline double luminance(const glm::vec4& c) { return 0.2126 * double(c.x) + 0.7152 * double(c.y) + 0.0722 * double(c.z); }
 
 }  // namespace sffd::render::test
