@@ -1,4 +1,4 @@
-// Runs the built `splatffd` binary as a user does, for the command-line tests: the test executables are
+// Runs the built `splatffd` binary (or any shell command) as a user does, for the command-line tests: the test executables are
 // compiled with SFFD_BINARY_DIR (tests/CMakeLists.txt, sffd_test) naming the build folder.
 #pragma once
 
@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 namespace sffd::test {
@@ -26,6 +27,12 @@ inline CliRun run(const std::string& args) {
     const int status = pclose(p);
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return r;
+}
+
+// COMMAND through the shell (std::system); its exit status, or -1 when it did not exit normally.
+inline int run_shell(const std::string& command) {
+    const int rc = std::system(command.c_str());
+    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
 }
 
 }  // namespace sffd::test

@@ -14,6 +14,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/assets/test_util.h"
+#include "tests/test_util/run_tool.h"
 #include "runtime/assets/import.h"
 #include "runtime/assets/scene.h"
 #include "runtime/scene/components.h"
@@ -26,22 +28,13 @@ namespace fs = std::filesystem;
 
 namespace {
 
-int run(const std::string& command) {
-    const int rc = std::system(command.c_str());
-    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-}
+using sffd::test::run_shell;
+using sffd::test::slurp;
 
 std::string splatffd() { return std::string(SFFD_BINARY_DIR) + "/tools/splatffd"; }
 
 bool bit_equal(const std::vector<glm::dvec3>& a, const std::vector<glm::dvec3>& b) {
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(glm::dvec3)) == 0;
-}
-
-std::string slurp(const fs::path& p) {
-    std::ifstream f(p, std::ios::binary);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
 }
 
 // The one lattice of a saved scene and the cloud it is bound to.
@@ -67,14 +60,14 @@ Saved load_saved(const fs::path& file) {
 }  // namespace
 
 TEST(LatticeViewSession, AddExportImportThroughTheWindow) {
-    if (run("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run not installed";
+    if (run_shell("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run not installed";
     const fs::path dir = fs::temp_directory_path() / ("sffd_lattice_view_" + std::to_string(::getpid()));
     fs::create_directories(dir);
     const fs::path ply = dir / "copy.ply", scene = dir / "edited.glb", json = dir / "edited.lattice.json";
     const std::string data = std::string(SFFD_TEST_DATA_DIR) + "/editor/";
-    ASSERT_EQ(run(splatffd() + " convert sphere " + ply.string() + " --splats 3000 > /dev/null 2>&1"), 0);
+    ASSERT_EQ(run_shell(splatffd() + " convert sphere " + ply.string() + " --splats 3000 > /dev/null 2>&1"), 0);
     // Panels on in the first run (the Lattices panel is drawn), off in the second.
-    ASSERT_EQ(run("xvfb-run -a " + splatffd() + " view " + ply.string() + " --size 1280x720 --quality preview --frames 14 --replay " + data +
+    ASSERT_EQ(run_shell("xvfb-run -a " + splatffd() + " view " + ply.string() + " --size 1280x720 --quality preview --frames 14 --replay " + data +
                   "lattice_add.txt --save " + scene.string() + " > " + (dir / "add.log").string() + " 2>&1"),
               0) << slurp(dir / "add.log");
     ASSERT_TRUE(fs::exists(scene)) << slurp(dir / "add.log");
@@ -101,7 +94,7 @@ TEST(LatticeViewSession, AddExportImportThroughTheWindow) {
     EXPECT_TRUE(bit_equal(exported->current, added.lattice.current));
 
     // Reopen, reset, import, save: the JSON's lattice again.
-    ASSERT_EQ(run("xvfb-run -a " + splatffd() + " view " + scene.string() + " --size 1280x720 --quality preview --no-ui --frames 8 --replay " +
+    ASSERT_EQ(run_shell("xvfb-run -a " + splatffd() + " view " + scene.string() + " --size 1280x720 --quality preview --no-ui --frames 8 --replay " +
                   data + "lattice_import.txt > " + (dir / "import.log").string() + " 2>&1"),
               0) << slurp(dir / "import.log");
     EXPECT_NE(slurp(dir / "import.log").find("imported"), std::string::npos) << slurp(dir / "import.log");
@@ -111,8 +104,8 @@ TEST(LatticeViewSession, AddExportImportThroughTheWindow) {
 
     // deform: the scene file and the JSON are the same lattice.
     const fs::path a = dir / "a.ply", b = dir / "b.ply";
-    ASSERT_EQ(run(splatffd() + " deform " + ply.string() + " " + a.string() + " --lattice " + scene.string() + " > /dev/null 2>&1"), 0);
-    ASSERT_EQ(run(splatffd() + " deform " + ply.string() + " " + b.string() + " --lattice " + json.string() + " > /dev/null 2>&1"), 0);
+    ASSERT_EQ(run_shell(splatffd() + " deform " + ply.string() + " " + a.string() + " --lattice " + scene.string() + " > /dev/null 2>&1"), 0);
+    ASSERT_EQ(run_shell(splatffd() + " deform " + ply.string() + " " + b.string() + " --lattice " + json.string() + " > /dev/null 2>&1"), 0);
     EXPECT_EQ(slurp(a), slurp(b));
     EXPECT_NE(slurp(a), slurp(ply));  // and it deformed something
     fs::remove_all(dir);

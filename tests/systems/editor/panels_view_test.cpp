@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/assets/test_util.h"
+#include "tests/test_util/run_tool.h"
 #include "systems/editor/panel_layout.h"
 #include "systems/splat_render/image_io.h"
 
@@ -19,17 +21,8 @@ namespace fs = std::filesystem;
 
 namespace {
 
-int run(const std::string& command) {
-    const int rc = std::system(command.c_str());
-    return WIFEXITED(rc) ? WEXITSTATUS(rc) : -1;
-}
-
-std::string slurp(const fs::path& p) {
-    std::ifstream f(p, std::ios::binary);
-    std::stringstream s;
-    s << f.rdbuf();
-    return s.str();
-}
+using sffd::test::run_shell;
+using sffd::test::slurp;
 
 struct Rect {
     std::string name;
@@ -54,14 +47,14 @@ std::vector<Rect> parse_rects(const std::string& json) {
 }  // namespace
 
 TEST(PanelsView, PanelsFitTheWindowWithoutOverlap) {
-    if (run("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run not installed";
+    if (run_shell("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run not installed";
     const fs::path dir = fs::temp_directory_path() / ("sffd_panels_view_" + std::to_string(::getpid()));
     fs::create_directories(dir);
     for (const auto& [w, h] : {std::pair{1280, 720}, {1920, 1080}}) {
         const std::string size = std::to_string(w) + "x" + std::to_string(h);
         const fs::path json = dir / (size + ".json"), png = dir / (size + ".png"), log = dir / (size + ".log");
         // xvfb's screen must hold the window; XDG_CONFIG_HOME keeps the test away from the user's layout.
-        ASSERT_EQ(run("XDG_CONFIG_HOME=" + dir.string() + " xvfb-run -a -s '-screen 0 2048x1200x24' " +
+        ASSERT_EQ(run_shell("XDG_CONFIG_HOME=" + dir.string() + " xvfb-run -a -s '-screen 0 2048x1200x24' " +
                       std::string(SFFD_BINARY_DIR) + "/tools/splatffd view sphere --size " + size +
                       " --quality preview --frames 4 --panel-rects-json " + json.string() + " --window-screenshot " +
                       png.string() + " > " + log.string() + " 2>&1"),
