@@ -33,14 +33,7 @@ struct Scene {
         // A lattice 3x3x3 cells around the unit cube [-1,1]^3, and a small point cloud (a sphere of radius 0.5)
         // inside it, so the inner control points are not hidden behind the surface from the camera.
         lattice = reg.create();
-        Lattice& l = reg.emplace<Lattice>(lattice);
-        l.divisions = {3, 3, 3};
-        l.origin = {-1, -1, -1};
-        l.axes = {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)};
-        for (int i = 0; i <= 3; ++i)
-            for (int j = 0; j <= 3; ++j)
-                for (int k = 0; k <= 3; ++k) l.rest.push_back(l.origin + glm::dvec3(i, j, k) * (2.0 / 3.0));
-        l.current = l.rest;
+        reg.emplace<Lattice>(lattice, make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3}));
         cloud = reg.create();
         SplatCloud& c = reg.emplace<SplatCloud>(cloud);
         for (int a = 0; a < 40; ++a)

@@ -19,14 +19,7 @@ struct Scene {
     EditorState* state;
     Scene() {
         lattice = reg.create();
-        Lattice& l = reg.emplace<Lattice>(lattice);
-        l.divisions = {4, 4, 4};
-        l.origin = {-1, -1, -1};
-        l.axes = {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)};
-        for (int i = 0; i <= 4; ++i)
-            for (int j = 0; j <= 4; ++j)
-                for (int k = 0; k <= 4; ++k) l.rest.push_back(l.origin + glm::dvec3(i, j, k) * 0.5);
-        l.current = l.rest;
+        reg.emplace<Lattice>(lattice, make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {4, 4, 4}));
         // A cloud whose box is [-0.6, 0.6]^3: the 27 control points at -0.5, 0, 0.5 per axis are inside.
         const ecs::Entity cloud = reg.create();
         SplatCloud& c = reg.emplace<SplatCloud>(cloud);
