@@ -72,6 +72,25 @@ TEST(Cli, UsageErrorsExitTwo) {
     EXPECT_EQ(run("info").code, 2);
 }
 
+// `reference` and `render` read numbers through the shared parser: the message names the option.
+TEST(Cli, ReferenceAndRenderNumberErrorsNameTheOption) {
+    const struct {
+        const char* args;
+        const char* message;
+    } cases[] = {
+        {"reference --out /tmp/sffd_ref_bad --size 32xq", "--size: expected an integer in 1..16384, got 'q'"},
+        {"reference --out /tmp/sffd_ref_bad --supersample 99", "--supersample: expected an integer in 0..16, got '99'"},
+        {"reference --out /tmp/sffd_ref_bad --fps abc", "--fps: expected a number"},
+        {"reference --out /tmp/sffd_ref_bad --frames 1:x", "--frames: expected an integer"},
+        {"render sphere --out /tmp/sffd_render_bad --size 0x5", "--size: expected an integer in 1..16384, got '0'"},
+    };
+    for (const auto& c : cases) {
+        const auto r = run(c.args);
+        EXPECT_EQ(r.code, 2) << c.args;
+        EXPECT_NE(r.out.find(c.message), std::string::npos) << c.args << "\n" << r.out;
+    }
+}
+
 // Issue 13: a glTF from the web must not leak local files into an export; --allow-outside-resources
 // is the explicit opt-in for trusted files.
 TEST(Cli, ConvertRefusesResourcesOutsideTheFileFolderUnlessAllowed) {

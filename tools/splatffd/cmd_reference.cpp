@@ -36,19 +36,6 @@ void usage() {
                  "  --fps F          frames per second of the clip clock (default 24)\n");
 }
 
-bool parse_pair(const std::string& s, char sep, long& a, long& b) {
-    const auto at = s.find(sep);
-    if (at == std::string::npos) return false;
-    try {
-        std::size_t n1 = 0, n2 = 0;
-        a = std::stol(s.substr(0, at), &n1);
-        b = std::stol(s.substr(at + 1), &n2);
-        return n1 == at && n2 == s.size() - at - 1;
-    } catch (...) {
-        return false;
-    }
-}
-
 int run_reference(sffd::cli::Args args) {
     std::string scene = "sphere", out_dir;
     bool scene_given = false, png = true, exr = true;
@@ -61,40 +48,33 @@ int run_reference(sffd::cli::Args args) {
             std::fprintf(stderr, "splatffd reference: %s '%s'\n", what, has_value ? args[i + 1].c_str() : "");
             return 2;
         };
+        auto fail = [](const Status& st) {
+            std::fprintf(stderr, "splatffd reference: %s\n", st.message().c_str());
+            return 2;
+        };
         if (a == "--help" || a == "-h") {
             usage();
             return 0;
         } else if (a == "--out" && has_value) {
             out_dir = args[++i];
         } else if (a == "--frames" && has_value) {
-            if (!parse_pair(args[i + 1], ':', first, last) || first < 0 || last < first)
-                return bad("--frames expects A:B with 0 <= A <= B, got");
+            if (Status st = cli::parse_integer_pair("--frames", args[i + 1], ':', 0, 99'999'999, first, last); !st) return fail(st);
+            if (last < first) return bad("--frames expects A:B with 0 <= A <= B, got");
             ++i;
         } else if (a == "--size" && has_value) {
-            if (!parse_pair(args[i + 1], 'x', width, height) || width < 1 || height < 1 || width > 16384 || height > 16384)
-                return bad("--size expects WxH (1..16384), got");
+            if (Status st = cli::parse_integer_pair("--size", args[i + 1], 'x', 1, 16384, width, height); !st) return fail(st);
             ++i;
         } else if (a == "--supersample" && has_value) {
-            try {
-                std::size_t used = 0;
-                supersample = std::stol(args[i + 1], &used);
-                if (used != args[i + 1].size()) supersample = -1;
-            } catch (...) {
-                supersample = -1;
-            }
-            if (supersample < 0 || supersample > 16) return bad("--supersample expects 0..16, got");
-            ++i;
+            auto n = cli::parse_integer("--supersample", args[++i], 0, 16);
+            if (!n) return fail(n.error());
+            supersample = static_cast<long>(*n);
         } else if (a == "--format" && has_value) {
             if (!cli::parse_image_formats(args[i + 1], png, exr)) return bad("--format expects png, exr or png,exr, got");
             ++i;
         } else if (a == "--fps" && has_value) {
-            try {
-                fps = std::stod(args[i + 1]);
-            } catch (...) {
-                fps = 0;
-            }
-            if (!(fps > 0.0 && fps < 1e6)) return bad("--fps expects a positive number, got");
-            ++i;
+            auto f = cli::parse_number("--fps", args[++i], 1e-6, 1e6);
+            if (!f) return fail(f.error());
+            fps = *f;
         } else if (!a.empty() && a[0] != '-' && !scene_given) {
             scene = a;
             scene_given = true;

@@ -242,18 +242,6 @@ Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir,
 }
 
 // "A<sep>B", each part through cli::parse_integer (one message format, the option named).
-Status parse_int_pair(const std::string& option, const std::string& s, char sep, long long min, long long max, long& a, long& b) {
-    const auto at = s.find(sep);
-    if (at == std::string::npos) return make_error(option + ": expected two integers separated by '" + std::string(1, sep) + "', got '" + s + "'");
-    auto x = cli::parse_integer(option, s.substr(0, at), min, max);
-    if (!x) return x.error();
-    auto y = cli::parse_integer(option, s.substr(at + 1), min, max);
-    if (!y) return y.error();
-    a = static_cast<long>(*x);
-    b = static_cast<long>(*y);
-    return {};
-}
-
 std::optional<glm::vec3> parse_rgb(const std::string& s) {
     glm::vec3 c(0.0f);
     std::size_t start = 0;
@@ -298,7 +286,7 @@ int run_render(sffd::cli::Args args) {
         } else if (a == "--out" && has_value) {
             out_dir = args[++i];
         } else if (a == "--frames" && has_value) {
-            if (Status st = parse_int_pair("--frames", args[i + 1], ':', 0, 99'999'999, first, last); !st) {
+            if (Status st = cli::parse_integer_pair("--frames", args[i + 1], ':', 0, 99'999'999, first, last); !st) {
                 std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
                 return 2;
             }
@@ -306,7 +294,7 @@ int run_render(sffd::cli::Args args) {
             frames_given = true;
             ++i;
         } else if (a == "--size" && has_value) {
-            if (Status st = parse_int_pair("--size", args[i + 1], 'x', 1, 16384, width, height); !st) {
+            if (Status st = cli::parse_integer_pair("--size", args[i + 1], 'x', 1, 16384, width, height); !st) {
                 std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
                 return 2;
             }

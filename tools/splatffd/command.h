@@ -31,6 +31,9 @@ std::vector<Command>& commands();
 Result<long long> parse_integer(std::string_view option, std::string_view text, long long min, long long max);
 // Same for real numbers (finite, in [min, max]).
 Result<double> parse_number(std::string_view option, std::string_view text, double min, double max);
+// Two integers in [min, max] separated by `sep` ("0:95", "1280x720"), each through parse_integer.
+Status parse_integer_pair(std::string_view option, std::string_view text, char sep, long long min, long long max,
+                          long& a, long& b);
 
 struct Registrar {
     Registrar(const char* name, const char* summary, CommandFn run);

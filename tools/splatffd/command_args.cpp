@@ -35,4 +35,19 @@ Result<double> parse_number(std::string_view option, std::string_view text, doub
     return v;
 }
 
+Status parse_integer_pair(std::string_view option, std::string_view text, char sep, long long min, long long max,
+                          long& a, long& b) {
+    const auto at = text.find(sep);
+    if (at == std::string_view::npos)
+        return make_error(std::string(option) + ": expected two integers separated by '" + std::string(1, sep) + "', got '" +
+                          std::string(text) + "'");
+    auto x = parse_integer(option, text.substr(0, at), min, max);
+    if (!x) return x.error();
+    auto y = parse_integer(option, text.substr(at + 1), min, max);
+    if (!y) return y.error();
+    a = static_cast<long>(*x);
+    b = static_cast<long>(*y);
+    return {};
+}
+
 }  // namespace sffd::cli
