@@ -210,6 +210,7 @@ Result<GaussianCloud> read_splat(const fs::path& path) {
     std::uint64_t size = 0;
     auto file = open_splat_file(path, size);
     if (!file) return file.error();
+    if (size == 0) return make_error(name + ": empty file (a .splat file holds 32 bytes per Gaussian)");
     if (size % 32 != 0)
         return make_error(name + ": size " + std::to_string(size) + " bytes is not a multiple of 32 (.splat rows are 32 bytes; truncated?)");
     const std::size_t n = size / 32;

@@ -210,6 +210,9 @@ TEST(GaussianIo, SplatFileKnownValues) {
     const fs::path odd = temp_path("odd.splat");
     write_text(odd, bytes.substr(0, 40));
     expect_error(odd, "not a multiple of 32");
+    const fs::path empty = temp_path("empty.splat");
+    write_text(empty, "");
+    expect_error(empty, "empty.splat: empty file");
     std::string bad = bytes;
     const float nan = std::nanf("");
     std::memcpy(bad.data() + 32 + 16, &nan, 4);
