@@ -16,11 +16,13 @@
 
 namespace sffd::picking {
 
-enum class PickKind : std::uint8_t { none, control_point, surface };
-const char* pick_kind_name(PickKind kind);  // "none", "control_point", "surface"
+enum class PickKind : std::uint8_t { none, control_point, surface, gaussian };
+const char* pick_kind_name(PickKind kind);  // "none", "control_point", "surface", "gaussian"
 
-// One pick's answer. `entity` is the lattice entity (control point) or the point-cloud entity
-// (surface); `index` is the control point's flat index (i*(m+1)+j)*(n+1)+k or the splat's index.
+// One pick's answer. `entity` is the lattice entity (control point), the point-cloud entity (surface)
+// or the Gaussian-cloud entity (gaussian); `index` is the control point's flat index
+// (i*(m+1)+j)*(n+1)+k, the splat's index or the Gaussian's index in its cloud. For a Gaussian,
+// `position` is where the ray enters its pickable ellipsoid (systems/picking/gaussian_source.h).
 struct PickHit {
     PickKind kind = PickKind::none;
     ecs::Entity entity = ecs::null_entity;

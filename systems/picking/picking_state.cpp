@@ -18,6 +18,8 @@
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
+#include "systems/gaussian/components.h"
+#include "systems/picking/gaussian_source.h"
 #include "systems/picking/splat_source.h"
 #include "systems/picking/world_space.h"
 
@@ -42,6 +44,14 @@ struct GeomRecord {
     bool discs = false;
     // Ellipse filter inputs (discs only), anchor-relative float, indexed by primitive id.
     std::vector<glm::vec3> centres, axis_u, axis_v;
+    // Gaussian clouds (user geometry): the pickable Gaussians, indexed by primitive id.
+    struct Ellipsoid {
+        glm::vec3 centre;    // anchor-relative
+        float k;             // Mahalanobis radius (gaussian_pick_sigmas)
+        glm::mat3 to_unit;   // S⁻¹ Rᵀ L⁻¹
+        std::uint32_t index; // the Gaussian's index in its cloud
+    };
+    std::vector<Ellipsoid> ellipsoids;
 
     GeomRecord() = default;
     GeomRecord(const GeomRecord&) = delete;
@@ -112,6 +122,92 @@ void ellipse_filter(const RTCFilterFunctionNArguments* args) {
         const float y = (A * bd - B * ad) / det;
         if (x * x + y * y > 1.0f + 1e-5f) args->valid[i] = 0;
     }
+}
+
+PickEllipsoid to_pick_ellipsoid(const GeomRecord::Ellipsoid& e) {
+    PickEllipsoid p;
+    p.centre = glm::dvec3(e.centre);
+    p.to_unit = glm::dmat3(e.to_unit);
+    p.k = double(e.k);
+    return p;
+}
+
+// User geometry bounds: the box around {c + B x : |x| <= k}, B = to_unit⁻¹; half extent along world axis
+// j is k |row j of B|.
+void ellipsoid_bounds(const RTCBoundsFunctionArguments* args) {
+    const auto* rec = static_cast<const GeomRecord*>(args->geometryUserPtr);
+    const GeomRecord::Ellipsoid& e = rec->ellipsoids[args->primID];
+    const glm::mat3 B = glm::inverse(e.to_unit);
+    glm::vec3 half;
+    for (int j = 0; j < 3; ++j) half[j] = e.k * glm::length(glm::vec3(B[0][j], B[1][j], B[2][j])) * (1.0f + 1e-5f);
+    RTCBounds* b = args->bounds_o;
+    b->lower_x = e.centre.x - half.x, b->lower_y = e.centre.y - half.y, b->lower_z = e.centre.z - half.z;
+    b->upper_x = e.centre.x + half.x, b->upper_y = e.centre.y + half.y, b->upper_z = e.centre.z + half.z;
+}
+
+void ellipsoid_intersect(const RTCIntersectFunctionNArguments* args) {
+    const auto* rec = static_cast<const GeomRecord*>(args->geometryUserPtr);
+    const GeomRecord::Ellipsoid& e = rec->ellipsoids[args->primID];
+    const PickEllipsoid pe = to_pick_ellipsoid(e);
+    RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, args->N);
+    RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, args->N);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        const glm::dvec3 org{RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i)};
+        const glm::dvec3 dir{RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i)};
+        const double t = intersect_ellipsoid(pe, org, dir, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i));
+        if (t < 0.0) continue;
+        RTCRayN_tfar(ray, args->N, i) = float(t);
+        // Normal: the density's gradient direction, to_unitᵀ to_unit (p − c).
+        const glm::dvec3 n = glm::transpose(pe.to_unit) * (pe.to_unit * (org + t * dir - pe.centre));
+        RTCHitN_Ng_x(hit, args->N, i) = float(n.x);
+        RTCHitN_Ng_y(hit, args->N, i) = float(n.y);
+        RTCHitN_Ng_z(hit, args->N, i) = float(n.z);
+        RTCHitN_u(hit, args->N, i) = 0.0f;
+        RTCHitN_v(hit, args->N, i) = 0.0f;
+        RTCHitN_primID(hit, args->N, i) = args->primID;
+        RTCHitN_geomID(hit, args->N, i) = args->geomID;
+        RTCHitN_instID(hit, args->N, i, 0) = args->context->instID[0];
+    }
+}
+
+void ellipsoid_occluded(const RTCOccludedFunctionNArguments* args) {
+    const auto* rec = static_cast<const GeomRecord*>(args->geometryUserPtr);
+    const PickEllipsoid pe = to_pick_ellipsoid(rec->ellipsoids[args->primID]);
+    for (unsigned i = 0; i < args->N; ++i) {
+        if (args->valid[i] != -1) continue;
+        RTCRayN* ray = args->ray;
+        const glm::dvec3 org{RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i)};
+        const glm::dvec3 dir{RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i)};
+        if (intersect_ellipsoid(pe, org, dir, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i)) >= 0.0)
+            RTCRayN_tfar(ray, args->N, i) = -std::numeric_limits<float>::infinity();
+    }
+}
+
+// The pickable Gaussians of a cloud (opacity above the 3DGS alpha cut, finite, invertible), in world
+// space minus the anchor.
+std::vector<GeomRecord::Ellipsoid> gaussian_ellipsoids(const GaussianSource& src, const glm::dmat4& model,
+                                                       const glm::dvec3& anchor) {
+    const std::size_t n = src.positions.size();
+    std::vector<GeomRecord::Ellipsoid> all(n);
+    std::vector<std::uint8_t> keep(n, 0);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t i = range.begin(); i < range.end(); ++i) {
+            const PickEllipsoid e = gaussian_ellipsoid(model, src.origin + glm::dvec3(src.positions[i]), src.scales[i],
+                                                       src.rotations[i], src.opacities[i]);
+            if (e.k <= 0.0) continue;
+            const glm::mat3 to_unit(e.to_unit);
+            const glm::vec3 c(e.centre - anchor);
+            if (!std::isfinite(glm::determinant(to_unit)) || glm::determinant(to_unit) == 0.0f) continue;
+            all[i] = {c, float(e.k), to_unit, std::uint32_t(i)};
+            keep[i] = 1;
+        }
+    });
+    std::vector<GeomRecord::Ellipsoid> out;
+    out.reserve(n);
+    for (std::size_t i = 0; i < n; ++i)
+        if (keep[i]) out.push_back(all[i]);
+    return out;
 }
 
 // Fills (or refills) a point cloud's geometry buffers from its splats, in world space minus the anchor.
@@ -231,11 +327,13 @@ struct PickingState::Impl {
     RTCScene surfaces = nullptr;
     RTCScene controls = nullptr;
     RecordMap surface_records, control_records;               // by entity bits
+    RecordMap gaussian_records;                               // Gaussian clouds (in the surfaces scene), by entity bits
     std::unordered_map<unsigned, ecs::Entity> surface_ids, control_ids;  // geometry id -> entity
+    std::unordered_map<unsigned, ecs::Entity> gaussian_ids;   // surfaces-scene geometry id -> Gaussian entity
     glm::dvec3 anchor{0.0};
     bool anchored = false;
     // Registry stamps of the last refresh: when none moved, refresh() returns at once.
-    std::array<std::uint64_t, 4> seen{~0ull, ~0ull, ~0ull, ~0ull};
+    std::array<std::uint64_t, 5> seen{~0ull, ~0ull, ~0ull, ~0ull, ~0ull};
     double seen_fraction = -1.0;
     DeformCache deform_cache;  // CPU deformations of clouds whose deformed output is GPU-only
     Stats stats;
@@ -246,6 +344,7 @@ struct PickingState::Impl {
     }
     ~Impl() {
         surface_records.clear();
+        gaussian_records.clear();
         control_records.clear();
         if (surfaces) rtcReleaseScene(surfaces);
         if (controls) rtcReleaseScene(controls);
@@ -253,9 +352,11 @@ struct PickingState::Impl {
     }
 
     bool refresh_surfaces(ecs::Registry& registry);
+    bool refresh_gaussians(ecs::Registry& registry);
     bool refresh_controls(ecs::Registry& registry, double fraction);
     std::optional<RayHit> intersect(RTCScene scene, const std::unordered_map<unsigned, ecs::Entity>& ids,
                                     const Ray& ray, double tfar) const;
+    void create_gaussian_geometry(GeomRecord& rec);
 };
 
 PickingState::PickingState() : m_impl(std::make_unique<Impl>()) {}
@@ -266,6 +367,76 @@ PickingState& PickingState::operator=(PickingState&&) noexcept = default;
 const PickingState::Stats& PickingState::stats() const { return m_impl->stats; }
 std::size_t PickingState::surface_geometry_count() const { return m_impl->surface_records.size(); }
 std::size_t PickingState::control_geometry_count() const { return m_impl->control_records.size(); }
+std::size_t PickingState::gaussian_geometry_count() const { return m_impl->gaussian_records.size(); }
+
+// One RTC_GEOMETRY_TYPE_USER geometry per Gaussian cloud: Embree calls ellipsoid_bounds per primitive at
+// the scene commit and ellipsoid_intersect / ellipsoid_occluded for the rays that reach its box.
+void PickingState::Impl::create_gaussian_geometry(GeomRecord& rec) {
+    rec.geometry = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_USER);
+    rec.discs = false;
+    rtcSetGeometryBuildQuality(rec.geometry, RTC_BUILD_QUALITY_LOW);
+    rtcSetGeometryUserPrimitiveCount(rec.geometry, unsigned(rec.ellipsoids.size()));
+    rtcSetGeometryUserData(rec.geometry, &rec);
+    rtcSetGeometryBoundsFunction(rec.geometry, ellipsoid_bounds, nullptr);
+    rtcSetGeometryIntersectFunction(rec.geometry, ellipsoid_intersect);
+    rtcSetGeometryOccludedFunction(rec.geometry, ellipsoid_occluded);
+    rtcCommitGeometry(rec.geometry);
+    rec.id = rtcAttachGeometry(surfaces, rec.geometry);
+}
+
+bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
+    bool changed = false;
+    for (auto it = gaussian_records.begin(); it != gaussian_records.end();) {
+        const ecs::Entity e = it->second->entity;
+        if (!registry.valid(e) || !registry.has<GaussianCloud>(e)) {
+            gaussian_ids.erase(it->second->id);
+            auto doomed = it++;
+            release_geometry(surfaces, gaussian_records, doomed);
+            ++stats.geometries_released;
+            changed = true;
+        } else {
+            ++it;
+        }
+    }
+    for (auto [e, cloud] : registry.view<const GaussianCloud>()) {
+        const GaussianSource src = gaussian_source(registry, e);
+        const glm::dmat4 model = model_matrix(registry.try_get<Transform>(e));
+        if (!anchored && !src.positions.empty()) {
+            anchor = glm::dvec3(model * glm::dvec4(src.origin, 1.0));
+            anchored = true;
+        }
+        Stamp stamp{int(src.kind), src.version, registry.version<Transform>(e), 0.0, src.positions.size()};
+        auto it = gaussian_records.find(e.bits());
+        if (it != gaussian_records.end() && it->second->stamp == stamp) continue;
+        std::vector<GeomRecord::Ellipsoid> ellipsoids = gaussian_ellipsoids(src, model, anchor);
+        // The primitive count is that of the pickable Gaussians: a different count gets a new geometry.
+        if (it != gaussian_records.end() &&
+            (it->second->ellipsoids.size() != ellipsoids.size() || ellipsoids.empty())) {
+            gaussian_ids.erase(it->second->id);
+            release_geometry(surfaces, gaussian_records, it);
+            ++stats.geometries_released;
+            it = gaussian_records.end();
+            changed = true;
+        }
+        if (ellipsoids.empty()) continue;
+        if (it == gaussian_records.end()) {
+            auto rec = std::make_unique<GeomRecord>();
+            rec->entity = e;
+            rec->ellipsoids = std::move(ellipsoids);
+            create_gaussian_geometry(*rec);
+            gaussian_ids[rec->id] = e;
+            it = gaussian_records.emplace(e.bits(), std::move(rec)).first;
+            ++stats.geometries_created;
+        } else {
+            it->second->ellipsoids = std::move(ellipsoids);
+            rtcCommitGeometry(it->second->geometry);  // bounds are re-read at the scene commit
+            ++stats.geometries_updated;
+        }
+        it->second->stamp = stamp;
+        changed = true;
+    }
+    return changed;
+}
 
 bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
     bool changed = false;
@@ -319,6 +490,7 @@ bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
         changed = true;
     }
     stats.cpu_deformations = deform_cache.deformations;
+    if (refresh_gaussians(registry)) changed = true;
     if (changed) {
         rtcCommitScene(surfaces);
         ++stats.surface_commits;
@@ -381,8 +553,9 @@ bool PickingState::Impl::refresh_controls(ecs::Registry& registry, double fracti
 bool PickingState::refresh(ecs::Registry& registry, const PickSettings& settings) {
     Impl& s = *m_impl;
     ++s.stats.refresh_calls;
-    const std::array<std::uint64_t, 4> now{registry.storage_version<SplatCloud>(), splat_source_storage_version(registry),
-                                           registry.storage_version<Transform>(), registry.storage_version<Lattice>()};
+    const std::array<std::uint64_t, 5> now{registry.storage_version<SplatCloud>(), splat_source_storage_version(registry),
+                                           registry.storage_version<Transform>(), registry.storage_version<Lattice>(),
+                                           gaussian_source_storage_version(registry)};
     if (now == s.seen && settings.control_point_radius_fraction == s.seen_fraction) return false;
     const bool a = s.refresh_surfaces(registry);
     const bool b = s.refresh_controls(registry, settings.control_point_radius_fraction);
@@ -398,9 +571,16 @@ std::optional<PickingState::RayHit> PickingState::Impl::intersect(
     RTCRayHit rh = make_rayhit(ray.origin - anchor, ray.direction, tfar);
     rtcIntersect1(scene, &context, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+    if (scene == surfaces) {
+        if (const auto g = gaussian_ids.find(rh.hit.geomID); g != gaussian_ids.end()) {
+            const auto rec = gaussian_records.find(g->second.bits());
+            if (rec == gaussian_records.end() || rh.hit.primID >= rec->second->ellipsoids.size()) return std::nullopt;
+            return RayHit{g->second, rec->second->ellipsoids[rh.hit.primID].index, double(rh.ray.tfar), true};
+        }
+    }
     const auto it = ids.find(rh.hit.geomID);
     if (it == ids.end()) return std::nullopt;
-    return RayHit{it->second, rh.hit.primID, double(rh.ray.tfar)};
+    return RayHit{it->second, rh.hit.primID, double(rh.ray.tfar), false};
 }
 
 std::optional<PickingState::RayHit> PickingState::intersect_surfaces(const Ray& ray, double tfar) const {

@@ -7,6 +7,9 @@
 //             ellipse (axis_u, axis_v). Data: see splat_source.h (deformed output, picking's own CPU
 //             deformation when the output is GPU-only, or the authored SplatCloud). Clouds without
 //             normals become sphere points.
+//             Gaussian clouds (GaussianCloud, or DeformedGaussians) are in this scene too: one
+//             RTC_GEOMETRY_TYPE_USER geometry per cloud whose primitives are the pickable Gaussians as
+//             ellipsoids (bounds / intersect / occluded callbacks; see gaussian_source.h for the shape).
 //   controls  one RTC_GEOMETRY_TYPE_SPHERE_POINT geometry per lattice entity (current control points).
 // Geometry id -> entity (with generation) and primitive id -> splat / control-point index.
 //
@@ -58,8 +61,9 @@ public:
     // Closest hit along the ray in (tnear, tfar], in world units from ray.origin (direction unit length).
     struct RayHit {
         ecs::Entity entity = ecs::null_entity;
-        std::uint32_t index = 0;
+        std::uint32_t index = 0;  // splat, Gaussian or control-point index
         double t = 0.0;
+        bool gaussian = false;    // a Gaussian of a GaussianCloud (surfaces scene only)
     };
     std::optional<RayHit> intersect_surfaces(const Ray& ray, double tfar) const;
     std::optional<RayHit> intersect_controls(const Ray& ray, double tfar) const;
@@ -75,6 +79,7 @@ public:
     // Number of geometries in each scene (for tests: ids are released when entities die).
     std::size_t surface_geometry_count() const;
     std::size_t control_geometry_count() const;
+    std::size_t gaussian_geometry_count() const;  // Gaussian clouds with at least one pickable Gaussian
 
     struct Impl;
 

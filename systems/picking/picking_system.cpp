@@ -13,6 +13,7 @@ const char* pick_kind_name(PickKind kind) {
         case PickKind::none: return "none";
         case PickKind::control_point: return "control_point";
         case PickKind::surface: return "surface";
+        case PickKind::gaussian: return "gaussian";
     }
     return "none";
 }
@@ -87,6 +88,9 @@ PickHit pick(ecs::Registry& registry, PickingState& state, const PickQuery& quer
             }
         }
     }
+    if (surface && surface->gaussian)
+        return {PickKind::gaussian, surface->entity, surface->index, q.ray.origin + surface->t * q.ray.direction,
+                surface->t, glm::dvec2(0.0)};
     if (surface) {
         PickHit hit{PickKind::surface, surface->entity, surface->index, q.ray.origin + surface->t * q.ray.direction,
                     surface->t, glm::dvec2(0.0)};

@@ -1,0 +1,92 @@
+#include "systems/picking/gaussian_source.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "systems/ffd/components.h"
+#include "systems/gaussian/components.h"
+
+namespace sffd::picking {
+
+GaussianSource gaussian_source(const ecs::Registry& registry, ecs::Entity e) {
+    GaussianSource src;
+    const GaussianCloud* cloud = registry.try_get<GaussianCloud>(e);
+    if (!cloud) return src;
+    const std::size_t n = cloud->size();
+    const bool consistent = cloud->scales.size() == n && cloud->rotations.size() == n && cloud->opacities.size() == n;
+    if (!consistent) return src;  // malformed component: nothing to pick rather than out-of-range reads
+    src.opacities = cloud->opacities;
+    const DeformedGaussians* deformed = registry.has<Deformers>(e) ? registry.try_get<DeformedGaussians>(e) : nullptr;
+    const GaussianCloud* g = cloud;
+    if (deformed && deformed->cloud.size() == n && deformed->cloud.scales.size() == n &&
+        deformed->cloud.rotations.size() == n) {
+        g = &deformed->cloud;
+        src.kind = GaussianSource::Kind::deformed;
+        src.version = registry.version<DeformedGaussians>(e);
+    } else {
+        src.kind = GaussianSource::Kind::authored;
+        src.version = registry.version<GaussianCloud>(e);
+    }
+    src.origin = g->origin;
+    src.positions = g->positions;
+    src.scales = g->scales;
+    src.rotations = g->rotations;
+    return src;
+}
+
+std::uint64_t gaussian_source_storage_version(const ecs::Registry& registry) {
+    return registry.storage_version<GaussianCloud>() * 0x9E3779B97F4A7C15ull ^ registry.storage_version<DeformedGaussians>();
+}
+
+double gaussian_pick_sigmas(double opacity) {
+    const double x = 255.0 * opacity;
+    if (!(x > 1.0) || !std::isfinite(x)) return 0.0;
+    return std::sqrt(2.0 * std::log(x));
+}
+
+PickEllipsoid gaussian_ellipsoid(const glm::dmat4& model, const glm::dvec3& shifted_centre, const glm::vec3& scale,
+                                 const glm::quat& rotation, float opacity) {
+    PickEllipsoid e;
+    const double k = gaussian_pick_sigmas(double(std::min(opacity, 1.0f)));
+    const glm::dvec3 s(scale);
+    const double s_max = std::max({s.x, s.y, s.z});
+    const glm::dquat q(rotation);
+    const double qn = glm::length(q);
+    if (k == 0.0 || !(s_max > 0.0) || !std::isfinite(s_max) || !(qn > 0.0) || !std::isfinite(qn) ||
+        !std::isfinite(shifted_centre.x + shifted_centre.y + shifted_centre.z))
+        return e;
+    const glm::dvec3 sc = glm::max(s, glm::dvec3(1e-6 * s_max));
+    const glm::dmat3 R = glm::mat3_cast(q / qn);
+    const glm::dmat3 L(model);
+    const double detL = glm::determinant(L);
+    if (!(std::abs(detL) > 0.0) || !std::isfinite(detL)) return e;
+    const glm::dmat3 B = L * R * glm::dmat3(sc.x, 0, 0, 0, sc.y, 0, 0, 0, sc.z);  // world axes (columns) × σ
+    // to_unit = B⁻¹ = S⁻¹ Rᵀ L⁻¹.
+    e.to_unit = glm::dmat3(1.0 / sc.x, 0, 0, 0, 1.0 / sc.y, 0, 0, 0, 1.0 / sc.z) * glm::transpose(R) * glm::inverse(L);
+    e.centre = glm::dvec3(model * glm::dvec4(shifted_centre, 1.0));
+    // Half extent along world axis j: k |row j of B| (support function of the ellipsoid B·ball(k)).
+    for (int j = 0; j < 3; ++j) e.half_extent[j] = k * glm::length(glm::dvec3(B[0][j], B[1][j], B[2][j]));
+    e.k = k;
+    return e;
+}
+
+double intersect_ellipsoid(const PickEllipsoid& e, const glm::dvec3& origin, const glm::dvec3& direction, double tnear,
+                           double tfar) {
+    if (e.k <= 0.0) return -1.0;
+    const glm::dvec3 o = e.to_unit * (origin - e.centre);
+    const glm::dvec3 d = e.to_unit * direction;
+    const double a = glm::dot(d, d);
+    const double b = glm::dot(o, d);
+    const double c = glm::dot(o, o) - e.k * e.k;
+    const double disc = b * b - a * c;
+    if (!(a > 0.0) || !(disc >= 0.0)) return -1.0;
+    // Stable roots of a t² + 2 b t + c = 0.
+    const double q = -(b + std::copysign(std::sqrt(disc), b));
+    double t0 = q / a, t1 = q != 0.0 ? c / q : t0;
+    if (t0 > t1) std::swap(t0, t1);
+    if (t0 >= tnear && t0 <= tfar) return t0;
+    if (t1 >= tnear && t1 <= tfar) return t1;
+    return -1.0;
+}
+
+}  // namespace sffd::picking
