@@ -97,7 +97,8 @@ void click_select(ecs::Registry& registry, EditorState& state, const Camera& cam
         say(state, log::str("picked control point ", hit.index));
         return;
     }
-    if (hit.kind == picking::PickKind::surface) state.selected_entity = hit.entity;
+    if (hit.kind == picking::PickKind::surface || hit.kind == picking::PickKind::gaussian)
+        state.selected_entity = hit.entity;
     if (mode == picking::SelectMode::replace && registry.valid(state.active_lattice))
         set_selection(registry, state, state.active_lattice, {}, "deselect");
 }
@@ -118,7 +119,7 @@ void brush_dab(ecs::Registry& registry, EditorState& state, const Camera& camera
                picking::SelectMode mode) {
     if (!active_lattice(registry, state)) return;
     const picking::PickHit hit = pick_at(registry, state, camera, cursor, false, true);
-    if (hit.kind != picking::PickKind::surface) return;
+    if (hit.kind != picking::PickKind::surface && hit.kind != picking::PickKind::gaussian) return;
     const auto local = picking::surface_hit_in_lattice_space(registry, state.active_lattice, hit);
     if (!local) return;
     const auto picked = picking::brush_select(registry.get<Lattice>(state.active_lattice), *local, {});

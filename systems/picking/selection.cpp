@@ -5,6 +5,7 @@
 #include <numeric>
 
 #include "runtime/scene/components.h"
+#include "systems/gaussian/components.h"
 #include "systems/picking/world_space.h"
 
 namespace sffd::picking {
@@ -134,7 +135,16 @@ std::vector<std::uint32_t> brush_select(const Lattice& lattice, const glm::dvec3
 
 std::optional<glm::dvec3> surface_hit_in_lattice_space(const ecs::Registry& registry, ecs::Entity lattice,
                                                        const PickHit& hit) {
-    if (hit.kind != PickKind::surface || !registry.valid(hit.entity) || !registry.valid(lattice)) return std::nullopt;
+    if (!registry.valid(hit.entity) || !registry.valid(lattice)) return std::nullopt;
+    if (hit.kind == PickKind::gaussian) {
+        // A Gaussian brushes from its authored centre (the ellipsoid is a blob, not a surface patch).
+        const GaussianCloud* g = registry.try_get<GaussianCloud>(hit.entity);
+        if (!g || hit.index >= g->size()) return std::nullopt;
+        const glm::dvec4 world = model_matrix(registry.try_get<Transform>(hit.entity)) *
+                                 glm::dvec4(g->origin + glm::dvec3(g->positions[hit.index]), 1.0);
+        return glm::dvec3(glm::inverse(model_matrix(registry.try_get<Transform>(lattice))) * world);
+    }
+    if (hit.kind != PickKind::surface) return std::nullopt;
     const SplatCloud* cloud = registry.try_get<SplatCloud>(hit.entity);
     if (!cloud || hit.index >= cloud->size()) return std::nullopt;
     glm::dvec3 rest = cloud->origin + glm::dvec3(cloud->positions[hit.index]);

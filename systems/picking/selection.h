@@ -74,7 +74,8 @@ std::vector<std::uint32_t> brush_select(const Lattice& lattice, const glm::dvec3
 // point (splat centre + splat_coords along the authored axes), moved from its cloud's space into the
 // lattice entity's space through both Transforms. For a
 // cloud with several deformers this is exact for the first lattice only (later lattices see the output of
-// earlier ones, which picking does not keep). nullopt when the hit is not a surface or the entity is gone.
+// earlier ones, which picking does not keep). A Gaussian hit gives its authored centre. nullopt when the
+// hit is not a surface or a Gaussian, or the entity is gone.
 std::optional<glm::dvec3> surface_hit_in_lattice_space(const ecs::Registry& registry, ecs::Entity lattice,
                                                        const PickHit& hit);
 

@@ -7,20 +7,31 @@
 //   {"hit":true,"kind":"control_point","entity":4,"generation":0,"name":"lattice","index":665,
 //    "lattice_ijk":[6,0,5],"position":[x,y,z],"distance":d,"pixel":[X,Y]}
 //   {"hit":true,"kind":"surface","entity":3,...,"index":1234,"position":[...],"distance":d,...}
+//   {"hit":true,"kind":"gaussian","entity":0,"name":"scene.ply","index":42,"position":[...],"distance":d,...}
 //   {"hit":false,"pixel":[X,Y]}
+// SCENE may be a 3D Gaussian file (3DGS PLY, .splat, SPZ, KHR glb): one Gaussian-cloud entity, seen
+// through the camera `splatffd render` frames it with; Gaussians are picked as the ellipsoids where
+// their 3DGS alpha reaches 1/255 (systems/picking/gaussian_source.h). Scenes holding Gaussian clouds
+// with lattices run the Gaussian deformation phase first, so picks follow the deformation.
 // A miss is an answer, not an error: exit 0 (scripts test "hit"). Exit 1: the scene cannot be loaded;
 // exit 2: usage. Deformed scenes are picked as deformed (picking deforms on the CPU).
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <string>
 
 #include "runtime/assets/scene.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
+#include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_system.h"
 #include "systems/picking/picking_system.h"
 #include "systems/splat_render/camera_math.h"
 #include "tools/splatffd/command.h"
+#include "tools/splatffd/convert_gaussians.h"
+#include "tools/splatffd/render_gaussians.h"
 
 namespace {
 
@@ -29,7 +40,8 @@ using namespace sffd;
 void usage() {
     std::fprintf(stderr,
                  "usage: splatffd pick [SCENE] --at X,Y [--size WxH] [--xray] [--tolerance PX]\n"
-                 "  SCENE         built-in name (sphere, face) or a scene/point-cloud file (default: sphere)\n"
+                 "  SCENE         built-in name (sphere, face), a scene/point-cloud file or a 3D Gaussian file\n"
+                 "                (3DGS .ply, .splat, .spz, KHR .glb; default: sphere)\n"
                  "  --at X,Y      pixel to pick (origin top-left, y down; picks the pixel's centre)\n"
                  "  --size WxH    viewport in pixels (default 1280x720, as `splatffd render`)\n"
                  "  --xray        control points hidden behind the surface can be picked\n"
@@ -116,12 +128,32 @@ int run_pick(sffd::cli::Args args) {
     }
 
     ecs::Registry registry;
-    if (const Status st = load_scene(registry, scene); !st) {
-        std::fprintf(stderr, "%s\n", st.message().c_str());
-        return 1;
+    Camera camera;
+    if (scene_given && cli::is_gaussian_file(scene)) {
+        auto cloud = gaussian::read_gaussians(scene);
+        if (!cloud) {
+            std::fprintf(stderr, "%s\n", cloud.message().c_str());
+            return 1;
+        }
+        if (cloud->size() == 0) {
+            std::fprintf(stderr, "%s: no Gaussians\n", scene.c_str());
+            return 1;
+        }
+        camera = cli::gaussian_file_camera(*cloud, w / h);
+        const ecs::Entity e = registry.create();
+        registry.emplace<GaussianCloud>(e, std::move(*cloud));
+        registry.emplace<Name>(e, Name{std::filesystem::path(scene).filename().string()});
+    } else {
+        if (const Status st = load_scene(registry, scene); !st) {
+            std::fprintf(stderr, "%s\n", st.message().c_str());
+            return 1;
+        }
+        camera = render::scene_camera(registry, w / h);
     }
+    // The deformation phase for Gaussian clouds (CPU; nothing to do without them). Surface splats need
+    // no such step: picking deforms them on demand.
+    gaussian_deform_system(registry, FrameContext{});
     const glm::ivec2 size{int(w), int(h)};
-    const Camera camera = render::scene_camera(registry, w / h);
     const picking::ScreenView view = picking::make_screen_view(camera, size);
     picking::PickQuery query = picking::query_at_pixel(view, {x + 0.5, y + 0.5});
     query.xray = xray;
@@ -146,6 +178,13 @@ int run_pick(sffd::cli::Args args) {
             const int idx = int(hit.index);
             out += ",\"lattice_ijk\":[" + std::to_string(idx / (m1 * n1)) + "," + std::to_string((idx / n1) % m1) + "," +
                    std::to_string(idx % n1) + "]";
+        }
+    }
+    if (hit.kind == picking::PickKind::gaussian) {
+        if (const GaussianCloud* g = registry.try_get<GaussianCloud>(hit.entity); g && hit.index < g->opacities.size()) {
+            char op[64];
+            std::snprintf(op, sizeof op, ",\"opacity\":%.9g", double(g->opacities[hit.index]));
+            out += op;
         }
     }
     char buf[256];

@@ -14,6 +14,14 @@
 
 namespace sffd::cli {
 
+Camera gaussian_file_camera(const GaussianCloud& cloud, double aspect) {
+    glm::dvec3 lo(cloud.positions[0]), hi = lo;
+    for (const glm::vec3& p : cloud.positions) lo = glm::min(lo, glm::dvec3(p)), hi = glm::max(hi, glm::dvec3(p));
+    const glm::dvec3 center = cloud.origin + 0.5 * (lo + hi);
+    const double radius = std::max(0.5 * glm::length(hi - lo), 1e-6);
+    return render::framing_camera(center, radius, aspect);
+}
+
 int render_gaussians(const std::string& in, const std::string& out_dir, int width, int height,
                      std::optional<glm::vec3> background) {
     auto fail = [](const std::string& m) {
@@ -23,11 +31,7 @@ int render_gaussians(const std::string& in, const std::string& out_dir, int widt
     auto cloud = gaussian::read_gaussians(in);
     if (!cloud) return fail(cloud.message());
     if (cloud->size() == 0) return fail(in + ": no Gaussians");
-    glm::dvec3 lo(cloud->positions[0]), hi = lo;
-    for (const glm::vec3& p : cloud->positions) lo = glm::min(lo, glm::dvec3(p)), hi = glm::max(hi, glm::dvec3(p));
-    const glm::dvec3 center = cloud->origin + 0.5 * (lo + hi);
-    const double radius = std::max(0.5 * glm::length(hi - lo), 1e-6);
-    const Camera camera = render::framing_camera(center, radius, double(width) / double(height));
+    const Camera camera = gaussian_file_camera(*cloud, double(width) / double(height));
 
     auto ctx = gfx::create_context({.headless = true, .width = width, .height = height, .debug = false});
     if (!ctx) return fail(ctx.message());

@@ -9,7 +9,14 @@
 
 #include <glm/glm.hpp>
 
+#include "runtime/scene/camera.h"
+#include "systems/gaussian/components.h"
+
 namespace sffd::cli {
+
+// The view `render` and `pick` use for a Gaussian file: render::framing_camera around the bounding sphere
+// of the centres. `cloud` must not be empty.
+Camera gaussian_file_camera(const GaussianCloud& cloud, double aspect);
 
 // Writes DIR/frame_0000.png. background: sRGB 0..1 (PNG alpha 255), else straight alpha. Exit code.
 int render_gaussians(const std::string& in, const std::string& out_dir, int width, int height,

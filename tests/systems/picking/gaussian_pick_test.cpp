@@ -18,6 +18,7 @@
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/picking/gaussian_source.h"
 #include "systems/picking/picking_system.h"
+#include "systems/picking/selection.h"
 #include "test_scenes.h"
 
 namespace sffd::picking {
@@ -270,6 +271,10 @@ TEST(PickingGaussians, PicksFollowTheDeformation) {
     EXPECT_EQ(pick(reg, state, down).kind, PickKind::gaussian);
     // Nothing changed: no new commit.
     EXPECT_EQ(state.stats().surface_commits, commits + 1);
+    // The brush maps a Gaussian hit back to its authored centre, in the lattice's space.
+    const auto rest_point = surface_hit_in_lattice_space(reg, lattice, pick(reg, state, down));
+    ASSERT_TRUE(rest_point.has_value());
+    EXPECT_NEAR(glm::length(*rest_point - glm::dvec3(0.5)), 0.0, 1e-6);
 
     // Without Deformers, the authored cloud is picked again.
     reg.remove<Deformers>(e);

@@ -5,14 +5,20 @@
 #include <algorithm>
 #include <array>
 #include <cstdio>
+#include <filesystem>
+#include <limits>
 #include <string>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <nlohmann/json.hpp>
 
 #include "runtime/assets/scene.h"
 #include "runtime/ecs/registry.h"
 #include "systems/ffd/components.h"
+#include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_io.h"
+#include "systems/picking/gaussian_source.h"
 #include "systems/picking/screen_view.h"
 #include "systems/picking/world_space.h"
 #include "systems/splat_render/camera_math.h"
@@ -133,6 +139,91 @@ TEST(PickCli, BadInputExitCodesAndMessages) {
     r = run_pick("sphere --at 400,10 --size 320x240");
     EXPECT_EQ(r.exit_code, 2);
     EXPECT_NE(r.out.find("outside the 320x240 viewport"), std::string::npos) << r.out;
+}
+
+// A 3DGS PLY of three Gaussians written here: picked through `splatffd pick FILE`, seen from the camera
+// `render` frames a Gaussian file with (render::framing_camera around the centres' bounding sphere).
+struct GaussianFile {
+    std::filesystem::path path;
+    GaussianCloud cloud;
+    ScreenView view;
+    GaussianFile() {
+        path = std::filesystem::temp_directory_path() / ("sffd_pick_gauss_" + std::to_string(::getpid()) + ".ply");
+        const glm::vec3 centres[3] = {{-1, 0, 0}, {0.5f, 0.2f, 0.3f}, {1, 0, -0.5f}};
+        for (int i = 0; i < 3; ++i) {
+            cloud.positions.push_back(centres[i]);
+            cloud.scales.emplace_back(0.15f, 0.1f, 0.05f * float(i + 1));
+            cloud.rotations.push_back(glm::normalize(glm::quat(1.0f, 0.3f * float(i), 0.2f, -0.1f)));
+            cloud.opacities.push_back(0.3f + 0.3f * float(i));
+            for (int c = 0; c < 3; ++c) cloud.sh.push_back(0.2f);
+        }
+        EXPECT_TRUE(gaussian::write_ply(path, cloud));
+        // Bounding box of the centres: x [-1, 1], y [0, 0.2], z [-0.5, 0.3].
+        const glm::dvec3 lo(-1, 0, -0.5), hi(1, 0.2, 0.3);
+        view = make_screen_view(render::framing_camera(0.5 * (lo + hi), 0.5 * glm::length(hi - lo), 320.0 / 240.0),
+                                {320, 240});
+    }
+    ~GaussianFile() { std::filesystem::remove(path); }
+};
+
+// Independent reference: entry distance of a ray into Gaussian i's ellipsoid (p − c)ᵀ Σ⁻¹ (p − c) = k(α)²,
+// or −1 on a miss.
+double entry_distance(const GaussianCloud& g, std::size_t i, const Ray& ray) {
+    const glm::dmat3 R = glm::mat3_cast(glm::dquat(g.rotations[i]));
+    const glm::dvec3 s(g.scales[i]);
+    const glm::dmat3 inv = glm::inverse(R * glm::dmat3(s.x * s.x, 0, 0, 0, s.y * s.y, 0, 0, 0, s.z * s.z) * glm::transpose(R));
+    const double k = gaussian_pick_sigmas(double(g.opacities[i]));
+    const glm::dvec3 w = ray.origin - glm::dvec3(g.positions[i]), d = glm::normalize(ray.direction);
+    const double a = glm::dot(d, inv * d), b = glm::dot(w, inv * d), c = glm::dot(w, inv * w) - k * k;
+    if (b * b - a * c < 0.0) return -1.0;
+    return (-b - std::sqrt(b * b - a * c)) / a;
+}
+
+TEST(PickCli, GaussianFileHitsTheNearestGaussianOnThePixelRay) {
+    GaussianFile f;
+    for (std::uint32_t target = 0; target < 3; ++target) {
+        const auto px = project(f.view, glm::dvec3(f.cloud.positions[target]));
+        ASSERT_TRUE(px.has_value());
+        const glm::ivec2 pixel(glm::floor(px->screen));
+        const CliRun r = run_pick(f.path.string() + " --size 320x240 --at " + std::to_string(pixel.x) + "," +
+                                  std::to_string(pixel.y));
+        ASSERT_EQ(r.exit_code, 0) << r.out;
+        const auto j = nlohmann::json::parse(r.out);
+        ASSERT_TRUE(j["hit"].get<bool>()) << r.out;
+        EXPECT_EQ(j["kind"], "gaussian");
+        EXPECT_EQ(j["name"], f.path.filename().string());
+        // Brute force over the three: the nearest entry along the pixel's ray (the target's own ellipsoid
+        // contains its centre's ray, so there is one).
+        const Ray ray = ray_through(f.view, glm::dvec2(pixel) + 0.5);
+        double best = std::numeric_limits<double>::infinity();
+        std::uint32_t best_i = 99;
+        for (std::uint32_t i = 0; i < 3; ++i)
+            if (const double t = entry_distance(f.cloud, i, ray); t >= 0.0 && t < best) best = t, best_i = i;
+        ASSERT_LT(best_i, 3u);
+        EXPECT_EQ(j["index"].get<std::uint32_t>(), best_i) << "pixel of Gaussian " << target;
+        EXPECT_NEAR(j["distance"].get<double>(), best, 1e-4);
+        EXPECT_NEAR(j["opacity"].get<double>(), double(f.cloud.opacities[best_i]), 1e-6);
+        const glm::dvec3 p{j["position"][0].get<double>(), j["position"][1].get<double>(), j["position"][2].get<double>()};
+        EXPECT_NEAR(glm::length(p - (ray.origin + best * glm::normalize(ray.direction))), 0.0, 1e-4);
+    }
+    // A corner pixel sees nothing.
+    const CliRun miss = run_pick(f.path.string() + " --size 320x240 --at 0,0");
+    ASSERT_EQ(miss.exit_code, 0) << miss.out;
+    EXPECT_FALSE(nlohmann::json::parse(miss.out)["hit"].get<bool>());
+}
+
+TEST(PickCli, BadGaussianFileNamesTheFile) {
+    const auto path = std::filesystem::temp_directory_path() / ("sffd_pick_bad_" + std::to_string(::getpid()) + ".splat");
+    {
+        FILE* f = std::fopen(path.string().c_str(), "wb");
+        ASSERT_NE(f, nullptr);
+        std::fputs("not 32 bytes", f);
+        std::fclose(f);
+    }
+    const CliRun r = run_pick(path.string() + " --at 1,1");
+    std::filesystem::remove(path);
+    EXPECT_EQ(r.exit_code, 1) << r.out;
+    EXPECT_NE(r.out.find(path.string() + ":"), std::string::npos) << r.out;
 }
 
 }  // namespace
