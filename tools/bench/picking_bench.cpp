@@ -8,8 +8,12 @@
 // rtcUpdateGeometryBuffer, rtcCommitGeometry, one rtcCommitScene (BVH build). BM_RefreshNewGeometry
 // times the same with a geometry created from scratch (entity replaced). BM_PickScreen / BM_PickRay time
 // one pick on an up-to-date scene; BM_PickAfterLatticeEdit the first pick after a lattice edit when the
-// deformed splats are GPU-only (picking's own CPU deformation + refresh + pick).
+// deformed splats are GPU-only (picking's own CPU deformation + refresh + pick). BM_GaussianRefresh /
+// BM_GaussianPickRay: the same for N flat 3D Gaussians on the unit sphere (59,650 and 1M).
 #include <benchmark/benchmark.h>
+
+#define GLM_ENABLE_EXPERIMENTAL
+#include <glm/gtx/quaternion.hpp>
 
 #include <cmath>
 #include <ctime>
@@ -22,6 +26,7 @@
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
+#include "systems/gaussian/components.h"
 #include "systems/picking/picking_state.h"
 #include "systems/picking/picking_system.h"
 #include "systems/splat_render/camera_math.h"
@@ -185,5 +190,70 @@ void BM_PickAfterLatticeEdit(benchmark::State& st) {
     st.counters["cpu_deformations"] = double(state.stats().cpu_deformations);
 }
 BENCHMARK(BM_PickAfterLatticeEdit)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// 3D Gaussians (issue 17): N flat Gaussians tangent to the unit sphere (Fibonacci points, in-plane σ 0.7 of
+// the mean spacing, 0.1 of that along the normal, opacity 0.95: what `convert --gaussians` makes of a
+// surface), picked as Embree user-geometry ellipsoids. Refresh: the cloud alternates between rest and a
+// copy stretched 1.5x along y (swapped in, no deformation maths timed); ellipsoid setup + BVH build.
+struct GaussianScene {
+    ecs::Registry reg;
+    ecs::Entity cloud;
+    std::vector<glm::vec3> other;
+    explicit GaussianScene(std::size_t n) {
+        GaussianCloud g;
+        const double spacing = std::sqrt(4.0 * std::numbers::pi / double(n));
+        const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+        for (std::size_t i = 0; i < n; ++i) {
+            const double z = 1.0 - 2.0 * (double(i) + 0.5) / double(n), r = std::sqrt(1.0 - z * z);
+            const glm::dvec3 p(r * std::cos(golden * double(i)), r * std::sin(golden * double(i)), z);
+            g.positions.emplace_back(p);
+            g.scales.emplace_back(0.7 * spacing, 0.7 * spacing, 0.07 * spacing);
+            g.rotations.push_back(glm::quat(glm::rotation(glm::vec3(0, 0, 1), glm::vec3(p))));
+            g.opacities.push_back(0.95f);
+            for (int c = 0; c < 3; ++c) g.sh.push_back(0.2f);
+        }
+        other = g.positions;
+        for (glm::vec3& p : other) p.y *= 1.5f;
+        cloud = reg.create();
+        reg.emplace<GaussianCloud>(cloud, std::move(g));
+    }
+    void swap_positions() { std::swap(reg.patch<GaussianCloud>(cloud).positions, other); }
+};
+
+void BM_GaussianRefresh(benchmark::State& st) {
+    GaussianScene s(std::size_t(st.range(0)));
+    PickingState state;
+    state.refresh(s.reg);
+    double cpu = 0.0;
+    for (auto _ : st) {
+        st.PauseTiming();
+        s.swap_positions();
+        st.ResumeTiming();
+        const double t0 = process_cpu_seconds();
+        benchmark::DoNotOptimize(state.refresh(s.reg));
+        cpu += process_cpu_seconds() - t0;
+    }
+    st.counters["process_cpu_ms"] = 1e3 * cpu / double(st.iterations());
+}
+BENCHMARK(BM_GaussianRefresh)->Arg(59650)->Arg(1000000)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+// One explicit ray at the Gaussian sphere (always a hit): traversal + ellipsoid intersection callbacks.
+void BM_GaussianPickRay(benchmark::State& st) {
+    GaussianScene s(std::size_t(st.range(0)));
+    PickingState state;
+    state.refresh(s.reg);
+    std::mt19937 rng(2);
+    std::uniform_real_distribution<double> u(-0.6, 0.6);
+    std::size_t hits = 0;
+    for (auto _ : st) {
+        PickQuery q = query_from_ray({{u(rng), u(rng), 4.0}, {0.0, 0.0, -1.0}});
+        q.control_points = false;
+        const PickHit h = pick(s.reg, state, q);
+        hits += h.kind == PickKind::gaussian;
+        benchmark::DoNotOptimize(h);
+    }
+    if (hits != std::size_t(st.iterations())) st.SkipWithError("a ray at the sphere missed");
+}
+BENCHMARK(BM_GaussianPickRay)->Arg(59650)->Arg(1000000)->Unit(benchmark::kMicrosecond);
 
 }  // namespace
