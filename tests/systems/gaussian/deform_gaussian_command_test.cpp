@@ -3,12 +3,14 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
 #include <sstream>
 
+#include "runtime/assets/ply.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/lattice_io.h"
 #include "runtime/assets/builtin_scenes.h"
@@ -89,6 +91,73 @@ TEST(GaussianDeformCommand, MatchesTheLibraryAndPrintsBenchJson) {
         EXPECT_EQ(got->opacities[i], src->opacities[i]);
     }
     EXPECT_EQ(got->sh, expect.sh);
+}
+
+// Streaming over three chunks (140,000 rows > 2 x 65,536) of an ASCII 3DGS PLY that carries a property
+// and an element the Gaussian layout does not know: the output equals the in-memory deformation of the
+// whole file, and the unknown property and element come through unchanged.
+TEST(GaussianDeformCommand, StreamsThreeChunksIdenticallyAndKeepsOtherData) {
+    constexpr std::size_t n = 140000;
+    const fs::path in = temp("stream_in.ply"), out = temp("stream_out.ply"), lat = temp("stream_lat.json");
+    {
+        std::ofstream f(in);
+        f << "ply\nformat ascii 1.0\nelement vertex " << n << "\nproperty float x\nproperty float y\nproperty float z\n"
+          << "property float confidence\nproperty float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n"
+          << "property float opacity\nproperty float scale_0\nproperty float scale_1\nproperty float scale_2\n"
+          << "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\n"
+          << "element camera 1\nproperty float fx\nend_header\n";
+        for (std::size_t i = 0; i < n; ++i) {
+            const double t = double(i);
+            f << 0.9 * std::sin(t) << ' ' << 0.9 * std::cos(1.3 * t) << ' ' << 0.9 * std::sin(0.7 * t + 1) << ' ' << i % 1000
+              << " 0.1 -0.2 0.3 " << (i % 7) - 3.0 << ' ' << -4.0 - double(i % 3) << " -4.5 -5 " << 1.0 + 0.1 * std::sin(t)
+              << ' ' << 0.2 * std::cos(t) << " 0.3 -0.1\n";
+        }
+        f << "1234.5\n";
+    }
+    Lattice l = ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3});
+    ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.7, glm::dvec3(0.0));
+    ASSERT_TRUE(ffd::save_lattice(lat, l));
+    const RunResult r = run(in.string() + " " + out.string() + " --lattice " + lat.string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_NE(r.err.find("140000 Gaussians"), std::string::npos) << r.err;
+
+    auto src = gaussian::read_ply(in);
+    ASSERT_TRUE(src) << src.message();
+    GaussianCloud expect;
+    ASSERT_TRUE(gaussian::deform(l, *src, expect));
+    auto got = gaussian::read_ply(out);
+    ASSERT_TRUE(got) << got.message();
+    ASSERT_EQ(got->size(), n);
+    std::size_t bad = 0;
+    for (std::size_t i = 0; i < n; ++i) {
+        bad += got->positions[i] != expect.positions[i];
+        bad += !(glm::length(got->scales[i] - expect.scales[i]) <= 1e-6f * glm::length(expect.scales[i]));
+        bad += !(std::abs(std::abs(glm::dot(got->rotations[i], expect.rotations[i])) - 1.0f) <= 1e-6f);
+        bad += got->opacities[i] != src->opacities[i];
+    }
+    EXPECT_EQ(bad, 0u);
+    EXPECT_EQ(got->sh, expect.sh);
+
+    auto reader = ply::Reader::open(out);
+    ASSERT_TRUE(reader) << reader.message();
+    ASSERT_TRUE(reader->seek_element("vertex"));
+    ply::Chunk chunk;
+    std::size_t row = 0, wrong = 0;
+    while (true) {
+        auto rows = reader->read_rows(50000, chunk);
+        ASSERT_TRUE(rows) << rows.message();
+        if (*rows == 0) break;
+        const int c = chunk.find("confidence");
+        ASSERT_GE(c, 0);
+        for (std::size_t k = 0; k < *rows; ++k, ++row) wrong += chunk.columns[std::size_t(c)].values[k] != double(row % 1000);
+    }
+    EXPECT_EQ(row, n);
+    EXPECT_EQ(wrong, 0u);
+    ASSERT_TRUE(reader->seek_element("camera"));
+    auto rows = reader->read_rows(10, chunk);
+    ASSERT_TRUE(rows);
+    ASSERT_EQ(*rows, 1u);
+    EXPECT_EQ(chunk.columns[std::size_t(chunk.find("fx"))].values[0], 1234.5);
 }
 
 TEST(GaussianDeformCommand, RefusesGpuBackendAndBadFiles) {
