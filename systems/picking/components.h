@@ -68,9 +68,16 @@ struct PickResult {
 };
 
 // Resource: picking tunables.
+// Which Gaussian a ray picks (systems/picking/gaussian_source.h for the ellipsoids):
+//   most_visible     the one contributing most to the pixel (largest 3DGS blending weight α T along the
+//                    ray; a faint floater in front of an opaque Gaussian is passed over, as on screen);
+//   first_ellipsoid  the first ellipsoid the ray enters (every Gaussian drawn with alpha >= 1/255 counts).
+enum class GaussianPick : std::uint8_t { most_visible, first_ellipsoid };
+
 struct PickSettings {
     // Control-point sphere radius for explicit rays, as a fraction of the lattice's smallest cell edge.
     double control_point_radius_fraction = 0.08;
+    GaussianPick gaussians = GaussianPick::most_visible;
 };
 
 // On a lattice entity: the selected control points, as sorted unique flat indices. Changed only

@@ -67,7 +67,17 @@ PickEllipsoid gaussian_ellipsoid(const glm::dmat4& model, const glm::dvec3& shif
     // Half extent along world axis j: k |row j of B| (support function of the ellipsoid B·ball(k)).
     for (int j = 0; j < 3; ++j) e.half_extent[j] = k * glm::length(glm::dvec3(B[0][j], B[1][j], B[2][j]));
     e.k = k;
+    e.opacity = double(std::min(opacity, 1.0f));
     return e;
+}
+
+double ray_alpha(const PickEllipsoid& e, const glm::dvec3& origin, const glm::dvec3& direction) {
+    const glm::dvec3 o = e.to_unit * (origin - e.centre);
+    const glm::dvec3 d = e.to_unit * direction;
+    const double a = glm::dot(d, d);
+    if (!(a > 0.0)) return 0.0;
+    const double m2 = std::max(0.0, glm::dot(o, o) - glm::dot(o, d) * glm::dot(o, d) / a);
+    return std::min(0.99, e.opacity * std::exp(-0.5 * m2));
 }
 
 double intersect_ellipsoid(const PickEllipsoid& e, const glm::dvec3& origin, const glm::dvec3& direction, double tnear,

@@ -51,6 +51,7 @@ struct PickEllipsoid {
     glm::dmat3 to_unit{1.0};     // S⁻¹ Rᵀ L⁻¹ (L: the entity's linear transform)
     glm::dvec3 half_extent{0.0};  // axis-aligned half size of the ellipsoid (bounds)
     double k = 0.0;
+    double opacity = 0.0;
 };
 
 // The ellipsoid of Gaussian (position, scale, rotation, opacity) under the model matrix `model`
@@ -61,6 +62,11 @@ PickEllipsoid gaussian_ellipsoid(const glm::dmat4& model, const glm::dvec3& shif
 
 // Ray parameter t ∈ [tnear, tfar] where the ray (origin, direction) enters the ellipsoid (or leaves it,
 // when the origin is inside); negative when it misses. Double precision, independent of Embree.
+// The largest 3DGS alpha of the Gaussian along the (infinite) line: min(0.99, α exp(−m²/2)) with m the
+// least Mahalanobis distance of the line to the centre: what the forward pass blends at the pixel of
+// this ray (up to its low-pass and perspective linearisation).
+double ray_alpha(const PickEllipsoid& e, const glm::dvec3& origin, const glm::dvec3& direction);
+
 double intersect_ellipsoid(const PickEllipsoid& e, const glm::dvec3& origin, const glm::dvec3& direction, double tnear,
                            double tfar);
 

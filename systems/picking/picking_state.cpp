@@ -8,6 +8,7 @@
 #include <cmath>
 #include <limits>
 #include <span>
+#include <type_traits>
 #include <unordered_map>
 #include <vector>
 
@@ -50,6 +51,7 @@ struct GeomRecord {
         float k;             // Mahalanobis radius (gaussian_pick_sigmas)
         glm::mat3 to_unit;   // S⁻¹ Rᵀ L⁻¹
         std::uint32_t index; // the Gaussian's index in its cloud
+        float opacity;       // linear, for the blending weights of the most-visible pick
     };
     std::vector<Ellipsoid> ellipsoids;
 
@@ -129,8 +131,26 @@ PickEllipsoid to_pick_ellipsoid(const GeomRecord::Ellipsoid& e) {
     p.centre = glm::dvec3(e.centre);
     p.to_unit = glm::dmat3(e.to_unit);
     p.k = double(e.k);
+    p.opacity = double(e.opacity);
     return p;
 }
+
+// Every Gaussian a collecting ray enters (the most-visible pick): Embree is not told about these hits,
+// so traversal goes on behind them, up to the nearest splat disc.
+struct GaussianRayHit {
+    double t_entry = 0.0;   // where the ray enters the ellipsoid
+    double t_centre = 0.0;  // the centre's depth along the ray (the blending order, as 3DGS's depth sort)
+    double alpha = 0.0;     // ray_alpha
+    unsigned geom = 0, prim = 0;
+};
+
+// Our intersect context: Embree's first (it hands the pointer back to the callbacks), then whether the
+// Gaussian callbacks collect instead of reporting the nearest hit.
+struct PickContext {
+    RTCIntersectContext base;
+    std::vector<GaussianRayHit>* collect = nullptr;
+};
+static_assert(std::is_standard_layout_v<PickContext>);
 
 // User geometry bounds: the box around {c + B x : |x| <= k}, B = to_unit⁻¹; half extent along world axis
 // j is k |row j of B|.
@@ -157,6 +177,12 @@ void ellipsoid_intersect(const RTCIntersectFunctionNArguments* args) {
         const glm::dvec3 dir{RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i)};
         const double t = intersect_ellipsoid(pe, org, dir, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i));
         if (t < 0.0) continue;
+        // Every surfaces-scene ray is cast with a PickContext (Impl::intersect, surface_between).
+        if (auto* hits = reinterpret_cast<const PickContext*>(args->context)->collect) {
+            hits->push_back({t, glm::dot(pe.centre - org, dir) / glm::dot(dir, dir), ray_alpha(pe, org, dir), args->geomID,
+                             args->primID});
+            continue;
+        }
         RTCRayN_tfar(ray, args->N, i) = float(t);
         // Normal: the density's gradient direction, to_unitᵀ to_unit (p − c).
         const glm::dvec3 n = glm::transpose(pe.to_unit) * (pe.to_unit * (org + t * dir - pe.centre));
@@ -179,7 +205,10 @@ void ellipsoid_occluded(const RTCOccludedFunctionNArguments* args) {
         RTCRayN* ray = args->ray;
         const glm::dvec3 org{RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i)};
         const glm::dvec3 dir{RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i)};
-        if (intersect_ellipsoid(pe, org, dir, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i)) >= 0.0)
+        // A Gaussian hides what is behind it when it alone covers at least half the pixel (faint floaters
+        // in front of a control point do not hide it).
+        if (intersect_ellipsoid(pe, org, dir, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i)) >= 0.0 &&
+            ray_alpha(pe, org, dir) >= 0.5)
             RTCRayN_tfar(ray, args->N, i) = -std::numeric_limits<float>::infinity();
     }
 }
@@ -199,7 +228,7 @@ std::vector<GeomRecord::Ellipsoid> gaussian_ellipsoids(const GaussianSource& src
             const glm::mat3 to_unit(e.to_unit);
             const glm::vec3 c(e.centre - anchor);
             if (!std::isfinite(glm::determinant(to_unit)) || glm::determinant(to_unit) == 0.0f) continue;
-            all[i] = {c, float(e.k), to_unit, std::uint32_t(i)};
+            all[i] = {c, float(e.k), to_unit, std::uint32_t(i), float(e.opacity)};
             keep[i] = 1;
         }
     });
@@ -566,10 +595,10 @@ bool PickingState::refresh(ecs::Registry& registry, const PickSettings& settings
 
 std::optional<PickingState::RayHit> PickingState::Impl::intersect(
     RTCScene scene, const std::unordered_map<unsigned, ecs::Entity>& ids, const Ray& ray, double tfar) const {
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
+    PickContext context;
+    rtcInitIntersectContext(&context.base);
     RTCRayHit rh = make_rayhit(ray.origin - anchor, ray.direction, tfar);
-    rtcIntersect1(scene, &context, &rh);
+    rtcIntersect1(scene, &context.base, &rh);
     if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
     if (scene == surfaces) {
         if (const auto g = gaussian_ids.find(rh.hit.geomID); g != gaussian_ids.end()) {
@@ -585,6 +614,41 @@ std::optional<PickingState::RayHit> PickingState::Impl::intersect(
 
 std::optional<PickingState::RayHit> PickingState::intersect_surfaces(const Ray& ray, double tfar) const {
     return m_impl->intersect(m_impl->surfaces, m_impl->surface_ids, ray, tfar);
+}
+
+std::optional<PickingState::RayHit> PickingState::most_visible_surface(const Ray& ray, double tfar) const {
+    const Impl& s = *m_impl;
+    std::vector<GaussianRayHit> hits;
+    PickContext context;
+    rtcInitIntersectContext(&context.base);
+    context.collect = &hits;
+    const glm::dvec3 direction = glm::normalize(ray.direction);
+    RTCRayHit rh = make_rayhit(ray.origin - s.anchor, direction, tfar);
+    rtcIntersect1(s.surfaces, &context.base, &rh);
+    // The nearest splat disc (opaque), if any: Gaussians entered behind it do not count.
+    std::optional<RayHit> disc;
+    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
+        if (const auto it = s.surface_ids.find(rh.hit.geomID); it != s.surface_ids.end())
+            disc = RayHit{it->second, rh.hit.primID, double(rh.ray.tfar), false};
+    const double t_disc = disc ? disc->t : std::numeric_limits<double>::infinity();
+    std::erase_if(hits, [&](const GaussianRayHit& h) { return !(h.t_entry <= t_disc); });
+    std::stable_sort(hits.begin(), hits.end(),
+                     [](const GaussianRayHit& a, const GaussianRayHit& b) { return a.t_centre < b.t_centre; });
+    // Front-to-back blending weights w = α T; the disc is opaque (weight T behind every Gaussian).
+    double T = 1.0, best_w = 0.0;
+    const GaussianRayHit* best = nullptr;
+    for (const GaussianRayHit& h : hits) {
+        const double w = h.alpha * T;
+        if (w > best_w) best_w = w, best = &h;
+        T *= 1.0 - h.alpha;
+    }
+    if (disc && (T > best_w || !best)) return disc;
+    if (!best) return std::nullopt;
+    const auto g = s.gaussian_ids.find(best->geom);
+    if (g == s.gaussian_ids.end()) return std::nullopt;
+    const auto rec = s.gaussian_records.find(g->second.bits());
+    if (rec == s.gaussian_records.end() || best->prim >= rec->second->ellipsoids.size()) return std::nullopt;
+    return RayHit{g->second, rec->second->ellipsoids[best->prim].index, best->t_entry, true};
 }
 
 std::optional<PickingState::RayHit> PickingState::intersect_controls(const Ray& ray, double tfar) const {
@@ -610,10 +674,10 @@ bool PickingState::surface_between(const glm::dvec3& from, const glm::dvec3& to)
     const glm::dvec3 d = to - from;
     const double len = glm::length(d);
     if (!(len > 0.0)) return false;
-    RTCIntersectContext context;
-    rtcInitIntersectContext(&context);
+    PickContext context;
+    rtcInitIntersectContext(&context.base);
     RTCRayHit rh = make_rayhit(from - m_impl->anchor, d / len, len * (1.0 - 1e-3));
-    rtcOccluded1(m_impl->surfaces, &context, &rh.ray);
+    rtcOccluded1(m_impl->surfaces, &context.base, &rh.ray);
     return rh.ray.tfar == -std::numeric_limits<float>::infinity();
 }
 

@@ -67,8 +67,15 @@ public:
     };
     std::optional<RayHit> intersect_surfaces(const Ray& ray, double tfar) const;
     std::optional<RayHit> intersect_controls(const Ray& ray, double tfar) const;
+    // The surface that contributes most to the pixel of this ray: every Gaussian ellipsoid in front of the
+    // nearest splat disc gets its 3DGS blending weight α T (α = ray_alpha, T the transmittance of the
+    // Gaussians before it in centre-depth order), the disc (opaque) the transmittance left; the largest
+    // weight wins, ties to the nearer. t is the ellipsoid entry (or the disc hit). Without Gaussians it is
+    // intersect_surfaces().
+    std::optional<RayHit> most_visible_surface(const Ray& ray, double tfar) const;
     // True when a surface lies on the segment from `from` to `to` (excluding a small end margin, so a
-    // control point sitting on the surface is not hidden by the splat it touches).
+    // control point sitting on the surface is not hidden by the splat it touches). A Gaussian counts when
+    // the segment enters its ellipsoid and its alpha along the line (ray_alpha) is at least 0.5.
     bool surface_between(const glm::dvec3& from, const glm::dvec3& to) const;
 
     // Coordinates (x, y) of a world point in a picked splat's frame, point = centre + x a + y b with a, b

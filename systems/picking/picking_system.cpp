@@ -77,7 +77,11 @@ PickHit pick(ecs::Registry& registry, PickingState& state, const PickQuery& quer
         if (PickHit hit = control_point_near_cursor(registry, state, q)) return hit;
     }
     std::optional<PickingState::RayHit> surface;
-    if (q.surfaces) surface = state.intersect_surfaces(q.ray, std::numeric_limits<double>::infinity());
+    if (q.surfaces) {
+        const bool first = settings && settings->gaussians == GaussianPick::first_ellipsoid;
+        surface = first ? state.intersect_surfaces(q.ray, std::numeric_limits<double>::infinity())
+                        : state.most_visible_surface(q.ray, std::numeric_limits<double>::infinity());
+    }
     if (q.control_points) {
         const double tfar = (surface && !q.xray) ? surface->t : std::numeric_limits<double>::infinity();
         if (const auto c = state.intersect_controls(q.ray, tfar)) {

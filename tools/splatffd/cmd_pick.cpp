@@ -1,4 +1,4 @@
-// splatffd pick [SCENE] --at X,Y [--size WxH] [--xray] [--tolerance PX]
+// splatffd pick [SCENE] --at X,Y [--size WxH] [--xray] [--tolerance PX] [--first-gaussian]
 //
 // Loads a scene (built-in name or file; default `sphere`), looks through its camera (or the default
 // framing camera, render::scene_camera, the same one `splatffd render` uses) at a WxH viewport, picks at
@@ -39,13 +39,15 @@ using namespace sffd;
 
 void usage() {
     std::fprintf(stderr,
-                 "usage: splatffd pick [SCENE] --at X,Y [--size WxH] [--xray] [--tolerance PX]\n"
+                 "usage: splatffd pick [SCENE] --at X,Y [--size WxH] [--xray] [--tolerance PX] [--first-gaussian]\n"
                  "  SCENE         built-in name (sphere, face), a scene/point-cloud file or a 3D Gaussian file\n"
                  "                (3DGS .ply, .splat, .spz, KHR .glb; default: sphere)\n"
                  "  --at X,Y      pixel to pick (origin top-left, y down; picks the pixel's centre)\n"
                  "  --size WxH    viewport in pixels (default 1280x720, as `splatffd render`)\n"
                  "  --xray        control points hidden behind the surface can be picked\n"
                  "  --tolerance P control points within P pixels of the cursor win (default 6)\n"
+                 "  --first-gaussian  the first Gaussian ellipsoid on the ray wins (default: the Gaussian\n"
+                 "                contributing most to the pixel)\n"
                  "prints the hit as JSON; a miss prints {\"hit\":false} and exits 0\n");
 }
 
@@ -80,7 +82,7 @@ int run_pick(sffd::cli::Args args) {
     std::string scene = "sphere";
     bool have_at = false, scene_given = false;
     double x = 0, y = 0, w = 1280, h = 720, tolerance = 6.0;
-    bool xray = false;
+    bool xray = false, first_gaussian = false;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         const bool has_value = i + 1 < args.size();
@@ -108,6 +110,8 @@ int run_pick(sffd::cli::Args args) {
             tolerance = *t;
         } else if (a == "--xray") {
             xray = true;
+        } else if (a == "--first-gaussian") {
+            first_gaussian = true;
         } else if (!a.empty() && a[0] != '-' && !scene_given) {
             scene = a;
             scene_given = true;
@@ -159,6 +163,13 @@ int run_pick(sffd::cli::Args args) {
     query.xray = xray;
     query.tolerance_px = tolerance;
 
+    if (first_gaussian) {
+        picking::PickSettings settings = registry.try_resource<picking::PickSettings>()
+                                             ? *registry.try_resource<picking::PickSettings>()
+                                             : picking::PickSettings{};
+        settings.gaussians = picking::GaussianPick::first_ellipsoid;
+        registry.set_resource<picking::PickSettings>(settings);
+    }
     // Through the engine's picking system, as the editor does: request, run the phase, read the result.
     registry.set_resource<picking::PickRequest>(picking::PickRequest{true, query});
     picking::picking_system(registry, FrameContext{});

@@ -282,5 +282,84 @@ TEST(PickingGaussians, PicksFollowTheDeformation) {
     EXPECT_NEAR(authored.distance, 4.5 - 0.05 * k1, 1e-5);
 }
 
+// The default rule picks the Gaussian with the largest 3DGS blending weight α T along the ray (α: the
+// Gaussian's alpha at its closest approach, here the centre: α = opacity; T: the transmittance of those
+// in front), worked out by hand below; PickSettings::gaussians = first_ellipsoid picks the nearest entry.
+TEST(PickingGaussians, MostVisiblePassesOverFaintFloaters) {
+    ecs::Registry reg;
+    const ecs::Entity e = reg.create();
+    reg.emplace<GaussianCloud>(e, cloud_of({{{0, 0, 0}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, 1.0f},
+                                            {{0, 0, 1}, {0.3f, 0.3f, 0.3f}, {1, 0, 0, 0}, 0.1f}}));
+    PickingState state;
+    const PickQuery down = ray_query({0, 0, 10}, {0, 0, -1});
+    // Weights: floater 0.1, opaque one 0.9 · 0.99.
+    const PickHit visible = pick(reg, state, down);
+    ASSERT_EQ(visible.kind, PickKind::gaussian);
+    EXPECT_EQ(visible.index, 0u);
+    EXPECT_NEAR(visible.distance, 10.0 - 0.2 * k1, 1e-5);
+    reg.set_resource<PickSettings>(PickSettings{0.08, GaussianPick::first_ellipsoid});
+    const PickHit first = pick(reg, state, down);
+    ASSERT_EQ(first.kind, PickKind::gaussian);
+    EXPECT_EQ(first.index, 1u);
+    EXPECT_NEAR(first.distance, 9.0 - 0.3 * std::sqrt(2.0 * std::log(25.5)), 1e-5);
+    reg.erase_resource<PickSettings>();
+    // A faint Gaussian alone is still picked (it is all the pixel shows).
+    reg.patch<GaussianCloud>(e).opacities[0] = 0.02f;
+    EXPECT_EQ(pick(reg, state, down).index, 1u);  // weights: 0.1, then 0.9 · 0.02
+}
+
+TEST(PickingGaussians, BlendingWeightsDecideBetweenTwo) {
+    // Front 0.6, back 0.6: weights 0.6 and 0.24 -> front. Front 0.3, back 0.9: 0.3 and 0.63 -> back.
+    const std::pair<float, float> cases[] = {{0.6f, 0.6f}, {0.3f, 0.9f}};
+    const std::uint32_t expect[] = {1u, 0u};
+    for (int c = 0; c < 2; ++c) {
+        ecs::Registry reg;
+        reg.emplace<GaussianCloud>(reg.create(), cloud_of({{{0, 0, 0}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, cases[c].second},
+                                                           {{0, 0, 2}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, cases[c].first}}));
+        PickingState state;
+        EXPECT_EQ(pick(reg, state, ray_query({0, 0, 10}, {0, 0, -1})).index, expect[c]) << c;
+    }
+}
+
+TEST(PickingGaussians, SplatDiscsAreOpaqueInTheWeighting) {
+    ecs::Registry reg;
+    const ecs::Entity sheet = reg.create();
+    reg.emplace<SplatCloud>(sheet, test::disc_grid(3, 1.0, 0.6, 0.0, {-1.0, -1.0}));  // z = 0
+    const ecs::Entity g = reg.create();
+    reg.emplace<GaussianCloud>(g, cloud_of({{{0, 0, 1}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, 0.2f},    // in front, faint
+                                            {{0, 0, -1}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, 1.0f}}));  // behind the sheet
+    PickingState state;
+    PickQuery down = ray_query({0, 0, 10}, {0, 0, -1});
+    down.control_points = false;
+    // Faint Gaussian 0.2, the sheet 0.8 (the Gaussian behind it never counts).
+    const PickHit hit = pick(reg, state, down);
+    EXPECT_EQ(hit.kind, PickKind::surface);
+    EXPECT_EQ(hit.entity, sheet);
+    EXPECT_NEAR(hit.distance, 10.0, 1e-5);
+    // An opaque Gaussian in front wins over the sheet (0.99 against 0.01).
+    reg.patch<GaussianCloud>(g).opacities[0] = 1.0f;
+    const PickHit front = pick(reg, state, down);
+    EXPECT_EQ(front.kind, PickKind::gaussian);
+    EXPECT_EQ(front.index, 0u);
+    // From below, the opaque Gaussian under the sheet.
+    PickQuery up = ray_query({0, 0, -10}, {0, 0, 1});
+    up.control_points = false;
+    EXPECT_EQ(pick(reg, state, up).index, 1u);
+}
+
+TEST(PickingGaussians, OnlyGaussiansCoveringHalfThePixelHideControlPoints) {
+    ecs::Registry reg;
+    const ecs::Entity e = reg.create();
+    reg.emplace<GaussianCloud>(e, cloud_of({{{0, 0, 1}, {0.3f, 0.3f, 0.3f}, {1, 0, 0, 0}, 0.3f}}));
+    PickingState state;
+    state.refresh(reg);
+    EXPECT_FALSE(state.surface_between({0, 0, 10}, {0, 0, 0}));  // alpha 0.3 on this line
+    reg.patch<GaussianCloud>(e).opacities[0] = 0.6f;
+    state.refresh(reg);
+    EXPECT_TRUE(state.surface_between({0, 0, 10}, {0, 0, 0}));   // alpha 0.6
+    // Off-centre by 0.3 = 1 σ: alpha 0.6 e^-0.5 = 0.36 < 0.5.
+    EXPECT_FALSE(state.surface_between({0.3, 0, 10}, {0.3, 0, 0}));
+}
+
 }  // namespace
 }  // namespace sffd::picking

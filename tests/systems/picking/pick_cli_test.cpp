@@ -141,7 +141,7 @@ TEST(PickCli, BadInputExitCodesAndMessages) {
     EXPECT_NE(r.out.find("outside the 320x240 viewport"), std::string::npos) << r.out;
 }
 
-// A 3DGS PLY of three Gaussians written here: picked through `splatffd pick FILE`, seen from the camera
+// A 3DGS PLY of four Gaussians written here: picked through `splatffd pick FILE`, seen from the camera
 // `render` frames a Gaussian file with (render::framing_camera around the centres' bounding sphere).
 struct GaussianFile {
     std::filesystem::path path;
@@ -157,6 +157,13 @@ struct GaussianFile {
             cloud.opacities.push_back(0.3f + 0.3f * float(i));
             for (int c = 0; c < 3; ++c) cloud.sh.push_back(0.2f);
         }
+        // A big faint floater just in front of Gaussian 0 (inside the bounding box below): the first
+        // ellipsoid on Gaussian 0's pixel, but Gaussian 0 contributes more.
+        cloud.positions.emplace_back(-1.0f, 0.0f, 0.3f);
+        cloud.scales.emplace_back(0.3f, 0.3f, 0.3f);
+        cloud.rotations.emplace_back(1.0f, 0.0f, 0.0f, 0.0f);
+        cloud.opacities.push_back(0.08f);
+        for (int c = 0; c < 3; ++c) cloud.sh.push_back(0.2f);
         EXPECT_TRUE(gaussian::write_ply(path, cloud));
         // Bounding box of the centres: x [-1, 1], y [0, 0.2], z [-0.5, 0.3].
         const glm::dvec3 lo(-1, 0, -0.5), hi(1, 0.2, 0.3);
@@ -166,46 +173,76 @@ struct GaussianFile {
     ~GaussianFile() { std::filesystem::remove(path); }
 };
 
-// Independent reference: entry distance of a ray into Gaussian i's ellipsoid (p − c)ᵀ Σ⁻¹ (p − c) = k(α)²,
-// or −1 on a miss.
-double entry_distance(const GaussianCloud& g, std::size_t i, const Ray& ray) {
+// Independent reference for one Gaussian and a ray, from Σ⁻¹ = (R S² Rᵀ)⁻¹: the entry distance into
+// (p − c)ᵀ Σ⁻¹ (p − c) = k(α)² (−1 on a miss), the centre's depth along the ray, and the largest alpha
+// along the line, min(0.99, α exp(−m²/2)) with m² = wᵀΣ⁻¹w − (wᵀΣ⁻¹d)² / dᵀΣ⁻¹d.
+struct RayGaussian {
+    double entry = -1.0, depth = 0.0, alpha = 0.0;
+};
+RayGaussian ray_gaussian(const GaussianCloud& g, std::size_t i, const Ray& ray) {
     const glm::dmat3 R = glm::mat3_cast(glm::dquat(g.rotations[i]));
     const glm::dvec3 s(g.scales[i]);
     const glm::dmat3 inv = glm::inverse(R * glm::dmat3(s.x * s.x, 0, 0, 0, s.y * s.y, 0, 0, 0, s.z * s.z) * glm::transpose(R));
     const double k = gaussian_pick_sigmas(double(g.opacities[i]));
     const glm::dvec3 w = ray.origin - glm::dvec3(g.positions[i]), d = glm::normalize(ray.direction);
     const double a = glm::dot(d, inv * d), b = glm::dot(w, inv * d), c = glm::dot(w, inv * w) - k * k;
-    if (b * b - a * c < 0.0) return -1.0;
-    return (-b - std::sqrt(b * b - a * c)) / a;
+    RayGaussian r;
+    r.depth = -glm::dot(w, d);
+    r.alpha = std::min(0.99, double(g.opacities[i]) * std::exp(-0.5 * (glm::dot(w, inv * w) - b * b / a)));
+    if (b * b - a * c >= 0.0) r.entry = (-b - std::sqrt(b * b - a * c)) / a;
+    return r;
 }
 
-TEST(PickCli, GaussianFileHitsTheNearestGaussianOnThePixelRay) {
-    GaussianFile f;
-    for (std::uint32_t target = 0; target < 3; ++target) {
-        const auto px = project(f.view, glm::dvec3(f.cloud.positions[target]));
-        ASSERT_TRUE(px.has_value());
-        const glm::ivec2 pixel(glm::floor(px->screen));
-        const CliRun r = run_pick(f.path.string() + " --size 320x240 --at " + std::to_string(pixel.x) + "," +
-                                  std::to_string(pixel.y));
-        ASSERT_EQ(r.exit_code, 0) << r.out;
-        const auto j = nlohmann::json::parse(r.out);
-        ASSERT_TRUE(j["hit"].get<bool>()) << r.out;
-        EXPECT_EQ(j["kind"], "gaussian");
-        EXPECT_EQ(j["name"], f.path.filename().string());
-        // Brute force over the three: the nearest entry along the pixel's ray (the target's own ellipsoid
-        // contains its centre's ray, so there is one).
-        const Ray ray = ray_through(f.view, glm::dvec2(pixel) + 0.5);
-        double best = std::numeric_limits<double>::infinity();
-        std::uint32_t best_i = 99;
-        for (std::uint32_t i = 0; i < 3; ++i)
-            if (const double t = entry_distance(f.cloud, i, ray); t >= 0.0 && t < best) best = t, best_i = i;
-        ASSERT_LT(best_i, 3u);
-        EXPECT_EQ(j["index"].get<std::uint32_t>(), best_i) << "pixel of Gaussian " << target;
-        EXPECT_NEAR(j["distance"].get<double>(), best, 1e-4);
-        EXPECT_NEAR(j["opacity"].get<double>(), double(f.cloud.opacities[best_i]), 1e-6);
-        const glm::dvec3 p{j["position"][0].get<double>(), j["position"][1].get<double>(), j["position"][2].get<double>()};
-        EXPECT_NEAR(glm::length(p - (ray.origin + best * glm::normalize(ray.direction))), 0.0, 1e-4);
+// The Gaussian picked along `ray`: nearest entry (first_ellipsoid) or largest blending weight α T in
+// centre-depth order (most_visible). 99 when none.
+std::uint32_t expected_pick(const GaussianCloud& g, const Ray& ray, bool first, double& t) {
+    std::vector<std::pair<RayGaussian, std::uint32_t>> hits;
+    for (std::uint32_t i = 0; i < g.size(); ++i)
+        if (const RayGaussian r = ray_gaussian(g, i, ray); r.entry >= 0.0) hits.emplace_back(r, i);
+    std::uint32_t best = 99;
+    t = std::numeric_limits<double>::infinity();
+    if (first) {
+        for (const auto& [r, i] : hits)
+            if (r.entry < t) t = r.entry, best = i;
+        return best;
     }
+    std::sort(hits.begin(), hits.end(), [](const auto& a, const auto& b) { return a.first.depth < b.first.depth; });
+    double T = 1.0, best_w = 0.0;
+    for (const auto& [r, i] : hits) {
+        if (r.alpha * T > best_w) best_w = r.alpha * T, best = i, t = r.entry;
+        T *= 1.0 - r.alpha;
+    }
+    return best;
+}
+
+TEST(PickCli, GaussianFileHitsTheGaussianOnThePixelRay) {
+    GaussianFile f;
+    int differ = 0;  // pixels where the two rules pick different Gaussians (the file is built to have one)
+    for (const bool first : {false, true}) {
+        for (std::uint32_t target = 0; target < 3; ++target) {
+            const auto px = project(f.view, glm::dvec3(f.cloud.positions[target]));
+            ASSERT_TRUE(px.has_value());
+            const glm::ivec2 pixel(glm::floor(px->screen));
+            const CliRun r = run_pick(f.path.string() + " --size 320x240 --at " + std::to_string(pixel.x) + "," +
+                                      std::to_string(pixel.y) + (first ? " --first-gaussian" : ""));
+            ASSERT_EQ(r.exit_code, 0) << r.out;
+            const auto j = nlohmann::json::parse(r.out);
+            ASSERT_TRUE(j["hit"].get<bool>()) << r.out;
+            EXPECT_EQ(j["kind"], "gaussian");
+            EXPECT_EQ(j["name"], f.path.filename().string());
+            const Ray ray = ray_through(f.view, glm::dvec2(pixel) + 0.5);
+            double t = 0.0, t_other = 0.0;
+            const std::uint32_t expect = expected_pick(f.cloud, ray, first, t);
+            differ += expect != expected_pick(f.cloud, ray, !first, t_other);
+            ASSERT_LT(expect, 4u);
+            EXPECT_EQ(j["index"].get<std::uint32_t>(), expect) << "pixel of Gaussian " << target << (first ? ", first" : "");
+            EXPECT_NEAR(j["distance"].get<double>(), t, 1e-4);
+            EXPECT_NEAR(j["opacity"].get<double>(), double(f.cloud.opacities[expect]), 1e-6);
+            const glm::dvec3 p{j["position"][0].get<double>(), j["position"][1].get<double>(), j["position"][2].get<double>()};
+            EXPECT_NEAR(glm::length(p - (ray.origin + t * glm::normalize(ray.direction))), 0.0, 1e-4);
+        }
+    }
+    EXPECT_GT(differ, 0) << "the scene no longer tells the two rules apart";
     // A corner pixel sees nothing.
     const CliRun miss = run_pick(f.path.string() + " --size 320x240 --at 0,0");
     ASSERT_EQ(miss.exit_code, 0) << miss.out;
