@@ -4,11 +4,37 @@
 #include <cmath>
 
 #include "systems/ffd/components.h"
+#include "systems/ffd/deform.h"
+#include "systems/ffd/deform_inputs.h"
 #include "systems/gaussian/components.h"
 
 namespace sffd::picking {
 
-GaussianSource gaussian_source(const ecs::Registry& registry, ecs::Entity e) {
+namespace {
+
+// Centres and accumulated Jacobians of `cloud` through `lattices` in order (J = J_n ... J_1). False when a
+// lattice is refused (the cache then keeps nothing and the authored cloud is picked).
+bool deform_centres(const ecs::Registry& registry, const std::vector<ecs::Entity>& lattices, const GaussianCloud& cloud,
+                    GaussianDeformCache::Entry& entry) {
+    const std::size_t n = cloud.size();
+    entry.positions = cloud.positions;
+    entry.jacobians.assign(n, glm::mat3(1.0f));
+    std::vector<glm::vec3> moved(n);
+    std::vector<glm::mat3> step(n);
+    for (ecs::Entity le : lattices) {
+        const ffd::PointsIn in{entry.positions.data(), nullptr, nullptr, nullptr, n, cloud.origin};
+        ffd::PointsOut out{moved.data(), nullptr, nullptr, nullptr};
+        out.jacobians = step.data();
+        if (!ffd::deform(registry.get<Lattice>(le), in, out)) return false;
+        entry.positions.swap(moved);
+        for (std::size_t i = 0; i < n; ++i) entry.jacobians[i] = step[i] * entry.jacobians[i];
+    }
+    return true;
+}
+
+}  // namespace
+
+GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity e, GaussianDeformCache& cache) {
     GaussianSource src;
     const GaussianCloud* cloud = registry.try_get<GaussianCloud>(e);
     if (!cloud) return src;
@@ -16,21 +42,45 @@ GaussianSource gaussian_source(const ecs::Registry& registry, ecs::Entity e) {
     const bool consistent = cloud->scales.size() == n && cloud->rotations.size() == n && cloud->opacities.size() == n;
     if (!consistent) return src;  // malformed component: nothing to pick rather than out-of-range reads
     src.opacities = cloud->opacities;
-    const DeformedGaussians* deformed = registry.has<Deformers>(e) ? registry.try_get<DeformedGaussians>(e) : nullptr;
-    const GaussianCloud* g = cloud;
-    if (deformed && deformed->cloud.size() == n && deformed->cloud.scales.size() == n &&
+    src.kind = GaussianSource::Kind::authored;
+    src.version = registry.version<GaussianCloud>(e);
+    src.origin = cloud->origin;
+    src.positions = cloud->positions;
+    src.scales = cloud->scales;
+    src.rotations = cloud->rotations;
+    if (!registry.has<Deformers>(e)) {
+        cache.clouds.erase(e.bits());
+        return src;
+    }
+    const ffd::DeformInputs inputs = ffd::deform_inputs<GaussianCloud>(registry, e);
+    const DeformedGaussians* deformed = registry.try_get<DeformedGaussians>(e);
+    if (deformed && deformed->seen == inputs.stamps && deformed->cloud.size() == n && deformed->cloud.scales.size() == n &&
         deformed->cloud.rotations.size() == n) {
-        g = &deformed->cloud;
+        cache.clouds.erase(e.bits());
         src.kind = GaussianSource::Kind::deformed;
         src.version = registry.version<DeformedGaussians>(e);
-    } else {
-        src.kind = GaussianSource::Kind::authored;
-        src.version = registry.version<GaussianCloud>(e);
+        src.origin = deformed->cloud.origin;
+        src.positions = deformed->cloud.positions;
+        src.scales = deformed->cloud.scales;
+        src.rotations = deformed->cloud.rotations;
+        return src;
     }
-    src.origin = g->origin;
-    src.positions = g->positions;
-    src.scales = g->scales;
-    src.rotations = g->rotations;
+    // Output missing, stale or GPU-only: picking's own centres + Jacobians.
+    auto it = cache.clouds.find(e.bits());
+    if (it == cache.clouds.end() || !(it->second.key == inputs.stamps)) {
+        GaussianDeformCache::Entry entry;
+        entry.key = inputs.stamps;
+        if (!deform_centres(registry, inputs.lattices, *cloud, entry)) {
+            cache.clouds.erase(e.bits());
+            return src;  // a refused lattice: the authored cloud, as the deformation phase would skip it
+        }
+        entry.serial = ++cache.deformations;
+        it = cache.clouds.insert_or_assign(e.bits(), std::move(entry)).first;
+    }
+    src.kind = GaussianSource::Kind::cpu_deformed;
+    src.version = it->second.serial;
+    src.positions = it->second.positions;
+    src.jacobians = it->second.jacobians;
     return src;
 }
 
@@ -45,7 +95,7 @@ double gaussian_pick_sigmas(double opacity) {
 }
 
 PickEllipsoid gaussian_ellipsoid(const glm::dmat4& model, const glm::dvec3& shifted_centre, const glm::vec3& scale,
-                                 const glm::quat& rotation, float opacity) {
+                                 const glm::quat& rotation, float opacity, const glm::mat3& jacobian) {
     PickEllipsoid e;
     const double k = gaussian_pick_sigmas(double(std::min(opacity, 1.0f)));
     const glm::dvec3 s(scale);
@@ -57,12 +107,13 @@ PickEllipsoid gaussian_ellipsoid(const glm::dmat4& model, const glm::dvec3& shif
         return e;
     const glm::dvec3 sc = glm::max(s, glm::dvec3(1e-6 * s_max));
     const glm::dmat3 R = glm::mat3_cast(q / qn);
-    const glm::dmat3 L(model);
+    const glm::dmat3 L = glm::dmat3(model) * glm::dmat3(jacobian);
     const double detL = glm::determinant(L);
-    if (!(std::abs(detL) > 0.0) || !std::isfinite(detL)) return e;
+    if (!(std::abs(detL) > 1e-300) || !std::isfinite(detL)) return e;
     const glm::dmat3 B = L * R * glm::dmat3(sc.x, 0, 0, 0, sc.y, 0, 0, 0, sc.z);  // world axes (columns) × σ
-    // to_unit = B⁻¹ = S⁻¹ Rᵀ L⁻¹.
+    // to_unit = B⁻¹ = S⁻¹ Rᵀ L⁻¹ (L: the model's linear part times the deformation's J).
     e.to_unit = glm::dmat3(1.0 / sc.x, 0, 0, 0, 1.0 / sc.y, 0, 0, 0, 1.0 / sc.z) * glm::transpose(R) * glm::inverse(L);
+    if (!std::isfinite(e.to_unit[0][0] + e.to_unit[1][1] + e.to_unit[2][2])) return e;
     e.centre = glm::dvec3(model * glm::dvec4(shifted_centre, 1.0));
     // Half extent along world axis j: k |row j of B| (support function of the ellipsoid B·ball(k)).
     for (int j = 0; j < 3; ++j) e.half_extent[j] = k * glm::length(glm::dvec3(B[0][j], B[1][j], B[2][j]));

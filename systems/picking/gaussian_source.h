@@ -3,8 +3,14 @@
 //
 // Source, in this order:
 //   1. the deformation's CPU output (DeformedGaussians, written by systems/gaussian's deformation phase)
-//      when the entity has Deformers and the output has one Gaussian per authored one;
-//   2. the authored GaussianCloud.
+//      when the entity has Deformers and the output is current (its `seen` stamps equal the inputs') and
+//      has one Gaussian per authored one;
+//   2. an entity with Deformers whose output is missing, stale or not on the CPU: picking's own
+//      deformation of what it needs, centres and Jacobians through every lattice in order
+//      (ffd::deform with PointsOut::jacobians, the cheap part of the Gaussian deformation: no
+//      eigen-decomposition, no SH), kept in GaussianDeformCache keyed by the input stamps and computed only
+//      when a pick needs it; the ellipsoid is then {c' + J R S x : |x| <= k};
+//   3. the authored GaussianCloud.
 // Opacities are always the authored cloud's (a deformation does not change them and does not copy them).
 //
 // The pickable shape of a Gaussian with opacity α is the ellipsoid where its 3DGS alpha
@@ -18,25 +24,41 @@
 
 #include <cstdint>
 #include <span>
+#include <unordered_map>
+#include <vector>
 
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
 #include "runtime/ecs/registry.h"
+#include "systems/ffd/components.h"  // DeformInputStamps
 
 namespace sffd::picking {
 
 struct GaussianSource {
-    enum class Kind : int { none = 10, authored, deformed };  // disjoint from SplatSource::Kind
+    enum class Kind : int { none = 10, authored, deformed, cpu_deformed };  // disjoint from SplatSource::Kind
     Kind kind = Kind::none;
-    std::uint64_t version = 0;  // change stamp of the data component
+    std::uint64_t version = 0;  // identifies the data (a change stamp, or the cache entry's serial)
     glm::dvec3 origin{0.0};     // positions are relative to this (entity space)
     std::span<const glm::vec3> positions, scales;
     std::span<const glm::quat> rotations;
     std::span<const float> opacities;
+    std::span<const glm::mat3> jacobians;  // cpu_deformed only: the deformation's J per Gaussian
 };
 
-GaussianSource gaussian_source(const ecs::Registry& registry, ecs::Entity cloud);
+// Picking's own CPU deformations of Gaussian clouds (per entity bits).
+struct GaussianDeformCache {
+    struct Entry {
+        DeformInputStamps key;
+        std::uint64_t serial = 0;
+        std::vector<glm::vec3> positions;
+        std::vector<glm::mat3> jacobians;
+    };
+    std::unordered_map<std::uint64_t, Entry> clouds;
+    std::uint64_t deformations = 0;  // CPU deformations run (tests check they stay lazy)
+};
+
+GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity cloud, GaussianDeformCache& cache);
 
 // Changes whenever GaussianCloud or DeformedGaussians storage changes.
 std::uint64_t gaussian_source_storage_version(const ecs::Registry& registry);
@@ -55,10 +77,11 @@ struct PickEllipsoid {
 };
 
 // The ellipsoid of Gaussian (position, scale, rotation, opacity) under the model matrix `model`
-// (`shifted_centre` = origin + position, entity space). nullopt-like: k == 0 when not pickable. Zero
-// scales (flat Gaussians) are raised to 1e-6 of the largest scale so the ellipsoid stays invertible.
+// (`shifted_centre` = origin + position, entity space), its axes first mapped by `jacobian` (a
+// deformation's J; identity for none). k == 0 when not pickable (also for a singular J). Zero scales
+// (flat Gaussians) are raised to 1e-6 of the largest scale so the ellipsoid stays invertible.
 PickEllipsoid gaussian_ellipsoid(const glm::dmat4& model, const glm::dvec3& shifted_centre, const glm::vec3& scale,
-                                 const glm::quat& rotation, float opacity);
+                                 const glm::quat& rotation, float opacity, const glm::mat3& jacobian = glm::mat3(1.0f));
 
 // Ray parameter t ∈ [tnear, tfar] where the ray (origin, direction) enters the ellipsoid (or leaves it,
 // when the origin is inside); negative when it misses. Double precision, independent of Embree.

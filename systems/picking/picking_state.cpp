@@ -222,8 +222,9 @@ std::vector<GeomRecord::Ellipsoid> gaussian_ellipsoids(const GaussianSource& src
     std::vector<std::uint8_t> keep(n, 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
         for (std::size_t i = range.begin(); i < range.end(); ++i) {
-            const PickEllipsoid e = gaussian_ellipsoid(model, src.origin + glm::dvec3(src.positions[i]), src.scales[i],
-                                                       src.rotations[i], src.opacities[i]);
+            const PickEllipsoid e =
+                gaussian_ellipsoid(model, src.origin + glm::dvec3(src.positions[i]), src.scales[i], src.rotations[i],
+                                   src.opacities[i], src.jacobians.empty() ? glm::mat3(1.0f) : src.jacobians[i]);
             if (e.k <= 0.0) continue;
             const glm::mat3 to_unit(e.to_unit);
             const glm::vec3 c(e.centre - anchor);
@@ -365,6 +366,7 @@ struct PickingState::Impl {
     std::array<std::uint64_t, 5> seen{~0ull, ~0ull, ~0ull, ~0ull, ~0ull};
     double seen_fraction = -1.0;
     DeformCache deform_cache;  // CPU deformations of clouds whose deformed output is GPU-only
+    GaussianDeformCache gaussian_cache;  // centres + Jacobians of Gaussian clouds without a current CPU output
     Stats stats;
 
     Impl() : device(create_device()), surfaces(create_scene(device)), controls(create_scene(device)) {
@@ -419,6 +421,7 @@ bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
         const ecs::Entity e = it->second->entity;
         if (!registry.valid(e) || !registry.has<GaussianCloud>(e)) {
             gaussian_ids.erase(it->second->id);
+            gaussian_cache.clouds.erase(e.bits());
             auto doomed = it++;
             release_geometry(surfaces, gaussian_records, doomed);
             ++stats.geometries_released;
@@ -428,7 +431,7 @@ bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
         }
     }
     for (auto [e, cloud] : registry.view<const GaussianCloud>()) {
-        const GaussianSource src = gaussian_source(registry, e);
+        const GaussianSource src = gaussian_source(registry, e, gaussian_cache);
         const glm::dmat4 model = model_matrix(registry.try_get<Transform>(e));
         if (!anchored && !src.positions.empty()) {
             anchor = glm::dvec3(model * glm::dvec4(src.origin, 1.0));
@@ -464,6 +467,7 @@ bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
         it->second->stamp = stamp;
         changed = true;
     }
+    stats.gaussian_cpu_deformations = gaussian_cache.deformations;
     return changed;
 }
 

@@ -52,6 +52,7 @@ public:
         std::uint64_t geometries_updated = 0; // in-place buffer updates (same entity, data moved)
         std::uint64_t geometries_released = 0;
         std::uint64_t cpu_deformations = 0;   // clouds deformed on the CPU by picking (GPU-only output)
+        std::uint64_t gaussian_cpu_deformations = 0;  // Gaussian clouds' centres + Jacobians computed by picking
     };
     const Stats& stats() const;
 

@@ -11,8 +11,8 @@
 //   {"hit":false,"pixel":[X,Y]}
 // SCENE may be a 3D Gaussian file (3DGS PLY, .splat, SPZ, KHR glb): one Gaussian-cloud entity, seen
 // through the camera `splatffd render` frames it with; Gaussians are picked as the ellipsoids where
-// their 3DGS alpha reaches 1/255 (systems/picking/gaussian_source.h). Scenes holding Gaussian clouds
-// with lattices run the Gaussian deformation phase first, so picks follow the deformation.
+// their 3DGS alpha reaches 1/255 (systems/picking/gaussian_source.h). Deformed scenes are picked as
+// deformed: picking computes what it needs (splats: the FFD CPU path; Gaussians: centres + Jacobians).
 // A miss is an answer, not an error: exit 0 (scripts test "hit"). Exit 1: the scene cannot be loaded;
 // exit 2: usage. Deformed scenes are picked as deformed (picking deforms on the CPU).
 #include <cmath>
@@ -26,7 +26,6 @@
 #include "systems/ffd/components.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_io.h"
-#include "systems/gaussian/gaussian_system.h"
 #include "systems/picking/picking_system.h"
 #include "systems/splat_render/camera_math.h"
 #include "tools/splatffd/command.h"
@@ -154,9 +153,6 @@ int run_pick(sffd::cli::Args args) {
         }
         camera = render::scene_camera(registry, w / h);
     }
-    // The deformation phase for Gaussian clouds (CPU; nothing to do without them). Surface splats need
-    // no such step: picking deforms them on demand.
-    gaussian_deform_system(registry, FrameContext{});
     const glm::ivec2 size{int(w), int(h)};
     const picking::ScreenView view = picking::make_screen_view(camera, size);
     picking::PickQuery query = picking::query_at_pixel(view, {x + 0.5, y + 0.5});

@@ -276,6 +276,8 @@ TEST(PickingGaussians, PicksFollowTheDeformation) {
     ASSERT_TRUE(rest_point.has_value());
     EXPECT_NEAR(glm::length(*rest_point - glm::dvec3(0.5)), 0.0, 1e-6);
 
+    EXPECT_EQ(state.stats().gaussian_cpu_deformations, 0u);  // the deformation phase output was current
+
     // Without Deformers, the authored cloud is picked again.
     reg.remove<Deformers>(e);
     const PickHit authored = pick(reg, state, along_x);
@@ -359,6 +361,83 @@ TEST(PickingGaussians, OnlyGaussiansCoveringHalfThePixelHideControlPoints) {
     EXPECT_TRUE(state.surface_between({0, 0, 10}, {0, 0, 0}));   // alpha 0.6
     // Off-centre by 0.3 = 1 σ: alpha 0.6 e^-0.5 = 0.36 < 0.5.
     EXPECT_FALSE(state.surface_between({0.3, 0, 10}, {0.3, 0, 0}));
+}
+
+// Without a current DeformedGaussians (the phase did not run, ran before the last edit, or its output is
+// GPU-only), picking deforms centres and Jacobians itself, once per change of its inputs.
+TEST(PickingGaussians, PicksFollowTheLatticeWithoutTheDeformationPhase) {
+    ecs::Registry reg;
+    const ecs::Entity lattice = reg.create();
+    reg.emplace<Lattice>(lattice, test::box_lattice({0, 0, 0}, {1, 1, 1}, {2, 2, 2}));
+    const ecs::Entity e = reg.create();
+    reg.emplace<GaussianCloud>(e, cloud_of({{{0.5, 0.5, 0.5}, {0.05f, 0.05f, 0.05f}}}));
+    reg.emplace<Deformers>(e, Deformers{{lattice}});
+    for (glm::dvec3& p : reg.patch<Lattice>(lattice).current) p.x *= 2.0;  // x' = 2x
+    PickingState state;
+    PickQuery along_x = ray_query({5, 0.5, 0.5}, {-1, 0, 0});
+    along_x.control_points = false;
+    EXPECT_NEAR(pick(reg, state, along_x).distance, 4.0 - 0.1 * k1, 1e-5);
+    EXPECT_EQ(state.stats().gaussian_cpu_deformations, 1u);
+    pick(reg, state, along_x);
+    EXPECT_EQ(state.stats().gaussian_cpu_deformations, 1u);  // nothing moved: no new deformation
+    // The phase runs: its output is used (no picking deformation); then a later edit makes it stale.
+    gaussian_deform_system(reg, FrameContext{});
+    EXPECT_NEAR(pick(reg, state, along_x).distance, 4.0 - 0.1 * k1, 1e-5);
+    EXPECT_EQ(state.stats().gaussian_cpu_deformations, 1u);
+    for (glm::dvec3& p : reg.patch<Lattice>(lattice).current) p.x *= 1.5;  // x' = 3x, DeformedGaussians stale
+    EXPECT_NEAR(pick(reg, state, along_x).distance, 3.5 - 0.15 * k1, 1e-5);
+    EXPECT_EQ(state.stats().gaussian_cpu_deformations, 2u);
+}
+
+// Two independent routes to the deformed ellipsoid under a non-linear (twisted, stretched) lattice:
+// picking's J R S axes versus the deformation phase's Σ' = J Σ Jᵀ re-factored as scale + rotation.
+// Random rays must meet both at the same distances.
+TEST(PickingGaussians, OwnJacobianEllipsoidsMatchTheDeformationPhase) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    std::vector<G> gs;
+    for (int i = 0; i < 40; ++i)
+        gs.push_back({{0.2 + 0.6 * u(rng), 0.2 + 0.6 * u(rng), 0.2 + 0.6 * u(rng)},
+                      {float(0.01 + 0.03 * u(rng)), float(0.01 + 0.03 * u(rng)), float(0.005 + 0.01 * u(rng))},
+                      glm::normalize(glm::quat(float(u(rng) - 0.5), float(u(rng) - 0.5), float(u(rng) - 0.5), float(u(rng) - 0.5))),
+                      float(0.3 + 0.7 * u(rng))});
+    auto scene = [&](ecs::Registry& reg) {
+        const ecs::Entity lattice = reg.create();
+        Lattice l = test::box_lattice({0, 0, 0}, {1, 1, 1}, {3, 3, 3});
+        for (glm::dvec3& p : l.current) {
+            const double a = 0.8 * (p.y - 0.5);  // twist about the vertical axis through (0.5, ·, 0.5)
+            const glm::dvec3 d = p - glm::dvec3(0.5, p.y, 0.5);
+            p = glm::dvec3(0.5 + 1.4 * (std::cos(a) * d.x + std::sin(a) * d.z), p.y, 0.5 - std::sin(a) * d.x + std::cos(a) * d.z);
+        }
+        reg.emplace<Lattice>(lattice, l);
+        const ecs::Entity e = reg.create();
+        reg.emplace<GaussianCloud>(e, cloud_of(gs));
+        reg.emplace<Deformers>(e, Deformers{{lattice}});
+    };
+    ecs::Registry own, phase;
+    scene(own);
+    scene(phase);
+    gaussian_deform_system(phase, FrameContext{});
+    PickingState s_own, s_phase;
+    own.set_resource<PickSettings>(PickSettings{0.08, GaussianPick::first_ellipsoid});
+    phase.set_resource<PickSettings>(PickSettings{0.08, GaussianPick::first_ellipsoid});
+    int hits = 0;
+    for (int r = 0; r < 400; ++r) {
+        const glm::dvec3 o(-1.0, u(rng), u(rng));
+        const glm::dvec3 d = glm::normalize(glm::dvec3(0.0 + 1.5, u(rng), u(rng)) - o);
+        PickQuery q = ray_query(o, d);
+        q.control_points = false;
+        const PickHit a = pick(own, s_own, q), b = pick(phase, s_phase, q);
+        ASSERT_EQ(a.kind, b.kind) << r;
+        if (a.kind != PickKind::gaussian) continue;
+        ++hits;
+        EXPECT_EQ(a.index, b.index) << r;
+        EXPECT_NEAR(a.distance, b.distance, 2e-5) << r;
+    }
+    EXPECT_EQ(s_own.stats().gaussian_cpu_deformations, 1u);
+    EXPECT_EQ(s_phase.stats().gaussian_cpu_deformations, 0u);
+    std::printf("own Jacobians vs deformation phase: %d of 400 rays hit\n", hits);
+    EXPECT_GT(hits, 20);
 }
 
 }  // namespace
