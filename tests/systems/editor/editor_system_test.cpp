@@ -14,6 +14,7 @@
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform.h"
+#include "systems/gaussian/components.h"
 #include "systems/picking/components.h"
 #include "systems/splat_render/splat_render.h"
 
@@ -401,4 +402,19 @@ TEST(EditorSystem, PreviewWhileDraggingRefinesToHqAtRest) {
     p.run({Scene::move({300, 300}), Scene::press(0, MouseButton::right), Scene::move({350, 300})});
     for (int f = 0; f < 12; ++f) p.run({});
     EXPECT_EQ(ps.quality, render::Quality::preview);
+}
+
+// A click on a 3D Gaussian (issue 17) selects its cloud entity, through the same picking phase.
+TEST(EditorSystem, ClickOnAGaussianSelectsItsCloud) {
+    Scene s;
+    const ecs::Entity blob = s.reg.create();
+    GaussianCloud& g = s.reg.emplace<GaussianCloud>(blob);
+    g.positions.emplace_back(2.0f, 0.0f, 0.0f);  // beside the lattice, in view
+    g.scales.emplace_back(0.2f, 0.2f, 0.2f);
+    g.rotations.emplace_back(1.0f, 0.0f, 0.0f, 0.0f);
+    g.opacities.push_back(1.0f);
+    g.sh = {0.3f, 0.3f, 0.3f};
+    s.click(glm::dvec2(project_to_pixel(s.camera(), s.state->viewport, glm::dvec3(2.0, 0.0, 0.0))));
+    EXPECT_EQ(s.state->selected_entity, blob);
+    EXPECT_TRUE(s.selection().empty());
 }
