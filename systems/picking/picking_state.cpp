@@ -233,11 +233,12 @@ std::vector<GeomRecord::Ellipsoid> gaussian_ellipsoids(const GaussianSource& src
             keep[i] = 1;
         }
     });
-    std::vector<GeomRecord::Ellipsoid> out;
-    out.reserve(n);
+    // Compact in place (no second n-sized array at the peak).
+    std::size_t kept = 0;
     for (std::size_t i = 0; i < n; ++i)
-        if (keep[i]) out.push_back(all[i]);
-    return out;
+        if (keep[i]) all[kept++] = all[i];
+    all.resize(kept);
+    return all;
 }
 
 // Fills (or refills) a point cloud's geometry buffers from its splats, in world space minus the anchor.
