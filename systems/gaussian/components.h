@@ -52,9 +52,12 @@ constexpr int sh_coeffs(int degree) { return (degree + 1) * (degree + 1); }
 // Deformers: same layout as GaussianCloud (opacities are unchanged by a deformation and not copied).
 // Covariance Σ' = J Σ Jᵀ stored back as scale + rotation; SH rotated by the polar rotation of J.
 struct DeformedGaussians {
-    GaussianCloud cloud;               // opacities left empty: read the authored cloud's
-    std::size_t inverted = 0;          // Gaussians whose Jacobian has det < 0
-    std::size_t degenerate = 0;        // Gaussians whose Jacobian is (near) singular
+    GaussianCloud cloud;               // opacities left empty: read the authored cloud's; EMPTY when on_gpu
+    bool on_gpu = false;               // the GPU pass wrote GpuGaussianStore::clouds[e].deformed (+ frames)
+                                       // and no CPU copy exists (gpu_deform.h read_back() makes one)
+    bool seen_force_cpu = false;       // the backend choice this output was made with (a switch re-runs)
+    std::size_t inverted = 0;          // Gaussians whose Jacobian has det < 0 (CPU path; GPU: 0, see README)
+    std::size_t degenerate = 0;        // Gaussians whose Jacobian is (near) singular (same)
     std::uint64_t version = 0;         // bumped on every rewrite
 
     // Change stamps this output was computed from (the system skips unchanged clouds).

@@ -1,16 +1,63 @@
 #include "systems/gaussian/gaussian_system.h"
 
+#include <optional>
 #include <vector>
 
+#include <EGL/egl.h>
+#include <GLFW/glfw3.h>
+
+#include "runtime/app/pass_timer.h"
 #include "runtime/core/log.h"
+#include "runtime/gfx/context.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform_inputs.h"
+#include "systems/ffd/ffd_system.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
+#include "systems/gaussian/gpu_deform.h"
+#include "systems/gaussian/gpu_store.h"
 
 namespace sffd {
 
+namespace {
+
+// The system's GPU state (a registry resource: its GL objects live as long as the registry's).
+struct GaussianGpuState {
+    std::optional<gaussian::GpuGaussianDeformer> deformer;
+    bool unavailable = false;  // compile failed once: stay on the CPU path
+};
+
+bool gl_context_current() { return eglGetCurrentContext() != EGL_NO_CONTEXT || glfwGetCurrentContext() != nullptr; }
+
+gaussian::GpuGaussianDeformer* gpu_deformer(ecs::Registry& reg) {
+    auto* st = reg.try_resource<GaussianGpuState>();
+    if (!st) st = &reg.set_resource<GaussianGpuState>();
+    if (st->unavailable) return nullptr;
+    if (!st->deformer) {
+        auto d = gaussian::GpuGaussianDeformer::create();
+        if (!d) {
+            log::warn("gaussian_deform_system: GPU path unavailable, deforming on the CPU (", d.message(), ")");
+            st->unavailable = true;
+            return nullptr;
+        }
+        st->deformer.emplace(std::move(*d));
+    }
+    return &*st->deformer;
+}
+
+}  // namespace
+
+void gaussian_release_gpu(ecs::Registry& registry) { registry.erase_resource<GaussianGpuState>(); }
+
 void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
+    // The backend choice of ffd_system (systems/ffd/ffd_system.h): GPU when a GL context is current,
+    // except on a software rasterizer (llvmpipe runs the "GPU" on the same CPU cores, slower than the
+    // TBB path) unless FfdSettings::force_gpu; never with FfdSettings::force_cpu.
+    const FfdSettings* settings = reg.try_resource<FfdSettings>();
+    GaussianDeformCounters* counters = reg.try_resource<GaussianDeformCounters>();
+    const bool force_gpu = settings && settings->force_gpu;
+    const bool have_gl = gl_context_current();
+    const bool force_cpu = (settings && settings->force_cpu) || (have_gl && !force_gpu && gfx::software_rasterizer());
     // Collect first: emplacing DeformedGaussians while iterating is a structural change.
     std::vector<ecs::Entity> clouds;
     reg.view<const GaussianCloud, const Deformers>().each(
@@ -20,12 +67,50 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         const ffd::DeformInputs inputs = ffd::deform_inputs<GaussianCloud>(reg, e);
         const std::vector<ecs::Entity>& lattices = inputs.lattices;
         const DeformedGaussians* seen = reg.try_get<DeformedGaussians>(e);
-        if (seen && seen->seen == inputs.stamps) continue;  // nothing this cloud depends on moved
+        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu) continue;  // nothing moved
         if (!seen) reg.emplace<DeformedGaussians>(e);
         DeformedGaussians& out = reg.patch<DeformedGaussians>(e);
         out.seen = inputs.stamps;
+        out.seen_force_cpu = force_cpu;
         out.inverted = out.degenerate = 0;
         ++out.version;
+
+        // GPU path: the authored cloud goes to GpuGaussianStore::rest when its change stamp moved (the
+        // only per-Gaussian CPU work, once per cloud change), then one dispatch per lattice into
+        // `deformed` (+ `frames`: ShMode::rotate_view when the SH have view-dependent terms). No read-back.
+        if (have_gl && !force_cpu) {
+            if (gaussian::GpuGaussianDeformer* gpu = gpu_deformer(reg)) {
+                auto* store = reg.try_resource<gaussian::GpuGaussianStore>();
+                if (!store) store = &reg.set_resource<gaussian::GpuGaussianStore>();
+                gaussian::GpuGaussians& g = store->clouds[e];
+                Status up;
+                if (!g.rest || g.rest_version != inputs.stamps.cloud || g.count != cloud.size()) {
+                    up = gaussian::upload_rest(g, cloud, inputs.stamps.cloud);
+                    if (counters) ++counters->rest_uploads;
+                }
+                if (up) {
+                    std::vector<const Lattice*> ls;
+                    std::vector<std::uint64_t> keys;
+                    for (ecs::Entity le : lattices) ls.push_back(&reg.get<Lattice>(le)), keys.push_back(le.bits());
+                    auto pass_scope = profiling::gpu_scope(reg, "gaussian.deform");
+                    if (Status s = gpu->deform(g, cloud.origin, ls, keys, inputs.stamps.lattices, cloud.sh_degree > 0); !s)
+                        log::warn("gaussian_deform_system: ", s.message(), " (lattice skipped)");
+                    out.on_gpu = true;
+                    out.cloud = GaussianCloud{};
+                    out.cloud.origin = cloud.origin;
+                    out.cloud.sh_degree = cloud.sh_degree;
+                    if (counters) ++counters->gpu_runs, counters->gpu_sync_readbacks = gpu->sync_readbacks();
+                    continue;
+                }
+                log::warn("gaussian_deform_system: ", up.message(), " (deforming on the CPU)");
+            }
+        }
+
+        // CPU path (TBB): SH coefficients rotated per band (ShMode::rotate_coefficients).
+        out.on_gpu = false;
+        if (auto* store = reg.try_resource<gaussian::GpuGaussianStore>())
+            if (auto it = store->clouds.find(e); it != store->clouds.end())
+                it->second.has_deformed = it->second.deformed_on_gpu = it->second.has_frames = it->second.has_deformed_sh = false;
         // Opacities are not copied (a deformation never changes them): readers use the authored cloud's.
         out.cloud.origin = cloud.origin;
         out.cloud.sh_degree = cloud.sh_degree;
@@ -34,6 +119,7 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         out.cloud.rotations = cloud.rotations;
         out.cloud.sh = cloud.sh;
         out.cloud.opacities.clear();
+        out.cloud.sh_frames.clear();
         for (ecs::Entity le : lattices) {
             auto stats = gaussian::deform(reg.get<Lattice>(le), out.cloud, out.cloud, ffd::Backend::automatic, false);
             if (!stats) {
@@ -43,6 +129,7 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
             out.inverted += stats->inverted;
             out.degenerate += stats->degenerate;
         }
+        if (counters) ++counters->cpu_runs;
     }
 }
 
