@@ -13,6 +13,10 @@
 //   frames  (FFD_GAUSS_FRAMES) the rotation R_p of the polar decomposition J = R_p U, composed onto the
 //           previous deformer's frame: frames[3i + c] = column c (the SH are evaluated at frameᵀ d).
 //           Near-singular J (|det J| <= 1e-12 ‖J‖_F³, the CPU's rule) keeps the previous frame.
+//   SH      (ShMode::rotate_coefficients, flag 4) the coefficients rotated by R_p per band, as the CPU's
+//           sh_rotation (systems/gaussian/sh.cpp): band l's function is evaluated at its 2l+1 sample
+//           directions turned by R_pᵀ and mapped back to coefficients by A_l⁻¹ (tables in sh_tab[]).
+//           Unmoved and near-singular Gaussians keep their coefficients.
 // Opacity is carried. A result that is not finite (a degenerate or overflowing lattice) is never left
 // for the renderer to compare against NaN: the Gaussian is written with opacity 0, scale 0 and its input
 // centre, and stats[2] counts it. Finiteness is tested on the IEEE exponent bits, which no fast-math
@@ -29,10 +33,78 @@ layout(local_size_x = FFD_LOCAL_SIZE) in;
 layout(std430, binding = SFFD_GAUSS_SSBO_IN) readonly buffer GaussiansIn { GpuGaussian g_in[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_DEFORMED) writeonly buffer GaussiansOut { GpuGaussian g_out[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_FRAMES) buffer Frames { vec4 frames[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_SH) readonly buffer ShIn { float sh_in[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_DEFORMED_SH) writeonly buffer ShOut { float sh_out[]; };
+// sh_tab: band 1..3 sample directions (3 + 5 + 7, xyz each: floats 0..44), then A_1⁻¹ (45..53), A_2⁻¹
+// (54..78), A_3⁻¹ (79..127), row-major.
+layout(std430, binding = SFFD_GAUSS_SSBO_SH_TABLES) readonly buffer ShTables { float sh_tab[]; };
 layout(std430, binding = SFFD_SSBO_STATS) buffer Stats { uint stats[]; };  // [0] inverted, [1] inside, [2] not finite, [3] singular
 
-// Bit 0: write frames; bit 1: the frames buffer holds the previous deformer's frames (compose), else start at I.
+// Bit 0: write frames; bit 1: the frames buffer holds the previous deformer's frames (compose), else start
+// at I; bit 2: rotate the SH coefficients sh_in -> sh_out (the same buffer after the first deformer).
 layout(location = 0) uniform uint u_flags;
+layout(location = 1) uniform int u_sh_degree;
+
+// Band l (1..3) of the 3DGS SH basis at d (systems/gaussian/sh.h, same constants and order).
+void sh_band(int l, vec3 d, out float y[7]) {
+    float x = d.x, yy_ = d.y, z = d.z;
+    if (l == 1) {
+        y[0] = -0.4886025119029199 * yy_; y[1] = 0.4886025119029199 * z; y[2] = -0.4886025119029199 * x;
+        return;
+    }
+    float xx = x * x, yy = yy_ * yy_, zz = z * z;
+    if (l == 2) {
+        y[0] = 1.0925484305920792 * x * yy_;
+        y[1] = -1.0925484305920792 * yy_ * z;
+        y[2] = 0.31539156525252005 * (2.0 * zz - xx - yy);
+        y[3] = -1.0925484305920792 * x * z;
+        y[4] = 0.5462742152960396 * (xx - yy);
+        return;
+    }
+    y[0] = -0.5900435899266435 * yy_ * (3.0 * xx - yy);
+    y[1] = 2.890611442640554 * x * yy_ * z;
+    y[2] = -0.4570457994644658 * yy_ * (4.0 * zz - xx - yy);
+    y[3] = 0.3731763325901154 * z * (2.0 * zz - 3.0 * xx - 3.0 * yy);
+    y[4] = -0.4570457994644658 * x * (4.0 * zz - xx - yy);
+    y[5] = 1.445305721320277 * z * (xx - yy);
+    y[6] = -0.5900435899266435 * x * (xx - 3.0 * yy);
+}
+
+// Coefficients of Gaussian id: rotated by r (D_l c = A_l⁻¹ [f_l(rᵀ d_j)]_j per band) when `rotate`, else copied.
+void sh_write(uint id, int degree, bool rotate, mat3 r) {
+    int K = (degree + 1) * (degree + 1);
+    uint base = id * uint(K) * 3u;
+    vec3 c[16];
+    for (int k = 0; k < K; ++k) c[k] = vec3(sh_in[base + 3u * uint(k)], sh_in[base + 3u * uint(k) + 1u], sh_in[base + 3u * uint(k) + 2u]);
+    if (rotate) {
+        mat3 rt = transpose(r);
+        int dir0 = 0, inv0 = 45;
+        for (int l = 1; l <= degree; ++l) {
+            int n = 2 * l + 1, first = l * l;
+            vec3 v[7];
+            for (int j = 0; j < n; ++j) {
+                int t = 3 * (dir0 + j);
+                float y[7];
+                sh_band(l, rt * vec3(sh_tab[t], sh_tab[t + 1], sh_tab[t + 2]), y);
+                vec3 f = vec3(0.0);
+                for (int m = 0; m < n; ++m) f += y[m] * c[first + m];
+                v[j] = f;
+            }
+            for (int row = 0; row < n; ++row) {
+                vec3 o = vec3(0.0);
+                for (int j = 0; j < n; ++j) o += sh_tab[inv0 + row * n + j] * v[j];
+                c[first + row] = o;  // band l's inputs are all in v[] already
+            }
+            dir0 += n;
+            inv0 += n * n;
+        }
+    }
+    for (int k = 0; k < K; ++k) {
+        sh_out[base + 3u * uint(k)] = c[k].x;
+        sh_out[base + 3u * uint(k) + 1u] = c[k].y;
+        sh_out[base + 3u * uint(k) + 2u] = c[k].z;
+    }
+}
 
 bool finite_f(float x) { return (floatBitsToUint(x) & 0x7f800000u) != 0x7f800000u; }
 bool finite_v(vec4 v) { return finite_f(v.x) && finite_f(v.y) && finite_f(v.z) && finite_f(v.w); }
@@ -135,6 +207,9 @@ bool polar_rotation(mat3 j, out mat3 r) {
         x = next;
         if (change <= 1e-13 * 3.0) break;
     }
+    bool finite = true;
+    for (int c = 0; c < 3; ++c) finite = finite && finite_v(vec4(x[c], 0.0));
+    if (!finite) return false;
     r = x;
     return true;
 }
@@ -160,6 +235,7 @@ void main() {
     if (id >= ffd_count.x) return;
     const bool want_frames = (u_flags & 1u) != 0u;
     const bool compose = (u_flags & 2u) != 0u;
+    const bool want_coefficients = (u_flags & 4u) != 0u;
     GpuGaussian g = g_in[id];
     mat3 prev_frame = mat3(1.0);
     if (want_frames && compose) prev_frame = mat3(frames[3u * id].xyz, frames[3u * id + 1u].xyz, frames[3u * id + 2u].xyz);
@@ -170,6 +246,7 @@ void main() {
     if (culled) {  // not moved: copied unchanged, frames start at identity
         g_out[id] = g;
         if (want_frames && !compose) write_frame(id, mat3(1.0));
+        if (want_coefficients) sh_write(id, u_sh_degree, false, mat3(1.0));
         return;
     }
     vec3 D;
@@ -179,6 +256,8 @@ void main() {
     GpuGaussian o = g;
     o.pos_opacity.xyz = g.pos_opacity.xyz + D;
     mat3 frame = prev_frame;
+    bool rotated = false;
+    mat3 polar = mat3(1.0);
     if (J != mat3(1.0)) {  // J = I exactly (as the CPU tests it): shape and frame unchanged
         float det = determinant(J);
         if (det < 0.0) atomicAdd(stats[0], 1u);
@@ -199,8 +278,10 @@ void main() {
         }
         o.rotation = mat3_to_quat(axes);
         o.scale = vec4(scale, g.scale.w);
-        mat3 r;
-        if (want_frames && !singular && polar_rotation(J, r)) frame = r * prev_frame;
+        if ((want_frames || want_coefficients) && !singular && polar_rotation(J, polar)) {
+            rotated = true;
+            frame = polar * prev_frame;
+        }
     }
     bool ok = finite_v(o.pos_opacity) && finite_v(o.rotation) && finite_v(o.scale) &&
               finite_v(vec4(frame[0], frame[1].x)) && finite_v(vec4(frame[1].yz, frame[2].xy)) && finite_f(frame[2].z);
@@ -213,4 +294,5 @@ void main() {
     }
     g_out[id] = o;
     if (want_frames) write_frame(id, frame);
+    if (want_coefficients) sh_write(id, u_sh_degree, rotated && ok, polar);
 }

@@ -13,6 +13,8 @@
 // The GPU deformation (shaders/gaussian/deform.comp) reads SFFD_GAUSS_SSBO_IN, writes this one and
 // SFFD_GAUSS_SSBO_FRAMES; it also uses the ffd pass's points 2 (control points) and 6 (statistics).
 #define SFFD_GAUSS_SSBO_DEFORMED  7   // GpuGaussian[]: deformed Gaussians (may be the same buffer as IN)
+#define SFFD_GAUSS_SSBO_DEFORMED_SH 8 // float[]: rotated SH coefficients (ShMode::rotate_coefficients), SH layout
+#define SFFD_GAUSS_SSBO_SH_TABLES 9   // float[128]: SH rotation tables (sh_sample_tables: 15 directions, A_l⁻¹)
 
 // GpuGaussian, std430, 48 bytes:
 //   vec4 pos_opacity;  // xyz centre relative to the origin, w linear opacity

@@ -56,6 +56,7 @@ struct DeformedGaussians {
     bool on_gpu = false;               // the GPU pass wrote GpuGaussianStore::clouds[e].deformed (+ frames)
                                        // and no CPU copy exists (gpu_deform.h read_back() makes one)
     bool seen_force_cpu = false;       // the backend choice this output was made with (a switch re-runs)
+    std::uint8_t seen_sh_mode = 0;     // the gaussian::ShMode it used (GaussianDeformSettings; a switch re-runs)
     std::size_t inverted = 0;          // Gaussians whose Jacobian has det < 0 (CPU path; GPU: 0, see README)
     std::size_t degenerate = 0;        // Gaussians whose Jacobian is (near) singular (same)
     std::uint64_t version = 0;         // bumped on every rewrite

@@ -54,7 +54,9 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
     // except on a software rasterizer (llvmpipe runs the "GPU" on the same CPU cores, slower than the
     // TBB path) unless FfdSettings::force_gpu; never with FfdSettings::force_cpu.
     const FfdSettings* settings = reg.try_resource<FfdSettings>();
-    GaussianDeformCounters* counters = reg.try_resource<GaussianDeformCounters>();
+    GaussianDeformSettings* counters = reg.try_resource<GaussianDeformSettings>();
+    const gaussian::ShMode gpu_sh = counters ? counters->gpu_sh : gaussian::ShMode::rotate_view;
+    const gaussian::ShMode cpu_sh = counters ? counters->cpu_sh : gaussian::ShMode::rotate_coefficients;
     const bool force_gpu = settings && settings->force_gpu;
     const bool have_gl = gl_context_current();
     const bool force_cpu = (settings && settings->force_cpu) || (have_gl && !force_gpu && gfx::software_rasterizer());
@@ -67,18 +69,22 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         const ffd::DeformInputs inputs = ffd::deform_inputs<GaussianCloud>(reg, e);
         const std::vector<ecs::Entity>& lattices = inputs.lattices;
         const DeformedGaussians* seen = reg.try_get<DeformedGaussians>(e);
-        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu) continue;  // nothing moved
+        const bool gpu_path = have_gl && !force_cpu;
+        const auto sh_mode = std::uint8_t(gpu_path ? gpu_sh : cpu_sh);
+        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu && seen->seen_sh_mode == sh_mode)
+            continue;  // nothing moved
         if (!seen) reg.emplace<DeformedGaussians>(e);
         DeformedGaussians& out = reg.patch<DeformedGaussians>(e);
         out.seen = inputs.stamps;
         out.seen_force_cpu = force_cpu;
+        out.seen_sh_mode = sh_mode;
         out.inverted = out.degenerate = 0;
         ++out.version;
 
         // GPU path: the authored cloud goes to GpuGaussianStore::rest when its change stamp moved (the
         // only per-Gaussian CPU work, once per cloud change), then one dispatch per lattice into
-        // `deformed` (+ `frames`: ShMode::rotate_view when the SH have view-dependent terms). No read-back.
-        if (have_gl && !force_cpu) {
+        // `deformed` (+ `frames` or `deformed_sh` when the SH have view-dependent terms). No read-back.
+        if (gpu_path) {
             if (gaussian::GpuGaussianDeformer* gpu = gpu_deformer(reg)) {
                 auto* store = reg.try_resource<gaussian::GpuGaussianStore>();
                 if (!store) store = &reg.set_resource<gaussian::GpuGaussianStore>();
@@ -93,7 +99,7 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
                     std::vector<std::uint64_t> keys;
                     for (ecs::Entity le : lattices) ls.push_back(&reg.get<Lattice>(le)), keys.push_back(le.bits());
                     auto pass_scope = profiling::gpu_scope(reg, "gaussian.deform");
-                    if (Status s = gpu->deform(g, cloud.origin, ls, keys, inputs.stamps.lattices, cloud.sh_degree > 0); !s)
+                    if (Status s = gpu->deform(g, cloud.origin, ls, keys, inputs.stamps.lattices, gpu_sh); !s)
                         log::warn("gaussian_deform_system: ", s.message(), " (lattice skipped)");
                     out.on_gpu = true;
                     out.cloud = GaussianCloud{};
@@ -106,7 +112,7 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
             }
         }
 
-        // CPU path (TBB): SH coefficients rotated per band (ShMode::rotate_coefficients).
+        // CPU path (TBB).
         out.on_gpu = false;
         if (auto* store = reg.try_resource<gaussian::GpuGaussianStore>())
             if (auto it = store->clouds.find(e); it != store->clouds.end())
@@ -121,7 +127,7 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         out.cloud.opacities.clear();
         out.cloud.sh_frames.clear();
         for (ecs::Entity le : lattices) {
-            auto stats = gaussian::deform(reg.get<Lattice>(le), out.cloud, out.cloud, ffd::Backend::automatic, false);
+            auto stats = gaussian::deform(reg.get<Lattice>(le), out.cloud, out.cloud, {ffd::Backend::automatic, false, cpu_sh});
             if (!stats) {
                 log::warn("gaussian_deform_system: ", stats.message(), " (lattice skipped)");
                 continue;

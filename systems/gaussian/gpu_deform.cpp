@@ -13,6 +13,7 @@
 #include "systems/ffd/deform_kernels.h"
 #include "systems/ffd/gpu_block.h"
 #include "systems/ffd/lattice.h"
+#include "systems/gaussian/sh.h"
 
 namespace sffd::gaussian {
 
@@ -64,7 +65,7 @@ Status upload_rest(GpuGaussians& dst, const GaussianCloud& g, std::uint64_t vers
 struct GpuGaussianDeformer::Impl {
     gfx::Program program;                                         // generic (any divisions, B-spline)
     std::unordered_map<std::uint64_t, gfx::Program> specialised;  // Bernstein, per (l, m, n, kernel)
-    gfx::Buffer ubo, stats;
+    gfx::Buffer ubo, stats, sh_tables;
     struct Controls {
         gfx::Buffer buffer;
         std::size_t capacity = 0;
@@ -95,6 +96,22 @@ Result<GpuGaussianDeformer> GpuGaussianDeformer::create() {
     impl->stats = gfx::Buffer::create("gaussian.deform.stats");
     const std::uint32_t zero[kStats] = {};
     glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_READ);
+    // deform.comp's sh_tab[]: the CPU rotation's sample directions and inverse evaluation matrices.
+    std::vector<float> tables;
+    for (int band = 1; band <= 3; ++band) {
+        glm::dvec3 dirs[7];
+        double inv[49];
+        sh_sample_tables(band, dirs, inv);
+        for (int j = 0; j < 2 * band + 1; ++j) tables.insert(tables.end(), {float(dirs[j].x), float(dirs[j].y), float(dirs[j].z)});
+    }
+    for (int band = 1; band <= 3; ++band) {
+        glm::dvec3 dirs[7];
+        double inv[49];
+        sh_sample_tables(band, dirs, inv);
+        for (int k = 0; k < (2 * band + 1) * (2 * band + 1); ++k) tables.push_back(float(inv[k]));
+    }
+    impl->sh_tables = gfx::Buffer::create("gaussian.deform.sh_tables");
+    glNamedBufferStorage(impl->sh_tables.id(), GLsizeiptr(tables.size() * sizeof(float)), tables.data(), 0);
     return GpuGaussianDeformer(std::move(impl));
 }
 
@@ -122,8 +139,9 @@ GpuDeformStats GpuGaussianDeformer::read_stats() {
 }
 
 Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp, const glm::dvec3& cloud_origin,
-                                     GLuint in, GLuint out, GLuint frames, bool compose_frames, std::uint32_t count) {
+                                     const Buffers& b, std::uint32_t count) {
     if (Status s = ffd::validate(lattice); !s) return s;
+    if (b.sh_out && (b.sh_degree < 0 || b.sh_degree > 3)) return make_error("gaussian::GpuGaussianDeformer: SH degree must be 0..3");
     Impl& m = *m_impl;
     // The ffd pass's preparation and control-point upload (float displacements, M⁻¹, origin in double).
     const ffd::detail::Prepared P = ffd::detail::prepare(lattice, cloud_origin);
@@ -170,14 +188,18 @@ Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, 
         program = sp->second.id();
     }
     glUseProgram(program);
-    glProgramUniform1ui(program, 0, (frames ? 1u : 0u) | (frames && compose_frames ? 2u : 0u));
+    glProgramUniform1ui(program, 0, (b.frames ? 1u : 0u) | (b.frames && b.compose_frames ? 2u : 0u) | (b.sh_out ? 4u : 0u));
+    glProgramUniform1i(program, 1, b.sh_degree);
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, m.ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, cp.buffer.id());
     if (cp_ubo) glBindBufferRange(GL_UNIFORM_BUFFER, SFFD_UBO_FFD_CONTROL, cp.buffer.id(), 0, GLsizeiptr(lattice.size() * 16));
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, in);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED, out);
-    // An unused binding still needs a buffer on some drivers: the statistics stand in when no frames.
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, frames ? frames : m.stats.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, b.in);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED, b.out);
+    // Unused bindings still get a buffer (the statistics stand in): nothing reads or writes them.
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, b.frames ? b.frames : m.stats.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, b.sh_out && b.sh_in ? b.sh_in : m.stats.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED_SH, b.sh_out && b.sh_in ? b.sh_out : m.stats.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH_TABLES, m.sh_tables.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
     // Beyond 65,535 groups (4.19M Gaussians at 64 wide): a 2D grid (runtime/gfx/dispatch.h).
     if (Status s = gfx::dispatch_1d(count, local_size); !s) return s;
@@ -186,30 +208,42 @@ Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, 
 }
 
 Status GpuGaussianDeformer::deform(GpuGaussians& dst, const glm::dvec3& origin, const std::vector<const Lattice*>& lattices,
-                                   const std::vector<std::uint64_t>& keys, const std::vector<std::uint64_t>& stamps, bool with_frames) {
+                                   const std::vector<std::uint64_t>& keys, const std::vector<std::uint64_t>& stamps, ShMode sh) {
     if (!dst.rest) return make_error("gaussian::GpuGaussianDeformer::deform(): the cloud's rest buffer is not uploaded");
     if (keys.size() != lattices.size() || stamps.size() != lattices.size())
         return make_error("gaussian::GpuGaussianDeformer::deform(): one key and one stamp per lattice");
     const std::uint32_t n = dst.count;
+    const bool view_dependent = dst.sh_degree > 0;
+    const bool with_frames = view_dependent && sh == ShMode::rotate_view;
+    const bool with_sh = view_dependent && sh == ShMode::rotate_coefficients;
+    if (with_sh && !dst.sh) return make_error("gaussian::GpuGaussianDeformer::deform(): the cloud's SH buffer is not uploaded");
+    const std::size_t sh_bytes = std::size_t(n) * std::size_t(sh_coeffs(dst.sh_degree)) * 3 * sizeof(float);
     ensure(dst.deformed, "gaussians.deformed", std::size_t(n) * sizeof(gpu::GpuGaussian));
     if (with_frames) ensure(dst.frames, "gaussians.frames", std::size_t(n) * 3 * sizeof(float) * 4);
-    // The first lattice reads `rest`, the next ones deform `deformed` in place; with no lattice (or when
-    // the first fails) `deformed` starts as a copy of `rest` and the frames as identity.
-    GLuint in = dst.rest.id();
-    bool frames_started = false;
+    if (with_sh) ensure(dst.deformed_sh, "gaussians.deformed_sh", sh_bytes);
+    // The first lattice reads `rest` (and `sh`), the next ones deform `deformed` (and `deformed_sh`) in
+    // place; with no lattice (or when every one fails) the outputs start as copies of the inputs and the
+    // frames as identity.
+    Buffers b;
+    b.in = dst.rest.id();
+    b.out = dst.deformed.id();
+    b.frames = with_frames ? dst.frames.id() : 0;
+    b.sh_in = with_sh ? dst.sh.id() : 0;
+    b.sh_out = with_sh ? dst.deformed_sh.id() : 0;
+    b.sh_degree = dst.sh_degree;
     Status first_error;
     for (std::size_t d = 0; d < lattices.size(); ++d) {
-        Status s = dispatch(*lattices[d], keys[d], stamps[d], origin, in, dst.deformed.id(), with_frames ? dst.frames.id() : 0,
-                            frames_started, n);
-        if (!s) {
+        if (Status s = dispatch(*lattices[d], keys[d], stamps[d], origin, b, n); !s) {
             if (first_error) first_error = s;
             continue;
         }
-        in = dst.deformed.id();
-        frames_started = true;
+        b.in = dst.deformed.id();
+        b.compose_frames = true;
+        if (with_sh) b.sh_in = dst.deformed_sh.id();
     }
-    if (in == dst.rest.id() && n > 0) {
+    if (b.in == dst.rest.id() && n > 0) {
         glCopyNamedBufferSubData(dst.rest.id(), dst.deformed.id(), 0, 0, GLsizeiptr(std::size_t(n) * sizeof(gpu::GpuGaussian)));
+        if (with_sh) glCopyNamedBufferSubData(dst.sh.id(), dst.deformed_sh.id(), 0, 0, GLsizeiptr(sh_bytes));
         if (with_frames) {
             std::vector<float> identity(std::size_t(n) * 12, 0.0f);
             for (std::size_t i = 0; i < n; ++i) identity[i * 12] = identity[i * 12 + 5] = identity[i * 12 + 10] = 1.0f;
@@ -219,7 +253,7 @@ Status GpuGaussianDeformer::deform(GpuGaussians& dst, const glm::dvec3& origin, 
     dst.has_deformed = true;
     dst.deformed_on_gpu = true;
     dst.has_frames = with_frames;
-    dst.has_deformed_sh = false;
+    dst.has_deformed_sh = with_sh;
     ++dst.deformed_version;
     return first_error;
 }
@@ -254,14 +288,14 @@ Result<GaussianCloud> read_back(const GpuGaussians& src, const glm::dvec3& origi
 }
 
 Result<GaussianCloud> deform_on_gpu(GpuGaussianDeformer& deformer, const std::vector<const Lattice*>& lattices, const GaussianCloud& cloud,
-                                    bool with_frames, GpuDeformStats* stats) {
+                                    ShMode sh, GpuDeformStats* stats) {
     GpuGaussians scratch;
     if (Status s = upload_rest(scratch, cloud, 1); !s) return s.error();
     deformer.reset_stats();
     // Stamp 0: always upload (the keys are this call's own, past the range of entity bits).
     std::vector<std::uint64_t> keys(lattices.size()), stamps(lattices.size(), 0);
     for (std::size_t d = 0; d < keys.size(); ++d) keys[d] = ~std::uint64_t(0) - d;
-    if (Status s = deformer.deform(scratch, cloud.origin, lattices, keys, stamps, with_frames); !s) return s.error();
+    if (Status s = deformer.deform(scratch, cloud.origin, lattices, keys, stamps, sh); !s) return s.error();
     if (stats) *stats = deformer.read_stats();
     return read_back(scratch, cloud.origin);
 }

@@ -1,9 +1,11 @@
 // GPU deformation of 3D Gaussians (issue 17): the compute pass shaders/gaussian/deform.comp over the
 // GpuGaussianStore buffers (gpu_store.h). Per Gaussian and per lattice, in order: centre through the
 // lattice, Σ' = J Σ Jᵀ back to rotation + scale (one-sided Jacobi on the deformed axes J R S, in float),
-// opacity carried, and optionally the polar rotation of J composed into `frames` (ShMode::rotate_view:
-// the coefficients stay as authored, the renderer evaluates the SH at frameᵀ d). The SH coefficients
-// themselves are never rotated on the GPU (ShMode::rotate_coefficients is CPU only: gaussian::deform).
+// opacity carried, and the polar rotation of J either composed into `frames` (ShMode::rotate_view:
+// the coefficients stay as authored, the renderer evaluates the SH at frameᵀ d) or applied to the SH
+// coefficients. The SH coefficients
+// themselves can be rotated instead (ShMode::rotate_coefficients: per band, the CPU's sh_rotation tables)
+// into `deformed_sh`.
 // The lattice evaluation is the ffd pass's own (shaders/ffd/ffd_common.glsl: Bernstein with the direct
 // or shared-memory kernel, B-spline), with the same control-point upload (systems/ffd/gpu_block.h).
 // Needs a current GL 4.5 context for every call.
@@ -18,6 +20,7 @@
 #include "systems/ffd/components.h"
 #include "systems/ffd/ffd_gpu.h"
 #include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gpu_store.h"
 
 namespace sffd::gaussian {
@@ -43,20 +46,31 @@ public:
     GpuGaussianDeformer& operator=(GpuGaussianDeformer&&) noexcept;
     ~GpuGaussianDeformer();
 
-    // One lattice: `count` GpuGaussians from `in` into `out` (may be the same buffer: in place), positions
-    // relative to `cloud_origin`. `frames` (vec4[3 * count], 0 = none) receives the polar rotations:
-    // composed onto what it holds when `compose_frames`, else starting from identity. Each `key` (e.g. the
-    // lattice entity) keeps its control points, uploaded only when `lattice_stamp` moved (0 always uploads).
-    // Does not wait for the GPU.
+    // The buffers of one dispatch. `in`/`out` GpuGaussian[count] (may be the same buffer: in place).
+    // `frames` (vec4[3 * count], 0 = none) receives the polar rotations, composed onto what it holds when
+    // `compose_frames`, else starting from identity. `sh_out` (0 = none): the coefficients of `sh_in`
+    // (GaussianCloud::sh layout, degree `sh_degree`) rotated by the polar rotation (may equal `sh_in`).
+    struct Buffers {
+        GLuint in = 0, out = 0;
+        GLuint frames = 0;
+        bool compose_frames = false;
+        GLuint sh_in = 0, sh_out = 0;
+        int sh_degree = 0;
+    };
+    // One lattice over `count` Gaussians, positions relative to `cloud_origin`. Each `key` (e.g. the
+    // lattice entity) keeps its control points, uploaded only when `lattice_stamp` moved (0 always
+    // uploads). Does not wait for the GPU.
     Status dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin,
-                    GLuint in, GLuint out, GLuint frames, bool compose_frames, std::uint32_t count);
+                    const Buffers& buffers, std::uint32_t count);
 
-    // Every lattice in order over a store entry whose `rest` is current: writes `deformed` (grown when
-    // needed), and `frames` when `with_frames`; sets has_deformed, deformed_on_gpu, has_frames, bumps
-    // deformed_version; clears has_deformed_sh. No read-back. `keys`/`stamps` as in dispatch(), one per
-    // lattice. A lattice that fails validation is skipped (its error is returned after the others ran).
+    // Every lattice in order over a store entry whose `rest` (and `sh`) are current: writes `deformed`
+    // (grown when needed) and, when the SH have view-dependent terms (degree > 0), `frames`
+    // (ShMode::rotate_view) or `deformed_sh` (ShMode::rotate_coefficients); sets has_deformed,
+    // deformed_on_gpu, has_frames, has_deformed_sh, bumps deformed_version. No read-back. `keys`/`stamps`
+    // as in dispatch(), one per lattice. A lattice that fails validation is skipped (the first error is
+    // returned after the others ran).
     Status deform(GpuGaussians& dst, const glm::dvec3& cloud_origin, const std::vector<const Lattice*>& lattices,
-                  const std::vector<std::uint64_t>& keys, const std::vector<std::uint64_t>& stamps, bool with_frames);
+                  const std::vector<std::uint64_t>& keys, const std::vector<std::uint64_t>& stamps, ShMode sh);
 
     // Statistics accumulated since reset_stats(). read_stats() waits for the GPU (tests, commands).
     void reset_stats();
@@ -81,8 +95,9 @@ private:
 Result<GaussianCloud> read_back(const GpuGaussians& src, const glm::dvec3& origin);
 
 // Upload + deform through every lattice + read back, on a scratch store entry (tests, commands, the
-// benchmark's correctness check). `with_frames`: ShMode::rotate_view's frames (sh_frames of the result).
+// benchmark's correctness check): rotate_view gives the result sh_frames (degree > 0), rotate_coefficients
+// rotated sh.
 Result<GaussianCloud> deform_on_gpu(GpuGaussianDeformer& deformer, const std::vector<const Lattice*>& lattices,
-                                    const GaussianCloud& cloud, bool with_frames, GpuDeformStats* stats = nullptr);
+                                    const GaussianCloud& cloud, ShMode sh, GpuDeformStats* stats = nullptr);
 
 }  // namespace sffd::gaussian

@@ -110,10 +110,10 @@ bool all_finite(const GaussianCloud& g) {
 }
 
 // CPU reference: every lattice in order, in place, view-direction mode (frames compose).
-GaussianCloud cpu_deform(const std::vector<const Lattice*>& ls, const GaussianCloud& in) {
+GaussianCloud cpu_deform(const std::vector<const Lattice*>& ls, const GaussianCloud& in, ShMode mode = ShMode::rotate_view) {
     GaussianCloud g = in;
     DeformOptions o;
-    o.sh = ShMode::rotate_view;
+    o.sh = mode;
     for (const Lattice* l : ls) EXPECT_TRUE(deform(*l, g, g, o));
     return g;
 }
@@ -124,7 +124,12 @@ struct Errors {
 Errors compare(const GaussianCloud& gpu, const GaussianCloud& cpu, const char* what) {
     Errors e;
     EXPECT_EQ(gpu.size(), cpu.size());
-    EXPECT_EQ(gpu.sh, cpu.sh) << what;  // coefficients untouched in view mode
+    if (!cpu.sh_frames.empty()) {
+        EXPECT_EQ(gpu.sh, cpu.sh) << what;  // coefficients untouched in view mode
+    }
+    double esh = 0.0;
+    for (std::size_t k = 0; k < gpu.sh.size() && k < cpu.sh.size(); ++k) esh = std::max(esh, double(std::abs(gpu.sh[k] - cpu.sh[k])));
+    EXPECT_LT(esh, 5e-5) << what;  // rotated coefficients (|c| <= 0.5; llvmpipe: 8.5e-6, A_l⁻¹ amplifies rounding)
     EXPECT_EQ(gpu.sh_frames.size(), cpu.sh_frames.size()) << what;
     for (std::size_t i = 0; i < gpu.size(); ++i) {
         EXPECT_EQ(gpu.opacities[i], cpu.opacities[i]) << what << " " << i;
@@ -134,7 +139,8 @@ Errors compare(const GaussianCloud& gpu, const GaussianCloud& cpu, const char* w
         if (i < gpu.sh_frames.size() && i < cpu.sh_frames.size())
             e.frame = std::max(e.frame, max_abs(glm::dmat3(gpu.sh_frames[i]) - glm::dmat3(cpu.sh_frames[i])));
     }
-    std::printf("%s: max centre error %.2e, max relative Σ error %.2e, max frame error %.2e\n", what, e.centre, e.sigma, e.frame);
+    std::printf("%s: max centre error %.2e, max relative Σ error %.2e, max frame error %.2e, max SH error %.2e\n", what, e.centre,
+                e.sigma, e.frame, esh);
     EXPECT_LT(e.centre, 5e-6) << what;
     EXPECT_LT(e.sigma, 3e-5) << what;
     EXPECT_LT(e.frame, 1e-5) << what;
@@ -148,7 +154,7 @@ TEST_F(GaussianGpuDeform, MatchesCpuOnBernsteinAndBsplineLatticesWithSeveralDefo
         const std::vector<std::vector<const Lattice*>> cases = {{&tw}, {&st}, {&tw, &st}, {&st, &tw, &st}};
         for (const auto& ls : cases) {
             GpuDeformStats stats;
-            auto gpu = deform_on_gpu(*deformer, ls, cloud, true, &stats);
+            auto gpu = deform_on_gpu(*deformer, ls, cloud, ShMode::rotate_view, &stats);
             ASSERT_TRUE(gpu) << gpu.message();
             const std::string what = std::string(basis == LatticeBasis::bernstein ? "bernstein" : "bspline") + ", " +
                                      std::to_string(ls.size()) + " deformer(s)";
@@ -166,10 +172,26 @@ TEST_F(GaussianGpuDeform, BothBernsteinKernelsAgree) {
     const GaussianCloud cpu = cpu_deform({&l}, cloud);
     for (ffd::GpuBernsteinKernel k : {ffd::GpuBernsteinKernel::direct, ffd::GpuBernsteinKernel::shared}) {
         deformer->set_bernstein_kernel(k);
-        auto gpu = deform_on_gpu(*deformer, {&l}, cloud, true);
+        auto gpu = deform_on_gpu(*deformer, {&l}, cloud, ShMode::rotate_view);
         ASSERT_TRUE(gpu) << gpu.message();
         EXPECT_EQ(deformer->last_bernstein_kernel(), k);
         compare(*gpu, cpu, k == ffd::GpuBernsteinKernel::direct ? "direct kernel" : "shared-memory kernel");
+    }
+}
+
+TEST_F(GaussianGpuDeform, RotatedCoefficientsMatchCpuRotation) {
+    // ShMode::rotate_coefficients on the GPU: each band rotated by the polar rotation, chained deformers
+    // rotating the previous output, against the CPU's per-band matrices (sh_rotation), degrees 1..3.
+    for (int degree = 1; degree <= 3; ++degree) {
+        const GaussianCloud cloud = random_cloud(2500, degree, 1.1f, 23 + unsigned(degree));
+        const Lattice tw = twisted(LatticeBasis::bernstein, {4, 3, 5}), st = stretched(LatticeBasis::bspline, {3, 3, 3});
+        GpuDeformStats stats;
+        auto gpu = deform_on_gpu(*deformer, {&tw, &st}, cloud, ShMode::rotate_coefficients, &stats);
+        ASSERT_TRUE(gpu) << gpu.message();
+        EXPECT_TRUE(gpu->sh_frames.empty());
+        const GaussianCloud cpu = cpu_deform({&tw, &st}, cloud, ShMode::rotate_coefficients);
+        EXPECT_NE(gpu->sh, cloud.sh);  // something was rotated
+        compare(*gpu, cpu, ("coefficients, degree " + std::to_string(degree)).c_str());
     }
 }
 
@@ -184,7 +206,7 @@ TEST_F(GaussianGpuDeform, RigidLatticeMotionMovesGaussiansRigidly) {
     ffd::stretch(l, ffd::all_control_points(l), t);
     const glm::dmat3 q = glm::mat3_cast(glm::angleAxis(1.1, axis));
     GpuDeformStats stats;
-    auto gpu = deform_on_gpu(*deformer, {&l}, cloud, true, &stats);
+    auto gpu = deform_on_gpu(*deformer, {&l}, cloud, ShMode::rotate_view, &stats);
     ASSERT_TRUE(gpu) << gpu.message();
     EXPECT_EQ(stats.inside, cloud.size());
     EXPECT_EQ(stats.inverted, 0u);
@@ -214,7 +236,7 @@ TEST_F(GaussianGpuDeform, DegenerateLatticesGiveNoNaN) {
     Lattice flat = box_lattice(LatticeBasis::bernstein, {3, 3, 3});
     for (glm::dvec3& p : flat.current) p.y = 0.0;
     GpuDeformStats stats;
-    auto gpu = deform_on_gpu(*deformer, {&flat}, cloud, true, &stats);
+    auto gpu = deform_on_gpu(*deformer, {&flat}, cloud, ShMode::rotate_view, &stats);
     ASSERT_TRUE(gpu) << gpu.message();
     EXPECT_TRUE(all_finite(*gpu));
     EXPECT_EQ(stats.not_finite, 0u);
@@ -240,7 +262,7 @@ TEST_F(GaussianGpuDeform, DegenerateLatticesGiveNoNaN) {
     Lattice huge = box_lattice(LatticeBasis::bernstein, {2, 2, 2});
     huge.current[13].x = 1e39;  // the centre control point: every inside Gaussian depends on it
     ASSERT_TRUE(ffd::validate(huge));
-    auto bad = deform_on_gpu(*deformer, {&huge}, cloud, true, &stats);
+    auto bad = deform_on_gpu(*deformer, {&huge}, cloud, ShMode::rotate_view, &stats);
     ASSERT_TRUE(bad) << bad.message();
     EXPECT_TRUE(all_finite(*bad));
     EXPECT_GT(stats.not_finite, 0u);
@@ -260,12 +282,12 @@ TEST_F(GaussianGpuDeform, TwoDimensionalDispatchGridCoversEveryGaussian) {
     const Lattice b = twisted(LatticeBasis::bspline, {4, 4, 4});
     for (ffd::GpuBernsteinKernel k : {ffd::GpuBernsteinKernel::direct, ffd::GpuBernsteinKernel::shared}) {
         deformer->set_bernstein_kernel(k);
-        auto full = deform_on_gpu(*deformer, {&l, &b}, cloud, true);
+        auto full = deform_on_gpu(*deformer, {&l, &b}, cloud, ShMode::rotate_view);
         ASSERT_TRUE(full) << full.message();
         std::optional<Result<GaussianCloud>> grid;
         {
             gfx::ScopedDispatchLimit limit(3);
-            grid.emplace(deform_on_gpu(*deformer, {&l, &b}, cloud, true));
+            grid.emplace(deform_on_gpu(*deformer, {&l, &b}, cloud, ShMode::rotate_view));
         }
         ASSERT_TRUE(*grid) << grid->message();
         const GaussianCloud& g = **grid;
@@ -279,7 +301,7 @@ TEST_F(GaussianGpuDeform, TwoDimensionalDispatchGridCoversEveryGaussian) {
 TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
     ecs::Registry reg;
     reg.set_resource<FfdSettings>().force_gpu = true;  // llvmpipe would choose the CPU path
-    auto& counters = reg.set_resource<GaussianDeformCounters>();
+    auto& counters = reg.set_resource<GaussianDeformSettings>();
     const ecs::Entity e = reg.create(), a = reg.create(), b = reg.create();
     const GaussianCloud cloud = random_cloud(1500, 2, 0.9f, 17);
     reg.emplace<GaussianCloud>(e, cloud);
@@ -316,12 +338,25 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
     check("system, after lattice edits");
     gaussian_deform_system(reg, {});  // nothing moved
     EXPECT_EQ(g.deformed_version, v0 + 3);
+    // Coefficient mode: re-deformed into deformed_sh, the frames no longer claimed.
+    counters.gpu_sh = ShMode::rotate_coefficients;
+    gaussian_deform_system(reg, {});
+    EXPECT_EQ(g.deformed_version, v0 + 4);
+    EXPECT_TRUE(g.has_deformed_sh && !g.has_frames);
+    EXPECT_EQ(g.sh_buffer(), g.deformed_sh.id());
+    {
+        auto back = read_back(g, cloud.origin);
+        ASSERT_TRUE(back) << back.message();
+        compare(*back, cpu_deform({&reg.get<Lattice>(a), &reg.get<Lattice>(b)}, cloud, ShMode::rotate_coefficients), "system, coefficients");
+    }
+    EXPECT_EQ(counters.rest_uploads, 1u);
+    EXPECT_EQ(counters.gpu_sync_readbacks, 0u);
     // Forced CPU: DeformedGaussians carries the arrays, the store no longer claims a GPU result.
     reg.resource<FfdSettings>() = FfdSettings{.force_cpu = true};
     gaussian_deform_system(reg, {});
     EXPECT_FALSE(reg.get<DeformedGaussians>(e).on_gpu);
     EXPECT_EQ(reg.get<DeformedGaussians>(e).cloud.size(), cloud.size());
-    EXPECT_FALSE(g.has_deformed || g.deformed_on_gpu || g.has_frames);
+    EXPECT_FALSE(g.has_deformed || g.deformed_on_gpu || g.has_frames || g.has_deformed_sh);
     EXPECT_EQ(counters.cpu_runs, 1u);
     gaussian_release_gpu(reg);
 }
@@ -329,7 +364,7 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
 TEST_F(GaussianGpuDeform, SystemAutomaticChoiceFollowsFfdSystem) {
     // Automatic: the CPU path on a software rasterizer, the GPU path on a hardware GPU.
     ecs::Registry reg;
-    auto& counters = reg.set_resource<GaussianDeformCounters>();
+    auto& counters = reg.set_resource<GaussianDeformSettings>();
     const ecs::Entity e = reg.create(), a = reg.create();
     reg.emplace<GaussianCloud>(e, random_cloud(300, 1, 0.9f, 19));
     reg.emplace<Lattice>(a, twisted(LatticeBasis::bernstein, {3, 3, 3}));
