@@ -57,8 +57,12 @@ struct DeformedGaussians {
                                        // and no CPU copy exists (gpu_deform.h read_back() makes one)
     bool seen_force_cpu = false;       // the backend choice this output was made with (a switch re-runs)
     std::uint8_t seen_sh_mode = 0;     // the gaussian::ShMode it used (GaussianDeformSettings; a switch re-runs)
-    std::size_t inverted = 0;          // Gaussians whose Jacobian has det < 0 (CPU path; GPU: 0, see README)
-    std::size_t degenerate = 0;        // Gaussians whose Jacobian is (near) singular (same)
+    // Statistics (summed over the deformers). GPU path: they arrive a few frames after the deformation
+    // (fenced, never waited for) and stay 0 with stats_arrived false until then.
+    std::size_t inverted = 0;          // Gaussians whose Jacobian has det < 0
+    std::size_t degenerate = 0;        // Gaussians whose Jacobian is (near) singular
+    std::size_t not_finite = 0;        // GPU: results that were not finite (written transparent)
+    bool stats_arrived = false;
     std::uint64_t version = 0;         // bumped on every rewrite
 
     // Change stamps this output was computed from (the system skips unchanged clouds).

@@ -1,6 +1,7 @@
 #include "systems/gaussian/gaussian_system.h"
 
 #include <optional>
+#include <unordered_map>
 #include <vector>
 
 #include <EGL/egl.h>
@@ -25,7 +26,35 @@ namespace {
 struct GaussianGpuState {
     std::optional<gaussian::GpuGaussianDeformer> deformer;
     bool unavailable = false;  // compile failed once: stay on the CPU path
+    // Statistics in flight (queue_stats tag -> the output they were counted for).
+    struct Pending {
+        ecs::Entity cloud;
+        std::uint64_t version = 0;
+    };
+    std::unordered_map<std::uint64_t, Pending> pending;
+    std::uint64_t next_tag = 1;
 };
+
+// Counts of earlier GPU runs that have arrived (never waits): they apply to the output they were counted
+// for if it has not been rewritten since. Statistics, not data: no change stamp.
+void collect_gpu_stats(ecs::Registry& reg) {
+    auto* st = reg.try_resource<GaussianGpuState>();
+    if (!st || !st->deformer || st->pending.empty()) return;
+    for (const gaussian::GpuGaussianDeformer::TaggedStats& t : st->deformer->poll_stats()) {
+        auto it = st->pending.find(t.tag);
+        if (it == st->pending.end()) continue;
+        const GaussianGpuState::Pending p = it->second;
+        st->pending.erase(it);
+        if (t.stats.not_finite)
+            log::warn("gaussian_deform_system: ", t.stats.not_finite, " Gaussians deformed to non-finite values (drawn transparent)");
+        DeformedGaussians* out = reg.valid(p.cloud) ? reg.try_get<DeformedGaussians>(p.cloud) : nullptr;
+        if (!out || out->version != p.version) continue;
+        out->inverted = t.stats.inverted;
+        out->degenerate = t.stats.degenerate;
+        out->not_finite = t.stats.not_finite;
+        out->stats_arrived = true;
+    }
+}
 
 bool gl_context_current() { return eglGetCurrentContext() != EGL_NO_CONTEXT || glfwGetCurrentContext() != nullptr; }
 
@@ -60,6 +89,7 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
     const bool force_gpu = settings && settings->force_gpu;
     const bool have_gl = gl_context_current();
     const bool force_cpu = (settings && settings->force_cpu) || (have_gl && !force_gpu && gfx::software_rasterizer());
+    if (have_gl) collect_gpu_stats(reg);
     // Collect first: emplacing DeformedGaussians while iterating is a structural change.
     std::vector<ecs::Entity> clouds;
     reg.view<const GaussianCloud, const Deformers>().each(
@@ -78,7 +108,8 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         out.seen = inputs.stamps;
         out.seen_force_cpu = force_cpu;
         out.seen_sh_mode = sh_mode;
-        out.inverted = out.degenerate = 0;
+        out.inverted = out.degenerate = out.not_finite = 0;
+        out.stats_arrived = false;
         ++out.version;
 
         // GPU path: the authored cloud goes to GpuGaussianStore::rest when its change stamp moved (the
@@ -99,8 +130,13 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
                     std::vector<std::uint64_t> keys;
                     for (ecs::Entity le : lattices) ls.push_back(&reg.get<Lattice>(le)), keys.push_back(le.bits());
                     auto pass_scope = profiling::gpu_scope(reg, "gaussian.deform");
+                    gpu->reset_stats();
                     if (Status s = gpu->deform(g, cloud.origin, ls, keys, inputs.stamps.lattices, gpu_sh); !s)
                         log::warn("gaussian_deform_system: ", s.message(), " (lattice skipped)");
+                    // The counts arrive a few frames later (collect_gpu_stats); nothing waits for them.
+                    auto& state = reg.resource<GaussianGpuState>();
+                    const std::uint64_t tag = state.next_tag++;
+                    if (gpu->queue_stats(tag)) state.pending[tag] = {e, out.version};
                     out.on_gpu = true;
                     out.cloud = GaussianCloud{};
                     out.cloud.origin = cloud.origin;
@@ -135,6 +171,7 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
             out.inverted += stats->inverted;
             out.degenerate += stats->degenerate;
         }
+        out.stats_arrived = true;
         if (counters) ++counters->cpu_runs;
     }
 }

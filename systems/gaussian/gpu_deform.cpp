@@ -72,10 +72,21 @@ struct GpuGaussianDeformer::Impl {
         std::uint64_t stamp = 0;
     };
     std::unordered_map<std::uint64_t, Controls> controls;
+    struct Readback {  // queue_stats() slots: host-visible, persistently mapped; `fence` null = free
+        gfx::Buffer buffer;
+        const std::uint32_t* mapped = nullptr;
+        GLsync fence = nullptr;
+        std::uint64_t tag = 0;
+    };
+    std::vector<Readback> readbacks;
     std::uint64_t uploads = 0, sync_readbacks = 0;
     GLint max_ubo = 0, max_shared = 0;
     bool software = false;
     ffd::GpuBernsteinKernel kernel = ffd::GpuBernsteinKernel::automatic, last_kernel = ffd::GpuBernsteinKernel::automatic;
+    ~Impl() {
+        for (Readback& r : readbacks)
+            if (r.fence) glDeleteSync(r.fence);
+    }
 };
 
 GpuGaussianDeformer::GpuGaussianDeformer(std::unique_ptr<Impl> impl) : m_impl(std::move(impl)) {}
@@ -136,6 +147,41 @@ GpuDeformStats GpuGaussianDeformer::read_stats() {
     GpuDeformStats s;
     s.inverted = v[0], s.inside = v[1], s.not_finite = v[2], s.degenerate = v[3];
     return s;
+}
+
+bool GpuGaussianDeformer::queue_stats(std::uint64_t tag) {
+    Impl& m = *m_impl;
+    auto slot = std::find_if(m.readbacks.begin(), m.readbacks.end(), [](const Impl::Readback& r) { return !r.fence; });
+    if (slot == m.readbacks.end()) {
+        Impl::Readback r;
+        r.buffer = gfx::Buffer::create("gaussian.deform.stats_readback");
+        const GLbitfield flags = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
+        glNamedBufferStorage(r.buffer.id(), kStats * sizeof(std::uint32_t), nullptr, flags);
+        r.mapped = static_cast<const std::uint32_t*>(glMapNamedBufferRange(r.buffer.id(), 0, kStats * sizeof(std::uint32_t), flags));
+        if (!r.mapped) return false;  // the GL error callback has said why; these statistics are lost
+        m.readbacks.push_back(std::move(r));
+        slot = m.readbacks.end() - 1;
+    }
+    glCopyNamedBufferSubData(m.stats.id(), slot->buffer.id(), 0, 0, kStats * sizeof(std::uint32_t));
+    slot->fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    slot->tag = tag;
+    return slot->fence != nullptr;
+}
+
+std::vector<GpuGaussianDeformer::TaggedStats> GpuGaussianDeformer::poll_stats() {
+    std::vector<TaggedStats> done;
+    for (Impl::Readback& r : m_impl->readbacks) {
+        if (!r.fence) continue;
+        const GLenum state = glClientWaitSync(r.fence, GL_SYNC_FLUSH_COMMANDS_BIT, 0);  // zero timeout: never waits
+        if (state != GL_ALREADY_SIGNALED && state != GL_CONDITION_SATISFIED) continue;
+        glDeleteSync(r.fence);
+        r.fence = nullptr;
+        TaggedStats t;
+        t.tag = r.tag;
+        t.stats.inverted = r.mapped[0], t.stats.inside = r.mapped[1], t.stats.not_finite = r.mapped[2], t.stats.degenerate = r.mapped[3];
+        done.push_back(t);
+    }
+    return done;
 }
 
 Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp, const glm::dvec3& cloud_origin,

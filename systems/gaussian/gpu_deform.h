@@ -75,6 +75,15 @@ public:
     // Statistics accumulated since reset_stats(). read_stats() waits for the GPU (tests, commands).
     void reset_stats();
     GpuDeformStats read_stats();
+    // Non-blocking statistics for the frame path (as ffd::GpuDeformer): queue_stats() copies the counts
+    // accumulated since reset_stats() into a persistently mapped buffer behind a fence, tagged;
+    // poll_stats() returns those whose fence has signalled, never waiting. false: no read-back slot.
+    struct TaggedStats {
+        std::uint64_t tag = 0;
+        GpuDeformStats stats;
+    };
+    bool queue_stats(std::uint64_t tag);
+    std::vector<TaggedStats> poll_stats();
     // Forgets control-point buffers whose key is not in `live`.
     void retain_keys(const std::vector<std::uint64_t>& live);
     // Bernstein kernel (ffd::GpuBernsteinKernel: automatic = shared on hardware GPUs, direct on llvmpipe).

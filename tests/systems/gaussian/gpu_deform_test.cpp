@@ -16,6 +16,7 @@
 #include "runtime/ecs/registry.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
+#include "runtime/gfx/gl.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/ffd_system.h"
 #include "systems/ffd/lattice.h"
@@ -325,6 +326,25 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
         compare(*back, cpu_deform({&reg.get<Lattice>(a), &reg.get<Lattice>(b)}, cloud), what);
     };
     check("system, first frame");
+    // The statistics arrive without a read-back: a later frame polls the fence (glFinish stands in for
+    // frames passing) and fills DeformedGaussians; they equal the CPU's counts.
+    EXPECT_FALSE(d.stats_arrived);
+    glFinish();
+    gaussian_deform_system(reg, {});  // nothing moved: only the statistics are collected
+    EXPECT_EQ(g.deformed_version, v0);
+    EXPECT_TRUE(d.stats_arrived);
+    {
+        GaussianCloud c = cloud;
+        std::size_t inverted = 0, degenerate = 0;
+        for (ecs::Entity le : {a, b}) {
+            auto st = deform(reg.get<Lattice>(le), c, c, DeformOptions{ffd::Backend::automatic, true, ShMode::rotate_view});
+            ASSERT_TRUE(st);
+            inverted += st->inverted, degenerate += st->degenerate;
+        }
+        EXPECT_EQ(d.inverted, inverted);
+        EXPECT_EQ(d.degenerate, degenerate);
+        EXPECT_EQ(d.not_finite, 0u);
+    }
     // Lattice edits: re-deformed on the GPU, no new upload of the cloud, no read-back by the system.
     for (int frame = 0; frame < 3; ++frame) {
         ffd::twist(reg.patch<Lattice>(a), {0, 1, 2, 3}, {0, 0, 1}, 0.1);
