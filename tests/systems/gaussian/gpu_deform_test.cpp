@@ -42,8 +42,15 @@ protected:
         auto d = GpuGaussianDeformer::create();
         ASSERT_TRUE(d) << d.message();
         deformer.emplace(std::move(*d));
+        errors_at_start = gfx::debug_error_count();
     }
-    void TearDown() override { deformer.reset(); }
+    void TearDown() override {
+        deformer.reset();
+        if (ctx) {
+            EXPECT_EQ(gfx::debug_error_count(), errors_at_start) << "GL errors reported by the debug callback";
+        }
+    }
+    std::uint64_t errors_at_start = 0;
     std::optional<gfx::GlContext> ctx;
     std::optional<GpuGaussianDeformer> deformer;
 };
@@ -257,6 +264,27 @@ TEST_F(GaussianGpuDeform, DegenerateLatticesGiveNoNaN) {
         EXPECT_EQ(gpu->opacities[i], cloud.opacities[i]);
     }
     EXPECT_GT(checked, cloud.size() / 2);
+    // (1b) Degenerate Gaussians through a regular lattice: all scales 0, one scale 0 (and, from
+    //      random_cloud, two equal scales): finite, and the same Σ as the CPU.
+    GaussianCloud thin = cloud;
+    for (std::size_t i = 0; i < thin.size(); ++i) {
+        if (i % 5 == 0) thin.scales[i] = glm::vec3(0.0f);
+        if (i % 5 == 1) thin.scales[i].y = 0.0f;
+    }
+    const Lattice tw = twisted(LatticeBasis::bspline, {3, 3, 3});
+    auto thin_gpu = deform_on_gpu(*deformer, {&tw}, thin, ShMode::rotate_view, &stats);
+    ASSERT_TRUE(thin_gpu) << thin_gpu.message();
+    EXPECT_TRUE(all_finite(*thin_gpu));
+    EXPECT_EQ(stats.not_finite, 0u);
+    const GaussianCloud thin_cpu = cpu_deform({&tw}, thin);
+    for (std::size_t i = 0; i < thin.size(); ++i) {
+        const glm::dmat3 expect = sigma(thin_cpu, i);
+        EXPECT_LE(max_abs(sigma(*thin_gpu, i) - expect), 3e-5 * max_abs(expect)) << i;
+        if (i % 5 == 0) {
+            EXPECT_EQ(thin_gpu->scales[i], glm::vec3(0.0f)) << i;
+        }
+    }
+
     // (2) A control point at 1e39: finite in double (the lattice is valid) but not in float, so the GPU's
     //     results near it overflow. Those Gaussians are written transparent with scale 0 and counted; no
     //     NaN or infinity reaches the buffer.
