@@ -283,7 +283,9 @@ void main() {
             frame = polar * prev_frame;
         }
     }
-    bool ok = finite_v(o.pos_opacity) && finite_v(o.rotation) && finite_v(o.scale) &&
+    // J too: a non-finite J can still give a finite-looking shape (max() of NaN is undefined, m > 0 false).
+    bool ok = finite_v(vec4(J[0], J[1].x)) && finite_v(vec4(J[1].yz, J[2].xy)) && finite_f(J[2].z) &&
+              finite_v(o.pos_opacity) && finite_v(o.rotation) && finite_v(o.scale) &&
               finite_v(vec4(frame[0], frame[1].x)) && finite_v(vec4(frame[1].yz, frame[2].xy)) && finite_f(frame[2].z);
     if (!ok) {
         atomicAdd(stats[2], 1u);
