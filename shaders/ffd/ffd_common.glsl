@@ -1,4 +1,5 @@
-// FFD evaluation shared by the compute pass (deform.comp) and paper mode (paper_mode.vert).
+// FFD evaluation shared by the compute pass (deform.comp), paper mode (paper_mode.vert) and the Gaussian
+// deformation (shaders/gaussian/deform.comp).
 // Convention: ../../systems/ffd/README.md (displacement form X' = X + Σ ΔP B B B, J = I + G M⁻¹, normals by
 // the cofactor of J). Control points arrive as displacements ΔP (vec4 xyz) in SSBO SFFD_SSBO_CONTROL_POINTS:
 // Bernstein: flat index (i*(m+1)+j)*(n+1)+k; B-spline: zero-bordered grid (l+3)(m+3)(n+3), index + 1.

@@ -10,6 +10,11 @@
 #define SFFD_GAUSS_SSBO_ORDER     3   // uint[]: visible Gaussians, front to back
 #define SFFD_GAUSS_SSBO_FRAMES    4   // vec4[3] per Gaussian: columns of its SH frame (view-direction mode)
 #define SFFD_GAUSS_SSBO_DEPTH     5   // float[]: view depth of each drawn Gaussian, −1 when not drawn (sort keys)
+// The GPU deformation (shaders/gaussian/deform.comp) reads SFFD_GAUSS_SSBO_IN, writes this one and
+// SFFD_GAUSS_SSBO_FRAMES; it also uses the ffd pass's points 2 (control points) and 6 (statistics).
+#define SFFD_GAUSS_SSBO_DEFORMED  7   // GpuGaussian[]: deformed Gaussians (may be the same buffer as IN)
+#define SFFD_GAUSS_SSBO_DEFORMED_SH 8 // float[]: rotated SH coefficients (ShMode::rotate_coefficients), SH layout
+#define SFFD_GAUSS_SSBO_SH_TABLES 9   // float[128]: SH rotation tables (sh_sample_tables: 15 directions, A_l⁻¹)
 
 // GpuGaussian, std430, 48 bytes:
 //   vec4 pos_opacity;  // xyz centre relative to the origin, w linear opacity

@@ -1,15 +1,45 @@
 // gaussian_deform_system: the deformation phase for 3D Gaussian clouds (issue 17), in the style of
 // ffd_system (systems/ffd). Reads GaussianCloud + Deformers on Gaussian entities and Lattice on the
-// lattice entities they name; writes DeformedGaussians (CPU arrays). Runs only when the cloud's
-// GaussianCloud or Deformers, or one of its lattices' change stamps, moved. Several deformers apply in
-// order (the first reads the authored cloud, the next ones deform its output in place). CPU only.
+// lattice entities they name; writes DeformedGaussians, and on the GPU path GpuGaussianStore::clouds[e]
+// (rest/sh uploaded when the cloud changes; deformed + frames written by the compute pass, gpu_deform.h).
+// Runs only when the cloud's GaussianCloud or Deformers, one of its lattices' change stamps, or the
+// backend choice moved. Several deformers apply in order (the first reads the authored cloud, the next
+// ones deform its output in place).
+//
+// Backend: ffd_system's rule and settings (FfdSettings::force_cpu / force_gpu): GPU when a GL context is
+// current on this thread and it is not a software rasterizer (there the TBB path is faster; force_gpu
+// keeps the compute pass), CPU otherwise. GPU path: GaussianDeformSettings::gpu_sh (default frames:
+// has_frames when sh_degree > 0; or deformed_sh), DeformedGaussians::on_gpu with empty CPU arrays, no
+// per-Gaussian CPU work and no read-back while only lattices change. CPU path: cpu_sh (default the
+// coefficients rotated), CPU arrays, the store's has_deformed/deformed_on_gpu/has_frames/has_deformed_sh
+// cleared so the renderer uploads DeformedGaussians itself.
 #pragma once
+
+#include <cstdint>
 
 #include "runtime/app/frame_loop.h"
 #include "runtime/ecs/registry.h"
+#include "systems/gaussian/gaussian_deform.h"
 
 namespace sffd {
 
+// Optional resource: how view-dependent colour follows the deformation on each path, and what the system
+// did (tests check the GPU frame path does no CPU pass and no read-back).
+struct GaussianDeformSettings {
+    // GPU: frames (36 bytes per Gaussian written per deformation, one 3x3 product per Gaussian per frame in
+    // the renderer) or coefficients rotated into GpuGaussianStore::deformed_sh. CPU: the coefficients
+    // rotated in DeformedGaussians::cloud.sh, or frames in DeformedGaussians::cloud.sh_frames.
+    gaussian::ShMode gpu_sh = gaussian::ShMode::rotate_view;
+    gaussian::ShMode cpu_sh = gaussian::ShMode::rotate_coefficients;
+    std::uint64_t cpu_runs = 0;            // clouds deformed on the CPU
+    std::uint64_t gpu_runs = 0;            // clouds deformed on the GPU
+    std::uint64_t rest_uploads = 0;        // authored clouds uploaded to GpuGaussianStore (per-Gaussian CPU work)
+    std::uint64_t gpu_sync_readbacks = 0;  // synchronous read-backs by the system's GPU deformer (stays 0)
+};
+
 void gaussian_deform_system(ecs::Registry& registry, const FrameContext& frame);
+
+// Drops the system's GPU state (call while the GL context is still current, before destroying it).
+void gaussian_release_gpu(ecs::Registry& registry);
 
 }  // namespace sffd

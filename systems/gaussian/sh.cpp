@@ -167,6 +167,12 @@ void sh_rotate(const ShRotation& s, const float* in, float* out) {
     if (s.degree >= 3) apply(s.band3, in + 27, out + 27);
 }
 
+void sh_sample_tables(int band, glm::dvec3* dirs, double* inverse) {
+    const Tables& t = tables();
+    std::copy(t.dirs[band].begin(), t.dirs[band].end(), dirs);
+    std::copy(t.inv[band].begin(), t.inv[band].end(), inverse);
+}
+
 double sh_sample_condition(int band) {
     // Frobenius norms of A and A⁻¹: an upper bound of the 2-norm condition number times n.
     const Tables& t = tables();

@@ -46,6 +46,10 @@ ShRotation sh_rotation(const glm::dmat3& r, int degree);
 // Rotates one splat's coefficients (K RGB triples): out may equal in. The DC term is unchanged.
 void sh_rotate(const ShRotation& rot, const float* in, float* out);
 
+// The tables behind sh_rotation(), for the GPU deformation (shaders/gaussian/deform.comp rotates the
+// coefficients the same way): band l's 2l+1 sample directions (dirs[j]) and A_l⁻¹ row-major (inverse[r*n+k]).
+void sh_sample_tables(int band, glm::dvec3* dirs, double* inverse);
+
 // Condition number (2-norm estimate, for the test) of the fixed evaluation matrix of band l (1..3).
 double sh_sample_condition(int band);
 

@@ -1,0 +1,349 @@
+#include "systems/gaussian/gpu_deform.h"
+
+#include <algorithm>
+#include <string>
+#include <unordered_map>
+
+#include "runtime/gfx/context.h"
+#include "runtime/gfx/dispatch.h"
+#include "runtime/gfx/gl.h"
+#include "runtime/gfx/shader.h"
+#include "shaders/common/bindings.h"
+#include "shaders/gaussian/gaussian_layout.h"
+#include "systems/ffd/deform_kernels.h"
+#include "systems/ffd/gpu_block.h"
+#include "systems/ffd/lattice.h"
+#include "systems/gaussian/sh.h"
+
+namespace sffd::gaussian {
+
+namespace {
+
+constexpr int kStats = 4;  // deform.comp's stats[]: inverted, inside, not finite, degenerate
+
+// Makes `buffer` hold at least `bytes` (contents undefined when it grows).
+void ensure(gfx::Buffer& buffer, const char* label, std::size_t bytes) {
+    bytes = std::max<std::size_t>(bytes, 16);
+    if (!buffer) {
+        buffer = gfx::Buffer::create(label);
+        glNamedBufferData(buffer.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_COPY);
+        return;
+    }
+    GLint64 size = 0;
+    glGetNamedBufferParameteri64v(buffer.id(), GL_BUFFER_SIZE, &size);
+    if (std::size_t(size) < bytes) glNamedBufferData(buffer.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_COPY);
+}
+
+}  // namespace
+
+Status upload_rest(GpuGaussians& dst, const GaussianCloud& g, std::uint64_t version) {
+    const std::size_t n = g.size();
+    if (g.scales.size() != n || g.rotations.size() != n || g.opacities.size() != n ||
+        g.sh.size() != n * std::size_t(sh_coeffs(g.sh_degree)) * 3)
+        return make_error("gaussian::upload_rest(): cloud arrays differ in size");
+    if (n > 0xffffffffull) return make_error("gaussian::upload_rest(): more than 2^32 - 1 Gaussians");
+    std::vector<gpu::GpuGaussian> rest(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const glm::vec3 p = g.positions[i];
+        const glm::quat q = g.rotations[i];
+        rest[i] = {{p.x, p.y, p.z, g.opacities[i]}, {q.w, q.x, q.y, q.z}, {g.scales[i].x, g.scales[i].y, g.scales[i].z, 0.0f}};
+    }
+    // New storage each time: a buffer the previous frame may still read is orphaned, not waited on.
+    dst.rest = gfx::Buffer::create("gaussians.rest");
+    glNamedBufferData(dst.rest.id(), GLsizeiptr(std::max<std::size_t>(n, 1) * sizeof(gpu::GpuGaussian)), nullptr, GL_STATIC_DRAW);
+    if (n) glNamedBufferSubData(dst.rest.id(), 0, GLsizeiptr(n * sizeof(gpu::GpuGaussian)), rest.data());
+    dst.sh = gfx::Buffer::create("gaussians.sh");
+    glNamedBufferData(dst.sh.id(), GLsizeiptr(std::max<std::size_t>(g.sh.size(), 4) * sizeof(float)), nullptr, GL_STATIC_DRAW);
+    if (!g.sh.empty()) glNamedBufferSubData(dst.sh.id(), 0, GLsizeiptr(g.sh.size() * sizeof(float)), g.sh.data());
+    dst.count = std::uint32_t(n);
+    dst.sh_degree = g.sh_degree;
+    dst.rest_version = version;
+    dst.has_deformed = dst.has_deformed_sh = dst.has_frames = dst.deformed_on_gpu = false;
+    return {};
+}
+
+struct GpuGaussianDeformer::Impl {
+    gfx::Program program;                                         // generic (any divisions, B-spline)
+    std::unordered_map<std::uint64_t, gfx::Program> specialised;  // Bernstein, per (l, m, n, kernel)
+    gfx::Buffer ubo, stats, sh_tables;
+    struct Controls {
+        gfx::Buffer buffer;
+        std::size_t capacity = 0;
+        std::uint64_t stamp = 0;
+    };
+    std::unordered_map<std::uint64_t, Controls> controls;
+    struct Readback {  // queue_stats() slots: host-visible, persistently mapped; `fence` null = free
+        gfx::Buffer buffer;
+        const std::uint32_t* mapped = nullptr;
+        GLsync fence = nullptr;
+        std::uint64_t tag = 0;
+    };
+    std::vector<Readback> readbacks;
+    std::uint64_t uploads = 0, sync_readbacks = 0;
+    GLint max_ubo = 0, max_shared = 0;
+    bool software = false;
+    ffd::GpuBernsteinKernel kernel = ffd::GpuBernsteinKernel::automatic, last_kernel = ffd::GpuBernsteinKernel::automatic;
+    ~Impl() {
+        for (Readback& r : readbacks)
+            if (r.fence) glDeleteSync(r.fence);
+    }
+};
+
+GpuGaussianDeformer::GpuGaussianDeformer(std::unique_ptr<Impl> impl) : m_impl(std::move(impl)) {}
+GpuGaussianDeformer::GpuGaussianDeformer(GpuGaussianDeformer&&) noexcept = default;
+GpuGaussianDeformer& GpuGaussianDeformer::operator=(GpuGaussianDeformer&&) noexcept = default;
+GpuGaussianDeformer::~GpuGaussianDeformer() = default;
+
+Result<GpuGaussianDeformer> GpuGaussianDeformer::create() {
+    auto impl = std::make_unique<Impl>();
+    auto program = gfx::load_compute_program("gaussian/deform.comp", "gaussian.deform");
+    if (!program) return program.error();
+    impl->program = std::move(*program);
+    glGetIntegerv(GL_MAX_UNIFORM_BLOCK_SIZE, &impl->max_ubo);
+    glGetIntegerv(GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, &impl->max_shared);
+    impl->software = gfx::software_rasterizer();
+    impl->ubo = gfx::Buffer::create("gaussian.deform.lattice_block");
+    glNamedBufferData(impl->ubo.id(), sizeof(ffd::detail::FfdBlock), nullptr, GL_DYNAMIC_DRAW);
+    impl->stats = gfx::Buffer::create("gaussian.deform.stats");
+    const std::uint32_t zero[kStats] = {};
+    glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_READ);
+    // deform.comp's sh_tab[]: the CPU rotation's sample directions and inverse evaluation matrices.
+    std::vector<float> tables;
+    for (int band = 1; band <= 3; ++band) {
+        glm::dvec3 dirs[7];
+        double inv[49];
+        sh_sample_tables(band, dirs, inv);
+        for (int j = 0; j < 2 * band + 1; ++j) tables.insert(tables.end(), {float(dirs[j].x), float(dirs[j].y), float(dirs[j].z)});
+    }
+    for (int band = 1; band <= 3; ++band) {
+        glm::dvec3 dirs[7];
+        double inv[49];
+        sh_sample_tables(band, dirs, inv);
+        for (int k = 0; k < (2 * band + 1) * (2 * band + 1); ++k) tables.push_back(float(inv[k]));
+    }
+    impl->sh_tables = gfx::Buffer::create("gaussian.deform.sh_tables");
+    glNamedBufferStorage(impl->sh_tables.id(), GLsizeiptr(tables.size() * sizeof(float)), tables.data(), 0);
+    return GpuGaussianDeformer(std::move(impl));
+}
+
+void GpuGaussianDeformer::set_bernstein_kernel(ffd::GpuBernsteinKernel kernel) { m_impl->kernel = kernel; }
+ffd::GpuBernsteinKernel GpuGaussianDeformer::last_bernstein_kernel() const { return m_impl->last_kernel; }
+std::uint64_t GpuGaussianDeformer::upload_count() const { return m_impl->uploads; }
+std::uint64_t GpuGaussianDeformer::sync_readbacks() const { return m_impl->sync_readbacks; }
+
+void GpuGaussianDeformer::retain_keys(const std::vector<std::uint64_t>& live) {
+    for (auto it = m_impl->controls.begin(); it != m_impl->controls.end();)
+        it = std::find(live.begin(), live.end(), it->first) == live.end() ? m_impl->controls.erase(it) : std::next(it);
+}
+
+void GpuGaussianDeformer::reset_stats() {
+    glClearNamedBufferData(m_impl->stats.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+}
+
+GpuDeformStats GpuGaussianDeformer::read_stats() {
+    std::uint32_t v[kStats] = {};
+    glGetNamedBufferSubData(m_impl->stats.id(), 0, sizeof v, v);
+    ++m_impl->sync_readbacks;
+    GpuDeformStats s;
+    s.inverted = v[0], s.inside = v[1], s.not_finite = v[2], s.degenerate = v[3];
+    return s;
+}
+
+bool GpuGaussianDeformer::queue_stats(std::uint64_t tag) {
+    Impl& m = *m_impl;
+    auto slot = std::find_if(m.readbacks.begin(), m.readbacks.end(), [](const Impl::Readback& r) { return !r.fence; });
+    if (slot == m.readbacks.end()) {
+        Impl::Readback r;
+        r.buffer = gfx::Buffer::create("gaussian.deform.stats_readback");
+        const GLbitfield flags = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
+        glNamedBufferStorage(r.buffer.id(), kStats * sizeof(std::uint32_t), nullptr, flags);
+        r.mapped = static_cast<const std::uint32_t*>(glMapNamedBufferRange(r.buffer.id(), 0, kStats * sizeof(std::uint32_t), flags));
+        if (!r.mapped) return false;  // the GL error callback has said why; these statistics are lost
+        m.readbacks.push_back(std::move(r));
+        slot = m.readbacks.end() - 1;
+    }
+    glCopyNamedBufferSubData(m.stats.id(), slot->buffer.id(), 0, 0, kStats * sizeof(std::uint32_t));
+    slot->fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    slot->tag = tag;
+    return slot->fence != nullptr;
+}
+
+std::vector<GpuGaussianDeformer::TaggedStats> GpuGaussianDeformer::poll_stats() {
+    std::vector<TaggedStats> done;
+    for (Impl::Readback& r : m_impl->readbacks) {
+        if (!r.fence) continue;
+        const GLenum state = glClientWaitSync(r.fence, GL_SYNC_FLUSH_COMMANDS_BIT, 0);  // zero timeout: never waits
+        if (state != GL_ALREADY_SIGNALED && state != GL_CONDITION_SATISFIED) continue;
+        glDeleteSync(r.fence);
+        r.fence = nullptr;
+        TaggedStats t;
+        t.tag = r.tag;
+        t.stats.inverted = r.mapped[0], t.stats.inside = r.mapped[1], t.stats.not_finite = r.mapped[2], t.stats.degenerate = r.mapped[3];
+        done.push_back(t);
+    }
+    return done;
+}
+
+Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp, const glm::dvec3& cloud_origin,
+                                     const Buffers& b, std::uint32_t count) {
+    if (Status s = ffd::validate(lattice); !s) return s;
+    if (b.sh_out && (b.sh_degree < 0 || b.sh_degree > 3)) return make_error("gaussian::GpuGaussianDeformer: SH degree must be 0..3");
+    Impl& m = *m_impl;
+    // The ffd pass's preparation and control-point upload (float displacements, M⁻¹, origin in double).
+    const ffd::detail::Prepared P = ffd::detail::prepare(lattice, cloud_origin);
+    const ffd::detail::FfdBlock block = ffd::detail::make_ffd_block(lattice, P, count);
+    glNamedBufferSubData(m.ubo.id(), 0, sizeof block, &block);
+    Impl::Controls& cp = m.controls[key];
+    if (!cp.buffer) cp.buffer = gfx::Buffer::create("gaussian.deform.control_points");
+    if (stamp == 0 || stamp != cp.stamp) {
+        ffd::detail::upload_control_points(cp.buffer.id(), cp.capacity, lattice, P);
+        cp.stamp = stamp;
+        ++m.uploads;
+    }
+    // Kernel choice as ffd::GpuDeformer (systems/ffd/ffd_gpu.cpp): Bernstein programs specialised per
+    // lattice shape (constant loop bounds), control points in shared memory on hardware GPUs, in a UBO
+    // on a software rasterizer; the B-spline reads 4 neighbours per axis: generic program.
+    const bool bernstein = lattice.basis == LatticeBasis::bernstein;
+    const bool fits_shared = lattice.size() * 3 * sizeof(float) <= std::size_t(m.max_shared);
+    const bool cp_shared = bernstein && fits_shared &&
+                           (m.kernel == ffd::GpuBernsteinKernel::shared || (m.kernel == ffd::GpuBernsteinKernel::automatic && !m.software));
+    const bool cp_ubo = bernstein && !cp_shared && lattice.size() * 16 <= std::size_t(m.max_ubo);
+    const std::uint32_t local_size = cp_shared ? 256 : 64;
+    GLuint program = m.program.id();
+    if (bernstein) {
+        m.last_kernel = cp_shared ? ffd::GpuBernsteinKernel::shared : ffd::GpuBernsteinKernel::direct;
+        const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) | (std::uint64_t(lattice.divisions.y) << 12) |
+                                    std::uint64_t(lattice.divisions.z) | (std::uint64_t(cp_shared) << 44) | (std::uint64_t(cp_ubo) << 45);
+        auto sp = m.specialised.find(shape);
+        if (sp == m.specialised.end()) {
+            const int maxb = std::max({lattice.divisions.x, lattice.divisions.y, lattice.divisions.z}) + 1;
+            gfx::Defines defines = {{"FFD_L", std::to_string(lattice.divisions.x)},
+                                    {"FFD_M", std::to_string(lattice.divisions.y)},
+                                    {"FFD_N", std::to_string(lattice.divisions.z)},
+                                    {"FFD_MAXB", std::to_string(maxb)}};
+            if (cp_shared) {
+                defines.push_back({"FFD_CP_SHARED", std::to_string(lattice.size())});
+                defines.push_back({"FFD_LOCAL_SIZE", std::to_string(local_size)});
+            }
+            if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});
+            auto prog = gfx::load_compute_program("gaussian/deform.comp", cp_shared ? "gaussian.deform.shared" : "gaussian.deform.specialised",
+                                                  defines);
+            if (!prog) return prog.error();
+            sp = m.specialised.emplace(shape, std::move(*prog)).first;
+        }
+        program = sp->second.id();
+    }
+    glUseProgram(program);
+    glProgramUniform1ui(program, 0, (b.frames ? 1u : 0u) | (b.frames && b.compose_frames ? 2u : 0u) | (b.sh_out ? 4u : 0u));
+    glProgramUniform1i(program, 1, b.sh_degree);
+    glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, m.ubo.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, cp.buffer.id());
+    if (cp_ubo) glBindBufferRange(GL_UNIFORM_BUFFER, SFFD_UBO_FFD_CONTROL, cp.buffer.id(), 0, GLsizeiptr(lattice.size() * 16));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, b.in);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED, b.out);
+    // Unused bindings still get a buffer (the statistics stand in): nothing reads or writes them.
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, b.frames ? b.frames : m.stats.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, b.sh_out && b.sh_in ? b.sh_in : m.stats.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED_SH, b.sh_out && b.sh_in ? b.sh_out : m.stats.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH_TABLES, m.sh_tables.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
+    // Beyond 65,535 groups (4.19M Gaussians at 64 wide): a 2D grid (runtime/gfx/dispatch.h).
+    if (Status s = gfx::dispatch_1d(count, local_size); !s) return s;
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    return {};
+}
+
+Status GpuGaussianDeformer::deform(GpuGaussians& dst, const glm::dvec3& origin, const std::vector<const Lattice*>& lattices,
+                                   const std::vector<std::uint64_t>& keys, const std::vector<std::uint64_t>& stamps, ShMode sh) {
+    if (!dst.rest) return make_error("gaussian::GpuGaussianDeformer::deform(): the cloud's rest buffer is not uploaded");
+    if (keys.size() != lattices.size() || stamps.size() != lattices.size())
+        return make_error("gaussian::GpuGaussianDeformer::deform(): one key and one stamp per lattice");
+    const std::uint32_t n = dst.count;
+    const bool view_dependent = dst.sh_degree > 0;
+    const bool with_frames = view_dependent && sh == ShMode::rotate_view;
+    const bool with_sh = view_dependent && sh == ShMode::rotate_coefficients;
+    if (with_sh && !dst.sh) return make_error("gaussian::GpuGaussianDeformer::deform(): the cloud's SH buffer is not uploaded");
+    const std::size_t sh_bytes = std::size_t(n) * std::size_t(sh_coeffs(dst.sh_degree)) * 3 * sizeof(float);
+    ensure(dst.deformed, "gaussians.deformed", std::size_t(n) * sizeof(gpu::GpuGaussian));
+    if (with_frames) ensure(dst.frames, "gaussians.frames", std::size_t(n) * 3 * sizeof(float) * 4);
+    if (with_sh) ensure(dst.deformed_sh, "gaussians.deformed_sh", sh_bytes);
+    // The first lattice reads `rest` (and `sh`), the next ones deform `deformed` (and `deformed_sh`) in
+    // place; with no lattice (or when every one fails) the outputs start as copies of the inputs and the
+    // frames as identity.
+    Buffers b;
+    b.in = dst.rest.id();
+    b.out = dst.deformed.id();
+    b.frames = with_frames ? dst.frames.id() : 0;
+    b.sh_in = with_sh ? dst.sh.id() : 0;
+    b.sh_out = with_sh ? dst.deformed_sh.id() : 0;
+    b.sh_degree = dst.sh_degree;
+    Status first_error;
+    for (std::size_t d = 0; d < lattices.size(); ++d) {
+        if (Status s = dispatch(*lattices[d], keys[d], stamps[d], origin, b, n); !s) {
+            if (first_error) first_error = s;
+            continue;
+        }
+        b.in = dst.deformed.id();
+        b.compose_frames = true;
+        if (with_sh) b.sh_in = dst.deformed_sh.id();
+    }
+    if (b.in == dst.rest.id() && n > 0) {
+        glCopyNamedBufferSubData(dst.rest.id(), dst.deformed.id(), 0, 0, GLsizeiptr(std::size_t(n) * sizeof(gpu::GpuGaussian)));
+        if (with_sh) glCopyNamedBufferSubData(dst.sh.id(), dst.deformed_sh.id(), 0, 0, GLsizeiptr(sh_bytes));
+        if (with_frames) {
+            std::vector<float> identity(std::size_t(n) * 12, 0.0f);
+            for (std::size_t i = 0; i < n; ++i) identity[i * 12] = identity[i * 12 + 5] = identity[i * 12 + 10] = 1.0f;
+            glNamedBufferSubData(dst.frames.id(), 0, GLsizeiptr(identity.size() * sizeof(float)), identity.data());
+        }
+    }
+    dst.has_deformed = true;
+    dst.deformed_on_gpu = true;
+    dst.has_frames = with_frames;
+    dst.has_deformed_sh = with_sh;
+    ++dst.deformed_version;
+    return first_error;
+}
+
+Result<GaussianCloud> read_back(const GpuGaussians& src, const glm::dvec3& origin) {
+    const GLuint buffer = src.draw_buffer();
+    if (!buffer) return make_error("gaussian::read_back(): nothing uploaded");
+    const std::size_t n = src.count;
+    std::vector<gpu::GpuGaussian> rows(n);
+    if (n) glGetNamedBufferSubData(buffer, 0, GLsizeiptr(n * sizeof(gpu::GpuGaussian)), rows.data());
+    GaussianCloud g;
+    g.origin = origin;
+    g.sh_degree = src.sh_degree;
+    g.positions.resize(n), g.scales.resize(n), g.rotations.resize(n), g.opacities.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const gpu::GpuGaussian& r = rows[i];
+        g.positions[i] = {r.pos_opacity[0], r.pos_opacity[1], r.pos_opacity[2]};
+        g.opacities[i] = r.pos_opacity[3];
+        g.rotations[i] = glm::quat(r.rotation[0], r.rotation[1], r.rotation[2], r.rotation[3]);
+        g.scales[i] = {r.scale[0], r.scale[1], r.scale[2]};
+    }
+    g.sh.resize(n * std::size_t(sh_coeffs(src.sh_degree)) * 3);
+    if (!g.sh.empty() && src.sh_buffer())
+        glGetNamedBufferSubData(src.sh_buffer(), 0, GLsizeiptr(g.sh.size() * sizeof(float)), g.sh.data());
+    if (src.has_frames && src.frames && n) {
+        std::vector<glm::vec4> cols(n * 3);
+        glGetNamedBufferSubData(src.frames.id(), 0, GLsizeiptr(cols.size() * sizeof(glm::vec4)), cols.data());
+        g.sh_frames.resize(n);
+        for (std::size_t i = 0; i < n; ++i) g.sh_frames[i] = glm::mat3(glm::vec3(cols[3 * i]), glm::vec3(cols[3 * i + 1]), glm::vec3(cols[3 * i + 2]));
+    }
+    return g;
+}
+
+Result<GaussianCloud> deform_on_gpu(GpuGaussianDeformer& deformer, const std::vector<const Lattice*>& lattices, const GaussianCloud& cloud,
+                                    ShMode sh, GpuDeformStats* stats) {
+    GpuGaussians scratch;
+    if (Status s = upload_rest(scratch, cloud, 1); !s) return s.error();
+    deformer.reset_stats();
+    // Stamp 0: always upload (the keys are this call's own, past the range of entity bits).
+    std::vector<std::uint64_t> keys(lattices.size()), stamps(lattices.size(), 0);
+    for (std::size_t d = 0; d < keys.size(); ++d) keys[d] = ~std::uint64_t(0) - d;
+    if (Status s = deformer.deform(scratch, cloud.origin, lattices, keys, stamps, sh); !s) return s.error();
+    if (stats) *stats = deformer.read_stats();
+    return read_back(scratch, cloud.origin);
+}
+
+}  // namespace sffd::gaussian

@@ -1,0 +1,112 @@
+// GPU deformation of 3D Gaussians (issue 17): the compute pass shaders/gaussian/deform.comp over the
+// GpuGaussianStore buffers (gpu_store.h). Per Gaussian and per lattice, in order: centre through the
+// lattice, Σ' = J Σ Jᵀ back to rotation + scale (one-sided Jacobi on the deformed axes J R S, in float),
+// opacity carried, and the polar rotation of J either composed into `frames` (ShMode::rotate_view:
+// the coefficients stay as authored, the renderer evaluates the SH at frameᵀ d) or applied to the SH
+// coefficients. The SH coefficients
+// themselves can be rotated instead (ShMode::rotate_coefficients: per band, the CPU's sh_rotation tables)
+// into `deformed_sh`.
+// The lattice evaluation is the ffd pass's own (shaders/ffd/ffd_common.glsl: Bernstein with the direct
+// or shared-memory kernel, B-spline), with the same control-point upload (systems/ffd/gpu_block.h).
+// Needs a current GL 4.5 context for every call.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "runtime/core/result.h"
+#include "runtime/gfx/gl_object.h"
+#include "systems/ffd/components.h"
+#include "systems/ffd/ffd_gpu.h"
+#include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_deform.h"
+#include "systems/gaussian/gpu_store.h"
+
+namespace sffd::gaussian {
+
+struct GpuDeformStats {
+    std::size_t inside = 0;      // Gaussian × lattice pairs inside the lattice
+    std::size_t inverted = 0;    // det J < 0
+    std::size_t degenerate = 0;  // |det J| <= 1e-12 ‖J‖³ (the CPU's rule): frame left as it was
+    std::size_t not_finite = 0;  // results that were not finite: written with opacity 0 and scale 0
+};
+
+// Uploads the authored cloud into `dst.rest` (GpuGaussian: centre, linear opacity, quaternion w x y z,
+// linear scale) and `dst.sh`, and records `version` as dst.rest_version. Invalidates `deformed`,
+// `deformed_sh` and `frames` (has_* false). Refuses clouds whose arrays differ in size.
+Status upload_rest(GpuGaussians& dst, const GaussianCloud& cloud, std::uint64_t version);
+
+class GpuGaussianDeformer {
+public:
+    // Compiles the compute program (context must be current).
+    static Result<GpuGaussianDeformer> create();
+
+    GpuGaussianDeformer(GpuGaussianDeformer&&) noexcept;
+    GpuGaussianDeformer& operator=(GpuGaussianDeformer&&) noexcept;
+    ~GpuGaussianDeformer();
+
+    // The buffers of one dispatch. `in`/`out` GpuGaussian[count] (may be the same buffer: in place).
+    // `frames` (vec4[3 * count], 0 = none) receives the polar rotations, composed onto what it holds when
+    // `compose_frames`, else starting from identity. `sh_out` (0 = none): the coefficients of `sh_in`
+    // (GaussianCloud::sh layout, degree `sh_degree`) rotated by the polar rotation (may equal `sh_in`).
+    struct Buffers {
+        GLuint in = 0, out = 0;
+        GLuint frames = 0;
+        bool compose_frames = false;
+        GLuint sh_in = 0, sh_out = 0;
+        int sh_degree = 0;
+    };
+    // One lattice over `count` Gaussians, positions relative to `cloud_origin`. Each `key` (e.g. the
+    // lattice entity) keeps its control points, uploaded only when `lattice_stamp` moved (0 always
+    // uploads). Does not wait for the GPU.
+    Status dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin,
+                    const Buffers& buffers, std::uint32_t count);
+
+    // Every lattice in order over a store entry whose `rest` (and `sh`) are current: writes `deformed`
+    // (grown when needed) and, when the SH have view-dependent terms (degree > 0), `frames`
+    // (ShMode::rotate_view) or `deformed_sh` (ShMode::rotate_coefficients); sets has_deformed,
+    // deformed_on_gpu, has_frames, has_deformed_sh, bumps deformed_version. No read-back. `keys`/`stamps`
+    // as in dispatch(), one per lattice. A lattice that fails validation is skipped (the first error is
+    // returned after the others ran).
+    Status deform(GpuGaussians& dst, const glm::dvec3& cloud_origin, const std::vector<const Lattice*>& lattices,
+                  const std::vector<std::uint64_t>& keys, const std::vector<std::uint64_t>& stamps, ShMode sh);
+
+    // Statistics accumulated since reset_stats(). read_stats() waits for the GPU (tests, commands).
+    void reset_stats();
+    GpuDeformStats read_stats();
+    // Non-blocking statistics for the frame path (as ffd::GpuDeformer): queue_stats() copies the counts
+    // accumulated since reset_stats() into a persistently mapped buffer behind a fence, tagged;
+    // poll_stats() returns those whose fence has signalled, never waiting. false: no read-back slot.
+    struct TaggedStats {
+        std::uint64_t tag = 0;
+        GpuDeformStats stats;
+    };
+    bool queue_stats(std::uint64_t tag);
+    std::vector<TaggedStats> poll_stats();
+    // Forgets control-point buffers whose key is not in `live`.
+    void retain_keys(const std::vector<std::uint64_t>& live);
+    // Bernstein kernel (ffd::GpuBernsteinKernel: automatic = shared on hardware GPUs, direct on llvmpipe).
+    void set_bernstein_kernel(ffd::GpuBernsteinKernel kernel);
+    ffd::GpuBernsteinKernel last_bernstein_kernel() const;
+    std::uint64_t upload_count() const;    // control-point uploads so far
+    std::uint64_t sync_readbacks() const;  // read_stats() calls so far (the frame path makes none)
+
+private:
+    struct Impl;
+    explicit GpuGaussianDeformer(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> m_impl;
+};
+
+// Read-back for tests and commands (waits for the GPU): the Gaussians `src` draws (deformed when
+// has_deformed, else rest) as a GaussianCloud with `origin`: positions, scales, rotations, opacities, the
+// SH (deformed_sh when has_deformed_sh, else sh) and sh_frames when has_frames.
+Result<GaussianCloud> read_back(const GpuGaussians& src, const glm::dvec3& origin);
+
+// Upload + deform through every lattice + read back, on a scratch store entry (tests, commands, the
+// benchmark's correctness check): rotate_view gives the result sh_frames (degree > 0), rotate_coefficients
+// rotated sh.
+Result<GaussianCloud> deform_on_gpu(GpuGaussianDeformer& deformer, const std::vector<const Lattice*>& lattices,
+                                    const GaussianCloud& cloud, ShMode sh, GpuDeformStats* stats = nullptr);
+
+}  // namespace sffd::gaussian
