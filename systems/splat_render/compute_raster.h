@@ -53,6 +53,14 @@ struct ComputeRaster {
     int width = 0, height = 0;
 };
 
+// RasterPath::automatic takes the compute rasteriser when the drawn splats' mean on-screen diameter
+// (splat_footprint_px, weighted by splat count) is at most this many pixels. Software rasterizer (llvmpipe,
+// measured with bench_raster_path, RESULTS.md): compute 2.4x faster at 1.7 px (1M-splat sphere), even at
+// 3.3 px (250k), 1.6x slower at 6.7 px (59,650). Hardware GPU: the hybrid bound itself (not measured: no
+// GPU was at hand; Schuetz et al. report their compute path 2-3x faster than GL points for small splats).
+inline constexpr double compute_raster_software_max_footprint = 2.5;
+inline constexpr double compute_raster_hardware_max_footprint = 8.0;
+
 // One cloud's inputs for a frame (the cull pass's outputs; buffers owned by the renderer).
 struct ComputeRasterDraw {
     ComputeRasterCloud* cloud = nullptr;

@@ -160,6 +160,7 @@ struct SplatRenderState {
 
     std::unordered_map<ecs::Entity, CloudGpu> clouds;
     bool software = false;  // the context is a software rasterizer (gfx::software_rasterizer)
+    std::uint32_t cpu_splat_passes = 0;  // this frame's loops over a cloud's splats on the CPU (RenderStats)
     bool failed = false;
 };
 
@@ -271,6 +272,7 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
         CloudGpu& gpu = s.clouds[e];
         const auto n = static_cast<std::uint32_t>(cloud.size());
         if (!splats.rest || splats.rest_version != version) {
+            ++s.cpu_splat_passes;
             std::vector<gpu::GpuSplat> packed = pack_splats(cloud);
             if (!splats.rest || splats.count != n) {
                 splats.rest = gfx::Buffer::create("splats.rest");
@@ -288,6 +290,7 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
             gpu.cpu_rest = {}, gpu.cpu_deformed = {}, gpu.cpu_cull = {};
         } else if (gpu.cpu_rest_version != version || gpu.cpu_rest.size() != n) {
             gpu.cpu_rest = pack_splats(cloud), gpu.cpu_rest_version = version;  // the CPU path was just chosen
+            ++s.cpu_splat_passes;
         }
         if (!gpu.frame_ubo) {
             gpu.frame_ubo = gfx::Buffer::create("render.frame_block");
@@ -313,12 +316,14 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
         if (gpu.bounds_version != version) {
             gpu.bounds = bounding_sphere(cloud);
             gpu.mean_radius = mean_splat_radius(cloud);
+            ++s.cpu_splat_passes;
             gpu.bounds_version = version;
         }
         // CPU deformation output (ffd's CPU path) that the GPU path did not write: upload it as `deformed`.
         if (const auto* deformed = reg.try_get<DeformedSplats>(e);
             deformed && deformed->cpu_valid && !deformed->gpu_valid && deformed->positions.size() == n) {
             if (gpu.cpu_deformed_version != deformed->version || !splats.deformed) {
+                ++s.cpu_splat_passes;
                 SplatCloud moved;
                 moved.positions = deformed->positions;
                 moved.normals = deformed->normals.size() == n ? deformed->normals : cloud.normals;
@@ -724,6 +729,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
                           gpu.uniform_radius.empty() ? nullptr : gpu.uniform_radius.data()};
             CpuCullResult& r = gpu.cpu_cull;
             cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
+            ++s.cpu_splat_passes;
             CpuCullResult::for_each_run(r.records, r.record_counts, r.block, [&](std::size_t at, const SplatRecord* p, std::size_t k) {
                 glNamedBufferSubData(gpu.records.id(), GLintptr(at * sizeof(SplatRecord)), GLsizeiptr(k * sizeof(SplatRecord)), p);
             });
@@ -825,11 +831,11 @@ void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, R
     if (settings.quality != Quality::hq || materials || plan.drawn.empty() || settings.raster_path == RasterPath::raster)
         return;
     if (settings.raster_path == RasterPath::automatic) {
-        // llvmpipe keeps the rasteriser (measured slower there: RESULTS.md, bench_raster_path).
-        if (s.software) return;
-        double splats = 0, footprint = 0;  // mean on-screen splat diameter over every drawn splat
+        // Mean on-screen splat diameter over every drawn splat, against the measured break-even (compute_raster.h).
+        double splats = 0, footprint = 0;
         for (const CloudGpu* gpu : plan.drawn) splats += gpu->count, footprint += gpu->count * gpu->footprint_px;
-        if (!(footprint <= SFFD_RASTER_MAX_SPRITE * splats)) return;
+        const double limit = s.software ? compute_raster_software_max_footprint : compute_raster_hardware_max_footprint;
+        if (!(footprint <= limit * splats)) return;
     }
     if (Status st = init_compute_raster(s.compute_raster); !st) {
         log::error("render_system(): ", st.message());
@@ -942,6 +948,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     stats = RenderStats{};
     stats.frame = frame.frame;
 
+    s.cpu_splat_passes = 0;
     FramePlan plan;
     plan.settings = reg.resource<RenderSettings>();
     PassLaps laps(plan.settings.time_passes);
@@ -980,6 +987,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     stats.visible_points = s.counts_points;
     stats.visible_quads = s.counts_quads;
     stats.raster_sprites = s.counts_raster_sprites;
+    stats.cpu_splat_passes = s.cpu_splat_passes;
     s.last_background = plan.common.background;
     if (plan.settings.time_passes) stats.total_ms = laps.total_ms();
 }

@@ -97,6 +97,7 @@ TEST_F(ComputeRaster_, RendersTheSameImageAsTheRasterPath) {
                     const FrameImage compute = render_path(RasterPath::compute, culling, cull);
                     const RenderStats& st = reg.resource<RenderStats>();
                     EXPECT_EQ(st.compute_rastered_clouds, 1u) << what;
+                    EXPECT_EQ(st.cpu_culled_clouds, cull == CullPath::cpu ? 1u : 0u) << what;
                     ASSERT_TRUE(st.counts_valid) << what;
                     if (distance >= 8.0) {
                         EXPECT_EQ(st.raster_sprites, 0u) << what;  // every sprite <= 8 px
@@ -229,16 +230,19 @@ TEST_F(ComputeRaster_, MatchesTheRasterPathOnGpuDeformedSplats) {
     ffd_release_gpu(reg);
 }
 
-// automatic: the rasteriser on a software rasterizer (llvmpipe, measured faster there); on a hardware GPU
-// the compute rasteriser when the splats are on average <= SFFD_RASTER_MAX_SPRITE px, else the rasteriser.
-TEST_F(ComputeRaster_, AutomaticChoiceFollowsTheHardwareAndTheSplatSize) {
+// automatic: the compute rasteriser when the splats' mean on-screen diameter is at most 8 px on a hardware
+// GPU, 2.5 px on a software rasterizer (llvmpipe's measured break-even); else the rasteriser.
+TEST_F(ComputeRaster_, AutomaticChoiceFollowsTheSplatSize) {
     const bool software = gfx::software_rasterizer();
     Camera& cam = add_camera(8.0);
     add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
-    add_cloud(fibonacci_sphere(20000));  // splat diameter ~2.3 px at distance 8 in a 320 px tall frame
+    add_cloud(fibonacci_sphere(20000));  // mean diameter 0.0201 * 2.414 * 320 / distance px
+    render_path(RasterPath::automatic);  // 1.9 px
+    EXPECT_EQ(reg.resource<RenderStats>().compute_rastered_clouds, 1u);
+    cam.eye = glm::dvec3(0.0, 0.0, 4.0);  // 3.9 px
     render_path(RasterPath::automatic);
     EXPECT_EQ(reg.resource<RenderStats>().compute_rastered_clouds, software ? 0u : 1u);
-    cam.eye = glm::dvec3(0.0, 0.0, 1.5);  // ~12 px
+    cam.eye = glm::dvec3(0.0, 0.0, 1.5);  // 10.3 px
     render_path(RasterPath::automatic);
     EXPECT_EQ(reg.resource<RenderStats>().compute_rastered_clouds, 0u);
     // Preview never uses it, whatever the setting.
