@@ -819,6 +819,7 @@ void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& p
     if (big) {
         glEnable(GL_SCISSOR_TEST);
         glScissor(rect.x, rect.y, rect.z, rect.w);
+        glBindVertexArray(s.vao.id());  // full-screen triangle from gl_VertexID, no attributes
         compute_raster_merge(s.compute_raster, plan.drawn.front()->frame_ubo.id());
         glDisable(GL_SCISSOR_TEST);
     }
@@ -888,6 +889,7 @@ void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePl
         if (big) {
             compute_raster_attribute(s.compute_raster, plan.compute, rect, s.depth.id());
             glDepthFunc(GL_NOTEQUAL);  // the resolve runs where a surface is visible (not the cleared 1.0)
+            glBindVertexArray(s.vao.id());
             compute_raster_resolve(s.compute_raster, plan.drawn.front()->frame_ubo.id());
         }
     }
