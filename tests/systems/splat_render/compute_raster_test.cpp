@@ -127,6 +127,37 @@ TEST_F(ComputeRaster_, RendersTheSameImageAsTheRasterPath) {
     }
 }
 
+// Two clouds in one frame, one textured and moved by a Transform, one not, overlapping on screen, with
+// some large splats: each cloud's lists, draws and counts stay its own, and the image matches the raster
+// path (both cull paths).
+TEST_F(ComputeRaster_, SeveralCloudsInOneFrame) {
+    add_camera(4.0);
+    add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
+    SplatCloud left = fibonacci_sphere(20000, 1.0, 0.8, 0xff3399ccu);
+    add_checker(left);
+    for (std::size_t i = 0; i < left.size(); i += 97) left.axis_u[i] *= 6.0f, left.axis_v[i] *= 6.0f;
+    const ecs::Entity a = add_cloud(std::move(left));
+    reg.emplace<Transform>(a, Transform{.translation = glm::dvec3(-0.6, 0.0, 0.0)});
+    const ecs::Entity b = add_cloud(fibonacci_sphere(30000, 0.8, 0.8, 0xffcc6633u));
+    reg.emplace<Transform>(b, Transform{.translation = glm::dvec3(0.7, 0.1, 0.3)});
+    for (CullPath cull : {CullPath::compute, CullPath::cpu}) {
+        const char* what = cull == CullPath::cpu ? "cpu cull" : "compute cull";
+        const FrameImage raster = render_path(RasterPath::raster, true, cull);
+        const RenderStats rs = reg.resource<RenderStats>();
+        const FrameImage compute = render_path(RasterPath::compute, true, cull);
+        const RenderStats cs = reg.resource<RenderStats>();
+        EXPECT_EQ(cs.compute_rastered_clouds, 2u) << what;
+        EXPECT_EQ(cs.visible_points, rs.visible_points) << what;
+        EXPECT_GT(cs.raster_sprites, 20u) << what;  // the enlarged splats of the textured cloud
+        EXPECT_LT(cs.raster_sprites, cs.visible_points / 4) << what;
+        const Comparison c = compare(raster, compute);
+        EXPECT_GT(c.covered_a, 20000) << what;
+        EXPECT_LE(c.coverage_mismatch, 2) << what;
+        EXPECT_GT(c.psnr, 60.0) << what;
+        EXPECT_LT(c.max_depth, 1e-4) << what;
+    }
+}
+
 // Exactly the sprites larger than SFFD_RASTER_MAX_SPRITE go to the rasteriser: every 211th splat facing
 // the camera is 25x larger (~40 px), the others are ~2 px; the big ones are counted independently here.
 TEST_F(ComputeRaster_, HybridSendsLargeSpritesToTheRasterPath) {
