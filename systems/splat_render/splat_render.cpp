@@ -23,11 +23,13 @@
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
 #include "shaders/common/bindings.h"
+#include "shaders/splat_render/compute_raster.h"
 #include "shaders/splat_render/frame_block.h"
 #include "shaders/splat_render/splat_record.h"
 #include "systems/ffd/components.h"
 #include "runtime/app/pass_timer.h"
 #include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/compute_raster.h"
 #include "systems/splat_render/cpu_cull.h"
 #include "systems/splat_render/splat_pack.h"
 
@@ -53,7 +55,11 @@ struct CloudGpu {
     const std::vector<glm::vec4>* uv_axes_cpu = nullptr;  // the cloud's, valid during one render_system call
     std::uint64_t texture_version = 0;
     BoundingSphere bounds;  // cloud space, for the framing camera
+    double mean_radius = 0;  // mean_splat_radius(), for the automatic raster path
     std::uint64_t bounds_version = 0;
+    double footprint_px = 0;  // splat_footprint_px() this frame (cull_pass)
+    bool flat_list = false;   // the CPU cull filled the flat-coloured sprite list this frame
+    ComputeRasterCloud raster;  // sprites the compute rasteriser leaves to the rasteriser (compute_raster.h)
     const SplatMaterial* material = nullptr;  // valid during one render_system call
     std::uint32_t count = 0;
     GLuint splats = 0;      // draw buffer this frame
@@ -98,8 +104,14 @@ struct CountsSlot {
     std::uint64_t serial = 0;     // issue order
     std::uint64_t frame = 0;      // FrameContext::frame of the frame that issued it
     std::uint32_t cpu_points = 0, cpu_quads = 0;  // counts of the CPU-culled clouds, known at once
-    std::uint32_t gpu_clouds = 0;  // compute-culled clouds copied into the slot
+    std::uint32_t gpu_clouds = 0;  // clouds copied into the slot
+    std::vector<std::uint8_t> parts;  // per copied cloud: counts_cull (its cull commands), counts_big (its
+                                      // compute rasteriser's big-sprite commands)
 };
+
+constexpr std::uint8_t counts_cull = 1, counts_big = 2;
+// Per cloud in the counts ring: the cull's three draw commands, then the compute rasteriser's two.
+constexpr std::size_t counts_entry_words = draw_command_words + 10;
 
 }  // namespace
 
@@ -143,10 +155,12 @@ struct SplatRenderState {
     std::uint64_t counts_issued = 0;  // serial of the last slot issued
     std::uint64_t counts_serial = 0;  // serial of the counts below (0: none arrived yet)
     std::uint64_t counts_frame = 0;
-    std::uint32_t counts_points = 0, counts_quads = 0;
+    std::uint32_t counts_points = 0, counts_quads = 0, counts_raster_sprites = 0;
+    ComputeRaster compute_raster;  // compute rasteriser (compute_raster.h), compiled on first use
 
     std::unordered_map<ecs::Entity, CloudGpu> clouds;
     bool software = false;  // the context is a software rasterizer (gfx::software_rasterizer)
+    std::uint32_t cpu_splat_passes = 0;  // this frame's loops over a cloud's splats on the CPU (RenderStats)
     bool failed = false;
 };
 
@@ -258,6 +272,7 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
         CloudGpu& gpu = s.clouds[e];
         const auto n = static_cast<std::uint32_t>(cloud.size());
         if (!splats.rest || splats.rest_version != version) {
+            ++s.cpu_splat_passes;
             std::vector<gpu::GpuSplat> packed = pack_splats(cloud);
             if (!splats.rest || splats.count != n) {
                 splats.rest = gfx::Buffer::create("splats.rest");
@@ -275,6 +290,7 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
             gpu.cpu_rest = {}, gpu.cpu_deformed = {}, gpu.cpu_cull = {};
         } else if (gpu.cpu_rest_version != version || gpu.cpu_rest.size() != n) {
             gpu.cpu_rest = pack_splats(cloud), gpu.cpu_rest_version = version;  // the CPU path was just chosen
+            ++s.cpu_splat_passes;
         }
         if (!gpu.frame_ubo) {
             gpu.frame_ubo = gfx::Buffer::create("render.frame_block");
@@ -299,12 +315,15 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
         gpu.uv_axes_cpu = gpu.texture && cloud.uv_axes.size() == n ? &cloud.uv_axes : nullptr;
         if (gpu.bounds_version != version) {
             gpu.bounds = bounding_sphere(cloud);
+            gpu.mean_radius = mean_splat_radius(cloud);
+            ++s.cpu_splat_passes;
             gpu.bounds_version = version;
         }
         // CPU deformation output (ffd's CPU path) that the GPU path did not write: upload it as `deformed`.
         if (const auto* deformed = reg.try_get<DeformedSplats>(e);
             deformed && deformed->cpu_valid && !deformed->gpu_valid && deformed->positions.size() == n) {
             if (gpu.cpu_deformed_version != deformed->version || !splats.deformed) {
+                ++s.cpu_splat_passes;
                 SplatCloud moved;
                 moved.positions = deformed->positions;
                 moved.normals = deformed->normals.size() == n ? deformed->normals : cloud.normals;
@@ -449,8 +468,10 @@ glm::ivec4 screen_rect(ecs::Registry& reg, const ViewSetup& view, int w, int h) 
 
 // programs: [sprites, quads] for the cloud; flat: the program for a textured cloud's flat-coloured sprites
 // (CpuCullResult::flat_records: the untextured variant of the pass; null for passes without colour).
+// big: the HQ passes of the compute rasteriser's frame draw only the sprites it left to them (indexed
+// draws over ComputeRasterCloud::big) and the quads.
 void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& programs, const CloudGpu& gpu,
-                const gfx::Program* flat = nullptr) {
+                const gfx::Program* flat = nullptr, bool big = false) {
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
@@ -459,16 +480,28 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
     if (gpu.texture) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
     glVertexArrayVertexBuffer(s.records_vao.id(), 0, gpu.records.id(), 0, GLsizei(SFFD_SPLAT_RECORD_BYTES));
+    if (big) glVertexArrayElementBuffer(s.records_vao.id(), gpu.raster.big.id());
     glBindVertexArray(s.records_vao.id());
     glUseProgram(programs[0].id());
-    glDrawArraysIndirect(GL_POINTS, nullptr);
+    if (big) {
+        glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.raster.commands.id());
+        glDrawElementsIndirect(GL_POINTS, GL_UNSIGNED_INT, nullptr);
+        glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
+    } else {
+        glDrawArraysIndirect(GL_POINTS, nullptr);
+    }
     glBindVertexArray(s.vao.id());
     glUseProgram(programs[1].id());
     glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(4 * sizeof(std::uint32_t)));
     if (gpu.texture) {
         glBindVertexArray(s.records_vao.id());
         glUseProgram(flat ? flat->id() : programs[0].id());
-        glDrawArraysIndirect(GL_POINTS, reinterpret_cast<const void*>(8 * sizeof(std::uint32_t)));
+        if (big) {
+            glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.raster.commands.id());
+            glDrawElementsIndirect(GL_POINTS, GL_UNSIGNED_INT, reinterpret_cast<const void*>(5 * sizeof(std::uint32_t)));
+        } else {
+            glDrawArraysIndirect(GL_POINTS, reinterpret_cast<const void*>(8 * sizeof(std::uint32_t)));
+        }
     }
 }
 
@@ -559,6 +592,13 @@ void release_render_state(ecs::Registry& registry) { registry.erase_resource<Spl
 
 namespace {
 
+// A cloud whose counts live on the GPU this frame: its cull commands (compute cull) and/or its compute
+// rasteriser's big-sprite commands.
+struct CountsSource {
+    const CloudGpu* gpu = nullptr;
+    std::uint8_t parts = 0;  // counts_cull | counts_big
+};
+
 // What the passes of one frame share: the settings, the camera, the per-cloud uniforms' common part and the
 // clouds that reached the draw lists (cull_pass fills `drawn`).
 struct FramePlan {
@@ -567,6 +607,10 @@ struct FramePlan {
     ViewSetup view;
     gpu::FrameBlock common;
     std::vector<CloudGpu*> drawn;
+    // Visible counts: the CPU-culled clouds' now, the others' through the counts ring (issue_counts).
+    std::vector<CountsSource> gpu_counts;
+    std::uint32_t cpu_points = 0, cpu_quads = 0;
+    std::vector<ComputeRasterDraw> compute;  // clouds on the compute rasteriser this frame (HQ)
 };
 
 // CPU time per pass for RenderStats, only with RenderSettings::time_passes (glFinish after each pass).
@@ -595,7 +639,7 @@ void ensure_counts_ring(SplatRenderState& s, std::size_t clouds) {
     if (s.counts_ring && s.counts_ring_clouds >= clouds) return;
     for (CountsSlot& slot : s.counts_slots) slot = CountsSlot{};  // in flight into the old ring: dropped
     s.counts_ring_clouds = std::max<std::size_t>(clouds, 4);
-    const auto bytes = GLsizeiptr(SplatRenderState::counts_slot_count * s.counts_ring_clouds * draw_command_words * sizeof(std::uint32_t));
+    const auto bytes = GLsizeiptr(SplatRenderState::counts_slot_count * s.counts_ring_clouds * counts_entry_words * sizeof(std::uint32_t));
     const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
     s.counts_ring = gfx::Buffer::create("render.visible_counts");
     glNamedBufferStorage(s.counts_ring.id(), bytes, nullptr, map | GL_CLIENT_STORAGE_BIT);
@@ -611,21 +655,24 @@ void collect_counts(SplatRenderState& s) {
         if (state != GL_ALREADY_SIGNALED && state != GL_CONDITION_SATISFIED) continue;
         slot.fence.reset();
         if (slot.serial <= s.counts_serial || !s.counts_mapped) continue;
-        std::uint32_t points = slot.cpu_points, quads = slot.cpu_quads;
-        const std::uint32_t* p = s.counts_mapped + i * s.counts_ring_clouds * draw_command_words;
+        std::uint32_t points = slot.cpu_points, quads = slot.cpu_quads, big = 0;
+        const std::uint32_t* p = s.counts_mapped + i * s.counts_ring_clouds * counts_entry_words;
         for (std::uint32_t c = 0; c < slot.gpu_clouds; ++c) {
-            const std::uint32_t* commands = p + c * draw_command_words;
-            points += commands[0] + commands[8];  // sprites + flat-coloured sprites
-            quads += commands[5];
+            const std::uint32_t* commands = p + c * counts_entry_words;
+            if (slot.parts[c] & counts_cull) {
+                points += commands[0] + commands[8];  // sprites + flat-coloured sprites
+                quads += commands[5];
+            }
+            if (slot.parts[c] & counts_big) big += commands[draw_command_words] + commands[draw_command_words + 5];
         }
         s.counts_serial = slot.serial, s.counts_frame = slot.frame;
-        s.counts_points = points, s.counts_quads = quads;
+        s.counts_points = points, s.counts_quads = quads, s.counts_raster_sprites = big;
     }
 }
 
-// Copies this frame's draw commands of the compute-culled clouds into a free slot of the ring and fences
-// it (the oldest slot when every one is still in flight: its counts are dropped, never waited for).
-void issue_counts(SplatRenderState& s, const std::vector<const CloudGpu*>& computed, std::uint32_t cpu_points,
+// Copies this frame's GPU-side draw commands into a free slot of the ring and fences it (the oldest slot
+// when every one is still in flight: its counts are dropped, never waited for).
+void issue_counts(SplatRenderState& s, const std::vector<CountsSource>& computed, std::uint32_t cpu_points,
                   std::uint32_t cpu_quads, std::uint64_t frame) {
     ensure_counts_ring(s, computed.size());
     std::size_t at = 0;
@@ -636,11 +683,18 @@ void issue_counts(SplatRenderState& s, const std::vector<const CloudGpu*>& compu
         }
         if (s.counts_slots[i].serial < s.counts_slots[at].serial) at = i;
     }
-    for (std::size_t c = 0; c < computed.size(); ++c)
-        glCopyNamedBufferSubData(computed[c]->commands.id(), s.counts_ring.id(), 0,
-                                 GLintptr((at * s.counts_ring_clouds + c) * draw_command_words * sizeof(std::uint32_t)),
-                                 draw_command_words * sizeof(std::uint32_t));
     CountsSlot& slot = s.counts_slots[at];
+    slot.parts.assign(computed.size(), 0);
+    for (std::size_t c = 0; c < computed.size(); ++c) {
+        const GLintptr entry = GLintptr((at * s.counts_ring_clouds + c) * counts_entry_words * sizeof(std::uint32_t));
+        if (computed[c].parts & counts_cull)
+            glCopyNamedBufferSubData(computed[c].gpu->commands.id(), s.counts_ring.id(), 0, entry,
+                                     draw_command_words * sizeof(std::uint32_t));
+        if (computed[c].parts & counts_big)
+            glCopyNamedBufferSubData(computed[c].gpu->raster.commands.id(), s.counts_ring.id(), 0,
+                                     entry + GLintptr(draw_command_words * sizeof(std::uint32_t)), 10 * sizeof(std::uint32_t));
+        slot.parts[c] = computed[c].parts;
+    }
     slot.fence = Fence(glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0));
     glFlush();  // a fence signals only once submitted; polls never flush (a headless run has no swap)
     slot.serial = ++s.counts_issued, slot.frame = frame;
@@ -651,8 +705,6 @@ void issue_counts(SplatRenderState& s, const std::vector<const CloudGpu*>& compu
 // Per-cloud uniforms, then culling and compaction of every cloud (the compute pass, or cpu_cull.h).
 void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderStats& stats) {
     const RenderSettings& settings = plan.settings;
-    std::vector<const CloudGpu*> computed;  // clouds culled by the compute pass (counts come back later)
-    std::uint32_t cpu_points = 0, cpu_quads = 0;
     auto scope = profiling::gpu_scope(reg, "render.cull");
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         CloudGpu& gpu = s.clouds[e];
@@ -661,6 +713,8 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
         const glm::dmat4 mv = plan.view.view * model_matrix(reg.try_get<Transform>(e), cloud.origin);
         b.model_view = glm::mat4(mv);
         b.normal_view = glm::mat4(glm::mat3(glm::inverseTranspose(glm::dmat3(mv))));
+        gpu.footprint_px = splat_footprint_px(mv, gpu.bounds.center, gpu.mean_radius, plan.view.projection[1][1], plan.height);
+        gpu.flat_list = false;
         b.params.w = gpu.texture ? 1.0f : 0.0f;
         b.material = glm::vec4(gpu.material->specular, gpu.material->shininess, 0.0f, 0.0f);
         b.counts.x = gpu.count;
@@ -675,6 +729,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
                           gpu.uniform_radius.empty() ? nullptr : gpu.uniform_radius.data()};
             CpuCullResult& r = gpu.cpu_cull;
             cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
+            ++s.cpu_splat_passes;
             CpuCullResult::for_each_run(r.records, r.record_counts, r.block, [&](std::size_t at, const SplatRecord* p, std::size_t k) {
                 glNamedBufferSubData(gpu.records.id(), GLintptr(at * sizeof(SplatRecord)), GLsizeiptr(k * sizeof(SplatRecord)), p);
             });
@@ -687,8 +742,9 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             });
             const std::uint32_t commands[draw_command_words] = {r.visible_records, 1, 0, 0, 6, r.visible_quads, 0, 0, r.visible_flat, 1, gpu.capacity, 0};
             glNamedBufferSubData(gpu.commands.id(), 0, sizeof commands, commands);
-            cpu_points += r.visible_records + r.visible_flat;
-            cpu_quads += r.visible_quads;
+            plan.cpu_points += r.visible_records + r.visible_flat;
+            plan.cpu_quads += r.visible_quads;
+            gpu.flat_list = bool(gpu.texture);
             ++stats.cpu_culled_clouds;
         } else {
             // Reset the counts on the GPU (a copy from an immutable buffer): a CPU upload into a buffer the
@@ -709,14 +765,12 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             // threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread time).
             if (Status st = gfx::dispatch_1d(gpu.count, SFFD_CULL_GROUP_SIZE); !st) log::error("render_system(): ", st.message());
             ++stats.compute_culled_clouds;
-            computed.push_back(&gpu);
+            plan.gpu_counts.push_back({&gpu, counts_cull});
         }
         stats.splats += gpu.count;
         plan.drawn.push_back(&gpu);
     });
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
-
-    issue_counts(s, computed, cpu_points, cpu_quads, stats.frame);
 }
 
 // Clears the output targets and sets the state every splat pass shares.
@@ -753,11 +807,50 @@ void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan
 }
 
 // HQ 1. visibility: eps-offset depth only.
-void visibility_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan) {
+// With the compute rasteriser (plan.compute): its visibility pass first, the rasteriser draws only what it
+// left over, then its depths are merged into the depth target inside `rect` (where the accumulation runs).
+void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect) {
     glBindFramebuffer(GL_FRAMEBUFFER, s.depth_fbo.id());
     glDepthFunc(GL_LESS);
     auto scope = profiling::gpu_scope(reg, "render.hq.visibility");
-    for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.visibility, *gpu);
+    const bool big = !plan.compute.empty();
+    if (big) compute_raster_visibility(s.compute_raster, plan.compute, plan.width, plan.height);
+    for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.visibility, *gpu, nullptr, big);
+    if (big) {
+        glEnable(GL_SCISSOR_TEST);
+        glScissor(rect.x, rect.y, rect.z, rect.w);
+        glBindVertexArray(s.vao.id());  // full-screen triangle from gl_VertexID, no attributes
+        compute_raster_merge(s.compute_raster, plan.drawn.front()->frame_ubo.id());
+        glDisable(GL_SCISSOR_TEST);
+    }
+}
+
+// Whether the HQ passes of this frame run on the compute rasteriser (RenderSettings::raster_path), and its
+// per-cloud inputs (plan.compute) when they do.
+void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, RenderStats& stats) {
+    const RenderSettings& settings = plan.settings;
+    if (settings.quality != Quality::hq || materials || plan.drawn.empty() || settings.raster_path == RasterPath::raster)
+        return;
+    if (settings.raster_path == RasterPath::automatic) {
+        // Mean on-screen splat diameter over every drawn splat, against the measured break-even (compute_raster.h).
+        double splats = 0, footprint = 0;
+        for (const CloudGpu* gpu : plan.drawn) splats += gpu->count, footprint += gpu->count * gpu->footprint_px;
+        const double limit = s.software ? compute_raster_software_max_footprint : compute_raster_hardware_max_footprint;
+        if (!(footprint <= limit * splats)) return;
+    }
+    if (Status st = init_compute_raster(s.compute_raster); !st) {
+        log::error("render_system(): ", st.message());
+        return;
+    }
+    for (CloudGpu* gpu : plan.drawn) {
+        ensure_compute_raster_cloud(gpu->raster, gpu->capacity);
+        plan.compute.push_back({&gpu->raster, gpu->frame_ubo.id(), gpu->records.id(), gpu->commands.id(), gpu->texture.id(),
+                                gpu->count, gpu->capacity, gpu->flat_list});
+        auto it = std::find_if(plan.gpu_counts.begin(), plan.gpu_counts.end(), [&](const CountsSource& c) { return c.gpu == gpu; });
+        if (it == plan.gpu_counts.end()) plan.gpu_counts.push_back({gpu, counts_big});
+        else it->parts |= counts_big;
+    }
+    stats.compute_rastered_clouds = std::uint32_t(plan.compute.size());
 }
 
 // Whether the drawn clouds differ in specular/shininess: then they blend into a third target (per-pixel
@@ -790,8 +883,15 @@ void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePl
     glBlendFunc(GL_ONE, GL_ONE);
     {
         auto scope = profiling::gpu_scope(reg, "render.hq.attribute");
+        const bool big = !plan.compute.empty();
         for (const CloudGpu* gpu : plan.drawn)
-            draw_cloud(s, s.attribute[gpu->texture ? 1 : 0][materials], *gpu, &s.attribute[0][materials][0]);
+            draw_cloud(s, s.attribute[gpu->texture ? 1 : 0][materials], *gpu, &s.attribute[0][materials][0], big);
+        if (big) {
+            compute_raster_attribute(s.compute_raster, plan.compute, rect, s.depth.id());
+            glDepthFunc(GL_NOTEQUAL);  // the resolve runs where a surface is visible (not the cleared 1.0)
+            glBindVertexArray(s.vao.id());
+            compute_raster_resolve(s.compute_raster, plan.drawn.front()->frame_ubo.id());
+        }
     }
     glDisable(GL_BLEND);
     glDepthMask(GL_TRUE);
@@ -850,6 +950,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     stats = RenderStats{};
     stats.frame = frame.frame;
 
+    s.cpu_splat_passes = 0;
     FramePlan plan;
     plan.settings = reg.resource<RenderSettings>();
     PassLaps laps(plan.settings.time_passes);
@@ -860,16 +961,21 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     plan.common = frame_block(reg, plan.settings, plan.view, s.max_point_size);
 
     cull_pass(reg, s, plan, stats);
+    const bool materials = plan.settings.quality == Quality::hq && clouds_differ_in_material(plan);
+    plan_compute_raster(s, plan, materials, stats);
+    // The counts ring's copies follow the passes that write the counts (cull; compute visibility).
+    if (plan.compute.empty()) issue_counts(s, plan.gpu_counts, plan.cpu_points, plan.cpu_quads, stats.frame);
     laps.lap(stats.cull_ms);
     begin_splat_passes(s, plan);
     if (plan.settings.quality == Quality::preview) {
         preview_pass(reg, s, plan);
         laps.lap(stats.preview_ms);
     } else {
-        visibility_pass(reg, s, plan);
+        const glm::ivec4 rect = screen_rect(reg, plan.view, plan.width, plan.height);
+        visibility_pass(reg, s, plan, rect);
+        if (!plan.compute.empty()) issue_counts(s, plan.gpu_counts, plan.cpu_points, plan.cpu_quads, stats.frame);
         laps.lap(stats.visibility_ms);
-        const bool materials = clouds_differ_in_material(plan);
-        attribute_pass(reg, s, plan, screen_rect(reg, plan.view, plan.width, plan.height), materials);
+        attribute_pass(reg, s, plan, rect, materials);
         laps.lap(stats.attribute_ms);
         shade_pass(reg, s, plan, materials);
         laps.lap(stats.shade_ms);
@@ -882,6 +988,8 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     stats.counts_valid = s.counts_serial != 0;
     stats.visible_points = s.counts_points;
     stats.visible_quads = s.counts_quads;
+    stats.raster_sprites = s.counts_raster_sprites;
+    stats.cpu_splat_passes = s.cpu_splat_passes;
     s.last_background = plan.common.background;
     if (plan.settings.time_passes) stats.total_ms = laps.total_ms();
 }

@@ -34,6 +34,14 @@ enum class Quality : std::uint8_t { hq, preview };
 // cloud deformed on the GPU: its splats exist only there).
 enum class CullPath : std::uint8_t { automatic, compute, cpu };
 
+// Who rasterises the HQ passes' sprites (compute_raster.h). raster: point sprites and quads through the
+// fixed-function pipeline. compute: sprites up to SFFD_RASTER_MAX_SPRITE pixels by compute shaders with
+// 32-bit atomics, larger ones and quads by the rasteriser in the same frame (hybrid). automatic: compute when
+// the splats are on average small on screen: at most 8 px on a hardware GPU, 2.5 px on a software rasterizer
+// (llvmpipe's measured break-even, compute_raster.h). Preview and frames whose clouds differ in material
+// always rasterise.
+enum class RasterPath : std::uint8_t { automatic, raster, compute };
+
 // Registry resource; zero-initialised fields are the defaults.
 struct RenderSettings {
     Quality quality = Quality::hq;
@@ -42,6 +50,7 @@ struct RenderSettings {
     std::optional<glm::vec3> background;  // linear RGB for display; captured frames keep alpha 0 there
     bool culling = true;                  // back-face + frustum culling (off: classify only)
     CullPath cull_path = CullPath::automatic;
+    RasterPath raster_path = RasterPath::automatic;
     float visibility_epsilon = 1.0f;      // HQ depth offset along the view ray, in units of each splat's radius
     bool time_passes = false;             // glFinish after each pass and record CPU times in RenderStats
     bool aux_outputs = false;             // also write the normal + depth target (EXR Z, N; capture_frame's
@@ -61,6 +70,11 @@ struct RenderStats {
     bool counts_valid = false;
     std::uint32_t cpu_culled_clouds = 0;      // clouds culled on the CPU this frame (CullPath)
     std::uint32_t compute_culled_clouds = 0;  // clouds culled by the compute pass this frame
+    std::uint32_t compute_rastered_clouds = 0;  // clouds whose HQ sprites went through the compute rasteriser
+    std::uint32_t raster_sprites = 0;  // of those clouds' sprites, the ones too large for it, drawn by the
+                                       // rasteriser (frame counts_frame; included in visible_points)
+    std::uint32_t cpu_splat_passes = 0;  // loops over a cloud's splats on the CPU this frame (uploads of
+                                         // changed clouds, their bounds, the CPU cull): 0 in a GPU-resident frame
     double cull_ms = 0, visibility_ms = 0, attribute_ms = 0, shade_ms = 0, preview_ms = 0, total_ms = 0;
 };
 

@@ -24,6 +24,8 @@ constexpr const char* usage_text =
     "  --frames N            measured frames (default 120)\n"
     "  --warmup W            frames run before measuring (default 10)\n"
     "  --quality hq|preview  render quality (default hq)\n"
+    "  --raster auto|raster|compute  HQ splat rasteriser: the fixed-function one, the compute one\n"
+    "                        (hybrid: sprites > 8 px stay on the rasteriser), or by splat size (default)\n"
     "  --backend cpu|gpu     deformation backend (default gpu; cpu runs without a GL context when the\n"
     "                        renderer is not wanted)\n"
     "  --sync                time GPU passes with glFinish + CPU clock instead of timer queries\n"
@@ -142,6 +144,9 @@ int run_profile_command(cli::Args args) {
             if (!int_value(o.naive_frames)) return usage_error("--naive-frames takes a non-negative integer");
         } else if (a == "--quality") {
             if (!value(o.quality) || (o.quality != "hq" && o.quality != "preview")) return usage_error("--quality hq|preview");
+        } else if (a == "--raster") {
+            if (!value(o.raster) || (o.raster != "auto" && o.raster != "raster" && o.raster != "compute"))
+                return usage_error("--raster auto|raster|compute");
         } else if (a == "--backend") {
             if (!value(o.backend) || (o.backend != "cpu" && o.backend != "gpu")) return usage_error("--backend cpu|gpu");
         } else if (a == "--drive") {
@@ -183,6 +188,7 @@ int run_profile_command(cli::Args args) {
     s.warmup = o.warmup;
     s.quality = o.quality;
     s.backend = o.backend;
+    s.raster = o.raster;
     s.sync = o.sync;
     s.drive = o.drive;
     auto r = run_profile(s);

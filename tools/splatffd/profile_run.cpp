@@ -171,6 +171,9 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     if (have_gl && want_render) {
         auto& rs = registry.set_resource<render::RenderSettings>();
         rs.quality = s.quality == "preview" ? render::Quality::preview : render::Quality::hq;
+        rs.raster_path = s.raster == "compute" ? render::RasterPath::compute
+                       : s.raster == "raster"  ? render::RasterPath::raster
+                                               : render::RasterPath::automatic;
     }
     // The FFD system picks its CPU path on a software rasterizer; --backend forces either path.
     registry.set_resource<FfdSettings>(FfdSettings{.force_cpu = s.backend == "cpu", .force_gpu = s.backend == "gpu"});

@@ -24,6 +24,7 @@ struct Options {
     int warmup = 10;
     std::string quality = "hq";
     std::string backend = "gpu";
+    std::string raster = "auto";  // HQ rasteriser: auto, raster, compute (render::RasterPath)
     bool sync = false;
     std::string drive = "global twist";
     std::string json, csv, svg, trace, compare;
@@ -36,7 +37,7 @@ struct Options {
 struct RunSetup {
     std::string scene;
     int frames = 120, warmup = 10;
-    std::string quality = "hq", backend = "gpu", drive = "global twist";
+    std::string quality = "hq", backend = "gpu", drive = "global twist", raster = "auto";
     bool sync = false;
     int lattice_points = 0;           // > 0: replace every lattice's divisions (control points per axis)
     std::string basis;                // "": keep

@@ -28,4 +28,8 @@ for m in 0 1; do for l in 0 1 2 3 4; do check splat_render/shade.frag frag LIGHT
 check splat_render/fullscreen.vert vert
 check splat_render/cull.comp comp
 for t in 0 1; do for l in 0 1; do check splat_render/cull.comp comp TEXTURED=$t LIT=$l LIGHTS=$((l * 2)); done; done
+check splat_render/compute_visibility.comp comp
+for t in 0 1; do check splat_render/compute_attribute.comp comp TEXTURED=$t; done
+check splat_render/compute_merge.frag frag
+check splat_render/compute_resolve.frag frag
 exit $status

@@ -83,7 +83,10 @@ using namespace sffd::render::test;
 
 namespace {
 
-class Readback_ : public GlRenderTest {};
+class Readback_ : public GlRenderTest {
+protected:
+    void gpu_deformation_frames_never_wait(RasterPath raster);
+};
 
 TEST_F(Readback_, SteadyStateFramesNeverWaitAndCountsStillArrive) {
     add_camera(2.6);
@@ -132,8 +135,9 @@ TEST_F(Readback_, SteadyStateFramesNeverWaitAndCountsStillArrive) {
 // The same with the FFD compute pass in the frame (ffd_system's GPU path, forced on llvmpipe): a lattice
 // edited every frame is re-uploaded and the cloud re-deformed on the GPU, the compute cull draws it, and
 // still nothing waits; the deformer's statistics arrive late through fences (DeformedSplats::
-// inverted_version moves on), and the system makes no pass over the splats on the CPU.
-TEST_F(Readback_, GpuDeformationFramesNeverWait) {
+// inverted_version moves on), and neither system makes a pass over the splats on the CPU. With the compute
+// rasteriser (raster_path compute) the same holds, and its hybrid counts arrive through the ring too.
+void Readback_::gpu_deformation_frames_never_wait(RasterPath raster) {
     add_camera(2.6);
     add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
     const ecs::Entity cloud = add_cloud(fibonacci_sphere(20000));
@@ -143,7 +147,7 @@ TEST_F(Readback_, GpuDeformationFramesNeverWait) {
     reg.emplace<Deformers>(cloud, Deformers{{le}});
     reg.set_resource<FfdSettings>().force_gpu = true;
     RenderSettings s;
-    s.width = 320, s.height = 240, s.cull_path = CullPath::compute;
+    s.width = 320, s.height = 240, s.cull_path = CullPath::compute, s.raster_path = raster;
     reg.set_resource<RenderSettings>(s);
     const auto frame = [&](std::uint64_t f) {
         ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.02, glm::dvec3(0.0));
@@ -156,7 +160,14 @@ TEST_F(Readback_, GpuDeformationFramesNeverWait) {
     const FfdSettings before = reg.resource<FfdSettings>();
     const std::uint64_t stats_before = reg.get<DeformedSplats>(cloud).inverted_version;
     g_buffer_reads = g_finishes = g_blocking_waits = g_maps = 0;
-    for (std::uint64_t f = 10; f < 40; ++f) frame(f);
+    std::uint32_t render_cpu_passes = 0;
+    for (std::uint64_t f = 10; f < 40; ++f) {
+        frame(f);
+        const RenderStats& st = reg.resource<RenderStats>();
+        render_cpu_passes += st.cpu_splat_passes;
+        EXPECT_EQ(st.compute_rastered_clouds, raster == RasterPath::compute ? 1u : 0u);
+    }
+    EXPECT_EQ(render_cpu_passes, 0u);
     EXPECT_EQ(g_buffer_reads.load(), 0);
     EXPECT_EQ(g_finishes.load(), 0);
     EXPECT_EQ(g_blocking_waits.load(), 0);
@@ -168,7 +179,15 @@ TEST_F(Readback_, GpuDeformationFramesNeverWait) {
     EXPECT_EQ(after.gpu_sync_readbacks, before.gpu_sync_readbacks);
     EXPECT_GT(reg.get<DeformedSplats>(cloud).inverted_version, stats_before);  // statistics still arrive
     EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 1u);
+    EXPECT_TRUE(reg.resource<RenderStats>().counts_valid);
+    EXPECT_GE(reg.resource<RenderStats>().counts_frame, 30u);  // the counts kept arriving
     ffd_release_gpu(reg);
+}
+
+TEST_F(Readback_, GpuDeformationFramesNeverWait) { gpu_deformation_frames_never_wait(RasterPath::raster); }
+
+TEST_F(Readback_, GpuDeformationFramesNeverWaitOnTheComputeRasteriser) {
+    gpu_deformation_frames_never_wait(RasterPath::compute);
 }
 
 // The interposition is live: a read-back in this process is seen (else the test above could not fail).
