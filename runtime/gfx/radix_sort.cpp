@@ -45,7 +45,7 @@ Status radix_sort(RadixSorter& s, GLuint keys, GLuint values, std::uint32_t coun
         grow(s.keys_scratch, count), grow(s.values_scratch, count);
         s.scratch_elements = count;
     }
-    const std::uint64_t entries = std::uint64_t(blocks) * SFFD_RADIX_BUCKETS;
+    const std::uint64_t entries = std::uint64_t(blocks) * SFFD_RADIX_BUCKETS + 1;  // + the scan's total
     if (entries > s.histogram_entries) {
         grow(s.histogram, entries);
         s.histogram_entries = entries;
@@ -57,7 +57,7 @@ Status radix_sort(RadixSorter& s, GLuint keys, GLuint values, std::uint32_t coun
         glProgramUniform1ui(p, SFFD_RADIX_LOC_COUNT, count);
         glProgramUniform1ui(p, SFFD_RADIX_LOC_BLOCKS, blocks);
     }
-    glProgramUniform1ui(s.scan.id(), SFFD_RADIX_LOC_BLOCKS, blocks);
+    glProgramUniform1ui(s.scan.id(), SFFD_RADIX_LOC_COUNT, blocks * SFFD_RADIX_BUCKETS);
     bind(SFFD_RADIX_SSBO_HISTOGRAM, s.histogram.id());
     for (int pass = 0; pass < passes; ++pass) {
         const GLuint shift = GLuint(pass) * SFFD_RADIX_BITS;
@@ -84,6 +84,17 @@ Status radix_sort(RadixSorter& s, GLuint keys, GLuint values, std::uint32_t coun
         glCopyNamedBufferSubData(keys_in, keys, 0, 0, GLsizeiptr(count) * 4);
         glCopyNamedBufferSubData(values_in, values, 0, 0, GLsizeiptr(count) * 4);
     }
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    return {};
+}
+
+Status exclusive_scan(RadixSorter& s, GLuint buffer, std::uint32_t count) {
+    if (count == 0xffffffffu) return make_error("exclusive_scan(): the total of 2^32 - 1 elements has no slot");
+    glProgramUniform1ui(s.scan.id(), SFFD_RADIX_LOC_COUNT, count);
+    bind(SFFD_RADIX_SSBO_HISTOGRAM, buffer);
+    glUseProgram(s.scan.id());
+    glDispatchCompute(1, 1, 1);
+    glUseProgram(0);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
     return {};
 }

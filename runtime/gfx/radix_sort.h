@@ -39,4 +39,9 @@ Result<RadixSorter> create_radix_sorter();
 // (shader storage, buffer update and command barriers are issued).
 Status radix_sort(RadixSorter& sorter, GLuint keys, GLuint values, std::uint32_t count, int key_bits = 32);
 
+// Exclusive prefix sum of the first `count` uints of `buffer`, in place, with their total written at
+// element `count` (the buffer holds count + 1 uints). One work group (the sort's histogram scan): fine
+// for the sort's histograms and for millions of elements on a CPU rasterizer, slow-ish on a big GPU.
+Status exclusive_scan(RadixSorter& sorter, GLuint buffer, std::uint32_t count);
+
 }  // namespace sffd::gfx

@@ -139,6 +139,26 @@ TEST_F(RadixSort, BlocksBeyondOneGridRow) {
     check(random_keys(9000, 0xffffffffu, 11));
 }
 
+TEST_F(RadixSort, ExclusiveScanWithTotal) {
+    // The histogram scan, exposed for gl_render's tile offsets: in place, total after the elements.
+    for (std::uint32_t n : {0u, 1u, 255u, 256u, 257u, 100000u}) {
+        const std::vector<std::uint32_t> in = random_keys(n, 40, n + 1);
+        std::vector<std::uint32_t> data(in);
+        data.push_back(0xdeadbeefu);  // the total's slot
+        data.push_back(0x12345678u);  // past it: untouched
+        gfx::Buffer b = gfx::Buffer::create("test.scan");
+        glNamedBufferData(b.id(), GLsizeiptr(data.size() * 4), data.data(), GL_DYNAMIC_COPY);
+        ASSERT_TRUE(gfx::exclusive_scan(*sorter, b.id(), n));
+        glGetNamedBufferSubData(b.id(), 0, GLsizeiptr(data.size() * 4), data.data());
+        std::uint32_t run = 0;
+        std::size_t wrong = 0;
+        for (std::uint32_t i = 0; i < n; ++i) wrong += data[i] != run, run += in[i];
+        EXPECT_EQ(wrong, 0u) << n;
+        EXPECT_EQ(data[n], run) << n;
+        EXPECT_EQ(data[n + 1], 0x12345678u) << n;
+    }
+}
+
 TEST_F(RadixSort, BadKeyWidthIsAnError) {
     gfx::Buffer b = gfx::Buffer::create("test.bad");
     glNamedBufferData(b.id(), 64, nullptr, GL_DYNAMIC_COPY);
