@@ -18,7 +18,13 @@ Result<RadixSorter> create_radix_sorter() {
     if (!scan) return scan.error();
     auto scatter = load_compute_program("common/radix_sort_scatter.comp", "radix_sort.scatter");
     if (!scatter) return scatter.error();
+    auto reduce = load_compute_program("common/scan_reduce.comp", "scan.reduce");
+    if (!reduce) return reduce.error();
+    auto add = load_compute_program("common/scan_add.comp", "scan.add");
+    if (!add) return add.error();
     s.count = std::move(*count), s.scan = std::move(*scan), s.scatter = std::move(*scatter);
+    s.scan_reduce = std::move(*reduce), s.scan_add = std::move(*add);
+    s.scan_sums = Buffer::create("scan.block_sums");
     s.keys_scratch = Buffer::create("radix_sort.keys_scratch");
     s.values_scratch = Buffer::create("radix_sort.values_scratch");
     s.histogram = Buffer::create("radix_sort.histogram");
@@ -90,10 +96,32 @@ Status radix_sort(RadixSorter& s, GLuint keys, GLuint values, std::uint32_t coun
 
 Status exclusive_scan(RadixSorter& s, GLuint buffer, std::uint32_t count) {
     if (count == 0xffffffffu) return make_error("exclusive_scan(): the total of 2^32 - 1 elements has no slot");
-    glProgramUniform1ui(s.scan.id(), SFFD_RADIX_LOC_COUNT, count);
-    bind(SFFD_RADIX_SSBO_HISTOGRAM, buffer);
+    if (count == 0) {
+        const GLuint zero = 0;
+        glClearNamedBufferSubData(buffer, GL_R32UI, 0, sizeof(GLuint), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        return {};
+    }
+    const std::uint32_t blocks = (count + SFFD_RADIX_BLOCK - 1) / SFFD_RADIX_BLOCK;
+    if (blocks + 1u > s.scan_sum_entries) {
+        grow(s.scan_sums, blocks + 1u);
+        s.scan_sum_entries = blocks + 1u;
+    }
+    const std::uint32_t max_x = s.max_groups_x ? s.max_groups_x : dispatch_group_limit();
+    for (GLuint p : {s.scan_reduce.id(), s.scan_add.id()}) {
+        glProgramUniform1ui(p, SFFD_RADIX_LOC_COUNT, count);
+        glProgramUniform1ui(p, SFFD_RADIX_LOC_BLOCKS, blocks);
+    }
+    glProgramUniform1ui(s.scan.id(), SFFD_RADIX_LOC_COUNT, blocks);
+    bind(SFFD_RADIX_SSBO_KEYS_IN, buffer);
+    bind(SFFD_RADIX_SSBO_HISTOGRAM, s.scan_sums.id());
+    glUseProgram(s.scan_reduce.id());
+    if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st) return st;
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     glUseProgram(s.scan.id());
     glDispatchCompute(1, 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    glUseProgram(s.scan_add.id());
+    if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st) return st;
     glUseProgram(0);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
     return {};

@@ -23,8 +23,10 @@ namespace sffd::gfx {
 
 struct RadixSorter {
     Program count, scan, scatter;
-    Buffer keys_scratch, values_scratch, histogram;  // grow-only: ping-pong targets and the block histograms
-    std::uint64_t scratch_elements = 0, histogram_entries = 0;
+    Program scan_reduce, scan_add;  // exclusive_scan()'s first and last steps (the middle one is `scan`)
+    // Grow-only: ping-pong targets, the block histograms, exclusive_scan()'s block sums.
+    Buffer keys_scratch, values_scratch, histogram, scan_sums;
+    std::uint64_t scratch_elements = 0, histogram_entries = 0, scan_sum_entries = 0;
     std::uint32_t max_groups_x = 0;  // work groups per grid row; 0 = dispatch_group_limit()
 };
 
@@ -40,8 +42,9 @@ Result<RadixSorter> create_radix_sorter();
 Status radix_sort(RadixSorter& sorter, GLuint keys, GLuint values, std::uint32_t count, int key_bits = 32);
 
 // Exclusive prefix sum of the first `count` uints of `buffer`, in place, with their total written at
-// element `count` (the buffer holds count + 1 uints). One work group (the sort's histogram scan): fine
-// for the sort's histograms and for millions of elements on a CPU rasterizer, slow-ish on a big GPU.
+// element `count` (the buffer holds count + 1 uints; sums wrap modulo 2^32). Reduce-then-scan: block
+// sums (scan_reduce.comp), their scan by one group (radix_sort_scan.comp: up to ~10^5 blocks is cheap),
+// each block scanned with its offset (scan_add.comp). No readback.
 Status exclusive_scan(RadixSorter& sorter, GLuint buffer, std::uint32_t count);
 
 }  // namespace sffd::gfx

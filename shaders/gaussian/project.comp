@@ -67,6 +67,9 @@ bool project(uint i) {
     const float depth = -t.z;
     depth_keys[i] = SFFD_GAUSS_NOT_DRAWN;
     if (!(depth >= u_near)) { projected[i] = o; return false; }
+    // Culled too: opacity below 1/255 (every α = min(0.99, o·exp(power ≤ 0)) ≤ o would be skipped, as in
+    // the reference), and NaN opacities.
+    if (!(g.pos_opacity.w >= 1.0 / 255.0)) { projected[i] = o; return false; }
     // Σ = R S Sᵀ Rᵀ from the quaternion (w, x, y, z).
     const float w = g.rotation.x, x = g.rotation.y, y = g.rotation.z, z = g.rotation.w;
     const mat3 r = mat3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y),

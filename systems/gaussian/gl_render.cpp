@@ -110,9 +110,13 @@ Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>
     return {};
 }
 
+// Hardware GPUs: the GPU sort (no readback, no CPU work). Software rasterizers: the CPU sort, faster
+// there at every size measured (bench_gaussian_gl, 1200x797 frames, see systems/gaussian/README.md):
+// llvmpipe's "GPU" is the same CPU cores, and TBB's sort of 64-bit (key, index) pairs beats 8 radix
+// passes of compute shaders run by llvmpipe (1M: 33 ms vs ~150+ ms; the readback is a memcpy there).
 bool gpu_sort_preferred(const GlRenderer& r, std::size_t gaussians) {
-    (void)gaussians;
-    return !r.software;  // PLACEHOLDER: llvmpipe measurements
+    (void)gaussians;  // the CPU sort wins on llvmpipe at 100k, 1M and 6M alike
+    return !r.software;
 }
 
 namespace {
@@ -216,6 +220,8 @@ void tile_uniforms(GLuint program, const ReferenceOptions& o, glm::uvec2 tiles) 
     glProgramUniform2ui(program, glGetUniformLocation(program, "u_tiles"), tiles.x, tiles.y);
 }
 
+double stage_ms(const GlRenderer& r, std::chrono::steady_clock::time_point& t);
+
 // Step 3, tiles (3DGS's rasterizer in compute): per drawn Gaussian in depth order the tiles it touches,
 // their exclusive scan, one (tile id, Gaussian) entry per overlap in depth order, a stable radix sort by
 // tile id (so (tile, depth) order), per-tile ranges, and a 16x16 group per tile blending front to back.
@@ -228,6 +234,8 @@ Status blend_tiles(GlRenderer& r, const ReferenceOptions& o) {
     if (tiles.x > gfx::kMinMaxComputeGroups || tiles.y > gfx::kMinMaxComputeGroups)
         return make_error("draw_gl(): image too large for one tile group per tile");
     const std::uint32_t max_x = std::max(1u, r.max_groups_x);
+    r.sorter.max_groups_x = max_x;
+    auto t = std::chrono::steady_clock::now();
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
@@ -270,6 +278,7 @@ Status blend_tiles(GlRenderer& r, const ReferenceOptions& o) {
     glUseProgram(rp);
     if (Status st = gfx::dispatch_1d(entries, 64, max_x); !st) return st.error();
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    r.tile_prepare_ms = stage_ms(r, t);
     tile_uniforms(r.tile_blend.id(), o, tiles);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
     glBindImageTexture(SFFD_GAUSS_IMAGE_COLOR, r.color.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
@@ -324,7 +333,7 @@ Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const Reference
         sort_cpu(r);
         stage_ms(r, t);
     }
-    r.tile_entries = 0;
+    r.tile_entries = 0, r.tile_prepare_ms = 0.0;
     if (r.blend_path == BlendPath::tiles) {
         if (Status st = blend_tiles(r, o); !st) return st.error();
     } else {

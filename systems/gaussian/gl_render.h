@@ -59,7 +59,8 @@ struct GlRenderer {
     // always measured: key readback, which waits for the projection, + sort + upload); (tile path) the
     // number of (tile, Gaussian) entries.
     bool gpu_sort_used = false;
-    double project_ms = 0.0, sort_ms = 0.0, blend_ms = 0.0, readback_ms = 0.0;
+    // blend_ms includes, on the tile path, tile_prepare_ms: tile counts, scan, entries, their sort, ranges.
+    double project_ms = 0.0, sort_ms = 0.0, blend_ms = 0.0, readback_ms = 0.0, tile_prepare_ms = 0.0;
     std::uint64_t tile_entries = 0;
     // Work groups per row of the projection dispatch. GL guarantees only 65,535 groups per dimension
     // (64 × 65,535 = 4.19M Gaussians), so larger clouds are dispatched as a 2D grid; tests lower this to

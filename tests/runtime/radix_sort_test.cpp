@@ -140,8 +140,10 @@ TEST_F(RadixSort, BlocksBeyondOneGridRow) {
 }
 
 TEST_F(RadixSort, ExclusiveScanWithTotal) {
-    // The histogram scan, exposed for gl_render's tile offsets: in place, total after the elements.
-    for (std::uint32_t n : {0u, 1u, 255u, 256u, 257u, 100000u}) {
+    // gl_render's tile offsets: in place, total after the elements; block boundaries (2,048), and a grid
+    // of blocks over several rows.
+    for (std::uint32_t n : {0u, 1u, 255u, 256u, 257u, 2048u, 2049u, 100000u, 1000000u}) {
+        sorter->max_groups_x = n == 100000u ? 4u : 0u;
         const std::vector<std::uint32_t> in = random_keys(n, 40, n + 1);
         std::vector<std::uint32_t> data(in);
         data.push_back(0xdeadbeefu);  // the total's slot

@@ -49,7 +49,7 @@ void BM_GaussianGlFrame(benchmark::State& state) {
     cam.fov_y_degrees = 45.0f;
     gaussian::ReferenceOptions o;
     o.width = 1200, o.height = 797;
-    double project_ms = 0.0, sort_ms = 0.0, blend_ms = 0.0, readback_ms = 0.0;
+    double project_ms = 0.0, sort_ms = 0.0, blend_ms = 0.0, readback_ms = 0.0, tile_prepare_ms = 0.0;
     if (auto s = gaussian::upload_gl(*r, g); !s) state.SkipWithError(s.message().c_str());
     // One frame untimed: llvmpipe compiles each shader on its first dispatch (hundreds of ms).
     if (auto img = gaussian::draw_gl(*r, cam, o); !img) state.SkipWithError(img.message().c_str());
@@ -57,6 +57,7 @@ void BM_GaussianGlFrame(benchmark::State& state) {
         auto img = gaussian::draw_gl(*r, cam, o);
         if (!img) state.SkipWithError(img.message().c_str());
         project_ms += r->project_ms, sort_ms += r->sort_ms, blend_ms += r->blend_ms, readback_ms += r->readback_ms;
+        tile_prepare_ms += r->tile_prepare_ms;
     }
     const double runs = double(state.iterations());
     state.SetItemsProcessed(int64_t(state.iterations()) * state.range(0));
@@ -64,6 +65,7 @@ void BM_GaussianGlFrame(benchmark::State& state) {
     state.counters["sort_ms"] = sort_ms / runs;
     state.counters["blend_ms"] = blend_ms / runs;
     state.counters["readback_ms"] = readback_ms / runs;
+    state.counters["tile_prepare_ms"] = tile_prepare_ms / runs;  // part of blend_ms
     state.counters["tile_entries"] = double(r->tile_entries);
     state.SetLabel(ctx->renderer());
     r.reset();

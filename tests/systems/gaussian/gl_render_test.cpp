@@ -178,6 +178,29 @@ TEST_F(GaussianGl, OffscreenGaussiansAreCulledBeforeTheSort) {
     EXPECT_GT(psnr(*img, render_reference(g, cam, o)), 40.0);
 }
 
+TEST_F(GaussianGl, TransparentGaussiansAreCulled) {
+    // Opacity below 1/255 can never pass the 1/255 alpha threshold: not drawn, not sorted. The whole
+    // cloud is on the image, so the drawn count is exactly the opaque enough ones.
+    ReferenceOptions o;
+    o.width = 64, o.height = 48;
+    GaussianCloud g = random_cloud(3000, 0);
+    std::size_t opaque = 0;
+    for (std::size_t i = 0; i < g.size(); ++i) {
+        if (i % 3 == 0) g.opacities[i] = i % 2 ? 0.0f : 0.003f;  // 0.003 < 1/255 = 0.00392
+        opaque += g.opacities[i] >= 1.0f / 255.0f;
+    }
+    const Camera cam = camera_at({0.0, 0.0, 7.0});
+    for (SortPath sort : {SortPath::cpu, SortPath::gpu}) {
+        renderer->sort_path = sort;
+        auto img = render_gl(*renderer, g, cam, o);
+        ASSERT_TRUE(img) << img.message();
+        GLuint command[4] = {};
+        glGetNamedBufferSubData(renderer->draw.id(), 0, sizeof(command), command);
+        EXPECT_EQ(command[1], opaque);
+        EXPECT_GT(psnr(*img, render_reference(g, cam, o)), 40.0);
+    }
+}
+
 TEST_F(GaussianGl, EmptyCloudGivesTheBackground) {
     ReferenceOptions o;
     o.width = o.height = 8;
