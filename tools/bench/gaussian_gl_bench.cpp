@@ -9,6 +9,8 @@
 // Args: Gaussians, sort (0 CPU, 1 GPU), blend (0 quads, 1 tiles).
 #include <benchmark/benchmark.h>
 
+#include <sys/resource.h>
+
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -23,6 +25,14 @@
 namespace {
 
 using namespace sffd;
+
+// CPU time of the whole process, llvmpipe's worker threads included: the work a frame costs, comparable
+// between runs on a loaded machine where wall time mostly measures the other processes.
+double process_cpu_s() {
+    rusage ru{};
+    getrusage(RUSAGE_SELF, &ru);
+    return double(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) + 1e-6 * double(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
+}
 
 void BM_GaussianGlFrame(benchmark::State& state) {
     auto ctx = gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false});
@@ -53,6 +63,7 @@ void BM_GaussianGlFrame(benchmark::State& state) {
     if (auto s = gaussian::upload_gl(*r, g); !s) state.SkipWithError(s.message().c_str());
     // One frame untimed: llvmpipe compiles each shader on its first dispatch (hundreds of ms).
     if (auto img = gaussian::draw_gl(*r, cam, o); !img) state.SkipWithError(img.message().c_str());
+    const double cpu0 = process_cpu_s();
     for (auto _ : state) {
         auto img = gaussian::draw_gl(*r, cam, o);
         if (!img) state.SkipWithError(img.message().c_str());
@@ -61,6 +72,7 @@ void BM_GaussianGlFrame(benchmark::State& state) {
     }
     const double runs = double(state.iterations());
     state.SetItemsProcessed(int64_t(state.iterations()) * state.range(0));
+    state.counters["process_cpu_ms"] = 1e3 * (process_cpu_s() - cpu0) / runs;
     state.counters["project_ms"] = project_ms / runs;
     state.counters["sort_ms"] = sort_ms / runs;
     state.counters["blend_ms"] = blend_ms / runs;
@@ -103,15 +115,19 @@ void BM_RadixSortGl(benchmark::State& state) {
     glNamedBufferData(vb->id(), GLsizeiptr(n * 4), values.data(), GL_DYNAMIC_COPY);
     if (auto s = gfx::radix_sort(*sorter, kb->id(), vb->id(), std::uint32_t(n)); !s) state.SkipWithError(s.message().c_str());
     glFinish();  // untimed: shader compilation on first use, scratch allocation
+    double cpu = 0.0;
     for (auto _ : state) {
         state.PauseTiming();
         glNamedBufferData(kb->id(), GLsizeiptr(n * 4), keys.data(), GL_DYNAMIC_COPY);
         glNamedBufferData(vb->id(), GLsizeiptr(n * 4), values.data(), GL_DYNAMIC_COPY);
         glFinish();
         state.ResumeTiming();
+        const double cpu0 = process_cpu_s();
         if (auto s = gfx::radix_sort(*sorter, kb->id(), vb->id(), std::uint32_t(n)); !s) state.SkipWithError(s.message().c_str());
         glFinish();
+        cpu += process_cpu_s() - cpu0;
     }
+    state.counters["process_cpu_ms"] = 1e3 * cpu / double(state.iterations());
     state.SetItemsProcessed(int64_t(state.iterations()) * state.range(0));
     state.SetLabel(ctx->renderer());
     kb.reset(), vb.reset(), sorter.reset();
