@@ -19,7 +19,8 @@ uniform uvec2 u_tiles;
 #include "gaussian/tile_common.glsl"
 
 const uint kBatch = SFFD_GAUSS_TILE * SFFD_GAUSS_TILE;
-shared vec4 s_center_depth_radius[kBatch];
+shared vec2 s_center[kBatch];
+shared ivec4 s_box[kBatch];  // the Gaussian's clipped pixel box, computed once per batch, not per pixel
 shared vec4 s_conic_opacity[kBatch];
 shared vec3 s_color[kBatch];
 shared uint s_done;
@@ -40,7 +41,8 @@ void main() {
         if (done) atomicAdd(s_done, 1u);
         if (begin + tid < range.y) {
             const GpuProjected p = projected[tile_values[begin + tid]];
-            s_center_depth_radius[tid] = p.center_depth_radius;
+            s_center[tid] = p.center_depth_radius.xy;
+            s_box[tid] = pixel_box(p.center_depth_radius);
             s_conic_opacity[tid] = p.conic_opacity;
             s_color[tid] = p.color.rgb;
         }
@@ -48,10 +50,9 @@ void main() {
         if (s_done == kBatch) break;  // uniform: every invocation read the same count after the barrier
         const uint batch = min(kBatch, range.y - begin);
         for (uint j = 0u; j < batch && !done; ++j) {
-            const vec4 cdr = s_center_depth_radius[j];
-            const ivec4 box = pixel_box(cdr);
+            const ivec4 box = s_box[j];
             if (int(pixel.x) < box.x || int(pixel.x) > box.z || int(pixel.y) < box.y || int(pixel.y) > box.w) continue;
-            const vec2 d = vec2(pixel) + 0.5 - cdr.xy;
+            const vec2 d = vec2(pixel) + 0.5 - s_center[j];
             const vec4 k = s_conic_opacity[j];
             const float power = -0.5 * (k.x * d.x * d.x + k.z * d.y * d.y) - k.y * d.x * d.y;
             if (power > 0.0) continue;

@@ -16,6 +16,7 @@ layout(std430, binding = SFFD_GAUSS_SSBO_TILE_KEYS) writeonly buffer TileKeys { 
 layout(std430, binding = SFFD_GAUSS_SSBO_TILE_VALUES) writeonly buffer TileValues { uint tile_values[]; };
 
 uniform uint u_count;
+uniform uint u_capacity;  // entries the entry buffers hold: never written past (a wrapped 32-bit total)
 uniform vec2 u_size;
 uniform uvec2 u_tiles;
 
@@ -31,6 +32,7 @@ void main() {
     uint o = offsets[p];
     for (uint ty = t.y; ty <= t.w; ++ty)
         for (uint tx = t.x; tx <= t.z; ++tx, ++o) {
+            if (o >= u_capacity) return;
             tile_keys[o] = ty * u_tiles.x + tx;
             tile_values[o] = i;
         }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 #include <numeric>
+#include <string>
 
 #include <tbb/parallel_sort.h>
 
@@ -251,6 +252,10 @@ Status blend_tiles(GlRenderer& r, const ReferenceOptions& o) {
     GLuint entries = 0;
     glGetNamedBufferSubData(r.tile_touched.id(), GLintptr(n * sizeof(std::uint32_t)), sizeof(GLuint), &entries);
     r.tile_entries = entries;
+    // 8 bytes per entry; past 2^28 entries (2 GiB) the quad path is the one to use. (A true total past
+    // 2^32 would wrap; the emit pass never writes past the capacity, so that is a wrong image at worst.)
+    if (entries > (1u << 28))
+        return make_error("draw_gl(): " + std::to_string(entries) + " tile entries exceed the tile path's 2^28; use BlendPath::quads");
     if (entries > r.tile_entry_capacity) {
         upload(r.tile_keys, nullptr, std::size_t(entries) * sizeof(std::uint32_t));
         upload(r.tile_values, nullptr, std::size_t(entries) * sizeof(std::uint32_t));
@@ -264,6 +269,7 @@ Status blend_tiles(GlRenderer& r, const ReferenceOptions& o) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_KEYS, r.tile_keys.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_VALUES, r.tile_values.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TOUCHED, r.tile_touched.id());
+    glProgramUniform1ui(r.tile_emit.id(), glGetUniformLocation(r.tile_emit.id(), "u_capacity"), entries);
     glUseProgram(r.tile_emit.id());
     if (Status st = gfx::dispatch_1d(n, 64, max_x); !st) return st.error();
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
