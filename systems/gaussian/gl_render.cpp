@@ -114,9 +114,10 @@ Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>
 // Hardware GPUs: the GPU sort (no readback, no CPU work). Software rasterizers: the CPU sort, faster
 // there at every size measured (bench_gaussian_gl, 1200x797 frames, see systems/gaussian/README.md):
 // llvmpipe's "GPU" is the same CPU cores, and TBB's sort of 64-bit (key, index) pairs beats 8 radix
-// passes of compute shaders run by llvmpipe (1M: 33 ms vs ~150+ ms; the readback is a memcpy there).
+// passes of compute shaders run by llvmpipe: in-frame sort time at load avg ~10, 1M: 131 vs 814 ms,
+// 6M: 1122 vs 4912 ms (100k, earlier scatter: 12 vs 211 ms); the key readback is a memcpy there.
 bool gpu_sort_preferred(const GlRenderer& r, std::size_t gaussians) {
-    (void)gaussians;  // the CPU sort wins on llvmpipe at 100k, 1M and 6M alike
+    (void)gaussians;  // the CPU sort wins on llvmpipe at every size measured
     return !r.software;
 }
 
@@ -266,6 +267,10 @@ Status blend_tiles(GlRenderer& r, const ReferenceOptions& o) {
         r.tile_ranges_buffer_tiles = tile_count;
     }
     glClearNamedBufferData(r.tile_ranges_buffer.id(), GL_RG32UI, GL_RG_INTEGER, GL_UNSIGNED_INT, nullptr);
+    // gfx::exclusive_scan bound its own buffers (points 0 and 4): bind every buffer the emit pass reads.
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_KEYS, r.tile_keys.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_VALUES, r.tile_values.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TOUCHED, r.tile_touched.id());
