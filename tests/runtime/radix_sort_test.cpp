@@ -38,8 +38,13 @@ protected:
         std::iota(v.begin(), v.end(), 0u);
         for (std::uint32_t t = 0; t < tail; ++t) k.push_back(0xabcd0000u + t), v.push_back(0xdead0000u + t);
         gfx::Buffer kb = gfx::Buffer::create("test.keys"), vb = gfx::Buffer::create("test.values");
-        glNamedBufferData(kb.id(), GLsizeiptr(k.size() * 4 + 4), k.data(), GL_DYNAMIC_COPY);
-        glNamedBufferData(vb.id(), GLsizeiptr(v.size() * 4 + 4), v.data(), GL_DYNAMIC_COPY);
+        // One spare element so that an empty sort still has storage to bind.
+        glNamedBufferData(kb.id(), GLsizeiptr(k.size() * 4 + 4), nullptr, GL_DYNAMIC_COPY);
+        glNamedBufferData(vb.id(), GLsizeiptr(v.size() * 4 + 4), nullptr, GL_DYNAMIC_COPY);
+        if (!k.empty()) {
+            glNamedBufferSubData(kb.id(), 0, GLsizeiptr(k.size() * 4), k.data());
+            glNamedBufferSubData(vb.id(), 0, GLsizeiptr(v.size() * 4), v.data());
+        }
         const std::uint64_t errors = gfx::debug_error_count();
         ASSERT_TRUE(gfx::radix_sort(*sorter, kb.id(), vb.id(), std::uint32_t(n), key_bits));
         std::vector<std::uint32_t> gk(k.size()), gv(v.size());
