@@ -1,6 +1,7 @@
 // GL 4.5 renderer of 3D Gaussians (issue 17). A frame (draw_gl):
 //   1. project (shaders/gaussian/project.comp): EWA conic, SH colour, a sortable depth key per Gaussian
-//      (0xffffffff when not drawn: behind the near plane, degenerate, or its pixel box off the image),
+//      (0xffffffff when not drawn: behind the near plane, opacity below 1/255, degenerate, or its pixel
+//      box off the image: culled before the sort),
 //      and the drawn count accumulated on the GPU into an indirect draw command;
 //   2. depth sort (SortPath): a stable GPU radix sort of (key, index) (runtime/gfx/radix_sort.h; no
 //      readback, the drawn Gaussians come first), or the keys read back and sorted on the CPU (TBB);
@@ -62,9 +63,9 @@ struct GlRenderer {
     // blend_ms includes, on the tile path, tile_prepare_ms: tile counts, scan, entries, their sort, ranges.
     double project_ms = 0.0, sort_ms = 0.0, blend_ms = 0.0, readback_ms = 0.0, tile_prepare_ms = 0.0;
     std::uint64_t tile_entries = 0;
-    // Work groups per row of the projection dispatch. GL guarantees only 65,535 groups per dimension
-    // (64 × 65,535 = 4.19M Gaussians), so larger clouds are dispatched as a 2D grid; tests lower this to
-    // exercise the grid with small clouds.
+    // Work groups per row of every 1D dispatch (projection, GPU sort blocks, tile passes). GL guarantees
+    // only 65,535 groups per dimension (64 × 65,535 = 4.19M Gaussians), so larger clouds are dispatched
+    // as a 2D grid; tests lower this to exercise the grid with small clouds.
     unsigned max_groups_x = 65535;
 };
 
