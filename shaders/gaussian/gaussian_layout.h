@@ -9,8 +9,19 @@
 #define SFFD_GAUSS_SSBO_PROJECTED 2   // GpuProjected[]: written by project.comp, read by the splat pass
 #define SFFD_GAUSS_SSBO_ORDER     3   // uint[]: visible Gaussians, front to back
 #define SFFD_GAUSS_SSBO_FRAMES    4   // vec4[3] per Gaussian: columns of its SH frame (view-direction mode)
-#define SFFD_GAUSS_SSBO_DEPTH     5   // float[]: view depth of each drawn Gaussian, −1 when not drawn (sort keys)
-// The GPU deformation (shaders/gaussian/deform.comp) reads SFFD_GAUSS_SSBO_IN, writes this one and
+#define SFFD_GAUSS_SSBO_DEPTH     5   // uint[]: sort key of each Gaussian: floatBitsToUint(view depth) when drawn
+                                      // (positive floats order like their bits), SFFD_GAUSS_NOT_DRAWN when not
+#define SFFD_GAUSS_SSBO_DRAW      6   // DrawArraysIndirectCommand {4, visible count, 0, 0}: the splat pass's draw
+#define SFFD_GAUSS_NOT_DRAWN      0xffffffffu  // sort key of a Gaussian not drawn: after every depth
+// Tile path (gl_render BlendPath::tiles): 16x16-pixel tiles, one (tile, Gaussian) entry per overlap.
+#define SFFD_GAUSS_TILE           16u
+#define SFFD_GAUSS_SSBO_TOUCHED   7   // uint[]: tiles touched by the p-th Gaussian in depth order, then their exclusive scan
+#define SFFD_GAUSS_SSBO_TILE_KEYS 8   // uint[]: tile id of each entry (sort key)
+#define SFFD_GAUSS_SSBO_TILE_VALUES 9 // uint[]: Gaussian index of each entry (payload)
+#define SFFD_GAUSS_SSBO_RANGES    10  // uvec2[tile]: the tile's entries [begin, end) after the sort
+#define SFFD_GAUSS_IMAGE_COLOR    0   // image unit: rgba32f target of the tile blend (rgb premultiplied, a = 1 − T)
+// The GPU deformation (shaders/gaussian/deform.comp, its own program: points 7-9 below mean something
+// else there than in the tile passes) reads SFFD_GAUSS_SSBO_IN, writes SFFD_GAUSS_SSBO_DEFORMED and
 // SFFD_GAUSS_SSBO_FRAMES; it also uses the ffd pass's points 2 (control points) and 6 (statistics).
 #define SFFD_GAUSS_SSBO_DEFORMED  7   // GpuGaussian[]: deformed Gaussians (may be the same buffer as IN)
 #define SFFD_GAUSS_SSBO_DEFORMED_SH 8 // float[]: rotated SH coefficients (ShMode::rotate_coefficients), SH layout

@@ -10,7 +10,10 @@ layout(std430, binding = SFFD_GAUSS_SSBO_IN) readonly buffer Gaussians { GpuGaus
 layout(std430, binding = SFFD_GAUSS_SSBO_SH) readonly buffer Sh { float sh[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_PROJECTED) writeonly buffer Projected { GpuProjected projected[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_FRAMES) readonly buffer Frames { vec4 frames[]; };
-layout(std430, binding = SFFD_GAUSS_SSBO_DEPTH) writeonly buffer Depth { float depth_keys[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_DEPTH) writeonly buffer Depth { uint depth_keys[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_ORDER) writeonly buffer Order { uint order[]; };  // payloads for the GPU sort
+// DrawArraysIndirectCommand; instance_count counts the drawn Gaussians (zeroed by the CPU before the pass).
+layout(std430, binding = SFFD_GAUSS_SSBO_DRAW) buffer Draw { uint vertex_count, instance_count, first, base_instance; };
 
 uniform mat4 u_view;        // cloud (origin-relative) -> camera, composed in double on the CPU
 uniform vec3 u_eye;         // camera position relative to the cloud origin
@@ -52,10 +55,9 @@ vec3 sh_color(uint i, vec3 d) {
     return max(c + 0.5, vec3(0.0));
 }
 
-void main() {
-    // 2D grid of groups for clouds over 64 x 65,535 Gaussians (the guaranteed groups per dimension).
-    const uint i = sffd_dispatch_index();
-    if (i >= u_count) return;
+// Projects Gaussian i; true when it is drawn. Writes its projected record, sort key and payload.
+bool project(uint i) {
+    order[i] = i;
     GpuProjected o;
     o.center_depth_radius = vec4(0.0);
     o.conic_opacity = vec4(0.0);
@@ -63,8 +65,11 @@ void main() {
     const GpuGaussian g = gaussians[i];
     const vec3 t = (u_view * vec4(g.pos_opacity.xyz, 1.0)).xyz;
     const float depth = -t.z;
-    depth_keys[i] = -1.0;
-    if (!(depth >= u_near)) { projected[i] = o; return; }
+    depth_keys[i] = SFFD_GAUSS_NOT_DRAWN;
+    if (!(depth >= u_near)) { projected[i] = o; return false; }
+    // Culled too: opacity below 1/255 (every α = min(0.99, o·exp(power ≤ 0)) ≤ o would be skipped, as in
+    // the reference), and NaN opacities.
+    if (!(g.pos_opacity.w >= 1.0 / 255.0)) { projected[i] = o; return false; }
     // Σ = R S Sᵀ Rᵀ from the quaternion (w, x, y, z).
     const float w = g.rotation.x, x = g.rotation.y, y = g.rotation.z, z = g.rotation.w;
     const mat3 r = mat3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y),
@@ -79,14 +84,34 @@ void main() {
     const vec3 jy = vec3(0.0, -u_focal / depth, -u_focal * ty / (depth * depth));
     const float a = dot(jx, v * jx) + 0.3, b = dot(jx, v * jy), c = dot(jy, v * jy) + 0.3;
     const float det = a * c - b * b;
-    if (!(det > 0.0)) { projected[i] = o; return; }
-    depth_keys[i] = depth;
+    if (!(det > 0.0)) { projected[i] = o; return false; }
     const float mid = 0.5 * (a + c), lmax = mid + sqrt(max(0.1, mid * mid - det));
     const vec2 center = vec2(0.5 * u_size.x + u_focal * t.x / depth, 0.5 * u_size.y - u_focal * t.y / depth);
-    o.center_depth_radius = vec4(center, depth, ceil(3.0 * sqrt(lmax)));
+    const float radius = ceil(3.0 * sqrt(lmax));
+    // Culling before the sort: a pixel box (floor(c - r) .. ceil(c + r), the reference's) entirely off
+    // the image is not drawn, like the reference's empty clipped box.
+    const vec2 lo = floor(center - radius), hi = ceil(center + radius);
+    if (any(lessThan(hi, vec2(0.0))) || any(greaterThan(lo, u_size - 1.0))) { projected[i] = o; return false; }
+    depth_keys[i] = floatBitsToUint(depth);
+    o.center_depth_radius = vec4(center, depth, radius);
     o.conic_opacity = vec4(c / det, -b / det, a / det, g.pos_opacity.w);
     vec3 dir = normalize(g.pos_opacity.xyz - u_eye);
     if (u_frames != 0) dir = transpose(mat3(frames[3u * i].xyz, frames[3u * i + 1u].xyz, frames[3u * i + 2u].xyz)) * dir;
     o.color = vec4(sh_color(i, dir), 0.0);
     projected[i] = o;
+    return true;
+}
+
+shared uint s_drawn;
+
+void main() {
+    // 2D grid of groups for clouds over 64 x 65,535 Gaussians (the guaranteed groups per dimension).
+    const uint i = sffd_dispatch_index();
+    const bool drawn = i < u_count && project(i);
+    // The drawn count reaches the indirect draw without a readback: one global atomic per group.
+    if (gl_LocalInvocationID.x == 0u) s_drawn = 0u;
+    barrier();
+    if (drawn) atomicAdd(s_drawn, 1u);
+    barrier();
+    if (gl_LocalInvocationID.x == 0u && s_drawn > 0u) atomicAdd(instance_count, s_drawn);
 }

@@ -5,12 +5,14 @@
 #include <cmath>
 #include <cstring>
 #include <numeric>
+#include <string>
 
 #include <tbb/parallel_sort.h>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/shader.h"
@@ -27,6 +29,17 @@ Result<GlRenderer> create_gl_renderer() {
     if (!splat) return splat.error();
     r.project = std::move(*project);
     r.splat = std::move(*splat);
+    const std::pair<gfx::Program*, const char*> tiles[] = {{&r.tile_count, "tile_count"}, {&r.tile_emit, "tile_emit"},
+                                                           {&r.tile_ranges, "tile_ranges"}, {&r.tile_blend, "tile_blend"}};
+    for (const auto& [program, name] : tiles) {
+        auto made = gfx::load_compute_program(std::string("gaussian/") + name + ".comp", std::string("gaussian.") + name);
+        if (!made) return made.error();
+        *program = std::move(*made);
+    }
+    auto sorter = gfx::create_radix_sorter();
+    if (!sorter) return sorter.error();
+    r.sorter = std::move(*sorter);
+    r.software = gfx::software_rasterizer();
     r.vao = gfx::VertexArray::create("gaussian.quads");
     r.gaussians = gfx::Buffer::create("gaussian.in");
     r.sh = gfx::Buffer::create("gaussian.sh");
@@ -34,6 +47,12 @@ Result<GlRenderer> create_gl_renderer() {
     r.order = gfx::Buffer::create("gaussian.order");
     r.frames = gfx::Buffer::create("gaussian.sh_frames");
     r.depth = gfx::Buffer::create("gaussian.depth_keys");
+    r.draw = gfx::Buffer::create("gaussian.draw_indirect");
+    glNamedBufferData(r.draw.id(), 16, nullptr, GL_DYNAMIC_DRAW);
+    r.tile_touched = gfx::Buffer::create("gaussian.tile_touched");
+    r.tile_keys = gfx::Buffer::create("gaussian.tile_keys");
+    r.tile_values = gfx::Buffer::create("gaussian.tile_values");
+    r.tile_ranges_buffer = gfx::Buffer::create("gaussian.tile_ranges");
     return r;
 }
 
@@ -75,7 +94,9 @@ Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>
     upload(r.gaussians, in.data(), in.size() * sizeof(gpu::GpuGaussian));
     upload(r.sh, g.sh.data(), g.sh.size() * sizeof(float));
     upload(r.projected, nullptr, n * sizeof(gpu::GpuProjected));
-    upload(r.depth, nullptr, n * sizeof(float));
+    upload(r.depth, nullptr, n * sizeof(std::uint32_t));
+    upload(r.order, nullptr, n * sizeof(std::uint32_t));  // payloads written by the projection (GPU sort)
+    upload(r.tile_touched, nullptr, (n + 1) * sizeof(std::uint32_t));  // + the scan's total
     if (g.sh_frames.size() == n && n > 0) {
         std::vector<glm::vec4> cols(n * 3);
         for (std::size_t i = 0; i < n; ++i)
@@ -90,18 +111,35 @@ Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>
     return {};
 }
 
-Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const ReferenceOptions& o) {
-    if (o.width < 1 || o.height < 1) return make_error("draw_gl(): empty image");
+// Hardware GPUs: the GPU sort (no readback, no CPU work). Software rasterizers: the CPU sort, faster
+// there at every size measured (bench_gaussian_gl, 1200x797 frames, see systems/gaussian/README.md):
+// llvmpipe's "GPU" is the same CPU cores, and TBB's sort of 64-bit (key, index) pairs beats 8 radix
+// passes of compute shaders run by llvmpipe: in-frame sort time at load avg ~10, 1M: 131 vs 814 ms,
+// 6M: 1122 vs 4912 ms (100k, earlier scatter: 12 vs 211 ms); the key readback is a memcpy there.
+bool gpu_sort_preferred(const GlRenderer& r, std::size_t gaussians) {
+    (void)gaussians;  // the CPU sort wins on llvmpipe at every size measured
+    return !r.software;
+}
+
+namespace {
+
+Status ensure_target(GlRenderer& r, const ReferenceOptions& o) {
+    if (r.width == o.width && r.height == o.height) return {};
+    r.color = gfx::Texture::create("gaussian.color", GL_TEXTURE_2D);
+    glTextureStorage2D(r.color.id(), 1, GL_RGBA32F, o.width, o.height);
+    r.framebuffer = gfx::Framebuffer::create("gaussian.target");
+    glNamedFramebufferTexture(r.framebuffer.id(), GL_COLOR_ATTACHMENT0, r.color.id(), 0);
+    if (glCheckNamedFramebufferStatus(r.framebuffer.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        return make_error("draw_gl(): RGBA32F framebuffer incomplete");
+    r.width = o.width, r.height = o.height;
+    return {};
+}
+
+// Step 1: projection of the resident Gaussians; resets and fills the indirect draw command.
+Status project_gl(GlRenderer& r, const Camera& cam, const ReferenceOptions& o) {
     const std::size_t n = r.count;
-    if (r.width != o.width || r.height != o.height) {
-        r.color = gfx::Texture::create("gaussian.color", GL_TEXTURE_2D);
-        glTextureStorage2D(r.color.id(), 1, GL_RGBA32F, o.width, o.height);
-        r.framebuffer = gfx::Framebuffer::create("gaussian.target");
-        glNamedFramebufferTexture(r.framebuffer.id(), GL_COLOR_ATTACHMENT0, r.color.id(), 0);
-        if (glCheckNamedFramebufferStatus(r.framebuffer.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-            return make_error("draw_gl(): RGBA32F framebuffer incomplete");
-        r.width = o.width, r.height = o.height;
-    }
+    const GLuint command[4] = {4, 0, 0, 0};  // 4 strip vertices per quad, drawn count accumulated on the GPU
+    glNamedBufferSubData(r.draw.id(), 0, sizeof(command), command);
     const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up) * glm::translate(glm::dmat4(1.0), r.origin);
     const double tan_half = std::tan(glm::radians(double(cam.fov_y_degrees)) * 0.5);
     const GLuint pp = r.project.id();
@@ -119,30 +157,42 @@ Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const Reference
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, r.frames.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEPTH, r.depth.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
     glUseProgram(pp);
     if (Status st = gfx::dispatch_1d(n, 64, std::max(1u, r.max_groups_x)); !st) return st.error();
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+    glUseProgram(0);
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    return {};
+}
 
-    // Depth sort on the CPU: read back the depth keys only (4 bytes per Gaussian) and sort
-    // (depth bits, index) pairs: positive floats order like their bit patterns, and the index breaks
-    // ties, so the order equals the reference's stable sort (and is deterministic).
+// Step 2, CPU: read back the keys only (4 bytes per Gaussian) and sort (key, index) pairs of the drawn
+// ones: the index breaks ties, so the order equals the reference's stable sort (and is deterministic).
+void sort_cpu(GlRenderer& r) {
+    const std::size_t n = r.count;
     const auto t0 = std::chrono::steady_clock::now();
-    std::vector<float> depth(n);
-    if (n > 0) glGetNamedBufferSubData(r.depth.id(), 0, GLsizeiptr(n * sizeof(float)), depth.data());
+    std::vector<std::uint32_t> depth(n);
+    if (n > 0) glGetNamedBufferSubData(r.depth.id(), 0, GLsizeiptr(n * sizeof(std::uint32_t)), depth.data());
     std::vector<std::uint64_t> keys;
     keys.reserve(n);
     for (std::size_t i = 0; i < n; ++i)
-        if (depth[i] > 0.0f) {
-            std::uint32_t bits;
-            std::memcpy(&bits, &depth[i], 4);
-            keys.push_back(std::uint64_t(bits) << 32 | std::uint64_t(i));
-        }
+        if (depth[i] != SFFD_GAUSS_NOT_DRAWN) keys.push_back(std::uint64_t(depth[i]) << 32 | std::uint64_t(i));
     tbb::parallel_sort(keys.begin(), keys.end());
     std::vector<std::uint32_t> order(keys.size());
     for (std::size_t k = 0; k < keys.size(); ++k) order[k] = std::uint32_t(keys[k] & 0xffffffffu);
-    upload(r.order, order.data(), order.size() * sizeof(std::uint32_t));
+    if (!order.empty()) glNamedBufferSubData(r.order.id(), 0, GLsizeiptr(order.size() * sizeof(std::uint32_t)), order.data());
     r.sort_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
 
+// Step 2, GPU: all keys sorted with their indices; the not-drawn keys (0xffffffff) end up last, so the
+// first `drawn count` entries of `order` are the drawn Gaussians front to back. No readback.
+Status sort_gpu(GlRenderer& r) {
+    r.sorter.max_groups_x = std::max(1u, r.max_groups_x);
+    return gfx::radix_sort(r.sorter, r.depth.id(), r.order.id(), std::uint32_t(r.count));
+}
+
+// Step 3, quads: one instanced quad per drawn Gaussian, the count from the indirect command.
+void blend_quads(GlRenderer& r, const ReferenceOptions& o) {
     glBindFramebuffer(GL_FRAMEBUFFER, r.framebuffer.id());
     glViewport(0, 0, o.width, o.height);
     const float clear[4] = {0, 0, 0, 0};
@@ -158,25 +208,151 @@ Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const Reference
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
     glUseProgram(sp);
     glBindVertexArray(r.vao.id());
-    if (!order.empty()) glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(order.size()));
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, r.draw.id());
+    if (r.count > 0) glDrawArraysIndirect(GL_TRIANGLE_STRIP, nullptr);
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
     glDisable(GL_BLEND);
     glBindVertexArray(0);
     glUseProgram(0);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
+}
 
+void tile_uniforms(GLuint program, const ReferenceOptions& o, glm::uvec2 tiles) {
+    set(program, "u_size", glm::vec2(float(o.width), float(o.height)));
+    glProgramUniform2ui(program, glGetUniformLocation(program, "u_tiles"), tiles.x, tiles.y);
+}
+
+double stage_ms(const GlRenderer& r, std::chrono::steady_clock::time_point& t);
+
+// Step 3, tiles (3DGS's rasterizer in compute): per drawn Gaussian in depth order the tiles it touches,
+// their exclusive scan, one (tile id, Gaussian) entry per overlap in depth order, a stable radix sort by
+// tile id (so (tile, depth) order), per-tile ranges, and a 16x16 group per tile blending front to back.
+// One readback: the entry count (4 bytes), to size the entry buffers, as 3DGS does.
+Status blend_tiles(GlRenderer& r, const ReferenceOptions& o) {
+    const std::size_t n = r.count;
+    const glm::uvec2 tiles((unsigned(o.width) + SFFD_GAUSS_TILE - 1) / SFFD_GAUSS_TILE,
+                           (unsigned(o.height) + SFFD_GAUSS_TILE - 1) / SFFD_GAUSS_TILE);
+    const std::uint64_t tile_count = std::uint64_t(tiles.x) * tiles.y;
+    if (tiles.x > gfx::kMinMaxComputeGroups || tiles.y > gfx::kMinMaxComputeGroups)
+        return make_error("draw_gl(): image too large for one tile group per tile");
+    const std::uint32_t max_x = std::max(1u, r.max_groups_x);
+    r.sorter.max_groups_x = max_x;
+    auto t = std::chrono::steady_clock::now();
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TOUCHED, r.tile_touched.id());
+    for (GLuint p : {r.tile_count.id(), r.tile_emit.id()}) {
+        tile_uniforms(p, o, tiles);
+        glProgramUniform1ui(p, glGetUniformLocation(p, "u_count"), GLuint(n));
+    }
+    glUseProgram(r.tile_count.id());
+    if (Status st = gfx::dispatch_1d(n, 64, max_x); !st) return st.error();
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    if (Status st = gfx::exclusive_scan(r.sorter, r.tile_touched.id(), std::uint32_t(n)); !st) return st.error();
+    GLuint entries = 0;
+    glGetNamedBufferSubData(r.tile_touched.id(), GLintptr(n * sizeof(std::uint32_t)), sizeof(GLuint), &entries);
+    r.tile_entries = entries;
+    // 8 bytes per entry; past 2^28 entries (2 GiB) the quad path is the one to use. (A true total past
+    // 2^32 would wrap; the emit pass never writes past the capacity, so that is a wrong image at worst.)
+    if (entries > (1u << 28))
+        return make_error("draw_gl(): " + std::to_string(entries) + " tile entries exceed the tile path's 2^28; use BlendPath::quads");
+    if (entries > r.tile_entry_capacity) {
+        upload(r.tile_keys, nullptr, std::size_t(entries) * sizeof(std::uint32_t));
+        upload(r.tile_values, nullptr, std::size_t(entries) * sizeof(std::uint32_t));
+        r.tile_entry_capacity = entries;
+    }
+    if (r.tile_ranges_buffer_tiles != tile_count) {
+        upload(r.tile_ranges_buffer, nullptr, std::size_t(tile_count) * 2 * sizeof(std::uint32_t));
+        r.tile_ranges_buffer_tiles = tile_count;
+    }
+    glClearNamedBufferData(r.tile_ranges_buffer.id(), GL_RG32UI, GL_RG_INTEGER, GL_UNSIGNED_INT, nullptr);
+    // gfx::exclusive_scan bound its own buffers (points 0 and 4): bind every buffer the emit pass reads.
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_KEYS, r.tile_keys.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_VALUES, r.tile_values.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TOUCHED, r.tile_touched.id());
+    glProgramUniform1ui(r.tile_emit.id(), glGetUniformLocation(r.tile_emit.id(), "u_capacity"), entries);
+    glUseProgram(r.tile_emit.id());
+    if (Status st = gfx::dispatch_1d(n, 64, max_x); !st) return st.error();
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    int key_bits = 1;
+    while (key_bits < 32 && (std::uint64_t(1) << key_bits) < tile_count) ++key_bits;
+    if (Status st = gfx::radix_sort(r.sorter, r.tile_keys.id(), r.tile_values.id(), entries, key_bits); !st) return st.error();
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_KEYS, r.tile_keys.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_VALUES, r.tile_values.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_RANGES, r.tile_ranges_buffer.id());
+    const GLuint rp = r.tile_ranges.id();
+    glProgramUniform1ui(rp, glGetUniformLocation(rp, "u_entries"), entries);
+    glUseProgram(rp);
+    if (Status st = gfx::dispatch_1d(entries, 64, max_x); !st) return st.error();
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    r.tile_prepare_ms = stage_ms(r, t);
+    tile_uniforms(r.tile_blend.id(), o, tiles);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
+    glBindImageTexture(SFFD_GAUSS_IMAGE_COLOR, r.color.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    glUseProgram(r.tile_blend.id());
+    glDispatchCompute(tiles.x, tiles.y, 1);
+    glUseProgram(0);
+    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    return {};
+}
+
+// Step 4: the image (GL rows bottom-up), the background blended in by the remaining transmittance.
+ReferenceImage read_image(const GlRenderer& r, const ReferenceOptions& o) {
     std::vector<glm::vec4> pixels(std::size_t(o.width) * std::size_t(o.height));
     glGetTextureImage(r.color.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(pixels.size() * sizeof(glm::vec4)), pixels.data());
     ReferenceImage img;
     img.width = o.width, img.height = o.height;
     img.color.resize(pixels.size());
     img.transmittance.resize(pixels.size());
-    for (int y = 0; y < o.height; ++y)  // GL rows go bottom-up
+    for (int y = 0; y < o.height; ++y)
         for (int x = 0; x < o.width; ++x) {
             const glm::vec4 p = pixels[std::size_t(o.height - 1 - y) * std::size_t(o.width) + std::size_t(x)];
             const std::size_t k = img.index(x, y);
             img.transmittance[k] = 1.0f - p.w;
             img.color[k] = glm::vec3(p) + (1.0f - p.w) * o.background;
         }
+    return img;
+}
+
+// Stage timing for benchmarks: the wall time since `t`, after waiting for the GL work (stage_timing).
+double stage_ms(const GlRenderer& r, std::chrono::steady_clock::time_point& t) {
+    if (!r.stage_timing) return 0.0;
+    glFinish();
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - t).count();
+    t = now;
+    return ms;
+}
+
+}  // namespace
+
+Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const ReferenceOptions& o) {
+    if (o.width < 1 || o.height < 1) return make_error("draw_gl(): empty image");
+    if (Status st = ensure_target(r, o); !st) return st.error();
+    auto t = std::chrono::steady_clock::now();
+    if (Status st = project_gl(r, cam, o); !st) return st.error();
+    r.project_ms = stage_ms(r, t);
+    r.gpu_sort_used = r.sort_path == SortPath::gpu || (r.sort_path == SortPath::automatic && gpu_sort_preferred(r, r.count));
+    if (r.gpu_sort_used) {
+        if (Status st = sort_gpu(r); !st) return st.error();
+        r.sort_ms = stage_ms(r, t);
+    } else {
+        sort_cpu(r);
+        stage_ms(r, t);
+    }
+    r.tile_entries = 0, r.tile_prepare_ms = 0.0;
+    if (r.blend_path == BlendPath::tiles) {
+        if (Status st = blend_tiles(r, o); !st) return st.error();
+    } else {
+        blend_quads(r, o);
+    }
+    r.blend_ms = stage_ms(r, t);
+    ReferenceImage img = read_image(r, o);
+    r.readback_ms = stage_ms(r, t);
     return img;
 }
 

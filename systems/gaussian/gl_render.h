@@ -1,8 +1,17 @@
-// GL 4.5 renderer of 3D Gaussians (issue 17), first version: a compute pass projects every Gaussian
-// (EWA conic, SH colour: shaders/gaussian/project.comp), the visible ones are sorted by view depth on
-// the CPU (depth keys read back, 4 bytes per Gaussian; a GPU radix sort does not exist yet), and one instanced quad per Gaussian is blended front to
-// back into an RGBA32F target (shaders/gaussian/splat.{vert,frag}). The images match the CPU reference
-// renderer (reference_render.h: same conventions, same pixel boxes) within the PSNR the GL test states.
+// GL 4.5 renderer of 3D Gaussians (issue 17). A frame (draw_gl):
+//   1. project (shaders/gaussian/project.comp): EWA conic, SH colour, a sortable depth key per Gaussian
+//      (0xffffffff when not drawn: behind the near plane, opacity below 1/255, degenerate, or its pixel
+//      box off the image: culled before the sort),
+//      and the drawn count accumulated on the GPU into an indirect draw command;
+//   2. depth sort (SortPath): a stable GPU radix sort of (key, index) (runtime/gfx/radix_sort.h; no
+//      readback, the drawn Gaussians come first), or the keys read back and sorted on the CPU (TBB);
+//   3. blend front to back (BlendPath) into an RGBA32F target: instanced quads over the reference's
+//      pixel boxes (splat.{vert,frag}, hardware blending, drawn through the indirect command), or the
+//      3DGS tile renderer in compute (tile_*.comp: (tile, Gaussian) entries in depth order, a stable
+//      radix sort by tile id, per-tile ranges, a 16x16 group per tile with early termination);
+//   4. the image read back.
+// The images match the CPU reference renderer (reference_render.h: same conventions, same pixel boxes)
+// within the PSNR the GL test states; both sort paths give identical images.
 // Owns its GL objects (move-only); create and use it with a GL context current, destroy it before the
 // context.
 #pragma once
@@ -11,17 +20,29 @@
 
 #include "runtime/core/result.h"
 #include "runtime/gfx/gl_object.h"
+#include "runtime/gfx/radix_sort.h"
 #include "runtime/scene/components.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/reference_render.h"
 
 namespace sffd::gaussian {
 
+// Which depth sort a frame uses. automatic: the GPU sort on hardware GPUs; on a software rasterizer
+// (gfx::software_rasterizer(): llvmpipe) the faster one there, see gpu_sort_preferred().
+enum class SortPath { automatic, cpu, gpu };
+// How the sorted Gaussians are blended: instanced quads (raster blending) or the compute tile renderer.
+enum class BlendPath { quads, tiles };
+
 struct GlRenderer {
     gfx::Program project;
     gfx::Program splat;
+    gfx::Program tile_count, tile_emit, tile_ranges, tile_blend;
+    gfx::RadixSorter sorter;
     gfx::VertexArray vao;
     gfx::Buffer gaussians, sh, projected, order, frames, depth;
+    gfx::Buffer draw;  // DrawArraysIndirectCommand; its instance count is the drawn count, written on the GPU
+    gfx::Buffer tile_touched, tile_keys, tile_values, tile_ranges_buffer;  // tile path, grow-only
+    std::uint64_t tile_entry_capacity = 0, tile_ranges_buffer_tiles = 0;
     gfx::Texture color;
     gfx::Framebuffer framebuffer;
     int width = 0, height = 0;
@@ -29,19 +50,35 @@ struct GlRenderer {
     int sh_degree = 0;
     bool has_frames = false;  // the resident cloud carries SH frames
     glm::dvec3 origin{0.0};
-    double sort_ms = 0.0;  // CPU time of the last frame's depth sort (readback + sort + upload)
-    // Work groups per row of the projection dispatch. GL guarantees only 65,535 groups per dimension
-    // (64 × 65,535 = 4.19M Gaussians), so larger clouds are dispatched as a 2D grid; tests lower this to
-    // exercise the grid with small clouds.
+    SortPath sort_path = SortPath::automatic;
+    BlendPath blend_path = BlendPath::quads;
+    bool software = false;  // gfx::software_rasterizer() when created
+    // Benchmarks: glFinish after each stage so that the stage wall times below mean something (GL timer
+    // queries do not on llvmpipe: 0 ms for compute, nonsense for draws). Off: no extra waits.
+    bool stage_timing = false;
+    // Last frame: which sort ran; stage wall times in ms (with stage_timing; sort_ms of the CPU path is
+    // always measured: key readback, which waits for the projection, + sort + upload); (tile path) the
+    // number of (tile, Gaussian) entries.
+    bool gpu_sort_used = false;
+    // blend_ms includes, on the tile path, tile_prepare_ms: tile counts, scan, entries, their sort, ranges.
+    double project_ms = 0.0, sort_ms = 0.0, blend_ms = 0.0, readback_ms = 0.0, tile_prepare_ms = 0.0;
+    std::uint64_t tile_entries = 0;
+    // Work groups per row of every 1D dispatch (projection, GPU sort blocks, tile passes). GL guarantees
+    // only 65,535 groups per dimension (64 × 65,535 = 4.19M Gaussians), so larger clouds are dispatched
+    // as a 2D grid; tests lower this to exercise the grid with small clouds.
     unsigned max_groups_x = 65535;
 };
 
 // Compiles the programs (errors name the shader file and line).
 Result<GlRenderer> create_gl_renderer();
 
+// The sort SortPath::automatic picks for `gaussians` resident Gaussians (see gl_render.cpp for the
+// llvmpipe measurements behind it).
+bool gpu_sort_preferred(const GlRenderer& renderer, std::size_t gaussians);
+
 // Uploads a cloud; it stays resident for draw_gl() until the next upload.
 Status upload_gl(GlRenderer& renderer, const GaussianCloud& cloud, const std::vector<float>* opacities = nullptr);
-// One frame of the resident cloud: projection, depth sort, splatting, image readback.
+// One frame of the resident cloud: projection, depth sort, blending, image readback.
 Result<ReferenceImage> draw_gl(GlRenderer& renderer, const Camera& camera, const ReferenceOptions& options);
 // upload_gl + draw_gl: renders like render_reference() (same camera model, background blended in).
 Result<ReferenceImage> render_gl(GlRenderer& renderer, const GaussianCloud& cloud, const Camera& camera,

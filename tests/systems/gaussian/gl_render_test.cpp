@@ -1,15 +1,20 @@
 // GL renderer of Gaussians against the CPU reference renderer (headless EGL; llvmpipe here). The two
-// share conventions and pixel boxes; they differ by float vs double arithmetic and the reference's early
-// stop at T < 1e-4, which the blending hardware cannot do. Stated bound: PSNR > 40 dB on every scene.
+// share conventions and pixel boxes; they differ by float vs double arithmetic and, on the quad path, the
+// reference's early stop at T < 1e-4, which the blending hardware cannot do (the tile path does it).
+// Stated bound: PSNR > 40 dB on every scene, for every sort and blend path; the CPU and GPU sorts give
+// bit-identical images (same stable order), and the tile path matches the quad path within the same bound.
 #include <gtest/gtest.h>
 
 #include <optional>
 #include <random>
 
+#include <glm/gtc/matrix_transform.hpp>
+
 #include <glm/gtc/quaternion.hpp>
 
 #include "runtime/assets/builtin_scenes.h"
 #include "runtime/gfx/context.h"
+#include "runtime/gfx/gl.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/from_splats.h"
@@ -60,20 +65,37 @@ GaussianCloud random_cloud(std::size_t n, int degree) {
 }
 
 void compare(GlRenderer& r, const GaussianCloud& g, const Camera& cam, ReferenceOptions o, const char* what) {
-    auto gl = render_gl(r, g, cam, o);
-    ASSERT_TRUE(gl) << gl.message();
     const ReferenceImage ref = render_reference(g, cam, o);
-    const double p = psnr(ref, *gl);
-    // Coverage must agree too (a blank GL image of a mostly empty scene would still score well).
-    std::size_t covered_ref = 0, covered_gl = 0;
-    for (std::size_t k = 0; k < ref.transmittance.size(); ++k) {
-        covered_ref += ref.transmittance[k] < 0.5f;
-        covered_gl += gl->transmittance[k] < 0.5f;
-    }
-    std::printf("%s: PSNR %.1f dB, covered pixels %zu (reference %zu), sort %.2f ms\n", what, p, covered_gl, covered_ref, r.sort_ms);
-    EXPECT_GT(p, 40.0) << what;
-    EXPECT_GT(covered_ref, ref.transmittance.size() / 20) << what;
-    EXPECT_NEAR(double(covered_gl), double(covered_ref), 0.01 * double(covered_ref) + 5) << what;
+    std::optional<ReferenceImage> cpu_quads;
+    for (BlendPath blend : {BlendPath::quads, BlendPath::tiles})
+        for (SortPath sort : {SortPath::cpu, SortPath::gpu}) {
+            r.sort_path = sort, r.blend_path = blend;
+            auto gl = render_gl(r, g, cam, o);
+            ASSERT_TRUE(gl) << gl.message();
+            EXPECT_EQ(r.gpu_sort_used, sort == SortPath::gpu);
+            const double p = psnr(ref, *gl);
+            // Coverage must agree too (a blank GL image of a mostly empty scene would still score well).
+            std::size_t covered_ref = 0, covered_gl = 0;
+            for (std::size_t k = 0; k < ref.transmittance.size(); ++k) {
+                covered_ref += ref.transmittance[k] < 0.5f;
+                covered_gl += gl->transmittance[k] < 0.5f;
+            }
+            const char* path = blend == BlendPath::tiles ? (sort == SortPath::gpu ? "tiles, GPU sort" : "tiles, CPU sort")
+                                                         : (sort == SortPath::gpu ? "quads, GPU sort" : "quads, CPU sort");
+            std::printf("%s (%s): PSNR %.1f dB, covered pixels %zu (reference %zu), tile entries %llu\n", what, path, p,
+                        covered_gl, covered_ref, (unsigned long long)r.tile_entries);
+            EXPECT_GT(p, 40.0) << what << ", " << path;
+            EXPECT_GT(covered_ref, ref.transmittance.size() / 20) << what;
+            EXPECT_NEAR(double(covered_gl), double(covered_ref), 0.01 * double(covered_ref) + 5) << what << ", " << path;
+            if (!cpu_quads) {
+                cpu_quads = std::move(*gl);
+            } else if (blend == BlendPath::quads) {
+                EXPECT_EQ(gl->color, cpu_quads->color) << what << ": the GPU sort changed the image";
+            } else {
+                EXPECT_GT(psnr(*cpu_quads, *gl), 40.0) << what << ", " << path << " vs the quad path";
+            }
+        }
+    r.sort_path = SortPath::automatic, r.blend_path = BlendPath::quads;
 }
 
 TEST_F(GaussianGl, MatchesCpuReference) {
@@ -106,18 +128,77 @@ TEST_F(GaussianGl, MatchesCpuReference) {
 
 TEST_F(GaussianGl, LargeCloudsAreDispatchedAsAGrid) {
     // Clouds beyond 64 x 65,535 Gaussians need a 2D dispatch; with 3 groups per row, 3,000 Gaussians
-    // take a 3 x 16 grid (the last row partly empty) and must render exactly as in one row.
+    // take a 3 x 16 grid (the last row partly empty) and must render exactly as in one row, on every
+    // path (the GPU sort's blocks and the tile passes go through the same grid).
     ReferenceOptions o;
     o.width = 96, o.height = 72;
     const GaussianCloud g = random_cloud(3000, 1);
     const Camera cam = camera_at({0.2, 0.3, 3.5});
-    auto one_row = render_gl(*renderer, g, cam, o);
-    ASSERT_TRUE(one_row) << one_row.message();
-    renderer->max_groups_x = 3;
-    auto grid = render_gl(*renderer, g, cam, o);
-    ASSERT_TRUE(grid) << grid.message();
-    EXPECT_EQ(grid->color, one_row->color);
-    EXPECT_GT(psnr(*grid, render_reference(g, cam, o)), 40.0);
+    for (BlendPath blend : {BlendPath::quads, BlendPath::tiles})
+        for (SortPath sort : {SortPath::cpu, SortPath::gpu}) {
+            renderer->sort_path = sort, renderer->blend_path = blend;
+            renderer->max_groups_x = 65535;
+            auto one_row = render_gl(*renderer, g, cam, o);
+            ASSERT_TRUE(one_row) << one_row.message();
+            renderer->max_groups_x = 3;
+            auto grid = render_gl(*renderer, g, cam, o);
+            ASSERT_TRUE(grid) << grid.message();
+            EXPECT_EQ(grid->color, one_row->color);
+            EXPECT_GT(psnr(*grid, render_reference(g, cam, o)), 40.0);
+        }
+}
+
+TEST_F(GaussianGl, OffscreenGaussiansAreCulledBeforeTheSort) {
+    // A camera looking at one corner of the cloud: Gaussians whose pixel box misses the image get the
+    // not-drawn key and are not counted in the indirect draw; the image still matches the reference.
+    ReferenceOptions o;
+    o.width = 80, o.height = 60;
+    const GaussianCloud g = random_cloud(4000, 0);
+    const Camera cam = camera_at({0.6, 0.6, 1.8}, {0.6, 0.6, 0.0}, 30.0f);
+    auto img = render_gl(*renderer, g, cam, o);
+    ASSERT_TRUE(img) << img.message();
+    GLuint command[4] = {};
+    glGetNamedBufferSubData(renderer->draw.id(), 0, sizeof(command), command);
+    // Expected drawn count, from the reference's own rule (in front of the near plane, box on the image):
+    // counted here in double, so allow a few boundary cases either way.
+    std::size_t expected = 0;
+    const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up);
+    const double f = o.height / (2.0 * std::tan(glm::radians(double(cam.fov_y_degrees)) * 0.5));
+    for (std::size_t i = 0; i < g.size(); ++i) {
+        const glm::dvec3 t(view * glm::dvec4(glm::dvec3(g.positions[i]), 1.0));
+        if (-t.z < o.near_plane) continue;
+        const double px = o.width * 0.5 + f * t.x / -t.z, py = o.height * 0.5 - f * t.y / -t.z;
+        const double margin = 3.0 * f * 0.14 / -t.z + 2.0;  // 3 sigma of the largest scale, plus rounding
+        expected += px + margin >= 0.0 && px - margin <= o.width && py + margin >= 0.0 && py - margin <= o.height;
+    }
+    EXPECT_EQ(command[0], 4u);
+    EXPECT_LE(command[1], expected) << "Gaussians off the image were drawn";
+    EXPECT_LT(command[1], g.size() / 2);
+    EXPECT_GT(command[1], 0u);
+    EXPECT_GT(psnr(*img, render_reference(g, cam, o)), 40.0);
+}
+
+TEST_F(GaussianGl, TransparentGaussiansAreCulled) {
+    // Opacity below 1/255 can never pass the 1/255 alpha threshold: not drawn, not sorted. The whole
+    // cloud is on the image, so the drawn count is exactly the opaque enough ones.
+    ReferenceOptions o;
+    o.width = 64, o.height = 48;
+    GaussianCloud g = random_cloud(3000, 0);
+    std::size_t opaque = 0;
+    for (std::size_t i = 0; i < g.size(); ++i) {
+        if (i % 3 == 0) g.opacities[i] = i % 2 ? 0.0f : 0.003f;  // 0.003 < 1/255 = 0.00392
+        opaque += g.opacities[i] >= 1.0f / 255.0f;
+    }
+    const Camera cam = camera_at({0.0, 0.0, 7.0});
+    for (SortPath sort : {SortPath::cpu, SortPath::gpu}) {
+        renderer->sort_path = sort;
+        auto img = render_gl(*renderer, g, cam, o);
+        ASSERT_TRUE(img) << img.message();
+        GLuint command[4] = {};
+        glGetNamedBufferSubData(renderer->draw.id(), 0, sizeof(command), command);
+        EXPECT_EQ(command[1], opaque);
+        EXPECT_GT(psnr(*img, render_reference(g, cam, o)), 40.0);
+    }
 }
 
 TEST_F(GaussianGl, EmptyCloudGivesTheBackground) {
@@ -125,9 +206,47 @@ TEST_F(GaussianGl, EmptyCloudGivesTheBackground) {
     o.width = o.height = 8;
     o.background = {0.25f, 0.5f, 1.0f};
     GaussianCloud empty;
-    auto img = render_gl(*renderer, empty, camera_at({0, 0, 3}), o);
+    for (BlendPath blend : {BlendPath::quads, BlendPath::tiles})
+        for (SortPath sort : {SortPath::cpu, SortPath::gpu}) {
+            renderer->sort_path = sort, renderer->blend_path = blend;
+            auto img = render_gl(*renderer, empty, camera_at({0, 0, 3}), o);
+            ASSERT_TRUE(img) << img.message();
+            for (const glm::vec3& c : img->color) EXPECT_EQ(c, o.background);
+        }
+}
+
+TEST_F(GaussianGl, OneGaussianOnEveryPath) {
+    // One element: the sorts' trivial case; the tile path with a Gaussian spanning several tiles.
+    ReferenceOptions o;
+    o.width = 70, o.height = 50;  // not multiples of the 16-pixel tile
+    GaussianCloud g = random_cloud(1, 2);
+    g.positions[0] = glm::vec3(0.0f);
+    g.scales[0] = glm::vec3(0.3f, 0.2f, 0.1f);
+    const Camera cam = camera_at({0, 0, 3});
+    const ReferenceImage ref = render_reference(g, cam, o);
+    for (BlendPath blend : {BlendPath::quads, BlendPath::tiles})
+        for (SortPath sort : {SortPath::cpu, SortPath::gpu}) {
+            renderer->sort_path = sort, renderer->blend_path = blend;
+            auto img = render_gl(*renderer, g, cam, o);
+            ASSERT_TRUE(img) << img.message();
+            EXPECT_GT(psnr(ref, *img), 40.0);
+            if (blend == BlendPath::tiles) {
+                EXPECT_GT(renderer->tile_entries, 4u);
+            }
+        }
+}
+
+TEST_F(GaussianGl, AutomaticSortFollowsTheRasterizer) {
+    renderer->sort_path = SortPath::automatic;
+    ReferenceOptions o;
+    o.width = o.height = 16;
+    auto img = render_gl(*renderer, random_cloud(100, 0), camera_at({0, 0, 3}), o);
     ASSERT_TRUE(img) << img.message();
-    for (const glm::vec3& c : img->color) EXPECT_EQ(c, o.background);
+    EXPECT_EQ(renderer->software, gfx::software_rasterizer());
+    EXPECT_EQ(renderer->gpu_sort_used, gpu_sort_preferred(*renderer, 100));
+    if (!renderer->software) {
+        EXPECT_TRUE(renderer->gpu_sort_used) << "hardware GPUs sort on the GPU";
+    }
 }
 
 }  // namespace

@@ -1,0 +1,130 @@
+#include "runtime/gfx/radix_sort.h"
+
+#include <string>
+#include <utility>
+
+#include "runtime/gfx/dispatch.h"
+#include "runtime/gfx/gl.h"
+#include "runtime/gfx/shader.h"
+#include "shaders/common/radix_sort_layout.h"
+
+namespace sffd::gfx {
+
+Result<RadixSorter> create_radix_sorter() {
+    RadixSorter s;
+    auto count = load_compute_program("common/radix_sort_count.comp", "radix_sort.count");
+    if (!count) return count.error();
+    auto scan = load_compute_program("common/radix_sort_scan.comp", "radix_sort.scan");
+    if (!scan) return scan.error();
+    auto scatter = load_compute_program("common/radix_sort_scatter.comp", "radix_sort.scatter");
+    if (!scatter) return scatter.error();
+    auto reduce = load_compute_program("common/scan_reduce.comp", "scan.reduce");
+    if (!reduce) return reduce.error();
+    auto add = load_compute_program("common/scan_add.comp", "scan.add");
+    if (!add) return add.error();
+    s.count = std::move(*count), s.scan = std::move(*scan), s.scatter = std::move(*scatter);
+    s.scan_reduce = std::move(*reduce), s.scan_add = std::move(*add);
+    s.scan_sums = Buffer::create("scan.block_sums");
+    s.keys_scratch = Buffer::create("radix_sort.keys_scratch");
+    s.values_scratch = Buffer::create("radix_sort.values_scratch");
+    s.histogram = Buffer::create("radix_sort.histogram");
+    return s;
+}
+
+namespace {
+
+// Grow-only storage (reallocating drops the contents, which are scratch).
+void grow(const Buffer& b, std::uint64_t need) {
+    glNamedBufferData(b.id(), GLsizeiptr(need * sizeof(std::uint32_t)), nullptr, GL_DYNAMIC_COPY);
+}
+
+void bind(GLuint binding, GLuint buffer) { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffer); }
+
+}  // namespace
+
+Status radix_sort(RadixSorter& s, GLuint keys, GLuint values, std::uint32_t count, int key_bits) {
+    if (key_bits < 1 || key_bits > 32)
+        return make_error("radix_sort(): key_bits " + std::to_string(key_bits) + " is not in 1..32");
+    if (count <= 1) return {};
+    const std::uint32_t blocks = (count + SFFD_RADIX_BLOCK - 1) / SFFD_RADIX_BLOCK;
+    if (count > s.scratch_elements) {
+        grow(s.keys_scratch, count), grow(s.values_scratch, count);
+        s.scratch_elements = count;
+    }
+    const std::uint64_t entries = std::uint64_t(blocks) * SFFD_RADIX_BUCKETS + 1;  // + the scan's total
+    if (entries > s.histogram_entries) {
+        grow(s.histogram, entries);
+        s.histogram_entries = entries;
+    }
+    const std::uint32_t max_x = s.max_groups_x ? s.max_groups_x : dispatch_group_limit();
+    const int passes = (key_bits + int(SFFD_RADIX_BITS) - 1) / int(SFFD_RADIX_BITS);
+    GLuint keys_in = keys, values_in = values, keys_out = s.keys_scratch.id(), values_out = s.values_scratch.id();
+    for (GLuint p : {s.count.id(), s.scatter.id()}) {
+        glProgramUniform1ui(p, SFFD_RADIX_LOC_COUNT, count);
+        glProgramUniform1ui(p, SFFD_RADIX_LOC_BLOCKS, blocks);
+    }
+    glProgramUniform1ui(s.scan.id(), SFFD_RADIX_LOC_COUNT, blocks * SFFD_RADIX_BUCKETS);
+    bind(SFFD_RADIX_SSBO_HISTOGRAM, s.histogram.id());
+    for (int pass = 0; pass < passes; ++pass) {
+        const GLuint shift = GLuint(pass) * SFFD_RADIX_BITS;
+        bind(SFFD_RADIX_SSBO_KEYS_IN, keys_in);
+        bind(SFFD_RADIX_SSBO_VALUES_IN, values_in);
+        bind(SFFD_RADIX_SSBO_KEYS_OUT, keys_out);
+        bind(SFFD_RADIX_SSBO_VALUES_OUT, values_out);
+        glProgramUniform1ui(s.count.id(), SFFD_RADIX_LOC_SHIFT, shift);
+        glProgramUniform1ui(s.scatter.id(), SFFD_RADIX_LOC_SHIFT, shift);
+        glUseProgram(s.count.id());
+        if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st) return st;
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        glUseProgram(s.scan.id());
+        glDispatchCompute(1, 1, 1);
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        glUseProgram(s.scatter.id());
+        if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st) return st;
+        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        std::swap(keys_in, keys_out), std::swap(values_in, values_out);
+    }
+    glUseProgram(0);
+    if (passes % 2 == 1) {  // the result is in the scratch buffers: copy it home
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        glCopyNamedBufferSubData(keys_in, keys, 0, 0, GLsizeiptr(count) * 4);
+        glCopyNamedBufferSubData(values_in, values, 0, 0, GLsizeiptr(count) * 4);
+    }
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    return {};
+}
+
+Status exclusive_scan(RadixSorter& s, GLuint buffer, std::uint32_t count) {
+    if (count == 0xffffffffu) return make_error("exclusive_scan(): the total of 2^32 - 1 elements has no slot");
+    if (count == 0) {
+        const GLuint zero = 0;
+        glClearNamedBufferSubData(buffer, GL_R32UI, 0, sizeof(GLuint), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        return {};
+    }
+    const std::uint32_t blocks = (count + SFFD_RADIX_BLOCK - 1) / SFFD_RADIX_BLOCK;
+    if (blocks + 1u > s.scan_sum_entries) {
+        grow(s.scan_sums, blocks + 1u);
+        s.scan_sum_entries = blocks + 1u;
+    }
+    const std::uint32_t max_x = s.max_groups_x ? s.max_groups_x : dispatch_group_limit();
+    for (GLuint p : {s.scan_reduce.id(), s.scan_add.id()}) {
+        glProgramUniform1ui(p, SFFD_RADIX_LOC_COUNT, count);
+        glProgramUniform1ui(p, SFFD_RADIX_LOC_BLOCKS, blocks);
+    }
+    glProgramUniform1ui(s.scan.id(), SFFD_RADIX_LOC_COUNT, blocks);
+    bind(SFFD_RADIX_SSBO_KEYS_IN, buffer);
+    bind(SFFD_RADIX_SSBO_HISTOGRAM, s.scan_sums.id());
+    glUseProgram(s.scan_reduce.id());
+    if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st) return st;
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    glUseProgram(s.scan.id());
+    glDispatchCompute(1, 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    glUseProgram(s.scan_add.id());
+    if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st) return st;
+    glUseProgram(0);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    return {};
+}
+
+}  // namespace sffd::gfx

@@ -1,0 +1,33 @@
+#version 450 core
+// Tile path, step 1: for the p-th Gaussian in depth order (p < the drawn count of the indirect draw),
+// the number of 16x16 tiles its pixel box touches; 0 past the drawn count. Scanned next to give each
+// Gaussian its first (tile, Gaussian) entry.
+#include "gaussian/gaussian_layout.h"
+
+layout(local_size_x = 64) in;
+#include "common/dispatch.glsl"
+
+layout(std430, binding = SFFD_GAUSS_SSBO_PROJECTED) readonly buffer Projected { GpuProjected projected[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_ORDER) readonly buffer Order { uint order[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_DRAW) readonly buffer Draw { uint vertex_count, instance_count, first, base_instance; };
+layout(std430, binding = SFFD_GAUSS_SSBO_TOUCHED) writeonly buffer Touched { uint touched[]; };
+
+uniform uint u_count;
+uniform vec2 u_size;
+uniform uvec2 u_tiles;
+
+#include "gaussian/tile_common.glsl"
+
+void main() {
+    const uint p = sffd_dispatch_index();
+    if (p >= u_count) return;
+    uint n = 0u;
+    if (p < instance_count) {
+        const ivec4 box = pixel_box(projected[order[p]].center_depth_radius);
+        if (box.x <= box.z && box.y <= box.w) {
+            const uvec4 t = tile_rect(box);
+            n = (t.z - t.x + 1u) * (t.w - t.y + 1u);
+        }
+    }
+    touched[p] = n;
+}
