@@ -12,6 +12,9 @@
 #include "systems/ffd/ffd_system.h"
 #include "systems/splat_render/ground_truth.h"
 #include "systems/splat_render/image_compare.h"
+#include "runtime/assets/import.h"
+#include "tests/assets/test_util.h"
+#include "tests/assets/textured_box.h"
 #include "tests/systems/splat_render/gl_fixture.h"
 
 namespace sffd::render::test {
@@ -91,6 +94,65 @@ TEST_F(Quality_, FlatColouredSpritesLookLikeTexturedOnes) {
         EXPECT_GT(cmp->psnr, 45.0);
         EXPECT_EQ(cmp->pixels_one, 0u);
     }
+}
+
+// A textured mesh converted to splats (issue 14: mesh sampling keeps the texture and gives each splat a
+// uv frame) shows its checker per pixel: every pixel of the box's front face, away from cell and face
+// edges, has the colour of the checker cell its ray hits, in HQ and preview. The cells (8 texels, about
+// 16 x 90 px here) are not much taller than a splat, so one colour per splat (the same cloud without uv
+// frames: HQ blends its neighbours' colours) gets many pixels wrong: the check that this test sees it.
+TEST_F(Quality_, ConvertedTexturedMeshShowsItsCheckerPerPixel) {
+    constexpr int kTexels = 256, kCells = 32;
+    auto g = assets::read_geometry(sffd::test::write_textured_box(sffd::test::fresh_dir("render", "textured_box"), kTexels, kCells));
+    ASSERT_TRUE(g.ok()) << g.message();
+    assets::ImportOptions opt;
+    opt.splats = 4000;
+    auto converted = assets::make_splat_cloud(*g, opt);
+    ASSERT_TRUE(converted.ok()) << converted.message();
+    ASSERT_EQ(converted->uv_axes.size(), converted->size());
+    converted->material.specular = 0.0f;
+    const sffd::test::BoxFace front = sffd::test::textured_box_faces()[0];  // z = 0.25, facing +z
+    Camera cam;
+    cam.eye = glm::dvec3(0.0, 0.0, 2.0);
+    cam.near_plane = 0.05f;
+    reg.emplace<Camera>(reg.create(), cam);
+    reg.emplace<AmbientLight>(reg.create(), AmbientLight{glm::vec3(1.0f), 1.0f});  // albedo shows
+    const std::vector<std::uint8_t> texels = sffd::test::checker_texels(kTexels, kCells);
+    const int w = 512, h = 288;
+    auto wrong_fraction = [&](const FrameImage& img, const char* what) {
+        int checked = 0, wrong = 0;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                const glm::dvec3 d = pixel_ray(cam, x, y, w, h);
+                const glm::dvec3 p = cam.eye + d * ((front.corner.z - cam.eye.z) / d.z);
+                const glm::dvec2 st = front.st(p);
+                if (st.x < 0.03 || st.x > 0.97 || st.y < 0.05 || st.y > 0.95) continue;  // the face's border
+                const glm::dvec2 t = front.uv(p) * double(kTexels);  // texel coordinates
+                const double cell = double(kTexels / kCells);
+                auto edge = [&](double c) { const double r = std::fmod(c, cell); return std::min(r, cell - r); };
+                if (edge(t.x) < 1.5 || edge(t.y) < 1.5) continue;  // within the filter's reach of a cell edge
+                const std::uint8_t* want = &texels[(std::size_t(t.y) * kTexels + std::size_t(t.x)) * 4];
+                ++checked;
+                const glm::vec4 c = img.color[img.index(x, y)];
+                for (int k = 0; k < 3; ++k)
+                    if (std::abs(int(encode_srgb8(c[k])) - int(want[k])) > 12) {
+                        ++wrong;
+                        break;
+                    }
+            }
+        std::printf("%s: %d of %d pixels off their checker cell's colour\n", what, wrong, checked);
+        EXPECT_GT(checked, 15000) << what;
+        return checked ? double(wrong) / checked : 1.0;
+    };
+    const ecs::Entity e = add_cloud(*converted);
+    for (Quality q : {Quality::hq, Quality::preview}) {
+        const char* name = q == Quality::hq ? "hq, per-pixel texture" : "preview, per-pixel texture";
+        EXPECT_LT(wrong_fraction(render(q, w, h), name), 0.002) << name;
+    }
+    // Without the uv frame every fragment takes the splat centre's colour: the checker edges break up.
+    release_render_state(reg);
+    reg.get<SplatCloud>(e).uv_axes.clear();
+    EXPECT_GT(wrong_fraction(render(Quality::hq, w, h), "hq, one colour per splat"), 0.05);
 }
 
 }  // namespace
