@@ -6,7 +6,7 @@
 //      textures). Positions are kept in double precision; every number is checked (NaN/inf refused).
 //   2. make_splat_cloud(geometry, options): meshes are sampled on their surface (area-weighted, blue-noise
 //      thinned, exactly `splats` samples; colour from vertex colours or the base-colour texture, normal
-//      from the triangle), point sets are used as they are (or thinned to `splats`); missing normals
+//      from the triangle; a mesh with one untinted texture keeps it, with per-splat uv and uv frame), point sets are used as they are (or thinned to `splats`); missing normals
 //      and radii are estimated (splat_estimation.h). Positions become float offsets from a double
 //      origin: the bounding-box centre when the cloud is far from the world origin, else 0.
 // Every error names the file.
