@@ -1,4 +1,6 @@
-// Ground-truth renderer: a CPU ray tracer of the exact surface behind a splat cloud (ExactSphere), seen
+// Ground-truth renderer: a CPU ray tracer of the exact surface behind a splat cloud (ExactSphere, or the
+// ExactMesh a mesh file was sampled from: its triangles through Embree, uv interpolated, the texture's
+// uv derivatives from each triangle's affine 3D -> uv map, at rest only), seen
 // through the same camera, lit by the same lights with the same Blinn-Phong model and textured with the
 // same texture as the splat renderer, so its images are what the splats approximate (issue 14).
 //
@@ -52,6 +54,10 @@ struct ReferenceScene {
     std::vector<Lattice> lattices;          // deformers in order (world space); empty: the rest sphere
     const SplatMaterial* material = nullptr;  // texture (sRGB, row 0 at v = 0), base colour, specular
     ReferenceLights lights;
+    // Instead of the sphere: a cloud's ExactMesh (at rest only), and the cloud's model matrix (Transform
+    // and origin) that places it in the world.
+    const ExactMesh* mesh = nullptr;
+    glm::dmat4 mesh_model{1.0};
 };
 
 struct ReferenceSettings {
@@ -60,8 +66,10 @@ struct ReferenceSettings {
     int colatitude_steps = 1024;
 };
 
-// The scene of the first cloud carrying an ExactSphere, after the current frame's animation (Lattice::
-// current as it is now), through scene_camera() at width x height. Errors name what is missing.
+// The scene of the first cloud carrying an ExactSphere (else an ExactMesh), after the current frame's
+// animation (Lattice::current as it is now), through scene_camera() at width x height. Errors name what
+// is missing; a mesh whose lattices moved (no deformed-mesh ground truth yet) and a mesh cloud whose
+// colours were baked per splat (no texture to trace: a tinted or multi-texture mesh) are errors.
 Result<ReferenceScene> reference_scene(const ecs::Registry& registry, int width, int height);
 
 Result<FrameImage> render_reference(const ReferenceScene& scene, const ReferenceSettings& settings = {});
