@@ -368,6 +368,9 @@ TEST(AssimpTestModels, TexturedBoxImportsWithTextureColours) {
         std::sort(distinct.begin(), distinct.end());
         distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
         EXPECT_GT(distinct.size(), 50u);
+        // One untinted texture: kept as the cloud's material, with a uv frame per splat (issue 14).
+        EXPECT_EQ(c->material.texture_width, g->textures[0].width);
+        EXPECT_EQ(c->uv_axes.size(), 2000u);
     }
     const fs::path bad = dir / "IndexOutOfRange/IndexOutOfRange.gltf";
     if (fs::exists(bad)) {
