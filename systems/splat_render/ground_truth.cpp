@@ -336,6 +336,22 @@ glm::dvec4 ReferenceTexture::bilinear(const glm::dvec2& uv, int level) const {
     return glm::mix(glm::mix(t(x0, y0), t(x1, y0), ax), glm::mix(t(x0, y1), t(x1, y1), ax), ay);
 }
 
+glm::dvec4 ReferenceTexture::anisotropic(const glm::dvec2& uv, const glm::dvec2& dx, const glm::dvec2& dy, int max_probes) const {
+    const glm::dvec2 size(levels_[0].width, levels_[0].height);
+    const double lx = glm::length(dx * size), ly = glm::length(dy * size);
+    const double major = std::max(lx, ly), minor = std::min(lx, ly);
+    if (!(minor > 0.0) || major <= 1.0) return trilinear(uv, dx, dy);
+    const int n = std::clamp(int(std::ceil(major / minor)), 1, std::max(max_probes, 1));
+    if (n == 1) return trilinear(uv, dx, dy);
+    // n trilinear probes spread over the footprint's major axis, each filtering major / n (EXT_texture_
+    // filter_anisotropic's model; GL leaves the exact probe placement to the implementation).
+    const glm::dvec2 axis = lx >= ly ? dx : dy;
+    const glm::dvec2 step = axis / double(n), other = (lx >= ly ? dy : dx);
+    glm::dvec4 sum(0.0);
+    for (int i = 0; i < n; ++i) sum += trilinear(uv + axis * ((i + 0.5) / n - 0.5), step, other);
+    return sum / double(n);
+}
+
 glm::dvec4 ReferenceTexture::trilinear(const glm::dvec2& uv, const glm::dvec2& dx, const glm::dvec2& dy) const {
     const glm::dvec2 size(levels_[0].width, levels_[0].height);
     const double rho = std::max(glm::length(dx * size), glm::length(dy * size));
@@ -493,7 +509,8 @@ Result<FrameImage> render_reference(const ReferenceScene& scene, const Reference
                             if (hit->mesh) return glm::dvec2(glm::dot(hit->grad_u, dq), glm::dot(hit->grad_v, dq));
                             return sphere_uv_differential(hit->rest_dir, hit->to_rest * dq);
                         };
-                        tex = texture.trilinear(hit_uv(*hit), duv(1.0, 0.0), duv(0.0, 1.0));
+                        tex = settings.anisotropic > 0 ? texture.anisotropic(hit_uv(*hit), duv(1.0, 0.0), duv(0.0, 1.0), settings.anisotropic)
+                                                       : texture.trilinear(hit_uv(*hit), duv(1.0, 0.0), duv(0.0, 1.0));
                     }
                     color = shade(*hit, dir, tex);
                 } else {

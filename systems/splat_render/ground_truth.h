@@ -62,6 +62,7 @@ struct ReferenceScene {
 
 struct ReferenceSettings {
     int supersample = 0;       // 0: pixel-centre rays, trilinear mip filtering; N: N x N rays, level 0
+    int anisotropic = 0;       // with supersample 0: up to this many trilinear probes along the footprint's major axis
     int longitude_steps = 2048;  // tessellation of the deformed sphere
     int colatitude_steps = 1024;
 };
@@ -87,6 +88,9 @@ public:
     glm::dvec4 bilinear(const glm::dvec2& uv, int level = 0) const;
     // GL_LINEAR_MIPMAP_LINEAR with explicit derivatives of uv along window x and y (GL 4.5 section 8.14).
     glm::dvec4 trilinear(const glm::dvec2& uv, const glm::dvec2& duv_dx, const glm::dvec2& duv_dy) const;
+    // Anisotropic filtering (EXT_texture_filter_anisotropic's model): min(ceil(major / minor), max_probes)
+    // trilinear probes along the footprint's major axis, each at the level of major / probes.
+    glm::dvec4 anisotropic(const glm::dvec2& uv, const glm::dvec2& duv_dx, const glm::dvec2& duv_dy, int max_probes) const;
 
 private:
     struct Level {

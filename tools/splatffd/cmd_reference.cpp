@@ -1,4 +1,4 @@
-// splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N] [--format png,exr]
+// splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N] [--anisotropic N] [--format png,exr]
 //
 // Ground-truth frames (systems/splat_render/ground_truth.h): the exact surface behind the scene's cloud
 // (the built-in `sphere`; or the triangles of a mesh file, at rest, whose cloud is what `splatffd render
@@ -28,7 +28,7 @@ using namespace sffd;
 
 void usage() {
     std::fprintf(stderr,
-                 "usage: splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N]\n"
+                 "usage: splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N] [--anisotropic N]\n"
                  "                          [--format png,exr] [--fps F]\n"
                  "  SCENE            a scene whose cloud has an exact surface (built-in: sphere; default), or a\n"
                  "                   mesh file (OBJ, OFF, PLY, glTF with triangles; at rest, untinted)\n"
@@ -36,6 +36,7 @@ void usage() {
                  "  --frames A:B     frame range, inclusive (default 0:0); frame k is at time k / fps\n"
                  "  --size WxH       image size in pixels (default 1280x720)\n"
                  "  --supersample N  N x N rays per pixel, box-filtered (default 0: one ray, trilinear mip)\n"
+                 "  --anisotropic N  one ray, up to N trilinear probes along the footprint (default 0: off)\n"
                  "  --format LIST    png, exr or png,exr (default png,exr)\n"
                  "  --fps F          frames per second of the clip clock (default 24)\n");
 }
@@ -64,7 +65,7 @@ Status attach_exact_mesh(ecs::Registry& registry, const std::string& scene) {
 int run_reference(sffd::cli::Args args) {
     std::string scene = "sphere", out_dir;
     bool scene_given = false, png = true, exr = true;
-    long first = 0, last = 0, width = 1280, height = 720, supersample = 0;
+    long first = 0, last = 0, width = 1280, height = 720, supersample = 0, anisotropic = 0;
     double fps = 24.0;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
@@ -93,6 +94,10 @@ int run_reference(sffd::cli::Args args) {
             auto n = cli::parse_integer("--supersample", args[++i], 0, 16);
             if (!n) return fail(n.error());
             supersample = static_cast<long>(*n);
+        } else if (a == "--anisotropic" && has_value) {
+            auto n = cli::parse_integer("--anisotropic", args[++i], 0, 64);
+            if (!n) return fail(n.error());
+            anisotropic = static_cast<long>(*n);
         } else if (a == "--format" && has_value) {
             if (!cli::parse_image_formats(args[i + 1], png, exr)) return bad("--format expects png, exr or png,exr, got");
             ++i;
@@ -126,6 +131,7 @@ int run_reference(sffd::cli::Args args) {
     }
     render::ReferenceSettings settings;
     settings.supersample = int(supersample);
+    settings.anisotropic = int(anisotropic);
     for (long k = first; k <= last; ++k) {
         // The clip's pose at frame k, as `splatffd render` reaches it (a clock of its own, seeked to k / fps).
         Clock clock(ClockSettings{.fixed_dt = 1.0 / fps});

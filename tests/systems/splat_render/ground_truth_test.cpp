@@ -124,6 +124,30 @@ TEST(GroundTruth, MeshPathMatchesTheAnalyticSquare) {
     EXPECT_NE(bad.message().find("index out of range"), std::string::npos) << bad.message();
 }
 
+// Anisotropic filtering in the reference: an isotropic footprint is plain trilinear; a 4:1 footprint whose
+// long axis runs along v, over a texture constant along v (columns of random colours), filters at the
+// short axis's level: equal to trilinear with the long derivative divided by 4, sharper than trilinear.
+TEST(GroundTruth, AnisotropicReferenceFilterProbesAlongTheMajorAxis) {
+    SplatMaterial m;
+    m.texture_width = m.texture_height = 64;
+    std::mt19937 rng(7);
+    std::vector<std::uint8_t> column(64 * 3);
+    for (auto& c : column) c = std::uint8_t(rng() & 255u);
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) m.texture_rgba8.insert(m.texture_rgba8.end(), {column[3 * x], column[3 * x + 1], column[3 * x + 2], 255});
+    const ReferenceTexture t(m);
+    const glm::dvec2 uv(0.4137, 0.61), dx(3.0 / 64, 0.0), dy(0.0, 12.0 / 64);
+    const glm::dvec4 iso = t.anisotropic(uv, dx, glm::dvec2(0.0, 3.0 / 64), 16), tri = t.trilinear(uv, dx, glm::dvec2(0.0, 3.0 / 64));
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(iso[c], tri[c], 1e-12);
+    const glm::dvec4 an = t.anisotropic(uv, dx, dy, 16), sharp = t.trilinear(uv, dx, dy / 4.0), blurred = t.trilinear(uv, dx, dy);
+    double differs = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(an[c], sharp[c], 1e-6) << c;
+        differs += std::abs(an[c] - blurred[c]);
+    }
+    EXPECT_GT(differs, 1e-3);  // trilinear alone blurs at the long axis's level
+}
+
 TEST(GroundTruth, SilhouetteIsTheAnalyticDisc) {
     SplatMaterial m;  // untextured: base colour
     const int w = 201, h = 201;
