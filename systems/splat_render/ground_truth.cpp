@@ -50,10 +50,15 @@ struct Hit {
     glm::dvec3 grad_u{0.0}, grad_v{0.0};
 };
 
-// An ExactMesh in world space through Embree.
+// An ExactMesh in world space through Embree. Deformed by lattices (F the lattices in order), each
+// triangle is traced as a k x k subdivision whose vertices are F of the rest points (positions and
+// normals through ffd::deform), as the deformed sphere is; a hit's rest point is the barycentric mix of the
+// sub-triangle's rest points, its uv the parent triangle's affine map there, and the uv gradient the
+// parent's pulled through the sub-triangle's world -> rest map.
 class MeshTracer {
 public:
-    MeshTracer(const ExactMesh& mesh, const glm::dmat4& model) : mesh_(mesh) {
+    MeshTracer(const ExactMesh& mesh, const glm::dmat4& model, const std::vector<Lattice>& lattices, const ReferenceSettings& settings)
+        : mesh_(mesh) {
         const std::size_t nv = mesh.positions.size(), nt = mesh.triangles.size() / 3;
         if (nt == 0 || nv == 0) {
             error_ = "render_reference(): the exact mesh has no triangles";
@@ -69,9 +74,10 @@ public:
         for (std::size_t i = 0; i < nv; ++i) world_[i] = glm::dvec3(model * glm::dvec4(mesh.positions[i], 1.0)), centre_ += world_[i];
         centre_ /= double(nv);  // float vertices relative to the mesh's centre keep precision far from 0
         const glm::dmat3 nm = glm::transpose(glm::inverse(glm::dmat3(model)));
+        std::vector<glm::dvec3> normals;
         if (mesh.normals.size() == nv) {
-            normals_.resize(nv);
-            for (std::size_t i = 0; i < nv; ++i) normals_[i] = nm * glm::dvec3(mesh.normals[i]);
+            normals.resize(nv);
+            for (std::size_t i = 0; i < nv; ++i) normals[i] = nm * glm::dvec3(mesh.normals[i]);
         }
         grad_u_.resize(nt), grad_v_.resize(nt);
         const bool uv = mesh.uvs.size() == nv;
@@ -87,6 +93,56 @@ public:
             grad_u_[t] = solve(d1.x, d2.x);
             grad_v_[t] = solve(d1.y, d2.y);
         }
+        // Traced triangles: the mesh's own at rest; k x k sub-triangles per triangle when deformed (k so
+        // that all of them stay within about mesh_subdivision_budget).
+        deformed_ = !lattices.empty();
+        const int k = deformed_ ? std::clamp(int(std::sqrt(double(std::max(settings.mesh_triangle_budget, 1)) / double(nt))), 1, 256) : 1;
+        const std::size_t per = std::size_t(k + 1) * std::size_t(k + 2) / 2;
+        rest_.reserve(nt * per);
+        std::vector<glm::vec3> pos, nrm;
+        pos.reserve(nt * per), nrm.reserve(nt * per);
+        for (std::size_t t = 0; t < nt; ++t) {
+            const std::uint32_t* tri = &mesh.triangles[3 * t];
+            const glm::dvec3 a = world_[tri[0]], b = world_[tri[1]], c = world_[tri[2]];
+            const glm::dvec3 face = glm::cross(b - a, c - a);
+            const glm::dvec3 fn = glm::length(face) > 0.0 ? glm::normalize(face) : glm::dvec3(0, 0, 1);
+            const std::uint32_t base = std::uint32_t(rest_.size());
+            auto local = [&](int i, int j) { return base + std::uint32_t(i * (k + 1) - i * (i - 1) / 2 + j); };  // row i holds k + 1 - i points
+            for (int i = 0; i <= k; ++i)
+                for (int j = 0; j <= k - i; ++j) {
+                    const double bu = double(i) / k, bv = double(j) / k, bw = 1.0 - bu - bv;
+                    const glm::dvec3 p = bw * a + bu * b + bv * c;
+                    glm::dvec3 n = fn;
+                    if (!normals.empty()) {
+                        const glm::dvec3 m = bw * normals[tri[0]] + bu * normals[tri[1]] + bv * normals[tri[2]];
+                        if (glm::length(m) > 1e-12) n = glm::normalize(m);
+                    }
+                    rest_.push_back(p);
+                    pos.emplace_back(p - centre_);
+                    nrm.emplace_back(n);
+                }
+            for (int i = 0; i < k; ++i)
+                for (int j = 0; j < k - i; ++j) {
+                    tris_.insert(tris_.end(), {local(i, j), local(i + 1, j), local(i, j + 1)});
+                    parent_.push_back(std::uint32_t(t));
+                    if (j + 1 <= k - i - 1) {
+                        tris_.insert(tris_.end(), {local(i + 1, j), local(i + 1, j + 1), local(i, j + 1)});
+                        parent_.push_back(std::uint32_t(t));
+                    }
+                }
+        }
+        for (const Lattice& l : lattices) {
+            const ffd::PointsIn in{pos.data(), nrm.data(), nullptr, nullptr, pos.size(), centre_};
+            const ffd::PointsOut out{pos.data(), nrm.data(), nullptr, nullptr};
+            if (auto st = ffd::deform(l, in, out); !st) {
+                error_ = st.message();
+                return;
+            }
+        }
+        positions_.resize(pos.size());
+        for (std::size_t i = 0; i < pos.size(); ++i) positions_[i] = centre_ + glm::dvec3(pos[i]);
+        normals_.assign(nrm.begin(), nrm.end());
+        smooth_ = !normals.empty() || deformed_;  // else each triangle's own (flat) normal
         device_ = rtcNewDevice(nullptr);
         if (!device_) {
             error_ = "render_reference(): rtcNewDevice failed";
@@ -94,12 +150,11 @@ public:
         }
         scene_rtc_ = rtcNewScene(device_);
         RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), nv));
-        for (std::size_t k = 0; k < nv; ++k)
-            for (int a = 0; a < 3; ++a) v[3 * k + std::size_t(a)] = float(world_[k][a] - centre_[a]);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), pos.size()));
+        for (std::size_t i = 0; i < pos.size(); ++i) v[3 * i] = pos[i].x, v[3 * i + 1] = pos[i].y, v[3 * i + 2] = pos[i].z;
         auto* idx = static_cast<std::uint32_t*>(
-            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), nt));
-        std::copy(mesh.triangles.begin(), mesh.triangles.end(), idx);
+            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), parent_.size()));
+        std::copy(tris_.begin(), tris_.end(), idx);
         rtcCommitGeometry(geom);
         rtcAttachGeometry(scene_rtc_, geom);
         rtcReleaseGeometry(geom);
@@ -128,30 +183,46 @@ public:
         rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
         rtcIntersect1(scene_rtc_, &ctx, &rh);
         if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-        const std::size_t t = rh.hit.primID;
-        const std::uint32_t* tri = &mesh_.triangles[3 * t];
+        const std::size_t s = rh.hit.primID, t = parent_[s];
+        const std::uint32_t* tri = &tris_[3 * s];
         const double bu = rh.hit.u, bv = rh.hit.v, bw = 1.0 - bu - bv;
-        const glm::dvec3 a = world_[tri[0]], b = world_[tri[1]], c = world_[tri[2]];
+        const glm::dvec3 a = positions_[tri[0]], b = positions_[tri[1]], c = positions_[tri[2]];
         Hit h;
         h.mesh = true;
         // The hit from the barycentrics in double precision (the float t is enough to find the triangle).
         h.position = bw * a + bu * b + bv * c;
         const glm::dvec3 face = glm::cross(b - a, c - a);
         h.normal = glm::length(face) > 0.0 ? glm::normalize(face) : -glm::normalize(dir);
-        if (!normals_.empty()) {
+        if (smooth_) {
             const glm::dvec3 n = bw * normals_[tri[0]] + bu * normals_[tri[1]] + bv * normals_[tri[2]];
             if (glm::length(n) > 1e-12) h.normal = glm::normalize(n);
         }
+        // uv: the parent triangle's affine map at the rest point.
+        const glm::dvec3 ra = rest_[tri[0]], rb = rest_[tri[1]], rc = rest_[tri[2]];
+        const glm::dvec3 rest = bw * ra + bu * rb + bv * rc;
+        const std::uint32_t corner = mesh_.triangles[3 * t];
         if (mesh_.uvs.size() == mesh_.positions.size())
-            h.uv = bw * glm::dvec2(mesh_.uvs[tri[0]]) + bu * glm::dvec2(mesh_.uvs[tri[1]]) + bv * glm::dvec2(mesh_.uvs[tri[2]]);
+            h.uv = glm::dvec2(mesh_.uvs[corner]) + glm::dvec2(glm::dot(grad_u_[t], rest - world_[corner]), glm::dot(grad_v_[t], rest - world_[corner]));
         h.grad_u = grad_u_[t], h.grad_v = grad_v_[t];
+        if (deformed_) {
+            // World -> rest on the sub-triangle (the FFD is affine at its scale): dq = x e1 + y e2 (+ gn,
+            // dropped) -> dp = x f1 + y f2; the uv change grad . dp = (M^T grad) . dq.
+            const glm::dvec3 e1 = b - a, e2 = c - a, gn = glm::cross(e1, e2);
+            glm::dmat3 m(0.0);
+            if (glm::dot(gn, gn) > 0.0) m = glm::dmat3(rb - ra, rc - ra, glm::dvec3(0.0)) * glm::inverse(glm::dmat3(e1, e2, gn));
+            h.grad_u = glm::transpose(m) * grad_u_[t];
+            h.grad_v = glm::transpose(m) * grad_v_[t];
+        }
         return h;
     }
 
 private:
     const ExactMesh& mesh_;
-    std::vector<glm::dvec3> world_, normals_, grad_u_, grad_v_;
+    std::vector<glm::dvec3> world_, grad_u_, grad_v_;   // rest vertices (world), per-triangle uv gradients
+    std::vector<glm::dvec3> rest_, positions_, normals_;  // traced vertices: rest, deformed, normals
+    std::vector<std::uint32_t> tris_, parent_;            // traced triangles and the mesh triangle of each
     glm::dvec3 centre_{0.0};
+    bool deformed_ = false, smooth_ = false;
     RTCDevice device_ = nullptr;
     RTCScene scene_rtc_ = nullptr;
     std::string error_;
@@ -433,8 +504,10 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
                           "no texture to trace";
             if (const Deformers* d = reg.try_get<Deformers>(e))
                 for (ecs::Entity l : d->lattices)
-                    if (reg.valid(l) && reg.has<Lattice>(l) && ffd::moved_count(reg.get<Lattice>(l)) > 0)
-                        problem = "the mesh is deformed by a lattice: the mesh ground truth is at rest only";
+                    if (reg.valid(l) && reg.has<Lattice>(l)) {
+                        const Lattice& lat = reg.get<Lattice>(l);
+                        if (ffd::moved_count(lat) > 0) s.lattices.push_back(lat);
+                    }
         });
     }
     if (!cloud) return make_error("reference_scene(): no point cloud with an exact surface (ExactSphere or ExactMesh) in the scene");
@@ -452,7 +525,7 @@ Result<FrameImage> render_reference(const ReferenceScene& scene, const Reference
     std::optional<DeformedSphere> deformed;
     std::optional<MeshTracer> mesh;
     if (scene.mesh) {
-        mesh.emplace(*scene.mesh, scene.mesh_model);
+        mesh.emplace(*scene.mesh, scene.mesh_model, scene.lattices, settings);
         if (!mesh->error().empty()) return make_error(mesh->error());
     } else if (!scene.lattices.empty()) {
         deformed.emplace(scene, settings);

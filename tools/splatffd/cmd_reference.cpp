@@ -31,7 +31,7 @@ void usage() {
                  "usage: splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N] [--anisotropic N]\n"
                  "                          [--format png,exr] [--fps F]\n"
                  "  SCENE            a scene whose cloud has an exact surface (built-in: sphere; default), or a\n"
-                 "                   mesh file (OBJ, OFF, PLY, glTF with triangles; at rest, untinted)\n"
+                 "                   mesh file (OBJ, OFF, PLY, glTF with triangles; one untinted texture or none)\n"
                  "  --out DIR        output folder (created); files frame_NNNN.png / frame_NNNN.exr\n"
                  "  --frames A:B     frame range, inclusive (default 0:0); frame k is at time k / fps\n"
                  "  --size WxH       image size in pixels (default 1280x720)\n"

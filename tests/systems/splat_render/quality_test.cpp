@@ -10,6 +10,7 @@
 #include "systems/animation/animation_system.h"
 #include "systems/animation/editing.h"
 #include "systems/animation/paper_demo.h"
+#include "systems/ffd/deform.h"
 #include "systems/ffd/ffd_system.h"
 #include "systems/splat_render/ground_truth.h"
 #include "systems/splat_render/image_compare.h"
@@ -206,6 +207,60 @@ TEST_F(Quality_, ConvertedTexturedMeshAgainstItsMeshGroundTruth) {
     ASSERT_TRUE(flat.ok());
     std::printf("box hq without uv frames: interior %.2f dB\n", flat->psnr_interior);
     EXPECT_LT(flat->psnr_interior, 35.0);
+}
+
+// Under FFD: the converted box twisted by a lattice (the splats through ffd::deform: positions, normals,
+// axes; the uv frames ride on the axes) against the mesh ground truth deformed by the same lattice
+// (each triangle subdivided, its vertices through the same deformation).
+TEST_F(Quality_, TwistedConvertedMeshAgainstItsTwistedMeshGroundTruth) {
+    auto g = assets::read_geometry(sffd::test::write_textured_box(sffd::test::fresh_dir("render", "textured_box_twist"), 256, 16));
+    ASSERT_TRUE(g.ok()) << g.message();
+    assets::ImportOptions opt;
+    opt.splats = 20000;
+    auto cloud = assets::make_splat_cloud(*g, opt);
+    ASSERT_TRUE(cloud.ok()) << cloud.message();
+    // A twist about x: the control points turn by up to +-0.5 rad from one end to the other.
+    Lattice lattice = make_lattice(glm::dvec3(-1.2, -0.7, -0.45), {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 1.4, 0), glm::dvec3(0, 0, 0.9)},
+                                   glm::ivec3(4, 3, 3));
+    for (glm::dvec3& c : lattice.current) {
+        const double a = 0.5 * c.x / 1.2, ca = std::cos(a), sa = std::sin(a);
+        c = glm::dvec3(c.x, ca * c.y - sa * c.z, sa * c.y + ca * c.z);
+    }
+    SplatCloud& c = *cloud;
+    const ffd::PointsIn in{c.positions.data(), c.normals.data(), c.axis_u.data(), c.axis_v.data(), c.size(), c.origin};
+    const ffd::PointsOut out{c.positions.data(), c.normals.data(), c.axis_u.data(), c.axis_v.data()};
+    auto st = ffd::deform(lattice, in, out);
+    ASSERT_TRUE(st.ok()) << st.message();
+    ASSERT_EQ(st->inside, c.size());
+    const ecs::Entity e = reg.create();
+    ExactMesh mesh;
+    for (const glm::dvec3& p : g->positions) mesh.positions.push_back(p - c.origin);
+    mesh.uvs = g->uvs;
+    mesh.triangles = g->triangles;
+    reg.emplace<SplatCloud>(e, std::move(c));
+    reg.emplace<ExactMesh>(e, std::move(mesh));
+    Camera cam;
+    cam.eye = glm::dvec3(0.9, 0.8, 2.4);
+    cam.near_plane = 0.05f;
+    reg.emplace<Camera>(reg.create(), cam);
+    add_light({-0.4f, -0.6f, -0.7f}, 0.15f);
+    const int w = 640, h = 360;
+    auto scene = reference_scene(reg, w, h);
+    ASSERT_TRUE(scene.ok()) << scene.message();
+    scene->lattices = {lattice};  // the cloud above was deformed directly, not through Deformers
+    auto ref = render_reference(*scene);
+    ASSERT_TRUE(ref.ok()) << ref.message();
+    for (Quality q : {Quality::hq, Quality::preview}) {
+        const FrameImage img = render(q, w, h);
+        auto cmp = compare_images(img, *ref);
+        ASSERT_TRUE(cmp.ok()) << cmp.message();
+        const char* name = q == Quality::hq ? "hq" : "preview";
+        std::printf("twisted box %s vs twisted mesh ground truth: PSNR %.2f dB (both %.2f dB, %zu px in one only), interior %.2f dB "
+                    "over %zu of %zu px\n",
+                    name, cmp->psnr, cmp->psnr_both, cmp->pixels_one, cmp->psnr_interior, cmp->pixels_interior, cmp->pixels);
+        EXPECT_GT(cmp->pixels_interior, cmp->pixels * 3 / 4) << name;
+        EXPECT_GE(cmp->psnr_interior, q == Quality::hq ? 40.0 : 35.0) << name;
+    }
 }
 
 }  // namespace
