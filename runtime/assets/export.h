@@ -7,8 +7,11 @@
 //   red green blue alpha  uchar, sRGB (when it has colours)
 //   u v                   float (when it has texture coordinates; texture row 0 at v = 0)
 //   axis_ux .. axis_vz    float: the splat's tangent axes scaled by its radii
-// plus "comment TextureFile <texture_path>" when the material names a texture file (the pixels are not
-// stored in PLY; GLB embeds them). read_ply_geometry() reads all of these back.
+//   du_ds dv_ds du_dt dv_dt  float: the uv frame (SplatCloud::uv_axes; with the axes only)
+// plus "comment TextureFile <texture_path>" when the material names a texture file; texels without a file
+// (a procedural or converted mesh's texture) are written to <stem>_texture.png beside the PLY and named
+// by that comment. read_ply_geometry() reads all of these back.
+// glTF: the uv frame is the float VEC4 attribute _UV_AXES.
 // GLB/glTF: see gltf_io.h.
 #pragma once
 

@@ -299,7 +299,7 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(world)));
     const glm::dmat3 linear(world);
 
-    std::vector<double> nrm, col, uv, au, av;
+    std::vector<double> nrm, col, uv, au, av, uvf;
     int col_components = 0;
     if (int i = attr("NORMAL"); i >= 0) {
         auto r = read_gltf_accessor(m, i, 3, src, "NORMAL");
@@ -325,6 +325,15 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
         if (!rv) return rv.error();
         au = std::move(*ru);
         av = std::move(*rv);
+        // The uv frame along those axes (SplatCloud::uv_axes): du/ds, dv/ds, du/dt, dv/dt.
+        if (int i = attr("_UV_AXES"); i >= 0) {
+            auto r = read_gltf_accessor(m, i, 4, src, "_UV_AXES");
+            if (!r) return r.error();
+            uvf = std::move(*r);
+            for (double d : uvf)
+                if (!std::isfinite(d)) return make_error(src + ": _UV_AXES has a non-finite value");
+            if (uvf.size() / 4 != n) return make_error(src + ": attribute counts differ from POSITION");
+        }
     }
     for (const auto* a : {&nrm, &uv, &au, &av})
         if (!a->empty() && a->size() / (a == &uv ? 2 : 3) != n) return make_error(src + ": attribute counts differ from POSITION");
@@ -349,6 +358,9 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
         fill3(av, c.axis_v);
         c.uvs.resize(uv.size() / 2);
         for (std::size_t i = 0; i < c.uvs.size(); ++i) c.uvs[i] = glm::vec2(static_cast<float>(uv[2 * i]), static_cast<float>(uv[2 * i + 1]));
+        c.uv_axes.resize(uvf.size() / 4);
+        for (std::size_t i = 0; i < c.uv_axes.size(); ++i)
+            c.uv_axes[i] = glm::vec4(float(uvf[4 * i]), float(uvf[4 * i + 1]), float(uvf[4 * i + 2]), float(uvf[4 * i + 3]));
         c.colors.resize(col.empty() ? 0 : n);
         for (std::size_t i = 0; i < c.colors.size(); ++i) c.colors[i] = colour(i);
         if (prim.material >= 0 && static_cast<std::size_t>(prim.material) < m.materials.size()) {
@@ -402,6 +414,12 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
             g.axis_u.emplace_back(linear * glm::dvec3(au[3 * i], au[3 * i + 1], au[3 * i + 2]));
             g.axis_v.emplace_back(linear * glm::dvec3(av[3 * i], av[3 * i + 1], av[3 * i + 2]));
         }
+    }
+    // Per axis, so a node transform (which maps the axes) leaves the uv frame as it is.
+    if (!uvf.empty() || !g.uv_axes.empty()) {
+        pad(g.uv_axes, glm::vec4(0.0f));
+        for (std::size_t i = 0; i < n; ++i)
+            g.uv_axes.push_back(uvf.empty() ? glm::vec4(0.0f) : glm::vec4(float(uvf[4 * i]), float(uvf[4 * i + 1]), float(uvf[4 * i + 2]), float(uvf[4 * i + 3])));
     }
 
     // Material: base colour factor and texture, shared by all triangles of this primitive.
@@ -605,7 +623,8 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
         const SplatCloud& c = *out.cloud;
         const std::size_t n = c.size();
         auto sized = [&](std::size_t s) { return s == 0 || s == n; };
-        if (!sized(c.normals.size()) || !sized(c.colors.size()) || !sized(c.uvs.size()) || !sized(c.axis_u.size()) || c.axis_u.size() != c.axis_v.size())
+        if (!sized(c.normals.size()) || !sized(c.colors.size()) || !sized(c.uvs.size()) || !sized(c.axis_u.size()) || c.axis_u.size() != c.axis_v.size() ||
+            !sized(c.uv_axes.size()))
             return make_error(path.string() + ": cloud '" + out.name + "' has attribute arrays of the wrong length");
         json attributes = json::object();
         if (n > 0) {
@@ -636,6 +655,7 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
             if (!c.axis_u.empty()) {
                 attributes["_AXIS_U"] = b.accessor(c.axis_u, kFloat, "VEC3", 3);
                 attributes["_AXIS_V"] = b.accessor(c.axis_v, kFloat, "VEC3", 3);
+                if (!c.uv_axes.empty()) attributes["_UV_AXES"] = b.accessor(c.uv_axes, kFloat, "VEC4", 4);
             }
         }
         json material = {{"name", out.name + ".material"},
@@ -735,6 +755,7 @@ void pad_attributes(Geometry& g) {
         g.axis_u.resize(n, glm::vec3(0.0f));
         g.axis_v.resize(n, glm::vec3(0.0f));
     }
+    if (!g.uv_axes.empty()) g.uv_axes.resize(n, glm::vec4(0.0f));
 }
 
 }  // namespace
@@ -801,7 +822,8 @@ Result<GltfContents> read_gltf(const fs::path& path) {
             const std::size_t n = cloud.cloud.size();
             for (const auto& p : cloud.cloud.positions)
                 if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return make_error(src + ": splat node '" + node.name + "' has a non-finite position");
-            if ((!cloud.cloud.axis_u.empty() && cloud.cloud.axis_u.size() != n) || (!cloud.cloud.normals.empty() && cloud.cloud.normals.size() != n))
+            if ((!cloud.cloud.axis_u.empty() && cloud.cloud.axis_u.size() != n) || (!cloud.cloud.normals.empty() && cloud.cloud.normals.size() != n) ||
+                (!cloud.cloud.uv_axes.empty() && cloud.cloud.uv_axes.size() != n))
                 return make_error(src + ": splat node '" + node.name + "' has attribute arrays of the wrong length");
             out.clouds.push_back(std::move(cloud));
         } else {
@@ -830,6 +852,7 @@ Result<GltfContents> read_gltf(const fs::path& path) {
     if (!g.colors.empty()) g.attributes.push_back("COLOR_0");
     if (!g.uvs.empty()) g.attributes.push_back("TEXCOORD_0");
     if (!g.axis_u.empty()) g.attributes.push_back("_AXIS_U/_AXIS_V");
+    if (!g.uv_axes.empty()) g.attributes.push_back("_UV_AXES");
     return out;
 }
 
@@ -857,6 +880,7 @@ Result<Geometry> read_gltf_geometry(const fs::path& path) {
         extend(g.axis_v, c.cloud.axis_v, [&](const glm::vec3& v) { return glm::vec3(linear * glm::dvec3(v)); }, glm::vec3(0.0f));
         extend(g.colors, c.cloud.colors, [](std::uint32_t v) { return v; }, 0xffffffffu);
         extend(g.uvs, c.cloud.uvs, [](const glm::vec2& v) { return v; }, glm::vec2(0.0f));
+        extend(g.uv_axes, c.cloud.uv_axes, [](const glm::vec4& v) { return v; }, glm::vec4(0.0f));
         if (single) {
             g.splat_material = c.cloud.material;
             const bool identity = t.translation == glm::dvec3(0.0) && t.rotation == glm::dquat(1, 0, 0, 0) && t.scale == glm::dvec3(1.0);

@@ -78,6 +78,8 @@ Result<Geometry> read_ply_geometry(const fs::path& path) {
     const int ax[6] = {scalar(ve.find("axis_ux")), scalar(ve.find("axis_uy")), scalar(ve.find("axis_uz")),
                        scalar(ve.find("axis_vx")), scalar(ve.find("axis_vy")), scalar(ve.find("axis_vz"))};
     const bool has_axes = std::all_of(ax, ax + 6, [](int i) { return i >= 0; });
+    const int uf[4] = {scalar(ve.find("du_ds")), scalar(ve.find("dv_ds")), scalar(ve.find("du_dt")), scalar(ve.find("dv_dt"))};
+    const bool has_uv_frame = has_axes && std::all_of(uf, uf + 4, [](int i) { return i >= 0; });
     const bool has_normals = nx >= 0 && ny >= 0 && nz >= 0;
     const bool has_colors = cr >= 0 && cg >= 0 && cb >= 0;
     const bool has_uvs = tu >= 0 && tv >= 0;
@@ -107,6 +109,7 @@ Result<Geometry> read_ply_geometry(const fs::path& path) {
         g.axis_u.reserve(n);
         g.axis_v.reserve(n);
     }
+    if (has_uv_frame) g.uv_axes.reserve(n);
     if (auto s = reader->seek_element("vertex"); !s) return s.error();
     ply::Chunk chunk;
     while (true) {
@@ -131,6 +134,7 @@ Result<Geometry> read_ply_geometry(const fs::path& path) {
                 g.axis_u.emplace_back(col(ax[0])[r], col(ax[1])[r], col(ax[2])[r]);
                 g.axis_v.emplace_back(col(ax[3])[r], col(ax[4])[r], col(ax[5])[r]);
             }
+            if (has_uv_frame) g.uv_axes.emplace_back(col(uf[0])[r], col(uf[1])[r], col(uf[2])[r], col(uf[3])[r]);
         }
     }
     // Faces (any element named "face" with a vertex index list), triangulated as fans.
@@ -210,10 +214,43 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
         for (std::uint32_t v : input.triangles) used[v] = 1;
         if (static_cast<std::size_t>(std::count(used.begin(), used.end(), 1)) < options.min_mesh_splats) mesh_splats = options.min_mesh_splats;
     }
+    // A stored uv frame (our files) as texture-space gradients, so it survives thinning and re-estimated
+    // axes: the gradient in the span of the stored axes that reproduces the frame along them.
+    std::vector<glm::vec3> file_grad_u, file_grad_v;
+    if (const std::size_t n = input.positions.size(); input.uv_axes.size() == n && input.axis_u.size() == n && input.uvs.size() == n) {
+        file_grad_u.resize(n);
+        file_grad_v.resize(n);
+        for (std::size_t i = 0; i < n; ++i) {
+            const glm::vec4 f = input.uv_axes[i];
+            glm::dvec3 gu, gv;
+            triangle_uv_gradients(glm::dvec3(0.0), glm::dvec3(input.axis_u[i]), glm::dvec3(input.axis_v[i]), glm::dvec2(0.0),
+                                  glm::dvec2(f.x, f.y), glm::dvec2(f.z, f.w), gu, gv);
+            file_grad_u[i] = glm::vec3(gu);
+            file_grad_v[i] = glm::vec3(gv);
+        }
+    }
     if (input.triangle_count() > 0 && mesh_splats == 0) {
         // One splat per vertex used by a face (stray vertices are not part of the surface); normals are
         // the area-weighted face normals unless the file has its own.
         std::vector<glm::dvec3> acc(input.positions.size(), glm::dvec3(0.0));
+        // One texture over the mesh: kept, with each vertex's uv gradients the area-weighted mean of its
+        // triangles' (a vertex on a uv seam is a separate vertex in OBJ/glTF, so the mean stays on one side).
+        const int texture = single_texture(input);
+        std::vector<glm::dvec3> acc_gu, acc_gv;
+        std::vector<double> acc_area;
+        if (texture >= 0) {
+            acc_gu.assign(input.positions.size(), glm::dvec3(0.0));
+            acc_gv.assign(input.positions.size(), glm::dvec3(0.0));
+            acc_area.assign(input.positions.size(), 0.0);
+            for (std::size_t t = 0; t < input.triangle_count(); ++t) {
+                const std::uint32_t a = input.triangles[3 * t], b = input.triangles[3 * t + 1], c = input.triangles[3 * t + 2];
+                glm::dvec3 gu, gv;
+                triangle_uv_gradients(input.positions[a], input.positions[b], input.positions[c], glm::dvec2(input.uvs[a]),
+                                      glm::dvec2(input.uvs[b]), glm::dvec2(input.uvs[c]), gu, gv);
+                const double area = 0.5 * glm::length(glm::cross(input.positions[b] - input.positions[a], input.positions[c] - input.positions[a]));
+                for (std::uint32_t v : {a, b, c}) acc_gu[v] += area * gu, acc_gv[v] += area * gv, acc_area[v] += area;
+            }
+        }
         std::vector<char> used(input.positions.size(), 0);
         std::vector<std::int32_t> material_of(input.positions.size(), -1);
         for (std::size_t t = 0; t < input.triangle_count(); ++t) {
@@ -251,6 +288,17 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
                 resampled.colors.push_back(input.colors[i]);
             }
             if (!input.uvs.empty()) resampled.uvs.push_back(input.uvs[i]);
+            if (texture >= 0) {
+                const double w = acc_area[i] > 0.0 ? 1.0 / acc_area[i] : 0.0;
+                resampled.uv_grad_u.emplace_back(w * acc_gu[i]);
+                resampled.uv_grad_v.emplace_back(w * acc_gv[i]);
+            }
+        }
+        if (texture >= 0) {
+            const Image& img = input.textures[static_cast<std::size_t>(texture)];
+            resampled.splat_material.texture_width = img.width;
+            resampled.splat_material.texture_height = img.height;
+            resampled.splat_material.texture_rgba8 = img.rgba8;
         }
         // Degenerate faces only: let PCA decide.
         if (std::any_of(resampled.normals.begin(), resampled.normals.end(), [](const glm::vec3& n) { return glm::length(n) < 0.5f; }))
@@ -286,6 +334,7 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
             if (!input.normals.empty()) resampled.normals.push_back(input.normals[i]);
             if (!input.colors.empty()) resampled.colors.push_back(input.colors[i]);
             if (!input.uvs.empty()) resampled.uvs.push_back(input.uvs[i]);
+            if (!file_grad_u.empty()) resampled.uv_grad_u.push_back(file_grad_u[i]), resampled.uv_grad_v.push_back(file_grad_v[i]);
         }
         g = &resampled;
         resampled_points = true;
@@ -323,6 +372,20 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
     est.progress = options.progress;
     if (!normals_ok) cloud.normals.clear();
     estimate_splats(cloud, est);
+    // The uv frame along the final axes: as stored when the stored axes were kept, else from the
+    // texture-space gradients (mesh sampling, or the stored frame re-expressed).
+    const std::size_t n = cloud.size();
+    if (cloud.uvs.size() == n && cloud.axis_u.size() == n) {
+        const std::vector<glm::vec3>* gu = g->uv_grad_u.size() == n ? &g->uv_grad_u : (g == &input && file_grad_u.size() == n ? &file_grad_u : nullptr);
+        const std::vector<glm::vec3>* gv = gu == &g->uv_grad_u ? &g->uv_grad_v : &file_grad_v;
+        if (g == &input && axes_ok && !est.radii && input.uv_axes.size() == n) {
+            cloud.uv_axes = input.uv_axes;
+        } else if (gu) {
+            cloud.uv_axes.resize(n);
+            for (std::size_t i = 0; i < n; ++i)
+                cloud.uv_axes[i] = uv_frame(glm::dvec3((*gu)[i]), glm::dvec3((*gv)[i]), cloud.axis_u[i], cloud.axis_v[i]);
+        }
+    }
     return cloud;
 }
 

@@ -6,7 +6,7 @@
 //      textures). Positions are kept in double precision; every number is checked (NaN/inf refused).
 //   2. make_splat_cloud(geometry, options): meshes are sampled on their surface (area-weighted, blue-noise
 //      thinned, exactly `splats` samples; colour from vertex colours or the base-colour texture, normal
-//      from the triangle), point sets are used as they are (or thinned to `splats`); missing normals
+//      from the triangle; a mesh with one untinted texture keeps it, with per-splat uv and uv frame), point sets are used as they are (or thinned to `splats`); missing normals
 //      and radii are estimated (splat_estimation.h). Positions become float offsets from a double
 //      origin: the bounding-box centre when the cloud is far from the world origin, else 0.
 // Every error names the file.
@@ -43,6 +43,12 @@ struct Geometry {
     std::vector<std::uint32_t> colors;       // RGBA8 sRGB, R in the low byte; empty or one per position
     std::vector<glm::vec2> uvs;              // empty or one per position
     std::vector<glm::vec3> axis_u, axis_v;   // splat axes, when the file stores them (our PLY/GLB)
+    // uv frame along those axes (SplatCloud::uv_axes), when the file stores it (our PLY/GLB; needs the axes).
+    std::vector<glm::vec4> uv_axes;
+    // Texture-space gradients (world space, in the surface's tangent plane): near point i,
+    // uv(p) = uvs[i] + (dot(uv_grad_u[i], p - x_i), dot(uv_grad_v[i], p - x_i)). Made by mesh sampling from
+    // each triangle's affine 3D -> uv map; make_splat_cloud turns them into uv_axes once the axes exist.
+    std::vector<glm::vec3> uv_grad_u, uv_grad_v;
     std::vector<std::uint32_t> triangles;    // 3 vertex indices per triangle (meshes)
     std::vector<std::int32_t> triangle_material;  // empty or one per triangle, index into materials
     std::vector<MeshMaterial> materials;

@@ -23,6 +23,12 @@ Status check_geometry(const Geometry& g) {
     for (std::size_t i = 0; i < g.axis_u.size(); ++i)
         if (!finite3(glm::dvec3(g.axis_u[i])) || !finite3(glm::dvec3(g.axis_v[i])))
             return make_error(g.source + ": point " + std::to_string(i) + " has non-finite splat axes");
+    for (std::size_t i = 0; i < g.uv_axes.size(); ++i)
+        if (!std::isfinite(g.uv_axes[i].x + g.uv_axes[i].y + g.uv_axes[i].z + g.uv_axes[i].w))
+            return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite uv frame");
+    if ((!g.uv_axes.empty() && (g.uv_axes.size() != n || g.axis_u.size() != n)) ||
+        (!g.uv_grad_u.empty() && (g.uv_grad_u.size() != n || g.uv_grad_v.size() != n)))
+        return make_error(g.source + ": attribute arrays do not match the point count");
     if ((!g.normals.empty() && g.normals.size() != n) || (!g.colors.empty() && g.colors.size() != n) ||
         (!g.uvs.empty() && g.uvs.size() != n) || g.axis_u.size() != g.axis_v.size() || (!g.axis_u.empty() && g.axis_u.size() != n))
         return make_error(g.source + ": attribute arrays do not match the point count");

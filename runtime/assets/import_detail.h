@@ -122,4 +122,22 @@ std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::si
                                      const ProgressFn& progress = {});
 glm::vec4 sample_texture(const Image& img, glm::vec2 uv);
 
+// The texture a mesh can keep as its splat cloud's material (a textured cloud, sampled per pixel by the
+// renderer) instead of baking it into colours: every triangle's material names this one texture with a
+// white base colour, the mesh has uvs and no vertex colours. -1 when any of that fails (then colours are
+// baked, as before).
+int single_texture(const Geometry& mesh);
+
+// The gradients of a triangle's affine map from 3D to uv (in the triangle's plane): for x = a + s(b - a) +
+// t(c - a), uv = ta + s(tb - ta) + t(tc - ta), and grad_u . (x - a) = u(x) - u(a) (likewise v).
+// Zero for a degenerate triangle.
+void triangle_uv_gradients(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, glm::dvec2 ta, glm::dvec2 tb,
+                           glm::dvec2 tc, glm::dvec3& grad_u, glm::dvec3& grad_v);
+
+// A splat's uv frame (SplatCloud::uv_axes) from the texture-space gradients and its axes.
+inline glm::vec4 uv_frame(const glm::dvec3& grad_u, const glm::dvec3& grad_v, const glm::vec3& axis_u, const glm::vec3& axis_v) {
+    const glm::dvec3 au(axis_u), av(axis_v);
+    return glm::vec4(float(glm::dot(grad_u, au)), float(glm::dot(grad_v, au)), float(glm::dot(grad_u, av)), float(glm::dot(grad_v, av)));
+}
+
 }  // namespace sffd::assets::detail

@@ -109,6 +109,40 @@ glm::vec4 sample_texture(const Image& img, glm::vec2 uv) {
     return glm::mix(glm::mix(texel(x0, y0), texel(x0 + 1, y0), tx), glm::mix(texel(x0, y0 + 1), texel(x0 + 1, y0 + 1), tx), ty);
 }
 
+int single_texture(const Geometry& mesh) {
+    if (mesh.uvs.size() != mesh.positions.size() || !mesh.colors.empty() || mesh.triangle_count() == 0) return -1;
+    int texture = -1;
+    for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
+        const int m = mesh.triangle_material.empty() ? (mesh.materials.size() == 1 ? 0 : -1) : mesh.triangle_material[t];
+        if (m < 0) return -1;
+        const MeshMaterial& mat = mesh.materials[static_cast<std::size_t>(m)];
+        // White within 8-bit rounding: the renderer's textured path has no base-colour factor.
+        if (mat.texture < 0 || glm::any(glm::lessThan(mat.base_color, glm::vec4(254.5f / 255.0f)))) return -1;
+        if (texture >= 0 && mat.texture != texture) return -1;
+        texture = mat.texture;
+    }
+    const Image& img = mesh.textures[static_cast<std::size_t>(texture)];
+    if (img.width <= 0 || img.height <= 0 || img.rgba8.size() != std::size_t(img.width) * std::size_t(img.height) * 4) return -1;
+    return texture;
+}
+
+void triangle_uv_gradients(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, glm::dvec2 ta, glm::dvec2 tb,
+                           glm::dvec2 tc, glm::dvec3& grad_u, glm::dvec3& grad_v) {
+    // grad = alpha e1 + beta e2 (in the plane) with grad . e1 = d1, grad . e2 = d2: the 2x2 Gram system.
+    const glm::dvec3 e1 = b - a, e2 = c - a;
+    const double g11 = glm::dot(e1, e1), g12 = glm::dot(e1, e2), g22 = glm::dot(e2, e2);
+    const double det = g11 * g22 - g12 * g12;
+    grad_u = grad_v = glm::dvec3(0.0);
+    if (!(det > 1e-24 * g11 * g22) || !std::isfinite(det)) return;
+    const glm::dvec2 d1 = tb - ta, d2 = tc - ta;
+    auto solve = [&](double r1, double r2) {
+        const double alpha = (g22 * r1 - g12 * r2) / det, beta = (g11 * r2 - g12 * r1) / det;
+        return alpha * e1 + beta * e2;
+    };
+    grad_u = solve(d1.x, d2.x);
+    grad_v = solve(d1.y, d2.y);
+}
+
 }  // namespace detail
 
 Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::uint32_t seed, const ProgressFn& progress) {
@@ -158,6 +192,18 @@ Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::ui
     out.attributes = mesh.attributes;
     const bool vertex_normals = mesh.normals.size() == mesh.positions.size();
     const bool bake_colour = !mesh.colors.empty() || !mesh.materials.empty();
+    // One texture over the whole mesh: the cloud keeps it with a uv frame per splat (colours are still
+    // baked: the untextured fallback, e.g. a PLY whose texture file went missing).
+    const int texture = single_texture(mesh);
+    if (texture >= 0) {
+        const Image& img = mesh.textures[static_cast<std::size_t>(texture)];
+        out.splat_material.texture_width = img.width;
+        out.splat_material.texture_height = img.height;
+        out.splat_material.texture_rgba8 = img.rgba8;
+        out.uvs.reserve(count);
+        out.uv_grad_u.reserve(count);
+        out.uv_grad_v.reserve(count);
+    }
     out.positions.reserve(count);
     out.normals.reserve(count);
     if (bake_colour) out.colors.reserve(count);
@@ -173,6 +219,14 @@ Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::ui
             if (glm::length(vn) > 1e-12) n = glm::normalize(vn);
         }
         out.normals.emplace_back(n);
+        if (texture >= 0) {
+            const glm::dvec2 ta(mesh.uvs[ia]), tb(mesh.uvs[ib]), tc(mesh.uvs[ic]);
+            out.uvs.emplace_back(w0 * ta + u * tb + v * tc);
+            glm::dvec3 gu, gv;
+            triangle_uv_gradients(mesh.positions[ia], mesh.positions[ib], mesh.positions[ic], ta, tb, tc, gu, gv);
+            out.uv_grad_u.emplace_back(gu);
+            out.uv_grad_v.emplace_back(gv);
+        }
         if (bake_colour) {
             glm::vec4 col(1.0f);
             if (!mesh.colors.empty())

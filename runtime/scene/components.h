@@ -62,6 +62,17 @@ struct ExactSphere {
     double radius = 1.0;
 };
 
+// On a point-cloud entity whose splats sample a triangle mesh (`splatffd reference` attaches it to a mesh
+// file's cloud): the mesh in cloud space (relative to SplatCloud::origin), read by the ground-truth ray
+// tracer, which renders these triangles (textured through `uvs` with the cloud's material) instead of the
+// splats. Authored data.
+struct ExactMesh {
+    std::vector<glm::dvec3> positions;
+    std::vector<glm::vec3> normals;         // empty: the triangles' own normals; else one per position
+    std::vector<glm::vec2> uvs;             // empty or one per position
+    std::vector<std::uint32_t> triangles;   // 3 indices per triangle
+};
+
 // Perspective camera looking down its local -Z; placed by the entity's Transform or by look-at fields.
 struct Camera {
     glm::dvec3 eye{0.0, 0.0, 3.0};

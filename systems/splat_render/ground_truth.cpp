@@ -43,6 +43,189 @@ std::optional<glm::dvec3> ray_plane(const glm::dvec3& o, const glm::dvec3& dir, 
 struct Hit {
     glm::dvec3 position{0.0}, normal{0.0}, rest_dir{0.0};
     glm::dmat3 to_rest{1.0};
+    // Mesh hits: uv, and the triangle's uv gradients (a world displacement dq in its plane moves uv by
+    // (grad_u . dq, grad_v . dq)).
+    bool mesh = false;
+    glm::dvec2 uv{0.0};
+    glm::dvec3 grad_u{0.0}, grad_v{0.0};
+};
+
+// An ExactMesh in world space through Embree. Deformed by lattices (F the lattices in order), each
+// triangle is traced as a k x k subdivision whose vertices are F of the rest points (positions and
+// normals through ffd::deform), as the deformed sphere is; a hit's rest point is the barycentric mix of the
+// sub-triangle's rest points, its uv the parent triangle's affine map there, and the uv gradient the
+// parent's pulled through the sub-triangle's world -> rest map.
+class MeshTracer {
+public:
+    MeshTracer(const ExactMesh& mesh, const glm::dmat4& model, const std::vector<Lattice>& lattices, const ReferenceSettings& settings)
+        : mesh_(mesh) {
+        const std::size_t nv = mesh.positions.size(), nt = mesh.triangles.size() / 3;
+        if (nt == 0 || nv == 0) {
+            error_ = "render_reference(): the exact mesh has no triangles";
+            return;
+        }
+        for (std::uint32_t i : mesh.triangles)
+            if (i >= nv) {
+                error_ = "render_reference(): the exact mesh has a triangle index out of range";
+                return;
+            }
+        world_.resize(nv);
+        centre_ = glm::dvec3(0.0);
+        for (std::size_t i = 0; i < nv; ++i) world_[i] = glm::dvec3(model * glm::dvec4(mesh.positions[i], 1.0)), centre_ += world_[i];
+        centre_ /= double(nv);  // float vertices relative to the mesh's centre keep precision far from 0
+        const glm::dmat3 nm = glm::transpose(glm::inverse(glm::dmat3(model)));
+        std::vector<glm::dvec3> normals;
+        if (mesh.normals.size() == nv) {
+            normals.resize(nv);
+            for (std::size_t i = 0; i < nv; ++i) normals[i] = nm * glm::dvec3(mesh.normals[i]);
+        }
+        grad_u_.resize(nt), grad_v_.resize(nt);
+        const bool uv = mesh.uvs.size() == nv;
+        for (std::size_t t = 0; t < nt; ++t) {
+            // The triangle's affine uv map: grad = a e1 + b e2 with grad . e1 = du1, grad . e2 = du2.
+            const std::uint32_t* tri = &mesh.triangles[3 * t];
+            const glm::dvec3 e1 = world_[tri[1]] - world_[tri[0]], e2 = world_[tri[2]] - world_[tri[0]];
+            const double g11 = glm::dot(e1, e1), g12 = glm::dot(e1, e2), g22 = glm::dot(e2, e2), det = g11 * g22 - g12 * g12;
+            if (!uv || !(det > 1e-24 * g11 * g22)) continue;
+            const glm::dvec2 d1 = glm::dvec2(mesh.uvs[tri[1]]) - glm::dvec2(mesh.uvs[tri[0]]);
+            const glm::dvec2 d2 = glm::dvec2(mesh.uvs[tri[2]]) - glm::dvec2(mesh.uvs[tri[0]]);
+            auto solve = [&](double r1, double r2) { return ((g22 * r1 - g12 * r2) / det) * e1 + ((g11 * r2 - g12 * r1) / det) * e2; };
+            grad_u_[t] = solve(d1.x, d2.x);
+            grad_v_[t] = solve(d1.y, d2.y);
+        }
+        // Traced triangles: the mesh's own at rest; k x k sub-triangles per triangle when deformed (k so
+        // that all of them stay within about mesh_subdivision_budget).
+        deformed_ = !lattices.empty();
+        const int k = deformed_ ? std::clamp(int(std::sqrt(double(std::max(settings.mesh_triangle_budget, 1)) / double(nt))), 1, 256) : 1;
+        const std::size_t per = std::size_t(k + 1) * std::size_t(k + 2) / 2;
+        rest_.reserve(nt * per);
+        std::vector<glm::vec3> pos, nrm;
+        pos.reserve(nt * per), nrm.reserve(nt * per);
+        for (std::size_t t = 0; t < nt; ++t) {
+            const std::uint32_t* tri = &mesh.triangles[3 * t];
+            const glm::dvec3 a = world_[tri[0]], b = world_[tri[1]], c = world_[tri[2]];
+            const glm::dvec3 face = glm::cross(b - a, c - a);
+            const glm::dvec3 fn = glm::length(face) > 0.0 ? glm::normalize(face) : glm::dvec3(0, 0, 1);
+            const std::uint32_t base = std::uint32_t(rest_.size());
+            auto local = [&](int i, int j) { return base + std::uint32_t(i * (k + 1) - i * (i - 1) / 2 + j); };  // row i holds k + 1 - i points
+            for (int i = 0; i <= k; ++i)
+                for (int j = 0; j <= k - i; ++j) {
+                    const double bu = double(i) / k, bv = double(j) / k, bw = 1.0 - bu - bv;
+                    const glm::dvec3 p = bw * a + bu * b + bv * c;
+                    glm::dvec3 n = fn;
+                    if (!normals.empty()) {
+                        const glm::dvec3 m = bw * normals[tri[0]] + bu * normals[tri[1]] + bv * normals[tri[2]];
+                        if (glm::length(m) > 1e-12) n = glm::normalize(m);
+                    }
+                    rest_.push_back(p);
+                    pos.emplace_back(p - centre_);
+                    nrm.emplace_back(n);
+                }
+            for (int i = 0; i < k; ++i)
+                for (int j = 0; j < k - i; ++j) {
+                    tris_.insert(tris_.end(), {local(i, j), local(i + 1, j), local(i, j + 1)});
+                    parent_.push_back(std::uint32_t(t));
+                    if (j + 1 <= k - i - 1) {
+                        tris_.insert(tris_.end(), {local(i + 1, j), local(i + 1, j + 1), local(i, j + 1)});
+                        parent_.push_back(std::uint32_t(t));
+                    }
+                }
+        }
+        for (const Lattice& l : lattices) {
+            const ffd::PointsIn in{pos.data(), nrm.data(), nullptr, nullptr, pos.size(), centre_};
+            const ffd::PointsOut out{pos.data(), nrm.data(), nullptr, nullptr};
+            if (auto st = ffd::deform(l, in, out); !st) {
+                error_ = st.message();
+                return;
+            }
+        }
+        positions_.resize(pos.size());
+        for (std::size_t i = 0; i < pos.size(); ++i) positions_[i] = centre_ + glm::dvec3(pos[i]);
+        normals_.assign(nrm.begin(), nrm.end());
+        smooth_ = !normals.empty() || deformed_;  // else each triangle's own (flat) normal
+        device_ = rtcNewDevice(nullptr);
+        if (!device_) {
+            error_ = "render_reference(): rtcNewDevice failed";
+            return;
+        }
+        scene_rtc_ = rtcNewScene(device_);
+        RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), pos.size()));
+        for (std::size_t i = 0; i < pos.size(); ++i) v[3 * i] = pos[i].x, v[3 * i + 1] = pos[i].y, v[3 * i + 2] = pos[i].z;
+        auto* idx = static_cast<std::uint32_t*>(
+            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), parent_.size()));
+        std::copy(tris_.begin(), tris_.end(), idx);
+        rtcCommitGeometry(geom);
+        rtcAttachGeometry(scene_rtc_, geom);
+        rtcReleaseGeometry(geom);
+        rtcSetSceneBuildQuality(scene_rtc_, RTC_BUILD_QUALITY_HIGH);
+        rtcCommitScene(scene_rtc_);
+    }
+    ~MeshTracer() {
+        if (scene_rtc_) rtcReleaseScene(scene_rtc_);
+        if (device_) rtcReleaseDevice(device_);
+    }
+    MeshTracer(const MeshTracer&) = delete;
+    MeshTracer& operator=(const MeshTracer&) = delete;
+
+    const std::string& error() const { return error_; }
+
+    std::optional<Hit> trace(const glm::dvec3& origin, const glm::dvec3& dir) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        RTCRayHit rh{};
+        const glm::dvec3 o = origin - centre_;
+        rh.ray.org_x = float(o.x), rh.ray.org_y = float(o.y), rh.ray.org_z = float(o.z);
+        rh.ray.dir_x = float(dir.x), rh.ray.dir_y = float(dir.y), rh.ray.dir_z = float(dir.z);
+        rh.ray.tnear = 0.0f;
+        rh.ray.tfar = std::numeric_limits<float>::infinity();
+        rh.ray.mask = ~0u;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene_rtc_, &ctx, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+        const std::size_t s = rh.hit.primID, t = parent_[s];
+        const std::uint32_t* tri = &tris_[3 * s];
+        const double bu = rh.hit.u, bv = rh.hit.v, bw = 1.0 - bu - bv;
+        const glm::dvec3 a = positions_[tri[0]], b = positions_[tri[1]], c = positions_[tri[2]];
+        Hit h;
+        h.mesh = true;
+        // The hit from the barycentrics in double precision (the float t is enough to find the triangle).
+        h.position = bw * a + bu * b + bv * c;
+        const glm::dvec3 face = glm::cross(b - a, c - a);
+        h.normal = glm::length(face) > 0.0 ? glm::normalize(face) : -glm::normalize(dir);
+        if (smooth_) {
+            const glm::dvec3 n = bw * normals_[tri[0]] + bu * normals_[tri[1]] + bv * normals_[tri[2]];
+            if (glm::length(n) > 1e-12) h.normal = glm::normalize(n);
+        }
+        // uv: the parent triangle's affine map at the rest point.
+        const glm::dvec3 ra = rest_[tri[0]], rb = rest_[tri[1]], rc = rest_[tri[2]];
+        const glm::dvec3 rest = bw * ra + bu * rb + bv * rc;
+        const std::uint32_t corner = mesh_.triangles[3 * t];
+        if (mesh_.uvs.size() == mesh_.positions.size())
+            h.uv = glm::dvec2(mesh_.uvs[corner]) + glm::dvec2(glm::dot(grad_u_[t], rest - world_[corner]), glm::dot(grad_v_[t], rest - world_[corner]));
+        h.grad_u = grad_u_[t], h.grad_v = grad_v_[t];
+        if (deformed_) {
+            // World -> rest on the sub-triangle (the FFD is affine at its scale): dq = x e1 + y e2 (+ gn,
+            // dropped) -> dp = x f1 + y f2; the uv change grad . dp = (M^T grad) . dq.
+            const glm::dvec3 e1 = b - a, e2 = c - a, gn = glm::cross(e1, e2);
+            glm::dmat3 m(0.0);
+            if (glm::dot(gn, gn) > 0.0) m = glm::dmat3(rb - ra, rc - ra, glm::dvec3(0.0)) * glm::inverse(glm::dmat3(e1, e2, gn));
+            h.grad_u = glm::transpose(m) * grad_u_[t];
+            h.grad_v = glm::transpose(m) * grad_v_[t];
+        }
+        return h;
+    }
+
+private:
+    const ExactMesh& mesh_;
+    std::vector<glm::dvec3> world_, grad_u_, grad_v_;   // rest vertices (world), per-triangle uv gradients
+    std::vector<glm::dvec3> rest_, positions_, normals_;  // traced vertices: rest, deformed, normals
+    std::vector<std::uint32_t> tris_, parent_;            // traced triangles and the mesh triangle of each
+    glm::dvec3 centre_{0.0};
+    bool deformed_ = false, smooth_ = false;
+    RTCDevice device_ = nullptr;
+    RTCScene scene_rtc_ = nullptr;
+    std::string error_;
 };
 
 // The deformed sphere: Embree scene over the tessellation, with the rest points and FFD normals.
@@ -224,6 +407,22 @@ glm::dvec4 ReferenceTexture::bilinear(const glm::dvec2& uv, int level) const {
     return glm::mix(glm::mix(t(x0, y0), t(x1, y0), ax), glm::mix(t(x0, y1), t(x1, y1), ax), ay);
 }
 
+glm::dvec4 ReferenceTexture::anisotropic(const glm::dvec2& uv, const glm::dvec2& dx, const glm::dvec2& dy, int max_probes) const {
+    const glm::dvec2 size(levels_[0].width, levels_[0].height);
+    const double lx = glm::length(dx * size), ly = glm::length(dy * size);
+    const double major = std::max(lx, ly), minor = std::min(lx, ly);
+    if (!(minor > 0.0) || major <= 1.0) return trilinear(uv, dx, dy);
+    const int n = std::clamp(int(std::ceil(major / minor)), 1, std::max(max_probes, 1));
+    if (n == 1) return trilinear(uv, dx, dy);
+    // n trilinear probes spread over the footprint's major axis, each filtering major / n (EXT_texture_
+    // filter_anisotropic's model; GL leaves the exact probe placement to the implementation).
+    const glm::dvec2 axis = lx >= ly ? dx : dy;
+    const glm::dvec2 step = axis / double(n), other = (lx >= ly ? dy : dx);
+    glm::dvec4 sum(0.0);
+    for (int i = 0; i < n; ++i) sum += trilinear(uv + axis * ((i + 0.5) / n - 0.5), step, other);
+    return sum / double(n);
+}
+
 glm::dvec4 ReferenceTexture::trilinear(const glm::dvec2& uv, const glm::dvec2& dx, const glm::dvec2& dy) const {
     const glm::dvec2 size(levels_[0].width, levels_[0].height);
     const double rho = std::max(glm::length(dx * size), glm::length(dy * size));
@@ -293,7 +492,25 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
                     if (ffd::moved_count(lat) > 0) s.lattices.push_back(lat);
                 }
     });
-    if (!cloud) return make_error("reference_scene(): no point cloud with an exact surface (ExactSphere) in the scene");
+    if (!cloud) {
+        reg.view<const SplatCloud, const ExactMesh>().each([&](ecs::Entity e, const SplatCloud& c, const ExactMesh& mesh) {
+            if (cloud) return;
+            cloud = &c;
+            s.mesh = &mesh;
+            s.mesh_model = model_matrix(reg.try_get<Transform>(e), c.origin);
+            s.material = &c.material;
+            if (c.material.texture_rgba8.empty() && c.colors.size() == c.size() && c.size() > 0)
+                problem = "the mesh's colours are baked per splat (vertex colours, or a tinted or multi-texture material): "
+                          "no texture to trace";
+            if (const Deformers* d = reg.try_get<Deformers>(e))
+                for (ecs::Entity l : d->lattices)
+                    if (reg.valid(l) && reg.has<Lattice>(l)) {
+                        const Lattice& lat = reg.get<Lattice>(l);
+                        if (ffd::moved_count(lat) > 0) s.lattices.push_back(lat);
+                    }
+        });
+    }
+    if (!cloud) return make_error("reference_scene(): no point cloud with an exact surface (ExactSphere or ExactMesh) in the scene");
     if (!problem.empty()) return make_error("reference_scene(): " + problem);
     const double aspect = double(width) / double(height);
     const Camera cam = scene_camera(reg, aspect);
@@ -306,7 +523,11 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
 Result<FrameImage> render_reference(const ReferenceScene& scene, const ReferenceSettings& settings) {
     if (scene.width < 1 || scene.height < 1 || !scene.material) return make_error("render_reference(): incomplete scene");
     std::optional<DeformedSphere> deformed;
-    if (!scene.lattices.empty()) {
+    std::optional<MeshTracer> mesh;
+    if (scene.mesh) {
+        mesh.emplace(*scene.mesh, scene.mesh_model, scene.lattices, settings);
+        if (!mesh->error().empty()) return make_error(mesh->error());
+    } else if (!scene.lattices.empty()) {
         deformed.emplace(scene, settings);
         if (!deformed->error().empty()) return make_error(deformed->error());
     }
@@ -325,8 +546,9 @@ Result<FrameImage> render_reference(const ReferenceScene& scene, const Reference
         return to_world * glm::dvec3(nx / p00, ny / p11, -1.0);
     };
     auto trace = [&](const glm::dvec3& dir) {
-        return deformed ? deformed->trace(eye, dir) : trace_sphere(scene, eye, dir);
+        return mesh ? mesh->trace(eye, dir) : deformed ? deformed->trace(eye, dir) : trace_sphere(scene, eye, dir);
     };
+    auto hit_uv = [](const Hit& hit) { return hit.mesh ? hit.uv : sphere_uv(hit.rest_dir); };
     auto shade = [&](const Hit& hit, const glm::dvec3& dir, const glm::dvec4& tex) {
         const glm::dvec3 albedo = texture.empty() ? base : glm::dvec3(tex);
         return shade_reference(scene.lights, albedo, hit.normal, -glm::normalize(dir), specular, shininess);
@@ -356,9 +578,12 @@ Result<FrameImage> render_reference(const ReferenceScene& scene, const Reference
                         auto duv = [&](double ox, double oy) {
                             const auto q = ray_plane(eye, ray_dir(wx + ox, wy + oy), hit->position, hit->normal);
                             if (!q) return glm::dvec2(0.0);
-                            return sphere_uv_differential(hit->rest_dir, hit->to_rest * (*q - hit->position));
+                            const glm::dvec3 dq = *q - hit->position;
+                            if (hit->mesh) return glm::dvec2(glm::dot(hit->grad_u, dq), glm::dot(hit->grad_v, dq));
+                            return sphere_uv_differential(hit->rest_dir, hit->to_rest * dq);
                         };
-                        tex = texture.trilinear(sphere_uv(hit->rest_dir), duv(1.0, 0.0), duv(0.0, 1.0));
+                        tex = settings.anisotropic > 0 ? texture.anisotropic(hit_uv(*hit), duv(1.0, 0.0), duv(0.0, 1.0), settings.anisotropic)
+                                                       : texture.trilinear(hit_uv(*hit), duv(1.0, 0.0), duv(0.0, 1.0));
                     }
                     color = shade(*hit, dir, tex);
                 } else {
@@ -368,12 +593,12 @@ Result<FrameImage> render_reference(const ReferenceScene& scene, const Reference
                             const glm::dvec3 d = ray_dir(double(x) + (sx + 0.5) / ss, double(h - 1 - y) + (sy + 0.5) / ss);
                             const std::optional<Hit> sub = trace(d);
                             if (!sub) continue;
-                            const glm::dvec4 tex = texture.empty() ? glm::dvec4(0.0) : texture.bilinear(sphere_uv(sub->rest_dir));
+                            const glm::dvec4 tex = texture.empty() ? glm::dvec4(0.0) : texture.bilinear(hit_uv(*sub));
                             color += shade(*sub, d, tex);
                             ++hits;
                         }
                     color = hits ? color / double(hits) : shade(*hit, dir, texture.empty() ? glm::dvec4(0.0)
-                                                                                           : texture.bilinear(sphere_uv(hit->rest_dir)));
+                                                                                           : texture.bilinear(hit_uv(*hit)));
                 }
                 const std::size_t k = img.index(x, y);
                 img.color[k] = glm::vec4(glm::vec3(color), 1.0f);

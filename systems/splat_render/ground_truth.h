@@ -1,4 +1,7 @@
-// Ground-truth renderer: a CPU ray tracer of the exact surface behind a splat cloud (ExactSphere), seen
+// Ground-truth renderer: a CPU ray tracer of the exact surface behind a splat cloud (ExactSphere, or the
+// ExactMesh a mesh file was sampled from: its triangles through Embree, uv interpolated, the texture's
+// uv derivatives from each triangle's affine 3D -> uv map; under FFD a subdivision of each triangle whose
+// vertices are F of the rest points), seen
 // through the same camera, lit by the same lights with the same Blinn-Phong model and textured with the
 // same texture as the splat renderer, so its images are what the splats approximate (issue 14).
 //
@@ -52,16 +55,24 @@ struct ReferenceScene {
     std::vector<Lattice> lattices;          // deformers in order (world space); empty: the rest sphere
     const SplatMaterial* material = nullptr;  // texture (sRGB, row 0 at v = 0), base colour, specular
     ReferenceLights lights;
+    // Instead of the sphere: a cloud's ExactMesh (deformed by `lattices` like the sphere), and the
+    // cloud's model matrix (Transform and origin) that places it in the world.
+    const ExactMesh* mesh = nullptr;
+    glm::dmat4 mesh_model{1.0};
 };
 
 struct ReferenceSettings {
     int supersample = 0;       // 0: pixel-centre rays, trilinear mip filtering; N: N x N rays, level 0
+    int anisotropic = 0;       // with supersample 0: up to this many trilinear probes along the footprint's major axis
     int longitude_steps = 2048;  // tessellation of the deformed sphere
     int colatitude_steps = 1024;
+    int mesh_triangle_budget = 1 << 21;  // a deformed ExactMesh: k x k sub-triangles each, about this many in all
 };
 
-// The scene of the first cloud carrying an ExactSphere, after the current frame's animation (Lattice::
-// current as it is now), through scene_camera() at width x height. Errors name what is missing.
+// The scene of the first cloud carrying an ExactSphere (else an ExactMesh), after the current frame's
+// animation (Lattice::current as it is now), through scene_camera() at width x height. Errors name what
+// is missing; a mesh cloud whose colours were baked per splat (no texture to trace: a tinted or
+// multi-texture mesh) is an error.
 Result<ReferenceScene> reference_scene(const ecs::Registry& registry, int width, int height);
 
 Result<FrameImage> render_reference(const ReferenceScene& scene, const ReferenceSettings& settings = {});
@@ -79,6 +90,9 @@ public:
     glm::dvec4 bilinear(const glm::dvec2& uv, int level = 0) const;
     // GL_LINEAR_MIPMAP_LINEAR with explicit derivatives of uv along window x and y (GL 4.5 section 8.14).
     glm::dvec4 trilinear(const glm::dvec2& uv, const glm::dvec2& duv_dx, const glm::dvec2& duv_dy) const;
+    // Anisotropic filtering (EXT_texture_filter_anisotropic's model): min(ceil(major / minor), max_probes)
+    // trilinear probes along the footprint's major axis, each at the level of major / probes.
+    glm::dvec4 anisotropic(const glm::dvec2& uv, const glm::dvec2& duv_dx, const glm::dvec2& duv_dy, int max_probes) const;
 
 private:
     struct Level {

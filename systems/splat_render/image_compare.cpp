@@ -50,6 +50,30 @@ Result<ImageComparison> compare_images(const FrameImage& a, const FrameImage& b,
     r.psnr = r.mse > 0.0 ? 10.0 * std::log10(1.0 / r.mse) : std::numeric_limits<double>::infinity();
     const double mse_both = r.pixels_both ? sum_both / (3.0 * double(r.pixels_both)) : 0.0;
     r.psnr_both = mse_both > 0.0 ? 10.0 * std::log10(1.0 / mse_both) : std::numeric_limits<double>::infinity();
+    double sum_interior = 0.0;
+    if (b.normal.size() == n) {
+        const double cos10 = std::cos(10.0 * 3.14159265358979323846 / 180.0);
+        auto same = [&](const glm::vec3& m, const glm::vec3& o) {
+            return double(glm::dot(m, o)) > cos10 * double(glm::length(m)) * double(glm::length(o));
+        };
+        const bool a_normals = a.normal.size() == n;
+        for (int y = 2; y + 2 < h; ++y)
+            for (int x = 2; x + 2 < w; ++x) {
+                const std::size_t k = std::size_t(y) * std::size_t(w) + std::size_t(x);
+                bool interior = true;
+                for (int dy = -2; dy <= 2 && interior; ++dy)
+                    for (int dx = -2; dx <= 2 && interior; ++dx) {
+                        const std::size_t q = std::size_t(y + dy) * std::size_t(w) + std::size_t(x + dx);
+                        interior = a.color[q].w > 0.0f && b.color[q].w > 0.0f && same(b.normal[k], b.normal[q]) &&
+                                   (!a_normals || same(a.normal[q], b.normal[q]));
+                    }
+                if (!interior) continue;
+                const glm::dvec3 d = display_rgb(a.color[k]) - display_rgb(b.color[k]);
+                sum_interior += glm::dot(d, d), ++r.pixels_interior;
+            }
+    }
+    const double mse_interior = r.pixels_interior ? sum_interior / (3.0 * double(r.pixels_interior)) : 0.0;
+    r.psnr_interior = mse_interior > 0.0 ? 10.0 * std::log10(1.0 / mse_interior) : std::numeric_limits<double>::infinity();
 
     constexpr int radius = 5;
     std::array<double, 2 * radius + 1> g{};

@@ -26,6 +26,13 @@ struct ImageComparison {
     // and the pixels covered in exactly one (silhouette disagreement).
     double psnr_both = 0.0;
     std::size_t pixels_both = 0, pixels_one = 0;
+    // The interior: pixels whose 5 x 5 neighbourhood is covered in both images, where the second image's
+    // normals (the reference's; needed) turn by less than 10 degrees and the first image's (when it has
+    // them) are within 10 degrees of them: away from silhouettes and creases and from places where the
+    // first image shows another surface (discs overshooting a crease), so texture filtering and smooth
+    // shading only (inf and 0 pixels when there is none).
+    double psnr_interior = 0.0;
+    std::size_t pixels_interior = 0;
 };
 
 // Errors: sizes differ ("images differ in size: WxH vs WxH"); an empty mask gives pixels = 0, psnr = inf.

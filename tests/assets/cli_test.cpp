@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "runtime/assets/import.h"
+#include "tests/assets/textured_box.h"
 #include "tests/test_util/run_tool.h"
 
 namespace fs = std::filesystem;
@@ -185,4 +186,28 @@ TEST(Cli, ConvertProgressReportsEveryStepInOrderAndAlwaysTheTiming) {
     ASSERT_EQ(quiet.code, 0) << quiet.out;
     EXPECT_EQ(quiet.out.find("%"), std::string::npos) << quiet.out;
     EXPECT_NE(quiet.out.find("convert: done in "), std::string::npos) << quiet.out;
+}
+
+// A textured mesh converts to a textured cloud (issue 14): the PLY carries the uv frame and its texture
+// beside it; `reference MESH` ray traces the mesh itself; a tinted mesh (colours baked per splat) has no
+// texture to trace and is refused naming the file.
+TEST(Cli, TexturedMeshConvertsWithItsUvFrameAndReferenceTracesTheMesh) {
+    const fs::path dir = temp_dir() / "textured";
+    const fs::path obj = sffd::test::write_textured_box(dir);
+    const fs::path ply = dir / "box.ply";
+    const CliRun c = run("convert " + obj.string() + " " + ply.string() + " --splats 3000");
+    ASSERT_EQ(c.code, 0) << c.out;
+    EXPECT_TRUE(fs::exists(dir / "box_texture.png"));
+    const CliRun i = run("info " + ply.string());
+    ASSERT_EQ(i.code, 0) << i.out;
+    for (const char* p : {"float du_ds", "float dv_ds", "float du_dt", "float dv_dt", "TextureFile box_texture.png"})
+        EXPECT_NE(i.out.find(p), std::string::npos) << p << "\n" << i.out;
+    const CliRun r = run("reference " + obj.string() + " --out " + (dir / "ref").string() + " --size 96x54 --format png");
+    ASSERT_EQ(r.code, 0) << r.out;
+    EXPECT_TRUE(fs::exists(dir / "ref" / "frame_0000.png"));
+    std::ofstream(dir / "box.mtl") << "newmtl checker\nKd 1 0.5 1\nmap_Kd checker.png\n";
+    const CliRun tinted = run("reference " + obj.string() + " --out " + (dir / "ref2").string() + " --size 96x54 --format png");
+    EXPECT_EQ(tinted.code, 1) << tinted.out;
+    EXPECT_NE(tinted.out.find(obj.string()), std::string::npos) << tinted.out;
+    EXPECT_NE(tinted.out.find("baked per splat"), std::string::npos) << tinted.out;
 }

@@ -14,6 +14,8 @@
 #include "runtime/assets/gltf_io.h"
 #include "runtime/assets/import.h"
 #include "runtime/core/log.h"
+#include "tests/assets/test_util.h"
+#include "tests/assets/textured_box.h"
 
 #include <stb/stb_image_write.h>
 
@@ -69,6 +71,7 @@ void expect_same_cloud(const SplatCloud& a, const SplatCloud& b, bool texture) {
     EXPECT_TRUE(same_bytes(a.axis_v, b.axis_v));
     EXPECT_TRUE(same_bytes(a.colors, b.colors));
     EXPECT_TRUE(same_bytes(a.uvs, b.uvs));
+    EXPECT_TRUE(same_bytes(a.uv_axes, b.uv_axes));
     if (texture) {
         EXPECT_EQ(a.material.texture_width, b.material.texture_width);
         EXPECT_EQ(a.material.texture_height, b.material.texture_height);
@@ -365,6 +368,9 @@ TEST(AssimpTestModels, TexturedBoxImportsWithTextureColours) {
         std::sort(distinct.begin(), distinct.end());
         distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
         EXPECT_GT(distinct.size(), 50u);
+        // One untinted texture: kept as the cloud's material, with a uv frame per splat (issue 14).
+        EXPECT_EQ(c->material.texture_width, g->textures[0].width);
+        EXPECT_EQ(c->uv_axes.size(), 2000u);
     }
     const fs::path bad = dir / "IndexOutOfRange/IndexOutOfRange.gltf";
     if (fs::exists(bad)) {
@@ -499,4 +505,140 @@ TEST(AssimpTestModels, ForeignSamplesImport) {
             << r.message();
         EXPECT_NE(r.message().find("convert it to glTF 2.0"), std::string::npos) << r.message();
     }
+}
+
+// ---------------------------------------------------------------------------------------------------
+// Textured meshes keep their texture (issue 14): mesh sampling gives each splat the uv of its point and
+// the uv derivatives along its two axes from its triangle's affine 3D -> uv map; our PLY and glTF files
+// store that frame and read it back; re-estimated axes get the frame re-expressed along them.
+
+namespace {
+
+// Every splat's uv and uv frame against the box's analytic map (the face found by the splat's normal).
+void expect_box_uv_frame(const SplatCloud& c, const char* what) {
+    const auto faces = sffd::test::textured_box_faces();
+    const std::size_t n = c.size();
+    ASSERT_EQ(c.uvs.size(), n) << what;
+    ASSERT_EQ(c.uv_axes.size(), n) << what;
+    ASSERT_EQ(c.axis_u.size(), n) << what;
+    std::size_t bad = 0;
+    int faces_seen = 0;
+    bool seen[6] = {false, false, false, false, false, false};
+    for (std::size_t i = 0; i < n; ++i) {
+        const glm::dvec3 x = c.origin + glm::dvec3(c.positions[i]);
+        const sffd::test::BoxFace* f = sffd::test::box_face_of(faces, glm::dvec3(c.normals[i]));
+        ASSERT_NE(f, nullptr) << what << ": splat " << i << " has normal off every face";
+        seen[f - faces.data()] = true;
+        const glm::dvec2 uv = f->uv(x);
+        const glm::dvec2 du = f->duv(glm::dvec3(c.axis_u[i])), dv = f->duv(glm::dvec3(c.axis_v[i]));
+        const glm::dvec4 want(du.x, du.y, dv.x, dv.y), got(c.uv_axes[i]);
+        const bool ok = std::abs(uv.x - double(c.uvs[i].x)) < 2e-6 && std::abs(uv.y - double(c.uvs[i].y)) < 2e-6 &&
+                        glm::all(glm::lessThan(glm::abs(want - got), glm::dvec4(1e-7) + 1e-4 * glm::abs(want)));
+        if (!ok && bad++ < 5)
+            ADD_FAILURE() << what << ": splat " << i << " uv " << c.uvs[i].x << "," << c.uvs[i].y << " (want " << uv.x << "," << uv.y
+                          << ") frame " << got.x << "," << got.y << "," << got.z << "," << got.w << " (want " << want.x << "," << want.y
+                          << "," << want.z << "," << want.w << ")";
+        // The frame is not trivially zero: the axes have a radius and the map a scale.
+        EXPECT_GT(glm::length(got), 1e-4) << what << ": splat " << i;
+    }
+    EXPECT_EQ(bad, 0u) << what;
+    for (bool b : seen) faces_seen += b;
+    EXPECT_EQ(faces_seen, 6) << what;
+}
+
+}  // namespace
+
+TEST(TexturedMesh, SampledSplatsCarryTheTextureAndTheAnalyticUvFrame) {
+    const fs::path obj = sffd::test::write_textured_box(sffd::test::fresh_dir("import", "textured_box"));
+    auto g = read_geometry(obj);
+    ASSERT_TRUE(g.ok()) << g.message();
+    ImportOptions opt;
+    opt.splats = 3000;
+    auto c = make_splat_cloud(*g, opt);
+    ASSERT_TRUE(c.ok()) << c.message();
+    ASSERT_EQ(c->size(), 3000u);
+    // The mesh's one texture becomes the cloud's material, pixel for pixel (not baked into colours only).
+    EXPECT_EQ(c->material.texture_width, 256);
+    EXPECT_EQ(c->material.texture_height, 256);
+    EXPECT_TRUE(same_bytes(c->material.texture_rgba8, sffd::test::checker_texels(256, 16)));
+    EXPECT_EQ(c->colors.size(), c->size());  // baked as well: the untextured fallback
+    expect_box_uv_frame(*c, "sampled");
+
+    // One splat per vertex (24): each vertex's frame is its face's (the mean over its two triangles).
+    opt.splats = 0;
+    opt.min_mesh_splats = 0;
+    auto v = make_splat_cloud(*g, opt);
+    ASSERT_TRUE(v.ok()) << v.message();
+    ASSERT_EQ(v->size(), 24u);
+    EXPECT_EQ(v->material.texture_width, 256);
+    expect_box_uv_frame(*v, "per vertex");
+}
+
+TEST(TexturedMesh, TintedOrMultiTextureMeshesStayBakedIntoColours) {
+    const fs::path dir = sffd::test::fresh_dir("import", "tinted_box");
+    const fs::path obj = sffd::test::write_textured_box(dir);
+    // A base colour the textured path cannot apply (it has no tint factor): colours are baked as before.
+    std::ofstream(dir / "box.mtl") << "newmtl checker\nKd 1 0.5 1\nmap_Kd checker.png\n";
+    auto g = read_geometry(obj);
+    ASSERT_TRUE(g.ok()) << g.message();
+    ImportOptions opt;
+    opt.splats = 500;
+    auto c = make_splat_cloud(*g, opt);
+    ASSERT_TRUE(c.ok()) << c.message();
+    EXPECT_TRUE(c->material.texture_rgba8.empty());
+    EXPECT_TRUE(c->uv_axes.empty());
+    ASSERT_EQ(c->colors.size(), 500u);
+    for (std::uint32_t col : c->colors) EXPECT_LE((col >> 8) & 255u, 190u);  // green halved (sRGB of 0.5 * 0.8 at most)
+}
+
+TEST(TexturedMesh, UvFrameAndTextureRoundTripThroughPlyAndGltf) {
+    const fs::path dir = sffd::test::fresh_dir("import", "textured_box_rt");
+    auto g = read_geometry(sffd::test::write_textured_box(dir));
+    ASSERT_TRUE(g.ok()) << g.message();
+    ImportOptions opt;
+    opt.splats = 2000;
+    auto c = make_splat_cloud(*g, opt);
+    ASSERT_TRUE(c.ok()) << c.message();
+    for (const char* name : {"rt.ply", "rt_ascii.ply", "rt.glb", "rt.gltf"}) {
+        const fs::path p = dir / name;
+        const bool ascii = std::string(name) == "rt_ascii.ply";
+        ASSERT_TRUE((ascii ? save_splat_ply(*c, p, ply::Format::ascii) : save_splat_cloud(*c, p)).ok()) << name;
+        auto back = import_splat_cloud(p);
+        ASSERT_TRUE(back.ok()) << back.message();
+        expect_same_cloud(*c, *back, false);
+        // PLY keeps the texels in <stem>_texture.png beside it (TextureFile comment); glTF embeds them.
+        EXPECT_EQ(back->material.texture_width, 256) << name;
+        EXPECT_TRUE(same_bytes(back->material.texture_rgba8, c->material.texture_rgba8)) << name;
+        if (p.extension() == ".ply") {
+            EXPECT_TRUE(fs::exists(dir / (p.stem().string() + "_texture.png"))) << name;
+            auto geom = read_geometry(p);
+            ASSERT_TRUE(geom.ok()) << geom.message();
+            EXPECT_NE(std::find(geom->attributes.begin(), geom->attributes.end(), "float du_ds"), geom->attributes.end()) << name;
+        }
+    }
+    // Thinned (axes re-estimated) and re-estimated radii: the stored frame is re-expressed along the new
+    // axes and still matches the analytic map.
+    ImportOptions thin;
+    thin.splats = 1200;
+    auto t = import_splat_cloud(dir / "rt.ply", thin);
+    ASSERT_TRUE(t.ok()) << t.message();
+    ASSERT_EQ(t->size(), 1200u);
+    expect_box_uv_frame(*t, "thinned from PLY");
+    ImportOptions radii;
+    radii.estimate_radii = true;
+    auto r = import_splat_cloud(dir / "rt.glb", radii);
+    ASSERT_TRUE(r.ok()) << r.message();
+    expect_box_uv_frame(*r, "radii re-estimated from GLB");
+}
+
+TEST(TexturedMesh, NonFiniteUvFrameInAPlyIsRefusedNamingTheFile) {
+    const fs::path p = sffd::test::fresh_dir("import", "bad_uv_frame") / "bad.ply";
+    std::ofstream(p) << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                        "property float axis_ux\nproperty float axis_uy\nproperty float axis_uz\n"
+                        "property float axis_vx\nproperty float axis_vy\nproperty float axis_vz\n"
+                        "property float u\nproperty float v\n"
+                        "property float du_ds\nproperty float dv_ds\nproperty float du_dt\nproperty float dv_dt\nend_header\n"
+                        "0 0 0 1 0 0 0 1 0 0.5 0.5 nan 0 0 1\n";
+    auto g = read_geometry(p);
+    expect_error(status_of(g), p, "non-finite uv frame");
 }

@@ -3,7 +3,10 @@
 // PSNR and SSIM between two frames (systems/splat_render/image_compare.h): over the object (pixels covered
 // in either image) by default, over every pixel with --whole-image. Prints one line:
 //   psnr_db=37.12 ssim=0.9876 pixels=140233 mse=1.94e-04 psnr_both_db=38.50 pixels_both=139000 pixels_one=1233
-// (the last three: the pixels covered in both images alone, and the silhouette disagreement)
+//   psnr_interior_db=45.10 pixels_interior=120000
+// (then: the pixels covered in both images alone, the silhouette disagreement, and the interior: pixels 2+
+// px from B's silhouettes and creases (B's normals turn < 10 degrees in 5 x 5, A's within 10 degrees of
+// B's), texture and shading only)
 // Exit 0 ok, 1 unreadable file or size mismatch (the message names the file), 2 usage.
 #include <cstdio>
 #include <string>
@@ -48,8 +51,9 @@ int run_compare(sffd::cli::Args args) {
         std::fprintf(stderr, "%s vs %s: %s\n", files[0].c_str(), files[1].c_str(), r.message().c_str());
         return 1;
     }
-    std::printf("psnr_db=%.2f ssim=%.4f pixels=%zu mse=%.3e psnr_both_db=%.2f pixels_both=%zu pixels_one=%zu\n", r->psnr,
-                r->ssim, r->pixels, r->mse, r->psnr_both, r->pixels_both, r->pixels_one);
+    std::printf("psnr_db=%.2f ssim=%.4f pixels=%zu mse=%.3e psnr_both_db=%.2f pixels_both=%zu pixels_one=%zu psnr_interior_db=%.2f "
+                "pixels_interior=%zu\n",
+                r->psnr, r->ssim, r->pixels, r->mse, r->psnr_both, r->pixels_both, r->pixels_one, r->psnr_interior, r->pixels_interior);
     return 0;
 }
 

@@ -1,7 +1,8 @@
-// splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N] [--format png,exr]
+// splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N] [--anisotropic N] [--format png,exr]
 //
 // Ground-truth frames (systems/splat_render/ground_truth.h): the exact surface behind the scene's cloud
-// (the built-in `sphere`), deformed by the lattices as the demo clip poses them at frame k (time k / fps),
+// (the built-in `sphere`; or the triangles of a mesh file, at rest, whose cloud is what `splatffd render
+// MESH` samples from it), deformed by the lattices as the demo clip poses them at frame k (time k / fps),
 // ray traced on the CPU with the render command's camera, lights, material and texture. Files are named
 // like `splatffd render`'s (DIR/frame_NNNN.png / .exr), so `splatffd compare` can pair them.
 // Exit 0 ok, 1 bad scene / no exact surface / unwritable output, 2 usage.
@@ -11,6 +12,8 @@
 #include <system_error>
 
 #include "runtime/app/clock.h"
+#include "runtime/assets/builtin_scenes.h"
+#include "runtime/assets/import.h"
 #include "runtime/assets/scene.h"
 #include "runtime/ecs/registry.h"
 #include "systems/animation/animation_system.h"
@@ -25,21 +28,44 @@ using namespace sffd;
 
 void usage() {
     std::fprintf(stderr,
-                 "usage: splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N]\n"
+                 "usage: splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N] [--anisotropic N]\n"
                  "                          [--format png,exr] [--fps F]\n"
-                 "  SCENE            a scene whose cloud has an exact surface (built-in: sphere; default)\n"
+                 "  SCENE            a scene whose cloud has an exact surface (built-in: sphere; default), or a\n"
+                 "                   mesh file (OBJ, OFF, PLY, glTF with triangles; one untinted texture or none)\n"
                  "  --out DIR        output folder (created); files frame_NNNN.png / frame_NNNN.exr\n"
                  "  --frames A:B     frame range, inclusive (default 0:0); frame k is at time k / fps\n"
                  "  --size WxH       image size in pixels (default 1280x720)\n"
                  "  --supersample N  N x N rays per pixel, box-filtered (default 0: one ray, trilinear mip)\n"
+                 "  --anisotropic N  one ray, up to N trilinear probes along the footprint (default 0: off)\n"
                  "  --format LIST    png, exr or png,exr (default png,exr)\n"
                  "  --fps F          frames per second of the clip clock (default 24)\n");
+}
+
+// A mesh file (OBJ, OFF, PLY or glTF with triangles) loads as the cloud sampled from it (load_scene, as
+// `splatffd render` loads it): its triangles become that cloud's ExactMesh, the surface to trace.
+Status attach_exact_mesh(ecs::Registry& registry, const std::string& scene) {
+    if (assets::is_builtin_scene(scene) || registry.count<ExactSphere>() > 0) return {};
+    std::vector<ecs::Entity> clouds;
+    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud&) { clouds.push_back(e); });
+    if (clouds.size() != 1) return {};  // reference_scene() names what is missing
+    auto g = assets::read_geometry(scene);
+    if (!g) return g.error();
+    if (g->triangle_count() == 0) return {};
+    const SplatCloud& cloud = registry.get<SplatCloud>(clouds[0]);
+    ExactMesh mesh;
+    mesh.positions.reserve(g->positions.size());
+    for (const glm::dvec3& p : g->positions) mesh.positions.push_back(p - cloud.origin);
+    mesh.normals = std::move(g->normals);
+    mesh.uvs = std::move(g->uvs);
+    mesh.triangles = std::move(g->triangles);
+    registry.emplace<ExactMesh>(clouds[0], std::move(mesh));
+    return {};
 }
 
 int run_reference(sffd::cli::Args args) {
     std::string scene = "sphere", out_dir;
     bool scene_given = false, png = true, exr = true;
-    long first = 0, last = 0, width = 1280, height = 720, supersample = 0;
+    long first = 0, last = 0, width = 1280, height = 720, supersample = 0, anisotropic = 0;
     double fps = 24.0;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
@@ -68,6 +94,10 @@ int run_reference(sffd::cli::Args args) {
             auto n = cli::parse_integer("--supersample", args[++i], 0, 16);
             if (!n) return fail(n.error());
             supersample = static_cast<long>(*n);
+        } else if (a == "--anisotropic" && has_value) {
+            auto n = cli::parse_integer("--anisotropic", args[++i], 0, 64);
+            if (!n) return fail(n.error());
+            anisotropic = static_cast<long>(*n);
         } else if (a == "--format" && has_value) {
             if (!cli::parse_image_formats(args[i + 1], png, exr)) return bad("--format expects png, exr or png,exr, got");
             ++i;
@@ -95,8 +125,13 @@ int run_reference(sffd::cli::Args args) {
         std::fprintf(stderr, "%s\n", st.message().c_str());
         return 1;
     }
+    if (Status st = attach_exact_mesh(registry, scene); !st) {
+        std::fprintf(stderr, "splatffd reference: %s\n", st.message().c_str());
+        return 1;
+    }
     render::ReferenceSettings settings;
     settings.supersample = int(supersample);
+    settings.anisotropic = int(anisotropic);
     for (long k = first; k <= last; ++k) {
         // The clip's pose at frame k, as `splatffd render` reaches it (a clock of its own, seeked to k / fps).
         Clock clock(ClockSettings{.fixed_dt = 1.0 / fps});

@@ -15,7 +15,10 @@
 #include <string>
 #include <tuple>
 
+#include "runtime/assets/export.h"
+#include "runtime/assets/import.h"
 #include "runtime/assets/ply.h"
+#include "tests/assets/textured_box.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/lattice_io.h"
 #include "tests/systems/ffd/test_util.h"
@@ -343,6 +346,43 @@ TEST_F(DeformCommand, SigintAndSigtermRemoveTheTemporaryAndKeepTheOldOutput) {
             EXPECT_EQ(e.path().filename().string().find("sffd-tmp"), std::string::npos) << e.path();
         std::ifstream old(p("res.ply"));
         EXPECT_EQ(std::string((std::istreambuf_iterator<char>(old)), {}), "old output");
+    }
+}
+
+// A textured cloud's uv frame rides on its axes (issue 14): deform maps the axes by the Jacobian and keeps
+// the frame (du/ds ... per axis) as it is, streamed PLY -> PLY and in memory PLY/GLB -> GLB.
+TEST_F(DeformCommand, UvFrameOfATexturedCloudRidesOnTheDeformedAxes) {
+    auto g = assets::read_geometry(sffd::test::write_textured_box(dir / "box"));
+    ASSERT_TRUE(g.ok()) << g.message();
+    assets::ImportOptions opt;
+    opt.splats = 1500;
+    auto cloud = assets::make_splat_cloud(*g, opt);
+    ASSERT_TRUE(cloud.ok()) << cloud.message();
+    ASSERT_EQ(cloud->uv_axes.size(), cloud->size());
+    ASSERT_TRUE(assets::save_splat_cloud(*cloud, dir / "box.ply").ok());
+    ASSERT_TRUE(assets::save_splat_cloud(*cloud, dir / "box.glb").ok());
+    // x' = 2x: a 2x2x2 Bernstein lattice around the box with its control points scaled along x.
+    Lattice l = make_lattice(glm::dvec3(-1.5, -1.0, -1.0), {glm::dvec3(3, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, glm::ivec3(2, 2, 2));
+    for (glm::dvec3& c : l.current) c.x *= 2.0;
+    ASSERT_TRUE(save_lattice(dir / "stretch.json", l).ok());
+    for (const auto& [in, out] : {std::pair{"box.ply", "out.ply"}, std::pair{"box.ply", "out_ply.glb"}, std::pair{"box.glb", "out.glb"}}) {
+        const RunResult r = run(p(in) + " " + p(out) + " --lattice " + p("stretch.json"));
+        ASSERT_EQ(r.code, 0) << in << " -> " << out << ": " << r.err;
+        auto d = assets::import_splat_cloud(dir / out);
+        ASSERT_TRUE(d.ok()) << d.message();
+        ASSERT_EQ(d->size(), cloud->size()) << out;
+        ASSERT_EQ(d->uv_axes.size(), cloud->size()) << out;
+        EXPECT_EQ(d->material.texture_width, 256) << out;  // the texture still found (PLY: the TextureFile beside it)
+        std::size_t bad = 0;
+        for (std::size_t i = 0; i < d->size(); ++i) {
+            // Axes doubled along x, the frame and uv unchanged: the point x' + s J a_u has the uv of x + s a_u.
+            const glm::vec3 au = cloud->axis_u[i], av = cloud->axis_v[i];
+            const bool ok = glm::length(d->axis_u[i] - glm::vec3(2 * au.x, au.y, au.z)) < 1e-5f &&
+                            glm::length(d->axis_v[i] - glm::vec3(2 * av.x, av.y, av.z)) < 1e-5f && d->uv_axes[i] == cloud->uv_axes[i] &&
+                            d->uvs[i] == cloud->uvs[i];
+            if (!ok && bad++ < 3) ADD_FAILURE() << out << ": splat " << i;
+        }
+        EXPECT_EQ(bad, 0u) << out;
     }
 }
 

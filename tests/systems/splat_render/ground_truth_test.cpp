@@ -77,6 +77,109 @@ TEST(GroundTruth, CentrePixelSeesTheExpectedUvNormalDepthAndShade) {
     }
 }
 
+// A mesh (ExactMesh): the square |x|, |y| <= 1 at z = 1 as two triangles, uv = (0.25 + x / 8, 0.5 + y / 4),
+// seen like the sphere above. Its centre pixel hits (0, 0, 1) with the sphere's uv, normal and depth there,
+// so it must get the same colour; its coverage is the square's image exactly; its far corners' uvs follow
+// the affine map.
+TEST(GroundTruth, MeshPathMatchesTheAnalyticSquare) {
+    const SplatMaterial m = four_by_two();
+    ReferenceScene s = axis_scene(65, 65, 4.0, m);
+    ExactMesh mesh;
+    mesh.positions = {{-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}};
+    for (const glm::dvec3& p : mesh.positions) mesh.uvs.emplace_back(0.25 + p.x / 8.0, 0.5 + p.y / 4.0);
+    mesh.triangles = {0, 1, 2, 0, 2, 3};
+    s.mesh = &mesh;
+    auto img = render_reference(s);
+    ASSERT_TRUE(img) << img.message();
+    auto sphere = render_reference(axis_scene(65, 65, 4.0, m));
+    ASSERT_TRUE(sphere) << sphere.message();
+    const std::size_t k = img->index(32, 32);
+    ASSERT_EQ(img->color[k].w, 1.0f);
+    EXPECT_NEAR(img->depth[k], 3.0, 1e-5);
+    EXPECT_NEAR(img->normal[k].z, 1.0, 1e-6);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(img->color[k][c], sphere->color[k][c], 1e-5) << "channel " << c;
+    // Coverage: the pixel centre's ray hits the square (pixels within 1e-3 of its edge skipped).
+    const glm::dmat4 inv_view = glm::inverse(s.view);
+    int covered = 0, wrong = 0;
+    for (int y = 0; y < 65; ++y)
+        for (int x = 0; x < 65; ++x) {
+            const double nx = 2.0 * (x + 0.5) / 65 - 1.0, ny = 2.0 * (64 - y + 0.5) / 65 - 1.0;
+            const glm::dvec3 d = glm::dmat3(inv_view) * glm::dvec3(nx / s.projection[0][0], ny / s.projection[1][1], -1.0);
+            const glm::dvec3 p = glm::dvec3(0, 0, 4) + d * (3.0 / -d.z);
+            const double edge = std::max(std::abs(p.x), std::abs(p.y));
+            if (std::abs(edge - 1.0) < 1e-3) continue;
+            const bool in = edge < 1.0;
+            covered += in;
+            wrong += in != (img->color[img->index(x, y)].w > 0.0f);
+            if (in) {
+                EXPECT_NEAR(img->depth[img->index(x, y)], 3.0, 1e-5);
+            }
+        }
+    EXPECT_GT(covered, 200);
+    EXPECT_EQ(wrong, 0);
+    // A bad index is an error, not a crash.
+    mesh.triangles = {0, 1, 7};
+    auto bad = render_reference(s);
+    ASSERT_FALSE(bad.ok());
+    EXPECT_NE(bad.message().find("index out of range"), std::string::npos) << bad.message();
+}
+
+// The mesh path under FFD: a lattice stretching x by 1.5 (Bernstein reproduces the linear map) traces the
+// subdivided, deformed square; it must look like the square built stretched (same uvs per vertex), traced
+// at rest, up to the tessellation's float rounding.
+TEST(GroundTruth, DeformedMeshPathMatchesThePreStretchedMesh) {
+    const SplatMaterial m = four_by_two();
+    ExactMesh square, stretched;
+    square.positions = {{-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}};
+    for (const glm::dvec3& p : square.positions) square.uvs.emplace_back(0.25 + p.x / 8.0, 0.5 + p.y / 4.0);
+    square.triangles = {0, 1, 2, 0, 2, 3};
+    stretched = square;
+    for (glm::dvec3& p : stretched.positions) p.x *= 1.5;
+    Lattice lattice = make_lattice(glm::dvec3(-1.2, -1.2, -0.2), {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)},
+                                        glm::ivec3(2, 2, 2));
+    for (glm::dvec3& c : lattice.current) c.x *= 1.5;
+    ReferenceScene deformed = axis_scene(96, 64, 4.0, m), direct = axis_scene(96, 64, 4.0, m);
+    deformed.mesh = &square;
+    deformed.lattices = {lattice};
+    direct.mesh = &stretched;
+    ReferenceSettings rs;
+    rs.mesh_triangle_budget = 2000;  // 18 x 18 sub-triangles per triangle
+    auto a = render_reference(deformed, rs);
+    auto b = render_reference(direct, rs);
+    ASSERT_TRUE(a.ok()) << a.message();
+    ASSERT_TRUE(b.ok()) << b.message();
+    auto cmp = compare_images(*a, *b);
+    ASSERT_TRUE(cmp.ok());
+    std::printf("deformed square vs pre-stretched square: %.2f dB, %zu px (%zu in one only)\n", cmp->psnr, cmp->pixels, cmp->pixels_one);
+    EXPECT_GT(cmp->pixels, 2000u);
+    EXPECT_LE(cmp->pixels_one, 2u);  // a pixel centre exactly on the edge may round either way
+    EXPECT_GT(cmp->psnr_both, 60.0);
+}
+
+// Anisotropic filtering in the reference: an isotropic footprint is plain trilinear; a 4:1 footprint whose
+// long axis runs along v, over a texture constant along v (columns of random colours), filters at the
+// short axis's level: equal to trilinear with the long derivative divided by 4, sharper than trilinear.
+TEST(GroundTruth, AnisotropicReferenceFilterProbesAlongTheMajorAxis) {
+    SplatMaterial m;
+    m.texture_width = m.texture_height = 64;
+    std::mt19937 rng(7);
+    std::vector<std::uint8_t> column(64 * 3);
+    for (auto& c : column) c = std::uint8_t(rng() & 255u);
+    for (int y = 0; y < 64; ++y)
+        for (int x = 0; x < 64; ++x) m.texture_rgba8.insert(m.texture_rgba8.end(), {column[3 * x], column[3 * x + 1], column[3 * x + 2], 255});
+    const ReferenceTexture t(m);
+    const glm::dvec2 uv(0.4137, 0.61), dx(3.0 / 64, 0.0), dy(0.0, 12.0 / 64);
+    const glm::dvec4 iso = t.anisotropic(uv, dx, glm::dvec2(0.0, 3.0 / 64), 16), tri = t.trilinear(uv, dx, glm::dvec2(0.0, 3.0 / 64));
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(iso[c], tri[c], 1e-12);
+    const glm::dvec4 an = t.anisotropic(uv, dx, dy, 16), sharp = t.trilinear(uv, dx, dy / 4.0), blurred = t.trilinear(uv, dx, dy);
+    double differs = 0.0;
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(an[c], sharp[c], 1e-6) << c;
+        differs += std::abs(an[c] - blurred[c]);
+    }
+    EXPECT_GT(differs, 1e-3);  // trilinear alone blurs at the long axis's level
+}
+
 TEST(GroundTruth, SilhouetteIsTheAnalyticDisc) {
     SplatMaterial m;  // untextured: base colour
     const int w = 201, h = 201;
@@ -184,6 +287,31 @@ TEST(ImageCompare, MaskIsThePixelsCoveredInEitherImage) {
     auto whole = compare_images(grey_row({0.5, 0.5, -1}), grey_row({0.5, -1, -1}), false);
     ASSERT_TRUE(whole);
     EXPECT_EQ(whole->pixels, 3u);
+}
+
+// The interior: 5 x 5 neighbourhoods covered in both, the reference's normals turning < 10 degrees, the
+// first image's normals agreeing. 12 x 12, crease at x = 6: x in {2, 3, 8, 9}, y in 2..9 (32 pixels);
+// the first image showing another surface at (2, 2) removes the 6 whose neighbourhood holds it.
+TEST(ImageCompare, InteriorAvoidsSilhouettesCreasesAndOtherSurfaces) {
+    FrameImage a, b;
+    for (FrameImage* f : {&a, &b}) {
+        f->width = f->height = 12;
+        f->color.assign(144, glm::vec4(0.5f, 0.5f, 0.5f, 1.0f));
+        f->depth.assign(144, 1.0f);
+        f->normal.resize(144);
+        for (int y = 0; y < 12; ++y)
+            for (int x = 0; x < 12; ++x) f->normal[f->index(x, y)] = x < 6 ? glm::vec3(0, 0, 1) : glm::vec3(1, 0, 0);
+    }
+    a.color[a.index(3, 5)] = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);  // one interior pixel differs
+    auto r = compare_images(a, b);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->pixels_interior, 32u);
+    const double d = linear_to_srgb(0.5f);  // the difference in display values, per channel
+    EXPECT_NEAR(r->psnr_interior, 10.0 * std::log10(32.0 / (d * d)), 1e-9);
+    a.normal[a.index(2, 2)] = glm::vec3(0, 1, 0);
+    r = compare_images(a, b);
+    ASSERT_TRUE(r.ok());
+    EXPECT_EQ(r->pixels_interior, 26u);
 }
 
 TEST(ImageCompare, IdenticalImagesAreInfiniteAndOne) {
