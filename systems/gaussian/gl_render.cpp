@@ -74,8 +74,6 @@ Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>
     }
     upload(r.gaussians, in.data(), in.size() * sizeof(gpu::GpuGaussian));
     upload(r.sh, g.sh.data(), g.sh.size() * sizeof(float));
-    upload(r.projected, nullptr, n * sizeof(gpu::GpuProjected));
-    upload(r.depth, nullptr, n * sizeof(float));
     if (g.sh_frames.size() == n && n > 0) {
         std::vector<glm::vec4> cols(n * 3);
         for (std::size_t i = 0; i < n; ++i)
@@ -90,42 +88,17 @@ Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>
     return {};
 }
 
-Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const ReferenceOptions& o) {
-    if (o.width < 1 || o.height < 1) return make_error("draw_gl(): empty image");
-    const std::size_t n = r.count;
-    if (r.width != o.width || r.height != o.height) {
-        r.color = gfx::Texture::create("gaussian.color", GL_TEXTURE_2D);
-        glTextureStorage2D(r.color.id(), 1, GL_RGBA32F, o.width, o.height);
-        r.framebuffer = gfx::Framebuffer::create("gaussian.target");
-        glNamedFramebufferTexture(r.framebuffer.id(), GL_COLOR_ATTACHMENT0, r.color.id(), 0);
-        if (glCheckNamedFramebufferStatus(r.framebuffer.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-            return make_error("draw_gl(): RGBA32F framebuffer incomplete");
-        r.width = o.width, r.height = o.height;
-    }
-    const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up) * glm::translate(glm::dmat4(1.0), r.origin);
-    const double tan_half = std::tan(glm::radians(double(cam.fov_y_degrees)) * 0.5);
-    const GLuint pp = r.project.id();
-    glProgramUniformMatrix4fv(pp, glGetUniformLocation(pp, "u_view"), 1, GL_FALSE, glm::value_ptr(glm::mat4(view)));
-    set(pp, "u_eye", glm::vec3(cam.eye - r.origin));
-    set(pp, "u_size", glm::vec2(float(o.width), float(o.height)));
-    set(pp, "u_focal", float(o.height / (2.0 * tan_half)));
-    set(pp, "u_limit", glm::vec2(float(1.3 * tan_half * o.width / o.height), float(1.3 * tan_half)));
-    set(pp, "u_near", float(o.near_plane));
-    glProgramUniform1ui(pp, glGetUniformLocation(pp, "u_count"), GLuint(n));
-    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_degree"), r.sh_degree);
-    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_frames"), r.has_frames ? 1 : 0);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, r.gaussians.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, r.sh.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, r.frames.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEPTH, r.depth.id());
-    glUseProgram(pp);
-    if (Status st = gfx::dispatch_1d(n, 64, std::max(1u, r.max_groups_x)); !st) return st.error();
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+GaussianBuffers resident_buffers(const GlRenderer& r) {
+    return {r.gaussians.id(), r.sh.id(), r.frames.id(), r.count, r.sh_degree, r.has_frames};
+}
 
-    // Depth sort on the CPU: read back the depth keys only (4 bytes per Gaussian) and sort
-    // (depth bits, index) pairs: positive floats order like their bit patterns, and the index breaks
-    // ties, so the order equals the reference's stable sort (and is deterministic).
+namespace {
+
+// Front-to-back order of the Gaussians the projection kept, into r.order; returns how many.
+// CPU depth sort: read back the depth keys only (4 bytes per Gaussian) and sort (depth bits, index)
+// pairs: positive floats order like their bit patterns, and the index breaks ties, so the order equals
+// the reference's stable sort (and is deterministic).
+std::size_t sort_front_to_back(GlRenderer& r, std::size_t n) {
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<float> depth(n);
     if (n > 0) glGetNamedBufferSubData(r.depth.id(), 0, GLsizeiptr(n * sizeof(float)), depth.data());
@@ -142,27 +115,88 @@ Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const Reference
     for (std::size_t k = 0; k < keys.size(); ++k) order[k] = std::uint32_t(keys[k] & 0xffffffffu);
     upload(r.order, order.data(), order.size() * sizeof(std::uint32_t));
     r.sort_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    return order.size();
+}
 
+}  // namespace
+
+Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v, const gfx::Program* splat_program) {
+    const std::size_t n = b.count;
+    if (n >= (std::size_t(1) << 31)) return make_error("draw_gaussians(): more than 2^31 Gaussians in one draw");
+    if (r.scratch < n || !r.projected) {
+        if (!r.projected) r.projected = gfx::Buffer::create("gaussian.projected");
+        if (!r.depth) r.depth = gfx::Buffer::create("gaussian.depth_keys");
+        if (!r.order) r.order = gfx::Buffer::create("gaussian.order");
+        upload(r.projected, nullptr, n * sizeof(gpu::GpuProjected));
+        upload(r.depth, nullptr, n * sizeof(float));
+        r.scratch = n;
+    }
+    const double tan_half = std::tan(glm::radians(v.fov_y_degrees) * 0.5);
+    const GLuint pp = r.project.id();
+    glProgramUniformMatrix4fv(pp, glGetUniformLocation(pp, "u_view"), 1, GL_FALSE, glm::value_ptr(glm::mat4(v.view)));
+    set(pp, "u_eye", glm::vec3(v.eye));
+    set(pp, "u_size", glm::vec2(float(v.width), float(v.height)));
+    set(pp, "u_focal", float(v.height / (2.0 * tan_half)));
+    set(pp, "u_limit", glm::vec2(float(1.3 * tan_half * v.width / v.height), float(1.3 * tan_half)));
+    set(pp, "u_near", float(v.near_plane));
+    glProgramUniform1ui(pp, glGetUniformLocation(pp, "u_count"), GLuint(n));
+    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_degree"), b.sh_degree);
+    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_frames"), b.has_frames ? 1 : 0);
+    // A buffer with no store cannot be bound: the frames slot falls back to the Gaussians (never read).
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, b.gaussians);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, b.sh);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, b.has_frames && b.frames ? b.frames : b.gaussians);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEPTH, r.depth.id());
+    glUseProgram(pp);
+    if (Status st = gfx::dispatch_1d(n, 64, std::max(1u, r.max_groups_x)); !st) return st.error();
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT);
+
+    const std::size_t visible = sort_front_to_back(r, n);
+
+    glDisable(GL_CULL_FACE);
+    glEnable(GL_BLEND);
+    glBlendEquation(GL_FUNC_ADD);
+    glBlendFuncSeparate(GL_ONE_MINUS_DST_ALPHA, GL_ONE, GL_ONE_MINUS_DST_ALPHA, GL_ONE);
+    const GLuint sp = splat_program ? splat_program->id() : r.splat.id();
+    set(sp, "u_size", glm::vec2(float(v.width), float(v.height)));
+    set(sp, "u_ndc_depth", glm::vec2(v.ndc_depth));
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
+    glUseProgram(sp);
+    glBindVertexArray(r.vao.id());
+    if (visible > 0) glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(visible));
+    glDisable(GL_BLEND);
+    glBindVertexArray(0);
+    glUseProgram(0);
+    return {};
+}
+
+Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const ReferenceOptions& o) {
+    if (o.width < 1 || o.height < 1) return make_error("draw_gl(): empty image");
+    if (r.width != o.width || r.height != o.height) {
+        r.color = gfx::Texture::create("gaussian.color", GL_TEXTURE_2D);
+        glTextureStorage2D(r.color.id(), 1, GL_RGBA32F, o.width, o.height);
+        r.framebuffer = gfx::Framebuffer::create("gaussian.target");
+        glNamedFramebufferTexture(r.framebuffer.id(), GL_COLOR_ATTACHMENT0, r.color.id(), 0);
+        if (glCheckNamedFramebufferStatus(r.framebuffer.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+            return make_error("draw_gl(): RGBA32F framebuffer incomplete");
+        r.width = o.width, r.height = o.height;
+    }
+    GaussianView v;
+    v.view = glm::lookAt(cam.eye, cam.target, cam.up) * glm::translate(glm::dmat4(1.0), r.origin);
+    v.eye = cam.eye - r.origin;
+    v.fov_y_degrees = double(cam.fov_y_degrees);
+    v.near_plane = double(o.near_plane);
+    v.width = o.width, v.height = o.height;
     glBindFramebuffer(GL_FRAMEBUFFER, r.framebuffer.id());
     glViewport(0, 0, o.width, o.height);
     const float clear[4] = {0, 0, 0, 0};
     glClearNamedFramebufferfv(r.framebuffer.id(), GL_COLOR, 0, clear);
     glDisable(GL_DEPTH_TEST);
-    glDisable(GL_CULL_FACE);
-    glEnable(GL_BLEND);
-    glBlendEquation(GL_FUNC_ADD);
-    glBlendFuncSeparate(GL_ONE_MINUS_DST_ALPHA, GL_ONE, GL_ONE_MINUS_DST_ALPHA, GL_ONE);
-    const GLuint sp = r.splat.id();
-    set(sp, "u_size", glm::vec2(float(o.width), float(o.height)));
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
-    glUseProgram(sp);
-    glBindVertexArray(r.vao.id());
-    if (!order.empty()) glDrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, GLsizei(order.size()));
-    glDisable(GL_BLEND);
-    glBindVertexArray(0);
-    glUseProgram(0);
+    const Status drawn = draw_gaussians(r, resident_buffers(r), v);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    if (!drawn) return drawn.error();
 
     std::vector<glm::vec4> pixels(std::size_t(o.width) * std::size_t(o.height));
     glGetTextureImage(r.color.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(pixels.size() * sizeof(glm::vec4)), pixels.data());

@@ -61,7 +61,9 @@ struct RenderStats {
     bool counts_valid = false;
     std::uint32_t cpu_culled_clouds = 0;      // clouds culled on the CPU this frame (CullPath)
     std::uint32_t compute_culled_clouds = 0;  // clouds culled by the compute pass this frame
+    std::uint32_t gaussians = 0;              // 3D Gaussians submitted (all GaussianClouds), this frame
     double cull_ms = 0, visibility_ms = 0, attribute_ms = 0, shade_ms = 0, preview_ms = 0, total_ms = 0;
+    double gaussian_ms = 0;  // the Gaussian pass (gaussian_pass.h), with time_passes
 };
 
 // Compiles the programs and creates the state resource (SplatRenderState). Needs a current GL 4.5
