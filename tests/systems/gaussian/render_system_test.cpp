@@ -18,6 +18,7 @@
 #include "systems/gaussian/gpu_store.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"
+#include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_render.h"
 #include "tests/systems/splat_render/test_scenes.h"
 
@@ -88,13 +89,18 @@ GaussianCloud blob(glm::vec3 at, float sigma, float opacity, glm::vec3 rgb) {
     return g;
 }
 
-// The render system's output (straight colour + coverage) as a ReferenceImage over a black background:
-// premultiplied colour, transmittance 1 - coverage.
+glm::vec3 srgb(glm::vec3 linear) {
+    return {render::linear_to_srgb(linear.x), render::linear_to_srgb(linear.y), render::linear_to_srgb(linear.z)};
+}
+
+// The render system's output (straight linear colour + coverage) as a ReferenceImage over a black
+// background: display-referred (sRGB, the 3DGS colours' space) premultiplied colour, transmittance
+// 1 - coverage.
 ReferenceImage as_reference(const render::FrameImage& f) {
     ReferenceImage r;
     r.width = f.width, r.height = f.height;
     for (const glm::vec4& c : f.color) {
-        r.color.push_back(glm::vec3(c) * c.w);
+        r.color.push_back(srgb(glm::vec3(c)) * c.w);
         r.transmittance.push_back(1.0f - c.w);
     }
     return r;
@@ -183,7 +189,8 @@ TEST_F(GaussianRenderSystem, GaussianBehindOpaqueSplatsIsHiddenInFrontIsBlended)
         EXPECT_EQ(differing, 0u) << "a Gaussian inside the opaque sphere shows through";
         reg.destroy(inside);
 
-        // In front: the Gaussian alone gives (G, A); over the surface S the frame must be G + (1 - A) S.
+        // In front: the Gaussian alone gives (G, A); over the surface S the frame must be G + (1 - A) S,
+        // blended in display space (sRGB, the space of 3DGS colours).
         const ecs::Entity front = reg.create();
         reg.emplace<GaussianCloud>(front, blob({0, 0, 1.6f}, 0.15f, 0.8f, {1, 0, 0}));
         const render::FrameImage both = frame(w, h, q);
@@ -197,8 +204,8 @@ TEST_F(GaussianRenderSystem, GaussianBehindOpaqueSplatsIsHiddenInFrontIsBlended)
             const float a = alone.color[k].w;
             if (surface.color[k].w < 1.0f || a < 0.05f) continue;
             ++blended;
-            const glm::vec3 expected = glm::vec3(alone.color[k]) * a + (1.0f - a) * glm::vec3(surface.color[k]);
-            worst = std::max(worst, glm::length(glm::vec3(both.color[k]) - expected));
+            const glm::vec3 expected = srgb(glm::vec3(alone.color[k])) * a + (1.0f - a) * srgb(glm::vec3(surface.color[k]));
+            worst = std::max(worst, glm::length(srgb(glm::vec3(both.color[k])) - expected));
             EXPECT_NEAR(both.color[k].w, 1.0f, 1e-3f);
         }
         std::printf("Gaussian over the sphere: %zu blended pixels, worst colour error %.2e\n", blended, double(worst));
