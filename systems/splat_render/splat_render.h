@@ -1,9 +1,12 @@
-// Splat render system (rendering phase): surface splatting of every SplatCloud in the registry.
+// Splat render system (rendering phase): surface splatting of every SplatCloud in the registry, then every
+// GaussianCloud (3D Gaussians, gaussian_pass.h) over them, in the same frame.
 //
 //   reads   SplatCloud (+ Transform), Camera, DirectionalLight, AmbientLight, RenderSettings (resource),
-//           GpuSplatStore draw_buffer() (deformed splats written by the FFD system, else rest)
+//           GpuSplatStore draw_buffer() (deformed splats written by the FFD system, else rest);
+//           GaussianCloud (+ Transform), DeformedGaussians, GpuGaussianStore
 //   writes  GpuSplatStore.rest (uploads a cloud when its change stamp moves), SplatRenderState (resource:
-//           its GL programs, per-cloud cull buffers and textures, the offscreen targets), RenderStats
+//           its GL programs, per-cloud cull buffers and textures, the offscreen targets), RenderStats;
+//           GpuGaussianStore rest/sh/deformed (gaussian_pass.h)
 //
 // HQ (Botsch et al. 2005): cull + compact (a compute pass, or cpu_cull.h on a software rasterizer) ->
 // visibility (depth, eps-offset ray-cast ellipses) -> attribute (additive RGBA32F: w*colour, w; w*normal,
