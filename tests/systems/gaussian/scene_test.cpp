@@ -261,4 +261,36 @@ TEST_F(GaussianScene, RenderCommandOnGaussianFilesAndAnimatedScenes) {
     std::printf("frame 84 vs rest: %zu differing channels; vs frame 83: %zu\n", differ, step);
 }
 
+TEST_F(GaussianScene, EditorAddsALatticeToAGaussianFileAndSavesTheDeformedScene) {
+    if (!context()) GTEST_SKIP() << "no headless GL 4.5 context";
+    // `splatffd view g.ply` (headless, replayed keys: shift+a fits a lattice, select all, move the inner
+    // points by 0.3 in x, ctrl+s): the saved scene refers to g.ply, binds the lattice, and renders the
+    // Gaussians deformed (different from the file alone).
+    const fs::path dir = fresh_dir("editor");
+    ASSERT_TRUE(write_ply(dir / "g.ply", sphere_gaussians()));
+    const std::string replay = std::string(SFFD_TEST_DATA_DIR) + "/editor/lattice_add.txt";
+    std::string out;
+    ASSERT_EQ(run("view " + (dir / "g.ply").string() + " --headless --no-ui --quality preview --frames 14 --replay " + replay +
+                      " --save " + (dir / "edited.glb").string(), &out), 0) << out;
+    ecs::Registry reg;
+    ASSERT_TRUE(load_scene(reg, (dir / "edited.glb").string()));
+    ASSERT_EQ(reg.count<GaussianCloud>(), 1u);
+    ASSERT_EQ(reg.count<Lattice>(), 1u);
+    ecs::Entity e = ecs::null_entity;
+    reg.view<const GaussianCloud>().each([&](ecs::Entity x, const GaussianCloud&) { e = x; });
+    ASSERT_TRUE(reg.has<Deformers>(e));
+    const Lattice& l = reg.get<Lattice>(reg.get<Deformers>(e).lattices.at(0));
+    std::size_t moved = 0;
+    for (std::size_t k = 0; k < l.rest.size(); ++k) moved += std::abs(l.current[k].x - l.rest[k].x - 0.3) < 1e-9;
+    EXPECT_EQ(moved, 729u);  // the 9^3 inner points of the default 11^3 fit
+    ASSERT_EQ(run("render " + (dir / "edited.glb").string() + " --out " + (dir / "edited").string() + " --size 96x72", &out), 0) << out;
+    ASSERT_EQ(run("render " + (dir / "g.ply").string() + " --out " + (dir / "file").string() + " --size 96x72", &out), 0) << out;
+    auto a = render::read_png(dir / "edited" / "frame_0000.png");
+    auto b = render::read_png(dir / "file" / "frame_0000.png");
+    ASSERT_TRUE(a && b);
+    std::size_t differ = 0;
+    for (std::size_t k = 0; k < a->pixels.size(); ++k) differ += std::abs(int(a->pixels[k]) - int(b->pixels[k])) > 8;
+    EXPECT_GT(differ, 100u);
+}
+
 }  // namespace
