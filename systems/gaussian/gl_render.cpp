@@ -131,6 +131,8 @@ Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianVie
         upload(r.depth, nullptr, n * sizeof(float));
         r.scratch = n;
     }
+    // The scratch buffers were read by the previous draw (another cloud this frame): its reads come first.
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     const double tan_half = std::tan(glm::radians(v.fov_y_degrees) * 0.5);
     const GLuint pp = r.project.id();
     glProgramUniformMatrix4fv(pp, glGetUniformLocation(pp, "u_view"), 1, GL_FALSE, glm::value_ptr(glm::mat4(v.view)));

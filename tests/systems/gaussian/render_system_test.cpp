@@ -16,6 +16,7 @@
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/gaussian/gl_render.h"
 #include "systems/gaussian/gpu_store.h"
+#include "systems/gaussian/gpu_upload.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"
 #include "systems/splat_render/image_io.h"
@@ -245,6 +246,37 @@ TEST_F(GaussianRenderSystem, DeformedCloudIsDrawnAndFollowsTheStore) {
     reg.remove<Deformers>(e);
     const ReferenceImage back = as_reference(frame(128, 96));
     EXPECT_GT(psnr(rest, back), 60.0);
+}
+
+TEST_F(GaussianRenderSystem, DrawsWhatTheGpuDeformationWroteIntoTheStore) {
+    // The GpuGaussianStore contract with a GPU deformation: when it has written `deformed` and says so
+    // (deformed_on_gpu), the render system draws that buffer and never overwrites it with a CPU copy.
+    add_camera();
+    const GaussianCloud g = random_cloud(1500, 0);
+    const ecs::Entity e = reg.create();
+    reg.emplace<GaussianCloud>(e, g);
+    reg.emplace<Deformers>(e);
+    DeformedGaussians stale;  // a CPU result that must not be drawn
+    stale.cloud = g;
+    for (auto& p : stale.cloud.positions) p.y -= 0.7f;
+    stale.version = 1;
+    reg.emplace<DeformedGaussians>(e, stale);
+    (void)frame(128, 96);  // uploads rest (and the CPU result)
+    GaussianCloud moved = g;
+    for (auto& p : moved.positions) p.x += 0.4f;
+    GpuGaussians& gpu = reg.resource<GpuGaussianStore>().clouds.at(e);
+    const std::vector<gpu::GpuGaussian> packed = pack_gaussians(moved, g.opacities);
+    glNamedBufferSubData(gpu.deformed.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuGaussian)), packed.data());
+    gpu.has_deformed = true, gpu.deformed_on_gpu = true, gpu.has_deformed_sh = false, gpu.has_frames = false;
+    ++gpu.deformed_version;
+    reg.patch<DeformedGaussians>(e).version = 2;  // even a newer CPU result stays out
+    const ReferenceImage img = as_reference(frame(128, 96));
+    ReferenceOptions o;
+    o.width = 128, o.height = 96, o.near_plane = camera().near_plane;
+    const double p = psnr(render_reference(moved, camera(), o), img);
+    std::printf("GPU-written deformed buffer drawn: PSNR %.1f dB vs the reference of that cloud\n", p);
+    EXPECT_GT(p, 40.0);
+    EXPECT_TRUE(reg.resource<GpuGaussianStore>().clouds.at(e).deformed_on_gpu);
 }
 
 }  // namespace

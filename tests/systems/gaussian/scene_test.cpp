@@ -15,6 +15,7 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#include "runtime/assets/export.h"
 #include "runtime/assets/scene.h"
 #include "runtime/gfx/context.h"
 #include "runtime/scene/components.h"
@@ -26,6 +27,7 @@
 #include "systems/ffd/lattice.h"
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_deform.h"
+#include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_scene.h"
 #include "systems/gaussian/gaussian_system.h"
@@ -291,6 +293,42 @@ TEST_F(GaussianScene, EditorAddsALatticeToAGaussianFileAndSavesTheDeformedScene)
     std::size_t differ = 0;
     for (std::size_t k = 0; k < a->pixels.size(); ++k) differ += std::abs(int(a->pixels[k]) - int(b->pixels[k])) > 8;
     EXPECT_GT(differ, 100u);
+}
+
+TEST_F(GaussianScene, GaussianFilesAreToldApartFromSurfaceFiles) {
+    const fs::path dir = fresh_dir("kinds");
+    const GaussianCloud g = sphere_gaussians();
+    ASSERT_TRUE(write_ply(dir / "g.ply", g));
+    ASSERT_TRUE(write_glb(dir / "g.glb", g));
+    ASSERT_TRUE(assets::save_splat_ply(render::test::fibonacci_sphere(500), dir / "surface.ply"));
+    for (const char* f : {"g.ply", "g.glb"}) {
+        ecs::Registry reg;
+        ASSERT_TRUE(load_scene(reg, (dir / f).string())) << f;
+        EXPECT_EQ(reg.count<GaussianCloud>(), 1u) << f;
+        EXPECT_EQ(reg.count<SplatCloud>(), 0u) << f;
+        EXPECT_EQ(reg.count<Camera>(), 1u) << f;  // a default view, like an imported point cloud
+        reg.view<const GaussianCloud>().each([&](const GaussianCloud& c) { EXPECT_EQ(c.size(), g.size()) << f; });
+    }
+    ecs::Registry reg;
+    ASSERT_TRUE(load_scene(reg, (dir / "surface.ply").string()));
+    EXPECT_EQ(reg.count<GaussianCloud>(), 0u);
+    EXPECT_EQ(reg.count<SplatCloud>(), 1u);
+    // Our own scene files are never taken for KHR Gaussian files, even when they hold Gaussian entities.
+    reg.emplace<GaussianCloud>(reg.create(), g);
+    ASSERT_TRUE(save_scene(reg, dir / "scene.glb"));
+    EXPECT_FALSE(is_gaussian_scene_file(dir / "scene.glb"));
+    EXPECT_TRUE(is_gaussian_scene_file(dir / "g.glb"));
+    EXPECT_FALSE(is_gaussian_scene_file(dir / "surface.ply"));
+    // A bad Gaussian file opened directly: `file: problem`, nothing created.
+    fs::resize_file(dir / "g.ply", 300);
+    ecs::Registry bad;
+    const Status st = load_scene(bad, (dir / "g.ply").string());
+    ASSERT_FALSE(st);
+    EXPECT_EQ(st.message().rfind((dir / "g.ply").string(), 0), 0u) << st.message();
+    EXPECT_EQ(bad.count<GaussianCloud>(), 0u);
+    std::string out;
+    EXPECT_EQ(run("render " + (dir / "g.ply").string() + " --out " + (dir / "frames").string() + " --size 32x24", &out), 1);
+    EXPECT_NE(out.find((dir / "g.ply").string() + ":"), std::string::npos) << out;
 }
 
 }  // namespace
