@@ -21,9 +21,19 @@ using nlohmann::json;
 namespace {
 
 struct Extension {
-    SceneSaveFn save;
-    SceneLoadFn load;
+    SceneFileSaveFn save;
+    SceneFileLoadFn load;
 };
+
+struct FileLoader {
+    SceneFileClaim claims;
+    SceneFileLoader load;
+};
+
+std::map<std::string, FileLoader>& file_loaders() {
+    static std::map<std::string, FileLoader> all;
+    return all;
+}
 
 std::map<std::string, Extension>& extensions() {
     static std::map<std::string, Extension> all;
@@ -246,7 +256,7 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
                     auto f = by_id.find(id);
                     return f == by_id.end() ? ecs::null_entity : f->second;
                 };
-                if (auto s = it->second.load(r, value.dump(), entity_of); !s)
+                if (auto s = it->second.load(r, value.dump(), entity_of, path.parent_path()); !s)
                     return rollback(make_error(src + ": scene extension '" + key + "': " + s.message()));
             }
         }
@@ -274,8 +284,24 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
 std::vector<std::string> builtin_scene_names() { return {"sphere", "face"}; }
 
 void register_scene_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn) {
+    Extension e;
+    if (save_fn) e.save = [f = std::move(save_fn)](const ecs::Registry& r, const SceneIdOf& id_of, const fs::path&) { return f(r, id_of); };
+    if (load_fn)
+        e.load = [f = std::move(load_fn)](ecs::Registry& r, std::string_view text, const SceneEntityOf& entity_of, const fs::path&) {
+            return f(r, text, entity_of);
+        };
+    extensions()[key] = std::move(e);
+}
+
+void register_scene_file_extension(const std::string& key, SceneFileSaveFn save_fn, SceneFileLoadFn load_fn) {
     extensions()[key] = Extension{std::move(save_fn), std::move(load_fn)};
 }
+
+void register_scene_file_loader(const std::string& key, SceneFileClaim claims, SceneFileLoader load) {
+    file_loaders()[key] = FileLoader{std::move(claims), std::move(load)};
+}
+
+void unregister_scene_file_loader(const std::string& key) { file_loaders().erase(key); }
 
 void unregister_scene_extension(const std::string& key) { extensions().erase(key); }
 
@@ -310,6 +336,8 @@ Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
         return make_error(name_or_path + ": no such file or built-in scene (built-ins: sphere, face)");
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    for (const auto& [key, loader] : file_loaders())
+        if (loader.claims && loader.load && loader.claims(path)) return loader.load(r, path);
     if (ext == ".gltf" || ext == ".glb") return load_scene_file(r, path);
     auto cloud = assets::import_splat_cloud(path);
     if (!cloud) return cloud.error();
@@ -386,7 +414,7 @@ Status save_scene(const ecs::Registry& r, const fs::path& path) {
     json ext = json::object();
     for (const auto& [key, fns] : extensions()) {
         if (!fns.save) continue;
-        auto text = fns.save(r, id_of);
+        auto text = fns.save(r, id_of, path.parent_path());
         if (!text) return make_error(path.string() + ": scene extension '" + key + "': " + text.message());
         if (text->empty()) continue;
         json v = json::parse(*text, nullptr, false);

@@ -47,6 +47,23 @@ using SceneLoadFn = std::function<Status(ecs::Registry&, std::string_view json, 
 void register_scene_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn);
 void unregister_scene_extension(const std::string& key);
 
+// An extension whose data names other files (systems/gaussian: the Gaussian clouds of a scene) also gets
+// the scene file's directory: relative paths in its JSON are relative to it. Same key space as above.
+using SceneFileSaveFn =
+    std::function<Result<std::string>(const ecs::Registry&, const SceneIdOf& id_of, const std::filesystem::path& scene_dir)>;
+using SceneFileLoadFn = std::function<Status(ecs::Registry&, std::string_view json, const SceneEntityOf& entity_of,
+                                             const std::filesystem::path& scene_dir)>;
+void register_scene_file_extension(const std::string& key, SceneFileSaveFn save_fn, SceneFileLoadFn load_fn);
+
+// Files assets cannot import itself (3D Gaussian files: 3DGS PLY, .splat, .spz, KHR_gaussian_splatting
+// glTF; registered by systems/gaussian): load_scene(registry, path) asks every registered loader, in key
+// order, before its own importers; the first whose `claims(path)` is true loads the file (its entities,
+// and a default Camera when the registry has none, like an imported point cloud).
+using SceneFileClaim = std::function<bool(const std::filesystem::path&)>;
+using SceneFileLoader = std::function<Status(ecs::Registry&, const std::filesystem::path&)>;
+void register_scene_file_loader(const std::string& key, SceneFileClaim claims, SceneFileLoader load);
+void unregister_scene_file_loader(const std::string& key);
+
 // Built-in scenes have no file for an extension to read, so a system that adds defaults to them (the
 // animation engineer's paper demo clip) registers a hook that runs after a built-in scene's entities
 // exist, with the scene name and exactly the entities that load created. (Added by the animation engineer.)

@@ -7,6 +7,10 @@ layout(std430, binding = SFFD_GAUSS_SSBO_PROJECTED) readonly buffer Projected { 
 layout(std430, binding = SFFD_GAUSS_SSBO_ORDER) readonly buffer Order { uint order[]; };
 
 uniform vec2 u_size;
+// NDC depth of the quad: u_ndc_depth.x + u_ndc_depth.y / view depth (the render system's projection, so
+// the depth test hides Gaussians behind opaque surface splats); (0, 0) by default: z = 0. Clamped below
+// the far plane (a Gaussian beyond it stays drawn; the depth buffer is cleared to the far plane).
+uniform vec2 u_ndc_depth;
 
 flat out vec2 v_center;
 flat out vec4 v_conic_opacity;
@@ -19,7 +23,8 @@ void main() {
     const vec2 lo = floor(c - r), hi = ceil(c + r) + 1.0;  // pixel edges
     const vec2 corner = vec2(float(gl_VertexID & 1), float(gl_VertexID >> 1));
     const vec2 pix = mix(lo, hi, corner);
-    gl_Position = vec4(pix.x / u_size.x * 2.0 - 1.0, 1.0 - pix.y / u_size.y * 2.0, 0.0, 1.0);
+    const float z = clamp(u_ndc_depth.x + u_ndc_depth.y / p.center_depth_radius.z, -1.0, 0.999999);
+    gl_Position = vec4(pix.x / u_size.x * 2.0 - 1.0, 1.0 - pix.y / u_size.y * 2.0, z, 1.0);
     v_center = c;
     v_conic_opacity = p.conic_opacity;
     v_color = p.color.rgb;

@@ -6,6 +6,7 @@
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/lattice_io.h"
+#include "systems/gaussian/components.h"
 #include "systems/picking/components.h"
 #include "systems/animation/components.h"
 
@@ -25,6 +26,16 @@ std::string name_of(const ecs::Registry& r, ecs::Entity e, const char* fallback)
 
 bool is_lattice(const ecs::Registry& r, ecs::Entity e) { return r.valid(e) && r.has<Lattice>(e); }
 
+// A cloud lattices deform: surface splats (SplatCloud) or 3D Gaussians (GaussianCloud, issue 17).
+bool is_cloud(const ecs::Registry& r, ecs::Entity e) { return r.valid(e) && (r.has<SplatCloud>(e) || r.has<GaussianCloud>(e)); }
+
+// The authored centres and origin of either kind of cloud.
+const std::vector<glm::vec3>& cloud_positions(const ecs::Registry& r, ecs::Entity e, glm::dvec3& origin) {
+    if (const SplatCloud* c = r.try_get<SplatCloud>(e)) return origin = c->origin, c->positions;
+    const GaussianCloud& g = r.get<GaussianCloud>(e);
+    return origin = g.origin, g.positions;
+}
+
 std::vector<ecs::Entity> all_lattices(const ecs::Registry& r) {
     std::vector<ecs::Entity> out;
     r.each_entity([&](ecs::Entity e) {
@@ -38,7 +49,7 @@ std::vector<ecs::Entity> clouds_deformed_by(const ecs::Registry& r, ecs::Entity 
     std::vector<ecs::Entity> out;
     r.each_entity([&](ecs::Entity e) {
         const Deformers* d = r.try_get<Deformers>(e);
-        if (d && r.has<SplatCloud>(e) && std::find(d->lattices.begin(), d->lattices.end(), lattice) != d->lattices.end())
+        if (d && is_cloud(r, e) && std::find(d->lattices.begin(), d->lattices.end(), lattice) != d->lattices.end())
             out.push_back(e);
     });
     return out;
@@ -96,9 +107,10 @@ std::vector<glm::vec3> points_of(const ecs::Registry& r, const std::vector<ecs::
     std::vector<glm::vec3> pts;
     bool first = true;
     for (ecs::Entity c : clouds) {
-        const SplatCloud& cloud = r.get<SplatCloud>(c);
-        if (first) origin = cloud.origin, first = false;
-        for (const glm::vec3& p : cloud.positions) pts.push_back(glm::vec3(cloud.origin - origin + glm::dvec3(p)));
+        glm::dvec3 cloud_origin(0.0);
+        const std::vector<glm::vec3>& positions = cloud_positions(r, c, cloud_origin);
+        if (first) origin = cloud_origin, first = false;
+        for (const glm::vec3& p : positions) pts.push_back(glm::vec3(cloud_origin - origin + glm::dvec3(p)));
     }
     return pts;
 }
@@ -120,12 +132,12 @@ std::vector<ecs::Entity> lattices_of(const ecs::Registry& registry, ecs::Entity 
 }
 
 ecs::Entity target_cloud(const ecs::Registry& r, const EditorState& state) {
-    if (r.valid(state.selected_entity) && r.has<SplatCloud>(state.selected_entity)) return state.selected_entity;
+    if (is_cloud(r, state.selected_entity)) return state.selected_entity;
     if (is_lattice(r, state.active_lattice))
         if (auto clouds = clouds_deformed_by(r, state.active_lattice); !clouds.empty()) return clouds.front();
     ecs::Entity first = ecs::null_entity;
     r.each_entity([&](ecs::Entity e) {
-        if (!first && r.has<SplatCloud>(e)) first = e;
+        if (!first && is_cloud(r, e)) first = e;
     });
     return first;
 }
@@ -133,9 +145,10 @@ ecs::Entity target_cloud(const ecs::Registry& r, const EditorState& state) {
 bool add_lattice(ecs::Registry& r, EditorState& state) {
     const ecs::Entity cloud = target_cloud(r, state);
     if (!cloud) return say(state, "add lattice: the scene has no point cloud"), false;
-    const SplatCloud& c = r.get<SplatCloud>(cloud);
+    glm::dvec3 origin(0.0);
+    const std::vector<glm::vec3>& positions = cloud_positions(r, cloud, origin);
     const ffd::FitOptions fit = lattice_fit_settings(r).fit;
-    auto l = ffd::fit_lattice(c.positions, c.origin, fit);
+    auto l = ffd::fit_lattice(positions, origin, fit);
     if (!l) return say(state, "add lattice: " + l.message()), false;
     return add_bound_lattice(r, state, cloud, std::move(*l), "add lattice");
 }

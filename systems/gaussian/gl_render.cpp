@@ -93,10 +93,6 @@ Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>
     }
     upload(r.gaussians, in.data(), in.size() * sizeof(gpu::GpuGaussian));
     upload(r.sh, g.sh.data(), g.sh.size() * sizeof(float));
-    upload(r.projected, nullptr, n * sizeof(gpu::GpuProjected));
-    upload(r.depth, nullptr, n * sizeof(std::uint32_t));
-    upload(r.order, nullptr, n * sizeof(std::uint32_t));  // payloads written by the projection (GPU sort)
-    upload(r.tile_touched, nullptr, (n + 1) * sizeof(std::uint32_t));  // + the scan's total
     if (g.sh_frames.size() == n && n > 0) {
         std::vector<glm::vec4> cols(n * 3);
         for (std::size_t i = 0; i < n; ++i)
@@ -109,6 +105,10 @@ Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>
     r.count = n, r.sh_degree = g.sh_degree, r.origin = g.origin;
     r.has_frames = g.sh_frames.size() == n && n > 0;
     return {};
+}
+
+GaussianBuffers resident_buffers(const GlRenderer& r) {
+    return {r.gaussians.id(), r.sh.id(), r.frames.id(), r.count, r.sh_degree, r.has_frames};
 }
 
 // Hardware GPUs: the GPU sort (no readback, no CPU work). Software rasterizers: the CPU sort, faster
@@ -135,27 +135,40 @@ Status ensure_target(GlRenderer& r, const ReferenceOptions& o) {
     return {};
 }
 
-// Step 1: projection of the resident Gaussians; resets and fills the indirect draw command.
-Status project_gl(GlRenderer& r, const Camera& cam, const ReferenceOptions& o) {
-    const std::size_t n = r.count;
+// The per-draw scratch buffers (projections, sort keys and payloads, tile counts) hold `n` Gaussians.
+void ensure_scratch(GlRenderer& r, std::size_t n) {
+    if (r.scratch >= n && r.scratch > 0) return;
+    upload(r.projected, nullptr, n * sizeof(gpu::GpuProjected));
+    upload(r.depth, nullptr, n * sizeof(std::uint32_t));
+    upload(r.order, nullptr, n * sizeof(std::uint32_t));  // payloads written by the projection (GPU sort)
+    upload(r.tile_touched, nullptr, (n + 1) * sizeof(std::uint32_t));  // + the scan's total
+    r.scratch = std::max<std::size_t>(n, 1);
+}
+
+// Step 1: projection of one cloud's Gaussians; resets and fills the indirect draw command.
+Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v) {
+    const std::size_t n = b.count;
+    ensure_scratch(r, n);
+    // The scratch buffers may have been read by the previous draw (another cloud this frame): its reads first.
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
     const GLuint command[4] = {4, 0, 0, 0};  // 4 strip vertices per quad, drawn count accumulated on the GPU
     glNamedBufferSubData(r.draw.id(), 0, sizeof(command), command);
-    const glm::dmat4 view = glm::lookAt(cam.eye, cam.target, cam.up) * glm::translate(glm::dmat4(1.0), r.origin);
-    const double tan_half = std::tan(glm::radians(double(cam.fov_y_degrees)) * 0.5);
+    const double tan_half = std::tan(glm::radians(v.fov_y_degrees) * 0.5);
     const GLuint pp = r.project.id();
-    glProgramUniformMatrix4fv(pp, glGetUniformLocation(pp, "u_view"), 1, GL_FALSE, glm::value_ptr(glm::mat4(view)));
-    set(pp, "u_eye", glm::vec3(cam.eye - r.origin));
-    set(pp, "u_size", glm::vec2(float(o.width), float(o.height)));
-    set(pp, "u_focal", float(o.height / (2.0 * tan_half)));
-    set(pp, "u_limit", glm::vec2(float(1.3 * tan_half * o.width / o.height), float(1.3 * tan_half)));
-    set(pp, "u_near", float(o.near_plane));
+    glProgramUniformMatrix4fv(pp, glGetUniformLocation(pp, "u_view"), 1, GL_FALSE, glm::value_ptr(glm::mat4(v.view)));
+    set(pp, "u_eye", glm::vec3(v.eye));
+    set(pp, "u_size", glm::vec2(float(v.width), float(v.height)));
+    set(pp, "u_focal", float(v.height / (2.0 * tan_half)));
+    set(pp, "u_limit", glm::vec2(float(1.3 * tan_half * v.width / v.height), float(1.3 * tan_half)));
+    set(pp, "u_near", float(v.near_plane));
     glProgramUniform1ui(pp, glGetUniformLocation(pp, "u_count"), GLuint(n));
-    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_degree"), r.sh_degree);
-    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_frames"), r.has_frames ? 1 : 0);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, r.gaussians.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, r.sh.id());
+    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_degree"), b.sh_degree);
+    glProgramUniform1i(pp, glGetUniformLocation(pp, "u_frames"), b.has_frames ? 1 : 0);
+    // A buffer with no store cannot be bound: the frames slot falls back to the Gaussians (never read).
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, b.gaussians);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, b.sh);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, r.frames.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, b.has_frames && b.frames ? b.frames : b.gaussians);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEPTH, r.depth.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
@@ -168,8 +181,7 @@ Status project_gl(GlRenderer& r, const Camera& cam, const ReferenceOptions& o) {
 
 // Step 2, CPU: read back the keys only (4 bytes per Gaussian) and sort (key, index) pairs of the drawn
 // ones: the index breaks ties, so the order equals the reference's stable sort (and is deterministic).
-void sort_cpu(GlRenderer& r) {
-    const std::size_t n = r.count;
+void sort_cpu(GlRenderer& r, std::size_t n) {
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<std::uint32_t> depth(n);
     if (n > 0) glGetNamedBufferSubData(r.depth.id(), 0, GLsizeiptr(n * sizeof(std::uint32_t)), depth.data());
@@ -186,35 +198,31 @@ void sort_cpu(GlRenderer& r) {
 
 // Step 2, GPU: all keys sorted with their indices; the not-drawn keys (0xffffffff) end up last, so the
 // first `drawn count` entries of `order` are the drawn Gaussians front to back. No readback.
-Status sort_gpu(GlRenderer& r) {
+Status sort_gpu(GlRenderer& r, std::size_t n) {
     r.sorter.max_groups_x = std::max(1u, r.max_groups_x);
-    return gfx::radix_sort(r.sorter, r.depth.id(), r.order.id(), std::uint32_t(r.count));
+    return gfx::radix_sort(r.sorter, r.depth.id(), r.order.id(), std::uint32_t(n));
 }
 
-// Step 3, quads: one instanced quad per drawn Gaussian, the count from the indirect command.
-void blend_quads(GlRenderer& r, const ReferenceOptions& o) {
-    glBindFramebuffer(GL_FRAMEBUFFER, r.framebuffer.id());
-    glViewport(0, 0, o.width, o.height);
-    const float clear[4] = {0, 0, 0, 0};
-    glClearNamedFramebufferfv(r.framebuffer.id(), GL_COLOR, 0, clear);
-    glDisable(GL_DEPTH_TEST);
+// Step 3, quads: one instanced quad per drawn Gaussian, the count from the indirect command, blended
+// into the framebuffer and viewport bound now (depth test state is the caller's).
+void blend_quads(GlRenderer& r, const GaussianView& v, std::size_t n, const gfx::Program* splat_program) {
     glDisable(GL_CULL_FACE);
     glEnable(GL_BLEND);
     glBlendEquation(GL_FUNC_ADD);
     glBlendFuncSeparate(GL_ONE_MINUS_DST_ALPHA, GL_ONE, GL_ONE_MINUS_DST_ALPHA, GL_ONE);
-    const GLuint sp = r.splat.id();
-    set(sp, "u_size", glm::vec2(float(o.width), float(o.height)));
+    const GLuint sp = splat_program ? splat_program->id() : r.splat.id();
+    set(sp, "u_size", glm::vec2(float(v.width), float(v.height)));
+    set(sp, "u_ndc_depth", glm::vec2(v.ndc_depth));
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
     glUseProgram(sp);
     glBindVertexArray(r.vao.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, r.draw.id());
-    if (r.count > 0) glDrawArraysIndirect(GL_TRIANGLE_STRIP, nullptr);
+    if (n > 0) glDrawArraysIndirect(GL_TRIANGLE_STRIP, nullptr);
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
     glDisable(GL_BLEND);
     glBindVertexArray(0);
     glUseProgram(0);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
 void tile_uniforms(GLuint program, const ReferenceOptions& o, glm::uvec2 tiles) {
@@ -224,12 +232,27 @@ void tile_uniforms(GLuint program, const ReferenceOptions& o, glm::uvec2 tiles) 
 
 double stage_ms(const GlRenderer& r, std::chrono::steady_clock::time_point& t);
 
+// Steps 1 and 2 (projection and depth sort) of one cloud, with the stage times of benchmarks.
+Status project_and_sort(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v) {
+    auto t = std::chrono::steady_clock::now();
+    if (Status st = project_gl(r, b, v); !st) return st.error();
+    r.project_ms = stage_ms(r, t);
+    r.gpu_sort_used = r.sort_path == SortPath::gpu || (r.sort_path == SortPath::automatic && gpu_sort_preferred(r, b.count));
+    if (r.gpu_sort_used) {
+        if (Status st = sort_gpu(r, b.count); !st) return st.error();
+        r.sort_ms = stage_ms(r, t);
+    } else {
+        sort_cpu(r, b.count);
+        stage_ms(r, t);
+    }
+    return {};
+}
+
 // Step 3, tiles (3DGS's rasterizer in compute): per drawn Gaussian in depth order the tiles it touches,
 // their exclusive scan, one (tile id, Gaussian) entry per overlap in depth order, a stable radix sort by
 // tile id (so (tile, depth) order), per-tile ranges, and a 16x16 group per tile blending front to back.
 // One readback: the entry count (4 bytes), to size the entry buffers, as 3DGS does.
-Status blend_tiles(GlRenderer& r, const ReferenceOptions& o) {
-    const std::size_t n = r.count;
+Status blend_tiles(GlRenderer& r, const ReferenceOptions& o, std::size_t n) {
     const glm::uvec2 tiles((unsigned(o.width) + SFFD_GAUSS_TILE - 1) / SFFD_GAUSS_TILE,
                            (unsigned(o.height) + SFFD_GAUSS_TILE - 1) / SFFD_GAUSS_TILE);
     const std::uint64_t tile_count = std::uint64_t(tiles.x) * tiles.y;
@@ -330,25 +353,36 @@ double stage_ms(const GlRenderer& r, std::chrono::steady_clock::time_point& t) {
 
 }  // namespace
 
+Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v, const gfx::Program* splat_program) {
+    if (b.count >= (std::size_t(1) << 31)) return make_error("draw_gaussians(): more than 2^31 Gaussians in one draw");
+    if (Status st = project_and_sort(r, b, v); !st) return st.error();
+    blend_quads(r, v, b.count, splat_program);
+    return {};
+}
+
 Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const ReferenceOptions& o) {
     if (o.width < 1 || o.height < 1) return make_error("draw_gl(): empty image");
     if (Status st = ensure_target(r, o); !st) return st.error();
+    GaussianView v;
+    v.view = glm::lookAt(cam.eye, cam.target, cam.up) * glm::translate(glm::dmat4(1.0), r.origin);
+    v.eye = cam.eye - r.origin;
+    v.fov_y_degrees = double(cam.fov_y_degrees);
+    v.near_plane = double(o.near_plane);
+    v.width = o.width, v.height = o.height;
+    const GaussianBuffers b = resident_buffers(r);
+    if (Status st = project_and_sort(r, b, v); !st) return st.error();
     auto t = std::chrono::steady_clock::now();
-    if (Status st = project_gl(r, cam, o); !st) return st.error();
-    r.project_ms = stage_ms(r, t);
-    r.gpu_sort_used = r.sort_path == SortPath::gpu || (r.sort_path == SortPath::automatic && gpu_sort_preferred(r, r.count));
-    if (r.gpu_sort_used) {
-        if (Status st = sort_gpu(r); !st) return st.error();
-        r.sort_ms = stage_ms(r, t);
-    } else {
-        sort_cpu(r);
-        stage_ms(r, t);
-    }
     r.tile_entries = 0, r.tile_prepare_ms = 0.0;
     if (r.blend_path == BlendPath::tiles) {
-        if (Status st = blend_tiles(r, o); !st) return st.error();
+        if (Status st = blend_tiles(r, o, b.count); !st) return st.error();
     } else {
-        blend_quads(r, o);
+        glBindFramebuffer(GL_FRAMEBUFFER, r.framebuffer.id());
+        glViewport(0, 0, o.width, o.height);
+        const float clear[4] = {0, 0, 0, 0};
+        glClearNamedFramebufferfv(r.framebuffer.id(), GL_COLOR, 0, clear);
+        glDisable(GL_DEPTH_TEST);
+        blend_quads(r, v, b.count, nullptr);
+        glBindFramebuffer(GL_FRAMEBUFFER, 0);
     }
     r.blend_ms = stage_ms(r, t);
     ReferenceImage img = read_image(r, o);

@@ -7,6 +7,7 @@
 #include <vector>
 
 
+#include "systems/splat_render/gaussian_pass.h"
 #include "systems/splat_render/splat_pack.h"
 
 namespace sffd::render {
@@ -28,7 +29,7 @@ Camera framing_camera(const glm::dvec3& center, double radius, double aspect, gl
     return c;
 }
 
-Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBounds& bounds) {
+Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBounds& bounds, const GaussianBounds& gaussian_bounds) {
     bool found = false;
     Camera camera;
     registry.view<const Camera>().each([&](const Camera& c) {
@@ -38,17 +39,21 @@ Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBou
     // Frame every cloud: union of their world-space bounding spheres (same as render_system's framing).
     glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
     std::vector<std::pair<glm::dvec3, double>> balls;
-    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
-        if (cloud.size() == 0) return;
-        const BoundingSphere b = bounds ? bounds(e, cloud) : bounding_sphere(cloud);
+    auto add = [&](ecs::Entity e, const glm::dvec3& origin, const BoundingSphere& b) {
         if (b.radius < 0.0) return;
-        const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), cloud.origin);
+        const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), origin);
         const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])),
                                        glm::length(glm::dvec3(m[2]))});
         const glm::dvec3 c = glm::dvec3(m * glm::dvec4(b.center, 1.0));
         balls.emplace_back(c, b.radius * scale);
         lo = glm::min(lo, c - b.radius * scale);
         hi = glm::max(hi, c + b.radius * scale);
+    };
+    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
+        if (cloud.size() > 0) add(e, cloud.origin, bounds ? bounds(e, cloud) : bounding_sphere(cloud));
+    });
+    registry.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& cloud) {
+        if (cloud.size() > 0) add(e, cloud.origin, gaussian_bounds ? gaussian_bounds(e, cloud) : gaussian_bounding_sphere(cloud));
     });
     glm::dvec3 center(0.0);
     double radius = 1.0;

@@ -9,6 +9,7 @@
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
+#include "systems/gaussian/components.h"
 #include "shaders/splat_render/frame_block.h"
 
 namespace sffd::render {
@@ -25,7 +26,11 @@ Camera framing_camera(const glm::dvec3& center, double radius, double aspect,
 // < 0 skips the cloud); by default bounding_sphere() is computed on each call (O(splats)).
 struct BoundingSphere;
 using CloudBounds = std::function<BoundingSphere(ecs::Entity, const SplatCloud&)>;
-Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBounds& bounds = {});
+// 3D Gaussian clouds (GaussianCloud) are framed too: `gaussian_bounds` may supply cached spheres (by
+// default gaussian_bounding_sphere(), gaussian_pass.h).
+using GaussianBounds = std::function<BoundingSphere(ecs::Entity, const GaussianCloud&)>;
+Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBounds& bounds = {},
+                    const GaussianBounds& gaussian_bounds = {});
 
 // The camera's part of the splat passes' FrameBlock (shaders/splat_render/frame_block.h) for a
 // width x height frame: projection, view_to_world, viewport, the pixel-ray map, and model_view /

@@ -31,6 +31,7 @@
 #include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/compute_raster.h"
 #include "systems/splat_render/cpu_cull.h"
+#include "systems/splat_render/gaussian_pass.h"
 #include "systems/splat_render/splat_pack.h"
 
 namespace sffd::render {
@@ -371,10 +372,13 @@ struct ViewSetup {
 ViewSetup choose_camera(ecs::Registry& reg, const SplatRenderState& s, double aspect) {
     ViewSetup v;
     // The one default-camera rule (camera_math.h), fed with the bounds cached per uploaded cloud.
-    v.camera = scene_camera(reg, aspect, [&](ecs::Entity e, const SplatCloud&) {
-        auto it = s.clouds.find(e);
-        return it == s.clouds.end() ? BoundingSphere{glm::dvec3(0.0), -1.0} : it->second.bounds;
-    });
+    v.camera = scene_camera(
+        reg, aspect,
+        [&](ecs::Entity e, const SplatCloud&) {
+            auto it = s.clouds.find(e);
+            return it == s.clouds.end() ? BoundingSphere{glm::dvec3(0.0), -1.0} : it->second.bounds;
+        },
+        [&](ecs::Entity e, const GaussianCloud&) { return cached_gaussian_bounds(reg, e); });
     v.view = view_matrix(v.camera);
     v.projection = projection_matrix(v.camera, aspect);
     return v;
@@ -588,7 +592,10 @@ Status init_render_state(ecs::Registry& registry) {
     return {};
 }
 
-void release_render_state(ecs::Registry& registry) { registry.erase_resource<SplatRenderState>(); }
+void release_render_state(ecs::Registry& registry) {
+    release_gaussian_pass(registry);
+    registry.erase_resource<SplatRenderState>();
+}
 
 namespace {
 
@@ -981,6 +988,17 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         laps.lap(stats.shade_ms);
     }
     end_splat_passes();
+    // 3D Gaussians over the surface splats, depth-tested against them (gaussian_pass.h).
+    if (reg.count<GaussianCloud>() > 0) {
+        GaussianPassFrame gf;
+        gf.camera = plan.view.camera, gf.view = plan.view.view, gf.projection = plan.view.projection;
+        gf.output_fbo = s.output_fbo.id(), gf.color = s.color.id(), gf.aux = s.aux.id(), gf.depth = s.depth.id();
+        gf.width = plan.width, gf.height = plan.height, gf.aux_outputs = plan.settings.aux_outputs;
+        auto drawn = gaussian_pass(reg, gf);
+        if (!drawn) log::error("render_system(): ", drawn.message());
+        else stats.gaussians = *drawn;
+        laps.lap(stats.gaussian_ms);
+    }
     // Visible counts of the newest frame whose read-back has landed (with time_passes: this frame, the
     // glFinish of the laps has completed it; otherwise usually a frame or two back). Never waits.
     collect_counts(s);

@@ -1,9 +1,12 @@
-// Splat render system (rendering phase): surface splatting of every SplatCloud in the registry.
+// Splat render system (rendering phase): surface splatting of every SplatCloud in the registry, then every
+// GaussianCloud (3D Gaussians, gaussian_pass.h) over them, in the same frame.
 //
 //   reads   SplatCloud (+ Transform), Camera, DirectionalLight, AmbientLight, RenderSettings (resource),
-//           GpuSplatStore draw_buffer() (deformed splats written by the FFD system, else rest)
+//           GpuSplatStore draw_buffer() (deformed splats written by the FFD system, else rest);
+//           GaussianCloud (+ Transform), DeformedGaussians, GpuGaussianStore
 //   writes  GpuSplatStore.rest (uploads a cloud when its change stamp moves), SplatRenderState (resource:
-//           its GL programs, per-cloud cull buffers and textures, the offscreen targets), RenderStats
+//           its GL programs, per-cloud cull buffers and textures, the offscreen targets), RenderStats;
+//           GpuGaussianStore rest/sh/deformed (gaussian_pass.h)
 //
 // HQ (Botsch et al. 2005): cull + compact (a compute pass, or cpu_cull.h on a software rasterizer) ->
 // visibility (depth, eps-offset ray-cast ellipses) -> attribute (additive RGBA32F: w*colour, w; w*normal,
@@ -75,7 +78,9 @@ struct RenderStats {
                                        // rasteriser (frame counts_frame; included in visible_points)
     std::uint32_t cpu_splat_passes = 0;  // loops over a cloud's splats on the CPU this frame (uploads of
                                          // changed clouds, their bounds, the CPU cull): 0 in a GPU-resident frame
+    std::uint32_t gaussians = 0;              // 3D Gaussians submitted (all GaussianClouds), this frame
     double cull_ms = 0, visibility_ms = 0, attribute_ms = 0, shade_ms = 0, preview_ms = 0, total_ms = 0;
+    double gaussian_ms = 0;  // the Gaussian pass (gaussian_pass.h), with time_passes
 };
 
 // Compiles the programs and creates the state resource (SplatRenderState). Needs a current GL 4.5

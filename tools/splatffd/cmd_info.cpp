@@ -15,6 +15,8 @@
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
+#include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_scene.h"
 #include "tools/splatffd/command.h"
 
 namespace {
@@ -119,6 +121,30 @@ void summarise_registry(const ecs::Registry& reg) {
             std::printf("\n");
         }
     });
+    std::size_t gaussians = 0;
+    reg.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& g) {  // 3D Gaussian entities
+        const Name* n = reg.try_get<Name>(e);
+        const GaussianSource* src = reg.try_get<GaussianSource>(e);
+        gaussians += g.size();
+        std::printf("  gaussians '%s': %zu Gaussians, SH degree %d%s%s\n", n ? n->value.c_str() : "?", g.size(), g.sh_degree,
+                    src ? "; file " : "", src ? src->path.string().c_str() : "");
+        if (g.size()) {
+            glm::dvec3 lo(INFINITY), hi(-INFINITY);
+            for (const glm::vec3& p : g.positions) {
+                lo = glm::min(lo, g.origin + glm::dvec3(p));
+                hi = glm::max(hi, g.origin + glm::dvec3(p));
+            }
+            print_bounds("    ", lo, hi);
+        }
+        if (const Deformers* d = reg.try_get<Deformers>(e)) {
+            std::printf("    deformed by");
+            for (ecs::Entity l : d->lattices) {
+                const Name* ln = reg.try_get<Name>(l);
+                std::printf(" '%s'", ln ? ln->value.c_str() : "?");
+            }
+            std::printf("\n");
+        }
+    });
     reg.view<const Lattice>().each([&](ecs::Entity e, const Lattice& l) {
         const Name* n = reg.try_get<Name>(e);
         std::size_t moved = 0;
@@ -140,7 +166,7 @@ void summarise_registry(const ecs::Registry& reg) {
                             l.axes[std::size_t(a)].z, glm::length(l.axes[std::size_t(a)]));
         }
     });
-    if (reg.count<Lattice>() == 0 && reg.count<SplatCloud>() > 0)
+    if (reg.count<Lattice>() == 0 && (reg.count<SplatCloud>() > 0 || reg.count<GaussianCloud>() > 0))
         std::printf("  lattices none (add one: splatffd convert IN OUT.glb --lattice fit[:L,M,N], or shift+a in splatffd view)\n");
     reg.view<const Camera>().each([&](const Camera& c) {
         std::printf("  camera   eye [%.4g, %.4g, %.4g] target [%.4g, %.4g, %.4g] fov %.1f\n", c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y,
@@ -152,6 +178,7 @@ void summarise_registry(const ecs::Registry& reg) {
     });
     reg.view<const AmbientLight>().each([&](const AmbientLight& a) { std::printf("  light    ambient intensity %.3g\n", static_cast<double>(a.intensity)); });
     std::printf("  total    %zu splats\n", total);
+    if (gaussians) std::printf("  total    %zu Gaussians\n", gaussians);
 }
 
 int run_info(cli::Args args) {

@@ -25,12 +25,9 @@
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
 #include "systems/gaussian/components.h"
-#include "systems/gaussian/gaussian_io.h"
 #include "systems/picking/picking_system.h"
 #include "systems/splat_render/camera_math.h"
 #include "tools/splatffd/command.h"
-#include "tools/splatffd/convert_gaussians.h"
-#include "tools/splatffd/render_gaussians.h"
 
 namespace {
 
@@ -132,27 +129,13 @@ int run_pick(sffd::cli::Args args) {
 
     ecs::Registry registry;
     Camera camera;
-    if (scene_given && cli::is_gaussian_file(scene)) {
-        auto cloud = gaussian::read_gaussians(scene);
-        if (!cloud) {
-            std::fprintf(stderr, "%s\n", cloud.message().c_str());
-            return 1;
-        }
-        if (cloud->size() == 0) {
-            std::fprintf(stderr, "%s: no Gaussians\n", scene.c_str());
-            return 1;
-        }
-        camera = cli::gaussian_file_camera(*cloud, w / h);
-        const ecs::Entity e = registry.create();
-        registry.emplace<GaussianCloud>(e, std::move(*cloud));
-        registry.emplace<Name>(e, Name{std::filesystem::path(scene).filename().string()});
-    } else {
-        if (const Status st = load_scene(registry, scene); !st) {
-            std::fprintf(stderr, "%s\n", st.message().c_str());
-            return 1;
-        }
-        camera = render::scene_camera(registry, w / h);
+    // Surface scenes and Gaussian files alike (splatffd's main registers the Gaussian scene hooks): the
+    // camera is the one `render` sees them through.
+    if (const Status st = load_scene(registry, scene); !st) {
+        std::fprintf(stderr, "%s\n", st.message().c_str());
+        return 1;
     }
+    camera = render::scene_camera(registry, w / h);
     const glm::ivec2 size{int(w), int(h)};
     const picking::ScreenView view = picking::make_screen_view(camera, size);
     picking::PickQuery query = picking::query_at_pixel(view, {x + 0.5, y + 0.5});

@@ -20,7 +20,8 @@ using namespace profiling;
 constexpr const char* usage_text =
     "usage: splatffd profile [SCENE] [options]\n"
     "  SCENE                 built-in name (sphere, face), a scene/point-cloud file, or synthetic:N\n"
-    "                        (a sphere of N splats with an 11^3 lattice). Default: sphere\n"
+    "                        (a sphere of N splats with an 11^3 lattice), synthetic-gaussians:N (that\n"
+    "                        sphere as N 3D Gaussians; Gaussian files work as SCENE too). Default: sphere\n"
     "  --frames N            measured frames (default 120)\n"
     "  --warmup W            frames run before measuring (default 10)\n"
     "  --quality hq|preview  render quality (default hq)\n"

@@ -2,7 +2,8 @@
 //                 [--background R,G,B] [--fps F] [--no-cull]
 //                 [--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV | --turntable N] [--video OUT.mp4|OUT.gif]
 //
-// Renders frames of a scene (built-in name or file; default `sphere`) through the engine's standard
+// Renders frames of a scene (built-in name or file; default `sphere`; 3D Gaussian files and scene files
+// with Gaussian entities too, systems/gaussian/gaussian_scene.h) through the engine's standard
 // schedule (tools/splatffd/engine.cpp: animation and deformation run before rendering), offscreen in a
 // headless EGL context (no display needed). Frame k is rendered at clock time k / fps on the fixed-step
 // grid with a clock of its own, so frame k alone is the same image as frame k of a sequence.
@@ -38,14 +39,14 @@
 #include "runtime/core/atomic_file.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/gfx/context.h"
+#include "systems/gaussian/components.h"
 #include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/gaussian_pass.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/splat_render.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/frame_files.h"
-#include "tools/splatffd/convert_gaussians.h"
-#include "tools/splatffd/render_gaussians.h"
 #include "tools/splatffd/engine.h"
 
 namespace {
@@ -123,6 +124,16 @@ SceneBounds scene_bounds(const ecs::Registry& registry) {
     registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         if (cloud.size() == 0) return;
         const render::BoundingSphere b = render::bounding_sphere(cloud);
+        const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), cloud.origin);
+        const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
+        const glm::dvec3 c = glm::dvec3(m * glm::dvec4(b.center, 1.0));
+        balls.emplace_back(c, b.radius * scale);
+        lo = glm::min(lo, c - b.radius * scale);
+        hi = glm::max(hi, c + b.radius * scale);
+    });
+    registry.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& cloud) {  // 3D Gaussians too
+        if (cloud.size() == 0) return;
+        const render::BoundingSphere b = render::gaussian_bounding_sphere(cloud);
         const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), cloud.origin);
         const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
         const glm::dvec3 c = glm::dvec3(m * glm::dvec4(b.center, 1.0));
@@ -394,13 +405,6 @@ int run_render(sffd::cli::Args args) {
     }
     if (!cli::create_output_folder(out_dir)) return 1;
 
-    // 3D Gaussian files (3DGS PLY, .splat, KHR glb): one frame through the Gaussian renderer.
-    if (scene_given && cli::is_gaussian_file(scene) && (camera || turntable > 0 || !video.empty())) {
-        std::fprintf(stderr, "splatffd render: %s: --camera, --turntable and --video are not supported for 3D Gaussian files yet (one frame, the file's view)\n",
-                     scene.c_str());
-        return 2;
-    }
-    if (scene_given && cli::is_gaussian_file(scene)) return cli::render_gaussians(scene, out_dir, int(width), int(height), background);
     // Offscreen rendering needs no window: EGL surfaceless works with or without a display.
     auto ctx = gfx::create_context({.headless = true, .width = int(width), .height = int(height), .debug = false});
     if (!ctx) {

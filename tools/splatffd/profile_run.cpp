@@ -17,6 +17,8 @@
 #include "runtime/gfx/splat_store.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/ffd_system.h"
+#include "systems/gaussian/components.h"
+#include "systems/gaussian/from_splats.h"
 #include "systems/profiling/synthetic.h"
 #include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/splat_render.h"
@@ -71,6 +73,21 @@ double thread_cpu_ms() {
 
 Status load(ecs::Registry& registry, const std::string& scene, bool* synthetic) {
     *synthetic = false;
+    if (scene.rfind("synthetic-gaussians:", 0) == 0) {
+        // The synthetic sphere as 3D Gaussians (gaussians_from_splats: flat Gaussians, SH degree 0) in the
+        // same 11^3 lattice: gaussian_deform_system deforms it, render_system's Gaussian pass draws it.
+        double count = 0.0;
+        if (!parse_count(scene.substr(20), count)) return make_error(scene + ": bad synthetic Gaussian count");
+        *synthetic = true;
+        const SplatCloud sphere = synthetic_sphere(static_cast<std::size_t>(count));
+        const ecs::Entity cloud = registry.create();
+        registry.emplace<Name>(cloud, Name{"synthetic Gaussian sphere"});
+        registry.emplace<GaussianCloud>(cloud, gaussian::gaussians_from_splats(sphere));
+        const ecs::Entity lattice = registry.create();
+        registry.emplace<Lattice>(lattice, paper_lattice(sphere, 10));
+        registry.emplace<Deformers>(cloud, Deformers{{lattice}});
+        return {};
+    }
     if (scene.rfind("synthetic:", 0) != 0) return load_scene(registry, scene);
     double count = 0.0;
     if (!parse_count(scene.substr(10), count)) return make_error(scene + ": bad synthetic point count");
@@ -139,6 +156,12 @@ Result<RunOutput> run_profile(const RunSetup& s) {
         (void)e;
         out.points += c.size();
     }
+    std::size_t gaussians = 0;
+    for (auto [e, g] : registry.view<const GaussianCloud>()) {
+        (void)e;
+        gaussians += g.size();
+    }
+    out.points += gaussians;
     if (s.lattice_points > 0 || !s.basis.empty()) {
         std::vector<ecs::Entity> ls;
         for (auto [e, l] : registry.view<const Lattice>()) {
@@ -192,6 +215,7 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     Config config{{"scene", s.scene},
                   {"synthetic_scene", synthetic},
                   {"points", static_cast<double>(out.points)},
+                  {"gaussians", static_cast<double>(gaussians)},
                   {"frames", static_cast<double>(s.frames)},
                   {"warmup", static_cast<double>(s.warmup)},
                   {"quality", s.quality},

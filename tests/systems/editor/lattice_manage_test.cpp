@@ -16,6 +16,8 @@
 #include "systems/ffd/components.h"
 #include "systems/ffd/lattice_io.h"
 #include "systems/ffd/operations.h"
+#include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_system.h"
 
 using namespace sffd;
 using namespace sffd::editor;
@@ -208,3 +210,52 @@ TEST(LatticeManage, ExportImportJsonAndSceneRoundTrip) {
 }
 
 }  // namespace
+
+// 3D Gaussian clouds (issue 17) get lattices like point clouds: shift+a fits one around the Gaussian
+// centres and binds it; editing the lattice deforms the Gaussians (gaussian_deform_system).
+TEST(LatticeManage, GaussianCloudGetsAFittedLatticeThatDeformsIt) {
+    ecs::Registry reg;
+    const ecs::Entity g = reg.create();
+    reg.emplace<Name>(g, Name{"gaussians"});
+    reg.emplace<Transform>(g, Transform{});
+    GaussianCloud& c = reg.emplace<GaussianCloud>(g);
+    c.origin = {5.0, 0.0, 0.0};
+    for (int i = 0; i < 200; ++i) {
+        const float t = float(i) / 199.0f;
+        c.positions.emplace_back(2.0f * t - 1.0f, 0.5f * std::sin(6.0f * t), 0.25f * std::cos(9.0f * t));
+        c.scales.emplace_back(0.05f);
+        c.rotations.emplace_back(1.0f, 0.0f, 0.0f, 0.0f);
+        c.opacities.push_back(0.9f);
+        c.sh.insert(c.sh.end(), {0.1f, 0.2f, 0.3f});
+    }
+    Camera& cam = reg.emplace<Camera>(reg.create());
+    cam.eye = {5.0, 0.0, 8.0};
+    cam.target = {5.0, 0.0, 0.0};
+    EditorState& state = setup_editor(reg, Viewport{800, 600});
+    InputEvent e;
+    e.kind = InputKind::key, e.key = "a", e.modifiers = mods::shift;
+    state.events = {e};
+    editor_input_system(reg, FrameContext{0, 0.0, 1 / 60.0});
+    ASSERT_EQ(reg.count<Lattice>(), 1u);
+    ASSERT_TRUE(reg.has<Deformers>(g));
+    ASSERT_EQ(reg.get<Deformers>(g).lattices.size(), 1u);
+    const ecs::Entity l = reg.get<Deformers>(g).lattices[0];
+    EXPECT_EQ(l, state.active_lattice);
+    // The fitted box holds every centre (world coordinates: origin + position).
+    const Lattice& lat = reg.get<Lattice>(l);
+    for (const glm::vec3& p : c.positions) {
+        const glm::dvec3 w = c.origin + glm::dvec3(p) - lat.origin;
+        for (int a = 0; a < 3; ++a) {
+            const double s = glm::dot(w, lat.axes[std::size_t(a)]) / glm::dot(lat.axes[std::size_t(a)], lat.axes[std::size_t(a)]);
+            EXPECT_GE(s, 0.0);
+            EXPECT_LE(s, 1.0);
+        }
+    }
+    // Moving every control point by +y moves every Gaussian by +y.
+    gaussian_deform_system(reg, {});
+    for (glm::dvec3& p : reg.patch<Lattice>(l).current) p.y += 0.5;
+    gaussian_deform_system(reg, {});
+    const DeformedGaussians& d = reg.get<DeformedGaussians>(g);
+    ASSERT_EQ(d.cloud.size(), c.size());
+    for (std::size_t i = 0; i < c.size(); ++i) EXPECT_NEAR(d.cloud.positions[i].y, c.positions[i].y + 0.5f, 1e-4f) << i;
+}

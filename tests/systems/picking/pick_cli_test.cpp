@@ -18,6 +18,7 @@
 #include "systems/ffd/components.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_scene.h"
 #include "systems/picking/gaussian_source.h"
 #include "systems/picking/screen_view.h"
 #include "systems/picking/world_space.h"
@@ -142,7 +143,7 @@ TEST(PickCli, BadInputExitCodesAndMessages) {
 }
 
 // A 3DGS PLY of four Gaussians written here: picked through `splatffd pick FILE`, seen from the camera
-// `render` frames a Gaussian file with (render::framing_camera around the centres' bounding sphere).
+// `render` frames a Gaussian file with (load_scene's default view of it).
 struct GaussianFile {
     std::filesystem::path path;
     GaussianCloud cloud;
@@ -165,10 +166,14 @@ struct GaussianFile {
         cloud.opacities.push_back(0.08f);
         for (int c = 0; c < 3; ++c) cloud.sh.push_back(0.2f);
         EXPECT_TRUE(gaussian::write_ply(path, cloud));
-        // Bounding box of the centres: x [-1, 1], y [0, 0.2], z [-0.5, 0.3].
-        const glm::dvec3 lo(-1, 0, -0.5), hi(1, 0.2, 0.3);
-        view = make_screen_view(render::framing_camera(0.5 * (lo + hi), 0.5 * glm::length(hi - lo), 320.0 / 240.0),
-                                {320, 240});
+        // The camera `render` and `pick` see the file through: load_scene's default view of a Gaussian file
+        // (the Gaussian scene hooks, which splatffd's main registers).
+        gaussian::register_gaussian_scene_hooks();
+        ecs::Registry reg;
+        const Status st = load_scene(reg, path.string());
+        gaussian::unregister_gaussian_scene_hooks();
+        EXPECT_TRUE(st) << (st ? "" : st.message());
+        view = make_screen_view(render::scene_camera(reg, 320.0 / 240.0), {320, 240});
     }
     ~GaussianFile() { std::filesystem::remove(path); }
 };

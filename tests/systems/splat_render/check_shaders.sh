@@ -11,7 +11,7 @@ check() {  # file stage defines...
     { head -n1 "$root/$file"; echo "#extension GL_GOOGLE_include_directive : require"
       for d in "$@"; do echo "#define ${d%%=*} ${d#*=}"; done
       tail -n +2 "$root/$file"; } > "$out"
-    if ! glslangValidator -G -o "$tmp/out.spv" -S "$stage" -I"$root" -I"$root/$(dirname "$file")" "$out" > "$tmp/log" 2>&1; then
+    if ! glslangValidator ${SPIRV--G -o "$tmp/out.spv"} -S "$stage" -I"$root" -I"$root/$(dirname "$file")" "$out" > "$tmp/log" 2>&1; then
         echo "FAIL $file $*"; cat "$tmp/log"; status=1
     else
         echo "ok   $file $*"
@@ -32,4 +32,11 @@ check splat_render/compute_visibility.comp comp
 for t in 0 1; do check splat_render/compute_attribute.comp comp TEXTURED=$t; done
 check splat_render/compute_merge.frag frag
 check splat_render/compute_resolve.frag frag
+# The Gaussian shaders use plain (location-less) uniforms, which SPIR-V for OpenGL (-G) refuses unless
+# locations are assigned automatically (--aml; the GL driver assigns its own).
+SPIRV="-G --aml -o $tmp/out.spv"
+for f in gaussian/project.comp:comp gaussian/splat.vert:vert gaussian/splat.frag:frag \
+         splat_render/gaussian_accum.frag:frag splat_render/gaussian_composite.frag:frag; do
+    check "${f%%:*}" "${f##*:}"
+done
 exit $status

@@ -299,12 +299,16 @@ TEST(RenderCommand, DegenerateCamerasAreRefused) {
     EXPECT_NE(log.find("--size: expected an integer in 1..16384, got '-5'"), std::string::npos) << log;
     EXPECT_EQ(run(out + " --video clip.avi", &log), 2);
     EXPECT_NE(log.find("must end in .mp4 or .gif"), std::string::npos) << log;
-    // 3D Gaussian files take another renderer (one frame): the options are refused, not ignored.
+    // 3D Gaussian files go through the engine like any scene (issue 17): --turntable works on them and a
+    // degenerate --camera is refused the same way.
     const fs::path g = fresh_dir("cam_bad").parent_path() / "gaussians.ply";
     fs::create_directories(g.parent_path());
     ASSERT_EQ(std::system((binary + " convert sphere " + g.string() + " --gaussians > /dev/null 2>&1").c_str()), 0);
-    EXPECT_EQ(run(g.string() + out + " --turntable 3", &log), 2);
-    EXPECT_NE(log.find("not supported for 3D Gaussian files"), std::string::npos) << log;
+    const fs::path turn = fresh_dir("gaussian_turn");
+    EXPECT_EQ(run(g.string() + " --out " + turn.string() + " --size 48x32 --turntable 3", &log), 0) << log;
+    EXPECT_TRUE(fs::exists(turn / "frame_0002.png"));
+    EXPECT_EQ(run(g.string() + out + " --camera 1,2,3,1,2,3,0,1,0,45", &log), 2);
+    EXPECT_NE(log.find("--camera: eye and target are the same point"), std::string::npos) << log;
 }
 
 TEST(RenderCommand, TurntableOrbitsAndStartsAtTheSceneCamerasEye) {

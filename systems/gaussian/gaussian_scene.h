@@ -1,0 +1,54 @@
+// 3D Gaussian clouds as scene entities (issue 17): loading a Gaussian file as an entity, and Gaussian
+// entities in our scene files (runtime/assets/scene.h hooks; assets never links this library).
+//
+// register_gaussian_scene_hooks() registers, under the key "gaussians":
+//   - a scene file loader: load_scene(registry, "x.ply" | "x.splat" | "x.spz" | "x.glb"/"x.gltf") on a
+//     Gaussian file (a PLY with f_dc_0/opacity/scale_0/rot_0, .splat, .spz, a glTF whose JSON uses
+//     KHR_gaussian_splatting and is not one of our scene files) creates one Gaussian entity (Name =
+//     file stem, Transform, GaussianCloud, GaussianSource) and a default camera when there is none;
+//   - a scene extension: save_scene writes every Gaussian entity into SFFD_scene.extensions.gaussians,
+//     load_scene reads them back:
+//       { "version": 1,
+//         "clouds": [ { "name": "g", "file": "g.ply",               // relative to the scene file's folder
+//                       "transform": { "translation": [x,y,z], "rotation": [x,y,z,w], "scale": [x,y,z] },
+//                       "lattices": [ <scene ids of lattice entities>, ... ] } ] }   // its Deformers, in order
+//     A Gaussian entity without a GaussianSource (made in memory) is written beside the scene as
+//     "<name>.gaussians.ply" (3DGS PLY, atomic) and referred to by that name. Errors name the scene, the
+//     entry and the Gaussian file ("scene.gltf: scene extension 'gaussians': clouds[0]: g.ply: problem").
+// Call it once at start-up (tools/splatffd/main.cpp does; tests call it themselves).
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <string_view>
+
+#include "runtime/core/result.h"
+#include "runtime/ecs/registry.h"
+
+namespace sffd {
+
+// The file a GaussianCloud entity was loaded from (absolute), so a saved scene can refer to it.
+struct GaussianSource {
+    std::filesystem::path path;
+};
+
+namespace gaussian {
+
+// Whether `path` is a Gaussian file load_gaussian_entity() reads (see above; PLY and glTF by content).
+bool is_gaussian_scene_file(const std::filesystem::path& path);
+
+// Reads the file and creates its entity (Name, Transform, GaussianCloud, GaussianSource).
+Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const std::filesystem::path& path);
+
+void register_gaussian_scene_hooks();
+void unregister_gaussian_scene_hooks();
+
+// The extension's two halves, usable without the hook registry.
+Result<std::string> save_gaussian_extension(const ecs::Registry& registry, const std::function<int(ecs::Entity)>& id_of,
+                                            const std::filesystem::path& scene_dir);
+Status load_gaussian_extension(ecs::Registry& registry, std::string_view json,
+                               const std::function<ecs::Entity(int)>& entity_of, const std::filesystem::path& scene_dir);
+
+}  // namespace gaussian
+}  // namespace sffd

@@ -1,0 +1,252 @@
+// Render system's Gaussian pass. See gaussian_pass.h for the data flow.
+#include "systems/splat_render/gaussian_pass.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+#include <utility>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "runtime/app/pass_timer.h"
+#include "runtime/gfx/gl_object.h"
+#include "runtime/gfx/shader.h"
+#include "runtime/scene/camera.h"
+#include "systems/gaussian/gl_render.h"
+#include "systems/gaussian/gpu_store.h"
+#include "systems/gaussian/gpu_upload.h"
+
+namespace sffd::render {
+
+namespace {
+
+struct CloudState {
+    std::uint64_t cpu_deformed_version = 0;  // DeformedGaussians::version uploaded into GpuGaussians::deformed
+    bool cpu_deformed_uploaded = false;
+    BoundingSphere bounds;
+    std::uint64_t bounds_version = 0;
+    bool bounds_valid = false;
+};
+
+}  // namespace
+
+// Registry resource: the pass's GL objects (the clouds themselves live in GpuGaussianStore).
+struct GaussianPassState {
+    gaussian::GlRenderer renderer;  // projection program, per-draw scratch buffers, the quad VAO
+    gfx::Program accum;             // shaders/gaussian/splat.vert + splat_render/gaussian_accum.frag
+    gfx::Program composite;         // fullscreen + splat_render/gaussian_composite.frag
+    gfx::VertexArray empty_vao;
+    int width = 0, height = 0;
+    gfx::Texture gauss_color, gauss_depth, surface_color, surface_aux;
+    gfx::Framebuffer accum_fbo;
+    GLuint depth_attached = 0;  // the render system's depth texture attached to accum_fbo
+    std::unordered_map<ecs::Entity, CloudState> clouds;
+    bool failed = false;
+};
+
+namespace {
+
+gfx::Texture make_texture(GLenum format, int w, int h, const char* label) {
+    gfx::Texture t = gfx::Texture::create(label, GL_TEXTURE_2D);
+    glTextureStorage2D(t.id(), 1, format, w, h);
+    glTextureParameteri(t.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(t.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    return t;
+}
+
+Result<GaussianPassState*> pass_state(ecs::Registry& reg) {
+    if (auto* s = reg.try_resource<GaussianPassState>()) {
+        if (s->failed) return make_error("gaussian pass: initialisation failed earlier");
+        return s;
+    }
+    GaussianPassState s;
+    auto fail = [&](const std::string& message) -> Result<GaussianPassState*> {
+        GaussianPassState failed;
+        failed.failed = true;
+        reg.set_resource<GaussianPassState>(std::move(failed));
+        return make_error(message);
+    };
+    auto renderer = gaussian::create_gl_renderer();
+    if (!renderer) return fail(renderer.message());
+    s.renderer = std::move(*renderer);
+    auto accum = gfx::load_program({{GL_VERTEX_SHADER, "gaussian/splat.vert"}, {GL_FRAGMENT_SHADER, "splat_render/gaussian_accum.frag"}},
+                                   "render.gaussian_accum");
+    if (!accum) return fail(accum.message());
+    auto composite = gfx::load_program(
+        {{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "splat_render/gaussian_composite.frag"}},
+        "render.gaussian_composite");
+    if (!composite) return fail(composite.message());
+    s.accum = std::move(*accum);
+    s.composite = std::move(*composite);
+    s.empty_vao = gfx::VertexArray::create("render.gaussian_composite");
+    return &reg.set_resource<GaussianPassState>(std::move(s));
+}
+
+void ensure_targets(GaussianPassState& s, const GaussianPassFrame& f) {
+    if (s.width != f.width || s.height != f.height || !s.accum_fbo) {
+        s.width = f.width, s.height = f.height;
+        s.gauss_color = make_texture(GL_RGBA32F, f.width, f.height, "render.gaussian_color");
+        s.gauss_depth = make_texture(GL_RGBA32F, f.width, f.height, "render.gaussian_depth");
+        s.surface_color = make_texture(GL_RGBA16F, f.width, f.height, "render.surface_color_copy");
+        s.surface_aux = make_texture(GL_RGBA32F, f.width, f.height, "render.surface_aux_copy");
+        s.accum_fbo = gfx::Framebuffer::create("render.gaussian_accum");
+        glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT0, s.gauss_color.id(), 0);
+        glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT1, s.gauss_depth.id(), 0);
+        const GLenum two[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+        glNamedFramebufferDrawBuffers(s.accum_fbo.id(), 2, two);
+        s.depth_attached = 0;
+    }
+    if (s.depth_attached != f.depth) {  // the render system recreates its targets on a resize
+        glNamedFramebufferTexture(s.accum_fbo.id(), GL_DEPTH_ATTACHMENT, f.depth, 0);
+        s.depth_attached = f.depth;
+    }
+}
+
+// Uploads the authored clouds whose stamp moved, and CPU deformations the GPU did not write.
+void sync_store(ecs::Registry& reg, GaussianPassState& s, gaussian::GpuGaussianStore& store) {
+    for (auto it = store.clouds.begin(); it != store.clouds.end();)
+        it = reg.valid(it->first) && reg.has<GaussianCloud>(it->first) ? std::next(it) : store.clouds.erase(it);
+    for (auto it = s.clouds.begin(); it != s.clouds.end();)
+        it = reg.valid(it->first) && reg.has<GaussianCloud>(it->first) ? std::next(it) : s.clouds.erase(it);
+    reg.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& cloud) {
+        const std::uint64_t version = reg.version<GaussianCloud>(e);
+        gaussian::GpuGaussians& gpu = store.clouds[e];
+        CloudState& cs = s.clouds[e];
+        if (!gpu.rest || gpu.rest_version != version) {
+            gaussian::upload_rest(gpu, cloud, version);
+            cs.cpu_deformed_uploaded = false;
+        }
+        if (gpu.deformed_on_gpu) return;  // the GPU deformation owns `deformed`
+        const DeformedGaussians* d = reg.try_get<DeformedGaussians>(e);
+        if (d && reg.has<Deformers>(e) && d->cloud.size() == cloud.size()) {
+            if (!cs.cpu_deformed_uploaded || cs.cpu_deformed_version != d->version || !gpu.has_deformed) {
+                gaussian::upload_cpu_deformed(gpu, *d, cloud);
+                cs.cpu_deformed_version = d->version, cs.cpu_deformed_uploaded = true;
+            }
+        } else if (gpu.has_deformed) {
+            gaussian::drop_deformed(gpu);
+            cs.cpu_deformed_uploaded = false;
+        }
+    });
+}
+
+}  // namespace
+
+BoundingSphere gaussian_bounding_sphere(const GaussianCloud& cloud) {
+    BoundingSphere b;
+    if (cloud.size() == 0) return b;
+    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    double max_scale = 0.0;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        lo = glm::min(lo, glm::dvec3(cloud.positions[i]));
+        hi = glm::max(hi, glm::dvec3(cloud.positions[i]));
+        const glm::vec3 s = cloud.scales[i];
+        max_scale = std::max(max_scale, double(std::max({s.x, s.y, s.z})));
+    }
+    b.center = 0.5 * (lo + hi);
+    double r = 0.0;
+    for (const glm::vec3& p : cloud.positions) r = std::max(r, glm::length(glm::dvec3(p) - b.center));
+    b.max_splat_radius = 3.0 * max_scale;
+    b.radius = r + b.max_splat_radius;
+    return b;
+}
+
+BoundingSphere cached_gaussian_bounds(ecs::Registry& reg, ecs::Entity e) {
+    const GaussianCloud* cloud = reg.try_get<GaussianCloud>(e);
+    if (!cloud) return {glm::dvec3(0.0), -1.0, 0.0};
+    auto* s = reg.try_resource<GaussianPassState>();
+    if (!s) return gaussian_bounding_sphere(*cloud);
+    CloudState& cs = s->clouds[e];
+    const std::uint64_t version = reg.version<GaussianCloud>(e);
+    if (!cs.bounds_valid || cs.bounds_version != version) {
+        cs.bounds = gaussian_bounding_sphere(*cloud);
+        cs.bounds_version = version, cs.bounds_valid = true;
+    }
+    return cs.bounds;
+}
+
+Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame& f) {
+    if (reg.count<GaussianCloud>() == 0) return std::uint32_t(0);
+    auto state = pass_state(reg);
+    if (!state) return state.error();
+    GaussianPassState& s = **state;
+    if (!reg.try_resource<gaussian::GpuGaussianStore>()) reg.set_resource<gaussian::GpuGaussianStore>();
+    auto& store = reg.resource<gaussian::GpuGaussianStore>();
+    sync_store(reg, s, store);
+    ensure_targets(s, f);
+
+    // Clouds nearest first (front-to-back blending), by the view depth of their bounding sphere's centre.
+    struct Item {
+        ecs::Entity entity;
+        double depth;
+    };
+    std::vector<Item> items;
+    reg.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& cloud) {
+        if (cloud.size() == 0) return;
+        const BoundingSphere b = cached_gaussian_bounds(reg, e);
+        const glm::dmat4 m = model_matrix(reg.try_get<Transform>(e), cloud.origin);
+        const glm::dvec4 c = f.view * m * glm::dvec4(b.center, 1.0);
+        items.push_back({e, -c.z});
+    });
+    std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.depth < b.depth; });
+
+    auto scope = profiling::gpu_scope(reg, "render.gaussians");
+    const float zero[4] = {0, 0, 0, 0};
+    glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 0, zero);
+    glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 1, zero);
+    glBindFramebuffer(GL_FRAMEBUFFER, s.accum_fbo.id());
+    glViewport(0, 0, f.width, f.height);
+    glDisable(GL_SCISSOR_TEST);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LESS);
+    glDepthMask(GL_FALSE);  // test against the surface splats, never write: Gaussians are blended
+    // NDC depth z = -P22 + P32 / depth of a perspective projection (glm::perspective, NDC z in [-1, 1]).
+    const glm::dvec2 ndc_depth(-f.projection[2][2], f.projection[3][2]);
+    std::uint32_t submitted = 0;
+    Status status;
+    for (const Item& item : items) {
+        const GaussianCloud& cloud = reg.get<GaussianCloud>(item.entity);
+        const gaussian::GpuGaussians& gpu = store.clouds.at(item.entity);
+        const glm::dmat4 model = model_matrix(reg.try_get<Transform>(item.entity), cloud.origin);
+        gaussian::GaussianView v;
+        v.view = f.view * model;
+        v.eye = glm::dvec3(glm::inverse(model) * glm::dvec4(f.camera.eye, 1.0));
+        v.fov_y_degrees = double(f.camera.fov_y_degrees);
+        v.near_plane = double(f.camera.near_plane);
+        v.width = f.width, v.height = f.height;
+        v.ndc_depth = ndc_depth;
+        const gaussian::GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(), gpu.frames.id(), gpu.count, gpu.sh_degree,
+                                                gpu.has_deformed && gpu.has_frames};
+        if (Status st = gaussian::draw_gaussians(s.renderer, buffers, v, &s.accum); !st) status = st;
+        submitted += gpu.count;
+    }
+    glDepthMask(GL_TRUE);
+    glDisable(GL_DEPTH_TEST);
+
+    // Composite over the surface colour (and aux) copied aside: the output target is written.
+    glCopyImageSubData(f.color, GL_TEXTURE_2D, 0, 0, 0, 0, s.surface_color.id(), GL_TEXTURE_2D, 0, 0, 0, 0, f.width, f.height, 1);
+    if (f.aux_outputs)
+        glCopyImageSubData(f.aux, GL_TEXTURE_2D, 0, 0, 0, 0, s.surface_aux.id(), GL_TEXTURE_2D, 0, 0, 0, 0, f.width, f.height, 1);
+    glBindFramebuffer(GL_FRAMEBUFFER, f.output_fbo);
+    glViewport(0, 0, f.width, f.height);
+    glDisable(GL_BLEND);
+    glBindTextureUnit(0, s.gauss_color.id());
+    glBindTextureUnit(1, s.gauss_depth.id());
+    glBindTextureUnit(2, s.surface_color.id());
+    glBindTextureUnit(3, s.surface_aux.id());
+    glProgramUniform1i(s.composite.id(), glGetUniformLocation(s.composite.id(), "u_aux"), f.aux_outputs ? 1 : 0);
+    glUseProgram(s.composite.id());
+    glBindVertexArray(s.empty_vao.id());
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBindVertexArray(0);
+    glUseProgram(0);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    if (!status) return status.error();
+    return submitted;
+}
+
+void release_gaussian_pass(ecs::Registry& registry) { registry.erase_resource<GaussianPassState>(); }
+
+}  // namespace sffd::render

@@ -1,0 +1,53 @@
+// The render system's 3D Gaussian pass (issue 17): every entity with a GaussianCloud is drawn in the same
+// frame and output target as the surface splats, after them.
+//
+//   reads   GaussianCloud (+ Transform), DeformedGaussians (CPU deformation output), the render system's
+//           camera and targets (its depth: surface splats hide the Gaussians behind them)
+//   writes  GpuGaussianStore (resource, systems/gaussian/gpu_store.h): rest/sh when the cloud's change
+//           stamp moves; deformed (+ deformed_sh, frames) from DeformedGaussians unless the GPU
+//           deformation wrote them (deformed_on_gpu); GaussianPassState (resource: programs, targets)
+//
+// Per cloud: the gaussian GL renderer (systems/gaussian/gl_render.h: projection, front-to-back order,
+// instanced quads) into an RGBA32F accumulation target (premultiplied colour, coverage) whose quads are
+// depth-tested against the surface splats' depth buffer (each quad at its centre's depth; no depth
+// writes); then one full-screen pass composites it over the surface colour: C = G + (1 − A) S (the
+// output target keeps straight colour and coverage, so the stored colour is C / coverage). Clouds are
+// drawn nearest first (front-to-back blending across clouds is exact when they do not overlap in depth).
+#pragma once
+
+#include <cstdint>
+#include <functional>
+
+#include <glm/glm.hpp>
+
+#include "runtime/core/result.h"
+#include "runtime/ecs/registry.h"
+#include "runtime/gfx/gl.h"
+#include "runtime/scene/components.h"
+#include "systems/gaussian/components.h"
+#include "systems/splat_render/splat_pack.h"
+
+namespace sffd::render {
+
+// The render system's frame, as the Gaussian pass sees it.
+struct GaussianPassFrame {
+    Camera camera;
+    glm::dmat4 view{1.0}, projection{1.0};
+    GLuint output_fbo = 0;  // colour attachment 0 (linear RGBA16F, straight colour + coverage), 1 (aux)
+    GLuint color = 0, aux = 0, depth = 0;
+    int width = 1, height = 1;
+    bool aux_outputs = false;  // attachment 1 is written this frame (normal + view depth)
+};
+
+// Bounding sphere of a Gaussian cloud (cloud space): the centres' box grown by 3 × the largest scale.
+BoundingSphere gaussian_bounding_sphere(const GaussianCloud& cloud);
+// Cached per entity (recomputed when the cloud's change stamp moves): for scene_camera's framing.
+BoundingSphere cached_gaussian_bounds(ecs::Registry& registry, ecs::Entity entity);
+
+// Uploads what changed and draws every Gaussian cloud; returns the number of Gaussians submitted.
+Result<std::uint32_t> gaussian_pass(ecs::Registry& registry, const GaussianPassFrame& frame);
+
+// Frees the pass's GL objects (while the context is current).
+void release_gaussian_pass(ecs::Registry& registry);
+
+}  // namespace sffd::render

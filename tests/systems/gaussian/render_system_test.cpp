@@ -1,0 +1,282 @@
+// 3D Gaussians in the render system (issue 17): render_system's image of a Gaussian scene against the
+// Gaussian GL renderer and the CPU reference, compositing with surface splats (a Gaussian behind an
+// opaque splat is hidden; one in front is blended over it exactly as G + (1 - A) S), deformed Gaussians.
+// Headless EGL (llvmpipe here).
+#include <gtest/gtest.h>
+
+#include <cstdio>
+#include <optional>
+#include <random>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include "runtime/gfx/context.h"
+#include "runtime/scene/camera.h"
+#include "runtime/scene/components.h"
+#include "systems/gaussian/gaussian_system.h"
+#include "systems/gaussian/gl_render.h"
+#include "systems/gaussian/gpu_store.h"
+#include "systems/gaussian/gpu_upload.h"
+#include "systems/gaussian/reference_render.h"
+#include "systems/gaussian/sh.h"
+#include "systems/splat_render/image_io.h"
+#include "systems/splat_render/splat_render.h"
+#include "tests/systems/splat_render/test_scenes.h"
+
+namespace {
+
+using namespace sffd;
+using namespace sffd::gaussian;
+
+class GaussianRenderSystem : public testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        auto c = gfx::create_context({.headless = true, .width = 16, .height = 16});
+        if (c) context().emplace(std::move(*c));
+    }
+    static void TearDownTestSuite() { context().reset(); }
+    static std::optional<gfx::GlContext>& context() {
+        static std::optional<gfx::GlContext> c;
+        return c;
+    }
+    void SetUp() override {
+        if (!context()) GTEST_SKIP() << "no headless GL 4.5 context";
+    }
+    void TearDown() override { render::release_render_state(reg); }
+
+    Camera camera() const {
+        Camera c;
+        c.eye = {0.3, 0.4, 4.0}, c.target = {0.0, 0.0, 0.0}, c.up = {0, 1, 0};
+        c.fov_y_degrees = 40.0f, c.near_plane = 0.1f, c.far_plane = 20.0f;
+        return c;
+    }
+    void add_camera() { reg.emplace<Camera>(reg.create(), camera()); }
+
+    render::FrameImage frame(int w, int h, render::Quality q = render::Quality::hq) {
+        render::RenderSettings s;
+        s.width = w, s.height = h, s.quality = q, s.aux_outputs = true;
+        reg.set_resource<render::RenderSettings>(s);
+        render::render_system(reg, FrameContext{});
+        auto img = render::capture_frame(reg);
+        EXPECT_TRUE(img.ok()) << (img.ok() ? "" : img.message());
+        return img.ok() ? std::move(*img) : render::FrameImage{};
+    }
+    ecs::Registry reg;
+};
+
+GaussianCloud random_cloud(std::size_t n, int degree, float extent = 1.0f) {
+    std::mt19937 rng(29);
+    std::uniform_real_distribution<float> u(-1, 1);
+    GaussianCloud g;
+    g.sh_degree = degree;
+    for (std::size_t i = 0; i < n; ++i) {
+        g.positions.emplace_back(extent * u(rng), extent * u(rng), extent * u(rng));
+        g.scales.emplace_back(0.08f + 0.06f * u(rng), 0.03f + 0.02f * u(rng), 0.05f);
+        g.rotations.push_back(glm::normalize(glm::quat(u(rng), u(rng), u(rng), u(rng))));
+        g.opacities.push_back(0.6f + 0.35f * u(rng));
+        for (int k = 0; k < sh_coeffs(degree) * 3; ++k) g.sh.push_back(0.6f * u(rng));
+    }
+    return g;
+}
+
+// One Gaussian of a flat colour (DC only), isotropic scale `sigma`.
+GaussianCloud blob(glm::vec3 at, float sigma, float opacity, glm::vec3 rgb) {
+    GaussianCloud g;
+    g.positions = {at};
+    g.scales = {glm::vec3(sigma)};
+    g.rotations = {glm::quat(1, 0, 0, 0)};
+    g.opacities = {opacity};
+    g.sh = {(rgb.x - 0.5f) / 0.28209479f, (rgb.y - 0.5f) / 0.28209479f, (rgb.z - 0.5f) / 0.28209479f};
+    return g;
+}
+
+glm::vec3 srgb(glm::vec3 linear) {
+    return {render::linear_to_srgb(linear.x), render::linear_to_srgb(linear.y), render::linear_to_srgb(linear.z)};
+}
+
+// The render system's output (straight linear colour + coverage) as a ReferenceImage over a black
+// background: display-referred (sRGB, the 3DGS colours' space) premultiplied colour, transmittance
+// 1 - coverage.
+ReferenceImage as_reference(const render::FrameImage& f) {
+    ReferenceImage r;
+    r.width = f.width, r.height = f.height;
+    for (const glm::vec4& c : f.color) {
+        r.color.push_back(srgb(glm::vec3(c)) * c.w);
+        r.transmittance.push_back(1.0f - c.w);
+    }
+    return r;
+}
+
+std::size_t covered(const ReferenceImage& r) {
+    std::size_t n = 0;
+    for (float t : r.transmittance) n += t < 0.5f;
+    return n;
+}
+
+TEST_F(GaussianRenderSystem, ImageEqualsGaussianRendererAndReference) {
+    add_camera();
+    const GaussianCloud g = random_cloud(3000, 3);
+    const ecs::Entity e = reg.create();
+    reg.emplace<GaussianCloud>(e, g);
+    const int w = 200, h = 150;
+    const ReferenceImage sys = as_reference(frame(w, h));
+
+    auto renderer = create_gl_renderer();
+    ASSERT_TRUE(renderer) << renderer.message();
+    ReferenceOptions o;
+    o.width = w, o.height = h, o.near_plane = camera().near_plane;
+    auto gl = render_gl(*renderer, g, camera(), o);
+    ASSERT_TRUE(gl) << gl.message();
+    const ReferenceImage ref = render_reference(g, camera(), o);
+    const double p_gl = psnr(*gl, sys), p_ref = psnr(ref, sys);
+    std::printf("render system vs gaussian GL renderer: PSNR %.1f dB; vs CPU reference: %.1f dB; covered %zu / %zu / %zu\n",
+                p_gl, p_ref, covered(sys), covered(*gl), covered(ref));
+    EXPECT_GT(p_gl, 50.0);  // same shaders; the output target is RGBA16F (half-float colour)
+    EXPECT_GT(p_ref, 40.0);
+    EXPECT_GT(covered(ref), std::size_t(w * h / 20));
+    EXPECT_NEAR(double(covered(sys)), double(covered(ref)), 0.01 * double(covered(ref)) + 5);
+    const auto& stats = reg.resource<render::RenderStats>();
+    EXPECT_EQ(stats.gaussians, 3000u);
+    ASSERT_TRUE(reg.try_resource<GpuGaussianStore>());
+    EXPECT_EQ(reg.resource<GpuGaussianStore>().clouds.at(e).count, 3000u);
+}
+
+TEST_F(GaussianRenderSystem, TransformMovesTheCloudLikeTheCamera) {
+    // A cloud under a rigid Transform seen from the camera equals the untransformed cloud seen from the
+    // inversely moved camera (view-dependent colour included: the SH are evaluated in the cloud's frame).
+    const GaussianCloud g = random_cloud(1500, 2, 0.8f);
+    Transform t;
+    t.translation = {0.4, -0.2, 0.3};
+    t.rotation = glm::angleAxis(0.7, glm::normalize(glm::dvec3(1, 2, 0.5)));
+    const ecs::Entity e = reg.create();
+    reg.emplace<GaussianCloud>(e, g);
+    reg.emplace<Transform>(e, t);
+    add_camera();
+    const ReferenceImage sys = as_reference(frame(160, 120));
+    const glm::dmat4 inv = glm::inverse(model_matrix(&t, glm::dvec3(0.0)));
+    Camera moved = camera();
+    moved.eye = glm::dvec3(inv * glm::dvec4(moved.eye, 1.0));
+    moved.target = glm::dvec3(inv * glm::dvec4(moved.target, 1.0));
+    moved.up = glm::dmat3(inv) * moved.up;
+    ReferenceOptions o;
+    o.width = 160, o.height = 120, o.near_plane = moved.near_plane;
+    const ReferenceImage ref = render_reference(g, moved, o);
+    const double p = psnr(ref, sys);
+    std::printf("transformed cloud vs reference from the moved camera: PSNR %.1f dB\n", p);
+    EXPECT_GT(p, 40.0);
+    EXPECT_GT(covered(ref), std::size_t(160 * 120 / 20));
+}
+
+TEST_F(GaussianRenderSystem, GaussianBehindOpaqueSplatsIsHiddenInFrontIsBlended) {
+    add_camera();
+    reg.emplace<DirectionalLight>(reg.create(), DirectionalLight{glm::vec3(0, 0, -1), glm::vec3(1.0f), 1.0f});
+    const ecs::Entity sphere = reg.create();
+    reg.emplace<SplatCloud>(sphere, render::test::fibonacci_sphere(20000, 1.0));
+    const int w = 160, h = 120;
+    for (render::Quality q : {render::Quality::hq, render::Quality::preview}) {
+        SCOPED_TRACE(q == render::Quality::hq ? "hq" : "preview");
+        const render::FrameImage surface = frame(w, h, q);
+        // Behind: a bright red Gaussian at the sphere's centre (inside the opaque surface).
+        const ecs::Entity inside = reg.create();
+        reg.emplace<GaussianCloud>(inside, blob({0, 0, 0}, 0.3f, 0.95f, {1, 0, 0}));
+        const render::FrameImage hidden = frame(w, h, q);
+        std::size_t sphere_pixels = 0, differing = 0;
+        for (std::size_t k = 0; k < surface.color.size(); ++k) {
+            if (surface.color[k].w < 1.0f) continue;
+            ++sphere_pixels;
+            differing += glm::length(hidden.color[k] - surface.color[k]) > 1e-6f;
+        }
+        EXPECT_GT(sphere_pixels, std::size_t(w * h / 10));
+        EXPECT_EQ(differing, 0u) << "a Gaussian inside the opaque sphere shows through";
+        reg.destroy(inside);
+
+        // In front: the Gaussian alone gives (G, A); over the surface S the frame must be G + (1 - A) S,
+        // blended in display space (sRGB, the space of 3DGS colours).
+        const ecs::Entity front = reg.create();
+        reg.emplace<GaussianCloud>(front, blob({0, 0, 1.6f}, 0.15f, 0.8f, {1, 0, 0}));
+        const render::FrameImage both = frame(w, h, q);
+        reg.remove<SplatCloud>(sphere);
+        const render::FrameImage alone = frame(w, h, q);
+        reg.emplace<SplatCloud>(sphere, render::test::fibonacci_sphere(20000, 1.0));
+        reg.destroy(front);
+        std::size_t blended = 0;
+        float worst = 0.0f;
+        for (std::size_t k = 0; k < surface.color.size(); ++k) {
+            const float a = alone.color[k].w;
+            if (surface.color[k].w < 1.0f || a < 0.05f) continue;
+            ++blended;
+            const glm::vec3 expected = srgb(glm::vec3(alone.color[k])) * a + (1.0f - a) * srgb(glm::vec3(surface.color[k]));
+            worst = std::max(worst, glm::length(srgb(glm::vec3(both.color[k])) - expected));
+            EXPECT_NEAR(both.color[k].w, 1.0f, 1e-3f);
+        }
+        std::printf("Gaussian over the sphere: %zu blended pixels, worst colour error %.2e\n", blended, double(worst));
+        EXPECT_GT(blended, 50u);
+        EXPECT_LT(worst, 4e-3f);  // RGBA16F targets
+    }
+}
+
+TEST_F(GaussianRenderSystem, DeformedCloudIsDrawnAndFollowsTheStore) {
+    add_camera();
+    const GaussianCloud g = random_cloud(2000, 1);
+    const ecs::Entity e = reg.create();
+    reg.emplace<GaussianCloud>(e, g);
+    const ReferenceImage rest = as_reference(frame(128, 96));
+    // CPU deformation output present: the render system uploads it into the store's `deformed`.
+    DeformedGaussians d;
+    d.cloud = g;
+    for (auto& p : d.cloud.positions) p.x += 0.5f;
+    d.cloud.opacities.clear();
+    d.version = 1;
+    reg.emplace<Deformers>(e);
+    reg.emplace<DeformedGaussians>(e, d);
+    const ReferenceImage moved = as_reference(frame(128, 96));
+    const auto& gpu = reg.resource<GpuGaussianStore>().clouds.at(e);
+    EXPECT_TRUE(gpu.has_deformed);
+    EXPECT_FALSE(gpu.deformed_on_gpu);
+    GaussianCloud expected = d.cloud;
+    expected.opacities = g.opacities;
+    ReferenceOptions o;
+    o.width = 128, o.height = 96, o.near_plane = camera().near_plane;
+    const double p_moved = psnr(render_reference(expected, camera(), o), moved);
+    const double p_rest = psnr(rest, moved);
+    std::printf("deformed: PSNR %.1f dB vs the reference of the deformed cloud, %.1f dB vs rest\n", p_moved, p_rest);
+    EXPECT_GT(p_moved, 40.0);
+    EXPECT_LT(p_rest, 30.0);
+    // The deformers go away: back to the authored cloud.
+    reg.remove<Deformers>(e);
+    const ReferenceImage back = as_reference(frame(128, 96));
+    EXPECT_GT(psnr(rest, back), 60.0);
+}
+
+TEST_F(GaussianRenderSystem, DrawsWhatTheGpuDeformationWroteIntoTheStore) {
+    // The GpuGaussianStore contract with a GPU deformation: when it has written `deformed` and says so
+    // (deformed_on_gpu), the render system draws that buffer and never overwrites it with a CPU copy.
+    add_camera();
+    const GaussianCloud g = random_cloud(1500, 0);
+    const ecs::Entity e = reg.create();
+    reg.emplace<GaussianCloud>(e, g);
+    reg.emplace<Deformers>(e);
+    DeformedGaussians stale;  // a CPU result that must not be drawn
+    stale.cloud = g;
+    for (auto& p : stale.cloud.positions) p.y -= 0.7f;
+    stale.version = 1;
+    reg.emplace<DeformedGaussians>(e, stale);
+    (void)frame(128, 96);  // uploads rest (and the CPU result)
+    GaussianCloud moved = g;
+    for (auto& p : moved.positions) p.x += 0.4f;
+    GpuGaussians& gpu = reg.resource<GpuGaussianStore>().clouds.at(e);
+    const std::vector<gpu::GpuGaussian> packed = pack_gaussians(moved, g.opacities);
+    glNamedBufferSubData(gpu.deformed.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuGaussian)), packed.data());
+    gpu.has_deformed = true, gpu.deformed_on_gpu = true, gpu.has_deformed_sh = false, gpu.has_frames = false;
+    ++gpu.deformed_version;
+    reg.patch<DeformedGaussians>(e).version = 2;  // even a newer CPU result stays out
+    const ReferenceImage img = as_reference(frame(128, 96));
+    ReferenceOptions o;
+    o.width = 128, o.height = 96, o.near_plane = camera().near_plane;
+    const double p = psnr(render_reference(moved, camera(), o), img);
+    std::printf("GPU-written deformed buffer drawn: PSNR %.1f dB vs the reference of that cloud\n", p);
+    EXPECT_GT(p, 40.0);
+    EXPECT_TRUE(reg.resource<GpuGaussianStore>().clouds.at(e).deformed_on_gpu);
+}
+
+}  // namespace
