@@ -36,32 +36,6 @@ void ensure(gfx::Buffer& buffer, const char* label, std::size_t bytes) {
 
 }  // namespace
 
-Status upload_rest(GpuGaussians& dst, const GaussianCloud& g, std::uint64_t version) {
-    const std::size_t n = g.size();
-    if (g.scales.size() != n || g.rotations.size() != n || g.opacities.size() != n ||
-        g.sh.size() != n * std::size_t(sh_coeffs(g.sh_degree)) * 3)
-        return make_error("gaussian::upload_rest(): cloud arrays differ in size");
-    if (n > 0xffffffffull) return make_error("gaussian::upload_rest(): more than 2^32 - 1 Gaussians");
-    std::vector<gpu::GpuGaussian> rest(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const glm::vec3 p = g.positions[i];
-        const glm::quat q = g.rotations[i];
-        rest[i] = {{p.x, p.y, p.z, g.opacities[i]}, {q.w, q.x, q.y, q.z}, {g.scales[i].x, g.scales[i].y, g.scales[i].z, 0.0f}};
-    }
-    // New storage each time: a buffer the previous frame may still read is orphaned, not waited on.
-    dst.rest = gfx::Buffer::create("gaussians.rest");
-    glNamedBufferData(dst.rest.id(), GLsizeiptr(std::max<std::size_t>(n, 1) * sizeof(gpu::GpuGaussian)), nullptr, GL_STATIC_DRAW);
-    if (n) glNamedBufferSubData(dst.rest.id(), 0, GLsizeiptr(n * sizeof(gpu::GpuGaussian)), rest.data());
-    dst.sh = gfx::Buffer::create("gaussians.sh");
-    glNamedBufferData(dst.sh.id(), GLsizeiptr(std::max<std::size_t>(g.sh.size(), 4) * sizeof(float)), nullptr, GL_STATIC_DRAW);
-    if (!g.sh.empty()) glNamedBufferSubData(dst.sh.id(), 0, GLsizeiptr(g.sh.size() * sizeof(float)), g.sh.data());
-    dst.count = std::uint32_t(n);
-    dst.sh_degree = g.sh_degree;
-    dst.rest_version = version;
-    dst.has_deformed = dst.has_deformed_sh = dst.has_frames = dst.deformed_on_gpu = false;
-    return {};
-}
-
 struct GpuGaussianDeformer::Impl {
     gfx::Program program;                                         // generic (any divisions, B-spline)
     std::unordered_map<std::uint64_t, gfx::Program> specialised;  // Bernstein, per (l, m, n, kernel)

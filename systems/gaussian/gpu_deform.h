@@ -22,6 +22,7 @@
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gpu_store.h"
+#include "systems/gaussian/gpu_upload.h"
 
 namespace sffd::gaussian {
 
@@ -32,10 +33,7 @@ struct GpuDeformStats {
     std::size_t not_finite = 0;  // results that were not finite: written with opacity 0 and scale 0
 };
 
-// Uploads the authored cloud into `dst.rest` (GpuGaussian: centre, linear opacity, quaternion w x y z,
-// linear scale) and `dst.sh`, and records `version` as dst.rest_version. Invalidates `deformed`,
-// `deformed_sh` and `frames` (has_* false). Refuses clouds whose arrays differ in size.
-Status upload_rest(GpuGaussians& dst, const GaussianCloud& cloud, std::uint64_t version);
+// upload_rest() (the authored cloud into the store's rest/sh) is in gpu_upload.h.
 
 class GpuGaussianDeformer {
 public:

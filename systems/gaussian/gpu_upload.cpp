@@ -29,14 +29,21 @@ std::vector<gpu::GpuGaussian> pack_gaussians(const GaussianCloud& g, const std::
     return out;
 }
 
-void upload_rest(GpuGaussians& gpu, const GaussianCloud& cloud, std::uint64_t version) {
+Status upload_rest(GpuGaussians& gpu, const GaussianCloud& cloud, std::uint64_t version) {
+    const std::size_t n = cloud.size();
+    if (cloud.scales.size() != n || cloud.rotations.size() != n || cloud.opacities.size() != n ||
+        cloud.sh.size() != n * std::size_t(sh_coeffs(cloud.sh_degree)) * 3)
+        return make_error("gaussian::upload_rest(): cloud arrays differ in size");
+    if (n > 0xffffffffull) return make_error("gaussian::upload_rest(): more than 2^32 - 1 Gaussians");
     const std::vector<gpu::GpuGaussian> packed = pack_gaussians(cloud, cloud.opacities);
     fill(gpu.rest, "gaussian.rest", packed.data(), packed.size() * sizeof(gpu::GpuGaussian));
     fill(gpu.sh, "gaussian.rest_sh", cloud.sh.data(), cloud.sh.size() * sizeof(float));
-    if (gpu.count != std::uint32_t(cloud.size()) || gpu.sh_degree != cloud.sh_degree) drop_deformed(gpu);
-    gpu.count = std::uint32_t(cloud.size());
+    drop_deformed(gpu);
+    gpu.deformed_on_gpu = false;
+    gpu.count = std::uint32_t(n);
     gpu.sh_degree = cloud.sh_degree;
     gpu.rest_version = version;
+    return {};
 }
 
 void upload_cpu_deformed(GpuGaussians& gpu, const DeformedGaussians& d, const GaussianCloud& authored) {

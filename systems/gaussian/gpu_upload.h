@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "runtime/core/result.h"
 #include "shaders/gaussian/gaussian_layout.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gpu_store.h"
@@ -18,9 +19,11 @@ namespace sffd::gaussian {
 // cloud's geometry with `opacities` (a DeformedGaussians carries none: pass the authored cloud's).
 std::vector<gpu::GpuGaussian> pack_gaussians(const GaussianCloud& geometry, const std::vector<float>& opacities);
 
-// Uploads `cloud` into rest + sh and records `version` (its change stamp) in rest_version. A change of
-// size drops `deformed` (has_deformed = false) until it is written again.
-void upload_rest(GpuGaussians& gpu, const GaussianCloud& cloud, std::uint64_t version);
+// Uploads `cloud` into rest + sh and records `version` (its change stamp, registry.version<GaussianCloud>,
+// the same for every caller) in rest_version. Invalidates `deformed`, `deformed_sh` and `frames` (has_*
+// and deformed_on_gpu false: nothing deformed from an older rest is drawn) until they are written again.
+// Refuses clouds whose arrays differ in size or that hold 2^32 Gaussians or more.
+Status upload_rest(GpuGaussians& gpu, const GaussianCloud& cloud, std::uint64_t version);
 
 // Uploads the CPU deformation's output into `deformed`; its SH into `deformed_sh` when they differ from
 // the authored ones (ShMode::rotate_coefficients), its sh_frames into `frames` (ShMode::rotate_view).

@@ -115,8 +115,11 @@ void sync_store(ecs::Registry& reg, GaussianPassState& s, gaussian::GpuGaussianS
         gaussian::GpuGaussians& gpu = store.clouds[e];
         CloudState& cs = s.clouds[e];
         if (!gpu.rest || gpu.rest_version != version) {
-            gaussian::upload_rest(gpu, cloud, version);
             cs.cpu_deformed_uploaded = false;
+            if (!gaussian::upload_rest(gpu, cloud, version)) {  // inconsistent arrays: nothing to draw
+                gpu.count = 0;
+                return;
+            }
         }
         if (gpu.deformed_on_gpu) return;  // the GPU deformation owns `deformed`
         const DeformedGaussians* d = reg.try_get<DeformedGaussians>(e);

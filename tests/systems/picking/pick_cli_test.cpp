@@ -234,7 +234,7 @@ TEST(PickCli, GaussianFileHitsTheGaussianOnThePixelRay) {
             const auto j = nlohmann::json::parse(r.out);
             ASSERT_TRUE(j["hit"].get<bool>()) << r.out;
             EXPECT_EQ(j["kind"], "gaussian");
-            EXPECT_EQ(j["name"], f.path.filename().string());
+            EXPECT_EQ(j["name"], f.path.stem().string());
             const Ray ray = ray_through(f.view, glm::dvec2(pixel) + 0.5);
             double t = 0.0, t_other = 0.0;
             const std::uint32_t expect = expected_pick(f.cloud, ray, first, t);
