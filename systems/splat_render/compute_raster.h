@@ -55,10 +55,13 @@ struct ComputeRaster {
 
 // RasterPath::automatic takes the compute rasteriser when the drawn splats' mean on-screen diameter
 // (splat_footprint_px, weighted by splat count) is at most this many pixels. Software rasterizer (llvmpipe,
-// measured with bench_raster_path, RESULTS.md): compute 2.4x faster at 1.7 px (1M-splat sphere), even at
-// 3.3 px (250k), 1.6x slower at 6.7 px (59,650). Hardware GPU: the hybrid bound itself (not measured: no
-// GPU was at hand; Schuetz et al. report their compute path 2-3x faster than GL points for small splats).
-inline constexpr double compute_raster_software_max_footprint = 2.5;
+// bench_raster_path on a quiet machine, RESULTS.md): compute 1.08x faster at 1.7 px (1M-splat sphere: 147
+// vs 159 ms), 1.13x slower at 2.1 px (600k: bench_render's HQ row, 124 vs 110 ms), 1.85x slower at 3.3 px
+// (250k) and 2x at 6.7 px (59,650). (Runs on the machine loaded by other builds had put the break-even near
+// 3 px: llvmpipe's raster threads suffer more from the load.) Hardware GPU: the hybrid bound itself (not
+// measured: no GPU was at hand; Schuetz et al. report their compute path 2-3x faster than GL points for
+// small splats).
+inline constexpr double compute_raster_software_max_footprint = 1.8;
 inline constexpr double compute_raster_hardware_max_footprint = 8.0;
 
 // One cloud's inputs for a frame (the cull pass's outputs; buffers owned by the renderer).
