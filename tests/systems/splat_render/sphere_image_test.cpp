@@ -201,7 +201,7 @@ TEST_F(SphereImage, DeferredShadingKeepsEachCloudsMaterial) {
                 const glm::dvec3 nrm = glm::normalize(cam.eye + t * d - centres[k]);
                 const glm::dvec3 hv = glm::normalize(l - glm::normalize(d));
                 const double ndl = std::max(glm::dot(nrm, l), 0.0);
-                const double spec = ndl > 0 ? std::pow(std::max(glm::dot(nrm, hv), 0.0), double(shininess[k])) * specular[k] : 0.0;
+                const double spec = ndl > 0 ? std::pow(std::max(glm::dot(nrm, hv), 0.0), double(shininess[k])) * double(specular[k]) : 0.0;
                 const double analytic = albedo * 0.1 + albedo * ndl + spec;
                 const double got = double(hq.color[hq.index(x, y)].y);
                 sum_err[k] += std::abs(got - analytic);
