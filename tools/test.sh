@@ -21,8 +21,9 @@ tools/bootstrap.sh
 jobs=$(nproc 2>/dev/null || echo 2)
 cmake --preset "$preset" -DCMAKE_CXX_COMPILER_LAUNCHER=ccache
 cmake --build --preset "$preset" -j"$jobs"
-# Real content (the face scan) is fetched and converted by the freshly built binary.
-if [[ -x tools/fetch_content.sh ]]; then SPLATFFD="$root/build/$preset/tools/splatffd" tools/fetch_content.sh; fi
+# Real content (the face scan, and the dragon scan for the converted-content tests) is fetched and
+# converted by the freshly built binary; without a registry the tests that need it skip and say so.
+if [[ -x tools/fetch_content.sh ]]; then SPLATFFD="$root/build/$preset/tools/splatffd" tools/fetch_content.sh --dragon; fi
 # The 3DGS interop tests (label slow) compare with an independent tool, npm @playcanvas/splat-transform;
 # without it (no npm registry) they skip and say so.
 if [[ -x tools/fetch_splat_transform.sh ]]; then
