@@ -19,6 +19,7 @@
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gl_render.h"
+#include "tests/test_util/headless_gl.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/splat_render/camera_math.h"
 
@@ -36,18 +37,14 @@ fs::path source_of(const std::string& name) {
     return assets::face_cache_path().parent_path() / "dragon.ply";
 }
 
-class GaussianGlContent : public testing::TestWithParam<const char*> {
+class GaussianGlContent : public sffd::test::HeadlessGlTestWithParam<const char*> {
 protected:
     void SetUp() override {
-        auto c = gfx::create_context({.headless = true, .width = 16, .height = 16});
-        if (!c) GTEST_SKIP() << c.message();
-        ctx.emplace(std::move(*c));
-        auto r = create_gl_renderer();
-        ASSERT_TRUE(r) << r.message();
-        renderer.emplace(std::move(*r));
+        HeadlessGlTest::SetUp();
+        if (IsSkipped()) return;
+        sffd::test::emplace_made(renderer, create_gl_renderer());
     }
     void TearDown() override { renderer.reset(); }
-    std::optional<gfx::GlContext> ctx;
     std::optional<GlRenderer> renderer;
 };
 

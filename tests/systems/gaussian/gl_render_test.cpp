@@ -20,6 +20,7 @@
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gl_render.h"
+#include "tests/test_util/headless_gl.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"
 
@@ -28,18 +29,14 @@ namespace {
 using namespace sffd;
 using namespace sffd::gaussian;
 
-class GaussianGl : public testing::Test {
+class GaussianGl : public sffd::test::HeadlessGlTest {
 protected:
     void SetUp() override {
-        auto c = gfx::create_context({.headless = true, .width = 16, .height = 16});
-        if (!c) GTEST_SKIP() << c.message();
-        ctx.emplace(std::move(*c));
-        auto r = create_gl_renderer();
-        ASSERT_TRUE(r) << r.message();
-        renderer.emplace(std::move(*r));
+        HeadlessGlTest::SetUp();
+        if (IsSkipped()) return;
+        sffd::test::emplace_made(renderer, create_gl_renderer());
     }
     void TearDown() override { renderer.reset(); }
-    std::optional<gfx::GlContext> ctx;
     std::optional<GlRenderer> renderer;
 };
 
