@@ -41,18 +41,7 @@ using bench::sphere_gaussians;
 
 void BM_GaussianDeform(benchmark::State& state) {
     const GaussianCloud g = sphere_gaussians(std::size_t(state.range(0)), int(state.range(1)));
-    const Lattice l = bench::twisted_gaussian_lattice();
-    GaussianCloud out;
-    gaussian::DeformOptions options;
-    options.sh = state.range(2) ? gaussian::ShMode::rotate_view : gaussian::ShMode::rotate_coefficients;
-    const double cpu0 = process_cpu_s();
-    for (auto _ : state) {
-        auto s = gaussian::deform(l, g, out, options);
-        if (!s) state.SkipWithError(s.message().c_str());
-        benchmark::DoNotOptimize(out.positions.data());
-    }
-    state.SetItemsProcessed(int64_t(state.iterations()) * state.range(0));
-    state.counters["process_cpu_ms_per_run"] = 1e3 * (process_cpu_s() - cpu0) / double(state.iterations());
+    bench::run_cpu_deform(state, g, state.range(2) ? gaussian::ShMode::rotate_view : gaussian::ShMode::rotate_coefficients);
 }
 // Args: Gaussians, SH degree, SH mode (0 rotate the coefficients, 1 store the per-splat view rotation).
 BENCHMARK(BM_GaussianDeform)

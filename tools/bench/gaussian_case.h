@@ -13,6 +13,7 @@
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_deform.h"
 #include "tools/bench/bench_util.h"
 #include "tools/bench/paper_case.h"
 
@@ -43,6 +44,23 @@ inline Lattice twisted_gaussian_lattice() {
                                   {10, 10, 10});
     ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.6 / 1.1, glm::dvec3(0.0));
     return l;
+}
+
+// The CPU deformation benchmark loop (gaussian::deform, TBB) of `g` through the Gaussian lattice in SH
+// mode `sh`: items are Gaussians, process_cpu_ms_per_run the CPU time of all threads per run.
+inline void run_cpu_deform(benchmark::State& state, const GaussianCloud& g, gaussian::ShMode sh) {
+    const Lattice l = twisted_gaussian_lattice();
+    GaussianCloud out;
+    gaussian::DeformOptions options;
+    options.sh = sh;
+    const double cpu0 = process_cpu_s();
+    for (auto _ : state) {
+        auto s = gaussian::deform(l, g, out, options);
+        if (!s) state.SkipWithError(s.message().c_str());
+        benchmark::DoNotOptimize(out.positions.data());
+    }
+    state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(g.size()));
+    state.counters["process_cpu_ms_per_run"] = 1e3 * (process_cpu_s() - cpu0) / double(state.iterations());
 }
 
 }  // namespace sffd::bench

@@ -37,19 +37,7 @@ gaussian::ShMode mode(std::int64_t m) { return m ? gaussian::ShMode::rotate_view
 
 // Args: Gaussians, SH mode (0 rotate the coefficients, 1 store the view rotation).
 void BM_GaussianDeformCpu(benchmark::State& state) {
-    const GaussianCloud& g = cloud(std::size_t(state.range(0)));
-    const Lattice l = bench::twisted_gaussian_lattice();
-    GaussianCloud out;
-    gaussian::DeformOptions options;
-    options.sh = mode(state.range(1));
-    const double cpu0 = process_cpu_s();
-    for (auto _ : state) {
-        auto s = gaussian::deform(l, g, out, options);
-        if (!s) state.SkipWithError(s.message().c_str());
-        benchmark::DoNotOptimize(out.positions.data());
-    }
-    state.SetItemsProcessed(int64_t(state.iterations()) * state.range(0));
-    state.counters["process_cpu_ms_per_run"] = 1e3 * (process_cpu_s() - cpu0) / double(state.iterations());
+    bench::run_cpu_deform(state, cloud(std::size_t(state.range(0))), mode(state.range(1)));
 }
 BENCHMARK(BM_GaussianDeformCpu)->Args({1000000, 0})->Args({1000000, 1})->Args({6000000, 0})->Args({6000000, 1})
     ->Unit(benchmark::kMillisecond)->UseRealTime();

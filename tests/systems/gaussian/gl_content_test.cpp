@@ -19,7 +19,7 @@
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gl_render.h"
-#include "tests/test_util/headless_gl.h"
+#include "tests/systems/gaussian/gl_renderer_fixture.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/splat_render/camera_math.h"
 
@@ -37,16 +37,7 @@ fs::path source_of(const std::string& name) {
     return assets::face_cache_path().parent_path() / "dragon.ply";
 }
 
-class GaussianGlContent : public sffd::test::HeadlessGlTestWithParam<const char*> {
-protected:
-    void SetUp() override {
-        HeadlessGlTest::SetUp();
-        if (IsSkipped()) return;
-        sffd::test::emplace_made(renderer, create_gl_renderer());
-    }
-    void TearDown() override { renderer.reset(); }
-    std::optional<GlRenderer> renderer;
-};
+class GaussianGlContent : public sffd::test::GaussianGlRendererTest<sffd::test::HeadlessGlTestWithParam<const char*>> {};
 
 void compare(GlRenderer& r, const GaussianCloud& g, const Camera& cam, const ReferenceOptions& o, const std::string& what) {
     auto gl = render_gl(r, g, cam, o);

@@ -20,7 +20,7 @@
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gl_render.h"
-#include "tests/test_util/headless_gl.h"
+#include "tests/systems/gaussian/gl_renderer_fixture.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"
 
@@ -29,16 +29,7 @@ namespace {
 using namespace sffd;
 using namespace sffd::gaussian;
 
-class GaussianGl : public sffd::test::HeadlessGlTest {
-protected:
-    void SetUp() override {
-        HeadlessGlTest::SetUp();
-        if (IsSkipped()) return;
-        sffd::test::emplace_made(renderer, create_gl_renderer());
-    }
-    void TearDown() override { renderer.reset(); }
-    std::optional<GlRenderer> renderer;
-};
+class GaussianGl : public sffd::test::GaussianGlRendererTest<sffd::test::HeadlessGlTest> {};
 
 Camera camera_at(glm::dvec3 eye, glm::dvec3 target = glm::dvec3(0.0), float fov = 40.0f) {
     Camera c;
