@@ -21,6 +21,7 @@
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/splat_render/image_io.h"
+#include "tests/systems/gaussian/test_math.h"
 
 namespace {
 
@@ -177,12 +178,7 @@ TEST(GaussianDeformCommand, StreamsThreeChunksIdenticallyAndKeepsOtherData) {
     EXPECT_EQ(chunk.columns[std::size_t(chunk.find("fx"))].values[0], 1234.5);
 }
 
-double max_abs(const glm::dmat3& a) {
-    double m = 0.0;
-    for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r) m = std::max(m, std::abs(a[c][r]));
-    return m;
-}
+using sffd::test::max_abs;
 
 TEST(GaussianDeformCommand, GpuBackendMatchesTheLibrary) {
     // --backend gpu: the GPU deformation (coefficients rotated on the GPU) on a headless context, chunk by

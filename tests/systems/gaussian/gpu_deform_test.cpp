@@ -28,6 +28,7 @@
 #include "systems/gaussian/gpu_deform.h"
 #include "systems/gaussian/gpu_store.h"
 #include "tests/test_util/headless_gl.h"
+#include "tests/systems/gaussian/test_math.h"
 
 namespace {
 
@@ -92,12 +93,8 @@ Lattice stretched(LatticeBasis basis, glm::ivec3 div) {
     return l;
 }
 
-double max_abs(const glm::dmat3& a) {
-    double m = 0.0;
-    for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r) m = std::max(m, std::abs(a[c][r]));
-    return m;
-}
+using sffd::test::max_abs;
+
 glm::dmat3 sigma(const GaussianCloud& g, std::size_t i) { return covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i])); }
 
 bool all_finite(const GaussianCloud& g) {
