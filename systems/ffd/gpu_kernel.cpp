@@ -10,7 +10,8 @@
 
 namespace sffd::ffd::detail {
 
-Result<DeformPrograms> DeformPrograms::create(std::string shader, std::string program_label, std::string prefix) {
+Result<DeformPrograms> DeformPrograms::create(std::string shader, std::string program_label,
+                                              std::string prefix) {
     DeformPrograms p;
     auto program = gfx::load_compute_program(shader, program_label);
     if (!program) return program.error();
@@ -24,8 +25,9 @@ Result<DeformPrograms> DeformPrograms::create(std::string shader, std::string pr
     return p;
 }
 
-Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp,
-                                                   const glm::dvec3& cloud_origin, std::uint32_t count) {
+Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::uint64_t key,
+                                                   std::uint64_t stamp, const glm::dvec3& cloud_origin,
+                                                   std::uint32_t count) {
     // Same preparation as the CPU kernels (float displacements, M⁻¹, origin offset in double).
     const Prepared P = prepare(lattice, cloud_origin);
     const FfdBlock block = make_ffd_block(lattice, P, count);
@@ -42,16 +44,19 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
     // rasterizer. B-spline reads 4 neighbours per axis whatever the size: generic program.
     const bool bernstein = lattice.basis == LatticeBasis::bernstein;
     const bool fits_shared = lattice.size() * 3 * sizeof(float) <= std::size_t(max_shared);
-    const bool cp_shared = bernstein && fits_shared &&
-                           (kernel == GpuBernsteinKernel::shared || (kernel == GpuBernsteinKernel::automatic && !software));
+    const bool cp_shared =
+        bernstein && fits_shared &&
+        (kernel == GpuBernsteinKernel::shared || (kernel == GpuBernsteinKernel::automatic && !software));
     const bool cp_ubo = bernstein && !cp_shared && lattice.size() * 16 <= std::size_t(max_ubo);
     Bound b;
     b.local_size = cp_shared ? 256 : 64;
     b.program = program.id();
     if (bernstein) {
         last_kernel = cp_shared ? GpuBernsteinKernel::shared : GpuBernsteinKernel::direct;
-        const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) | (std::uint64_t(lattice.divisions.y) << 12) |
-                                    std::uint64_t(lattice.divisions.z) | (std::uint64_t(cp_shared) << 44) | (std::uint64_t(cp_ubo) << 45);
+        const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) |
+                                    (std::uint64_t(lattice.divisions.y) << 12) |
+                                    std::uint64_t(lattice.divisions.z) | (std::uint64_t(cp_shared) << 44) |
+                                    (std::uint64_t(cp_ubo) << 45);
         auto sp = specialised.find(shape);
         if (sp == specialised.end()) {
             const int maxb = std::max({lattice.divisions.x, lattice.divisions.y, lattice.divisions.z}) + 1;
@@ -64,7 +69,8 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
                 defines.push_back({"FFD_LOCAL_SIZE", std::to_string(b.local_size)});
             }
             if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});
-            auto prog = gfx::load_compute_program(shader, program_label + (cp_shared ? ".shared" : ".specialised"), defines);
+            auto prog = gfx::load_compute_program(
+                shader, program_label + (cp_shared ? ".shared" : ".specialised"), defines);
             if (!prog) return prog.error();
             sp = specialised.emplace(shape, std::move(*prog)).first;
         }
@@ -73,13 +79,16 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
     glUseProgram(b.program);
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, cp.buffer.id());
-    if (cp_ubo) glBindBufferRange(GL_UNIFORM_BUFFER, SFFD_UBO_FFD_CONTROL, cp.buffer.id(), 0, GLsizeiptr(lattice.size() * 16));
+    if (cp_ubo)
+        glBindBufferRange(GL_UNIFORM_BUFFER, SFFD_UBO_FFD_CONTROL, cp.buffer.id(), 0,
+                          GLsizeiptr(lattice.size() * 16));
     return b;
 }
 
 void DeformPrograms::retain_keys(const std::vector<std::uint64_t>& live) {
     for (auto it = controls.begin(); it != controls.end();)
-        it = std::find(live.begin(), live.end(), it->first) == live.end() ? controls.erase(it) : std::next(it);
+        it =
+            std::find(live.begin(), live.end(), it->first) == live.end() ? controls.erase(it) : std::next(it);
 }
 
 StatsReadbacks::~StatsReadbacks() {
@@ -95,7 +104,8 @@ bool StatsReadbacks::queue(GLuint stats, std::size_t words, std::uint64_t tag, c
         r.buffer = gfx::Buffer::create(label);
         const GLbitfield flags = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
         glNamedBufferStorage(r.buffer.id(), GLsizeiptr(bytes), nullptr, flags);
-        r.mapped = static_cast<const std::uint32_t*>(glMapNamedBufferRange(r.buffer.id(), 0, GLsizeiptr(bytes), flags));
+        r.mapped = static_cast<const std::uint32_t*>(
+            glMapNamedBufferRange(r.buffer.id(), 0, GLsizeiptr(bytes), flags));
         if (!r.mapped) return false;  // the GL error callback has reported why; these statistics are lost
         m_slots.push_back(std::move(r));
         slot = m_slots.end() - 1;
@@ -116,7 +126,8 @@ bool StatsReadbacks::signalled(Slot& r) {
 }
 
 std::size_t StatsReadbacks::pending() const {
-    return std::size_t(std::count_if(m_slots.begin(), m_slots.end(), [](const Slot& r) { return r.fence != nullptr; }));
+    return std::size_t(
+        std::count_if(m_slots.begin(), m_slots.end(), [](const Slot& r) { return r.fence != nullptr; }));
 }
 
 }  // namespace sffd::ffd::detail

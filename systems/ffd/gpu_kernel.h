@@ -6,11 +6,10 @@
 #pragma once
 
 #include <cstdint>
+#include <glm/vec3.hpp>
 #include <string>
 #include <unordered_map>
 #include <vector>
-
-#include <glm/vec3.hpp>
 
 #include "runtime/core/result.h"
 #include "runtime/gfx/gl.h"
@@ -36,8 +35,8 @@ struct DeformPrograms {
     };
     std::unordered_map<std::uint64_t, Controls> controls;  // per key (lattice entity)
     std::uint64_t uploads = 0;
-    GLint max_ubo = 0;     // GL_MAX_UNIFORM_BLOCK_SIZE, queried once (a glGet can stall a threaded driver)
-    GLint max_shared = 0;  // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, same
+    GLint max_ubo = 0;      // GL_MAX_UNIFORM_BLOCK_SIZE, queried once (a glGet can stall a threaded driver)
+    GLint max_shared = 0;   // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, same
     bool software = false;  // gfx::software_rasterizer(), for GpuBernsteinKernel::automatic
     GpuBernsteinKernel kernel = GpuBernsteinKernel::automatic, last_kernel = GpuBernsteinKernel::automatic;
 
@@ -51,8 +50,8 @@ struct DeformPrograms {
     // Fills the block UBO for `count` points, uploads the control points of `key` when `stamp` moved (0:
     // always), picks the program and binds it with the lattice bindings (SFFD_UBO_FFD,
     // SFFD_SSBO_CONTROL_POINTS, SFFD_UBO_FFD_CONTROL). The lattice must be valid.
-    Result<Bound> bind(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp, const glm::dvec3& cloud_origin,
-                       std::uint32_t count);
+    Result<Bound> bind(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp,
+                       const glm::dvec3& cloud_origin, std::uint32_t count);
     void retain_keys(const std::vector<std::uint64_t>& live);
 };
 

@@ -23,7 +23,8 @@ namespace sffd::bench {
 inline GaussianCloud sphere_gaussians(std::size_t count, int degree) {
     GaussianCloud g;
     g.sh_degree = degree;
-    g.positions.reserve(count), g.scales.reserve(count), g.rotations.reserve(count), g.opacities.reserve(count);
+    g.positions.reserve(count), g.scales.reserve(count), g.rotations.reserve(count),
+        g.opacities.reserve(count);
     g.sh.reserve(count * std::size_t(sh_coeffs(degree)) * 3);
     std::mt19937 rng(1);
     std::uniform_real_distribution<float> u(-0.5f, 0.5f);
@@ -40,7 +41,8 @@ inline GaussianCloud sphere_gaussians(std::size_t count, int degree) {
 
 // The Gaussian benches' lattice (box [-1.1, 1.1]³, divisions 10, Bernstein, graded twist about +y).
 inline Lattice twisted_gaussian_lattice() {
-    Lattice l = ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+    Lattice l = ffd::make_lattice({-1.1, -1.1, -1.1},
+                                  {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
                                   {10, 10, 10});
     ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.6 / 1.1, glm::dvec3(0.0));
     return l;

@@ -3,7 +3,6 @@
 
 #include <algorithm>
 #include <cmath>
-
 #include <glm/glm.hpp>
 
 namespace sffd::test {
