@@ -40,6 +40,20 @@ void grow(const Buffer& b, std::uint64_t need) {
 
 void bind(GLuint binding, GLuint buffer) { glBindBufferBase(GL_SHADER_STORAGE_BUFFER, binding, buffer); }
 
+// One round of both algorithms: `per_block` over the blocks (a histogram or a sum each), the one-group
+// scan of those entries, `apply` over the blocks (scatter, or add the block's offset). Leaves `apply`
+// bound; the caller places the barrier its next reader needs.
+Status block_scan_round(const RadixSorter& s, GLuint per_block, GLuint apply, std::uint32_t blocks, std::uint32_t max_x) {
+    glUseProgram(per_block);
+    if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st) return st;
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    glUseProgram(s.scan.id());
+    glDispatchCompute(1, 1, 1);
+    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    glUseProgram(apply);
+    return dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x);
+}
+
 }  // namespace
 
 Status radix_sort(RadixSorter& s, GLuint keys, GLuint values, std::uint32_t count, int key_bits) {
@@ -73,14 +87,7 @@ Status radix_sort(RadixSorter& s, GLuint keys, GLuint values, std::uint32_t coun
         bind(SFFD_RADIX_SSBO_VALUES_OUT, values_out);
         glProgramUniform1ui(s.count.id(), SFFD_RADIX_LOC_SHIFT, shift);
         glProgramUniform1ui(s.scatter.id(), SFFD_RADIX_LOC_SHIFT, shift);
-        glUseProgram(s.count.id());
-        if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st) return st;
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        glUseProgram(s.scan.id());
-        glDispatchCompute(1, 1, 1);
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-        glUseProgram(s.scatter.id());
-        if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st) return st;
+        if (Status st = block_scan_round(s, s.count.id(), s.scatter.id(), blocks, max_x); !st) return st;
         glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
         std::swap(keys_in, keys_out), std::swap(values_in, values_out);
     }
@@ -114,14 +121,7 @@ Status exclusive_scan(RadixSorter& s, GLuint buffer, std::uint32_t count) {
     glProgramUniform1ui(s.scan.id(), SFFD_RADIX_LOC_COUNT, blocks);
     bind(SFFD_RADIX_SSBO_KEYS_IN, buffer);
     bind(SFFD_RADIX_SSBO_HISTOGRAM, s.scan_sums.id());
-    glUseProgram(s.scan_reduce.id());
-    if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st) return st;
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-    glUseProgram(s.scan.id());
-    glDispatchCompute(1, 1, 1);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-    glUseProgram(s.scan_add.id());
-    if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st) return st;
+    if (Status st = block_scan_round(s, s.scan_reduce.id(), s.scan_add.id(), blocks, max_x); !st) return st;
     glUseProgram(0);
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
     return {};

@@ -13,46 +13,18 @@
 #include "runtime/gfx/shader.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/deform_kernels.h"
-#include "systems/ffd/gpu_block.h"
+#include "systems/ffd/gpu_kernel.h"
 #include "systems/ffd/lattice.h"
 
 namespace sffd::ffd {
 
 struct GpuDeformer::Impl {
     std::optional<gfx::GlContext> context;  // only when created headless; destroyed last (declared first)
-    gfx::Program program;                                      // generic (any divisions)
-    std::unordered_map<std::uint64_t, gfx::Program> specialised;  // per (l, m, n, basis)
-    gfx::Buffer ubo, stats, scratch;
-    struct Controls {
-        gfx::Buffer buffer;
-        std::size_t capacity = 0;
-        std::uint64_t stamp = 0;
-    };
-    std::unordered_map<std::uint64_t, Controls> controls;  // per key (lattice entity)
-    // Read-back slots for queue_stats(): 8 bytes each, persistently mapped (host memory, so copying the
-    // counters there is not a video-to-host migration); `fence` null = free.
-    struct Readback {
-        gfx::Buffer buffer;
-        const std::uint32_t* mapped = nullptr;
-        GLsync fence = nullptr;
-        std::uint64_t tag = 0;
-    };
-    std::vector<Readback> readbacks;
+    detail::DeformPrograms programs;          // lattice set-up shared with the Gaussian deformer
+    gfx::Buffer stats, scratch;
+    detail::StatsReadbacks readbacks;  // queue_stats(): 2 counters each
     std::size_t scratch_capacity = 0;
-    std::uint64_t uploads = 0;
     std::uint64_t sync_readbacks = 0;
-    GLint max_ubo = 0;  // GL_MAX_UNIFORM_BLOCK_SIZE, queried once (a glGet can stall a threaded driver)
-    GLint max_shared = 0;  // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, same
-    bool software = false;  // gfx::software_rasterizer(), for GpuBernsteinKernel::automatic
-    GpuBernsteinKernel kernel = GpuBernsteinKernel::automatic, last_kernel = GpuBernsteinKernel::automatic;
-    ~Impl() {  // GL objects before the context
-        for (Readback& r : readbacks)
-            if (r.fence) glDeleteSync(r.fence);
-        readbacks.clear();
-        program.reset(), ubo.reset(), stats.reset(), scratch.reset();
-        specialised.clear();
-        controls.clear();
-    }
 };
 
 GpuDeformer::GpuDeformer(std::unique_ptr<Impl> impl) : m_impl(std::move(impl)) {}
@@ -62,14 +34,9 @@ GpuDeformer::~GpuDeformer() = default;
 
 Result<GpuDeformer> GpuDeformer::create() {
     auto impl = std::make_unique<Impl>();
-    auto program = gfx::load_compute_program("ffd/deform.comp", "ffd.deform");
-    if (!program) return program.error();
-    impl->program = std::move(*program);
-    glGetIntegerv(GL_MAX_UNIFORM_BLOCK_SIZE, &impl->max_ubo);
-    glGetIntegerv(GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, &impl->max_shared);
-    impl->software = gfx::software_rasterizer();
-    impl->ubo = gfx::Buffer::create("ffd.lattice_block");
-    glNamedBufferData(impl->ubo.id(), sizeof(detail::FfdBlock), nullptr, GL_DYNAMIC_DRAW);
+    auto programs = detail::DeformPrograms::create("ffd/deform.comp", "ffd.deform", "ffd");
+    if (!programs) return programs.error();
+    impl->programs = std::move(*programs);
     impl->stats = gfx::Buffer::create("ffd.stats");
     const std::uint32_t zero[2] = {0, 0};
     glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_READ);
@@ -85,69 +52,22 @@ Result<GpuDeformer> GpuDeformer::create_headless() {
     return d;
 }
 
-std::uint64_t GpuDeformer::upload_count() const { return m_impl->uploads; }
-void GpuDeformer::set_bernstein_kernel(GpuBernsteinKernel kernel) { m_impl->kernel = kernel; }
-GpuBernsteinKernel GpuDeformer::last_bernstein_kernel() const { return m_impl->last_kernel; }
-
-void GpuDeformer::retain_keys(const std::vector<std::uint64_t>& live) {
-    for (auto it = m_impl->controls.begin(); it != m_impl->controls.end();)
-        it = std::find(live.begin(), live.end(), it->first) == live.end() ? m_impl->controls.erase(it) : std::next(it);
-}
+std::uint64_t GpuDeformer::upload_count() const { return m_impl->programs.uploads; }
+void GpuDeformer::set_bernstein_kernel(GpuBernsteinKernel kernel) { m_impl->programs.kernel = kernel; }
+GpuBernsteinKernel GpuDeformer::last_bernstein_kernel() const { return m_impl->programs.last_kernel; }
+void GpuDeformer::retain_keys(const std::vector<std::uint64_t>& live) { m_impl->programs.retain_keys(live); }
 
 Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp, const glm::dvec3& cloud_origin,
                              GLuint in, GLuint out, std::uint32_t count) {
     if (Status s = validate(lattice); !s) return s;
     Impl& m = *m_impl;
-    // Same preparation as the CPU kernels (float displacements, M⁻¹, origin offset in double).
-    const detail::Prepared P = detail::prepare(lattice, cloud_origin);
-    const detail::FfdBlock block = detail::make_ffd_block(lattice, P, count);
-    glNamedBufferSubData(m.ubo.id(), 0, sizeof block, &block);
-    Impl::Controls& cp = m.controls[key];
-    if (!cp.buffer) cp.buffer = gfx::Buffer::create("ffd.control_points");
-    if (stamp == 0 || stamp != cp.stamp) {  // control points only when edited
-        detail::upload_control_points(cp.buffer.id(), cp.capacity, lattice, P);
-        cp.stamp = stamp;
-        ++m.uploads;
-    }
-    // Bernstein: a program specialised for this lattice shape and kernel (compiled once each; constant
-    // loop bounds, small arrays). B-spline reads 4 neighbours per axis whatever the size: generic program.
-    GLuint program = m.program.id();
-    const bool bernstein = lattice.basis == LatticeBasis::bernstein;
-    const bool fits_shared = lattice.size() * 3 * sizeof(float) <= std::size_t(m.max_shared);
-    const bool cp_shared = bernstein && fits_shared &&
-                           (m.kernel == GpuBernsteinKernel::shared || (m.kernel == GpuBernsteinKernel::automatic && !m.software));
-    const bool cp_ubo = bernstein && !cp_shared && lattice.size() * 16 <= std::size_t(m.max_ubo);
-    const std::uint32_t local_size = cp_shared ? 256 : 64;  // deform.comp's FFD_LOCAL_SIZE
-    if (bernstein) m.last_kernel = cp_shared ? GpuBernsteinKernel::shared : GpuBernsteinKernel::direct;
-    const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) | (std::uint64_t(lattice.divisions.y) << 12) |
-                                std::uint64_t(lattice.divisions.z) | (std::uint64_t(lattice.basis) << 40) |
-                                (std::uint64_t(cp_shared) << 44);
-    auto sp = m.specialised.find(shape);
-    if (bernstein && sp == m.specialised.end()) {
-        const int maxb = std::max({lattice.divisions.x, lattice.divisions.y, lattice.divisions.z}) + 1;
-        gfx::Defines defines = {{"FFD_L", std::to_string(lattice.divisions.x)},
-                                {"FFD_M", std::to_string(lattice.divisions.y)},
-                                {"FFD_N", std::to_string(lattice.divisions.z)},
-                                {"FFD_MAXB", std::to_string(maxb)}};
-        if (cp_shared) {
-            defines.push_back({"FFD_CP_SHARED", std::to_string(lattice.size())});
-            defines.push_back({"FFD_LOCAL_SIZE", std::to_string(local_size)});
-        }
-        if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});
-        auto prog = gfx::load_compute_program("ffd/deform.comp", cp_shared ? "ffd.deform.shared" : "ffd.deform.specialised", defines);
-        if (!prog) return prog.error();
-        sp = m.specialised.emplace(shape, std::move(*prog)).first;
-    }
-    if (lattice.basis == LatticeBasis::bernstein) program = sp->second.id();
-    glUseProgram(program);
-    glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, m.ubo.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, cp.buffer.id());
-    if (cp_ubo) glBindBufferRange(GL_UNIFORM_BUFFER, SFFD_UBO_FFD_CONTROL, cp.buffer.id(), 0, GLsizeiptr(lattice.size() * 16));
+    auto bound = m.programs.bind(lattice, key, stamp, cloud_origin, count);
+    if (!bound) return bound.error();
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_IN, in);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_OUT, out);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
     // A 2D grid beyond 65,535 groups (4.19M splats): runtime/gfx/dispatch.h.
-    if (Status s = gfx::dispatch_1d(count, local_size); !s) return s;
+    if (Status s = gfx::dispatch_1d(count, bound->local_size); !s) return s;
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     return {};
 }
@@ -170,46 +90,22 @@ void GpuDeformer::reset_stats() {
 }
 
 bool GpuDeformer::queue_stats(std::uint64_t tag) {
-    Impl& m = *m_impl;
-    auto slot = std::find_if(m.readbacks.begin(), m.readbacks.end(), [](const Impl::Readback& r) { return !r.fence; });
-    if (slot == m.readbacks.end()) {
-        Impl::Readback r;
-        r.buffer = gfx::Buffer::create("ffd.stats_readback");
-        const GLbitfield flags = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
-        glNamedBufferStorage(r.buffer.id(), 2 * sizeof(std::uint32_t), nullptr, flags);
-        r.mapped = static_cast<const std::uint32_t*>(glMapNamedBufferRange(r.buffer.id(), 0, 2 * sizeof(std::uint32_t), flags));
-        if (!r.mapped) return false;  // the GL error callback has reported why; these statistics are lost
-        m.readbacks.push_back(std::move(r));
-        slot = m.readbacks.end() - 1;
-    }
-    glCopyNamedBufferSubData(m.stats.id(), slot->buffer.id(), 0, 0, 2 * sizeof(std::uint32_t));
-    slot->fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
-    slot->tag = tag;
-    return slot->fence != nullptr;
+    return m_impl->readbacks.queue(m_impl->stats.id(), 2, tag, "ffd.stats_readback");
 }
 
 std::vector<GpuDeformer::TaggedStats> GpuDeformer::poll_stats() {
     std::vector<TaggedStats> done;
-    for (Impl::Readback& r : m_impl->readbacks) {
-        if (!r.fence) continue;
-        // Zero timeout: asks, never waits. The flush bit makes sure the fence reaches the GPU.
-        const GLenum state = glClientWaitSync(r.fence, GL_SYNC_FLUSH_COMMANDS_BIT, 0);
-        if (state != GL_ALREADY_SIGNALED && state != GL_CONDITION_SATISFIED) continue;
-        glDeleteSync(r.fence);
-        r.fence = nullptr;
+    m_impl->readbacks.poll([&](std::uint64_t tag, const std::uint32_t* counts) {
         DeformStats s;
-        s.inverted = r.mapped[0];
-        s.inside = r.mapped[1];
+        s.inverted = counts[0];
+        s.inside = counts[1];
         s.backend = Backend::fast;
-        done.push_back({r.tag, s});
-    }
+        done.push_back({tag, s});
+    });
     return done;
 }
 
-std::size_t GpuDeformer::pending_stats() const {
-    return std::size_t(std::count_if(m_impl->readbacks.begin(), m_impl->readbacks.end(),
-                                     [](const Impl::Readback& r) { return r.fence != nullptr; }));
-}
+std::size_t GpuDeformer::pending_stats() const { return m_impl->readbacks.pending(); }
 
 std::uint64_t GpuDeformer::sync_readbacks() const { return m_impl->sync_readbacks; }
 

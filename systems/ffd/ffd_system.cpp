@@ -1,21 +1,16 @@
 #include "systems/ffd/ffd_system.h"
 
-#include <optional>
 #include <string_view>
-#include <unordered_map>
 #include <vector>
-
-#include <EGL/egl.h>
-#include <GLFW/glfw3.h>
 
 #include "runtime/app/pass_timer.h"
 #include "runtime/core/log.h"
-#include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/components.h"
+#include "systems/ffd/deform_backend.h"
 #include "systems/ffd/deform_cloud.h"
 #include "systems/ffd/deform_inputs.h"
 #include "systems/ffd/ffd_gpu.h"
@@ -25,52 +20,19 @@ namespace sffd {
 
 namespace {
 
-// The system's GPU state (a registry resource, so it lives exactly as long as the registry's GL objects).
-struct FfdGpuState {
-    std::optional<ffd::GpuDeformer> deformer;
-    bool unavailable = false;  // compile failed once: stay on the CPU path
-    // Statistics in flight (GpuDeformer::queue_stats tag -> the output they were counted for).
-    struct Pending {
-        ecs::Entity cloud;
-        std::uint64_t version = 0;
-    };
-    std::unordered_map<std::uint64_t, Pending> pending;
-    std::uint64_t next_tag = 1;
-};
+using FfdGpuState = ffd::GpuDeformerState<ffd::GpuDeformer>;
 
 // Inverted counts of earlier GPU runs that have arrived (never waits): each applies if it is newer than
 // the count the output holds.
 void collect_gpu_stats(ecs::Registry& reg) {
     auto* st = reg.try_resource<FfdGpuState>();
-    if (!st || !st->deformer || st->pending.empty()) return;
-    for (const ffd::GpuDeformer::TaggedStats& t : st->deformer->poll_stats()) {
-        auto it = st->pending.find(t.tag);
-        if (it == st->pending.end()) continue;
-        const FfdGpuState::Pending p = it->second;
-        st->pending.erase(it);
+    if (!st) return;
+    st->collect([&](const FfdGpuState::Pending& p, const ffd::DeformStats& stats) {
         DeformedSplats* out = reg.valid(p.cloud) ? reg.try_get<DeformedSplats>(p.cloud) : nullptr;
-        if (!out || p.version <= out->inverted_version) continue;
-        out->inverted = t.stats.inverted;  // statistics, not data: no change stamp
+        if (!out || p.version <= out->inverted_version) return;
+        out->inverted = stats.inverted;  // statistics, not data: no change stamp
         out->inverted_version = p.version;
-    }
-}
-
-bool gl_context_current() { return eglGetCurrentContext() != EGL_NO_CONTEXT || glfwGetCurrentContext() != nullptr; }
-
-ffd::GpuDeformer* gpu_deformer(ecs::Registry& reg) {
-    auto* st = reg.try_resource<FfdGpuState>();
-    if (!st) st = &reg.set_resource<FfdGpuState>();
-    if (st->unavailable) return nullptr;
-    if (!st->deformer) {
-        auto d = ffd::GpuDeformer::create();
-        if (!d) {
-            log::warn("ffd_system: GPU path unavailable, deforming on the CPU (", d.message(), ")");
-            st->unavailable = true;
-            return nullptr;
-        }
-        st->deformer.emplace(std::move(*d));
-    }
-    return &*st->deformer;
+    });
 }
 
 }  // namespace
@@ -79,9 +41,8 @@ void ffd_release_gpu(ecs::Registry& registry) { registry.erase_resource<FfdGpuSt
 
 void ffd_system(ecs::Registry& reg, const FrameContext&) {
     FfdSettings* settings = reg.try_resource<FfdSettings>();
-    const bool force_gpu = settings && settings->force_gpu;
-    const bool have_gl = gl_context_current();
-    const bool force_cpu = (settings && settings->force_cpu) || (have_gl && !force_gpu && gfx::software_rasterizer());
+    const ffd::DeformBackend backend = ffd::choose_deform_backend(settings);
+    const bool have_gl = backend.have_gl, force_cpu = backend.force_cpu;
     if (have_gl) collect_gpu_stats(reg);
     // Collect first: emplacing DeformedSplats while iterating is a structural change.
     std::vector<ecs::Entity> clouds;
@@ -125,7 +86,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
             if (it != store->clouds.end() && it->second.rest && it->second.rest_version == cloud_v && it->second.count == n)
                 splats = &it->second;
         }
-        ffd::GpuDeformer* gpu = splats ? gpu_deformer(reg) : nullptr;
+        ffd::GpuDeformer* gpu = splats ? ffd::gpu_deformer<ffd::GpuDeformer>(reg, "ffd_system") : nullptr;
         if (gpu) {
             const std::size_t bytes = std::max<std::size_t>(n, 1) * sizeof(gpu::GpuSplat);
             if (!splats->deformed) {
@@ -159,9 +120,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
             if (ok) {
                 // The inverted count arrives a few frames later (collect_gpu_stats); until then `inverted`
                 // keeps the latest count that arrived.
-                auto& state = reg.resource<FfdGpuState>();
-                const std::uint64_t tag = state.next_tag++;
-                if (gpu->queue_stats(tag)) state.pending[tag] = {e, out.version};
+                reg.resource<FfdGpuState>().queue_stats(*gpu, e, out.version);
                 splats->has_deformed = true;
                 ++splats->deformed_version;
                 out.gpu_valid = true;

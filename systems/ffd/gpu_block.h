@@ -1,4 +1,4 @@
-// Shared by the compute deformer (ffd_gpu.cpp) and paper mode (paper_mode.cpp): the std140 mirror of
+// Shared by the compute deformers (gpu_kernel.cpp) and paper mode (paper_mode.cpp): the std140 mirror of
 // FfdBlock in shaders/ffd/ffd_common.glsl, filled from the same preparation as the CPU kernels, and the
 // control-point upload (float displacements, or the zero-bordered B-spline grid).
 #pragma once

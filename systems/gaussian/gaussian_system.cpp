@@ -1,16 +1,11 @@
 #include "systems/gaussian/gaussian_system.h"
 
-#include <optional>
-#include <unordered_map>
 #include <vector>
-
-#include <EGL/egl.h>
-#include <GLFW/glfw3.h>
 
 #include "runtime/app/pass_timer.h"
 #include "runtime/core/log.h"
-#include "runtime/gfx/context.h"
 #include "systems/ffd/components.h"
+#include "systems/ffd/deform_backend.h"
 #include "systems/ffd/deform_inputs.h"
 #include "systems/ffd/ffd_system.h"
 #include "systems/gaussian/components.h"
@@ -22,56 +17,23 @@ namespace sffd {
 
 namespace {
 
-// The system's GPU state (a registry resource: its GL objects live as long as the registry's).
-struct GaussianGpuState {
-    std::optional<gaussian::GpuGaussianDeformer> deformer;
-    bool unavailable = false;  // compile failed once: stay on the CPU path
-    // Statistics in flight (queue_stats tag -> the output they were counted for).
-    struct Pending {
-        ecs::Entity cloud;
-        std::uint64_t version = 0;
-    };
-    std::unordered_map<std::uint64_t, Pending> pending;
-    std::uint64_t next_tag = 1;
-};
+using GaussianGpuState = ffd::GpuDeformerState<gaussian::GpuGaussianDeformer>;
 
 // Counts of earlier GPU runs that have arrived (never waits): they apply to the output they were counted
 // for if it has not been rewritten since. Statistics, not data: no change stamp.
 void collect_gpu_stats(ecs::Registry& reg) {
     auto* st = reg.try_resource<GaussianGpuState>();
-    if (!st || !st->deformer || st->pending.empty()) return;
-    for (const gaussian::GpuGaussianDeformer::TaggedStats& t : st->deformer->poll_stats()) {
-        auto it = st->pending.find(t.tag);
-        if (it == st->pending.end()) continue;
-        const GaussianGpuState::Pending p = it->second;
-        st->pending.erase(it);
-        if (t.stats.not_finite)
-            log::warn("gaussian_deform_system: ", t.stats.not_finite, " Gaussians deformed to non-finite values (drawn transparent)");
+    if (!st) return;
+    st->collect([&](const GaussianGpuState::Pending& p, const gaussian::GpuDeformStats& stats) {
+        if (stats.not_finite)
+            log::warn("gaussian_deform_system: ", stats.not_finite, " Gaussians deformed to non-finite values (drawn transparent)");
         DeformedGaussians* out = reg.valid(p.cloud) ? reg.try_get<DeformedGaussians>(p.cloud) : nullptr;
-        if (!out || out->version != p.version) continue;
-        out->inverted = t.stats.inverted;
-        out->degenerate = t.stats.degenerate;
-        out->not_finite = t.stats.not_finite;
+        if (!out || out->version != p.version) return;
+        out->inverted = stats.inverted;
+        out->degenerate = stats.degenerate;
+        out->not_finite = stats.not_finite;
         out->stats_arrived = true;
-    }
-}
-
-bool gl_context_current() { return eglGetCurrentContext() != EGL_NO_CONTEXT || glfwGetCurrentContext() != nullptr; }
-
-gaussian::GpuGaussianDeformer* gpu_deformer(ecs::Registry& reg) {
-    auto* st = reg.try_resource<GaussianGpuState>();
-    if (!st) st = &reg.set_resource<GaussianGpuState>();
-    if (st->unavailable) return nullptr;
-    if (!st->deformer) {
-        auto d = gaussian::GpuGaussianDeformer::create();
-        if (!d) {
-            log::warn("gaussian_deform_system: GPU path unavailable, deforming on the CPU (", d.message(), ")");
-            st->unavailable = true;
-            return nullptr;
-        }
-        st->deformer.emplace(std::move(*d));
-    }
-    return &*st->deformer;
+    });
 }
 
 }  // namespace
@@ -79,16 +41,12 @@ gaussian::GpuGaussianDeformer* gpu_deformer(ecs::Registry& reg) {
 void gaussian_release_gpu(ecs::Registry& registry) { registry.erase_resource<GaussianGpuState>(); }
 
 void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
-    // The backend choice of ffd_system (systems/ffd/ffd_system.h): GPU when a GL context is current,
-    // except on a software rasterizer (llvmpipe runs the "GPU" on the same CPU cores, slower than the
-    // TBB path) unless FfdSettings::force_gpu; never with FfdSettings::force_cpu.
-    const FfdSettings* settings = reg.try_resource<FfdSettings>();
+    // The backend choice of ffd_system (systems/ffd/deform_backend.h).
+    const ffd::DeformBackend backend = ffd::choose_deform_backend(reg.try_resource<FfdSettings>());
+    const bool have_gl = backend.have_gl, force_cpu = backend.force_cpu;
     GaussianDeformSettings* counters = reg.try_resource<GaussianDeformSettings>();
     const gaussian::ShMode gpu_sh = counters ? counters->gpu_sh : gaussian::ShMode::rotate_view;
     const gaussian::ShMode cpu_sh = counters ? counters->cpu_sh : gaussian::ShMode::rotate_coefficients;
-    const bool force_gpu = settings && settings->force_gpu;
-    const bool have_gl = gl_context_current();
-    const bool force_cpu = (settings && settings->force_cpu) || (have_gl && !force_gpu && gfx::software_rasterizer());
     if (have_gl) collect_gpu_stats(reg);
     // Collect first: emplacing DeformedGaussians while iterating is a structural change.
     std::vector<ecs::Entity> clouds;
@@ -99,7 +57,7 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         const ffd::DeformInputs inputs = ffd::deform_inputs<GaussianCloud>(reg, e);
         const std::vector<ecs::Entity>& lattices = inputs.lattices;
         const DeformedGaussians* seen = reg.try_get<DeformedGaussians>(e);
-        const bool gpu_path = have_gl && !force_cpu;
+        const bool gpu_path = backend.gpu();
         const auto sh_mode = std::uint8_t(gpu_path ? gpu_sh : cpu_sh);
         if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu && seen->seen_sh_mode == sh_mode)
             continue;  // nothing moved
@@ -116,7 +74,7 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         // only per-Gaussian CPU work, once per cloud change), then one dispatch per lattice into
         // `deformed` (+ `frames` or `deformed_sh` when the SH have view-dependent terms). No read-back.
         if (gpu_path) {
-            if (gaussian::GpuGaussianDeformer* gpu = gpu_deformer(reg)) {
+            if (gaussian::GpuGaussianDeformer* gpu = ffd::gpu_deformer<gaussian::GpuGaussianDeformer>(reg, "gaussian_deform_system")) {
                 auto* store = reg.try_resource<gaussian::GpuGaussianStore>();
                 if (!store) store = &reg.set_resource<gaussian::GpuGaussianStore>();
                 gaussian::GpuGaussians& g = store->clouds[e];
@@ -134,9 +92,7 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
                     if (Status s = gpu->deform(g, cloud.origin, ls, keys, inputs.stamps.lattices, gpu_sh); !s)
                         log::warn("gaussian_deform_system: ", s.message(), " (lattice skipped)");
                     // The counts arrive a few frames later (collect_gpu_stats); nothing waits for them.
-                    auto& state = reg.resource<GaussianGpuState>();
-                    const std::uint64_t tag = state.next_tag++;
-                    if (gpu->queue_stats(tag)) state.pending[tag] = {e, out.version};
+                    reg.resource<GaussianGpuState>().queue_stats(*gpu, e, out.version);
                     out.on_gpu = true;
                     out.cloud = GaussianCloud{};
                     out.cloud.origin = cloud.origin;

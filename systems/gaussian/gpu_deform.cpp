@@ -11,7 +11,7 @@
 #include "shaders/common/bindings.h"
 #include "shaders/gaussian/gaussian_layout.h"
 #include "systems/ffd/deform_kernels.h"
-#include "systems/ffd/gpu_block.h"
+#include "systems/ffd/gpu_kernel.h"
 #include "systems/ffd/lattice.h"
 #include "systems/gaussian/sh.h"
 
@@ -37,30 +37,10 @@ void ensure(gfx::Buffer& buffer, const char* label, std::size_t bytes) {
 }  // namespace
 
 struct GpuGaussianDeformer::Impl {
-    gfx::Program program;                                         // generic (any divisions, B-spline)
-    std::unordered_map<std::uint64_t, gfx::Program> specialised;  // Bernstein, per (l, m, n, kernel)
-    gfx::Buffer ubo, stats, sh_tables;
-    struct Controls {
-        gfx::Buffer buffer;
-        std::size_t capacity = 0;
-        std::uint64_t stamp = 0;
-    };
-    std::unordered_map<std::uint64_t, Controls> controls;
-    struct Readback {  // queue_stats() slots: host-visible, persistently mapped; `fence` null = free
-        gfx::Buffer buffer;
-        const std::uint32_t* mapped = nullptr;
-        GLsync fence = nullptr;
-        std::uint64_t tag = 0;
-    };
-    std::vector<Readback> readbacks;
-    std::uint64_t uploads = 0, sync_readbacks = 0;
-    GLint max_ubo = 0, max_shared = 0;
-    bool software = false;
-    ffd::GpuBernsteinKernel kernel = ffd::GpuBernsteinKernel::automatic, last_kernel = ffd::GpuBernsteinKernel::automatic;
-    ~Impl() {
-        for (Readback& r : readbacks)
-            if (r.fence) glDeleteSync(r.fence);
-    }
+    ffd::detail::DeformPrograms programs;  // the lattice set-up of ffd::GpuDeformer (systems/ffd/gpu_kernel.h)
+    gfx::Buffer stats, sh_tables;
+    ffd::detail::StatsReadbacks readbacks;  // queue_stats(): kStats counters each
+    std::uint64_t sync_readbacks = 0;
 };
 
 GpuGaussianDeformer::GpuGaussianDeformer(std::unique_ptr<Impl> impl) : m_impl(std::move(impl)) {}
@@ -70,14 +50,9 @@ GpuGaussianDeformer::~GpuGaussianDeformer() = default;
 
 Result<GpuGaussianDeformer> GpuGaussianDeformer::create() {
     auto impl = std::make_unique<Impl>();
-    auto program = gfx::load_compute_program("gaussian/deform.comp", "gaussian.deform");
-    if (!program) return program.error();
-    impl->program = std::move(*program);
-    glGetIntegerv(GL_MAX_UNIFORM_BLOCK_SIZE, &impl->max_ubo);
-    glGetIntegerv(GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, &impl->max_shared);
-    impl->software = gfx::software_rasterizer();
-    impl->ubo = gfx::Buffer::create("gaussian.deform.lattice_block");
-    glNamedBufferData(impl->ubo.id(), sizeof(ffd::detail::FfdBlock), nullptr, GL_DYNAMIC_DRAW);
+    auto programs = ffd::detail::DeformPrograms::create("gaussian/deform.comp", "gaussian.deform", "gaussian.deform");
+    if (!programs) return programs.error();
+    impl->programs = std::move(*programs);
     impl->stats = gfx::Buffer::create("gaussian.deform.stats");
     const std::uint32_t zero[kStats] = {};
     glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_READ);
@@ -100,15 +75,11 @@ Result<GpuGaussianDeformer> GpuGaussianDeformer::create() {
     return GpuGaussianDeformer(std::move(impl));
 }
 
-void GpuGaussianDeformer::set_bernstein_kernel(ffd::GpuBernsteinKernel kernel) { m_impl->kernel = kernel; }
-ffd::GpuBernsteinKernel GpuGaussianDeformer::last_bernstein_kernel() const { return m_impl->last_kernel; }
-std::uint64_t GpuGaussianDeformer::upload_count() const { return m_impl->uploads; }
+void GpuGaussianDeformer::set_bernstein_kernel(ffd::GpuBernsteinKernel kernel) { m_impl->programs.kernel = kernel; }
+ffd::GpuBernsteinKernel GpuGaussianDeformer::last_bernstein_kernel() const { return m_impl->programs.last_kernel; }
+std::uint64_t GpuGaussianDeformer::upload_count() const { return m_impl->programs.uploads; }
 std::uint64_t GpuGaussianDeformer::sync_readbacks() const { return m_impl->sync_readbacks; }
-
-void GpuGaussianDeformer::retain_keys(const std::vector<std::uint64_t>& live) {
-    for (auto it = m_impl->controls.begin(); it != m_impl->controls.end();)
-        it = std::find(live.begin(), live.end(), it->first) == live.end() ? m_impl->controls.erase(it) : std::next(it);
-}
+void GpuGaussianDeformer::retain_keys(const std::vector<std::uint64_t>& live) { m_impl->programs.retain_keys(live); }
 
 void GpuGaussianDeformer::reset_stats() {
     glClearNamedBufferData(m_impl->stats.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
@@ -124,37 +95,17 @@ GpuDeformStats GpuGaussianDeformer::read_stats() {
 }
 
 bool GpuGaussianDeformer::queue_stats(std::uint64_t tag) {
-    Impl& m = *m_impl;
-    auto slot = std::find_if(m.readbacks.begin(), m.readbacks.end(), [](const Impl::Readback& r) { return !r.fence; });
-    if (slot == m.readbacks.end()) {
-        Impl::Readback r;
-        r.buffer = gfx::Buffer::create("gaussian.deform.stats_readback");
-        const GLbitfield flags = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
-        glNamedBufferStorage(r.buffer.id(), kStats * sizeof(std::uint32_t), nullptr, flags);
-        r.mapped = static_cast<const std::uint32_t*>(glMapNamedBufferRange(r.buffer.id(), 0, kStats * sizeof(std::uint32_t), flags));
-        if (!r.mapped) return false;  // the GL error callback has said why; these statistics are lost
-        m.readbacks.push_back(std::move(r));
-        slot = m.readbacks.end() - 1;
-    }
-    glCopyNamedBufferSubData(m.stats.id(), slot->buffer.id(), 0, 0, kStats * sizeof(std::uint32_t));
-    slot->fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
-    slot->tag = tag;
-    return slot->fence != nullptr;
+    return m_impl->readbacks.queue(m_impl->stats.id(), kStats, tag, "gaussian.deform.stats_readback");
 }
 
 std::vector<GpuGaussianDeformer::TaggedStats> GpuGaussianDeformer::poll_stats() {
     std::vector<TaggedStats> done;
-    for (Impl::Readback& r : m_impl->readbacks) {
-        if (!r.fence) continue;
-        const GLenum state = glClientWaitSync(r.fence, GL_SYNC_FLUSH_COMMANDS_BIT, 0);  // zero timeout: never waits
-        if (state != GL_ALREADY_SIGNALED && state != GL_CONDITION_SATISFIED) continue;
-        glDeleteSync(r.fence);
-        r.fence = nullptr;
+    m_impl->readbacks.poll([&](std::uint64_t tag, const std::uint32_t* v) {
         TaggedStats t;
-        t.tag = r.tag;
-        t.stats.inverted = r.mapped[0], t.stats.inside = r.mapped[1], t.stats.not_finite = r.mapped[2], t.stats.degenerate = r.mapped[3];
+        t.tag = tag;
+        t.stats.inverted = v[0], t.stats.inside = v[1], t.stats.not_finite = v[2], t.stats.degenerate = v[3];
         done.push_back(t);
-    }
+    });
     return done;
 }
 
@@ -163,56 +114,13 @@ Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, 
     if (Status s = ffd::validate(lattice); !s) return s;
     if (b.sh_out && (b.sh_degree < 0 || b.sh_degree > 3)) return make_error("gaussian::GpuGaussianDeformer: SH degree must be 0..3");
     Impl& m = *m_impl;
-    // The ffd pass's preparation and control-point upload (float displacements, M⁻¹, origin in double).
-    const ffd::detail::Prepared P = ffd::detail::prepare(lattice, cloud_origin);
-    const ffd::detail::FfdBlock block = ffd::detail::make_ffd_block(lattice, P, count);
-    glNamedBufferSubData(m.ubo.id(), 0, sizeof block, &block);
-    Impl::Controls& cp = m.controls[key];
-    if (!cp.buffer) cp.buffer = gfx::Buffer::create("gaussian.deform.control_points");
-    if (stamp == 0 || stamp != cp.stamp) {
-        ffd::detail::upload_control_points(cp.buffer.id(), cp.capacity, lattice, P);
-        cp.stamp = stamp;
-        ++m.uploads;
-    }
-    // Kernel choice as ffd::GpuDeformer (systems/ffd/ffd_gpu.cpp): Bernstein programs specialised per
-    // lattice shape (constant loop bounds), control points in shared memory on hardware GPUs, in a UBO
-    // on a software rasterizer; the B-spline reads 4 neighbours per axis: generic program.
-    const bool bernstein = lattice.basis == LatticeBasis::bernstein;
-    const bool fits_shared = lattice.size() * 3 * sizeof(float) <= std::size_t(m.max_shared);
-    const bool cp_shared = bernstein && fits_shared &&
-                           (m.kernel == ffd::GpuBernsteinKernel::shared || (m.kernel == ffd::GpuBernsteinKernel::automatic && !m.software));
-    const bool cp_ubo = bernstein && !cp_shared && lattice.size() * 16 <= std::size_t(m.max_ubo);
-    const std::uint32_t local_size = cp_shared ? 256 : 64;
-    GLuint program = m.program.id();
-    if (bernstein) {
-        m.last_kernel = cp_shared ? ffd::GpuBernsteinKernel::shared : ffd::GpuBernsteinKernel::direct;
-        const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) | (std::uint64_t(lattice.divisions.y) << 12) |
-                                    std::uint64_t(lattice.divisions.z) | (std::uint64_t(cp_shared) << 44) | (std::uint64_t(cp_ubo) << 45);
-        auto sp = m.specialised.find(shape);
-        if (sp == m.specialised.end()) {
-            const int maxb = std::max({lattice.divisions.x, lattice.divisions.y, lattice.divisions.z}) + 1;
-            gfx::Defines defines = {{"FFD_L", std::to_string(lattice.divisions.x)},
-                                    {"FFD_M", std::to_string(lattice.divisions.y)},
-                                    {"FFD_N", std::to_string(lattice.divisions.z)},
-                                    {"FFD_MAXB", std::to_string(maxb)}};
-            if (cp_shared) {
-                defines.push_back({"FFD_CP_SHARED", std::to_string(lattice.size())});
-                defines.push_back({"FFD_LOCAL_SIZE", std::to_string(local_size)});
-            }
-            if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});
-            auto prog = gfx::load_compute_program("gaussian/deform.comp", cp_shared ? "gaussian.deform.shared" : "gaussian.deform.specialised",
-                                                  defines);
-            if (!prog) return prog.error();
-            sp = m.specialised.emplace(shape, std::move(*prog)).first;
-        }
-        program = sp->second.id();
-    }
-    glUseProgram(program);
+    // The ffd pass's lattice set-up and kernel choice (systems/ffd/gpu_kernel.h): block UBO, control points
+    // when edited, Bernstein programs specialised per lattice shape; then this shader's own buffers.
+    auto bound = m.programs.bind(lattice, key, stamp, cloud_origin, count);
+    if (!bound) return bound.error();
+    const GLuint program = bound->program;
     glProgramUniform1ui(program, 0, (b.frames ? 1u : 0u) | (b.frames && b.compose_frames ? 2u : 0u) | (b.sh_out ? 4u : 0u));
     glProgramUniform1i(program, 1, b.sh_degree);
-    glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, m.ubo.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, cp.buffer.id());
-    if (cp_ubo) glBindBufferRange(GL_UNIFORM_BUFFER, SFFD_UBO_FFD_CONTROL, cp.buffer.id(), 0, GLsizeiptr(lattice.size() * 16));
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, b.in);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED, b.out);
     // Unused bindings still get a buffer (the statistics stand in): nothing reads or writes them.
@@ -222,7 +130,7 @@ Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, 
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH_TABLES, m.sh_tables.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
     // Beyond 65,535 groups (4.19M Gaussians at 64 wide): a 2D grid (runtime/gfx/dispatch.h).
-    if (Status s = gfx::dispatch_1d(count, local_size); !s) return s;
+    if (Status s = gfx::dispatch_1d(count, bound->local_size); !s) return s;
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
     return {};
 }

@@ -7,7 +7,7 @@
 // themselves can be rotated instead (ShMode::rotate_coefficients: per band, the CPU's sh_rotation tables)
 // into `deformed_sh`.
 // The lattice evaluation is the ffd pass's own (shaders/ffd/ffd_common.glsl: Bernstein with the direct
-// or shared-memory kernel, B-spline), with the same control-point upload (systems/ffd/gpu_block.h).
+// or shared-memory kernel, B-spline), with the same lattice set-up and control-point upload (systems/ffd/gpu_kernel.h).
 // Needs a current GL 4.5 context for every call.
 #pragma once
 

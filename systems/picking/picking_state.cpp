@@ -337,6 +337,29 @@ void release_geometry(RTCScene scene, RecordMap& map, RecordMap::iterator it) {
     map.erase(it);
 }
 
+// Detaches the geometry of every record whose entity died or lost its `C` (its id becomes free for reuse),
+// drops its id, and lets `forget(entity)` drop what else the caller keeps for it. Adds to `released`;
+// true when any went.
+template <class C, class Forget>
+bool release_stale(const ecs::Registry& registry, RTCScene scene, RecordMap& records, std::unordered_map<unsigned, ecs::Entity>& ids,
+                   std::uint64_t& released, Forget&& forget) {
+    bool changed = false;
+    for (auto it = records.begin(); it != records.end();) {
+        const ecs::Entity e = it->second->entity;
+        if (!registry.valid(e) || !registry.has<C>(e)) {
+            ids.erase(it->second->id);
+            forget(e);
+            auto doomed = it++;
+            release_geometry(scene, records, doomed);
+            ++released;
+            changed = true;
+        } else {
+            ++it;
+        }
+    }
+    return changed;
+}
+
 RTCRayHit make_rayhit(const glm::dvec3& origin, const glm::dvec3& direction, double tfar) {
     RTCRayHit rh{};
     rh.ray.org_x = float(origin.x), rh.ray.org_y = float(origin.y), rh.ray.org_z = float(origin.z);
@@ -417,20 +440,8 @@ void PickingState::Impl::create_gaussian_geometry(GeomRecord& rec) {
 }
 
 bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
-    bool changed = false;
-    for (auto it = gaussian_records.begin(); it != gaussian_records.end();) {
-        const ecs::Entity e = it->second->entity;
-        if (!registry.valid(e) || !registry.has<GaussianCloud>(e)) {
-            gaussian_ids.erase(it->second->id);
-            gaussian_cache.clouds.erase(e.bits());
-            auto doomed = it++;
-            release_geometry(surfaces, gaussian_records, doomed);
-            ++stats.geometries_released;
-            changed = true;
-        } else {
-            ++it;
-        }
-    }
+    bool changed = release_stale<GaussianCloud>(registry, surfaces, gaussian_records, gaussian_ids, stats.geometries_released,
+                                                [&](ecs::Entity e) { gaussian_cache.clouds.erase(e.bits()); });
     for (auto [e, cloud] : registry.view<const GaussianCloud>()) {
         const GaussianSource src = gaussian_source(registry, e, gaussian_cache);
         const glm::dmat4 model = model_matrix(registry.try_get<Transform>(e));
@@ -473,21 +484,9 @@ bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
 }
 
 bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
-    bool changed = false;
     // Entities that died or lost their cloud: detach their geometry (its id becomes free for reuse).
-    for (auto it = surface_records.begin(); it != surface_records.end();) {
-        const ecs::Entity e = it->second->entity;
-        if (!registry.valid(e) || !registry.has<SplatCloud>(e)) {
-            surface_ids.erase(it->second->id);
-            deform_cache.clouds.erase(e.bits());
-            auto doomed = it++;
-            release_geometry(surfaces, surface_records, doomed);
-            ++stats.geometries_released;
-            changed = true;
-        } else {
-            ++it;
-        }
-    }
+    bool changed = release_stale<SplatCloud>(registry, surfaces, surface_records, surface_ids, stats.geometries_released,
+                                             [&](ecs::Entity e) { deform_cache.clouds.erase(e.bits()); });
     for (auto [e, cloud] : registry.view<const SplatCloud>()) {
         const SplatSource src = splat_source(registry, e, deform_cache);
         if (!anchored && !src.positions.empty()) {
@@ -533,19 +532,7 @@ bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
 }
 
 bool PickingState::Impl::refresh_controls(ecs::Registry& registry, double fraction) {
-    bool changed = false;
-    for (auto it = control_records.begin(); it != control_records.end();) {
-        const ecs::Entity e = it->second->entity;
-        if (!registry.valid(e) || !registry.has<Lattice>(e)) {
-            control_ids.erase(it->second->id);
-            auto doomed = it++;
-            release_geometry(controls, control_records, doomed);
-            ++stats.geometries_released;
-            changed = true;
-        } else {
-            ++it;
-        }
-    }
+    bool changed = release_stale<Lattice>(registry, controls, control_records, control_ids, stats.geometries_released, [](ecs::Entity) {});
     for (auto [e, lattice] : registry.view<const Lattice>()) {
         if (!anchored && !lattice.current.empty()) {
             anchor = glm::dvec3(model_matrix(registry.try_get<Transform>(e)) * glm::dvec4(lattice.origin, 1.0));

@@ -50,6 +50,58 @@ struct Hit {
     glm::dvec3 grad_u{0.0}, grad_v{0.0};
 };
 
+// One Embree triangle scene (device, scene, one geometry), built once from float vertices relative to a
+// centre of the caller's choice (precision far from the origin) and 3 indices per triangle.
+class EmbreeTriangles {
+public:
+    EmbreeTriangles() = default;
+    ~EmbreeTriangles() {
+        if (scene_) rtcReleaseScene(scene_);
+        if (device_) rtcReleaseDevice(device_);
+    }
+    EmbreeTriangles(const EmbreeTriangles&) = delete;
+    EmbreeTriangles& operator=(const EmbreeTriangles&) = delete;
+
+    // Empty on success, else the message.
+    std::string build(const std::vector<glm::vec3>& pos, const std::vector<std::uint32_t>& tris) {
+        device_ = rtcNewDevice(nullptr);
+        if (!device_) return "render_reference(): rtcNewDevice failed";
+        scene_ = rtcNewScene(device_);
+        RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), pos.size()));
+        for (std::size_t i = 0; i < pos.size(); ++i) v[3 * i] = pos[i].x, v[3 * i + 1] = pos[i].y, v[3 * i + 2] = pos[i].z;
+        auto* idx = static_cast<std::uint32_t*>(
+            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), tris.size() / 3));
+        std::copy(tris.begin(), tris.end(), idx);
+        rtcCommitGeometry(geom);
+        rtcAttachGeometry(scene_, geom);
+        rtcReleaseGeometry(geom);
+        rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
+        rtcCommitScene(scene_);
+        return {};
+    }
+
+    // The nearest hit of the ray o + t dir (o relative to the vertices' centre), if any.
+    std::optional<RTCRayHit> intersect(const glm::dvec3& o, const glm::dvec3& dir) const {
+        RTCIntersectContext ctx;
+        rtcInitIntersectContext(&ctx);
+        RTCRayHit rh{};
+        rh.ray.org_x = float(o.x), rh.ray.org_y = float(o.y), rh.ray.org_z = float(o.z);
+        rh.ray.dir_x = float(dir.x), rh.ray.dir_y = float(dir.y), rh.ray.dir_z = float(dir.z);
+        rh.ray.tnear = 0.0f;
+        rh.ray.tfar = std::numeric_limits<float>::infinity();
+        rh.ray.mask = ~0u;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(scene_, &ctx, &rh);
+        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+        return rh;
+    }
+
+private:
+    RTCDevice device_ = nullptr;
+    RTCScene scene_ = nullptr;
+};
+
 // An ExactMesh in world space through Embree. Deformed by lattices (F the lattices in order), each
 // triangle is traced as a k x k subdivision whose vertices are F of the rest points (positions and
 // normals through ffd::deform), as the deformed sphere is; a hit's rest point is the barycentric mix of the
@@ -143,46 +195,15 @@ public:
         for (std::size_t i = 0; i < pos.size(); ++i) positions_[i] = centre_ + glm::dvec3(pos[i]);
         normals_.assign(nrm.begin(), nrm.end());
         smooth_ = !normals.empty() || deformed_;  // else each triangle's own (flat) normal
-        device_ = rtcNewDevice(nullptr);
-        if (!device_) {
-            error_ = "render_reference(): rtcNewDevice failed";
-            return;
-        }
-        scene_rtc_ = rtcNewScene(device_);
-        RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), pos.size()));
-        for (std::size_t i = 0; i < pos.size(); ++i) v[3 * i] = pos[i].x, v[3 * i + 1] = pos[i].y, v[3 * i + 2] = pos[i].z;
-        auto* idx = static_cast<std::uint32_t*>(
-            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), parent_.size()));
-        std::copy(tris_.begin(), tris_.end(), idx);
-        rtcCommitGeometry(geom);
-        rtcAttachGeometry(scene_rtc_, geom);
-        rtcReleaseGeometry(geom);
-        rtcSetSceneBuildQuality(scene_rtc_, RTC_BUILD_QUALITY_HIGH);
-        rtcCommitScene(scene_rtc_);
+        error_ = rtc_.build(pos, tris_);
     }
-    ~MeshTracer() {
-        if (scene_rtc_) rtcReleaseScene(scene_rtc_);
-        if (device_) rtcReleaseDevice(device_);
-    }
-    MeshTracer(const MeshTracer&) = delete;
-    MeshTracer& operator=(const MeshTracer&) = delete;
 
     const std::string& error() const { return error_; }
 
     std::optional<Hit> trace(const glm::dvec3& origin, const glm::dvec3& dir) const {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        RTCRayHit rh{};
-        const glm::dvec3 o = origin - centre_;
-        rh.ray.org_x = float(o.x), rh.ray.org_y = float(o.y), rh.ray.org_z = float(o.z);
-        rh.ray.dir_x = float(dir.x), rh.ray.dir_y = float(dir.y), rh.ray.dir_z = float(dir.z);
-        rh.ray.tnear = 0.0f;
-        rh.ray.tfar = std::numeric_limits<float>::infinity();
-        rh.ray.mask = ~0u;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(scene_rtc_, &ctx, &rh);
-        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+        const std::optional<RTCRayHit> found = rtc_.intersect(origin - centre_, dir);
+        if (!found) return std::nullopt;
+        const RTCRayHit& rh = *found;
         const std::size_t s = rh.hit.primID, t = parent_[s];
         const std::uint32_t* tri = &tris_[3 * s];
         const double bu = rh.hit.u, bv = rh.hit.v, bw = 1.0 - bu - bv;
@@ -223,8 +244,7 @@ private:
     std::vector<std::uint32_t> tris_, parent_;            // traced triangles and the mesh triangle of each
     glm::dvec3 centre_{0.0};
     bool deformed_ = false, smooth_ = false;
-    RTCDevice device_ = nullptr;
-    RTCScene scene_rtc_ = nullptr;
+    EmbreeTriangles rtc_;
     std::string error_;
 };
 
@@ -256,19 +276,9 @@ public:
             }
         }
         normals_ = std::move(nrm);
-        device_ = rtcNewDevice(nullptr);
-        if (!device_) {
-            error_ = "render_reference(): rtcNewDevice failed";
-            return;
-        }
-        scene_rtc_ = rtcNewScene(device_);
-        RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* v = static_cast<float*>(
-            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), count));
-        for (std::size_t k = 0; k < count; ++k) v[3 * k] = pos[k].x, v[3 * k + 1] = pos[k].y, v[3 * k + 2] = pos[k].z;
         const std::size_t tris = std::size_t(nu) * std::size_t(nv) * 2;
-        auto* idx = static_cast<std::uint32_t*>(
-            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), tris));
+        indices_.resize(3 * tris);
+        std::uint32_t* idx = indices_.data();
         std::size_t t = 0;
         for (int j = 0; j < nv; ++j)
             for (int i = 0; i < nu; ++i) {
@@ -276,36 +286,17 @@ public:
                 idx[3 * t] = a, idx[3 * t + 1] = c, idx[3 * t + 2] = b, ++t;
                 idx[3 * t] = b, idx[3 * t + 1] = c, idx[3 * t + 2] = d, ++t;
             }
-        indices_.assign(idx, idx + 3 * tris);
-        rtcCommitGeometry(geom);
-        rtcAttachGeometry(scene_rtc_, geom);
-        rtcReleaseGeometry(geom);
-        rtcSetSceneBuildQuality(scene_rtc_, RTC_BUILD_QUALITY_HIGH);
-        rtcCommitScene(scene_rtc_);
+        error_ = rtc_.build(pos, indices_);
+        if (!error_.empty()) return;
         positions_ = std::move(pos);
     }
-    ~DeformedSphere() {
-        if (scene_rtc_) rtcReleaseScene(scene_rtc_);
-        if (device_) rtcReleaseDevice(device_);
-    }
-    DeformedSphere(const DeformedSphere&) = delete;
-    DeformedSphere& operator=(const DeformedSphere&) = delete;
 
     const std::string& error() const { return error_; }
 
     std::optional<Hit> trace(const glm::dvec3& origin, const glm::dvec3& dir) const {
-        RTCIntersectContext ctx;
-        rtcInitIntersectContext(&ctx);
-        RTCRayHit rh{};
-        const glm::dvec3 o = origin - scene_.center;
-        rh.ray.org_x = float(o.x), rh.ray.org_y = float(o.y), rh.ray.org_z = float(o.z);
-        rh.ray.dir_x = float(dir.x), rh.ray.dir_y = float(dir.y), rh.ray.dir_z = float(dir.z);
-        rh.ray.tnear = 0.0f;
-        rh.ray.tfar = std::numeric_limits<float>::infinity();
-        rh.ray.mask = ~0u;
-        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-        rtcIntersect1(scene_rtc_, &ctx, &rh);
-        if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
+        const std::optional<RTCRayHit> found = rtc_.intersect(origin - scene_.center, dir);
+        if (!found) return std::nullopt;
+        const RTCRayHit& rh = *found;
         const std::uint32_t* tri = &indices_[3 * std::size_t(rh.hit.primID)];
         const double bu = rh.hit.u, bv = rh.hit.v, bw = 1.0 - bu - bv;
         Hit h;
@@ -333,8 +324,7 @@ private:
     std::vector<glm::dvec3> rest_;
     std::vector<glm::vec3> positions_, normals_;
     std::vector<std::uint32_t> indices_;
-    RTCDevice device_ = nullptr;
-    RTCScene scene_rtc_ = nullptr;
+    EmbreeTriangles rtc_;
     std::string error_;
 };
 

@@ -13,20 +13,18 @@
 
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/radix_sort.h"
+#include "tests/test_util/headless_gl.h"
 
 using namespace sffd;
 
 namespace {
 
-class RadixSort : public testing::Test {
+class RadixSort : public test::HeadlessGlTest {
 protected:
     void SetUp() override {
-        auto c = gfx::create_context({.headless = true, .width = 16, .height = 16});
-        if (!c) GTEST_SKIP() << c.message();
-        ctx.emplace(std::move(*c));
-        auto s = gfx::create_radix_sorter();
-        ASSERT_TRUE(s) << s.message();
-        sorter.emplace(std::move(*s));
+        HeadlessGlTest::SetUp();
+        if (IsSkipped()) return;
+        test::emplace_made(sorter, gfx::create_radix_sorter());
     }
     void TearDown() override { sorter.reset(); }
 
@@ -66,7 +64,6 @@ protected:
         }
     }
 
-    std::optional<gfx::GlContext> ctx;
     std::optional<gfx::RadixSorter> sorter;
 };
 

@@ -16,9 +16,9 @@ struct CliRun {
     std::string out;  // stdout + stderr
 };
 
-// `splatffd ARGS` through the shell (ARGS is pasted as written, so quote paths with spaces).
-inline CliRun run(const std::string& args) {
-    const std::string cmd = std::string(SFFD_BINARY_DIR) + "/tools/splatffd " + args + " 2>&1";
+// COMMAND through the shell with stderr joined to stdout.
+inline CliRun run_command(const std::string& command) {
+    const std::string cmd = command + " 2>&1";
     CliRun r;
     std::FILE* p = popen(cmd.c_str(), "r");
     if (!p) return r;
@@ -27,6 +27,14 @@ inline CliRun run(const std::string& args) {
     const int status = pclose(p);
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return r;
+}
+
+// `splatffd ARGS` through the shell (ARGS is pasted as written, so quote paths with spaces).
+inline CliRun run(const std::string& args) { return run_command(std::string(SFFD_BINARY_DIR) + "/tools/splatffd " + args); }
+
+// The same as on a machine without a display (DISPLAY and WAYLAND_DISPLAY unset): GL through headless EGL.
+inline CliRun run_headless(const std::string& args) {
+    return run_command("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(SFFD_BINARY_DIR) + "/tools/splatffd " + args);
 }
 
 // COMMAND through the shell (std::system); its exit status, or -1 when it did not exit normally.

@@ -10,7 +10,6 @@
 //   build/release/tools/bench/bench_gaussian --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
-#include <sys/resource.h>
 #include <unistd.h>
 
 #include <malloc.h>
@@ -23,11 +22,7 @@
 #include <cstring>
 #include <filesystem>
 #include <string>
-#include <random>
 #include <vector>
-
-#define GLM_ENABLE_EXPERIMENTAL
-#include <glm/gtx/quaternion.hpp>
 
 #include "systems/ffd/deform.h"
 #include "systems/ffd/lattice.h"
@@ -35,57 +30,18 @@
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_io.h"
-#include "tools/bench/paper_case.h"
+#include "tools/bench/gaussian_case.h"
 
 namespace {
 
 using namespace sffd;
 
-GaussianCloud sphere_gaussians(std::size_t count, int degree) {
-    GaussianCloud g;
-    g.sh_degree = degree;
-    std::mt19937 rng(1);
-    std::uniform_real_distribution<float> u(-0.5f, 0.5f);
-    for (std::size_t i = 0; i < count; ++i) {
-        const glm::dvec3 n = bench::fibonacci_sphere(i, count);
-        g.positions.push_back(glm::vec3(n));
-        g.scales.emplace_back(0.01f, 0.01f, 0.001f);  // flat along the local z = the normal
-        g.rotations.push_back(glm::quat(glm::rotation(glm::dvec3(0, 0, 1), n)));
-        g.opacities.push_back(0.8f);
-        for (int k = 0; k < sh_coeffs(degree) * 3; ++k) g.sh.push_back(u(rng));
-    }
-    return g;
-}
-
-// CPU time of the whole process (all TBB threads): the work done, meaningful on a loaded machine where
-// wall time mostly measures the other processes.
-double process_cpu_s() {
-    rusage ru{};
-    getrusage(RUSAGE_SELF, &ru);
-    return double(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) + 1e-6 * double(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
-}
-
-Lattice twisted() {
-    Lattice l = ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
-                                  {10, 10, 10});
-    ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.6 / 1.1, glm::dvec3(0.0));
-    return l;
-}
+using bench::process_cpu_s;
+using bench::sphere_gaussians;
 
 void BM_GaussianDeform(benchmark::State& state) {
     const GaussianCloud g = sphere_gaussians(std::size_t(state.range(0)), int(state.range(1)));
-    const Lattice l = twisted();
-    GaussianCloud out;
-    gaussian::DeformOptions options;
-    options.sh = state.range(2) ? gaussian::ShMode::rotate_view : gaussian::ShMode::rotate_coefficients;
-    const double cpu0 = process_cpu_s();
-    for (auto _ : state) {
-        auto s = gaussian::deform(l, g, out, options);
-        if (!s) state.SkipWithError(s.message().c_str());
-        benchmark::DoNotOptimize(out.positions.data());
-    }
-    state.SetItemsProcessed(int64_t(state.iterations()) * state.range(0));
-    state.counters["process_cpu_ms_per_run"] = 1e3 * (process_cpu_s() - cpu0) / double(state.iterations());
+    bench::run_cpu_deform(state, g, state.range(2) ? gaussian::ShMode::rotate_view : gaussian::ShMode::rotate_coefficients);
 }
 // Args: Gaussians, SH degree, SH mode (0 rotate the coefficients, 1 store the per-splat view rotation).
 BENCHMARK(BM_GaussianDeform)
@@ -97,7 +53,7 @@ BENCHMARK(BM_GaussianDeform)
 // What the lattice evaluation alone costs (positions + full Jacobians, the ffd fast path).
 void BM_FfdPositionsAndJacobians(benchmark::State& state) {
     const GaussianCloud g = sphere_gaussians(std::size_t(state.range(0)), 0);
-    const Lattice l = twisted();
+    const Lattice l = bench::twisted_gaussian_lattice();
     std::vector<glm::vec3> pos(g.size());
     std::vector<glm::mat3> jac(g.size());
     const double cpu0 = process_cpu_s();

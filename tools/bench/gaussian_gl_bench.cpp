@@ -9,8 +9,6 @@
 // Args: Gaussians, sort (0 CPU, 1 GPU), blend (0 quads, 1 tiles).
 #include <benchmark/benchmark.h>
 
-#include <sys/resource.h>
-
 #include <cstdint>
 #include <optional>
 #include <vector>
@@ -21,34 +19,19 @@
 #include "runtime/gfx/radix_sort.h"
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gl_render.h"
+#include "tools/bench/bench_util.h"
 
 namespace {
 
 using namespace sffd;
 
-// CPU time of the whole process, llvmpipe's worker threads included: the work a frame costs, comparable
-// between runs on a loaded machine where wall time mostly measures the other processes.
-double process_cpu_s() {
-    rusage ru{};
-    getrusage(RUSAGE_SELF, &ru);
-    return double(ru.ru_utime.tv_sec + ru.ru_stime.tv_sec) + 1e-6 * double(ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
-}
+using bench::process_cpu_s;
 
 void BM_GaussianGlFrame(benchmark::State& state) {
-    auto ctx = gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false});
-    if (!ctx) {
-        state.SkipWithError(ctx.message().c_str());
-        return;
-    }
-    std::optional<gaussian::GlRenderer> r;
-    {
-        auto made = gaussian::create_gl_renderer();
-        if (!made) {
-            state.SkipWithError(made.message().c_str());
-            return;
-        }
-        r.emplace(std::move(*made));
-    }
+    auto ctx = bench::made_or_skip(state, gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false}));
+    if (!ctx) return;
+    std::optional<gaussian::GlRenderer> r = bench::made_or_skip(state, gaussian::create_gl_renderer());
+    if (!r) return;
     r->sort_path = state.range(1) ? gaussian::SortPath::gpu : gaussian::SortPath::cpu;
     r->blend_path = state.range(2) ? gaussian::BlendPath::tiles : gaussian::BlendPath::quads;
     r->stage_timing = true;
@@ -92,20 +75,10 @@ BENCHMARK(BM_GaussianGlFrame)
 // The sort alone on the GPU (radix_sort of N random 32-bit keys with payloads, waited for with glFinish)
 // next to what the CPU path's sort costs (TBB parallel_sort of N (key << 32 | index) pairs).
 void BM_RadixSortGl(benchmark::State& state) {
-    auto ctx = gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false});
-    if (!ctx) {
-        state.SkipWithError(ctx.message().c_str());
-        return;
-    }
-    std::optional<gfx::RadixSorter> sorter;
-    {
-        auto made = gfx::create_radix_sorter();
-        if (!made) {
-            state.SkipWithError(made.message().c_str());
-            return;
-        }
-        sorter.emplace(std::move(*made));
-    }
+    auto ctx = bench::made_or_skip(state, gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false}));
+    if (!ctx) return;
+    std::optional<gfx::RadixSorter> sorter = bench::made_or_skip(state, gfx::create_radix_sorter());
+    if (!sorter) return;
     const std::size_t n = std::size_t(state.range(0));
     std::vector<std::uint32_t> keys(n), values(n);
     std::uint32_t x = 12345u;

@@ -28,6 +28,18 @@ void print_bounds(const char* indent, const glm::dvec3& lo, const glm::dvec3& hi
                 hi.x - lo.x, hi.y - lo.y, hi.z - lo.z);
 }
 
+// "    deformed by 'a' 'b'" for a cloud with Deformers (lattice names, in order).
+void print_deformers(const ecs::Registry& reg, ecs::Entity e) {
+    const Deformers* d = reg.try_get<Deformers>(e);
+    if (!d) return;
+    std::printf("    deformed by");
+    for (ecs::Entity l : d->lattices) {
+        const Name* ln = reg.try_get<Name>(l);
+        std::printf(" '%s'", ln ? ln->value.c_str() : "?");
+    }
+    std::printf("\n");
+}
+
 int info_ply(const std::string& file) {
     auto r = ply::Reader::open(file);
     if (!r) {
@@ -112,14 +124,7 @@ void summarise_registry(const ecs::Registry& reg) {
             print_bounds("    ", lo, hi);
             if (!c.axis_u.empty()) std::printf("    radius   min %.4g, mean %.4g, max %.4g\n", rmin, rsum / static_cast<double>(c.size()), rmax);
         }
-        if (const Deformers* d = reg.try_get<Deformers>(e)) {
-            std::printf("    deformed by");
-            for (ecs::Entity l : d->lattices) {
-                const Name* ln = reg.try_get<Name>(l);
-                std::printf(" '%s'", ln ? ln->value.c_str() : "?");
-            }
-            std::printf("\n");
-        }
+        print_deformers(reg, e);
     });
     std::size_t gaussians = 0;
     reg.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& g) {  // 3D Gaussian entities
@@ -136,14 +141,7 @@ void summarise_registry(const ecs::Registry& reg) {
             }
             print_bounds("    ", lo, hi);
         }
-        if (const Deformers* d = reg.try_get<Deformers>(e)) {
-            std::printf("    deformed by");
-            for (ecs::Entity l : d->lattices) {
-                const Name* ln = reg.try_get<Name>(l);
-                std::printf(" '%s'", ln ? ln->value.c_str() : "?");
-            }
-            std::printf("\n");
-        }
+        print_deformers(reg, e);
     });
     reg.view<const Lattice>().each([&](ecs::Entity e, const Lattice& l) {
         const Name* n = reg.try_get<Name>(e);

@@ -121,25 +121,21 @@ struct SceneBounds {
 SceneBounds scene_bounds(const ecs::Registry& registry) {
     glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
     std::vector<std::pair<glm::dvec3, double>> balls;
-    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
-        if (cloud.size() == 0) return;
-        const render::BoundingSphere b = render::bounding_sphere(cloud);
-        const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), cloud.origin);
+    // A cloud's local bounding sphere `b` in world space (centre through the model matrix, radius by its
+    // largest axis scale).
+    const auto add = [&](ecs::Entity e, const render::BoundingSphere& b, const glm::dvec3& origin) {
+        const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), origin);
         const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
         const glm::dvec3 c = glm::dvec3(m * glm::dvec4(b.center, 1.0));
         balls.emplace_back(c, b.radius * scale);
         lo = glm::min(lo, c - b.radius * scale);
         hi = glm::max(hi, c + b.radius * scale);
+    };
+    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
+        if (cloud.size() > 0) add(e, render::bounding_sphere(cloud), cloud.origin);
     });
     registry.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& cloud) {  // 3D Gaussians too
-        if (cloud.size() == 0) return;
-        const render::BoundingSphere b = render::gaussian_bounding_sphere(cloud);
-        const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), cloud.origin);
-        const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
-        const glm::dvec3 c = glm::dvec3(m * glm::dvec4(b.center, 1.0));
-        balls.emplace_back(c, b.radius * scale);
-        lo = glm::min(lo, c - b.radius * scale);
-        hi = glm::max(hi, c + b.radius * scale);
+        if (cloud.size() > 0) add(e, render::gaussian_bounding_sphere(cloud), cloud.origin);
     });
     SceneBounds out;
     if (balls.empty()) return out;

@@ -17,21 +17,14 @@
 #include "systems/ffd/operations.h"
 #include "systems/ffd/paper_mode.h"
 #include "tests/systems/ffd/test_util.h"
+#include "tests/test_util/headless_gl.h"
 
 #include <glm/gtc/matrix_transform.hpp>
 
 namespace sffd {
 namespace {
 
-class FfdGl : public testing::Test {
-protected:
-    void SetUp() override {
-        auto c = gfx::create_context({.headless = true, .width = 16, .height = 16});
-        if (!c) GTEST_SKIP() << c.message();
-        ctx.emplace(std::move(*c));
-    }
-    std::optional<gfx::GlContext> ctx;
-};
+class FfdGl : public test::HeadlessGlTest {};
 
 // A point cloud with the test points, deformed by one lattice.
 std::pair<ecs::Entity, ecs::Entity> add_cloud_and_lattice(ecs::Registry& reg, const ffd::test::Cloud& c, Lattice lattice) {

@@ -21,6 +21,7 @@
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/splat_render/image_io.h"
+#include "tests/systems/gaussian/test_math.h"
 
 namespace {
 
@@ -67,31 +68,50 @@ GaussianCloud cloud(std::size_t n) {
     return g;
 }
 
+// A 4³ lattice around cloud(n), twisted by up to 0.5 rad about +y, saved to `path`.
+Lattice save_twisted_lattice(const fs::path& path) {
+    Lattice l = ffd::make_lattice({-1.2, -1.2, -1.2}, {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)}, {4, 4, 4});
+    ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.5, glm::dvec3(0.0));
+    EXPECT_TRUE(ffd::save_lattice(path, l));
+    return l;
+}
+
+// What the command wrote (`got`), its input as read back (`src`) and the library's CPU deformation of
+// that input through `l` (`expect`), the reference the command must match.
+struct Deformed {
+    GaussianCloud got, src, expect;
+};
+Result<Deformed> read_and_deform(const fs::path& in, const fs::path& out, const Lattice& l) {
+    Deformed d;
+    auto got = gaussian::read_ply(out);
+    if (!got) return got.error();
+    auto src = gaussian::read_ply(in);
+    if (!src) return src.error();
+    if (auto s = gaussian::deform(l, *src, d.expect); !s) return s.error();
+    d.got = std::move(*got), d.src = std::move(*src);
+    return d;
+}
+
 TEST(GaussianDeformCommand, MatchesTheLibraryAndPrintsBenchJson) {
     const GaussianCloud g = cloud(70000);  // more than one 65,536-row chunk
     const fs::path in = temp("in.ply"), out = temp("out.ply"), lat = temp("lat.json");
     ASSERT_TRUE(gaussian::write_ply(in, g));
-    Lattice l = ffd::make_lattice({-1.2, -1.2, -1.2}, {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)}, {4, 4, 4});
-    ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.5, glm::dvec3(0.0));
-    ASSERT_TRUE(ffd::save_lattice(lat, l));
+    const Lattice l = save_twisted_lattice(lat);
     const RunResult r = run(in.string() + " " + out.string() + " --lattice " + lat.string() + " --bench 2");
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.out.find("{\"gaussians\":70000,\"sh_degree\":3,\"backend\":\"cpu\",\"median_ms\":"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("\"gaussians_per_s\":"), std::string::npos);
-    auto got = gaussian::read_ply(out);
-    ASSERT_TRUE(got) << got.message();
-    auto src = gaussian::read_ply(in);
-    ASSERT_TRUE(src);
-    GaussianCloud expect;
-    ASSERT_TRUE(gaussian::deform(l, *src, expect));
-    ASSERT_EQ(got->size(), expect.size());
-    for (std::size_t i = 0; i < got->size(); ++i) {
-        EXPECT_EQ(got->positions[i], expect.positions[i]);
-        EXPECT_LT(glm::length(got->scales[i] - expect.scales[i]), 1e-6f * glm::length(expect.scales[i]));
-        EXPECT_LT(std::abs(std::abs(glm::dot(got->rotations[i], expect.rotations[i])) - 1.0f), 1e-6f);
-        EXPECT_EQ(got->opacities[i], src->opacities[i]);
+    auto d = read_and_deform(in, out, l);
+    ASSERT_TRUE(d) << d.message();
+    const GaussianCloud &got = d->got, &src = d->src, &expect = d->expect;
+    ASSERT_EQ(got.size(), expect.size());
+    for (std::size_t i = 0; i < got.size(); ++i) {
+        EXPECT_EQ(got.positions[i], expect.positions[i]);
+        EXPECT_LT(glm::length(got.scales[i] - expect.scales[i]), 1e-6f * glm::length(expect.scales[i]));
+        EXPECT_LT(std::abs(std::abs(glm::dot(got.rotations[i], expect.rotations[i])) - 1.0f), 1e-6f);
+        EXPECT_EQ(got.opacities[i], src.opacities[i]);
     }
-    EXPECT_EQ(got->sh, expect.sh);
+    EXPECT_EQ(got.sh, expect.sh);
 }
 
 // Streaming over three chunks (140,000 rows > 2 x 65,536) of an ASCII 3DGS PLY that carries a property
@@ -122,22 +142,19 @@ TEST(GaussianDeformCommand, StreamsThreeChunksIdenticallyAndKeepsOtherData) {
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.err.find("140000 Gaussians"), std::string::npos) << r.err;
 
-    auto src = gaussian::read_ply(in);
-    ASSERT_TRUE(src) << src.message();
-    GaussianCloud expect;
-    ASSERT_TRUE(gaussian::deform(l, *src, expect));
-    auto got = gaussian::read_ply(out);
-    ASSERT_TRUE(got) << got.message();
-    ASSERT_EQ(got->size(), n);
+    auto d = read_and_deform(in, out, l);
+    ASSERT_TRUE(d) << d.message();
+    const GaussianCloud &got = d->got, &src = d->src, &expect = d->expect;
+    ASSERT_EQ(got.size(), n);
     std::size_t bad = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        bad += got->positions[i] != expect.positions[i];
-        bad += !(glm::length(got->scales[i] - expect.scales[i]) <= 1e-6f * glm::length(expect.scales[i]));
-        bad += !(std::abs(std::abs(glm::dot(got->rotations[i], expect.rotations[i])) - 1.0f) <= 1e-6f);
-        bad += got->opacities[i] != src->opacities[i];
+        bad += got.positions[i] != expect.positions[i];
+        bad += !(glm::length(got.scales[i] - expect.scales[i]) <= 1e-6f * glm::length(expect.scales[i]));
+        bad += !(std::abs(std::abs(glm::dot(got.rotations[i], expect.rotations[i])) - 1.0f) <= 1e-6f);
+        bad += got.opacities[i] != src.opacities[i];
     }
     EXPECT_EQ(bad, 0u);
-    EXPECT_EQ(got->sh, expect.sh);
+    EXPECT_EQ(got.sh, expect.sh);
 
     auto reader = ply::Reader::open(out);
     ASSERT_TRUE(reader) << reader.message();
@@ -161,12 +178,7 @@ TEST(GaussianDeformCommand, StreamsThreeChunksIdenticallyAndKeepsOtherData) {
     EXPECT_EQ(chunk.columns[std::size_t(chunk.find("fx"))].values[0], 1234.5);
 }
 
-double max_abs(const glm::dmat3& a) {
-    double m = 0.0;
-    for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r) m = std::max(m, std::abs(a[c][r]));
-    return m;
-}
+using sffd::test::max_abs;
 
 TEST(GaussianDeformCommand, GpuBackendMatchesTheLibrary) {
     // --backend gpu: the GPU deformation (coefficients rotated on the GPU) on a headless context, chunk by
@@ -174,28 +186,23 @@ TEST(GaussianDeformCommand, GpuBackendMatchesTheLibrary) {
     const GaussianCloud g = cloud(70000);  // two chunks
     const fs::path in = temp("gin.ply"), out = temp("gout.ply"), lat = temp("glat.json");
     ASSERT_TRUE(gaussian::write_ply(in, g));
-    Lattice l = ffd::make_lattice({-1.2, -1.2, -1.2}, {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)}, {4, 4, 4});
-    ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.5, glm::dvec3(0.0));
-    ASSERT_TRUE(ffd::save_lattice(lat, l));
+    const Lattice l = save_twisted_lattice(lat);
     const RunResult r = run(in.string() + " " + out.string() + " --lattice " + lat.string() + " --backend gpu");
     if (r.code != 0 && r.err.find("--backend gpu: ") != std::string::npos) GTEST_SKIP() << "no GL context: " << r.err;
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.err.find("0 not finite"), std::string::npos) << r.err;
-    auto got = gaussian::read_ply(out);
-    ASSERT_TRUE(got) << got.message();
-    auto src = gaussian::read_ply(in);
-    ASSERT_TRUE(src);
-    GaussianCloud expect;
-    ASSERT_TRUE(gaussian::deform(l, *src, expect));
-    ASSERT_EQ(got->size(), expect.size());
+    auto d = read_and_deform(in, out, l);
+    ASSERT_TRUE(d) << d.message();
+    const GaussianCloud &got = d->got, &src = d->src, &expect = d->expect;
+    ASSERT_EQ(got.size(), expect.size());
     double ec = 0, es = 0, esh = 0;
-    for (std::size_t i = 0; i < got->size(); ++i) {
-        ec = std::max(ec, double(glm::length(got->positions[i] - expect.positions[i])));
+    for (std::size_t i = 0; i < got.size(); ++i) {
+        ec = std::max(ec, double(glm::length(got.positions[i] - expect.positions[i])));
         const glm::dmat3 s = gaussian::covariance(glm::dvec3(expect.scales[i]), glm::dquat(expect.rotations[i]));
-        es = std::max(es, max_abs(gaussian::covariance(glm::dvec3(got->scales[i]), glm::dquat(got->rotations[i])) - s) / max_abs(s));
-        EXPECT_EQ(got->opacities[i], src->opacities[i]);
+        es = std::max(es, max_abs(gaussian::covariance(glm::dvec3(got.scales[i]), glm::dquat(got.rotations[i])) - s) / max_abs(s));
+        EXPECT_EQ(got.opacities[i], src.opacities[i]);
     }
-    for (std::size_t k = 0; k < got->sh.size(); ++k) esh = std::max(esh, double(std::abs(got->sh[k] - expect.sh[k])));
+    for (std::size_t k = 0; k < got.sh.size(); ++k) esh = std::max(esh, double(std::abs(got.sh[k] - expect.sh[k])));
     std::printf("deform --backend gpu: max centre error %.2e, relative Σ %.2e, SH %.2e\n", ec, es, esh);
     EXPECT_LT(ec, 5e-6);
     EXPECT_LT(es, 3e-5);  // the file's log scales and normalised quaternions add rounding of their own

@@ -22,18 +22,14 @@
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/gaussian/sh.h"
+#include "tests/systems/gaussian/test_math.h"
 
 namespace {
 
 using namespace sffd;
 using namespace sffd::gaussian;
 
-double max_abs(const glm::dmat3& a) {
-    double m = 0.0;
-    for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r) m = std::max(m, std::abs(a[c][r]));
-    return m;
-}
+using sffd::test::max_abs;
 
 // A 4³ Bernstein (or B-spline) lattice around [-1,1]³ with a graded twist about y and a bend.
 Lattice twisted_lattice(LatticeBasis basis = LatticeBasis::bernstein, int div = 4) {

@@ -19,6 +19,7 @@
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gl_render.h"
+#include "tests/systems/gaussian/gl_renderer_fixture.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/splat_render/camera_math.h"
 
@@ -36,20 +37,7 @@ fs::path source_of(const std::string& name) {
     return assets::face_cache_path().parent_path() / "dragon.ply";
 }
 
-class GaussianGlContent : public testing::TestWithParam<const char*> {
-protected:
-    void SetUp() override {
-        auto c = gfx::create_context({.headless = true, .width = 16, .height = 16});
-        if (!c) GTEST_SKIP() << c.message();
-        ctx.emplace(std::move(*c));
-        auto r = create_gl_renderer();
-        ASSERT_TRUE(r) << r.message();
-        renderer.emplace(std::move(*r));
-    }
-    void TearDown() override { renderer.reset(); }
-    std::optional<gfx::GlContext> ctx;
-    std::optional<GlRenderer> renderer;
-};
+class GaussianGlContent : public sffd::test::GaussianGlRendererTest<sffd::test::HeadlessGlTestWithParam<const char*>> {};
 
 void compare(GlRenderer& r, const GaussianCloud& g, const Camera& cam, const ReferenceOptions& o, const std::string& what) {
     auto gl = render_gl(r, g, cam, o);

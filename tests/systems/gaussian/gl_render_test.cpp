@@ -20,6 +20,7 @@
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gl_render.h"
+#include "tests/systems/gaussian/gl_renderer_fixture.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"
 
@@ -28,20 +29,7 @@ namespace {
 using namespace sffd;
 using namespace sffd::gaussian;
 
-class GaussianGl : public testing::Test {
-protected:
-    void SetUp() override {
-        auto c = gfx::create_context({.headless = true, .width = 16, .height = 16});
-        if (!c) GTEST_SKIP() << c.message();
-        ctx.emplace(std::move(*c));
-        auto r = create_gl_renderer();
-        ASSERT_TRUE(r) << r.message();
-        renderer.emplace(std::move(*r));
-    }
-    void TearDown() override { renderer.reset(); }
-    std::optional<gfx::GlContext> ctx;
-    std::optional<GlRenderer> renderer;
-};
+class GaussianGl : public sffd::test::GaussianGlRendererTest<sffd::test::HeadlessGlTest> {};
 
 Camera camera_at(glm::dvec3 eye, glm::dvec3 target = glm::dvec3(0.0), float fov = 40.0f) {
     Camera c;

@@ -27,6 +27,8 @@
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/gaussian/gpu_deform.h"
 #include "systems/gaussian/gpu_store.h"
+#include "tests/test_util/headless_gl.h"
+#include "tests/systems/gaussian/test_math.h"
 
 namespace {
 
@@ -35,15 +37,12 @@ using namespace sffd::gaussian;
 
 // Bernstein lattices use two shapes only (4x3x5 and 3x3x3): each shape and kernel is a specialised program
 // whose first compile on llvmpipe takes tens of seconds on a loaded machine (Mesa caches it on disk).
-class GaussianGpuDeform : public testing::Test {
+class GaussianGpuDeform : public sffd::test::HeadlessGlTest {
 protected:
     void SetUp() override {
-        auto c = gfx::create_context({.headless = true, .width = 16, .height = 16});
-        if (!c) GTEST_SKIP() << c.message();
-        ctx.emplace(std::move(*c));
-        auto d = GpuGaussianDeformer::create();
-        ASSERT_TRUE(d) << d.message();
-        deformer.emplace(std::move(*d));
+        HeadlessGlTest::SetUp();
+        if (IsSkipped()) return;
+        sffd::test::emplace_made(deformer, GpuGaussianDeformer::create());
         errors_at_start = gfx::debug_error_count();
     }
     void TearDown() override {
@@ -53,7 +52,6 @@ protected:
         }
     }
     std::uint64_t errors_at_start = 0;
-    std::optional<gfx::GlContext> ctx;
     std::optional<GpuGaussianDeformer> deformer;
 };
 
@@ -95,12 +93,8 @@ Lattice stretched(LatticeBasis basis, glm::ivec3 div) {
     return l;
 }
 
-double max_abs(const glm::dmat3& a) {
-    double m = 0.0;
-    for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r) m = std::max(m, std::abs(a[c][r]));
-    return m;
-}
+using sffd::test::max_abs;
+
 glm::dmat3 sigma(const GaussianCloud& g, std::size_t i) { return covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i])); }
 
 bool all_finite(const GaussianCloud& g) {

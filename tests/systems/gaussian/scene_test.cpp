@@ -35,14 +35,13 @@
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_render.h"
 #include "tests/systems/splat_render/test_scenes.h"
+#include "tests/test_util/run_tool.h"
 
 namespace {
 
 using namespace sffd;
 using namespace sffd::gaussian;
 namespace fs = std::filesystem;
-
-const std::string binary = std::string(SFFD_BINARY_DIR) + "/tools/splatffd";
 
 fs::path fresh_dir(const std::string& name) {
     const fs::path d = fs::temp_directory_path() / ("sffd_gaussian_scene_" + std::to_string(::getpid())) / name;
@@ -52,15 +51,9 @@ fs::path fresh_dir(const std::string& name) {
 }
 
 int run(const std::string& args, std::string* output = nullptr) {
-    const fs::path log = fs::temp_directory_path() / ("sffd_gaussian_scene_" + std::to_string(::getpid()) + ".log");
-    const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY " + binary + " " + args + " > " + log.string() + " 2>&1";
-    const int status = std::system(cmd.c_str());
-    if (output) {
-        std::ifstream in(log);
-        *output = std::string(std::istreambuf_iterator<char>(in), {});
-    }
-    fs::remove(log);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    const sffd::test::CliRun r = sffd::test::run_headless(args);
+    if (output) *output = r.out;
+    return r.code;
 }
 
 // A test sphere as Gaussians (a closed, coloured surface a twist visibly moves).

@@ -24,6 +24,7 @@
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/gaussian_spz.h"
 #include "systems/gaussian/sh.h"
+#include "tests/systems/gaussian/test_math.h"
 
 namespace {
 
@@ -76,12 +77,7 @@ GaussianCloud cloud(std::size_t n, int degree) {
     return g;
 }
 
-double max_abs(const glm::dmat3& a) {
-    double m = 0.0;
-    for (int c = 0; c < 3; ++c)
-        for (int r = 0; r < 3; ++r) m = std::max(m, std::abs(a[c][r]));
-    return m;
-}
+using sffd::test::max_abs;
 
 // Same Gaussians up to float rounding (covariances compared, not the sign or order of the factors).
 void expect_same(const GaussianCloud& a, const GaussianCloud& b, double tol) {

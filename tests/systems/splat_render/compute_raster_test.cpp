@@ -21,46 +21,6 @@ using namespace sffd::render::test;
 
 namespace {
 
-struct Comparison {
-    int covered_a = 0, covered_b = 0, coverage_mismatch = 0;
-    double psnr = 0.0;       // dB, linear rgb over the pixels covered in both
-    double max_color = 0.0;  // largest channel difference there
-    double max_depth = 0.0;  // largest depth difference there (view-axis units)
-};
-
-Comparison compare(const FrameImage& a, const FrameImage& b) {
-    Comparison c;
-    double se = 0.0;
-    int both = 0;
-    for (int y = 0; y < a.height; ++y)
-        for (int x = 0; x < a.width; ++x) {
-            const bool ca = a.covered(x, y), cb = b.covered(x, y);
-            c.covered_a += ca, c.covered_b += cb, c.coverage_mismatch += ca != cb;
-            if (!ca || !cb) continue;
-            const std::size_t i = a.index(x, y);
-            const glm::vec3 e = glm::abs(glm::vec3(a.color[i]) - glm::vec3(b.color[i]));
-            se += double(glm::dot(e, e));
-            c.max_color = std::max(c.max_color, double(std::max({e.x, e.y, e.z})));
-            c.max_depth = std::max(c.max_depth, double(std::abs(a.depth[i] - b.depth[i])));
-            ++both;
-        }
-    const double mse = both > 0 ? se / (3.0 * both) : 0.0;
-    c.psnr = mse > 0.0 ? 10.0 * std::log10(1.0 / mse) : 200.0;
-    return c;
-}
-
-// A checker texture on the sphere's uv (textured clouds sample it per pixel).
-void add_checker(SplatCloud& s) {
-    const int tw = 64, th = 32;
-    s.material.texture_width = tw, s.material.texture_height = th;
-    for (int y = 0; y < th; ++y)
-        for (int x = 0; x < tw; ++x) {
-            const bool check = ((x / 8) + (y / 8)) % 2 == 0;
-            s.material.texture_rgba8.insert(s.material.texture_rgba8.end(),
-                                            {std::uint8_t(check ? 230 : 40), std::uint8_t(40 + 6 * y), std::uint8_t(check ? 40 : 220), 255});
-        }
-}
-
 class ComputeRaster_ : public GlRenderTest {
 protected:
     FrameImage render_path(RasterPath raster, bool culling = true, CullPath cull = CullPath::automatic, int w = 480, int h = 320) {
@@ -108,7 +68,7 @@ TEST_F(ComputeRaster_, RendersTheSameImageAsTheRasterPath) {
                         EXPECT_GT(st.raster_sprites, 100u) << what;  // the hybrid split: both paths draw
                         EXPECT_LT(st.raster_sprites + 100u, st.visible_points) << what;
                     }
-                    const Comparison c = compare(raster, compute);
+                    const ImageDiff c = image_diff(raster, compute);
                     EXPECT_GT(c.covered_a, distance >= 20.0 ? 400 : 5000) << what;
                     // Measured on llvmpipe: coverage identical; PSNR 86.5-105 dB where the compute
                     // rasteriser draws (fixed-point rounding of the sums), largest channel difference 0.0039
@@ -150,7 +110,7 @@ TEST_F(ComputeRaster_, SeveralCloudsInOneFrame) {
         EXPECT_EQ(cs.visible_points, rs.visible_points) << what;
         EXPECT_GT(cs.raster_sprites, 20u) << what;  // the enlarged splats of the textured cloud
         EXPECT_LT(cs.raster_sprites, cs.visible_points / 4) << what;
-        const Comparison c = compare(raster, compute);
+        const ImageDiff c = image_diff(raster, compute);
         EXPECT_GT(c.covered_a, 20000) << what;
         EXPECT_LE(c.coverage_mismatch, 2) << what;
         EXPECT_GT(c.psnr, 60.0) << what;
@@ -177,7 +137,7 @@ TEST_F(ComputeRaster_, HybridSendsLargeSpritesToTheRasterPath) {
     EXPECT_EQ(cs.raster_sprites, enlarged);
     EXPECT_EQ(rs.raster_sprites, 0u);  // the raster path splits nothing
     EXPECT_EQ(cs.visible_points, rs.visible_points);
-    const Comparison c = compare(raster, compute);
+    const ImageDiff c = image_diff(raster, compute);
     EXPECT_GT(c.covered_a, 5000);
     EXPECT_LE(c.coverage_mismatch, 4);
     EXPECT_GT(c.psnr, 40.0);
@@ -186,7 +146,7 @@ TEST_F(ComputeRaster_, HybridSendsLargeSpritesToTheRasterPath) {
     gfx::ScopedDispatchLimit two(2);
     const FrameImage grid = render_path(RasterPath::compute, true, CullPath::compute);
     EXPECT_EQ(reg.resource<RenderStats>().raster_sprites, enlarged);
-    EXPECT_GT(compare(compute, grid).psnr, 60.0);
+    EXPECT_GT(image_diff(compute, grid).psnr, 60.0);
 }
 
 // 65,535 coincident splats facing the camera, centred on a pixel centre: that pixel gets 65,535
@@ -240,10 +200,7 @@ TEST_F(ComputeRaster_, MatchesTheRasterPathOnGpuDeformedSplats) {
     add_camera(3.0);
     add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
     const ecs::Entity cloud = add_cloud(fibonacci_sphere(20000));
-    const ecs::Entity le = reg.create();
-    reg.emplace<Lattice>(le, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
-                                               {4, 4, 4}));
-    reg.emplace<Deformers>(cloud, Deformers{{le}});
+    const ecs::Entity le = add_lattice(cloud);
     ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.9, glm::dvec3(0.0));
     reg.set_resource<FfdSettings>().force_gpu = true;
     render_path(RasterPath::raster);  // uploads the rest splats the compute pass reads
@@ -253,7 +210,7 @@ TEST_F(ComputeRaster_, MatchesTheRasterPathOnGpuDeformedSplats) {
     const FrameImage compute = render_path(RasterPath::compute);
     EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 1u);
     EXPECT_EQ(reg.resource<RenderStats>().compute_rastered_clouds, 1u);
-    const Comparison c = compare(raster, compute);
+    const ImageDiff c = image_diff(raster, compute);
     EXPECT_GT(c.covered_a, 10000);
     EXPECT_LE(c.coverage_mismatch, 4);
     EXPECT_GT(c.psnr, 40.0);

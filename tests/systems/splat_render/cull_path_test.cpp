@@ -20,44 +20,11 @@ using namespace sffd::render::test;
 
 namespace {
 
-struct ImageDiff {
-    int covered_a = 0, covered_b = 0, coverage_mismatch = 0, over_2_percent = 0;
-    double max_color = 0.0, mean_color = 0.0, max_depth = 0.0;  // over covered-in-both pixels
-};
-
-ImageDiff diff(const FrameImage& a, const FrameImage& b) {
-    ImageDiff d;
-    int both = 0;
-    for (int y = 0; y < a.height; ++y)
-        for (int x = 0; x < a.width; ++x) {
-            const bool ca = a.covered(x, y), cb = b.covered(x, y);
-            d.covered_a += ca, d.covered_b += cb, d.coverage_mismatch += ca != cb;
-            if (!ca || !cb) continue;
-            const std::size_t i = a.index(x, y);
-            const glm::vec4 e = glm::abs(a.color[i] - b.color[i]);
-            const double m = double(std::max({e.x, e.y, e.z}));
-            d.max_color = std::max(d.max_color, m);
-            d.over_2_percent += m > 0.02;
-            d.mean_color += m;
-            d.max_depth = std::max(d.max_depth, double(std::abs(a.depth[i] - b.depth[i])));
-            ++both;
-        }
-    if (both > 0) d.mean_color /= both;
-    return d;
-}
-
 // A textured sphere with some splats too large for sprites (drawn as quads) and a few splats straddling
 // the frame's border (quads too: sprites are clipped by their centre).
 SplatCloud mixed_sphere() {
     SplatCloud s = fibonacci_sphere(20000, 1.0, 0.8);
-    const int tw = 64, th = 32;
-    s.material.texture_width = tw, s.material.texture_height = th;
-    for (int y = 0; y < th; ++y)
-        for (int x = 0; x < tw; ++x) {
-            const bool check = ((x / 8) + (y / 8)) % 2 == 0;
-            s.material.texture_rgba8.insert(s.material.texture_rgba8.end(),
-                                            {std::uint8_t(check ? 230 : 40), std::uint8_t(40 + 6 * y), std::uint8_t(check ? 40 : 220), 255});
-        }
+    add_checker(s);
     for (std::size_t i = 0; i < s.size(); i += 211)
         if (s.normals[i].z > 0.5f) s.axis_u[i] *= 25.0f, s.axis_v[i] *= 25.0f;
     return s;
@@ -89,7 +56,7 @@ TEST_F(CullPath_, CpuAndComputeCullsRenderTheSameImage) {
             } else {
                 EXPECT_EQ(cs.visible_points + cs.visible_quads, 20000u) << what;
             }
-            const ImageDiff d = diff(gpu, cpu);
+            const ImageDiff d = image_diff(gpu, cpu);
             EXPECT_GT(d.covered_a, 30000) << what;
             EXPECT_LE(d.coverage_mismatch, 2) << what;
             // Measured: the CPU's float-weight texture filtering and llvmpipe's differ by <= 1/512 (mean
@@ -144,7 +111,7 @@ TEST_F(CullPath_, GridDispatchCullsTheSameSplatsAsOneRow) {
         if (!culling) {
             EXPECT_EQ(gs.visible_points + gs.visible_quads, 20000u) << what;
         }
-        const ImageDiff d = diff(grid, row);
+        const ImageDiff d = image_diff(grid, row);
         EXPECT_GT(d.covered_a, 10000) << what;
         EXPECT_LE(d.coverage_mismatch, 2) << what;
         EXPECT_LT(d.max_depth, 1e-5) << what;
@@ -164,10 +131,7 @@ TEST_F(CullPath_, AutomaticPathFollowsWhereTheSplatsAre) {
     EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, software ? 1u : 0u);
     EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, software ? 0u : 1u);
 
-    const ecs::Entity le = reg.create();
-    reg.emplace<Lattice>(le, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
-                                               {4, 4, 4}));
-    reg.emplace<Deformers>(cloud, Deformers{{le}});
+    const ecs::Entity le = add_lattice(cloud);
     ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.9, glm::dvec3(0.0));
     reg.set_resource<FfdSettings>().force_cpu = true;
     ffd_system(reg, {});
@@ -184,7 +148,7 @@ TEST_F(CullPath_, AutomaticPathFollowsWhereTheSplatsAre) {
     EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, 0u);
     EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 1u);
 
-    const ImageDiff d = diff(on_cpu, on_gpu);
+    const ImageDiff d = image_diff(on_cpu, on_gpu);
     EXPECT_GT(d.covered_a, 10000);
     EXPECT_LE(d.coverage_mismatch, 4);
     EXPECT_LT(d.mean_color, 1e-3);

@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -13,6 +14,7 @@
 
 #include "runtime/ecs/registry.h"
 #include "runtime/gfx/context.h"
+#include "runtime/scene/lattice.h"
 #include "runtime/scene/components.h"
 #include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/image_io.h"
@@ -51,6 +53,14 @@ protected:
         const ecs::Entity e = reg.create();
         reg.emplace<SplatCloud>(e, std::move(cloud));
         return e;
+    }
+    // A Bernstein lattice of `divisions`³ around the unit sphere (box [-1.1, 1.1]³) deforming `cloud`.
+    ecs::Entity add_lattice(ecs::Entity cloud, int divisions = 4) {
+        const ecs::Entity le = reg.create();
+        reg.emplace<Lattice>(le, make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                                                   {divisions, divisions, divisions}));
+        reg.emplace<Deformers>(cloud, Deformers{{le}});
+        return le;
     }
 
     // path: automatic is the CPU cull on llvmpipe; CullPath::compute runs the compute pass.
@@ -117,6 +127,41 @@ inline Coverage ellipsoid_coverage(const FrameImage& img, const Camera& cam, glm
             if (std::abs(double(img.depth[img.index(x, y)]) - *hit_ellipsoid(cam.eye, d, scale)) > 0.05) ++c.far_side;
         }
     return c;
+}
+
+// Two frames compared over the pixels covered in both (after counting coverage and its mismatches).
+struct ImageDiff {
+    int covered_a = 0, covered_b = 0, coverage_mismatch = 0;
+    int over_2_percent = 0;   // pixels whose largest channel difference is over 0.02
+    double psnr = 0.0;        // dB, linear rgb (200 when equal)
+    double max_color = 0.0;   // largest rgb channel difference
+    double mean_color = 0.0;  // mean of the per-pixel largest channel difference
+    double max_depth = 0.0;   // largest depth difference (view-axis units)
+};
+
+inline ImageDiff image_diff(const FrameImage& a, const FrameImage& b) {
+    ImageDiff d;
+    double se = 0.0;
+    int both = 0;
+    for (int y = 0; y < a.height; ++y)
+        for (int x = 0; x < a.width; ++x) {
+            const bool ca = a.covered(x, y), cb = b.covered(x, y);
+            d.covered_a += ca, d.covered_b += cb, d.coverage_mismatch += ca != cb;
+            if (!ca || !cb) continue;
+            const std::size_t i = a.index(x, y);
+            const glm::vec3 e = glm::abs(glm::vec3(a.color[i]) - glm::vec3(b.color[i]));
+            const double m = double(std::max({e.x, e.y, e.z}));
+            se += double(glm::dot(e, e));
+            d.max_color = std::max(d.max_color, m);
+            d.over_2_percent += m > 0.02;
+            d.mean_color += m;
+            d.max_depth = std::max(d.max_depth, double(std::abs(a.depth[i] - b.depth[i])));
+            ++both;
+        }
+    if (both > 0) d.mean_color /= both;
+    const double mse = both > 0 ? se / (3.0 * both) : 0.0;
+    d.psnr = mse > 0.0 ? 10.0 * std::log10(1.0 / mse) : 200.0;
+    return d;
 }
 
 inline double luminance(const glm::vec4& c) { return 0.2126 * double(c.x) + 0.7152 * double(c.y) + 0.0722 * double(c.z); }

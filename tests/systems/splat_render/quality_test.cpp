@@ -26,6 +26,38 @@ namespace fs = std::filesystem;
 
 class Quality_ : public GlRenderTest {
 protected:
+    // The converted box `cloud` with its mesh `g` as the ExactMesh ground truth (positions relative to the
+    // cloud's origin), the box tests' camera and light.
+    ecs::Entity add_box_and_its_mesh(const assets::Geometry& g, SplatCloud cloud) {
+        const ecs::Entity e = reg.create();
+        ExactMesh mesh;
+        for (const glm::dvec3& p : g.positions) mesh.positions.push_back(p - cloud.origin);
+        mesh.uvs = g.uvs;
+        mesh.triangles = g.triangles;
+        reg.emplace<SplatCloud>(e, std::move(cloud));
+        reg.emplace<ExactMesh>(e, std::move(mesh));
+        Camera cam;
+        cam.eye = glm::dvec3(0.9, 0.8, 2.4);
+        cam.near_plane = 0.05f;
+        reg.emplace<Camera>(reg.create(), cam);
+        add_light({-0.4f, -0.6f, -0.7f}, 0.15f);
+        return e;
+    }
+    // Both qualities against the mesh ground truth `ref`: most pixels are face interior, and there the
+    // PSNR is at least `hq_db` / `preview_db`.
+    void expect_interior_matches(const FrameImage& ref, int w, int h, const char* what, double hq_db, double preview_db) {
+        for (Quality q : {Quality::hq, Quality::preview}) {
+            const FrameImage img = render(q, w, h);
+            auto cmp = compare_images(img, ref);
+            ASSERT_TRUE(cmp.ok()) << cmp.message();
+            const char* name = q == Quality::hq ? "hq" : "preview";
+            std::printf("%s %s vs its mesh ground truth: PSNR %.2f dB (covered in both %.2f dB, %zu px covered in one only), "
+                        "interior %.2f dB over %zu of %zu px\n",
+                        what, name, cmp->psnr, cmp->psnr_both, cmp->pixels_one, cmp->psnr_interior, cmp->pixels_interior, cmp->pixels);
+            EXPECT_GT(cmp->pixels_interior, cmp->pixels * 3 / 4) << name;
+            EXPECT_GE(cmp->psnr_interior, q == Quality::hq ? hq_db : preview_db) << name;
+        }
+    }
     // The built-in sphere with the demo clip on its lattice (what `splatffd render sphere` loads).
     void load_sphere() {
         ASSERT_TRUE(assets::load_builtin_scene(reg, "sphere"));
@@ -171,35 +203,14 @@ TEST_F(Quality_, ConvertedTexturedMeshAgainstItsMeshGroundTruth) {
     opt.splats = 20000;
     auto converted = assets::make_splat_cloud(*g, opt);
     ASSERT_TRUE(converted.ok()) << converted.message();
-    const ecs::Entity e = reg.create();
-    ExactMesh mesh;
-    for (const glm::dvec3& p : g->positions) mesh.positions.push_back(p - converted->origin);
-    mesh.uvs = g->uvs;
-    mesh.triangles = g->triangles;
-    reg.emplace<SplatCloud>(e, std::move(*converted));
-    reg.emplace<ExactMesh>(e, std::move(mesh));
-    Camera cam;
-    cam.eye = glm::dvec3(0.9, 0.8, 2.4);
-    cam.near_plane = 0.05f;
-    reg.emplace<Camera>(reg.create(), cam);
-    add_light({-0.4f, -0.6f, -0.7f}, 0.15f);
+    const ecs::Entity e = add_box_and_its_mesh(*g, std::move(*converted));
     const int w = 640, h = 360;
     auto scene = reference_scene(reg, w, h);
     ASSERT_TRUE(scene.ok()) << scene.message();
     ASSERT_NE(scene->mesh, nullptr);
     auto ref = render_reference(*scene);
     ASSERT_TRUE(ref.ok()) << ref.message();
-    for (Quality q : {Quality::hq, Quality::preview}) {
-        const FrameImage img = render(q, w, h);
-        auto cmp = compare_images(img, *ref);
-        ASSERT_TRUE(cmp.ok()) << cmp.message();
-        const char* name = q == Quality::hq ? "hq" : "preview";
-        std::printf("box %s vs mesh ground truth: PSNR %.2f dB (covered in both %.2f dB, %zu px covered in one only), interior %.2f dB "
-                    "over %zu of %zu px\n",
-                    name, cmp->psnr, cmp->psnr_both, cmp->pixels_one, cmp->psnr_interior, cmp->pixels_interior, cmp->pixels);
-        EXPECT_GT(cmp->pixels_interior, cmp->pixels * 3 / 4) << name;
-        EXPECT_GE(cmp->psnr_interior, q == Quality::hq ? 45.0 : 40.0) << name;
-    }
+    expect_interior_matches(*ref, w, h, "box", 45.0, 40.0);
     // Without the uv frames (one colour per splat) the interior no longer matches.
     release_render_state(reg);
     reg.get<SplatCloud>(e).uv_axes.clear();
@@ -232,35 +243,14 @@ TEST_F(Quality_, TwistedConvertedMeshAgainstItsTwistedMeshGroundTruth) {
     auto st = ffd::deform(lattice, in, out);
     ASSERT_TRUE(st.ok()) << st.message();
     ASSERT_EQ(st->inside, c.size());
-    const ecs::Entity e = reg.create();
-    ExactMesh mesh;
-    for (const glm::dvec3& p : g->positions) mesh.positions.push_back(p - c.origin);
-    mesh.uvs = g->uvs;
-    mesh.triangles = g->triangles;
-    reg.emplace<SplatCloud>(e, std::move(c));
-    reg.emplace<ExactMesh>(e, std::move(mesh));
-    Camera cam;
-    cam.eye = glm::dvec3(0.9, 0.8, 2.4);
-    cam.near_plane = 0.05f;
-    reg.emplace<Camera>(reg.create(), cam);
-    add_light({-0.4f, -0.6f, -0.7f}, 0.15f);
+    add_box_and_its_mesh(*g, std::move(c));
     const int w = 640, h = 360;
     auto scene = reference_scene(reg, w, h);
     ASSERT_TRUE(scene.ok()) << scene.message();
     scene->lattices = {lattice};  // the cloud above was deformed directly, not through Deformers
     auto ref = render_reference(*scene);
     ASSERT_TRUE(ref.ok()) << ref.message();
-    for (Quality q : {Quality::hq, Quality::preview}) {
-        const FrameImage img = render(q, w, h);
-        auto cmp = compare_images(img, *ref);
-        ASSERT_TRUE(cmp.ok()) << cmp.message();
-        const char* name = q == Quality::hq ? "hq" : "preview";
-        std::printf("twisted box %s vs twisted mesh ground truth: PSNR %.2f dB (both %.2f dB, %zu px in one only), interior %.2f dB "
-                    "over %zu of %zu px\n",
-                    name, cmp->psnr, cmp->psnr_both, cmp->pixels_one, cmp->psnr_interior, cmp->pixels_interior, cmp->pixels);
-        EXPECT_GT(cmp->pixels_interior, cmp->pixels * 3 / 4) << name;
-        EXPECT_GE(cmp->psnr_interior, q == Quality::hq ? 40.0 : 35.0) << name;
-    }
+    expect_interior_matches(*ref, w, h, "twisted box", 40.0, 35.0);
 }
 
 }  // namespace

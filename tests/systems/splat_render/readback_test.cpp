@@ -141,10 +141,7 @@ void Readback_::gpu_deformation_frames_never_wait(RasterPath raster) {
     add_camera(2.6);
     add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
     const ecs::Entity cloud = add_cloud(fibonacci_sphere(20000));
-    const ecs::Entity le = reg.create();
-    reg.emplace<Lattice>(le, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
-                                               {4, 4, 4}));
-    reg.emplace<Deformers>(cloud, Deformers{{le}});
+    const ecs::Entity le = add_lattice(cloud);
     reg.set_resource<FfdSettings>().force_gpu = true;
     RenderSettings s;
     s.width = 320, s.height = 240, s.cull_path = CullPath::compute, s.raster_path = raster;

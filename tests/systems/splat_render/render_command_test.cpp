@@ -19,6 +19,7 @@
 #include "runtime/ecs/registry.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_pack.h"
+#include "tests/test_util/run_tool.h"
 
 namespace fs = std::filesystem;
 using namespace sffd::render;
@@ -28,15 +29,9 @@ namespace {
 const std::string binary = std::string(SFFD_BINARY_DIR) + "/tools/splatffd";
 
 int run(const std::string& args, std::string* output = nullptr) {
-    const fs::path log = fs::temp_directory_path() / ("sffd_render_cmd_" + std::to_string(::getpid()) + ".log");
-    const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY " + binary + " render " + args + " > " + log.string() + " 2>&1";
-    const int status = std::system(cmd.c_str());
-    if (output) {
-        std::ifstream in(log);
-        *output = std::string(std::istreambuf_iterator<char>(in), {});
-    }
-    fs::remove(log);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+    const sffd::test::CliRun r = sffd::test::run_headless("render " + args);
+    if (output) *output = r.out;
+    return r.code;
 }
 
 fs::path fresh_dir(const std::string& name) {

@@ -286,11 +286,11 @@ TEST(RenderCpuCull, ClassifiesEverySplatLikeTheDefinition) {
             // (float set-up: near the silhouette the ray grazes the plane and rounding grows; 1e-2 of the
             // splat's radius is far below a pixel here)
             EXPECT_NEAR(t, -c.z, 1e-4 * -c.z) << i;
-            EXPECT_NEAR(t * glm::dot(glm::dvec3(got[k].dual_u), ray) - got[k].dual_u.w, 0.0, 1e-2) << i;
-            EXPECT_NEAR(t * glm::dot(glm::dvec3(got[k].dual_v), ray) - got[k].dual_v.w, 0.0, 1e-2) << i;
+            EXPECT_NEAR(t * glm::dot(glm::dvec3(got[k].dual_u), ray) - double(got[k].dual_u.w), 0.0, 1e-2) << i;
+            EXPECT_NEAR(t * glm::dot(glm::dvec3(got[k].dual_v), ray) - double(got[k].dual_v.w), 0.0, 1e-2) << i;
             // The rim point c + u has elliptical radius 1.
             const glm::dvec3 rim = c + glm::dvec3(cloud.axis_u[i]);
-            const double s = glm::dot(glm::dvec3(got[k].dual_u), rim) - got[k].dual_u.w, q = glm::dot(glm::dvec3(got[k].dual_v), rim) - got[k].dual_v.w;
+            const double s = glm::dot(glm::dvec3(got[k].dual_u), rim) - double(got[k].dual_u.w), q = glm::dot(glm::dvec3(got[k].dual_v), rim) - double(got[k].dual_v.w);
             EXPECT_NEAR(s * s + q * q, 1.0, 1e-2) << i;
             EXPECT_NEAR(got[k].plane.w, f.params.x * glm::length(cloud.axis_u[i]), 1e-6) << i;
             EXPECT_NEAR(glm::dot(glm::dvec3(got[k].normal), glm::dvec3(cloud.normals[i])), 1.0, 1e-5) << i;

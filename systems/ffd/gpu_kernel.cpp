@@ -1,0 +1,133 @@
+#include "systems/ffd/gpu_kernel.h"
+
+#include <algorithm>
+#include <utility>
+
+#include "runtime/gfx/context.h"
+#include "shaders/common/bindings.h"
+#include "systems/ffd/deform_kernels.h"
+#include "systems/ffd/gpu_block.h"
+
+namespace sffd::ffd::detail {
+
+Result<DeformPrograms> DeformPrograms::create(std::string shader, std::string program_label,
+                                              std::string prefix) {
+    DeformPrograms p;
+    auto program = gfx::load_compute_program(shader, program_label);
+    if (!program) return program.error();
+    p.program = std::move(*program);
+    p.shader = std::move(shader), p.program_label = std::move(program_label), p.prefix = std::move(prefix);
+    glGetIntegerv(GL_MAX_UNIFORM_BLOCK_SIZE, &p.max_ubo);
+    glGetIntegerv(GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, &p.max_shared);
+    p.software = gfx::software_rasterizer();
+    p.ubo = gfx::Buffer::create(p.prefix + ".lattice_block");
+    glNamedBufferData(p.ubo.id(), sizeof(FfdBlock), nullptr, GL_DYNAMIC_DRAW);
+    return p;
+}
+
+Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::uint64_t key,
+                                                   std::uint64_t stamp, const glm::dvec3& cloud_origin,
+                                                   std::uint32_t count) {
+    // Same preparation as the CPU kernels (float displacements, M⁻¹, origin offset in double).
+    const Prepared P = prepare(lattice, cloud_origin);
+    const FfdBlock block = make_ffd_block(lattice, P, count);
+    glNamedBufferSubData(ubo.id(), 0, sizeof block, &block);
+    Controls& cp = controls[key];
+    if (!cp.buffer) cp.buffer = gfx::Buffer::create(prefix + ".control_points");
+    if (stamp == 0 || stamp != cp.stamp) {  // control points only when edited
+        upload_control_points(cp.buffer.id(), cp.capacity, lattice, P);
+        cp.stamp = stamp;
+        ++uploads;
+    }
+    // Bernstein: a program specialised for this lattice shape and kernel (compiled once each; constant
+    // loop bounds, small arrays), control points in shared memory on hardware GPUs, in a UBO on a software
+    // rasterizer. B-spline reads 4 neighbours per axis whatever the size: generic program.
+    const bool bernstein = lattice.basis == LatticeBasis::bernstein;
+    const bool fits_shared = lattice.size() * 3 * sizeof(float) <= std::size_t(max_shared);
+    const bool cp_shared =
+        bernstein && fits_shared &&
+        (kernel == GpuBernsteinKernel::shared || (kernel == GpuBernsteinKernel::automatic && !software));
+    const bool cp_ubo = bernstein && !cp_shared && lattice.size() * 16 <= std::size_t(max_ubo);
+    Bound b;
+    b.local_size = cp_shared ? 256 : 64;
+    b.program = program.id();
+    if (bernstein) {
+        last_kernel = cp_shared ? GpuBernsteinKernel::shared : GpuBernsteinKernel::direct;
+        const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) |
+                                    (std::uint64_t(lattice.divisions.y) << 12) |
+                                    std::uint64_t(lattice.divisions.z) | (std::uint64_t(cp_shared) << 44) |
+                                    (std::uint64_t(cp_ubo) << 45);
+        auto sp = specialised.find(shape);
+        if (sp == specialised.end()) {
+            const int maxb = std::max({lattice.divisions.x, lattice.divisions.y, lattice.divisions.z}) + 1;
+            gfx::Defines defines = {{"FFD_L", std::to_string(lattice.divisions.x)},
+                                    {"FFD_M", std::to_string(lattice.divisions.y)},
+                                    {"FFD_N", std::to_string(lattice.divisions.z)},
+                                    {"FFD_MAXB", std::to_string(maxb)}};
+            if (cp_shared) {
+                defines.push_back({"FFD_CP_SHARED", std::to_string(lattice.size())});
+                defines.push_back({"FFD_LOCAL_SIZE", std::to_string(b.local_size)});
+            }
+            if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});
+            auto prog = gfx::load_compute_program(
+                shader, program_label + (cp_shared ? ".shared" : ".specialised"), defines);
+            if (!prog) return prog.error();
+            sp = specialised.emplace(shape, std::move(*prog)).first;
+        }
+        b.program = sp->second.id();
+    }
+    glUseProgram(b.program);
+    glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, ubo.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, cp.buffer.id());
+    if (cp_ubo)
+        glBindBufferRange(GL_UNIFORM_BUFFER, SFFD_UBO_FFD_CONTROL, cp.buffer.id(), 0,
+                          GLsizeiptr(lattice.size() * 16));
+    return b;
+}
+
+void DeformPrograms::retain_keys(const std::vector<std::uint64_t>& live) {
+    for (auto it = controls.begin(); it != controls.end();)
+        it =
+            std::find(live.begin(), live.end(), it->first) == live.end() ? controls.erase(it) : std::next(it);
+}
+
+StatsReadbacks::~StatsReadbacks() {
+    for (Slot& r : m_slots)
+        if (r.fence) glDeleteSync(r.fence);
+}
+
+bool StatsReadbacks::queue(GLuint stats, std::size_t words, std::uint64_t tag, const std::string& label) {
+    const std::size_t bytes = words * sizeof(std::uint32_t);
+    auto slot = std::find_if(m_slots.begin(), m_slots.end(), [](const Slot& r) { return !r.fence; });
+    if (slot == m_slots.end()) {
+        Slot r;
+        r.buffer = gfx::Buffer::create(label);
+        const GLbitfield flags = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
+        glNamedBufferStorage(r.buffer.id(), GLsizeiptr(bytes), nullptr, flags);
+        r.mapped = static_cast<const std::uint32_t*>(
+            glMapNamedBufferRange(r.buffer.id(), 0, GLsizeiptr(bytes), flags));
+        if (!r.mapped) return false;  // the GL error callback has reported why; these statistics are lost
+        m_slots.push_back(std::move(r));
+        slot = m_slots.end() - 1;
+    }
+    glCopyNamedBufferSubData(stats, slot->buffer.id(), 0, 0, GLsizeiptr(bytes));
+    slot->fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
+    slot->tag = tag;
+    return slot->fence != nullptr;
+}
+
+bool StatsReadbacks::signalled(Slot& r) {
+    // Zero timeout: asks, never waits. The flush bit makes sure the fence reaches the GPU.
+    const GLenum state = glClientWaitSync(r.fence, GL_SYNC_FLUSH_COMMANDS_BIT, 0);
+    if (state != GL_ALREADY_SIGNALED && state != GL_CONDITION_SATISFIED) return false;
+    glDeleteSync(r.fence);
+    r.fence = nullptr;
+    return true;
+}
+
+std::size_t StatsReadbacks::pending() const {
+    return std::size_t(
+        std::count_if(m_slots.begin(), m_slots.end(), [](const Slot& r) { return r.fence != nullptr; }));
+}
+
+}  // namespace sffd::ffd::detail

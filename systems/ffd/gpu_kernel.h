@@ -1,0 +1,91 @@
+// Shared by the two compute deformers, ffd::GpuDeformer (ffd_gpu.cpp, splats) and
+// gaussian::GpuGaussianDeformer (systems/gaussian/gpu_deform.cpp, Gaussians): they run the same FFD over
+// different point layouts, so the lattice set-up (block UBO, control points uploaded when edited, the
+// Bernstein kernel choice and its specialised programs) and the non-blocking statistics read-back are
+// written once here. Each deformer binds its own point buffers and dispatches.
+#pragma once
+
+#include <cstdint>
+#include <glm/vec3.hpp>
+#include <string>
+#include <unordered_map>
+#include <vector>
+
+#include "runtime/core/result.h"
+#include "runtime/gfx/gl.h"
+#include "runtime/gfx/gl_object.h"
+#include "runtime/gfx/shader.h"
+#include "systems/ffd/components.h"
+#include "systems/ffd/ffd_gpu.h"
+
+namespace sffd::ffd::detail {
+
+// One deform shader's programs (generic; Bernstein specialised per lattice shape and kernel) and the
+// lattice state they read. Labels: `program_label` (+ ".shared" / ".specialised"), `prefix` +
+// ".lattice_block" / ".control_points".
+struct DeformPrograms {
+    std::string shader, program_label, prefix;
+    gfx::Program program;                                         // generic (any divisions, B-spline)
+    std::unordered_map<std::uint64_t, gfx::Program> specialised;  // Bernstein, per (l, m, n, kernel)
+    gfx::Buffer ubo;                                              // FfdBlock
+    struct Controls {
+        gfx::Buffer buffer;
+        std::size_t capacity = 0;
+        std::uint64_t stamp = 0;
+    };
+    std::unordered_map<std::uint64_t, Controls> controls;  // per key (lattice entity)
+    std::uint64_t uploads = 0;
+    GLint max_ubo = 0;      // GL_MAX_UNIFORM_BLOCK_SIZE, queried once (a glGet can stall a threaded driver)
+    GLint max_shared = 0;   // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, same
+    bool software = false;  // gfx::software_rasterizer(), for GpuBernsteinKernel::automatic
+    GpuBernsteinKernel kernel = GpuBernsteinKernel::automatic, last_kernel = GpuBernsteinKernel::automatic;
+
+    // Compiles the generic program and creates the block UBO (context current).
+    static Result<DeformPrograms> create(std::string shader, std::string program_label, std::string prefix);
+
+    struct Bound {
+        GLuint program = 0;
+        std::uint32_t local_size = 64;  // deform.comp's FFD_LOCAL_SIZE
+    };
+    // Fills the block UBO for `count` points, uploads the control points of `key` when `stamp` moved (0:
+    // always), picks the program and binds it with the lattice bindings (SFFD_UBO_FFD,
+    // SFFD_SSBO_CONTROL_POINTS, SFFD_UBO_FFD_CONTROL). The lattice must be valid.
+    Result<Bound> bind(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp,
+                       const glm::dvec3& cloud_origin, std::uint32_t count);
+    void retain_keys(const std::vector<std::uint64_t>& live);
+};
+
+// queue_stats()/poll_stats(): the statistics buffer's `words` counters copied into persistently mapped
+// host buffers behind fences (a copy to host memory, not a video-to-host migration); a slot is free when
+// its fence is null.
+class StatsReadbacks {
+public:
+    StatsReadbacks() = default;
+    StatsReadbacks(StatsReadbacks&&) noexcept = default;
+    StatsReadbacks& operator=(StatsReadbacks&&) noexcept = default;
+    StatsReadbacks(const StatsReadbacks&) = delete;
+    StatsReadbacks& operator=(const StatsReadbacks&) = delete;
+    ~StatsReadbacks();
+
+    // false: no slot (mapping failed, the GL error callback has said why): these statistics are lost.
+    bool queue(GLuint stats, std::size_t words, std::uint64_t tag, const std::string& label);
+    // Calls done(tag, counters) for each queued copy whose fence has signalled; never waits.
+    template <class Done>
+    void poll(Done&& done) {
+        for (Slot& r : m_slots)
+            if (r.fence && signalled(r)) done(r.tag, r.mapped);
+    }
+    std::size_t pending() const;
+
+private:
+    struct Slot {
+        gfx::Buffer buffer;
+        const std::uint32_t* mapped = nullptr;
+        GLsync fence = nullptr;
+        std::uint64_t tag = 0;
+    };
+    static bool signalled(Slot& r);  // deletes the fence (frees the slot) when it has signalled
+    std::vector<Slot> m_slots;
+};
+
+}  // namespace sffd::ffd::detail
