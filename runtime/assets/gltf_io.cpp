@@ -610,7 +610,8 @@ Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
 }
 
 
-Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds, const std::string& sffd_scene_json) {
+Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds, const std::string& sffd_scene_json,
+                  const std::vector<GltfAppend>& append) {
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     const bool binary = ext == ".glb";
@@ -711,10 +712,12 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
         doc["extensionsUsed"] = {"SFFD_scene"};
         doc["extensions"] = {{"SFFD_scene", ext_json}};
     }
+    if (!b.accessors.empty()) doc["accessors"] = b.accessors;
+    if (!b.views.empty()) doc["bufferViews"] = b.views;
+    for (const GltfAppend& fn : append)
+        if (Status s = fn(doc, b.bin); !s) return make_error(path.string() + ": " + s.message());
     while (b.bin.size() % 4) b.bin.push_back('\0');
     if (!b.bin.empty()) {
-        doc["accessors"] = b.accessors;
-        doc["bufferViews"] = b.views;
         json buffer = {{"byteLength", b.bin.size()}};
         if (!binary) buffer["uri"] = "data:application/octet-stream;base64," + base64(b.bin);
         doc["buffers"] = {buffer};
@@ -762,11 +765,14 @@ void pad_attributes(Geometry& g) {
 
 Result<GltfContents> read_gltf(const fs::path& path) {
     const std::string src = path.string();
-    tinygltf::Model m;
+    auto model = std::make_shared<tinygltf::Model>();
+    tinygltf::Model& m = *model;
     if (Status s = load_gltf_model(path, m); !s) return s.error();
     GltfContents out;
+    out.model = model;
     out.other.source = src;
-    if (auto it = m.extensions.find("SFFD_scene"); it != m.extensions.end()) out.sffd_scene_json = to_json(it->second).dump();
+    const bool scene_file = m.extensions.find("SFFD_scene") != m.extensions.end();
+    if (scene_file) out.sffd_scene_json = to_json(m.extensions.find("SFFD_scene")->second).dump();
 
     std::unordered_map<int, int> material_map;
     std::unordered_set<int> visiting;
@@ -831,8 +837,10 @@ Result<GltfContents> read_gltf(const fs::path& path) {
                 if (static_cast<std::size_t>(node.mesh) >= m.meshes.size())
                     return make_error(src + ": node '" + node.name + "': mesh index " + std::to_string(node.mesh) + " out of range (" +
                                       std::to_string(m.meshes.size()) + " meshes)");
-                for (const auto& prim : m.meshes[static_cast<std::size_t>(node.mesh)].primitives)
+                for (const auto& prim : m.meshes[static_cast<std::size_t>(node.mesh)].primitives) {
+                    if (scene_file && prim.extensions.count("KHR_gaussian_splatting")) continue;  // systems/gaussian's
                     if (auto s = read_primitive(m, prim, world, src, out.other, material_map, nullptr); !s) return s;
+                }
             }
             for (int c : node.children)
                 if (auto s = visit(c, world, depth + 1); !s) return s;

@@ -14,8 +14,12 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
+#include <memory>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json_fwd.hpp>
 
 #include "runtime/assets/import.h"
 #include "runtime/core/result.h"
@@ -34,10 +38,16 @@ struct GltfCloudOut {
     const SplatCloud* cloud = nullptr;
 };
 
+// More content for the document write_gltf() builds (systems/gaussian: Gaussian clouds embedded in a scene
+// file as KHR_gaussian_splatting primitives). Called after the clouds are in `doc` (whose "nodes",
+// "meshes", "accessors", "bufferViews" and "extensionsUsed" arrays may be absent); it appends to them
+// and to `bin` (buffer 0; keep views 4-byte aligned) and adds its root nodes to doc["scenes"][0]["nodes"].
+using GltfAppend = std::function<Status(nlohmann::json& doc, std::string& bin)>;
+
 // Writes .glb (binary) or .gltf (JSON with an embedded base64 buffer) by extension, atomically.
 // `sffd_scene_json`, when not empty, becomes the top-level extensions.SFFD_scene object.
 Status write_gltf(const std::filesystem::path& path, const std::vector<GltfCloudOut>& clouds,
-                  const std::string& sffd_scene_json = {});
+                  const std::string& sffd_scene_json = {}, const std::vector<GltfAppend>& append = {});
 
 struct GltfCloudIn {
     std::string name;
@@ -50,7 +60,10 @@ struct GltfContents {
     std::vector<GltfCloudIn> clouds;   // our splat nodes, exactly as stored
     Geometry other;                    // every other mesh/point primitive, in world space
     std::string sffd_scene_json;       // extensions.SFFD_scene as JSON text (empty when absent)
+    std::shared_ptr<const tinygltf::Model> model;  // the whole file, for scene extensions that store glTF content
 };
+// In a scene file (one with SFFD_scene), KHR_gaussian_splatting primitives are not surface geometry:
+// read_gltf() leaves them out of `other` (systems/gaussian reads them through `model`).
 
 Result<GltfContents> read_gltf(const std::filesystem::path& path);
 

@@ -21,8 +21,8 @@ using nlohmann::json;
 namespace {
 
 struct Extension {
-    SceneFileSaveFn save;
-    SceneFileLoadFn load;
+    SceneGltfSaveFn save;
+    SceneGltfLoadFn load;
 };
 
 struct FileLoader {
@@ -256,7 +256,7 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
                     auto f = by_id.find(id);
                     return f == by_id.end() ? ecs::null_entity : f->second;
                 };
-                if (auto s = it->second.load(r, value.dump(), entity_of, path.parent_path()); !s)
+                if (auto s = it->second.load(r, value.dump(), entity_of, path, *contents->model); !s)
                     return rollback(make_error(src + ": scene extension '" + key + "': " + s.message()));
             }
         }
@@ -285,15 +285,29 @@ std::vector<std::string> builtin_scene_names() { return {"sphere", "face"}; }
 
 void register_scene_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn) {
     Extension e;
-    if (save_fn) e.save = [f = std::move(save_fn)](const ecs::Registry& r, const SceneIdOf& id_of, const fs::path&) { return f(r, id_of); };
-    if (load_fn)
-        e.load = [f = std::move(load_fn)](ecs::Registry& r, std::string_view text, const SceneEntityOf& entity_of, const fs::path&) {
-            return f(r, text, entity_of);
+    if (save_fn)
+        e.save = [f = std::move(save_fn)](const ecs::Registry& r, const SceneIdOf& id_of, const fs::path&, std::vector<assets::GltfAppend>&) {
+            return f(r, id_of);
         };
+    if (load_fn)
+        e.load = [f = std::move(load_fn)](ecs::Registry& r, std::string_view text, const SceneEntityOf& entity_of, const fs::path&,
+                                          const tinygltf::Model&) { return f(r, text, entity_of); };
     extensions()[key] = std::move(e);
 }
 
 void register_scene_file_extension(const std::string& key, SceneFileSaveFn save_fn, SceneFileLoadFn load_fn) {
+    Extension e;
+    if (save_fn)
+        e.save = [f = std::move(save_fn)](const ecs::Registry& r, const SceneIdOf& id_of, const fs::path& path, std::vector<assets::GltfAppend>&) {
+            return f(r, id_of, path.parent_path());
+        };
+    if (load_fn)
+        e.load = [f = std::move(load_fn)](ecs::Registry& r, std::string_view text, const SceneEntityOf& entity_of, const fs::path& path,
+                                          const tinygltf::Model&) { return f(r, text, entity_of, path.parent_path()); };
+    extensions()[key] = std::move(e);
+}
+
+void register_scene_gltf_extension(const std::string& key, SceneGltfSaveFn save_fn, SceneGltfLoadFn load_fn) {
     extensions()[key] = Extension{std::move(save_fn), std::move(load_fn)};
 }
 
@@ -412,9 +426,10 @@ Status save_scene(const ecs::Registry& r, const fs::path& path) {
     }
     scene["ambient_lights"] = aj;
     json ext = json::object();
+    std::vector<assets::GltfAppend> append;
     for (const auto& [key, fns] : extensions()) {
         if (!fns.save) continue;
-        auto text = fns.save(r, id_of, path.parent_path());
+        auto text = fns.save(r, id_of, path, append);
         if (!text) return make_error(path.string() + ": scene extension '" + key + "': " + text.message());
         if (text->empty()) continue;
         json v = json::parse(*text, nullptr, false);
@@ -432,7 +447,7 @@ Status save_scene(const ecs::Registry& r, const fs::path& path) {
         c.cloud = &r.get<SplatCloud>(e);
         out.push_back(c);
     }
-    return assets::write_gltf(path, out, scene.dump());
+    return assets::write_gltf(path, out, scene.dump(), append);
 }
 
 }  // namespace sffd

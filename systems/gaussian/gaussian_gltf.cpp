@@ -49,6 +49,8 @@ std::string sh_name(int l, int n) {
     return kExt + ":SH_DEGREE_" + std::to_string(l) + "_COEF_" + std::to_string(n);
 }
 
+}  // namespace
+
 Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim, const std::string& where) {
     auto attr = [&](const std::string& name) {
         auto it = prim.attributes.find(name);
@@ -124,6 +126,8 @@ Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::P
     }
     return g;
 }
+
+namespace {
 
 void append(GaussianCloud& a, const GaussianCloud& b, int degree) {
     const int ka = sh_coeffs(a.sh_degree), kb = sh_coeffs(b.sh_degree), k = sh_coeffs(degree);
@@ -206,12 +210,15 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
     return out;
 }
 
-Status write_glb(const fs::path& path, const GaussianCloud& g) {
-    if (Status s = validate(g, path.string()); !s) return s;
+Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianCloud& g, nlohmann::json& primitive, const std::string& where) {
+    if (Status s = validate(g, where); !s) return s;
     const std::size_t n = g.size();
     const int K = sh_coeffs(g.sh_degree);
-    std::string bin;
-    nlohmann::json views = nlohmann::json::array(), accessors = nlohmann::json::array(), attributes = nlohmann::json::object();
+    if (!doc.contains("bufferViews")) doc["bufferViews"] = nlohmann::json::array();
+    if (!doc.contains("accessors")) doc["accessors"] = nlohmann::json::array();
+    nlohmann::json& views = doc["bufferViews"];
+    nlohmann::json& accessors = doc["accessors"];
+    nlohmann::json attributes = nlohmann::json::object();
     auto add = [&](const std::string& name, const void* data, std::size_t bytes, int component, const char* type, bool normalized,
                    const nlohmann::json& lo = {}, const nlohmann::json& hi = {}) {
         while (bin.size() % 4) bin.push_back('\0');
@@ -248,21 +255,30 @@ Status write_glb(const fs::path& path, const GaussianCloud& g) {
             add(sh_name(l, c), tmp.data(), n * 12, kFloat, "VEC3", false);
         }
     while (bin.size() % 4) bin.push_back('\0');
+    primitive = {{"attributes", attributes},
+                 {"mode", 0},
+                 {"extensions",
+                  {{kExt, {{"kernel", "ellipse"}, {"colorSpace", "srgb_rec709_display"}, {"sortingMethod", "cameraDistance"}, {"projection", "perspective"}}}}}};
+    if (!doc.contains("extensionsUsed")) doc["extensionsUsed"] = nlohmann::json::array();
+    bool listed = false;
+    for (const auto& e : doc["extensionsUsed"]) listed = listed || (e.is_string() && e.get<std::string>() == kExt);
+    if (!listed) doc["extensionsUsed"].push_back(kExt);
+    return {};
+}
+
+Status write_glb(const fs::path& path, const GaussianCloud& g) {
+    nlohmann::json doc = nlohmann::json::object();
+    std::string bin;
+    nlohmann::json prim;
+    if (Status s = append_primitive(doc, bin, g, prim, path.string()); !s) return s;
     nlohmann::json node = {{"mesh", 0}, {"name", "gaussians"}};
     if (g.origin != glm::dvec3(0.0)) node["translation"] = {g.origin.x, g.origin.y, g.origin.z};
-    const nlohmann::json doc = {
-        {"asset", {{"version", "2.0"}, {"generator", "splatffd"}}},
-        {"extensionsUsed", {kExt}},
-        {"scene", 0},
-        {"scenes", {{{"nodes", {0}}}}},
-        {"nodes", {node}},
-        {"meshes", {{{"primitives", {{{"attributes", attributes}, {"mode", 0},
-                                      {"extensions", {{kExt, {{"kernel", "ellipse"}, {"colorSpace", "srgb_rec709_display"},
-                                                              {"sortingMethod", "cameraDistance"}, {"projection", "perspective"}}}}}}}}}}},
-        {"buffers", {{{"byteLength", bin.size()}}}},
-        {"bufferViews", views},
-        {"accessors", accessors},
-    };
+    doc["asset"] = {{"version", "2.0"}, {"generator", "splatffd"}};
+    doc["scene"] = 0;
+    doc["scenes"] = {{{"nodes", {0}}}};
+    doc["nodes"] = {node};
+    doc["meshes"] = {{{"primitives", {prim}}}};
+    doc["buffers"] = {{{"byteLength", bin.size()}}};
     std::string text = doc.dump();
     while (text.size() % 4) text.push_back(' ');
     const std::uint64_t total = 12 + 8 + text.size() + 8 + bin.size();

@@ -22,15 +22,33 @@
 #pragma once
 
 #include <filesystem>
+#include <string>
+
+#include <nlohmann/json_fwd.hpp>
 
 #include "runtime/core/result.h"
 #include "systems/gaussian/components.h"
+
+namespace tinygltf {
+class Model;
+struct Primitive;
+}  // namespace tinygltf
 
 namespace sffd::gaussian {
 
 Result<GaussianCloud> read_gltf(const std::filesystem::path& path);
 // One node (translation = cloud.origin) with one POINTS primitive; written atomically. .glb only.
 Status write_glb(const std::filesystem::path& path, const GaussianCloud& cloud);
+
+// The halves behind read_gltf / write_glb, for glTF documents that hold more than one cloud (scene files,
+// systems/gaussian/gaussian_scene.cpp). append_primitive() writes `cloud` (validated; no sh_frames) as
+// accessors and buffer views into `doc` ("accessors" and "bufferViews" arrays created when absent; views
+// refer to buffer 0 = `bin`, 4-byte aligned) and returns the POINTS primitive's JSON (positions as stored,
+// relative to cloud.origin). read_primitive() reads one such primitive with every check read_gltf makes;
+// errors read "where: problem".
+Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianCloud& cloud, nlohmann::json& primitive,
+                        const std::string& where);
+Result<GaussianCloud> read_primitive(const tinygltf::Model& model, const tinygltf::Primitive& primitive, const std::string& where);
 
 // Applies x -> A x + t (world space, double) to a cloud in place: centres, Σ' = A Σ Aᵀ, SH rotated by the
 // polar rotation of A. Used for glTF node matrices.

@@ -4,9 +4,11 @@
 #include <cmath>
 #include <fstream>
 #include <limits>
+#include <memory>
 #include <vector>
 
 #include <nlohmann/json.hpp>
+#include <tiny_gltf.h>
 
 #include "runtime/assets/builtin_scenes.h"
 #include "runtime/assets/ply.h"
@@ -15,6 +17,7 @@
 #include "runtime/scene/lattice.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
+#include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_io.h"
 
 namespace sffd::gaussian {
@@ -82,6 +85,58 @@ json transform_json(const Transform& t) {
             {"scale", {t.scale.x, t.scale.y, t.scale.z}}};
 }
 
+// Embedded cloud `entry` (clouds[entry] with "embedded": true): node "<name>" (TRS = the entity's
+// Transform, extras {"sffd_gaussians": entry}) with one child "<name>.origin" (translation = origin) whose
+// mesh is one KHR_gaussian_splatting POINTS primitive.
+assets::GltfAppend embed(std::shared_ptr<const GaussianCloud> cloud, std::string name, Transform t, int entry) {
+    return [cloud = std::move(cloud), name = std::move(name), t, entry](json& doc, std::string& bin) -> Status {
+        json prim;
+        if (Status s = append_primitive(doc, bin, *cloud, prim, "Gaussian cloud '" + name + "'"); !s) return s;
+        if (!doc.contains("meshes")) doc["meshes"] = json::array();
+        if (!doc.contains("nodes")) doc["nodes"] = json::array();
+        doc["meshes"].push_back({{"name", name}, {"primitives", {prim}}});
+        const std::size_t parent = doc["nodes"].size();
+        const glm::dvec3& o = cloud->origin;
+        doc["nodes"].push_back({{"name", name},
+                                {"translation", {t.translation.x, t.translation.y, t.translation.z}},
+                                {"rotation", {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w}},
+                                {"scale", {t.scale.x, t.scale.y, t.scale.z}},
+                                {"children", {parent + 1}},
+                                {"extras", {{"sffd_gaussians", entry}}}});
+        doc["nodes"].push_back({{"name", name + ".origin"}, {"translation", {o.x, o.y, o.z}}, {"mesh", doc["meshes"].size() - 1}});
+        doc["scenes"][0]["nodes"].push_back(parent);
+        return {};
+    };
+}
+
+// The cloud embedded for clouds[entry], with every check read_gltf makes on a KHR_gaussian_splatting file.
+GaussianCloud read_embedded(const tinygltf::Model& m, int entry, const std::string& where) {
+    int found = -1;
+    for (std::size_t i = 0; i < m.nodes.size(); ++i) {
+        const tinygltf::Value& x = m.nodes[i].extras;
+        if (x.IsObject() && x.Has("sffd_gaussians") && x.Get("sffd_gaussians").IsInt() && x.Get("sffd_gaussians").GetNumberAsInt() == entry) {
+            if (found >= 0) throw std::runtime_error(where + ": nodes " + std::to_string(found) + " and " + std::to_string(i) + " both claim this entry");
+            found = int(i);
+        }
+    }
+    if (found < 0) throw std::runtime_error(where + ": 'embedded' but no node has extras.sffd_gaussians = " + std::to_string(entry));
+    const std::string at = where + " (embedded, node " + std::to_string(found) + ")";
+    const tinygltf::Node& parent = m.nodes[std::size_t(found)];
+    if (parent.children.size() != 1 || parent.children[0] < 0 || std::size_t(parent.children[0]) >= m.nodes.size())
+        throw std::runtime_error(at + ": must have exactly one child node (the cloud's origin)");
+    const tinygltf::Node& child = m.nodes[std::size_t(parent.children[0])];
+    if (child.mesh < 0 || std::size_t(child.mesh) >= m.meshes.size()) throw std::runtime_error(at + ": the child node has no valid mesh");
+    const auto& prims = m.meshes[std::size_t(child.mesh)].primitives;
+    if (prims.size() != 1 || prims[0].mode != TINYGLTF_MODE_POINTS || !prims[0].extensions.count("KHR_gaussian_splatting"))
+        throw std::runtime_error(at + ": mesh " + std::to_string(child.mesh) + " must hold one KHR_gaussian_splatting POINTS primitive");
+    auto g = read_primitive(m, prims[0], at + " mesh " + std::to_string(child.mesh));
+    if (!g) throw std::runtime_error(g.message());
+    if (child.translation.size() == 3) g->origin = glm::dvec3(child.translation[0], child.translation[1], child.translation[2]);
+    if (!std::isfinite(g->origin.x + g->origin.y + g->origin.z)) throw std::runtime_error(at + ": the origin node's translation is not finite");
+    if (Status s = validate(*g, at); !s) throw std::runtime_error(s.message());
+    return std::move(*g);
+}
+
 }  // namespace
 
 bool is_gaussian_scene_file(const fs::path& path) {
@@ -115,7 +170,8 @@ Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const fs::path
 }
 
 Result<std::string> save_gaussian_extension(const ecs::Registry& registry, const std::function<int(ecs::Entity)>& id_of,
-                                            const fs::path& scene_dir) {
+                                            const fs::path& scene_path, std::vector<assets::GltfAppend>& append) {
+    const fs::path scene_dir = scene_path.parent_path();
     json clouds = json::array();
     std::vector<ecs::Entity> entities;
     registry.each_entity([&](ecs::Entity e) {
@@ -125,21 +181,21 @@ Result<std::string> save_gaussian_extension(const ecs::Registry& registry, const
         const ecs::Entity e = entities[i];
         const Name* name = registry.try_get<Name>(e);
         const std::string label = name && !name->value.empty() ? name->value : "gaussians" + std::to_string(i);
-        fs::path file;
+        json c = {{"name", label}};
+        const Transform* t = registry.try_get<Transform>(e);
         if (const GaussianSource* src = registry.try_get<GaussianSource>(e); src && !src->path.empty()) {
-            file = src->path;
-        } else {  // made in memory: written beside the scene
-            file = scene_dir / (label + ".gaussians.ply");
-            GaussianCloud baked = registry.get<GaussianCloud>(e);
-            bake_sh_frames(baked);
-            if (Status s = write_ply(file, baked); !s) return s.error();
+            std::error_code ec;
+            const fs::path base = scene_dir.empty() ? fs::current_path(ec) : fs::absolute(scene_dir, ec);
+            fs::path rel = ec ? fs::path() : fs::absolute(src->path, ec).lexically_relative(base);
+            if (ec || rel.empty()) rel = src->path;
+            c["file"] = rel.generic_string();
+        } else {  // made in memory: embedded in the scene file as a KHR_gaussian_splatting primitive
+            auto baked = std::make_shared<GaussianCloud>(registry.get<GaussianCloud>(e));
+            bake_sh_frames(*baked);
+            append.push_back(embed(std::move(baked), label, t ? *t : Transform{}, int(i)));
+            c["embedded"] = true;
         }
-        std::error_code ec;
-        const fs::path base = scene_dir.empty() ? fs::current_path(ec) : fs::absolute(scene_dir, ec);
-        fs::path rel = ec ? fs::path() : fs::absolute(file, ec).lexically_relative(base);
-        if (ec || rel.empty()) rel = file;
-        json c = {{"name", label}, {"file", rel.generic_string()}};
-        if (const Transform* t = registry.try_get<Transform>(e)) c["transform"] = transform_json(*t);
+        if (t) c["transform"] = transform_json(*t);
         json lattices = json::array();
         if (const Deformers* d = registry.try_get<Deformers>(e))
             for (ecs::Entity l : d->lattices)
@@ -152,7 +208,8 @@ Result<std::string> save_gaussian_extension(const ecs::Registry& registry, const
 }
 
 Status load_gaussian_extension(ecs::Registry& registry, std::string_view text, const std::function<ecs::Entity(int)>& entity_of,
-                               const fs::path& scene_dir) {
+                               const fs::path& scene_path, const tinygltf::Model& model) {
+    const fs::path scene_dir = scene_path.parent_path();
     const json j = json::parse(text, nullptr, false);
     if (j.is_discarded() || !j.is_object()) return make_error("not a JSON object");
     if (!j.contains("version") || !j["version"].is_number_integer() || j["version"].get<int>() != 1)
@@ -169,10 +226,13 @@ Status load_gaussian_extension(ecs::Registry& registry, std::string_view text, c
             const json& c = j["clouds"][i];
             const std::string where = "clouds[" + std::to_string(i) + "]";
             if (!c.is_object()) throw std::runtime_error(where + ": must be an object");
-            if (!c.contains("file") || !c["file"].is_string() || c["file"].get<std::string>().empty())
-                throw std::runtime_error(where + ": 'file' must be a non-empty string (a Gaussian file)");
-            fs::path file = c["file"].get<std::string>();
-            if (file.is_relative()) file = scene_dir / file;
+            if (c.contains("embedded") && !c["embedded"].is_boolean()) throw std::runtime_error(where + ": 'embedded' must be true or false");
+            const bool embedded = c.value("embedded", false);
+            if (embedded && c.contains("file")) throw std::runtime_error(where + ": has both 'file' and 'embedded'");
+            if (!embedded && (!c.contains("file") || !c["file"].is_string() || c["file"].get<std::string>().empty()))
+                throw std::runtime_error(where + ": 'file' must be a non-empty string (a Gaussian file), or 'embedded' true");
+            fs::path file = embedded ? fs::path() : fs::path(c["file"].get<std::string>());
+            if (file.is_relative() && !embedded) file = scene_dir / file;
             std::vector<ecs::Entity> lattices;
             if (c.contains("lattices")) {
                 if (!c["lattices"].is_array()) throw std::runtime_error(where + ": 'lattices' must be an array of lattice ids");
@@ -185,9 +245,19 @@ Status load_gaussian_extension(ecs::Registry& registry, std::string_view text, c
                 }
             }
             const Transform t = c.contains("transform") ? transform_from(c["transform"], where) : Transform{};
-            if (!fs::exists(file)) throw std::runtime_error(where + ": " + file.string() + ": no such Gaussian file");
-            auto e = load_gaussian_entity(registry, file);
-            if (!e) throw std::runtime_error(where + ": " + e.message());
+            Result<ecs::Entity> e = ecs::null_entity;
+            if (embedded) {
+                GaussianCloud g = read_embedded(model, int(i), where);
+                const ecs::Entity x = registry.create();
+                registry.emplace<Name>(x, Name{"gaussians" + std::to_string(i)});
+                registry.emplace<Transform>(x, Transform{});
+                registry.emplace<GaussianCloud>(x, std::move(g));
+                e = x;
+            } else {
+                if (!fs::exists(file)) throw std::runtime_error(where + ": " + file.string() + ": no such Gaussian file");
+                e = load_gaussian_entity(registry, file);
+                if (!e) throw std::runtime_error(where + ": " + e.message());
+            }
             created.push_back(*e);
             registry.get<Transform>(*e) = t;
             if (c.contains("name")) {
@@ -203,7 +273,7 @@ Status load_gaussian_extension(ecs::Registry& registry, std::string_view text, c
 }
 
 void register_gaussian_scene_hooks() {
-    register_scene_file_extension(kKey, save_gaussian_extension, load_gaussian_extension);
+    register_scene_gltf_extension(kKey, save_gaussian_extension, load_gaussian_extension);
     register_scene_file_loader(
         kKey, [](const fs::path& p) { return is_gaussian_scene_file(p); },
         [](ecs::Registry& registry, const fs::path& p) -> Status {

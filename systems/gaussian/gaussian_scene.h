@@ -12,9 +12,14 @@
 //         "clouds": [ { "name": "g", "file": "g.ply",               // relative to the scene file's folder
 //                       "transform": { "translation": [x,y,z], "rotation": [x,y,z,w], "scale": [x,y,z] },
 //                       "lattices": [ <scene ids of lattice entities>, ... ] } ] }   // its Deformers, in order
-//     A Gaussian entity without a GaussianSource (made in memory) is written beside the scene as
-//     "<name>.gaussians.ply" (3DGS PLY, atomic) and referred to by that name. Errors name the scene, the
-//     entry and the Gaussian file ("scene.gltf: scene extension 'gaussians': clouds[0]: g.ply: problem").
+//     A Gaussian entity without a GaussianSource (made in memory, or converted) is embedded in the scene
+//     file itself: its entry has "embedded": true instead of "file", and the glTF holds node "<name>"
+//     (TRS = its Transform, extras {"sffd_gaussians": <entry index>}) with a child "<name>.origin"
+//     (translation = GaussianCloud::origin) whose mesh is one KHR_gaussian_splatting POINTS primitive
+//     (gaussian_gltf.h's layout), so other glTF viewers that know the extension show it in place. (.glb
+//     and .gltf alike; a .gltf holds it in its base64 buffer.) Entities loaded from a Gaussian file stay
+//     references to it. Errors name the scene, the entry and the Gaussian file or node
+//     ("scene.glb: scene extension 'gaussians': clouds[0] (embedded, node 2) mesh 1: ...: problem").
 // Call it once at start-up (tools/splatffd/main.cpp does; tests call it themselves).
 #pragma once
 
@@ -22,7 +27,9 @@
 #include <functional>
 #include <string>
 #include <string_view>
+#include <vector>
 
+#include "runtime/assets/gltf_io.h"
 #include "runtime/core/result.h"
 #include "runtime/ecs/registry.h"
 
@@ -44,11 +51,11 @@ Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const std::fil
 void register_gaussian_scene_hooks();
 void unregister_gaussian_scene_hooks();
 
-// The extension's two halves, usable without the hook registry.
+// The extension's two halves, usable without the hook registry (register_scene_gltf_extension's forms).
 Result<std::string> save_gaussian_extension(const ecs::Registry& registry, const std::function<int(ecs::Entity)>& id_of,
-                                            const std::filesystem::path& scene_dir);
-Status load_gaussian_extension(ecs::Registry& registry, std::string_view json,
-                               const std::function<ecs::Entity(int)>& entity_of, const std::filesystem::path& scene_dir);
+                                            const std::filesystem::path& scene_path, std::vector<assets::GltfAppend>& append);
+Status load_gaussian_extension(ecs::Registry& registry, std::string_view json, const std::function<ecs::Entity(int)>& entity_of,
+                               const std::filesystem::path& scene_path, const tinygltf::Model& model);
 
 }  // namespace gaussian
 }  // namespace sffd

@@ -150,13 +150,13 @@ TEST_F(GaussianScene, SavesAndLoadsTheGaussianEntityWithItsLatticeAndClip) {
     ASSERT_TRUE(load_scene(again, (dir2 / "again.glb").string()));
     EXPECT_EQ(again.count<GaussianCloud>(), 1u);
     EXPECT_EQ(again.count<Deformers>(), 1u);
-    // A cloud made in memory (no file) is written beside the scene.
+    // A cloud made in memory (no file) is embedded in the scene (scene_embed_test.cpp checks the data).
     ecs::Registry mem;
     const ecs::Entity m = mem.create();
     mem.emplace<Name>(m, Name{"made"});
     mem.emplace<GaussianCloud>(m, g);
     ASSERT_TRUE(save_scene(mem, dir2 / "mem.gltf"));
-    EXPECT_TRUE(fs::exists(dir2 / "made.gaussians.ply"));
+    EXPECT_FALSE(fs::exists(dir2 / "made.gaussians.ply"));
     ecs::Registry mem2;
     ASSERT_TRUE(load_scene(mem2, (dir2 / "mem.gltf").string()));
     EXPECT_EQ(mem2.count<GaussianCloud>(), 1u);
