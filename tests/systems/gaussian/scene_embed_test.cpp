@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -16,10 +17,12 @@
 #include <nlohmann/json.hpp>
 
 #include "runtime/assets/scene.h"
+#include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
 #include "systems/ffd/lattice.h"
 #include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_scene.h"
 #include "systems/gaussian/sh.h"
 #include "tests/test_util/run_tool.h"
@@ -171,6 +174,28 @@ TEST_F(GaussianSceneEmbedded, InMemoryCloudRoundTripsBitForBitFromTheSceneFileAl
             EXPECT_EQ(d["accessors"][prim["attributes"]["POSITION"].get<std::size_t>()]["count"], 700);
         }
     EXPECT_EQ(marked, 1);
+    // A generic KHR_gaussian_splatting reader (read_gltf: walks the default scene's nodes, ignores
+    // SFFD_scene) finds the cloud placed by its nodes: centre = Transform(origin + p), Σ' = A Σ Aᵀ with
+    // A = 2R, so trace Σ' = 4 trace Σ; opacities as stored.
+    auto generic = read_gltf(saved_glb);
+    ASSERT_TRUE(generic) << generic.message();
+    ASSERT_EQ(generic->size(), g.size());
+    Transform t;
+    t.translation = {0.5, -1.25, 2.0};
+    t.rotation = glm::normalize(glm::dquat(0.9, 0.1, -0.3, 0.2));
+    t.scale = {2.0, 2.0, 2.0};
+    const glm::dmat4 world = model_matrix(&t);
+    double pos_err = 0.0, trace_err = 0.0;
+    for (std::size_t i = 0; i < g.size(); ++i) {
+        const glm::dvec3 expected = glm::dvec3(world * glm::dvec4(g.origin + glm::dvec3(g.positions[i]), 1.0));
+        pos_err = std::max(pos_err, glm::length(generic->origin + glm::dvec3(generic->positions[i]) - expected));
+        const glm::dvec3 s0(g.scales[i]), s1(generic->scales[i]);
+        trace_err = std::max(trace_err, std::abs(glm::dot(s1, s1) - 4.0 * glm::dot(s0, s0)) / (4.0 * glm::dot(s0, s0)));
+        EXPECT_EQ(generic->opacities[i], g.opacities[i]);
+    }
+    std::printf("generic KHR reader: max centre error %.3g, max relative trace(Sigma) error %.3g\n", pos_err, trace_err);
+    EXPECT_LT(pos_err, 1e-3);  // float positions about 2000 from the world origin: ulp 1.2e-4
+    EXPECT_LT(trace_err, 1e-5);
     const json& entry = d["extensions"]["SFFD_scene"]["extensions"]["gaussians"]["clouds"][0];
     EXPECT_EQ(entry["embedded"], true);
     EXPECT_FALSE(entry.contains("file"));
