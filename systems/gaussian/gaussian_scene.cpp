@@ -190,9 +190,16 @@ Result<std::string> save_gaussian_extension(const ecs::Registry& registry, const
             if (ec || rel.empty()) rel = src->path;
             c["file"] = rel.generic_string();
         } else {  // made in memory: embedded in the scene file as a KHR_gaussian_splatting primitive
-            auto baked = std::make_shared<GaussianCloud>(registry.get<GaussianCloud>(e));
-            bake_sh_frames(*baked);
-            append.push_back(embed(std::move(baked), label, t ? *t : Transform{}, int(i)));
+            // The append functions run inside save_scene, while the registry's cloud exists: no copy
+            // unless SH frames must be baked first.
+            const GaussianCloud& own = registry.get<GaussianCloud>(e);
+            std::shared_ptr<const GaussianCloud> cloud(&own, [](const GaussianCloud*) {});
+            if (!own.sh_frames.empty()) {
+                auto baked = std::make_shared<GaussianCloud>(own);
+                bake_sh_frames(*baked);
+                cloud = std::move(baked);
+            }
+            append.push_back(embed(std::move(cloud), label, t ? *t : Transform{}, int(i)));
             c["embedded"] = true;
         }
         if (t) c["transform"] = transform_json(*t);

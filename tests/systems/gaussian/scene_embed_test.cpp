@@ -3,7 +3,6 @@
 // lattice, from the scene file alone; the file's JSON holds a KHR_gaussian_splatting POINTS primitive;
 // corrupted or truncated embedded data names the scene file (load_scene and `splatffd render`).
 #include <gtest/gtest.h>
-
 #include <unistd.h>
 
 #include <cmath>
@@ -11,10 +10,10 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <glm/gtc/quaternion.hpp>
 #include <limits>
-#include <random>
-
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "runtime/assets/scene.h"
 #include "runtime/scene/camera.h"
@@ -22,6 +21,7 @@
 #include "runtime/scene/lattice.h"
 #include "systems/ffd/lattice.h"
 #include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_scene.h"
 #include "systems/gaussian/sh.h"
@@ -35,7 +35,8 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 fs::path fresh_dir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("sffd_gaussian_embed_" + std::to_string(::getpid())) / name;
+    const fs::path d =
+        fs::temp_directory_path() / ("sffd_gaussian_embed_" + std::to_string(::getpid())) / name;
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
@@ -98,7 +99,10 @@ protected:
         ecs::Registry reg;
         const ecs::Entity lat = reg.create();
         reg.emplace<Name>(lat, Name{"box"});
-        reg.emplace<Lattice>(lat, ffd::make_lattice({-2, -2, -2}, {glm::dvec3(4, 0, 0), glm::dvec3(0, 4, 0), glm::dvec3(0, 0, 4)}, {2, 2, 2}));
+        reg.emplace<Lattice>(
+            lat,
+            ffd::make_lattice({-2, -2, -2}, {glm::dvec3(4, 0, 0), glm::dvec3(0, 4, 0), glm::dvec3(0, 0, 4)},
+                              {2, 2, 2}));
         const ecs::Entity e = reg.create();
         reg.emplace<Name>(e, Name{"made"});
         Transform t;
@@ -139,7 +143,8 @@ TEST_F(GaussianSceneEmbedded, InMemoryCloudRoundTripsBitForBitFromTheSceneFileAl
         const Transform& t = reg.get<Transform>(e);
         EXPECT_EQ(t.translation, glm::dvec3(0.5, -1.25, 2.0));
         EXPECT_EQ(t.scale, glm::dvec3(2.0));
-        EXPECT_NEAR(std::abs(glm::dot(t.rotation, glm::normalize(glm::dquat(0.9, 0.1, -0.3, 0.2)))), 1.0, 1e-12);
+        EXPECT_NEAR(std::abs(glm::dot(t.rotation, glm::normalize(glm::dquat(0.9, 0.1, -0.3, 0.2)))), 1.0,
+                    1e-12);
         ASSERT_TRUE(reg.has<Deformers>(e));
         ASSERT_EQ(reg.get<Deformers>(e).lattices.size(), 1u);
         EXPECT_TRUE(reg.has<Lattice>(reg.get<Deformers>(e).lattices[0]));
@@ -152,7 +157,8 @@ TEST_F(GaussianSceneEmbedded, InMemoryCloudRoundTripsBitForBitFromTheSceneFileAl
         EXPECT_EQ(l.opacities, g.opacities);
         EXPECT_EQ(l.sh, g.sh);
         double worst = 0.0;  // rotations: renormalised on reading, so equal up to sign within float rounding
-        for (std::size_t i = 0; i < g.size(); ++i) worst = std::max(worst, 1.0 - std::abs(double(glm::dot(l.rotations[i], g.rotations[i]))));
+        for (std::size_t i = 0; i < g.size(); ++i)
+            worst = std::max(worst, 1.0 - std::abs(double(glm::dot(l.rotations[i], g.rotations[i]))));
         EXPECT_LT(worst, 1e-6);
     }
     // The .glb's JSON: one POINTS primitive with KHR_gaussian_splatting on a node marked for clouds[0],
@@ -187,19 +193,43 @@ TEST_F(GaussianSceneEmbedded, InMemoryCloudRoundTripsBitForBitFromTheSceneFileAl
     const glm::dmat4 world = model_matrix(&t);
     double pos_err = 0.0, trace_err = 0.0;
     for (std::size_t i = 0; i < g.size(); ++i) {
-        const glm::dvec3 expected = glm::dvec3(world * glm::dvec4(g.origin + glm::dvec3(g.positions[i]), 1.0));
-        pos_err = std::max(pos_err, glm::length(generic->origin + glm::dvec3(generic->positions[i]) - expected));
+        const glm::dvec3 expected =
+            glm::dvec3(world * glm::dvec4(g.origin + glm::dvec3(g.positions[i]), 1.0));
+        pos_err =
+            std::max(pos_err, glm::length(generic->origin + glm::dvec3(generic->positions[i]) - expected));
         const glm::dvec3 s0(g.scales[i]), s1(generic->scales[i]);
-        trace_err = std::max(trace_err, std::abs(glm::dot(s1, s1) - 4.0 * glm::dot(s0, s0)) / (4.0 * glm::dot(s0, s0)));
+        trace_err = std::max(trace_err,
+                             std::abs(glm::dot(s1, s1) - 4.0 * glm::dot(s0, s0)) / (4.0 * glm::dot(s0, s0)));
         EXPECT_EQ(generic->opacities[i], g.opacities[i]);
     }
-    std::printf("generic KHR reader: max centre error %.3g, max relative trace(Sigma) error %.3g\n", pos_err, trace_err);
+    std::printf("generic KHR reader: max centre error %.3g, max relative trace(Sigma) error %.3g\n", pos_err,
+                trace_err);
     EXPECT_LT(pos_err, 1e-3);  // float positions about 2000 from the world origin: ulp 1.2e-4
     EXPECT_LT(trace_err, 1e-5);
     const json& entry = d["extensions"]["SFFD_scene"]["extensions"]["gaussians"]["clouds"][0];
     EXPECT_EQ(entry["embedded"], true);
     EXPECT_FALSE(entry.contains("file"));
     EXPECT_EQ(entry["lattices"].size(), 1u);
+}
+
+TEST_F(GaussianSceneEmbedded, DeformedCloudsSHFramesAreBakedIntoTheEmbeddedCoefficients) {
+    // A cloud in view-direction mode (per-splat SH frames, as the deformation leaves it) is saved with
+    // its coefficients rotated by the frames (bake_sh_frames), and without frames.
+    GaussianCloud g = random_cloud(50);
+    const glm::mat3 frame = glm::mat3_cast(glm::normalize(glm::quat(0.8f, 0.3f, -0.4f, 0.1f)));
+    g.sh_frames.assign(g.size(), frame);
+    GaussianCloud expected = g;
+    bake_sh_frames(expected);
+    ASSERT_NE(expected.sh, g.sh);
+    const fs::path scene = save(fresh_dir("frames") / "scene.glb", g);
+    ecs::Registry reg;
+    const Status st = load_scene(reg, scene.string());
+    ASSERT_TRUE(st) << st.message();
+    ecs::Entity e = ecs::null_entity;
+    reg.view<const GaussianCloud>().each([&](ecs::Entity x, const GaussianCloud&) { e = x; });
+    ASSERT_NE(e, ecs::null_entity);
+    EXPECT_TRUE(reg.get<GaussianCloud>(e).sh_frames.empty());
+    EXPECT_EQ(reg.get<GaussianCloud>(e).sh, expected.sh);
 }
 
 TEST_F(GaussianSceneEmbedded, CorruptedEmbeddedDataNamesTheSceneFile) {
@@ -209,7 +239,8 @@ TEST_F(GaussianSceneEmbedded, CorruptedEmbeddedDataNamesTheSceneFile) {
     auto attribute = [&](const char* name) {
         for (const json& m : glb.doc["meshes"])
             for (const json& p : m["primitives"])
-                if (p.contains("extensions") && p["attributes"].contains(name)) return p["attributes"][name].get<std::size_t>();
+                if (p.contains("extensions") && p["attributes"].contains(name))
+                    return p["attributes"][name].get<std::size_t>();
         return std::size_t(0);
     };
     auto expect_refused = [&](const fs::path& scene, const std::string& problem) {
@@ -221,8 +252,8 @@ TEST_F(GaussianSceneEmbedded, CorruptedEmbeddedDataNamesTheSceneFile) {
         EXPECT_NE(st.message().find(problem), std::string::npos) << st.message();
         EXPECT_EQ(reg.count<GaussianCloud>(), 0u);  // nothing half-loaded
         EXPECT_EQ(reg.count<Lattice>(), 0u);
-        const sffd::test::CliRun r =
-            sffd::test::run_headless("render " + scene.string() + " --out " + (dir / "frames").string() + " --size 32x24");
+        const sffd::test::CliRun r = sffd::test::run_headless("render " + scene.string() + " --out " +
+                                                              (dir / "frames").string() + " --size 32x24");
         EXPECT_EQ(r.code, 1) << r.out;
         EXPECT_NE(r.out.find(scene.string()), std::string::npos) << r.out;
     };
@@ -234,7 +265,9 @@ TEST_F(GaussianSceneEmbedded, CorruptedEmbeddedDataNamesTheSceneFile) {
     }
     {  // A NaN centre.
         Glb bad = glb;
-        const json& view = bad.doc["bufferViews"][bad.doc["accessors"][attribute("POSITION")]["bufferView"].get<std::size_t>()];
+        const json& view =
+            bad.doc["bufferViews"]
+                   [bad.doc["accessors"][attribute("POSITION")]["bufferView"].get<std::size_t>()];
         const float nan = std::numeric_limits<float>::quiet_NaN();
         std::memcpy(bad.bin.data() + view["byteOffset"].get<std::size_t>() + 4 * 12 + 4, &nan, 4);
         write_glb(dir / "nan.glb", bad);
