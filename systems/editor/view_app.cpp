@@ -48,7 +48,11 @@ std::string glfw_key_name(int key) {
     if (key >= GLFW_KEY_A && key <= GLFW_KEY_Z) return std::string(1, char('a' + (key - GLFW_KEY_A)));
     if (key >= GLFW_KEY_0 && key <= GLFW_KEY_9) return std::string(1, char('0' + (key - GLFW_KEY_0)));
     if (key >= GLFW_KEY_KP_0 && key <= GLFW_KEY_KP_9) return std::string(1, char('0' + (key - GLFW_KEY_KP_0)));  // typed values
-    if (key >= GLFW_KEY_F1 && key <= GLFW_KEY_F12) return "f" + std::to_string(key - GLFW_KEY_F1 + 1);
+    if (key >= GLFW_KEY_F1 && key <= GLFW_KEY_F12) {
+        std::string name = std::to_string(key - GLFW_KEY_F1 + 1);
+        name.insert(name.begin(), 'f');  // not "f" + string: GCC 12 warns (-Wrestrict) on that inlined path
+        return name;
+    }
     switch (key) {
         case GLFW_KEY_ESCAPE: return "escape";
         case GLFW_KEY_ENTER:
