@@ -26,7 +26,9 @@ void expect_covers_once(std::uint64_t count, std::uint32_t local, std::uint32_t 
             }
     for (std::uint64_t i = 0; i < count; ++i) ASSERT_EQ(hits[i], 1) << "index " << i << " of " << count;
     // No row is wholly empty: the grid is as small as the limits allow.
-    if (count > 0) EXPECT_LT(std::uint64_t(grid->y - 1) * grid->x * local, count);
+    if (count > 0) {
+        EXPECT_LT(std::uint64_t(grid->y - 1) * grid->x * local, count);
+    }
 }
 
 TEST(DispatchGrid, SmallCountsAreOneRow) {

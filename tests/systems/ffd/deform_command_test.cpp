@@ -106,8 +106,8 @@ struct PyGeM {
 PyGeM pygem() {
     PyGeM p;
     std::vector<std::size_t> shape;
-    EXPECT_TRUE(test::read_npy_f64(SFFD_SHARED_DIR "/testdata/pygem/meshpoints_sphere_orig.npy", p.orig, shape));
-    EXPECT_TRUE(test::read_npy_f64(SFFD_SHARED_DIR "/testdata/pygem/meshpoints_sphere_mod.npy", p.mod, shape));
+    EXPECT_TRUE(test::read_npy_f64(SFFD_TEST_DATA_DIR "/pygem/meshpoints_sphere_orig.npy", p.orig, shape));
+    EXPECT_TRUE(test::read_npy_f64(SFFD_TEST_DATA_DIR "/pygem/meshpoints_sphere_mod.npy", p.mod, shape));
     p.n = p.orig.size() / 3;
     return p;
 }

@@ -140,8 +140,8 @@ TEST(FfdDeform, NormalsAgreeWithFiniteDifferences) {
 TEST(FfdDeform, PyGeMSphereCase) {
     std::vector<double> orig, mod;
     std::vector<std::size_t> shape, shape2;
-    ASSERT_TRUE(test::read_npy_f64(SFFD_SHARED_DIR "/testdata/pygem/meshpoints_sphere_orig.npy", orig, shape));
-    ASSERT_TRUE(test::read_npy_f64(SFFD_SHARED_DIR "/testdata/pygem/meshpoints_sphere_mod.npy", mod, shape2));
+    ASSERT_TRUE(test::read_npy_f64(SFFD_TEST_DATA_DIR "/pygem/meshpoints_sphere_orig.npy", orig, shape));
+    ASSERT_TRUE(test::read_npy_f64(SFFD_TEST_DATA_DIR "/pygem/meshpoints_sphere_mod.npy", mod, shape2));
     ASSERT_EQ(shape.size(), 2u);
     ASSERT_EQ(shape[1], 3u);
     ASSERT_EQ(orig.size(), mod.size());
@@ -194,8 +194,8 @@ void expect_agree(const Output& a, const Output& b, double size, const char* wha
             ASSERT_LT(glm::length(a.n[i] - b.n[i]), normal_tol) << what << " normal " << i;
         }
         // Axes relative to |J| |axis| (a nearly singular J shrinks an axis; its error does not shrink).
-        ASSERT_LT(glm::length(a.u[i] - b.u[i]), normal_tol * fro(J) * glm::length(c.u[i])) << what << " axis_u " << i;
-        ASSERT_LT(glm::length(a.v[i] - b.v[i]), normal_tol * fro(J) * glm::length(c.v[i])) << what << " axis_v " << i;
+        ASSERT_LT(double(glm::length(a.u[i] - b.u[i])), normal_tol * fro(J) * double(glm::length(c.u[i]))) << what << " axis_u " << i;
+        ASSERT_LT(double(glm::length(a.v[i] - b.v[i])), normal_tol * fro(J) * double(glm::length(c.v[i]))) << what << " axis_v " << i;
     }
     EXPECT_EQ(a.stats.inside, b.stats.inside) << what;
     EXPECT_EQ(a.stats.inverted, b.stats.inverted) << what;
