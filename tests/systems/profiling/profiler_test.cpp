@@ -1,6 +1,7 @@
 // Profiler on a synthetic schedule (CPU only): what it records, the report it builds, the files it
 // writes (JSON against the schema, trace, CSV), and --compare on a planted slowdown.
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <sstream>
 #include <thread>
@@ -275,13 +276,38 @@ TEST(ProfileFiles, CsvHasOneRowPerFrameAndAColumnPerScope) {
     EXPECT_EQ(rows, 6);
 }
 
+// A report whose frame, "deform" system and "ffd.compute" pass follow a given series of times. The
+// comparison is a pure function of the statistics, so it is tested on known series instead of on sleeps
+// measured on a machine that may be loaded (a wall-clock test breaks when the scheduler wakes late).
+ProfileReport report_of(const std::vector<double>& deform_ms) {
+    ProfileReport r;
+    std::vector<double> frame;
+    for (double d : deform_ms) frame.push_back(d + 1.0);
+    r.frame_ms = compute_stats(frame);
+    TimingRow system;
+    system.name = "deform";
+    system.phase = "deformation";
+    system.cpu_ms = compute_stats(deform_ms);
+    TimingRow pass = system;
+    pass.name = "ffd.compute";
+    pass.system = "deform";
+    r.systems.push_back(system);
+    r.passes.push_back(pass);
+    return r;
+}
+
+// `n` samples around `ms`: a deterministic jitter of +-`spread`, with one outlier at 3x the spread.
+std::vector<double> series(double ms, double spread, int n = 30) {
+    std::vector<double> v;
+    for (int i = 0; i < n; ++i) v.push_back(ms + spread * std::sin(1.7 * i));
+    v.back() = ms + 3.0 * spread;
+    return v;
+}
+
 TEST(Compare, FlagsAPlantedSlowdownAndPassesAnIdenticalRun) {
-    // Sleeps long against scheduler jitter (the machine may be loaded): the 5% floor then covers wake-up
-    // noise; the planted slowdown is 3x.
-    Profiler p_base, p_same, p_slow;
-    const ProfileReport base = run(10.0, 30, p_base);
-    const ProfileReport same = run(10.0, 30, p_same);
-    const ProfileReport slow = run(30.0, 30, p_slow);
+    const ProfileReport base = report_of(series(10.0, 0.5));
+    const ProfileReport same = report_of(series(10.1, 0.6));
+    const ProfileReport slow = report_of(series(30.0, 0.5));
 
     auto slower = [](const std::vector<Regression>& rows, const std::string& name) {
         for (const auto& r : rows)
@@ -301,6 +327,9 @@ TEST(Compare, FlagsAPlantedSlowdownAndPassesAnIdenticalRun) {
     for (const auto& r : compare_reports(base, base)) EXPECT_FALSE(r.slower);
     // Faster is never a regression.
     for (const auto& r : compare_reports(slow, base)) EXPECT_FALSE(r.slower);
+    // A slowdown smaller than the runs' own spread is noise, not a regression.
+    const auto noisy = compare_reports(report_of(series(10.0, 2.0)), report_of(series(11.0, 2.0)));
+    EXPECT_FALSE(slower(noisy, "deform")) << to_text(noisy);
 }
 
 }  // namespace
