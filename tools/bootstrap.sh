@@ -18,6 +18,7 @@ PACKAGES=(
   libimgui-dev                                    # editor UI
   libgtest-dev libgmock-dev libbenchmark-dev      # tests, benchmarks
   assimp-testmodels                               # glTF samples for the import tests (tests/assets)
+  munge slurmctld slurmd slurm-client            # a single-node Slurm the render farm test starts (tests/tools)
 )
 
 if ! command -v dpkg >/dev/null 2>&1; then

@@ -40,6 +40,9 @@ export LSAN_OPTIONS="suppressions=$root/tools/lsan.supp:print_suppressions=0"
 export UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=1"
 # Make a missing display a failure in the window tests instead of a skip.
 export SFFD_REQUIRE_DISPLAY=1
+# As root with the Slurm packages (bootstrap installs them), the render farm test must run on a real
+# Slurm; its fallback to local processes is for machines without root.
+if [[ $(id -u) == 0 ]]; then export SFFD_REQUIRE_SLURM=1; fi
 
 logs=$(mktemp -d)
 trap 'rm -rf "$logs"' EXIT

@@ -1,6 +1,7 @@
 // splatffd render [SCENE] --out DIR [--frames A:B] [--size WxH] [--quality hq|preview] [--format png,exr]
 //                 [--background R,G,B] [--fps F] [--no-cull]
 //                 [--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV | --turntable N] [--video OUT.mp4|OUT.gif]
+//                 [--shard K/N]
 //
 // Renders frames of a scene (built-in name or file; default `sphere`; 3D Gaussian files and scene files
 // with Gaussian entities too, systems/gaussian/gaussian_scene.h) through the engine's standard
@@ -10,16 +11,16 @@
 // Files: DIR/frame_NNNN.png (8-bit sRGB with alpha; transparent background unless --background) and
 // DIR/frame_NNNN.exr (R G B A half linear, Z float view-axis depth, N.X N.Y N.Z half world normals).
 // DIR/render_manifest.json: settings, frames written by this run, and "state": running | complete |
-// failed (an interrupted run stays "running" with the frames it finished; SIGINT/SIGTERM exit 130/143).
+// failed (an interrupted run stays "running" with the frames it finished; SIGINT/SIGTERM exit 130/143);
+// rewritten at a constant size after each frame, with every frame's fingerprint at the end
+// (tools/splatffd/render_manifest.h). A range whose output would not fit the free disk space is refused.
+// --shard K/N renders frames FIRST+K, FIRST+K+N, ... into the same file names, with a manifest of its own
+// (DIR/render_manifest.shard-K-of-N.json); `splatffd assemble DIR` checks and joins the shards.
 // A scene without a camera is framed automatically; without lights it gets a default key light.
 // --camera replaces the scene's camera for every frame; --turntable N renders frames 0..N-1 orbiting the
 // scene's bounds centre at the scene camera's distance and height (frame 0 = the scene camera's eye);
 // --video encodes the PNG frames with ffmpeg (optional: not installed by tools/bootstrap.sh).
 // Exit 0 ok, 1 bad scene or unwritable output (the message names the file), 2 usage.
-#include <spawn.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <chrono>
 #include <cerrno>
@@ -48,6 +49,8 @@
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/frame_files.h"
 #include "tools/splatffd/engine.h"
+#include "tools/splatffd/render_manifest.h"
+#include "tools/splatffd/video.h"
 
 namespace {
 
@@ -70,7 +73,9 @@ void usage() {
                  "                   degrees (0..180); eye = target and up along the view direction are refused\n"
                  "  --turntable N    N frames (0..N-1) orbiting the scene's bounds centre at the scene camera's\n"
                  "                   distance and height, one turn; frame 0 is seen from the scene camera's eye\n"
-                 "  --video FILE     also encode the PNG frames as FILE (.mp4 H.264 or .gif) at --fps; needs ffmpeg\n");
+                 "  --video FILE     also encode the PNG frames as FILE (.mp4 H.264 or .gif) at --fps; needs ffmpeg\n"
+                 "  --shard K/N      render only frames FIRST+K, FIRST+K+N, ... (shard K of N, for render farms);\n"
+                 "                   `splatffd assemble DIR` checks the shards and writes the final manifest\n");
 }
 
 // ---- --camera, --turntable ------------------------------------------------------------------------
@@ -190,64 +195,6 @@ Camera turntable_camera(const Camera& scene, const SceneBounds& b, long k, long 
     return c;
 }
 
-// ---- --video ---------------------------------------------------------------------------------------
-
-// The full path of `name` on PATH (an executable regular file), or "".
-std::string find_on_path(const std::string& name) {
-    const char* path = std::getenv("PATH");
-    std::string dirs = path ? path : "/usr/bin:/bin";
-    std::size_t start = 0;
-    while (start <= dirs.size()) {
-        const std::size_t end = std::min(dirs.find(':', start), dirs.size());
-        const std::string dir = dirs.substr(start, end - start);
-        const std::filesystem::path candidate = std::filesystem::path(dir.empty() ? "." : dir) / name;
-        std::error_code ec;
-        if (std::filesystem::is_regular_file(candidate, ec) && ::access(candidate.c_str(), X_OK) == 0) return candidate.string();
-        start = end + 1;
-    }
-    return {};
-}
-
-// Encodes DIR/frame_FIRST..LAST.png into `video` (.mp4: H.264 yuv420p, even size; .gif: per-clip palette)
-// through a temporary file renamed at the end, so a failed encode leaves no half video. ffmpeg runs with
-// an argument vector (no shell): paths with spaces or quotes are safe.
-Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir, long first, long last, double fps,
-                    const std::filesystem::path& video) {
-    const bool gif = video.extension() == ".gif";
-    const std::filesystem::path tmp = video.parent_path() / (video.filename().string() + ".tmp" + std::to_string(::getpid()));
-    char rate[64];
-    std::snprintf(rate, sizeof rate, "%.9g", fps);
-    std::vector<std::string> argv = {ffmpeg, "-nostdin", "-loglevel", "error", "-y", "-framerate", rate, "-start_number", std::to_string(first),
-                                     "-i", (dir / "frame_%04d.png").string(), "-frames:v", std::to_string(last - first + 1)};
-    if (gif) {
-        for (const char* a : {"-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse", "-loop", "0", "-f", "gif"}) argv.emplace_back(a);
-    } else {
-        for (const char* a : {"-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4"})
-            argv.emplace_back(a);
-    }
-    argv.push_back(tmp.string());
-    std::vector<char*> args;
-    for (std::string& a : argv) args.push_back(a.data());
-    args.push_back(nullptr);
-    pid_t pid = 0;
-    if (int err = posix_spawn(&pid, ffmpeg.c_str(), nullptr, nullptr, args.data(), environ); err != 0)
-        return make_error(video.string() + ": cannot run " + ffmpeg + ": " + std::strerror(err));
-    int status = 0;
-    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
-    std::error_code ec;
-    if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
-        std::filesystem::remove(tmp, ec);
-        return make_error(video.string() + ": ffmpeg failed (" +
-                          (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : std::string("killed")) + "); its messages are above");
-    }
-    std::filesystem::rename(tmp, video, ec);
-    if (ec) {
-        std::filesystem::remove(tmp, ec);
-        return make_error(video.string() + ": cannot write: " + ec.message());
-    }
-    return {};
-}
-
 // "A<sep>B", each part through cli::parse_integer (one message format, the option named).
 std::optional<glm::vec3> parse_rgb(const std::string& s) {
     glm::vec3 c(0.0f);
@@ -269,17 +216,28 @@ std::optional<glm::vec3> parse_rgb(const std::string& s) {
     return c;
 }
 
-int run_render(sffd::cli::Args args) {
-    std::string scene = "sphere", out_dir;
-    bool scene_given = false, png = true, exr = true, culling = true;
-    long first = 0, last = 0, width = 1280, height = 720;
+// ---- the command, step by step: parse, check, set up the scene, render the frames, encode --------------
+
+// Everything the options decide.
+struct RenderOptions {
+    std::string scene = "sphere", out_dir, video;
+    bool scene_given = false, png = true, exr = true, culling = true, frames_given = false;
+    long first = 0, last = 0, width = 1280, height = 720, turntable = 0;
     double fps = 24.0;  // the built-in demo clip (systems/animation/paper_demo.h) is authored at 24 fps
     render::Quality quality = render::Quality::hq;
     std::optional<glm::vec3> background;
     std::optional<Camera> camera;
-    long turntable = 0;
-    bool frames_given = false;
-    std::string video;
+    std::optional<cli::Shard> shard;
+    std::string command;  // the shell line that re-runs this render (in the manifest)
+};
+
+// Fills `o` from the arguments; an exit code when the command ends here (--help, a bad value).
+std::optional<int> parse_render_args(cli::Args args, RenderOptions& o) {
+    o.command = "splatffd render";
+    for (const std::string& a : args) {
+        o.command += ' ';  // appended in two steps: GCC 12 flags " " + string&& with a false -Wrestrict
+        o.command += cli::shell_quote(a);
+    }
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         const bool has_value = i + 1 < args.size();
@@ -287,244 +245,320 @@ int run_render(sffd::cli::Args args) {
             std::fprintf(stderr, "splatffd render: %s '%s'\n", what, has_value ? args[i + 1].c_str() : "");
             return 2;
         };
+        auto refuse = [](const std::string& message) {
+            std::fprintf(stderr, "splatffd render: %s\n", message.c_str());
+            return 2;
+        };
         if (a == "--help" || a == "-h") {
             usage();
             return 0;
         } else if (a == "--out" && has_value) {
-            out_dir = args[++i];
+            o.out_dir = args[++i];
         } else if (a == "--frames" && has_value) {
-            if (Status st = cli::parse_integer_pair("--frames", args[i + 1], ':', 0, 99'999'999, first, last); !st) {
-                std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
-                return 2;
-            }
-            if (last < first) return bad("--frames expects A:B with 0 <= A <= B, got");
-            frames_given = true;
+            if (Status st = cli::parse_integer_pair("--frames", args[i + 1], ':', 0, 99'999'999, o.first, o.last); !st)
+                return refuse(st.message());
+            if (o.last < o.first) return bad("--frames expects A:B with 0 <= A <= B, got");
+            o.frames_given = true;
             ++i;
         } else if (a == "--size" && has_value) {
-            if (Status st = cli::parse_integer_pair("--size", args[i + 1], 'x', 1, 16384, width, height); !st) {
-                std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
-                return 2;
-            }
+            if (Status st = cli::parse_integer_pair("--size", args[i + 1], 'x', 1, 16384, o.width, o.height); !st)
+                return refuse(st.message());
             ++i;
         } else if (a == "--camera" && has_value) {
             auto c = parse_camera(args[++i]);
-            if (!c) {
-                std::fprintf(stderr, "splatffd render: %s\n", c.message().c_str());
-                return 2;
-            }
-            camera = *c;
+            if (!c) return refuse(c.message());
+            o.camera = *c;
         } else if (a == "--turntable" && has_value) {
             auto n = cli::parse_integer("--turntable", args[++i], 1, 100'000);
-            if (!n) {
-                std::fprintf(stderr, "splatffd render: %s\n", n.message().c_str());
-                return 2;
-            }
-            turntable = static_cast<long>(*n);
+            if (!n) return refuse(n.message());
+            o.turntable = static_cast<long>(*n);
+        } else if (a == "--shard" && has_value) {
+            auto s = cli::parse_shard(args[++i]);
+            if (!s) return refuse(s.message());
+            o.shard = *s;
         } else if (a == "--video" && has_value) {
-            video = args[++i];
+            o.video = args[++i];
         } else if (a == "--quality" && has_value) {
-            if (args[i + 1] == "hq") quality = render::Quality::hq;
-            else if (args[i + 1] == "preview") quality = render::Quality::preview;
+            if (args[i + 1] == "hq") o.quality = render::Quality::hq;
+            else if (args[i + 1] == "preview") o.quality = render::Quality::preview;
             else return bad("--quality expects hq or preview, got");
             ++i;
         } else if (a == "--format" && has_value) {
-            if (!cli::parse_image_formats(args[i + 1], png, exr)) return bad("--format expects png, exr or png,exr, got");
+            if (!cli::parse_image_formats(args[i + 1], o.png, o.exr)) return bad("--format expects png, exr or png,exr, got");
             ++i;
         } else if (a == "--background" && has_value) {
-            background = parse_rgb(args[i + 1]);
-            if (!background) return bad("--background expects R,G,B in 0..1, got");
+            o.background = parse_rgb(args[i + 1]);
+            if (!o.background) return bad("--background expects R,G,B in 0..1, got");
             ++i;
         } else if (a == "--fps" && has_value) {
             auto f = cli::parse_number("--fps", args[++i], 1e-6, 1e6);
-            if (!f) {
-                std::fprintf(stderr, "splatffd render: %s\n", f.message().c_str());
-                return 2;
-            }
-            fps = *f;
+            if (!f) return refuse(f.message());
+            o.fps = *f;
         } else if (a == "--no-cull") {
-            culling = false;
-        } else if (!a.empty() && a[0] != '-' && !scene_given) {
-            scene = a;
-            scene_given = true;
+            o.culling = false;
+        } else if (!a.empty() && a[0] != '-' && !o.scene_given) {
+            o.scene = a;
+            o.scene_given = true;
         } else {
             std::fprintf(stderr, "splatffd render: unknown or incomplete option '%s'\n", a.c_str());
             usage();
             return 2;
         }
     }
+    return std::nullopt;
+}
+
+// Combinations and budgets, all before any work; `ffmpeg` is set when --video is given.
+std::optional<int> check_render_options(RenderOptions& o, std::string& ffmpeg) {
     // Memory budget stated up front: the HQ passes keep about 40 bytes per pixel on the GPU and the capture
     // about 30 on the CPU, so 8192x8192 (67M pixels, ~4.5 GB) is the most one frame may ask for.
     constexpr long long kMaxPixels = 8192LL * 8192LL;
-    if (static_cast<long long>(width) * height > kMaxPixels) {
-        std::fprintf(stderr, "splatffd render: --size %ldx%ld is %lld pixels, more than the budget of %lld (8192x8192)\n", width, height,
-                     static_cast<long long>(width) * height, kMaxPixels);
+    if (static_cast<long long>(o.width) * o.height > kMaxPixels) {
+        std::fprintf(stderr, "splatffd render: --size %ldx%ld is %lld pixels, more than the budget of %lld (8192x8192)\n", o.width,
+                     o.height, static_cast<long long>(o.width) * o.height, kMaxPixels);
         return 2;
     }
-    if (out_dir.empty()) {
+    if (o.out_dir.empty()) {
         std::fprintf(stderr, "splatffd render: --out DIR is required\n");
         usage();
         return 2;
     }
-    if (turntable > 0 && camera) {
+    if (o.turntable > 0 && o.camera) {
         std::fprintf(stderr, "splatffd render: --turntable orbits the scene camera; it cannot be combined with --camera\n");
         return 2;
     }
-    if (turntable > 0 && frames_given) {
+    if (o.turntable > 0 && o.frames_given) {
         std::fprintf(stderr, "splatffd render: --turntable N renders frames 0..N-1; it cannot be combined with --frames\n");
         return 2;
     }
-    if (turntable > 0) first = 0, last = turntable - 1;
-    // --video: checked before any frame is rendered (format, ffmpeg, the folder it goes to).
-    std::string ffmpeg;
-    if (!video.empty()) {
-        const std::string ext = std::filesystem::path(video).extension().string();
-        if (ext != ".mp4" && ext != ".gif") {
-            std::fprintf(stderr, "splatffd render: --video %s: the file must end in .mp4 or .gif\n", video.c_str());
-            return 2;
-        }
-        if (!png) {
+    if (o.turntable > 0) o.first = 0, o.last = o.turntable - 1;
+    if (o.shard && !o.video.empty()) {
+        // A shard has only some of the frames: the video is made once all shards are in (`splatffd assemble`).
+        std::fprintf(stderr, "splatffd render: --video cannot be combined with --shard; encode the assembled clip with "
+                             "`splatffd assemble DIR --video FILE`\n");
+        return 2;
+    }
+    if (!o.video.empty()) {
+        if (!o.png) {
             std::fprintf(stderr, "splatffd render: --video encodes the PNG frames; --format must include png\n");
             return 2;
         }
-        ffmpeg = find_on_path("ffmpeg");
-        if (ffmpeg.empty()) {
-            std::fprintf(stderr, "splatffd render: --video needs ffmpeg, which is not on PATH; install it (Debian/Ubuntu: "
-                                 "apt-get install ffmpeg) or encode the PNG frames yourself\n");
-            return 1;
+        bool usage_error = false;
+        auto f = cli::check_video_output(o.video, usage_error);
+        if (!f) {
+            std::fprintf(stderr, "splatffd render: %s\n", f.message().c_str());
+            return usage_error ? 2 : 1;
         }
-        const std::filesystem::path parent = std::filesystem::absolute(video).parent_path();
-        std::error_code vec;
-        if (!std::filesystem::is_directory(parent, vec) || ::access(parent.c_str(), W_OK) != 0) {
-            std::fprintf(stderr, "%s: cannot write the video: folder %s does not exist or is not writable\n", video.c_str(), parent.c_str());
-            return 1;
-        }
+        ffmpeg = *f;
     }
-    if (!cli::create_output_folder(out_dir)) return 1;
+    return std::nullopt;
+}
+
+std::string gigabytes(double bytes) {
+    char s[32];
+    std::snprintf(s, sizeof s, "%.3g GB", bytes / 1e9);
+    return s;
+}
+
+// Refuses `frames` frames of `bytes_per_frame` each when DIR's file system has less free space, so a
+// mistyped range (--frames 0:99999999) stops at once instead of filling the disk.
+Status check_free_space(const std::string& out_dir, long frames, double bytes_per_frame, const char* basis) {
+    std::error_code ec;
+    const std::filesystem::space_info space = std::filesystem::space(out_dir, ec);
+    if (ec) return {};  // unknown (a file system that does not say): nothing to check against
+    const double need = double(frames) * bytes_per_frame;
+    if (need <= double(space.available)) return {};
+    return make_error(out_dir + ": " + std::to_string(frames) + " frames need about " + gigabytes(need) + " (" + basis +
+                      ") but the file system has " + gigabytes(double(space.available)) +
+                      " free; render fewer frames (--frames, --shard) or free some space");
+}
+
+// Before the first frame, the estimate is deliberately low (0.05 bytes per pixel of PNG, 0.5 of EXR; the
+// sphere at 1280x720 writes 0.16 and 1.65), so no run that fits is refused; after the first frame the
+// real size is used.
+double estimated_frame_bytes(const RenderOptions& o) {
+    const double pixels = double(o.width) * double(o.height);
+    return pixels * ((o.png ? 0.05 : 0.0) + (o.exr ? 0.5 : 0.0));
+}
+
+// The manifest's "settings": everything that decides the pixels, and the binary's version. Shards of one
+// clip have equal settings (`splatffd assemble` compares them).
+nlohmann::ordered_json settings_json(const RenderOptions& o) {
+    nlohmann::ordered_json s;
+    s["scene"] = o.scene;
+    s["first"] = o.first, s["last"] = o.last;
+    s["size"] = {o.width, o.height};
+    s["quality"] = o.quality == render::Quality::hq ? "hq" : "preview";
+    s["formats"] = o.png && o.exr ? "png,exr" : o.png ? "png" : "exr";
+    s["fps"] = o.fps;
+    s["culling"] = o.culling;
+    s["background"] = o.background ? nlohmann::ordered_json{o.background->x, o.background->y, o.background->z} : nlohmann::ordered_json();
+    s["camera"] = o.camera ? nlohmann::ordered_json{o.camera->eye.x, o.camera->eye.y, o.camera->eye.z, o.camera->target.x,
+                                                    o.camera->target.y, o.camera->target.z, o.camera->up.x, o.camera->up.y,
+                                                    o.camera->up.z, o.camera->fov_y_degrees}
+                           : nlohmann::ordered_json();
+    s["turntable"] = o.turntable;
+    s["version"] = SFFD_VERSION;
+    return s;
+}
+
+// The loaded scene and what every frame needs from it.
+struct RenderScene {
+    ecs::Registry registry;
+    render::RenderSettings settings;
+    SceneBounds bounds;
+    Camera scene_view;  // the scene camera the turntable orbits from
+};
+
+// Loads the scene, applies the options to it and makes the render state (needs the GL context current).
+Status set_up_scene(const RenderOptions& o, gfx::GlContext& ctx, RenderScene& s) {
+    if (Status st = load_scene(s.registry, o.scene); !st) return st;
+    s.settings.quality = o.quality, s.settings.width = int(o.width), s.settings.height = int(o.height);
+    s.settings.background = o.background ? std::optional<glm::vec3>(glm::vec3(render::srgb_to_linear(o.background->x),
+                                                                              render::srgb_to_linear(o.background->y),
+                                                                              render::srgb_to_linear(o.background->z)))
+                                         : std::nullopt;
+    s.settings.culling = o.culling;
+    s.settings.aux_outputs = o.exr;  // Z and N channels
+    s.registry.set_resource<render::RenderSettings>(s.settings);
+    // --camera / --turntable replace the scene camera (its clip planes are fitted to the scene).
+    s.bounds = o.camera || o.turntable > 0 ? scene_bounds(s.registry) : SceneBounds{};
+    s.scene_view = o.turntable > 0 ? render::scene_camera(s.registry, double(o.width) / double(o.height)) : Camera{};
+    if (o.camera) {
+        Camera c = *o.camera;
+        fit_clip_planes(c, s.bounds);
+        use_camera(s.registry, c);
+    }
+    s.registry.set_resource<app::AppContext>(app::AppContext{&ctx, false});
+    if (Status st = render::init_render_state(s.registry); !st) return make_error("splatffd render: " + st.message());
+    return {};
+}
+
+// Renders frame k on a clock of its own (the frame depends on k only) and writes its files.
+Result<cli::FramePrint> render_frame(const RenderOptions& o, RenderScene& s, const Schedule& schedule, long k) {
+    Clock clock(ClockSettings{.fixed_dt = 1.0 / o.fps});
+    clock.seek(double(k) / o.fps);
+    FrameContext frame = clock.tick();
+    frame.frame = std::uint64_t(k);
+    if (o.turntable > 0) use_camera(s.registry, turntable_camera(s.scene_view, s.bounds, k, o.turntable));
+    schedule.run_frame(s.registry, frame);
+    auto image = render::capture_frame(s.registry);
+    if (!image) return make_error("splatffd render: " + image.message());
+    const std::filesystem::path base = cli::frame_file_base(o.out_dir, k);
+    cli::FramePrint print{k, std::nullopt, std::nullopt};
+    if (o.png) {
+        const std::filesystem::path file = base.string() + ".png";
+        if (Status st = render::write_png(file, render::to_rgba8(*image, s.settings.background)); !st) return st.error();
+        auto p = cli::fingerprint(file);
+        if (!p) return p.error();
+        print.png = *p;
+    }
+    if (o.exr) {
+        const std::filesystem::path file = base.string() + ".exr";
+        if (Status st = render::write_exr(file, *image); !st) return st.error();
+        auto p = cli::fingerprint(file);
+        if (!p) return p.error();
+        print.exr = *p;
+    }
+    return print;
+}
+
+// Renders the run's frames (all of FIRST..LAST, or the shard's share), keeping the manifest current:
+// "running" with the count done after each frame (constant size), "complete" or "failed" with every
+// written frame's fingerprint at the end. Returns the exit status.
+int render_frames(const RenderOptions& o, RenderScene& s, cli::RunRecord& run) {
+    const std::filesystem::path manifest = cli::manifest_path(o.out_dir, run.shard, run.sharded);
+    const Schedule schedule = make_engine_schedule({.present = false});
+    const long count = run.frames.count;
+    if (count == 0) run.state = "complete";  // a shard with no frame (more shards than frames) is done
+    if (Status st = cli::write_manifest(manifest, run); !st) {
+        std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
+        return 1;
+    }
+    int status = 0;
+    const auto start = std::chrono::steady_clock::now();
+    for (long i = 0; i < count; ++i) {
+        const long k = run.frames.at(i);
+        auto print = render_frame(o, s, schedule, k);
+        if (!print) {
+            std::fprintf(stderr, "\n%s\n", print.message().c_str());
+            status = 1;
+            break;
+        }
+        run.files.push_back(*print);
+        run.written = i + 1;
+        if (i == 0 && count > 1) {
+            // The first frame's real size, for the rest of the run.
+            const double bytes = double((print->png ? print->png->bytes : 0) + (print->exr ? print->exr->bytes : 0));
+            if (Status st = check_free_space(o.out_dir, count - 1, bytes, "at the size of the first frame"); !st) {
+                std::fprintf(stderr, "\nsplatffd render: %s\n", st.message().c_str());
+                status = 1;
+                break;
+            }
+        }
+        if (i + 1 == count) run.state = "complete";
+        if (Status st = cli::write_manifest(manifest, run); !st) {
+            std::fprintf(stderr, "\nsplatffd render: %s\n", st.message().c_str());
+            status = 1;
+            break;
+        }
+        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const long done = i + 1;
+        std::fprintf(stderr, "\rsplatffd render: frame %ld (%ld/%ld, %.0f%%) %.2f s/frame, ETA %.0f s   ", k, done,
+                     count, 100.0 * double(done) / double(count), elapsed / double(done),
+                     elapsed / double(done) * double(count - done));
+        std::fflush(stderr);
+    }
+    std::fprintf(stderr, "\n");
+    if (status != 0) {
+        run.state = "failed";
+        (void)cli::write_manifest(manifest, run);
+    }
+    return status;
+}
+
+int run_render(sffd::cli::Args args) {
+    RenderOptions o;
+    if (auto rc = parse_render_args(args, o)) return *rc;
+    std::string ffmpeg;
+    if (auto rc = check_render_options(o, ffmpeg)) return *rc;
+    if (!cli::create_output_folder(o.out_dir)) return 1;
+
+    cli::RunRecord run;
+    run.started_unix = std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+    run.command = o.command;
+    run.settings = settings_json(o);
+    run.sharded = o.shard.has_value();
+    run.shard = o.shard.value_or(cli::Shard{});
+    run.frames = cli::shard_frames(o.first, o.last, run.shard);
+    if (Status st = check_free_space(o.out_dir, run.frames.count, estimated_frame_bytes(o), "a low estimate for this size and format");
+        !st) {
+        std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
+        return 1;
+    }
 
     // Offscreen rendering needs no window: EGL surfaceless works with or without a display.
-    auto ctx = gfx::create_context({.headless = true, .width = int(width), .height = int(height), .debug = false});
+    auto ctx = gfx::create_context({.headless = true, .width = int(o.width), .height = int(o.height), .debug = false});
     if (!ctx) {
         std::fprintf(stderr, "splatffd render: %s\n", ctx.message().c_str());
         return 1;
     }
     int status = 0;
     {
-        ecs::Registry registry;
-        if (Status st = load_scene(registry, scene); !st) {
+        RenderScene scene;
+        if (Status st = set_up_scene(o, ctx.value(), scene); !st) {
             std::fprintf(stderr, "%s\n", st.message().c_str());
             return 1;
         }
-        render::RenderSettings settings;
-        settings.quality = quality, settings.width = int(width), settings.height = int(height);
-        settings.background = background ? std::optional<glm::vec3>(glm::vec3(render::srgb_to_linear(background->x),
-                                                                               render::srgb_to_linear(background->y),
-                                                                               render::srgb_to_linear(background->z)))
-                                         : std::nullopt;
-        settings.culling = culling;
-        settings.aux_outputs = exr;  // Z and N channels
-        registry.set_resource<render::RenderSettings>(settings);
-        // --camera / --turntable replace the scene camera (its clip planes are fitted to the scene).
-        const SceneBounds bounds = camera || turntable > 0 ? scene_bounds(registry) : SceneBounds{};
-        const Camera scene_view = turntable > 0 ? render::scene_camera(registry, double(width) / double(height)) : Camera{};
-        if (camera) {
-            fit_clip_planes(*camera, bounds);
-            use_camera(registry, *camera);
-        }
-        registry.set_resource<app::AppContext>(app::AppContext{&ctx.value(), false});
-        if (Status st = render::init_render_state(registry); !st) {
-            std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
-            return 1;
-        }
-        const Schedule schedule = make_engine_schedule({.present = false});
-        const long count = last - first + 1;
-        // DIR/render_manifest.json says which frames this run wrote and whether it finished, so frames of
-        // an interrupted run are not mistaken for a complete sequence (older frames may share the folder).
-        const std::filesystem::path manifest = std::filesystem::path(out_dir) / "render_manifest.json";
-        const std::string started = std::to_string(std::chrono::duration_cast<std::chrono::seconds>(
-                                                       std::chrono::system_clock::now().time_since_epoch()).count());
-        auto write_manifest = [&](long written_last, const char* state) {
-            std::string frames = "[";
-            for (long k = first; k <= written_last; ++k) {
-                if (k > first) frames += ',';
-                frames += std::to_string(k);
-            }
-            frames += "]";
-            char fields[512];
-            std::snprintf(fields, sizeof fields,
-                          "\"first\": %ld, \"last\": %ld, \"size\": [%ld, %ld], \"quality\": \"%s\", \"formats\": \"%s\", \"fps\": %.17g, "
-                          "\"culling\": %s",
-                          first, last, width, height, quality == render::Quality::hq ? "hq" : "preview",
-                          png && exr ? "png,exr" : png ? "png" : "exr", fps, culling ? "true" : "false");
-            std::string scene_escaped;
-            for (char ch : scene) {
-                if (ch == '"' || ch == '\\') scene_escaped += '\\';
-                if (static_cast<unsigned char>(ch) >= 0x20) scene_escaped += ch;
-            }
-            const std::string text = std::string("{\"generator\": \"splatffd render " SFFD_VERSION "\", \"state\": \"") + state +
-                                     "\", \"complete\": " + (std::string(state) == "complete" ? "true" : "false") +
-                                     ", \"started_unix\": " + started + ", \"scene\": \"" + scene_escaped + "\", " + fields +
-                                     ", \"frames_written\": " + frames + "}\n";
-            return write_file_atomic(manifest, text);
-        };
-        if (Status st = write_manifest(first - 1, "running"); !st) {
-            std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
-            render::release_render_state(registry);
-            return 1;
-        }
-        long written_last = first - 1;
-        const auto start = std::chrono::steady_clock::now();
-        for (long k = first; k <= last; ++k) {
-            // A clock of its own per frame, seeked to frame k: the frame depends on k only.
-            Clock clock(ClockSettings{.fixed_dt = 1.0 / fps});
-            clock.seek(double(k) / fps);
-            FrameContext frame = clock.tick();
-            frame.frame = std::uint64_t(k);
-            if (turntable > 0) use_camera(registry, turntable_camera(scene_view, bounds, k, turntable));
-            schedule.run_frame(registry, frame);
-            auto image = render::capture_frame(registry);
-            if (!image) {
-                std::fprintf(stderr, "\nsplatffd render: %s\n", image.message().c_str());
-                status = 1;
-                break;
-            }
-            const std::filesystem::path base = cli::frame_file_base(out_dir, k);
-            if (png) {
-                if (Status st = render::write_png(base.string() + ".png", render::to_rgba8(*image, settings.background)); !st) {
-                    std::fprintf(stderr, "\n%s\n", st.message().c_str());
-                    status = 1;
-                    break;
-                }
-            }
-            if (exr) {
-                if (Status st = render::write_exr(base.string() + ".exr", *image); !st) {
-                    std::fprintf(stderr, "\n%s\n", st.message().c_str());
-                    status = 1;
-                    break;
-                }
-            }
-            written_last = k;
-            if (Status st = write_manifest(written_last, k == last ? "complete" : "running"); !st) {
-                std::fprintf(stderr, "\nsplatffd render: %s\n", st.message().c_str());
-                status = 1;
-                break;
-            }
-            const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-            const long done = k - first + 1;
-            std::fprintf(stderr, "\rsplatffd render: frame %ld (%ld/%ld, %.0f%%) %.2f s/frame, ETA %.0f s   ", k, done,
-                         count, 100.0 * double(done) / double(count), elapsed / double(done),
-                         elapsed / double(done) * double(count - done));
-            std::fflush(stderr);
-        }
-        std::fprintf(stderr, "\n");
-        if (status != 0) (void)write_manifest(written_last, "failed");
-        render::release_render_state(registry);
+        status = render_frames(o, scene, run);
+        render::release_render_state(scene.registry);
     }
-    if (status == 0 && !video.empty()) {
-        if (Status st = encode_video(ffmpeg, out_dir, first, last, fps, video); !st) {
+    if (status == 0 && !o.video.empty()) {
+        if (Status st = cli::encode_video(ffmpeg, o.out_dir, o.first, o.last, o.fps, o.video); !st) {
             std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
             return 1;
         }
-        std::fprintf(stderr, "wrote %s: %ld frames at %g fps\n", video.c_str(), last - first + 1, fps);
+        std::fprintf(stderr, "wrote %s: %ld frames at %g fps\n", o.video.c_str(), o.last - o.first + 1, o.fps);
     }
     return status;
 }

@@ -14,6 +14,8 @@
 #include <fstream>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "runtime/assets/builtin_scenes.h"
 #include "runtime/assets/scene.h"
 #include "runtime/ecs/registry.h"
@@ -120,18 +122,30 @@ TEST(RenderCommand, ManifestListsTheFramesAndSaysWhetherTheRunCompleted) {
     ASSERT_EQ(run("sphere --out " + out.string() + " --frames 2:3 --size 64x36 --format png --quality preview", &log), 0) << log;
     std::ifstream in(out / "render_manifest.json");
     const std::string m((std::istreambuf_iterator<char>(in)), {});
-    EXPECT_NE(m.find("\"state\": \"complete\", \"complete\": true"), std::string::npos) << m;
-    EXPECT_NE(m.find("\"frames_written\": [2,3]"), std::string::npos) << m;
-    EXPECT_NE(m.find("\"size\": [64, 36], \"quality\": \"preview\", \"formats\": \"png\""), std::string::npos) << m;
-    EXPECT_NE(m.find("\"scene\": \"sphere\""), std::string::npos) << m;
+    const nlohmann::json j = nlohmann::json::parse(m);
+    EXPECT_EQ(j["state"], "complete") << m;
+    EXPECT_EQ(j["complete"], true) << m;
+    EXPECT_EQ(j["frames_written"]["count"], 2) << m;  // the first `count` frames of first, first + step, ...
+    EXPECT_EQ(j["frames"]["first"], 2) << m;
+    EXPECT_EQ(j["frames_written"]["last"], 3) << m;
+    EXPECT_EQ(j["settings"]["size"], nlohmann::json::array({64, 36})) << m;
+    EXPECT_EQ(j["settings"]["quality"], "preview") << m;
+    EXPECT_EQ(j["settings"]["formats"], "png") << m;
+    EXPECT_EQ(j["settings"]["scene"], "sphere") << m;
+    ASSERT_EQ(j["files"].size(), 2u) << m;  // each frame's bytes and FNV-1a, written once at the end
+    EXPECT_EQ(j["files"][1]["frame"], 3) << m;
+    EXPECT_EQ(j["files"][1]["png"]["bytes"], fs::file_size(out / "frame_0003.png")) << m;
     // A frame that cannot be written (its name is taken by a folder): the run fails and says so.
     const fs::path bad = fresh_dir("manifest_failed");
     fs::create_directories(bad / "frame_0001.png");
     EXPECT_EQ(run("sphere --out " + bad.string() + " --frames 0:2 --size 64x36 --format png --quality preview", &log), 1) << log;
     std::ifstream in2(bad / "render_manifest.json");
     const std::string f((std::istreambuf_iterator<char>(in2)), {});
-    EXPECT_NE(f.find("\"state\": \"failed\", \"complete\": false"), std::string::npos) << f;
-    EXPECT_NE(f.find("\"frames_written\": [0]"), std::string::npos) << f;
+    const nlohmann::json fj = nlohmann::json::parse(f);
+    EXPECT_EQ(fj["state"], "failed") << f;
+    EXPECT_EQ(fj["complete"], false) << f;
+    EXPECT_EQ(fj["frames_written"]["count"], 1) << f;
+    EXPECT_EQ(fj["frames_written"]["last"], 0) << f;
 }
 
 TEST(RenderCommand, SizeOverTheStatedMemoryBudgetIsRefusedUpFront) {
@@ -172,11 +186,13 @@ TEST(RenderCommand, InterruptedSequenceLeavesAnIncompleteManifestAndNoTemporarie
     EXPECT_NE(err.find("splatffd render: terminated (SIGTERM)"), std::string::npos) << err;
     std::ifstream in(out / "render_manifest.json");
     const std::string m((std::istreambuf_iterator<char>(in)), {});
-    EXPECT_NE(m.find("\"state\": \"running\", \"complete\": false"), std::string::npos) << m;
+    const nlohmann::json j = nlohmann::json::parse(m);
+    EXPECT_EQ(j["state"], "running") << m;
+    EXPECT_EQ(j["complete"], false) << m;
     // Frame 0 was finished; frame 1's file may exist before the manifest records it (the manifest is
-    // written after each frame's files, so it never lists a frame that is not complete).
-    EXPECT_NE(m.find("\"frames_written\": [0"), std::string::npos) << m;
-    EXPECT_EQ(m.find("100000]"), std::string::npos) << m;
+    // written after each frame's files, so it never counts a frame that is not complete).
+    EXPECT_GE(j["frames_written"]["count"].get<long>(), 1) << m;
+    EXPECT_LT(j["frames_written"]["count"].get<long>(), 100001) << m;
     for (const auto& e : fs::directory_iterator(out)) EXPECT_EQ(e.path().filename().string().find("sffd-tmp"), std::string::npos) << e.path();
 }
 

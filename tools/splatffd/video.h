@@ -1,0 +1,26 @@
+// Encoding a folder of PNG frames as a video with ffmpeg: `splatffd render --video` and
+// `splatffd assemble --video` share it (and its checks), so a clip assembled from shards encodes exactly
+// as a single run's would.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "runtime/core/result.h"
+
+namespace sffd::cli {
+
+// The full path of `name` on PATH (an executable regular file), or "".
+std::string find_on_path(const std::string& name);
+
+// Checks a --video FILE before any work: .mp4 or .gif, ffmpeg on PATH, the folder writable. On success
+// returns ffmpeg's path. `usage` is set when the mistake is the option's (exit 2) rather than the machine's.
+Result<std::string> check_video_output(const std::string& video, bool& usage);
+
+// Encodes DIR/frame_FIRST..LAST.png into `video` (.mp4: H.264 yuv420p, even size; .gif: per-clip palette)
+// through a temporary file renamed at the end, so a failed encode leaves no half video. ffmpeg runs with
+// an argument vector (no shell): paths with spaces or quotes are safe.
+Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir, long first, long last, double fps,
+                    const std::filesystem::path& video);
+
+}  // namespace sffd::cli
