@@ -349,7 +349,7 @@ TEST_F(DeformCommand, SigintAndSigtermRemoveTheTemporaryAndKeepTheOldOutput) {
     }
 }
 
-// A textured cloud's uv frame rides on its axes (issue 14): deform maps the axes by the Jacobian and keeps
+// A textured cloud's uv frame rides on its axes: deform maps the axes by the Jacobian and keeps
 // the frame (du/ds ... per axis) as it is, streamed PLY -> PLY and in memory PLY/GLB -> GLB.
 TEST_F(DeformCommand, UvFrameOfATexturedCloudRidesOnTheDeformedAxes) {
     auto g = assets::read_geometry(sffd::test::write_textured_box(dir / "box"));

@@ -1,4 +1,4 @@
-// 3D Gaussians in the render system (issue 17): render_system's image of a Gaussian scene against the
+// 3D Gaussians in the render system: render_system's image of a Gaussian scene against the
 // Gaussian GL renderer and the CPU reference, compositing with surface splats (a Gaussian behind an
 // opaque splat is hidden; one in front is blended over it exactly as G + (1 - A) S), deformed Gaussians.
 // Headless EGL (llvmpipe here).

@@ -1,4 +1,4 @@
-// 3D Gaussian entities in scene files and in `splatffd render` (issue 17): a scene with a Gaussian
+// 3D Gaussian entities in scene files and in `splatffd render`: a scene with a Gaussian
 // cloud, a lattice and a twist clip saves, loads and renders the deformed Gaussians (equal to deforming
 // then rendering, different from rest); bad Gaussian files in a scene name the file; the command renders
 // Gaussian files and animated Gaussian scenes to frames. Headless EGL (llvmpipe here).
