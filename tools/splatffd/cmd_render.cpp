@@ -47,7 +47,7 @@
 #include "systems/splat_render/splat_render.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/frame_files.h"
-#include "tools/splatffd/engine.h"
+#include "systems/engine/engine.h"
 
 namespace {
 
