@@ -7,6 +7,7 @@ set -euo pipefail
 
 PACKAGES=(
   build-essential cmake pkg-config git ccache     # toolchain (presets use Unix Makefiles: no ninja)
+  clang-format python3                            # format check (tools/check_format.sh), include check
   clang                                           # libFuzzer targets (tools/fuzz, SFFD_BUILD_FUZZERS)
   libglfw3-dev libegl-dev libgl-dev               # window + GL 4.5 core, EGL for headless
   libgl1-mesa-dri libegl-mesa0                    # Mesa llvmpipe: GL without a GPU, EGL surfaceless

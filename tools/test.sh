@@ -1,7 +1,9 @@
 #!/usr/bin/env bash
 # tools/test.sh [--asan]: install what is missing, configure and build (release preset, or asan =
 # ASan+UBSan), fetch content, then run every test: ctest for the cpu, gl and slow labels (GL tests make their own
-# headless EGL context) and the xvfb-labelled window tests under `xvfb-run -a`.
+# headless EGL context) and the xvfb-labelled window tests under `xvfb-run -a`, and the formatting check
+# (tools/check_format.sh, counted as one test). GL tests fail when no GL context can be made; a run
+# without GL on purpose sets SFFD_NO_GL=1 and they skip.
 # Ends with one line "test.sh: N passed, N failed"; exits non-zero if anything failed.
 set -euo pipefail
 cd "$(dirname "${BASH_SOURCE[0]}")/.."
@@ -56,12 +58,17 @@ else
   xvfb-run -a -s "-screen 0 1280x1024x24" ctest --preset "$preset" -L xvfb 2>&1 | tee "$logs/xvfb.log" || status=1
 fi
 
-# Sum ctest's "N% tests passed, F tests failed out of T" lines.
-passed=0 failed=0
+echo "== format (tools/check_format.sh)"
+format_failed=0
+tools/check_format.sh 2>&1 | tail -n 40 | tee "$logs/format.txt" || format_failed=1
+((format_failed == 0)) || status=1
+
+# Sum ctest's "N% tests passed, F tests failed out of T" lines, plus the format check.
+passed=$((1 - format_failed)) failed=$format_failed
 while read -r f t; do
   passed=$((passed + t - f)); failed=$((failed + f))
 done < <(sed -nE 's/.*tests passed, ([0-9]+) tests? failed out of ([0-9]+).*/\1 \2/p' "$logs"/*.log)
-if ((passed + failed == 0)); then
+if ((passed + failed <= 1)); then
   echo "test.sh: no test ran" >&2
   exit 1
 fi

@@ -4,7 +4,7 @@
 //
 //   auto ctx = gfx::create_context({.headless = headless});
 //   ecs::Registry registry;
-//   Schedule schedule = make_engine_schedule();          // tools/splatffd/engine.h
+//   Schedule schedule = make_engine_schedule();          // systems/engine/engine.h
 //   Clock clock = app::make_clock(&*ctx);                // fixed 1/60 s when headless
 //   app::RunResult r = app::run(registry, schedule, clock, &*ctx, {.max_frames = 10});
 //

@@ -1,4 +1,4 @@
-// Built-in scenes (owned by the content engineer, issue 5): the paper's two objects.
+// Built-in scenes: the paper's two objects.
 //   sphere: unit sphere, exactly 59,650 splats on a Fibonacci spiral (even spacing, no pole clusters),
 //           uv-mapped (u = longitude, v = colatitude), procedural texture: a 16x8 black/white checker
 //           whose light cells carry a hue per latitude band, with dark grid lines every cell, so stretching

@@ -1,4 +1,4 @@
-// Writing splat clouds (owned by the content engineer, issue 5). Every save is atomic (temp + rename).
+// Writing splat clouds. Every save is atomic (temp + rename).
 //
 // PLY (binary little-endian by default, or ascii): vertex properties
 //   x y z                 float (cloud.origin == 0) or double world coordinates (origin != 0, so other

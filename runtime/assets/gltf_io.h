@@ -1,4 +1,4 @@
-// glTF 2.0 / GLB reading and writing of splat clouds (owned by the content engineer, issue 5).
+// glTF 2.0 / GLB reading and writing of splat clouds.
 // tinygltf reads (it validates the JSON and resolves buffers, data URIs and images); we write the JSON
 // ourselves with nlohmann::json so the layout below is exactly what content/README.md documents.
 //

@@ -1,4 +1,4 @@
-// Importing point clouds and meshes as splat clouds (owned by the content engineer, issue 5).
+// Importing point clouds and meshes as splat clouds.
 //
 // Two steps, so `splatffd info` can look at a file without estimating anything:
 //   1. read_geometry(path): PLY (ascii/binary, any vertex properties, faces allowed), OBJ (+ .mtl map_Kd),
@@ -89,8 +89,5 @@ Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::ui
 
 // Chooses the origin for float positions (bbox centre when far from 0, else 0; see above).
 glm::dvec3 choose_origin(const std::vector<glm::dvec3>& positions);
-
-// Decodes a PNG/JPEG/... file into RGBA8 (stb_image). Row 0 is the top row of the file.
-Result<Image> load_image(const std::filesystem::path& path);
 
 }  // namespace sffd::assets

@@ -85,6 +85,4 @@ Result<Image> load_named_image(const fs::path& owner, const std::string& name, c
 
 }  // namespace detail
 
-Result<Image> load_image(const fs::path& path) { return detail::decode_image(path, nullptr); }
-
 }  // namespace sffd::assets

@@ -1,4 +1,4 @@
-// Streaming PLY reader and writer (owned by the content engineer, issue 5).
+// Streaming PLY reader and writer.
 //
 // PLY files can be far larger than memory (`splatffd deform` streams multi-GB scans with < 256 MB peak),
 // so neither side ever holds a whole element: the reader hands out chunks of up to N rows, the writer

@@ -295,18 +295,6 @@ void register_scene_extension(const std::string& key, SceneSaveFn save_fn, Scene
     extensions()[key] = std::move(e);
 }
 
-void register_scene_file_extension(const std::string& key, SceneFileSaveFn save_fn, SceneFileLoadFn load_fn) {
-    Extension e;
-    if (save_fn)
-        e.save = [f = std::move(save_fn)](const ecs::Registry& r, const SceneIdOf& id_of, const fs::path& path, std::vector<assets::GltfAppend>&) {
-            return f(r, id_of, path.parent_path());
-        };
-    if (load_fn)
-        e.load = [f = std::move(load_fn)](ecs::Registry& r, std::string_view text, const SceneEntityOf& entity_of, const fs::path& path,
-                                          const tinygltf::Model&) { return f(r, text, entity_of, path.parent_path()); };
-    extensions()[key] = std::move(e);
-}
-
 void register_scene_gltf_extension(const std::string& key, SceneGltfSaveFn save_fn, SceneGltfLoadFn load_fn) {
     extensions()[key] = Extension{std::move(save_fn), std::move(load_fn)};
 }

@@ -1,5 +1,5 @@
-// Scenes: built-in names, importable files and our glTF scene files (owned by the content engineer,
-// issue 5). The file format is documented in content/README.md.
+// Scenes: built-in names, importable files and our glTF scene files.
+// The file format is documented in content/README.md.
 //
 //   load_scene(registry, "sphere")            built-in: textured sphere, 59,650 splats, 11x11x11 lattice
 //   load_scene(registry, "face")              built-in: real head scan, 40,880 splats, 11x11x11 lattice
@@ -47,14 +47,6 @@ using SceneLoadFn = std::function<Status(ecs::Registry&, std::string_view json, 
 // Registers (or replaces) the extension stored under `key` in the file's SFFD_scene.extensions object.
 void register_scene_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn);
 void unregister_scene_extension(const std::string& key);
-
-// An extension whose data names other files (systems/gaussian: the Gaussian clouds of a scene) also gets
-// the scene file's directory: relative paths in its JSON are relative to it. Same key space as above.
-using SceneFileSaveFn =
-    std::function<Result<std::string>(const ecs::Registry&, const SceneIdOf& id_of, const std::filesystem::path& scene_dir)>;
-using SceneFileLoadFn = std::function<Status(ecs::Registry&, std::string_view json, const SceneEntityOf& entity_of,
-                                             const std::filesystem::path& scene_dir)>;
-void register_scene_file_extension(const std::string& key, SceneFileSaveFn save_fn, SceneFileLoadFn load_fn);
 
 // An extension that also stores glTF content in the scene file (systems/gaussian: clouds embedded as
 // KHR_gaussian_splatting primitives) gets the scene file's path; saving, it may add GltfAppend functions

@@ -1,4 +1,4 @@
-// Splat estimation for raw points (owned by the content engineer, issue 5): k nearest neighbours
+// Splat estimation for raw points: k nearest neighbours
 // (nanoflann k-d tree), normals by PCA of the neighbourhood, consistent orientation, splat radii from
 // neighbour spacing, and tangent axes.
 //

@@ -41,14 +41,6 @@ const char* file_kind(mode_t m) {
     return "not a regular file";
 }
 
-Status check_regular_file(const fs::path& path) {
-    struct stat st {};
-    if (::stat(path.c_str(), &st) != 0)
-        return make_error(path.string() + (errno == ENOENT ? std::string(": cannot open: no such file") : std::string(": cannot open: ") + std::strerror(errno)));
-    if (!S_ISREG(st.st_mode)) return not_regular(path, st.st_mode);
-    return {};
-}
-
 Result<std::string> read_file(const fs::path& path, std::uint64_t limit) {
     Fd f;
     f.fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);

@@ -31,9 +31,6 @@ Result<std::string> read_file(const std::filesystem::path& path, std::uint64_t l
 // "a folder"; "not a regular file" for anything else): readers here and atomic saving name it alike.
 const char* file_kind(mode_t mode);
 
-// Same checks without reading: a regular file that exists (for readers that stream, e.g. PLY).
-Status check_regular_file(const std::filesystem::path& path);
-
 // The resolved location of a resource named `uri` inside `owner` (a file): the path of a regular
 // file inside owner's folder, after lexical normalisation and after following symlinks. Refused with
 // `owner: resource 'uri' is outside the file's folder` for absolute paths, `..` escapes and symlinks

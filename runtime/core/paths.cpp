@@ -29,7 +29,11 @@ fs::path data_root() {
         if (const char* env = std::getenv("SPLATFFD_DATA_DIR"); env && *env && has_data(env)) return fs::path(env);
         const fs::path exe_dir = executable_path().parent_path();
         for (const fs::path& candidate : {exe_dir / ".." / "share" / "splatffd", exe_dir / "share" / "splatffd"})
-            if (has_data(candidate)) return fs::weakly_canonical(candidate);
+            if (has_data(candidate)) {
+                std::error_code ec;  // data_root() reports nothing: on a filesystem error keep the path as found
+                fs::path canonical = fs::weakly_canonical(candidate, ec);
+                return ec ? candidate : canonical;
+            }
         // Build tree: the executable sits somewhere under build/; the source tree is baked in.
         if (has_data(SFFD_SOURCE_DIR)) return fs::path(SFFD_SOURCE_DIR);
         return exe_dir;

@@ -1,5 +1,5 @@
 #version 450 core
-// GPU deformation of 3D Gaussians through one FFD lattice (issue 17; systems/gaussian/gpu_deform.h). Reads
+// GPU deformation of 3D Gaussians through one FFD lattice (systems/gaussian/gpu_deform.h). Reads
 // GpuGaussian[] (the rest cloud, or the previous deformer's output when several apply in order: in place)
 // and writes the deformed Gaussian:
 //   centre  μ' = μ + D(μ)                     (shaders/ffd/ffd_common.glsl, the ffd pass's own evaluation)

@@ -6,7 +6,7 @@
 //   accum_material (MATERIALS 1) = sum(w * specular), sum(w * shininess)
 // TEXTURED 1: the colour is the material texture at this pixel's uv, from the splat's uv frame (v_uv,
 // splat_uv_frame) at the fragment's splat coordinates, filtered trilinearly at the splat's mip level
-// (splat_texture_lod): texture detail finer than the splats survives (issue 14). TEXTURED 0: the splat's
+// (splat_texture_lod): texture detail finer than the splats survives. TEXTURED 0: the splat's
 // one colour (v_plane.w).
 #include "splat_render/raycast.glsl"
 

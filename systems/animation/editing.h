@@ -1,4 +1,4 @@
-// Editor-facing API (the editor's timeline panel calls these; see issue 6). Plain functions over the
+// Editor-facing API (the editor's timeline panel calls these). Plain functions over the
 // components: the caller gets them with registry.patch<AnimationClip>(e) / patch<AnimationState>(e) so
 // change stamps move. Every edit keeps a track's keys sorted with distinct times; the animation system
 // re-evaluates the pose on the next frame (also while paused).

@@ -26,7 +26,7 @@ std::string name_of(const ecs::Registry& r, ecs::Entity e, const char* fallback)
 
 bool is_lattice(const ecs::Registry& r, ecs::Entity e) { return r.valid(e) && r.has<Lattice>(e); }
 
-// A cloud lattices deform: surface splats (SplatCloud) or 3D Gaussians (GaussianCloud, issue 17).
+// A cloud lattices deform: surface splats (SplatCloud) or 3D Gaussians (GaussianCloud).
 bool is_cloud(const ecs::Registry& r, ecs::Entity e) { return r.valid(e) && (r.has<SplatCloud>(e) || r.has<GaussianCloud>(e)); }
 
 // The authored centres and origin of either kind of cloud.

@@ -1,4 +1,4 @@
-// Lattice management in the editor (issue 16): add a lattice fitted around any cloud (box or oriented
+// Lattice management in the editor: add a lattice fitted around any cloud (box or oriented
 // box, padding, divisions, basis: ffd::fit_lattice, the same code as `splatffd convert --lattice fit`),
 // remove it, refit it, reorder a cloud's lattices, switch the active one, export / import lattice JSON.
 // Every change is one undo step (the entity a removed or un-added lattice lived on stays, without

@@ -400,8 +400,6 @@ int finish_group(const Prepared& P, const Group& g, const PointsIn& in, const Po
 
 }  // namespace
 
-int lane_width() { return W; }
-
 Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin) {
     Prepared P;
     P.L = l.divisions.x, P.M = l.divisions.y, P.N = l.divisions.z;

@@ -36,7 +36,4 @@ Prepared prepare(const Lattice& lattice, const glm::dvec3& cloud_origin);
 // Runs the fast (dense Bernstein / B-spline) or sparse kernel over all points with TBB.
 DeformStats run_fast(const Prepared& prepared, const PointsIn& in, const PointsOut& out, bool sparse);
 
-// Lane width the fast kernels were compiled for (16 with AVX-512, 8 with AVX2).
-int lane_width();
-
 }  // namespace sffd::ffd::detail

@@ -4,8 +4,6 @@
 
 namespace sffd::ffd {
 
-glm::dmat3 axes_matrix(const Lattice& l) { return glm::dmat3(l.axes[0], l.axes[1], l.axes[2]); }
-
 glm::dmat3 inverse_axes(const Lattice& l) {
     const glm::dvec3 &S = l.axes[0], &T = l.axes[1], &U = l.axes[2];
     const glm::dvec3 r0 = glm::cross(T, U) / glm::dot(glm::cross(T, U), S);

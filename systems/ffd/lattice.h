@@ -28,8 +28,7 @@ using sffd::rest_grid;
 // Divisions, finiteness, counts and a non-degenerate box: the runtime's one rule set (validate_lattice).
 inline Status validate(const Lattice& lattice, const std::string& what = "lattice") { return validate_lattice(lattice, what); }
 
-// M = [S T U] (columns) and its inverse (rows (T×U)/((T×U)·S), (S×U)/((S×U)·T), (S×T)/((S×T)·U)).
-glm::dmat3 axes_matrix(const Lattice& lattice);
+// The inverse of M = [S T U] (columns): rows (T×U)/((T×U)·S), (S×U)/((S×U)·T), (S×T)/((S×T)·U).
 glm::dmat3 inverse_axes(const Lattice& lattice);
 
 // (s,t,u) = M⁻¹ (X − X0), X in world space.

@@ -1,4 +1,4 @@
-// 3D Gaussian splat components: plain data (issue 17). Owned by systems/gaussian; other systems read them.
+// 3D Gaussian splat components: plain data. Owned by systems/gaussian; other systems read them.
 //
 // A GaussianCloud is the authored cloud as loaded (3DGS PLY, .splat, or converted from a surface cloud);
 // the deformation writes a separate DeformedGaussians, the authored cloud is never overwritten.

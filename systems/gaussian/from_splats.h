@@ -1,4 +1,4 @@
-// Test scenes for 3D Gaussians (issue 17): a surface-splat cloud (SplatCloud: discs with tangent axes
+// Test scenes for 3D Gaussians: a surface-splat cloud (SplatCloud: discs with tangent axes
 // and sRGB colours, e.g. the built-in sphere) converted into flat 3D Gaussians.
 #pragma once
 

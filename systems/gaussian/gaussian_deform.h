@@ -1,4 +1,4 @@
-// CPU deformation of 3D Gaussians through an FFD lattice (issue 17):
+// CPU deformation of 3D Gaussians through an FFD lattice:
 //   centre  μ' = FFD(μ)                      (the ffd system's own evaluator, systems/ffd/deform.h)
 //   shape   Σ' = J Σ Jᵀ, J the world Jacobian at μ (first-order push-forward of the density), stored
 //           back as scale + rotation (symmetric eigen-decomposition)

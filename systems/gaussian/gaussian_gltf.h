@@ -1,4 +1,4 @@
-// glTF 2.0 `KHR_gaussian_splatting` (Khronos, ratified; issue 17): read (.glb / .gltf through tinygltf) and
+// glTF 2.0 `KHR_gaussian_splatting` (Khronos, ratified): read (.glb / .gltf through tinygltf) and
 // write (.glb) 3D Gaussian clouds.
 //
 // Conventions of the extension (ratified text; the earlier review draft stored SCALE in log space,

@@ -1,4 +1,4 @@
-// Gaussian splat files (issue 17): the 3DGS PLY layout (read and write, binary little endian or ASCII,
+// Gaussian splat files: the 3DGS PLY layout (read and write, binary little endian or ASCII,
 // degrees 0..3) and antimatter15's `.splat` (read).
 //
 // 3DGS PLY (graphdeco-inria/gaussian-splatting, scene/gaussian_model.py save_ply/load_ply): element

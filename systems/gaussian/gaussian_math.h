@@ -1,4 +1,4 @@
-// Small dense maths for 3D Gaussians, in double precision (issue 17): covariance from scale + rotation,
+// Small dense maths for 3D Gaussians, in double precision: covariance from scale + rotation,
 // symmetric 3x3 eigen-decomposition (cyclic Jacobi: robust for repeated eigenvalues), the covariance's
 // decomposition back into scale + rotation, and the polar decomposition J = R U.
 // glm matrices are column-major: m[c][r].

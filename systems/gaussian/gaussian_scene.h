@@ -1,4 +1,4 @@
-// 3D Gaussian clouds as scene entities (issue 17): loading a Gaussian file as an entity, and Gaussian
+// 3D Gaussian clouds as scene entities: loading a Gaussian file as an entity, and Gaussian
 // entities in our scene files (runtime/assets/scene.h hooks; assets never links this library).
 //
 // register_gaussian_scene_hooks() registers, under the key "gaussians":

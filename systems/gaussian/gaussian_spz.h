@@ -1,4 +1,4 @@
-// Niantic SPZ Gaussian files, versions 2 and 3 (one gzip stream), read only (issue 17).
+// Niantic SPZ Gaussian files, versions 2 and 3 (one gzip stream), read only.
 // Layout after gunzip: 16-byte header (u32 magic 'NGSP' = 0x5053474e, u32 version, u32 numPoints,
 // u8 shDegree, u8 fractionalBits, u8 flags, u8 reserved), then per attribute, all splats:
 //   positions  3 × 24-bit signed fixed point (little endian), value = fixed / 2^fractionalBits

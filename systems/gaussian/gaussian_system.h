@@ -1,4 +1,4 @@
-// gaussian_deform_system: the deformation phase for 3D Gaussian clouds (issue 17), in the style of
+// gaussian_deform_system: the deformation phase for 3D Gaussian clouds, in the style of
 // ffd_system (systems/ffd). Reads GaussianCloud + Deformers on Gaussian entities and Lattice on the
 // lattice entities they name; writes DeformedGaussians, and on the GPU path GpuGaussianStore::clouds[e]
 // (rest/sh uploaded when the cloud changes; deformed + frames written by the compute pass, gpu_deform.h).

@@ -116,10 +116,7 @@ GaussianBuffers resident_buffers(const GlRenderer& r) {
 // llvmpipe's "GPU" is the same CPU cores, and TBB's sort of 64-bit (key, index) pairs beats 8 radix
 // passes of compute shaders run by llvmpipe: in-frame sort time at load avg ~10, 1M: 131 vs 814 ms,
 // 6M: 1122 vs 4912 ms (100k, earlier scatter: 12 vs 211 ms); the key readback is a memcpy there.
-bool gpu_sort_preferred(const GlRenderer& r, std::size_t gaussians) {
-    (void)gaussians;  // the CPU sort wins on llvmpipe at every size measured
-    return !r.software;
-}
+bool gpu_sort_preferred(const GlRenderer& r) { return !r.software; }
 
 namespace {
 
@@ -237,7 +234,7 @@ Status project_and_sort(GlRenderer& r, const GaussianBuffers& b, const GaussianV
     auto t = std::chrono::steady_clock::now();
     if (Status st = project_gl(r, b, v); !st) return st.error();
     r.project_ms = stage_ms(r, t);
-    r.gpu_sort_used = r.sort_path == SortPath::gpu || (r.sort_path == SortPath::automatic && gpu_sort_preferred(r, b.count));
+    r.gpu_sort_used = r.sort_path == SortPath::gpu || (r.sort_path == SortPath::automatic && gpu_sort_preferred(r));
     if (r.gpu_sort_used) {
         if (Status st = sort_gpu(r, b.count); !st) return st.error();
         r.sort_ms = stage_ms(r, t);

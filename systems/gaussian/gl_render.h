@@ -1,4 +1,4 @@
-// GL 4.5 renderer of 3D Gaussians (issue 17). A frame (draw_gl):
+// GL 4.5 renderer of 3D Gaussians. A frame (draw_gl):
 //   1. project (shaders/gaussian/project.comp): EWA conic, SH colour, a sortable depth key per Gaussian
 //      (0xffffffff when not drawn: behind the near plane, opacity below 1/255, degenerate, or its pixel
 //      box off the image: culled before the sort),
@@ -107,9 +107,9 @@ GaussianBuffers resident_buffers(const GlRenderer& renderer);
 // Compiles the programs (errors name the shader file and line).
 Result<GlRenderer> create_gl_renderer();
 
-// The sort SortPath::automatic picks for `gaussians` resident Gaussians (see gl_render.cpp for the
-// llvmpipe measurements behind it).
-bool gpu_sort_preferred(const GlRenderer& renderer, std::size_t gaussians);
+// The sort SortPath::automatic picks: the GPU sort except on a software rasterizer, at any cloud size
+// (see gl_render.cpp for the llvmpipe measurements behind it).
+bool gpu_sort_preferred(const GlRenderer& renderer);
 
 // Uploads a cloud; it stays resident for draw_gl() until the next upload.
 Status upload_gl(GlRenderer& renderer, const GaussianCloud& cloud, const std::vector<float>* opacities = nullptr);

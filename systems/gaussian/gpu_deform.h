@@ -1,4 +1,4 @@
-// GPU deformation of 3D Gaussians (issue 17): the compute pass shaders/gaussian/deform.comp over the
+// GPU deformation of 3D Gaussians: the compute pass shaders/gaussian/deform.comp over the
 // GpuGaussianStore buffers (gpu_store.h). Per Gaussian and per lattice, in order: centre through the
 // lattice, Σ' = J Σ Jᵀ back to rotation + scale (one-sided Jacobi on the deformed axes J R S, in float),
 // opacity carried, and the polar rotation of J either composed into `frames` (ShMode::rotate_view:

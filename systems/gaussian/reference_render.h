@@ -1,4 +1,4 @@
-// CPU reference renderer of 3D Gaussians (issue 17), written for clarity, not speed: the tests' ground
+// CPU reference renderer of 3D Gaussians, written for clarity, not speed: the tests' ground
 // truth for the deformation and for a future GPU renderer. It follows the 3DGS rasterizer
 // (graphdeco-inria/diff-gaussian-rasterization, forward.cu) in our camera convention:
 //   - camera: sffd::Camera (eye, target, up, vertical fov), looking down its −Z; pinhole with square

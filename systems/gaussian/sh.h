@@ -1,5 +1,5 @@
 // Spherical harmonics in the 3DGS basis (graphdeco-inria/gaussian-splatting, utils/sh_utils.py, and its
-// CUDA rasterizer's computeColorFromSH), degrees 0..3 (issue 17).
+// CUDA rasterizer's computeColorFromSH), degrees 0..3.
 //
 // Basis, for a unit direction d = (x, y, z) from the camera to the splat, coefficient index k:
 //   k 0: C0

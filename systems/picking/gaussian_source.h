@@ -1,4 +1,4 @@
-// Which Gaussians picking sees for a Gaussian-cloud entity (issue 17), and the ellipsoid each one is
+// Which Gaussians picking sees for a Gaussian-cloud entity, and the ellipsoid each one is
 // picked as.
 //
 // Source, in this order:

@@ -1,4 +1,4 @@
-// Compute-shader splat rasteriser for the HQ passes (issue 15): Botsch et al. 2005's visibility / attribute /
+// Compute-shader splat rasteriser for the HQ passes: Botsch et al. 2005's visibility / attribute /
 // normalise passes done by compute shaders with 32-bit atomics, after Schuetz, Kerbl and Wimmer 2021
 // ("Rendering point clouds with compute shaders and vertex order optimization"), for clouds whose splats are
 // a few pixels or less on screen. Only core GL 4.5: no 64-bit atomics (the paper packs depth and colour in

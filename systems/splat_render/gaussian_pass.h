@@ -1,4 +1,4 @@
-// The render system's 3D Gaussian pass (issue 17): every entity with a GaussianCloud is drawn in the same
+// The render system's 3D Gaussian pass: every entity with a GaussianCloud is drawn in the same
 // frame and output target as the surface splats, after them.
 //
 //   reads   GaussianCloud (+ Transform), DeformedGaussians (CPU deformation output), the render system's

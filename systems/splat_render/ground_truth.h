@@ -3,7 +3,7 @@
 // uv derivatives from each triangle's affine 3D -> uv map; under FFD a subdivision of each triangle whose
 // vertices are F of the rest points), seen
 // through the same camera, lit by the same lights with the same Blinn-Phong model and textured with the
-// same texture as the splat renderer, so its images are what the splats approximate (issue 14).
+// same texture as the splat renderer, so its images are what the splats approximate.
 //
 // Geometry. At rest (no deformer moved any control point) the sphere is intersected analytically. Under
 // FFD the exact surface is F(sphere), F the cloud's lattices applied in order (ffd::deform, the function

@@ -145,7 +145,7 @@ TEST(Cli, OutOfMemoryIsAMessageAndOverBudgetRequestsAreRefusedEarly) {
     EXPECT_FALSE(fs::exists(temp_dir() / "oom.ply"));
 }
 
-// Progress (issue 16): with --progress every step prints its start, each further 10 % and its end with
+// Progress: with --progress every step prints its start, each further 10 % and its end with
 // its time, in order; without it (stderr is a pipe here, not a terminal) no progress lines, but the
 // timing summary is printed always.
 TEST(Cli, ConvertProgressReportsEveryStepInOrderAndAlwaysTheTiming) {
@@ -188,7 +188,7 @@ TEST(Cli, ConvertProgressReportsEveryStepInOrderAndAlwaysTheTiming) {
     EXPECT_NE(quiet.out.find("convert: done in "), std::string::npos) << quiet.out;
 }
 
-// A textured mesh converts to a textured cloud (issue 14): the PLY carries the uv frame and its texture
+// A textured mesh converts to a textured cloud: the PLY carries the uv frame and its texture
 // beside it; `reference MESH` ray traces the mesh itself; a tinted mesh (colours baked per splat) has no
 // texture to trace and is refused naming the file.
 TEST(Cli, TexturedMeshConvertsWithItsUvFrameAndReferenceTracesTheMesh) {

@@ -1,4 +1,4 @@
-// Hostile files (issue 13): resources named by a file resolve only inside its folder, FIFOs are never
+// Hostile files: resources named by a file resolve only inside its folder, FIFOs are never
 // opened for reading, JSON nesting is bounded before any parser, declared sizes are budgeted before
 // anything is decoded or expanded, scene fields that cannot be rendered are refused, and saving goes
 // through mkstemp temporaries that keep permissions and refuse non-regular outputs. Every case asserts

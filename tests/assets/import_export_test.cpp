@@ -368,7 +368,7 @@ TEST(AssimpTestModels, TexturedBoxImportsWithTextureColours) {
         std::sort(distinct.begin(), distinct.end());
         distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
         EXPECT_GT(distinct.size(), 50u);
-        // One untinted texture: kept as the cloud's material, with a uv frame per splat (issue 14).
+        // One untinted texture: kept as the cloud's material, with a uv frame per splat.
         EXPECT_EQ(c->material.texture_width, g->textures[0].width);
         EXPECT_EQ(c->uv_axes.size(), 2000u);
     }
@@ -381,7 +381,7 @@ TEST(AssimpTestModels, TexturedBoxImportsWithTextureColours) {
 }
 
 // ---------------------------------------------------------------------------------------------------
-// Files from other tools (issue 16): Windows paths in OBJ/MTL, PLY headers with writers' own lines,
+// Files from other tools: Windows paths in OBJ/MTL, PLY headers with writers' own lines,
 // glTF 1.0 named as such. Hand-made files first, then the real assimp samples when installed.
 
 namespace {
@@ -508,7 +508,7 @@ TEST(AssimpTestModels, ForeignSamplesImport) {
 }
 
 // ---------------------------------------------------------------------------------------------------
-// Textured meshes keep their texture (issue 14): mesh sampling gives each splat the uv of its point and
+// Textured meshes keep their texture: mesh sampling gives each splat the uv of its point and
 // the uv derivatives along its two axes from its triangle's affine 3D -> uv map; our PLY and glTF files
 // store that frame and read it back; re-estimated axes get the frame re-expressed along them.
 

@@ -1,4 +1,4 @@
-// A textured box with a known uv map (issue 14): a 2 x 1 x 0.5 box whose six faces each map to their own
+// A textured box with a known uv map: a 2 x 1 x 0.5 box whose six faces each map to their own
 // sheared, non-uniformly scaled parallelogram of one texture, written as OBJ + MTL + PNG. The analytic uv
 // of a point on a face and its derivative along a vector are what mesh sampling must reproduce.
 #pragma once

@@ -23,7 +23,7 @@ class RadixSort : public test::HeadlessGlTest {
 protected:
     void SetUp() override {
         HeadlessGlTest::SetUp();
-        if (IsSkipped()) return;
+        if (IsSkipped() || HasFatalFailure()) return;
         test::emplace_made(sorter, gfx::create_radix_sorter());
     }
     void TearDown() override { sorter.reset(); }

@@ -1,6 +1,7 @@
 // Fixture base for GL tests that need a current context and nothing else from a window: a 16 x 16 headless
-// EGL context per test, the test skipped (with the reason) where none can be made. Objects a derived
-// fixture makes in SetUp() die before the context (derived members are destroyed before base ones).
+// EGL context per test; where none can be made the test fails, or skips under SFFD_NO_GL=1
+// (gl_required.h). Objects a derived fixture makes in SetUp() die before the context (derived members
+// are destroyed before base ones).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -10,15 +11,16 @@
 
 #include "runtime/core/result.h"
 #include "runtime/gfx/context.h"
+#include "tests/test_util/gl_required.h"
 
 namespace sffd::test {
 
 class HeadlessGlTest : public testing::Test {
 protected:
-    // A derived SetUp() calls this first and returns when IsSkipped().
+    // A derived SetUp() calls this first and returns when IsSkipped() || HasFatalFailure().
     void SetUp() override {
         auto c = gfx::create_context({.headless = true, .width = 16, .height = 16});
-        if (!c) GTEST_SKIP() << c.message();
+        if (!c) SFFD_GL_UNAVAILABLE(c.message());
         ctx.emplace(std::move(*c));
     }
     std::optional<gfx::GlContext> ctx;

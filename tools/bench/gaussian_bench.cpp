@@ -1,4 +1,4 @@
-// 3D Gaussian benchmarks (issue 17): CPU deformation of 1M synthetic Gaussians (flat Gaussians tangent to
+// 3D Gaussian benchmarks: CPU deformation of 1M synthetic Gaussians (flat Gaussians tangent to
 // a unit Fibonacci sphere, random SH) through the twisted 11³ lattice of the paper case, per SH degree;
 // the lattice evaluation alone (positions + Jacobians) for comparison; 3DGS PLY import of 1M Gaussians
 // (degree 3, binary little endian, written once to the temp folder) with bytes per Gaussian.

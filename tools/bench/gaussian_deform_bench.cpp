@@ -1,4 +1,4 @@
-// Deformation of 3D Gaussians at 1M and 6M (issue 17): the CPU path (gaussian::deform, TBB) in both SH
+// Deformation of 3D Gaussians at 1M and 6M: the CPU path (gaussian::deform, TBB) in both SH
 // modes and the GPU compute pass (gaussian::GpuGaussianDeformer, shaders/gaussian/deform.comp) in both SH
 // modes, on N flat degree-3 Gaussians tangent to a unit Fibonacci sphere through the twisted 11³ Bernstein
 // lattice of gaussian_bench. GPU: the cloud is uploaded once (GpuGaussianStore entry), a run is the

@@ -191,7 +191,7 @@ void BM_PickAfterLatticeEdit(benchmark::State& st) {
 }
 BENCHMARK(BM_PickAfterLatticeEdit)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-// 3D Gaussians (issue 17): N flat Gaussians tangent to the unit sphere (Fibonacci points, in-plane σ 0.7 of
+// 3D Gaussians: N flat Gaussians tangent to the unit sphere (Fibonacci points, in-plane σ 0.7 of
 // the mean spacing, 0.1 of that along the normal, opacity 0.95: what `convert --gaussians` makes of a
 // surface), picked as Embree user-geometry ellipsoids. Refresh: the cloud alternates between rest and a
 // copy stretched 1.5x along y (swapped in, no deformation maths timed); ellipsoid setup + BVH build.

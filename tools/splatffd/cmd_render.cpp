@@ -45,10 +45,10 @@
 #include "systems/splat_render/gaussian_pass.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_pack.h"
+#include "systems/engine/engine.h"
 #include "systems/splat_render/splat_render.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/frame_files.h"
-#include "tools/splatffd/engine.h"
 #include "tools/splatffd/render_manifest.h"
 #include "tools/splatffd/video.h"
 

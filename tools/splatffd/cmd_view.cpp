@@ -6,7 +6,7 @@
 #include "tools/splatffd/command.h"
 
 #include "systems/editor/view_app.h"
-#include "tools/splatffd/engine.h"
+#include "systems/engine/engine.h"
 
 namespace {
 

@@ -1,4 +1,4 @@
-// `splatffd convert IN OUT --gaussians` (issue 17): writes 3D Gaussians (3DGS PLY, or glTF
+// `splatffd convert IN OUT --gaussians`: writes 3D Gaussians (3DGS PLY, or glTF
 // KHR_gaussian_splatting .glb). IN is either a Gaussian file (.splat, 3DGS PLY, KHR .glb/.gltf) or any
 // surface-splat input, converted by gaussian::gaussians_from_splats (flat Gaussians, σ = 0.7 × radius).
 #pragma once

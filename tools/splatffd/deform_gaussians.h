@@ -1,4 +1,4 @@
-// `splatffd deform` on 3DGS PLY files (issue 17): cmd_deform.cpp hands a file whose vertex element has
+// `splatffd deform` on 3DGS PLY files: cmd_deform.cpp hands a file whose vertex element has
 // the 3DGS properties (f_dc_0, opacity, scale_0, rot_0) to this path.
 #pragma once
 

@@ -9,8 +9,7 @@
 #include "runtime/core/atomic_file.h"
 #include "runtime/core/file_io.h"
 #include "runtime/core/paths.h"
-#include "systems/animation/scene_extension.h"
-#include "systems/gaussian/gaussian_scene.h"
+#include "systems/engine/engine_frame.h"
 #include "tools/splatffd/command.h"
 
 namespace sffd::cli {
@@ -96,8 +95,7 @@ int main(int argc, char** argv) {
     }
     const std::string name = args[0];
     // Start-up registrations of systems that store data in scene files (runtime/assets/scene.h hooks).
-    sffd::register_animation_scene_hooks();
-    sffd::gaussian::register_gaussian_scene_hooks();  // Gaussian files as entities, Gaussian entities in scenes
+    sffd::register_engine_scene_hooks();
     // SIGINT/SIGTERM remove unfinished outputs (runtime/core/atomic_file.h) and exit 130/143.
     static const std::string program = "splatffd " + name;
     sffd::install_interrupt_cleanup(program.c_str());

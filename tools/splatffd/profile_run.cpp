@@ -23,7 +23,7 @@
 #include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/splat_render.h"
 #include "tools/splatffd/command.h"
-#include "tools/splatffd/engine.h"
+#include "systems/engine/engine.h"
 
 namespace sffd::profile_cmd {
 

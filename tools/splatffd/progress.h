@@ -1,4 +1,4 @@
-// Progress of a long command on stderr (issue 16: `convert --splats 1000000` ran 67 s without a word).
+// Progress of a long command on stderr (`convert --splats 1000000` once ran 67 s without a word).
 //   terminal  (stderr is a tty): a step running over a second gets one line, rewritten in place with its
 //             percentage, ended with its time;
 //   lines     (--progress): every step, one line at its start, one per further 10 %, one at its end

@@ -404,7 +404,7 @@ TEST(EditorSystem, PreviewWhileDraggingRefinesToHqAtRest) {
     EXPECT_EQ(ps.quality, render::Quality::preview);
 }
 
-// A click on a 3D Gaussian (issue 17) selects its cloud entity, through the same picking phase.
+// A click on a 3D Gaussian selects its cloud entity, through the same picking phase.
 TEST(EditorSystem, ClickOnAGaussianSelectsItsCloud) {
     Scene s;
     const ecs::Entity blob = s.reg.create();

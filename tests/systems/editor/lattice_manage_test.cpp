@@ -1,4 +1,4 @@
-// Lattices on an imported cloud in the editor (issue 16), driven by key events through the input
+// Lattices on an imported cloud in the editor, driven by key events through the input
 // system exactly as the window and replays drive it: add (fitted: box / oriented, divisions, basis,
 // padding — the same ffd::fit_lattice as `splatffd convert --lattice fit`), several per cloud with their
 // order, refit, remove, export / import JSON; each one undo step, undo/redo bit-exact; the scene file keeps
@@ -211,7 +211,7 @@ TEST(LatticeManage, ExportImportJsonAndSceneRoundTrip) {
 
 }  // namespace
 
-// 3D Gaussian clouds (issue 17) get lattices like point clouds: shift+a fits one around the Gaussian
+// 3D Gaussian clouds get lattices like point clouds: shift+a fits one around the Gaussian
 // centres and binds it; editing the lattice deforms the Gaussians (gaussian_deform_system).
 TEST(LatticeManage, GaussianCloudGetsAFittedLatticeThatDeformsIt) {
     ecs::Registry reg;

@@ -1,4 +1,4 @@
-// Acceptance (issue 6): under xvfb-run, `splatffd view sphere --replay tests/data/editor/session.txt`
+// Acceptance: under xvfb-run, `splatffd view sphere --replay tests/data/editor/session.txt`
 // selects control points (x-ray box select), stretches and twists the sphere, undoes and redoes, and
 // saves. Checked here:
 //   - the screenshot shows the change: against a run of the same length without the replay, the surface

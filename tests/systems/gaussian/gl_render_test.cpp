@@ -231,7 +231,7 @@ TEST_F(GaussianGl, AutomaticSortFollowsTheRasterizer) {
     auto img = render_gl(*renderer, random_cloud(100, 0), camera_at({0, 0, 3}), o);
     ASSERT_TRUE(img) << img.message();
     EXPECT_EQ(renderer->software, gfx::software_rasterizer());
-    EXPECT_EQ(renderer->gpu_sort_used, gpu_sort_preferred(*renderer, 100));
+    EXPECT_EQ(renderer->gpu_sort_used, gpu_sort_preferred(*renderer));
     if (!renderer->software) {
         EXPECT_TRUE(renderer->gpu_sort_used) << "hardware GPUs sort on the GPU";
     }

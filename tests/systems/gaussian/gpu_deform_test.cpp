@@ -41,7 +41,7 @@ class GaussianGpuDeform : public sffd::test::HeadlessGlTest {
 protected:
     void SetUp() override {
         HeadlessGlTest::SetUp();
-        if (IsSkipped()) return;
+        if (IsSkipped() || HasFatalFailure()) return;
         sffd::test::emplace_made(deformer, GpuGaussianDeformer::create());
         errors_at_start = gfx::debug_error_count();
     }

@@ -1,4 +1,4 @@
-// 3D Gaussians in the render system (issue 17): render_system's image of a Gaussian scene against the
+// 3D Gaussians in the render system: render_system's image of a Gaussian scene against the
 // Gaussian GL renderer and the CPU reference, compositing with surface splats (a Gaussian behind an
 // opaque splat is hidden; one in front is blended over it exactly as G + (1 - A) S), deformed Gaussians.
 // Headless EGL (llvmpipe here).
@@ -22,6 +22,7 @@
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_render.h"
 #include "tests/systems/splat_render/test_scenes.h"
+#include "tests/test_util/gl_required.h"
 
 namespace {
 
@@ -40,7 +41,7 @@ protected:
         return c;
     }
     void SetUp() override {
-        if (!context()) GTEST_SKIP() << "no headless GL 4.5 context";
+        if (!context()) SFFD_GL_UNAVAILABLE("no headless GL 4.5 context");
     }
     void TearDown() override { render::release_render_state(reg); }
 

@@ -1,4 +1,4 @@
-// Gaussian clouds embedded in our scene files as KHR_gaussian_splatting primitives (issue 17): an in-memory
+// Gaussian clouds embedded in our scene files as KHR_gaussian_splatting primitives: an in-memory
 // cloud (no source file) saved in a .glb / .gltf scene with a lattice comes back bit for bit, bound to the
 // lattice, from the scene file alone; the file's JSON holds a KHR_gaussian_splatting POINTS primitive;
 // corrupted or truncated embedded data names the scene file (load_scene and `splatffd render`).

@@ -1,4 +1,4 @@
-// 3D Gaussian entities in scene files and in `splatffd render` (issue 17): a scene with a Gaussian
+// 3D Gaussian entities in scene files and in `splatffd render`: a scene with a Gaussian
 // cloud, a lattice and a twist clip saves, loads and renders the deformed Gaussians (equal to deforming
 // then rendering, different from rest); bad Gaussian files in a scene name the file; the command renders
 // Gaussian files and animated Gaussian scenes to frames. Headless EGL (llvmpipe here).
@@ -36,6 +36,7 @@
 #include "systems/splat_render/splat_render.h"
 #include "tests/systems/splat_render/test_scenes.h"
 #include "tests/test_util/run_tool.h"
+#include "tests/test_util/gl_required.h"
 
 namespace {
 
@@ -163,7 +164,7 @@ TEST_F(GaussianScene, SavesAndLoadsTheGaussianEntityWithItsLatticeAndClip) {
 }
 
 TEST_F(GaussianScene, AnimatedTwistRendersTheDeformedGaussians) {
-    if (!context()) GTEST_SKIP() << "no headless GL 4.5 context";
+    if (!context()) SFFD_GL_UNAVAILABLE("no headless GL 4.5 context");
     const fs::path dir = fresh_dir("twist");
     const fs::path scene = write_scene(dir, sphere_gaussians());
     ecs::Registry reg;
@@ -225,7 +226,7 @@ TEST_F(GaussianScene, BadGaussianFileInASceneNamesTheFile) {
 }
 
 TEST_F(GaussianScene, RenderCommandOnGaussianFilesAndAnimatedScenes) {
-    if (!context()) GTEST_SKIP() << "no headless GL 4.5 context";
+    if (!context()) SFFD_GL_UNAVAILABLE("no headless GL 4.5 context");
     const fs::path dir = fresh_dir("command");
     const fs::path scene = write_scene(dir, sphere_gaussians());
     // A Gaussian file: told apart from a surface PLY by its properties, framed, --camera and --turntable.
@@ -257,7 +258,7 @@ TEST_F(GaussianScene, RenderCommandOnGaussianFilesAndAnimatedScenes) {
 }
 
 TEST_F(GaussianScene, EditorAddsALatticeToAGaussianFileAndSavesTheDeformedScene) {
-    if (!context()) GTEST_SKIP() << "no headless GL 4.5 context";
+    if (!context()) SFFD_GL_UNAVAILABLE("no headless GL 4.5 context");
     // `splatffd view g.ply` (headless, replayed keys: shift+a fits a lattice, select all, move the inner
     // points by 0.3 in x, ctrl+s): the saved scene refers to g.ply, binds the lattice, and renders the
     // Gaussians deformed (different from the file alone).

@@ -1,4 +1,4 @@
-// Picking 3D Gaussians (issue 17): each Gaussian is an Embree user-geometry ellipsoid at the 3DGS alpha
+// Picking 3D Gaussians: each Gaussian is an Embree user-geometry ellipsoid at the 3DGS alpha
 // cut, k(α) = sqrt(2 ln(255 α)) standard deviations. Expected distances are worked out independently
 // from the covariance Σ = R S² Rᵀ: the ray point p(t) is on the boundary when
 // (p − c)ᵀ Σ⁻¹ (p − c) = k², a quadratic in t solved here in closed form.

@@ -132,7 +132,7 @@ TEST_F(Quality_, FlatColouredSpritesLookLikeTexturedOnes) {
     }
 }
 
-// A textured mesh converted to splats (issue 14: mesh sampling keeps the texture and gives each splat a
+// A textured mesh converted to splats (mesh sampling keeps the texture and gives each splat a
 // uv frame) shows its checker per pixel: every pixel of the box's front face, away from cell and face
 // edges, has the colour of the checker cell its ray hits, in HQ and preview. The cells (8 texels, about
 // 16 x 90 px here) are not much taller than a splat, so one colour per splat (the same cloud without uv

@@ -1,4 +1,4 @@
-// The frame path never waits for the GPU (issue 15): render_system reads the compute cull's visible counts
+// The frame path never waits for the GPU: render_system reads the compute cull's visible counts
 // through fences polled with a zero timeout and a persistently mapped ring, so in steady state a frame makes
 // no synchronous read-back, no glFinish and no map; the counts still arrive, a few frames late.
 //

@@ -196,7 +196,7 @@ TEST(RenderCommand, InterruptedSequenceLeavesAnIncompleteManifestAndNoTemporarie
     for (const auto& e : fs::directory_iterator(out)) EXPECT_EQ(e.path().filename().string().find("sffd-tmp"), std::string::npos) << e.path();
 }
 
-// ---- --camera, --turntable, --video (issue 16) ------------------------------------------------------
+// ---- --camera, --turntable, --video ------------------------------------------------------
 
 namespace {
 
@@ -310,7 +310,7 @@ TEST(RenderCommand, DegenerateCamerasAreRefused) {
     EXPECT_NE(log.find("--size: expected an integer in 1..16384, got '-5'"), std::string::npos) << log;
     EXPECT_EQ(run(out + " --video clip.avi", &log), 2);
     EXPECT_NE(log.find("must end in .mp4 or .gif"), std::string::npos) << log;
-    // 3D Gaussian files go through the engine like any scene (issue 17): --turntable works on them and a
+    // 3D Gaussian files go through the engine like any scene: --turntable works on them and a
     // degenerate --camera is refused the same way.
     const fs::path g = fresh_dir("cam_bad").parent_path() / "gaussians.ply";
     fs::create_directories(g.parent_path());

@@ -1,7 +1,7 @@
 // The one place that lists which system runs in which phase (the phase order itself is written once, in
 // runtime/app/frame_loop.h). One add() line per system, in the order they run within the phase. System
 // owners add their own line when their system lands; keep this file compiling with whatever exists.
-#include "tools/splatffd/engine.h"
+#include "systems/engine/engine.h"
 
 #include "runtime/app/app.h"
 #include "systems/animation/animation_system.h"

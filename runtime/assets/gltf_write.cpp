@@ -1,0 +1,211 @@
+// Writing splat clouds as glTF 2.0 / GLB (gltf_io.h): the JSON is built with nlohmann::json so the layout
+// is exactly what content/README.md documents; one binary buffer, embedded PNG textures, atomic save.
+#include "runtime/assets/gltf_io.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include <nlohmann/json.hpp>
+#include <stb/stb_image_write.h>
+
+#include "runtime/assets/gltf_detail.h"
+#include "runtime/core/atomic_file.h"
+
+namespace sffd::assets {
+namespace fs = std::filesystem;
+using nlohmann::json;
+using namespace gltf_detail;
+
+namespace {
+
+std::string base64(const std::string& in) {
+    static const char* t = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    out.reserve((in.size() + 2) / 3 * 4);
+    std::size_t i = 0;
+    for (; i + 2 < in.size(); i += 3) {
+        const std::uint32_t v = (std::uint32_t(std::uint8_t(in[i])) << 16) | (std::uint32_t(std::uint8_t(in[i + 1])) << 8) | std::uint8_t(in[i + 2]);
+        out += t[v >> 18];
+        out += t[(v >> 12) & 63];
+        out += t[(v >> 6) & 63];
+        out += t[v & 63];
+    }
+    if (i < in.size()) {
+        std::uint32_t v = std::uint32_t(std::uint8_t(in[i])) << 16;
+        if (i + 1 < in.size()) v |= std::uint32_t(std::uint8_t(in[i + 1])) << 8;
+        out += t[v >> 18];
+        out += t[(v >> 12) & 63];
+        out += i + 1 < in.size() ? t[(v >> 6) & 63] : '=';
+        out += '=';
+    }
+    return out;
+}
+
+struct BinBuilder {
+    std::string bin;
+    json views = json::array();
+    json accessors = json::array();
+
+    int view(const void* data, std::size_t bytes, int target) {
+        while (bin.size() % 4) bin.push_back('\0');
+        json v = {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}};
+        if (target) v["target"] = target;
+        bin.append(static_cast<const char*>(data), bytes);
+        views.push_back(v);
+        return static_cast<int>(views.size()) - 1;
+    }
+    template <class T>
+    int accessor(const std::vector<T>& data, int component_type, const char* type, std::size_t components, bool normalized = false) {
+        const int v = view(data.data(), data.size() * sizeof(T), 34962);
+        json a = {{"bufferView", v}, {"componentType", component_type}, {"count", data.size()}, {"type", type}};
+        if (normalized) a["normalized"] = true;
+        (void)components;
+        accessors.push_back(a);
+        return static_cast<int>(accessors.size()) - 1;
+    }
+};
+
+json vec(const glm::dvec3& v) { return json::array({v.x, v.y, v.z}); }
+
+void png_append(void* context, void* data, int size) {
+    static_cast<std::string*>(context)->append(static_cast<const char*>(data), static_cast<std::size_t>(size));
+}
+
+}  // namespace
+
+Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds, const std::string& sffd_scene_json,
+                  const std::vector<GltfAppend>& append) {
+    std::string ext = path.extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    const bool binary = ext == ".glb";
+    if (!binary && ext != ".gltf") return make_error(path.string() + ": expected a .gltf or .glb file name");
+
+    BinBuilder b;
+    json nodes = json::array(), meshes = json::array(), materials = json::array(), textures = json::array(), images = json::array();
+    json roots = json::array();
+    for (const GltfCloudOut& out : clouds) {
+        const SplatCloud& c = *out.cloud;
+        const std::size_t n = c.size();
+        auto sized = [&](std::size_t s) { return s == 0 || s == n; };
+        if (!sized(c.normals.size()) || !sized(c.colors.size()) || !sized(c.uvs.size()) || !sized(c.axis_u.size()) || c.axis_u.size() != c.axis_v.size() ||
+            !sized(c.uv_axes.size()))
+            return make_error(path.string() + ": cloud '" + out.name + "' has attribute arrays of the wrong length");
+        json attributes = json::object();
+        if (n > 0) {
+            const int ip = b.accessor(c.positions, kFloat, "VEC3", 3);
+            glm::vec3 lo(c.positions[0]), hi(c.positions[0]);
+            for (const auto& p : c.positions) {
+                lo = glm::min(lo, p);
+                hi = glm::max(hi, p);
+            }
+            b.accessors[ip]["min"] = {lo.x, lo.y, lo.z};
+            b.accessors[ip]["max"] = {hi.x, hi.y, hi.z};
+            attributes["POSITION"] = ip;
+            if (!c.normals.empty()) attributes["NORMAL"] = b.accessor(c.normals, kFloat, "VEC3", 3);
+            if (!c.colors.empty()) {
+                std::vector<std::uint16_t> lin(n * 4);
+                for (std::size_t i = 0; i < n; ++i) {
+                    const std::uint32_t col = c.colors[i];
+                    lin[4 * i] = srgb8_to_linear16(col & 255u);
+                    lin[4 * i + 1] = srgb8_to_linear16((col >> 8) & 255u);
+                    lin[4 * i + 2] = srgb8_to_linear16((col >> 16) & 255u);
+                    lin[4 * i + 3] = static_cast<std::uint16_t>((col >> 24) * 257u);  // alpha is linear already
+                }
+                const int v = b.view(lin.data(), lin.size() * 2, 34962);
+                b.accessors.push_back({{"bufferView", v}, {"componentType", kUShort}, {"count", n}, {"type", "VEC4"}, {"normalized", true}});
+                attributes["COLOR_0"] = static_cast<int>(b.accessors.size()) - 1;
+            }
+            if (!c.uvs.empty()) attributes["TEXCOORD_0"] = b.accessor(c.uvs, kFloat, "VEC2", 2);
+            if (!c.axis_u.empty()) {
+                attributes["_AXIS_U"] = b.accessor(c.axis_u, kFloat, "VEC3", 3);
+                attributes["_AXIS_V"] = b.accessor(c.axis_v, kFloat, "VEC3", 3);
+                if (!c.uv_axes.empty()) attributes["_UV_AXES"] = b.accessor(c.uv_axes, kFloat, "VEC4", 4);
+            }
+        }
+        json material = {{"name", out.name + ".material"},
+                         {"pbrMetallicRoughness",
+                          {{"baseColorFactor", {c.material.base_color.x, c.material.base_color.y, c.material.base_color.z, c.material.base_color.w}},
+                           {"metallicFactor", 0.0},
+                           {"roughnessFactor", 1.0}}},
+                         {"extras", {{"sffd_specular", c.material.specular}, {"sffd_shininess", c.material.shininess}}}};
+        if (!c.material.texture_path.empty()) material["extras"]["sffd_texture_path"] = c.material.texture_path;
+        if (!c.material.texture_rgba8.empty()) {
+            const int w = c.material.texture_width, h = c.material.texture_height;
+            if (w <= 0 || h <= 0 || c.material.texture_rgba8.size() != static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4)
+                return make_error(path.string() + ": cloud '" + out.name + "' has a texture of the wrong size");
+            std::string png;
+            if (!stbi_write_png_to_func(png_append, &png, w, h, 4, c.material.texture_rgba8.data(), w * 4))
+                return make_error(path.string() + ": cannot encode the texture as PNG");
+            const int v = b.view(png.data(), png.size(), 0);
+            images.push_back({{"bufferView", v}, {"mimeType", "image/png"}});
+            textures.push_back({{"source", images.size() - 1}, {"sampler", 0}});
+            material["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", textures.size() - 1}};
+        }
+        materials.push_back(material);
+        json prim = {{"mode", 0}, {"attributes", attributes}, {"material", materials.size() - 1}};
+        meshes.push_back({{"name", out.name}, {"primitives", json::array({prim})}});
+
+        const Transform t = out.transform ? *out.transform : Transform{};
+        json parent = {{"name", out.name},
+                       {"translation", vec(t.translation)},
+                       {"rotation", {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w}},
+                       {"scale", vec(t.scale)},
+                       {"children", {nodes.size() + 1}},
+                       {"extras", {{"sffd_cloud", out.id}}}};
+        json child = {{"name", out.name + ".origin"}, {"translation", vec(c.origin)}, {"mesh", meshes.size() - 1}};
+        roots.push_back(nodes.size());
+        nodes.push_back(parent);
+        nodes.push_back(child);
+    }
+
+    json doc = {{"asset", {{"version", "2.0"}, {"generator", "SplatFFD " SFFD_VERSION}}},
+                {"scene", 0},
+                {"scenes", {{{"name", "scene"}, {"nodes", roots}}}},
+                {"nodes", nodes}};
+    if (!meshes.empty()) doc["meshes"] = meshes;
+    if (!materials.empty()) doc["materials"] = materials;
+    if (!textures.empty()) {
+        doc["textures"] = textures;
+        doc["images"] = images;
+        doc["samplers"] = {{{"magFilter", 9729}, {"minFilter", 9729}, {"wrapS", 10497}, {"wrapT", 10497}}};
+    }
+    if (!sffd_scene_json.empty()) {
+        json ext_json = json::parse(sffd_scene_json, nullptr, false);
+        if (ext_json.is_discarded()) return make_error(path.string() + ": write_gltf(): scene extension is not valid JSON");
+        doc["extensionsUsed"] = {"SFFD_scene"};
+        doc["extensions"] = {{"SFFD_scene", ext_json}};
+    }
+    if (!b.accessors.empty()) doc["accessors"] = b.accessors;
+    if (!b.views.empty()) doc["bufferViews"] = b.views;
+    for (const GltfAppend& fn : append)
+        if (Status s = fn(doc, b.bin); !s) return make_error(path.string() + ": " + s.message());
+    while (b.bin.size() % 4) b.bin.push_back('\0');
+    if (!b.bin.empty()) {
+        json buffer = {{"byteLength", b.bin.size()}};
+        if (!binary) buffer["uri"] = "data:application/octet-stream;base64," + base64(b.bin);
+        doc["buffers"] = {buffer};
+    }
+    std::string text = doc.dump(binary ? -1 : 1);
+    if (!binary) return write_file_atomic(path, text + "\n");
+
+    while (text.size() % 4) text.push_back(' ');
+    std::string glb;
+    auto u32 = [&](std::uint32_t v) { glb.append(reinterpret_cast<const char*>(&v), 4); };
+    const std::size_t total = 12 + 8 + text.size() + (b.bin.empty() ? 0 : 8 + b.bin.size());
+    if (total > 0xffffffffu) return make_error(path.string() + ": scene too large for a GLB file (4 GiB)");
+    glb.reserve(total);
+    u32(0x46546C67u);  // "glTF"
+    u32(2);
+    u32(static_cast<std::uint32_t>(total));
+    u32(static_cast<std::uint32_t>(text.size()));
+    u32(0x4E4F534Au);  // "JSON"
+    glb += text;
+    if (!b.bin.empty()) {
+        u32(static_cast<std::uint32_t>(b.bin.size()));
+        u32(0x004E4942u);  // "BIN\0"
+        glb += b.bin;
+    }
+    return write_file_atomic(path, glb);
+}
+
+}  // namespace sffd::assets

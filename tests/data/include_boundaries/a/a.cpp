@@ -1,0 +1,3 @@
+#include "b/b.h"
+
+int a() { return b(); }
