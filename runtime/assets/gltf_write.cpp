@@ -185,7 +185,7 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
         if (!binary) buffer["uri"] = "data:application/octet-stream;base64," + base64(b.bin);
         doc["buffers"] = {buffer};
     }
-    std::string text = doc.dump(binary ? -1 : 1);
+    std::string text = doc.dump(binary ? -1 : 1, ' ', false, json::error_handler_t::replace);
     if (!binary) return write_file_atomic(path, text + "\n");
 
     while (text.size() % 4) text.push_back(' ');

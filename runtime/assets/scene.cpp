@@ -435,7 +435,7 @@ Status save_scene(const ecs::Registry& r, const fs::path& path) {
         c.cloud = &r.get<SplatCloud>(e);
         out.push_back(c);
     }
-    return assets::write_gltf(path, out, scene.dump(), append);
+    return assets::write_gltf(path, out, scene.dump(-1, ' ', false, json::error_handler_t::replace), append);
 }
 
 }  // namespace sffd

@@ -8,6 +8,8 @@
 
 #include <atomic>
 #include <cerrno>
+#include <cstdint>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <map>
@@ -155,9 +157,27 @@ std::vector<Stale> scan_folder(const fs::path& folder) {
 
 }  // namespace
 
+namespace {
+
+// The output name as it appears in its temporary's name: the name itself, unless the temporary
+// (".<name>.sffd-tmp-<pid>-XXXXXX", up to 38 bytes more) would pass NAME_MAX (255 bytes on every Linux
+// file system): then a prefix of the name and a hash of the whole name, so a 250-byte output name can
+// still be saved and its stale temporaries still be recognised.
+std::string temporary_stem(const std::string& name) {
+    constexpr std::size_t kNameMax = 255, kSuffix = 1 + 10 + 20 + 7;  // ".", ".sffd-tmp-", pid, "-XXXXXX"
+    if (name.size() + kSuffix <= kNameMax) return name;
+    std::uint64_t h = 1469598103934665603ull;  // FNV-1a
+    for (const unsigned char c : name) h = (h ^ c) * 1099511628211ull;
+    char hex[17];
+    std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(h));
+    return name.substr(0, kNameMax - kSuffix - 17) + "~" + hex;
+}
+
+}  // namespace
+
 int remove_stale_temporaries(const fs::path& path) {
     const fs::path folder = path.parent_path().empty() ? fs::path(".") : path.parent_path();
-    const std::string name = path.filename().string();
+    const std::string name = temporary_stem(path.filename().string());
     std::vector<Stale> mine;
     {
         std::lock_guard lock(g_stale_mutex);
@@ -234,7 +254,7 @@ Result<AtomicFile> AtomicFile::create(const fs::path& path) {
     remove_stale_temporaries(impl->target);
     const fs::path folder = impl->target.parent_path();
     std::string base(".");  // built by appending: GCC 12 warns (-Wrestrict) on "." + std::string
-    base += impl->target.filename().string();
+    base += temporary_stem(impl->target.filename().string());
     base += ".sffd-tmp-";
     base += std::to_string(::getpid());
     base += "-XXXXXX";

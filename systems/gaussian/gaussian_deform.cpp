@@ -16,6 +16,22 @@ namespace sffd::gaussian {
 namespace {
 // Jacobians are produced per block so the scratch stays small (36 bytes per Gaussian per block).
 constexpr std::size_t kBlock = 1 << 16;
+
+bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// Whether Gaussian i of a deformed cloud is finite everywhere a renderer reads it.
+bool finite_result(const GaussianCloud& g, std::size_t i, int K, bool frames) {
+    const glm::quat q = g.rotations[i];
+    if (!finite3(g.positions[i]) || !finite3(g.scales[i]) || !std::isfinite(q.w + q.x + q.y + q.z)) return false;
+    if (!(std::abs(glm::dot(q, q) - 1.0f) < 1e-3f)) return false;  // a zero or overflowed quaternion
+    for (std::size_t k = 0; k < std::size_t(K) * 3; ++k)
+        if (!std::isfinite(g.sh[i * std::size_t(K) * 3 + k])) return false;
+    if (frames)
+        for (int c = 0; c < 3; ++c)
+            if (!finite3(g.sh_frames[i][c])) return false;
+    return true;
+}
+
 }  // namespace
 
 Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out, ffd::Backend backend,
@@ -56,8 +72,11 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
     const bool frames_in = in.sh_frames.size() == n;
     DeformStats total;
     std::vector<glm::mat3> jac(std::min(n, kBlock));
+    std::vector<glm::vec3> centres(std::min(n, kBlock));  // the block's input centres (in-place overwrites them)
+    const bool drop_opacity = out.opacities.size() == n;
     for (std::size_t first = 0; first < n; first += kBlock) {
         const std::size_t count = std::min(kBlock, n - first);
+        std::copy(in.positions.begin() + std::ptrdiff_t(first), in.positions.begin() + std::ptrdiff_t(first + count), centres.begin());
         const ffd::PointsIn pin{in.positions.data() + first, nullptr, nullptr, nullptr, count, in.origin};
         ffd::PointsOut pout{out.positions.data() + first, nullptr, nullptr, nullptr};
         pout.jacobians = jac.data();
@@ -65,47 +84,64 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
         if (!stats) return stats.error();
         total.inside += stats->inside;
         total.inverted += stats->inverted;
-        std::atomic<std::size_t> degenerate{0};
+        // One Gaussian: its shape from the Jacobian, its SH rotated by the polar rotation.
+        auto deform_one = [&](std::size_t i, std::size_t b, std::size_t& bad) {
+            const float* sh_in = &in.sh[i * std::size_t(K) * 3];
+            float* sh_out = &out.sh[i * std::size_t(K) * 3];
+            if (jac[b] == glm::mat3(1.0f)) {  // outside the lattice or not moved by it
+                if (&out != &in) {
+                    out.scales[i] = in.scales[i], out.rotations[i] = in.rotations[i];
+                    std::copy(sh_in, sh_in + K * 3, sh_out);
+                }
+                return;
+            }
+            const glm::dmat3 j(jac[b]);
+            double n2 = 0.0;
+            for (int c = 0; c < 3; ++c) n2 += glm::dot(j[c], j[c]);
+            const bool singular = !(std::abs(glm::determinant(j)) > 1e-12 * n2 * std::sqrt(n2));  // as polar_decomposition
+            bad += singular;
+            const glm::dmat3 rq = glm::mat3_cast(glm::dquat(in.rotations[i]));
+            const glm::dvec3 s(in.scales[i]);
+            const glm::dmat3 a = j * glm::dmat3(rq[0] * s.x, rq[1] * s.y, rq[2] * s.z);  // deformed axes J R S
+            // Σ' = (JRS)(JRS)ᵀ; the deformed axes, orthonormalised, are a close guess of its eigenvectors.
+            const ScaleRotation sr = decompose_covariance(a * glm::transpose(a), orthonormalize(j * rq));
+            out.scales[i] = glm::vec3(sr.scale);
+            out.rotations[i] = glm::quat(sr.rotation);
+            if (K == 1) {
+                if (&out != &in) std::copy(sh_in, sh_in + 3, sh_out);
+                return;
+            }
+            const Polar p = polar_decomposition(j);
+            if (!p.ok || view_mode) {
+                if (&out != &in) std::copy(sh_in, sh_in + K * 3, sh_out);
+                if (p.ok && view_mode) out.sh_frames[i] = glm::mat3(p.rotation) * (frames_in ? in.sh_frames[i] : glm::mat3(1.0f));
+                return;
+            }
+            sh_rotate(sh_rotation(p.rotation, in.sh_degree), sh_in, sh_out);
+        };
+        std::atomic<std::size_t> degenerate{0}, not_finite{0};
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-            std::size_t bad = 0;
+            std::size_t bad = 0, dropped = 0;
             for (std::size_t b = r.begin(); b != r.end(); ++b) {
                 const std::size_t i = first + b;
-                const float* sh_in = &in.sh[i * std::size_t(K) * 3];
-                float* sh_out = &out.sh[i * std::size_t(K) * 3];
-                if (jac[b] == glm::mat3(1.0f)) {  // outside the lattice or not moved by it
-                    if (&out != &in) {
-                        out.scales[i] = in.scales[i], out.rotations[i] = in.rotations[i];
-                        std::copy(sh_in, sh_in + K * 3, sh_out);
-                    }
-                    continue;
+                deform_one(i, b, bad);
+                // As the GPU pass does (deform.comp): a result that is not finite is never left for the
+                // renderer; the Gaussian keeps its input centre with scale 0 and opacity 0, and is counted.
+                if (!finite_result(out, i, K, view_mode)) {
+                    ++dropped;
+                    out.positions[i] = centres[b];
+                    out.scales[i] = glm::vec3(0.0f);
+                    out.rotations[i] = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+                    std::fill_n(&out.sh[i * std::size_t(K) * 3], K * 3, 0.0f);
+                    if (view_mode) out.sh_frames[i] = glm::mat3(1.0f);
+                    if (drop_opacity) out.opacities[i] = 0.0f;
                 }
-                const glm::dmat3 j(jac[b]);
-                double n2 = 0.0;
-                for (int c = 0; c < 3; ++c) n2 += glm::dot(j[c], j[c]);
-                const bool singular = !(std::abs(glm::determinant(j)) > 1e-12 * n2 * std::sqrt(n2));  // as polar_decomposition
-                bad += singular;
-                const glm::dmat3 rq = glm::mat3_cast(glm::dquat(in.rotations[i]));
-                const glm::dvec3 s(in.scales[i]);
-                const glm::dmat3 a = j * glm::dmat3(rq[0] * s.x, rq[1] * s.y, rq[2] * s.z);  // deformed axes J R S
-                // Σ' = (JRS)(JRS)ᵀ; the deformed axes, orthonormalised, are a close guess of its eigenvectors.
-                const ScaleRotation sr = decompose_covariance(a * glm::transpose(a), orthonormalize(j * rq));
-                out.scales[i] = glm::vec3(sr.scale);
-                out.rotations[i] = glm::quat(sr.rotation);
-                if (K == 1) {
-                    if (&out != &in) std::copy(sh_in, sh_in + 3, sh_out);
-                    continue;
-                }
-                const Polar p = polar_decomposition(j);
-                if (!p.ok || view_mode) {
-                    if (&out != &in) std::copy(sh_in, sh_in + K * 3, sh_out);
-                    if (p.ok && view_mode) out.sh_frames[i] = glm::mat3(p.rotation) * (frames_in ? in.sh_frames[i] : glm::mat3(1.0f));
-                    continue;
-                }
-                sh_rotate(sh_rotation(p.rotation, in.sh_degree), sh_in, sh_out);
             }
             degenerate += bad;
+            not_finite += dropped;
         });
         total.degenerate += degenerate.load();
+        total.not_finite += not_finite.load();
     }
     return total;
 }

@@ -4,7 +4,8 @@
 //           back as scale + rotation (symmetric eigen-decomposition)
 //   colour  SH rotated by R, the rotation of the polar decomposition J = R U (a reflection when the
 //           cell inverts: the SH are transformed by the orthogonal R either way)
-// Gaussians outside the lattice (J = I) are copied unchanged; opacities are never changed.
+// Gaussians outside the lattice (J = I) are copied unchanged; opacities are never changed, except that a
+// Gaussian whose result is not finite is made transparent (DeformStats::not_finite), as on the GPU.
 #pragma once
 
 #include <cstddef>
@@ -21,6 +22,9 @@ struct DeformStats {
     std::size_t inside = 0;      // Gaussians inside the lattice
     std::size_t inverted = 0;    // det J < 0
     std::size_t degenerate = 0;  // J (near) singular: the covariance collapses, SH left unrotated
+    std::size_t not_finite = 0;  // results that were not finite: written as the GPU pass writes them
+                                 // (input centre, scale 0, identity rotation, SH 0, opacity 0 when
+                                 // `out` carries opacities), never left as NaN or inf
 };
 
 // How view-dependent colour follows the deformation (the issue asks for both, measured):

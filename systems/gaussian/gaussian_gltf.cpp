@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
 #include <functional>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 
 #include "runtime/assets/gltf_io.h"
 #include "runtime/core/atomic_file.h"
+#include "runtime/core/file_io.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/sh.h"
@@ -58,6 +60,9 @@ Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::P
     };
     for (const char* name : {"POSITION", "KHR_gaussian_splatting:ROTATION", "KHR_gaussian_splatting:SCALE", "KHR_gaussian_splatting:OPACITY"})
         if (attr(name) < 0) return make_error(where + ": missing attribute " + name);
+    if (const int a = attr("POSITION"); std::size_t(a) < m.accessors.size() && m.accessors[std::size_t(a)].count > kMaxGaussians)
+        return make_error(where + ": POSITION declares " + std::to_string(m.accessors[std::size_t(a)].count) +
+                          " Gaussians, more than the " + std::to_string(kMaxGaussians) + "-Gaussian limit");
     auto pos = read_accessor(m, attr("POSITION"), 3, where, "POSITION");
     if (!pos) return pos.error();
     const std::size_t n = pos->size() / 3;
@@ -77,10 +82,13 @@ Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::P
     for (int l = 1; l <= 3; ++l) {
         int present = 0;
         for (int c = 0; c <= 2 * l; ++c) present += attr(sh_name(l, c)) >= 0;
-        if (present == 0) break;
+        if (present == 0) continue;
         if (present != 2 * l + 1)
             return make_error(where + ": SH degree " + std::to_string(l) + " is partial (" + std::to_string(present) + " of " +
                               std::to_string(2 * l + 1) + " coefficients)");
+        // Degree l needs every band below it; silently dropping the higher bands would lose data.
+        if (degree != l - 1)
+            return make_error(where + ": SH degree " + std::to_string(l) + " coefficients without degree " + std::to_string(degree + 1));
         degree = l;
     }
     GaussianCloud g;
@@ -93,7 +101,8 @@ Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::P
         for (std::size_t i = 0; i < n; ++i)
             for (int c = 0; c < 3; ++c) g.sh[i * std::size_t(K) * 3 + std::size_t(c)] = float((*dc)[i * 3 + std::size_t(c)]);
     } else if (attr("COLOR_0") >= 0) {
-        const int comps = m.accessors[std::size_t(attr("COLOR_0"))].type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
+        const std::size_t ci = std::size_t(attr("COLOR_0"));
+        const int comps = ci < m.accessors.size() && m.accessors[ci].type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
         auto col = get("COLOR_0", comps);
         if (!col) return col.error();
         for (std::size_t i = 0; i < n; ++i)
@@ -119,10 +128,10 @@ Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::P
         const double o = (*opacity)[i];
         if (o < 0.0 || o > 1.0) return fail("opacity outside [0, 1]");
         g.opacities.push_back(float(o));
-        const glm::dvec4 q((*rot)[i * 4], (*rot)[i * 4 + 1], (*rot)[i * 4 + 2], (*rot)[i * 4 + 3]);  // x y z w
-        const double len = glm::length(q);
-        if (!(len > 1e-30)) return fail("zero-length rotation quaternion");
-        g.rotations.emplace_back(float(q.w / len), float(q.x / len), float(q.y / len), float(q.z / len));
+        glm::quat q;  // the file stores x y z w
+        if (!normalize_quaternion((*rot)[i * 4 + 3], (*rot)[i * 4], (*rot)[i * 4 + 1], (*rot)[i * 4 + 2], q))
+            return fail("zero-length rotation quaternion");
+        g.rotations.push_back(q);
     }
     return g;
 }
@@ -167,12 +176,28 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
     tinygltf::Model m;
     if (Status s = assets::load_gltf_model(path, m); !s) return s.error();
     std::vector<GaussianCloud> parts;
-    std::vector<int> visiting;
+    // glTF node graphs are forests: a node listed as a child twice (two parents, or twice by one) would
+    // be visited once per path, exponentially often in a DAG. Refused up front; each node is then
+    // visited at most once.
+    std::vector<int> parent_of(m.nodes.size(), -1);
+    for (std::size_t i = 0; i < m.nodes.size(); ++i)
+        for (int c : m.nodes[i].children) {
+            if (c < 0 || std::size_t(c) >= m.nodes.size())
+                return make_error(src + ": node " + std::to_string(i) + ": child index " + std::to_string(c) + " out of range");
+            if (parent_of[std::size_t(c)] >= 0)
+                return make_error(src + ": node " + std::to_string(c) + " is listed as a child of node " +
+                                  std::to_string(parent_of[std::size_t(c)]) + " and of node " + std::to_string(i) +
+                                  " (a glTF node has at most one parent)");
+            parent_of[std::size_t(c)] = int(i);
+        }
+    std::vector<char> visited(m.nodes.size(), 0);
+    std::size_t depth = 0;
     std::function<Status(int, const glm::dmat4&)> visit = [&](int index, const glm::dmat4& parent) -> Status {
         if (index < 0 || std::size_t(index) >= m.nodes.size()) return make_error(src + ": node index " + std::to_string(index) + " out of range");
-        if (visiting.size() > 256 || std::find(visiting.begin(), visiting.end(), index) != visiting.end())
-            return make_error(src + ": node hierarchy has a cycle");
-        visiting.push_back(index);
+        if (visited[std::size_t(index)]) return make_error(src + ": node " + std::to_string(index) + " is reached twice (a cycle, or a root that is also a child)");
+        if (depth >= 256) return make_error(src + ": node hierarchy deeper than 256 levels");
+        visited[std::size_t(index)] = 1;
+        ++depth;
         const tinygltf::Node& node = m.nodes[std::size_t(index)];
         const glm::dmat4 world = parent * node_matrix(node);
         if (node.mesh >= 0 && std::size_t(node.mesh) < m.meshes.size()) {
@@ -189,15 +214,16 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
         }
         for (int c : node.children)
             if (Status s = visit(c, world); !s) return s;
-        visiting.pop_back();
+        --depth;
         return {};
     };
     std::vector<int> roots;
     if (!m.scenes.empty()) {
         const std::size_t s = m.defaultScene >= 0 && std::size_t(m.defaultScene) < m.scenes.size() ? std::size_t(m.defaultScene) : 0;
         roots = m.scenes[s].nodes;
-    } else {
-        for (std::size_t i = 0; i < m.nodes.size(); ++i) roots.push_back(int(i));
+    } else {  // no scene: the roots are the nodes that are nobody's child
+        for (std::size_t i = 0; i < m.nodes.size(); ++i)
+            if (parent_of[i] < 0) roots.push_back(int(i));
     }
     for (int r : roots)
         if (Status s = visit(r, glm::dmat4(1.0)); !s) return s.error();
@@ -208,6 +234,37 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
     out.sh_degree = degree;
     for (const GaussianCloud& p : parts) append(out, p, degree);
     return out;
+}
+
+GltfDeclaration gltf_declaration(const fs::path& path) {
+    GltfDeclaration d;
+    std::string text;
+    {
+        std::ifstream in(path, std::ios::binary);
+        char head[20] = {};
+        in.read(head, sizeof head);
+        if (in.gcount() >= 4 && std::memcmp(head, "glTF", 4) == 0) {
+            if (in.gcount() < 20) return d;
+            std::uint32_t len = 0, type = 0;
+            std::memcpy(&len, head + 12, 4), std::memcpy(&type, head + 16, 4);
+            if (type != 0x4E4F534Au || len > kMaxJsonFileBytes) return d;
+            text.resize(len);
+            in.read(text.data(), std::streamsize(len));
+            text.resize(std::size_t(std::max<std::streamsize>(in.gcount(), 0)));
+        } else {
+            auto all = read_file(path, kMaxResourceBytes);  // a .gltf may carry base64 buffers
+            if (!all) return d;
+            text = std::move(*all);
+        }
+    }
+    if (!check_json_depth(text, path.string())) return d;
+    const nlohmann::json doc = nlohmann::json::parse(text, nullptr, false);
+    if (doc.is_discarded() || !doc.is_object()) return d;
+    for (const char* key : {"extensionsUsed", "extensionsRequired"})
+        if (auto it = doc.find(key); it != doc.end() && it->is_array())
+            for (const auto& e : *it) d.gaussian_splatting = d.gaussian_splatting || (e.is_string() && e.get<std::string>() == kExt);
+    if (auto it = doc.find("extensions"); it != doc.end() && it->is_object()) d.sffd_scene = it->contains("SFFD_scene");
+    return d;
 }
 
 Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianCloud& g, nlohmann::json& primitive, const std::string& where) {

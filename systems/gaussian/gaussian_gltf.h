@@ -12,10 +12,13 @@
 //     (n in the 3DGS / Condon–Shortley order, i.e. our k = l² + n)
 //   COLOR_0                                   optional fallback (we write it; we read it only when
 //                                             SH_DEGREE_0_COEF_0 is absent)
-// Reading: every POINTS primitive with the extension in the default scene, placed by its node's world
+// Reading: every POINTS primitive with the extension in the default scene (without `scenes`: the nodes
+// that are nobody's child), each node visited once (a node with two parents is refused, so a DAG cannot
+// multiply the work), placed by its node's world
 // matrix (a non-rigid node matrix is applied like a deformation: Σ' = A Σ Aᵀ, SH rotated by the polar
 // rotation of A); primitives of different SH degrees are merged at the lowest degree. Errors name the
-// file and the problem (missing attribute, count mismatch, partial SH degree, negative scale, opacity
+// file and the problem (missing attribute, count mismatch, partial SH degree, a degree present without
+// the one below it, more than kMaxGaussians, negative scale, opacity
 // outside [0,1], non-finite values, accessors outside their buffers).
 // Coordinates are taken as they are: note that splat-transform treats PLY data as rotated 180° about
 // Z relative to glTF (its PLY -> GLB conversion turns x, y into −x, −y); we read both files as stored.
@@ -37,6 +40,17 @@ struct Primitive;
 namespace sffd::gaussian {
 
 Result<GaussianCloud> read_gltf(const std::filesystem::path& path);
+
+// What a glTF/GLB file declares, read from its JSON (the GLB's JSON chunk) without tinygltf: whether
+// `extensionsUsed` or `extensionsRequired` lists KHR_gaussian_splatting, and whether it is one of our
+// scene files (top-level `extensions.SFFD_scene`). A file that declares the extension is read as
+// Gaussians or refused, never reinterpreted by the surface importer. Unreadable or invalid JSON declares
+// nothing (the reader that opens it next reports the problem).
+struct GltfDeclaration {
+    bool gaussian_splatting = false;
+    bool sffd_scene = false;
+};
+GltfDeclaration gltf_declaration(const std::filesystem::path& path);
 // One node (translation = cloud.origin) with one POINTS primitive; written atomically. .glb only.
 Status write_glb(const std::filesystem::path& path, const GaussianCloud& cloud);
 

@@ -89,10 +89,10 @@ Status append_from_chunk(const ply::Chunk& chunk, const PlyLayout& l, std::uint6
             s[c] = float(e);
         }
         out.scales.push_back(s);
-        const glm::dvec4 q(col(l.rot[0])[r], col(l.rot[1])[r], col(l.rot[2])[r], col(l.rot[3])[r]);
-        const double len = glm::length(q);
-        if (!(len > 1e-30)) return bad(l.rot[0], "zero-length rotation quaternion at");
-        out.rotations.emplace_back(float(q[0] / len), float(q[1] / len), float(q[2] / len), float(q[3] / len));
+        glm::quat q;
+        if (!normalize_quaternion(col(l.rot[0])[r], col(l.rot[1])[r], col(l.rot[2])[r], col(l.rot[3])[r], q))
+            return bad(l.rot[0], "zero-length rotation quaternion at");
+        out.rotations.push_back(q);
         out.opacities.push_back(sigmoid(col(l.opacity)[r]));
         for (int k = 0; k < K; ++k)
             for (int c = 0; c < 3; ++c)
@@ -148,6 +148,9 @@ Result<GaussianCloud> read_ply(const fs::path& path) {
     const ply::Element& ve = reader->header().elements[std::size_t(vi)];
     auto layout = ply_layout(ve, name);
     if (!layout) return layout.error();
+    if (ve.count > kMaxGaussians)
+        return make_error(name + ": declares " + std::to_string(ve.count) + " Gaussians, more than the " +
+                          std::to_string(kMaxGaussians) + "-Gaussian limit");
     GaussianCloud g;
     g.sh_degree = layout->degree;
     // ply::Reader::open() refused counts the file cannot hold, so reserving the declared count is safe.
@@ -214,6 +217,9 @@ Result<GaussianCloud> read_splat(const fs::path& path) {
     if (size % 32 != 0)
         return make_error(name + ": size " + std::to_string(size) + " bytes is not a multiple of 32 (.splat rows are 32 bytes; truncated?)");
     const std::size_t n = size / 32;
+    if (n > kMaxGaussians)
+        return make_error(name + ": holds " + std::to_string(n) + " Gaussians, more than the " + std::to_string(kMaxGaussians) +
+                          "-Gaussian limit");
     GaussianCloud g;
     g.sh_degree = 0;
     g.positions.reserve(n), g.scales.reserve(n), g.rotations.reserve(n), g.opacities.reserve(n), g.sh.reserve(n * 3);
@@ -251,30 +257,62 @@ Result<GaussianCloud> read_splat(const fs::path& path) {
 Result<GaussianCloud> read_gaussians(const fs::path& path) {
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
-    if (ext == ".ply") return read_ply(path);
-    if (ext == ".splat") return read_splat(path);
-    if (ext == ".glb" || ext == ".gltf") return read_gltf(path);
-    if (ext == ".spz") return read_spz(path);
-    return make_error(path.string() + ": unknown Gaussian splat format '" + ext + "' (expected .ply, .splat, .spz, .glb or .gltf)");
+    Result<GaussianCloud> g = make_error(path.string() + ": unknown Gaussian splat format '" + ext +
+                                         "' (expected .ply, .splat, .spz, .glb or .gltf)");
+    if (ext == ".ply") g = read_ply(path);
+    else if (ext == ".splat") g = read_splat(path);
+    else if (ext == ".glb" || ext == ".gltf") g = read_gltf(path);
+    else if (ext == ".spz") g = read_spz(path);
+    if (!g) return g;
+    // The one validation every cloud from a file passes, after the readers' transforms.
+    if (Status s = validate(*g, path.string()); !s) return s.error();
+    return g;
 }
 
-Status validate(const GaussianCloud& g, const std::string& what) {
+bool normalize_quaternion(double w, double x, double y, double z, glm::quat& out) {
+    const double big = std::max({std::abs(w), std::abs(x), std::abs(y), std::abs(z)});
+    if (!(big > 0.0) || !std::isfinite(big)) return false;
+    const glm::dvec4 q = glm::dvec4(w, x, y, z) / big;
+    const double len = glm::length(q);  // in [1, 2]: no overflow or underflow left
+    out = glm::quat(float(q[0] / len), float(q[1] / len), float(q[2] / len), float(q[3] / len));
+    return true;
+}
+
+Status validate(const GaussianCloud& g, const std::string& what, std::uint64_t first_index) {
     const std::size_t n = g.size();
     if (g.sh_degree < 0 || g.sh_degree > 3) return make_error(what + ": SH degree " + std::to_string(g.sh_degree) + " outside 0..3");
     if (g.scales.size() != n || g.rotations.size() != n || g.opacities.size() != n ||
         g.sh.size() != n * std::size_t(sh_coeffs(g.sh_degree)) * 3)
         return make_error(what + ": array sizes differ from the " + std::to_string(n) + " positions");
+    if (!std::isfinite(g.origin.x + g.origin.y + g.origin.z)) return make_error(what + ": the cloud's origin is not finite");
+    static const char* const kAxis[] = {"x", "y", "z"};
+    const std::size_t K3 = std::size_t(sh_coeffs(g.sh_degree)) * 3;
     for (std::size_t i = 0; i < n; ++i) {
-        const auto fail = [&](const char* why) { return make_error(what + ": Gaussian " + std::to_string(i) + ": " + why); };
-        const glm::vec3 p = g.positions[i], s = g.scales[i];
-        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return fail("non-finite position");
-        if (!(s.x >= 0 && s.y >= 0 && s.z >= 0) || !std::isfinite(s.x + s.y + s.z)) return fail("scale negative or not finite");
-        if (!(g.opacities[i] >= 0.0f && g.opacities[i] <= 1.0f)) return fail("opacity outside [0, 1]");
+        const auto fail = [&](const std::string& field, double v, const char* why) {
+            char value[32];
+            std::snprintf(value, sizeof value, "%.9g", v);
+            return make_error(what + ": Gaussian " + std::to_string(first_index + i) + ": " + field + " = " + value + ": " + why);
+        };
+        for (int c = 0; c < 3; ++c) {
+            const double p = g.origin[c] + double(g.positions[i][c]);
+            if (!std::isfinite(p)) return fail(std::string("position.") + kAxis[c], p, "not finite");
+            if (std::abs(p) > kMaxCoordinate) return fail(std::string("position.") + kAxis[c], p, "beyond the +-1e10 coordinate bound");
+            const double s = double(g.scales[i][c]);
+            if (!std::isfinite(s)) return fail(std::string("scale.") + kAxis[c], s, "not finite");
+            if (!(s >= 0.0)) return fail(std::string("scale.") + kAxis[c], s, "negative");
+            if (s > kMaxScale) return fail(std::string("scale.") + kAxis[c], s, "beyond the 1e10 scale bound");
+        }
+        if (!(g.opacities[i] >= 0.0f && g.opacities[i] <= 1.0f)) return fail("opacity", double(g.opacities[i]), "outside [0, 1]");
         const glm::quat q = g.rotations[i];
-        if (!(std::abs(glm::dot(q, q) - 1.0f) < 1e-3f)) return fail("rotation is not a unit quaternion");
+        const float q2 = glm::dot(q, q);
+        if (!(std::abs(q2 - 1.0f) < 1e-3f)) return fail("rotation (squared length)", double(q2), "not a unit quaternion");
+        for (std::size_t k = 0; k < K3; ++k) {
+            const double v = double(g.sh[i * K3 + k]);
+            if (!std::isfinite(v) || std::abs(v) > kMaxShMagnitude)
+                return fail("sh[" + std::to_string(k / 3) + "]." + "rgb"[k % 3], v,
+                            std::isfinite(v) ? "beyond the 1e6 SH bound" : "not finite");
+        }
     }
-    for (float v : g.sh)
-        if (!std::isfinite(v)) return make_error(what + ": non-finite SH coefficient");
     if (!g.sh_frames.empty())
         return make_error(what + ": the cloud carries per-splat SH frames (view-direction mode): bake_sh_frames() before writing");
     return {};

@@ -68,9 +68,22 @@ inline constexpr double kMaxLogit = 16.635532273834041;  // log(2²⁴ − 1)
 float sigmoid(double logit);
 double logit(double p);
 
-// Checks a cloud's array sizes and values (finite, scales >= 0, opacities in [0,1], unit quaternions
-// within 1e-3); messages "what: problem".
-Status validate(const GaussianCloud& cloud, const std::string& what);
+// Budgets and bounds, stated once (messages quote them). Every cloud a reader returns has passed
+// validate() after all its transforms (glTF nodes, the origin): values beyond these bounds are refused
+// rather than left to overflow in a projection (a coordinate of 1e30 blanks a whole render).
+inline constexpr std::uint64_t kMaxGaussians = std::uint64_t(1) << 26;  // 67M: ~16 GB as a degree-3 cloud
+inline constexpr double kMaxCoordinate = 1e10;                          // |origin + position| per axis
+inline constexpr double kMaxScale = 1e10;                               // linear standard deviation
+inline constexpr double kMaxShMagnitude = 1e6;                          // |SH coefficient|
+
+// The unit quaternion (w, x, y, z) in any finite magnitude: divides by the largest component first so
+// 1e200 does not overflow to a zero quaternion. False when all four are zero or one is not finite.
+bool normalize_quaternion(double w, double x, double y, double z, glm::quat& out);
+
+// Checks a cloud's array sizes and values (finite, scales in [0, kMaxScale], coordinates within
+// ±kMaxCoordinate, opacities in [0,1], unit quaternions within 1e-3, |SH| <= kMaxShMagnitude); messages
+// "what: Gaussian i: field = value: problem", i counted from `first_index` (a chunk's first row).
+Status validate(const GaussianCloud& cloud, const std::string& what, std::uint64_t first_index = 0);
 
 }  // namespace sffd::gaussian
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <limits>
 #include <memory>
 #include <vector>
@@ -13,6 +12,7 @@
 #include "runtime/assets/builtin_scenes.h"
 #include "runtime/assets/ply.h"
 #include "runtime/assets/scene.h"
+#include "runtime/core/file_io.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
 #include "systems/gaussian/components.h"
@@ -35,15 +35,6 @@ std::string lower_ext(const fs::path& p) {
     return e;
 }
 
-// The first `bytes` of a file (a glTF's JSON, or a GLB's JSON chunk, comes first).
-std::string head(const fs::path& path, std::size_t bytes) {
-    std::ifstream in(path, std::ios::binary);
-    std::string s(bytes, '\0');
-    in.read(s.data(), std::streamsize(bytes));
-    s.resize(std::size_t(std::max<std::streamsize>(in.gcount(), 0)));
-    return s;
-}
-
 // Strict JSON readers: errors say where.
 glm::dvec3 vec3_at(const json& j, const char* key, glm::dvec3 fallback, const std::string& where) {
     if (!j.contains(key)) return fallback;
@@ -54,6 +45,8 @@ glm::dvec3 vec3_at(const json& j, const char* key, glm::dvec3 fallback, const st
         const json& e = v[std::size_t(i)];
         if (!e.is_number() || !std::isfinite(e.get<double>())) throw std::runtime_error(where + ": '" + key + "' has a non-finite or non-numeric entry");
         out[i] = e.get<double>();
+        // Bounded like the cloud itself (gaussian_io.h): a scale of 1e30 would overflow every projection.
+        if (std::abs(out[i]) > kMaxCoordinate) throw std::runtime_error(where + ": '" + key + "' entry beyond the +-1e10 bound");
     }
     return out;
 }
@@ -149,8 +142,8 @@ bool is_gaussian_scene_file(const fs::path& path) {
         return v >= 0 && is_gaussian_element(r->header().elements[std::size_t(v)]);
     }
     if (e == ".glb" || e == ".gltf") {
-        const std::string h = head(path, std::size_t(4) << 20);
-        return h.find("KHR_gaussian_splatting") != std::string::npos && h.find("SFFD_scene") == std::string::npos;
+        const GltfDeclaration d = gltf_declaration(path);
+        return d.gaussian_splatting && !d.sffd_scene;
     }
     return false;
 }
@@ -211,12 +204,12 @@ Result<std::string> save_gaussian_extension(const ecs::Registry& registry, const
         clouds.push_back(std::move(c));
     }
     if (clouds.empty()) return std::string();
-    return json{{"version", 1}, {"clouds", clouds}}.dump();
+    // Names and file names are any bytes: invalid UTF-8 becomes U+FFFD instead of an exception.
+    return json{{"version", 1}, {"clouds", clouds}}.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
 Status load_gaussian_extension(ecs::Registry& registry, std::string_view text, const std::function<ecs::Entity(int)>& entity_of,
                                const fs::path& scene_path, const tinygltf::Model& model) {
-    const fs::path scene_dir = scene_path.parent_path();
     const json j = json::parse(text, nullptr, false);
     if (j.is_discarded() || !j.is_object()) return make_error("not a JSON object");
     if (!j.contains("version") || !j["version"].is_number_integer() || j["version"].get<int>() != 1)
@@ -238,8 +231,18 @@ Status load_gaussian_extension(ecs::Registry& registry, std::string_view text, c
             if (embedded && c.contains("file")) throw std::runtime_error(where + ": has both 'file' and 'embedded'");
             if (!embedded && (!c.contains("file") || !c["file"].is_string() || c["file"].get<std::string>().empty()))
                 throw std::runtime_error(where + ": 'file' must be a non-empty string (a Gaussian file), or 'embedded' true");
-            fs::path file = embedded ? fs::path() : fs::path(c["file"].get<std::string>());
-            if (file.is_relative() && !embedded) file = scene_dir / file;
+            fs::path file;
+            if (!embedded) {
+                // The same confinement as every other resource a file names (runtime/core/file_io.h): inside
+                // the scene file's folder unless --allow-outside-resources.
+                auto resolved = resolve_resource(scene_path, c["file"].get<std::string>());
+                if (!resolved) {
+                    const std::string& m = resolved.message();
+                    const bool missing = m.size() >= 10 && m.compare(m.size() - 10, 10, " not found") == 0;
+                    throw std::runtime_error(where + ": " + m + (missing ? " (no such Gaussian file)" : ""));
+                }
+                file = std::move(*resolved);
+            }
             std::vector<ecs::Entity> lattices;
             if (c.contains("lattices")) {
                 if (!c["lattices"].is_array()) throw std::runtime_error(where + ": 'lattices' must be an array of lattice ids");
@@ -261,7 +264,6 @@ Status load_gaussian_extension(ecs::Registry& registry, std::string_view text, c
                 registry.emplace<GaussianCloud>(x, std::move(g));
                 e = x;
             } else {
-                if (!fs::exists(file)) throw std::runtime_error(where + ": " + file.string() + ": no such Gaussian file");
                 e = load_gaussian_entity(registry, file);
                 if (!e) throw std::runtime_error(where + ": " + e.message());
             }
@@ -288,10 +290,14 @@ void register_gaussian_scene_hooks() {
             if (!e) return e.error();
             if (registry.count<Camera>() == 0) {
                 const GaussianCloud& g = registry.get<GaussianCloud>(*e);
+                // The bounds hold each Gaussian's 3-sigma extent, not only its centre: the default camera
+                // (and its near plane) then sits outside every Gaussian, also when the centres coincide.
                 glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-                for (const glm::vec3& q : g.positions) {
-                    lo = glm::min(lo, g.origin + glm::dvec3(q));
-                    hi = glm::max(hi, g.origin + glm::dvec3(q));
+                for (std::size_t i = 0; i < g.size(); ++i) {
+                    const glm::dvec3 s = glm::dvec3(g.scales[i]);
+                    const double reach = 3.0 * std::max({s.x, s.y, s.z});
+                    lo = glm::min(lo, g.origin + glm::dvec3(g.positions[i]) - reach);
+                    hi = glm::max(hi, g.origin + glm::dvec3(g.positions[i]) + reach);
                 }
                 if (lo.x <= hi.x) assets::add_default_view(registry, lo, hi, glm::dvec3(0.3, 0.3, 1.0));
             }

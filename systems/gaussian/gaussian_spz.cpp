@@ -9,6 +9,8 @@
 #include <memory>
 #include <vector>
 
+#include "systems/gaussian/gaussian_io.h"
+
 namespace sffd::gaussian {
 namespace fs = std::filesystem;
 
@@ -16,6 +18,9 @@ namespace {
 
 constexpr std::uint32_t kMagic = 0x5053474e;  // "NGSP"
 constexpr double kColorScale = 0.15;
+// Budgets (the messages quote them): the compressed file and the decoded attribute data.
+constexpr std::uint64_t kMaxSpzFileBytes = std::uint64_t(2) << 30;
+constexpr std::uint64_t kMaxSpzDecodedBytes = std::uint64_t(4) << 30;
 
 struct Inflater {
     z_stream z{};
@@ -36,6 +41,8 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
     if (!fs::is_regular_file(path, ec)) return fail(fs::exists(path, ec) ? "not a regular file" : "no such file");
     const std::uint64_t size = fs::file_size(path, ec);
     if (ec) return fail("cannot stat: " + ec.message());
+    if (size > kMaxSpzFileBytes)
+        return fail("file is " + std::to_string(size) + " bytes, more than the " + std::to_string(kMaxSpzFileBytes) + "-byte limit");
     std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), std::fclose);
     if (!f) return fail(std::string("cannot open: ") + std::strerror(errno));
     std::vector<unsigned char> file(static_cast<std::size_t>(size));
@@ -87,8 +94,38 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
     if (double(n) * double(per) > double(file.size()) * 1032.0 + 1024.0)
         return fail("declares " + std::to_string(n) + " splats, more than its " + std::to_string(file.size()) +
                     " compressed bytes can hold");
-    std::vector<unsigned char> data(std::size_t(n) * per);
-    if (!take(data.data(), data.size(), why)) return fail(why);
+    if (n > kMaxGaussians || std::uint64_t(n) * per > kMaxSpzDecodedBytes)
+        return fail("declares " + std::to_string(n) + " splats (" + std::to_string(std::uint64_t(n) * per) +
+                    " decoded bytes), more than the " + std::to_string(kMaxGaussians) + "-Gaussian / " +
+                    std::to_string(kMaxSpzDecodedBytes) + "-byte limit");
+    // The buffer grows with the data actually inflated, so a small file that merely declares a large
+    // count fails as truncated before the memory is taken.
+    std::vector<unsigned char> data;
+    const std::size_t want = std::size_t(n) * per;
+    for (std::size_t have = 0; have < want;) {
+        const std::size_t step = std::min<std::size_t>(want - have, std::max<std::size_t>(have, std::size_t(1) << 20));
+        data.resize(have + step);
+        if (!take(data.data() + have, step, why)) return fail(why);
+        have += step;
+    }
+    // The rest of the stream: nothing may follow the splats, and inflating to the end makes zlib check
+    // the gzip trailer (CRC-32 and length of the decoded data).
+    {
+        unsigned char extra[64];
+        std::size_t trailing = 0;
+        while (true) {
+            inf.z.next_out = extra;
+            inf.z.avail_out = sizeof extra;
+            const int rc = inflate(&inf.z, Z_NO_FLUSH);
+            trailing += sizeof extra - inf.z.avail_out;
+            if (trailing > 0)
+                return fail("decoded data is longer than the header declares (" + std::to_string(n) + " splats of " +
+                            std::to_string(per) + " bytes)");
+            if (rc == Z_STREAM_END) break;
+            if (rc == Z_BUF_ERROR) return fail("truncated data (gzip trailer missing)");
+            if (rc != Z_OK) return fail(std::string("corrupt gzip stream (") + (inf.z.msg ? inf.z.msg : "zlib error") + ")");
+        }
+    }
 
     GaussianCloud g;
     g.sh_degree = degree;

@@ -12,7 +12,8 @@
 // Version 4 (per-stream zstd with a table of contents) is refused with a hint (no zstd here):
 // `splat-transform in.spz --spz-version 3 out.spz` re-encodes. Errors name the file: not gzip/SPZ,
 // unsupported version or degree, a splat count the compressed size cannot hold (refused before
-// allocating; deflate expands at most 1032:1), truncated data.
+// allocating; deflate expands at most 1032:1), budgets (2 GiB file, 4 GiB decoded, gaussian_io.h's
+// kMaxGaussians), truncated data, decoded data longer than declared, a bad gzip CRC or length.
 #pragma once
 
 #include <filesystem>

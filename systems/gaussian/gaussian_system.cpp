@@ -116,7 +116,9 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         out.cloud.scales = cloud.scales;
         out.cloud.rotations = cloud.rotations;
         out.cloud.sh = cloud.sh;
-        out.cloud.opacities.clear();
+        // Carried through the deformation only so that Gaussians whose result is not finite can be made
+        // transparent (as the GPU pass does); dropped again when none was.
+        out.cloud.opacities = cloud.opacities;
         out.cloud.sh_frames.clear();
         for (ecs::Entity le : lattices) {
             auto stats = gaussian::deform(reg.get<Lattice>(le), out.cloud, out.cloud, {ffd::Backend::automatic, false, cpu_sh});
@@ -126,7 +128,12 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
             }
             out.inverted += stats->inverted;
             out.degenerate += stats->degenerate;
+            out.not_finite += stats->not_finite;
         }
+        if (out.not_finite)
+            log::warn("gaussian_deform_system: ", out.not_finite, " Gaussians deformed to non-finite values (drawn transparent)");
+        else
+            out.cloud.opacities.clear();
         out.stats_arrived = true;
         if (counters) ++counters->cpu_runs;
     }

@@ -48,7 +48,8 @@ Status upload_rest(GpuGaussians& gpu, const GaussianCloud& cloud, std::uint64_t 
 
 void upload_cpu_deformed(GpuGaussians& gpu, const DeformedGaussians& d, const GaussianCloud& authored) {
     const GaussianCloud& g = d.cloud;
-    const std::vector<gpu::GpuGaussian> packed = pack_gaussians(g, authored.opacities);
+    // The deformed cloud carries opacities only when some Gaussians were made transparent.
+    const std::vector<gpu::GpuGaussian> packed = pack_gaussians(g, g.opacities.size() == g.size() ? g.opacities : authored.opacities);
     fill(gpu.deformed, "gaussian.deformed", packed.data(), packed.size() * sizeof(gpu::GpuGaussian));
     gpu.has_deformed_sh = g.sh.size() == authored.sh.size() && g.sh != authored.sh;
     if (gpu.has_deformed_sh) fill(gpu.deformed_sh, "gaussian.deformed_sh", g.sh.data(), g.sh.size() * sizeof(float));

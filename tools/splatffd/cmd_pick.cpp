@@ -21,6 +21,7 @@
 #include <string>
 
 #include "runtime/assets/scene.h"
+#include "runtime/core/json_text.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
@@ -61,18 +62,8 @@ bool parse_pair(const std::string& s, char sep, double& a, double& b) {
     }
 }
 
-std::string json_string(const std::string& s) {
-    std::string out = "\"";
-    for (const char c : s) {
-        if (c == '"' || c == '\\') out += '\\', out += c;
-        else if (static_cast<unsigned char>(c) < 0x20) {
-            char buf[8];
-            std::snprintf(buf, sizeof buf, "\\u%04x", c);
-            out += buf;
-        } else out += c;
-    }
-    return out + "\"";
-}
+// Names come from file names and glTF strings (any bytes): json_quote() keeps the output valid UTF-8.
+std::string json_string(const std::string& s) { return sffd::json_quote(s); }
 
 int run_pick(sffd::cli::Args args) {
     std::string scene = "sphere";

@@ -29,7 +29,9 @@ bool is_gaussian_file(const std::string& in) {
         const int v = r ? r->header().find("vertex") : -1;
         return v >= 0 && gaussian::is_gaussian_element(r->header().elements[std::size_t(v)]);
     }
-    if (e == ".glb" || e == ".gltf") return gaussian::read_gltf(in).ok();
+    // By declaration, not by whether the Gaussian reader accepts it: a file that declares
+    // KHR_gaussian_splatting is read as Gaussians or refused, never reinterpreted as surface splats.
+    if (e == ".glb" || e == ".gltf") return gaussian::gltf_declaration(in).gaussian_splatting;
     return false;
 }
 

@@ -53,7 +53,11 @@ int deform_gaussian_ply(const std::string& in_path, const std::string& out_path,
     std::size_t not_finite = 0;
     // One chunk through the chosen backend; `out` may be `in` (CPU) or is replaced (GPU).
     auto run_deform = [&](const GaussianCloud& in, GaussianCloud& out) -> Result<gaussian::DeformStats> {
-        if (!gpu) return gaussian::deform(lattice, in, out, backend, false);
+        if (!gpu) {
+            auto st = gaussian::deform(lattice, in, out, backend, false);
+            if (st && &out == &in) not_finite += st->not_finite;  // the timing copies are not counted
+            return st;
+        }
         gaussian::GpuDeformStats st;
         auto got = gaussian::deform_on_gpu(*gpu, {&lattice}, in, gaussian::ShMode::rotate_coefficients, &st);
         if (!got) return got.error();
@@ -92,6 +96,8 @@ int deform_gaussian_ply(const std::string& in_path, const std::string& out_path,
                 g = GaussianCloud{};
                 g.sh_degree = layout->degree;
                 if (auto s = gaussian::append_from_chunk(chunk, *layout, row, in_path, g); !s) return fail(s.message());
+                // The same validation as every cloud read whole (read_gaussians), row numbers of the file.
+                if (auto s = gaussian::validate(g, in_path, row); !s) return fail(s.message());
                 read_ms += ms_since(t0);
                 for (int r = 0; r < bench; ++r) {  // timing runs on a copy (the chunk is still the input)
                     t0 = Clock::now();

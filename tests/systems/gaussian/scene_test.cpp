@@ -17,6 +17,7 @@
 
 #include "runtime/assets/export.h"
 #include "runtime/assets/scene.h"
+#include "runtime/core/file_io.h"
 #include "runtime/gfx/context.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
@@ -144,11 +145,20 @@ TEST_F(GaussianScene, SavesAndLoadsTheGaussianEntityWithItsLatticeAndClip) {
     EXPECT_TRUE(reg.has<Lattice>(lat));
     EXPECT_TRUE(reg.has<AnimationClip>(lat));
     EXPECT_EQ(fs::path(reg.get<GaussianSource>(e).path), fs::absolute(dir / "sphere.ply").lexically_normal());
-    // Saved again from the loaded registry (elsewhere): still one Gaussian entity referring to the file.
+    // Saved again from the loaded registry (elsewhere): still one Gaussian entity referring to the file,
+    // which is now outside the scene's folder: read only with --allow-outside-resources (the rule of
+    // every resource a file names).
     const fs::path dir2 = fresh_dir("roundtrip2");
     ASSERT_TRUE(save_scene(reg, dir2 / "again.glb"));
+    ecs::Registry refused;
+    const Status outside = load_scene(refused, (dir2 / "again.glb").string());
+    ASSERT_FALSE(outside);
+    EXPECT_NE(outside.message().find("outside the file's folder"), std::string::npos) << outside.message();
+    set_allow_outside_resources(true);
     ecs::Registry again;
-    ASSERT_TRUE(load_scene(again, (dir2 / "again.glb").string()));
+    const Status allowed = load_scene(again, (dir2 / "again.glb").string());
+    set_allow_outside_resources(false);
+    ASSERT_TRUE(allowed) << allowed.message();
     EXPECT_EQ(again.count<GaussianCloud>(), 1u);
     EXPECT_EQ(again.count<Deformers>(), 1u);
     // A cloud made in memory (no file) is embedded in the scene (scene_embed_test.cpp checks the data).
