@@ -6,6 +6,7 @@ const char* phase_name(Phase phase) {
     switch (phase) {
         case Phase::input: return "input";
         case Phase::animation: return "animation";
+        case Phase::residency: return "residency";
         case Phase::deformation: return "deformation";
         case Phase::picking: return "picking";
         case Phase::rendering: return "rendering";

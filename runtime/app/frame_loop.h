@@ -3,7 +3,10 @@
 //
 //   input       window events, replayed input files, editor tools -> edit commands on lattices
 //   animation   clips evaluate at the frame time and write lattice control points from the rest lattice
-//   deformation point clouds whose rest data or lattices changed are re-deformed (GPU compute or CPU)
+//   residency   authored clouds whose change stamp moved are uploaded to the GPU stores, once, by one
+//               function per kind (the stores and their per-cloud state have this one owner)
+//   deformation point clouds whose rest data or lattices changed are re-deformed (GPU compute or CPU,
+//               whose output is uploaded); writes the deformed buffers and their state
 //   picking     only when a pick was requested: refresh the ray-casting scene, cast, store the hit
 //   rendering   culling, splat passes, shading, overlays, UI, frame capture
 //   present     sRGB display copy (after every overlay), blit and swap the window, or read back and write
@@ -25,8 +28,8 @@
 
 namespace sffd {
 
-enum class Phase : std::uint8_t { input, animation, deformation, picking, rendering, present };
-inline constexpr std::size_t phase_count = 6;
+enum class Phase : std::uint8_t { input, animation, residency, deformation, picking, rendering, present };
+inline constexpr std::size_t phase_count = 7;
 const char* phase_name(Phase phase);
 
 // Per-frame timing handed to every system.

@@ -1,6 +1,6 @@
 // `splatffd view [SCENE]`: the editor window. Opens a GLFW window through the foundation's context
 // (runtime/gfx/context.h), loads the scene (runtime/assets/scene.h), and runs the engine's standard
-// Schedule with the editor's systems (tools/splatffd/engine.cpp lists them: input system; lattice overlay
+// Schedule with the editor's systems (systems/engine/engine.cpp lists them: input system; lattice overlay
 // and request handling (save, screenshot, quit) in the rendering phase; in the present phase display copy
 // -> blit -> ImGui panels -> swap).
 //
@@ -41,7 +41,7 @@ struct ViewOptions {
 std::string user_config_file(const std::string& name);
 
 // Runs the editor on `schedule`: the engine's standard frame with the editor's systems
-// (make_engine_schedule({.editor = true}), tools/splatffd/engine.cpp lists them). Returns the process exit
+// (make_engine_schedule({.editor = true}), systems/engine/engine.cpp lists them). Returns the process exit
 // code (0 ok, 1 bad input or failure, with a message naming the problem).
 int run_view(const ViewOptions& options, Schedule schedule);
 

@@ -11,6 +11,7 @@
 #include "systems/ffd/ffd_system.h"
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/picking/picking_system.h"
+#include "systems/residency/residency_system.h"
 #include "systems/splat_render/splat_render.h"
 
 namespace sffd {
@@ -23,6 +24,9 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
 
     // --- animation: clips write lattice control points at the frame time (animation) ----------------
     s.add(Phase::animation, "animation", animation_system);
+
+    // --- residency: upload authored clouds whose change stamp moved; owns the GPU stores (residency) ----
+    s.add(Phase::residency, "residency", residency_system);  // no-op without a GL context
 
     // --- deformation: re-deform point clouds whose rest data or lattices changed (ffd) --------------
     s.add(Phase::deformation, "ffd", ffd_system);  // GPU compute when a context is current, else CPU

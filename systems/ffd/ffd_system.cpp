@@ -1,11 +1,13 @@
 #include "systems/ffd/ffd_system.h"
 
+#include <algorithm>
 #include <string_view>
 #include <vector>
 
 #include "runtime/app/pass_timer.h"
 #include "runtime/core/log.h"
 #include "runtime/gfx/gl.h"
+#include "runtime/gfx/residency.h"
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
 #include "shaders/common/bindings.h"
@@ -52,8 +54,19 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
         const ffd::DeformInputs inputs = ffd::deform_inputs<SplatCloud>(reg, e);
         const std::vector<ecs::Entity>& lattices = inputs.lattices;
         const std::uint64_t cloud_v = inputs.stamps.cloud;
+        const std::size_t n = cloud.size();
+        // The cloud's residency (residency_system uploaded its rest splats this frame when they changed):
+        // the GPU path needs them current, the CPU path uploads its output there.
+        gfx::GpuSplatStore* store = have_gl ? reg.try_resource<gfx::GpuSplatStore>() : nullptr;
+        gfx::GpuSplats* splats = nullptr;
+        if (store) {
+            auto it = store->clouds.find(e);
+            if (it != store->clouds.end() && it->second.rest && it->second.rest_version == cloud_v && it->second.count == n)
+                splats = &it->second;
+        }
         const DeformedSplats* seen = reg.try_get<DeformedSplats>(e);
-        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu)
+        // A resident cloud at rest has no deformed data yet (its entry is new): deform even if nothing moved.
+        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu && (!splats || splats->is_deformed()))
             continue;  // nothing this cloud depends on moved
 
         if (!seen) reg.emplace<DeformedSplats>(e);
@@ -62,7 +75,6 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
         out.seen = inputs.stamps;
         out.seen_force_cpu = force_cpu;
         ++out.version;
-        const std::size_t n = cloud.size();
 
         // Bounds from the control points only: the rest box (one pass over the splats when the cloud
         // changes, cached) grown by each lattice's displacement hull, in order (never under-covers).
@@ -78,25 +90,9 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
             if (ffd::validate(reg.get<Lattice>(le)).ok()) box = ffd::deformed_bounds(reg.get<Lattice>(le), box);
         out.bounds_min = box.lo, out.bounds_max = box.hi;
 
-        // GPU path: the cloud's rest splats are on the GPU and current.
-        gfx::GpuSplatStore* store = force_cpu || !have_gl ? nullptr : reg.try_resource<gfx::GpuSplatStore>();
-        gfx::GpuSplats* splats = nullptr;
-        if (store) {
-            auto it = store->clouds.find(e);
-            if (it != store->clouds.end() && it->second.rest && it->second.rest_version == cloud_v && it->second.count == n)
-                splats = &it->second;
-        }
-        ffd::GpuDeformer* gpu = splats ? ffd::gpu_deformer<ffd::GpuDeformer>(reg, "ffd_system") : nullptr;
+        ffd::GpuDeformer* gpu = splats && !force_cpu ? ffd::gpu_deformer<ffd::GpuDeformer>(reg, "ffd_system") : nullptr;
         if (gpu) {
-            const std::size_t bytes = std::max<std::size_t>(n, 1) * sizeof(gpu::GpuSplat);
-            if (!splats->deformed) {
-                splats->deformed = gfx::Buffer::create("splats.deformed");
-                glNamedBufferData(splats->deformed.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_COPY);
-            } else {
-                GLint64 size = 0;
-                glGetNamedBufferParameteri64v(splats->deformed.id(), GL_BUFFER_SIZE, &size);
-                if (std::size_t(size) < bytes) glNamedBufferData(splats->deformed.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_COPY);
-            }
+            gfx::reserve_buffer(splats->deformed, "splats.deformed", std::max<std::size_t>(n, 1) * sizeof(gpu::GpuSplat));
             auto pass_scope = profiling::gpu_scope(reg, "ffd.compute");  // names the pass for the profiler
             gpu->reset_stats();
             GLuint in = splats->rest.id();
@@ -121,8 +117,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
                 // The inverted count arrives a few frames later (collect_gpu_stats); until then `inverted`
                 // keeps the latest count that arrived.
                 reg.resource<FfdGpuState>().queue_stats(*gpu, e, out.version);
-                splats->has_deformed = true;
-                ++splats->deformed_version;
+                gfx::set_deformed(*splats, gfx::Residency::deformed_gpu);
                 out.gpu_valid = true;
                 out.cpu_valid = false;
                 out.positions.clear(), out.normals.clear(), out.axis_u.clear(), out.axis_v.clear();
@@ -135,8 +130,10 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
         ffd::deform_cloud(reg, cloud, lattices, out, "ffd_system");
         out.inverted_version = out.version;
         out.gpu_valid = false;
-        if (store)
-            if (auto it = store->clouds.find(e); it != store->clouds.end()) it->second.has_deformed = false;  // render re-uploads
+        if (splats) {  // the resident cloud draws this output from now on (state deformed_cpu)
+            gfx::upload_deformed_splats(*splats, cloud, {out.positions, out.normals, out.axis_u, out.axis_v}, store->keep_cpu);
+            if (auto* rs = reg.try_resource<gfx::ResidencyStats>()) ++rs->deformed_uploads;
+        }
         if (settings) ++settings->cpu_runs, ++settings->cpu_splat_passes;
     }
 }

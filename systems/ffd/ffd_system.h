@@ -1,18 +1,20 @@
 // ffd_system: the deformation phase (runtime/app/frame_loop.h). Reads SplatCloud + Deformers on point-cloud
 // entities and Lattice on the lattice entities they name; writes DeformedSplats (always: bounds, inverted
-// count, version) and either GpuSplatStore::clouds[e].deformed (GPU path) or DeformedSplats' CPU arrays.
+// count, version) and the cloud's residency (runtime/gfx/splat_store.h): GpuSplatStore::clouds[e].deformed
+// from the compute pass (state deformed_gpu), or DeformedSplats' CPU arrays uploaded there when the cloud
+// is resident (state deformed_cpu).
 //
 // Skinning-style: a cloud is re-deformed only when its SplatCloud, its Deformers or one of its lattices'
 // change stamps (registry.version<Lattice>) moved; several deformers apply in order (each deforms the
 // previous one's output). GPU path when a GL context is current on this thread and GpuSplatStore holds
-// the cloud's up-to-date `rest` buffer (the render system uploads it); CPU otherwise (headless tools,
-// tests, or the first frame before the upload). Control points go to the GPU only when edited.
+// the cloud's up-to-date `rest` buffer (residency_system uploads it in the phase before); CPU otherwise
+// (headless tools, tests without the residency phase). Control points go to the GPU only when edited.
 // GPU mode does no per-splat CPU work per frame: bounds come from the lattices' control points and a rest
 // box cached per cloud change, and the inverted count is read back a few frames late through a fence.
 // On a software rasterizer (Mesa llvmpipe/softpipe) the GPU path runs on the same CPU cores through a
 // shader JIT and is 10-15x slower than the vectorised CPU path (measured: 124 ms vs 8 ms for the
-// paper's 59,650 splats in an 11^3 Bernstein lattice), so there the CPU path is chosen and the render
-// system uploads its output; FfdSettings::force_gpu keeps the compute pass (tests, comparisons).
+// paper's 59,650 splats in an 11^3 Bernstein lattice), so there the CPU path is chosen and uploads its
+// output; FfdSettings::force_gpu keeps the compute pass (tests, comparisons).
 #pragma once
 
 #include <cstdint>

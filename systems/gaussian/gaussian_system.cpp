@@ -4,6 +4,7 @@
 
 #include "runtime/app/pass_timer.h"
 #include "runtime/core/log.h"
+#include "runtime/gfx/residency.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform_backend.h"
 #include "systems/ffd/deform_inputs.h"
@@ -12,6 +13,7 @@
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gpu_deform.h"
 #include "systems/gaussian/gpu_store.h"
+#include "systems/gaussian/gpu_upload.h"
 
 namespace sffd {
 
@@ -56,10 +58,20 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         const GaussianCloud& cloud = reg.get<GaussianCloud>(e);
         const ffd::DeformInputs inputs = ffd::deform_inputs<GaussianCloud>(reg, e);
         const std::vector<ecs::Entity>& lattices = inputs.lattices;
+        // The cloud's residency (residency_system uploaded its rest cloud this frame when it changed): the
+        // GPU path needs it current, the CPU path uploads its output there.
+        gaussian::GpuGaussianStore* store = have_gl ? reg.try_resource<gaussian::GpuGaussianStore>() : nullptr;
+        gaussian::GpuGaussians* resident = nullptr;
+        if (store)
+            if (auto it = store->clouds.find(e); it != store->clouds.end() && it->second.rest &&
+                                                 it->second.rest_version == inputs.stamps.cloud && it->second.count == cloud.size())
+                resident = &it->second;
         const DeformedGaussians* seen = reg.try_get<DeformedGaussians>(e);
         const bool gpu_path = backend.gpu();
         const auto sh_mode = std::uint8_t(gpu_path ? gpu_sh : cpu_sh);
-        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu && seen->seen_sh_mode == sh_mode)
+        // A resident cloud at rest has no deformed data yet (its entry is new): deform even if nothing moved.
+        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu && seen->seen_sh_mode == sh_mode &&
+            (!resident || resident->is_deformed()))
             continue;  // nothing moved
         if (!seen) reg.emplace<DeformedGaussians>(e);
         DeformedGaussians& out = reg.patch<DeformedGaussians>(e);
@@ -70,45 +82,31 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         out.stats_arrived = false;
         ++out.version;
 
-        // GPU path: the authored cloud goes to GpuGaussianStore::rest when its change stamp moved (the
-        // only per-Gaussian CPU work, once per cloud change), then one dispatch per lattice into
-        // `deformed` (+ `frames` or `deformed_sh` when the SH have view-dependent terms). No read-back.
-        if (gpu_path) {
+        // GPU path: residency_system uploaded the authored cloud into GpuGaussianStore::rest this frame
+        // when its change stamp moved; one dispatch per lattice into `deformed` (+ `frames` or
+        // `deformed_sh` when the SH have view-dependent terms). No read-back.
+        if (gpu_path && resident) {
             if (gaussian::GpuGaussianDeformer* gpu = ffd::gpu_deformer<gaussian::GpuGaussianDeformer>(reg, "gaussian_deform_system")) {
-                auto* store = reg.try_resource<gaussian::GpuGaussianStore>();
-                if (!store) store = &reg.set_resource<gaussian::GpuGaussianStore>();
-                gaussian::GpuGaussians& g = store->clouds[e];
-                Status up;
-                if (!g.rest || g.rest_version != inputs.stamps.cloud || g.count != cloud.size()) {
-                    up = gaussian::upload_rest(g, cloud, inputs.stamps.cloud);
-                    if (counters) ++counters->rest_uploads;
-                }
-                if (up) {
-                    std::vector<const Lattice*> ls;
-                    std::vector<std::uint64_t> keys;
-                    for (ecs::Entity le : lattices) ls.push_back(&reg.get<Lattice>(le)), keys.push_back(le.bits());
-                    auto pass_scope = profiling::gpu_scope(reg, "gaussian.deform");
-                    gpu->reset_stats();
-                    if (Status s = gpu->deform(g, cloud.origin, ls, keys, inputs.stamps.lattices, gpu_sh); !s)
-                        log::warn("gaussian_deform_system: ", s.message(), " (lattice skipped)");
-                    // The counts arrive a few frames later (collect_gpu_stats); nothing waits for them.
-                    reg.resource<GaussianGpuState>().queue_stats(*gpu, e, out.version);
-                    out.on_gpu = true;
-                    out.cloud = GaussianCloud{};
-                    out.cloud.origin = cloud.origin;
-                    out.cloud.sh_degree = cloud.sh_degree;
-                    if (counters) ++counters->gpu_runs, counters->gpu_sync_readbacks = gpu->sync_readbacks();
-                    continue;
-                }
-                log::warn("gaussian_deform_system: ", up.message(), " (deforming on the CPU)");
+                std::vector<const Lattice*> ls;
+                std::vector<std::uint64_t> keys;
+                for (ecs::Entity le : lattices) ls.push_back(&reg.get<Lattice>(le)), keys.push_back(le.bits());
+                auto pass_scope = profiling::gpu_scope(reg, "gaussian.deform");
+                gpu->reset_stats();
+                if (Status s = gpu->deform(*resident, cloud.origin, ls, keys, inputs.stamps.lattices, gpu_sh); !s)
+                    log::warn("gaussian_deform_system: ", s.message(), " (lattice skipped)");
+                // The counts arrive a few frames later (collect_gpu_stats); nothing waits for them.
+                reg.resource<GaussianGpuState>().queue_stats(*gpu, e, out.version);
+                out.on_gpu = true;
+                out.cloud = GaussianCloud{};
+                out.cloud.origin = cloud.origin;
+                out.cloud.sh_degree = cloud.sh_degree;
+                if (counters) ++counters->gpu_runs, counters->gpu_sync_readbacks = gpu->sync_readbacks();
+                continue;
             }
         }
 
         // CPU path (TBB).
         out.on_gpu = false;
-        if (auto* store = reg.try_resource<gaussian::GpuGaussianStore>())
-            if (auto it = store->clouds.find(e); it != store->clouds.end())
-                it->second.has_deformed = it->second.deformed_on_gpu = it->second.has_frames = it->second.has_deformed_sh = false;
         // Opacities are not copied (a deformation never changes them): readers use the authored cloud's.
         out.cloud.origin = cloud.origin;
         out.cloud.sh_degree = cloud.sh_degree;
@@ -135,6 +133,11 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         else
             out.cloud.opacities.clear();
         out.stats_arrived = true;
+        // The resident cloud draws this output from now on (state deformed_cpu).
+        if (resident) {
+            gaussian::upload_cpu_deformed(*resident, out, cloud);
+            if (auto* rs = reg.try_resource<gfx::ResidencyStats>()) ++rs->deformed_uploads;
+        }
         if (counters) ++counters->cpu_runs;
     }
 }

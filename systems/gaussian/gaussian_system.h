@@ -1,7 +1,9 @@
 // gaussian_deform_system: the deformation phase for 3D Gaussian clouds, in the style of
 // ffd_system (systems/ffd). Reads GaussianCloud + Deformers on Gaussian entities and Lattice on the
-// lattice entities they name; writes DeformedGaussians, and on the GPU path GpuGaussianStore::clouds[e]
-// (rest/sh uploaded when the cloud changes; deformed + frames written by the compute pass, gpu_deform.h).
+// lattice entities they name and GpuGaussianStore::clouds[e].rest/sh (uploaded by residency_system in the
+// phase before); writes DeformedGaussians and the store entry's `deformed` (+ frames or deformed_sh) and
+// residency state: deformed_gpu from the compute pass (gpu_deform.h), deformed_cpu when the CPU path
+// uploads its output.
 // Runs only when the cloud's GaussianCloud or Deformers, one of its lattices' change stamps, or the
 // backend choice moved. Several deformers apply in order (the first reads the authored cloud, the next
 // ones deform its output in place).
@@ -11,8 +13,7 @@
 // keeps the compute pass), CPU otherwise. GPU path: GaussianDeformSettings::gpu_sh (default frames:
 // has_frames when sh_degree > 0; or deformed_sh), DeformedGaussians::on_gpu with empty CPU arrays, no
 // per-Gaussian CPU work and no read-back while only lattices change. CPU path: cpu_sh (default the
-// coefficients rotated), CPU arrays, the store's has_deformed/deformed_on_gpu/has_frames/has_deformed_sh
-// cleared so the renderer uploads DeformedGaussians itself.
+// coefficients rotated), CPU arrays, uploaded into the store when the cloud is resident (a GL context).
 #pragma once
 
 #include <cstdint>
@@ -33,7 +34,6 @@ struct GaussianDeformSettings {
     gaussian::ShMode cpu_sh = gaussian::ShMode::rotate_coefficients;
     std::uint64_t cpu_runs = 0;            // clouds deformed on the CPU
     std::uint64_t gpu_runs = 0;            // clouds deformed on the GPU
-    std::uint64_t rest_uploads = 0;        // authored clouds uploaded to GpuGaussianStore (per-Gaussian CPU work)
     std::uint64_t gpu_sync_readbacks = 0;  // synchronous read-backs by the system's GPU deformer (stays 0)
 };
 

@@ -1,5 +1,7 @@
 #include "systems/gaussian/gpu_deform.h"
 
+#include "runtime/gfx/residency.h"
+
 #include <algorithm>
 #include <string>
 #include <unordered_map>
@@ -22,17 +24,7 @@ namespace {
 constexpr int kStats = 4;  // deform.comp's stats[]: inverted, inside, not finite, degenerate
 
 // Makes `buffer` hold at least `bytes` (contents undefined when it grows).
-void ensure(gfx::Buffer& buffer, const char* label, std::size_t bytes) {
-    bytes = std::max<std::size_t>(bytes, 16);
-    if (!buffer) {
-        buffer = gfx::Buffer::create(label);
-        glNamedBufferData(buffer.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_COPY);
-        return;
-    }
-    GLint64 size = 0;
-    glGetNamedBufferParameteri64v(buffer.id(), GL_BUFFER_SIZE, &size);
-    if (std::size_t(size) < bytes) glNamedBufferData(buffer.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_COPY);
-}
+void ensure(gfx::Buffer& buffer, const char* label, std::size_t bytes) { gfx::reserve_buffer(buffer, label, bytes); }
 
 }  // namespace
 
@@ -178,11 +170,8 @@ Status GpuGaussianDeformer::deform(GpuGaussians& dst, const glm::dvec3& origin, 
             glNamedBufferSubData(dst.frames.id(), 0, GLsizeiptr(identity.size() * sizeof(float)), identity.data());
         }
     }
-    dst.has_deformed = true;
-    dst.deformed_on_gpu = true;
-    dst.has_frames = with_frames;
-    dst.has_deformed_sh = with_sh;
-    ++dst.deformed_version;
+    dst.sh_source = with_frames ? ShSource::frames : with_sh ? ShSource::rotated : ShSource::authored;
+    gfx::set_deformed(dst, gfx::Residency::deformed_gpu);
     return first_error;
 }
 
@@ -206,7 +195,7 @@ Result<GaussianCloud> read_back(const GpuGaussians& src, const glm::dvec3& origi
     g.sh.resize(n * std::size_t(sh_coeffs(src.sh_degree)) * 3);
     if (!g.sh.empty() && src.sh_buffer())
         glGetNamedBufferSubData(src.sh_buffer(), 0, GLsizeiptr(g.sh.size() * sizeof(float)), g.sh.data());
-    if (src.has_frames && src.frames && n) {
+    if (src.has_frames() && src.frames && n) {
         std::vector<glm::vec4> cols(n * 3);
         glGetNamedBufferSubData(src.frames.id(), 0, GLsizeiptr(cols.size() * sizeof(glm::vec4)), cols.data());
         g.sh_frames.resize(n);

@@ -63,8 +63,8 @@ public:
 
     // Every lattice in order over a store entry whose `rest` (and `sh`) are current: writes `deformed`
     // (grown when needed) and, when the SH have view-dependent terms (degree > 0), `frames`
-    // (ShMode::rotate_view) or `deformed_sh` (ShMode::rotate_coefficients); sets has_deformed,
-    // deformed_on_gpu, has_frames, has_deformed_sh, bumps deformed_version. No read-back. `keys`/`stamps`
+    // (ShMode::rotate_view) or `deformed_sh` (ShMode::rotate_coefficients); state deformed_gpu with
+    // the matching sh_source, bumps deformed_version. No read-back. `keys`/`stamps`
     // as in dispatch(), one per lattice. A lattice that fails validation is skipped (the first error is
     // returned after the others ran).
     Status deform(GpuGaussians& dst, const glm::dvec3& cloud_origin, const std::vector<const Lattice*>& lattices,
@@ -97,8 +97,8 @@ private:
 };
 
 // Read-back for tests and commands (waits for the GPU): the Gaussians `src` draws (deformed when
-// has_deformed, else rest) as a GaussianCloud with `origin`: positions, scales, rotations, opacities, the
-// SH (deformed_sh when has_deformed_sh, else sh) and sh_frames when has_frames.
+// deformed, else rest) as a GaussianCloud with `origin`: positions, scales, rotations, opacities, the
+// SH (sh_buffer()) and sh_frames when has_frames().
 Result<GaussianCloud> read_back(const GpuGaussians& src, const glm::dvec3& origin);
 
 // Upload + deform through every lattice + read back, on a scratch store entry (tests, commands, the

@@ -6,15 +6,7 @@ namespace sffd::gaussian {
 
 namespace {
 
-// (Re)allocates when the size changes (never a zero-sized store: GL needs one to bind) and uploads.
-void fill(gfx::Buffer& b, const char* label, const void* data, std::size_t bytes) {
-    if (!b) b = gfx::Buffer::create(label);
-    GLint64 have = 0;
-    glGetNamedBufferParameteri64v(b.id(), GL_BUFFER_SIZE, &have);
-    const std::size_t want = std::max<std::size_t>(bytes, 16);
-    if (std::size_t(have) != want) glNamedBufferData(b.id(), GLsizeiptr(want), nullptr, GL_DYNAMIC_DRAW);
-    if (bytes > 0 && data) glNamedBufferSubData(b.id(), 0, GLsizeiptr(bytes), data);
-}
+using gfx::fill_buffer;
 
 }  // namespace
 
@@ -36,13 +28,11 @@ Status upload_rest(GpuGaussians& gpu, const GaussianCloud& cloud, std::uint64_t 
         return make_error("gaussian::upload_rest(): cloud arrays differ in size");
     if (n > 0xffffffffull) return make_error("gaussian::upload_rest(): more than 2^32 - 1 Gaussians");
     const std::vector<gpu::GpuGaussian> packed = pack_gaussians(cloud, cloud.opacities);
-    fill(gpu.rest, "gaussian.rest", packed.data(), packed.size() * sizeof(gpu::GpuGaussian));
-    fill(gpu.sh, "gaussian.rest_sh", cloud.sh.data(), cloud.sh.size() * sizeof(float));
-    drop_deformed(gpu);
-    gpu.deformed_on_gpu = false;
-    gpu.count = std::uint32_t(n);
+    fill_buffer(gpu.rest, "gaussian.rest", packed.data(), packed.size() * sizeof(gpu::GpuGaussian));
+    fill_buffer(gpu.sh, "gaussian.rest_sh", cloud.sh.data(), cloud.sh.size() * sizeof(float));
+    gfx::set_rest(gpu, version, std::uint32_t(n));
     gpu.sh_degree = cloud.sh_degree;
-    gpu.rest_version = version;
+    gpu.sh_source = ShSource::authored;
     return {};
 }
 
@@ -50,23 +40,19 @@ void upload_cpu_deformed(GpuGaussians& gpu, const DeformedGaussians& d, const Ga
     const GaussianCloud& g = d.cloud;
     // The deformed cloud carries opacities only when some Gaussians were made transparent.
     const std::vector<gpu::GpuGaussian> packed = pack_gaussians(g, g.opacities.size() == g.size() ? g.opacities : authored.opacities);
-    fill(gpu.deformed, "gaussian.deformed", packed.data(), packed.size() * sizeof(gpu::GpuGaussian));
-    gpu.has_deformed_sh = g.sh.size() == authored.sh.size() && g.sh != authored.sh;
-    if (gpu.has_deformed_sh) fill(gpu.deformed_sh, "gaussian.deformed_sh", g.sh.data(), g.sh.size() * sizeof(float));
-    gpu.has_frames = !g.sh_frames.empty() && g.sh_frames.size() == g.size();
-    if (gpu.has_frames) {
+    fill_buffer(gpu.deformed, "gaussian.deformed", packed.data(), packed.size() * sizeof(gpu::GpuGaussian));
+    gpu.sh_source = ShSource::authored;
+    if (g.sh.size() == authored.sh.size() && g.sh != authored.sh) {
+        fill_buffer(gpu.deformed_sh, "gaussian.deformed_sh", g.sh.data(), g.sh.size() * sizeof(float));
+        gpu.sh_source = ShSource::rotated;
+    } else if (!g.sh_frames.empty() && g.sh_frames.size() == g.size()) {
         std::vector<glm::vec4> cols(g.size() * 3);
         for (std::size_t i = 0; i < g.size(); ++i)
             for (int c = 0; c < 3; ++c) cols[i * 3 + std::size_t(c)] = glm::vec4(g.sh_frames[i][c], 0.0f);
-        fill(gpu.frames, "gaussian.sh_frames", cols.data(), cols.size() * sizeof(glm::vec4));
+        fill_buffer(gpu.frames, "gaussian.sh_frames", cols.data(), cols.size() * sizeof(glm::vec4));
+        gpu.sh_source = ShSource::frames;
     }
-    gpu.has_deformed = true;
-    gpu.deformed_on_gpu = false;
-    ++gpu.deformed_version;
-}
-
-void drop_deformed(GpuGaussians& gpu) {
-    gpu.has_deformed = gpu.has_deformed_sh = gpu.has_frames = gpu.deformed_on_gpu = false;
+    gfx::set_deformed(gpu, gfx::Residency::deformed_cpu);
 }
 
 }  // namespace sffd::gaussian

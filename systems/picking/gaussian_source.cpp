@@ -3,10 +3,14 @@
 #include <algorithm>
 #include <cmath>
 
+#include "runtime/gfx/residency.h"
+#include "runtime/gfx/gl.h"
+#include "shaders/gaussian/gaussian_layout.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform.h"
 #include "systems/ffd/deform_inputs.h"
 #include "systems/gaussian/components.h"
+#include "systems/gaussian/gpu_store.h"
 
 namespace sffd::picking {
 
@@ -30,6 +34,37 @@ bool deform_centres(const ecs::Registry& registry, const std::vector<ecs::Entity
         for (std::size_t i = 0; i < n; ++i) entry.jacobians[i] = step[i] * entry.jacobians[i];
     }
     return true;
+}
+
+// The resident GPU-only deformed output of cloud `e` (state deformed_gpu, n Gaussians), if one is readable.
+const gaussian::GpuGaussians* gpu_only_output(const ecs::Registry& registry, ecs::Entity e, std::size_t n) {
+    if (!gfx::context_current()) return nullptr;
+    const auto* store = registry.try_resource<gaussian::GpuGaussianStore>();
+    if (!store) return nullptr;
+    const auto it = store->clouds.find(e);
+    if (it == store->clouds.end()) return nullptr;
+    const gaussian::GpuGaussians& gpu = it->second;
+    const bool current = gpu.state == gfx::Residency::deformed_gpu && gpu.count == n &&
+                         gpu.rest_version == registry.version<GaussianCloud>(e);
+    return current ? &gpu : nullptr;
+}
+
+// Centres, scales and rotations of a GPU-only output (waits for the GPU).
+void read_back(const gaussian::GpuGaussians& gpu, GaussianDeformCache::Entry& entry) {
+    const std::size_t n = gpu.count;
+    std::vector<gpu::GpuGaussian> rows(n);
+    // The compute pass wrote the buffer through shader storage: make those writes visible to the copy.
+    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+    if (n) glGetNamedBufferSubData(gpu.deformed.id(), 0, GLsizeiptr(n * sizeof(gpu::GpuGaussian)), rows.data());
+    entry.positions.resize(n), entry.scales.resize(n), entry.rotations.resize(n);
+    entry.jacobians.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+        const gpu::GpuGaussian& r = rows[i];
+        entry.positions[i] = {r.pos_opacity[0], r.pos_opacity[1], r.pos_opacity[2]};
+        entry.rotations[i] = glm::quat(r.rotation[0], r.rotation[1], r.rotation[2], r.rotation[3]);
+        entry.scales[i] = {r.scale[0], r.scale[1], r.scale[2]};
+    }
+    entry.gpu_version = gpu.deformed_version;
 }
 
 }  // namespace
@@ -65,9 +100,26 @@ GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity e, GaussianD
         src.rotations = deformed->cloud.rotations;
         return src;
     }
-    // Output missing, stale or GPU-only: picking's own centres + Jacobians.
+    // Current output, GPU-only: read it back once per version.
+    if (deformed && deformed->on_gpu && deformed->seen == inputs.stamps)
+        if (const gaussian::GpuGaussians* gpu = gpu_only_output(registry, e, n)) {
+            GaussianDeformCache::Entry& entry = cache.clouds[e.bits()];
+            if (entry.gpu_version != gpu->deformed_version || !(entry.key == inputs.stamps)) {
+                read_back(*gpu, entry);
+                entry.key = inputs.stamps;
+                entry.serial = ++cache.read_backs;
+            }
+            src.kind = GaussianSource::Kind::gpu_read_back;
+            src.version = entry.serial;
+            src.origin = cloud->origin;
+            src.positions = entry.positions;
+            src.scales = entry.scales;
+            src.rotations = entry.rotations;
+            return src;
+        }
+    // Output missing, stale or not readable: picking's own centres + Jacobians.
     auto it = cache.clouds.find(e.bits());
-    if (it == cache.clouds.end() || !(it->second.key == inputs.stamps)) {
+    if (it == cache.clouds.end() || !(it->second.key == inputs.stamps) || it->second.gpu_version != 0) {
         GaussianDeformCache::Entry entry;
         entry.key = inputs.stamps;
         if (!deform_centres(registry, inputs.lattices, *cloud, entry)) {

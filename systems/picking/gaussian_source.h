@@ -5,12 +5,15 @@
 //   1. the deformation's CPU output (DeformedGaussians, written by systems/gaussian's deformation phase)
 //      when the entity has Deformers and the output is current (its `seen` stamps equal the inputs') and
 //      has one Gaussian per authored one;
-//   2. an entity with Deformers whose output is missing, stale or not on the CPU: picking's own
+//   2. an entity with Deformers whose current output lives only on the GPU (GpuGaussianStore state
+//      deformed_gpu, a GL context current): read back once per GpuGaussians::deformed_version (centres,
+//      scales, rotations) into GaussianDeformCache;
+//   3. an entity with Deformers whose output is missing, stale or not readable: picking's own
 //      deformation of what it needs, centres and Jacobians through every lattice in order
 //      (ffd::deform with PointsOut::jacobians, the cheap part of the Gaussian deformation: no
 //      eigen-decomposition, no SH), kept in GaussianDeformCache keyed by the input stamps and computed only
 //      when a pick needs it; the ellipsoid is then {c' + J R S x : |x| <= k};
-//   3. the authored GaussianCloud.
+//   4. the authored GaussianCloud.
 // Opacities are always the authored cloud's (a deformation does not change them and does not copy them).
 //
 // The pickable shape of a Gaussian with opacity α is the ellipsoid where its 3DGS alpha
@@ -36,7 +39,7 @@
 namespace sffd::picking {
 
 struct GaussianSource {
-    enum class Kind : int { none = 10, authored, deformed, cpu_deformed };  // disjoint from SplatSource::Kind
+    enum class Kind : int { none = 10, authored, deformed, cpu_deformed, gpu_read_back };  // disjoint from SplatSource::Kind
     Kind kind = Kind::none;
     std::uint64_t version = 0;  // identifies the data (a change stamp, or the cache entry's serial)
     glm::dvec3 origin{0.0};     // positions are relative to this (entity space)
@@ -52,10 +55,14 @@ struct GaussianDeformCache {
         DeformInputStamps key;
         std::uint64_t serial = 0;
         std::vector<glm::vec3> positions;
-        std::vector<glm::mat3> jacobians;
+        std::vector<glm::mat3> jacobians;  // picking's own deformation
+        std::vector<glm::vec3> scales;     // a read-back GPU output (gpu_version != 0)
+        std::vector<glm::quat> rotations;
+        std::uint64_t gpu_version = 0;     // GpuGaussians::deformed_version read back; 0: own deformation
     };
     std::unordered_map<std::uint64_t, Entry> clouds;
     std::uint64_t deformations = 0;  // CPU deformations run (tests check they stay lazy)
+    std::uint64_t read_backs = 0;    // GPU-only outputs read back (once per deformed_version)
 };
 
 GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity cloud, GaussianDeformCache& cache);

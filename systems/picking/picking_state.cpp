@@ -480,6 +480,7 @@ bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
         changed = true;
     }
     stats.gaussian_cpu_deformations = gaussian_cache.deformations;
+    stats.gaussian_gpu_read_backs = gaussian_cache.read_backs;
     return changed;
 }
 
@@ -523,6 +524,7 @@ bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
         changed = true;
     }
     stats.cpu_deformations = deform_cache.deformations;
+    stats.gpu_read_backs = deform_cache.read_backs;
     if (refresh_gaussians(registry)) changed = true;
     if (changed) {
         rtcCommitScene(surfaces);

@@ -4,8 +4,9 @@
 // Two scenes, following the Embree tutorials (point_geometry, dynamic_scene):
 //   surfaces  one RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT geometry per point-cloud entity: centre, radius
 //             = the longer splat axis, normal; an intersection filter trims the disc to the splat's
-//             ellipse (axis_u, axis_v). Data: see splat_source.h (deformed output, picking's own CPU
-//             deformation when the output is GPU-only, or the authored SplatCloud). Clouds without
+//             ellipse (axis_u, axis_v). Data: see splat_source.h (deformed output, read back once per
+//             version when it is GPU-only, picking's own CPU deformation without a context, or the
+//             authored SplatCloud). Clouds without
 //             normals become sphere points.
 //             Gaussian clouds (GaussianCloud, or DeformedGaussians) are in this scene too: one
 //             RTC_GEOMETRY_TYPE_USER geometry per cloud whose primitives are the pickable Gaussians as
@@ -51,8 +52,10 @@ public:
         std::uint64_t geometries_created = 0;
         std::uint64_t geometries_updated = 0; // in-place buffer updates (same entity, data moved)
         std::uint64_t geometries_released = 0;
-        std::uint64_t cpu_deformations = 0;   // clouds deformed on the CPU by picking (GPU-only output)
+        std::uint64_t cpu_deformations = 0;   // clouds deformed on the CPU by picking (no context, no CPU output)
+        std::uint64_t gpu_read_backs = 0;     // GPU-only deformed outputs read back (once per version)
         std::uint64_t gaussian_cpu_deformations = 0;  // Gaussian clouds' centres + Jacobians computed by picking
+        std::uint64_t gaussian_gpu_read_backs = 0;    // Gaussian clouds' GPU-only outputs read back
     };
     const Stats& stats() const;
 

@@ -1,9 +1,12 @@
 // Which splats picking sees for a point-cloud entity, in this order:
 //   1. the deformer's CPU output (DeformedSplats with cpu_valid, written by systems/ffd);
-//   2. a cloud with Deformers whose output lives only on the GPU: picking asks the FFD system for its CPU
-//      output (ffd::deform_cloud, the step ffd_system's CPU path runs) into `DeformCache`, keyed by the
-//      change stamps of the cloud, its Deformers and every lattice — recomputed only when a pick needs it;
-//   3. the authored SplatCloud.
+//   2. a cloud with Deformers whose output lives only on the GPU (GpuSplatStore state deformed_gpu, a GL
+//      context current): read back once per GpuSplats::deformed_version into `DeformCache`;
+//   3. otherwise a cloud with Deformers and no CPU output (no context, e.g. a headless tool): picking asks
+//      the FFD system for its CPU output (ffd::deform_cloud, the step ffd_system's CPU path runs) into
+//      `DeformCache`, keyed by the change stamps of the cloud, its Deformers and every lattice —
+//      recomputed only when a pick needs it;
+//   4. the authored SplatCloud.
 // The spans point into the components or the cache; valid until either changes.
 #pragma once
 
@@ -20,7 +23,7 @@
 namespace sffd::picking {
 
 struct SplatSource {
-    enum class Kind : int { none, authored, deformed, cpu_deformed };
+    enum class Kind : int { none, authored, deformed, cpu_deformed, gpu_read_back };
     Kind kind = Kind::none;
     std::uint64_t version = 0;  // identifies the data (a change stamp or a hash of stamps)
     glm::dvec3 origin{0.0};     // positions are relative to this (entity space)
@@ -35,6 +38,7 @@ struct DeformCache {
     };
     std::unordered_map<std::uint64_t, Entry> clouds;
     std::uint64_t deformations = 0;  // CPU deformations run (tests check it stays lazy)
+    std::uint64_t read_backs = 0;    // GPU-only outputs read back (once per deformed_version)
 };
 
 SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud, DeformCache& cache);

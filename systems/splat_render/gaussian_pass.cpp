@@ -16,15 +16,12 @@
 #include "runtime/scene/camera.h"
 #include "systems/gaussian/gl_render.h"
 #include "systems/gaussian/gpu_store.h"
-#include "systems/gaussian/gpu_upload.h"
 
 namespace sffd::render {
 
 namespace {
 
 struct CloudState {
-    std::uint64_t cpu_deformed_version = 0;  // DeformedGaussians::version uploaded into GpuGaussians::deformed
-    bool cpu_deformed_uploaded = false;
     BoundingSphere bounds;
     std::uint64_t bounds_version = 0;
     bool bounds_valid = false;
@@ -104,35 +101,10 @@ void ensure_targets(GaussianPassState& s, const GaussianPassFrame& f) {
     }
 }
 
-// Uploads the authored clouds whose stamp moved, and CPU deformations the GPU did not write.
-void sync_store(ecs::Registry& reg, GaussianPassState& s, gaussian::GpuGaussianStore& store) {
-    for (auto it = store.clouds.begin(); it != store.clouds.end();)
-        it = reg.valid(it->first) && reg.has<GaussianCloud>(it->first) ? std::next(it) : store.clouds.erase(it);
+// Drops the pass's per-cloud caches of clouds that no longer exist.
+void prune(ecs::Registry& reg, GaussianPassState& s) {
     for (auto it = s.clouds.begin(); it != s.clouds.end();)
         it = reg.valid(it->first) && reg.has<GaussianCloud>(it->first) ? std::next(it) : s.clouds.erase(it);
-    reg.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& cloud) {
-        const std::uint64_t version = reg.version<GaussianCloud>(e);
-        gaussian::GpuGaussians& gpu = store.clouds[e];
-        CloudState& cs = s.clouds[e];
-        if (!gpu.rest || gpu.rest_version != version) {
-            cs.cpu_deformed_uploaded = false;
-            if (!gaussian::upload_rest(gpu, cloud, version)) {  // inconsistent arrays: nothing to draw
-                gpu.count = 0;
-                return;
-            }
-        }
-        if (gpu.deformed_on_gpu) return;  // the GPU deformation owns `deformed`
-        const DeformedGaussians* d = reg.try_get<DeformedGaussians>(e);
-        if (d && reg.has<Deformers>(e) && d->cloud.size() == cloud.size()) {
-            if (!cs.cpu_deformed_uploaded || cs.cpu_deformed_version != d->version || !gpu.has_deformed) {
-                gaussian::upload_cpu_deformed(gpu, *d, cloud);
-                cs.cpu_deformed_version = d->version, cs.cpu_deformed_uploaded = true;
-            }
-        } else if (gpu.has_deformed) {
-            gaussian::drop_deformed(gpu);
-            cs.cpu_deformed_uploaded = false;
-        }
-    });
 }
 
 }  // namespace
@@ -175,9 +147,10 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
     auto state = pass_state(reg);
     if (!state) return state.error();
     GaussianPassState& s = **state;
-    if (!reg.try_resource<gaussian::GpuGaussianStore>()) reg.set_resource<gaussian::GpuGaussianStore>();
-    auto& store = reg.resource<gaussian::GpuGaussianStore>();
-    sync_store(reg, s, store);
+    // residency_system keeps the clouds resident; without it (no residency phase ran) nothing is drawn.
+    const auto* store = reg.try_resource<gaussian::GpuGaussianStore>();
+    if (!store) return std::uint32_t(0);
+    prune(reg, s);
     ensure_targets(s, f);
 
     // Clouds nearest first (front-to-back blending), by the view depth of their bounding sphere's centre.
@@ -187,7 +160,7 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
     };
     std::vector<Item> items;
     reg.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& cloud) {
-        if (cloud.size() == 0) return;
+        if (cloud.size() == 0 || !store->clouds.contains(e)) return;
         const BoundingSphere b = cached_gaussian_bounds(reg, e);
         const glm::dmat4 m = model_matrix(reg.try_get<Transform>(e), cloud.origin);
         const glm::dvec4 c = f.view * m * glm::dvec4(b.center, 1.0);
@@ -211,7 +184,7 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
     Status status;
     for (const Item& item : items) {
         const GaussianCloud& cloud = reg.get<GaussianCloud>(item.entity);
-        const gaussian::GpuGaussians& gpu = store.clouds.at(item.entity);
+        const gaussian::GpuGaussians& gpu = store->clouds.at(item.entity);
         const glm::dmat4 model = model_matrix(reg.try_get<Transform>(item.entity), cloud.origin);
         gaussian::GaussianView v;
         v.view = f.view * model;
@@ -221,7 +194,7 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
         v.width = f.width, v.height = f.height;
         v.ndc_depth = ndc_depth;
         const gaussian::GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(), gpu.frames.id(), gpu.count, gpu.sh_degree,
-                                                gpu.has_deformed && gpu.has_frames};
+                                                gpu.has_frames()};
         if (Status st = gaussian::draw_gaussians(s.renderer, buffers, v, &s.accum); !st) status = st;
         submitted += gpu.count;
     }

@@ -1,11 +1,10 @@
 // The render system's 3D Gaussian pass: every entity with a GaussianCloud is drawn in the same
 // frame and output target as the surface splats, after them.
 //
-//   reads   GaussianCloud (+ Transform), DeformedGaussians (CPU deformation output), the render system's
+//   reads   GaussianCloud (+ Transform), GpuGaussianStore (systems/gaussian/gpu_store.h: draw_buffer(),
+//           sh_buffer(), frames; kept by residency_system and the deformation), the render system's
 //           camera and targets (its depth: surface splats hide the Gaussians behind them)
-//   writes  GpuGaussianStore (resource, systems/gaussian/gpu_store.h): rest/sh when the cloud's change
-//           stamp moves; deformed (+ deformed_sh, frames) from DeformedGaussians unless the GPU
-//           deformation wrote them (deformed_on_gpu); GaussianPassState (resource: programs, targets)
+//   writes  GaussianPassState (resource: programs, targets, per-cloud bounds)
 //
 // Per cloud: the gaussian GL renderer (systems/gaussian/gl_render.h: projection, front-to-back order,
 // instanced quads) into an RGBA32F accumulation target (premultiplied colour, coverage) whose quads are

@@ -20,6 +20,7 @@
 #include <string>
 
 #include "runtime/core/atomic_file.h"
+#include "runtime/gfx/splat_pack.h"
 
 namespace sffd::render {
 
@@ -33,9 +34,7 @@ float srgb_to_linear(float c) {
     return c <= 0.04045f ? c / 12.92f : std::pow((c + 0.055f) / 1.055f, 2.4f);
 }
 
-std::uint8_t encode_srgb8(float linear) {
-    return static_cast<std::uint8_t>(std::lround(linear_to_srgb(linear) * 255.0f));
-}
+std::uint8_t encode_srgb8(float linear) { return gfx::encode_srgb8(linear); }
 
 Rgba8Image to_rgba8(const FrameImage& image, std::optional<glm::vec3> background) {
     Rgba8Image out{image.width, image.height, {}};

@@ -1,17 +1,17 @@
-// Packs an authored SplatCloud into the 64-byte GpuSplat layout of shaders/common/bindings.h (CPU side of
-// the upload into GpuSplatStore.rest). Colour: per-splat RGBA8 when present, else the material's base
-// colour (sRGB-encoded); uv in axis_u.w / axis_v.w; normal.w = 1.
+// Cloud-space bounds of an authored SplatCloud. pack_splats() (the GpuSplat packing) lives with the
+// uploads in runtime/gfx/splat_pack.h and is visible here under its old name.
 #pragma once
 
 #include <cstdint>
 #include <vector>
 
 #include "runtime/scene/components.h"
+#include "runtime/gfx/splat_pack.h"
 #include "shaders/common/bindings.h"
 
 namespace sffd::render {
 
-std::vector<gpu::GpuSplat> pack_splats(const SplatCloud& cloud);
+using gfx::pack_splats;
 
 // Bounding sphere (cloud space, relative to origin) of the splat centres: centre of the box, largest
 // distance to it plus the largest splat radius.

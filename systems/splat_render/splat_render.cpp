@@ -64,13 +64,12 @@ struct CloudGpu {
     const SplatMaterial* material = nullptr;  // valid during one render_system call
     std::uint32_t count = 0;
     GLuint splats = 0;      // draw buffer this frame
-    std::uint64_t cpu_deformed_version = 0;  // DeformedSplats::version uploaded into GpuSplats::deformed
 
-    // CPU copies of what the GPU buffers hold, kept only when the CPU cull may run (cpu_cull.h).
-    std::vector<gpu::GpuSplat> cpu_rest;      // = GpuSplats::rest (SplatCloud change stamp cpu_rest_version)
-    std::uint64_t cpu_rest_version = 0;
-    std::vector<gpu::GpuSplat> cpu_deformed;  // = GpuSplats::deformed when the FFD system's CPU path wrote it
-    const std::vector<gpu::GpuSplat>* cpu_current = nullptr;  // the copy of the draw buffer, if any
+    // The CPU copy of the draw buffer for the CPU cull (cpu_cull.h): the store's mirror, or on a hardware
+    // GPU with the CPU cull forced (no mirrors kept there) the renderer's own copy of the rest splats.
+    std::vector<gpu::GpuSplat> cpu_own;
+    std::uint64_t cpu_own_version = 0;  // SplatCloud change stamp cpu_own holds
+    const std::vector<gpu::GpuSplat>* cpu_current = nullptr;
     CpuCullResult cpu_cull;
 };
 
@@ -258,41 +257,22 @@ bool cpu_cull_wanted(const SplatRenderState& s, CullPath path) {
     return path == CullPath::cpu || (path == CullPath::automatic && s.software);
 }
 
-// Uploads clouds whose change stamp moved into GpuSplatStore.rest and refreshes the renderer's own
-// per-cloud objects; drops objects of clouds that no longer exist. keep_cpu: keep CPU copies of the
-// uploaded splats for the CPU cull (CloudGpu::cpu_current).
-void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& store, bool keep_cpu) {
+// Refreshes the renderer's own per-cloud objects (cull buffers, texture, bounds) for the clouds that are
+// resident in GpuSplatStore (residency_system uploads them; this only reads the store) and drops objects
+// of clouds that no longer exist. keep_cpu: the CPU cull may run, so point cpu_current at a CPU copy of
+// the draw buffer.
+void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatStore& store, bool keep_cpu) {
     for (auto it = s.clouds.begin(); it != s.clouds.end();)
-        it = reg.valid(it->first) && reg.has<SplatCloud>(it->first) ? std::next(it) : s.clouds.erase(it);
-    for (auto it = store.clouds.begin(); it != store.clouds.end();)
-        it = reg.valid(it->first) && reg.has<SplatCloud>(it->first) ? std::next(it) : store.clouds.erase(it);
+        it = reg.valid(it->first) && reg.has<SplatCloud>(it->first) && store.clouds.contains(it->first) ? std::next(it)
+                                                                                                     : s.clouds.erase(it);
 
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
+        const auto sit = store.clouds.find(e);
+        if (sit == store.clouds.end()) return;  // not resident (no residency phase ran): not drawn
+        const gfx::GpuSplats& splats = sit->second;
         const std::uint64_t version = reg.version<SplatCloud>(e);
-        gfx::GpuSplats& splats = store.clouds[e];
         CloudGpu& gpu = s.clouds[e];
         const auto n = static_cast<std::uint32_t>(cloud.size());
-        if (!splats.rest || splats.rest_version != version) {
-            ++s.cpu_splat_passes;
-            std::vector<gpu::GpuSplat> packed = pack_splats(cloud);
-            if (!splats.rest || splats.count != n) {
-                splats.rest = gfx::Buffer::create("splats.rest");
-                glNamedBufferData(splats.rest.id(), GLsizeiptr(std::max<std::size_t>(packed.size(), 1) * sizeof(gpu::GpuSplat)),
-                                  nullptr, GL_DYNAMIC_DRAW);
-                if (splats.count != n) splats.has_deformed = false;
-                splats.count = n;
-            }
-            if (!packed.empty())
-                glNamedBufferSubData(splats.rest.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data());
-            splats.rest_version = version;
-            if (keep_cpu) gpu.cpu_rest = std::move(packed), gpu.cpu_rest_version = version;
-        }
-        if (!keep_cpu) {
-            gpu.cpu_rest = {}, gpu.cpu_deformed = {}, gpu.cpu_cull = {};
-        } else if (gpu.cpu_rest_version != version || gpu.cpu_rest.size() != n) {
-            gpu.cpu_rest = pack_splats(cloud), gpu.cpu_rest_version = version;  // the CPU path was just chosen
-            ++s.cpu_splat_passes;
-        }
         if (!gpu.frame_ubo) {
             gpu.frame_ubo = gfx::Buffer::create("render.frame_block");
             glNamedBufferData(gpu.frame_ubo.id(), sizeof(gpu::FrameBlock), nullptr, GL_DYNAMIC_DRAW);
@@ -320,45 +300,23 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore& st
             ++s.cpu_splat_passes;
             gpu.bounds_version = version;
         }
-        // CPU deformation output (ffd's CPU path) that the GPU path did not write: upload it as `deformed`.
-        if (const auto* deformed = reg.try_get<DeformedSplats>(e);
-            deformed && deformed->cpu_valid && !deformed->gpu_valid && deformed->positions.size() == n) {
-            if (gpu.cpu_deformed_version != deformed->version || !splats.deformed) {
-                ++s.cpu_splat_passes;
-                SplatCloud moved;
-                moved.positions = deformed->positions;
-                moved.normals = deformed->normals.size() == n ? deformed->normals : cloud.normals;
-                moved.axis_u = deformed->axis_u.size() == n ? deformed->axis_u : cloud.axis_u;
-                moved.axis_v = deformed->axis_v.size() == n ? deformed->axis_v : cloud.axis_v;
-                moved.colors = cloud.colors;
-                moved.uvs = cloud.uvs;
-                moved.material.base_color = cloud.material.base_color;
-                std::vector<gpu::GpuSplat> packed = pack_splats(moved);
-                if (!splats.deformed) {
-                    splats.deformed = gfx::Buffer::create("splats.deformed");
-                    glNamedBufferData(splats.deformed.id(), GLsizeiptr(std::max<std::size_t>(n, 1) * sizeof(gpu::GpuSplat)),
-                                      nullptr, GL_DYNAMIC_DRAW);
-                }
-                if (!packed.empty())
-                    glNamedBufferSubData(splats.deformed.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)),
-                                         packed.data());
-                gpu.cpu_deformed_version = deformed->version;
-                splats.has_deformed = true;
-                if (keep_cpu) gpu.cpu_deformed = std::move(packed);
-            }
-        }
         gpu.material = &cloud.material;
         gpu.count = std::min(n, splats.count);
         gpu.splats = splats.draw_buffer();
-        // The CPU copy of the draw buffer: rest, or the CPU deformation uploaded above; none when the FFD
-        // compute pass wrote `deformed` (those splats exist only on the GPU).
+        // The CPU copy of the draw buffer: the store's mirror (rest, or the CPU deformation's output);
+        // none when the FFD compute pass wrote `deformed` (those splats exist only on the GPU).
         gpu.cpu_current = nullptr;
-        if (keep_cpu && !splats.has_deformed && gpu.cpu_rest.size() == gpu.count) {
-            gpu.cpu_current = &gpu.cpu_rest;
-        } else if (keep_cpu && splats.has_deformed) {
-            const auto* d = reg.try_get<DeformedSplats>(e);
-            if (d && d->cpu_valid && !d->gpu_valid && gpu.cpu_deformed_version == d->version && gpu.cpu_deformed.size() == gpu.count)
-                gpu.cpu_current = &gpu.cpu_deformed;
+        if (!keep_cpu) {
+            gpu.cpu_own = {}, gpu.cpu_cull = {};
+            return;
+        }
+        gpu.cpu_current = splats.cpu_current();
+        if (!gpu.cpu_current && splats.state == gfx::Residency::rest && splats.rest_version == version) {
+            if (gpu.cpu_own_version != version || gpu.cpu_own.size() != n) {
+                gpu.cpu_own = pack_splats(cloud), gpu.cpu_own_version = version;  // the CPU cull was just chosen
+                ++s.cpu_splat_passes;
+            }
+            if (gpu.cpu_own.size() == gpu.count) gpu.cpu_current = &gpu.cpu_own;
         }
     });
 }
@@ -440,7 +398,7 @@ glm::ivec4 screen_rect(ecs::Registry& reg, const ViewSetup& view, int w, int h) 
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         if (everything || cloud.size() == 0) return;
         const auto sit = store ? store->clouds.find(e) : decltype(store->clouds.end()){};
-        const bool deformed = store && sit != store->clouds.end() && sit->second.has_deformed;
+        const bool deformed = store && sit != store->clouds.end() && sit->second.is_deformed();
         if (deformed) {
             const auto* d = reg.try_get<DeformedSplats>(e);
             if (!d || d->bounds_max.x < d->bounds_min.x) {
@@ -579,15 +537,7 @@ Status init_render_state(ecs::Registry& registry) {
     GLfloat range[2] = {1.0f, 1.0f};
     glGetFloatv(GL_POINT_SIZE_RANGE, range);
     s.max_point_size = range[1];
-    // Upload the rest splats of the clouds already loaded: ffd_system's GPU path needs GpuSplatStore's
-    // rest buffers and runs before render_system, so without this the first frame of every run was
-    // deformed on the CPU and `render --frames k:k` differed (by float rounding) from frame k of a
-    // sequence once the built-in scenes animate. (Added by the animation engineer.)
-    if (!registry.try_resource<gfx::GpuSplatStore>()) registry.set_resource<gfx::GpuSplatStore>();
     s.software = gfx::software_rasterizer();
-    const auto* settings = registry.try_resource<RenderSettings>();
-    sync_clouds(registry, s, registry.resource<gfx::GpuSplatStore>(),
-                cpu_cull_wanted(s, settings ? settings->cull_path : CullPath::automatic));
     registry.set_resource<SplatRenderState>(std::move(s));
     return {};
 }
@@ -951,7 +901,6 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     SplatRenderState& s = render_state(reg);
     if (s.failed) return;
     if (!reg.try_resource<RenderSettings>()) reg.set_resource<RenderSettings>();
-    if (!reg.try_resource<gfx::GpuSplatStore>()) reg.set_resource<gfx::GpuSplatStore>();
     if (!reg.try_resource<RenderStats>()) reg.set_resource<RenderStats>();
     RenderStats& stats = reg.resource<RenderStats>();
     stats = RenderStats{};
@@ -963,7 +912,9 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     PassLaps laps(plan.settings.time_passes);
     plan.width = std::max(plan.settings.width, 1), plan.height = std::max(plan.settings.height, 1);
     ensure_targets(s, plan.width, plan.height);
-    sync_clouds(reg, s, reg.resource<gfx::GpuSplatStore>(), cpu_cull_wanted(s, plan.settings.cull_path));
+    static const gfx::GpuSplatStore no_clouds;  // nothing resident: residency_system has not run
+    const auto* store = reg.try_resource<gfx::GpuSplatStore>();
+    sync_clouds(reg, s, store ? *store : no_clouds, cpu_cull_wanted(s, plan.settings.cull_path));
     plan.view = choose_camera(reg, s, double(plan.width) / double(plan.height));
     plan.common = frame_block(reg, plan.settings, plan.view, s.max_point_size);
 

@@ -2,11 +2,11 @@
 // GaussianCloud (3D Gaussians, gaussian_pass.h) over them, in the same frame.
 //
 //   reads   SplatCloud (+ Transform), Camera, DirectionalLight, AmbientLight, RenderSettings (resource),
-//           GpuSplatStore draw_buffer() (deformed splats written by the FFD system, else rest);
-//           GaussianCloud (+ Transform), DeformedGaussians, GpuGaussianStore
-//   writes  GpuSplatStore.rest (uploads a cloud when its change stamp moves), SplatRenderState (resource:
-//           its GL programs, per-cloud cull buffers and textures, the offscreen targets), RenderStats;
-//           GpuGaussianStore rest/sh/deformed (gaussian_pass.h)
+//           GpuSplatStore (draw_buffer(), state, CPU mirrors; kept by residency_system and ffd_system,
+//           runtime/gfx/splat_store.h), DeformedSplats bounds; GaussianCloud (+ Transform),
+//           GpuGaussianStore (gaussian_pass.h). Never uploads a cloud: a cloud not resident is not drawn.
+//   writes  SplatRenderState (resource: its GL programs, per-cloud cull buffers and textures, the
+//           offscreen targets), RenderStats
 //
 // HQ (Botsch et al. 2005): cull + compact (a compute pass, or cpu_cull.h on a software rasterizer) ->
 // visibility (depth, eps-offset ray-cast ellipses) -> attribute (additive RGBA32F: w*colour, w; w*normal,

@@ -30,6 +30,7 @@
 #include "systems/splat_render/cpu_cull.h"
 #include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/splat_render.h"
+#include "systems/residency/residency_system.h"
 
 using namespace sffd;
 using namespace sffd::render;
@@ -108,7 +109,8 @@ void render_frames(benchmark::State& state, CullPath path, RasterPath raster) {
     settings.raster_path = raster;
     reg.set_resource<RenderSettings>(settings);
     FrameContext frame;
-    render_system(reg, frame);  // upload, compile, warm up
+    residency_system(reg, frame);  // upload
+    render_system(reg, frame);     // compile, warm up
     glFinish();
     double cpu = 0.0;
     for (auto _ : state) {

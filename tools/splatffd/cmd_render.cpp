@@ -5,7 +5,7 @@
 //
 // Renders frames of a scene (built-in name or file; default `sphere`; 3D Gaussian files and scene files
 // with Gaussian entities too, systems/gaussian/gaussian_scene.h) through the engine's standard
-// schedule (tools/splatffd/engine.cpp: animation and deformation run before rendering), offscreen in a
+// schedule (systems/engine/engine.cpp: animation and deformation run before rendering), offscreen in a
 // headless EGL context (no display needed). Frame k is rendered at clock time k / fps on the fixed-step
 // grid with a clock of its own, so frame k alone is the same image as frame k of a sequence.
 // Files: DIR/frame_NNNN.png (8-bit sRGB with alpha; transparent background unless --background) and

@@ -14,6 +14,7 @@
 #include "systems/ffd/components.h"
 #include "systems/ffd/ffd_system.h"
 #include "systems/ffd/paper_mode.h"
+#include "systems/residency/residency_system.h"
 #include "tools/splatffd/profile_run.h"
 
 namespace sffd::profile_cmd {
@@ -136,7 +137,7 @@ int run_paper(const Options& o) {
                 greg->emplace<Lattice>(le, lattice);
                 greg->emplace<Deformers>(ce, Deformers{{le}});
                 greg->set_resource<FfdSettings>(FfdSettings{.force_gpu = true});
-                upload_rest_splats(*greg);
+                residency_system(*greg, {});  // the rest splats the compute path reads
                 auto deform = [&]() -> Status {
                     ffd_system(*greg, {});
                     if (!greg->get<DeformedSplats>(ce).gpu_valid) return make_error("profile --paper: ffd_system did not deform on the GPU");

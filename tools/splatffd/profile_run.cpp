@@ -20,7 +20,7 @@
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/from_splats.h"
 #include "systems/profiling/synthetic.h"
-#include "systems/splat_render/splat_pack.h"
+#include "systems/residency/residency_system.h"
 #include "systems/splat_render/splat_render.h"
 #include "tools/splatffd/command.h"
 #include "systems/engine/engine.h"
@@ -101,20 +101,6 @@ Status load(ecs::Registry& registry, const std::string& scene, bool* synthetic) 
     return {};
 }
 
-void upload_rest_splats(ecs::Registry& registry) {
-    auto* store = registry.try_resource<gfx::GpuSplatStore>();
-    if (!store) store = &registry.set_resource<gfx::GpuSplatStore>();
-    for (auto [e, cloud] : registry.view<const SplatCloud>()) {
-        gfx::GpuSplats& s = store->clouds[e];
-        const std::vector<gpu::GpuSplat> packed = render::pack_splats(cloud);
-        s.rest = gfx::Buffer::create("splats.rest");
-        glNamedBufferData(s.rest.id(), GLsizeiptr(std::max<std::size_t>(packed.size(), 1) * sizeof(gpu::GpuSplat)),
-                          packed.empty() ? nullptr : packed.data(), GL_STATIC_DRAW);
-        s.count = static_cast<std::uint32_t>(packed.size());
-        s.rest_version = registry.version<SplatCloud>(e);
-    }
-}
-
 namespace {
 
 // Harness system (animation phase): every lattice follows a paper case whose strength oscillates with
@@ -182,9 +168,9 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     if (!s.deformation_only) {
         schedule = make_engine_schedule({.present = false});
     } else {
+        schedule.add(Phase::residency, "residency", residency_system);  // the compute path's input
         schedule.add(Phase::deformation, "ffd", ffd_system);
         schedule_kind = "deformation";
-        if (have_gl) upload_rest_splats(registry);  // the render system's upload, which this schedule lacks
     }
     if (s.drive != "none") {
         const PaperCase* c = find_case(s.drive);

@@ -56,10 +56,6 @@ Result<RunOutput> run_profile(const RunSetup& s);
 
 // Creates the scene's entities; synthetic:N makes a Fibonacci sphere of N splats in an 11^3 lattice.
 Status load(ecs::Registry& registry, const std::string& scene, bool* synthetic);
-// What the render system does before the first frame, for schedules without it (sweeps, the paper
-// table): every cloud's authored splats uploaded as GpuSplatStore `rest`, so ffd_system's compute path
-// has its input.
-void upload_rest_splats(ecs::Registry& registry);
 
 int run_sweep(const Options& o);
 int plot_sweep(const std::string& path, const std::string& prefix);

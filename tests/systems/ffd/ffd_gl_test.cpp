@@ -38,7 +38,7 @@ std::pair<ecs::Entity, ecs::Entity> add_cloud_and_lattice(ecs::Registry& reg, co
     return {cloud, le};
 }
 
-// What the render system does: upload the authored splats as the cloud's `rest` buffer.
+// What residency_system does: upload the authored splats as the cloud's `rest` buffer (state rest).
 gfx::GpuSplatStore& upload_rest(ecs::Registry& reg, ecs::Entity cloud, const ffd::test::Cloud& c) {
     auto& store = reg.set_resource<gfx::GpuSplatStore>();
     gfx::GpuSplats& s = store.clouds[cloud];
@@ -181,7 +181,7 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     ffd_system(reg, {});
     EXPECT_EQ(settings.gpu_runs, 1u);
     const gfx::GpuSplats& s = store.clouds[cloud];
-    ASSERT_TRUE(s.has_deformed);
+    ASSERT_EQ(s.state, gfx::Residency::deformed_gpu);
     EXPECT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
     EXPECT_FALSE(reg.get<DeformedSplats>(cloud).cpu_valid);
     std::vector<gpu::GpuSplat> back(c.size());
@@ -290,10 +290,14 @@ TEST_F(FfdGl, SoftwareRasterizerGetsTheCpuPathUnlessTheGpuIsForced) {
     EXPECT_EQ(settings.cpu_runs, 1u);
     EXPECT_EQ(settings.gpu_runs, 0u);
     EXPECT_TRUE(reg.get<DeformedSplats>(cloud).cpu_valid);
+    EXPECT_EQ(s.state, gfx::Residency::deformed_cpu);  // the CPU output was uploaded for the render
+    EXPECT_EQ(s.deformed_version, 1u);
     settings.force_gpu = true;  // a policy change re-runs the cloud on the compute pass
     ffd_system(reg, {});
     EXPECT_EQ(settings.gpu_runs, 1u);
     EXPECT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
+    EXPECT_EQ(s.state, gfx::Residency::deformed_gpu);
+    EXPECT_EQ(s.deformed_version, 2u);
     ffd_release_gpu(reg);
     reg.erase_resource<gfx::GpuSplatStore>();
 }

@@ -27,6 +27,7 @@
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/gaussian/gpu_deform.h"
 #include "systems/gaussian/gpu_store.h"
+#include "systems/residency/residency_system.h"
 #include "tests/test_util/headless_gl.h"
 #include "tests/systems/gaussian/test_math.h"
 
@@ -333,14 +334,17 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
     reg.emplace<Lattice>(a, twisted(LatticeBasis::bernstein, {3, 3, 3}));
     reg.emplace<Lattice>(b, stretched(LatticeBasis::bspline, {3, 3, 3}));
     reg.emplace<Deformers>(e, Deformers{{a, b}});
-    gaussian_deform_system(reg, {});
+    // One frame's residency and deformation phases (residency_system uploads the rest cloud).
+    const auto frame = [&] { residency_system(reg, {}), gaussian_deform_system(reg, {}); };
+    frame();
     const DeformedGaussians& d = reg.get<DeformedGaussians>(e);
     EXPECT_TRUE(d.on_gpu);
     EXPECT_TRUE(d.cloud.positions.empty());  // no CPU copy
     auto& store = reg.resource<GpuGaussianStore>();
     GpuGaussians& g = store.clouds.at(e);
-    EXPECT_TRUE(g.has_deformed && g.deformed_on_gpu && g.has_frames);
-    EXPECT_FALSE(g.has_deformed_sh);
+    EXPECT_EQ(g.state, gfx::Residency::deformed_gpu);
+    EXPECT_TRUE(g.has_frames());
+    EXPECT_EQ(g.sh_source, ShSource::frames);
     EXPECT_EQ(g.count, cloud.size());
     EXPECT_EQ(g.draw_buffer(), g.deformed.id());
     const std::uint64_t v0 = g.deformed_version;
@@ -354,7 +358,7 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
     // frames passing) and fills DeformedGaussians; they equal the CPU's counts.
     EXPECT_FALSE(d.stats_arrived);
     glFinish();
-    gaussian_deform_system(reg, {});  // nothing moved: only the statistics are collected
+    frame();  // nothing moved: only the statistics are collected
     EXPECT_EQ(g.deformed_version, v0);
     EXPECT_TRUE(d.stats_arrived);
     {
@@ -370,37 +374,51 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
         EXPECT_EQ(d.not_finite, 0u);
     }
     // Lattice edits: re-deformed on the GPU, no new upload of the cloud, no read-back by the system.
-    for (int frame = 0; frame < 3; ++frame) {
+    for (int k = 0; k < 3; ++k) {
         ffd::twist(reg.patch<Lattice>(a), {0, 1, 2, 3}, {0, 0, 1}, 0.1);
-        gaussian_deform_system(reg, {});
+        frame();
     }
     EXPECT_EQ(g.deformed_version, v0 + 3);
     EXPECT_EQ(counters.gpu_runs, 4u);
-    EXPECT_EQ(counters.rest_uploads, 1u);
+    EXPECT_EQ(reg.resource<gfx::ResidencyStats>().rest_uploads, 1u);
     EXPECT_EQ(counters.gpu_sync_readbacks, 0u);
     EXPECT_EQ(counters.cpu_runs, 0u);
     check("system, after lattice edits");
-    gaussian_deform_system(reg, {});  // nothing moved
+    frame();  // nothing moved
     EXPECT_EQ(g.deformed_version, v0 + 3);
     // Coefficient mode: re-deformed into deformed_sh, the frames no longer claimed.
     counters.gpu_sh = ShMode::rotate_coefficients;
-    gaussian_deform_system(reg, {});
+    frame();
     EXPECT_EQ(g.deformed_version, v0 + 4);
-    EXPECT_TRUE(g.has_deformed_sh && !g.has_frames);
+    EXPECT_TRUE(g.sh_source == ShSource::rotated && !g.has_frames());
     EXPECT_EQ(g.sh_buffer(), g.deformed_sh.id());
     {
         auto back = read_back(g, cloud.origin);
         ASSERT_TRUE(back) << back.message();
         compare(*back, cpu_deform({&reg.get<Lattice>(a), &reg.get<Lattice>(b)}, cloud, ShMode::rotate_coefficients), "system, coefficients");
     }
-    EXPECT_EQ(counters.rest_uploads, 1u);
+    EXPECT_EQ(reg.resource<gfx::ResidencyStats>().rest_uploads, 1u);
     EXPECT_EQ(counters.gpu_sync_readbacks, 0u);
-    // Forced CPU: DeformedGaussians carries the arrays, the store no longer claims a GPU result.
+    // Forced CPU: DeformedGaussians carries the arrays and the store draws their upload, not a GPU result.
     reg.resource<FfdSettings>() = FfdSettings{.force_cpu = true};
-    gaussian_deform_system(reg, {});
+    frame();
     EXPECT_FALSE(reg.get<DeformedGaussians>(e).on_gpu);
     EXPECT_EQ(reg.get<DeformedGaussians>(e).cloud.size(), cloud.size());
-    EXPECT_FALSE(g.has_deformed || g.deformed_on_gpu || g.has_frames || g.has_deformed_sh);
+    EXPECT_EQ(g.state, gfx::Residency::deformed_cpu);
+    EXPECT_EQ(g.deformed_version, v0 + 5);
+    EXPECT_EQ(g.sh_source, ShSource::rotated);  // the CPU default: coefficients rotated
+    {
+        auto back = read_back(g, cloud.origin);
+        ASSERT_TRUE(back) << back.message();
+        GaussianCloud uploaded = reg.get<DeformedGaussians>(e).cloud;
+        uploaded.opacities = cloud.opacities;  // a deformation carries the authored opacities
+        compare(*back, uploaded, "system, CPU output uploaded");
+    }
+    // The cloud loses its deformers: residency draws the authored cloud again.
+    reg.remove<Deformers>(e);
+    residency_system(reg, {});
+    EXPECT_EQ(g.state, gfx::Residency::rest);
+    EXPECT_EQ(g.draw_buffer(), g.rest.id());
     EXPECT_EQ(counters.cpu_runs, 1u);
     gaussian_release_gpu(reg);
 }
@@ -413,6 +431,7 @@ TEST_F(GaussianGpuDeform, SystemAutomaticChoiceFollowsFfdSystem) {
     reg.emplace<GaussianCloud>(e, random_cloud(300, 1, 0.9f, 19));
     reg.emplace<Lattice>(a, twisted(LatticeBasis::bernstein, {3, 3, 3}));
     reg.emplace<Deformers>(e, Deformers{{a}});
+    residency_system(reg, {});
     gaussian_deform_system(reg, {});
     if (gfx::software_rasterizer()) {
         EXPECT_EQ(counters.cpu_runs, 1u);

@@ -11,6 +11,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "runtime/gfx/context.h"
+#include "runtime/gfx/residency.h"
 #include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
 #include "systems/gaussian/gaussian_system.h"
@@ -19,6 +20,7 @@
 #include "systems/gaussian/gpu_upload.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"
+#include "systems/residency/residency_system.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_render.h"
 #include "tests/systems/splat_render/test_scenes.h"
@@ -57,6 +59,7 @@ protected:
         render::RenderSettings s;
         s.width = w, s.height = h, s.quality = q, s.aux_outputs = true;
         reg.set_resource<render::RenderSettings>(s);
+        residency_system(reg, FrameContext{});
         render::render_system(reg, FrameContext{});
         auto img = render::capture_frame(reg);
         EXPECT_TRUE(img.ok()) << (img.ok() ? "" : img.message());
@@ -222,7 +225,8 @@ TEST_F(GaussianRenderSystem, DeformedCloudIsDrawnAndFollowsTheStore) {
     const ecs::Entity e = reg.create();
     reg.emplace<GaussianCloud>(e, g);
     const ReferenceImage rest = as_reference(frame(128, 96));
-    // CPU deformation output present: the render system uploads it into the store's `deformed`.
+    // CPU deformation output uploaded into the store's `deformed` (as gaussian_deform_system's CPU path
+    // does): the render system draws it.
     DeformedGaussians d;
     d.cloud = g;
     for (auto& p : d.cloud.positions) p.x += 0.5f;
@@ -230,10 +234,10 @@ TEST_F(GaussianRenderSystem, DeformedCloudIsDrawnAndFollowsTheStore) {
     d.version = 1;
     reg.emplace<Deformers>(e);
     reg.emplace<DeformedGaussians>(e, d);
+    upload_cpu_deformed(reg.resource<GpuGaussianStore>().clouds.at(e), d, g);
     const ReferenceImage moved = as_reference(frame(128, 96));
     const auto& gpu = reg.resource<GpuGaussianStore>().clouds.at(e);
-    EXPECT_TRUE(gpu.has_deformed);
-    EXPECT_FALSE(gpu.deformed_on_gpu);
+    EXPECT_EQ(gpu.state, gfx::Residency::deformed_cpu);
     GaussianCloud expected = d.cloud;
     expected.opacities = g.opacities;
     ReferenceOptions o;
@@ -251,7 +255,7 @@ TEST_F(GaussianRenderSystem, DeformedCloudIsDrawnAndFollowsTheStore) {
 
 TEST_F(GaussianRenderSystem, DrawsWhatTheGpuDeformationWroteIntoTheStore) {
     // The GpuGaussianStore contract with a GPU deformation: when it has written `deformed` and says so
-    // (deformed_on_gpu), the render system draws that buffer and never overwrites it with a CPU copy.
+    // (state deformed_gpu), the render system draws that buffer; it never uploads a CPU result itself.
     add_camera();
     const GaussianCloud g = random_cloud(1500, 0);
     const ecs::Entity e = reg.create();
@@ -262,14 +266,15 @@ TEST_F(GaussianRenderSystem, DrawsWhatTheGpuDeformationWroteIntoTheStore) {
     for (auto& p : stale.cloud.positions) p.y -= 0.7f;
     stale.version = 1;
     reg.emplace<DeformedGaussians>(e, stale);
-    (void)frame(128, 96);  // uploads rest (and the CPU result)
+    (void)frame(128, 96);  // residency uploads rest
     GaussianCloud moved = g;
     for (auto& p : moved.positions) p.x += 0.4f;
     GpuGaussians& gpu = reg.resource<GpuGaussianStore>().clouds.at(e);
     const std::vector<gpu::GpuGaussian> packed = pack_gaussians(moved, g.opacities);
-    glNamedBufferSubData(gpu.deformed.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuGaussian)), packed.data());
-    gpu.has_deformed = true, gpu.deformed_on_gpu = true, gpu.has_deformed_sh = false, gpu.has_frames = false;
-    ++gpu.deformed_version;
+    EXPECT_EQ(gpu.state, gfx::Residency::rest);
+    gfx::fill_buffer(gpu.deformed, "test.deformed", packed.data(), packed.size() * sizeof(gpu::GpuGaussian));
+    gpu.sh_source = ShSource::authored;
+    gfx::set_deformed(gpu, gfx::Residency::deformed_gpu);
     reg.patch<DeformedGaussians>(e).version = 2;  // even a newer CPU result stays out
     const ReferenceImage img = as_reference(frame(128, 96));
     ReferenceOptions o;
@@ -277,7 +282,7 @@ TEST_F(GaussianRenderSystem, DrawsWhatTheGpuDeformationWroteIntoTheStore) {
     const double p = psnr(render_reference(moved, camera(), o), img);
     std::printf("GPU-written deformed buffer drawn: PSNR %.1f dB vs the reference of that cloud\n", p);
     EXPECT_GT(p, 40.0);
-    EXPECT_TRUE(reg.resource<GpuGaussianStore>().clouds.at(e).deformed_on_gpu);
+    EXPECT_EQ(reg.resource<GpuGaussianStore>().clouds.at(e).state, gfx::Residency::deformed_gpu);
 }
 
 }  // namespace

@@ -35,6 +35,7 @@
 #include "systems/gaussian/reference_render.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_render.h"
+#include "systems/residency/residency_system.h"
 #include "tests/systems/splat_render/test_scenes.h"
 #include "tests/test_util/run_tool.h"
 #include "tests/test_util/gl_required.h"
@@ -185,6 +186,7 @@ TEST_F(GaussianScene, AnimatedTwistRendersTheDeformedGaussians) {
     auto frame_at = [&](int k) {
         const FrameContext fc{std::uint64_t(k), double(k) / paper_demo_fps, 1.0 / paper_demo_fps};
         animation_system(reg, fc);
+        residency_system(reg, fc);
         gaussian_deform_system(reg, fc);
         render::render_system(reg, fc);
         auto img = render::capture_frame(reg);

@@ -14,6 +14,7 @@
 #include "systems/ffd/operations.h"
 #include "tests/systems/splat_render/gl_fixture.h"
 #include "tests/systems/splat_render/test_scenes.h"
+#include "systems/residency/residency_system.h"
 
 using namespace sffd;
 using namespace sffd::render;
@@ -28,6 +29,7 @@ protected:
         s.quality = Quality::hq, s.width = w, s.height = h, s.culling = culling, s.time_passes = true;
         s.cull_path = cull, s.raster_path = raster, s.aux_outputs = true;
         reg.set_resource<RenderSettings>(s);
+        residency_system(reg, FrameContext{});
         render_system(reg, FrameContext{});
         auto img = capture_frame(reg);
         EXPECT_TRUE(img.ok());
@@ -203,7 +205,7 @@ TEST_F(ComputeRaster_, MatchesTheRasterPathOnGpuDeformedSplats) {
     const ecs::Entity le = add_lattice(cloud);
     ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.9, glm::dvec3(0.0));
     reg.set_resource<FfdSettings>().force_gpu = true;
-    render_path(RasterPath::raster);  // uploads the rest splats the compute pass reads
+    residency_system(reg, {});  // the rest splats the compute pass reads
     ffd_system(reg, {});
     ASSERT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
     const FrameImage raster = render_path(RasterPath::raster);

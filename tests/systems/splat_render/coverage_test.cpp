@@ -12,6 +12,7 @@
 #include "systems/ffd/lattice.h"
 #include "tests/systems/splat_render/gl_fixture.h"
 #include "tests/systems/splat_render/test_scenes.h"
+#include "systems/residency/residency_system.h"
 
 using namespace sffd;
 using namespace sffd::render;
@@ -217,20 +218,27 @@ TEST_F(Coverage_, TextureColoursLandWhereTheUvSays) {
 }
 
 // The renderer draws the deformer's output, not the authored cloud: the FFD system's GPU buffer
-// (GpuSplatStore::deformed with has_deformed) and its CPU output (DeformedSplats) both show the stretch.
+// (GpuSplatStore::deformed, state deformed_gpu) and its CPU output (DeformedSplats uploaded, state
+// deformed_cpu) both show the stretch.
 TEST_F(Coverage_, DrawsTheDeformersOutputInsteadOfTheRestCloud) {
     const Camera cam = add_camera(6.0);
     add_light({-1.0f, -0.3f, -0.5f});
     const SplatCloud rest = fibonacci_sphere(paper_splats);
     const SplatCloud stretched = stretch_x(rest, 2.0);
     const ecs::Entity e = add_cloud(rest);
+    reg.emplace<Deformers>(e);  // a deformed cloud (a cloud without deformers is drawn at rest)
 
-    // CPU path: DeformedSplats with cpu_valid.
+    // CPU path: DeformedSplats with cpu_valid, uploaded as ffd_system's CPU path does.
     DeformedSplats& d = reg.emplace<DeformedSplats>(e);
     d.positions = stretched.positions, d.normals = stretched.normals;
     d.axis_u = stretched.axis_u, d.axis_v = stretched.axis_v;
     d.cpu_valid = true, d.version = 1;
     d.bounds_min = glm::dvec3(-2.1, -1.1, -1.1), d.bounds_max = glm::dvec3(2.1, 1.1, 1.1);
+    residency_system(reg, FrameContext{});
+    {
+        auto& store = reg.resource<gfx::GpuSplatStore>();
+        gfx::upload_deformed_splats(store.clouds.at(e), rest, {d.positions, d.normals, d.axis_u, d.axis_v}, store.keep_cpu);
+    }
     FrameImage img = render(Quality::hq, 256, 256);
     Coverage c = ellipsoid_coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));
     EXPECT_GT(c.inside, 10000);
@@ -242,7 +250,7 @@ TEST_F(Coverage_, DrawsTheDeformersOutputInsteadOfTheRestCloud) {
     auto& gpu = reg.resource<gfx::GpuSplatStore>().clouds.at(e);
     const std::vector<gpu::GpuSplat> packed = pack_splats(rest);
     glNamedBufferSubData(gpu.deformed.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data());
-    gpu.has_deformed = true;
+    gfx::set_deformed(gpu, gfx::Residency::deformed_gpu);
     img = render(Quality::hq, 256, 256);
     c = ellipsoid_coverage(img, cam, glm::dvec3(1.0));
     EXPECT_EQ(c.holes, 0);

@@ -19,6 +19,7 @@
 #include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_render.h"
+#include "systems/residency/residency_system.h"
 
 namespace sffd::render::test {
 
@@ -70,6 +71,7 @@ protected:
         s.cull_path = path;
         s.aux_outputs = true;
         reg.set_resource<RenderSettings>(s);
+        residency_system(reg, FrameContext{});
         render_system(reg, FrameContext{});
         auto img = capture_frame(reg);
         EXPECT_TRUE(img.ok()) << (img.ok() ? "" : img.message());

@@ -18,6 +18,7 @@
 #include "tests/assets/test_util.h"
 #include "tests/assets/textured_box.h"
 #include "tests/systems/splat_render/gl_fixture.h"
+#include "systems/residency/residency_system.h"
 
 namespace sffd::render::test {
 namespace {
@@ -74,6 +75,7 @@ protected:
         FrameContext f = clock.tick();
         f.frame = std::uint64_t(k);
         animation_system(reg, f);
+        residency_system(reg, f);
         ffd_system(reg, f);
         RenderSettings s;
         s.quality = quality, s.width = w, s.height = h, s.aux_outputs = true;

@@ -14,6 +14,7 @@
 #include "systems/ffd/operations.h"
 #include "tests/systems/splat_render/gl_fixture.h"
 #include "tests/systems/splat_render/test_scenes.h"
+#include "systems/residency/residency_system.h"
 
 namespace {
 
@@ -148,10 +149,12 @@ void Readback_::gpu_deformation_frames_never_wait(RasterPath raster) {
     reg.set_resource<RenderSettings>(s);
     const auto frame = [&](std::uint64_t f) {
         ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.02, glm::dvec3(0.0));
+        residency_system(reg, FrameContext{.frame = f});
         ffd_system(reg, FrameContext{.frame = f});
         render_system(reg, FrameContext{.frame = f});
     };
-    render_system(reg, FrameContext{.frame = 1});  // uploads the rest buffer the compute pass reads
+    residency_system(reg, FrameContext{.frame = 1});  // the rest buffer the compute pass reads
+    render_system(reg, FrameContext{.frame = 1});
     for (std::uint64_t f = 2; f < 10; ++f) frame(f);  // warm-up: programs, buffers, read-back slots
     ASSERT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
     const FfdSettings before = reg.resource<FfdSettings>();

@@ -1,0 +1,59 @@
+// GPU residency of a point cloud, shared by both kinds (surface splats: gfx::GpuSplats in splat_store.h;
+// 3D Gaussians: gaussian::GpuGaussians in systems/gaussian/gpu_store.h). One state per cloud, one writer
+// per transition:
+//   rest          residency_system (phase `residency`) uploaded the authored cloud into `rest` when its
+//                 change stamp moved, or the cloud has no deformers: draw `rest`;
+//   deformed_gpu  a deformation system's compute pass wrote `deformed` (no CPU copy exists);
+//   deformed_cpu  a deformation system's CPU path wrote its output and uploaded it into `deformed`.
+// Render and picking only read: draw_buffer() and `deformed_version` (bumped on every rewrite of
+// `deformed`, so caches of the deformed data key on it).
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "runtime/gfx/gl_object.h"
+
+namespace sffd::gfx {
+
+enum class Residency : std::uint8_t { rest, deformed_gpu, deformed_cpu };
+
+// The part of a resident cloud that does not depend on its kind (the kinds derive from it and add the
+// buffers their data needs).
+struct ResidentCloud {
+    Buffer rest;                         // authored data, in the kind's GPU layout
+    Buffer deformed;                     // written by the deformation (GPU pass or uploaded CPU output)
+    std::uint32_t count = 0;             // elements in `rest` (and in `deformed` when it is valid)
+    std::uint64_t rest_version = 0;      // change stamp of the authored component that `rest` holds
+    Residency state = Residency::rest;
+    std::uint64_t deformed_version = 0;  // bumped whenever `deformed` is rewritten
+
+    bool is_deformed() const { return state != Residency::rest; }
+    GLuint draw_buffer() const { return is_deformed() ? deformed.id() : rest.id(); }
+};
+
+// Allocates `b` (labelled) at `bytes` (at least 16: GL needs a store to bind) when it is missing or of
+// another size, then uploads `data` (none when null). The one upload primitive both kinds use.
+void fill_buffer(Buffer& b, const char* label, const void* data, std::size_t bytes);
+
+// Grows `b` (labelled) to hold at least `bytes` without uploading (the deformation's output buffers).
+void reserve_buffer(Buffer& b, const char* label, std::size_t bytes);
+
+// The state transitions, written once. set_rest: `rest` now holds `version` (count elements) and nothing
+// deformed from an older rest is drawn. set_deformed: `deformed` was just rewritten by `how`.
+void set_rest(ResidentCloud& cloud, std::uint64_t version, std::uint32_t count);
+void set_deformed(ResidentCloud& cloud, Residency how);
+inline void drop_deformed(ResidentCloud& cloud) { cloud.state = Residency::rest; }
+
+// True when a GL context (EGL or GLFW) is current on the calling thread: the stores exist only then.
+bool context_current();
+
+// Counters of the upload step (a registry resource that residency_system and the deformation systems'
+// CPU paths bump; tests and the profiler read it). Not settings: nothing here changes behaviour.
+struct ResidencyStats {
+    std::uint64_t rest_uploads = 0;      // authored clouds uploaded (per-element CPU work each)
+    std::uint64_t deformed_uploads = 0;  // CPU deformation outputs uploaded
+    std::uint64_t dropped = 0;           // store entries removed with their entity or component
+};
+
+}  // namespace sffd::gfx
