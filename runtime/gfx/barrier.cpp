@@ -1,6 +1,7 @@
 #include "runtime/gfx/barrier.h"
 
 #include <cassert>
+#include <cstdio>
 #include <string_view>
 
 #include "runtime/gfx/gl.h"
@@ -70,13 +71,12 @@ std::string barrier_bit_names(std::uint32_t bits) {
         out += n.name;
         bits &= ~n.bit;
     }
-    if (bits) out += (out.empty() ? "" : "|") + std::string("0x") + [&] {
-        static const char hex[] = "0123456789abcdef";
-        std::string h;
-        for (int shift = 28; shift >= 0; shift -= 4)
-            if (!h.empty() || ((bits >> shift) & 0xf) || shift == 0) h += hex[(bits >> shift) & 0xf];
-        return h;
-    }();
+    if (bits) {  // bits without a name above
+        char hex[16];
+        std::snprintf(hex, sizeof hex, "0x%x", unsigned(bits));
+        if (!out.empty()) out += '|';
+        out += hex;
+    }
     return out;
 }
 
