@@ -8,9 +8,11 @@
 #include <cstdlib>
 #include <mutex>
 #include <string_view>
+#include <vector>
 
 #include "runtime/core/log.h"
 #include "runtime/gfx/gl.h"
+#include "runtime/gfx/limits.h"
 
 namespace sffd::gfx {
 
@@ -84,6 +86,7 @@ struct EglDisplay {
     EGLDisplay display = EGL_NO_DISPLAY;
     EGLConfig config = nullptr;
     std::string error;
+    bool on_device = false;  // EGL_EXT_platform_device (the fallback), not surfaceless
 };
 
 const char* egl_error_name(EGLint e) {
@@ -103,29 +106,91 @@ const char* egl_error_name(EGLint e) {
     }
 }
 
+// Opens and initialises one EGL display of `platform` (surfaceless Mesa, or one EGL device).
+EglDisplay open_display(EGLenum platform, void* native, const char* what) {
+    EglDisplay out;
+    out.display = eglGetPlatformDisplay(platform, native, nullptr);
+    if (out.display == EGL_NO_DISPLAY) {
+        out.error = log::str("eglGetPlatformDisplay(", what, "): ", egl_error_name(eglGetError()));
+        return out;
+    }
+    EGLint major = 0, minor = 0;
+    if (!eglInitialize(out.display, &major, &minor)) {
+        out.error = log::str("eglInitialize(", what, "): ", egl_error_name(eglGetError()));
+        out.display = EGL_NO_DISPLAY;
+        return out;
+    }
+    const EGLint attribs[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
+    EGLint count = 0;
+    if (!eglChooseConfig(out.display, attribs, &out.config, 1, &count) || count == 0) {
+        // Surfaceless needs no surface type; accept any GL-capable config.
+        const EGLint any_gl[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
+        if (!eglChooseConfig(out.display, any_gl, &out.config, 1, &count) || count == 0) out.config = nullptr;
+    }
+    return out;
+}
+
+// The first EGL device that is not a software rasterizer (EGL_EXT_device_enumeration; Mesa marks its
+// software device with EGL_MESA_device_software), or null when there is none or no enumeration.
+EGLDeviceEXT first_hardware_device() {
+    const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
+    if (!client || std::string_view(client).find("EGL_EXT_platform_device") == std::string_view::npos) return nullptr;
+    auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
+    auto query_string = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
+    if (!query_devices || !query_string) return nullptr;
+    EGLint count = 0;
+    if (!query_devices(0, nullptr, &count) || count <= 0) return nullptr;
+    std::vector<EGLDeviceEXT> devices(std::size_t(count), nullptr);
+    if (!query_devices(count, devices.data(), &count)) return nullptr;
+    for (EGLint i = 0; i < count; ++i) {
+        const char* ext = query_string(devices[std::size_t(i)], EGL_EXTENSIONS);
+        if (!ext || std::string_view(ext).find("EGL_MESA_device_software") == std::string_view::npos) return devices[std::size_t(i)];
+    }
+    return nullptr;
+}
+
+// GL_RENDERER of a throw-away 4.5 core context on `d` (empty when none can be made).
+std::string probe_renderer(const EglDisplay& d) {
+    if (!eglBindAPI(EGL_OPENGL_API)) return {};
+    const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
+                              EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+    const EGLContext ctx = eglCreateContext(d.display, d.config, EGL_NO_CONTEXT, attribs);
+    if (ctx == EGL_NO_CONTEXT) return {};
+    const EGLDisplay old_display = eglGetCurrentDisplay();
+    const EGLContext old_context = eglGetCurrentContext();
+    std::string renderer;
+    if (eglMakeCurrent(d.display, EGL_NO_SURFACE, EGL_NO_SURFACE, ctx)) renderer = gl_string(GL_RENDERER);
+    if (old_context != EGL_NO_CONTEXT) eglMakeCurrent(old_display, EGL_NO_SURFACE, EGL_NO_SURFACE, old_context);
+    else eglMakeCurrent(d.display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
+    eglDestroyContext(d.display, ctx);
+    return renderer;
+}
+
+// Surfaceless Mesa first (no device node needed; Mesa picks a render node when it can). When that fails,
+// or gives a software renderer while a hardware EGL device exists (a GPU whose driver Mesa's surfaceless
+// platform does not drive, e.g. NVIDIA's), the first hardware device through EGL_EXT_platform_device.
 const EglDisplay& egl_display() {
     static const EglDisplay d = [] {
-        EglDisplay out;
-        out.display = eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
-        if (out.display == EGL_NO_DISPLAY) {
-            out.error = log::str("eglGetPlatformDisplay(EGL_PLATFORM_SURFACELESS_MESA): ", egl_error_name(eglGetError()),
-                                 " (is libegl-mesa0 installed?)");
-            return out;
+        EglDisplay surfaceless = open_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, "EGL_PLATFORM_SURFACELESS_MESA");
+        EGLDeviceEXT device = first_hardware_device();
+        if (!device) {
+            if (surfaceless.display == EGL_NO_DISPLAY) surfaceless.error += " (is libegl-mesa0 installed?)";
+            return surfaceless;
         }
-        EGLint major = 0, minor = 0;
-        if (!eglInitialize(out.display, &major, &minor)) {
-            out.error = log::str("eglInitialize(): ", egl_error_name(eglGetError()));
-            out.display = EGL_NO_DISPLAY;
-            return out;
+        if (surfaceless.display != EGL_NO_DISPLAY && surfaceless.config) {
+            const std::string renderer = probe_renderer(surfaceless);
+            if (!renderer.empty() && !software_renderer_name(renderer)) return surfaceless;
+            log::info("EGL surfaceless gives ", renderer.empty() ? "no GL 4.5 context" : renderer,
+                      "; trying the first hardware EGL device");
         }
-        const EGLint attribs[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
-        EGLint count = 0;
-        if (!eglChooseConfig(out.display, attribs, &out.config, 1, &count) || count == 0) {
-            // Surfaceless needs no surface type; accept any GL-capable config.
-            const EGLint any_gl[] = {EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
-            if (!eglChooseConfig(out.display, any_gl, &out.config, 1, &count) || count == 0) out.config = nullptr;
+        EglDisplay on_device = open_display(EGL_PLATFORM_DEVICE_EXT, device, "EGL_PLATFORM_DEVICE_EXT");
+        if (on_device.display != EGL_NO_DISPLAY && on_device.config) {
+            on_device.on_device = true;
+            return on_device;
         }
-        return out;
+        log::warn("EGL device fallback failed: ", on_device.error.empty() ? "no OpenGL config" : on_device.error);
+        if (surfaceless.display == EGL_NO_DISPLAY) surfaceless.error += "; " + on_device.error;
+        return surfaceless;
     }();
     return d;
 }
@@ -245,8 +310,19 @@ Result<GlContext> finish(GlContext context, GlContext::Impl& impl, bool debug) {
     glGetIntegerv(GL_MINOR_VERSION, &minor);
     if (major * 10 + minor < 45)
         return make_error(log::str("create_context(): need OpenGL 4.5 core, got ", impl.version, " (", impl.renderer, ")"));
+    if (hardware_gl_required() && software_renderer_name(impl.renderer))
+        return make_error(log::str("create_context(): SFFD_REQUIRE_HARDWARE_GL is set but the renderer is ", impl.renderer,
+                                   " (a software rasterizer)"));
+    const GlLimits limits = query_limits();
+    if (Status s = check_limits(limits); !s) return make_error(log::str("create_context(): ", s.message(), " (", impl.renderer, ")"));
+    set_context_limits(limits);
     if (debug) install_debug_callback();
-    log::debug("GL context: ", impl.headless ? "headless EGL" : "window", ", ", impl.renderer, ", ", impl.version);
+    // At info level once per process where the renderer is in question (a GPU run, or the EGL device
+    // fallback was taken); otherwise at debug: commands print machine-readable output on the same streams.
+    static std::atomic<bool> logged{false};
+    const auto line = log::str("GL context: ", impl.headless ? "headless EGL" : "window", ", ", impl.renderer, ", ", impl.version);
+    if ((hardware_gl_required() || (impl.headless && egl_display().on_device)) && !logged.exchange(true)) log::info(line);
+    else log::debug(line);
     return context;
 }
 
@@ -306,9 +382,7 @@ Result<GlContext> create_context(const ContextOptions& options) {
 
 bool software_rasterizer() {
     const auto* renderer = reinterpret_cast<const char*>(glGetString(GL_RENDERER));
-    if (!renderer) return false;
-    const std::string_view r(renderer);
-    return r.find("llvmpipe") != r.npos || r.find("softpipe") != r.npos || r.find("SWR") != r.npos;
+    return renderer && software_renderer_name(renderer);
 }
 
 }  // namespace sffd::gfx

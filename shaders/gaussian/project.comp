@@ -55,6 +55,13 @@ vec3 sh_color(uint i, vec3 d) {
     return max(c + 0.5, vec3(0.0));
 }
 
+// Whether every component is finite, from the bits (exponent not all ones). GLSL leaves comparisons with
+// NaN undefined and NVIDIA folds `!(x >= y)` into `x < y`, so NaN is caught here and never reaches a
+// comparison (as in splat_common.glsl's all_finite; splat_record.h).
+bool finite4(vec4 v) {
+    return all(notEqual(floatBitsToUint(v) & 0x7f800000u, uvec4(0x7f800000u)));
+}
+
 // Projects Gaussian i; true when it is drawn. Writes its projected record, sort key and payload.
 bool project(uint i) {
     order[i] = i;
@@ -63,13 +70,19 @@ bool project(uint i) {
     o.conic_opacity = vec4(0.0);
     o.color = vec4(0.0);
     const GpuGaussian g = gaussians[i];
+    depth_keys[i] = SFFD_GAUSS_NOT_DRAWN;
+    // Culled: non-finite centres, opacities, rotations or scales (the loaders refuse them; a deformation
+    // can still produce them).
+    if (!finite4(g.pos_opacity) || !finite4(g.rotation) || !finite4(vec4(g.scale.xyz, 0.0))) {
+        projected[i] = o;
+        return false;
+    }
     const vec3 t = (u_view * vec4(g.pos_opacity.xyz, 1.0)).xyz;
     const float depth = -t.z;
-    depth_keys[i] = SFFD_GAUSS_NOT_DRAWN;
-    if (!(depth >= u_near)) { projected[i] = o; return false; }
+    if (!finite4(vec4(t, 0.0)) || depth < u_near) { projected[i] = o; return false; }
     // Culled too: opacity below 1/255 (every α = min(0.99, o·exp(power ≤ 0)) ≤ o would be skipped, as in
-    // the reference), and NaN opacities.
-    if (!(g.pos_opacity.w >= 1.0 / 255.0)) { projected[i] = o; return false; }
+    // the reference).
+    if (g.pos_opacity.w < 1.0 / 255.0) { projected[i] = o; return false; }
     // Σ = R S Sᵀ Rᵀ from the quaternion (w, x, y, z).
     const float w = g.rotation.x, x = g.rotation.y, y = g.rotation.z, z = g.rotation.w;
     const mat3 r = mat3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y),
@@ -84,7 +97,8 @@ bool project(uint i) {
     const vec3 jy = vec3(0.0, -u_focal / depth, -u_focal * ty / (depth * depth));
     const float a = dot(jx, v * jx) + 0.3, b = dot(jx, v * jy), c = dot(jy, v * jy) + 0.3;
     const float det = a * c - b * b;
-    if (!(det > 0.0)) { projected[i] = o; return false; }
+    // Overflow (inf - inf) can still make NaN from finite inputs: test the bits before comparing.
+    if (!finite4(vec4(a, b, c, det)) || det <= 0.0) { projected[i] = o; return false; }
     const float mid = 0.5 * (a + c), lmax = mid + sqrt(max(0.1, mid * mid - det));
     const vec2 center = vec2(0.5 * u_size.x + u_focal * t.x / depth, 0.5 * u_size.y - u_focal * t.y / depth);
     const float radius = ceil(3.0 * sqrt(lmax));

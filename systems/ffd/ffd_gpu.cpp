@@ -7,6 +7,7 @@
 #include <unordered_map>
 #include <vector>
 
+#include "runtime/gfx/barrier.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl.h"
@@ -66,9 +67,14 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_IN, in);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_OUT, out);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
+    // Write-after-read across frames: the last frame's passes read `out` (the cull's SSBO loads, vertex
+    // fetches) and this dispatch overwrites it.
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "ffd.dispatch.reuse");
     // A 2D grid beyond 65,535 groups (4.19M splats): runtime/gfx/dispatch.h.
     if (Status s = gfx::dispatch_1d(count, bound->local_size); !s) return s;
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    // Read next as SSBOs (cull), vertex attributes, and by copies and read-backs (statistics, deform()).
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT,
+                        "ffd.dispatch");
     return {};
 }
 

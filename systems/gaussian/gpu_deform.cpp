@@ -6,6 +6,7 @@
 #include <string>
 #include <unordered_map>
 
+#include "runtime/gfx/barrier.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl.h"
@@ -121,9 +122,12 @@ Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, 
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED_SH, b.sh_out && b.sh_in ? b.sh_out : m.stats.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH_TABLES, m.sh_tables.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
+    // Write-after-read across frames: the last frame's projection read the deformed buffers overwritten here.
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.deform.reuse");
     // Beyond 65,535 groups (4.19M Gaussians at 64 wide): a 2D grid (runtime/gfx/dispatch.h).
     if (Status s = gfx::dispatch_1d(count, bound->local_size); !s) return s;
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT,
+                        "gaussian.deform");
     return {};
 }
 

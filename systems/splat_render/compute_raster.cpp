@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "runtime/core/log.h"
+#include "runtime/gfx/barrier.h"
 #include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/shader.h"
 #include "shaders/common/bindings.h"
@@ -83,6 +84,9 @@ void compute_raster_visibility(ComputeRaster& raster, std::span<const ComputeRas
         glClearNamedBufferData(raster.sums.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         raster.width = width, raster.height = height;
     }
+    // The clears below overwrite depth words and counters that the last frame's shaders wrote (atomics) and
+    // read; the big lists are overwritten by this pass's stores after the last frame's indexed draws.
+    gfx::memory_barrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT, "render.compute.visibility.reuse");
     glClearNamedBufferData(raster.depth.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &depth_clear);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_RASTER_DEPTH, raster.depth.id());
     glUseProgram(raster.visibility.id());
@@ -99,8 +103,11 @@ void compute_raster_visibility(ComputeRaster& raster, std::span<const ComputeRas
             if (Status st = gfx::dispatch_1d(d.count, SFFD_RASTER_GROUP_SIZE); !st) log::error("render_system(): ", st.message());
         });
     }
-    // The big lists feed indirect indexed draws; the depth words the merge pass's SSBO reads.
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_ELEMENT_ARRAY_BARRIER_BIT);
+    // The big lists feed indirect indexed draws (ELEMENT_ARRAY, COMMAND) whose records are fetched as vertex
+    // attributes; the depth words the merge pass's SSBO reads; the counters are copied into the counts ring.
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_ELEMENT_ARRAY_BARRIER_BIT |
+                            GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT,
+                        "render.compute.visibility");
 }
 
 void compute_raster_merge(const ComputeRaster& raster, GLuint frame_ubo) {
@@ -127,7 +134,7 @@ void compute_raster_attribute(const ComputeRaster& raster, std::span<const Compu
             if (Status st = gfx::dispatch_1d(d.count, SFFD_RASTER_GROUP_SIZE); !st) log::error("render_system(): ", st.message());
         });
     }
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "render.compute.attribute");  // sums, read by the resolve
 }
 
 void compute_raster_resolve(const ComputeRaster& raster, GLuint frame_ubo) {
@@ -137,7 +144,7 @@ void compute_raster_resolve(const ComputeRaster& raster, GLuint frame_ubo) {
     glUseProgram(raster.resolve.id());
     glDrawArrays(GL_TRIANGLES, 0, 3);
     // The zeroed words are next read by next frame's compute attribute pass.
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "render.compute.resolve");
 }
 
 double splat_footprint_px(const glm::dmat4& model_view, const glm::dvec3& center, double radius, double p11,

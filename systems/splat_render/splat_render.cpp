@@ -16,6 +16,7 @@
 
 #include "runtime/app/app.h"
 #include "runtime/core/log.h"
+#include "runtime/gfx/barrier.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl_object.h"
@@ -33,6 +34,7 @@
 #include "systems/splat_render/cpu_cull.h"
 #include "systems/splat_render/gaussian_pass.h"
 #include "systems/splat_render/splat_pack.h"
+#include "systems/splat_render/storage_limits.h"
 
 namespace sffd::render {
 
@@ -160,6 +162,7 @@ struct SplatRenderState {
 
     std::unordered_map<ecs::Entity, CloudGpu> clouds;
     bool software = false;  // the context is a software rasterizer (gfx::software_rasterizer)
+    bool cull_over_limit = false;  // some cloud's compute-cull buffers exceed the storage block size (storage_limits.h)
     std::uint32_t cpu_splat_passes = 0;  // this frame's loops over a cloud's splats on the CPU (RenderStats)
     bool failed = false;
 };
@@ -254,7 +257,7 @@ void upload_uv_axes(CloudGpu& gpu, const SplatCloud& cloud) {
 
 // Whether the CPU cull may run this frame, so CPU copies of the splats are worth keeping.
 bool cpu_cull_wanted(const SplatRenderState& s, CullPath path) {
-    return path == CullPath::cpu || (path == CullPath::automatic && s.software);
+    return path == CullPath::cpu || (path == CullPath::automatic && (s.software || s.cull_over_limit));
 }
 
 // Refreshes the renderer's own per-cloud objects (cull buffers, texture, bounds) for the clouds that are
@@ -642,6 +645,8 @@ void issue_counts(SplatRenderState& s, const std::vector<CountsSource>& computed
     }
     CountsSlot& slot = s.counts_slots[at];
     slot.parts.assign(computed.size(), 0);
+    // The copies read counters that shader atomics wrote (cull.comp, compute_visibility.comp).
+    if (!computed.empty()) gfx::memory_barrier(GL_BUFFER_UPDATE_BARRIER_BIT, "render.counts");
     for (std::size_t c = 0; c < computed.size(); ++c) {
         const GLintptr entry = GLintptr((at * s.counts_ring_clouds + c) * counts_entry_words * sizeof(std::uint32_t));
         if (computed[c].parts & counts_cull)
@@ -663,6 +668,9 @@ void issue_counts(SplatRenderState& s, const std::vector<CountsSource>& computed
 void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderStats& stats) {
     const RenderSettings& settings = plan.settings;
     auto scope = profiling::gpu_scope(reg, "render.cull");
+    // Write-after-read across frames: the last frame's draws fetched records, quads and commands that this
+    // pass overwrites, by shader stores (compute cull) or by copies and sub-data uploads (CPU cull).
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT, "render.cull.reuse");
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         CloudGpu& gpu = s.clouds[e];
         if (gpu.count == 0 || gpu.splats == 0) return;
@@ -707,6 +715,10 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             // Reset the counts on the GPU (a copy from an immutable buffer): a CPU upload into a buffer the
             // GPU writes every frame makes drivers move it to host memory (NVIDIA's performance warning).
             // The third command (flat-coloured sprites) stays empty: only the CPU cull fills it.
+            if (Status st = compute_cull_fits(gpu.count); !st) {
+                warn_once("render_system(): " + st.message() + "; the cloud is not drawn (the automatic cull path takes the CPU cull)");
+                return;
+            }
             glCopyNamedBufferSubData(s.command_reset.id(), gpu.commands.id(), 0, 0, draw_command_words * sizeof(std::uint32_t));
             const bool textured = bool(gpu.texture), lit = b.counts.w == 1u;
             if (Status st = cull_program(s, textured, lit, b.counts.y); !st) log::error("render_system(): ", st.message());
@@ -727,7 +739,11 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
         stats.splats += gpu.count;
         plan.drawn.push_back(&gpu);
     });
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    // Records are fetched as vertex attributes (records_vao), quads and records read as SSBOs, commands
+    // drawn indirectly and copied into the counts ring.
+    gfx::memory_barrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT |
+                            GL_BUFFER_UPDATE_BARRIER_BIT,
+                        "render.cull");
 }
 
 // Clears the output targets and sets the state every splat pass shares.
@@ -795,6 +811,7 @@ void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, R
         const double limit = s.software ? compute_raster_software_max_footprint : compute_raster_hardware_max_footprint;
         if (!(footprint <= limit * splats)) return;
     }
+    if (Status st = compute_raster_fits(plan.width, plan.height); !st) return warn_once("render_system(): " + st.message());
     if (Status st = init_compute_raster(s.compute_raster); !st) {
         log::error("render_system(): ", st.message());
         return;
@@ -914,6 +931,8 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     ensure_targets(s, plan.width, plan.height);
     static const gfx::GpuSplatStore no_clouds;  // nothing resident: residency_system has not run
     const auto* store = reg.try_resource<gfx::GpuSplatStore>();
+    s.cull_over_limit = false;
+    reg.view<const SplatCloud>().each([&](const SplatCloud& c) { s.cull_over_limit |= !compute_cull_fits(c.size()).ok(); });
     sync_clouds(reg, s, store ? *store : no_clouds, cpu_cull_wanted(s, plan.settings.cull_path));
     plan.view = choose_camera(reg, s, double(plan.width) / double(plan.height));
     plan.common = frame_block(reg, plan.settings, plan.view, s.max_point_size);

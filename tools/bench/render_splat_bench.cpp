@@ -90,6 +90,52 @@ void bench_raster_path(benchmark::State& state) {
     render_frames(state, CullPath::automatic, state.range(3) ? RasterPath::compute : RasterPath::raster);
 }
 
+// The compute rasteriser's break-even against the rasteriser (compute_raster.h's max footprints): the HQ
+// frame of a sphere whose mean splat diameter is footprint_px at 1280x720 from distance 3 (n = (1643 /
+// footprint)² splats: 6.7 px at 59,650), both raster paths in each iteration. Counters: raster_ms,
+// compute_ms and compute_speedup = raster_ms / compute_ms; the break-even is the largest footprint_px
+// whose speedup is still >= 1 (one line per footprint on stderr says so). Run it on the GPU to set
+// compute_raster_hardware_max_footprint (systems/splat_render/README.md).
+void bench_raster_break_even(benchmark::State& state) {
+    context();
+    const double footprint = double(state.range(0)) / 10.0;
+    const auto n = std::size_t(std::llround(std::pow(1643.0 / footprint, 2.0)));
+    ecs::Registry reg;
+    reg.emplace<SplatCloud>(reg.create(), sphere(n));
+    Camera cam;
+    cam.eye = glm::dvec3(0, 0, 3);
+    cam.near_plane = 0.1f;
+    cam.far_plane = 10.0f;
+    reg.emplace<Camera>(reg.create(), cam);
+    reg.emplace<DirectionalLight>(reg.create(), DirectionalLight{});
+    RenderSettings settings;
+    settings.quality = Quality::hq, settings.width = 1280, settings.height = 720, settings.culling = true;
+    FrameContext frame;
+    const auto timed = [&](RasterPath path) {
+        reg.resource<RenderSettings>().raster_path = path;
+        const auto t0 = std::chrono::steady_clock::now();
+        render_system(reg, frame);
+        glFinish();
+        return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    };
+    reg.set_resource<RenderSettings>(settings);
+    timed(RasterPath::raster), timed(RasterPath::compute);  // upload, compile, warm up
+    double raster = 0.0, compute = 0.0;
+    for (auto _ : state) {
+        const double r = timed(RasterPath::raster), c = timed(RasterPath::compute);
+        raster += r, compute += c;
+        state.SetIterationTime(r + c);
+    }
+    const auto it = double(state.iterations());
+    state.counters["splats"] = double(n);
+    state.counters["raster_ms"] = 1e3 * raster / it;
+    state.counters["compute_ms"] = 1e3 * compute / it;
+    state.counters["compute_speedup"] = compute > 0.0 ? raster / compute : 0.0;
+    std::fprintf(stderr, "raster break-even: %.1f px (%zu splats): compute rasteriser %.2fx the rasteriser's speed (%s)\n",
+                 footprint, n, compute > 0.0 ? raster / compute : 0.0, glGetString(GL_RENDERER) ?
+                 reinterpret_cast<const char*>(glGetString(GL_RENDERER)) : "?");
+}
+
 void render_frames(benchmark::State& state, CullPath path, RasterPath raster) {
     context();
     const auto n = std::size_t(state.range(0));
@@ -249,6 +295,14 @@ BENCHMARK(bench_render)
     ->Args({600000, 1, 1, 1})
     ->Args({600000, 0, 0, 0})
     ->Args({600000, 1, 0, 0})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond)
+    ->MinTime(1.0);
+
+// Arg: mean splat diameter in tenths of a pixel (1 px to 24 px).
+BENCHMARK(bench_raster_break_even)
+    ->ArgName("footprint_px_x10")
+    ->Arg(10)->Arg(20)->Arg(30)->Arg(40)->Arg(60)->Arg(80)->Arg(120)->Arg(160)->Arg(240)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond)
     ->MinTime(1.0);

@@ -83,7 +83,8 @@ TEST_F(FfdGl, ComputePassMatchesCpuReference) {
 // Clouds beyond 65,535 work groups (4.19M splats) are deformed over a 2D grid (gfx::dispatch_1d). With 4
 // groups per row, 5,000 splats take a 4 x 20 grid of 64-wide groups (4 x 5 of the shared-memory Bernstein
 // kernel's 256), the last row partly empty: the output is bit-identical to the one-row dispatch's, and the
-// statistics count every splat once.
+// statistics count every splat once. Bit equality holds on any implementation here: one program, one
+// invocation per splat computing the same expressions; only the grid's shape differs.
 TEST_F(FfdGl, GridDispatchDeformsExactlyAsOneRow) {
     auto gpu = ffd::GpuDeformer::create();
     ASSERT_TRUE(gpu.ok()) << gpu.message();
@@ -124,7 +125,11 @@ TEST_F(FfdGl, GridDispatchDeformsExactlyAsOneRow) {
 
 // The Bernstein kernels (GpuBernsteinKernel): control points from shared memory (copied once per work
 // group) or read directly (UBO, or the SSBO when too large for a UBO) run the same arithmetic in the same
-// order: bit-identical outputs and statistics, and both within 1e-5 of the double-precision CPU reference.
+// order: the same statistics, and both within 1e-5 of the double-precision CPU reference. Not bit-identical
+// outputs: they are two differently compiled programs, and GLSL lets each contract a * b + c into an fma
+// and round its divisions (the binomials) and inversesqrt within 2.5 ULP; llvmpipe happens to give equal
+// bits. The reference bound holds on any conforming implementation (float rounding of sums of at most
+// 7³ weights of unit scale); so the kernels agree within twice it.
 // Shapes: uneven 6x5x7 and 4x3x5 (the paper's 11³ compiles for minutes on llvmpipe as a shared-memory
 // program, whose barrier() llvmpipe splits into coroutines; it runs only in bench_ffd_gpu). Lattices over
 // the shared-memory limit fall back to direct (not tested: same reason).
@@ -159,13 +164,13 @@ TEST_F(FfdGl, BernsteinSharedMemoryKernelMatchesTheDirectKernel) {
         EXPECT_EQ(s->inside, r->inside);
         EXPECT_EQ(s->inverted, r->inverted);
         for (std::size_t i = 0; i < n; ++i) {
-            ASSERT_EQ(p[1][i], p[0][i]) << i;
-            ASSERT_EQ(nn[1][i], nn[0][i]) << i;
-            ASSERT_EQ(u[1][i], u[0][i]) << i;
-            ASSERT_EQ(v[1][i], v[0][i]) << i;
-            ASSERT_LT(glm::length(p[1][i] - p[2][i]), 1e-5f * 2.2f) << i;
-            ASSERT_LT(glm::length(nn[1][i] - nn[2][i]), 1e-5f) << i;
-            ASSERT_LT(glm::length(u[1][i] - u[2][i]), 1e-5f * glm::length(u[2][i]) + 1e-9f) << i;
+            for (int k = 0; k < 2; ++k) {  // shared, then direct, against the reference
+                ASSERT_LT(glm::length(p[k][i] - p[2][i]), 1e-5f * 2.2f) << i << " kernel " << k;
+                ASSERT_LT(glm::length(nn[k][i] - nn[2][i]), 1e-5f) << i << " kernel " << k;
+                ASSERT_LT(glm::length(u[k][i] - u[2][i]), 1e-5f * glm::length(u[2][i]) + 1e-9f) << i << " kernel " << k;
+                ASSERT_LT(glm::length(v[k][i] - v[2][i]), 1e-5f * glm::length(v[2][i]) + 1e-9f) << i << " kernel " << k;
+            }
+            ASSERT_LT(glm::length(p[1][i] - p[0][i]), 2e-5f * 2.2f) << i;
         }
     }
 }

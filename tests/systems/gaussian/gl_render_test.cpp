@@ -5,6 +5,8 @@
 // bit-identical images (same stable order), and the tile path matches the quad path within the same bound.
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <limits>
 #include <optional>
 #include <random>
 
@@ -186,6 +188,36 @@ TEST_F(GaussianGl, TransparentGaussiansAreCulled) {
         glGetNamedBufferSubData(renderer->draw.id(), 0, sizeof(command), command);
         EXPECT_EQ(command[1], opaque);
         EXPECT_GT(psnr(*img, render_reference(g, cam, o)), 40.0);
+    }
+}
+
+// Non-finite centres, opacities, scales and rotations (a deformation can make them) are culled by their
+// bit patterns (project.comp), not by comparisons GLSL leaves undefined for NaN: exactly the finite
+// Gaussians are drawn, and the image holds no NaN.
+TEST_F(GaussianGl, NonFiniteGaussiansAreCulled) {
+    ReferenceOptions o;
+    o.width = 64, o.height = 48;
+    GaussianCloud g = random_cloud(600, 0);
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    std::size_t finite = 0;
+    for (std::size_t i = 0; i < g.size(); ++i) {
+        switch (i % 6) {
+            case 0: g.opacities[i] = nan; break;
+            case 1: g.positions[i].x = nan; break;
+            case 2: g.scales[i].y = inf; break;
+            case 3: g.rotations[i].w = nan; break;
+            default: ++finite;
+        }
+    }
+    const Camera cam = camera_at({0.0, 0.0, 7.0});
+    for (SortPath sort : {SortPath::cpu, SortPath::gpu}) {
+        renderer->sort_path = sort;
+        auto img = render_gl(*renderer, g, cam, o);
+        ASSERT_TRUE(img) << img.message();
+        GLuint command[4] = {};
+        glGetNamedBufferSubData(renderer->draw.id(), 0, sizeof(command), command);
+        EXPECT_EQ(command[1], finite);
+        for (const glm::vec3& c : img->color) ASSERT_FALSE(glm::any(glm::isnan(c)));
     }
 }
 

@@ -32,6 +32,16 @@ SplatCloud mixed_sphere() {
 
 class CullPath_ : public GlRenderTest {};
 
+// How many splats the compute cull may classify differently from its C++ twin: each decision (in front,
+// facing, sprite or quad, inside the frame) compares float expressions that a GPU evaluates with
+// approximate inversesqrt (2 ULP), 2.5-ULP division and fused multiply-adds, so a splat whose margin is
+// within a few ULP can flip. On these spheres of 20,000 splats that is a handful; 0.25% leaves room on
+// any conforming implementation while a wrong test (a sign, a missed plane) moves hundreds. llvmpipe
+// agrees exactly.
+constexpr std::uint32_t kBorderlineSplats = 50;
+
+std::uint32_t count_difference(std::uint32_t a, std::uint32_t b) { return a > b ? a - b : b - a; }
+
 // Preview (lit per splat in the cull) and HQ, culling on and off, textured: the CPU cull and the compute
 // pass produce the same visible sets and the same pixels (up to float rounding and, in the preview, the
 // draw order of splats at equal depth).
@@ -48,8 +58,8 @@ TEST_F(CullPath_, CpuAndComputeCullsRenderTheSameImage) {
             const RenderStats cs = reg.resource<RenderStats>();
             EXPECT_EQ(gs.compute_culled_clouds, 1u) << what;
             EXPECT_EQ(cs.cpu_culled_clouds, 1u) << what;
-            EXPECT_EQ(cs.visible_points, gs.visible_points) << what;
-            EXPECT_EQ(cs.visible_quads, gs.visible_quads) << what;
+            EXPECT_LE(count_difference(cs.visible_points, gs.visible_points), kBorderlineSplats) << what;
+            EXPECT_LE(count_difference(cs.visible_quads, gs.visible_quads), kBorderlineSplats) << what;
             EXPECT_GE(cs.visible_quads, 5u) << what;
             if (culling) {
                 EXPECT_LT(cs.visible_points, 20000u / 2) << what;
@@ -61,9 +71,12 @@ TEST_F(CullPath_, CpuAndComputeCullsRenderTheSameImage) {
             EXPECT_LE(d.coverage_mismatch, 2) << what;
             // Measured: the CPU's float-weight texture filtering and llvmpipe's differ by <= 1/512 (mean
             // 7e-4 HQ, 1.1e-3 preview); in the preview a splat drawn first at an exact depth tie wins the
-            // pixel, and the compute pass's atomic compaction orders ties differently (2 pixels).
+            // pixel, and the compute pass's atomic compaction orders ties differently (2 pixels). On a GPU
+            // the order of the atomic appends varies from frame to frame and borderline splats may flip
+            // (kBorderlineSplats): a pixel per flipped splat may differ, so the bound on pixels over 2% is
+            // the borderline count, not llvmpipe's measurement.
             EXPECT_LT(d.mean_color, 2e-3) << what;
-            EXPECT_LE(d.over_2_percent, q == Quality::hq ? 0 : 10) << what;
+            EXPECT_LE(d.over_2_percent, gfx::software_rasterizer() ? (q == Quality::hq ? 0 : 10) : int(kBorderlineSplats)) << what;
             EXPECT_LT(d.max_depth, 1e-3) << what;
         }
 }
@@ -104,10 +117,12 @@ TEST_F(CullPath_, GridDispatchCullsTheSameSplatsAsOneRow) {
         }
         ASSERT_TRUE(gs.counts_valid && rs.counts_valid && cs.counts_valid) << what;
         EXPECT_EQ(gs.compute_culled_clouds, 1u) << what;
+        // One program, the same expressions per splat: the grid and the row agree exactly anywhere; the
+        // C++ twin up to the borderline splats.
         EXPECT_EQ(gs.visible_points, rs.visible_points) << what;
         EXPECT_EQ(gs.visible_quads, rs.visible_quads) << what;
-        EXPECT_EQ(gs.visible_points, cs.visible_points) << what;
-        EXPECT_EQ(gs.visible_quads, cs.visible_quads) << what;
+        EXPECT_LE(count_difference(gs.visible_points, cs.visible_points), kBorderlineSplats) << what;
+        EXPECT_LE(count_difference(gs.visible_quads, cs.visible_quads), kBorderlineSplats) << what;
         if (!culling) {
             EXPECT_EQ(gs.visible_points + gs.visible_quads, 20000u) << what;
         }
