@@ -18,6 +18,7 @@ PACKAGES=(
   libimgui-dev                                    # editor UI
   libgtest-dev libgmock-dev libbenchmark-dev      # tests, benchmarks
   assimp-testmodels                               # glTF samples for the import tests (tests/assets)
+  ffmpeg                                          # render --video: MP4 (H.264) and GIF encoding
 )
 
 if ! command -v dpkg >/dev/null 2>&1; then

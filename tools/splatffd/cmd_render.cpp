@@ -1,4 +1,4 @@
-// splatffd render [SCENE] --out DIR [--frames A:B] [--size WxH] [--quality hq|preview] [--format png,exr]
+// splatffd render [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--quality hq|preview] [--format png,exr]
 //                 [--background R,G,B] [--fps F] [--no-cull]
 //                 [--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV | --turntable N] [--video OUT.mp4|OUT.gif]
 //
@@ -14,7 +14,8 @@
 // A scene without a camera is framed automatically; without lights it gets a default key light.
 // --camera replaces the scene's camera for every frame; --turntable N renders frames 0..N-1 orbiting the
 // scene's bounds centre at the scene camera's distance and height (frame 0 = the scene camera's eye);
-// --video encodes the PNG frames with ffmpeg (optional: not installed by tools/bootstrap.sh).
+// --video encodes the PNG frames with ffmpeg (tools/bootstrap.sh installs it), MP4 and GIF over the same
+// background (--background, else black).
 // Exit 0 ok, 1 bad scene or unwritable output (the message names the file), 2 usage.
 #include <spawn.h>
 #include <sys/wait.h>
@@ -53,25 +54,31 @@ namespace {
 
 using namespace sffd;
 
-void usage() {
-    std::fprintf(stderr,
-                 "usage: splatffd render [SCENE] --out DIR [--frames A:B] [--size WxH] [--quality hq|preview]\n"
-                 "                       [--format png,exr] [--background R,G,B] [--fps F] [--no-cull]\n"
-                 "  SCENE            built-in name (sphere, face) or a scene/point-cloud file (default: sphere)\n"
-                 "  --out DIR        output folder (created); files frame_NNNN.png / frame_NNNN.exr\n"
-                 "  --frames A:B     frame range, inclusive (default 0:0); frame k is at time k / fps\n"
-                 "  --size WxH       image size in pixels (default 1280x720)\n"
-                 "  --quality Q      hq (three-pass surface splatting, default) or preview (opaque discs)\n"
-                 "  --format LIST    png, exr or png,exr (default png,exr)\n"
-                 "  --background RGB sRGB colour 0..1 (e.g. 1,1,1) filling the PNG background (default transparent)\n"
-                 "  --fps F          frames per second of the fixed-step clock (default 24, the demo clip's rate)\n"
-                 "  --no-cull        disable back-face/frustum culling (for comparisons)\n"
-                 "  --camera E,T,U,F the camera for every frame: eye x,y,z, target x,y,z, up x,y,z, vertical fov in\n"
-                 "                   degrees (0..180); eye = target and up along the view direction are refused\n"
-                 "  --turntable N    N frames (0..N-1) orbiting the scene's bounds centre at the scene camera's\n"
-                 "                   distance and height, one turn; frame 0 is seen from the scene camera's eye\n"
-                 "  --video FILE     also encode the PNG frames as FILE (.mp4 H.264 or .gif) at --fps; needs ffmpeg\n");
-}
+constexpr const char* kUsage =
+    "usage: splatffd render [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--quality hq|preview] [--format png,exr]\n"
+    "                       [--background R,G,B] [--fps F] [--no-cull]\n"
+    "                       [--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV | --turntable N] [--video FILE.mp4|FILE.gif]\n"
+    "  SCENE            built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj .off,\n"
+    "                   3D Gaussians .ply (3DGS) .splat .spz .glb (KHR_gaussian_splatting) (default: sphere)\n"
+    "  --out DIR        output folder (created; required); files frame_NNNN.png / frame_NNNN.exr\n"
+    "  --frames N|A:B   N: frames 0..N-1; A:B: frames A..B inclusive (default 1: frame 0); frame k is at\n"
+    "                   time k / fps, and the scene's clips play\n"
+    "  --size WxH       image size in pixels (default 1280x720)\n"
+    "  --quality Q      hq (three-pass surface splatting, default) or preview (opaque discs)\n"
+    "  --format LIST    png, exr or png,exr (default png,exr)\n"
+    "  --background RGB sRGB colour 0..1 (e.g. 1,1,1) behind the object in the PNG and the video\n"
+    "                   (default: transparent PNG, black video)\n"
+    "  --fps F          frames per second of the fixed-step clock and the video (default 24, the demo clip's rate)\n"
+    "  --no-cull        disable back-face/frustum culling (for comparisons; default on)\n"
+    "  --camera E,T,U,F the camera for every frame: eye x,y,z, target x,y,z, up x,y,z, vertical fov in\n"
+    "                   degrees (0..180); eye = target and up along the view direction are refused\n"
+    "                   (default: the scene's camera, or one framing the scene)\n"
+    "  --turntable N    N frames (0..N-1) orbiting the scene's bounds centre at the scene camera's\n"
+    "                   distance and height, one turn; frame 0 is seen from the scene camera's eye; the\n"
+    "                   scene's clips play along (frame k at time k / fps), as with --frames\n"
+    "  --video FILE     also encode the PNG frames as FILE (.mp4 H.264 or .gif) at --fps, both over the\n"
+    "                   same background; needs ffmpeg (tools/bootstrap.sh installs it)\n"
+    "Progress is shown on a terminal only (nothing is written into logs or pipes).\n";
 
 // ---- --camera, --turntable ------------------------------------------------------------------------
 
@@ -211,19 +218,29 @@ std::string find_on_path(const std::string& name) {
 // Encodes DIR/frame_FIRST..LAST.png into `video` (.mp4: H.264 yuv420p, even size; .gif: per-clip palette)
 // through a temporary file renamed at the end, so a failed encode leaves no half video. ffmpeg runs with
 // an argument vector (no shell): paths with spaces or quotes are safe.
+// Both formats are flattened over the same opaque `background` (sRGB) first: H.264 has no alpha and a GIF's
+// one transparent index cannot hold soft edges, and left to ffmpeg the MP4 came out black where the GIF
+// was transparent. The PNG's straight alpha is blended in display (sRGB) space, as 3DGS viewers do.
 Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir, long first, long last, double fps,
-                    const std::filesystem::path& video) {
+                    const std::filesystem::path& video, glm::vec3 background) {
     const bool gif = video.extension() == ".gif";
     const std::filesystem::path tmp = video.parent_path() / (video.filename().string() + ".tmp" + std::to_string(::getpid()));
     char rate[64];
     std::snprintf(rate, sizeof rate, "%.9g", fps);
     std::vector<std::string> argv = {ffmpeg, "-nostdin", "-loglevel", "error", "-y", "-framerate", rate, "-start_number", std::to_string(first),
                                      "-i", (dir / "frame_%04d.png").string(), "-frames:v", std::to_string(last - first + 1)};
+    char colour[16];
+    const auto byte = [](float c) { return static_cast<unsigned>(std::lround(std::clamp(c, 0.0f, 1.0f) * 255.0f)); };
+    std::snprintf(colour, sizeof colour, "0x%02X%02X%02X", byte(background.x), byte(background.y), byte(background.z));
+    // [bg] is the colour as a stream as long as the frames; overlay=shortest=1 ends with the last frame.
+    const std::string flatten = std::string("[0:v]split[in][size];[size]format=rgb24,drawbox=c=") + colour +
+                                ":t=fill[bg];[bg][in]overlay=shortest=1:format=rgb";
     if (gif) {
-        for (const char* a : {"-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse", "-loop", "0", "-f", "gif"}) argv.emplace_back(a);
+        argv.insert(argv.end(), {"-filter_complex", flatten + ",split[a][b];[a]palettegen=reserve_transparent=0[p];[b][p]paletteuse",
+                                 "-loop", "0", "-f", "gif"});
     } else {
-        for (const char* a : {"-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4"})
-            argv.emplace_back(a);
+        argv.insert(argv.end(), {"-filter_complex", flatten + ",pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p",
+                                 "-movflags", "+faststart", "-f", "mp4"});
     }
     argv.push_back(tmp.string());
     std::vector<char*> args;
@@ -287,19 +304,15 @@ int run_render(sffd::cli::Args args) {
             std::fprintf(stderr, "splatffd render: %s '%s'\n", what, has_value ? args[i + 1].c_str() : "");
             return 2;
         };
-        if (a == "--help" || a == "-h") {
-            usage();
-            return 0;
+        if (cli::is_help(a)) {
+            return cli::help(kUsage);
         } else if (a == "--out" && has_value) {
             out_dir = args[++i];
         } else if (a == "--frames" && has_value) {
-            if (Status st = cli::parse_integer_pair("--frames", args[i + 1], ':', 0, 99'999'999, first, last); !st) {
-                std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
-                return 2;
-            }
-            if (last < first) return bad("--frames expects A:B with 0 <= A <= B, got");
+            auto range = cli::parse_frames(args[++i]);
+            if (!range) return cli::usage_error("render", range.message(), "");
+            first = range->first, last = range->last;
             frames_given = true;
-            ++i;
         } else if (a == "--size" && has_value) {
             if (Status st = cli::parse_integer_pair("--size", args[i + 1], 'x', 1, 16384, width, height); !st) {
                 std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
@@ -347,9 +360,7 @@ int run_render(sffd::cli::Args args) {
             scene = a;
             scene_given = true;
         } else {
-            std::fprintf(stderr, "splatffd render: unknown or incomplete option '%s'\n", a.c_str());
-            usage();
-            return 2;
+            return cli::usage_error("render", "unknown or incomplete option '" + a + "'", kUsage);
         }
     }
     // Memory budget stated up front: the HQ passes keep about 40 bytes per pixel on the GPU and the capture
@@ -361,9 +372,7 @@ int run_render(sffd::cli::Args args) {
         return 2;
     }
     if (out_dir.empty()) {
-        std::fprintf(stderr, "splatffd render: --out DIR is required\n");
-        usage();
-        return 2;
+        return cli::usage_error("render", "--out DIR is required", kUsage);
     }
     if (turntable > 0 && camera) {
         std::fprintf(stderr, "splatffd render: --turntable orbits the scene camera; it cannot be combined with --camera\n");
@@ -473,6 +482,13 @@ int run_render(sffd::cli::Args args) {
         }
         long written_last = first - 1;
         const auto start = std::chrono::steady_clock::now();
+        // Progress rewrites one line with \r: on a terminal only, so log files get no control characters.
+        const bool show_progress = cli::stderr_is_terminal();
+        bool line_open = false;
+        const auto end_line = [&] {
+            if (line_open) std::fputc('\n', stderr);
+            line_open = false;
+        };
         for (long k = first; k <= last; ++k) {
             // A clock of its own per frame, seeked to frame k: the frame depends on k only.
             Clock clock(ClockSettings{.fixed_dt = 1.0 / fps});
@@ -483,44 +499,54 @@ int run_render(sffd::cli::Args args) {
             schedule.run_frame(registry, frame);
             auto image = render::capture_frame(registry);
             if (!image) {
-                std::fprintf(stderr, "\nsplatffd render: %s\n", image.message().c_str());
+                end_line();
+                std::fprintf(stderr, "splatffd render: %s\n", image.message().c_str());
                 status = 1;
                 break;
             }
             const std::filesystem::path base = cli::frame_file_base(out_dir, k);
             if (png) {
                 if (Status st = render::write_png(base.string() + ".png", render::to_rgba8(*image, settings.background)); !st) {
-                    std::fprintf(stderr, "\n%s\n", st.message().c_str());
+                    end_line();
+                    std::fprintf(stderr, "%s\n", st.message().c_str());
                     status = 1;
                     break;
                 }
             }
             if (exr) {
                 if (Status st = render::write_exr(base.string() + ".exr", *image); !st) {
-                    std::fprintf(stderr, "\n%s\n", st.message().c_str());
+                    end_line();
+                    std::fprintf(stderr, "%s\n", st.message().c_str());
                     status = 1;
                     break;
                 }
             }
             written_last = k;
             if (Status st = write_manifest(written_last, k == last ? "complete" : "running"); !st) {
-                std::fprintf(stderr, "\nsplatffd render: %s\n", st.message().c_str());
+                end_line();
+                std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
                 status = 1;
                 break;
             }
             const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             const long done = k - first + 1;
-            std::fprintf(stderr, "\rsplatffd render: frame %ld (%ld/%ld, %.0f%%) %.2f s/frame, ETA %.0f s   ", k, done,
-                         count, 100.0 * double(done) / double(count), elapsed / double(done),
-                         elapsed / double(done) * double(count - done));
-            std::fflush(stderr);
+            if (show_progress) {
+                std::fprintf(stderr, "\rsplatffd render: frame %ld (%ld/%ld, %.0f%%) %.2f s/frame, ETA %.0f s   ", k, done,
+                             count, 100.0 * double(done) / double(count), elapsed / double(done),
+                             elapsed / double(done) * double(count - done));
+                std::fflush(stderr);
+                line_open = true;
+            }
         }
-        std::fprintf(stderr, "\n");
+        end_line();
+        if (status == 0)
+            std::fprintf(stderr, "splatffd render: wrote frames %ld..%ld to %s in %.1f s\n", first, last, out_dir.c_str(),
+                         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
         if (status != 0) (void)write_manifest(written_last, "failed");
         render::release_render_state(registry);
     }
     if (status == 0 && !video.empty()) {
-        if (Status st = encode_video(ffmpeg, out_dir, first, last, fps, video); !st) {
+        if (Status st = encode_video(ffmpeg, out_dir, first, last, fps, video, background.value_or(glm::vec3(0.0f))); !st) {
             std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
             return 1;
         }
