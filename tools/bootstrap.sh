@@ -20,6 +20,7 @@ PACKAGES=(
   libgtest-dev libgmock-dev libbenchmark-dev      # tests, benchmarks
   assimp-testmodels                               # glTF samples for the import tests (tests/assets)
   munge slurmctld slurmd slurm-client            # a single-node Slurm the render farm test starts (tests/tools)
+  ffmpeg                                          # render --video: MP4 (H.264) and GIF encoding
 )
 
 if ! command -v dpkg >/dev/null 2>&1; then

@@ -240,7 +240,11 @@ int run_assemble(cli::Args args) {
             return 1;
         }
         const double fps = settings.at("fps").get<double>();
-        if (Status st = cli::encode_video(ffmpeg, dir, first, last, fps, video); !st) {
+        // The same background a single run's --video uses: the shards' --background, or black.
+        glm::vec3 background(0.0f);
+        if (const auto bg = settings.find("background"); bg != settings.end() && bg->is_array() && bg->size() == 3)
+            background = glm::vec3((*bg)[0].get<float>(), (*bg)[1].get<float>(), (*bg)[2].get<float>());
+        if (Status st = cli::encode_video(ffmpeg, dir, first, last, fps, video, background); !st) {
             std::fprintf(stderr, "splatffd assemble: %s\n", st.message().c_str());
             return 1;
         }

@@ -1,4 +1,4 @@
-// splatffd compare A.exr B.exr [--whole-image]
+// splatffd compare A.exr B.exr [--whole-image | --mask-alpha]
 //
 // PSNR and SSIM between two frames (systems/splat_render/image_compare.h): over the object (pixels covered
 // in either image) by default, over every pixel with --whole-image. Prints one line:
@@ -20,22 +20,24 @@ namespace {
 
 using namespace sffd;
 
+constexpr const char* kUsage =
+    "usage: splatffd compare A.exr B.exr [--whole-image | --mask-alpha]\n"
+    "  A.exr B.exr    two frames of the same size (splatffd render / reference --format exr)\n"
+    "  --mask-alpha   PSNR (dB) and SSIM of sRGB colour over the pixels covered in either image (default)\n"
+    "  --whole-image  over every pixel\n"
+    "Prints one line: psnr_db ssim pixels mse psnr_both_db pixels_both pixels_one psnr_interior_db pixels_interior\n";
+
 int run_compare(sffd::cli::Args args) {
     std::vector<std::string> files;
     bool object_only = true;
     for (const std::string& a : args) {
+        if (cli::is_help(a)) return cli::help(kUsage);
         if (a == "--whole-image") object_only = false;
         else if (a == "--mask-alpha") object_only = true;
-        else if (a == "--help" || a == "-h") files.clear(), files.resize(3);
         else if (!a.empty() && a[0] != '-') files.push_back(a);
-        else files.resize(3);  // unknown option: usage
+        else return cli::usage_error("compare", "unknown option '" + a + "'", kUsage);
     }
-    if (files.size() != 2) {
-        std::fprintf(stderr, "usage: splatffd compare A.exr B.exr [--whole-image]\n"
-                             "  PSNR (dB) and SSIM of sRGB colour over the pixels covered in either image\n"
-                             "  (--whole-image: every pixel)\n");
-        return 2;
-    }
+    if (files.size() != 2) return cli::usage_error("compare", "expected two EXR files, got " + std::to_string(files.size()), kUsage);
     auto a = render::read_exr(files[0]);
     if (!a) {
         std::fprintf(stderr, "%s\n", a.message().c_str());

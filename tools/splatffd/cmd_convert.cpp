@@ -26,29 +26,30 @@
 
 namespace {
 
-void usage() {
-    std::fprintf(stderr,
-                 "usage: splatffd convert IN OUT [options]\n"
-                 "  IN   .ply .obj .off .gltf .glb, or a built-in scene name (sphere, face)\n"
-                 "  OUT  .ply (binary little-endian; --ascii for text) .glb .gltf, or .json: a lattice (see below)\n"
-                 "  --splats N       exactly N splats (meshes: sampled on the surface; points: thinned evenly)\n"
-                 "  --normals        re-estimate normals (PCA of k nearest neighbours, MST-oriented)\n"
-                 "  --radii          re-estimate splat radii and axes from neighbour spacing\n"
-                 "  --neighbours K   neighbourhood size for normals (default 16)\n"
-                 "  --seed S         surface sampling seed (default 1)\n"
-                 "  --ascii          write ASCII PLY\n"
-                 "  --progress       a line per step at its start, every 10 %% and its end (default: only when stderr\n"
-                 "                   is a terminal, for steps over a second); the timing summary is always printed\n"
-                 "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .glb KHR_gaussian_splatting); IN may also be\n"
-                 "                   a Gaussian file (.splat, 3DGS .ply, KHR .glb)\n"
-                 "  --lattice SRC    store a lattice bound to the cloud (OUT .glb/.gltf) or write it (OUT .json):\n"
-                 "                   fit[:L,M,N][,pad=P][,obb][,bspline]  fitted around the cloud: L,M,N divisions\n"
-                 "                   (default 10,10,10), pad x the largest extent per side (0.05), obb: oriented box\n"
-                 "                   (principal axes), bspline: cubic B-spline basis (default Bernstein);\n"
-                 "                   L.json or scene.glb: that lattice (a scene's lattices bound to its cloud)\n"
-                 "  --lattice-name N the lattice of that name in a scene file (IN for OUT .json, or --lattice)\n"
-                 "  OUT .json without --lattice exports IN's lattice (IN a scene file or a built-in scene)\n");
-}
+constexpr const char* kUsage =
+    "usage: splatffd convert IN OUT [--splats N] [--normals] [--radii] [--neighbours K] [--seed S] [--ascii]\n"
+    "                        [--progress] [--gaussians] [--lattice SRC [--lattice-name N]]\n"
+    "  IN   .ply .obj .off .gltf .glb, or a built-in scene name (sphere, face)\n"
+    "  OUT  .ply (binary little-endian; --ascii for text) .glb .gltf, or .json: a lattice (see below)\n"
+    "  --splats N       exactly N splats (meshes: sampled on the surface; points: thinned evenly; default:\n"
+    "                   one per point, or per mesh vertex (at least 20000 on the surface))\n"
+    "  --normals        re-estimate normals (PCA of k nearest neighbours, MST-oriented; default: estimated\n"
+    "                   only where missing)\n"
+    "  --radii          re-estimate splat radii and axes from neighbour spacing (default: only where missing)\n"
+    "  --neighbours K   neighbourhood size for normals (default 16)\n"
+    "  --seed S         surface sampling seed (default 1)\n"
+    "  --ascii          write ASCII PLY (default binary little-endian)\n"
+    "  --progress       a line per step at its start, every 10 % and its end (default: only when stderr\n"
+    "                   is a terminal, for steps over a second); the timing summary is always printed\n"
+    "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .glb KHR_gaussian_splatting; default: surface\n"
+    "                   splats); IN may also be a Gaussian file (.splat, 3DGS .ply, KHR .glb)\n"
+    "  --lattice SRC    store a lattice bound to the cloud (OUT .glb/.gltf) or write it (OUT .json):\n"
+    "                   fit[:L,M,N][,pad=P][,obb][,bspline]  fitted around the cloud: L,M,N divisions\n"
+    "                   (default 10,10,10), pad x the largest extent per side (0.05), obb: oriented box\n"
+    "                   (principal axes), bspline: cubic B-spline basis (default Bernstein);\n"
+    "                   L.json or scene.glb: that lattice (a scene's lattices bound to its cloud)\n"
+    "  --lattice-name N the lattice of that name in a scene file (IN for OUT .json, or --lattice)\n"
+    "  OUT .json without --lattice exports IN's lattice (IN a scene file or a built-in scene)\n";
 
 struct LatticeRequest {
     std::string source;  // --lattice
@@ -161,9 +162,8 @@ int run_convert(sffd::cli::Args args) {
             }
             return args[++i];
         };
-        if (a == "--help" || a == "-h") {
-            usage();
-            return 0;
+        if (cli::is_help(a)) {
+            return cli::help(kUsage);
         } else if (a == "--splats") {
             auto v = value(1, 1'000'000'000);
             if (!v) return 2;
@@ -191,22 +191,16 @@ int run_convert(sffd::cli::Args args) {
         } else if (a == "--gaussians") {
             gaussians = true;
         } else if (!a.empty() && a[0] == '-') {
-            std::fprintf(stderr, "splatffd convert: unknown option '%s'\n", a.c_str());
-            usage();
-            return 2;
+            return cli::usage_error("convert", "unknown option '" + a + "'", kUsage);
         } else if (in.empty()) {
             in = a;
         } else if (out.empty()) {
             out = a;
         } else {
-            usage();
-            return 2;
+            return cli::usage_error("convert", "more than two files given ('" + a + "')", kUsage);
         }
     }
-    if (in.empty() || out.empty()) {
-        usage();
-        return 2;
-    }
+    if (in.empty() || out.empty()) return cli::usage_error("convert", "expected IN and OUT", kUsage);
     if (gaussians && in != "sphere" && cli::is_gaussian_file(in)) return cli::write_gaussians(in, nullptr, out, ascii);
     if (cli::is_json_path(out)) return export_lattice_json(in, out, lattice);
     if (!lattice.source.empty() && !cli::is_scene_path(out)) {

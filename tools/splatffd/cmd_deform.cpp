@@ -43,6 +43,7 @@
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/deform_gaussians.h"
 #include "tools/splatffd/lattice_source.h"
+#include "tools/splatffd/progress.h"
 
 namespace {
 
@@ -54,19 +55,22 @@ constexpr std::uint64_t kEstimateMaxPoints = 4'000'000;  // default limit of the
 
 constexpr const char* kUsage =
     "usage: splatffd deform IN OUT [--lattice SOURCE [--lattice-name NAME]] [--backend cpu|gpu|reference] [--bench N] [--ascii]\n"
-    "  IN, OUT  .ply (streamed, every property kept) or .glb .gltf (OUT also .ply); IN also .obj .off\n"
-    "  SOURCE   L.json | scene.glb (the lattices bound to its cloud) | fit[:L,M,N][,pad=P][,obb][,bspline]\n"
+    "                              [--estimate-radii]\n"
+    "  IN, OUT  .ply (streamed, every property kept; 3DGS Gaussians too) or .glb .gltf (OUT also .ply);\n"
+    "           IN also .obj .off\n"
+    "  --lattice SOURCE  L.json | scene.glb (the lattices bound to its cloud) | fit[:L,M,N][,pad=P][,obb][,bspline]\n"
     "           (default: the lattices stored in IN when IN is a scene file)\n"
-    "  --lattice-name NAME  the lattice of that name in a scene file\n"
+    "  --lattice-name NAME  the lattice of that name in a scene file (default: every lattice bound to the cloud)\n"
+    "  --backend B  cpu (float, every core; default), gpu (compute shader on a headless GL context) or\n"
+    "           reference (double precision, one thread: for checking the others)\n"
+    "  --bench N    re-run the deformation N more times and print a JSON timing line on stdout (default 0)\n"
+    "  --ascii      write ASCII PLY (default binary little-endian)\n"
     "  splat axes (axis_u*, axis_v*) are deformed; from normals (+ radius, or radii estimated from\n"
     "  neighbour spacing) they are created first\n"
     "  --estimate-radii  estimate radii for PLY input with normals only even beyond 4M points\n"
     "                    (the estimate holds every position: ~75 bytes per point)\n";
 
-int usage(bool asked = false) {
-    std::fputs(kUsage, asked ? stdout : stderr);
-    return asked ? 0 : 2;
-}
+int usage(bool asked = false) { return asked ? cli::help(kUsage) : cli::usage_error("deform", "", kUsage); }
 
 int fail(const std::string& message) {
     std::fprintf(stderr, "splatffd deform: %s\n", message.c_str());
@@ -229,14 +233,15 @@ int parse_options(sffd::cli::Args args, Options& o) {
             if (i + 1 >= args.size()) return std::nullopt;
             return args[++i];
         };
-        if (a == "--help" || a == "-h") return usage(true);
+        if (cli::is_help(a)) return usage(true);
         if (a == "--lattice" || a == "--lattice-name") {
             auto v = next();
             if (!v) return std::fprintf(stderr, "splatffd deform: %s needs a value\n", a.c_str()), usage();
             (a == "--lattice" ? o.lattice_source : o.lattice_name) = *v;
         } else if (a == "--backend") {
             auto v = next();
-            if (!v || (*v != "cpu" && *v != "gpu" && *v != "reference")) return usage();
+            if (!v || (*v != "cpu" && *v != "gpu" && *v != "reference"))
+                return cli::usage_error("deform", "--backend takes cpu, gpu or reference", kUsage);
             o.backend = *v;
         } else if (a == "--bench") {
             auto v = next();
@@ -392,6 +397,8 @@ int deform_ply_stream(const Options& o) {
     const auto t_start = Clock::now();
     ply::Chunk chunk;
     const std::string lattice_label = o.lattice_source.empty() ? in_path : o.lattice_source;
+    // A percentage line on a terminal for a stream that runs over a second; nothing in logs or pipes.
+    cli::ProgressPrinter progress("splatffd deform", cli::ProgressPrinter::mode_for(false));
     for (const ply::Element& e : in_header.elements) {
         if (auto s = reader->seek_element(e.name); !s) return fail(s.message());
         while (true) {
@@ -416,6 +423,8 @@ int deform_ply_stream(const Options& o) {
                                 " is not finite; nothing was written to " + o.files[1]);
                 first_ms += *ms;
                 points += *rows;
+                progress.report("deforming " + std::to_string(ve.count) + " points",
+                                ve.count > 0 ? double(points) / double(ve.count) : 1.0);
             }
             if (auto s = writer->write_rows(chunk); !s) return fail(s.message());
         }

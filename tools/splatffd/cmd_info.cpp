@@ -179,11 +179,16 @@ void summarise_registry(const ecs::Registry& reg) {
     if (gaussians) std::printf("  total    %zu Gaussians\n", gaussians);
 }
 
+constexpr const char* kUsage =
+    "usage: splatffd info FILE|sphere|face\n"
+    "  FILE   .ply (point cloud or 3DGS Gaussians: header, counts, bounds), .obj .off (mesh or points),\n"
+    "         .gltf .glb (scene: clouds, Gaussians, lattices, clips, camera, lights)\n"
+    "  sphere, face   the built-in scenes\n";
+
 int run_info(cli::Args args) {
-    if (args.size() != 1 || args[0] == "--help" || args[0] == "-h") {
-        std::fprintf(stderr, "usage: splatffd info FILE|sphere|face\n  FILE: .ply .obj .off .gltf .glb\n");
-        return args.size() == 1 ? 0 : 2;
-    }
+    for (const std::string& a : args)
+        if (cli::is_help(a)) return cli::help(kUsage);
+    if (args.size() != 1) return cli::usage_error("info", args.empty() ? "expected a FILE" : "expected one FILE", kUsage);
     const std::string file = args[0];
     std::string ext = std::filesystem::path(file).extension().string();
     for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));

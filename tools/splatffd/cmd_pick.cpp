@@ -34,19 +34,17 @@ namespace {
 
 using namespace sffd;
 
-void usage() {
-    std::fprintf(stderr,
-                 "usage: splatffd pick [SCENE] --at X,Y [--size WxH] [--xray] [--tolerance PX] [--first-gaussian]\n"
-                 "  SCENE         built-in name (sphere, face), a scene/point-cloud file or a 3D Gaussian file\n"
-                 "                (3DGS .ply, .splat, .spz, KHR .glb; default: sphere)\n"
-                 "  --at X,Y      pixel to pick (origin top-left, y down; picks the pixel's centre)\n"
-                 "  --size WxH    viewport in pixels (default 1280x720, as `splatffd render`)\n"
-                 "  --xray        control points hidden behind the surface can be picked\n"
-                 "  --tolerance P control points within P pixels of the cursor win (default 6)\n"
-                 "  --first-gaussian  the first Gaussian ellipsoid on the ray wins (default: the Gaussian\n"
-                 "                contributing most to the pixel)\n"
-                 "prints the hit as JSON; a miss prints {\"hit\":false} and exits 0\n");
-}
+constexpr const char* kUsage =
+    "usage: splatffd pick [SCENE] --at X,Y [--size WxH] [--xray] [--tolerance PX] [--first-gaussian]\n"
+    "  SCENE         built-in name (sphere, face), a scene/point-cloud file or a 3D Gaussian file\n"
+    "                (3DGS .ply, .splat, .spz, KHR .glb; default: sphere)\n"
+    "  --at X,Y      pixel to pick (origin top-left, y down; picks the pixel's centre)\n"
+    "  --size WxH    viewport in pixels (default 1280x720, as `splatffd render`)\n"
+    "  --xray        control points hidden behind the surface can be picked (default: only visible ones)\n"
+    "  --tolerance P control points within P pixels of the cursor win (default 6)\n"
+    "  --first-gaussian  the first Gaussian ellipsoid on the ray wins (default: the Gaussian\n"
+    "                contributing most to the pixel)\n"
+    "prints the hit as JSON; a miss prints {\"hit\":false} and exits 0\n";
 
 bool parse_pair(const std::string& s, char sep, double& a, double& b) {
     const auto at = s.find(sep);
@@ -73,9 +71,8 @@ int run_pick(sffd::cli::Args args) {
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         const bool has_value = i + 1 < args.size();
-        if (a == "--help" || a == "-h") {
-            usage();
-            return 0;
+        if (cli::is_help(a)) {
+            return cli::help(kUsage);
         } else if (a == "--at" && has_value) {
             if (!parse_pair(args[++i], ',', x, y)) {
                 std::fprintf(stderr, "splatffd pick: --at expects X,Y (numbers), got '%s'\n", args[i].c_str());
@@ -103,15 +100,11 @@ int run_pick(sffd::cli::Args args) {
             scene = a;
             scene_given = true;
         } else {
-            std::fprintf(stderr, "splatffd pick: unexpected argument '%s'\n", a.c_str());
-            usage();
-            return 2;
+            return cli::usage_error("pick", "unexpected argument '" + a + "'", kUsage);
         }
     }
     if (!have_at) {
-        std::fprintf(stderr, "splatffd pick: --at X,Y is required\n");
-        usage();
-        return 2;
+        return cli::usage_error("pick", "--at X,Y is required", kUsage);
     }
     if (x < 0 || y < 0 || x >= w || y >= h) {
         std::fprintf(stderr, "splatffd pick: pixel %g,%g is outside the %gx%g viewport\n", x, y, w, h);

@@ -18,11 +18,14 @@ namespace {
 using namespace profiling;
 
 constexpr const char* usage_text =
-    "usage: splatffd profile [SCENE] [options]\n"
+    "usage: splatffd profile [SCENE] [--frames N] [--warmup W] [--quality hq|preview] [--raster auto|raster|compute]\n"
+    "                        [--backend cpu|gpu] [--sync] [--drive CASE|none] [--json F] [--csv F] [--svg F]\n"
+    "                        [--trace F] [--compare BASE.json] [--sweep K=V,..] [--plot-sweep F.json] [--paper]\n"
+    "                        [--naive-frames N]\n"
     "  SCENE                 built-in name (sphere, face), a scene/point-cloud file, or synthetic:N\n"
     "                        (a sphere of N splats with an 11^3 lattice), synthetic-gaussians:N (that\n"
     "                        sphere as N 3D Gaussians; Gaussian files work as SCENE too). Default: sphere\n"
-    "  --frames N            measured frames (default 120)\n"
+    "  --frames N|0:B        measured frames, after the warm-up (default 120)\n"
     "  --warmup W            frames run before measuring (default 10)\n"
     "  --quality hq|preview  render quality (default hq)\n"
     "  --raster auto|raster|compute  HQ splat rasteriser: the fixed-function one, the compute one\n"
@@ -30,7 +33,7 @@ constexpr const char* usage_text =
     "  --backend cpu|gpu     deformation backend (default gpu; cpu runs without a GL context when the\n"
     "                        renderer is not wanted)\n"
     "  --sync                time GPU passes with glFinish + CPU clock instead of timer queries\n"
-    "                        (timer queries are not trustworthy on llvmpipe)\n"
+    "                        (timer queries are not trustworthy on llvmpipe; default: timer queries)\n"
     "  --drive CASE|none     deform every lattice each frame with a paper case, animated over time:\n"
     "                        'global twist' (default), 'global stretch', 'local twist', 'local stretch'\n"
     "  --json F --csv F --svg F --trace F   write the report / per-frame CSV / frame-time chart /\n"
@@ -43,15 +46,13 @@ constexpr const char* usage_text =
     "  --plot-sweep F.json   re-draw the plots of a sweep saved with --json (with --svg PREFIX)\n"
     "  --paper               the seed paper's table: sphere and face, 11^3 control points, four cases;\n"
     "                        naive paper CPU algorithm vs ffd_system's CPU and GPU paths, paper mode\n"
+    "                        (minutes: progress is shown on a terminal)\n"
     "  --naive-frames N      frames of the naive paper algorithm per case (default 1; about a minute\n"
     "                        each; 0 skips it)\n";
 
 }  // namespace
 
-int usage_error(const std::string& message) {
-    std::fprintf(stderr, "splatffd profile: %s\n%s", message.c_str(), usage_text);
-    return 2;
-}
+int usage_error(const std::string& message) { return cli::usage_error("profile", message, usage_text); }
 
 namespace {
 
@@ -134,11 +135,15 @@ int run_profile_command(cli::Args args) {
             std::string v;
             return value(v) && parse_int(v, out);
         };
-        if (a == "--help" || a == "-h") {
-            std::printf("%s", usage_text);
-            return 0;
+        if (cli::is_help(a)) {
+            return cli::help(usage_text);
         } else if (a == "--frames") {
-            if (!int_value(o.frames) || o.frames < 1) return usage_error("--frames takes a positive integer");
+            // One meaning of --frames in every command (N, or 0:B); measuring starts at frame 0.
+            std::string v;
+            auto range = value(v) ? cli::parse_frames(v, 9'999'999) : Result<cli::FrameRange>(make_error("--frames needs a value"));
+            if (!range) return usage_error(range.message());
+            if (range->first != 0) return usage_error("--frames " + v + ": measuring starts at frame 0; use N or 0:B");
+            o.frames = static_cast<int>(range->count());
         } else if (a == "--warmup") {
             if (!int_value(o.warmup)) return usage_error("--warmup takes a non-negative integer");
         } else if (a == "--naive-frames") {

@@ -1,4 +1,4 @@
-// splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N] [--anisotropic N] [--format png,exr]
+// splatffd reference [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--supersample N] [--anisotropic N] [--format png,exr]
 //
 // Ground-truth frames (systems/splat_render/ground_truth.h): the exact surface behind the scene's cloud
 // (the built-in `sphere`; or the triangles of a mesh file, at rest, whose cloud is what `splatffd render
@@ -26,20 +26,19 @@ namespace {
 
 using namespace sffd;
 
-void usage() {
-    std::fprintf(stderr,
-                 "usage: splatffd reference [SCENE] --out DIR [--frames A:B] [--size WxH] [--supersample N] [--anisotropic N]\n"
-                 "                          [--format png,exr] [--fps F]\n"
-                 "  SCENE            a scene whose cloud has an exact surface (built-in: sphere; default), or a\n"
-                 "                   mesh file (OBJ, OFF, PLY, glTF with triangles; one untinted texture or none)\n"
-                 "  --out DIR        output folder (created); files frame_NNNN.png / frame_NNNN.exr\n"
-                 "  --frames A:B     frame range, inclusive (default 0:0); frame k is at time k / fps\n"
-                 "  --size WxH       image size in pixels (default 1280x720)\n"
-                 "  --supersample N  N x N rays per pixel, box-filtered (default 0: one ray, trilinear mip)\n"
-                 "  --anisotropic N  one ray, up to N trilinear probes along the footprint (default 0: off)\n"
-                 "  --format LIST    png, exr or png,exr (default png,exr)\n"
-                 "  --fps F          frames per second of the clip clock (default 24)\n");
-}
+constexpr const char* kUsage =
+    "usage: splatffd reference [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--supersample N] [--anisotropic N]\n"
+    "                          [--format png,exr] [--fps F]\n"
+    "  SCENE            a scene whose cloud has an exact surface (built-in: sphere; default), or a\n"
+    "                   mesh file (OBJ, OFF, PLY, glTF with triangles; one untinted texture or none)\n"
+    "  --out DIR        output folder (created; required); files frame_NNNN.png / frame_NNNN.exr\n"
+    "  --frames N|A:B   N: frames 0..N-1; A:B: frames A..B inclusive (default 1: frame 0); frame k is at\n"
+    "                   time k / fps, and the scene's clips play\n"
+    "  --size WxH       image size in pixels (default 1280x720)\n"
+    "  --supersample N  N x N rays per pixel, box-filtered (default 0: one ray, trilinear mip)\n"
+    "  --anisotropic N  one ray, up to N trilinear probes along the footprint (default 0: off)\n"
+    "  --format LIST    png, exr or png,exr (default png,exr)\n"
+    "  --fps F          frames per second of the clip clock (default 24)\n";
 
 // A mesh file (OBJ, OFF, PLY or glTF with triangles) loads as the cloud sampled from it (load_scene, as
 // `splatffd render` loads it): its triangles become that cloud's ExactMesh, the surface to trace.
@@ -78,15 +77,14 @@ int run_reference(sffd::cli::Args args) {
             std::fprintf(stderr, "splatffd reference: %s\n", st.message().c_str());
             return 2;
         };
-        if (a == "--help" || a == "-h") {
-            usage();
-            return 0;
+        if (cli::is_help(a)) {
+            return cli::help(kUsage);
         } else if (a == "--out" && has_value) {
             out_dir = args[++i];
         } else if (a == "--frames" && has_value) {
-            if (Status st = cli::parse_integer_pair("--frames", args[i + 1], ':', 0, 99'999'999, first, last); !st) return fail(st);
-            if (last < first) return bad("--frames expects A:B with 0 <= A <= B, got");
-            ++i;
+            auto range = cli::parse_frames(args[++i]);  // one meaning of --frames in every command
+            if (!range) return fail(range.error());
+            first = range->first, last = range->last;
         } else if (a == "--size" && has_value) {
             if (Status st = cli::parse_integer_pair("--size", args[i + 1], 'x', 1, 16384, width, height); !st) return fail(st);
             ++i;
@@ -109,15 +107,11 @@ int run_reference(sffd::cli::Args args) {
             scene = a;
             scene_given = true;
         } else {
-            std::fprintf(stderr, "splatffd reference: unknown or incomplete option '%s'\n", a.c_str());
-            usage();
-            return 2;
+            return cli::usage_error("reference", "unknown or incomplete option '" + a + "'", kUsage);
         }
     }
     if (out_dir.empty()) {
-        std::fprintf(stderr, "splatffd reference: --out DIR is required\n");
-        usage();
-        return 2;
+        return cli::usage_error("reference", "--out DIR is required", kUsage);
     }
     if (!cli::create_output_folder(out_dir)) return 1;
     ecs::Registry registry;

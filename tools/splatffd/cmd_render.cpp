@@ -56,27 +56,59 @@ namespace {
 
 using namespace sffd;
 
-void usage() {
-    std::fprintf(stderr,
-                 "usage: splatffd render [SCENE] --out DIR [--frames A:B] [--size WxH] [--quality hq|preview]\n"
-                 "                       [--format png,exr] [--background R,G,B] [--fps F] [--no-cull]\n"
-                 "  SCENE            built-in name (sphere, face) or a scene/point-cloud file (default: sphere)\n"
-                 "  --out DIR        output folder (created); files frame_NNNN.png / frame_NNNN.exr\n"
-                 "  --frames A:B     frame range, inclusive (default 0:0); frame k is at time k / fps\n"
-                 "  --size WxH       image size in pixels (default 1280x720)\n"
-                 "  --quality Q      hq (three-pass surface splatting, default) or preview (opaque discs)\n"
-                 "  --format LIST    png, exr or png,exr (default png,exr)\n"
-                 "  --background RGB sRGB colour 0..1 (e.g. 1,1,1) filling the PNG background (default transparent)\n"
-                 "  --fps F          frames per second of the fixed-step clock (default 24, the demo clip's rate)\n"
-                 "  --no-cull        disable back-face/frustum culling (for comparisons)\n"
-                 "  --camera E,T,U,F the camera for every frame: eye x,y,z, target x,y,z, up x,y,z, vertical fov in\n"
-                 "                   degrees (0..180); eye = target and up along the view direction are refused\n"
-                 "  --turntable N    N frames (0..N-1) orbiting the scene's bounds centre at the scene camera's\n"
-                 "                   distance and height, one turn; frame 0 is seen from the scene camera's eye\n"
-                 "  --video FILE     also encode the PNG frames as FILE (.mp4 H.264 or .gif) at --fps; needs ffmpeg\n"
-                 "  --shard K/N      render only frames FIRST+K, FIRST+K+N, ... (shard K of N, for render farms);\n"
-                 "                   `splatffd assemble DIR` checks the shards and writes the final manifest\n");
-}
+constexpr const char* kUsage =
+    "usage: splatffd render [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--quality hq|preview] [--format png,exr]
+"
+    "                       [--background R,G,B] [--fps F] [--no-cull]
+"
+    "                       [--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV | --turntable N] [--video FILE.mp4|FILE.gif] [--shard K/N]
+"
+    "  SCENE            built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj .off,
+"
+    "                   3D Gaussians .ply (3DGS) .splat .spz .glb (KHR_gaussian_splatting) (default: sphere)
+"
+    "  --out DIR        output folder (created; required); files frame_NNNN.png / frame_NNNN.exr
+"
+    "  --frames N|A:B   N: frames 0..N-1; A:B: frames A..B inclusive (default 1: frame 0); frame k is at
+"
+    "                   time k / fps, and the scene's clips play
+"
+    "  --size WxH       image size in pixels (default 1280x720)
+"
+    "  --quality Q      hq (three-pass surface splatting, default) or preview (opaque discs)
+"
+    "  --format LIST    png, exr or png,exr (default png,exr)
+"
+    "  --background RGB sRGB colour 0..1 (e.g. 1,1,1) behind the object in the PNG and the video
+"
+    "                   (default: transparent PNG, black video)
+"
+    "  --fps F          frames per second of the fixed-step clock and the video (default 24, the demo clip's rate)
+"
+    "  --no-cull        disable back-face/frustum culling (for comparisons; default on)
+"
+    "  --camera E,T,U,F the camera for every frame: eye x,y,z, target x,y,z, up x,y,z, vertical fov in
+"
+    "                   degrees (0..180); eye = target and up along the view direction are refused
+"
+    "                   (default: the scene's camera, or one framing the scene)
+"
+    "  --turntable N    N frames (0..N-1) orbiting the scene's bounds centre at the scene camera's
+"
+    "                   distance and height, one turn; frame 0 is seen from the scene camera's eye; the
+"
+    "                   scene's clips play along (frame k at time k / fps), as with --frames
+"
+    "  --video FILE     also encode the PNG frames as FILE (.mp4 H.264 or .gif) at --fps, both over the
+"
+    "                   same background; needs ffmpeg (tools/bootstrap.sh installs it)
+"
+    "  --shard K/N      render only frames FIRST+K, FIRST+K+N, ... (shard K of N, for render farms;
+"
+    "                   default: every frame); `splatffd assemble DIR` checks the shards and writes the manifest
+"
+    "Progress is shown on a terminal only (nothing is written into logs or pipes).
+";
 
 // ---- --camera, --turntable ------------------------------------------------------------------------
 
@@ -249,17 +281,15 @@ std::optional<int> parse_render_args(cli::Args args, RenderOptions& o) {
             std::fprintf(stderr, "splatffd render: %s\n", message.c_str());
             return 2;
         };
-        if (a == "--help" || a == "-h") {
-            usage();
-            return 0;
+        if (cli::is_help(a)) {
+            return cli::help(kUsage);
         } else if (a == "--out" && has_value) {
             o.out_dir = args[++i];
         } else if (a == "--frames" && has_value) {
-            if (Status st = cli::parse_integer_pair("--frames", args[i + 1], ':', 0, 99'999'999, o.first, o.last); !st)
-                return refuse(st.message());
-            if (o.last < o.first) return bad("--frames expects A:B with 0 <= A <= B, got");
+            auto range = cli::parse_frames(args[++i]);
+            if (!range) return cli::usage_error("render", range.message(), "");
+            o.first = range->first, o.last = range->last;
             o.frames_given = true;
-            ++i;
         } else if (a == "--size" && has_value) {
             if (Status st = cli::parse_integer_pair("--size", args[i + 1], 'x', 1, 16384, o.width, o.height); !st)
                 return refuse(st.message());
@@ -300,9 +330,7 @@ std::optional<int> parse_render_args(cli::Args args, RenderOptions& o) {
             o.scene = a;
             o.scene_given = true;
         } else {
-            std::fprintf(stderr, "splatffd render: unknown or incomplete option '%s'\n", a.c_str());
-            usage();
-            return 2;
+            return cli::usage_error("render", "unknown or incomplete option '" + a + "'", kUsage);
         }
     }
     return std::nullopt;
@@ -318,11 +346,7 @@ std::optional<int> check_render_options(RenderOptions& o, std::string& ffmpeg) {
                      o.height, static_cast<long long>(o.width) * o.height, kMaxPixels);
         return 2;
     }
-    if (o.out_dir.empty()) {
-        std::fprintf(stderr, "splatffd render: --out DIR is required\n");
-        usage();
-        return 2;
-    }
+    if (o.out_dir.empty()) return cli::usage_error("render", "--out DIR is required", kUsage);
     if (o.turntable > 0 && o.camera) {
         std::fprintf(stderr, "splatffd render: --turntable orbits the scene camera; it cannot be combined with --camera\n");
         return 2;
@@ -477,11 +501,19 @@ int render_frames(const RenderOptions& o, RenderScene& s, cli::RunRecord& run) {
     }
     int status = 0;
     const auto start = std::chrono::steady_clock::now();
+    // Progress rewrites one line with \r: on a terminal only, so log files get no control characters.
+    const bool show_progress = cli::stderr_is_terminal();
+    bool line_open = false;
+    const auto end_line = [&] {
+        if (line_open) std::fputc('\n', stderr);
+        line_open = false;
+    };
     for (long i = 0; i < count; ++i) {
         const long k = run.frames.at(i);
         auto print = render_frame(o, s, schedule, k);
         if (!print) {
-            std::fprintf(stderr, "\n%s\n", print.message().c_str());
+            end_line();
+            std::fprintf(stderr, "%s\n", print.message().c_str());
             status = 1;
             break;
         }
@@ -491,25 +523,34 @@ int render_frames(const RenderOptions& o, RenderScene& s, cli::RunRecord& run) {
             // The first frame's real size, for the rest of the run.
             const double bytes = double((print->png ? print->png->bytes : 0) + (print->exr ? print->exr->bytes : 0));
             if (Status st = check_free_space(o.out_dir, count - 1, bytes, "at the size of the first frame"); !st) {
-                std::fprintf(stderr, "\nsplatffd render: %s\n", st.message().c_str());
+                end_line();
+                std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
                 status = 1;
                 break;
             }
         }
         if (i + 1 == count) run.state = "complete";
         if (Status st = cli::write_manifest(manifest, run); !st) {
-            std::fprintf(stderr, "\nsplatffd render: %s\n", st.message().c_str());
+            end_line();
+            std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
             status = 1;
             break;
         }
         const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         const long done = i + 1;
-        std::fprintf(stderr, "\rsplatffd render: frame %ld (%ld/%ld, %.0f%%) %.2f s/frame, ETA %.0f s   ", k, done,
-                     count, 100.0 * double(done) / double(count), elapsed / double(done),
-                     elapsed / double(done) * double(count - done));
-        std::fflush(stderr);
+        if (show_progress) {
+            std::fprintf(stderr, "\rsplatffd render: frame %ld (%ld/%ld, %.0f%%) %.2f s/frame, ETA %.0f s   ", k, done,
+                         count, 100.0 * double(done) / double(count), elapsed / double(done),
+                         elapsed / double(done) * double(count - done));
+            std::fflush(stderr);
+            line_open = true;
+        }
     }
-    std::fprintf(stderr, "\n");
+    end_line();
+    if (status == 0 && count > 0)
+        std::fprintf(stderr, "splatffd render: wrote frames %ld..%ld to %s in %.1f s\n", run.frames.at(0),
+                     run.frames.at(count - 1), o.out_dir.c_str(),
+                     std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     if (status != 0) {
         run.state = "failed";
         (void)cli::write_manifest(manifest, run);
@@ -554,7 +595,7 @@ int run_render(sffd::cli::Args args) {
         render::release_render_state(scene.registry);
     }
     if (status == 0 && !o.video.empty()) {
-        if (Status st = cli::encode_video(ffmpeg, o.out_dir, o.first, o.last, o.fps, o.video); !st) {
+        if (Status st = cli::encode_video(ffmpeg, o.out_dir, o.first, o.last, o.fps, o.video, o.background.value_or(glm::vec3(0.0f))); !st) {
             std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
             return 1;
         }

@@ -10,24 +10,26 @@
 
 namespace {
 
-void usage() {
-    std::fprintf(stderr,
-                 "usage: splatffd view [SCENE] [options]\n"
-                 "  SCENE              built-in name (sphere, face) or a file (.ply .obj .off .gltf .glb); default sphere\n"
-                 "  --replay FILE      play a recorded input file (format: systems/editor/README.md)\n"
-                 "  --record FILE      write this session's input to FILE at exit\n"
-                 "  --frames N         exit after N frames\n"
-                 "  --screenshot PATH  write the last frame to PATH (.png or .exr) at exit\n"
-                 "  --save PATH        where ctrl+s saves (default: the scene file, or <scene>.glb)\n"
-                 "  --size WxH         window size (default 1280x720)\n"
-                 "  --quality hq|preview\n"
-                 "  --no-ui            no ImGui panels\n"
-                 "  --headless         no window (EGL); input only from --replay\n"
-                 "  --timing-json F    write frame-time statistics (all frames, frames with a live drag)\n"
-                 "  --window-screenshot PATH  with --frames: the last frame's whole window (panels too), PNG\n"
-                 "  --panel-rects-json PATH   with --frames: the panels' rectangles in the last frame, JSON\n"
-                 "Runs under X (use `xvfb-run -a` without a display). Keys and mouse: systems/editor/README.md\n");
-}
+constexpr const char* kUsage =
+    "usage: splatffd view [SCENE] [--replay FILE] [--record FILE] [--frames N] [--out PATH] [--save PATH] [--size WxH]\n"
+    "                     [--quality hq|preview] [--no-ui] [--headless] [--json F] [--window-screenshot PATH]\n"
+    "                     [--panel-rects-json PATH]\n"
+    "  SCENE              built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj .off,\n"
+    "                     3D Gaussians .ply (3DGS) .splat .spz .glb (default: sphere)\n"
+    "  --replay FILE      play a recorded input file (format: systems/editor/README.md)\n"
+    "  --record FILE      write this session's input to FILE at exit\n"
+    "  --frames N|0:B     exit after N frames (0:B: after frames 0..B; default: run until the window closes)\n"
+    "  --out PATH         write the last frame to PATH (.png or .exr) at exit (old spelling: --screenshot)\n"
+    "  --save PATH        where ctrl+s saves (default: the scene file, or <scene>.glb)\n"
+    "  --size WxH         window size (default 1280x720)\n"
+    "  --quality Q        hq (three-pass surface splatting, default) or preview (opaque discs, faster)\n"
+    "  --no-ui            no ImGui panels (default: panels shown)\n"
+    "  --headless         no window (EGL); input only from --replay (default: a window)\n"
+    "  --json F           write frame-time statistics (all frames, frames with a live drag) (old spelling:\n"
+    "                     --timing-json)\n"
+    "  --window-screenshot PATH  with --frames: the last frame's whole window (panels too), PNG\n"
+    "  --panel-rects-json PATH   with --frames: the panels' rectangles in the last frame, JSON\n"
+    "Runs under X (use `xvfb-run -a` without a display). Keys and mouse: systems/editor/README.md\n";
 
 int run_view_command(sffd::cli::Args args) {
     sffd::editor::ViewOptions o;
@@ -41,9 +43,8 @@ int run_view_command(sffd::cli::Args args) {
             }
             return &args[++i];
         };
-        if (a == "--help" || a == "-h") {
-            usage();
-            return 0;
+        if (sffd::cli::is_help(a)) {
+            return sffd::cli::help(kUsage);
         } else if (a == "--replay") {
             const auto* v = value("--replay");
             if (!v) return 2;
@@ -55,14 +56,15 @@ int run_view_command(sffd::cli::Args args) {
         } else if (a == "--frames") {
             const auto* v = value("--frames");
             if (!v) return 2;
-            auto n = sffd::cli::parse_integer("--frames", *v, 1, 1'000'000'000);  // the shared number parser
-            if (!n) {
-                std::fprintf(stderr, "splatffd view: %s\n", n.message().c_str());
-                return 2;
-            }
-            o.frames = std::uint64_t(*n);
-        } else if (a == "--screenshot") {
-            const auto* v = value("--screenshot");
+            auto range = sffd::cli::parse_frames(*v, 999'999'999);  // one meaning of --frames in every command
+            if (!range) return sffd::cli::usage_error("view", range.message(), "");
+            // The editor's clock starts at frame 0; a later first frame would need a seek it does not do.
+            if (range->first != 0)
+                return sffd::cli::usage_error("view", "--frames " + *v + ": the editor starts at frame 0; use N or 0:B", "");
+            o.frames = std::uint64_t(range->count());
+        } else if (a == "--out" || a == "--screenshot") {
+            if (a == "--screenshot") sffd::cli::warn_deprecated("view", a, "--out");
+            const auto* v = value(a.c_str());
             if (!v) return 2;
             o.screenshot = *v;
         } else if (a == "--save") {
@@ -77,8 +79,9 @@ int run_view_command(sffd::cli::Args args) {
             const auto* v = value("--panel-rects-json");
             if (!v) return 2;
             o.panel_rects_json = *v;
-        } else if (a == "--timing-json") {
-            const auto* v = value("--timing-json");
+        } else if (a == "--json" || a == "--timing-json") {
+            if (a == "--timing-json") sffd::cli::warn_deprecated("view", a, "--json");
+            const auto* v = value(a.c_str());
             if (!v) return 2;
             o.timing_json = *v;
         } else if (a == "--size") {
@@ -100,9 +103,7 @@ int run_view_command(sffd::cli::Args args) {
         } else if (a == "--headless") {
             o.headless = true;
         } else if (!a.empty() && a[0] == '-') {
-            std::fprintf(stderr, "splatffd view: unknown option '%s'\n", a.c_str());
-            usage();
-            return 2;
+            return sffd::cli::usage_error("view", "unknown option '" + a + "'", kUsage);
         } else if (!have_scene) {
             o.scene = a;
             have_scene = true;

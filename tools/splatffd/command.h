@@ -35,6 +35,31 @@ Result<double> parse_number(std::string_view option, std::string_view text, doub
 Status parse_integer_pair(std::string_view option, std::string_view text, char sep, long long min, long long max,
                           long& a, long& b);
 
+// ---- The one grammar of every command (help, usage errors, --frames, renamed options, progress) ----
+
+// `--help` or `-h`.
+bool is_help(std::string_view arg);
+// `splatffd X --help`: the usage text on stdout; returns 0, the exit code of a help request.
+int help(std::string_view usage_text);
+// A usage error: "splatffd X: MESSAGE" and then the usage text on stderr; returns 2. An empty message
+// prints the usage text alone.
+int usage_error(std::string_view command, std::string_view message, std::string_view usage_text);
+// An old option spelling that still works: one line on stderr,
+// "splatffd X: --screenshot is deprecated; use --out".
+void warn_deprecated(std::string_view command, std::string_view old_name, std::string_view new_name);
+
+// --frames has one meaning in every command: "N" is the N frames 0..N-1, "A:B" the frames A..B
+// (inclusive). Errors name the option: "--frames: expected N or A:B with 0 <= A <= B, got '5:2'".
+struct FrameRange {
+    long first = 0, last = 0;
+    long count() const { return last - first + 1; }
+};
+Result<FrameRange> parse_frames(std::string_view text, long max_frame = 99'999'999);
+
+// Progress lines (rewritten in place with \r) go to stderr only when it is a terminal: logs and pipes
+// get the command's result lines and nothing else.
+bool stderr_is_terminal();
+
 struct Registrar {
     Registrar(const char* name, const char* summary, CommandFn run);
 };

@@ -7,6 +7,8 @@
 #include <cstdlib>
 #include <string>
 
+#include <unistd.h>
+
 #include "tools/splatffd/command.h"
 
 namespace sffd::cli {
@@ -49,5 +51,42 @@ Status parse_integer_pair(std::string_view option, std::string_view text, char s
     b = static_cast<long>(*y);
     return {};
 }
+
+bool is_help(std::string_view arg) { return arg == "--help" || arg == "-h"; }
+
+int help(std::string_view usage_text) {
+    std::fwrite(usage_text.data(), 1, usage_text.size(), stdout);
+    return 0;
+}
+
+int usage_error(std::string_view command, std::string_view message, std::string_view usage_text) {
+    if (!message.empty())
+        std::fprintf(stderr, "splatffd %.*s: %.*s\n", int(command.size()), command.data(), int(message.size()), message.data());
+    std::fwrite(usage_text.data(), 1, usage_text.size(), stderr);
+    return 2;
+}
+
+void warn_deprecated(std::string_view command, std::string_view old_name, std::string_view new_name) {
+    std::fprintf(stderr, "splatffd %.*s: %.*s is deprecated; use %.*s\n", int(command.size()), command.data(), int(old_name.size()),
+                 old_name.data(), int(new_name.size()), new_name.data());
+}
+
+Result<FrameRange> parse_frames(std::string_view text, long max_frame) {
+    const auto bad = [&] {
+        return make_error("--frames: expected an integer N (frames 0..N-1) or a range A:B (frames A..B, 0 <= A <= B <= " +
+                          std::to_string(max_frame) + "), got '" + std::string(text) + "'");
+    };
+    FrameRange r;
+    if (text.find(':') == std::string_view::npos) {
+        auto n = parse_integer("--frames", text, 1, max_frame + 1);
+        if (!n) return bad();
+        r.first = 0, r.last = static_cast<long>(*n) - 1;
+        return r;
+    }
+    if (!parse_integer_pair("--frames", text, ':', 0, max_frame, r.first, r.last) || r.last < r.first) return bad();
+    return r;
+}
+
+bool stderr_is_terminal() { return isatty(STDERR_FILENO) != 0; }
 
 }  // namespace sffd::cli

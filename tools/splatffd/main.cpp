@@ -48,23 +48,24 @@ const sffd::cli::Command* find(const std::string& name) {
     return nullptr;
 }
 
-void print_help() {
-    std::printf(
+// On stdout for --help (exit 0); on stderr for a bare `splatffd` (a usage error, exit 2).
+void print_help(std::FILE* to) {
+    std::fprintf(to,
         "splatffd %s: real-time point-splat engine with free-form-deformation lattices\n\n"
         "usage: splatffd <command> [options]     (splatffd <command> --help for a command's options)\n\n"
         "commands:\n",
         SFFD_VERSION);
     for (const Known& k : known_commands) {
         const auto* c = find(k.name);
-        std::printf("  %-9s %s%s\n", k.name, c && !c->summary.empty() ? c->summary.c_str() : k.summary,
+        std::fprintf(to, "  %-9s %s%s\n", k.name, c && !c->summary.empty() ? c->summary.c_str() : k.summary,
                     c ? "" : " (not implemented yet)");
     }
     for (const auto& c : sffd::cli::commands()) {
         const bool listed = std::any_of(std::begin(known_commands), std::end(known_commands),
                                         [&](const Known& k) { return c.name == k.name; });
-        if (!listed) std::printf("  %-9s %s\n", c.name.c_str(), c.summary.c_str());
+        if (!listed) std::fprintf(to, "  %-9s %s\n", c.name.c_str(), c.summary.c_str());
     }
-    std::printf("\noptions:\n  --help     this text\n  --version  print the version\n"
+    std::fprintf(to, "\noptions:\n  --help     this text\n  --version  print the version\n"
                 "  --paths    print where shaders, content and the cache are found\n"
                 "  --allow-outside-resources  (with any command) let trusted files name textures, buffers and\n"
                 "             material libraries outside their own folder (refused by default)\n");
@@ -81,7 +82,7 @@ int main(int argc, char** argv) {
         args.erase(it);
     }
     if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
-        print_help();
+        print_help(args.empty() ? stderr : stdout);
         return args.empty() ? 2 : 0;
     }
     if (args[0] == "--version") {

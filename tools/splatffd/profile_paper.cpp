@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,7 @@
 #include "systems/ffd/paper_mode.h"
 #include "systems/residency/residency_system.h"
 #include "tools/splatffd/profile_run.h"
+#include "tools/splatffd/progress.h"
 
 namespace sffd::profile_cmd {
 
@@ -39,6 +41,8 @@ int run_paper(const Options& o) {
                 "GPU vertex shader up to %.0f FPS (~%.0f ms), x%.0f.\n\n",
                 paper_cpu_fps, 1.0 / paper_cpu_fps, paper_gpu_fps, 1000.0 / paper_gpu_fps, paper_speedup);
     std::vector<PaperRow> rows;
+    // The naive algorithm runs about a minute per case: a percentage on a terminal (quiet in logs).
+    cli::ProgressPrinter progress("profile --paper", cli::ProgressPrinter::mode_for(false));
     for (const char* object : {"sphere", "face"}) {
         ecs::Registry registry;
         bool synthetic = false;
@@ -62,7 +66,9 @@ int run_paper(const Options& o) {
 
         PaperRow naive{label, "paper CPU naive, wall (1 thread)", cloud->size(), {}, ""};
         PaperRow naive_cpu{label, "paper CPU naive, thread CPU time", cloud->size(), {}, ""};
+        const std::string naive_step = std::string(object) + ": naive paper CPU";
         for (const auto& pc : paper_cases) {
+            progress.report(naive_step, double(&pc - paper_cases) / double(std::size(paper_cases)));
             std::vector<double> ms, cpu;
             for (int f = 0; f < o.naive_frames; ++f) {
                 apply_paper_case(lattice, pc, 0.5 + 0.5 * std::sin(0.7 * (f + 1)));
@@ -82,6 +88,7 @@ int run_paper(const Options& o) {
                         naive.case_ms.back(), naive_cpu.case_ms.back());
             std::fflush(stdout);
         }
+        progress.report(naive_step, 1.0);
         rows.push_back(naive);
         rows.push_back(naive_cpu);
 

@@ -5,6 +5,7 @@
 #include <time.h>
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
@@ -24,6 +25,7 @@
 #include "systems/splat_render/splat_render.h"
 #include "tools/splatffd/command.h"
 #include "systems/engine/engine.h"
+#include "tools/splatffd/progress.h"
 
 namespace sffd::profile_cmd {
 
@@ -192,9 +194,20 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     out.profiler = std::make_unique<Profiler>(ProfilerSettings{.gpu = timing});
     out.profiler->attach(schedule, registry);
     Clock clock({.fixed_dt = 1.0 / 60.0});
-    for (int i = 0; i < s.warmup; ++i) schedule.run_frame(registry, clock.tick());
+    // Says what it runs before it starts (a profile can run for minutes), and shows a percentage on a
+    // terminal only (ProgressPrinter: quiet in logs and pipes).
+    std::fprintf(stderr, "profile: %s: %d warm-up + %d measured frames (%d in all)\n", s.scene.c_str(), s.warmup, s.frames,
+                 s.warmup + s.frames);
+    cli::ProgressPrinter progress("profile", cli::ProgressPrinter::mode_for(false));
+    for (int i = 0; i < s.warmup; ++i) {
+        schedule.run_frame(registry, clock.tick());
+        progress.report("warm-up", double(i + 1) / double(s.warmup));
+    }
     out.profiler->clear();
-    for (int i = 0; i < s.frames; ++i) schedule.run_frame(registry, clock.tick());
+    for (int i = 0; i < s.frames; ++i) {
+        schedule.run_frame(registry, clock.tick());
+        progress.report("measuring", double(i + 1) / double(s.frames));
+    }
     out.profiler->resolve_all();
     out.profiler->detach(schedule, registry);
 
@@ -205,6 +218,7 @@ Result<RunOutput> run_profile(const RunSetup& s) {
                   {"frames", static_cast<double>(s.frames)},
                   {"warmup", static_cast<double>(s.warmup)},
                   {"quality", s.quality},
+                  {"raster", want_render ? s.raster : std::string("none")},
                   {"backend", s.backend},
                   {"drive", s.drive},
                   {"schedule", schedule_kind},

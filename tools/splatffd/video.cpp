@@ -5,6 +5,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cerrno>
 #include <cstdio>
 #include <cstdlib>
@@ -32,18 +33,28 @@ std::string find_on_path(const std::string& name) {
 }
 
 Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir, long first, long last, double fps,
-                    const std::filesystem::path& video) {
+                    const std::filesystem::path& video, glm::vec3 background) {
     const bool gif = video.extension() == ".gif";
     const std::filesystem::path tmp = video.parent_path() / (video.filename().string() + ".tmp" + std::to_string(::getpid()));
     char rate[64];
     std::snprintf(rate, sizeof rate, "%.9g", fps);
     std::vector<std::string> argv = {ffmpeg, "-nostdin", "-loglevel", "error", "-y", "-framerate", rate, "-start_number", std::to_string(first),
                                      "-i", (dir / "frame_%04d.png").string(), "-frames:v", std::to_string(last - first + 1)};
+    // Both formats are flattened over the same opaque `background` (sRGB) first: H.264 has no alpha and a
+    // GIF's one transparent index cannot hold soft edges, and left to ffmpeg the MP4 came out black where the
+    // GIF was transparent. The PNG's straight alpha is blended in display (sRGB) space, as 3DGS viewers do.
+    char colour[16];
+    const auto byte = [](float c) { return static_cast<unsigned>(std::lround(std::clamp(c, 0.0f, 1.0f) * 255.0f)); };
+    std::snprintf(colour, sizeof colour, "0x%02X%02X%02X", byte(background.x), byte(background.y), byte(background.z));
+    // [bg] is the colour as a stream as long as the frames; overlay=shortest=1 ends with the last frame.
+    const std::string flatten = std::string("[0:v]split[in][size];[size]format=rgb24,drawbox=c=") + colour +
+                                ":t=fill[bg];[bg][in]overlay=shortest=1:format=rgb";
     if (gif) {
-        for (const char* a : {"-vf", "split[a][b];[a]palettegen[p];[b][p]paletteuse", "-loop", "0", "-f", "gif"}) argv.emplace_back(a);
+        argv.insert(argv.end(), {"-filter_complex", flatten + ",split[a][b];[a]palettegen=reserve_transparent=0[p];[b][p]paletteuse",
+                                 "-loop", "0", "-f", "gif"});
     } else {
-        for (const char* a : {"-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4"})
-            argv.emplace_back(a);
+        argv.insert(argv.end(), {"-filter_complex", flatten + ",pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p",
+                                 "-movflags", "+faststart", "-f", "mp4"});
     }
     argv.push_back(tmp.string());
     std::vector<char*> args;

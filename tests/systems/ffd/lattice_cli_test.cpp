@@ -339,7 +339,7 @@ TEST_F(LatticeCli, OptionErrorsNameTheOption) {
                    "--bench: expected an integer in 0..1000000, got '1x'");
     expect_refusal("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit:99", 1,
                    "fit:99: divisions must be integers in 1..64");
-    expect_refusal("view sphere --frames -3", 2, "--frames: expected an integer in 1..1000000000, got '-3'");
+    expect_refusal("view sphere --frames -3", 2, "--frames: expected an integer N (frames 0..N-1) or a range A:B");
     expect_refusal("pick sphere --at 1,1 --tolerance abc", 2,
                    "--tolerance: expected a number in 0..1e+06, got 'abc'");
     // profile checks its paths before measuring: one line, the file named, nothing measured.
