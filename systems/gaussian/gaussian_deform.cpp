@@ -8,6 +8,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "systems/gaussian/gaussian_deform_fast.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/sh.h"
 
@@ -66,6 +67,18 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
         total.inside += stats->inside;
         total.inverted += stats->inverted;
         std::atomic<std::size_t> degenerate{0};
+        if (!options.reference_shapes) {
+            // The vectorised float kernel (the GPU pass's arithmetic); ranges split on whole vectors.
+            const detail::FastShapeArgs args{&in, &out, jac.data(), first, view_mode, frames_in};
+            const std::size_t w = std::size_t(detail::shape_lane_width());
+            const std::size_t groups = (count + w - 1) / w;
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+                degenerate += detail::deform_shapes_fast(args, r.begin() * w, std::min(count, r.end() * w));
+            });
+            total.degenerate += degenerate.load();
+            continue;
+        }
+        // The reference: double precision per Gaussian (the fast kernel and the GPU pass are tested against it).
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
             std::size_t bad = 0;
             for (std::size_t b = r.begin(); b != r.end(); ++b) {
