@@ -24,6 +24,8 @@ void usage() {
                  "  --no-ui            no ImGui panels\n"
                  "  --headless         no window (EGL); input only from --replay\n"
                  "  --timing-json F    write frame-time statistics (all frames, frames with a live drag)\n"
+                 "  --sync-timing      glFinish after each system, so each system's time includes its GL work\n"
+                 "                     (a true per-system split; frames get slower)\n"
                  "  --window-screenshot PATH  with --frames: the last frame's whole window (panels too), PNG\n"
                  "  --panel-rects-json PATH   with --frames: the panels' rectangles in the last frame, JSON\n"
                  "Runs under X (use `xvfb-run -a` without a display). Keys and mouse: systems/editor/README.md\n");
@@ -97,6 +99,8 @@ int run_view_command(sffd::cli::Args args) {
             o.preview = *v == "preview";
         } else if (a == "--no-ui") {
             o.ui = false;
+        } else if (a == "--sync-timing") {
+            o.sync_timing = true;
         } else if (a == "--headless") {
             o.headless = true;
         } else if (!a.empty() && a[0] == '-') {
