@@ -89,6 +89,36 @@ inline double decode(const unsigned char* p, Type t, bool swap) {
     return 0.0;
 }
 
+// decode() of `rows` values `stride` bytes apart into out[0 .. rows-1], one loop per type and byte order.
+template <class T>
+void decode_as(const unsigned char* p, std::size_t stride, std::size_t rows, bool swap, double* out) {
+    for (std::size_t r = 0; r < rows; ++r, p += stride) {
+        unsigned char b[sizeof(T)];
+        std::memcpy(b, p, sizeof(T));
+        if (swap) std::reverse(b, b + sizeof(T));
+        T v;
+        std::memcpy(&v, b, sizeof(T));
+        out[r] = static_cast<double>(v);
+    }
+}
+template <class T>
+void decode_typed(const unsigned char* p, std::size_t stride, std::size_t rows, bool swap, double* out) {
+    if (swap) decode_as<T>(p, stride, rows, true, out);
+    else decode_as<T>(p, stride, rows, false, out);
+}
+void decode_column(const unsigned char* p, std::size_t stride, std::size_t rows, Type t, bool swap, double* out) {
+    switch (t) {
+        case Type::int8: return decode_typed<std::int8_t>(p, stride, rows, swap, out);
+        case Type::uint8: return decode_typed<std::uint8_t>(p, stride, rows, swap, out);
+        case Type::int16: return decode_typed<std::int16_t>(p, stride, rows, swap, out);
+        case Type::uint16: return decode_typed<std::uint16_t>(p, stride, rows, swap, out);
+        case Type::int32: return decode_typed<std::int32_t>(p, stride, rows, swap, out);
+        case Type::uint32: return decode_typed<std::uint32_t>(p, stride, rows, swap, out);
+        case Type::float32: return decode_typed<float>(p, stride, rows, swap, out);
+        case Type::float64: return decode_typed<double>(p, stride, rows, swap, out);
+    }
+}
+
 inline void encode(unsigned char* p, Type t, double value, bool swap) {
     unsigned char b[8];
     switch (t) {
@@ -413,21 +443,27 @@ struct Reader::Impl {
         return {};
     }
 
-    // Fixed-size binary rows: decode a block of rows column by column.
+    // Fixed-size binary rows: decode the rows column by column, a few hundred rows at a time so the raw
+    // rows stay in cache across the columns (a whole chunk of a 62-property 3DGS file is 16 MB), with the
+    // type and byte order chosen once per column, not per value.
     Status read_fixed_rows(const Element& e, std::size_t n, std::vector<Column>& cols) {
         const std::size_t stride = e.row_size();
-        std::vector<unsigned char> raw(stride * n);
-        if (!read_bytes(raw.data(), raw.size())) return fail("truncated data in " + where());
-        std::size_t offset = 0;
-        for (std::size_t p = 0; p < e.properties.size(); ++p) {
-            const Type t = e.properties[p].type;
-            auto& out = cols[p].values;
-            out.resize(n);
-            for (std::size_t r = 0; r < n; ++r) out[r] = decode(raw.data() + r * stride + offset, t, swap);
-            offset += type_size(t);
+        raw.resize(stride * n);  // kept between calls: no allocation or zeroing per chunk
+        if (!read_bytes(raw.data(), stride * n)) return fail("truncated data in " + where());
+        for (std::size_t p = 0; p < e.properties.size(); ++p) cols[p].values.resize(n);
+        constexpr std::size_t kRowBlock = 256;
+        for (std::size_t r0 = 0; r0 < n; r0 += kRowBlock) {
+            const std::size_t rows = std::min(kRowBlock, n - r0);
+            std::size_t offset = 0;
+            for (std::size_t p = 0; p < e.properties.size(); ++p) {
+                const Type t = e.properties[p].type;
+                decode_column(raw.data() + r0 * stride + offset, stride, rows, t, swap, cols[p].values.data() + r0);
+                offset += type_size(t);
+            }
         }
         return {};
     }
+    std::vector<unsigned char> raw;  // read_fixed_rows' row buffer
 
     void advance_element() {
         ++element;

@@ -24,6 +24,7 @@ uniform float u_near;
 uniform uint u_count;
 uniform int u_degree;
 uniform int u_frames;       // 1: evaluate the SH at frameᵀ d (GaussianCloud::sh_frames)
+uniform float u_min_footprint;  // > 0 (preview): skip Gaussians whose unfiltered 3σ radius is below it, px
 
 const float C0 = 0.28209479177387814;
 const float C1 = 0.4886025119029199;
@@ -100,6 +101,13 @@ bool project(uint i) {
     // Overflow (inf - inf) can still make NaN from finite inputs: test the bits before comparing.
     if (!finite4(vec4(a, b, c, det)) || det <= 0.0) { projected[i] = o; return false; }
     const float mid = 0.5 * (a + c), lmax = mid + sqrt(max(0.1, mid * mid - det));
+    if (u_min_footprint > 0.0) {
+        // Largest eigenvalue of the footprint without the low-pass (trace - 0.6 = 2 mid - 0.6, det of the
+        // unfiltered 2x2): a Gaussian under a pixel only blurs its neighbours in a moving preview.
+        const float a0 = a - 0.3, c0 = c - 0.3, mid0 = 0.5 * (a0 + c0);
+        const float lmax0 = mid0 + sqrt(max(0.0, mid0 * mid0 - (a0 * c0 - b * b)));
+        if (9.0 * max(lmax0, 0.0) < u_min_footprint * u_min_footprint) { projected[i] = o; return false; }
+    }
     const vec2 center = vec2(0.5 * u_size.x + u_focal * t.x / depth, 0.5 * u_size.y - u_focal * t.y / depth);
     const float radius = ceil(3.0 * sqrt(lmax));
     // Culling before the sort: a pixel box (floor(c - r) .. ceil(c + r), the reference's) entirely off

@@ -32,6 +32,7 @@ struct ViewOptions {
     bool ui = true;           // ImGui panels (window only)
     bool preview = false;     // render quality preview instead of hq
     std::string timing_json;  // write frame-time statistics (all frames / frames with a tool drag) here
+    bool sync_timing = false; // glFinish after every system: each system's time includes its own GL work
     std::string window_screenshot;  // with --frames: the whole window (panels included) of the last frame, PNG
     std::string panel_rects_json;   // with --frames: the panels' rectangles in the last frame (panels.h), JSON
 };

@@ -8,6 +8,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "systems/gaussian/gaussian_deform_fast.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/sh.h"
 
@@ -120,22 +121,41 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
             sh_rotate(sh_rotation(p.rotation, in.sh_degree), sh_in, sh_out);
         };
         std::atomic<std::size_t> degenerate{0}, not_finite{0};
+        // As the GPU pass does (deform.comp): a result that is not finite is never left for the renderer; the
+        // Gaussian keeps its input centre with scale 0 and opacity 0, and is counted. Both CPU kernels pass here.
+        auto drop_if_not_finite = [&](std::size_t i, std::size_t b) -> std::size_t {
+            if (finite_result(out, i, K, view_mode)) return 0;
+            out.positions[i] = centres[b];
+            out.scales[i] = glm::vec3(0.0f);
+            out.rotations[i] = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+            std::fill_n(&out.sh[i * std::size_t(K) * 3], K * 3, 0.0f);
+            if (view_mode) out.sh_frames[i] = glm::mat3(1.0f);
+            if (drop_opacity) out.opacities[i] = 0.0f;
+            return 1;
+        };
+        if (!options.reference_shapes) {
+            // The vectorised float kernel (the GPU pass's arithmetic); ranges split on whole vectors.
+            const detail::FastShapeArgs args{&in, &out, jac.data(), first, view_mode, frames_in};
+            const std::size_t w = std::size_t(detail::shape_lane_width());
+            const std::size_t groups = (count + w - 1) / w;
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 64), [&](const tbb::blocked_range<std::size_t>& r) {
+                const std::size_t b0 = r.begin() * w, b1 = std::min(count, r.end() * w);
+                degenerate += detail::deform_shapes_fast(args, b0, b1);
+                std::size_t dropped = 0;
+                for (std::size_t b = b0; b < b1; ++b) dropped += drop_if_not_finite(first + b, b);
+                not_finite += dropped;
+            });
+            total.degenerate += degenerate.load();
+            total.not_finite += not_finite.load();
+            continue;
+        }
+        // The reference: double precision per Gaussian (the fast kernel and the GPU pass are tested against it).
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
             std::size_t bad = 0, dropped = 0;
             for (std::size_t b = r.begin(); b != r.end(); ++b) {
                 const std::size_t i = first + b;
                 deform_one(i, b, bad);
-                // As the GPU pass does (deform.comp): a result that is not finite is never left for the
-                // renderer; the Gaussian keeps its input centre with scale 0 and opacity 0, and is counted.
-                if (!finite_result(out, i, K, view_mode)) {
-                    ++dropped;
-                    out.positions[i] = centres[b];
-                    out.scales[i] = glm::vec3(0.0f);
-                    out.rotations[i] = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
-                    std::fill_n(&out.sh[i * std::size_t(K) * 3], K * 3, 0.0f);
-                    if (view_mode) out.sh_frames[i] = glm::mat3(1.0f);
-                    if (drop_opacity) out.opacities[i] = 0.0f;
-                }
+                dropped += drop_if_not_finite(i, b);
             }
             degenerate += bad;
             not_finite += dropped;

@@ -34,9 +34,13 @@ struct DeformStats {
 enum class ShMode : std::uint8_t { rotate_coefficients, rotate_view };
 
 struct DeformOptions {
-    ffd::Backend backend = ffd::Backend::automatic;
+    ffd::Backend backend = ffd::Backend::automatic;  // the lattice evaluator
     bool copy_opacities = true;
     ShMode sh = ShMode::rotate_coefficients;
+    // Shape and colour from J: the vectorised float kernel (gaussian_deform_fast.h, the GPU pass's
+    // arithmetic) unless this is set: then the double-precision per-Gaussian maths, the exact reference
+    // (tests, benchmarks).
+    bool reference_shapes = false;
 };
 
 // Writes `out` (positions, scales, rotations, sh or sh_frames; opacities copied when `copy_opacities`)

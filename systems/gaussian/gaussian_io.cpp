@@ -1,11 +1,15 @@
 #include "systems/gaussian/gaussian_io.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <memory>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_spz.h"
@@ -66,39 +70,59 @@ Result<PlyLayout> ply_layout(const ply::Element& v, const std::string& name) {
     return l;
 }
 
-Status append_from_chunk(const ply::Chunk& chunk, const PlyLayout& l, std::uint64_t first_row, const std::string& name,
-                         GaussianCloud& out) {
+// One vertex row into the cloud's slot `at` (arrays already sized); the checks in the order they report.
+Status convert_row(const ply::Chunk& chunk, const PlyLayout& l, std::size_t r, std::uint64_t first_row,
+                   const std::string& name, GaussianCloud& out, std::size_t at) {
     const int K = sh_coeffs(l.degree);
     auto col = [&](int i) -> const std::vector<double>& { return chunk.columns[std::size_t(i)].values; };
-    for (std::size_t r = 0; r < chunk.rows; ++r) {
-        auto bad = [&](int prop, const char* why) {
-            return make_error(name + ": vertex " + std::to_string(first_row + r) + ": " + why + " '" +
-                              chunk.element.properties[std::size_t(prop)].name + "'");
-        };
-        // Every read column must be finite (NaN scales or rotations would poison a whole render).
-        for (int p : {l.x, l.y, l.z, l.dc[0], l.dc[1], l.dc[2], l.opacity, l.scale[0], l.scale[1], l.scale[2], l.rot[0],
-                      l.rot[1], l.rot[2], l.rot[3]})
-            if (!std::isfinite(col(p)[r])) return bad(p, "non-finite");
-        for (int p : l.rest)
-            if (!std::isfinite(col(p)[r])) return bad(p, "non-finite");
-        out.positions.emplace_back(float(col(l.x)[r]), float(col(l.y)[r]), float(col(l.z)[r]));
-        glm::vec3 s;
-        for (int c = 0; c < 3; ++c) {
-            const double e = std::exp(col(l.scale[c])[r]);
-            if (!std::isfinite(float(e))) return bad(l.scale[c], "scale overflows (log scale too large) in");
-            s[c] = float(e);
-        }
-        out.scales.push_back(s);
-        glm::quat q;
-        if (!normalize_quaternion(col(l.rot[0])[r], col(l.rot[1])[r], col(l.rot[2])[r], col(l.rot[3])[r], q))
-            return bad(l.rot[0], "zero-length rotation quaternion at");
-        out.rotations.push_back(q);
-        out.opacities.push_back(sigmoid(col(l.opacity)[r]));
-        for (int k = 0; k < K; ++k)
-            for (int c = 0; c < 3; ++c)
-                out.sh.push_back(k == 0 ? float(col(l.dc[c])[r])
-                                        : float(col(l.rest[std::size_t(c * (K - 1) + (k - 1))])[r]));
+    auto bad = [&](int prop, const char* why) {
+        return make_error(name + ": vertex " + std::to_string(first_row + r) + ": " + why + " '" +
+                          chunk.element.properties[std::size_t(prop)].name + "'");
+    };
+    // Every read column must be finite (NaN scales or rotations would poison a whole render).
+    for (int p : {l.x, l.y, l.z, l.dc[0], l.dc[1], l.dc[2], l.opacity, l.scale[0], l.scale[1], l.scale[2], l.rot[0],
+                  l.rot[1], l.rot[2], l.rot[3]})
+        if (!std::isfinite(col(p)[r])) return bad(p, "non-finite");
+    for (int p : l.rest)
+        if (!std::isfinite(col(p)[r])) return bad(p, "non-finite");
+    out.positions[at] = glm::vec3(float(col(l.x)[r]), float(col(l.y)[r]), float(col(l.z)[r]));
+    glm::vec3 s;
+    for (int c = 0; c < 3; ++c) {
+        const double e = std::exp(col(l.scale[c])[r]);
+        if (!std::isfinite(float(e))) return bad(l.scale[c], "scale overflows (log scale too large) in");
+        s[c] = float(e);
     }
+    out.scales[at] = s;
+    if (!normalize_quaternion(col(l.rot[0])[r], col(l.rot[1])[r], col(l.rot[2])[r], col(l.rot[3])[r], out.rotations[at]))
+        return bad(l.rot[0], "zero-length rotation quaternion at");
+    out.opacities[at] = sigmoid(col(l.opacity)[r]);
+    float* sh = &out.sh[at * std::size_t(K) * 3];
+    for (int k = 0; k < K; ++k)
+        for (int c = 0; c < 3; ++c)
+            *sh++ = k == 0 ? float(col(l.dc[c])[r]) : float(col(l.rest[std::size_t(c * (K - 1) + (k - 1))])[r]);
+    return {};
+}
+
+// Appends the chunk's rows, converted in parallel. On bad input the cloud is left partly filled and the
+// error is the one of the first bad row in file order (each range stops at its own first bad row; the
+// smallest of those is re-run for its message).
+Status append_from_chunk(const ply::Chunk& chunk, const PlyLayout& l, std::uint64_t first_row, const std::string& name,
+                         GaussianCloud& out) {
+    const std::size_t base = out.positions.size(), n = base + chunk.rows;
+    const std::size_t K = std::size_t(sh_coeffs(l.degree));
+    out.positions.resize(n), out.scales.resize(n), out.rotations.resize(n), out.opacities.resize(n);
+    out.sh.resize(n * K * 3);
+    std::atomic<std::size_t> first_bad{chunk.rows};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunk.rows, 2048), [&](const tbb::blocked_range<std::size_t>& range) {
+        for (std::size_t r = range.begin(); r != range.end(); ++r)
+            if (!convert_row(chunk, l, r, first_row, name, out, base + r)) {
+                std::size_t seen = first_bad.load();
+                while (r < seen && !first_bad.compare_exchange_weak(seen, r)) {
+                }
+                return;
+            }
+    });
+    if (const std::size_t r = first_bad.load(); r < chunk.rows) return convert_row(chunk, l, r, first_row, name, out, base + r);
     return {};
 }
 

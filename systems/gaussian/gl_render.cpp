@@ -158,6 +158,7 @@ Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v
     set(pp, "u_focal", float(v.height / (2.0 * tan_half)));
     set(pp, "u_limit", glm::vec2(float(1.3 * tan_half * v.width / v.height), float(1.3 * tan_half)));
     set(pp, "u_near", float(v.near_plane));
+    set(pp, "u_min_footprint", v.min_footprint_px);
     glProgramUniform1ui(pp, glGetUniformLocation(pp, "u_count"), GLuint(n));
     glProgramUniform1i(pp, glGetUniformLocation(pp, "u_degree"), b.sh_degree);
     glProgramUniform1i(pp, glGetUniformLocation(pp, "u_frames"), b.has_frames ? 1 : 0);
@@ -366,6 +367,7 @@ Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const Reference
     v.fov_y_degrees = double(cam.fov_y_degrees);
     v.near_plane = double(o.near_plane);
     v.width = o.width, v.height = o.height;
+    v.min_footprint_px = r.min_footprint_px;
     const GaussianBuffers b = resident_buffers(r);
     if (Status st = project_and_sort(r, b, v); !st) return st.error();
     auto t = std::chrono::steady_clock::now();

@@ -56,6 +56,8 @@ struct GlRenderer {
     // Benchmarks: glFinish after each stage so that the stage wall times below mean something (GL timer
     // queries do not on llvmpipe: 0 ms for compute, nonsense for draws). Off: no extra waits.
     bool stage_timing = false;
+    // draw_gl's GaussianView::min_footprint_px (0: every Gaussian; the render system sets its own per draw).
+    float min_footprint_px = 0.0f;
     // Last frame: which sort ran; stage wall times in ms (with stage_timing; sort_ms of the CPU path is
     // always measured: key readback, which waits for the projection, + sort + upload); (tile path) the
     // number of (tile, Gaussian) entries.
@@ -92,6 +94,9 @@ struct GaussianView {
     // NDC depth of a splat quad, z = ndc_depth.x + ndc_depth.y / view_depth (a perspective projection's
     // -P[2][2] and P[3][2]), clamped below the far plane; (0, 0): every quad at z = 0 (no depth test).
     glm::dvec2 ndc_depth{0.0};
+    // Gaussians whose projected 3σ radius, before the 0.3 px² low-pass, is below this are not drawn (a
+    // preview while moving drops the sub-pixel ones: fewer to sort and blend). 0: all are drawn.
+    float min_footprint_px = 0.0f;
 };
 
 // One cloud: projection, front-to-back order of the visible Gaussians, and the instanced splat quads

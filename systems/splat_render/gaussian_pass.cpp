@@ -193,6 +193,7 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
         v.near_plane = double(f.camera.near_plane);
         v.width = f.width, v.height = f.height;
         v.ndc_depth = ndc_depth;
+        v.min_footprint_px = f.preview ? kPreviewMinFootprintPx : 0.0f;
         const gaussian::GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(), gpu.frames.id(), gpu.count, gpu.sh_degree,
                                                 gpu.has_frames()};
         if (Status st = gaussian::draw_gaussians(s.renderer, buffers, v, &s.accum); !st) status = st;

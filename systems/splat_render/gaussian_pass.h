@@ -36,7 +36,13 @@ struct GaussianPassFrame {
     GLuint color = 0, aux = 0, depth = 0;
     int width = 1, height = 1;
     bool aux_outputs = false;  // attachment 1 is written this frame (normal + view depth)
+    // Preview quality (the editor while moving): Gaussians whose own footprint is under a pixel are not
+    // drawn (GaussianView::min_footprint_px); the HQ (still) frame draws every Gaussian.
+    bool preview = false;
 };
+
+// The footprint (3σ radius before the 0.3 px² low-pass) under which preview frames drop a Gaussian.
+inline constexpr float kPreviewMinFootprintPx = 1.0f;
 
 // Bounding sphere of a Gaussian cloud (cloud space): the centres' box grown by 3 × the largest scale.
 BoundingSphere gaussian_bounding_sphere(const GaussianCloud& cloud);

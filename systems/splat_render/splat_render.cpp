@@ -964,6 +964,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         gf.camera = plan.view.camera, gf.view = plan.view.view, gf.projection = plan.view.projection;
         gf.output_fbo = s.output_fbo.id(), gf.color = s.color.id(), gf.aux = s.aux.id(), gf.depth = s.depth.id();
         gf.width = plan.width, gf.height = plan.height, gf.aux_outputs = plan.settings.aux_outputs;
+        gf.preview = plan.settings.quality == Quality::preview;
         auto drawn = gaussian_pass(reg, gf);
         if (!drawn) log::error("render_system(): ", drawn.message());
         else stats.gaussians = *drawn;

@@ -50,11 +50,13 @@ inline Lattice twisted_gaussian_lattice() {
 
 // The CPU deformation benchmark loop (gaussian::deform, TBB) of `g` through the Gaussian lattice in SH
 // mode `sh`: items are Gaussians, process_cpu_ms_per_run the CPU time of all threads per run.
-inline void run_cpu_deform(benchmark::State& state, const GaussianCloud& g, gaussian::ShMode sh) {
+inline void run_cpu_deform(benchmark::State& state, const GaussianCloud& g, gaussian::ShMode sh,
+                           bool reference_shapes = false) {
     const Lattice l = twisted_gaussian_lattice();
     GaussianCloud out;
     gaussian::DeformOptions options;
     options.sh = sh;
+    options.reference_shapes = reference_shapes;
     const double cpu0 = process_cpu_s();
     for (auto _ : state) {
         auto s = gaussian::deform(l, g, out, options);

@@ -35,12 +35,13 @@ const GaussianCloud& cloud(std::size_t n) {
 
 gaussian::ShMode mode(std::int64_t m) { return m ? gaussian::ShMode::rotate_view : gaussian::ShMode::rotate_coefficients; }
 
-// Args: Gaussians, SH mode (0 rotate the coefficients, 1 store the view rotation).
+// Args: Gaussians, SH mode (0 rotate the coefficients, 1 store the view rotation), shape kernel (0 the
+// vectorised float kernel, 1 the double-precision per-Gaussian reference: the A/B of the two).
 void BM_GaussianDeformCpu(benchmark::State& state) {
-    bench::run_cpu_deform(state, cloud(std::size_t(state.range(0))), mode(state.range(1)));
+    bench::run_cpu_deform(state, cloud(std::size_t(state.range(0))), mode(state.range(1)), state.range(2) != 0);
 }
-BENCHMARK(BM_GaussianDeformCpu)->Args({1000000, 0})->Args({1000000, 1})->Args({6000000, 0})->Args({6000000, 1})
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GaussianDeformCpu)->Args({1000000, 0, 0})->Args({1000000, 1, 0})->Args({1000000, 0, 1})->Args({1000000, 1, 1})
+    ->Args({6000000, 0, 0})->Args({6000000, 1, 0})->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_GaussianDeformGpu(benchmark::State& state) {
     auto ctx = bench::made_or_skip(state, gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false}));

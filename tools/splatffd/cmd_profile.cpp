@@ -30,8 +30,9 @@ constexpr const char* usage_text =
     "  --quality hq|preview  render quality (default hq)\n"
     "  --raster auto|raster|compute  HQ splat rasteriser: the fixed-function one, the compute one\n"
     "                        (hybrid: sprites > 8 px stay on the rasteriser), or by splat size (default)\n"
-    "  --backend cpu|gpu     deformation backend (default gpu; cpu runs without a GL context when the\n"
-    "                        renderer is not wanted)\n"
+    "  --backend auto|cpu|gpu  deformation backend (default auto: the engine's own choice, the CPU on a\n"
+    "                        software rasterizer; the one used is printed; cpu runs without a GL context\n"
+    "                        when the renderer is not wanted)\n"
     "  --sync                time GPU passes with glFinish + CPU clock instead of timer queries\n"
     "                        (timer queries are not trustworthy on llvmpipe; default: timer queries)\n"
     "  --drive CASE|none     deform every lattice each frame with a paper case, animated over time:\n"
@@ -154,7 +155,8 @@ int run_profile_command(cli::Args args) {
             if (!value(o.raster) || (o.raster != "auto" && o.raster != "raster" && o.raster != "compute"))
                 return usage_error("--raster auto|raster|compute");
         } else if (a == "--backend") {
-            if (!value(o.backend) || (o.backend != "cpu" && o.backend != "gpu")) return usage_error("--backend cpu|gpu");
+            if (!value(o.backend) || (o.backend != "auto" && o.backend != "cpu" && o.backend != "gpu"))
+                return usage_error("--backend auto|cpu|gpu");
         } else if (a == "--drive") {
             if (!value(o.drive) || (o.drive != "none" && !find_case(o.drive)))
                 return usage_error("--drive takes 'local stretch', 'local twist', 'global stretch', 'global twist' or none");
@@ -203,6 +205,7 @@ int run_profile_command(cli::Args args) {
         return 1;
     }
     std::printf("%s", to_text(r->report).c_str());
+    std::printf("deformation backend: %s (--backend %s)\n", r->backend_used.c_str(), o.backend.c_str());
     if (int rc = write_outputs(o, *r); rc != 0) return rc;
     if (!o.compare.empty()) return compare_with(r->report, o.compare);
     return 0;

@@ -12,7 +12,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: splatffd view [SCENE] [--replay FILE] [--record FILE] [--frames N] [--out PATH] [--save PATH] [--size WxH]\n"
-    "                     [--quality hq|preview] [--no-ui] [--headless] [--json F] [--window-screenshot PATH]\n"
+    "                     [--quality hq|preview] [--no-ui] [--headless] [--json F] [--sync-timing] [--window-screenshot PATH]\n"
     "                     [--panel-rects-json PATH]\n"
     "  SCENE              built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj .off,\n"
     "                     3D Gaussians .ply (3DGS) .splat .spz .glb (default: sphere)\n"
@@ -27,6 +27,8 @@ constexpr const char* kUsage =
     "  --headless         no window (EGL); input only from --replay (default: a window)\n"
     "  --json F           write frame-time statistics (all frames, frames with a live drag) (old spelling:\n"
     "                     --timing-json)\n"
+    "  --sync-timing      finish the GL queue around every system and pass, so each one's time includes its GL\n"
+    "                     work (a true per-system split; frames get slower; default off)\n"
     "  --window-screenshot PATH  with --frames: the last frame's whole window (panels too), PNG\n"
     "  --panel-rects-json PATH   with --frames: the panels' rectangles in the last frame, JSON\n"
     "Runs under X (use `xvfb-run -a` without a display). Keys and mouse: systems/editor/README.md\n";
@@ -100,6 +102,8 @@ int run_view_command(sffd::cli::Args args) {
             o.preview = *v == "preview";
         } else if (a == "--no-ui") {
             o.ui = false;
+        } else if (a == "--sync-timing") {
+            o.sync_timing = true;
         } else if (a == "--headless") {
             o.headless = true;
         } else if (!a.empty() && a[0] == '-') {

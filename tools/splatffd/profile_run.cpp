@@ -20,6 +20,7 @@
 #include "systems/ffd/ffd_system.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/from_splats.h"
+#include "systems/gaussian/gaussian_system.h"
 #include "systems/profiling/synthetic.h"
 #include "systems/residency/residency_system.h"
 #include "systems/splat_render/splat_render.h"
@@ -121,10 +122,16 @@ SystemFn drive_system(PaperCase c) {
 
 }  // namespace
 
+std::string deformation_backend_name(std::uint64_t cpu_runs, std::uint64_t gpu_runs) {
+    if (cpu_runs > 0 && gpu_runs > 0) return "mixed";
+    return gpu_runs > 0 ? "gpu" : cpu_runs > 0 ? "cpu" : "none";
+}
+
 Result<RunOutput> run_profile(const RunSetup& s) {
     RunOutput out;
     const bool want_render = !s.deformation_only;
-    const bool need_gl = s.backend == "gpu" || want_render;
+    // auto needs a context only where the engine could pick its GPU path (the renderer wants one anyway).
+    const bool need_gl = s.backend != "cpu" || want_render;
     bool have_gl = false;
     if (need_gl) {
         auto ctx = gfx::create_context({.headless = true, .width = 1280, .height = 720, .debug = false});
@@ -186,8 +193,10 @@ Result<RunOutput> run_profile(const RunSetup& s) {
                        : s.raster == "raster"  ? render::RasterPath::raster
                                                : render::RasterPath::automatic;
     }
-    // The FFD system picks its CPU path on a software rasterizer; --backend forces either path.
+    // The FFD system picks its CPU path on a software rasterizer (auto); --backend cpu|gpu forces either
+    // path. The Gaussian system's counters (its default settings) say which path it took.
     registry.set_resource<FfdSettings>(FfdSettings{.force_cpu = s.backend == "cpu", .force_gpu = s.backend == "gpu"});
+    registry.set_resource<GaussianDeformSettings>();
 
     GpuTiming timing = GpuTiming::none;
     if (have_gl) timing = s.sync ? GpuTiming::sync : GpuTiming::queries;
@@ -204,10 +213,19 @@ Result<RunOutput> run_profile(const RunSetup& s) {
         progress.report("warm-up", double(i + 1) / double(s.warmup));
     }
     out.profiler->clear();
+    // Deformations per path so far: the first frames may take the CPU path before the render upload.
+    auto runs = [&registry] {
+        std::pair<std::uint64_t, std::uint64_t> r{0, 0};
+        if (const auto* fs = registry.try_resource<FfdSettings>()) r.first += fs->cpu_runs, r.second += fs->gpu_runs;
+        if (const auto* gs = registry.try_resource<GaussianDeformSettings>()) r.first += gs->cpu_runs, r.second += gs->gpu_runs;
+        return r;
+    };
+    const auto runs_before = runs();
     for (int i = 0; i < s.frames; ++i) {
         schedule.run_frame(registry, clock.tick());
         progress.report("measuring", double(i + 1) / double(s.frames));
     }
+    const auto runs_after = runs();
     out.profiler->resolve_all();
     out.profiler->detach(schedule, registry);
 
@@ -228,6 +246,12 @@ Result<RunOutput> run_profile(const RunSetup& s) {
         config.emplace_back("ffd_cpu_runs", static_cast<double>(fs->cpu_runs));
         config.emplace_back("ffd_gpu_runs", static_cast<double>(fs->gpu_runs));
     }
+    if (const auto* gs = registry.try_resource<GaussianDeformSettings>()) {
+        config.emplace_back("gaussian_cpu_runs", static_cast<double>(gs->cpu_runs));
+        config.emplace_back("gaussian_gpu_runs", static_cast<double>(gs->gpu_runs));
+    }
+    out.backend_used = deformation_backend_name(runs_after.first - runs_before.first, runs_after.second - runs_before.second);
+    config.emplace_back("backend_used", out.backend_used);
     if (s.lattice_points > 0) config.emplace_back("lattice", static_cast<double>(s.lattice_points));
     if (!s.basis.empty()) config.emplace_back("basis", s.basis);
     out.report = build_report(*out.profiler, std::move(config), machine_info(have_gl));

@@ -23,7 +23,7 @@ struct Options {
     int frames = 120;
     int warmup = 10;
     std::string quality = "hq";
-    std::string backend = "gpu";
+    std::string backend = "auto";  // auto: the engine's own choice (ffd/deform_backend.h), cpu, gpu
     std::string raster = "auto";  // HQ rasteriser: auto, raster, compute (render::RasterPath)
     bool sync = false;
     std::string drive = "global twist";
@@ -37,7 +37,7 @@ struct Options {
 struct RunSetup {
     std::string scene;
     int frames = 120, warmup = 10;
-    std::string quality = "hq", backend = "gpu", drive = "global twist", raster = "auto";
+    std::string quality = "hq", backend = "auto", drive = "global twist", raster = "auto";
     bool sync = false;
     int lattice_points = 0;           // > 0: replace every lattice's divisions (control points per axis)
     std::string basis;                // "": keep
@@ -50,9 +50,12 @@ struct RunOutput {
     std::unique_ptr<profiling::Profiler> profiler;
     profiling::ProfileReport report;
     std::size_t points = 0;
+    std::string backend_used;  // deformation path of the measured frames: cpu, gpu, mixed or none
 };
 
 Result<RunOutput> run_profile(const RunSetup& s);
+// "cpu", "gpu", "mixed" (both ran) or "none" from the clouds deformed on each path.
+std::string deformation_backend_name(std::uint64_t cpu_runs, std::uint64_t gpu_runs);
 
 // Creates the scene's entities; synthetic:N makes a Fibonacci sphere of N splats in an 11^3 lattice.
 Status load(ecs::Registry& registry, const std::string& scene, bool* synthetic);

@@ -168,6 +168,43 @@ TEST_F(GaussianGl, OffscreenGaussiansAreCulledBeforeTheSort) {
     EXPECT_GT(psnr(*img, render_reference(g, cam, o)), 40.0);
 }
 
+TEST_F(GaussianGl, PreviewFootprintDropsOnlySubPixelGaussians) {
+    // Half the cloud far under a pixel: with min_footprint_px = 1 (the moving preview) they are not drawn
+    // and the image is the one of the large half alone; with 0 (the still frame) every Gaussian is drawn.
+    ReferenceOptions o;
+    o.width = 96, o.height = 72;
+    GaussianCloud g = random_cloud(2000, 1), big = g;
+    const GaussianCloud small_half = random_cloud(2000, 1);
+    for (std::size_t i = 0; i < small_half.size(); ++i) {
+        g.positions.push_back(small_half.positions[i] * 0.5f);
+        g.scales.push_back(glm::vec3(2e-4f));
+        g.rotations.push_back(small_half.rotations[i]);
+        g.opacities.push_back(0.9f);
+        for (int k = 0; k < 4 * 3; ++k) g.sh.push_back(small_half.sh[i * 12 + std::size_t(k)] + 0.4f);
+    }
+    const Camera cam = camera_at({0.3, 0.4, 3.0});
+    auto drawn = [&] {
+        GLuint command[4] = {};
+        glGetNamedBufferSubData(renderer->draw.id(), 0, sizeof(command), command);
+        return command[1];
+    };
+    renderer->min_footprint_px = 0.0f;
+    auto all = render_gl(*renderer, g, cam, o);
+    ASSERT_TRUE(all) << all.message();
+    const GLuint drawn_all = drawn();
+    auto big_only = render_gl(*renderer, big, cam, o);
+    ASSERT_TRUE(big_only) << big_only.message();
+    const GLuint drawn_big = drawn();
+    renderer->min_footprint_px = 1.0f;
+    auto preview = render_gl(*renderer, g, cam, o);
+    ASSERT_TRUE(preview) << preview.message();
+    EXPECT_EQ(drawn(), drawn_big);
+    EXPECT_GT(drawn_all, drawn_big + 1500);
+    EXPECT_GT(psnr(*preview, *big_only), 60.0);
+    EXPECT_LT(psnr(*all, *big_only), 50.0);  // the small ones do show when drawn
+    renderer->min_footprint_px = 0.0f;
+}
+
 TEST_F(GaussianGl, TransparentGaussiansAreCulled) {
     // Opacity below 1/255 can never pass the 1/255 alpha threshold: not drawn, not sorted. The whole
     // cloud is on the image, so the drawn count is exactly the opaque enough ones.

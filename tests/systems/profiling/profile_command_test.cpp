@@ -141,4 +141,21 @@ TEST_F(ProfileCommand, BadBaselineAndBadUsageAreReported) {
     EXPECT_EQ(profile("--bogus").code, 2);
 }
 
+TEST_F(ProfileCommand, DefaultsToTheEnginesOwnBackendAndSaysWhichRan) {
+    // No --backend: the engine's automatic choice (the CPU on a software rasterizer, else the GPU), one
+    // path for every measured frame, printed and in the report; --backend cpu is obeyed.
+    const CmdResult r = profile("synthetic:5k --frames 3 --warmup 2 --json " + path("auto.json"));
+    ASSERT_EQ(r.code, 0) << r.out;
+    const auto report = nlohmann::json::parse(read_text(path("auto.json")));
+    EXPECT_EQ(report["config"]["backend"], "auto");
+    const std::string used = report["config"]["backend_used"].get<std::string>();
+    EXPECT_TRUE(used == "cpu" || used == "gpu") << used;
+    EXPECT_NE(r.out.find("deformation backend: " + used + " (--backend auto)"), std::string::npos) << r.out;
+    const CmdResult c = profile("synthetic:5k --backend cpu --frames 3 --warmup 2 --json " + path("cpu.json"));
+    ASSERT_EQ(c.code, 0) << c.out;
+    EXPECT_EQ(nlohmann::json::parse(read_text(path("cpu.json")))["config"]["backend_used"], "cpu");
+    EXPECT_NE(c.out.find("deformation backend: cpu (--backend cpu)"), std::string::npos) << c.out;
+    EXPECT_EQ(profile("--backend tpu").code, 2);
+}
+
 }  // namespace

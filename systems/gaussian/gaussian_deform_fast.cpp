@@ -1,0 +1,381 @@
+// W Gaussians per vector, float, branch-free across lanes (compiled -O3 -ffp-contract=fast -fno-math-errno,
+// like systems/ffd/deform_fast.cpp). Each step is the GPU pass's (shaders/gaussian/deform.comp), so the CPU
+// and GPU paths give the same shapes and colours to float rounding; the double-precision per-Gaussian path
+// in gaussian_deform.cpp (Backend::reference) stays the exact reference both are tested against.
+// Per-lane decisions (converged, singular, moved) are masks and selects; the iterative steps (Jacobi
+// sweeps, Newton steps) run until every lane of the vector has converged, converged lanes frozen.
+#include "systems/gaussian/gaussian_deform_fast.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "systems/gaussian/sh.h"
+
+namespace sffd::gaussian::detail {
+
+namespace {
+
+#if defined(__AVX512F__)
+constexpr int W = 16;
+#elif defined(__AVX__)
+constexpr int W = 8;
+#else
+constexpr int W = 4;
+#endif
+typedef float vf __attribute__((vector_size(W * sizeof(float))));
+typedef int vm __attribute__((vector_size(W * sizeof(int))));  // lane masks: -1 true, 0 false
+
+inline vf splat(float x) { return vf{} + x; }
+inline vf sel(vm m, vf a, vf b) { return m ? a : b; }
+// Lane loops the vectoriser turns into single instructions (no errno with -fno-math-errno).
+inline vf vsqrt(vf x) {
+    for (int l = 0; l < W; ++l) x[l] = std::sqrt(x[l]);
+    return x;
+}
+inline vf vabs(vf x) {
+    for (int l = 0; l < W; ++l) x[l] = std::fabs(x[l]);
+    return x;
+}
+inline vf vmax(vf a, vf b) { return a > b ? a : b; }
+inline bool any(vm m) {
+    for (int l = 0; l < W; ++l)
+        if (m[l]) return true;
+    return false;
+}
+// Finite on the IEEE exponent bits (as the shader): no fast-math rewrite of isfinite can remove it.
+inline vm finite(vf x) { return ((vm)x & 0x7f800000) != 0x7f800000; }
+
+struct V3 {
+    vf x, y, z;
+};
+inline V3 operator+(V3 a, V3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline V3 operator*(vf s, V3 a) { return {s * a.x, s * a.y, s * a.z}; }
+inline vf dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+inline V3 sel(vm m, V3 a, V3 b) { return {sel(m, a.x, b.x), sel(m, a.y, b.y), sel(m, a.z, b.z)}; }
+inline V3 splat3(float x, float y, float z) { return {splat(x), splat(y), splat(z)}; }
+inline V3 normalize(V3 a) { return (1.0f / vsqrt(dot(a, a))) * a; }
+
+struct M3 {
+    V3 c[3];  // columns
+};
+inline V3 mul(const M3& m, V3 v) { return v.x * m.c[0] + v.y * m.c[1] + v.z * m.c[2]; }
+inline M3 transpose(const M3& m) {
+    return {{{m.c[0].x, m.c[1].x, m.c[2].x}, {m.c[0].y, m.c[1].y, m.c[2].y}, {m.c[0].z, m.c[1].z, m.c[2].z}}};
+}
+inline M3 sel(vm m, const M3& a, const M3& b) { return {{sel(m, a.c[0], b.c[0]), sel(m, a.c[1], b.c[1]), sel(m, a.c[2], b.c[2])}}; }
+inline M3 identity() { return {{splat3(1, 0, 0), splat3(0, 1, 0), splat3(0, 0, 1)}}; }
+
+// One Hestenes rotation of columns p, q where `go`: makes them orthogonal (no-op where they already are to
+// float precision, or either is zero).
+inline void orthogonalise(vm go, V3& bp, V3& bq) {
+    const vf alpha = dot(bp, bp), beta = dot(bq, bq), gamma = dot(bp, bq);
+    const vm act = go & (vabs(gamma) > 1e-7f * vsqrt(alpha * beta)) & (gamma != 0.0f);
+    if (!any(act)) return;
+    const vf zeta = (beta - alpha) / (2.0f * sel(act, gamma, splat(1.0f)));
+    // t = sign(ζ) / (|ζ| + sqrt(1 + ζ²)), the smaller root; 1/(2ζ) where ζ² would overflow.
+    const vf az = vabs(zeta);
+    vf t = sel(az < 1e18f, 1.0f / (az + vsqrt(1.0f + az * az)), 0.5f / az);
+    t = sel(zeta < 0.0f, -t, t);
+    vf c = 1.0f / vsqrt(1.0f + t * t), s = c * t;
+    c = sel(act, c, splat(1.0f));
+    s = sel(act, s, splat(0.0f));
+    const V3 np = c * bp - s * bq, nq = s * bp + c * bq;
+    bp = np;
+    bq = nq;
+}
+
+// Axes (a proper rotation) and scales (descending) of A Aᵀ: one-sided Jacobi on the columns of A.
+void decompose(const M3& a, M3& axes, V3& scale) {
+    V3 b0 = a.c[0], b1 = a.c[1], b2 = a.c[2];
+    for (int sweep = 0; sweep < 12; ++sweep) {
+        const vf n0 = dot(b0, b0), n1 = dot(b1, b1), n2 = dot(b2, b2);
+        const vf off = vmax(vmax(vabs(dot(b0, b1)) / vsqrt(vmax(n0 * n1, splat(1e-37f))),
+                                 vabs(dot(b0, b2)) / vsqrt(vmax(n0 * n2, splat(1e-37f)))),
+                            vabs(dot(b1, b2)) / vsqrt(vmax(n1 * n2, splat(1e-37f))));
+        const vm go = off > 1e-7f;
+        if (!any(go)) break;
+        orthogonalise(go, b0, b1);
+        orthogonalise(go, b0, b2);
+        orthogonalise(go, b1, b2);
+    }
+    vf s0 = vsqrt(dot(b0, b0)), s1 = vsqrt(dot(b1, b1)), s2 = vsqrt(dot(b2, b2));
+    auto swap_if = [](vm m, V3& p, V3& q, vf& sp, vf& sq) {
+        const V3 t = p;
+        p = sel(m, q, p), q = sel(m, t, q);
+        const vf ts = sp;
+        sp = sel(m, sq, sp), sq = sel(m, ts, sq);
+    };
+    swap_if(s1 > s0, b0, b1, s0, s1);
+    swap_if(s2 > s1, b1, b2, s1, s2);
+    swap_if(s1 > s0, b0, b1, s0, s1);
+    // Columns that vanished (relative to the largest) are completed orthogonally.
+    const vf tiny = 1e-6f * s0;
+    const vm pos0 = s0 > 0.0f, big1 = s1 > tiny;
+    const V3 u0 = sel(pos0, (1.0f / sel(pos0, s0, splat(1.0f))) * b0, splat3(1, 0, 0));
+    const V3 other = sel(vabs(u0.x) < 0.9f, splat3(1, 0, 0), splat3(0, 1, 0));
+    V3 u1 = sel(big1, (1.0f / sel(big1, s1, splat(1.0f))) * b1, normalize(cross(u0, other)));
+    u1 = normalize(u1 - dot(u0, u1) * u0);  // re-orthogonalise the rounding away
+    axes = {{u0, u1, cross(u0, u1)}};       // det = +1
+    scale = {s0, s1, s2};
+}
+
+// Unit quaternion (w, x, y, z), w >= 0, of a proper rotation (Shepperd: divide by the largest of four).
+void to_quat(const M3& m, vf q[4]) {
+    const vf m00 = m.c[0].x, m01 = m.c[0].y, m02 = m.c[0].z;
+    const vf m10 = m.c[1].x, m11 = m.c[1].y, m12 = m.c[1].z;
+    const vf m20 = m.c[2].x, m21 = m.c[2].y, m22 = m.c[2].z;
+    const vf tr = m00 + m11 + m22;
+    const vm c0 = tr > 0.0f;
+    const vm c1 = ~c0 & (m00 > m11) & (m00 > m22);
+    const vm c2 = ~c0 & ~c1 & (m11 > m22);
+    const vf arg = sel(c0, tr + 1.0f, sel(c1, 1.0f + m00 - m11 - m22, sel(c2, 1.0f + m11 - m00 - m22, 1.0f + m22 - m00 - m11)));
+    const vf s = vsqrt(arg) * 2.0f, inv = 1.0f / s, big = 0.25f * s;
+    const vf a = (m12 - m21) * inv, b = (m20 - m02) * inv, c = (m01 - m10) * inv;
+    const vf d = (m10 + m01) * inv, e = (m20 + m02) * inv, f = (m21 + m12) * inv;
+    vf w = sel(c0, big, sel(c1, a, sel(c2, b, c)));
+    vf x = sel(c0, a, sel(c1, big, sel(c2, d, e)));
+    vf y = sel(c0, b, sel(c1, d, sel(c2, big, f)));
+    vf z = sel(c0, c, sel(c1, e, sel(c2, f, big)));
+    const vf n = 1.0f / vsqrt(w * w + x * x + y * y + z * z);
+    const vf sign = sel(w < 0.0f, -n, n);
+    q[0] = w * sign, q[1] = x * sign, q[2] = y * sign, q[3] = z * sign;
+}
+
+// Orthogonal factor of J = R U where `need` (scaled Newton, Higham: the GPU's polar_rotation); `ok` false
+// where the result is not finite. Lanes not needed iterate on I (its own fixed point).
+M3 polar_rotation(const M3& j, vm need, vm& ok) {
+    M3 x = sel(need, j, identity());
+    vm active = need;
+    for (int it = 0; it < 20 && any(active); ++it) {
+        const V3 c0 = cross(x.c[1], x.c[2]), c1 = cross(x.c[2], x.c[0]), c2 = cross(x.c[0], x.c[1]);
+        const vf inv_det = 1.0f / dot(x.c[0], c0);
+        const M3 inv_t = {{inv_det * c0, inv_det * c1, inv_det * c2}};  // (X⁻¹)ᵀ: cofactors / det
+        const vf nx = dot(x.c[0], x.c[0]) + dot(x.c[1], x.c[1]) + dot(x.c[2], x.c[2]);
+        const vf ni = dot(inv_t.c[0], inv_t.c[0]) + dot(inv_t.c[1], inv_t.c[1]) + dot(inv_t.c[2], inv_t.c[2]);
+        const vf zeta = vsqrt(vsqrt(ni / nx)), half_zeta = 0.5f * zeta, half_inv = 0.5f / zeta;
+        M3 next;
+        vf change = splat(0.0f);
+        for (int c = 0; c < 3; ++c) {
+            next.c[c] = half_zeta * x.c[c] + half_inv * inv_t.c[c];
+            const V3 d = next.c[c] - x.c[c];
+            change += dot(d, d);
+        }
+        x = sel(active, next, x);
+        active &= ~(change <= 1e-13f * 3.0f);
+    }
+    ok = need;
+    for (int c = 0; c < 3; ++c) ok &= finite(x.c[c].x) & finite(x.c[c].y) & finite(x.c[c].z);
+    return x;
+}
+
+// Band l (1..3) of the 3DGS SH basis at d (systems/gaussian/sh.h: same constants and order).
+inline void sh_band(int l, V3 d, vf* y) {
+    const vf x = d.x, yy_ = d.y, z = d.z;
+    if (l == 1) {
+        y[0] = float(-kShC1) * yy_, y[1] = float(kShC1) * z, y[2] = float(-kShC1) * x;
+        return;
+    }
+    const vf xx = x * x, yy = yy_ * yy_, zz = z * z;
+    if (l == 2) {
+        y[0] = float(kShC2[0]) * x * yy_;
+        y[1] = float(kShC2[1]) * yy_ * z;
+        y[2] = float(kShC2[2]) * (2.0f * zz - xx - yy);
+        y[3] = float(kShC2[3]) * x * z;
+        y[4] = float(kShC2[4]) * (xx - yy);
+        return;
+    }
+    y[0] = float(kShC3[0]) * yy_ * (3.0f * xx - yy);
+    y[1] = float(kShC3[1]) * x * yy_ * z;
+    y[2] = float(kShC3[2]) * yy_ * (4.0f * zz - xx - yy);
+    y[3] = float(kShC3[3]) * z * (2.0f * zz - 3.0f * xx - 3.0f * yy);
+    y[4] = float(kShC3[4]) * x * (4.0f * zz - xx - yy);
+    y[5] = float(kShC3[5]) * z * (xx - yy);
+    y[6] = float(kShC3[6]) * x * (xx - 3.0f * yy);
+}
+
+// sh_rotation()'s tables in float (as the GPU pass gets them): per band the sample directions and A_l⁻¹.
+struct ShTables {
+    float dirs[4][7][3] = {};
+    float inv[4][49] = {};
+    ShTables() {
+        for (int l = 1; l <= 3; ++l) {
+            glm::dvec3 d[7];
+            double inv_d[49];
+            sh_sample_tables(l, d, inv_d);
+            const int n = 2 * l + 1;
+            for (int j = 0; j < n; ++j)
+                for (int c = 0; c < 3; ++c) dirs[l][j][c] = float(d[j][c]);
+            for (int k = 0; k < n * n; ++k) inv[l][k] = float(inv_d[k]);
+        }
+    }
+};
+const ShTables& sh_tables() {
+    static const ShTables t;
+    return t;
+}
+
+// Coefficients c[k] (RGB in x, y, z) of band 1..degree rotated by r: D_l c = A_l⁻¹ [f_l(rᵀ d_j)]_j.
+void rotate_sh(int degree, const M3& r, V3* c) {
+    const ShTables& t = sh_tables();
+    const M3 rt = transpose(r);
+    for (int l = 1; l <= degree; ++l) {
+        const int n = 2 * l + 1, first = l * l;
+        V3 v[7];
+        for (int j = 0; j < n; ++j) {
+            vf y[7];
+            sh_band(l, mul(rt, splat3(t.dirs[l][j][0], t.dirs[l][j][1], t.dirs[l][j][2])), y);
+            V3 f = y[0] * c[first];
+            for (int m = 1; m < n; ++m) f = f + y[m] * c[first + m];
+            v[j] = f;
+        }
+        for (int row = 0; row < n; ++row) {
+            V3 o = splat(t.inv[l][row * n]) * v[0];
+            for (int j = 1; j < n; ++j) o = o + splat(t.inv[l][row * n + j]) * v[j];
+            c[first + row] = o;  // band l's inputs are all in v[] already
+        }
+    }
+}
+
+// One vector of Gaussians first .. first + n - 1 (n <= W). Returns the near-singular count.
+std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
+    const GaussianCloud& in = *a.in;
+    GaussianCloud& out = *a.out;
+    const bool copy = &out != &in;
+    const int K = sh_coeffs(in.sh_degree);
+    const std::size_t stride = std::size_t(K) * 3;
+    // Gather: J, rotation, scale per lane; padding lanes get J = I (not moved).
+    alignas(64) float jl[9][W], ql[4][W], sl[3][W];
+    for (int l = 0; l < W; ++l) {
+        const bool real = l < n;
+        const glm::mat3 j = real ? a.jacobians[first - a.first + std::size_t(l)] : glm::mat3(1.0f);
+        for (int c = 0; c < 3; ++c)
+            for (int r = 0; r < 3; ++r) jl[c * 3 + r][l] = j[c][r];
+        const glm::quat q = real ? in.rotations[first + std::size_t(l)] : glm::quat(1, 0, 0, 0);
+        ql[0][l] = q.w, ql[1][l] = q.x, ql[2][l] = q.y, ql[3][l] = q.z;
+        const glm::vec3 s = real ? in.scales[first + std::size_t(l)] : glm::vec3(0.0f);
+        sl[0][l] = s.x, sl[1][l] = s.y, sl[2][l] = s.z;
+    }
+    auto load = [](const float* p) {
+        vf v;
+        std::memcpy(&v, p, sizeof v);
+        return v;
+    };
+    M3 J;
+    for (int c = 0; c < 3; ++c) J.c[c] = {load(jl[c * 3]), load(jl[c * 3 + 1]), load(jl[c * 3 + 2])};
+    vm moved = vm{};  // all false
+    for (int c = 0; c < 3; ++c) {
+        moved |= J.c[c].x != (c == 0 ? 1.0f : 0.0f);
+        moved |= J.c[c].y != (c == 1 ? 1.0f : 0.0f);
+        moved |= J.c[c].z != (c == 2 ? 1.0f : 0.0f);
+    }
+    std::size_t singular_count = 0;
+    if (any(moved)) {
+        // polar_decomposition's rule, in double as there: a J singular in exact arithmetic (a flattened cell)
+        // has a float determinant of rounding size, far above the 1e-12 threshold.
+        vm singular = vm{};
+        for (int l = 0; l < n; ++l) {
+            const glm::dmat3 jd(glm::dvec3(jl[0][l], jl[1][l], jl[2][l]), glm::dvec3(jl[3][l], jl[4][l], jl[5][l]),
+                                glm::dvec3(jl[6][l], jl[7][l], jl[8][l]));
+            const double n2 = glm::dot(jd[0], jd[0]) + glm::dot(jd[1], jd[1]) + glm::dot(jd[2], jd[2]);
+            singular[l] = moved[l] && !(std::abs(glm::determinant(jd)) > 1e-12 * n2 * std::sqrt(n2)) ? -1 : 0;
+        }
+        // Input rotation (normalised; a zero quaternion reads as I) times the scales: A = J R S.
+        vf w = load(ql[0]), x = load(ql[1]), y = load(ql[2]), z = load(ql[3]);
+        const vf qn2 = w * w + x * x + y * y + z * z;
+        const vm qok = qn2 > 0.0f;
+        const vf qinv = 1.0f / vsqrt(sel(qok, qn2, splat(1.0f)));
+        w = sel(qok, w * qinv, splat(1.0f)), x = sel(qok, x * qinv, splat(0.0f));
+        y = sel(qok, y * qinv, splat(0.0f)), z = sel(qok, z * qinv, splat(0.0f));
+        const V3 r0 = {1.0f - 2.0f * (y * y + z * z), 2.0f * (x * y + w * z), 2.0f * (x * z - w * y)};
+        const V3 r1 = {2.0f * (x * y - w * z), 1.0f - 2.0f * (x * x + z * z), 2.0f * (y * z + w * x)};
+        const V3 r2 = {2.0f * (x * z + w * y), 2.0f * (y * z - w * x), 1.0f - 2.0f * (x * x + y * y)};
+        const M3 A = {{mul(J, load(sl[0]) * r0), mul(J, load(sl[1]) * r1), mul(J, load(sl[2]) * r2)}};
+        // Normalised by the largest entry so that neither tiny nor huge scales under/overflow the squares.
+        vf m = splat(0.0f);
+        for (int c = 0; c < 3; ++c) m = vmax(m, vmax(vabs(A.c[c].x), vmax(vabs(A.c[c].y), vabs(A.c[c].z))));
+        const vm mpos = m > 0.0f;
+        const vf minv = 1.0f / sel(mpos, m, splat(1.0f));
+        M3 axes;
+        V3 scale;
+        decompose({{minv * A.c[0], minv * A.c[1], minv * A.c[2]}}, axes, scale);
+        axes = sel(mpos, axes, identity());
+        scale = sel(mpos, m * scale, splat3(0, 0, 0));
+        vf q[4];
+        to_quat(axes, q);
+        alignas(64) float out_s[3][W], out_q[4][W];
+        std::memcpy(out_s[0], &scale.x, sizeof(vf)), std::memcpy(out_s[1], &scale.y, sizeof(vf));
+        std::memcpy(out_s[2], &scale.z, sizeof(vf));
+        for (int k = 0; k < 4; ++k) std::memcpy(out_q[k], &q[k], sizeof(vf));
+
+        // Colour: the polar rotation where J is regular (coefficients rotated, or the frame stored).
+        vm rotated = vm{};
+        M3 R = identity();
+        if (K > 1) R = polar_rotation(J, moved & ~singular, rotated);
+        alignas(64) float sh_soa[48][W];
+        const bool rotate_coeffs = K > 1 && !a.view_mode && any(rotated);
+        if (rotate_coeffs) {
+            if (n < W) std::memset(sh_soa, 0, sizeof sh_soa);  // padding lanes: defined values
+            for (int l = 0; l < n; ++l) {
+                const float* src = &in.sh[(first + std::size_t(l)) * stride];
+                for (std::size_t k = 0; k < stride; ++k) sh_soa[k][l] = src[k];
+            }
+            V3 c[16];
+            for (int k = 0; k < K; ++k) c[k] = {load(sh_soa[3 * k]), load(sh_soa[3 * k + 1]), load(sh_soa[3 * k + 2])};
+            rotate_sh(in.sh_degree, R, c);
+            for (int k = 1; k < K; ++k) {
+                std::memcpy(sh_soa[3 * k], &c[k].x, sizeof(vf));
+                std::memcpy(sh_soa[3 * k + 1], &c[k].y, sizeof(vf));
+                std::memcpy(sh_soa[3 * k + 2], &c[k].z, sizeof(vf));
+            }
+        }
+        for (int l = 0; l < n; ++l) {
+            const std::size_t i = first + std::size_t(l);
+            const float* sh_in = &in.sh[i * stride];
+            float* sh_out = &out.sh[i * stride];
+            if (!moved[l]) {  // outside the lattice or not moved by it
+                if (copy) {
+                    out.scales[i] = in.scales[i], out.rotations[i] = in.rotations[i];
+                    std::copy(sh_in, sh_in + stride, sh_out);
+                }
+                continue;
+            }
+            singular_count += singular[l] != 0;
+            out.scales[i] = glm::vec3(out_s[0][l], out_s[1][l], out_s[2][l]);
+            out.rotations[i] = glm::quat(out_q[0][l], out_q[1][l], out_q[2][l], out_q[3][l]);
+            if (rotate_coeffs && rotated[l]) {
+                for (std::size_t k = 3; k < stride; ++k) sh_out[k] = sh_soa[k][l];
+                if (copy) std::copy(sh_in, sh_in + 3, sh_out);
+                continue;
+            }
+            if (copy) std::copy(sh_in, sh_in + stride, sh_out);
+            if (a.view_mode && rotated[l]) {
+                glm::mat3 p;
+                for (int c = 0; c < 3; ++c) p[c] = glm::vec3(R.c[c].x[l], R.c[c].y[l], R.c[c].z[l]);
+                out.sh_frames[i] = p * (a.frames_in ? in.sh_frames[i] : glm::mat3(1.0f));
+            }
+        }
+    } else if (copy) {
+        for (int l = 0; l < n; ++l) {
+            const std::size_t i = first + std::size_t(l);
+            out.scales[i] = in.scales[i], out.rotations[i] = in.rotations[i];
+            std::copy(&in.sh[i * stride], &in.sh[i * stride] + stride, &out.sh[i * stride]);
+        }
+    }
+    return singular_count;
+}
+
+}  // namespace
+
+int shape_lane_width() { return W; }
+
+std::size_t deform_shapes_fast(const FastShapeArgs& a, std::size_t begin, std::size_t end) {
+    std::size_t singular = 0;
+    for (std::size_t b = begin; b < end; b += W)
+        singular += group(a, a.first + b, int(std::min<std::size_t>(W, end - b)));
+    return singular;
+}
+
+}  // namespace sffd::gaussian::detail

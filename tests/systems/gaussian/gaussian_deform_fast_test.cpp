@@ -1,0 +1,158 @@
+// The vectorised shape/colour kernel of gaussian::deform against the double-precision per-Gaussian path
+// (DeformOptions::reference_shapes), both from the same Jacobians: covariances, SH colours, view-mode
+// frames and statistics, on clouds whose sizes are not a multiple of the vector width, partly outside the
+// lattice, in place and chained, and on a lattice that flattens its cells.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include <glm/gtc/quaternion.hpp>
+
+#include "systems/ffd/lattice.h"
+#include "systems/ffd/operations.h"
+#include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_deform.h"
+#include "systems/gaussian/gaussian_math.h"
+#include "systems/gaussian/sh.h"
+#include "tests/systems/gaussian/test_math.h"
+
+namespace {
+
+using namespace sffd;
+using namespace sffd::gaussian;
+using sffd::test::max_abs;
+
+Lattice twisted(LatticeBasis basis, int div) {
+    Lattice l = ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)},
+                                  {div, div, div}, basis);
+    ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.8, glm::dvec3(0.0));
+    for (glm::dvec3& p : l.current) p.x += 0.2 * p.y * p.y, p.z *= 1.0 + 0.3 * p.x;
+    return l;
+}
+
+GaussianCloud cloud(std::size_t n, int degree, unsigned seed) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-1, 1);
+    std::normal_distribution<float> nd;
+    GaussianCloud g;
+    g.sh_degree = degree;
+    for (std::size_t i = 0; i < n; ++i) {
+        g.positions.emplace_back(1.2f * u(rng), 1.2f * u(rng), 1.2f * u(rng));  // some outside [-1,1]³
+        // Anisotropic, some needle-thin (axis ratio down to 1e-3).
+        const float thin = i % 7 == 0 ? 1e-3f : 0.3f + 0.2f * u(rng);
+        g.scales.emplace_back(0.03f * (1.2f + u(rng)), 0.02f * (1.1f + u(rng)), 0.03f * thin);
+        g.rotations.push_back(glm::normalize(glm::quat(nd(rng), nd(rng), nd(rng), nd(rng))));
+        g.opacities.push_back(0.5f);
+        for (int k = 0; k < sh_coeffs(degree) * 3; ++k) g.sh.push_back(0.5f * u(rng));
+    }
+    return g;
+}
+
+glm::dmat3 sigma(const GaussianCloud& g, std::size_t i) { return covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i])); }
+
+// Largest colour difference over a few directions (coefficients |c| <= 0.5, as the GPU comparison).
+float colour_error(const GaussianCloud& a, const GaussianCloud& b, std::size_t i) {
+    const int K = sh_coeffs(a.sh_degree);
+    float e = 0.0f;
+    for (const glm::vec3 d : {glm::vec3(0.3f, -0.5f, 0.8f), glm::vec3(-0.9f, 0.1f, 0.4f), glm::vec3(0.2f, 0.9f, -0.3f)}) {
+        const glm::vec3 n = glm::normalize(d);
+        const glm::vec3 da = a.sh_frames.empty() ? n : glm::transpose(a.sh_frames[i]) * n;
+        const glm::vec3 db = b.sh_frames.empty() ? n : glm::transpose(b.sh_frames[i]) * n;
+        e = std::max(e, glm::length(sh_color(a.sh_degree, &a.sh[i * std::size_t(K) * 3], da) -
+                                    sh_color(b.sh_degree, &b.sh[i * std::size_t(K) * 3], db)));
+    }
+    return e;
+}
+
+void expect_match(const GaussianCloud& fast, const GaussianCloud& ref, const char* what) {
+    ASSERT_EQ(fast.size(), ref.size());
+    double worst_sigma = 0.0;
+    float worst_colour = 0.0f;
+    for (std::size_t i = 0; i < ref.size(); ++i) {
+        EXPECT_LT(glm::length(fast.positions[i] - ref.positions[i]), 1e-5f) << what << " " << i;
+        const glm::dmat3 s = sigma(ref, i);
+        worst_sigma = std::max(worst_sigma, max_abs(sigma(fast, i) - s) / max_abs(s));
+        worst_colour = std::max(worst_colour, colour_error(fast, ref, i));
+        EXPECT_EQ(fast.opacities[i], ref.opacities[i]);
+    }
+    EXPECT_LT(worst_sigma, 3e-5) << what;   // the GPU pass's tolerance against the same reference
+    EXPECT_LT(worst_colour, 5e-5f) << what;
+}
+
+TEST(GaussianDeformFast, MatchesTheDoublePrecisionReference) {
+    for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline})
+        for (int degree : {0, 1, 3}) {
+            const Lattice l = twisted(basis, 5);
+            const GaussianCloud g = cloud(1003, degree, unsigned(7 + degree));  // not a multiple of any lane width
+            GaussianCloud fast, ref;
+            DeformOptions ro;
+            ro.reference_shapes = true;
+            auto fs = deform(l, g, fast);
+            auto rs = deform(l, g, ref, ro);
+            ASSERT_TRUE(fs && rs);
+            EXPECT_EQ(fs->inside, rs->inside);
+            EXPECT_EQ(fs->inverted, rs->inverted);
+            EXPECT_EQ(fs->degenerate, rs->degenerate);
+            EXPECT_GT(rs->inside, 300u);
+            EXPECT_LT(rs->inside, g.size());
+            expect_match(fast, ref, degree == 3 ? "degree 3" : "degree < 3");
+            // Outside Gaussians are copied bit for bit.
+            for (std::size_t i = 0; i < g.size(); ++i)
+                if (glm::any(glm::greaterThan(glm::abs(g.positions[i]), glm::vec3(1.0f)))) {
+                    EXPECT_EQ(fast.scales[i], g.scales[i]);
+                    EXPECT_EQ(fast.rotations[i], g.rotations[i]);
+                }
+        }
+}
+
+TEST(GaussianDeformFast, ViewModeAndChainedInPlaceDeformationsMatchTheReference) {
+    const Lattice a = twisted(LatticeBasis::bernstein, 4), b = twisted(LatticeBasis::bspline, 6);
+    const GaussianCloud g = cloud(777, 3, 21);
+    DeformOptions view, view_ref, ref;
+    view.sh = view_ref.sh = ShMode::rotate_view;
+    view_ref.reference_shapes = ref.reference_shapes = true;
+    GaussianCloud fv = g, rv = g, fc = g, rc = g;
+    for (const Lattice* l : {&a, &b}) {
+        ASSERT_TRUE(deform(*l, fv, fv, view));
+        ASSERT_TRUE(deform(*l, rv, rv, view_ref));
+        ASSERT_TRUE(deform(*l, fc, fc));
+        ASSERT_TRUE(deform(*l, rc, rc, ref));
+    }
+    ASSERT_EQ(fv.sh_frames.size(), g.size());
+    for (std::size_t i = 0; i < g.size(); ++i)
+        EXPECT_LT(max_abs(glm::dmat3(fv.sh_frames[i]) - glm::dmat3(rv.sh_frames[i])), 1e-5) << i;
+    EXPECT_EQ(fv.sh, g.sh);
+    expect_match(fv, rv, "view mode");
+    expect_match(fc, rc, "coefficients, chained");
+    expect_match(fv, rc, "view mode against rotated coefficients");
+}
+
+TEST(GaussianDeformFast, FlattenedCellsCountAsDegenerateWithoutNaN) {
+    // Every control point's y set to 0: J has a zero row, Σ' is flat, the SH stay unrotated. The reference
+    // lattice evaluator for both (the fast one leaves rounding-size entries in that row).
+    Lattice l = ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3});
+    for (glm::dvec3& p : l.current) p.y = 0.0;
+    const GaussianCloud g = cloud(133, 2, 5);
+    GaussianCloud fast, ref;
+    DeformOptions fo, ro;
+    fo.backend = ro.backend = ffd::Backend::reference;
+    ro.reference_shapes = true;
+    auto fs = deform(l, g, fast, fo);
+    auto rs = deform(l, g, ref, ro);
+    ASSERT_TRUE(fs && rs);
+    EXPECT_EQ(fs->degenerate, rs->degenerate);
+    EXPECT_EQ(fs->degenerate, rs->inside);
+    for (std::size_t i = 0; i < g.size(); ++i) {
+        for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(fast.scales[i][c])) << i;
+        EXPECT_TRUE(std::isfinite(glm::dot(fast.rotations[i], fast.rotations[i]))) << i;
+        if (glm::all(glm::lessThanEqual(glm::abs(g.positions[i]), glm::vec3(1.0f)))) {
+            EXPECT_LT(fast.scales[i].z, 1e-6f * fast.scales[i].x) << i;  // the collapsed axis, last
+            const glm::dmat3 s = sigma(ref, i);
+            EXPECT_LT(max_abs(sigma(fast, i) - s), 1e-4 * max_abs(s)) << i;
+        }
+    }
+    EXPECT_EQ(fast.sh, g.sh);
+}
+
+}  // namespace
