@@ -7,7 +7,9 @@
 #include <cstring>
 #include <memory>
 
+#include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_gltf.h"
+#include "systems/gaussian/gaussian_infinity.h"
 #include "systems/gaussian/gaussian_spz.h"
 #include "systems/gaussian/sh.h"
 
@@ -67,33 +69,35 @@ Result<PlyLayout> ply_layout(const ply::Element& v, const std::string& name) {
 }
 
 Status append_from_chunk(const ply::Chunk& chunk, const PlyLayout& l, std::uint64_t first_row, const std::string& name,
-                         GaussianCloud& out) {
+                         GaussianCloud& out, InfinityCount* mapped) {
     const int K = sh_coeffs(l.degree);
+    InfinityCount local;
+    InfinityCount& inf = mapped ? *mapped : local;
     auto col = [&](int i) -> const std::vector<double>& { return chunk.columns[std::size_t(i)].values; };
     for (std::size_t r = 0; r < chunk.rows; ++r) {
         auto bad = [&](int prop, const char* why) {
             return make_error(name + ": vertex " + std::to_string(first_row + r) + ": " + why + " '" +
                               chunk.element.properties[std::size_t(prop)].name + "'");
         };
-        // Every read column must be finite (NaN scales or rotations would poison a whole render).
-        for (int p : {l.x, l.y, l.z, l.dc[0], l.dc[1], l.dc[2], l.opacity, l.scale[0], l.scale[1], l.scale[2], l.rot[0],
-                      l.rot[1], l.rot[2], l.rot[3]})
+        // Every read column must be finite (NaN scales or rotations would poison a whole render); opacity
+        // and scale go through the one infinity mapping (gaussian_infinity.h) below.
+        for (int p : {l.x, l.y, l.z, l.dc[0], l.dc[1], l.dc[2], l.rot[0], l.rot[1], l.rot[2], l.rot[3]})
             if (!std::isfinite(col(p)[r])) return bad(p, "non-finite");
         for (int p : l.rest)
             if (!std::isfinite(col(p)[r])) return bad(p, "non-finite");
         out.positions.emplace_back(float(col(l.x)[r]), float(col(l.y)[r]), float(col(l.z)[r]));
         glm::vec3 s;
-        for (int c = 0; c < 3; ++c) {
-            const double e = std::exp(col(l.scale[c])[r]);
-            if (!std::isfinite(float(e))) return bad(l.scale[c], "scale overflows (log scale too large) in");
-            s[c] = float(e);
-        }
+        for (int c = 0; c < 3; ++c)
+            if (!scale_from_log(col(l.scale[c])[r], s[c], inf))
+                return bad(l.scale[c], std::isnan(col(l.scale[c])[r]) ? "non-finite" : "scale overflows (log scale too large) in");
         out.scales.push_back(s);
         const glm::dvec4 q(col(l.rot[0])[r], col(l.rot[1])[r], col(l.rot[2])[r], col(l.rot[3])[r]);
         const double len = glm::length(q);
         if (!(len > 1e-30)) return bad(l.rot[0], "zero-length rotation quaternion at");
         out.rotations.emplace_back(float(q[0] / len), float(q[1] / len), float(q[2] / len), float(q[3] / len));
-        out.opacities.push_back(sigmoid(col(l.opacity)[r]));
+        float opacity = 0.0f;
+        if (!opacity_from_logit(col(l.opacity)[r], opacity, inf)) return bad(l.opacity, "non-finite");
+        out.opacities.push_back(opacity);
         for (int k = 0; k < K; ++k)
             for (int c = 0; c < 3; ++c)
                 out.sh.push_back(k == 0 ? float(col(l.dc[c])[r])
@@ -145,6 +149,8 @@ Result<GaussianCloud> read_ply(const fs::path& path) {
     const std::string name = path.string();
     const int vi = reader->header().find("vertex");
     if (vi < 0) return make_error(name + ": no vertex element");
+    // PlayCanvas's compressed layout (chunk + packed vertex elements) has its own reader.
+    if (is_compressed_ply(reader->header())) return read_compressed_ply(path);
     const ply::Element& ve = reader->header().elements[std::size_t(vi)];
     auto layout = ply_layout(ve, name);
     if (!layout) return layout.error();
@@ -156,13 +162,15 @@ Result<GaussianCloud> read_ply(const fs::path& path) {
     if (auto s = reader->seek_element("vertex"); !s) return s.error();
     ply::Chunk chunk;
     std::uint64_t row = 0;
+    InfinityCount mapped;
     while (true) {
         auto rows = reader->read_rows(kChunkRows, chunk);
         if (!rows) return rows.error();
         if (*rows == 0) break;
-        if (auto s = append_from_chunk(chunk, *layout, row, name, g); !s) return s.error();
+        if (auto s = append_from_chunk(chunk, *layout, row, name, g, &mapped); !s) return s.error();
         row += *rows;
     }
+    report_infinities(name, mapped);
     return g;
 }
 

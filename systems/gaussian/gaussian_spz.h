@@ -9,6 +9,8 @@
 //              v3: u32 "smallest three": 2-bit index of the largest component, three 10-bit
 //              (9-bit magnitude × √½ / 511, sign bit) for the others
 //   SH         (K − 1) × 3 × u8 per splat, coefficient-major with RGB inner, value = (b − 128) / 128
+// Axes: SPZ is stored x right, y up, z back (RUB, the SPZ README); the reader turns the cloud 180
+// degrees about x into the internal 3DGS PLY frame (gaussian_axes.h).
 // Version 4 (per-stream zstd with a table of contents) is refused with a hint (no zstd here):
 // `splat-transform in.spz --spz-version 3 out.spz` re-encodes. Errors name the file: not gzip/SPZ,
 // unsupported version or degree, a splat count the compressed size cannot hold (refused before
