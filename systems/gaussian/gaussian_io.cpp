@@ -10,6 +10,7 @@
 #include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_infinity.h"
+#include "systems/gaussian/gaussian_ksplat.h"
 #include "systems/gaussian/gaussian_spz.h"
 #include "systems/gaussian/sh.h"
 
@@ -263,7 +264,8 @@ Result<GaussianCloud> read_gaussians(const fs::path& path) {
     if (ext == ".splat") return read_splat(path);
     if (ext == ".glb" || ext == ".gltf") return read_gltf(path);
     if (ext == ".spz") return read_spz(path);
-    return make_error(path.string() + ": unknown Gaussian splat format '" + ext + "' (expected .ply, .splat, .spz, .glb or .gltf)");
+    if (ext == ".ksplat") return read_ksplat(path);
+    return make_error(path.string() + ": unknown Gaussian splat format '" + ext + "' (expected .ply, .splat, .spz, .ksplat, .glb or .gltf)");
 }
 
 Status validate(const GaussianCloud& g, const std::string& what) {

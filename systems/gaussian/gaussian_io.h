@@ -62,7 +62,8 @@ Result<GaussianCloud> read_ply(const std::filesystem::path& path);
 Status write_ply(const std::filesystem::path& path, const GaussianCloud& cloud,
                  ply::Format format = ply::Format::binary_little_endian);
 Result<GaussianCloud> read_splat(const std::filesystem::path& path);
-// By extension: .ply, .splat, .spz (v2/v3, gaussian_spz.h) or .glb/.gltf (KHR_gaussian_splatting, gaussian_gltf.h).
+// By extension: .ply (3DGS or compressed, gaussian_compressed_ply.h), .splat, .spz (v2/v3, gaussian_spz.h),
+// .ksplat (gaussian_ksplat.h) or .glb/.gltf (KHR_gaussian_splatting, gaussian_gltf.h).
 Result<GaussianCloud> read_gaussians(const std::filesystem::path& path);
 
 // Unit conversions between the files and GaussianCloud (double inside; logit saturates at p = 0 or 1 to

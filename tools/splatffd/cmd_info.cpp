@@ -1,7 +1,7 @@
 // splatffd info FILE|SCENE: counts, bounds, attributes and lattices of a file or built-in scene.
 // PLY files are streamed (any size); glTF scene files and built-ins are loaded into a registry and
 // every cloud, lattice, binding, camera and light is listed. Gaussian splat files (3DGS and compressed
-// PLY, .spz, .splat) end with an "N Gaussians, SH degree D" line.
+// PLY, .spz, .splat, .ksplat) end with an "N Gaussians, SH degree D" line.
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -216,7 +216,7 @@ void summarise_registry(const ecs::Registry& reg) {
 
 int run_info(cli::Args args) {
     if (args.size() != 1 || args[0] == "--help" || args[0] == "-h") {
-        std::fprintf(stderr, "usage: splatffd info FILE|sphere|face\n  FILE: .ply (points, 3DGS or compressed) .obj .off .gltf .glb .spz .splat\n");
+        std::fprintf(stderr, "usage: splatffd info FILE|sphere|face\n  FILE: .ply (points, 3DGS or compressed) .obj .off .gltf .glb .spz .splat .ksplat\n");
         return args.size() == 1 ? 0 : 2;
     }
     const std::string file = args[0];
@@ -225,8 +225,9 @@ int run_info(cli::Args args) {
     if (ext == ".ply") return info_ply(file);
     if (ext == ".spz") return info_gaussians(file, "SPZ (Niantic)");
     if (ext == ".splat") return info_gaussians(file, ".splat (antimatter15)");
+    if (ext == ".ksplat") return info_gaussians(file, ".ksplat (GaussianSplats3D)");
     if (ext != ".obj" && ext != ".off" && ext != ".gltf" && ext != ".glb" && !assets::is_builtin_scene(file)) {
-        std::fprintf(stderr, "splatffd info: %s: unknown file type '%s' (expected .ply, .obj, .off, .gltf, .glb, .spz or .splat)\n",
+        std::fprintf(stderr, "splatffd info: %s: unknown file type '%s' (expected .ply, .obj, .off, .gltf, .glb, .spz, .splat or .ksplat)\n",
                      file.c_str(), ext.c_str());
         return 1;
     }

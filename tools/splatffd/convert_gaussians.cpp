@@ -25,7 +25,7 @@ std::string lower_ext(const std::string& p) {
 
 bool is_gaussian_file(const std::string& in) {
     const std::string e = lower_ext(in);
-    if (e == ".splat" || e == ".spz") return true;
+    if (e == ".splat" || e == ".spz" || e == ".ksplat") return true;
     if (e == ".ply") {
         auto r = ply::Reader::open(in);
         const int v = r ? r->header().find("vertex") : -1;

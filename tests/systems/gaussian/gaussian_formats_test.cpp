@@ -7,6 +7,7 @@
 
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <random>
@@ -16,6 +17,7 @@
 #include "systems/gaussian/gaussian_axes.h"
 #include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_ksplat.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/sh.h"
 #include "tests/systems/gaussian/test_math.h"
@@ -288,6 +290,91 @@ TEST(CompressedPly, MinusInfiniteLogScaleBoundReadsAsFlatAndIsCounted) {
     EXPECT_EQ(g->scales[0].x, 0.0f);  // at the -inf end
     EXPECT_EQ(g->scales[1].x, 1.0f);  // at the finite end, not inf·0
     EXPECT_TRUE(capture.contains("read 1 infinite values as limits"));
+}
+
+// .ksplat bytes: little-endian helpers over a growing buffer.
+struct Bytes {
+    std::string b;
+    void at(std::size_t offset, const void* p, std::size_t n) {
+        if (b.size() < offset + n) b.resize(offset + n, '\0');
+        std::memcpy(&b[offset], p, n);
+    }
+    void u8(std::size_t o, unsigned v) { const unsigned char c = static_cast<unsigned char>(v); at(o, &c, 1); }
+    void u16(std::size_t o, unsigned v) { const std::uint16_t x = static_cast<std::uint16_t>(v); at(o, &x, 2); }
+    void u32(std::size_t o, std::uint32_t v) { at(o, &v, 4); }
+    void f32(std::size_t o, float v) { at(o, &v, 4); }
+};
+
+// Mode 1 (positions u16 in buckets, f16 scale/rotation/SH): one section, three splats of degree 1 in a
+// full bucket of two and a partial bucket of one.
+Bytes ksplat_mode1(std::uint32_t declared = 3) {
+    Bytes k;
+    k.u8(0, 0), k.u8(1, 1), k.u32(4, 1), k.u32(16, declared), k.u16(20, 1);
+    const std::size_t s = 4096;
+    k.u32(s + 0, 3), k.u32(s + 4, 3), k.u32(s + 8, 2), k.u32(s + 12, 2), k.f32(s + 16, 2.0f), k.u16(s + 20, 12);
+    k.u32(s + 24, 1000), k.u32(s + 32, 1), k.u32(s + 36, 1), k.u16(s + 40, 1);
+    std::size_t d = 4096 + 1024;
+    k.u32(d, 1);                                               // partial bucket size
+    k.f32(d + 4, 10), k.f32(d + 8, 20), k.f32(d + 12, 30);     // bucket 0 centre
+    k.f32(d + 16, -5), k.f32(d + 20, 0), k.f32(d + 24, 5);     // bucket 1 centre
+    std::size_t r = d + 4 + 24;                                // 2 buckets x 12 bytes + 4
+    const std::size_t record = 6 + 6 + 8 + 4 + 9 * 2;
+    const unsigned half_one = 0x3c00, half_half = 0x3800, half_minus_quarter = 0xb400;
+    for (int j = 0; j < 3; ++j, r += record) {
+        k.u16(r, 1000 + 500), k.u16(r + 2, 1000), k.u16(r + 4, 1000 - 1000);  // (+0.5 block/2, 0, -block/2)
+        k.u16(r + 6, half_half), k.u16(r + 8, half_one), k.u16(r + 10, 0);    // scales 0.5, 1, 0 (flat)
+        k.u16(r + 12, half_one), k.u16(r + 14, 0), k.u16(r + 16, 0), k.u16(r + 18, 0);
+        k.u8(r + 20, 255), k.u8(r + 21, 0), k.u8(r + 22, 128), k.u8(r + 23, 51);
+        for (int c = 0; c < 9; ++c) k.u16(r + 24 + 2 * std::size_t(c), c < 3 ? half_minus_quarter : 0);  // R band 1 = -0.25
+    }
+    return k;
+}
+
+TEST(Ksplat, HandBuiltMode1WithBucketsAndKnownValues) {
+    const fs::path p = temp("m1.ksplat");
+    std::ofstream(p, std::ios::binary) << ksplat_mode1().b;
+    auto g = read_gaussians(p);
+    ASSERT_TRUE(g) << g.message();
+    ASSERT_EQ(g->size(), 3u);
+    EXPECT_EQ(g->sh_degree, 1);
+    // Position = (u - range) * block / 2 / range + centre: (0.5, 0, -1) from each splat's bucket centre.
+    EXPECT_EQ(g->positions[0], glm::vec3(10.5f, 20.0f, 29.0f));
+    EXPECT_EQ(g->positions[1], glm::vec3(10.5f, 20.0f, 29.0f));
+    EXPECT_EQ(g->positions[2], glm::vec3(-4.5f, 0.0f, 4.0f));  // the partial bucket
+    EXPECT_EQ(g->scales[0], glm::vec3(0.5f, 1.0f, 0.0f));
+    EXPECT_EQ(g->rotations[0], glm::quat(1, 0, 0, 0));
+    EXPECT_NEAR(g->opacities[0], 0.2f, 1e-7);
+    EXPECT_NEAR(g->sh[0], 0.5 / kShC0, 1e-6);
+    EXPECT_NEAR(g->sh[1], -0.5 / kShC0, 1e-6);
+    for (int k = 1; k < 4; ++k) {
+        EXPECT_EQ(g->sh[std::size_t(k) * 3 + 0], -0.25f) << k;  // red, coefficients 1..3
+        EXPECT_EQ(g->sh[std::size_t(k) * 3 + 1], 0.0f) << k;
+    }
+    EXPECT_TRUE(validate(*g, "read"));
+}
+
+TEST(Ksplat, BadFilesNameTheFileAndTheProblem) {
+    auto expect = [](const std::string& name, const std::string& bytes, const std::string& fragment) {
+        const fs::path p = temp(name);
+        std::ofstream(p, std::ios::binary) << bytes;
+        auto g = read_ksplat(p);
+        ASSERT_FALSE(g);
+        EXPECT_EQ(g.message().rfind(p.string() + ": ", 0), 0u) << g.message();
+        EXPECT_NE(g.message().find(fragment), std::string::npos) << g.message();
+    };
+    expect("small.ksplat", std::string(100, '\0'), "too small");
+    expect("count.ksplat", ksplat_mode1(4).b, "declares 4 splats, the sections hold 3");
+    Bytes mode = ksplat_mode1();
+    mode.u16(20, 3);
+    expect("mode.ksplat", mode.b, "compression mode 3");
+    const std::string whole = ksplat_mode1().b;
+    expect("trunc.ksplat", whole.substr(0, whole.size() - 10), "run past the end of the file");
+    Bytes sections = ksplat_mode1();
+    sections.u32(4, 4000000000u);
+    expect("sections.ksplat", sections.b, "section headers do not fit");
+    Bytes scale = ksplat_mode1();
+    scale.u16(4096 + 1024 + 28 + 6, 0xbc00);  // scale x = -1
+    expect("scale.ksplat", scale.b, "splat 0: scale negative");
 }
 
 }  // namespace
