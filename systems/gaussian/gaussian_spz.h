@@ -25,5 +25,8 @@
 namespace sffd::gaussian {
 
 Result<GaussianCloud> read_spz(const std::filesystem::path& path);
+// Version 3, gzip level 6, turned into RUB (gaussian_spz_write.cpp); up to 12 fractional bits, fewer
+// when a coordinate needs them. Saved to a temporary and renamed.
+Status write_spz(const std::filesystem::path& path, const GaussianCloud& cloud);
 
 }  // namespace sffd::gaussian

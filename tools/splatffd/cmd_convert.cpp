@@ -40,7 +40,7 @@ void usage() {
                  "  --progress       a line per step at its start, every 10 %% and its end (default: only when stderr\n"
                  "                   is a terminal, for steps over a second); the timing summary is always printed\n"
                  "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .compressed.ply PlayCanvas's quantised layout,\n"
-                 "                   .glb KHR_gaussian_splatting); IN may also be\n"
+                 "                   .spz v3, .glb KHR_gaussian_splatting); IN may also be\n"
                  "                   a Gaussian file (.splat, .spz, .ksplat, 3DGS or compressed .ply, KHR .glb)\n"
                  "  --turn-x180      with --gaussians: turn the Gaussians 180 degrees about x, (x, y, z) -> (x, -y, -z),\n"
                  "                   for a file stored y-up (RUB) that should be y-down like a 3DGS PLY, or back\n"

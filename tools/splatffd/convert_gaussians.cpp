@@ -12,6 +12,7 @@
 #include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_spz.h"
 
 namespace sffd::cli {
 
@@ -48,7 +49,8 @@ int write_gaussians(const std::string& in, const SplatCloud* surface, const std:
     Status s = compressed    ? gaussian::write_compressed_ply(out, *g)
                : e == ".ply" ? gaussian::write_ply(out, *g, ascii ? ply::Format::ascii : ply::Format::binary_little_endian)
                : e == ".glb" ? gaussian::write_glb(out, *g)
-                             : Status(make_error(out + ": Gaussians are written as .ply (3DGS), .compressed.ply (PlayCanvas) or .glb (KHR_gaussian_splatting)"));
+               : e == ".spz" ? gaussian::write_spz(out, *g)
+                             : Status(make_error(out + ": Gaussians are written as .ply (3DGS), .compressed.ply (PlayCanvas), .spz (v3) or .glb (KHR_gaussian_splatting)"));
     if (!s) {
         std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
         return 1;

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <unistd.h>
+#include <zlib.h>
 
 #include <array>
 #include <cmath>
@@ -18,6 +19,7 @@
 #include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_ksplat.h"
+#include "systems/gaussian/gaussian_spz.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/sh.h"
 #include "tests/systems/gaussian/test_math.h"
@@ -375,6 +377,47 @@ TEST(Ksplat, BadFilesNameTheFileAndTheProblem) {
     Bytes scale = ksplat_mode1();
     scale.u16(4096 + 1024 + 28 + 6, 0xbc00);  // scale x = -1
     expect("scale.ksplat", scale.b, "splat 0: scale negative");
+}
+
+TEST(SpzWrite, RoundTripsWithinSpzQuantisationAndKeepsTheFrame) {
+    const GaussianCloud g = cloud(400, 3, 21);
+    const fs::path p = temp("ours.spz");
+    ASSERT_TRUE(write_spz(p, g));
+    auto back = read_gaussians(p);
+    ASSERT_TRUE(back) << back.message();
+    ASSERT_EQ(back->size(), g.size());
+    ASSERT_EQ(back->sh_degree, 3);
+    for (std::size_t i = 0; i < g.size(); ++i) {
+        // 12 fractional bits; log scales in steps of 1/16; opacity 1/255; rotation 9-bit smallest three.
+        EXPECT_LT(glm::length(back->positions[i] - g.positions[i]), 2.5e-4f) << i;  // √3 half steps
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(std::log(back->scales[i][c]), std::log(g.scales[i][c]), 1.0 / 32 + 1e-6) << i;
+        EXPECT_NEAR(back->opacities[i], g.opacities[i], 0.5 / 255 + 1e-6) << i;
+        EXPECT_GT(std::abs(glm::dot(back->rotations[i], g.rotations[i])), 0.999f) << i;
+        for (int k = 0; k < 48; ++k)  // DC in steps of 1/(255·0.15), SH in steps of 1/128
+            EXPECT_NEAR(back->sh[i * 48 + std::size_t(k)], g.sh[i * 48 + std::size_t(k)], k < 3 ? 0.5 / (255 * 0.15) + 1e-5 : 0.5 / 128 + 1e-6) << i << " " << k;
+    }
+}
+
+TEST(SpzWrite, StoresRubOnDisk) {
+    // One splat at (1, 2, 3) in the PLY frame is (1, -2, -3) in the file (fixed point, 12 bits).
+    GaussianCloud g = cloud(1, 0);
+    g.positions[0] = {1, 2, 3};
+    const fs::path p = temp("rub.spz");
+    ASSERT_TRUE(write_spz(p, g));
+    gzFile f = gzopen(p.c_str(), "rb");
+    ASSERT_NE(f, nullptr);
+    unsigned char b[25];
+    ASSERT_EQ(gzread(f, b, sizeof b), int(sizeof b));
+    gzclose(f);
+    EXPECT_EQ(b[13], 12);
+    auto coord = [&](int c) {
+        std::int32_t v = std::int32_t(b[16 + 3 * c] | b[17 + 3 * c] << 8 | b[18 + 3 * c] << 16);
+        if (v & 0x800000) v -= 0x1000000;
+        return v / 4096.0;
+    };
+    EXPECT_EQ(coord(0), 1.0);
+    EXPECT_EQ(coord(1), -2.0);
+    EXPECT_EQ(coord(2), -3.0);
 }
 
 }  // namespace

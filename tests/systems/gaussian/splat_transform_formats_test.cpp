@@ -164,7 +164,7 @@ TEST_F(SplatTransformFormats, OneCaptureRendersTheSameFromEveryFormat) {
     const std::vector<Case> cases = {
         {"their.ply", false, true},          {"ours.glb", false, false},   {"their.glb", false, true, false, true},
         {"our.compressed.ply", true, false}, {"their.compressed.ply", true, true},
-        {"their.spz", true, true, true},     {"their.splat", true, true},
+        {"their.spz", true, true, true},     {"their.splat", true, true},         {"our.spz", true, false},
     };
     for (const Case& c : cases) {
         const fs::path f = temp(c.file);
@@ -172,6 +172,8 @@ TEST_F(SplatTransformFormats, OneCaptureRendersTheSameFromEveryFormat) {
             ASSERT_EQ(run((c.file == "their.spz" ? "--spz-version 3 " : "") + ply.string() + " " + f.string()), "");
         } else if (c.file == "ours.glb") {
             ASSERT_TRUE(write_glb(f, g));
+        } else if (c.file == "our.spz") {
+            ASSERT_TRUE(write_spz(f, g));
         } else {
             ASSERT_TRUE(write_compressed_ply(f, g));
         }
@@ -220,6 +222,21 @@ TEST_F(SplatTransformFormats, SpzFromTheOfficialLibraryReadsInThePlyFrame) {
         for (int k = 0; k < 48; ++k)  // SPZ: DC in steps of 1/(255·0.15), SH in steps of 1/128
             EXPECT_NEAR(back->sh[i * 48 + std::size_t(k)], g.sh[i * 48 + std::size_t(k)], k < 3 ? 0.02 : 0.01) << i << " " << k;
     }
+}
+
+TEST_F(SplatTransformFormats, OurSpzDecodesLikeOursTurnedAboutX) {
+    // splat-transform decodes SPZ without the RUB turn (gaussian_axes.h): its PLY of our SPZ is our
+    // decoded cloud turned 180 degrees about x, and nothing else.
+    const GaussianCloud g = capture(500, 0.3f);
+    const fs::path spz = temp("w.spz"), decoded = temp("w_decoded.ply");
+    ASSERT_TRUE(write_spz(spz, g));
+    ASSERT_EQ(run(spz.string() + " " + decoded.string()), "");
+    auto mine = read_gaussians(spz);
+    ASSERT_TRUE(mine) << mine.message();
+    auto theirs = read_ply(decoded);
+    ASSERT_TRUE(theirs) << theirs.message();
+    turn_axes(*theirs, AxisTurn::x180);
+    expect_close(*mine, *theirs, 2e-5);
 }
 
 }  // namespace
