@@ -140,4 +140,16 @@ TEST(InfoGaussians, InfinitiesAreCountedAndUnknownTypesListEveryFormat) {
         << r.err;
 }
 
+TEST(InfoGaussians, CompressedPlyAsAPointCloudSaysWhatItIs) {
+    // Before: "vertex element has no x, y, z properties". Now the message names the format and the way.
+    const fs::path comp = temp("p.compressed.ply");
+    ASSERT_TRUE(gaussian::write_compressed_ply(comp, cloud(10, 0)));
+    const std::string o = temp("pc.txt").string();
+    const int status = std::system((kTool + " convert '" + comp.string() + "' '" + temp("pc.ply").string() + "' >" + o + " 2>&1").c_str());
+    EXPECT_NE(WEXITSTATUS(status), 0);
+    std::stringstream so;
+    so << std::ifstream(o).rdbuf();
+    EXPECT_NE(so.str().find(comp.string() + ": a compressed (PlayCanvas) Gaussian PLY, not a point cloud"), std::string::npos) << so.str();
+}
+
 }  // namespace
