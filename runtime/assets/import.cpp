@@ -67,6 +67,9 @@ Result<Geometry> read_ply_geometry(const fs::path& path) {
     if (vi < 0) return make_error(g.source + ": no 'vertex' element");
     const ply::Element& ve = h.elements[vi];
     const int px = ve.find("x"), py = ve.find("y"), pz = ve.find("z");
+    // PlayCanvas's compressed Gaussian PLY packs positions into chunks: say so instead of "no x, y, z".
+    if (h.find("chunk") >= 0 && ve.find("packed_position") >= 0)
+        return make_error(g.source + ": a compressed (PlayCanvas) Gaussian PLY, not a point cloud: read it as Gaussians (convert --gaussians, render, view)");
     if (px < 0 || py < 0 || pz < 0) return make_error(g.source + ": vertex element has no x, y, z properties");
     for (int i : {px, py, pz})
         if (ve.properties[i].is_list) return make_error(g.source + ": vertex property '" + ve.properties[i].name + "' is a list");

@@ -11,7 +11,10 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_gltf.h"
+#include "systems/gaussian/gaussian_infinity.h"
+#include "systems/gaussian/gaussian_ksplat.h"
 #include "systems/gaussian/gaussian_spz.h"
 #include "systems/gaussian/sh.h"
 
@@ -71,31 +74,29 @@ Result<PlyLayout> ply_layout(const ply::Element& v, const std::string& name) {
 }
 
 // One vertex row into the cloud's slot `at` (arrays already sized); the checks in the order they report.
+// Opacity and scale go through the one infinity mapping (gaussian_infinity.h), counted in `inf`.
 Status convert_row(const ply::Chunk& chunk, const PlyLayout& l, std::size_t r, std::uint64_t first_row,
-                   const std::string& name, GaussianCloud& out, std::size_t at) {
+                   const std::string& name, GaussianCloud& out, std::size_t at, InfinityCount& inf) {
     const int K = sh_coeffs(l.degree);
     auto col = [&](int i) -> const std::vector<double>& { return chunk.columns[std::size_t(i)].values; };
     auto bad = [&](int prop, const char* why) {
         return make_error(name + ": vertex " + std::to_string(first_row + r) + ": " + why + " '" +
                           chunk.element.properties[std::size_t(prop)].name + "'");
     };
-    // Every read column must be finite (NaN scales or rotations would poison a whole render).
-    for (int p : {l.x, l.y, l.z, l.dc[0], l.dc[1], l.dc[2], l.opacity, l.scale[0], l.scale[1], l.scale[2], l.rot[0],
-                  l.rot[1], l.rot[2], l.rot[3]})
+    // Every other read column must be finite (NaN scales or rotations would poison a whole render).
+    for (int p : {l.x, l.y, l.z, l.dc[0], l.dc[1], l.dc[2], l.rot[0], l.rot[1], l.rot[2], l.rot[3]})
         if (!std::isfinite(col(p)[r])) return bad(p, "non-finite");
     for (int p : l.rest)
         if (!std::isfinite(col(p)[r])) return bad(p, "non-finite");
     out.positions[at] = glm::vec3(float(col(l.x)[r]), float(col(l.y)[r]), float(col(l.z)[r]));
     glm::vec3 s;
-    for (int c = 0; c < 3; ++c) {
-        const double e = std::exp(col(l.scale[c])[r]);
-        if (!std::isfinite(float(e))) return bad(l.scale[c], "scale overflows (log scale too large) in");
-        s[c] = float(e);
-    }
+    for (int c = 0; c < 3; ++c)
+        if (!scale_from_log(col(l.scale[c])[r], s[c], inf))
+            return bad(l.scale[c], std::isnan(col(l.scale[c])[r]) ? "non-finite" : "scale overflows (log scale too large) in");
     out.scales[at] = s;
     if (!normalize_quaternion(col(l.rot[0])[r], col(l.rot[1])[r], col(l.rot[2])[r], col(l.rot[3])[r], out.rotations[at]))
         return bad(l.rot[0], "zero-length rotation quaternion at");
-    out.opacities[at] = sigmoid(col(l.opacity)[r]);
+    if (!opacity_from_logit(col(l.opacity)[r], out.opacities[at], inf)) return bad(l.opacity, "non-finite");
     float* sh = &out.sh[at * std::size_t(K) * 3];
     for (int k = 0; k < K; ++k)
         for (int c = 0; c < 3; ++c)
@@ -107,22 +108,29 @@ Status convert_row(const ply::Chunk& chunk, const PlyLayout& l, std::size_t r, s
 // error is the one of the first bad row in file order (each range stops at its own first bad row; the
 // smallest of those is re-run for its message).
 Status append_from_chunk(const ply::Chunk& chunk, const PlyLayout& l, std::uint64_t first_row, const std::string& name,
-                         GaussianCloud& out) {
+                         GaussianCloud& out, InfinityCount* mapped) {
     const std::size_t base = out.positions.size(), n = base + chunk.rows;
     const std::size_t K = std::size_t(sh_coeffs(l.degree));
     out.positions.resize(n), out.scales.resize(n), out.rotations.resize(n), out.opacities.resize(n);
     out.sh.resize(n * K * 3);
-    std::atomic<std::size_t> first_bad{chunk.rows};
+    std::atomic<std::size_t> first_bad{chunk.rows}, opacity_inf{0}, scale_inf{0};
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunk.rows, 2048), [&](const tbb::blocked_range<std::size_t>& range) {
+        InfinityCount inf;
         for (std::size_t r = range.begin(); r != range.end(); ++r)
-            if (!convert_row(chunk, l, r, first_row, name, out, base + r)) {
+            if (!convert_row(chunk, l, r, first_row, name, out, base + r, inf)) {
                 std::size_t seen = first_bad.load();
                 while (r < seen && !first_bad.compare_exchange_weak(seen, r)) {
                 }
-                return;
+                break;
             }
+        opacity_inf += inf.opacity;
+        scale_inf += inf.scale;
     });
-    if (const std::size_t r = first_bad.load(); r < chunk.rows) return convert_row(chunk, l, r, first_row, name, out, base + r);
+    if (const std::size_t r = first_bad.load(); r < chunk.rows) {
+        InfinityCount ignored;
+        return convert_row(chunk, l, r, first_row, name, out, base + r, ignored);
+    }
+    if (mapped) mapped->opacity += opacity_inf.load(), mapped->scale += scale_inf.load();
     return {};
 }
 
@@ -169,6 +177,8 @@ Result<GaussianCloud> read_ply(const fs::path& path) {
     const std::string name = path.string();
     const int vi = reader->header().find("vertex");
     if (vi < 0) return make_error(name + ": no vertex element");
+    // PlayCanvas's compressed layout (chunk + packed vertex elements) has its own reader.
+    if (is_compressed_ply(reader->header())) return read_compressed_ply(path);
     const ply::Element& ve = reader->header().elements[std::size_t(vi)];
     auto layout = ply_layout(ve, name);
     if (!layout) return layout.error();
@@ -183,13 +193,15 @@ Result<GaussianCloud> read_ply(const fs::path& path) {
     if (auto s = reader->seek_element("vertex"); !s) return s.error();
     ply::Chunk chunk;
     std::uint64_t row = 0;
+    InfinityCount mapped;
     while (true) {
         auto rows = reader->read_rows(kChunkRows, chunk);
         if (!rows) return rows.error();
         if (*rows == 0) break;
-        if (auto s = append_from_chunk(chunk, *layout, row, name, g); !s) return s.error();
+        if (auto s = append_from_chunk(chunk, *layout, row, name, g, &mapped); !s) return s.error();
         row += *rows;
     }
+    report_infinities(name, mapped);
     return g;
 }
 
@@ -282,11 +294,12 @@ Result<GaussianCloud> read_gaussians(const fs::path& path) {
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
     Result<GaussianCloud> g = make_error(path.string() + ": unknown Gaussian splat format '" + ext +
-                                         "' (expected .ply, .splat, .spz, .glb or .gltf)");
+                                         "' (expected .ply, .splat, .spz, .ksplat, .glb or .gltf)");
     if (ext == ".ply") g = read_ply(path);
     else if (ext == ".splat") g = read_splat(path);
     else if (ext == ".glb" || ext == ".gltf") g = read_gltf(path);
     else if (ext == ".spz") g = read_spz(path);
+    else if (ext == ".ksplat") g = read_ksplat(path);
     if (!g) return g;
     // The one validation every cloud from a file passes, after the readers' transforms.
     if (Status s = validate(*g, path.string()); !s) return s.error();

@@ -26,6 +26,7 @@
 #include "runtime/assets/ply.h"
 #include "runtime/core/result.h"
 #include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_infinity.h"
 
 namespace sffd::gaussian {
 
@@ -48,8 +49,10 @@ Result<PlyLayout> ply_layout(const ply::Element& vertex, const std::string& name
 
 // Converts rows of a chunk into Gaussians appended to `out` (out.sh_degree must equal layout.degree).
 // `first_row` numbers the rows in error messages.
+// Logit opacities of ±inf and log scales of -inf are read as limits (gaussian_infinity.h) and counted
+// in `mapped` when given.
 Status append_from_chunk(const ply::Chunk& chunk, const PlyLayout& layout, std::uint64_t first_row,
-                         const std::string& name, GaussianCloud& out);
+                         const std::string& name, GaussianCloud& out, InfinityCount* mapped = nullptr);
 // The vertex element we write for a degree (x y z nx ny nz f_dc_0..2 f_rest_.. opacity scale_0..2 rot_0..3).
 ply::Element ply_element(int degree, std::uint64_t count);
 // Fills `chunk` (reset to ply_element) with splats [first, first+count) of `cloud` in file units.
@@ -59,7 +62,8 @@ Result<GaussianCloud> read_ply(const std::filesystem::path& path);
 Status write_ply(const std::filesystem::path& path, const GaussianCloud& cloud,
                  ply::Format format = ply::Format::binary_little_endian);
 Result<GaussianCloud> read_splat(const std::filesystem::path& path);
-// By extension: .ply, .splat, .spz (v2/v3, gaussian_spz.h) or .glb/.gltf (KHR_gaussian_splatting, gaussian_gltf.h).
+// By extension: .ply (3DGS or compressed, gaussian_compressed_ply.h), .splat, .spz (v2/v3, gaussian_spz.h),
+// .ksplat (gaussian_ksplat.h) or .glb/.gltf (KHR_gaussian_splatting, gaussian_gltf.h).
 Result<GaussianCloud> read_gaussians(const std::filesystem::path& path);
 
 // Unit conversions between the files and GaussianCloud (double inside; logit saturates at p = 0 or 1 to

@@ -18,6 +18,7 @@
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_gltf.h"
+#include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_io.h"
 
 namespace sffd::gaussian {
@@ -134,12 +135,12 @@ GaussianCloud read_embedded(const tinygltf::Model& m, int entry, const std::stri
 
 bool is_gaussian_scene_file(const fs::path& path) {
     const std::string e = lower_ext(path);
-    if (e == ".splat" || e == ".spz") return true;
+    if (e == ".splat" || e == ".spz" || e == ".ksplat") return true;
     if (e == ".ply") {
         auto r = ply::Reader::open(path);
         if (!r) return false;
         const int v = r->header().find("vertex");
-        return v >= 0 && is_gaussian_element(r->header().elements[std::size_t(v)]);
+        return v >= 0 && (is_gaussian_element(r->header().elements[std::size_t(v)]) || is_compressed_ply(r->header()));
     }
     if (e == ".glb" || e == ".gltf") {
         const GltfDeclaration d = gltf_declaration(path);

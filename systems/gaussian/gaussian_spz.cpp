@@ -9,6 +9,7 @@
 #include <memory>
 #include <vector>
 
+#include "systems/gaussian/gaussian_axes.h"
 #include "systems/gaussian/gaussian_io.h"
 
 namespace sffd::gaussian {
@@ -47,10 +48,18 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
     if (!f) return fail(std::string("cannot open: ") + std::strerror(errno));
     std::vector<unsigned char> file(static_cast<std::size_t>(size));
     if (size > 0 && std::fread(file.data(), 1, file.size(), f.get()) != file.size()) return fail("read error");
-    if (file.size() >= 8 && u32(file.data()) == kMagic)
-        return fail("SPZ version " + std::to_string(u32(file.data() + 4)) +
-                    " (uncompressed container, zstd streams) is not supported: re-encode as version 3 "
-                    "(splat-transform in.spz --spz-version 3 out.spz)");
+    // An NGSP magic outside gzip is either version 4 (its own container of zstd streams) or an older
+    // version's payload that was never gzipped: say which, from the version the header states.
+    if (file.size() >= 8 && u32(file.data()) == kMagic) {
+        const std::uint32_t v = u32(file.data() + 4);
+        if (v >= 4)
+            return fail("SPZ version " + std::to_string(v) +
+                        " (uncompressed container, zstd streams) is not supported: re-encode as version 3 "
+                        "(splat-transform in.spz --spz-version 3 out.spz)");
+        return fail("uncompressed SPZ version " + std::to_string(v) +
+                    " data: versions 2 and 3 are one gzip stream (gzip the file, or re-encode it with "
+                    "splat-transform in.spz --spz-version 3 out.spz)");
+    }
     if (file.size() < 2 || file[0] != 0x1f || file[1] != 0x8b) return fail("not an SPZ file (no gzip stream)");
 
     Inflater inf;
@@ -173,6 +182,8 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
         for (std::size_t k = 0; k < rest; ++k)  // (k/3 + 1) coefficient, k%3 channel: our layout shifted by one triple
             g.sh[i * std::size_t(K) * 3 + 3 + k] = float((sh[i * rest + k] - 128) / 128.0);
     }
+    // SPZ is stored x right, y up, z back; the internal frame is the 3DGS PLY one (gaussian_axes.h).
+    turn_axes(g, AxisTurn::x180);
     return g;
 }
 

@@ -9,6 +9,8 @@
 //              v3: u32 "smallest three": 2-bit index of the largest component, three 10-bit
 //              (9-bit magnitude × √½ / 511, sign bit) for the others
 //   SH         (K − 1) × 3 × u8 per splat, coefficient-major with RGB inner, value = (b − 128) / 128
+// Axes: SPZ is stored x right, y up, z back (RUB, the SPZ README); the reader turns the cloud 180
+// degrees about x into the internal 3DGS PLY frame (gaussian_axes.h).
 // Version 4 (per-stream zstd with a table of contents) is refused with a hint (no zstd here):
 // `splat-transform in.spz --spz-version 3 out.spz` re-encodes. Errors name the file: not gzip/SPZ,
 // unsupported version or degree, a splat count the compressed size cannot hold (refused before
@@ -24,5 +26,8 @@
 namespace sffd::gaussian {
 
 Result<GaussianCloud> read_spz(const std::filesystem::path& path);
+// Version 3, gzip level 6, turned into RUB (gaussian_spz_write.cpp); up to 12 fractional bits, fewer
+// when a coordinate needs them. Saved to a temporary and renamed.
+Status write_spz(const std::filesystem::path& path, const GaussianCloud& cloud);
 
 }  // namespace sffd::gaussian

@@ -28,7 +28,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: splatffd convert IN OUT [--splats N] [--normals] [--radii] [--neighbours K] [--seed S] [--ascii]\n"
-    "                        [--progress] [--gaussians] [--lattice SRC [--lattice-name N]]\n"
+    "                        [--progress] [--gaussians [--turn-x180]] [--lattice SRC [--lattice-name N]]\n"
     "  IN   .ply .obj .off .gltf .glb, or a built-in scene name (sphere, face)\n"
     "  OUT  .ply (binary little-endian; --ascii for text) .glb .gltf, or .json: a lattice (see below)\n"
     "  --splats N       exactly N splats (meshes: sampled on the surface; points: thinned evenly; default:\n"
@@ -41,8 +41,11 @@ constexpr const char* kUsage =
     "  --ascii          write ASCII PLY (default binary little-endian)\n"
     "  --progress       a line per step at its start, every 10 % and its end (default: only when stderr\n"
     "                   is a terminal, for steps over a second); the timing summary is always printed\n"
-    "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .glb KHR_gaussian_splatting; default: surface\n"
-    "                   splats); IN may also be a Gaussian file (.splat, 3DGS .ply, KHR .glb)\n"
+    "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .compressed.ply PlayCanvas's quantised layout,\n"
+    "                   .spz v3, .glb KHR_gaussian_splatting; default: surface splats); IN may also be a\n"
+    "                   Gaussian file (.splat, .spz, .ksplat, 3DGS or compressed .ply, KHR .glb)\n"
+    "  --turn-x180      with --gaussians: turn the Gaussians 180 degrees about x, (x, y, z) -> (x, -y, -z),\n"
+    "                   for a file stored y-up (RUB) that should be y-down like a 3DGS PLY, or back (default off)\n"
     "  --lattice SRC    store a lattice bound to the cloud (OUT .glb/.gltf) or write it (OUT .json):\n"
     "                   fit[:L,M,N][,pad=P][,obb][,bspline]  fitted around the cloud: L,M,N divisions\n"
     "                   (default 10,10,10), pad x the largest extent per side (0.05), obb: oriented box\n"
@@ -141,7 +144,7 @@ int run_convert(sffd::cli::Args args) {
     using namespace sffd;
     std::string in, out;
     assets::ImportOptions opt;
-    bool ascii = false, gaussians = false, progress = false;
+    bool ascii = false, gaussians = false, progress = false, turn_x180 = false;
     LatticeRequest lattice;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
@@ -190,6 +193,8 @@ int run_convert(sffd::cli::Args args) {
             progress = true;
         } else if (a == "--gaussians") {
             gaussians = true;
+        } else if (a == "--turn-x180") {
+            turn_x180 = true;
         } else if (!a.empty() && a[0] == '-') {
             return cli::usage_error("convert", "unknown option '" + a + "'", kUsage);
         } else if (in.empty()) {
@@ -201,7 +206,8 @@ int run_convert(sffd::cli::Args args) {
         }
     }
     if (in.empty() || out.empty()) return cli::usage_error("convert", "expected IN and OUT", kUsage);
-    if (gaussians && in != "sphere" && cli::is_gaussian_file(in)) return cli::write_gaussians(in, nullptr, out, ascii);
+    if (turn_x180 && !gaussians) return cli::usage_error("convert", "--turn-x180 applies to Gaussians: add --gaussians", "");
+    if (gaussians && in != "sphere" && cli::is_gaussian_file(in)) return cli::write_gaussians(in, nullptr, out, ascii, turn_x180);
     if (cli::is_json_path(out)) return export_lattice_json(in, out, lattice);
     if (!lattice.source.empty() && !cli::is_scene_path(out)) {
         std::fprintf(stderr, "splatffd convert: %s: a PLY file cannot hold a lattice; write a scene (.glb/.gltf) or the lattice alone (.json)\n", out.c_str());
@@ -276,7 +282,7 @@ int run_convert(sffd::cli::Args args) {
         std::fprintf(stderr, "splatffd convert: %s\n", cloud.message().c_str());
         return 1;
     }
-    if (gaussians) return cli::write_gaussians(in, &*cloud, out, ascii);
+    if (gaussians) return cli::write_gaussians(in, &*cloud, out, ascii, turn_x180);
     const auto t2 = std::chrono::steady_clock::now();
     std::string lattice_note;
     printer.report("writing", 0.0);

@@ -39,6 +39,7 @@
 #include "systems/ffd/ffd_gpu.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/lattice_io.h"
+#include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/deform_gaussians.h"
@@ -341,6 +342,9 @@ int deform_ply_stream(const Options& o) {
     if (vi < 0) return fail(in_path + ": no vertex element");
     const ply::Element& ve = in_header.elements[std::size_t(vi)];
     VertexColumns cols = find_columns(ve);
+    if (gaussian::is_compressed_ply(in_header))
+        return fail(in_path + ": a compressed (PlayCanvas) Gaussian PLY: deform streams 3DGS PLY; expand it first with "
+                              "splatffd convert IN OUT.ply --gaussians");
     if (cols.x < 0 || cols.y < 0 || cols.z < 0) return fail(in_path + ": vertex element has no x, y, z properties");
     for (int k : {cols.x, cols.y, cols.z})
         if (ve.properties[std::size_t(k)].is_list) return fail(in_path + ": x, y, z must be scalar properties");

@@ -1,6 +1,7 @@
 // splatffd info FILE|SCENE: counts, bounds, attributes and lattices of a file or built-in scene.
 // PLY files are streamed (any size); glTF scene files and built-ins are loaded into a registry and
-// every cloud, lattice, binding, camera and light is listed.
+// every cloud, lattice, binding, camera and light is listed. Gaussian splat files (3DGS and compressed
+// PLY, .spz, .splat, .ksplat) end with an "N Gaussians, SH degree D" line.
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -16,6 +17,8 @@
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
 #include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_compressed_ply.h"
+#include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_scene.h"
 #include "tools/splatffd/command.h"
 
@@ -40,6 +43,28 @@ void print_deformers(const ecs::Registry& reg, ecs::Entity e) {
     std::printf("\n");
 }
 
+// Gaussian files without a header to list: read whole (the readers' budgets apply), then summarised.
+int info_gaussians(const std::string& file, const char* format) {
+    auto g = gaussian::read_gaussians(file);
+    if (!g) {
+        std::fprintf(stderr, "splatffd info: %s\n", g.message().c_str());
+        return 1;
+    }
+    std::error_code ec;
+    const auto bytes = std::filesystem::file_size(file, ec);
+    std::printf("%s: %s, %llu bytes\n", file.c_str(), format, static_cast<unsigned long long>(ec ? 0 : bytes));
+    std::printf("  %zu Gaussians, SH degree %d\n", g->size(), g->sh_degree);
+    if (g->size()) {
+        glm::dvec3 lo(INFINITY), hi(-INFINITY);
+        for (const glm::vec3& p : g->positions) {
+            lo = glm::min(lo, g->origin + glm::dvec3(p));
+            hi = glm::max(hi, g->origin + glm::dvec3(p));
+        }
+        print_bounds("  ", lo, hi);
+    }
+    return 0;
+}
+
 int info_ply(const std::string& file) {
     auto r = ply::Reader::open(file);
     if (!r) {
@@ -60,6 +85,16 @@ int info_ply(const std::string& file) {
     const int vi = h.find("vertex");
     if (vi < 0) return 0;
     const ply::Element& ve = h.elements[static_cast<std::size_t>(vi)];
+    if (gaussian::is_compressed_ply(h)) return info_gaussians(file, "compressed PLY (PlayCanvas chunk + packed vertex elements)");
+    if (gaussian::is_gaussian_element(ve)) {
+        // The header alone gives the count and degree; a bad layout is the reader's message.
+        auto layout = gaussian::ply_layout(ve, file);
+        if (!layout) {
+            std::fprintf(stderr, "splatffd info: %s\n", layout.message().c_str());
+            return 1;
+        }
+        std::printf("  %llu Gaussians, SH degree %d (3DGS PLY)\n", static_cast<unsigned long long>(ve.count), layout->degree);
+    }
     const int x = ve.find("x"), y = ve.find("y"), z = ve.find("z");
     if (x < 0 || y < 0 || z < 0) return 0;
     if (auto s = r->seek_element("vertex"); !s) {
@@ -181,8 +216,9 @@ void summarise_registry(const ecs::Registry& reg) {
 
 constexpr const char* kUsage =
     "usage: splatffd info FILE|sphere|face\n"
-    "  FILE   .ply (point cloud or 3DGS Gaussians: header, counts, bounds), .obj .off (mesh or points),\n"
-    "         .gltf .glb (scene: clouds, Gaussians, lattices, clips, camera, lights)\n"
+    "  FILE   .ply (point cloud, 3DGS or compressed Gaussians: header, counts, bounds), .obj .off (mesh or\n"
+    "         points), .gltf .glb (scene: clouds, Gaussians, lattices, clips, camera, lights), .spz .splat .ksplat\n"
+    "         (Gaussians: count, SH degree, bounds)\n"
     "  sphere, face   the built-in scenes\n";
 
 int run_info(cli::Args args) {
@@ -193,6 +229,14 @@ int run_info(cli::Args args) {
     std::string ext = std::filesystem::path(file).extension().string();
     for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
     if (ext == ".ply") return info_ply(file);
+    if (ext == ".spz") return info_gaussians(file, "SPZ (Niantic)");
+    if (ext == ".splat") return info_gaussians(file, ".splat (antimatter15)");
+    if (ext == ".ksplat") return info_gaussians(file, ".ksplat (GaussianSplats3D)");
+    if (ext != ".obj" && ext != ".off" && ext != ".gltf" && ext != ".glb" && !assets::is_builtin_scene(file)) {
+        std::fprintf(stderr, "splatffd info: %s: unknown file type '%s' (expected .ply, .obj, .off, .gltf, .glb, .spz, .splat or .ksplat)\n",
+                     file.c_str(), ext.c_str());
+        return 1;
+    }
     if (assets::is_builtin_scene(file) || ext == ".gltf" || ext == ".glb") {
         ecs::Registry reg;
         if (auto s = load_scene(reg, file); !s) {

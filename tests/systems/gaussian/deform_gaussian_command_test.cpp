@@ -245,7 +245,7 @@ TEST(GaussianConvertCommand, BuiltinSphereToGaussiansAndBetweenFormats) {
     EXPECT_EQ(back->sh, g->sh);
     r = run("sphere " + temp("x.obj").string() + " --gaussians", "convert");
     EXPECT_EQ(r.code, 1);
-    EXPECT_NE(r.err.find("Gaussians are written as .ply (3DGS) or .glb"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("Gaussians are written as .ply (3DGS), .compressed.ply (PlayCanvas), .spz (v3) or .glb"), std::string::npos) << r.err;
 }
 
 TEST(GaussianRenderCommand, RendersAGaussianFileToPng) {

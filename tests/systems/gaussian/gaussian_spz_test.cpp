@@ -62,8 +62,9 @@ TEST(GaussianSpz, HandBuiltVersion3WithKnownValues) {
     ASSERT_TRUE(g) << g.message();
     ASSERT_EQ(g->size(), 2u);
     EXPECT_EQ(g->sh_degree, 1);
-    EXPECT_EQ(g->positions[0], glm::vec3(1.5f, -1.0f, 0.0f));
-    EXPECT_EQ(g->positions[1], glm::vec3(0.5f, 0.0f, -0.25f));
+    // SPZ is stored RUB; read into the 3DGS PLY frame by the turn (x, y, z) -> (x, -y, -z).
+    EXPECT_EQ(g->positions[0], glm::vec3(1.5f, 1.0f, 0.0f));
+    EXPECT_EQ(g->positions[1], glm::vec3(0.5f, 0.0f, 0.25f));
     EXPECT_EQ(g->opacities[0], 1.0f);
     EXPECT_NEAR(g->opacities[1], 0.2f, 1e-7);
     EXPECT_NEAR(g->sh[0], (128 / 255.0 - 0.5) / 0.15, 1e-6);
@@ -71,10 +72,14 @@ TEST(GaussianSpz, HandBuiltVersion3WithKnownValues) {
     EXPECT_NEAR(g->scales[0].x, 1.0f, 1e-6);
     EXPECT_NEAR(g->scales[0].y, std::exp(-1.0f), 1e-6);
     EXPECT_NEAR(g->scales[0].z, std::exp(1.0f), 1e-5);
-    EXPECT_EQ(g->rotations[0], glm::quat(1, 0, 0, 0));
-    EXPECT_NEAR(g->rotations[1].w, std::sqrt(0.5f), 1e-6);
-    EXPECT_NEAR(g->rotations[1].z, std::sqrt(0.5f), 1e-6);
-    for (int k = 3; k < 12; ++k) EXPECT_EQ(g->sh[std::size_t(k)], 0.5f) << k;
+    // The turn q -> (0, 1, 0, 0)·q: identity becomes the half turn about x, and 90 degrees about z
+    // (w = z = √½) becomes (w, x, y, z) = (0, √½, -√½, 0).
+    EXPECT_EQ(g->rotations[0], glm::quat(0, 1, 0, 0));
+    EXPECT_NEAR(g->rotations[1].x, std::sqrt(0.5f), 1e-6);
+    EXPECT_NEAR(g->rotations[1].y, -std::sqrt(0.5f), 1e-6);
+    // Band 1 is (−y, z, −x): the turn flips the y and z coefficients, keeps x's.
+    for (int k = 3; k < 9; ++k) EXPECT_EQ(g->sh[std::size_t(k)], -0.5f) << k;
+    for (int k = 9; k < 12; ++k) EXPECT_EQ(g->sh[std::size_t(k)], 0.5f) << k;
     for (int k = 15; k < 24; ++k) EXPECT_EQ(g->sh[std::size_t(k)], 0.0f) << k;
 }
 
@@ -89,6 +94,8 @@ TEST(GaussianSpz, BadFiles) {
     expect(temp("plain.spz"), "no gzip stream");
     std::ofstream(temp("v4.spz"), std::ios::binary) << header(4, 1, 0, 12) + std::string(16, '\0');
     expect(temp("v4.spz"), "--spz-version 3");
+    std::ofstream(temp("raw2.spz"), std::ios::binary) << header(2, 1, 0, 12) + std::string(16, '\0');
+    expect(temp("raw2.spz"), "uncompressed SPZ version 2 data");
     write_gz(temp("magic.spz"), "XXXX" + header(3, 1, 0, 12).substr(4));
     expect(temp("magic.spz"), "bad magic");
     write_gz(temp("trunc.spz"), header(3, 10, 0, 12) + std::string(50, '\0'));

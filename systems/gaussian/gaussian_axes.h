@@ -1,0 +1,31 @@
+// Axis conventions of Gaussian files, and the one exact conversion between them.
+//
+// The internal convention (GaussianCloud, every system and command) is the 3DGS PLY one, kept as the
+// trainers write it: the frame of the COLMAP reconstruction, conventionally x right, y down, z forward
+// ("RDF", OpenCV camera axes). PLY, compressed PLY and .splat are read and written as stored (the
+// reference trainer, SuperSplat and splat-transform all treat them so: its `Transform.PLY` space).
+// SPZ is specified as x right, y up, z back ("RUB", OpenGL camera axes; the Niantic README): the SPZ
+// reader turns it 180 degrees about x into the internal frame. A file that was stored in RUB anyway
+// (a y-up PLY; or an SPZ written by splat-transform 3.7.0, which writes SPZ in its PLY space without
+// the conversion, by its own source comment) is turned by the user: `splatffd convert IN OUT
+// --turn-x180`.
+//
+// A turn of 180 degrees about a coordinate axis is a proper rotation R = diag(±1, ±1, ±1) with det +1,
+// so it maps every part of a Gaussian exactly: centres p -> R p, rotations q -> q_R q (covariance
+// R Σ Rᵀ), and each SH coefficient only changes sign (every 3DGS basis function is even or odd in each
+// coordinate), no resampling and no rounding.
+#pragma once
+
+#include "systems/gaussian/components.h"
+
+namespace sffd::gaussian {
+
+enum class AxisTurn {
+    x180,  // (x, y, z) -> (x, -y, -z): RDF <-> RUB (3DGS PLY <-> SPZ, OpenCV <-> OpenGL camera axes)
+    z180,  // (x, y, z) -> (-x, -y, z): splat-transform's PLY space <-> its engine (GLB) space
+};
+
+// Applies the turn to centres (and origin), rotations and SH coefficients in place. Its own inverse.
+void turn_axes(GaussianCloud& cloud, AxisTurn turn);
+
+}  // namespace sffd::gaussian
