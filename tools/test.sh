@@ -62,17 +62,17 @@ fi
 # is one tree-wide change still to make (tools/check_format.sh lists the files); SFFD_REQUIRE_FORMAT=1
 # makes it count as a failure, as it will once the tree is formatted.
 echo "== format (tools/check_format.sh)"
-format_failed=0
-tools/check_format.sh 2>&1 | tail -n 5 | tee "$logs/format.txt" || format_failed=1
-if [[ ${SFFD_REQUIRE_FORMAT:-0} != 1 ]]; then format_failed=0; fi
+format_counted=0 format_failed=0
+if [[ ${SFFD_REQUIRE_FORMAT:-0} == 1 ]]; then format_counted=1; fi
+tools/check_format.sh 2>&1 | tail -n 5 | tee "$logs/format.txt" || format_failed=$format_counted
 ((format_failed == 0)) || status=1
 
-# Sum ctest's "N% tests passed, F tests failed out of T" lines, plus the format check.
-passed=$((1 - format_failed)) failed=$format_failed
+# Sum ctest's "N% tests passed, F tests failed out of T" lines, plus the format check when it counts.
+passed=$((format_counted - format_failed)) failed=$format_failed
 while read -r f t; do
   passed=$((passed + t - f)); failed=$((failed + f))
 done < <(sed -nE 's/.*tests passed, ([0-9]+) tests? failed out of ([0-9]+).*/\1 \2/p' "$logs"/*.log)
-if ((passed + failed <= 1)); then
+if ((passed + failed <= format_counted)); then
   echo "test.sh: no test ran" >&2
   exit 1
 fi
