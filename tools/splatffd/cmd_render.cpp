@@ -57,58 +57,32 @@ namespace {
 using namespace sffd;
 
 constexpr const char* kUsage =
-    "usage: splatffd render [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--quality hq|preview] [--format png,exr]
-"
-    "                       [--background R,G,B] [--fps F] [--no-cull]
-"
-    "                       [--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV | --turntable N] [--video FILE.mp4|FILE.gif] [--shard K/N]
-"
-    "  SCENE            built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj .off,
-"
-    "                   3D Gaussians .ply (3DGS) .splat .spz .glb (KHR_gaussian_splatting) (default: sphere)
-"
-    "  --out DIR        output folder (created; required); files frame_NNNN.png / frame_NNNN.exr
-"
-    "  --frames N|A:B   N: frames 0..N-1; A:B: frames A..B inclusive (default 1: frame 0); frame k is at
-"
-    "                   time k / fps, and the scene's clips play
-"
-    "  --size WxH       image size in pixels (default 1280x720)
-"
-    "  --quality Q      hq (three-pass surface splatting, default) or preview (opaque discs)
-"
-    "  --format LIST    png, exr or png,exr (default png,exr)
-"
-    "  --background RGB sRGB colour 0..1 (e.g. 1,1,1) behind the object in the PNG and the video
-"
-    "                   (default: transparent PNG, black video)
-"
-    "  --fps F          frames per second of the fixed-step clock and the video (default 24, the demo clip's rate)
-"
-    "  --no-cull        disable back-face/frustum culling (for comparisons; default on)
-"
-    "  --camera E,T,U,F the camera for every frame: eye x,y,z, target x,y,z, up x,y,z, vertical fov in
-"
-    "                   degrees (0..180); eye = target and up along the view direction are refused
-"
-    "                   (default: the scene's camera, or one framing the scene)
-"
-    "  --turntable N    N frames (0..N-1) orbiting the scene's bounds centre at the scene camera's
-"
-    "                   distance and height, one turn; frame 0 is seen from the scene camera's eye; the
-"
-    "                   scene's clips play along (frame k at time k / fps), as with --frames
-"
-    "  --video FILE     also encode the PNG frames as FILE (.mp4 H.264 or .gif) at --fps, both over the
-"
-    "                   same background; needs ffmpeg (tools/bootstrap.sh installs it)
-"
-    "  --shard K/N      render only frames FIRST+K, FIRST+K+N, ... (shard K of N, for render farms;
-"
-    "                   default: every frame); `splatffd assemble DIR` checks the shards and writes the manifest
-"
-    "Progress is shown on a terminal only (nothing is written into logs or pipes).
-";
+    "usage: splatffd render [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--quality hq|preview] [--format png,exr]\n"
+    "                       [--background R,G,B] [--fps F] [--no-cull]\n"
+    "                       [--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV | --turntable N] [--video FILE.mp4|FILE.gif] [--shard K/N]\n"
+    "  SCENE            built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj .off,\n"
+    "                   3D Gaussians .ply (3DGS) .splat .spz .glb (KHR_gaussian_splatting) (default: sphere)\n"
+    "  --out DIR        output folder (created; required); files frame_NNNN.png / frame_NNNN.exr\n"
+    "  --frames N|A:B   N: frames 0..N-1; A:B: frames A..B inclusive (default 1: frame 0); frame k is at\n"
+    "                   time k / fps, and the scene's clips play\n"
+    "  --size WxH       image size in pixels (default 1280x720)\n"
+    "  --quality Q      hq (three-pass surface splatting, default) or preview (opaque discs)\n"
+    "  --format LIST    png, exr or png,exr (default png,exr)\n"
+    "  --background RGB sRGB colour 0..1 (e.g. 1,1,1) behind the object in the PNG and the video\n"
+    "                   (default: transparent PNG, black video)\n"
+    "  --fps F          frames per second of the fixed-step clock and the video (default 24, the demo clip's rate)\n"
+    "  --no-cull        disable back-face/frustum culling (for comparisons; default on)\n"
+    "  --camera E,T,U,F the camera for every frame: eye x,y,z, target x,y,z, up x,y,z, vertical fov in\n"
+    "                   degrees (0..180); eye = target and up along the view direction are refused\n"
+    "                   (default: the scene's camera, or one framing the scene)\n"
+    "  --turntable N    N frames (0..N-1) orbiting the scene's bounds centre at the scene camera's\n"
+    "                   distance and height, one turn; frame 0 is seen from the scene camera's eye; the\n"
+    "                   scene's clips play along (frame k at time k / fps), as with --frames\n"
+    "  --video FILE     also encode the PNG frames as FILE (.mp4 H.264 or .gif) at --fps, both over the\n"
+    "                   same background; needs ffmpeg (tools/bootstrap.sh installs it)\n"
+    "  --shard K/N      render only frames FIRST+K, FIRST+K+N, ... (shard K of N, for render farms;\n"
+    "                   default: every frame); `splatffd assemble DIR` checks the shards and writes the manifest\n"
+    "Progress is shown on a terminal only (nothing is written into logs or pipes).\n";
 
 // ---- --camera, --turntable ------------------------------------------------------------------------
 
