@@ -50,6 +50,19 @@ void record_current_window(const char* name) {
     layout_state().drawn.push_back({name, PanelRect{pos.x, pos.y, size.x, size.y}});
 }
 
+// Values typed into the tool and lattice panels that stay between frames until applied: a registry
+// resource, created on first use, so they live and die with the editor's registry.
+struct PanelEntries {
+    glm::dvec3 move_by{0.0, 0.1, 0.0};
+    double twist_by = 45.0;
+    glm::ivec3 divisions{0};  // pending resolution of `divisions_of` (0: take the lattice's)
+    ecs::Entity divisions_of = ecs::null_entity;
+};
+PanelEntries& panel_entries(ecs::Registry& registry) {
+    if (PanelEntries* e = registry.try_resource<PanelEntries>()) return *e;
+    return registry.set_resource<PanelEntries>();
+}
+
 // Begin of a laid-out panel: placed and sized every frame (the user collapses panels, the layout moves
 // the others), not movable or resizable by hand (a moved panel would cover another).
 bool begin_panel(Panel p) {
@@ -410,8 +423,8 @@ void tools_panel(ecs::Registry& registry, EditorState& state) {
         ImGui::SameLine();
         ImGui::Checkbox("x-ray (T)", &state.xray);
         ImGui::Separator();
-        static glm::dvec3 move_by{0.0, 0.1, 0.0};
-        static double twist_by = 45.0;
+        glm::dvec3& move_by = panel_entries(registry).move_by;
+        double& twist_by = panel_entries(registry).twist_by;
         input_dvec3("##move", move_by, "%.3f");
         ImGui::SameLine();
         if (ImGui::Button("stretch")) apply_stretch(registry, state, move_by);
@@ -452,8 +465,8 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
             if (ImGui::Button("reset")) reset_lattice(registry, state);
             ImGui::Separator();
             // Resolution: edits a pending value; "resample" applies it keeping the current shape.
-            static glm::ivec3 divisions{0};
-            static ecs::Entity divisions_of = ecs::null_entity;
+            glm::ivec3& divisions = panel_entries(registry).divisions;
+            ecs::Entity& divisions_of = panel_entries(registry).divisions_of;
             if (divisions_of != state.active_lattice || divisions == glm::ivec3(0)) {
                 divisions = l->divisions;
                 divisions_of = state.active_lattice;

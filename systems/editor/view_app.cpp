@@ -34,10 +34,13 @@ namespace sffd::editor {
 
 namespace {
 
-// Where GLFW callbacks deliver events. GLFW windows live on the main thread, one editor window per
-// process, so a file-level pointer is the simplest owner-free link from the C callbacks to the registry.
-ecs::Registry* g_registry = nullptr;
-bool g_ui = false;
+// Where GLFW callbacks deliver events: run_view points the window's user pointer at one of these for
+// as long as the window feeds this registry (and clears it before the registry goes), so the C callbacks
+// reach the registry without file-level state.
+struct CallbackLink {
+    ecs::Registry* registry = nullptr;
+    bool ui = false;
+};
 
 std::uint8_t glfw_mods(int m) {
     return std::uint8_t(((m & GLFW_MOD_SHIFT) ? mods::shift : 0) | ((m & GLFW_MOD_CONTROL) ? mods::ctrl : 0) |
@@ -81,9 +84,21 @@ std::string glfw_key_name(int key) {
     }
 }
 
-EditorState* live_state() { return g_registry ? g_registry->try_resource<EditorState>() : nullptr; }
-bool ui_wants_mouse() { return g_ui && ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureMouse; }
-bool ui_wants_keyboard() { return g_ui && ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureKeyboard; }
+const CallbackLink* link_of(GLFWwindow* window) {
+    return window ? static_cast<const CallbackLink*>(glfwGetWindowUserPointer(window)) : nullptr;
+}
+EditorState* live_state(GLFWwindow* window) {
+    const CallbackLink* link = link_of(window);
+    return link && link->registry ? link->registry->try_resource<EditorState>() : nullptr;
+}
+bool ui_wants_mouse(GLFWwindow* window) {
+    const CallbackLink* link = link_of(window);
+    return link && link->ui && ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureMouse;
+}
+bool ui_wants_keyboard(GLFWwindow* window) {
+    const CallbackLink* link = link_of(window);
+    return link && link->ui && ImGui::GetCurrentContext() && ImGui::GetIO().WantCaptureKeyboard;
+}
 
 glm::dvec2 to_pixels(GLFWwindow* window, double x, double y) {
     int ww = 0, wh = 0, fw = 0, fh = 0;
@@ -93,7 +108,7 @@ glm::dvec2 to_pixels(GLFWwindow* window, double x, double y) {
 }
 
 void on_cursor(GLFWwindow* window, double x, double y) {
-    EditorState* s = live_state();
+    EditorState* s = live_state(window);
     if (!s || s->replay) return;  // a replay owns the input
     InputEvent e;
     e.kind = InputKind::move;
@@ -101,8 +116,8 @@ void on_cursor(GLFWwindow* window, double x, double y) {
     s->events.push_back(e);
 }
 
-void on_button(GLFWwindow*, int button, int action, int m) {
-    EditorState* s = live_state();
+void on_button(GLFWwindow* window, int button, int action, int m) {
+    EditorState* s = live_state(window);
     if (!s || s->replay) return;
     InputEvent e;
     e.kind = action == GLFW_PRESS ? InputKind::press : InputKind::release;
@@ -111,25 +126,25 @@ void on_button(GLFWwindow*, int button, int action, int m) {
     else if (button == GLFW_MOUSE_BUTTON_MIDDLE) e.button = MouseButton::middle;
     else return;
     // Presses over a panel belong to the panel; releases always reach the editor (ends its drags).
-    if (e.kind == InputKind::press && ui_wants_mouse()) return;
+    if (e.kind == InputKind::press && ui_wants_mouse(window)) return;
     e.modifiers = glfw_mods(m);
     s->events.push_back(e);
 }
 
-void on_scroll(GLFWwindow*, double, double dy) {
-    EditorState* s = live_state();
-    if (!s || s->replay || ui_wants_mouse()) return;
+void on_scroll(GLFWwindow* window, double, double dy) {
+    EditorState* s = live_state(window);
+    if (!s || s->replay || ui_wants_mouse(window)) return;
     InputEvent e;
     e.kind = InputKind::scroll;
     e.scroll = dy;
     s->events.push_back(e);
 }
 
-void on_key(GLFWwindow*, int key, int, int action, int m) {
-    EditorState* s = live_state();
+void on_key(GLFWwindow* window, int key, int, int action, int m) {
+    EditorState* s = live_state(window);
     // ctrl+q quits even while a panel or the file dialog has the keyboard.
     const bool quit = key == GLFW_KEY_Q && (m & GLFW_MOD_CONTROL);
-    if (!s || s->replay || action == GLFW_RELEASE || (ui_wants_keyboard() && !quit)) return;
+    if (!s || s->replay || action == GLFW_RELEASE || (ui_wants_keyboard(window) && !quit)) return;
     std::string name = glfw_key_name(key);
     if (name.empty()) return;
     InputEvent e;
@@ -366,10 +381,10 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         lattice_fit_settings(registry).json_path = std::filesystem::path(session.save_path).replace_extension(".lattice.json").string();
         session.ui = options.ui && !headless;
 
-        g_registry = &registry;
-        g_ui = session.ui;
+        CallbackLink link{&registry, session.ui};
         GLFWwindow* window = ctx->window();
         if (window) {
+            glfwSetWindowUserPointer(window, &link);
             // Ours first; ImGui's backend chains to them (install_callbacks = true).
             glfwSetCursorPosCallback(window, on_cursor);
             glfwSetMouseButtonCallback(window, on_button);
@@ -463,9 +478,8 @@ int run_view(const ViewOptions& options, Schedule schedule) {
             ImGui_ImplGlfw_Shutdown();
             ImGui::DestroyContext();
         }
-        g_registry = nullptr;
-        g_ui = false;
         if (window) {
+            glfwSetWindowUserPointer(window, nullptr);
             glfwSetCursorPosCallback(window, nullptr);
             glfwSetMouseButtonCallback(window, nullptr);
             glfwSetScrollCallback(window, nullptr);

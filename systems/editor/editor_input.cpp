@@ -1,0 +1,261 @@
+// The editor's keyboard input (shortcuts, typed values), the adaptive render quality and the input system.
+#include "systems/editor/editor_system_detail.h"
+
+namespace sffd::editor {
+
+namespace detail {
+
+namespace {
+
+void set_axis(EditorState& state, AxisMode mode) {
+    if (state.tool == Tool::twist) {
+        state.twist_axis = mode;
+    } else {
+        state.move_axis = state.move_axis == mode ? AxisMode::view_plane : mode;  // pressing again frees it
+        if (mode != AxisMode::view) state.twist_axis = mode;
+    }
+    say(state, log::str("axis: ", axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis)));
+}
+
+// Reads up to three leading numbers of a numeric entry ("dx dy dz", commas allowed) into v; returns how
+// many were read. trailing_junk (when given) tells whether anything but spaces follows them.
+int scan_numbers(const std::string& text, double (&v)[3], bool* trailing_junk = nullptr) {
+    std::string cleaned = text;
+    std::replace(cleaned.begin(), cleaned.end(), ',', ' ');
+    int n = 0;
+    const char* p = cleaned.c_str();
+    while (n < 3) {
+        char* end = nullptr;
+        const double x = std::strtod(p, &end);
+        if (end == p) break;
+        v[n++] = x;
+        p = end;
+    }
+    while (*p == ' ') ++p;
+    if (trailing_junk) *trailing_junk = *p != '\0';
+    return n;
+}
+
+// Up to three numbers of a numeric entry; returns how many were read, or -1 when junk follows them.
+int parse_numbers(const std::string& text, double (&v)[3]) {
+    bool junk = false;
+    const int n = scan_numbers(text, v, &junk);
+    return junk ? -1 : n;  // trailing junk: not a number list
+}
+
+const char* typed_char(const std::string& key) {
+    static const char* digits[] = {"0", "1", "2", "3", "4", "5", "6", "7", "8", "9"};
+    for (const char* d : digits)
+        if (key == d) return d;
+    if (key == "minus") return "-";
+    if (key == "period") return ".";
+    if (key == "comma") return ",";
+    if (key == "space") return " ";
+    return nullptr;
+}
+
+std::string typed_prompt(const EditorState& state) {
+    const TypedEntry& t = state.typed;
+    const AxisMode axis = t.tool == Tool::twist ? state.twist_axis : state.move_axis;
+    return std::string(t.tool == Tool::twist ? "twist " : "move ") + axis_mode_name(axis) + ": " + t.text +
+           "_  (Enter applies, Esc cancels)";
+}
+
+void apply_typed(ecs::Registry& registry, EditorState& state) {
+    TypedEntry t = std::move(state.typed);
+    state.typed = {};
+    double v[3] = {0, 0, 0};
+    const int n = parse_numbers(t.text, v);
+    if (t.tool == Tool::twist) {
+        if (n == 1) apply_twist(registry, state, v[0]);
+        else say(state, "typed twist '" + t.text + "': give one angle in degrees");
+        return;
+    }
+    const AxisMode axis = state.move_axis;
+    const bool along = axis == AxisMode::x || axis == AxisMode::y || axis == AxisMode::z || axis == AxisMode::custom;
+    if (n == 1 && along) {
+        const Camera* camera = camera_of(registry, state);
+        if (camera) apply_stretch(registry, state, axis_direction(axis, *camera, state.custom_axis) * v[0]);
+    } else if (n == 3) {
+        apply_stretch(registry, state, {v[0], v[1], v[2]});
+    } else {
+        say(state, "typed move '" + t.text + "': give one distance after x, y or z, or three values dx dy dz");
+    }
+}
+
+// Keys while a typed entry is active; false when the key ends the entry and is handled as usual.
+bool handle_typed_key(ecs::Registry& registry, EditorState& state, const InputEvent& e) {
+    TypedEntry& t = state.typed;
+    const std::string& k = e.key;
+    if ((e.modifiers & (mods::ctrl | mods::alt)) == 0) {
+        if (const char* c = typed_char(k)) {
+            t.text += c;
+            state.status = typed_prompt(state);
+            return true;
+        }
+        if (k == "backspace") {
+            if (!t.text.empty()) t.text.pop_back();
+            state.status = typed_prompt(state);
+            return true;
+        }
+        if (k == "x" || k == "y" || k == "z") {
+            // The first axis key of an entry sets the axis (whatever the last entry left); the same key
+            // again frees it, as outside an entry.
+            const AxisMode mode = k == "x" ? AxisMode::x : k == "y" ? AxisMode::y : AxisMode::z;
+            if (!t.axis_typed && t.tool == Tool::move) state.move_axis = AxisMode::view_plane;
+            if (!t.axis_typed && t.tool == Tool::twist) state.twist_axis = AxisMode::view;
+            t.axis_typed = true;
+            set_axis(state, mode);
+            state.status = typed_prompt(state);
+            return true;
+        }
+        if (k == "enter") {
+            apply_typed(registry, state);
+            return true;
+        }
+        if (k == "escape") {
+            state.typed = {};
+            say(state, "typed entry cancelled");
+            return true;
+        }
+    }
+    state.typed = {};
+    return false;
+}
+
+void handle_text(ecs::Registry& registry, EditorState& state, const std::string& text) {
+    // Numeric entry: "dx dy dz" (commas allowed) for move, "degrees" for twist.
+    state.typed = {};
+    double v[3] = {0, 0, 0};
+    const int n = scan_numbers(text, v);  // the leading numbers; what follows them is not checked here
+    if (state.tool == Tool::twist && n >= 1) apply_twist(registry, state, v[0]);
+    else if (state.tool == Tool::move && n == 3) apply_stretch(registry, state, {v[0], v[1], v[2]});
+    else say(state, "numeric entry '" + text + "': move takes 'dx dy dz', twist takes 'degrees'");
+}
+
+void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e) {
+    const bool ctrl = e.modifiers & mods::ctrl, shift = e.modifiers & mods::shift;
+    const std::string& k = e.key;
+    if (state.drag.kind != Drag::Kind::none) {
+        if (k == "escape") cancel_drag(registry, state);
+        return;  // no other shortcuts mid-gesture
+    }
+    if (state.typed.active && handle_typed_key(registry, state, e)) return;
+    if (handle_lattice_key(registry, state, e)) return;  // add/remove/refit/order/export/import (lattice_manage.h)
+    if (ctrl) {
+        if (k == "z" && shift) redo(registry, state);
+        else if (k == "z") undo(registry, state);
+        else if (k == "y") redo(registry, state);
+        else if (k == "s") state.request_save = true;
+        else if (k == "a") select_all(registry, state);
+        else if (k == "q") state.request_quit = true;
+        else if (k == "o") state.request_open_dialog = true;
+        return;
+    }
+    if (k == "q") state.tool = Tool::select, say(state, "tool: select");
+    else if (k == "g" || k == "w" || k == "r") {
+        state.tool = k == "r" ? Tool::twist : Tool::move;
+        state.typed = TypedEntry{true, state.tool, {}};
+        say(state, std::string(k == "r" ? "tool: twist" : "tool: move") +
+                       " (drag, or type a value: x/y/z axis, number, Enter)");
+    }
+    else if (k == "b") state.tool = Tool::brush, say(state, "tool: brush");
+    else if (k == "x") set_axis(state, AxisMode::x);
+    else if (k == "y") set_axis(state, AxisMode::y);
+    else if (k == "z") set_axis(state, AxisMode::z);
+    else if (k == "v") set_axis(state, AxisMode::view);
+    else if (k == "c") set_axis(state, AxisMode::custom);
+    else if (k == "a") select_all(registry, state);
+    else if (k == "escape") clear_selection(registry, state);
+    else if (k == "f") frame_selection(registry, state);
+    else if (k == "p") state.pin_outer_layer = !state.pin_outer_layer,
+                       say(state, state.pin_outer_layer ? "outer layer pinned" : "outer layer unpinned");
+    else if (k == "l") state.scope = state.scope == ToolScope::local ? ToolScope::global : ToolScope::local,
+                       say(state, state.scope == ToolScope::local ? "scope: local (selection)" : "scope: global (all points)");
+    else if (k == "t" && shift) state.lattice_cage_only = !state.lattice_cage_only,
+                                say(state, state.lattice_cage_only ? "lattice: outer cage only" : "lattice: all points and cells");
+    else if (k == "t") state.xray = !state.xray, say(state, state.xray ? "x-ray on" : "x-ray off");
+    else if (k == "o") state.pivot_mode = state.pivot_mode == PivotMode::centroid ? PivotMode::picked_point : PivotMode::centroid;
+    else if (k == "home") reset_lattice(registry, state);
+    else if (k == "k" && shift) delete_keys_at_time(registry, state);
+    else if (k == "k") key_last_edit(registry, state);
+    else if (k == "space") toggle_play(registry, state);
+    else if (k == "n") state.auto_key = !state.auto_key, say(state, state.auto_key ? "auto-key on: edits are keyed at the clip time"
+                                                                                   : "auto-key off");
+    else if (k == "left") scrub_to(registry, state, clip_time(registry, state) - 1.0 / 24.0);
+    else if (k == "right") scrub_to(registry, state, clip_time(registry, state) + 1.0 / 24.0);
+    else if (k == "f12") state.request_screenshot = true;
+}
+
+}  // namespace
+
+AnimationState* animation_state(ecs::Registry& registry, const EditorState& state) {
+    return registry.valid(state.active_lattice) ? registry.try_get<AnimationState>(state.active_lattice) : nullptr;
+}
+
+namespace {
+
+// Preview while moving, HQ at rest (EditorState::preview_while_moving): writes RenderSettings::quality.
+void adapt_quality(ecs::Registry& registry, EditorState& state, bool scrolled) {
+    auto* settings = registry.try_resource<render::RenderSettings>();
+    if (!settings) return;
+    if (state.rest_quality < 0) {  // first frame: the quality the view started with, the camera as it is
+        state.rest_quality = int(settings->quality);
+        if (const Camera* cam = camera_of(registry, state)) state.last_camera = *cam;
+    }
+    const Drag::Kind k = state.drag.kind;
+    bool moving = scrolled || k == Drag::Kind::orbit || k == Drag::Kind::pan || k == Drag::Kind::move ||
+                  k == Drag::Kind::twist || k == Drag::Kind::brush;
+    registry.view<AnimationState>().each([&](ecs::Entity, AnimationState& a) { moving |= a.playing; });
+    if (const Camera* cam = camera_of(registry, state)) {
+        const Camera& l = state.last_camera;
+        moving |= cam->eye != l.eye || cam->target != l.target || cam->up != l.up || cam->fov_y_degrees != l.fov_y_degrees;
+        state.last_camera = *cam;
+    }
+    state.still_frames = moving ? 0 : std::min(state.still_frames + 1, 1 << 20);
+    const auto rest = render::Quality(state.rest_quality);
+    state.previewing = state.preview_while_moving && rest != render::Quality::preview && state.still_frames < state.refine_after;
+    settings->quality = state.previewing ? render::Quality::preview : rest;
+}
+
+}  // namespace
+
+}  // namespace detail
+
+using namespace detail;
+
+void editor_input_system(ecs::Registry& registry, const FrameContext& frame) {
+    EditorState* state = registry.try_resource<EditorState>();
+    if (!state) return;
+    Camera* camera = camera_of(registry, *state);
+    std::vector<InputEvent> events;
+    if (state->replay) events = state->replay->take(frame.frame);
+    for (InputEvent& e : state->events) events.push_back(std::move(e));
+    state->events.clear();
+    for (InputEvent& e : events) e.frame = frame.frame;
+    if (state->record) state->recorded.insert(state->recorded.end(), events.begin(), events.end());
+    for (const InputEvent& e : events) {
+        camera = camera_of(registry, *state);  // undo may have touched components: look it up again
+        if (!camera) break;
+        switch (e.kind) {
+            case InputKind::move:
+                state->cursor = e.position;
+                handle_move(registry, *state, *camera, e.position);
+                break;
+            case InputKind::press: handle_press(registry, *state, *camera, e); break;
+            case InputKind::release: handle_release(registry, *state, *camera, e); break;
+            case InputKind::scroll: zoom(*camera, e.scroll); break;
+            case InputKind::key: handle_key(registry, *state, e); break;
+            case InputKind::text: handle_text(registry, *state, e.key); break;
+        }
+    }
+    if (state->request_frame_selection) {
+        state->request_frame_selection = false;
+        frame_selection(registry, *state);
+    }
+    adapt_quality(registry, *state, std::any_of(events.begin(), events.end(), [](const InputEvent& e) {
+                      return e.kind == InputKind::scroll;
+                  }));
+}
+
+}  // namespace sffd::editor

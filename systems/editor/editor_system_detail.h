@@ -1,0 +1,52 @@
+// Internals of the editor's input system shared by its source files (helpers over EditorState, the tool
+// gestures). Not a public header: only systems/editor's own sources include it.
+#pragma once
+
+#include "systems/editor/editor_system.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <glm/gtc/matrix_inverse.hpp>
+
+#include "runtime/core/log.h"
+#include "runtime/scene/components.h"
+#include "systems/editor/selection_edit.h"
+#include "systems/ffd/components.h"
+#include "systems/picking/components.h"
+#include "systems/picking/picking_system.h"
+#include "systems/picking/selection.h"
+#include "systems/picking/world_space.h"
+#include "systems/animation/components.h"
+#include "systems/animation/editing.h"
+#include "systems/editor/lattice_manage.h"
+#include "systems/ffd/operations.h"
+#include "systems/splat_render/splat_render.h"
+
+namespace sffd::editor::detail {
+
+constexpr double drag_threshold_px = 3.0;
+
+// editor_system.cpp: small helpers over the editor state.
+void say(EditorState& state, std::string message);
+Camera* camera_of(ecs::Registry& registry, EditorState& state);
+picking::ScreenView screen_view(const Camera& camera, const Viewport& vp);
+glm::dmat4 lattice_model(const ecs::Registry& registry, ecs::Entity lattice);
+const Lattice* active_lattice(const ecs::Registry& registry, const EditorState& state);
+void keep_an_active_lattice(ecs::Registry& registry, EditorState& state);
+std::vector<std::uint32_t> selection_of(const ecs::Registry& registry, ecs::Entity lattice);
+
+// editor_tools.cpp: mouse gestures (selection clicks and boxes, the brush, tool drags).
+void apply_drag(ecs::Registry& registry, const Drag& drag);
+bool begin_tool_drag(ecs::Registry& registry, EditorState& state, const Camera& camera, Drag& drag);
+void finish_tool_drag(ecs::Registry& registry, EditorState& state, Drag& drag);
+void handle_move(ecs::Registry& registry, EditorState& state, Camera& camera, glm::dvec2 cursor);
+void handle_press(ecs::Registry& registry, EditorState& state, Camera& camera, const InputEvent& e);
+void handle_release(ecs::Registry& registry, EditorState& state, Camera& camera, const InputEvent& e);
+void cancel_drag(ecs::Registry& registry, EditorState& state);
+
+// editor_input.cpp
+AnimationState* animation_state(ecs::Registry& registry, const EditorState& state);
+
+}  // namespace sffd::editor::detail

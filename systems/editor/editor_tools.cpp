@@ -1,0 +1,254 @@
+// The editor's mouse gestures: picking, click and box selection, the brush, move/twist drags.
+#include "systems/editor/editor_system_detail.h"
+
+namespace sffd::editor::detail {
+
+namespace {
+
+picking::PickHit pick_at(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor,
+                         bool control_points, bool surfaces) {
+    picking::PickQuery q = picking::query_at_pixel(screen_view(camera, state.viewport), cursor);
+    q.tolerance_px = state.click_tolerance_px;
+    q.xray = state.xray;
+    q.control_points = control_points;
+    q.surfaces = surfaces;
+    return picking::pick(registry, picking::picking_state(registry), q);
+}
+
+void click_select(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor,
+                  std::uint8_t modifiers) {
+    const picking::SelectMode mode = picking::select_mode(modifiers & mods::shift, modifiers & mods::ctrl);
+    const picking::PickHit hit = pick_at(registry, state, camera, cursor, true, true);
+    if (hit.kind == picking::PickKind::control_point) {
+        state.active_lattice = hit.entity;
+        state.selected_entity = hit.entity;
+        const std::uint32_t picked[] = {hit.index};
+        const picking::LatticeSelection current{selection_of(registry, hit.entity)};
+        set_selection(registry, state, hit.entity, picking::select(current, picked, mode).indices, "select");
+        say(state, log::str("picked control point ", hit.index));
+        return;
+    }
+    if (hit.kind == picking::PickKind::surface || hit.kind == picking::PickKind::gaussian)
+        state.selected_entity = hit.entity;
+    if (mode == picking::SelectMode::replace && registry.valid(state.active_lattice))
+        set_selection(registry, state, state.active_lattice, {}, "deselect");
+}
+
+void box_select(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 a, glm::dvec2 b,
+                std::uint8_t modifiers) {
+    if (!active_lattice(registry, state)) return;
+    const picking::SelectMode mode = picking::select_mode(modifiers & mods::shift, modifiers & mods::ctrl);
+    const std::vector<std::uint32_t> inside = picking::control_points_in_rect(
+        registry, picking::picking_state(registry), state.active_lattice, screen_view(camera, state.viewport),
+        picking::ScreenRect{a, b}, !state.xray);
+    picking::LatticeSelection current{selection_of(registry, state.active_lattice)};
+    set_selection(registry, state, state.active_lattice, picking::select(current, inside, mode).indices, "box select");
+    say(state, log::str("box selected ", inside.size(), " control points"));
+}
+
+void brush_dab(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor,
+               picking::SelectMode mode) {
+    if (!active_lattice(registry, state)) return;
+    const picking::PickHit hit = pick_at(registry, state, camera, cursor, false, true);
+    if (hit.kind != picking::PickKind::surface && hit.kind != picking::PickKind::gaussian) return;
+    const auto local = picking::surface_hit_in_lattice_space(registry, state.active_lattice, hit);
+    if (!local) return;
+    const auto picked = picking::brush_select(registry.get<Lattice>(state.active_lattice), *local, {});
+    picking::LatticeSelection current{selection_of(registry, state.active_lattice)};
+    set_selection(registry, state, state.active_lattice, picking::select(current, picked, mode).indices, "brush");
+}
+
+// Pivot and axis of a tool in world space.
+glm::dvec3 tool_pivot(const ecs::Registry& registry, const EditorState& state, std::span<const std::uint32_t> points) {
+    if (state.pivot_mode == PivotMode::picked_point && state.has_picked_pivot) return state.picked_pivot;
+    const Lattice* lattice = active_lattice(registry, state);
+    if (!lattice) return glm::dvec3(0.0);
+    return glm::dvec3(lattice_model(registry, state.active_lattice) * glm::dvec4(centroid(*lattice, points), 1.0));
+}
+
+}  // namespace
+
+// Applies the drag's current displacement / angle to the lattice, from the snapshot.
+void apply_drag(ecs::Registry& registry, const Drag& drag) {
+    if (!registry.valid(drag.lattice) || !registry.has<Lattice>(drag.lattice)) return;
+    const glm::dmat4 model = lattice_model(registry, drag.lattice);
+    const glm::dmat4 inverse = glm::inverse(model);
+    Lattice& lattice = registry.patch<Lattice>(drag.lattice);
+    if (lattice.current.size() != drag.start_points.size()) return;
+    if (drag.kind == Drag::Kind::move) {
+        const glm::dvec3 d = glm::dvec3(inverse * glm::dvec4(drag.displacement_world, 0.0));
+        stretch_points(drag.start_points, lattice.current, drag.points, d);
+    } else {
+        const glm::dvec3 pivot = glm::dvec3(inverse * glm::dvec4(drag.pivot_world, 1.0));
+        const glm::dvec3 axis = glm::dvec3(inverse * glm::dvec4(drag.axis_world, 0.0));
+        twist_points(drag.start_points, lattice.current, drag.points, pivot, axis, drag.angle);
+    }
+}
+
+namespace {
+
+void remember_edit(ecs::Registry& registry, EditorState& state, const Drag& drag) {
+    const glm::dmat4 inverse = glm::inverse(lattice_model(registry, drag.lattice));
+    LastEdit& e = state.last_edit;
+    e.lattice = drag.lattice;
+    e.points = drag.points;
+    if (drag.kind == Drag::Kind::move) {
+        e.kind = LastEdit::Kind::stretch;
+        e.displacement = glm::dvec3(inverse * glm::dvec4(drag.displacement_world, 0.0));
+    } else {
+        e.kind = LastEdit::Kind::twist;
+        e.angle = drag.angle;
+        e.axis = glm::dvec3(inverse * glm::dvec4(drag.axis_world, 0.0));
+        e.pivot = glm::dvec3(inverse * glm::dvec4(drag.pivot_world, 1.0));
+    }
+}
+
+}  // namespace
+
+bool begin_tool_drag(ecs::Registry& registry, EditorState& state, const Camera& camera, Drag& drag) {
+    const Lattice* lattice = active_lattice(registry, state);
+    if (!lattice) return false;
+    drag.points = editable_selection(registry, state);
+    if (drag.points.empty()) {
+        say(state, state.pin_outer_layer && !selection_of(registry, state.active_lattice).empty()
+                       ? "only pinned (outer layer) points selected: unpin with p, or go global with l"
+                       : "nothing selected to edit");
+        return false;
+    }
+    drag.kind = state.tool == Tool::move ? Drag::Kind::move : Drag::Kind::twist;
+    drag.camera = camera;
+    drag.lattice = state.active_lattice;
+    drag.start_points = lattice->current;
+    drag.before = *lattice;
+    drag.pivot_world = tool_pivot(registry, state, drag.points);
+    drag.axis_world = axis_direction(state.twist_axis, camera, state.custom_axis);
+    drag.angle = 0.0;
+    drag.displacement_world = glm::dvec3(0.0);
+    return true;
+}
+
+void finish_tool_drag(ecs::Registry& registry, EditorState& state, Drag& drag) {
+    if (!registry.valid(drag.lattice) || !registry.has<Lattice>(drag.lattice)) return;
+    const bool is_move = drag.kind == Drag::Kind::move;
+    auto change = std::make_unique<ComponentChange<Lattice>>(is_move ? "stretch" : "twist", drag.lattice, drag.before,
+                                                             registry.get<Lattice>(drag.lattice));
+    if (state.undo.push(std::move(change))) {
+        remember_edit(registry, state, drag);
+        say(state, is_move ? log::str("stretched ", drag.points.size(), " control points")
+                           : log::str("twisted ", drag.points.size(), " control points by ",
+                                      glm::degrees(drag.angle), " degrees"));
+        if (state.auto_key) {
+            const std::string edited = state.status;
+            if (key_last_edit(registry, state)) say(state, edited + " (auto-key: " + state.status + ")");
+        } else {
+            state.unkeyed = drag.lattice;
+            state.play_warned = false;
+        }
+    }
+}
+
+namespace {
+
+glm::dvec3 move_displacement(const EditorState& state, const Drag& drag, glm::dvec2 cursor) {
+    const Camera& cam = drag.camera;
+    if (state.move_axis == AxisMode::view_plane)
+        return drag_in_view_plane(cam, state.viewport, drag.pivot_world, drag.start, cursor);
+    if (state.move_axis == AxisMode::view) {
+        // Along the viewing direction: upward drag pushes away, one pixel = one pixel's size at the pivot.
+        const double depth = glm::dot(drag.pivot_world - cam.eye, glm::normalize(cam.target - cam.eye));
+        const double pixel = 2.0 * depth * std::tan(glm::radians(double(cam.fov_y_degrees)) * 0.5) / state.viewport.height;
+        return glm::normalize(cam.target - cam.eye) * ((drag.start.y - cursor.y) * pixel);
+    }
+    return drag_along_axis(cam, state.viewport, drag.pivot_world, axis_direction(state.move_axis, cam, state.custom_axis),
+                           drag.start, cursor);
+}
+
+}  // namespace
+
+void handle_move(ecs::Registry& registry, EditorState& state, Camera& camera, glm::dvec2 cursor) {
+    Drag& drag = state.drag;
+    const glm::dvec2 delta = cursor - drag.last;
+    switch (drag.kind) {
+        case Drag::Kind::none: break;
+        case Drag::Kind::pending_click:
+            if (glm::length(cursor - drag.start) > drag_threshold_px) drag.kind = Drag::Kind::box;
+            break;
+        case Drag::Kind::box: break;
+        case Drag::Kind::orbit: orbit(camera, delta); break;
+        case Drag::Kind::pan: pan(camera, state.viewport, delta); break;
+        case Drag::Kind::move:
+            drag.displacement_world = move_displacement(state, drag, cursor);
+            apply_drag(registry, drag);
+            break;
+        case Drag::Kind::twist:
+            drag.angle += drag_angle(drag.camera, state.viewport, drag.pivot_world, drag.axis_world, drag.last, cursor);
+            apply_drag(registry, drag);
+            break;
+        case Drag::Kind::brush:
+            brush_dab(registry, state, camera, cursor,
+                      drag.modifiers & mods::ctrl ? picking::SelectMode::remove : picking::SelectMode::add);
+            break;
+    }
+    drag.last = cursor;
+}
+
+void handle_press(ecs::Registry& registry, EditorState& state, Camera& camera, const InputEvent& e) {
+    state.typed = {};  // a click or drag ends a typed entry unapplied
+    Drag& drag = state.drag;
+    if (drag.kind != Drag::Kind::none) return;  // one gesture at a time
+    drag = Drag{};
+    drag.button = e.button;
+    drag.modifiers = e.modifiers;
+    drag.start = drag.last = state.cursor;
+    if (e.button == MouseButton::right) {
+        drag.kind = (e.modifiers & mods::shift) ? Drag::Kind::pan : Drag::Kind::orbit;
+        return;
+    }
+    if (e.button == MouseButton::middle) {
+        drag.kind = Drag::Kind::pan;
+        return;
+    }
+    if (e.modifiers & mods::alt) {  // pivot at a picked surface point
+        const picking::PickHit hit = pick_at(registry, state, camera, state.cursor, false, true);
+        if (hit) {
+            state.picked_pivot = hit.position;
+            state.has_picked_pivot = true;
+            state.pivot_mode = PivotMode::picked_point;
+            say(state, "pivot set to the picked surface point");
+        }
+        return;
+    }
+    const bool plain = (e.modifiers & (mods::shift | mods::ctrl)) == 0;
+    if (plain && (state.tool == Tool::move || state.tool == Tool::twist) && begin_tool_drag(registry, state, camera, drag))
+        return;
+    if (state.tool == Tool::brush) {
+        drag.kind = Drag::Kind::brush;
+        brush_dab(registry, state, camera, state.cursor, picking::select_mode(e.modifiers & mods::shift, e.modifiers & mods::ctrl));
+        return;
+    }
+    drag.kind = Drag::Kind::pending_click;
+}
+
+void handle_release(ecs::Registry& registry, EditorState& state, Camera& camera, const InputEvent& e) {
+    Drag& drag = state.drag;
+    if (drag.kind == Drag::Kind::none || drag.button != e.button) return;
+    switch (drag.kind) {
+        case Drag::Kind::pending_click: click_select(registry, state, camera, drag.start, drag.modifiers); break;
+        case Drag::Kind::box: box_select(registry, state, camera, drag.start, state.cursor, drag.modifiers); break;
+        case Drag::Kind::move:
+        case Drag::Kind::twist: finish_tool_drag(registry, state, drag); break;
+        default: break;
+    }
+    drag = Drag{};
+}
+
+void cancel_drag(ecs::Registry& registry, EditorState& state) {
+    Drag& drag = state.drag;
+    if ((drag.kind == Drag::Kind::move || drag.kind == Drag::Kind::twist) && registry.valid(drag.lattice) &&
+        registry.has<Lattice>(drag.lattice))
+        registry.patch<Lattice>(drag.lattice).current = drag.start_points;
+    drag = Drag{};
+    say(state, "cancelled");
+}
+
+}  // namespace sffd::editor::detail

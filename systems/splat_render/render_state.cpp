@@ -1,0 +1,264 @@
+// Splat render system: the state resource, its programs and render targets, and the per-cloud GPU objects.
+#include "systems/splat_render/splat_render_detail.h"
+
+namespace sffd::render {
+
+namespace {
+
+using namespace detail;
+
+Result<gfx::Program> splat_program(const char* fragment, const char* label, int pass, int quad, int aux = 1,
+                                   int materials = 0, int textured = -1) {
+    gfx::Defines defines{{"PASS", std::to_string(pass)}, {"SHAPE_QUAD", std::to_string(quad)},
+                         {"AUX", std::to_string(aux)}, {"MATERIALS", std::to_string(materials)}};
+    if (textured >= 0) defines.push_back({"TEXTURED", std::to_string(textured)});  // else read per draw
+    return gfx::load_program({{GL_VERTEX_SHADER, "splat_render/splat.vert"}, {GL_FRAGMENT_SHADER, fragment}}, label,
+                             defines);
+}
+
+void upload_texture(CloudGpu& gpu, const SplatMaterial& m) {
+    if (m.texture_rgba8.empty() || m.texture_width <= 0 || m.texture_height <= 0 ||
+        m.texture_rgba8.size() < std::size_t(m.texture_width) * std::size_t(m.texture_height) * 4) {
+        gpu.texture.reset();
+        return;
+    }
+    gpu.texture = gfx::Texture::create("render.material", GL_TEXTURE_2D);
+    const int levels = 1 + int(std::floor(std::log2(std::max(m.texture_width, m.texture_height))));
+    glTextureStorage2D(gpu.texture.id(), levels, GL_SRGB8_ALPHA8, m.texture_width, m.texture_height);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
+    // Row 0 of the texels is v = 0, which is also GL's first row (t = 0).
+    glTextureSubImage2D(gpu.texture.id(), 0, 0, 0, m.texture_width, m.texture_height, GL_RGBA, GL_UNSIGNED_BYTE,
+                        m.texture_rgba8.data());
+    glGenerateTextureMipmap(gpu.texture.id());
+    // Mipmapped: the HQ attribute pass filters per pixel with textureGrad (the cull's per-splat lookups ask
+    // for level 0 explicitly).
+    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
+    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+}
+
+// The uv frames the textured passes read (SFFD_SSBO_UV_AXES), zeros for a cloud without them (then every
+// fragment samples the splat's centre uv at level 0).
+void upload_uv_axes(CloudGpu& gpu, const SplatCloud& cloud) {
+    gpu.uniform_radius.clear();
+    if (!gpu.texture) {
+        gpu.uv_axes.reset();
+        return;
+    }
+    const SplatMaterial& m = cloud.material;
+    gpu.uniform_radius = uniform_texel_radius(m.texture_rgba8.data(), m.texture_width, m.texture_height);
+    std::vector<glm::vec4> zeros;
+    const std::vector<glm::vec4>* data = &cloud.uv_axes;
+    if (cloud.uv_axes.size() != cloud.size()) zeros.assign(cloud.size(), glm::vec4(0.0f)), data = &zeros;
+    gpu.uv_axes = gfx::Buffer::create("render.uv_axes");
+    glNamedBufferData(gpu.uv_axes.id(), GLsizeiptr(std::max<std::size_t>(data->size(), 1) * sizeof(glm::vec4)),
+                      data->empty() ? nullptr : data->data(), GL_STATIC_DRAW);
+}
+
+}  // namespace
+
+namespace detail {
+
+gfx::Texture make_target(GLenum format, int w, int h, const char* label) {
+    gfx::Texture t = gfx::Texture::create(label, GL_TEXTURE_2D);
+    glTextureStorage2D(t.id(), 1, format, w, h);
+    glTextureParameteri(t.id(), GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    glTextureParameteri(t.id(), GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    return t;
+}
+
+void ensure_targets(SplatRenderState& s, int w, int h) {
+    if (s.width == w && s.height == h && s.output_fbo) return;
+    s.width = w, s.height = h;
+    s.color = make_target(GL_RGBA16F, w, h, "render.color");
+    s.aux = make_target(GL_RGBA32F, w, h, "render.normal_depth");
+    s.depth = make_target(GL_DEPTH_COMPONENT32F, w, h, "render.depth");
+    s.accum_color = make_target(GL_RGBA32F, w, h, "render.accum_color");
+    s.accum_normal = make_target(GL_RGBA32F, w, h, "render.accum_normal");
+    s.accum_material = make_target(GL_RG32F, w, h, "render.accum_material");
+
+    s.output_fbo = gfx::Framebuffer::create("render.output");
+    glNamedFramebufferTexture(s.output_fbo.id(), GL_COLOR_ATTACHMENT0, s.color.id(), 0);
+    glNamedFramebufferTexture(s.output_fbo.id(), GL_COLOR_ATTACHMENT1, s.aux.id(), 0);
+    glNamedFramebufferTexture(s.output_fbo.id(), GL_DEPTH_ATTACHMENT, s.depth.id(), 0);
+    const GLenum two[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    glNamedFramebufferDrawBuffers(s.output_fbo.id(), 2, two);
+
+    s.accum_fbo = gfx::Framebuffer::create("render.accum");
+    glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT0, s.accum_color.id(), 0);
+    glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT1, s.accum_normal.id(), 0);
+    glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT2, s.accum_material.id(), 0);
+    glNamedFramebufferTexture(s.accum_fbo.id(), GL_DEPTH_ATTACHMENT, s.depth.id(), 0);
+    glNamedFramebufferDrawBuffers(s.accum_fbo.id(), 2, two);
+
+    s.depth_fbo = gfx::Framebuffer::create("render.visibility");
+    glNamedFramebufferTexture(s.depth_fbo.id(), GL_DEPTH_ATTACHMENT, s.depth.id(), 0);
+    glNamedFramebufferDrawBuffer(s.depth_fbo.id(), GL_NONE);
+}
+
+// Whether the CPU cull may run this frame, so CPU copies of the splats are worth keeping.
+bool cpu_cull_wanted(const SplatRenderState& s, CullPath path) {
+    return path == CullPath::cpu || (path == CullPath::automatic && (s.software || s.cull_over_limit));
+}
+
+// Refreshes the renderer's own per-cloud objects (cull buffers, texture, bounds) for the clouds that are
+// resident in GpuSplatStore (residency_system uploads them; this only reads the store) and drops objects
+// of clouds that no longer exist. keep_cpu: the CPU cull may run, so point cpu_current at a CPU copy of
+// the draw buffer.
+void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatStore& store, bool keep_cpu) {
+    for (auto it = s.clouds.begin(); it != s.clouds.end();)
+        it = reg.valid(it->first) && reg.has<SplatCloud>(it->first) && store.clouds.contains(it->first) ? std::next(it)
+                                                                                                     : s.clouds.erase(it);
+
+    reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
+        const auto sit = store.clouds.find(e);
+        if (sit == store.clouds.end()) return;  // not resident (no residency phase ran): not drawn
+        const gfx::GpuSplats& splats = sit->second;
+        const std::uint64_t version = reg.version<SplatCloud>(e);
+        CloudGpu& gpu = s.clouds[e];
+        const auto n = static_cast<std::uint32_t>(cloud.size());
+        if (!gpu.frame_ubo) {
+            gpu.frame_ubo = gfx::Buffer::create("render.frame_block");
+            glNamedBufferData(gpu.frame_ubo.id(), sizeof(gpu::FrameBlock), nullptr, GL_DYNAMIC_DRAW);
+            gpu.commands = gfx::Buffer::create("render.draw_commands");
+            glNamedBufferData(gpu.commands.id(), draw_command_words * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_DRAW);
+        }
+        if (gpu.capacity < n || !gpu.records) {
+            gpu.capacity = std::max<std::uint32_t>(n, 1);
+            gpu.records = gfx::Buffer::create("render.visible_splats");
+            glNamedBufferData(gpu.records.id(), GLsizeiptr(2 * std::size_t(gpu.capacity) * sizeof(SplatRecord)), nullptr,
+                              GL_DYNAMIC_DRAW);
+            gpu.quads = gfx::Buffer::create("render.visible_quads");
+            glNamedBufferData(gpu.quads.id(), GLsizeiptr(std::size_t(gpu.capacity) * sizeof(std::uint32_t)), nullptr,
+                              GL_DYNAMIC_DRAW);
+        }
+        if (gpu.texture_version != version) {
+            upload_texture(gpu, cloud.material);
+            upload_uv_axes(gpu, cloud);
+            gpu.texture_version = version;
+        }
+        gpu.uv_axes_cpu = gpu.texture && cloud.uv_axes.size() == n ? &cloud.uv_axes : nullptr;
+        if (gpu.bounds_version != version) {
+            gpu.bounds = bounding_sphere(cloud);
+            gpu.mean_radius = mean_splat_radius(cloud);
+            ++s.cpu_splat_passes;
+            gpu.bounds_version = version;
+        }
+        gpu.material = &cloud.material;
+        gpu.count = std::min(n, splats.count);
+        gpu.splats = splats.draw_buffer();
+        // The CPU copy of the draw buffer: the store's mirror (rest, or the CPU deformation's output);
+        // none when the FFD compute pass wrote `deformed` (those splats exist only on the GPU).
+        gpu.cpu_current = nullptr;
+        if (!keep_cpu) {
+            gpu.cpu_own = {}, gpu.cpu_cull = {};
+            return;
+        }
+        gpu.cpu_current = splats.cpu_current();
+        if (!gpu.cpu_current && splats.state == gfx::Residency::rest && splats.rest_version == version) {
+            if (gpu.cpu_own_version != version || gpu.cpu_own.size() != n) {
+                gpu.cpu_own = pack_splats(cloud), gpu.cpu_own_version = version;  // the CPU cull was just chosen
+                ++s.cpu_splat_passes;
+            }
+            if (gpu.cpu_own.size() == gpu.count) gpu.cpu_current = &gpu.cpu_own;
+        }
+    });
+}
+
+// The cull pass variant for an (un)textured material, (un)lit colours and `lights` lights, compiled once.
+Status cull_program(SplatRenderState& s, bool textured, bool lit, std::uint32_t lights) {
+    lights = std::min<std::uint32_t>(lights, SFFD_MAX_LIGHTS);
+    gfx::Program& program = s.cull[textured][lit][lit ? lights : 0];
+    if (program) return {};
+    auto cull = gfx::load_compute_program("splat_render/cull.comp", "render.cull",
+                                          {{"TEXTURED", textured ? "1" : "0"}, {"LIT", lit ? "1" : "0"},
+                                           {"LIGHTS", std::to_string(lit ? lights : 0)}});
+    if (!cull) return make_error(cull.message());
+    program = std::move(cull.value());
+    return {};
+}
+
+// The deferred shading program for `lights` directional lights (LIGHTS in lighting.glsl), with one
+// material for the frame or blended ones (MATERIALS), compiled once.
+Status shade_program(SplatRenderState& s, bool materials, std::uint32_t lights) {
+    gfx::Program& program = s.shade[materials][std::min<std::uint32_t>(lights, SFFD_MAX_LIGHTS)];
+    if (program) return {};
+    auto shade = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
+                                    {GL_FRAGMENT_SHADER, "splat_render/shade.frag"}},
+                                   "render.shade", {{"LIGHTS", std::to_string(lights)}, {"MATERIALS", materials ? "1" : "0"}});
+    if (!shade) return make_error(shade.message());
+    program = std::move(shade.value());
+    return {};
+}
+
+// The state resource, created on first use (a failed start is remembered: no retry every frame).
+SplatRenderState& render_state(ecs::Registry& reg) {
+    if (!reg.try_resource<SplatRenderState>()) {
+        if (Status st = init_render_state(reg); !st) {
+            log::error("render_system(): ", st.message());
+            SplatRenderState failed;
+            failed.failed = true;
+            reg.set_resource<SplatRenderState>(std::move(failed));
+        }
+    }
+    return reg.resource<SplatRenderState>();
+}
+
+}  // namespace detail
+
+using namespace detail;
+
+Status init_render_state(ecs::Registry& registry) {
+    SplatRenderState s;
+    if (Status st = cull_program(s, false, false, 1); !st) return st;
+    for (int quad = 0; quad < 2; ++quad) {
+        auto vis = splat_program("splat_render/visibility.frag", quad ? "render.visibility.quads" : "render.visibility", 0, quad, 0);
+        if (!vis) return make_error(vis.message());
+        for (int textured = 0; textured < 2; ++textured)
+            for (int materials = 0; materials < 2; ++materials) {
+                auto attr = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute",
+                                          1, quad, 0, materials, textured);
+                if (!attr) return make_error(attr.message());
+                s.attribute[textured][materials][quad] = std::move(attr.value());
+            }
+        for (int textured = 0; textured < 2; ++textured)
+            for (int aux = 0; aux < 2; ++aux) {
+                auto prev = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2,
+                                          quad, aux, 0, textured);
+                if (!prev) return make_error(prev.message());
+                s.preview[textured][aux][quad] = std::move(prev.value());
+            }
+        s.visibility[quad] = std::move(vis.value());
+    }
+    // The shading program of the common case (one light) now, so shader errors surface here.
+    if (Status st = shade_program(s, false, 1); !st) return st;
+    auto display = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
+                                      {GL_FRAGMENT_SHADER, "splat_render/display.frag"}},
+                                     "render.display");
+    if (!display) return make_error(display.message());
+    s.display = std::move(display.value());
+    s.vao = gfx::VertexArray::create("render.empty");
+    s.command_reset = gfx::Buffer::create("render.draw_commands.reset");
+    const std::uint32_t reset[draw_command_words] = {0, 1, 0, 0, 6, 0, 0, 0, 0, 1, 0, 0};
+    glNamedBufferStorage(s.command_reset.id(), sizeof reset, reset, 0);
+    s.records_vao = gfx::VertexArray::create("render.splat_records");
+    for (GLuint a = 0; a < GLuint(SFFD_SPLAT_RECORD_BYTES / 16); ++a) {
+        glEnableVertexArrayAttrib(s.records_vao.id(), a);
+        glVertexArrayAttribFormat(s.records_vao.id(), a, 4, GL_FLOAT, GL_FALSE, a * 16);
+        glVertexArrayAttribBinding(s.records_vao.id(), a, 0);
+    }
+    GLfloat range[2] = {1.0f, 1.0f};
+    glGetFloatv(GL_POINT_SIZE_RANGE, range);
+    s.max_point_size = range[1];
+    s.software = gfx::software_rasterizer();
+    registry.set_resource<SplatRenderState>(std::move(s));
+    return {};
+}
+
+void release_render_state(ecs::Registry& registry) {
+    release_gaussian_pass(registry);
+    registry.erase_resource<SplatRenderState>();
+}
+
+}  // namespace sffd::render

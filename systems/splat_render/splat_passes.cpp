@@ -1,0 +1,202 @@
+// Splat render system: the splat passes (preview; HQ visibility, attributes, shading).
+#include "systems/splat_render/splat_render_detail.h"
+
+namespace sffd::render::detail {
+
+namespace {
+
+// programs: [sprites, quads] for the cloud; flat: the program for a textured cloud's flat-coloured sprites
+// (CpuCullResult::flat_records: the untextured variant of the pass; null for passes without colour).
+// big: the HQ passes of the compute rasteriser's frame draw only the sprites it left to them (indexed
+// draws over ComputeRasterCloud::big) and the quads.
+void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& programs, const CloudGpu& gpu,
+                const gfx::Program* flat = nullptr, bool big = false) {
+    glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
+    glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
+    glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
+    if (gpu.texture) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
+    glVertexArrayVertexBuffer(s.records_vao.id(), 0, gpu.records.id(), 0, GLsizei(SFFD_SPLAT_RECORD_BYTES));
+    if (big) glVertexArrayElementBuffer(s.records_vao.id(), gpu.raster.big.id());
+    glBindVertexArray(s.records_vao.id());
+    glUseProgram(programs[0].id());
+    if (big) {
+        glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.raster.commands.id());
+        glDrawElementsIndirect(GL_POINTS, GL_UNSIGNED_INT, nullptr);
+        glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
+    } else {
+        glDrawArraysIndirect(GL_POINTS, nullptr);
+    }
+    glBindVertexArray(s.vao.id());
+    glUseProgram(programs[1].id());
+    glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(4 * sizeof(std::uint32_t)));
+    if (gpu.texture) {
+        glBindVertexArray(s.records_vao.id());
+        glUseProgram(flat ? flat->id() : programs[0].id());
+        if (big) {
+            glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.raster.commands.id());
+            glDrawElementsIndirect(GL_POINTS, GL_UNSIGNED_INT, reinterpret_cast<const void*>(5 * sizeof(std::uint32_t)));
+        } else {
+            glDrawArraysIndirect(GL_POINTS, reinterpret_cast<const void*>(8 * sizeof(std::uint32_t)));
+        }
+    }
+}
+
+}  // namespace
+
+// Clears the output targets and sets the state every splat pass shares.
+void begin_splat_passes(SplatRenderState& s, const FramePlan& plan) {
+    const RenderSettings& settings = plan.settings;
+    const glm::vec4 background = plan.common.background;
+    const glm::vec4 no_hit(0.0f, 0.0f, 0.0f, -1.0f);
+    const float far_depth = 1.0f;
+    glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 0, &background.x);
+    if (settings.aux_outputs) glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 1, &no_hit.x);
+    glClearNamedFramebufferfv(s.output_fbo.id(), GL_DEPTH, 0, &far_depth);
+    glViewport(0, 0, plan.width, plan.height);
+    glBindVertexArray(s.vao.id());
+    glEnable(GL_PROGRAM_POINT_SIZE);
+    glDisable(GL_CULL_FACE);
+    glDisable(GL_BLEND);
+    glEnable(GL_DEPTH_TEST);
+    glDepthMask(GL_TRUE);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+
+    // Without aux outputs only attachment 0 is written (the preview program variant has no aux output).
+    const GLenum with_aux[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1}, without_aux[2] = {GL_COLOR_ATTACHMENT0, GL_NONE};
+    glNamedFramebufferDrawBuffers(s.output_fbo.id(), 2, settings.aux_outputs ? with_aux : without_aux);
+    s.aux_valid = settings.aux_outputs;
+}
+
+// Preview: one pass of opaque ray-cast ellipses into the output targets.
+void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan) {
+    glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
+    glDepthFunc(GL_LESS);
+    auto scope = profiling::gpu_scope(reg, "render.preview");
+    const int aux = plan.settings.aux_outputs ? 1 : 0;
+    for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.preview[gpu->texture ? 1 : 0][aux], *gpu, &s.preview[0][aux][0]);
+}
+
+// HQ 1. visibility: eps-offset depth only.
+// With the compute rasteriser (plan.compute): its visibility pass first, the rasteriser draws only what it
+// left over, then its depths are merged into the depth target inside `rect` (where the accumulation runs).
+void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect) {
+    glBindFramebuffer(GL_FRAMEBUFFER, s.depth_fbo.id());
+    glDepthFunc(GL_LESS);
+    auto scope = profiling::gpu_scope(reg, "render.hq.visibility");
+    const bool big = !plan.compute.empty();
+    if (big) compute_raster_visibility(s.compute_raster, plan.compute, plan.width, plan.height);
+    for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.visibility, *gpu, nullptr, big);
+    if (big) {
+        glEnable(GL_SCISSOR_TEST);
+        glScissor(rect.x, rect.y, rect.z, rect.w);
+        glBindVertexArray(s.vao.id());  // full-screen triangle from gl_VertexID, no attributes
+        compute_raster_merge(s.compute_raster, plan.drawn.front()->frame_ubo.id());
+        glDisable(GL_SCISSOR_TEST);
+    }
+}
+
+// Whether the HQ passes of this frame run on the compute rasteriser (RenderSettings::raster_path), and its
+// per-cloud inputs (plan.compute) when they do.
+void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, RenderStats& stats) {
+    const RenderSettings& settings = plan.settings;
+    if (settings.quality != Quality::hq || materials || plan.drawn.empty() || settings.raster_path == RasterPath::raster)
+        return;
+    if (settings.raster_path == RasterPath::automatic) {
+        // Mean on-screen splat diameter over every drawn splat, against the measured break-even (compute_raster.h).
+        double splats = 0, footprint = 0;
+        for (const CloudGpu* gpu : plan.drawn) splats += gpu->count, footprint += gpu->count * gpu->footprint_px;
+        const double limit = s.software ? compute_raster_software_max_footprint : compute_raster_hardware_max_footprint;
+        if (!(footprint <= limit * splats)) return;
+    }
+    if (Status st = compute_raster_fits(plan.width, plan.height); !st) return warn_once("render_system(): " + st.message());
+    if (Status st = init_compute_raster(s.compute_raster); !st) {
+        log::error("render_system(): ", st.message());
+        return;
+    }
+    for (CloudGpu* gpu : plan.drawn) {
+        ensure_compute_raster_cloud(gpu->raster, gpu->capacity);
+        plan.compute.push_back({&gpu->raster, gpu->frame_ubo.id(), gpu->records.id(), gpu->commands.id(), gpu->texture.id(),
+                                gpu->count, gpu->capacity, gpu->flat_list});
+        auto it = std::find_if(plan.gpu_counts.begin(), plan.gpu_counts.end(), [&](const CountsSource& c) { return c.gpu == gpu; });
+        if (it == plan.gpu_counts.end()) plan.gpu_counts.push_back({gpu, counts_big});
+        else it->parts |= counts_big;
+    }
+    stats.compute_rastered_clouds = std::uint32_t(plan.compute.size());
+}
+
+// Whether the drawn clouds differ in specular/shininess: then they blend into a third target (per-pixel
+// materials); one material for every cloud is a uniform, as cheap as before.
+bool clouds_differ_in_material(const FramePlan& plan) {
+    return std::any_of(plan.drawn.begin(), plan.drawn.end(), [&](const CloudGpu* g) {
+        return g->material->specular != plan.drawn.front()->material->specular ||
+               g->material->shininess != plan.drawn.front()->material->shininess;
+    });
+}
+
+// HQ 2. attributes: additive, depth-tested against the offset surface, no depth writes; only inside the
+// screen rectangle the clouds can cover (`rect`: clears of two RGBA32F targets and the shading pass are a
+// large part of a small scene's frame on llvmpipe). Leaves the scissor test on for shade_pass.
+void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect,
+                    bool materials) {
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(rect.x, rect.y, rect.z, rect.w);
+    const GLenum accum_buffers[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
+    glNamedFramebufferDrawBuffers(s.accum_fbo.id(), materials ? 3 : 2, accum_buffers);
+    const glm::vec4 zero(0.0f);
+    glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 0, &zero.x);
+    glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 1, &zero.x);
+    if (materials) glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 2, &zero.x);
+    glBindFramebuffer(GL_FRAMEBUFFER, s.accum_fbo.id());
+    glDepthFunc(GL_LEQUAL);
+    glDepthMask(GL_FALSE);
+    glEnable(GL_BLEND);
+    glBlendEquation(GL_FUNC_ADD);
+    glBlendFunc(GL_ONE, GL_ONE);
+    {
+        auto scope = profiling::gpu_scope(reg, "render.hq.attribute");
+        const bool big = !plan.compute.empty();
+        for (const CloudGpu* gpu : plan.drawn)
+            draw_cloud(s, s.attribute[gpu->texture ? 1 : 0][materials], *gpu, &s.attribute[0][materials][0], big);
+        if (big) {
+            compute_raster_attribute(s.compute_raster, plan.compute, rect, s.depth.id());
+            glDepthFunc(GL_NOTEQUAL);  // the resolve runs where a surface is visible (not the cleared 1.0)
+            glBindVertexArray(s.vao.id());
+            compute_raster_resolve(s.compute_raster, plan.drawn.front()->frame_ubo.id());
+        }
+    }
+    glDisable(GL_BLEND);
+    glDepthMask(GL_TRUE);
+}
+
+// HQ 3. normalise + shade into the output targets. Early depth test skips background pixels (depth still
+// 1.0) before the shader runs. Ends the scissor test attribute_pass began.
+void shade_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, bool materials) {
+    glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
+    glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s.accum_color.id());
+    glBindTextureUnit(SFFD_TEX_ACCUM_NORMAL, s.accum_normal.id());
+    glBindTextureUnit(SFFD_TEX_ACCUM_MATERIAL, s.accum_material.id());
+    glDepthFunc(GL_NOTEQUAL);
+    glDepthMask(GL_FALSE);
+    if (!plan.drawn.empty()) glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, plan.drawn.front()->frame_ubo.id());
+    const std::uint32_t lights = std::min<std::uint32_t>(plan.common.counts.y, SFFD_MAX_LIGHTS);
+    if (Status st = shade_program(s, materials, lights); !st) log::error("render_system(): ", st.message());
+    glUseProgram(s.shade[materials][lights].id());
+    {
+        auto scope = profiling::gpu_scope(reg, "render.hq.shade");
+        if (!plan.drawn.empty()) glDrawArrays(GL_TRIANGLES, 0, 3);
+    }
+    glDisable(GL_SCISSOR_TEST);
+    glDepthMask(GL_TRUE);
+    glDepthFunc(GL_LESS);
+}
+
+void end_splat_passes() {
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+    glBindVertexArray(0);
+    glUseProgram(0);
+}
+
+}  // namespace sffd::render::detail

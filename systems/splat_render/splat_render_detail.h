@@ -1,0 +1,249 @@
+// Internals of the splat render system shared by its source files (state resource, per-frame plan, pass
+// entry points). Not a public header: only systems/splat_render's own sources include it.
+#pragma once
+
+#include "systems/splat_render/splat_render.h"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <utility>
+#include <unordered_map>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/matrix_inverse.hpp>
+
+#include "runtime/app/app.h"
+#include "runtime/core/log.h"
+#include "runtime/gfx/barrier.h"
+#include "runtime/gfx/context.h"
+#include "runtime/gfx/dispatch.h"
+#include "runtime/gfx/gl_object.h"
+#include "runtime/gfx/shader.h"
+#include "runtime/gfx/splat_store.h"
+#include "runtime/scene/components.h"
+#include "shaders/common/bindings.h"
+#include "shaders/splat_render/compute_raster.h"
+#include "shaders/splat_render/frame_block.h"
+#include "shaders/splat_render/splat_record.h"
+#include "systems/ffd/components.h"
+#include "runtime/app/pass_timer.h"
+#include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/compute_raster.h"
+#include "systems/splat_render/cpu_cull.h"
+#include "systems/splat_render/gaussian_pass.h"
+#include "systems/splat_render/splat_pack.h"
+#include "systems/splat_render/storage_limits.h"
+
+namespace sffd::render::detail {
+
+// Three DrawArraysIndirectCommands per cloud: sprites {n, 1, 0, 0}, quads {6, n, 0, 0}, and a textured
+// cloud's flat-coloured sprites {n, 1, capacity, 0} (CPU cull only; the compute cull leaves n = 0).
+constexpr std::size_t draw_command_words = 12;
+
+// Per point cloud GPU objects owned by the renderer (the splats themselves live in GpuSplatStore).
+struct CloudGpu {
+    gfx::Buffer records;    // SplatRecord[2 capacity]: visible sprites, prepared by the cull pass; from
+                            // `capacity` on, a textured cloud's sprites of one texture colour (CPU cull)
+    gfx::Buffer quads;      // uint[capacity]: indices of visible splats drawn as quads
+    gfx::Buffer commands;   // three DrawArraysIndirectCommands: sprites, quads, flat-coloured sprites
+    gfx::Buffer frame_ubo;  // FrameBlock for this cloud
+    std::uint32_t capacity = 0;
+    gfx::Texture texture;   // material texture (sRGB), when the material has one
+    gfx::Buffer uv_axes;    // vec4[count]: SplatCloud::uv_axes (zeros when absent), when textured
+    std::vector<std::uint16_t> uniform_radius;  // uniform_texel_radius() of the texture (CPU cull)
+    const std::vector<glm::vec4>* uv_axes_cpu = nullptr;  // the cloud's, valid during one render_system call
+    std::uint64_t texture_version = 0;
+    BoundingSphere bounds;  // cloud space, for the framing camera
+    double mean_radius = 0;  // mean_splat_radius(), for the automatic raster path
+    std::uint64_t bounds_version = 0;
+    double footprint_px = 0;  // splat_footprint_px() this frame (cull_pass)
+    bool flat_list = false;   // the CPU cull filled the flat-coloured sprite list this frame
+    ComputeRasterCloud raster;  // sprites the compute rasteriser leaves to the rasteriser (compute_raster.h)
+    const SplatMaterial* material = nullptr;  // valid during one render_system call
+    std::uint32_t count = 0;
+    GLuint splats = 0;      // draw buffer this frame
+
+    // The CPU copy of the draw buffer for the CPU cull (cpu_cull.h): the store's mirror, or on a hardware
+    // GPU with the CPU cull forced (no mirrors kept there) the renderer's own copy of the rest splats.
+    std::vector<gpu::GpuSplat> cpu_own;
+    std::uint64_t cpu_own_version = 0;  // SplatCloud change stamp cpu_own holds
+    const std::vector<gpu::GpuSplat>* cpu_current = nullptr;
+    CpuCullResult cpu_cull;
+};
+
+// Owner of a fence sync object (GLsync is not a GL name, so gfx::GlObject does not cover it): move-only,
+// deleted with its owner.
+class Fence {
+public:
+    Fence() = default;
+    explicit Fence(GLsync sync) : m_sync(sync) {}
+    Fence(Fence&& other) noexcept : m_sync(std::exchange(other.m_sync, nullptr)) {}
+    Fence& operator=(Fence&& other) noexcept {
+        if (this != &other) reset(), m_sync = std::exchange(other.m_sync, nullptr);
+        return *this;
+    }
+    Fence(const Fence&) = delete;
+    Fence& operator=(const Fence&) = delete;
+    ~Fence() { reset(); }
+    void reset() {
+        if (m_sync) glDeleteSync(m_sync);
+        m_sync = nullptr;
+    }
+    GLsync get() const { return m_sync; }
+    explicit operator bool() const { return m_sync != nullptr; }
+
+private:
+    GLsync m_sync = nullptr;
+};
+
+// One frame's visible counts on their way back (SplatRenderState::counts_ring).
+struct CountsSlot {
+    Fence fence;                  // signals when the copies of the compute-culled clouds' commands landed
+    std::uint64_t serial = 0;     // issue order
+    std::uint64_t frame = 0;      // FrameContext::frame of the frame that issued it
+    std::uint32_t cpu_points = 0, cpu_quads = 0;  // counts of the CPU-culled clouds, known at once
+    std::uint32_t gpu_clouds = 0;  // clouds copied into the slot
+    std::vector<std::uint8_t> parts;  // per copied cloud: counts_cull (its cull commands), counts_big (its
+                                      // compute rasteriser's big-sprite commands)
+};
+
+constexpr std::uint8_t counts_cull = 1, counts_big = 2;
+// Per cloud in the counts ring: the cull's three draw commands, then the compute rasteriser's two.
+constexpr std::size_t counts_entry_words = draw_command_words + 10;
+
+// Registry resource: everything the renderer owns on the GPU.
+struct SplatRenderState {
+    // [textured][lit][lights]: cull pass variants (TEXTURED, LIT, LIGHTS in splat_color.glsl), compiled on
+    // first use (cull_program)
+    std::array<std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2>, 2> cull;
+    std::array<gfx::Program, 2> visibility;  // [0] sprites, [1] quads
+    // [textured: per-pixel texture lookups][clouds differ in material][sprites, quads]
+    std::array<std::array<std::array<gfx::Program, 2>, 2>, 2> attribute;
+    // [textured: per-pixel texture lookups][aux outputs][sprites, quads]
+    std::array<std::array<std::array<gfx::Program, 2>, 2>, 2> preview;
+    // [clouds differ in material][lights]: compiled on first use (shade_program)
+    std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2> shade;
+    gfx::Program display;  // sRGB copy for a window (PresentSource)
+    gfx::VertexArray vao;          // empty: quads read their splats from SSBOs
+    gfx::VertexArray records_vao;  // SplatRecord[] as vertex attributes 0..5 (buffer bound per cloud)
+    float max_point_size = 1.0f;
+
+    int width = 0, height = 0;
+    bool aux_valid = false;  // the last frame wrote the normal + depth target
+    gfx::Texture color, aux, depth, accum_color, accum_normal, accum_material;
+    gfx::Framebuffer output_fbo, accum_fbo, depth_fbo;
+    gfx::Texture display_color;  // RGBA8 sRGB-encoded, only when presenting to a window
+    gfx::Framebuffer display_fbo;
+    int display_width = 0, display_height = 0;
+
+    gfx::Buffer display_ubo;        // FrameBlock with the background, for the display copy
+    glm::vec4 last_background{0.0f};  // of the last rendered frame
+
+    // The compute cull's visible counts come back through this ring, never by waiting (issue 15): a
+    // persistently mapped buffer of counts_slot_count slots x counts_ring_clouds clouds x draw_command_words
+    // uints (all three draw commands).
+    static constexpr std::size_t counts_slot_count = 4;
+    gfx::Buffer command_reset;  // immutable {0, 1, 0, 0, 6, 0, 0, 0, 0, 1, 0, 0}: copied over the draw commands
+    gfx::Buffer counts_ring;
+    const std::uint32_t* counts_mapped = nullptr;
+    std::size_t counts_ring_clouds = 0;
+    std::array<CountsSlot, counts_slot_count> counts_slots;
+    std::uint64_t counts_issued = 0;  // serial of the last slot issued
+    std::uint64_t counts_serial = 0;  // serial of the counts below (0: none arrived yet)
+    std::uint64_t counts_frame = 0;
+    std::uint32_t counts_points = 0, counts_quads = 0, counts_raster_sprites = 0;
+    ComputeRaster compute_raster;  // compute rasteriser (compute_raster.h), compiled on first use
+
+    std::unordered_map<ecs::Entity, CloudGpu> clouds;
+    bool software = false;  // the context is a software rasterizer (gfx::software_rasterizer)
+    bool cull_over_limit = false;  // some cloud's compute-cull buffers exceed the storage block size (storage_limits.h)
+    std::uint32_t cpu_splat_passes = 0;  // this frame's loops over a cloud's splats on the CPU (RenderStats)
+    bool failed = false;
+};
+
+struct ViewSetup {
+    Camera camera;
+    glm::dmat4 view{1.0};
+    glm::dmat4 projection{1.0};
+};
+
+// A cloud whose counts live on the GPU this frame: its cull commands (compute cull) and/or its compute
+// rasteriser's big-sprite commands.
+struct CountsSource {
+    const CloudGpu* gpu = nullptr;
+    std::uint8_t parts = 0;  // counts_cull | counts_big
+};
+
+// What the passes of one frame share: the settings, the camera, the per-cloud uniforms' common part and the
+// clouds that reached the draw lists (cull_pass fills `drawn`).
+struct FramePlan {
+    RenderSettings settings;
+    int width = 1, height = 1;
+    ViewSetup view;
+    gpu::FrameBlock common;
+    std::vector<CloudGpu*> drawn;
+    // Visible counts: the CPU-culled clouds' now, the others' through the counts ring (issue_counts).
+    std::vector<CountsSource> gpu_counts;
+    std::uint32_t cpu_points = 0, cpu_quads = 0;
+    std::vector<ComputeRasterDraw> compute;  // clouds on the compute rasteriser this frame (HQ)
+};
+
+// CPU time per pass for RenderStats, only with RenderSettings::time_passes (glFinish after each pass).
+class PassLaps {
+public:
+    explicit PassLaps(bool enabled) : m_enabled(enabled) {}
+    void lap(double& slot) {
+        if (!m_enabled) return;
+        glFinish();
+        const auto now = clock::now();
+        slot += std::chrono::duration<double, std::milli>(now - m_lap).count();
+        m_lap = now;
+    }
+    double total_ms() const { return std::chrono::duration<double, std::milli>(clock::now() - m_start).count(); }
+
+private:
+    using clock = std::chrono::steady_clock;
+    bool m_enabled;
+    clock::time_point m_start = clock::now(), m_lap = m_start;
+};
+
+// render_state.cpp: the state resource, its programs and targets, the per-cloud objects.
+gfx::Texture make_target(GLenum format, int w, int h, const char* label);
+void ensure_targets(SplatRenderState& s, int w, int h);
+bool cpu_cull_wanted(const SplatRenderState& s, CullPath path);
+void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatStore& store, bool keep_cpu);
+Status cull_program(SplatRenderState& s, bool textured, bool lit, std::uint32_t lights);
+Status shade_program(SplatRenderState& s, bool materials, std::uint32_t lights);
+SplatRenderState& render_state(ecs::Registry& reg);
+
+// frame_view.cpp: camera, per-frame uniforms and the screen rectangle the clouds cover.
+ViewSetup choose_camera(ecs::Registry& reg, const SplatRenderState& s, double aspect);
+gpu::FrameBlock frame_block(ecs::Registry& reg, const RenderSettings& settings, const ViewSetup& view,
+                            float max_point_size);
+glm::ivec4 screen_rect(ecs::Registry& reg, const ViewSetup& view, int w, int h);
+
+// visible_counts.cpp: the ring that brings the GPU's visible counts back without waiting.
+void collect_counts(SplatRenderState& s);
+void issue_counts(SplatRenderState& s, const std::vector<CountsSource>& computed, std::uint32_t cpu_points,
+                  std::uint32_t cpu_quads, std::uint64_t frame);
+
+// cull_pass.cpp
+void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderStats& stats);
+
+// splat_passes.cpp: the preview pass and the three HQ passes.
+void begin_splat_passes(SplatRenderState& s, const FramePlan& plan);
+void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan);
+void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect);
+void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, RenderStats& stats);
+bool clouds_differ_in_material(const FramePlan& plan);
+void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect,
+                    bool materials);
+void shade_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, bool materials);
+void end_splat_passes();
+
+}  // namespace sffd::render::detail
