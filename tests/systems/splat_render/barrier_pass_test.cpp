@@ -46,6 +46,7 @@ protected:
         RenderSettings s;
         s.quality = q, s.width = w, s.height = h, s.cull_path = cull, s.raster_path = raster;
         reg.set_resource<RenderSettings>(s);
+        residency_system(reg, FrameContext{});  // the clouds are uploaded in the phase before rendering
         render_system(reg, FrameContext{});
     }
 };
