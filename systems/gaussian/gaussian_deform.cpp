@@ -123,8 +123,10 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
         std::atomic<std::size_t> degenerate{0}, not_finite{0};
         // As the GPU pass does (deform.comp): a result that is not finite is never left for the renderer; the
         // Gaussian keeps its input centre with scale 0 and opacity 0, and is counted. Both CPU kernels pass here.
+        // J is tested too, as the shader does: a non-finite J can still give a finite-looking shape.
         auto drop_if_not_finite = [&](std::size_t i, std::size_t b) -> std::size_t {
-            if (finite_result(out, i, K, view_mode)) return 0;
+            const glm::mat3& j = jac[b];
+            if (finite3(j[0]) && finite3(j[1]) && finite3(j[2]) && finite_result(out, i, K, view_mode)) return 0;
             out.positions[i] = centres[b];
             out.scales[i] = glm::vec3(0.0f);
             out.rotations[i] = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);

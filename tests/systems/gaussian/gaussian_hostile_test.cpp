@@ -272,21 +272,26 @@ TEST(GaussianHostile, CpuDeformationDropsAndCountsNonFiniteResults) {
     // A 1e-12 box with one control point moved by 1e29: the Jacobian (~1e41) passes the float range.
     Lattice l = make_lattice({0, 0, 0}, {glm::dvec3(1e-12, 0, 0), glm::dvec3(0, 1e-12, 0), glm::dvec3(0, 0, 1e-12)}, {1, 1, 1});
     l.current[l.index(1, 1, 1)] += glm::dvec3(1e29, -1e29, 1e29);
-    GaussianCloud out;
-    out.opacities = g.opacities;
-    auto st = deform(l, g, out, ffd::Backend::reference, false);
-    ASSERT_TRUE(st) << st.message();
-    EXPECT_GT(st->not_finite, 0u);
-    std::size_t transparent = 0;
-    for (std::size_t i = 0; i < out.size(); ++i) {
-        const glm::quat q = out.rotations[i];
-        EXPECT_TRUE(std::isfinite(q.w + q.x + q.y + q.z)) << i;
-        EXPECT_TRUE(std::isfinite(out.scales[i].x + out.scales[i].y + out.scales[i].z)) << i;
-        EXPECT_TRUE(std::isfinite(out.positions[i].x + out.positions[i].y + out.positions[i].z)) << i;
-        for (int k = 0; k < 12; ++k) EXPECT_TRUE(std::isfinite(out.sh[i * 12 + std::size_t(k)])) << i;
-        transparent += out.opacities[i] == 0.0f;
+    // Both CPU kernels: the vectorised float one (the GPU pass's arithmetic) and the double reference.
+    for (bool reference : {false, true}) {
+        GaussianCloud out;
+        out.opacities = g.opacities;
+        DeformOptions options;
+        options.backend = ffd::Backend::reference, options.copy_opacities = false, options.reference_shapes = reference;
+        auto st = deform(l, g, out, options);
+        ASSERT_TRUE(st) << st.message();
+        EXPECT_GT(st->not_finite, 0u) << "reference kernel: " << reference;
+        std::size_t transparent = 0;
+        for (std::size_t i = 0; i < out.size(); ++i) {
+            const glm::quat q = out.rotations[i];
+            EXPECT_TRUE(std::isfinite(q.w + q.x + q.y + q.z)) << i;
+            EXPECT_TRUE(std::isfinite(out.scales[i].x + out.scales[i].y + out.scales[i].z)) << i;
+            EXPECT_TRUE(std::isfinite(out.positions[i].x + out.positions[i].y + out.positions[i].z)) << i;
+            for (int k = 0; k < 12; ++k) EXPECT_TRUE(std::isfinite(out.sh[i * 12 + std::size_t(k)])) << i;
+            transparent += out.opacities[i] == 0.0f;
+        }
+        EXPECT_EQ(transparent, st->not_finite) << "reference kernel: " << reference;
     }
-    EXPECT_EQ(transparent, st->not_finite);
 }
 
 // --- folder confinement of scene entries ------------------------------------------------------------
