@@ -32,7 +32,8 @@ Result<std::string> save_animation_extension(const ecs::Registry& registry, cons
         json entry;
         entry["lattice"] = id;
         const AnimationState* state = registry.try_get<AnimationState>(e);
-        entry["playing"] = state ? state->playing : true;
+        // Not `playing`: the editor's pause is view state, not scene content, so a saved scene animates
+        // wherever it is rendered (`view` pauses clips on load by itself).
         entry["speed"] = state ? state->speed : 1.0;
         entry["clip"] = clip_to_json(clip);
         entries.emplace_back(id, std::move(entry));
@@ -77,10 +78,9 @@ Status load_animation_extension(ecs::Registry& registry, std::string_view text,
             return make_error(where + ".lattice: " + std::to_string(id) + " is not a lattice of this scene");
         bool playing = true;
         double speed = 1.0;
-        if (c.contains("playing")) {
-            if (!c["playing"].is_boolean()) return make_error(where + ".playing: expected true or false");
-            playing = c["playing"].get<bool>();
-        }
+        // Files from before the pause became view state may carry "playing": still checked, but a clip
+        // loaded from a scene always plays.
+        if (c.contains("playing") && !c["playing"].is_boolean()) return make_error(where + ".playing: expected true or false");
         if (c.contains("speed")) {
             if (!c["speed"].is_number() || !std::isfinite(c["speed"].get<double>()))
                 return make_error(where + ".speed: expected a finite number");

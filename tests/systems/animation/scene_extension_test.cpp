@@ -77,7 +77,8 @@ TEST(AnimationScene, ClipsRoundTripThroughSceneFilesExactly) {
         EXPECT_EQ(x.keys[1].time, 2.0 / 3.0);
         EXPECT_EQ(x.axis.x, 1.0 / 3.0);
         EXPECT_TRUE(std::signbit(x.pivot.z));
-        EXPECT_FALSE(back.get<AnimationState>(b).playing);
+        // The pause was the editor's view state: the saved scene plays wherever it is loaded.
+        EXPECT_TRUE(back.get<AnimationState>(b).playing);
         EXPECT_EQ(back.get<AnimationState>(b).speed, 1.7);
         std::filesystem::remove(path);
     }
@@ -106,9 +107,12 @@ TEST(AnimationScene, BadExtensionDataIsRefused) {
                  "tracks": [{"kind": "stretch", "points": [8]}]}}]})"),
               "clips[0]: clip '': tracks[0]: control point 8 out of range (lattice has 8)");
     EXPECT_EQ(reg.count<AnimationClip>(), 0u);  // nothing attached on failure
+    EXPECT_EQ(load(R"({"version": 1, "clips": [{"lattice": 0, "playing": 1, "clip": {"duration": 1}}]})"),
+              "clips[0].playing: expected true or false");
+    // A file saved while the editor was paused (older versions wrote the pause) still animates.
     EXPECT_EQ(load(R"({"version": 1, "clips": [{"lattice": 0, "playing": false, "clip": {"duration": 1}}]})"), "ok");
     EXPECT_TRUE(reg.has<AnimationClip>(lat));
-    EXPECT_FALSE(reg.get<AnimationState>(lat).playing);
+    EXPECT_TRUE(reg.get<AnimationState>(lat).playing);
 }
 
 }  // namespace
