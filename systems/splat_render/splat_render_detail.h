@@ -144,9 +144,9 @@ struct SplatRenderState {
     gfx::Buffer display_ubo;        // FrameBlock with the background, for the display copy
     glm::vec4 last_background{0.0f};  // of the last rendered frame
 
-    // The compute cull's visible counts come back through this ring, never by waiting (issue 15): a
-    // persistently mapped buffer of counts_slot_count slots x counts_ring_clouds clouds x draw_command_words
-    // uints (all three draw commands).
+    // The compute cull's visible counts come back through this ring, never by waiting (the frame must not
+    // stall on a read-back): a persistently mapped buffer of counts_slot_count slots x counts_ring_clouds
+    // clouds x draw_command_words uints (all three draw commands).
     static constexpr std::size_t counts_slot_count = 4;
     gfx::Buffer command_reset;  // immutable {0, 1, 0, 0, 6, 0, 0, 0, 0, 1, 0, 0}: copied over the draw commands
     gfx::Buffer counts_ring;

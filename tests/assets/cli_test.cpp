@@ -92,7 +92,7 @@ TEST(Cli, ReferenceAndRenderNumberErrorsNameTheOption) {
     }
 }
 
-// Issue 13: a glTF from the web must not leak local files into an export; --allow-outside-resources
+// A glTF from the web must not leak local files into an export; --allow-outside-resources
 // is the explicit opt-in for trusted files.
 TEST(Cli, ConvertRefusesResourcesOutsideTheFileFolderUnlessAllowed) {
     const fs::path root = temp_dir() / "exfil";
@@ -115,7 +115,7 @@ TEST(Cli, ConvertRefusesResourcesOutsideTheFileFolderUnlessAllowed) {
     EXPECT_TRUE(fs::exists(leak));
 }
 
-// Issue 13: running out of memory is a message and exit 1, never an uncaught std::bad_alloc (rc 134);
+// Running out of memory is a message and exit 1, never an uncaught std::bad_alloc (rc 134);
 // requests beyond the stated budget are refused before any work.
 TEST(Cli, OutOfMemoryIsAMessageAndOverBudgetRequestsAreRefusedEarly) {
     const fs::path obj = temp_dir() / "oom.obj";

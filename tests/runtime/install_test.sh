@@ -37,7 +37,7 @@ if help=$("$exe" render --help 2>&1) || ! grep -q "not implemented yet" <<<"$hel
 else
   echo "install_test: 'render' not implemented yet; checked --version and data paths only"
 fi
-# Issue 16: the `face` scene's cache is made by tools/fetch_content.sh, which is installed with its helper;
+# The `face` scene's cache is made by tools/fetch_content.sh, which is installed with its helper;
 # the installed binary's message names the installed script, and that script uses the installed binary
 # and the cache that binary reads (no source tree, no build).
 script="$prefix/share/splatffd/tools/fetch_content.sh"

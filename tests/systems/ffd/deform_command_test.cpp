@@ -238,7 +238,7 @@ TEST_F(DeformCommand, BadInputIsRefused) {
     EXPECT_NE(r.err.find("noxyz.ply: vertex element has no x, y, z"), std::string::npos) << r.err;
 }
 
-// Issue 13: outputs that would be wrong or destructive, hostile lattices, and interruptions.
+// Outputs that would be wrong or destructive, hostile lattices, and interruptions.
 TEST_F(DeformCommand, WrongExtensionSameFileAndNonRegularPathsAreRefused) {
     const std::string lat = " --lattice " + p("lattice.json");
     // The format follows the extension: .glb used to get PLY bytes; now it is a binary glTF.

@@ -117,7 +117,7 @@ TEST(RenderCommand, BadInputExitsWithAMessage) {
     EXPECT_NE(log.find(missing.string()), std::string::npos) << log;
 }
 
-// Issue 13: DIR/render_manifest.json tells which frames this run wrote and whether it finished.
+// DIR/render_manifest.json tells which frames this run wrote and whether it finished.
 TEST(RenderCommand, ManifestListsTheFramesAndSaysWhetherTheRunCompleted) {
     const fs::path out = fresh_dir("manifest");
     std::string log;
@@ -156,7 +156,7 @@ TEST(RenderCommand, SizeOverTheStatedMemoryBudgetIsRefusedUpFront) {
     EXPECT_NE(log.find("--size 16384x16384 is 268435456 pixels, more than the budget of 67108864 (8192x8192)"), std::string::npos) << log;
 }
 
-// Issue 13: SIGTERM during a sequence exits 143 with a message, leaves no temporary files, and the
+// SIGTERM during a sequence exits 143 with a message, leaves no temporary files, and the
 // manifest still says the run did not complete and lists only the frames it finished.
 TEST(RenderCommand, InterruptedSequenceLeavesAnIncompleteManifestAndNoTemporaries) {
     const fs::path out = fresh_dir("interrupted");
