@@ -40,16 +40,23 @@ Rgba8Image to_rgba8(const FrameImage& image, std::optional<glm::vec3> background
     Rgba8Image out{image.width, image.height, {}};
     out.pixels.resize(std::size_t(image.width) * std::size_t(image.height) * 4);
     for (std::size_t i = 0; i < image.color.size(); ++i) {
-        glm::vec4 c = image.color[i];
-        if (background) {
-            const float a = std::clamp(c.w, 0.0f, 1.0f);
-            c = glm::vec4(glm::vec3(c) * a + *background * (1.0f - a), 1.0f);
-        }
+        const glm::vec4 c = image.color[i];
         std::uint8_t* p = &out.pixels[i * 4];
+        const float a = std::clamp(c.w, 0.0f, 1.0f);
+        if (background && a < 1.0f) {
+            // Over a background the straight colour is blended in display (sRGB) space, as 3DGS viewers and the
+            // --video path do: blending in linear space made soft edges lighter on dark backgrounds.
+            for (int k = 0; k < 3; ++k) {
+                const float v = linear_to_srgb(c[k]) * a + linear_to_srgb((*background)[k]) * (1.0f - a);
+                p[k] = static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+            }
+            p[3] = 255;
+            continue;
+        }
         p[0] = encode_srgb8(c.x);
         p[1] = encode_srgb8(c.y);
         p[2] = encode_srgb8(c.z);
-        p[3] = static_cast<std::uint8_t>(std::lround(std::clamp(c.w, 0.0f, 1.0f) * 255.0f));
+        p[3] = background ? 255 : static_cast<std::uint8_t>(std::lround(a * 255.0f));
     }
     return out;
 }

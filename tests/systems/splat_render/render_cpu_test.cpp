@@ -76,6 +76,22 @@ TEST(RenderImageIo, BackgroundFillsTransparentPixels) {
     EXPECT_EQ(rgba.at(0, 0)[3], 255);
 }
 
+TEST(RenderImageIo, BackgroundBlendsInDisplaySpaceAs3dgsViewersDo) {
+    FrameImage img = gradient(2, 1);
+    img.color[0] = glm::vec4(1.0f, 1.0f, 1.0f, 0.5f);  // a half-covered white edge
+    img.color[1] = glm::vec4(0.25f, 0.5f, 1.0f, 1.0f);  // fully covered
+    const Rgba8Image black = to_rgba8(img, glm::vec3(0.0f));
+    // Display space: 0.5 * 255 = 127.5 (127 or 128 after float rounding); a linear blend would give
+    // encode_srgb8(0.5) = 188.
+    EXPECT_NEAR(double(black.at(0, 0)[0]), 127.5, 0.5);
+    EXPECT_EQ(black.at(0, 0)[3], 255);
+    const Rgba8Image white = to_rgba8(img, glm::vec3(1.0f));
+    EXPECT_EQ(white.at(0, 0)[0], 255);
+    // Covered pixels are the colour itself, whatever the background.
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(black.at(1, 0)[k], encode_srgb8(img.color[1][k])) << k;
+    EXPECT_EQ(black.at(1, 0)[3], 255);
+}
+
 TEST(RenderImageIo, ExrHoldsHalfRgbaFloatZAndNormals) {
     const FrameImage img = gradient(8, 6);
     const fs::path path = temp_dir() / "round.exr";
