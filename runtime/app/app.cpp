@@ -57,8 +57,8 @@ void present_blit_system(ecs::Registry& registry, const FrameContext& /*frame*/)
     if (!source || source->framebuffer == 0 || size.width <= 0 || size.height <= 0) return;
     glNamedFramebufferReadBuffer(source->framebuffer, source->read_buffer);
     const bool same = source->width == size.width && source->height == size.height;
-    glBlitNamedFramebuffer(source->framebuffer, 0, 0, 0, source->width, source->height, 0, 0, size.width, size.height,
-                           GL_COLOR_BUFFER_BIT, same ? GL_NEAREST : GL_LINEAR);
+    glBlitNamedFramebuffer(source->framebuffer, 0, 0, 0, source->width, source->height, 0, 0, size.width,
+                           size.height, GL_COLOR_BUFFER_BIT, same ? GL_NEAREST : GL_LINEAR);
 }
 
 void present_swap_system(ecs::Registry& registry, const FrameContext& /*frame*/) {

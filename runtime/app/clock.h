@@ -9,9 +9,9 @@
 namespace sffd {
 
 struct ClockSettings {
-    double fixed_dt = 0.0;     // > 0: every frame advances exactly this much (deterministic)
-    double start_time = 0.0;   // clock time of frame 0
-    double max_dt = 0.25;      // real-time mode clamps long stalls (debugger, window drag)
+    double fixed_dt = 0.0;    // > 0: every frame advances exactly this much (deterministic)
+    double start_time = 0.0;  // clock time of frame 0
+    double max_dt = 0.25;     // real-time mode clamps long stalls (debugger, window drag)
 };
 
 class Clock {

@@ -34,9 +34,9 @@ const char* phase_name(Phase phase);
 
 // Per-frame timing handed to every system.
 struct FrameContext {
-    std::uint64_t frame = 0;   // index of this frame, 0-based
-    double time = 0.0;         // seconds of clock time at this frame (paused time does not advance)
-    double dt = 0.0;           // seconds since the previous frame (0 when paused)
+    std::uint64_t frame = 0;  // index of this frame, 0-based
+    double time = 0.0;        // seconds of clock time at this frame (paused time does not advance)
+    double dt = 0.0;          // seconds since the previous frame (0 when paused)
 };
 
 using SystemFn = std::function<void(ecs::Registry&, const FrameContext&)>;

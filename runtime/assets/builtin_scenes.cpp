@@ -28,7 +28,9 @@ glm::vec3 hsv(float h, float s, float v) {
 }
 
 std::uint32_t pack(glm::vec3 c) {
-    auto q = [](float v) { return static_cast<std::uint32_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f)); };
+    auto q = [](float v) {
+        return static_cast<std::uint32_t>(std::lround(std::clamp(v, 0.0f, 1.0f) * 255.0f));
+    };
     return q(c.x) | (q(c.y) << 8) | (q(c.z) << 16) | (255u << 24);
 }
 
@@ -50,12 +52,16 @@ Image make_sphere_texture(int width, int height) {
             const glm::vec3 band = hsv(static_cast<float>(cv) / cells_v, 0.75f, 0.95f);
             glm::vec3 c = ((cu + cv) % 2 == 0) ? band : glm::vec3(0.12f) + 0.15f * band;
             // Thin grid lines on every cell border; a thicker white prime meridian and equator.
-            const float fu = u * cells_u - std::floor(u * cells_u), fv = v * cells_v - std::floor(v * cells_v);
+            const float fu = u * cells_u - std::floor(u * cells_u),
+                        fv = v * cells_v - std::floor(v * cells_v);
             const float line_u = 0.04f, line_v = 0.04f * cells_v / cells_u * 2.0f;
             if (fu < line_u || fu > 1.0f - line_u || fv < line_v || fv > 1.0f - line_v) c = glm::vec3(0.05f);
             if (std::abs(v - 0.5f) < 0.004f || u < 0.004f || u > 0.996f) c = glm::vec3(1.0f);
             const std::uint32_t p = pack(c);
-            std::memcpy(&img.rgba8[(static_cast<std::size_t>(y) * static_cast<std::size_t>(width) + static_cast<std::size_t>(x)) * 4], &p, 4);
+            std::memcpy(&img.rgba8[(static_cast<std::size_t>(y) * static_cast<std::size_t>(width) +
+                                    static_cast<std::size_t>(x)) *
+                                   4],
+                        &p, 4);
         }
     }
     return img;
@@ -77,7 +83,8 @@ SplatCloud make_sphere_cloud(std::size_t n) {
         c.normals[i] = glm::vec3(glm::normalize(p));
         double lon = std::atan2(p.z, p.x);  // (-pi, pi]
         if (lon < 0) lon += 2.0 * std::numbers::pi;
-        c.uvs[i] = glm::vec2(static_cast<float>(lon / (2.0 * std::numbers::pi)), static_cast<float>(std::acos(std::clamp(z, -1.0, 1.0)) / std::numbers::pi));
+        c.uvs[i] = glm::vec2(static_cast<float>(lon / (2.0 * std::numbers::pi)),
+                             static_cast<float>(std::acos(std::clamp(z, -1.0, 1.0)) / std::numbers::pi));
     }
     // Every Fibonacci point stands for the same area 4 pi / n, so every splat gets one radius:
     // 0.8 * sqrt(4 pi / n), discs that overlap about twice. That closes the sphere (test
@@ -96,18 +103,19 @@ SplatCloud make_sphere_cloud(std::size_t n) {
         c.axis_u[i] = east * radii[i];
         c.axis_v[i] = south * radii[i];
     }
-    // uv frame: the gradients of u = longitude / 2 pi and v = colatitude / pi on the unit sphere (east / (2 pi
-    // sin(colatitude)) and south / pi) applied to the axes.
+    // uv frame: the gradients of u = longitude / 2 pi and v = colatitude / pi on the unit sphere (east / (2
+    // pi sin(colatitude)) and south / pi) applied to the axes.
     c.uv_axes.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
         const glm::dvec3 p(c.positions[i]);
         const double sin_colat = std::max(std::sqrt(p.x * p.x + p.z * p.z), 1e-6);
         const glm::dvec3 east = glm::dvec3(-p.z, 0.0, p.x) / sin_colat;
         const glm::dvec3 south = glm::cross(glm::dvec3(c.normals[i]), east);
-        const glm::dvec3 grad_u = east / (2.0 * std::numbers::pi * sin_colat), grad_v = south / std::numbers::pi;
+        const glm::dvec3 grad_u = east / (2.0 * std::numbers::pi * sin_colat),
+                         grad_v = south / std::numbers::pi;
         const glm::dvec3 au(c.axis_u[i]), av(c.axis_v[i]);
-        c.uv_axes[i] = glm::vec4(float(glm::dot(grad_u, au)), float(glm::dot(grad_v, au)), float(glm::dot(grad_u, av)),
-                                 float(glm::dot(grad_v, av)));
+        c.uv_axes[i] = glm::vec4(float(glm::dot(grad_u, au)), float(glm::dot(grad_v, au)),
+                                 float(glm::dot(grad_u, av)), float(glm::dot(grad_v, av)));
     }
     Image tex = make_sphere_texture();
     c.material.texture_width = tex.width;
@@ -117,9 +125,16 @@ SplatCloud make_sphere_cloud(std::size_t n) {
     // Per-splat colours too (the texel under each splat), for renderers or tools that ignore textures.
     c.colors.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
-        const int x = std::clamp(static_cast<int>(c.uvs[i].x * static_cast<float>(c.material.texture_width)), 0, c.material.texture_width - 1);
-        const int y = std::clamp(static_cast<int>(c.uvs[i].y * static_cast<float>(c.material.texture_height)), 0, c.material.texture_height - 1);
-        std::memcpy(&c.colors[i], &c.material.texture_rgba8[(static_cast<std::size_t>(y) * static_cast<std::size_t>(c.material.texture_width) + static_cast<std::size_t>(x)) * 4], 4);
+        const int x = std::clamp(static_cast<int>(c.uvs[i].x * static_cast<float>(c.material.texture_width)),
+                                 0, c.material.texture_width - 1);
+        const int y = std::clamp(static_cast<int>(c.uvs[i].y * static_cast<float>(c.material.texture_height)),
+                                 0, c.material.texture_height - 1);
+        std::memcpy(&c.colors[i],
+                    &c.material.texture_rgba8[(static_cast<std::size_t>(y) *
+                                                   static_cast<std::size_t>(c.material.texture_width) +
+                                               static_cast<std::size_t>(x)) *
+                                              4],
+                    4);
     }
     return c;
 }
@@ -131,18 +146,23 @@ std::string fetch_script() {
     // installs it): data_root() is the folder that holds both shaders/ and tools/.
     std::error_code ec;
     const fs::path script = paths::data_root() / "tools" / "fetch_content.sh";
-    return fs::is_regular_file(script, ec) ? script.string() : std::string("tools/fetch_content.sh (in the source tree)");
+    return fs::is_regular_file(script, ec) ? script.string()
+                                           : std::string("tools/fetch_content.sh (in the source tree)");
 }
 
 Lattice make_box_lattice(const glm::dvec3& lo, const glm::dvec3& hi, glm::ivec3 div, LatticeBasis basis) {
-    return make_lattice(lo, {glm::dvec3(hi.x - lo.x, 0, 0), glm::dvec3(0, hi.y - lo.y, 0), glm::dvec3(0, 0, hi.z - lo.z)}, div, basis);
+    return make_lattice(
+        lo, {glm::dvec3(hi.x - lo.x, 0, 0), glm::dvec3(0, hi.y - lo.y, 0), glm::dvec3(0, 0, hi.z - lo.z)},
+        div, basis);
 }
 
-void add_default_view(ecs::Registry& r, const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec3& view_dir) {
+void add_default_view(ecs::Registry& r, const glm::dvec3& lo, const glm::dvec3& hi,
+                      const glm::dvec3& view_dir) {
     const glm::dvec3 centre = 0.5 * (lo + hi);
     const double radius = std::max(0.5 * glm::length(hi - lo), 1e-6);
     const double fov = 40.0;
-    // The bounding sphere fills ~90% of the view height (its corners may leave the frame; the object does not).
+    // The bounding sphere fills ~90% of the view height (its corners may leave the frame; the object does
+    // not).
     const double distance = radius / std::tan(glm::radians(fov) * 0.5) * 0.9;
     const ecs::Entity cam = r.create();
     r.emplace<Name>(cam, Name{"camera"});
@@ -169,7 +189,8 @@ bool is_builtin_scene(const std::string& name) { return name == "sphere" || name
 
 namespace {
 
-ecs::Entity add_cloud_with_lattice(ecs::Registry& r, const std::string& name, SplatCloud cloud, const glm::dvec3& view_dir) {
+ecs::Entity add_cloud_with_lattice(ecs::Registry& r, const std::string& name, SplatCloud cloud,
+                                   const glm::dvec3& view_dir) {
     glm::dvec3 lo(1e300), hi(-1e300);
     for (const auto& p : cloud.positions) {
         lo = glm::min(lo, cloud.origin + glm::dvec3(p));
@@ -180,7 +201,8 @@ ecs::Entity add_cloud_with_lattice(ecs::Registry& r, const std::string& name, Sp
     const ecs::Entity lat = r.create();
     r.emplace<Name>(lat, Name{name + ".lattice"});
     r.emplace<Transform>(lat, Transform{});
-    r.emplace<Lattice>(lat, make_box_lattice(lo - pad, hi + pad, glm::ivec3(kBuiltinLatticeDivisions), LatticeBasis::bernstein));
+    r.emplace<Lattice>(lat, make_box_lattice(lo - pad, hi + pad, glm::ivec3(kBuiltinLatticeDivisions),
+                                             LatticeBasis::bernstein));
     const ecs::Entity e = r.create();
     r.emplace<Name>(e, Name{name});
     r.emplace<Transform>(e, Transform{});
@@ -194,7 +216,8 @@ ecs::Entity add_cloud_with_lattice(ecs::Registry& r, const std::string& name, Sp
 
 Status load_builtin_scene(ecs::Registry& r, const std::string& name) {
     if (name == "sphere") {
-        const ecs::Entity sphere = add_cloud_with_lattice(r, "sphere", make_sphere_cloud(), glm::dvec3(0.35, 0.3, 1.0));
+        const ecs::Entity sphere =
+            add_cloud_with_lattice(r, "sphere", make_sphere_cloud(), glm::dvec3(0.35, 0.3, 1.0));
         // make_sphere_cloud samples the unit sphere at the origin: the ground-truth renderer traces it.
         r.emplace<ExactSphere>(sphere, ExactSphere{});
         return {};
@@ -206,10 +229,13 @@ Status load_builtin_scene(ecs::Registry& r, const std::string& name) {
             return make_error("face: the face scan is not in the content cache (" + cache.string() +
                               "); run " + fetch_script() + " once to download and convert it");
         auto cloud = import_splat_cloud(cache);
-        if (!cloud) return make_error("face: " + cloud.message() + " (run " + fetch_script() + " again to rebuild the cache)");
+        if (!cloud)
+            return make_error("face: " + cloud.message() + " (run " + fetch_script() +
+                              " again to rebuild the cache)");
         if (cloud->size() != kFaceSplats)
-            return make_error("face: " + cache.string() + " has " + std::to_string(cloud->size()) + " splats, expected " +
-                              std::to_string(kFaceSplats) + "; run " + fetch_script() + " again");
+            return make_error("face: " + cache.string() + " has " + std::to_string(cloud->size()) +
+                              " splats, expected " + std::to_string(kFaceSplats) + "; run " + fetch_script() +
+                              " again");
         add_cloud_with_lattice(r, "face", std::move(*cloud), glm::dvec3(0.25, 0.1, 1.0));
         return {};
     }

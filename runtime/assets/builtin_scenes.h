@@ -35,13 +35,15 @@ std::filesystem::path face_cache_path();
 std::string fetch_script();
 
 // A rest lattice (current == rest) spanning the box [lo, hi] with the given divisions.
-Lattice make_box_lattice(const glm::dvec3& lo, const glm::dvec3& hi, glm::ivec3 divisions, LatticeBasis basis);
+Lattice make_box_lattice(const glm::dvec3& lo, const glm::dvec3& hi, glm::ivec3 divisions,
+                         LatticeBasis basis);
 
 // Creates the scene's entities in `registry`. Errors name the scene (and the missing cache file).
 Status load_builtin_scene(ecs::Registry& registry, const std::string& name);
 bool is_builtin_scene(const std::string& name);
 
 // Adds a camera framing world-space box [lo, hi] and default lights (used for imported files too).
-void add_default_view(ecs::Registry& registry, const glm::dvec3& lo, const glm::dvec3& hi, const glm::dvec3& view_dir);
+void add_default_view(ecs::Registry& registry, const glm::dvec3& lo, const glm::dvec3& hi,
+                      const glm::dvec3& view_dir);
 
 }  // namespace sffd::assets

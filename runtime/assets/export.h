@@ -25,8 +25,10 @@ namespace sffd::assets {
 
 Status save_splat_ply(const SplatCloud& cloud, const std::filesystem::path& path,
                       ply::Format format = ply::Format::binary_little_endian);
-Status save_splat_glb(const SplatCloud& cloud, const std::filesystem::path& path, const std::string& name = "cloud");
+Status save_splat_glb(const SplatCloud& cloud, const std::filesystem::path& path,
+                      const std::string& name = "cloud");
 // By extension: .ply, .glb, .gltf.
-Status save_splat_cloud(const SplatCloud& cloud, const std::filesystem::path& path, const std::string& name = "cloud");
+Status save_splat_cloud(const SplatCloud& cloud, const std::filesystem::path& path,
+                        const std::string& name = "cloud");
 
 }  // namespace sffd::assets

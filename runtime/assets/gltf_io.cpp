@@ -36,7 +36,8 @@ json to_json(const tinygltf::Value& v, int depth = 0) {
     if (v.IsString()) return v.Get<std::string>();
     if (v.IsArray()) {
         json a = json::array();
-        for (std::size_t i = 0; i < v.ArrayLen(); ++i) a.push_back(to_json(v.Get(static_cast<int>(i)), depth + 1));
+        for (std::size_t i = 0; i < v.ArrayLen(); ++i)
+            a.push_back(to_json(v.Get(static_cast<int>(i)), depth + 1));
         return a;
     }
     if (v.IsObject()) {
@@ -50,27 +51,35 @@ json to_json(const tinygltf::Value& v, int depth = 0) {
 glm::dmat4 node_matrix(const tinygltf::Node& n) {
     if (n.matrix.size() == 16) return glm::make_mat4(n.matrix.data());
     glm::dmat4 m(1.0);
-    if (n.translation.size() == 3) m = glm::translate(m, glm::dvec3(n.translation[0], n.translation[1], n.translation[2]));
-    if (n.rotation.size() == 4) m = m * glm::mat4_cast(glm::normalize(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2])));
+    if (n.translation.size() == 3)
+        m = glm::translate(m, glm::dvec3(n.translation[0], n.translation[1], n.translation[2]));
+    if (n.rotation.size() == 4)
+        m = m * glm::mat4_cast(
+                    glm::normalize(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2])));
     if (n.scale.size() == 3) m = glm::scale(m, glm::dvec3(n.scale[0], n.scale[1], n.scale[2]));
     return m;
 }
 
 Transform node_trs(const tinygltf::Node& n) {
     Transform t;
-    if (n.translation.size() == 3) t.translation = glm::dvec3(n.translation[0], n.translation[1], n.translation[2]);
-    if (n.rotation.size() == 4) t.rotation = glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2]);
+    if (n.translation.size() == 3)
+        t.translation = glm::dvec3(n.translation[0], n.translation[1], n.translation[2]);
+    if (n.rotation.size() == 4)
+        t.rotation = glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2]);
     if (n.scale.size() == 3) t.scale = glm::dvec3(n.scale[0], n.scale[1], n.scale[2]);
     return t;
 }
 
 Result<Image> gltf_image(const tinygltf::Model& m, int texture, const std::string& src) {
-    if (texture < 0 || static_cast<std::size_t>(texture) >= m.textures.size()) return make_error(src + ": texture index out of range");
+    if (texture < 0 || static_cast<std::size_t>(texture) >= m.textures.size())
+        return make_error(src + ": texture index out of range");
     const int source = m.textures[static_cast<std::size_t>(texture)].source;
-    if (source < 0 || static_cast<std::size_t>(source) >= m.images.size()) return make_error(src + ": texture has no image");
+    if (source < 0 || static_cast<std::size_t>(source) >= m.images.size())
+        return make_error(src + ": texture has no image");
     const tinygltf::Image& im = m.images[static_cast<std::size_t>(source)];
     if (im.width <= 0 || im.height <= 0 || im.component < 1 || im.component > 4 || im.bits != 8 ||
-        im.image.size() != static_cast<std::size_t>(im.width) * static_cast<std::size_t>(im.height) * static_cast<std::size_t>(im.component))
+        im.image.size() != static_cast<std::size_t>(im.width) * static_cast<std::size_t>(im.height) *
+                               static_cast<std::size_t>(im.component))
         return make_error(src + ": image " + std::to_string(source) + " was not decoded to 8-bit pixels");
     Image out;
     out.width = im.width;
@@ -80,7 +89,10 @@ Result<Image> gltf_image(const tinygltf::Model& m, int texture, const std::strin
     for (std::size_t i = 0; i < n; ++i) {
         const unsigned char* p = &im.image[i * static_cast<std::size_t>(im.component)];
         std::uint8_t px[4] = {p[0], p[0], p[0], 255};
-        if (im.component >= 3) { px[1] = p[1]; px[2] = p[2]; }
+        if (im.component >= 3) {
+            px[1] = p[1];
+            px[2] = p[2];
+        }
         if (im.component == 2) px[3] = p[1];
         if (im.component == 4) px[3] = p[3];
         std::memcpy(&out.rgba8[i * 4], px, 4);
@@ -90,10 +102,11 @@ Result<Image> gltf_image(const tinygltf::Model& m, int texture, const std::strin
 
 // Appends one primitive's data to `g` (world transform `world`); for our splat nodes `exact` receives
 // the stored arrays untouched instead.
-Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim, const glm::dmat4& world, const std::string& src,
-                      Geometry& g, std::unordered_map<int, int>& material_map, SplatCloud* exact) {
-    if (prim.mode != TINYGLTF_MODE_POINTS && prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
-        prim.mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim, const glm::dmat4& world,
+                      const std::string& src, Geometry& g, std::unordered_map<int, int>& material_map,
+                      SplatCloud* exact) {
+    if (prim.mode != TINYGLTF_MODE_POINTS && prim.mode != TINYGLTF_MODE_TRIANGLES &&
+        prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP && prim.mode != TINYGLTF_MODE_TRIANGLE_FAN) {
         log::warn(src, ": skipping a primitive with mode ", prim.mode, " (lines)");
         return {};
     }
@@ -118,7 +131,10 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
         nrm = std::move(*r);
     }
     if (int i = attr("COLOR_0"); i >= 0) {
-        const int comps = m.accessors.size() > static_cast<std::size_t>(i) && m.accessors[static_cast<std::size_t>(i)].type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
+        const int comps = m.accessors.size() > static_cast<std::size_t>(i) &&
+                                  m.accessors[static_cast<std::size_t>(i)].type == TINYGLTF_TYPE_VEC3
+                              ? 3
+                              : 4;
         auto r = read_gltf_accessor(m, i, comps, src, "COLOR_0");
         if (!r) return r.error();
         col = std::move(*r);
@@ -147,42 +163,60 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
         }
     }
     for (const auto* a : {&nrm, &uv, &au, &av})
-        if (!a->empty() && a->size() / (a == &uv ? 2 : 3) != n) return make_error(src + ": attribute counts differ from POSITION");
-    if (!col.empty() && col.size() / static_cast<std::size_t>(col_components) != n) return make_error(src + ": COLOR_0 count differs from POSITION");
+        if (!a->empty() && a->size() / (a == &uv ? 2 : 3) != n)
+            return make_error(src + ": attribute counts differ from POSITION");
+    if (!col.empty() && col.size() / static_cast<std::size_t>(col_components) != n)
+        return make_error(src + ": COLOR_0 count differs from POSITION");
 
     auto colour = [&](std::size_t i) {
         const std::size_t k = i * static_cast<std::size_t>(col_components);
-        const std::uint32_t a = col_components == 4 ? static_cast<std::uint32_t>(std::lround(std::clamp(col[k + 3], 0.0, 1.0) * 255.0)) : 255u;
-        return linear_to_srgb8(col[k]) | (linear_to_srgb8(col[k + 1]) << 8) | (linear_to_srgb8(col[k + 2]) << 16) | (a << 24);
+        const std::uint32_t a =
+            col_components == 4
+                ? static_cast<std::uint32_t>(std::lround(std::clamp(col[k + 3], 0.0, 1.0) * 255.0))
+                : 255u;
+        return linear_to_srgb8(col[k]) | (linear_to_srgb8(col[k + 1]) << 8) |
+               (linear_to_srgb8(col[k + 2]) << 16) | (a << 24);
     };
 
     if (exact) {
         SplatCloud& c = *exact;
         c.positions.resize(n);
-        for (std::size_t i = 0; i < n; ++i) c.positions[i] = glm::vec3(static_cast<float>((*pos)[3 * i]), static_cast<float>((*pos)[3 * i + 1]), static_cast<float>((*pos)[3 * i + 2]));
+        for (std::size_t i = 0; i < n; ++i)
+            c.positions[i] =
+                glm::vec3(static_cast<float>((*pos)[3 * i]), static_cast<float>((*pos)[3 * i + 1]),
+                          static_cast<float>((*pos)[3 * i + 2]));
         auto fill3 = [&](const std::vector<double>& src3, std::vector<glm::vec3>& dst) {
             dst.resize(src3.size() / 3);
-            for (std::size_t i = 0; i < dst.size(); ++i) dst[i] = glm::vec3(static_cast<float>(src3[3 * i]), static_cast<float>(src3[3 * i + 1]), static_cast<float>(src3[3 * i + 2]));
+            for (std::size_t i = 0; i < dst.size(); ++i)
+                dst[i] = glm::vec3(static_cast<float>(src3[3 * i]), static_cast<float>(src3[3 * i + 1]),
+                                   static_cast<float>(src3[3 * i + 2]));
         };
         fill3(nrm, c.normals);
         fill3(au, c.axis_u);
         fill3(av, c.axis_v);
         c.uvs.resize(uv.size() / 2);
-        for (std::size_t i = 0; i < c.uvs.size(); ++i) c.uvs[i] = glm::vec2(static_cast<float>(uv[2 * i]), static_cast<float>(uv[2 * i + 1]));
+        for (std::size_t i = 0; i < c.uvs.size(); ++i)
+            c.uvs[i] = glm::vec2(static_cast<float>(uv[2 * i]), static_cast<float>(uv[2 * i + 1]));
         c.uv_axes.resize(uvf.size() / 4);
         for (std::size_t i = 0; i < c.uv_axes.size(); ++i)
-            c.uv_axes[i] = glm::vec4(float(uvf[4 * i]), float(uvf[4 * i + 1]), float(uvf[4 * i + 2]), float(uvf[4 * i + 3]));
+            c.uv_axes[i] = glm::vec4(float(uvf[4 * i]), float(uvf[4 * i + 1]), float(uvf[4 * i + 2]),
+                                     float(uvf[4 * i + 3]));
         c.colors.resize(col.empty() ? 0 : n);
         for (std::size_t i = 0; i < c.colors.size(); ++i) c.colors[i] = colour(i);
         if (prim.material >= 0 && static_cast<std::size_t>(prim.material) < m.materials.size()) {
             const tinygltf::Material& mat = m.materials[static_cast<std::size_t>(prim.material)];
             const auto& f = mat.pbrMetallicRoughness.baseColorFactor;
-            if (f.size() == 4) c.material.base_color = glm::vec4(static_cast<float>(f[0]), static_cast<float>(f[1]), static_cast<float>(f[2]), static_cast<float>(f[3]));
+            if (f.size() == 4)
+                c.material.base_color = glm::vec4(static_cast<float>(f[0]), static_cast<float>(f[1]),
+                                                  static_cast<float>(f[2]), static_cast<float>(f[3]));
             const json extras = to_json(mat.extras);
             if (extras.is_object()) {
-                if (extras.contains("sffd_specular") && extras["sffd_specular"].is_number()) c.material.specular = extras["sffd_specular"].get<float>();
-                if (extras.contains("sffd_shininess") && extras["sffd_shininess"].is_number()) c.material.shininess = extras["sffd_shininess"].get<float>();
-                if (extras.contains("sffd_texture_path") && extras["sffd_texture_path"].is_string()) c.material.texture_path = extras["sffd_texture_path"].get<std::string>();
+                if (extras.contains("sffd_specular") && extras["sffd_specular"].is_number())
+                    c.material.specular = extras["sffd_specular"].get<float>();
+                if (extras.contains("sffd_shininess") && extras["sffd_shininess"].is_number())
+                    c.material.shininess = extras["sffd_shininess"].get<float>();
+                if (extras.contains("sffd_texture_path") && extras["sffd_texture_path"].is_string())
+                    c.material.texture_path = extras["sffd_texture_path"].get<std::string>();
             }
             if (mat.pbrMetallicRoughness.baseColorTexture.index >= 0) {
                 auto img = gltf_image(m, mat.pbrMetallicRoughness.baseColorTexture.index, src);
@@ -196,7 +230,8 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     }
 
     for (std::size_t i = 0; i < n; ++i)
-        g.positions.push_back(glm::dvec3(world * glm::dvec4((*pos)[3 * i], (*pos)[3 * i + 1], (*pos)[3 * i + 2], 1.0)));
+        g.positions.push_back(
+            glm::dvec3(world * glm::dvec4((*pos)[3 * i], (*pos)[3 * i + 1], (*pos)[3 * i + 2], 1.0)));
     // Per-point attributes must cover every point of the Geometry: fill gaps with defaults once any
     // primitive has the attribute.
     auto pad = [&](auto& arr, auto value) {
@@ -205,7 +240,9 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     if (!nrm.empty() || !g.normals.empty()) {
         pad(g.normals, glm::vec3(0.0f));
         for (std::size_t i = 0; i < n; ++i) {
-            glm::dvec3 v = nrm.empty() ? glm::dvec3(0.0) : normal_matrix * glm::dvec3(nrm[3 * i], nrm[3 * i + 1], nrm[3 * i + 2]);
+            glm::dvec3 v = nrm.empty()
+                               ? glm::dvec3(0.0)
+                               : normal_matrix * glm::dvec3(nrm[3 * i], nrm[3 * i + 1], nrm[3 * i + 2]);
             if (glm::length(v) > 0.0) v = glm::normalize(v);
             g.normals.emplace_back(v);
         }
@@ -216,7 +253,10 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     }
     if (!uv.empty() || !g.uvs.empty()) {
         pad(g.uvs, glm::vec2(0.0f));
-        for (std::size_t i = 0; i < n; ++i) g.uvs.emplace_back(uv.empty() ? glm::vec2(0.0f) : glm::vec2(static_cast<float>(uv[2 * i]), static_cast<float>(uv[2 * i + 1])));
+        for (std::size_t i = 0; i < n; ++i)
+            g.uvs.emplace_back(
+                uv.empty() ? glm::vec2(0.0f)
+                           : glm::vec2(static_cast<float>(uv[2 * i]), static_cast<float>(uv[2 * i + 1])));
     }
     if (!au.empty()) {
         pad(g.axis_u, glm::vec3(0.0f));
@@ -230,7 +270,9 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     if (!uvf.empty() || !g.uv_axes.empty()) {
         pad(g.uv_axes, glm::vec4(0.0f));
         for (std::size_t i = 0; i < n; ++i)
-            g.uv_axes.push_back(uvf.empty() ? glm::vec4(0.0f) : glm::vec4(float(uvf[4 * i]), float(uvf[4 * i + 1]), float(uvf[4 * i + 2]), float(uvf[4 * i + 3])));
+            g.uv_axes.push_back(uvf.empty() ? glm::vec4(0.0f)
+                                            : glm::vec4(float(uvf[4 * i]), float(uvf[4 * i + 1]),
+                                                        float(uvf[4 * i + 2]), float(uvf[4 * i + 3])));
     }
 
     // Material: base colour factor and texture, shared by all triangles of this primitive.
@@ -243,7 +285,9 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
             const tinygltf::Material& mat = m.materials[static_cast<std::size_t>(prim.material)];
             MeshMaterial mm;
             const auto& f = mat.pbrMetallicRoughness.baseColorFactor;
-            if (f.size() == 4) mm.base_color = glm::vec4(static_cast<float>(f[0]), static_cast<float>(f[1]), static_cast<float>(f[2]), static_cast<float>(f[3]));
+            if (f.size() == 4)
+                mm.base_color = glm::vec4(static_cast<float>(f[0]), static_cast<float>(f[1]),
+                                          static_cast<float>(f[2]), static_cast<float>(f[3]));
             if (mat.pbrMetallicRoughness.baseColorTexture.index >= 0) {
                 auto img = gltf_image(m, mat.pbrMetallicRoughness.baseColorTexture.index, src);
                 if (img) {
@@ -260,7 +304,10 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     }
 
     if (prim.mode == TINYGLTF_MODE_POINTS) {
-        if (!g.triangles.empty()) log::warn(src, ": file mixes points and triangles; points are sampled with the surface only if they have faces");
+        if (!g.triangles.empty())
+            log::warn(src,
+                      ": file mixes points and triangles; points are sampled with the surface only if they "
+                      "have faces");
         return {};
     }
     std::vector<std::uint32_t> idx;
@@ -269,7 +316,9 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
         if (!r) return r.error();
         idx.reserve(r->size());
         for (double d : *r) {
-            if (d < 0 || d >= static_cast<double>(n)) return make_error(src + ": index " + std::to_string(static_cast<long long>(d)) + " out of range (" + std::to_string(n) + " vertices)");
+            if (d < 0 || d >= static_cast<double>(n))
+                return make_error(src + ": index " + std::to_string(static_cast<long long>(d)) +
+                                  " out of range (" + std::to_string(n) + " vertices)");
             idx.push_back(static_cast<std::uint32_t>(d));
         }
     } else {
@@ -284,11 +333,15 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     };
     // A mirroring transform flips the winding; keep faces pointing the same way.
     const bool flip = glm::determinant(linear) < 0.0;
-    auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) { flip ? tri(a, c, b) : tri(a, b, c); };
+    auto emit = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+        flip ? tri(a, c, b) : tri(a, b, c);
+    };
     if (prim.mode == TINYGLTF_MODE_TRIANGLES) {
-        for (std::size_t i = 0; i + 2 < idx.size() + 0 && i + 2 < idx.size(); i += 3) emit(idx[i], idx[i + 1], idx[i + 2]);
+        for (std::size_t i = 0; i + 2 < idx.size() + 0 && i + 2 < idx.size(); i += 3)
+            emit(idx[i], idx[i + 1], idx[i + 2]);
     } else if (prim.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
-        for (std::size_t i = 0; i + 2 < idx.size(); ++i) i % 2 ? emit(idx[i + 1], idx[i], idx[i + 2]) : emit(idx[i], idx[i + 1], idx[i + 2]);
+        for (std::size_t i = 0; i + 2 < idx.size(); ++i)
+            i % 2 ? emit(idx[i + 1], idx[i], idx[i + 2]) : emit(idx[i], idx[i + 1], idx[i + 2]);
     } else {
         for (std::size_t i = 1; i + 1 < idx.size(); ++i) emit(idx[0], idx[i], idx[i + 1]);
     }
@@ -330,68 +383,91 @@ Result<GltfContents> read_gltf(const fs::path& path) {
     std::unordered_set<int> visiting;
     std::vector<int> roots;
     if (!m.scenes.empty()) {
-        const int s = m.defaultScene >= 0 && static_cast<std::size_t>(m.defaultScene) < m.scenes.size() ? m.defaultScene : 0;
+        const int s = m.defaultScene >= 0 && static_cast<std::size_t>(m.defaultScene) < m.scenes.size()
+                          ? m.defaultScene
+                          : 0;
         roots = m.scenes[static_cast<std::size_t>(s)].nodes;
     } else {
         // No scene: every node that is nobody's child is a root.
         std::vector<char> is_child(m.nodes.size(), 0);
         for (const auto& n : m.nodes)
             for (int c : n.children)
-                if (c >= 0 && static_cast<std::size_t>(c) < m.nodes.size()) is_child[static_cast<std::size_t>(c)] = 1;
+                if (c >= 0 && static_cast<std::size_t>(c) < m.nodes.size())
+                    is_child[static_cast<std::size_t>(c)] = 1;
         for (std::size_t i = 0; i < m.nodes.size(); ++i)
             if (!is_child[i]) roots.push_back(static_cast<int>(i));
     }
 
-    std::function<Status(int, const glm::dmat4&, int)> visit = [&](int index, const glm::dmat4& parent, int depth) -> Status {
-        if (index < 0 || static_cast<std::size_t>(index) >= m.nodes.size()) return make_error(src + ": node index " + std::to_string(index) + " out of range");
-        if (depth > 256 || !visiting.insert(index).second) return make_error(src + ": node hierarchy has a cycle");
+    std::function<Status(int, const glm::dmat4&, int)> visit = [&](int index, const glm::dmat4& parent,
+                                                                   int depth) -> Status {
+        if (index < 0 || static_cast<std::size_t>(index) >= m.nodes.size())
+            return make_error(src + ": node index " + std::to_string(index) + " out of range");
+        if (depth > 256 || !visiting.insert(index).second)
+            return make_error(src + ": node hierarchy has a cycle");
         const tinygltf::Node& node = m.nodes[static_cast<std::size_t>(index)];
         const glm::dmat4 world = parent * node_matrix(node);
         const json extras = to_json(node.extras);
         if (extras.is_object() && extras.contains("sffd_cloud") && node.children.size() == 1) {
             // One of our splat nodes: keep the arrays exactly as stored, Transform and origin apart.
             const int child = node.children[0];
-            if (child < 0 || static_cast<std::size_t>(child) >= m.nodes.size()) return make_error(src + ": bad child of splat node");
+            if (child < 0 || static_cast<std::size_t>(child) >= m.nodes.size())
+                return make_error(src + ": bad child of splat node");
             const tinygltf::Node& cn = m.nodes[static_cast<std::size_t>(child)];
             GltfCloudIn cloud;
             cloud.name = node.name;
             cloud.id = extras["sffd_cloud"].is_number_integer() ? extras["sffd_cloud"].get<int>() : -1;
             cloud.transform = node_trs(node);
-            // A zero quaternion has no rotation to normalise to, a zero scale flattens the cloud: refused (others
-            // are kept exactly as stored, for round trips).
+            // A zero quaternion has no rotation to normalise to, a zero scale flattens the cloud: refused
+            // (others are kept exactly as stored, for round trips).
             const glm::dquat& q = cloud.transform.rotation;
             if (!(glm::length(q) > 1e-12) || !std::isfinite(glm::length(q)))
-                return make_error(src + ": splat node '" + node.name + "': rotation is a zero or non-finite quaternion");
+                return make_error(src + ": splat node '" + node.name +
+                                  "': rotation is a zero or non-finite quaternion");
             const glm::dvec3& sc = cloud.transform.scale;
             if (sc.x == 0.0 || sc.y == 0.0 || sc.z == 0.0 || !std::isfinite(sc.x + sc.y + sc.z))
-                return make_error(src + ": splat node '" + node.name + "': scale has a zero or non-finite component");
+                return make_error(src + ": splat node '" + node.name +
+                                  "': scale has a zero or non-finite component");
             for (int a = 0; a < 3; ++a)
-                if (!std::isfinite(cloud.transform.translation[a])) return make_error(src + ": splat node '" + node.name + "': translation is not finite");
-            if (cn.translation.size() == 3) cloud.cloud.origin = glm::dvec3(cn.translation[0], cn.translation[1], cn.translation[2]);
+                if (!std::isfinite(cloud.transform.translation[a]))
+                    return make_error(src + ": splat node '" + node.name + "': translation is not finite");
+            if (cn.translation.size() == 3)
+                cloud.cloud.origin = glm::dvec3(cn.translation[0], cn.translation[1], cn.translation[2]);
             if (cn.mesh >= 0 && static_cast<std::size_t>(cn.mesh) >= m.meshes.size())
-                return make_error(src + ": splat node '" + node.name + "': mesh index " + std::to_string(cn.mesh) + " out of range (" +
+                return make_error(src + ": splat node '" + node.name + "': mesh index " +
+                                  std::to_string(cn.mesh) + " out of range (" +
                                   std::to_string(m.meshes.size()) + " meshes)");
             if (cn.mesh >= 0) {
                 const auto& prims = m.meshes[static_cast<std::size_t>(cn.mesh)].primitives;
-                if (prims.size() != 1 || prims[0].mode != TINYGLTF_MODE_POINTS) return make_error(src + ": splat node '" + node.name + "' must hold one POINTS primitive");
+                if (prims.size() != 1 || prims[0].mode != TINYGLTF_MODE_POINTS)
+                    return make_error(src + ": splat node '" + node.name +
+                                      "' must hold one POINTS primitive");
                 Geometry unused;
-                if (auto s = read_primitive(m, prims[0], glm::dmat4(1.0), src, unused, material_map, &cloud.cloud); !s) return s;
+                if (auto s =
+                        read_primitive(m, prims[0], glm::dmat4(1.0), src, unused, material_map, &cloud.cloud);
+                    !s)
+                    return s;
             }
             const std::size_t n = cloud.cloud.size();
             for (const auto& p : cloud.cloud.positions)
-                if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return make_error(src + ": splat node '" + node.name + "' has a non-finite position");
-            if ((!cloud.cloud.axis_u.empty() && cloud.cloud.axis_u.size() != n) || (!cloud.cloud.normals.empty() && cloud.cloud.normals.size() != n) ||
+                if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+                    return make_error(src + ": splat node '" + node.name + "' has a non-finite position");
+            if ((!cloud.cloud.axis_u.empty() && cloud.cloud.axis_u.size() != n) ||
+                (!cloud.cloud.normals.empty() && cloud.cloud.normals.size() != n) ||
                 (!cloud.cloud.uv_axes.empty() && cloud.cloud.uv_axes.size() != n))
-                return make_error(src + ": splat node '" + node.name + "' has attribute arrays of the wrong length");
+                return make_error(src + ": splat node '" + node.name +
+                                  "' has attribute arrays of the wrong length");
             out.clouds.push_back(std::move(cloud));
         } else {
             if (node.mesh >= 0) {
                 if (static_cast<std::size_t>(node.mesh) >= m.meshes.size())
-                    return make_error(src + ": node '" + node.name + "': mesh index " + std::to_string(node.mesh) + " out of range (" +
+                    return make_error(src + ": node '" + node.name + "': mesh index " +
+                                      std::to_string(node.mesh) + " out of range (" +
                                       std::to_string(m.meshes.size()) + " meshes)");
                 for (const auto& prim : m.meshes[static_cast<std::size_t>(node.mesh)].primitives) {
-                    if (scene_file && prim.extensions.count("KHR_gaussian_splatting")) continue;  // systems/gaussian's
-                    if (auto s = read_primitive(m, prim, world, src, out.other, material_map, nullptr); !s) return s;
+                    if (scene_file && prim.extensions.count("KHR_gaussian_splatting"))
+                        continue;  // systems/gaussian's
+                    if (auto s = read_primitive(m, prim, world, src, out.other, material_map, nullptr); !s)
+                        return s;
                 }
             }
             for (int c : node.children)
@@ -406,7 +482,8 @@ Result<GltfContents> read_gltf(const fs::path& path) {
     Geometry& g = out.other;
     pad_attributes(g);
     for (const auto& p : g.positions)
-        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return make_error(src + ": a node transform or position is not finite");
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+            return make_error(src + ": a node transform or position is not finite");
     g.attributes = {"POSITION"};
     if (!g.normals.empty()) g.attributes.push_back("NORMAL");
     if (!g.colors.empty()) g.attributes.push_back("COLOR_0");
@@ -429,21 +506,33 @@ Result<Geometry> read_gltf_geometry(const fs::path& path) {
         const glm::dmat3 nm = glm::transpose(glm::inverse(linear));
         const std::size_t base = g.positions.size();
         const std::size_t n = c.cloud.size();
-        for (const auto& p : c.cloud.positions) g.positions.push_back(glm::dvec3(world * glm::dvec4(c.cloud.origin + glm::dvec3(p), 1.0)));
+        for (const auto& p : c.cloud.positions)
+            g.positions.push_back(glm::dvec3(world * glm::dvec4(c.cloud.origin + glm::dvec3(p), 1.0)));
         auto extend = [&](auto& dst, const auto& src_arr, auto fn, auto def) {
             if (src_arr.empty() && dst.empty()) return;
             dst.resize(base, def);
             for (std::size_t i = 0; i < n; ++i) dst.push_back(src_arr.empty() ? def : fn(src_arr[i]));
         };
-        extend(g.normals, c.cloud.normals, [&](const glm::vec3& v) { return glm::vec3(glm::normalize(nm * glm::dvec3(v))); }, glm::vec3(0.0f));
-        extend(g.axis_u, c.cloud.axis_u, [&](const glm::vec3& v) { return glm::vec3(linear * glm::dvec3(v)); }, glm::vec3(0.0f));
-        extend(g.axis_v, c.cloud.axis_v, [&](const glm::vec3& v) { return glm::vec3(linear * glm::dvec3(v)); }, glm::vec3(0.0f));
-        extend(g.colors, c.cloud.colors, [](std::uint32_t v) { return v; }, 0xffffffffu);
-        extend(g.uvs, c.cloud.uvs, [](const glm::vec2& v) { return v; }, glm::vec2(0.0f));
-        extend(g.uv_axes, c.cloud.uv_axes, [](const glm::vec4& v) { return v; }, glm::vec4(0.0f));
+        extend(
+            g.normals, c.cloud.normals,
+            [&](const glm::vec3& v) { return glm::vec3(glm::normalize(nm * glm::dvec3(v))); },
+            glm::vec3(0.0f));
+        extend(
+            g.axis_u, c.cloud.axis_u, [&](const glm::vec3& v) { return glm::vec3(linear * glm::dvec3(v)); },
+            glm::vec3(0.0f));
+        extend(
+            g.axis_v, c.cloud.axis_v, [&](const glm::vec3& v) { return glm::vec3(linear * glm::dvec3(v)); },
+            glm::vec3(0.0f));
+        extend(
+            g.colors, c.cloud.colors, [](std::uint32_t v) { return v; }, 0xffffffffu);
+        extend(
+            g.uvs, c.cloud.uvs, [](const glm::vec2& v) { return v; }, glm::vec2(0.0f));
+        extend(
+            g.uv_axes, c.cloud.uv_axes, [](const glm::vec4& v) { return v; }, glm::vec4(0.0f));
         if (single) {
             g.splat_material = c.cloud.material;
-            const bool identity = t.translation == glm::dvec3(0.0) && t.rotation == glm::dquat(1, 0, 0, 0) && t.scale == glm::dvec3(1.0);
+            const bool identity = t.translation == glm::dvec3(0.0) && t.rotation == glm::dquat(1, 0, 0, 0) &&
+                                  t.scale == glm::dvec3(1.0);
             if (identity) {
                 g.has_origin = true;
                 g.origin = c.cloud.origin;

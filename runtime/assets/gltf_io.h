@@ -33,7 +33,7 @@ namespace sffd::assets {
 
 struct GltfCloudOut {
     std::string name;
-    int id = -1;                    // written as extras.sffd_cloud (scene files refer to clouds by it)
+    int id = -1;  // written as extras.sffd_cloud (scene files refer to clouds by it)
     const Transform* transform = nullptr;
     const SplatCloud* cloud = nullptr;
 };
@@ -57,10 +57,11 @@ struct GltfCloudIn {
 };
 
 struct GltfContents {
-    std::vector<GltfCloudIn> clouds;   // our splat nodes, exactly as stored
-    Geometry other;                    // every other mesh/point primitive, in world space
-    std::string sffd_scene_json;       // extensions.SFFD_scene as JSON text (empty when absent)
-    std::shared_ptr<const tinygltf::Model> model;  // the whole file, for scene extensions that store glTF content
+    std::vector<GltfCloudIn> clouds;  // our splat nodes, exactly as stored
+    Geometry other;                   // every other mesh/point primitive, in world space
+    std::string sffd_scene_json;      // extensions.SFFD_scene as JSON text (empty when absent)
+    std::shared_ptr<const tinygltf::Model>
+        model;  // the whole file, for scene extensions that store glTF content
 };
 // In a scene file (one with SFFD_scene), KHR_gaussian_splatting primitives are not surface geometry:
 // read_gltf() leaves them out of `other` (systems/gaussian reads them through `model`).

@@ -23,9 +23,12 @@ namespace {
 
 std::size_t component_size(int type) {
     switch (type) {
-        case kByte: case kUByte: return 1;
-        case kShort: case kUShort: return 2;
-        case kUInt: case kFloat: return 4;
+        case kByte:
+        case kUByte: return 1;
+        case kShort:
+        case kUShort: return 2;
+        case kUInt:
+        case kFloat: return 4;
         default: return 0;
     }
 }
@@ -36,16 +39,16 @@ std::size_t component_size(int type) {
 // answered), read_file() opens regular files only. The first refusal is kept and reported as the error.
 // Images are not decoded in tinygltf's callback: it records each image's declared size (stb header) and
 // keeps the encoded bytes; read_gltf() checks the total against kDecodedImageBudget and decodes after.
-constexpr std::uint64_t kMaxImagePixels = 8192ull * 8192ull;              // one image: 256 MB as RGBA8
-constexpr std::uint64_t kDecodedImageBudget = std::uint64_t(1) << 30;     // all images of one file, RGBA8
-constexpr std::uint64_t kMaxGltfBytes = std::uint64_t(2) << 30;           // the .gltf / .glb itself
+constexpr std::uint64_t kMaxImagePixels = 8192ull * 8192ull;           // one image: 256 MB as RGBA8
+constexpr std::uint64_t kDecodedImageBudget = std::uint64_t(1) << 30;  // all images of one file, RGBA8
+constexpr std::uint64_t kMaxGltfBytes = std::uint64_t(2) << 30;        // the .gltf / .glb itself
 
 struct LoadContext {
-    fs::path owner;                 // the glTF file, for messages and resolution
-    std::string basedir;            // what tinygltf prefixes to URIs
-    std::string error;              // first refusal
+    fs::path owner;                                      // the glTF file, for messages and resolution
+    std::string basedir;                                 // what tinygltf prefixes to URIs
+    std::string error;                                   // first refusal
     std::unordered_map<std::string, fs::path> resolved;  // tinygltf's joined path -> checked path
-    std::uint64_t declared_bytes = 0;                     // decoded RGBA8 size of all images so far
+    std::uint64_t declared_bytes = 0;                    // decoded RGBA8 size of all images so far
 };
 
 void refuse(LoadContext& ctx, const std::string& message) {
@@ -55,8 +58,10 @@ void refuse(LoadContext& ctx, const std::string& message) {
 bool fs_exists(const std::string& joined, void* user) {
     auto& ctx = *static_cast<LoadContext*>(user);
     std::string uri;
-    const std::string prefix = ctx.basedir.empty() ? std::string() : (ctx.basedir.back() == '/' ? ctx.basedir : ctx.basedir + "/");
-    if (prefix.empty()) uri = joined;  // the glTF is in the current folder: both candidates are relative to it
+    const std::string prefix =
+        ctx.basedir.empty() ? std::string() : (ctx.basedir.back() == '/' ? ctx.basedir : ctx.basedir + "/");
+    if (prefix.empty())
+        uri = joined;  // the glTF is in the current folder: both candidates are relative to it
     else if (joined.rfind(prefix, 0) == 0) uri = joined.substr(prefix.size());
     else return false;  // tinygltf's current-directory fallback: never
     auto r = resolve_resource(ctx.owner, uri);
@@ -92,25 +97,27 @@ bool fs_write(std::string* err, const std::string&, const std::vector<unsigned c
     return false;
 }
 
-bool load_image_deferred(tinygltf::Image* image, const int index, std::string* err, std::string*, int, int, const unsigned char* bytes,
-                         int size, void* user) {
+bool load_image_deferred(tinygltf::Image* image, const int index, std::string* err, std::string*, int, int,
+                         const unsigned char* bytes, int size, void* user) {
     auto& ctx = *static_cast<LoadContext*>(user);
     int w = 0, h = 0, comp = 0;
     if (size <= 0 || !stbi_info_from_memory(bytes, size, &w, &h, &comp) || w <= 0 || h <= 0) {
         if (err) *err += "image " + std::to_string(index) + ": unknown or corrupt image format\n";
-        refuse(ctx, ctx.owner.string() + ": image " + std::to_string(index) + ": unknown or corrupt image format");
+        refuse(ctx,
+               ctx.owner.string() + ": image " + std::to_string(index) + ": unknown or corrupt image format");
         return false;
     }
     const std::uint64_t pixels = static_cast<std::uint64_t>(w) * static_cast<std::uint64_t>(h);
     if (pixels > kMaxImagePixels) {
-        refuse(ctx, ctx.owner.string() + ": image " + std::to_string(index) + " is " + std::to_string(w) + "x" + std::to_string(h) +
-                        ", larger than 8192x8192");
+        refuse(ctx, ctx.owner.string() + ": image " + std::to_string(index) + " is " + std::to_string(w) +
+                        "x" + std::to_string(h) + ", larger than 8192x8192");
         return false;
     }
     ctx.declared_bytes += pixels * 4;
     if (ctx.declared_bytes > kDecodedImageBudget) {
-        refuse(ctx, ctx.owner.string() + ": images decode to more than " + std::to_string(kDecodedImageBudget >> 20) +
-                        " MiB in total (image " + std::to_string(index) + " is " + std::to_string(w) + "x" + std::to_string(h) +
+        refuse(ctx, ctx.owner.string() + ": images decode to more than " +
+                        std::to_string(kDecodedImageBudget >> 20) + " MiB in total (image " +
+                        std::to_string(index) + " is " + std::to_string(w) + "x" + std::to_string(h) +
                         "); the budget per file is " + std::to_string(kDecodedImageBudget >> 20) + " MiB");
         return false;
     }
@@ -128,7 +135,8 @@ Status decode_images(tinygltf::Model& m, const std::string& src) {
         tinygltf::Image& im = m.images[i];
         if (im.component != 0 || im.image.empty()) continue;
         int w = 0, h = 0, comp = 0;
-        stbi_uc* data = stbi_load_from_memory(im.image.data(), static_cast<int>(im.image.size()), &w, &h, &comp, 4);
+        stbi_uc* data =
+            stbi_load_from_memory(im.image.data(), static_cast<int>(im.image.size()), &w, &h, &comp, 4);
         if (!data)
             return make_error(src + ": image " + std::to_string(i) + ": cannot decode: " +
                               (stbi_failure_reason() ? stbi_failure_reason() : "unknown error"));
@@ -143,10 +151,11 @@ Status decode_images(tinygltf::Model& m, const std::string& src) {
 }
 }  // namespace
 
-Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& m, int index, int components, const std::string& src,
-                                               const std::string& what) {
+Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& m, int index, int components,
+                                               const std::string& src, const std::string& what) {
     auto fail = [&](const std::string& why) { return make_error(src + ": " + what + ": " + why); };
-    if (index < 0 || static_cast<std::size_t>(index) >= m.accessors.size()) return fail("accessor index out of range");
+    if (index < 0 || static_cast<std::size_t>(index) >= m.accessors.size())
+        return fail("accessor index out of range");
     const tinygltf::Accessor& a = m.accessors[static_cast<std::size_t>(index)];
     if (a.sparse.isSparse) return fail("sparse accessors are not supported");
     if (tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type)) != components)
@@ -156,16 +165,20 @@ Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& m, int ind
     const std::size_t elem = csize * static_cast<std::size_t>(components);
     std::vector<double> out;
     if (a.count == 0) return out;
-    if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= m.bufferViews.size()) return fail("accessor has no valid bufferView");
+    if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= m.bufferViews.size())
+        return fail("accessor has no valid bufferView");
     const tinygltf::BufferView& bv = m.bufferViews[static_cast<std::size_t>(a.bufferView)];
-    if (bv.buffer < 0 || static_cast<std::size_t>(bv.buffer) >= m.buffers.size()) return fail("bufferView has no valid buffer");
+    if (bv.buffer < 0 || static_cast<std::size_t>(bv.buffer) >= m.buffers.size())
+        return fail("bufferView has no valid buffer");
     const std::vector<unsigned char>& data = m.buffers[static_cast<std::size_t>(bv.buffer)].data;
     const std::size_t stride = bv.byteStride ? bv.byteStride : elem;
     if (stride < elem) return fail("byteStride smaller than an element");
-    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset) return fail("bufferView exceeds its buffer");
+    if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset)
+        return fail("bufferView exceeds its buffer");
     if (a.byteOffset > bv.byteLength) return fail("accessor offset exceeds its bufferView");
     const std::size_t avail = bv.byteLength - a.byteOffset;
-    if (a.count > avail / stride + 1 || (a.count - 1) * stride + elem > avail) return fail("accessor exceeds its bufferView");
+    if (a.count > avail / stride + 1 || (a.count - 1) * stride + elem > avail)
+        return fail("accessor exceeds its bufferView");
     out.resize(a.count * static_cast<std::size_t>(components));
     const unsigned char* base = data.data() + bv.byteOffset + a.byteOffset;
     for (std::size_t i = 0; i < a.count; ++i) {
@@ -173,12 +186,43 @@ Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& m, int ind
         for (int c = 0; c < components; ++c, p += csize) {
             double v = 0.0;
             switch (a.componentType) {
-                case kFloat: { float f; std::memcpy(&f, p, 4); v = static_cast<double>(f); break; }
-                case kUByte: v = *p; if (a.normalized) v /= 255.0; break;
-                case kByte: { std::int8_t x; std::memcpy(&x, p, 1); v = x; if (a.normalized) v = std::max(v / 127.0, -1.0); break; }
-                case kUShort: { std::uint16_t x; std::memcpy(&x, p, 2); v = x; if (a.normalized) v /= 65535.0; break; }
-                case kShort: { std::int16_t x; std::memcpy(&x, p, 2); v = x; if (a.normalized) v = std::max(v / 32767.0, -1.0); break; }
-                case kUInt: { std::uint32_t x; std::memcpy(&x, p, 4); v = x; break; }
+                case kFloat: {
+                    float f;
+                    std::memcpy(&f, p, 4);
+                    v = static_cast<double>(f);
+                    break;
+                }
+                case kUByte:
+                    v = *p;
+                    if (a.normalized) v /= 255.0;
+                    break;
+                case kByte: {
+                    std::int8_t x;
+                    std::memcpy(&x, p, 1);
+                    v = x;
+                    if (a.normalized) v = std::max(v / 127.0, -1.0);
+                    break;
+                }
+                case kUShort: {
+                    std::uint16_t x;
+                    std::memcpy(&x, p, 2);
+                    v = x;
+                    if (a.normalized) v /= 65535.0;
+                    break;
+                }
+                case kShort: {
+                    std::int16_t x;
+                    std::memcpy(&x, p, 2);
+                    v = x;
+                    if (a.normalized) v = std::max(v / 32767.0, -1.0);
+                    break;
+                }
+                case kUInt: {
+                    std::uint32_t x;
+                    std::memcpy(&x, p, 4);
+                    v = x;
+                    break;
+                }
             }
             if (!std::isfinite(v)) return fail("non-finite value at element " + std::to_string(i));
             out[i * static_cast<std::size_t>(components) + static_cast<std::size_t>(c)] = v;
@@ -209,7 +253,8 @@ std::string gltf1_version(std::string_view json_text) {
 }
 
 Status refuse_gltf1(const std::string& src, const std::string& version) {
-    return make_error(src + ": glTF 1.0 is not supported (asset.version \"" + version + "\"); convert it to glTF 2.0");
+    return make_error(src + ": glTF 1.0 is not supported (asset.version \"" + version +
+                      "\"); convert it to glTF 2.0");
 }
 
 }  // namespace
@@ -219,7 +264,8 @@ Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
     auto bytes = read_file(path, kMaxGltfBytes);
     if (!bytes) return bytes.error();
     std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     const bool binary = ext == ".glb" || (bytes->size() >= 4 && bytes->compare(0, 4, "glTF") == 0);
     // The JSON chunk's nesting is checked before tinygltf's recursive parser sees it (stack overflow).
     std::string_view json_text = *bytes;
@@ -229,7 +275,8 @@ Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
         json_text = std::string_view(*bytes).substr(20, std::min<std::size_t>(len, bytes->size() - 20));
     }
     if (Status s = check_json_depth(json_text, src); !s) return s;
-    if (binary && bytes->size() >= 8) {  // the GLB header's container version: 1 is glTF 1.0's KHR_binary_glTF
+    if (binary &&
+        bytes->size() >= 8) {  // the GLB header's container version: 1 is glTF 1.0's KHR_binary_glTF
         std::uint32_t container = 0;
         std::memcpy(&container, bytes->data() + 4, 4);
         if (container == 1) {
@@ -248,8 +295,10 @@ Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
     bool ok = false;
     try {
         const auto* data = reinterpret_cast<const unsigned char*>(bytes->data());
-        ok = binary ? loader.LoadBinaryFromMemory(&m, &err, &warn, data, static_cast<unsigned int>(bytes->size()), ctx.basedir)
-                    : loader.LoadASCIIFromString(&m, &err, &warn, bytes->data(), static_cast<unsigned int>(bytes->size()), ctx.basedir);
+        ok = binary ? loader.LoadBinaryFromMemory(&m, &err, &warn, data,
+                                                  static_cast<unsigned int>(bytes->size()), ctx.basedir)
+                    : loader.LoadASCIIFromString(&m, &err, &warn, bytes->data(),
+                                                 static_cast<unsigned int>(bytes->size()), ctx.basedir);
     } catch (const std::bad_alloc&) {
         return make_error(src + ": out of memory while parsing the glTF");
     } catch (const std::exception& e) {  // tinygltf's JSON parser may throw on hostile input
@@ -261,7 +310,8 @@ Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
     if (!ctx.error.empty()) return make_error(ctx.error);  // a refused resource, whatever tinygltf made of it
     if (!ok) {
         while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
-        return make_error(src + ": invalid glTF: " + (err.empty() ? std::string("unknown error") : err.substr(0, 500)));
+        return make_error(
+            src + ": invalid glTF: " + (err.empty() ? std::string("unknown error") : err.substr(0, 500)));
     }
     return decode_images(m, src);
 }

@@ -24,7 +24,8 @@ std::string base64(const std::string& in) {
     out.reserve((in.size() + 2) / 3 * 4);
     std::size_t i = 0;
     for (; i + 2 < in.size(); i += 3) {
-        const std::uint32_t v = (std::uint32_t(std::uint8_t(in[i])) << 16) | (std::uint32_t(std::uint8_t(in[i + 1])) << 8) | std::uint8_t(in[i + 2]);
+        const std::uint32_t v = (std::uint32_t(std::uint8_t(in[i])) << 16) |
+                                (std::uint32_t(std::uint8_t(in[i + 1])) << 8) | std::uint8_t(in[i + 2]);
         out += t[v >> 18];
         out += t[(v >> 12) & 63];
         out += t[(v >> 6) & 63];
@@ -55,9 +56,11 @@ struct BinBuilder {
         return static_cast<int>(views.size()) - 1;
     }
     template <class T>
-    int accessor(const std::vector<T>& data, int component_type, const char* type, std::size_t components, bool normalized = false) {
+    int accessor(const std::vector<T>& data, int component_type, const char* type, std::size_t components,
+                 bool normalized = false) {
         const int v = view(data.data(), data.size() * sizeof(T), 34962);
-        json a = {{"bufferView", v}, {"componentType", component_type}, {"count", data.size()}, {"type", type}};
+        json a = {
+            {"bufferView", v}, {"componentType", component_type}, {"count", data.size()}, {"type", type}};
         if (normalized) a["normalized"] = true;
         (void)components;
         accessors.push_back(a);
@@ -68,28 +71,32 @@ struct BinBuilder {
 json vec(const glm::dvec3& v) { return json::array({v.x, v.y, v.z}); }
 
 void png_append(void* context, void* data, int size) {
-    static_cast<std::string*>(context)->append(static_cast<const char*>(data), static_cast<std::size_t>(size));
+    static_cast<std::string*>(context)->append(static_cast<const char*>(data),
+                                               static_cast<std::size_t>(size));
 }
 
 }  // namespace
 
-Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds, const std::string& sffd_scene_json,
-                  const std::vector<GltfAppend>& append) {
+Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
+                  const std::string& sffd_scene_json, const std::vector<GltfAppend>& append) {
     std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     const bool binary = ext == ".glb";
     if (!binary && ext != ".gltf") return make_error(path.string() + ": expected a .gltf or .glb file name");
 
     BinBuilder b;
-    json nodes = json::array(), meshes = json::array(), materials = json::array(), textures = json::array(), images = json::array();
+    json nodes = json::array(), meshes = json::array(), materials = json::array(), textures = json::array(),
+         images = json::array();
     json roots = json::array();
     for (const GltfCloudOut& out : clouds) {
         const SplatCloud& c = *out.cloud;
         const std::size_t n = c.size();
         auto sized = [&](std::size_t s) { return s == 0 || s == n; };
-        if (!sized(c.normals.size()) || !sized(c.colors.size()) || !sized(c.uvs.size()) || !sized(c.axis_u.size()) || c.axis_u.size() != c.axis_v.size() ||
-            !sized(c.uv_axes.size()))
-            return make_error(path.string() + ": cloud '" + out.name + "' has attribute arrays of the wrong length");
+        if (!sized(c.normals.size()) || !sized(c.colors.size()) || !sized(c.uvs.size()) ||
+            !sized(c.axis_u.size()) || c.axis_u.size() != c.axis_v.size() || !sized(c.uv_axes.size()))
+            return make_error(path.string() + ": cloud '" + out.name +
+                              "' has attribute arrays of the wrong length");
         json attributes = json::object();
         if (n > 0) {
             const int ip = b.accessor(c.positions, kFloat, "VEC3", 3);
@@ -109,10 +116,15 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
                     lin[4 * i] = srgb8_to_linear16(col & 255u);
                     lin[4 * i + 1] = srgb8_to_linear16((col >> 8) & 255u);
                     lin[4 * i + 2] = srgb8_to_linear16((col >> 16) & 255u);
-                    lin[4 * i + 3] = static_cast<std::uint16_t>((col >> 24) * 257u);  // alpha is linear already
+                    lin[4 * i + 3] =
+                        static_cast<std::uint16_t>((col >> 24) * 257u);  // alpha is linear already
                 }
                 const int v = b.view(lin.data(), lin.size() * 2, 34962);
-                b.accessors.push_back({{"bufferView", v}, {"componentType", kUShort}, {"count", n}, {"type", "VEC4"}, {"normalized", true}});
+                b.accessors.push_back({{"bufferView", v},
+                                       {"componentType", kUShort},
+                                       {"count", n},
+                                       {"type", "VEC4"},
+                                       {"normalized", true}});
                 attributes["COLOR_0"] = static_cast<int>(b.accessors.size()) - 1;
             }
             if (!c.uvs.empty()) attributes["TEXCOORD_0"] = b.accessor(c.uvs, kFloat, "VEC2", 2);
@@ -122,17 +134,24 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
                 if (!c.uv_axes.empty()) attributes["_UV_AXES"] = b.accessor(c.uv_axes, kFloat, "VEC4", 4);
             }
         }
-        json material = {{"name", out.name + ".material"},
-                         {"pbrMetallicRoughness",
-                          {{"baseColorFactor", {c.material.base_color.x, c.material.base_color.y, c.material.base_color.z, c.material.base_color.w}},
-                           {"metallicFactor", 0.0},
-                           {"roughnessFactor", 1.0}}},
-                         {"extras", {{"sffd_specular", c.material.specular}, {"sffd_shininess", c.material.shininess}}}};
-        if (!c.material.texture_path.empty()) material["extras"]["sffd_texture_path"] = c.material.texture_path;
+        json material = {
+            {"name", out.name + ".material"},
+            {"pbrMetallicRoughness",
+             {{"baseColorFactor",
+               {c.material.base_color.x, c.material.base_color.y, c.material.base_color.z,
+                c.material.base_color.w}},
+              {"metallicFactor", 0.0},
+              {"roughnessFactor", 1.0}}},
+            {"extras", {{"sffd_specular", c.material.specular}, {"sffd_shininess", c.material.shininess}}}};
+        if (!c.material.texture_path.empty())
+            material["extras"]["sffd_texture_path"] = c.material.texture_path;
         if (!c.material.texture_rgba8.empty()) {
             const int w = c.material.texture_width, h = c.material.texture_height;
-            if (w <= 0 || h <= 0 || c.material.texture_rgba8.size() != static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4)
-                return make_error(path.string() + ": cloud '" + out.name + "' has a texture of the wrong size");
+            if (w <= 0 || h <= 0 ||
+                c.material.texture_rgba8.size() !=
+                    static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4)
+                return make_error(path.string() + ": cloud '" + out.name +
+                                  "' has a texture of the wrong size");
             std::string png;
             if (!stbi_write_png_to_func(png_append, &png, w, h, 4, c.material.texture_rgba8.data(), w * 4))
                 return make_error(path.string() + ": cannot encode the texture as PNG");
@@ -152,7 +171,8 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
                        {"scale", vec(t.scale)},
                        {"children", {nodes.size() + 1}},
                        {"extras", {{"sffd_cloud", out.id}}}};
-        json child = {{"name", out.name + ".origin"}, {"translation", vec(c.origin)}, {"mesh", meshes.size() - 1}};
+        json child = {
+            {"name", out.name + ".origin"}, {"translation", vec(c.origin)}, {"mesh", meshes.size() - 1}};
         roots.push_back(nodes.size());
         nodes.push_back(parent);
         nodes.push_back(child);
@@ -171,7 +191,8 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
     }
     if (!sffd_scene_json.empty()) {
         json ext_json = json::parse(sffd_scene_json, nullptr, false);
-        if (ext_json.is_discarded()) return make_error(path.string() + ": write_gltf(): scene extension is not valid JSON");
+        if (ext_json.is_discarded())
+            return make_error(path.string() + ": write_gltf(): scene extension is not valid JSON");
         doc["extensionsUsed"] = {"SFFD_scene"};
         doc["extensions"] = {{"SFFD_scene", ext_json}};
     }

@@ -14,12 +14,15 @@ namespace detail {
 Status check_geometry(const Geometry& g) {
     const std::size_t n = g.positions.size();
     for (std::size_t i = 0; i < n; ++i)
-        if (!finite3(g.positions[i])) return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite coordinate");
+        if (!finite3(g.positions[i]))
+            return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite coordinate");
     for (std::size_t i = 0; i < g.normals.size(); ++i)
-        if (!finite3(glm::dvec3(g.normals[i]))) return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite normal");
+        if (!finite3(glm::dvec3(g.normals[i])))
+            return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite normal");
     for (std::size_t i = 0; i < g.uvs.size(); ++i)
         if (!std::isfinite(g.uvs[i].x) || !std::isfinite(g.uvs[i].y))
-            return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite texture coordinate");
+            return make_error(g.source + ": point " + std::to_string(i) +
+                              " has a non-finite texture coordinate");
     for (std::size_t i = 0; i < g.axis_u.size(); ++i)
         if (!finite3(glm::dvec3(g.axis_u[i])) || !finite3(glm::dvec3(g.axis_v[i])))
             return make_error(g.source + ": point " + std::to_string(i) + " has non-finite splat axes");
@@ -30,16 +33,19 @@ Status check_geometry(const Geometry& g) {
         (!g.uv_grad_u.empty() && (g.uv_grad_u.size() != n || g.uv_grad_v.size() != n)))
         return make_error(g.source + ": attribute arrays do not match the point count");
     if ((!g.normals.empty() && g.normals.size() != n) || (!g.colors.empty() && g.colors.size() != n) ||
-        (!g.uvs.empty() && g.uvs.size() != n) || g.axis_u.size() != g.axis_v.size() || (!g.axis_u.empty() && g.axis_u.size() != n))
+        (!g.uvs.empty() && g.uvs.size() != n) || g.axis_u.size() != g.axis_v.size() ||
+        (!g.axis_u.empty() && g.axis_u.size() != n))
         return make_error(g.source + ": attribute arrays do not match the point count");
     for (std::size_t i = 0; i < g.triangles.size(); ++i)
         if (g.triangles[i] >= n)
-            return make_error(g.source + ": face " + std::to_string(i / 3) + " refers to vertex " + std::to_string(g.triangles[i]) +
-                              " but there are only " + std::to_string(n));
+            return make_error(g.source + ": face " + std::to_string(i / 3) + " refers to vertex " +
+                              std::to_string(g.triangles[i]) + " but there are only " + std::to_string(n));
     for (std::int32_t m : g.triangle_material)
-        if (m >= static_cast<std::int32_t>(g.materials.size())) return make_error(g.source + ": bad material index");
+        if (m >= static_cast<std::int32_t>(g.materials.size()))
+            return make_error(g.source + ": bad material index");
     for (const MeshMaterial& m : g.materials)
-        if (m.texture >= static_cast<int>(g.textures.size())) return make_error(g.source + ": bad texture index");
+        if (m.texture >= static_cast<int>(g.textures.size()))
+            return make_error(g.source + ": bad texture index");
     return {};
 }
 
@@ -50,32 +56,39 @@ Result<Image> decode_image(const fs::path& path, std::uint64_t* budget_left) {
     const int size = static_cast<int>(std::min<std::size_t>(bytes->size(), 0x7fffffff));
     int w = 0, h = 0, comp = 0;
     if (!stbi_info_from_memory(data, size, &w, &h, &comp) || w <= 0 || h <= 0)
-        return make_error(path.string() + ": cannot decode image: " + (stbi_failure_reason() ? stbi_failure_reason() : "unknown format"));
+        return make_error(path.string() + ": cannot decode image: " +
+                          (stbi_failure_reason() ? stbi_failure_reason() : "unknown format"));
     const std::uint64_t pixels = static_cast<std::uint64_t>(w) * static_cast<std::uint64_t>(h);
     if (pixels > kMaxImagePixels)
-        return make_error(path.string() + ": image is " + std::to_string(w) + "x" + std::to_string(h) + ", larger than 8192x8192");
+        return make_error(path.string() + ": image is " + std::to_string(w) + "x" + std::to_string(h) +
+                          ", larger than 8192x8192");
     if (budget_left) {
         if (pixels * 4 > *budget_left)
-            return make_error(path.string() + ": image is " + std::to_string(w) + "x" + std::to_string(h) + "; the textures of one file may decode to at most " +
+            return make_error(path.string() + ": image is " + std::to_string(w) + "x" + std::to_string(h) +
+                              "; the textures of one file may decode to at most " +
                               std::to_string(kDecodedTextureBudget >> 20) + " MiB in total");
         *budget_left -= pixels * 4;
     }
     stbi_uc* pixels_rgba = stbi_load_from_memory(data, size, &w, &h, &comp, 4);
-    if (!pixels_rgba) return make_error(path.string() + ": cannot decode image: " + (stbi_failure_reason() ? stbi_failure_reason() : "?"));
+    if (!pixels_rgba)
+        return make_error(path.string() +
+                          ": cannot decode image: " + (stbi_failure_reason() ? stbi_failure_reason() : "?"));
     Image img;
     img.width = w;
     img.height = h;
-    img.rgba8.assign(pixels_rgba, pixels_rgba + static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4);
+    img.rgba8.assign(pixels_rgba,
+                     pixels_rgba + static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4);
     stbi_image_free(pixels_rgba);
     return img;
 }
 
-Result<Image> load_named_image(const fs::path& owner, const std::string& name, const std::string& source, std::uint64_t* budget_left,
-                               bool& missing) {
+Result<Image> load_named_image(const fs::path& owner, const std::string& name, const std::string& source,
+                               std::uint64_t* budget_left, bool& missing) {
     missing = false;
     auto where = resolve_resource(owner, name);
     if (!where) {
-        missing = where.message().size() >= 9 && where.message().compare(where.message().size() - 9, 9, "not found") == 0;
+        missing = where.message().size() >= 9 &&
+                  where.message().compare(where.message().size() - 9, 9, "not found") == 0;
         return where.error();
     }
     auto img = decode_image(*where, budget_left);

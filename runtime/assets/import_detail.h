@@ -35,17 +35,21 @@ inline std::string lower_ext(const std::filesystem::path& p) {
 }
 
 inline std::uint32_t pack_rgba(double r, double g, double b, double a) {
-    auto q = [](double v) { return static_cast<std::uint32_t>(std::lround(std::clamp(v, 0.0, 1.0) * 255.0)); };
+    auto q = [](double v) {
+        return static_cast<std::uint32_t>(std::lround(std::clamp(v, 0.0, 1.0) * 255.0));
+    };
     return q(r) | (q(g) << 8) | (q(b) << 16) | (q(a) << 24);
 }
 
 inline glm::vec4 unpack_rgba(std::uint32_t c) {
-    return glm::vec4(static_cast<float>(c & 255u), static_cast<float>((c >> 8) & 255u), static_cast<float>((c >> 16) & 255u),
-                     static_cast<float>(c >> 24)) /
+    return glm::vec4(static_cast<float>(c & 255u), static_cast<float>((c >> 8) & 255u),
+                     static_cast<float>((c >> 16) & 255u), static_cast<float>(c >> 24)) /
            255.0f;
 }
 
-inline bool finite3(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+inline bool finite3(const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 // Deterministic uniform doubles in [0, 1) (std distributions differ between standard libraries).
 struct Rng {
@@ -69,8 +73,8 @@ Result<Image> decode_image(const std::filesystem::path& path, std::uint64_t* bud
 
 // A texture named inside `owner`: refused (an error) when it lies outside owner's folder or is not a
 // regular file; a missing one sets `missing` (callers warn: the geometry is still usable).
-Result<Image> load_named_image(const std::filesystem::path& owner, const std::string& name, const std::string& source,
-                               std::uint64_t* budget_left, bool& missing);
+Result<Image> load_named_image(const std::filesystem::path& owner, const std::string& name,
+                               const std::string& source, std::uint64_t* budget_left, bool& missing);
 
 // Line-oriented text formats (OBJ, MTL, OFF).
 struct LineCursor {
@@ -131,13 +135,15 @@ int single_texture(const Geometry& mesh);
 // The gradients of a triangle's affine map from 3D to uv (in the triangle's plane): for x = a + s(b - a) +
 // t(c - a), uv = ta + s(tb - ta) + t(tc - ta), and grad_u . (x - a) = u(x) - u(a) (likewise v).
 // Zero for a degenerate triangle.
-void triangle_uv_gradients(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, glm::dvec2 ta, glm::dvec2 tb,
-                           glm::dvec2 tc, glm::dvec3& grad_u, glm::dvec3& grad_v);
+void triangle_uv_gradients(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, glm::dvec2 ta,
+                           glm::dvec2 tb, glm::dvec2 tc, glm::dvec3& grad_u, glm::dvec3& grad_v);
 
 // A splat's uv frame (SplatCloud::uv_axes) from the texture-space gradients and its axes.
-inline glm::vec4 uv_frame(const glm::dvec3& grad_u, const glm::dvec3& grad_v, const glm::vec3& axis_u, const glm::vec3& axis_v) {
+inline glm::vec4 uv_frame(const glm::dvec3& grad_u, const glm::dvec3& grad_v, const glm::vec3& axis_u,
+                          const glm::vec3& axis_v) {
     const glm::dvec3 au(axis_u), av(axis_v);
-    return glm::vec4(float(glm::dot(grad_u, au)), float(glm::dot(grad_v, au)), float(glm::dot(grad_u, av)), float(glm::dot(grad_v, av)));
+    return glm::vec4(float(glm::dot(grad_u, au)), float(glm::dot(grad_v, au)), float(glm::dot(grad_u, av)),
+                     float(glm::dot(grad_v, av)));
 }
 
 }  // namespace sffd::assets::detail

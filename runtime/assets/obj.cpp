@@ -14,9 +14,9 @@ using namespace detail;
 
 namespace {
 
-// OBJ/MTL files written on Windows name files with backslashes (assimp's spider.mtl: "map_Kd .\SpiderTex.jpg").
-// A backslash is taken as a folder separator, so the name still goes through resolve_resource (".\..\x"
-// becomes "./../x" and is refused as an escape like any other).
+// OBJ/MTL files written on Windows name files with backslashes (assimp's spider.mtl: "map_Kd
+// .\SpiderTex.jpg"). A backslash is taken as a folder separator, so the name still goes through
+// resolve_resource (".\..\x" becomes "./../x" and is refused as an escape like any other).
 std::string portable_name(std::string name) {
     std::replace(name.begin(), name.end(), '\\', '/');
     return name;
@@ -24,11 +24,12 @@ std::string portable_name(std::string name) {
 
 // Loads `name` (an mtllib line of the OBJ `obj`): an error when it is outside the OBJ's folder or not a
 // regular file, a warning when missing. Its map_Kd textures resolve inside the MTL's own folder.
-Status load_mtl(const fs::path& obj, const std::string& name, Geometry& g, std::unordered_map<std::string, int>& by_name,
-                std::uint64_t& texture_budget) {
+Status load_mtl(const fs::path& obj, const std::string& name, Geometry& g,
+                std::unordered_map<std::string, int>& by_name, std::uint64_t& texture_budget) {
     auto mtl_path = resolve_resource(obj, portable_name(name));
     if (!mtl_path) {
-        if (mtl_path.message().size() >= 9 && mtl_path.message().compare(mtl_path.message().size() - 9, 9, "not found") == 0) {
+        if (mtl_path.message().size() >= 9 &&
+            mtl_path.message().compare(mtl_path.message().size() - 9, 9, "not found") == 0) {
             log::warn(g.source, ": material library not loaded: ", mtl_path.message());
             return {};
         }
@@ -49,14 +50,16 @@ Status load_mtl(const fs::path& obj, const std::string& name, Geometry& g, std::
         } else if (current >= 0 && key == "Kd") {
             std::string_view a, b, d;
             double r = 1, gg = 1, bb = 1;
-            if (c.next(a) && c.next(b) && c.next(d) && to_double(a, r) && to_double(b, gg) && to_double(d, bb) &&
-                std::isfinite(r + gg + bb))
-                g.materials[current].base_color = glm::vec4(static_cast<float>(r), static_cast<float>(gg), static_cast<float>(bb),
-                                                            g.materials[current].base_color.w);
+            if (c.next(a) && c.next(b) && c.next(d) && to_double(a, r) && to_double(b, gg) &&
+                to_double(d, bb) && std::isfinite(r + gg + bb))
+                g.materials[current].base_color =
+                    glm::vec4(static_cast<float>(r), static_cast<float>(gg), static_cast<float>(bb),
+                              g.materials[current].base_color.w);
         } else if (current >= 0 && key == "d") {
             std::string_view a;
             double d = 1;
-            if (c.next(a) && to_double(a, d) && std::isfinite(d)) g.materials[current].base_color.w = static_cast<float>(d);
+            if (c.next(a) && to_double(a, d) && std::isfinite(d))
+                g.materials[current].base_color.w = static_cast<float>(d);
         } else if (current >= 0 && key == "map_Kd") {
             std::string file = c.rest();
             // Options such as "-s 1 1 1" come before the file name; the name is the last word.
@@ -95,7 +98,7 @@ Result<Geometry> read_obj_geometry(const fs::path& path) {
     struct Corner {
         long long v, t, n;
     };
-    std::vector<Corner> corners;        // 3 per triangle
+    std::vector<Corner> corners;  // 3 per triangle
     std::vector<std::int32_t> tri_mat;
     std::unordered_map<std::string, int> materials;
     int current_material = -1;
@@ -113,7 +116,8 @@ Result<Geometry> read_obj_geometry(const fs::path& path) {
             int count = 0;
             std::string_view tok;
             while (count < 7 && c.next(tok)) {
-                if (!to_double(tok, d[count])) return fail("malformed number '" + std::string(tok.substr(0, 40)) + "'");
+                if (!to_double(tok, d[count]))
+                    return fail("malformed number '" + std::string(tok.substr(0, 40)) + "'");
                 if (!std::isfinite(d[count])) return fail("non-finite number");
                 ++count;
             }
@@ -139,7 +143,8 @@ Result<Geometry> read_obj_geometry(const fs::path& path) {
                     std::size_t slash = tok.find('/', start);
                     if (slash == std::string_view::npos) slash = tok.size();
                     const std::string_view part = tok.substr(start, slash - start);
-                    if (!part.empty() && !to_long(part, *slots[s])) return fail("malformed face index '" + std::string(tok.substr(0, 40)) + "'");
+                    if (!part.empty() && !to_long(part, *slots[s]))
+                        return fail("malformed face index '" + std::string(tok.substr(0, 40)) + "'");
                     start = slash + 1;
                 }
                 // Negative indices count back from the latest element; resolve to 1-based now.
@@ -149,9 +154,12 @@ Result<Geometry> read_obj_geometry(const fs::path& path) {
                 resolve(k.v, v.size());
                 resolve(k.t, vt.size());
                 resolve(k.n, vn.size());
-                if (k.v < 1 || k.v > static_cast<long long>(v.size())) return fail("face refers to missing vertex " + std::to_string(k.v));
-                if (k.t < 0 || k.t > static_cast<long long>(vt.size())) return fail("face refers to missing texture coordinate");
-                if (k.n < 0 || k.n > static_cast<long long>(vn.size())) return fail("face refers to missing normal");
+                if (k.v < 1 || k.v > static_cast<long long>(v.size()))
+                    return fail("face refers to missing vertex " + std::to_string(k.v));
+                if (k.t < 0 || k.t > static_cast<long long>(vt.size()))
+                    return fail("face refers to missing texture coordinate");
+                if (k.n < 0 || k.n > static_cast<long long>(vn.size()))
+                    return fail("face refers to missing normal");
                 poly.push_back(k);
             }
             if (poly.size() < 3) return fail("face with fewer than 3 vertices");
@@ -173,8 +181,10 @@ Result<Geometry> read_obj_geometry(const fs::path& path) {
         return true;
     });
     if (!error.empty()) return make_error(error);
-    if (!vcolor.empty() && vcolor.size() != v.size()) vcolor.clear();  // colours on some vertices only: ignore
-    const bool by_corner = std::any_of(corners.begin(), corners.end(), [](const Corner& k) { return k.t > 0 || k.n > 0; });
+    if (!vcolor.empty() && vcolor.size() != v.size())
+        vcolor.clear();  // colours on some vertices only: ignore
+    const bool by_corner =
+        std::any_of(corners.begin(), corners.end(), [](const Corner& k) { return k.t > 0 || k.n > 0; });
     if (!by_corner) {
         g.positions = std::move(v);
         g.colors = std::move(vcolor);
@@ -184,8 +194,8 @@ Result<Geometry> read_obj_geometry(const fs::path& path) {
         std::unordered_map<std::uint64_t, std::uint32_t> seen;
         const bool has_t = !vt.empty(), has_n = !vn.empty();
         auto key_of = [](const Corner& k) {
-            return (static_cast<std::uint64_t>(k.v) * 0x9E3779B1ull) ^ (static_cast<std::uint64_t>(k.t) << 42) ^
-                   (static_cast<std::uint64_t>(k.n) << 21);
+            return (static_cast<std::uint64_t>(k.v) * 0x9E3779B1ull) ^
+                   (static_cast<std::uint64_t>(k.t) << 42) ^ (static_cast<std::uint64_t>(k.n) << 21);
         };
         std::vector<Corner> uniq;
         for (const Corner& k : corners) {
@@ -211,7 +221,8 @@ Result<Geometry> read_obj_geometry(const fs::path& path) {
             if (has_n) g.normals.push_back(k.n > 0 ? vn[static_cast<std::size_t>(k.n - 1)] : glm::vec3(0.0f));
         }
         // Normals given on some corners only are unusable for interpolation.
-        if (has_n && std::any_of(uniq.begin(), uniq.end(), [](const Corner& k) { return k.n == 0; })) g.normals.clear();
+        if (has_n && std::any_of(uniq.begin(), uniq.end(), [](const Corner& k) { return k.n == 0; }))
+            g.normals.clear();
     }
     if (!g.materials.empty() && !tri_mat.empty()) g.triangle_material = std::move(tri_mat);
     g.attributes = {"position"};

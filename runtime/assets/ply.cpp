@@ -74,17 +74,44 @@ inline double decode(const unsigned char* p, Type t, bool swap) {
     const std::size_t n = info(t).size;
     if (swap)
         for (std::size_t i = 0; i < n; ++i) b[i] = p[n - 1 - i];
-    else
-        std::memcpy(b, p, n);
+    else std::memcpy(b, p, n);
     switch (t) {
-        case Type::int8: { std::int8_t v; std::memcpy(&v, b, 1); return v; }
+        case Type::int8: {
+            std::int8_t v;
+            std::memcpy(&v, b, 1);
+            return v;
+        }
         case Type::uint8: return b[0];
-        case Type::int16: { std::int16_t v; std::memcpy(&v, b, 2); return v; }
-        case Type::uint16: { std::uint16_t v; std::memcpy(&v, b, 2); return v; }
-        case Type::int32: { std::int32_t v; std::memcpy(&v, b, 4); return v; }
-        case Type::uint32: { std::uint32_t v; std::memcpy(&v, b, 4); return v; }
-        case Type::float32: { float v; std::memcpy(&v, b, 4); return static_cast<double>(v); }
-        case Type::float64: { double v; std::memcpy(&v, b, 8); return v; }
+        case Type::int16: {
+            std::int16_t v;
+            std::memcpy(&v, b, 2);
+            return v;
+        }
+        case Type::uint16: {
+            std::uint16_t v;
+            std::memcpy(&v, b, 2);
+            return v;
+        }
+        case Type::int32: {
+            std::int32_t v;
+            std::memcpy(&v, b, 4);
+            return v;
+        }
+        case Type::uint32: {
+            std::uint32_t v;
+            std::memcpy(&v, b, 4);
+            return v;
+        }
+        case Type::float32: {
+            float v;
+            std::memcpy(&v, b, 4);
+            return static_cast<double>(v);
+        }
+        case Type::float64: {
+            double v;
+            std::memcpy(&v, b, 8);
+            return v;
+        }
     }
     return 0.0;
 }
@@ -106,7 +133,8 @@ void decode_typed(const unsigned char* p, std::size_t stride, std::size_t rows, 
     if (swap) decode_as<T>(p, stride, rows, true, out);
     else decode_as<T>(p, stride, rows, false, out);
 }
-void decode_column(const unsigned char* p, std::size_t stride, std::size_t rows, Type t, bool swap, double* out) {
+void decode_column(const unsigned char* p, std::size_t stride, std::size_t rows, Type t, bool swap,
+                   double* out) {
     switch (t) {
         case Type::int8: return decode_typed<std::int8_t>(p, stride, rows, swap, out);
         case Type::uint8: return decode_typed<std::uint8_t>(p, stride, rows, swap, out);
@@ -122,20 +150,47 @@ void decode_column(const unsigned char* p, std::size_t stride, std::size_t rows,
 inline void encode(unsigned char* p, Type t, double value, bool swap) {
     unsigned char b[8];
     switch (t) {
-        case Type::int8: { auto v = static_cast<std::int8_t>(value); std::memcpy(b, &v, 1); break; }
-        case Type::uint8: { auto v = static_cast<std::uint8_t>(value); std::memcpy(b, &v, 1); break; }
-        case Type::int16: { auto v = static_cast<std::int16_t>(value); std::memcpy(b, &v, 2); break; }
-        case Type::uint16: { auto v = static_cast<std::uint16_t>(value); std::memcpy(b, &v, 2); break; }
-        case Type::int32: { auto v = static_cast<std::int32_t>(value); std::memcpy(b, &v, 4); break; }
-        case Type::uint32: { auto v = static_cast<std::uint32_t>(value); std::memcpy(b, &v, 4); break; }
-        case Type::float32: { auto v = static_cast<float>(value); std::memcpy(b, &v, 4); break; }
+        case Type::int8: {
+            auto v = static_cast<std::int8_t>(value);
+            std::memcpy(b, &v, 1);
+            break;
+        }
+        case Type::uint8: {
+            auto v = static_cast<std::uint8_t>(value);
+            std::memcpy(b, &v, 1);
+            break;
+        }
+        case Type::int16: {
+            auto v = static_cast<std::int16_t>(value);
+            std::memcpy(b, &v, 2);
+            break;
+        }
+        case Type::uint16: {
+            auto v = static_cast<std::uint16_t>(value);
+            std::memcpy(b, &v, 2);
+            break;
+        }
+        case Type::int32: {
+            auto v = static_cast<std::int32_t>(value);
+            std::memcpy(b, &v, 4);
+            break;
+        }
+        case Type::uint32: {
+            auto v = static_cast<std::uint32_t>(value);
+            std::memcpy(b, &v, 4);
+            break;
+        }
+        case Type::float32: {
+            auto v = static_cast<float>(value);
+            std::memcpy(b, &v, 4);
+            break;
+        }
         case Type::float64: std::memcpy(b, &value, 8); break;
     }
     const std::size_t n = info(t).size;
     if (swap)
         for (std::size_t i = 0; i < n; ++i) p[i] = b[n - 1 - i];
-    else
-        std::memcpy(p, b, n);
+    else std::memcpy(p, b, n);
 }
 
 // Integer-typed values must be integral and in range; NaN is only representable in float types.
@@ -192,18 +247,16 @@ std::string Header::to_string() const {
     s += format_name(format);
     s += " 1.0\n";
     for (const std::string& c : comments) {
-        if (c.rfind("obj_info ", 0) == 0)
-            s += c + "\n";
-        else
-            s += "comment " + c + "\n";
+        if (c.rfind("obj_info ", 0) == 0) s += c + "\n";
+        else s += "comment " + c + "\n";
     }
     for (const Element& e : elements) {
         s += "element " + e.name + " " + std::to_string(e.count) + "\n";
         for (const Property& p : e.properties) {
             if (p.is_list)
-                s += std::string("property list ") + type_name(p.count_type) + " " + type_name(p.type) + " " + p.name + "\n";
-            else
-                s += std::string("property ") + type_name(p.type) + " " + p.name + "\n";
+                s += std::string("property list ") + type_name(p.count_type) + " " + type_name(p.type) + " " +
+                     p.name + "\n";
+            else s += std::string("property ") + type_name(p.type) + " " + p.name + "\n";
         }
     }
     s += "end_header\n";
@@ -245,7 +298,8 @@ Result<Header> parse_header(std::string_view text, const std::string& name, std:
     };
     std::string_view line;
     if (!next_line(line) || trim(line) != "ply")
-        return fail(text.substr(0, 3) == "ply" ? "truncated PLY header" : "not a PLY file (bad magic: expected 'ply')");
+        return fail(text.substr(0, 3) == "ply" ? "truncated PLY header"
+                                               : "not a PLY file (bad magic: expected 'ply')");
     while (true) {
         if (!next_line(line)) return fail("truncated PLY header (no end_header)");
         const auto words = split_words(line);
@@ -257,7 +311,8 @@ Result<Header> parse_header(std::string_view text, const std::string& name, std:
             const std::size_t at = line.find("comment") + 7;
             h.comments.push_back(trim(line.substr(std::min(line.size(), at + 1))));
         } else if (key == "obj_info") {
-            h.comments.push_back("obj_info " + trim(line.substr(std::min(line.size(), line.find("obj_info") + 9))));
+            h.comments.push_back("obj_info " +
+                                 trim(line.substr(std::min(line.size(), line.find("obj_info") + 9))));
         } else if (key == "format") {
             if (have_format) return fail(where + "duplicate format line");
             if (words.size() != 3) return fail(where + "expected 'format <type> 1.0'");
@@ -265,7 +320,8 @@ Result<Header> parse_header(std::string_view text, const std::string& name, std:
             else if (words[1] == "binary_little_endian") h.format = Format::binary_little_endian;
             else if (words[1] == "binary_big_endian") h.format = Format::binary_big_endian;
             else return fail(where + "unknown format '" + std::string(words[1]) + "'");
-            if (words[2] != "1.0" && words[2] != "1") return fail(where + "unsupported PLY version '" + std::string(words[2]) + "'");
+            if (words[2] != "1.0" && words[2] != "1")
+                return fail(where + "unsupported PLY version '" + std::string(words[2]) + "'");
             have_format = true;
         } else if (key == "element") {
             if (words.size() != 3) return fail(where + "expected 'element <name> <count>'");
@@ -282,7 +338,8 @@ Result<Header> parse_header(std::string_view text, const std::string& name, std:
             Element& e = h.elements.back();
             Property p;
             if (words.size() >= 2 && words[1] == "list") {
-                if (words.size() != 5) return fail(where + "expected 'property list <count type> <type> <name>'");
+                if (words.size() != 5)
+                    return fail(where + "expected 'property list <count type> <type> <name>'");
                 auto ct = parse_type(words[2]);
                 if (!ct) return fail(where + ct.message());
                 auto vt = parse_type(words[3]);
@@ -299,21 +356,24 @@ Result<Header> parse_header(std::string_view text, const std::string& name, std:
                 p.type = *t;
                 p.name = std::string(words[2]);
             }
-            if (e.find(p.name) >= 0) return fail(where + "duplicate property '" + p.name + "' in element '" + e.name + "'");
+            if (e.find(p.name) >= 0)
+                return fail(where + "duplicate property '" + p.name + "' in element '" + e.name + "'");
             e.properties.push_back(std::move(p));
         } else {
             // Writers add their own lines (Blender 2.4's "Created by Blender3D ..." in assimp's Wuson.ply);
             // readers such as rply and assimp skip them. Skipped with a warning, a few at most, so a
             // hostile header of junk lines cannot flood the log (it still needs an end_header).
             if (++unknown_lines <= kMaxUnknownWarnings)
-                log::warn(name, ": ", where, "unknown keyword '", std::string(key).substr(0, 64), "', line ignored");
+                log::warn(name, ": ", where, "unknown keyword '", std::string(key).substr(0, 64),
+                          "', line ignored");
             else if (unknown_lines == kMaxUnknownWarnings + 1)
                 log::warn(name, ": further unknown header lines ignored without a warning");
         }
     }
     if (!have_format) return fail("PLY header has no format line");
     for (const Element& e : h.elements)
-        if (e.count > 0 && e.properties.empty()) return fail("element '" + e.name + "' has rows but no properties");
+        if (e.count > 0 && e.properties.empty())
+            return fail("element '" + e.name + "' has rows but no properties");
     header_bytes = pos;
     return h;
 }
@@ -334,8 +394,8 @@ struct Reader::Impl {
     std::size_t pos = 0, len = 0;
     bool eof = false;
 
-    std::size_t element = 0;        // current element index
-    std::uint64_t row = 0;          // rows of the current element already read
+    std::size_t element = 0;  // current element index
+    std::uint64_t row = 0;    // rows of the current element already read
 
     ~Impl() {
         if (file) std::fclose(file);
@@ -406,7 +466,9 @@ struct Reader::Impl {
         }
         if (ec != std::errc() || ptr != e)
             return fail("malformed number '" + std::string(tok.substr(0, 40)) + "' in " + where());
-        if (!fits(t, v)) return fail("value '" + std::string(tok.substr(0, 40)) + "' does not fit type " + type_name(t) + " in " + where());
+        if (!fits(t, v))
+            return fail("value '" + std::string(tok.substr(0, 40)) + "' does not fit type " + type_name(t) +
+                        " in " + where());
         if (t == Type::float32) v = static_cast<double>(static_cast<float>(v));
         return v;
     }
@@ -431,7 +493,8 @@ struct Reader::Impl {
             auto n = value(prop.count_type);
             if (!n) return n.error();
             if (*n < 0 || *n > kMaxListLength)
-                return fail("list length " + std::to_string(static_cast<long long>(*n)) + " of '" + prop.name + "' out of range in " + where());
+                return fail("list length " + std::to_string(static_cast<long long>(*n)) + " of '" +
+                            prop.name + "' out of range in " + where());
             const auto count = static_cast<std::uint32_t>(*n);
             for (std::uint32_t i = 0; i < count; ++i) {
                 auto v = value(prop.type);
@@ -457,7 +520,8 @@ struct Reader::Impl {
             std::size_t offset = 0;
             for (std::size_t p = 0; p < e.properties.size(); ++p) {
                 const Type t = e.properties[p].type;
-                decode_column(raw.data() + r0 * stride + offset, stride, rows, t, swap, cols[p].values.data() + r0);
+                decode_column(raw.data() + r0 * stride + offset, stride, rows, t, swap,
+                              cols[p].values.data() + r0);
                 offset += type_size(t);
             }
         }
@@ -487,7 +551,9 @@ Result<Reader> Reader::open(const fs::path& path) {
     impl->name = path.string();
     // O_NONBLOCK and fstat on the open descriptor: a FIFO or device named as input is refused, not waited on.
     const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-    if (fd < 0) return impl->fail(errno == ENOENT ? std::string("no such file") : std::string("cannot open: ") + std::strerror(errno));
+    if (fd < 0)
+        return impl->fail(errno == ENOENT ? std::string("no such file")
+                                          : std::string("cannot open: ") + std::strerror(errno));
     struct stat st {};
     if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
         ::close(fd);
@@ -501,7 +567,8 @@ Result<Reader> Reader::open(const fs::path& path) {
     }
 
     std::string head(static_cast<std::size_t>(std::min<std::uint64_t>(impl->size, kMaxHeaderBytes)), '\0');
-    if (std::fread(head.data(), 1, head.size(), impl->file) != head.size()) return impl->fail("read error in header");
+    if (std::fread(head.data(), 1, head.size(), impl->file) != head.size())
+        return impl->fail("read error in header");
     std::size_t header_bytes = 0;
     auto header = parse_header(head, impl->name, header_bytes);
     if (!header) return header.error();
@@ -514,15 +581,18 @@ Result<Reader> Reader::open(const fs::path& path) {
     const std::uint64_t remaining = impl->size - header_bytes;
     long double need = 0;
     for (const Element& e : impl->header.elements) {
-        const std::size_t min_row = impl->header.format == Format::ascii ? 2 * e.properties.size() : e.row_size();
+        const std::size_t min_row =
+            impl->header.format == Format::ascii ? 2 * e.properties.size() : e.row_size();
         need += static_cast<long double>(e.count) * static_cast<long double>(min_row);
         if (need > static_cast<long double>(remaining) + 1)
             return impl->fail("element '" + e.name + "' declares " + std::to_string(e.count) +
-                              " rows, more than the file's " + std::to_string(remaining) + " data bytes can hold");
+                              " rows, more than the file's " + std::to_string(remaining) +
+                              " data bytes can hold");
     }
 
     impl->buf.resize(kBufferBytes);
-    if (std::fseek(impl->file, static_cast<long>(header_bytes), SEEK_SET) != 0) return impl->fail("cannot seek");
+    if (std::fseek(impl->file, static_cast<long>(header_bytes), SEEK_SET) != 0)
+        return impl->fail("cannot seek");
     return Reader(std::move(impl));
 }
 
@@ -530,8 +600,10 @@ Status Reader::seek_element(std::string_view element) {
     Impl& m = *m_impl;
     const int target = m.header.find(element);
     if (target < 0) return m.fail("no element '" + std::string(element) + "'");
-    if (static_cast<std::size_t>(target) < m.element || (static_cast<std::size_t>(target) == m.element && m.row > 0))
-        return m.fail("element '" + std::string(element) + "' was already read (PLY elements are read in order)");
+    if (static_cast<std::size_t>(target) < m.element ||
+        (static_cast<std::size_t>(target) == m.element && m.row > 0))
+        return m.fail("element '" + std::string(element) +
+                      "' was already read (PLY elements are read in order)");
     while (m.element < static_cast<std::size_t>(target)) {
         const Element& e = m.header.elements[m.element];
         if (m.header.format != Format::ascii && !e.has_lists()) {
@@ -541,7 +613,8 @@ Status Reader::seek_element(std::string_view element) {
             if (skip <= buffered) {
                 m.pos += static_cast<std::size_t>(skip);
             } else {
-                if (std::fseek(m.file, static_cast<long>(skip - buffered), SEEK_CUR) != 0) return m.fail("cannot seek");
+                if (std::fseek(m.file, static_cast<long>(skip - buffered), SEEK_CUR) != 0)
+                    return m.fail("cannot seek");
                 m.pos = m.len = 0;
             }
         } else {
@@ -572,7 +645,8 @@ Result<std::size_t> Reader::read_rows(std::size_t max_rows, Chunk& chunk) {
         m.advance_element();
         return std::size_t{0};
     }
-    const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(left, std::max<std::size_t>(max_rows, 1)));
+    const auto n =
+        static_cast<std::size_t>(std::min<std::uint64_t>(left, std::max<std::size_t>(max_rows, 1)));
     if (m.header.format != Format::ascii && !e.has_lists()) {
         if (auto s = m.read_fixed_rows(e, n, chunk.columns); !s) return s.error();
         m.row += n;
@@ -623,16 +697,14 @@ struct Writer::Impl {
 
     Status put(Type t, double v, const std::string& prop) {
         if (!fits(t, v))
-            return fail("value " + std::to_string(v) + " of '" + prop + "' does not fit type " + type_name(t));
+            return fail("value " + std::to_string(v) + " of '" + prop + "' does not fit type " +
+                        type_name(t));
         if (header.format == Format::ascii) {
             char b[64];
             std::to_chars_result r;
-            if (is_integer(t))
-                r = std::to_chars(b, b + sizeof b, static_cast<long long>(v));
-            else if (t == Type::float32)
-                r = std::to_chars(b, b + sizeof b, static_cast<float>(v));
-            else
-                r = std::to_chars(b, b + sizeof b, v);
+            if (is_integer(t)) r = std::to_chars(b, b + sizeof b, static_cast<long long>(v));
+            else if (t == Type::float32) r = std::to_chars(b, b + sizeof b, static_cast<float>(v));
+            else r = std::to_chars(b, b + sizeof b, v);
             out.insert(out.end(), b, r.ptr);
             out.push_back(' ');
         } else {
@@ -655,7 +727,8 @@ Result<Writer> Writer::create(const fs::path& path, const Header& header) {
     impl->name = path.string();
     impl->header = header;
     for (const Element& e : header.elements)
-        if (e.count > 0 && e.properties.empty()) return impl->fail("element '" + e.name + "' has rows but no properties");
+        if (e.count > 0 && e.properties.empty())
+            return impl->fail("element '" + e.name + "' has rows but no properties");
     impl->swap = (header.format == Format::binary_big_endian) == kLittleEndianHost;
     auto atomic = AtomicFile::create(path);
     if (!atomic) return atomic.error();
@@ -675,22 +748,28 @@ Status Writer::write_rows(const Chunk& chunk) {
         ++m.element;
         m.row = 0;
     }
-    if (m.element >= m.header.elements.size()) return m.fail("write_rows(): no element '" + chunk.element.name + "' left to write");
+    if (m.element >= m.header.elements.size())
+        return m.fail("write_rows(): no element '" + chunk.element.name + "' left to write");
     const Element& e = m.header.elements[m.element];
     if (e.name != chunk.element.name)
-        return m.fail("write_rows(): expected rows of element '" + e.name + "', got '" + chunk.element.name + "'");
+        return m.fail("write_rows(): expected rows of element '" + e.name + "', got '" + chunk.element.name +
+                      "'");
     if (m.row + chunk.rows > e.count)
-        return m.fail("write_rows(): element '" + e.name + "' declares " + std::to_string(e.count) + " rows, got more");
+        return m.fail("write_rows(): element '" + e.name + "' declares " + std::to_string(e.count) +
+                      " rows, got more");
     // Map the header's properties to the chunk's columns by name.
     std::vector<int> map(e.properties.size());
     for (std::size_t p = 0; p < e.properties.size(); ++p) {
         map[p] = chunk.find(e.properties[p].name);
         if (map[p] < 0 || chunk.element.properties[map[p]].is_list != e.properties[p].is_list ||
             static_cast<std::size_t>(map[p]) >= chunk.columns.size())
-            return m.fail("write_rows(): chunk has no " + std::string(e.properties[p].is_list ? "list " : "") + "property '" + e.properties[p].name + "'");
+            return m.fail("write_rows(): chunk has no " +
+                          std::string(e.properties[p].is_list ? "list " : "") + "property '" +
+                          e.properties[p].name + "'");
         const Column& c = chunk.columns[map[p]];
-        if (e.properties[p].is_list ? c.offsets.size() < chunk.rows + 1 || c.offsets[chunk.rows] > c.values.size()
-                                    : c.values.size() < chunk.rows)
+        if (e.properties[p].is_list
+                ? c.offsets.size() < chunk.rows + 1 || c.offsets[chunk.rows] > c.values.size()
+                : c.values.size() < chunk.rows)
             return m.fail("write_rows(): column '" + e.properties[p].name + "' is shorter than the chunk");
     }
     for (std::size_t r = 0; r < chunk.rows; ++r) {
@@ -721,8 +800,9 @@ Status Writer::finish() {
     for (std::size_t i = m.element; i < m.header.elements.size(); ++i) {
         const std::uint64_t done = i == m.element ? m.row : 0;
         if (done != m.header.elements[i].count)
-            return m.fail("finish(): element '" + m.header.elements[i].name + "' has " + std::to_string(done) + " of " +
-                          std::to_string(m.header.elements[i].count) + " rows");
+            return m.fail("finish(): element '" + m.header.elements[i].name + "' has " +
+                          std::to_string(done) + " of " + std::to_string(m.header.elements[i].count) +
+                          " rows");
     }
     if (auto s = m.flush(); !s) return s;
     m.file = nullptr;

@@ -60,8 +60,8 @@ enum class Format : std::uint8_t { ascii, binary_little_endian, binary_big_endia
 enum class Type : std::uint8_t { int8, uint8, int16, uint16, int32, uint32, float32, float64 };
 
 std::size_t type_size(Type t);
-const char* type_name(Type t);                         // canonical names: char uchar short ushort int uint float double
-Result<Type> parse_type(std::string_view name);        // also accepts int8 uint8 ... float32 float64
+const char* type_name(Type t);  // canonical names: char uchar short ushort int uint float double
+Result<Type> parse_type(std::string_view name);  // also accepts int8 uint8 ... float32 float64
 const char* format_name(Format f);
 
 // A list never has more entries than this (hostile files declare 2^32 - 1 entries per row).
@@ -69,9 +69,9 @@ constexpr std::uint32_t kMaxListLength = 1u << 20;
 
 struct Property {
     std::string name;
-    Type type = Type::float32;     // value type (of the list entries for a list)
+    Type type = Type::float32;  // value type (of the list entries for a list)
     bool is_list = false;
-    Type count_type = Type::uint8; // type of the list length, when is_list
+    Type count_type = Type::uint8;  // type of the list length, when is_list
 };
 
 struct Element {
@@ -86,7 +86,8 @@ struct Element {
 
 struct Header {
     Format format = Format::binary_little_endian;
-    std::vector<std::string> comments;   // text after "comment " (obj_info lines are kept with prefix "obj_info ")
+    std::vector<std::string>
+        comments;  // text after "comment " (obj_info lines are kept with prefix "obj_info ")
     std::vector<Element> elements;
 
     int find(std::string_view element) const;  // index or -1
@@ -95,14 +96,14 @@ struct Header {
 
 // One column per property of the element, in property order.
 struct Column {
-    std::vector<double> values;              // scalar: values[row]; list: entries of all rows back to back
-    std::vector<std::uint32_t> offsets;      // list only: row r has values[offsets[r] .. offsets[r+1])
+    std::vector<double> values;          // scalar: values[row]; list: entries of all rows back to back
+    std::vector<std::uint32_t> offsets;  // list only: row r has values[offsets[r] .. offsets[r+1])
 };
 
 struct Chunk {
-    Element element;                         // the element these rows belong to (name, properties)
+    Element element;  // the element these rows belong to (name, properties)
     std::size_t rows = 0;
-    std::vector<Column> columns;             // columns.size() == element.properties.size()
+    std::vector<Column> columns;  // columns.size() == element.properties.size()
 
     int find(std::string_view property) const { return element.find(property); }
     // Empties the rows but keeps the element and column capacity.

@@ -17,9 +17,13 @@ template <class Vec>
 struct PointSpanAdaptor {
     std::span<const Vec> pts;
     std::size_t kdtree_get_point_count() const { return pts.size(); }
-    typename Vec::value_type kdtree_get_pt(std::size_t i, std::size_t d) const { return pts[i][static_cast<int>(d)]; }
+    typename Vec::value_type kdtree_get_pt(std::size_t i, std::size_t d) const {
+        return pts[i][static_cast<int>(d)];
+    }
     template <class BBox>
-    bool kdtree_get_bbox(BBox&) const { return false; }
+    bool kdtree_get_bbox(BBox&) const {
+        return false;
+    }
 };
 
 // Built on construction; `points` must outlive the tree. Leaf size 16 (what both users had).
@@ -28,10 +32,12 @@ template <class Vec>
 class PointTree {
 public:
     using Scalar = typename Vec::value_type;
-    using Index = nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<Scalar, PointSpanAdaptor<Vec>>, PointSpanAdaptor<Vec>, 3,
-                                                      std::uint32_t>;
+    using Index =
+        nanoflann::KDTreeSingleIndexAdaptor<nanoflann::L2_Simple_Adaptor<Scalar, PointSpanAdaptor<Vec>>,
+                                            PointSpanAdaptor<Vec>, 3, std::uint32_t>;
 
-    explicit PointTree(std::span<const Vec> points) : m_adaptor{points}, m_index(3, m_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
+    explicit PointTree(std::span<const Vec> points)
+        : m_adaptor{points}, m_index(3, m_adaptor, nanoflann::KDTreeSingleIndexAdaptorParams(16)) {
         m_index.buildIndex();
     }
     PointTree(const PointTree&) = delete;

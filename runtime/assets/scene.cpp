@@ -46,32 +46,42 @@ json vec3(const glm::dvec3& v) { return json::array({v.x, v.y, v.z}); }
 json vec3f(const glm::vec3& v) { return json::array({v.x, v.y, v.z}); }
 
 json transform_json(const Transform& t) {
-    return {{"translation", vec3(t.translation)}, {"rotation", {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w}}, {"scale", vec3(t.scale)}};
+    return {{"translation", vec3(t.translation)},
+            {"rotation", {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w}},
+            {"scale", vec3(t.scale)}};
 }
 
 // Strict readers: every number must be present, numeric and finite (hostile files).
 struct Reader {
     std::string where;
     double num(const json& j, const char* key) const {
-        if (!j.is_object() || !j.contains(key) || !j[key].is_number()) throw std::runtime_error(where + ": '" + key + "' must be a number");
+        if (!j.is_object() || !j.contains(key) || !j[key].is_number())
+            throw std::runtime_error(where + ": '" + key + "' must be a number");
         const double v = j[key].get<double>();
         if (!std::isfinite(v)) throw std::runtime_error(where + ": '" + key + "' is not finite");
         return v;
     }
-    double num_or(const json& j, const char* key, double def) const { return j.is_object() && j.contains(key) ? num(j, key) : def; }
+    double num_or(const json& j, const char* key, double def) const {
+        return j.is_object() && j.contains(key) ? num(j, key) : def;
+    }
     glm::dvec3 v3(const json& j, const char* key) const {
-        if (!j.is_object() || !j.contains(key) || !j[key].is_array() || j[key].size() != 3) throw std::runtime_error(where + ": '" + key + "' must be [x, y, z]");
+        if (!j.is_object() || !j.contains(key) || !j[key].is_array() || j[key].size() != 3)
+            throw std::runtime_error(where + ": '" + key + "' must be [x, y, z]");
         glm::dvec3 v;
         for (int i = 0; i < 3; ++i) {
             const json& e = j[key][static_cast<std::size_t>(i)];
-            if (!e.is_number() || !std::isfinite(e.get<double>())) throw std::runtime_error(where + ": '" + key + "' has a non-finite or non-numeric entry");
+            if (!e.is_number() || !std::isfinite(e.get<double>()))
+                throw std::runtime_error(where + ": '" + key + "' has a non-finite or non-numeric entry");
             v[i] = e.get<double>();
         }
         return v;
     }
-    glm::dvec3 v3_or(const json& j, const char* key, glm::dvec3 def) const { return j.is_object() && j.contains(key) ? v3(j, key) : def; }
+    glm::dvec3 v3_or(const json& j, const char* key, glm::dvec3 def) const {
+        return j.is_object() && j.contains(key) ? v3(j, key) : def;
+    }
     int integer(const json& j, const char* key) const {
-        if (!j.is_object() || !j.contains(key) || !j[key].is_number_integer()) throw std::runtime_error(where + ": '" + key + "' must be an integer");
+        if (!j.is_object() || !j.contains(key) || !j[key].is_number_integer())
+            throw std::runtime_error(where + ": '" + key + "' must be an integer");
         const auto v = j[key].get<long long>();
         if (v < -1 || v > 1'000'000'000) throw std::runtime_error(where + ": '" + key + "' out of range");
         return static_cast<int>(v);
@@ -85,22 +95,28 @@ struct Reader {
         Transform t;
         if (!j.is_object() || !j.contains("transform")) return t;
         const json& tj = j["transform"];
-        if (!tj.is_object()) throw std::runtime_error(where + ": 'transform' must be an object {translation, rotation, scale}");
+        if (!tj.is_object())
+            throw std::runtime_error(where +
+                                     ": 'transform' must be an object {translation, rotation, scale}");
         t.translation = v3_or(tj, "translation", glm::dvec3(0.0));
         t.scale = v3_or(tj, "scale", glm::dvec3(1.0));
         if (t.scale.x == 0.0 || t.scale.y == 0.0 || t.scale.z == 0.0)
-            throw std::runtime_error(where + ": 'transform' 'scale' has a zero component (the transform would not be invertible)");
+            throw std::runtime_error(
+                where + ": 'transform' 'scale' has a zero component (the transform would not be invertible)");
         if (tj.contains("rotation")) {
             const json& q = tj["rotation"];
-            if (!q.is_array() || q.size() != 4) throw std::runtime_error(where + ": rotation must be [x, y, z, w]");
+            if (!q.is_array() || q.size() != 4)
+                throw std::runtime_error(where + ": rotation must be [x, y, z, w]");
             double c[4];
             for (std::size_t i = 0; i < 4; ++i) {
-                if (!q[i].is_number() || !std::isfinite(q[i].get<double>())) throw std::runtime_error(where + ": rotation is not finite");
+                if (!q[i].is_number() || !std::isfinite(q[i].get<double>()))
+                    throw std::runtime_error(where + ": rotation is not finite");
                 c[i] = q[i].get<double>();
             }
             t.rotation = glm::dquat(c[3], c[0], c[1], c[2]);
             const double len = glm::length(t.rotation);
-            if (!(len > 1e-12) || !std::isfinite(len)) throw std::runtime_error(where + ": 'transform' 'rotation' is a zero quaternion");
+            if (!(len > 1e-12) || !std::isfinite(len))
+                throw std::runtime_error(where + ": 'transform' 'rotation' is a zero quaternion");
         }
         return t;
     }
@@ -124,13 +140,17 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
     };
     bool have_camera = false;
     try {
-        json scene = contents->sffd_scene_json.empty() ? json::object() : json::parse(contents->sffd_scene_json);
+        json scene =
+            contents->sffd_scene_json.empty() ? json::object() : json::parse(contents->sffd_scene_json);
         if (!scene.is_object()) return make_error(src + ": SFFD_scene must be an object");
-        if (scene.contains("version") && (!scene["version"].is_number_integer() || scene["version"].get<int>() > kSceneVersion))
-            return make_error(src + ": SFFD_scene version not supported (this build reads version " + std::to_string(kSceneVersion) + ")");
+        if (scene.contains("version") &&
+            (!scene["version"].is_number_integer() || scene["version"].get<int>() > kSceneVersion))
+            return make_error(src + ": SFFD_scene version not supported (this build reads version " +
+                              std::to_string(kSceneVersion) + ")");
         Reader rd{src + ": SFFD_scene"};
         auto remember = [&](int id, ecs::Entity e) {
-            if (id >= 0 && !by_id.emplace(id, e).second) throw std::runtime_error(src + ": SFFD_scene: duplicate id " + std::to_string(id));
+            if (id >= 0 && !by_id.emplace(id, e).second)
+                throw std::runtime_error(src + ": SFFD_scene: duplicate id " + std::to_string(id));
         };
         for (auto& c : contents->clouds) {
             const ecs::Entity e = r.create();
@@ -151,7 +171,8 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
             r.emplace<SplatCloud>(e, std::move(*cloud));
         }
         if (scene.contains("lattices")) {
-            if (!scene["lattices"].is_array()) throw std::runtime_error(src + ": SFFD_scene: 'lattices' must be an array");
+            if (!scene["lattices"].is_array())
+                throw std::runtime_error(src + ": SFFD_scene: 'lattices' must be an array");
             for (json& lj : scene["lattices"]) {
                 // The entry's own keys are read here and taken out; what is left is the lattice's JSON
                 // form, read by the one lattice reader (lattice files use it too) with its rules.
@@ -172,25 +193,32 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
             }
         }
         if (scene.contains("deformers")) {
-            if (!scene["deformers"].is_array()) throw std::runtime_error(src + ": SFFD_scene: 'deformers' must be an array");
+            if (!scene["deformers"].is_array())
+                throw std::runtime_error(src + ": SFFD_scene: 'deformers' must be an array");
             for (const json& dj : scene["deformers"]) {
                 const int cid = rd.integer(dj, "cloud");
                 auto it = by_id.find(cid);
-                if (it == by_id.end() || !r.has<SplatCloud>(it->second)) throw std::runtime_error(src + ": SFFD_scene: deformer refers to missing cloud " + std::to_string(cid));
-                if (!dj.contains("lattices") || !dj["lattices"].is_array()) throw std::runtime_error(src + ": SFFD_scene: deformer needs a 'lattices' array");
+                if (it == by_id.end() || !r.has<SplatCloud>(it->second))
+                    throw std::runtime_error(src + ": SFFD_scene: deformer refers to missing cloud " +
+                                             std::to_string(cid));
+                if (!dj.contains("lattices") || !dj["lattices"].is_array())
+                    throw std::runtime_error(src + ": SFFD_scene: deformer needs a 'lattices' array");
                 Deformers d;
                 for (const json& lid : dj["lattices"]) {
-                    if (!lid.is_number_integer()) throw std::runtime_error(src + ": SFFD_scene: lattice ids must be integers");
+                    if (!lid.is_number_integer())
+                        throw std::runtime_error(src + ": SFFD_scene: lattice ids must be integers");
                     auto lt = by_id.find(lid.get<int>());
                     if (lt == by_id.end() || !r.has<Lattice>(lt->second))
-                        throw std::runtime_error(src + ": SFFD_scene: deformer refers to missing lattice " + lid.dump());
+                        throw std::runtime_error(src + ": SFFD_scene: deformer refers to missing lattice " +
+                                                 lid.dump());
                     d.lattices.push_back(lt->second);
                 }
                 r.emplace<Deformers>(it->second, std::move(d));
             }
         }
         if (scene.contains("cameras")) {
-            if (!scene["cameras"].is_array()) throw std::runtime_error(src + ": SFFD_scene: 'cameras' must be an array");
+            if (!scene["cameras"].is_array())
+                throw std::runtime_error(src + ": SFFD_scene: 'cameras' must be an array");
             for (const json& cj : scene["cameras"]) {
                 Reader cr{src + ": SFFD_scene camera"};
                 Camera c;
@@ -200,11 +228,13 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
                 c.fov_y_degrees = static_cast<float>(cr.num_or(cj, "fov_y_degrees", c.fov_y_degrees));
                 c.near_plane = static_cast<float>(cr.num_or(cj, "near", c.near_plane));
                 c.far_plane = static_cast<float>(cr.num_or(cj, "far", c.far_plane));
-                if (!(c.fov_y_degrees > 0.0f && c.fov_y_degrees < 180.0f) || !(c.near_plane > 0.0f) || !(c.far_plane > c.near_plane))
+                if (!(c.fov_y_degrees > 0.0f && c.fov_y_degrees < 180.0f) || !(c.near_plane > 0.0f) ||
+                    !(c.far_plane > c.near_plane))
                     throw std::runtime_error(cr.where + ": fov must be in (0, 180) and 0 < near < far");
                 // eye = target has no view direction; an up vector along it (or zero) has no roll.
                 const glm::dvec3 view = c.target - c.eye;
-                if (!(glm::length(view) > 0.0)) throw std::runtime_error(cr.where + ": 'eye' equals 'target' (no view direction)");
+                if (!(glm::length(view) > 0.0))
+                    throw std::runtime_error(cr.where + ": 'eye' equals 'target' (no view direction)");
                 if (!(glm::length(glm::cross(glm::normalize(view), glm::dvec3(c.up))) > 1e-9))
                     throw std::runtime_error(cr.where + ": 'up' is zero or parallel to the view direction");
                 const ecs::Entity e = r.create();
@@ -216,13 +246,15 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
             }
         }
         if (scene.contains("directional_lights")) {
-            if (!scene["directional_lights"].is_array()) throw std::runtime_error(src + ": SFFD_scene: 'directional_lights' must be an array");
+            if (!scene["directional_lights"].is_array())
+                throw std::runtime_error(src + ": SFFD_scene: 'directional_lights' must be an array");
             for (const json& lj : scene["directional_lights"]) {
                 Reader lr{src + ": SFFD_scene directional light"};
                 DirectionalLight d;
                 d.direction = glm::vec3(lr.v3(lj, "direction"));
                 d.color = glm::vec3(lr.v3_or(lj, "color", glm::dvec3(d.color)));
-                d.intensity = static_cast<float>(lr.num_or(lj, "intensity", static_cast<double>(d.intensity)));
+                d.intensity =
+                    static_cast<float>(lr.num_or(lj, "intensity", static_cast<double>(d.intensity)));
                 const ecs::Entity e = r.create();
                 created.push_back(e);
                 r.emplace<Name>(e, Name{lr.str_or(lj, "name", "light")});
@@ -231,12 +263,14 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
             }
         }
         if (scene.contains("ambient_lights")) {
-            if (!scene["ambient_lights"].is_array()) throw std::runtime_error(src + ": SFFD_scene: 'ambient_lights' must be an array");
+            if (!scene["ambient_lights"].is_array())
+                throw std::runtime_error(src + ": SFFD_scene: 'ambient_lights' must be an array");
             for (const json& lj : scene["ambient_lights"]) {
                 Reader lr{src + ": SFFD_scene ambient light"};
                 AmbientLight a;
                 a.color = glm::vec3(lr.v3_or(lj, "color", glm::dvec3(a.color)));
-                a.intensity = static_cast<float>(lr.num_or(lj, "intensity", static_cast<double>(a.intensity)));
+                a.intensity =
+                    static_cast<float>(lr.num_or(lj, "intensity", static_cast<double>(a.intensity)));
                 const ecs::Entity e = r.create();
                 created.push_back(e);
                 r.emplace<Name>(e, Name{lr.str_or(lj, "name", "ambient")});
@@ -245,7 +279,8 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
             }
         }
         if (scene.contains("extensions")) {
-            if (!scene["extensions"].is_object()) throw std::runtime_error(src + ": SFFD_scene: 'extensions' must be an object");
+            if (!scene["extensions"].is_object())
+                throw std::runtime_error(src + ": SFFD_scene: 'extensions' must be an object");
             for (const auto& [key, value] : scene["extensions"].items()) {
                 auto it = extensions().find(key);
                 if (it == extensions().end() || !it->second.load) {
@@ -286,11 +321,11 @@ std::vector<std::string> builtin_scene_names() { return {"sphere", "face"}; }
 void register_scene_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn) {
     Extension e;
     if (save_fn)
-        e.save = [f = std::move(save_fn)](const ecs::Registry& r, const SceneIdOf& id_of, const fs::path&, std::vector<assets::GltfAppend>&) {
-            return f(r, id_of);
-        };
+        e.save = [f = std::move(save_fn)](const ecs::Registry& r, const SceneIdOf& id_of, const fs::path&,
+                                          std::vector<assets::GltfAppend>&) { return f(r, id_of); };
     if (load_fn)
-        e.load = [f = std::move(load_fn)](ecs::Registry& r, std::string_view text, const SceneEntityOf& entity_of, const fs::path&,
+        e.load = [f = std::move(load_fn)](ecs::Registry& r, std::string_view text,
+                                          const SceneEntityOf& entity_of, const fs::path&,
                                           const tinygltf::Model&) { return f(r, text, entity_of); };
     extensions()[key] = std::move(e);
 }
@@ -327,7 +362,9 @@ Status load_builtin_with_hooks(ecs::Registry& r, const std::string& name) {
 }
 }  // namespace
 
-void register_builtin_scene_hook(const std::string& key, BuiltinSceneHook hook) { builtin_hooks()[key] = std::move(hook); }
+void register_builtin_scene_hook(const std::string& key, BuiltinSceneHook hook) {
+    builtin_hooks()[key] = std::move(hook);
+}
 void unregister_builtin_scene_hook(const std::string& key) { builtin_hooks().erase(key); }
 
 Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
@@ -337,7 +374,8 @@ Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
     if (!fs::exists(path, ec))
         return make_error(name_or_path + ": no such file or built-in scene (built-ins: sphere, face)");
     std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
     for (const auto& [key, loader] : file_loaders())
         if (loader.claims && loader.load && loader.claims(path)) return loader.load(r, path);
     if (ext == ".gltf" || ext == ".glb") return load_scene_file(r, path);
@@ -397,20 +435,33 @@ Status save_scene(const ecs::Registry& r, const fs::path& path) {
     json cj = json::array();
     for (ecs::Entity e : cameras) {
         const Camera& c = r.get<Camera>(e);
-        cj.push_back({{"id", ids[e]}, {"name", name_of(r, e, "camera")}, {"eye", vec3(c.eye)}, {"target", vec3(c.target)}, {"up", vec3(c.up)},
-                      {"fov_y_degrees", c.fov_y_degrees}, {"near", c.near_plane}, {"far", c.far_plane}});
+        cj.push_back({{"id", ids[e]},
+                      {"name", name_of(r, e, "camera")},
+                      {"eye", vec3(c.eye)},
+                      {"target", vec3(c.target)},
+                      {"up", vec3(c.up)},
+                      {"fov_y_degrees", c.fov_y_degrees},
+                      {"near", c.near_plane},
+                      {"far", c.far_plane}});
     }
     scene["cameras"] = cj;
     json sj = json::array();
     for (ecs::Entity e : suns) {
         const DirectionalLight& d = r.get<DirectionalLight>(e);
-        sj.push_back({{"id", ids[e]}, {"name", name_of(r, e, "light")}, {"direction", vec3f(d.direction)}, {"color", vec3f(d.color)}, {"intensity", d.intensity}});
+        sj.push_back({{"id", ids[e]},
+                      {"name", name_of(r, e, "light")},
+                      {"direction", vec3f(d.direction)},
+                      {"color", vec3f(d.color)},
+                      {"intensity", d.intensity}});
     }
     scene["directional_lights"] = sj;
     json aj = json::array();
     for (ecs::Entity e : ambients) {
         const AmbientLight& a = r.get<AmbientLight>(e);
-        aj.push_back({{"id", ids[e]}, {"name", name_of(r, e, "ambient")}, {"color", vec3f(a.color)}, {"intensity", a.intensity}});
+        aj.push_back({{"id", ids[e]},
+                      {"name", name_of(r, e, "ambient")},
+                      {"color", vec3f(a.color)},
+                      {"intensity", a.intensity}});
     }
     scene["ambient_lights"] = aj;
     json ext = json::object();
@@ -421,7 +472,8 @@ Status save_scene(const ecs::Registry& r, const fs::path& path) {
         if (!text) return make_error(path.string() + ": scene extension '" + key + "': " + text.message());
         if (text->empty()) continue;
         json v = json::parse(*text, nullptr, false);
-        if (v.is_discarded()) return make_error(path.string() + ": scene extension '" + key + "' returned invalid JSON");
+        if (v.is_discarded())
+            return make_error(path.string() + ": scene extension '" + key + "' returned invalid JSON");
         ext[key] = v;
     }
     if (!ext.empty()) scene["extensions"] = ext;

@@ -42,7 +42,8 @@ std::vector<std::string> builtin_scene_names();
 using SceneIdOf = std::function<int(ecs::Entity)>;
 using SceneEntityOf = std::function<ecs::Entity(int)>;
 using SceneSaveFn = std::function<Result<std::string>(const ecs::Registry&, const SceneIdOf& id_of)>;
-using SceneLoadFn = std::function<Status(ecs::Registry&, std::string_view json, const SceneEntityOf& entity_of)>;
+using SceneLoadFn =
+    std::function<Status(ecs::Registry&, std::string_view json, const SceneEntityOf& entity_of)>;
 
 // Registers (or replaces) the extension stored under `key` in the file's SFFD_scene.extensions object.
 void register_scene_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn);
@@ -53,10 +54,12 @@ void unregister_scene_extension(const std::string& key);
 // (runtime/assets/gltf_io.h) that write nodes, meshes and accessors into the document; loading, it gets the
 // file's parsed tinygltf model (never null there). Its JSON must find its content again without indices
 // known at save time (systems/gaussian marks its nodes with extras). Same key space as above.
-using SceneGltfSaveFn = std::function<Result<std::string>(const ecs::Registry&, const SceneIdOf& id_of, const std::filesystem::path& scene_path,
+using SceneGltfSaveFn = std::function<Result<std::string>(const ecs::Registry&, const SceneIdOf& id_of,
+                                                          const std::filesystem::path& scene_path,
                                                           std::vector<assets::GltfAppend>& append)>;
-using SceneGltfLoadFn = std::function<Status(ecs::Registry&, std::string_view json, const SceneEntityOf& entity_of,
-                                             const std::filesystem::path& scene_path, const tinygltf::Model& model)>;
+using SceneGltfLoadFn =
+    std::function<Status(ecs::Registry&, std::string_view json, const SceneEntityOf& entity_of,
+                         const std::filesystem::path& scene_path, const tinygltf::Model& model)>;
 void register_scene_gltf_extension(const std::string& key, SceneGltfSaveFn save_fn, SceneGltfLoadFn load_fn);
 
 // Files assets cannot import itself (3D Gaussian files: 3DGS PLY, .splat, .spz, KHR_gaussian_splatting

@@ -22,30 +22,31 @@ Neighbours find_neighbours(std::span<const glm::vec3> points, int k, const Progr
     if (n < 2 || k <= 0) return nb;
     ProgressCounter counter(progress, "finding neighbours", n);
     const detail::PointTree<glm::vec3> tree(points);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-        counter.add(r.size());
-        std::vector<std::uint32_t> idx(static_cast<std::size_t>(k) + 1);
-        std::vector<float> d2(static_cast<std::size_t>(k) + 1);
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-            const float q[3] = {points[i].x, points[i].y, points[i].z};
-            const std::size_t found = tree.knn(q, static_cast<std::size_t>(k) + 1, idx.data(), d2.data());
-            std::size_t out = 0;
-            std::uint32_t last = static_cast<std::uint32_t>(i == 0 ? 1 : 0);
-            float last_d = 0.0f;
-            for (std::size_t j = 0; j < found && out < static_cast<std::size_t>(k); ++j) {
-                if (idx[j] == i) continue;
-                nb.index[i * k + out] = idx[j];
-                nb.dist2[i * k + out] = d2[j];
-                last = idx[j];
-                last_d = d2[j];
-                ++out;
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, n, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+            counter.add(r.size());
+            std::vector<std::uint32_t> idx(static_cast<std::size_t>(k) + 1);
+            std::vector<float> d2(static_cast<std::size_t>(k) + 1);
+            for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                const float q[3] = {points[i].x, points[i].y, points[i].z};
+                const std::size_t found = tree.knn(q, static_cast<std::size_t>(k) + 1, idx.data(), d2.data());
+                std::size_t out = 0;
+                std::uint32_t last = static_cast<std::uint32_t>(i == 0 ? 1 : 0);
+                float last_d = 0.0f;
+                for (std::size_t j = 0; j < found && out < static_cast<std::size_t>(k); ++j) {
+                    if (idx[j] == i) continue;
+                    nb.index[i * k + out] = idx[j];
+                    nb.dist2[i * k + out] = d2[j];
+                    last = idx[j];
+                    last_d = d2[j];
+                    ++out;
+                }
+                for (; out < static_cast<std::size_t>(k); ++out) {
+                    nb.index[i * k + out] = last;
+                    nb.dist2[i * k + out] = last_d;
+                }
             }
-            for (; out < static_cast<std::size_t>(k); ++out) {
-                nb.index[i * k + out] = last;
-                nb.dist2[i * k + out] = last_d;
-            }
-        }
-    });
+        });
     counter.done();
     return nb;
 }
@@ -53,44 +54,51 @@ Neighbours find_neighbours(std::span<const glm::vec3> points, int k, const Progr
 void symmetric_eigen(const glm::dmat3& input, glm::dvec3& values, glm::dmat3& vectors) {
     // Stops once the off-diagonal mass is 1e-30 of the diagonal's (or exactly zero); skips only exact zeros.
     constexpr double zero_only = std::numeric_limits<double>::denorm_min();  // |x| < denorm_min ⇔ x == 0
-    const JacobiRule rule{.max_sweeps = 50, .relative = 1e-30, .relative_to_diagonal = true, .floor = zero_only,
+    const JacobiRule rule{.max_sweeps = 50,
+                          .relative = 1e-30,
+                          .relative_to_diagonal = true,
+                          .floor = zero_only,
                           .skip_below = zero_only};
     const Eigen3 e = jacobi_eigen(input, glm::dmat3(1.0), rule, EigenOrder::ascending);
     values = e.values;
     vectors = e.vectors;
 }
 
-std::vector<glm::vec3> pca_normals(std::span<const glm::vec3> points, const Neighbours& nb, const ProgressFn& progress) {
+std::vector<glm::vec3> pca_normals(std::span<const glm::vec3> points, const Neighbours& nb,
+                                   const ProgressFn& progress) {
     std::vector<glm::vec3> normals(points.size(), glm::vec3(0, 0, 1));
     const std::size_t k = static_cast<std::size_t>(nb.k);
     ProgressCounter counter(progress, "estimating normals", points.size());
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-        counter.add(r.size());
-        for (std::size_t i = r.begin(); i != r.end(); ++i) {
-            glm::dvec3 mean(points[i]);
-            for (std::size_t j = 0; j < k; ++j) mean += glm::dvec3(points[nb.index[i * k + j]]);
-            mean /= static_cast<double>(k + 1);
-            glm::dmat3 cov(0.0);
-            auto add = [&](const glm::vec3& p) {
-                const glm::dvec3 d = glm::dvec3(p) - mean;
-                cov += glm::outerProduct(d, d);
-            };
-            add(points[i]);
-            for (std::size_t j = 0; j < k; ++j) add(points[nb.index[i * k + j]]);
-            glm::dvec3 values;
-            glm::dmat3 vectors;
-            symmetric_eigen(cov, values, vectors);
-            if (values[2] <= 0.0) continue;  // all neighbours coincide
-            const glm::dvec3 n = vectors[0];
-            const double len = glm::length(n);
-            if (len > 0.0 && std::isfinite(len)) normals[i] = glm::vec3(n / len);
-        }
-    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 1024),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          counter.add(r.size());
+                          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                              glm::dvec3 mean(points[i]);
+                              for (std::size_t j = 0; j < k; ++j)
+                                  mean += glm::dvec3(points[nb.index[i * k + j]]);
+                              mean /= static_cast<double>(k + 1);
+                              glm::dmat3 cov(0.0);
+                              auto add = [&](const glm::vec3& p) {
+                                  const glm::dvec3 d = glm::dvec3(p) - mean;
+                                  cov += glm::outerProduct(d, d);
+                              };
+                              add(points[i]);
+                              for (std::size_t j = 0; j < k; ++j) add(points[nb.index[i * k + j]]);
+                              glm::dvec3 values;
+                              glm::dmat3 vectors;
+                              symmetric_eigen(cov, values, vectors);
+                              if (values[2] <= 0.0) continue;  // all neighbours coincide
+                              const glm::dvec3 n = vectors[0];
+                              const double len = glm::length(n);
+                              if (len > 0.0 && std::isfinite(len)) normals[i] = glm::vec3(n / len);
+                          }
+                      });
     counter.done();
     return normals;
 }
 
-void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std::span<glm::vec3> normals, const ProgressFn& progress) {
+void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std::span<glm::vec3> normals,
+                    const ProgressFn& progress) {
     const std::size_t n = points.size();
     const std::size_t k = static_cast<std::size_t>(nb.k);
     if (n == 0) return;
@@ -117,7 +125,8 @@ void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std
     // Seeds in order of decreasing z: the first unvisited one starts a new component.
     std::vector<std::uint32_t> by_z(n);
     for (std::size_t i = 0; i < n; ++i) by_z[i] = static_cast<std::uint32_t>(i);
-    std::sort(by_z.begin(), by_z.end(), [&](std::uint32_t a, std::uint32_t b) { return points[a].z > points[b].z; });
+    std::sort(by_z.begin(), by_z.end(),
+              [&](std::uint32_t a, std::uint32_t b) { return points[a].z > points[b].z; });
 
     ProgressCounter counter(progress, "orienting normals", n);
     std::size_t visited = 0;
@@ -135,7 +144,8 @@ void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std
             if (done[node]) continue;
             done[node] = 1;
             if (++visited % 4096 == 0) counter.add(4096);
-            if (node != parent && glm::dot(normals[node], normals[parent]) < 0.0f) normals[node] = -normals[node];
+            if (node != parent && glm::dot(normals[node], normals[parent]) < 0.0f)
+                normals[node] = -normals[node];
             for (std::uint32_t e = degree[node]; e < degree[node + 1]; ++e) {
                 const std::uint32_t o = adj[e];
                 if (!done[o]) heap.push({1.0f - std::abs(glm::dot(normals[node], normals[o])), {node, o}});
@@ -167,8 +177,8 @@ glm::vec3 any_tangent(const glm::vec3& n) {
     return glm::vec3(1.0f + sign * n.x * n.x * a, sign * b, -sign * n.x);
 }
 
-void make_circular_axes(std::span<const glm::vec3> normals, std::span<const float> radii, std::vector<glm::vec3>& axis_u,
-                        std::vector<glm::vec3>& axis_v) {
+void make_circular_axes(std::span<const glm::vec3> normals, std::span<const float> radii,
+                        std::vector<glm::vec3>& axis_u, std::vector<glm::vec3>& axis_v) {
     axis_u.resize(normals.size());
     axis_v.resize(normals.size());
     for (std::size_t i = 0; i < normals.size(); ++i) {

@@ -39,7 +39,8 @@ Neighbours find_neighbours(std::span<const glm::vec3> points, int k, const Progr
 
 // Unit normals by PCA (eigenvector of the smallest eigenvalue of the neighbourhood covariance), not yet
 // oriented. Degenerate neighbourhoods (all points equal) get (0, 0, 1).
-std::vector<glm::vec3> pca_normals(std::span<const glm::vec3> points, const Neighbours& nb, const ProgressFn& progress = {});
+std::vector<glm::vec3> pca_normals(std::span<const glm::vec3> points, const Neighbours& nb,
+                                   const ProgressFn& progress = {});
 
 // Flips normals in place so that they agree along a minimum spanning tree of the k-NN graph (see above).
 void orient_normals(std::span<const glm::vec3> points, const Neighbours& nb, std::span<glm::vec3> normals,
@@ -59,10 +60,10 @@ glm::vec3 any_tangent(const glm::vec3& n);
 void symmetric_eigen(const glm::dmat3& a, glm::dvec3& values, glm::dmat3& vectors);
 
 struct EstimateOptions {
-    bool normals = true;   // estimate normals (PCA + orientation)
-    bool radii = true;     // estimate radii and axes
-    int k = 16;            // neighbourhood for PCA and orientation
-    ProgressFn progress;   // each step's progress (splatffd convert prints it); may be empty
+    bool normals = true;  // estimate normals (PCA + orientation)
+    bool radii = true;    // estimate radii and axes
+    int k = 16;           // neighbourhood for PCA and orientation
+    ProgressFn progress;  // each step's progress (splatffd convert prints it); may be empty
 };
 
 // Fills normals / axis_u / axis_v of `cloud` as requested (normals also when missing and radii wanted).

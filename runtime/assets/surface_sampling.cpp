@@ -17,7 +17,8 @@ namespace detail {
 // Weighted sample elimination (Yuksel 2015): removes the most crowded point until `keep` remain.
 // `area` is the surface area the points cover (for the neighbourhood radius). Returns the kept indices
 // in ascending order.
-std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::size_t keep, double area, const ProgressFn& progress) {
+std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::size_t keep, double area,
+                                     const ProgressFn& progress) {
     const std::size_t n = pts.size();
     std::vector<std::uint32_t> kept;
     if (keep >= n) {
@@ -61,14 +62,18 @@ std::vector<std::uint32_t> eliminate(const std::vector<glm::dvec3>& pts, std::si
     std::vector<float> dist;
     for (std::size_t b = 0; b < blocks; ++b) {
         const std::size_t first = b * kBlock;
-        for (std::size_t k = 0; k < block_count[b].size(); ++k) offsets[first + k + 1] = offsets[first + k] + block_count[b][k];
+        for (std::size_t k = 0; k < block_count[b].size(); ++k)
+            offsets[first + k + 1] = offsets[first + k] + block_count[b][k];
         nbr.insert(nbr.end(), block_nbr[b].begin(), block_nbr[b].end());
         dist.insert(dist.end(), block_dist[b].begin(), block_dist[b].end());
         std::vector<std::uint32_t>().swap(block_nbr[b]);
         std::vector<float>().swap(block_dist[b]);
     }
     std::vector<double> weight(n, 0.0);
-    auto w = [&](float d) { const double x = 1.0 - static_cast<double>(d) / r2; return x * x * x * x * x * x * x * x; };
+    auto w = [&](float d) {
+        const double x = 1.0 - static_cast<double>(d) / r2;
+        return x * x * x * x * x * x * x * x;
+    };
     for (std::size_t i = 0; i < n; ++i)
         for (std::uint32_t e = offsets[i]; e < offsets[i + 1]; ++e) weight[i] += w(dist[e]);
     std::priority_queue<std::pair<double, std::uint32_t>> heap;
@@ -103,17 +108,23 @@ glm::vec4 sample_texture(const Image& img, glm::vec2 uv) {
     auto texel = [&](int x, int y) {
         x = ((x % img.width) + img.width) % img.width;
         y = ((y % img.height) + img.height) % img.height;
-        const std::uint8_t* p = &img.rgba8[(static_cast<std::size_t>(y) * static_cast<std::size_t>(img.width) + static_cast<std::size_t>(x)) * 4];
+        const std::uint8_t* p =
+            &img.rgba8[(static_cast<std::size_t>(y) * static_cast<std::size_t>(img.width) +
+                        static_cast<std::size_t>(x)) *
+                       4];
         return glm::vec4(p[0], p[1], p[2], p[3]) / 255.0f;
     };
-    return glm::mix(glm::mix(texel(x0, y0), texel(x0 + 1, y0), tx), glm::mix(texel(x0, y0 + 1), texel(x0 + 1, y0 + 1), tx), ty);
+    return glm::mix(glm::mix(texel(x0, y0), texel(x0 + 1, y0), tx),
+                    glm::mix(texel(x0, y0 + 1), texel(x0 + 1, y0 + 1), tx), ty);
 }
 
 int single_texture(const Geometry& mesh) {
-    if (mesh.uvs.size() != mesh.positions.size() || !mesh.colors.empty() || mesh.triangle_count() == 0) return -1;
+    if (mesh.uvs.size() != mesh.positions.size() || !mesh.colors.empty() || mesh.triangle_count() == 0)
+        return -1;
     int texture = -1;
     for (std::size_t t = 0; t < mesh.triangle_count(); ++t) {
-        const int m = mesh.triangle_material.empty() ? (mesh.materials.size() == 1 ? 0 : -1) : mesh.triangle_material[t];
+        const int m = mesh.triangle_material.empty() ? (mesh.materials.size() == 1 ? 0 : -1)
+                                                     : mesh.triangle_material[t];
         if (m < 0) return -1;
         const MeshMaterial& mat = mesh.materials[static_cast<std::size_t>(m)];
         // White within 8-bit rounding: the renderer's textured path has no base-colour factor.
@@ -122,12 +133,14 @@ int single_texture(const Geometry& mesh) {
         texture = mat.texture;
     }
     const Image& img = mesh.textures[static_cast<std::size_t>(texture)];
-    if (img.width <= 0 || img.height <= 0 || img.rgba8.size() != std::size_t(img.width) * std::size_t(img.height) * 4) return -1;
+    if (img.width <= 0 || img.height <= 0 ||
+        img.rgba8.size() != std::size_t(img.width) * std::size_t(img.height) * 4)
+        return -1;
     return texture;
 }
 
-void triangle_uv_gradients(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, glm::dvec2 ta, glm::dvec2 tb,
-                           glm::dvec2 tc, glm::dvec3& grad_u, glm::dvec3& grad_v) {
+void triangle_uv_gradients(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c, glm::dvec2 ta,
+                           glm::dvec2 tb, glm::dvec2 tc, glm::dvec3& grad_u, glm::dvec3& grad_v) {
     // grad = alpha e1 + beta e2 (in the plane) with grad . e1 = d1, grad . e2 = d2: the 2x2 Gram system.
     const glm::dvec3 e1 = b - a, e2 = c - a;
     const double g11 = glm::dot(e1, e1), g12 = glm::dot(e1, e2), g22 = glm::dot(e2, e2);
@@ -145,7 +158,8 @@ void triangle_uv_gradients(const glm::dvec3& a, const glm::dvec3& b, const glm::
 
 }  // namespace detail
 
-Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::uint32_t seed, const ProgressFn& progress) {
+Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::uint32_t seed,
+                                const ProgressFn& progress) {
     const std::size_t nt = mesh.triangle_count();
     if (nt == 0) return make_error(mesh.source + ": no triangles to sample");
     if (count == 0) return make_error(mesh.source + ": cannot sample 0 splats");
@@ -158,7 +172,8 @@ Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::ui
         total += 0.5 * glm::length(glm::cross(b - a, c - a));
         cumulative[t] = total;
     }
-    if (!(total > 0.0) || !std::isfinite(total)) return make_error(mesh.source + ": the mesh has no surface area");
+    if (!(total > 0.0) || !std::isfinite(total))
+        return make_error(mesh.source + ": the mesh has no surface area");
     // Candidates: 4x the target (1x beyond 4M splats to bound memory), then thin to exactly `count`.
     const std::size_t candidates = count <= (std::size_t(4) << 20) ? 4 * count : count;
     Rng rng(seed);
@@ -169,7 +184,10 @@ Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::ui
     for (std::size_t i = 0; i < candidates; ++i) {
         if (i % 4096 == 4095) sampled.add(4096);
         const double r = rng.uniform() * total;
-        const std::size_t t = std::min<std::size_t>(static_cast<std::size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), r) - cumulative.begin()), nt - 1);
+        const std::size_t t = std::min<std::size_t>(
+            static_cast<std::size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), r) -
+                                     cumulative.begin()),
+            nt - 1);
         double u = rng.uniform(), v = rng.uniform();
         if (u + v > 1.0) {
             u = 1.0 - u;
@@ -185,7 +203,8 @@ Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::ui
     sampled.done();
     std::vector<std::uint32_t> kept = eliminate(pos, count, total, progress);
     // Spatial locality for the renderer and the cache: order samples by triangle.
-    std::stable_sort(kept.begin(), kept.end(), [&](std::uint32_t x, std::uint32_t y) { return tri[x] < tri[y]; });
+    std::stable_sort(kept.begin(), kept.end(),
+                     [&](std::uint32_t x, std::uint32_t y) { return tri[x] < tri[y]; });
 
     Geometry out;
     out.source = mesh.source;
@@ -209,13 +228,16 @@ Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::ui
     if (bake_colour) out.colors.reserve(count);
     for (std::uint32_t i : kept) {
         const std::size_t t = tri[i];
-        const std::uint32_t ia = mesh.triangles[3 * t], ib = mesh.triangles[3 * t + 1], ic = mesh.triangles[3 * t + 2];
+        const std::uint32_t ia = mesh.triangles[3 * t], ib = mesh.triangles[3 * t + 1],
+                            ic = mesh.triangles[3 * t + 2];
         const double u = bary[i].x, v = bary[i].y, w0 = 1.0 - u - v;
         out.positions.push_back(pos[i]);
-        const glm::dvec3 face = glm::cross(mesh.positions[ib] - mesh.positions[ia], mesh.positions[ic] - mesh.positions[ia]);
+        const glm::dvec3 face =
+            glm::cross(mesh.positions[ib] - mesh.positions[ia], mesh.positions[ic] - mesh.positions[ia]);
         glm::dvec3 n = glm::length(face) > 0.0 ? glm::normalize(face) : glm::dvec3(0, 0, 1);
         if (vertex_normals) {
-            const glm::dvec3 vn = w0 * glm::dvec3(mesh.normals[ia]) + u * glm::dvec3(mesh.normals[ib]) + v * glm::dvec3(mesh.normals[ic]);
+            const glm::dvec3 vn = w0 * glm::dvec3(mesh.normals[ia]) + u * glm::dvec3(mesh.normals[ib]) +
+                                  v * glm::dvec3(mesh.normals[ic]);
             if (glm::length(vn) > 1e-12) n = glm::normalize(vn);
         }
         out.normals.emplace_back(n);
@@ -223,21 +245,25 @@ Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::ui
             const glm::dvec2 ta(mesh.uvs[ia]), tb(mesh.uvs[ib]), tc(mesh.uvs[ic]);
             out.uvs.emplace_back(w0 * ta + u * tb + v * tc);
             glm::dvec3 gu, gv;
-            triangle_uv_gradients(mesh.positions[ia], mesh.positions[ib], mesh.positions[ic], ta, tb, tc, gu, gv);
+            triangle_uv_gradients(mesh.positions[ia], mesh.positions[ib], mesh.positions[ic], ta, tb, tc, gu,
+                                  gv);
             out.uv_grad_u.emplace_back(gu);
             out.uv_grad_v.emplace_back(gv);
         }
         if (bake_colour) {
             glm::vec4 col(1.0f);
             if (!mesh.colors.empty())
-                col = static_cast<float>(w0) * unpack_rgba(mesh.colors[ia]) + static_cast<float>(u) * unpack_rgba(mesh.colors[ib]) +
+                col = static_cast<float>(w0) * unpack_rgba(mesh.colors[ia]) +
+                      static_cast<float>(u) * unpack_rgba(mesh.colors[ib]) +
                       static_cast<float>(v) * unpack_rgba(mesh.colors[ic]);
-            const int m = mesh.triangle_material.empty() ? (mesh.materials.size() == 1 ? 0 : -1) : mesh.triangle_material[t];
+            const int m = mesh.triangle_material.empty() ? (mesh.materials.size() == 1 ? 0 : -1)
+                                                         : mesh.triangle_material[t];
             if (m >= 0) {
                 const MeshMaterial& mat = mesh.materials[static_cast<std::size_t>(m)];
                 col *= mat.base_color;
                 if (mat.texture >= 0 && !mesh.uvs.empty()) {
-                    const glm::vec2 uv = static_cast<float>(w0) * mesh.uvs[ia] + static_cast<float>(u) * mesh.uvs[ib] +
+                    const glm::vec2 uv = static_cast<float>(w0) * mesh.uvs[ia] +
+                                         static_cast<float>(u) * mesh.uvs[ib] +
                                          static_cast<float>(v) * mesh.uvs[ic];
                     col *= sample_texture(mesh.textures[static_cast<std::size_t>(mat.texture)], uv);
                 }

@@ -67,7 +67,8 @@ extern "C" void on_interrupt(int sig) {
     write_stderr("\n");
     write_stderr(g_program.load());
     write_stderr(sig == SIGINT ? ": interrupted (SIGINT)" : ": terminated (SIGTERM)");
-    write_stderr(removed ? "; unfinished output removed, previous files left as they were\n" : "; nothing was being saved\n");
+    write_stderr(removed ? "; unfinished output removed, previous files left as they were\n"
+                         : "; nothing was being saved\n");
     ::_exit(128 + sig);
 }
 
@@ -131,7 +132,8 @@ std::vector<Stale> scan_folder(const fs::path& folder) {
         const std::string f = it->path().filename().string();
         std::string output;
         long pid = -1;
-        if (const auto at = f.find(".sffd-tmp-"); f.size() > 1 && f[0] == '.' && at != std::string::npos && at > 1) {
+        if (const auto at = f.find(".sffd-tmp-");
+            f.size() > 1 && f[0] == '.' && at != std::string::npos && at > 1) {
             // .<name>.sffd-tmp-<pid>-XXXXXX
             const std::string_view rest = std::string_view(f).substr(at + 10);
             pid = leading_pid(rest);
@@ -199,7 +201,8 @@ int remove_stale_temporaries(const fs::path& path) {
     for (const Stale& s : mine)
         if (::unlink(s.path.c_str()) == 0) {
             ++removed;
-            log::info(path.string(), ": removed a stale temporary file of an interrupted save (", s.path.filename().string(), ")");
+            log::info(path.string(), ": removed a stale temporary file of an interrupted save (",
+                      s.path.filename().string(), ")");
         }
     return removed;
 }
@@ -247,7 +250,8 @@ Result<AtomicFile> AtomicFile::create(const fs::path& path) {
         struct stat st {};
         if (::stat(impl->target.c_str(), &st) == 0) {
             if (!S_ISREG(st.st_mode))
-                return impl->fail(std::string("not a regular file (") + file_kind(st.st_mode) + "); refusing to replace it");
+                return impl->fail(std::string("not a regular file (") + file_kind(st.st_mode) +
+                                  "); refusing to replace it");
             mode = st.st_mode & 07777;
         }
     }
@@ -289,7 +293,8 @@ Status AtomicFile::commit() {
     if (m.done || !m.file) return m.fail("commit(): already finished");
     Status status;
     if (std::fflush(m.file) != 0) status = m.fail(std::string("write failed: ") + std::strerror(errno));
-    if (status && ::fsync(fileno(m.file)) != 0) status = m.fail(std::string("fsync failed: ") + std::strerror(errno));
+    if (status && ::fsync(fileno(m.file)) != 0)
+        status = m.fail(std::string("fsync failed: ") + std::strerror(errno));
     const int rc = std::fclose(m.file);
     m.file = nullptr;
     if (rc != 0 && status) status = m.fail(std::string("close failed: ") + std::strerror(errno));

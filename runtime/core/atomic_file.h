@@ -33,11 +33,11 @@ public:
     AtomicFile& operator=(AtomicFile&&) noexcept;
     ~AtomicFile();  // not committed: the temporary is removed
 
-    std::FILE* file() const;                         // binary mode, positioned at 0
-    const std::filesystem::path& path() const;       // the output as named
-    const std::filesystem::path& target() const;     // the file that will be replaced (link resolved)
+    std::FILE* file() const;                      // binary mode, positioned at 0
+    const std::filesystem::path& path() const;    // the output as named
+    const std::filesystem::path& target() const;  // the file that will be replaced (link resolved)
     const std::filesystem::path& temporary() const;
-    Status commit();                                 // flush, fsync, rename; the object is spent
+    Status commit();  // flush, fsync, rename; the object is spent
 
 private:
     struct Impl;

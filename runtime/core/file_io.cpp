@@ -19,7 +19,8 @@ std::atomic<bool> g_allow_outside{false};
 
 Error not_regular(const fs::path& path, mode_t m) {
     const std::string kind = file_kind(m);
-    return make_error(path.string() + ": not a regular file" + (kind == "not a regular file" ? "" : " (" + kind + ")"));
+    return make_error(path.string() + ": not a regular file" +
+                      (kind == "not a regular file" ? "" : " (" + kind + ")"));
 }
 
 // Closes the descriptor on every path out of read_file().
@@ -45,14 +46,16 @@ Result<std::string> read_file(const fs::path& path, std::uint64_t limit) {
     Fd f;
     f.fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
     if (f.fd < 0)
-        return make_error(path.string() + (errno == ENOENT ? std::string(": cannot open: no such file") : std::string(": cannot open: ") + std::strerror(errno)));
+        return make_error(path.string() + (errno == ENOENT
+                                               ? std::string(": cannot open: no such file")
+                                               : std::string(": cannot open: ") + std::strerror(errno)));
     struct stat st {};
     if (::fstat(f.fd, &st) != 0) return make_error(path.string() + ": cannot stat: " + std::strerror(errno));
     if (!S_ISREG(st.st_mode)) return not_regular(path, st.st_mode);
     const auto size = static_cast<std::uint64_t>(st.st_size);
     if (size > limit)
-        return make_error(path.string() + ": file is " + std::to_string(size) + " bytes, more than the " + std::to_string(limit) +
-                          "-byte limit");
+        return make_error(path.string() + ": file is " + std::to_string(size) + " bytes, more than the " +
+                          std::to_string(limit) + "-byte limit");
     std::string out;
     try {
         out.resize(static_cast<std::size_t>(size));
@@ -76,9 +79,12 @@ bool allow_outside_resources() { return g_allow_outside; }
 
 Result<fs::path> resolve_resource(const fs::path& owner, std::string_view uri) {
     const std::string quoted = "resource '" + std::string(uri.substr(0, 200)) + "'";
-    auto outside = [&] { return make_error(owner.string() + ": " + quoted + " is outside the file's folder"); };
+    auto outside = [&] {
+        return make_error(owner.string() + ": " + quoted + " is outside the file's folder");
+    };
     if (uri.empty()) return make_error(owner.string() + ": empty resource name");
-    if (uri.find('\0') != std::string_view::npos) return make_error(owner.string() + ": " + quoted + " contains a NUL byte");
+    if (uri.find('\0') != std::string_view::npos)
+        return make_error(owner.string() + ": " + quoted + " contains a NUL byte");
     std::error_code ec;
     const fs::path folder = fs::weakly_canonical(fs::absolute(owner, ec).parent_path(), ec);
     if (ec) return make_error(owner.string() + ": cannot resolve the file's folder: " + ec.message());
@@ -102,7 +108,9 @@ Result<fs::path> resolve_resource(const fs::path& owner, std::string_view uri) {
         const auto [f_end, r_it] = std::mismatch(folder.begin(), folder.end(), real.begin(), real.end());
         if (f_end != folder.end()) return outside();
     }
-    if (!S_ISREG(st.st_mode)) return make_error(owner.string() + ": " + quoted + " is " + file_kind(st.st_mode) + ", not a regular file");
+    if (!S_ISREG(st.st_mode))
+        return make_error(owner.string() + ": " + quoted + " is " + file_kind(st.st_mode) +
+                          ", not a regular file");
     return real;
 }
 
@@ -118,7 +126,9 @@ Status check_json_depth(std::string_view text, const std::string& name, int max_
         }
         if (c == '"') in_string = true;
         else if (c == '[' || c == '{') {
-            if (++depth > max_depth) return make_error(name + ": JSON nesting deeper than " + std::to_string(max_depth) + " levels");
+            if (++depth > max_depth)
+                return make_error(name + ": JSON nesting deeper than " + std::to_string(max_depth) +
+                                  " levels");
         } else if (c == ']' || c == '}') {
             --depth;
         }

@@ -18,9 +18,10 @@
 namespace sffd {
 
 // Budgets stated once (the messages quote them).
-inline constexpr std::uint64_t kMaxTextFileBytes = std::uint64_t(4) << 30;   // OBJ/OFF text
-inline constexpr std::uint64_t kMaxJsonFileBytes = std::uint64_t(256) << 20; // lattices, clips, scenes (JSON)
-inline constexpr std::uint64_t kMaxResourceBytes = std::uint64_t(2) << 30;   // one glTF buffer or image file
+inline constexpr std::uint64_t kMaxTextFileBytes = std::uint64_t(4) << 30;  // OBJ/OFF text
+inline constexpr std::uint64_t kMaxJsonFileBytes = std::uint64_t(256)
+                                                   << 20;                   // lattices, clips, scenes (JSON)
+inline constexpr std::uint64_t kMaxResourceBytes = std::uint64_t(2) << 30;  // one glTF buffer or image file
 
 // Opens `path` (O_NONBLOCK, so a FIFO never blocks the open), checks that it is a regular file of at most
 // `limit` bytes and reads it whole. Errors: `path: no such file`, `path: not a regular file`,

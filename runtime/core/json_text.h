@@ -13,7 +13,8 @@ namespace sffd {
 // code points above U+10FFFF, truncated sequences) replaced by U+FFFD.
 std::string valid_utf8(std::string_view text);
 
-// `text` as a JSON string literal, quotes included: valid UTF-8, with `"`, `\` and control characters escaped.
+// `text` as a JSON string literal, quotes included: valid UTF-8, with `"`, `\` and control characters
+// escaped.
 std::string json_quote(std::string_view text);
 
 }  // namespace sffd

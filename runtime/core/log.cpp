@@ -39,10 +39,8 @@ Level min_level() { return g_min_level; }
 void write(Level level, std::string_view message) {
     if (level < g_min_level) return;
     std::lock_guard lock(g_mutex);
-    if (g_sink)
-        g_sink(level, message);
-    else
-        default_sink(level, message);
+    if (g_sink) g_sink(level, message);
+    else default_sink(level, message);
 }
 
 ScopedLogCapture::ScopedLogCapture() : m_previous_level(min_level()) {

@@ -30,10 +30,22 @@ std::string str(const Args&... args) {
     return s.str();
 }
 
-template <class... Args> void debug(const Args&... a) { if (min_level() <= Level::debug) write(Level::debug, str(a...)); }
-template <class... Args> void info(const Args&... a) { if (min_level() <= Level::info) write(Level::info, str(a...)); }
-template <class... Args> void warn(const Args&... a) { write(Level::warn, str(a...)); }
-template <class... Args> void error(const Args&... a) { write(Level::error, str(a...)); }
+template <class... Args>
+void debug(const Args&... a) {
+    if (min_level() <= Level::debug) write(Level::debug, str(a...));
+}
+template <class... Args>
+void info(const Args&... a) {
+    if (min_level() <= Level::info) write(Level::info, str(a...));
+}
+template <class... Args>
+void warn(const Args&... a) {
+    write(Level::warn, str(a...));
+}
+template <class... Args>
+void error(const Args&... a) {
+    write(Level::error, str(a...));
+}
 
 // Captures every message while alive (thread-safe), then restores the previous sink.
 class ScopedLogCapture {

@@ -26,11 +26,14 @@ static bool has_data(const fs::path& root) {
 
 fs::path data_root() {
     static const fs::path root = [] {
-        if (const char* env = std::getenv("SPLATFFD_DATA_DIR"); env && *env && has_data(env)) return fs::path(env);
+        if (const char* env = std::getenv("SPLATFFD_DATA_DIR"); env && *env && has_data(env))
+            return fs::path(env);
         const fs::path exe_dir = executable_path().parent_path();
-        for (const fs::path& candidate : {exe_dir / ".." / "share" / "splatffd", exe_dir / "share" / "splatffd"})
+        for (const fs::path& candidate :
+             {exe_dir / ".." / "share" / "splatffd", exe_dir / "share" / "splatffd"})
             if (has_data(candidate)) {
-                std::error_code ec;  // data_root() reports nothing: on a filesystem error keep the path as found
+                std::error_code
+                    ec;  // data_root() reports nothing: on a filesystem error keep the path as found
                 fs::path canonical = fs::weakly_canonical(candidate, ec);
                 return ec ? candidate : canonical;
             }
@@ -50,12 +53,9 @@ fs::path cache_dir() {
     fs::create_directories(in_tree, ec);
     if (!ec && access(in_tree.c_str(), W_OK) == 0) return in_tree;
     fs::path base;
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg)
-        base = xdg;
-    else if (const char* home = std::getenv("HOME"); home && *home)
-        base = fs::path(home) / ".cache";
-    else
-        base = fs::temp_directory_path();
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) base = xdg;
+    else if (const char* home = std::getenv("HOME"); home && *home) base = fs::path(home) / ".cache";
+    else base = fs::temp_directory_path();
     fs::create_directories(base / "splatffd", ec);
     return base / "splatffd";
 }

@@ -8,9 +8,9 @@
 namespace sffd::paths {
 
 std::filesystem::path executable_path();
-std::filesystem::path data_root();     // folder that holds shaders/ and content/
-std::filesystem::path shader_dir();    // data_root()/shaders
-std::filesystem::path content_dir();   // data_root()/content
+std::filesystem::path data_root();    // folder that holds shaders/ and content/
+std::filesystem::path shader_dir();   // data_root()/shaders
+std::filesystem::path content_dir();  // data_root()/content
 // Writable cache for content made at set-up time (e.g. the `face` scene): content/cache in the source
 // tree, or $XDG_CACHE_HOME/splatffd (~/.cache/splatffd) when installed read-only.
 std::filesystem::path cache_dir();

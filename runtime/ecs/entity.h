@@ -26,5 +26,7 @@ inline constexpr Entity null_entity{};
 
 template <>
 struct std::hash<sffd::ecs::Entity> {
-    std::size_t operator()(const sffd::ecs::Entity& e) const noexcept { return std::hash<std::uint64_t>{}(e.bits()); }
+    std::size_t operator()(const sffd::ecs::Entity& e) const noexcept {
+        return std::hash<std::uint64_t>{}(e.bits());
+    }
 };

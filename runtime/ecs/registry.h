@@ -51,8 +51,11 @@ class View {
 public:
     explicit View(Storages storages) : m_storages(storages) {
         const StorageBase* smallest = nullptr;
-        std::apply([&](auto*... s) { ((smallest = (!smallest || s->size() < smallest->size()) ? s : smallest), ...); },
-                   m_storages);
+        std::apply(
+            [&](auto*... s) {
+                ((smallest = (!smallest || s->size() < smallest->size()) ? s : smallest), ...);
+            },
+            m_storages);
         m_lead = smallest;
     }
 
@@ -80,7 +83,11 @@ public:
             const Entity e = m_view->m_lead->entities()[m_i - 1];
             return std::tuple<Entity, C&...>(e, m_view->template get<C>(e)...);
         }
-        iterator& operator++() { --m_i; skip(); return *this; }
+        iterator& operator++() {
+            --m_i;
+            skip();
+            return *this;
+        }
         bool operator==(const iterator& o) const { return m_i == o.m_i; }
 
     private:
@@ -114,10 +121,8 @@ private:
     }
     template <class Fn>
     void call(Fn& fn, Entity e, std::uint32_t lead_pos) const {
-        if constexpr (std::is_invocable_v<Fn&, Entity, C&...>)
-            fn(e, get_at<C>(e, lead_pos)...);
-        else
-            fn(get_at<C>(e, lead_pos)...);
+        if constexpr (std::is_invocable_v<Fn&, Entity, C&...>) fn(e, get_at<C>(e, lead_pos)...);
+        else fn(get_at<C>(e, lead_pos)...);
     }
 
     Storages m_storages;
@@ -186,39 +191,74 @@ public:
         return storage<C>().emplace(e, std::forward<Args>(args)...);
     }
     template <class C>
-    void remove(Entity e) { if (auto* s = find_storage<C>()) s->remove(e); }
+    void remove(Entity e) {
+        if (auto* s = find_storage<C>()) s->remove(e);
+    }
     template <class C>
-    bool has(Entity e) const { const auto* s = find_storage<C>(); return s && s->contains(e); }
+    bool has(Entity e) const {
+        const auto* s = find_storage<C>();
+        return s && s->contains(e);
+    }
     template <class C>
-    C& get(Entity e) { return storage<C>().get(e); }
+    C& get(Entity e) {
+        return storage<C>().get(e);
+    }
     template <class C>
-    const C& get(Entity e) const { const auto* s = find_storage<C>(); assert(s); return s->get(e); }
+    const C& get(Entity e) const {
+        const auto* s = find_storage<C>();
+        assert(s);
+        return s->get(e);
+    }
     template <class C>
-    C* try_get(Entity e) { auto* s = find_storage<C>(); return s ? s->try_get(e) : nullptr; }
+    C* try_get(Entity e) {
+        auto* s = find_storage<C>();
+        return s ? s->try_get(e) : nullptr;
+    }
     template <class C>
-    const C* try_get(Entity e) const { const auto* s = find_storage<C>(); return s ? s->try_get(e) : nullptr; }
+    const C* try_get(Entity e) const {
+        const auto* s = find_storage<C>();
+        return s ? s->try_get(e) : nullptr;
+    }
 
     // Mutable access that records a change (use it for edits other systems must react to).
     template <class C>
-    C& patch(Entity e) { auto& s = storage<C>(); s.mark_changed(e); return s.get(e); }
+    C& patch(Entity e) {
+        auto& s = storage<C>();
+        s.mark_changed(e);
+        return s.get(e);
+    }
     template <class C>
-    void mark_changed(Entity e) { storage<C>().mark_changed(e); }
+    void mark_changed(Entity e) {
+        storage<C>().mark_changed(e);
+    }
     // Change stamp of e's C (0 if absent), and the latest stamp of any C.
     template <class C>
-    std::uint64_t version(Entity e) const { const auto* s = find_storage<C>(); return s ? s->version(e) : 0; }
+    std::uint64_t version(Entity e) const {
+        const auto* s = find_storage<C>();
+        return s ? s->version(e) : 0;
+    }
     template <class C>
-    std::uint64_t storage_version() const { const auto* s = find_storage<C>(); return s ? s->version() : 0; }
+    std::uint64_t storage_version() const {
+        const auto* s = find_storage<C>();
+        return s ? s->version() : 0;
+    }
     std::uint64_t tick() const { return m_tick; }
 
     template <class... C>
-    View<C...> view() { return View<C...>(std::make_tuple(&storage<std::remove_const_t<C>>()...)); }
+    View<C...> view() {
+        return View<C...>(std::make_tuple(&storage<std::remove_const_t<C>>()...));
+    }
     template <class... C>
     View<const C...> view() const {
-        return View<const C...>(std::make_tuple(&const_cast<Registry*>(this)->storage<std::remove_const_t<C>>()...));
+        return View<const C...>(
+            std::make_tuple(&const_cast<Registry*>(this)->storage<std::remove_const_t<C>>()...));
     }
 
     template <class C>
-    std::size_t count() const { const auto* s = find_storage<C>(); return s ? s->size() : 0; }
+    std::size_t count() const {
+        const auto* s = find_storage<C>();
+        return s ? s->size() : 0;
+    }
 
     template <class C>
     Storage<C>& storage() {
@@ -241,14 +281,25 @@ public:
     template <class R>
     R* try_resource() {
         const std::uint32_t id = detail::type_id<R>();
-        return id < m_resources.size() && m_resources[id] ? &static_cast<Holder<R>&>(*m_resources[id]).value : nullptr;
+        return id < m_resources.size() && m_resources[id] ? &static_cast<Holder<R>&>(*m_resources[id]).value
+                                                          : nullptr;
     }
     template <class R>
-    const R* try_resource() const { return const_cast<Registry*>(this)->try_resource<R>(); }
+    const R* try_resource() const {
+        return const_cast<Registry*>(this)->try_resource<R>();
+    }
     template <class R>
-    R& resource() { R* r = try_resource<R>(); assert(r && "resource(): not set"); return *r; }
+    R& resource() {
+        R* r = try_resource<R>();
+        assert(r && "resource(): not set");
+        return *r;
+    }
     template <class R>
-    const R& resource() const { const R* r = try_resource<R>(); assert(r && "resource(): not set"); return *r; }
+    const R& resource() const {
+        const R* r = try_resource<R>();
+        assert(r && "resource(): not set");
+        return *r;
+    }
     template <class R>
     void erase_resource() {
         const std::uint32_t id = detail::type_id<R>();
@@ -256,7 +307,9 @@ public:
     }
 
 private:
-    struct HolderBase { virtual ~HolderBase() = default; };
+    struct HolderBase {
+        virtual ~HolderBase() = default;
+    };
     template <class R>
     struct Holder final : HolderBase {
         template <class... Args>
@@ -270,7 +323,9 @@ private:
         return id < m_storages.size() ? static_cast<Storage<C>*>(m_storages[id].get()) : nullptr;
     }
     template <class C>
-    const Storage<C>* find_storage() const { return const_cast<Registry*>(this)->find_storage<C>(); }
+    const Storage<C>* find_storage() const {
+        return const_cast<Registry*>(this)->find_storage<C>();
+    }
 
     std::vector<std::uint32_t> m_generations;
     std::vector<std::uint8_t> m_alive;

@@ -23,10 +23,8 @@ namespace detail {
 // parentheses otherwise, so `std::vector<int>(3, 1)` means three ones whether it is added or replaced.
 template <class T, class... Args>
 T make(Args&&... args) {
-    if constexpr (std::is_aggregate_v<T>)
-        return T{std::forward<Args>(args)...};
-    else
-        return T(std::forward<Args>(args)...);
+    if constexpr (std::is_aggregate_v<T>) return T{std::forward<Args>(args)...};
+    else return T(std::forward<Args>(args)...);
 }
 }  // namespace detail
 
@@ -122,8 +120,14 @@ public:
         m_version = ++*m_tick;
     }
 
-    C& get(Entity e) { assert(contains(e)); return m_data[position(e)]; }
-    const C& get(Entity e) const { assert(contains(e)); return m_data[position(e)]; }
+    C& get(Entity e) {
+        assert(contains(e));
+        return m_data[position(e)];
+    }
+    const C& get(Entity e) const {
+        assert(contains(e));
+        return m_data[position(e)];
+    }
     C* try_get(Entity e) { return contains(e) ? &m_data[position(e)] : nullptr; }
     const C* try_get(Entity e) const { return contains(e) ? &m_data[position(e)] : nullptr; }
 

@@ -49,7 +49,8 @@ std::string barrier_bit_names(std::uint32_t bits) {
         std::uint32_t bit;
         const char* name;
     } names[] = {
-        {GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT, "VERTEX_ATTRIB_ARRAY"}, {GL_ELEMENT_ARRAY_BARRIER_BIT, "ELEMENT_ARRAY"},
+        {GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT, "VERTEX_ATTRIB_ARRAY"},
+        {GL_ELEMENT_ARRAY_BARRIER_BIT, "ELEMENT_ARRAY"},
         {GL_UNIFORM_BARRIER_BIT, "UNIFORM"},
         {GL_TEXTURE_FETCH_BARRIER_BIT, "TEXTURE_FETCH"},
         {GL_SHADER_IMAGE_ACCESS_BARRIER_BIT, "SHADER_IMAGE_ACCESS"},

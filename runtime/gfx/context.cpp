@@ -46,9 +46,12 @@ const char* type_name(GLenum type) {
 // The one GL error path: every context registers this callback, so no code checks glGetError().
 void GLAPIENTRY debug_callback(GLenum source, GLenum type, GLuint id, GLenum severity, GLsizei length,
                                const GLchar* message, const void* /*user*/) {
-    if (type == GL_DEBUG_TYPE_PUSH_GROUP || type == GL_DEBUG_TYPE_POP_GROUP || type == GL_DEBUG_TYPE_MARKER) return;
-    const std::string_view text(message, length < 0 ? std::char_traits<char>::length(message) : std::size_t(length));
-    const std::string line = log::str("GL ", type_name(type), " (", source_name(source), ", id ", id, "): ", text);
+    if (type == GL_DEBUG_TYPE_PUSH_GROUP || type == GL_DEBUG_TYPE_POP_GROUP || type == GL_DEBUG_TYPE_MARKER)
+        return;
+    const std::string_view text(message,
+                                length < 0 ? std::char_traits<char>::length(message) : std::size_t(length));
+    const std::string line =
+        log::str("GL ", type_name(type), " (", source_name(source), ", id ", id, "): ", text);
     // Compile errors come back from load_program() as results mapped to file:line; the raw copy the
     // driver also sends here would only repeat them with source-string numbers.
     if (source == GL_DEBUG_SOURCE_SHADER_COMPILER) {
@@ -71,7 +74,8 @@ void install_debug_callback() {
     glEnable(GL_DEBUG_OUTPUT_SYNCHRONOUS);
     glDebugMessageCallback(debug_callback, nullptr);
     glDebugMessageControl(GL_DONT_CARE, GL_DONT_CARE, GL_DONT_CARE, 0, nullptr, GL_TRUE);
-    if (!(flags & GL_CONTEXT_FLAG_DEBUG_BIT)) log::debug("GL context is not a debug context; errors may be missed");
+    if (!(flags & GL_CONTEXT_FLAG_DEBUG_BIT))
+        log::debug("GL context is not a debug context; errors may be missed");
 }
 
 std::string gl_string(GLenum name) {
@@ -120,7 +124,8 @@ EglDisplay open_display(EGLenum platform, void* native, const char* what) {
         out.display = EGL_NO_DISPLAY;
         return out;
     }
-    const EGLint attribs[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT, EGL_NONE};
+    const EGLint attribs[] = {EGL_SURFACE_TYPE, EGL_PBUFFER_BIT, EGL_RENDERABLE_TYPE, EGL_OPENGL_BIT,
+                              EGL_NONE};
     EGLint count = 0;
     if (!eglChooseConfig(out.display, attribs, &out.config, 1, &count) || count == 0) {
         // Surfaceless needs no surface type; accept any GL-capable config.
@@ -134,9 +139,11 @@ EglDisplay open_display(EGLenum platform, void* native, const char* what) {
 // software device with EGL_MESA_device_software), or null when there is none or no enumeration.
 EGLDeviceEXT first_hardware_device() {
     const char* client = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-    if (!client || std::string_view(client).find("EGL_EXT_platform_device") == std::string_view::npos) return nullptr;
+    if (!client || std::string_view(client).find("EGL_EXT_platform_device") == std::string_view::npos)
+        return nullptr;
     auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
-    auto query_string = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
+    auto query_string =
+        reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
     if (!query_devices || !query_string) return nullptr;
     EGLint count = 0;
     if (!query_devices(0, nullptr, &count) || count <= 0) return nullptr;
@@ -144,7 +151,8 @@ EGLDeviceEXT first_hardware_device() {
     if (!query_devices(count, devices.data(), &count)) return nullptr;
     for (EGLint i = 0; i < count; ++i) {
         const char* ext = query_string(devices[std::size_t(i)], EGL_EXTENSIONS);
-        if (!ext || std::string_view(ext).find("EGL_MESA_device_software") == std::string_view::npos) return devices[std::size_t(i)];
+        if (!ext || std::string_view(ext).find("EGL_MESA_device_software") == std::string_view::npos)
+            return devices[std::size_t(i)];
     }
     return nullptr;
 }
@@ -152,15 +160,21 @@ EGLDeviceEXT first_hardware_device() {
 // GL_RENDERER of a throw-away 4.5 core context on `d` (empty when none can be made).
 std::string probe_renderer(const EglDisplay& d) {
     if (!eglBindAPI(EGL_OPENGL_API)) return {};
-    const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
-                              EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT, EGL_NONE};
+    const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION,
+                              4,
+                              EGL_CONTEXT_MINOR_VERSION,
+                              5,
+                              EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                              EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                              EGL_NONE};
     const EGLContext ctx = eglCreateContext(d.display, d.config, EGL_NO_CONTEXT, attribs);
     if (ctx == EGL_NO_CONTEXT) return {};
     const EGLDisplay old_display = eglGetCurrentDisplay();
     const EGLContext old_context = eglGetCurrentContext();
     std::string renderer;
     if (eglMakeCurrent(d.display, EGL_NO_SURFACE, EGL_NO_SURFACE, ctx)) renderer = gl_string(GL_RENDERER);
-    if (old_context != EGL_NO_CONTEXT) eglMakeCurrent(old_display, EGL_NO_SURFACE, EGL_NO_SURFACE, old_context);
+    if (old_context != EGL_NO_CONTEXT)
+        eglMakeCurrent(old_display, EGL_NO_SURFACE, EGL_NO_SURFACE, old_context);
     else eglMakeCurrent(d.display, EGL_NO_SURFACE, EGL_NO_SURFACE, EGL_NO_CONTEXT);
     eglDestroyContext(d.display, ctx);
     return renderer;
@@ -171,7 +185,8 @@ std::string probe_renderer(const EglDisplay& d) {
 // platform does not drive, e.g. NVIDIA's), the first hardware device through EGL_EXT_platform_device.
 const EglDisplay& egl_display() {
     static const EglDisplay d = [] {
-        EglDisplay surfaceless = open_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, "EGL_PLATFORM_SURFACELESS_MESA");
+        EglDisplay surfaceless =
+            open_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, "EGL_PLATFORM_SURFACELESS_MESA");
         EGLDeviceEXT device = first_hardware_device();
         if (!device) {
             if (surfaceless.display == EGL_NO_DISPLAY) surfaceless.error += " (is libegl-mesa0 installed?)";
@@ -188,7 +203,8 @@ const EglDisplay& egl_display() {
             on_device.on_device = true;
             return on_device;
         }
-        log::warn("EGL device fallback failed: ", on_device.error.empty() ? "no OpenGL config" : on_device.error);
+        log::warn("EGL device fallback failed: ",
+                  on_device.error.empty() ? "no OpenGL config" : on_device.error);
         if (surfaceless.display == EGL_NO_DISPLAY) surfaceless.error += "; " + on_device.error;
         return surfaceless;
     }();
@@ -309,19 +325,23 @@ Result<GlContext> finish(GlContext context, GlContext::Impl& impl, bool debug) {
     glGetIntegerv(GL_MAJOR_VERSION, &major);
     glGetIntegerv(GL_MINOR_VERSION, &minor);
     if (major * 10 + minor < 45)
-        return make_error(log::str("create_context(): need OpenGL 4.5 core, got ", impl.version, " (", impl.renderer, ")"));
+        return make_error(
+            log::str("create_context(): need OpenGL 4.5 core, got ", impl.version, " (", impl.renderer, ")"));
     if (hardware_gl_required() && software_renderer_name(impl.renderer))
-        return make_error(log::str("create_context(): SFFD_REQUIRE_HARDWARE_GL is set but the renderer is ", impl.renderer,
-                                   " (a software rasterizer)"));
+        return make_error(log::str("create_context(): SFFD_REQUIRE_HARDWARE_GL is set but the renderer is ",
+                                   impl.renderer, " (a software rasterizer)"));
     const GlLimits limits = query_limits();
-    if (Status s = check_limits(limits); !s) return make_error(log::str("create_context(): ", s.message(), " (", impl.renderer, ")"));
+    if (Status s = check_limits(limits); !s)
+        return make_error(log::str("create_context(): ", s.message(), " (", impl.renderer, ")"));
     set_context_limits(limits);
     if (debug) install_debug_callback();
     // At info level once per process where the renderer is in question (a GPU run, or the EGL device
     // fallback was taken); otherwise at debug: commands print machine-readable output on the same streams.
     static std::atomic<bool> logged{false};
-    const auto line = log::str("GL context: ", impl.headless ? "headless EGL" : "window", ", ", impl.renderer, ", ", impl.version);
-    if ((hardware_gl_required() || (impl.headless && egl_display().on_device)) && !logged.exchange(true)) log::info(line);
+    const auto line = log::str("GL context: ", impl.headless ? "headless EGL" : "window", ", ", impl.renderer,
+                               ", ", impl.version);
+    if ((hardware_gl_required() || (impl.headless && egl_display().on_device)) && !logged.exchange(true))
+        log::info(line);
     else log::debug(line);
     return context;
 }
@@ -352,7 +372,8 @@ Result<GlContext> create_context(const ContextOptions& options) {
         glfwWindowHint(GLFW_OPENGL_DEBUG_CONTEXT, options.debug ? GLFW_TRUE : GLFW_FALSE);
         glfwWindowHint(GLFW_VISIBLE, options.visible ? GLFW_TRUE : GLFW_FALSE);
         glfwWindowHint(GLFW_DEPTH_BITS, 24);
-        impl.window = glfwCreateWindow(options.width, options.height, options.title.c_str(), nullptr, nullptr);
+        impl.window =
+            glfwCreateWindow(options.width, options.height, options.title.c_str(), nullptr, nullptr);
         if (!impl.window) {
             impl.headless = true;
             return make_error("create_context(): glfwCreateWindow() failed for an OpenGL 4.5 core context");
@@ -365,18 +386,25 @@ Result<GlContext> create_context(const ContextOptions& options) {
     const EglDisplay& egl = egl_display();
     if (egl.display == EGL_NO_DISPLAY) return make_error("create_context(): " + egl.error);
     if (!eglBindAPI(EGL_OPENGL_API))
-        return make_error(log::str("create_context(): eglBindAPI(EGL_OPENGL_API): ", egl_error_name(eglGetError())));
+        return make_error(
+            log::str("create_context(): eglBindAPI(EGL_OPENGL_API): ", egl_error_name(eglGetError())));
     // 4.5 core exactly: llvmpipe on Debian 12 refuses 4.6.
-    const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4,
-                              EGL_CONTEXT_MINOR_VERSION, 5,
-                              EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
-                              EGL_CONTEXT_OPENGL_DEBUG, options.debug ? EGL_TRUE : EGL_FALSE,
+    const EGLint attribs[] = {EGL_CONTEXT_MAJOR_VERSION,
+                              4,
+                              EGL_CONTEXT_MINOR_VERSION,
+                              5,
+                              EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                              EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+                              EGL_CONTEXT_OPENGL_DEBUG,
+                              options.debug ? EGL_TRUE : EGL_FALSE,
                               EGL_NONE};
     impl.egl_context = eglCreateContext(egl.display, egl.config, EGL_NO_CONTEXT, attribs);
     if (impl.egl_context == EGL_NO_CONTEXT)
-        return make_error(log::str("create_context(): eglCreateContext(OpenGL 4.5 core): ", egl_error_name(eglGetError())));
+        return make_error(
+            log::str("create_context(): eglCreateContext(OpenGL 4.5 core): ", egl_error_name(eglGetError())));
     if (!eglMakeCurrent(egl.display, EGL_NO_SURFACE, EGL_NO_SURFACE, impl.egl_context))
-        return make_error(log::str("create_context(): eglMakeCurrent(surfaceless): ", egl_error_name(eglGetError())));
+        return make_error(
+            log::str("create_context(): eglMakeCurrent(surfaceless): ", egl_error_name(eglGetError())));
     return finish(std::move(context), impl, options.debug);
 }
 

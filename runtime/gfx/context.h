@@ -28,11 +28,11 @@ struct GLFWwindow;
 namespace sffd::gfx {
 
 struct ContextOptions {
-    bool headless = false;   // force EGL surfaceless even when DISPLAY is set
-    int width = 1280;        // window size, or the nominal framebuffer size when headless
+    bool headless = false;  // force EGL surfaceless even when DISPLAY is set
+    int width = 1280;       // window size, or the nominal framebuffer size when headless
     int height = 720;
-    bool visible = true;     // window only
-    bool debug = true;       // debug context + debug-message callback
+    bool visible = true;  // window only
+    bool debug = true;    // debug context + debug-message callback
     std::string title = "SplatFFD";
 };
 
@@ -64,7 +64,7 @@ public:
     bool is_headless() const;
     // Window: its framebuffer in pixels. Headless: the size asked for in ContextOptions.
     FramebufferSize framebuffer_size() const;
-    GLFWwindow* window() const;  // nullptr when headless
+    GLFWwindow* window() const;           // nullptr when headless
     const std::string& renderer() const;  // GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
     const std::string& version() const;   // GL_VERSION
 

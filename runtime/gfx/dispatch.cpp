@@ -29,9 +29,10 @@ Status dispatch_1d(std::uint64_t count, std::uint32_t local_size, std::uint32_t 
     if (max_groups_x == 0) max_groups_x = t_limit;
     const std::optional<DispatchGrid> grid = dispatch_grid(count, local_size, max_groups_x);
     if (!grid)
-        return make_error("dispatch_1d(): " + std::to_string(count) + " invocations of " + std::to_string(local_size) +
-                          " per group do not fit a grid of " + std::to_string(max_groups_x) + " x " +
-                          std::to_string(kMinMaxComputeGroups) + " groups with 32-bit indices");
+        return make_error("dispatch_1d(): " + std::to_string(count) + " invocations of " +
+                          std::to_string(local_size) + " per group do not fit a grid of " +
+                          std::to_string(max_groups_x) + " x " + std::to_string(kMinMaxComputeGroups) +
+                          " groups with 32-bit indices");
     if (grid->x > 0) glDispatchCompute(grid->x, grid->y, 1);
     return {};
 }

@@ -13,7 +13,17 @@
 
 namespace sffd::gfx {
 
-enum class GlKind { buffer, texture, framebuffer, renderbuffer, vertex_array, program, shader, query, sampler };
+enum class GlKind {
+    buffer,
+    texture,
+    framebuffer,
+    renderbuffer,
+    vertex_array,
+    program,
+    shader,
+    query,
+    sampler
+};
 
 template <GlKind K>
 class GlObject {
@@ -56,14 +66,18 @@ public:
         GLenum identifier = 0;
         if constexpr (K == GlKind::buffer) glCreateBuffers(1, &id), identifier = GL_BUFFER;
         else if constexpr (K == GlKind::texture) glCreateTextures(target, 1, &id), identifier = GL_TEXTURE;
-        else if constexpr (K == GlKind::framebuffer) glCreateFramebuffers(1, &id), identifier = GL_FRAMEBUFFER;
-        else if constexpr (K == GlKind::renderbuffer) glCreateRenderbuffers(1, &id), identifier = GL_RENDERBUFFER;
-        else if constexpr (K == GlKind::vertex_array) glCreateVertexArrays(1, &id), identifier = GL_VERTEX_ARRAY;
+        else if constexpr (K == GlKind::framebuffer)
+            glCreateFramebuffers(1, &id), identifier = GL_FRAMEBUFFER;
+        else if constexpr (K == GlKind::renderbuffer)
+            glCreateRenderbuffers(1, &id), identifier = GL_RENDERBUFFER;
+        else if constexpr (K == GlKind::vertex_array)
+            glCreateVertexArrays(1, &id), identifier = GL_VERTEX_ARRAY;
         else if constexpr (K == GlKind::program) id = glCreateProgram(), identifier = GL_PROGRAM;
         else if constexpr (K == GlKind::shader) id = glCreateShader(target), identifier = GL_SHADER;
         else if constexpr (K == GlKind::query) glCreateQueries(target, 1, &id), identifier = GL_QUERY;
         else if constexpr (K == GlKind::sampler) glCreateSamplers(1, &id), identifier = GL_SAMPLER;
-        if (id && !label.empty()) glObjectLabel(identifier, id, static_cast<GLsizei>(label.size()), label.data());
+        if (id && !label.empty())
+            glObjectLabel(identifier, id, static_cast<GLsizei>(label.size()), label.data());
         return GlObject(id);
     }
 

@@ -82,10 +82,13 @@ bool ssbo_fits(std::uint64_t bytes, const GlLimits& l) {
 }
 
 std::string ssbo_too_large(const char* what, std::uint64_t bytes, const GlLimits& l) {
-    return log::str(what, ": ", bytes, " bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (", l.max_ssbo_block_size, ")");
+    return log::str(what, ": ", bytes, " bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (",
+                    l.max_ssbo_block_size, ")");
 }
 
-ScopedLimits::ScopedLimits(const GlLimits& l) : m_limits(l), m_previous(t_override) { t_override = &m_limits; }
+ScopedLimits::ScopedLimits(const GlLimits& l) : m_limits(l), m_previous(t_override) {
+    t_override = &m_limits;
+}
 ScopedLimits::~ScopedLimits() { t_override = m_previous; }
 
 bool hardware_gl_required() {

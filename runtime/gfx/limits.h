@@ -28,11 +28,11 @@ struct GlLimits {
     int max_fragment_ssbo_blocks = 0;      // GL_MAX_FRAGMENT_SHADER_STORAGE_BLOCKS
     int max_compute_ssbo_blocks = 0;       // GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS
     int max_combined_ssbo_blocks = 0;      // GL_MAX_COMBINED_SHADER_STORAGE_BLOCKS
-    int ssbo_offset_alignment = 0;         // GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, bytes (glBindBufferRange)
-    int max_uniform_block_size = 0;        // GL_MAX_UNIFORM_BLOCK_SIZE, bytes
-    int max_compute_groups_x = 0;          // GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
-    int max_compute_groups_y = 0;          // GL_MAX_COMPUTE_WORK_GROUP_COUNT[1]
-    float max_point_size = 0;              // GL_POINT_SIZE_RANGE[1]
+    int ssbo_offset_alignment = 0;   // GL_SHADER_STORAGE_BUFFER_OFFSET_ALIGNMENT, bytes (glBindBufferRange)
+    int max_uniform_block_size = 0;  // GL_MAX_UNIFORM_BLOCK_SIZE, bytes
+    int max_compute_groups_x = 0;    // GL_MAX_COMPUTE_WORK_GROUP_COUNT[0]
+    int max_compute_groups_y = 0;    // GL_MAX_COMPUTE_WORK_GROUP_COUNT[1]
+    float max_point_size = 0;        // GL_POINT_SIZE_RANGE[1]
 };
 
 // What the engine's shaders need beyond GL 4.5's guarantees (each with the shader that needs it).

@@ -43,9 +43,11 @@ void bind(GLuint binding, GLuint buffer) { glBindBufferBase(GL_SHADER_STORAGE_BU
 // One round of both algorithms: `per_block` over the blocks (a histogram or a sum each), the one-group
 // scan of those entries, `apply` over the blocks (scatter, or add the block's offset). Leaves `apply`
 // bound; the caller places the barrier its next reader needs.
-Status block_scan_round(const RadixSorter& s, GLuint per_block, GLuint apply, std::uint32_t blocks, std::uint32_t max_x) {
+Status block_scan_round(const RadixSorter& s, GLuint per_block, GLuint apply, std::uint32_t blocks,
+                        std::uint32_t max_x) {
     glUseProgram(per_block);
-    if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st) return st;
+    if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st)
+        return st;
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     glUseProgram(s.scan.id());
     glDispatchCompute(1, 1, 1);
@@ -72,7 +74,8 @@ Status radix_sort(RadixSorter& s, GLuint keys, GLuint values, std::uint32_t coun
     }
     const std::uint32_t max_x = s.max_groups_x ? s.max_groups_x : dispatch_group_limit();
     const int passes = (key_bits + int(SFFD_RADIX_BITS) - 1) / int(SFFD_RADIX_BITS);
-    GLuint keys_in = keys, values_in = values, keys_out = s.keys_scratch.id(), values_out = s.values_scratch.id();
+    GLuint keys_in = keys, values_in = values, keys_out = s.keys_scratch.id(),
+           values_out = s.values_scratch.id();
     for (GLuint p : {s.count.id(), s.scatter.id()}) {
         glProgramUniform1ui(p, SFFD_RADIX_LOC_COUNT, count);
         glProgramUniform1ui(p, SFFD_RADIX_LOC_BLOCKS, blocks);
@@ -102,10 +105,12 @@ Status radix_sort(RadixSorter& s, GLuint keys, GLuint values, std::uint32_t coun
 }
 
 Status exclusive_scan(RadixSorter& s, GLuint buffer, std::uint32_t count) {
-    if (count == 0xffffffffu) return make_error("exclusive_scan(): the total of 2^32 - 1 elements has no slot");
+    if (count == 0xffffffffu)
+        return make_error("exclusive_scan(): the total of 2^32 - 1 elements has no slot");
     if (count == 0) {
         const GLuint zero = 0;
-        glClearNamedBufferSubData(buffer, GL_R32UI, 0, sizeof(GLuint), GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
+        glClearNamedBufferSubData(buffer, GL_R32UI, 0, sizeof(GLuint), GL_RED_INTEGER, GL_UNSIGNED_INT,
+                                  &zero);
         return {};
     }
     const std::uint32_t blocks = (count + SFFD_RADIX_BLOCK - 1) / SFFD_RADIX_BLOCK;

@@ -1,8 +1,8 @@
 // Stable GPU radix sort of (uint key, uint value) pairs in GL buffers, compute shaders only (GL 4.5 core,
 // no subgroup or vendor extensions): per pass of 4 key bits, a histogram per block of 2,048 keys
-// (shaders/common/radix_sort_count.comp: packed counters, a shared-memory tree), one exclusive scan of all histograms
-// (radix_sort_scan.comp) and a stable scatter (radix_sort_scatter.comp); 8 passes for 32-bit keys, fewer
-// when only the low `key_bits` bits order (e.g. 12-bit tile ids: 3 passes). Equal keys keep their input
+// (shaders/common/radix_sort_count.comp: packed counters, a shared-memory tree), one exclusive scan of all
+// histograms (radix_sort_scan.comp) and a stable scatter (radix_sort_scatter.comp); 8 passes for 32-bit keys,
+// fewer when only the low `key_bits` bits order (e.g. 12-bit tile ids: 3 passes). Equal keys keep their input
 // order, so sorting by a second key after a first gives the lexicographic order (gl_render's tiles).
 //
 //   auto sorter = gfx::create_radix_sorter();                 // compiles the 3 programs

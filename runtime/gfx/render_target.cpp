@@ -26,8 +26,8 @@ Result<RenderTarget> RenderTarget::create(const RenderTargetDesc& desc) {
     for (std::size_t i = 0; i < desc.color.size(); ++i)
         for (std::size_t j = 0; j < i; ++j)
             if (desc.color[i].name == desc.color[j].name)
-                return make_error(log::str("RenderTarget::create(", desc.label, "): duplicate attachment name '",
-                                           desc.color[i].name, "'"));
+                return make_error(log::str("RenderTarget::create(", desc.label,
+                                           "): duplicate attachment name '", desc.color[i].name, "'"));
     RenderTarget target;
     target.m_desc = desc;
     if (Status s = target.allocate(); !s) return s.error();
@@ -39,8 +39,8 @@ Status RenderTarget::allocate() {
     glGetIntegerv(GL_MAX_TEXTURE_SIZE, &max_size);
     glGetIntegerv(GL_MAX_COLOR_ATTACHMENTS, &max_attachments);
     if (m_desc.width <= 0 || m_desc.height <= 0 || m_desc.width > max_size || m_desc.height > max_size)
-        return make_error(log::str("RenderTarget(", m_desc.label, "): invalid size ", m_desc.width, "x", m_desc.height,
-                                   " (1..", max_size, ")"));
+        return make_error(log::str("RenderTarget(", m_desc.label, "): invalid size ", m_desc.width, "x",
+                                   m_desc.height, " (1..", max_size, ")"));
     if (int(m_desc.color.size()) > max_attachments)
         return make_error(log::str("RenderTarget(", m_desc.label, "): ", m_desc.color.size(),
                                    " colour attachments, the driver allows ", max_attachments));
@@ -72,8 +72,8 @@ Status RenderTarget::allocate() {
     else glNamedFramebufferDrawBuffers(m_fbo.id(), GLsizei(draw_buffers.size()), draw_buffers.data());
     const GLenum status = glCheckNamedFramebufferStatus(m_fbo.id(), GL_FRAMEBUFFER);
     if (status != GL_FRAMEBUFFER_COMPLETE)
-        return make_error(log::str("RenderTarget(", m_desc.label, "): framebuffer incomplete (status 0x", std::hex,
-                                   status, ")"));
+        return make_error(log::str("RenderTarget(", m_desc.label, "): framebuffer incomplete (status 0x",
+                                   std::hex, status, ")"));
     return {};
 }
 
@@ -101,7 +101,9 @@ int RenderTarget::attachment_index(std::string_view name) const {
     return -1;
 }
 
-GLuint RenderTarget::color_texture(std::string_view name) const { return color_texture(attachment_index(name)); }
+GLuint RenderTarget::color_texture(std::string_view name) const {
+    return color_texture(attachment_index(name));
+}
 
 GLuint RenderTarget::color_texture(int index) const {
     return index >= 0 && std::size_t(index) < m_color.size() ? m_color[std::size_t(index)].id() : 0;
@@ -144,7 +146,8 @@ std::vector<float> RenderTarget::read_depth() const {
     if (!m_depth) return {};
     std::vector<float> depth(std::size_t(m_desc.width) * std::size_t(m_desc.height));
     glPixelStorei(GL_PACK_ALIGNMENT, 4);
-    glGetTextureImage(m_depth.id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(depth.size() * sizeof(float)), depth.data());
+    glGetTextureImage(m_depth.id(), 0, GL_DEPTH_COMPONENT, GL_FLOAT, GLsizei(depth.size() * sizeof(float)),
+                      depth.data());
     return depth;
 }
 

@@ -28,7 +28,9 @@ void reserve_buffer(Buffer& b, const char* label, std::size_t bytes) {
     if (std::size_t(have) < want) glNamedBufferData(b.id(), GLsizeiptr(want), nullptr, GL_DYNAMIC_COPY);
 }
 
-bool context_current() { return eglGetCurrentContext() != EGL_NO_CONTEXT || glfwGetCurrentContext() != nullptr; }
+bool context_current() {
+    return eglGetCurrentContext() != EGL_NO_CONTEXT || glfwGetCurrentContext() != nullptr;
+}
 
 void set_rest(ResidentCloud& cloud, std::uint64_t version, std::uint32_t count) {
     cloud.rest_version = version;

@@ -21,10 +21,10 @@ enum class Residency : std::uint8_t { rest, deformed_gpu, deformed_cpu };
 // The part of a resident cloud that does not depend on its kind (the kinds derive from it and add the
 // buffers their data needs).
 struct ResidentCloud {
-    Buffer rest;                         // authored data, in the kind's GPU layout
-    Buffer deformed;                     // written by the deformation (GPU pass or uploaded CPU output)
-    std::uint32_t count = 0;             // elements in `rest` (and in `deformed` when it is valid)
-    std::uint64_t rest_version = 0;      // change stamp of the authored component that `rest` holds
+    Buffer rest;                     // authored data, in the kind's GPU layout
+    Buffer deformed;                 // written by the deformation (GPU pass or uploaded CPU output)
+    std::uint32_t count = 0;         // elements in `rest` (and in `deformed` when it is valid)
+    std::uint64_t rest_version = 0;  // change stamp of the authored component that `rest` holds
     Residency state = Residency::rest;
     std::uint64_t deformed_version = 0;  // bumped whenever `deformed` is rewritten
 

@@ -25,8 +25,8 @@ bool is_directive(std::string_view line, std::string_view name, std::string_view
     line = trim_left(line.substr(1));
     if (line.substr(0, name.size()) != name) return false;
     line.remove_prefix(name.size());
-    if (!line.empty() && line.front() != ' ' && line.front() != '\t' && line.front() != '"' && line.front() != '<' &&
-        line.front() != '\r')
+    if (!line.empty() && line.front() != ' ' && line.front() != '\t' && line.front() != '"' &&
+        line.front() != '<' && line.front() != '\r')
         return false;  // e.g. "#includes"
     if (rest) *rest = trim_left(line);
     return true;
@@ -89,7 +89,8 @@ private:
             for (std::size_t c = 0; c + 1 < line.size(); ++c) {
                 if (!in_block_comment && line[c] == '/' && line[c + 1] == '/') break;
                 if (!in_block_comment && line[c] == '/' && line[c + 1] == '*') in_block_comment = true, ++c;
-                else if (in_block_comment && line[c] == '*' && line[c + 1] == '/') in_block_comment = false, ++c;
+                else if (in_block_comment && line[c] == '*' && line[c + 1] == '/')
+                    in_block_comment = false, ++c;
             }
             std::string_view rest;
             if (starts_in_comment) {
@@ -98,7 +99,8 @@ private:
                 if (!is_main)
                     return fail(log::str(path.string(), ":", line_no, ": #version in an included file"));
                 emit(line);
-                for (const auto& [name, value] : m_defines) emit(log::str("#define ", name, value.empty() ? "" : " ", value));
+                for (const auto& [name, value] : m_defines)
+                    emit(log::str("#define ", name, value.empty() ? "" : " ", value));
                 emit(log::str("#line ", line_no + 1, " ", id));
                 seen_version = true;
             } else if (is_directive(line, "pragma", &rest) && trim_left(rest).substr(0, 4) == "once") {
@@ -109,7 +111,8 @@ private:
                 const char close = open == '<' ? '>' : '"';
                 const std::size_t end = rest.find(close, 1);
                 if ((open != '"' && open != '<') || end == std::string_view::npos)
-                    return fail(log::str(path.string(), ":", line_no, ": malformed #include (expected #include \"file\")"));
+                    return fail(log::str(path.string(), ":", line_no,
+                                         ": malformed #include (expected #include \"file\")"));
                 const std::string name(rest.substr(1, end - 1));
                 fs::path target;
                 std::error_code ec;
@@ -119,12 +122,14 @@ private:
                         break;
                     }
                 if (target.empty())
-                    return fail(log::str(path.string(), ":", line_no, ": cannot open include \"", name, "\" (looked in ",
-                                         path.parent_path().string(), " and ", m_root.string(), ")"));
+                    return fail(log::str(path.string(), ":", line_no, ": cannot open include \"", name,
+                                         "\" (looked in ", path.parent_path().string(), " and ",
+                                         m_root.string(), ")"));
                 if (std::find(m_stack.begin(), m_stack.end(), target) != m_stack.end()) {
                     std::string chain;
                     for (const fs::path& p : m_stack) chain += p.filename().string() + " -> ";
-                    return fail(log::str(path.string(), ":", line_no, ": #include cycle: ", chain, target.filename().string()));
+                    return fail(log::str(path.string(), ":", line_no, ": #include cycle: ", chain,
+                                         target.filename().string()));
                 }
                 if (std::find(m_once.begin(), m_once.end(), target) != m_once.end()) {
                     emit("");
@@ -170,13 +175,15 @@ const char* stage_name(GLenum stage) {
 }
 
 std::string trim_trailing(std::string s) {
-    while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ' || s.back() == '\0')) s.pop_back();
+    while (!s.empty() && (s.back() == '\n' || s.back() == '\r' || s.back() == ' ' || s.back() == '\0'))
+        s.pop_back();
     return s;
 }
 
 }  // namespace
 
-Result<PreprocessedSource> preprocess_shader(const fs::path& root, const fs::path& path, const Defines& defines) {
+Result<PreprocessedSource> preprocess_shader(const fs::path& root, const fs::path& path,
+                                             const Defines& defines) {
     return Preprocessor(root, defines).run(path);
 }
 
@@ -238,8 +245,8 @@ std::string map_shader_log(std::string_view log_text, const std::vector<fs::path
     return trim_trailing(std::move(out));
 }
 
-Result<Program> load_program(const fs::path& root, const std::vector<ShaderSource>& sources, std::string_view label,
-                             const Defines& defines) {
+Result<Program> load_program(const fs::path& root, const std::vector<ShaderSource>& sources,
+                             std::string_view label, const Defines& defines) {
     if (sources.empty()) return make_error(log::str("load_program(", label, "): no shader stages given"));
     std::vector<Shader> shaders;
     for (const ShaderSource& source : sources) {
@@ -257,7 +264,8 @@ Result<Program> load_program(const fs::path& root, const std::vector<ShaderSourc
         if (log_length > 1) glGetShaderInfoLog(shader.id(), log_length, nullptr, info.data());
         const std::string mapped = map_shader_log(trim_trailing(info), pre->files);
         if (!ok) {
-            if (mapped.empty()) return make_error(pre->files[0].string() + ": compile failed (the driver gave no log)");
+            if (mapped.empty())
+                return make_error(pre->files[0].string() + ": compile failed (the driver gave no log)");
             return make_error(mapped);
         }
         if (!mapped.empty()) log::warn(mapped);
@@ -282,11 +290,13 @@ Result<Program> load_program(const fs::path& root, const std::vector<ShaderSourc
     return program;
 }
 
-Result<Program> load_program(const std::vector<ShaderSource>& sources, std::string_view label, const Defines& defines) {
+Result<Program> load_program(const std::vector<ShaderSource>& sources, std::string_view label,
+                             const Defines& defines) {
     return load_program(paths::shader_dir(), sources, label, defines);
 }
 
-Result<Program> load_compute_program(const std::string& path, std::string_view label, const Defines& defines) {
+Result<Program> load_compute_program(const std::string& path, std::string_view label,
+                                     const Defines& defines) {
     return load_program(paths::shader_dir(), {{GL_COMPUTE_SHADER, path}}, label, defines);
 }
 

@@ -38,8 +38,8 @@ struct PreprocessedSource {
 };
 
 // CPU-only step (testable without GL): reads `path` (relative to `root` unless absolute) and expands it.
-Result<PreprocessedSource> preprocess_shader(const std::filesystem::path& root, const std::filesystem::path& path,
-                                             const Defines& defines = {});
+Result<PreprocessedSource> preprocess_shader(const std::filesystem::path& root,
+                                             const std::filesystem::path& path, const Defines& defines = {});
 
 // Rewrites a driver info log ("0:12(5): error: ..." from Mesa, "ERROR: 0:12: ..." elsewhere) into
 // "path:line: message" lines using the file table from preprocess_shader().
@@ -52,6 +52,7 @@ Result<Program> load_program(const std::filesystem::path& root, const std::vecto
                              std::string_view label, const Defines& defines = {});
 
 // Convenience for a single compute shader.
-Result<Program> load_compute_program(const std::string& path, std::string_view label, const Defines& defines = {});
+Result<Program> load_compute_program(const std::string& path, std::string_view label,
+                                     const Defines& defines = {});
 
 }  // namespace sffd::gfx

@@ -13,7 +13,8 @@ void upload_rest_splats(GpuSplats& gpu, const SplatCloud& cloud, std::uint64_t v
     else gpu.cpu_rest = {};
 }
 
-void upload_deformed_splats(GpuSplats& gpu, const SplatCloud& authored, const DeformedSplatArrays& d, bool keep_cpu) {
+void upload_deformed_splats(GpuSplats& gpu, const SplatCloud& authored, const DeformedSplatArrays& d,
+                            bool keep_cpu) {
     const std::size_t n = authored.size();
     SplatCloud moved;
     moved.positions = d.positions;

@@ -30,14 +30,16 @@ struct GpuSplats : ResidentCloud {
     // The CPU copy of the draw buffer, if one exists (none when the compute pass wrote `deformed`).
     const std::vector<gpu::GpuSplat>* cpu_current() const {
         if (state == Residency::rest) return cpu_rest.size() == count && count ? &cpu_rest : nullptr;
-        if (state == Residency::deformed_cpu) return cpu_deformed.size() == count && count ? &cpu_deformed : nullptr;
+        if (state == Residency::deformed_cpu)
+            return cpu_deformed.size() == count && count ? &cpu_deformed : nullptr;
         return nullptr;
     }
 };
 
 struct GpuSplatStore {
     std::unordered_map<ecs::Entity, GpuSplats> clouds;
-    bool keep_cpu = false;  // keep CPU mirrors (residency_system: on a software rasterizer the cull runs there)
+    bool keep_cpu =
+        false;  // keep CPU mirrors (residency_system: on a software rasterizer the cull runs there)
 };
 
 // The one rest upload of a surface cloud: packs it, fills `rest`, state rest at `version`.

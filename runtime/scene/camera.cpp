@@ -42,7 +42,8 @@ std::optional<Projected> project(const Camera& camera, const Viewport& viewport,
     if (!(depth > 0.0)) return std::nullopt;
     const glm::dvec4 clip = projection_matrix(camera, viewport) * eye_space;
     const glm::dvec3 ndc = glm::dvec3(clip) / clip.w;
-    return Projected{{(ndc.x + 1.0) * 0.5 * viewport.width, (1.0 - ndc.y) * 0.5 * viewport.height}, depth, ndc.z};
+    return Projected{
+        {(ndc.x + 1.0) * 0.5 * viewport.width, (1.0 - ndc.y) * 0.5 * viewport.height}, depth, ndc.z};
 }
 
 glm::dvec3 project_to_pixel(const Camera& camera, const Viewport& viewport, const glm::dvec3& world) {

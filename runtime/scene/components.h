@@ -26,9 +26,9 @@ struct Transform {
 
 // Material of a splat cloud: flat per-splat colours, or a texture looked up at each splat's uv.
 struct SplatMaterial {
-    std::string texture_path;              // empty: use per-splat colours (or `base_color`)
+    std::string texture_path;  // empty: use per-splat colours (or `base_color`)
     int texture_width = 0, texture_height = 0;
-    std::vector<std::uint8_t> texture_rgba8;  // decoded texels, row 0 at v = 0, sRGB-encoded
+    std::vector<std::uint8_t> texture_rgba8;       // decoded texels, row 0 at v = 0, sRGB-encoded
     glm::vec4 base_color{0.8f, 0.8f, 0.8f, 1.0f};  // linear RGBA when no texture and no colours
     float specular = 0.3f;
     float shininess = 32.0f;
@@ -38,13 +38,13 @@ struct SplatMaterial {
 // length `size()`. Splat i is the ellipse centred at origin + positions[i], spanned by axis_u[i] and
 // axis_v[i] (their lengths are the radii; a circular splat has |axis_u| = |axis_v|), facing normals[i].
 struct SplatCloud {
-    glm::dvec3 origin{0.0};                 // world offset of every position (double precision)
+    glm::dvec3 origin{0.0};  // world offset of every position (double precision)
     std::vector<glm::vec3> positions;
-    std::vector<glm::vec3> normals;         // unit length
-    std::vector<glm::vec3> axis_u;          // tangent axis scaled by radius
-    std::vector<glm::vec3> axis_v;          // bitangent axis scaled by radius (normal x axis_u direction)
-    std::vector<std::uint32_t> colors;      // RGBA8, sRGB-encoded, R in the low byte
-    std::vector<glm::vec2> uvs;             // texture coordinates (when the material has a texture)
+    std::vector<glm::vec3> normals;     // unit length
+    std::vector<glm::vec3> axis_u;      // tangent axis scaled by radius
+    std::vector<glm::vec3> axis_v;      // bitangent axis scaled by radius (normal x axis_u direction)
+    std::vector<std::uint32_t> colors;  // RGBA8, sRGB-encoded, R in the low byte
+    std::vector<glm::vec2> uvs;         // texture coordinates (when the material has a texture)
     // uv derivatives along the splat's axes: the point positions[i] + s * axis_u[i] + t * axis_v[i] has
     // uv = uvs[i] + s * uv_axes[i].xy + t * uv_axes[i].zw (first order). Per axis, so they hold for the
     // deformed axes too (FFD maps the axes by the Jacobian). Empty: one texture lookup per splat.
@@ -68,9 +68,9 @@ struct ExactSphere {
 // splats. Authored data.
 struct ExactMesh {
     std::vector<glm::dvec3> positions;
-    std::vector<glm::vec3> normals;         // empty: the triangles' own normals; else one per position
-    std::vector<glm::vec2> uvs;             // empty or one per position
-    std::vector<std::uint32_t> triangles;   // 3 indices per triangle
+    std::vector<glm::vec3> normals;        // empty: the triangles' own normals; else one per position
+    std::vector<glm::vec2> uvs;            // empty or one per position
+    std::vector<std::uint32_t> triangles;  // 3 indices per triangle
 };
 
 // Perspective camera looking down its local -Z; placed by the entity's Transform or by look-at fields.

@@ -17,13 +17,16 @@ std::vector<glm::dvec3> rest_grid(const glm::dvec3& origin, const std::array<glm
     return grid;
 }
 
-static bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+static bool finite(const glm::dvec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 Status validate_lattice(const Lattice& l, const std::string& what) {
     for (int a = 0; a < 3; ++a)
         if (l.divisions[a] < 1 || l.divisions[a] > kMaxLatticeDivisions)
-            return make_error(what + ": divisions must be between 1 and " + std::to_string(kMaxLatticeDivisions) +
-                              " per axis (got " + std::to_string(l.divisions[a]) + ")");
+            return make_error(what + ": divisions must be between 1 and " +
+                              std::to_string(kMaxLatticeDivisions) + " per axis (got " +
+                              std::to_string(l.divisions[a]) + ")");
     if (!finite(l.origin)) return make_error(what + ": origin is not finite");
     for (int a = 0; a < 3; ++a)
         if (!finite(l.axes[a])) return make_error(what + ": axis " + "STU"[a] + " is not finite");
@@ -39,14 +42,16 @@ Status validate_lattice(const Lattice& l, const std::string& what) {
         return make_error(what + ": expected " + std::to_string(n) + " control points, got " +
                           std::to_string(l.current.size()));
     for (std::size_t c = 0; c < n; ++c) {
-        if (!finite(l.current[c])) return make_error(what + ": control point " + std::to_string(c) + " is not finite");
-        if (!finite(l.rest[c])) return make_error(what + ": rest control point " + std::to_string(c) + " is not finite");
+        if (!finite(l.current[c]))
+            return make_error(what + ": control point " + std::to_string(c) + " is not finite");
+        if (!finite(l.rest[c]))
+            return make_error(what + ": rest control point " + std::to_string(c) + " is not finite");
     }
     return {};
 }
 
-Lattice make_lattice(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes, const glm::ivec3& divisions,
-                     LatticeBasis basis) {
+Lattice make_lattice(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes,
+                     const glm::ivec3& divisions, LatticeBasis basis) {
     Lattice l;
     l.origin = origin;
     l.axes = axes;

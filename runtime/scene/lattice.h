@@ -28,10 +28,10 @@ inline constexpr int kMaxLatticeDivisions = 64;
 struct Lattice {
     glm::dvec3 origin{0.0};
     std::array<glm::dvec3, 3> axes{glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)};  // S, T, U
-    glm::ivec3 divisions{1, 1, 1};                // l, m, n
+    glm::ivec3 divisions{1, 1, 1};                                                                  // l, m, n
     LatticeBasis basis = LatticeBasis::bernstein;
-    std::vector<glm::dvec3> rest;                 // control points at rest (world space of the lattice)
-    std::vector<glm::dvec3> current;              // edited control points, same indexing
+    std::vector<glm::dvec3> rest;     // control points at rest (world space of the lattice)
+    std::vector<glm::dvec3> current;  // edited control points, same indexing
 
     std::size_t size() const { return std::size_t(divisions.x + 1) * (divisions.y + 1) * (divisions.z + 1); }
     std::size_t index(int i, int j, int k) const {
@@ -57,7 +57,7 @@ std::vector<glm::dvec3> rest_grid(const glm::dvec3& origin, const std::array<glm
 Status validate_lattice(const Lattice& lattice, const std::string& what = "lattice");
 
 // A lattice at rest (rest == current == rest_grid).
-Lattice make_lattice(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes, const glm::ivec3& divisions,
-                     LatticeBasis basis = LatticeBasis::bernstein);
+Lattice make_lattice(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes,
+                     const glm::ivec3& divisions, LatticeBasis basis = LatticeBasis::bernstein);
 
 }  // namespace sffd

@@ -23,7 +23,8 @@ Eigen3 jacobi_eigen(const glm::dmat3& input, const glm::dmat3& v0, const JacobiR
                 const double apq = a[p][q];
                 if (std::abs(apq) < rule.skip_below) continue;
                 const double theta = (a[q][q] - a[p][p]) / (2.0 * apq);
-                const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+                const double t =
+                    (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
                 const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
                 // A ← Jᵀ A J with J the rotation in the (p, q) plane; V ← V J.
                 for (int k = 0; k < 3; ++k) {
@@ -46,8 +47,7 @@ Eigen3 jacobi_eigen(const glm::dmat3& input, const glm::dmat3& v0, const JacobiR
     int idx[3] = {0, 1, 2};
     if (order == EigenOrder::ascending)
         std::sort(idx, idx + 3, [&](int x, int y) { return a[x][x] < a[y][y]; });
-    else
-        std::sort(idx, idx + 3, [&](int x, int y) { return a[x][x] > a[y][y]; });
+    else std::sort(idx, idx + 3, [&](int x, int y) { return a[x][x] > a[y][y]; });
     Eigen3 e;
     for (int i = 0; i < 3; ++i) {
         e.values[i] = a[idx[i]][idx[i]];

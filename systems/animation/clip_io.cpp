@@ -18,27 +18,27 @@ namespace {
 
 const char* to_string(PlayMode m) {
     switch (m) {
-    case PlayMode::loop: return "loop";
-    case PlayMode::once: return "once";
-    case PlayMode::ping_pong: return "ping_pong";
+        case PlayMode::loop: return "loop";
+        case PlayMode::once: return "once";
+        case PlayMode::ping_pong: return "ping_pong";
     }
     return "loop";
 }
 const char* to_string(TrackKind k) { return k == TrackKind::twist ? "twist" : "stretch"; }
 const char* to_string(Interpolation i) {
     switch (i) {
-    case Interpolation::step: return "step";
-    case Interpolation::linear: return "linear";
-    case Interpolation::smooth: return "smooth";
+        case Interpolation::step: return "step";
+        case Interpolation::linear: return "linear";
+        case Interpolation::smooth: return "smooth";
     }
     return "smooth";
 }
 const char* to_string(Easing e) {
     switch (e) {
-    case Easing::none: return "none";
-    case Easing::ease_in: return "ease_in";
-    case Easing::ease_out: return "ease_out";
-    case Easing::ease_in_out: return "ease_in_out";
+        case Easing::none: return "none";
+        case Easing::ease_in: return "ease_in";
+        case Easing::ease_out: return "ease_out";
+        case Easing::ease_in_out: return "ease_in_out";
     }
     return "none";
 }
@@ -79,7 +79,10 @@ struct Reader {
         std::string name;
         if (!string(obj[key], path + "." + key, name)) return false;
         for (E v : values)
-            if (name == to_string(v)) { out = v; return true; }
+            if (name == to_string(v)) {
+                out = v;
+                return true;
+            }
         std::string allowed;
         for (E v : values) allowed += std::string(allowed.empty() ? "" : ", ") + to_string(v);
         return fail(path + "." + key, "unknown value '" + name + "' (expected " + allowed + ")");
@@ -125,31 +128,52 @@ Result<AnimationClip> clip_from_json(const json& j, const std::string& source) {
     Reader r{source, {}};
     AnimationClip clip;
     auto failed = [&]() -> Result<AnimationClip> { return make_error(r.error); };
-    if (!j.is_object()) { r.fail("clip", "expected an object"); return failed(); }
+    if (!j.is_object()) {
+        r.fail("clip", "expected an object");
+        return failed();
+    }
     if (j.contains("name") && !r.string(j["name"], "name", clip.name)) return failed();
-    if (!j.contains("duration")) { r.fail("duration", "missing"); return failed(); }
+    if (!j.contains("duration")) {
+        r.fail("duration", "missing");
+        return failed();
+    }
     if (!r.number(j["duration"], "duration", clip.duration)) return failed();
-    if (!(clip.duration > 0.0)) { r.fail("duration", "must be > 0"); return failed(); }
+    if (!(clip.duration > 0.0)) {
+        r.fail("duration", "must be > 0");
+        return failed();
+    }
     if (j.contains("speed") && !r.number(j["speed"], "speed", clip.speed)) return failed();
     if (!r.enumeration(j, "mode", "clip", clip.mode,
                        std::array{PlayMode::loop, PlayMode::once, PlayMode::ping_pong}, PlayMode::loop))
         return failed();
     if (!j.contains("tracks")) return clip;
     const json& tracks = j["tracks"];
-    if (!tracks.is_array()) { r.fail("tracks", "expected an array"); return failed(); }
+    if (!tracks.is_array()) {
+        r.fail("tracks", "expected an array");
+        return failed();
+    }
     for (std::size_t ti = 0; ti < tracks.size(); ++ti) {
         const json& t = tracks[ti];
         const std::string tp = "tracks[" + std::to_string(ti) + "]";
-        if (!t.is_object()) { r.fail(tp, "expected an object"); return failed(); }
+        if (!t.is_object()) {
+            r.fail(tp, "expected an object");
+            return failed();
+        }
         AnimationTrack track;
         if (t.contains("name") && !r.string(t["name"], tp + ".name", track.name)) return failed();
-        if (!t.contains("kind")) { r.fail(tp + ".kind", "missing"); return failed(); }
+        if (!t.contains("kind")) {
+            r.fail(tp + ".kind", "missing");
+            return failed();
+        }
         if (!r.enumeration(t, "kind", tp, track.kind, std::array{TrackKind::stretch, TrackKind::twist},
                            TrackKind::stretch))
             return failed();
         if (t.contains("points")) {
             const json& pts = t["points"];
-            if (!pts.is_array()) { r.fail(tp + ".points", "expected an array"); return failed(); }
+            if (!pts.is_array()) {
+                r.fail(tp + ".points", "expected an array");
+                return failed();
+            }
             for (std::size_t pi = 0; pi < pts.size(); ++pi) {
                 if (!pts[pi].is_number_unsigned() || pts[pi].get<std::uint64_t>() > 0xffffffffu) {
                     r.fail(tp + ".points[" + std::to_string(pi) + "]", "expected a control-point index");
@@ -159,9 +183,15 @@ Result<AnimationClip> clip_from_json(const json& j, const std::string& source) {
             }
         }
         if (track.kind == TrackKind::twist) {
-            if (!t.contains("axis")) { r.fail(tp + ".axis", "missing (twist tracks need an axis)"); return failed(); }
+            if (!t.contains("axis")) {
+                r.fail(tp + ".axis", "missing (twist tracks need an axis)");
+                return failed();
+            }
             if (!r.vec(t["axis"], tp + ".axis", track.axis)) return failed();
-            if (track.axis == glm::dvec3(0.0)) { r.fail(tp + ".axis", "must be non-zero"); return failed(); }
+            if (track.axis == glm::dvec3(0.0)) {
+                r.fail(tp + ".axis", "must be non-zero");
+                return failed();
+            }
             if (t.contains("pivot")) {
                 if (!r.vec(t["pivot"], tp + ".pivot", track.pivot)) return failed();
                 track.has_pivot = true;
@@ -169,28 +199,45 @@ Result<AnimationClip> clip_from_json(const json& j, const std::string& source) {
         }
         if (t.contains("keys")) {
             const json& keys = t["keys"];
-            if (!keys.is_array()) { r.fail(tp + ".keys", "expected an array"); return failed(); }
+            if (!keys.is_array()) {
+                r.fail(tp + ".keys", "expected an array");
+                return failed();
+            }
             for (std::size_t ki = 0; ki < keys.size(); ++ki) {
                 const json& k = keys[ki];
                 const std::string kp = tp + ".keys[" + std::to_string(ki) + "]";
-                if (!k.is_object()) { r.fail(kp, "expected an object"); return failed(); }
+                if (!k.is_object()) {
+                    r.fail(kp, "expected an object");
+                    return failed();
+                }
                 Keyframe key;
-                if (!k.contains("time")) { r.fail(kp + ".time", "missing"); return failed(); }
+                if (!k.contains("time")) {
+                    r.fail(kp + ".time", "missing");
+                    return failed();
+                }
                 if (!r.number(k["time"], kp + ".time", key.time)) return failed();
                 if (track.kind == TrackKind::twist) {
-                    if (!k.contains("angle")) { r.fail(kp + ".angle", "missing"); return failed(); }
+                    if (!k.contains("angle")) {
+                        r.fail(kp + ".angle", "missing");
+                        return failed();
+                    }
                     if (!r.number(k["angle"], kp + ".angle", key.value.x)) return failed();
                 } else {
-                    if (!k.contains("value")) { r.fail(kp + ".value", "missing"); return failed(); }
+                    if (!k.contains("value")) {
+                        r.fail(kp + ".value", "missing");
+                        return failed();
+                    }
                     if (!r.vec(k["value"], kp + ".value", key.value)) return failed();
                 }
-                if (!r.enumeration(k, "interpolation", kp, key.interpolation,
-                                   std::array{Interpolation::step, Interpolation::linear, Interpolation::smooth},
-                                   Interpolation::smooth))
+                if (!r.enumeration(
+                        k, "interpolation", kp, key.interpolation,
+                        std::array{Interpolation::step, Interpolation::linear, Interpolation::smooth},
+                        Interpolation::smooth))
                     return failed();
-                if (!r.enumeration(k, "easing", kp, key.easing,
-                                   std::array{Easing::none, Easing::ease_in, Easing::ease_out, Easing::ease_in_out},
-                                   Easing::none))
+                if (!r.enumeration(
+                        k, "easing", kp, key.easing,
+                        std::array{Easing::none, Easing::ease_in, Easing::ease_out, Easing::ease_in_out},
+                        Easing::none))
                     return failed();
                 if (!track.keys.empty() && !(key.time > track.keys.back().time)) {
                     r.fail(kp + ".time", "key times must be strictly increasing");
@@ -222,7 +269,8 @@ Status save_clip(const AnimationClip& clip, const std::filesystem::path& path) {
 }
 
 Result<AnimationClip> load_clip(const std::filesystem::path& path) {
-    auto text = read_file(path, kMaxJsonFileBytes);  // runtime/core/file_io.h: regular files only, size budget
+    auto text =
+        read_file(path, kMaxJsonFileBytes);  // runtime/core/file_io.h: regular files only, size budget
     if (!text) return text.error();
     return parse_clip(*text, path.string());
 }

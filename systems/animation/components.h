@@ -43,8 +43,8 @@ enum class PlayMode : std::uint8_t {
 };
 
 struct Keyframe {
-    double time = 0.0;         // seconds of clip time
-    glm::dvec3 value{0.0};     // stretch: displacement; twist: value.x = angle in degrees (y, z unused, 0)
+    double time = 0.0;      // seconds of clip time
+    glm::dvec3 value{0.0};  // stretch: displacement; twist: value.x = angle in degrees (y, z unused, 0)
     Interpolation interpolation = Interpolation::smooth;
     Easing easing = Easing::none;
 };
@@ -56,7 +56,7 @@ struct AnimationTrack {
     std::vector<Keyframe> keys;         // sorted by time, distinct times (editing.h keeps it so)
     // Twist only. The axis need not be unit length (normalised at evaluation) but must be non-zero.
     glm::dvec3 axis{0.0, 0.0, 1.0};
-    bool has_pivot = false;             // false: pivot = centroid of the bound rest points
+    bool has_pivot = false;  // false: pivot = centroid of the bound rest points
     glm::dvec3 pivot{0.0};
 };
 
@@ -65,7 +65,7 @@ struct AnimationClip {
     std::vector<AnimationTrack> tracks;  // applied in this order
     double duration = 1.0;               // seconds of clip time (> 0)
     PlayMode mode = PlayMode::loop;
-    double speed = 1.0;                  // clip-time seconds per playback second
+    double speed = 1.0;  // clip-time seconds per playback second
 };
 
 // Playback state of the clip on the same entity. The clip time is a pure function of the frame clock:
@@ -76,10 +76,10 @@ struct AnimationClip {
 // editing.h's play/pause/scrub move the anchor; the system fills in anchor_clock on the next frame.
 struct AnimationState {
     bool playing = true;
-    double speed = 1.0;          // playback speed multiplier (negative plays backwards)
-    double anchor_time = 0.0;    // raw clip time at clock time anchor_clock
-    double anchor_clock = 0.0;   // frame-clock seconds
-    bool rebase = false;         // set by play/scrub: the next frame sets anchor_clock = frame.time
+    double speed = 1.0;         // playback speed multiplier (negative plays backwards)
+    double anchor_time = 0.0;   // raw clip time at clock time anchor_clock
+    double anchor_clock = 0.0;  // frame-clock seconds
+    bool rebase = false;        // set by play/scrub: the next frame sets anchor_clock = frame.time
 
     // Derived, written by animation_system (read by the timeline; never authored):
     double time = 0.0;                  // mapped clip time of the last evaluated frame

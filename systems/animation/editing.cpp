@@ -34,8 +34,10 @@ bool delete_key(AnimationTrack& track, double time) {
 std::vector<KeyRef> list_keys(const AnimationClip& clip) {
     std::vector<KeyRef> refs;
     for (std::size_t t = 0; t < clip.tracks.size(); ++t)
-        for (std::size_t k = 0; k < clip.tracks[t].keys.size(); ++k) refs.push_back({t, k, clip.tracks[t].keys[k].time});
-    std::stable_sort(refs.begin(), refs.end(), [](const KeyRef& a, const KeyRef& b) { return a.time < b.time; });
+        for (std::size_t k = 0; k < clip.tracks[t].keys.size(); ++k)
+            refs.push_back({t, k, clip.tracks[t].keys[k].time});
+    std::stable_sort(refs.begin(), refs.end(),
+                     [](const KeyRef& a, const KeyRef& b) { return a.time < b.time; });
     return refs;
 }
 

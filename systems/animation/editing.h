@@ -46,6 +46,7 @@ void scrub(AnimationState& state, double clip_time);
 void set_speed(AnimationState& state, double speed);
 
 // Puts a clip and a fresh playing state on a lattice entity (replacing any previous clip).
-void attach_clip(ecs::Registry& registry, ecs::Entity lattice_entity, AnimationClip clip, bool playing = true);
+void attach_clip(ecs::Registry& registry, ecs::Entity lattice_entity, AnimationClip clip,
+                 bool playing = true);
 
 }  // namespace sffd

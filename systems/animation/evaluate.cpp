@@ -8,10 +8,10 @@ namespace sffd {
 
 double apply_easing(Easing easing, double u) {
     switch (easing) {
-    case Easing::none: return u;
-    case Easing::ease_in: return u * u;
-    case Easing::ease_out: return 1.0 - (1.0 - u) * (1.0 - u);
-    case Easing::ease_in_out: return u * u * (3.0 - 2.0 * u);
+        case Easing::none: return u;
+        case Easing::ease_in: return u * u;
+        case Easing::ease_out: return 1.0 - (1.0 - u) * (1.0 - u);
+        case Easing::ease_in_out: return u * u * (3.0 - 2.0 * u);
     }
     return u;
 }
@@ -41,16 +41,17 @@ glm::dvec3 evaluate_track(const AnimationTrack& track, double clip_time) {
     const double span = kb.time - ka.time;
     const double u = apply_easing(ka.easing, (clip_time - ka.time) / span);
     switch (ka.interpolation) {
-    case Interpolation::step: return ka.value;
-    case Interpolation::linear: return ka.value + (kb.value - ka.value) * u;
-    case Interpolation::smooth: {
-        const double u2 = u * u, u3 = u2 * u;
-        const double h00 = 2.0 * u3 - 3.0 * u2 + 1.0;
-        const double h10 = u3 - 2.0 * u2 + u;
-        const double h01 = -2.0 * u3 + 3.0 * u2;
-        const double h11 = u3 - u2;
-        return h00 * ka.value + (h10 * span) * tangent(keys, a) + h01 * kb.value + (h11 * span) * tangent(keys, b);
-    }
+        case Interpolation::step: return ka.value;
+        case Interpolation::linear: return ka.value + (kb.value - ka.value) * u;
+        case Interpolation::smooth: {
+            const double u2 = u * u, u3 = u2 * u;
+            const double h00 = 2.0 * u3 - 3.0 * u2 + 1.0;
+            const double h10 = u3 - 2.0 * u2 + u;
+            const double h01 = -2.0 * u3 + 3.0 * u2;
+            const double h11 = u3 - u2;
+            return h00 * ka.value + (h10 * span) * tangent(keys, a) + h01 * kb.value +
+                   (h11 * span) * tangent(keys, b);
+        }
     }
     return ka.value;
 }
@@ -64,19 +65,19 @@ double map_clip_time(const AnimationClip& clip, double raw_time) {
     const double d = clip.duration;
     if (!(d > 0.0) || !std::isfinite(raw_time)) return 0.0;
     switch (clip.mode) {
-    case PlayMode::once: return std::clamp(raw_time, 0.0, d);
-    case PlayMode::loop: {
-        double r = std::fmod(raw_time, d);  // exact
-        if (r < 0.0) r += d;
-        return r >= d ? 0.0 : r;
-    }
-    case PlayMode::ping_pong: {
-        const double period = 2.0 * d;
-        double r = std::fmod(raw_time, period);
-        if (r < 0.0) r += period;
-        if (r >= period) r = 0.0;
-        return r > d ? period - r : r;
-    }
+        case PlayMode::once: return std::clamp(raw_time, 0.0, d);
+        case PlayMode::loop: {
+            double r = std::fmod(raw_time, d);  // exact
+            if (r < 0.0) r += d;
+            return r >= d ? 0.0 : r;
+        }
+        case PlayMode::ping_pong: {
+            const double period = 2.0 * d;
+            double r = std::fmod(raw_time, period);
+            if (r < 0.0) r += period;
+            if (r >= period) r = 0.0;
+            return r > d ? period - r : r;
+        }
     }
     return 0.0;
 }
@@ -109,10 +110,16 @@ struct Twist {
         if (r >= 360.0 || r == 0.0 || !std::isfinite(r) || !(len > 0.0)) return;
         identity = false;
         k = axis / len;
-        if (r == 90.0) { c = 0.0; s = 1.0; }
-        else if (r == 180.0) { c = -1.0; s = 0.0; }
-        else if (r == 270.0) { c = 0.0; s = -1.0; }
-        else {
+        if (r == 90.0) {
+            c = 0.0;
+            s = 1.0;
+        } else if (r == 180.0) {
+            c = -1.0;
+            s = 0.0;
+        } else if (r == 270.0) {
+            c = 0.0;
+            s = -1.0;
+        } else {
             const double rad = r * (std::numbers::pi / 180.0);
             c = std::cos(rad);
             s = std::sin(rad);
@@ -132,7 +139,8 @@ glm::dvec3 twist_point(const glm::dvec3& p, const glm::dvec3& pivot, const glm::
     return Twist(pivot, axis, degrees).apply(p);
 }
 
-void evaluate_pose(const AnimationClip& clip, const Lattice& lattice, double clip_time, std::vector<glm::dvec3>& out) {
+void evaluate_pose(const AnimationClip& clip, const Lattice& lattice, double clip_time,
+                   std::vector<glm::dvec3>& out) {
     out = lattice.rest;
     for (const AnimationTrack& track : clip.tracks) {
         if (track.points.empty() || track.keys.empty()) continue;
@@ -170,8 +178,8 @@ Status validate_clip(const AnimationClip& clip, std::size_t point_count) {
         const std::string tw = where + "tracks[" + std::to_string(t) + "]";
         for (std::uint32_t idx : track.points)
             if (idx >= point_count)
-                return make_error(tw + ": control point " + std::to_string(idx) + " out of range (lattice has " +
-                                  std::to_string(point_count) + ")");
+                return make_error(tw + ": control point " + std::to_string(idx) +
+                                  " out of range (lattice has " + std::to_string(point_count) + ")");
         if (track.kind == TrackKind::twist) {
             if (!finite3(track.axis) || glm::length(track.axis) == 0.0)
                 return make_error(tw + ": twist axis must be finite and non-zero");
@@ -180,8 +188,10 @@ Status validate_clip(const AnimationClip& clip, std::size_t point_count) {
         for (std::size_t k = 0; k < track.keys.size(); ++k) {
             const Keyframe& key = track.keys[k];
             const std::string kw = tw + ".keys[" + std::to_string(k) + "]";
-            if (!std::isfinite(key.time) || !finite3(key.value)) return make_error(kw + ": non-finite time or value");
-            if (k > 0 && !(key.time > track.keys[k - 1].time)) return make_error(kw + ": times not increasing");
+            if (!std::isfinite(key.time) || !finite3(key.value))
+                return make_error(kw + ": non-finite time or value");
+            if (k > 0 && !(key.time > track.keys[k - 1].time))
+                return make_error(kw + ": times not increasing");
         }
     }
     return {};

@@ -47,7 +47,8 @@ glm::dvec3 twist_point(const glm::dvec3& p, const glm::dvec3& pivot, const glm::
 
 // Writes the lattice's control points at clip time t into `out` (resized to lattice.rest.size()).
 // Indices out of range are skipped (validate_clip reports them).
-void evaluate_pose(const AnimationClip& clip, const Lattice& lattice, double clip_time, std::vector<glm::dvec3>& out);
+void evaluate_pose(const AnimationClip& clip, const Lattice& lattice, double clip_time,
+                   std::vector<glm::dvec3>& out);
 std::vector<glm::dvec3> evaluate_pose(const AnimationClip& clip, const Lattice& lattice, double clip_time);
 
 // Checks a clip against a lattice of `point_count` control points: finite numbers, duration > 0,

@@ -44,9 +44,10 @@ AnimationClip make_paper_demo_clip(const Lattice& lattice) {
 
     // 1. Local stretch: an interior block, centred in S and U, in the upper part of T, pulled up.
     {
-        const std::size_t t = add_stretch_track(
-            clip, "local stretch",
-            block(lattice, {frac(d.x, 0.3), frac(d.y, 0.6), frac(d.z, 0.3)}, {frac(d.x, 0.7), d.y - 1, frac(d.z, 0.7)}));
+        const std::size_t t =
+            add_stretch_track(clip, "local stretch",
+                              block(lattice, {frac(d.x, 0.3), frac(d.y, 0.6), frac(d.z, 0.3)},
+                                    {frac(d.x, 0.7), d.y - 1, frac(d.z, 0.7)}));
         add_pulse(clip.tracks[t], 0.0, 0.4 * up);
     }
     // 2. Local twist: the upper right quarter of interior points turns about the up axis through its

@@ -23,7 +23,8 @@ void register_animation_scene_hooks();
 void unregister_animation_scene_hooks();
 
 // The extension's two halves, usable without the hook registry (tests, tools).
-Result<std::string> save_animation_extension(const ecs::Registry& registry, const std::function<int(ecs::Entity)>& id_of);
+Result<std::string> save_animation_extension(const ecs::Registry& registry,
+                                             const std::function<int(ecs::Entity)>& id_of);
 Status load_animation_extension(ecs::Registry& registry, std::string_view json,
                                 const std::function<ecs::Entity(int)>& entity_of);
 

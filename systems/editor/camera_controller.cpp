@@ -15,11 +15,13 @@ void orbit(Camera& camera, glm::dvec2 pixel_delta, const OrbitSettings& settings
     glm::dvec3 dir = offset / distance;
     // Yaw about the up axis.
     const double yaw = -pixel_delta.x * settings.radians_per_pixel;
-    dir = std::cos(yaw) * dir + std::sin(yaw) * glm::cross(up, dir) + (1.0 - std::cos(yaw)) * glm::dot(up, dir) * up;
+    dir = std::cos(yaw) * dir + std::sin(yaw) * glm::cross(up, dir) +
+          (1.0 - std::cos(yaw)) * glm::dot(up, dir) * up;
     // Pitch: change the elevation angle, clamped away from the poles.
     const double elevation = std::asin(std::clamp(glm::dot(dir, up), -1.0, 1.0));
     const double limit = glm::radians(89.0);
-    const double new_elevation = std::clamp(elevation + pixel_delta.y * settings.radians_per_pixel, -limit, limit);
+    const double new_elevation =
+        std::clamp(elevation + pixel_delta.y * settings.radians_per_pixel, -limit, limit);
     glm::dvec3 horizontal = dir - glm::dot(dir, up) * up;
     if (glm::length(horizontal) < 1e-12) horizontal = glm::dvec3(up.y, up.z, up.x);  // looking along up
     horizontal = glm::normalize(horizontal);
@@ -34,7 +36,8 @@ void pan(Camera& camera, const Viewport& viewport, glm::dvec2 pixel_delta) {
     const glm::dvec3 right = glm::normalize(glm::cross(forward, camera.up));
     const glm::dvec3 up = glm::cross(right, forward);
     // World size of one pixel at the target's depth.
-    const double pixel = 2.0 * distance * std::tan(glm::radians(double(camera.fov_y_degrees)) * 0.5) / viewport.height;
+    const double pixel =
+        2.0 * distance * std::tan(glm::radians(double(camera.fov_y_degrees)) * 0.5) / viewport.height;
     // Dragging right moves the scene right, i.e. the camera left; pixel y goes down.
     const glm::dvec3 move = (-pixel_delta.x * right + pixel_delta.y * up) * pixel;
     camera.eye += move;
@@ -45,11 +48,13 @@ void zoom(Camera& camera, double notches, const OrbitSettings& settings) {
     const glm::dvec3 offset = camera.eye - camera.target;
     const double distance = glm::length(offset);
     if (distance <= 0.0) return;
-    const double next = std::max(distance * std::exp(-notches * settings.zoom_per_notch), settings.min_distance);
+    const double next =
+        std::max(distance * std::exp(-notches * settings.zoom_per_notch), settings.min_distance);
     camera.eye = camera.target + offset * (next / distance);
 }
 
-void frame_points(Camera& camera, const Viewport& viewport, std::span<const glm::dvec3> points, double margin) {
+void frame_points(Camera& camera, const Viewport& viewport, std::span<const glm::dvec3> points,
+                  double margin) {
     if (points.empty()) return;
     glm::dvec3 lo = points[0], hi = points[0];
     for (const auto& p : points) lo = glm::min(lo, p), hi = glm::max(hi, p);

@@ -15,7 +15,7 @@ namespace sffd::editor {
 
 struct OrbitSettings {
     double radians_per_pixel = 0.008;
-    double zoom_per_notch = 0.12;   // each scroll notch scales the distance by exp(-zoom_per_notch)
+    double zoom_per_notch = 0.12;  // each scroll notch scales the distance by exp(-zoom_per_notch)
     double min_distance = 1e-3;
 };
 
@@ -30,6 +30,7 @@ void zoom(Camera& camera, double notches, const OrbitSettings& settings = {});
 // Re-targets the camera at the bounding sphere of `points` and sets the distance so the whole sphere
 // is inside the view (both fov directions) with `margin` (1.1 = 10% room). The viewing direction is
 // kept. No points: the camera is unchanged.
-void frame_points(Camera& camera, const Viewport& viewport, std::span<const glm::dvec3> points, double margin = 1.1);
+void frame_points(Camera& camera, const Viewport& viewport, std::span<const glm::dvec3> points,
+                  double margin = 1.1);
 
 }  // namespace sffd::editor

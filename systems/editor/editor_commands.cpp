@@ -66,7 +66,8 @@ bool apply_twist(ecs::Registry& registry, EditorState& state, double degrees) {
 
 void reset_lattice(ecs::Registry& registry, EditorState& state) {
     if (!active_lattice(registry, state)) return;
-    if (state.undo.record<Lattice>(registry, state.active_lattice, "reset", [](Lattice& l) { l.current = l.rest; }))
+    if (state.undo.record<Lattice>(registry, state.active_lattice, "reset",
+                                   [](Lattice& l) { l.current = l.rest; }))
         say(state, "lattice reset to rest");
 }
 
@@ -77,7 +78,8 @@ void frame_selection(ecs::Registry& registry, EditorState& state) {
     if (const Lattice* lattice = active_lattice(registry, state)) {
         const glm::dmat4 model = lattice_model(registry, state.active_lattice);
         for (std::uint32_t i : selection_of(registry, state.active_lattice))
-            if (i < lattice->current.size()) points.push_back(glm::dvec3(model * glm::dvec4(lattice->current[i], 1.0)));
+            if (i < lattice->current.size())
+                points.push_back(glm::dvec3(model * glm::dvec4(lattice->current[i], 1.0)));
     }
     if (points.size() < 2) {
         glm::dvec3 lo, hi;
@@ -106,10 +108,12 @@ void toggle_play(ecs::Registry& registry, EditorState& state) {
     registry.view<AnimationState>().each([&](ecs::Entity, AnimationState& s) { any_playing |= s.playing; });
     // Playing poses the lattice from its clip: an un-keyed stretch/twist would silently vanish.
     const ecs::Entity unkeyed = state.unkeyed;
-    if (!any_playing && registry.valid(unkeyed) && registry.has<AnimationClip>(unkeyed) && registry.has<Lattice>(unkeyed)) {
+    if (!any_playing && registry.valid(unkeyed) && registry.has<AnimationClip>(unkeyed) &&
+        registry.has<Lattice>(unkeyed)) {
         if (!state.play_warned) {
             const Name* n = registry.try_get<Name>(unkeyed);
-            say(state, "playing would discard the un-keyed edit of " + (n && !n->value.empty() ? n->value : std::string("the lattice")) +
+            say(state, "playing would discard the un-keyed edit of " +
+                           (n && !n->value.empty() ? n->value : std::string("the lattice")) +
                            ": k keys it, n turns auto-key on, space again plays anyway");
             state.play_warned = true;
             return;
@@ -127,7 +131,8 @@ void toggle_play(ecs::Registry& registry, EditorState& state) {
 
 bool key_last_edit(ecs::Registry& registry, EditorState& state) {
     const LastEdit& edit = state.last_edit;
-    if (edit.kind == LastEdit::Kind::none || !registry.valid(edit.lattice) || !registry.has<Lattice>(edit.lattice)) {
+    if (edit.kind == LastEdit::Kind::none || !registry.valid(edit.lattice) ||
+        !registry.has<Lattice>(edit.lattice)) {
         say(state, "set key: stretch or twist something first");
         return false;
     }
@@ -153,11 +158,13 @@ bool key_last_edit(ecs::Registry& registry, EditorState& state) {
     if (track == clip.tracks.size()) {
         track = kind == TrackKind::stretch
                     ? add_stretch_track(clip, "stretch " + std::to_string(clip.tracks.size()), edit.points)
-                    : add_twist_track(clip, "twist " + std::to_string(clip.tracks.size()), edit.points, edit.axis, edit.pivot);
+                    : add_twist_track(clip, "twist " + std::to_string(clip.tracks.size()), edit.points,
+                                      edit.axis, edit.pivot);
     }
     Keyframe key;
     key.time = time;
-    key.value = kind == TrackKind::stretch ? edit.displacement : glm::dvec3(glm::degrees(edit.angle), 0.0, 0.0);
+    key.value =
+        kind == TrackKind::stretch ? edit.displacement : glm::dvec3(glm::degrees(edit.angle), 0.0, 0.0);
     sffd::set_key(clip.tracks[track], key);
     clip.duration = std::max(clip.duration, time);
     group->add(clip_edit.finish(registry));
@@ -170,7 +177,8 @@ bool key_last_edit(ecs::Registry& registry, EditorState& state) {
 
 bool delete_keys_at_time(ecs::Registry& registry, EditorState& state) {
     const ecs::Entity e = state.active_lattice;
-    if (!registry.valid(e) || !registry.has<AnimationClip>(e) || !registry.has<AnimationState>(e)) return false;
+    if (!registry.valid(e) || !registry.has<AnimationClip>(e) || !registry.has<AnimationState>(e))
+        return false;
     const double time = registry.get<AnimationState>(e).time;
     ComponentEdit<AnimationClip> clip_edit(registry, e, "delete key");
     bool removed = false;

@@ -14,7 +14,8 @@ void set_axis(EditorState& state, AxisMode mode) {
         state.move_axis = state.move_axis == mode ? AxisMode::view_plane : mode;  // pressing again frees it
         if (mode != AxisMode::view) state.twist_axis = mode;
     }
-    say(state, log::str("axis: ", axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis)));
+    say(state,
+        log::str("axis: ", axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis)));
 }
 
 // Reads up to three leading numbers of a numeric entry ("dx dy dz", commas allowed) into v; returns how
@@ -72,14 +73,16 @@ void apply_typed(ecs::Registry& registry, EditorState& state) {
         return;
     }
     const AxisMode axis = state.move_axis;
-    const bool along = axis == AxisMode::x || axis == AxisMode::y || axis == AxisMode::z || axis == AxisMode::custom;
+    const bool along =
+        axis == AxisMode::x || axis == AxisMode::y || axis == AxisMode::z || axis == AxisMode::custom;
     if (n == 1 && along) {
         const Camera* camera = camera_of(registry, state);
         if (camera) apply_stretch(registry, state, axis_direction(axis, *camera, state.custom_axis) * v[0]);
     } else if (n == 3) {
         apply_stretch(registry, state, {v[0], v[1], v[2]});
     } else {
-        say(state, "typed move '" + t.text + "': give one distance after x, y or z, or three values dx dy dz");
+        say(state,
+            "typed move '" + t.text + "': give one distance after x, y or z, or three values dx dy dz");
     }
 }
 
@@ -141,7 +144,8 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
         return;  // no other shortcuts mid-gesture
     }
     if (state.typed.active && handle_typed_key(registry, state, e)) return;
-    if (handle_lattice_key(registry, state, e)) return;  // add/remove/refit/order/export/import (lattice_manage.h)
+    if (handle_lattice_key(registry, state, e))
+        return;  // add/remove/refit/order/export/import (lattice_manage.h)
     if (ctrl) {
         if (k == "z" && shift) redo(registry, state);
         else if (k == "z") undo(registry, state);
@@ -158,8 +162,7 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
         state.typed = TypedEntry{true, state.tool, {}};
         say(state, std::string(k == "r" ? "tool: twist" : "tool: move") +
                        " (drag, or type a value: x/y/z axis, number, Enter)");
-    }
-    else if (k == "b") state.tool = Tool::brush, say(state, "tool: brush");
+    } else if (k == "b") state.tool = Tool::brush, say(state, "tool: brush");
     else if (k == "x") set_axis(state, AxisMode::x);
     else if (k == "y") set_axis(state, AxisMode::y);
     else if (k == "z") set_axis(state, AxisMode::z);
@@ -168,20 +171,27 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
     else if (k == "a") select_all(registry, state);
     else if (k == "escape") clear_selection(registry, state);
     else if (k == "f") frame_selection(registry, state);
-    else if (k == "p") state.pin_outer_layer = !state.pin_outer_layer,
-                       say(state, state.pin_outer_layer ? "outer layer pinned" : "outer layer unpinned");
-    else if (k == "l") state.scope = state.scope == ToolScope::local ? ToolScope::global : ToolScope::local,
-                       say(state, state.scope == ToolScope::local ? "scope: local (selection)" : "scope: global (all points)");
-    else if (k == "t" && shift) state.lattice_cage_only = !state.lattice_cage_only,
-                                say(state, state.lattice_cage_only ? "lattice: outer cage only" : "lattice: all points and cells");
+    else if (k == "p")
+        state.pin_outer_layer = !state.pin_outer_layer,
+        say(state, state.pin_outer_layer ? "outer layer pinned" : "outer layer unpinned");
+    else if (k == "l")
+        state.scope = state.scope == ToolScope::local ? ToolScope::global : ToolScope::local,
+        say(state,
+            state.scope == ToolScope::local ? "scope: local (selection)" : "scope: global (all points)");
+    else if (k == "t" && shift)
+        state.lattice_cage_only = !state.lattice_cage_only,
+        say(state, state.lattice_cage_only ? "lattice: outer cage only" : "lattice: all points and cells");
     else if (k == "t") state.xray = !state.xray, say(state, state.xray ? "x-ray on" : "x-ray off");
-    else if (k == "o") state.pivot_mode = state.pivot_mode == PivotMode::centroid ? PivotMode::picked_point : PivotMode::centroid;
+    else if (k == "o")
+        state.pivot_mode =
+            state.pivot_mode == PivotMode::centroid ? PivotMode::picked_point : PivotMode::centroid;
     else if (k == "home") reset_lattice(registry, state);
     else if (k == "k" && shift) delete_keys_at_time(registry, state);
     else if (k == "k") key_last_edit(registry, state);
     else if (k == "space") toggle_play(registry, state);
-    else if (k == "n") state.auto_key = !state.auto_key, say(state, state.auto_key ? "auto-key on: edits are keyed at the clip time"
-                                                                                   : "auto-key off");
+    else if (k == "n")
+        state.auto_key = !state.auto_key,
+        say(state, state.auto_key ? "auto-key on: edits are keyed at the clip time" : "auto-key off");
     else if (k == "left") scrub_to(registry, state, clip_time(registry, state) - 1.0 / 24.0);
     else if (k == "right") scrub_to(registry, state, clip_time(registry, state) + 1.0 / 24.0);
     else if (k == "f12") state.request_screenshot = true;
@@ -190,7 +200,8 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
 }  // namespace
 
 AnimationState* animation_state(ecs::Registry& registry, const EditorState& state) {
-    return registry.valid(state.active_lattice) ? registry.try_get<AnimationState>(state.active_lattice) : nullptr;
+    return registry.valid(state.active_lattice) ? registry.try_get<AnimationState>(state.active_lattice)
+                                                : nullptr;
 }
 
 namespace {
@@ -209,12 +220,14 @@ void adapt_quality(ecs::Registry& registry, EditorState& state, bool scrolled) {
     registry.view<AnimationState>().each([&](ecs::Entity, AnimationState& a) { moving |= a.playing; });
     if (const Camera* cam = camera_of(registry, state)) {
         const Camera& l = state.last_camera;
-        moving |= cam->eye != l.eye || cam->target != l.target || cam->up != l.up || cam->fov_y_degrees != l.fov_y_degrees;
+        moving |= cam->eye != l.eye || cam->target != l.target || cam->up != l.up ||
+                  cam->fov_y_degrees != l.fov_y_degrees;
         state.last_camera = *cam;
     }
     state.still_frames = moving ? 0 : std::min(state.still_frames + 1, 1 << 20);
     const auto rest = render::Quality(state.rest_quality);
-    state.previewing = state.preview_while_moving && rest != render::Quality::preview && state.still_frames < state.refine_after;
+    state.previewing = state.preview_while_moving && rest != render::Quality::preview &&
+                       state.still_frames < state.refine_after;
     settings->quality = state.previewing ? render::Quality::preview : rest;
 }
 

@@ -41,19 +41,28 @@ struct LastEdit {
 
 // What a held mouse button is doing.
 struct Drag {
-    enum class Kind : std::uint8_t { none, pending_click, box, orbit, pan, move, twist, brush } kind = Kind::none;
+    enum class Kind : std::uint8_t {
+        none,
+        pending_click,
+        box,
+        orbit,
+        pan,
+        move,
+        twist,
+        brush
+    } kind = Kind::none;
     MouseButton button = MouseButton::left;
     std::uint8_t modifiers = 0;
-    glm::dvec2 start{0.0};      // cursor at press
-    glm::dvec2 last{0.0};       // cursor at the previous event
-    Camera camera;              // the camera when the tool drag began (tools drag in its view)
+    glm::dvec2 start{0.0};  // cursor at press
+    glm::dvec2 last{0.0};   // cursor at the previous event
+    Camera camera;          // the camera when the tool drag began (tools drag in its view)
     ecs::Entity lattice = ecs::null_entity;
     std::vector<glm::dvec3> start_points;  // lattice current at press (tools apply from it: no drift)
     std::optional<Lattice> before;         // undo snapshot
     std::vector<std::uint32_t> points;     // edited control points
     glm::dvec3 pivot_world{0.0};
     glm::dvec3 axis_world{0.0, 0.0, 1.0};
-    double angle = 0.0;                    // accumulated twist (unbounded)
+    double angle = 0.0;  // accumulated twist (unbounded)
     glm::dvec3 displacement_world{0.0};
 };
 
@@ -76,7 +85,7 @@ struct EditorState {
     AxisMode twist_axis = AxisMode::view;
     glm::dvec3 custom_axis{0.0, 0.0, 1.0};
     PivotMode pivot_mode = PivotMode::centroid;
-    glm::dvec3 picked_pivot{0.0};   // world; set by alt+click on the surface
+    glm::dvec3 picked_pivot{0.0};  // world; set by alt+click on the surface
     bool has_picked_pivot = false;
     ToolScope scope = ToolScope::local;
     bool pin_outer_layer = true;
@@ -91,7 +100,8 @@ struct EditorState {
     int still_frames = 1 << 20;  // frames since the last movement
     int rest_quality = -1;       // render::Quality the view started with (-1: not read yet)
     bool previewing = false;     // this frame renders in preview because of movement (status bar)
-    Camera last_camera;          // camera at the end of the previous frame (movement by any means)  // shift+t: the overlay draws only the box's 12 edges (+ selected points)
+    Camera last_camera;  // camera at the end of the previous frame (movement by any means)  // shift+t: the
+                         // overlay draws only the box's 12 edges (+ selected points)
     // Auto-key (n toggles; status bar and Timeline show it): every stretch/twist is also keyed at the clip
     // time. Off: a stretch/twist of a lattice with a clip is "un-keyed" until k keys it; playing would
     // replace it with the clip's pose, so the first play only warns and the second plays.
@@ -101,9 +111,9 @@ struct EditorState {
     double click_tolerance_px = 8.0;
 
     // --- what is being edited ---
-    ecs::Entity camera = ecs::null_entity;          // entity with the Camera the view uses
-    ecs::Entity active_lattice = ecs::null_entity;  // lattice the tools work on
-    ecs::Entity selected_entity = ecs::null_entity; // outliner / inspector selection
+    ecs::Entity camera = ecs::null_entity;           // entity with the Camera the view uses
+    ecs::Entity active_lattice = ecs::null_entity;   // lattice the tools work on
+    ecs::Entity selected_entity = ecs::null_entity;  // outliner / inspector selection
     Viewport viewport;
 
     UndoStack undo;
@@ -124,7 +134,7 @@ struct EditorState {
     bool request_quit = false;
     bool request_frame_selection = false;
     bool request_open_dialog = false;  // ctrl+o: the panels open File > Open scene
-    std::string save_as;  // non-empty: save there (File > Save as); it becomes the ctrl+s path
+    std::string save_as;               // non-empty: save there (File > Save as); it becomes the ctrl+s path
 
     // --- files (file_browser.h) ---
     std::string last_folder;    // where the dialogs open and saves/screenshots go by default ("" = current)

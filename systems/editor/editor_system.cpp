@@ -59,8 +59,8 @@ std::vector<std::uint32_t> selection_of(const ecs::Registry& registry, ecs::Enti
 
 using namespace detail;
 
-void set_selection(ecs::Registry& registry, EditorState& state, ecs::Entity lattice, std::vector<std::uint32_t> indices,
-                   const char* label) {
+void set_selection(ecs::Registry& registry, EditorState& state, ecs::Entity lattice,
+                   std::vector<std::uint32_t> indices, const char* label) {
     if (!registry.valid(lattice) || !registry.has<Lattice>(lattice)) return;
     const auto* current = registry.try_get<picking::LatticeSelection>(lattice);
     if (current && current->indices == indices) return;

@@ -5,7 +5,8 @@
 //           deformer re-runs), picking::LatticeSelection, AnimationClip (set/delete key), AnimationState
 //           (play/pause/scrub), EditorState (tools, drag, undo stack, requests); through lattice_manage.h
 //           lattice entities (Name, Transform, Lattice: add/remove/refit/import) and clouds' Deformers
-//           render::RenderSettings::quality (resource; preview while the view moves, EditorState::preview_while_moving)
+//           render::RenderSettings::quality (resource; preview while the view moves,
+//           EditorState::preview_while_moving)
 // Does nothing when the registry has no EditorState. Picks synchronously through the picking library
 // (picking::pick on the PickingState resource): a click is answered in the frame it happens in, so a
 // replayed session is deterministic frame by frame.

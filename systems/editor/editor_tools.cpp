@@ -42,7 +42,8 @@ void box_select(ecs::Registry& registry, EditorState& state, const Camera& camer
         registry, picking::picking_state(registry), state.active_lattice, screen_view(camera, state.viewport),
         picking::ScreenRect{a, b}, !state.xray);
     picking::LatticeSelection current{selection_of(registry, state.active_lattice)};
-    set_selection(registry, state, state.active_lattice, picking::select(current, inside, mode).indices, "box select");
+    set_selection(registry, state, state.active_lattice, picking::select(current, inside, mode).indices,
+                  "box select");
     say(state, log::str("box selected ", inside.size(), " control points"));
 }
 
@@ -55,15 +56,18 @@ void brush_dab(ecs::Registry& registry, EditorState& state, const Camera& camera
     if (!local) return;
     const auto picked = picking::brush_select(registry.get<Lattice>(state.active_lattice), *local, {});
     picking::LatticeSelection current{selection_of(registry, state.active_lattice)};
-    set_selection(registry, state, state.active_lattice, picking::select(current, picked, mode).indices, "brush");
+    set_selection(registry, state, state.active_lattice, picking::select(current, picked, mode).indices,
+                  "brush");
 }
 
 // Pivot and axis of a tool in world space.
-glm::dvec3 tool_pivot(const ecs::Registry& registry, const EditorState& state, std::span<const std::uint32_t> points) {
+glm::dvec3 tool_pivot(const ecs::Registry& registry, const EditorState& state,
+                      std::span<const std::uint32_t> points) {
     if (state.pivot_mode == PivotMode::picked_point && state.has_picked_pivot) return state.picked_pivot;
     const Lattice* lattice = active_lattice(registry, state);
     if (!lattice) return glm::dvec3(0.0);
-    return glm::dvec3(lattice_model(registry, state.active_lattice) * glm::dvec4(centroid(*lattice, points), 1.0));
+    return glm::dvec3(lattice_model(registry, state.active_lattice) *
+                      glm::dvec4(centroid(*lattice, points), 1.0));
 }
 
 }  // namespace
@@ -130,8 +134,8 @@ bool begin_tool_drag(ecs::Registry& registry, EditorState& state, const Camera& 
 void finish_tool_drag(ecs::Registry& registry, EditorState& state, Drag& drag) {
     if (!registry.valid(drag.lattice) || !registry.has<Lattice>(drag.lattice)) return;
     const bool is_move = drag.kind == Drag::Kind::move;
-    auto change = std::make_unique<ComponentChange<Lattice>>(is_move ? "stretch" : "twist", drag.lattice, drag.before,
-                                                             registry.get<Lattice>(drag.lattice));
+    auto change = std::make_unique<ComponentChange<Lattice>>(
+        is_move ? "stretch" : "twist", drag.lattice, drag.before, registry.get<Lattice>(drag.lattice));
     if (state.undo.push(std::move(change))) {
         remember_edit(registry, state, drag);
         say(state, is_move ? log::str("stretched ", drag.points.size(), " control points")
@@ -156,11 +160,12 @@ glm::dvec3 move_displacement(const EditorState& state, const Drag& drag, glm::dv
     if (state.move_axis == AxisMode::view) {
         // Along the viewing direction: upward drag pushes away, one pixel = one pixel's size at the pivot.
         const double depth = glm::dot(drag.pivot_world - cam.eye, glm::normalize(cam.target - cam.eye));
-        const double pixel = 2.0 * depth * std::tan(glm::radians(double(cam.fov_y_degrees)) * 0.5) / state.viewport.height;
+        const double pixel =
+            2.0 * depth * std::tan(glm::radians(double(cam.fov_y_degrees)) * 0.5) / state.viewport.height;
         return glm::normalize(cam.target - cam.eye) * ((drag.start.y - cursor.y) * pixel);
     }
-    return drag_along_axis(cam, state.viewport, drag.pivot_world, axis_direction(state.move_axis, cam, state.custom_axis),
-                           drag.start, cursor);
+    return drag_along_axis(cam, state.viewport, drag.pivot_world,
+                           axis_direction(state.move_axis, cam, state.custom_axis), drag.start, cursor);
 }
 
 }  // namespace
@@ -181,7 +186,8 @@ void handle_move(ecs::Registry& registry, EditorState& state, Camera& camera, gl
             apply_drag(registry, drag);
             break;
         case Drag::Kind::twist:
-            drag.angle += drag_angle(drag.camera, state.viewport, drag.pivot_world, drag.axis_world, drag.last, cursor);
+            drag.angle +=
+                drag_angle(drag.camera, state.viewport, drag.pivot_world, drag.axis_world, drag.last, cursor);
             apply_drag(registry, drag);
             break;
         case Drag::Kind::brush:
@@ -219,11 +225,13 @@ void handle_press(ecs::Registry& registry, EditorState& state, Camera& camera, c
         return;
     }
     const bool plain = (e.modifiers & (mods::shift | mods::ctrl)) == 0;
-    if (plain && (state.tool == Tool::move || state.tool == Tool::twist) && begin_tool_drag(registry, state, camera, drag))
+    if (plain && (state.tool == Tool::move || state.tool == Tool::twist) &&
+        begin_tool_drag(registry, state, camera, drag))
         return;
     if (state.tool == Tool::brush) {
         drag.kind = Drag::Kind::brush;
-        brush_dab(registry, state, camera, state.cursor, picking::select_mode(e.modifiers & mods::shift, e.modifiers & mods::ctrl));
+        brush_dab(registry, state, camera, state.cursor,
+                  picking::select_mode(e.modifiers & mods::shift, e.modifiers & mods::ctrl));
         return;
     }
     drag.kind = Drag::Kind::pending_click;
@@ -233,8 +241,12 @@ void handle_release(ecs::Registry& registry, EditorState& state, Camera& camera,
     Drag& drag = state.drag;
     if (drag.kind == Drag::Kind::none || drag.button != e.button) return;
     switch (drag.kind) {
-        case Drag::Kind::pending_click: click_select(registry, state, camera, drag.start, drag.modifiers); break;
-        case Drag::Kind::box: box_select(registry, state, camera, drag.start, state.cursor, drag.modifiers); break;
+        case Drag::Kind::pending_click:
+            click_select(registry, state, camera, drag.start, drag.modifiers);
+            break;
+        case Drag::Kind::box:
+            box_select(registry, state, camera, drag.start, state.cursor, drag.modifiers);
+            break;
         case Drag::Kind::move:
         case Drag::Kind::twist: finish_tool_drag(registry, state, drag); break;
         default: break;

@@ -12,7 +12,8 @@ namespace sffd::editor {
 
 namespace fs = std::filesystem;
 
-Result<std::vector<FolderEntry>> list_folder(const fs::path& folder, const std::vector<std::string>& extensions) {
+Result<std::vector<FolderEntry>> list_folder(const fs::path& folder,
+                                             const std::vector<std::string>& extensions) {
     std::error_code ec;
     if (!fs::is_directory(folder, ec)) return make_error(folder.string() + ": not a folder");
     std::vector<FolderEntry> dirs, files;
@@ -27,7 +28,8 @@ Result<std::vector<FolderEntry>> list_folder(const fs::path& folder, const std::
             continue;
         }
         std::string ext = e.path().extension().string();
-        std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+        std::transform(ext.begin(), ext.end(), ext.begin(),
+                       [](unsigned char c) { return char(std::tolower(c)); });
         if (extensions.empty() || std::find(extensions.begin(), extensions.end(), ext) != extensions.end())
             files.push_back({name, false});
     }

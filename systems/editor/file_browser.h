@@ -14,14 +14,15 @@
 namespace sffd::editor {
 
 struct FolderEntry {
-    std::string name;   // ".." for the parent
+    std::string name;  // ".." for the parent
     bool folder = false;
 };
 
 // `folder`'s entries: ".." (unless at the root), sub-folders, then files whose extension (lower case,
 // with the dot) is in `extensions` (all files when empty), each group sorted by name; hidden entries
 // (leading '.') are left out. Error "folder: problem" when it cannot be listed.
-Result<std::vector<FolderEntry>> list_folder(const std::filesystem::path& folder, const std::vector<std::string>& extensions);
+Result<std::vector<FolderEntry>> list_folder(const std::filesystem::path& folder,
+                                             const std::vector<std::string>& extensions);
 
 // Extensions the editor opens (scenes and point clouds) and saves (scenes).
 const std::vector<std::string>& openable_extensions();

@@ -30,7 +30,8 @@ glm::dvec3 axis_direction(AxisMode mode, const Camera& camera, const glm::dvec3&
     return glm::normalize(camera.target - camera.eye);
 }
 
-glm::dvec3 point_on_view_plane(const Camera& camera, const Viewport& viewport, const glm::dvec3& pivot, glm::dvec2 pixel) {
+glm::dvec3 point_on_view_plane(const Camera& camera, const Viewport& viewport, const glm::dvec3& pivot,
+                               glm::dvec2 pixel) {
     const glm::dvec3 normal = glm::normalize(camera.target - camera.eye);
     const Ray ray = pixel_ray(camera, viewport, pixel);
     const double denom = glm::dot(ray.direction, normal);
@@ -41,14 +42,16 @@ glm::dvec3 point_on_view_plane(const Camera& camera, const Viewport& viewport, c
 
 glm::dvec3 drag_in_view_plane(const Camera& camera, const Viewport& viewport, const glm::dvec3& pivot,
                               glm::dvec2 from, glm::dvec2 to) {
-    return point_on_view_plane(camera, viewport, pivot, to) - point_on_view_plane(camera, viewport, pivot, from);
+    return point_on_view_plane(camera, viewport, pivot, to) -
+           point_on_view_plane(camera, viewport, pivot, from);
 }
 
 namespace {
 // Parameter along the line pivot + s*axis of the point closest to the ray; false when they are parallel.
 bool closest_on_axis(const Ray& ray, const glm::dvec3& pivot, const glm::dvec3& axis, double& s) {
     const glm::dvec3 w = pivot - ray.origin;
-    const double a = glm::dot(axis, axis), b = glm::dot(axis, ray.direction), c = glm::dot(ray.direction, ray.direction);
+    const double a = glm::dot(axis, axis), b = glm::dot(axis, ray.direction),
+                 c = glm::dot(ray.direction, ray.direction);
     const double d = glm::dot(axis, w), e = glm::dot(ray.direction, w);
     const double denom = a * c - b * b;
     if (std::abs(denom) < 1e-9 * a * c) return false;
@@ -67,8 +70,8 @@ glm::dvec3 drag_along_axis(const Camera& camera, const Viewport& viewport, const
     return (s1 - s0) * unit;
 }
 
-double drag_angle(const Camera& camera, const Viewport& viewport, const glm::dvec3& pivot, const glm::dvec3& axis,
-                  glm::dvec2 from, glm::dvec2 to) {
+double drag_angle(const Camera& camera, const Viewport& viewport, const glm::dvec3& pivot,
+                  const glm::dvec3& axis, glm::dvec2 from, glm::dvec2 to) {
     const glm::dvec3 centre = project_to_pixel(camera, viewport, pivot);
     const glm::dvec2 a = from - glm::dvec2(centre), b = to - glm::dvec2(centre);
     if (glm::length(a) < 1e-9 || glm::length(b) < 1e-9) return 0.0;

@@ -21,7 +21,8 @@ glm::dvec3 axis_direction(AxisMode mode, const Camera& camera, const glm::dvec3&
 
 // Where the pixel's ray meets the plane through `pivot` facing the camera; nullopt-free: a ray parallel
 // to the plane (impossible for the camera-facing plane) returns the pivot.
-glm::dvec3 point_on_view_plane(const Camera& camera, const Viewport& viewport, const glm::dvec3& pivot, glm::dvec2 pixel);
+glm::dvec3 point_on_view_plane(const Camera& camera, const Viewport& viewport, const glm::dvec3& pivot,
+                               glm::dvec2 pixel);
 
 // Move in the view plane: the world displacement that keeps the grabbed point under the cursor.
 glm::dvec3 drag_in_view_plane(const Camera& camera, const Viewport& viewport, const glm::dvec3& pivot,
@@ -36,7 +37,7 @@ glm::dvec3 drag_along_axis(const Camera& camera, const Viewport& viewport, const
 // by the cursor from `from` to `to` about the pivot, positive when the rotation about `axis` (right-hand
 // rule) looks the same way on screen. Callers accumulate per-frame increments, so several turns add up.
 // Cursor on the pivot: 0.
-double drag_angle(const Camera& camera, const Viewport& viewport, const glm::dvec3& pivot, const glm::dvec3& axis,
-                  glm::dvec2 from, glm::dvec2 to);
+double drag_angle(const Camera& camera, const Viewport& viewport, const glm::dvec3& pivot,
+                  const glm::dvec3& axis, glm::dvec2 from, glm::dvec2 to);
 
 }  // namespace sffd::editor

@@ -13,8 +13,8 @@ namespace sffd::editor {
 namespace {
 
 constexpr std::array<std::string_view, 20> named_keys = {
-    "escape", "enter", "tab", "backspace", "delete", "space", "left", "right", "up", "down",
-    "home", "end", "minus", "equal", "period", "pageup", "pagedown", "insert", "comma", "slash"};
+    "escape", "enter", "tab",   "backspace", "delete", "space",  "left",     "right",  "up",    "down",
+    "home",   "end",   "minus", "equal",     "period", "pageup", "pagedown", "insert", "comma", "slash"};
 
 std::vector<std::string_view> split_words(std::string_view line) {
     std::vector<std::string_view> words;
@@ -51,7 +51,10 @@ bool parse_mods(std::string_view word, std::uint8_t& out) {
 
 std::string mods_string(std::uint8_t m) {
     std::string s;
-    auto add = [&](const char* name) { s += s.empty() ? "" : "+"; s += name; };
+    auto add = [&](const char* name) {
+        s += s.empty() ? "" : "+";
+        s += name;
+    };
     if (m & mods::shift) add("shift");
     if (m & mods::ctrl) add("ctrl");
     if (m & mods::alt) add("alt");
@@ -76,7 +79,8 @@ std::string format_number(double v) {
 }  // namespace
 
 bool is_known_key(std::string_view name) {
-    if (name.size() == 1 && ((name[0] >= 'a' && name[0] <= 'z') || (name[0] >= '0' && name[0] <= '9'))) return true;
+    if (name.size() == 1 && ((name[0] >= 'a' && name[0] <= 'z') || (name[0] >= '0' && name[0] <= '9')))
+        return true;
     if (name.size() >= 2 && name.size() <= 3 && name[0] == 'f') {
         int n = 0;
         const auto [ptr, ec] = std::from_chars(name.data() + 1, name.data() + name.size(), n);
@@ -99,7 +103,8 @@ Result<std::vector<InputEvent>> parse_input_recording(std::string_view text, std
         const auto fail = [&](const std::string& problem) {
             return make_error(std::string(source) + ":" + std::to_string(line_no) + ": " + problem);
         };
-        if (const std::size_t hash = line.find('#'); hash != std::string_view::npos) line = line.substr(0, hash);
+        if (const std::size_t hash = line.find('#'); hash != std::string_view::npos)
+            line = line.substr(0, hash);
         const std::vector<std::string_view> w = split_words(line);
         if (w.empty()) continue;
         if (w.size() < 2) return fail("expected '<frame> <event> ...'");
@@ -110,7 +115,9 @@ Result<std::vector<InputEvent>> parse_input_recording(std::string_view text, std
             if (ec != std::errc() || ptr != w[0].data() + w[0].size())
                 return fail("bad frame number '" + std::string(w[0]) + "'");
         }
-        if (e.frame < last_frame) return fail("frame " + std::to_string(e.frame) + " is before frame " + std::to_string(last_frame));
+        if (e.frame < last_frame)
+            return fail("frame " + std::to_string(e.frame) + " is before frame " +
+                        std::to_string(last_frame));
         last_frame = e.frame;
 
         const std::string_view kind = w[1];
@@ -122,7 +129,8 @@ Result<std::vector<InputEvent>> parse_input_recording(std::string_view text, std
             e.kind = InputKind::move;
         } else if (kind == "press" || kind == "release") {
             e.kind = kind == "press" ? InputKind::press : InputKind::release;
-            if (w.size() < 3 || w.size() > 4) return fail("'" + std::string(kind) + "' takes a button and optional mods");
+            if (w.size() < 3 || w.size() > 4)
+                return fail("'" + std::string(kind) + "' takes a button and optional mods");
             if (w[2] == "left") e.button = MouseButton::left;
             else if (w[2] == "right") e.button = MouseButton::right;
             else if (w[2] == "middle") e.button = MouseButton::middle;
@@ -149,7 +157,8 @@ Result<std::vector<InputEvent>> parse_input_recording(std::string_view text, std
             if (rest.empty()) return fail("'text' needs a string");
             e.key = std::string(rest);
         } else {
-            return fail("unknown event '" + std::string(kind) + "' (move, press, release, scroll, key, text)");
+            return fail("unknown event '" + std::string(kind) +
+                        "' (move, press, release, scroll, key, text)");
         }
         if (mods_at && w.size() > mods_at && !parse_mods(w[mods_at], e.modifiers))
             return fail("bad modifiers '" + std::string(w[mods_at]) + "' (shift, ctrl, alt joined by +)");
@@ -170,12 +179,18 @@ std::string format_input_recording(std::span<const InputEvent> events) {
         out += std::to_string(e.frame);
         std::string m = mods_string(e.modifiers);
         switch (e.kind) {
-            case InputKind::move: out += " move " + format_number(e.position.x) + " " + format_number(e.position.y); m.clear(); break;
+            case InputKind::move:
+                out += " move " + format_number(e.position.x) + " " + format_number(e.position.y);
+                m.clear();
+                break;
             case InputKind::press: out += std::string(" press ") + button_name(e.button); break;
             case InputKind::release: out += std::string(" release ") + button_name(e.button); break;
             case InputKind::scroll: out += " scroll " + format_number(e.scroll); break;
             case InputKind::key: out += " key " + e.key; break;
-            case InputKind::text: out += " text " + e.key; m.clear(); break;
+            case InputKind::text:
+                out += " text " + e.key;
+                m.clear();
+                break;
         }
         if (!m.empty()) out += " " + m;
         out += "\n";

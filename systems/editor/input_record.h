@@ -37,10 +37,10 @@ inline constexpr std::uint8_t shift = 1, ctrl = 2, alt = 4;
 struct InputEvent {
     std::uint64_t frame = 0;
     InputKind kind = InputKind::move;
-    glm::dvec2 position{0.0};   // move
+    glm::dvec2 position{0.0};                // move
     MouseButton button = MouseButton::left;  // press, release
-    double scroll = 0.0;        // scroll
-    std::string key;            // key: canonical name (lower case); text: the typed string
+    double scroll = 0.0;                     // scroll
+    std::string key;                         // key: canonical name (lower case); text: the typed string
     std::uint8_t modifiers = 0;
 
     bool operator==(const InputEvent&) const = default;

@@ -14,7 +14,8 @@ bool replace_lattice(ecs::Registry& registry, EditorState& state, Lattice next, 
     ComponentEdit<Lattice> lattice_edit(registry, e, label);
     ComponentEdit<picking::LatticeSelection> selection_edit(registry, e, label);
     registry.patch<Lattice>(e) = std::move(next);
-    if (registry.has<picking::LatticeSelection>(e)) registry.patch<picking::LatticeSelection>(e).indices.clear();
+    if (registry.has<picking::LatticeSelection>(e))
+        registry.patch<picking::LatticeSelection>(e).indices.clear();
     group->add(lattice_edit.finish(registry));
     group->add(selection_edit.finish(registry));
     state.undo.push(std::move(group));
@@ -25,11 +26,12 @@ bool replace_lattice(ecs::Registry& registry, EditorState& state, Lattice next, 
 // Point clouds deformed by `lattice` (Deformers lists it).
 std::vector<ecs::Entity> clouds_of(ecs::Registry& registry, ecs::Entity lattice, bool first_only) {
     std::vector<ecs::Entity> out;
-    registry.view<const SplatCloud, const Deformers>().each([&](ecs::Entity e, const SplatCloud&, const Deformers& d) {
-        if (first_only ? (!d.lattices.empty() && d.lattices.front() == lattice)
-                       : std::find(d.lattices.begin(), d.lattices.end(), lattice) != d.lattices.end())
-            out.push_back(e);
-    });
+    registry.view<const SplatCloud, const Deformers>().each(
+        [&](ecs::Entity e, const SplatCloud&, const Deformers& d) {
+            if (first_only ? (!d.lattices.empty() && d.lattices.front() == lattice)
+                           : std::find(d.lattices.begin(), d.lattices.end(), lattice) != d.lattices.end())
+                out.push_back(e);
+        });
     return out;
 }
 
@@ -52,7 +54,8 @@ bool resample_lattice(ecs::Registry& registry, EditorState& state, glm::ivec3 di
         next = std::move(*lowered);
     }
     replace_lattice(registry, state, std::move(next), "resample");
-    say(state, log::str("lattice resampled to ", divisions.x, "x", divisions.y, "x", divisions.z, " divisions"));
+    say(state,
+        log::str("lattice resampled to ", divisions.x, "x", divisions.y, "x", divisions.z, " divisions"));
     return true;
 }
 
@@ -74,7 +77,8 @@ bool fit_lattice_to(ecs::Registry& registry, EditorState& state, bool to_selecti
         const auto sel = selection_of(registry, state.active_lattice);
         if (sel.size() < 2) return say(state, "fit to selection: select at least two control points"), false;
         lo = glm::dvec3(std::numeric_limits<double>::max()), hi = -lo;
-        for (std::uint32_t i : sel) lo = glm::min(lo, lattice->current[i]), hi = glm::max(hi, lattice->current[i]);
+        for (std::uint32_t i : sel)
+            lo = glm::min(lo, lattice->current[i]), hi = glm::max(hi, lattice->current[i]);
     }
     std::vector<glm::vec3> points;
     glm::dvec3 origin(0.0);
@@ -88,7 +92,8 @@ bool fit_lattice_to(ecs::Registry& registry, EditorState& state, bool to_selecti
                 points.push_back(glm::vec3(w - origin));
         }
     }
-    if (points.empty()) return say(state, "fit: no points of the clouds this lattice deforms are in range"), false;
+    if (points.empty())
+        return say(state, "fit: no points of the clouds this lattice deforms are in range"), false;
     auto fitted = ffd::fit_lattice(points, origin, lattice->divisions, lattice->basis);
     if (!fitted) return say(state, "fit: " + fitted.message()), false;
     replace_lattice(registry, state, std::move(*fitted), to_selection ? "fit to selection" : "fit to object");
@@ -107,8 +112,8 @@ bool apply_lattice_as_rest(ecs::Registry& registry, EditorState& state) {
         ComponentEdit<SplatCloud> cloud_edit(registry, clouds[c], "bake");
         SplatCloud& cloud = registry.patch<SplatCloud>(clouds[c]);
         ffd::BakeTarget bake{&cloud.positions, cloud.normals.empty() ? nullptr : &cloud.normals,
-                             cloud.axis_u.empty() ? nullptr : &cloud.axis_u, cloud.axis_v.empty() ? nullptr : &cloud.axis_v,
-                             cloud.origin};
+                             cloud.axis_u.empty() ? nullptr : &cloud.axis_u,
+                             cloud.axis_v.empty() ? nullptr : &cloud.axis_v, cloud.origin};
         Lattice scratch = *lattice;  // apply_as_rest resets the lattice: bake each cloud from the same one
         if (Status st = ffd::apply_as_rest(scratch, &bake); !st) {
             group->add(cloud_edit.finish(registry));
@@ -119,7 +124,8 @@ bool apply_lattice_as_rest(ecs::Registry& registry, EditorState& state) {
         group->add(cloud_edit.finish(registry));
     }
     if (clouds.empty()) {
-        if (Status st = ffd::apply_as_rest(next); !st) return say(state, "apply as rest: " + st.message()), false;
+        if (Status st = ffd::apply_as_rest(next); !st)
+            return say(state, "apply as rest: " + st.message()), false;
     }
     registry.patch<Lattice>(state.active_lattice) = std::move(next);
     group->add(lattice_edit.finish(registry));

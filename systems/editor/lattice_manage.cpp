@@ -27,7 +27,9 @@ std::string name_of(const ecs::Registry& r, ecs::Entity e, const char* fallback)
 bool is_lattice(const ecs::Registry& r, ecs::Entity e) { return r.valid(e) && r.has<Lattice>(e); }
 
 // A cloud lattices deform: surface splats (SplatCloud) or 3D Gaussians (GaussianCloud).
-bool is_cloud(const ecs::Registry& r, ecs::Entity e) { return r.valid(e) && (r.has<SplatCloud>(e) || r.has<GaussianCloud>(e)); }
+bool is_cloud(const ecs::Registry& r, ecs::Entity e) {
+    return r.valid(e) && (r.has<SplatCloud>(e) || r.has<GaussianCloud>(e));
+}
 
 // The authored centres and origin of either kind of cloud.
 const std::vector<glm::vec3>& cloud_positions(const ecs::Registry& r, ecs::Entity e, glm::dvec3& origin) {
@@ -49,7 +51,8 @@ std::vector<ecs::Entity> clouds_deformed_by(const ecs::Registry& r, ecs::Entity 
     std::vector<ecs::Entity> out;
     r.each_entity([&](ecs::Entity e) {
         const Deformers* d = r.try_get<Deformers>(e);
-        if (d && is_cloud(r, e) && std::find(d->lattices.begin(), d->lattices.end(), lattice) != d->lattices.end())
+        if (d && is_cloud(r, e) &&
+            std::find(d->lattices.begin(), d->lattices.end(), lattice) != d->lattices.end())
             out.push_back(e);
     });
     return out;
@@ -82,7 +85,8 @@ void remove_recorded(ecs::Registry& r, CommandGroup& group, ecs::Entity e, const
 }
 
 // A lattice entity bound last to `cloud` (placed like the cloud), active, as one undo step.
-bool add_bound_lattice(ecs::Registry& r, EditorState& state, ecs::Entity cloud, Lattice lattice, const char* label) {
+bool add_bound_lattice(ecs::Registry& r, EditorState& state, ecs::Entity cloud, Lattice lattice,
+                       const char* label) {
     // Never leave a cloud without Deformers once it had a lattice: the deformation phase only rewrites
     // DeformedSplats for clouds that have it (an empty list gives the authored splats back).
     if (!r.has<Deformers>(cloud)) r.emplace<Deformers>(cloud);
@@ -103,7 +107,8 @@ bool add_bound_lattice(ecs::Registry& r, EditorState& state, ecs::Entity cloud, 
 }
 
 // The authored points of `clouds` relative to the first one's origin.
-std::vector<glm::vec3> points_of(const ecs::Registry& r, const std::vector<ecs::Entity>& clouds, glm::dvec3& origin) {
+std::vector<glm::vec3> points_of(const ecs::Registry& r, const std::vector<ecs::Entity>& clouds,
+                                 glm::dvec3& origin) {
     std::vector<glm::vec3> pts;
     bool first = true;
     for (ecs::Entity c : clouds) {
@@ -193,10 +198,12 @@ bool refit_lattice(ecs::Registry& r, EditorState& state) {
     auto group = std::make_unique<CommandGroup>("refit lattice");
     change<Lattice>(r, *group, e, "refit lattice", [&] { r.patch<Lattice>(e) = std::move(*fitted); });
     if (r.has<picking::LatticeSelection>(e))
-        change<picking::LatticeSelection>(r, *group, e, "refit lattice", [&] { r.patch<picking::LatticeSelection>(e).indices.clear(); });
+        change<picking::LatticeSelection>(r, *group, e, "refit lattice",
+                                          [&] { r.patch<picking::LatticeSelection>(e).indices.clear(); });
     state.undo.push(std::move(group));
     state.last_edit = {};
-    say(state, "refitted '" + name_of(r, e, "lattice") + "' (" + ffd::fit_spec_string(lattice_fit_settings(r).fit) + ")");
+    say(state, "refitted '" + name_of(r, e, "lattice") + "' (" +
+                   ffd::fit_spec_string(lattice_fit_settings(r).fit) + ")");
     return true;
 }
 
@@ -207,16 +214,18 @@ bool move_lattice_in_order(ecs::Registry& r, EditorState& state, int delta) {
         const auto& list = r.get<Deformers>(cloud).lattices;
         const auto at = std::size_t(std::find(list.begin(), list.end(), e) - list.begin());
         const long long to = (long long)at + delta;
-        if (to < 0 || to >= (long long)list.size()) return say(state, "lattice order: already " + std::string(delta < 0 ? "first" : "last")), false;
+        if (to < 0 || to >= (long long)list.size())
+            return say(state, "lattice order: already " + std::string(delta < 0 ? "first" : "last")), false;
         auto group = std::make_unique<CommandGroup>("lattice order");
         change<Deformers>(r, *group, cloud, "lattice order", [&] {
             auto& l = r.patch<Deformers>(cloud).lattices;
             std::swap(l[at], l[std::size_t(to)]);
         });
         state.undo.push(std::move(group));
-        say(state, "'" + name_of(r, e, "lattice") + "' is lattice " + std::to_string(to + 1) + " of " + std::to_string(list.size()) +
-                       " on '" + name_of(r, cloud, "cloud") + "'");
-        return true;  // the first cloud that follows it (a lattice shared by several clouds keeps one order each)
+        say(state, "'" + name_of(r, e, "lattice") + "' is lattice " + std::to_string(to + 1) + " of " +
+                       std::to_string(list.size()) + " on '" + name_of(r, cloud, "cloud") + "'");
+        return true;  // the first cloud that follows it (a lattice shared by several clouds keeps one order
+                      // each)
     }
     return say(state, "lattice order: the active lattice deforms no cloud"), false;
 }
@@ -234,7 +243,8 @@ bool cycle_active_lattice(ecs::Registry& r, EditorState& state, int delta) {
 
 bool export_lattice_json(ecs::Registry& r, EditorState& state, const std::string& path) {
     if (!is_lattice(r, state.active_lattice)) return say(state, "export lattice: no active lattice"), false;
-    if (Status s = ffd::save_lattice(path, r.get<Lattice>(state.active_lattice)); !s) return say(state, "export lattice: " + s.message()), false;
+    if (Status s = ffd::save_lattice(path, r.get<Lattice>(state.active_lattice)); !s)
+        return say(state, "export lattice: " + s.message()), false;
     say(state, "exported '" + name_of(r, state.active_lattice, "lattice") + "' to " + path);
     return true;
 }
@@ -251,7 +261,8 @@ bool import_lattice_json(ecs::Registry& r, EditorState& state, const std::string
     auto group = std::make_unique<CommandGroup>("import lattice");
     change<Lattice>(r, *group, e, "import lattice", [&] { r.patch<Lattice>(e) = std::move(*loaded); });
     if (r.has<picking::LatticeSelection>(e))
-        change<picking::LatticeSelection>(r, *group, e, "import lattice", [&] { r.patch<picking::LatticeSelection>(e).indices.clear(); });
+        change<picking::LatticeSelection>(r, *group, e, "import lattice",
+                                          [&] { r.patch<picking::LatticeSelection>(e).indices.clear(); });
     state.undo.push(std::move(group));
     state.last_edit = {};
     say(state, "imported " + path + " into '" + name_of(r, e, "lattice") + "'");
@@ -259,11 +270,14 @@ bool import_lattice_json(ecs::Registry& r, EditorState& state, const std::string
 }
 
 bool handle_lattice_key(ecs::Registry& r, EditorState& state, const InputEvent& ev) {
-    const bool ctrl = ev.modifiers & mods::ctrl, shift = ev.modifiers & mods::shift, alt = ev.modifiers & mods::alt;
+    const bool ctrl = ev.modifiers & mods::ctrl, shift = ev.modifiers & mods::shift,
+               alt = ev.modifiers & mods::alt;
     const std::string& k = ev.key;
     if (alt) return false;
-    if (ctrl && !shift && k == "e") return export_lattice_json(r, state, lattice_fit_settings(r).json_path), true;
-    if (ctrl && !shift && k == "i") return import_lattice_json(r, state, lattice_fit_settings(r).json_path), true;
+    if (ctrl && !shift && k == "e")
+        return export_lattice_json(r, state, lattice_fit_settings(r).json_path), true;
+    if (ctrl && !shift && k == "i")
+        return import_lattice_json(r, state, lattice_fit_settings(r).json_path), true;
     if (ctrl) return false;
     if (shift && k == "a") return add_lattice(r, state), true;
     if (shift && k == "f") return refit_lattice(r, state), true;

@@ -26,7 +26,8 @@ struct LatticeOverlayState {
     bool failed = false;
 };
 
-OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const EditorState& state, ecs::Entity entity) {
+OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const EditorState& state,
+                                      ecs::Entity entity) {
     OverlayGeometry g;
     const Lattice* lattice = registry.try_get<Lattice>(entity);
     if (!lattice || lattice->current.size() != lattice->size()) return g;
@@ -70,15 +71,16 @@ OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const Edito
                 faint = true;
             }
         }
-        glm::vec4 color = selected[c] ? overlay_selected
+        glm::vec4 color = selected[c]          ? overlay_selected
                           : (pins && outer[c]) ? overlay_pinned
-                          : inside[c] ? overlay_inside
-                                      : overlay_outside;
+                          : inside[c]          ? overlay_inside
+                                               : overlay_outside;
         if (!active) color.w *= 0.5f;
         if (faint) color.w *= 0.35f;
         g.points.push_back({p[c], color, faint ? 3.0f : selected[c] ? 9.0f : 5.0f});
     }
-    const glm::vec4 line_color = active ? glm::vec4(0.3f, 0.75f, 0.95f, 0.7f) : glm::vec4(0.5f, 0.5f, 0.5f, 0.4f);
+    const glm::vec4 line_color =
+        active ? glm::vec4(0.3f, 0.75f, 0.95f, 0.7f) : glm::vec4(0.5f, 0.5f, 0.5f, 0.4f);
     auto edge = [&](std::size_t a, std::size_t b) {
         g.lines.push_back({p[a], line_color, 1.0f});
         g.lines.push_back({p[b], line_color, 1.0f});
@@ -98,8 +100,9 @@ OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const Edito
 
 Status init_lattice_overlay(ecs::Registry& registry) {
     if (registry.try_resource<LatticeOverlayState>()) return {};
-    auto program = gfx::load_program({{GL_VERTEX_SHADER, "editor/lattice.vert"}, {GL_FRAGMENT_SHADER, "editor/lattice.frag"}},
-                                     "editor.lattice");
+    auto program = gfx::load_program(
+        {{GL_VERTEX_SHADER, "editor/lattice.vert"}, {GL_FRAGMENT_SHADER, "editor/lattice.frag"}},
+        "editor.lattice");
     LatticeOverlayState& s = registry.set_resource<LatticeOverlayState>();
     if (!program) {
         s.failed = true;
@@ -134,7 +137,8 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
 
     GLint width = 0, height = 0;
     GLint color_tex = 0;
-    glGetNamedFramebufferAttachmentParameteriv(fbo, GL_COLOR_ATTACHMENT0, GL_FRAMEBUFFER_ATTACHMENT_OBJECT_NAME, &color_tex);
+    glGetNamedFramebufferAttachmentParameteriv(fbo, GL_COLOR_ATTACHMENT0,
+                                               GL_FRAMEBUFFER_ATTACHMENT_OBJECT_NAME, &color_tex);
     if (color_tex == 0) return;
     glGetTextureLevelParameteriv(GLuint(color_tex), 0, GL_TEXTURE_WIDTH, &width);
     glGetTextureLevelParameteriv(GLuint(color_tex), 0, GL_TEXTURE_HEIGHT, &height);
@@ -162,9 +166,11 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
         const std::size_t count = g.points.size() + g.lines.size();
         if (count > s.capacity) {
             s.capacity = count * 2;
-            glNamedBufferData(s.buffer.id(), GLsizeiptr(s.capacity * sizeof(OverlayVertex)), nullptr, GL_STREAM_DRAW);
+            glNamedBufferData(s.buffer.id(), GLsizeiptr(s.capacity * sizeof(OverlayVertex)), nullptr,
+                              GL_STREAM_DRAW);
         }
-        glNamedBufferSubData(s.buffer.id(), 0, GLsizeiptr(g.lines.size() * sizeof(OverlayVertex)), g.lines.data());
+        glNamedBufferSubData(s.buffer.id(), 0, GLsizeiptr(g.lines.size() * sizeof(OverlayVertex)),
+                             g.lines.data());
         glNamedBufferSubData(s.buffer.id(), GLintptr(g.lines.size() * sizeof(OverlayVertex)),
                              GLsizeiptr(g.points.size() * sizeof(OverlayVertex)), g.points.data());
         glVertexArrayVertexBuffer(s.vao.id(), 0, s.buffer.id(), 0, sizeof(OverlayVertex));
@@ -196,7 +202,8 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
     std::vector<GLenum> bufs;
     for (GLint i = 0; i < max_attach; ++i) {
         GLint type = GL_NONE;
-        glGetNamedFramebufferAttachmentParameteriv(fbo, GL_COLOR_ATTACHMENT0 + GLenum(i), GL_FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE, &type);
+        glGetNamedFramebufferAttachmentParameteriv(fbo, GL_COLOR_ATTACHMENT0 + GLenum(i),
+                                                   GL_FRAMEBUFFER_ATTACHMENT_OBJECT_TYPE, &type);
         if (type == GL_NONE) break;
         bufs.push_back(GL_COLOR_ATTACHMENT0 + GLenum(i));
     }

@@ -38,7 +38,8 @@ inline constexpr glm::vec4 overlay_pinned{0.35f, 0.42f, 0.62f, 1.0f};
 inline constexpr glm::vec4 overlay_inside{0.95f, 0.95f, 0.95f, 1.0f};
 inline constexpr glm::vec4 overlay_outside{0.25f, 0.8f, 0.9f, 1.0f};
 
-OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const EditorState& state, ecs::Entity lattice);
+OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const EditorState& state,
+                                      ecs::Entity lattice);
 
 Status init_lattice_overlay(ecs::Registry& registry);
 void lattice_overlay_system(ecs::Registry& registry, const FrameContext& frame);

@@ -17,7 +17,8 @@ std::vector<std::uint8_t> outer_layer_mask(const Lattice& lattice) {
     return mask;
 }
 
-std::vector<std::uint8_t> inside_box_mask(const Lattice& lattice, const glm::dvec3& lo, const glm::dvec3& hi) {
+std::vector<std::uint8_t> inside_box_mask(const Lattice& lattice, const glm::dvec3& lo,
+                                          const glm::dvec3& hi) {
     std::vector<std::uint8_t> mask(lattice.current.size(), 0);
     for (std::size_t c = 0; c < lattice.current.size(); ++c) {
         const glm::dvec3& p = lattice.current[c];
@@ -35,7 +36,8 @@ std::vector<std::uint32_t> editable_points(const Lattice& lattice, std::span<con
         for (std::uint32_t c = 0; c < n; ++c) out[c] = c;
         return out;
     }
-    const std::vector<std::uint8_t> pinned = pin_outer ? outer_layer_mask(lattice) : std::vector<std::uint8_t>();
+    const std::vector<std::uint8_t> pinned =
+        pin_outer ? outer_layer_mask(lattice) : std::vector<std::uint8_t>();
     for (std::uint32_t c : selection)
         if (c < n && (pinned.empty() || !pinned[c])) out.push_back(c);
     std::sort(out.begin(), out.end());
@@ -52,15 +54,16 @@ glm::dvec3 centroid(const Lattice& lattice, std::span<const std::uint32_t> indic
     return sum / double(indices.size());
 }
 
-void stretch_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out, std::span<const std::uint32_t> indices,
-                    const glm::dvec3& displacement) {
+void stretch_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out,
+                    std::span<const std::uint32_t> indices, const glm::dvec3& displacement) {
     assert(start.size() == out.size());
     std::copy(start.begin(), start.end(), out.begin());
     for (std::uint32_t c : indices) out[c] = start[c] + displacement;
 }
 
-void twist_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out, std::span<const std::uint32_t> indices,
-                  const glm::dvec3& pivot, const glm::dvec3& axis, double angle) {
+void twist_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out,
+                  std::span<const std::uint32_t> indices, const glm::dvec3& pivot, const glm::dvec3& axis,
+                  double angle) {
     assert(start.size() == out.size());
     std::copy(start.begin(), start.end(), out.begin());
     if (glm::length(axis) == 0.0) return;

@@ -35,10 +35,11 @@ std::vector<std::uint32_t> editable_points(const Lattice& lattice, std::span<con
 glm::dvec3 centroid(const Lattice& lattice, std::span<const std::uint32_t> indices);
 
 // Paper eq. (23): out[c] = start[c] + d for c in indices; other points copy start.
-void stretch_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out, std::span<const std::uint32_t> indices,
-                    const glm::dvec3& displacement);
+void stretch_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out,
+                    std::span<const std::uint32_t> indices, const glm::dvec3& displacement);
 // Paper eq. (24) with a pivot: out[c] = pivot + R(axis, angle)(start[c] - pivot) for c in indices.
-void twist_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out, std::span<const std::uint32_t> indices,
-                  const glm::dvec3& pivot, const glm::dvec3& axis, double angle);
+void twist_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out,
+                  std::span<const std::uint32_t> indices, const glm::dvec3& pivot, const glm::dvec3& axis,
+                  double angle);
 
 }  // namespace sffd::editor

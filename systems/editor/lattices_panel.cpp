@@ -1,8 +1,8 @@
 // The "lattices" section at the top of the Lattice panel (lattice_manage.h): the clouds and the lattices
 // each follows, in order (click one to make it active); add / remove / refit with the fit settings (shape,
 // padding, divisions, basis); order; export / import JSON. Every button calls the same function as its
-// key, so each action is one undo step. (A section, not a window of its own: the right column (panel_layout.h)
-// holds Tools and Lattice.)
+// key, so each action is one undo step. (A section, not a window of its own: the right column
+// (panel_layout.h) holds Tools and Lattice.)
 #include <cstdio>
 #include <string>
 
@@ -42,7 +42,8 @@ void lattice_manager_section(ecs::Registry& registry, EditorState& state) {
                 std::snprintf(prefix, sizeof prefix, "  %zu. ", i + 1);
                 ImGui::TextUnformatted(prefix);
                 ImGui::SameLine();
-                const std::string label = name_of(registry, list[i], "lattice") + "##" + std::to_string(list[i].index);
+                const std::string label =
+                    name_of(registry, list[i], "lattice") + "##" + std::to_string(list[i].index);
                 if (ImGui::Selectable(label.c_str(), list[i] == state.active_lattice))
                     state.active_lattice = list[i];
             }

@@ -25,15 +25,15 @@ constexpr float gap = 2.0f;
 
 struct Slot {
     Panel panel;
-    float weight;     // share of the column's free height (0: fixed)
-    float fixed;      // wanted height when weight == 0
+    float weight;  // share of the column's free height (0: fixed)
+    float fixed;   // wanted height when weight == 0
 };
 
 // Stacks `slots` top to bottom in [y0, y1]: collapsed panels take their title bar, fixed ones their
 // height (shrunk when the column is short), the rest share what is left by weight.
 template <std::size_t N>
-void stack(std::array<PanelRect, panel_count>& out, const LayoutInput& in, float x, float w, float y0, float y1,
-           const std::array<Slot, N>& slots) {
+void stack(std::array<PanelRect, panel_count>& out, const LayoutInput& in, float x, float w, float y0,
+           float y1, const std::array<Slot, N>& slots) {
     const float total = std::max(0.0f, y1 - y0 - gap * float(N - 1));
     std::array<float, N> h{};
     float used = 0.0f, weights = 0.0f;
@@ -52,7 +52,8 @@ void stack(std::array<PanelRect, panel_count>& out, const LayoutInput& in, float
     }
     const float left = std::max(0.0f, total - used);
     for (std::size_t i = 0; i < N; ++i)
-        if (!in.collapsed[std::size_t(slots[i].panel)] && slots[i].weight > 0.0f) h[i] = left * slots[i].weight / weights;
+        if (!in.collapsed[std::size_t(slots[i].panel)] && slots[i].weight > 0.0f)
+            h[i] = left * slots[i].weight / weights;
     float y = y0;
     for (std::size_t i = 0; i < N; ++i) {
         const float hi = std::floor(h[i]);
@@ -76,11 +77,14 @@ std::array<PanelRect, panel_count> layout_panels(const LayoutInput& in) {
         left = std::floor(left * s), right = std::floor(right * s);
     }
     stack(out, in, 0.0f, left, y0, y1,
-          std::array<Slot, 3>{{{Panel::outliner, 0.22f, 0}, {Panel::inspector, 0.48f, 0}, {Panel::frame_time, 0.30f, 0}}});
-    stack(out, in, W - right, right, y0, y1, std::array<Slot, 2>{{{Panel::tools, 0.45f, 0}, {Panel::lattice, 0.55f, 0}}});
+          std::array<Slot, 3>{
+              {{Panel::outliner, 0.22f, 0}, {Panel::inspector, 0.48f, 0}, {Panel::frame_time, 0.30f, 0}}});
+    stack(out, in, W - right, right, y0, y1,
+          std::array<Slot, 2>{{{Panel::tools, 0.45f, 0}, {Panel::lattice, 0.55f, 0}}});
     // Timeline: between the columns, above the status bar.
     const float mid_x = left + gap, mid_w = std::max(0.0f, W - right - gap - mid_x);
-    const float th = std::min(in.collapsed[std::size_t(Panel::timeline)] ? in.title : 64.0f, std::max(0.0f, y1 - y0));
+    const float th =
+        std::min(in.collapsed[std::size_t(Panel::timeline)] ? in.title : 64.0f, std::max(0.0f, y1 - y0));
     out[std::size_t(Panel::timeline)] = PanelRect{mid_x, y1 - th, mid_w, th};
     return out;
 }

@@ -70,7 +70,8 @@ bool begin_panel(Panel p) {
     const PanelRect& r = ls.rects[std::size_t(p)];
     ImGui::SetNextWindowPos(ImVec2(r.x, r.y), ImGuiCond_Always);
     ImGui::SetNextWindowSize(ImVec2(r.w, r.h), ImGuiCond_Always);
-    const bool open = ImGui::Begin(panel_title(p), nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
+    const bool open =
+        ImGui::Begin(panel_title(p), nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
     ls.collapsed[std::size_t(p)] = ImGui::IsWindowCollapsed();
     record_current_window(panel_title(p));
     return open;
@@ -93,24 +94,27 @@ PendingEdit<C>& pending() {
 // Call right after a widget that edits C of `e` in place; `changed` is the widget's return value and
 // `before` yields the value the component had before this frame's widget call (called only on activation).
 template <class C, class BeforeFn>
-void track_edit_fn(ecs::Registry& registry, EditorState& state, ecs::Entity e, BeforeFn&& before, bool changed,
-                   const char* label) {
+void track_edit_fn(ecs::Registry& registry, EditorState& state, ecs::Entity e, BeforeFn&& before,
+                   bool changed, const char* label) {
     PendingEdit<C>& p = pending<C>();
     if (ImGui::IsItemActivated()) {
         p.entity = e;
         p.before = before();
     }
     if (changed) registry.mark_changed<C>(e);
-    if (ImGui::IsItemDeactivatedAfterEdit() && p.before && p.entity == e && registry.valid(e) && registry.has<C>(e)) {
-        state.undo.push(std::make_unique<ComponentChange<C>>(label, e, std::move(p.before), registry.get<C>(e)));
+    if (ImGui::IsItemDeactivatedAfterEdit() && p.before && p.entity == e && registry.valid(e) &&
+        registry.has<C>(e)) {
+        state.undo.push(
+            std::make_unique<ComponentChange<C>>(label, e, std::move(p.before), registry.get<C>(e)));
         p.before.reset();
     }
 }
 
 template <class C>
-void track_edit(ecs::Registry& registry, EditorState& state, ecs::Entity e, const C& before_value, bool changed,
-                const char* label) {
-    track_edit_fn<C>(registry, state, e, [&] { return before_value; }, changed, label);
+void track_edit(ecs::Registry& registry, EditorState& state, ecs::Entity e, const C& before_value,
+                bool changed, const char* label) {
+    track_edit_fn<C>(
+        registry, state, e, [&] { return before_value; }, changed, label);
 }
 
 bool input_dvec3(const char* label, glm::dvec3& v, const char* format = "%.4f") {
@@ -146,7 +150,8 @@ FileDialog& file_dialog() {
 }
 
 void browse(FileDialog& d, const std::filesystem::path& folder) {
-    auto listed = list_folder(folder, d.mode == FileDialog::Mode::open ? openable_extensions() : saveable_extensions());
+    auto listed =
+        list_folder(folder, d.mode == FileDialog::Mode::open ? openable_extensions() : saveable_extensions());
     if (!listed) {
         d.error = listed.message();
         return;
@@ -187,8 +192,11 @@ void file_dialog_window(ecs::Registry& registry, EditorState& state) {
     FileDialog& d = file_dialog();
     const char* title = d.mode == FileDialog::Mode::open ? "Open scene" : "Save scene as";
     const ImGuiViewport* vp = ImGui::GetMainViewport();
-    ImGui::SetNextWindowPos(ImVec2(vp->Size.x * 0.5f, vp->Size.y * 0.5f), ImGuiCond_Appearing, ImVec2(0.5f, 0.5f));
-    ImGui::SetNextWindowSize(ImVec2(std::min(640.0f, vp->Size.x - 40.0f), std::min(460.0f, vp->Size.y - 80.0f)), ImGuiCond_Appearing);
+    ImGui::SetNextWindowPos(ImVec2(vp->Size.x * 0.5f, vp->Size.y * 0.5f), ImGuiCond_Appearing,
+                            ImVec2(0.5f, 0.5f));
+    ImGui::SetNextWindowSize(
+        ImVec2(std::min(640.0f, vp->Size.x - 40.0f), std::min(460.0f, vp->Size.y - 80.0f)),
+        ImGuiCond_Appearing);
     if (!ImGui::BeginPopupModal(title, nullptr)) return;
     if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
         ImGui::CloseCurrentPopup();
@@ -203,7 +211,8 @@ void file_dialog_window(ecs::Registry& registry, EditorState& state) {
         std::filesystem::path enter;
         for (const FolderEntry& e : d.entries) {
             const std::string label = e.folder ? "[" + e.name + "]" : e.name;
-            if (ImGui::Selectable(label.c_str(), !e.folder && e.name == d.name, ImGuiSelectableFlags_AllowDoubleClick)) {
+            if (ImGui::Selectable(label.c_str(), !e.folder && e.name == d.name,
+                                  ImGuiSelectableFlags_AllowDoubleClick)) {
                 if (e.folder) enter = e.name == ".." ? d.folder.parent_path() : d.folder / e.name;
                 else {
                     std::snprintf(d.name, sizeof d.name, "%s", e.name.c_str());
@@ -215,15 +224,16 @@ void file_dialog_window(ecs::Registry& registry, EditorState& state) {
     }
     ImGui::EndChild();
     ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x * 0.7f);
-    const bool entered = ImGui::InputText(d.mode == FileDialog::Mode::open ? "file or built-in name" : "file name", d.name,
-                                          sizeof d.name, ImGuiInputTextFlags_EnterReturnsTrue);
+    const bool entered =
+        ImGui::InputText(d.mode == FileDialog::Mode::open ? "file or built-in name" : "file name", d.name,
+                         sizeof d.name, ImGuiInputTextFlags_EnterReturnsTrue);
     if (ImGui::Button(d.mode == FileDialog::Mode::open ? "Open" : "Save") || entered) {
         const std::string name = d.name;
         if (!name.empty()) {
             const std::filesystem::path p(name);
             // A bare built-in name ("sphere") is not a file in the folder; anything else is relative to it.
-            const bool builtin = d.mode == FileDialog::Mode::open && !p.has_extension() && !p.has_parent_path() &&
-                                 !std::filesystem::exists(d.folder / p);
+            const bool builtin = d.mode == FileDialog::Mode::open && !p.has_extension() &&
+                                 !p.has_parent_path() && !std::filesystem::exists(d.folder / p);
             chosen = builtin ? name : (p.is_absolute() ? p : d.folder / p).string();
         }
     }
@@ -302,7 +312,8 @@ void inspector(ecs::Registry& registry, EditorState& state) {
         ImGui::End();
         return;
     }
-    if (Name* n = registry.try_get<Name>(e); n && ImGui::CollapsingHeader("Name", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (Name* n = registry.try_get<Name>(e);
+        n && ImGui::CollapsingHeader("Name", ImGuiTreeNodeFlags_DefaultOpen)) {
         char buf[256];
         std::snprintf(buf, sizeof buf, "%s", n->value.c_str());
         const Name before = *n;
@@ -310,7 +321,8 @@ void inspector(ecs::Registry& registry, EditorState& state) {
         if (changed) n->value = buf;
         track_edit<Name>(registry, state, e, before, changed, "rename");
     }
-    if (Transform* t = registry.try_get<Transform>(e); t && ImGui::CollapsingHeader("Transform", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (Transform* t = registry.try_get<Transform>(e);
+        t && ImGui::CollapsingHeader("Transform", ImGuiTreeNodeFlags_DefaultOpen)) {
         const Transform before = *t;
         bool changed = drag_dvec3("translation", t->translation);
         track_edit<Transform>(registry, state, e, before, changed, "move entity");
@@ -321,7 +333,8 @@ void inspector(ecs::Registry& registry, EditorState& state) {
         changed = drag_dvec3("scale", t->scale);
         track_edit<Transform>(registry, state, e, before, changed, "scale entity");
     }
-    if (SplatCloud* c = registry.try_get<SplatCloud>(e); c && ImGui::CollapsingHeader("SplatCloud", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (SplatCloud* c = registry.try_get<SplatCloud>(e);
+        c && ImGui::CollapsingHeader("SplatCloud", ImGuiTreeNodeFlags_DefaultOpen)) {
         ImGui::Text("%zu splats%s%s", c->size(), c->colors.empty() ? "" : ", colours",
                     c->material.texture_path.empty() ? "" : ", textured");
         ImGui::Text("origin %.3f %.3f %.3f", c->origin.x, c->origin.y, c->origin.z);
@@ -331,11 +344,14 @@ void inspector(ecs::Registry& registry, EditorState& state) {
         const auto material_edit = [&](bool changed, const char* label) {
             // The undo step stores the whole cloud (one undo mechanism for every component); it is copied
             // only when a widget is grabbed, never per frame.
-            track_edit_fn<SplatCloud>(registry, state, e, [&] {
-                SplatCloud b = *c;
-                b.material = before_m;
-                return b;
-            }, changed, label);
+            track_edit_fn<SplatCloud>(
+                registry, state, e,
+                [&] {
+                    SplatCloud b = *c;
+                    b.material = before_m;
+                    return b;
+                },
+                changed, label);
         };
         bool ch = ImGui::ColorEdit4("base colour", &m.base_color.x);
         material_edit(ch, "material colour");
@@ -344,7 +360,8 @@ void inspector(ecs::Registry& registry, EditorState& state) {
         ch = ImGui::SliderFloat("shininess", &m.shininess, 1.0f, 256.0f);
         material_edit(ch, "material shininess");
     }
-    if (Camera* cam = registry.try_get<Camera>(e); cam && ImGui::CollapsingHeader("Camera", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (Camera* cam = registry.try_get<Camera>(e);
+        cam && ImGui::CollapsingHeader("Camera", ImGuiTreeNodeFlags_DefaultOpen)) {
         const Camera before = *cam;
         bool ch = drag_dvec3("eye", cam->eye);
         track_edit<Camera>(registry, state, e, before, ch, "camera eye");
@@ -353,7 +370,8 @@ void inspector(ecs::Registry& registry, EditorState& state) {
         ch = ImGui::SliderFloat("fov y", &cam->fov_y_degrees, 5.0f, 120.0f);
         track_edit<Camera>(registry, state, e, before, ch, "camera fov");
     }
-    if (DirectionalLight* l = registry.try_get<DirectionalLight>(e); l && ImGui::CollapsingHeader("DirectionalLight", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (DirectionalLight* l = registry.try_get<DirectionalLight>(e);
+        l && ImGui::CollapsingHeader("DirectionalLight", ImGuiTreeNodeFlags_DefaultOpen)) {
         const DirectionalLight before = *l;
         bool ch = ImGui::DragFloat3("direction", &l->direction.x, 0.01f);
         track_edit<DirectionalLight>(registry, state, e, before, ch, "light direction");
@@ -362,24 +380,28 @@ void inspector(ecs::Registry& registry, EditorState& state) {
         ch = ImGui::SliderFloat("intensity", &l->intensity, 0.0f, 10.0f);
         track_edit<DirectionalLight>(registry, state, e, before, ch, "light intensity");
     }
-    if (AmbientLight* a = registry.try_get<AmbientLight>(e); a && ImGui::CollapsingHeader("AmbientLight", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (AmbientLight* a = registry.try_get<AmbientLight>(e);
+        a && ImGui::CollapsingHeader("AmbientLight", ImGuiTreeNodeFlags_DefaultOpen)) {
         const AmbientLight before = *a;
         bool ch = ImGui::ColorEdit3("ambient colour", &a->color.x);
         track_edit<AmbientLight>(registry, state, e, before, ch, "ambient colour");
         ch = ImGui::SliderFloat("ambient intensity", &a->intensity, 0.0f, 2.0f);
         track_edit<AmbientLight>(registry, state, e, before, ch, "ambient intensity");
     }
-    if (const Lattice* l = registry.try_get<Lattice>(e); l && ImGui::CollapsingHeader("Lattice", ImGuiTreeNodeFlags_DefaultOpen)) {
-        ImGui::Text("divisions %d x %d x %d (%zu points), %s", l->divisions.x, l->divisions.y, l->divisions.z, l->size(),
-                    l->basis == LatticeBasis::bernstein ? "Bernstein" : "B-spline");
+    if (const Lattice* l = registry.try_get<Lattice>(e);
+        l && ImGui::CollapsingHeader("Lattice", ImGuiTreeNodeFlags_DefaultOpen)) {
+        ImGui::Text("divisions %d x %d x %d (%zu points), %s", l->divisions.x, l->divisions.y, l->divisions.z,
+                    l->size(), l->basis == LatticeBasis::bernstein ? "Bernstein" : "B-spline");
         ImGui::Text("origin %.3f %.3f %.3f", l->origin.x, l->origin.y, l->origin.z);
-        if (const auto* sel = registry.try_get<picking::LatticeSelection>(e)) ImGui::Text("%zu selected", sel->indices.size());
+        if (const auto* sel = registry.try_get<picking::LatticeSelection>(e))
+            ImGui::Text("%zu selected", sel->indices.size());
         ImGui::TextDisabled("edit shape and resolution in the Lattice panel");
     }
     if (const Deformers* d = registry.try_get<Deformers>(e); d && ImGui::CollapsingHeader("Deformers")) {
         for (ecs::Entity l : d->lattices) ImGui::BulletText("%s", entity_label(registry, l).c_str());
     }
-    if (AnimationClip* clip = registry.try_get<AnimationClip>(e); clip && ImGui::CollapsingHeader("AnimationClip")) {
+    if (AnimationClip* clip = registry.try_get<AnimationClip>(e);
+        clip && ImGui::CollapsingHeader("AnimationClip")) {
         const AnimationClip before = *clip;
         double duration = clip->duration;
         const bool ch = ImGui::InputDouble("duration (s)", &duration, 0.1, 1.0, "%.3f");
@@ -442,7 +464,8 @@ void tools_panel(ecs::Registry& registry, EditorState& state) {
 void lattice_panel(ecs::Registry& registry, EditorState& state) {
     if (begin_panel(Panel::lattice)) {
         lattice_manager_section(registry, state);  // add / remove / order / JSON (lattice_manage.h)
-        const Lattice* l = registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
+        const Lattice* l =
+            registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
         if (!l) {
             ImGui::TextDisabled("no lattice: shift+a adds one");
         } else {
@@ -457,8 +480,8 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
             }
             const auto outer = outer_layer_mask(*l);
             ImGui::TextWrapped("%zu inside the object's box (white), %zu outer (pinned: %s)", inside,
-                        std::size_t(std::count(outer.begin(), outer.end(), std::uint8_t(1))),
-                        state.pin_outer_layer ? "yes" : "no");
+                               std::size_t(std::count(outer.begin(), outer.end(), std::uint8_t(1))),
+                               state.pin_outer_layer ? "yes" : "no");
             if (ImGui::Button(state.pin_outer_layer ? "unpin outer layer" : "pin outer layer"))
                 state.pin_outer_layer = !state.pin_outer_layer;
             ImGui::SameLine();
@@ -480,7 +503,8 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
                 divisions = glm::ivec3(0);
             }
             int basis = int(l->basis);
-            if (ImGui::Combo("basis", &basis, "Bernstein\0cubic B-spline\0")) set_lattice_basis(registry, state, LatticeBasis(basis));
+            if (ImGui::Combo("basis", &basis, "Bernstein\0cubic B-spline\0"))
+                set_lattice_basis(registry, state, LatticeBasis(basis));
             if (ImGui::Button("fit to object")) fit_lattice_to(registry, state, false);
             same_line_if_fits("fit to selection");
             if (ImGui::Button("fit to selection")) fit_lattice_to(registry, state, true);
@@ -507,7 +531,8 @@ void timeline_panel(ecs::Registry& registry, EditorState& state) {
             ImGui::SameLine();
             float t = float(anim->time);
             ImGui::SetNextItemWidth(-1);
-            if (ImGui::SliderFloat("##time", &t, 0.0f, float(clip->duration), "%.3f s")) scrub_to(registry, state, t);
+            if (ImGui::SliderFloat("##time", &t, 0.0f, float(clip->duration), "%.3f s"))
+                scrub_to(registry, state, t);
             // Key markers under the slider.
             const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
             ImDrawList* dl = ImGui::GetWindowDrawList();
@@ -533,8 +558,10 @@ void profiler_panel(ecs::Registry& registry, EditorState&) {
             const float scale = graph_scale(std::span<const float>(o->frame_ms.data(), o->count));
             char overlay[48];
             std::snprintf(overlay, sizeof overlay, "0..%.0f ms, %zu frames", double(scale), o->count);
-            ImGui::PlotLines("##frame", o->frame_ms.data(), int(o->count), int(o->oldest()), overlay, 0.0f, scale,
-                             ImVec2(ImGui::GetContentRegionAvail().x, 50));  // PlotLines (1.86) takes no -1 width: it drew a 1-px line
+            ImGui::PlotLines("##frame", o->frame_ms.data(), int(o->count), int(o->oldest()), overlay, 0.0f,
+                             scale,
+                             ImVec2(ImGui::GetContentRegionAvail().x,
+                                    50));  // PlotLines (1.86) takes no -1 width: it drew a 1-px line
             const float total = std::max(o->frame_avg_ms, 1e-3f);
             for (const auto& s : o->systems) {
                 char text[128];
@@ -560,22 +587,24 @@ void status_bar(ecs::Registry& registry, EditorState& state) {
     const float h = status_bar_height();
     ImGui::SetNextWindowPos(ImVec2(vp->Pos.x, vp->Pos.y + vp->Size.y - h));
     ImGui::SetNextWindowSize(ImVec2(vp->Size.x, h));
-    ImGui::Begin("##status", nullptr, ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs |
-                                          ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing);
+    ImGui::Begin("##status", nullptr,
+                 ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs |
+                     ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing);
     record_current_window("##status");
     std::size_t selected = 0;
     if (registry.valid(state.active_lattice))
-        if (const auto* s = registry.try_get<picking::LatticeSelection>(state.active_lattice)) selected = s->indices.size();
-    const char* render = state.previewing ? "preview while moving"
+        if (const auto* s = registry.try_get<picking::LatticeSelection>(state.active_lattice))
+            selected = s->indices.size();
+    const char* render = state.previewing                                      ? "preview while moving"
                          : state.rest_quality == int(render::Quality::preview) ? "preview"
-                                                                                : "HQ";
-    ImGui::Text("tool %s | axis %s | %s%s%s | %zu selected | auto-key %s%s | render %s | undo %zu/%zu | %s", tool_name(state.tool),
-                axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis),
-                state.scope == ToolScope::local ? "local" : "global", state.pin_outer_layer ? " pinned" : "",
-                state.xray ? " x-ray" : "", selected, state.auto_key ? "ON" : "off",
-                registry.valid(state.unkeyed) && registry.has<AnimationClip>(state.unkeyed) ? " (un-keyed edit)" : "",
-                render,
-                state.undo.position(), state.undo.size(), state.status.c_str());
+                                                                               : "HQ";
+    ImGui::Text(
+        "tool %s | axis %s | %s%s%s | %zu selected | auto-key %s%s | render %s | undo %zu/%zu | %s",
+        tool_name(state.tool), axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis),
+        state.scope == ToolScope::local ? "local" : "global", state.pin_outer_layer ? " pinned" : "",
+        state.xray ? " x-ray" : "", selected, state.auto_key ? "ON" : "off",
+        registry.valid(state.unkeyed) && registry.has<AnimationClip>(state.unkeyed) ? " (un-keyed edit)" : "",
+        render, state.undo.position(), state.undo.size(), state.status.c_str());
     ImGui::End();
 }
 
@@ -585,10 +614,13 @@ void gizmo(ecs::Registry& registry, EditorState& state) {
     if (d.kind == Drag::Kind::box) {
         // Translucent fill under a 2-px outline with a dark 1-px edge outside it, visible on light and dark
         // surfaces alike (a faint 1-px line was lost over the model).
-        const ImVec2 a(std::min(float(d.start.x), float(state.cursor.x)), std::min(float(d.start.y), float(state.cursor.y)));
-        const ImVec2 b(std::max(float(d.start.x), float(state.cursor.x)), std::max(float(d.start.y), float(state.cursor.y)));
+        const ImVec2 a(std::min(float(d.start.x), float(state.cursor.x)),
+                       std::min(float(d.start.y), float(state.cursor.y)));
+        const ImVec2 b(std::max(float(d.start.x), float(state.cursor.x)),
+                       std::max(float(d.start.y), float(state.cursor.y)));
         dl->AddRectFilled(a, b, IM_COL32(255, 200, 60, 48));
-        dl->AddRect(ImVec2(a.x - 1.5f, a.y - 1.5f), ImVec2(b.x + 1.5f, b.y + 1.5f), IM_COL32(0, 0, 0, 200), 0.0f, 0, 1.0f);
+        dl->AddRect(ImVec2(a.x - 1.5f, a.y - 1.5f), ImVec2(b.x + 1.5f, b.y + 1.5f), IM_COL32(0, 0, 0, 200),
+                    0.0f, 0, 1.0f);
         dl->AddRect(a, b, IM_COL32(255, 200, 60, 255), 0.0f, 0, 2.0f);
     }
     if (state.tool != Tool::move && state.tool != Tool::twist) return;
@@ -616,11 +648,12 @@ void gizmo(ecs::Registry& registry, EditorState& state) {
         const double size = 0.25 * glm::length(cam.eye - cam.target);
         const glm::dvec3 a = project_to_pixel(cam, state.viewport, pivot - axis * size);
         const glm::dvec3 b = project_to_pixel(cam, state.viewport, pivot + axis * size);
-        const ImU32 col = mode == AxisMode::x ? IM_COL32(240, 70, 70, 255)
+        const ImU32 col = mode == AxisMode::x   ? IM_COL32(240, 70, 70, 255)
                           : mode == AxisMode::y ? IM_COL32(90, 220, 90, 255)
                           : mode == AxisMode::z ? IM_COL32(80, 130, 255, 255)
                                                 : IM_COL32(230, 230, 230, 255);
-        if (a.z <= 1.0 && b.z <= 1.0) dl->AddLine(ImVec2(float(a.x), float(a.y)), ImVec2(float(b.x), float(b.y)), col, 2.0f);
+        if (a.z <= 1.0 && b.z <= 1.0)
+            dl->AddLine(ImVec2(float(a.x), float(a.y)), ImVec2(float(b.x), float(b.y)), col, 2.0f);
         if (state.tool == Tool::twist) dl->AddCircle(centre, 40.0f, col, 48, 2.0f);
     }
     dl->AddCircleFilled(centre, 4.0f, IM_COL32(255, 255, 255, 255));
@@ -647,7 +680,8 @@ void open_file_dialog(EditorState& state, bool save) {
     d.mode = save ? FileDialog::Mode::save : FileDialog::Mode::open;
     d.name[0] = '\0';
     std::error_code ec;
-    browse(d, state.last_folder.empty() ? std::filesystem::current_path(ec) : std::filesystem::path(state.last_folder));
+    browse(d, state.last_folder.empty() ? std::filesystem::current_path(ec)
+                                        : std::filesystem::path(state.last_folder));
     if (!d.error.empty()) browse(d, std::filesystem::current_path(ec));  // the remembered folder is gone
     ImGui::OpenPopup(save ? "Save scene as" : "Open scene");
 }

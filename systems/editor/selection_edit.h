@@ -11,7 +11,7 @@
 namespace sffd::editor {
 
 // Sets the lattice's selection to `indices` (sorted, unique) as one undo step; no step when unchanged.
-void set_selection(ecs::Registry& registry, EditorState& state, ecs::Entity lattice, std::vector<std::uint32_t> indices,
-                   const char* label);
+void set_selection(ecs::Registry& registry, EditorState& state, ecs::Entity lattice,
+                   std::vector<std::uint32_t> indices, const char* label);
 
 }  // namespace sffd::editor

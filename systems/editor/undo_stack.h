@@ -47,20 +47,19 @@ template <class C>
 bool same_state(const std::optional<C>& a, const std::optional<C>& b) {
     if (a.has_value() != b.has_value()) return false;
     if (!a) return true;
-    if constexpr (requires(const C& x, const C& y) { { x == y } -> std::convertible_to<bool>; })
+    if constexpr (requires(const C& x, const C& y) {
+                      { x == y } -> std::convertible_to<bool>;
+                  })
         return *a == *b;
-    else
-        return false;  // no equality: keep the step (harmless)
+    else return false;  // no equality: keep the step (harmless)
 }
 
 template <class C>
 void restore(ecs::Registry& registry, ecs::Entity e, const std::optional<C>& state) {
     if (!registry.valid(e)) return;  // entity deleted since: nothing to restore into
     if (state) {
-        if (registry.has<C>(e))
-            registry.patch<C>(e) = *state;
-        else
-            registry.emplace<C>(e, *state);
+        if (registry.has<C>(e)) registry.patch<C>(e) = *state;
+        else registry.emplace<C>(e, *state);
     } else {
         registry.remove<C>(e);
     }
@@ -72,7 +71,10 @@ template <class C>
 class ComponentChange final : public Command {
 public:
     ComponentChange(std::string label, ecs::Entity entity, std::optional<C> before, std::optional<C> after)
-        : Command(std::move(label)), m_entity(entity), m_before(std::move(before)), m_after(std::move(after)) {}
+        : Command(std::move(label)),
+          m_entity(entity),
+          m_before(std::move(before)),
+          m_after(std::move(after)) {}
 
     void undo(ecs::Registry& registry) const override { detail::restore(registry, m_entity, m_before); }
     void redo(ecs::Registry& registry) const override { detail::restore(registry, m_entity, m_after); }
@@ -121,7 +123,8 @@ public:
     const std::optional<C>& before() const { return m_before; }
 
     std::unique_ptr<ComponentChange<C>> finish(const ecs::Registry& registry) {
-        return std::make_unique<ComponentChange<C>>(m_label, m_entity, m_before, snapshot(registry, m_entity));
+        return std::make_unique<ComponentChange<C>>(m_label, m_entity, m_before,
+                                                    snapshot(registry, m_entity));
     }
 
     static std::optional<C> snapshot(const ecs::Registry& registry, ecs::Entity e) {
@@ -158,7 +161,10 @@ public:
     bool redo(ecs::Registry& registry);
     bool can_undo() const { return m_next > 0; }
     bool can_redo() const { return m_next < m_commands.size(); }
-    void clear() { m_commands.clear(); m_next = 0; }
+    void clear() {
+        m_commands.clear();
+        m_next = 0;
+    }
 
     std::size_t size() const { return m_commands.size(); }
     std::size_t position() const { return m_next; }  // commands [0, position) are applied

@@ -50,7 +50,8 @@ std::uint8_t glfw_mods(int m) {
 std::string glfw_key_name(int key) {
     if (key >= GLFW_KEY_A && key <= GLFW_KEY_Z) return std::string(1, char('a' + (key - GLFW_KEY_A)));
     if (key >= GLFW_KEY_0 && key <= GLFW_KEY_9) return std::string(1, char('0' + (key - GLFW_KEY_0)));
-    if (key >= GLFW_KEY_KP_0 && key <= GLFW_KEY_KP_9) return std::string(1, char('0' + (key - GLFW_KEY_KP_0)));  // typed values
+    if (key >= GLFW_KEY_KP_0 && key <= GLFW_KEY_KP_9)
+        return std::string(1, char('0' + (key - GLFW_KEY_KP_0)));  // typed values
     if (key >= GLFW_KEY_F1 && key <= GLFW_KEY_F12) {
         std::string name = std::to_string(key - GLFW_KEY_F1 + 1);
         name.insert(name.begin(), 'f');  // not "f" + string: GCC 12 warns (-Wrestrict) on that inlined path
@@ -159,7 +160,8 @@ void on_key(GLFWwindow* window, int key, int, int action, int m) {
 std::string user_config_file(const std::string& name) {
     std::filesystem::path dir;
     if (const char* xdg = std::getenv("XDG_CONFIG_HOME"); xdg && *xdg) dir = xdg;
-    else if (const char* home = std::getenv("HOME"); home && *home) dir = std::filesystem::path(home) / ".config";
+    else if (const char* home = std::getenv("HOME"); home && *home)
+        dir = std::filesystem::path(home) / ".config";
     else return {};
     dir /= "splatffd";
     std::error_code ec;
@@ -199,7 +201,8 @@ Status write_screenshot(ecs::Registry& registry, const std::filesystem::path& pa
             }
     }
     std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
     if (ext == ".exr") return render::write_exr(path, *frame);
     if (ext == ".png") return render::write_png(path, render::to_rgba8(*frame, glm::vec3(0.0f)));
     return make_error(path.string() + ": screenshot must end in .png or .exr");
@@ -212,7 +215,8 @@ void requests_system(ecs::Registry& registry, const FrameContext& frame) {
     ViewSession* session = registry.try_resource<ViewSession>();
     if (!state || !session) return;
     if (session->dragging.size() <= frame.frame) session->dragging.resize(frame.frame + 1, 0);
-    session->dragging[frame.frame] = state->drag.kind == Drag::Kind::move || state->drag.kind == Drag::Kind::twist;
+    session->dragging[frame.frame] =
+        state->drag.kind == Drag::Kind::move || state->drag.kind == Drag::Kind::twist;
     if (!state->save_as.empty()) {  // File > Save as: the new ctrl+s target
         session->save_path = std::move(state->save_as);
         state->save_as.clear();
@@ -230,8 +234,10 @@ void requests_system(ecs::Registry& registry, const FrameContext& frame) {
     if (state->request_screenshot) {
         state->request_screenshot = false;
         // In the last folder of the file dialogs (remembered between runs), else the current one.
-        const std::string name = "splatffd-screenshot-" + std::to_string(session->screenshot_count++) + ".png";
-        const std::string path = state->last_folder.empty() ? name : (std::filesystem::path(state->last_folder) / name).string();
+        const std::string name =
+            "splatffd-screenshot-" + std::to_string(session->screenshot_count++) + ".png";
+        const std::string path =
+            state->last_folder.empty() ? name : (std::filesystem::path(state->last_folder) / name).string();
         const Status st = write_screenshot(registry, path);
         state->status = st ? "screenshot " + path : "screenshot failed: " + st.message();
         log::info("editor: ", state->status);
@@ -265,13 +271,15 @@ void ui_system(ecs::Registry& registry, const FrameContext& frame) {
         // {"window": [w, h], "panels": [{"name": .., "x": .., "y": .., "w": .., "h": ..}, ..]}
         const ImVec2 size = ImGui::GetMainViewport()->Size;
         char line[256];
-        std::snprintf(line, sizeof line, "{\n  \"window\": [%g, %g],\n  \"panels\": [", double(size.x), double(size.y));
+        std::snprintf(line, sizeof line, "{\n  \"window\": [%g, %g],\n  \"panels\": [", double(size.x),
+                      double(size.y));
         std::string json = line;
         const auto& rects = panel_rects();
         for (std::size_t i = 0; i < rects.size(); ++i) {
             const PanelRect& r = rects[i].rect;
-            std::snprintf(line, sizeof line, "%s\n    {\"name\": \"%s\", \"x\": %g, \"y\": %g, \"w\": %g, \"h\": %g}",
-                          i ? "," : "", rects[i].name.c_str(), double(r.x), double(r.y), double(r.w), double(r.h));
+            std::snprintf(
+                line, sizeof line, "%s\n    {\"name\": \"%s\", \"x\": %g, \"y\": %g, \"w\": %g, \"h\": %g}",
+                i ? "," : "", rects[i].name.c_str(), double(r.x), double(r.y), double(r.w), double(r.h));
             json += line;
         }
         json += "\n  ]\n}\n";
@@ -301,7 +309,8 @@ std::string default_save_path(const std::string& scene) {
     const std::string ext = p.extension().string();
     if (ext == ".glb" || ext == ".gltf") return scene;
     // Next to the scene file (not in the current folder); a built-in name has no folder.
-    return (p.parent_path() / ((p.stem().empty() ? std::string("scene") : p.stem().string()) + ".glb")).string();
+    return (p.parent_path() / ((p.stem().empty() ? std::string("scene") : p.stem().string()) + ".glb"))
+        .string();
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -318,17 +327,24 @@ double percentile(std::vector<double> v, double q) {
 int run_view(const ViewOptions& options, Schedule schedule) {
     const bool headless = options.headless || !gfx::display_available();
     if (!options.headless && headless) {
-        std::fprintf(stderr, "splatffd view: no display (DISPLAY is not set): run under `xvfb-run -a`, or pass --headless\n");
+        std::fprintf(
+            stderr,
+            "splatffd view: no display (DISPLAY is not set): run under `xvfb-run -a`, or pass --headless\n");
         return 1;
     }
-    auto ctx = gfx::create_context({.headless = headless, .width = options.width, .height = options.height,
-                                    .visible = true, .debug = true, .title = "SplatFFD editor: " + options.scene});
+    auto ctx = gfx::create_context({.headless = headless,
+                                    .width = options.width,
+                                    .height = options.height,
+                                    .visible = true,
+                                    .debug = true,
+                                    .title = "SplatFFD editor: " + options.scene});
     if (!ctx) {
         std::fprintf(stderr, "splatffd view: %s\n", ctx.message().c_str());
         return 1;
     }
     const gfx::FramebufferSize fb = ctx->framebuffer_size();
-    const Viewport viewport{fb.width > 0 ? fb.width : options.width, fb.height > 0 ? fb.height : options.height};
+    const Viewport viewport{fb.width > 0 ? fb.width : options.width,
+                            fb.height > 0 ? fb.height : options.height};
 
     int exit_code = 0;
     {
@@ -373,12 +389,14 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         session.save_path = options.save_path;
         if (session.save_path.empty()) {
             session.save_path = default_save_path(options.scene);
-            // A built-in scene (no folder of its own) is saved in the last folder rather than the current one.
+            // A built-in scene (no folder of its own) is saved in the last folder rather than the current
+            // one.
             if (!state.last_folder.empty() && !std::filesystem::path(session.save_path).has_parent_path())
                 session.save_path = (std::filesystem::path(state.last_folder) / session.save_path).string();
         }
         // Lattice JSON export/import (ctrl+e / ctrl+i) next to the scene's save: <save>.lattice.json.
-        lattice_fit_settings(registry).json_path = std::filesystem::path(session.save_path).replace_extension(".lattice.json").string();
+        lattice_fit_settings(registry).json_path =
+            std::filesystem::path(session.save_path).replace_extension(".lattice.json").string();
         session.ui = options.ui && !headless;
 
         CallbackLink link{&registry, session.ui};
@@ -407,7 +425,8 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         // Unsynchronised, the GL work of one system is charged to whichever later system first waits for
         // it (display, blit, swap); --sync-timing finishes the GL queue around every system instead.
         profiling::Profiler profiler(
-            {.gpu = options.sync_timing ? profiling::GpuTiming::sync : profiling::GpuTiming::none, .keep_frames = true});
+            {.gpu = options.sync_timing ? profiling::GpuTiming::sync : profiling::GpuTiming::none,
+             .keep_frames = true});
         profiler.attach(schedule, registry);
         // Replays and fixed frame counts run on a fixed 1/60 s clock (frame k = time k/60, deterministic).
         Clock clock = (!options.replay.empty() || options.frames > 0 || headless)
@@ -435,7 +454,8 @@ int run_view(const ViewOptions& options, Schedule schedule) {
             all.push_back(f.total_ms);
             if (f.frame < session.dragging.size() && session.dragging[f.frame]) drag.push_back(f.total_ms);
         }
-        std::fprintf(stderr, "view: frame ms p50 %.2f p95 %.2f (n=%zu); while dragging p50 %.2f p95 %.2f (n=%zu)\n",
+        std::fprintf(stderr,
+                     "view: frame ms p50 %.2f p95 %.2f (n=%zu); while dragging p50 %.2f p95 %.2f (n=%zu)\n",
                      percentile(all, 0.5), percentile(all, 0.95), all.size(), percentile(drag, 0.5),
                      percentile(drag, 0.95), drag.size());
         // Per system (and per named GL pass), median CPU time over the drag frames (where the time of a drag
@@ -445,24 +465,29 @@ int run_view(const ViewOptions& options, Schedule schedule) {
             std::string& list = kind == profiling::ScopeKind::system ? per_system : per_pass;
             std::vector<std::pair<std::string, std::vector<double>>> rows;
             for (const auto& f : profiler.frames()) {
-                if (f.frame == 0 || f.frame >= session.dragging.size() || !session.dragging[f.frame]) continue;
+                if (f.frame == 0 || f.frame >= session.dragging.size() || !session.dragging[f.frame])
+                    continue;
                 for (const auto& sc : f.scopes) {
                     if (sc.kind != kind) continue;
                     const std::string& name = profiler.name(sc.name);
-                    auto it = std::find_if(rows.begin(), rows.end(), [&](const auto& r) { return r.first == name; });
+                    auto it = std::find_if(rows.begin(), rows.end(),
+                                           [&](const auto& r) { return r.first == name; });
                     if (it == rows.end()) rows.emplace_back(name, std::vector<double>{}), it = rows.end() - 1;
                     it->second.push_back(sc.cpu_ms);
                 }
             }
             for (const auto& [name, ms] : rows) {
                 if (kind == profiling::ScopeKind::system)
-                    std::fprintf(stderr, "view:   while dragging, %-16s p50 %.2f ms\n", name.c_str(), percentile(ms, 0.5));
-                list += (list.empty() ? "" : ", ") + std::string("\"") + name + "\": " + std::to_string(percentile(ms, 0.5));
+                    std::fprintf(stderr, "view:   while dragging, %-16s p50 %.2f ms\n", name.c_str(),
+                                 percentile(ms, 0.5));
+                list += (list.empty() ? "" : ", ") + std::string("\"") + name +
+                        "\": " + std::to_string(percentile(ms, 0.5));
             }
         }
         if (!options.timing_json.empty()) {
             std::string json = "{\n  \"renderer\": \"" + ctx->renderer() + "\",\n  \"timing\": \"" +
-                               (options.sync_timing ? "sync" : "unsynchronised") + "\",\n  \"frames\": " + std::to_string(all.size()) +
+                               (options.sync_timing ? "sync" : "unsynchronised") +
+                               "\",\n  \"frames\": " + std::to_string(all.size()) +
                                ",\n  \"frame_ms_p50\": " + std::to_string(percentile(all, 0.5)) +
                                ",\n  \"frame_ms_p95\": " + std::to_string(percentile(all, 0.95)) +
                                ",\n  \"drag_frames\": " + std::to_string(drag.size()) +

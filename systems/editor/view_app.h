@@ -21,20 +21,21 @@ namespace sffd::editor {
 
 struct ViewOptions {
     std::string scene = "sphere";
-    std::string replay;       // input recording to play
-    std::string record;       // write the session's input here at exit
-    std::uint64_t frames = 0; // > 0: exit after this many frames
-    std::string screenshot;   // write the last frame here at exit (.png / .exr)
-    std::string save_path;    // ctrl+s target (default: the scene file if it is .glb/.gltf, else <scene>.glb)
+    std::string replay;        // input recording to play
+    std::string record;        // write the session's input here at exit
+    std::uint64_t frames = 0;  // > 0: exit after this many frames
+    std::string screenshot;    // write the last frame here at exit (.png / .exr)
+    std::string save_path;  // ctrl+s target (default: the scene file if it is .glb/.gltf, else <scene>.glb)
     int width = 1280;
     int height = 720;
     bool headless = false;
-    bool ui = true;           // ImGui panels (window only)
-    bool preview = false;     // render quality preview instead of hq
-    std::string timing_json;  // write frame-time statistics (all frames / frames with a tool drag) here
-    bool sync_timing = false; // glFinish after every system: each system's time includes its own GL work
-    std::string window_screenshot;  // with --frames: the whole window (panels included) of the last frame, PNG
-    std::string panel_rects_json;   // with --frames: the panels' rectangles in the last frame (panels.h), JSON
+    bool ui = true;            // ImGui panels (window only)
+    bool preview = false;      // render quality preview instead of hq
+    std::string timing_json;   // write frame-time statistics (all frames / frames with a tool drag) here
+    bool sync_timing = false;  // glFinish after every system: each system's time includes its own GL work
+    std::string
+        window_screenshot;         // with --frames: the whole window (panels included) of the last frame, PNG
+    std::string panel_rects_json;  // with --frames: the panels' rectangles in the last frame (panels.h), JSON
 };
 
 // $XDG_CONFIG_HOME/splatffd/<name> (else ~/.config/splatffd/<name>), its folder created; empty when

@@ -39,7 +39,7 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
     s.add(Phase::rendering, "splat_render", render::render_system);  // culling + HQ/preview splat passes
     if (options.editor) {
         s.add(Phase::rendering, "editor.overlay", editor::lattice_overlay_system);  // into the linear target
-        s.add(Phase::rendering, "editor.requests", editor::requests_system);  // save, screenshot, quit
+        s.add(Phase::rendering, "editor.requests", editor::requests_system);        // save, screenshot, quit
     }
 
     // --- present: sRGB display copy (after every overlay), blit it to the window, window UI on top

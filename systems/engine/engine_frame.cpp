@@ -13,10 +13,11 @@ void register_engine_scene_hooks() {
     gaussian::register_gaussian_scene_hooks();  // Gaussian files as entities, Gaussian entities in scenes
 }
 
-Result<render::FrameImage> render_engine_frame(ecs::Registry& registry, const Schedule& schedule, gfx::GlContext& context,
-                                               const EngineFrameOptions& options) {
+Result<render::FrameImage> render_engine_frame(ecs::Registry& registry, const Schedule& schedule,
+                                               gfx::GlContext& context, const EngineFrameOptions& options) {
     if (!(options.fps > 0.0)) return make_error("render_engine_frame(): fps must be positive");
-    if (!registry.try_resource<app::AppContext>()) registry.set_resource<app::AppContext>(app::AppContext{&context, false});
+    if (!registry.try_resource<app::AppContext>())
+        registry.set_resource<app::AppContext>(app::AppContext{&context, false});
     // A clock of its own, seeked to the frame: the frame's time is k / fps whatever ran before.
     Clock clock(ClockSettings{.fixed_dt = 1.0 / options.fps});
     clock.seek(double(options.frame) / options.fps);

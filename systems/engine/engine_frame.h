@@ -34,7 +34,8 @@ struct EngineFrameOptions {
 // Runs frame `options.frame` of `schedule` on `registry` in `context` (current) and reads it back
 // (render::capture_frame). Sets app::AppContext when the registry has none; the render state is made by
 // render_system on first use (call render::init_render_state() first to get shader errors as a Status).
-Result<render::FrameImage> render_engine_frame(ecs::Registry& registry, const Schedule& schedule, gfx::GlContext& context,
+Result<render::FrameImage> render_engine_frame(ecs::Registry& registry, const Schedule& schedule,
+                                               gfx::GlContext& context,
                                                const EngineFrameOptions& options = {});
 
 }  // namespace sffd

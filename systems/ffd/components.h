@@ -48,7 +48,7 @@ struct DeformedSplats {
     glm::dvec3 rest_box_lo{0.0}, rest_box_hi{0.0};
     bool rest_box_empty = true;
     bool has_rest_box = false;
-    std::uint64_t rest_box_cloud = 0;    // SplatCloud change stamp the box is of
+    std::uint64_t rest_box_cloud = 0;  // SplatCloud change stamp the box is of
 
     // Inputs this output was computed from (change stamps), so the system skips unchanged clouds.
     DeformInputStamps seen;

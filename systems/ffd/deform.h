@@ -50,8 +50,8 @@ struct PointsOut {
 };
 
 struct DeformStats {
-    std::size_t inside = 0;     // points inside the lattice (deformed)
-    std::size_t inverted = 0;   // inside points with det J < 0 (their normal flips with the cell)
+    std::size_t inside = 0;                // points inside the lattice (deformed)
+    std::size_t inverted = 0;              // inside points with det J < 0 (their normal flips with the cell)
     Backend backend = Backend::automatic;  // the backend that ran
 };
 

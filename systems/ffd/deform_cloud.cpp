@@ -5,8 +5,8 @@
 
 namespace sffd::ffd {
 
-void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud, const std::vector<ecs::Entity>& lattices,
-                  DeformedSplats& out, const char* who) {
+void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud,
+                  const std::vector<ecs::Entity>& lattices, DeformedSplats& out, const char* who) {
     const std::size_t n = cloud.size();
     out.origin = cloud.origin;
     out.positions = cloud.positions;
@@ -19,7 +19,8 @@ void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud, const 
         const Lattice* lattice = registry.valid(le) ? registry.try_get<Lattice>(le) : nullptr;
         if (!lattice) continue;
         // In place: each lattice deforms the previous one's output (allowed by ffd::deform).
-        const PointsIn in{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v), n, cloud.origin};
+        const PointsIn in{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v), n,
+                          cloud.origin};
         const PointsOut o{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v)};
         const auto stats = deform(*lattice, in, o);
         if (!stats) {

@@ -18,7 +18,7 @@ namespace sffd::ffd {
 // validation is skipped with a warning "`who`: problem (lattice skipped)". Normals and splat axes are
 // deformed when they have the cloud's size (else copied as authored). Bounds, versions and the
 // change-detection stamps are the caller's.
-void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud, const std::vector<ecs::Entity>& lattices,
-                  DeformedSplats& out, const char* who = "ffd");
+void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud,
+                  const std::vector<ecs::Entity>& lattices, DeformedSplats& out, const char* who = "ffd");
 
 }  // namespace sffd::ffd

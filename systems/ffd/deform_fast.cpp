@@ -35,7 +35,11 @@ typedef float v4 __attribute__((vector_size(16)));
 
 constexpr int kMaxB = kMaxDivisions + 1;
 
-inline vf loadv(const float* p) { vf v; std::memcpy(&v, p, sizeof v); return v; }
+inline vf loadv(const float* p) {
+    vf v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
 inline void storev(float* p, vf v) { std::memcpy(p, &v, sizeof v); }
 inline vf splat(float x) { return vf{} + x; }
 
@@ -51,7 +55,8 @@ struct Group {
     std::size_t first = 0;
 };
 
-// Writes a kernel's sums into the group: D_c = X[c], and with Full the derivatives G[c*3+a] = (Fs, Ft, Fu)[c].
+// Writes a kernel's sums into the group: D_c = X[c], and with Full the derivatives G[c*3+a] = (Fs, Ft,
+// Fu)[c].
 template <bool Full>
 inline void store_group(Group& g, const vf (&X)[3], const vf (&Fs)[3], const vf (&Ft)[3], const vf (&Fu)[3]) {
     for (int c = 0; c < 3; ++c) {
@@ -168,8 +173,8 @@ void bernstein_group(const Prepared& P, Group& g) {
 
 // Bernstein basis values B(L,i,s) and derivatives for the indices flagged in `need` only, from powers
 // s^i and (1-s)^(L-i): O(L) per axis instead of O(L²) (what the sparse path needs).
-inline void bernstein_some(vf s, int L, const std::uint8_t* need, const float* binom_l, const float* binom_l1, vf* b,
-                           vf* db, bool full) {
+inline void bernstein_some(vf s, int L, const std::uint8_t* need, const float* binom_l, const float* binom_l1,
+                           vf* b, vf* db, bool full) {
     vf sp[kMaxB + 1], rp[kMaxB + 1];
     const vf r = splat(1.0f) - s;
     sp[0] = rp[0] = splat(1.0f);
@@ -214,11 +219,13 @@ void sparse_group(const Prepared& P, Group& g) {
 
 __attribute__((always_inline)) inline v4 lanes4(v16 r) {
     const v4 a = __builtin_shufflevector(r, r, 0, 1, 2, 3), b = __builtin_shufflevector(r, r, 4, 5, 6, 7);
-    const v4 c = __builtin_shufflevector(r, r, 8, 9, 10, 11), d = __builtin_shufflevector(r, r, 12, 13, 14, 15);
+    const v4 c = __builtin_shufflevector(r, r, 8, 9, 10, 11),
+             d = __builtin_shufflevector(r, r, 12, 13, 14, 15);
     return (a + b) + (c + d);
 }
 __attribute__((always_inline)) inline v16 expand4(const float w[4]) {
-    return v16{w[0], w[0], w[0], w[0], w[1], w[1], w[1], w[1], w[2], w[2], w[2], w[2], w[3], w[3], w[3], w[3]};
+    return v16{w[0], w[0], w[0], w[0], w[1], w[1], w[1], w[1],
+               w[2], w[2], w[2], w[2], w[3], w[3], w[3], w[3]};
 }
 
 typedef int vi __attribute__((vector_size(W * sizeof(int))));
@@ -327,7 +334,8 @@ GroupFn pick_bernstein(int K) {
 
 // Writes one group back: X' = X + D, J = I + G M⁻¹, n' = cof(J) n / |.|, axes J a. Returns inverted count.
 int finish_group(const Prepared& P, const Group& g, const PointsIn& in, const PointsOut& out, bool full) {
-    const bool want_n = in.normals && out.normals, want_u = in.axis_u && out.axis_u, want_v = in.axis_v && out.axis_v;
+    const bool want_n = in.normals && out.normals, want_u = in.axis_u && out.axis_u,
+               want_v = in.axis_v && out.axis_v;
     alignas(64) float nx[W], ny[W], nz[W];
     auto gather = [&](const glm::vec3* src, vf& x, vf& y, vf& z) {
         if (g.contiguous) return load_xyz(src + g.first, x, y, z);
@@ -461,93 +469,92 @@ Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin) {
 }
 
 DeformStats run_fast(const Prepared& P, const PointsIn& in, const PointsOut& out, bool sparse) {
-    const bool full =
-        (in.normals && out.normals) || (in.axis_u && out.axis_u) || (in.axis_v && out.axis_v) || out.jacobians;
+    const bool full = (in.normals && out.normals) || (in.axis_u && out.axis_u) || (in.axis_v && out.axis_v) ||
+                      out.jacobians;
     GroupFn fn;
-    if (P.basis == LatticeBasis::bspline)
-        fn = full ? bspline_group<true> : bspline_group<false>;
-    else if (sparse)
-        fn = full ? sparse_group<true> : sparse_group<false>;
-    else
-        fn = full ? pick_bernstein<true>(P.N + 1) : pick_bernstein<false>(P.N + 1);
+    if (P.basis == LatticeBasis::bspline) fn = full ? bspline_group<true> : bspline_group<false>;
+    else if (sparse) fn = full ? sparse_group<true> : sparse_group<false>;
+    else fn = full ? pick_bernstein<true>(P.N + 1) : pick_bernstein<false>(P.N + 1);
     const bool nothing_moved = P.moved.empty();
     std::atomic<std::size_t> inside_total{0}, inverted_total{0};
     const float lo = float(-kInsideSlack), hi = float(1.0 + kInsideSlack);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, in.count, 2048), [&](const tbb::blocked_range<std::size_t>& r) {
-        std::size_t n_in = 0, n_inv = 0;
-        Group g;
-        auto flush = [&] {
-            if (g.n == 0) return;
-            for (int l = g.n; l < W; ++l) g.s[l] = g.s[0], g.t[l] = g.t[0], g.u[l] = g.u[0];
-            fn(P, g);
-            n_inv += std::size_t(finish_group(P, g, in, out, full));
-            g.n = 0;
-        };
-        auto one = [&](std::size_t p) {
-            const glm::vec3 x = in.positions[p];
-            const float s = P.stu0[0] + P.minv[0] * x.x + P.minv[1] * x.y + P.minv[2] * x.z;
-            const float t = P.stu0[1] + P.minv[3] * x.x + P.minv[4] * x.y + P.minv[5] * x.z;
-            const float u = P.stu0[2] + P.minv[6] * x.x + P.minv[7] * x.y + P.minv[8] * x.z;
-            const bool is_inside = s >= lo && s <= hi && t >= lo && t <= hi && u >= lo && u <= hi;
-            n_in += is_inside;
-            // Unchanged points: outside, nothing moved, or (B-spline) outside the moved points' support.
-            const bool culled = !is_inside || nothing_moved ||
-                                (P.basis == LatticeBasis::bspline &&
-                                 (s <= P.cull_lo[0] || s >= P.cull_hi[0] || t <= P.cull_lo[1] || t >= P.cull_hi[1] ||
-                                  u <= P.cull_lo[2] || u >= P.cull_hi[2]));
-            if (culled) {
-                if (out.positions != in.positions) out.positions[p] = x;
-                if (in.normals && out.normals && out.normals != in.normals) out.normals[p] = in.normals[p];
-                if (in.axis_u && out.axis_u && out.axis_u != in.axis_u) out.axis_u[p] = in.axis_u[p];
-                if (in.axis_v && out.axis_v && out.axis_v != in.axis_v) out.axis_v[p] = in.axis_v[p];
-                if (out.jacobians) out.jacobians[p] = glm::mat3(1.0f);
-                return;
-            }
-            g.s[g.n] = std::clamp(s, 0.0f, 1.0f);
-            g.t[g.n] = std::clamp(t, 0.0f, 1.0f);
-            g.u[g.n] = std::clamp(u, 0.0f, 1.0f);
-            g.idx[g.n] = std::uint32_t(p);
-            if (++g.n == W) flush();
-        };
-        std::size_t p = r.begin();
-        if (!nothing_moved) {
-            // Whole blocks of W points that are all inside (and not culled) go straight to the kernel with
-            // vector loads; mixed blocks fall back to the per-point compaction above.
-            Group blk;
-            blk.contiguous = true;
-            blk.n = W;
-            const vf lov = splat(lo), hiv = splat(hi);
-            for (; p + W <= r.end(); p += W) {
-                vf x, y, z;
-                load_xyz(in.positions + p, x, y, z);
-                const vf s = P.stu0[0] + P.minv[0] * x + P.minv[1] * y + P.minv[2] * z;
-                const vf t = P.stu0[1] + P.minv[3] * x + P.minv[4] * y + P.minv[5] * z;
-                const vf u = P.stu0[2] + P.minv[6] * x + P.minv[7] * y + P.minv[8] * z;
-                auto outside = (s < lov) | (s > hiv) | (t < lov) | (t > hiv) | (u < lov) | (u > hiv);
-                if (P.basis == LatticeBasis::bspline)
-                    outside |= (s <= P.cull_lo[0]) | (s >= P.cull_hi[0]) | (t <= P.cull_lo[1]) | (t >= P.cull_hi[1]) |
-                               (u <= P.cull_lo[2]) | (u >= P.cull_hi[2]);
-                bool any_out = false;
-                for (int l = 0; l < W; ++l) any_out |= outside[l] != 0;
-                if (any_out) {
-                    for (int l = 0; l < W; ++l) one(p + std::size_t(l));
-                    continue;
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, in.count, 2048), [&](const tbb::blocked_range<std::size_t>& r) {
+            std::size_t n_in = 0, n_inv = 0;
+            Group g;
+            auto flush = [&] {
+                if (g.n == 0) return;
+                for (int l = g.n; l < W; ++l) g.s[l] = g.s[0], g.t[l] = g.t[0], g.u[l] = g.u[0];
+                fn(P, g);
+                n_inv += std::size_t(finish_group(P, g, in, out, full));
+                g.n = 0;
+            };
+            auto one = [&](std::size_t p) {
+                const glm::vec3 x = in.positions[p];
+                const float s = P.stu0[0] + P.minv[0] * x.x + P.minv[1] * x.y + P.minv[2] * x.z;
+                const float t = P.stu0[1] + P.minv[3] * x.x + P.minv[4] * x.y + P.minv[5] * x.z;
+                const float u = P.stu0[2] + P.minv[6] * x.x + P.minv[7] * x.y + P.minv[8] * x.z;
+                const bool is_inside = s >= lo && s <= hi && t >= lo && t <= hi && u >= lo && u <= hi;
+                n_in += is_inside;
+                // Unchanged points: outside, nothing moved, or (B-spline) outside the moved points' support.
+                const bool culled = !is_inside || nothing_moved ||
+                                    (P.basis == LatticeBasis::bspline &&
+                                     (s <= P.cull_lo[0] || s >= P.cull_hi[0] || t <= P.cull_lo[1] ||
+                                      t >= P.cull_hi[1] || u <= P.cull_lo[2] || u >= P.cull_hi[2]));
+                if (culled) {
+                    if (out.positions != in.positions) out.positions[p] = x;
+                    if (in.normals && out.normals && out.normals != in.normals)
+                        out.normals[p] = in.normals[p];
+                    if (in.axis_u && out.axis_u && out.axis_u != in.axis_u) out.axis_u[p] = in.axis_u[p];
+                    if (in.axis_v && out.axis_v && out.axis_v != in.axis_v) out.axis_v[p] = in.axis_v[p];
+                    if (out.jacobians) out.jacobians[p] = glm::mat3(1.0f);
+                    return;
                 }
-                const vf zero = splat(0.0f), onev = splat(1.0f);
-                storev(blk.s, s < zero ? zero : (s > onev ? onev : s));
-                storev(blk.t, t < zero ? zero : (t > onev ? onev : t));
-                storev(blk.u, u < zero ? zero : (u > onev ? onev : u));
-                blk.first = p;
-                fn(P, blk);
-                n_in += W;
-                n_inv += std::size_t(finish_group(P, blk, in, out, full));
+                g.s[g.n] = std::clamp(s, 0.0f, 1.0f);
+                g.t[g.n] = std::clamp(t, 0.0f, 1.0f);
+                g.u[g.n] = std::clamp(u, 0.0f, 1.0f);
+                g.idx[g.n] = std::uint32_t(p);
+                if (++g.n == W) flush();
+            };
+            std::size_t p = r.begin();
+            if (!nothing_moved) {
+                // Whole blocks of W points that are all inside (and not culled) go straight to the kernel
+                // with vector loads; mixed blocks fall back to the per-point compaction above.
+                Group blk;
+                blk.contiguous = true;
+                blk.n = W;
+                const vf lov = splat(lo), hiv = splat(hi);
+                for (; p + W <= r.end(); p += W) {
+                    vf x, y, z;
+                    load_xyz(in.positions + p, x, y, z);
+                    const vf s = P.stu0[0] + P.minv[0] * x + P.minv[1] * y + P.minv[2] * z;
+                    const vf t = P.stu0[1] + P.minv[3] * x + P.minv[4] * y + P.minv[5] * z;
+                    const vf u = P.stu0[2] + P.minv[6] * x + P.minv[7] * y + P.minv[8] * z;
+                    auto outside = (s < lov) | (s > hiv) | (t < lov) | (t > hiv) | (u < lov) | (u > hiv);
+                    if (P.basis == LatticeBasis::bspline)
+                        outside |= (s <= P.cull_lo[0]) | (s >= P.cull_hi[0]) | (t <= P.cull_lo[1]) |
+                                   (t >= P.cull_hi[1]) | (u <= P.cull_lo[2]) | (u >= P.cull_hi[2]);
+                    bool any_out = false;
+                    for (int l = 0; l < W; ++l) any_out |= outside[l] != 0;
+                    if (any_out) {
+                        for (int l = 0; l < W; ++l) one(p + std::size_t(l));
+                        continue;
+                    }
+                    const vf zero = splat(0.0f), onev = splat(1.0f);
+                    storev(blk.s, s < zero ? zero : (s > onev ? onev : s));
+                    storev(blk.t, t < zero ? zero : (t > onev ? onev : t));
+                    storev(blk.u, u < zero ? zero : (u > onev ? onev : u));
+                    blk.first = p;
+                    fn(P, blk);
+                    n_in += W;
+                    n_inv += std::size_t(finish_group(P, blk, in, out, full));
+                }
             }
-        }
-        for (; p != r.end(); ++p) one(p);
-        flush();
-        inside_total += n_in;
-        inverted_total += n_inv;
-    });
+            for (; p != r.end(); ++p) one(p);
+            flush();
+            inside_total += n_in;
+            inverted_total += n_inv;
+        });
     return DeformStats{inside_total.load(), inverted_total.load(), Backend::fast};
 }
 

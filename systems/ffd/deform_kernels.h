@@ -13,21 +13,21 @@ namespace sffd::ffd::detail {
 // are differences, so far-away lattices lose no precision), the inverse axes and the cloud's offset in
 // local coordinates (computed in double: local = stu0 + M⁻¹ p for a point p relative to the cloud origin).
 struct Prepared {
-    int L = 1, M = 1, N = 1;                  // divisions
+    int L = 1, M = 1, N = 1;  // divisions
     LatticeBasis basis = LatticeBasis::bernstein;
-    std::vector<float> dp4;                   // Bernstein: ΔP as x,y,z,0 per control point, flat index
-    std::vector<std::uint8_t> row_nonzero;    // Bernstein: (i,j) rows with any nonzero ΔP
+    std::vector<float> dp4;                 // Bernstein: ΔP as x,y,z,0 per control point, flat index
+    std::vector<std::uint8_t> row_nonzero;  // Bernstein: (i,j) rows with any nonzero ΔP
     struct Moved {
         int i, j, k;
         float d[3];
     };
-    std::vector<Moved> moved;                 // sparse path: moved control points only
-    std::vector<std::uint8_t> need[3];        // sparse path: per axis, indices some moved point uses
-    std::vector<float> binom[3], binom1[3];   // C(n,i) and C(n-1,i) per axis
-    std::vector<float> grid;                  // B-spline: zero-bordered ΔP grid, (L+3)(M+3)(N+3) x,y,z,0
-    float minv[9] = {};                       // row-major M⁻¹
-    float stu0[3] = {};                       // M⁻¹ (cloud origin − lattice origin)
-    float cull_lo[3] = {0, 0, 0};             // local box outside which ΔP has no influence (B-spline)
+    std::vector<Moved> moved;                // sparse path: moved control points only
+    std::vector<std::uint8_t> need[3];       // sparse path: per axis, indices some moved point uses
+    std::vector<float> binom[3], binom1[3];  // C(n,i) and C(n-1,i) per axis
+    std::vector<float> grid;                 // B-spline: zero-bordered ΔP grid, (L+3)(M+3)(N+3) x,y,z,0
+    float minv[9] = {};                      // row-major M⁻¹
+    float stu0[3] = {};                      // M⁻¹ (cloud origin − lattice origin)
+    float cull_lo[3] = {0, 0, 0};            // local box outside which ΔP has no influence (B-spline)
     float cull_hi[3] = {1, 1, 1};
 };
 

@@ -21,7 +21,7 @@ namespace sffd::ffd {
 
 struct GpuDeformer::Impl {
     std::optional<gfx::GlContext> context;  // only when created headless; destroyed last (declared first)
-    detail::DeformPrograms programs;          // lattice set-up shared with the Gaussian deformer
+    detail::DeformPrograms programs;        // lattice set-up shared with the Gaussian deformer
     gfx::Buffer stats, scratch;
     detail::StatsReadbacks readbacks;  // queue_stats(): 2 counters each
     std::size_t scratch_capacity = 0;
@@ -58,8 +58,8 @@ void GpuDeformer::set_bernstein_kernel(GpuBernsteinKernel kernel) { m_impl->prog
 GpuBernsteinKernel GpuDeformer::last_bernstein_kernel() const { return m_impl->programs.last_kernel; }
 void GpuDeformer::retain_keys(const std::vector<std::uint64_t>& live) { m_impl->programs.retain_keys(live); }
 
-Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp, const glm::dvec3& cloud_origin,
-                             GLuint in, GLuint out, std::uint32_t count) {
+Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp,
+                             const glm::dvec3& cloud_origin, GLuint in, GLuint out, std::uint32_t count) {
     if (Status s = validate(lattice); !s) return s;
     Impl& m = *m_impl;
     auto bound = m.programs.bind(lattice, key, stamp, cloud_origin, count);
@@ -73,8 +73,9 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
     // A 2D grid beyond 65,535 groups (4.19M splats): runtime/gfx/dispatch.h.
     if (Status s = gfx::dispatch_1d(count, bound->local_size); !s) return s;
     // Read next as SSBOs (cull), vertex attributes, and by copies and read-backs (statistics, deform()).
-    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT,
-                        "ffd.dispatch");
+    gfx::memory_barrier(
+        GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT,
+        "ffd.dispatch");
     return {};
 }
 
@@ -134,12 +135,17 @@ Result<DeformStats> GpuDeformer::deform(const Lattice& lattice, const PointsIn& 
         m.scratch_capacity = bytes;
     }
     if (!splats.empty())
-        glNamedBufferSubData(m.scratch.id(), 0, GLsizeiptr(splats.size() * sizeof(gpu::GpuSplat)), splats.data());
+        glNamedBufferSubData(m.scratch.id(), 0, GLsizeiptr(splats.size() * sizeof(gpu::GpuSplat)),
+                             splats.data());
     reset_stats();
-    if (Status s = dispatch(lattice, ~std::uint64_t(0), 0, in.origin, m.scratch.id(), m.scratch.id(), std::uint32_t(in.count)); !s)
+    if (Status s = dispatch(lattice, ~std::uint64_t(0), 0, in.origin, m.scratch.id(), m.scratch.id(),
+                            std::uint32_t(in.count));
+        !s)
         return s.error();
     if (!splats.empty())
-        glGetNamedBufferSubData(m.scratch.id(), 0, GLsizeiptr(splats.size() * sizeof(gpu::GpuSplat)), splats.data()), ++m.sync_readbacks;
+        glGetNamedBufferSubData(m.scratch.id(), 0, GLsizeiptr(splats.size() * sizeof(gpu::GpuSplat)),
+                                splats.data()),
+            ++m.sync_readbacks;
     for (std::size_t i = 0; i < in.count; ++i) {
         const gpu::GpuSplat& s = splats[i];
         out.positions[i] = glm::vec3(s.center[0], s.center[1], s.center[2]);

@@ -20,9 +20,9 @@ namespace sffd::ffd {
 // FFD_DP): the same arithmetic in the same order either way.
 enum class GpuBernsteinKernel {
     automatic,  // shared on hardware GPUs, direct on a software rasterizer (llvmpipe: barrier() is costly)
-    direct,     // every invocation reads them from a UBO (when they fit GL_MAX_UNIFORM_BLOCK_SIZE) or the SSBO
-    shared,     // copied into shared memory once per 256-wide work group (when xyz fit
-                // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, >= 32 KB: up to 2,730 points; direct otherwise)
+    direct,  // every invocation reads them from a UBO (when they fit GL_MAX_UNIFORM_BLOCK_SIZE) or the SSBO
+    shared,  // copied into shared memory once per 256-wide work group (when xyz fit
+             // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, >= 32 KB: up to 2,730 points; direct otherwise)
 };
 
 class GpuDeformer {
@@ -40,11 +40,11 @@ public:
     // lattice. Each `key` (e.g. the lattice entity) has its own control-point buffer, uploaded only when
     // `lattice_stamp` differs from its last upload (stamp 0 always uploads). Positions in the buffers are
     // relative to `cloud_origin`. Does not wait for the GPU.
-    Status dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin,
-                    GLuint in, GLuint out, std::uint32_t count);
+    Status dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t lattice_stamp,
+                    const glm::dvec3& cloud_origin, GLuint in, GLuint out, std::uint32_t count);
     // Single-lattice form (key 0), kept for callers written against the first version of this API.
-    Status dispatch(const Lattice& lattice, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin, GLuint in,
-                    GLuint out, std::uint32_t count) {
+    Status dispatch(const Lattice& lattice, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin,
+                    GLuint in, GLuint out, std::uint32_t count) {
         return dispatch(lattice, 0, lattice_stamp, cloud_origin, in, out, count);
     }
     // Forgets control-point buffers whose key is not in `live` (lattices that were destroyed).

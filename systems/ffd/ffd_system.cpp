@@ -48,7 +48,8 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
     if (have_gl) collect_gpu_stats(reg);
     // Collect first: emplacing DeformedSplats while iterating is a structural change.
     std::vector<ecs::Entity> clouds;
-    reg.view<const SplatCloud, const Deformers>().each([&](ecs::Entity e, const SplatCloud&, const Deformers&) { clouds.push_back(e); });
+    reg.view<const SplatCloud, const Deformers>().each(
+        [&](ecs::Entity e, const SplatCloud&, const Deformers&) { clouds.push_back(e); });
     for (ecs::Entity e : clouds) {
         const SplatCloud& cloud = reg.get<SplatCloud>(e);
         const ffd::DeformInputs inputs = ffd::deform_inputs<SplatCloud>(reg, e);
@@ -61,12 +62,14 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
         gfx::GpuSplats* splats = nullptr;
         if (store) {
             auto it = store->clouds.find(e);
-            if (it != store->clouds.end() && it->second.rest && it->second.rest_version == cloud_v && it->second.count == n)
+            if (it != store->clouds.end() && it->second.rest && it->second.rest_version == cloud_v &&
+                it->second.count == n)
                 splats = &it->second;
         }
         const DeformedSplats* seen = reg.try_get<DeformedSplats>(e);
         // A resident cloud at rest has no deformed data yet (its entry is new): deform even if nothing moved.
-        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu && (!splats || splats->is_deformed()))
+        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu &&
+            (!splats || splats->is_deformed()))
             continue;  // nothing this cloud depends on moved
 
         if (!seen) reg.emplace<DeformedSplats>(e);
@@ -87,26 +90,31 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
         }
         ffd::Box box{out.rest_box_lo, out.rest_box_hi, out.rest_box_empty};
         for (ecs::Entity le : lattices)
-            if (ffd::validate(reg.get<Lattice>(le)).ok()) box = ffd::deformed_bounds(reg.get<Lattice>(le), box);
+            if (ffd::validate(reg.get<Lattice>(le)).ok())
+                box = ffd::deformed_bounds(reg.get<Lattice>(le), box);
         out.bounds_min = box.lo, out.bounds_max = box.hi;
 
-        ffd::GpuDeformer* gpu = splats && !force_cpu ? ffd::gpu_deformer<ffd::GpuDeformer>(reg, "ffd_system") : nullptr;
+        ffd::GpuDeformer* gpu =
+            splats && !force_cpu ? ffd::gpu_deformer<ffd::GpuDeformer>(reg, "ffd_system") : nullptr;
         if (gpu) {
-            gfx::reserve_buffer(splats->deformed, "splats.deformed", std::max<std::size_t>(n, 1) * sizeof(gpu::GpuSplat));
+            gfx::reserve_buffer(splats->deformed, "splats.deformed",
+                                std::max<std::size_t>(n, 1) * sizeof(gpu::GpuSplat));
             auto pass_scope = profiling::gpu_scope(reg, "ffd.compute");  // names the pass for the profiler
             gpu->reset_stats();
             GLuint in = splats->rest.id();
             bool ok = true;
             if (lattices.empty() && n > 0)
-                glCopyNamedBufferSubData(in, splats->deformed.id(), 0, 0, GLsizeiptr(n * sizeof(gpu::GpuSplat)));
+                glCopyNamedBufferSubData(in, splats->deformed.id(), 0, 0,
+                                         GLsizeiptr(n * sizeof(gpu::GpuSplat)));
             for (std::size_t d = 0; d < lattices.size(); ++d) {
                 const Lattice& l = reg.get<Lattice>(lattices[d]);
-                if (Status s = gpu->dispatch(l, lattices[d].bits(), inputs.stamps.lattices[d], cloud.origin, in, splats->deformed.id(),
-                                             std::uint32_t(n));
+                if (Status s = gpu->dispatch(l, lattices[d].bits(), inputs.stamps.lattices[d], cloud.origin,
+                                             in, splats->deformed.id(), std::uint32_t(n));
                     !s) {
                     log::warn("ffd_system: ", s.message(), " (lattice skipped)");
                     if (d == 0 && n > 0)
-                        glCopyNamedBufferSubData(in, splats->deformed.id(), 0, 0, GLsizeiptr(n * sizeof(gpu::GpuSplat)));
+                        glCopyNamedBufferSubData(in, splats->deformed.id(), 0, 0,
+                                                 GLsizeiptr(n * sizeof(gpu::GpuSplat)));
                     else if (d == 0) ok = false;
                     in = splats->deformed.id();
                     continue;
@@ -131,7 +139,8 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
         out.inverted_version = out.version;
         out.gpu_valid = false;
         if (splats) {  // the resident cloud draws this output from now on (state deformed_cpu)
-            gfx::upload_deformed_splats(*splats, cloud, {out.positions, out.normals, out.axis_u, out.axis_v}, store->keep_cpu);
+            gfx::upload_deformed_splats(*splats, cloud, {out.positions, out.normals, out.axis_u, out.axis_v},
+                                        store->keep_cpu);
             if (auto* rs = reg.try_resource<gfx::ResidencyStats>()) ++rs->deformed_uploads;
         }
         if (settings) ++settings->cpu_runs, ++settings->cpu_splat_passes;

@@ -27,10 +27,10 @@ namespace sffd {
 
 // Optional resource: settings and counters of the deformation phase.
 struct FfdSettings {
-    bool force_cpu = false;        // never use the GPU path (picking-heavy tools, comparisons)
-    bool force_gpu = false;        // use the GPU path even on a software rasterizer (llvmpipe)
-    std::uint64_t cpu_runs = 0;    // clouds deformed on the CPU so far
-    std::uint64_t gpu_runs = 0;    // clouds deformed on the GPU so far
+    bool force_cpu = false;      // never use the GPU path (picking-heavy tools, comparisons)
+    bool force_gpu = false;      // use the GPU path even on a software rasterizer (llvmpipe)
+    std::uint64_t cpu_runs = 0;  // clouds deformed on the CPU so far
+    std::uint64_t gpu_runs = 0;  // clouds deformed on the GPU so far
     // GPU-resident frame, checked by tests: passes of the system over a cloud's splats on the CPU (the
     // rest box when a cloud changes, each CPU deformation) and synchronous GPU read-backs by its deformer.
     // In GPU mode both stay flat while only lattices change.

@@ -40,7 +40,8 @@ inline FfdBlock make_ffd_block(const Lattice& lattice, const Prepared& P, std::u
 }
 
 // Writes the lattice's control data into `buffer`, growing it (tracked by `capacity`) when needed.
-inline void upload_control_points(GLuint buffer, std::size_t& capacity, const Lattice& lattice, const Prepared& P) {
+inline void upload_control_points(GLuint buffer, std::size_t& capacity, const Lattice& lattice,
+                                  const Prepared& P) {
     const std::vector<float>& data = lattice.basis == LatticeBasis::bspline ? P.grid : P.dp4;
     const std::size_t bytes = std::max<std::size_t>(data.size(), 4) * sizeof(float);
     if (bytes > capacity) {

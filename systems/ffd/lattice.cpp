@@ -12,7 +12,9 @@ glm::dmat3 inverse_axes(const Lattice& l) {
     return glm::transpose(glm::dmat3(r0, r1, r2));  // rows r0, r1, r2
 }
 
-glm::dvec3 local_coords(const Lattice& l, const glm::dvec3& world) { return inverse_axes(l) * (world - l.origin); }
+glm::dvec3 local_coords(const Lattice& l, const glm::dvec3& world) {
+    return inverse_axes(l) * (world - l.origin);
+}
 
 bool rest_is_uniform(const Lattice& l) {
     const auto grid = rest_grid(l.origin, l.axes, l.divisions);
@@ -37,7 +39,8 @@ Box deformed_bounds(const Lattice& l, const Box& in) {
     if (l.basis == LatticeBasis::bernstein && rest_is_uniform(l)) {
         // Inside points land in the control points' convex hull; outside points stay in `in`.
         // Pad by the inside slack: a point up to kInsideSlack outside is deformed as if on the face.
-        const glm::dvec3 pad(kInsideSlack * (glm::length(l.axes[0]) + glm::length(l.axes[1]) + glm::length(l.axes[2])));
+        const glm::dvec3 pad(kInsideSlack *
+                             (glm::length(l.axes[0]) + glm::length(l.axes[1]) + glm::length(l.axes[2])));
         const glm::dvec3 lo = glm::min(hull.lo - pad, in.lo), hi = glm::max(hull.hi + pad, in.hi);
         out.lo = glm::max(out.lo, lo);
         out.hi = glm::min(out.hi, hi);

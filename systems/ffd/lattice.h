@@ -26,7 +26,9 @@ using sffd::make_lattice;
 using sffd::rest_grid;
 
 // Divisions, finiteness, counts and a non-degenerate box: the runtime's one rule set (validate_lattice).
-inline Status validate(const Lattice& lattice, const std::string& what = "lattice") { return validate_lattice(lattice, what); }
+inline Status validate(const Lattice& lattice, const std::string& what = "lattice") {
+    return validate_lattice(lattice, what);
+}
 
 // The inverse of M = [S T U] (columns): rows (T×U)/((T×U)·S), (S×U)/((S×U)·T), (S×T)/((S×T)·U).
 glm::dmat3 inverse_axes(const Lattice& lattice);
@@ -63,7 +65,11 @@ struct Box {
     glm::dvec3 hi{0.0};
     bool empty = true;
     void add(const glm::dvec3& p) {
-        if (empty) { lo = hi = p; empty = false; return; }
+        if (empty) {
+            lo = hi = p;
+            empty = false;
+            return;
+        }
         lo = glm::min(lo, p);
         hi = glm::max(hi, p);
     }

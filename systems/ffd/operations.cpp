@@ -45,13 +45,15 @@ static glm::dvec3 rotate(const glm::dvec3& p, const glm::dvec3& a, double angle)
     return p * c + glm::cross(a, p) * s + a * glm::dot(a, p) * (1.0 - c);
 }
 
-void twist(Lattice& l, const Selection& sel, const glm::dvec3& axis, double angle, std::optional<glm::dvec3> pivot) {
+void twist(Lattice& l, const Selection& sel, const glm::dvec3& axis, double angle,
+           std::optional<glm::dvec3> pivot) {
     if (glm::length(axis) == 0.0 || sel.empty()) return;
     const glm::dvec3 a = glm::normalize(axis), C = pivot ? *pivot : centroid(l, sel);
     for (std::size_t i : sel) l.current[i] = C + rotate(l.current[i] - C, a, angle);
 }
 
-void twist_graded(Lattice& l, const Selection& sel, const glm::dvec3& axis, double rate, std::optional<glm::dvec3> pivot) {
+void twist_graded(Lattice& l, const Selection& sel, const glm::dvec3& axis, double rate,
+                  std::optional<glm::dvec3> pivot) {
     if (glm::length(axis) == 0.0 || sel.empty()) return;
     const glm::dvec3 a = glm::normalize(axis), C = pivot ? *pivot : centroid(l, sel);
     for (std::size_t i : sel) {
@@ -62,8 +64,8 @@ void twist_graded(Lattice& l, const Selection& sel, const glm::dvec3& axis, doub
 
 void reset(Lattice& l) { l.current = l.rest; }
 
-Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::dvec3& origin, glm::ivec3 divisions,
-                            LatticeBasis basis, double padding) {
+Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::dvec3& origin,
+                            glm::ivec3 divisions, LatticeBasis basis, double padding) {
     return fit_lattice(positions, origin, FitOptions{divisions, basis, padding, FitShape::box});
 }
 
@@ -81,7 +83,8 @@ glm::dmat3 symmetric_eigenvectors(glm::dmat3 a) {
             for (int q = p + 1; q < 3; ++q) {
                 if (a[p][q] == 0.0) continue;
                 const double theta = (a[q][q] - a[p][p]) / (2.0 * a[p][q]);
-                const double t = (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
+                const double t =
+                    (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1.0));
                 const double c = 1.0 / std::sqrt(t * t + 1.0), s = t * c;
                 glm::dmat3 r(1.0);  // rotation in the (p, q) plane: a <- rᵀ a r, v <- v r
                 r[p][p] = c, r[q][q] = c, r[q][p] = s, r[p][q] = -s;
@@ -109,7 +112,8 @@ std::array<glm::dvec3, 3> principal_frame(const std::vector<glm::vec3>& position
     double best_score = -1.0;
     for (int p = 0; p < 6; ++p) {
         double score = 0.0;
-        for (int a = 0; a < 3; ++a) score += std::abs(v[kPerms[p][a]][a]);  // eigenvector kPerms[p][a] on world axis a
+        for (int a = 0; a < 3; ++a)
+            score += std::abs(v[kPerms[p][a]][a]);  // eigenvector kPerms[p][a] on world axis a
         if (score > best_score + 1e-12) best_score = score, best = p;
     }
     std::array<glm::dvec3, 3> frame;
@@ -124,8 +128,8 @@ std::array<glm::dvec3, 3> principal_frame(const std::vector<glm::vec3>& position
 }  // namespace
 
 // The fit along `frame` (shape box: the world axes, projected exactly as an AABB).
-static Result<Lattice> fit_in_frame(const std::vector<glm::vec3>& positions, const glm::dvec3& origin, const FitOptions& options,
-                                    const std::array<glm::dvec3, 3>& frame) {
+static Result<Lattice> fit_in_frame(const std::vector<glm::vec3>& positions, const glm::dvec3& origin,
+                                    const FitOptions& options, const std::array<glm::dvec3, 3>& frame) {
     const bool box = options.shape == FitShape::box;
     glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
     for (const glm::vec3& p : positions) {
@@ -148,23 +152,29 @@ static Result<Lattice> fit_in_frame(const std::vector<glm::vec3>& positions, con
     glm::dvec3 corner = box ? start : origin;
     if (!box)
         for (int a = 0; a < 3; ++a) corner += start[a] * frame[std::size_t(a)];
-    Lattice l = make_lattice(corner, {frame[0] * size.x, frame[1] * size.y, frame[2] * size.z}, options.divisions, options.basis);
+    Lattice l = make_lattice(corner, {frame[0] * size.x, frame[1] * size.y, frame[2] * size.z},
+                             options.divisions, options.basis);
     if (Status s = validate(l, "fit_lattice()"); !s) return s.error();
     return l;
 }
 
-static double box_volume(const Lattice& l) { return std::abs(glm::determinant(glm::dmat3(l.axes[0], l.axes[1], l.axes[2]))); }
+static double box_volume(const Lattice& l) {
+    return std::abs(glm::determinant(glm::dmat3(l.axes[0], l.axes[1], l.axes[2])));
+}
 
-Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::dvec3& origin, const FitOptions& options) {
+Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::dvec3& origin,
+                            const FitOptions& options) {
     if (positions.empty()) return make_error("fit_lattice(): no points");
-    if (!(options.padding >= 0.0) || !std::isfinite(options.padding)) return make_error("fit_lattice(): padding must be >= 0");
+    if (!(options.padding >= 0.0) || !std::isfinite(options.padding))
+        return make_error("fit_lattice(): padding must be >= 0");
     for (const glm::vec3& p : positions)
         if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
             return make_error("fit_lattice(): a point is not finite");
     const std::array<glm::dvec3, 3> world{glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)};
     FitOptions aligned = options;
     aligned.shape = FitShape::box;
-    if (options.shape == FitShape::box || positions.size() < 2) return fit_in_frame(positions, origin, aligned, world);
+    if (options.shape == FitShape::box || positions.size() < 2)
+        return fit_in_frame(positions, origin, aligned, world);
     // Near-isotropic clouds (a sphere) have no meaningful principal axes: the oriented box is kept only
     // when its tight box (no padding) is at least 5% smaller than the axis-aligned one.
     const std::array<glm::dvec3, 3> frame = principal_frame(positions);
@@ -174,7 +184,8 @@ Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::
     auto tight_oriented = fit_in_frame(positions, origin, tight, frame);
     auto tight_box = fit_in_frame(positions, origin, aligned, world);
     if (!tight_oriented || !tight_box) return tight_box ? tight_oriented : tight_box;
-    if (box_volume(*tight_oriented) < 0.95 * box_volume(*tight_box)) return fit_in_frame(positions, origin, options, frame);
+    if (box_volume(*tight_oriented) < 0.95 * box_volume(*tight_box))
+        return fit_in_frame(positions, origin, options, frame);
     aligned.padding = options.padding;
     return fit_in_frame(positions, origin, aligned, world);
 }
@@ -183,7 +194,8 @@ bool is_fit_spec(std::string_view text) { return text == "fit" || text.rfind("fi
 
 Result<FitOptions> parse_fit_spec(std::string_view text) {
     const std::string whole(text);
-    if (!is_fit_spec(text)) return make_error(whole + ": a fit spec reads fit[:L,M,N][,pad=P][,obb][,bspline]");
+    if (!is_fit_spec(text))
+        return make_error(whole + ": a fit spec reads fit[:L,M,N][,pad=P][,obb][,bspline]");
     FitOptions o;
     if (text == "fit") return o;
     std::string_view rest = text.substr(4);
@@ -195,11 +207,13 @@ Result<FitOptions> parse_fit_spec(std::string_view text) {
         rest = comma == std::string_view::npos ? std::string_view() : rest.substr(comma + 1);
         if (part.empty()) return make_error(whole + ": empty item (fit[:L,M,N][,pad=P][,obb][,bspline])");
         if (std::isdigit(static_cast<unsigned char>(part[0])) || part[0] == '-' || part[0] == '+') {
-            if (seen_words || divs.size() == 3) return make_error(whole + ": divisions come first, at most three (L,M,N)");
+            if (seen_words || divs.size() == 3)
+                return make_error(whole + ": divisions come first, at most three (L,M,N)");
             char* end = nullptr;
             const long v = std::strtol(part.c_str(), &end, 10);
             if (*end != '\0' || v < 1 || v > kMaxDivisions)
-                return make_error(whole + ": divisions must be integers in 1.." + std::to_string(kMaxDivisions) + ", got '" + part + "'");
+                return make_error(whole + ": divisions must be integers in 1.." +
+                                  std::to_string(kMaxDivisions) + ", got '" + part + "'");
             divs.push_back(int(v));
         } else if (part.rfind("pad=", 0) == 0) {
             seen_words = true;
@@ -207,7 +221,8 @@ Result<FitOptions> parse_fit_spec(std::string_view text) {
             char* end = nullptr;
             const double d = std::strtod(v.c_str(), &end);
             if (v.empty() || *end != '\0' || !std::isfinite(d) || d < 0.0 || d > 10.0)
-                return make_error(whole + ": pad must be a number in 0..10 (× the largest extent), got '" + v + "'");
+                return make_error(whole + ": pad must be a number in 0..10 (× the largest extent), got '" +
+                                  v + "'");
             o.padding = d;
         } else if (part == "obb" || part == "oriented") {
             seen_words = true, o.shape = FitShape::oriented;
@@ -234,8 +249,9 @@ std::string fit_spec_string(const FitOptions& o) {
         std::snprintf(pad, sizeof pad, "%.*g", digits, o.padding);
         if (std::strtod(pad, nullptr) == o.padding) break;
     }
-    return "fit:" + std::to_string(o.divisions.x) + "," + std::to_string(o.divisions.y) + "," + std::to_string(o.divisions.z) +
-           ",pad=" + pad + (o.shape == FitShape::oriented ? ",obb" : "") + (o.basis == LatticeBasis::bspline ? ",bspline" : "");
+    return "fit:" + std::to_string(o.divisions.x) + "," + std::to_string(o.divisions.y) + "," +
+           std::to_string(o.divisions.z) + ",pad=" + pad + (o.shape == FitShape::oriented ? ",obb" : "") +
+           (o.basis == LatticeBasis::bspline ? ",bspline" : "");
 }
 
 Status apply_as_rest(Lattice& l, const BakeTarget* bake) {
@@ -243,8 +259,14 @@ Status apply_as_rest(Lattice& l, const BakeTarget* bake) {
     if (bake && bake->positions) {
         const std::size_t n = bake->positions->size();
         auto ptr = [n](std::vector<glm::vec3>* v) { return v && v->size() == n ? v->data() : nullptr; };
-        const PointsIn in{bake->positions->data(), ptr(bake->normals), ptr(bake->axis_u), ptr(bake->axis_v), n, bake->origin};
-        const PointsOut out{bake->positions->data(), ptr(bake->normals), ptr(bake->axis_u), ptr(bake->axis_v)};
+        const PointsIn in{bake->positions->data(),
+                          ptr(bake->normals),
+                          ptr(bake->axis_u),
+                          ptr(bake->axis_v),
+                          n,
+                          bake->origin};
+        const PointsOut out{bake->positions->data(), ptr(bake->normals), ptr(bake->axis_u),
+                            ptr(bake->axis_v)};
         auto r = deform(l, in, out);  // in place
         if (!r) return r.error();
     }
@@ -318,7 +340,8 @@ static Result<Matrix> least_squares(LatticeBasis b, int n, int m) {
         int piv = col;
         for (int r = col + 1; r < M1; ++r)
             if (std::abs(aug[r][col]) > std::abs(aug[piv][col])) piv = r;
-        if (std::abs(aug[piv][col]) < 1e-300) return make_error("lower_resolution(): singular least-squares system");
+        if (std::abs(aug[piv][col]) < 1e-300)
+            return make_error("lower_resolution(): singular least-squares system");
         std::swap(aug[piv], aug[col]);
         const double inv = 1.0 / aug[col][col];
         for (double& v : aug[col]) v *= inv;
@@ -335,7 +358,8 @@ static Result<Matrix> least_squares(LatticeBasis b, int n, int m) {
 }
 
 // Applies ops[a] along axis a to a (d.x+1)(d.y+1)(d.z+1) grid; returns the grid of the new divisions.
-static std::vector<glm::dvec3> apply_ops(const std::vector<glm::dvec3>& grid, glm::ivec3 d, const Matrix ops[3]) {
+static std::vector<glm::dvec3> apply_ops(const std::vector<glm::dvec3>& grid, glm::ivec3 d,
+                                         const Matrix ops[3]) {
     std::vector<glm::dvec3> g = grid;
     glm::ivec3 dims = d + 1;
     for (int a = 0; a < 3; ++a) {
@@ -373,12 +397,15 @@ Result<Lattice> raise_resolution(const Lattice& l, glm::ivec3 div, bool* exact) 
     Matrix ops[3];
     for (int a = 0; a < 3; ++a) {
         const int n = l.divisions[a], m = div[a];
-        if (m < n) return make_error("raise_resolution(): divisions must not decrease (use lower_resolution)");
-        if (m > kMaxDivisions) return make_error("raise_resolution(): at most " + std::to_string(kMaxDivisions) + " divisions");
+        if (m < n)
+            return make_error("raise_resolution(): divisions must not decrease (use lower_resolution)");
+        if (m > kMaxDivisions)
+            return make_error("raise_resolution(): at most " + std::to_string(kMaxDivisions) + " divisions");
         if (l.basis == LatticeBasis::bernstein) {
             ops[a] = elevation(n, m);
         } else {
-            if (m != n && m != 2 * n) return make_error("raise_resolution(): a B-spline axis can only be kept or doubled");
+            if (m != n && m != 2 * n)
+                return make_error("raise_resolution(): a B-spline axis can only be kept or doubled");
             ops[a] = m == n ? identity(n) : doubling(n);
         }
     }
@@ -398,7 +425,9 @@ Result<Lattice> raise_resolution(const Lattice& l, glm::ivec3 div, bool* exact) 
                 for (int j = 0; j <= l.divisions.y; ++j)
                     for (int k = 0; k <= l.divisions.z; ++k) {
                         const int idx[3] = {i, j, k};
-                        if ((idx[a] == 0 || idx[a] == l.divisions[a]) && d[l.index(i, j, k)] != glm::dvec3(0.0)) *exact = false;
+                        if ((idx[a] == 0 || idx[a] == l.divisions[a]) &&
+                            d[l.index(i, j, k)] != glm::dvec3(0.0))
+                            *exact = false;
                     }
         }
     const std::vector<glm::dvec3> nd = apply_ops(d, l.divisions, ops);

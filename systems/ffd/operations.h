@@ -38,8 +38,9 @@ void reset(Lattice& lattice);
 // An axis-aligned lattice around points (positions relative to `origin`), grown by `padding` × the
 // box's largest extent on every side. Flat or collinear input (or a single point) is safe: a degenerate
 // axis gets a minimum thickness of 1e-3 × the largest extent (or 1e-3 when all points coincide).
-Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::dvec3& origin, glm::ivec3 divisions,
-                            LatticeBasis basis = LatticeBasis::bernstein, double padding = 0.05);
+Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::dvec3& origin,
+                            glm::ivec3 divisions, LatticeBasis basis = LatticeBasis::bernstein,
+                            double padding = 0.05);
 
 // How a lattice is fitted around a cloud (the `splatffd convert/deform --lattice fit:…` spec, the editor's
 // add/refit). `oriented`: the box along the principal axes of the points (PCA of their covariance), each
@@ -49,10 +50,11 @@ enum class FitShape : std::uint8_t { box, oriented };
 struct FitOptions {
     glm::ivec3 divisions{10, 10, 10};  // as the built-in scenes' lattices (11 control points per axis)
     LatticeBasis basis = LatticeBasis::bernstein;
-    double padding = 0.05;             // × the box's largest extent, on every side
+    double padding = 0.05;  // × the box's largest extent, on every side
     FitShape shape = FitShape::box;
 };
-Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::dvec3& origin, const FitOptions& options);
+Result<Lattice> fit_lattice(const std::vector<glm::vec3>& positions, const glm::dvec3& origin,
+                            const FitOptions& options);
 
 // "fit[:L,M,N][,pad=P][,obb|,box][,bspline|,bernstein]" (one division count D means D,D,D). Errors name
 // the offending part, e.g. "fit:4,x: divisions must be integers in 1..64".

@@ -41,8 +41,9 @@ Result<PaperModeRenderer> PaperModeRenderer::create() {
     return PaperModeRenderer(std::move(impl));
 }
 
-Status PaperModeRenderer::draw(const Lattice& lattice, std::uint64_t stamp, const glm::dvec3& cloud_origin, GLuint rest,
-                               std::uint32_t count, const glm::mat4& view_proj, float point_size) {
+Status PaperModeRenderer::draw(const Lattice& lattice, std::uint64_t stamp, const glm::dvec3& cloud_origin,
+                               GLuint rest, std::uint32_t count, const glm::mat4& view_proj,
+                               float point_size) {
     if (Status s = validate(lattice); !s) return s;
     Impl& m = *m_impl;
     const detail::Prepared P = detail::prepare(lattice, cloud_origin);
@@ -65,7 +66,8 @@ Status PaperModeRenderer::draw(const Lattice& lattice, std::uint64_t stamp, cons
     return {};
 }
 
-void PaperModeRenderer::draw_deformed(GLuint deformed, std::uint32_t count, const glm::mat4& view_proj, float point_size) {
+void PaperModeRenderer::draw_deformed(GLuint deformed, std::uint32_t count, const glm::mat4& view_proj,
+                                      float point_size) {
     Impl& m = *m_impl;
     glUseProgram(m.plain.id());
     glProgramUniformMatrix4fv(m.plain.id(), 0, 1, GL_FALSE, glm::value_ptr(view_proj));

@@ -28,8 +28,8 @@ public:
 
     // GpuSplat[] `rest` deformed by `lattice` in the vertex shader. Control points are uploaded when
     // `lattice_stamp` changes (0: always).
-    Status draw(const Lattice& lattice, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin, GLuint rest,
-                std::uint32_t count, const glm::mat4& view_proj, float point_size);
+    Status draw(const Lattice& lattice, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin,
+                GLuint rest, std::uint32_t count, const glm::mat4& view_proj, float point_size);
     // GpuSplat[] already deformed (e.g. by the compute pass): same sprites, no deformation.
     void draw_deformed(GLuint deformed, std::uint32_t count, const glm::mat4& view_proj, float point_size);
 

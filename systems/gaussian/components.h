@@ -52,19 +52,19 @@ constexpr int sh_coeffs(int degree) { return (degree + 1) * (degree + 1); }
 // Deformers: same layout as GaussianCloud (opacities are unchanged by a deformation and not copied).
 // Covariance Σ' = J Σ Jᵀ stored back as scale + rotation; SH rotated by the polar rotation of J.
 struct DeformedGaussians {
-    GaussianCloud cloud;               // opacities left empty (read the authored cloud's) unless some
-                                       // results were not finite (then theirs are 0); EMPTY when on_gpu
-    bool on_gpu = false;               // the GPU pass wrote GpuGaussianStore::clouds[e].deformed (+ frames)
-                                       // and no CPU copy exists (gpu_deform.h read_back() makes one)
-    bool seen_force_cpu = false;       // the backend choice this output was made with (a switch re-runs)
-    std::uint8_t seen_sh_mode = 0;     // the gaussian::ShMode it used (GaussianDeformSettings; a switch re-runs)
+    GaussianCloud cloud;            // opacities left empty (read the authored cloud's) unless some
+                                    // results were not finite (then theirs are 0); EMPTY when on_gpu
+    bool on_gpu = false;            // the GPU pass wrote GpuGaussianStore::clouds[e].deformed (+ frames)
+                                    // and no CPU copy exists (gpu_deform.h read_back() makes one)
+    bool seen_force_cpu = false;    // the backend choice this output was made with (a switch re-runs)
+    std::uint8_t seen_sh_mode = 0;  // the gaussian::ShMode it used (GaussianDeformSettings; a switch re-runs)
     // Statistics (summed over the deformers). GPU path: they arrive a few frames after the deformation
     // (fenced, never waited for) and stay 0 with stats_arrived false until then.
-    std::size_t inverted = 0;          // Gaussians whose Jacobian has det < 0
-    std::size_t degenerate = 0;        // Gaussians whose Jacobian is (near) singular
-    std::size_t not_finite = 0;        // results that were not finite (written transparent, CPU and GPU)
+    std::size_t inverted = 0;    // Gaussians whose Jacobian has det < 0
+    std::size_t degenerate = 0;  // Gaussians whose Jacobian is (near) singular
+    std::size_t not_finite = 0;  // results that were not finite (written transparent, CPU and GPU)
     bool stats_arrived = false;
-    std::uint64_t version = 0;         // bumped on every rewrite
+    std::uint64_t version = 0;  // bumped on every rewrite
 
     // Change stamps this output was computed from (the system skips unchanged clouds).
     DeformInputStamps seen;

@@ -24,7 +24,8 @@ GaussianCloud gaussians_from_splats(const SplatCloud& c, const FromSplatsOptions
         fallback = std::cbrt(e.x * e.y * e.z / double(n)) * 0.5;
     }
     // The material's linear base colour to display (sRGB-like) values, when there are no colours.
-    const glm::vec3 base = glm::pow(glm::clamp(glm::vec3(c.material.base_color), 0.0f, 1.0f), glm::vec3(1.0f / 2.2f));
+    const glm::vec3 base =
+        glm::pow(glm::clamp(glm::vec3(c.material.base_color), 0.0f, 1.0f), glm::vec3(1.0f / 2.2f));
     for (std::size_t i = 0; i < n; ++i) {
         if (axes && glm::length(c.axis_u[i]) > 0.0f && glm::length(c.axis_v[i]) > 0.0f) {
             const glm::dvec3 u(c.axis_u[i]), v(c.axis_v[i]);
@@ -42,7 +43,8 @@ GaussianCloud gaussians_from_splats(const SplatCloud& c, const FromSplatsOptions
         glm::vec3 col = base;
         if (c.colors.size() == n) {
             const std::uint32_t rgba = c.colors[i];
-            col = glm::vec3(float(rgba & 0xffu), float((rgba >> 8) & 0xffu), float((rgba >> 16) & 0xffu)) / 255.0f;
+            col = glm::vec3(float(rgba & 0xffu), float((rgba >> 8) & 0xffu), float((rgba >> 16) & 0xffu)) /
+                  255.0f;
         }
         for (int ch = 0; ch < 3; ++ch) g.sh[i * 3 + std::size_t(ch)] = float((double(col[ch]) - 0.5) / kShC0);
     }

@@ -61,8 +61,9 @@ Result<GaussianCloud> read_compressed_ply(const fs::path& path) {
     const std::uint64_t n = ve.count;
 
     std::string missing;
-    static const char* kBounds[12] = {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z",
-                                      "min_scale_x", "min_scale_y", "min_scale_z", "max_scale_x", "max_scale_y", "max_scale_z"};
+    static const char* kBounds[12] = {"min_x",       "min_y",       "min_z",       "max_x",
+                                      "max_y",       "max_z",       "min_scale_x", "min_scale_y",
+                                      "min_scale_z", "max_scale_x", "max_scale_y", "max_scale_z"};
     int bound[12];
     for (int i = 0; i < 12; ++i) bound[i] = need(ce, kBounds[i], missing);
     static const char* kColour[6] = {"min_r", "min_g", "min_b", "max_r", "max_g", "max_b"};
@@ -75,21 +76,25 @@ Result<GaussianCloud> read_compressed_ply(const fs::path& path) {
     if (!missing.empty()) return fail("compressed PLY lacks " + missing);
     if (ce.count != (n + kSplatsPerChunk - 1) / kSplatsPerChunk)
         return fail("compressed PLY has " + std::to_string(ce.count) + " chunks for " + std::to_string(n) +
-                    " splats (expected " + std::to_string((n + kSplatsPerChunk - 1) / kSplatsPerChunk) + ", one per 256)");
+                    " splats (expected " + std::to_string((n + kSplatsPerChunk - 1) / kSplatsPerChunk) +
+                    ", one per 256)");
 
     int degree = 0;
     std::vector<int> rest;
     if (si >= 0) {
         const ply::Element& se = h.elements[std::size_t(si)];
         if (se.count != n)
-            return fail("sh element has " + std::to_string(se.count) + " rows for " + std::to_string(n) + " splats");
+            return fail("sh element has " + std::to_string(se.count) + " rows for " + std::to_string(n) +
+                        " splats");
         const std::size_t count = se.properties.size();
         degree = -1;
         for (int d = 1; d <= 3; ++d)
             if (count == std::size_t(3 * (sh_coeffs(d) - 1))) degree = d;
         if (degree < 0)
-            return fail("sh element has " + std::to_string(count) + " properties: expected 9, 24 or 45 (SH degree 1, 2 or 3)");
-        for (std::size_t i = 0; i < count; ++i) rest.push_back(need(se, "f_rest_" + std::to_string(i), missing));
+            return fail("sh element has " + std::to_string(count) +
+                        " properties: expected 9, 24 or 45 (SH degree 1, 2 or 3)");
+        for (std::size_t i = 0; i < count; ++i)
+            rest.push_back(need(se, "f_rest_" + std::to_string(i), missing));
         if (!missing.empty()) return fail("compressed PLY lacks " + missing);
     }
 
@@ -104,11 +109,15 @@ Result<GaussianCloud> read_compressed_ply(const fs::path& path) {
         for (std::size_t r = 0; r < *got; ++r) {
             double* b = &bounds[std::size_t(at + r) * 18];
             for (int i = 0; i < 12; ++i) b[i] = rows.columns[std::size_t(bound[i])].values[r];
-            for (int i = 0; i < 6; ++i) b[12 + i] = colour_bounds ? rows.columns[std::size_t(cbound[i])].values[r] : double(i / 3);
+            for (int i = 0; i < 6; ++i)
+                b[12 + i] = colour_bounds ? rows.columns[std::size_t(cbound[i])].values[r] : double(i / 3);
             for (int i : {0, 1, 2, 3, 4, 5, 12, 13, 14, 15, 16, 17})
-                if (!std::isfinite(b[i])) return fail("chunk " + std::to_string(at + r) + ": non-finite '" + (i < 12 ? kBounds[i] : kColour[i - 12]) + "'");
+                if (!std::isfinite(b[i]))
+                    return fail("chunk " + std::to_string(at + r) + ": non-finite '" +
+                                (i < 12 ? kBounds[i] : kColour[i - 12]) + "'");
             for (int i = 6; i < 12; ++i)
-                if (std::isnan(b[i]) || (std::isinf(b[i]) && b[i] > 0)) return fail("chunk " + std::to_string(at + r) + ": '" + kBounds[i] + "' is NaN or +inf");
+                if (std::isnan(b[i]) || (std::isinf(b[i]) && b[i] > 0))
+                    return fail("chunk " + std::to_string(at + r) + ": '" + kBounds[i] + "' is NaN or +inf");
         }
         at += *got;
     }
@@ -133,11 +142,14 @@ Result<GaussianCloud> read_compressed_ply(const fs::path& path) {
                 const double v = rows.columns[std::size_t(cols[k])].values[r];
                 // A float column could hold anything: only 32-bit unsigned integers are packed words.
                 if (!(v >= 0.0 && v < 4294967296.0) || v != std::floor(v))
-                    return fail("splat " + std::to_string(i) + ": '" + ve.properties[std::size_t(cols[k])].name + "' is not a 32-bit unsigned integer");
+                    return fail("splat " + std::to_string(i) + ": '" +
+                                ve.properties[std::size_t(cols[k])].name +
+                                "' is not a 32-bit unsigned integer");
                 words[k] = std::uint32_t(v);
             }
             const std::uint32_t p = words[0], q = words[1], s = words[2], c = words[3];
-            g.positions.emplace_back(float(lerp(b[0], b[3], unorm(p >> 21, 11))), float(lerp(b[1], b[4], unorm(p >> 11, 10))),
+            g.positions.emplace_back(float(lerp(b[0], b[3], unorm(p >> 21, 11))),
+                                     float(lerp(b[1], b[4], unorm(p >> 11, 10))),
                                      float(lerp(b[2], b[5], unorm(p, 11))));
             const double t[3] = {unorm(s >> 21, 11), unorm(s >> 11, 10), unorm(s, 11)};
             glm::vec3 scale;
@@ -146,7 +158,8 @@ Result<GaussianCloud> read_compressed_ply(const fs::path& path) {
                     return fail("splat " + std::to_string(i) + ": scale overflows (log scale too large)");
             g.scales.push_back(scale);
             const double norm = std::sqrt(2.0);  // the three smaller components lie in [-1/√2, 1/√2]
-            const double a = (unorm(q >> 20, 10) - 0.5) * norm, bb = (unorm(q >> 10, 10) - 0.5) * norm, cc = (unorm(q, 10) - 0.5) * norm;
+            const double a = (unorm(q >> 20, 10) - 0.5) * norm, bb = (unorm(q >> 10, 10) - 0.5) * norm,
+                         cc = (unorm(q, 10) - 0.5) * norm;
             const double m = std::sqrt(std::max(0.0, 1.0 - (a * a + bb * bb + cc * cc)));
             double wxyz[4];
             switch (q >> 30) {
@@ -155,12 +168,15 @@ Result<GaussianCloud> read_compressed_ply(const fs::path& path) {
                 case 2: wxyz[0] = a, wxyz[1] = bb, wxyz[2] = m, wxyz[3] = cc; break;
                 default: wxyz[0] = a, wxyz[1] = bb, wxyz[2] = cc, wxyz[3] = m; break;
             }
-            const double len = std::sqrt(wxyz[0] * wxyz[0] + wxyz[1] * wxyz[1] + wxyz[2] * wxyz[2] + wxyz[3] * wxyz[3]);
-            g.rotations.emplace_back(float(wxyz[0] / len), float(wxyz[1] / len), float(wxyz[2] / len), float(wxyz[3] / len));
+            const double len =
+                std::sqrt(wxyz[0] * wxyz[0] + wxyz[1] * wxyz[1] + wxyz[2] * wxyz[2] + wxyz[3] * wxyz[3]);
+            g.rotations.emplace_back(float(wxyz[0] / len), float(wxyz[1] / len), float(wxyz[2] / len),
+                                     float(wxyz[3] / len));
             g.opacities.push_back(float(unorm(c, 8)));
             const double rgb[3] = {unorm(c >> 24, 8), unorm(c >> 16, 8), unorm(c >> 8, 8)};
             for (int k = 0; k < 3; ++k)
-                g.sh[std::size_t(i) * std::size_t(K) * 3 + std::size_t(k)] = float((lerp(b[12 + k], b[15 + k], rgb[k]) - 0.5) / kShC0);
+                g.sh[std::size_t(i) * std::size_t(K) * 3 + std::size_t(k)] =
+                    float((lerp(b[12 + k], b[15 + k], rgb[k]) - 0.5) / kShC0);
         }
         at += *got;
     }
@@ -173,10 +189,13 @@ Result<GaussianCloud> read_compressed_ply(const fs::path& path) {
             for (std::size_t r = 0; r < *got; ++r)
                 for (int ch = 0; ch < 3; ++ch)
                     for (int k = 1; k < K; ++k) {
-                        const double byte = rows.columns[std::size_t(rest[std::size_t(ch * (K - 1) + (k - 1))])].values[r];
-                        if (!std::isfinite(byte)) return fail("sh row " + std::to_string(at + r) + ": non-finite value");
+                        const double byte =
+                            rows.columns[std::size_t(rest[std::size_t(ch * (K - 1) + (k - 1))])].values[r];
+                        if (!std::isfinite(byte))
+                            return fail("sh row " + std::to_string(at + r) + ": non-finite value");
                         const double unit = byte <= 0.0 ? 0.0 : byte >= 255.0 ? 1.0 : (byte + 0.5) / 256.0;
-                        g.sh[(std::size_t(at + r) * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(ch)] = float((unit - 0.5) * 8.0);
+                        g.sh[(std::size_t(at + r) * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(ch)] =
+                            float((unit - 0.5) * 8.0);
                     }
             at += *got;
         }
@@ -196,7 +215,8 @@ std::uint32_t quantise(double t, int bits) {
 // Position of v within [lo, hi] (0 when the range is empty).
 double unit_in(double v, double lo, double hi) { return hi > lo ? (v - lo) / (hi - lo) : 0.0; }
 
-ply::Element element(const std::string& name, std::uint64_t count, std::initializer_list<const char*> props, ply::Type type) {
+ply::Element element(const std::string& name, std::uint64_t count, std::initializer_list<const char*> props,
+                     ply::Type type) {
     ply::Element e;
     e.name = name;
     e.count = count;
@@ -214,16 +234,21 @@ Status write_compressed_ply(const fs::path& path, const GaussianCloud& g) {
     ply::Header h;
     h.format = ply::Format::binary_little_endian;
     h.comments.push_back("compressed 3D Gaussian splats (PlayCanvas layout) written by splatffd");
-    h.elements.push_back(element("chunk", chunks,
-                                 {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z", "min_scale_x", "min_scale_y", "min_scale_z",
-                                  "max_scale_x", "max_scale_y", "max_scale_z", "min_r", "min_g", "min_b", "max_r", "max_g", "max_b"},
-                                 ply::Type::float32));
-    h.elements.push_back(element("vertex", n, {"packed_position", "packed_rotation", "packed_scale", "packed_color"}, ply::Type::uint32));
+    h.elements.push_back(element(
+        "chunk", chunks,
+        {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z", "min_scale_x", "min_scale_y", "min_scale_z",
+         "max_scale_x", "max_scale_y", "max_scale_z", "min_r", "min_g", "min_b", "max_r", "max_g", "max_b"},
+        ply::Type::float32));
+    h.elements.push_back(element("vertex", n,
+                                 {"packed_position", "packed_rotation", "packed_scale", "packed_color"},
+                                 ply::Type::uint32));
     if (g.sh_degree > 0) {
         ply::Element e;
         e.name = "sh";
         e.count = n;
-        for (int i = 0; i < 3 * (K - 1); ++i) e.properties.push_back({"f_rest_" + std::to_string(i), ply::Type::uint8, false, ply::Type::uint8});
+        for (int i = 0; i < 3 * (K - 1); ++i)
+            e.properties.push_back(
+                {"f_rest_" + std::to_string(i), ply::Type::uint8, false, ply::Type::uint8});
         h.elements.push_back(e);
     }
     auto writer = ply::Writer::create(path, h);
@@ -232,7 +257,9 @@ Status write_compressed_ply(const fs::path& path, const GaussianCloud& g) {
     // Per splat in file units: centre, log scale, colour (0.5 + C0 f_dc).
     auto centre = [&](std::size_t i) { return g.origin + glm::dvec3(g.positions[i]); };
     auto log_scale = [&](std::size_t i, int c) { return std::log(std::max(double(g.scales[i][c]), 1e-30)); };
-    auto colour = [&](std::size_t i, int c) { return 0.5 + kShC0 * double(g.sh[i * std::size_t(K) * 3 + std::size_t(c)]); };
+    auto colour = [&](std::size_t i, int c) {
+        return 0.5 + kShC0 * double(g.sh[i * std::size_t(K) * 3 + std::size_t(c)]);
+    };
     // The bounds as the file stores them (float), so quantising against them matches what a reader sees.
     std::vector<double> bounds(chunks * 18);
     ply::Chunk rows;
@@ -245,7 +272,9 @@ Status write_compressed_ply(const fs::path& path, const GaussianCloud& g) {
         for (std::size_t i = k * kSplatsPerChunk; i < std::min(n, (k + 1) * kSplatsPerChunk); ++i)
             for (int c = 0; c < 3; ++c) {
                 const double v[3] = {centre(i)[c], log_scale(i, c), colour(i, c)};
-                for (int a = 0; a < 3; ++a) lo[a * 3 + c] = std::min(lo[a * 3 + c], v[a]), hi[a * 3 + c] = std::max(hi[a * 3 + c], v[a]);
+                for (int a = 0; a < 3; ++a)
+                    lo[a * 3 + c] = std::min(lo[a * 3 + c], v[a]),
+                               hi[a * 3 + c] = std::max(hi[a * 3 + c], v[a]);
             }
         double* b = &bounds[k * 18];
         for (int a = 0; a < 3; ++a)
@@ -269,10 +298,12 @@ Status write_compressed_ply(const fs::path& path, const GaussianCloud& g) {
             const std::size_t i = first + r;
             const double* b = &bounds[(i / kSplatsPerChunk) * 18];
             const glm::dvec3 p = centre(i);
-            const std::uint32_t pp = quantise(unit_in(p.x, b[0], b[3]), 11) << 21 | quantise(unit_in(p.y, b[1], b[4]), 10) << 11 |
+            const std::uint32_t pp = quantise(unit_in(p.x, b[0], b[3]), 11) << 21 |
+                                     quantise(unit_in(p.y, b[1], b[4]), 10) << 11 |
                                      quantise(unit_in(p.z, b[2], b[5]), 11);
             const std::uint32_t ps = quantise(unit_in(log_scale(i, 0), b[6], b[9]), 11) << 21 |
-                                     quantise(unit_in(log_scale(i, 1), b[7], b[10]), 10) << 11 | quantise(unit_in(log_scale(i, 2), b[8], b[11]), 11);
+                                     quantise(unit_in(log_scale(i, 1), b[7], b[10]), 10) << 11 |
+                                     quantise(unit_in(log_scale(i, 2), b[8], b[11]), 11);
             const glm::quat q = g.rotations[i];
             double wxyz[4] = {q.w, q.x, q.y, q.z};
             int largest = 0;
@@ -284,9 +315,12 @@ Status write_compressed_ply(const fs::path& path, const GaussianCloud& g) {
             int shift = 20;
             for (int c = 0; c < 4; ++c)
                 if (c != largest) pr |= quantise(wxyz[c] / std::sqrt(2.0) + 0.5, 10) << shift, shift -= 10;
-            const std::uint32_t pc = quantise(unit_in(colour(i, 0), b[12], b[15]), 8) << 24 | quantise(unit_in(colour(i, 1), b[13], b[16]), 8) << 16 |
-                                     quantise(unit_in(colour(i, 2), b[14], b[17]), 8) << 8 | quantise(g.opacities[i], 8);
-            rows.columns[0].values[r] = pp, rows.columns[1].values[r] = pr, rows.columns[2].values[r] = ps, rows.columns[3].values[r] = pc;
+            const std::uint32_t pc = quantise(unit_in(colour(i, 0), b[12], b[15]), 8) << 24 |
+                                     quantise(unit_in(colour(i, 1), b[13], b[16]), 8) << 16 |
+                                     quantise(unit_in(colour(i, 2), b[14], b[17]), 8) << 8 |
+                                     quantise(g.opacities[i], 8);
+            rows.columns[0].values[r] = pp, rows.columns[1].values[r] = pr, rows.columns[2].values[r] = ps,
+            rows.columns[3].values[r] = pc;
         }
         if (auto s = writer->write_rows(rows); !s) return s;
     }
@@ -300,8 +334,10 @@ Status write_compressed_ply(const fs::path& path, const GaussianCloud& g) {
                 for (int ch = 0; ch < 3; ++ch)
                     for (int k = 1; k < K; ++k) {
                         // Inverse of the reader's (b + 0.5)/256 decode: b = 32 v + 127.5, rounded.
-                        const double v = g.sh[((first + r) * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(ch)];
-                        rows.columns[std::size_t(ch * (K - 1) + (k - 1))].values[r] = std::clamp(std::round(32.0 * v + 127.5), 0.0, 255.0);
+                        const double v =
+                            g.sh[((first + r) * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(ch)];
+                        rows.columns[std::size_t(ch * (K - 1) + (k - 1))].values[r] =
+                            std::clamp(std::round(32.0 * v + 127.5), 0.0, 255.0);
                     }
             if (auto s = writer->write_rows(rows); !s) return s;
         }

@@ -23,7 +23,8 @@ bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.
 // Whether Gaussian i of a deformed cloud is finite everywhere a renderer reads it.
 bool finite_result(const GaussianCloud& g, std::size_t i, int K, bool frames) {
     const glm::quat q = g.rotations[i];
-    if (!finite3(g.positions[i]) || !finite3(g.scales[i]) || !std::isfinite(q.w + q.x + q.y + q.z)) return false;
+    if (!finite3(g.positions[i]) || !finite3(g.scales[i]) || !std::isfinite(q.w + q.x + q.y + q.z))
+        return false;
     if (!(std::abs(glm::dot(q, q) - 1.0f) < 1e-3f)) return false;  // a zero or overflowed quaternion
     for (std::size_t k = 0; k < std::size_t(K) * 3; ++k)
         if (!std::isfinite(g.sh[i * std::size_t(K) * 3 + k])) return false;
@@ -35,28 +36,32 @@ bool finite_result(const GaussianCloud& g, std::size_t i, int K, bool frames) {
 
 }  // namespace
 
-Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out, ffd::Backend backend,
-                           bool copy_opacities) {
+Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out,
+                           ffd::Backend backend, bool copy_opacities) {
     return deform(lattice, in, out, DeformOptions{backend, copy_opacities, ShMode::rotate_coefficients});
 }
 
 void bake_sh_frames(GaussianCloud& g) {
     if (g.sh_frames.size() != g.size()) return g.sh_frames.clear();
     const std::size_t K = std::size_t(sh_coeffs(g.sh_degree));
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.size(), 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-        for (std::size_t i = r.begin(); i != r.end(); ++i)
-            if (K > 1 && g.sh_frames[i] != glm::mat3(1.0f))
-                sh_rotate(sh_rotation(glm::dmat3(g.sh_frames[i]), g.sh_degree), &g.sh[i * K * 3], &g.sh[i * K * 3]);
-    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.size(), 1024),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i != r.end(); ++i)
+                              if (K > 1 && g.sh_frames[i] != glm::mat3(1.0f))
+                                  sh_rotate(sh_rotation(glm::dmat3(g.sh_frames[i]), g.sh_degree),
+                                            &g.sh[i * K * 3], &g.sh[i * K * 3]);
+                      });
     g.sh_frames.clear();
 }
 
-Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out, const DeformOptions& options) {
+Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out,
+                           const DeformOptions& options) {
     const ffd::Backend backend = options.backend;
     const bool copy_opacities = options.copy_opacities;
     const bool view_mode = options.sh == ShMode::rotate_view;
     if (!view_mode && !in.sh_frames.empty())
-        return make_error("gaussian::deform(): the cloud carries SH frames (view-direction mode): bake_sh_frames() first");
+        return make_error(
+            "gaussian::deform(): the cloud carries SH frames (view-direction mode): bake_sh_frames() first");
     const std::size_t n = in.size();
     const int K = sh_coeffs(in.sh_degree);
     if (in.scales.size() != n || in.rotations.size() != n || in.sh.size() != n * std::size_t(K) * 3)
@@ -73,11 +78,13 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
     const bool frames_in = in.sh_frames.size() == n;
     DeformStats total;
     std::vector<glm::mat3> jac(std::min(n, kBlock));
-    std::vector<glm::vec3> centres(std::min(n, kBlock));  // the block's input centres (in-place overwrites them)
+    std::vector<glm::vec3> centres(
+        std::min(n, kBlock));  // the block's input centres (in-place overwrites them)
     const bool drop_opacity = out.opacities.size() == n;
     for (std::size_t first = 0; first < n; first += kBlock) {
         const std::size_t count = std::min(kBlock, n - first);
-        std::copy(in.positions.begin() + std::ptrdiff_t(first), in.positions.begin() + std::ptrdiff_t(first + count), centres.begin());
+        std::copy(in.positions.begin() + std::ptrdiff_t(first),
+                  in.positions.begin() + std::ptrdiff_t(first + count), centres.begin());
         const ffd::PointsIn pin{in.positions.data() + first, nullptr, nullptr, nullptr, count, in.origin};
         ffd::PointsOut pout{out.positions.data() + first, nullptr, nullptr, nullptr};
         pout.jacobians = jac.data();
@@ -99,11 +106,13 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
             const glm::dmat3 j(jac[b]);
             double n2 = 0.0;
             for (int c = 0; c < 3; ++c) n2 += glm::dot(j[c], j[c]);
-            const bool singular = !(std::abs(glm::determinant(j)) > 1e-12 * n2 * std::sqrt(n2));  // as polar_decomposition
+            const bool singular =
+                !(std::abs(glm::determinant(j)) > 1e-12 * n2 * std::sqrt(n2));  // as polar_decomposition
             bad += singular;
             const glm::dmat3 rq = glm::mat3_cast(glm::dquat(in.rotations[i]));
             const glm::dvec3 s(in.scales[i]);
-            const glm::dmat3 a = j * glm::dmat3(rq[0] * s.x, rq[1] * s.y, rq[2] * s.z);  // deformed axes J R S
+            const glm::dmat3 a =
+                j * glm::dmat3(rq[0] * s.x, rq[1] * s.y, rq[2] * s.z);  // deformed axes J R S
             // Σ' = (JRS)(JRS)ᵀ; the deformed axes, orthonormalised, are a close guess of its eigenvectors.
             const ScaleRotation sr = decompose_covariance(a * glm::transpose(a), orthonormalize(j * rq));
             out.scales[i] = glm::vec3(sr.scale);
@@ -115,18 +124,21 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
             const Polar p = polar_decomposition(j);
             if (!p.ok || view_mode) {
                 if (&out != &in) std::copy(sh_in, sh_in + K * 3, sh_out);
-                if (p.ok && view_mode) out.sh_frames[i] = glm::mat3(p.rotation) * (frames_in ? in.sh_frames[i] : glm::mat3(1.0f));
+                if (p.ok && view_mode)
+                    out.sh_frames[i] =
+                        glm::mat3(p.rotation) * (frames_in ? in.sh_frames[i] : glm::mat3(1.0f));
                 return;
             }
             sh_rotate(sh_rotation(p.rotation, in.sh_degree), sh_in, sh_out);
         };
         std::atomic<std::size_t> degenerate{0}, not_finite{0};
         // As the GPU pass does (deform.comp): a result that is not finite is never left for the renderer; the
-        // Gaussian keeps its input centre with scale 0 and opacity 0, and is counted. Both CPU kernels pass here.
-        // J is tested too, as the shader does: a non-finite J can still give a finite-looking shape.
+        // Gaussian keeps its input centre with scale 0 and opacity 0, and is counted. Both CPU kernels pass
+        // here. J is tested too, as the shader does: a non-finite J can still give a finite-looking shape.
         auto drop_if_not_finite = [&](std::size_t i, std::size_t b) -> std::size_t {
             const glm::mat3& j = jac[b];
-            if (finite3(j[0]) && finite3(j[1]) && finite3(j[2]) && finite_result(out, i, K, view_mode)) return 0;
+            if (finite3(j[0]) && finite3(j[1]) && finite3(j[2]) && finite_result(out, i, K, view_mode))
+                return 0;
             out.positions[i] = centres[b];
             out.scales[i] = glm::vec3(0.0f);
             out.rotations[i] = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
@@ -140,28 +152,32 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
             const detail::FastShapeArgs args{&in, &out, jac.data(), first, view_mode, frames_in};
             const std::size_t w = std::size_t(detail::shape_lane_width());
             const std::size_t groups = (count + w - 1) / w;
-            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 64), [&](const tbb::blocked_range<std::size_t>& r) {
-                const std::size_t b0 = r.begin() * w, b1 = std::min(count, r.end() * w);
-                degenerate += detail::deform_shapes_fast(args, b0, b1);
-                std::size_t dropped = 0;
-                for (std::size_t b = b0; b < b1; ++b) dropped += drop_if_not_finite(first + b, b);
-                not_finite += dropped;
-            });
+            tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 64),
+                              [&](const tbb::blocked_range<std::size_t>& r) {
+                                  const std::size_t b0 = r.begin() * w, b1 = std::min(count, r.end() * w);
+                                  degenerate += detail::deform_shapes_fast(args, b0, b1);
+                                  std::size_t dropped = 0;
+                                  for (std::size_t b = b0; b < b1; ++b)
+                                      dropped += drop_if_not_finite(first + b, b);
+                                  not_finite += dropped;
+                              });
             total.degenerate += degenerate.load();
             total.not_finite += not_finite.load();
             continue;
         }
-        // The reference: double precision per Gaussian (the fast kernel and the GPU pass are tested against it).
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
-            std::size_t bad = 0, dropped = 0;
-            for (std::size_t b = r.begin(); b != r.end(); ++b) {
-                const std::size_t i = first + b;
-                deform_one(i, b, bad);
-                dropped += drop_if_not_finite(i, b);
-            }
-            degenerate += bad;
-            not_finite += dropped;
-        });
+        // The reference: double precision per Gaussian (the fast kernel and the GPU pass are tested against
+        // it).
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              std::size_t bad = 0, dropped = 0;
+                              for (std::size_t b = r.begin(); b != r.end(); ++b) {
+                                  const std::size_t i = first + b;
+                                  deform_one(i, b, bad);
+                                  dropped += drop_if_not_finite(i, b);
+                              }
+                              degenerate += bad;
+                              not_finite += dropped;
+                          });
         total.degenerate += degenerate.load();
         total.not_finite += not_finite.load();
     }

@@ -46,7 +46,8 @@ struct DeformOptions {
 // Writes `out` (positions, scales, rotations, sh or sh_frames; opacities copied when `copy_opacities`)
 // from `in`. `out` may be `in` (chained lattices deform in place; frames compose). Lattice errors read
 // "lattice: problem".
-Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out, const DeformOptions& options);
+Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out,
+                           const DeformOptions& options);
 Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out,
                            ffd::Backend backend = ffd::Backend::automatic, bool copy_opacities = true);
 

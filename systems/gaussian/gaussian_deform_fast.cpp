@@ -65,7 +65,9 @@ inline V3 mul(const M3& m, V3 v) { return v.x * m.c[0] + v.y * m.c[1] + v.z * m.
 inline M3 transpose(const M3& m) {
     return {{{m.c[0].x, m.c[1].x, m.c[2].x}, {m.c[0].y, m.c[1].y, m.c[2].y}, {m.c[0].z, m.c[1].z, m.c[2].z}}};
 }
-inline M3 sel(vm m, const M3& a, const M3& b) { return {{sel(m, a.c[0], b.c[0]), sel(m, a.c[1], b.c[1]), sel(m, a.c[2], b.c[2])}}; }
+inline M3 sel(vm m, const M3& a, const M3& b) {
+    return {{sel(m, a.c[0], b.c[0]), sel(m, a.c[1], b.c[1]), sel(m, a.c[2], b.c[2])}};
+}
 inline M3 identity() { return {{splat3(1, 0, 0), splat3(0, 1, 0), splat3(0, 0, 1)}}; }
 
 // One Hestenes rotation of columns p, q where `go`: makes them orthogonal (no-op where they already are to
@@ -131,7 +133,9 @@ void to_quat(const M3& m, vf q[4]) {
     const vm c0 = tr > 0.0f;
     const vm c1 = ~c0 & (m00 > m11) & (m00 > m22);
     const vm c2 = ~c0 & ~c1 & (m11 > m22);
-    const vf arg = sel(c0, tr + 1.0f, sel(c1, 1.0f + m00 - m11 - m22, sel(c2, 1.0f + m11 - m00 - m22, 1.0f + m22 - m00 - m11)));
+    const vf arg =
+        sel(c0, tr + 1.0f,
+            sel(c1, 1.0f + m00 - m11 - m22, sel(c2, 1.0f + m11 - m00 - m22, 1.0f + m22 - m00 - m11)));
     const vf s = vsqrt(arg) * 2.0f, inv = 1.0f / s, big = 0.25f * s;
     const vf a = (m12 - m21) * inv, b = (m20 - m02) * inv, c = (m01 - m10) * inv;
     const vf d = (m10 + m01) * inv, e = (m20 + m02) * inv, f = (m21 + m12) * inv;
@@ -277,7 +281,8 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
         // has a float determinant of rounding size, far above the 1e-12 threshold.
         vm singular = vm{};
         for (int l = 0; l < n; ++l) {
-            const glm::dmat3 jd(glm::dvec3(jl[0][l], jl[1][l], jl[2][l]), glm::dvec3(jl[3][l], jl[4][l], jl[5][l]),
+            const glm::dmat3 jd(glm::dvec3(jl[0][l], jl[1][l], jl[2][l]),
+                                glm::dvec3(jl[3][l], jl[4][l], jl[5][l]),
                                 glm::dvec3(jl[6][l], jl[7][l], jl[8][l]));
             const double n2 = glm::dot(jd[0], jd[0]) + glm::dot(jd[1], jd[1]) + glm::dot(jd[2], jd[2]);
             singular[l] = moved[l] && !(std::abs(glm::determinant(jd)) > 1e-12 * n2 * std::sqrt(n2)) ? -1 : 0;
@@ -323,7 +328,8 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
                 for (std::size_t k = 0; k < stride; ++k) sh_soa[k][l] = src[k];
             }
             V3 c[16];
-            for (int k = 0; k < K; ++k) c[k] = {load(sh_soa[3 * k]), load(sh_soa[3 * k + 1]), load(sh_soa[3 * k + 2])};
+            for (int k = 0; k < K; ++k)
+                c[k] = {load(sh_soa[3 * k]), load(sh_soa[3 * k + 1]), load(sh_soa[3 * k + 2])};
             rotate_sh(in.sh_degree, R, c);
             for (int k = 1; k < K; ++k) {
                 std::memcpy(sh_soa[3 * k], &c[k].x, sizeof(vf));

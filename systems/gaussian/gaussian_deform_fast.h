@@ -14,7 +14,7 @@ namespace sffd::gaussian::detail {
 
 struct FastShapeArgs {
     const GaussianCloud* in = nullptr;
-    GaussianCloud* out = nullptr;   // may be `in`
+    GaussianCloud* out = nullptr;          // may be `in`
     const glm::mat3* jacobians = nullptr;  // jacobians[b] is Gaussian first + b's
     std::size_t first = 0;
     bool view_mode = false;  // store the polar rotation in out->sh_frames instead of rotating coefficients

@@ -31,9 +31,10 @@ const std::string kExt = "KHR_gaussian_splatting";
 
 // The attributes KHR_gaussian_splatting allows: float or normalised (unsigned) byte / short, never
 // unsigned int (which the shared reader also accepts, for indices).
-Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, int components, const std::string& where,
-                                          const std::string& name) {
-    if (index >= 0 && std::size_t(index) < m.accessors.size() && m.accessors[std::size_t(index)].componentType == kUInt)
+Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, int components,
+                                          const std::string& where, const std::string& name) {
+    if (index >= 0 && std::size_t(index) < m.accessors.size() &&
+        m.accessors[std::size_t(index)].componentType == kUInt)
         return make_error(where + ": " + name + ": unsupported component type " + std::to_string(kUInt));
     return assets::read_gltf_accessor(m, index, components, where, name);
 }
@@ -41,8 +42,10 @@ Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, i
 glm::dmat4 node_matrix(const tinygltf::Node& n) {
     if (n.matrix.size() == 16) return glm::make_mat4(n.matrix.data());
     glm::dmat4 m(1.0);
-    if (n.translation.size() == 3) m = glm::translate(m, glm::dvec3(n.translation[0], n.translation[1], n.translation[2]));
-    if (n.rotation.size() == 4) m = m * glm::mat4_cast(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2]));
+    if (n.translation.size() == 3)
+        m = glm::translate(m, glm::dvec3(n.translation[0], n.translation[1], n.translation[2]));
+    if (n.rotation.size() == 4)
+        m = m * glm::mat4_cast(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2]));
     if (n.scale.size() == 3) m = glm::scale(m, glm::dvec3(n.scale[0], n.scale[1], n.scale[2]));
     return m;
 }
@@ -53,14 +56,17 @@ std::string sh_name(int l, int n) {
 
 }  // namespace
 
-Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim, const std::string& where) {
+Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
+                                     const std::string& where) {
     auto attr = [&](const std::string& name) {
         auto it = prim.attributes.find(name);
         return it == prim.attributes.end() ? -1 : it->second;
     };
-    for (const char* name : {"POSITION", "KHR_gaussian_splatting:ROTATION", "KHR_gaussian_splatting:SCALE", "KHR_gaussian_splatting:OPACITY"})
+    for (const char* name : {"POSITION", "KHR_gaussian_splatting:ROTATION", "KHR_gaussian_splatting:SCALE",
+                             "KHR_gaussian_splatting:OPACITY"})
         if (attr(name) < 0) return make_error(where + ": missing attribute " + name);
-    if (const int a = attr("POSITION"); std::size_t(a) < m.accessors.size() && m.accessors[std::size_t(a)].count > kMaxGaussians)
+    if (const int a = attr("POSITION");
+        std::size_t(a) < m.accessors.size() && m.accessors[std::size_t(a)].count > kMaxGaussians)
         return make_error(where + ": POSITION declares " + std::to_string(m.accessors[std::size_t(a)].count) +
                           " Gaussians, more than the " + std::to_string(kMaxGaussians) + "-Gaussian limit");
     auto pos = read_accessor(m, attr("POSITION"), 3, where, "POSITION");
@@ -69,7 +75,8 @@ Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::P
     auto get = [&](const std::string& name, int comps) -> Result<std::vector<double>> {
         auto v = read_accessor(m, attr(name), comps, where, name);
         if (v && v->size() != n * std::size_t(comps))
-            return make_error(where + ": " + name + " has " + std::to_string(v->size() / std::size_t(comps)) + " elements, POSITION " + std::to_string(n));
+            return make_error(where + ": " + name + " has " + std::to_string(v->size() / std::size_t(comps)) +
+                              " elements, POSITION " + std::to_string(n));
         return v;
     };
     auto rot = get(kExt + ":ROTATION", 4);
@@ -84,11 +91,13 @@ Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::P
         for (int c = 0; c <= 2 * l; ++c) present += attr(sh_name(l, c)) >= 0;
         if (present == 0) continue;
         if (present != 2 * l + 1)
-            return make_error(where + ": SH degree " + std::to_string(l) + " is partial (" + std::to_string(present) + " of " +
-                              std::to_string(2 * l + 1) + " coefficients)");
+            return make_error(where + ": SH degree " + std::to_string(l) + " is partial (" +
+                              std::to_string(present) + " of " + std::to_string(2 * l + 1) +
+                              " coefficients)");
         // Degree l needs every band below it; silently dropping the higher bands would lose data.
         if (degree != l - 1)
-            return make_error(where + ": SH degree " + std::to_string(l) + " coefficients without degree " + std::to_string(degree + 1));
+            return make_error(where + ": SH degree " + std::to_string(l) + " coefficients without degree " +
+                              std::to_string(degree + 1));
         degree = l;
     }
     GaussianCloud g;
@@ -99,7 +108,8 @@ Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::P
         auto dc = get(sh_name(0, 0), 3);
         if (!dc) return dc.error();
         for (std::size_t i = 0; i < n; ++i)
-            for (int c = 0; c < 3; ++c) g.sh[i * std::size_t(K) * 3 + std::size_t(c)] = float((*dc)[i * 3 + std::size_t(c)]);
+            for (int c = 0; c < 3; ++c)
+                g.sh[i * std::size_t(K) * 3 + std::size_t(c)] = float((*dc)[i * 3 + std::size_t(c)]);
     } else if (attr("COLOR_0") >= 0) {
         const std::size_t ci = std::size_t(attr("COLOR_0"));
         const int comps = ci < m.accessors.size() && m.accessors[ci].type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
@@ -107,7 +117,8 @@ Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::P
         if (!col) return col.error();
         for (std::size_t i = 0; i < n; ++i)
             for (int c = 0; c < 3; ++c)
-                g.sh[i * std::size_t(K) * 3 + std::size_t(c)] = float(((*col)[i * std::size_t(comps) + std::size_t(c)] - 0.5) / kShC0);
+                g.sh[i * std::size_t(K) * 3 + std::size_t(c)] =
+                    float(((*col)[i * std::size_t(comps) + std::size_t(c)] - 0.5) / kShC0);
     } else {
         return make_error(where + ": missing attribute " + sh_name(0, 0) + " (and no COLOR_0)");
     }
@@ -117,13 +128,19 @@ Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::P
             if (!v) return v.error();
             const std::size_t k = std::size_t(l * l + c);
             for (std::size_t i = 0; i < n; ++i)
-                for (std::size_t ch = 0; ch < 3; ++ch) g.sh[(i * std::size_t(K) + k) * 3 + ch] = float((*v)[i * 3 + ch]);
+                for (std::size_t ch = 0; ch < 3; ++ch)
+                    g.sh[(i * std::size_t(K) + k) * 3 + ch] = float((*v)[i * 3 + ch]);
         }
     for (std::size_t i = 0; i < n; ++i) {
-        const auto fail = [&](const char* why) { return make_error(where + ": Gaussian " + std::to_string(i) + ": " + why); };
+        const auto fail = [&](const char* why) {
+            return make_error(where + ": Gaussian " + std::to_string(i) + ": " + why);
+        };
         g.positions.emplace_back(float((*pos)[i * 3]), float((*pos)[i * 3 + 1]), float((*pos)[i * 3 + 2]));
         const glm::dvec3 s((*scale)[i * 3], (*scale)[i * 3 + 1], (*scale)[i * 3 + 2]);
-        if (s.x < 0 || s.y < 0 || s.z < 0) return fail("negative scale (KHR_gaussian_splatting scales are linear; log-space data from the review draft?)");
+        if (s.x < 0 || s.y < 0 || s.z < 0)
+            return fail(
+                "negative scale (KHR_gaussian_splatting scales are linear; log-space data from the review "
+                "draft?)");
         g.scales.push_back(glm::vec3(s));
         const double o = (*opacity)[i];
         if (o < 0.0 || o > 1.0) return fail("opacity outside [0, 1]");
@@ -143,9 +160,11 @@ void append(GaussianCloud& a, const GaussianCloud& b, int degree) {
     std::vector<float> sh;
     sh.reserve((a.size() + b.size()) * std::size_t(k) * 3);
     for (std::size_t i = 0; i < a.size(); ++i)
-        sh.insert(sh.end(), a.sh.begin() + std::ptrdiff_t(i * std::size_t(ka) * 3), a.sh.begin() + std::ptrdiff_t((i * std::size_t(ka) + std::size_t(k)) * 3));
+        sh.insert(sh.end(), a.sh.begin() + std::ptrdiff_t(i * std::size_t(ka) * 3),
+                  a.sh.begin() + std::ptrdiff_t((i * std::size_t(ka) + std::size_t(k)) * 3));
     for (std::size_t i = 0; i < b.size(); ++i)
-        sh.insert(sh.end(), b.sh.begin() + std::ptrdiff_t(i * std::size_t(kb) * 3), b.sh.begin() + std::ptrdiff_t((i * std::size_t(kb) + std::size_t(k)) * 3));
+        sh.insert(sh.end(), b.sh.begin() + std::ptrdiff_t(i * std::size_t(kb) * 3),
+                  b.sh.begin() + std::ptrdiff_t((i * std::size_t(kb) + std::size_t(k)) * 3));
     a.sh = std::move(sh);
     a.sh_degree = degree;
     a.positions.insert(a.positions.end(), b.positions.begin(), b.positions.end());
@@ -162,7 +181,8 @@ void apply_affine(GaussianCloud& g, const glm::dmat3& a, const glm::dvec3& t) {
     const ShRotation rot = sh_rotation(p.rotation, g.sh_degree);
     for (std::size_t i = 0; i < g.size(); ++i) {
         g.positions[i] = glm::vec3(a * (g.origin + glm::dvec3(g.positions[i])) + t - g.origin);
-        const ScaleRotation sr = decompose_covariance(a * covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i])) * glm::transpose(a));
+        const ScaleRotation sr = decompose_covariance(
+            a * covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i])) * glm::transpose(a));
         g.scales[i] = glm::vec3(sr.scale);
         g.rotations[i] = glm::quat(sr.rotation);
         if (K > 1 && p.ok) sh_rotate(rot, &g.sh[i * std::size_t(K) * 3], &g.sh[i * std::size_t(K) * 3]);
@@ -183,18 +203,22 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
     for (std::size_t i = 0; i < m.nodes.size(); ++i)
         for (int c : m.nodes[i].children) {
             if (c < 0 || std::size_t(c) >= m.nodes.size())
-                return make_error(src + ": node " + std::to_string(i) + ": child index " + std::to_string(c) + " out of range");
+                return make_error(src + ": node " + std::to_string(i) + ": child index " + std::to_string(c) +
+                                  " out of range");
             if (parent_of[std::size_t(c)] >= 0)
                 return make_error(src + ": node " + std::to_string(c) + " is listed as a child of node " +
-                                  std::to_string(parent_of[std::size_t(c)]) + " and of node " + std::to_string(i) +
-                                  " (a glTF node has at most one parent)");
+                                  std::to_string(parent_of[std::size_t(c)]) + " and of node " +
+                                  std::to_string(i) + " (a glTF node has at most one parent)");
             parent_of[std::size_t(c)] = int(i);
         }
     std::vector<char> visited(m.nodes.size(), 0);
     std::size_t depth = 0;
     std::function<Status(int, const glm::dmat4&)> visit = [&](int index, const glm::dmat4& parent) -> Status {
-        if (index < 0 || std::size_t(index) >= m.nodes.size()) return make_error(src + ": node index " + std::to_string(index) + " out of range");
-        if (visited[std::size_t(index)]) return make_error(src + ": node " + std::to_string(index) + " is reached twice (a cycle, or a root that is also a child)");
+        if (index < 0 || std::size_t(index) >= m.nodes.size())
+            return make_error(src + ": node index " + std::to_string(index) + " out of range");
+        if (visited[std::size_t(index)])
+            return make_error(src + ": node " + std::to_string(index) +
+                              " is reached twice (a cycle, or a root that is also a child)");
         if (depth >= 256) return make_error(src + ": node hierarchy deeper than 256 levels");
         visited[std::size_t(index)] = 1;
         ++depth;
@@ -204,8 +228,10 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
             const auto& prims = m.meshes[std::size_t(node.mesh)].primitives;
             for (std::size_t p = 0; p < prims.size(); ++p) {
                 if (prims[p].extensions.find(kExt) == prims[p].extensions.end()) continue;
-                const std::string where = src + ": mesh " + std::to_string(node.mesh) + " primitive " + std::to_string(p);
-                if (prims[p].mode != TINYGLTF_MODE_POINTS) return make_error(where + ": KHR_gaussian_splatting needs mode POINTS");
+                const std::string where =
+                    src + ": mesh " + std::to_string(node.mesh) + " primitive " + std::to_string(p);
+                if (prims[p].mode != TINYGLTF_MODE_POINTS)
+                    return make_error(where + ": KHR_gaussian_splatting needs mode POINTS");
                 auto g = read_primitive(m, prims[p], where);
                 if (!g) return g.error();
                 if (world != glm::dmat4(1.0)) apply_affine(*g, glm::dmat3(world), glm::dvec3(world[3]));
@@ -219,7 +245,9 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
     };
     std::vector<int> roots;
     if (!m.scenes.empty()) {
-        const std::size_t s = m.defaultScene >= 0 && std::size_t(m.defaultScene) < m.scenes.size() ? std::size_t(m.defaultScene) : 0;
+        const std::size_t s = m.defaultScene >= 0 && std::size_t(m.defaultScene) < m.scenes.size()
+                                  ? std::size_t(m.defaultScene)
+                                  : 0;
         roots = m.scenes[s].nodes;
     } else {  // no scene: the roots are the nodes that are nobody's child
         for (std::size_t i = 0; i < m.nodes.size(); ++i)
@@ -262,12 +290,16 @@ GltfDeclaration gltf_declaration(const fs::path& path) {
     if (doc.is_discarded() || !doc.is_object()) return d;
     for (const char* key : {"extensionsUsed", "extensionsRequired"})
         if (auto it = doc.find(key); it != doc.end() && it->is_array())
-            for (const auto& e : *it) d.gaussian_splatting = d.gaussian_splatting || (e.is_string() && e.get<std::string>() == kExt);
-    if (auto it = doc.find("extensions"); it != doc.end() && it->is_object()) d.sffd_scene = it->contains("SFFD_scene");
+            for (const auto& e : *it)
+                d.gaussian_splatting =
+                    d.gaussian_splatting || (e.is_string() && e.get<std::string>() == kExt);
+    if (auto it = doc.find("extensions"); it != doc.end() && it->is_object())
+        d.sffd_scene = it->contains("SFFD_scene");
     return d;
 }
 
-Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianCloud& g, nlohmann::json& primitive, const std::string& where) {
+Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianCloud& g,
+                        nlohmann::json& primitive, const std::string& where) {
     if (Status s = validate(g, where); !s) return s;
     const std::size_t n = g.size();
     const int K = sh_coeffs(g.sh_degree);
@@ -276,12 +308,15 @@ Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianClo
     nlohmann::json& views = doc["bufferViews"];
     nlohmann::json& accessors = doc["accessors"];
     nlohmann::json attributes = nlohmann::json::object();
-    auto add = [&](const std::string& name, const void* data, std::size_t bytes, int component, const char* type, bool normalized,
-                   const nlohmann::json& lo = {}, const nlohmann::json& hi = {}) {
+    auto add = [&](const std::string& name, const void* data, std::size_t bytes, int component,
+                   const char* type, bool normalized, const nlohmann::json& lo = {},
+                   const nlohmann::json& hi = {}) {
         while (bin.size() % 4) bin.push_back('\0');
-        views.push_back({{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}, {"target", 34962}});
+        views.push_back(
+            {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}, {"target", 34962}});
         bin.append(static_cast<const char*>(data), bytes);
-        nlohmann::json a = {{"bufferView", views.size() - 1}, {"componentType", component}, {"count", n}, {"type", type}};
+        nlohmann::json a = {
+            {"bufferView", views.size() - 1}, {"componentType", component}, {"count", n}, {"type", type}};
         if (normalized) a["normalized"] = true;
         if (!lo.is_null()) a["min"] = lo, a["max"] = hi;
         accessors.push_back(a);
@@ -290,12 +325,14 @@ Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianClo
     glm::vec3 lo(0.0f), hi(0.0f);
     if (n > 0) lo = hi = g.positions[0];
     for (const glm::vec3& p : g.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
-    add("POSITION", g.positions.data(), n * 12, kFloat, "VEC3", false, {lo.x, lo.y, lo.z}, {hi.x, hi.y, hi.z});
+    add("POSITION", g.positions.data(), n * 12, kFloat, "VEC3", false, {lo.x, lo.y, lo.z},
+        {hi.x, hi.y, hi.z});
     std::vector<unsigned char> color(n * 4);
     std::vector<float> rot(n * 4), tmp(n * 3);
     for (std::size_t i = 0; i < n; ++i) {
         for (std::size_t c = 0; c < 3; ++c)
-            color[i * 4 + c] = static_cast<unsigned char>(std::lround(std::clamp(0.5 + kShC0 * double(g.sh[i * std::size_t(K) * 3 + c]), 0.0, 1.0) * 255.0));
+            color[i * 4 + c] = static_cast<unsigned char>(std::lround(
+                std::clamp(0.5 + kShC0 * double(g.sh[i * std::size_t(K) * 3 + c]), 0.0, 1.0) * 255.0));
         color[i * 4 + 3] = static_cast<unsigned char>(std::lround(double(g.opacities[i]) * 255.0));
         const glm::quat q = g.rotations[i];
         rot[i * 4] = q.x, rot[i * 4 + 1] = q.y, rot[i * 4 + 2] = q.z, rot[i * 4 + 3] = q.w;
@@ -308,17 +345,23 @@ Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianClo
         for (int c = 0; c <= 2 * l; ++c) {
             const std::size_t k = std::size_t(l * l + c);
             for (std::size_t i = 0; i < n; ++i)
-                for (std::size_t ch = 0; ch < 3; ++ch) tmp[i * 3 + ch] = g.sh[(i * std::size_t(K) + k) * 3 + ch];
+                for (std::size_t ch = 0; ch < 3; ++ch)
+                    tmp[i * 3 + ch] = g.sh[(i * std::size_t(K) + k) * 3 + ch];
             add(sh_name(l, c), tmp.data(), n * 12, kFloat, "VEC3", false);
         }
     while (bin.size() % 4) bin.push_back('\0');
     primitive = {{"attributes", attributes},
                  {"mode", 0},
                  {"extensions",
-                  {{kExt, {{"kernel", "ellipse"}, {"colorSpace", "srgb_rec709_display"}, {"sortingMethod", "cameraDistance"}, {"projection", "perspective"}}}}}};
+                  {{kExt,
+                    {{"kernel", "ellipse"},
+                     {"colorSpace", "srgb_rec709_display"},
+                     {"sortingMethod", "cameraDistance"},
+                     {"projection", "perspective"}}}}}};
     if (!doc.contains("extensionsUsed")) doc["extensionsUsed"] = nlohmann::json::array();
     bool listed = false;
-    for (const auto& e : doc["extensionsUsed"]) listed = listed || (e.is_string() && e.get<std::string>() == kExt);
+    for (const auto& e : doc["extensionsUsed"])
+        listed = listed || (e.is_string() && e.get<std::string>() == kExt);
     if (!listed) doc["extensionsUsed"].push_back(kExt);
     return {};
 }

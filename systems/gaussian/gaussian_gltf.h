@@ -5,10 +5,10 @@
 // which the ratified text and @playcanvas/splat-transform 3.x do not):
 //   POSITION                                  VEC3 float
 //   KHR_gaussian_splatting:ROTATION           VEC4 (x, y, z, w), float or normalised byte/short
-//   KHR_gaussian_splatting:SCALE              VEC3 LINEAR standard deviations, float or (normalised) byte/short
-//   KHR_gaussian_splatting:OPACITY            SCALAR LINEAR [0, 1], float or normalised ubyte/ushort
-//   KHR_gaussian_splatting:SH_DEGREE_0_COEF_0 VEC3 float, the DC coefficients (colour = 0.5 + C0·dc)
-//   KHR_gaussian_splatting:SH_DEGREE_l_COEF_n VEC3 float (RGB) per coefficient, l = 1..3, n = 0..2l
+//   KHR_gaussian_splatting:SCALE              VEC3 LINEAR standard deviations, float or (normalised)
+//   byte/short KHR_gaussian_splatting:OPACITY            SCALAR LINEAR [0, 1], float or normalised
+//   ubyte/ushort KHR_gaussian_splatting:SH_DEGREE_0_COEF_0 VEC3 float, the DC coefficients (colour = 0.5 +
+//   C0·dc) KHR_gaussian_splatting:SH_DEGREE_l_COEF_n VEC3 float (RGB) per coefficient, l = 1..3, n = 0..2l
 //     (n in the 3DGS / Condon–Shortley order, i.e. our k = l² + n)
 //   COLOR_0                                   optional fallback (we write it; we read it only when
 //                                             SH_DEGREE_0_COEF_0 is absent)
@@ -60,9 +60,10 @@ Status write_glb(const std::filesystem::path& path, const GaussianCloud& cloud);
 // refer to buffer 0 = `bin`, 4-byte aligned) and returns the POINTS primitive's JSON (positions as stored,
 // relative to cloud.origin). read_primitive() reads one such primitive with every check read_gltf makes;
 // errors read "where: problem".
-Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianCloud& cloud, nlohmann::json& primitive,
-                        const std::string& where);
-Result<GaussianCloud> read_primitive(const tinygltf::Model& model, const tinygltf::Primitive& primitive, const std::string& where);
+Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianCloud& cloud,
+                        nlohmann::json& primitive, const std::string& where);
+Result<GaussianCloud> read_primitive(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
+                                     const std::string& where);
 
 // Applies x -> A x + t (world space, double) to a cloud in place: centres, Σ' = A Σ Aᵀ, SH rotated by the
 // polar rotation of A. Used for glTF node matrices.

@@ -47,7 +47,8 @@ Result<PlyLayout> ply_layout(const ply::Element& v, const std::string& name) {
     auto need = [&](const std::string& prop, int& slot) {
         slot = v.find(prop);
         if (slot < 0) missing += (missing.empty() ? "" : ", ") + prop;
-        else if (v.properties[std::size_t(slot)].is_list) missing += (missing.empty() ? "" : ", ") + prop + " (is a list)";
+        else if (v.properties[std::size_t(slot)].is_list)
+            missing += (missing.empty() ? "" : ", ") + prop + " (is a list)";
     };
     need("x", l.x), need("y", l.y), need("z", l.z);
     for (int c = 0; c < 3; ++c) need("f_dc_" + std::to_string(c), l.dc[c]);
@@ -61,7 +62,8 @@ Result<PlyLayout> ply_layout(const ply::Element& v, const std::string& name) {
     for (int i = 0; i < count; ++i) {
         const int at = v.find(rest_name(i));
         if (at < 0 || v.properties[std::size_t(at)].is_list)
-            return make_error(name + ": " + std::to_string(count) + " f_rest properties but no scalar " + rest_name(i));
+            return make_error(name + ": " + std::to_string(count) + " f_rest properties but no scalar " +
+                              rest_name(i));
         l.rest.push_back(at);
     }
     l.degree = -1;
@@ -92,40 +94,45 @@ Status convert_row(const ply::Chunk& chunk, const PlyLayout& l, std::size_t r, s
     glm::vec3 s;
     for (int c = 0; c < 3; ++c)
         if (!scale_from_log(col(l.scale[c])[r], s[c], inf))
-            return bad(l.scale[c], std::isnan(col(l.scale[c])[r]) ? "non-finite" : "scale overflows (log scale too large) in");
+            return bad(l.scale[c], std::isnan(col(l.scale[c])[r])
+                                       ? "non-finite"
+                                       : "scale overflows (log scale too large) in");
     out.scales[at] = s;
-    if (!normalize_quaternion(col(l.rot[0])[r], col(l.rot[1])[r], col(l.rot[2])[r], col(l.rot[3])[r], out.rotations[at]))
+    if (!normalize_quaternion(col(l.rot[0])[r], col(l.rot[1])[r], col(l.rot[2])[r], col(l.rot[3])[r],
+                              out.rotations[at]))
         return bad(l.rot[0], "zero-length rotation quaternion at");
     if (!opacity_from_logit(col(l.opacity)[r], out.opacities[at], inf)) return bad(l.opacity, "non-finite");
     float* sh = &out.sh[at * std::size_t(K) * 3];
     for (int k = 0; k < K; ++k)
         for (int c = 0; c < 3; ++c)
-            *sh++ = k == 0 ? float(col(l.dc[c])[r]) : float(col(l.rest[std::size_t(c * (K - 1) + (k - 1))])[r]);
+            *sh++ =
+                k == 0 ? float(col(l.dc[c])[r]) : float(col(l.rest[std::size_t(c * (K - 1) + (k - 1))])[r]);
     return {};
 }
 
 // Appends the chunk's rows, converted in parallel. On bad input the cloud is left partly filled and the
 // error is the one of the first bad row in file order (each range stops at its own first bad row; the
 // smallest of those is re-run for its message).
-Status append_from_chunk(const ply::Chunk& chunk, const PlyLayout& l, std::uint64_t first_row, const std::string& name,
-                         GaussianCloud& out, InfinityCount* mapped) {
+Status append_from_chunk(const ply::Chunk& chunk, const PlyLayout& l, std::uint64_t first_row,
+                         const std::string& name, GaussianCloud& out, InfinityCount* mapped) {
     const std::size_t base = out.positions.size(), n = base + chunk.rows;
     const std::size_t K = std::size_t(sh_coeffs(l.degree));
     out.positions.resize(n), out.scales.resize(n), out.rotations.resize(n), out.opacities.resize(n);
     out.sh.resize(n * K * 3);
     std::atomic<std::size_t> first_bad{chunk.rows}, opacity_inf{0}, scale_inf{0};
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunk.rows, 2048), [&](const tbb::blocked_range<std::size_t>& range) {
-        InfinityCount inf;
-        for (std::size_t r = range.begin(); r != range.end(); ++r)
-            if (!convert_row(chunk, l, r, first_row, name, out, base + r, inf)) {
-                std::size_t seen = first_bad.load();
-                while (r < seen && !first_bad.compare_exchange_weak(seen, r)) {
-                }
-                break;
-            }
-        opacity_inf += inf.opacity;
-        scale_inf += inf.scale;
-    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, chunk.rows, 2048),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          InfinityCount inf;
+                          for (std::size_t r = range.begin(); r != range.end(); ++r)
+                              if (!convert_row(chunk, l, r, first_row, name, out, base + r, inf)) {
+                                  std::size_t seen = first_bad.load();
+                                  while (r < seen && !first_bad.compare_exchange_weak(seen, r)) {
+                                  }
+                                  break;
+                              }
+                          opacity_inf += inf.opacity;
+                          scale_inf += inf.scale;
+                      });
     if (const std::size_t r = first_bad.load(); r < chunk.rows) {
         InfinityCount ignored;
         return convert_row(chunk, l, r, first_row, name, out, base + r, ignored);
@@ -138,7 +145,9 @@ ply::Element ply_element(int degree, std::uint64_t count) {
     ply::Element e;
     e.name = "vertex";
     e.count = count;
-    auto add = [&](const std::string& n) { e.properties.push_back({n, ply::Type::float32, false, ply::Type::uint8}); };
+    auto add = [&](const std::string& n) {
+        e.properties.push_back({n, ply::Type::float32, false, ply::Type::uint8});
+    };
     for (const char* n : {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"}) add(n);
     for (int i = 0; i < 3 * (sh_coeffs(degree) - 1); ++i) add(rest_name(i));
     add("opacity");
@@ -161,7 +170,8 @@ void fill_chunk(const GaussianCloud& g, std::size_t first, std::size_t count, pl
             col(3 + c)[r] = 0.0;
             col(6 + c)[r] = g.sh[(i * std::size_t(K)) * 3 + std::size_t(c)];
             for (int k = 1; k < K; ++k)
-                col(rest0 + c * (K - 1) + (k - 1))[r] = g.sh[(i * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(c)];
+                col(rest0 + c * (K - 1) + (k - 1))[r] =
+                    g.sh[(i * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(c)];
             // log(0) is -inf: a flat Gaussian keeps a tiny finite log scale instead.
             col(scale0 + c)[r] = std::log(std::max(double(g.scales[i][c]), 1e-30));
         }
@@ -234,7 +244,8 @@ using File = std::unique_ptr<std::FILE, FileCloser>;
 Result<File> open_splat_file(const fs::path& path, std::uint64_t& size) {
     std::error_code ec;
     if (!fs::is_regular_file(path, ec))
-        return make_error(path.string() + ": " + (fs::exists(path, ec) ? "not a regular file" : "no such file"));
+        return make_error(path.string() + ": " +
+                          (fs::exists(path, ec) ? "not a regular file" : "no such file"));
     size = fs::file_size(path, ec);
     if (ec) return make_error(path.string() + ": cannot stat: " + ec.message());
     File f(std::fopen(path.c_str(), "rb"));
@@ -251,14 +262,16 @@ Result<GaussianCloud> read_splat(const fs::path& path) {
     if (!file) return file.error();
     if (size == 0) return make_error(name + ": empty file (a .splat file holds 32 bytes per Gaussian)");
     if (size % 32 != 0)
-        return make_error(name + ": size " + std::to_string(size) + " bytes is not a multiple of 32 (.splat rows are 32 bytes; truncated?)");
+        return make_error(name + ": size " + std::to_string(size) +
+                          " bytes is not a multiple of 32 (.splat rows are 32 bytes; truncated?)");
     const std::size_t n = size / 32;
     if (n > kMaxGaussians)
-        return make_error(name + ": holds " + std::to_string(n) + " Gaussians, more than the " + std::to_string(kMaxGaussians) +
-                          "-Gaussian limit");
+        return make_error(name + ": holds " + std::to_string(n) + " Gaussians, more than the " +
+                          std::to_string(kMaxGaussians) + "-Gaussian limit");
     GaussianCloud g;
     g.sh_degree = 0;
-    g.positions.reserve(n), g.scales.reserve(n), g.rotations.reserve(n), g.opacities.reserve(n), g.sh.reserve(n * 3);
+    g.positions.reserve(n), g.scales.reserve(n), g.rotations.reserve(n), g.opacities.reserve(n),
+        g.sh.reserve(n * 3);
     std::vector<unsigned char> buf(32 * 8192);
     for (std::size_t first = 0; first < n; first += 8192) {
         const std::size_t rows = std::min<std::size_t>(8192, n - first);
@@ -280,9 +293,11 @@ Result<GaussianCloud> read_splat(const fs::path& path) {
             for (int c = 0; c < 3; ++c) g.sh.push_back(float((rgba[c] / 255.0 - 0.5) / kShC0));
             g.opacities.push_back(float(rgba[3] / 255.0));
             const unsigned char* rb = p + 28;
-            glm::dvec4 q((rb[0] - 128) / 128.0, (rb[1] - 128) / 128.0, (rb[2] - 128) / 128.0, (rb[3] - 128) / 128.0);
+            glm::dvec4 q((rb[0] - 128) / 128.0, (rb[1] - 128) / 128.0, (rb[2] - 128) / 128.0,
+                         (rb[3] - 128) / 128.0);
             const double len = glm::length(q);
-            if (!(len > 0.0)) return make_error(name + ": splat " + std::to_string(first + r) + ": zero-length rotation");
+            if (!(len > 0.0))
+                return make_error(name + ": splat " + std::to_string(first + r) + ": zero-length rotation");
             q /= len;
             g.rotations.emplace_back(float(q[0]), float(q[1]), float(q[2]), float(q[3]));
         }
@@ -292,7 +307,8 @@ Result<GaussianCloud> read_splat(const fs::path& path) {
 
 Result<GaussianCloud> read_gaussians(const fs::path& path) {
     std::string ext = path.extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
     Result<GaussianCloud> g = make_error(path.string() + ": unknown Gaussian splat format '" + ext +
                                          "' (expected .ply, .splat, .spz, .ksplat, .glb or .gltf)");
     if (ext == ".ply") g = read_ply(path);
@@ -317,32 +333,39 @@ bool normalize_quaternion(double w, double x, double y, double z, glm::quat& out
 
 Status validate(const GaussianCloud& g, const std::string& what, std::uint64_t first_index) {
     const std::size_t n = g.size();
-    if (g.sh_degree < 0 || g.sh_degree > 3) return make_error(what + ": SH degree " + std::to_string(g.sh_degree) + " outside 0..3");
+    if (g.sh_degree < 0 || g.sh_degree > 3)
+        return make_error(what + ": SH degree " + std::to_string(g.sh_degree) + " outside 0..3");
     if (g.scales.size() != n || g.rotations.size() != n || g.opacities.size() != n ||
         g.sh.size() != n * std::size_t(sh_coeffs(g.sh_degree)) * 3)
         return make_error(what + ": array sizes differ from the " + std::to_string(n) + " positions");
-    if (!std::isfinite(g.origin.x + g.origin.y + g.origin.z)) return make_error(what + ": the cloud's origin is not finite");
+    if (!std::isfinite(g.origin.x + g.origin.y + g.origin.z))
+        return make_error(what + ": the cloud's origin is not finite");
     static const char* const kAxis[] = {"x", "y", "z"};
     const std::size_t K3 = std::size_t(sh_coeffs(g.sh_degree)) * 3;
     for (std::size_t i = 0; i < n; ++i) {
         const auto fail = [&](const std::string& field, double v, const char* why) {
             char value[32];
             std::snprintf(value, sizeof value, "%.9g", v);
-            return make_error(what + ": Gaussian " + std::to_string(first_index + i) + ": " + field + " = " + value + ": " + why);
+            return make_error(what + ": Gaussian " + std::to_string(first_index + i) + ": " + field + " = " +
+                              value + ": " + why);
         };
         for (int c = 0; c < 3; ++c) {
             const double p = g.origin[c] + double(g.positions[i][c]);
             if (!std::isfinite(p)) return fail(std::string("position.") + kAxis[c], p, "not finite");
-            if (std::abs(p) > kMaxCoordinate) return fail(std::string("position.") + kAxis[c], p, "beyond the +-1e10 coordinate bound");
+            if (std::abs(p) > kMaxCoordinate)
+                return fail(std::string("position.") + kAxis[c], p, "beyond the +-1e10 coordinate bound");
             const double s = double(g.scales[i][c]);
             if (!std::isfinite(s)) return fail(std::string("scale.") + kAxis[c], s, "not finite");
             if (!(s >= 0.0)) return fail(std::string("scale.") + kAxis[c], s, "negative");
-            if (s > kMaxScale) return fail(std::string("scale.") + kAxis[c], s, "beyond the 1e10 scale bound");
+            if (s > kMaxScale)
+                return fail(std::string("scale.") + kAxis[c], s, "beyond the 1e10 scale bound");
         }
-        if (!(g.opacities[i] >= 0.0f && g.opacities[i] <= 1.0f)) return fail("opacity", double(g.opacities[i]), "outside [0, 1]");
+        if (!(g.opacities[i] >= 0.0f && g.opacities[i] <= 1.0f))
+            return fail("opacity", double(g.opacities[i]), "outside [0, 1]");
         const glm::quat q = g.rotations[i];
         const float q2 = glm::dot(q, q);
-        if (!(std::abs(q2 - 1.0f) < 1e-3f)) return fail("rotation (squared length)", double(q2), "not a unit quaternion");
+        if (!(std::abs(q2 - 1.0f) < 1e-3f))
+            return fail("rotation (squared length)", double(q2), "not a unit quaternion");
         for (std::size_t k = 0; k < K3; ++k) {
             const double v = double(g.sh[i * K3 + k]);
             if (!std::isfinite(v) || std::abs(v) > kMaxShMagnitude)
@@ -351,7 +374,9 @@ Status validate(const GaussianCloud& g, const std::string& what, std::uint64_t f
         }
     }
     if (!g.sh_frames.empty())
-        return make_error(what + ": the cloud carries per-splat SH frames (view-direction mode): bake_sh_frames() before writing");
+        return make_error(
+            what +
+            ": the cloud carries per-splat SH frames (view-direction mode): bake_sh_frames() before writing");
     return {};
 }
 
@@ -372,7 +397,8 @@ void store_to_chunk(const GaussianCloud& g, const PlyLayout& l, bool opacity, pl
                 col(l.scale[c])[r] = std::log(std::max(double(g.scales[r][c]), 1e-30));
             col(l.dc[c])[r] = g.sh[r * std::size_t(K) * 3 + std::size_t(c)];
             for (int k = 1; k < K; ++k)
-                col(l.rest[std::size_t(c * (K - 1) + (k - 1))])[r] = g.sh[(r * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(c)];
+                col(l.rest[std::size_t(c * (K - 1) + (k - 1))])[r] =
+                    g.sh[(r * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(c)];
         }
         const glm::quat q = g.rotations[r];
         const double w = col(l.rot[0])[r], x = col(l.rot[1])[r], y = col(l.rot[2])[r], z = col(l.rot[3])[r];

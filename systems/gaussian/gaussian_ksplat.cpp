@@ -24,7 +24,10 @@ struct Mode {
 constexpr Mode kModes[3] = {{12, 12, 16, 4, 4, 1}, {6, 6, 8, 4, 2, 32767}, {6, 6, 8, 4, 1, 32767}};
 
 std::uint16_t u16(const unsigned char* p) { return std::uint16_t(p[0] | p[1] << 8); }
-std::uint32_t u32(const unsigned char* p) { return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24; }
+std::uint32_t u32(const unsigned char* p) {
+    return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 |
+           std::uint32_t(p[3]) << 24;
+}
 float f32(const unsigned char* p) {
     const std::uint32_t b = u32(p);
     float f;
@@ -46,20 +49,26 @@ Result<GaussianCloud> read_ksplat(const fs::path& path) {
     const std::string name = path.string();
     auto fail = [&](const std::string& why) { return make_error(name + ": " + why); };
     std::error_code ec;
-    if (!fs::is_regular_file(path, ec)) return fail(fs::exists(path, ec) ? "not a regular file" : "no such file");
+    if (!fs::is_regular_file(path, ec))
+        return fail(fs::exists(path, ec) ? "not a regular file" : "no such file");
     const std::uint64_t size = fs::file_size(path, ec);
     if (ec) return fail("cannot stat: " + ec.message());
-    if (size < kMainHeader) return fail("too small for a .ksplat file (" + std::to_string(size) + " bytes, the header alone is 4096)");
+    if (size < kMainHeader)
+        return fail("too small for a .ksplat file (" + std::to_string(size) +
+                    " bytes, the header alone is 4096)");
     std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), std::fclose);
     if (!f) return fail(std::string("cannot open: ") + std::strerror(errno));
     // The whole file is read: its size is what is on disk, not a declared count.
     std::vector<unsigned char> file(static_cast<std::size_t>(size));
     if (std::fread(file.data(), 1, file.size(), f.get()) != file.size()) return fail("read error");
     const unsigned char* h = file.data();
-    if (h[0] != 0 || h[1] < 1) return fail("unsupported .ksplat version " + std::to_string(h[0]) + "." + std::to_string(h[1]) + " (0.1 and later are read)");
+    if (h[0] != 0 || h[1] < 1)
+        return fail("unsupported .ksplat version " + std::to_string(h[0]) + "." + std::to_string(h[1]) +
+                    " (0.1 and later are read)");
     const std::uint64_t sections = u32(h + 4), n = u32(h + 16);
     const unsigned mode_index = u16(h + 20);
-    if (mode_index > 2) return fail("unsupported compression mode " + std::to_string(mode_index) + " (0, 1, 2)");
+    if (mode_index > 2)
+        return fail("unsupported compression mode " + std::to_string(mode_index) + " (0, 1, 2)");
     const Mode mode = kModes[mode_index];
     float sh_min = f32(h + 36), sh_max = f32(h + 40);
     if (sh_min == 0.0f) sh_min = -1.5f;
@@ -67,7 +76,8 @@ Result<GaussianCloud> read_ksplat(const fs::path& path) {
     if (!std::isfinite(sh_min) || !std::isfinite(sh_max)) return fail("non-finite SH range in the header");
     if (n == 0) return fail("holds no splats");
     if (kMainHeader + sections * kSectionHeader > size)
-        return fail(std::to_string(sections) + " section headers do not fit in " + std::to_string(size) + " bytes");
+        return fail(std::to_string(sections) + " section headers do not fit in " + std::to_string(size) +
+                    " bytes");
 
     // First pass: the sections' layout, every range checked against the file before allocating.
     struct Section {
@@ -79,11 +89,14 @@ Result<GaussianCloud> read_ksplat(const fs::path& path) {
     int degree = 0;
     for (std::uint64_t s = 0; s < sections; ++s) {
         const unsigned char* sh = h + kMainHeader + s * kSectionHeader;
-        Section c{u32(sh), u32(sh + 4), u32(sh + 8), u32(sh + 12), u32(sh + 32), u32(sh + 36), u16(sh + 40), u32(sh + 24), 0, f32(sh + 16)};
+        Section c{u32(sh),      u32(sh + 4),  u32(sh + 8), u32(sh + 12), u32(sh + 32), u32(sh + 36),
+                  u16(sh + 40), u32(sh + 24), 0,           f32(sh + 16)};
         if (c.range == 0) c.range = mode.range;
         const std::string where = "section " + std::to_string(s) + ": ";
         if (c.degree > 3) return fail(where + "SH degree " + std::to_string(c.degree) + " (0..3 are read)");
-        if (c.splats > c.capacity) return fail(where + std::to_string(c.splats) + " splats exceed its capacity " + std::to_string(c.capacity));
+        if (c.splats > c.capacity)
+            return fail(where + std::to_string(c.splats) + " splats exceed its capacity " +
+                        std::to_string(c.capacity));
         if (c.full + c.partial > c.buckets) return fail(where + "more full and partial buckets than buckets");
         if (mode_index > 0 && c.splats > 0 && (c.buckets == 0 || !std::isfinite(c.block)))
             return fail(where + "quantised positions without buckets or with a non-finite block size");
@@ -92,7 +105,8 @@ Result<GaussianCloud> read_ksplat(const fs::path& path) {
         const std::uint64_t storage = std::uint64_t(u16(sh + 20)) * c.buckets + 4 * c.partial;
         // 32-bit fields: these products stay far below 2^64.
         if (offset + storage + record * c.capacity > size)
-            return fail(where + "its buckets and " + std::to_string(c.capacity) + " records run past the end of the file");
+            return fail(where + "its buckets and " + std::to_string(c.capacity) +
+                        " records run past the end of the file");
         if (c.buckets * 12 + 4 * c.partial > storage && mode_index > 0)
             return fail(where + "bucket storage too small for its bucket centres");
         c.data = offset;
@@ -101,7 +115,9 @@ Result<GaussianCloud> read_ksplat(const fs::path& path) {
         if (c.splats > 0) degree = std::max(degree, int(c.degree));
         list.push_back(c);
     }
-    if (total != n) return fail("the header declares " + std::to_string(n) + " splats, the sections hold " + std::to_string(total));
+    if (total != n)
+        return fail("the header declares " + std::to_string(n) + " splats, the sections hold " +
+                    std::to_string(total));
 
     GaussianCloud g;
     g.sh_degree = degree;
@@ -110,12 +126,14 @@ Result<GaussianCloud> read_ksplat(const fs::path& path) {
     g.sh.assign(std::size_t(n) * K * 3, 0.0f);
     for (std::size_t s = 0; s < list.size(); ++s) {
         const Section& c = list[s];
-        const std::uint64_t storage = std::uint64_t(u16(h + kMainHeader + s * kSectionHeader + 20)) * c.buckets + 4 * c.partial;
+        const std::uint64_t storage =
+            std::uint64_t(u16(h + kMainHeader + s * kSectionHeader + 20)) * c.buckets + 4 * c.partial;
         const unsigned char* partial_sizes = h + c.data;
         const unsigned char* centres = h + c.data + 4 * c.partial;
         const unsigned char* records = h + c.data + storage;
         const int sk = sh_coeffs(int(c.degree)) - 1;  // per channel in this section
-        const std::uint64_t record = mode.centre + mode.scale + mode.rotation + mode.colour + std::uint64_t(3 * sk) * mode.sh;
+        const std::uint64_t record =
+            mode.centre + mode.scale + mode.rotation + mode.colour + std::uint64_t(3 * sk) * mode.sh;
         const double unit = double(c.block) / 2.0 / double(c.range);
         std::uint64_t bucket = 0, partial_bucket = c.full, partial_base = c.full * c.bucket_capacity;
         for (std::uint64_t j = 0; j < c.splats; ++j) {
@@ -130,15 +148,19 @@ Result<GaussianCloud> read_ksplat(const fs::path& path) {
                     bucket = j / std::max<std::uint64_t>(c.bucket_capacity, 1);
                 } else {
                     // Partial buckets follow the full ones, each with its stored size.
-                    while (partial_bucket - c.full < c.partial && j >= partial_base + u32(partial_sizes + 4 * (partial_bucket - c.full))) {
+                    while (partial_bucket - c.full < c.partial &&
+                           j >= partial_base + u32(partial_sizes + 4 * (partial_bucket - c.full))) {
                         partial_base += u32(partial_sizes + 4 * (partial_bucket - c.full));
                         ++partial_bucket;
                     }
                     bucket = partial_bucket;
                 }
-                if (bucket >= c.buckets) return fail(where + "its bucket " + std::to_string(bucket) + " is past the section's " + std::to_string(c.buckets));
+                if (bucket >= c.buckets)
+                    return fail(where + "its bucket " + std::to_string(bucket) + " is past the section's " +
+                                std::to_string(c.buckets));
                 for (int a = 0; a < 3; ++a)
-                    p[a] = float((double(u16(r + 2 * a)) - double(c.range)) * unit + double(f32(centres + bucket * 12 + std::uint64_t(a) * 4)));
+                    p[a] = float((double(u16(r + 2 * a)) - double(c.range)) * unit +
+                                 double(f32(centres + bucket * 12 + std::uint64_t(a) * 4)));
             }
             const unsigned char* sc = r + mode.centre;
             const unsigned char* ro = sc + mode.scale;
@@ -148,16 +170,21 @@ Result<GaussianCloud> read_ksplat(const fs::path& path) {
             double q[4];
             for (int a = 0; a < 3; ++a) scale[a] = mode_index == 0 ? f32(sc + 4 * a) : f16(sc + 2 * a);
             for (int a = 0; a < 4; ++a) q[a] = mode_index == 0 ? f32(ro + 4 * a) : f16(ro + 2 * a);
-            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return fail(where + "non-finite position");
-            if (!(scale.x >= 0 && scale.y >= 0 && scale.z >= 0) || !std::isfinite(scale.x + scale.y + scale.z))
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+                return fail(where + "non-finite position");
+            if (!(scale.x >= 0 && scale.y >= 0 && scale.z >= 0) ||
+                !std::isfinite(scale.x + scale.y + scale.z))
                 return fail(where + "scale negative or not finite");
             const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-            if (!(len > 1e-30) || !std::isfinite(len)) return fail(where + "zero-length or non-finite rotation");
+            if (!(len > 1e-30) || !std::isfinite(len))
+                return fail(where + "zero-length or non-finite rotation");
             g.positions.push_back(p);
             g.scales.push_back(scale);
-            g.rotations.emplace_back(float(q[0] / len), float(q[1] / len), float(q[2] / len), float(q[3] / len));
+            g.rotations.emplace_back(float(q[0] / len), float(q[1] / len), float(q[2] / len),
+                                     float(q[3] / len));
             g.opacities.push_back(float(co[3] / 255.0));
-            for (std::size_t ch = 0; ch < 3; ++ch) g.sh[i * K * 3 + ch] = float((co[ch] / 255.0 - 0.5) / kShC0);
+            for (std::size_t ch = 0; ch < 3; ++ch)
+                g.sh[i * K * 3 + ch] = float((co[ch] / 255.0 - 0.5) / kShC0);
             // Bands in order, each per channel: component index -> (channel, coefficient k).
             int component = 0;
             for (int band = 1; band <= int(c.degree); ++band) {

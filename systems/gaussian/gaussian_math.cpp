@@ -21,7 +21,8 @@ SymEigen sym_eigen(const glm::dmat3& in, const glm::dmat3& guess) {
     // of four to six). Stops at 1e-32 of the squared Frobenius norm or below 1e-300 absolute.
     const glm::dmat3 sym = 0.5 * (in + glm::transpose(in));
     const glm::dmat3 rotated = glm::transpose(guess) * sym * guess;
-    const Eigen3 j = jacobi_eigen(0.5 * (rotated + glm::transpose(rotated)), guess, JacobiRule{}, EigenOrder::descending);
+    const Eigen3 j =
+        jacobi_eigen(0.5 * (rotated + glm::transpose(rotated)), guess, JacobiRule{}, EigenOrder::descending);
     SymEigen e;
     e.values = j.values;
     e.vectors = j.vectors;
@@ -47,7 +48,9 @@ glm::dquat quat_from_rotation(const glm::dmat3& r) {
     return q;
 }
 
-ScaleRotation decompose_covariance(const glm::dmat3& sigma) { return decompose_covariance(sigma, glm::dmat3(1.0)); }
+ScaleRotation decompose_covariance(const glm::dmat3& sigma) {
+    return decompose_covariance(sigma, glm::dmat3(1.0));
+}
 
 ScaleRotation decompose_covariance(const glm::dmat3& sigma, const glm::dmat3& guess) {
     const SymEigen e = sym_eigen(sigma, guess);

@@ -44,10 +44,12 @@ glm::dvec3 vec3_at(const json& j, const char* key, glm::dvec3 fallback, const st
     glm::dvec3 out;
     for (int i = 0; i < 3; ++i) {
         const json& e = v[std::size_t(i)];
-        if (!e.is_number() || !std::isfinite(e.get<double>())) throw std::runtime_error(where + ": '" + key + "' has a non-finite or non-numeric entry");
+        if (!e.is_number() || !std::isfinite(e.get<double>()))
+            throw std::runtime_error(where + ": '" + key + "' has a non-finite or non-numeric entry");
         out[i] = e.get<double>();
         // Bounded like the cloud itself (gaussian_io.h): a scale of 1e30 would overflow every projection.
-        if (std::abs(out[i]) > kMaxCoordinate) throw std::runtime_error(where + ": '" + key + "' entry beyond the +-1e10 bound");
+        if (std::abs(out[i]) > kMaxCoordinate)
+            throw std::runtime_error(where + ": '" + key + "' entry beyond the +-1e10 bound");
     }
     return out;
 }
@@ -59,15 +61,18 @@ Transform transform_from(const json& j, const std::string& where) {
     t.scale = vec3_at(j, "scale", t.scale, where + " transform");
     if (j.contains("rotation")) {
         const json& r = j["rotation"];
-        if (!r.is_array() || r.size() != 4) throw std::runtime_error(where + " transform: 'rotation' must be [x, y, z, w]");
+        if (!r.is_array() || r.size() != 4)
+            throw std::runtime_error(where + " transform: 'rotation' must be [x, y, z, w]");
         double q[4];
         for (int i = 0; i < 4; ++i) {
             if (!r[std::size_t(i)].is_number() || !std::isfinite(r[std::size_t(i)].get<double>()))
-                throw std::runtime_error(where + " transform: 'rotation' has a non-finite or non-numeric entry");
+                throw std::runtime_error(where +
+                                         " transform: 'rotation' has a non-finite or non-numeric entry");
             q[i] = r[std::size_t(i)].get<double>();
         }
         const glm::dquat rot(q[3], q[0], q[1], q[2]);
-        if (!(glm::length(rot) > 1e-12)) throw std::runtime_error(where + " transform: 'rotation' is a zero quaternion");
+        if (!(glm::length(rot) > 1e-12))
+            throw std::runtime_error(where + " transform: 'rotation' is a zero quaternion");
         t.rotation = glm::normalize(rot);
     }
     return t;
@@ -82,25 +87,30 @@ json transform_json(const Transform& t) {
 // Embedded cloud `entry` (clouds[entry] with "embedded": true): node "<name>" (TRS = the entity's
 // Transform, extras {"sffd_gaussians": entry}) with one child "<name>.origin" (translation = origin) whose
 // mesh is one KHR_gaussian_splatting POINTS primitive.
-assets::GltfAppend embed(std::shared_ptr<const GaussianCloud> cloud, std::string name, Transform t, int entry) {
-    return [cloud = std::move(cloud), name = std::move(name), t, entry](json& doc, std::string& bin) -> Status {
-        json prim;
-        if (Status s = append_primitive(doc, bin, *cloud, prim, "Gaussian cloud '" + name + "'"); !s) return s;
-        if (!doc.contains("meshes")) doc["meshes"] = json::array();
-        if (!doc.contains("nodes")) doc["nodes"] = json::array();
-        doc["meshes"].push_back({{"name", name}, {"primitives", {prim}}});
-        const std::size_t parent = doc["nodes"].size();
-        const glm::dvec3& o = cloud->origin;
-        doc["nodes"].push_back({{"name", name},
-                                {"translation", {t.translation.x, t.translation.y, t.translation.z}},
-                                {"rotation", {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w}},
-                                {"scale", {t.scale.x, t.scale.y, t.scale.z}},
-                                {"children", {parent + 1}},
-                                {"extras", {{"sffd_gaussians", entry}}}});
-        doc["nodes"].push_back({{"name", name + ".origin"}, {"translation", {o.x, o.y, o.z}}, {"mesh", doc["meshes"].size() - 1}});
-        doc["scenes"][0]["nodes"].push_back(parent);
-        return {};
-    };
+assets::GltfAppend embed(std::shared_ptr<const GaussianCloud> cloud, std::string name, Transform t,
+                         int entry) {
+    return
+        [cloud = std::move(cloud), name = std::move(name), t, entry](json& doc, std::string& bin) -> Status {
+            json prim;
+            if (Status s = append_primitive(doc, bin, *cloud, prim, "Gaussian cloud '" + name + "'"); !s)
+                return s;
+            if (!doc.contains("meshes")) doc["meshes"] = json::array();
+            if (!doc.contains("nodes")) doc["nodes"] = json::array();
+            doc["meshes"].push_back({{"name", name}, {"primitives", {prim}}});
+            const std::size_t parent = doc["nodes"].size();
+            const glm::dvec3& o = cloud->origin;
+            doc["nodes"].push_back({{"name", name},
+                                    {"translation", {t.translation.x, t.translation.y, t.translation.z}},
+                                    {"rotation", {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w}},
+                                    {"scale", {t.scale.x, t.scale.y, t.scale.z}},
+                                    {"children", {parent + 1}},
+                                    {"extras", {{"sffd_gaussians", entry}}}});
+            doc["nodes"].push_back({{"name", name + ".origin"},
+                                    {"translation", {o.x, o.y, o.z}},
+                                    {"mesh", doc["meshes"].size() - 1}});
+            doc["scenes"][0]["nodes"].push_back(parent);
+            return {};
+        };
 }
 
 // The cloud embedded for clouds[entry], with every check read_gltf makes on a KHR_gaussian_splatting file.
@@ -108,25 +118,36 @@ GaussianCloud read_embedded(const tinygltf::Model& m, int entry, const std::stri
     int found = -1;
     for (std::size_t i = 0; i < m.nodes.size(); ++i) {
         const tinygltf::Value& x = m.nodes[i].extras;
-        if (x.IsObject() && x.Has("sffd_gaussians") && x.Get("sffd_gaussians").IsInt() && x.Get("sffd_gaussians").GetNumberAsInt() == entry) {
-            if (found >= 0) throw std::runtime_error(where + ": nodes " + std::to_string(found) + " and " + std::to_string(i) + " both claim this entry");
+        if (x.IsObject() && x.Has("sffd_gaussians") && x.Get("sffd_gaussians").IsInt() &&
+            x.Get("sffd_gaussians").GetNumberAsInt() == entry) {
+            if (found >= 0)
+                throw std::runtime_error(where + ": nodes " + std::to_string(found) + " and " +
+                                         std::to_string(i) + " both claim this entry");
             found = int(i);
         }
     }
-    if (found < 0) throw std::runtime_error(where + ": 'embedded' but no node has extras.sffd_gaussians = " + std::to_string(entry));
+    if (found < 0)
+        throw std::runtime_error(
+            where + ": 'embedded' but no node has extras.sffd_gaussians = " + std::to_string(entry));
     const std::string at = where + " (embedded, node " + std::to_string(found) + ")";
     const tinygltf::Node& parent = m.nodes[std::size_t(found)];
-    if (parent.children.size() != 1 || parent.children[0] < 0 || std::size_t(parent.children[0]) >= m.nodes.size())
+    if (parent.children.size() != 1 || parent.children[0] < 0 ||
+        std::size_t(parent.children[0]) >= m.nodes.size())
         throw std::runtime_error(at + ": must have exactly one child node (the cloud's origin)");
     const tinygltf::Node& child = m.nodes[std::size_t(parent.children[0])];
-    if (child.mesh < 0 || std::size_t(child.mesh) >= m.meshes.size()) throw std::runtime_error(at + ": the child node has no valid mesh");
+    if (child.mesh < 0 || std::size_t(child.mesh) >= m.meshes.size())
+        throw std::runtime_error(at + ": the child node has no valid mesh");
     const auto& prims = m.meshes[std::size_t(child.mesh)].primitives;
-    if (prims.size() != 1 || prims[0].mode != TINYGLTF_MODE_POINTS || !prims[0].extensions.count("KHR_gaussian_splatting"))
-        throw std::runtime_error(at + ": mesh " + std::to_string(child.mesh) + " must hold one KHR_gaussian_splatting POINTS primitive");
+    if (prims.size() != 1 || prims[0].mode != TINYGLTF_MODE_POINTS ||
+        !prims[0].extensions.count("KHR_gaussian_splatting"))
+        throw std::runtime_error(at + ": mesh " + std::to_string(child.mesh) +
+                                 " must hold one KHR_gaussian_splatting POINTS primitive");
     auto g = read_primitive(m, prims[0], at + " mesh " + std::to_string(child.mesh));
     if (!g) throw std::runtime_error(g.message());
-    if (child.translation.size() == 3) g->origin = glm::dvec3(child.translation[0], child.translation[1], child.translation[2]);
-    if (!std::isfinite(g->origin.x + g->origin.y + g->origin.z)) throw std::runtime_error(at + ": the origin node's translation is not finite");
+    if (child.translation.size() == 3)
+        g->origin = glm::dvec3(child.translation[0], child.translation[1], child.translation[2]);
+    if (!std::isfinite(g->origin.x + g->origin.y + g->origin.z))
+        throw std::runtime_error(at + ": the origin node's translation is not finite");
     if (Status s = validate(*g, at); !s) throw std::runtime_error(s.message());
     return std::move(*g);
 }
@@ -140,7 +161,8 @@ bool is_gaussian_scene_file(const fs::path& path) {
         auto r = ply::Reader::open(path);
         if (!r) return false;
         const int v = r->header().find("vertex");
-        return v >= 0 && (is_gaussian_element(r->header().elements[std::size_t(v)]) || is_compressed_ply(r->header()));
+        return v >= 0 &&
+               (is_gaussian_element(r->header().elements[std::size_t(v)]) || is_compressed_ply(r->header()));
     }
     if (e == ".glb" || e == ".gltf") {
         const GltfDeclaration d = gltf_declaration(path);
@@ -163,8 +185,10 @@ Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const fs::path
     return e;
 }
 
-Result<std::string> save_gaussian_extension(const ecs::Registry& registry, const std::function<int(ecs::Entity)>& id_of,
-                                            const fs::path& scene_path, std::vector<assets::GltfAppend>& append) {
+Result<std::string> save_gaussian_extension(const ecs::Registry& registry,
+                                            const std::function<int(ecs::Entity)>& id_of,
+                                            const fs::path& scene_path,
+                                            std::vector<assets::GltfAppend>& append) {
     const fs::path scene_dir = scene_path.parent_path();
     json clouds = json::array();
     std::vector<ecs::Entity> entities;
@@ -174,7 +198,8 @@ Result<std::string> save_gaussian_extension(const ecs::Registry& registry, const
     for (std::size_t i = 0; i < entities.size(); ++i) {
         const ecs::Entity e = entities[i];
         const Name* name = registry.try_get<Name>(e);
-        const std::string label = name && !name->value.empty() ? name->value : "gaussians" + std::to_string(i);
+        const std::string label =
+            name && !name->value.empty() ? name->value : "gaussians" + std::to_string(i);
         json c = {{"name", label}};
         const Transform* t = registry.try_get<Transform>(e);
         if (const GaussianSource* src = registry.try_get<GaussianSource>(e); src && !src->path.empty()) {
@@ -209,8 +234,9 @@ Result<std::string> save_gaussian_extension(const ecs::Registry& registry, const
     return json{{"version", 1}, {"clouds", clouds}}.dump(-1, ' ', false, json::error_handler_t::replace);
 }
 
-Status load_gaussian_extension(ecs::Registry& registry, std::string_view text, const std::function<ecs::Entity(int)>& entity_of,
-                               const fs::path& scene_path, const tinygltf::Model& model) {
+Status load_gaussian_extension(ecs::Registry& registry, std::string_view text,
+                               const std::function<ecs::Entity(int)>& entity_of, const fs::path& scene_path,
+                               const tinygltf::Model& model) {
     const json j = json::parse(text, nullptr, false);
     if (j.is_discarded() || !j.is_object()) return make_error("not a JSON object");
     if (!j.contains("version") || !j["version"].is_number_integer() || j["version"].get<int>() != 1)
@@ -227,11 +253,15 @@ Status load_gaussian_extension(ecs::Registry& registry, std::string_view text, c
             const json& c = j["clouds"][i];
             const std::string where = "clouds[" + std::to_string(i) + "]";
             if (!c.is_object()) throw std::runtime_error(where + ": must be an object");
-            if (c.contains("embedded") && !c["embedded"].is_boolean()) throw std::runtime_error(where + ": 'embedded' must be true or false");
+            if (c.contains("embedded") && !c["embedded"].is_boolean())
+                throw std::runtime_error(where + ": 'embedded' must be true or false");
             const bool embedded = c.value("embedded", false);
-            if (embedded && c.contains("file")) throw std::runtime_error(where + ": has both 'file' and 'embedded'");
-            if (!embedded && (!c.contains("file") || !c["file"].is_string() || c["file"].get<std::string>().empty()))
-                throw std::runtime_error(where + ": 'file' must be a non-empty string (a Gaussian file), or 'embedded' true");
+            if (embedded && c.contains("file"))
+                throw std::runtime_error(where + ": has both 'file' and 'embedded'");
+            if (!embedded &&
+                (!c.contains("file") || !c["file"].is_string() || c["file"].get<std::string>().empty()))
+                throw std::runtime_error(
+                    where + ": 'file' must be a non-empty string (a Gaussian file), or 'embedded' true");
             fs::path file;
             if (!embedded) {
                 // The same confinement as every other resource a file names (runtime/core/file_io.h): inside
@@ -246,12 +276,16 @@ Status load_gaussian_extension(ecs::Registry& registry, std::string_view text, c
             }
             std::vector<ecs::Entity> lattices;
             if (c.contains("lattices")) {
-                if (!c["lattices"].is_array()) throw std::runtime_error(where + ": 'lattices' must be an array of lattice ids");
+                if (!c["lattices"].is_array())
+                    throw std::runtime_error(where + ": 'lattices' must be an array of lattice ids");
                 for (const json& id : c["lattices"]) {
-                    if (!id.is_number_integer()) throw std::runtime_error(where + ": 'lattices' must be an array of lattice ids");
+                    if (!id.is_number_integer())
+                        throw std::runtime_error(where + ": 'lattices' must be an array of lattice ids");
                     const ecs::Entity l = entity_of(id.get<int>());
                     if (l == ecs::null_entity || !registry.has<Lattice>(l))
-                        throw std::runtime_error(where + ": 'lattices' names " + std::to_string(id.get<int>()) + ", which is not a lattice of this scene");
+                        throw std::runtime_error(where + ": 'lattices' names " +
+                                                 std::to_string(id.get<int>()) +
+                                                 ", which is not a lattice of this scene");
                     lattices.push_back(l);
                 }
             }

@@ -11,7 +11,8 @@
 //       { "version": 1,
 //         "clouds": [ { "name": "g", "file": "g.ply",               // relative to the scene file's folder
 //                       "transform": { "translation": [x,y,z], "rotation": [x,y,z,w], "scale": [x,y,z] },
-//                       "lattices": [ <scene ids of lattice entities>, ... ] } ] }   // its Deformers, in order
+//                       "lattices": [ <scene ids of lattice entities>, ... ] } ] }   // its Deformers, in
+//                       order
 //     A Gaussian entity without a GaussianSource (made in memory, or converted) is embedded in the scene
 //     file itself: its entry has "embedded": true instead of "file", and the glTF holds node "<name>"
 //     (TRS = its Transform, extras {"sffd_gaussians": <entry index>}) with a child "<name>.origin"
@@ -52,9 +53,12 @@ void register_gaussian_scene_hooks();
 void unregister_gaussian_scene_hooks();
 
 // The extension's two halves, usable without the hook registry (register_scene_gltf_extension's forms).
-Result<std::string> save_gaussian_extension(const ecs::Registry& registry, const std::function<int(ecs::Entity)>& id_of,
-                                            const std::filesystem::path& scene_path, std::vector<assets::GltfAppend>& append);
-Status load_gaussian_extension(ecs::Registry& registry, std::string_view json, const std::function<ecs::Entity(int)>& entity_of,
+Result<std::string> save_gaussian_extension(const ecs::Registry& registry,
+                                            const std::function<int(ecs::Entity)>& id_of,
+                                            const std::filesystem::path& scene_path,
+                                            std::vector<assets::GltfAppend>& append);
+Status load_gaussian_extension(ecs::Registry& registry, std::string_view json,
+                               const std::function<ecs::Entity(int)>& entity_of,
                                const std::filesystem::path& scene_path, const tinygltf::Model& model);
 
 }  // namespace gaussian

@@ -31,7 +31,10 @@ struct Inflater {
     }
 };
 
-std::uint32_t u32(const unsigned char* p) { return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 | std::uint32_t(p[3]) << 24; }
+std::uint32_t u32(const unsigned char* p) {
+    return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 |
+           std::uint32_t(p[3]) << 24;
+}
 
 }  // namespace
 
@@ -39,15 +42,18 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
     const std::string name = path.string();
     auto fail = [&](const std::string& why) { return make_error(name + ": " + why); };
     std::error_code ec;
-    if (!fs::is_regular_file(path, ec)) return fail(fs::exists(path, ec) ? "not a regular file" : "no such file");
+    if (!fs::is_regular_file(path, ec))
+        return fail(fs::exists(path, ec) ? "not a regular file" : "no such file");
     const std::uint64_t size = fs::file_size(path, ec);
     if (ec) return fail("cannot stat: " + ec.message());
     if (size > kMaxSpzFileBytes)
-        return fail("file is " + std::to_string(size) + " bytes, more than the " + std::to_string(kMaxSpzFileBytes) + "-byte limit");
+        return fail("file is " + std::to_string(size) + " bytes, more than the " +
+                    std::to_string(kMaxSpzFileBytes) + "-byte limit");
     std::unique_ptr<std::FILE, int (*)(std::FILE*)> f(std::fopen(path.c_str(), "rb"), std::fclose);
     if (!f) return fail(std::string("cannot open: ") + std::strerror(errno));
     std::vector<unsigned char> file(static_cast<std::size_t>(size));
-    if (size > 0 && std::fread(file.data(), 1, file.size(), f.get()) != file.size()) return fail("read error");
+    if (size > 0 && std::fread(file.data(), 1, file.size(), f.get()) != file.size())
+        return fail("read error");
     // An NGSP magic outside gzip is either version 4 (its own container of zstd streams) or an older
     // version's payload that was never gzipped: say which, from the version the header states.
     if (file.size() >= 8 && u32(file.data()) == kMagic) {
@@ -60,7 +66,8 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
                     " data: versions 2 and 3 are one gzip stream (gzip the file, or re-encode it with "
                     "splat-transform in.spz --spz-version 3 out.spz)");
     }
-    if (file.size() < 2 || file[0] != 0x1f || file[1] != 0x8b) return fail("not an SPZ file (no gzip stream)");
+    if (file.size() < 2 || file[0] != 0x1f || file[1] != 0x8b)
+        return fail("not an SPZ file (no gzip stream)");
 
     Inflater inf;
     if (inflateInit2(&inf.z, 16 + MAX_WBITS) != Z_OK) return fail("zlib initialisation failed");
@@ -94,15 +101,16 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
     if (u32(h) != kMagic) return fail("not an SPZ file (bad magic)");
     const std::uint32_t version = u32(h + 4), n = u32(h + 8);
     const int degree = h[12], frac = h[13];
-    if (version < 2 || version > 3) return fail("unsupported SPZ version " + std::to_string(version) + " (2 and 3 are read)");
+    if (version < 2 || version > 3)
+        return fail("unsupported SPZ version " + std::to_string(version) + " (2 and 3 are read)");
     if (degree > 3) return fail("unsupported SH degree " + std::to_string(degree) + " (0..3)");
     if (frac > 30) return fail("fractional bits " + std::to_string(frac) + " out of range");
     const std::size_t rest = std::size_t(3 * (sh_coeffs(degree) - 1));
     const std::size_t per = 9 + 1 + 3 + 3 + (version == 2 ? 3 : 4) + rest;
     // Deflate expands at most ~1032:1: refuse counts the compressed file cannot hold before allocating.
     if (double(n) * double(per) > double(file.size()) * 1032.0 + 1024.0)
-        return fail("declares " + std::to_string(n) + " splats, more than its " + std::to_string(file.size()) +
-                    " compressed bytes can hold");
+        return fail("declares " + std::to_string(n) + " splats, more than its " +
+                    std::to_string(file.size()) + " compressed bytes can hold");
     if (n > kMaxGaussians || std::uint64_t(n) * per > kMaxSpzDecodedBytes)
         return fail("declares " + std::to_string(n) + " splats (" + std::to_string(std::uint64_t(n) * per) +
                     " decoded bytes), more than the " + std::to_string(kMaxGaussians) + "-Gaussian / " +
@@ -112,7 +120,8 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
     std::vector<unsigned char> data;
     const std::size_t want = std::size_t(n) * per;
     for (std::size_t have = 0; have < want;) {
-        const std::size_t step = std::min<std::size_t>(want - have, std::max<std::size_t>(have, std::size_t(1) << 20));
+        const std::size_t step =
+            std::min<std::size_t>(want - have, std::max<std::size_t>(have, std::size_t(1) << 20));
         data.resize(have + step);
         if (!take(data.data() + have, step, why)) return fail(why);
         have += step;
@@ -128,11 +137,13 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
             const int rc = inflate(&inf.z, Z_NO_FLUSH);
             trailing += sizeof extra - inf.z.avail_out;
             if (trailing > 0)
-                return fail("decoded data is longer than the header declares (" + std::to_string(n) + " splats of " +
-                            std::to_string(per) + " bytes)");
+                return fail("decoded data is longer than the header declares (" + std::to_string(n) +
+                            " splats of " + std::to_string(per) + " bytes)");
             if (rc == Z_STREAM_END) break;
             if (rc == Z_BUF_ERROR) return fail("truncated data (gzip trailer missing)");
-            if (rc != Z_OK) return fail(std::string("corrupt gzip stream (") + (inf.z.msg ? inf.z.msg : "zlib error") + ")");
+            if (rc != Z_OK)
+                return fail(std::string("corrupt gzip stream (") + (inf.z.msg ? inf.z.msg : "zlib error") +
+                            ")");
         }
     }
 
@@ -151,11 +162,13 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
     for (std::size_t i = 0; i < n; ++i) {
         for (int c = 0; c < 3; ++c) {
             const unsigned char* p = pos + i * 9 + std::size_t(c) * 3;
-            std::int32_t v = std::int32_t(std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16);
+            std::int32_t v =
+                std::int32_t(std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16);
             if (v & 0x800000) v -= 0x1000000;  // sign-extend 24 bits
             g.positions[i][c] = float(v * unit);
             g.scales[i][c] = float(std::exp(scale[i * 3 + std::size_t(c)] / 16.0 - 10.0));
-            g.sh[i * std::size_t(K) * 3 + std::size_t(c)] = float((color[i * 3 + std::size_t(c)] / 255.0 - 0.5) / kColorScale);
+            g.sh[i * std::size_t(K) * 3 + std::size_t(c)] =
+                float((color[i * 3 + std::size_t(c)] / 255.0 - 0.5) / kColorScale);
         }
         g.opacities[i] = float(alpha[i] / 255.0);
         double q[4] = {0, 0, 0, 0};  // x y z w
@@ -177,9 +190,11 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
             q[largest] = std::sqrt(std::max(0.0, 1.0 - sum));
         }
         const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-        g.rotations[i] = len > 0.0 ? glm::quat(float(q[3] / len), float(q[0] / len), float(q[1] / len), float(q[2] / len))
-                                   : glm::quat(1, 0, 0, 0);
-        for (std::size_t k = 0; k < rest; ++k)  // (k/3 + 1) coefficient, k%3 channel: our layout shifted by one triple
+        g.rotations[i] =
+            len > 0.0 ? glm::quat(float(q[3] / len), float(q[0] / len), float(q[1] / len), float(q[2] / len))
+                      : glm::quat(1, 0, 0, 0);
+        for (std::size_t k = 0; k < rest;
+             ++k)  // (k/3 + 1) coefficient, k%3 channel: our layout shifted by one triple
             g.sh[i * std::size_t(K) * 3 + 3 + k] = float((sh[i * rest + k] - 128) / 128.0);
     }
     // SPZ is stored x right, y up, z back; the internal frame is the 3DGS PLY one (gaussian_axes.h).

@@ -31,14 +31,18 @@ Status write_spz(const fs::path& path, const GaussianCloud& cloud) {
     GaussianCloud g = cloud;
     turn_axes(g, AxisTurn::x180);
     const std::size_t n = g.size();
-    if (n > 0xffffffffu) return make_error(name + ": " + std::to_string(n) + " Gaussians do not fit SPZ's 32-bit count");
-    // 24-bit fixed point: as many fractional bits (up to 12, the reference's) as the largest coordinate allows.
+    if (n > 0xffffffffu)
+        return make_error(name + ": " + std::to_string(n) + " Gaussians do not fit SPZ's 32-bit count");
+    // 24-bit fixed point: as many fractional bits (up to 12, the reference's) as the largest coordinate
+    // allows.
     double largest = 0.0;
     for (const glm::vec3& p : g.positions)
         for (int c = 0; c < 3; ++c) largest = std::max(largest, std::abs(g.origin[c] + double(p[c])));
     int frac = 12;
     while (frac > 0 && largest * double(1 << frac) > 8388607.0) --frac;
-    if (largest > 8388607.0) return make_error(name + ": a coordinate of " + std::to_string(largest) + " is beyond SPZ's 24-bit range");
+    if (largest > 8388607.0)
+        return make_error(name + ": a coordinate of " + std::to_string(largest) +
+                          " is beyond SPZ's 24-bit range");
     const int K = sh_coeffs(g.sh_degree);
     const std::size_t rest = std::size_t(3 * (K - 1));
     std::string raw;
@@ -47,14 +51,17 @@ Status write_spz(const fs::path& path, const GaussianCloud& cloud) {
     raw += char(g.sh_degree), raw += char(frac), raw += char(0), raw += char(0);
     for (std::size_t i = 0; i < n; ++i)
         for (int c = 0; c < 3; ++c) {
-            const std::int32_t v = std::int32_t(std::lround((g.origin[c] + double(g.positions[i][c])) * double(1 << frac)));
+            const std::int32_t v =
+                std::int32_t(std::lround((g.origin[c] + double(g.positions[i][c])) * double(1 << frac)));
             for (int b = 0; b < 3; ++b) raw += char((std::uint32_t(v) >> (8 * b)) & 0xff);
         }
     for (std::size_t i = 0; i < n; ++i) raw += char(byte(double(g.opacities[i]) * 255.0));
     for (std::size_t i = 0; i < n; ++i)  // SPZ's colour scale 0.15, not C0
-        for (int c = 0; c < 3; ++c) raw += char(byte((double(g.sh[i * std::size_t(K) * 3 + std::size_t(c)]) * 0.15 + 0.5) * 255.0));
+        for (int c = 0; c < 3; ++c)
+            raw += char(byte((double(g.sh[i * std::size_t(K) * 3 + std::size_t(c)]) * 0.15 + 0.5) * 255.0));
     for (std::size_t i = 0; i < n; ++i)
-        for (int c = 0; c < 3; ++c) raw += char(byte(g.scales[i][c] > 0 ? (std::log(double(g.scales[i][c])) + 10.0) * 16.0 : 0.0));
+        for (int c = 0; c < 3; ++c)
+            raw += char(byte(g.scales[i][c] > 0 ? (std::log(double(g.scales[i][c])) + 10.0) * 16.0 : 0.0));
     for (std::size_t i = 0; i < n; ++i) {
         const glm::quat q = glm::normalize(g.rotations[i]);
         double xyzw[4] = {q.x, q.y, q.z, q.w};
@@ -66,18 +73,23 @@ Status write_spz(const fs::path& path, const GaussianCloud& cloud) {
         for (int c = 0; c < 4; ++c) {
             if (c == largest_c) continue;
             const double v = sign * xyzw[c];
-            const std::uint32_t mag = std::uint32_t(std::clamp(std::lround(std::abs(v) / std::sqrt(0.5) * 511.0), 0L, 511L));
+            const std::uint32_t mag =
+                std::uint32_t(std::clamp(std::lround(std::abs(v) / std::sqrt(0.5) * 511.0), 0L, 511L));
             packed = packed << 10 | (v < 0 ? 1u << 9 : 0u) | mag;
         }
         put32(raw, packed | std::uint32_t(largest_c) << 30);
     }
     for (std::size_t i = 0; i < n; ++i)
-        for (std::size_t k = 0; k < rest; ++k) raw += char(byte(double(g.sh[i * std::size_t(K) * 3 + 3 + k]) * 128.0 + 128.0));
+        for (std::size_t k = 0; k < rest; ++k)
+            raw += char(byte(double(g.sh[i * std::size_t(K) * 3 + 3 + k]) * 128.0 + 128.0));
 
     // One deflate call: zlib's counters are 32-bit (a 4 GiB payload is ~50M degree-3 Gaussians).
-    if (raw.size() > 0xffff0000u) return make_error(name + ": " + std::to_string(raw.size()) + " bytes of SPZ data exceed one 4 GiB gzip call");
+    if (raw.size() > 0xffff0000u)
+        return make_error(name + ": " + std::to_string(raw.size()) +
+                          " bytes of SPZ data exceed one 4 GiB gzip call");
     z_stream z{};
-    if (deflateInit2(&z, 6, Z_DEFLATED, 16 + MAX_WBITS, 8, Z_DEFAULT_STRATEGY) != Z_OK) return make_error(name + ": zlib initialisation failed");
+    if (deflateInit2(&z, 6, Z_DEFLATED, 16 + MAX_WBITS, 8, Z_DEFAULT_STRATEGY) != Z_OK)
+        return make_error(name + ": zlib initialisation failed");
     std::string gz(deflateBound(&z, uLong(raw.size())), '\0');
     z.next_in = reinterpret_cast<Bytef*>(raw.data());
     z.avail_in = uInt(raw.size());

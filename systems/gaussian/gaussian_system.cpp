@@ -28,7 +28,8 @@ void collect_gpu_stats(ecs::Registry& reg) {
     if (!st) return;
     st->collect([&](const GaussianGpuState::Pending& p, const gaussian::GpuDeformStats& stats) {
         if (stats.not_finite)
-            log::warn("gaussian_deform_system: ", stats.not_finite, " Gaussians deformed to non-finite values (drawn transparent)");
+            log::warn("gaussian_deform_system: ", stats.not_finite,
+                      " Gaussians deformed to non-finite values (drawn transparent)");
         DeformedGaussians* out = reg.valid(p.cloud) ? reg.try_get<DeformedGaussians>(p.cloud) : nullptr;
         if (!out || out->version != p.version) return;
         out->inverted = stats.inverted;
@@ -60,18 +61,20 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         const std::vector<ecs::Entity>& lattices = inputs.lattices;
         // The cloud's residency (residency_system uploaded its rest cloud this frame when it changed): the
         // GPU path needs it current, the CPU path uploads its output there.
-        gaussian::GpuGaussianStore* store = have_gl ? reg.try_resource<gaussian::GpuGaussianStore>() : nullptr;
+        gaussian::GpuGaussianStore* store =
+            have_gl ? reg.try_resource<gaussian::GpuGaussianStore>() : nullptr;
         gaussian::GpuGaussians* resident = nullptr;
         if (store)
             if (auto it = store->clouds.find(e); it != store->clouds.end() && it->second.rest &&
-                                                 it->second.rest_version == inputs.stamps.cloud && it->second.count == cloud.size())
+                                                 it->second.rest_version == inputs.stamps.cloud &&
+                                                 it->second.count == cloud.size())
                 resident = &it->second;
         const DeformedGaussians* seen = reg.try_get<DeformedGaussians>(e);
         const bool gpu_path = backend.gpu();
         const auto sh_mode = std::uint8_t(gpu_path ? gpu_sh : cpu_sh);
         // A resident cloud at rest has no deformed data yet (its entry is new): deform even if nothing moved.
-        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu && seen->seen_sh_mode == sh_mode &&
-            (!resident || resident->is_deformed()))
+        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu &&
+            seen->seen_sh_mode == sh_mode && (!resident || resident->is_deformed()))
             continue;  // nothing moved
         if (!seen) reg.emplace<DeformedGaussians>(e);
         DeformedGaussians& out = reg.patch<DeformedGaussians>(e);
@@ -86,13 +89,16 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         // when its change stamp moved; one dispatch per lattice into `deformed` (+ `frames` or
         // `deformed_sh` when the SH have view-dependent terms). No read-back.
         if (gpu_path && resident) {
-            if (gaussian::GpuGaussianDeformer* gpu = ffd::gpu_deformer<gaussian::GpuGaussianDeformer>(reg, "gaussian_deform_system")) {
+            if (gaussian::GpuGaussianDeformer* gpu =
+                    ffd::gpu_deformer<gaussian::GpuGaussianDeformer>(reg, "gaussian_deform_system")) {
                 std::vector<const Lattice*> ls;
                 std::vector<std::uint64_t> keys;
-                for (ecs::Entity le : lattices) ls.push_back(&reg.get<Lattice>(le)), keys.push_back(le.bits());
+                for (ecs::Entity le : lattices)
+                    ls.push_back(&reg.get<Lattice>(le)), keys.push_back(le.bits());
                 auto pass_scope = profiling::gpu_scope(reg, "gaussian.deform");
                 gpu->reset_stats();
-                if (Status s = gpu->deform(*resident, cloud.origin, ls, keys, inputs.stamps.lattices, gpu_sh); !s)
+                if (Status s = gpu->deform(*resident, cloud.origin, ls, keys, inputs.stamps.lattices, gpu_sh);
+                    !s)
                     log::warn("gaussian_deform_system: ", s.message(), " (lattice skipped)");
                 // The counts arrive a few frames later (collect_gpu_stats); nothing waits for them.
                 reg.resource<GaussianGpuState>().queue_stats(*gpu, e, out.version);
@@ -119,7 +125,8 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         out.cloud.opacities = cloud.opacities;
         out.cloud.sh_frames.clear();
         for (ecs::Entity le : lattices) {
-            auto stats = gaussian::deform(reg.get<Lattice>(le), out.cloud, out.cloud, {ffd::Backend::automatic, false, cpu_sh});
+            auto stats = gaussian::deform(reg.get<Lattice>(le), out.cloud, out.cloud,
+                                          {ffd::Backend::automatic, false, cpu_sh});
             if (!stats) {
                 log::warn("gaussian_deform_system: ", stats.message(), " (lattice skipped)");
                 continue;
@@ -129,9 +136,9 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
             out.not_finite += stats->not_finite;
         }
         if (out.not_finite)
-            log::warn("gaussian_deform_system: ", out.not_finite, " Gaussians deformed to non-finite values (drawn transparent)");
-        else
-            out.cloud.opacities.clear();
+            log::warn("gaussian_deform_system: ", out.not_finite,
+                      " Gaussians deformed to non-finite values (drawn transparent)");
+        else out.cloud.opacities.clear();
         out.stats_arrived = true;
         // The resident cloud draws this output from now on (state deformed_cpu).
         if (resident) {

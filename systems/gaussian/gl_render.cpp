@@ -24,15 +24,19 @@ Result<GlRenderer> create_gl_renderer() {
     GlRenderer r;
     auto project = gfx::load_compute_program("gaussian/project.comp", "gaussian.project");
     if (!project) return project.error();
-    auto splat = gfx::load_program({{GL_VERTEX_SHADER, "gaussian/splat.vert"}, {GL_FRAGMENT_SHADER, "gaussian/splat.frag"}},
-                                   "gaussian.splat");
+    auto splat = gfx::load_program(
+        {{GL_VERTEX_SHADER, "gaussian/splat.vert"}, {GL_FRAGMENT_SHADER, "gaussian/splat.frag"}},
+        "gaussian.splat");
     if (!splat) return splat.error();
     r.project = std::move(*project);
     r.splat = std::move(*splat);
-    const std::pair<gfx::Program*, const char*> tiles[] = {{&r.tile_count, "tile_count"}, {&r.tile_emit, "tile_emit"},
-                                                           {&r.tile_ranges, "tile_ranges"}, {&r.tile_blend, "tile_blend"}};
+    const std::pair<gfx::Program*, const char*> tiles[] = {{&r.tile_count, "tile_count"},
+                                                           {&r.tile_emit, "tile_emit"},
+                                                           {&r.tile_ranges, "tile_ranges"},
+                                                           {&r.tile_blend, "tile_blend"}};
     for (const auto& [program, name] : tiles) {
-        auto made = gfx::load_compute_program(std::string("gaussian/") + name + ".comp", std::string("gaussian.") + name);
+        auto made = gfx::load_compute_program(std::string("gaussian/") + name + ".comp",
+                                              std::string("gaussian.") + name);
         if (!made) return made.error();
         *program = std::move(*made);
     }
@@ -64,16 +68,20 @@ void upload(const gfx::Buffer& b, const void* data, std::size_t bytes) {
     if (bytes > 0 && data) glNamedBufferSubData(b.id(), 0, GLsizeiptr(bytes), data);
 }
 
-void set(GLuint program, const char* name, float v) { glProgramUniform1f(program, glGetUniformLocation(program, name), v); }
-void set(GLuint program, const char* name, glm::vec2 v) { glProgramUniform2f(program, glGetUniformLocation(program, name), v.x, v.y); }
+void set(GLuint program, const char* name, float v) {
+    glProgramUniform1f(program, glGetUniformLocation(program, name), v);
+}
+void set(GLuint program, const char* name, glm::vec2 v) {
+    glProgramUniform2f(program, glGetUniformLocation(program, name), v.x, v.y);
+}
 void set(GLuint program, const char* name, glm::vec3 v) {
     glProgramUniform3f(program, glGetUniformLocation(program, name), v.x, v.y, v.z);
 }
 
 }  // namespace
 
-Result<ReferenceImage> render_gl(GlRenderer& r, const GaussianCloud& g, const Camera& cam, const ReferenceOptions& o,
-                                 const std::vector<float>* opacity_override) {
+Result<ReferenceImage> render_gl(GlRenderer& r, const GaussianCloud& g, const Camera& cam,
+                                 const ReferenceOptions& o, const std::vector<float>* opacity_override) {
     if (Status s = upload_gl(r, g, opacity_override); !s) return s.error();
     return draw_gl(r, cam, o);
 }
@@ -89,7 +97,9 @@ Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>
     for (std::size_t i = 0; i < n; ++i) {
         const glm::vec3 p = g.positions[i];
         const glm::quat q = g.rotations[i];
-        in[i] = {{p.x, p.y, p.z, opac[i]}, {q.w, q.x, q.y, q.z}, {g.scales[i].x, g.scales[i].y, g.scales[i].z, 0.0f}};
+        in[i] = {{p.x, p.y, p.z, opac[i]},
+                 {q.w, q.x, q.y, q.z},
+                 {g.scales[i].x, g.scales[i].y, g.scales[i].z, 0.0f}};
     }
     upload(r.gaussians, in.data(), in.size() * sizeof(gpu::GpuGaussian));
     upload(r.sh, g.sh.data(), g.sh.size() * sizeof(float));
@@ -146,13 +156,15 @@ void ensure_scratch(GlRenderer& r, std::size_t n) {
 Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v) {
     const std::size_t n = b.count;
     ensure_scratch(r, n);
-    // The scratch buffers may have been read by the previous draw (another cloud this frame): its reads first.
+    // The scratch buffers may have been read by the previous draw (another cloud this frame): its reads
+    // first.
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
     const GLuint command[4] = {4, 0, 0, 0};  // 4 strip vertices per quad, drawn count accumulated on the GPU
     glNamedBufferSubData(r.draw.id(), 0, sizeof(command), command);
     const double tan_half = std::tan(glm::radians(v.fov_y_degrees) * 0.5);
     const GLuint pp = r.project.id();
-    glProgramUniformMatrix4fv(pp, glGetUniformLocation(pp, "u_view"), 1, GL_FALSE, glm::value_ptr(glm::mat4(v.view)));
+    glProgramUniformMatrix4fv(pp, glGetUniformLocation(pp, "u_view"), 1, GL_FALSE,
+                              glm::value_ptr(glm::mat4(v.view)));
     set(pp, "u_eye", glm::vec3(v.eye));
     set(pp, "u_size", glm::vec2(float(v.width), float(v.height)));
     set(pp, "u_focal", float(v.height / (2.0 * tan_half)));
@@ -166,7 +178,8 @@ Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, b.gaussians);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, b.sh);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, b.has_frames && b.frames ? b.frames : b.gaussians);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES,
+                     b.has_frames && b.frames ? b.frames : b.gaussians);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEPTH, r.depth.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
@@ -186,11 +199,13 @@ void sort_cpu(GlRenderer& r, std::size_t n) {
     std::vector<std::uint64_t> keys;
     keys.reserve(n);
     for (std::size_t i = 0; i < n; ++i)
-        if (depth[i] != SFFD_GAUSS_NOT_DRAWN) keys.push_back(std::uint64_t(depth[i]) << 32 | std::uint64_t(i));
+        if (depth[i] != SFFD_GAUSS_NOT_DRAWN)
+            keys.push_back(std::uint64_t(depth[i]) << 32 | std::uint64_t(i));
     tbb::parallel_sort(keys.begin(), keys.end());
     std::vector<std::uint32_t> order(keys.size());
     for (std::size_t k = 0; k < keys.size(); ++k) order[k] = std::uint32_t(keys[k] & 0xffffffffu);
-    if (!order.empty()) glNamedBufferSubData(r.order.id(), 0, GLsizeiptr(order.size() * sizeof(std::uint32_t)), order.data());
+    if (!order.empty())
+        glNamedBufferSubData(r.order.id(), 0, GLsizeiptr(order.size() * sizeof(std::uint32_t)), order.data());
     r.sort_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
@@ -235,7 +250,8 @@ Status project_and_sort(GlRenderer& r, const GaussianBuffers& b, const GaussianV
     auto t = std::chrono::steady_clock::now();
     if (Status st = project_gl(r, b, v); !st) return st.error();
     r.project_ms = stage_ms(r, t);
-    r.gpu_sort_used = r.sort_path == SortPath::gpu || (r.sort_path == SortPath::automatic && gpu_sort_preferred(r));
+    r.gpu_sort_used =
+        r.sort_path == SortPath::gpu || (r.sort_path == SortPath::automatic && gpu_sort_preferred(r));
     if (r.gpu_sort_used) {
         if (Status st = sort_gpu(r, b.count); !st) return st.error();
         r.sort_ms = stage_ms(r, t);
@@ -270,14 +286,17 @@ Status blend_tiles(GlRenderer& r, const ReferenceOptions& o, std::size_t n) {
     glUseProgram(r.tile_count.id());
     if (Status st = gfx::dispatch_1d(n, 64, max_x); !st) return st.error();
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
-    if (Status st = gfx::exclusive_scan(r.sorter, r.tile_touched.id(), std::uint32_t(n)); !st) return st.error();
+    if (Status st = gfx::exclusive_scan(r.sorter, r.tile_touched.id(), std::uint32_t(n)); !st)
+        return st.error();
     GLuint entries = 0;
-    glGetNamedBufferSubData(r.tile_touched.id(), GLintptr(n * sizeof(std::uint32_t)), sizeof(GLuint), &entries);
+    glGetNamedBufferSubData(r.tile_touched.id(), GLintptr(n * sizeof(std::uint32_t)), sizeof(GLuint),
+                            &entries);
     r.tile_entries = entries;
     // 8 bytes per entry; past 2^28 entries (2 GiB) the quad path is the one to use. (A true total past
     // 2^32 would wrap; the emit pass never writes past the capacity, so that is a wrong image at worst.)
     if (entries > (1u << 28))
-        return make_error("draw_gl(): " + std::to_string(entries) + " tile entries exceed the tile path's 2^28; use BlendPath::quads");
+        return make_error("draw_gl(): " + std::to_string(entries) +
+                          " tile entries exceed the tile path's 2^28; use BlendPath::quads");
     if (entries > r.tile_entry_capacity) {
         upload(r.tile_keys, nullptr, std::size_t(entries) * sizeof(std::uint32_t));
         upload(r.tile_values, nullptr, std::size_t(entries) * sizeof(std::uint32_t));
@@ -301,7 +320,8 @@ Status blend_tiles(GlRenderer& r, const ReferenceOptions& o, std::size_t n) {
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     int key_bits = 1;
     while (key_bits < 32 && (std::uint64_t(1) << key_bits) < tile_count) ++key_bits;
-    if (Status st = gfx::radix_sort(r.sorter, r.tile_keys.id(), r.tile_values.id(), entries, key_bits); !st) return st.error();
+    if (Status st = gfx::radix_sort(r.sorter, r.tile_keys.id(), r.tile_values.id(), entries, key_bits); !st)
+        return st.error();
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_KEYS, r.tile_keys.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_VALUES, r.tile_values.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_RANGES, r.tile_ranges_buffer.id());
@@ -324,7 +344,8 @@ Status blend_tiles(GlRenderer& r, const ReferenceOptions& o, std::size_t n) {
 // Step 4: the image (GL rows bottom-up), the background blended in by the remaining transmittance.
 ReferenceImage read_image(const GlRenderer& r, const ReferenceOptions& o) {
     std::vector<glm::vec4> pixels(std::size_t(o.width) * std::size_t(o.height));
-    glGetTextureImage(r.color.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(pixels.size() * sizeof(glm::vec4)), pixels.data());
+    glGetTextureImage(r.color.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(pixels.size() * sizeof(glm::vec4)),
+                      pixels.data());
     ReferenceImage img;
     img.width = o.width, img.height = o.height;
     img.color.resize(pixels.size());
@@ -351,8 +372,10 @@ double stage_ms(const GlRenderer& r, std::chrono::steady_clock::time_point& t) {
 
 }  // namespace
 
-Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v, const gfx::Program* splat_program) {
-    if (b.count >= (std::size_t(1) << 31)) return make_error("draw_gaussians(): more than 2^31 Gaussians in one draw");
+Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v,
+                      const gfx::Program* splat_program) {
+    if (b.count >= (std::size_t(1) << 31))
+        return make_error("draw_gaussians(): more than 2^31 Gaussians in one draw");
     if (Status st = project_and_sort(r, b, v); !st) return st.error();
     blend_quads(r, v, b.count, splat_program);
     return {};

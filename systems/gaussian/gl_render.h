@@ -46,7 +46,7 @@ struct GlRenderer {
     gfx::Texture color;
     gfx::Framebuffer framebuffer;
     int width = 0, height = 0;
-    std::size_t count = 0;    // Gaussians resident (upload_gl)
+    std::size_t count = 0;  // Gaussians resident (upload_gl)
     int sh_degree = 0;
     bool has_frames = false;  // the resident cloud carries SH frames
     glm::dvec3 origin{0.0};
@@ -117,11 +117,13 @@ Result<GlRenderer> create_gl_renderer();
 bool gpu_sort_preferred(const GlRenderer& renderer);
 
 // Uploads a cloud; it stays resident for draw_gl() until the next upload.
-Status upload_gl(GlRenderer& renderer, const GaussianCloud& cloud, const std::vector<float>* opacities = nullptr);
+Status upload_gl(GlRenderer& renderer, const GaussianCloud& cloud,
+                 const std::vector<float>* opacities = nullptr);
 // One frame of the resident cloud: projection, depth sort, blending, image readback.
 Result<ReferenceImage> draw_gl(GlRenderer& renderer, const Camera& camera, const ReferenceOptions& options);
 // upload_gl + draw_gl: renders like render_reference() (same camera model, background blended in).
 Result<ReferenceImage> render_gl(GlRenderer& renderer, const GaussianCloud& cloud, const Camera& camera,
-                                 const ReferenceOptions& options, const std::vector<float>* opacities = nullptr);
+                                 const ReferenceOptions& options,
+                                 const std::vector<float>* opacities = nullptr);
 
 }  // namespace sffd::gaussian

@@ -25,12 +25,15 @@ namespace {
 constexpr int kStats = 4;  // deform.comp's stats[]: inverted, inside, not finite, degenerate
 
 // Makes `buffer` hold at least `bytes` (contents undefined when it grows).
-void ensure(gfx::Buffer& buffer, const char* label, std::size_t bytes) { gfx::reserve_buffer(buffer, label, bytes); }
+void ensure(gfx::Buffer& buffer, const char* label, std::size_t bytes) {
+    gfx::reserve_buffer(buffer, label, bytes);
+}
 
 }  // namespace
 
 struct GpuGaussianDeformer::Impl {
-    ffd::detail::DeformPrograms programs;  // the lattice set-up of ffd::GpuDeformer (systems/ffd/gpu_kernel.h)
+    ffd::detail::DeformPrograms
+        programs;  // the lattice set-up of ffd::GpuDeformer (systems/ffd/gpu_kernel.h)
     gfx::Buffer stats, sh_tables;
     ffd::detail::StatsReadbacks readbacks;  // queue_stats(): kStats counters each
     std::uint64_t sync_readbacks = 0;
@@ -43,7 +46,8 @@ GpuGaussianDeformer::~GpuGaussianDeformer() = default;
 
 Result<GpuGaussianDeformer> GpuGaussianDeformer::create() {
     auto impl = std::make_unique<Impl>();
-    auto programs = ffd::detail::DeformPrograms::create("gaussian/deform.comp", "gaussian.deform", "gaussian.deform");
+    auto programs =
+        ffd::detail::DeformPrograms::create("gaussian/deform.comp", "gaussian.deform", "gaussian.deform");
     if (!programs) return programs.error();
     impl->programs = std::move(*programs);
     impl->stats = gfx::Buffer::create("gaussian.deform.stats");
@@ -55,7 +59,8 @@ Result<GpuGaussianDeformer> GpuGaussianDeformer::create() {
         glm::dvec3 dirs[7];
         double inv[49];
         sh_sample_tables(band, dirs, inv);
-        for (int j = 0; j < 2 * band + 1; ++j) tables.insert(tables.end(), {float(dirs[j].x), float(dirs[j].y), float(dirs[j].z)});
+        for (int j = 0; j < 2 * band + 1; ++j)
+            tables.insert(tables.end(), {float(dirs[j].x), float(dirs[j].y), float(dirs[j].z)});
     }
     for (int band = 1; band <= 3; ++band) {
         glm::dvec3 dirs[7];
@@ -68,11 +73,17 @@ Result<GpuGaussianDeformer> GpuGaussianDeformer::create() {
     return GpuGaussianDeformer(std::move(impl));
 }
 
-void GpuGaussianDeformer::set_bernstein_kernel(ffd::GpuBernsteinKernel kernel) { m_impl->programs.kernel = kernel; }
-ffd::GpuBernsteinKernel GpuGaussianDeformer::last_bernstein_kernel() const { return m_impl->programs.last_kernel; }
+void GpuGaussianDeformer::set_bernstein_kernel(ffd::GpuBernsteinKernel kernel) {
+    m_impl->programs.kernel = kernel;
+}
+ffd::GpuBernsteinKernel GpuGaussianDeformer::last_bernstein_kernel() const {
+    return m_impl->programs.last_kernel;
+}
 std::uint64_t GpuGaussianDeformer::upload_count() const { return m_impl->programs.uploads; }
 std::uint64_t GpuGaussianDeformer::sync_readbacks() const { return m_impl->sync_readbacks; }
-void GpuGaussianDeformer::retain_keys(const std::vector<std::uint64_t>& live) { m_impl->programs.retain_keys(live); }
+void GpuGaussianDeformer::retain_keys(const std::vector<std::uint64_t>& live) {
+    m_impl->programs.retain_keys(live);
+}
 
 void GpuGaussianDeformer::reset_stats() {
     glClearNamedBufferData(m_impl->stats.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
@@ -102,45 +113,54 @@ std::vector<GpuGaussianDeformer::TaggedStats> GpuGaussianDeformer::poll_stats() 
     return done;
 }
 
-Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp, const glm::dvec3& cloud_origin,
-                                     const Buffers& b, std::uint32_t count) {
+Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp,
+                                     const glm::dvec3& cloud_origin, const Buffers& b, std::uint32_t count) {
     if (Status s = ffd::validate(lattice); !s) return s;
-    if (b.sh_out && (b.sh_degree < 0 || b.sh_degree > 3)) return make_error("gaussian::GpuGaussianDeformer: SH degree must be 0..3");
+    if (b.sh_out && (b.sh_degree < 0 || b.sh_degree > 3))
+        return make_error("gaussian::GpuGaussianDeformer: SH degree must be 0..3");
     Impl& m = *m_impl;
     // The ffd pass's lattice set-up and kernel choice (systems/ffd/gpu_kernel.h): block UBO, control points
     // when edited, Bernstein programs specialised per lattice shape; then this shader's own buffers.
     auto bound = m.programs.bind(lattice, key, stamp, cloud_origin, count);
     if (!bound) return bound.error();
     const GLuint program = bound->program;
-    glProgramUniform1ui(program, 0, (b.frames ? 1u : 0u) | (b.frames && b.compose_frames ? 2u : 0u) | (b.sh_out ? 4u : 0u));
+    glProgramUniform1ui(
+        program, 0, (b.frames ? 1u : 0u) | (b.frames && b.compose_frames ? 2u : 0u) | (b.sh_out ? 4u : 0u));
     glProgramUniform1i(program, 1, b.sh_degree);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, b.in);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED, b.out);
     // Unused bindings still get a buffer (the statistics stand in): nothing reads or writes them.
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, b.frames ? b.frames : m.stats.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, b.sh_out && b.sh_in ? b.sh_in : m.stats.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED_SH, b.sh_out && b.sh_in ? b.sh_out : m.stats.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH,
+                     b.sh_out && b.sh_in ? b.sh_in : m.stats.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED_SH,
+                     b.sh_out && b.sh_in ? b.sh_out : m.stats.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH_TABLES, m.sh_tables.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
     // Write-after-read across frames: the last frame's projection read the deformed buffers overwritten here.
     gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.deform.reuse");
     // Beyond 65,535 groups (4.19M Gaussians at 64 wide): a 2D grid (runtime/gfx/dispatch.h).
     if (Status s = gfx::dispatch_1d(count, bound->local_size); !s) return s;
-    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT,
-                        "gaussian.deform");
+    gfx::memory_barrier(
+        GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT,
+        "gaussian.deform");
     return {};
 }
 
-Status GpuGaussianDeformer::deform(GpuGaussians& dst, const glm::dvec3& origin, const std::vector<const Lattice*>& lattices,
-                                   const std::vector<std::uint64_t>& keys, const std::vector<std::uint64_t>& stamps, ShMode sh) {
-    if (!dst.rest) return make_error("gaussian::GpuGaussianDeformer::deform(): the cloud's rest buffer is not uploaded");
+Status GpuGaussianDeformer::deform(GpuGaussians& dst, const glm::dvec3& origin,
+                                   const std::vector<const Lattice*>& lattices,
+                                   const std::vector<std::uint64_t>& keys,
+                                   const std::vector<std::uint64_t>& stamps, ShMode sh) {
+    if (!dst.rest)
+        return make_error("gaussian::GpuGaussianDeformer::deform(): the cloud's rest buffer is not uploaded");
     if (keys.size() != lattices.size() || stamps.size() != lattices.size())
         return make_error("gaussian::GpuGaussianDeformer::deform(): one key and one stamp per lattice");
     const std::uint32_t n = dst.count;
     const bool view_dependent = dst.sh_degree > 0;
     const bool with_frames = view_dependent && sh == ShMode::rotate_view;
     const bool with_sh = view_dependent && sh == ShMode::rotate_coefficients;
-    if (with_sh && !dst.sh) return make_error("gaussian::GpuGaussianDeformer::deform(): the cloud's SH buffer is not uploaded");
+    if (with_sh && !dst.sh)
+        return make_error("gaussian::GpuGaussianDeformer::deform(): the cloud's SH buffer is not uploaded");
     const std::size_t sh_bytes = std::size_t(n) * std::size_t(sh_coeffs(dst.sh_degree)) * 3 * sizeof(float);
     ensure(dst.deformed, "gaussians.deformed", std::size_t(n) * sizeof(gpu::GpuGaussian));
     if (with_frames) ensure(dst.frames, "gaussians.frames", std::size_t(n) * 3 * sizeof(float) * 4);
@@ -166,12 +186,15 @@ Status GpuGaussianDeformer::deform(GpuGaussians& dst, const glm::dvec3& origin, 
         if (with_sh) b.sh_in = dst.deformed_sh.id();
     }
     if (b.in == dst.rest.id() && n > 0) {
-        glCopyNamedBufferSubData(dst.rest.id(), dst.deformed.id(), 0, 0, GLsizeiptr(std::size_t(n) * sizeof(gpu::GpuGaussian)));
+        glCopyNamedBufferSubData(dst.rest.id(), dst.deformed.id(), 0, 0,
+                                 GLsizeiptr(std::size_t(n) * sizeof(gpu::GpuGaussian)));
         if (with_sh) glCopyNamedBufferSubData(dst.sh.id(), dst.deformed_sh.id(), 0, 0, GLsizeiptr(sh_bytes));
         if (with_frames) {
             std::vector<float> identity(std::size_t(n) * 12, 0.0f);
-            for (std::size_t i = 0; i < n; ++i) identity[i * 12] = identity[i * 12 + 5] = identity[i * 12 + 10] = 1.0f;
-            glNamedBufferSubData(dst.frames.id(), 0, GLsizeiptr(identity.size() * sizeof(float)), identity.data());
+            for (std::size_t i = 0; i < n; ++i)
+                identity[i * 12] = identity[i * 12 + 5] = identity[i * 12 + 10] = 1.0f;
+            glNamedBufferSubData(dst.frames.id(), 0, GLsizeiptr(identity.size() * sizeof(float)),
+                                 identity.data());
         }
     }
     dst.sh_source = with_frames ? ShSource::frames : with_sh ? ShSource::rotated : ShSource::authored;
@@ -203,12 +226,15 @@ Result<GaussianCloud> read_back(const GpuGaussians& src, const glm::dvec3& origi
         std::vector<glm::vec4> cols(n * 3);
         glGetNamedBufferSubData(src.frames.id(), 0, GLsizeiptr(cols.size() * sizeof(glm::vec4)), cols.data());
         g.sh_frames.resize(n);
-        for (std::size_t i = 0; i < n; ++i) g.sh_frames[i] = glm::mat3(glm::vec3(cols[3 * i]), glm::vec3(cols[3 * i + 1]), glm::vec3(cols[3 * i + 2]));
+        for (std::size_t i = 0; i < n; ++i)
+            g.sh_frames[i] =
+                glm::mat3(glm::vec3(cols[3 * i]), glm::vec3(cols[3 * i + 1]), glm::vec3(cols[3 * i + 2]));
     }
     return g;
 }
 
-Result<GaussianCloud> deform_on_gpu(GpuGaussianDeformer& deformer, const std::vector<const Lattice*>& lattices, const GaussianCloud& cloud,
+Result<GaussianCloud> deform_on_gpu(GpuGaussianDeformer& deformer,
+                                    const std::vector<const Lattice*>& lattices, const GaussianCloud& cloud,
                                     ShMode sh, GpuDeformStats* stats) {
     GpuGaussians scratch;
     if (Status s = upload_rest(scratch, cloud, 1); !s) return s.error();

@@ -7,8 +7,8 @@
 // themselves can be rotated instead (ShMode::rotate_coefficients: per band, the CPU's sh_rotation tables)
 // into `deformed_sh`.
 // The lattice evaluation is the ffd pass's own (shaders/ffd/ffd_common.glsl: Bernstein with the direct
-// or shared-memory kernel, B-spline), with the same lattice set-up and control-point upload (systems/ffd/gpu_kernel.h).
-// Needs a current GL 4.5 context for every call.
+// or shared-memory kernel, B-spline), with the same lattice set-up and control-point upload
+// (systems/ffd/gpu_kernel.h). Needs a current GL 4.5 context for every call.
 #pragma once
 
 #include <cstdint>
@@ -58,8 +58,8 @@ public:
     // One lattice over `count` Gaussians, positions relative to `cloud_origin`. Each `key` (e.g. the
     // lattice entity) keeps its control points, uploaded only when `lattice_stamp` moved (0 always
     // uploads). Does not wait for the GPU.
-    Status dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin,
-                    const Buffers& buffers, std::uint32_t count);
+    Status dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t lattice_stamp,
+                    const glm::dvec3& cloud_origin, const Buffers& buffers, std::uint32_t count);
 
     // Every lattice in order over a store entry whose `rest` (and `sh`) are current: writes `deformed`
     // (grown when needed) and, when the SH have view-dependent terms (degree > 0), `frames`
@@ -67,8 +67,9 @@ public:
     // the matching sh_source, bumps deformed_version. No read-back. `keys`/`stamps`
     // as in dispatch(), one per lattice. A lattice that fails validation is skipped (the first error is
     // returned after the others ran).
-    Status deform(GpuGaussians& dst, const glm::dvec3& cloud_origin, const std::vector<const Lattice*>& lattices,
-                  const std::vector<std::uint64_t>& keys, const std::vector<std::uint64_t>& stamps, ShMode sh);
+    Status deform(GpuGaussians& dst, const glm::dvec3& cloud_origin,
+                  const std::vector<const Lattice*>& lattices, const std::vector<std::uint64_t>& keys,
+                  const std::vector<std::uint64_t>& stamps, ShMode sh);
 
     // Statistics accumulated since reset_stats(). read_stats() waits for the GPU (tests, commands).
     void reset_stats();
@@ -104,7 +105,8 @@ Result<GaussianCloud> read_back(const GpuGaussians& src, const glm::dvec3& origi
 // Upload + deform through every lattice + read back, on a scratch store entry (tests, commands, the
 // benchmark's correctness check): rotate_view gives the result sh_frames (degree > 0), rotate_coefficients
 // rotated sh.
-Result<GaussianCloud> deform_on_gpu(GpuGaussianDeformer& deformer, const std::vector<const Lattice*>& lattices,
-                                    const GaussianCloud& cloud, ShMode sh, GpuDeformStats* stats = nullptr);
+Result<GaussianCloud> deform_on_gpu(GpuGaussianDeformer& deformer,
+                                    const std::vector<const Lattice*>& lattices, const GaussianCloud& cloud,
+                                    ShMode sh, GpuDeformStats* stats = nullptr);
 
 }  // namespace sffd::gaussian

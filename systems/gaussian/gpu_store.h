@@ -35,7 +35,9 @@ struct GpuGaussians : gfx::ResidentCloud {
     ShSource sh_source = ShSource::authored;
 
     bool has_frames() const { return is_deformed() && sh_source == ShSource::frames; }
-    GLuint sh_buffer() const { return is_deformed() && sh_source == ShSource::rotated ? deformed_sh.id() : sh.id(); }
+    GLuint sh_buffer() const {
+        return is_deformed() && sh_source == ShSource::rotated ? deformed_sh.id() : sh.id();
+    }
 };
 
 struct GpuGaussianStore {

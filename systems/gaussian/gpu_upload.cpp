@@ -16,7 +16,9 @@ std::vector<gpu::GpuGaussian> pack_gaussians(const GaussianCloud& g, const std::
     for (std::size_t i = 0; i < n; ++i) {
         const glm::vec3 p = g.positions[i], s = g.scales[i];
         const glm::quat q = g.rotations[i];
-        out[i] = {{p.x, p.y, p.z, i < opacities.size() ? opacities[i] : 0.0f}, {q.w, q.x, q.y, q.z}, {s.x, s.y, s.z, 0.0f}};
+        out[i] = {{p.x, p.y, p.z, i < opacities.size() ? opacities[i] : 0.0f},
+                  {q.w, q.x, q.y, q.z},
+                  {s.x, s.y, s.z, 0.0f}};
     }
     return out;
 }
@@ -39,7 +41,8 @@ Status upload_rest(GpuGaussians& gpu, const GaussianCloud& cloud, std::uint64_t 
 void upload_cpu_deformed(GpuGaussians& gpu, const DeformedGaussians& d, const GaussianCloud& authored) {
     const GaussianCloud& g = d.cloud;
     // The deformed cloud carries opacities only when some Gaussians were made transparent.
-    const std::vector<gpu::GpuGaussian> packed = pack_gaussians(g, g.opacities.size() == g.size() ? g.opacities : authored.opacities);
+    const std::vector<gpu::GpuGaussian> packed =
+        pack_gaussians(g, g.opacities.size() == g.size() ? g.opacities : authored.opacities);
     fill_buffer(gpu.deformed, "gaussian.deformed", packed.data(), packed.size() * sizeof(gpu::GpuGaussian));
     gpu.sh_source = ShSource::authored;
     if (g.sh.size() == authored.sh.size() && g.sh != authored.sh) {

@@ -15,7 +15,8 @@ namespace sffd::gaussian {
 
 // GpuGaussian records (centre relative to the origin + opacity, rotation w x y z, linear scale) of a
 // cloud's geometry with `opacities` (a DeformedGaussians carries none: pass the authored cloud's).
-std::vector<gpu::GpuGaussian> pack_gaussians(const GaussianCloud& geometry, const std::vector<float>& opacities);
+std::vector<gpu::GpuGaussian> pack_gaussians(const GaussianCloud& geometry,
+                                             const std::vector<float>& opacities);
 
 // Uploads `cloud` into rest + sh and records `version` (its change stamp, registry.version<GaussianCloud>,
 // the same for every caller) in rest_version. State rest: nothing deformed from an older rest is drawn

@@ -48,11 +48,14 @@ ReferenceImage render_reference(const GaussianCloud& g, const Camera& cam, const
         if (depth < o.near_plane) continue;
         const double px = cx + f * t.x / depth, py = cy - f * t.y / depth;
         // Projection Jacobian (rows: pixel x, pixel y; columns: view x, y, z), with clamped x/z, y/z.
-        const double tx = std::clamp(t.x / depth, -lim_x, lim_x) * depth, ty = std::clamp(t.y / depth, -lim_y, lim_y) * depth;
+        const double tx = std::clamp(t.x / depth, -lim_x, lim_x) * depth,
+                     ty = std::clamp(t.y / depth, -lim_y, lim_y) * depth;
         const glm::dvec3 jx(f / depth, 0.0, f * tx / (depth * depth));
         const glm::dvec3 jy(0.0, -f / depth, -f * ty / (depth * depth));
-        const glm::dmat3 sigma_view = w * covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i])) * glm::transpose(w);
-        double a = glm::dot(jx, sigma_view * jx) + 0.3, b = glm::dot(jx, sigma_view * jy), c = glm::dot(jy, sigma_view * jy) + 0.3;
+        const glm::dmat3 sigma_view =
+            w * covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i])) * glm::transpose(w);
+        double a = glm::dot(jx, sigma_view * jx) + 0.3, b = glm::dot(jx, sigma_view * jy),
+               c = glm::dot(jy, sigma_view * jy) + 0.3;
         const double det = a * c - b * b;
         if (!(det > 0.0)) continue;
         const double mid = 0.5 * (a + c), lmax = mid + std::sqrt(std::max(0.1, mid * mid - det));
@@ -60,17 +63,21 @@ ReferenceImage render_reference(const GaussianCloud& g, const Camera& cam, const
         Splat2D s;
         s.center = {px, py};
         s.conic = glm::dvec3(c / det, -b / det, a / det);
-        s.x0 = std::max(0, int(std::floor(px - radius))), s.x1 = std::min(o.width - 1, int(std::ceil(px + radius)));
-        s.y0 = std::max(0, int(std::floor(py - radius))), s.y1 = std::min(o.height - 1, int(std::ceil(py + radius)));
+        s.x0 = std::max(0, int(std::floor(px - radius))),
+        s.x1 = std::min(o.width - 1, int(std::ceil(px + radius)));
+        s.y0 = std::max(0, int(std::floor(py - radius))),
+        s.y1 = std::min(o.height - 1, int(std::ceil(py + radius)));
         if (s.x0 > s.x1 || s.y0 > s.y1) continue;
         glm::vec3 dir(glm::normalize(world - cam.eye));
-        if (g.sh_frames.size() == g.size()) dir = glm::transpose(g.sh_frames[i]) * dir;  // view-direction mode
+        if (g.sh_frames.size() == g.size())
+            dir = glm::transpose(g.sh_frames[i]) * dir;  // view-direction mode
         s.color = sh_color(g.sh_degree, &g.sh[i * std::size_t(K) * 3], dir);
         s.opacity = opac[i];
         s.depth = depth;
         splats.push_back(s);
     }
-    std::stable_sort(splats.begin(), splats.end(), [](const Splat2D& x, const Splat2D& y) { return x.depth < y.depth; });
+    std::stable_sort(splats.begin(), splats.end(),
+                     [](const Splat2D& x, const Splat2D& y) { return x.depth < y.depth; });
 
     std::vector<unsigned char> done(img.color.size(), 0);
     for (const Splat2D& s : splats)
@@ -100,7 +107,8 @@ double psnr(const ReferenceImage& a, const ReferenceImage& b) {
     double se = 0.0;
     for (std::size_t p = 0; p < a.color.size(); ++p)
         for (int c = 0; c < 3; ++c) {
-            const double d = std::clamp(double(a.color[p][c]), 0.0, 1.0) - std::clamp(double(b.color[p][c]), 0.0, 1.0);
+            const double d =
+                std::clamp(double(a.color[p][c]), 0.0, 1.0) - std::clamp(double(b.color[p][c]), 0.0, 1.0);
             se += d * d;
         }
     const double mse = se / (3.0 * double(a.color.size()));

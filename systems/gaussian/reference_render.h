@@ -24,8 +24,8 @@ namespace sffd::gaussian {
 
 struct ReferenceImage {
     int width = 0, height = 0;
-    std::vector<glm::vec3> color;       // final colour (background blended in), row 0 at the top
-    std::vector<float> transmittance;   // T_final per pixel (1 = nothing drawn)
+    std::vector<glm::vec3> color;      // final colour (background blended in), row 0 at the top
+    std::vector<float> transmittance;  // T_final per pixel (1 = nothing drawn)
     std::size_t index(int x, int y) const { return std::size_t(y) * std::size_t(width) + std::size_t(x); }
 };
 
@@ -36,7 +36,8 @@ struct ReferenceOptions {
 };
 
 // `opacities` overrides cloud.opacities when non-null (a DeformedGaussians cloud has none of its own).
-ReferenceImage render_reference(const GaussianCloud& cloud, const Camera& camera, const ReferenceOptions& options,
+ReferenceImage render_reference(const GaussianCloud& cloud, const Camera& camera,
+                                const ReferenceOptions& options,
                                 const std::vector<float>* opacities = nullptr);
 
 // Peak signal-to-noise ratio of two same-size images in dB (colours in [0,1]); +inf when identical.

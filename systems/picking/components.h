@@ -1,7 +1,8 @@
 // Picking components and resources: plain data. Owned by the picking system (systems/picking); the
 // editor (systems/editor) writes PickRequest and LatticeSelection, reads PickResult.
 //
-//   registry.set_resource<picking::PickRequest>(picking::PickRequest{true, picking::query_at_pixel(view, {320.5, 240.5})});
+//   registry.set_resource<picking::PickRequest>(picking::PickRequest{true, picking::query_at_pixel(view,
+//   {320.5, 240.5})});
 //   ... picking phase runs picking_system() ...
 //   const picking::PickHit& hit = registry.resource<picking::PickResult>().hit;
 #pragma once

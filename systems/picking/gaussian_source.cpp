@@ -18,8 +18,8 @@ namespace {
 
 // Centres and accumulated Jacobians of `cloud` through `lattices` in order (J = J_n ... J_1). False when a
 // lattice is refused (the cache then keeps nothing and the authored cloud is picked).
-bool deform_centres(const ecs::Registry& registry, const std::vector<ecs::Entity>& lattices, const GaussianCloud& cloud,
-                    GaussianDeformCache::Entry& entry) {
+bool deform_centres(const ecs::Registry& registry, const std::vector<ecs::Entity>& lattices,
+                    const GaussianCloud& cloud, GaussianDeformCache::Entry& entry) {
     const std::size_t n = cloud.size();
     entry.positions = cloud.positions;
     entry.jacobians.assign(n, glm::mat3(1.0f));
@@ -55,7 +55,8 @@ void read_back(const gaussian::GpuGaussians& gpu, GaussianDeformCache::Entry& en
     std::vector<gpu::GpuGaussian> rows(n);
     // The compute pass wrote the buffer through shader storage: make those writes visible to the copy.
     glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
-    if (n) glGetNamedBufferSubData(gpu.deformed.id(), 0, GLsizeiptr(n * sizeof(gpu::GpuGaussian)), rows.data());
+    if (n)
+        glGetNamedBufferSubData(gpu.deformed.id(), 0, GLsizeiptr(n * sizeof(gpu::GpuGaussian)), rows.data());
     entry.positions.resize(n), entry.scales.resize(n), entry.rotations.resize(n);
     entry.jacobians.clear();
     for (std::size_t i = 0; i < n; ++i) {
@@ -74,7 +75,8 @@ GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity e, GaussianD
     const GaussianCloud* cloud = registry.try_get<GaussianCloud>(e);
     if (!cloud) return src;
     const std::size_t n = cloud->size();
-    const bool consistent = cloud->scales.size() == n && cloud->rotations.size() == n && cloud->opacities.size() == n;
+    const bool consistent =
+        cloud->scales.size() == n && cloud->rotations.size() == n && cloud->opacities.size() == n;
     if (!consistent) return src;  // malformed component: nothing to pick rather than out-of-range reads
     src.opacities = cloud->opacities;
     src.kind = GaussianSource::Kind::authored;
@@ -89,8 +91,8 @@ GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity e, GaussianD
     }
     const ffd::DeformInputs inputs = ffd::deform_inputs<GaussianCloud>(registry, e);
     const DeformedGaussians* deformed = registry.try_get<DeformedGaussians>(e);
-    if (deformed && deformed->seen == inputs.stamps && deformed->cloud.size() == n && deformed->cloud.scales.size() == n &&
-        deformed->cloud.rotations.size() == n) {
+    if (deformed && deformed->seen == inputs.stamps && deformed->cloud.size() == n &&
+        deformed->cloud.scales.size() == n && deformed->cloud.rotations.size() == n) {
         cache.clouds.erase(e.bits());
         src.kind = GaussianSource::Kind::deformed;
         src.version = registry.version<DeformedGaussians>(e);
@@ -137,7 +139,8 @@ GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity e, GaussianD
 }
 
 std::uint64_t gaussian_source_storage_version(const ecs::Registry& registry) {
-    return registry.storage_version<GaussianCloud>() * 0x9E3779B97F4A7C15ull ^ registry.storage_version<DeformedGaussians>();
+    return registry.storage_version<GaussianCloud>() * 0x9E3779B97F4A7C15ull ^
+           registry.storage_version<DeformedGaussians>();
 }
 
 double gaussian_pick_sigmas(double opacity) {
@@ -146,8 +149,9 @@ double gaussian_pick_sigmas(double opacity) {
     return std::sqrt(2.0 * std::log(x));
 }
 
-PickEllipsoid gaussian_ellipsoid(const glm::dmat4& model, const glm::dvec3& shifted_centre, const glm::vec3& scale,
-                                 const glm::quat& rotation, float opacity, const glm::mat3& jacobian) {
+PickEllipsoid gaussian_ellipsoid(const glm::dmat4& model, const glm::dvec3& shifted_centre,
+                                 const glm::vec3& scale, const glm::quat& rotation, float opacity,
+                                 const glm::mat3& jacobian) {
     PickEllipsoid e;
     const double k = gaussian_pick_sigmas(double(std::min(opacity, 1.0f)));
     const glm::dvec3 s(scale);
@@ -164,7 +168,8 @@ PickEllipsoid gaussian_ellipsoid(const glm::dmat4& model, const glm::dvec3& shif
     if (!(std::abs(detL) > 1e-300) || !std::isfinite(detL)) return e;
     const glm::dmat3 B = L * R * glm::dmat3(sc.x, 0, 0, 0, sc.y, 0, 0, 0, sc.z);  // world axes (columns) × σ
     // to_unit = B⁻¹ = S⁻¹ Rᵀ L⁻¹ (L: the model's linear part times the deformation's J).
-    e.to_unit = glm::dmat3(1.0 / sc.x, 0, 0, 0, 1.0 / sc.y, 0, 0, 0, 1.0 / sc.z) * glm::transpose(R) * glm::inverse(L);
+    e.to_unit = glm::dmat3(1.0 / sc.x, 0, 0, 0, 1.0 / sc.y, 0, 0, 0, 1.0 / sc.z) * glm::transpose(R) *
+                glm::inverse(L);
     if (!std::isfinite(e.to_unit[0][0] + e.to_unit[1][1] + e.to_unit[2][2])) return e;
     e.centre = glm::dvec3(model * glm::dvec4(shifted_centre, 1.0));
     // Half extent along world axis j: k |row j of B| (support function of the ellipsoid B·ball(k)).
@@ -183,8 +188,8 @@ double ray_alpha(const PickEllipsoid& e, const glm::dvec3& origin, const glm::dv
     return std::min(0.99, e.opacity * std::exp(-0.5 * m2));
 }
 
-double intersect_ellipsoid(const PickEllipsoid& e, const glm::dvec3& origin, const glm::dvec3& direction, double tnear,
-                           double tfar) {
+double intersect_ellipsoid(const PickEllipsoid& e, const glm::dvec3& origin, const glm::dvec3& direction,
+                           double tnear, double tfar) {
     if (e.k <= 0.0) return -1.0;
     const glm::dvec3 o = e.to_unit * (origin - e.centre);
     const glm::dvec3 d = e.to_unit * direction;

@@ -39,7 +39,13 @@
 namespace sffd::picking {
 
 struct GaussianSource {
-    enum class Kind : int { none = 10, authored, deformed, cpu_deformed, gpu_read_back };  // disjoint from SplatSource::Kind
+    enum class Kind : int {
+        none = 10,
+        authored,
+        deformed,
+        cpu_deformed,
+        gpu_read_back
+    };  // disjoint from SplatSource::Kind
     Kind kind = Kind::none;
     std::uint64_t version = 0;  // identifies the data (a change stamp, or the cache entry's serial)
     glm::dvec3 origin{0.0};     // positions are relative to this (entity space)
@@ -58,7 +64,7 @@ struct GaussianDeformCache {
         std::vector<glm::mat3> jacobians;  // picking's own deformation
         std::vector<glm::vec3> scales;     // a read-back GPU output (gpu_version != 0)
         std::vector<glm::quat> rotations;
-        std::uint64_t gpu_version = 0;     // GpuGaussians::deformed_version read back; 0: own deformation
+        std::uint64_t gpu_version = 0;  // GpuGaussians::deformed_version read back; 0: own deformation
     };
     std::unordered_map<std::uint64_t, Entry> clouds;
     std::uint64_t deformations = 0;  // CPU deformations run (tests check they stay lazy)
@@ -77,7 +83,7 @@ double gaussian_pick_sigmas(double opacity);
 // One pickable Gaussian in world space: points p with |to_unit (p − centre)| ≤ k.
 struct PickEllipsoid {
     glm::dvec3 centre{0.0};
-    glm::dmat3 to_unit{1.0};     // S⁻¹ Rᵀ L⁻¹ (L: the entity's linear transform)
+    glm::dmat3 to_unit{1.0};      // S⁻¹ Rᵀ L⁻¹ (L: the entity's linear transform)
     glm::dvec3 half_extent{0.0};  // axis-aligned half size of the ellipsoid (bounds)
     double k = 0.0;
     double opacity = 0.0;
@@ -87,8 +93,9 @@ struct PickEllipsoid {
 // (`shifted_centre` = origin + position, entity space), its axes first mapped by `jacobian` (a
 // deformation's J; identity for none). k == 0 when not pickable (also for a singular J). Zero scales
 // (flat Gaussians) are raised to 1e-6 of the largest scale so the ellipsoid stays invertible.
-PickEllipsoid gaussian_ellipsoid(const glm::dmat4& model, const glm::dvec3& shifted_centre, const glm::vec3& scale,
-                                 const glm::quat& rotation, float opacity, const glm::mat3& jacobian = glm::mat3(1.0f));
+PickEllipsoid gaussian_ellipsoid(const glm::dmat4& model, const glm::dvec3& shifted_centre,
+                                 const glm::vec3& scale, const glm::quat& rotation, float opacity,
+                                 const glm::mat3& jacobian = glm::mat3(1.0f));
 
 // Ray parameter t ∈ [tnear, tfar] where the ray (origin, direction) enters the ellipsoid (or leaves it,
 // when the origin is inside); negative when it misses. Double precision, independent of Embree.
@@ -97,7 +104,7 @@ PickEllipsoid gaussian_ellipsoid(const glm::dmat4& model, const glm::dvec3& shif
 // this ray (up to its low-pass and perspective linearisation).
 double ray_alpha(const PickEllipsoid& e, const glm::dvec3& origin, const glm::dvec3& direction);
 
-double intersect_ellipsoid(const PickEllipsoid& e, const glm::dvec3& origin, const glm::dvec3& direction, double tnear,
-                           double tfar);
+double intersect_ellipsoid(const PickEllipsoid& e, const glm::dvec3& origin, const glm::dvec3& direction,
+                           double tnear, double tfar);
 
 }  // namespace sffd::picking

@@ -47,11 +47,11 @@ struct GeomRecord {
     std::vector<glm::vec3> centres, axis_u, axis_v;
     // Gaussian clouds (user geometry): the pickable Gaussians, indexed by primitive id.
     struct Ellipsoid {
-        glm::vec3 centre;    // anchor-relative
-        float k;             // Mahalanobis radius (gaussian_pick_sigmas)
-        glm::mat3 to_unit;   // S⁻¹ Rᵀ L⁻¹
-        std::uint32_t index; // the Gaussian's index in its cloud
-        float opacity;       // linear, for the blending weights of the most-visible pick
+        glm::vec3 centre;     // anchor-relative
+        float k;              // Mahalanobis radius (gaussian_pick_sigmas)
+        glm::mat3 to_unit;    // S⁻¹ Rᵀ L⁻¹
+        std::uint32_t index;  // the Gaussian's index in its cloud
+        float opacity;        // linear, for the blending weights of the most-visible pick
     };
     std::vector<Ellipsoid> ellipsoids;
 
@@ -159,7 +159,8 @@ void ellipsoid_bounds(const RTCBoundsFunctionArguments* args) {
     const GeomRecord::Ellipsoid& e = rec->ellipsoids[args->primID];
     const glm::mat3 B = glm::inverse(e.to_unit);
     glm::vec3 half;
-    for (int j = 0; j < 3; ++j) half[j] = e.k * glm::length(glm::vec3(B[0][j], B[1][j], B[2][j])) * (1.0f + 1e-5f);
+    for (int j = 0; j < 3; ++j)
+        half[j] = e.k * glm::length(glm::vec3(B[0][j], B[1][j], B[2][j])) * (1.0f + 1e-5f);
     RTCBounds* b = args->bounds_o;
     b->lower_x = e.centre.x - half.x, b->lower_y = e.centre.y - half.y, b->lower_z = e.centre.z - half.z;
     b->upper_x = e.centre.x + half.x, b->upper_y = e.centre.y + half.y, b->upper_z = e.centre.z + half.z;
@@ -173,14 +174,17 @@ void ellipsoid_intersect(const RTCIntersectFunctionNArguments* args) {
     RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, args->N);
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] != -1) continue;
-        const glm::dvec3 org{RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i)};
-        const glm::dvec3 dir{RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i)};
-        const double t = intersect_ellipsoid(pe, org, dir, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i));
+        const glm::dvec3 org{RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i),
+                             RTCRayN_org_z(ray, args->N, i)};
+        const glm::dvec3 dir{RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i),
+                             RTCRayN_dir_z(ray, args->N, i)};
+        const double t =
+            intersect_ellipsoid(pe, org, dir, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i));
         if (t < 0.0) continue;
         // Every surfaces-scene ray is cast with a PickContext (Impl::intersect, surface_between).
         if (auto* hits = reinterpret_cast<const PickContext*>(args->context)->collect) {
-            hits->push_back({t, glm::dot(pe.centre - org, dir) / glm::dot(dir, dir), ray_alpha(pe, org, dir), args->geomID,
-                             args->primID});
+            hits->push_back({t, glm::dot(pe.centre - org, dir) / glm::dot(dir, dir), ray_alpha(pe, org, dir),
+                             args->geomID, args->primID});
             continue;
         }
         RTCRayN_tfar(ray, args->N, i) = float(t);
@@ -203,11 +207,14 @@ void ellipsoid_occluded(const RTCOccludedFunctionNArguments* args) {
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] != -1) continue;
         RTCRayN* ray = args->ray;
-        const glm::dvec3 org{RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i), RTCRayN_org_z(ray, args->N, i)};
-        const glm::dvec3 dir{RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i), RTCRayN_dir_z(ray, args->N, i)};
+        const glm::dvec3 org{RTCRayN_org_x(ray, args->N, i), RTCRayN_org_y(ray, args->N, i),
+                             RTCRayN_org_z(ray, args->N, i)};
+        const glm::dvec3 dir{RTCRayN_dir_x(ray, args->N, i), RTCRayN_dir_y(ray, args->N, i),
+                             RTCRayN_dir_z(ray, args->N, i)};
         // A Gaussian hides what is behind it when it alone covers at least half the pixel (faint floaters
         // in front of a control point do not hide it).
-        if (intersect_ellipsoid(pe, org, dir, RTCRayN_tnear(ray, args->N, i), RTCRayN_tfar(ray, args->N, i)) >= 0.0 &&
+        if (intersect_ellipsoid(pe, org, dir, RTCRayN_tnear(ray, args->N, i),
+                                RTCRayN_tfar(ray, args->N, i)) >= 0.0 &&
             ray_alpha(pe, org, dir) >= 0.5)
             RTCRayN_tfar(ray, args->N, i) = -std::numeric_limits<float>::infinity();
     }
@@ -220,19 +227,20 @@ std::vector<GeomRecord::Ellipsoid> gaussian_ellipsoids(const GaussianSource& src
     const std::size_t n = src.positions.size();
     std::vector<GeomRecord::Ellipsoid> all(n);
     std::vector<std::uint8_t> keep(n, 0);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
-        for (std::size_t i = range.begin(); i < range.end(); ++i) {
-            const PickEllipsoid e =
-                gaussian_ellipsoid(model, src.origin + glm::dvec3(src.positions[i]), src.scales[i], src.rotations[i],
-                                   src.opacities[i], src.jacobians.empty() ? glm::mat3(1.0f) : src.jacobians[i]);
-            if (e.k <= 0.0) continue;
-            const glm::mat3 to_unit(e.to_unit);
-            const glm::vec3 c(e.centre - anchor);
-            if (!std::isfinite(glm::determinant(to_unit)) || glm::determinant(to_unit) == 0.0f) continue;
-            all[i] = {c, float(e.k), to_unit, std::uint32_t(i), float(e.opacity)};
-            keep[i] = 1;
-        }
-    });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
+            for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                const PickEllipsoid e = gaussian_ellipsoid(
+                    model, src.origin + glm::dvec3(src.positions[i]), src.scales[i], src.rotations[i],
+                    src.opacities[i], src.jacobians.empty() ? glm::mat3(1.0f) : src.jacobians[i]);
+                if (e.k <= 0.0) continue;
+                const glm::mat3 to_unit(e.to_unit);
+                const glm::vec3 c(e.centre - anchor);
+                if (!std::isfinite(glm::determinant(to_unit)) || glm::determinant(to_unit) == 0.0f) continue;
+                all[i] = {c, float(e.k), to_unit, std::uint32_t(i), float(e.opacity)};
+                keep[i] = 1;
+            }
+        });
     // Compact in place (no second n-sized array at the peak).
     std::size_t kept = 0;
     for (std::size_t i = 0; i < n; ++i)
@@ -242,16 +250,17 @@ std::vector<GeomRecord::Ellipsoid> gaussian_ellipsoids(const GaussianSource& src
 }
 
 // Fills (or refills) a point cloud's geometry buffers from its splats, in world space minus the anchor.
-void fill_surface(GeomRecord& rec, const SplatSource& src, const glm::dmat4& model, const glm::dvec3& anchor) {
+void fill_surface(GeomRecord& rec, const SplatSource& src, const glm::dmat4& model,
+                  const glm::dvec3& anchor) {
     const std::size_t n = src.positions.size();
     const glm::dmat3 linear(model);
     const glm::mat3 linear_f(linear);
     const glm::mat3 normal_f(glm::transpose(glm::inverse(linear)));
     const bool has_axes = src.axis_u.size() == n && src.axis_v.size() == n;
     auto* vertex = static_cast<float*>(rtcGetGeometryBufferData(rec.geometry, RTC_BUFFER_TYPE_VERTEX, 0));
-    float* normal = rec.discs
-        ? static_cast<float*>(rtcGetGeometryBufferData(rec.geometry, RTC_BUFFER_TYPE_NORMAL, 0))
-        : nullptr;
+    float* normal =
+        rec.discs ? static_cast<float*>(rtcGetGeometryBufferData(rec.geometry, RTC_BUFFER_TYPE_NORMAL, 0))
+                  : nullptr;
     rec.centres.resize(rec.discs ? n : 0);
     rec.axis_u.resize(rec.discs ? n : 0);
     rec.axis_v.resize(rec.discs ? n : 0);
@@ -265,32 +274,34 @@ void fill_surface(GeomRecord& rec, const SplatSource& src, const glm::dmat4& mod
     }
     const glm::dvec3 shift = src.origin;
     // Independent per splat: split across cores (the BVH build that follows is parallel too).
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
-        for (std::size_t i = range.begin(); i < range.end(); ++i) {
-            const glm::dvec3 world = glm::dvec3(model * glm::dvec4(shift + glm::dvec3(src.positions[i]), 1.0));
-            const glm::vec3 c(world - anchor);
-            float radius = fallback_radius;
-            if (has_axes) {
-                const glm::vec3 a = linear_f * src.axis_u[i];
-                const glm::vec3 b = linear_f * src.axis_v[i];
-                radius = ellipse_bounding_radius(a, b);
-                if (rec.discs) rec.axis_u[i] = a, rec.axis_v[i] = b;
-            }
-            vertex[4 * i + 0] = c.x;
-            vertex[4 * i + 1] = c.y;
-            vertex[4 * i + 2] = c.z;
-            vertex[4 * i + 3] = radius;
-            if (rec.discs) {
-                rec.centres[i] = c;
-                glm::vec3 nn = normal_f * src.normals[i];
-                const float len = glm::length(nn);
-                nn = len > 0.0f ? nn / len : glm::vec3(0, 0, 1);
-                normal[3 * i + 0] = nn.x;
-                normal[3 * i + 1] = nn.y;
-                normal[3 * i + 2] = nn.z;
-            }
-        }
-    });
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 4096),
+                      [&](const tbb::blocked_range<std::size_t>& range) {
+                          for (std::size_t i = range.begin(); i < range.end(); ++i) {
+                              const glm::dvec3 world =
+                                  glm::dvec3(model * glm::dvec4(shift + glm::dvec3(src.positions[i]), 1.0));
+                              const glm::vec3 c(world - anchor);
+                              float radius = fallback_radius;
+                              if (has_axes) {
+                                  const glm::vec3 a = linear_f * src.axis_u[i];
+                                  const glm::vec3 b = linear_f * src.axis_v[i];
+                                  radius = ellipse_bounding_radius(a, b);
+                                  if (rec.discs) rec.axis_u[i] = a, rec.axis_v[i] = b;
+                              }
+                              vertex[4 * i + 0] = c.x;
+                              vertex[4 * i + 1] = c.y;
+                              vertex[4 * i + 2] = c.z;
+                              vertex[4 * i + 3] = radius;
+                              if (rec.discs) {
+                                  rec.centres[i] = c;
+                                  glm::vec3 nn = normal_f * src.normals[i];
+                                  const float len = glm::length(nn);
+                                  nn = len > 0.0f ? nn / len : glm::vec3(0, 0, 1);
+                                  normal[3 * i + 0] = nn.x;
+                                  normal[3 * i + 1] = nn.y;
+                                  normal[3 * i + 2] = nn.z;
+                              }
+                          }
+                      });
     rtcUpdateGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_VERTEX, 0);
     if (rec.discs) rtcUpdateGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_NORMAL, 0);
     rtcCommitGeometry(rec.geometry);
@@ -318,13 +329,16 @@ void fill_controls(GeomRecord& rec, const Lattice& lattice, const glm::dmat4& mo
 }
 
 // New Embree geometry sized for `count` primitives, attached to `scene`.
-void create_geometry(RTCDevice device, RTCScene scene, GeomRecord& rec, RTCGeometryType type, std::size_t count) {
+void create_geometry(RTCDevice device, RTCScene scene, GeomRecord& rec, RTCGeometryType type,
+                     std::size_t count) {
     rec.geometry = rtcNewGeometry(device, type);
     rec.discs = type == RTC_GEOMETRY_TYPE_ORIENTED_DISC_POINT;
     rtcSetGeometryBuildQuality(rec.geometry, RTC_BUILD_QUALITY_LOW);
-    rtcSetNewGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float), count);
+    rtcSetNewGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float),
+                            count);
     if (rec.discs) {
-        rtcSetNewGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), count);
+        rtcSetNewGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+                                count);
         rtcSetGeometryUserData(rec.geometry, &rec);
         rtcSetGeometryIntersectFilterFunction(rec.geometry, ellipse_filter);
         rtcSetGeometryOccludedFilterFunction(rec.geometry, ellipse_filter);
@@ -341,8 +355,8 @@ void release_geometry(RTCScene scene, RecordMap& map, RecordMap::iterator it) {
 // drops its id, and lets `forget(entity)` drop what else the caller keeps for it. Adds to `released`;
 // true when any went.
 template <class C, class Forget>
-bool release_stale(const ecs::Registry& registry, RTCScene scene, RecordMap& records, std::unordered_map<unsigned, ecs::Entity>& ids,
-                   std::uint64_t& released, Forget&& forget) {
+bool release_stale(const ecs::Registry& registry, RTCScene scene, RecordMap& records,
+                   std::unordered_map<unsigned, ecs::Entity>& ids, std::uint64_t& released, Forget&& forget) {
     bool changed = false;
     for (auto it = records.begin(); it != records.end();) {
         const ecs::Entity e = it->second->entity;
@@ -380,17 +394,18 @@ struct PickingState::Impl {
     RTCDevice device = nullptr;
     RTCScene surfaces = nullptr;
     RTCScene controls = nullptr;
-    RecordMap surface_records, control_records;               // by entity bits
-    RecordMap gaussian_records;                               // Gaussian clouds (in the surfaces scene), by entity bits
+    RecordMap surface_records, control_records;  // by entity bits
+    RecordMap gaussian_records;                  // Gaussian clouds (in the surfaces scene), by entity bits
     std::unordered_map<unsigned, ecs::Entity> surface_ids, control_ids;  // geometry id -> entity
-    std::unordered_map<unsigned, ecs::Entity> gaussian_ids;   // surfaces-scene geometry id -> Gaussian entity
+    std::unordered_map<unsigned, ecs::Entity> gaussian_ids;  // surfaces-scene geometry id -> Gaussian entity
     glm::dvec3 anchor{0.0};
     bool anchored = false;
     // Registry stamps of the last refresh: when none moved, refresh() returns at once.
     std::array<std::uint64_t, 5> seen{~0ull, ~0ull, ~0ull, ~0ull, ~0ull};
     double seen_fraction = -1.0;
     DeformCache deform_cache;  // CPU deformations of clouds whose deformed output is GPU-only
-    GaussianDeformCache gaussian_cache;  // centres + Jacobians of Gaussian clouds without a current CPU output
+    GaussianDeformCache
+        gaussian_cache;  // centres + Jacobians of Gaussian clouds without a current CPU output
     Stats stats;
 
     Impl() : device(create_device()), surfaces(create_scene(device)), controls(create_scene(device)) {
@@ -440,8 +455,9 @@ void PickingState::Impl::create_gaussian_geometry(GeomRecord& rec) {
 }
 
 bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
-    bool changed = release_stale<GaussianCloud>(registry, surfaces, gaussian_records, gaussian_ids, stats.geometries_released,
-                                                [&](ecs::Entity e) { gaussian_cache.clouds.erase(e.bits()); });
+    bool changed = release_stale<GaussianCloud>(
+        registry, surfaces, gaussian_records, gaussian_ids, stats.geometries_released,
+        [&](ecs::Entity e) { gaussian_cache.clouds.erase(e.bits()); });
     for (auto [e, cloud] : registry.view<const GaussianCloud>()) {
         const GaussianSource src = gaussian_source(registry, e, gaussian_cache);
         const glm::dmat4 model = model_matrix(registry.try_get<Transform>(e));
@@ -486,15 +502,17 @@ bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
 
 bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
     // Entities that died or lost their cloud: detach their geometry (its id becomes free for reuse).
-    bool changed = release_stale<SplatCloud>(registry, surfaces, surface_records, surface_ids, stats.geometries_released,
-                                             [&](ecs::Entity e) { deform_cache.clouds.erase(e.bits()); });
+    bool changed =
+        release_stale<SplatCloud>(registry, surfaces, surface_records, surface_ids, stats.geometries_released,
+                                  [&](ecs::Entity e) { deform_cache.clouds.erase(e.bits()); });
     for (auto [e, cloud] : registry.view<const SplatCloud>()) {
         const SplatSource src = splat_source(registry, e, deform_cache);
         if (!anchored && !src.positions.empty()) {
             anchor = glm::dvec3(model_matrix(registry.try_get<Transform>(e)) * glm::dvec4(src.origin, 1.0));
             anchored = true;
         }
-        const Stamp stamp{int(src.kind), src.version, registry.version<Transform>(e), 0.0, src.positions.size()};
+        const Stamp stamp{int(src.kind), src.version, registry.version<Transform>(e), 0.0,
+                          src.positions.size()};
         auto it = surface_records.find(e.bits());
         if (it != surface_records.end() && it->second->stamp == stamp) continue;
         const bool discs = src.normals.size() == src.positions.size();
@@ -534,10 +552,12 @@ bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
 }
 
 bool PickingState::Impl::refresh_controls(ecs::Registry& registry, double fraction) {
-    bool changed = release_stale<Lattice>(registry, controls, control_records, control_ids, stats.geometries_released, [](ecs::Entity) {});
+    bool changed = release_stale<Lattice>(registry, controls, control_records, control_ids,
+                                          stats.geometries_released, [](ecs::Entity) {});
     for (auto [e, lattice] : registry.view<const Lattice>()) {
         if (!anchored && !lattice.current.empty()) {
-            anchor = glm::dvec3(model_matrix(registry.try_get<Transform>(e)) * glm::dvec4(lattice.origin, 1.0));
+            anchor =
+                glm::dvec3(model_matrix(registry.try_get<Transform>(e)) * glm::dvec4(lattice.origin, 1.0));
             anchored = true;
         }
         const Stamp stamp{-1, registry.version<Lattice>(e), registry.version<Transform>(e), fraction,
@@ -576,9 +596,10 @@ bool PickingState::Impl::refresh_controls(ecs::Registry& registry, double fracti
 bool PickingState::refresh(ecs::Registry& registry, const PickSettings& settings) {
     Impl& s = *m_impl;
     ++s.stats.refresh_calls;
-    const std::array<std::uint64_t, 5> now{registry.storage_version<SplatCloud>(), splat_source_storage_version(registry),
-                                           registry.storage_version<Transform>(), registry.storage_version<Lattice>(),
-                                           gaussian_source_storage_version(registry)};
+    const std::array<std::uint64_t, 5> now{
+        registry.storage_version<SplatCloud>(), splat_source_storage_version(registry),
+        registry.storage_version<Transform>(), registry.storage_version<Lattice>(),
+        gaussian_source_storage_version(registry)};
     if (now == s.seen && settings.control_point_radius_fraction == s.seen_fraction) return false;
     const bool a = s.refresh_surfaces(registry);
     const bool b = s.refresh_controls(registry, settings.control_point_radius_fraction);
@@ -597,7 +618,8 @@ std::optional<PickingState::RayHit> PickingState::Impl::intersect(
     if (scene == surfaces) {
         if (const auto g = gaussian_ids.find(rh.hit.geomID); g != gaussian_ids.end()) {
             const auto rec = gaussian_records.find(g->second.bits());
-            if (rec == gaussian_records.end() || rh.hit.primID >= rec->second->ellipsoids.size()) return std::nullopt;
+            if (rec == gaussian_records.end() || rh.hit.primID >= rec->second->ellipsoids.size())
+                return std::nullopt;
             return RayHit{g->second, rec->second->ellipsoids[rh.hit.primID].index, double(rh.ray.tfar), true};
         }
     }
@@ -626,8 +648,9 @@ std::optional<PickingState::RayHit> PickingState::most_visible_surface(const Ray
             disc = RayHit{it->second, rh.hit.primID, double(rh.ray.tfar), false};
     const double t_disc = disc ? disc->t : std::numeric_limits<double>::infinity();
     std::erase_if(hits, [&](const GaussianRayHit& h) { return !(h.t_entry <= t_disc); });
-    std::stable_sort(hits.begin(), hits.end(),
-                     [](const GaussianRayHit& a, const GaussianRayHit& b) { return a.t_centre < b.t_centre; });
+    std::stable_sort(hits.begin(), hits.end(), [](const GaussianRayHit& a, const GaussianRayHit& b) {
+        return a.t_centre < b.t_centre;
+    });
     // Front-to-back blending weights w = α T; the disc is opaque (weight T behind every Gaussian).
     double T = 1.0, best_w = 0.0;
     const GaussianRayHit* best = nullptr;
@@ -650,7 +673,7 @@ std::optional<PickingState::RayHit> PickingState::intersect_controls(const Ray& 
 }
 
 std::optional<glm::dvec2> PickingState::splat_coordinates(ecs::Entity cloud, std::uint32_t index,
-                                                           const glm::dvec3& world) const {
+                                                          const glm::dvec3& world) const {
     const auto it = m_impl->surface_records.find(cloud.bits());
     if (it == m_impl->surface_records.end()) return std::nullopt;
     const GeomRecord& rec = *it->second;

@@ -46,16 +46,18 @@ public:
 
     // Counters for tests and the benchmark: how much work refreshes did.
     struct Stats {
-        std::uint64_t refresh_calls = 0;      // refresh() invocations
-        std::uint64_t surface_commits = 0;    // rtcCommitScene on the surfaces scene
-        std::uint64_t control_commits = 0;    // rtcCommitScene on the controls scene
+        std::uint64_t refresh_calls = 0;    // refresh() invocations
+        std::uint64_t surface_commits = 0;  // rtcCommitScene on the surfaces scene
+        std::uint64_t control_commits = 0;  // rtcCommitScene on the controls scene
         std::uint64_t geometries_created = 0;
-        std::uint64_t geometries_updated = 0; // in-place buffer updates (same entity, data moved)
+        std::uint64_t geometries_updated = 0;  // in-place buffer updates (same entity, data moved)
         std::uint64_t geometries_released = 0;
-        std::uint64_t cpu_deformations = 0;   // clouds deformed on the CPU by picking (no context, no CPU output)
-        std::uint64_t gpu_read_backs = 0;     // GPU-only deformed outputs read back (once per version)
-        std::uint64_t gaussian_cpu_deformations = 0;  // Gaussian clouds' centres + Jacobians computed by picking
-        std::uint64_t gaussian_gpu_read_backs = 0;    // Gaussian clouds' GPU-only outputs read back
+        std::uint64_t cpu_deformations =
+            0;  // clouds deformed on the CPU by picking (no context, no CPU output)
+        std::uint64_t gpu_read_backs = 0;  // GPU-only deformed outputs read back (once per version)
+        std::uint64_t gaussian_cpu_deformations =
+            0;  // Gaussian clouds' centres + Jacobians computed by picking
+        std::uint64_t gaussian_gpu_read_backs = 0;  // Gaussian clouds' GPU-only outputs read back
     };
     const Stats& stats() const;
 
@@ -67,7 +69,7 @@ public:
         ecs::Entity entity = ecs::null_entity;
         std::uint32_t index = 0;  // splat, Gaussian or control-point index
         double t = 0.0;
-        bool gaussian = false;    // a Gaussian of a GaussianCloud (surfaces scene only)
+        bool gaussian = false;  // a Gaussian of a GaussianCloud (surfaces scene only)
     };
     std::optional<RayHit> intersect_surfaces(const Ray& ray, double tfar) const;
     std::optional<RayHit> intersect_controls(const Ray& ray, double tfar) const;
@@ -85,7 +87,8 @@ public:
     // Coordinates (x, y) of a world point in a picked splat's frame, point = centre + x a + y b with a, b
     // the splat's world-space axes as last refreshed (least squares). nullopt for unknown clouds, sphere
     // clouds or degenerate axes.
-    std::optional<glm::dvec2> splat_coordinates(ecs::Entity cloud, std::uint32_t index, const glm::dvec3& world) const;
+    std::optional<glm::dvec2> splat_coordinates(ecs::Entity cloud, std::uint32_t index,
+                                                const glm::dvec3& world) const;
 
     // Number of geometries in each scene (for tests: ids are released when entities die).
     std::size_t surface_geometry_count() const;

@@ -56,7 +56,11 @@ PickHit control_point_near_cursor(ecs::Registry& registry, const PickingState& s
             if (!q.xray && q.surfaces && state.surface_between(q.ray.origin, points[i])) continue;
             best_px = px;
             best_depth = p->depth;
-            best = {PickKind::control_point, e, std::uint32_t(i), points[i], glm::length(points[i] - q.ray.origin),
+            best = {PickKind::control_point,
+                    e,
+                    std::uint32_t(i),
+                    points[i],
+                    glm::length(points[i] - q.ray.origin),
                     glm::dvec2(0.0)};
         }
     }
@@ -88,17 +92,21 @@ PickHit pick(ecs::Registry& registry, PickingState& state, const PickQuery& quer
             const std::vector<glm::dvec3> points = control_points_world(registry, c->entity);
             if (c->index < points.size()) {
                 const glm::dvec3 p = points[c->index];
-                return {PickKind::control_point, c->entity, c->index, p, glm::length(p - q.ray.origin), glm::dvec2(0.0)};
+                return {PickKind::control_point,       c->entity,      c->index, p,
+                        glm::length(p - q.ray.origin), glm::dvec2(0.0)};
             }
         }
     }
     if (surface && surface->gaussian)
-        return {PickKind::gaussian, surface->entity, surface->index, q.ray.origin + surface->t * q.ray.direction,
-                surface->t, glm::dvec2(0.0)};
+        return {PickKind::gaussian, surface->entity,
+                surface->index,     q.ray.origin + surface->t * q.ray.direction,
+                surface->t,         glm::dvec2(0.0)};
     if (surface) {
-        PickHit hit{PickKind::surface, surface->entity, surface->index, q.ray.origin + surface->t * q.ray.direction,
-                    surface->t, glm::dvec2(0.0)};
-        hit.splat_coords = state.splat_coordinates(hit.entity, hit.index, hit.position).value_or(glm::dvec2(0.0));
+        PickHit hit{PickKind::surface, surface->entity,
+                    surface->index,    q.ray.origin + surface->t * q.ray.direction,
+                    surface->t,        glm::dvec2(0.0)};
+        hit.splat_coords =
+            state.splat_coordinates(hit.entity, hit.index, hit.position).value_or(glm::dvec2(0.0));
         return hit;
     }
     return {};

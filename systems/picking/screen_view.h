@@ -28,7 +28,9 @@ inline ScreenView make_screen_view(const Camera& camera, glm::ivec2 size) {
 }
 
 // The ray from the eye through the screen point (continuous pixel coordinates, see above).
-inline Ray ray_through(const ScreenView& view, glm::dvec2 screen) { return pixel_ray(view.camera, view.viewport, screen); }
+inline Ray ray_through(const ScreenView& view, glm::dvec2 screen) {
+    return pixel_ray(view.camera, view.viewport, screen);
+}
 
 // Where a world point lands on screen: (x, y) in pixels and the eye-space depth (distance along the view
 // direction, > 0 in front of the camera). nullopt for points at or behind the eye plane.

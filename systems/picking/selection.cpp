@@ -15,15 +15,14 @@ SelectMode select_mode(bool shift, bool ctrl) {
     return shift ? SelectMode::add : SelectMode::replace;
 }
 
-LatticeSelection select(const LatticeSelection& current, std::span<const std::uint32_t> picked, SelectMode mode) {
+LatticeSelection select(const LatticeSelection& current, std::span<const std::uint32_t> picked,
+                        SelectMode mode) {
     std::vector<std::uint32_t> p(picked.begin(), picked.end());
     std::sort(p.begin(), p.end());
     p.erase(std::unique(p.begin(), p.end()), p.end());
     LatticeSelection out;
     switch (mode) {
-        case SelectMode::replace:
-            out.indices = std::move(p);
-            break;
+        case SelectMode::replace: out.indices = std::move(p); break;
         case SelectMode::add:
             std::set_union(current.indices.begin(), current.indices.end(), p.begin(), p.end(),
                            std::back_inserter(out.indices));
@@ -40,34 +39,37 @@ bool is_selected(const LatticeSelection& selection, std::uint32_t index) {
     return std::binary_search(selection.indices.begin(), selection.indices.end(), index);
 }
 
-std::vector<std::uint32_t> control_points_in_rect(std::span<const glm::dvec3> world_points, const ScreenView& view,
-                                                  ScreenRect rect,
+std::vector<std::uint32_t> control_points_in_rect(std::span<const glm::dvec3> world_points,
+                                                  const ScreenView& view, ScreenRect rect,
                                                   const std::function<bool(const glm::dvec3&)>& visible) {
     const glm::dvec2 lo = glm::min(rect.a, rect.b), hi = glm::max(rect.a, rect.b);
     std::vector<std::uint32_t> out;
     for (std::size_t i = 0; i < world_points.size(); ++i) {
         const auto p = project(view, world_points[i]);
-        if (!p || p->screen.x < lo.x || p->screen.y < lo.y || p->screen.x > hi.x || p->screen.y > hi.y) continue;
+        if (!p || p->screen.x < lo.x || p->screen.y < lo.y || p->screen.x > hi.x || p->screen.y > hi.y)
+            continue;
         if (visible && !visible(world_points[i])) continue;
         out.push_back(std::uint32_t(i));
     }
     return out;
 }
 
-std::vector<std::uint32_t> control_points_in_rect(ecs::Registry& registry, PickingState& state, ecs::Entity lattice,
-                                                  const ScreenView& view, ScreenRect rect, bool visible_only) {
+std::vector<std::uint32_t> control_points_in_rect(ecs::Registry& registry, PickingState& state,
+                                                  ecs::Entity lattice, const ScreenView& view,
+                                                  ScreenRect rect, bool visible_only) {
     const std::vector<glm::dvec3> points = control_points_world(registry, lattice);
     if (!visible_only) return control_points_in_rect(points, view, rect);
     const PickSettings* settings = registry.try_resource<PickSettings>();
     state.refresh(registry, settings ? *settings : PickSettings{});
-    return control_points_in_rect(points, view, rect,
-                                  [&](const glm::dvec3& p) { return !state.surface_between(view.camera.eye, p); });
+    return control_points_in_rect(
+        points, view, rect, [&](const glm::dvec3& p) { return !state.surface_between(view.camera.eye, p); });
 }
 
 std::optional<glm::dvec3> lattice_local_coordinates(const Lattice& lattice, const glm::dvec3& point) {
     const glm::dmat3 m(lattice.axes[0], lattice.axes[1], lattice.axes[2]);  // columns S, T, U
     const double det = glm::determinant(m);
-    const double scale = glm::length(lattice.axes[0]) * glm::length(lattice.axes[1]) * glm::length(lattice.axes[2]);
+    const double scale =
+        glm::length(lattice.axes[0]) * glm::length(lattice.axes[1]) * glm::length(lattice.axes[2]);
     if (!(std::abs(det) > 1e-12 * scale)) return std::nullopt;
     return glm::inverse(m) * (point - lattice.origin);
 }
@@ -93,7 +95,8 @@ double cubic_bspline(double x) {
 std::vector<double> axis_weights(LatticeBasis basis, int divisions, double x) {
     std::vector<double> w(std::size_t(divisions) + 1);
     for (int i = 0; i <= divisions; ++i)
-        w[i] = basis == LatticeBasis::bernstein ? bernstein(divisions, i, x) : cubic_bspline(divisions * x - i);
+        w[i] =
+            basis == LatticeBasis::bernstein ? bernstein(divisions, i, x) : cubic_bspline(divisions * x - i);
     return w;
 }
 
@@ -113,17 +116,20 @@ std::vector<double> control_point_weights(const Lattice& lattice, const glm::dve
     const auto wu = axis_weights(lattice.basis, lattice.divisions.z, local->z);
     for (int i = 0; i <= lattice.divisions.x; ++i)
         for (int j = 0; j <= lattice.divisions.y; ++j)
-            for (int k = 0; k <= lattice.divisions.z; ++k) out[lattice.index(i, j, k)] = ws[i] * wt[j] * wu[k];
+            for (int k = 0; k <= lattice.divisions.z; ++k)
+                out[lattice.index(i, j, k)] = ws[i] * wt[j] * wu[k];
     return out;
 }
 
-std::vector<std::uint32_t> brush_select(const Lattice& lattice, const glm::dvec3& point, const BrushOptions& options) {
+std::vector<std::uint32_t> brush_select(const Lattice& lattice, const glm::dvec3& point,
+                                        const BrushOptions& options) {
     const std::vector<double> w = control_point_weights(lattice, point);
     const double max_w = w.empty() ? 0.0 : *std::max_element(w.begin(), w.end());
     if (!(max_w > 0.0)) return {};
     std::vector<std::uint32_t> order(w.size());
     std::iota(order.begin(), order.end(), 0u);
-    std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) { return w[a] > w[b]; });
+    std::stable_sort(order.begin(), order.end(),
+                     [&](std::uint32_t a, std::uint32_t b) { return w[a] > w[b]; });
     std::vector<std::uint32_t> out;
     for (std::uint32_t i : order) {
         if (options.top_k && out.size() >= options.top_k) break;

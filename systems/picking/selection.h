@@ -30,7 +30,8 @@ SelectMode select_mode(bool shift, bool ctrl);
 
 // The selection after applying `picked` with `mode`. Replace with nothing picked clears the selection
 // (a click into empty space); add/remove with nothing picked leave it unchanged. Result sorted, unique.
-LatticeSelection select(const LatticeSelection& current, std::span<const std::uint32_t> picked, SelectMode mode);
+LatticeSelection select(const LatticeSelection& current, std::span<const std::uint32_t> picked,
+                        SelectMode mode);
 
 bool is_selected(const LatticeSelection& selection, std::uint32_t index);
 
@@ -42,14 +43,15 @@ struct ScreenRect {
 
 // Indices of the points whose projection lies inside the rectangle (borders included) and in front of
 // the camera, and for which `visible` (when given) returns true.
-std::vector<std::uint32_t> control_points_in_rect(std::span<const glm::dvec3> world_points, const ScreenView& view,
-                                                  ScreenRect rect,
+std::vector<std::uint32_t> control_points_in_rect(std::span<const glm::dvec3> world_points,
+                                                  const ScreenView& view, ScreenRect rect,
                                                   const std::function<bool(const glm::dvec3&)>& visible = {});
 
 // Registry form: the lattice entity's control points; with `visible_only`, points hidden behind a
 // surface (from the eye) are left out — pass visible_only = !xray.
-std::vector<std::uint32_t> control_points_in_rect(ecs::Registry& registry, PickingState& state, ecs::Entity lattice,
-                                                  const ScreenView& view, ScreenRect rect, bool visible_only);
+std::vector<std::uint32_t> control_points_in_rect(ecs::Registry& registry, PickingState& state,
+                                                  ecs::Entity lattice, const ScreenView& view,
+                                                  ScreenRect rect, bool visible_only);
 
 // --- surface brush --------------------------------------------------------------------------------
 // Lattice-local coordinates (s, t, u) = M⁻¹ (X − X0), M = [S T U] (notes/ffd-math.md). nullopt when the
@@ -68,7 +70,8 @@ struct BrushOptions {
 
 // The control points with the most influence at X, by decreasing weight (ties: lower index first).
 // Empty when X is outside the lattice.
-std::vector<std::uint32_t> brush_select(const Lattice& lattice, const glm::dvec3& point, const BrushOptions& options);
+std::vector<std::uint32_t> brush_select(const Lattice& lattice, const glm::dvec3& point,
+                                        const BrushOptions& options);
 
 // Where a surface hit lies in the lattice's (undeformed) space: the authored rest position of the hit
 // point (splat centre + splat_coords along the authored axes), moved from its cloud's space into the

@@ -83,7 +83,9 @@ SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud_entity
     }
 
     const Deformers* deformers = registry.try_get<Deformers>(cloud_entity);
-    if (const gfx::GpuSplats* gpu = deformers && !deformers->lattices.empty() ? gpu_only_output(registry, cloud_entity, n) : nullptr) {
+    if (const gfx::GpuSplats* gpu = deformers && !deformers->lattices.empty()
+                                        ? gpu_only_output(registry, cloud_entity, n)
+                                        : nullptr) {
         DeformCache::Entry& entry = cache.clouds[cloud_entity.bits()];
         const std::uint64_t key = mix(0x9b1d5a7e3c2f4d61ull, gpu->deformed_version);
         if (entry.key != key || entry.deformed.positions.size() != n) {
@@ -119,7 +121,8 @@ SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud_entity
     src.version = registry.version<SplatCloud>(cloud_entity);
     src.positions = cloud->positions;
     src.normals = if_sized(cloud->normals, n);
-    if (cloud->axis_u.size() == n && cloud->axis_v.size() == n) src.axis_u = cloud->axis_u, src.axis_v = cloud->axis_v;
+    if (cloud->axis_u.size() == n && cloud->axis_v.size() == n)
+        src.axis_u = cloud->axis_u, src.axis_v = cloud->axis_v;
     return src;
 }
 

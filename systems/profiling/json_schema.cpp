@@ -19,7 +19,8 @@ bool has_type(const json& v, const std::string& type) {
     if (type == "null") return v.is_null();
     if (type == "number") return v.is_number();
     if (type == "integer")
-        return v.is_number_integer() || (v.is_number_float() && std::floor(v.get<double>()) == v.get<double>());
+        return v.is_number_integer() ||
+               (v.is_number_float() && std::floor(v.get<double>()) == v.get<double>());
     return false;
 }
 
@@ -27,12 +28,15 @@ struct Validator {
     const json& root;
     std::vector<std::string> errors;
 
-    void fail(const std::string& where, const std::string& what) { errors.push_back((where.empty() ? "/" : where) + ": " + what); }
+    void fail(const std::string& where, const std::string& what) {
+        errors.push_back((where.empty() ? "/" : where) + ": " + what);
+    }
 
     const json* resolve(const std::string& ref, const std::string& where) {
         if (ref == "#") return &root;
         const std::string prefix = "#/$defs/";
-        if (ref.rfind(prefix, 0) == 0 && root.contains("$defs") && root["$defs"].contains(ref.substr(prefix.size())))
+        if (ref.rfind(prefix, 0) == 0 && root.contains("$defs") &&
+            root["$defs"].contains(ref.substr(prefix.size())))
             return &root["$defs"][ref.substr(prefix.size())];
         fail(where, "schema: unresolvable $ref \"" + ref + "\"");
         return nullptr;
@@ -45,9 +49,11 @@ struct Validator {
             return;
         }
         if (!schema.is_object()) return fail(where, "schema: a schema must be an object or a boolean");
-        static const std::set<std::string> known = {"$schema", "$id", "$defs", "title", "description", "type",
-                                                    "properties", "required", "additionalProperties", "items",
-                                                    "minimum", "enum", "const", "$ref"};
+        static const std::set<std::string> known = {"$schema",    "$id",         "$defs",
+                                                    "title",      "description", "type",
+                                                    "properties", "required",    "additionalProperties",
+                                                    "items",      "minimum",     "enum",
+                                                    "const",      "$ref"};
         for (const auto& [k, _] : schema.items())
             if (!known.count(k)) fail(where, "schema: unsupported keyword \"" + k + "\"");
 
@@ -60,7 +66,7 @@ struct Validator {
             if (t.is_string()) ok = has_type(v, t.get<std::string>());
             else
                 for (const auto& one : t) ok |= has_type(v, one.get<std::string>());
-            if (!ok) fail(where, v.dump() .substr(0, 60) + " is not of type " + t.dump());
+            if (!ok) fail(where, v.dump().substr(0, 60) + " is not of type " + t.dump());
         }
         if (schema.contains("const") && v != schema["const"])
             fail(where, v.dump().substr(0, 60) + " is not " + schema["const"].dump());
@@ -74,7 +80,8 @@ struct Validator {
         if (v.is_object()) {
             if (schema.contains("required"))
                 for (const auto& r : schema["required"])
-                    if (!v.contains(r.get<std::string>())) fail(where, "missing required property \"" + r.get<std::string>() + "\"");
+                    if (!v.contains(r.get<std::string>()))
+                        fail(where, "missing required property \"" + r.get<std::string>() + "\"");
             const json* props = schema.contains("properties") ? &schema["properties"] : nullptr;
             for (const auto& [k, value] : v.items()) {
                 if (props && props->contains(k)) {
@@ -85,7 +92,8 @@ struct Validator {
             }
         }
         if (v.is_array() && schema.contains("items"))
-            for (std::size_t i = 0; i < v.size(); ++i) validate(schema["items"], v[i], where + "/" + std::to_string(i), depth + 1);
+            for (std::size_t i = 0; i < v.size(); ++i)
+                validate(schema["items"], v[i], where + "/" + std::to_string(i), depth + 1);
     }
 };
 

@@ -22,7 +22,7 @@ struct ProfileOverlay {
     // Ring buffer of whole-frame wall times in ms: the newest is at (head + history - 1) % history;
     // `count` grows to `history`. oldest() is the values_offset for ImGui::PlotLines.
     std::array<float, history> frame_ms{};
-    std::size_t head = 0;   // next slot to write
+    std::size_t head = 0;  // next slot to write
     std::size_t count = 0;
     float max_ms = 0.0f;        // largest value in the ring (graph scale)
     float frame_avg_ms = 0.0f;  // mean over the ring

@@ -47,8 +47,9 @@ Lattice paper_lattice(const SplatCloud& cloud, int divisions) {
     lo -= 0.02 * extent;
     extent *= 1.04;
 
-    Lattice l = make_lattice(lo, {glm::dvec3(extent.x, 0, 0), glm::dvec3(0, extent.y, 0), glm::dvec3(0, 0, extent.z)},
-                             glm::ivec3(divisions), LatticeBasis::bernstein);
+    Lattice l =
+        make_lattice(lo, {glm::dvec3(extent.x, 0, 0), glm::dvec3(0, extent.y, 0), glm::dvec3(0, 0, extent.z)},
+                     glm::ivec3(divisions), LatticeBasis::bernstein);
     return l;
 }
 
@@ -116,8 +117,8 @@ void paper_ffd_naive(const Lattice& l, const SplatCloud& cloud, std::vector<glm:
                 for (int k = 0; k <= N; ++k) {
                     const glm::dvec3& P = l.current[l.index(i, j, k)];
                     const double bs = bernstein(L, i, s), bt = bernstein(M, j, t), bu = bernstein(N, k, u);
-                    X1 += P * (bs * bt * bu);                                     // eq. (6)
-                    Fs += P * (bernstein_derivative(L, i, s) * bt * bu);          // eqs. (11)-(19), corrected
+                    X1 += P * (bs * bt * bu);                             // eq. (6)
+                    Fs += P * (bernstein_derivative(L, i, s) * bt * bu);  // eqs. (11)-(19), corrected
                     Ft += P * (bs * bernstein_derivative(M, j, t) * bu);
                     Fu += P * (bs * bt * bernstein_derivative(N, k, u));
                 }

@@ -26,8 +26,8 @@ namespace sffd::profiling {
 
 struct PaperCase {
     const char* name;
-    bool local;   // a subset of control points (else all of them)
-    bool twist;   // rotation about an axis (else translation)
+    bool local;  // a subset of control points (else all of them)
+    bool twist;  // rotation about an axis (else translation)
 };
 inline constexpr PaperCase paper_cases[4] = {
     {"local stretch", true, false},

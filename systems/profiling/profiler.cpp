@@ -31,7 +31,8 @@ const char* gpu_timing_name(GpuTiming timing) {
     return "?";
 }
 
-Profiler::Profiler(ProfilerSettings settings) : m_settings(settings), m_t0(std::chrono::steady_clock::now()) {}
+Profiler::Profiler(ProfilerSettings settings)
+    : m_settings(settings), m_t0(std::chrono::steady_clock::now()) {}
 
 Profiler::~Profiler() {
     if (!m_query_names.empty())

@@ -43,10 +43,10 @@ struct ScopeSample {
     std::uint32_t system = no_name;  // passes: the system that issued it (no_name outside systems)
     ScopeKind kind = ScopeKind::system;
     Phase phase = Phase::input;
-    std::uint16_t depth = 0;         // passes: nesting level (0 = outermost)
-    double begin_ms = 0.0;           // CPU clock, ms since the profiler was created
-    double cpu_ms = 0.0;             // CPU wall time between begin and end hooks
-    double gpu_ms = -1.0;            // passes: GPU time; -1 when unknown (method none, or not read yet)
+    std::uint16_t depth = 0;  // passes: nesting level (0 = outermost)
+    double begin_ms = 0.0;    // CPU clock, ms since the profiler was created
+    double cpu_ms = 0.0;      // CPU wall time between begin and end hooks
+    double gpu_ms = -1.0;     // passes: GPU time; -1 when unknown (method none, or not read yet)
 };
 
 struct FrameRecord {
@@ -58,8 +58,8 @@ struct FrameRecord {
 
 struct ProfilerSettings {
     GpuTiming gpu = GpuTiming::none;
-    int query_latency = 3;     // frames before a query result is polled (never waited for)
-    bool keep_frames = true;   // false: only the live overlay is updated (editor), no history kept
+    int query_latency = 3;    // frames before a query result is polled (never waited for)
+    bool keep_frames = true;  // false: only the live overlay is updated (editor), no history kept
 };
 
 class Profiler {
@@ -96,7 +96,7 @@ private:
     };
     struct Pending {
         std::uint64_t frame = 0;
-        std::size_t record = 0;   // index in m_frames (SIZE_MAX when frames are not kept)
+        std::size_t record = 0;  // index in m_frames (SIZE_MAX when frames are not kept)
         std::size_t sample = 0;
         std::uint32_t name = 0;
         std::uint32_t q_begin = 0, q_end = 0;
@@ -126,7 +126,7 @@ private:
     std::unordered_map<const char*, std::uint32_t> m_pass_ids;  // pointer cache (content-checked)
 
     std::vector<FrameRecord> m_frames;
-    FrameRecord m_scratch;    // the open frame when frames are not kept
+    FrameRecord m_scratch;  // the open frame when frames are not kept
     bool m_in_frame = false;
     std::uint64_t m_frame_no = 0;
     Phase m_phase = Phase::input;

@@ -120,7 +120,8 @@ ProfileReport build_report(const Profiler& profiler, Config config, MachineInfo 
         row.name = profiler.name(a.name);
         row.phase = phase_name(a.phase);
         if (a.system != no_name) row.system = profiler.name(a.system);
-        row.calls_per_frame = frames.empty() ? 0.0 : static_cast<double>(a.calls) / static_cast<double>(frames.size());
+        row.calls_per_frame =
+            frames.empty() ? 0.0 : static_cast<double>(a.calls) / static_cast<double>(frames.size());
         a.cpu.resize(frames.size(), 0.0);
         row.cpu_ms = compute_stats(a.cpu);
         if (a.kind == ScopeKind::pass && a.any_gpu) {
@@ -147,7 +148,7 @@ ProfileReport build_report(const Profiler& profiler, Config config, MachineInfo 
 namespace {
 
 json stats_json(const Stats& s) {
-    return json{{"n", s.n}, {"min", s.min}, {"mean", s.mean}, {"p50", s.p50},
+    return json{{"n", s.n},     {"min", s.min}, {"mean", s.mean}, {"p50", s.p50},
                 {"p95", s.p95}, {"p99", s.p99}, {"max", s.max}};
 }
 
@@ -166,8 +167,11 @@ Stats stats_from(const json& j) {
 json rows_json(const std::vector<TimingRow>& rows, bool with_system) {
     json a = json::array();
     for (const auto& r : rows) {
-        json o{{"name", r.name}, {"phase", r.phase}, {"calls_per_frame", r.calls_per_frame},
-               {"cpu_ms", stats_json(r.cpu_ms)}, {"gpu_ms", r.gpu_ms ? stats_json(*r.gpu_ms) : json(nullptr)}};
+        json o{{"name", r.name},
+               {"phase", r.phase},
+               {"calls_per_frame", r.calls_per_frame},
+               {"cpu_ms", stats_json(r.cpu_ms)},
+               {"gpu_ms", r.gpu_ms ? stats_json(*r.gpu_ms) : json(nullptr)}};
         if (with_system) o["system"] = r.system;
         a.push_back(std::move(o));
     }
@@ -193,14 +197,17 @@ std::vector<TimingRow> rows_from(const json& a) {
 
 std::string to_json(const ProfileReport& r) {
     json config = json::object();
-    for (const auto& [k, v] : r.config)
-        std::visit([&, key = k](const auto& x) { config[key] = x; }, v);
+    for (const auto& [k, v] : r.config) std::visit([&, key = k](const auto& x) { config[key] = x; }, v);
     json j{
         {"format", "splatffd-profile"},
         {"version", 1},
         {"config", config},
-        {"machine", {{"cpu", r.machine.cpu}, {"cores", r.machine.cores}, {"os", r.machine.os},
-                     {"gl_renderer", r.machine.gl_renderer}, {"gl_version", r.machine.gl_version}}},
+        {"machine",
+         {{"cpu", r.machine.cpu},
+          {"cores", r.machine.cores},
+          {"os", r.machine.os},
+          {"gl_renderer", r.machine.gl_renderer},
+          {"gl_version", r.machine.gl_version}}},
         {"gpu_timing", r.gpu_timing},
         {"frame", {{"cpu_ms", stats_json(r.frame_ms)}, {"fps_mean", r.fps_mean}, {"fps_p50", r.fps_p50}}},
         {"phases", rows_json(r.phases, false)},
@@ -215,7 +222,8 @@ Result<ProfileReport> report_from_json(const std::string& text, const std::strin
     if (j.is_discarded()) return make_error(path + ": not valid JSON");
     try {
         if (j.value("format", "") != "splatffd-profile")
-            return make_error(path + ": not a splatffd profile report (\"format\" is not \"splatffd-profile\")");
+            return make_error(path +
+                              ": not a splatffd profile report (\"format\" is not \"splatffd-profile\")");
         ProfileReport r;
         for (const auto& [k, v] : j.at("config").items()) {
             if (v.is_string()) r.config.emplace_back(k, v.get<std::string>());
@@ -244,7 +252,8 @@ Result<ProfileReport> report_from_json(const std::string& text, const std::strin
 // ---------------------------------------------------------------------------------------------- text
 
 namespace {
-std::string fmt_row(const char* kind, const std::string& name, const Stats& s, const std::optional<Stats>& g) {
+std::string fmt_row(const char* kind, const std::string& name, const Stats& s,
+                    const std::optional<Stats>& g) {
     char buf[256];
     std::snprintf(buf, sizeof buf, "%-7s %-28s %9.3f %9.3f %9.3f %9.3f", kind, name.c_str(), s.p50, s.p95,
                   s.p99, s.max);
@@ -281,22 +290,23 @@ std::string to_text(const ProfileReport& r) {
                   r.machine.gl_renderer.empty() ? "none" : r.machine.gl_renderer.c_str(),
                   r.machine.gl_version.c_str());
     o += buf;
-    std::snprintf(buf, sizeof buf,
-                  "GPU timing: %s%s\n", r.gpu_timing.c_str(),
+    std::snprintf(buf, sizeof buf, "GPU timing: %s%s\n", r.gpu_timing.c_str(),
                   r.gpu_timing == "sync" ? " (glFinish around every pass and system + CPU clock)"
                   : r.gpu_timing == "queries"
                       ? " (GL timestamp queries; not trustworthy on llvmpipe: use --sync)"
                       : " (no GPU timing)");
     o += buf;
-    std::snprintf(buf, sizeof buf, "frames: %zu  frame ms p50 %.3f p95 %.3f p99 %.3f max %.3f  FPS mean %.2f p50 %.2f\n\n",
+    std::snprintf(buf, sizeof buf,
+                  "frames: %zu  frame ms p50 %.3f p95 %.3f p99 %.3f max %.3f  FPS mean %.2f p50 %.2f\n\n",
                   r.frame_ms.n, r.frame_ms.p50, r.frame_ms.p95, r.frame_ms.p99, r.frame_ms.max, r.fps_mean,
                   r.fps_p50);
     o += buf;
-    std::snprintf(buf, sizeof buf, "%-7s %-28s %9s %9s %9s %9s   %9s %9s %9s %9s\n", "kind", "name", "cpu p50",
-                  "p95", "p99", "max", "gpu p50", "p95", "p99", "max");
+    std::snprintf(buf, sizeof buf, "%-7s %-28s %9s %9s %9s %9s   %9s %9s %9s %9s\n", "kind", "name",
+                  "cpu p50", "p95", "p99", "max", "gpu p50", "p95", "p99", "max");
     o += buf;
     for (const auto& row : r.phases) o += fmt_row("phase", row.name, row.cpu_ms, row.gpu_ms);
-    for (const auto& row : r.systems) o += fmt_row("system", row.phase + "/" + row.name, row.cpu_ms, row.gpu_ms);
+    for (const auto& row : r.systems)
+        o += fmt_row("system", row.phase + "/" + row.name, row.cpu_ms, row.gpu_ms);
     for (const auto& row : r.passes) o += fmt_row("pass", row.name, row.cpu_ms, row.gpu_ms);
     return o;
 }
@@ -313,7 +323,9 @@ std::string to_csv(const Profiler& p) {
             if (seen.insert({static_cast<int>(s.kind), s.name}).second) cols.emplace_back(s.kind, s.name);
             any_gpu |= s.gpu_ms >= 0.0;
         }
-    auto kind_name = [](ScopeKind k) { return k == ScopeKind::phase ? "phase" : k == ScopeKind::system ? "system" : "pass"; };
+    auto kind_name = [](ScopeKind k) {
+        return k == ScopeKind::phase ? "phase" : k == ScopeKind::system ? "system" : "pass";
+    };
     auto quote = [](const std::string& s) {
         std::string q(1, '"');
         for (char c : s) {
@@ -362,23 +374,51 @@ std::string to_csv(const Profiler& p) {
 
 std::string to_chrome_trace(const Profiler& p, const std::string& process_name) {
     json events = json::array();
-    events.push_back({{"name", "process_name"}, {"ph", "M"}, {"pid", 1}, {"tid", 1}, {"args", {{"name", process_name}}}});
-    events.push_back({{"name", "thread_name"}, {"ph", "M"}, {"pid", 1}, {"tid", 1}, {"args", {{"name", "CPU (frame loop)"}}}});
-    events.push_back({{"name", "thread_name"}, {"ph", "M"}, {"pid", 1}, {"tid", 2},
-                      {"args", {{"name", std::string("GPU passes (") + gpu_timing_name(p.gpu_timing()) + ")"}}}});
+    events.push_back(
+        {{"name", "process_name"}, {"ph", "M"}, {"pid", 1}, {"tid", 1}, {"args", {{"name", process_name}}}});
+    events.push_back({{"name", "thread_name"},
+                      {"ph", "M"},
+                      {"pid", 1},
+                      {"tid", 1},
+                      {"args", {{"name", "CPU (frame loop)"}}}});
+    events.push_back(
+        {{"name", "thread_name"},
+         {"ph", "M"},
+         {"pid", 1},
+         {"tid", 2},
+         {"args", {{"name", std::string("GPU passes (") + gpu_timing_name(p.gpu_timing()) + ")"}}}});
     auto us = [](double ms) { return ms * 1000.0; };
     for (const auto& f : p.frames()) {
-        events.push_back({{"name", "frame " + std::to_string(f.frame)}, {"cat", "frame"}, {"ph", "X"}, {"pid", 1},
-                          {"tid", 1}, {"ts", us(f.begin_ms)}, {"dur", us(f.total_ms)}});
+        events.push_back({{"name", "frame " + std::to_string(f.frame)},
+                          {"cat", "frame"},
+                          {"ph", "X"},
+                          {"pid", 1},
+                          {"tid", 1},
+                          {"ts", us(f.begin_ms)},
+                          {"dur", us(f.total_ms)}});
         for (const auto& s : f.scopes) {
-            const char* cat = s.kind == ScopeKind::phase ? "phase" : s.kind == ScopeKind::system ? "system" : "pass";
+            const char* cat = s.kind == ScopeKind::phase    ? "phase"
+                              : s.kind == ScopeKind::system ? "system"
+                                                            : "pass";
             json args{{"phase", phase_name(s.phase)}};
             if (s.system != no_name) args["system"] = p.name(s.system);
-            events.push_back({{"name", p.name(s.name)}, {"cat", cat}, {"ph", "X"}, {"pid", 1}, {"tid", 1},
-                              {"ts", us(s.begin_ms)}, {"dur", us(s.cpu_ms)}, {"args", args}});
+            events.push_back({{"name", p.name(s.name)},
+                              {"cat", cat},
+                              {"ph", "X"},
+                              {"pid", 1},
+                              {"tid", 1},
+                              {"ts", us(s.begin_ms)},
+                              {"dur", us(s.cpu_ms)},
+                              {"args", args}});
             if (s.kind == ScopeKind::pass && s.gpu_ms >= 0.0)
-                events.push_back({{"name", p.name(s.name)}, {"cat", "gpu"}, {"ph", "X"}, {"pid", 1}, {"tid", 2},
-                                  {"ts", us(s.begin_ms)}, {"dur", us(s.gpu_ms)}, {"args", args}});
+                events.push_back({{"name", p.name(s.name)},
+                                  {"cat", "gpu"},
+                                  {"ph", "X"},
+                                  {"pid", 1},
+                                  {"tid", 2},
+                                  {"ts", us(s.begin_ms)},
+                                  {"dur", us(s.gpu_ms)},
+                                  {"args", args}});
         }
     }
     return json{{"traceEvents", events}, {"displayTimeUnit", "ms"}}.dump() + "\n";
@@ -419,9 +459,11 @@ std::string frame_svg(const Profiler& p, const std::string& title) {
 
 // ---------------------------------------------------------------------------------------------- compare
 
-std::vector<Regression> compare_reports(const ProfileReport& base, const ProfileReport& cur, CompareOptions opt) {
+std::vector<Regression> compare_reports(const ProfileReport& base, const ProfileReport& cur,
+                                        CompareOptions opt) {
     std::vector<Regression> out;
-    auto check = [&](const char* kind, const std::string& name, const char* metric, const Stats& b, const Stats& c) {
+    auto check = [&](const char* kind, const std::string& name, const char* metric, const Stats& b,
+                     const Stats& c) {
         Regression r;
         r.kind = kind;
         r.name = name;

@@ -41,7 +41,7 @@ using Config = std::vector<std::pair<std::string, ConfigValue>>;
 struct TimingRow {
     std::string name;
     std::string phase;
-    std::string system;        // passes: the issuing system ("" outside systems)
+    std::string system;  // passes: the issuing system ("" outside systems)
     double calls_per_frame = 0.0;
     Stats cpu_ms;
     std::optional<Stats> gpu_ms;  // passes (and systems with passes) when GPU times were measured
@@ -50,10 +50,10 @@ struct TimingRow {
 struct ProfileReport {
     Config config;
     MachineInfo machine;
-    std::string gpu_timing;    // "queries", "sync" or "none"
+    std::string gpu_timing;  // "queries", "sync" or "none"
     Stats frame_ms;
-    double fps_mean = 0.0;     // frames / summed frame time
-    double fps_p50 = 0.0;      // 1000 / median frame time
+    double fps_mean = 0.0;  // frames / summed frame time
+    double fps_p50 = 0.0;   // 1000 / median frame time
     std::vector<TimingRow> phases;
     std::vector<TimingRow> systems;
     std::vector<TimingRow> passes;
@@ -79,9 +79,9 @@ std::string frame_svg(const Profiler& profiler, const std::string& title);
 //   cur.p50 - base.p50 > max(base.p95 - base.p50, cur.p95 - cur.p50, floor_ms, floor_rel * base.p50).
 // The floors keep constant-time rows (spread 0) from flagging scheduler jitter.
 struct Regression {
-    std::string kind;   // "frame", "system", "pass"
+    std::string kind;  // "frame", "system", "pass"
     std::string name;
-    std::string metric; // "cpu_ms" or "gpu_ms"
+    std::string metric;  // "cpu_ms" or "gpu_ms"
     double base_p50 = 0.0, current_p50 = 0.0, threshold = 0.0;
     bool slower = false;
 };

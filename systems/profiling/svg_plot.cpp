@@ -10,9 +10,8 @@ namespace sffd::profiling {
 namespace {
 
 // Colour-blind-safe palette (Okabe-Ito), then greys.
-constexpr const char* palette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00",
-                                   "#56B4E9", "#000000", "#882255", "#777777", "#AA4499",
-                                   "#332288", "#117733"};
+constexpr const char* palette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9",
+                                   "#000000", "#882255", "#777777", "#AA4499", "#332288", "#117733"};
 constexpr const char* dashes[] = {"", "6,3", "2,3", "8,3,2,3"};
 
 std::string escape(const std::string& s) {
@@ -156,8 +155,10 @@ std::string render_svg(const LineChart& c) {
          fmt("%.0f", H) + "\" viewBox=\"0 0 " + fmt("%.0f", W) + " " + fmt("%.0f", H) +
          "\" font-family=\"DejaVu Sans, Arial, sans-serif\" font-size=\"13\">\n";
     o += "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n";
-    o += "<text x=\"" + fmt("%.1f", (left + right) / 2) + "\" y=\"28\" text-anchor=\"middle\" font-size=\"17\" "
-         "font-weight=\"bold\">" + escape(c.title) + "</text>\n";
+    o += "<text x=\"" + fmt("%.1f", (left + right) / 2) +
+         "\" y=\"28\" text-anchor=\"middle\" font-size=\"17\" "
+         "font-weight=\"bold\">" +
+         escape(c.title) + "</text>\n";
     // Grid and ticks.
     for (double t : c.x_ticks_at_data && !data_x.empty() ? data_x : nice_ticks(x0, x1, c.log_x)) {
         const double x = tx(t);
@@ -170,10 +171,10 @@ std::string render_svg(const LineChart& c) {
     }
     for (double t : nice_ticks(y0, y1, c.log_y)) {
         const double y = ty(t);
-        o += "<line x1=\"" + fmt("%.1f", left) + "\" y1=\"" + fmt("%.1f", y) + "\" x2=\"" + fmt("%.1f", right) +
-             "\" y2=\"" + fmt("%.1f", y) + "\" stroke=\"#e4e4e4\"/>\n";
-        o += "<line x1=\"" + fmt("%.1f", left - 5) + "\" y1=\"" + fmt("%.1f", y) + "\" x2=\"" + fmt("%.1f", left) +
-             "\" y2=\"" + fmt("%.1f", y) + "\" stroke=\"black\"/>\n";
+        o += "<line x1=\"" + fmt("%.1f", left) + "\" y1=\"" + fmt("%.1f", y) + "\" x2=\"" +
+             fmt("%.1f", right) + "\" y2=\"" + fmt("%.1f", y) + "\" stroke=\"#e4e4e4\"/>\n";
+        o += "<line x1=\"" + fmt("%.1f", left - 5) + "\" y1=\"" + fmt("%.1f", y) + "\" x2=\"" +
+             fmt("%.1f", left) + "\" y2=\"" + fmt("%.1f", y) + "\" stroke=\"black\"/>\n";
         o += "<text x=\"" + fmt("%.1f", left - 8) + "\" y=\"" + fmt("%.1f", y + 4) +
              "\" text-anchor=\"end\">" + tick_label(t) + "</text>\n";
     }
@@ -201,15 +202,15 @@ std::string render_svg(const LineChart& c) {
         if (c.markers)
             for (auto [x, y] : s.points) {
                 if ((c.log_x && x <= 0) || (c.log_y && y <= 0)) continue;
-                o += "<circle cx=\"" + fmt("%.1f", tx(x)) + "\" cy=\"" + fmt("%.1f", ty(y)) + "\" r=\"3.5\" fill=\"" +
-                     colour + "\"/>\n";
+                o += "<circle cx=\"" + fmt("%.1f", tx(x)) + "\" cy=\"" + fmt("%.1f", ty(y)) +
+                     "\" r=\"3.5\" fill=\"" + colour + "\"/>\n";
             }
         const double ly = top + 10 + 20.0 * static_cast<double>(i);
         o += "<line x1=\"" + fmt("%.1f", right + 15) + "\" y1=\"" + fmt("%.1f", ly) + "\" x2=\"" +
              fmt("%.1f", right + 45) + "\" y2=\"" + fmt("%.1f", ly) + "\" stroke=\"" + colour +
              "\" stroke-width=\"2\"" + (dash.empty() ? "" : " stroke-dasharray=\"" + dash + "\"") + "/>\n";
-        o += "<text x=\"" + fmt("%.1f", right + 52) + "\" y=\"" + fmt("%.1f", ly + 4) + "\" font-size=\"12\">" +
-             escape(s.name) + "</text>\n";
+        o += "<text x=\"" + fmt("%.1f", right + 52) + "\" y=\"" + fmt("%.1f", ly + 4) +
+             "\" font-size=\"12\">" + escape(s.name) + "</text>\n";
     }
     o += "</svg>\n";
     return o;

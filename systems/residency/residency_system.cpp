@@ -57,18 +57,20 @@ void residency_system(ecs::Registry& reg, const FrameContext&) {
     // software rasterizer: splat_render's automatic cull path); the upload packed them anyway.
     auto& splats = resource<gfx::GpuSplatStore>(reg);
     splats.keep_cpu = gfx::software_rasterizer();
-    sync<SplatCloud>(reg, splats, stats, [&](gfx::GpuSplats& gpu, const SplatCloud& cloud, std::uint64_t version) {
-        gfx::upload_rest_splats(gpu, cloud, version, splats.keep_cpu);
-    });
+    sync<SplatCloud>(reg, splats, stats,
+                     [&](gfx::GpuSplats& gpu, const SplatCloud& cloud, std::uint64_t version) {
+                         gfx::upload_rest_splats(gpu, cloud, version, splats.keep_cpu);
+                     });
 
     // 3D Gaussians: rest + SH. A cloud whose arrays disagree is refused once per change (nothing drawn).
     auto& gaussians = resource<gaussian::GpuGaussianStore>(reg);
-    sync<GaussianCloud>(reg, gaussians, stats, [](gaussian::GpuGaussians& gpu, const GaussianCloud& cloud, std::uint64_t version) {
-        if (Status s = gaussian::upload_rest(gpu, cloud, version); !s) {
-            log::warn("residency_system: ", s.message(), " (cloud not drawn)");
-            gfx::set_rest(gpu, version, 0);
-        }
-    });
+    sync<GaussianCloud>(reg, gaussians, stats,
+                        [](gaussian::GpuGaussians& gpu, const GaussianCloud& cloud, std::uint64_t version) {
+                            if (Status s = gaussian::upload_rest(gpu, cloud, version); !s) {
+                                log::warn("residency_system: ", s.message(), " (cloud not drawn)");
+                                gfx::set_rest(gpu, version, 0);
+                            }
+                        });
 }
 
 }  // namespace sffd

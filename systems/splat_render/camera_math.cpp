@@ -6,7 +6,6 @@
 #include <utility>
 #include <vector>
 
-
 #include "systems/splat_render/gaussian_pass.h"
 #include "systems/splat_render/splat_pack.h"
 
@@ -29,7 +28,8 @@ Camera framing_camera(const glm::dvec3& center, double radius, double aspect, gl
     return c;
 }
 
-Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBounds& bounds, const GaussianBounds& gaussian_bounds) {
+Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBounds& bounds,
+                    const GaussianBounds& gaussian_bounds) {
     bool found = false;
     Camera camera;
     registry.view<const Camera>().each([&](const Camera& c) {
@@ -42,8 +42,8 @@ Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBou
     auto add = [&](ecs::Entity e, const glm::dvec3& origin, const BoundingSphere& b) {
         if (b.radius < 0.0) return;
         const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), origin);
-        const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])),
-                                       glm::length(glm::dvec3(m[2]))});
+        const double scale = std::max(
+            {glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
         const glm::dvec3 c = glm::dvec3(m * glm::dvec4(b.center, 1.0));
         balls.emplace_back(c, b.radius * scale);
         lo = glm::min(lo, c - b.radius * scale);
@@ -53,7 +53,9 @@ Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBou
         if (cloud.size() > 0) add(e, cloud.origin, bounds ? bounds(e, cloud) : bounding_sphere(cloud));
     });
     registry.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& cloud) {
-        if (cloud.size() > 0) add(e, cloud.origin, gaussian_bounds ? gaussian_bounds(e, cloud) : gaussian_bounding_sphere(cloud));
+        if (cloud.size() > 0)
+            add(e, cloud.origin,
+                gaussian_bounds ? gaussian_bounds(e, cloud) : gaussian_bounding_sphere(cloud));
     });
     glm::dvec3 center(0.0);
     double radius = 1.0;
@@ -65,16 +67,17 @@ Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBou
     return framing_camera(center, radius, aspect);
 }
 
-gpu::FrameBlock camera_frame_block(const glm::dmat4& view, const glm::dmat4& projection, int width, int height,
-                                   float visibility_epsilon, float max_point_size, bool culling) {
+gpu::FrameBlock camera_frame_block(const glm::dmat4& view, const glm::dmat4& projection, int width,
+                                   int height, float visibility_epsilon, float max_point_size, bool culling) {
     gpu::FrameBlock b{};
     b.model_view = glm::mat4(view);
     b.normal_view = glm::mat4(glm::mat3(glm::transpose(glm::inverse(glm::dmat3(view)))));
     b.projection = glm::mat4(projection);
     b.view_to_world = glm::mat4(glm::inverse(view));
     b.viewport = glm::vec4(float(width), float(height), 1.0f / float(width), 1.0f / float(height));
-    b.ray_map = glm::vec4(float(2.0 / (double(width) * projection[0][0])), float(2.0 / (double(height) * projection[1][1])),
-                          float(-1.0 / projection[0][0]), float(-1.0 / projection[1][1]));
+    b.ray_map = glm::vec4(float(2.0 / (double(width) * projection[0][0])),
+                          float(2.0 / (double(height) * projection[1][1])), float(-1.0 / projection[0][0]),
+                          float(-1.0 / projection[1][1]));
     b.params = glm::vec4(visibility_epsilon, max_point_size, culling ? 1.0f : 0.0f, 0.0f);
     return b;
 }

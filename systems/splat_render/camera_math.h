@@ -36,7 +36,7 @@ Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBou
 // width x height frame: projection, view_to_world, viewport, the pixel-ray map, and model_view /
 // normal_view for a cloud whose positions are world positions (render_system replaces those two per cloud).
 // params = (visibility_epsilon, max_point_size, culling, 0); lights, material and counts are left zero.
-gpu::FrameBlock camera_frame_block(const glm::dmat4& view, const glm::dmat4& projection, int width, int height,
-                                   float visibility_epsilon, float max_point_size, bool culling);
+gpu::FrameBlock camera_frame_block(const glm::dmat4& view, const glm::dmat4& projection, int width,
+                                   int height, float visibility_epsilon, float max_point_size, bool culling);
 
 }  // namespace sffd::render

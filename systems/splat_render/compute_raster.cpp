@@ -16,8 +16,8 @@ namespace sffd::render {
 
 namespace {
 
-constexpr GLint list_uniform = 0;  // u_list in compute_visibility.comp / compute_attribute.comp
-constexpr GLint rect_uniform = 1;  // u_rect in compute_attribute.comp
+constexpr GLint list_uniform = 0;            // u_list in compute_visibility.comp / compute_attribute.comp
+constexpr GLint rect_uniform = 1;            // u_rect in compute_attribute.comp
 constexpr std::uint32_t command_words = 10;  // two DrawElementsIndirectCommands
 constexpr std::uint32_t depth_clear = 0x3f800000u;  // 1.0f: RASTER_DEPTH_CLEAR
 
@@ -41,8 +41,9 @@ Status init_compute_raster(ComputeRaster& raster) {
     auto vis = gfx::load_compute_program("splat_render/compute_visibility.comp", "render.compute.visibility");
     if (!vis) return make_error(vis.message());
     for (int textured = 0; textured < 2; ++textured) {
-        auto attr = gfx::load_compute_program("splat_render/compute_attribute.comp", "render.compute.attribute",
-                                              {{"TEXTURED", textured ? "1" : "0"}});
+        auto attr =
+            gfx::load_compute_program("splat_render/compute_attribute.comp", "render.compute.attribute",
+                                      {{"TEXTURED", textured ? "1" : "0"}});
         if (!attr) return make_error(attr.message());
         raster.attribute[std::size_t(textured)] = std::move(attr.value());
     }
@@ -64,21 +65,26 @@ void ensure_compute_raster_cloud(ComputeRasterCloud& cloud, std::uint32_t capaci
     if (cloud.big && cloud.capacity >= capacity) return;
     cloud.capacity = std::max<std::uint32_t>(capacity, 1);
     cloud.big = gfx::Buffer::create("render.compute.big_sprites");
-    glNamedBufferStorage(cloud.big.id(), GLsizeiptr(2 * std::size_t(cloud.capacity) * sizeof(std::uint32_t)), nullptr, 0);
+    glNamedBufferStorage(cloud.big.id(), GLsizeiptr(2 * std::size_t(cloud.capacity) * sizeof(std::uint32_t)),
+                         nullptr, 0);
     // The constant words (instances 1, first index) are set once here; each frame only the two counts are
-    // cleared on the GPU (compute_raster_visibility), never uploaded from the CPU into a buffer the GPU writes.
+    // cleared on the GPU (compute_raster_visibility), never uploaded from the CPU into a buffer the GPU
+    // writes.
     const std::uint32_t init[command_words] = {0, 1, 0, 0, 0, 0, 1, cloud.capacity, 0, 0};
     cloud.commands = gfx::Buffer::create("render.compute.big_commands");
     glNamedBufferStorage(cloud.commands.id(), sizeof init, init, GL_DYNAMIC_STORAGE_BIT);
 }
 
-void compute_raster_visibility(ComputeRaster& raster, std::span<const ComputeRasterDraw> draws, int width, int height) {
+void compute_raster_visibility(ComputeRaster& raster, std::span<const ComputeRasterDraw> draws, int width,
+                               int height) {
     if (!raster.depth || raster.width != width || raster.height != height) {
         const std::size_t pixels = std::size_t(std::max(width, 1)) * std::size_t(std::max(height, 1));
         raster.depth = gfx::Buffer::create("render.compute.depth");
-        glNamedBufferStorage(raster.depth.id(), GLsizeiptr(pixels * sizeof(std::uint32_t)), nullptr, GL_DYNAMIC_STORAGE_BIT);
+        glNamedBufferStorage(raster.depth.id(), GLsizeiptr(pixels * sizeof(std::uint32_t)), nullptr,
+                             GL_DYNAMIC_STORAGE_BIT);
         raster.sums = gfx::Buffer::create("render.compute.sums");
-        glNamedBufferStorage(raster.sums.id(), GLsizeiptr(pixels * SFFD_RASTER_SUM_WORDS * sizeof(std::uint32_t)), nullptr,
+        glNamedBufferStorage(raster.sums.id(),
+                             GLsizeiptr(pixels * SFFD_RASTER_SUM_WORDS * sizeof(std::uint32_t)), nullptr,
                              GL_DYNAMIC_STORAGE_BIT);
         const std::uint32_t zero = 0;
         glClearNamedBufferData(raster.sums.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
@@ -86,27 +92,31 @@ void compute_raster_visibility(ComputeRaster& raster, std::span<const ComputeRas
     }
     // The clears below overwrite depth words and counters that the last frame's shaders wrote (atomics) and
     // read; the big lists are overwritten by this pass's stores after the last frame's indexed draws.
-    gfx::memory_barrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT, "render.compute.visibility.reuse");
+    gfx::memory_barrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT,
+                        "render.compute.visibility.reuse");
     glClearNamedBufferData(raster.depth.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &depth_clear);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_RASTER_DEPTH, raster.depth.id());
     glUseProgram(raster.visibility.id());
     for (const ComputeRasterDraw& d : draws) {
         const std::uint32_t zero = 0;
-        glClearNamedBufferSubData(d.cloud->commands.id(), GL_R32UI, 0, sizeof zero, GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-        glClearNamedBufferSubData(d.cloud->commands.id(), GL_R32UI, 5 * sizeof zero, sizeof zero, GL_RED_INTEGER,
+        glClearNamedBufferSubData(d.cloud->commands.id(), GL_R32UI, 0, sizeof zero, GL_RED_INTEGER,
                                   GL_UNSIGNED_INT, &zero);
+        glClearNamedBufferSubData(d.cloud->commands.id(), GL_R32UI, 5 * sizeof zero, sizeof zero,
+                                  GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
         bind_cloud(d);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_RASTER_BIG, d.cloud->big.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_RASTER_BIG_COMMANDS, d.cloud->commands.id());
         for_each_list(d, [&](const glm::uvec4& list) {
             glUniform4ui(list_uniform, list.x, list.y, list.z, list.w);
-            if (Status st = gfx::dispatch_1d(d.count, SFFD_RASTER_GROUP_SIZE); !st) log::error("render_system(): ", st.message());
+            if (Status st = gfx::dispatch_1d(d.count, SFFD_RASTER_GROUP_SIZE); !st)
+                log::error("render_system(): ", st.message());
         });
     }
     // The big lists feed indirect indexed draws (ELEMENT_ARRAY, COMMAND) whose records are fetched as vertex
     // attributes; the depth words the merge pass's SSBO reads; the counters are copied into the counts ring.
-    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT | GL_ELEMENT_ARRAY_BARRIER_BIT |
-                            GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT,
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT |
+                            GL_ELEMENT_ARRAY_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT |
+                            GL_BUFFER_UPDATE_BARRIER_BIT,
                         "render.compute.visibility");
 }
 
@@ -131,10 +141,12 @@ void compute_raster_attribute(const ComputeRaster& raster, std::span<const Compu
             glUseProgram(raster.attribute[textured].id());
             glUniform4i(rect_uniform, rect.x, rect.y, rect.x + rect.z, rect.y + rect.w);
             glUniform4ui(list_uniform, list.x, list.y, list.z, list.w);
-            if (Status st = gfx::dispatch_1d(d.count, SFFD_RASTER_GROUP_SIZE); !st) log::error("render_system(): ", st.message());
+            if (Status st = gfx::dispatch_1d(d.count, SFFD_RASTER_GROUP_SIZE); !st)
+                log::error("render_system(): ", st.message());
         });
     }
-    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "render.compute.attribute");  // sums, read by the resolve
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT,
+                        "render.compute.attribute");  // sums, read by the resolve
 }
 
 void compute_raster_resolve(const ComputeRaster& raster, GLuint frame_ubo) {
@@ -150,8 +162,9 @@ void compute_raster_resolve(const ComputeRaster& raster, GLuint frame_ubo) {
 double splat_footprint_px(const glm::dmat4& model_view, const glm::dvec3& center, double radius, double p11,
                           int height) {
     const double depth = -(model_view * glm::dvec4(center, 1.0)).z;
-    const double scale = std::max({glm::length(glm::dvec3(model_view[0])), glm::length(glm::dvec3(model_view[1])),
-                                   glm::length(glm::dvec3(model_view[2]))});
+    const double scale =
+        std::max({glm::length(glm::dvec3(model_view[0])), glm::length(glm::dvec3(model_view[1])),
+                  glm::length(glm::dvec3(model_view[2]))});
     if (depth <= 0.0) return std::numeric_limits<double>::infinity();
     return 2.0 * radius * scale * p11 * 0.5 * double(height) / depth;
 }

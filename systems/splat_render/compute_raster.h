@@ -37,9 +37,10 @@ namespace sffd::render {
 
 // Per cloud: the sprites the compute rasteriser leaves to the rasteriser this frame.
 struct ComputeRasterCloud {
-    gfx::Buffer big;       // uint[2 capacity]: record indices; [0, capacity) from the sprite list,
-                           // [capacity, 2 capacity) from the flat-coloured list (values = record indices)
-    gfx::Buffer commands;  // two DrawElementsIndirectCommands over `big`: {n, 1, 0, 0, 0}, {n, 1, capacity, 0, 0}
+    gfx::Buffer big;  // uint[2 capacity]: record indices; [0, capacity) from the sprite list,
+                      // [capacity, 2 capacity) from the flat-coloured list (values = record indices)
+    gfx::Buffer
+        commands;  // two DrawElementsIndirectCommands over `big`: {n, 1, 0, 0, 0}, {n, 1, capacity, 0, 0}
     std::uint32_t capacity = 0;
 };
 
@@ -68,12 +69,12 @@ inline constexpr double compute_raster_hardware_max_footprint = 8.0;
 struct ComputeRasterDraw {
     ComputeRasterCloud* cloud = nullptr;
     GLuint frame_ubo = 0;
-    GLuint records = 0;        // SplatRecord[2 capacity] (splat_record.h)
-    GLuint commands = 0;       // the cull's three DrawArraysIndirectCommands (counts in words 0 and 8)
-    GLuint texture = 0;        // material texture (0: untextured)
-    std::uint32_t count = 0;   // splats of the cloud: an upper bound of each list's length
+    GLuint records = 0;       // SplatRecord[2 capacity] (splat_record.h)
+    GLuint commands = 0;      // the cull's three DrawArraysIndirectCommands (counts in words 0 and 8)
+    GLuint texture = 0;       // material texture (0: untextured)
+    std::uint32_t count = 0;  // splats of the cloud: an upper bound of each list's length
     std::uint32_t capacity = 0;
-    bool flat_list = false;    // the CPU cull filled the flat-coloured list (textured clouds)
+    bool flat_list = false;  // the CPU cull filled the flat-coloured list (textured clouds)
 };
 
 // Compiles the programs once (shader errors as a Status naming the file).
@@ -84,7 +85,8 @@ void ensure_compute_raster_cloud(ComputeRasterCloud& cloud, std::uint32_t capaci
 
 // Pass 1 for every cloud: clears the depth words (and sizes them for w x h), resets each cloud's big lists,
 // dispatches compute_visibility.comp per record list.
-void compute_raster_visibility(ComputeRaster& raster, std::span<const ComputeRasterDraw> draws, int width, int height);
+void compute_raster_visibility(ComputeRaster& raster, std::span<const ComputeRasterDraw> draws, int width,
+                               int height);
 
 // After the raster visibility pass, with the depth-only framebuffer bound and depth test LESS, writes on:
 // the compute depths into the depth target (inside the current scissor/viewport).

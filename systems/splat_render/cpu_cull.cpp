@@ -51,7 +51,8 @@ bool all_finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite
 const std::array<float, 256>& splat_srgb_table() {
     static const std::array<float, 256> table = [] {
         std::array<float, 256> t{};
-        for (int i = 0; i < 256; ++i) t[std::size_t(i)] = std::pow((float(i) / 255.0f + 0.055f) * (1.0f / 1.055f), 2.4f);
+        for (int i = 0; i < 256; ++i)
+            t[std::size_t(i)] = std::pow((float(i) / 255.0f + 0.055f) * (1.0f / 1.055f), 2.4f);
         return t;
     }();
     return table;
@@ -70,28 +71,33 @@ const std::array<float, 256>& srgb8_table() {
     return table;
 }
 
-glm::vec3 shade_blinn_phong(const gpu::FrameBlock& f, const glm::vec3& albedo, const glm::vec3& n, const glm::vec3& to_eye) {
+glm::vec3 shade_blinn_phong(const gpu::FrameBlock& f, const glm::vec3& albedo, const glm::vec3& n,
+                            const glm::vec3& to_eye) {
     glm::vec3 color = glm::vec3(f.ambient) * albedo;
     for (std::uint32_t i = 0; i < SFFD_MAX_LIGHTS && i < f.counts.y; ++i) {
         const glm::vec3 l(f.light_dir[i]);
         const float ndl = std::max(glm::dot(n, l), 0.0f);
         const glm::vec3 h = glm::normalize(l + to_eye);
-        const float spec = ndl > 0.0f ? std::exp2(f.material.y * std::log2(std::max(glm::dot(n, h), 1e-8f))) * f.material.x : 0.0f;
+        const float spec =
+            ndl > 0.0f ? std::exp2(f.material.y * std::log2(std::max(glm::dot(n, h), 1e-8f))) * f.material.x
+                       : 0.0f;
         color += glm::vec3(f.light_color[i]) * (albedo * ndl + glm::vec3(spec));
     }
     return color;
 }
 
 // blinn_phong_factors of lighting.glsl: colour = albedo * diffuse + specular.
-void blinn_phong_factors(const gpu::FrameBlock& f, const glm::vec3& n, const glm::vec3& to_eye, glm::vec3& diffuse,
-                         glm::vec3& specular) {
+void blinn_phong_factors(const gpu::FrameBlock& f, const glm::vec3& n, const glm::vec3& to_eye,
+                         glm::vec3& diffuse, glm::vec3& specular) {
     diffuse = glm::vec3(f.ambient);
     specular = glm::vec3(0.0f);
     for (std::uint32_t i = 0; i < SFFD_MAX_LIGHTS && i < f.counts.y; ++i) {
         const glm::vec3 l(f.light_dir[i]);
         const float ndl = std::max(glm::dot(n, l), 0.0f);
         const glm::vec3 h = glm::normalize(l + to_eye);
-        const float spec = ndl > 0.0f ? std::exp2(f.material.y * std::log2(std::max(glm::dot(n, h), 1e-8f))) * f.material.x : 0.0f;
+        const float spec =
+            ndl > 0.0f ? std::exp2(f.material.y * std::log2(std::max(glm::dot(n, h), 1e-8f))) * f.material.x
+                       : 0.0f;
         diffuse += glm::vec3(f.light_color[i]) * ndl;
         specular += glm::vec3(f.light_color[i]) * spec;
     }
@@ -104,7 +110,8 @@ struct SplatView {
 
 }  // namespace
 
-glm::vec3 ellipse_sprite(const gpu::FrameBlock& f, const glm::vec3& c, const glm::vec3& u, const glm::vec3& v) {
+glm::vec3 ellipse_sprite(const gpu::FrameBlock& f, const glm::vec3& c, const glm::vec3& u,
+                         const glm::vec3& v) {
     const float near_plane = f.projection[3][2] / (f.projection[2][2] - 1.0f);
     const glm::vec2 z(u.z, v.z);
     if (-c.z - glm::length(z) <= near_plane) return glm::vec3(0.0f, 0.0f, -1.0f);
@@ -117,8 +124,8 @@ glm::vec3 ellipse_sprite(const gpu::FrameBlock& f, const glm::vec3& c, const glm
     return glm::vec3(x0 + off, std::max(half_extent.x * f.viewport.x, half_extent.y * f.viewport.y));
 }
 
-void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBlock& f, const TexelView& texture,
-                     CpuCullResult& out) {
+void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBlock& f,
+                     const TexelView& texture, CpuCullResult& out) {
     const std::size_t n = splats.size();
     const std::size_t blocks = (n + block_splats - 1) / block_splats;
     out.block = block_splats;
@@ -129,8 +136,8 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     out.flat_counts.assign(blocks, 0u);
 
     const glm::mat3 mv3(f.model_view), nv3(f.normal_view), v2w3(f.view_to_world);
-    const bool culling = f.params.z != 0.0f, textured = f.params.w != 0.0f && texture.rgba8 && texture.width > 0 &&
-                                                      texture.height > 0;
+    const bool culling = f.params.z != 0.0f,
+               textured = f.params.w != 0.0f && texture.rgba8 && texture.width > 0 && texture.height > 0;
     const bool lit = f.counts.w == 1u;
     const float p00 = f.projection[0][0], p11 = f.projection[1][1];
     const float near_plane = f.projection[3][2] / (f.projection[2][2] - 1.0f);
@@ -141,7 +148,8 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     const bool flat_ok = textured && texture.uniform_radius;
     if (flat_ok && out.flat_records.size() < n) out.flat_records.resize(n);
 
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const tbb::blocked_range<std::size_t>& range) {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const tbb::blocked_range<
+                                                                         std::size_t>& range) {
         for (std::size_t b = range.begin(); b != range.end(); ++b) {
             const std::size_t begin = b * block_splats, end = std::min(n, begin + block_splats);
             SplatRecord* records = out.records.data() + begin;
@@ -152,17 +160,21 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 const gpu::GpuSplat& s = splats[i];
                 // Back face from centre and normal only (a flipped splat, normal.w == 0, is two-sided).
                 const glm::vec3 c = glm::vec3(f.model_view * glm::vec4(xyz(s.center), 1.0f));
-                if (!all_finite(xyz(s.center)) || !all_finite(xyz(s.normal)) || !all_finite(c)) continue;  // nothing to draw
+                if (!all_finite(xyz(s.center)) || !all_finite(xyz(s.normal)) || !all_finite(c))
+                    continue;  // nothing to draw
                 const bool back = s.normal[3] != 0.0f && glm::dot(nv3 * xyz(s.normal), c) > 0.0f;
                 if (back && culling) continue;
                 const glm::vec3 u = mv3 * xyz(s.axis_u), v = mv3 * xyz(s.axis_v);
-                if (!all_finite(xyz(s.axis_u)) || !all_finite(xyz(s.axis_v)) || !all_finite(u) || !all_finite(v)) continue;
+                if (!all_finite(xyz(s.axis_u)) || !all_finite(xyz(s.axis_v)) || !all_finite(u) ||
+                    !all_finite(v))
+                    continue;
                 const float r = ellipse_max_radius(u, v);
                 const glm::vec3 cr = glm::cross(u, v);
                 if (r <= 0.0f || glm::dot(cr, cr) <= 1e-12f * r * r * r * r) continue;  // degenerate
                 if (culling) {
                     const float depth = -c.z;
-                    if (depth + r < near_plane || depth - r > far_plane || (depth - p00 * std::abs(c.x)) * side_x < -r ||
+                    if (depth + r < near_plane || depth - r > far_plane ||
+                        (depth - p00 * std::abs(c.x)) * side_x < -r ||
                         (depth - p11 * std::abs(c.y)) * side_y < -r)
                         continue;
                 }
@@ -181,7 +193,8 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 rec.plane = glm::vec4(pn / glm::dot(o.c, pn), f.params.x * o.r);
                 rec.dual_u = glm::vec4(du, glm::dot(du, o.c));
                 rec.dual_v = glm::vec4(dv, glm::dot(dv, o.c));
-                if (back) rec.plane.x = rec.plane.y = rec.plane.z = 0.0f;  // hidden (culling off, splat_record.h)
+                if (back)
+                    rec.plane.x = rec.plane.y = rec.plane.z = 0.0f;  // hidden (culling off, splat_record.h)
                 rec.center = glm::vec4(box.x, box.y, o.c.z, box.z);
                 const glm::vec3 world_n = glm::normalize(v2w3 * o.shading_n);
                 if (textured) {
@@ -190,25 +203,33 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                     rec.uv = glm::vec4(s.axis_u[3], s.axis_v[3], pack_halves(glm::vec2(a.x, a.y)),
                                        pack_halves(glm::vec2(a.z, a.w)));
                     const glm::vec2 scale = -o.c.z * glm::vec2(f.ray_map.x, f.ray_map.y);
-                    const glm::vec2 ds = scale * (glm::vec2(rec.dual_u) - glm::vec2(rec.plane) * rec.dual_u.w);
-                    const glm::vec2 dq = scale * (glm::vec2(rec.dual_v) - glm::vec2(rec.plane) * rec.dual_v.w);
+                    const glm::vec2 ds =
+                        scale * (glm::vec2(rec.dual_u) - glm::vec2(rec.plane) * rec.dual_u.w);
+                    const glm::vec2 dq =
+                        scale * (glm::vec2(rec.dual_v) - glm::vec2(rec.plane) * rec.dual_v.w);
                     const glm::vec2 size(float(texture.width), float(texture.height));
                     const glm::vec2 ddx = (ds.x * glm::vec2(a.x, a.y) + dq.x * glm::vec2(a.z, a.w)) * size;
                     const glm::vec2 ddy = (ds.y * glm::vec2(a.x, a.y) + dq.y * glm::vec2(a.z, a.w)) * size;
-                    const float lod = 0.5f * std::log2(std::max(std::max(glm::dot(ddx, ddx), glm::dot(ddy, ddy)), 1e-20f));
-                    if (flat_ok && lod < 16.0f && std::abs(rec.uv.x) < 1e6f && std::abs(rec.uv.y) < 1e6f) {  // (false for NaN)
-                        // One colour under the whole footprint (|s|, |t| <= 1) and the filter's reach (two texels
-                        // of the coarser level, in level-0 texels): draw it flat (CpuCullResult::flat_records).
-                        const float reach = (std::abs(a.x) + std::abs(a.z)) * size.x, reach_v = (std::abs(a.y) + std::abs(a.w)) * size.y;
+                    const float lod =
+                        0.5f * std::log2(std::max(std::max(glm::dot(ddx, ddx), glm::dot(ddy, ddy)), 1e-20f));
+                    if (flat_ok && lod < 16.0f && std::abs(rec.uv.x) < 1e6f &&
+                        std::abs(rec.uv.y) < 1e6f) {  // (false for NaN)
+                        // One colour under the whole footprint (|s|, |t| <= 1) and the filter's reach (two
+                        // texels of the coarser level, in level-0 texels): draw it flat
+                        // (CpuCullResult::flat_records).
+                        const float reach = (std::abs(a.x) + std::abs(a.z)) * size.x,
+                                    reach_v = (std::abs(a.y) + std::abs(a.w)) * size.y;
                         const float margin = 2.0f * std::exp2(std::ceil(std::max(lod, 0.0f))) + 1.0f;
                         const float fu = rec.uv.x - std::floor(rec.uv.x);
                         const int tx = std::min(int(fu * size.x), texture.width - 1);
                         const int ty = std::clamp(int(std::floor(rec.uv.y * size.y)), 0, texture.height - 1);
-                        const std::size_t texel = std::size_t(ty) * std::size_t(texture.width) + std::size_t(tx);
+                        const std::size_t texel =
+                            std::size_t(ty) * std::size_t(texture.width) + std::size_t(tx);
                         if (std::max(reach, reach_v) + margin < float(texture.uniform_radius[texel])) {
                             const std::uint8_t* p = texture.rgba8 + 4 * texel;
                             glm::vec3 color(texel_lut[p[0]], texel_lut[p[1]], texel_lut[p[2]]);
-                            if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
+                            if (lit)
+                                color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
                             SplatRecord& flat = flat_records[kept_flat++];
                             flat = rec;
                             flat.plane.w = f.params.x * o.r;
@@ -232,7 +253,8 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 // splat_color
                 glm::vec3 color;
                 const std::uint32_t bits = std::bit_cast<std::uint32_t>(s.center[3]);
-                color = glm::vec3(splat_lut[bits & 255u], splat_lut[(bits >> 8) & 255u], splat_lut[(bits >> 16) & 255u]);
+                color = glm::vec3(splat_lut[bits & 255u], splat_lut[(bits >> 8) & 255u],
+                                  splat_lut[(bits >> 16) & 255u]);
                 if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
                 rec.normal = glm::vec4(world_n, pack_color(color));
                 rec.uv = glm::vec4(0.0f);
@@ -244,7 +266,8 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     });
     out.visible_records = out.visible_quads = out.visible_flat = 0;
     for (std::size_t b = 0; b < blocks; ++b)
-        out.visible_records += out.record_counts[b], out.visible_quads += out.quad_counts[b], out.visible_flat += out.flat_counts[b];
+        out.visible_records += out.record_counts[b], out.visible_quads += out.quad_counts[b],
+            out.visible_flat += out.flat_counts[b];
 }
 
 std::vector<std::uint16_t> uniform_texel_radius(const std::uint8_t* rgba8, int w, int h) {
@@ -265,15 +288,21 @@ std::vector<std::uint16_t> uniform_texel_radius(const std::uint8_t* rgba8, int w
             d[std::size_t(y) * std::size_t(w) + std::size_t(x)] = edge ? 0 : far;
         }
     // Two chamfer passes with unit weights over the 8-neighbourhood: exact Chebyshev distances.
-    auto at = [&](int x, int y) -> std::uint16_t& { return d[std::size_t(y) * std::size_t(w) + std::size_t(x)]; };
+    auto at = [&](int x, int y) -> std::uint16_t& {
+        return d[std::size_t(y) * std::size_t(w) + std::size_t(x)];
+    };
     auto relax = [&](int x, int y, int nx, int ny) {
         if (nx < 0 || ny < 0 || nx >= w || ny >= h) return;
         at(x, y) = std::uint16_t(std::min<int>(at(x, y), at(nx, ny) + 1));
     };
     for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) relax(x, y, x - 1, y), relax(x, y, x - 1, y - 1), relax(x, y, x, y - 1), relax(x, y, x + 1, y - 1);
+        for (int x = 0; x < w; ++x)
+            relax(x, y, x - 1, y), relax(x, y, x - 1, y - 1), relax(x, y, x, y - 1),
+                relax(x, y, x + 1, y - 1);
     for (int y = h - 1; y >= 0; --y)
-        for (int x = w - 1; x >= 0; --x) relax(x, y, x + 1, y), relax(x, y, x + 1, y + 1), relax(x, y, x, y + 1), relax(x, y, x - 1, y + 1);
+        for (int x = w - 1; x >= 0; --x)
+            relax(x, y, x + 1, y), relax(x, y, x + 1, y + 1), relax(x, y, x, y + 1),
+                relax(x, y, x - 1, y + 1);
     return d;
 }
 

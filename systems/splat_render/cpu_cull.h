@@ -52,14 +52,15 @@ struct CpuCullResult {
     // Textured clouds: sprites whose texture footprint is one colour (TexelView::uniform_radius) are not
     // in `records` but here, with that colour packed like an untextured splat's (runs per block).
     std::vector<SplatRecord> flat_records;
-    std::vector<std::uint32_t> flat_counts;    // per block
-    std::uint32_t visible_records = 0;         // sums of the counts
+    std::vector<std::uint32_t> flat_counts;  // per block
+    std::uint32_t visible_records = 0;       // sums of the counts
     std::uint32_t visible_quads = 0;
     std::uint32_t visible_flat = 0;
 
     // Calls fn(first_output_index, pointer, count) for each non-empty run, in order.
     template <class T, class Fn>
-    static void for_each_run(const std::vector<T>& data, const std::vector<std::uint32_t>& counts, std::size_t block, Fn&& fn) {
+    static void for_each_run(const std::vector<T>& data, const std::vector<std::uint32_t>& counts,
+                             std::size_t block, Fn&& fn) {
         std::size_t out = 0;
         for (std::size_t b = 0; b < counts.size(); ++b) {
             if (counts[b] == 0) continue;
@@ -73,11 +74,12 @@ struct CpuCullResult {
 // counts.w = 1 lights the colours for preview, ...). frame.counts.x is ignored: the span's size counts.
 // One difference: with TexelView::uniform_radius, a textured cloud's one-colour sprites go to
 // flat_records (cull.comp keeps every textured sprite in the textured list).
-void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBlock& frame, const TexelView& texture,
-                     CpuCullResult& out);
+void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBlock& frame,
+                     const TexelView& texture, CpuCullResult& out);
 
 // Screen box of a splat's projected ellipse, the twin of ellipse_sprite() in splat_common.glsl: NDC centre
 // (xy) and the side in pixels of the square sprite around it (z, -1 when the ellipse reaches the near plane).
-glm::vec3 ellipse_sprite(const gpu::FrameBlock& frame, const glm::vec3& c, const glm::vec3& u, const glm::vec3& v);
+glm::vec3 ellipse_sprite(const gpu::FrameBlock& frame, const glm::vec3& c, const glm::vec3& u,
+                         const glm::vec3& v);
 
 }  // namespace sffd::render

@@ -17,7 +17,8 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
         const glm::dmat4 mv = plan.view.view * model_matrix(reg.try_get<Transform>(e), cloud.origin);
         b.model_view = glm::mat4(mv);
         b.normal_view = glm::mat4(glm::mat3(glm::inverseTranspose(glm::dmat3(mv))));
-        gpu.footprint_px = splat_footprint_px(mv, gpu.bounds.center, gpu.mean_radius, plan.view.projection[1][1], plan.height);
+        gpu.footprint_px = splat_footprint_px(mv, gpu.bounds.center, gpu.mean_radius,
+                                              plan.view.projection[1][1], plan.height);
         gpu.flat_list = false;
         b.params.w = gpu.texture ? 1.0f : 0.0f;
         b.material = glm::vec4(gpu.material->specular, gpu.material->shininess, 0.0f, 0.0f);
@@ -28,23 +29,32 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             // CPU cull (cpu_cull.h): the same records, uploaded run by run into the buffers the draws read.
             TexelView texels;
             if (gpu.texture)
-                texels = {gpu.material->texture_rgba8.data(), gpu.material->texture_width, gpu.material->texture_height,
-                          gpu.uv_axes_cpu ? gpu.uv_axes_cpu->data() : nullptr,
+                texels = {gpu.material->texture_rgba8.data(), gpu.material->texture_width,
+                          gpu.material->texture_height, gpu.uv_axes_cpu ? gpu.uv_axes_cpu->data() : nullptr,
                           gpu.uniform_radius.empty() ? nullptr : gpu.uniform_radius.data()};
             CpuCullResult& r = gpu.cpu_cull;
             cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
             ++s.cpu_splat_passes;
-            CpuCullResult::for_each_run(r.records, r.record_counts, r.block, [&](std::size_t at, const SplatRecord* p, std::size_t k) {
-                glNamedBufferSubData(gpu.records.id(), GLintptr(at * sizeof(SplatRecord)), GLsizeiptr(k * sizeof(SplatRecord)), p);
-            });
-            CpuCullResult::for_each_run(r.quads, r.quad_counts, r.block, [&](std::size_t at, const std::uint32_t* p, std::size_t k) {
-                glNamedBufferSubData(gpu.quads.id(), GLintptr(at * sizeof(std::uint32_t)), GLsizeiptr(k * sizeof(std::uint32_t)), p);
-            });
-            CpuCullResult::for_each_run(r.flat_records, r.flat_counts, r.block, [&](std::size_t at, const SplatRecord* p, std::size_t k) {
-                glNamedBufferSubData(gpu.records.id(), GLintptr((gpu.capacity + at) * sizeof(SplatRecord)),
-                                     GLsizeiptr(k * sizeof(SplatRecord)), p);
-            });
-            const std::uint32_t commands[draw_command_words] = {r.visible_records, 1, 0, 0, 6, r.visible_quads, 0, 0, r.visible_flat, 1, gpu.capacity, 0};
+            CpuCullResult::for_each_run(r.records, r.record_counts, r.block,
+                                        [&](std::size_t at, const SplatRecord* p, std::size_t k) {
+                                            glNamedBufferSubData(gpu.records.id(),
+                                                                 GLintptr(at * sizeof(SplatRecord)),
+                                                                 GLsizeiptr(k * sizeof(SplatRecord)), p);
+                                        });
+            CpuCullResult::for_each_run(
+                r.quads, r.quad_counts, r.block, [&](std::size_t at, const std::uint32_t* p, std::size_t k) {
+                    glNamedBufferSubData(gpu.quads.id(), GLintptr(at * sizeof(std::uint32_t)),
+                                         GLsizeiptr(k * sizeof(std::uint32_t)), p);
+                });
+            CpuCullResult::for_each_run(r.flat_records, r.flat_counts, r.block,
+                                        [&](std::size_t at, const SplatRecord* p, std::size_t k) {
+                                            glNamedBufferSubData(
+                                                gpu.records.id(),
+                                                GLintptr((gpu.capacity + at) * sizeof(SplatRecord)),
+                                                GLsizeiptr(k * sizeof(SplatRecord)), p);
+                                        });
+            const std::uint32_t commands[draw_command_words] = {
+                r.visible_records, 1, 0, 0, 6, r.visible_quads, 0, 0, r.visible_flat, 1, gpu.capacity, 0};
             glNamedBufferSubData(gpu.commands.id(), 0, sizeof commands, commands);
             plan.cpu_points += r.visible_records + r.visible_flat;
             plan.cpu_quads += r.visible_quads;
@@ -55,13 +65,17 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             // GPU writes every frame makes drivers move it to host memory (NVIDIA's performance warning).
             // The third command (flat-coloured sprites) stays empty: only the CPU cull fills it.
             if (Status st = compute_cull_fits(gpu.count); !st) {
-                warn_once("render_system(): " + st.message() + "; the cloud is not drawn (the automatic cull path takes the CPU cull)");
+                warn_once("render_system(): " + st.message() +
+                          "; the cloud is not drawn (the automatic cull path takes the CPU cull)");
                 return;
             }
-            glCopyNamedBufferSubData(s.command_reset.id(), gpu.commands.id(), 0, 0, draw_command_words * sizeof(std::uint32_t));
+            glCopyNamedBufferSubData(s.command_reset.id(), gpu.commands.id(), 0, 0,
+                                     draw_command_words * sizeof(std::uint32_t));
             const bool textured = bool(gpu.texture), lit = b.counts.w == 1u;
-            if (Status st = cull_program(s, textured, lit, b.counts.y); !st) log::error("render_system(): ", st.message());
-            glUseProgram(s.cull[textured][lit][lit ? std::min<std::uint32_t>(b.counts.y, SFFD_MAX_LIGHTS) : 0].id());
+            if (Status st = cull_program(s, textured, lit, b.counts.y); !st)
+                log::error("render_system(): ", st.message());
+            glUseProgram(
+                s.cull[textured][lit][lit ? std::min<std::uint32_t>(b.counts.y, SFFD_MAX_LIGHTS) : 0].id());
             glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
@@ -69,9 +83,11 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, gpu.commands.id());
             if (textured) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
             glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
-            // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its worker
-            // threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread time).
-            if (Status st = gfx::dispatch_1d(gpu.count, SFFD_CULL_GROUP_SIZE); !st) log::error("render_system(): ", st.message());
+            // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its
+            // worker threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread
+            // time).
+            if (Status st = gfx::dispatch_1d(gpu.count, SFFD_CULL_GROUP_SIZE); !st)
+                log::error("render_system(): ", st.message());
             ++stats.compute_culled_clouds;
             plan.gpu_counts.push_back({&gpu, counts_cull});
         }
@@ -80,8 +96,8 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
     });
     // Records are fetched as vertex attributes (records_vao), quads and records read as SSBOs, commands
     // drawn indirectly and copied into the counts ring.
-    gfx::memory_barrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT |
-                            GL_BUFFER_UPDATE_BARRIER_BIT,
+    gfx::memory_barrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT |
+                            GL_COMMAND_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT,
                         "render.cull");
 }
 

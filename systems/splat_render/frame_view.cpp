@@ -85,15 +85,17 @@ glm::ivec4 screen_rect(ecs::Registry& reg, const ViewSetup& view, int w, int h) 
             // deformed axes are longer by the local stretch).
             const auto cit = state->clouds.find(e);
             const double splat_r = cit != state->clouds.end() ? cit->second.bounds.max_splat_radius : 0.0;
-            add_ball(0.5 * (d->bounds_min + d->bounds_max), 0.5 * glm::length(d->bounds_max - d->bounds_min) + 4.0 * splat_r);
+            add_ball(0.5 * (d->bounds_min + d->bounds_max),
+                     0.5 * glm::length(d->bounds_max - d->bounds_min) + 4.0 * splat_r);
             return;
         }
         const auto cit = state->clouds.find(e);
         if (cit == state->clouds.end()) return;
         const glm::dmat4 m = model_matrix(reg.try_get<Transform>(e), cloud.origin);
-        const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])),
-                                       glm::length(glm::dvec3(m[2]))});
-        add_ball(glm::dvec3(m * glm::dvec4(cit->second.bounds.center, 1.0)), cit->second.bounds.radius * scale);
+        const double scale = std::max(
+            {glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
+        add_ball(glm::dvec3(m * glm::dvec4(cit->second.bounds.center, 1.0)),
+                 cit->second.bounds.radius * scale);
     });
     if (everything) return full;
     if (hi.x < lo.x) return glm::ivec4(0, 0, 0, 0);

@@ -68,12 +68,13 @@ Result<GaussianPassState*> pass_state(ecs::Registry& reg) {
     auto renderer = gaussian::create_gl_renderer();
     if (!renderer) return fail(renderer.message());
     s.renderer = std::move(*renderer);
-    auto accum = gfx::load_program({{GL_VERTEX_SHADER, "gaussian/splat.vert"}, {GL_FRAGMENT_SHADER, "splat_render/gaussian_accum.frag"}},
-                                   "render.gaussian_accum");
+    auto accum = gfx::load_program(
+        {{GL_VERTEX_SHADER, "gaussian/splat.vert"}, {GL_FRAGMENT_SHADER, "splat_render/gaussian_accum.frag"}},
+        "render.gaussian_accum");
     if (!accum) return fail(accum.message());
-    auto composite = gfx::load_program(
-        {{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "splat_render/gaussian_composite.frag"}},
-        "render.gaussian_composite");
+    auto composite = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
+                                        {GL_FRAGMENT_SHADER, "splat_render/gaussian_composite.frag"}},
+                                       "render.gaussian_composite");
     if (!composite) return fail(composite.message());
     s.accum = std::move(*accum);
     s.composite = std::move(*composite);
@@ -166,7 +167,8 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
         const glm::dvec4 c = f.view * m * glm::dvec4(b.center, 1.0);
         items.push_back({e, -c.z});
     });
-    std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) { return a.depth < b.depth; });
+    std::stable_sort(items.begin(), items.end(),
+                     [](const Item& a, const Item& b) { return a.depth < b.depth; });
 
     auto scope = profiling::gpu_scope(reg, "render.gaussians");
     const float zero[4] = {0, 0, 0, 0};
@@ -194,8 +196,8 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
         v.width = f.width, v.height = f.height;
         v.ndc_depth = ndc_depth;
         v.min_footprint_px = f.preview ? kPreviewMinFootprintPx : 0.0f;
-        const gaussian::GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(), gpu.frames.id(), gpu.count, gpu.sh_degree,
-                                                gpu.has_frames()};
+        const gaussian::GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(), gpu.frames.id(),
+                                                gpu.count,         gpu.sh_degree,   gpu.has_frames()};
         if (Status st = gaussian::draw_gaussians(s.renderer, buffers, v, &s.accum); !st) status = st;
         submitted += gpu.count;
     }
@@ -203,9 +205,11 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
     glDisable(GL_DEPTH_TEST);
 
     // Composite over the surface colour (and aux) copied aside: the output target is written.
-    glCopyImageSubData(f.color, GL_TEXTURE_2D, 0, 0, 0, 0, s.surface_color.id(), GL_TEXTURE_2D, 0, 0, 0, 0, f.width, f.height, 1);
+    glCopyImageSubData(f.color, GL_TEXTURE_2D, 0, 0, 0, 0, s.surface_color.id(), GL_TEXTURE_2D, 0, 0, 0, 0,
+                       f.width, f.height, 1);
     if (f.aux_outputs)
-        glCopyImageSubData(f.aux, GL_TEXTURE_2D, 0, 0, 0, 0, s.surface_aux.id(), GL_TEXTURE_2D, 0, 0, 0, 0, f.width, f.height, 1);
+        glCopyImageSubData(f.aux, GL_TEXTURE_2D, 0, 0, 0, 0, s.surface_aux.id(), GL_TEXTURE_2D, 0, 0, 0, 0,
+                           f.width, f.height, 1);
     glBindFramebuffer(GL_FRAMEBUFFER, f.output_fbo);
     glViewport(0, 0, f.width, f.height);
     glDisable(GL_BLEND);
@@ -213,7 +217,8 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
     glBindTextureUnit(1, s.gauss_depth.id());
     glBindTextureUnit(2, s.surface_color.id());
     glBindTextureUnit(3, s.surface_aux.id());
-    glProgramUniform1i(s.composite.id(), glGetUniformLocation(s.composite.id(), "u_aux"), f.aux_outputs ? 1 : 0);
+    glProgramUniform1i(s.composite.id(), glGetUniformLocation(s.composite.id(), "u_aux"),
+                       f.aux_outputs ? 1 : 0);
     glUseProgram(s.composite.id());
     glBindVertexArray(s.empty_vao.id());
     glDrawArrays(GL_TRIANGLES, 0, 3);

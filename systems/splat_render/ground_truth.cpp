@@ -31,7 +31,8 @@ glm::dvec2 sphere_uv_differential(const glm::dvec3& d, const glm::dvec3& dp) {
 }
 
 // Where the ray o + t*dir meets the plane through p with normal n (t may be any sign); nullopt if parallel.
-std::optional<glm::dvec3> ray_plane(const glm::dvec3& o, const glm::dvec3& dir, const glm::dvec3& p, const glm::dvec3& n) {
+std::optional<glm::dvec3> ray_plane(const glm::dvec3& o, const glm::dvec3& dir, const glm::dvec3& p,
+                                    const glm::dvec3& n) {
     const double den = glm::dot(dir, n);
     if (std::abs(den) < 1e-12) return std::nullopt;
     return o + dir * (glm::dot(p - o, n) / den);
@@ -68,10 +69,12 @@ public:
         if (!device_) return "render_reference(): rtcNewDevice failed";
         scene_ = rtcNewScene(device_);
         RTCGeometry geom = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_TRIANGLE);
-        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), pos.size()));
-        for (std::size_t i = 0; i < pos.size(); ++i) v[3 * i] = pos[i].x, v[3 * i + 1] = pos[i].y, v[3 * i + 2] = pos[i].z;
-        auto* idx = static_cast<std::uint32_t*>(
-            rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), tris.size() / 3));
+        auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+            geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), pos.size()));
+        for (std::size_t i = 0; i < pos.size(); ++i)
+            v[3 * i] = pos[i].x, v[3 * i + 1] = pos[i].y, v[3 * i + 2] = pos[i].z;
+        auto* idx = static_cast<std::uint32_t*>(rtcSetNewGeometryBuffer(
+            geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(std::uint32_t), tris.size() / 3));
         std::copy(tris.begin(), tris.end(), idx);
         rtcCommitGeometry(geom);
         rtcAttachGeometry(scene_, geom);
@@ -109,7 +112,8 @@ private:
 // parent's pulled through the sub-triangle's world -> rest map.
 class MeshTracer {
 public:
-    MeshTracer(const ExactMesh& mesh, const glm::dmat4& model, const std::vector<Lattice>& lattices, const ReferenceSettings& settings)
+    MeshTracer(const ExactMesh& mesh, const glm::dmat4& model, const std::vector<Lattice>& lattices,
+               const ReferenceSettings& settings)
         : mesh_(mesh) {
         const std::size_t nv = mesh.positions.size(), nt = mesh.triangles.size() / 3;
         if (nt == 0 || nv == 0) {
@@ -123,7 +127,8 @@ public:
             }
         world_.resize(nv);
         centre_ = glm::dvec3(0.0);
-        for (std::size_t i = 0; i < nv; ++i) world_[i] = glm::dvec3(model * glm::dvec4(mesh.positions[i], 1.0)), centre_ += world_[i];
+        for (std::size_t i = 0; i < nv; ++i)
+            world_[i] = glm::dvec3(model * glm::dvec4(mesh.positions[i], 1.0)), centre_ += world_[i];
         centre_ /= double(nv);  // float vertices relative to the mesh's centre keep precision far from 0
         const glm::dmat3 nm = glm::transpose(glm::inverse(glm::dmat3(model)));
         std::vector<glm::dvec3> normals;
@@ -137,18 +142,25 @@ public:
             // The triangle's affine uv map: grad = a e1 + b e2 with grad . e1 = du1, grad . e2 = du2.
             const std::uint32_t* tri = &mesh.triangles[3 * t];
             const glm::dvec3 e1 = world_[tri[1]] - world_[tri[0]], e2 = world_[tri[2]] - world_[tri[0]];
-            const double g11 = glm::dot(e1, e1), g12 = glm::dot(e1, e2), g22 = glm::dot(e2, e2), det = g11 * g22 - g12 * g12;
+            const double g11 = glm::dot(e1, e1), g12 = glm::dot(e1, e2), g22 = glm::dot(e2, e2),
+                         det = g11 * g22 - g12 * g12;
             if (!uv || !(det > 1e-24 * g11 * g22)) continue;
             const glm::dvec2 d1 = glm::dvec2(mesh.uvs[tri[1]]) - glm::dvec2(mesh.uvs[tri[0]]);
             const glm::dvec2 d2 = glm::dvec2(mesh.uvs[tri[2]]) - glm::dvec2(mesh.uvs[tri[0]]);
-            auto solve = [&](double r1, double r2) { return ((g22 * r1 - g12 * r2) / det) * e1 + ((g11 * r2 - g12 * r1) / det) * e2; };
+            auto solve = [&](double r1, double r2) {
+                return ((g22 * r1 - g12 * r2) / det) * e1 + ((g11 * r2 - g12 * r1) / det) * e2;
+            };
             grad_u_[t] = solve(d1.x, d2.x);
             grad_v_[t] = solve(d1.y, d2.y);
         }
         // Traced triangles: the mesh's own at rest; k x k sub-triangles per triangle when deformed (k so
         // that all of them stay within about mesh_subdivision_budget).
         deformed_ = !lattices.empty();
-        const int k = deformed_ ? std::clamp(int(std::sqrt(double(std::max(settings.mesh_triangle_budget, 1)) / double(nt))), 1, 256) : 1;
+        const int k =
+            deformed_
+                ? std::clamp(int(std::sqrt(double(std::max(settings.mesh_triangle_budget, 1)) / double(nt))),
+                             1, 256)
+                : 1;
         const std::size_t per = std::size_t(k + 1) * std::size_t(k + 2) / 2;
         rest_.reserve(nt * per);
         std::vector<glm::vec3> pos, nrm;
@@ -159,14 +171,17 @@ public:
             const glm::dvec3 face = glm::cross(b - a, c - a);
             const glm::dvec3 fn = glm::length(face) > 0.0 ? glm::normalize(face) : glm::dvec3(0, 0, 1);
             const std::uint32_t base = std::uint32_t(rest_.size());
-            auto local = [&](int i, int j) { return base + std::uint32_t(i * (k + 1) - i * (i - 1) / 2 + j); };  // row i holds k + 1 - i points
+            auto local = [&](int i, int j) {
+                return base + std::uint32_t(i * (k + 1) - i * (i - 1) / 2 + j);
+            };  // row i holds k + 1 - i points
             for (int i = 0; i <= k; ++i)
                 for (int j = 0; j <= k - i; ++j) {
                     const double bu = double(i) / k, bv = double(j) / k, bw = 1.0 - bu - bv;
                     const glm::dvec3 p = bw * a + bu * b + bv * c;
                     glm::dvec3 n = fn;
                     if (!normals.empty()) {
-                        const glm::dvec3 m = bw * normals[tri[0]] + bu * normals[tri[1]] + bv * normals[tri[2]];
+                        const glm::dvec3 m =
+                            bw * normals[tri[0]] + bu * normals[tri[1]] + bv * normals[tri[2]];
                         if (glm::length(m) > 1e-12) n = glm::normalize(m);
                     }
                     rest_.push_back(p);
@@ -223,14 +238,16 @@ public:
         const glm::dvec3 rest = bw * ra + bu * rb + bv * rc;
         const std::uint32_t corner = mesh_.triangles[3 * t];
         if (mesh_.uvs.size() == mesh_.positions.size())
-            h.uv = glm::dvec2(mesh_.uvs[corner]) + glm::dvec2(glm::dot(grad_u_[t], rest - world_[corner]), glm::dot(grad_v_[t], rest - world_[corner]));
+            h.uv = glm::dvec2(mesh_.uvs[corner]) + glm::dvec2(glm::dot(grad_u_[t], rest - world_[corner]),
+                                                              glm::dot(grad_v_[t], rest - world_[corner]));
         h.grad_u = grad_u_[t], h.grad_v = grad_v_[t];
         if (deformed_) {
             // World -> rest on the sub-triangle (the FFD is affine at its scale): dq = x e1 + y e2 (+ gn,
             // dropped) -> dp = x f1 + y f2; the uv change grad . dp = (M^T grad) . dq.
             const glm::dvec3 e1 = b - a, e2 = c - a, gn = glm::cross(e1, e2);
             glm::dmat3 m(0.0);
-            if (glm::dot(gn, gn) > 0.0) m = glm::dmat3(rb - ra, rc - ra, glm::dvec3(0.0)) * glm::inverse(glm::dmat3(e1, e2, gn));
+            if (glm::dot(gn, gn) > 0.0)
+                m = glm::dmat3(rb - ra, rc - ra, glm::dvec3(0.0)) * glm::inverse(glm::dmat3(e1, e2, gn));
             h.grad_u = glm::transpose(m) * grad_u_[t];
             h.grad_v = glm::transpose(m) * grad_v_[t];
         }
@@ -239,7 +256,7 @@ public:
 
 private:
     const ExactMesh& mesh_;
-    std::vector<glm::dvec3> world_, grad_u_, grad_v_;   // rest vertices (world), per-triangle uv gradients
+    std::vector<glm::dvec3> world_, grad_u_, grad_v_;     // rest vertices (world), per-triangle uv gradients
     std::vector<glm::dvec3> rest_, positions_, normals_;  // traced vertices: rest, deformed, normals
     std::vector<std::uint32_t> tris_, parent_;            // traced triangles and the mesh triangle of each
     glm::dvec3 centre_{0.0};
@@ -260,7 +277,8 @@ public:
         for (int j = 0; j <= nv; ++j)
             for (int i = 0; i <= nu; ++i) {
                 const double lon = 2.0 * std::numbers::pi * i / nu, colat = std::numbers::pi * j / nv;
-                const glm::dvec3 d(std::sin(colat) * std::cos(lon), std::cos(colat), std::sin(colat) * std::sin(lon));
+                const glm::dvec3 d(std::sin(colat) * std::cos(lon), std::cos(colat),
+                                   std::sin(colat) * std::sin(lon));
                 const std::size_t k = std::size_t(j) * std::size_t(cols_) + std::size_t(i);
                 rest_[k] = d;
                 pos[k] = glm::vec3(d * scene.radius);  // relative to the sphere centre (the deform origin)
@@ -282,7 +300,8 @@ public:
         std::size_t t = 0;
         for (int j = 0; j < nv; ++j)
             for (int i = 0; i < nu; ++i) {
-                const auto a = std::uint32_t(j * cols_ + i), b = a + 1, c = a + std::uint32_t(cols_), d = c + 1;
+                const auto a = std::uint32_t(j * cols_ + i), b = a + 1, c = a + std::uint32_t(cols_),
+                           d = c + 1;
                 idx[3 * t] = a, idx[3 * t + 1] = c, idx[3 * t + 2] = b, ++t;
                 idx[3 * t] = b, idx[3 * t + 1] = c, idx[3 * t + 2] = d, ++t;
             }
@@ -328,9 +347,11 @@ private:
     std::string error_;
 };
 
-std::optional<Hit> trace_sphere(const ReferenceScene& scene, const glm::dvec3& origin, const glm::dvec3& dir) {
+std::optional<Hit> trace_sphere(const ReferenceScene& scene, const glm::dvec3& origin,
+                                const glm::dvec3& dir) {
     const glm::dvec3 oc = origin - scene.center;
-    const double a = glm::dot(dir, dir), b = glm::dot(oc, dir), c = glm::dot(oc, oc) - scene.radius * scene.radius;
+    const double a = glm::dot(dir, dir), b = glm::dot(oc, dir),
+                 c = glm::dot(oc, oc) - scene.radius * scene.radius;
     const double disc = b * b - a * c;
     if (disc < 0.0) return std::nullopt;
     const double sq = std::sqrt(disc);
@@ -377,7 +398,8 @@ ReferenceTexture::ReferenceTexture(const SplatMaterial& m) {
                 glm::vec4 sum(0.0f);
                 for (int dy = 0; dy < 2; ++dy)
                     for (int dx = 0; dx < 2; ++dx) {
-                        const int sx = std::min(2 * x + dx, prev.width - 1), sy = std::min(2 * y + dy, prev.height - 1);
+                        const int sx = std::min(2 * x + dx, prev.width - 1),
+                                  sy = std::min(2 * y + dy, prev.height - 1);
                         sum += prev.texels[std::size_t(sy) * std::size_t(prev.width) + std::size_t(sx)];
                     }
                 next.texels[std::size_t(y) * std::size_t(next.width) + std::size_t(x)] = sum * 0.25f;
@@ -393,11 +415,14 @@ glm::dvec4 ReferenceTexture::bilinear(const glm::dvec2& uv, int level) const {
     auto wrap = [](long i, int n) { return int(((i % n) + n) % n); };
     const int x0 = wrap(long(fx), l.width), x1 = wrap(long(fx) + 1, l.width);
     const int y0 = std::clamp(int(fy), 0, l.height - 1), y1 = std::clamp(int(fy) + 1, 0, l.height - 1);
-    auto t = [&](int tx, int ty) { return glm::dvec4(l.texels[std::size_t(ty) * std::size_t(l.width) + std::size_t(tx)]); };
+    auto t = [&](int tx, int ty) {
+        return glm::dvec4(l.texels[std::size_t(ty) * std::size_t(l.width) + std::size_t(tx)]);
+    };
     return glm::mix(glm::mix(t(x0, y0), t(x1, y0), ax), glm::mix(t(x0, y1), t(x1, y1), ax), ay);
 }
 
-glm::dvec4 ReferenceTexture::anisotropic(const glm::dvec2& uv, const glm::dvec2& dx, const glm::dvec2& dy, int max_probes) const {
+glm::dvec4 ReferenceTexture::anisotropic(const glm::dvec2& uv, const glm::dvec2& dx, const glm::dvec2& dy,
+                                         int max_probes) const {
     const glm::dvec2 size(levels_[0].width, levels_[0].height);
     const double lx = glm::length(dx * size), ly = glm::length(dy * size);
     const double major = std::max(lx, ly), minor = std::min(lx, ly);
@@ -413,7 +438,8 @@ glm::dvec4 ReferenceTexture::anisotropic(const glm::dvec2& uv, const glm::dvec2&
     return sum / double(n);
 }
 
-glm::dvec4 ReferenceTexture::trilinear(const glm::dvec2& uv, const glm::dvec2& dx, const glm::dvec2& dy) const {
+glm::dvec4 ReferenceTexture::trilinear(const glm::dvec2& uv, const glm::dvec2& dx,
+                                       const glm::dvec2& dy) const {
     const glm::dvec2 size(levels_[0].width, levels_[0].height);
     const double rho = std::max(glm::length(dx * size), glm::length(dy * size));
     const double lambda = rho > 0.0 ? std::log2(rho) : -1.0;
@@ -466,32 +492,17 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
     s.width = width, s.height = height;
     const SplatCloud* cloud = nullptr;
     std::string problem;
-    reg.view<const SplatCloud, const ExactSphere>().each([&](ecs::Entity e, const SplatCloud& c, const ExactSphere& sphere) {
-        if (cloud) return;
-        cloud = &c;
-        const Transform* t = reg.try_get<Transform>(e);
-        const glm::dmat4 m = model_matrix(t, c.origin);
-        if (glm::dmat3(m) != glm::dmat3(1.0)) problem = "the sphere's Transform rotates or scales it (not supported)";
-        s.center = glm::dvec3(m * glm::dvec4(sphere.center, 1.0));
-        s.radius = sphere.radius;
-        s.material = &c.material;
-        if (const Deformers* d = reg.try_get<Deformers>(e))
-            for (ecs::Entity l : d->lattices)
-                if (reg.valid(l) && reg.has<Lattice>(l)) {
-                    const Lattice& lat = reg.get<Lattice>(l);
-                    if (ffd::moved_count(lat) > 0) s.lattices.push_back(lat);
-                }
-    });
-    if (!cloud) {
-        reg.view<const SplatCloud, const ExactMesh>().each([&](ecs::Entity e, const SplatCloud& c, const ExactMesh& mesh) {
+    reg.view<const SplatCloud, const ExactSphere>().each(
+        [&](ecs::Entity e, const SplatCloud& c, const ExactSphere& sphere) {
             if (cloud) return;
             cloud = &c;
-            s.mesh = &mesh;
-            s.mesh_model = model_matrix(reg.try_get<Transform>(e), c.origin);
+            const Transform* t = reg.try_get<Transform>(e);
+            const glm::dmat4 m = model_matrix(t, c.origin);
+            if (glm::dmat3(m) != glm::dmat3(1.0))
+                problem = "the sphere's Transform rotates or scales it (not supported)";
+            s.center = glm::dvec3(m * glm::dvec4(sphere.center, 1.0));
+            s.radius = sphere.radius;
             s.material = &c.material;
-            if (c.material.texture_rgba8.empty() && c.colors.size() == c.size() && c.size() > 0)
-                problem = "the mesh's colours are baked per splat (vertex colours, or a tinted or multi-texture material): "
-                          "no texture to trace";
             if (const Deformers* d = reg.try_get<Deformers>(e))
                 for (ecs::Entity l : d->lattices)
                     if (reg.valid(l) && reg.has<Lattice>(l)) {
@@ -499,8 +510,31 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
                         if (ffd::moved_count(lat) > 0) s.lattices.push_back(lat);
                     }
         });
+    if (!cloud) {
+        reg.view<const SplatCloud, const ExactMesh>().each(
+            [&](ecs::Entity e, const SplatCloud& c, const ExactMesh& mesh) {
+                if (cloud) return;
+                cloud = &c;
+                s.mesh = &mesh;
+                s.mesh_model = model_matrix(reg.try_get<Transform>(e), c.origin);
+                s.material = &c.material;
+                if (c.material.texture_rgba8.empty() && c.colors.size() == c.size() && c.size() > 0)
+                    problem =
+                        "the mesh's colours are baked per splat (vertex colours, or a tinted or "
+                        "multi-texture material): "
+                        "no texture to trace";
+                if (const Deformers* d = reg.try_get<Deformers>(e))
+                    for (ecs::Entity l : d->lattices)
+                        if (reg.valid(l) && reg.has<Lattice>(l)) {
+                            const Lattice& lat = reg.get<Lattice>(l);
+                            if (ffd::moved_count(lat) > 0) s.lattices.push_back(lat);
+                        }
+            });
     }
-    if (!cloud) return make_error("reference_scene(): no point cloud with an exact surface (ExactSphere or ExactMesh) in the scene");
+    if (!cloud)
+        return make_error(
+            "reference_scene(): no point cloud with an exact surface (ExactSphere or ExactMesh) in the "
+            "scene");
     if (!problem.empty()) return make_error("reference_scene(): " + problem);
     const double aspect = double(width) / double(height);
     const Camera cam = scene_camera(reg, aspect);
@@ -511,7 +545,8 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
 }
 
 Result<FrameImage> render_reference(const ReferenceScene& scene, const ReferenceSettings& settings) {
-    if (scene.width < 1 || scene.height < 1 || !scene.material) return make_error("render_reference(): incomplete scene");
+    if (scene.width < 1 || scene.height < 1 || !scene.material)
+        return make_error("render_reference(): incomplete scene");
     std::optional<DeformedSphere> deformed;
     std::optional<MeshTracer> mesh;
     if (scene.mesh) {
@@ -536,7 +571,9 @@ Result<FrameImage> render_reference(const ReferenceScene& scene, const Reference
         return to_world * glm::dvec3(nx / p00, ny / p11, -1.0);
     };
     auto trace = [&](const glm::dvec3& dir) {
-        return mesh ? mesh->trace(eye, dir) : deformed ? deformed->trace(eye, dir) : trace_sphere(scene, eye, dir);
+        return mesh       ? mesh->trace(eye, dir)
+               : deformed ? deformed->trace(eye, dir)
+                          : trace_sphere(scene, eye, dir);
     };
     auto hit_uv = [](const Hit& hit) { return hit.mesh ? hit.uv : sphere_uv(hit.rest_dir); };
     auto shade = [&](const Hit& hit, const glm::dvec3& dir, const glm::dvec4& tex) {
@@ -566,29 +603,36 @@ Result<FrameImage> render_reference(const ReferenceScene& scene, const Reference
                     if (!texture.empty()) {
                         // Exact uv derivatives: the neighbouring pixels' rays cut with the tangent plane.
                         auto duv = [&](double ox, double oy) {
-                            const auto q = ray_plane(eye, ray_dir(wx + ox, wy + oy), hit->position, hit->normal);
+                            const auto q =
+                                ray_plane(eye, ray_dir(wx + ox, wy + oy), hit->position, hit->normal);
                             if (!q) return glm::dvec2(0.0);
                             const glm::dvec3 dq = *q - hit->position;
-                            if (hit->mesh) return glm::dvec2(glm::dot(hit->grad_u, dq), glm::dot(hit->grad_v, dq));
+                            if (hit->mesh)
+                                return glm::dvec2(glm::dot(hit->grad_u, dq), glm::dot(hit->grad_v, dq));
                             return sphere_uv_differential(hit->rest_dir, hit->to_rest * dq);
                         };
-                        tex = settings.anisotropic > 0 ? texture.anisotropic(hit_uv(*hit), duv(1.0, 0.0), duv(0.0, 1.0), settings.anisotropic)
-                                                       : texture.trilinear(hit_uv(*hit), duv(1.0, 0.0), duv(0.0, 1.0));
+                        tex = settings.anisotropic > 0
+                                  ? texture.anisotropic(hit_uv(*hit), duv(1.0, 0.0), duv(0.0, 1.0),
+                                                        settings.anisotropic)
+                                  : texture.trilinear(hit_uv(*hit), duv(1.0, 0.0), duv(0.0, 1.0));
                     }
                     color = shade(*hit, dir, tex);
                 } else {
                     int hits = 0;
                     for (int sy = 0; sy < ss; ++sy)
                         for (int sx = 0; sx < ss; ++sx) {
-                            const glm::dvec3 d = ray_dir(double(x) + (sx + 0.5) / ss, double(h - 1 - y) + (sy + 0.5) / ss);
+                            const glm::dvec3 d =
+                                ray_dir(double(x) + (sx + 0.5) / ss, double(h - 1 - y) + (sy + 0.5) / ss);
                             const std::optional<Hit> sub = trace(d);
                             if (!sub) continue;
-                            const glm::dvec4 tex = texture.empty() ? glm::dvec4(0.0) : texture.bilinear(hit_uv(*sub));
+                            const glm::dvec4 tex =
+                                texture.empty() ? glm::dvec4(0.0) : texture.bilinear(hit_uv(*sub));
                             color += shade(*sub, d, tex);
                             ++hits;
                         }
-                    color = hits ? color / double(hits) : shade(*hit, dir, texture.empty() ? glm::dvec4(0.0)
-                                                                                           : texture.bilinear(hit_uv(*hit)));
+                    color = hits ? color / double(hits)
+                                 : shade(*hit, dir,
+                                         texture.empty() ? glm::dvec4(0.0) : texture.bilinear(hit_uv(*hit)));
                 }
                 const std::size_t k = img.index(x, y);
                 img.color[k] = glm::vec4(glm::vec3(color), 1.0f);

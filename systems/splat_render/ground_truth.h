@@ -52,7 +52,7 @@ struct ReferenceScene {
     glm::dmat4 view{1.0}, projection{1.0};  // camera_math.h's view_matrix / projection_matrix
     glm::dvec3 center{0.0};                 // world space sphere
     double radius = 1.0;
-    std::vector<Lattice> lattices;          // deformers in order (world space); empty: the rest sphere
+    std::vector<Lattice> lattices;            // deformers in order (world space); empty: the rest sphere
     const SplatMaterial* material = nullptr;  // texture (sRGB, row 0 at v = 0), base colour, specular
     ReferenceLights lights;
     // Instead of the sphere: a cloud's ExactMesh (deformed by `lattices` like the sphere), and the
@@ -62,11 +62,13 @@ struct ReferenceScene {
 };
 
 struct ReferenceSettings {
-    int supersample = 0;       // 0: pixel-centre rays, trilinear mip filtering; N: N x N rays, level 0
-    int anisotropic = 0;       // with supersample 0: up to this many trilinear probes along the footprint's major axis
+    int supersample = 0;  // 0: pixel-centre rays, trilinear mip filtering; N: N x N rays, level 0
+    int anisotropic =
+        0;  // with supersample 0: up to this many trilinear probes along the footprint's major axis
     int longitude_steps = 2048;  // tessellation of the deformed sphere
     int colatitude_steps = 1024;
-    int mesh_triangle_budget = 1 << 21;  // a deformed ExactMesh: k x k sub-triangles each, about this many in all
+    int mesh_triangle_budget =
+        1 << 21;  // a deformed ExactMesh: k x k sub-triangles each, about this many in all
 };
 
 // The scene of the first cloud carrying an ExactSphere (else an ExactMesh), after the current frame's
@@ -92,7 +94,8 @@ public:
     glm::dvec4 trilinear(const glm::dvec2& uv, const glm::dvec2& duv_dx, const glm::dvec2& duv_dy) const;
     // Anisotropic filtering (EXT_texture_filter_anisotropic's model): min(ceil(major / minor), max_probes)
     // trilinear probes along the footprint's major axis, each at the level of major / probes.
-    glm::dvec4 anisotropic(const glm::dvec2& uv, const glm::dvec2& duv_dx, const glm::dvec2& duv_dy, int max_probes) const;
+    glm::dvec4 anisotropic(const glm::dvec2& uv, const glm::dvec2& duv_dx, const glm::dvec2& duv_dy,
+                           int max_probes) const;
 
 private:
     struct Level {

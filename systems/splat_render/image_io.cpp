@@ -44,7 +44,8 @@ Rgba8Image to_rgba8(const FrameImage& image, std::optional<glm::vec3> background
         std::uint8_t* p = &out.pixels[i * 4];
         const float a = std::clamp(c.w, 0.0f, 1.0f);
         if (background && a < 1.0f) {
-            // Over a background the straight colour is blended in display (sRGB) space, as 3DGS viewers and the
+            // Over a background the straight colour is blended in display (sRGB) space, as 3DGS viewers and
+            // the
             // --video path do: blending in linear space made soft edges lighter on dark backgrounds.
             for (int k = 0; k < 3; ++k) {
                 const float v = linear_to_srgb(c[k]) * a + linear_to_srgb((*background)[k]) * (1.0f - a);
@@ -62,7 +63,8 @@ Rgba8Image to_rgba8(const FrameImage& image, std::optional<glm::vec3> background
 }
 
 Status write_png(const std::filesystem::path& path, const Rgba8Image& image) {
-    if (image.width <= 0 || image.height <= 0 || image.pixels.size() != std::size_t(image.width) * image.height * 4)
+    if (image.width <= 0 || image.height <= 0 ||
+        image.pixels.size() != std::size_t(image.width) * image.height * 4)
         return make_error(path.string() + ": write_png(): empty or inconsistent image");
     png_image png;
     std::memset(&png, 0, sizeof png);
@@ -141,20 +143,23 @@ Status write_exr(const std::filesystem::path& path, const FrameImage& image) {
         const char* rgba_names[4] = {"R", "G", "B", "A"};
         for (int c = 0; c < 4; ++c) {
             channels.insert(rgba_names[c], Imf::Channel(Imf::HALF));
-            fb.insert(rgba_names[c], Imf::Slice(Imf::HALF, reinterpret_cast<char*>(&rgba[std::size_t(c)]),
-                                                sizeof(half) * 4, sizeof(half) * 4 * std::size_t(image.width)));
+            fb.insert(rgba_names[c],
+                      Imf::Slice(Imf::HALF, reinterpret_cast<char*>(&rgba[std::size_t(c)]), sizeof(half) * 4,
+                                 sizeof(half) * 4 * std::size_t(image.width)));
         }
         if (has_z) {
             channels.insert("Z", Imf::Channel(Imf::FLOAT));
-            fb.insert("Z", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(image.depth.data())),
-                                      sizeof(float), sizeof(float) * std::size_t(image.width)));
+            fb.insert("Z",
+                      Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(const_cast<float*>(image.depth.data())),
+                                 sizeof(float), sizeof(float) * std::size_t(image.width)));
         }
         if (has_n) {
             const char* n_names[3] = {"N.X", "N.Y", "N.Z"};
             for (int c = 0; c < 3; ++c) {
                 channels.insert(n_names[c], Imf::Channel(Imf::HALF));
-                fb.insert(n_names[c], Imf::Slice(Imf::HALF, reinterpret_cast<char*>(&normals[std::size_t(c)]),
-                                                 sizeof(half) * 3, sizeof(half) * 3 * std::size_t(image.width)));
+                fb.insert(n_names[c],
+                          Imf::Slice(Imf::HALF, reinterpret_cast<char*>(&normals[std::size_t(c)]),
+                                     sizeof(half) * 3, sizeof(half) * 3 * std::size_t(image.width)));
             }
         }
         MemoryOStream stream;
@@ -188,17 +193,19 @@ Result<FrameImage> read_exr(const std::filesystem::path& path) {
         Imf::FrameBuffer fb;
         const char* rgba_names[4] = {"R", "G", "B", "A"};
         for (int c = 0; c < 4; ++c)
-            fb.insert(rgba_names[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(rgba.data() + c - origin * 4),
-                                                sizeof(float) * 4, sizeof(float) * 4 * std::size_t(out.width), 1, 1,
-                                                c == 3 ? 1.0 : 0.0));
+            fb.insert(rgba_names[c],
+                      Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(rgba.data() + c - origin * 4),
+                                 sizeof(float) * 4, sizeof(float) * 4 * std::size_t(out.width), 1, 1,
+                                 c == 3 ? 1.0 : 0.0));
         if (has_z)
-            fb.insert("Z", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(out.depth.data() - origin), sizeof(float),
-                                      sizeof(float) * std::size_t(out.width)));
+            fb.insert("Z", Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(out.depth.data() - origin),
+                                      sizeof(float), sizeof(float) * std::size_t(out.width)));
         const char* n_names[3] = {"N.X", "N.Y", "N.Z"};
         if (has_n)
             for (int c = 0; c < 3; ++c)
-                fb.insert(n_names[c], Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(normals.data() + c - origin * 3),
-                                                 sizeof(float) * 3, sizeof(float) * 3 * std::size_t(out.width)));
+                fb.insert(n_names[c],
+                          Imf::Slice(Imf::FLOAT, reinterpret_cast<char*>(normals.data() + c - origin * 3),
+                                     sizeof(float) * 3, sizeof(float) * 3 * std::size_t(out.width)));
         file.setFrameBuffer(fb);
         file.readPixels(dw.min.y, dw.max.y);
         out.color.resize(n);
@@ -206,7 +213,8 @@ Result<FrameImage> read_exr(const std::filesystem::path& path) {
             out.color[i] = glm::vec4(rgba[i * 4], rgba[i * 4 + 1], rgba[i * 4 + 2], rgba[i * 4 + 3]);
         if (has_n) {
             out.normal.resize(n);
-            for (std::size_t i = 0; i < n; ++i) out.normal[i] = glm::vec3(normals[i * 3], normals[i * 3 + 1], normals[i * 3 + 2]);
+            for (std::size_t i = 0; i < n; ++i)
+                out.normal[i] = glm::vec3(normals[i * 3], normals[i * 3 + 1], normals[i * 3 + 2]);
         }
         return out;
     } catch (const std::exception& e) {

@@ -34,7 +34,9 @@ struct Rgba8Image {
     int height = 0;
     std::vector<std::uint8_t> pixels;  // width*height*4
 
-    const std::uint8_t* at(int x, int y) const { return &pixels[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 4]; }
+    const std::uint8_t* at(int x, int y) const {
+        return &pixels[(std::size_t(y) * std::size_t(width) + std::size_t(x)) * 4];
+    }
 };
 
 float linear_to_srgb(float linear);

@@ -9,11 +9,13 @@ using namespace detail;
 
 Result<gfx::Program> splat_program(const char* fragment, const char* label, int pass, int quad, int aux = 1,
                                    int materials = 0, int textured = -1) {
-    gfx::Defines defines{{"PASS", std::to_string(pass)}, {"SHAPE_QUAD", std::to_string(quad)},
-                         {"AUX", std::to_string(aux)}, {"MATERIALS", std::to_string(materials)}};
+    gfx::Defines defines{{"PASS", std::to_string(pass)},
+                         {"SHAPE_QUAD", std::to_string(quad)},
+                         {"AUX", std::to_string(aux)},
+                         {"MATERIALS", std::to_string(materials)}};
     if (textured >= 0) defines.push_back({"TEXTURED", std::to_string(textured)});  // else read per draw
-    return gfx::load_program({{GL_VERTEX_SHADER, "splat_render/splat.vert"}, {GL_FRAGMENT_SHADER, fragment}}, label,
-                             defines);
+    return gfx::load_program({{GL_VERTEX_SHADER, "splat_render/splat.vert"}, {GL_FRAGMENT_SHADER, fragment}},
+                             label, defines);
 }
 
 void upload_texture(CloudGpu& gpu, const SplatMaterial& m) {
@@ -27,8 +29,8 @@ void upload_texture(CloudGpu& gpu, const SplatMaterial& m) {
     glTextureStorage2D(gpu.texture.id(), levels, GL_SRGB8_ALPHA8, m.texture_width, m.texture_height);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     // Row 0 of the texels is v = 0, which is also GL's first row (t = 0).
-    glTextureSubImage2D(gpu.texture.id(), 0, 0, 0, m.texture_width, m.texture_height, GL_RGBA, GL_UNSIGNED_BYTE,
-                        m.texture_rgba8.data());
+    glTextureSubImage2D(gpu.texture.id(), 0, 0, 0, m.texture_width, m.texture_height, GL_RGBA,
+                        GL_UNSIGNED_BYTE, m.texture_rgba8.data());
     glGenerateTextureMipmap(gpu.texture.id());
     // Mipmapped: the HQ attribute pass filters per pixel with textureGrad (the cull's per-splat lookups ask
     // for level 0 explicitly).
@@ -52,7 +54,8 @@ void upload_uv_axes(CloudGpu& gpu, const SplatCloud& cloud) {
     const std::vector<glm::vec4>* data = &cloud.uv_axes;
     if (cloud.uv_axes.size() != cloud.size()) zeros.assign(cloud.size(), glm::vec4(0.0f)), data = &zeros;
     gpu.uv_axes = gfx::Buffer::create("render.uv_axes");
-    glNamedBufferData(gpu.uv_axes.id(), GLsizeiptr(std::max<std::size_t>(data->size(), 1) * sizeof(glm::vec4)),
+    glNamedBufferData(gpu.uv_axes.id(),
+                      GLsizeiptr(std::max<std::size_t>(data->size(), 1) * sizeof(glm::vec4)),
                       data->empty() ? nullptr : data->data(), GL_STATIC_DRAW);
 }
 
@@ -108,8 +111,9 @@ bool cpu_cull_wanted(const SplatRenderState& s, CullPath path) {
 // the draw buffer.
 void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatStore& store, bool keep_cpu) {
     for (auto it = s.clouds.begin(); it != s.clouds.end();)
-        it = reg.valid(it->first) && reg.has<SplatCloud>(it->first) && store.clouds.contains(it->first) ? std::next(it)
-                                                                                                     : s.clouds.erase(it);
+        it = reg.valid(it->first) && reg.has<SplatCloud>(it->first) && store.clouds.contains(it->first)
+                 ? std::next(it)
+                 : s.clouds.erase(it);
 
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         const auto sit = store.clouds.find(e);
@@ -122,16 +126,18 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatSto
             gpu.frame_ubo = gfx::Buffer::create("render.frame_block");
             glNamedBufferData(gpu.frame_ubo.id(), sizeof(gpu::FrameBlock), nullptr, GL_DYNAMIC_DRAW);
             gpu.commands = gfx::Buffer::create("render.draw_commands");
-            glNamedBufferData(gpu.commands.id(), draw_command_words * sizeof(std::uint32_t), nullptr, GL_DYNAMIC_DRAW);
+            glNamedBufferData(gpu.commands.id(), draw_command_words * sizeof(std::uint32_t), nullptr,
+                              GL_DYNAMIC_DRAW);
         }
         if (gpu.capacity < n || !gpu.records) {
             gpu.capacity = std::max<std::uint32_t>(n, 1);
             gpu.records = gfx::Buffer::create("render.visible_splats");
-            glNamedBufferData(gpu.records.id(), GLsizeiptr(2 * std::size_t(gpu.capacity) * sizeof(SplatRecord)), nullptr,
+            glNamedBufferData(gpu.records.id(),
+                              GLsizeiptr(2 * std::size_t(gpu.capacity) * sizeof(SplatRecord)), nullptr,
                               GL_DYNAMIC_DRAW);
             gpu.quads = gfx::Buffer::create("render.visible_quads");
-            glNamedBufferData(gpu.quads.id(), GLsizeiptr(std::size_t(gpu.capacity) * sizeof(std::uint32_t)), nullptr,
-                              GL_DYNAMIC_DRAW);
+            glNamedBufferData(gpu.quads.id(), GLsizeiptr(std::size_t(gpu.capacity) * sizeof(std::uint32_t)),
+                              nullptr, GL_DYNAMIC_DRAW);
         }
         if (gpu.texture_version != version) {
             upload_texture(gpu, cloud.material);
@@ -158,7 +164,8 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatSto
         gpu.cpu_current = splats.cpu_current();
         if (!gpu.cpu_current && splats.state == gfx::Residency::rest && splats.rest_version == version) {
             if (gpu.cpu_own_version != version || gpu.cpu_own.size() != n) {
-                gpu.cpu_own = pack_splats(cloud), gpu.cpu_own_version = version;  // the CPU cull was just chosen
+                gpu.cpu_own = pack_splats(cloud),
+                gpu.cpu_own_version = version;  // the CPU cull was just chosen
                 ++s.cpu_splat_passes;
             }
             if (gpu.cpu_own.size() == gpu.count) gpu.cpu_current = &gpu.cpu_own;
@@ -172,7 +179,8 @@ Status cull_program(SplatRenderState& s, bool textured, bool lit, std::uint32_t 
     gfx::Program& program = s.cull[textured][lit][lit ? lights : 0];
     if (program) return {};
     auto cull = gfx::load_compute_program("splat_render/cull.comp", "render.cull",
-                                          {{"TEXTURED", textured ? "1" : "0"}, {"LIT", lit ? "1" : "0"},
+                                          {{"TEXTURED", textured ? "1" : "0"},
+                                           {"LIT", lit ? "1" : "0"},
                                            {"LIGHTS", std::to_string(lit ? lights : 0)}});
     if (!cull) return make_error(cull.message());
     program = std::move(cull.value());
@@ -184,9 +192,9 @@ Status cull_program(SplatRenderState& s, bool textured, bool lit, std::uint32_t 
 Status shade_program(SplatRenderState& s, bool materials, std::uint32_t lights) {
     gfx::Program& program = s.shade[materials][std::min<std::uint32_t>(lights, SFFD_MAX_LIGHTS)];
     if (program) return {};
-    auto shade = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
-                                    {GL_FRAGMENT_SHADER, "splat_render/shade.frag"}},
-                                   "render.shade", {{"LIGHTS", std::to_string(lights)}, {"MATERIALS", materials ? "1" : "0"}});
+    auto shade = gfx::load_program(
+        {{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"}, {GL_FRAGMENT_SHADER, "splat_render/shade.frag"}},
+        "render.shade", {{"LIGHTS", std::to_string(lights)}, {"MATERIALS", materials ? "1" : "0"}});
     if (!shade) return make_error(shade.message());
     program = std::move(shade.value());
     return {};
@@ -213,19 +221,22 @@ Status init_render_state(ecs::Registry& registry) {
     SplatRenderState s;
     if (Status st = cull_program(s, false, false, 1); !st) return st;
     for (int quad = 0; quad < 2; ++quad) {
-        auto vis = splat_program("splat_render/visibility.frag", quad ? "render.visibility.quads" : "render.visibility", 0, quad, 0);
+        auto vis = splat_program("splat_render/visibility.frag",
+                                 quad ? "render.visibility.quads" : "render.visibility", 0, quad, 0);
         if (!vis) return make_error(vis.message());
         for (int textured = 0; textured < 2; ++textured)
             for (int materials = 0; materials < 2; ++materials) {
-                auto attr = splat_program("splat_render/attribute.frag", quad ? "render.attribute.quads" : "render.attribute",
-                                          1, quad, 0, materials, textured);
+                auto attr = splat_program("splat_render/attribute.frag",
+                                          quad ? "render.attribute.quads" : "render.attribute", 1, quad, 0,
+                                          materials, textured);
                 if (!attr) return make_error(attr.message());
                 s.attribute[textured][materials][quad] = std::move(attr.value());
             }
         for (int textured = 0; textured < 2; ++textured)
             for (int aux = 0; aux < 2; ++aux) {
-                auto prev = splat_program("splat_render/preview.frag", quad ? "render.preview.quads" : "render.preview", 2,
-                                          quad, aux, 0, textured);
+                auto prev = splat_program("splat_render/preview.frag",
+                                          quad ? "render.preview.quads" : "render.preview", 2, quad, aux, 0,
+                                          textured);
                 if (!prev) return make_error(prev.message());
                 s.preview[textured][aux][quad] = std::move(prev.value());
             }

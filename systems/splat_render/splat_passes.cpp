@@ -37,7 +37,8 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
         glUseProgram(flat ? flat->id() : programs[0].id());
         if (big) {
             glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.raster.commands.id());
-            glDrawElementsIndirect(GL_POINTS, GL_UNSIGNED_INT, reinterpret_cast<const void*>(5 * sizeof(std::uint32_t)));
+            glDrawElementsIndirect(GL_POINTS, GL_UNSIGNED_INT,
+                                   reinterpret_cast<const void*>(5 * sizeof(std::uint32_t)));
         } else {
             glDrawArraysIndirect(GL_POINTS, reinterpret_cast<const void*>(8 * sizeof(std::uint32_t)));
         }
@@ -65,7 +66,8 @@ void begin_splat_passes(SplatRenderState& s, const FramePlan& plan) {
     glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
 
     // Without aux outputs only attachment 0 is written (the preview program variant has no aux output).
-    const GLenum with_aux[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1}, without_aux[2] = {GL_COLOR_ATTACHMENT0, GL_NONE};
+    const GLenum with_aux[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1},
+                 without_aux[2] = {GL_COLOR_ATTACHMENT0, GL_NONE};
     glNamedFramebufferDrawBuffers(s.output_fbo.id(), 2, settings.aux_outputs ? with_aux : without_aux);
     s.aux_valid = settings.aux_outputs;
 }
@@ -76,7 +78,8 @@ void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan
     glDepthFunc(GL_LESS);
     auto scope = profiling::gpu_scope(reg, "render.preview");
     const int aux = plan.settings.aux_outputs ? 1 : 0;
-    for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.preview[gpu->texture ? 1 : 0][aux], *gpu, &s.preview[0][aux][0]);
+    for (const CloudGpu* gpu : plan.drawn)
+        draw_cloud(s, s.preview[gpu->texture ? 1 : 0][aux], *gpu, &s.preview[0][aux][0]);
 }
 
 // HQ 1. visibility: eps-offset depth only.
@@ -102,25 +105,31 @@ void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& p
 // per-cloud inputs (plan.compute) when they do.
 void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, RenderStats& stats) {
     const RenderSettings& settings = plan.settings;
-    if (settings.quality != Quality::hq || materials || plan.drawn.empty() || settings.raster_path == RasterPath::raster)
+    if (settings.quality != Quality::hq || materials || plan.drawn.empty() ||
+        settings.raster_path == RasterPath::raster)
         return;
     if (settings.raster_path == RasterPath::automatic) {
-        // Mean on-screen splat diameter over every drawn splat, against the measured break-even (compute_raster.h).
+        // Mean on-screen splat diameter over every drawn splat, against the measured break-even
+        // (compute_raster.h).
         double splats = 0, footprint = 0;
-        for (const CloudGpu* gpu : plan.drawn) splats += gpu->count, footprint += gpu->count * gpu->footprint_px;
-        const double limit = s.software ? compute_raster_software_max_footprint : compute_raster_hardware_max_footprint;
+        for (const CloudGpu* gpu : plan.drawn)
+            splats += gpu->count, footprint += gpu->count * gpu->footprint_px;
+        const double limit =
+            s.software ? compute_raster_software_max_footprint : compute_raster_hardware_max_footprint;
         if (!(footprint <= limit * splats)) return;
     }
-    if (Status st = compute_raster_fits(plan.width, plan.height); !st) return warn_once("render_system(): " + st.message());
+    if (Status st = compute_raster_fits(plan.width, plan.height); !st)
+        return warn_once("render_system(): " + st.message());
     if (Status st = init_compute_raster(s.compute_raster); !st) {
         log::error("render_system(): ", st.message());
         return;
     }
     for (CloudGpu* gpu : plan.drawn) {
         ensure_compute_raster_cloud(gpu->raster, gpu->capacity);
-        plan.compute.push_back({&gpu->raster, gpu->frame_ubo.id(), gpu->records.id(), gpu->commands.id(), gpu->texture.id(),
-                                gpu->count, gpu->capacity, gpu->flat_list});
-        auto it = std::find_if(plan.gpu_counts.begin(), plan.gpu_counts.end(), [&](const CountsSource& c) { return c.gpu == gpu; });
+        plan.compute.push_back({&gpu->raster, gpu->frame_ubo.id(), gpu->records.id(), gpu->commands.id(),
+                                gpu->texture.id(), gpu->count, gpu->capacity, gpu->flat_list});
+        auto it = std::find_if(plan.gpu_counts.begin(), plan.gpu_counts.end(),
+                               [&](const CountsSource& c) { return c.gpu == gpu; });
         if (it == plan.gpu_counts.end()) plan.gpu_counts.push_back({gpu, counts_big});
         else it->parts |= counts_big;
     }
@@ -139,8 +148,8 @@ bool clouds_differ_in_material(const FramePlan& plan) {
 // HQ 2. attributes: additive, depth-tested against the offset surface, no depth writes; only inside the
 // screen rectangle the clouds can cover (`rect`: clears of two RGBA32F targets and the shading pass are a
 // large part of a small scene's frame on llvmpipe). Leaves the scissor test on for shade_pass.
-void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect,
-                    bool materials) {
+void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan,
+                    const glm::ivec4& rect, bool materials) {
     glEnable(GL_SCISSOR_TEST);
     glScissor(rect.x, rect.y, rect.z, rect.w);
     const GLenum accum_buffers[3] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2};
@@ -159,7 +168,8 @@ void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePl
         auto scope = profiling::gpu_scope(reg, "render.hq.attribute");
         const bool big = !plan.compute.empty();
         for (const CloudGpu* gpu : plan.drawn)
-            draw_cloud(s, s.attribute[gpu->texture ? 1 : 0][materials], *gpu, &s.attribute[0][materials][0], big);
+            draw_cloud(s, s.attribute[gpu->texture ? 1 : 0][materials], *gpu, &s.attribute[0][materials][0],
+                       big);
         if (big) {
             compute_raster_attribute(s.compute_raster, plan.compute, rect, s.depth.id());
             glDepthFunc(GL_NOTEQUAL);  // the resolve runs where a surface is visible (not the cleared 1.0)
@@ -180,7 +190,8 @@ void shade_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, 
     glBindTextureUnit(SFFD_TEX_ACCUM_MATERIAL, s.accum_material.id());
     glDepthFunc(GL_NOTEQUAL);
     glDepthMask(GL_FALSE);
-    if (!plan.drawn.empty()) glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, plan.drawn.front()->frame_ubo.id());
+    if (!plan.drawn.empty())
+        glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, plan.drawn.front()->frame_ubo.id());
     const std::uint32_t lights = std::min<std::uint32_t>(plan.common.counts.y, SFFD_MAX_LIGHTS);
     if (Status st = shade_program(s, materials, lights); !st) log::error("render_system(): ", st.message());
     glUseProgram(s.shade[materials][lights].id());

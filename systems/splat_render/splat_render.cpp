@@ -26,7 +26,8 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     static const gfx::GpuSplatStore no_clouds;  // nothing resident: residency_system has not run
     const auto* store = reg.try_resource<gfx::GpuSplatStore>();
     s.cull_over_limit = false;
-    reg.view<const SplatCloud>().each([&](const SplatCloud& c) { s.cull_over_limit |= !compute_cull_fits(c.size()).ok(); });
+    reg.view<const SplatCloud>().each(
+        [&](const SplatCloud& c) { s.cull_over_limit |= !compute_cull_fits(c.size()).ok(); });
     sync_clouds(reg, s, store ? *store : no_clouds, cpu_cull_wanted(s, plan.settings.cull_path));
     plan.view = choose_camera(reg, s, double(plan.width) / double(plan.height));
     plan.common = frame_block(reg, plan.settings, plan.view, s.max_point_size);
@@ -44,7 +45,8 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     } else {
         const glm::ivec4 rect = screen_rect(reg, plan.view, plan.width, plan.height);
         visibility_pass(reg, s, plan, rect);
-        if (!plan.compute.empty()) issue_counts(s, plan.gpu_counts, plan.cpu_points, plan.cpu_quads, stats.frame);
+        if (!plan.compute.empty())
+            issue_counts(s, plan.gpu_counts, plan.cpu_points, plan.cpu_quads, stats.frame);
         laps.lap(stats.visibility_ms);
         attribute_pass(reg, s, plan, rect, materials);
         laps.lap(stats.attribute_ms);
@@ -56,7 +58,8 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     if (reg.count<GaussianCloud>() > 0) {
         GaussianPassFrame gf;
         gf.camera = plan.view.camera, gf.view = plan.view.view, gf.projection = plan.view.projection;
-        gf.output_fbo = s.output_fbo.id(), gf.color = s.color.id(), gf.aux = s.aux.id(), gf.depth = s.depth.id();
+        gf.output_fbo = s.output_fbo.id(), gf.color = s.color.id(), gf.aux = s.aux.id(),
+        gf.depth = s.depth.id();
         gf.width = plan.width, gf.height = plan.height, gf.aux_outputs = plan.settings.aux_outputs;
         gf.preview = plan.settings.quality == Quality::preview;
         auto drawn = gaussian_pass(reg, gf);
@@ -123,18 +126,21 @@ Result<FrameImage> capture_frame(ecs::Registry& registry) {
     const std::size_t n = std::size_t(w) * std::size_t(h);
     std::vector<glm::vec4> color(n), aux(n);
     glGetTextureImage(s->color.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(n * sizeof(glm::vec4)), color.data());
-    if (s->aux_valid) glGetTextureImage(s->aux.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(n * sizeof(glm::vec4)), aux.data());
+    if (s->aux_valid)
+        glGetTextureImage(s->aux.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(n * sizeof(glm::vec4)), aux.data());
     FrameImage img;
     img.width = w, img.height = h;
     img.color.resize(n), img.depth.resize(n), img.normal.resize(n);
     for (int y = 0; y < h; ++y) {  // GL rows are bottom-up, images top-down
-        const std::size_t src_row = std::size_t(h - 1 - y) * std::size_t(w), dst_row = std::size_t(y) * std::size_t(w);
+        const std::size_t src_row = std::size_t(h - 1 - y) * std::size_t(w),
+                          dst_row = std::size_t(y) * std::size_t(w);
         for (int x = 0; x < w; ++x) {
             const glm::vec4& c = color[src_row + std::size_t(x)];
             const glm::vec4& a = aux[src_row + std::size_t(x)];
             const bool hit = c.w > 0.0f && (!s->aux_valid || a.w >= 0.0f);
             img.color[dst_row + std::size_t(x)] = hit ? c : glm::vec4(0.0f);
-            img.depth[dst_row + std::size_t(x)] = hit && s->aux_valid ? a.w : std::numeric_limits<float>::infinity();
+            img.depth[dst_row + std::size_t(x)] =
+                hit && s->aux_valid ? a.w : std::numeric_limits<float>::infinity();
             img.normal[dst_row + std::size_t(x)] = hit && s->aux_valid ? glm::vec3(a) : glm::vec3(0.0f);
         }
     }

@@ -54,10 +54,10 @@ struct RenderSettings {
     bool culling = true;                  // back-face + frustum culling (off: classify only)
     CullPath cull_path = CullPath::automatic;
     RasterPath raster_path = RasterPath::automatic;
-    float visibility_epsilon = 1.0f;      // HQ depth offset along the view ray, in units of each splat's radius
-    bool time_passes = false;             // glFinish after each pass and record CPU times in RenderStats
-    bool aux_outputs = false;             // also write the normal + depth target (EXR Z, N; capture_frame's
-                                          // depth/normal); off for interaction: it costs the preview ~10%
+    float visibility_epsilon = 1.0f;  // HQ depth offset along the view ray, in units of each splat's radius
+    bool time_passes = false;         // glFinish after each pass and record CPU times in RenderStats
+    bool aux_outputs = false;         // also write the normal + depth target (EXR Z, N; capture_frame's
+                                      // depth/normal); off for interaction: it costs the preview ~10%
 };
 
 // Registry resource written by render_system; pass times only when RenderSettings::time_passes.
@@ -66,19 +66,20 @@ struct RenderSettings {
 // back); counts_valid is false until the first one lands.
 struct RenderStats {
     std::uint64_t frame = 0;
-    std::uint32_t splats = 0;           // splats submitted (all clouds), this frame
-    std::uint32_t visible_points = 0;   // after culling, drawn as sprites (all clouds), frame counts_frame
-    std::uint32_t visible_quads = 0;    // after culling, drawn as quads (all clouds), frame counts_frame
+    std::uint32_t splats = 0;          // splats submitted (all clouds), this frame
+    std::uint32_t visible_points = 0;  // after culling, drawn as sprites (all clouds), frame counts_frame
+    std::uint32_t visible_quads = 0;   // after culling, drawn as quads (all clouds), frame counts_frame
     std::uint64_t counts_frame = 0;
     bool counts_valid = false;
-    std::uint32_t cpu_culled_clouds = 0;      // clouds culled on the CPU this frame (CullPath)
-    std::uint32_t compute_culled_clouds = 0;  // clouds culled by the compute pass this frame
+    std::uint32_t cpu_culled_clouds = 0;        // clouds culled on the CPU this frame (CullPath)
+    std::uint32_t compute_culled_clouds = 0;    // clouds culled by the compute pass this frame
     std::uint32_t compute_rastered_clouds = 0;  // clouds whose HQ sprites went through the compute rasteriser
     std::uint32_t raster_sprites = 0;  // of those clouds' sprites, the ones too large for it, drawn by the
                                        // rasteriser (frame counts_frame; included in visible_points)
-    std::uint32_t cpu_splat_passes = 0;  // loops over a cloud's splats on the CPU this frame (uploads of
-                                         // changed clouds, their bounds, the CPU cull): 0 in a GPU-resident frame
-    std::uint32_t gaussians = 0;              // 3D Gaussians submitted (all GaussianClouds), this frame
+    std::uint32_t cpu_splat_passes =
+        0;                        // loops over a cloud's splats on the CPU this frame (uploads of
+                                  // changed clouds, their bounds, the CPU cull): 0 in a GPU-resident frame
+    std::uint32_t gaussians = 0;  // 3D Gaussians submitted (all GaussianClouds), this frame
     double cull_ms = 0, visibility_ms = 0, attribute_ms = 0, shade_ms = 0, preview_ms = 0, total_ms = 0;
     double gaussian_ms = 0;  // the Gaussian pass (gaussian_pass.h), with time_passes
 };

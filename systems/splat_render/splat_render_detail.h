@@ -53,20 +53,20 @@ struct CloudGpu {
     gfx::Buffer commands;   // three DrawArraysIndirectCommands: sprites, quads, flat-coloured sprites
     gfx::Buffer frame_ubo;  // FrameBlock for this cloud
     std::uint32_t capacity = 0;
-    gfx::Texture texture;   // material texture (sRGB), when the material has one
-    gfx::Buffer uv_axes;    // vec4[count]: SplatCloud::uv_axes (zeros when absent), when textured
-    std::vector<std::uint16_t> uniform_radius;  // uniform_texel_radius() of the texture (CPU cull)
+    gfx::Texture texture;  // material texture (sRGB), when the material has one
+    gfx::Buffer uv_axes;   // vec4[count]: SplatCloud::uv_axes (zeros when absent), when textured
+    std::vector<std::uint16_t> uniform_radius;            // uniform_texel_radius() of the texture (CPU cull)
     const std::vector<glm::vec4>* uv_axes_cpu = nullptr;  // the cloud's, valid during one render_system call
     std::uint64_t texture_version = 0;
-    BoundingSphere bounds;  // cloud space, for the framing camera
+    BoundingSphere bounds;   // cloud space, for the framing camera
     double mean_radius = 0;  // mean_splat_radius(), for the automatic raster path
     std::uint64_t bounds_version = 0;
-    double footprint_px = 0;  // splat_footprint_px() this frame (cull_pass)
-    bool flat_list = false;   // the CPU cull filled the flat-coloured sprite list this frame
+    double footprint_px = 0;    // splat_footprint_px() this frame (cull_pass)
+    bool flat_list = false;     // the CPU cull filled the flat-coloured sprite list this frame
     ComputeRasterCloud raster;  // sprites the compute rasteriser leaves to the rasteriser (compute_raster.h)
     const SplatMaterial* material = nullptr;  // valid during one render_system call
     std::uint32_t count = 0;
-    GLuint splats = 0;      // draw buffer this frame
+    GLuint splats = 0;  // draw buffer this frame
 
     // The CPU copy of the draw buffer for the CPU cull (cpu_cull.h): the store's mirror, or on a hardware
     // GPU with the CPU cull forced (no mirrors kept there) the renderer's own copy of the rest splats.
@@ -103,11 +103,11 @@ private:
 
 // One frame's visible counts on their way back (SplatRenderState::counts_ring).
 struct CountsSlot {
-    Fence fence;                  // signals when the copies of the compute-culled clouds' commands landed
-    std::uint64_t serial = 0;     // issue order
-    std::uint64_t frame = 0;      // FrameContext::frame of the frame that issued it
+    Fence fence;               // signals when the copies of the compute-culled clouds' commands landed
+    std::uint64_t serial = 0;  // issue order
+    std::uint64_t frame = 0;   // FrameContext::frame of the frame that issued it
     std::uint32_t cpu_points = 0, cpu_quads = 0;  // counts of the CPU-culled clouds, known at once
-    std::uint32_t gpu_clouds = 0;  // clouds copied into the slot
+    std::uint32_t gpu_clouds = 0;                 // clouds copied into the slot
     std::vector<std::uint8_t> parts;  // per copied cloud: counts_cull (its cull commands), counts_big (its
                                       // compute rasteriser's big-sprite commands)
 };
@@ -128,7 +128,7 @@ struct SplatRenderState {
     std::array<std::array<std::array<gfx::Program, 2>, 2>, 2> preview;
     // [clouds differ in material][lights]: compiled on first use (shade_program)
     std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2> shade;
-    gfx::Program display;  // sRGB copy for a window (PresentSource)
+    gfx::Program display;          // sRGB copy for a window (PresentSource)
     gfx::VertexArray vao;          // empty: quads read their splats from SSBOs
     gfx::VertexArray records_vao;  // SplatRecord[] as vertex attributes 0..5 (buffer bound per cloud)
     float max_point_size = 1.0f;
@@ -141,14 +141,15 @@ struct SplatRenderState {
     gfx::Framebuffer display_fbo;
     int display_width = 0, display_height = 0;
 
-    gfx::Buffer display_ubo;        // FrameBlock with the background, for the display copy
+    gfx::Buffer display_ubo;          // FrameBlock with the background, for the display copy
     glm::vec4 last_background{0.0f};  // of the last rendered frame
 
     // The compute cull's visible counts come back through this ring, never by waiting (the frame must not
     // stall on a read-back): a persistently mapped buffer of counts_slot_count slots x counts_ring_clouds
     // clouds x draw_command_words uints (all three draw commands).
     static constexpr std::size_t counts_slot_count = 4;
-    gfx::Buffer command_reset;  // immutable {0, 1, 0, 0, 6, 0, 0, 0, 0, 1, 0, 0}: copied over the draw commands
+    gfx::Buffer
+        command_reset;  // immutable {0, 1, 0, 0, 6, 0, 0, 0, 0, 1, 0, 0}: copied over the draw commands
     gfx::Buffer counts_ring;
     const std::uint32_t* counts_mapped = nullptr;
     std::size_t counts_ring_clouds = 0;
@@ -161,7 +162,8 @@ struct SplatRenderState {
 
     std::unordered_map<ecs::Entity, CloudGpu> clouds;
     bool software = false;  // the context is a software rasterizer (gfx::software_rasterizer)
-    bool cull_over_limit = false;  // some cloud's compute-cull buffers exceed the storage block size (storage_limits.h)
+    bool cull_over_limit =
+        false;  // some cloud's compute-cull buffers exceed the storage block size (storage_limits.h)
     std::uint32_t cpu_splat_passes = 0;  // this frame's loops over a cloud's splats on the CPU (RenderStats)
     bool failed = false;
 };
@@ -204,7 +206,9 @@ public:
         slot += std::chrono::duration<double, std::milli>(now - m_lap).count();
         m_lap = now;
     }
-    double total_ms() const { return std::chrono::duration<double, std::milli>(clock::now() - m_start).count(); }
+    double total_ms() const {
+        return std::chrono::duration<double, std::milli>(clock::now() - m_start).count();
+    }
 
 private:
     using clock = std::chrono::steady_clock;
@@ -241,8 +245,8 @@ void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan
 void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect);
 void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, RenderStats& stats);
 bool clouds_differ_in_material(const FramePlan& plan);
-void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect,
-                    bool materials);
+void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan,
+                    const glm::ivec4& rect, bool materials);
 void shade_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, bool materials);
 void end_splat_passes();
 

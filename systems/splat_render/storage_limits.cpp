@@ -19,8 +19,10 @@ Status compute_raster_fits(int width, int height) {
     const std::uint64_t pixels = std::uint64_t(std::max(width, 1)) * std::uint64_t(std::max(height, 1));
     const std::uint64_t sums = pixels * SFFD_RASTER_SUM_WORDS * sizeof(std::uint32_t);
     const std::uint64_t depth = pixels * sizeof(std::uint32_t);
-    if (!gfx::ssbo_fits(sums)) return make_error(gfx::ssbo_too_large("render.compute.sums", sums) + "; using the raster path");
-    if (!gfx::ssbo_fits(depth)) return make_error(gfx::ssbo_too_large("render.compute.depth", depth) + "; using the raster path");
+    if (!gfx::ssbo_fits(sums))
+        return make_error(gfx::ssbo_too_large("render.compute.sums", sums) + "; using the raster path");
+    if (!gfx::ssbo_fits(depth))
+        return make_error(gfx::ssbo_too_large("render.compute.depth", depth) + "; using the raster path");
     return {};
 }
 

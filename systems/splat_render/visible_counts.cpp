@@ -12,11 +12,13 @@ void ensure_counts_ring(SplatRenderState& s, std::size_t clouds) {
     if (s.counts_ring && s.counts_ring_clouds >= clouds) return;
     for (CountsSlot& slot : s.counts_slots) slot = CountsSlot{};  // in flight into the old ring: dropped
     s.counts_ring_clouds = std::max<std::size_t>(clouds, 4);
-    const auto bytes = GLsizeiptr(SplatRenderState::counts_slot_count * s.counts_ring_clouds * counts_entry_words * sizeof(std::uint32_t));
+    const auto bytes = GLsizeiptr(SplatRenderState::counts_slot_count * s.counts_ring_clouds *
+                                  counts_entry_words * sizeof(std::uint32_t));
     const GLbitfield map = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
     s.counts_ring = gfx::Buffer::create("render.visible_counts");
     glNamedBufferStorage(s.counts_ring.id(), bytes, nullptr, map | GL_CLIENT_STORAGE_BIT);
-    s.counts_mapped = static_cast<const std::uint32_t*>(glMapNamedBufferRange(s.counts_ring.id(), 0, bytes, map));
+    s.counts_mapped =
+        static_cast<const std::uint32_t*>(glMapNamedBufferRange(s.counts_ring.id(), 0, bytes, map));
 }
 
 }  // namespace
@@ -38,7 +40,8 @@ void collect_counts(SplatRenderState& s) {
                 points += commands[0] + commands[8];  // sprites + flat-coloured sprites
                 quads += commands[5];
             }
-            if (slot.parts[c] & counts_big) big += commands[draw_command_words] + commands[draw_command_words + 5];
+            if (slot.parts[c] & counts_big)
+                big += commands[draw_command_words] + commands[draw_command_words + 5];
         }
         s.counts_serial = slot.serial, s.counts_frame = slot.frame;
         s.counts_points = points, s.counts_quads = quads, s.counts_raster_sprites = big;
@@ -63,13 +66,15 @@ void issue_counts(SplatRenderState& s, const std::vector<CountsSource>& computed
     // The copies read counters that shader atomics wrote (cull.comp, compute_visibility.comp).
     if (!computed.empty()) gfx::memory_barrier(GL_BUFFER_UPDATE_BARRIER_BIT, "render.counts");
     for (std::size_t c = 0; c < computed.size(); ++c) {
-        const GLintptr entry = GLintptr((at * s.counts_ring_clouds + c) * counts_entry_words * sizeof(std::uint32_t));
+        const GLintptr entry =
+            GLintptr((at * s.counts_ring_clouds + c) * counts_entry_words * sizeof(std::uint32_t));
         if (computed[c].parts & counts_cull)
             glCopyNamedBufferSubData(computed[c].gpu->commands.id(), s.counts_ring.id(), 0, entry,
                                      draw_command_words * sizeof(std::uint32_t));
         if (computed[c].parts & counts_big)
             glCopyNamedBufferSubData(computed[c].gpu->raster.commands.id(), s.counts_ring.id(), 0,
-                                     entry + GLintptr(draw_command_words * sizeof(std::uint32_t)), 10 * sizeof(std::uint32_t));
+                                     entry + GLintptr(draw_command_words * sizeof(std::uint32_t)),
+                                     10 * sizeof(std::uint32_t));
         slot.parts[c] = computed[c].parts;
     }
     slot.fence = Fence(glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0));

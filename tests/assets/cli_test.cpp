@@ -57,7 +57,8 @@ TEST(Cli, ConvertMeshToExactSplatCountAndInfoReportsIt) {
 TEST(Cli, BadInputExitsOneAndNamesTheFile) {
     const fs::path bad = temp_dir() / "bad.ply";
     std::ofstream(bad) << "ply\nformat ascii 1.0\nelement vertex 99999999\nproperty float x\nend_header\n1\n";
-    for (const std::string& cmd : {"info " + bad.string(), "convert " + bad.string() + " " + (temp_dir() / "o.glb").string()}) {
+    for (const std::string& cmd :
+         {"info " + bad.string(), "convert " + bad.string() + " " + (temp_dir() / "o.glb").string()}) {
         const CliRun r = run(cmd);
         EXPECT_EQ(r.code, 1) << r.out;
         EXPECT_NE(r.out.find(bad.string()), std::string::npos) << r.out;
@@ -80,10 +81,12 @@ TEST(Cli, ReferenceAndRenderNumberErrorsNameTheOption) {
         const char* message;
     } cases[] = {
         {"reference --out /tmp/sffd_ref_bad --size 32xq", "--size: expected an integer in 1..16384, got 'q'"},
-        {"reference --out /tmp/sffd_ref_bad --supersample 99", "--supersample: expected an integer in 0..16, got '99'"},
+        {"reference --out /tmp/sffd_ref_bad --supersample 99",
+         "--supersample: expected an integer in 0..16, got '99'"},
         {"reference --out /tmp/sffd_ref_bad --fps abc", "--fps: expected a number"},
         {"reference --out /tmp/sffd_ref_bad --frames 1:x", "--frames: expected an integer"},
-        {"render sphere --out /tmp/sffd_render_bad --size 0x5", "--size: expected an integer in 1..16384, got '0'"},
+        {"render sphere --out /tmp/sffd_render_bad --size 0x5",
+         "--size: expected an integer in 1..16384, got '0'"},
     };
     for (const auto& c : cases) {
         const auto r = run(c.args);
@@ -101,16 +104,20 @@ TEST(Cli, ConvertRefusesResourcesOutsideTheFileFolderUnlessAllowed) {
     fs::create_directories(root / "a" / "b");
     std::ofstream(root / "x" / "secret.txt") << "SECRET123";
     const fs::path gltf = root / "a" / "b" / "exfil.gltf";
-    std::ofstream(gltf) << R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
+    std::ofstream(gltf)
+        << R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
       "meshes":[{"primitives":[{"mode":0,"attributes":{"POSITION":0}}]}],
       "accessors":[{"bufferView":0,"componentType":5121,"count":3,"type":"VEC3"}],
       "bufferViews":[{"buffer":0,"byteLength":9}],"buffers":[{"uri":"%2e%2e/%2e%2e/x/secret.txt","byteLength":9}]})";
     const fs::path leak = root / "leak.ply";
     const CliRun r = run("convert " + gltf.string() + " " + leak.string() + " --ascii");
     EXPECT_EQ(r.code, 1) << r.out;
-    EXPECT_NE(r.out.find(gltf.string() + ": resource '../../x/secret.txt' is outside the file's folder"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(gltf.string() + ": resource '../../x/secret.txt' is outside the file's folder"),
+              std::string::npos)
+        << r.out;
     EXPECT_FALSE(fs::exists(leak));
-    const CliRun ok = run("--allow-outside-resources convert " + gltf.string() + " " + leak.string() + " --ascii");
+    const CliRun ok =
+        run("--allow-outside-resources convert " + gltf.string() + " " + leak.string() + " --ascii");
     EXPECT_EQ(ok.code, 0) << ok.out;
     EXPECT_TRUE(fs::exists(leak));
 }
@@ -122,9 +129,12 @@ TEST(Cli, OutOfMemoryIsAMessageAndOverBudgetRequestsAreRefusedEarly) {
     std::ofstream(obj) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nf 1 2 3\nf 2 4 3\n";
     const double phys = double(sysconf(_SC_PHYS_PAGES)) * double(sysconf(_SC_PAGESIZE));
     if (phys < 322e9) {  // a machine with more memory than 2^28 splats need would start the work
-        const CliRun early = run("convert " + obj.string() + " " + (temp_dir() / "oom.ply").string() + " --splats 268435456");
+        const CliRun early =
+            run("convert " + obj.string() + " " + (temp_dir() / "oom.ply").string() + " --splats 268435456");
         EXPECT_EQ(early.code, 1) << early.out;
-        EXPECT_NE(early.out.find(obj.string() + ": sampling 268435456 splats needs about 322.1 GB (1.2 KB per splat)"), std::string::npos)
+        EXPECT_NE(early.out.find(obj.string() +
+                                 ": sampling 268435456 splats needs about 322.1 GB (1.2 KB per splat)"),
+                  std::string::npos)
             << early.out;
     }
     // Under a 300 MB address-space limit, sampling 2M splats (about 2.2 GB) runs out of memory.
@@ -132,8 +142,9 @@ TEST(Cli, OutOfMemoryIsAMessageAndOverBudgetRequestsAreRefusedEarly) {
     GTEST_SKIP() << "AddressSanitizer reserves terabytes of shadow memory: it cannot start under ulimit -v";
 #endif
     CliRun r;
-    const std::string cmd = "sh -c 'ulimit -v 300000; exec " + std::string(SFFD_BINARY_DIR) + "/tools/splatffd convert " + obj.string() +
-                            " " + (temp_dir() / "oom.ply").string() + " --splats 2000000' 2>&1";
+    const std::string cmd = "sh -c 'ulimit -v 300000; exec " + std::string(SFFD_BINARY_DIR) +
+                            "/tools/splatffd convert " + obj.string() + " " +
+                            (temp_dir() / "oom.ply").string() + " --splats 2000000' 2>&1";
     std::FILE* p = popen(cmd.c_str(), "r");
     ASSERT_NE(p, nullptr);
     std::array<char, 4096> buf{};
@@ -154,8 +165,13 @@ TEST(Cli, ConvertProgressReportsEveryStepInOrderAndAlwaysTheTiming) {
     const fs::path ply = temp_dir() / "progress.ply";
     const CliRun c = run("convert " + obj.string() + " " + ply.string() + " --splats 5000 --progress");
     ASSERT_EQ(c.code, 0) << c.out;
-    const std::vector<std::string> steps = {"reading", "sampling the surface", "finding neighbours for thinning",
-                                            "thinning (sample elimination)", "finding neighbours", "splat radii and axes", "writing"};
+    const std::vector<std::string> steps = {"reading",
+                                            "sampling the surface",
+                                            "finding neighbours for thinning",
+                                            "thinning (sample elimination)",
+                                            "finding neighbours",
+                                            "splat radii and axes",
+                                            "writing"};
     std::istringstream lines(c.out);
     std::string line;
     std::size_t step = 0;
@@ -164,7 +180,8 @@ TEST(Cli, ConvertProgressReportsEveryStepInOrderAndAlwaysTheTiming) {
         if (line.rfind("convert: ", 0) != 0 || line.rfind("convert: done in", 0) == 0) continue;
         ASSERT_LT(step, steps.size()) << "unexpected line after the last step: " << line << "\n" << c.out;
         const std::string head = "convert: " + steps[step] + ": ";
-        ASSERT_EQ(line.rfind(head, 0), 0u) << "expected step '" << steps[step] << "', got: " << line << "\n" << c.out;
+        ASSERT_EQ(line.rfind(head, 0), 0u) << "expected step '" << steps[step] << "', got: " << line << "\n"
+                                           << c.out;
         const int percent = std::stoi(line.substr(head.size()));
         if (last_percent < 0) {
             EXPECT_EQ(percent, 0) << line;  // every step announces its start
@@ -180,7 +197,8 @@ TEST(Cli, ConvertProgressReportsEveryStepInOrderAndAlwaysTheTiming) {
     EXPECT_EQ(step, steps.size()) << c.out;
     const auto done = c.out.find("convert: done in ");
     ASSERT_NE(done, std::string::npos) << c.out;
-    for (const std::string& s : steps) EXPECT_NE(c.out.find(s + " ", done), std::string::npos) << s << "\n" << c.out;
+    for (const std::string& s : steps)
+        EXPECT_NE(c.out.find(s + " ", done), std::string::npos) << s << "\n" << c.out;
 
     const CliRun quiet = run("convert " + obj.string() + " " + ply.string() + " --splats 5000");
     ASSERT_EQ(quiet.code, 0) << quiet.out;
@@ -200,13 +218,16 @@ TEST(Cli, TexturedMeshConvertsWithItsUvFrameAndReferenceTracesTheMesh) {
     EXPECT_TRUE(fs::exists(dir / "box_texture.png"));
     const CliRun i = run("info " + ply.string());
     ASSERT_EQ(i.code, 0) << i.out;
-    for (const char* p : {"float du_ds", "float dv_ds", "float du_dt", "float dv_dt", "TextureFile box_texture.png"})
+    for (const char* p :
+         {"float du_ds", "float dv_ds", "float du_dt", "float dv_dt", "TextureFile box_texture.png"})
         EXPECT_NE(i.out.find(p), std::string::npos) << p << "\n" << i.out;
-    const CliRun r = run("reference " + obj.string() + " --out " + (dir / "ref").string() + " --size 96x54 --format png");
+    const CliRun r =
+        run("reference " + obj.string() + " --out " + (dir / "ref").string() + " --size 96x54 --format png");
     ASSERT_EQ(r.code, 0) << r.out;
     EXPECT_TRUE(fs::exists(dir / "ref" / "frame_0000.png"));
     std::ofstream(dir / "box.mtl") << "newmtl checker\nKd 1 0.5 1\nmap_Kd checker.png\n";
-    const CliRun tinted = run("reference " + obj.string() + " --out " + (dir / "ref2").string() + " --size 96x54 --format png");
+    const CliRun tinted =
+        run("reference " + obj.string() + " --out " + (dir / "ref2").string() + " --size 96x54 --format png");
     EXPECT_EQ(tinted.code, 1) << tinted.out;
     EXPECT_NE(tinted.out.find(obj.string()), std::string::npos) << tinted.out;
     EXPECT_NE(tinted.out.find("baked per splat"), std::string::npos) << tinted.out;

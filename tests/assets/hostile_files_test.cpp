@@ -43,7 +43,8 @@ std::string gltf_with_buffer(const std::string& uri, int byte_length = 9) {
   "meshes":[{"primitives":[{"mode":0,"attributes":{"POSITION":0}}]}],
   "accessors":[{"bufferView":0,"componentType":5121,"count":3,"type":"VEC3"}],
   "bufferViews":[{"buffer":0,"byteLength":9}],
-  "buffers":[{"uri":")" + uri + R"(","byteLength":)" + std::to_string(byte_length) + "}]}";
+  "buffers":[{"uri":")" +
+           uri + R"(","byteLength":)" + std::to_string(byte_length) + "}]}";
 }
 
 // A glTF whose triangle's material has a base-colour texture from image `uri`, repeated `images` times.
@@ -83,7 +84,8 @@ std::string png_header(std::uint32_t w, std::uint32_t h) {
 TEST(HostileGltf, BufferUriWithDotDotIsRefusedAndNothingIsRead) {
     const fs::path root = fresh_dir("gltf_dotdot");
     write(root / "x" / "secret.txt", secret());
-    for (const std::string uri : {"../../x/secret.txt", "%2e%2e/%2e%2e/x/secret.txt", "sub/../../../x/secret.txt"}) {
+    for (const std::string uri :
+         {"../../x/secret.txt", "%2e%2e/%2e%2e/x/secret.txt", "sub/../../../x/secret.txt"}) {
         const fs::path file = root / "a" / "b" / "exfil.gltf";
         write(file, gltf_with_buffer(uri, static_cast<int>(secret().size())));
         auto g = assets::read_gltf_geometry(file);
@@ -100,7 +102,9 @@ TEST(HostileGltf, AbsoluteBufferUriIsRefused) {
     write(file, gltf_with_buffer((root / "secret.txt").string(), static_cast<int>(secret().size())));
     auto g = assets::read_gltf_geometry(file);
     ASSERT_FALSE(g.ok());
-    EXPECT_NE(g.message().find("resource '" + (root / "secret.txt").string() + "' is outside the file's folder"), std::string::npos)
+    EXPECT_NE(
+        g.message().find("resource '" + (root / "secret.txt").string() + "' is outside the file's folder"),
+        std::string::npos)
         << g.message();
     // A wrong byteLength no longer reveals another file's size either.
     EXPECT_EQ(g.message().find("File size mismatch"), std::string::npos) << g.message();
@@ -115,7 +119,9 @@ TEST(HostileGltf, SymlinkLeadingOutOfTheFolderIsRefused) {
     write(file, gltf_with_buffer("data.bin", static_cast<int>(secret().size())));
     auto g = assets::read_gltf_geometry(file);
     ASSERT_FALSE(g.ok());
-    EXPECT_NE(g.message().find(file.string() + ": resource 'data.bin' is outside the file's folder"), std::string::npos) << g.message();
+    EXPECT_NE(g.message().find(file.string() + ": resource 'data.bin' is outside the file's folder"),
+              std::string::npos)
+        << g.message();
 }
 
 TEST(HostileGltf, BareUriIsNotLookedUpInTheCurrentDirectory) {
@@ -128,13 +134,15 @@ TEST(HostileGltf, BareUriIsNotLookedUpInTheCurrentDirectory) {
     auto g = assets::read_gltf_geometry(file);
     fs::current_path(before);
     ASSERT_FALSE(g.ok()) << "the current directory's secret.bin was read";
-    EXPECT_NE(g.message().find(file.string() + ": resource 'secret.bin' not found"), std::string::npos) << g.message();
+    EXPECT_NE(g.message().find(file.string() + ": resource 'secret.bin' not found"), std::string::npos)
+        << g.message();
 }
 
 TEST(HostileGltf, BuffersInsideTheFolderStillLoad) {
     const fs::path root = fresh_dir("gltf_ok");
     write(root / "bin" / "data.bin", std::string("\x01\x02\x03\x04\x05\x06\x07\x08\x09", 9));
-    for (const std::string uri : {"bin/data.bin", "./bin/data.bin", "bin/../bin/data.bin", "bin%2Fdata.bin"}) {
+    for (const std::string uri :
+         {"bin/data.bin", "./bin/data.bin", "bin/../bin/data.bin", "bin%2Fdata.bin"}) {
         write(root / "ok.gltf", gltf_with_buffer(uri));
         auto g = assets::read_gltf_geometry(root / "ok.gltf");
         ASSERT_TRUE(g.ok()) << uri << ": " << g.message();
@@ -157,7 +165,9 @@ TEST(HostileGltf, ImageUriOutsideTheFolderIsRefused) {
     write(file, gltf_with_images("../evil.png", 1));
     auto c = assets::read_gltf(file);
     ASSERT_FALSE(c.ok());
-    EXPECT_NE(c.message().find(file.string() + ": resource '../evil.png' is outside the file's folder"), std::string::npos) << c.message();
+    EXPECT_NE(c.message().find(file.string() + ": resource '../evil.png' is outside the file's folder"),
+              std::string::npos)
+        << c.message();
 }
 
 TEST(HostileGltf, FifoAsBufferIsRefusedWithoutBlocking) {
@@ -166,12 +176,15 @@ TEST(HostileGltf, FifoAsBufferIsRefusedWithoutBlocking) {
     write(root / "fifo.gltf", gltf_with_buffer("data.bin"));
     auto g = assets::read_gltf_geometry(root / "fifo.gltf");  // used to block forever in open()
     ASSERT_FALSE(g.ok());
-    EXPECT_NE(g.message().find("resource 'data.bin' is a FIFO, not a regular file"), std::string::npos) << g.message();
+    EXPECT_NE(g.message().find("resource 'data.bin' is a FIFO, not a regular file"), std::string::npos)
+        << g.message();
     // The glTF itself as a FIFO, too.
     ASSERT_EQ(::mkfifo((root / "pipe.gltf").c_str(), 0600), 0);
     auto p = assets::read_gltf(root / "pipe.gltf");
     ASSERT_FALSE(p.ok());
-    EXPECT_NE(p.message().find((root / "pipe.gltf").string() + ": not a regular file (a FIFO)"), std::string::npos) << p.message();
+    EXPECT_NE(p.message().find((root / "pipe.gltf").string() + ": not a regular file (a FIFO)"),
+              std::string::npos)
+        << p.message();
 }
 
 TEST(HostileGltf, DeeplyNestedExtrasAreRefusedBeforeParsing) {
@@ -182,7 +195,9 @@ TEST(HostileGltf, DeeplyNestedExtrasAreRefusedBeforeParsing) {
     write(root / "deep.gltf", text);
     auto c = assets::read_gltf(root / "deep.gltf");  // used to overflow the stack (SIGSEGV)
     ASSERT_FALSE(c.ok());
-    EXPECT_NE(c.message().find((root / "deep.gltf").string() + ": JSON nesting deeper than 256 levels"), std::string::npos) << c.message();
+    EXPECT_NE(c.message().find((root / "deep.gltf").string() + ": JSON nesting deeper than 256 levels"),
+              std::string::npos)
+        << c.message();
     // Brackets inside strings do not count.
     EXPECT_TRUE(check_json_depth(R"({"a":")" + std::string(1000, '[') + R"("})", "x").ok());
 }
@@ -195,14 +210,17 @@ TEST(HostileGltf, DecodedImageSizeIsBudgetedPerFile) {
     write(root / "bomb.gltf", gltf_with_images("big.png", 40));
     auto c = assets::read_gltf(root / "bomb.gltf");
     ASSERT_FALSE(c.ok());
-    EXPECT_NE(c.message().find((root / "bomb.gltf").string() + ": images decode to more than 1024 MiB in total"), std::string::npos)
+    EXPECT_NE(
+        c.message().find((root / "bomb.gltf").string() + ": images decode to more than 1024 MiB in total"),
+        std::string::npos)
         << c.message();
     // One image over 8192 x 8192 on its own.
     write(root / "huge.png", png_header(16384, 8193));
     write(root / "huge.gltf", gltf_with_images("huge.png", 1));
     auto h = assets::read_gltf(root / "huge.gltf");
     ASSERT_FALSE(h.ok());
-    EXPECT_NE(h.message().find("image 0 is 16384x8193, larger than 8192x8192"), std::string::npos) << h.message();
+    EXPECT_NE(h.message().find("image 0 is 16384x8193, larger than 8192x8192"), std::string::npos)
+        << h.message();
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -213,34 +231,43 @@ TEST(HostilePly, TextureFileOutsideTheFolderIsRefused) {
     write(root / "x.png", png_header(2, 2));
     for (const std::string& tex : {std::string("../x.png"), (root / "x.png").string()}) {
         const fs::path file = root / "a" / "tex.ply";
-        write(file, "ply\nformat ascii 1.0\ncomment TextureFile " + tex + "\nelement vertex 1\nproperty float x\nproperty float y\n"
-                    "property float z\nend_header\n0 0 0\n");
+        write(file, "ply\nformat ascii 1.0\ncomment TextureFile " + tex +
+                        "\nelement vertex 1\nproperty float x\nproperty float y\n"
+                        "property float z\nend_header\n0 0 0\n");
         auto g = assets::read_ply_geometry(file);
         ASSERT_FALSE(g.ok()) << tex;
-        EXPECT_NE(g.message().find(file.string() + ": resource '" + tex + "' is outside the file's folder"), std::string::npos) << g.message();
+        EXPECT_NE(g.message().find(file.string() + ": resource '" + tex + "' is outside the file's folder"),
+                  std::string::npos)
+            << g.message();
     }
 }
 
 TEST(HostilePly, FifoAsTextureOrInputIsRefused) {
     const fs::path root = fresh_dir("ply_fifo");
     ASSERT_EQ(::mkfifo((root / "t.png").c_str(), 0600), 0);
-    write(root / "tex.ply", "ply\nformat ascii 1.0\ncomment TextureFile t.png\nelement vertex 1\nproperty float x\nproperty float y\n"
-                            "property float z\nend_header\n0 0 0\n");
+    write(root / "tex.ply",
+          "ply\nformat ascii 1.0\ncomment TextureFile t.png\nelement vertex 1\nproperty float x\nproperty "
+          "float y\n"
+          "property float z\nend_header\n0 0 0\n");
     auto g = assets::read_ply_geometry(root / "tex.ply");
     ASSERT_FALSE(g.ok());
-    EXPECT_NE(g.message().find("resource 't.png' is a FIFO, not a regular file"), std::string::npos) << g.message();
+    EXPECT_NE(g.message().find("resource 't.png' is a FIFO, not a regular file"), std::string::npos)
+        << g.message();
     ASSERT_EQ(::mkfifo((root / "in.ply").c_str(), 0600), 0);
     auto p = assets::read_ply_geometry(root / "in.ply");
     ASSERT_FALSE(p.ok());
-    EXPECT_NE(p.message().find((root / "in.ply").string() + ": not a regular file"), std::string::npos) << p.message();
+    EXPECT_NE(p.message().find((root / "in.ply").string() + ": not a regular file"), std::string::npos)
+        << p.message();
 }
 
 TEST(HostilePly, HugeFaceListsAreRefusedBeforeExpanding) {
     // One face of 2^20 one-byte indices (1 MB) would fan out to a million triangles; the file of the
     // issue had 64 of them (67M triangles, 1.6 GB). Refused at the first face.
     const fs::path root = fresh_dir("ply_faces");
-    std::string s = "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                    "element face 4\nproperty list uint uchar vertex_indices\nend_header\n";
+    std::string s =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float "
+        "y\nproperty float z\n"
+        "element face 4\nproperty list uint uchar vertex_indices\nend_header\n";
     s += std::string(36, '\0');
     for (int f = 0; f < 4; ++f) {
         const std::uint32_t n = 1u << 20;
@@ -250,7 +277,9 @@ TEST(HostilePly, HugeFaceListsAreRefusedBeforeExpanding) {
     write(root / "faces.ply", s);
     auto g = assets::read_ply_geometry(root / "faces.ply");
     ASSERT_FALSE(g.ok());
-    EXPECT_NE(g.message().find((root / "faces.ply").string() + ": face 0 has 1048576 vertices; at most 65536 per face"), std::string::npos)
+    EXPECT_NE(g.message().find((root / "faces.ply").string() +
+                               ": face 0 has 1048576 vertices; at most 65536 per face"),
+              std::string::npos)
         << g.message();
 }
 
@@ -260,7 +289,8 @@ TEST(HostileObj, MaterialLibraryAndTextureOutsideTheFolderAreRefused) {
     write(root / "a" / "b" / "m.obj", "mtllib ../../evil.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     auto g = assets::read_obj_geometry(root / "a" / "b" / "m.obj");
     ASSERT_FALSE(g.ok());
-    EXPECT_NE(g.message().find((root / "a" / "b" / "m.obj").string() + ": resource '../../evil.mtl' is outside the file's folder"),
+    EXPECT_NE(g.message().find((root / "a" / "b" / "m.obj").string() +
+                               ": resource '../../evil.mtl' is outside the file's folder"),
               std::string::npos)
         << g.message();
 
@@ -270,8 +300,8 @@ TEST(HostileObj, MaterialLibraryAndTextureOutsideTheFolderAreRefused) {
     write(root / "c" / "t.obj", "mtllib ok.mtl\nusemtl m\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     auto t = assets::read_obj_geometry(root / "c" / "t.obj");
     ASSERT_FALSE(t.ok());
-    EXPECT_NE(t.message().find((root / "c" / "ok.mtl").string() + ": resource '" + (root / "secret.png").string() +
-                               "' is outside the file's folder"),
+    EXPECT_NE(t.message().find((root / "c" / "ok.mtl").string() + ": resource '" +
+                               (root / "secret.png").string() + "' is outside the file's folder"),
               std::string::npos)
         << t.message();
 
@@ -299,22 +329,27 @@ TEST(HostileLattice, UnknownKeyHugeControlPointsDeepNestingAndDevicesAreRefused)
     const std::string base = R"("origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"divisions":[1,1,1])";
     auto misspelt = ffd::parse_lattice_json("{" + base + R"(,"controlpoints":[]})", "l.json");
     ASSERT_FALSE(misspelt.ok());
-    EXPECT_NE(misspelt.message().find("l.json: unknown key \"controlpoints\""), std::string::npos) << misspelt.message();
+    EXPECT_NE(misspelt.message().find("l.json: unknown key \"controlpoints\""), std::string::npos)
+        << misspelt.message();
 
     std::string cps = "[";
     for (int i = 0; i < 8; ++i) cps += std::string(i ? "," : "") + (i == 7 ? "[1e308,1,1]" : "[0,0,0]");
     cps += "]";
     auto huge = ffd::parse_lattice_json("{" + base + R"(,"control_points":)" + cps + "}", "l.json");
     ASSERT_FALSE(huge.ok());
-    EXPECT_NE(huge.message().find("l.json: control_points[7] is larger than 1e30 in magnitude"), std::string::npos) << huge.message();
+    EXPECT_NE(huge.message().find("l.json: control_points[7] is larger than 1e30 in magnitude"),
+              std::string::npos)
+        << huge.message();
 
     auto deep = ffd::parse_lattice_json(std::string(20000, '[') + std::string(20000, ']'), "deep.json");
     ASSERT_FALSE(deep.ok());
-    EXPECT_NE(deep.message().find("deep.json: JSON nesting deeper than 256 levels"), std::string::npos) << deep.message();
+    EXPECT_NE(deep.message().find("deep.json: JSON nesting deeper than 256 levels"), std::string::npos)
+        << deep.message();
 
     auto dev = ffd::load_lattice("/dev/zero");  // used to read until std::bad_alloc
     ASSERT_FALSE(dev.ok());
-    EXPECT_NE(dev.message().find("/dev/zero: not a regular file (a character device)"), std::string::npos) << dev.message();
+    EXPECT_NE(dev.message().find("/dev/zero: not a regular file (a character device)"), std::string::npos)
+        << dev.message();
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -335,10 +370,11 @@ Status load_edited(const std::string& name, const std::function<void(nlohmann::j
     out.name = "cloud";
     out.id = 0;
     out.cloud = &c;
-    const std::string ext = R"({"version":1,"lattices":[{"id":1,"name":"l","origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],)"
-                            R"("divisions":[1,1,1],"rest":[0,0,0,0,0,1,0,1,0,0,1,1,1,0,0,1,0,1,1,1,0,1,1,1],)"
-                            R"("transform":{"translation":[0,0,0],"rotation":[0,0,0,1],"scale":[1,1,1]}}],)"
-                            R"("cameras":[{"eye":[0,0,3],"target":[0,0,0]}]})";
+    const std::string ext =
+        R"({"version":1,"lattices":[{"id":1,"name":"l","origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],)"
+        R"("divisions":[1,1,1],"rest":[0,0,0,0,0,1,0,1,0,0,1,1,1,0,0,1,0,1,1,1,0,1,1,1],)"
+        R"("transform":{"translation":[0,0,0],"rotation":[0,0,0,1],"scale":[1,1,1]}}],)"
+        R"("cameras":[{"eye":[0,0,3],"target":[0,0,0]}]})";
     EXPECT_TRUE(assets::write_gltf(dir / "s.gltf", {out}, ext).ok());
     nlohmann::json doc = nlohmann::json::parse(slurp(dir / "s.gltf"));
     edit(doc);
@@ -360,16 +396,40 @@ TEST(HostileScene, UnrenderableFieldsAreRefusedNamingFileAndField) {
     };
     auto lattice = [](json& d) -> json& { return d["extensions"]["SFFD_scene"]["lattices"][0]; };
     const Case cases[] = {
-        {"transform", [&](json& d) { lattice(d)["transform"] = "abc"; }, "SFFD_scene lattice: 'transform' must be an object"},
-        {"quat", [&](json& d) { lattice(d)["transform"]["rotation"] = {0, 0, 0, 0}; },
+        {"transform", [&](json& d) { lattice(d)["transform"] = "abc"; },
+         "SFFD_scene lattice: 'transform' must be an object"},
+        {"quat",
+         [&](json& d) {
+             lattice(d)["transform"]["rotation"] = {0, 0, 0, 0};
+         },
          "SFFD_scene lattice: 'transform' 'rotation' is a zero quaternion"},
-        {"scale", [&](json& d) { lattice(d)["transform"]["scale"] = {1, 0, 1}; }, "SFFD_scene lattice: 'transform' 'scale' has a zero component"},
-        {"eye", [](json& d) { d["extensions"]["SFFD_scene"]["cameras"][0]["eye"] = {0, 0, 0}; }, "SFFD_scene camera: 'eye' equals 'target'"},
-        {"up", [](json& d) { d["extensions"]["SFFD_scene"]["cameras"][0]["up"] = {0, 0, 2}; },
+        {"scale",
+         [&](json& d) {
+             lattice(d)["transform"]["scale"] = {1, 0, 1};
+         },
+         "SFFD_scene lattice: 'transform' 'scale' has a zero component"},
+        {"eye",
+         [](json& d) {
+             d["extensions"]["SFFD_scene"]["cameras"][0]["eye"] = {0, 0, 0};
+         },
+         "SFFD_scene camera: 'eye' equals 'target'"},
+        {"up",
+         [](json& d) {
+             d["extensions"]["SFFD_scene"]["cameras"][0]["up"] = {0, 0, 2};
+         },
          "SFFD_scene camera: 'up' is zero or parallel to the view direction"},
-        {"mesh", [](json& d) { d["nodes"][1]["mesh"] = 99; }, "splat node 'cloud': mesh index 99 out of range (1 meshes)"},
-        {"nodequat", [](json& d) { d["nodes"][0]["rotation"] = {0, 0, 0, 0}; }, "splat node 'cloud': rotation is a zero or non-finite quaternion"},
-        {"nodescale", [](json& d) { d["nodes"][0]["scale"] = {0, 1, 1}; }, "splat node 'cloud': scale has a zero or non-finite component"},
+        {"mesh", [](json& d) { d["nodes"][1]["mesh"] = 99; },
+         "splat node 'cloud': mesh index 99 out of range (1 meshes)"},
+        {"nodequat",
+         [](json& d) {
+             d["nodes"][0]["rotation"] = {0, 0, 0, 0};
+         },
+         "splat node 'cloud': rotation is a zero or non-finite quaternion"},
+        {"nodescale",
+         [](json& d) {
+             d["nodes"][0]["scale"] = {0, 1, 1};
+         },
+         "splat node 'cloud': scale has a zero or non-finite component"},
     };
     for (const Case& c : cases) {
         const Status s = load_edited(c.name, c.edit);
@@ -405,11 +465,14 @@ TEST(AtomicSave, KeepsPermissionsRefusesNonRegularOutputsAndReplacesALinksTarget
     ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
     Status f = write_file_atomic(dir / "fifo", "x");
     ASSERT_FALSE(f.ok());
-    EXPECT_NE(f.message().find((dir / "fifo").string() + ": not a regular file (a FIFO); refusing to replace it"), std::string::npos)
+    EXPECT_NE(
+        f.message().find((dir / "fifo").string() + ": not a regular file (a FIFO); refusing to replace it"),
+        std::string::npos)
         << f.message();
     Status n = write_file_atomic("/dev/null", "x");
     ASSERT_FALSE(n.ok());
-    EXPECT_NE(n.message().find("/dev/null: not a regular file (a character device)"), std::string::npos) << n.message();
+    EXPECT_NE(n.message().find("/dev/null: not a regular file (a character device)"), std::string::npos)
+        << n.message();
 
     write(dir / "real" / "target.txt", "old");
     fs::create_symlink(dir / "real" / "target.txt", dir / "link.txt");

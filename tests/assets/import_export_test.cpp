@@ -44,7 +44,8 @@ SplatCloud sample_cloud(std::size_t n, glm::dvec3 origin = glm::dvec3(0.0)) {
     c.origin = origin;
     for (std::size_t i = 0; i < n; ++i) {
         const std::uint32_t b = static_cast<std::uint32_t>(i % 256);
-        c.colors[i] = b | (((b * 7) & 255u) << 8) | (((b * 13 + 5) & 255u) << 16) | (((255 - b) & 255u) << 24);
+        c.colors[i] =
+            b | (((b * 7) & 255u) << 8) | (((b * 13 + 5) & 255u) << 16) | (((255 - b) & 255u) << 24);
     }
     // A smaller texture keeps the GLB small; odd size checks the PNG row handling.
     Image tex = make_sphere_texture(37, 19);
@@ -136,7 +137,9 @@ TEST(RoundTrip, PlyFarCloudKeepsOriginAndPositionsToFloatPrecision) {
     ASSERT_EQ(back->size(), c.size());
     for (std::size_t i = 0; i < c.size(); ++i)
         for (int a = 0; a < 3; ++a)
-            EXPECT_LE(std::abs(back->positions[i][a] - c.positions[i][a]), 2.0f * std::numeric_limits<float>::epsilon()) << i;
+            EXPECT_LE(std::abs(back->positions[i][a] - c.positions[i][a]),
+                      2.0f * std::numeric_limits<float>::epsilon())
+                << i;
     EXPECT_TRUE(same_bytes(c.axis_u, back->axis_u));
     EXPECT_TRUE(same_bytes(c.colors, back->colors));
 }
@@ -146,7 +149,8 @@ TEST(Import, FarAwayScanIsRecentredOnItsBoundingBox) {
     g.source = "far";
     std::mt19937 rng(1);
     std::uniform_real_distribution<double> u(0, 10);
-    for (int i = 0; i < 500; ++i) g.positions.emplace_back(5.0e6 + u(rng), 3.0e6 + u(rng), 100.0 + 0.01 * u(rng));
+    for (int i = 0; i < 500; ++i)
+        g.positions.emplace_back(5.0e6 + u(rng), 3.0e6 + u(rng), 100.0 + 0.01 * u(rng));
     auto c = make_splat_cloud(g, {});
     ASSERT_TRUE(c.ok()) << c.message();
     glm::dvec3 lo(1e300), hi(-1e300);
@@ -156,17 +160,19 @@ TEST(Import, FarAwayScanIsRecentredOnItsBoundingBox) {
     }
     EXPECT_EQ(c->origin, 0.5 * (lo + hi));
     for (std::size_t i = 0; i < g.positions.size(); ++i)
-        EXPECT_NEAR(c->origin.x + static_cast<double>(c->positions[i].x), g.positions[i].x, 1e-6);  // float offsets stay precise
+        EXPECT_NEAR(c->origin.x + static_cast<double>(c->positions[i].x), g.positions[i].x,
+                    1e-6);  // float offsets stay precise
 }
 
 TEST(Import, ObjWithQuadsNegativeIndicesMaterialsAndSeams) {
     write_text("cube.mtl", "newmtl red\nKd 1 0 0\nnewmtl blue\nKd 0 0 1\n");
-    const fs::path p = write_text("cube.obj",
-                                  "mtllib cube.mtl\n"
-                                  "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nv 9 9 9\n"
-                                  "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
-                                  "usemtl red\nf 1/1 4/4 3/3 2/2\nf 5/1 6/2 7/3 8/4\n"
-                                  "usemtl blue\nf -9/1 -8/2 -4/3 -5/4\nf 2/1 3/2 7/3 6/4\nf 3/1 4/2 8/3 7/4\nf 4/1 1/2 5/3 8/4\n");
+    const fs::path p = write_text(
+        "cube.obj",
+        "mtllib cube.mtl\n"
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nv 0 0 1\nv 1 0 1\nv 1 1 1\nv 0 1 1\nv 9 9 9\n"
+        "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
+        "usemtl red\nf 1/1 4/4 3/3 2/2\nf 5/1 6/2 7/3 8/4\n"
+        "usemtl blue\nf -9/1 -8/2 -4/3 -5/4\nf 2/1 3/2 7/3 6/4\nf 3/1 4/2 8/3 7/4\nf 4/1 1/2 5/3 8/4\n");
     auto g = read_geometry(p);
     ASSERT_TRUE(g.ok()) << g.message();
     EXPECT_EQ(g->triangle_count(), 12u);
@@ -206,7 +212,8 @@ TEST(Import, ObjWithQuadsNegativeIndicesMaterialsAndSeams) {
 
 TEST(Import, OffWithColours) {
     const fs::path p = write_text("tet.off",
-                                  "COFF\n# a tetrahedron\n4 4 6\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 0 0 255 255\n0 0 1 255 255 255 255\n"
+                                  "COFF\n# a tetrahedron\n4 4 6\n0 0 0 255 0 0 255\n1 0 0 0 255 0 255\n0 1 0 "
+                                  "0 0 255 255\n0 0 1 255 255 255 255\n"
                                   "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
     auto g = read_geometry(p);
     ASSERT_TRUE(g.ok()) << g.message();
@@ -217,11 +224,12 @@ TEST(Import, OffWithColours) {
 }
 
 TEST(Import, PlyMeshWithFacesAndColours) {
-    const fs::path p = write_text("quad.ply",
-                                  "ply\nformat ascii 1.0\nelement vertex 5\nproperty double x\nproperty double y\nproperty double z\n"
-                                  "property uchar red\nproperty uchar green\nproperty uchar blue\n"
-                                  "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
-                                  "0 0 0 255 0 0\n1 0 0 255 0 0\n1 1 0 255 0 0\n0 1 0 255 0 0\n5 5 5 0 0 0\n4 0 1 2 3\n");
+    const fs::path p = write_text(
+        "quad.ply",
+        "ply\nformat ascii 1.0\nelement vertex 5\nproperty double x\nproperty double y\nproperty double z\n"
+        "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+        "element face 1\nproperty list uchar int vertex_indices\nend_header\n"
+        "0 0 0 255 0 0\n1 0 0 255 0 0\n1 1 0 255 0 0\n0 1 0 255 0 0\n5 5 5 0 0 0\n4 0 1 2 3\n");
     auto g = read_geometry(p);
     ASSERT_TRUE(g.ok()) << g.message();
     EXPECT_EQ(g->triangle_count(), 2u);
@@ -270,19 +278,25 @@ TEST_P(HostileImport, IsRefusedWithTheFileName) {
 INSTANTIATE_TEST_SUITE_P(
     Files, HostileImport,
     ::testing::Values(
-        Hostile{"nan.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\nnan 1 2\n",
+        Hostile{"nan.ply",
+                "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nproperty float "
+                "z\nend_header\n0 0 0\nnan 1 2\n",
                 "non-finite coordinate"},
         Hostile{"inf_normal.ply",
-                "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\n"
+                "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float "
+                "z\nproperty float nx\nproperty float ny\n"
                 "property float nz\nend_header\n0 0 0 inf 0 0\n",
                 "non-finite normal"},
-        Hostile{"noxyz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float a\nend_header\n1\n", "no x, y, z"},
+        Hostile{"noxyz.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float a\nend_header\n1\n",
+                "no x, y, z"},
         Hostile{"badface.ply",
-                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\n"
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float "
+                "z\nelement face 1\n"
                 "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n",
                 "refers to vertex 7"},
         Hostile{"negface.ply",
-                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nelement face 1\n"
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float "
+                "z\nelement face 1\n"
                 "property list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 -1 2\n",
                 "refers to vertex -1"},
         Hostile{"badindex.obj", "v 0 0 0\nv 1 0 0\nf 1 2 3\n", "missing vertex 3"},
@@ -300,15 +314,18 @@ INSTANTIATE_TEST_SUITE_P(
                    "bufferViews":[{"buffer":0,"byteLength":12}],
                    "buffers":[{"byteLength":12,"uri":"data:application/octet-stream;base64,AAAAAAAAAAAAAAAA"}]})",
                 "exceeds"},
-        Hostile{"cycle.gltf",
-                R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"children":[1]},{"children":[0]}]})", "cycle"},
-        Hostile{"nanmatrix.gltf",
-                R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0,"scale":[1e308,1e308,1e308],"children":[1]},{"mesh":0,"scale":[1e308,1,1]}],
+        Hostile{
+            "cycle.gltf",
+            R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"children":[1]},{"children":[0]}]})",
+            "cycle"},
+        Hostile{
+            "nanmatrix.gltf",
+            R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0,"scale":[1e308,1e308,1e308],"children":[1]},{"mesh":0,"scale":[1e308,1,1]}],
                    "meshes":[{"primitives":[{"mode":0,"attributes":{"POSITION":0}}]}],
                    "accessors":[{"bufferView":0,"componentType":5126,"count":1,"type":"VEC3","min":[0,0,0],"max":[1,1,1]}],
                    "bufferViews":[{"buffer":0,"byteLength":12}],
                    "buffers":[{"byteLength":12,"uri":"data:application/octet-stream;base64,AACAPwAAgD8AAIA/"}]})",
-                "not finite"},
+            "not finite"},
         Hostile{"hugeimage.gltf",
                 R"({"asset":{"version":"2.0"},"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],
                    "meshes":[{"primitives":[{"mode":0,"attributes":{"POSITION":0},"material":0}]}],
@@ -352,7 +369,8 @@ TEST(Import, MissingFileNamesIt) {
 TEST(AssimpTestModels, TexturedBoxImportsWithTextureColours) {
     const fs::path dir = "/usr/share/assimp/models/glTF2";
     const fs::path glb = dir / "BoxTextured-glTF-Binary/BoxTextured.glb";
-    if (!fs::exists(glb)) GTEST_SKIP() << "assimp-testmodels not installed (apt-get install assimp-testmodels)";
+    if (!fs::exists(glb))
+        GTEST_SKIP() << "assimp-testmodels not installed (apt-get install assimp-testmodels)";
     for (const fs::path& p : {glb, dir / "BoxTextured-glTF/BoxTextured.gltf"}) {
         auto g = read_geometry(p);
         ASSERT_TRUE(g.ok()) << g.message();
@@ -420,16 +438,18 @@ TEST(ForeignFiles, ObjWithWindowsBackslashPathsKeepsItsTexture) {
     std::ofstream(dir / "escape.obj") << "mtllib lib\\m.mtl\n" << tri;
     auto e = read_obj_geometry(dir / "escape.obj");
     ASSERT_FALSE(e.ok());
-    EXPECT_NE(e.message().find((dir / "lib" / "m.mtl").string() + ": resource '../maps/red.png' is outside the file's folder"),
+    EXPECT_NE(e.message().find((dir / "lib" / "m.mtl").string() +
+                               ": resource '../maps/red.png' is outside the file's folder"),
               std::string::npos)
         << e.message();
 }
 
 TEST(ForeignFiles, PlyHeaderWithUnknownLinesWarnsAndLoads) {
-    const fs::path p = write_text("created.ply",
-                                  "ply\nformat ascii 1.0\nCreated by Blender3D 247 - www.blender.org, source file: \n"
-                                  "obj_info num_cols 1\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                                  "end_header\n0 0 0\n1 0 0\n0 1 0\n");
+    const fs::path p = write_text(
+        "created.ply",
+        "ply\nformat ascii 1.0\nCreated by Blender3D 247 - www.blender.org, source file: \n"
+        "obj_info num_cols 1\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+        "end_header\n0 0 0\n1 0 0\n0 1 0\n");
     log::ScopedLogCapture capture;
     auto g = read_ply_geometry(p);
     ASSERT_TRUE(g.ok()) << g.message();
@@ -456,10 +476,12 @@ TEST(ForeignFiles, PlyHeaderOfJunkLinesWarnsAFewTimesOnly) {
 }
 
 TEST(ForeignFiles, Gltf1IsNamedAsUnsupported) {
-    const fs::path text = write_text("v1.gltf", R"({"asset": {"version": "1.0"}, "meshes": {"m": {"primitives": []}}, "scene": "s"})");
+    const fs::path text = write_text(
+        "v1.gltf", R"({"asset": {"version": "1.0"}, "meshes": {"m": {"primitives": []}}, "scene": "s"})");
     auto r = read_gltf_geometry(text);
     ASSERT_FALSE(r.ok());
-    EXPECT_EQ(r.message(), text.string() + ": glTF 1.0 is not supported (asset.version \"1.0\"); convert it to glTF 2.0");
+    EXPECT_EQ(r.message(),
+              text.string() + ": glTF 1.0 is not supported (asset.version \"1.0\"); convert it to glTF 2.0");
 
     // Binary glTF 1.0 (KHR_binary_glTF): container version 1, then length, JSON length, format 0.
     const std::string json = R"({"asset":{"version":"1.0.1"}} )";
@@ -473,10 +495,13 @@ TEST(ForeignFiles, Gltf1IsNamedAsUnsupported) {
     const fs::path bin = write_text("v1.glb", glb);
     auto b = read_gltf_geometry(bin);
     ASSERT_FALSE(b.ok());
-    EXPECT_EQ(b.message(), bin.string() + ": glTF 1.0 is not supported (asset.version \"1.0.1\"); convert it to glTF 2.0");
+    EXPECT_EQ(b.message(),
+              bin.string() + ": glTF 1.0 is not supported (asset.version \"1.0.1\"); convert it to glTF 2.0");
 
     // glTF 2.0 with a broken body keeps tinygltf's own message.
-    const fs::path v2 = write_text("v2.gltf", R"({"asset": {"version": "2.0"}, "meshes": [{"primitives": [{"attributes": {"POSITION": 7}}]}]})");
+    const fs::path v2 = write_text(
+        "v2.gltf",
+        R"({"asset": {"version": "2.0"}, "meshes": [{"primitives": [{"attributes": {"POSITION": 7}}]}]})");
     auto r2 = read_gltf_geometry(v2);
     ASSERT_FALSE(r2.ok());
     EXPECT_EQ(r2.message().find("glTF 1.0"), std::string::npos) << r2.message();
@@ -484,7 +509,8 @@ TEST(ForeignFiles, Gltf1IsNamedAsUnsupported) {
 
 TEST(AssimpTestModels, ForeignSamplesImport) {
     const fs::path dir = "/usr/share/assimp/models";
-    if (!fs::exists(dir / "OBJ/spider.obj")) GTEST_SKIP() << "assimp-testmodels not installed (apt-get install assimp-testmodels)";
+    if (!fs::exists(dir / "OBJ/spider.obj"))
+        GTEST_SKIP() << "assimp-testmodels not installed (apt-get install assimp-testmodels)";
     // spider.mtl names its five textures ".\SpiderTex.jpg" etc.; all ship next to it.
     auto spider = read_obj_geometry(dir / "OBJ/spider.obj");
     ASSERT_TRUE(spider.ok()) << spider.message();
@@ -496,12 +522,15 @@ TEST(AssimpTestModels, ForeignSamplesImport) {
     auto w = read_ply_geometry(wuson);
     ASSERT_TRUE(w.ok()) << w.message();
     EXPECT_EQ(w->positions.size(), 11184u);
-    EXPECT_TRUE(capture.contains(wuson.string() + ": header line 3: unknown keyword 'Created', line ignored"));
+    EXPECT_TRUE(
+        capture.contains(wuson.string() + ": header line 3: unknown keyword 'Created', line ignored"));
 
-    for (const char* f : {"glTF/BoxTextured-glTF/BoxTextured.gltf", "glTF/BoxTextured-glTF-Binary/BoxTextured.glb"}) {
+    for (const char* f :
+         {"glTF/BoxTextured-glTF/BoxTextured.gltf", "glTF/BoxTextured-glTF-Binary/BoxTextured.glb"}) {
         auto r = read_gltf_geometry(dir / f);
         ASSERT_FALSE(r.ok()) << f;
-        EXPECT_NE(r.message().find((dir / f).string() + ": glTF 1.0 is not supported (asset.version \"1.0"), std::string::npos)
+        EXPECT_NE(r.message().find((dir / f).string() + ": glTF 1.0 is not supported (asset.version \"1.0"),
+                  std::string::npos)
             << r.message();
         EXPECT_NE(r.message().find("convert it to glTF 2.0"), std::string::npos) << r.message();
     }
@@ -532,12 +561,14 @@ void expect_box_uv_frame(const SplatCloud& c, const char* what) {
         const glm::dvec2 uv = f->uv(x);
         const glm::dvec2 du = f->duv(glm::dvec3(c.axis_u[i])), dv = f->duv(glm::dvec3(c.axis_v[i]));
         const glm::dvec4 want(du.x, du.y, dv.x, dv.y), got(c.uv_axes[i]);
-        const bool ok = std::abs(uv.x - double(c.uvs[i].x)) < 2e-6 && std::abs(uv.y - double(c.uvs[i].y)) < 2e-6 &&
-                        glm::all(glm::lessThan(glm::abs(want - got), glm::dvec4(1e-7) + 1e-4 * glm::abs(want)));
+        const bool ok =
+            std::abs(uv.x - double(c.uvs[i].x)) < 2e-6 && std::abs(uv.y - double(c.uvs[i].y)) < 2e-6 &&
+            glm::all(glm::lessThan(glm::abs(want - got), glm::dvec4(1e-7) + 1e-4 * glm::abs(want)));
         if (!ok && bad++ < 5)
-            ADD_FAILURE() << what << ": splat " << i << " uv " << c.uvs[i].x << "," << c.uvs[i].y << " (want " << uv.x << "," << uv.y
-                          << ") frame " << got.x << "," << got.y << "," << got.z << "," << got.w << " (want " << want.x << "," << want.y
-                          << "," << want.z << "," << want.w << ")";
+            ADD_FAILURE() << what << ": splat " << i << " uv " << c.uvs[i].x << "," << c.uvs[i].y << " (want "
+                          << uv.x << "," << uv.y << ") frame " << got.x << "," << got.y << "," << got.z << ","
+                          << got.w << " (want " << want.x << "," << want.y << "," << want.z << "," << want.w
+                          << ")";
         // The frame is not trivially zero: the axes have a radius and the map a scale.
         EXPECT_GT(glm::length(got), 1e-4) << what << ": splat " << i;
     }
@@ -588,7 +619,8 @@ TEST(TexturedMesh, TintedOrMultiTextureMeshesStayBakedIntoColours) {
     EXPECT_TRUE(c->material.texture_rgba8.empty());
     EXPECT_TRUE(c->uv_axes.empty());
     ASSERT_EQ(c->colors.size(), 500u);
-    for (std::uint32_t col : c->colors) EXPECT_LE((col >> 8) & 255u, 190u);  // green halved (sRGB of 0.5 * 0.8 at most)
+    for (std::uint32_t col : c->colors)
+        EXPECT_LE((col >> 8) & 255u, 190u);  // green halved (sRGB of 0.5 * 0.8 at most)
 }
 
 TEST(TexturedMesh, UvFrameAndTextureRoundTripThroughPlyAndGltf) {
@@ -602,7 +634,8 @@ TEST(TexturedMesh, UvFrameAndTextureRoundTripThroughPlyAndGltf) {
     for (const char* name : {"rt.ply", "rt_ascii.ply", "rt.glb", "rt.gltf"}) {
         const fs::path p = dir / name;
         const bool ascii = std::string(name) == "rt_ascii.ply";
-        ASSERT_TRUE((ascii ? save_splat_ply(*c, p, ply::Format::ascii) : save_splat_cloud(*c, p)).ok()) << name;
+        ASSERT_TRUE((ascii ? save_splat_ply(*c, p, ply::Format::ascii) : save_splat_cloud(*c, p)).ok())
+            << name;
         auto back = import_splat_cloud(p);
         ASSERT_TRUE(back.ok()) << back.message();
         expect_same_cloud(*c, *back, false);
@@ -613,7 +646,9 @@ TEST(TexturedMesh, UvFrameAndTextureRoundTripThroughPlyAndGltf) {
             EXPECT_TRUE(fs::exists(dir / (p.stem().string() + "_texture.png"))) << name;
             auto geom = read_geometry(p);
             ASSERT_TRUE(geom.ok()) << geom.message();
-            EXPECT_NE(std::find(geom->attributes.begin(), geom->attributes.end(), "float du_ds"), geom->attributes.end()) << name;
+            EXPECT_NE(std::find(geom->attributes.begin(), geom->attributes.end(), "float du_ds"),
+                      geom->attributes.end())
+                << name;
         }
     }
     // Thinned (axes re-estimated) and re-estimated radii: the stored frame is re-expressed along the new
@@ -633,12 +668,14 @@ TEST(TexturedMesh, UvFrameAndTextureRoundTripThroughPlyAndGltf) {
 
 TEST(TexturedMesh, NonFiniteUvFrameInAPlyIsRefusedNamingTheFile) {
     const fs::path p = sffd::test::fresh_dir("import", "bad_uv_frame") / "bad.ply";
-    std::ofstream(p) << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
-                        "property float axis_ux\nproperty float axis_uy\nproperty float axis_uz\n"
-                        "property float axis_vx\nproperty float axis_vy\nproperty float axis_vz\n"
-                        "property float u\nproperty float v\n"
-                        "property float du_ds\nproperty float dv_ds\nproperty float du_dt\nproperty float dv_dt\nend_header\n"
-                        "0 0 0 1 0 0 0 1 0 0.5 0.5 nan 0 0 1\n";
+    std::ofstream(p)
+        << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+           "property float axis_ux\nproperty float axis_uy\nproperty float axis_uz\n"
+           "property float axis_vx\nproperty float axis_vy\nproperty float axis_vz\n"
+           "property float u\nproperty float v\n"
+           "property float du_ds\nproperty float dv_ds\nproperty float du_dt\nproperty float "
+           "dv_dt\nend_header\n"
+           "0 0 0 1 0 0 0 1 0 0.5 0.5 nan 0 0 1\n";
     auto g = read_geometry(p);
     expect_error(status_of(g), p, "non-finite uv frame");
 }

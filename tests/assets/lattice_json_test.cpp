@@ -69,7 +69,9 @@ Result<Lattice> load_lattice_scene(const fs::path& path) {
 
 // A glTF scene file whose SFFD_scene holds one lattice entry `entry` (no clouds).
 fs::path scene_with_entry(const fs::path& dir, const json& entry) {
-    const json ext = {{"version", 1}, {"lattices", json::array({entry})}, {"cameras", json::array({{{"eye", {0, 0, 3}}, {"target", {0, 0, 0}}}})}};
+    const json ext = {{"version", 1},
+                      {"lattices", json::array({entry})},
+                      {"cameras", json::array({{{"eye", {0, 0, 3}}, {"target", {0, 0, 0}}}})}};
     const fs::path p = dir / "s.gltf";
     EXPECT_TRUE(assets::write_gltf(p, {}, ext.dump()).ok());
     return p;
@@ -77,10 +79,12 @@ fs::path scene_with_entry(const fs::path& dir, const json& entry) {
 
 // Everything after "WHERE: " in a message.
 std::string problem(const std::string& message, const std::string& where) {
-    return message.rfind(where + ": ", 0) == 0 ? message.substr(where.size() + 2) : "(no '" + where + ": ' prefix) " + message;
+    return message.rfind(where + ": ", 0) == 0 ? message.substr(where.size() + 2)
+                                               : "(no '" + where + ": ' prefix) " + message;
 }
 
-const json kUnitBox = {{"origin", {0, 0, 0}}, {"axes", {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}, {"divisions", {1, 1, 1}}};
+const json kUnitBox = {
+    {"origin", {0, 0, 0}}, {"axes", {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}}}, {"divisions", {1, 1, 1}}};
 
 }  // namespace
 
@@ -89,8 +93,9 @@ TEST(LatticeJson, RoundTripsBitExactlyThroughSceneAndLatticeFiles) {
     // Awkward doubles on purpose: an origin far from 0, thirds, 0.1 + 0.2, a negative zero, a rest that
     // differs from the uniform grid by one ulp (within the 1e-12 tolerance of rest_is_uniform, which the
     // old lattice writer used to leave the rest out), then a baked (apply_as_rest) rest.
-    Lattice l = make_lattice({1e6 + 0.1, -2.0 / 3.0, 3.0}, {glm::dvec3(2, 0.1, 0), glm::dvec3(0, 3, 1.0 / 7), glm::dvec3(0.2, 0, 1)},
-                                  {3, 2, 4}, LatticeBasis::bspline);
+    Lattice l = make_lattice({1e6 + 0.1, -2.0 / 3.0, 3.0},
+                             {glm::dvec3(2, 0.1, 0), glm::dvec3(0, 3, 1.0 / 7), glm::dvec3(0.2, 0, 1)},
+                             {3, 2, 4}, LatticeBasis::bspline);
     ffd::twist(l, ffd::all_control_points(l), {0, 1, 0}, 0.3);
     l.current[0].x = 0.1 + 0.2;
     l.current[1].y = -0.0;
@@ -127,11 +132,14 @@ TEST(LatticeJson, RoundTripsBitExactlyThroughSceneAndLatticeFiles) {
         EXPECT_TRUE(entry.contains("id") && entry.contains("transform"));
         for (const char* key : {"id", "name", "transform"}) entry.erase(key);
         EXPECT_EQ(entry, json::parse(slurp(dir / "a.json")));
-        EXPECT_TRUE(entry.contains("rest_control_points"));  // the rest is not the uniform grid in either pass
+        EXPECT_TRUE(
+            entry.contains("rest_control_points"));  // the rest is not the uniform grid in either pass
     }
 
     // A rest exactly on the grid is left out and rebuilt exactly.
-    const Lattice at_rest = make_lattice({0.1, 0.2, 0.3}, {glm::dvec3(1.0 / 3, 0, 0), glm::dvec3(0, 0.7, 0), glm::dvec3(0, 0, 0.9)}, {5, 3, 2});
+    const Lattice at_rest =
+        make_lattice({0.1, 0.2, 0.3},
+                     {glm::dvec3(1.0 / 3, 0, 0), glm::dvec3(0, 0.7, 0), glm::dvec3(0, 0, 0.9)}, {5, 3, 2});
     const json j = lattice_to_json(at_rest);
     EXPECT_FALSE(j.contains("rest_control_points"));
     auto back = lattice_from_json(j, "x");
@@ -151,14 +159,17 @@ TEST(LatticeJson, UnknownKeysAndHugeNumbersAreRefusedInSceneEntriesLikeInLattice
     json misspelt = kUnitBox;
     misspelt["controlpoints"] = {{0, 0, 0}};
     json huge = kUnitBox;
-    huge["control_points"] = {{0, 0, 0}, {0, 0, 1}, {0, 1, 0}, {0, 1, 1}, {1, 0, 0}, {1, 0, 1}, {1, 1, 0}, {1e308, 1, 1}};
+    huge["control_points"] = {{0, 0, 0}, {0, 0, 1}, {0, 1, 0}, {0, 1, 1},
+                              {1, 0, 0}, {1, 0, 1}, {1, 1, 0}, {1e308, 1, 1}};
     json huge_flat = kUnitBox;  // the older scene form
     huge_flat["current"] = {0, 0, 0, 0, 0, 1, 0, 1, 0, 0, 1, 1, 1, 0, 0, 1, 0, 1, 1, 1, 0, 1, 1, -1e31};
     json both = kUnitBox;
     both["rest"] = {0, 0, 0};
     both["rest_control_points"] = {{0, 0, 0}};
     const Case cases[] = {
-        {"misspelt", misspelt, "unknown key \"controlpoints\" (expected origin, axes, divisions, basis, rest_control_points, control_points)"},
+        {"misspelt", misspelt,
+         "unknown key \"controlpoints\" (expected origin, axes, divisions, basis, rest_control_points, "
+         "control_points)"},
         {"huge", huge, "control_points[7] is larger than 1e30 in magnitude"},
         {"huge_flat", huge_flat, "current[7] is larger than 1e30 in magnitude"},
         {"both_names", both, "both \"rest_control_points\" and \"rest\" given"},
@@ -177,14 +188,16 @@ TEST(LatticeJson, UnknownKeysAndHugeNumbersAreRefusedInSceneEntriesLikeInLattice
         const Status s = load_scene(r, p.string());
         ASSERT_FALSE(s.ok());
         // The same problem, after the scene's prefix; nothing was added.
-        EXPECT_EQ(problem(s.message(), p.string() + ": SFFD_scene lattice"), problem(file.message(), "l.json"));
+        EXPECT_EQ(problem(s.message(), p.string() + ": SFFD_scene lattice"),
+                  problem(file.message(), "l.json"));
         EXPECT_EQ(r.alive(), 0u);
     }
 }
 
 TEST(LatticeJson, BothPointShapesAndBothKeyNamesReadInScenesAndLatticeFiles) {
     const fs::path dir = fresh_dir("shapes");
-    Lattice want = make_lattice({0, 0, 0}, {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)}, {1, 1, 1});
+    Lattice want =
+        make_lattice({0, 0, 0}, {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)}, {1, 1, 1});
     want.current[7] = glm::dvec3(1.5, 1.25, 1);
     // What the old scene writer wrote (flat "rest" and "current"), and the lattice file form.
     json old_scene = kUnitBox;
@@ -192,7 +205,8 @@ TEST(LatticeJson, BothPointShapesAndBothKeyNamesReadInScenesAndLatticeFiles) {
     old_scene["rest"] = {0, 0, 0, 0, 0, 1, 0, 1, 0, 0, 1, 1, 1, 0, 0, 1, 0, 1, 1, 1, 0, 1, 1, 1};
     old_scene["current"] = {0, 0, 0, 0, 0, 1, 0, 1, 0, 0, 1, 1, 1, 0, 0, 1, 0, 1, 1, 1, 0, 1.5, 1.25, 1};
     json file_form = kUnitBox;
-    file_form["control_points"] = {{0, 0, 0}, {0, 0, 1}, {0, 1, 0}, {0, 1, 1}, {1, 0, 0}, {1, 0, 1}, {1, 1, 0}, {1.5, 1.25, 1}};
+    file_form["control_points"] = {{0, 0, 0}, {0, 0, 1}, {0, 1, 0}, {0, 1, 1},
+                                   {1, 0, 0}, {1, 0, 1}, {1, 1, 0}, {1.5, 1.25, 1}};
     // Divisions written as 1.0 (older scene files were read that way) still count as integers.
     json float_divisions = file_form;
     float_divisions["divisions"] = {1.0, 1.0, 1.0};

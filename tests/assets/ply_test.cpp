@@ -62,7 +62,8 @@ std::vector<ply::Chunk> read_all(const fs::path& p, std::size_t n, ply::Header* 
                 const auto& src = c.columns[k];
                 if (e.properties[k].is_list) {
                     const std::uint32_t base = static_cast<std::uint32_t>(dst.values.size());
-                    for (std::size_t i = 1; i < src.offsets.size(); ++i) dst.offsets.push_back(base + src.offsets[i]);
+                    for (std::size_t i = 1; i < src.offsets.size(); ++i)
+                        dst.offsets.push_back(base + src.offsets[i]);
                 }
                 dst.values.insert(dst.values.end(), src.values.begin(), src.values.end());
             }
@@ -82,10 +83,10 @@ struct Sample {
 Sample make_sample(std::size_t vertices) {
     Sample s;
     ply::Element v{"vertex", vertices, {}};
-    v.properties = {{"x", ply::Type::float64}, {"y", ply::Type::float64}, {"z", ply::Type::float64},
-                    {"nx", ply::Type::float32}, {"red", ply::Type::uint8}, {"c", ply::Type::int8},
-                    {"s", ply::Type::int16}, {"us", ply::Type::uint16}, {"i", ply::Type::int32},
-                    {"u", ply::Type::uint32}, {"f_rest_0", ply::Type::float32}};
+    v.properties = {{"x", ply::Type::float64},  {"y", ply::Type::float64},       {"z", ply::Type::float64},
+                    {"nx", ply::Type::float32}, {"red", ply::Type::uint8},       {"c", ply::Type::int8},
+                    {"s", ply::Type::int16},    {"us", ply::Type::uint16},       {"i", ply::Type::int32},
+                    {"u", ply::Type::uint32},   {"f_rest_0", ply::Type::float32}};
     ply::Element f{"face", 3, {}};
     f.properties = {{"vertex_indices", ply::Type::int32, true, ply::Type::uint8}, {"flag", ply::Type::uint8}};
     s.header.comments = {"made by ply_test", "obj_info test object"};
@@ -106,7 +107,8 @@ Sample make_sample(std::size_t vertices) {
         cv.columns[7].values.push_back(65535.0 - static_cast<double>(r % 1000));
         cv.columns[8].values.push_back(-2147483648.0 + static_cast<double>(r));
         cv.columns[9].values.push_back(4294967295.0 - static_cast<double>(r));
-        cv.columns[10].values.push_back(r == 1 ? static_cast<double>(static_cast<float>(1e-38)) : static_cast<double>(static_cast<float>(u(rng) * 1e3)));
+        cv.columns[10].values.push_back(r == 1 ? static_cast<double>(static_cast<float>(1e-38))
+                                               : static_cast<double>(static_cast<float>(u(rng) * 1e3)));
     }
     ply::Chunk cf;
     cf.reset(f);
@@ -185,13 +187,24 @@ INSTANTIATE_TEST_SUITE_P(Formats, PlyRoundTrip,
 TEST(Ply, ReadsHandWrittenBigEndianAndSkipsElements) {
     // A file produced by another tool: big-endian, a leading "camera" element, floats and a list.
     std::string bytes =
-        "ply\r\nformat binary_big_endian 1.0\r\ncomment hand made\r\nelement camera 1\r\nproperty float fx\r\n"
-        "element vertex 2\r\nproperty float x\r\nproperty float y\r\nproperty float z\r\nproperty uchar red\r\n"
+        "ply\r\nformat binary_big_endian 1.0\r\ncomment hand made\r\nelement camera 1\r\nproperty float "
+        "fx\r\n"
+        "element vertex 2\r\nproperty float x\r\nproperty float y\r\nproperty float z\r\nproperty uchar "
+        "red\r\n"
         "element face 1\r\nproperty list uchar uint vertex_index\r\nend_header\r\n";
     append_be(bytes, 500.0f);
-    append_be(bytes, 1.5f); append_be(bytes, -2.25f); append_be(bytes, 3.0f); bytes.push_back('\xff');
-    append_be(bytes, 0.125f); append_be(bytes, 1e10f); append_be(bytes, -0.0f); bytes.push_back('\x07');
-    bytes.push_back('\x03'); append_be(bytes, 0u); append_be(bytes, 1u); append_be(bytes, 70000u);
+    append_be(bytes, 1.5f);
+    append_be(bytes, -2.25f);
+    append_be(bytes, 3.0f);
+    bytes.push_back('\xff');
+    append_be(bytes, 0.125f);
+    append_be(bytes, 1e10f);
+    append_be(bytes, -0.0f);
+    bytes.push_back('\x07');
+    bytes.push_back('\x03');
+    append_be(bytes, 0u);
+    append_be(bytes, 1u);
+    append_be(bytes, 70000u);
     const fs::path p = temp_dir() / "be.ply";
     write_bytes(p, bytes);
 
@@ -276,34 +289,45 @@ std::string header_le(const std::string& elements) {
 INSTANTIATE_TEST_SUITE_P(
     Malformed, PlyRefuses,
     ::testing::Values(
-        BadFile{"magic", "PK\x03\x04 not a ply", "bad magic"},
-        BadFile{"empty", "", "bad magic"},
-        BadFile{"no_end_header", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n", "truncated PLY header"},
+        BadFile{"magic", "PK\x03\x04 not a ply", "bad magic"}, BadFile{"empty", "", "bad magic"},
+        BadFile{"no_end_header", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n",
+                "truncated PLY header"},
         BadFile{"no_format", "ply\nelement vertex 0\nproperty float x\nend_header\n", "no format"},
         BadFile{"bad_format", "ply\nformat binary_middle_endian 1.0\nend_header\n", "unknown format"},
-        BadFile{"unknown_type", header_le("element vertex 1\nproperty float128 x\n"), "unknown PLY type 'float128'"},
-        BadFile{"float_list_count", header_le("element face 1\nproperty list float int idx\n"), "integer type"},
+        BadFile{"unknown_type", header_le("element vertex 1\nproperty float128 x\n"),
+                "unknown PLY type 'float128'"},
+        BadFile{"float_list_count", header_le("element face 1\nproperty list float int idx\n"),
+                "integer type"},
         BadFile{"property_first", header_le("property float x\n"), "property before any element"},
         BadFile{"negative_count", header_le("element vertex -5\nproperty float x\n"), "bad count"},
         BadFile{"huge_count", header_le("element vertex 18446744073709551615\nproperty float x\n") + "abcd",
                 "more than the file"},
-        BadFile{"count_exceeds_size", header_le("element vertex 10\nproperty float x\n") + std::string(36, '\0'),
+        BadFile{"count_exceeds_size",
+                header_le("element vertex 10\nproperty float x\n") + std::string(36, '\0'),
                 "more than the file"},
         BadFile{"duplicate_property", header_le("element vertex 1\nproperty float x\nproperty float x\n"),
                 "duplicate property"},
         BadFile{"truncated_list",
-                header_le("element face 1\nproperty list uchar int vertex_indices\n") + std::string("\x03\x01\0\0\0", 5),
+                header_le("element face 1\nproperty list uchar int vertex_indices\n") +
+                    std::string("\x03\x01\0\0\0", 5),
                 "truncated data in element 'face' row 0"},
         BadFile{"huge_list",
-                header_le("element face 1\nproperty list uint int vertex_indices\n") + std::string("\xff\xff\xff\xff", 4),
+                header_le("element face 1\nproperty list uint int vertex_indices\n") +
+                    std::string("\xff\xff\xff\xff", 4),
                 "list length"},
-        BadFile{"ascii_garbage", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nend_header\n1.0\nbanana\n",
+        BadFile{"ascii_garbage",
+                "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nend_header\n1.0\nbanana\n",
                 "malformed number 'banana' in element 'vertex' row 1"},
-        BadFile{"ascii_truncated", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nend_header\n1 2 3 ",
-                "more than the file"},
-        BadFile{"ascii_short", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nend_header\n1 2\n3      \n",
+        BadFile{
+            "ascii_truncated",
+            "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nend_header\n1 2 3 ",
+            "more than the file"},
+        BadFile{"ascii_short",
+                "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\nend_header\n1 "
+                "2\n3      \n",
                 "truncated data in element 'vertex' row 1"},
-        BadFile{"wrong_type", "ply\nformat ascii 1.0\nelement vertex 1\nproperty uchar red\nend_header\n300\n",
+        BadFile{"wrong_type",
+                "ply\nformat ascii 1.0\nelement vertex 1\nproperty uchar red\nend_header\n300\n",
                 "does not fit type uchar"},
         BadFile{"no_properties", header_le("element vertex 3\n") + "abc", "no properties"}),
     [](const auto& param_info) { return std::string(param_info.param.label); });

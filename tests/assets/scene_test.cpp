@@ -62,16 +62,19 @@ TEST(Scene, SaveLoadRoundTripKeepsEverything) {
     const ecs::Entity l1 = a.create();
     a.emplace<Name>(l1, Name{"outer"});
     a.emplace<Transform>(l1, Transform{glm::dvec3(0.5, 0, 0), glm::dquat(1, 0, 0, 0), glm::dvec3(1)});
-    a.emplace<Lattice>(l1, assets::make_box_lattice(glm::dvec3(-1.1), glm::dvec3(1.1), glm::ivec3(3, 4, 5), LatticeBasis::bernstein));
+    a.emplace<Lattice>(l1, assets::make_box_lattice(glm::dvec3(-1.1), glm::dvec3(1.1), glm::ivec3(3, 4, 5),
+                                                    LatticeBasis::bernstein));
     const ecs::Entity l2 = a.create();
     a.emplace<Name>(l2, Name{"inner"});
-    Lattice inner = assets::make_box_lattice(glm::dvec3(-0.5, -0.5, 0.0), glm::dvec3(0.5, 0.5, 1.2), glm::ivec3(2), LatticeBasis::bspline);
+    Lattice inner = assets::make_box_lattice(glm::dvec3(-0.5, -0.5, 0.0), glm::dvec3(0.5, 0.5, 1.2),
+                                             glm::ivec3(2), LatticeBasis::bspline);
     inner.current[7] += glm::dvec3(0.1234567890123, -0.2, 1e-9);
     a.emplace<Lattice>(l2, inner);
     a.emplace<Transform>(l2, Transform{});
     const ecs::Entity c1 = a.create();
     a.emplace<Name>(c1, Name{"ball"});
-    a.emplace<Transform>(c1, Transform{glm::dvec3(1, 2, 3), glm::normalize(glm::dquat(0.9, 0.1, 0.2, 0.3)), glm::dvec3(2, 2, 2)});
+    a.emplace<Transform>(c1, Transform{glm::dvec3(1, 2, 3), glm::normalize(glm::dquat(0.9, 0.1, 0.2, 0.3)),
+                                       glm::dvec3(2, 2, 2)});
     SplatCloud ball = assets::make_sphere_cloud(500);
     ball.origin = glm::dvec3(1e6 + 0.25, 0, -3);
     a.emplace<SplatCloud>(c1, ball);
@@ -87,7 +90,8 @@ TEST(Scene, SaveLoadRoundTripKeepsEverything) {
     a.emplace<SplatCloud>(c2, plain);
     const ecs::Entity cam = a.create();
     a.emplace<Name>(cam, Name{"cam"});
-    a.emplace<Camera>(cam, Camera{glm::dvec3(1, 2, 9), glm::dvec3(0, 0.5, 0), glm::dvec3(0, 1, 0), 33.0f, 0.05f, 50.0f});
+    a.emplace<Camera>(
+        cam, Camera{glm::dvec3(1, 2, 9), glm::dvec3(0, 0.5, 0), glm::dvec3(0, 1, 0), 33.0f, 0.05f, 50.0f});
     const ecs::Entity sun = a.create();
     a.emplace<DirectionalLight>(sun, DirectionalLight{glm::vec3(0, -1, 0), glm::vec3(1, 0.9f, 0.8f), 2.5f});
     const ecs::Entity amb = a.create();
@@ -98,25 +102,31 @@ TEST(Scene, SaveLoadRoundTripKeepsEverything) {
         "test_tags",
         [](const ecs::Registry& r, const SceneIdOf& id_of) -> Result<std::string> {
             nlohmann::json j = nlohmann::json::array();
-            r.view<const Tag>().each([&](ecs::Entity e, const Tag& t) { j.push_back({{"on", id_of(e)}, {"value", t.value}, {"target", id_of(t.target)}}); });
+            r.view<const Tag>().each([&](ecs::Entity e, const Tag& t) {
+                j.push_back({{"on", id_of(e)}, {"value", t.value}, {"target", id_of(t.target)}});
+            });
             return j.dump();
         },
         [](ecs::Registry& r, std::string_view text, const SceneEntityOf& entity_of) -> Status {
             const auto j = nlohmann::json::parse(text);
-            for (const auto& t : j) r.emplace<Tag>(entity_of(t["on"].get<int>()), Tag{t["value"].get<int>(), entity_of(t["target"].get<int>())});
+            for (const auto& t : j)
+                r.emplace<Tag>(entity_of(t["on"].get<int>()),
+                               Tag{t["value"].get<int>(), entity_of(t["target"].get<int>())});
             return {};
         });
 
     const fs::path p = temp_dir() / "scene.glb";
     auto saved = save_scene(a, p);
     ASSERT_TRUE(saved.ok()) << saved.message();
-    for (const auto& entry : fs::directory_iterator(p.parent_path())) EXPECT_EQ(entry.path().string().find(".tmp-"), std::string::npos);
+    for (const auto& entry : fs::directory_iterator(p.parent_path()))
+        EXPECT_EQ(entry.path().string().find(".tmp-"), std::string::npos);
 
     ecs::Registry b;
     auto loaded = load_scene(b, p.string());
     ASSERT_TRUE(loaded.ok()) << loaded.message();
 
-    const ecs::Entity bc1 = find_named(b, "ball"), bc2 = find_named(b, "plain"), bl1 = find_named(b, "outer"), bl2 = find_named(b, "inner");
+    const ecs::Entity bc1 = find_named(b, "ball"), bc2 = find_named(b, "plain"), bl1 = find_named(b, "outer"),
+                      bl2 = find_named(b, "inner");
     ASSERT_TRUE(bc1 && bc2 && bl1 && bl2);
     const SplatCloud& got = b.get<SplatCloud>(bc1);
     EXPECT_EQ(got.origin, ball.origin);
@@ -166,12 +176,14 @@ TEST(Scene, SaveLoadRoundTripKeepsEverything) {
     const fs::path p2 = temp_dir() / "scene2.glb";
     ASSERT_TRUE(save_scene(b, p2).ok());
     std::ifstream f1(p, std::ios::binary), f2(p2, std::ios::binary);
-    const std::string s1((std::istreambuf_iterator<char>(f1)), {}), s2((std::istreambuf_iterator<char>(f2)), {});
+    const std::string s1((std::istreambuf_iterator<char>(f1)), {}),
+        s2((std::istreambuf_iterator<char>(f2)), {});
     unregister_scene_extension("test_tags");
     const auto diff = std::mismatch(s1.begin(), s1.end(), s2.begin(), s2.end());
-    EXPECT_TRUE(s1 == s2) << "files differ at byte " << (diff.first - s1.begin()) << ": "
-                          << s1.substr(static_cast<std::size_t>(std::max<long>(0, diff.first - s1.begin() - 60)), 120) << " | "
-                          << s2.substr(static_cast<std::size_t>(std::max<long>(0, diff.second - s2.begin() - 60)), 120);
+    EXPECT_TRUE(s1 == s2)
+        << "files differ at byte " << (diff.first - s1.begin()) << ": "
+        << s1.substr(static_cast<std::size_t>(std::max<long>(0, diff.first - s1.begin() - 60)), 120) << " | "
+        << s2.substr(static_cast<std::size_t>(std::max<long>(0, diff.second - s2.begin() - 60)), 120);
 }
 
 TEST(Scene, BuiltinSphereHasThePapersCounts) {
@@ -182,7 +194,8 @@ TEST(Scene, BuiltinSphereHasThePapersCounts) {
     const SplatCloud& c = r.get<SplatCloud>(clouds[0]);
     EXPECT_EQ(c.size(), 59650u);
     EXPECT_EQ(c.uvs.size(), c.size());
-    EXPECT_EQ(c.material.texture_rgba8.size(), static_cast<std::size_t>(c.material.texture_width * c.material.texture_height * 4));
+    EXPECT_EQ(c.material.texture_rgba8.size(),
+              static_cast<std::size_t>(c.material.texture_width * c.material.texture_height * 4));
     for (const auto& uv : c.uvs) {
         ASSERT_GE(uv.x, 0.0f);
         ASSERT_LE(uv.x, 1.0f);
@@ -254,20 +267,33 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BadScene{"version", R"({"version":99})", "version not supported"},
         BadScene{"lattices_type", R"({"lattices":5})", "'lattices' must be an array"},
-        BadScene{"huge_divisions",
-                 R"({"lattices":[{"id":0,"origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"divisions":[100000,100000,100000],"rest":[]}]})",
-                 "divisions must be between 1 and 64 (got 100000)"},
-        BadScene{"short_rest", R"({"lattices":[{"id":0,"origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"divisions":[1,1,1],"rest":[0,0,0]}]})",
-                 "\"rest\" must hold 24 numbers (8 points x, y, z in a row), got 3"},
-        BadScene{"flat_axes", R"({"lattices":[{"id":0,"origin":[0,0,0],"axes":[[1,0,0],[2,0,0],[0,0,1]],"divisions":[1,1,1],"rest":[]}]})",
-                 "degenerate"},
-        BadScene{"string_origin", R"({"lattices":[{"id":0,"origin":"here","axes":[[1,0,0],[0,1,0],[0,0,1]],"divisions":[1,1,1]}]})",
-                 "\"origin\" must be an array of 3 numbers"},
-        BadScene{"missing_cloud", R"({"lattices":[)" + kGoodLattice + R"(],"deformers":[{"cloud":7,"lattices":[0]}]})", "missing cloud 7"},
-        BadScene{"duplicate_id", R"({"lattices":[)" + kGoodLattice + "," + kGoodLattice + "]}", "duplicate id 0"},
-        BadScene{"bad_camera", R"({"cameras":[{"eye":[0,0,1],"target":[0,0,0],"fov_y_degrees":0}]})", "fov must be"},
-        BadScene{"basis", R"({"lattices":[{"id":0,"origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"divisions":[1,1,1],"basis":"nurbs"}]})",
-                 "unknown basis"}),
+        BadScene{
+            "huge_divisions",
+            R"({"lattices":[{"id":0,"origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"divisions":[100000,100000,100000],"rest":[]}]})",
+            "divisions must be between 1 and 64 (got 100000)"},
+        BadScene{
+            "short_rest",
+            R"({"lattices":[{"id":0,"origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"divisions":[1,1,1],"rest":[0,0,0]}]})",
+            "\"rest\" must hold 24 numbers (8 points x, y, z in a row), got 3"},
+        BadScene{
+            "flat_axes",
+            R"({"lattices":[{"id":0,"origin":[0,0,0],"axes":[[1,0,0],[2,0,0],[0,0,1]],"divisions":[1,1,1],"rest":[]}]})",
+            "degenerate"},
+        BadScene{
+            "string_origin",
+            R"({"lattices":[{"id":0,"origin":"here","axes":[[1,0,0],[0,1,0],[0,0,1]],"divisions":[1,1,1]}]})",
+            "\"origin\" must be an array of 3 numbers"},
+        BadScene{"missing_cloud",
+                 R"({"lattices":[)" + kGoodLattice + R"(],"deformers":[{"cloud":7,"lattices":[0]}]})",
+                 "missing cloud 7"},
+        BadScene{"duplicate_id", R"({"lattices":[)" + kGoodLattice + "," + kGoodLattice + "]}",
+                 "duplicate id 0"},
+        BadScene{"bad_camera", R"({"cameras":[{"eye":[0,0,1],"target":[0,0,0],"fov_y_degrees":0}]})",
+                 "fov must be"},
+        BadScene{
+            "basis",
+            R"({"lattices":[{"id":0,"origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[0,0,1]],"divisions":[1,1,1],"basis":"nurbs"}]})",
+            "unknown basis"}),
     [](const auto& param_info) { return std::string(param_info.param.label); });
 
 // Scene lattices meet the same rules as lattice files and the deformers (validate_lattice in
@@ -275,9 +301,10 @@ INSTANTIATE_TEST_SUITE_P(
 // refused at load, not skipped with a warning by every deformation afterwards.
 INSTANTIATE_TEST_SUITE_P(
     LatticeRules, HostileScene,
-    ::testing::Values(BadScene{"nearly_flat_axes",
-                               R"({"lattices":[{"id":0,"origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[1,1,1e-12]],"divisions":[1,1,1],"rest":[]}]})",
-                               "zero-volume box"}),
+    ::testing::Values(BadScene{
+        "nearly_flat_axes",
+        R"({"lattices":[{"id":0,"origin":[0,0,0],"axes":[[1,0,0],[0,1,0],[1,1,1e-12]],"divisions":[1,1,1],"rest":[]}]})",
+        "zero-volume box"}),
     [](const auto& param_info) { return std::string(param_info.param.label); });
 
 TEST(Scene, UnknownNameSaysWhatExists) {

@@ -36,10 +36,11 @@ Geometry icosphere(int levels) {
     Geometry g;
     g.source = "icosphere";
     const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-    std::vector<glm::dvec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-    std::vector<std::uint32_t> f = {0, 11, 5, 0, 5, 1, 0, 1, 7, 0, 7, 10, 0, 10, 11, 1, 5, 9, 5, 11, 4, 11, 10, 2, 10, 7, 6, 7, 1, 8,
-                                    3, 9, 4, 3, 4, 2, 3, 2, 6, 3, 6, 8, 3, 8, 9, 4, 9, 5, 2, 4, 11, 6, 2, 10, 8, 6, 7, 9, 8, 1};
+    std::vector<glm::dvec3> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                                 {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+    std::vector<std::uint32_t> f = {0, 11, 5,  0, 5,  1, 0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
+                                    4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3,  9,  4, 3,  4,  2, 3, 2, 6, 3,
+                                    6, 8,  3,  8, 9,  4, 9, 5, 2, 4, 11, 6,  2, 10, 8,  6, 7, 9, 8, 1};
     for (auto& p : v) p = glm::normalize(p);
     for (int l = 0; l < levels; ++l) {
         std::vector<std::uint32_t> nf;
@@ -49,7 +50,8 @@ Geometry icosphere(int levels) {
                 v.push_back(glm::normalize(v[f[i + e]] + v[f[i + (e + 1) % 3]]));
                 m[e] = static_cast<std::uint32_t>(v.size() - 1);
             }
-            nf.insert(nf.end(), {f[i], m[0], m[2], f[i + 1], m[1], m[0], f[i + 2], m[2], m[1], m[0], m[1], m[2]});
+            nf.insert(nf.end(),
+                      {f[i], m[0], m[2], f[i + 1], m[1], m[0], f[i + 2], m[2], m[1], m[0], m[1], m[2]});
         }
         f = nf;
     }
@@ -167,7 +169,9 @@ TEST(Radii, RawRandomPointsGetNormalsAndCloseTheSurface) {
     auto cloud = make_splat_cloud(g, {});
     ASSERT_TRUE(cloud.ok()) << cloud.message();
     for (std::size_t i = 0; i < cloud->size(); ++i)
-        ASSERT_GT(glm::dot(glm::normalize(glm::dvec3(cloud->positions[i])), glm::dvec3(cloud->normals[i])), 0.9) << i;
+        ASSERT_GT(glm::dot(glm::normalize(glm::dvec3(cloud->positions[i])), glm::dvec3(cloud->normals[i])),
+                  0.9)
+            << i;
     // Uniform random points have clumps and gaps; the 6th-neighbour radius still leaves (almost) none.
     EXPECT_LT(uncovered_fraction(*cloud, 20000, 2), 1e-3);
 }

@@ -13,7 +13,8 @@ namespace sffd::test {
 // A fresh, empty folder <tmp>/sffd_<suite>_<pid>/<name> (the pid keeps parallel ctest runs apart).
 inline std::filesystem::path fresh_dir(const std::string& suite, const std::string& name) {
     namespace fs = std::filesystem;
-    const fs::path d = fs::temp_directory_path() / ("sffd_" + suite + "_" + std::to_string(::getpid())) / name;
+    const fs::path d =
+        fs::temp_directory_path() / ("sffd_" + suite + "_" + std::to_string(::getpid())) / name;
     fs::remove_all(d);
     fs::create_directories(d);
     return d;

@@ -25,19 +25,31 @@ struct BoxFace {
 
     glm::dvec3 normal() const { return glm::normalize(glm::cross(e1, e2)); }
     // Face coordinates of a point (e1 and e2 are perpendicular).
-    glm::dvec2 st(const glm::dvec3& x) const { return {glm::dot(x - corner, e1) / glm::dot(e1, e1), glm::dot(x - corner, e2) / glm::dot(e2, e2)}; }
-    glm::dvec2 uv(const glm::dvec3& x) const { const glm::dvec2 p = st(x); return uv0 + p.x * f1 + p.y * f2; }
+    glm::dvec2 st(const glm::dvec3& x) const {
+        return {glm::dot(x - corner, e1) / glm::dot(e1, e1), glm::dot(x - corner, e2) / glm::dot(e2, e2)};
+    }
+    glm::dvec2 uv(const glm::dvec3& x) const {
+        const glm::dvec2 p = st(x);
+        return uv0 + p.x * f1 + p.y * f2;
+    }
     // The change of uv along a vector d (its component in the face's plane; the map is affine).
-    glm::dvec2 duv(const glm::dvec3& d) const { return glm::dot(d, e1) / glm::dot(e1, e1) * f1 + glm::dot(d, e2) / glm::dot(e2, e2) * f2; }
+    glm::dvec2 duv(const glm::dvec3& d) const {
+        return glm::dot(d, e1) / glm::dot(e1, e1) * f1 + glm::dot(d, e2) / glm::dot(e2, e2) * f2;
+    }
 };
 
 inline std::array<BoxFace, 6> textured_box_faces() {
     std::array<BoxFace, 6> f;
-    const glm::dvec3 c[6] = {{-1, -0.5, 0.25}, {1, -0.5, -0.25}, {1, -0.5, 0.25}, {-1, -0.5, -0.25}, {-1, 0.5, 0.25}, {-1, -0.5, -0.25}};
+    const glm::dvec3 c[6] = {{-1, -0.5, 0.25},  {1, -0.5, -0.25}, {1, -0.5, 0.25},
+                             {-1, -0.5, -0.25}, {-1, 0.5, 0.25},  {-1, -0.5, -0.25}};
     const glm::dvec3 e1[6] = {{2, 0, 0}, {-2, 0, 0}, {0, 0, -0.5}, {0, 0, 0.5}, {2, 0, 0}, {2, 0, 0}};
     const glm::dvec3 e2[6] = {{0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 1, 0}, {0, 0, -0.5}, {0, 0, 0.5}};
     for (int k = 0; k < 6; ++k) {
-        f[std::size_t(k)] = {c[k], e1[k], e2[k], glm::dvec2(0.05 + 0.15 * k, 0.1 + 0.1 * (k % 2)), glm::dvec2(0.12, 0.02 * k - 0.03),
+        f[std::size_t(k)] = {c[k],
+                             e1[k],
+                             e2[k],
+                             glm::dvec2(0.05 + 0.15 * k, 0.1 + 0.1 * (k % 2)),
+                             glm::dvec2(0.12, 0.02 * k - 0.03),
                              glm::dvec2(0.01 * (k - 2), 0.35 + 0.05 * k)};
     }
     return f;
@@ -64,10 +76,12 @@ inline std::vector<std::uint8_t> checker_texels(int size, int cells) {
 
 // Writes box.obj (24 vertices, 6 quads, OBJ's flipped v), box.mtl and checker.png into `dir`; returns the
 // OBJ's path.
-inline std::filesystem::path write_textured_box(const std::filesystem::path& dir, int texture_size = 256, int cells = 16) {
+inline std::filesystem::path write_textured_box(const std::filesystem::path& dir, int texture_size = 256,
+                                                int cells = 16) {
     std::filesystem::create_directories(dir);
     const std::vector<std::uint8_t> px = checker_texels(texture_size, cells);
-    stbi_write_png((dir / "checker.png").string().c_str(), texture_size, texture_size, 4, px.data(), texture_size * 4);
+    stbi_write_png((dir / "checker.png").string().c_str(), texture_size, texture_size, 4, px.data(),
+                   texture_size * 4);
     std::ofstream(dir / "box.mtl") << "newmtl checker\nKd 1 1 1\nmap_Kd checker.png\n";
     std::ostringstream obj;
     obj.precision(17);

@@ -18,7 +18,8 @@ TEST(AppRun, RunsExactlyNFramesWithFixedStepTimes) {
     ecs::Registry registry;
     Schedule schedule;
     std::vector<FrameContext> seen;
-    schedule.add(Phase::animation, "record", [&](ecs::Registry&, const FrameContext& f) { seen.push_back(f); });
+    schedule.add(Phase::animation, "record",
+                 [&](ecs::Registry&, const FrameContext& f) { seen.push_back(f); });
     Clock clock = app::make_clock(nullptr, 0.5);
     EXPECT_TRUE(clock.fixed_step());
     const app::RunResult r = app::run(registry, schedule, clock, nullptr, {.max_frames = 4});
@@ -60,7 +61,8 @@ TEST(AppRun, PhasesRunInOrderAndDeferredDestroysFlushBetweenPhases) {
     std::vector<std::string> order;
     Schedule schedule;
     // Added out of order on purpose: the phase, not registration order, decides.
-    schedule.add(Phase::present, "present", [&](ecs::Registry&, const FrameContext&) { order.push_back("present"); });
+    schedule.add(Phase::present, "present",
+                 [&](ecs::Registry&, const FrameContext&) { order.push_back("present"); });
     schedule.add(Phase::rendering, "render", [&](ecs::Registry& r, const FrameContext&) {
         order.push_back(r.valid(doomed) ? "render:alive" : "render:gone");
     });

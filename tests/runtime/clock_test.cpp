@@ -32,7 +32,9 @@ TEST(Clock, PauseAndSingleStep) {
 TEST(Schedule, PhasesRunInOrderWhateverTheRegistrationOrder) {
     Schedule s;
     std::vector<std::string> order;
-    auto rec = [&](std::string n) { return [&order, n](ecs::Registry&, const FrameContext&) { order.push_back(n); }; };
+    auto rec = [&](std::string n) {
+        return [&order, n](ecs::Registry&, const FrameContext&) { order.push_back(n); };
+    };
     s.add(Phase::present, "present", rec("present"));
     s.add(Phase::rendering, "render", rec("render"));
     s.add(Phase::input, "input", rec("input"));

@@ -34,7 +34,7 @@ void expect_covers_once(std::uint64_t count, std::uint32_t local, std::uint32_t 
 TEST(DispatchGrid, SmallCountsAreOneRow) {
     EXPECT_EQ(gfx::dispatch_grid(1, 64)->x, 1u);
     EXPECT_EQ(gfx::dispatch_grid(1, 64)->y, 1u);
-    EXPECT_EQ(gfx::dispatch_grid(64, 64)->x, 1u);   // exact multiple
+    EXPECT_EQ(gfx::dispatch_grid(64, 64)->x, 1u);  // exact multiple
     EXPECT_EQ(gfx::dispatch_grid(65, 64)->x, 2u);
     EXPECT_EQ(gfx::dispatch_grid(65, 64)->y, 1u);
     const auto empty = gfx::dispatch_grid(0, 64);
@@ -71,8 +71,10 @@ TEST(DispatchGrid, BeyondTheGuaranteedLimitOfOneDimensionUsesRows) {
 TEST(DispatchGrid, EveryIndexOnceUnderSmallLimits) {
     for (std::uint32_t local : {1u, 3u, 64u})
         for (std::uint32_t max_x : {1u, 2u, 4u, 7u})
-            for (std::uint64_t count : {1ull, 2ull, 63ull, 64ull, 65ull, 255ull, 256ull, 257ull, 1000ull, 1024ull})
-                if ((count + local - 1) / local <= std::uint64_t(max_x) * 65535) expect_covers_once(count, local, max_x, 65535);
+            for (std::uint64_t count :
+                 {1ull, 2ull, 63ull, 64ull, 65ull, 255ull, 256ull, 257ull, 1000ull, 1024ull})
+                if ((count + local - 1) / local <= std::uint64_t(max_x) * 65535)
+                    expect_covers_once(count, local, max_x, 65535);
     // Both dimensions limited (the grid is exactly full at 4 x 4 groups of 64).
     expect_covers_once(1024, 64, 4, 4);
     expect_covers_once(1000, 64, 4, 4);

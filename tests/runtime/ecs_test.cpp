@@ -9,8 +9,12 @@
 using namespace sffd::ecs;
 
 namespace {
-struct Position { float x = 0, y = 0; };
-struct Velocity { float dx = 0, dy = 0; };
+struct Position {
+    float x = 0, y = 0;
+};
+struct Velocity {
+    float dx = 0, dy = 0;
+};
 struct Tag {};
 }  // namespace
 
@@ -47,7 +51,8 @@ TEST(Ecs, ViewVisitsExactlyTheEntitiesWithAllComponents) {
     EXPECT_EQ(seen, expected);
     std::set<std::uint32_t> seen_range;
     for (auto [e, v, p] : reg.view<const Velocity, Position>()) {
-        static_assert(std::is_const_v<std::remove_reference_t<decltype(v)>>, "const view yields read-only refs");
+        static_assert(std::is_const_v<std::remove_reference_t<decltype(v)>>,
+                      "const view yields read-only refs");
         seen_range.insert(e.index);
         (void)p;
     }
@@ -132,7 +137,7 @@ TEST(Ecs, StaleHandleNeverReachesTheNewEntitysComponents) {
     EXPECT_EQ(reg.try_get<Position>(a), nullptr);
     reg.remove<Position>(a);  // a no-op through a stale handle
     EXPECT_TRUE(reg.has<Position>(b));
-    reg.destroy_later(a);     // ignored at flush: a is stale
+    reg.destroy_later(a);  // ignored at flush: a is stale
     reg.flush();
     EXPECT_TRUE(reg.valid(b));
     // Generations keep counting across many reuses of one index.
@@ -159,14 +164,15 @@ TEST(Ecs, RemovingTheCurrentComponentWhileIteratingARangeIsSafe) {
     for (auto [e, p, v] : reg.view<Position, const Velocity>()) {
         ++visited;
         (void)v;
-        if (int(p.x) % 4 == 0) reg.remove<Velocity>(e);   // leaves the view
-        else if (int(p.x) % 4 == 1) reg.destroy(e);         // leaves everything
+        if (int(p.x) % 4 == 0) reg.remove<Velocity>(e);  // leaves the view
+        else if (int(p.x) % 4 == 1) reg.destroy(e);      // leaves everything
     }
     EXPECT_EQ(visited, 200);
     EXPECT_EQ(reg.count<Velocity>(), 100u);
     EXPECT_EQ(reg.count<Position>(), 150u);
     std::set<int> left;
-    reg.view<const Position, const Velocity>().each([&](const Position& p, const Velocity&) { left.insert(int(p.x)); });
+    reg.view<const Position, const Velocity>().each(
+        [&](const Position& p, const Velocity&) { left.insert(int(p.x)); });
     EXPECT_EQ(left.size(), 100u);
     for (int x : left) EXPECT_GE(x % 4, 2);
 }

@@ -122,17 +122,20 @@ TEST(Shader, ComputeWritesSsboReadBackOnCpu) {
 TEST(Shader, MissingIncludeNamesIncludingFileAndLine) {
     gfx::GlContext ctx = make_headless();
     ASSERT_TRUE(ctx);
-    auto program = gfx::load_program(test_shaders, {{GL_COMPUTE_SHADER, "broken_include.comp"}}, "test.broken");
+    auto program =
+        gfx::load_program(test_shaders, {{GL_COMPUTE_SHADER, "broken_include.comp"}}, "test.broken");
     ASSERT_FALSE(program.ok());
-    EXPECT_NE(program.message().find("broken_include.comp:3: cannot open include \"lib/does_not_exist.glsl\""),
-              std::string::npos)
+    EXPECT_NE(
+        program.message().find("broken_include.comp:3: cannot open include \"lib/does_not_exist.glsl\""),
+        std::string::npos)
         << program.message();
 }
 
 TEST(Shader, CompileErrorInIncludedFileNamesThatFileAndLine) {
     gfx::GlContext ctx = make_headless();
     ASSERT_TRUE(ctx);
-    auto program = gfx::load_program(test_shaders, {{GL_COMPUTE_SHADER, "bad_in_include.comp"}}, "test.bad_include");
+    auto program =
+        gfx::load_program(test_shaders, {{GL_COMPUTE_SHADER, "bad_in_include.comp"}}, "test.bad_include");
     ASSERT_FALSE(program.ok());
     const std::string expected = (test_shaders / "lib" / "bad.glsl").string() + ":4: ";
     EXPECT_EQ(program.message().rfind(expected, 0), 0u) << program.message();
@@ -141,8 +144,8 @@ TEST(Shader, CompileErrorInIncludedFileNamesThatFileAndLine) {
 TEST(Shader, CompileErrorAfterIncludeMapsToMainFileLine) {
     gfx::GlContext ctx = make_headless();
     ASSERT_TRUE(ctx);
-    auto program =
-        gfx::load_program(test_shaders, {{GL_COMPUTE_SHADER, "bad_after_include.comp"}}, "test.bad_after_include");
+    auto program = gfx::load_program(test_shaders, {{GL_COMPUTE_SHADER, "bad_after_include.comp"}},
+                                     "test.bad_after_include");
     ASSERT_FALSE(program.ok());
     const std::string expected = (test_shaders / "bad_after_include.comp").string() + ":6: ";
     EXPECT_EQ(program.message().rfind(expected, 0), 0u) << program.message();
@@ -154,7 +157,8 @@ TEST(Shader, MissingFileIsAnError) {
     ASSERT_TRUE(ctx);
     auto program = gfx::load_program(test_shaders, {{GL_VERTEX_SHADER, "nope.vert"}}, "test.nope");
     ASSERT_FALSE(program.ok());
-    EXPECT_NE(program.message().find("nope.vert: cannot open shader file"), std::string::npos) << program.message();
+    EXPECT_NE(program.message().find("nope.vert: cannot open shader file"), std::string::npos)
+        << program.message();
 }
 
 TEST(Shader, LinkErrorNamesTheProgram) {
@@ -164,21 +168,24 @@ TEST(Shader, LinkErrorNamesTheProgram) {
     // interfaces are driver-lenient, so force a link error with a missing main(): a library-only stage.
     auto program = gfx::load_program(test_shaders, {{GL_COMPUTE_SHADER, "lib_only.comp"}}, "test.link");
     ASSERT_FALSE(program.ok());
-    EXPECT_NE(program.message().find("load_program(test.link): link failed"), std::string::npos) << program.message();
+    EXPECT_NE(program.message().find("load_program(test.link): link failed"), std::string::npos)
+        << program.message();
 }
 
 TEST(RenderTarget, DrawReadBackBottomRowFirst) {
     gfx::GlContext ctx = make_headless();
     ASSERT_TRUE(ctx);
     const std::uint64_t errors = gfx::debug_error_count();
-    auto program = gfx::load_program(test_shaders, {{GL_VERTEX_SHADER, "bottom_half.vert"},
-                                                    {GL_FRAGMENT_SHADER, "bottom_half.frag"}},
-                                      "test.bottom_half");
+    auto program = gfx::load_program(
+        test_shaders, {{GL_VERTEX_SHADER, "bottom_half.vert"}, {GL_FRAGMENT_SHADER, "bottom_half.frag"}},
+        "test.bottom_half");
     ASSERT_TRUE(program.ok()) << program.message();
     const int w = 16, h = 8;
-    auto target = gfx::RenderTarget::create({.label = "test.target", .width = w, .height = h,
-                                             .color = {{"color", gfx::ColorFormat::rgba8},
-                                                       {"column", gfx::ColorFormat::r32f}}});
+    auto target = gfx::RenderTarget::create(
+        {.label = "test.target",
+         .width = w,
+         .height = h,
+         .color = {{"color", gfx::ColorFormat::rgba8}, {"column", gfx::ColorFormat::r32f}}});
     ASSERT_TRUE(target.ok()) << target.message();
     const float clear[4] = {0.0f, 0.0f, 1.0f, 1.0f};
     const float minus_one[4] = {-1.0f, 0.0f, 0.0f, 0.0f};
@@ -222,7 +229,7 @@ TEST(RenderTarget, DrawReadBackBottomRowFirst) {
     // Top-down for image writers.
     std::vector<std::uint8_t> flipped = rgba;
     gfx::flip_rows(flipped, std::size_t(w) * 4);
-    EXPECT_EQ(flipped[0 * 4 + 2], 255);                          // top row: clear colour
+    EXPECT_EQ(flipped[0 * 4 + 2], 255);                         // top row: clear colour
     EXPECT_EQ(flipped[std::size_t((h - 1) * w) * 4 + 0], 255);  // bottom row: drawn
     EXPECT_EQ(gfx::debug_error_count(), errors);
 }
@@ -230,9 +237,11 @@ TEST(RenderTarget, DrawReadBackBottomRowFirst) {
 TEST(RenderTarget, ResizeAndFormats) {
     gfx::GlContext ctx = make_headless();
     ASSERT_TRUE(ctx);
-    auto target = gfx::RenderTarget::create({.label = "test.formats", .width = 4, .height = 4,
-                                             .color = {{"a", gfx::ColorFormat::rgba16f},
-                                                       {"b", gfx::ColorFormat::rgba32f}}});
+    auto target = gfx::RenderTarget::create(
+        {.label = "test.formats",
+         .width = 4,
+         .height = 4,
+         .color = {{"a", gfx::ColorFormat::rgba16f}, {"b", gfx::ColorFormat::rgba32f}}});
     ASSERT_TRUE(target.ok()) << target.message();
     EXPECT_EQ(target->attachment_index("b"), 1);
     EXPECT_EQ(target->attachment_index("zzz"), -1);
@@ -252,8 +261,11 @@ TEST(RenderTarget, ResizeAndFormats) {
     ASSERT_FALSE(bad.ok());
     EXPECT_NE(bad.message().find("invalid size 0x6"), std::string::npos) << bad.message();
     EXPECT_EQ(target->width(), 10);
-    auto dup = gfx::RenderTarget::create({.label = "dup", .width = 2, .height = 2,
-                                          .color = {{"x", gfx::ColorFormat::rgba8}, {"x", gfx::ColorFormat::r32f}}});
+    auto dup =
+        gfx::RenderTarget::create({.label = "dup",
+                                   .width = 2,
+                                   .height = 2,
+                                   .color = {{"x", gfx::ColorFormat::rgba8}, {"x", gfx::ColorFormat::r32f}}});
     ASSERT_FALSE(dup.ok());
     EXPECT_NE(dup.message().find("duplicate attachment name 'x'"), std::string::npos);
 }

@@ -56,14 +56,16 @@ TEST(GlBarrier, RecordsSiteAndBitsWhileALogIsAlive) {
         EXPECT_EQ(log.count("test.a"), 2u);
         EXPECT_EQ(log.count("test.unrecorded"), 0u);
         EXPECT_EQ(log.bits_at("test.a"),
-                  std::uint32_t(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT));
+                  std::uint32_t(GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT |
+                                GL_BUFFER_UPDATE_BARRIER_BIT));
         // issued(): one barrier carrying every bit, not bits spread over several.
         EXPECT_TRUE(log.issued("test.a", GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT));
         EXPECT_FALSE(log.issued("test.a", GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT));
         EXPECT_FALSE(log.issued("test.b", GL_SHADER_STORAGE_BARRIER_BIT));
     }
     EXPECT_EQ(gfx::debug_error_count(), errors);
-    EXPECT_EQ(gfx::barrier_bit_names(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT), "COMMAND|SHADER_STORAGE");
+    EXPECT_EQ(gfx::barrier_bit_names(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT),
+              "COMMAND|SHADER_STORAGE");
     EXPECT_EQ(gfx::barrier_bit_names(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT), "VERTEX_ATTRIB_ARRAY");
 }
 
@@ -94,9 +96,11 @@ TEST(GlLimits, MissingLimitsAreNamed) {
     minimum.max_combined_ssbo_blocks = 8;
     const Status s = gfx::check_limits(minimum);
     ASSERT_FALSE(s.ok());
-    EXPECT_NE(s.message().find("GL_MAX_VERTEX_SHADER_STORAGE_BLOCKS is 0, splat_render/splat.vert needs 3"), std::string::npos)
+    EXPECT_NE(s.message().find("GL_MAX_VERTEX_SHADER_STORAGE_BLOCKS is 0, splat_render/splat.vert needs 3"),
+              std::string::npos)
         << s.message();
-    EXPECT_NE(s.message().find("GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS is 8"), std::string::npos) << s.message();
+    EXPECT_NE(s.message().find("GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS is 8"), std::string::npos)
+        << s.message();
     EXPECT_EQ(s.message().find("GL_MAX_COMPUTE_SHADER_STORAGE_BLOCKS"), std::string::npos) << s.message();
 }
 
@@ -111,7 +115,8 @@ TEST(GlLimits, ScopedOverrideAndBlockSizeChecks) {
         EXPECT_EQ(gfx::limits().max_ssbo_block_size, 1000);
         EXPECT_TRUE(gfx::ssbo_fits(1000));
         EXPECT_FALSE(gfx::ssbo_fits(1001));
-        EXPECT_EQ(gfx::ssbo_too_large("test.buffer", 1001), "test.buffer: 1001 bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (1000)");
+        EXPECT_EQ(gfx::ssbo_too_large("test.buffer", 1001),
+                  "test.buffer: 1001 bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (1000)");
     }
     EXPECT_EQ(gfx::limits().max_ssbo_block_size, real);
 }
@@ -143,5 +148,6 @@ TEST(GlContext, SoftwareRendererNames) {
     EXPECT_TRUE(gfx::software_renderer_name("llvmpipe (LLVM 15.0.6, 256 bits)"));
     EXPECT_TRUE(gfx::software_renderer_name("softpipe"));
     EXPECT_FALSE(gfx::software_renderer_name("NVIDIA H100 80GB HBM3/PCIe/SSE2"));
-    EXPECT_FALSE(gfx::software_renderer_name("AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 15.0.7, DRM 3.54)"));
+    EXPECT_FALSE(
+        gfx::software_renderer_name("AMD Radeon RX 7900 XTX (radeonsi, navi31, LLVM 15.0.7, DRM 3.54)"));
 }

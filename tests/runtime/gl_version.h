@@ -18,7 +18,8 @@ inline CurrentContext current_context() {
     glGetIntegerv(GL_MINOR_VERSION, &minor);
     glGetIntegerv(GL_CONTEXT_PROFILE_MASK, &profile);
     glGetIntegerv(GL_CONTEXT_FLAGS, &flags);
-    return {major * 10 + minor, (profile & GL_CONTEXT_CORE_PROFILE_BIT) != 0, (flags & GL_CONTEXT_FLAG_DEBUG_BIT) != 0};
+    return {major * 10 + minor, (profile & GL_CONTEXT_CORE_PROFILE_BIT) != 0,
+            (flags & GL_CONTEXT_FLAG_DEBUG_BIT) != 0};
 }
 
 }  // namespace sffd::test

@@ -53,8 +53,9 @@ protected:
         const std::uint32_t mask = key_bits == 32 ? 0xffffffffu : (1u << key_bits) - 1u;
         std::vector<std::uint32_t> order(n);
         std::iota(order.begin(), order.end(), 0u);
-        std::stable_sort(order.begin(), order.end(),
-                         [&](std::uint32_t a, std::uint32_t b) { return (keys[a] & mask) < (keys[b] & mask); });
+        std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+            return (keys[a] & mask) < (keys[b] & mask);
+        });
         std::size_t wrong = 0;
         for (std::size_t i = 0; i < n; ++i) wrong += gv[i] != order[i] || gk[i] != keys[order[i]];
         EXPECT_EQ(wrong, 0u) << "of " << n << " pairs";
@@ -81,16 +82,18 @@ TEST_F(RadixSort, RandomKeysMatchStableSort) {
 }
 
 TEST_F(RadixSort, DuplicatesKeepInputOrder) {
-    check(random_keys(50000, 7, 3));           // 8 distinct keys: stability decides almost every slot
+    check(random_keys(50000, 7, 3));               // 8 distinct keys: stability decides almost every slot
     check(std::vector<std::uint32_t>(5000, 42u));  // all equal: the identity permutation
     check(random_keys(20000, 0xffffffffu, 4) /* few duplicates */);
     std::vector<std::uint32_t> desc(3000);
-    for (std::size_t i = 0; i < desc.size(); ++i) desc[i] = std::uint32_t(desc.size() - i) / 2;  // pairs, reversed
+    for (std::size_t i = 0; i < desc.size(); ++i)
+        desc[i] = std::uint32_t(desc.size() - i) / 2;  // pairs, reversed
     check(desc);
 }
 
 TEST_F(RadixSort, CountsThatAreNotMultiplesOfTheGroup) {
-    for (std::size_t n : {2u, 3u, 255u, 257u, 2047u, 2049u, 4097u, 9999u}) check(random_keys(n, 0xffffu, unsigned(n)));
+    for (std::size_t n : {2u, 3u, 255u, 257u, 2047u, 2049u, 4097u, 9999u})
+        check(random_keys(n, 0xffffu, unsigned(n)));
 }
 
 TEST_F(RadixSort, ZeroAndOneElements) {

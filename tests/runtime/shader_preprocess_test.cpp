@@ -41,7 +41,8 @@ TEST(ShaderPreprocess, MissingIncludeNamesIncludingFileAndLine) {
     auto pre = gfx::preprocess_shader(root, "broken_include.comp");
     ASSERT_FALSE(pre.ok());
     EXPECT_EQ(pre.message().rfind((root / "broken_include.comp").string() +
-                                      ":3: cannot open include \"lib/does_not_exist.glsl\"", 0),
+                                      ":3: cannot open include \"lib/does_not_exist.glsl\"",
+                                  0),
               0u)
         << pre.message();
 }
@@ -49,8 +50,9 @@ TEST(ShaderPreprocess, MissingIncludeNamesIncludingFileAndLine) {
 TEST(ShaderPreprocess, IncludeCycleIsReported) {
     auto pre = gfx::preprocess_shader(root, "cycle_a.glsl");
     ASSERT_FALSE(pre.ok());
-    EXPECT_NE(pre.message().find("cycle_b.glsl:2: #include cycle: cycle_a.glsl -> cycle_b.glsl -> cycle_a.glsl"),
-              std::string::npos)
+    EXPECT_NE(
+        pre.message().find("cycle_b.glsl:2: #include cycle: cycle_a.glsl -> cycle_b.glsl -> cycle_a.glsl"),
+        std::string::npos)
         << pre.message();
 }
 
@@ -68,7 +70,8 @@ TEST(ShaderPreprocess, MissingVersionIsAnError) {
 
 TEST(ShaderPreprocess, IncludesResolveAgainstTheRealShaderRoot) {
     // The engine's shared binding header is includable from GLSL the way its comment says.
-    const std::filesystem::path shaders = std::filesystem::path(SFFD_RUNTIME_TEST_SHADERS) / ".." / ".." / ".." / "shaders";
+    const std::filesystem::path shaders =
+        std::filesystem::path(SFFD_RUNTIME_TEST_SHADERS) / ".." / ".." / ".." / "shaders";
     ASSERT_TRUE(std::filesystem::exists(shaders / "common" / "bindings.h"));
     const auto tmp = std::filesystem::temp_directory_path() / "sffd_shader_root_test.comp";
     {

@@ -38,7 +38,9 @@ TEST(Window, OpensCore45WindowAndPresentsAnOffscreenTarget) {
 
     // The same offscreen path as headless: render into a target, blit it to the window, read it back.
     const std::uint64_t errors = gfx::debug_error_count();
-    auto target = gfx::RenderTarget::create({.label = "test.window_target", .width = 48, .height = 32,
+    auto target = gfx::RenderTarget::create({.label = "test.window_target",
+                                             .width = 48,
+                                             .height = 32,
                                              .color = {{"color", gfx::ColorFormat::rgba8}}});
     ASSERT_TRUE(target.ok()) << target.message();
     const float green[4] = {0.0f, 1.0f, 0.0f, 1.0f};
@@ -77,8 +79,8 @@ TEST(Window, AppRunPresentsTheSourceAndStopsWhenTheWindowCloses) {
     ASSERT_TRUE(created.ok()) << created.message();
     gfx::GlContext ctx = std::move(created).value();
     glfwSwapInterval(0);
-    auto target = gfx::RenderTarget::create({.label = "test.present", .width = 32, .height = 24,
-                                             .color = {{"color", gfx::ColorFormat::rgba8}}});
+    auto target = gfx::RenderTarget::create(
+        {.label = "test.present", .width = 32, .height = 24, .color = {{"color", gfx::ColorFormat::rgba8}}});
     ASSERT_TRUE(target.ok()) << target.message();
     const float blue[4] = {0.0f, 0.0f, 1.0f, 1.0f};
     target->clear_color("color", blue);

@@ -19,8 +19,8 @@ inline bool gl_absent_on_purpose() {
 
 // Use where a GL context (or a command that needs one) could not be made; `why` is streamed into the
 // message. Returns from the calling function like GTEST_SKIP() / FAIL().
-#define SFFD_GL_UNAVAILABLE(why)                                                                       \
-    do {                                                                                               \
-        if (::sffd::test::gl_absent_on_purpose()) GTEST_SKIP() << "SFFD_NO_GL=1: " << why;             \
+#define SFFD_GL_UNAVAILABLE(why)                                                                        \
+    do {                                                                                                \
+        if (::sffd::test::gl_absent_on_purpose()) GTEST_SKIP() << "SFFD_NO_GL=1: " << why;              \
         FAIL() << why << " (a GL test fails without GL; set SFFD_NO_GL=1 to skip GL tests on purpose)"; \
     } while (0)

@@ -1,5 +1,6 @@
-// Runs the built `splatffd` binary (or any shell command) as a user does, for the command-line tests: the test executables are
-// compiled with SFFD_BINARY_DIR (tests/CMakeLists.txt, sffd_test) naming the build folder.
+// Runs the built `splatffd` binary (or any shell command) as a user does, for the command-line tests: the
+// test executables are compiled with SFFD_BINARY_DIR (tests/CMakeLists.txt, sffd_test) naming the build
+// folder.
 #pragma once
 
 #include <sys/wait.h>
@@ -30,11 +31,14 @@ inline CliRun run_command(const std::string& command) {
 }
 
 // `splatffd ARGS` through the shell (ARGS is pasted as written, so quote paths with spaces).
-inline CliRun run(const std::string& args) { return run_command(std::string(SFFD_BINARY_DIR) + "/tools/splatffd " + args); }
+inline CliRun run(const std::string& args) {
+    return run_command(std::string(SFFD_BINARY_DIR) + "/tools/splatffd " + args);
+}
 
 // The same as on a machine without a display (DISPLAY and WAYLAND_DISPLAY unset): GL through headless EGL.
 inline CliRun run_headless(const std::string& args) {
-    return run_command("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(SFFD_BINARY_DIR) + "/tools/splatffd " + args);
+    return run_command("env -u DISPLAY -u WAYLAND_DISPLAY " + std::string(SFFD_BINARY_DIR) +
+                       "/tools/splatffd " + args);
 }
 
 // COMMAND through the shell (std::system); its exit status, or -1 when it did not exit normally.

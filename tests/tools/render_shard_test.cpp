@@ -86,7 +86,8 @@ TEST(RenderShard, RunningManifestHasTheSameSizeAfterOneFrameAndAfterAMillion) {
     EXPECT_FALSE(sffd::cli::to_json(r).contains("files"));
     // Invalid UTF-8 (a file name from a hostile folder) is replaced, never an exception.
     r.command = "splatffd render \xff\xfe.ply";
-    EXPECT_NO_THROW((void)sffd::cli::to_json(r).dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace));
+    EXPECT_NO_THROW(
+        (void)sffd::cli::to_json(r).dump(2, ' ', false, nlohmann::ordered_json::error_handler_t::replace));
 }
 
 TEST(RenderShard, ShardsWriteTheSameBytesAsOneRunAndAssemble) {
@@ -109,7 +110,9 @@ TEST(RenderShard, ShardsWriteTheSameBytesAsOneRunAndAssemble) {
     // Before every shard is in, assemble names the missing one and the command that renders it.
     EXPECT_EQ(assemble(farm, &log), 1) << log;
     EXPECT_NE(log.find("shard 0/2: no manifest"), std::string::npos) << log;
-    EXPECT_NE(log.find("re-render it with: splatffd render sphere --out " + farm.string() + " --frames 2:6 --shard 0/2"), std::string::npos)
+    EXPECT_NE(log.find("re-render it with: splatffd render sphere --out " + farm.string() +
+                       " --frames 2:6 --shard 0/2"),
+              std::string::npos)
         << log;
     EXPECT_FALSE(fs::exists(farm / "render_manifest.json"));
     ASSERT_EQ(render("sphere --out " + farm.string() + " --frames 2:6 --shard 0/2" + kClip, &log), 0) << log;
@@ -122,7 +125,8 @@ TEST(RenderShard, ShardsWriteTheSameBytesAsOneRunAndAssemble) {
     EXPECT_EQ(whole["state"], "complete");
     EXPECT_EQ(whole["frames_written"]["count"], 5);
     EXPECT_EQ(whole["settings"], manifest(one / "render_manifest.json")["settings"]);
-    EXPECT_EQ(whole["files"], manifest(one / "render_manifest.json")["files"]);  // same bytes, same fingerprints
+    EXPECT_EQ(whole["files"],
+              manifest(one / "render_manifest.json")["files"]);  // same bytes, same fingerprints
 }
 
 TEST(RenderShard, AssembleRefusesOtherSettingsFailedShardsAndForeignFrames) {
@@ -130,10 +134,15 @@ TEST(RenderShard, AssembleRefusesOtherSettingsFailedShardsAndForeignFrames) {
     std::string log;
     ASSERT_EQ(render("sphere --out " + farm.string() + " --frames 0:3 --shard 0/2" + kClip, &log), 0) << log;
     // Shard 1 rendered with another size: not part of the same clip.
-    ASSERT_EQ(render("sphere --out " + farm.string() + " --frames 0:3 --shard 1/2 --size 48x27 --quality preview --format png", &log), 0)
+    ASSERT_EQ(render("sphere --out " + farm.string() +
+                         " --frames 0:3 --shard 1/2 --size 48x27 --quality preview --format png",
+                     &log),
+              0)
         << log;
     EXPECT_EQ(assemble(farm, &log), 1) << log;
-    EXPECT_NE(log.find("render_manifest.shard-1-of-2.json: settings differ from render_manifest.shard-0-of-2.json"), std::string::npos)
+    EXPECT_NE(
+        log.find("render_manifest.shard-1-of-2.json: settings differ from render_manifest.shard-0-of-2.json"),
+        std::string::npos)
         << log;
     // Shard 1 again with the right settings, but frame 3's name is taken by a folder: the shard fails.
     fs::remove(farm / "frame_0003.png");
@@ -141,7 +150,9 @@ TEST(RenderShard, AssembleRefusesOtherSettingsFailedShardsAndForeignFrames) {
     EXPECT_EQ(render("sphere --out " + farm.string() + " --frames 0:3 --shard 1/2" + kClip, &log), 1) << log;
     EXPECT_EQ(manifest(farm / "render_manifest.shard-1-of-2.json")["state"], "failed");
     EXPECT_EQ(assemble(farm, &log), 1) << log;
-    EXPECT_NE(log.find("shard 1/2: failed after 1 of 2 frames; re-render it with: splatffd render sphere"), std::string::npos) << log;
+    EXPECT_NE(log.find("shard 1/2: failed after 1 of 2 frames; re-render it with: splatffd render sphere"),
+              std::string::npos)
+        << log;
     fs::remove(farm / "frame_0003.png");
     ASSERT_EQ(render("sphere --out " + farm.string() + " --frames 0:3 --shard 1/2" + kClip, &log), 0) << log;
     ASSERT_EQ(assemble(farm, &log), 0) << log;
@@ -149,7 +160,8 @@ TEST(RenderShard, AssembleRefusesOtherSettingsFailedShardsAndForeignFrames) {
     fs::copy_file(farm / "frame_0000.png", farm / "frame_0050.png");
     fs::copy_file(farm / "frame_0000.png", farm / "frame_0002.png", fs::copy_options::overwrite_existing);
     EXPECT_EQ(assemble(farm, &log), 1) << log;
-    EXPECT_NE(log.find("frame_0050.png: not a frame of this clip (frames 0..3, png)"), std::string::npos) << log;
+    EXPECT_NE(log.find("frame_0050.png: not a frame of this clip (frames 0..3, png)"), std::string::npos)
+        << log;
     EXPECT_NE(log.find("frame_0002.png: not the bytes shard 0/2 wrote"), std::string::npos) << log;
 }
 
@@ -171,7 +183,8 @@ TEST(RenderShard, BadShardOptionsAreRefused) {
 TEST(RenderShard, RangeLargerThanTheFreeDiskSpaceIsRefusedUpFront) {
     const fs::path out = fresh_dir("huge");
     std::string log;
-    EXPECT_EQ(render("sphere --out " + out.string() + " --frames 0:99999999 --size 1280x720", &log), 1) << log;
+    EXPECT_EQ(render("sphere --out " + out.string() + " --frames 0:99999999 --size 1280x720", &log), 1)
+        << log;
     EXPECT_NE(log.find(out.string() + ": 100000000 frames need about"), std::string::npos) << log;
     EXPECT_NE(log.find("free; render fewer frames"), std::string::npos) << log;
     EXPECT_FALSE(fs::exists(out / "frame_0000.png"));

@@ -4,8 +4,12 @@
 #include "runtime/ecs/registry.h"
 
 namespace {
-struct Position { float x, y, z; };
-struct Velocity { float x, y, z; };
+struct Position {
+    float x, y, z;
+};
+struct Velocity {
+    float x, y, z;
+};
 
 void BM_ViewIterate1M(benchmark::State& state) {
     sffd::ecs::Registry reg;

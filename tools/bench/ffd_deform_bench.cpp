@@ -1,7 +1,8 @@
 // FFD CPU benchmarks on the paper's case: 59,650 splats (Fibonacci sphere, unit radius) in an 11x11x11
 // lattice (divisions 10) around it, global twist (every control point rotated about the vertical axis by an
 // angle proportional to its height, as ../shared/peers/blender_lattice.py does), plus 1M points.
-//   build/<dir>/tools/bench/bench_ffd_deform --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+//   build/<dir>/tools/bench/bench_ffd_deform --benchmark_repetitions=5
+//   --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -23,7 +24,8 @@ Points sphere(std::size_t count) {
     Points s;
     for (std::size_t i = 0; i < count; ++i) {
         const glm::dvec3 n = bench::fibonacci_sphere(i, count);
-        const glm::dvec3 t = glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
+        const glm::dvec3 t =
+            glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
         s.p.push_back(glm::vec3(n));
         s.n.push_back(glm::vec3(n));
         s.u.push_back(glm::vec3(t * 0.01));
@@ -36,42 +38,83 @@ Points sphere(std::size_t count) {
 Lattice twisted(LatticeBasis basis) { return bench::twisted_lattice(basis); }
 
 void run(benchmark::State& state, const Lattice& l, Points& s, bool full, ffd::Backend b) {
-    const ffd::PointsIn in{s.p.data(), full ? s.n.data() : nullptr, full ? s.u.data() : nullptr,
-                           full ? s.v.data() : nullptr, s.p.size(), {}};
+    const ffd::PointsIn in{s.p.data(),
+                           full ? s.n.data() : nullptr,
+                           full ? s.u.data() : nullptr,
+                           full ? s.v.data() : nullptr,
+                           s.p.size(),
+                           {}};
     const ffd::PointsOut out{s.op.data(), s.on.data(), s.ou.data(), s.ov.data()};
     for (auto _ : state) {
         auto r = ffd::deform(l, in, out, b);
         benchmark::DoNotOptimize(r);
         benchmark::ClobberMemory();
     }
-    state.counters["points/s"] = benchmark::Counter(double(s.p.size()), benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["points/s"] =
+        benchmark::Counter(double(s.p.size()), benchmark::Counter::kIsIterationInvariantRate);
 }
 
-Points& paper_points() { static Points s = sphere(59650); return s; }
-Points& million_points() { static Points s = sphere(1000000); return s; }
+Points& paper_points() {
+    static Points s = sphere(59650);
+    return s;
+}
+Points& million_points() {
+    static Points s = sphere(1000000);
+    return s;
+}
 
-void BM_Bernstein11_Full(benchmark::State& st) { run(st, twisted(LatticeBasis::bernstein), paper_points(), true, ffd::Backend::fast); }
-void BM_Bernstein11_PositionsOnly(benchmark::State& st) { run(st, twisted(LatticeBasis::bernstein), paper_points(), false, ffd::Backend::fast); }
+void BM_Bernstein11_Full(benchmark::State& st) {
+    run(st, twisted(LatticeBasis::bernstein), paper_points(), true, ffd::Backend::fast);
+}
+void BM_Bernstein11_PositionsOnly(benchmark::State& st) {
+    run(st, twisted(LatticeBasis::bernstein), paper_points(), false, ffd::Backend::fast);
+}
 void BM_Bernstein11_Sparse27_Full(benchmark::State& st) {
-    Lattice l = ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {10, 10, 10});
+    Lattice l = ffd::make_lattice({-1.1, -1.1, -1.1},
+                                  {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                                  {10, 10, 10});
     ffd::stretch(l, ffd::select_range(l, {4, 4, 8}, {6, 6, 10}), glm::dvec3(0.0, 0.0, 0.3));
     run(st, l, paper_points(), true, ffd::Backend::automatic);
 }
-void BM_BSpline11_Full(benchmark::State& st) { run(st, twisted(LatticeBasis::bspline), paper_points(), true, ffd::Backend::fast); }
-void BM_BSpline11_PositionsOnly(benchmark::State& st) { run(st, twisted(LatticeBasis::bspline), paper_points(), false, ffd::Backend::fast); }
-void BM_Bernstein11_1M_Full(benchmark::State& st) { run(st, twisted(LatticeBasis::bernstein), million_points(), true, ffd::Backend::fast); }
-void BM_BSpline11_1M_Full(benchmark::State& st) { run(st, twisted(LatticeBasis::bspline), million_points(), true, ffd::Backend::fast); }
-void BM_Bernstein11_1M_PositionsOnly(benchmark::State& st) { run(st, twisted(LatticeBasis::bernstein), million_points(), false, ffd::Backend::fast); }
-void BM_BSpline11_1M_PositionsOnly(benchmark::State& st) { run(st, twisted(LatticeBasis::bspline), million_points(), false, ffd::Backend::fast); }
+void BM_BSpline11_Full(benchmark::State& st) {
+    run(st, twisted(LatticeBasis::bspline), paper_points(), true, ffd::Backend::fast);
+}
+void BM_BSpline11_PositionsOnly(benchmark::State& st) {
+    run(st, twisted(LatticeBasis::bspline), paper_points(), false, ffd::Backend::fast);
+}
+void BM_Bernstein11_1M_Full(benchmark::State& st) {
+    run(st, twisted(LatticeBasis::bernstein), million_points(), true, ffd::Backend::fast);
+}
+void BM_BSpline11_1M_Full(benchmark::State& st) {
+    run(st, twisted(LatticeBasis::bspline), million_points(), true, ffd::Backend::fast);
+}
+void BM_Bernstein11_1M_PositionsOnly(benchmark::State& st) {
+    run(st, twisted(LatticeBasis::bernstein), million_points(), false, ffd::Backend::fast);
+}
+void BM_BSpline11_1M_PositionsOnly(benchmark::State& st) {
+    run(st, twisted(LatticeBasis::bspline), million_points(), false, ffd::Backend::fast);
+}
 
 BENCHMARK(BM_Bernstein11_Full)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
-BENCHMARK(BM_Bernstein11_PositionsOnly)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
-BENCHMARK(BM_Bernstein11_Sparse27_Full)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_Bernstein11_PositionsOnly)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+BENCHMARK(BM_Bernstein11_Sparse27_Full)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
 BENCHMARK(BM_BSpline11_Full)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 BENCHMARK(BM_BSpline11_PositionsOnly)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
 BENCHMARK(BM_Bernstein11_1M_Full)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
-BENCHMARK(BM_Bernstein11_1M_PositionsOnly)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_Bernstein11_1M_PositionsOnly)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
 BENCHMARK(BM_BSpline11_1M_Full)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
-BENCHMARK(BM_BSpline11_1M_PositionsOnly)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+BENCHMARK(BM_BSpline11_1M_PositionsOnly)
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
 
 }  // namespace

@@ -44,7 +44,9 @@ Gl& gl() {
         auto p = ffd::PaperModeRenderer::create();
         if (!p) return s.error = p.message(), std::move(s);
         s.paper.emplace(std::move(*p));
-        auto t = gfx::RenderTarget::create({.label = "bench.ffd", .width = 512, .height = 512,
+        auto t = gfx::RenderTarget::create({.label = "bench.ffd",
+                                            .width = 512,
+                                            .height = 512,
                                             .color = {{"color", gfx::ColorFormat::rgba8}}});
         if (!t) return s.error = t.message(), std::move(s);
         s.target.emplace(std::move(*t));
@@ -66,7 +68,9 @@ Splats& splats(std::size_t n) {
     std::vector<gpu::GpuSplat> packed(n);
     for (std::size_t i = 0; i < n; ++i) {
         const glm::vec3 p(bench::fibonacci_sphere(i, n));
-        const glm::vec3 t = glm::normalize(glm::cross(p, std::abs(p.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0))) * 0.01f;
+        const glm::vec3 t =
+            glm::normalize(glm::cross(p, std::abs(p.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0))) *
+            0.01f;
         const glm::vec3 b = glm::cross(p, t);
         packed[i] = {{p.x, p.y, p.z, 0}, {p.x, p.y, p.z, 1}, {t.x, t.y, t.z, 0}, {b.x, b.y, b.z, 0}};
     }
@@ -167,8 +171,14 @@ BENCHMARK(BM_GpuCompute_Bernstein11_1M_Full)->Unit(benchmark::kMillisecond)->Use
 BENCHMARK(BM_GpuCompute_BSpline11_1M_Full)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_GpuCompute_Bernstein11_Full_Direct)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_GpuCompute_Bernstein11_Full_Shared)->Unit(benchmark::kMillisecond)->UseRealTime();
-BENCHMARK(BM_GpuCompute_Bernstein11_1M_Full_Direct)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
-BENCHMARK(BM_GpuCompute_Bernstein11_1M_Full_Shared)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(1);
+BENCHMARK(BM_GpuCompute_Bernstein11_1M_Full_Direct)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
+BENCHMARK(BM_GpuCompute_Bernstein11_1M_Full_Shared)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(1);
 BENCHMARK(BM_PaperMode_Frame_1Pass)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Skinning_Frame_1Pass)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_PaperMode_Frame_3Passes)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -6,8 +6,9 @@
 // benchmark per process for a clean peak-RSS counter, e.g.
 //   build/release/tools/bench/bench_gaussian --benchmark_filter='Import/1000000/3$'
 // Deformation at 1M and 6M (Args: Gaussians, SH degree, SH mode), one iteration per run:
-//   build/release/tools/bench/bench_gaussian --benchmark_filter='Deform/6000000/3/1' --benchmark_repetitions=3
-//   build/release/tools/bench/bench_gaussian --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
+//   build/release/tools/bench/bench_gaussian --benchmark_filter='Deform/6000000/3/1'
+//   --benchmark_repetitions=3 build/release/tools/bench/bench_gaussian --benchmark_repetitions=3
+//   --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
 #include <unistd.h>
@@ -41,7 +42,8 @@ using bench::sphere_gaussians;
 
 void BM_GaussianDeform(benchmark::State& state) {
     const GaussianCloud g = sphere_gaussians(std::size_t(state.range(0)), int(state.range(1)));
-    bench::run_cpu_deform(state, g, state.range(2) ? gaussian::ShMode::rotate_view : gaussian::ShMode::rotate_coefficients);
+    bench::run_cpu_deform(
+        state, g, state.range(2) ? gaussian::ShMode::rotate_view : gaussian::ShMode::rotate_coefficients);
 }
 // Args: Gaussians, SH degree, SH mode (0 rotate the coefficients, 1 store the per-splat view rotation).
 BENCHMARK(BM_GaussianDeform)
@@ -104,12 +106,18 @@ void put_u32(std::string& s, std::uint32_t v) {
 bool write_splat_file(const std::filesystem::path& path, const GaussianCloud& g) {
     std::string b;
     b.reserve(g.size() * 32);
-    auto f32 = [&](float v) { char c[4]; std::memcpy(c, &v, 4); b.append(c, 4); };
+    auto f32 = [&](float v) {
+        char c[4];
+        std::memcpy(c, &v, 4);
+        b.append(c, 4);
+    };
     auto u8 = [](float v) { return char(std::lround(std::clamp(v, 0.0f, 255.0f))); };
     for (std::size_t i = 0; i < g.size(); ++i) {
         for (int a = 0; a < 3; ++a) f32(g.positions[i][a]);
         for (int a = 0; a < 3; ++a) f32(g.scales[i][a]);
-        for (int c = 0; c < 3; ++c) b += u8(255.0f * (0.5f + 0.28209479f * g.sh[i * std::size_t(sh_coeffs(g.sh_degree)) * 3 + std::size_t(c)]));
+        for (int c = 0; c < 3; ++c)
+            b += u8(255.0f * (0.5f + 0.28209479f *
+                                         g.sh[i * std::size_t(sh_coeffs(g.sh_degree)) * 3 + std::size_t(c)]));
         b += u8(255.0f * g.opacities[i]);
         const glm::quat q = g.rotations[i];
         for (float v : {q.w, q.x, q.y, q.z}) b += u8(128.0f + 128.0f * v);
@@ -136,7 +144,8 @@ bool write_spz_file(const std::filesystem::path& path, const GaussianCloud& g) {
         }
     for (std::size_t i = 0; i < n; ++i) b += u8(255.0 * double(g.opacities[i]));
     for (std::size_t i = 0; i < n; ++i)
-        for (int c = 0; c < 3; ++c) b += u8(255.0 * (0.5 + 0.15 * double(g.sh[i * std::size_t(K) * 3 + std::size_t(c)])));
+        for (int c = 0; c < 3; ++c)
+            b += u8(255.0 * (0.5 + 0.15 * double(g.sh[i * std::size_t(K) * 3 + std::size_t(c)])));
     for (std::size_t i = 0; i < n; ++i)
         for (int a = 0; a < 3; ++a) b += u8((std::log(double(g.scales[i][a])) + 10.0) * 16.0);
     for (std::size_t i = 0; i < n; ++i) {
@@ -145,14 +154,17 @@ bool write_spz_file(const std::filesystem::path& path, const GaussianCloud& g) {
         std::uint32_t bits = 3u << 30;  // w is the dropped (largest) component in these flat-disc rotations
         const float rest[3] = {q.x, q.y, q.z};
         for (int j = 0; j < 3; ++j) {
-            const std::uint32_t mag = std::uint32_t(std::lround(std::min(1.0f, std::abs(rest[j]) * std::sqrt(2.0f)) * 511.0f));
+            const std::uint32_t mag =
+                std::uint32_t(std::lround(std::min(1.0f, std::abs(rest[j]) * std::sqrt(2.0f)) * 511.0f));
             bits |= ((rest[j] < 0 ? 512u : 0u) | mag) << (10 * (2 - j));
         }
         put_u32(b, bits);
     }
     for (std::size_t i = 0; i < n; ++i)
         for (int k = 1; k < K; ++k)
-            for (int c = 0; c < 3; ++c) b += u8(128.0 + 128.0 * double(g.sh[(i * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(c)]));
+            for (int c = 0; c < 3; ++c)
+                b += u8(128.0 +
+                        128.0 * double(g.sh[(i * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(c)]));
     gzFile f = gzopen(path.c_str(), "wb1");
     if (!f) return false;
     const bool ok = gzwrite(f, b.data(), unsigned(b.size())) == int(b.size());

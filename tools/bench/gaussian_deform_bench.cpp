@@ -33,20 +33,32 @@ const GaussianCloud& cloud(std::size_t n) {
     return g;
 }
 
-gaussian::ShMode mode(std::int64_t m) { return m ? gaussian::ShMode::rotate_view : gaussian::ShMode::rotate_coefficients; }
+gaussian::ShMode mode(std::int64_t m) {
+    return m ? gaussian::ShMode::rotate_view : gaussian::ShMode::rotate_coefficients;
+}
 
 // Args: Gaussians, SH mode (0 rotate the coefficients, 1 store the view rotation), shape kernel (0 the
 // vectorised float kernel, 1 the double-precision per-Gaussian reference: the A/B of the two).
 void BM_GaussianDeformCpu(benchmark::State& state) {
-    bench::run_cpu_deform(state, cloud(std::size_t(state.range(0))), mode(state.range(1)), state.range(2) != 0);
+    bench::run_cpu_deform(state, cloud(std::size_t(state.range(0))), mode(state.range(1)),
+                          state.range(2) != 0);
 }
-BENCHMARK(BM_GaussianDeformCpu)->Args({1000000, 0, 0})->Args({1000000, 1, 0})->Args({1000000, 0, 1})->Args({1000000, 1, 1})
-    ->Args({6000000, 0, 0})->Args({6000000, 1, 0})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GaussianDeformCpu)
+    ->Args({1000000, 0, 0})
+    ->Args({1000000, 1, 0})
+    ->Args({1000000, 0, 1})
+    ->Args({1000000, 1, 1})
+    ->Args({6000000, 0, 0})
+    ->Args({6000000, 1, 0})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 void BM_GaussianDeformGpu(benchmark::State& state) {
-    auto ctx = bench::made_or_skip(state, gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false}));
+    auto ctx = bench::made_or_skip(
+        state, gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false}));
     if (!ctx) return;
-    std::optional<gaussian::GpuGaussianDeformer> deformer = bench::made_or_skip(state, gaussian::GpuGaussianDeformer::create());
+    std::optional<gaussian::GpuGaussianDeformer> deformer =
+        bench::made_or_skip(state, gaussian::GpuGaussianDeformer::create());
     if (!deformer) return;
     std::optional<gaussian::GpuGaussians> store;
     const GaussianCloud& g = cloud(std::size_t(state.range(0)));
@@ -56,11 +68,13 @@ void BM_GaussianDeformGpu(benchmark::State& state) {
     const std::vector<const Lattice*> ls = {&l};
     const std::vector<std::uint64_t> keys = {1}, stamps = {1};
     // Warm-up: compiles the specialised program, uploads the control points once.
-    if (auto s = deformer->deform(*store, g.origin, ls, keys, stamps, mode(state.range(1))); !s) state.SkipWithError(s.message().c_str());
+    if (auto s = deformer->deform(*store, g.origin, ls, keys, stamps, mode(state.range(1))); !s)
+        state.SkipWithError(s.message().c_str());
     glFinish();
     const double cpu0 = process_cpu_s();
     for (auto _ : state) {
-        if (auto s = deformer->deform(*store, g.origin, ls, keys, stamps, mode(state.range(1))); !s) state.SkipWithError(s.message().c_str());
+        if (auto s = deformer->deform(*store, g.origin, ls, keys, stamps, mode(state.range(1))); !s)
+            state.SkipWithError(s.message().c_str());
         glFinish();
     }
     state.SetItemsProcessed(int64_t(state.iterations()) * state.range(0));
@@ -69,7 +83,12 @@ void BM_GaussianDeformGpu(benchmark::State& state) {
     store.reset();
     deformer.reset();
 }
-BENCHMARK(BM_GaussianDeformGpu)->Args({1000000, 0})->Args({1000000, 1})->Args({6000000, 0})->Args({6000000, 1})
-    ->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GaussianDeformGpu)
+    ->Args({1000000, 0})
+    ->Args({1000000, 1})
+    ->Args({6000000, 0})
+    ->Args({6000000, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 }  // namespace

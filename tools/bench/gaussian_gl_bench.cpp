@@ -28,14 +28,16 @@ using namespace sffd;
 using bench::process_cpu_s;
 
 void BM_GaussianGlFrame(benchmark::State& state) {
-    auto ctx = bench::made_or_skip(state, gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false}));
+    auto ctx = bench::made_or_skip(
+        state, gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false}));
     if (!ctx) return;
     std::optional<gaussian::GlRenderer> r = bench::made_or_skip(state, gaussian::create_gl_renderer());
     if (!r) return;
     r->sort_path = state.range(1) ? gaussian::SortPath::gpu : gaussian::SortPath::cpu;
     r->blend_path = state.range(2) ? gaussian::BlendPath::tiles : gaussian::BlendPath::quads;
     r->stage_timing = true;
-    const GaussianCloud g = gaussian::gaussians_from_splats(assets::make_sphere_cloud(std::size_t(state.range(0))));
+    const GaussianCloud g =
+        gaussian::gaussians_from_splats(assets::make_sphere_cloud(std::size_t(state.range(0))));
     Camera cam;
     cam.eye = {0.0, 0.8, 3.2};
     cam.target = {0.0, 0.0, 0.0};
@@ -50,7 +52,8 @@ void BM_GaussianGlFrame(benchmark::State& state) {
     for (auto _ : state) {
         auto img = gaussian::draw_gl(*r, cam, o);
         if (!img) state.SkipWithError(img.message().c_str());
-        project_ms += r->project_ms, sort_ms += r->sort_ms, blend_ms += r->blend_ms, readback_ms += r->readback_ms;
+        project_ms += r->project_ms, sort_ms += r->sort_ms, blend_ms += r->blend_ms,
+            readback_ms += r->readback_ms;
         tile_prepare_ms += r->tile_prepare_ms;
     }
     const double runs = double(state.iterations());
@@ -75,18 +78,21 @@ BENCHMARK(BM_GaussianGlFrame)
 // The sort alone on the GPU (radix_sort of N random 32-bit keys with payloads, waited for with glFinish)
 // next to what the CPU path's sort costs (TBB parallel_sort of N (key << 32 | index) pairs).
 void BM_RadixSortGl(benchmark::State& state) {
-    auto ctx = bench::made_or_skip(state, gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false}));
+    auto ctx = bench::made_or_skip(
+        state, gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false}));
     if (!ctx) return;
     std::optional<gfx::RadixSorter> sorter = bench::made_or_skip(state, gfx::create_radix_sorter());
     if (!sorter) return;
     const std::size_t n = std::size_t(state.range(0));
     std::vector<std::uint32_t> keys(n), values(n);
     std::uint32_t x = 12345u;
-    for (std::size_t i = 0; i < n; ++i) x = x * 1664525u + 1013904223u, keys[i] = x, values[i] = std::uint32_t(i);
+    for (std::size_t i = 0; i < n; ++i)
+        x = x * 1664525u + 1013904223u, keys[i] = x, values[i] = std::uint32_t(i);
     std::optional<gfx::Buffer> kb(gfx::Buffer::create("bench.keys")), vb(gfx::Buffer::create("bench.values"));
     glNamedBufferData(kb->id(), GLsizeiptr(n * 4), keys.data(), GL_DYNAMIC_COPY);
     glNamedBufferData(vb->id(), GLsizeiptr(n * 4), values.data(), GL_DYNAMIC_COPY);
-    if (auto s = gfx::radix_sort(*sorter, kb->id(), vb->id(), std::uint32_t(n)); !s) state.SkipWithError(s.message().c_str());
+    if (auto s = gfx::radix_sort(*sorter, kb->id(), vb->id(), std::uint32_t(n)); !s)
+        state.SkipWithError(s.message().c_str());
     glFinish();  // untimed: shader compilation on first use, scratch allocation
     double cpu = 0.0;
     for (auto _ : state) {
@@ -96,7 +102,8 @@ void BM_RadixSortGl(benchmark::State& state) {
         glFinish();
         state.ResumeTiming();
         const double cpu0 = process_cpu_s();
-        if (auto s = gfx::radix_sort(*sorter, kb->id(), vb->id(), std::uint32_t(n)); !s) state.SkipWithError(s.message().c_str());
+        if (auto s = gfx::radix_sort(*sorter, kb->id(), vb->id(), std::uint32_t(n)); !s)
+            state.SkipWithError(s.message().c_str());
         glFinish();
         cpu += process_cpu_s() - cpu0;
     }
@@ -105,6 +112,11 @@ void BM_RadixSortGl(benchmark::State& state) {
     state.SetLabel(ctx->renderer());
     kb.reset(), vb.reset(), sorter.reset();
 }
-BENCHMARK(BM_RadixSortGl)->Arg(1000000)->Arg(6000000)->Unit(benchmark::kMillisecond)->UseRealTime()->Iterations(2);
+BENCHMARK(BM_RadixSortGl)
+    ->Arg(1000000)
+    ->Arg(6000000)
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(2);
 
 }  // namespace

@@ -4,8 +4,8 @@
 //   build/<dir>/tools/bench/bench_picking --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 //
 // BM_RefreshAfterDeformation: the cloud's deformed splats alternate between rest and a stretched copy
-// (swapped in, so no deformation math is timed) and refresh() rebuilds: buffer fill (world transform, ellipse axes),
-// rtcUpdateGeometryBuffer, rtcCommitGeometry, one rtcCommitScene (BVH build). BM_RefreshNewGeometry
+// (swapped in, so no deformation math is timed) and refresh() rebuilds: buffer fill (world transform, ellipse
+// axes), rtcUpdateGeometryBuffer, rtcCommitGeometry, one rtcCommitScene (BVH build). BM_RefreshNewGeometry
 // times the same with a geometry created from scratch (entity replaced). BM_PickScreen / BM_PickRay time
 // one pick on an up-to-date scene; BM_PickAfterLatticeEdit the first pick after a lattice edit when the
 // deformed splats are GPU-only (picking's own CPU deformation + refresh + pick). BM_GaussianRefresh /

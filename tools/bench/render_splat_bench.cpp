@@ -6,7 +6,8 @@
 // Each iteration renders one frame and waits for it (glFinish) and is timed with a CPU clock
 // (UseManualTime): llvmpipe's GL_TIME_ELAPSED under-reports point rasterisation. Counters: visible splats
 // and per-pass milliseconds (a separate timed frame with glFinish between passes).
-//   build/<dir>/tools/bench/bench_render_splat --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+//   build/<dir>/tools/bench/bench_render_splat --benchmark_repetitions=5
+//   --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
 #include <chrono>
@@ -131,9 +132,11 @@ void bench_raster_break_even(benchmark::State& state) {
     state.counters["raster_ms"] = 1e3 * raster / it;
     state.counters["compute_ms"] = 1e3 * compute / it;
     state.counters["compute_speedup"] = compute > 0.0 ? raster / compute : 0.0;
-    std::fprintf(stderr, "raster break-even: %.1f px (%zu splats): compute rasteriser %.2fx the rasteriser's speed (%s)\n",
-                 footprint, n, compute > 0.0 ? raster / compute : 0.0, glGetString(GL_RENDERER) ?
-                 reinterpret_cast<const char*>(glGetString(GL_RENDERER)) : "?");
+    std::fprintf(
+        stderr,
+        "raster break-even: %.1f px (%zu splats): compute rasteriser %.2fx the rasteriser's speed (%s)\n",
+        footprint, n, compute > 0.0 ? raster / compute : 0.0,
+        glGetString(GL_RENDERER) ? reinterpret_cast<const char*>(glGetString(GL_RENDERER)) : "?");
 }
 
 void render_frames(benchmark::State& state, CullPath path, RasterPath raster) {
@@ -198,12 +201,15 @@ void bench_reference_points(benchmark::State& state) {
     std::vector<glm::vec4> p;
     for (const glm::vec3& v : cloud.positions) p.emplace_back(v, 1.0f);
     glNamedBufferData(positions.id(), GLsizeiptr(p.size() * sizeof(glm::vec4)), p.data(), GL_STATIC_DRAW);
-    const char* vs = "#version 450\nlayout(std430, binding = 0) readonly buffer P { vec4 pos[]; };\n"
-                     "uniform mat4 mvp;\nvoid main() { gl_Position = mvp * pos[gl_VertexID]; gl_PointSize = 6.0; }\n";
-    const char* fs = "#version 450\nout vec4 color;\nvoid main() { vec2 d = gl_PointCoord * 2.0 - 1.0;\n"
-                     "if (dot(d, d) > 1.0) discard; color = vec4(1.0); }\n";
+    const char* vs =
+        "#version 450\nlayout(std430, binding = 0) readonly buffer P { vec4 pos[]; };\n"
+        "uniform mat4 mvp;\nvoid main() { gl_Position = mvp * pos[gl_VertexID]; gl_PointSize = 6.0; }\n";
+    const char* fs =
+        "#version 450\nout vec4 color;\nvoid main() { vec2 d = gl_PointCoord * 2.0 - 1.0;\n"
+        "if (dot(d, d) > 1.0) discard; color = vec4(1.0); }\n";
     gfx::Program program(glCreateProgram());
-    for (auto [stage, src] : {std::pair{GLenum(GL_VERTEX_SHADER), vs}, std::pair{GLenum(GL_FRAGMENT_SHADER), fs}}) {
+    for (auto [stage, src] :
+         {std::pair{GLenum(GL_VERTEX_SHADER), vs}, std::pair{GLenum(GL_FRAGMENT_SHADER), fs}}) {
         const GLuint sh = glCreateShader(stage);
         glShaderSource(sh, 1, &src, nullptr);
         glCompileShader(sh);
@@ -211,7 +217,8 @@ void bench_reference_points(benchmark::State& state) {
         glDeleteShader(sh);
     }
     glLinkProgram(program.id());
-    gfx::Texture color = gfx::Texture::create("bench.color", GL_TEXTURE_2D), depth = gfx::Texture::create("bench.depth", GL_TEXTURE_2D);
+    gfx::Texture color = gfx::Texture::create("bench.color", GL_TEXTURE_2D),
+                 depth = gfx::Texture::create("bench.depth", GL_TEXTURE_2D);
     glTextureStorage2D(color.id(), 1, GL_RGBA8, 1280, 720);
     glTextureStorage2D(depth.id(), 1, GL_DEPTH_COMPONENT32F, 1280, 720);
     gfx::Framebuffer fbo = gfx::Framebuffer::create("bench.fbo");
@@ -222,7 +229,8 @@ void bench_reference_points(benchmark::State& state) {
     cam.eye = glm::dvec3(0, 0, 3);
     const glm::mat4 mvp = glm::mat4(glm::perspective(glm::radians(45.0), 1280.0 / 720.0, 0.1, 10.0) *
                                     glm::lookAt(cam.eye, cam.target, cam.up));
-    glProgramUniformMatrix4fv(program.id(), glGetUniformLocation(program.id(), "mvp"), 1, GL_FALSE, &mvp[0][0]);
+    glProgramUniformMatrix4fv(program.id(), glGetUniformLocation(program.id(), "mvp"), 1, GL_FALSE,
+                              &mvp[0][0]);
     auto frame = [&] {
         const float clear[4] = {0, 0, 0, 0}, one = 1.0f;
         glClearNamedFramebufferfv(fbo.id(), GL_COLOR, 0, clear);
@@ -257,7 +265,8 @@ void bench_cpu_cull(benchmark::State& state) {
     const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
     Camera cam;
     cam.eye = glm::dvec3(0, 0, 3);
-    gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 1280.0 / 720.0), 1280, 720, 1.0f, 255.0f, true);
+    gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 1280.0 / 720.0), 1280,
+                                           720, 1.0f, 255.0f, true);
     f.light_dir[0] = glm::vec4(glm::normalize(glm::vec3(1, 1, 1)), 0);
     f.light_color[0] = glm::vec4(1.0f);
     f.material = glm::vec4(0.3f, 32.0f, 0, 0);
@@ -273,7 +282,14 @@ void bench_cpu_cull(benchmark::State& state) {
 
 }  // namespace
 
-BENCHMARK(bench_cpu_cull)->ArgNames({"splats", "hq"})->Args({59650, 0})->Args({59650, 1})->Args({600000, 0})->Args({600000, 1})->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(bench_cpu_cull)
+    ->ArgNames({"splats", "hq"})
+    ->Args({59650, 0})
+    ->Args({59650, 1})
+    ->Args({600000, 0})
+    ->Args({600000, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime();
 
 BENCHMARK(bench_reference_points)->UseManualTime()->Unit(benchmark::kMillisecond)->MinTime(1.0);
 
@@ -302,7 +318,15 @@ BENCHMARK(bench_render)
 // Arg: mean splat diameter in tenths of a pixel (1 px to 24 px).
 BENCHMARK(bench_raster_break_even)
     ->ArgName("footprint_px_x10")
-    ->Arg(10)->Arg(20)->Arg(30)->Arg(40)->Arg(60)->Arg(80)->Arg(120)->Arg(160)->Arg(240)
+    ->Arg(10)
+    ->Arg(20)
+    ->Arg(30)
+    ->Arg(40)
+    ->Arg(60)
+    ->Arg(80)
+    ->Arg(120)
+    ->Arg(160)
+    ->Arg(240)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond)
     ->MinTime(1.0);

@@ -76,10 +76,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     if (format <= 4) {
         auto g = gaussian::read_gaussians(path);
         if (!g && g.message().find(path) == std::string::npos) __builtin_trap();  // errors name the file
-        if (g && !gaussian::validate(*g, path)) __builtin_trap();                  // accepted clouds are sane
+        if (g && !gaussian::validate(*g, path)) __builtin_trap();                 // accepted clouds are sane
     } else {
         ecs::Registry registry;
-        if (auto s = load_scene(registry, path); !s && s.message().find(path) == std::string::npos) __builtin_trap();
+        if (auto s = load_scene(registry, path); !s && s.message().find(path) == std::string::npos)
+            __builtin_trap();
     }
     return 0;
 }

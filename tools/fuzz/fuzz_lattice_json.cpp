@@ -13,7 +13,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     const std::string_view text(reinterpret_cast<const char*>(data), size);
     auto lattice = ffd::parse_lattice_json(text, "fuzz.json");
     if (lattice) {
-        if (lattice->rest.size() != lattice->size() || lattice->current.size() != lattice->size()) __builtin_trap();
+        if (lattice->rest.size() != lattice->size() || lattice->current.size() != lattice->size())
+            __builtin_trap();
         // Accepted control points are finite and at most 1e30 in magnitude (1e308 once deformed to inf).
         for (const auto* grid : {&lattice->rest, &lattice->current})
             for (const auto& p : *grid)

@@ -20,13 +20,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         std::fclose(f);
     }
     std::size_t header_bytes = 0;
-    (void)ply::parse_header(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz", header_bytes);
+    (void)ply::parse_header(std::string_view(reinterpret_cast<const char*>(data), size), "fuzz",
+                            header_bytes);
     if (auto r = ply::Reader::open(path)) {
         ply::Chunk chunk;
         while (r->current_element() < r->header().elements.size()) {
             auto n = r->read_rows(7, chunk);
             if (!n) {
-                if (n.message().find(path) == std::string::npos) __builtin_trap();  // errors must name the file
+                if (n.message().find(path) == std::string::npos)
+                    __builtin_trap();  // errors must name the file
                 break;
             }
         }

@@ -18,7 +18,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     (void)quiet;
     if (size < 1) return 0;
     const bool glb = (data[0] & 1) != 0;
-    const std::string path = "/dev/shm/sffd_fuzz_scene_" + std::to_string(getpid()) + (glb ? ".glb" : ".gltf");
+    const std::string path =
+        "/dev/shm/sffd_fuzz_scene_" + std::to_string(getpid()) + (glb ? ".glb" : ".gltf");
     {
         std::FILE* f = std::fopen(path.c_str(), "wb");
         if (!f) return 0;
@@ -26,6 +27,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         std::fclose(f);
     }
     ecs::Registry registry;
-    if (auto s = load_scene(registry, path); !s && s.message().find(path) == std::string::npos) __builtin_trap();
+    if (auto s = load_scene(registry, path); !s && s.message().find(path) == std::string::npos)
+        __builtin_trap();
     return 0;
 }

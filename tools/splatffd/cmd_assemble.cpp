@@ -29,12 +29,14 @@ using namespace sffd;
 namespace fs = std::filesystem;
 
 void usage() {
-    std::fprintf(stderr,
-                 "usage: splatffd assemble DIR [--video FILE]\n"
-                 "  DIR           the folder the shards (`splatffd render ... --shard K/N --out DIR`) wrote\n"
-                 "  --video FILE  also encode the assembled PNG frames (.mp4 or .gif) at the clip's --fps; needs ffmpeg\n"
-                 "Checks that every shard finished with the same settings and that every frame is present once with\n"
-                 "the bytes its shard wrote, then writes DIR/render_manifest.json for the whole clip.\n");
+    std::fprintf(
+        stderr,
+        "usage: splatffd assemble DIR [--video FILE]\n"
+        "  DIR           the folder the shards (`splatffd render ... --shard K/N --out DIR`) wrote\n"
+        "  --video FILE  also encode the assembled PNG frames (.mp4 or .gif) at the clip's --fps; needs "
+        "ffmpeg\n"
+        "Checks that every shard finished with the same settings and that every frame is present once with\n"
+        "the bytes its shard wrote, then writes DIR/render_manifest.json for the whole clip.\n");
 }
 
 struct ShardFile {
@@ -48,7 +50,8 @@ std::string rerender_command(const std::map<long, ShardFile>& shards, long k, lo
     for (const auto& [index, s] : shards) {
         std::string c = s.run.command;
         const std::string from = " --shard " + std::to_string(index) + "/" + std::to_string(n);
-        if (auto at = c.find(from); at != std::string::npos) return c.replace(at, from.size(), " --shard " + std::to_string(k) + "/" + std::to_string(n));
+        if (auto at = c.find(from); at != std::string::npos)
+            return c.replace(at, from.size(), " --shard " + std::to_string(k) + "/" + std::to_string(n));
     }
     return "splatffd render ... --shard " + std::to_string(k) + "/" + std::to_string(n);
 }
@@ -99,7 +102,8 @@ int run_assemble(cli::Args args) {
     }
 
     // Every shard manifest and every frame file in DIR.
-    const std::regex manifest_name(R"(render_manifest\.shard-(\d+)-of-(\d+)\.json)"), frame_name(R"(frame_(\d+)\.(png|exr))");
+    const std::regex manifest_name(R"(render_manifest\.shard-(\d+)-of-(\d+)\.json)"),
+        frame_name(R"(frame_(\d+)\.(png|exr))");
     std::vector<std::string> problems;
     std::map<long, std::map<long, ShardFile>> by_count;  // N -> K -> manifest
     std::vector<std::pair<long, std::string>> frame_files;
@@ -123,14 +127,19 @@ int run_assemble(cli::Args args) {
     }
     if (by_count.empty()) {
         for (const std::string& p : problems) std::fprintf(stderr, "splatffd assemble: %s\n", p.c_str());
-        std::fprintf(stderr, "splatffd assemble: %s: no shard manifests (render_manifest.shard-K-of-N.json); render with --shard K/N\n",
+        std::fprintf(stderr,
+                     "splatffd assemble: %s: no shard manifests (render_manifest.shard-K-of-N.json); render "
+                     "with --shard K/N\n",
                      dir_text.c_str());
         return 1;
     }
     if (by_count.size() > 1) {
         std::string counts;
-        for (const auto& [n, s] : by_count) counts += (counts.empty() ? "" : ", ") + std::to_string(s.size()) + " of " + std::to_string(n);
-        std::fprintf(stderr, "splatffd assemble: %s holds shards of runs split differently (%s shards); keep one run's files in a folder\n",
+        for (const auto& [n, s] : by_count)
+            counts += (counts.empty() ? "" : ", ") + std::to_string(s.size()) + " of " + std::to_string(n);
+        std::fprintf(stderr,
+                     "splatffd assemble: %s holds shards of runs split differently (%s shards); keep one "
+                     "run's files in a folder\n",
                      dir_text.c_str(), counts.c_str());
         return 1;
     }
@@ -153,19 +162,22 @@ int run_assemble(cli::Args args) {
         }
         const cli::RunRecord& r = it->second.run;
         if (r.settings != settings) {
-            problems.push_back(it->second.path.string() + ": settings differ from " + reference.path.filename().string() +
+            problems.push_back(it->second.path.string() + ": settings differ from " +
+                               reference.path.filename().string() +
                                " (another run's shard, or another version of splatffd)" + again);
             continue;
         }
         if (r.state != "complete") {
-            problems.push_back(shard + ": " + r.state + " after " + std::to_string(r.written) + " of " + std::to_string(r.frames.count) +
-                               " frames" + (r.state == "running" ? " (still running, or interrupted)" : "") + again);
+            problems.push_back(shard + ": " + r.state + " after " + std::to_string(r.written) + " of " +
+                               std::to_string(r.frames.count) + " frames" +
+                               (r.state == "running" ? " (still running, or interrupted)" : "") + again);
             continue;
         }
         const cli::FrameSequence expect = cli::shard_frames(first, last, r.shard);
-        if (long(r.files.size()) != expect.count || r.frames.first != expect.first || r.frames.step != expect.step) {
-            problems.push_back(it->second.path.string() + ": lists " + std::to_string(r.files.size()) + " frames, its share is " +
-                               std::to_string(expect.count) + again);
+        if (long(r.files.size()) != expect.count || r.frames.first != expect.first ||
+            r.frames.step != expect.step) {
+            problems.push_back(it->second.path.string() + ": lists " + std::to_string(r.files.size()) +
+                               " frames, its share is " + std::to_string(expect.count) + again);
             continue;
         }
         for (const cli::FramePrint& f : r.files) writers[f.frame].emplace_back(k, &f);
@@ -177,7 +189,8 @@ int run_assemble(cli::Args args) {
         const auto w = writers.find(frame);
         if (w == writers.end()) continue;  // its shard's problem is listed above
         if (w->second.size() > 1) {
-            problems.push_back("frame " + std::to_string(frame) + " is listed by " + std::to_string(w->second.size()) + " shards");
+            problems.push_back("frame " + std::to_string(frame) + " is listed by " +
+                               std::to_string(w->second.size()) + " shards");
             continue;
         }
         const auto [k, print] = w->second.front();
@@ -188,14 +201,17 @@ int run_assemble(cli::Args args) {
             const fs::path file = base.string() + ext;
             auto actual = cli::fingerprint(file);
             if (!actual) {
-                problems.push_back(file.string() + ": missing (shard " + std::to_string(k) + "/" + std::to_string(n) +
+                problems.push_back(file.string() + ": missing (shard " + std::to_string(k) + "/" +
+                                   std::to_string(n) +
                                    " wrote it); re-render with: " + rerender_command(shards, k, n));
                 ok = false;
             } else if (actual->bytes != expected->bytes || actual->fnv1a64 != expected->fnv1a64) {
-                problems.push_back(file.string() + ": not the bytes shard " + std::to_string(k) + "/" + std::to_string(n) +
-                                   " wrote (" + std::to_string(actual->bytes) + " bytes, FNV-1a " + cli::hex64(actual->fnv1a64) +
-                                   "; recorded " + std::to_string(expected->bytes) + ", " + cli::hex64(expected->fnv1a64) +
-                                   "): rewritten by another run?; re-render with: " + rerender_command(shards, k, n));
+                problems.push_back(
+                    file.string() + ": not the bytes shard " + std::to_string(k) + "/" + std::to_string(n) +
+                    " wrote (" + std::to_string(actual->bytes) + " bytes, FNV-1a " +
+                    cli::hex64(actual->fnv1a64) + "; recorded " + std::to_string(expected->bytes) + ", " +
+                    cli::hex64(expected->fnv1a64) +
+                    "): rewritten by another run?; re-render with: " + rerender_command(shards, k, n));
                 ok = false;
             }
         }
@@ -207,15 +223,16 @@ int run_assemble(cli::Args args) {
         const bool in_range = frame >= first && frame <= last;
         const bool format = formats.find(ext) != std::string::npos;
         if (!in_range || !format)
-            problems.push_back(cli::frame_file_base(dir_text, frame).string() + "." + ext + ": not a frame of this clip (frames " +
-                               std::to_string(first) + ".." + std::to_string(last) + ", " + formats +
+            problems.push_back(cli::frame_file_base(dir_text, frame).string() + "." + ext +
+                               ": not a frame of this clip (frames " + std::to_string(first) + ".." +
+                               std::to_string(last) + ", " + formats +
                                "): another run's file; move it out of the folder");
     }
 
     if (!problems.empty()) {
         for (const std::string& p : problems) std::fprintf(stderr, "splatffd assemble: %s\n", p.c_str());
-        std::fprintf(stderr, "splatffd assemble: %s: %zu problem%s; nothing assembled\n", dir_text.c_str(), problems.size(),
-                     problems.size() == 1 ? "" : "s");
+        std::fprintf(stderr, "splatffd assemble: %s: %zu problem%s; nothing assembled\n", dir_text.c_str(),
+                     problems.size(), problems.size() == 1 ? "" : "s");
         return 1;
     }
 
@@ -232,17 +249,21 @@ int run_assemble(cli::Args args) {
         std::fprintf(stderr, "splatffd assemble: %s\n", st.message().c_str());
         return 1;
     }
-    std::fprintf(stderr, "splatffd assemble: %ld shards, frames %ld..%ld (%s) all present once with the bytes their shard wrote; wrote %s\n",
+    std::fprintf(stderr,
+                 "splatffd assemble: %ld shards, frames %ld..%ld (%s) all present once with the bytes their "
+                 "shard wrote; wrote %s\n",
                  n, first, last, formats.c_str(), (dir / "render_manifest.json").c_str());
     if (!video.empty()) {
         if (formats.find("png") == std::string::npos) {
-            std::fprintf(stderr, "splatffd assemble: --video encodes PNG frames; this clip has only %s\n", formats.c_str());
+            std::fprintf(stderr, "splatffd assemble: --video encodes PNG frames; this clip has only %s\n",
+                         formats.c_str());
             return 1;
         }
         const double fps = settings.at("fps").get<double>();
         // The same background a single run's --video uses: the shards' --background, or black.
         glm::vec3 background(0.0f);
-        if (const auto bg = settings.find("background"); bg != settings.end() && bg->is_array() && bg->size() == 3)
+        if (const auto bg = settings.find("background");
+            bg != settings.end() && bg->is_array() && bg->size() == 3)
             background = glm::vec3((*bg)[0].get<float>(), (*bg)[1].get<float>(), (*bg)[2].get<float>());
         if (Status st = cli::encode_video(ffmpeg, dir, first, last, fps, video, background); !st) {
             std::fprintf(stderr, "splatffd assemble: %s\n", st.message().c_str());
@@ -255,4 +276,5 @@ int run_assemble(cli::Args args) {
 
 }  // namespace
 
-SFFD_COMMAND(assemble, "check a folder of render shards and assemble the clip's manifest (and video)", run_assemble);
+SFFD_COMMAND(assemble, "check a folder of render shards and assemble the clip's manifest (and video)",
+             run_assemble);

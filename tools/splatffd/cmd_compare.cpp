@@ -2,8 +2,8 @@
 //
 // PSNR and SSIM between two frames (systems/splat_render/image_compare.h): over the object (pixels covered
 // in either image) by default, over every pixel with --whole-image. Prints one line:
-//   psnr_db=37.12 ssim=0.9876 pixels=140233 mse=1.94e-04 psnr_both_db=38.50 pixels_both=139000 pixels_one=1233
-//   psnr_interior_db=45.10 pixels_interior=120000
+//   psnr_db=37.12 ssim=0.9876 pixels=140233 mse=1.94e-04 psnr_both_db=38.50 pixels_both=139000
+//   pixels_one=1233 psnr_interior_db=45.10 pixels_interior=120000
 // (then: the pixels covered in both images alone, the silhouette disagreement, and the interior: pixels 2+
 // px from B's silhouettes and creases (B's normals turn < 10 degrees in 5 x 5, A's within 10 degrees of
 // B's), texture and shading only)
@@ -25,7 +25,8 @@ constexpr const char* kUsage =
     "  A.exr B.exr    two frames of the same size (splatffd render / reference --format exr)\n"
     "  --mask-alpha   PSNR (dB) and SSIM of sRGB colour over the pixels covered in either image (default)\n"
     "  --whole-image  over every pixel\n"
-    "Prints one line: psnr_db ssim pixels mse psnr_both_db pixels_both pixels_one psnr_interior_db pixels_interior\n";
+    "Prints one line: psnr_db ssim pixels mse psnr_both_db pixels_both pixels_one psnr_interior_db "
+    "pixels_interior\n";
 
 int run_compare(sffd::cli::Args args) {
     std::vector<std::string> files;
@@ -37,7 +38,9 @@ int run_compare(sffd::cli::Args args) {
         else if (!a.empty() && a[0] != '-') files.push_back(a);
         else return cli::usage_error("compare", "unknown option '" + a + "'", kUsage);
     }
-    if (files.size() != 2) return cli::usage_error("compare", "expected two EXR files, got " + std::to_string(files.size()), kUsage);
+    if (files.size() != 2)
+        return cli::usage_error("compare", "expected two EXR files, got " + std::to_string(files.size()),
+                                kUsage);
     auto a = render::read_exr(files[0]);
     if (!a) {
         std::fprintf(stderr, "%s\n", a.message().c_str());
@@ -53,9 +56,12 @@ int run_compare(sffd::cli::Args args) {
         std::fprintf(stderr, "%s vs %s: %s\n", files[0].c_str(), files[1].c_str(), r.message().c_str());
         return 1;
     }
-    std::printf("psnr_db=%.2f ssim=%.4f pixels=%zu mse=%.3e psnr_both_db=%.2f pixels_both=%zu pixels_one=%zu psnr_interior_db=%.2f "
-                "pixels_interior=%zu\n",
-                r->psnr, r->ssim, r->pixels, r->mse, r->psnr_both, r->pixels_both, r->pixels_one, r->psnr_interior, r->pixels_interior);
+    std::printf(
+        "psnr_db=%.2f ssim=%.4f pixels=%zu mse=%.3e psnr_both_db=%.2f pixels_both=%zu pixels_one=%zu "
+        "psnr_interior_db=%.2f "
+        "pixels_interior=%zu\n",
+        r->psnr, r->ssim, r->pixels, r->mse, r->psnr_both, r->pixels_both, r->pixels_one, r->psnr_interior,
+        r->pixels_interior);
     return 0;
 }
 

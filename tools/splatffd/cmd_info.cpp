@@ -27,8 +27,8 @@ namespace {
 using namespace sffd;
 
 void print_bounds(const char* indent, const glm::dvec3& lo, const glm::dvec3& hi) {
-    std::printf("%sbounds   [%.6g, %.6g, %.6g] .. [%.6g, %.6g, %.6g]  (size %.6g x %.6g x %.6g)\n", indent, lo.x, lo.y, lo.z, hi.x, hi.y, hi.z,
-                hi.x - lo.x, hi.y - lo.y, hi.z - lo.z);
+    std::printf("%sbounds   [%.6g, %.6g, %.6g] .. [%.6g, %.6g, %.6g]  (size %.6g x %.6g x %.6g)\n", indent,
+                lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, hi.x - lo.x, hi.y - lo.y, hi.z - lo.z);
 }
 
 // "    deformed by 'a' 'b'" for a cloud with Deformers (lattice names, in order).
@@ -52,7 +52,8 @@ int info_gaussians(const std::string& file, const char* format) {
     }
     std::error_code ec;
     const auto bytes = std::filesystem::file_size(file, ec);
-    std::printf("%s: %s, %llu bytes\n", file.c_str(), format, static_cast<unsigned long long>(ec ? 0 : bytes));
+    std::printf("%s: %s, %llu bytes\n", file.c_str(), format,
+                static_cast<unsigned long long>(ec ? 0 : bytes));
     std::printf("  %zu Gaussians, SH degree %d\n", g->size(), g->sh_degree);
     if (g->size()) {
         glm::dvec3 lo(INFINITY), hi(-INFINITY);
@@ -72,20 +73,22 @@ int info_ply(const std::string& file) {
         return 1;
     }
     const ply::Header& h = r->header();
-    std::printf("%s: PLY %s, %llu bytes\n", file.c_str(), ply::format_name(h.format), static_cast<unsigned long long>(r->file_size()));
+    std::printf("%s: PLY %s, %llu bytes\n", file.c_str(), ply::format_name(h.format),
+                static_cast<unsigned long long>(r->file_size()));
     for (const auto& c : h.comments) std::printf("  comment  %s\n", c.c_str());
     for (const auto& e : h.elements) {
         std::printf("  element  %s: %llu\n", e.name.c_str(), static_cast<unsigned long long>(e.count));
         for (const auto& p : e.properties)
             if (p.is_list)
-                std::printf("    list %s %s %s\n", ply::type_name(p.count_type), ply::type_name(p.type), p.name.c_str());
-            else
-                std::printf("    %s %s\n", ply::type_name(p.type), p.name.c_str());
+                std::printf("    list %s %s %s\n", ply::type_name(p.count_type), ply::type_name(p.type),
+                            p.name.c_str());
+            else std::printf("    %s %s\n", ply::type_name(p.type), p.name.c_str());
     }
     const int vi = h.find("vertex");
     if (vi < 0) return 0;
     const ply::Element& ve = h.elements[static_cast<std::size_t>(vi)];
-    if (gaussian::is_compressed_ply(h)) return info_gaussians(file, "compressed PLY (PlayCanvas chunk + packed vertex elements)");
+    if (gaussian::is_compressed_ply(h))
+        return info_gaussians(file, "compressed PLY (PlayCanvas chunk + packed vertex elements)");
     if (gaussian::is_gaussian_element(ve)) {
         // The header alone gives the count and degree; a bad layout is the reader's message.
         auto layout = gaussian::ply_layout(ve, file);
@@ -93,7 +96,8 @@ int info_ply(const std::string& file) {
             std::fprintf(stderr, "splatffd info: %s\n", layout.message().c_str());
             return 1;
         }
-        std::printf("  %llu Gaussians, SH degree %d (3DGS PLY)\n", static_cast<unsigned long long>(ve.count), layout->degree);
+        std::printf("  %llu Gaussians, SH degree %d (3DGS PLY)\n", static_cast<unsigned long long>(ve.count),
+                    layout->degree);
     }
     const int x = ve.find("x"), y = ve.find("y"), z = ve.find("z");
     if (x < 0 || y < 0 || z < 0) return 0;
@@ -112,7 +116,8 @@ int info_ply(const std::string& file) {
         }
         if (*n == 0) break;
         for (std::size_t i = 0; i < *n; ++i) {
-            const glm::dvec3 p(c.columns[static_cast<std::size_t>(x)].values[i], c.columns[static_cast<std::size_t>(y)].values[i],
+            const glm::dvec3 p(c.columns[static_cast<std::size_t>(x)].values[i],
+                               c.columns[static_cast<std::size_t>(y)].values[i],
                                c.columns[static_cast<std::size_t>(z)].values[i]);
             if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
                 ++bad;
@@ -123,7 +128,8 @@ int info_ply(const std::string& file) {
         }
     }
     if (lo.x <= hi.x) print_bounds("  ", lo, hi);
-    if (bad) std::printf("  WARNING  %zu vertices have non-finite coordinates (import refuses this file)\n", bad);
+    if (bad)
+        std::printf("  WARNING  %zu vertices have non-finite coordinates (import refuses this file)\n", bad);
     return 0;
 }
 
@@ -132,7 +138,8 @@ void summarise_registry(const ecs::Registry& reg) {
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& c) {
         const Name* n = reg.try_get<Name>(e);
         total += c.size();
-        std::printf("  cloud    '%s': %zu splats; origin [%.9g, %.9g, %.9g]\n", n ? n->value.c_str() : "?", c.size(), c.origin.x, c.origin.y, c.origin.z);
+        std::printf("  cloud    '%s': %zu splats; origin [%.9g, %.9g, %.9g]\n", n ? n->value.c_str() : "?",
+                    c.size(), c.origin.x, c.origin.y, c.origin.z);
         std::string attrs = "position";
         if (!c.normals.empty()) attrs += ", normal";
         if (!c.axis_u.empty()) attrs += ", axis_u/axis_v";
@@ -140,8 +147,8 @@ void summarise_registry(const ecs::Registry& reg) {
         if (!c.uvs.empty()) attrs += ", uv";
         std::printf("    attributes %s\n", attrs.c_str());
         if (!c.material.texture_rgba8.empty())
-            std::printf("    texture  %dx%d%s%s\n", c.material.texture_width, c.material.texture_height, c.material.texture_path.empty() ? "" : " ",
-                        c.material.texture_path.c_str());
+            std::printf("    texture  %dx%d%s%s\n", c.material.texture_width, c.material.texture_height,
+                        c.material.texture_path.empty() ? "" : " ", c.material.texture_path.c_str());
         if (c.size()) {
             glm::dvec3 lo(INFINITY), hi(-INFINITY);
             double rmin = INFINITY, rmax = 0, rsum = 0;
@@ -157,7 +164,9 @@ void summarise_registry(const ecs::Registry& reg) {
                 }
             }
             print_bounds("    ", lo, hi);
-            if (!c.axis_u.empty()) std::printf("    radius   min %.4g, mean %.4g, max %.4g\n", rmin, rsum / static_cast<double>(c.size()), rmax);
+            if (!c.axis_u.empty())
+                std::printf("    radius   min %.4g, mean %.4g, max %.4g\n", rmin,
+                            rsum / static_cast<double>(c.size()), rmax);
         }
         print_deformers(reg, e);
     });
@@ -166,8 +175,8 @@ void summarise_registry(const ecs::Registry& reg) {
         const Name* n = reg.try_get<Name>(e);
         const GaussianSource* src = reg.try_get<GaussianSource>(e);
         gaussians += g.size();
-        std::printf("  gaussians '%s': %zu Gaussians, SH degree %d%s%s\n", n ? n->value.c_str() : "?", g.size(), g.sh_degree,
-                    src ? "; file " : "", src ? src->path.string().c_str() : "");
+        std::printf("  gaussians '%s': %zu Gaussians, SH degree %d%s%s\n", n ? n->value.c_str() : "?",
+                    g.size(), g.sh_degree, src ? "; file " : "", src ? src->path.string().c_str() : "");
         if (g.size()) {
             glm::dvec3 lo(INFINITY), hi(-INFINITY);
             for (const glm::vec3& p : g.positions) {
@@ -187,29 +196,39 @@ void summarise_registry(const ecs::Registry& reg) {
             if (d > 0) ++moved;
             max_move = std::max(max_move, d);
         }
-        std::printf("  lattice  '%s': %s, divisions %d x %d x %d (%zu control points), %zu displaced (max %.4g)\n", n ? n->value.c_str() : "?",
-                    l.basis == LatticeBasis::bernstein ? "bernstein" : "bspline", l.divisions.x, l.divisions.y, l.divisions.z, l.size(), moved, max_move);
-        const bool aligned = l.axes[0].y == 0 && l.axes[0].z == 0 && l.axes[1].x == 0 && l.axes[1].z == 0 && l.axes[2].x == 0 && l.axes[2].y == 0;
+        std::printf(
+            "  lattice  '%s': %s, divisions %d x %d x %d (%zu control points), %zu displaced (max %.4g)\n",
+            n ? n->value.c_str() : "?", l.basis == LatticeBasis::bernstein ? "bernstein" : "bspline",
+            l.divisions.x, l.divisions.y, l.divisions.z, l.size(), moved, max_move);
+        const bool aligned = l.axes[0].y == 0 && l.axes[0].z == 0 && l.axes[1].x == 0 && l.axes[1].z == 0 &&
+                             l.axes[2].x == 0 && l.axes[2].y == 0;
         if (aligned) {
             print_bounds("    ", l.origin, l.origin + l.axes[0] + l.axes[1] + l.axes[2]);
         } else {  // an oriented box: origin and edge vectors
             std::printf("    origin   [%.6g, %.6g, %.6g]\n", l.origin.x, l.origin.y, l.origin.z);
             for (int a = 0; a < 3; ++a)
-                std::printf("    axis %c   [%.6g, %.6g, %.6g]  (length %.6g)\n", "STU"[a], l.axes[std::size_t(a)].x, l.axes[std::size_t(a)].y,
-                            l.axes[std::size_t(a)].z, glm::length(l.axes[std::size_t(a)]));
+                std::printf("    axis %c   [%.6g, %.6g, %.6g]  (length %.6g)\n", "STU"[a],
+                            l.axes[std::size_t(a)].x, l.axes[std::size_t(a)].y, l.axes[std::size_t(a)].z,
+                            glm::length(l.axes[std::size_t(a)]));
         }
     });
     if (reg.count<Lattice>() == 0 && (reg.count<SplatCloud>() > 0 || reg.count<GaussianCloud>() > 0))
-        std::printf("  lattices none (add one: splatffd convert IN OUT.glb --lattice fit[:L,M,N], or shift+a in splatffd view)\n");
+        std::printf(
+            "  lattices none (add one: splatffd convert IN OUT.glb --lattice fit[:L,M,N], or shift+a in "
+            "splatffd view)\n");
     reg.view<const Camera>().each([&](const Camera& c) {
-        std::printf("  camera   eye [%.4g, %.4g, %.4g] target [%.4g, %.4g, %.4g] fov %.1f\n", c.eye.x, c.eye.y, c.eye.z, c.target.x, c.target.y,
-                    c.target.z, static_cast<double>(c.fov_y_degrees));
+        std::printf("  camera   eye [%.4g, %.4g, %.4g] target [%.4g, %.4g, %.4g] fov %.1f\n", c.eye.x,
+                    c.eye.y, c.eye.z, c.target.x, c.target.y, c.target.z,
+                    static_cast<double>(c.fov_y_degrees));
     });
     reg.view<const DirectionalLight>().each([&](const DirectionalLight& d) {
-        std::printf("  light    directional [%.3g, %.3g, %.3g] intensity %.3g\n", static_cast<double>(d.direction.x), static_cast<double>(d.direction.y),
+        std::printf("  light    directional [%.3g, %.3g, %.3g] intensity %.3g\n",
+                    static_cast<double>(d.direction.x), static_cast<double>(d.direction.y),
                     static_cast<double>(d.direction.z), static_cast<double>(d.intensity));
     });
-    reg.view<const AmbientLight>().each([&](const AmbientLight& a) { std::printf("  light    ambient intensity %.3g\n", static_cast<double>(a.intensity)); });
+    reg.view<const AmbientLight>().each([&](const AmbientLight& a) {
+        std::printf("  light    ambient intensity %.3g\n", static_cast<double>(a.intensity));
+    });
     std::printf("  total    %zu splats\n", total);
     if (gaussians) std::printf("  total    %zu Gaussians\n", gaussians);
 }
@@ -217,14 +236,16 @@ void summarise_registry(const ecs::Registry& reg) {
 constexpr const char* kUsage =
     "usage: splatffd info FILE|sphere|face\n"
     "  FILE   .ply (point cloud, 3DGS or compressed Gaussians: header, counts, bounds), .obj .off (mesh or\n"
-    "         points), .gltf .glb (scene: clouds, Gaussians, lattices, clips, camera, lights), .spz .splat .ksplat\n"
+    "         points), .gltf .glb (scene: clouds, Gaussians, lattices, clips, camera, lights), .spz .splat "
+    ".ksplat\n"
     "         (Gaussians: count, SH degree, bounds)\n"
     "  sphere, face   the built-in scenes\n";
 
 int run_info(cli::Args args) {
     for (const std::string& a : args)
         if (cli::is_help(a)) return cli::help(kUsage);
-    if (args.size() != 1) return cli::usage_error("info", args.empty() ? "expected a FILE" : "expected one FILE", kUsage);
+    if (args.size() != 1)
+        return cli::usage_error("info", args.empty() ? "expected a FILE" : "expected one FILE", kUsage);
     const std::string file = args[0];
     std::string ext = std::filesystem::path(file).extension().string();
     for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
@@ -232,8 +253,11 @@ int run_info(cli::Args args) {
     if (ext == ".spz") return info_gaussians(file, "SPZ (Niantic)");
     if (ext == ".splat") return info_gaussians(file, ".splat (antimatter15)");
     if (ext == ".ksplat") return info_gaussians(file, ".ksplat (GaussianSplats3D)");
-    if (ext != ".obj" && ext != ".off" && ext != ".gltf" && ext != ".glb" && !assets::is_builtin_scene(file)) {
-        std::fprintf(stderr, "splatffd info: %s: unknown file type '%s' (expected .ply, .obj, .off, .gltf, .glb, .spz, .splat or .ksplat)\n",
+    if (ext != ".obj" && ext != ".off" && ext != ".gltf" && ext != ".glb" &&
+        !assets::is_builtin_scene(file)) {
+        std::fprintf(stderr,
+                     "splatffd info: %s: unknown file type '%s' (expected .ply, .obj, .off, .gltf, .glb, "
+                     ".spz, .splat or .ksplat)\n",
                      file.c_str(), ext.c_str());
         return 1;
     }
@@ -243,10 +267,12 @@ int run_info(cli::Args args) {
             std::fprintf(stderr, "splatffd info: %s\n", s.message().c_str());
             return 1;
         }
-        std::printf("%s: %s\n", file.c_str(), assets::is_builtin_scene(file) ? "built-in scene" : "glTF scene");
+        std::printf("%s: %s\n", file.c_str(),
+                    assets::is_builtin_scene(file) ? "built-in scene" : "glTF scene");
         if (!assets::is_builtin_scene(file)) {
             auto contents = assets::read_gltf(file);
-            if (contents && !contents->sffd_scene_json.empty()) std::printf("  SFFD_scene extension present\n");
+            if (contents && !contents->sffd_scene_json.empty())
+                std::printf("  SFFD_scene extension present\n");
         }
         summarise_registry(reg);
         return 0;
@@ -256,8 +282,8 @@ int run_info(cli::Args args) {
         std::fprintf(stderr, "splatffd info: %s\n", g.message().c_str());
         return 1;
     }
-    std::printf("%s: %zu points, %zu triangles, %zu materials, %zu textures\n", file.c_str(), g->positions.size(), g->triangle_count(),
-                g->materials.size(), g->textures.size());
+    std::printf("%s: %zu points, %zu triangles, %zu materials, %zu textures\n", file.c_str(),
+                g->positions.size(), g->triangle_count(), g->materials.size(), g->textures.size());
     std::string attrs;
     for (const auto& a : g->attributes) attrs += (attrs.empty() ? "" : ", ") + a;
     std::printf("  attributes %s\n", attrs.c_str());

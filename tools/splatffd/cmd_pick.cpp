@@ -75,14 +75,16 @@ int run_pick(sffd::cli::Args args) {
             return cli::help(kUsage);
         } else if (a == "--at" && has_value) {
             if (!parse_pair(args[++i], ',', x, y)) {
-                std::fprintf(stderr, "splatffd pick: --at expects X,Y (numbers), got '%s'\n", args[i].c_str());
+                std::fprintf(stderr, "splatffd pick: --at expects X,Y (numbers), got '%s'\n",
+                             args[i].c_str());
                 return 2;
             }
             have_at = true;
         } else if (a == "--size" && has_value) {
-            if (!parse_pair(args[++i], 'x', w, h) || w < 1 || h < 1 || w != std::floor(w) || h != std::floor(h) ||
-                w > 65536 || h > 65536) {
-                std::fprintf(stderr, "splatffd pick: --size expects WxH (positive integers), got '%s'\n", args[i].c_str());
+            if (!parse_pair(args[++i], 'x', w, h) || w < 1 || h < 1 || w != std::floor(w) ||
+                h != std::floor(h) || w > 65536 || h > 65536) {
+                std::fprintf(stderr, "splatffd pick: --size expects WxH (positive integers), got '%s'\n",
+                             args[i].c_str());
                 return 2;
             }
         } else if (a == "--tolerance" && has_value) {
@@ -143,26 +145,29 @@ int run_pick(sffd::cli::Args args) {
         return 0;
     }
     std::string out = "{\"hit\":true,\"kind\":\"" + std::string(picking::pick_kind_name(hit.kind)) + "\"";
-    out += ",\"entity\":" + std::to_string(hit.entity.index) + ",\"generation\":" + std::to_string(hit.entity.generation);
+    out += ",\"entity\":" + std::to_string(hit.entity.index) +
+           ",\"generation\":" + std::to_string(hit.entity.generation);
     if (const Name* name = registry.try_get<Name>(hit.entity)) out += ",\"name\":" + json_string(name->value);
     out += ",\"index\":" + std::to_string(hit.index);
     if (hit.kind == picking::PickKind::control_point) {
         if (const Lattice* l = registry.try_get<Lattice>(hit.entity)) {
             const int n1 = l->divisions.z + 1, m1 = l->divisions.y + 1;
             const int idx = int(hit.index);
-            out += ",\"lattice_ijk\":[" + std::to_string(idx / (m1 * n1)) + "," + std::to_string((idx / n1) % m1) + "," +
-                   std::to_string(idx % n1) + "]";
+            out += ",\"lattice_ijk\":[" + std::to_string(idx / (m1 * n1)) + "," +
+                   std::to_string((idx / n1) % m1) + "," + std::to_string(idx % n1) + "]";
         }
     }
     if (hit.kind == picking::PickKind::gaussian) {
-        if (const GaussianCloud* g = registry.try_get<GaussianCloud>(hit.entity); g && hit.index < g->opacities.size()) {
+        if (const GaussianCloud* g = registry.try_get<GaussianCloud>(hit.entity);
+            g && hit.index < g->opacities.size()) {
             char op[64];
             std::snprintf(op, sizeof op, ",\"opacity\":%.9g", double(g->opacities[hit.index]));
             out += op;
         }
     }
     char buf[256];
-    std::snprintf(buf, sizeof buf, ",\"position\":[%.17g,%.17g,%.17g],\"distance\":%.17g,\"pixel\":[%.17g,%.17g]}",
+    std::snprintf(buf, sizeof buf,
+                  ",\"position\":[%.17g,%.17g,%.17g],\"distance\":%.17g,\"pixel\":[%.17g,%.17g]}",
                   hit.position.x, hit.position.y, hit.position.z, hit.distance, x, y);
     out += buf;
     std::printf("%s\n", out.c_str());

@@ -18,9 +18,12 @@ namespace {
 using namespace profiling;
 
 constexpr const char* usage_text =
-    "usage: splatffd profile [SCENE] [--frames N] [--warmup W] [--quality hq|preview] [--raster auto|raster|compute]\n"
-    "                        [--backend cpu|gpu] [--sync] [--drive CASE|none] [--json F] [--csv F] [--svg F]\n"
-    "                        [--trace F] [--compare BASE.json] [--sweep K=V,..] [--plot-sweep F.json] [--paper]\n"
+    "usage: splatffd profile [SCENE] [--frames N] [--warmup W] [--quality hq|preview] [--raster "
+    "auto|raster|compute]\n"
+    "                        [--backend cpu|gpu] [--sync] [--drive CASE|none] [--json F] [--csv F] [--svg "
+    "F]\n"
+    "                        [--trace F] [--compare BASE.json] [--sweep K=V,..] [--plot-sweep F.json] "
+    "[--paper]\n"
     "                        [--naive-frames N]\n"
     "  SCENE                 built-in name (sphere, face), a scene/point-cloud file, or synthetic:N\n"
     "                        (a sphere of N splats with an 11^3 lattice), synthetic-gaussians:N (that\n"
@@ -141,16 +144,19 @@ int run_profile_command(cli::Args args) {
         } else if (a == "--frames") {
             // One meaning of --frames in every command (N, or 0:B); measuring starts at frame 0.
             std::string v;
-            auto range = value(v) ? cli::parse_frames(v, 9'999'999) : Result<cli::FrameRange>(make_error("--frames needs a value"));
+            auto range = value(v) ? cli::parse_frames(v, 9'999'999)
+                                  : Result<cli::FrameRange>(make_error("--frames needs a value"));
             if (!range) return usage_error(range.message());
-            if (range->first != 0) return usage_error("--frames " + v + ": measuring starts at frame 0; use N or 0:B");
+            if (range->first != 0)
+                return usage_error("--frames " + v + ": measuring starts at frame 0; use N or 0:B");
             o.frames = static_cast<int>(range->count());
         } else if (a == "--warmup") {
             if (!int_value(o.warmup)) return usage_error("--warmup takes a non-negative integer");
         } else if (a == "--naive-frames") {
             if (!int_value(o.naive_frames)) return usage_error("--naive-frames takes a non-negative integer");
         } else if (a == "--quality") {
-            if (!value(o.quality) || (o.quality != "hq" && o.quality != "preview")) return usage_error("--quality hq|preview");
+            if (!value(o.quality) || (o.quality != "hq" && o.quality != "preview"))
+                return usage_error("--quality hq|preview");
         } else if (a == "--raster") {
             if (!value(o.raster) || (o.raster != "auto" && o.raster != "raster" && o.raster != "compute"))
                 return usage_error("--raster auto|raster|compute");
@@ -159,14 +165,18 @@ int run_profile_command(cli::Args args) {
                 return usage_error("--backend auto|cpu|gpu");
         } else if (a == "--drive") {
             if (!value(o.drive) || (o.drive != "none" && !find_case(o.drive)))
-                return usage_error("--drive takes 'local stretch', 'local twist', 'global stretch', 'global twist' or none");
+                return usage_error(
+                    "--drive takes 'local stretch', 'local twist', 'global stretch', 'global twist' or none");
         } else if (a == "--sync") {
             o.sync = true;
         } else if (a == "--paper") {
             o.paper = true;
         } else if (a == "--json" || a == "--csv" || a == "--svg" || a == "--trace" || a == "--compare") {
-            std::string& target = a == "--json" ? o.json : a == "--csv" ? o.csv : a == "--svg" ? o.svg
-                                : a == "--trace" ? o.trace : o.compare;
+            std::string& target = a == "--json"    ? o.json
+                                  : a == "--csv"   ? o.csv
+                                  : a == "--svg"   ? o.svg
+                                  : a == "--trace" ? o.trace
+                                                   : o.compare;
             if (!value(target)) return usage_error(a + " takes a file name");
         } else if (a == "--plot-sweep") {
             if (!value(o.plot_sweep)) return usage_error("--plot-sweep takes a sweep JSON file");
@@ -214,4 +224,5 @@ int run_profile_command(cli::Args args) {
 }  // namespace
 }  // namespace sffd::profile_cmd
 
-SFFD_COMMAND(profile, "measure frame time per system and pass; sweeps, --compare, --paper", sffd::profile_cmd::run_profile_command);
+SFFD_COMMAND(profile, "measure frame time per system and pass; sweeps, --compare, --paper",
+             sffd::profile_cmd::run_profile_command);

@@ -1,4 +1,5 @@
-// splatffd reference [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--supersample N] [--anisotropic N] [--format png,exr]
+// splatffd reference [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--supersample N] [--anisotropic N]
+// [--format png,exr]
 //
 // Ground-truth frames (systems/splat_render/ground_truth.h): the exact surface behind the scene's cloud
 // (the built-in `sphere`; or the triangles of a mesh file, at rest, whose cloud is what `splatffd render
@@ -27,7 +28,8 @@ namespace {
 using namespace sffd;
 
 constexpr const char* kUsage =
-    "usage: splatffd reference [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--supersample N] [--anisotropic N]\n"
+    "usage: splatffd reference [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--supersample N] "
+    "[--anisotropic N]\n"
     "                          [--format png,exr] [--fps F]\n"
     "  SCENE            a scene whose cloud has an exact surface (built-in: sphere; default), or a\n"
     "                   mesh file (OBJ, OFF, PLY, glTF with triangles; one untinted texture or none)\n"
@@ -86,7 +88,8 @@ int run_reference(sffd::cli::Args args) {
             if (!range) return fail(range.error());
             first = range->first, last = range->last;
         } else if (a == "--size" && has_value) {
-            if (Status st = cli::parse_integer_pair("--size", args[i + 1], 'x', 1, 16384, width, height); !st) return fail(st);
+            if (Status st = cli::parse_integer_pair("--size", args[i + 1], 'x', 1, 16384, width, height); !st)
+                return fail(st);
             ++i;
         } else if (a == "--supersample" && has_value) {
             auto n = cli::parse_integer("--supersample", args[++i], 0, 16);
@@ -97,7 +100,8 @@ int run_reference(sffd::cli::Args args) {
             if (!n) return fail(n.error());
             anisotropic = static_cast<long>(*n);
         } else if (a == "--format" && has_value) {
-            if (!cli::parse_image_formats(args[i + 1], png, exr)) return bad("--format expects png, exr or png,exr, got");
+            if (!cli::parse_image_formats(args[i + 1], png, exr))
+                return bad("--format expects png, exr or png,exr, got");
             ++i;
         } else if (a == "--fps" && has_value) {
             auto f = cli::parse_number("--fps", args[++i], 1e-6, 1e6);
@@ -127,7 +131,8 @@ int run_reference(sffd::cli::Args args) {
     settings.supersample = int(supersample);
     settings.anisotropic = int(anisotropic);
     for (long k = first; k <= last; ++k) {
-        // The clip's pose at frame k, as `splatffd render` reaches it (a clock of its own, seeked to k / fps).
+        // The clip's pose at frame k, as `splatffd render` reaches it (a clock of its own, seeked to k /
+        // fps).
         Clock clock(ClockSettings{.fixed_dt = 1.0 / fps});
         clock.seek(double(k) / fps);
         FrameContext frame = clock.tick();
@@ -163,4 +168,5 @@ int run_reference(sffd::cli::Args args) {
 
 }  // namespace
 
-SFFD_COMMAND(reference, "ray trace the exact surface behind a scene (ground truth for image quality)", run_reference);
+SFFD_COMMAND(reference, "ray trace the exact surface behind a scene (ground truth for image quality)",
+             run_reference);

@@ -57,11 +57,15 @@ namespace {
 using namespace sffd;
 
 constexpr const char* kUsage =
-    "usage: splatffd render [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--quality hq|preview] [--format png,exr]\n"
+    "usage: splatffd render [SCENE] --out DIR [--frames N|A:B] [--size WxH] [--quality hq|preview] [--format "
+    "png,exr]\n"
     "                       [--background R,G,B] [--fps F] [--no-cull]\n"
-    "                       [--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV | --turntable N] [--video FILE.mp4|FILE.gif] [--shard K/N]\n"
-    "  SCENE            built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj .off,\n"
-    "                   3D Gaussians .ply (3DGS) .splat .spz .glb (KHR_gaussian_splatting) (default: sphere)\n"
+    "                       [--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV | --turntable N] [--video "
+    "FILE.mp4|FILE.gif] [--shard K/N]\n"
+    "  SCENE            built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj "
+    ".off,\n"
+    "                   3D Gaussians .ply (3DGS) .splat .spz .glb (KHR_gaussian_splatting) (default: "
+    "sphere)\n"
     "  --out DIR        output folder (created; required); files frame_NNNN.png / frame_NNNN.exr\n"
     "  --frames N|A:B   N: frames 0..N-1; A:B: frames A..B inclusive (default 1: frame 0); frame k is at\n"
     "                   time k / fps, and the scene's clips play\n"
@@ -70,7 +74,8 @@ constexpr const char* kUsage =
     "  --format LIST    png, exr or png,exr (default png,exr)\n"
     "  --background RGB sRGB colour 0..1 (e.g. 1,1,1) behind the object in the PNG and the video\n"
     "                   (default: transparent PNG, black video)\n"
-    "  --fps F          frames per second of the fixed-step clock and the video (default 24, the demo clip's rate)\n"
+    "  --fps F          frames per second of the fixed-step clock and the video (default 24, the demo clip's "
+    "rate)\n"
     "  --no-cull        disable back-face/frustum culling (for comparisons; default on)\n"
     "  --camera E,T,U,F the camera for every frame: eye x,y,z, target x,y,z, up x,y,z, vertical fov in\n"
     "                   degrees (0..180); eye = target and up along the view direction are refused\n"
@@ -81,7 +86,8 @@ constexpr const char* kUsage =
     "  --video FILE     also encode the PNG frames as FILE (.mp4 H.264 or .gif) at --fps, both over the\n"
     "                   same background; needs ffmpeg (tools/bootstrap.sh installs it)\n"
     "  --shard K/N      render only frames FIRST+K, FIRST+K+N, ... (shard K of N, for render farms;\n"
-    "                   default: every frame); `splatffd assemble DIR` checks the shards and writes the manifest\n"
+    "                   default: every frame); `splatffd assemble DIR` checks the shards and writes the "
+    "manifest\n"
     "Progress is shown on a terminal only (nothing is written into logs or pipes).\n";
 
 // ---- --camera, --turntable ------------------------------------------------------------------------
@@ -99,14 +105,17 @@ Result<Camera> parse_camera(const std::string& text) {
     std::size_t start = 0;
     while (true) {
         const std::size_t end = text.find(',', start);
-        auto n = cli::parse_number("--camera", text.substr(start, end == std::string::npos ? std::string::npos : end - start), -1e30, 1e30);
+        auto n = cli::parse_number(
+            "--camera", text.substr(start, end == std::string::npos ? std::string::npos : end - start), -1e30,
+            1e30);
         if (!n) return n.error();
         v.push_back(*n);
         if (end == std::string::npos) break;
         start = end + 1;
     }
     if (v.size() != 10)
-        return make_error("--camera expects 10 numbers eye x,y,z,target x,y,z,up x,y,z,fov; got " + std::to_string(v.size()) + " in '" + text + "'");
+        return make_error("--camera expects 10 numbers eye x,y,z,target x,y,z,up x,y,z,fov; got " +
+                          std::to_string(v.size()) + " in '" + text + "'");
     Camera c;
     c.eye = glm::dvec3(v[0], v[1], v[2]);
     c.target = glm::dvec3(v[3], v[4], v[5]);
@@ -115,10 +124,13 @@ Result<Camera> parse_camera(const std::string& text) {
     const glm::dvec3 view = c.target - c.eye;
     if (!(glm::length(view) > 1e-12 * std::max(1.0, glm::length(c.eye))))
         return make_error("--camera: eye and target are the same point; the camera has no view direction");
-    if (!(glm::length(c.up) > 0.0) || glm::length(glm::cross(glm::normalize(view), glm::normalize(c.up))) < 1e-6)
-        return make_error("--camera: up (" + number_text(v[6]) + ", " + number_text(v[7]) + ", " + number_text(v[8]) +
+    if (!(glm::length(c.up) > 0.0) ||
+        glm::length(glm::cross(glm::normalize(view), glm::normalize(c.up))) < 1e-6)
+        return make_error("--camera: up (" + number_text(v[6]) + ", " + number_text(v[7]) + ", " +
+                          number_text(v[8]) +
                           ") is parallel to the view direction (or zero); the image's up is undefined");
-    if (!(fov > 0.0 && fov < 180.0)) return make_error("--camera: fov " + number_text(fov) + " is outside (0, 180) degrees");
+    if (!(fov > 0.0 && fov < 180.0))
+        return make_error("--camera: fov " + number_text(fov) + " is outside (0, 180) degrees");
     c.fov_y_degrees = static_cast<float>(fov);
     return c;
 }
@@ -136,7 +148,8 @@ SceneBounds scene_bounds(const ecs::Registry& registry) {
     // largest axis scale).
     const auto add = [&](ecs::Entity e, const render::BoundingSphere& b, const glm::dvec3& origin) {
         const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), origin);
-        const double scale = std::max({glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
+        const double scale = std::max(
+            {glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
         const glm::dvec3 c = glm::dvec3(m * glm::dvec4(b.center, 1.0));
         balls.emplace_back(c, b.radius * scale);
         lo = glm::min(lo, c - b.radius * scale);
@@ -145,9 +158,10 @@ SceneBounds scene_bounds(const ecs::Registry& registry) {
     registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         if (cloud.size() > 0) add(e, render::bounding_sphere(cloud), cloud.origin);
     });
-    registry.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& cloud) {  // 3D Gaussians too
-        if (cloud.size() > 0) add(e, render::gaussian_bounding_sphere(cloud), cloud.origin);
-    });
+    registry.view<const GaussianCloud>().each(
+        [&](ecs::Entity e, const GaussianCloud& cloud) {  // 3D Gaussians too
+            if (cloud.size() > 0) add(e, render::gaussian_bounding_sphere(cloud), cloud.origin);
+        });
     SceneBounds out;
     if (balls.empty()) return out;
     out.center = 0.5 * (lo + hi);
@@ -265,7 +279,8 @@ std::optional<int> parse_render_args(cli::Args args, RenderOptions& o) {
             o.first = range->first, o.last = range->last;
             o.frames_given = true;
         } else if (a == "--size" && has_value) {
-            if (Status st = cli::parse_integer_pair("--size", args[i + 1], 'x', 1, 16384, o.width, o.height); !st)
+            if (Status st = cli::parse_integer_pair("--size", args[i + 1], 'x', 1, 16384, o.width, o.height);
+                !st)
                 return refuse(st.message());
             ++i;
         } else if (a == "--camera" && has_value) {
@@ -288,7 +303,8 @@ std::optional<int> parse_render_args(cli::Args args, RenderOptions& o) {
             else return bad("--quality expects hq or preview, got");
             ++i;
         } else if (a == "--format" && has_value) {
-            if (!cli::parse_image_formats(args[i + 1], o.png, o.exr)) return bad("--format expects png, exr or png,exr, got");
+            if (!cli::parse_image_formats(args[i + 1], o.png, o.exr))
+                return bad("--format expects png, exr or png,exr, got");
             ++i;
         } else if (a == "--background" && has_value) {
             o.background = parse_rgb(args[i + 1]);
@@ -316,29 +332,39 @@ std::optional<int> check_render_options(RenderOptions& o, std::string& ffmpeg) {
     // about 30 on the CPU, so 8192x8192 (67M pixels, ~4.5 GB) is the most one frame may ask for.
     constexpr long long kMaxPixels = 8192LL * 8192LL;
     if (static_cast<long long>(o.width) * o.height > kMaxPixels) {
-        std::fprintf(stderr, "splatffd render: --size %ldx%ld is %lld pixels, more than the budget of %lld (8192x8192)\n", o.width,
-                     o.height, static_cast<long long>(o.width) * o.height, kMaxPixels);
+        std::fprintf(
+            stderr,
+            "splatffd render: --size %ldx%ld is %lld pixels, more than the budget of %lld (8192x8192)\n",
+            o.width, o.height, static_cast<long long>(o.width) * o.height, kMaxPixels);
         return 2;
     }
     if (o.out_dir.empty()) return cli::usage_error("render", "--out DIR is required", kUsage);
     if (o.turntable > 0 && o.camera) {
-        std::fprintf(stderr, "splatffd render: --turntable orbits the scene camera; it cannot be combined with --camera\n");
+        std::fprintf(
+            stderr,
+            "splatffd render: --turntable orbits the scene camera; it cannot be combined with --camera\n");
         return 2;
     }
     if (o.turntable > 0 && o.frames_given) {
-        std::fprintf(stderr, "splatffd render: --turntable N renders frames 0..N-1; it cannot be combined with --frames\n");
+        std::fprintf(
+            stderr,
+            "splatffd render: --turntable N renders frames 0..N-1; it cannot be combined with --frames\n");
         return 2;
     }
     if (o.turntable > 0) o.first = 0, o.last = o.turntable - 1;
     if (o.shard && !o.video.empty()) {
-        // A shard has only some of the frames: the video is made once all shards are in (`splatffd assemble`).
-        std::fprintf(stderr, "splatffd render: --video cannot be combined with --shard; encode the assembled clip with "
-                             "`splatffd assemble DIR --video FILE`\n");
+        // A shard has only some of the frames: the video is made once all shards are in (`splatffd
+        // assemble`).
+        std::fprintf(
+            stderr,
+            "splatffd render: --video cannot be combined with --shard; encode the assembled clip with "
+            "`splatffd assemble DIR --video FILE`\n");
         return 2;
     }
     if (!o.video.empty()) {
         if (!o.png) {
-            std::fprintf(stderr, "splatffd render: --video encodes the PNG frames; --format must include png\n");
+            std::fprintf(stderr,
+                         "splatffd render: --video encodes the PNG frames; --format must include png\n");
             return 2;
         }
         bool usage_error = false;
@@ -366,8 +392,8 @@ Status check_free_space(const std::string& out_dir, long frames, double bytes_pe
     if (ec) return {};  // unknown (a file system that does not say): nothing to check against
     const double need = double(frames) * bytes_per_frame;
     if (need <= double(space.available)) return {};
-    return make_error(out_dir + ": " + std::to_string(frames) + " frames need about " + gigabytes(need) + " (" + basis +
-                      ") but the file system has " + gigabytes(double(space.available)) +
+    return make_error(out_dir + ": " + std::to_string(frames) + " frames need about " + gigabytes(need) +
+                      " (" + basis + ") but the file system has " + gigabytes(double(space.available)) +
                       " free; render fewer frames (--frames, --shard) or free some space");
 }
 
@@ -390,11 +416,14 @@ nlohmann::ordered_json settings_json(const RenderOptions& o) {
     s["formats"] = o.png && o.exr ? "png,exr" : o.png ? "png" : "exr";
     s["fps"] = o.fps;
     s["culling"] = o.culling;
-    s["background"] = o.background ? nlohmann::ordered_json{o.background->x, o.background->y, o.background->z} : nlohmann::ordered_json();
-    s["camera"] = o.camera ? nlohmann::ordered_json{o.camera->eye.x, o.camera->eye.y, o.camera->eye.z, o.camera->target.x,
-                                                    o.camera->target.y, o.camera->target.z, o.camera->up.x, o.camera->up.y,
-                                                    o.camera->up.z, o.camera->fov_y_degrees}
-                           : nlohmann::ordered_json();
+    s["background"] = o.background ? nlohmann::ordered_json{o.background->x, o.background->y, o.background->z}
+                                   : nlohmann::ordered_json();
+    s["camera"] = o.camera
+                      ? nlohmann::ordered_json{o.camera->eye.x,        o.camera->eye.y,    o.camera->eye.z,
+                                               o.camera->target.x,     o.camera->target.y, o.camera->target.z,
+                                               o.camera->up.x,         o.camera->up.y,     o.camera->up.z,
+                                               o.camera->fov_y_degrees}
+                      : nlohmann::ordered_json();
     s["turntable"] = o.turntable;
     s["version"] = SFFD_VERSION;
     return s;
@@ -412,28 +441,32 @@ struct RenderScene {
 Status set_up_scene(const RenderOptions& o, gfx::GlContext& ctx, RenderScene& s) {
     if (Status st = load_scene(s.registry, o.scene); !st) return st;
     s.settings.quality = o.quality, s.settings.width = int(o.width), s.settings.height = int(o.height);
-    s.settings.background = o.background ? std::optional<glm::vec3>(glm::vec3(render::srgb_to_linear(o.background->x),
-                                                                              render::srgb_to_linear(o.background->y),
-                                                                              render::srgb_to_linear(o.background->z)))
-                                         : std::nullopt;
+    s.settings.background = o.background
+                                ? std::optional<glm::vec3>(glm::vec3(render::srgb_to_linear(o.background->x),
+                                                                     render::srgb_to_linear(o.background->y),
+                                                                     render::srgb_to_linear(o.background->z)))
+                                : std::nullopt;
     s.settings.culling = o.culling;
     s.settings.aux_outputs = o.exr;  // Z and N channels
     s.registry.set_resource<render::RenderSettings>(s.settings);
     // --camera / --turntable replace the scene camera (its clip planes are fitted to the scene).
     s.bounds = o.camera || o.turntable > 0 ? scene_bounds(s.registry) : SceneBounds{};
-    s.scene_view = o.turntable > 0 ? render::scene_camera(s.registry, double(o.width) / double(o.height)) : Camera{};
+    s.scene_view =
+        o.turntable > 0 ? render::scene_camera(s.registry, double(o.width) / double(o.height)) : Camera{};
     if (o.camera) {
         Camera c = *o.camera;
         fit_clip_planes(c, s.bounds);
         use_camera(s.registry, c);
     }
     s.registry.set_resource<app::AppContext>(app::AppContext{&ctx, false});
-    if (Status st = render::init_render_state(s.registry); !st) return make_error("splatffd render: " + st.message());
+    if (Status st = render::init_render_state(s.registry); !st)
+        return make_error("splatffd render: " + st.message());
     return {};
 }
 
 // Renders frame k on a clock of its own (the frame depends on k only) and writes its files.
-Result<cli::FramePrint> render_frame(const RenderOptions& o, RenderScene& s, const Schedule& schedule, long k) {
+Result<cli::FramePrint> render_frame(const RenderOptions& o, RenderScene& s, const Schedule& schedule,
+                                     long k) {
     Clock clock(ClockSettings{.fixed_dt = 1.0 / o.fps});
     clock.seek(double(k) / o.fps);
     FrameContext frame = clock.tick();
@@ -446,7 +479,8 @@ Result<cli::FramePrint> render_frame(const RenderOptions& o, RenderScene& s, con
     cli::FramePrint print{k, std::nullopt, std::nullopt};
     if (o.png) {
         const std::filesystem::path file = base.string() + ".png";
-        if (Status st = render::write_png(file, render::to_rgba8(*image, s.settings.background)); !st) return st.error();
+        if (Status st = render::write_png(file, render::to_rgba8(*image, s.settings.background)); !st)
+            return st.error();
         auto p = cli::fingerprint(file);
         if (!p) return p.error();
         print.png = *p;
@@ -495,8 +529,10 @@ int render_frames(const RenderOptions& o, RenderScene& s, cli::RunRecord& run) {
         run.written = i + 1;
         if (i == 0 && count > 1) {
             // The first frame's real size, for the rest of the run.
-            const double bytes = double((print->png ? print->png->bytes : 0) + (print->exr ? print->exr->bytes : 0));
-            if (Status st = check_free_space(o.out_dir, count - 1, bytes, "at the size of the first frame"); !st) {
+            const double bytes =
+                double((print->png ? print->png->bytes : 0) + (print->exr ? print->exr->bytes : 0));
+            if (Status st = check_free_space(o.out_dir, count - 1, bytes, "at the size of the first frame");
+                !st) {
                 end_line();
                 std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
                 status = 1;
@@ -510,11 +546,12 @@ int render_frames(const RenderOptions& o, RenderScene& s, cli::RunRecord& run) {
             status = 1;
             break;
         }
-        const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        const double elapsed =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         const long done = i + 1;
         if (show_progress) {
-            std::fprintf(stderr, "\rsplatffd render: frame %ld (%ld/%ld, %.0f%%) %.2f s/frame, ETA %.0f s   ", k, done,
-                         count, 100.0 * double(done) / double(count), elapsed / double(done),
+            std::fprintf(stderr, "\rsplatffd render: frame %ld (%ld/%ld, %.0f%%) %.2f s/frame, ETA %.0f s   ",
+                         k, done, count, 100.0 * double(done) / double(count), elapsed / double(done),
                          elapsed / double(done) * double(count - done));
             std::fflush(stderr);
             line_open = true;
@@ -540,20 +577,24 @@ int run_render(sffd::cli::Args args) {
     if (!cli::create_output_folder(o.out_dir)) return 1;
 
     cli::RunRecord run;
-    run.started_unix = std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch()).count();
+    run.started_unix =
+        std::chrono::duration_cast<std::chrono::seconds>(std::chrono::system_clock::now().time_since_epoch())
+            .count();
     run.command = o.command;
     run.settings = settings_json(o);
     run.sharded = o.shard.has_value();
     run.shard = o.shard.value_or(cli::Shard{});
     run.frames = cli::shard_frames(o.first, o.last, run.shard);
-    if (Status st = check_free_space(o.out_dir, run.frames.count, estimated_frame_bytes(o), "a low estimate for this size and format");
+    if (Status st = check_free_space(o.out_dir, run.frames.count, estimated_frame_bytes(o),
+                                     "a low estimate for this size and format");
         !st) {
         std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
         return 1;
     }
 
     // Offscreen rendering needs no window: EGL surfaceless works with or without a display.
-    auto ctx = gfx::create_context({.headless = true, .width = int(o.width), .height = int(o.height), .debug = false});
+    auto ctx = gfx::create_context(
+        {.headless = true, .width = int(o.width), .height = int(o.height), .debug = false});
     if (!ctx) {
         std::fprintf(stderr, "splatffd render: %s\n", ctx.message().c_str());
         return 1;
@@ -569,11 +610,14 @@ int run_render(sffd::cli::Args args) {
         render::release_render_state(scene.registry);
     }
     if (status == 0 && !o.video.empty()) {
-        if (Status st = cli::encode_video(ffmpeg, o.out_dir, o.first, o.last, o.fps, o.video, o.background.value_or(glm::vec3(0.0f))); !st) {
+        if (Status st = cli::encode_video(ffmpeg, o.out_dir, o.first, o.last, o.fps, o.video,
+                                          o.background.value_or(glm::vec3(0.0f)));
+            !st) {
             std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
             return 1;
         }
-        std::fprintf(stderr, "wrote %s: %ld frames at %g fps\n", o.video.c_str(), o.last - o.first + 1, o.fps);
+        std::fprintf(stderr, "wrote %s: %ld frames at %g fps\n", o.video.c_str(), o.last - o.first + 1,
+                     o.fps);
     }
     return status;
 }

@@ -11,14 +11,18 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: splatffd view [SCENE] [--replay FILE] [--record FILE] [--frames N] [--out PATH] [--save PATH] [--size WxH]\n"
-    "                     [--quality hq|preview] [--no-ui] [--headless] [--json F] [--sync-timing] [--window-screenshot PATH]\n"
+    "usage: splatffd view [SCENE] [--replay FILE] [--record FILE] [--frames N] [--out PATH] [--save PATH] "
+    "[--size WxH]\n"
+    "                     [--quality hq|preview] [--no-ui] [--headless] [--json F] [--sync-timing] "
+    "[--window-screenshot PATH]\n"
     "                     [--panel-rects-json PATH]\n"
-    "  SCENE              built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj .off,\n"
+    "  SCENE              built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj "
+    ".off,\n"
     "                     3D Gaussians .ply (3DGS) .splat .spz .glb (default: sphere)\n"
     "  --replay FILE      play a recorded input file (format: systems/editor/README.md)\n"
     "  --record FILE      write this session's input to FILE at exit\n"
-    "  --frames N|0:B     exit after N frames (0:B: after frames 0..B; default: run until the window closes)\n"
+    "  --frames N|0:B     exit after N frames (0:B: after frames 0..B; default: run until the window "
+    "closes)\n"
     "  --out PATH         write the last frame to PATH (.png or .exr) at exit (old spelling: --screenshot)\n"
     "  --save PATH        where ctrl+s saves (default: the scene file, or <scene>.glb)\n"
     "  --size WxH         window size (default 1280x720)\n"
@@ -27,7 +31,8 @@ constexpr const char* kUsage =
     "  --headless         no window (EGL); input only from --replay (default: a window)\n"
     "  --json F           write frame-time statistics (all frames, frames with a live drag) (old spelling:\n"
     "                     --timing-json)\n"
-    "  --sync-timing      finish the GL queue around every system and pass, so each one's time includes its GL\n"
+    "  --sync-timing      finish the GL queue around every system and pass, so each one's time includes its "
+    "GL\n"
     "                     work (a true per-system split; frames get slower; default off)\n"
     "  --window-screenshot PATH  with --frames: the last frame's whole window (panels too), PNG\n"
     "  --panel-rects-json PATH   with --frames: the panels' rectangles in the last frame, JSON\n"
@@ -58,11 +63,13 @@ int run_view_command(sffd::cli::Args args) {
         } else if (a == "--frames") {
             const auto* v = value("--frames");
             if (!v) return 2;
-            auto range = sffd::cli::parse_frames(*v, 999'999'999);  // one meaning of --frames in every command
+            auto range =
+                sffd::cli::parse_frames(*v, 999'999'999);  // one meaning of --frames in every command
             if (!range) return sffd::cli::usage_error("view", range.message(), "");
             // The editor's clock starts at frame 0; a later first frame would need a seek it does not do.
             if (range->first != 0)
-                return sffd::cli::usage_error("view", "--frames " + *v + ": the editor starts at frame 0; use N or 0:B", "");
+                return sffd::cli::usage_error(
+                    "view", "--frames " + *v + ": the editor starts at frame 0; use N or 0:B", "");
             o.frames = std::uint64_t(range->count());
         } else if (a == "--out" || a == "--screenshot") {
             if (a == "--screenshot") sffd::cli::warn_deprecated("view", a, "--out");
@@ -88,8 +95,8 @@ int run_view_command(sffd::cli::Args args) {
             o.timing_json = *v;
         } else if (a == "--size") {
             const auto* v = value("--size");
-            if (!v || std::sscanf(v->c_str(), "%dx%d", &o.width, &o.height) != 2 || o.width < 16 || o.height < 16 ||
-                o.width > 8192 || o.height > 8192) {
+            if (!v || std::sscanf(v->c_str(), "%dx%d", &o.width, &o.height) != 2 || o.width < 16 ||
+                o.height < 16 || o.width > 8192 || o.height > 8192) {
                 std::fprintf(stderr, "splatffd view: --size takes WxH (16..8192)\n");
                 return 2;
             }

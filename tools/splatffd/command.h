@@ -32,8 +32,8 @@ Result<long long> parse_integer(std::string_view option, std::string_view text, 
 // Same for real numbers (finite, in [min, max]).
 Result<double> parse_number(std::string_view option, std::string_view text, double min, double max);
 // Two integers in [min, max] separated by `sep` ("0:95", "1280x720"), each through parse_integer.
-Status parse_integer_pair(std::string_view option, std::string_view text, char sep, long long min, long long max,
-                          long& a, long& b);
+Status parse_integer_pair(std::string_view option, std::string_view text, char sep, long long min,
+                          long long max, long& a, long& b);
 
 // ---- The one grammar of every command (help, usage errors, --frames, renamed options, progress) ----
 

@@ -13,13 +13,15 @@
 
 namespace sffd::cli {
 
-Result<long long> parse_integer(std::string_view option, std::string_view text, long long min, long long max) {
+Result<long long> parse_integer(std::string_view option, std::string_view text, long long min,
+                                long long max) {
     const std::string s(text);
     const std::string range = std::to_string(min) + ".." + std::to_string(max);
     errno = 0;
     char* end = nullptr;
     const long long v = s.empty() ? 0 : std::strtoll(s.c_str(), &end, 10);
-    const bool digits = !s.empty() && (std::isdigit(static_cast<unsigned char>(s[0])) || s[0] == '-' || s[0] == '+');
+    const bool digits =
+        !s.empty() && (std::isdigit(static_cast<unsigned char>(s[0])) || s[0] == '-' || s[0] == '+');
     if (!digits || end != s.c_str() + s.size() || errno == ERANGE || v < min || v > max)
         return make_error(std::string(option) + ": expected an integer in " + range + ", got '" + s + "'");
     return v;
@@ -37,12 +39,12 @@ Result<double> parse_number(std::string_view option, std::string_view text, doub
     return v;
 }
 
-Status parse_integer_pair(std::string_view option, std::string_view text, char sep, long long min, long long max,
-                          long& a, long& b) {
+Status parse_integer_pair(std::string_view option, std::string_view text, char sep, long long min,
+                          long long max, long& a, long& b) {
     const auto at = text.find(sep);
     if (at == std::string_view::npos)
-        return make_error(std::string(option) + ": expected two integers separated by '" + std::string(1, sep) + "', got '" +
-                          std::string(text) + "'");
+        return make_error(std::string(option) + ": expected two integers separated by '" +
+                          std::string(1, sep) + "', got '" + std::string(text) + "'");
     auto x = parse_integer(option, text.substr(0, at), min, max);
     if (!x) return x.error();
     auto y = parse_integer(option, text.substr(at + 1), min, max);
@@ -61,20 +63,22 @@ int help(std::string_view usage_text) {
 
 int usage_error(std::string_view command, std::string_view message, std::string_view usage_text) {
     if (!message.empty())
-        std::fprintf(stderr, "splatffd %.*s: %.*s\n", int(command.size()), command.data(), int(message.size()), message.data());
+        std::fprintf(stderr, "splatffd %.*s: %.*s\n", int(command.size()), command.data(),
+                     int(message.size()), message.data());
     std::fwrite(usage_text.data(), 1, usage_text.size(), stderr);
     return 2;
 }
 
 void warn_deprecated(std::string_view command, std::string_view old_name, std::string_view new_name) {
-    std::fprintf(stderr, "splatffd %.*s: %.*s is deprecated; use %.*s\n", int(command.size()), command.data(), int(old_name.size()),
-                 old_name.data(), int(new_name.size()), new_name.data());
+    std::fprintf(stderr, "splatffd %.*s: %.*s is deprecated; use %.*s\n", int(command.size()), command.data(),
+                 int(old_name.size()), old_name.data(), int(new_name.size()), new_name.data());
 }
 
 Result<FrameRange> parse_frames(std::string_view text, long max_frame) {
     const auto bad = [&] {
-        return make_error("--frames: expected an integer N (frames 0..N-1) or a range A:B (frames A..B, 0 <= A <= B <= " +
-                          std::to_string(max_frame) + "), got '" + std::string(text) + "'");
+        return make_error(
+            "--frames: expected an integer N (frames 0..N-1) or a range A:B (frames A..B, 0 <= A <= B <= " +
+            std::to_string(max_frame) + "), got '" + std::string(text) + "'");
     };
     FrameRange r;
     if (text.find(':') == std::string_view::npos) {
@@ -83,7 +87,8 @@ Result<FrameRange> parse_frames(std::string_view text, long max_frame) {
         r.first = 0, r.last = static_cast<long>(*n) - 1;
         return r;
     }
-    if (!parse_integer_pair("--frames", text, ':', 0, max_frame, r.first, r.last) || r.last < r.first) return bad();
+    if (!parse_integer_pair("--frames", text, ':', 0, max_frame, r.first, r.last) || r.last < r.first)
+        return bad();
     return r;
 }
 

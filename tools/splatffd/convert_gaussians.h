@@ -1,6 +1,7 @@
 // `splatffd convert IN OUT --gaussians`: writes 3D Gaussians (3DGS PLY, or glTF
-// KHR_gaussian_splatting .glb). IN is either a Gaussian file (.splat, .spz, 3DGS or compressed PLY, KHR .glb/.gltf) or any
-// surface-splat input, converted by gaussian::gaussians_from_splats (flat Gaussians, σ = 0.7 × radius).
+// KHR_gaussian_splatting .glb). IN is either a Gaussian file (.splat, .spz, 3DGS or compressed PLY, KHR
+// .glb/.gltf) or any surface-splat input, converted by gaussian::gaussians_from_splats (flat Gaussians, σ =
+// 0.7 × radius).
 #pragma once
 
 #include <string>
@@ -15,6 +16,7 @@ namespace sffd::cli {
 bool is_gaussian_file(const std::string& in);
 // Writes `out` from the Gaussian file `in` (when `surface` is null) or from `surface`. Returns the exit code.
 // `turn_x180`: turn the cloud 180 degrees about x before writing (gaussian_axes.h; a y-up file).
-int write_gaussians(const std::string& in, const SplatCloud* surface, const std::string& out, bool ascii, bool turn_x180 = false);
+int write_gaussians(const std::string& in, const SplatCloud* surface, const std::string& out, bool ascii,
+                    bool turn_x180 = false);
 
 }  // namespace sffd::cli

@@ -32,12 +32,16 @@ int fail(const std::string& message) {
     std::fprintf(stderr, "splatffd deform: %s\n", message.c_str());
     return 1;
 }
-double ms_since(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
+double ms_since(Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
 }  // namespace
 
 int deform_gaussian_ply(const std::string& in_path, const std::string& out_path, const Lattice& lattice,
-                        const std::string& lattice_path, const std::string& backend_name, int bench, bool ascii) {
-    const ffd::Backend backend = backend_name == "reference" ? ffd::Backend::reference : ffd::Backend::automatic;
+                        const std::string& lattice_path, const std::string& backend_name, int bench,
+                        bool ascii) {
+    const ffd::Backend backend =
+        backend_name == "reference" ? ffd::Backend::reference : ffd::Backend::automatic;
     // GPU backend: a headless context and the compute deformer (declared in this order: the deformer's GL
     // objects go before the context).
     std::optional<gfx::GlContext> context;
@@ -95,14 +99,14 @@ int deform_gaussian_ply(const std::string& in_path, const std::string& out_path,
             if (e.name == "vertex") {
                 g = GaussianCloud{};
                 g.sh_degree = layout->degree;
-                if (auto s = gaussian::append_from_chunk(chunk, *layout, row, in_path, g); !s) return fail(s.message());
+                if (auto s = gaussian::append_from_chunk(chunk, *layout, row, in_path, g); !s)
+                    return fail(s.message());
                 // The same validation as every cloud read whole (read_gaussians), row numbers of the file.
                 if (auto s = gaussian::validate(g, in_path, row); !s) return fail(s.message());
                 read_ms += ms_since(t0);
                 for (int r = 0; r < bench; ++r) {  // timing runs on a copy (the chunk is still the input)
                     t0 = Clock::now();
-                    if (auto s = run_deform(g, scratch); !s)
-                        return fail(lattice_path + ": " + s.message());
+                    if (auto s = run_deform(g, scratch); !s) return fail(lattice_path + ": " + s.message());
                     rep_ms[std::size_t(r)] += ms_since(t0);
                 }
                 t0 = Clock::now();
@@ -110,8 +114,10 @@ int deform_gaussian_ply(const std::string& in_path, const std::string& out_path,
                 auto stats = run_deform(g, g);
                 if (!stats) return fail(lattice_path + ": " + stats.message());
                 deform_ms += ms_since(t0);
-                total.inside += stats->inside, total.inverted += stats->inverted, total.degenerate += stats->degenerate;
-                gaussian::store_to_chunk(g, *layout, not_finite != bad_before, chunk);  // opacity only when some were zeroed
+                total.inside += stats->inside, total.inverted += stats->inverted,
+                    total.degenerate += stats->degenerate;
+                gaussian::store_to_chunk(g, *layout, not_finite != bad_before,
+                                         chunk);  // opacity only when some were zeroed
                 row += *rows;
             }
             if (auto s = writer->write_rows(chunk); !s) return fail(s.message());
@@ -119,19 +125,24 @@ int deform_gaussian_ply(const std::string& in_path, const std::string& out_path,
     }
     if (auto s = writer->finish(); !s) return fail(s.message());
     const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
-    std::fprintf(stderr,
-                 "splatffd deform: %llu Gaussians (SH degree %d, %s), %zu inside, %zu inverted, %zu degenerate, "
-                 "%zu not finite (written transparent); deformation %.1f ms, read+convert %.1f ms, total with I/O %.2f s\n",
-                 static_cast<unsigned long long>(row), layout->degree, backend_name.c_str(), total.inside, total.inverted,
-                 total.degenerate, not_finite, deform_ms, read_ms, total_s);
+    std::fprintf(
+        stderr,
+        "splatffd deform: %llu Gaussians (SH degree %d, %s), %zu inside, %zu inverted, %zu degenerate, "
+        "%zu not finite (written transparent); deformation %.1f ms, read+convert %.1f ms, total with I/O "
+        "%.2f s\n",
+        static_cast<unsigned long long>(row), layout->degree, backend_name.c_str(), total.inside,
+        total.inverted, total.degenerate, not_finite, deform_ms, read_ms, total_s);
     if (bench > 0) {
         std::sort(rep_ms.begin(), rep_ms.end());
-        const double median = rep_ms.size() % 2 ? rep_ms[rep_ms.size() / 2]
-                                                : 0.5 * (rep_ms[rep_ms.size() / 2 - 1] + rep_ms[rep_ms.size() / 2]);
-        std::printf("{\"gaussians\":%llu,\"sh_degree\":%d,\"backend\":\"%s\",\"median_ms\":%.4f,\"min_ms\":%.4f,\"runs\":%d,"
-                    "\"gaussians_per_s\":%.4g,\"read_ms\":%.3f,\"total_s\":%.3f}\n",
-                    static_cast<unsigned long long>(row), layout->degree, backend_name.c_str(), median, rep_ms.front(), bench,
-                    median > 0 ? double(row) / (median * 1e-3) : 0.0, read_ms, total_s);
+        const double median = rep_ms.size() % 2
+                                  ? rep_ms[rep_ms.size() / 2]
+                                  : 0.5 * (rep_ms[rep_ms.size() / 2 - 1] + rep_ms[rep_ms.size() / 2]);
+        std::printf(
+            "{\"gaussians\":%llu,\"sh_degree\":%d,\"backend\":\"%s\",\"median_ms\":%.4f,\"min_ms\":%.4f,"
+            "\"runs\":%d,"
+            "\"gaussians_per_s\":%.4g,\"read_ms\":%.3f,\"total_s\":%.3f}\n",
+            static_cast<unsigned long long>(row), layout->degree, backend_name.c_str(), median,
+            rep_ms.front(), bench, median > 0 ? double(row) / (median * 1e-3) : 0.0, read_ms, total_s);
     }
     return 0;
 }

@@ -37,7 +37,8 @@ bool is_scene_path(const std::string& path) {
 
 bool is_json_path(const std::string& path) { return lower_ext(path) == ".json"; }
 
-Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::string& file, const std::string& name) {
+Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::string& file,
+                                         const std::string& name) {
     std::vector<ecs::Entity> all;
     r.each_entity([&](ecs::Entity e) {
         if (r.has<Lattice>(e)) all.push_back(e);
@@ -52,13 +53,18 @@ Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::stri
         std::vector<ecs::Entity> hits;
         for (ecs::Entity e : all)
             if (name_of(r, e) == name) hits.push_back(e);
-        if (hits.empty()) return make_error(file + ": no lattice named '" + name + "' (lattices: " + quoted_list(all_names) + ")");
-        if (hits.size() > 1) return make_error(file + ": " + std::to_string(hits.size()) + " lattices are named '" + name + "'");
+        if (hits.empty())
+            return make_error(file + ": no lattice named '" + name +
+                              "' (lattices: " + quoted_list(all_names) + ")");
+        if (hits.size() > 1)
+            return make_error(file + ": " + std::to_string(hits.size()) + " lattices are named '" + name +
+                              "'");
         chain.lattices.push_back(r.get<Lattice>(hits[0]));
         chain.names.push_back(name);
         r.each_entity([&](ecs::Entity c) {
-            if (const Deformers* d = r.try_get<Deformers>(c); d && r.has<SplatCloud>(c) && !chain.cloud &&
-                                                              std::find(d->lattices.begin(), d->lattices.end(), hits[0]) != d->lattices.end())
+            if (const Deformers* d = r.try_get<Deformers>(c);
+                d && r.has<SplatCloud>(c) && !chain.cloud &&
+                std::find(d->lattices.begin(), d->lattices.end(), hits[0]) != d->lattices.end())
                 chain.cloud = c;
         });
         return chain;
@@ -66,7 +72,8 @@ Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::stri
     // The deformed clouds and their chains.
     std::vector<ecs::Entity> bound_clouds;
     r.each_entity([&](ecs::Entity c) {
-        if (const Deformers* d = r.try_get<Deformers>(c); d && r.has<SplatCloud>(c) && !d->lattices.empty()) bound_clouds.push_back(c);
+        if (const Deformers* d = r.try_get<Deformers>(c); d && r.has<SplatCloud>(c) && !d->lattices.empty())
+            bound_clouds.push_back(c);
     });
     if (bound_clouds.size() == 1) {
         for (ecs::Entity l : r.get<Deformers>(bound_clouds[0]).lattices)
@@ -82,9 +89,10 @@ Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::stri
         chain.names.push_back(all_names[0]);
         return chain;
     }
-    return make_error(file + ": " + std::to_string(all.size()) + " lattices (" + quoted_list(all_names) + ")" +
-                      (bound_clouds.size() > 1 ? " bound to " + std::to_string(bound_clouds.size()) + " clouds" : "") +
-                      "; choose one with --lattice-name NAME");
+    return make_error(
+        file + ": " + std::to_string(all.size()) + " lattices (" + quoted_list(all_names) + ")" +
+        (bound_clouds.size() > 1 ? " bound to " + std::to_string(bound_clouds.size()) + " clouds" : "") +
+        "; choose one with --lattice-name NAME");
 }
 
 Result<LatticeChain> load_lattice_source(const std::string& source, const std::string& name) {
@@ -93,7 +101,8 @@ Result<LatticeChain> load_lattice_source(const std::string& source, const std::s
         if (Status s = load_scene(r, source); !s) return s.error();
         return pick_scene_lattices(r, source, name);
     }
-    if (!name.empty()) return make_error(source + ": --lattice-name needs a scene file (.glb/.gltf), not a lattice JSON");
+    if (!name.empty())
+        return make_error(source + ": --lattice-name needs a scene file (.glb/.gltf), not a lattice JSON");
     auto l = ffd::load_lattice(source);
     if (!l) return l.error();
     LatticeChain chain;
@@ -102,8 +111,8 @@ Result<LatticeChain> load_lattice_source(const std::string& source, const std::s
     return chain;
 }
 
-Status save_cloud_with_lattices(SplatCloud cloud, const std::string& cloud_name, const std::vector<Lattice>& lattices,
-                                const std::string& path) {
+Status save_cloud_with_lattices(SplatCloud cloud, const std::string& cloud_name,
+                                const std::vector<Lattice>& lattices, const std::string& path) {
     ecs::Registry r;
     const ecs::Entity c = r.create();
     r.emplace<Name>(c, Name{cloud_name});

@@ -26,7 +26,8 @@ struct LatticeChain {
 // The lattices of a loaded scene (`file` names it in messages). With `name`: exactly the lattice of that
 // name. Without: the chain bound to the scene's one deformed cloud, or the scene's only lattice;
 // several bound clouds or several unbound lattices without a name are an error listing the names.
-Result<LatticeChain> pick_scene_lattices(const ecs::Registry& registry, const std::string& file, const std::string& name);
+Result<LatticeChain> pick_scene_lattices(const ecs::Registry& registry, const std::string& file,
+                                         const std::string& name);
 
 // Loads `source` when it is a lattice JSON or a scene file (not a fit spec: the caller fits, it has the
 // points). `name` (--lattice-name) applies to scene files only.
@@ -37,7 +38,7 @@ bool is_json_path(const std::string& path);   // .json (any case)
 
 // A scene holding `cloud` (Name `cloud_name`) and, when given, `lattices` bound to it in order (Name
 // "<cloud_name>.lattice", then ".lattice2", …), saved atomically as .glb/.gltf.
-Status save_cloud_with_lattices(SplatCloud cloud, const std::string& cloud_name, const std::vector<Lattice>& lattices,
-                                const std::string& path);
+Status save_cloud_with_lattices(SplatCloud cloud, const std::string& cloud_name,
+                                const std::vector<Lattice>& lattices, const std::string& path);
 
 }  // namespace sffd::cli

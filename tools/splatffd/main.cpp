@@ -50,7 +50,8 @@ const sffd::cli::Command* find(const std::string& name) {
 
 // On stdout for --help (exit 0); on stderr for a bare `splatffd` (a usage error, exit 2).
 void print_help(std::FILE* to) {
-    std::fprintf(to,
+    std::fprintf(
+        to,
         "splatffd %s: real-time point-splat engine with free-form-deformation lattices\n\n"
         "usage: splatffd <command> [options]     (splatffd <command> --help for a command's options)\n\n"
         "commands:\n",
@@ -58,17 +59,19 @@ void print_help(std::FILE* to) {
     for (const Known& k : known_commands) {
         const auto* c = find(k.name);
         std::fprintf(to, "  %-9s %s%s\n", k.name, c && !c->summary.empty() ? c->summary.c_str() : k.summary,
-                    c ? "" : " (not implemented yet)");
+                     c ? "" : " (not implemented yet)");
     }
     for (const auto& c : sffd::cli::commands()) {
         const bool listed = std::any_of(std::begin(known_commands), std::end(known_commands),
                                         [&](const Known& k) { return c.name == k.name; });
         if (!listed) std::fprintf(to, "  %-9s %s\n", c.name.c_str(), c.summary.c_str());
     }
-    std::fprintf(to, "\noptions:\n  --help     this text\n  --version  print the version\n"
-                "  --paths    print where shaders, content and the cache are found\n"
-                "  --allow-outside-resources  (with any command) let trusted files name textures, buffers and\n"
-                "             material libraries outside their own folder (refused by default)\n");
+    std::fprintf(
+        to,
+        "\noptions:\n  --help     this text\n  --version  print the version\n"
+        "  --paths    print where shaders, content and the cache are found\n"
+        "  --allow-outside-resources  (with any command) let trusted files name textures, buffers and\n"
+        "             material libraries outside their own folder (refused by default)\n");
 }
 
 }  // namespace
@@ -105,7 +108,9 @@ int main(int argc, char** argv) {
         try {
             return c->run(sffd::cli::Args(args).subspan(1));
         } catch (const std::bad_alloc&) {
-            std::fprintf(stderr, "splatffd %s: out of memory (the input needs more memory than is available)\n", name.c_str());
+            std::fprintf(stderr,
+                         "splatffd %s: out of memory (the input needs more memory than is available)\n",
+                         name.c_str());
             return 1;
         } catch (const std::exception& e) {
             std::fprintf(stderr, "splatffd %s: %s\n", name.c_str(), e.what());

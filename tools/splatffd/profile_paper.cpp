@@ -35,11 +35,12 @@ struct PaperRow {
 }  // namespace
 
 int run_paper(const Options& o) {
-    std::printf("The seed paper's experiment (section IV): 11x11x11 = 1331 control points, Bernstein basis,\n"
-                "positions + normals deformed every frame; time per frame = deformation only.\n"
-                "Paper (Pentium Dual-Core 2.7 GHz, GeForce 9500 GT): CPU %.2f FPS (~%.0f s/frame), "
-                "GPU vertex shader up to %.0f FPS (~%.0f ms), x%.0f.\n\n",
-                paper_cpu_fps, 1.0 / paper_cpu_fps, paper_gpu_fps, 1000.0 / paper_gpu_fps, paper_speedup);
+    std::printf(
+        "The seed paper's experiment (section IV): 11x11x11 = 1331 control points, Bernstein basis,\n"
+        "positions + normals deformed every frame; time per frame = deformation only.\n"
+        "Paper (Pentium Dual-Core 2.7 GHz, GeForce 9500 GT): CPU %.2f FPS (~%.0f s/frame), "
+        "GPU vertex shader up to %.0f FPS (~%.0f ms), x%.0f.\n\n",
+        paper_cpu_fps, 1.0 / paper_cpu_fps, paper_gpu_fps, 1000.0 / paper_gpu_fps, paper_speedup);
     std::vector<PaperRow> rows;
     // The naive algorithm runs about a minute per case: a percentage on a terminal (quiet in logs).
     cli::ProgressPrinter progress("profile --paper", cli::ProgressPrinter::mode_for(false));
@@ -76,7 +77,8 @@ int run_paper(const Options& o) {
                 const double c0 = thread_cpu_ms();
                 paper_ffd_naive(lattice, *cloud, pos, nrm);
                 cpu.push_back(thread_cpu_ms() - c0);
-                ms.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+                ms.push_back(
+                    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
             }
             naive.case_ms.push_back(ms.empty() ? -1.0 : median(ms));
             naive_cpu.case_ms.push_back(cpu.empty() ? -1.0 : median(cpu));
@@ -92,8 +94,8 @@ int run_paper(const Options& o) {
         rows.push_back(naive);
         rows.push_back(naive_cpu);
 
-        // Ours on the CPU: ffd_system's CPU path (FfdSettings::force_cpu), positions + normals as in the paper
-        // (the cloud's splat axes are left out of this registry's copy).
+        // Ours on the CPU: ffd_system's CPU path (FfdSettings::force_cpu), positions + normals as in the
+        // paper (the cloud's splat axes are left out of this registry's copy).
         PaperRow fast{label, "ours CPU (ffd_system CPU path)", cloud->size(), {}, ""};
         {
             ecs::Registry creg;
@@ -111,7 +113,9 @@ int run_paper(const Options& o) {
                     apply_paper_case(creg.patch<Lattice>(le), pc, 0.5 + 0.5 * std::sin(0.7 * (f + 1)));
                     const auto t0 = std::chrono::steady_clock::now();
                     ffd_system(creg, {});
-                    const double t = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+                    const double t =
+                        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                            .count();
                     if (!creg.get<DeformedSplats>(ce).cpu_valid) {
                         std::fprintf(stderr, "profile --paper: ffd_system did not deform on the CPU\n");
                         return 1;
@@ -147,7 +151,8 @@ int run_paper(const Options& o) {
                 residency_system(*greg, {});  // the rest splats the compute path reads
                 auto deform = [&]() -> Status {
                     ffd_system(*greg, {});
-                    if (!greg->get<DeformedSplats>(ce).gpu_valid) return make_error("profile --paper: ffd_system did not deform on the GPU");
+                    if (!greg->get<DeformedSplats>(ce).gpu_valid)
+                        return make_error("profile --paper: ffd_system did not deform on the GPU");
                     return {};
                 };
                 const int frames = std::max(3, o.frames / 8) + 2;
@@ -159,7 +164,9 @@ int run_paper(const Options& o) {
                         const auto t0 = std::chrono::steady_clock::now();
                         if (Status st = body(); !st) return st.error();
                         glFinish();
-                        const double t = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+                        const double t =
+                            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
+                                .count();
                         if (f >= 2) ms.push_back(t);  // two warm-up frames
                     }
                     return median(ms);
@@ -172,19 +179,23 @@ int run_paper(const Options& o) {
                     }
                     gpu.case_ms.push_back(*t);
                 }
-                auto target = gfx::RenderTarget::create(
-                    {.label = "profile.paper", .width = 1024, .height = 768, .color = {{"color", gfx::ColorFormat::rgba8}}});
+                auto target = gfx::RenderTarget::create({.label = "profile.paper",
+                                                         .width = 1024,
+                                                         .height = 768,
+                                                         .color = {{"color", gfx::ColorFormat::rgba8}}});
                 auto paper = ffd::PaperModeRenderer::create();
                 if (!target || !paper) {
                     std::fprintf(stderr, "%s\n", (!target ? target.message() : paper.message()).c_str());
                     return 1;
                 }
-                glm::dvec3 lo = lattice.origin, hi = lattice.origin + lattice.axes[0] + lattice.axes[1] + lattice.axes[2];
+                glm::dvec3 lo = lattice.origin,
+                           hi = lattice.origin + lattice.axes[0] + lattice.axes[1] + lattice.axes[2];
                 const glm::dvec3 centre = 0.5 * (lo + hi) - cloud->origin;
                 const float radius = static_cast<float>(0.5 * glm::length(hi - lo));
                 const glm::mat4 view_proj =
                     glm::perspective(glm::radians(45.0f), 1024.0f / 768.0f, 0.01f * radius, 10.0f * radius) *
-                    glm::lookAt(glm::vec3(centre) + glm::vec3(0, 0, 2.8f * radius), glm::vec3(centre), glm::vec3(0, 1, 0));
+                    glm::lookAt(glm::vec3(centre) + glm::vec3(0, 0, 2.8f * radius), glm::vec3(centre),
+                                glm::vec3(0, 1, 0));
                 const float black[4] = {0, 0, 0, 0};
                 const gfx::GpuSplats& buffers = greg->resource<gfx::GpuSplatStore>().clouds.at(ce);
                 for (const auto& pc : paper_cases) {
@@ -240,7 +251,8 @@ int run_paper(const Options& o) {
             else std::printf(" %12.2f ms", ms), sum += ms, ++n;
         }
         // Speed-up against the naive algorithm's thread CPU time (what its wall time is on an idle core), on
-        // the mean over the four cases; the other rows are wall times, so under load the ratio is conservative.
+        // the mean over the four cases; the other rows are wall times, so under load the ratio is
+        // conservative.
         double naive_mean = 0;
         for (const auto& q : rows)
             if (q.object == r.object && q.method.rfind("paper CPU naive, thread CPU", 0) == 0) {
@@ -249,16 +261,18 @@ int run_paper(const Options& o) {
         if (n > 0) {
             const double mean = sum / n;
             const double ratio = naive_mean / mean;
-            if (naive_mean > 0) std::printf(ratio < 10 ? " %10.2f %8.2fx" : " %10.2f %8.0fx", 1000.0 / mean, ratio);
+            if (naive_mean > 0)
+                std::printf(ratio < 10 ? " %10.2f %8.2fx" : " %10.2f %8.0fx", 1000.0 / mean, ratio);
             else std::printf(" %10.2f %9s", 1000.0 / mean, "-");
         } else {
             std::printf(" %10s %9s  %s", "-", "-", r.note.c_str());
         }
         std::printf("\n");
     }
-    std::printf("%-30s %-42s %63s %10.2f %8s\n", "paper (59,650 / 40,880)", "paper CPU", "", paper_cpu_fps, "1x");
-    std::printf("%-30s %-42s %63s %10.2f %8.0fx\n", "paper (59,650 / 40,880)", "paper GPU (vertex shader)", "",
-                paper_gpu_fps, paper_speedup);
+    std::printf("%-30s %-42s %63s %10.2f %8s\n", "paper (59,650 / 40,880)", "paper CPU", "", paper_cpu_fps,
+                "1x");
+    std::printf("%-30s %-42s %63s %10.2f %8.0fx\n", "paper (59,650 / 40,880)", "paper GPU (vertex shader)",
+                "", paper_gpu_fps, paper_speedup);
     return 0;
 }
 

@@ -33,7 +33,8 @@ namespace sffd::profile_cmd {
 using namespace profiling;
 
 bool parse_int(const std::string& s, int& out) {
-    auto v = cli::parse_integer("", s, 0, 10'000'000);  // the shared number parser (the caller names the option)
+    auto v =
+        cli::parse_integer("", s, 0, 10'000'000);  // the shared number parser (the caller names the option)
     if (!v) return false;
     out = static_cast<int>(*v);
     return true;
@@ -80,7 +81,8 @@ Status load(ecs::Registry& registry, const std::string& scene, bool* synthetic) 
         // The synthetic sphere as 3D Gaussians (gaussians_from_splats: flat Gaussians, SH degree 0) in the
         // same 11^3 lattice: gaussian_deform_system deforms it, render_system's Gaussian pass draws it.
         double count = 0.0;
-        if (!parse_count(scene.substr(20), count)) return make_error(scene + ": bad synthetic Gaussian count");
+        if (!parse_count(scene.substr(20), count))
+            return make_error(scene + ": bad synthetic Gaussian count");
         *synthetic = true;
         const SplatCloud sphere = synthetic_sphere(static_cast<std::size_t>(count));
         const ecs::Entity cloud = registry.create();
@@ -97,7 +99,8 @@ Status load(ecs::Registry& registry, const std::string& scene, bool* synthetic) 
     *synthetic = true;
     const ecs::Entity cloud = registry.create();
     registry.emplace<Name>(cloud, Name{"synthetic sphere"});
-    const SplatCloud& c = registry.emplace<SplatCloud>(cloud, synthetic_sphere(static_cast<std::size_t>(count)));
+    const SplatCloud& c =
+        registry.emplace<SplatCloud>(cloud, synthetic_sphere(static_cast<std::size_t>(count)));
     const ecs::Entity lattice = registry.create();
     registry.emplace<Lattice>(lattice, paper_lattice(c, 10));
     registry.emplace<Deformers>(cloud, Deformers{{lattice}});
@@ -136,7 +139,8 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     if (need_gl) {
         auto ctx = gfx::create_context({.headless = true, .width = 1280, .height = 720, .debug = false});
         if (!ctx) {
-            if (s.backend == "gpu") return make_error("profile: --backend gpu needs a GL context: " + ctx.message());
+            if (s.backend == "gpu")
+                return make_error("profile: --backend gpu needs a GL context: " + ctx.message());
         } else {
             out.context = std::move(ctx.value());
             have_gl = true;
@@ -165,7 +169,8 @@ Result<RunOutput> run_profile(const RunSetup& s) {
         }
         for (ecs::Entity e : ls) {
             Lattice& l = registry.patch<Lattice>(e);
-            if (s.lattice_points > 0) l = make_lattice(l.origin, l.axes, glm::ivec3(s.lattice_points - 1), l.basis);
+            if (s.lattice_points > 0)
+                l = make_lattice(l.origin, l.axes, glm::ivec3(s.lattice_points - 1), l.basis);
             if (s.basis == "bspline") l.basis = LatticeBasis::bspline;
             if (s.basis == "bernstein") l.basis = LatticeBasis::bernstein;
         }
@@ -189,13 +194,14 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     if (have_gl && want_render) {
         auto& rs = registry.set_resource<render::RenderSettings>();
         rs.quality = s.quality == "preview" ? render::Quality::preview : render::Quality::hq;
-        rs.raster_path = s.raster == "compute" ? render::RasterPath::compute
-                       : s.raster == "raster"  ? render::RasterPath::raster
-                                               : render::RasterPath::automatic;
+        rs.raster_path = s.raster == "compute"  ? render::RasterPath::compute
+                         : s.raster == "raster" ? render::RasterPath::raster
+                                                : render::RasterPath::automatic;
     }
     // The FFD system picks its CPU path on a software rasterizer (auto); --backend cpu|gpu forces either
     // path. The Gaussian system's counters (its default settings) say which path it took.
-    registry.set_resource<FfdSettings>(FfdSettings{.force_cpu = s.backend == "cpu", .force_gpu = s.backend == "gpu"});
+    registry.set_resource<FfdSettings>(
+        FfdSettings{.force_cpu = s.backend == "cpu", .force_gpu = s.backend == "gpu"});
     registry.set_resource<GaussianDeformSettings>();
 
     GpuTiming timing = GpuTiming::none;
@@ -205,8 +211,8 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     Clock clock({.fixed_dt = 1.0 / 60.0});
     // Says what it runs before it starts (a profile can run for minutes), and shows a percentage on a
     // terminal only (ProgressPrinter: quiet in logs and pipes).
-    std::fprintf(stderr, "profile: %s: %d warm-up + %d measured frames (%d in all)\n", s.scene.c_str(), s.warmup, s.frames,
-                 s.warmup + s.frames);
+    std::fprintf(stderr, "profile: %s: %d warm-up + %d measured frames (%d in all)\n", s.scene.c_str(),
+                 s.warmup, s.frames, s.warmup + s.frames);
     cli::ProgressPrinter progress("profile", cli::ProgressPrinter::mode_for(false));
     for (int i = 0; i < s.warmup; ++i) {
         schedule.run_frame(registry, clock.tick());
@@ -216,8 +222,10 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     // Deformations per path so far: the first frames may take the CPU path before the render upload.
     auto runs = [&registry] {
         std::pair<std::uint64_t, std::uint64_t> r{0, 0};
-        if (const auto* fs = registry.try_resource<FfdSettings>()) r.first += fs->cpu_runs, r.second += fs->gpu_runs;
-        if (const auto* gs = registry.try_resource<GaussianDeformSettings>()) r.first += gs->cpu_runs, r.second += gs->gpu_runs;
+        if (const auto* fs = registry.try_resource<FfdSettings>())
+            r.first += fs->cpu_runs, r.second += fs->gpu_runs;
+        if (const auto* gs = registry.try_resource<GaussianDeformSettings>())
+            r.first += gs->cpu_runs, r.second += gs->gpu_runs;
         return r;
     };
     const auto runs_before = runs();
@@ -250,7 +258,8 @@ Result<RunOutput> run_profile(const RunSetup& s) {
         config.emplace_back("gaussian_cpu_runs", static_cast<double>(gs->cpu_runs));
         config.emplace_back("gaussian_gpu_runs", static_cast<double>(gs->gpu_runs));
     }
-    out.backend_used = deformation_backend_name(runs_after.first - runs_before.first, runs_after.second - runs_before.second);
+    out.backend_used = deformation_backend_name(runs_after.first - runs_before.first,
+                                                runs_after.second - runs_before.second);
     config.emplace_back("backend_used", out.backend_used);
     if (s.lattice_points > 0) config.emplace_back("lattice", static_cast<double>(s.lattice_points));
     if (!s.basis.empty()) config.emplace_back("basis", s.basis);

@@ -24,7 +24,7 @@ struct Options {
     int warmup = 10;
     std::string quality = "hq";
     std::string backend = "auto";  // auto: the engine's own choice (ffd/deform_backend.h), cpu, gpu
-    std::string raster = "auto";  // HQ rasteriser: auto, raster, compute (render::RasterPath)
+    std::string raster = "auto";   // HQ rasteriser: auto, raster, compute (render::RasterPath)
     bool sync = false;
     std::string drive = "global twist";
     std::string json, csv, svg, trace, compare;
@@ -39,9 +39,9 @@ struct RunSetup {
     int frames = 120, warmup = 10;
     std::string quality = "hq", backend = "auto", drive = "global twist", raster = "auto";
     bool sync = false;
-    int lattice_points = 0;           // > 0: replace every lattice's divisions (control points per axis)
-    std::string basis;                // "": keep
-    bool deformation_only = false;    // sweeps: no renderer
+    int lattice_points = 0;         // > 0: replace every lattice's divisions (control points per axis)
+    std::string basis;              // "": keep
+    bool deformation_only = false;  // sweeps: no renderer
 };
 
 // Member order matters: the profiler's GL queries must be deleted before the context.

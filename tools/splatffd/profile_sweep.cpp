@@ -43,9 +43,13 @@ int write_sweep_plots(const std::vector<SweepRow>& rows, const std::string& pref
         for (const auto& r : rows) {
             if (r.deform_p50 <= 0) continue;
             char key[128];
-            if (by_points) std::snprintf(key, sizeof key, "%s %s, %d^3", r.backend.c_str(), r.basis.c_str(), r.lattice);
-            else std::snprintf(key, sizeof key, "%s %s, %s pts", r.backend.c_str(), r.basis.c_str(), tick_label(r.points).c_str());
-            if (!series.count(key)) order.push_back(key), series[key].name = key, series[key].dashed = r.backend == "gpu";
+            if (by_points)
+                std::snprintf(key, sizeof key, "%s %s, %d^3", r.backend.c_str(), r.basis.c_str(), r.lattice);
+            else
+                std::snprintf(key, sizeof key, "%s %s, %s pts", r.backend.c_str(), r.basis.c_str(),
+                              tick_label(r.points).c_str());
+            if (!series.count(key))
+                order.push_back(key), series[key].name = key, series[key].dashed = r.backend == "gpu";
             series[key].points.emplace_back(by_points ? r.points : double(r.lattice), r.deform_p50);
         }
         for (const auto& k : order) {
@@ -76,8 +80,10 @@ int plot_sweep(const std::string& path, const std::string& prefix) {
         return 1;
     }
     const auto j = nlohmann::json::parse(*text, nullptr, false);
-    if (j.is_discarded() || j.value("format", "") != "splatffd-sweep" || !j.contains("rows") || !j["rows"].is_array()) {
-        std::fprintf(stderr, "%s: not a sweep written by 'splatffd profile --sweep ... --json'\n", path.c_str());
+    if (j.is_discarded() || j.value("format", "") != "splatffd-sweep" || !j.contains("rows") ||
+        !j["rows"].is_array()) {
+        std::fprintf(stderr, "%s: not a sweep written by 'splatffd profile --sweep ... --json'\n",
+                     path.c_str());
         return 1;
     }
     std::vector<SweepRow> rows;
@@ -107,7 +113,8 @@ int run_sweep(const Options& o) {
         const auto eq = kv.find('=');
         if (eq == std::string::npos) return usage_error("--sweep: expected KEY=V1,V2,... got '" + kv + "'");
         const std::string key = kv.substr(0, eq);
-        if (!axes.count(key)) return usage_error("--sweep: unknown key '" + key + "' (points, lattice, backend, basis)");
+        if (!axes.count(key))
+            return usage_error("--sweep: unknown key '" + key + "' (points, lattice, backend, basis)");
         std::vector<std::string> values;
         std::stringstream ss(kv.substr(eq + 1));
         for (std::string v; std::getline(ss, v, ',');)
@@ -116,17 +123,20 @@ int run_sweep(const Options& o) {
         for (const auto& v : values) {
             double d = 0;
             int n = 0;
-            if (key == "points" && !parse_count(v, d)) return usage_error("--sweep: bad point count '" + v + "'");
+            if (key == "points" && !parse_count(v, d))
+                return usage_error("--sweep: bad point count '" + v + "'");
             if (key == "lattice" && (!parse_int(v, n) || n < 2 || n > 65))
                 return usage_error("--sweep: lattice takes control points per axis, 2..65, got '" + v + "'");
             if (key == "backend" && v != "cpu" && v != "gpu") return usage_error("--sweep: backend cpu|gpu");
-            if (key == "basis" && v != "bernstein" && v != "bspline") return usage_error("--sweep: basis bernstein|bspline");
+            if (key == "basis" && v != "bernstein" && v != "bspline")
+                return usage_error("--sweep: basis bernstein|bspline");
         }
         axes[key] = values;
     }
     std::vector<SweepRow> rows;
-    std::printf("sweep: %d measured frames + %d warm-up per configuration, deformation phase only, drive '%s'\n",
-                o.frames, o.warmup, o.drive.c_str());
+    std::printf(
+        "sweep: %d measured frames + %d warm-up per configuration, deformation phase only, drive '%s'\n",
+        o.frames, o.warmup, o.drive.c_str());
     std::printf("%9s %7s %7s %9s %12s %12s %12s  %s\n", "points", "lattice", "backend", "basis", "deform p50",
                 "deform p95", "frame p50", "note");
     std::string machine_line, timing_line;
@@ -154,21 +164,28 @@ int run_sweep(const Options& o) {
                         row.note = r.message();
                     } else {
                         for (const auto& ph : r->report.phases)
-                            if (ph.name == "deformation") row.deform_p50 = ph.cpu_ms.p50, row.deform_p95 = ph.cpu_ms.p95;
+                            if (ph.name == "deformation")
+                                row.deform_p50 = ph.cpu_ms.p50, row.deform_p95 = ph.cpu_ms.p95;
                         row.frame_p50 = r->report.frame_ms.p50;
                         // The row must measure the path it names: ffd_system falls back to the CPU when the
                         // GPU path is unavailable.
                         for (const auto& [key, value] : r->report.config)
-                            if (key == (backend == "gpu" ? "ffd_cpu_runs" : "ffd_gpu_runs") && std::get<double>(value) > 0)
-                                row.note = "ffd_system also ran its " + std::string(backend == "gpu" ? "CPU" : "GPU") +
-                                           " path (" + std::to_string(static_cast<long long>(std::get<double>(value))) + " runs)";
-                        machine_line = r->report.machine.cpu + ", " + std::to_string(r->report.machine.cores) + " cores" +
-                                       (r->report.machine.gl_renderer.empty() ? "" : ", GL " + r->report.machine.gl_renderer);
+                            if (key == (backend == "gpu" ? "ffd_cpu_runs" : "ffd_gpu_runs") &&
+                                std::get<double>(value) > 0)
+                                row.note = "ffd_system also ran its " +
+                                           std::string(backend == "gpu" ? "CPU" : "GPU") + " path (" +
+                                           std::to_string(static_cast<long long>(std::get<double>(value))) +
+                                           " runs)";
+                        machine_line =
+                            r->report.machine.cpu + ", " + std::to_string(r->report.machine.cores) +
+                            " cores" +
+                            (r->report.machine.gl_renderer.empty() ? ""
+                                                                   : ", GL " + r->report.machine.gl_renderer);
                         timing_line = r->report.gpu_timing;
                     }
                     std::printf("%9.0f %7d %7s %9s %12.3f %12.3f %12.3f  %s\n", row.points, row.lattice,
-                                row.backend.c_str(), row.basis.c_str(), row.deform_p50, row.deform_p95, row.frame_p50,
-                                row.note.c_str());
+                                row.backend.c_str(), row.basis.c_str(), row.deform_p50, row.deform_p95,
+                                row.frame_p50, row.note.c_str());
                     std::fflush(stdout);
                     rows.push_back(row);
                 }
@@ -177,7 +194,8 @@ int run_sweep(const Options& o) {
     if (!o.svg.empty())
         if (int rc = write_sweep_plots(rows, o.svg); rc != 0) return rc;
     if (!o.json.empty()) {
-        std::string j = "{\n  \"format\": \"splatffd-sweep\",\n  \"machine\": \"" + machine_line + "\",\n  \"rows\": [\n";
+        std::string j =
+            "{\n  \"format\": \"splatffd-sweep\",\n  \"machine\": \"" + machine_line + "\",\n  \"rows\": [\n";
         for (std::size_t i = 0; i < rows.size(); ++i) {
             const auto& r = rows[i];
             char buf[512];
@@ -195,8 +213,8 @@ int run_sweep(const Options& o) {
         }
         std::printf("wrote %s\n", o.json.c_str());
     }
-    const bool any_failed =
-        std::any_of(rows.begin(), rows.end(), [](const SweepRow& r) { return r.deform_p50 < 0 || !r.note.empty(); });
+    const bool any_failed = std::any_of(
+        rows.begin(), rows.end(), [](const SweepRow& r) { return r.deform_p50 < 0 || !r.note.empty(); });
     return any_failed ? 1 : 0;
 }
 

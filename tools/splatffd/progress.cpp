@@ -13,7 +13,8 @@ ProgressPrinter::Mode ProgressPrinter::mode_for(bool forced) {
     return isatty(STDERR_FILENO) ? Mode::terminal : Mode::quiet;
 }
 
-ProgressPrinter::ProgressPrinter(std::string command, Mode mode) : m_command(std::move(command)), m_mode(mode), m_start(Clock::now()) {}
+ProgressPrinter::ProgressPrinter(std::string command, Mode mode)
+    : m_command(std::move(command)), m_mode(mode), m_start(Clock::now()) {}
 
 ProgressFn ProgressPrinter::fn() {
     return [this](std::string_view step, double fraction) { report(step, fraction); };
@@ -22,8 +23,11 @@ ProgressFn ProgressPrinter::fn() {
 void ProgressPrinter::close_step(Clock::time_point now, bool finished) {
     if (m_step.empty()) return;
     const double seconds = std::chrono::duration<double>(now - m_step_start).count();
-    if (finished && m_mode == Mode::lines) std::fprintf(stderr, "%s: %s: 100%% in %.2f s\n", m_command.c_str(), m_step.c_str(), seconds);
-    if (m_line_open) std::fprintf(stderr, "\r\033[K%s: %s: %s in %.2f s\n", m_command.c_str(), m_step.c_str(), finished ? "100%" : "stopped", seconds);
+    if (finished && m_mode == Mode::lines)
+        std::fprintf(stderr, "%s: %s: 100%% in %.2f s\n", m_command.c_str(), m_step.c_str(), seconds);
+    if (m_line_open)
+        std::fprintf(stderr, "\r\033[K%s: %s: %s in %.2f s\n", m_command.c_str(), m_step.c_str(),
+                     finished ? "100%" : "stopped", seconds);
     m_line_open = false;
     m_times.emplace_back(m_step, seconds);
     m_step.clear();
@@ -51,7 +55,8 @@ void ProgressPrinter::report(std::string_view step, double fraction) {
         }
     } else if (m_mode == Mode::terminal) {
         // Only steps that run over a second, redrawn at most five times a second.
-        if (now - m_step_start >= std::chrono::seconds(1) && (!m_line_open || now - m_last_draw >= std::chrono::milliseconds(200))) {
+        if (now - m_step_start >= std::chrono::seconds(1) &&
+            (!m_line_open || now - m_last_draw >= std::chrono::milliseconds(200))) {
             std::fprintf(stderr, "\r\033[K%s: %s: %d%% (%.0f s)", m_command.c_str(), m_step.c_str(), percent,
                          std::chrono::duration<double>(now - m_step_start).count());
             std::fflush(stderr);
@@ -71,7 +76,8 @@ void ProgressPrinter::summary() {
         std::snprintf(buf, sizeof buf, " %.2f s", seconds);
         steps += (steps.empty() ? ": " : ", ") + name + buf;
     }
-    std::fprintf(stderr, "%s: done in %.2f s%s\n", m_command.c_str(), std::chrono::duration<double>(now - m_start).count(), steps.c_str());
+    std::fprintf(stderr, "%s: done in %.2f s%s\n", m_command.c_str(),
+                 std::chrono::duration<double>(now - m_start).count(), steps.c_str());
 }
 
 }  // namespace sffd::cli

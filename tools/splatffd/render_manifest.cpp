@@ -14,7 +14,8 @@ using ojson = nlohmann::ordered_json;
 
 Result<Shard> parse_shard(const std::string& text) {
     const auto slash = text.find('/');
-    if (slash == std::string::npos) return make_error("--shard: expected K/N (shard K of N, 0 <= K < N), got '" + text + "'");
+    if (slash == std::string::npos)
+        return make_error("--shard: expected K/N (shard K of N, 0 <= K < N), got '" + text + "'");
     auto n = parse_integer("--shard", text.substr(slash + 1), 1, 100'000);
     if (!n) return n.error();
     auto k = parse_integer("--shard", text.substr(0, slash), 0, *n - 1);
@@ -30,7 +31,8 @@ FrameSequence shard_frames(long first, long last, const Shard& shard) {
 
 std::filesystem::path manifest_path(const std::filesystem::path& dir, const Shard& shard, bool sharded) {
     if (!sharded) return dir / "render_manifest.json";
-    return dir / ("render_manifest.shard-" + std::to_string(shard.index) + "-of-" + std::to_string(shard.count) + ".json");
+    return dir / ("render_manifest.shard-" + std::to_string(shard.index) + "-of-" +
+                  std::to_string(shard.count) + ".json");
 }
 
 Result<FilePrint> fingerprint(const std::filesystem::path& file) {
@@ -78,7 +80,8 @@ ojson to_json(const RunRecord& r) {
     j["shard"] = ojson{{"index", r.shard.index}, {"count", r.shard.count}, {"sharded", r.sharded}};
     j["frames"] = ojson{{"first", r.frames.first}, {"step", r.frames.step}, {"count", r.frames.count}};
     // The frames on disk are the first `count` of the sequence above; `last` says which one ends them.
-    j["frames_written"] = ojson{{"count", r.written}, {"last", r.written > 0 ? ojson(r.frames.at(r.written - 1)) : ojson(nullptr)}};
+    j["frames_written"] = ojson{{"count", r.written},
+                                {"last", r.written > 0 ? ojson(r.frames.at(r.written - 1)) : ojson(nullptr)}};
     if (r.state != "running") {
         ojson files = ojson::array();
         for (const FramePrint& f : r.files) {
@@ -111,11 +114,12 @@ Result<RunRecord> read_manifest(const std::filesystem::path& path) {
         (void)r.settings.at("formats").get<std::string>(), (void)r.settings.at("fps").get<double>();
         r.shard = Shard{j.at("shard").at("index").get<long>(), j.at("shard").at("count").get<long>()};
         r.sharded = j.at("shard").at("sharded").get<bool>();
-        r.frames = FrameSequence{j.at("frames").at("first").get<long>(), j.at("frames").at("step").get<long>(),
-                                 j.at("frames").at("count").get<long>()};
+        r.frames =
+            FrameSequence{j.at("frames").at("first").get<long>(), j.at("frames").at("step").get<long>(),
+                          j.at("frames").at("count").get<long>()};
         r.written = j.at("frames_written").at("count").get<long>();
-        if (r.shard.count < 1 || r.shard.index < 0 || r.shard.index >= r.shard.count || r.frames.step < 1 || r.written < 0 ||
-            r.written > r.frames.count)
+        if (r.shard.count < 1 || r.shard.index < 0 || r.shard.index >= r.shard.count || r.frames.step < 1 ||
+            r.written < 0 || r.written > r.frames.count)
             return make_error(path.string() + ": inconsistent shard or frame counts");
         if (j.contains("files")) {
             for (const ojson& e : j.at("files")) {

@@ -68,8 +68,8 @@ struct RunRecord {
     Shard shard;
     bool sharded = false;
     FrameSequence frames;
-    long written = 0;                 // the first `written` frames of `frames` are on disk
-    std::vector<FramePrint> files;    // only when state != running
+    long written = 0;               // the first `written` frames of `frames` are on disk
+    std::vector<FramePrint> files;  // only when state != running
 };
 
 nlohmann::ordered_json to_json(const RunRecord& r);

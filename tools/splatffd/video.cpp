@@ -26,35 +26,53 @@ std::string find_on_path(const std::string& name) {
         const std::string dir = dirs.substr(start, end - start);
         const std::filesystem::path candidate = std::filesystem::path(dir.empty() ? "." : dir) / name;
         std::error_code ec;
-        if (std::filesystem::is_regular_file(candidate, ec) && ::access(candidate.c_str(), X_OK) == 0) return candidate.string();
+        if (std::filesystem::is_regular_file(candidate, ec) && ::access(candidate.c_str(), X_OK) == 0)
+            return candidate.string();
         start = end + 1;
     }
     return {};
 }
 
-Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir, long first, long last, double fps,
-                    const std::filesystem::path& video, glm::vec3 background) {
+Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir, long first, long last,
+                    double fps, const std::filesystem::path& video, glm::vec3 background) {
     const bool gif = video.extension() == ".gif";
-    const std::filesystem::path tmp = video.parent_path() / (video.filename().string() + ".tmp" + std::to_string(::getpid()));
+    const std::filesystem::path tmp =
+        video.parent_path() / (video.filename().string() + ".tmp" + std::to_string(::getpid()));
     char rate[64];
     std::snprintf(rate, sizeof rate, "%.9g", fps);
-    std::vector<std::string> argv = {ffmpeg, "-nostdin", "-loglevel", "error", "-y", "-framerate", rate, "-start_number", std::to_string(first),
-                                     "-i", (dir / "frame_%04d.png").string(), "-frames:v", std::to_string(last - first + 1)};
+    std::vector<std::string> argv = {ffmpeg,
+                                     "-nostdin",
+                                     "-loglevel",
+                                     "error",
+                                     "-y",
+                                     "-framerate",
+                                     rate,
+                                     "-start_number",
+                                     std::to_string(first),
+                                     "-i",
+                                     (dir / "frame_%04d.png").string(),
+                                     "-frames:v",
+                                     std::to_string(last - first + 1)};
     // Both formats are flattened over the same opaque `background` (sRGB) first: H.264 has no alpha and a
     // GIF's one transparent index cannot hold soft edges, and left to ffmpeg the MP4 came out black where the
     // GIF was transparent. The PNG's straight alpha is blended in display (sRGB) space, as 3DGS viewers do.
     char colour[16];
-    const auto byte = [](float c) { return static_cast<unsigned>(std::lround(std::clamp(c, 0.0f, 1.0f) * 255.0f)); };
-    std::snprintf(colour, sizeof colour, "0x%02X%02X%02X", byte(background.x), byte(background.y), byte(background.z));
+    const auto byte = [](float c) {
+        return static_cast<unsigned>(std::lround(std::clamp(c, 0.0f, 1.0f) * 255.0f));
+    };
+    std::snprintf(colour, sizeof colour, "0x%02X%02X%02X", byte(background.x), byte(background.y),
+                  byte(background.z));
     // [bg] is the colour as a stream as long as the frames; overlay=shortest=1 ends with the last frame.
     const std::string flatten = std::string("[0:v]split[in][size];[size]format=rgb24,drawbox=c=") + colour +
                                 ":t=fill[bg];[bg][in]overlay=shortest=1:format=rgb";
     if (gif) {
-        argv.insert(argv.end(), {"-filter_complex", flatten + ",split[a][b];[a]palettegen=reserve_transparent=0[p];[b][p]paletteuse",
-                                 "-loop", "0", "-f", "gif"});
+        argv.insert(argv.end(),
+                    {"-filter_complex",
+                     flatten + ",split[a][b];[a]palettegen=reserve_transparent=0[p];[b][p]paletteuse",
+                     "-loop", "0", "-f", "gif"});
     } else {
-        argv.insert(argv.end(), {"-filter_complex", flatten + ",pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v", "libx264", "-pix_fmt", "yuv420p",
-                                 "-movflags", "+faststart", "-f", "mp4"});
+        argv.insert(argv.end(), {"-filter_complex", flatten + ",pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v",
+                                 "libx264", "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4"});
     }
     argv.push_back(tmp.string());
     std::vector<char*> args;
@@ -64,12 +82,15 @@ Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir,
     if (int err = posix_spawn(&pid, ffmpeg.c_str(), nullptr, nullptr, args.data(), environ); err != 0)
         return make_error(video.string() + ": cannot run " + ffmpeg + ": " + std::strerror(err));
     int status = 0;
-    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {}
+    while (::waitpid(pid, &status, 0) < 0 && errno == EINTR) {
+    }
     std::error_code ec;
     if (!WIFEXITED(status) || WEXITSTATUS(status) != 0) {
         std::filesystem::remove(tmp, ec);
-        return make_error(video.string() + ": ffmpeg failed (" +
-                          (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : std::string("killed")) + "); its messages are above");
+        return make_error(
+            video.string() + ": ffmpeg failed (" +
+            (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : std::string("killed")) +
+            "); its messages are above");
     }
     std::filesystem::rename(tmp, video, ec);
     if (ec) {
@@ -82,16 +103,19 @@ Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir,
 Result<std::string> check_video_output(const std::string& video, bool& usage) {
     usage = true;
     const std::string ext = std::filesystem::path(video).extension().string();
-    if (ext != ".mp4" && ext != ".gif") return make_error("--video " + video + ": the file must end in .mp4 or .gif");
+    if (ext != ".mp4" && ext != ".gif")
+        return make_error("--video " + video + ": the file must end in .mp4 or .gif");
     usage = false;
     const std::string ffmpeg = find_on_path("ffmpeg");
     if (ffmpeg.empty())
-        return make_error("--video needs ffmpeg, which is not on PATH; install it (Debian/Ubuntu: "
-                          "apt-get install ffmpeg) or encode the PNG frames yourself");
+        return make_error(
+            "--video needs ffmpeg, which is not on PATH; install it (Debian/Ubuntu: "
+            "apt-get install ffmpeg) or encode the PNG frames yourself");
     const std::filesystem::path parent = std::filesystem::absolute(video).parent_path();
     std::error_code ec;
     if (!std::filesystem::is_directory(parent, ec) || ::access(parent.c_str(), W_OK) != 0)
-        return make_error(video + ": cannot write the video: folder " + parent.string() + " does not exist or is not writable");
+        return make_error(video + ": cannot write the video: folder " + parent.string() +
+                          " does not exist or is not writable");
     return ffmpeg;
 }
 

@@ -23,7 +23,7 @@ Result<std::string> check_video_output(const std::string& video, bool& usage);
 // through a temporary file renamed at the end, so a failed encode leaves no half video. ffmpeg runs with
 // an argument vector (no shell): paths with spaces or quotes are safe. Both formats are laid over the same
 // opaque `background` (sRGB 0..1; black by default), blended in display space.
-Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir, long first, long last, double fps,
-                    const std::filesystem::path& video, glm::vec3 background = glm::vec3(0.0f));
+Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir, long first, long last,
+                    double fps, const std::filesystem::path& video, glm::vec3 background = glm::vec3(0.0f));
 
 }  // namespace sffd::cli

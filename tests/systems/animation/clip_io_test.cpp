@@ -29,7 +29,9 @@ void expect_same(const AnimationClip& a, const AnimationClip& b) {
         EXPECT_EQ(x.has_pivot, y.has_pivot);
         if (x.kind == TrackKind::twist) {
             EXPECT_TRUE(test::same_bits(x.axis, y.axis));
-            if (x.has_pivot) { EXPECT_TRUE(test::same_bits(x.pivot, y.pivot)); }
+            if (x.has_pivot) {
+                EXPECT_TRUE(test::same_bits(x.pivot, y.pivot));
+            }
         }
         ASSERT_EQ(x.keys.size(), y.keys.size());
         for (std::size_t k = 0; k < x.keys.size(); ++k) {
@@ -49,9 +51,14 @@ AnimationClip awkward_clip() {
     clip.speed = -0.1;
     const std::size_t s = add_stretch_track(clip, "s", {0, 7, 4000000000u});
     set_key(clip.tracks[s], {0.0, {0.1, -1e-310, 6.02214076e23}, Interpolation::step, Easing::ease_in});
-    set_key(clip.tracks[s], {std::nextafter(0.1, 1.0), {std::numbers::pi, -0.0, 1e-17}, Interpolation::smooth, Easing::ease_out});
-    set_key(clip.tracks[s], {0.3, {std::numeric_limits<double>::max(), std::numeric_limits<double>::denorm_min(), 2.0 / 3.0},
-                             Interpolation::linear, Easing::ease_in_out});
+    set_key(
+        clip.tracks[s],
+        {std::nextafter(0.1, 1.0), {std::numbers::pi, -0.0, 1e-17}, Interpolation::smooth, Easing::ease_out});
+    set_key(clip.tracks[s],
+            {0.3,
+             {std::numeric_limits<double>::max(), std::numeric_limits<double>::denorm_min(), 2.0 / 3.0},
+             Interpolation::linear,
+             Easing::ease_in_out});
     const std::size_t t = add_twist_track(clip, "t", {3}, {1.0 / 7.0, 0.0, -2.5}, glm::dvec3(0.1, 0.2, 0.3));
     set_key(clip.tracks[t], {0.0, {720.0, 0, 0}, Interpolation::smooth, Easing::none});
     set_key(clip.tracks[t], {0.25, {-1e3 / 3.0, 0, 0}, Interpolation::linear, Easing::none});
@@ -69,10 +76,10 @@ TEST(AnimationClipIo, RoundTripIsExact) {
 }
 
 TEST(AnimationClipIo, PaperDemoRoundTripsThroughAFile) {
-    const Lattice lattice = test::make_lattice({10, 10, 10}, glm::dvec3(-0.7, -0.3, 0.1), glm::dvec3(1.4, 1.1, 0.9));
+    const Lattice lattice =
+        test::make_lattice({10, 10, 10}, glm::dvec3(-0.7, -0.3, 0.1), glm::dvec3(1.4, 1.1, 0.9));
     const AnimationClip clip = make_paper_demo_clip(lattice);
-    const std::filesystem::path path =
-        std::filesystem::path(SFFD_BINARY_DIR) / "animation_clip_io_test.json";
+    const std::filesystem::path path = std::filesystem::path(SFFD_BINARY_DIR) / "animation_clip_io_test.json";
     ASSERT_TRUE(save_clip(clip, path).ok());
     Result<AnimationClip> back = load_clip(path);
     ASSERT_TRUE(back.ok()) << back.message();
@@ -102,16 +109,21 @@ TEST(AnimationClipIo, BadInputNamesTheSourceAndTheProblem) {
               "scene.gltf: tracks[0].axis: must be non-zero");
     EXPECT_EQ(error(R"({"duration": 1, "tracks": [{"kind": "twist", "axis": [0, 1]}]})"),
               "scene.gltf: tracks[0].axis: expected an array of 3 numbers");
-    EXPECT_EQ(error(R"({"duration": 1, "tracks": [{"kind": "stretch", "keys": [{"time": 1, "value": [0, 0, 0]},
+    EXPECT_EQ(
+        error(R"({"duration": 1, "tracks": [{"kind": "stretch", "keys": [{"time": 1, "value": [0, 0, 0]},
                                                                           {"time": 0.5, "value": [0, 0, 0]}]}]})"),
-              "scene.gltf: tracks[0].keys[1].time: key times must be strictly increasing");
-    EXPECT_EQ(error(R"({"duration": 1, "tracks": [{"kind": "stretch", "keys": [{"time": 1, "value": [0, null, 0]}]}]})"),
-              "scene.gltf: tracks[0].keys[0].value[1]: expected a number");
-    EXPECT_EQ(error(R"({"duration": 1, "tracks": [{"kind": "twist", "axis": [0,0,1], "keys": [{"time": 1}]}]})"),
-              "scene.gltf: tracks[0].keys[0].angle: missing");
+        "scene.gltf: tracks[0].keys[1].time: key times must be strictly increasing");
+    EXPECT_EQ(
+        error(
+            R"({"duration": 1, "tracks": [{"kind": "stretch", "keys": [{"time": 1, "value": [0, null, 0]}]}]})"),
+        "scene.gltf: tracks[0].keys[0].value[1]: expected a number");
+    EXPECT_EQ(
+        error(R"({"duration": 1, "tracks": [{"kind": "twist", "axis": [0,0,1], "keys": [{"time": 1}]}]})"),
+        "scene.gltf: tracks[0].keys[0].angle: missing");
     EXPECT_EQ(error(R"({"duration": 1, "tracks": [{"kind": "stretch", "keys": [{"time": 1, "value": [0,0,0],
                                                                              "easing": "bouncy"}]}]})"),
-              "scene.gltf: tracks[0].keys[0].easing: unknown value 'bouncy' (expected none, ease_in, ease_out, ease_in_out)");
+              "scene.gltf: tracks[0].keys[0].easing: unknown value 'bouncy' (expected none, ease_in, "
+              "ease_out, ease_in_out)");
     EXPECT_EQ(error(R"({"duration": 1e999})").rfind("scene.gltf: not valid JSON (", 0), 0u);  // overflow
 }
 

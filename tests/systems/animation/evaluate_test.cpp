@@ -16,7 +16,8 @@ namespace {
 AnimationTrack track_with(Interpolation interp, Easing easing) {
     AnimationTrack t;
     const double times[] = {0.0, 0.4, 1.1, 1.5, 3.0};
-    const glm::dvec3 values[] = {{0.0, 1.0, -2.0}, {0.3, -0.7, 5.0}, {-1.25, 2.0, 0.1}, {4.0, 0.0, 0.0}, {0.1, 0.2, 0.3}};
+    const glm::dvec3 values[] = {
+        {0.0, 1.0, -2.0}, {0.3, -0.7, 5.0}, {-1.25, 2.0, 0.1}, {4.0, 0.0, 0.0}, {0.1, 0.2, 0.3}};
     for (int i = 0; i < 5; ++i) t.keys.push_back({times[i], values[i], interp, easing});
     return t;
 }
@@ -52,7 +53,8 @@ TEST(AnimationEvaluate, StepHoldsTheLeftKey) {
 
 TEST(AnimationEvaluate, LinearAndEasingAgainstClosedForms) {
     AnimationTrack t;
-    t.keys = {{1.0, glm::dvec3(2.0), Interpolation::linear, Easing::none}, {3.0, glm::dvec3(6.0), Interpolation::linear, Easing::none}};
+    t.keys = {{1.0, glm::dvec3(2.0), Interpolation::linear, Easing::none},
+              {3.0, glm::dvec3(6.0), Interpolation::linear, Easing::none}};
     EXPECT_DOUBLE_EQ(evaluate_track(t, 2.0).x, 4.0);
     EXPECT_DOUBLE_EQ(evaluate_track(t, 1.5).y, 3.0);
     t.keys[0].easing = Easing::ease_in;  // u^2: at u = 0.5 a quarter of the way
@@ -68,7 +70,8 @@ TEST(AnimationEvaluate, SmoothMatchesUniformCatmullRomOnInteriorSegments) {
     // Uniform keys: the documented tangents reduce to the textbook Catmull-Rom matrix form.
     AnimationTrack t;
     const double p[] = {0.0, 1.0, 3.0, -2.0, 0.5};
-    for (int i = 0; i < 5; ++i) t.keys.push_back({0.5 * i, glm::dvec3(p[i], 2 * p[i], 0.0), Interpolation::smooth, Easing::none});
+    for (int i = 0; i < 5; ++i)
+        t.keys.push_back({0.5 * i, glm::dvec3(p[i], 2 * p[i], 0.0), Interpolation::smooth, Easing::none});
     for (int seg = 1; seg <= 2; ++seg)
         for (double u : {0.1, 0.3, 0.5, 0.77, 0.95}) {
             const double p0 = p[seg - 1], p1 = p[seg], p2 = p[seg + 1], p3 = p[seg + 2];
@@ -137,11 +140,11 @@ TEST(AnimationEvaluate, TwistOf720DegreesTurnsTwice) {
     const glm::dvec3 start = lattice.rest[4];
     ASSERT_EQ(start, glm::dvec3(1, -1, -1));
     auto at = [&](double time) { return evaluate_pose(clip, lattice, time)[4]; };
-    EXPECT_TRUE(test::same_bits(at(1.0), start));           // 360: back at the start, bit for bit
-    EXPECT_TRUE(test::same_bits(at(2.0), start));           // 720
-    EXPECT_EQ(at(0.5), glm::dvec3(-1, 1, -1));              // 180: opposite
-    EXPECT_EQ(at(1.5), glm::dvec3(-1, 1, -1));              // 540: opposite again
-    EXPECT_EQ(at(0.25), glm::dvec3(1, 1, -1));              // 90
+    EXPECT_TRUE(test::same_bits(at(1.0), start));  // 360: back at the start, bit for bit
+    EXPECT_TRUE(test::same_bits(at(2.0), start));  // 720
+    EXPECT_EQ(at(0.5), glm::dvec3(-1, 1, -1));     // 180: opposite
+    EXPECT_EQ(at(1.5), glm::dvec3(-1, 1, -1));     // 540: opposite again
+    EXPECT_EQ(at(0.25), glm::dvec3(1, 1, -1));     // 90
     // Other points are untouched.
     EXPECT_EQ(evaluate_pose(clip, lattice, 0.3)[0], lattice.rest[0]);
 
@@ -185,8 +188,13 @@ TEST(AnimationEvaluate, TracksComposeInTrackOrder) {
             const std::size_t t = add_twist_track(clip, "t", {5, 6, 7}, {0, 0, 1});  // default pivot
             set_key(clip.tracks[t], {0.0, {90, 0, 0}, Interpolation::step, Easing::none});
         };
-        if (stretch_first) { add_stretch(); add_twist(); }
-        else { add_twist(); add_stretch(); }
+        if (stretch_first) {
+            add_stretch();
+            add_twist();
+        } else {
+            add_twist();
+            add_stretch();
+        }
         return clip;
     };
     // Rest points 4..7: (1,-1,-1) (1,-1,1) (1,1,-1) (1,1,1); twist pivot = centroid of 5,6,7 at rest.
@@ -210,7 +218,7 @@ TEST(AnimationEvaluate, TracksComposeInTrackOrder) {
     EXPECT_NEAR(glm::length(b[6] - (rot(r[6]) + v)), 0.0, tol);
     EXPECT_NEAR(glm::length(b[7] - rot(r[7])), 0.0, tol);
     EXPECT_GT(glm::length(a[5] - b[5]), 0.1);  // the order matters
-    for (int i = 0; i < 4; ++i) {               // unbound points stay at rest
+    for (int i = 0; i < 4; ++i) {              // unbound points stay at rest
         EXPECT_EQ(a[std::size_t(i)], r[std::size_t(i)]);
         EXPECT_EQ(b[std::size_t(i)], r[std::size_t(i)]);
     }
@@ -275,7 +283,8 @@ TEST(AnimationEvaluate, ValidateReportsProblems) {
     ASSERT_FALSE(s.ok());
     EXPECT_EQ(s.message(), "clip 'c': tracks[0]: control point 8 out of range (lattice has 8)");
     clip.tracks[0].points = {3};
-    clip.tracks[0].keys = {{0.5, {}, Interpolation::linear, Easing::none}, {0.5, {}, Interpolation::linear, Easing::none}};
+    clip.tracks[0].keys = {{0.5, {}, Interpolation::linear, Easing::none},
+                           {0.5, {}, Interpolation::linear, Easing::none}};
     s = validate_clip(clip, 8);
     ASSERT_FALSE(s.ok());
     EXPECT_EQ(s.message(), "clip 'c': tracks[0].keys[1]: times not increasing");

@@ -13,7 +13,8 @@ namespace sffd {
 namespace {
 
 const Lattice& demo_lattice() {
-    static const Lattice l = test::make_lattice({10, 10, 10}, glm::dvec3(-1.0, -1.2, -0.9), glm::dvec3(2.0, 2.4, 1.8));
+    static const Lattice l =
+        test::make_lattice({10, 10, 10}, glm::dvec3(-1.0, -1.2, -0.9), glm::dvec3(2.0, 2.4, 1.8));
     return l;
 }
 
@@ -32,8 +33,7 @@ TEST(PaperDemo, FourCasesOverNinetySixFrames) {
     EXPECT_EQ(clip.mode, PlayMode::loop);
     ASSERT_TRUE(validate_clip(clip, l.rest.size()).ok());
     // Rest at every case boundary.
-    for (int k : {0, 24, 48, 72})
-        EXPECT_EQ(evaluate_pose(clip, l, frame_time(k)), l.rest) << "frame " << k;
+    for (int k : {0, 24, 48, 72}) EXPECT_EQ(evaluate_pose(clip, l, frame_time(k)), l.rest) << "frame " << k;
     // Each case moves something at its peak (frame 12 of its second) and only its own tracks are active.
     for (int c = 0; c < 4; ++c) {
         const auto pose = evaluate_pose(clip, l, frame_time(24 * c + 12));

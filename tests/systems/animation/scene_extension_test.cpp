@@ -22,7 +22,10 @@ struct Hooks {
 ecs::Entity only_lattice(ecs::Registry& reg) {
     ecs::Entity found = ecs::null_entity;
     std::size_t n = 0;
-    reg.view<Lattice>().each([&](ecs::Entity e, Lattice&) { found = e; ++n; });
+    reg.view<Lattice>().each([&](ecs::Entity e, Lattice&) {
+        found = e;
+        ++n;
+    });
     EXPECT_EQ(n, 1u);
     return found;
 }
@@ -35,7 +38,8 @@ TEST(AnimationScene, BuiltinSphereGetsThePaperDemoClip) {
     ASSERT_TRUE(reg.has<AnimationClip>(e));
     ASSERT_TRUE(reg.has<AnimationState>(e));
     EXPECT_EQ(reg.get<Lattice>(e).divisions, glm::ivec3(10));
-    EXPECT_EQ(clip_to_string(reg.get<AnimationClip>(e)), clip_to_string(make_paper_demo_clip(reg.get<Lattice>(e))));
+    EXPECT_EQ(clip_to_string(reg.get<AnimationClip>(e)),
+              clip_to_string(make_paper_demo_clip(reg.get<Lattice>(e))));
     EXPECT_TRUE(reg.get<AnimationState>(e).playing);
 }
 
@@ -53,7 +57,8 @@ TEST(AnimationScene, ClipsRoundTripThroughSceneFilesExactly) {
         const ecs::Entity e = only_lattice(reg);
         // Make the clip awkward: an extra twist with many digits, a paused state at another speed.
         AnimationClip& clip = reg.patch<AnimationClip>(e);
-        const std::size_t t = add_twist_track(clip, "extra", {5, 6, 7}, {1.0 / 3.0, 0.1, -7.25}, glm::dvec3(0.1, 1e-300, -0.0));
+        const std::size_t t =
+            add_twist_track(clip, "extra", {5, 6, 7}, {1.0 / 3.0, 0.1, -7.25}, glm::dvec3(0.1, 1e-300, -0.0));
         set_key(clip.tracks[t], {0.1, {720.0 + 1.0 / 7.0, 0, 0}, Interpolation::smooth, Easing::ease_out});
         set_key(clip.tracks[t], {2.0 / 3.0, {-1e-12, 0, 0}, Interpolation::step, Easing::none});
         clip.mode = PlayMode::ping_pong;
@@ -62,7 +67,8 @@ TEST(AnimationScene, ClipsRoundTripThroughSceneFilesExactly) {
         reg.patch<AnimationState>(e).speed = 1.7;
         const std::string before = clip_to_string(clip);
 
-        const auto path = std::filesystem::path(SFFD_BINARY_DIR) / (std::string("animation_scene_test") + ext);
+        const auto path =
+            std::filesystem::path(SFFD_BINARY_DIR) / (std::string("animation_scene_test") + ext);
         Status saved = save_scene(reg, path);
         ASSERT_TRUE(saved.ok()) << saved.message();
         ecs::Registry back;
@@ -110,7 +116,8 @@ TEST(AnimationScene, BadExtensionDataIsRefused) {
     EXPECT_EQ(load(R"({"version": 1, "clips": [{"lattice": 0, "playing": 1, "clip": {"duration": 1}}]})"),
               "clips[0].playing: expected true or false");
     // A file saved while the editor was paused (older versions wrote the pause) still animates.
-    EXPECT_EQ(load(R"({"version": 1, "clips": [{"lattice": 0, "playing": false, "clip": {"duration": 1}}]})"), "ok");
+    EXPECT_EQ(load(R"({"version": 1, "clips": [{"lattice": 0, "playing": false, "clip": {"duration": 1}}]})"),
+              "ok");
     EXPECT_TRUE(reg.has<AnimationClip>(lat));
     EXPECT_TRUE(reg.get<AnimationState>(lat).playing);
 }

@@ -75,7 +75,7 @@ TEST(AnimationSystem, ScrubAndPlayContinueFromTheScrubbedTime) {
     attach_clip(reg, e, ramp_clip(PlayMode::loop));
     animation_system(reg, {0, 10.0, 0.0});
     EXPECT_EQ(reg.get<AnimationState>(e).time, 0.0);  // 10 s loops to 0
-    scrub(reg.patch<AnimationState>(e), 0.25);         // while playing
+    scrub(reg.patch<AnimationState>(e), 0.25);        // while playing
     animation_system(reg, {1, 10.5, 0.5});
     EXPECT_EQ(reg.get<AnimationState>(e).time, 0.25);
     animation_system(reg, {2, 10.75, 0.25});
@@ -100,7 +100,8 @@ TEST(AnimationSystem, ScrubAndPlayContinueFromTheScrubbedTime) {
 
 // Frame k of a fixed-step sequence == frame k evaluated alone in a fresh registry, bit for bit.
 TEST(AnimationSystem, SequencesAreDeterministic) {
-    const Lattice lattice = test::make_lattice({10, 10, 10}, glm::dvec3(-1.3, 0.2, 5.0), glm::dvec3(2.6, 2.1, 3.3));
+    const Lattice lattice =
+        test::make_lattice({10, 10, 10}, glm::dvec3(-1.3, 0.2, 5.0), glm::dvec3(2.6, 2.1, 3.3));
     ClockSettings settings;
     settings.fixed_dt = 1.0 / paper_demo_fps;
 
@@ -128,13 +129,16 @@ TEST(AnimationSystem, SequencesAreDeterministic) {
         const auto& got = alone.get<Lattice>(a).current;
         ASSERT_EQ(got.size(), frames[std::size_t(k)].size());
         for (std::size_t i = 0; i < got.size(); ++i)
-            ASSERT_TRUE(test::same_bits(got[i], frames[std::size_t(k)][i])) << "frame " << k << " point " << i;
+            ASSERT_TRUE(test::same_bits(got[i], frames[std::size_t(k)][i]))
+                << "frame " << k << " point " << i;
     }
     // And the loop really repeats: frame k and k+96 are the same pose (to rounding: (k+96)/24 - 4 is not
     // bit-identical to k/24).
     for (int k : {5, 40, 70, 90})
         for (std::size_t i = 0; i < frames[0].size(); ++i)
-            ASSERT_NEAR(glm::length(frames[std::size_t(k)][i] - frames[std::size_t(k + paper_demo_frames)][i]), 0.0, 1e-12);
+            ASSERT_NEAR(
+                glm::length(frames[std::size_t(k)][i] - frames[std::size_t(k + paper_demo_frames)][i]), 0.0,
+                1e-12);
 }
 
 TEST(AnimationSystem, InvalidClipIsReportedOnceAndNotApplied) {
@@ -148,7 +152,8 @@ TEST(AnimationSystem, InvalidClipIsReportedOnceAndNotApplied) {
     animation_system(reg, {0, 0.5, 0.0});
     animation_system(reg, {1, 0.6, 0.1});
     EXPECT_EQ(capture.entries().size(), 1u);
-    EXPECT_TRUE(capture.contains("animation_system(): clip 'bad': tracks[0]: control point 13 out of range (lattice has 8)"));
+    EXPECT_TRUE(capture.contains(
+        "animation_system(): clip 'bad': tracks[0]: control point 13 out of range (lattice has 8)"));
     EXPECT_EQ(reg.get<Lattice>(e).current, reg.get<Lattice>(e).rest);
     EXPECT_FALSE(reg.get<AnimationState>(e).error.empty());
 }

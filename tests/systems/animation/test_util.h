@@ -19,7 +19,8 @@ inline Lattice make_lattice(glm::ivec3 divisions, glm::dvec3 origin = glm::dvec3
     for (int i = 0; i <= divisions.x; ++i)
         for (int j = 0; j <= divisions.y; ++j)
             for (int k = 0; k <= divisions.z; ++k)
-                l.rest.push_back(origin + (double(i) / divisions.x) * l.axes[0] + (double(j) / divisions.y) * l.axes[1] +
+                l.rest.push_back(origin + (double(i) / divisions.x) * l.axes[0] +
+                                 (double(j) / divisions.y) * l.axes[1] +
                                  (double(k) / divisions.z) * l.axes[2]);
     l.current = l.rest;
     return l;

@@ -92,7 +92,8 @@ TEST(CameraController, FramedPointsAreAllInsideTheViewAndFillIt) {
     std::vector<glm::dvec3> pts;
     for (int i = 0; i < 200; ++i) {
         const double a = i * 0.37, b = i * 0.11;
-        pts.push_back(glm::dvec3(10.0 + 3.0 * std::cos(a) * std::sin(b), -4.0 + 0.5 * std::sin(a), 2.0 * std::cos(b)));
+        pts.push_back(
+            glm::dvec3(10.0 + 3.0 * std::cos(a) * std::sin(b), -4.0 + 0.5 * std::sin(a), 2.0 * std::cos(b)));
     }
     const glm::dvec3 dir0 = glm::normalize(c.eye - c.target);
     frame_points(c, vp, pts, 1.1);

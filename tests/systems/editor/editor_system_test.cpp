@@ -31,10 +31,13 @@ struct Scene {
     std::uint64_t frame = 0;
 
     Scene() {
-        // A lattice 3x3x3 cells around the unit cube [-1,1]^3, and a small point cloud (a sphere of radius 0.5)
-        // inside it, so the inner control points are not hidden behind the surface from the camera.
+        // A lattice 3x3x3 cells around the unit cube [-1,1]^3, and a small point cloud (a sphere of radius
+        // 0.5) inside it, so the inner control points are not hidden behind the surface from the camera.
         lattice = reg.create();
-        reg.emplace<Lattice>(lattice, make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3}));
+        reg.emplace<Lattice>(
+            lattice,
+            make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)},
+                         {3, 3, 3}));
         cloud = reg.create();
         SplatCloud& c = reg.emplace<SplatCloud>(cloud);
         for (int a = 0; a < 40; ++a)
@@ -43,7 +46,8 @@ struct Scene {
                 const glm::vec3 n(std::sin(ph) * std::cos(th), std::cos(ph), std::sin(ph) * std::sin(th));
                 c.positions.push_back(0.15f * n);
                 c.normals.push_back(n);
-                const glm::vec3 u = glm::normalize(glm::cross(n, std::abs(n.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0)));
+                const glm::vec3 u = glm::normalize(
+                    glm::cross(n, std::abs(n.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0)));
                 c.axis_u.push_back(0.03f * u);
                 c.axis_v.push_back(0.03f * glm::cross(n, u));
             }
@@ -55,7 +59,8 @@ struct Scene {
     }
     const Camera& camera() { return reg.get<Camera>(state->camera); }
     glm::dvec2 pixel_of(std::size_t control_point) {
-        return glm::dvec2(project_to_pixel(camera(), state->viewport, reg.get<Lattice>(lattice).current[control_point]));
+        return glm::dvec2(
+            project_to_pixel(camera(), state->viewport, reg.get<Lattice>(lattice).current[control_point]));
     }
     void run(std::vector<InputEvent> events) {
         for (auto& e : events) e.frame = frame;
@@ -63,12 +68,32 @@ struct Scene {
         editor_input_system(reg, FrameContext{frame, frame / 60.0, 1 / 60.0});
         ++frame;
     }
-    static InputEvent move(glm::dvec2 p) { InputEvent e; e.kind = InputKind::move; e.position = p; return e; }
-    static InputEvent press(std::uint8_t m = 0, MouseButton b = MouseButton::left) {
-        InputEvent e; e.kind = InputKind::press; e.button = b; e.modifiers = m; return e;
+    static InputEvent move(glm::dvec2 p) {
+        InputEvent e;
+        e.kind = InputKind::move;
+        e.position = p;
+        return e;
     }
-    static InputEvent release(MouseButton b = MouseButton::left) { InputEvent e; e.kind = InputKind::release; e.button = b; return e; }
-    static InputEvent key(const char* k, std::uint8_t m = 0) { InputEvent e; e.kind = InputKind::key; e.key = k; e.modifiers = m; return e; }
+    static InputEvent press(std::uint8_t m = 0, MouseButton b = MouseButton::left) {
+        InputEvent e;
+        e.kind = InputKind::press;
+        e.button = b;
+        e.modifiers = m;
+        return e;
+    }
+    static InputEvent release(MouseButton b = MouseButton::left) {
+        InputEvent e;
+        e.kind = InputKind::release;
+        e.button = b;
+        return e;
+    }
+    static InputEvent key(const char* k, std::uint8_t m = 0) {
+        InputEvent e;
+        e.kind = InputKind::key;
+        e.key = k;
+        e.modifiers = m;
+        return e;
+    }
     void click(glm::dvec2 p, std::uint8_t m = 0) { run({move(p), press(m), release()}); }
     std::vector<std::uint32_t> selection() {
         const auto* s = reg.try_get<picking::LatticeSelection>(lattice);
@@ -81,7 +106,9 @@ bool bit_equal(const std::vector<glm::dvec3>& a, const std::vector<glm::dvec3>& 
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(glm::dvec3)) == 0;
 }
 
-std::uint32_t idx(const Lattice& l, int i, int j, int k) { return static_cast<std::uint32_t>(l.index(i, j, k)); }
+std::uint32_t idx(const Lattice& l, int i, int j, int k) {
+    return static_cast<std::uint32_t>(l.index(i, j, k));
+}
 
 }  // namespace
 
@@ -129,7 +156,8 @@ TEST(EditorSystem, StretchDragMovesTheSelectionAlongXAndUndoRedoAreBitExact) {
     // Drag from the selection's centroid image to the image of a point 0.4 further along x.
     const glm::dvec3 c = 0.5 * (rest[a] + rest[b]);
     const glm::dvec2 from = glm::dvec2(project_to_pixel(s.camera(), s.state->viewport, c));
-    const glm::dvec2 to = glm::dvec2(project_to_pixel(s.camera(), s.state->viewport, c + glm::dvec3(0.4, 0, 0)));
+    const glm::dvec2 to =
+        glm::dvec2(project_to_pixel(s.camera(), s.state->viewport, c + glm::dvec3(0.4, 0, 0)));
     s.run({Scene::move(from), Scene::press(), Scene::move(glm::mix(from, to, 0.5))});
     EXPECT_GT(s.lat().current[a].x, rest[a].x);  // live while dragging
     s.run({Scene::move(to), Scene::release()});
@@ -194,7 +222,8 @@ TEST(EditorSystem, EscapeCancelsADragWithoutAnUndoStep) {
     s.click(s.pixel_of(a));
     const std::size_t steps = s.state->undo.size();
     const std::vector<glm::dvec3> before = s.lat().current;
-    s.run({Scene::key("g"), Scene::move(s.pixel_of(a)), Scene::press(), Scene::move(s.pixel_of(a) + glm::dvec2(40, 10))});
+    s.run({Scene::key("g"), Scene::move(s.pixel_of(a)), Scene::press(),
+           Scene::move(s.pixel_of(a) + glm::dvec2(40, 10))});
     EXPECT_FALSE(bit_equal(s.lat().current, before));
     s.run({Scene::key("escape"), Scene::release()});
     EXPECT_TRUE(bit_equal(s.lat().current, before));
@@ -206,7 +235,8 @@ TEST(EditorSystem, OrbitPanZoomMoveTheCamera) {
     const Camera before = s.camera();
     s.run({Scene::move({400, 300}), Scene::press(0, MouseButton::right), Scene::move({450, 300}),
            Scene::release(MouseButton::right)});
-    EXPECT_NEAR(glm::length(s.camera().eye - s.camera().target), glm::length(before.eye - before.target), 1e-9);
+    EXPECT_NEAR(glm::length(s.camera().eye - s.camera().target), glm::length(before.eye - before.target),
+                1e-9);
     EXPECT_GT(glm::length(s.camera().eye - before.eye), 0.1);
     InputEvent wheel;
     wheel.kind = InputKind::scroll;
@@ -352,7 +382,8 @@ TEST(EditorSystem, AutoKeyKeysEveryEditAtTheClipTime) {
     s.run(keys({"g", "z", "0", "period", "2", "enter"}));
     ASSERT_TRUE(s.reg.has<AnimationClip>(s.lattice));
     s.run(keys({"right"}));
-    animation_system(s.reg, FrameContext{s.frame, s.frame / 60.0, 1 / 60.0});  // the clip time follows the scrub
+    animation_system(s.reg,
+                     FrameContext{s.frame, s.frame / 60.0, 1 / 60.0});  // the clip time follows the scrub
     ASSERT_NEAR(s.reg.get<AnimationState>(s.lattice).time, 1.0 / 24.0, 1e-12);
     s.run(keys({"g", "z", "0", "period", "1", "enter"}));
     const AnimationClip& clip = s.reg.get<AnimationClip>(s.lattice);
@@ -369,7 +400,8 @@ TEST(EditorSystem, AutoKeyKeysEveryEditAtTheClipTime) {
     EXPECT_FALSE(s.state->auto_key);
 }
 
-// Preview while moving, HQ once the view has rested refine_after frames (RenderSettings through the registry).
+// Preview while moving, HQ once the view has rested refine_after frames (RenderSettings through the
+// registry).
 TEST(EditorSystem, PreviewWhileDraggingRefinesToHqAtRest) {
     Scene s;
     auto& settings = s.reg.set_resource<render::RenderSettings>();
@@ -391,7 +423,12 @@ TEST(EditorSystem, PreviewWhileDraggingRefinesToHqAtRest) {
     EXPECT_EQ(settings.quality, render::Quality::hq) << "rested " << s.state->refine_after << " frames";
     EXPECT_FALSE(s.state->previewing);
     // The wheel and a stretch drag count as movement too; a view started in preview stays preview.
-    s.run({[] { InputEvent e; e.kind = InputKind::scroll; e.scroll = 1; return e; }()});
+    s.run({[] {
+        InputEvent e;
+        e.kind = InputKind::scroll;
+        e.scroll = 1;
+        return e;
+    }()});
     EXPECT_EQ(settings.quality, render::Quality::preview);
     s.state->preview_while_moving = false;
     s.run({});

@@ -42,7 +42,8 @@ TEST(FileBrowser, ListsParentFoldersThenFilteredFiles) {
     for (const char* f : {"b.glb", "a.PLY", "notes.txt", "c.gltf", ".secret.glb"}) dir.touch(f);
     auto all = list_folder(dir.path, {});
     ASSERT_TRUE(all) << all.message();
-    EXPECT_EQ(names(*all), (std::vector<std::string>{"/..", "/alpha", "/zeta", "a.PLY", "b.glb", "c.gltf", "notes.txt"}));
+    EXPECT_EQ(names(*all),
+              (std::vector<std::string>{"/..", "/alpha", "/zeta", "a.PLY", "b.glb", "c.gltf", "notes.txt"}));
     auto open = list_folder(dir.path, openable_extensions());
     ASSERT_TRUE(open);
     EXPECT_EQ(names(*open), (std::vector<std::string>{"/..", "/alpha", "/zeta", "a.PLY", "b.glb", "c.gltf"}));

@@ -21,7 +21,9 @@ Camera front_camera() {  // looking down -z from +z
     c.target = {0.0, 0.0, 0.0};
     return c;
 }
-glm::dvec2 px(const Camera& c, const Viewport& vp, glm::dvec3 p) { return glm::dvec2(project_to_pixel(c, vp, p)); }
+glm::dvec2 px(const Camera& c, const Viewport& vp, glm::dvec3 p) {
+    return glm::dvec2(project_to_pixel(c, vp, p));
+}
 }  // namespace
 
 TEST(Gizmo, ViewPlaneDragKeepsTheGrabbedPointUnderTheCursor) {

@@ -84,7 +84,8 @@ TEST(InputRecord, ErrorsNameTheFileAndLine) {
     }
     auto missing = load_input_recording("/nonexistent/rec.txt");
     ASSERT_FALSE(missing.ok());
-    EXPECT_EQ(missing.message().rfind("/nonexistent/rec.txt: cannot open input recording", 0), 0u) << missing.message();
+    EXPECT_EQ(missing.message().rfind("/nonexistent/rec.txt: cannot open input recording", 0), 0u)
+        << missing.message();
 }
 
 TEST(InputRecord, ReplayerHandsOutEventsPerFrame) {

@@ -29,8 +29,8 @@ bool same(const Lattice& a, const Lattice& b) {
     auto eq = [](const std::vector<glm::dvec3>& x, const std::vector<glm::dvec3>& y) {
         return x.size() == y.size() && std::memcmp(x.data(), y.data(), x.size() * sizeof(glm::dvec3)) == 0;
     };
-    return a.origin == b.origin && a.axes == b.axes && a.divisions == b.divisions && a.basis == b.basis && eq(a.rest, b.rest) &&
-           eq(a.current, b.current);
+    return a.origin == b.origin && a.axes == b.axes && a.divisions == b.divisions && a.basis == b.basis &&
+           eq(a.rest, b.rest) && eq(a.current, b.current);
 }
 
 struct Editor {
@@ -51,8 +51,10 @@ struct Editor {
         for (int i = 0; i < 30; ++i)
             for (int j = 0; j < 15; ++j) {
                 const double th = i * 2 * 3.141592653589793 / 30, ph = (j + 0.5) * 3.141592653589793 / 15;
-                const glm::dvec3 q(2.0 * std::sin(ph) * std::cos(th), 1.0 * std::sin(ph) * std::sin(th), 0.5 * std::cos(ph));
-                c.positions.emplace_back(float(std::cos(a) * q.x - std::sin(a) * q.y), float(std::sin(a) * q.x + std::cos(a) * q.y), float(q.z));
+                const glm::dvec3 q(2.0 * std::sin(ph) * std::cos(th), 1.0 * std::sin(ph) * std::sin(th),
+                                   0.5 * std::cos(ph));
+                c.positions.emplace_back(float(std::cos(a) * q.x - std::sin(a) * q.y),
+                                         float(std::sin(a) * q.x + std::cos(a) * q.y), float(q.z));
                 c.normals.emplace_back(glm::normalize(glm::vec3(q)));
             }
         Camera& cam = reg.emplace<Camera>(reg.create());
@@ -173,7 +175,8 @@ TEST(LatticeManage, ExportImportJsonAndSceneRoundTrip) {
     ed.key("a", mods::shift);
     const ecs::Entity l = ed.state->active_lattice;
     // An edit, then ctrl+e: the JSON holds exactly the edited lattice.
-    ffd::stretch(ed.reg.patch<Lattice>(l), ffd::select_range(ed.reg.get<Lattice>(l), {1, 1, 1}, {2, 2, 1}), {0.1, -0.2, 0.3});
+    ffd::stretch(ed.reg.patch<Lattice>(l), ffd::select_range(ed.reg.get<Lattice>(l), {1, 1, 1}, {2, 2, 1}),
+                 {0.1, -0.2, 0.3});
     const Lattice edited = ed.reg.get<Lattice>(l);
     ed.key("e", mods::ctrl);
     auto json = ffd::load_lattice(settings.json_path);
@@ -202,7 +205,8 @@ TEST(LatticeManage, ExportImportJsonAndSceneRoundTrip) {
     ecs::Registry back;
     ASSERT_TRUE(load_scene(back, (dir / "s.glb").string()).ok());
     std::vector<ecs::Entity> order;
-    back.view<const SplatCloud, const Deformers>().each([&](ecs::Entity, const SplatCloud&, const Deformers& d) { order = d.lattices; });
+    back.view<const SplatCloud, const Deformers>().each(
+        [&](ecs::Entity, const SplatCloud&, const Deformers& d) { order = d.lattices; });
     ASSERT_EQ(order.size(), 2u);
     EXPECT_TRUE(same(back.get<Lattice>(order[0]), edited));
     EXPECT_EQ(back.get<Name>(order[1]).value, "scan.lattice2");
@@ -246,7 +250,8 @@ TEST(LatticeManage, GaussianCloudGetsAFittedLatticeThatDeformsIt) {
     for (const glm::vec3& p : c.positions) {
         const glm::dvec3 w = c.origin + glm::dvec3(p) - lat.origin;
         for (int a = 0; a < 3; ++a) {
-            const double s = glm::dot(w, lat.axes[std::size_t(a)]) / glm::dot(lat.axes[std::size_t(a)], lat.axes[std::size_t(a)]);
+            const double s = glm::dot(w, lat.axes[std::size_t(a)]) /
+                             glm::dot(lat.axes[std::size_t(a)], lat.axes[std::size_t(a)]);
             EXPECT_GE(s, 0.0);
             EXPECT_LE(s, 1.0);
         }
@@ -257,5 +262,6 @@ TEST(LatticeManage, GaussianCloudGetsAFittedLatticeThatDeformsIt) {
     gaussian_deform_system(reg, {});
     const DeformedGaussians& d = reg.get<DeformedGaussians>(g);
     ASSERT_EQ(d.cloud.size(), c.size());
-    for (std::size_t i = 0; i < c.size(); ++i) EXPECT_NEAR(d.cloud.positions[i].y, c.positions[i].y + 0.5f, 1e-4f) << i;
+    for (std::size_t i = 0; i < c.size(); ++i)
+        EXPECT_NEAR(d.cloud.positions[i].y, c.positions[i].y + 0.5f, 1e-4f) << i;
 }

@@ -50,10 +50,11 @@ Saved load_saved(const fs::path& file) {
     auto st = load_scene(r, file.string());
     EXPECT_TRUE(st.ok()) << st.message();
     r.view<const Lattice>().each([&](ecs::Entity, const Lattice& l) { s.lattice = l, ++s.lattices; });
-    r.view<const SplatCloud, const Deformers>().each([&](ecs::Entity, const SplatCloud& c, const Deformers& d) {
-        s.cloud = c;
-        s.bound = d.lattices.size() == 1;
-    });
+    r.view<const SplatCloud, const Deformers>().each(
+        [&](ecs::Entity, const SplatCloud& c, const Deformers& d) {
+            s.cloud = c;
+            s.bound = d.lattices.size() == 1;
+        });
     return s;
 }
 
@@ -65,11 +66,15 @@ TEST(LatticeViewSession, AddExportImportThroughTheWindow) {
     fs::create_directories(dir);
     const fs::path ply = dir / "copy.ply", scene = dir / "edited.glb", json = dir / "edited.lattice.json";
     const std::string data = std::string(SFFD_TEST_DATA_DIR) + "/editor/";
-    ASSERT_EQ(run_shell(splatffd() + " convert sphere " + ply.string() + " --splats 3000 > /dev/null 2>&1"), 0);
+    ASSERT_EQ(run_shell(splatffd() + " convert sphere " + ply.string() + " --splats 3000 > /dev/null 2>&1"),
+              0);
     // Panels on in the first run (the Lattices panel is drawn), off in the second.
-    ASSERT_EQ(run_shell("xvfb-run -a " + splatffd() + " view " + ply.string() + " --size 1280x720 --quality preview --frames 14 --replay " + data +
+    ASSERT_EQ(
+        run_shell("xvfb-run -a " + splatffd() + " view " + ply.string() +
+                  " --size 1280x720 --quality preview --frames 14 --replay " + data +
                   "lattice_add.txt --save " + scene.string() + " > " + (dir / "add.log").string() + " 2>&1"),
-              0) << slurp(dir / "add.log");
+        0)
+        << slurp(dir / "add.log");
     ASSERT_TRUE(fs::exists(scene)) << slurp(dir / "add.log");
     ASSERT_TRUE(fs::exists(json)) << slurp(dir / "add.log");
 
@@ -94,9 +99,11 @@ TEST(LatticeViewSession, AddExportImportThroughTheWindow) {
     EXPECT_TRUE(bit_equal(exported->current, added.lattice.current));
 
     // Reopen, reset, import, save: the JSON's lattice again.
-    ASSERT_EQ(run_shell("xvfb-run -a " + splatffd() + " view " + scene.string() + " --size 1280x720 --quality preview --no-ui --frames 8 --replay " +
-                  data + "lattice_import.txt > " + (dir / "import.log").string() + " 2>&1"),
-              0) << slurp(dir / "import.log");
+    ASSERT_EQ(run_shell("xvfb-run -a " + splatffd() + " view " + scene.string() +
+                        " --size 1280x720 --quality preview --no-ui --frames 8 --replay " + data +
+                        "lattice_import.txt > " + (dir / "import.log").string() + " 2>&1"),
+              0)
+        << slurp(dir / "import.log");
     EXPECT_NE(slurp(dir / "import.log").find("imported"), std::string::npos) << slurp(dir / "import.log");
     const Saved imported = load_saved(scene);
     ASSERT_EQ(imported.lattices, 1u);
@@ -104,8 +111,12 @@ TEST(LatticeViewSession, AddExportImportThroughTheWindow) {
 
     // deform: the scene file and the JSON are the same lattice.
     const fs::path a = dir / "a.ply", b = dir / "b.ply";
-    ASSERT_EQ(run_shell(splatffd() + " deform " + ply.string() + " " + a.string() + " --lattice " + scene.string() + " > /dev/null 2>&1"), 0);
-    ASSERT_EQ(run_shell(splatffd() + " deform " + ply.string() + " " + b.string() + " --lattice " + json.string() + " > /dev/null 2>&1"), 0);
+    ASSERT_EQ(run_shell(splatffd() + " deform " + ply.string() + " " + a.string() + " --lattice " +
+                        scene.string() + " > /dev/null 2>&1"),
+              0);
+    ASSERT_EQ(run_shell(splatffd() + " deform " + ply.string() + " " + b.string() + " --lattice " +
+                        json.string() + " > /dev/null 2>&1"),
+              0);
     EXPECT_EQ(slurp(a), slurp(b));
     EXPECT_NE(slurp(a), slurp(ply));  // and it deformed something
     fs::remove_all(dir);

@@ -19,7 +19,10 @@ struct Scene {
     EditorState* state;
     Scene() {
         lattice = reg.create();
-        reg.emplace<Lattice>(lattice, make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {4, 4, 4}));
+        reg.emplace<Lattice>(
+            lattice,
+            make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)},
+                         {4, 4, 4}));
         // A cloud whose box is [-0.6, 0.6]^3: the 27 control points at -0.5, 0, 0.5 per axis are inside.
         const ecs::Entity cloud = reg.create();
         SplatCloud& c = reg.emplace<SplatCloud>(cloud);
@@ -50,7 +53,8 @@ TEST(LatticeOverlay, ColoursShowSelectionPinsAndTheObjectsBox) {
     EXPECT_GT(g.points[selected].size, g.points[l.index(1, 1, 1)].size);
     // Unpinned (or global scope): the outer layer is shown as an ordinary point outside the box.
     s.state->pin_outer_layer = false;
-    EXPECT_EQ(colour_of(build_lattice_overlay(s.reg, *s.state, s.lattice), l.index(0, 2, 2)), overlay_outside);
+    EXPECT_EQ(colour_of(build_lattice_overlay(s.reg, *s.state, s.lattice), l.index(0, 2, 2)),
+              overlay_outside);
 }
 
 TEST(LatticeOverlay, CageOnlyDrawsTheBoxEdgesAndTheSelection) {
@@ -67,8 +71,8 @@ TEST(LatticeOverlay, CageOnlyDrawsTheBoxEdgesAndTheSelection) {
     ASSERT_TRUE(s.state->lattice_cage_only);
     EXPECT_FALSE(s.state->xray) << "shift+t is the cage, t alone x-ray";
     const OverlayGeometry g = build_lattice_overlay(s.reg, *s.state, s.lattice);
-    EXPECT_EQ(g.lines.size(), 2u * 12u * 4u);          // 12 box edges of 4 segments, 2 ends each
-    EXPECT_EQ(g.points.size(), 8u + 12u * 3u + 1u);     // corners, edge points, and the selected centre
+    EXPECT_EQ(g.lines.size(), 2u * 12u * 4u);        // 12 box edges of 4 segments, 2 ends each
+    EXPECT_EQ(g.points.size(), 8u + 12u * 3u + 1u);  // corners, edge points, and the selected centre
     // Every line end lies on an edge of the box [-1, 1]^3 (two coordinates at +-1).
     for (const OverlayVertex& v : g.lines) {
         const glm::dvec3 w = g.anchor + glm::dvec3(v.position);

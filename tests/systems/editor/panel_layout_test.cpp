@@ -30,11 +30,13 @@ void expect_fits(const std::vector<std::pair<std::string, PanelRect>>& rects, fl
         EXPECT_GT(r.w, 0.0f) << rects[i].first;
         EXPECT_GT(r.h, 0.0f) << rects[i].first;
         for (std::size_t j = i + 1; j < rects.size(); ++j)
-            EXPECT_FALSE(overlaps(r, rects[j].second)) << rects[i].first << " overlaps " << rects[j].first << " at " << w << "x" << h;
+            EXPECT_FALSE(overlaps(r, rects[j].second))
+                << rects[i].first << " overlaps " << rects[j].first << " at " << w << "x" << h;
     }
 }
 
-std::vector<std::pair<std::string, PanelRect>> named(const std::array<PanelRect, panel_count>& a, const LayoutInput& in) {
+std::vector<std::pair<std::string, PanelRect>> named(const std::array<PanelRect, panel_count>& a,
+                                                     const LayoutInput& in) {
     std::vector<std::pair<std::string, PanelRect>> out;
     for (std::size_t i = 0; i < panel_count; ++i) out.emplace_back(panel_title(Panel(i)), a[i]);
     out.emplace_back("menu", PanelRect{0, 0, in.width, in.top});
@@ -45,7 +47,8 @@ std::vector<std::pair<std::string, PanelRect>> named(const std::array<PanelRect,
 }  // namespace
 
 TEST(PanelLayout, NoOverlapInsideTheWindowAtAnySize) {
-    const float sizes[][2] = {{1280, 720}, {1600, 900}, {1920, 1080}, {2560, 1440}, {1024, 768}, {800, 600}, {3840, 2160}};
+    const float sizes[][2] = {{1280, 720}, {1600, 900}, {1920, 1080}, {2560, 1440},
+                              {1024, 768}, {800, 600},  {3840, 2160}};
     for (const auto& s : sizes)
         for (unsigned mask = 0; mask < (1u << panel_count); mask += 7) {  // a spread of collapsed states
             LayoutInput in;
@@ -139,7 +142,8 @@ TEST(PanelLayout, ImGuiDrawsThePanelsWhereTheLayoutSays) {
     ecs::Registry reg;
     scene_with_lattice(reg);
     HeadlessImGui imgui;
-    for (const auto& s : {std::pair{1280.0f, 720.0f}, {1600.0f, 900.0f}, {1920.0f, 1080.0f}, {1024.0f, 640.0f}}) {
+    for (const auto& s :
+         {std::pair{1280.0f, 720.0f}, {1600.0f, 900.0f}, {1920.0f, 1080.0f}, {1024.0f, 640.0f}}) {
         for (int f = 0; f < 3; ++f) imgui.frame(reg, s.first, s.second);  // menu height settles after frame 1
         const auto rects = drawn();
         ASSERT_EQ(rects.size(), panel_count + 2) << "menu, status and six panels";

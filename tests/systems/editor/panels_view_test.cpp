@@ -35,8 +35,8 @@ std::vector<Rect> parse_rects(const std::string& json) {
     for (std::string line; std::getline(in, line);) {
         char name[64] = {};
         Rect r;
-        if (std::sscanf(line.c_str(), " {\"name\": \"%63[^\"]\", \"x\": %f, \"y\": %f, \"w\": %f, \"h\": %f}", name, &r.r.x,
-                        &r.r.y, &r.r.w, &r.r.h) == 5) {
+        if (std::sscanf(line.c_str(), " {\"name\": \"%63[^\"]\", \"x\": %f, \"y\": %f, \"w\": %f, \"h\": %f}",
+                        name, &r.r.x, &r.r.y, &r.r.w, &r.r.h) == 5) {
             r.name = name;
             out.push_back(r);
         }
@@ -52,13 +52,15 @@ TEST(PanelsView, PanelsFitTheWindowWithoutOverlap) {
     fs::create_directories(dir);
     for (const auto& [w, h] : {std::pair{1280, 720}, {1920, 1080}}) {
         const std::string size = std::to_string(w) + "x" + std::to_string(h);
-        const fs::path json = dir / (size + ".json"), png = dir / (size + ".png"), log = dir / (size + ".log");
+        const fs::path json = dir / (size + ".json"), png = dir / (size + ".png"),
+                       log = dir / (size + ".log");
         // xvfb's screen must hold the window; XDG_CONFIG_HOME keeps the test away from the user's layout.
         ASSERT_EQ(run_shell("XDG_CONFIG_HOME=" + dir.string() + " xvfb-run -a -s '-screen 0 2048x1200x24' " +
-                      std::string(SFFD_BINARY_DIR) + "/tools/splatffd view sphere --size " + size +
-                      " --quality preview --frames 4 --panel-rects-json " + json.string() + " --window-screenshot " +
-                      png.string() + " > " + log.string() + " 2>&1"),
-                  0) << slurp(log);
+                            std::string(SFFD_BINARY_DIR) + "/tools/splatffd view sphere --size " + size +
+                            " --quality preview --frames 4 --panel-rects-json " + json.string() +
+                            " --window-screenshot " + png.string() + " > " + log.string() + " 2>&1"),
+                  0)
+            << slurp(log);
         const std::vector<Rect> rects = parse_rects(slurp(json));
         ASSERT_EQ(rects.size(), 8u) << slurp(json);
         for (std::size_t i = 0; i < rects.size(); ++i) {
@@ -68,7 +70,8 @@ TEST(PanelsView, PanelsFitTheWindowWithoutOverlap) {
             EXPECT_LE(r.x + r.w, float(w)) << rects[i].name << " " << size;
             EXPECT_LE(r.y + r.h, float(h)) << rects[i].name << " " << size;
             for (std::size_t j = i + 1; j < rects.size(); ++j)
-                EXPECT_FALSE(editor::overlaps(r, rects[j].r)) << rects[i].name << " overlaps " << rects[j].name << " at " << size;
+                EXPECT_FALSE(editor::overlaps(r, rects[j].r))
+                    << rects[i].name << " overlaps " << rects[j].name << " at " << size;
         }
         // The screenshot is the window at that size, and each panel is drawn where it says: the middle of
         // its title bar has ImGui's title colour (dark theme: TitleBg 0.04 grey, or TitleBgActive
@@ -85,8 +88,8 @@ TEST(PanelsView, PanelsFitTheWindowWithoutOverlap) {
             const int x = int(r.r.x + r.r.w * 0.75f), y = int(r.r.y + 6);
             const std::uint8_t* p = &img->pixels[(std::size_t(y) * std::size_t(w) + std::size_t(x)) * 4];
             EXPECT_TRUE(near(p, 10, 10, 10) || near(p, 41, 74, 122))
-                << r.name << " title bar not at " << x << "," << y << " (" << size << "): " << int(p[0]) << " " << int(p[1])
-                << " " << int(p[2]);
+                << r.name << " title bar not at " << x << "," << y << " (" << size << "): " << int(p[0])
+                << " " << int(p[1]) << " " << int(p[2]);
         }
     }
     fs::remove_all(dir);

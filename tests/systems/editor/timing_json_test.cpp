@@ -24,7 +24,8 @@ int run(const std::string& command) {
 
 nlohmann::json timing(const fs::path& dir, const std::string& extra) {
     const fs::path json = dir / "timing.json", log = dir / "view.log";
-    const std::string cmd = std::string(SFFD_BINARY_DIR) + "/tools/splatffd view sphere --headless --size 1280x720 --frames 40 --replay " +
+    const std::string cmd = std::string(SFFD_BINARY_DIR) +
+                            "/tools/splatffd view sphere --headless --size 1280x720 --frames 40 --replay " +
                             SFFD_TEST_DATA_DIR + "/editor/session.txt --save " + (dir / "s.glb").string() +
                             " --timing-json " + json.string() + extra + " > " + log.string() + " 2>&1";
     EXPECT_EQ(run(cmd), 0) << "see " << log;

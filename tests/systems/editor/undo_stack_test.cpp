@@ -132,7 +132,8 @@ TEST(UndoStack, LimitForgetsTheOldestSteps) {
     UndoStack undo(4);
     for (int v = 1; v <= 10; ++v) undo.record<Tag>(reg, e, "set", [v](Tag& t) { t.value = v; });
     EXPECT_EQ(undo.size(), 4u);
-    while (undo.undo(reg)) {}
+    while (undo.undo(reg)) {
+    }
     EXPECT_EQ(reg.get<Tag>(e).value, 6);
 }
 

@@ -37,7 +37,9 @@ std::string splatffd() { return std::string(SFFD_BINARY_DIR) + "/tools/splatffd"
 
 ecs::Entity first_lattice(ecs::Registry& reg) {
     ecs::Entity found = ecs::null_entity;
-    reg.view<Lattice>().each([&](ecs::Entity e, Lattice&) { if (found == ecs::null_entity) found = e; });
+    reg.view<Lattice>().each([&](ecs::Entity e, Lattice&) {
+        if (found == ecs::null_entity) found = e;
+    });
     return found;
 }
 
@@ -51,14 +53,18 @@ TEST(ViewSession, ReplayedEditsShowInTheScreenshotAndTheSavedLatticeIsBitExact) 
     if (run("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run not installed";
     const fs::path dir = fs::temp_directory_path() / ("sffd_view_session_" + std::to_string(::getpid()));
     fs::create_directories(dir);
-    const std::string common = " view sphere --size 1280x720 --quality preview --no-ui --frames " + std::to_string(frames);
+    const std::string common =
+        " view sphere --size 1280x720 --quality preview --no-ui --frames " + std::to_string(frames);
     const fs::path edited_exr = dir / "edited.exr", plain_exr = dir / "plain.exr", saved = dir / "edited.glb";
-    ASSERT_EQ(run("xvfb-run -a " + splatffd() + common + " --replay " + session + " --save " + saved.string() +
-                  " --screenshot " + edited_exr.string() + " > " + (dir / "edited.log").string() + " 2>&1"),
-              0) << "see " << (dir / "edited.log");
+    ASSERT_EQ(
+        run("xvfb-run -a " + splatffd() + common + " --replay " + session + " --save " + saved.string() +
+            " --screenshot " + edited_exr.string() + " > " + (dir / "edited.log").string() + " 2>&1"),
+        0)
+        << "see " << (dir / "edited.log");
     ASSERT_EQ(run("xvfb-run -a " + splatffd() + common + " --screenshot " + plain_exr.string() + " > " +
                   (dir / "plain.log").string() + " 2>&1"),
-              0) << "see " << (dir / "plain.log");
+              0)
+        << "see " << (dir / "plain.log");
     ASSERT_TRUE(fs::exists(saved)) << "the session's ctrl+s did not save";
 
     // --- the saved lattice: bit for bit what the editor's input system produces from the same events ---
@@ -68,9 +74,10 @@ TEST(ViewSession, ReplayedEditsShowInTheScreenshotAndTheSavedLatticeIsBitExact) 
     auto events = editor::load_input_recording(session);
     ASSERT_TRUE(events.ok()) << events.message();
     state.replay.emplace(*events);
-    for (std::uint64_t f = 0; f < frames; ++f) editor::editor_input_system(expected, FrameContext{f, f / 60.0, 1 / 60.0});
-    ASSERT_EQ(state.undo.size(), 3u);       // box select, stretch, twist
-    ASSERT_EQ(state.undo.position(), 3u);   // undone and redone: all applied
+    for (std::uint64_t f = 0; f < frames; ++f)
+        editor::editor_input_system(expected, FrameContext{f, f / 60.0, 1 / 60.0});
+    ASSERT_EQ(state.undo.size(), 3u);      // box select, stretch, twist
+    ASSERT_EQ(state.undo.position(), 3u);  // undone and redone: all applied
     EXPECT_EQ(state.undo.at(2).label(), "twist");
     const Lattice& want = expected.get<Lattice>(first_lattice(expected));
 
@@ -102,13 +109,15 @@ TEST(ViewSession, ReplayedEditsShowInTheScreenshotAndTheSavedLatticeIsBitExact) 
         for (int x = 0; x < 1280; ++x) {
             const std::size_t i = edited->index(x, y);
             const float a = edited->depth[i], b = plain->depth[i];
-            const bool depth_changed = std::isfinite(a) != std::isfinite(b) || (std::isfinite(a) && std::abs(a - b) > 1e-3f);
+            const bool depth_changed =
+                std::isfinite(a) != std::isfinite(b) || (std::isfinite(a) && std::abs(a - b) > 1e-3f);
             const bool in_middle = x >= 560 && x < 720 && y >= 250 && y < 400;
             const bool outside = x < 300 || x > 980 || y < 100 || y > 650;
             if (in_middle) {
                 ++middle;
                 middle_changed += depth_changed;
-                colour_changed += glm::length(glm::vec3(edited->color[i]) - glm::vec3(plain->color[i])) > 0.02f;
+                colour_changed +=
+                    glm::length(glm::vec3(edited->color[i]) - glm::vec3(plain->color[i])) > 0.02f;
             }
             if (outside) {
                 ++far;

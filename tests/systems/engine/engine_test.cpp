@@ -18,7 +18,8 @@ namespace {
 
 bool has(const Schedule& s, Phase phase, const std::string& name) {
     const auto& systems = s.systems(phase);
-    return std::any_of(systems.begin(), systems.end(), [&](const Schedule::Entry& e) { return e.name == name; });
+    return std::any_of(systems.begin(), systems.end(),
+                       [&](const Schedule::Entry& e) { return e.name == name; });
 }
 
 TEST(EngineSchedule, HeadlessScheduleHasNoPresentAndNoEditor) {
@@ -59,7 +60,8 @@ protected:
 };
 
 std::size_t covered(const render::FrameImage& image) {
-    return std::size_t(std::count_if(image.color.begin(), image.color.end(), [](const glm::vec4& c) { return c.w > 0.0f; }));
+    return std::size_t(
+        std::count_if(image.color.begin(), image.color.end(), [](const glm::vec4& c) { return c.w > 0.0f; }));
 }
 
 TEST_F(EngineFrame, FrameKAloneEqualsFrameKOfASequence) {
@@ -90,7 +92,8 @@ TEST_F(EngineFrame, FrameKAloneEqualsFrameKOfASequence) {
     EXPECT_LT(covered(*alone), pixels) << "and leaves background around it";
     ASSERT_EQ(in_sequence->color.size(), alone->color.size());
     std::size_t differing = 0;
-    for (std::size_t i = 0; i < alone->color.size(); ++i) differing += in_sequence->color[i] != alone->color[i];
+    for (std::size_t i = 0; i < alone->color.size(); ++i)
+        differing += in_sequence->color[i] != alone->color[i];
     EXPECT_EQ(differing, 0u) << "frame 3 depends on its index only, not on the frames run before it";
 }
 

@@ -40,7 +40,8 @@ RunResult run(const std::string& args) {
     const fs::path dir = fs::temp_directory_path();
     // Per-process names: test binaries of several build trees may run at once on one machine.
     const std::string id = std::to_string(::getpid());
-    const std::string o = (dir / ("ffd_cmd_stdout_" + id + ".txt")).string(), e = (dir / ("ffd_cmd_stderr_" + id + ".txt")).string();
+    const std::string o = (dir / ("ffd_cmd_stdout_" + id + ".txt")).string(),
+                      e = (dir / ("ffd_cmd_stderr_" + id + ".txt")).string();
     const int status = std::system((kTool + " deform " + args + " >" + o + " 2>" + e).c_str());
     RunResult r;
     r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
@@ -91,7 +92,9 @@ Rows read_ply(const fs::path& path, ply::Header* header = nullptr) {
         auto n = rd->read_rows(4096, c);
         if (!n || *n == 0) break;
         auto col = [&](const char* name) { return c.columns[std::size_t(c.find(name))].values; };
-        auto app = [](std::vector<double>& dst, const std::vector<double>& src) { dst.insert(dst.end(), src.begin(), src.end()); };
+        auto app = [](std::vector<double>& dst, const std::vector<double>& src) {
+            dst.insert(dst.end(), src.begin(), src.end());
+        };
         app(r.x, col("x")), app(r.y, col("y")), app(r.z, col("z"));
         app(r.nx, col("nx")), app(r.ny, col("ny")), app(r.nz, col("nz"));
         app(r.red, col("red"));
@@ -142,8 +145,9 @@ protected:
         const PyGeM g = pygem();
         double worst = 0.0;
         for (std::size_t i = 0; i < g.n; ++i)
-            worst = std::max(worst, glm::length(glm::dvec3(out.x[i], out.y[i], out.z[i]) -
-                                                glm::dvec3(g.mod[3 * i], g.mod[3 * i + 1], g.mod[3 * i + 2])));
+            worst =
+                std::max(worst, glm::length(glm::dvec3(out.x[i], out.y[i], out.z[i]) -
+                                            glm::dvec3(g.mod[3 * i], g.mod[3 * i + 1], g.mod[3 * i + 2])));
         return worst;
     }
 
@@ -152,12 +156,13 @@ protected:
 };
 
 TEST_F(DeformCommand, PyGeMCaseReferenceAndCpu) {
-    RunResult r = run(p("in.ply") + " " + p("out_ref.ply") + " --lattice " + p("lattice.json") + " --backend reference");
+    RunResult r = run(p("in.ply") + " " + p("out_ref.ply") + " --lattice " + p("lattice.json") +
+                      " --backend reference");
     ASSERT_EQ(r.code, 0) << r.err;
     Rows out = read_ply(p("out_ref.ply"));
     ASSERT_EQ(out.x.size(), input.x.size());
     EXPECT_LT(max_error(out), 1e-9);  // PyGeM's own test checks 6 decimals
-    EXPECT_EQ(out.red, input.red);   // other properties kept, same order
+    EXPECT_EQ(out.red, input.red);    // other properties kept, same order
     for (const auto* in : {"in.ply", "in_ascii.ply", "in_be.ply"}) {
         r = run(p(in) + " " + p("out_cpu.ply") + " --lattice " + p("lattice.json"));
         ASSERT_EQ(r.code, 0) << r.err;
@@ -175,7 +180,8 @@ TEST_F(DeformCommand, PyGeMCaseReferenceAndCpu) {
 }
 
 TEST_F(DeformCommand, AsciiOutputAndBenchJson) {
-    const RunResult r = run(p("in.ply") + " " + p("out.ply") + " --lattice " + p("lattice.json") + " --ascii --bench 3");
+    const RunResult r =
+        run(p("in.ply") + " " + p("out.ply") + " --lattice " + p("lattice.json") + " --ascii --bench 3");
     ASSERT_EQ(r.code, 0) << r.err;
     ply::Header h;
     const Rows out = read_ply(p("out.ply"), &h);
@@ -188,7 +194,8 @@ TEST_F(DeformCommand, AsciiOutputAndBenchJson) {
 }
 
 TEST_F(DeformCommand, GpuBackendMatchesReference) {
-    const RunResult r = run(p("in.ply") + " " + p("out_gpu.ply") + " --lattice " + p("lattice.json") + " --backend gpu");
+    const RunResult r =
+        run(p("in.ply") + " " + p("out_gpu.ply") + " --lattice " + p("lattice.json") + " --backend gpu");
     if (r.code != 0 && r.err.find("EGL") != std::string::npos) SFFD_GL_UNAVAILABLE("no EGL here: " << r.err);
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_LT(max_error(read_ply(p("out_gpu.ply"))), 1e-4);
@@ -197,7 +204,8 @@ TEST_F(DeformCommand, GpuBackendMatchesReference) {
 TEST_F(DeformCommand, BadInputIsRefused) {
     // Missing lattice option: usage.
     EXPECT_EQ(run(p("in.ply") + " " + p("o.ply")).code, 2);
-    EXPECT_EQ(run(p("in.ply") + " " + p("o.ply") + " --lattice " + p("lattice.json") + " --backend cuda").code, 2);
+    EXPECT_EQ(
+        run(p("in.ply") + " " + p("o.ply") + " --lattice " + p("lattice.json") + " --backend cuda").code, 2);
     // Bad lattice: wrong count.
     {
         std::ofstream f(p("bad.json"));
@@ -252,7 +260,9 @@ TEST_F(DeformCommand, WrongExtensionSameFileAndNonRegularPathsAreRefused) {
     }
     r = run(p("in.ply") + " " + p("out.xyz") + lat);  // an extension no writer has is refused
     EXPECT_EQ(r.code, 1);
-    EXPECT_NE(r.err.find(p("out.xyz") + ": deform writes .ply, .glb or .gltf files (got '.xyz')"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(p("out.xyz") + ": deform writes .ply, .glb or .gltf files (got '.xyz')"),
+              std::string::npos)
+        << r.err;
     EXPECT_FALSE(fs::exists(p("out.xyz")));
 
     const auto before = fs::file_size(p("in.ply"));
@@ -281,27 +291,35 @@ TEST_F(DeformCommand, WrongExtensionSameFileAndNonRegularPathsAreRefused) {
     fs::create_symlink("/dev/null", dir / "dev" / "null.ply");
     r = run(p("in.ply") + " " + (dir / "dev" / "null.ply").string() + lat);
     EXPECT_EQ(r.code, 1);
-    EXPECT_NE(r.err.find("not a regular file (a character device); refusing to replace it"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("not a regular file (a character device); refusing to replace it"),
+              std::string::npos)
+        << r.err;
 }
 
 TEST_F(DeformCommand, HugeControlPointsAndMisspeltKeysFailInsteadOfWritingNonsense) {
     std::string cps = "[";
-    for (int i = 0; i < 8; ++i) cps += std::string(i ? "," : "") + "[" + (i == 7 ? "1e308" : std::to_string(100 * (i & 1))) + "," +
-                                       std::to_string(100 * ((i >> 1) & 1)) + "," + std::to_string(100 * ((i >> 2) & 1)) + "]";
+    for (int i = 0; i < 8; ++i)
+        cps += std::string(i ? "," : "") + "[" + (i == 7 ? "1e308" : std::to_string(100 * (i & 1))) + "," +
+               std::to_string(100 * ((i >> 1) & 1)) + "," + std::to_string(100 * ((i >> 2) & 1)) + "]";
     cps += "]";
     {
         std::ofstream f(p("huge.json"));
-        f << R"({"origin":[0,0,0],"axes":[[100,0,0],[0,100,0],[0,0,100]],"divisions":[1,1,1],"control_points":)" << cps << "}";
+        f << R"({"origin":[0,0,0],"axes":[[100,0,0],[0,100,0],[0,0,100]],"divisions":[1,1,1],"control_points":)"
+          << cps << "}";
     }
-    RunResult r = run(p("in.ply") + " " + p("o.ply") + " --lattice " + p("huge.json"));  // used to exit 0 writing inf
+    RunResult r =
+        run(p("in.ply") + " " + p("o.ply") + " --lattice " + p("huge.json"));  // used to exit 0 writing inf
     EXPECT_EQ(r.code, 1);
-    EXPECT_NE(r.err.find(p("huge.json") + ": control_points[7] is larger than 1e30 in magnitude"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(p("huge.json") + ": control_points[7] is larger than 1e30 in magnitude"),
+              std::string::npos)
+        << r.err;
     EXPECT_FALSE(fs::exists(p("o.ply")));
     {
         std::ofstream f(p("typo.json"));
         f << R"({"origin":[0,0,0],"axes":[[100,0,0],[0,100,0],[0,0,100]],"divisions":[1,1,1],"controlpoints":[]})";
     }
-    r = run(p("in.ply") + " " + p("o.ply") + " --lattice " + p("typo.json"));  // used to deform nothing and exit 0
+    r = run(p("in.ply") + " " + p("o.ply") + " --lattice " +
+            p("typo.json"));  // used to deform nothing and exit 0
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.err.find(p("typo.json") + ": unknown key \"controlpoints\""), std::string::npos) << r.err;
 }
@@ -325,7 +343,8 @@ int deform_and_signal(const std::string& args, const fs::path& dir, int sig, con
             }
         if (!sent) ::usleep(1000);
         int status = 0;
-        if (!sent && ::waitpid(pid, &status, WNOHANG) == pid) return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+        if (!sent && ::waitpid(pid, &status, WNOHANG) == pid)
+            return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     }
     int status = 0;
     ::waitpid(pid, &status, 0);
@@ -333,16 +352,18 @@ int deform_and_signal(const std::string& args, const fs::path& dir, int sig, con
 }
 
 TEST_F(DeformCommand, SigintAndSigtermRemoveTheTemporaryAndKeepTheOldOutput) {
-    const std::string args = p("in.ply") + " " + p("res.ply") + " --lattice " + p("lattice.json") + " --backend reference --bench 100000";
-    for (const auto& [sig, code, word] : {std::tuple{SIGINT, 130, "interrupted (SIGINT)"}, std::tuple{SIGTERM, 143, "terminated (SIGTERM)"}}) {
-        {
-            std::ofstream(p("res.ply")) << "old output";
-        }
+    const std::string args = p("in.ply") + " " + p("res.ply") + " --lattice " + p("lattice.json") +
+                             " --backend reference --bench 100000";
+    for (const auto& [sig, code, word] : {std::tuple{SIGINT, 130, "interrupted (SIGINT)"},
+                                          std::tuple{SIGTERM, 143, "terminated (SIGTERM)"}}) {
+        { std::ofstream(p("res.ply")) << "old output"; }
         const int rc = deform_and_signal(args, dir, sig, dir / "err.txt");
         std::ifstream in(dir / "err.txt");
         const std::string err((std::istreambuf_iterator<char>(in)), {});
         EXPECT_EQ(rc, code) << err;
-        EXPECT_NE(err.find(std::string("splatffd deform: ") + word + "; unfinished output removed"), std::string::npos) << err;
+        EXPECT_NE(err.find(std::string("splatffd deform: ") + word + "; unfinished output removed"),
+                  std::string::npos)
+            << err;
         for (const auto& e : fs::directory_iterator(dir))
             EXPECT_EQ(e.path().filename().string().find("sffd-tmp"), std::string::npos) << e.path();
         std::ifstream old(p("res.ply"));
@@ -363,24 +384,29 @@ TEST_F(DeformCommand, UvFrameOfATexturedCloudRidesOnTheDeformedAxes) {
     ASSERT_TRUE(assets::save_splat_cloud(*cloud, dir / "box.ply").ok());
     ASSERT_TRUE(assets::save_splat_cloud(*cloud, dir / "box.glb").ok());
     // x' = 2x: a 2x2x2 Bernstein lattice around the box with its control points scaled along x.
-    Lattice l = make_lattice(glm::dvec3(-1.5, -1.0, -1.0), {glm::dvec3(3, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, glm::ivec3(2, 2, 2));
+    Lattice l =
+        make_lattice(glm::dvec3(-1.5, -1.0, -1.0),
+                     {glm::dvec3(3, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, glm::ivec3(2, 2, 2));
     for (glm::dvec3& c : l.current) c.x *= 2.0;
     ASSERT_TRUE(save_lattice(dir / "stretch.json", l).ok());
-    for (const auto& [in, out] : {std::pair{"box.ply", "out.ply"}, std::pair{"box.ply", "out_ply.glb"}, std::pair{"box.glb", "out.glb"}}) {
+    for (const auto& [in, out] : {std::pair{"box.ply", "out.ply"}, std::pair{"box.ply", "out_ply.glb"},
+                                  std::pair{"box.glb", "out.glb"}}) {
         const RunResult r = run(p(in) + " " + p(out) + " --lattice " + p("stretch.json"));
         ASSERT_EQ(r.code, 0) << in << " -> " << out << ": " << r.err;
         auto d = assets::import_splat_cloud(dir / out);
         ASSERT_TRUE(d.ok()) << d.message();
         ASSERT_EQ(d->size(), cloud->size()) << out;
         ASSERT_EQ(d->uv_axes.size(), cloud->size()) << out;
-        EXPECT_EQ(d->material.texture_width, 256) << out;  // the texture still found (PLY: the TextureFile beside it)
+        EXPECT_EQ(d->material.texture_width, 256)
+            << out;  // the texture still found (PLY: the TextureFile beside it)
         std::size_t bad = 0;
         for (std::size_t i = 0; i < d->size(); ++i) {
-            // Axes doubled along x, the frame and uv unchanged: the point x' + s J a_u has the uv of x + s a_u.
+            // Axes doubled along x, the frame and uv unchanged: the point x' + s J a_u has the uv of x + s
+            // a_u.
             const glm::vec3 au = cloud->axis_u[i], av = cloud->axis_v[i];
             const bool ok = glm::length(d->axis_u[i] - glm::vec3(2 * au.x, au.y, au.z)) < 1e-5f &&
-                            glm::length(d->axis_v[i] - glm::vec3(2 * av.x, av.y, av.z)) < 1e-5f && d->uv_axes[i] == cloud->uv_axes[i] &&
-                            d->uvs[i] == cloud->uvs[i];
+                            glm::length(d->axis_v[i] - glm::vec3(2 * av.x, av.y, av.z)) < 1e-5f &&
+                            d->uv_axes[i] == cloud->uv_axes[i] && d->uvs[i] == cloud->uvs[i];
             if (!ok && bad++ < 3) ADD_FAILURE() << out << ": splat " << i;
         }
         EXPECT_EQ(bad, 0u) << out;

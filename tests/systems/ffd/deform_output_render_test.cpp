@@ -62,7 +62,6 @@ double mean_axis_u(const SplatCloud& c) {
     return c.axis_u.empty() ? 0.0 : s / double(c.axis_u.size());
 }
 
-
 class DeformOutputRender : public GlRenderTest {};
 
 TEST_F(DeformOutputRender, TwiceStretchedSphereFromTheCommandHasNoHoles) {
@@ -75,7 +74,8 @@ TEST_F(DeformOutputRender, TwiceStretchedSphereFromTheCommandHasNoHoles) {
     save_radius_ply(rest, dir / "normals.ply", false);
     ASSERT_TRUE(assets::save_splat_cloud(rest, dir / "sphere.glb").ok());
     // x' = 2x inside [-1.2, 1.2]^3 (Bernstein reproduces the linear map exactly).
-    Lattice lattice = ffd::make_lattice(glm::dvec3(-1.2), {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)},
+    Lattice lattice = ffd::make_lattice(glm::dvec3(-1.2),
+                                        {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)},
                                         glm::ivec3(2, 2, 2));
     for (glm::dvec3& p : lattice.current) p.x *= 2.0;
     ASSERT_TRUE(ffd::save_lattice(dir / "stretch.json", lattice).ok());
@@ -83,29 +83,36 @@ TEST_F(DeformOutputRender, TwiceStretchedSphereFromTheCommandHasNoHoles) {
     const Camera cam = add_camera(6.0);
     add_light({-1.0f, -0.3f, -0.5f});
     for (const std::string in : {"axes.ply", "radius.ply", "normals.ply", "sphere.glb"}) {
-        const fs::path out = dir / ("out_" + fs::path(in).stem().string() + (in == "sphere.glb" ? ".glb" : ".ply"));
-        ASSERT_EQ(run("deform " + (dir / in).string() + " " + out.string() + " --lattice " + (dir / "stretch.json").string()), 0) << in;
+        const fs::path out =
+            dir / ("out_" + fs::path(in).stem().string() + (in == "sphere.glb" ? ".glb" : ".ply"));
+        ASSERT_EQ(run("deform " + (dir / in).string() + " " + out.string() + " --lattice " +
+                      (dir / "stretch.json").string()),
+                  0)
+            << in;
         auto cloud = assets::import_splat_cloud(out);
         ASSERT_TRUE(cloud.ok()) << cloud.message();
         ASSERT_EQ(cloud->size(), rest.size());
         ASSERT_EQ(cloud->axis_u.size(), rest.size()) << in << ": no axes written";
         // The axes were deformed: circles became ellipses stretched along x (mean |axis_u| grows).
-        EXPECT_GT(mean_axis_u(*cloud), 1.2 * mean_axis_u(rest)) << in << " mean |axis_u| " << mean_axis_u(rest) << " -> "
-                                                                 << mean_axis_u(*cloud);
+        EXPECT_GT(mean_axis_u(*cloud), 1.2 * mean_axis_u(rest))
+            << in << " mean |axis_u| " << mean_axis_u(rest) << " -> " << mean_axis_u(*cloud);
         // Control (first input only): the same output with the rest axes put back, i.e. what the command
         // wrote before, must show holes, or this check could not see the difference.
         if (in == "axes.ply") {
             SplatCloud undeformed_axes = *cloud;
             undeformed_axes.axis_u = rest.axis_u, undeformed_axes.axis_v = rest.axis_v;
             const ecs::Entity c = add_cloud(std::move(undeformed_axes));
-            const Coverage k = ellipsoid_coverage(render(Quality::hq, 512, 512), cam, glm::dvec3(2.0, 1.0, 1.0));
-            EXPECT_GT(k.holes + k.far_side, k.inside / 50) << "control: holes " << k.holes << " far side " << k.far_side;
+            const Coverage k =
+                ellipsoid_coverage(render(Quality::hq, 512, 512), cam, glm::dvec3(2.0, 1.0, 1.0));
+            EXPECT_GT(k.holes + k.far_side, k.inside / 50)
+                << "control: holes " << k.holes << " far side " << k.far_side;
             reg.destroy(c);
         }
         const ecs::Entity e = add_cloud(std::move(*cloud));
         for (Quality q : {Quality::hq, Quality::preview}) {
             const FrameImage img = render(q, 512, 512);
-            const Coverage c = ellipsoid_coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));  // the 2x1x1 ellipsoid
+            const Coverage c =
+                ellipsoid_coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));  // the 2x1x1 ellipsoid
             const char* qn = q == Quality::hq ? "hq" : "preview";
             EXPECT_GT(c.inside, 40000) << in << " " << qn;
             EXPECT_EQ(c.holes, 0) << in << " " << qn;

@@ -25,8 +25,12 @@ Output run(const Lattice& l, const Cloud& c, Backend b, bool full = true) {
     o.n.resize(c.size());
     o.u.resize(c.size());
     o.v.resize(c.size());
-    PointsIn in{c.p.data(), full ? c.n.data() : nullptr, full ? c.u.data() : nullptr, full ? c.v.data() : nullptr,
-                c.size(), c.origin};
+    PointsIn in{c.p.data(),
+                full ? c.n.data() : nullptr,
+                full ? c.u.data() : nullptr,
+                full ? c.v.data() : nullptr,
+                c.size(),
+                c.origin};
     PointsOut out{o.p.data(), o.n.data(), o.u.data(), o.v.data()};
     auto r = deform(l, in, out, b);
     EXPECT_TRUE(r.ok()) << (r.ok() ? "" : r.message());
@@ -48,7 +52,8 @@ Cloud inside_only(const Lattice& l, const Cloud& c) {
 const Backend kAll[] = {Backend::reference, Backend::fast, Backend::sparse};
 
 Lattice skewed_lattice(glm::ivec3 div, LatticeBasis basis = LatticeBasis::bernstein) {
-    return make_lattice({-1.1, -1.2, -1.05}, {glm::dvec3(2.3, 0.2, -0.1), glm::dvec3(0.1, 2.4, 0.3), glm::dvec3(-0.2, 0.1, 2.2)},
+    return make_lattice({-1.1, -1.2, -1.05},
+                        {glm::dvec3(2.3, 0.2, -0.1), glm::dvec3(0.1, 2.4, 0.3), glm::dvec3(-0.2, 0.1, 2.2)},
                         div, basis);
 }
 
@@ -95,17 +100,20 @@ void check_affine(const glm::dmat3& A, bool expect_inverted) {
 }
 
 TEST(FfdDeform, AffineMapOfControlPointsIsReproduced) {
-    check_affine(glm::dmat3(glm::dvec3(1.2, 0.1, -0.3), glm::dvec3(0.2, 0.8, 0.1), glm::dvec3(-0.1, 0.4, 1.5)), false);
+    check_affine(
+        glm::dmat3(glm::dvec3(1.2, 0.1, -0.3), glm::dvec3(0.2, 0.8, 0.1), glm::dvec3(-0.1, 0.4, 1.5)), false);
 }
 
 TEST(FfdDeform, MirroredLatticeFlipsNormalsConsistentlyAndCountsInverted) {
     // A reflection (det < 0): cof(A) n = det(A) A^-T n, the orientation follows the map.
-    check_affine(glm::dmat3(glm::dvec3(-1.0, 0.0, 0.0), glm::dvec3(0.0, 1.1, 0.0), glm::dvec3(0.1, 0.0, 0.9)), true);
+    check_affine(glm::dmat3(glm::dvec3(-1.0, 0.0, 0.0), glm::dvec3(0.0, 1.1, 0.0), glm::dvec3(0.1, 0.0, 0.9)),
+                 true);
 }
 
 TEST(FfdDeform, MirroredAxesAtRestAreNotInverted) {
     // A left-handed box (S pointing down x) at rest is the identity: nothing flips.
-    const Lattice l = make_lattice({1, -1, -1}, {glm::dvec3(-2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3});
+    const Lattice l = make_lattice(
+        {1, -1, -1}, {glm::dvec3(-2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3});
     const Cloud c = test::random_cloud(500, -0.9, 0.9);
     for (Backend b : kAll) {
         const Output o = run(l, c, b);
@@ -151,7 +159,8 @@ TEST(FfdDeform, PyGeMSphereCase) {
     double worst = 0.0;
     std::size_t moved = 0;
     for (std::size_t i = 0; i < n; ++i) {
-        const glm::dvec3 x(orig[3 * i], orig[3 * i + 1], orig[3 * i + 2]), want(mod[3 * i], mod[3 * i + 1], mod[3 * i + 2]);
+        const glm::dvec3 x(orig[3 * i], orig[3 * i + 1], orig[3 * i + 2]),
+            want(mod[3 * i], mod[3 * i + 1], mod[3 * i + 2]);
         worst = std::max(worst, glm::length(reference_point(l, x).position - want));
         moved += want != x;
     }
@@ -169,7 +178,8 @@ TEST(FfdDeform, PyGeMSphereCase) {
         const Output o = run(l, c, b);
         double w = 0.0;
         for (std::size_t i = 0; i < n; ++i)
-            w = std::max(w, glm::length(c.origin + glm::dvec3(o.p[i]) - glm::dvec3(mod[3 * i], mod[3 * i + 1], mod[3 * i + 2])));
+            w = std::max(w, glm::length(c.origin + glm::dvec3(o.p[i]) -
+                                        glm::dvec3(mod[3 * i], mod[3 * i + 1], mod[3 * i + 2])));
         EXPECT_LT(w, 1e-3) << backend_name(b);  // 1e-5 of the 100-unit box
     }
 }
@@ -178,8 +188,8 @@ TEST(FfdDeform, PyGeMSphereCase) {
 // Normals are compared where the reference Jacobian is well conditioned (cond_F(J) <= 20): near a singular
 // J the normal is ill-defined and any float evaluation drifts; `normal_tol` grows for very fine lattices,
 // where float derivative sums cancel (error ~ divisions * |ΔP| * 6e-8, see README "Precision").
-void expect_agree(const Output& a, const Output& b, double size, const char* what, const Lattice& l, const Cloud& c,
-                  double normal_tol = 1e-5) {
+void expect_agree(const Output& a, const Output& b, double size, const char* what, const Lattice& l,
+                  const Cloud& c, double normal_tol = 1e-5) {
     ASSERT_EQ(a.p.size(), b.p.size());
     auto fro = [](const glm::dmat3& m) {
         double s = 0;
@@ -194,8 +204,10 @@ void expect_agree(const Output& a, const Output& b, double size, const char* wha
             ASSERT_LT(glm::length(a.n[i] - b.n[i]), normal_tol) << what << " normal " << i;
         }
         // Axes relative to |J| |axis| (a nearly singular J shrinks an axis; its error does not shrink).
-        ASSERT_LT(double(glm::length(a.u[i] - b.u[i])), normal_tol * fro(J) * double(glm::length(c.u[i]))) << what << " axis_u " << i;
-        ASSERT_LT(double(glm::length(a.v[i] - b.v[i])), normal_tol * fro(J) * double(glm::length(c.v[i]))) << what << " axis_v " << i;
+        ASSERT_LT(double(glm::length(a.u[i] - b.u[i])), normal_tol * fro(J) * double(glm::length(c.u[i])))
+            << what << " axis_u " << i;
+        ASSERT_LT(double(glm::length(a.v[i] - b.v[i])), normal_tol * fro(J) * double(glm::length(c.v[i])))
+            << what << " axis_v " << i;
     }
     EXPECT_EQ(a.stats.inside, b.stats.inside) << what;
     EXPECT_EQ(a.stats.inverted, b.stats.inverted) << what;
@@ -203,11 +215,11 @@ void expect_agree(const Output& a, const Output& b, double size, const char* wha
 
 TEST(FfdDeform, FastSparseAndReferenceAgree) {
     const Cloud c = test::random_cloud(4000, -1.3, 1.3, 9);
-    for (glm::ivec3 div : {glm::ivec3(1, 1, 1), glm::ivec3(3, 5, 2), glm::ivec3(10, 10, 10), glm::ivec3(4, 3, 14),
-                           glm::ivec3(20, 6, 33)}) {
+    for (glm::ivec3 div : {glm::ivec3(1, 1, 1), glm::ivec3(3, 5, 2), glm::ivec3(10, 10, 10),
+                           glm::ivec3(4, 3, 14), glm::ivec3(20, 6, 33)}) {
         for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline}) {
-            SCOPED_TRACE(testing::Message() << "divisions " << div.x << " " << div.y << " " << div.z << " basis "
-                                            << int(basis));
+            SCOPED_TRACE(testing::Message()
+                         << "divisions " << div.x << " " << div.y << " " << div.z << " basis " << int(basis));
             Lattice l = skewed_lattice(div, basis);
             test::twist_about_t(l, 0.7);
             // Jitter a fraction of the cell size: keeps J well conditioned (float normals of a nearly
@@ -229,7 +241,8 @@ TEST(FfdDeform, PaperCaseAgreesTo1e5) {
     // The benchmark case: Fibonacci sphere in an 11x11x11 lattice, global twist; every normal compared.
     const Cloud c = test::fibonacci_sphere(59650);
     for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline}) {
-        Lattice l = make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+        Lattice l = make_lattice({-1.1, -1.1, -1.1},
+                                 {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
                                  {10, 10, 10}, basis);
         test::twist_about_t(l, 0.6);
         const Output ref = run(l, c, Backend::reference);
@@ -254,15 +267,16 @@ TEST(FfdDeform, AutomaticPicksSparseForLocalEdits) {
 TEST(FfdDeform, BSplineAffinePrecisionAwayFromBoundary) {
     const glm::dmat3 A(glm::dvec3(1.1, 0.2, 0.0), glm::dvec3(-0.1, 0.9, 0.1), glm::dvec3(0.0, 0.3, 1.2));
     const glm::dvec3 b(0.1, 0.2, -0.1);
-    Lattice l = make_lattice({-2, -2, -2}, {glm::dvec3(4, 0, 0), glm::dvec3(0, 4, 0), glm::dvec3(0, 0, 4)}, {8, 8, 8},
-                             LatticeBasis::bspline);
+    Lattice l = make_lattice({-2, -2, -2}, {glm::dvec3(4, 0, 0), glm::dvec3(0, 4, 0), glm::dvec3(0, 0, 4)},
+                             {8, 8, 8}, LatticeBasis::bspline);
     for (std::size_t c = 0; c < l.size(); ++c) l.current[c] = A * l.rest[c] + b;
     // Interior: l·s in [1, l-1] on every axis, i.e. [-1.5, 1.5] here.
     const Cloud inner = test::random_cloud(1000, -1.5, 1.5, 4);
     for (Backend be : kAll) {
         const Output o = run(l, inner, be);
         for (std::size_t i = 0; i < inner.size(); ++i) {
-            ASSERT_LT(glm::length(glm::dvec3(o.p[i]) - (A * glm::dvec3(inner.p[i]) + b)), 2e-5) << backend_name(be);
+            ASSERT_LT(glm::length(glm::dvec3(o.p[i]) - (A * glm::dvec3(inner.p[i]) + b)), 2e-5)
+                << backend_name(be);
             ASSERT_LT(glm::length(glm::dvec3(o.u[i]) - A * glm::dvec3(inner.u[i])), 2e-6);
         }
     }
@@ -272,8 +286,8 @@ TEST(FfdDeform, BSplineAffinePrecisionAwayFromBoundary) {
 }
 
 TEST(FfdDeform, BSplineIsLocal) {
-    Lattice l = make_lattice({0, 0, 0}, {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)}, {10, 10, 10},
-                             LatticeBasis::bspline);
+    Lattice l = make_lattice({0, 0, 0}, {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)},
+                             {10, 10, 10}, LatticeBasis::bspline);
     const int ci = 5, cj = 4, ck = 6;
     l.current[l.index(ci, cj, ck)] += glm::dvec3(0.05, -0.02, 0.03);
     const Cloud c = test::random_cloud(20000, 0.0, 1.0, 8);
@@ -282,7 +296,8 @@ TEST(FfdDeform, BSplineIsLocal) {
         std::size_t changed = 0;
         for (std::size_t i = 0; i < c.size(); ++i) {
             const glm::dvec3 x(c.p[i]);
-            const bool in_support = std::abs(10 * x.x - ci) < 2 && std::abs(10 * x.y - cj) < 2 && std::abs(10 * x.z - ck) < 2;
+            const bool in_support =
+                std::abs(10 * x.x - ci) < 2 && std::abs(10 * x.y - cj) < 2 && std::abs(10 * x.z - ck) < 2;
             if (!in_support) {
                 ASSERT_EQ(o.p[i], c.p[i]) << backend_name(be) << " point " << i;
             }
@@ -325,8 +340,8 @@ TEST(FfdDeform, FarFromOriginNoJitter) {
     // deformation computed at the world origin.
     const glm::dvec3 far(1.0e6, -2.0e6, 3.0e6);
     Cloud c = test::fibonacci_sphere(5000);
-    Lattice near_l = make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
-                                  {6, 6, 6});
+    Lattice near_l = make_lattice(
+        {-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {6, 6, 6});
     test::twist_about_t(near_l, 1.0);
     Lattice far_l = near_l;
     far_l.origin += far;
@@ -336,8 +351,10 @@ TEST(FfdDeform, FarFromOriginNoJitter) {
     c.origin = far;
     for (Backend be : kAll) {
         const Output b = run(far_l, c, be);
-        for (std::size_t i = 0; i < c.size(); ++i) ASSERT_LT(glm::length(a.p[i] - b.p[i]), 2e-6f) << backend_name(be);
-        for (std::size_t i = 0; i < c.size(); ++i) ASSERT_LT(glm::length(a.n[i] - b.n[i]), 2e-5f) << backend_name(be);
+        for (std::size_t i = 0; i < c.size(); ++i)
+            ASSERT_LT(glm::length(a.p[i] - b.p[i]), 2e-6f) << backend_name(be);
+        for (std::size_t i = 0; i < c.size(); ++i)
+            ASSERT_LT(glm::length(a.n[i] - b.n[i]), 2e-5f) << backend_name(be);
     }
 }
 
@@ -362,10 +379,12 @@ TEST(FfdDeform, DegenerateLatticesAreRefused) {
     const Cloud c = test::random_cloud(10, -1, 1);
     auto message = [&](const Lattice& l) {
         std::vector<glm::vec3> out(c.size());
-        auto r = deform(l, PointsIn{c.p.data(), nullptr, nullptr, nullptr, c.size(), {}}, PointsOut{out.data()});
+        auto r =
+            deform(l, PointsIn{c.p.data(), nullptr, nullptr, nullptr, c.size(), {}}, PointsOut{out.data()});
         return r.ok() ? std::string("ok") : r.message();
     };
-    Lattice flat = make_lattice({0, 0, 0}, {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(1, 1, 0)}, {2, 2, 2});
+    Lattice flat =
+        make_lattice({0, 0, 0}, {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(1, 1, 0)}, {2, 2, 2});
     EXPECT_NE(message(flat).find("zero-volume"), std::string::npos) << message(flat);
     Lattice nan = skewed_lattice({2, 2, 2});
     nan.current[5].y = std::nan("");

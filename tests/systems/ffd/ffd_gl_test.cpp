@@ -27,7 +27,8 @@ namespace {
 class FfdGl : public test::HeadlessGlTest {};
 
 // A point cloud with the test points, deformed by one lattice.
-std::pair<ecs::Entity, ecs::Entity> add_cloud_and_lattice(ecs::Registry& reg, const ffd::test::Cloud& c, Lattice lattice) {
+std::pair<ecs::Entity, ecs::Entity> add_cloud_and_lattice(ecs::Registry& reg, const ffd::test::Cloud& c,
+                                                          Lattice lattice) {
     const ecs::Entity cloud = reg.create();
     SplatCloud sc;
     sc.positions = c.p, sc.normals = c.n, sc.axis_u = c.u, sc.axis_v = c.v;
@@ -44,10 +45,13 @@ gfx::GpuSplatStore& upload_rest(ecs::Registry& reg, ecs::Entity cloud, const ffd
     gfx::GpuSplats& s = store.clouds[cloud];
     std::vector<gpu::GpuSplat> packed(c.size());
     for (std::size_t i = 0; i < c.size(); ++i)
-        packed[i] = {{c.p[i].x, c.p[i].y, c.p[i].z, 0}, {c.n[i].x, c.n[i].y, c.n[i].z, 1}, {c.u[i].x, c.u[i].y, c.u[i].z, 0},
+        packed[i] = {{c.p[i].x, c.p[i].y, c.p[i].z, 0},
+                     {c.n[i].x, c.n[i].y, c.n[i].z, 1},
+                     {c.u[i].x, c.u[i].y, c.u[i].z, 0},
                      {c.v[i].x, c.v[i].y, c.v[i].z, 0}};
     s.rest = gfx::Buffer::create("test.rest");
-    glNamedBufferData(s.rest.id(), GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data(), GL_STATIC_DRAW);
+    glNamedBufferData(s.rest.id(), GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data(),
+                      GL_STATIC_DRAW);
     s.count = std::uint32_t(c.size());
     s.rest_version = reg.version<SplatCloud>(cloud);
     return store;
@@ -59,7 +63,8 @@ TEST_F(FfdGl, ComputePassMatchesCpuReference) {
     ffd::test::Cloud c = ffd::test::fibonacci_sphere(20000);
     c.origin = glm::dvec3(1e6, 0, 0);  // far from the world origin
     for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline}) {
-        Lattice l = ffd::make_lattice(c.origin + glm::dvec3(-1.1), {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+        Lattice l = ffd::make_lattice(c.origin + glm::dvec3(-1.1),
+                                      {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
                                       {10, 10, 10}, basis);
         ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.6, c.origin);
         const std::size_t n = c.size();
@@ -91,8 +96,10 @@ TEST_F(FfdGl, GridDispatchDeformsExactlyAsOneRow) {
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(5000);
     for (int variant = 0; variant < 3; ++variant) {
         const LatticeBasis basis = variant == 2 ? LatticeBasis::bspline : LatticeBasis::bernstein;
-        gpu->set_bernstein_kernel(variant == 1 ? ffd::GpuBernsteinKernel::shared : ffd::GpuBernsteinKernel::direct);
-        Lattice l = ffd::make_lattice(c.origin + glm::dvec3(-1.1), {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+        gpu->set_bernstein_kernel(variant == 1 ? ffd::GpuBernsteinKernel::shared
+                                               : ffd::GpuBernsteinKernel::direct);
+        Lattice l = ffd::make_lattice(c.origin + glm::dvec3(-1.1),
+                                      {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
                                       {5, 4, 6}, basis);
         ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.6, c.origin);
         const std::size_t n = c.size();
@@ -106,7 +113,8 @@ TEST_F(FfdGl, GridDispatchDeformsExactlyAsOneRow) {
         }();
         ASSERT_TRUE(grid.ok()) << grid.message();
         if (variant < 2) {
-            EXPECT_EQ(gpu->last_bernstein_kernel(), variant == 1 ? ffd::GpuBernsteinKernel::shared : ffd::GpuBernsteinKernel::direct);
+            EXPECT_EQ(gpu->last_bernstein_kernel(),
+                      variant == 1 ? ffd::GpuBernsteinKernel::shared : ffd::GpuBernsteinKernel::direct);
         }
         EXPECT_EQ(row->inside, n);  // the lattice holds the whole sphere: each splat counted once
         EXPECT_EQ(grid->inside, row->inside);
@@ -141,7 +149,8 @@ TEST_F(FfdGl, BernsteinSharedMemoryKernelMatchesTheDirectKernel) {
     ffd::test::Cloud c = ffd::test::fibonacci_sphere(3000);
     c.origin = glm::dvec3(0, 2e5, 0);
     for (glm::ivec3 div : {glm::ivec3(5, 4, 6), glm::ivec3(3, 2, 4)}) {
-        Lattice l = ffd::make_lattice(c.origin + glm::dvec3(-1.1), {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+        Lattice l = ffd::make_lattice(c.origin + glm::dvec3(-1.1),
+                                      {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
                                       div, LatticeBasis::bernstein);
         ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.6, c.origin);
         const std::size_t n = c.size();
@@ -157,7 +166,8 @@ TEST_F(FfdGl, BernsteinSharedMemoryKernelMatchesTheDirectKernel) {
         ASSERT_TRUE(s.ok()) << s.message();
         ASSERT_GE(max_shared, 32768);  // GL 4.5's minimum: these lattices' xyz fit
         EXPECT_EQ(gpu->last_bernstein_kernel(), ffd::GpuBernsteinKernel::shared);
-        auto r = ffd::deform(l, in, {p[2].data(), nn[2].data(), u[2].data(), v[2].data()}, ffd::Backend::reference);
+        auto r = ffd::deform(l, in, {p[2].data(), nn[2].data(), u[2].data(), v[2].data()},
+                             ffd::Backend::reference);
         ASSERT_TRUE(r.ok());
         EXPECT_EQ(s->inside, d->inside);
         EXPECT_EQ(s->inverted, d->inverted);
@@ -167,8 +177,10 @@ TEST_F(FfdGl, BernsteinSharedMemoryKernelMatchesTheDirectKernel) {
             for (int k = 0; k < 2; ++k) {  // shared, then direct, against the reference
                 ASSERT_LT(glm::length(p[k][i] - p[2][i]), 1e-5f * 2.2f) << i << " kernel " << k;
                 ASSERT_LT(glm::length(nn[k][i] - nn[2][i]), 1e-5f) << i << " kernel " << k;
-                ASSERT_LT(glm::length(u[k][i] - u[2][i]), 1e-5f * glm::length(u[2][i]) + 1e-9f) << i << " kernel " << k;
-                ASSERT_LT(glm::length(v[k][i] - v[2][i]), 1e-5f * glm::length(v[2][i]) + 1e-9f) << i << " kernel " << k;
+                ASSERT_LT(glm::length(u[k][i] - u[2][i]), 1e-5f * glm::length(u[2][i]) + 1e-9f)
+                    << i << " kernel " << k;
+                ASSERT_LT(glm::length(v[k][i] - v[2][i]), 1e-5f * glm::length(v[2][i]) + 1e-9f)
+                    << i << " kernel " << k;
             }
             ASSERT_LT(glm::length(p[1][i] - p[0][i]), 2e-5f * 2.2f) << i;
         }
@@ -178,11 +190,15 @@ TEST_F(FfdGl, BernsteinSharedMemoryKernelMatchesTheDirectKernel) {
 TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     ecs::Registry reg;
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(5000);
-    const auto [cloud, le] = add_cloud_and_lattice(reg, c, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {5, 5, 5}));
+    const auto [cloud, le] = add_cloud_and_lattice(
+        reg, c,
+        ffd::make_lattice({-1.1, -1.1, -1.1},
+                          {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {5, 5, 5}));
     auto& settings = reg.set_resource<FfdSettings>();
     settings.force_gpu = true;  // llvmpipe would otherwise pick the (faster) CPU path
     auto& store = upload_rest(reg, cloud, c);
-    ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.8, glm::dvec3(0.0));
+    ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.8,
+                      glm::dvec3(0.0));
     ffd_system(reg, {});
     EXPECT_EQ(settings.gpu_runs, 1u);
     const gfx::GpuSplats& s = store.clouds[cloud];
@@ -192,15 +208,17 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     std::vector<gpu::GpuSplat> back(c.size());
     glGetNamedBufferSubData(s.deformed.id(), 0, GLsizeiptr(back.size() * sizeof(gpu::GpuSplat)), back.data());
     std::vector<glm::vec3> rp(c.size()), rn(c.size());
-    ASSERT_TRUE(ffd::deform(reg.get<Lattice>(le), {c.p.data(), c.n.data(), nullptr, nullptr, c.size(), {}}, {rp.data(), rn.data()},
-                            ffd::Backend::reference)
+    ASSERT_TRUE(ffd::deform(reg.get<Lattice>(le), {c.p.data(), c.n.data(), nullptr, nullptr, c.size(), {}},
+                            {rp.data(), rn.data()}, ffd::Backend::reference)
                     .ok());
     const DeformedSplats& d = reg.get<DeformedSplats>(cloud);
     for (std::size_t i = 0; i < c.size(); ++i) {
         const glm::vec3 p(back[i].center[0], back[i].center[1], back[i].center[2]);
         ASSERT_LT(glm::length(p - rp[i]), 2.2e-5f);
-        ASSERT_LT(glm::length(glm::vec3(back[i].normal[0], back[i].normal[1], back[i].normal[2]) - rn[i]), 1e-5f);
-        ASSERT_TRUE(glm::all(glm::greaterThanEqual(glm::dvec3(p), d.bounds_min)) && glm::all(glm::lessThanEqual(glm::dvec3(p), d.bounds_max)));
+        ASSERT_LT(glm::length(glm::vec3(back[i].normal[0], back[i].normal[1], back[i].normal[2]) - rn[i]),
+                  1e-5f);
+        ASSERT_TRUE(glm::all(glm::greaterThanEqual(glm::dvec3(p), d.bounds_min)) &&
+                    glm::all(glm::lessThanEqual(glm::dvec3(p), d.bounds_max)));
     }
     const std::uint64_t version = s.deformed_version;
     ffd_system(reg, {});  // nothing changed: no dispatch
@@ -222,7 +240,10 @@ TEST_F(FfdGl, GpuPathTouchesNoPerSplatCpuArrayAfterTheFirstFrame) {
     ecs::Registry reg;
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(4000);
     // Covers the upper part of the sphere only: outside points pass through (bounds need the rest box).
-    const auto [cloud, le] = add_cloud_and_lattice(reg, c, ffd::make_lattice({-1.1, -0.2, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 1.4, 0), glm::dvec3(0, 0, 2.2)}, {4, 4, 4}));
+    const auto [cloud, le] = add_cloud_and_lattice(
+        reg, c,
+        ffd::make_lattice({-1.1, -0.2, -1.1},
+                          {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 1.4, 0), glm::dvec3(0, 0, 2.2)}, {4, 4, 4}));
     auto& settings = reg.set_resource<FfdSettings>();
     settings.force_gpu = true;
     auto& store = upload_rest(reg, cloud, c);
@@ -245,8 +266,8 @@ TEST_F(FfdGl, GpuPathTouchesNoPerSplatCpuArrayAfterTheFirstFrame) {
     ffd_system(reg, {});
     const DeformedSplats& d = reg.get<DeformedSplats>(cloud);
     const std::uint64_t version = d.version;
-    glFinish();                // the test waits, the system never does
-    ffd_system(reg, {});       // nothing changed: no dispatch, but the statistics are collected
+    glFinish();           // the test waits, the system never does
+    ffd_system(reg, {});  // nothing changed: no dispatch, but the statistics are collected
     EXPECT_EQ(settings.gpu_runs, 8u);
     EXPECT_EQ(d.version, version);
     EXPECT_EQ(d.inverted_version, version);
@@ -254,7 +275,8 @@ TEST_F(FfdGl, GpuPathTouchesNoPerSplatCpuArrayAfterTheFirstFrame) {
     EXPECT_EQ(settings.cpu_splat_passes, 1u);
     // Against the CPU path: same inverted count, same bounds, and the GPU output lies inside them.
     std::vector<gpu::GpuSplat> back(c.size());
-    glGetNamedBufferSubData(store.clouds[cloud].deformed.id(), 0, GLsizeiptr(back.size() * sizeof(gpu::GpuSplat)), back.data());
+    glGetNamedBufferSubData(store.clouds[cloud].deformed.id(), 0,
+                            GLsizeiptr(back.size() * sizeof(gpu::GpuSplat)), back.data());
     const std::size_t gpu_inverted = d.inverted;
     const glm::dvec3 gpu_lo = d.bounds_min, gpu_hi = d.bounds_max;
     settings.force_cpu = true;
@@ -269,7 +291,8 @@ TEST_F(FfdGl, GpuPathTouchesNoPerSplatCpuArrayAfterTheFirstFrame) {
     for (std::size_t i = 0; i < c.size(); ++i) {
         const glm::dvec3 p(back[i].center[0], back[i].center[1], back[i].center[2]);
         moved += glm::length(p - glm::dvec3(c.p[i])) > 1e-3;
-        ASSERT_TRUE(glm::all(glm::greaterThanEqual(p, gpu_lo)) && glm::all(glm::lessThanEqual(p, gpu_hi))) << i;
+        ASSERT_TRUE(glm::all(glm::greaterThanEqual(p, gpu_lo)) && glm::all(glm::lessThanEqual(p, gpu_hi)))
+            << i;
     }
     EXPECT_GT(moved, 1000u);
     ffd_release_gpu(reg);
@@ -282,7 +305,10 @@ TEST_F(FfdGl, SoftwareRasterizerGetsTheCpuPathUnlessTheGpuIsForced) {
         GTEST_SKIP() << "hardware renderer: " << renderer;
     ecs::Registry reg;
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(2000);
-    const auto [cloud, le] = add_cloud_and_lattice(reg, c, ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {3, 3, 3}));
+    const auto [cloud, le] = add_cloud_and_lattice(
+        reg, c,
+        ffd::make_lattice({-1.1, -1.1, -1.1},
+                          {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {3, 3, 3}));
     auto& settings = reg.set_resource<FfdSettings>();
     auto& store = reg.set_resource<gfx::GpuSplatStore>();
     gfx::GpuSplats& s = store.clouds[cloud];
@@ -315,18 +341,22 @@ TEST_F(FfdGl, PaperModeDrawsTheSameImageAsTheComputePass) {
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(20000);
     std::vector<gpu::GpuSplat> packed(c.size());
     for (std::size_t i = 0; i < c.size(); ++i)
-        packed[i] = {{c.p[i].x, c.p[i].y, c.p[i].z, 0}, {c.n[i].x, c.n[i].y, c.n[i].z, 1}, {c.u[i].x, c.u[i].y, c.u[i].z, 0},
+        packed[i] = {{c.p[i].x, c.p[i].y, c.p[i].z, 0},
+                     {c.n[i].x, c.n[i].y, c.n[i].z, 1},
+                     {c.u[i].x, c.u[i].y, c.u[i].z, 0},
                      {c.v[i].x, c.v[i].y, c.v[i].z, 0}};
     const GLsizeiptr bytes = GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat));
     gfx::Buffer rest = gfx::Buffer::create("test.rest"), deformed = gfx::Buffer::create("test.deformed");
     glNamedBufferData(rest.id(), bytes, packed.data(), GL_STATIC_DRAW);
     glNamedBufferData(deformed.id(), bytes, nullptr, GL_DYNAMIC_COPY);
-    Lattice l = ffd::make_lattice(glm::dvec3(-1.1), {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {10, 10, 10});
+    Lattice l = ffd::make_lattice(glm::dvec3(-1.1),
+                                  {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                                  {10, 10, 10});
     ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 1.2, glm::dvec3(0.0));
     ffd::stretch(l, ffd::select_range(l, {0, 8, 0}, {10, 10, 10}), {0.3, 0.2, 0});
     ASSERT_TRUE(gpu->dispatch(l, 1, 1, {}, rest.id(), deformed.id(), std::uint32_t(c.size())).ok());
-    auto target = gfx::RenderTarget::create({.label = "test.paper", .width = 128, .height = 128,
-                                             .color = {{"color", gfx::ColorFormat::rgba8}}});
+    auto target = gfx::RenderTarget::create(
+        {.label = "test.paper", .width = 128, .height = 128, .color = {{"color", gfx::ColorFormat::rgba8}}});
     ASSERT_TRUE(target.ok()) << target.message();
     const glm::mat4 vp = glm::mat4(glm::scale(glm::mat4(1.0f), glm::vec3(0.6f, 0.6f, -0.3f)));
     const float black[4] = {0, 0, 0, 1};
@@ -347,8 +377,8 @@ TEST_F(FfdGl, PaperModeDrawsTheSameImageAsTheComputePass) {
         covered += a[i] > 0;
         different += std::abs(int(a[i]) - int(b[i])) > 2;
     }
-    EXPECT_GT(covered, 128u * 128u / 5);   // the deformed sphere covers a good part of the image
-    EXPECT_LT(different, covered / 200);   // same splats, same place, same shading (float rounding aside)
+    EXPECT_GT(covered, 128u * 128u / 5);  // the deformed sphere covers a good part of the image
+    EXPECT_LT(different, covered / 200);  // same splats, same place, same shading (float rounding aside)
     // And it is deformed: the undeformed sphere differs.
     paper->draw_deformed(rest.id(), 0, vp, 2.0f);
     const auto und = [&] {

@@ -29,11 +29,15 @@ void make_scene(Scene& s) {
     sc.positions = c.p, sc.normals = c.n, sc.axis_u = c.u, sc.axis_v = c.v;
     s.reg.emplace<SplatCloud>(s.cloud, std::move(sc));
     s.global = s.reg.create();
-    s.reg.emplace<Lattice>(s.global, ffd::make_lattice({98.9, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
-                                                       {4, 4, 4}));
+    s.reg.emplace<Lattice>(
+        s.global,
+        ffd::make_lattice({98.9, -1.1, -1.1},
+                          {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {4, 4, 4}));
     s.local = s.reg.create();
-    s.reg.emplace<Lattice>(s.local, ffd::make_lattice({100.2, 0.2, -0.5}, {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)},
-                                                      {3, 3, 3}, LatticeBasis::bspline));
+    s.reg.emplace<Lattice>(
+        s.local,
+        ffd::make_lattice({100.2, 0.2, -0.5}, {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)},
+                          {3, 3, 3}, LatticeBasis::bspline));
     s.reg.emplace<Deformers>(s.cloud, Deformers{{s.global, s.local}});
     s.reg.set_resource<FfdSettings>();
 }
@@ -50,7 +54,8 @@ TEST(FfdSystem, RunsOnlyWhenSomethingChanged) {
     ffd_system(s.reg, {});
     EXPECT_EQ(settings.cpu_runs, 1u);  // nothing moved
     EXPECT_EQ(s.reg.get<DeformedSplats>(s.cloud).version, v);
-    ffd::twist(s.reg.patch<Lattice>(s.local), ffd::all_control_points(s.reg.get<Lattice>(s.local)), {0, 0, 1}, 0.3);
+    ffd::twist(s.reg.patch<Lattice>(s.local), ffd::all_control_points(s.reg.get<Lattice>(s.local)), {0, 0, 1},
+               0.3);
     ffd_system(s.reg, {});
     EXPECT_EQ(settings.cpu_runs, 2u);  // the local lattice's stamp moved
     EXPECT_GT(s.reg.get<DeformedSplats>(s.cloud).version, v);
@@ -81,17 +86,20 @@ TEST(FfdSystem, DeformersApplyInOrderAndBoundsCover) {
         const glm::dvec3 got = d.origin + glm::dvec3(d.positions[i]);
         ASSERT_LT(glm::length(got - b.position), 1e-5) << i;
         changed_by_local += glm::length(b.position - a.position) > 1e-4;
-        ASSERT_TRUE(glm::all(glm::greaterThanEqual(got, d.bounds_min)) && glm::all(glm::lessThanEqual(got, d.bounds_max)));
+        ASSERT_TRUE(glm::all(glm::greaterThanEqual(got, d.bounds_min)) &&
+                    glm::all(glm::lessThanEqual(got, d.bounds_max)));
         // Normal through both Jacobians (cofactor = det · inverse transpose, composed).
         const glm::dmat3 J = b.jacobian * a.jacobian;
-        const glm::dvec3 n = glm::normalize(glm::determinant(J) * glm::transpose(glm::inverse(J)) * glm::dvec3(c.normals[i]));
+        const glm::dvec3 n =
+            glm::normalize(glm::determinant(J) * glm::transpose(glm::inverse(J)) * glm::dvec3(c.normals[i]));
         ASSERT_LT(glm::length(glm::dvec3(d.normals[i]) - n), 1e-4) << i;
     }
     EXPECT_GT(changed_by_local, 50u);
     EXPECT_EQ(d.inverted, 0u);
     // A mirrored global lattice: every splat inside it is reported inverted.
     Lattice& m = s.reg.patch<Lattice>(s.global);
-    for (std::size_t i = 0; i < m.size(); ++i) m.current[i] = glm::dvec3(200.0 - m.rest[i].x, m.rest[i].y, m.rest[i].z);
+    for (std::size_t i = 0; i < m.size(); ++i)
+        m.current[i] = glm::dvec3(200.0 - m.rest[i].x, m.rest[i].y, m.rest[i].z);
     s.reg.patch<Deformers>(s.cloud).lattices = {s.global};
     ffd_system(s.reg, {});
     EXPECT_EQ(s.reg.get<DeformedSplats>(s.cloud).inverted, c.size());
@@ -126,21 +134,26 @@ TEST(FfdSystem, BoundsContainEveryDeformedPointForRandomLattices) {
         const int deformers = 1 + trial % 2;
         for (int d = 0; d < deformers; ++d) {
             // A box around part of (or all of) the cloud, sheared a little.
-            const glm::dvec3 lo = glm::dvec3(50.0 * trial, -3.0, 7.0) + glm::dvec3(-1.2 + 0.8 * unit(rng), -1.2 + 0.8 * unit(rng), -1.2);
+            const glm::dvec3 lo = glm::dvec3(50.0 * trial, -3.0, 7.0) +
+                                  glm::dvec3(-1.2 + 0.8 * unit(rng), -1.2 + 0.8 * unit(rng), -1.2);
             const double size = 1.2 + 1.4 * unit(rng);
-            const std::array<glm::dvec3, 3> axes{glm::dvec3(size, 0.1 * unit(rng), 0), glm::dvec3(0, size, 0.1 * unit(rng)),
+            const std::array<glm::dvec3, 3> axes{glm::dvec3(size, 0.1 * unit(rng), 0),
+                                                 glm::dvec3(0, size, 0.1 * unit(rng)),
                                                  glm::dvec3(0.1 * unit(rng), 0, size)};
             const glm::ivec3 div(1 + int(unit(rng) * 6), 1 + int(unit(rng) * 6), 1 + int(unit(rng) * 6));
-            Lattice l = ffd::make_lattice(lo, axes, div, (trial + d) % 3 == 0 ? LatticeBasis::bspline : LatticeBasis::bernstein);
+            Lattice l = ffd::make_lattice(
+                lo, axes, div, (trial + d) % 3 == 0 ? LatticeBasis::bspline : LatticeBasis::bernstein);
             auto jitter = [&](double amount) {
-                for (glm::dvec3& p : l.current) p += amount * glm::dvec3(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
+                for (glm::dvec3& p : l.current)
+                    p += amount * glm::dvec3(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5);
             };
             jitter(0.6);
             if (trial % 4 == 1) {
                 ASSERT_TRUE(ffd::apply_as_rest(l).ok());  // non-uniform rest, then displaced again
                 jitter(0.4);
             }
-            if (trial % 5 == 2) ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 2.0, lo + 0.5 * size);
+            if (trial % 5 == 2)
+                ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 2.0, lo + 0.5 * size);
             const ecs::Entity le = reg.create();
             reg.emplace<Lattice>(le, std::move(l));
             chain.push_back(le);
@@ -157,7 +170,8 @@ TEST(FfdSystem, BoundsContainEveryDeformedPointForRandomLattices) {
         for (std::size_t i = 0; i < c.size(); ++i) {
             const glm::dvec3 x = d.origin + glm::dvec3(d.positions[i]);
             moved += glm::length(glm::dvec3(d.positions[i] - c.p[i])) > 1e-3;
-            ASSERT_TRUE(glm::all(glm::greaterThanEqual(x, d.bounds_min - tol)) && glm::all(glm::lessThanEqual(x, d.bounds_max + tol)))
+            ASSERT_TRUE(glm::all(glm::greaterThanEqual(x, d.bounds_min - tol)) &&
+                        glm::all(glm::lessThanEqual(x, d.bounds_max + tol)))
                 << "trial " << trial << " point " << i;
         }
         EXPECT_GT(moved, 100u) << "trial " << trial;  // the lattices really deform the cloud

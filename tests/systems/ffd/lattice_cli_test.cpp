@@ -51,7 +51,8 @@ SplatCloud grid_cloud() {
 
 // A lattice around the grid with its far x face moved +3 along x: a 2x stretch of the box in x.
 Lattice stretch_x2(const SplatCloud& c) {
-    auto l = fit_lattice(c.positions, c.origin, FitOptions{{2, 1, 1}, LatticeBasis::bernstein, 0.0, FitShape::box});
+    auto l = fit_lattice(c.positions, c.origin,
+                         FitOptions{{2, 1, 1}, LatticeBasis::bernstein, 0.0, FitShape::box});
     EXPECT_TRUE(l.ok());
     Lattice out = *l;
     const double len = out.axes[0].x;
@@ -75,7 +76,8 @@ struct LatticeCli : testing::Test {
     std::string p(const std::string& name) const { return (dir / name).string(); }
 
     // A scene: the grid cloud bound to `bound` lattices in order, plus `loose` unbound ones.
-    void save_grid_scene(const std::string& name, const std::vector<Lattice>& bound, const std::vector<Lattice>& loose = {}) {
+    void save_grid_scene(const std::string& name, const std::vector<Lattice>& bound,
+                         const std::vector<Lattice>& loose = {}) {
         ecs::Registry r;
         const ecs::Entity c = r.create();
         r.emplace<Name>(c, Name{"grid"});
@@ -108,7 +110,8 @@ void expect_refusal(const std::string& args, int code, const std::string& messag
 
 // Writes a PLY whose vertex element has exactly the float properties `names`, columns[k] holding the
 // values of property k (the inputs with fewer properties than our own files, which deform completes).
-void write_vertex_ply(const std::string& path, const std::vector<const char*>& names, std::vector<std::vector<double>> columns) {
+void write_vertex_ply(const std::string& path, const std::vector<const char*>& names,
+                      std::vector<std::vector<double>> columns) {
     ply::Header h;
     ply::Element e;
     e.name = "vertex";
@@ -150,7 +153,8 @@ std::vector<glm::dvec3> column3(const std::string& file, const char* a, const ch
         EXPECT_TRUE(ia >= 0 && ib >= 0 && ic >= 0) << file << " lacks " << a;
         if (ia < 0 || ib < 0 || ic < 0) return out;
         for (std::size_t r = 0; r < *n; ++r)
-            out.emplace_back(ch.columns[std::size_t(ia)].values[r], ch.columns[std::size_t(ib)].values[r], ch.columns[std::size_t(ic)].values[r]);
+            out.emplace_back(ch.columns[std::size_t(ia)].values[r], ch.columns[std::size_t(ib)].values[r],
+                             ch.columns[std::size_t(ic)].values[r]);
     }
     return out;
 }
@@ -172,13 +176,15 @@ TEST_F(LatticeCli, ConvertStoresAFittedLatticeAndExportsItAsJson) {
     ASSERT_TRUE(reg.has<Deformers>(cloud));
     EXPECT_EQ(reg.get<Deformers>(cloud).lattices, std::vector<ecs::Entity>{lattice});
     const SplatCloud& sc = reg.get<SplatCloud>(cloud);
-    auto want = fit_lattice(sc.positions, sc.origin, FitOptions{{4, 3, 2}, LatticeBasis::bspline, 0.1, FitShape::box});
+    auto want = fit_lattice(sc.positions, sc.origin,
+                            FitOptions{{4, 3, 2}, LatticeBasis::bspline, 0.1, FitShape::box});
     ASSERT_TRUE(want.ok());
     const Lattice& got = reg.get<Lattice>(lattice);
     EXPECT_EQ(got.divisions, glm::ivec3(4, 3, 2));
     EXPECT_EQ(got.basis, LatticeBasis::bspline);
     EXPECT_LT(glm::length(got.origin - want->origin), 1e-6);
-    for (int a = 0; a < 3; ++a) EXPECT_LT(glm::length(got.axes[std::size_t(a)] - want->axes[std::size_t(a)]), 1e-6);
+    for (int a = 0; a < 3; ++a)
+        EXPECT_LT(glm::length(got.axes[std::size_t(a)] - want->axes[std::size_t(a)]), 1e-6);
     // info lists it; convert SCENE L.json writes it; the JSON loads back to the same lattice.
     r = run("info " + p("fit.glb"));
     ASSERT_EQ(r.code, 0) << r.out;
@@ -227,7 +233,8 @@ TEST_F(LatticeCli, DeformTakesTheLatticeFromASceneFile) {
     save_grid_scene("two.glb", {}, {L, other});
     expect_refusal("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb"), 1,
                    "two.glb: 2 lattices ('L0', 'L1'); choose one with --lattice-name NAME");
-    r = run("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb") + " --lattice-name L0");
+    r = run("deform " + p("grid.ply") + " " + p("c.ply") + " --lattice " + p("two.glb") +
+            " --lattice-name L0");
     ASSERT_EQ(r.code, 0) << r.out;
     EXPECT_EQ(column3(p("c.ply"), "x", "y", "z"), a);
     expect_refusal(
@@ -253,7 +260,8 @@ TEST_F(LatticeCli, DeformTakesTheLatticeFromASceneFile) {
     reg.view<const SplatCloud>().each([&](ecs::Entity, const SplatCloud& c) {
         ++clouds;
         ASSERT_EQ(c.size(), cloud.size());
-        for (std::size_t i = 0; i < c.size(); ++i) EXPECT_NEAR(c.origin.x + double(c.positions[i].x), 2.0 * double(cloud.positions[i].x), 1e-5);
+        for (std::size_t i = 0; i < c.size(); ++i)
+            EXPECT_NEAR(c.origin.x + double(c.positions[i].x), 2.0 * double(cloud.positions[i].x), 1e-5);
     });
     EXPECT_EQ(clouds, 1u);
 }
@@ -268,13 +276,16 @@ TEST_F(LatticeCli, DeformWritesDeformedSplatAxes) {
     {  // x y z nx ny nz radius
         auto cols = position_normal_columns(cloud);
         cols.emplace_back(cloud.size(), 0.05);
-        ASSERT_NO_FATAL_FAILURE(write_vertex_ply(p("radius.ply"), {"x", "y", "z", "nx", "ny", "nz", "radius"}, std::move(cols)));
+        ASSERT_NO_FATAL_FAILURE(
+            write_vertex_ply(p("radius.ply"), {"x", "y", "z", "nx", "ny", "nz", "radius"}, std::move(cols)));
     }
     for (const std::string in : {"axes.ply", "radius.ply"}) {
         for (const std::string backend : {"cpu", "reference"}) {
-            const CliRun r = run("deform " + p(in) + " " + p("out.ply") + " --lattice " + p("L.json") + " --backend " + backend);
+            const CliRun r = run("deform " + p(in) + " " + p("out.ply") + " --lattice " + p("L.json") +
+                                 " --backend " + backend);
             ASSERT_EQ(r.code, 0) << r.out;
-            EXPECT_TRUE(has(r.out, in == "radius.ply" ? "splat axes (created from normals and radius)" : "normals, splat axes deformed"))
+            EXPECT_TRUE(has(r.out, in == "radius.ply" ? "splat axes (created from normals and radius)"
+                                                      : "normals, splat axes deformed"))
                 << r.out;
             const auto u = column3(p("out.ply"), "axis_ux", "axis_uy", "axis_uz");
             const auto v = column3(p("out.ply"), "axis_vx", "axis_vy", "axis_vz");
@@ -283,7 +294,8 @@ TEST_F(LatticeCli, DeformWritesDeformedSplatAxes) {
             for (std::size_t i = 0; i < cloud.size(); ++i) {
                 const ReferencePoint rp = reference_point(L, glm::dvec3(cloud.positions[i]));
                 ASSERT_TRUE(rp.inside);
-                const glm::dvec3 want_u = rp.jacobian * glm::dvec3(cloud.axis_u[i]), want_v = rp.jacobian * glm::dvec3(cloud.axis_v[i]);
+                const glm::dvec3 want_u = rp.jacobian * glm::dvec3(cloud.axis_u[i]),
+                                 want_v = rp.jacobian * glm::dvec3(cloud.axis_v[i]);
                 EXPECT_LT(glm::length(u[i] - want_u), 1e-6) << in << " " << backend << " splat " << i;
                 EXPECT_LT(glm::length(v[i] - want_v), 1e-6) << in << " " << backend << " splat " << i;
                 mean_before += double(glm::length(cloud.axis_u[i])) + double(glm::length(cloud.axis_v[i]));
@@ -296,17 +308,23 @@ TEST_F(LatticeCli, DeformWritesDeformedSplatAxes) {
     // Normals but no radius: radii estimated from neighbour spacing exactly as import does (identity fit,
     // so the written axes are the created ones: lengths = assets::estimate_radii).
     {
-        ASSERT_NO_FATAL_FAILURE(
-            write_vertex_ply(p("normals.ply"), {"x", "y", "z", "nx", "ny", "nz"}, position_normal_columns(cloud)));
+        ASSERT_NO_FATAL_FAILURE(write_vertex_ply(p("normals.ply"), {"x", "y", "z", "nx", "ny", "nz"},
+                                                 position_normal_columns(cloud)));
         const CliRun est = run("deform " + p("normals.ply") + " " + p("est.ply") + " --lattice fit:2");
         ASSERT_EQ(est.code, 0) << est.out;
-        EXPECT_TRUE(has(est.out, "splat axes (created from normals and radii estimated from neighbour spacing)")) << est.out;
+        EXPECT_TRUE(
+            has(est.out, "splat axes (created from normals and radii estimated from neighbour spacing)"))
+            << est.out;
         std::vector<glm::vec3> rel;
         for (const glm::vec3& q : cloud.positions) rel.push_back(q - cloud.positions[0]);
         const std::vector<float> radii = assets::estimate_radii(assets::find_neighbours(rel, 6), 6, 1.0f);
         // --estimate-radii (needed beyond 4M points) gives the same file below the limit.
-        ASSERT_EQ(run("deform " + p("normals.ply") + " " + p("est2.ply") + " --lattice fit:2 --estimate-radii").code, 0);
-        EXPECT_EQ(column3(p("est2.ply"), "axis_ux", "axis_uy", "axis_uz"), column3(p("est.ply"), "axis_ux", "axis_uy", "axis_uz"));
+        ASSERT_EQ(
+            run("deform " + p("normals.ply") + " " + p("est2.ply") + " --lattice fit:2 --estimate-radii")
+                .code,
+            0);
+        EXPECT_EQ(column3(p("est2.ply"), "axis_ux", "axis_uy", "axis_uz"),
+                  column3(p("est.ply"), "axis_ux", "axis_uy", "axis_uz"));
         const auto u = column3(p("est.ply"), "axis_ux", "axis_uy", "axis_uz");
         ASSERT_EQ(u.size(), radii.size());
         for (std::size_t i = 0; i < u.size(); ++i) {
@@ -315,10 +333,12 @@ TEST_F(LatticeCli, DeformWritesDeformedSplatAxes) {
         }
     }
     // Positions only (no normals): said plainly.
-    ASSERT_NO_FATAL_FAILURE(write_vertex_ply(p("xyz.ply"), {"x", "y", "z"}, {{0, 1, 0}, {0, 0, 1}, {0, 0, 0}}));
+    ASSERT_NO_FATAL_FAILURE(
+        write_vertex_ply(p("xyz.ply"), {"x", "y", "z"}, {{0, 1, 0}, {0, 0, 1}, {0, 0, 0}}));
     const CliRun r = run("deform " + p("xyz.ply") + " " + p("o.ply") + " --lattice fit:2");
     ASSERT_EQ(r.code, 0) << r.out;
-    EXPECT_TRUE(has(r.out, "positions (no normals in the input); no splat axes (the input has no normals")) << r.out;
+    EXPECT_TRUE(has(r.out, "positions (no normals in the input); no splat axes (the input has no normals"))
+        << r.out;
     EXPECT_TRUE(has(r.out, "deformed by 1 lattice 'fit:2,2,2,pad=0.05'")) << r.out;
 }
 
@@ -333,13 +353,15 @@ TEST_F(LatticeCli, OptionErrorsNameTheOption) {
     EXPECT_FALSE(has(r.out, "18446744073709551611")) << r.out;
     r = run("convert " + p("g.ply") + " " + p("x.glb") + " --splats abc");
     EXPECT_EQ(r.code, 2);
-    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << r.out;  // one line, not two contradicting ones
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1)
+        << r.out;  // one line, not two contradicting ones
     EXPECT_TRUE(has(r.out, "--splats: expected an integer")) << r.out;
     expect_refusal("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit --bench 1x", 2,
                    "--bench: expected an integer in 0..1000000, got '1x'");
     expect_refusal("deform " + p("g.ply") + " " + p("o.ply") + " --lattice fit:99", 1,
                    "fit:99: divisions must be integers in 1..64");
-    expect_refusal("view sphere --frames -3", 2, "--frames: expected an integer N (frames 0..N-1) or a range A:B");
+    expect_refusal("view sphere --frames -3", 2,
+                   "--frames: expected an integer N (frames 0..N-1) or a range A:B");
     expect_refusal("pick sphere --at 1,1 --tolerance abc", 2,
                    "--tolerance: expected a number in 0..1e+06, got 'abc'");
     // profile checks its paths before measuring: one line, the file named, nothing measured.

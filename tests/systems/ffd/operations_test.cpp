@@ -15,7 +15,8 @@ namespace sffd::ffd {
 namespace {
 
 Lattice box(glm::ivec3 div, LatticeBasis basis = LatticeBasis::bernstein) {
-    return make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, div, basis);
+    return make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, div,
+                        basis);
 }
 
 TEST(FfdOperations, StretchMovesOnlyTheSelection) {
@@ -46,7 +47,8 @@ TEST(FfdOperations, TwistRotatesAboutPivotDefaultCentroid) {
     twist(l, all, {1, 1, 0}, 0.7, glm::dvec3(0.1, 0, 0));
     const glm::dvec3 x(0.3, -0.2, 0.5);
     const ReferencePoint rp = reference_point(l, x);
-    EXPECT_NEAR(glm::length(rp.position - glm::dvec3(0.1, 0, 0)), glm::length(x - glm::dvec3(0.1, 0, 0)), 1e-12);
+    EXPECT_NEAR(glm::length(rp.position - glm::dvec3(0.1, 0, 0)), glm::length(x - glm::dvec3(0.1, 0, 0)),
+                1e-12);
     EXPECT_NEAR(glm::determinant(rp.jacobian), 1.0, 1e-12);
 }
 
@@ -56,7 +58,8 @@ TEST(FfdOperations, FitLatticeWithPaddingAndDegenerateInput) {
     ASSERT_TRUE(l.ok()) << l.message();
     for (const auto& p : c.p) {
         const glm::dvec3 stu = local_coords(*l, glm::dvec3(10, 0, 0) + glm::dvec3(p));
-        EXPECT_TRUE(glm::all(glm::greaterThan(stu, glm::dvec3(0.05))) && glm::all(glm::lessThan(stu, glm::dvec3(0.95))));
+        EXPECT_TRUE(glm::all(glm::greaterThan(stu, glm::dvec3(0.05))) &&
+                    glm::all(glm::lessThan(stu, glm::dvec3(0.95))));
     }
     // Flat (z = 0), collinear, and a single point: valid lattices containing the points.
     const std::vector<glm::vec3> flat = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};
@@ -82,7 +85,8 @@ TEST(FfdOperations, OrientedFitFindsTheRotatedBox) {
     for (int i = 0; i <= 8; ++i)
         for (int j = 0; j <= 6; ++j)
             for (int k = 0; k <= 4; ++k) {
-                const glm::dvec3 q(-half.x + 2 * half.x * i / 8, -half.y + 2 * half.y * j / 6, -half.z + 2 * half.z * k / 4);
+                const glm::dvec3 q(-half.x + 2 * half.x * i / 8, -half.y + 2 * half.y * j / 6,
+                                   -half.z + 2 * half.z * k / 4);
                 pts.push_back(glm::vec3(R * q));  // relative to the origin c
             }
     FitOptions o;
@@ -106,22 +110,28 @@ TEST(FfdOperations, OrientedFitFindsTheRotatedBox) {
     // Its volume is the box's (6+1.2)(4+1.2)(2+1.2); the axis-aligned fit of the same points is larger.
     auto aabb = fit_lattice(pts, c, FitOptions{{4, 3, 2}, LatticeBasis::bernstein, 0.1, FitShape::box});
     ASSERT_TRUE(aabb.ok());
-    const auto volume = [](const Lattice& x) { return std::abs(glm::determinant(glm::dmat3(x.axes[0], x.axes[1], x.axes[2]))); };
+    const auto volume = [](const Lattice& x) {
+        return std::abs(glm::determinant(glm::dmat3(x.axes[0], x.axes[1], x.axes[2])));
+    };
     EXPECT_NEAR(volume(*l), 7.2 * 5.2 * 3.2, 1e-4);
     EXPECT_GT(volume(*aabb), 1.5 * volume(*l));
     // An axis-aligned object: the oriented fit is the box fit.
     std::vector<glm::vec3> aligned;
     for (int i = 0; i <= 4; ++i)
         for (int j = 0; j <= 2; ++j)
-            for (int k = 0; k <= 1; ++k) aligned.push_back(glm::vec3(float(i), 0.5f * float(j), 2.0f * float(k)));
-    auto ob = fit_lattice(aligned, {}, FitOptions{{2, 2, 2}, LatticeBasis::bernstein, 0.0, FitShape::oriented});
+            for (int k = 0; k <= 1; ++k)
+                aligned.push_back(glm::vec3(float(i), 0.5f * float(j), 2.0f * float(k)));
+    auto ob =
+        fit_lattice(aligned, {}, FitOptions{{2, 2, 2}, LatticeBasis::bernstein, 0.0, FitShape::oriented});
     auto bb = fit_lattice(aligned, {}, FitOptions{{2, 2, 2}, LatticeBasis::bernstein, 0.0, FitShape::box});
     ASSERT_TRUE(ob.ok() && bb.ok());
-    for (int a = 0; a < 3; ++a) EXPECT_LT(glm::length(ob->axes[std::size_t(a)] - bb->axes[std::size_t(a)]), 1e-9);
+    for (int a = 0; a < 3; ++a)
+        EXPECT_LT(glm::length(ob->axes[std::size_t(a)] - bb->axes[std::size_t(a)]), 1e-9);
     EXPECT_LT(glm::length(ob->origin - bb->origin), 1e-9);
     // A sphere has no principal axes: the oriented fit keeps the axis-aligned box (not 5% smaller).
     const test::Cloud sphere = test::fibonacci_sphere(2000, 1.0);
-    auto os = fit_lattice(sphere.p, {}, FitOptions{{2, 2, 2}, LatticeBasis::bernstein, 0.05, FitShape::oriented});
+    auto os =
+        fit_lattice(sphere.p, {}, FitOptions{{2, 2, 2}, LatticeBasis::bernstein, 0.05, FitShape::oriented});
     auto bs = fit_lattice(sphere.p, {}, FitOptions{{2, 2, 2}, LatticeBasis::bernstein, 0.05, FitShape::box});
     ASSERT_TRUE(os.ok() && bs.ok());
     EXPECT_EQ(os->axes, bs->axes);
@@ -149,11 +159,17 @@ TEST(FfdOperations, FitSpecParsesAndRoundTrips) {
     EXPECT_EQ(g->basis, f->basis);
     EXPECT_EQ(parse_fit_spec("fit:3")->divisions, glm::ivec3(3));
     EXPECT_EQ(parse_fit_spec("fit:pad=0")->padding, 0.0);
-    const std::pair<const char*, const char*> bad[] = {
-        {"fit:", "empty item"},        {"fit:0", "1..64"},          {"fit:65", "1..64"},
-        {"fit:4,x", "unknown item 'x'"}, {"fit:4,5", "one division count"}, {"fit:1,2,3,4", "at most three"},
-        {"fit:pad=-1", "pad must be"},  {"fit:pad=abc", "pad must be"}, {"fit:obb,4", "divisions come first"},
-        {"fits", "a fit spec reads"},  {"fit:4,,4,4", "empty item"}};
+    const std::pair<const char*, const char*> bad[] = {{"fit:", "empty item"},
+                                                       {"fit:0", "1..64"},
+                                                       {"fit:65", "1..64"},
+                                                       {"fit:4,x", "unknown item 'x'"},
+                                                       {"fit:4,5", "one division count"},
+                                                       {"fit:1,2,3,4", "at most three"},
+                                                       {"fit:pad=-1", "pad must be"},
+                                                       {"fit:pad=abc", "pad must be"},
+                                                       {"fit:obb,4", "divisions come first"},
+                                                       {"fits", "a fit spec reads"},
+                                                       {"fit:4,,4,4", "empty item"}};
     for (const auto& [spec, want] : bad) {
         auto r = parse_fit_spec(spec);
         ASSERT_FALSE(r.ok()) << spec;
@@ -175,7 +191,9 @@ TEST(FfdOperations, ApplyAsRestBakesTheShape) {
     for (std::size_t i = 0; i < c.size(); ++i) EXPECT_LT(glm::length(c.p[i] - before[i]), 1e-5f);
     // The deformation is now the identity; further edits act on the baked shape.
     std::vector<glm::vec3> after(c.size());
-    ASSERT_TRUE(deform(l, PointsIn{c.p.data(), nullptr, nullptr, nullptr, c.size(), {}}, PointsOut{after.data()}).ok());
+    ASSERT_TRUE(
+        deform(l, PointsIn{c.p.data(), nullptr, nullptr, nullptr, c.size(), {}}, PointsOut{after.data()})
+            .ok());
     EXPECT_EQ(after, c.p);
 }
 
@@ -209,7 +227,8 @@ TEST(FfdOperations, BSplineDoublingIsExactWithRestBoundary) {
     // Move interior control points only (boundary layer at rest).
     for (int i = 1; i < 4; ++i)
         for (int j = 1; j < 4; ++j)
-            for (int k = 1; k < 4; ++k) l.current[l.index(i, j, k)] += glm::dvec3(0.05 * i, -0.03 * j, 0.02 * k * i);
+            for (int k = 1; k < 4; ++k)
+                l.current[l.index(i, j, k)] += glm::dvec3(0.05 * i, -0.03 * j, 0.02 * k * i);
     bool exact = false;
     auto hi = raise_resolution(l, {8, 4, 8}, &exact);
     ASSERT_TRUE(hi.ok()) << hi.message();
@@ -233,7 +252,7 @@ TEST(FfdOperations, LowerResolutionIsALeastSquaresApproximation) {
     ASSERT_TRUE(lo.ok());
     const test::Cloud c = test::random_cloud(300, -1, 1);
     const double err = max_deviation(l, *lo, c);
-    EXPECT_LT(err, 0.02);   // a smooth twist is captured well by degree 4
+    EXPECT_LT(err, 0.02);  // a smooth twist is captured well by degree 4
     EXPECT_GT(err, 0.0);
 }
 

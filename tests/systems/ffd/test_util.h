@@ -30,7 +30,8 @@ inline Cloud fibonacci_sphere(std::size_t count, double radius = 1.0, double spl
         const double y = 1.0 - 2.0 * (double(i) + 0.5) / double(count);
         const double r = std::sqrt(1.0 - y * y), th = golden * double(i);
         const glm::dvec3 n(r * std::cos(th), y, r * std::sin(th));
-        glm::dvec3 t = glm::abs(n.x) < 0.9 ? glm::cross(n, glm::dvec3(1, 0, 0)) : glm::cross(n, glm::dvec3(0, 1, 0));
+        glm::dvec3 t =
+            glm::abs(n.x) < 0.9 ? glm::cross(n, glm::dvec3(1, 0, 0)) : glm::cross(n, glm::dvec3(0, 1, 0));
         t = glm::normalize(t);
         const glm::dvec3 b = glm::cross(n, t);
         c.p.push_back(glm::vec3(n * radius));
@@ -48,9 +49,11 @@ inline Cloud random_cloud(std::size_t count, double lo, double hi, unsigned seed
     Cloud c;
     for (std::size_t i = 0; i < count; ++i) {
         glm::dvec3 n;
-        do n = glm::dvec3(dir(rng), dir(rng), dir(rng)); while (glm::length(n) < 0.1);
+        do n = glm::dvec3(dir(rng), dir(rng), dir(rng));
+        while (glm::length(n) < 0.1);
         n = glm::normalize(n);
-        glm::dvec3 t = glm::normalize(glm::cross(n, glm::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
+        glm::dvec3 t =
+            glm::normalize(glm::cross(n, glm::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
         c.p.push_back(glm::vec3(pos(rng), pos(rng), pos(rng)));
         c.n.push_back(glm::vec3(n));
         c.u.push_back(glm::vec3(t * 0.02));
@@ -76,7 +79,8 @@ inline void twist_about_t(Lattice& l, double rate) {
 inline void jitter(Lattice& l, double amount, unsigned seed = 7, std::size_t stride = 1) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<double> d(-amount, amount);
-    for (std::size_t c = 0; c < l.size(); c += stride) l.current[c] = l.rest[c] + glm::dvec3(d(rng), d(rng), d(rng));
+    for (std::size_t c = 0; c < l.size(); c += stride)
+        l.current[c] = l.rest[c] + glm::dvec3(d(rng), d(rng), d(rng));
 }
 
 // NumPy v1/v2 .npy reader for little-endian float64 C-order arrays (what the PyGeM data uses).
@@ -100,7 +104,8 @@ inline bool read_npy_f64(const std::string& path, std::vector<double>& out, std:
     }
     std::string header(hlen, '\0');
     f.read(header.data(), hlen);
-    if (header.find("'<f8'") == std::string::npos || header.find("'fortran_order': False") == std::string::npos)
+    if (header.find("'<f8'") == std::string::npos ||
+        header.find("'fortran_order': False") == std::string::npos)
         return false;
     const auto open = header.find('('), close = header.find(')');
     shape.clear();

@@ -63,10 +63,10 @@ glm::dvec2 project(const Camera& cam, const glm::dvec3& p) {
 }
 
 struct Coverage {
-    std::size_t footprint = 0;     // pixels holding at least one projected centre
-    std::size_t covered = 0;       // of those, alpha > 0.9
-    std::size_t holes = 0;         // footprint-interior pixels (8 neighbours in the footprint) with alpha < 0.5
-    std::size_t spill = 0;         // pixels with alpha > 0.5 more than 2 px from the footprint
+    std::size_t footprint = 0;  // pixels holding at least one projected centre
+    std::size_t covered = 0;    // of those, alpha > 0.9
+    std::size_t holes = 0;      // footprint-interior pixels (8 neighbours in the footprint) with alpha < 0.5
+    std::size_t spill = 0;      // pixels with alpha > 0.5 more than 2 px from the footprint
 };
 
 Coverage coverage(const GaussianCloud& g, const Camera& cam, const gaussian::ReferenceImage& img) {
@@ -76,7 +76,9 @@ Coverage coverage(const GaussianCloud& g, const Camera& cam, const gaussian::Ref
         const int x = int(std::floor(s.x)), y = int(std::floor(s.y));
         if (x >= 0 && y >= 0 && x < kSize && y < kSize) fp[std::size_t(y) * kSize + std::size_t(x)] = 1;
     }
-    auto in = [&](int x, int y) { return x >= 0 && y >= 0 && x < kSize && y < kSize && fp[std::size_t(y) * kSize + std::size_t(x)]; };
+    auto in = [&](int x, int y) {
+        return x >= 0 && y >= 0 && x < kSize && y < kSize && fp[std::size_t(y) * kSize + std::size_t(x)];
+    };
     Coverage c;
     for (int y = 0; y < kSize; ++y)
         for (int x = 0; x < kSize; ++x) {
@@ -99,9 +101,11 @@ Coverage coverage(const GaussianCloud& g, const Camera& cam, const gaussian::Ref
 }
 
 void expect_covered(const Coverage& c, const std::string& what) {
-    std::printf("%s: footprint %zu px, covered %zu (%.2f%%), holes %zu, spill %zu\n", what.c_str(), c.footprint, c.covered,
+    std::printf("%s: footprint %zu px, covered %zu (%.2f%%), holes %zu, spill %zu\n", what.c_str(),
+                c.footprint, c.covered,
                 100.0 * double(c.covered) / double(std::max<std::size_t>(c.footprint, 1)), c.holes, c.spill);
-    EXPECT_GT(c.footprint, std::size_t(kSize * kSize / 20)) << what << ": the object is too small on screen to judge";
+    EXPECT_GT(c.footprint, std::size_t(kSize * kSize / 20))
+        << what << ": the object is too small on screen to judge";
     EXPECT_GE(double(c.covered), 0.97 * double(c.footprint)) << what;
     EXPECT_EQ(c.holes, 0u) << what;
     EXPECT_LE(double(c.spill), 0.01 * double(c.footprint)) << what;
@@ -110,11 +114,13 @@ void expect_covered(const Coverage& c, const std::string& what) {
 // The rest lattice around the centres' bounding box (10% margin), 3 divisions per axis, Bernstein.
 Lattice lattice_around(const GaussianCloud& g) {
     glm::dvec3 lo(1e300), hi(-1e300);
-    for (const glm::vec3& p : g.positions) lo = glm::min(lo, g.origin + glm::dvec3(p)), hi = glm::max(hi, g.origin + glm::dvec3(p));
+    for (const glm::vec3& p : g.positions)
+        lo = glm::min(lo, g.origin + glm::dvec3(p)), hi = glm::max(hi, g.origin + glm::dvec3(p));
     const glm::dvec3 m = 0.1 * (hi - lo);
     lo -= m, hi += m;
-    return make_lattice(lo, {glm::dvec3(hi.x - lo.x, 0, 0), glm::dvec3(0, hi.y - lo.y, 0), glm::dvec3(0, 0, hi.z - lo.z)},
-                        {3, 3, 3}, LatticeBasis::bernstein);
+    return make_lattice(
+        lo, {glm::dvec3(hi.x - lo.x, 0, 0), glm::dvec3(0, hi.y - lo.y, 0), glm::dvec3(0, 0, hi.z - lo.z)},
+        {3, 3, 3}, LatticeBasis::bernstein);
 }
 
 class ConvertedContent : public ::testing::TestWithParam<Content> {};
@@ -123,16 +129,19 @@ TEST_P(ConvertedContent, ConvertsRendersWithoutHolesAndDeforms) {
     const Content& c = GetParam();
     const fs::path src = source_of(c.name);
     if (std::string(c.name) != "sphere" && !fs::exists(src))
-        GTEST_SKIP() << src << " not fetched; run tools/fetch_content.sh" << (std::string(c.name) == "dragon" ? " --dragon" : "");
+        GTEST_SKIP() << src << " not fetched; run tools/fetch_content.sh"
+                     << (std::string(c.name) == "dragon" ? " --dragon" : "");
     const fs::path out = temp(std::string(c.name) + "_gaussians.ply");
-    const std::string cmd = kTool + " convert " + src.string() + " " + out.string() + " --gaussians >/dev/null 2>&1";
+    const std::string cmd =
+        kTool + " convert " + src.string() + " " + out.string() + " --gaussians >/dev/null 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
     auto g = gaussian::read_gaussians(out);
     ASSERT_TRUE(g) << g.message();
     EXPECT_EQ(g->size(), c.gaussians);
 
     glm::dvec3 lo(1e300), hi(-1e300);
-    for (const glm::vec3& p : g->positions) lo = glm::min(lo, g->origin + glm::dvec3(p)), hi = glm::max(hi, g->origin + glm::dvec3(p));
+    for (const glm::vec3& p : g->positions)
+        lo = glm::min(lo, g->origin + glm::dvec3(p)), hi = glm::max(hi, g->origin + glm::dvec3(p));
     const glm::dvec3 centre = 0.5 * (lo + hi);
     const Camera cam = render::framing_camera(centre, 0.5 * glm::length(hi - lo), 1.0);
     gaussian::ReferenceOptions o;
@@ -164,13 +173,14 @@ TEST_P(ConvertedContent, ConvertsRendersWithoutHolesAndDeforms) {
     const Coverage before = coverage(*g, cam, rest);
     const Coverage after = coverage(stretched, cam, gaussian::render_reference(stretched, cam, o));
     expect_covered(after, std::string(c.name) + " stretched 1.6x");
-    EXPECT_GT(double(after.footprint), 1.2 * double(before.footprint)) << "the stretch did not widen the object";
+    EXPECT_GT(double(after.footprint), 1.2 * double(before.footprint))
+        << "the stretch did not widen the object";
     fs::remove_all(out.parent_path());
 }
 
 INSTANTIATE_TEST_SUITE_P(Content, ConvertedContent,
-                         ::testing::Values(Content{"sphere", assets::kSphereSplats}, Content{"face", assets::kFaceSplats},
-                                           Content{"dragon", 437645}),
+                         ::testing::Values(Content{"sphere", assets::kSphereSplats},
+                                           Content{"face", assets::kFaceSplats}, Content{"dragon", 437645}),
                          [](const auto& param_info) { return std::string(param_info.param.name); });
 
 }  // namespace

@@ -71,7 +71,8 @@ GaussianCloud cloud(std::size_t n) {
 
 // A 4³ lattice around cloud(n), twisted by up to 0.5 rad about +y, saved to `path`.
 Lattice save_twisted_lattice(const fs::path& path) {
-    Lattice l = ffd::make_lattice({-1.2, -1.2, -1.2}, {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)}, {4, 4, 4});
+    Lattice l = ffd::make_lattice(
+        {-1.2, -1.2, -1.2}, {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)}, {4, 4, 4});
     ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.5, glm::dvec3(0.0));
     EXPECT_TRUE(ffd::save_lattice(path, l));
     return l;
@@ -100,7 +101,9 @@ TEST(GaussianDeformCommand, MatchesTheLibraryAndPrintsBenchJson) {
     const Lattice l = save_twisted_lattice(lat);
     const RunResult r = run(in.string() + " " + out.string() + " --lattice " + lat.string() + " --bench 2");
     ASSERT_EQ(r.code, 0) << r.err;
-    EXPECT_NE(r.out.find("{\"gaussians\":70000,\"sh_degree\":3,\"backend\":\"cpu\",\"median_ms\":"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("{\"gaussians\":70000,\"sh_degree\":3,\"backend\":\"cpu\",\"median_ms\":"),
+              std::string::npos)
+        << r.out;
     EXPECT_NE(r.out.find("\"gaussians_per_s\":"), std::string::npos);
     auto d = read_and_deform(in, out, l);
     ASSERT_TRUE(d) << d.message();
@@ -123,20 +126,24 @@ TEST(GaussianDeformCommand, StreamsThreeChunksIdenticallyAndKeepsOtherData) {
     const fs::path in = temp("stream_in.ply"), out = temp("stream_out.ply"), lat = temp("stream_lat.json");
     {
         std::ofstream f(in);
-        f << "ply\nformat ascii 1.0\nelement vertex " << n << "\nproperty float x\nproperty float y\nproperty float z\n"
-          << "property float confidence\nproperty float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n"
-          << "property float opacity\nproperty float scale_0\nproperty float scale_1\nproperty float scale_2\n"
+        f << "ply\nformat ascii 1.0\nelement vertex " << n
+          << "\nproperty float x\nproperty float y\nproperty float z\n"
+          << "property float confidence\nproperty float f_dc_0\nproperty float f_dc_1\nproperty float "
+             "f_dc_2\n"
+          << "property float opacity\nproperty float scale_0\nproperty float scale_1\nproperty float "
+             "scale_2\n"
           << "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\n"
           << "element camera 1\nproperty float fx\nend_header\n";
         for (std::size_t i = 0; i < n; ++i) {
             const double t = double(i);
-            f << 0.9 * std::sin(t) << ' ' << 0.9 * std::cos(1.3 * t) << ' ' << 0.9 * std::sin(0.7 * t + 1) << ' ' << i % 1000
-              << " 0.1 -0.2 0.3 " << (i % 7) - 3.0 << ' ' << -4.0 - double(i % 3) << " -4.5 -5 " << 1.0 + 0.1 * std::sin(t)
-              << ' ' << 0.2 * std::cos(t) << " 0.3 -0.1\n";
+            f << 0.9 * std::sin(t) << ' ' << 0.9 * std::cos(1.3 * t) << ' ' << 0.9 * std::sin(0.7 * t + 1)
+              << ' ' << i % 1000 << " 0.1 -0.2 0.3 " << (i % 7) - 3.0 << ' ' << -4.0 - double(i % 3)
+              << " -4.5 -5 " << 1.0 + 0.1 * std::sin(t) << ' ' << 0.2 * std::cos(t) << " 0.3 -0.1\n";
         }
         f << "1234.5\n";
     }
-    Lattice l = ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3});
+    Lattice l = ffd::make_lattice({-1, -1, -1},
+                                  {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3});
     ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.7, glm::dvec3(0.0));
     ASSERT_TRUE(ffd::save_lattice(lat, l));
     const RunResult r = run(in.string() + " " + out.string() + " --lattice " + lat.string());
@@ -168,7 +175,8 @@ TEST(GaussianDeformCommand, StreamsThreeChunksIdenticallyAndKeepsOtherData) {
         if (*rows == 0) break;
         const int c = chunk.find("confidence");
         ASSERT_GE(c, 0);
-        for (std::size_t k = 0; k < *rows; ++k, ++row) wrong += chunk.columns[std::size_t(c)].values[k] != double(row % 1000);
+        for (std::size_t k = 0; k < *rows; ++k, ++row)
+            wrong += chunk.columns[std::size_t(c)].values[k] != double(row % 1000);
     }
     EXPECT_EQ(row, n);
     EXPECT_EQ(wrong, 0u);
@@ -188,8 +196,10 @@ TEST(GaussianDeformCommand, GpuBackendMatchesTheLibrary) {
     const fs::path in = temp("gin.ply"), out = temp("gout.ply"), lat = temp("glat.json");
     ASSERT_TRUE(gaussian::write_ply(in, g));
     const Lattice l = save_twisted_lattice(lat);
-    const RunResult r = run(in.string() + " " + out.string() + " --lattice " + lat.string() + " --backend gpu");
-    if (r.code != 0 && r.err.find("--backend gpu: ") != std::string::npos) SFFD_GL_UNAVAILABLE("no GL context: " << r.err);
+    const RunResult r =
+        run(in.string() + " " + out.string() + " --lattice " + lat.string() + " --backend gpu");
+    if (r.code != 0 && r.err.find("--backend gpu: ") != std::string::npos)
+        SFFD_GL_UNAVAILABLE("no GL context: " << r.err);
     ASSERT_EQ(r.code, 0) << r.err;
     EXPECT_NE(r.err.find("0 not finite"), std::string::npos) << r.err;
     auto d = read_and_deform(in, out, l);
@@ -199,11 +209,15 @@ TEST(GaussianDeformCommand, GpuBackendMatchesTheLibrary) {
     double ec = 0, es = 0, esh = 0;
     for (std::size_t i = 0; i < got.size(); ++i) {
         ec = std::max(ec, double(glm::length(got.positions[i] - expect.positions[i])));
-        const glm::dmat3 s = gaussian::covariance(glm::dvec3(expect.scales[i]), glm::dquat(expect.rotations[i]));
-        es = std::max(es, max_abs(gaussian::covariance(glm::dvec3(got.scales[i]), glm::dquat(got.rotations[i])) - s) / max_abs(s));
+        const glm::dmat3 s =
+            gaussian::covariance(glm::dvec3(expect.scales[i]), glm::dquat(expect.rotations[i]));
+        es = std::max(
+            es, max_abs(gaussian::covariance(glm::dvec3(got.scales[i]), glm::dquat(got.rotations[i])) - s) /
+                    max_abs(s));
         EXPECT_EQ(got.opacities[i], src.opacities[i]);
     }
-    for (std::size_t k = 0; k < got.sh.size(); ++k) esh = std::max(esh, double(std::abs(got.sh[k] - expect.sh[k])));
+    for (std::size_t k = 0; k < got.sh.size(); ++k)
+        esh = std::max(esh, double(std::abs(got.sh[k] - expect.sh[k])));
     std::printf("deform --backend gpu: max centre error %.2e, relative Σ %.2e, SH %.2e\n", ec, es, esh);
     EXPECT_LT(ec, 5e-6);
     EXPECT_LT(es, 3e-5);  // the file's log scales and normalised quaternions add rounding of their own
@@ -213,14 +227,17 @@ TEST(GaussianDeformCommand, GpuBackendMatchesTheLibrary) {
 TEST(GaussianDeformCommand, RefusesBadFiles) {
     const fs::path in = temp("small.ply"), out = temp("o.ply"), lat = temp("l.json");
     ASSERT_TRUE(gaussian::write_ply(in, cloud(10)));
-    ASSERT_TRUE(ffd::save_lattice(lat, ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {2, 2, 2})));
+    ASSERT_TRUE(ffd::save_lattice(
+        lat, ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)},
+                               {2, 2, 2})));
     RunResult r;
     const fs::path bad = temp("bad.ply");
-    std::ofstream(bad) << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
-                          "property float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\nproperty float opacity\n"
-                          "property float scale_0\nproperty float scale_1\nproperty float scale_2\nproperty float rot_0\n"
-                          "property float rot_1\nproperty float rot_2\nproperty float rot_3\nend_header\n"
-                          "0 0 0 0 0 0 0 0 0 nan 1 0 0 0\n";
+    std::ofstream(bad)
+        << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+           "property float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\nproperty float opacity\n"
+           "property float scale_0\nproperty float scale_1\nproperty float scale_2\nproperty float rot_0\n"
+           "property float rot_1\nproperty float rot_2\nproperty float rot_3\nend_header\n"
+           "0 0 0 0 0 0 0 0 0 nan 1 0 0 0\n";
     r = run(bad.string() + " " + out.string() + " --lattice " + lat.string());
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(r.err.find(bad.string() + ": vertex 0: non-finite 'scale_2'"), std::string::npos) << r.err;
@@ -245,13 +262,17 @@ TEST(GaussianConvertCommand, BuiltinSphereToGaussiansAndBetweenFormats) {
     EXPECT_EQ(back->sh, g->sh);
     r = run("sphere " + temp("x.obj").string() + " --gaussians", "convert");
     EXPECT_EQ(r.code, 1);
-    EXPECT_NE(r.err.find("Gaussians are written as .ply (3DGS), .compressed.ply (PlayCanvas), .spz (v3) or .glb"), std::string::npos) << r.err;
+    EXPECT_NE(
+        r.err.find("Gaussians are written as .ply (3DGS), .compressed.ply (PlayCanvas), .spz (v3) or .glb"),
+        std::string::npos)
+        << r.err;
 }
 
 TEST(GaussianRenderCommand, RendersAGaussianFileToPng) {
     const fs::path ply = temp("r_sphere.ply"), dir = temp("render_out");
     ASSERT_EQ(run("sphere " + ply.string() + " --gaussians --splats 20000", "convert").code, 0);
-    RunResult r = run(ply.string() + " --out " + dir.string() + " --size 160x120 --background 1,1,1", "render");
+    RunResult r =
+        run(ply.string() + " --out " + dir.string() + " --size 160x120 --background 1,1,1", "render");
     if (r.code == 1 && r.err.find("EGL") != std::string::npos) SFFD_GL_UNAVAILABLE("no EGL: " << r.err);
     ASSERT_EQ(r.code, 0) << r.err;
     auto png = render::read_png(dir / "frame_0000.png");

@@ -24,8 +24,9 @@ using namespace sffd::gaussian;
 using sffd::test::max_abs;
 
 Lattice twisted(LatticeBasis basis, int div) {
-    Lattice l = ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)},
-                                  {div, div, div}, basis);
+    Lattice l =
+        ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)},
+                          {div, div, div}, basis);
     ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.8, glm::dvec3(0.0));
     for (glm::dvec3& p : l.current) p.x += 0.2 * p.y * p.y, p.z *= 1.0 + 0.3 * p.x;
     return l;
@@ -49,13 +50,16 @@ GaussianCloud cloud(std::size_t n, int degree, unsigned seed) {
     return g;
 }
 
-glm::dmat3 sigma(const GaussianCloud& g, std::size_t i) { return covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i])); }
+glm::dmat3 sigma(const GaussianCloud& g, std::size_t i) {
+    return covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i]));
+}
 
 // Largest colour difference over a few directions (coefficients |c| <= 0.5, as the GPU comparison).
 float colour_error(const GaussianCloud& a, const GaussianCloud& b, std::size_t i) {
     const int K = sh_coeffs(a.sh_degree);
     float e = 0.0f;
-    for (const glm::vec3 d : {glm::vec3(0.3f, -0.5f, 0.8f), glm::vec3(-0.9f, 0.1f, 0.4f), glm::vec3(0.2f, 0.9f, -0.3f)}) {
+    for (const glm::vec3 d :
+         {glm::vec3(0.3f, -0.5f, 0.8f), glm::vec3(-0.9f, 0.1f, 0.4f), glm::vec3(0.2f, 0.9f, -0.3f)}) {
         const glm::vec3 n = glm::normalize(d);
         const glm::vec3 da = a.sh_frames.empty() ? n : glm::transpose(a.sh_frames[i]) * n;
         const glm::vec3 db = b.sh_frames.empty() ? n : glm::transpose(b.sh_frames[i]) * n;
@@ -76,7 +80,7 @@ void expect_match(const GaussianCloud& fast, const GaussianCloud& ref, const cha
         worst_colour = std::max(worst_colour, colour_error(fast, ref, i));
         EXPECT_EQ(fast.opacities[i], ref.opacities[i]);
     }
-    EXPECT_LT(worst_sigma, 3e-5) << what;   // the GPU pass's tolerance against the same reference
+    EXPECT_LT(worst_sigma, 3e-5) << what;  // the GPU pass's tolerance against the same reference
     EXPECT_LT(worst_colour, 5e-5f) << what;
 }
 
@@ -84,7 +88,8 @@ TEST(GaussianDeformFast, MatchesTheDoublePrecisionReference) {
     for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline})
         for (int degree : {0, 1, 3}) {
             const Lattice l = twisted(basis, 5);
-            const GaussianCloud g = cloud(1003, degree, unsigned(7 + degree));  // not a multiple of any lane width
+            const GaussianCloud g =
+                cloud(1003, degree, unsigned(7 + degree));  // not a multiple of any lane width
             GaussianCloud fast, ref;
             DeformOptions ro;
             ro.reference_shapes = true;
@@ -131,7 +136,8 @@ TEST(GaussianDeformFast, ViewModeAndChainedInPlaceDeformationsMatchTheReference)
 TEST(GaussianDeformFast, FlattenedCellsCountAsDegenerateWithoutNaN) {
     // Every control point's y set to 0: J has a zero row, Σ' is flat, the SH stay unrotated. The reference
     // lattice evaluator for both (the fast one leaves rounding-size entries in that row).
-    Lattice l = ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3});
+    Lattice l = ffd::make_lattice({-1, -1, -1},
+                                  {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3});
     for (glm::dvec3& p : l.current) p.y = 0.0;
     const GaussianCloud g = cloud(133, 2, 5);
     GaussianCloud fast, ref;

@@ -33,8 +33,9 @@ using sffd::test::max_abs;
 
 // A 4³ Bernstein (or B-spline) lattice around [-1,1]³ with a graded twist about y and a bend.
 Lattice twisted_lattice(LatticeBasis basis = LatticeBasis::bernstein, int div = 4) {
-    Lattice l = ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)},
-                                  {div, div, div}, basis);
+    Lattice l =
+        ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)},
+                          {div, div, div}, basis);
     ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.6, glm::dvec3(0.0));
     for (glm::dvec3& p : l.current) p.x += 0.15 * p.y * p.y;
     return l;
@@ -49,7 +50,8 @@ GaussianCloud random_cloud(std::size_t n, int degree, double extent, double scal
     g.sh_degree = degree;
     for (std::size_t i = 0; i < n; ++i) {
         g.positions.emplace_back(float(extent) * u(rng), float(extent) * u(rng), float(extent) * u(rng));
-        g.scales.emplace_back(float(scale) * (1.2f + u(rng)), float(scale) * (1.2f + u(rng)), float(scale) * (0.2f + 0.1f * u(rng)));
+        g.scales.emplace_back(float(scale) * (1.2f + u(rng)), float(scale) * (1.2f + u(rng)),
+                              float(scale) * (0.2f + 0.1f * u(rng)));
         g.rotations.push_back(glm::normalize(glm::quat(nd(rng), nd(rng), nd(rng), nd(rng))));
         g.opacities.push_back(0.5f + 0.4f * u(rng));
         for (int k = 0; k < sh_coeffs(degree) * 3; ++k) g.sh.push_back(0.5f * u(rng));
@@ -67,7 +69,8 @@ TEST(GaussianDeform, FfdJacobianOutputMatchesReferenceOnEveryBackend) {
             std::vector<glm::mat3> jac(g.size(), glm::mat3(0.0f));
             ffd::PointsOut out{pos.data(), nullptr, nullptr, nullptr};
             out.jacobians = jac.data();
-            auto stats = ffd::deform(l, {g.positions.data(), nullptr, nullptr, nullptr, g.size(), g.origin}, out, b);
+            auto stats =
+                ffd::deform(l, {g.positions.data(), nullptr, nullptr, nullptr, g.size(), g.origin}, out, b);
             ASSERT_TRUE(stats) << stats.message();
             std::size_t outside = 0;
             for (std::size_t i = 0; i < g.size(); ++i) {
@@ -77,7 +80,8 @@ TEST(GaussianDeform, FfdJacobianOutputMatchesReferenceOnEveryBackend) {
                     EXPECT_EQ(jac[i], glm::mat3(1.0f));
                     continue;
                 }
-                EXPECT_LT(max_abs(glm::dmat3(jac[i]) - rp.jacobian), 2e-5 * max_abs(rp.jacobian)) << ffd::backend_name(b);
+                EXPECT_LT(max_abs(glm::dmat3(jac[i]) - rp.jacobian), 2e-5 * max_abs(rp.jacobian))
+                    << ffd::backend_name(b);
             }
             EXPECT_GT(outside, 100u);
         }
@@ -130,8 +134,10 @@ TEST(GaussianDeform, CovarianceMatchesMonteCarloFitOfTheDeformedDensity) {
         const glm::dmat3 a = glm::mat3_cast(glm::dquat(g.rotations[i])) *
                              glm::dmat3(g.scales[i].x, 0, 0, 0, g.scales[i].y, 0, 0, 0, g.scales[i].z);
         std::vector<glm::vec3> samples(N), moved(N);
-        for (glm::vec3& s : samples) s = glm::vec3(glm::dvec3(g.positions[i]) + a * glm::dvec3(nd(rng), nd(rng), nd(rng)));
-        ASSERT_TRUE(ffd::deform(l, {samples.data(), nullptr, nullptr, nullptr, N, {}}, {moved.data(), nullptr, nullptr, nullptr}));
+        for (glm::vec3& s : samples)
+            s = glm::vec3(glm::dvec3(g.positions[i]) + a * glm::dvec3(nd(rng), nd(rng), nd(rng)));
+        ASSERT_TRUE(ffd::deform(l, {samples.data(), nullptr, nullptr, nullptr, N, {}},
+                                {moved.data(), nullptr, nullptr, nullptr}));
         glm::dvec3 mean(0.0);
         for (const glm::vec3& m : moved) mean += glm::dvec3(m);
         mean /= double(N);
@@ -147,7 +153,8 @@ TEST(GaussianDeform, CovarianceMatchesMonteCarloFitOfTheDeformedDensity) {
 TEST(GaussianDeform, RigidLatticeMotionMovesGaussiansRigidly) {
     // Every control point moved by x -> Q x + t: linear precision makes the FFD exactly that map, so
     // centres, covariances and the colours seen from rotated view directions must follow it.
-    Lattice l = ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 4, 2});
+    Lattice l = ffd::make_lattice({-1, -1, -1},
+                                  {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 4, 2});
     const glm::dmat3 q = glm::mat3_cast(glm::angleAxis(0.9, glm::normalize(glm::dvec3(1, -2, 0.5))));
     const glm::dvec3 t(0.3, -0.2, 0.7);
     for (std::size_t c = 0; c < l.size(); ++c) l.current[c] = q * l.rest[c] + t;
@@ -186,7 +193,8 @@ TEST(GaussianDeform, OutsideGaussiansAreUnchangedAndInversionIsCounted) {
     EXPECT_EQ(out.sh, g.sh);
     // A mirror lattice (x -> -x) inverts every Gaussian: det J < 0, still a valid covariance, and the SH
     // transformed by the reflection (colour seen along the mirrored direction is the original).
-    Lattice m = ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {2, 2, 2});
+    Lattice m = ffd::make_lattice({-1, -1, -1},
+                                  {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {2, 2, 2});
     for (std::size_t c = 0; c < m.size(); ++c) m.current[c].x = -m.rest[c].x;
     const GaussianCloud h = random_cloud(100, 3, 0.9, 0.05, 6);
     auto ms = deform(m, h, out);
@@ -196,7 +204,9 @@ TEST(GaussianDeform, OutsideGaussiansAreUnchangedAndInversionIsCounted) {
     for (std::size_t i = 0; i < h.size(); ++i) {
         EXPECT_LT(max_abs(out_sigma(out, i) - f * out_sigma(h, i) * f), 1e-6);
         const glm::vec3 d = glm::normalize(glm::vec3(0.3f, -0.5f, 0.8f));
-        EXPECT_LT(glm::length(sh_color(3, &out.sh[i * 48], glm::vec3(f * glm::dvec3(d))) - sh_color(3, &h.sh[i * 48], d)), 2e-5f);
+        EXPECT_LT(glm::length(sh_color(3, &out.sh[i * 48], glm::vec3(f * glm::dvec3(d))) -
+                              sh_color(3, &h.sh[i * 48], d)),
+                  2e-5f);
     }
 }
 
@@ -262,7 +272,8 @@ TEST(GaussianDeform, SystemRunsOnlyWhenSomethingChanged) {
     ffd::reset(reg.patch<Lattice>(lat));
     gaussian_deform_system(reg, {});
     EXPECT_GT(reg.get<DeformedGaussians>(cloud).version, v);
-    EXPECT_EQ(reg.get<DeformedGaussians>(cloud).cloud.positions, reg.get<GaussianCloud>(cloud).positions);  // rest lattice
+    EXPECT_EQ(reg.get<DeformedGaussians>(cloud).cloud.positions,
+              reg.get<GaussianCloud>(cloud).positions);  // rest lattice
 }
 
 TEST(GaussianDeform, AnimatedLatticeMovesTheGaussiansEveryFrame) {
@@ -273,7 +284,8 @@ TEST(GaussianDeform, AnimatedLatticeMovesTheGaussiansEveryFrame) {
     const ecs::Entity cloud = reg.create(), lat = reg.create();
     const GaussianCloud authored = random_cloud(200, 2, 0.8, 0.03, 21);
     reg.emplace<GaussianCloud>(cloud, authored);
-    Lattice l = ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3});
+    Lattice l = ffd::make_lattice({-1, -1, -1},
+                                  {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3});
     AnimationClip clip;
     clip.duration = 1.0;
     clip.mode = PlayMode::once;
@@ -281,7 +293,8 @@ TEST(GaussianDeform, AnimatedLatticeMovesTheGaussiansEveryFrame) {
     track.kind = TrackKind::twist;
     track.axis = {0, 1, 0};
     for (std::uint32_t c = 0; c < l.size(); ++c) track.points.push_back(c);
-    track.keys = {{0.0, glm::dvec3(0.0), Interpolation::linear, Easing::none}, {1.0, glm::dvec3(90.0, 0, 0), Interpolation::linear, Easing::none}};
+    track.keys = {{0.0, glm::dvec3(0.0), Interpolation::linear, Easing::none},
+                  {1.0, glm::dvec3(90.0, 0, 0), Interpolation::linear, Easing::none}};
     clip.tracks.push_back(track);
     reg.emplace<Lattice>(lat, l);
     reg.emplace<AnimationClip>(lat, clip);
@@ -298,13 +311,18 @@ TEST(GaussianDeform, AnimatedLatticeMovesTheGaussiansEveryFrame) {
             EXPECT_GT(d.version, last_version) << frame;  // the lattice moved: re-deformed
         }
         last_version = d.version;
-        const glm::dmat3 q = glm::mat3_cast(glm::angleAxis(glm::radians(90.0 * 0.25 * frame), glm::dvec3(0, 1, 0)));
+        const glm::dmat3 q =
+            glm::mat3_cast(glm::angleAxis(glm::radians(90.0 * 0.25 * frame), glm::dvec3(0, 1, 0)));
         for (std::size_t i = 0; i < authored.size(); ++i) {
-            EXPECT_LT(glm::length(glm::dvec3(d.cloud.positions[i]) - q * glm::dvec3(authored.positions[i])), 2e-6) << frame;
+            EXPECT_LT(glm::length(glm::dvec3(d.cloud.positions[i]) - q * glm::dvec3(authored.positions[i])),
+                      2e-6)
+                << frame;
             const glm::dmat3 expect = q * out_sigma(authored, i) * glm::transpose(q);
             EXPECT_LT(max_abs(out_sigma(d.cloud, i) - expect), 2e-6 * max_abs(expect)) << frame;
             const glm::vec3 dir = glm::normalize(glm::vec3(0.3f, -0.2f, 0.9f));
-            EXPECT_LT(glm::length(sh_color(2, &d.cloud.sh[i * 27], glm::vec3(q * glm::dvec3(dir))) - sh_color(2, &authored.sh[i * 27], dir)), 2e-5f);
+            EXPECT_LT(glm::length(sh_color(2, &d.cloud.sh[i * 27], glm::vec3(q * glm::dvec3(dir))) -
+                                  sh_color(2, &authored.sh[i * 27], dir)),
+                      2e-5f);
         }
     }
     // Same time again: nothing moved, nothing re-deformed.

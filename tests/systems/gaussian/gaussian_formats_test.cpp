@@ -52,7 +52,8 @@ GaussianCloud cloud(std::size_t n, int degree, unsigned seed = 7) {
 }
 
 // A 3DGS PLY of degree 0 with the given opacity and scale_0 columns (the rest ordinary).
-fs::path ply_with(const std::string& name, const std::vector<double>& opacity, const std::vector<double>& scale0) {
+fs::path ply_with(const std::string& name, const std::vector<double>& opacity,
+                  const std::vector<double>& scale0) {
     ply::Element e = ply_element(0, opacity.size());
     ply::Header h;
     h.elements.push_back(e);
@@ -75,7 +76,8 @@ fs::path ply_with(const std::string& name, const std::vector<double>& opacity, c
 }
 
 TEST(GaussianInfinity, PlyOpacityAndScaleInfinitiesReadAsLimitsAndCounted) {
-    const fs::path p = ply_with("inf.ply", {INFINITY, -INFINITY, 0.0, 2.0}, {0.0, -INFINITY, -INFINITY, std::log(0.5)});
+    const fs::path p =
+        ply_with("inf.ply", {INFINITY, -INFINITY, 0.0, 2.0}, {0.0, -INFINITY, -INFINITY, std::log(0.5)});
     log::ScopedLogCapture capture;
     auto g = read_gaussians(p);
     ASSERT_TRUE(g) << g.message();
@@ -89,7 +91,8 @@ TEST(GaussianInfinity, PlyOpacityAndScaleInfinitiesReadAsLimitsAndCounted) {
     EXPECT_EQ(g->scales[2].x, 0.0f);
     EXPECT_NEAR(g->scales[3].x, 0.5f, 1e-7);
     EXPECT_TRUE(validate(*g, "read"));
-    EXPECT_TRUE(capture.contains(p.string() + ": read 4 infinite values as limits (2 logit opacities")) << (capture.entries().empty() ? "no log" : capture.entries()[0].message);
+    EXPECT_TRUE(capture.contains(p.string() + ": read 4 infinite values as limits (2 logit opacities"))
+        << (capture.entries().empty() ? "no log" : capture.entries()[0].message);
     EXPECT_TRUE(capture.contains("2 log scales of -inf as flat axes"));
 }
 
@@ -133,7 +136,8 @@ glm::vec3 colour(const GaussianCloud& g, std::size_t i, const glm::vec3& d) {
 
 TEST(GaussianAxes, TurnMovesCentresCovariancesAndSeenColoursTogether) {
     for (AxisTurn turn : {AxisTurn::x180, AxisTurn::z180}) {
-        const glm::dmat3 r = turn == AxisTurn::x180 ? glm::dmat3(1, 0, 0, 0, -1, 0, 0, 0, -1) : glm::dmat3(-1, 0, 0, 0, -1, 0, 0, 0, 1);
+        const glm::dmat3 r = turn == AxisTurn::x180 ? glm::dmat3(1, 0, 0, 0, -1, 0, 0, 0, -1)
+                                                    : glm::dmat3(-1, 0, 0, 0, -1, 0, 0, 0, 1);
         const GaussianCloud g = cloud(50, 3);
         GaussianCloud t = g;
         turn_axes(t, turn);
@@ -152,20 +156,23 @@ TEST(GaussianAxes, TurnMovesCentresCovariancesAndSeenColoursTogether) {
         turn_axes(t, turn);  // its own inverse, exactly
         EXPECT_EQ(t.positions, g.positions);
         EXPECT_EQ(t.sh, g.sh);
-        for (std::size_t i = 0; i < g.size(); ++i) EXPECT_LT(std::abs(std::abs(glm::dot(t.rotations[i], g.rotations[i])) - 1.0f), 1e-6f);
+        for (std::size_t i = 0; i < g.size(); ++i)
+            EXPECT_LT(std::abs(std::abs(glm::dot(t.rotations[i], g.rotations[i])) - 1.0f), 1e-6f);
     }
 }
 
 // A compressed PLY from explicit rows (chunk bounds, packed words, sh bytes).
-fs::path compressed(const std::string& name, std::uint64_t n, const std::vector<std::vector<double>>& chunk_rows,
+fs::path compressed(const std::string& name, std::uint64_t n,
+                    const std::vector<std::vector<double>>& chunk_rows,
                     const std::vector<std::array<double, 4>>& packed, int sh_props = 0, double sh_byte = 0,
                     std::uint64_t chunk_count = ~0ull) {
     ply::Header h;
     ply::Element ce;
     ce.name = "chunk";
     ce.count = chunk_count == ~0ull ? chunk_rows.size() : chunk_count;
-    for (const char* p : {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z", "min_scale_x", "min_scale_y", "min_scale_z",
-                          "max_scale_x", "max_scale_y", "max_scale_z", "min_r", "min_g", "min_b", "max_r", "max_g", "max_b"})
+    for (const char* p :
+         {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z", "min_scale_x", "min_scale_y", "min_scale_z",
+          "max_scale_x", "max_scale_y", "max_scale_z", "min_r", "min_g", "min_b", "max_r", "max_g", "max_b"})
         ce.properties.push_back({p, ply::Type::float32, false, ply::Type::uint8});
     ply::Element ve;
     ve.name = "vertex";
@@ -177,7 +184,9 @@ fs::path compressed(const std::string& name, std::uint64_t n, const std::vector<
         ply::Element se;
         se.name = "sh";
         se.count = n;
-        for (int i = 0; i < sh_props; ++i) se.properties.push_back({"f_rest_" + std::to_string(i), ply::Type::uint8, false, ply::Type::uint8});
+        for (int i = 0; i < sh_props; ++i)
+            se.properties.push_back(
+                {"f_rest_" + std::to_string(i), ply::Type::uint8, false, ply::Type::uint8});
         h.elements.push_back(se);
     }
     // Write the header and rows ourselves (a wrong chunk count is not something ply::Writer would emit).
@@ -212,9 +221,10 @@ TEST(CompressedPly, HandBuiltFileWithKnownValues) {
     // Splat 1: mid values, rotation 90 degrees about z stored with z largest (index 3).
     const std::uint32_t rot1 = (3u << 30) | (1023u << 20) | (512u << 10) | 512u;  // w = (1 - 0.5)·√2 = √½
     const std::uint32_t col1 = (0u << 24) | (0u << 16) | (0u << 8) | 0u;
-    const fs::path p = compressed("known.compressed.ply", 2, {bounds}, {{double(pos0), double(rot0), double(sc0), double(col0)},
-                                                                       {0.0, double(rot1), 0.0, double(col1)}},
-                                  9, 255);
+    const fs::path p = compressed(
+        "known.compressed.ply", 2, {bounds},
+        {{double(pos0), double(rot0), double(sc0), double(col0)}, {0.0, double(rot1), 0.0, double(col1)}}, 9,
+        255);
     log::ScopedLogCapture capture;
     auto g = read_gaussians(p);
     ASSERT_TRUE(g) << g.message();
@@ -233,7 +243,8 @@ TEST(CompressedPly, HandBuiltFileWithKnownValues) {
     EXPECT_NEAR(g->rotations[0].x, half, 1e-6);
     EXPECT_NEAR(g->rotations[1].w, std::sqrt(0.5), 1e-3);
     EXPECT_NEAR(g->rotations[1].z, std::sqrt(0.5), 1e-3);
-    for (int k = 3; k < 12; ++k) EXPECT_EQ(g->sh[std::size_t(k)], 4.0f) << k;  // byte 255 is exactly (1 − 0.5)·8
+    for (int k = 3; k < 12; ++k)
+        EXPECT_EQ(g->sh[std::size_t(k)], 4.0f) << k;  // byte 255 is exactly (1 − 0.5)·8
     EXPECT_FALSE(capture.contains("infinite values"));
 }
 
@@ -257,10 +268,12 @@ TEST(CompressedPly, OurWriterRoundTripsWithinTheStatedQuantisation) {
             EXPECT_GT(std::abs(glm::dot(back->rotations[i], g.rotations[i])), 0.999f) << i;
             for (int c = 0; c < 3; ++c) {
                 EXPECT_NEAR(std::log(back->scales[i][c]), std::log(g.scales[i][c]), 0.01) << i;
-                EXPECT_NEAR(back->sh[i * std::size_t(K) * 3 + std::size_t(c)], g.sh[i * std::size_t(K) * 3 + std::size_t(c)], 1.0 / 510 / kShC0 + 1e-5);
+                EXPECT_NEAR(back->sh[i * std::size_t(K) * 3 + std::size_t(c)],
+                            g.sh[i * std::size_t(K) * 3 + std::size_t(c)], 1.0 / 510 / kShC0 + 1e-5);
             }
             for (int k = 3; k < K * 3; ++k)
-                EXPECT_NEAR(back->sh[i * std::size_t(K) * 3 + std::size_t(k)], g.sh[i * std::size_t(K) * 3 + std::size_t(k)], 1.0 / 64 + 1e-6);
+                EXPECT_NEAR(back->sh[i * std::size_t(K) * 3 + std::size_t(k)],
+                            g.sh[i * std::size_t(K) * 3 + std::size_t(k)], 1.0 / 64 + 1e-6);
         }
     }
 }
@@ -275,7 +288,8 @@ TEST(CompressedPly, BadFilesNameTheFileAndTheProblem) {
     const std::vector<double> b = {-1, 0, 10, 1, 2, 12, -2, -2, -2, 0, 0, 0, 0, 0, 0, 1, 1, 1};
     std::vector<std::array<double, 4>> rows(300, {0, 0, 0, 0});
     expect(compressed("one_chunk_300.ply", 300, {b}, rows), "1 chunks for 300 splats (expected 2");
-    expect(compressed("sh7.ply", 2, {b}, {{0, 0, 0, 0}, {0, 0, 0, 0}}, 7), "7 properties: expected 9, 24 or 45");
+    expect(compressed("sh7.ply", 2, {b}, {{0, 0, 0, 0}, {0, 0, 0, 0}}, 7),
+           "7 properties: expected 9, 24 or 45");
     std::vector<double> nan_bounds = b;
     nan_bounds[1] = NAN;
     expect(compressed("nan.ply", 1, {nan_bounds}, {{0, 0, 0, 0}}), "chunk 0: non-finite 'min_y'");
@@ -285,7 +299,8 @@ TEST(CompressedPly, BadFilesNameTheFileAndTheProblem) {
 
 TEST(CompressedPly, MinusInfiniteLogScaleBoundReadsAsFlatAndIsCounted) {
     std::vector<double> b = {-1, 0, 10, 1, 2, 12, -INFINITY, -2, -2, 0, 0, 0, 0, 0, 0, 1, 1, 1};
-    const fs::path p = compressed("flat.compressed.ply", 2, {b}, {{0, 0, 0, 255}, {0, 0, double(2047u << 21), 255}});
+    const fs::path p =
+        compressed("flat.compressed.ply", 2, {b}, {{0, 0, 0, 255}, {0, 0, double(2047u << 21), 255}});
     log::ScopedLogCapture capture;
     auto g = read_gaussians(p);
     ASSERT_TRUE(g) << g.message();
@@ -301,8 +316,14 @@ struct Bytes {
         if (b.size() < offset + n) b.resize(offset + n, '\0');
         std::memcpy(&b[offset], p, n);
     }
-    void u8(std::size_t o, unsigned v) { const unsigned char c = static_cast<unsigned char>(v); at(o, &c, 1); }
-    void u16(std::size_t o, unsigned v) { const std::uint16_t x = static_cast<std::uint16_t>(v); at(o, &x, 2); }
+    void u8(std::size_t o, unsigned v) {
+        const unsigned char c = static_cast<unsigned char>(v);
+        at(o, &c, 1);
+    }
+    void u16(std::size_t o, unsigned v) {
+        const std::uint16_t x = static_cast<std::uint16_t>(v);
+        at(o, &x, 2);
+    }
     void u32(std::size_t o, std::uint32_t v) { at(o, &v, 4); }
     void f32(std::size_t o, float v) { at(o, &v, 4); }
 };
@@ -313,13 +334,14 @@ Bytes ksplat_mode1(std::uint32_t declared = 3) {
     Bytes k;
     k.u8(0, 0), k.u8(1, 1), k.u32(4, 1), k.u32(16, declared), k.u16(20, 1);
     const std::size_t s = 4096;
-    k.u32(s + 0, 3), k.u32(s + 4, 3), k.u32(s + 8, 2), k.u32(s + 12, 2), k.f32(s + 16, 2.0f), k.u16(s + 20, 12);
+    k.u32(s + 0, 3), k.u32(s + 4, 3), k.u32(s + 8, 2), k.u32(s + 12, 2), k.f32(s + 16, 2.0f),
+        k.u16(s + 20, 12);
     k.u32(s + 24, 1000), k.u32(s + 32, 1), k.u32(s + 36, 1), k.u16(s + 40, 1);
     std::size_t d = 4096 + 1024;
-    k.u32(d, 1);                                               // partial bucket size
-    k.f32(d + 4, 10), k.f32(d + 8, 20), k.f32(d + 12, 30);     // bucket 0 centre
-    k.f32(d + 16, -5), k.f32(d + 20, 0), k.f32(d + 24, 5);     // bucket 1 centre
-    std::size_t r = d + 4 + 24;                                // 2 buckets x 12 bytes + 4
+    k.u32(d, 1);                                            // partial bucket size
+    k.f32(d + 4, 10), k.f32(d + 8, 20), k.f32(d + 12, 30);  // bucket 0 centre
+    k.f32(d + 16, -5), k.f32(d + 20, 0), k.f32(d + 24, 5);  // bucket 1 centre
+    std::size_t r = d + 4 + 24;                             // 2 buckets x 12 bytes + 4
     const std::size_t record = 6 + 6 + 8 + 4 + 9 * 2;
     const unsigned half_one = 0x3c00, half_half = 0x3800, half_minus_quarter = 0xb400;
     for (int j = 0; j < 3; ++j, r += record) {
@@ -327,7 +349,8 @@ Bytes ksplat_mode1(std::uint32_t declared = 3) {
         k.u16(r + 6, half_half), k.u16(r + 8, half_one), k.u16(r + 10, 0);    // scales 0.5, 1, 0 (flat)
         k.u16(r + 12, half_one), k.u16(r + 14, 0), k.u16(r + 16, 0), k.u16(r + 18, 0);
         k.u8(r + 20, 255), k.u8(r + 21, 0), k.u8(r + 22, 128), k.u8(r + 23, 51);
-        for (int c = 0; c < 9; ++c) k.u16(r + 24 + 2 * std::size_t(c), c < 3 ? half_minus_quarter : 0);  // R band 1 = -0.25
+        for (int c = 0; c < 9; ++c)
+            k.u16(r + 24 + 2 * std::size_t(c), c < 3 ? half_minus_quarter : 0);  // R band 1 = -0.25
     }
     return k;
 }
@@ -390,11 +413,14 @@ TEST(SpzWrite, RoundTripsWithinSpzQuantisationAndKeepsTheFrame) {
     for (std::size_t i = 0; i < g.size(); ++i) {
         // 12 fractional bits; log scales in steps of 1/16; opacity 1/255; rotation 9-bit smallest three.
         EXPECT_LT(glm::length(back->positions[i] - g.positions[i]), 2.5e-4f) << i;  // √3 half steps
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(std::log(back->scales[i][c]), std::log(g.scales[i][c]), 1.0 / 32 + 1e-6) << i;
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(std::log(back->scales[i][c]), std::log(g.scales[i][c]), 1.0 / 32 + 1e-6) << i;
         EXPECT_NEAR(back->opacities[i], g.opacities[i], 0.5 / 255 + 1e-6) << i;
         EXPECT_GT(std::abs(glm::dot(back->rotations[i], g.rotations[i])), 0.999f) << i;
         for (int k = 0; k < 48; ++k)  // DC in steps of 1/(255·0.15), SH in steps of 1/128
-            EXPECT_NEAR(back->sh[i * 48 + std::size_t(k)], g.sh[i * 48 + std::size_t(k)], k < 3 ? 0.5 / (255 * 0.15) + 1e-5 : 0.5 / 128 + 1e-6) << i << " " << k;
+            EXPECT_NEAR(back->sh[i * 48 + std::size_t(k)], g.sh[i * 48 + std::size_t(k)],
+                        k < 3 ? 0.5 / (255 * 0.15) + 1e-5 : 0.5 / 128 + 1e-6)
+                << i << " " << k;
     }
 }
 

@@ -54,7 +54,9 @@ TEST(GaussianGltf, GlbRoundTripsEveryDegree) {
         ASSERT_EQ(back->size(), g.size());
         EXPECT_EQ(back->sh_degree, degree);
         for (std::size_t i = 0; i < g.size(); ++i) {
-            EXPECT_LT(glm::length(glm::dvec3(back->positions[i]) + back->origin - (glm::dvec3(g.positions[i]) + g.origin)), 2e-6);
+            EXPECT_LT(glm::length(glm::dvec3(back->positions[i]) + back->origin -
+                                  (glm::dvec3(g.positions[i]) + g.origin)),
+                      2e-6);
             const glm::dmat3 a = covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i]));
             const glm::dmat3 b = covariance(glm::dvec3(back->scales[i]), glm::dquat(back->rotations[i]));
             for (int c = 0; c < 3; ++c) EXPECT_LT(glm::length(a[c] - b[c]), 1e-6);
@@ -69,7 +71,8 @@ std::string base64(const std::string& in) {
     std::string out;
     std::size_t i = 0;
     for (; i + 2 < in.size(); i += 3) {
-        const unsigned v = (unsigned char)in[i] << 16 | (unsigned char)in[i + 1] << 8 | (unsigned char)in[i + 2];
+        const unsigned v =
+            (unsigned char)in[i] << 16 | (unsigned char)in[i + 1] << 8 | (unsigned char)in[i + 2];
         out += t[v >> 18 & 63], out += t[v >> 12 & 63], out += t[v >> 6 & 63], out += t[v & 63];
     }
     if (i + 1 == in.size()) {
@@ -95,18 +98,27 @@ void write_gltf_text(const fs::path& p, const std::vector<Attr>& attrs, const st
         const std::size_t off = bin.size();
         bin.append(reinterpret_cast<const char*>(attrs[a].values.data()), attrs[a].values.size() * 4);
         const std::string sep = a ? "," : "";
-        views += sep + "{\"buffer\":0,\"byteOffset\":" + std::to_string(off) + ",\"byteLength\":" + std::to_string(attrs[a].values.size() * 4) + "}";
-        accessors += sep + "{\"bufferView\":" + std::to_string(a) + ",\"componentType\":5126,\"count\":" +
-                     std::to_string(attrs[a].values.size() / comps) + ",\"type\":\"" + attrs[a].type + "\"" +
+        views += sep + "{\"buffer\":0,\"byteOffset\":" + std::to_string(off) +
+                 ",\"byteLength\":" + std::to_string(attrs[a].values.size() * 4) + "}";
+        accessors += sep + "{\"bufferView\":" + std::to_string(a) +
+                     ",\"componentType\":5126,\"count\":" + std::to_string(attrs[a].values.size() / comps) +
+                     ",\"type\":\"" + attrs[a].type + "\"" +
                      (attrs[a].name == "POSITION" ? ",\"min\":[-9,-9,-9],\"max\":[9,9,9]" : "") + "}";
         attributes += sep + "\"" + attrs[a].name + "\":" + std::to_string(a);
     }
-    std::ofstream(p) << "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_gaussian_splatting\"],\"scene\":0,"
-                        "\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0" + node_extra + "}],"
-                        "\"meshes\":[{\"primitives\":[{\"mode\":0,\"attributes\":{" + attributes + "},"
-                        "\"extensions\":{\"KHR_gaussian_splatting\":{\"kernel\":\"ellipse\",\"colorSpace\":\"srgb_rec709_display\"}}}]}],"
-                        "\"buffers\":[{\"byteLength\":" + std::to_string(bin.size()) + ",\"uri\":\"data:application/octet-stream;base64," +
-                            base64(bin) + "\"}],\"bufferViews\":[" + views + "],\"accessors\":[" + accessors + "]}";
+    std::ofstream(p)
+        << "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_gaussian_splatting\"],\"scene\":0,"
+           "\"scenes\":[{\"nodes\":[0]}],\"nodes\":[{\"mesh\":0" +
+               node_extra +
+               "}],"
+               "\"meshes\":[{\"primitives\":[{\"mode\":0,\"attributes\":{" +
+               attributes +
+               "},"
+               "\"extensions\":{\"KHR_gaussian_splatting\":{\"kernel\":\"ellipse\",\"colorSpace\":\"srgb_"
+               "rec709_display\"}}}]}],"
+               "\"buffers\":[{\"byteLength\":" +
+               std::to_string(bin.size()) + ",\"uri\":\"data:application/octet-stream;base64," + base64(bin) +
+               "\"}],\"bufferViews\":[" + views + "],\"accessors\":[" + accessors + "]}";
 }
 
 const std::string K = "KHR_gaussian_splatting:";
@@ -115,9 +127,12 @@ TEST(GaussianGltf, HandWrittenFileWithNodeRotationAndColorFallback) {
     // One Gaussian at (1,0,0), identity rotation (x,y,z,w) = (0,0,0,1), linear scales, opacity 0.25,
     // no SH_DEGREE_0_COEF_0 but COLOR_0 (0.75, 0.5, 0.25, 1); node rotated 90° about +z.
     const fs::path p = temp("hand.gltf");
-    write_gltf_text(p, {{"POSITION", "VEC3", {1, 0, 0}}, {K + "ROTATION", "VEC4", {0, 0, 0, 1}},
-                        {K + "SCALE", "VEC3", {0.1f, 0.2f, 0.3f}}, {K + "OPACITY", "SCALAR", {0.25f}},
-                        {"COLOR_0", "VEC4", {0.75f, 0.5f, 0.25f, 1.0f}}},
+    write_gltf_text(p,
+                    {{"POSITION", "VEC3", {1, 0, 0}},
+                     {K + "ROTATION", "VEC4", {0, 0, 0, 1}},
+                     {K + "SCALE", "VEC3", {0.1f, 0.2f, 0.3f}},
+                     {K + "OPACITY", "SCALAR", {0.25f}},
+                     {"COLOR_0", "VEC4", {0.75f, 0.5f, 0.25f, 1.0f}}},
                     ",\"rotation\":[0,0,0.7071067811865476,0.7071067811865476]");
     auto g = read_gltf(p);
     ASSERT_TRUE(g) << g.message();
@@ -141,8 +156,10 @@ TEST(GaussianGltf, BadFiles) {
         EXPECT_NE(g.message().find(p.string()), std::string::npos) << g.message();
         EXPECT_NE(g.message().find(fragment), std::string::npos) << g.message();
     };
-    const std::vector<Attr> base = {{"POSITION", "VEC3", {1, 0, 0}}, {K + "ROTATION", "VEC4", {0, 0, 0, 1}},
-                                    {K + "SCALE", "VEC3", {0.1f, 0.2f, 0.3f}}, {K + "OPACITY", "SCALAR", {0.25f}},
+    const std::vector<Attr> base = {{"POSITION", "VEC3", {1, 0, 0}},
+                                    {K + "ROTATION", "VEC4", {0, 0, 0, 1}},
+                                    {K + "SCALE", "VEC3", {0.1f, 0.2f, 0.3f}},
+                                    {K + "OPACITY", "SCALAR", {0.25f}},
                                     {K + "SH_DEGREE_0_COEF_0", "VEC3", {0, 0, 0}}};
     std::vector<Attr> a = base;
     a.erase(a.begin() + 3);

@@ -60,8 +60,8 @@ void expect_refused(const fs::path& p, const std::string& fragment) {
 // (x y z f_dc_0 f_dc_1 f_dc_2 opacity scale_0 scale_1 scale_2 rot_0 rot_1 rot_2 rot_3).
 void write_ascii_ply(const fs::path& p, const std::vector<std::string>& rows) {
     std::string s = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(rows.size()) + "\n";
-    for (const char* n : {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1", "scale_2", "rot_0",
-                          "rot_1", "rot_2", "rot_3"})
+    for (const char* n : {"x", "y", "z", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0", "scale_1",
+                          "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
         s += std::string("property double ") + n + "\n";
     s += "end_header\n";
     for (const std::string& r : rows) s += r + "\n";
@@ -75,7 +75,8 @@ TEST(GaussianHostile, AbsurdOrOverflowingValuesAreRefusedWithFileRowAndField) {
     write_ascii_ply(temp("x_1e300.ply"), {kRow, "1e300 0 0 0.1 0.2 0.3 0 -2 -2 -2 1 0 0 0"});
     expect_refused(temp("x_1e300.ply"), "Gaussian 1: position.x");
     write_ascii_ply(temp("x_1e30.ply"), {"1e30 0 0 0.1 0.2 0.3 0 -2 -2 -2 1 0 0 0"});
-    expect_refused(temp("x_1e30.ply"), "Gaussian 0: position.x = 1.00000002e+30: beyond the +-1e10 coordinate bound");
+    expect_refused(temp("x_1e30.ply"),
+                   "Gaussian 0: position.x = 1.00000002e+30: beyond the +-1e10 coordinate bound");
     write_ascii_ply(temp("dc_1e300.ply"), {"0 0 0 1e300 0.2 0.3 0 -2 -2 -2 1 0 0 0"});
     expect_refused(temp("dc_1e300.ply"), "Gaussian 0: sh[0].r");
     write_ascii_ply(temp("logscale_87.ply"), {"0 0 0 0.1 0.2 0.3 0 87 -2 -2 1 0 0 0"});
@@ -97,7 +98,8 @@ std::string base64(const std::string& in) {
     std::string out;
     std::size_t i = 0;
     for (; i + 2 < in.size(); i += 3) {
-        const unsigned v = unsigned((unsigned char)in[i]) << 16 | unsigned((unsigned char)in[i + 1]) << 8 | (unsigned char)in[i + 2];
+        const unsigned v = unsigned((unsigned char)in[i]) << 16 | unsigned((unsigned char)in[i + 1]) << 8 |
+                           (unsigned char)in[i + 2];
         out += t[v >> 18 & 63], out += t[v >> 12 & 63], out += t[v >> 6 & 63], out += t[v & 63];
     }
     if (i + 1 == in.size()) {
@@ -113,7 +115,8 @@ std::string base64(const std::string& in) {
 const std::string K = "KHR_gaussian_splatting:";
 
 // One Gaussian primitive (mesh 0) with the given extra attributes; `nodes` and `scenes` are raw JSON.
-std::string khr_gltf(const std::string& nodes, const std::string& scenes, const std::vector<std::string>& extra_sh = {},
+std::string khr_gltf(const std::string& nodes, const std::string& scenes,
+                     const std::vector<std::string>& extra_sh = {},
                      const std::string& extra_attributes = "") {
     struct A {
         std::string name, type;
@@ -131,23 +134,28 @@ std::string khr_gltf(const std::string& nodes, const std::string& scenes, const 
         const std::size_t off = bin.size();
         bin.append(reinterpret_cast<const char*>(attrs[a].v.data()), attrs[a].v.size() * 4);
         const std::string sep = a ? "," : "";
-        views += sep + "{\"buffer\":0,\"byteOffset\":" + std::to_string(off) + ",\"byteLength\":" + std::to_string(attrs[a].v.size() * 4) + "}";
-        accessors += sep + "{\"bufferView\":" + std::to_string(a) + ",\"componentType\":5126,\"count\":" +
-                     std::to_string(attrs[a].v.size() / comps) + ",\"type\":\"" + attrs[a].type + "\"" +
+        views += sep + "{\"buffer\":0,\"byteOffset\":" + std::to_string(off) +
+                 ",\"byteLength\":" + std::to_string(attrs[a].v.size() * 4) + "}";
+        accessors += sep + "{\"bufferView\":" + std::to_string(a) +
+                     ",\"componentType\":5126,\"count\":" + std::to_string(attrs[a].v.size() / comps) +
+                     ",\"type\":\"" + attrs[a].type + "\"" +
                      (attrs[a].name == "POSITION" ? ",\"min\":[1,0,0],\"max\":[1,0,0]" : "") + "}";
         attributes += sep + "\"" + attrs[a].name + "\":" + std::to_string(a);
     }
-    return "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_gaussian_splatting\"]," + scenes + "\"nodes\":" + nodes +
-           ",\"meshes\":[{\"primitives\":[{\"mode\":0,\"attributes\":{" + attributes + extra_attributes +
+    return "{\"asset\":{\"version\":\"2.0\"},\"extensionsUsed\":[\"KHR_gaussian_splatting\"]," + scenes +
+           "\"nodes\":" + nodes + ",\"meshes\":[{\"primitives\":[{\"mode\":0,\"attributes\":{" + attributes +
+           extra_attributes +
            "},\"extensions\":{\"KHR_gaussian_splatting\":{\"kernel\":\"ellipse\"}}}]}],"
-           "\"buffers\":[{\"byteLength\":" + std::to_string(bin.size()) + ",\"uri\":\"data:application/octet-stream;base64," +
-           base64(bin) + "\"}],\"bufferViews\":[" + views + "],\"accessors\":[" + accessors + "]}";
+           "\"buffers\":[{\"byteLength\":" +
+           std::to_string(bin.size()) + ",\"uri\":\"data:application/octet-stream;base64," + base64(bin) +
+           "\"}],\"bufferViews\":[" + views + "],\"accessors\":[" + accessors + "]}";
 }
 
 TEST(GaussianHostile, NodeDagIsRefusedQuicklyInsteadOfExponentialWork) {
     // 40 nodes, each listing the next one twice: 2^40 paths before the fix.
     std::string nodes = "[";
-    for (int i = 0; i < 40; ++i) nodes += "{\"children\":[" + std::to_string(i + 1) + "," + std::to_string(i + 1) + "]},";
+    for (int i = 0; i < 40; ++i)
+        nodes += "{\"children\":[" + std::to_string(i + 1) + "," + std::to_string(i + 1) + "]},";
     nodes += "{\"mesh\":0}]";
     write_bytes(temp("dag.gltf"), khr_gltf(nodes, "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"));
     expect_refused(temp("dag.gltf"), "at most one parent");
@@ -156,8 +164,9 @@ TEST(GaussianHostile, NodeDagIsRefusedQuicklyInsteadOfExponentialWork) {
 TEST(GaussianHostile, GltfWithoutScenesVisitsOnlyRootNodes) {
     // Node 0 is the parent of node 1, which holds the cloud: without `scenes` only node 0 is a root, so
     // the Gaussian appears once (twice before the fix), moved by both translations.
-    write_bytes(temp("noscene.gltf"),
-                khr_gltf("[{\"children\":[1],\"translation\":[0,5,0]},{\"mesh\":0,\"translation\":[0,0,2]}]", ""));
+    write_bytes(
+        temp("noscene.gltf"),
+        khr_gltf("[{\"children\":[1],\"translation\":[0,5,0]},{\"mesh\":0,\"translation\":[0,0,2]}]", ""));
     auto g = read_gaussians(temp("noscene.gltf"));
     ASSERT_TRUE(g) << g.message();
     ASSERT_EQ(g->size(), 1u);
@@ -167,12 +176,14 @@ TEST(GaussianHostile, GltfWithoutScenesVisitsOnlyRootNodes) {
 TEST(GaussianHostile, ShDegreeTwoWithoutDegreeOneIsRefused) {
     std::vector<std::string> band2;
     for (int c = 0; c < 5; ++c) band2.push_back("SH_DEGREE_2_COEF_" + std::to_string(c));
-    write_bytes(temp("sh2.gltf"), khr_gltf("[{\"mesh\":0}]", "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],", band2));
+    write_bytes(temp("sh2.gltf"),
+                khr_gltf("[{\"mesh\":0}]", "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],", band2));
     expect_refused(temp("sh2.gltf"), "SH degree 2 coefficients without degree 1");
 }
 
 TEST(GaussianHostile, NodeScaleThatOverflowsIsRefused) {
-    write_bytes(temp("scale1e30.gltf"), khr_gltf("[{\"mesh\":0,\"scale\":[1e30,1e30,1e30]}]", "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"));
+    write_bytes(temp("scale1e30.gltf"), khr_gltf("[{\"mesh\":0,\"scale\":[1e30,1e30,1e30]}]",
+                                                 "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],"));
     expect_refused(temp("scale1e30.gltf"), "Gaussian 0:");
 }
 
@@ -182,7 +193,8 @@ TEST(GaussianHostile, ExtensionDeclarationDecidesDetectionNotASubstring) {
     EXPECT_TRUE(gltf_declaration(temp("declared.gltf")).gaussian_splatting);
     EXPECT_TRUE(is_gaussian_scene_file(temp("declared.gltf")));
     // A surface glTF whose node is merely named after the extension is not a Gaussian file.
-    write_bytes(temp("named.gltf"), "{\"asset\":{\"version\":\"2.0\"},\"nodes\":[{\"name\":\"KHR_gaussian_splatting\"}]}");
+    write_bytes(temp("named.gltf"),
+                "{\"asset\":{\"version\":\"2.0\"},\"nodes\":[{\"name\":\"KHR_gaussian_splatting\"}]}");
     EXPECT_FALSE(gltf_declaration(temp("named.gltf")).gaussian_splatting);
     EXPECT_FALSE(is_gaussian_scene_file(temp("named.gltf")));
     // A declared file that the Gaussian reader refuses is still declared (read as Gaussians or refused).
@@ -195,7 +207,8 @@ TEST(GaussianHostile, ExtensionDeclarationDecidesDetectionNotASubstring) {
 
 TEST(GaussianHostile, ColorAccessorIndexOutOfRangeIsAnError) {
     // No SH_DEGREE_0_COEF_0, COLOR_0 naming accessor 99.
-    std::string text = khr_gltf("[{\"mesh\":0}]", "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],", {}, ",\"COLOR_0\":99");
+    std::string text =
+        khr_gltf("[{\"mesh\":0}]", "\"scene\":0,\"scenes\":[{\"nodes\":[0]}],", {}, ",\"COLOR_0\":99");
     text.replace(text.find("\"" + K + "SH_DEGREE_0_COEF_0\":4,"), K.size() + 23, "");
     write_bytes(temp("color99.gltf"), text);
     expect_refused(temp("color99.gltf"), "COLOR_0");
@@ -226,11 +239,11 @@ std::string spz_payload(std::uint32_t declared, std::uint32_t n) {
     std::string s;
     put32(s, 0x5053474e), put32(s, 2), put32(s, declared);
     s += char(0), s += char(12), s += char(0), s += char(0);
-    s += std::string(std::size_t(n) * 9, '\0');                  // positions
-    s += std::string(n, char(200));                              // alphas
-    s += std::string(std::size_t(n) * 3, char(128));             // colours
-    s += std::string(std::size_t(n) * 3, char(140));             // scales
-    s += std::string(std::size_t(n) * 3, char(128));             // rotations
+    s += std::string(std::size_t(n) * 9, '\0');       // positions
+    s += std::string(n, char(200));                   // alphas
+    s += std::string(std::size_t(n) * 3, char(128));  // colours
+    s += std::string(std::size_t(n) * 3, char(140));  // scales
+    s += std::string(std::size_t(n) * 3, char(128));  // rotations
     return s;
 }
 
@@ -270,14 +283,16 @@ TEST(GaussianHostile, CpuDeformationDropsAndCountsNonFiniteResults) {
         for (int k = 0; k < 12; ++k) g.sh.push_back(0.1f);
     }
     // A 1e-12 box with one control point moved by 1e29: the Jacobian (~1e41) passes the float range.
-    Lattice l = make_lattice({0, 0, 0}, {glm::dvec3(1e-12, 0, 0), glm::dvec3(0, 1e-12, 0), glm::dvec3(0, 0, 1e-12)}, {1, 1, 1});
+    Lattice l = make_lattice(
+        {0, 0, 0}, {glm::dvec3(1e-12, 0, 0), glm::dvec3(0, 1e-12, 0), glm::dvec3(0, 0, 1e-12)}, {1, 1, 1});
     l.current[l.index(1, 1, 1)] += glm::dvec3(1e29, -1e29, 1e29);
     // Both CPU kernels: the vectorised float one (the GPU pass's arithmetic) and the double reference.
     for (bool reference : {false, true}) {
         GaussianCloud out;
         out.opacities = g.opacities;
         DeformOptions options;
-        options.backend = ffd::Backend::reference, options.copy_opacities = false, options.reference_shapes = reference;
+        options.backend = ffd::Backend::reference, options.copy_opacities = false,
+        options.reference_shapes = reference;
         auto st = deform(l, g, out, options);
         ASSERT_TRUE(st) << st.message();
         EXPECT_GT(st->not_finite, 0u) << "reference kernel: " << reference;
@@ -349,7 +364,8 @@ TEST(GaussianHostile, SceneEntryOutsideTheFolderNeedsAllowOutsideResources) {
 TEST(GaussianHostile, DefaultCameraStaysOutsideCoincidentOrHugeGaussians) {
     register_gaussian_scene_hooks();
     // Three Gaussians at one point, sigma e^0 = 1: the camera must be further than 3 sigma away.
-    write_ascii_ply(temp("coincident.ply"), {"2 3 4 0 0 0 0 0 0 0 1 0 0 0", "2 3 4 0 0 0 0 0 0 0 1 0 0 0", "2 3 4 0 0 0 0 0 0 0 1 0 0 0"});
+    write_ascii_ply(temp("coincident.ply"), {"2 3 4 0 0 0 0 0 0 0 1 0 0 0", "2 3 4 0 0 0 0 0 0 0 1 0 0 0",
+                                             "2 3 4 0 0 0 0 0 0 0 1 0 0 0"});
     ecs::Registry r;
     ASSERT_TRUE(load_scene(r, temp("coincident.ply").string()));
     bool found = false;
@@ -383,7 +399,12 @@ TEST(GaussianHostile, JsonTextIsValidUtf8) {
     const std::string quoted = json_quote(raw);
     const nlohmann::json j = nlohmann::json::parse(quoted, nullptr, false);
     ASSERT_FALSE(j.is_discarded()) << quoted;
-    EXPECT_EQ(j.get<std::string>(), "a\xEF\xBF\xBD" "b\xc3\xa9" "\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD" "\"\n" "\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD");
+    EXPECT_EQ(j.get<std::string>(),
+              "a\xEF\xBF\xBD"
+              "b\xc3\xa9"
+              "\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD"
+              "\"\n"
+              "\xEF\xBF\xBD\xEF\xBF\xBD\xEF\xBF\xBD");
     EXPECT_EQ(valid_utf8("plain \xc3\xa9"), "plain \xc3\xa9");
 }
 
@@ -399,7 +420,8 @@ void truncate_everywhere(const fs::path& full, const std::string& ext) {
         if (g) {
             EXPECT_TRUE(validate(*g, "cut")) << ext << " at " << n;
         } else {
-            EXPECT_NE(g.message().find(cut.string()), std::string::npos) << ext << " at " << n << ": " << g.message();
+            EXPECT_NE(g.message().find(cut.string()), std::string::npos)
+                << ext << " at " << n << ": " << g.message();
         }
     }
 }

@@ -27,22 +27,26 @@ fs::path temp_path(const std::string& name) {
 void write_text(const fs::path& p, const std::string& s) { std::ofstream(p, std::ios::binary) << s; }
 
 std::string ascii_header(int n_rest, std::uint64_t count) {
-    std::string h = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(count) +
-                    "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\n"
-                    "property float nz\nproperty float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n";
+    std::string h =
+        "ply\nformat ascii 1.0\nelement vertex " + std::to_string(count) +
+        "\nproperty float x\nproperty float y\nproperty float z\nproperty float nx\nproperty float ny\n"
+        "property float nz\nproperty float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n";
     for (int i = 0; i < n_rest; ++i) h += "property float f_rest_" + std::to_string(i) + "\n";
     h += "property float opacity\nproperty float scale_0\nproperty float scale_1\nproperty float scale_2\n"
-         "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float rot_3\nend_header\n";
+         "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float "
+         "rot_3\nend_header\n";
     return h;
 }
 
 TEST(GaussianIo, HandWrittenDegreeOnePly) {
     // Degree 1: 9 f_rest values per channel block R(k=1..3), G(k=1..3), B(k=1..3) = 10..18.
     const fs::path p = temp_path("tiny.ply");
-    write_text(p, ascii_header(9, 2) +
-                      "1 2 3 0 0 0 0.1 0.2 0.3 10 11 12 13 14 15 16 17 18 0 -1 0 0.6931471805599453 2 0 0 0\n"
-                      "-1 0.5 4 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 2.1972245773362196 -2.302585092994046 -2.302585092994046 "
-                      "-2.302585092994046 0 0 1 1\n");
+    write_text(
+        p,
+        ascii_header(9, 2) +
+            "1 2 3 0 0 0 0.1 0.2 0.3 10 11 12 13 14 15 16 17 18 0 -1 0 0.6931471805599453 2 0 0 0\n"
+            "-1 0.5 4 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 2.1972245773362196 -2.302585092994046 -2.302585092994046 "
+            "-2.302585092994046 0 0 1 1\n");
     auto g = read_ply(p);
     ASSERT_TRUE(g) << g.message();
     ASSERT_EQ(g->size(), 2u);
@@ -65,7 +69,8 @@ TEST(GaussianIo, HandWrittenDegreeOnePly) {
     EXPECT_FLOAT_EQ(g->sh[0 * 3 + 0], 0.1f);
     EXPECT_FLOAT_EQ(g->sh[0 * 3 + 2], 0.3f);
     for (int c = 0; c < 3; ++c)
-        for (int k = 1; k < 4; ++k) EXPECT_EQ(g->sh[std::size_t(k * 3 + c)], float(10 + c * 3 + (k - 1))) << c << k;
+        for (int k = 1; k < 4; ++k)
+            EXPECT_EQ(g->sh[std::size_t(k * 3 + c)], float(10 + c * 3 + (k - 1))) << c << k;
 }
 
 GaussianCloud random_cloud(int degree, std::size_t n, unsigned seed) {
@@ -89,7 +94,8 @@ void expect_same(const GaussianCloud& a, const GaussianCloud& b) {
     ASSERT_EQ(a.sh_degree, b.sh_degree);
     for (std::size_t i = 0; i < a.size(); ++i) {
         EXPECT_EQ(a.positions[i], b.positions[i]);
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(a.scales[i][c], b.scales[i][c], 2e-7 * double(a.scales[i][c]));
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(a.scales[i][c], b.scales[i][c], 2e-7 * double(a.scales[i][c]));
         EXPECT_NEAR(a.opacities[i], b.opacities[i], 2e-7);
         for (int c = 0; c < 4; ++c) EXPECT_NEAR(a.rotations[i][c], b.rotations[i][c], 2e-7);
     }
@@ -105,10 +111,12 @@ TEST(GaussianIo, PlyRoundTripsEveryDegreeBinaryAndAscii) {
             auto back = read_ply(p);
             ASSERT_TRUE(back) << back.message();
             expect_same(g, *back);
-            // The header has the 3DGS property count: 17 + 3 * (K - 1) (x y z, normals, f_dc, opacity, scale, rot).
+            // The header has the 3DGS property count: 17 + 3 * (K - 1) (x y z, normals, f_dc, opacity, scale,
+            // rot).
             auto reader = ply::Reader::open(p);
             ASSERT_TRUE(reader);
-            EXPECT_EQ(reader->header().elements[0].properties.size(), std::size_t(17 + 3 * (sh_coeffs(degree) - 1)));
+            EXPECT_EQ(reader->header().elements[0].properties.size(),
+                      std::size_t(17 + 3 * (sh_coeffs(degree) - 1)));
         }
 }
 
@@ -150,7 +158,9 @@ TEST(GaussianIo, BadPlyFiles) {
     expect_error(wrong, "10 f_rest properties: expected 0, 9, 24 or 45");
     // Missing property.
     const fs::path missing = temp_path("missing.ply");
-    write_text(missing, "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\nend_header\n0 0 0\n");
+    write_text(missing,
+               "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float "
+               "z\nend_header\n0 0 0\n");
     expect_error(missing, "not a 3DGS PLY");
     // NaN scale and zero quaternion.
     const fs::path nan = temp_path("nan.ply");
@@ -175,7 +185,8 @@ TEST(GaussianIo, BadPlyFiles) {
     expect_error(huge, "declares 4000000000 rows");
 }
 
-void put_splat(std::string& out, glm::vec3 p, glm::vec3 s, const unsigned char rgba[4], const unsigned char rot[4]) {
+void put_splat(std::string& out, glm::vec3 p, glm::vec3 s, const unsigned char rgba[4],
+               const unsigned char rot[4]) {
     char b[32];
     std::memcpy(b, &p, 12);
     std::memcpy(b + 12, &s, 12);
@@ -186,7 +197,8 @@ void put_splat(std::string& out, glm::vec3 p, glm::vec3 s, const unsigned char r
 
 TEST(GaussianIo, SplatFileKnownValues) {
     std::string bytes;
-    const unsigned char c0[4] = {255, 128, 0, 204}, r0[4] = {128, 255, 128, 128};  // rot (w,x,y,z) ~ (0,1,0,0)
+    const unsigned char c0[4] = {255, 128, 0, 204},
+                        r0[4] = {128, 255, 128, 128};  // rot (w,x,y,z) ~ (0,1,0,0)
     const unsigned char c1[4] = {0, 0, 0, 255}, r1[4] = {255, 128, 128, 128};
     put_splat(bytes, {1, 2, 3}, {0.1f, 0.2f, 0.3f}, c0, r0);
     put_splat(bytes, {-4, 5, -6}, {1, 1, 1}, c1, r1);

@@ -75,8 +75,8 @@ TEST(GaussianMath, SymEigenRandomAndRepeatedEigenvalues) {
     check_eigen(glm::dmat3(0.0), 1e-15);
     for (int t = 0; t < 50; ++t) {
         const glm::dmat3 q = glm::mat3_cast(random_quat(rng));
-        for (glm::dvec3 ev : {glm::dvec3(2, 2, 5), glm::dvec3(5, 2, 2), glm::dvec3(1, 0, 0), glm::dvec3(1e-8, 1e-8, 1),
-                              glm::dvec3(4, 4, 4)}) {
+        for (glm::dvec3 ev : {glm::dvec3(2, 2, 5), glm::dvec3(5, 2, 2), glm::dvec3(1, 0, 0),
+                              glm::dvec3(1e-8, 1e-8, 1), glm::dvec3(4, 4, 4)}) {
             const glm::dmat3 a = q * glm::dmat3(ev.x, 0, 0, 0, ev.y, 0, 0, 0, ev.z) * glm::transpose(q);
             check_eigen(a, 1e-12);
             const SymEigen e = sym_eigen(a);
@@ -98,7 +98,8 @@ TEST(GaussianMath, SymEigenFromAnyOrthogonalGuess) {
         const glm::dmat3 a = m * glm::transpose(m);
         glm::dmat3 guess = glm::mat3_cast(random_quat(rng));
         if (t % 2) guess[1] = -guess[1];
-        for (const glm::dmat3& g : {guess, sym_eigen(a).vectors, orthonormalize(m), orthonormalize(glm::dmat3(0.0))}) {
+        for (const glm::dmat3& g :
+             {guess, sym_eigen(a).vectors, orthonormalize(m), orthonormalize(glm::dmat3(0.0))}) {
             const SymEigen e = sym_eigen(a, g);
             const glm::dmat3 d(e.values[0], 0, 0, 0, e.values[1], 0, 0, 0, e.values[2]);
             EXPECT_LT(max_abs_diff(e.vectors * d * glm::transpose(e.vectors), a), 1e-12);
@@ -118,7 +119,8 @@ TEST(GaussianMath, DecomposeCovarianceRoundTrips) {
         const ScaleRotation sr = decompose_covariance(sigma);
         EXPECT_NEAR(glm::length(sr.rotation), 1.0, 1e-12);
         EXPECT_GE(sr.rotation.w, 0.0);
-        EXPECT_LT(max_abs_diff(covariance(sr.scale, sr.rotation), sigma), 1e-12 * (1.0 + s.x * s.x + s.z * s.z));
+        EXPECT_LT(max_abs_diff(covariance(sr.scale, sr.rotation), sigma),
+                  1e-12 * (1.0 + s.x * s.x + s.z * s.z));
         // Same scales as the input, as a set.
         glm::dvec3 a = s, b = sr.scale;
         std::sort(&a[0], &a[0] + 3), std::sort(&b[0], &b[0] + 3);
@@ -147,7 +149,8 @@ TEST(GaussianMath, PolarDecomposition) {
         // Independent formula: U = sqrt(JᵀJ) from the eigen-decomposition of JᵀJ.
         const SymEigen g = sym_eigen(glm::transpose(j) * j);
         const glm::dmat3 root = g.vectors *
-                                glm::dmat3(std::sqrt(g.values[0]), 0, 0, 0, std::sqrt(g.values[1]), 0, 0, 0, std::sqrt(g.values[2])) *
+                                glm::dmat3(std::sqrt(g.values[0]), 0, 0, 0, std::sqrt(g.values[1]), 0, 0, 0,
+                                           std::sqrt(g.values[2])) *
                                 glm::transpose(g.vectors);
         EXPECT_LT(max_abs_diff(root, p.stretch), 1e-10);
     }

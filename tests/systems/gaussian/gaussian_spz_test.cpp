@@ -47,12 +47,12 @@ TEST(GaussianSpz, HandBuiltVersion3WithKnownValues) {
     // Two splats, degree 1, 12 fractional bits.
     std::string b = header(3, 2, 1, 12);
     auto fixed = [&](int v) { b += char(v & 0xff), b += char((v >> 8) & 0xff), b += char((v >> 16) & 0xff); };
-    fixed(int(1.5 * 4096)), fixed(-4096), fixed(0);          // (1.5, -1, 0)
-    fixed(2048), fixed(0), fixed(-int(0.25 * 4096));          // (0.5, 0, -0.25)
-    b += char(255), b += char(51);                            // alphas: 1.0, 0.2
-    for (unsigned char c : {128, 255, 0, 200, 200, 200}) b += char(c);  // colours
+    fixed(int(1.5 * 4096)), fixed(-4096), fixed(0);                       // (1.5, -1, 0)
+    fixed(2048), fixed(0), fixed(-int(0.25 * 4096));                      // (0.5, 0, -0.25)
+    b += char(255), b += char(51);                                        // alphas: 1.0, 0.2
+    for (unsigned char c : {128, 255, 0, 200, 200, 200}) b += char(c);    // colours
     for (unsigned char s : {160, 144, 176, 160, 160, 160}) b += char(s);  // log scale s/16 - 10
-    put32(b, 3u << 30);                                       // identity: w largest, x y z 0
+    put32(b, 3u << 30);                                                   // identity: w largest, x y z 0
     // 90° about z: (x,y,z,w) = (0,0,√½,√½): largest index 2 (z) or 3 (w); take w, z = √½ (mag 511).
     put32(b, (3u << 30) | (511u << 0));  // components in order j = 2, 1, 0 from the low bits: z first
     for (int k = 0; k < 18; ++k) b += char(k < 9 ? 128 + 64 : 128);  // splat 0: band 1 all 0.5, splat 1: 0

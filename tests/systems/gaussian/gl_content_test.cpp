@@ -37,9 +37,11 @@ fs::path source_of(const std::string& name) {
     return assets::face_cache_path().parent_path() / "dragon.ply";
 }
 
-class GaussianGlContent : public sffd::test::GaussianGlRendererTest<sffd::test::HeadlessGlTestWithParam<const char*>> {};
+class GaussianGlContent
+    : public sffd::test::GaussianGlRendererTest<sffd::test::HeadlessGlTestWithParam<const char*>> {};
 
-void compare(GlRenderer& r, const GaussianCloud& g, const Camera& cam, const ReferenceOptions& o, const std::string& what) {
+void compare(GlRenderer& r, const GaussianCloud& g, const Camera& cam, const ReferenceOptions& o,
+             const std::string& what) {
     auto gl = render_gl(r, g, cam, o);
     ASSERT_TRUE(gl) << gl.message();
     const ReferenceImage ref = render_reference(g, cam, o);
@@ -49,8 +51,9 @@ void compare(GlRenderer& r, const GaussianCloud& g, const Camera& cam, const Ref
         covered_ref += ref.transmittance[k] < 0.5f;
         covered_gl += gl->transmittance[k] < 0.5f;
     }
-    std::printf("%s (%zu Gaussians, %dx%d): GL vs CPU reference PSNR %.1f dB, covered pixels %zu (reference %zu)\n",
-                what.c_str(), g.size(), o.width, o.height, p, covered_gl, covered_ref);
+    std::printf(
+        "%s (%zu Gaussians, %dx%d): GL vs CPU reference PSNR %.1f dB, covered pixels %zu (reference %zu)\n",
+        what.c_str(), g.size(), o.width, o.height, p, covered_gl, covered_ref);
     EXPECT_GT(p, 40.0) << what;
     EXPECT_GT(covered_ref, ref.transmittance.size() / 20) << what;
     EXPECT_NEAR(double(covered_gl), double(covered_ref), 0.01 * double(covered_ref) + 5) << what;
@@ -59,18 +62,21 @@ void compare(GlRenderer& r, const GaussianCloud& g, const Camera& cam, const Ref
 TEST_P(GaussianGlContent, MatchesCpuReferenceAtRestAndTwisted) {
     const std::string name = GetParam();
     const fs::path src = source_of(name);
-    if (name != "sphere" && !fs::exists(src)) GTEST_SKIP() << src << " not fetched; run tools/fetch_content.sh --dragon";
+    if (name != "sphere" && !fs::exists(src))
+        GTEST_SKIP() << src << " not fetched; run tools/fetch_content.sh --dragon";
     const fs::path dir = fs::temp_directory_path() / ("sffd_gl_content_" + std::to_string(getpid()));
     fs::create_directories(dir);
     const fs::path out = dir / (name + ".ply");
-    const std::string cmd = kTool + " convert " + src.string() + " " + out.string() + " --gaussians >/dev/null 2>&1";
+    const std::string cmd =
+        kTool + " convert " + src.string() + " " + out.string() + " --gaussians >/dev/null 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
     auto g = read_gaussians(out);
     fs::remove_all(dir);
     ASSERT_TRUE(g) << g.message();
 
     glm::dvec3 lo(1e300), hi(-1e300);
-    for (const glm::vec3& p : g->positions) lo = glm::min(lo, g->origin + glm::dvec3(p)), hi = glm::max(hi, g->origin + glm::dvec3(p));
+    for (const glm::vec3& p : g->positions)
+        lo = glm::min(lo, g->origin + glm::dvec3(p)), hi = glm::max(hi, g->origin + glm::dvec3(p));
     const glm::dvec3 centre = 0.5 * (lo + hi);
     const double radius = 0.5 * glm::length(hi - lo);
     ReferenceOptions o;
@@ -81,9 +87,11 @@ TEST_P(GaussianGlContent, MatchesCpuReferenceAtRestAndTwisted) {
 
     // Twisted about the vertical axis through the centre, 0.8 rad per unit of height.
     const glm::dvec3 m = 0.05 * (hi - lo);
-    Lattice l = ffd::make_lattice(lo - m, {glm::dvec3(hi.x - lo.x + 2 * m.x, 0, 0), glm::dvec3(0, hi.y - lo.y + 2 * m.y, 0),
-                                           glm::dvec3(0, 0, hi.z - lo.z + 2 * m.z)},
-                                  {4, 4, 4});
+    Lattice l =
+        ffd::make_lattice(lo - m,
+                          {glm::dvec3(hi.x - lo.x + 2 * m.x, 0, 0), glm::dvec3(0, hi.y - lo.y + 2 * m.y, 0),
+                           glm::dvec3(0, 0, hi.z - lo.z + 2 * m.z)},
+                          {4, 4, 4});
     ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.8 / radius, centre);
     GaussianCloud twisted;
     ASSERT_TRUE(deform(l, *g, twisted));

@@ -70,13 +70,15 @@ void compare(GlRenderer& r, const GaussianCloud& g, const Camera& cam, Reference
                 covered_ref += ref.transmittance[k] < 0.5f;
                 covered_gl += gl->transmittance[k] < 0.5f;
             }
-            const char* path = blend == BlendPath::tiles ? (sort == SortPath::gpu ? "tiles, GPU sort" : "tiles, CPU sort")
-                                                         : (sort == SortPath::gpu ? "quads, GPU sort" : "quads, CPU sort");
-            std::printf("%s (%s): PSNR %.1f dB, covered pixels %zu (reference %zu), tile entries %llu\n", what, path, p,
-                        covered_gl, covered_ref, (unsigned long long)r.tile_entries);
+            const char* path = blend == BlendPath::tiles
+                                   ? (sort == SortPath::gpu ? "tiles, GPU sort" : "tiles, CPU sort")
+                                   : (sort == SortPath::gpu ? "quads, GPU sort" : "quads, CPU sort");
+            std::printf("%s (%s): PSNR %.1f dB, covered pixels %zu (reference %zu), tile entries %llu\n",
+                        what, path, p, covered_gl, covered_ref, (unsigned long long)r.tile_entries);
             EXPECT_GT(p, 40.0) << what << ", " << path;
             EXPECT_GT(covered_ref, ref.transmittance.size() / 20) << what;
-            EXPECT_NEAR(double(covered_gl), double(covered_ref), 0.01 * double(covered_ref) + 5) << what << ", " << path;
+            EXPECT_NEAR(double(covered_gl), double(covered_ref), 0.01 * double(covered_ref) + 5)
+                << what << ", " << path;
             if (!cpu_quads) {
                 cpu_quads = std::move(*gl);
             } else if (blend == BlendPath::quads) {
@@ -95,7 +97,8 @@ TEST_F(GaussianGl, MatchesCpuReference) {
     compare(*renderer, random_cloud(3000, 3), camera_at({0.5, 0.7, 3.5}), o, "random degree 3");
     // The converted sphere, stretched and twisted by a lattice (deformed covariances and SH).
     GaussianCloud sphere = gaussians_from_splats(assets::make_sphere_cloud(20000));
-    Lattice l = ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {4, 4, 4});
+    Lattice l = ffd::make_lattice(
+        {-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {4, 4, 4});
     ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.8, glm::dvec3(0.0));
     for (glm::dvec3& p : l.current) p.x *= 1.6;
     GaussianCloud deformed;
@@ -113,7 +116,8 @@ TEST_F(GaussianGl, MatchesCpuReference) {
     // Far from the origin (the view matrix carries the cloud origin in double).
     GaussianCloud far = random_cloud(500, 1);
     far.origin = glm::dvec3(1e5, -2e4, 3e4);
-    compare(*renderer, far, camera_at(far.origin + glm::dvec3(0, 0, 3.0), far.origin), o, "far from the origin");
+    compare(*renderer, far, camera_at(far.origin + glm::dvec3(0, 0, 3.0), far.origin), o,
+            "far from the origin");
 }
 
 TEST_F(GaussianGl, LargeCloudsAreDispatchedAsAGrid) {
@@ -159,7 +163,8 @@ TEST_F(GaussianGl, OffscreenGaussiansAreCulledBeforeTheSort) {
         if (-t.z < o.near_plane) continue;
         const double px = o.width * 0.5 + f * t.x / -t.z, py = o.height * 0.5 - f * t.y / -t.z;
         const double margin = 3.0 * f * 0.14 / -t.z + 2.0;  // 3 sigma of the largest scale, plus rounding
-        expected += px + margin >= 0.0 && px - margin <= o.width && py + margin >= 0.0 && py - margin <= o.height;
+        expected +=
+            px + margin >= 0.0 && px - margin <= o.width && py + margin >= 0.0 && py - margin <= o.height;
     }
     EXPECT_EQ(command[0], 4u);
     EXPECT_LE(command[1], expected) << "Gaussians off the image were drawn";

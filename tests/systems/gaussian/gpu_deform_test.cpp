@@ -49,7 +49,8 @@ protected:
     void TearDown() override {
         deformer.reset();
         if (ctx) {
-            EXPECT_EQ(gfx::debug_error_count(), errors_at_start) << "GL errors reported by the debug callback";
+            EXPECT_EQ(gfx::debug_error_count(), errors_at_start)
+                << "GL errors reported by the debug callback";
         }
     }
     std::uint64_t errors_at_start = 0;
@@ -77,7 +78,8 @@ GaussianCloud random_cloud(std::size_t n, int degree, float extent, unsigned see
 }
 
 Lattice box_lattice(LatticeBasis basis, glm::ivec3 div) {
-    return ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, div, basis);
+    return ffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)},
+                             div, basis);
 }
 Lattice twisted(LatticeBasis basis, glm::ivec3 div) {
     Lattice l = box_lattice(basis, div);
@@ -96,10 +98,16 @@ Lattice stretched(LatticeBasis basis, glm::ivec3 div) {
 
 using sffd::test::max_abs;
 
-glm::dmat3 sigma(const GaussianCloud& g, std::size_t i) { return covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i])); }
+glm::dmat3 sigma(const GaussianCloud& g, std::size_t i) {
+    return covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i]));
+}
 
 bool all_finite(const GaussianCloud& g) {
-    auto fin = [](float v) { std::uint32_t b; std::memcpy(&b, &v, 4); return (b & 0x7f800000u) != 0x7f800000u; };
+    auto fin = [](float v) {
+        std::uint32_t b;
+        std::memcpy(&b, &v, 4);
+        return (b & 0x7f800000u) != 0x7f800000u;
+    };
     for (std::size_t i = 0; i < g.size(); ++i) {
         for (int a = 0; a < 3; ++a)
             if (!fin(g.positions[i][a]) || !fin(g.scales[i][a])) return false;
@@ -115,7 +123,8 @@ bool all_finite(const GaussianCloud& g) {
 }
 
 // CPU reference: every lattice in order, in place, view-direction mode (frames compose).
-GaussianCloud cpu_deform(const std::vector<const Lattice*>& ls, const GaussianCloud& in, ShMode mode = ShMode::rotate_view) {
+GaussianCloud cpu_deform(const std::vector<const Lattice*>& ls, const GaussianCloud& in,
+                         ShMode mode = ShMode::rotate_view) {
     GaussianCloud g = in;
     DeformOptions o;
     o.sh = mode;
@@ -133,8 +142,10 @@ Errors compare(const GaussianCloud& gpu, const GaussianCloud& cpu, const char* w
         EXPECT_EQ(gpu.sh, cpu.sh) << what;  // coefficients untouched in view mode
     }
     double esh = 0.0;
-    for (std::size_t k = 0; k < gpu.sh.size() && k < cpu.sh.size(); ++k) esh = std::max(esh, double(std::abs(gpu.sh[k] - cpu.sh[k])));
-    EXPECT_LT(esh, 5e-5) << what;  // rotated coefficients (|c| <= 0.5; llvmpipe: 8.5e-6, A_l⁻¹ amplifies rounding)
+    for (std::size_t k = 0; k < gpu.sh.size() && k < cpu.sh.size(); ++k)
+        esh = std::max(esh, double(std::abs(gpu.sh[k] - cpu.sh[k])));
+    EXPECT_LT(esh, 5e-5)
+        << what;  // rotated coefficients (|c| <= 0.5; llvmpipe: 8.5e-6, A_l⁻¹ amplifies rounding)
     EXPECT_EQ(gpu.sh_frames.size(), cpu.sh_frames.size()) << what;
     for (std::size_t i = 0; i < gpu.size(); ++i) {
         EXPECT_EQ(gpu.opacities[i], cpu.opacities[i]) << what << " " << i;
@@ -144,8 +155,9 @@ Errors compare(const GaussianCloud& gpu, const GaussianCloud& cpu, const char* w
         if (i < gpu.sh_frames.size() && i < cpu.sh_frames.size())
             e.frame = std::max(e.frame, max_abs(glm::dmat3(gpu.sh_frames[i]) - glm::dmat3(cpu.sh_frames[i])));
     }
-    std::printf("%s: max centre error %.2e, max relative Σ error %.2e, max frame error %.2e, max SH error %.2e\n", what, e.centre,
-                e.sigma, e.frame, esh);
+    std::printf(
+        "%s: max centre error %.2e, max relative Σ error %.2e, max frame error %.2e, max SH error %.2e\n",
+        what, e.centre, e.sigma, e.frame, esh);
     EXPECT_LT(e.centre, 5e-6) << what;
     EXPECT_LT(e.sigma, 3e-5) << what;
     EXPECT_LT(e.frame, 1e-5) << what;
@@ -161,8 +173,8 @@ TEST_F(GaussianGpuDeform, MatchesCpuOnBernsteinAndBsplineLatticesWithSeveralDefo
             GpuDeformStats stats;
             auto gpu = deform_on_gpu(*deformer, ls, cloud, ShMode::rotate_view, &stats);
             ASSERT_TRUE(gpu) << gpu.message();
-            const std::string what = std::string(basis == LatticeBasis::bernstein ? "bernstein" : "bspline") + ", " +
-                                     std::to_string(ls.size()) + " deformer(s)";
+            const std::string what = std::string(basis == LatticeBasis::bernstein ? "bernstein" : "bspline") +
+                                     ", " + std::to_string(ls.size()) + " deformer(s)";
             compare(*gpu, cpu_deform(ls, cloud), what.c_str());
             EXPECT_GT(stats.inside, 0u);
             EXPECT_EQ(stats.not_finite, 0u);
@@ -189,7 +201,8 @@ TEST_F(GaussianGpuDeform, RotatedCoefficientsMatchCpuRotation) {
     // rotating the previous output, against the CPU's per-band matrices (sh_rotation), degrees 1..3.
     for (int degree = 1; degree <= 3; ++degree) {
         const GaussianCloud cloud = random_cloud(2500, degree, 1.1f, 23 + unsigned(degree));
-        const Lattice tw = twisted(LatticeBasis::bernstein, {4, 3, 5}), st = stretched(LatticeBasis::bspline, {3, 3, 3});
+        const Lattice tw = twisted(LatticeBasis::bernstein, {4, 3, 5}),
+                      st = stretched(LatticeBasis::bspline, {3, 3, 3});
         GpuDeformStats stats;
         auto gpu = deform_on_gpu(*deformer, {&tw, &st}, cloud, ShMode::rotate_coefficients, &stats);
         ASSERT_TRUE(gpu) << gpu.message();
@@ -225,7 +238,8 @@ TEST_F(GaussianGpuDeform, RigidLatticeMotionMovesGaussiansRigidly) {
         ef = std::max(ef, max_abs(glm::dmat3(gpu->sh_frames[i]) - q));
         EXPECT_EQ(gpu->opacities[i], cloud.opacities[i]);
     }
-    std::printf("rigid: max centre error %.2e, max relative Σ error %.2e, max frame error %.2e\n", ec, es, ef);
+    std::printf("rigid: max centre error %.2e, max relative Σ error %.2e, max frame error %.2e\n", ec, es,
+                ef);
     EXPECT_LT(ec, 5e-6);
     EXPECT_LT(es, 2e-5);
     EXPECT_LT(ef, 1e-5);
@@ -286,7 +300,8 @@ TEST_F(GaussianGpuDeform, DegenerateLatticesGiveNoNaN) {
     //     results near it overflow. Those Gaussians are written transparent with scale 0 and counted; no
     //     NaN or infinity reaches the buffer.
     Lattice huge = box_lattice(LatticeBasis::bernstein, {3, 3, 3});
-    huge.current[21].x = 1e39;  // control point (1,1,1): Bernstein support is global, every inside Gaussian depends on it
+    huge.current[21].x =
+        1e39;  // control point (1,1,1): Bernstein support is global, every inside Gaussian depends on it
     ASSERT_TRUE(ffd::validate(huge));
     auto bad = deform_on_gpu(*deformer, {&huge}, cloud, ShMode::rotate_view, &stats);
     ASSERT_TRUE(bad) << bad.message();
@@ -365,7 +380,8 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
         GaussianCloud c = cloud;
         std::size_t inverted = 0, degenerate = 0;
         for (ecs::Entity le : {a, b}) {
-            auto st = deform(reg.get<Lattice>(le), c, c, DeformOptions{ffd::Backend::automatic, true, ShMode::rotate_view});
+            auto st = deform(reg.get<Lattice>(le), c, c,
+                             DeformOptions{ffd::Backend::automatic, true, ShMode::rotate_view});
             ASSERT_TRUE(st);
             inverted += st->inverted, degenerate += st->degenerate;
         }
@@ -395,7 +411,9 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
     {
         auto back = read_back(g, cloud.origin);
         ASSERT_TRUE(back) << back.message();
-        compare(*back, cpu_deform({&reg.get<Lattice>(a), &reg.get<Lattice>(b)}, cloud, ShMode::rotate_coefficients), "system, coefficients");
+        compare(*back,
+                cpu_deform({&reg.get<Lattice>(a), &reg.get<Lattice>(b)}, cloud, ShMode::rotate_coefficients),
+                "system, coefficients");
     }
     EXPECT_EQ(reg.resource<gfx::ResidencyStats>().rest_uploads, 1u);
     EXPECT_EQ(counters.gpu_sync_readbacks, 0u);

@@ -97,7 +97,8 @@ TEST(InfoGaussians, SplatAndSpzAreRead) {
     };
     put32(0x5053474e), put32(2), put32(1);
     b += char(0), b += char(12), b += char(0), b += char(0);
-    b += std::string(9, '\0') + std::string(1, char(255)) + std::string(3, char(128)) + std::string(3, char(160)) + std::string(3, char(128));
+    b += std::string(9, '\0') + std::string(1, char(255)) + std::string(3, char(128)) +
+         std::string(3, char(160)) + std::string(3, char(128));
     const fs::path spz = temp("g.spz");
     gzFile f = gzopen(spz.c_str(), "wb");
     ASSERT_NE(f, nullptr);
@@ -126,17 +127,24 @@ TEST(InfoGaussians, InfinitiesAreCountedAndUnknownTypesListEveryFormat) {
     std::ofstream(ply, std::ios::binary) << text;
     // info lists the header; render/convert read the file and log the mapped count.
     const std::string o = temp("convert.txt").string();
-    const int status = std::system((kTool + " convert '" + ply.string() + "' '" + temp("out.ply").string() + "' --gaussians >" + o + " 2>&1").c_str());
+    const int status = std::system((kTool + " convert '" + ply.string() + "' '" + temp("out.ply").string() +
+                                    "' --gaussians >" + o + " 2>&1")
+                                       .c_str());
     EXPECT_EQ(WEXITSTATUS(status), 0);
     std::stringstream so;
     so << std::ifstream(o).rdbuf();
-    EXPECT_NE(so.str().find("read 1 infinite values as limits (1 logit opacities"), std::string::npos) << so.str();
+    EXPECT_NE(so.str().find("read 1 infinite values as limits (1 logit opacities"), std::string::npos)
+        << so.str();
 
     const fs::path odd = temp("g.xyz");
     std::ofstream(odd) << "1 2 3\n";
     RunResult r = info(odd);
     EXPECT_NE(r.code, 0);
-    EXPECT_NE(r.err.find(odd.string() + ": unknown file type '.xyz' (expected .ply, .obj, .off, .gltf, .glb, .spz, .splat or .ksplat)"), std::string::npos)
+    EXPECT_NE(
+        r.err.find(
+            odd.string() +
+            ": unknown file type '.xyz' (expected .ply, .obj, .off, .gltf, .glb, .spz, .splat or .ksplat)"),
+        std::string::npos)
         << r.err;
 }
 
@@ -145,11 +153,15 @@ TEST(InfoGaussians, CompressedPlyAsAPointCloudSaysWhatItIs) {
     const fs::path comp = temp("p.compressed.ply");
     ASSERT_TRUE(gaussian::write_compressed_ply(comp, cloud(10, 0)));
     const std::string o = temp("pc.txt").string();
-    const int status = std::system((kTool + " convert '" + comp.string() + "' '" + temp("pc.ply").string() + "' >" + o + " 2>&1").c_str());
+    const int status = std::system(
+        (kTool + " convert '" + comp.string() + "' '" + temp("pc.ply").string() + "' >" + o + " 2>&1")
+            .c_str());
     EXPECT_NE(WEXITSTATUS(status), 0);
     std::stringstream so;
     so << std::ifstream(o).rdbuf();
-    EXPECT_NE(so.str().find(comp.string() + ": a compressed (PlayCanvas) Gaussian PLY, not a point cloud"), std::string::npos) << so.str();
+    EXPECT_NE(so.str().find(comp.string() + ": a compressed (PlayCanvas) Gaussian PLY, not a point cloud"),
+              std::string::npos)
+        << so.str();
 }
 
 }  // namespace

@@ -35,7 +35,8 @@ void append(GaussianCloud& a, const GaussianCloud& b) {
     a.sh.insert(a.sh.end(), b.sh.begin(), b.sh.end());
 }
 
-Camera camera_at(glm::dvec3 eye, glm::dvec3 target = glm::dvec3(0.0), glm::dvec3 up = {0, 1, 0}, float fov = 45.0f) {
+Camera camera_at(glm::dvec3 eye, glm::dvec3 target = glm::dvec3(0.0), glm::dvec3 up = {0, 1, 0},
+                 float fov = 45.0f) {
     Camera c;
     c.eye = eye, c.target = target, c.up = up, c.fov_y_degrees = fov;
     return c;
@@ -71,8 +72,9 @@ TEST(GaussianReferenceRender, AnisotropicFootprintMatchesAnalyticEwa) {
 }
 
 TEST(GaussianReferenceRender, FrontToBackBlendingFollowsDepthNotArrayOrder) {
-    GaussianCloud g = one({0, 0, 0}, glm::vec3(0.3f), glm::quat(1, 0, 0, 0), {0, 1, 0}, 0.6f);  // green, behind
-    append(g, one({0, 0, 0.5f}, glm::vec3(0.3f), glm::quat(1, 0, 0, 0), {1, 0, 0}, 0.5f));    // red, in front
+    GaussianCloud g =
+        one({0, 0, 0}, glm::vec3(0.3f), glm::quat(1, 0, 0, 0), {0, 1, 0}, 0.6f);            // green, behind
+    append(g, one({0, 0, 0.5f}, glm::vec3(0.3f), glm::quat(1, 0, 0, 0), {1, 0, 0}, 0.5f));  // red, in front
     ReferenceOptions o;
     o.width = o.height = 32;
     o.background = {0, 0, 1};
@@ -122,7 +124,8 @@ GaussianCloud sphere_with_sh() {
 
 TEST(GaussianReferenceRender, RigidLatticeMotionRendersTheSameImageFromTheMovedCamera) {
     const GaussianCloud g = sphere_with_sh();
-    Lattice l = ffd::make_lattice({-1.2, -1.2, -1.2}, {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)}, {3, 3, 3});
+    Lattice l = ffd::make_lattice(
+        {-1.2, -1.2, -1.2}, {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)}, {3, 3, 3});
     const glm::dmat3 q = glm::mat3_cast(glm::angleAxis(1.1, glm::normalize(glm::dvec3(0.2, 1, -0.4))));
     const glm::dvec3 t(0.5, 0.1, -0.3);
     for (std::size_t c = 0; c < l.size(); ++c) l.current[c] = q * l.rest[c] + t;
@@ -161,7 +164,8 @@ TEST(GaussianReferenceRender, StretchedSphereStaysClosedWithDeformedCovariances)
     // Stretch a converted sphere (5,000 Gaussians: ~4 px apart in this view) 2.5x along x with a lattice.
     // With Σ' = J Σ Jᵀ the surface stays closed; moving only the centres (old covariances) opens gaps.
     const GaussianCloud g = gaussians_from_splats(assets::make_sphere_cloud(5000));
-    Lattice l = ffd::make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {2, 2, 2});
+    Lattice l = ffd::make_lattice(
+        {-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {2, 2, 2});
     for (std::size_t c = 0; c < l.size(); ++c) l.current[c].x = 2.5 * l.rest[c].x;
     GaussianCloud stretched;
     ASSERT_TRUE(deform(l, g, stretched));

@@ -95,7 +95,8 @@ GaussianCloud blob(glm::vec3 at, float sigma, float opacity, glm::vec3 rgb) {
 }
 
 glm::vec3 srgb(glm::vec3 linear) {
-    return {render::linear_to_srgb(linear.x), render::linear_to_srgb(linear.y), render::linear_to_srgb(linear.z)};
+    return {render::linear_to_srgb(linear.x), render::linear_to_srgb(linear.y),
+            render::linear_to_srgb(linear.z)};
 }
 
 // The render system's output (straight linear colour + coverage) as a ReferenceImage over a black
@@ -133,8 +134,10 @@ TEST_F(GaussianRenderSystem, ImageEqualsGaussianRendererAndReference) {
     ASSERT_TRUE(gl) << gl.message();
     const ReferenceImage ref = render_reference(g, camera(), o);
     const double p_gl = psnr(*gl, sys), p_ref = psnr(ref, sys);
-    std::printf("render system vs gaussian GL renderer: PSNR %.1f dB; vs CPU reference: %.1f dB; covered %zu / %zu / %zu\n",
-                p_gl, p_ref, covered(sys), covered(*gl), covered(ref));
+    std::printf(
+        "render system vs gaussian GL renderer: PSNR %.1f dB; vs CPU reference: %.1f dB; covered %zu / %zu / "
+        "%zu\n",
+        p_gl, p_ref, covered(sys), covered(*gl), covered(ref));
     EXPECT_GT(p_gl, 50.0);  // same shaders; the output target is RGBA16F (half-float colour)
     EXPECT_GT(p_ref, 40.0);
     EXPECT_GT(covered(ref), std::size_t(w * h / 20));
@@ -209,11 +212,13 @@ TEST_F(GaussianRenderSystem, GaussianBehindOpaqueSplatsIsHiddenInFrontIsBlended)
             const float a = alone.color[k].w;
             if (surface.color[k].w < 1.0f || a < 0.05f) continue;
             ++blended;
-            const glm::vec3 expected = srgb(glm::vec3(alone.color[k])) * a + (1.0f - a) * srgb(glm::vec3(surface.color[k]));
+            const glm::vec3 expected =
+                srgb(glm::vec3(alone.color[k])) * a + (1.0f - a) * srgb(glm::vec3(surface.color[k]));
             worst = std::max(worst, glm::length(srgb(glm::vec3(both.color[k])) - expected));
             EXPECT_NEAR(both.color[k].w, 1.0f, 1e-3f);
         }
-        std::printf("Gaussian over the sphere: %zu blended pixels, worst colour error %.2e\n", blended, double(worst));
+        std::printf("Gaussian over the sphere: %zu blended pixels, worst colour error %.2e\n", blended,
+                    double(worst));
         EXPECT_GT(blended, 50u);
         EXPECT_LT(worst, 4e-3f);  // RGBA16F targets
     }
@@ -244,7 +249,8 @@ TEST_F(GaussianRenderSystem, DeformedCloudIsDrawnAndFollowsTheStore) {
     o.width = 128, o.height = 96, o.near_plane = camera().near_plane;
     const double p_moved = psnr(render_reference(expected, camera(), o), moved);
     const double p_rest = psnr(rest, moved);
-    std::printf("deformed: PSNR %.1f dB vs the reference of the deformed cloud, %.1f dB vs rest\n", p_moved, p_rest);
+    std::printf("deformed: PSNR %.1f dB vs the reference of the deformed cloud, %.1f dB vs rest\n", p_moved,
+                p_rest);
     EXPECT_GT(p_moved, 40.0);
     EXPECT_LT(p_rest, 30.0);
     // The deformers go away: back to the authored cloud.

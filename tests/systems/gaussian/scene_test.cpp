@@ -47,7 +47,8 @@ using namespace sffd::gaussian;
 namespace fs = std::filesystem;
 
 fs::path fresh_dir(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("sffd_gaussian_scene_" + std::to_string(::getpid())) / name;
+    const fs::path d =
+        fs::temp_directory_path() / ("sffd_gaussian_scene_" + std::to_string(::getpid())) / name;
     fs::remove_all(d);
     fs::create_directories(d);
     return d;
@@ -86,7 +87,8 @@ fs::path write_scene(const fs::path& dir, const GaussianCloud& g) {
     auto e = load_gaussian_entity(reg, ply);
     EXPECT_TRUE(e) << e.message();
     const ecs::Entity lat = reg.create();
-    const Lattice l = ffd::make_lattice({-1.3, -1.3, -1.3}, {glm::dvec3(2.6, 0, 0), glm::dvec3(0, 2.6, 0), glm::dvec3(0, 0, 2.6)}, {4, 4, 4});
+    const Lattice l = ffd::make_lattice(
+        {-1.3, -1.3, -1.3}, {glm::dvec3(2.6, 0, 0), glm::dvec3(0, 2.6, 0), glm::dvec3(0, 0, 2.6)}, {4, 4, 4});
     reg.emplace<Name>(lat, Name{"box"});
     reg.emplace<Lattice>(lat, l);
     reg.emplace<AnimationClip>(lat, make_paper_demo_clip(l));
@@ -122,7 +124,9 @@ ReferenceImage display_premultiplied(const render::FrameImage& f) {
     ReferenceImage r;
     r.width = f.width, r.height = f.height;
     for (const glm::vec4& c : f.color) {
-        r.color.push_back(glm::vec3(render::linear_to_srgb(c.x), render::linear_to_srgb(c.y), render::linear_to_srgb(c.z)) * c.w);
+        r.color.push_back(
+            glm::vec3(render::linear_to_srgb(c.x), render::linear_to_srgb(c.y), render::linear_to_srgb(c.z)) *
+            c.w);
         r.transmittance.push_back(1.0f - c.w);
     }
     return r;
@@ -197,7 +201,8 @@ TEST_F(GaussianScene, AnimatedTwistRendersTheDeformedGaussians) {
     const ReferenceImage twisted = frame_at(84);  // global twist peak
     ecs::Entity e = ecs::null_entity;
     reg.view<const GaussianCloud>().each([&](ecs::Entity x, const GaussianCloud&) { e = x; });
-    // Deform then render, independently: the lattice as the clip left it, gaussian::deform, the CPU reference.
+    // Deform then render, independently: the lattice as the clip left it, gaussian::deform, the CPU
+    // reference.
     const Lattice& lattice = reg.get<Lattice>(reg.get<Deformers>(e).lattices[0]);
     GaussianCloud deformed;
     ASSERT_TRUE(deform(lattice, reg.get<GaussianCloud>(e), deformed));
@@ -205,9 +210,12 @@ TEST_F(GaussianScene, AnimatedTwistRendersTheDeformedGaussians) {
     o.width = 160, o.height = 120, o.near_plane = test_camera().near_plane;
     const ReferenceImage expected = render_reference(deformed, test_camera(), o);
     const ReferenceImage at_rest = render_reference(reg.get<GaussianCloud>(e), test_camera(), o);
-    const double p_deformed = psnr(expected, twisted), p_rest = psnr(rest, twisted), p_rest_ref = psnr(at_rest, rest);
-    std::printf("twisted scene frame 84: PSNR %.1f dB vs deform-then-render, %.1f dB vs the rest frame; rest frame vs reference %.1f dB\n",
-                p_deformed, p_rest, p_rest_ref);
+    const double p_deformed = psnr(expected, twisted), p_rest = psnr(rest, twisted),
+                 p_rest_ref = psnr(at_rest, rest);
+    std::printf(
+        "twisted scene frame 84: PSNR %.1f dB vs deform-then-render, %.1f dB vs the rest frame; rest frame "
+        "vs reference %.1f dB\n",
+        p_deformed, p_rest, p_rest_ref);
     EXPECT_GT(p_deformed, 40.0);
     EXPECT_GT(p_rest_ref, 40.0);
     EXPECT_LT(p_rest, 30.0);
@@ -228,7 +236,8 @@ TEST_F(GaussianScene, BadGaussianFileInASceneNamesTheFile) {
     EXPECT_NE(st.message().find("sphere.ply"), std::string::npos) << st.message();
     EXPECT_EQ(reg.count<GaussianCloud>(), 0u);  // nothing half-loaded
     std::string out;
-    EXPECT_EQ(run("render " + scene.string() + " --out " + (dir / "frames").string() + " --size 32x24", &out), 1);
+    EXPECT_EQ(run("render " + scene.string() + " --out " + (dir / "frames").string() + " --size 32x24", &out),
+              1);
     EXPECT_NE(out.find("sphere.ply"), std::string::npos) << out;
     // A missing Gaussian file.
     fs::remove(ply);
@@ -243,7 +252,11 @@ TEST_F(GaussianScene, RenderCommandOnGaussianFilesAndAnimatedScenes) {
     const fs::path scene = write_scene(dir, sphere_gaussians());
     // A Gaussian file: told apart from a surface PLY by its properties, framed, --camera and --turntable.
     std::string out;
-    ASSERT_EQ(run("render " + (dir / "sphere.ply").string() + " --out " + (dir / "file").string() + " --size 64x48 --turntable 2", &out), 0) << out;
+    ASSERT_EQ(run("render " + (dir / "sphere.ply").string() + " --out " + (dir / "file").string() +
+                      " --size 64x48 --turntable 2",
+                  &out),
+              0)
+        << out;
     for (const char* f : {"frame_0000.png", "frame_0001.png"}) {
         auto png = render::read_png(dir / "file" / f);
         ASSERT_TRUE(png) << png.message();
@@ -252,10 +265,22 @@ TEST_F(GaussianScene, RenderCommandOnGaussianFilesAndAnimatedScenes) {
         EXPECT_GT(covered, 64u * 48u / 10) << f;
     }
     ASSERT_EQ(run("render " + (dir / "sphere.ply").string() + " --out " + (dir / "cam").string() +
-                      " --size 64x48 --camera 0,0,5,0,0,0,0,1,0,40", &out), 0) << out;
-    // The animated scene: frames 0 (rest) and 84 (twist peak) differ; frame 84 equals frame 84 rendered alone.
-    ASSERT_EQ(run("render " + scene.string() + " --out " + (dir / "anim").string() + " --size 64x48 --frames 83:84", &out), 0) << out;
-    ASSERT_EQ(run("render " + scene.string() + " --out " + (dir / "rest").string() + " --size 64x48 --frames 0:0", &out), 0) << out;
+                      " --size 64x48 --camera 0,0,5,0,0,0,0,1,0,40",
+                  &out),
+              0)
+        << out;
+    // The animated scene: frames 0 (rest) and 84 (twist peak) differ; frame 84 equals frame 84 rendered
+    // alone.
+    ASSERT_EQ(
+        run("render " + scene.string() + " --out " + (dir / "anim").string() + " --size 64x48 --frames 83:84",
+            &out),
+        0)
+        << out;
+    ASSERT_EQ(
+        run("render " + scene.string() + " --out " + (dir / "rest").string() + " --size 64x48 --frames 0:0",
+            &out),
+        0)
+        << out;
     auto a = render::read_png(dir / "anim" / "frame_0084.png");
     auto b = render::read_png(dir / "rest" / "frame_0000.png");
     auto c = render::read_png(dir / "anim" / "frame_0083.png");
@@ -278,8 +303,12 @@ TEST_F(GaussianScene, EditorAddsALatticeToAGaussianFileAndSavesTheDeformedScene)
     ASSERT_TRUE(write_ply(dir / "g.ply", sphere_gaussians()));
     const std::string replay = std::string(SFFD_TEST_DATA_DIR) + "/editor/lattice_add.txt";
     std::string out;
-    ASSERT_EQ(run("view " + (dir / "g.ply").string() + " --headless --no-ui --quality preview --frames 14 --replay " + replay +
-                      " --save " + (dir / "edited.glb").string(), &out), 0) << out;
+    ASSERT_EQ(run("view " + (dir / "g.ply").string() +
+                      " --headless --no-ui --quality preview --frames 14 --replay " + replay + " --save " +
+                      (dir / "edited.glb").string(),
+                  &out),
+              0)
+        << out;
     ecs::Registry reg;
     ASSERT_TRUE(load_scene(reg, (dir / "edited.glb").string()));
     ASSERT_EQ(reg.count<GaussianCloud>(), 1u);
@@ -289,15 +318,25 @@ TEST_F(GaussianScene, EditorAddsALatticeToAGaussianFileAndSavesTheDeformedScene)
     ASSERT_TRUE(reg.has<Deformers>(e));
     const Lattice& l = reg.get<Lattice>(reg.get<Deformers>(e).lattices.at(0));
     std::size_t moved = 0;
-    for (std::size_t k = 0; k < l.rest.size(); ++k) moved += std::abs(l.current[k].x - l.rest[k].x - 0.3) < 1e-9;
+    for (std::size_t k = 0; k < l.rest.size(); ++k)
+        moved += std::abs(l.current[k].x - l.rest[k].x - 0.3) < 1e-9;
     EXPECT_EQ(moved, 729u);  // the 9^3 inner points of the default 11^3 fit
-    ASSERT_EQ(run("render " + (dir / "edited.glb").string() + " --out " + (dir / "edited").string() + " --size 96x72", &out), 0) << out;
-    ASSERT_EQ(run("render " + (dir / "g.ply").string() + " --out " + (dir / "file").string() + " --size 96x72", &out), 0) << out;
+    ASSERT_EQ(run("render " + (dir / "edited.glb").string() + " --out " + (dir / "edited").string() +
+                      " --size 96x72",
+                  &out),
+              0)
+        << out;
+    ASSERT_EQ(
+        run("render " + (dir / "g.ply").string() + " --out " + (dir / "file").string() + " --size 96x72",
+            &out),
+        0)
+        << out;
     auto a = render::read_png(dir / "edited" / "frame_0000.png");
     auto b = render::read_png(dir / "file" / "frame_0000.png");
     ASSERT_TRUE(a && b);
     std::size_t differ = 0;
-    for (std::size_t k = 0; k < a->pixels.size(); ++k) differ += std::abs(int(a->pixels[k]) - int(b->pixels[k])) > 8;
+    for (std::size_t k = 0; k < a->pixels.size(); ++k)
+        differ += std::abs(int(a->pixels[k]) - int(b->pixels[k])) > 8;
     EXPECT_GT(differ, 100u);
 }
 
@@ -313,7 +352,8 @@ TEST_F(GaussianScene, GaussianFilesAreToldApartFromSurfaceFiles) {
         EXPECT_EQ(reg.count<GaussianCloud>(), 1u) << f;
         EXPECT_EQ(reg.count<SplatCloud>(), 0u) << f;
         EXPECT_EQ(reg.count<Camera>(), 1u) << f;  // a default view, like an imported point cloud
-        reg.view<const GaussianCloud>().each([&](const GaussianCloud& c) { EXPECT_EQ(c.size(), g.size()) << f; });
+        reg.view<const GaussianCloud>().each(
+            [&](const GaussianCloud& c) { EXPECT_EQ(c.size(), g.size()) << f; });
     }
     ecs::Registry reg;
     ASSERT_TRUE(load_scene(reg, (dir / "surface.ply").string()));
@@ -333,7 +373,10 @@ TEST_F(GaussianScene, GaussianFilesAreToldApartFromSurfaceFiles) {
     EXPECT_EQ(st.message().rfind((dir / "g.ply").string(), 0), 0u) << st.message();
     EXPECT_EQ(bad.count<GaussianCloud>(), 0u);
     std::string out;
-    EXPECT_EQ(run("render " + (dir / "g.ply").string() + " --out " + (dir / "frames").string() + " --size 32x24", &out), 1);
+    EXPECT_EQ(
+        run("render " + (dir / "g.ply").string() + " --out " + (dir / "frames").string() + " --size 32x24",
+            &out),
+        1);
     EXPECT_NE(out.find((dir / "g.ply").string() + ":"), std::string::npos) << out;
 }
 

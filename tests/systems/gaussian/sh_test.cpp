@@ -27,7 +27,8 @@ TEST(Sh, BasisIsOrthonormalOnTheSphere) {
         const double th = (a + 0.5) * kPi / nt, w = std::sin(th) * (kPi / nt) * (2 * kPi / np);
         for (int b = 0; b < np; ++b) {
             const double ph = (b + 0.5) * 2 * kPi / np;
-            sh_basis(3, glm::dvec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)), y);
+            sh_basis(3, glm::dvec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)),
+                     y);
             for (int i = 0; i < 16; ++i)
                 for (int j = 0; j < 16; ++j) gram[i][j] += w * y[i] * y[j];
         }

@@ -33,7 +33,8 @@ using namespace sffd::gaussian;
 std::string tool() {
     if (const char* env = std::getenv("SPLAT_TRANSFORM")) return env;
     const char* cache = std::getenv("SPLATFFD_CACHE_DIR");
-    const fs::path base = cache ? fs::path(cache) : fs::path(SFFD_TEST_DATA_DIR) / ".." / ".." / "content" / "cache";
+    const fs::path base =
+        cache ? fs::path(cache) : fs::path(SFFD_TEST_DATA_DIR) / ".." / ".." / "content" / "cache";
     return (base / "splat-transform" / "node_modules" / ".bin" / "splat-transform").string();
 }
 
@@ -55,7 +56,9 @@ class SplatTransformFormats : public ::testing::Test {
 protected:
     void SetUp() override {
         if (std::system("node --version >/dev/null 2>&1") != 0) GTEST_SKIP() << "node is not installed";
-        if (!fs::exists(tool())) GTEST_SKIP() << "splat-transform not installed at " << tool() << " (run tools/fetch_splat_transform.sh)";
+        if (!fs::exists(tool()))
+            GTEST_SKIP() << "splat-transform not installed at " << tool()
+                         << " (run tools/fetch_splat_transform.sh)";
     }
 };
 
@@ -94,7 +97,8 @@ void expect_close(const GaussianCloud& a, const GaussianCloud& b, double tol) {
 
 TEST_F(SplatTransformFormats, TheirCompressedPlyReadsLikeTheirDecode) {
     const GaussianCloud g = capture(1000, 0.2f);
-    const fs::path ply = temp("c_ours.ply"), comp = temp("c_theirs.compressed.ply"), decoded = temp("c_decoded.ply");
+    const fs::path ply = temp("c_ours.ply"), comp = temp("c_theirs.compressed.ply"),
+                   decoded = temp("c_decoded.ply");
     ASSERT_TRUE(write_ply(ply, g));
     ASSERT_EQ(run(ply.string() + " " + comp.string()), "");
     ASSERT_EQ(run(comp.string() + " " + decoded.string()), "");
@@ -157,19 +161,26 @@ TEST_F(SplatTransformFormats, OneCaptureRendersTheSameFromEveryFormat) {
     struct Case {
         std::string file;
         bool lossy;
-        bool theirs;            // made by splat-transform from r.ply
-        bool turn_x180 = false;  // splat-transform's SPZ is in its PLY frame, not SPZ's RUB (see gaussian_axes.h)
+        bool theirs;  // made by splat-transform from r.ply
+        bool turn_x180 =
+            false;  // splat-transform's SPZ is in its PLY frame, not SPZ's RUB (see gaussian_axes.h)
         bool turn_z180 = false;  // its GLB is its engine frame: the PLY frame turned about z
     };
     const std::vector<Case> cases = {
-        {"their.ply", false, true},          {"ours.glb", false, false},   {"their.glb", false, true, false, true},
-        {"our.compressed.ply", true, false}, {"their.compressed.ply", true, true},
-        {"their.spz", true, true, true},     {"their.splat", true, true},         {"our.spz", true, false},
+        {"their.ply", false, true},
+        {"ours.glb", false, false},
+        {"their.glb", false, true, false, true},
+        {"our.compressed.ply", true, false},
+        {"their.compressed.ply", true, true},
+        {"their.spz", true, true, true},
+        {"their.splat", true, true},
+        {"our.spz", true, false},
     };
     for (const Case& c : cases) {
         const fs::path f = temp(c.file);
         if (c.theirs) {
-            ASSERT_EQ(run((c.file == "their.spz" ? "--spz-version 3 " : "") + ply.string() + " " + f.string()), "");
+            ASSERT_EQ(
+                run((c.file == "their.spz" ? "--spz-version 3 " : "") + ply.string() + " " + f.string()), "");
         } else if (c.file == "ours.glb") {
             ASSERT_TRUE(write_glb(f, g));
         } else if (c.file == "our.spz") {
@@ -200,12 +211,23 @@ TEST_F(SplatTransformFormats, SpzFromTheOfficialLibraryReadsInThePlyFrame) {
         j << "],";
     };
     const std::size_t n = g.size();
-    list("positions", [&](std::size_t k) { return g.positions[k / 3][int(k % 3)]; }, n * 3);
-    list("scales", [&](std::size_t k) { return std::log(g.scales[k / 3][int(k % 3)]); }, n * 3);
-    list("rotations", [&](std::size_t k) { const glm::quat q = g.rotations[k / 4]; return k % 4 == 0 ? q.w : q[int(k % 4 - 1)]; }, n * 4);
-    list("alphas", [&](std::size_t k) { return logit(g.opacities[k]); }, n);
-    list("colors", [&](std::size_t k) { return g.sh[(k / 3) * 48 + k % 3]; }, n * 3);
-    list("sh", [&](std::size_t k) { return g.sh[(k / 45) * 48 + 3 + k % 45]; }, n * 45);
+    list(
+        "positions", [&](std::size_t k) { return g.positions[k / 3][int(k % 3)]; }, n * 3);
+    list(
+        "scales", [&](std::size_t k) { return std::log(g.scales[k / 3][int(k % 3)]); }, n * 3);
+    list(
+        "rotations",
+        [&](std::size_t k) {
+            const glm::quat q = g.rotations[k / 4];
+            return k % 4 == 0 ? q.w : q[int(k % 4 - 1)];
+        },
+        n * 4);
+    list(
+        "alphas", [&](std::size_t k) { return logit(g.opacities[k]); }, n);
+    list(
+        "colors", [&](std::size_t k) { return g.sh[(k / 3) * 48 + k % 3]; }, n * 3);
+    list(
+        "sh", [&](std::size_t k) { return g.sh[(k / 45) * 48 + 3 + k % 45]; }, n * 45);
     // Appended piecewise: GCC 12 flags operator+(const char*, string&&) with a false -Wrestrict.
     std::string json = "{";
     json += j.str();
@@ -214,9 +236,12 @@ TEST_F(SplatTransformFormats, SpzFromTheOfficialLibraryReadsInThePlyFrame) {
     json += ",\"degree\":3}";
     const fs::path in = temp("niantic.json"), out = temp("niantic.spz");
     std::ofstream(in) << json;
-    const fs::path dist = fs::path(tool()).parent_path().parent_path() / "@playcanvas" / "splat-transform" / "dist";
+    const fs::path dist =
+        fs::path(tool()).parent_path().parent_path() / "@playcanvas" / "splat-transform" / "dist";
     const std::string script = std::string(SFFD_TEST_DATA_DIR) + "/../systems/gaussian/niantic_spz.mjs";
-    ASSERT_EQ(std::system(("node " + script + " " + dist.string() + " " + in.string() + " " + out.string()).c_str()), 0);
+    ASSERT_EQ(std::system(
+                  ("node " + script + " " + dist.string() + " " + in.string() + " " + out.string()).c_str()),
+              0);
     auto back = read_spz(out);
     ASSERT_TRUE(back) << back.message();
     ASSERT_EQ(back->size(), n);
@@ -229,7 +254,8 @@ TEST_F(SplatTransformFormats, SpzFromTheOfficialLibraryReadsInThePlyFrame) {
         EXPECT_LT(test::max_abs(sa - sb), 0.1 * test::max_abs(sb)) << i;  // log scales in steps of 1/16
         EXPECT_NEAR(back->opacities[i], g.opacities[i], 1.0 / 255 + 1e-6) << i;
         for (int k = 0; k < 48; ++k)  // SPZ: DC in steps of 1/(255·0.15), SH in steps of 1/128
-            EXPECT_NEAR(back->sh[i * 48 + std::size_t(k)], g.sh[i * 48 + std::size_t(k)], k < 3 ? 0.02 : 0.01) << i << " " << k;
+            EXPECT_NEAR(back->sh[i * 48 + std::size_t(k)], g.sh[i * 48 + std::size_t(k)], k < 3 ? 0.02 : 0.01)
+                << i << " " << k;
     }
 }
 

@@ -36,7 +36,8 @@ using namespace sffd::gaussian;
 std::string tool() {
     if (const char* env = std::getenv("SPLAT_TRANSFORM")) return env;
     const char* cache = std::getenv("SPLATFFD_CACHE_DIR");
-    const fs::path base = cache ? fs::path(cache) : fs::path(SFFD_TEST_DATA_DIR) / ".." / ".." / "content" / "cache";
+    const fs::path base =
+        cache ? fs::path(cache) : fs::path(SFFD_TEST_DATA_DIR) / ".." / ".." / "content" / "cache";
     return (base / "splat-transform" / "node_modules" / ".bin" / "splat-transform").string();
 }
 
@@ -59,7 +60,9 @@ class SplatTransform : public ::testing::Test {
 protected:
     void SetUp() override {
         if (std::system("node --version >/dev/null 2>&1") != 0) GTEST_SKIP() << "node is not installed";
-        if (!fs::exists(tool())) GTEST_SKIP() << "splat-transform not installed at " << tool() << " (run tools/fetch_splat_transform.sh)";
+        if (!fs::exists(tool()))
+            GTEST_SKIP() << "splat-transform not installed at " << tool()
+                         << " (run tools/fetch_splat_transform.sh)";
     }
 };
 
@@ -85,7 +88,9 @@ void expect_same(const GaussianCloud& a, const GaussianCloud& b, double tol) {
     ASSERT_EQ(a.size(), b.size());
     ASSERT_EQ(a.sh_degree, b.sh_degree);
     for (std::size_t i = 0; i < a.size(); ++i) {
-        EXPECT_LT(glm::length(glm::dvec3(a.positions[i]) + a.origin - glm::dvec3(b.positions[i]) - b.origin), tol) << i;
+        EXPECT_LT(glm::length(glm::dvec3(a.positions[i]) + a.origin - glm::dvec3(b.positions[i]) - b.origin),
+                  tol)
+            << i;
         const glm::dmat3 sa = covariance(glm::dvec3(a.scales[i]), glm::dquat(a.rotations[i]));
         const glm::dmat3 sb = covariance(glm::dvec3(b.scales[i]), glm::dquat(b.rotations[i]));
         EXPECT_LT(max_abs(sa - sb), tol * max_abs(sa)) << i;
@@ -122,7 +127,8 @@ TEST_F(SplatTransform, TheirRotationMatchesOurRigidLatticeMotion) {
     EXPECT_LT(max_abs(glm::transpose(q) * q - glm::dmat3(1.0)), 1e-5);
     EXPECT_NEAR(glm::determinant(q), 1.0, 1e-5);
     EXPECT_GT(max_abs(q - glm::dmat3(1.0)), 0.5);  // a real rotation
-    Lattice l = ffd::make_lattice({-1.5, -1.5, -1.5}, {glm::dvec3(3, 0, 0), glm::dvec3(0, 3, 0), glm::dvec3(0, 0, 3)}, {2, 2, 2});
+    Lattice l = ffd::make_lattice({-1.5, -1.5, -1.5},
+                                  {glm::dvec3(3, 0, 0), glm::dvec3(0, 3, 0), glm::dvec3(0, 0, 3)}, {2, 2, 2});
     for (std::size_t c = 0; c < l.size(); ++c) l.current[c] = q * l.rest[c];
     GaussianCloud mine;
     ASSERT_TRUE(deform(l, g, mine));
@@ -204,7 +210,8 @@ TEST_F(SplatTransform, SpzVersion3ReadsLikeTheirs) {
     // And the quantised cloud is close to what we wrote (SPZ is lossy: 8-bit SH, 24-bit positions).
     ASSERT_EQ(mine->size(), g.size());
     turn_axes(*mine, AxisTurn::x180);
-    for (std::size_t i = 0; i < g.size(); ++i) EXPECT_LT(glm::length(mine->positions[i] - g.positions[i]), 1e-3f);
+    for (std::size_t i = 0; i < g.size(); ++i)
+        EXPECT_LT(glm::length(mine->positions[i] - g.positions[i]), 1e-3f);
 }
 
 }  // namespace

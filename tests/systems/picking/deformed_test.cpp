@@ -40,7 +40,11 @@ struct StretchScene {
 TEST(PickingDeformed, RayHitsTheMovedSplatAfterLatticeStretch) {
     StretchScene s;
     PickingState state;
-    const PickQuery q = [] { PickQuery p = query_from_ray(down_from(0.4, 0.4)); p.control_points = false; return p; }();
+    const PickQuery q = [] {
+        PickQuery p = query_from_ray(down_from(0.4, 0.4));
+        p.control_points = false;
+        return p;
+    }();
 
     const PickHit before = pick(s.reg, state, q);
     ASSERT_EQ(before.kind, PickKind::surface);
@@ -67,7 +71,13 @@ TEST(PickingDeformed, RayHitsTheMovedSplatAfterLatticeStretch) {
     EXPECT_EQ(state.stats().cpu_deformations, deformations + 1);
 
     // A ray at the old place of splat (0, 4) now misses: the sheet moved right by 0.1.
-    EXPECT_EQ(pick(s.reg, state, [] { PickQuery p = query_from_ray(down_from(0.0, 0.4)); p.control_points = false; return p; }()).kind,
+    EXPECT_EQ(pick(s.reg, state,
+                   [] {
+                       PickQuery p = query_from_ray(down_from(0.0, 0.4));
+                       p.control_points = false;
+                       return p;
+                   }())
+                  .kind,
               PickKind::none);
 }
 
@@ -114,7 +124,8 @@ TEST(PickingDeformed, CpuDeformationMatchesFfdReference) {
     const PickHit hit = pick(s.reg, state, q);
     ASSERT_EQ(hit.kind, PickKind::surface);
     EXPECT_EQ(hit.index, 6u * 11u + 7u);
-    EXPECT_NEAR(hit.position.z, ref.position.z, 2e-4);  // the disc plane is tilted slightly by the deformation
+    EXPECT_NEAR(hit.position.z, ref.position.z,
+                2e-4);  // the disc plane is tilted slightly by the deformation
 }
 
 TEST(PickingDeformed, SurfaceHitMapsBackToItsRestPointOnTheSplat) {

@@ -101,7 +101,8 @@ TEST(PickingGaussians, RotatedGaussiansMatchTheCovarianceQuadratic) {
     for (int trial = 0; trial < 50; ++trial) {
         ecs::Registry reg;
         G g{{u(rng), u(rng), u(rng)},
-            {float(0.1 + 0.4 * (u(rng) + 1)), float(0.1 + 0.4 * (u(rng) + 1)), float(0.02 + 0.2 * (u(rng) + 1))},
+            {float(0.1 + 0.4 * (u(rng) + 1)), float(0.1 + 0.4 * (u(rng) + 1)),
+             float(0.02 + 0.2 * (u(rng) + 1))},
             glm::normalize(glm::quat(float(u(rng)), float(u(rng)), float(u(rng)), float(u(rng)))),
             float(0.05 + 0.475 * (u(rng) + 1))};
         reg.emplace<GaussianCloud>(reg.create(), cloud_of({g}));
@@ -153,10 +154,11 @@ TEST(PickingGaussians, MissJustOutsideHitJustInside) {
 
 TEST(PickingGaussians, NearestOfSeveralAndTransparentOnesSkipped) {
     ecs::Registry reg;
-    const std::vector<G> gs = {{{0, 0, 0}, {0.2f, 0.2f, 0.2f}},
-                               {{0, 0, 3}, {0.2f, 0.2f, 0.1f}},
-                               {{0, 0, 6}, {0.2f, 0.2f, 0.3f}, {1, 0, 0, 0}, 0.003f},  // below 1/255: not drawn
-                               {{5, 0, 6}, {0.2f, 0.2f, 0.2f}}};
+    const std::vector<G> gs = {
+        {{0, 0, 0}, {0.2f, 0.2f, 0.2f}},
+        {{0, 0, 3}, {0.2f, 0.2f, 0.1f}},
+        {{0, 0, 6}, {0.2f, 0.2f, 0.3f}, {1, 0, 0, 0}, 0.003f},  // below 1/255: not drawn
+        {{5, 0, 6}, {0.2f, 0.2f, 0.2f}}};
     const ecs::Entity e = reg.create();
     reg.emplace<GaussianCloud>(e, cloud_of(gs));
     PickingState state;
@@ -181,7 +183,8 @@ TEST(PickingGaussians, NearerOfASplatSurfaceAndAGaussianAndOcclusion) {
     const ecs::Entity splats = reg.create();
     reg.emplace<SplatCloud>(splats, test::disc_grid(3, 1.0, 0.6, 1.0, {-1.0, -1.0}));  // sheet at z = 1
     const ecs::Entity gauss = reg.create();
-    reg.emplace<GaussianCloud>(gauss, cloud_of({{{0, 0, 2}, {0.1f, 0.1f, 0.1f}}, {{0, 0, 0}, {0.1f, 0.1f, 0.1f}}}));
+    reg.emplace<GaussianCloud>(gauss,
+                               cloud_of({{{0, 0, 2}, {0.1f, 0.1f, 0.1f}}, {{0, 0, 0}, {0.1f, 0.1f, 0.1f}}}));
     PickingState state;
     const PickHit from_top = pick(reg, state, ray_query({0, 0, 10}, {0, 0, -1}));
     ASSERT_EQ(from_top.kind, PickKind::gaussian);
@@ -205,7 +208,8 @@ TEST(PickingGaussians, EntityTransformAppliesToTheEllipsoid) {
     reg.emplace<GaussianCloud>(e, cloud_of({{{1, 0, 0}, {0.1f, 0.2f, 0.3f}}}));
     // Scale x by 3, then turn 90° about z, then move by (0, 0, 5): the centre lands at (0, 3, 5) and the
     // local x axis (σ 0.1 · 3 = 0.3) points along world y.
-    reg.emplace<Transform>(e, Transform{{0, 0, 5}, glm::angleAxis(glm::radians(90.0), glm::dvec3(0, 0, 1)), {3, 1, 1}});
+    reg.emplace<Transform>(
+        e, Transform{{0, 0, 5}, glm::angleAxis(glm::radians(90.0), glm::dvec3(0, 0, 1)), {3, 1, 1}});
     PickingState state;
     const PickHit hit = pick(reg, state, ray_query({0, 10, 5}, {0, -1, 0}));
     ASSERT_EQ(hit.kind, PickKind::gaussian);
@@ -316,8 +320,9 @@ TEST(PickingGaussians, BlendingWeightsDecideBetweenTwo) {
     const std::uint32_t expect[] = {1u, 0u};
     for (int c = 0; c < 2; ++c) {
         ecs::Registry reg;
-        reg.emplace<GaussianCloud>(reg.create(), cloud_of({{{0, 0, 0}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, cases[c].second},
-                                                           {{0, 0, 2}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, cases[c].first}}));
+        reg.emplace<GaussianCloud>(reg.create(),
+                                   cloud_of({{{0, 0, 0}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, cases[c].second},
+                                             {{0, 0, 2}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, cases[c].first}}));
         PickingState state;
         EXPECT_EQ(pick(reg, state, ray_query({0, 0, 10}, {0, 0, -1})).index, expect[c]) << c;
     }
@@ -328,8 +333,9 @@ TEST(PickingGaussians, SplatDiscsAreOpaqueInTheWeighting) {
     const ecs::Entity sheet = reg.create();
     reg.emplace<SplatCloud>(sheet, test::disc_grid(3, 1.0, 0.6, 0.0, {-1.0, -1.0}));  // z = 0
     const ecs::Entity g = reg.create();
-    reg.emplace<GaussianCloud>(g, cloud_of({{{0, 0, 1}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, 0.2f},    // in front, faint
-                                            {{0, 0, -1}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, 1.0f}}));  // behind the sheet
+    reg.emplace<GaussianCloud>(
+        g, cloud_of({{{0, 0, 1}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, 0.2f},      // in front, faint
+                     {{0, 0, -1}, {0.2f, 0.2f, 0.2f}, {1, 0, 0, 0}, 1.0f}}));  // behind the sheet
     PickingState state;
     PickQuery down = ray_query({0, 0, 10}, {0, 0, -1});
     down.control_points = false;
@@ -358,7 +364,7 @@ TEST(PickingGaussians, OnlyGaussiansCoveringHalfThePixelHideControlPoints) {
     EXPECT_FALSE(state.surface_between({0, 0, 10}, {0, 0, 0}));  // alpha 0.3 on this line
     reg.patch<GaussianCloud>(e).opacities[0] = 0.6f;
     state.refresh(reg);
-    EXPECT_TRUE(state.surface_between({0, 0, 10}, {0, 0, 0}));   // alpha 0.6
+    EXPECT_TRUE(state.surface_between({0, 0, 10}, {0, 0, 0}));  // alpha 0.6
     // Off-centre by 0.3 = 1 σ: alpha 0.6 e^-0.5 = 0.36 < 0.5.
     EXPECT_FALSE(state.surface_between({0.3, 0, 10}, {0.3, 0, 0}));
 }
@@ -397,17 +403,20 @@ TEST(PickingGaussians, OwnJacobianEllipsoidsMatchTheDeformationPhase) {
     std::uniform_real_distribution<double> u(0.0, 1.0);
     std::vector<G> gs;
     for (int i = 0; i < 40; ++i)
-        gs.push_back({{0.2 + 0.6 * u(rng), 0.2 + 0.6 * u(rng), 0.2 + 0.6 * u(rng)},
-                      {float(0.01 + 0.03 * u(rng)), float(0.01 + 0.03 * u(rng)), float(0.005 + 0.01 * u(rng))},
-                      glm::normalize(glm::quat(float(u(rng) - 0.5), float(u(rng) - 0.5), float(u(rng) - 0.5), float(u(rng) - 0.5))),
-                      float(0.3 + 0.7 * u(rng))});
+        gs.push_back(
+            {{0.2 + 0.6 * u(rng), 0.2 + 0.6 * u(rng), 0.2 + 0.6 * u(rng)},
+             {float(0.01 + 0.03 * u(rng)), float(0.01 + 0.03 * u(rng)), float(0.005 + 0.01 * u(rng))},
+             glm::normalize(glm::quat(float(u(rng) - 0.5), float(u(rng) - 0.5), float(u(rng) - 0.5),
+                                      float(u(rng) - 0.5))),
+             float(0.3 + 0.7 * u(rng))});
     auto scene = [&](ecs::Registry& reg) {
         const ecs::Entity lattice = reg.create();
         Lattice l = test::box_lattice({0, 0, 0}, {1, 1, 1}, {3, 3, 3});
         for (glm::dvec3& p : l.current) {
             const double a = 0.8 * (p.y - 0.5);  // twist about the vertical axis through (0.5, ·, 0.5)
             const glm::dvec3 d = p - glm::dvec3(0.5, p.y, 0.5);
-            p = glm::dvec3(0.5 + 1.4 * (std::cos(a) * d.x + std::sin(a) * d.z), p.y, 0.5 - std::sin(a) * d.x + std::cos(a) * d.z);
+            p = glm::dvec3(0.5 + 1.4 * (std::cos(a) * d.x + std::sin(a) * d.z), p.y,
+                           0.5 - std::sin(a) * d.x + std::cos(a) * d.z);
         }
         reg.emplace<Lattice>(lattice, l);
         const ecs::Entity e = reg.create();

@@ -76,7 +76,8 @@ TEST(PickCli, ControlPointAtItsProjectedPixel) {
     }
     ASSERT_GT(best, 4.0) << "control points too crowded on screen for an unambiguous pick";
     const glm::ivec2 pixel(glm::floor(screen[target]));
-    const CliRun r = run_pick("sphere --xray --size 320x240 --at " + std::to_string(pixel.x) + "," + std::to_string(pixel.y));
+    const CliRun r = run_pick("sphere --xray --size 320x240 --at " + std::to_string(pixel.x) + "," +
+                              std::to_string(pixel.y));
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const auto j = nlohmann::json::parse(r.out);
     EXPECT_TRUE(j["hit"].get<bool>());
@@ -84,7 +85,8 @@ TEST(PickCli, ControlPointAtItsProjectedPixel) {
     EXPECT_EQ(j["entity"].get<std::uint32_t>(), s.lattice.index);
     EXPECT_EQ(j["index"].get<std::size_t>(), target);
     const int n1 = l.divisions.z + 1, m1 = l.divisions.y + 1;
-    EXPECT_EQ(j["lattice_ijk"], nlohmann::json::array({int(target) / (m1 * n1), (int(target) / n1) % m1, int(target) % n1}));
+    EXPECT_EQ(j["lattice_ijk"],
+              nlohmann::json::array({int(target) / (m1 * n1), (int(target) / n1) % m1, int(target) % n1}));
     for (int a = 0; a < 3; ++a) EXPECT_NEAR(j["position"][a].get<double>(), points[target][a], 1e-9);
     EXPECT_NEAR(j["distance"].get<double>(), glm::length(points[target] - s.view.camera.eye), 1e-9);
 }
@@ -107,12 +109,14 @@ TEST(PickCli, SurfaceHitLiesOnTheUnitSphereOnThePixelRay) {
         if (clear) pixel = cand;
     }
     ASSERT_GE(pixel.x, 0) << "no clear pixel found";
-    const CliRun r = run_pick("sphere --size 320x240 --tolerance 0 --at " + std::to_string(pixel.x) + "," + std::to_string(pixel.y));
+    const CliRun r = run_pick("sphere --size 320x240 --tolerance 0 --at " + std::to_string(pixel.x) + "," +
+                              std::to_string(pixel.y));
     ASSERT_EQ(r.exit_code, 0) << r.out;
     const auto j = nlohmann::json::parse(r.out);
     ASSERT_TRUE(j["hit"].get<bool>()) << r.out;
     ASSERT_EQ(j["kind"], "surface");
-    const glm::dvec3 p{j["position"][0].get<double>(), j["position"][1].get<double>(), j["position"][2].get<double>()};
+    const glm::dvec3 p{j["position"][0].get<double>(), j["position"][1].get<double>(),
+                       j["position"][2].get<double>()};
     EXPECT_NEAR(glm::length(p), 1.0, 0.01);  // on the unit sphere, up to the splats' flatness
     EXPECT_LT(j["index"].get<std::size_t>(), 59650u);
     EXPECT_NEAR(glm::length(glm::cross(p - ray.origin, ray.direction)), 0.0, 1e-5);  // on the pixel's ray
@@ -149,7 +153,8 @@ struct GaussianFile {
     GaussianCloud cloud;
     ScreenView view;
     GaussianFile() {
-        path = std::filesystem::temp_directory_path() / ("sffd_pick_gauss_" + std::to_string(::getpid()) + ".ply");
+        path = std::filesystem::temp_directory_path() /
+               ("sffd_pick_gauss_" + std::to_string(::getpid()) + ".ply");
         const glm::vec3 centres[3] = {{-1, 0, 0}, {0.5f, 0.2f, 0.3f}, {1, 0, -0.5f}};
         for (int i = 0; i < 3; ++i) {
             cloud.positions.push_back(centres[i]);
@@ -187,7 +192,8 @@ struct RayGaussian {
 RayGaussian ray_gaussian(const GaussianCloud& g, std::size_t i, const Ray& ray) {
     const glm::dmat3 R = glm::mat3_cast(glm::dquat(g.rotations[i]));
     const glm::dvec3 s(g.scales[i]);
-    const glm::dmat3 inv = glm::inverse(R * glm::dmat3(s.x * s.x, 0, 0, 0, s.y * s.y, 0, 0, 0, s.z * s.z) * glm::transpose(R));
+    const glm::dmat3 inv =
+        glm::inverse(R * glm::dmat3(s.x * s.x, 0, 0, 0, s.y * s.y, 0, 0, 0, s.z * s.z) * glm::transpose(R));
     const double k = gaussian_pick_sigmas(double(g.opacities[i]));
     const glm::dvec3 w = ray.origin - glm::dvec3(g.positions[i]), d = glm::normalize(ray.direction);
     const double a = glm::dot(d, inv * d), b = glm::dot(w, inv * d), c = glm::dot(w, inv * w) - k * k;
@@ -211,7 +217,8 @@ std::uint32_t expected_pick(const GaussianCloud& g, const Ray& ray, bool first, 
             if (r.entry < t) t = r.entry, best = i;
         return best;
     }
-    std::sort(hits.begin(), hits.end(), [](const auto& a, const auto& b) { return a.first.depth < b.first.depth; });
+    std::sort(hits.begin(), hits.end(),
+              [](const auto& a, const auto& b) { return a.first.depth < b.first.depth; });
     double T = 1.0, best_w = 0.0;
     for (const auto& [r, i] : hits) {
         if (r.alpha * T > best_w) best_w = r.alpha * T, best = i, t = r.entry;
@@ -228,8 +235,8 @@ TEST(PickCli, GaussianFileHitsTheGaussianOnThePixelRay) {
             const auto px = project(f.view, glm::dvec3(f.cloud.positions[target]));
             ASSERT_TRUE(px.has_value());
             const glm::ivec2 pixel(glm::floor(px->screen));
-            const CliRun r = run_pick(f.path.string() + " --size 320x240 --at " + std::to_string(pixel.x) + "," +
-                                      std::to_string(pixel.y) + (first ? " --first-gaussian" : ""));
+            const CliRun r = run_pick(f.path.string() + " --size 320x240 --at " + std::to_string(pixel.x) +
+                                      "," + std::to_string(pixel.y) + (first ? " --first-gaussian" : ""));
             ASSERT_EQ(r.exit_code, 0) << r.out;
             const auto j = nlohmann::json::parse(r.out);
             ASSERT_TRUE(j["hit"].get<bool>()) << r.out;
@@ -240,10 +247,12 @@ TEST(PickCli, GaussianFileHitsTheGaussianOnThePixelRay) {
             const std::uint32_t expect = expected_pick(f.cloud, ray, first, t);
             differ += expect != expected_pick(f.cloud, ray, !first, t_other);
             ASSERT_LT(expect, 4u);
-            EXPECT_EQ(j["index"].get<std::uint32_t>(), expect) << "pixel of Gaussian " << target << (first ? ", first" : "");
+            EXPECT_EQ(j["index"].get<std::uint32_t>(), expect)
+                << "pixel of Gaussian " << target << (first ? ", first" : "");
             EXPECT_NEAR(j["distance"].get<double>(), t, 1e-4);
             EXPECT_NEAR(j["opacity"].get<double>(), double(f.cloud.opacities[expect]), 1e-6);
-            const glm::dvec3 p{j["position"][0].get<double>(), j["position"][1].get<double>(), j["position"][2].get<double>()};
+            const glm::dvec3 p{j["position"][0].get<double>(), j["position"][1].get<double>(),
+                               j["position"][2].get<double>()};
             EXPECT_NEAR(glm::length(p - (ray.origin + t * glm::normalize(ray.direction))), 0.0, 1e-4);
         }
     }
@@ -255,7 +264,8 @@ TEST(PickCli, GaussianFileHitsTheGaussianOnThePixelRay) {
 }
 
 TEST(PickCli, BadGaussianFileNamesTheFile) {
-    const auto path = std::filesystem::temp_directory_path() / ("sffd_pick_bad_" + std::to_string(::getpid()) + ".splat");
+    const auto path =
+        std::filesystem::temp_directory_path() / ("sffd_pick_bad_" + std::to_string(::getpid()) + ".splat");
     {
         FILE* f = std::fopen(path.string().c_str(), "wb");
         ASSERT_NE(f, nullptr);

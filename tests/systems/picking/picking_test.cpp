@@ -248,7 +248,8 @@ TEST(Picking, FarFromOriginKeepsPrecision) {
     const glm::dvec3 origin{1e6, -2e6, 5e5};
     reg.emplace<SplatCloud>(cloud, disc_grid(10, 0.01, 0.004, origin.z, {origin.x, origin.y}, origin));
     PickingState state;
-    const PickHit hit = pick(reg, state, query_from_ray(down_from(origin.x + 0.031, origin.y + 0.042, origin.z + 1.0)));
+    const PickHit hit =
+        pick(reg, state, query_from_ray(down_from(origin.x + 0.031, origin.y + 0.042, origin.z + 1.0)));
     ASSERT_EQ(hit.kind, PickKind::surface);
     EXPECT_EQ(hit.index, 43u);
     expect_near(hit.position, origin + glm::dvec3(0.031, 0.042, 0.0), 1e-5);
@@ -271,8 +272,10 @@ TEST(Picking, HostileDataIsSkippedNotCrashed) {
     reg.emplace<Lattice>(lat, bad);
     PickingState state;
     EXPECT_EQ(pick(reg, state, query_from_ray(down_from(2.0, 2.0))).index, 10u);  // healthy splats still pick
-    EXPECT_EQ(pick(reg, state, query_from_ray(down_from(2.0, 0.0))).kind, PickKind::none);  // zero-size splat 2
-    EXPECT_EQ(pick(reg, state, query_from_ray(down_from(0.0, 0.0))).kind, PickKind::control_point);  // P[0][0][1]
+    EXPECT_EQ(pick(reg, state, query_from_ray(down_from(2.0, 0.0))).kind,
+              PickKind::none);  // zero-size splat 2
+    EXPECT_EQ(pick(reg, state, query_from_ray(down_from(0.0, 0.0))).kind,
+              PickKind::control_point);  // P[0][0][1]
     // A NaN or zero ray answers "nothing".
     EXPECT_EQ(pick(reg, state, query_from_ray({{0, 0, 10}, {0, 0, 0}})).kind, PickKind::none);
     EXPECT_EQ(pick(reg, state, query_from_ray({{std::nan(""), 0, 10}, {0, 0, -1}})).kind, PickKind::none);
@@ -289,7 +292,8 @@ TEST(PickingSystem, AnswersPendingRequestOnce) {
 
     const Camera cam = top_camera(4.5, 4.5, 10.0);
     const ScreenView view = make_screen_view(cam, {100, 100});
-    reg.set_resource<PickRequest>(PickRequest{true, query_at_pixel(view, expected_pixel(cam, 100, {3.0, 6.0, 0.0}))});
+    reg.set_resource<PickRequest>(
+        PickRequest{true, query_at_pixel(view, expected_pixel(cam, 100, {3.0, 6.0, 0.0}))});
     picking_system(reg, FrameContext{7, 0.0, 0.0});
     const PickResult& result = reg.resource<PickResult>();
     EXPECT_FALSE(reg.resource<PickRequest>().pending);

@@ -88,7 +88,7 @@ TEST(Selection, BoxSelectMatchesPinholeProjection) {
 
     const Indices visible = control_points_in_rect(s.reg, state, s.lattice, s.view, rect, true);
     EXPECT_EQ(visible, s.expected({70, 0}, {110, 200}, true));
-    EXPECT_LT(visible.size(), all.size());  // the sheet really hides something
+    EXPECT_LT(visible.size(), all.size());                                 // the sheet really hides something
     EXPECT_FALSE(std::binary_search(visible.begin(), visible.end(), 0u));  // (0,0,0) is under the sheet
 
     // A rectangle around nothing.
@@ -124,9 +124,12 @@ Indices expected_top(const Lattice& l, glm::dvec3 local, std::size_t k) {
         for (int j = 0; j <= l.divisions.y; ++j)
             for (int c = 0; c <= l.divisions.z; ++c) {
                 const bool bern = l.basis == LatticeBasis::bernstein;
-                const double wi = bern ? bernstein_dc(l.divisions.x, i, local.x) : bspline_pieces(l.divisions.x, i, local.x);
-                const double wj = bern ? bernstein_dc(l.divisions.y, j, local.y) : bspline_pieces(l.divisions.y, j, local.y);
-                const double wk = bern ? bernstein_dc(l.divisions.z, c, local.z) : bspline_pieces(l.divisions.z, c, local.z);
+                const double wi = bern ? bernstein_dc(l.divisions.x, i, local.x)
+                                       : bspline_pieces(l.divisions.x, i, local.x);
+                const double wj = bern ? bernstein_dc(l.divisions.y, j, local.y)
+                                       : bspline_pieces(l.divisions.y, j, local.y);
+                const double wk = bern ? bernstein_dc(l.divisions.z, c, local.z)
+                                       : bspline_pieces(l.divisions.z, c, local.z);
                 w[(std::size_t(i) * (l.divisions.y + 1) + j) * (l.divisions.z + 1) + c] = wi * wj * wk;
             }
     Indices order(w.size());
@@ -153,7 +156,8 @@ TEST(Brush, BernsteinTopKMatchesIndependentWeights) {
     // The weights sum to one (partition of unity) and match de Casteljau one by one.
     const std::vector<double> w = control_point_weights(l, x);
     EXPECT_NEAR(std::accumulate(w.begin(), w.end(), 0.0), 1.0, 1e-12);
-    EXPECT_NEAR(w[l.index(1, 1, 2)], bernstein_dc(3, 1, 0.23) * bernstein_dc(2, 1, 0.71) * bernstein_dc(4, 2, 0.42), 1e-14);
+    EXPECT_NEAR(w[l.index(1, 1, 2)],
+                bernstein_dc(3, 1, 0.23) * bernstein_dc(2, 1, 0.71) * bernstein_dc(4, 2, 0.42), 1e-14);
 
     // Fraction rule: every kept weight >= half the maximum, every dropped one below.
     const Indices half = brush_select(l, x, {.top_k = 0, .min_fraction = 0.5});
@@ -183,7 +187,8 @@ TEST(Brush, BsplineTopKMatchesIndependentWeights) {
     const glm::dvec3 local{0.37, 0.52, 0.81};
     EXPECT_EQ(brush_select(l, local, {.top_k = 8, .min_fraction = 0.0}), expected_top(l, local, 8));
     const std::vector<double> w = control_point_weights(l, local);
-    EXPECT_NEAR(w[l.index(2, 2, 4)], bspline_pieces(5, 2, 0.37) * bspline_pieces(5, 2, 0.52) * bspline_pieces(5, 4, 0.81), 1e-14);
+    EXPECT_NEAR(w[l.index(2, 2, 4)],
+                bspline_pieces(5, 2, 0.37) * bspline_pieces(5, 2, 0.52) * bspline_pieces(5, 4, 0.81), 1e-14);
     // Local support: at most 4 x 4 x 4 non-zero weights.
     EXPECT_LE(std::count_if(w.begin(), w.end(), [](double v) { return v > 0.0; }), 64);
 }

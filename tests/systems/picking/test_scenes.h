@@ -40,8 +40,8 @@ inline Lattice box_lattice(glm::dvec3 lo, glm::dvec3 hi, glm::ivec3 divisions,
     for (int i = 0; i <= divisions.x; ++i)
         for (int j = 0; j <= divisions.y; ++j)
             for (int k = 0; k <= divisions.z; ++k)
-                l.rest.push_back(lo + double(i) / divisions.x * l.axes[0] + double(j) / divisions.y * l.axes[1] +
-                                 double(k) / divisions.z * l.axes[2]);
+                l.rest.push_back(lo + double(i) / divisions.x * l.axes[0] +
+                                 double(j) / divisions.y * l.axes[1] + double(k) / divisions.z * l.axes[2]);
     l.current = l.rest;
     return l;
 }

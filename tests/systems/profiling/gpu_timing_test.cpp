@@ -45,7 +45,8 @@ struct Burner {
         glNamedBufferData(out.id(), 64 * 256 * sizeof(float), nullptr, GL_DYNAMIC_DRAW);
     }
     // Iterations that keep this GPU busy for at least `ms` (quadrupling from 1500, measured with glFinish),
-    // so the heavy pass is measurable on any implementation: 1500 take ~10 ms on llvmpipe, 0.04 ms on an H100.
+    // so the heavy pass is measurable on any implementation: 1500 take ~10 ms on llvmpipe, 0.04 ms on an
+    // H100.
     int calibrate(double ms) const {
         int iterations = 1500;
         for (; iterations < (1 << 26); iterations *= 4) {
@@ -53,7 +54,9 @@ struct Burner {
             const auto t0 = std::chrono::steady_clock::now();
             run(iterations);
             glFinish();
-            if (std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() >= ms) break;
+            if (std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count() >=
+                ms)
+                break;
         }
         return iterations;
     }
@@ -83,9 +86,7 @@ Schedule burn_schedule(const Burner& burner, int iterations = 1500) {
             auto heavy = gpu_scope(r, "burn.heavy");
             burner.run(iterations);
         }
-        {
-            auto empty = gpu_scope(r, "burn.empty");
-        }
+        { auto empty = gpu_scope(r, "burn.empty"); }
     });
     return s;
 }

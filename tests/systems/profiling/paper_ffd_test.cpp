@@ -72,7 +72,8 @@ TEST(PaperFfd, OneCellLatticeIsTrilinearInterpolationOfItsCorners) {
         for (int i = 0; i < 2; ++i)
             for (int j = 0; j < 2; ++j)
                 for (int k = 0; k < 2; ++k)
-                    want += l.current[l.index(i, j, k)] * ((i ? s : 1 - s) * (j ? t : 1 - t) * (k ? w : 1 - w));
+                    want +=
+                        l.current[l.index(i, j, k)] * ((i ? s : 1 - s) * (j ? t : 1 - t) * (k ? w : 1 - w));
         expect_near(pos[n], glm::vec3(want), 1e-5f, "trilinear", n);
     }
 }
@@ -102,7 +103,8 @@ TEST(PaperFfd, NormalsMatchFiniteDifferencesOfTheDeformation) {
     const double h = 1e-3;
     for (std::size_t i = 0; i < c.size(); ++i) {
         const glm::dvec3 n = glm::dvec3(c.normals[i]);
-        const glm::dvec3 a = glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
+        const glm::dvec3 a =
+            glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
         const glm::dvec3 bt = glm::cross(n, a);
         // Deform p +- h a and p +- h b with the same deformer (central differences).
         SplatCloud probe;
@@ -113,7 +115,8 @@ TEST(PaperFfd, NormalsMatchFiniteDifferencesOfTheDeformation) {
         }
         std::vector<glm::vec3> pp, pn;
         paper_ffd_naive(l, probe, pp, pn);
-        const glm::dvec3 da = glm::dvec3(pp[0]) - glm::dvec3(pp[1]), db = glm::dvec3(pp[2]) - glm::dvec3(pp[3]);
+        const glm::dvec3 da = glm::dvec3(pp[0]) - glm::dvec3(pp[1]),
+                         db = glm::dvec3(pp[2]) - glm::dvec3(pp[3]);
         const glm::dvec3 want = glm::normalize(glm::cross(da, db));
         EXPECT_GT(glm::dot(want, glm::dvec3(nrm[i])), 0.999) << i;
     }

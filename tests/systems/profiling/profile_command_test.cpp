@@ -64,11 +64,13 @@ protected:
 };
 
 TEST_F(ProfileCommand, WritesSchemaValidJsonAndAParsableTrace) {
-    const CmdResult r = profile("synthetic:20k --backend cpu --frames 8 --warmup 2 --json " + path("p.json") +
-                          " --trace " + path("p.trace.json") + " --csv " + path("p.csv") + " --svg " + path("p.svg"));
+    const CmdResult r =
+        profile("synthetic:20k --backend cpu --frames 8 --warmup 2 --json " + path("p.json") + " --trace " +
+                path("p.trace.json") + " --csv " + path("p.csv") + " --svg " + path("p.svg"));
     ASSERT_EQ(r.code, 0) << r.out;
     EXPECT_NE(r.out.find("frames: 8"), std::string::npos) << r.out;
-    const auto errors = sffd::profiling::validate_json(read_text(SFFD_PROFILE_SCHEMA), read_text(path("p.json")));
+    const auto errors =
+        sffd::profiling::validate_json(read_text(SFFD_PROFILE_SCHEMA), read_text(path("p.json")));
     EXPECT_TRUE(errors.empty()) << errors.front();
 
     const auto report = nlohmann::json::parse(read_text(path("p.json")));
@@ -81,7 +83,8 @@ TEST_F(ProfileCommand, WritesSchemaValidJsonAndAParsableTrace) {
     std::vector<std::string> passes;
     for (const auto& p : report["passes"]) passes.push_back(p["name"].get<std::string>());
     for (const char* name : {"render.cull", "render.hq.visibility", "render.hq.attribute", "render.hq.shade"})
-        EXPECT_NE(std::find(passes.begin(), passes.end(), name), passes.end()) << name << " missing: " << report["passes"].dump();
+        EXPECT_NE(std::find(passes.begin(), passes.end(), name), passes.end())
+            << name << " missing: " << report["passes"].dump();
 
     const auto trace = nlohmann::json::parse(read_text(path("p.trace.json")));
     int frames = 0;
@@ -91,7 +94,8 @@ TEST_F(ProfileCommand, WritesSchemaValidJsonAndAParsableTrace) {
 }
 
 TEST_F(ProfileCommand, CompareFailsOnAPlantedSlowdownAndPassesWithinTheSpread) {
-    ASSERT_EQ(profile("synthetic:20k --backend cpu --frames 10 --warmup 2 --json " + path("base.json")).code, 0);
+    ASSERT_EQ(profile("synthetic:20k --backend cpu --frames 10 --warmup 2 --json " + path("base.json")).code,
+              0);
     auto base = nlohmann::json::parse(read_text(path("base.json")));
     // Planted slowdown: a baseline in which every system and the frame were 20x faster than measured.
     auto fast = base;
@@ -110,7 +114,8 @@ TEST_F(ProfileCommand, CompareFailsOnAPlantedSlowdownAndPassesWithinTheSpread) {
     };
     every_row(fast, shrink);
     std::ofstream(path("fast.json")) << fast.dump();
-    const CmdResult slow = profile("synthetic:20k --backend cpu --frames 10 --warmup 2 --compare " + path("fast.json"));
+    const CmdResult slow =
+        profile("synthetic:20k --backend cpu --frames 10 --warmup 2 --compare " + path("fast.json"));
     EXPECT_EQ(slow.code, 3) << slow.out;
     EXPECT_NE(slow.out.find("SLOWER"), std::string::npos) << slow.out;
 
@@ -122,17 +127,20 @@ TEST_F(ProfileCommand, CompareFailsOnAPlantedSlowdownAndPassesWithinTheSpread) {
     };
     every_row(sluggish, grow);
     std::ofstream(path("slow.json")) << sluggish.dump();
-    const CmdResult ok = profile("synthetic:20k --backend cpu --frames 10 --warmup 2 --compare " + path("slow.json"));
+    const CmdResult ok =
+        profile("synthetic:20k --backend cpu --frames 10 --warmup 2 --compare " + path("slow.json"));
     EXPECT_EQ(ok.code, 0) << ok.out;
     EXPECT_NE(ok.out.find("no regression"), std::string::npos) << ok.out;
 }
 
 TEST_F(ProfileCommand, BadBaselineAndBadUsageAreReported) {
     std::ofstream(path("bad.json")) << "{\"format\": \"splatffd-profile\", \"version\": 1";
-    const CmdResult bad = profile("synthetic:5k --backend cpu --frames 2 --warmup 0 --compare " + path("bad.json"));
+    const CmdResult bad =
+        profile("synthetic:5k --backend cpu --frames 2 --warmup 0 --compare " + path("bad.json"));
     EXPECT_EQ(bad.code, 1) << bad.out;
     EXPECT_NE(bad.out.find(path("bad.json") + ": not valid JSON"), std::string::npos) << bad.out;
-    const CmdResult missing = profile("synthetic:5k --backend cpu --frames 2 --warmup 0 --compare " + path("nope.json"));
+    const CmdResult missing =
+        profile("synthetic:5k --backend cpu --frames 2 --warmup 0 --compare " + path("nope.json"));
     EXPECT_EQ(missing.code, 1) << missing.out;
     EXPECT_NE(missing.out.find("nope.json"), std::string::npos) << missing.out;
     EXPECT_EQ(profile("--frames zero").code, 2);
@@ -151,7 +159,8 @@ TEST_F(ProfileCommand, DefaultsToTheEnginesOwnBackendAndSaysWhichRan) {
     const std::string used = report["config"]["backend_used"].get<std::string>();
     EXPECT_TRUE(used == "cpu" || used == "gpu") << used;
     EXPECT_NE(r.out.find("deformation backend: " + used + " (--backend auto)"), std::string::npos) << r.out;
-    const CmdResult c = profile("synthetic:5k --backend cpu --frames 3 --warmup 2 --json " + path("cpu.json"));
+    const CmdResult c =
+        profile("synthetic:5k --backend cpu --frames 3 --warmup 2 --json " + path("cpu.json"));
     ASSERT_EQ(c.code, 0) << c.out;
     EXPECT_EQ(nlohmann::json::parse(read_text(path("cpu.json")))["config"]["backend_used"], "cpu");
     EXPECT_NE(c.out.find("deformation backend: cpu (--backend cpu)"), std::string::npos) << c.out;

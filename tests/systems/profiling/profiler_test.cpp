@@ -62,7 +62,8 @@ ProfileReport run(double deform_ms, int frames, Profiler& profiler, int warmup =
     for (int i = 0; i < frames; ++i) schedule.run_frame(registry, clock.tick());
     profiler.resolve_all();
     profiler.detach(schedule, registry);
-    return build_report(profiler, {{"scene", std::string("synthetic")}, {"frames", double(frames)}}, machine_info(false));
+    return build_report(profiler, {{"scene", std::string("synthetic")}, {"frames", double(frames)}},
+                        machine_info(false));
 }
 
 const TimingRow* find(const std::vector<TimingRow>& rows, const std::string& name) {

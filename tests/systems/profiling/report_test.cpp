@@ -55,11 +55,12 @@ TEST(SvgPlot, ChartHasTitleAxesLegendAndOnePolylinePerSeries) {
     EXPECT_NE(svg.find("deform time vs points"), std::string::npos);
     EXPECT_NE(svg.find("points (log scale)"), std::string::npos);
     EXPECT_NE(svg.find("gpu &lt;bspline&gt;"), std::string::npos);  // escaped legend text
-    EXPECT_NE(svg.find(">50k<"), std::string::npos);  // log axis widened to 1-2-5 values
+    EXPECT_NE(svg.find(">50k<"), std::string::npos);                // log axis widened to 1-2-5 values
     EXPECT_NE(svg.find(">1M<"), std::string::npos);
     EXPECT_EQ(svg.find(">60k<"), std::string::npos);
     size_t polylines = 0;
-    for (size_t at = svg.find("<polyline"); at != std::string::npos; at = svg.find("<polyline", at + 1)) ++polylines;
+    for (size_t at = svg.find("<polyline"); at != std::string::npos; at = svg.find("<polyline", at + 1))
+        ++polylines;
     EXPECT_EQ(polylines, 2u);
 }
 

@@ -22,9 +22,9 @@ using namespace sffd::render::test;
 
 namespace {
 
-constexpr std::uint32_t vertex_attrib = GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT, element = GL_ELEMENT_ARRAY_BARRIER_BIT,
-                        storage = GL_SHADER_STORAGE_BARRIER_BIT, command = GL_COMMAND_BARRIER_BIT,
-                        update = GL_BUFFER_UPDATE_BARRIER_BIT;
+constexpr std::uint32_t vertex_attrib = GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT,
+                        element = GL_ELEMENT_ARRAY_BARRIER_BIT, storage = GL_SHADER_STORAGE_BARRIER_BIT,
+                        command = GL_COMMAND_BARRIER_BIT, update = GL_BUFFER_UPDATE_BARRIER_BIT;
 
 // Index of the first record at `site` at or after `from` (records().size() when none).
 std::size_t find_site(const gfx::BarrierLog& log, std::string_view site, std::size_t from = 0) {
@@ -36,7 +36,8 @@ std::size_t find_site(const gfx::BarrierLog& log, std::string_view site, std::si
 
 std::string describe(const gfx::BarrierLog& log) {
     std::string out;
-    for (const gfx::BarrierRecord& r : log.records()) out += r.site + " " + gfx::barrier_bit_names(r.bits) + "\n";
+    for (const gfx::BarrierRecord& r : log.records())
+        out += r.site + " " + gfx::barrier_bit_names(r.bits) + "\n";
     return out;
 }
 
@@ -67,7 +68,8 @@ TEST_F(Barriers_, ComputeCullAndRasteriserIssueTheRequiredBits) {
     // Write-after-read: the last frame's draws read what this frame's cull overwrites.
     EXPECT_TRUE(log.issued("render.cull.reuse", storage | update)) << all;
     // The big lists feed indexed indirect draws over the records; the counters are copied.
-    EXPECT_TRUE(log.issued("render.compute.visibility", storage | command | element | vertex_attrib | update)) << all;
+    EXPECT_TRUE(log.issued("render.compute.visibility", storage | command | element | vertex_attrib | update))
+        << all;
     EXPECT_TRUE(log.issued("render.compute.visibility.reuse", update | storage)) << all;
     EXPECT_TRUE(log.issued("render.compute.attribute", storage)) << all;
     EXPECT_TRUE(log.issued("render.compute.resolve", storage)) << all;
@@ -76,8 +78,10 @@ TEST_F(Barriers_, ComputeCullAndRasteriserIssueTheRequiredBits) {
     // written by both), then the attribute pass.
     std::size_t at = 0;
     for (int f = 0; f < 2; ++f) {
-        const std::size_t reuse = find_site(log, "render.cull.reuse", at), cull = find_site(log, "render.cull", at),
-                          vis = find_site(log, "render.compute.visibility", at), counts = find_site(log, "render.counts", at),
+        const std::size_t reuse = find_site(log, "render.cull.reuse", at),
+                          cull = find_site(log, "render.cull", at),
+                          vis = find_site(log, "render.compute.visibility", at),
+                          counts = find_site(log, "render.counts", at),
                           attribute = find_site(log, "render.compute.attribute", at);
         ASSERT_LT(attribute, log.records().size()) << "frame " << f << "\n" << all;
         EXPECT_LT(reuse, cull) << all;
@@ -121,11 +125,14 @@ TEST_F(Barriers_, FfdDispatchIssuesTheRequiredBits) {
     auto gpu = ffd::GpuDeformer::create();
     ASSERT_TRUE(gpu.ok()) << gpu.message();
     const SplatCloud c = fibonacci_sphere(500, 1.0, 0.8);
-    Lattice l = ffd::make_lattice(glm::dvec3(-1.1), {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {3, 3, 3});
+    Lattice l = ffd::make_lattice(
+        glm::dvec3(-1.1), {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {3, 3, 3});
     std::vector<glm::vec3> p(c.size()), n(c.size()), u(c.size()), v(c.size());
     gfx::BarrierLog log;
-    auto st = gpu->deform(l, {c.positions.data(), c.normals.data(), c.axis_u.data(), c.axis_v.data(), c.size(), glm::dvec3(0.0)},
-                          {p.data(), n.data(), u.data(), v.data()});
+    auto st = gpu->deform(
+        l,
+        {c.positions.data(), c.normals.data(), c.axis_u.data(), c.axis_v.data(), c.size(), glm::dvec3(0.0)},
+        {p.data(), n.data(), u.data(), v.data()});
     ASSERT_TRUE(st.ok()) << st.message();
     const std::string all = describe(log);
     EXPECT_TRUE(log.issued("ffd.dispatch", storage | vertex_attrib | update)) << all;
@@ -147,7 +154,8 @@ TEST_F(Barriers_, ComputeRasteriserFallsBackWhenItsBuffersExceedTheBlockSize) {
     }
     const RenderStats& st = reg.resource<RenderStats>();
     EXPECT_EQ(st.compute_rastered_clouds, 0u);
-    EXPECT_TRUE(capture.contains("render.compute.sums: 815868 bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (500000)"));
+    EXPECT_TRUE(capture.contains(
+        "render.compute.sums: 815868 bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (500000)"));
     frame(Quality::hq, CullPath::compute, RasterPath::compute, 173, 131);
     EXPECT_EQ(reg.resource<RenderStats>().compute_rastered_clouds, 1u);  // the real limit allows it
 }
@@ -166,7 +174,8 @@ TEST_F(Barriers_, ComputeCullFallsBackWhenItsRecordsExceedTheBlockSize) {
     EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 0u);
     frame(Quality::hq, CullPath::compute, RasterPath::raster);
     EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 0u);
-    EXPECT_TRUE(capture.contains("render.visible_splats: 450240 bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (200000)"));
+    EXPECT_TRUE(capture.contains(
+        "render.visible_splats: 450240 bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (200000)"));
 }
 
 }  // namespace

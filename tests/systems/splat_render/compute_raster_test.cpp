@@ -24,7 +24,8 @@ namespace {
 
 class ComputeRaster_ : public GlRenderTest {
 protected:
-    FrameImage render_path(RasterPath raster, bool culling = true, CullPath cull = CullPath::automatic, int w = 480, int h = 320) {
+    FrameImage render_path(RasterPath raster, bool culling = true, CullPath cull = CullPath::automatic,
+                           int w = 480, int h = 320) {
         RenderSettings s;
         s.quality = Quality::hq, s.width = w, s.height = h, s.culling = culling, s.time_passes = true;
         s.cull_path = cull, s.raster_path = raster, s.aux_outputs = true;
@@ -51,8 +52,9 @@ TEST_F(ComputeRaster_, RendersTheSameImageAsTheRasterPath) {
             cam.far_plane = 40.0f;
             for (bool culling : {true, false})
                 for (CullPath cull : {CullPath::compute, CullPath::cpu}) {
-                    const std::string what = std::string(textured ? "textured" : "untextured") + ", distance " +
-                                             std::to_string(distance) + (culling ? "" : ", no culling") +
+                    const std::string what = std::string(textured ? "textured" : "untextured") +
+                                             ", distance " + std::to_string(distance) +
+                                             (culling ? "" : ", no culling") +
                                              (cull == CullPath::cpu ? ", cpu cull" : ", compute cull");
                     const FrameImage raster = render_path(RasterPath::raster, culling, cull);
                     EXPECT_EQ(reg.resource<RenderStats>().compute_rastered_clouds, 0u) << what;
@@ -203,7 +205,8 @@ TEST_F(ComputeRaster_, MatchesTheRasterPathOnGpuDeformedSplats) {
     add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
     const ecs::Entity cloud = add_cloud(fibonacci_sphere(20000));
     const ecs::Entity le = add_lattice(cloud);
-    ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.9, glm::dvec3(0.0));
+    ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.9,
+                      glm::dvec3(0.0));
     reg.set_resource<FfdSettings>().force_gpu = true;
     residency_system(reg, {});  // the rest splats the compute pass reads
     ffd_system(reg, {});

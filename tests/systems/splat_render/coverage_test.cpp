@@ -25,12 +25,13 @@ constexpr std::size_t paper_splats = 59650;
 // Deforms `cloud` through a 2x2x2-division Bernstein lattice around the unit sphere whose control points
 // are scaled `factor` times along x: x' = factor * x inside (Bernstein reproduces linear maps exactly).
 SplatCloud stretch_x(const SplatCloud& cloud, double factor) {
-    Lattice lattice = ffd::make_lattice(glm::dvec3(-1.2), {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)},
+    Lattice lattice = ffd::make_lattice(glm::dvec3(-1.2),
+                                        {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)},
                                         glm::ivec3(2, 2, 2));
     for (glm::dvec3& p : lattice.current) p.x *= factor;
     SplatCloud out = cloud;
-    ffd::PointsIn in{cloud.positions.data(), cloud.normals.data(), cloud.axis_u.data(), cloud.axis_v.data(),
-                     cloud.size(), cloud.origin};
+    ffd::PointsIn in{cloud.positions.data(), cloud.normals.data(), cloud.axis_u.data(),
+                     cloud.axis_v.data(),    cloud.size(),         cloud.origin};
     ffd::PointsOut o{out.positions.data(), out.normals.data(), out.axis_u.data(), out.axis_v.data()};
     auto stats = ffd::deform(lattice, in, o);
     EXPECT_TRUE(stats.ok()) << (stats.ok() ? "" : stats.message());
@@ -92,7 +93,8 @@ TEST_F(Coverage_, SplatLargerThanThePointSizeLimitIsDrawnWhole) {
     const double disc_fraction = 309.0 / 512.0;
     const int size = std::max(512, int(std::ceil(1.2 * double(range[1]) / disc_fraction)));
     if (size > std::min({max_viewport[0], max_viewport[1], max_texture, 8192}))
-        GTEST_SKIP() << "needs a frame 1.2x GL_POINT_SIZE_RANGE's maximum (" << range[1] << " px) / 0.6 = " << size
+        GTEST_SKIP() << "needs a frame 1.2x GL_POINT_SIZE_RANGE's maximum (" << range[1]
+                     << " px) / 0.6 = " << size
                      << " px, beyond GL_MAX_VIEWPORT_DIMS / GL_MAX_TEXTURE_SIZE (or 8192)";
     add_camera(2.0);
     add_light({0.0f, 0.0f, -1.0f});
@@ -129,7 +131,8 @@ TEST_F(Coverage_, SplatLargerThanThePointSizeLimitIsDrawnWhole) {
                 mismatched += in != img.covered(x, y);
             }
         EXPECT_GT(expected, int(0.95 * std::numbers::pi * radius_px * radius_px));
-        EXPECT_LE(mismatched, 2 * int(2 * std::numbers::pi * radius_px * 0.02) + 8) << "expected " << expected << " got " << got;
+        EXPECT_LE(mismatched, 2 * int(2 * std::numbers::pi * radius_px * 0.02) + 8)
+            << "expected " << expected << " got " << got;
     }
 }
 
@@ -237,7 +240,8 @@ TEST_F(Coverage_, DrawsTheDeformersOutputInsteadOfTheRestCloud) {
     residency_system(reg, FrameContext{});
     {
         auto& store = reg.resource<gfx::GpuSplatStore>();
-        gfx::upload_deformed_splats(store.clouds.at(e), rest, {d.positions, d.normals, d.axis_u, d.axis_v}, store.keep_cpu);
+        gfx::upload_deformed_splats(store.clouds.at(e), rest, {d.positions, d.normals, d.axis_u, d.axis_v},
+                                    store.keep_cpu);
     }
     FrameImage img = render(Quality::hq, 256, 256);
     Coverage c = ellipsoid_coverage(img, cam, glm::dvec3(2.0, 1.0, 1.0));
@@ -249,7 +253,8 @@ TEST_F(Coverage_, DrawsTheDeformersOutputInsteadOfTheRestCloud) {
     reg.remove<DeformedSplats>(e);
     auto& gpu = reg.resource<gfx::GpuSplatStore>().clouds.at(e);
     const std::vector<gpu::GpuSplat> packed = pack_splats(rest);
-    glNamedBufferSubData(gpu.deformed.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)), packed.data());
+    glNamedBufferSubData(gpu.deformed.id(), 0, GLsizeiptr(packed.size() * sizeof(gpu::GpuSplat)),
+                         packed.data());
     gfx::set_deformed(gpu, gfx::Residency::deformed_gpu);
     img = render(Quality::hq, 256, 256);
     c = ellipsoid_coverage(img, cam, glm::dvec3(1.0));
@@ -258,7 +263,8 @@ TEST_F(Coverage_, DrawsTheDeformersOutputInsteadOfTheRestCloud) {
     int outside_unit_sphere = 0;
     for (int y = 0; y < img.height; ++y)
         for (int x = 0; x < img.width; ++x)
-            outside_unit_sphere += img.covered(x, y) && !hit_ellipsoid(cam.eye, pixel_ray(cam, x, y, 256, 256), glm::dvec3(1.03));
+            outside_unit_sphere += img.covered(x, y) &&
+                                   !hit_ellipsoid(cam.eye, pixel_ray(cam, x, y, 256, 256), glm::dvec3(1.03));
     EXPECT_EQ(outside_unit_sphere, 0);
 }
 
@@ -273,44 +279,49 @@ TEST_F(Coverage_, SpriteCoversExactlyItsAnalyticDisc) {
     const ecs::Entity e = reg.create();
     // Rodrigues: v rotated by `angle` about the unit axis a.
     auto rotate = [](glm::dvec3 v, glm::dvec3 a, double angle) {
-        return v * std::cos(angle) + glm::cross(a, v) * std::sin(angle) + a * glm::dot(a, v) * (1.0 - std::cos(angle));
+        return v * std::cos(angle) + glm::cross(a, v) * std::sin(angle) +
+               a * glm::dot(a, v) * (1.0 - std::cos(angle));
     };
     const double deg = std::numbers::pi / 180.0;
     const glm::vec3 normals[] = {
         glm::normalize(glm::vec3(0.2f, 0.1f, 1.0f)),
         glm::vec3(rotate({0, 0, 1}, {1, 0, 0}, 75.0 * deg)),
-        glm::vec3(rotate({0, 0, 1}, glm::normalize(glm::dvec3(std::cos(30.0 * deg), std::sin(30.0 * deg), 0.0)), 70.0 * deg)),
+        glm::vec3(rotate({0, 0, 1},
+                         glm::normalize(glm::dvec3(std::cos(30.0 * deg), std::sin(30.0 * deg), 0.0)),
+                         70.0 * deg)),
     };
     for (const glm::vec3 normal : normals)
-    for (const glm::vec3 centre : {glm::vec3(0.0f), glm::vec3(0.1037f, -0.0711f, 0.0f), glm::vec3(-0.3013f, 0.2559f, 0.05f)}) {
-        SplatCloud one;
-        one.positions = {centre};
-        one.normals = {normal};
-        const glm::vec3 t = glm::normalize(glm::cross(glm::vec3(0, 1, 0.3f), one.normals[0]));
-        one.axis_u = {t * 0.05f};
-        one.axis_v = {glm::cross(one.normals[0], t) * 0.05f};
-        if (reg.has<SplatCloud>(e)) reg.remove<SplatCloud>(e);
-        reg.emplace<SplatCloud>(e, one);
-        for (CullPath path : {CullPath::cpu, CullPath::compute})
-        for (Quality q : {Quality::hq, Quality::preview}) {
-            const FrameImage img = render(q, 512, 512, true, path);
-            EXPECT_EQ(reg.resource<RenderStats>().visible_points, 1u);
-            EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, path == CullPath::cpu ? 1u : 0u);
-            int expected = 0, mismatched = 0;
-            for (int y = 0; y < 512; ++y)
-                for (int x = 0; x < 512; ++x) {
-                    const glm::dvec3 d = pixel_ray(cam, x, y, 512, 512);
-                    const glm::dvec3 n(one.normals[0]);
-                    const double t_hit = glm::dot(glm::dvec3(centre) - cam.eye, n) / glm::dot(d, n);
-                    const glm::dvec3 p = cam.eye + d * t_hit - glm::dvec3(centre);
-                    const bool in = glm::length(p) <= 0.05;
-                    expected += in;
-                    mismatched += in != img.covered(x, y);
+        for (const glm::vec3 centre :
+             {glm::vec3(0.0f), glm::vec3(0.1037f, -0.0711f, 0.0f), glm::vec3(-0.3013f, 0.2559f, 0.05f)}) {
+            SplatCloud one;
+            one.positions = {centre};
+            one.normals = {normal};
+            const glm::vec3 t = glm::normalize(glm::cross(glm::vec3(0, 1, 0.3f), one.normals[0]));
+            one.axis_u = {t * 0.05f};
+            one.axis_v = {glm::cross(one.normals[0], t) * 0.05f};
+            if (reg.has<SplatCloud>(e)) reg.remove<SplatCloud>(e);
+            reg.emplace<SplatCloud>(e, one);
+            for (CullPath path : {CullPath::cpu, CullPath::compute})
+                for (Quality q : {Quality::hq, Quality::preview}) {
+                    const FrameImage img = render(q, 512, 512, true, path);
+                    EXPECT_EQ(reg.resource<RenderStats>().visible_points, 1u);
+                    EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, path == CullPath::cpu ? 1u : 0u);
+                    int expected = 0, mismatched = 0;
+                    for (int y = 0; y < 512; ++y)
+                        for (int x = 0; x < 512; ++x) {
+                            const glm::dvec3 d = pixel_ray(cam, x, y, 512, 512);
+                            const glm::dvec3 n(one.normals[0]);
+                            const double t_hit = glm::dot(glm::dvec3(centre) - cam.eye, n) / glm::dot(d, n);
+                            const glm::dvec3 p = cam.eye + d * t_hit - glm::dvec3(centre);
+                            const bool in = glm::length(p) <= 0.05;
+                            expected += in;
+                            mismatched += in != img.covered(x, y);
+                        }
+                    EXPECT_GT(expected, 150);
+                    EXPECT_LE(mismatched, 2)
+                        << "normal " << normal.x << "," << normal.y << "," << normal.z << " centre "
+                        << centre.x << "," << centre.y << (q == Quality::hq ? " hq" : " preview")
+                        << (path == CullPath::cpu ? " cpu" : " compute");
                 }
-            EXPECT_GT(expected, 150);
-            EXPECT_LE(mismatched, 2) << "normal " << normal.x << "," << normal.y << "," << normal.z << " centre " << centre.x
-                                     << "," << centre.y << (q == Quality::hq ? " hq" : " preview")
-                                     << (path == CullPath::cpu ? " cpu" : " compute");
         }
-    }
 }

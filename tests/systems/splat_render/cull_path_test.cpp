@@ -51,7 +51,8 @@ TEST_F(CullPath_, CpuAndComputeCullsRenderTheSameImage) {
     add_cloud(mixed_sphere());
     for (bool culling : {true, false})
         for (Quality q : {Quality::hq, Quality::preview}) {
-            const char* what = q == Quality::hq ? (culling ? "hq" : "hq, no culling") : (culling ? "preview" : "preview, no culling");
+            const char* what = q == Quality::hq ? (culling ? "hq" : "hq, no culling")
+                                                : (culling ? "preview" : "preview, no culling");
             const FrameImage gpu = render(q, 480, 320, culling, CullPath::compute);
             const RenderStats gs = reg.resource<RenderStats>();
             const FrameImage cpu = render(q, 480, 320, culling, CullPath::cpu);
@@ -76,7 +77,9 @@ TEST_F(CullPath_, CpuAndComputeCullsRenderTheSameImage) {
             // (kBorderlineSplats): a pixel per flipped splat may differ, so the bound on pixels over 2% is
             // the borderline count, not llvmpipe's measurement.
             EXPECT_LT(d.mean_color, 2e-3) << what;
-            EXPECT_LE(d.over_2_percent, gfx::software_rasterizer() ? (q == Quality::hq ? 0 : 10) : int(kBorderlineSplats)) << what;
+            EXPECT_LE(d.over_2_percent,
+                      gfx::software_rasterizer() ? (q == Quality::hq ? 0 : 10) : int(kBorderlineSplats))
+                << what;
             EXPECT_LT(d.max_depth, 1e-3) << what;
         }
 }
@@ -138,7 +141,8 @@ TEST_F(CullPath_, GridDispatchCullsTheSameSplatsAsOneRow) {
 // FFD system deformed them on the CPU; the compute cull when the FFD compute pass wrote them (force_gpu),
 // and always on a hardware GPU (gfx::software_rasterizer() false). Both deformations render the same image.
 TEST_F(CullPath_, AutomaticPathFollowsWhereTheSplatsAre) {
-    const bool software = gfx::software_rasterizer();  // llvmpipe: the CPU cull while the splats are on the CPU
+    const bool software =
+        gfx::software_rasterizer();  // llvmpipe: the CPU cull while the splats are on the CPU
     add_camera(3.0);
     add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
     const ecs::Entity cloud = add_cloud(fibonacci_sphere(20000));
@@ -147,7 +151,8 @@ TEST_F(CullPath_, AutomaticPathFollowsWhereTheSplatsAre) {
     EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, software ? 0u : 1u);
 
     const ecs::Entity le = add_lattice(cloud);
-    ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.9, glm::dvec3(0.0));
+    ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.9,
+                      glm::dvec3(0.0));
     reg.set_resource<FfdSettings>().force_cpu = true;
     ffd_system(reg, {});
     ASSERT_TRUE(reg.get<DeformedSplats>(cloud).cpu_valid);

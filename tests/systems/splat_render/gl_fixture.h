@@ -58,14 +58,17 @@ protected:
     // A Bernstein lattice of `divisions`³ around the unit sphere (box [-1.1, 1.1]³) deforming `cloud`.
     ecs::Entity add_lattice(ecs::Entity cloud, int divisions = 4) {
         const ecs::Entity le = reg.create();
-        reg.emplace<Lattice>(le, make_lattice({-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
-                                                   {divisions, divisions, divisions}));
+        reg.emplace<Lattice>(
+            le, make_lattice({-1.1, -1.1, -1.1},
+                             {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                             {divisions, divisions, divisions}));
         reg.emplace<Deformers>(cloud, Deformers{{le}});
         return le;
     }
 
     // path: automatic is the CPU cull on llvmpipe; CullPath::compute runs the compute pass.
-    FrameImage render(Quality quality, int w, int h, bool culling = true, CullPath path = CullPath::automatic) {
+    FrameImage render(Quality quality, int w, int h, bool culling = true,
+                      CullPath path = CullPath::automatic) {
         RenderSettings s;
         s.quality = quality, s.width = w, s.height = h, s.culling = culling, s.time_passes = true;
         s.cull_path = path;
@@ -75,7 +78,8 @@ protected:
         render_system(reg, FrameContext{});
         auto img = capture_frame(reg);
         EXPECT_TRUE(img.ok()) << (img.ok() ? "" : img.message());
-        if (const char* dir = std::getenv("SFFD_RENDER_TEST_OUT"); dir && img.ok()) {  // for looking at the images
+        if (const char* dir = std::getenv("SFFD_RENDER_TEST_OUT");
+            dir && img.ok()) {  // for looking at the images
             const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
             const std::string name = std::string(info->test_suite_name()) + "." + info->name() + "." +
                                      (quality == Quality::hq ? "hq" : "preview") +
@@ -98,7 +102,8 @@ inline glm::dvec3 pixel_ray(const Camera& cam, int x, int y, int w, int h) {
 }
 
 // View-axis depth of the first hit of the ray with the ellipsoid |(p - c) / scale| = 1, or nullopt.
-inline std::optional<double> hit_ellipsoid(const glm::dvec3& eye, const glm::dvec3& dir, const glm::dvec3& scale,
+inline std::optional<double> hit_ellipsoid(const glm::dvec3& eye, const glm::dvec3& dir,
+                                           const glm::dvec3& scale,
                                            const glm::dvec3& center = glm::dvec3(0.0)) {
     const glm::dvec3 o = (eye - center) / scale, d = dir / scale;
     const double a = glm::dot(d, d), b = 2.0 * glm::dot(o, d), c = glm::dot(o, o) - 1.0;
@@ -126,7 +131,8 @@ inline Coverage ellipsoid_coverage(const FrameImage& img, const Camera& cam, glm
                 ++c.holes;
                 continue;
             }
-            if (std::abs(double(img.depth[img.index(x, y)]) - *hit_ellipsoid(cam.eye, d, scale)) > 0.05) ++c.far_side;
+            if (std::abs(double(img.depth[img.index(x, y)]) - *hit_ellipsoid(cam.eye, d, scale)) > 0.05)
+                ++c.far_side;
         }
     return c;
 }
@@ -166,6 +172,8 @@ inline ImageDiff image_diff(const FrameImage& a, const FrameImage& b) {
     return d;
 }
 
-inline double luminance(const glm::vec4& c) { return 0.2126 * double(c.x) + 0.7152 * double(c.y) + 0.0722 * double(c.z); }
+inline double luminance(const glm::vec4& c) {
+    return 0.2126 * double(c.x) + 0.7152 * double(c.y) + 0.0722 * double(c.z);
+}
 
 }  // namespace sffd::render::test

@@ -33,7 +33,8 @@ protected:
         double sum = 0;
         for (std::size_t i = 0; i < actual.pixels.size(); i += 4) {
             int worst = 0;
-            for (int c = 0; c < 4; ++c) worst = std::max(worst, std::abs(int(actual.pixels[i + c]) - int(golden->pixels[i + c])));
+            for (int c = 0; c < 4; ++c)
+                worst = std::max(worst, std::abs(int(actual.pixels[i + c]) - int(golden->pixels[i + c])));
             bad += worst > 12;
             sum += worst;
         }
@@ -42,8 +43,8 @@ protected:
             const fs::path failed = fs::path(SFFD_BINARY_DIR) / "golden_failures" / (name + ".png");
             fs::create_directories(failed.parent_path());
             (void)write_png(failed, actual);
-            ADD_FAILURE() << name << ": " << bad << " pixels differ by more than 12 levels, mean " << sum / pixels
-                          << "; actual image: " << failed;
+            ADD_FAILURE() << name << ": " << bad << " pixels differ by more than 12 levels, mean "
+                          << sum / pixels << "; actual image: " << failed;
         }
     }
 };
@@ -74,12 +75,14 @@ TEST_F(Golden, TexturedSphereStretchedByALattice) {
             const std::uint8_t r = check ? 230 : 40, g = std::uint8_t(40 + 6 * y), b = check ? 40 : 220;
             sphere.material.texture_rgba8.insert(sphere.material.texture_rgba8.end(), {r, g, b, 255});
         }
-    Lattice lattice = ffd::make_lattice(glm::dvec3(-1.2), {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)},
+    Lattice lattice = ffd::make_lattice(glm::dvec3(-1.2),
+                                        {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)},
                                         glm::ivec3(2, 2, 2));
     for (glm::dvec3& p : lattice.current) p.x *= 2.0, p.y += 0.12 * p.x * p.x - 0.3;  // stretch and bend
     SplatCloud out = sphere;
-    auto st = ffd::deform(lattice, {sphere.positions.data(), sphere.normals.data(), sphere.axis_u.data(), sphere.axis_v.data(),
-                                    sphere.size(), sphere.origin},
+    auto st = ffd::deform(lattice,
+                          {sphere.positions.data(), sphere.normals.data(), sphere.axis_u.data(),
+                           sphere.axis_v.data(), sphere.size(), sphere.origin},
                           {out.positions.data(), out.normals.data(), out.axis_u.data(), out.axis_v.data()});
     ASSERT_TRUE(st.ok());
     add_cloud(std::move(out));

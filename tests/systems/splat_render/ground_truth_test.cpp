@@ -104,7 +104,8 @@ TEST(GroundTruth, MeshPathMatchesTheAnalyticSquare) {
     for (int y = 0; y < 65; ++y)
         for (int x = 0; x < 65; ++x) {
             const double nx = 2.0 * (x + 0.5) / 65 - 1.0, ny = 2.0 * (64 - y + 0.5) / 65 - 1.0;
-            const glm::dvec3 d = glm::dmat3(inv_view) * glm::dvec3(nx / s.projection[0][0], ny / s.projection[1][1], -1.0);
+            const glm::dvec3 d =
+                glm::dmat3(inv_view) * glm::dvec3(nx / s.projection[0][0], ny / s.projection[1][1], -1.0);
             const glm::dvec3 p = glm::dvec3(0, 0, 4) + d * (3.0 / -d.z);
             const double edge = std::max(std::abs(p.x), std::abs(p.y));
             if (std::abs(edge - 1.0) < 1e-3) continue;
@@ -135,8 +136,9 @@ TEST(GroundTruth, DeformedMeshPathMatchesThePreStretchedMesh) {
     square.triangles = {0, 1, 2, 0, 2, 3};
     stretched = square;
     for (glm::dvec3& p : stretched.positions) p.x *= 1.5;
-    Lattice lattice = make_lattice(glm::dvec3(-1.2, -1.2, -0.2), {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)},
-                                        glm::ivec3(2, 2, 2));
+    Lattice lattice = make_lattice(glm::dvec3(-1.2, -1.2, -0.2),
+                                   {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)},
+                                   glm::ivec3(2, 2, 2));
     for (glm::dvec3& c : lattice.current) c.x *= 1.5;
     ReferenceScene deformed = axis_scene(96, 64, 4.0, m), direct = axis_scene(96, 64, 4.0, m);
     deformed.mesh = &square;
@@ -150,7 +152,8 @@ TEST(GroundTruth, DeformedMeshPathMatchesThePreStretchedMesh) {
     ASSERT_TRUE(b.ok()) << b.message();
     auto cmp = compare_images(*a, *b);
     ASSERT_TRUE(cmp.ok());
-    std::printf("deformed square vs pre-stretched square: %.2f dB, %zu px (%zu in one only)\n", cmp->psnr, cmp->pixels, cmp->pixels_one);
+    std::printf("deformed square vs pre-stretched square: %.2f dB, %zu px (%zu in one only)\n", cmp->psnr,
+                cmp->pixels, cmp->pixels_one);
     EXPECT_GT(cmp->pixels, 2000u);
     EXPECT_LE(cmp->pixels_one, 2u);  // a pixel centre exactly on the edge may round either way
     EXPECT_GT(cmp->psnr_both, 60.0);
@@ -166,12 +169,16 @@ TEST(GroundTruth, AnisotropicReferenceFilterProbesAlongTheMajorAxis) {
     std::vector<std::uint8_t> column(64 * 3);
     for (auto& c : column) c = std::uint8_t(rng() & 255u);
     for (int y = 0; y < 64; ++y)
-        for (int x = 0; x < 64; ++x) m.texture_rgba8.insert(m.texture_rgba8.end(), {column[3 * x], column[3 * x + 1], column[3 * x + 2], 255});
+        for (int x = 0; x < 64; ++x)
+            m.texture_rgba8.insert(m.texture_rgba8.end(),
+                                   {column[3 * x], column[3 * x + 1], column[3 * x + 2], 255});
     const ReferenceTexture t(m);
     const glm::dvec2 uv(0.4137, 0.61), dx(3.0 / 64, 0.0), dy(0.0, 12.0 / 64);
-    const glm::dvec4 iso = t.anisotropic(uv, dx, glm::dvec2(0.0, 3.0 / 64), 16), tri = t.trilinear(uv, dx, glm::dvec2(0.0, 3.0 / 64));
+    const glm::dvec4 iso = t.anisotropic(uv, dx, glm::dvec2(0.0, 3.0 / 64), 16),
+                     tri = t.trilinear(uv, dx, glm::dvec2(0.0, 3.0 / 64));
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(iso[c], tri[c], 1e-12);
-    const glm::dvec4 an = t.anisotropic(uv, dx, dy, 16), sharp = t.trilinear(uv, dx, dy / 4.0), blurred = t.trilinear(uv, dx, dy);
+    const glm::dvec4 an = t.anisotropic(uv, dx, dy, 16), sharp = t.trilinear(uv, dx, dy / 4.0),
+                     blurred = t.trilinear(uv, dx, dy);
     double differs = 0.0;
     for (int c = 0; c < 3; ++c) {
         EXPECT_NEAR(an[c], sharp[c], 1e-6) << c;
@@ -215,7 +222,8 @@ TEST(GroundTruth, DeformedPathMatchesTheAnalyticScaledSphere) {
         return m;
     }();
     ReferenceScene scaled = axis_scene(160, 120, 6.0, tex);
-    Lattice l = assets::make_box_lattice(glm::dvec3(-1.1), glm::dvec3(1.1), glm::ivec3(4), LatticeBasis::bernstein);
+    Lattice l =
+        assets::make_box_lattice(glm::dvec3(-1.1), glm::dvec3(1.1), glm::ivec3(4), LatticeBasis::bernstein);
     for (std::size_t i = 0; i < l.size(); ++i) l.current[i] = 1.5 * l.rest[i];
     scaled.lattices = {l};
     ReferenceSettings fine;
@@ -233,7 +241,8 @@ TEST(GroundTruth, DeformedPathMatchesTheAnalyticScaledSphere) {
     EXPECT_GT(cmp->psnr, 45.0);
     EXPECT_GT(cmp->ssim, 0.995);
     int coverage_diff = 0;
-    for (std::size_t k = 0; k < exact->color.size(); ++k) coverage_diff += (exact->color[k].w > 0) != (traced->color[k].w > 0);
+    for (std::size_t k = 0; k < exact->color.size(); ++k)
+        coverage_diff += (exact->color[k].w > 0) != (traced->color[k].w > 0);
     EXPECT_LE(coverage_diff, 4);  // only pixel centres within float rounding of the silhouette
 }
 
@@ -300,7 +309,8 @@ TEST(ImageCompare, InteriorAvoidsSilhouettesCreasesAndOtherSurfaces) {
         f->depth.assign(144, 1.0f);
         f->normal.resize(144);
         for (int y = 0; y < 12; ++y)
-            for (int x = 0; x < 12; ++x) f->normal[f->index(x, y)] = x < 6 ? glm::vec3(0, 0, 1) : glm::vec3(1, 0, 0);
+            for (int x = 0; x < 12; ++x)
+                f->normal[f->index(x, y)] = x < 6 ? glm::vec3(0, 0, 1) : glm::vec3(1, 0, 0);
     }
     a.color[a.index(3, 5)] = glm::vec4(0.0f, 0.0f, 0.0f, 1.0f);  // one interior pixel differs
     auto r = compare_images(a, b);
@@ -337,7 +347,8 @@ TEST(UvFrame, BuiltinSphereFramesPredictTheUvOfTheRim) {
         if (uv0.y < 0.3 || uv0.y > 0.7 || uv0.x < 0.05 || uv0.x > 0.95) continue;
         for (double a = 0.0; a < 6.28; a += 0.7) {
             const double s = std::cos(a), t = std::sin(a);
-            const glm::dvec3 p = glm::dvec3(c.positions[i]) + s * glm::dvec3(c.axis_u[i]) + t * glm::dvec3(c.axis_v[i]);
+            const glm::dvec3 p =
+                glm::dvec3(c.positions[i]) + s * glm::dvec3(c.axis_u[i]) + t * glm::dvec3(c.axis_v[i]);
             const glm::dvec2 exact = sphere_uv(glm::normalize(p));
             const glm::dvec4 f(c.uv_axes[i]);
             const glm::dvec2 step = s * glm::dvec2(f.x, f.y) + t * glm::dvec2(f.z, f.w);
@@ -353,7 +364,8 @@ TEST(UvFrame, BuiltinSphereFramesPredictTheUvOfTheRim) {
 // point is the rest rim point. Checked for a random lattice with the CPU deformation the renderer uses.
 TEST(UvFrame, DeformedAxesMapTheRestRimToTheDeformedRim) {
     const SplatCloud c = assets::make_sphere_cloud(2000);
-    Lattice l = assets::make_box_lattice(glm::dvec3(-1.2), glm::dvec3(1.2), glm::ivec3(4), LatticeBasis::bernstein);
+    Lattice l =
+        assets::make_box_lattice(glm::dvec3(-1.2), glm::dvec3(1.2), glm::ivec3(4), LatticeBasis::bernstein);
     std::mt19937 rng(7);
     std::uniform_real_distribution<double> jitter(-0.15, 0.15);
     for (glm::dvec3& p : l.current) p += glm::dvec3(jitter(rng), jitter(rng), jitter(rng));
@@ -367,9 +379,11 @@ TEST(UvFrame, DeformedAxesMapTheRestRimToTheDeformedRim) {
         for (std::size_t i = 0; i < n; ++i)
             rim[i] = c.positions[i] + float(std::cos(a)) * c.axis_u[i] + float(std::sin(a)) * c.axis_v[i];
         std::vector<glm::vec3> moved(n);
-        ASSERT_TRUE(ffd::deform(l, {rim.data(), nullptr, nullptr, nullptr, n, c.origin}, {moved.data(), nullptr, nullptr, nullptr}));
+        ASSERT_TRUE(ffd::deform(l, {rim.data(), nullptr, nullptr, nullptr, n, c.origin},
+                                {moved.data(), nullptr, nullptr, nullptr}));
         for (std::size_t i = 0; i < n; ++i) {
-            const glm::dvec3 predicted = glm::dvec3(pos[i]) + std::cos(a) * glm::dvec3(au[i]) + std::sin(a) * glm::dvec3(av[i]);
+            const glm::dvec3 predicted =
+                glm::dvec3(pos[i]) + std::cos(a) * glm::dvec3(au[i]) + std::sin(a) * glm::dvec3(av[i]);
             const double step = glm::length(predicted - glm::dvec3(pos[i]));
             ASSERT_LT(glm::length(predicted - glm::dvec3(moved[i])), 0.05 * step) << i;
         }
@@ -385,7 +399,8 @@ TEST(TextureRegions, UniformRadiusIsTheChebyshevDistanceToAColourChange) {
     std::vector<std::uint8_t> tex(std::size_t(w * h) * 4, 255);
     // Rectangles of three colours over a grey field.
     for (int r = 0; r < 12; ++r) {
-        const int x0 = int(rng() % w), y0 = int(rng() % h), x1 = std::min(w, x0 + 2 + int(rng() % 15)), y1 = std::min(h, y0 + 2 + int(rng() % 10));
+        const int x0 = int(rng() % w), y0 = int(rng() % h), x1 = std::min(w, x0 + 2 + int(rng() % 15)),
+                  y1 = std::min(h, y0 + 2 + int(rng() % 10));
         const auto c = std::uint8_t(60 * (1 + rng() % 3));
         for (int y = y0; y < y1; ++y)
             for (int x = x0; x < x1; ++x) tex[std::size_t(y * w + x) * 4] = c;
@@ -410,7 +425,8 @@ TEST(TextureRegions, UniformRadiusIsTheChebyshevDistanceToAColourChange) {
             ASSERT_EQ(int(d[std::size_t(y * w + x)]), best) << x << "," << y;
             interior += best > 1;
             for (int yy = std::max(0, y - best + 1); yy < std::min(h, y + best); ++yy)
-                for (int xx = std::max(0, x - best + 1); xx < std::min(w, x + best); ++xx) ASSERT_EQ(colour(xx, yy), colour(x, y));
+                for (int xx = std::max(0, x - best + 1); xx < std::min(w, x + best); ++xx)
+                    ASSERT_EQ(colour(xx, yy), colour(x, y));
         }
     EXPECT_GT(interior, 100);
 }
@@ -423,17 +439,18 @@ TEST(TextureRegions, CpuCullDrawsOneColourFootprintsFlat) {
     const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
     Camera cam;
     cam.eye = glm::dvec3(0.0, 0.0, 4.0);
-    gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 16.0 / 9.0), 1280, 720, 0.1f, 255.0f, true);
+    gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 16.0 / 9.0), 1280, 720,
+                                           0.1f, 255.0f, true);
     f.params.w = 1.0f;
     f.counts.y = 1;
     f.light_dir[0] = glm::vec4(0, 0, 1, 0);
     f.light_color[0] = glm::vec4(1.0f);
-    const std::vector<std::uint16_t> radius = uniform_texel_radius(cloud.material.texture_rgba8.data(), cloud.material.texture_width,
-                                                                   cloud.material.texture_height);
+    const std::vector<std::uint16_t> radius = uniform_texel_radius(
+        cloud.material.texture_rgba8.data(), cloud.material.texture_width, cloud.material.texture_height);
     for (bool lit : {false, true}) {
         f.counts.w = lit ? 1u : 0u;
-        TexelView texels{cloud.material.texture_rgba8.data(), cloud.material.texture_width, cloud.material.texture_height,
-                         cloud.uv_axes.data(), radius.data()};
+        TexelView texels{cloud.material.texture_rgba8.data(), cloud.material.texture_width,
+                         cloud.material.texture_height, cloud.uv_axes.data(), radius.data()};
         CpuCullResult with, without;
         cull_splats_cpu(splats, f, texels, with);
         texels.uniform_radius = nullptr;
@@ -441,7 +458,8 @@ TEST(TextureRegions, CpuCullDrawsOneColourFootprintsFlat) {
         EXPECT_EQ(without.visible_flat, 0u);
         EXPECT_EQ(with.visible_records + with.visible_flat, without.visible_records);
         EXPECT_GT(with.visible_flat, without.visible_records / 3) << "lit " << lit;
-        EXPECT_GT(with.visible_records, without.visible_records / 10) << "lit " << lit;  // edges stay textured
+        EXPECT_GT(with.visible_records, without.visible_records / 10)
+            << "lit " << lit;  // edges stay textured
     }
 }
 

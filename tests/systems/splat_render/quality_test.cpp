@@ -46,15 +46,19 @@ protected:
     }
     // Both qualities against the mesh ground truth `ref`: most pixels are face interior, and there the
     // PSNR is at least `hq_db` / `preview_db`.
-    void expect_interior_matches(const FrameImage& ref, int w, int h, const char* what, double hq_db, double preview_db) {
+    void expect_interior_matches(const FrameImage& ref, int w, int h, const char* what, double hq_db,
+                                 double preview_db) {
         for (Quality q : {Quality::hq, Quality::preview}) {
             const FrameImage img = render(q, w, h);
             auto cmp = compare_images(img, ref);
             ASSERT_TRUE(cmp.ok()) << cmp.message();
             const char* name = q == Quality::hq ? "hq" : "preview";
-            std::printf("%s %s vs its mesh ground truth: PSNR %.2f dB (covered in both %.2f dB, %zu px covered in one only), "
-                        "interior %.2f dB over %zu of %zu px\n",
-                        what, name, cmp->psnr, cmp->psnr_both, cmp->pixels_one, cmp->psnr_interior, cmp->pixels_interior, cmp->pixels);
+            std::printf(
+                "%s %s vs its mesh ground truth: PSNR %.2f dB (covered in both %.2f dB, %zu px covered in "
+                "one only), "
+                "interior %.2f dB over %zu of %zu px\n",
+                what, name, cmp->psnr, cmp->psnr_both, cmp->pixels_one, cmp->psnr_interior,
+                cmp->pixels_interior, cmp->pixels);
             EXPECT_GT(cmp->pixels_interior, cmp->pixels * 3 / 4) << name;
             EXPECT_GE(cmp->psnr_interior, q == Quality::hq ? hq_db : preview_db) << name;
         }
@@ -104,8 +108,8 @@ TEST_F(Quality_, TexturedSphereMeetsThePsnrTargetsAgainstTheGroundTruth) {
             auto cmp = compare_images(img, ref);
             ASSERT_TRUE(cmp.ok()) << cmp.message();
             const char* name = q == Quality::hq ? "hq" : "preview";
-            std::printf("frame %ld %s: PSNR %.2f dB, SSIM %.4f, %zu px (%zu covered in one only)\n", k, name, cmp->psnr,
-                        cmp->ssim, cmp->pixels, cmp->pixels_one);
+            std::printf("frame %ld %s: PSNR %.2f dB, SSIM %.4f, %zu px (%zu covered in one only)\n", k, name,
+                        cmp->psnr, cmp->ssim, cmp->pixels, cmp->pixels_one);
             EXPECT_GT(cmp->pixels, 25000u);  // the sphere is ~210 px across at this size
             EXPECT_GE(cmp->psnr, q == Quality::hq ? 38.0 : 30.0) << "frame " << k << " " << name;
             // The silhouette agrees with the exact one but for a pixel-wide fringe in places.
@@ -128,7 +132,8 @@ TEST_F(Quality_, FlatColouredSpritesLookLikeTexturedOnes) {
         }
         auto cmp = compare_images(img[0], img[1]);
         ASSERT_TRUE(cmp.ok());
-        std::printf("%s: flat + textured vs all textured: PSNR %.2f dB\n", q == Quality::hq ? "hq" : "preview", cmp->psnr);
+        std::printf("%s: flat + textured vs all textured: PSNR %.2f dB\n",
+                    q == Quality::hq ? "hq" : "preview", cmp->psnr);
         EXPECT_GT(cmp->psnr, 45.0);
         EXPECT_EQ(cmp->pixels_one, 0u);
     }
@@ -141,7 +146,8 @@ TEST_F(Quality_, FlatColouredSpritesLookLikeTexturedOnes) {
 // frames: HQ blends its neighbours' colours) gets many pixels wrong: the check that this test sees it.
 TEST_F(Quality_, ConvertedTexturedMeshShowsItsCheckerPerPixel) {
     constexpr int kTexels = 256, kCells = 32;
-    auto g = assets::read_geometry(sffd::test::write_textured_box(sffd::test::fresh_dir("render", "textured_box"), kTexels, kCells));
+    auto g = assets::read_geometry(
+        sffd::test::write_textured_box(sffd::test::fresh_dir("render", "textured_box"), kTexels, kCells));
     ASSERT_TRUE(g.ok()) << g.message();
     assets::ImportOptions opt;
     opt.splats = 4000;
@@ -165,9 +171,12 @@ TEST_F(Quality_, ConvertedTexturedMeshShowsItsCheckerPerPixel) {
                 const glm::dvec3 p = cam.eye + d * ((front.corner.z - cam.eye.z) / d.z);
                 const glm::dvec2 st = front.st(p);
                 if (st.x < 0.03 || st.x > 0.97 || st.y < 0.05 || st.y > 0.95) continue;  // the face's border
-                const glm::dvec2 t = front.uv(p) * double(kTexels);  // texel coordinates
+                const glm::dvec2 t = front.uv(p) * double(kTexels);                      // texel coordinates
                 const double cell = double(kTexels / kCells);
-                auto edge = [&](double c) { const double r = std::fmod(c, cell); return std::min(r, cell - r); };
+                auto edge = [&](double c) {
+                    const double r = std::fmod(c, cell);
+                    return std::min(r, cell - r);
+                };
                 if (edge(t.x) < 1.5 || edge(t.y) < 1.5) continue;  // within the filter's reach of a cell edge
                 const std::uint8_t* want = &texels[(std::size_t(t.y) * kTexels + std::size_t(t.x)) * 4];
                 ++checked;
@@ -198,7 +207,8 @@ TEST_F(Quality_, ConvertedTexturedMeshShowsItsCheckerPerPixel) {
 // ground truth (texture filtered per pixel, flat shading); the error is at the box's silhouette and
 // creases, where flat discs overshoot the edges (no clipping of splats at sharp edges).
 TEST_F(Quality_, ConvertedTexturedMeshAgainstItsMeshGroundTruth) {
-    const fs::path obj = sffd::test::write_textured_box(sffd::test::fresh_dir("render", "textured_box_gt"), 256, 16);
+    const fs::path obj =
+        sffd::test::write_textured_box(sffd::test::fresh_dir("render", "textured_box_gt"), 256, 16);
     auto g = assets::read_geometry(obj);
     ASSERT_TRUE(g.ok()) << g.message();
     assets::ImportOptions opt;
@@ -226,21 +236,24 @@ TEST_F(Quality_, ConvertedTexturedMeshAgainstItsMeshGroundTruth) {
 // axes; the uv frames ride on the axes) against the mesh ground truth deformed by the same lattice
 // (each triangle subdivided, its vertices through the same deformation).
 TEST_F(Quality_, TwistedConvertedMeshAgainstItsTwistedMeshGroundTruth) {
-    auto g = assets::read_geometry(sffd::test::write_textured_box(sffd::test::fresh_dir("render", "textured_box_twist"), 256, 16));
+    auto g = assets::read_geometry(
+        sffd::test::write_textured_box(sffd::test::fresh_dir("render", "textured_box_twist"), 256, 16));
     ASSERT_TRUE(g.ok()) << g.message();
     assets::ImportOptions opt;
     opt.splats = 20000;
     auto cloud = assets::make_splat_cloud(*g, opt);
     ASSERT_TRUE(cloud.ok()) << cloud.message();
     // A twist about x: the control points turn by up to +-0.5 rad from one end to the other.
-    Lattice lattice = make_lattice(glm::dvec3(-1.2, -0.7, -0.45), {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 1.4, 0), glm::dvec3(0, 0, 0.9)},
+    Lattice lattice = make_lattice(glm::dvec3(-1.2, -0.7, -0.45),
+                                   {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 1.4, 0), glm::dvec3(0, 0, 0.9)},
                                    glm::ivec3(4, 3, 3));
     for (glm::dvec3& c : lattice.current) {
         const double a = 0.5 * c.x / 1.2, ca = std::cos(a), sa = std::sin(a);
         c = glm::dvec3(c.x, ca * c.y - sa * c.z, sa * c.y + ca * c.z);
     }
     SplatCloud& c = *cloud;
-    const ffd::PointsIn in{c.positions.data(), c.normals.data(), c.axis_u.data(), c.axis_v.data(), c.size(), c.origin};
+    const ffd::PointsIn in{c.positions.data(), c.normals.data(), c.axis_u.data(),
+                           c.axis_v.data(),    c.size(),         c.origin};
     const ffd::PointsOut out{c.positions.data(), c.normals.data(), c.axis_u.data(), c.axis_v.data()};
     auto st = ffd::deform(lattice, in, out);
     ASSERT_TRUE(st.ok()) << st.message();

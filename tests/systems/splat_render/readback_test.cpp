@@ -18,10 +18,10 @@
 
 namespace {
 
-std::atomic<int> g_buffer_reads{0};  // glGet(Named)BufferSubData
-std::atomic<int> g_finishes{0};      // glFinish
+std::atomic<int> g_buffer_reads{0};    // glGet(Named)BufferSubData
+std::atomic<int> g_finishes{0};        // glFinish
 std::atomic<int> g_blocking_waits{0};  // glClientWaitSync with a timeout, glWaitSync
-std::atomic<int> g_maps{0};          // glMap(Named)Buffer(Range)
+std::atomic<int> g_maps{0};            // glMap(Named)Buffer(Range)
 
 template <class Fn>
 Fn real(const char* name) {
@@ -114,12 +114,14 @@ TEST_F(Readback_, SteadyStateFramesNeverWaitAndCountsStillArrive) {
         for (std::uint64_t f = first; f <= last; ++f) {
             render_system(reg, FrameContext{.frame = f});
             const RenderStats& st = reg.resource<RenderStats>();
-            EXPECT_EQ(path == CullPath::compute ? st.compute_culled_clouds : st.cpu_culled_clouds, 1u) << what;
+            EXPECT_EQ(path == CullPath::compute ? st.compute_culled_clouds : st.cpu_culled_clouds, 1u)
+                << what;
             ASSERT_TRUE(st.counts_valid) << what;
             EXPECT_LE(st.counts_frame, f) << what;
             if (st.counts_frame >= first) {
                 ++arrived;
-                EXPECT_EQ(st.visible_points, reference.visible_points) << what << ", frame " << st.counts_frame;
+                EXPECT_EQ(st.visible_points, reference.visible_points)
+                    << what << ", frame " << st.counts_frame;
                 EXPECT_EQ(st.visible_quads, reference.visible_quads) << what << ", frame " << st.counts_frame;
             }
         }
@@ -148,7 +150,8 @@ void Readback_::gpu_deformation_frames_never_wait(RasterPath raster) {
     s.width = 320, s.height = 240, s.cull_path = CullPath::compute, s.raster_path = raster;
     reg.set_resource<RenderSettings>(s);
     const auto frame = [&](std::uint64_t f) {
-        ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.02, glm::dvec3(0.0));
+        ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0},
+                          0.02, glm::dvec3(0.0));
         residency_system(reg, FrameContext{.frame = f});
         ffd_system(reg, FrameContext{.frame = f});
         render_system(reg, FrameContext{.frame = f});

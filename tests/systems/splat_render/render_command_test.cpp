@@ -76,27 +76,32 @@ TEST(RenderCommand, WritesOnePngAndOneExrWithoutADisplay) {
 TEST(RenderCommand, FrameKAloneEqualsFrameKOfASequence) {
     const fs::path seq = fresh_dir("seq"), alone = fresh_dir("alone");
     std::string log;
-    ASSERT_EQ(run("sphere --out " + seq.string() + " --frames 0:3 --size 160x90 --format png", &log), 0) << log;
-    ASSERT_EQ(run("sphere --out " + alone.string() + " --frames 3:3 --size 160x90 --format png", &log), 0) << log;
+    ASSERT_EQ(run("sphere --out " + seq.string() + " --frames 0:3 --size 160x90 --format png", &log), 0)
+        << log;
+    ASSERT_EQ(run("sphere --out " + alone.string() + " --frames 3:3 --size 160x90 --format png", &log), 0)
+        << log;
     EXPECT_TRUE(fs::exists(seq / "frame_0000.png"));
     EXPECT_FALSE(fs::exists(alone / "frame_0000.png"));
     auto a = read_png(seq / "frame_0003.png");
     auto b = read_png(alone / "frame_0003.png");
     ASSERT_TRUE(a.ok() && b.ok());
     int differing = 0;
-    for (std::size_t i = 0; i < a->pixels.size(); ++i) differing += std::abs(int(a->pixels[i]) - int(b->pixels[i])) > 2;
+    for (std::size_t i = 0; i < a->pixels.size(); ++i)
+        differing += std::abs(int(a->pixels[i]) - int(b->pixels[i])) > 2;
     EXPECT_EQ(differing, 0);
     // Not trivially equal: the built-in sphere's demo clip animates its lattice, so frame 0 differs.
     auto f0 = read_png(seq / "frame_0000.png");
     ASSERT_TRUE(f0.ok());
     int moved = 0;
-    for (std::size_t i = 0; i < f0->pixels.size(); ++i) moved += std::abs(int(f0->pixels[i]) - int(a->pixels[i])) > 2;
+    for (std::size_t i = 0; i < f0->pixels.size(); ++i)
+        moved += std::abs(int(f0->pixels[i]) - int(a->pixels[i])) > 2;
     EXPECT_GT(moved, 0);
 }
 
 TEST(RenderCommand, BackgroundFillsThePng) {
     const fs::path out = fresh_dir("bg");
-    ASSERT_EQ(run("--out " + out.string() + " --size 96x54 --format png --background 1,0,0 --quality preview"), 0);
+    ASSERT_EQ(
+        run("--out " + out.string() + " --size 96x54 --format png --background 1,0,0 --quality preview"), 0);
     auto png = read_png(out / "frame_0000.png");
     ASSERT_TRUE(png.ok());
     EXPECT_FALSE(fs::exists(out / "frame_0000.exr"));
@@ -121,7 +126,11 @@ TEST(RenderCommand, BadInputExitsWithAMessage) {
 TEST(RenderCommand, ManifestListsTheFramesAndSaysWhetherTheRunCompleted) {
     const fs::path out = fresh_dir("manifest");
     std::string log;
-    ASSERT_EQ(run("sphere --out " + out.string() + " --frames 2:3 --size 64x36 --format png --quality preview", &log), 0) << log;
+    ASSERT_EQ(
+        run("sphere --out " + out.string() + " --frames 2:3 --size 64x36 --format png --quality preview",
+            &log),
+        0)
+        << log;
     std::ifstream in(out / "render_manifest.json");
     const std::string m((std::istreambuf_iterator<char>(in)), {});
     const nlohmann::json j = nlohmann::json::parse(m);
@@ -140,7 +149,11 @@ TEST(RenderCommand, ManifestListsTheFramesAndSaysWhetherTheRunCompleted) {
     // A frame that cannot be written (its name is taken by a folder): the run fails and says so.
     const fs::path bad = fresh_dir("manifest_failed");
     fs::create_directories(bad / "frame_0001.png");
-    EXPECT_EQ(run("sphere --out " + bad.string() + " --frames 0:2 --size 64x36 --format png --quality preview", &log), 1) << log;
+    EXPECT_EQ(
+        run("sphere --out " + bad.string() + " --frames 0:2 --size 64x36 --format png --quality preview",
+            &log),
+        1)
+        << log;
     std::ifstream in2(bad / "render_manifest.json");
     const std::string f((std::istreambuf_iterator<char>(in2)), {});
     const nlohmann::json fj = nlohmann::json::parse(f);
@@ -153,7 +166,10 @@ TEST(RenderCommand, ManifestListsTheFramesAndSaysWhetherTheRunCompleted) {
 TEST(RenderCommand, SizeOverTheStatedMemoryBudgetIsRefusedUpFront) {
     std::string log;
     EXPECT_EQ(run("--out /tmp/x --size 16384x16384", &log), 2);
-    EXPECT_NE(log.find("--size 16384x16384 is 268435456 pixels, more than the budget of 67108864 (8192x8192)"), std::string::npos) << log;
+    EXPECT_NE(
+        log.find("--size 16384x16384 is 268435456 pixels, more than the budget of 67108864 (8192x8192)"),
+        std::string::npos)
+        << log;
 }
 
 // SIGTERM during a sequence exits 143 with a message, leaves no temporary files, and the
@@ -164,8 +180,9 @@ TEST(RenderCommand, InterruptedSequenceLeavesAnIncompleteManifestAndNoTemporarie
     const fs::path log = out.parent_path() / "interrupted.log";
     const pid_t pid = ::fork();
     if (pid == 0) {
-        const std::string cmd = "exec env -u DISPLAY -u WAYLAND_DISPLAY " + binary + " render sphere --out " + out.string() +
-                                " --frames 0:100000 --size 64x36 --format png --quality preview 2>" + log.string();
+        const std::string cmd =
+            "exec env -u DISPLAY -u WAYLAND_DISPLAY " + binary + " render sphere --out " + out.string() +
+            " --frames 0:100000 --size 64x36 --format png --quality preview 2>" + log.string();
         ::execl("/bin/sh", "sh", "-c", cmd.c_str(), static_cast<char*>(nullptr));
         ::_exit(127);
     }
@@ -195,7 +212,8 @@ TEST(RenderCommand, InterruptedSequenceLeavesAnIncompleteManifestAndNoTemporarie
     // written after each frame's files, so it never counts a frame that is not complete).
     EXPECT_GE(j["frames_written"]["count"].get<long>(), 1) << m;
     EXPECT_LT(j["frames_written"]["count"].get<long>(), 100001) << m;
-    for (const auto& e : fs::directory_iterator(out)) EXPECT_EQ(e.path().filename().string().find("sffd-tmp"), std::string::npos) << e.path();
+    for (const auto& e : fs::directory_iterator(out))
+        EXPECT_EQ(e.path().filename().string().find("sffd-tmp"), std::string::npos) << e.path();
 }
 
 // ---- --camera, --turntable, --video ------------------------------------------------------
@@ -270,8 +288,15 @@ TEST(RenderCommand, CameraOptionMovesTheViewAndMatchesTheSameSceneCamera) {
     std::string log;
     ASSERT_EQ(run(scene.path.string() + " --out " + own.string() + common, &log), 0) << log;
     const sffd::Camera& c = scene.camera;
-    ASSERT_EQ(run(scene.path.string() + " --out " + same.string() + common + camera_option(c.eye, c.target, c.up, c.fov_y_degrees), &log), 0) << log;
-    ASSERT_EQ(run(scene.path.string() + " --out " + other.string() + common + camera_option({2.5, 0.2, -1.0}, {0, 0, 0}, {0, 1, 0}, 25.0), &log), 0)
+    ASSERT_EQ(run(scene.path.string() + " --out " + same.string() + common +
+                      camera_option(c.eye, c.target, c.up, c.fov_y_degrees),
+                  &log),
+              0)
+        << log;
+    ASSERT_EQ(run(scene.path.string() + " --out " + other.string() + common +
+                      camera_option({2.5, 0.2, -1.0}, {0, 0, 0}, {0, 1, 0}, 25.0),
+                  &log),
+              0)
         << log;
     // The same camera given on the command line draws the scene camera's image (only the clip planes,
     // fitted to the scene, differ); another camera draws another image.
@@ -294,7 +319,8 @@ TEST(RenderCommand, DegenerateCamerasAreRefused) {
     EXPECT_EQ(run(out + " --camera 1,2,3,1,2,3,0,1,0,45", &log), 2);
     EXPECT_NE(log.find("--camera: eye and target are the same point"), std::string::npos) << log;
     EXPECT_EQ(run(out + " --camera 0,0,3,0,0,0,0,0,-2,45", &log), 2);
-    EXPECT_NE(log.find("--camera: up (0, 0, -2) is parallel to the view direction"), std::string::npos) << log;
+    EXPECT_NE(log.find("--camera: up (0, 0, -2) is parallel to the view direction"), std::string::npos)
+        << log;
     EXPECT_EQ(run(out + " --camera 0,0,3,0,0,0,0,1,0,0", &log), 2);
     EXPECT_NE(log.find("--camera: fov 0 is outside (0, 180) degrees"), std::string::npos) << log;
     EXPECT_EQ(run(out + " --camera 0,0,3,0,0,0,0,1,0,180", &log), 2);
@@ -316,7 +342,8 @@ TEST(RenderCommand, DegenerateCamerasAreRefused) {
     // degenerate --camera is refused the same way.
     const fs::path g = fresh_dir("cam_bad").parent_path() / "gaussians.ply";
     fs::create_directories(g.parent_path());
-    ASSERT_EQ(std::system((binary + " convert sphere " + g.string() + " --gaussians > /dev/null 2>&1").c_str()), 0);
+    ASSERT_EQ(
+        std::system((binary + " convert sphere " + g.string() + " --gaussians > /dev/null 2>&1").c_str()), 0);
     const fs::path turn = fresh_dir("gaussian_turn");
     EXPECT_EQ(run(g.string() + " --out " + turn.string() + " --size 48x32 --turntable 3", &log), 0) << log;
     EXPECT_TRUE(fs::exists(turn / "frame_0002.png"));
@@ -329,19 +356,24 @@ TEST(RenderCommand, TurntableOrbitsAndStartsAtTheSceneCamerasEye) {
     const fs::path turn = fresh_dir("turntable"), start = fresh_dir("turntable_start");
     const std::string common = " --size 160x90 --format png --quality preview";
     std::string log;
-    ASSERT_EQ(run(scene.path.string() + " --out " + turn.string() + common + " --turntable 4", &log), 0) << log;
-    for (int k = 0; k < 4; ++k) EXPECT_TRUE(fs::exists(turn / ("frame_000" + std::to_string(k) + ".png"))) << k;
+    ASSERT_EQ(run(scene.path.string() + " --out " + turn.string() + common + " --turntable 4", &log), 0)
+        << log;
+    for (int k = 0; k < 4; ++k)
+        EXPECT_TRUE(fs::exists(turn / ("frame_000" + std::to_string(k) + ".png"))) << k;
     EXPECT_FALSE(fs::exists(turn / "frame_0004.png"));
     // Frame 0 = the scene camera's eye looking at the bounds centre, as --camera gives it.
     const glm::dvec3 up = glm::normalize(scene.camera.up);
-    ASSERT_EQ(run(scene.path.string() + " --out " + start.string() + common + camera_option(scene.camera.eye, scene.centre, up, scene.camera.fov_y_degrees),
+    ASSERT_EQ(run(scene.path.string() + " --out " + start.string() + common +
+                      camera_option(scene.camera.eye, scene.centre, up, scene.camera.fov_y_degrees),
                   &log),
               0)
         << log;
     EXPECT_EQ(differing_pixels(turn / "frame_0000.png", start / "frame_0000.png"), 0);
     // The other frames see the scene from elsewhere (the cloud is still: only the camera moves).
     for (int k = 1; k < 4; ++k)
-        EXPECT_GT(differing_pixels(turn / "frame_0000.png", turn / ("frame_000" + std::to_string(k) + ".png")), 100) << k;
+        EXPECT_GT(
+            differing_pixels(turn / "frame_0000.png", turn / ("frame_000" + std::to_string(k) + ".png")), 100)
+            << k;
 }
 
 TEST(RenderCommand, VideoNamesFfmpegWhenItIsMissing) {
@@ -349,21 +381,26 @@ TEST(RenderCommand, VideoNamesFfmpegWhenItIsMissing) {
     fs::create_directories(out.parent_path());
     const fs::path log = out.parent_path() / "video_missing.log";
     // PATH without ffmpeg: refused before any frame is rendered, naming the package.
-    const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY PATH=/nonexistent " + binary + " render sphere --out " + out.string() +
-                            " --video " + (out.parent_path() / "v.mp4").string() + " > " + log.string() + " 2>&1";
+    const std::string cmd = "env -u DISPLAY -u WAYLAND_DISPLAY PATH=/nonexistent " + binary +
+                            " render sphere --out " + out.string() + " --video " +
+                            (out.parent_path() / "v.mp4").string() + " > " + log.string() + " 2>&1";
     const int status = std::system(cmd.c_str());
     std::ifstream in(log);
     const std::string text((std::istreambuf_iterator<char>(in)), {});
     ASSERT_TRUE(WIFEXITED(status));
     EXPECT_EQ(WEXITSTATUS(status), 1) << text;
-    EXPECT_NE(text.find("--video needs ffmpeg, which is not on PATH; install it (Debian/Ubuntu: apt-get install ffmpeg)"), std::string::npos)
+    EXPECT_NE(
+        text.find(
+            "--video needs ffmpeg, which is not on PATH; install it (Debian/Ubuntu: apt-get install ffmpeg)"),
+        std::string::npos)
         << text;
     EXPECT_FALSE(fs::exists(out / "frame_0000.png"));
 }
 
 TEST(RenderCommand, VideoOfATurntableHasOneFramePerImage) {
     if (std::system("command -v ffmpeg > /dev/null 2>&1 && command -v ffprobe > /dev/null 2>&1") != 0)
-        GTEST_SKIP() << "ffmpeg/ffprobe not installed: --video is optional (apt-get install ffmpeg: 91 packages, 157 MB, so "
+        GTEST_SKIP() << "ffmpeg/ffprobe not installed: --video is optional (apt-get install ffmpeg: 91 "
+                        "packages, 157 MB, so "
                         "tools/bootstrap.sh does not install it)";
     const fs::path out = fresh_dir("video");
     fs::create_directories(out.parent_path());  // the videos go next to the frames' folder
@@ -371,18 +408,25 @@ TEST(RenderCommand, VideoOfATurntableHasOneFramePerImage) {
         const fs::path video = out.parent_path() / name;
         fs::remove(video);
         std::string log;
-        ASSERT_EQ(run("sphere --out " + out.string() + " --size 97x55 --format png --quality preview --turntable 5 --video '" + video.string() + "'", &log), 0)
+        ASSERT_EQ(run("sphere --out " + out.string() +
+                          " --size 97x55 --format png --quality preview --turntable 5 --video '" +
+                          video.string() + "'",
+                      &log),
+                  0)
             << log;
         ASSERT_TRUE(fs::exists(video)) << log;
         const fs::path probe = out.parent_path() / "probe.txt";
-        const std::string cmd = "ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of csv=p=0 '" +
-                                video.string() + "' > " + probe.string();
+        const std::string cmd =
+            "ffprobe -v error -count_frames -select_streams v:0 -show_entries stream=nb_read_frames -of "
+            "csv=p=0 '" +
+            video.string() + "' > " + probe.string();
         ASSERT_EQ(std::system(cmd.c_str()), 0);
         std::ifstream in(probe);
         int frames = 0;
         in >> frames;
         EXPECT_EQ(frames, 5) << name;
         for (const auto& e : fs::directory_iterator(out.parent_path()))
-            EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << "temporary left: " << e.path();
+            EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos)
+                << "temporary left: " << e.path();
     }
 }

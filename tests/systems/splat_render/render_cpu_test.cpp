@@ -36,9 +36,12 @@ FrameImage gradient(int w, int h) {
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const bool bg = x == 0 && y == 0;
-            img.color.push_back(bg ? glm::vec4(0) : glm::vec4(float(x) / float(w), float(y) / float(h), 0.25f, 1.0f));
-            img.depth.push_back(bg ? std::numeric_limits<float>::infinity() : 1.0f + float(x) * 0.01f + float(y));
-            img.normal.push_back(bg ? glm::vec3(0) : glm::normalize(glm::vec3(float(x) - 3.5f, float(y) - 2.5f, 4.0f)));
+            img.color.push_back(bg ? glm::vec4(0)
+                                   : glm::vec4(float(x) / float(w), float(y) / float(h), 0.25f, 1.0f));
+            img.depth.push_back(bg ? std::numeric_limits<float>::infinity()
+                                   : 1.0f + float(x) * 0.01f + float(y));
+            img.normal.push_back(bg ? glm::vec3(0)
+                                    : glm::normalize(glm::vec3(float(x) - 3.5f, float(y) - 2.5f, 4.0f)));
         }
     return img;
 }
@@ -57,7 +60,7 @@ TEST(RenderSrgb, MatchesTheStandardCurve) {
 TEST(RenderImageIo, PngRoundTripKeepsSrgbBytesAndAlpha) {
     const FrameImage img = gradient(8, 6);
     const Rgba8Image rgba = to_rgba8(img);
-    EXPECT_EQ(rgba.at(0, 0)[3], 0);    // background stays transparent
+    EXPECT_EQ(rgba.at(0, 0)[3], 0);  // background stays transparent
     EXPECT_EQ(rgba.at(5, 3)[3], 255);
     EXPECT_EQ(rgba.at(5, 3)[0], encode_srgb8(5.0f / 8.0f));
     const fs::path path = temp_dir() / "round.png";
@@ -78,7 +81,7 @@ TEST(RenderImageIo, BackgroundFillsTransparentPixels) {
 
 TEST(RenderImageIo, BackgroundBlendsInDisplaySpaceAs3dgsViewersDo) {
     FrameImage img = gradient(2, 1);
-    img.color[0] = glm::vec4(1.0f, 1.0f, 1.0f, 0.5f);  // a half-covered white edge
+    img.color[0] = glm::vec4(1.0f, 1.0f, 1.0f, 0.5f);   // a half-covered white edge
     img.color[1] = glm::vec4(0.25f, 0.5f, 1.0f, 1.0f);  // fully covered
     const Rgba8Image black = to_rgba8(img, glm::vec3(0.0f));
     // Display space: 0.5 * 255 = 127.5 (127 or 128 after float rounding); a linear blend would give
@@ -156,8 +159,8 @@ TEST(RenderCamera, FramingCameraSeesTheWholeSphere) {
     const double radius = 3.0, aspect = 16.0 / 9.0;
     const Camera cam = framing_camera(center, radius, aspect);
     const glm::dmat4 vp = projection_matrix(cam, aspect) * view_matrix(cam);
-    for (const glm::dvec3& d : {glm::dvec3(1, 0, 0), glm::dvec3(-1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, -1, 0),
-                                glm::dvec3(0, 0, 1), glm::dvec3(0, 0, -1)}) {
+    for (const glm::dvec3& d : {glm::dvec3(1, 0, 0), glm::dvec3(-1, 0, 0), glm::dvec3(0, 1, 0),
+                                glm::dvec3(0, -1, 0), glm::dvec3(0, 0, 1), glm::dvec3(0, 0, -1)}) {
         const glm::dvec4 clip = vp * glm::dvec4(center + d * radius, 1.0);
         EXPECT_LT(std::abs(clip.x / clip.w), 1.0);
         EXPECT_LT(std::abs(clip.y / clip.w), 1.0);
@@ -192,7 +195,8 @@ gpu::FrameBlock test_frame(double distance = 3.0) {
     Camera cam;
     cam.eye = glm::dvec3(0.0, 0.0, distance);
     cam.near_plane = 0.1f, cam.far_plane = 10.0f;
-    gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 1280.0 / 720.0), 1280, 720, 1.0f, 255.0f, true);
+    gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 1280.0 / 720.0), 1280,
+                                           720, 1.0f, 255.0f, true);
     f.light_dir[0] = glm::vec4(glm::normalize(glm::vec3(0.3f, 0.5f, 1.0f)), 0.0f);
     f.light_color[0] = glm::vec4(1.0f);
     f.material = glm::vec4(0.3f, 32.0f, 0.0f, 0.0f);
@@ -217,7 +221,8 @@ TEST(RenderSprite, EllipseBoxHoldsTheProjectedRimAndIsTight) {
         const glm::dvec3 n = glm::normalize(glm::dvec3(uni(rng), uni(rng), uni(rng)));
         const glm::dvec3 t = glm::normalize(glm::cross(n, glm::dvec3(uni(rng), uni(rng), uni(rng))));
         const double scale = trial % 3 == 0 ? 0.002 : 0.05;
-        const glm::dvec3 u = t * scale * (0.5 + 0.5 * (uni(rng) + 1.0)), v = glm::cross(n, t) * scale * (0.3 + (uni(rng) + 1.0));
+        const glm::dvec3 u = t * scale * (0.5 + 0.5 * (uni(rng) + 1.0)),
+                         v = glm::cross(n, t) * scale * (0.3 + (uni(rng) + 1.0));
         const glm::vec3 box = ellipse_sprite(f, glm::vec3(c), glm::vec3(u), glm::vec3(v));
         ASSERT_GT(box.z, 0.0f);
         glm::dvec2 lo(1e30), hi(-1e30);
@@ -235,12 +240,16 @@ TEST(RenderSprite, EllipseBoxHoldsTheProjectedRimAndIsTight) {
         EXPECT_LE(centre.y - half, lo.y + tol) << trial;
         EXPECT_GE(centre.y + half, hi.y - tol) << trial;
         const glm::dvec2 extent = hi - lo;
-        EXPECT_NEAR(box.z, std::max(extent.x, extent.y), 2e-3 * std::max(1.0, std::max(extent.x, extent.y))) << trial;
+        EXPECT_NEAR(box.z, std::max(extent.x, extent.y), 2e-3 * std::max(1.0, std::max(extent.x, extent.y)))
+            << trial;
         ++checked;
     }
     EXPECT_EQ(checked, 500);
     // Reaching the near plane: no box.
-    EXPECT_LT(ellipse_sprite(f, glm::vec3(0.0f, 0.0f, -0.12f), glm::vec3(0.0f, 0.0f, 0.05f), glm::vec3(0.05f, 0.0f, 0.0f)).z, 0.0f);
+    EXPECT_LT(ellipse_sprite(f, glm::vec3(0.0f, 0.0f, -0.12f), glm::vec3(0.0f, 0.0f, 0.05f),
+                             glm::vec3(0.05f, 0.0f, 0.0f))
+                  .z,
+              0.0f);
 }
 
 // The CPU cull against its definition: each splat classified by an independent double-precision
@@ -253,9 +262,9 @@ TEST(RenderCpuCull, ClassifiesEverySplatLikeTheDefinition) {
     cloud.positions[1] = glm::vec3(-2.3f, 0.0f, 0.9f), cloud.normals[1] = glm::vec3(0, 0, 1);
     cloud.axis_u[1] = glm::vec3(0.3f, 0, 0), cloud.axis_v[1] = glm::vec3(0, 0.3f, 0);
     // Non-finite centres (a broken deformation) are dropped, not drawn.
-    const std::size_t front = std::size_t(std::find_if(cloud.normals.begin(), cloud.normals.end(), [](const glm::vec3& n) {
-                                                 return n.z > 0.9f;
-                                             }) - cloud.normals.begin());
+    const std::size_t front = std::size_t(std::find_if(cloud.normals.begin(), cloud.normals.end(),
+                                                       [](const glm::vec3& n) { return n.z > 0.9f; }) -
+                                          cloud.normals.begin());
     cloud.positions[front].x = std::numeric_limits<float>::quiet_NaN();
     cloud.positions[front + 1].y = std::numeric_limits<float>::infinity();
     const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
@@ -270,26 +279,30 @@ TEST(RenderCpuCull, ClassifiesEverySplatLikeTheDefinition) {
             const glm::dvec3 c = glm::dvec3(mv * glm::dvec4(glm::dvec3(cloud.positions[i]), 1.0));
             if (!std::isfinite(c.x + c.y + c.z)) continue;
             if (glm::dot(glm::dvec3(cloud.normals[i]), c) > 0.0) continue;  // back-facing (view = world here)
-            const double r = std::max(glm::length(glm::dvec3(cloud.axis_u[i])), glm::length(glm::dvec3(cloud.axis_v[i])));
+            const double r =
+                std::max(glm::length(glm::dvec3(cloud.axis_u[i])), glm::length(glm::dvec3(cloud.axis_v[i])));
             // The symmetric frustum's side planes through the eye, as a ball test.
             const double p00 = proj[0][0], p11 = proj[1][1], depth = -c.z;
             if ((depth - p00 * std::abs(c.x)) / std::sqrt(p00 * p00 + 1.0) < -r ||
                 (depth - p11 * std::abs(c.y)) / std::sqrt(p11 * p11 + 1.0) < -r)
                 continue;
-            const glm::vec3 box = ellipse_sprite(f, glm::vec3(c), glm::vec3(cloud.axis_u[i]), glm::vec3(cloud.axis_v[i]));
-            (box.z > 255.0f || std::abs(box.x) > 1.0f || std::abs(box.y) > 1.0f ? quads : sprites).push_back(i);
+            const glm::vec3 box =
+                ellipse_sprite(f, glm::vec3(c), glm::vec3(cloud.axis_u[i]), glm::vec3(cloud.axis_v[i]));
+            (box.z > 255.0f || std::abs(box.x) > 1.0f || std::abs(box.y) > 1.0f ? quads : sprites)
+                .push_back(i);
         }
         ASSERT_EQ(out.visible_records, sprites.size());
         ASSERT_EQ(out.visible_quads, quads.size());
-        EXPECT_GE(quads.size(), 3u);   // the enlarged splats on the visible side, and the off-screen one
+        EXPECT_GE(quads.size(), 3u);  // the enlarged splats on the visible side, and the off-screen one
         std::vector<std::uint32_t> got_quads;
         std::vector<SplatRecord> got;
-        CpuCullResult::for_each_run(out.quads, out.quad_counts, out.block, [&](std::size_t, const std::uint32_t* p, std::size_t k) {
-            got_quads.insert(got_quads.end(), p, p + k);
-        });
-        CpuCullResult::for_each_run(out.records, out.record_counts, out.block, [&](std::size_t, const SplatRecord* p, std::size_t k) {
-            got.insert(got.end(), p, p + k);
-        });
+        CpuCullResult::for_each_run(out.quads, out.quad_counts, out.block,
+                                    [&](std::size_t, const std::uint32_t* p, std::size_t k) {
+                                        got_quads.insert(got_quads.end(), p, p + k);
+                                    });
+        CpuCullResult::for_each_run(
+            out.records, out.record_counts, out.block,
+            [&](std::size_t, const SplatRecord* p, std::size_t k) { got.insert(got.end(), p, p + k); });
         EXPECT_EQ(got_quads, quads);
         ASSERT_EQ(got.size(), sprites.size());
         for (std::size_t k = 0; k < got.size(); ++k) {
@@ -302,11 +315,14 @@ TEST(RenderCpuCull, ClassifiesEverySplatLikeTheDefinition) {
             // (float set-up: near the silhouette the ray grazes the plane and rounding grows; 1e-2 of the
             // splat's radius is far below a pixel here)
             EXPECT_NEAR(t, -c.z, 1e-4 * -c.z) << i;
-            EXPECT_NEAR(t * glm::dot(glm::dvec3(got[k].dual_u), ray) - double(got[k].dual_u.w), 0.0, 1e-2) << i;
-            EXPECT_NEAR(t * glm::dot(glm::dvec3(got[k].dual_v), ray) - double(got[k].dual_v.w), 0.0, 1e-2) << i;
+            EXPECT_NEAR(t * glm::dot(glm::dvec3(got[k].dual_u), ray) - double(got[k].dual_u.w), 0.0, 1e-2)
+                << i;
+            EXPECT_NEAR(t * glm::dot(glm::dvec3(got[k].dual_v), ray) - double(got[k].dual_v.w), 0.0, 1e-2)
+                << i;
             // The rim point c + u has elliptical radius 1.
             const glm::dvec3 rim = c + glm::dvec3(cloud.axis_u[i]);
-            const double s = glm::dot(glm::dvec3(got[k].dual_u), rim) - double(got[k].dual_u.w), q = glm::dot(glm::dvec3(got[k].dual_v), rim) - double(got[k].dual_v.w);
+            const double s = glm::dot(glm::dvec3(got[k].dual_u), rim) - double(got[k].dual_u.w),
+                         q = glm::dot(glm::dvec3(got[k].dual_v), rim) - double(got[k].dual_v.w);
             EXPECT_NEAR(s * s + q * q, 1.0, 1e-2) << i;
             EXPECT_NEAR(got[k].plane.w, f.params.x * glm::length(cloud.axis_u[i]), 1e-6) << i;
             EXPECT_NEAR(glm::dot(glm::dvec3(got[k].normal), glm::dvec3(cloud.normals[i])), 1.0, 1e-5) << i;
@@ -329,9 +345,9 @@ TEST(RenderCpuCull, CullingOffMarksBackFacesHiddenWithFiniteValuesOnly) {
         cull_splats_cpu(splats, f, {}, out);
         EXPECT_EQ(out.visible_records + out.visible_quads, splats.size());
         std::vector<std::uint32_t> quads;
-        CpuCullResult::for_each_run(out.quads, out.quad_counts, out.block, [&](std::size_t, const std::uint32_t* p, std::size_t k) {
-            quads.insert(quads.end(), p, p + k);
-        });
+        CpuCullResult::for_each_run(
+            out.quads, out.quad_counts, out.block,
+            [&](std::size_t, const std::uint32_t* p, std::size_t k) { quads.insert(quads.end(), p, p + k); });
         std::size_t back_sprites = 0;
         const glm::dmat4 mv(f.model_view);
         for (std::uint32_t i = 0; i < splats.size(); ++i) {
@@ -341,14 +357,15 @@ TEST(RenderCpuCull, CullingOffMarksBackFacesHiddenWithFiniteValuesOnly) {
         }
         ASSERT_GT(back_sprites, splats.size() / 4);
         std::size_t hidden = 0;
-        CpuCullResult::for_each_run(out.records, out.record_counts, out.block, [&](std::size_t, const SplatRecord* p, std::size_t k) {
-            for (std::size_t r = 0; r < k; ++r) {
-                const float* v = &p[r].center.x;
-                for (int j = 0; j < 20; ++j) ASSERT_TRUE(std::isfinite(v[j])) << "field " << j;
-                EXPECT_TRUE(std::isnormal(p[r].normal.w)) << "packed colour";
-                hidden += p[r].plane.x == 0.0f && p[r].plane.y == 0.0f && p[r].plane.z == 0.0f;
-            }
-        });
+        CpuCullResult::for_each_run(
+            out.records, out.record_counts, out.block, [&](std::size_t, const SplatRecord* p, std::size_t k) {
+                for (std::size_t r = 0; r < k; ++r) {
+                    const float* v = &p[r].center.x;
+                    for (int j = 0; j < 20; ++j) ASSERT_TRUE(std::isfinite(v[j])) << "field " << j;
+                    EXPECT_TRUE(std::isnormal(p[r].normal.w)) << "packed colour";
+                    hidden += p[r].plane.x == 0.0f && p[r].plane.y == 0.0f && p[r].plane.z == 0.0f;
+                }
+            });
         EXPECT_EQ(hidden, back_sprites);
     }
 }

@@ -16,16 +16,16 @@ namespace {
 constexpr std::size_t paper_splats = 59650;
 
 struct CoverageReport {
-    int inside = 0;        // pixels whose ray hits the shrunken analytic surface
-    int holes = 0;         // of those, not covered
-    int far_side = 0;      // of those, depth off the analytic surface by more than the tolerance
+    int inside = 0;    // pixels whose ray hits the shrunken analytic surface
+    int holes = 0;     // of those, not covered
+    int far_side = 0;  // of those, depth off the analytic surface by more than the tolerance
     double max_depth_error = 0.0;
 };
 
 // Every pixel whose ray hits the analytic ellipsoid shrunk by `shrink` must be covered, and its depth must
 // match the unshrunk ellipsoid's within `tolerance` (a far-side splat seen through a gap is ~1 unit deeper).
-CoverageReport check_coverage(const FrameImage& img, const Camera& cam, glm::dvec3 scale, double shrink = 0.97,
-                              double tolerance = 0.03) {
+CoverageReport check_coverage(const FrameImage& img, const Camera& cam, glm::dvec3 scale,
+                              double shrink = 0.97, double tolerance = 0.03) {
     CoverageReport r;
     for (int y = 0; y < img.height; ++y)
         for (int x = 0; x < img.width; ++x) {
@@ -61,7 +61,9 @@ TEST_F(SphereImage, HqCoversTheSilhouetteWithContinuousDepth) {
     int outside = 0;
     for (int y = 0; y < img.height; ++y)
         for (int x = 0; x < img.width; ++x)
-            if (!hit_ellipsoid(cam.eye, pixel_ray(cam, x, y, 512, 512), glm::dvec3(1.03)) && img.covered(x, y)) ++outside;
+            if (!hit_ellipsoid(cam.eye, pixel_ray(cam, x, y, 512, 512), glm::dvec3(1.03)) &&
+                img.covered(x, y))
+                ++outside;
     EXPECT_EQ(outside, 0);
 }
 
@@ -90,7 +92,8 @@ TEST_F(SphereImage, ExrDepthAtTheCentrePixelMatchesTheAnalyticSphere) {
         const double expected = *hit_ellipsoid(cam.eye, pixel_ray(cam, x, y, 640, 360), glm::dvec3(1.0));
         EXPECT_NEAR(expected, 2.0, 1e-3);
         // Within 1% of the radius (1.0).
-        EXPECT_NEAR(double(back->depth[back->index(x, y)]), expected, 0.01) << (q == Quality::hq ? "hq" : "preview");
+        EXPECT_NEAR(double(back->depth[back->index(x, y)]), expected, 0.01)
+            << (q == Quality::hq ? "hq" : "preview");
         // The normal there faces the camera.
         EXPECT_GT(double(back->normal[back->index(x, y)].z), 0.99);
         std::filesystem::remove(path);
@@ -140,8 +143,10 @@ TEST_F(SphereImage, HqShadingIsSmoothAndMatchesTheAnalyticSphere) {
             const glm::dvec3 n = glm::normalize(cam.eye + t * d);
             const glm::dvec3 hv = glm::normalize(l + -glm::normalize(d));
             const double ndl = std::max(glm::dot(n, l), 0.0);
-            const double spec = ndl > 0 ? std::pow(std::max(glm::dot(n, hv), 0.0), double(material.shininess)) *
-                                              double(material.specular) : 0.0;
+            const double spec = ndl > 0
+                                    ? std::pow(std::max(glm::dot(n, hv), 0.0), double(material.shininess)) *
+                                          double(material.specular)
+                                    : 0.0;
             analytic[std::size_t(y) * w + x] = albedo * 0.1 + albedo * ndl + spec;
         }
     auto srgb8 = [](double v) { return double(encode_srgb8(float(v))); };
@@ -156,10 +161,12 @@ TEST_F(SphereImage, HqShadingIsSmoothAndMatchesTheAnalyticSphere) {
             max_err = std::max(max_err, std::abs(got - analytic[i]));
             sum_err += std::abs(got - analytic[i]);
             ++n;
-            max_step_analytic = std::max(max_step_analytic, std::abs(srgb8(analytic[i + 1]) - srgb8(analytic[i])));
-            max_step_hq = std::max(max_step_hq, std::abs(srgb8(double(hq.color[i + 1].y)) - srgb8(double(hq.color[i].y))));
-            max_step_preview = std::max(max_step_preview,
-                                        std::abs(srgb8(double(preview.color[i + 1].y)) - srgb8(double(preview.color[i].y))));
+            max_step_analytic =
+                std::max(max_step_analytic, std::abs(srgb8(analytic[i + 1]) - srgb8(analytic[i])));
+            max_step_hq = std::max(max_step_hq,
+                                   std::abs(srgb8(double(hq.color[i + 1].y)) - srgb8(double(hq.color[i].y))));
+            max_step_preview = std::max(max_step_preview, std::abs(srgb8(double(preview.color[i + 1].y)) -
+                                                                   srgb8(double(preview.color[i].y))));
         }
     ASSERT_GT(n, 50000);
     EXPECT_LT(sum_err / n, 0.01);
@@ -201,7 +208,10 @@ TEST_F(SphereImage, DeferredShadingKeepsEachCloudsMaterial) {
                 const glm::dvec3 nrm = glm::normalize(cam.eye + t * d - centres[k]);
                 const glm::dvec3 hv = glm::normalize(l - glm::normalize(d));
                 const double ndl = std::max(glm::dot(nrm, l), 0.0);
-                const double spec = ndl > 0 ? std::pow(std::max(glm::dot(nrm, hv), 0.0), double(shininess[k])) * double(specular[k]) : 0.0;
+                const double spec = ndl > 0
+                                        ? std::pow(std::max(glm::dot(nrm, hv), 0.0), double(shininess[k])) *
+                                              double(specular[k])
+                                        : 0.0;
                 const double analytic = albedo * 0.1 + albedo * ndl + spec;
                 const double got = double(hq.color[hq.index(x, y)].y);
                 sum_err[k] += std::abs(got - analytic);
@@ -254,7 +264,8 @@ TEST_F(SphereImage, SceneWithoutCameraOrLightsIsFramedAndLit) {
         for (int x = 0; x < img.width; ++x) {
             if (!img.covered(x, y)) continue;
             ++covered;
-            min_x = std::min(min_x, x), max_x = std::max(max_x, x), min_y = std::min(min_y, y), max_y = std::max(max_y, y);
+            min_x = std::min(min_x, x), max_x = std::max(max_x, x), min_y = std::min(min_y, y),
+            max_y = std::max(max_y, y);
             lo = std::min(lo, luminance(img.color[img.index(x, y)]));
             hi = std::max(hi, luminance(img.color[img.index(x, y)]));
         }
@@ -266,6 +277,6 @@ TEST_F(SphereImage, SceneWithoutCameraOrLightsIsFramedAndLit) {
     EXPECT_LT(max_y, 179);
     EXPECT_NEAR(0.5 * (min_x + max_x), 160.0, 4.0);
     EXPECT_NEAR(0.5 * (min_y + max_y), 90.0, 4.0);
-    EXPECT_GT(lo, 0.0);        // ambient reaches the unlit side
-    EXPECT_GT(hi, 4.0 * lo);   // the key light makes a lit side
+    EXPECT_GT(lo, 0.0);       // ambient reaches the unlit side
+    EXPECT_GT(hi, 4.0 * lo);  // the key light makes a lit side
 }

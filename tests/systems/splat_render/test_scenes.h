@@ -49,7 +49,8 @@ inline void add_checker(SplatCloud& s) {
         for (int x = 0; x < tw; ++x) {
             const bool check = ((x / 8) + (y / 8)) % 2 == 0;
             s.material.texture_rgba8.insert(s.material.texture_rgba8.end(),
-                                            {std::uint8_t(check ? 230 : 40), std::uint8_t(40 + 6 * y), std::uint8_t(check ? 40 : 220), 255});
+                                            {std::uint8_t(check ? 230 : 40), std::uint8_t(40 + 6 * y),
+                                             std::uint8_t(check ? 40 : 220), 255});
         }
 }
 

@@ -31,14 +31,17 @@ fs::path temp_dir(const std::string& name) {
 // The first frame of a video as W x H RGB bytes (decoded by ffmpeg); empty on failure.
 std::vector<std::uint8_t> first_frame_rgb(const fs::path& video) {
     const fs::path raw = video.string() + ".rgb";
-    if (sffd::test::run_shell("ffmpeg -nostdin -loglevel error -y -i " + video.string() + " -frames:v 1 -vf crop=" + std::to_string(W) + ":" +
-                              std::to_string(H) + ":0:0 -f rawvideo -pix_fmt rgb24 " + raw.string()) != 0)
+    if (sffd::test::run_shell("ffmpeg -nostdin -loglevel error -y -i " + video.string() +
+                              " -frames:v 1 -vf crop=" + std::to_string(W) + ":" + std::to_string(H) +
+                              ":0:0 -f rawvideo -pix_fmt rgb24 " + raw.string()) != 0)
         return {};
     std::ifstream in(raw, std::ios::binary);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-int channel(const std::vector<std::uint8_t>& rgb, int x, int y, int c) { return rgb[std::size_t((y * W + x) * 3 + c)]; }
+int channel(const std::vector<std::uint8_t>& rgb, int x, int y, int c) {
+    return rgb[std::size_t((y * W + x) * 3 + c)];
+}
 
 double block_mean(const std::vector<std::uint8_t>& rgb, int c) {
     double sum = 0.0;
@@ -48,11 +51,13 @@ double block_mean(const std::vector<std::uint8_t>& rgb, int c) {
 }
 
 // Renders two frames of the sphere into MP4 and GIF with the given extra options; returns both first frames.
-void render_both(const std::string& extra, std::vector<std::uint8_t>& mp4, std::vector<std::uint8_t>& gif, const std::string& name) {
+void render_both(const std::string& extra, std::vector<std::uint8_t>& mp4, std::vector<std::uint8_t>& gif,
+                 const std::string& name) {
     const fs::path dir = temp_dir(name);
     for (const char* ext : {"mp4", "gif"}) {
-        const auto r = sffd::test::run_headless("render sphere --frames 2 --size " + std::to_string(W) + "x" + std::to_string(H) +
-                                                " --format png --quality preview " + extra + " --out " + (dir / ext).string() + " --video " +
+        const auto r = sffd::test::run_headless("render sphere --frames 2 --size " + std::to_string(W) + "x" +
+                                                std::to_string(H) + " --format png --quality preview " +
+                                                extra + " --out " + (dir / ext).string() + " --video " +
                                                 (dir / (std::string("clip.") + ext)).string());
         ASSERT_EQ(r.code, 0) << r.out;
     }
@@ -65,7 +70,8 @@ void render_both(const std::string& extra, std::vector<std::uint8_t>& mp4, std::
 }  // namespace
 
 TEST(RenderVideo, Mp4AndGifAgreeOnTheBackgroundAndTheObject) {
-    if (sffd::test::run_shell("command -v ffmpeg >/dev/null 2>&1") != 0) GTEST_SKIP() << "ffmpeg is not installed (tools/bootstrap.sh installs it)";
+    if (sffd::test::run_shell("command -v ffmpeg >/dev/null 2>&1") != 0)
+        GTEST_SKIP() << "ffmpeg is not installed (tools/bootstrap.sh installs it)";
     std::vector<std::uint8_t> mp4, gif;
     render_both("", mp4, gif, "default");
     // Without --background both are over black (the GIF used to stay transparent, the MP4 black).
@@ -75,7 +81,8 @@ TEST(RenderVideo, Mp4AndGifAgreeOnTheBackgroundAndTheObject) {
     }
     // The object in the middle: the same colour up to H.264 (chroma at half resolution) and palette
     // dithering, so compared as the mean of a 12 x 12 block of the textured sphere, not pixel by pixel.
-    for (int c = 0; c < 3; ++c) EXPECT_NEAR(block_mean(mp4, c), block_mean(gif, c), 12.0) << "centre block channel " << c;
+    for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(block_mean(mp4, c), block_mean(gif, c), 12.0) << "centre block channel " << c;
     EXPECT_GT(block_mean(mp4, 0) + block_mean(mp4, 1) + block_mean(mp4, 2), 60.0) << "the sphere is drawn";
 
     render_both("--background 1,1,1", mp4, gif, "white");
