@@ -33,21 +33,22 @@ namespace sffd::editor {
 namespace {
 
 // The layout of this frame (from the window size and last frame's collapsed flags) and the rectangles the
-// panels really got (what panel_rects() reports). UI state of the single editor window (main thread).
+// panels really got (what panel_rects() reports): a registry resource, so it lives and dies with the
+// editor's registry.
 struct LayoutState {
     std::array<bool, panel_count> collapsed{};
     std::array<PanelRect, panel_count> rects{};
     float menu_height = 0.0f;
     std::vector<NamedPanelRect> drawn;
 };
-LayoutState& layout_state() {
-    static LayoutState s;
-    return s;
+LayoutState& layout_state(ecs::Registry& registry) {
+    if (LayoutState* s = registry.try_resource<LayoutState>()) return *s;
+    return registry.set_resource<LayoutState>();
 }
 
-void record_current_window(const char* name) {
+void record_current_window(ecs::Registry& registry, const char* name) {
     const ImVec2 pos = ImGui::GetWindowPos(), size = ImGui::GetWindowSize();
-    layout_state().drawn.push_back({name, PanelRect{pos.x, pos.y, size.x, size.y}});
+    layout_state(registry).drawn.push_back({name, PanelRect{pos.x, pos.y, size.x, size.y}});
 }
 
 // Values typed into the tool and lattice panels that stay between frames until applied: a registry
@@ -65,15 +66,15 @@ PanelEntries& panel_entries(ecs::Registry& registry) {
 
 // Begin of a laid-out panel: placed and sized every frame (the user collapses panels, the layout moves
 // the others), not movable or resizable by hand (a moved panel would cover another).
-bool begin_panel(Panel p) {
-    LayoutState& ls = layout_state();
+bool begin_panel(ecs::Registry& registry, Panel p) {
+    LayoutState& ls = layout_state(registry);
     const PanelRect& r = ls.rects[std::size_t(p)];
     ImGui::SetNextWindowPos(ImVec2(r.x, r.y), ImGuiCond_Always);
     ImGui::SetNextWindowSize(ImVec2(r.w, r.h), ImGuiCond_Always);
     const bool open =
         ImGui::Begin(panel_title(p), nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
     ls.collapsed[std::size_t(p)] = ImGui::IsWindowCollapsed();
-    record_current_window(panel_title(p));
+    record_current_window(registry, panel_title(p));
     return open;
 }
 
@@ -85,10 +86,11 @@ struct PendingEdit {
     std::optional<C> before;
 };
 
+// A registry resource per edited component type, so a half-done edit dies with the editor's registry.
 template <class C>
-PendingEdit<C>& pending() {
-    static PendingEdit<C> p;  // UI state of the single editor window (main thread only)
-    return p;
+PendingEdit<C>& pending(ecs::Registry& registry) {
+    if (PendingEdit<C>* p = registry.try_resource<PendingEdit<C>>()) return *p;
+    return registry.set_resource<PendingEdit<C>>();
 }
 
 // Call right after a widget that edits C of `e` in place; `changed` is the widget's return value and
@@ -96,7 +98,7 @@ PendingEdit<C>& pending() {
 template <class C, class BeforeFn>
 void track_edit_fn(ecs::Registry& registry, EditorState& state, ecs::Entity e, BeforeFn&& before,
                    bool changed, const char* label) {
-    PendingEdit<C>& p = pending<C>();
+    PendingEdit<C>& p = pending<C>(registry);
     if (ImGui::IsItemActivated()) {
         p.entity = e;
         p.before = before();
@@ -135,125 +137,11 @@ std::string entity_label(const ecs::Registry& registry, ecs::Entity e) {
     return kind.empty() ? name : name + "  [" + kind + "]";
 }
 
-// The open / save dialog: a folder listing (file_browser.h) with ".." and sub-folders, files filtered by
-// extension, a name field (built-in scene names such as "sphere" can be typed), Escape or Cancel closes.
-struct FileDialog {
-    enum class Mode { open, save } mode = Mode::open;
-    std::filesystem::path folder;
-    std::vector<FolderEntry> entries;
-    std::string error;
-    char name[512] = "";
-};
-FileDialog& file_dialog() {
-    static FileDialog d;
-    return d;
-}
-
-void browse(FileDialog& d, const std::filesystem::path& folder) {
-    auto listed =
-        list_folder(folder, d.mode == FileDialog::Mode::open ? openable_extensions() : saveable_extensions());
-    if (!listed) {
-        d.error = listed.message();
-        return;
-    }
-    std::error_code ec;
-    d.folder = std::filesystem::weakly_canonical(folder, ec);
-    if (ec) d.folder = folder;
-    d.entries = std::move(*listed);
-    d.error.clear();
-}
-
-void remember_folder(EditorState& state, const std::filesystem::path& folder) {
-    state.last_folder = folder.string();
-    save_last_folder(state.settings_file, state.last_folder);
-}
-
-void open_scene_file(ecs::Registry& registry, EditorState& state, const std::string& path) {
-    // Replace the scene: destroy every entity, load, re-run the editor set-up. The undo history refers
-    // to the old entities, so it is cleared.
-    ecs::Registry probe;
-    if (Status st = load_scene(probe, path); !st) {
-        state.status = st.message();
-        return;
-    }
-    std::vector<ecs::Entity> all;
-    registry.each_entity([&](ecs::Entity e) { all.push_back(e); });
-    for (ecs::Entity e : all) registry.destroy(e);
-    if (Status st2 = load_scene(registry, path); !st2) state.status = st2.message();
-    state.undo.clear();
-    state.camera = state.active_lattice = state.selected_entity = ecs::null_entity;
-    state.last_edit = {};
-    state.unkeyed = ecs::null_entity;
-    setup_editor(registry, state.viewport);
-    state.status = "opened " + path;
-}
-
-void file_dialog_window(ecs::Registry& registry, EditorState& state) {
-    FileDialog& d = file_dialog();
-    const char* title = d.mode == FileDialog::Mode::open ? "Open scene" : "Save scene as";
-    const ImGuiViewport* vp = ImGui::GetMainViewport();
-    ImGui::SetNextWindowPos(ImVec2(vp->Size.x * 0.5f, vp->Size.y * 0.5f), ImGuiCond_Appearing,
-                            ImVec2(0.5f, 0.5f));
-    ImGui::SetNextWindowSize(
-        ImVec2(std::min(640.0f, vp->Size.x - 40.0f), std::min(460.0f, vp->Size.y - 80.0f)),
-        ImGuiCond_Appearing);
-    if (!ImGui::BeginPopupModal(title, nullptr)) return;
-    if (ImGui::IsKeyPressed(ImGui::GetKeyIndex(ImGuiKey_Escape))) {
-        ImGui::CloseCurrentPopup();
-        ImGui::EndPopup();
-        return;
-    }
-    ImGui::TextUnformatted(d.folder.string().c_str());
-    if (!d.error.empty()) ImGui::TextColored(ImVec4(1.0f, 0.45f, 0.4f, 1.0f), "%s", d.error.c_str());
-    const float list_h = ImGui::GetContentRegionAvail().y - 2.0f * ImGui::GetFrameHeightWithSpacing() - 4.0f;
-    std::string chosen;  // a file double-clicked: open/save it at once
-    if (ImGui::BeginChild("##files", ImVec2(0, std::max(list_h, 60.0f)), true)) {
-        std::filesystem::path enter;
-        for (const FolderEntry& e : d.entries) {
-            const std::string label = e.folder ? "[" + e.name + "]" : e.name;
-            if (ImGui::Selectable(label.c_str(), !e.folder && e.name == d.name,
-                                  ImGuiSelectableFlags_AllowDoubleClick)) {
-                if (e.folder) enter = e.name == ".." ? d.folder.parent_path() : d.folder / e.name;
-                else {
-                    std::snprintf(d.name, sizeof d.name, "%s", e.name.c_str());
-                    if (ImGui::IsMouseDoubleClicked(0)) chosen = (d.folder / e.name).string();
-                }
-            }
-        }
-        if (!enter.empty()) browse(d, enter);
-    }
-    ImGui::EndChild();
-    ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x * 0.7f);
-    const bool entered =
-        ImGui::InputText(d.mode == FileDialog::Mode::open ? "file or built-in name" : "file name", d.name,
-                         sizeof d.name, ImGuiInputTextFlags_EnterReturnsTrue);
-    if (ImGui::Button(d.mode == FileDialog::Mode::open ? "Open" : "Save") || entered) {
-        const std::string name = d.name;
-        if (!name.empty()) {
-            const std::filesystem::path p(name);
-            // A bare built-in name ("sphere") is not a file in the folder; anything else is relative to it.
-            const bool builtin = d.mode == FileDialog::Mode::open && !p.has_extension() &&
-                                 !p.has_parent_path() && !std::filesystem::exists(d.folder / p);
-            chosen = builtin ? name : (p.is_absolute() ? p : d.folder / p).string();
-        }
-    }
-    ImGui::SameLine();
-    if (ImGui::Button("Cancel")) ImGui::CloseCurrentPopup();
-    if (!chosen.empty()) {
-        const std::filesystem::path p(chosen);
-        if (p.has_parent_path()) remember_folder(state, p.parent_path());
-        if (d.mode == FileDialog::Mode::open) open_scene_file(registry, state, chosen);
-        else state.save_as = chosen, state.request_save = true;
-        ImGui::CloseCurrentPopup();
-    }
-    ImGui::EndPopup();
-}
-
 void menu_bar(ecs::Registry& registry, EditorState& state) {
     bool open_popup = false, save_popup = false;
     if (ImGui::BeginMainMenuBar()) {
-        layout_state().menu_height = ImGui::GetWindowSize().y;
-        record_current_window("##menu");
+        layout_state(registry).menu_height = ImGui::GetWindowSize().y;
+        record_current_window(registry, "##menu");
         if (ImGui::BeginMenu("File")) {
             if (ImGui::MenuItem("Open scene...", "Ctrl+O")) open_popup = true;
             if (ImGui::MenuItem("Save scene", "Ctrl+S")) state.request_save = true;
@@ -284,12 +172,12 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
         ImGui::EndMainMenuBar();
     }
     if (state.request_open_dialog) open_popup = true, state.request_open_dialog = false;
-    if (open_popup || save_popup) open_file_dialog(state, save_popup);
+    if (open_popup || save_popup) open_file_dialog(registry, state, save_popup);
     file_dialog_window(registry, state);
 }
 
 void outliner(ecs::Registry& registry, EditorState& state) {
-    if (begin_panel(Panel::outliner)) {
+    if (begin_panel(registry, Panel::outliner)) {
         registry.each_entity([&](ecs::Entity e) {
             const std::string label = entity_label(registry, e) + "##" + std::to_string(e.index);
             if (ImGui::Selectable(label.c_str(), state.selected_entity == e)) {
@@ -302,7 +190,7 @@ void outliner(ecs::Registry& registry, EditorState& state) {
 }
 
 void inspector(ecs::Registry& registry, EditorState& state) {
-    if (!begin_panel(Panel::inspector)) {
+    if (!begin_panel(registry, Panel::inspector)) {
         ImGui::End();
         return;
     }
@@ -417,7 +305,7 @@ void inspector(ecs::Registry& registry, EditorState& state) {
 }
 
 void tools_panel(ecs::Registry& registry, EditorState& state) {
-    if (begin_panel(Panel::tools)) {
+    if (begin_panel(registry, Panel::tools)) {
         int tool = int(state.tool);
         ImGui::RadioButton("select (Q)", &tool, int(Tool::select));
         ImGui::SameLine();
@@ -462,7 +350,7 @@ void tools_panel(ecs::Registry& registry, EditorState& state) {
 }
 
 void lattice_panel(ecs::Registry& registry, EditorState& state) {
-    if (begin_panel(Panel::lattice)) {
+    if (begin_panel(registry, Panel::lattice)) {
         lattice_manager_section(registry, state);  // add / remove / order / JSON (lattice_manage.h)
         const Lattice* l =
             registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
@@ -516,7 +404,7 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
 }
 
 void timeline_panel(ecs::Registry& registry, EditorState& state) {
-    if (begin_panel(Panel::timeline)) {
+    if (begin_panel(registry, Panel::timeline)) {
         const ecs::Entity e = state.active_lattice;
         AnimationClip* clip = registry.valid(e) ? registry.try_get<AnimationClip>(e) : nullptr;
         AnimationState* anim = registry.valid(e) ? registry.try_get<AnimationState>(e) : nullptr;
@@ -549,7 +437,7 @@ void timeline_panel(ecs::Registry& registry, EditorState& state) {
 }
 
 void profiler_panel(ecs::Registry& registry, EditorState&) {
-    if (begin_panel(Panel::frame_time)) {
+    if (begin_panel(registry, Panel::frame_time)) {
         if (const auto* o = registry.try_resource<profiling::ProfileOverlay>(); o && o->count > 0) {
             ImGui::Text("%.1f ms (avg %.1f, %.1f FPS)", double(o->frame_last_ms), double(o->frame_avg_ms),
                         o->frame_avg_ms > 0 ? 1000.0 / double(o->frame_avg_ms) : 0.0);
@@ -590,7 +478,7 @@ void status_bar(ecs::Registry& registry, EditorState& state) {
     ImGui::Begin("##status", nullptr,
                  ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoInputs |
                      ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing);
-    record_current_window("##status");
+    record_current_window(registry, "##status");
     std::size_t selected = 0;
     if (registry.valid(state.active_lattice))
         if (const auto* s = registry.try_get<picking::LatticeSelection>(state.active_lattice))
@@ -673,25 +561,15 @@ void same_line_if_fits(const char* next_label) {
     if (ImGui::GetItemRectMax().x + style.ItemSpacing.x + w <= right) ImGui::SameLine();
 }
 
-const std::vector<NamedPanelRect>& panel_rects() { return layout_state().drawn; }
-
-void open_file_dialog(EditorState& state, bool save) {
-    FileDialog& d = file_dialog();
-    d.mode = save ? FileDialog::Mode::save : FileDialog::Mode::open;
-    d.name[0] = '\0';
-    std::error_code ec;
-    browse(d, state.last_folder.empty() ? std::filesystem::current_path(ec)
-                                        : std::filesystem::path(state.last_folder));
-    if (!d.error.empty()) browse(d, std::filesystem::current_path(ec));  // the remembered folder is gone
-    ImGui::OpenPopup(save ? "Save scene as" : "Open scene");
+std::vector<NamedPanelRect> panel_rects(const ecs::Registry& registry) {
+    const LayoutState* ls = registry.try_resource<LayoutState>();
+    return ls ? ls->drawn : std::vector<NamedPanelRect>{};
 }
-
-bool file_dialog_open() { return ImGui::IsPopupOpen("Open scene") || ImGui::IsPopupOpen("Save scene as"); }
 
 void draw_panels(ecs::Registry& registry, const FrameContext&) {
     EditorState* state = registry.try_resource<EditorState>();
     if (!state) return;
-    LayoutState& ls = layout_state();
+    LayoutState& ls = layout_state(registry);
     ls.drawn.clear();
     const ImGuiViewport* vp = ImGui::GetMainViewport();
     LayoutInput in;

@@ -26,13 +26,15 @@ struct NamedPanelRect {
     std::string name;
     PanelRect rect;
 };
-const std::vector<NamedPanelRect>& panel_rects();
+std::vector<NamedPanelRect> panel_rects(const ecs::Registry& registry);
 
 // The open (save = false) / save-as dialog: a file browser starting in EditorState::last_folder; Escape
-// or Cancel closes it. Needs a current ImGui frame; the dialog is drawn by draw_panels.
+// or Cancel closes it. Needs a current ImGui frame; the dialog is drawn by draw_panels
+// (file_dialog_window, file_dialog.cpp). Its folder and listing are a registry resource.
 struct EditorState;
-void open_file_dialog(EditorState& state, bool save);
+void open_file_dialog(ecs::Registry& registry, EditorState& state, bool save);
 bool file_dialog_open();
+void file_dialog_window(ecs::Registry& registry, EditorState& state);
 
 // SameLine() when a button labelled `next_label` still fits on the current line of the window, so rows
 // of buttons wrap in narrow panels instead of being cut at the window's edge.

@@ -274,7 +274,7 @@ void ui_system(ecs::Registry& registry, const FrameContext& frame) {
         std::snprintf(line, sizeof line, "{\n  \"window\": [%g, %g],\n  \"panels\": [", double(size.x),
                       double(size.y));
         std::string json = line;
-        const auto& rects = panel_rects();
+        const auto rects = panel_rects(registry);
         for (std::size_t i = 0; i < rects.size(); ++i) {
             const PanelRect& r = rects[i].rect;
             std::snprintf(

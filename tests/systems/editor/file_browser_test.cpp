@@ -94,7 +94,7 @@ TEST(FileBrowser, DialogOpensAndEscapeClosesIt) {
     };
     frame(false);
     ImGui::NewFrame();
-    open_file_dialog(state, false);
+    open_file_dialog(reg, state, false);
     draw_panels(reg, FrameContext{});
     ImGui::Render();
     EXPECT_TRUE(frame(false));

@@ -130,9 +130,9 @@ void scene_with_lattice(ecs::Registry& reg) {
     s.selected_entity = c;  // the inspector shows the cloud's material rows
 }
 
-std::vector<std::pair<std::string, PanelRect>> drawn() {
+std::vector<std::pair<std::string, PanelRect>> drawn(const ecs::Registry& reg) {
     std::vector<std::pair<std::string, PanelRect>> out;
-    for (const NamedPanelRect& p : panel_rects()) out.emplace_back(p.name, p.rect);
+    for (const NamedPanelRect& p : panel_rects(reg)) out.emplace_back(p.name, p.rect);
     return out;
 }
 
@@ -145,7 +145,7 @@ TEST(PanelLayout, ImGuiDrawsThePanelsWhereTheLayoutSays) {
     for (const auto& s :
          {std::pair{1280.0f, 720.0f}, {1600.0f, 900.0f}, {1920.0f, 1080.0f}, {1024.0f, 640.0f}}) {
         for (int f = 0; f < 3; ++f) imgui.frame(reg, s.first, s.second);  // menu height settles after frame 1
-        const auto rects = drawn();
+        const auto rects = drawn(reg);
         ASSERT_EQ(rects.size(), panel_count + 2) << "menu, status and six panels";
         expect_fits(rects, s.first, s.second);
     }
@@ -159,7 +159,7 @@ TEST(PanelLayout, CollapsedPanelsAreRememberedThroughTheIniFile) {
     {
         HeadlessImGui imgui;
         for (int f = 0; f < 2; ++f) imgui.frame(reg, 1280, 720);
-        for (const NamedPanelRect& p : panel_rects())
+        for (const NamedPanelRect& p : panel_rects(reg))
             if (p.name == "Inspector") inspector_open = p.rect.h;
         ImGui::SetWindowCollapsed("Outliner", true);  // what a click on its title bar arrow does
         for (int f = 0; f < 2; ++f) imgui.frame(reg, 1280, 720);
@@ -170,13 +170,13 @@ TEST(PanelLayout, CollapsedPanelsAreRememberedThroughTheIniFile) {
         HeadlessImGui imgui;  // the next run
         ImGui::LoadIniSettingsFromMemory(ini.c_str(), ini.size());
         for (int f = 0; f < 2; ++f) imgui.frame(reg, 1280, 720);
-        for (const NamedPanelRect& p : panel_rects()) {
+        for (const NamedPanelRect& p : panel_rects(reg)) {
             if (p.name == "Outliner") {
                 EXPECT_LE(p.rect.h, ImGui::GetFrameHeight() + 1.0f);
             }
             if (p.name == "Inspector") inspector_folded = p.rect.h;
         }
-        expect_fits(drawn(), 1280, 720);
+        expect_fits(drawn(reg), 1280, 720);
     }
     EXPECT_GT(inspector_folded, inspector_open + 60.0f);
 }
