@@ -43,6 +43,8 @@ void ffd_release_gpu(ecs::Registry& registry) { registry.erase_resource<FfdGpuSt
 
 void ffd_system(ecs::Registry& reg, const FrameContext&) {
     FfdSettings* settings = reg.try_resource<FfdSettings>();
+    FfdStats* stats = reg.try_resource<FfdStats>();
+    if (!stats) stats = &reg.set_resource<FfdStats>();
     const ffd::DeformBackend backend = ffd::choose_deform_backend(settings);
     const bool have_gl = backend.have_gl, force_cpu = backend.force_cpu;
     if (have_gl) collect_gpu_stats(reg);
@@ -86,7 +88,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
             for (const glm::vec3& p : cloud.positions) rest.add(cloud.origin + glm::dvec3(p));
             out.rest_box_lo = rest.lo, out.rest_box_hi = rest.hi, out.rest_box_empty = rest.empty;
             out.has_rest_box = true, out.rest_box_cloud = cloud_v;
-            if (settings) ++settings->cpu_splat_passes;
+            ++stats->cpu_splat_passes;
         }
         ffd::Box box{out.rest_box_lo, out.rest_box_hi, out.rest_box_empty};
         for (ecs::Entity le : lattices)
@@ -129,7 +131,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
                 out.gpu_valid = true;
                 out.cpu_valid = false;
                 out.positions.clear(), out.normals.clear(), out.axis_u.clear(), out.axis_v.clear();
-                if (settings) ++settings->gpu_runs, settings->gpu_sync_readbacks = gpu->sync_readbacks();
+                ++stats->gpu_runs, stats->gpu_sync_readbacks = gpu->sync_readbacks();
                 continue;
             }
         }
@@ -143,7 +145,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
                                         store->keep_cpu);
             if (auto* rs = reg.try_resource<gfx::ResidencyStats>()) ++rs->deformed_uploads;
         }
-        if (settings) ++settings->cpu_runs, ++settings->cpu_splat_passes;
+        ++stats->cpu_runs, ++stats->cpu_splat_passes;
     }
 }
 

@@ -27,8 +27,13 @@ namespace sffd {
 
 // Optional resource: settings and counters of the deformation phase.
 struct FfdSettings {
-    bool force_cpu = false;      // never use the GPU path (picking-heavy tools, comparisons)
-    bool force_gpu = false;      // use the GPU path even on a software rasterizer (llvmpipe)
+    bool force_cpu = false;  // never use the GPU path (picking-heavy tools, comparisons)
+    bool force_gpu = false;  // use the GPU path even on a software rasterizer (llvmpipe)
+};
+
+// Resource written by ffd_system (created on its first run), read by tests and `profile`: what the
+// system did so far. Kept apart from FfdSettings, which only the user writes.
+struct FfdStats {
     std::uint64_t cpu_runs = 0;  // clouds deformed on the CPU so far
     std::uint64_t gpu_runs = 0;  // clouds deformed on the GPU so far
     // GPU-resident frame, checked by tests: passes of the system over a cloud's splats on the CPU (the

@@ -47,9 +47,11 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
     // The backend choice of ffd_system (systems/ffd/deform_backend.h).
     const ffd::DeformBackend backend = ffd::choose_deform_backend(reg.try_resource<FfdSettings>());
     const bool have_gl = backend.have_gl, force_cpu = backend.force_cpu;
-    GaussianDeformSettings* counters = reg.try_resource<GaussianDeformSettings>();
-    const gaussian::ShMode gpu_sh = counters ? counters->gpu_sh : gaussian::ShMode::rotate_view;
-    const gaussian::ShMode cpu_sh = counters ? counters->cpu_sh : gaussian::ShMode::rotate_coefficients;
+    const GaussianDeformSettings* settings = reg.try_resource<GaussianDeformSettings>();
+    const gaussian::ShMode gpu_sh = settings ? settings->gpu_sh : gaussian::ShMode::rotate_view;
+    const gaussian::ShMode cpu_sh = settings ? settings->cpu_sh : gaussian::ShMode::rotate_coefficients;
+    GaussianDeformStats* counters = reg.try_resource<GaussianDeformStats>();
+    if (!counters) counters = &reg.set_resource<GaussianDeformStats>();
     if (have_gl) collect_gpu_stats(reg);
     // Collect first: emplacing DeformedGaussians while iterating is a structural change.
     std::vector<ecs::Entity> clouds;
@@ -106,7 +108,7 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
                 out.cloud = GaussianCloud{};
                 out.cloud.origin = cloud.origin;
                 out.cloud.sh_degree = cloud.sh_degree;
-                if (counters) ++counters->gpu_runs, counters->gpu_sync_readbacks = gpu->sync_readbacks();
+                ++counters->gpu_runs, counters->gpu_sync_readbacks = gpu->sync_readbacks();
                 continue;
             }
         }
@@ -145,7 +147,7 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
             gaussian::upload_cpu_deformed(*resident, out, cloud);
             if (auto* rs = reg.try_resource<gfx::ResidencyStats>()) ++rs->deformed_uploads;
         }
-        if (counters) ++counters->cpu_runs;
+        ++counters->cpu_runs;
     }
 }
 

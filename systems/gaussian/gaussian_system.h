@@ -32,6 +32,11 @@ struct GaussianDeformSettings {
     // rotated in DeformedGaussians::cloud.sh, or frames in DeformedGaussians::cloud.sh_frames.
     gaussian::ShMode gpu_sh = gaussian::ShMode::rotate_view;
     gaussian::ShMode cpu_sh = gaussian::ShMode::rotate_coefficients;
+};
+
+// Resource written by gaussian_deform_system (created on its first run), read by tests and `profile`.
+// Kept apart from GaussianDeformSettings, which only the user writes.
+struct GaussianDeformStats {
     std::uint64_t cpu_runs = 0;            // clouds deformed on the CPU
     std::uint64_t gpu_runs = 0;            // clouds deformed on the GPU
     std::uint64_t gpu_sync_readbacks = 0;  // synchronous read-backs by the system's GPU deformer (stays 0)

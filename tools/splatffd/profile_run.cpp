@@ -222,9 +222,9 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     // Deformations per path so far: the first frames may take the CPU path before the render upload.
     auto runs = [&registry] {
         std::pair<std::uint64_t, std::uint64_t> r{0, 0};
-        if (const auto* fs = registry.try_resource<FfdSettings>())
+        if (const auto* fs = registry.try_resource<FfdStats>())
             r.first += fs->cpu_runs, r.second += fs->gpu_runs;
-        if (const auto* gs = registry.try_resource<GaussianDeformSettings>())
+        if (const auto* gs = registry.try_resource<GaussianDeformStats>())
             r.first += gs->cpu_runs, r.second += gs->gpu_runs;
         return r;
     };
@@ -250,11 +250,11 @@ Result<RunOutput> run_profile(const RunSetup& s) {
                   {"schedule", schedule_kind},
                   {"clock", std::string("fixed 1/60 s")}};
     // Which path the FFD system really took (it falls back to the CPU e.g. before the render upload).
-    if (const auto* fs = registry.try_resource<FfdSettings>()) {
+    if (const auto* fs = registry.try_resource<FfdStats>()) {
         config.emplace_back("ffd_cpu_runs", static_cast<double>(fs->cpu_runs));
         config.emplace_back("ffd_gpu_runs", static_cast<double>(fs->gpu_runs));
     }
-    if (const auto* gs = registry.try_resource<GaussianDeformSettings>()) {
+    if (const auto* gs = registry.try_resource<GaussianDeformStats>()) {
         config.emplace_back("gaussian_cpu_runs", static_cast<double>(gs->cpu_runs));
         config.emplace_back("gaussian_gpu_runs", static_cast<double>(gs->gpu_runs));
     }

@@ -200,7 +200,7 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.8,
                       glm::dvec3(0.0));
     ffd_system(reg, {});
-    EXPECT_EQ(settings.gpu_runs, 1u);
+    EXPECT_EQ(reg.resource<FfdStats>().gpu_runs, 1u);
     const gfx::GpuSplats& s = store.clouds[cloud];
     ASSERT_EQ(s.state, gfx::Residency::deformed_gpu);
     EXPECT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
@@ -223,10 +223,10 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     const std::uint64_t version = s.deformed_version;
     ffd_system(reg, {});  // nothing changed: no dispatch
     EXPECT_EQ(s.deformed_version, version);
-    EXPECT_EQ(settings.gpu_runs, 1u);
+    EXPECT_EQ(reg.resource<FfdStats>().gpu_runs, 1u);
     ffd::stretch(reg.patch<Lattice>(le), {0}, {0.01, 0, 0});
     ffd_system(reg, {});
-    EXPECT_EQ(settings.gpu_runs, 2u);
+    EXPECT_EQ(reg.resource<FfdStats>().gpu_runs, 2u);
     EXPECT_GT(s.deformed_version, version);
     ffd_release_gpu(reg);
     reg.erase_resource<gfx::GpuSplatStore>();
@@ -248,16 +248,16 @@ TEST_F(FfdGl, GpuPathTouchesNoPerSplatCpuArrayAfterTheFirstFrame) {
     settings.force_gpu = true;
     auto& store = upload_rest(reg, cloud, c);
     ffd_system(reg, {});
-    ASSERT_EQ(settings.gpu_runs, 1u);
-    EXPECT_EQ(settings.cpu_splat_passes, 1u);  // the rest box, once
+    ASSERT_EQ(reg.resource<FfdStats>().gpu_runs, 1u);
+    EXPECT_EQ(reg.resource<FfdStats>().cpu_splat_passes, 1u);  // the rest box, once
     for (int frame = 0; frame < 6; ++frame) {
         Lattice& l = reg.patch<Lattice>(le);
         ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.2, glm::dvec3(0.0));
         ffd_system(reg, {});
     }
-    EXPECT_EQ(settings.gpu_runs, 7u);
-    EXPECT_EQ(settings.cpu_splat_passes, 1u);
-    EXPECT_EQ(settings.gpu_sync_readbacks, 0u);
+    EXPECT_EQ(reg.resource<FfdStats>().gpu_runs, 7u);
+    EXPECT_EQ(reg.resource<FfdStats>().cpu_splat_passes, 1u);
+    EXPECT_EQ(reg.resource<FfdStats>().gpu_sync_readbacks, 0u);
     // A mirror in x on top: the splats inside invert. Their count arrives once the GPU is done.
     {
         Lattice& l = reg.patch<Lattice>(le);
@@ -268,11 +268,11 @@ TEST_F(FfdGl, GpuPathTouchesNoPerSplatCpuArrayAfterTheFirstFrame) {
     const std::uint64_t version = d.version;
     glFinish();           // the test waits, the system never does
     ffd_system(reg, {});  // nothing changed: no dispatch, but the statistics are collected
-    EXPECT_EQ(settings.gpu_runs, 8u);
+    EXPECT_EQ(reg.resource<FfdStats>().gpu_runs, 8u);
     EXPECT_EQ(d.version, version);
     EXPECT_EQ(d.inverted_version, version);
-    EXPECT_EQ(settings.gpu_sync_readbacks, 0u);
-    EXPECT_EQ(settings.cpu_splat_passes, 1u);
+    EXPECT_EQ(reg.resource<FfdStats>().gpu_sync_readbacks, 0u);
+    EXPECT_EQ(reg.resource<FfdStats>().cpu_splat_passes, 1u);
     // Against the CPU path: same inverted count, same bounds, and the GPU output lies inside them.
     std::vector<gpu::GpuSplat> back(c.size());
     glGetNamedBufferSubData(store.clouds[cloud].deformed.id(), 0,
@@ -281,7 +281,7 @@ TEST_F(FfdGl, GpuPathTouchesNoPerSplatCpuArrayAfterTheFirstFrame) {
     const glm::dvec3 gpu_lo = d.bounds_min, gpu_hi = d.bounds_max;
     settings.force_cpu = true;
     ffd_system(reg, {});
-    EXPECT_EQ(settings.cpu_runs, 1u);
+    EXPECT_EQ(reg.resource<FfdStats>().cpu_runs, 1u);
     const DeformedSplats& cpu = reg.get<DeformedSplats>(cloud);
     EXPECT_GT(cpu.inverted, 100u);
     EXPECT_EQ(gpu_inverted, cpu.inverted);
@@ -318,14 +318,14 @@ TEST_F(FfdGl, SoftwareRasterizerGetsTheCpuPathUnlessTheGpuIsForced) {
     s.rest_version = reg.version<SplatCloud>(cloud);
     ffd::stretch(reg.patch<Lattice>(le), {0}, {0.2, 0, 0});
     ffd_system(reg, {});
-    EXPECT_EQ(settings.cpu_runs, 1u);
-    EXPECT_EQ(settings.gpu_runs, 0u);
+    EXPECT_EQ(reg.resource<FfdStats>().cpu_runs, 1u);
+    EXPECT_EQ(reg.resource<FfdStats>().gpu_runs, 0u);
     EXPECT_TRUE(reg.get<DeformedSplats>(cloud).cpu_valid);
     EXPECT_EQ(s.state, gfx::Residency::deformed_cpu);  // the CPU output was uploaded for the render
     EXPECT_EQ(s.deformed_version, 1u);
     settings.force_gpu = true;  // a policy change re-runs the cloud on the compute pass
     ffd_system(reg, {});
-    EXPECT_EQ(settings.gpu_runs, 1u);
+    EXPECT_EQ(reg.resource<FfdStats>().gpu_runs, 1u);
     EXPECT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
     EXPECT_EQ(s.state, gfx::Residency::deformed_gpu);
     EXPECT_EQ(s.deformed_version, 2u);

@@ -45,26 +45,26 @@ void make_scene(Scene& s) {
 TEST(FfdSystem, RunsOnlyWhenSomethingChanged) {
     Scene s;
     make_scene(s);
-    auto& settings = s.reg.resource<FfdSettings>();
     ffd_system(s.reg, {});
-    EXPECT_EQ(settings.cpu_runs, 1u);
+    const auto& stats = s.reg.resource<FfdStats>();
+    EXPECT_EQ(stats.cpu_runs, 1u);
     const DeformedSplats& d = s.reg.get<DeformedSplats>(s.cloud);
     EXPECT_TRUE(d.cpu_valid);
     const std::uint64_t v = d.version;
     ffd_system(s.reg, {});
-    EXPECT_EQ(settings.cpu_runs, 1u);  // nothing moved
+    EXPECT_EQ(stats.cpu_runs, 1u);  // nothing moved
     EXPECT_EQ(s.reg.get<DeformedSplats>(s.cloud).version, v);
     ffd::twist(s.reg.patch<Lattice>(s.local), ffd::all_control_points(s.reg.get<Lattice>(s.local)), {0, 0, 1},
                0.3);
     ffd_system(s.reg, {});
-    EXPECT_EQ(settings.cpu_runs, 2u);  // the local lattice's stamp moved
+    EXPECT_EQ(stats.cpu_runs, 2u);  // the local lattice's stamp moved
     EXPECT_GT(s.reg.get<DeformedSplats>(s.cloud).version, v);
     s.reg.patch<SplatCloud>(s.cloud);
     ffd_system(s.reg, {});
-    EXPECT_EQ(settings.cpu_runs, 3u);  // the rest points changed
+    EXPECT_EQ(stats.cpu_runs, 3u);  // the rest points changed
     s.reg.patch<Deformers>(s.cloud).lattices.pop_back();
     ffd_system(s.reg, {});
-    EXPECT_EQ(settings.cpu_runs, 4u);  // the deformer list changed
+    EXPECT_EQ(stats.cpu_runs, 4u);  // the deformer list changed
 }
 
 TEST(FfdSystem, DeformersApplyInOrderAndBoundsCover) {
@@ -182,16 +182,16 @@ TEST(FfdSystem, BoundsContainEveryDeformedPointForRandomLattices) {
 TEST(FfdSystem, RestBoxIsComputedOncePerCloudChange) {
     Scene s;
     make_scene(s);
-    auto& settings = s.reg.resource<FfdSettings>();
     ffd_system(s.reg, {});
-    EXPECT_EQ(settings.cpu_splat_passes, 2u);  // rest box + the CPU deformation
+    const auto& stats = s.reg.resource<FfdStats>();
+    EXPECT_EQ(stats.cpu_splat_passes, 2u);  // rest box + the CPU deformation
     ffd::stretch(s.reg.patch<Lattice>(s.local), {0}, {0.01, 0, 0});
     ffd_system(s.reg, {});
-    EXPECT_EQ(settings.cpu_splat_passes, 3u);  // the CPU deformation only
+    EXPECT_EQ(stats.cpu_splat_passes, 3u);  // the CPU deformation only
     const glm::dvec3 lo = s.reg.get<DeformedSplats>(s.cloud).bounds_min;
     for (glm::vec3& p : s.reg.patch<SplatCloud>(s.cloud).positions) p.x -= 5.0f;  // the cloud moves out
     ffd_system(s.reg, {});
-    EXPECT_EQ(settings.cpu_splat_passes, 5u);  // the box follows the new cloud
+    EXPECT_EQ(stats.cpu_splat_passes, 5u);  // the box follows the new cloud
     EXPECT_LT(s.reg.get<DeformedSplats>(s.cloud).bounds_min.x, lo.x - 4.0);
 }
 

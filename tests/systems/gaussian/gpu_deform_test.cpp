@@ -342,7 +342,7 @@ TEST_F(GaussianGpuDeform, TwoDimensionalDispatchGridCoversEveryGaussian) {
 TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
     ecs::Registry reg;
     reg.set_resource<FfdSettings>().force_gpu = true;  // llvmpipe would choose the CPU path
-    auto& counters = reg.set_resource<GaussianDeformSettings>();
+    auto& settings = reg.set_resource<GaussianDeformSettings>();
     const ecs::Entity e = reg.create(), a = reg.create(), b = reg.create();
     const GaussianCloud cloud = random_cloud(1500, 2, 0.9f, 17);
     reg.emplace<GaussianCloud>(e, cloud);
@@ -395,15 +395,15 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
         frame();
     }
     EXPECT_EQ(g.deformed_version, v0 + 3);
-    EXPECT_EQ(counters.gpu_runs, 4u);
+    EXPECT_EQ(reg.resource<GaussianDeformStats>().gpu_runs, 4u);
     EXPECT_EQ(reg.resource<gfx::ResidencyStats>().rest_uploads, 1u);
-    EXPECT_EQ(counters.gpu_sync_readbacks, 0u);
-    EXPECT_EQ(counters.cpu_runs, 0u);
+    EXPECT_EQ(reg.resource<GaussianDeformStats>().gpu_sync_readbacks, 0u);
+    EXPECT_EQ(reg.resource<GaussianDeformStats>().cpu_runs, 0u);
     check("system, after lattice edits");
     frame();  // nothing moved
     EXPECT_EQ(g.deformed_version, v0 + 3);
     // Coefficient mode: re-deformed into deformed_sh, the frames no longer claimed.
-    counters.gpu_sh = ShMode::rotate_coefficients;
+    settings.gpu_sh = ShMode::rotate_coefficients;
     frame();
     EXPECT_EQ(g.deformed_version, v0 + 4);
     EXPECT_TRUE(g.sh_source == ShSource::rotated && !g.has_frames());
@@ -416,7 +416,7 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
                 "system, coefficients");
     }
     EXPECT_EQ(reg.resource<gfx::ResidencyStats>().rest_uploads, 1u);
-    EXPECT_EQ(counters.gpu_sync_readbacks, 0u);
+    EXPECT_EQ(reg.resource<GaussianDeformStats>().gpu_sync_readbacks, 0u);
     // Forced CPU: DeformedGaussians carries the arrays and the store draws their upload, not a GPU result.
     reg.resource<FfdSettings>() = FfdSettings{.force_cpu = true};
     frame();
@@ -437,14 +437,14 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
     residency_system(reg, {});
     EXPECT_EQ(g.state, gfx::Residency::rest);
     EXPECT_EQ(g.draw_buffer(), g.rest.id());
-    EXPECT_EQ(counters.cpu_runs, 1u);
+    EXPECT_EQ(reg.resource<GaussianDeformStats>().cpu_runs, 1u);
     gaussian_release_gpu(reg);
 }
 
 TEST_F(GaussianGpuDeform, SystemAutomaticChoiceFollowsFfdSystem) {
     // Automatic: the CPU path on a software rasterizer, the GPU path on a hardware GPU.
     ecs::Registry reg;
-    auto& counters = reg.set_resource<GaussianDeformSettings>();
+    reg.set_resource<GaussianDeformSettings>();
     const ecs::Entity e = reg.create(), a = reg.create();
     reg.emplace<GaussianCloud>(e, random_cloud(300, 1, 0.9f, 19));
     reg.emplace<Lattice>(a, twisted(LatticeBasis::bernstein, {3, 3, 3}));
@@ -452,10 +452,10 @@ TEST_F(GaussianGpuDeform, SystemAutomaticChoiceFollowsFfdSystem) {
     residency_system(reg, {});
     gaussian_deform_system(reg, {});
     if (gfx::software_rasterizer()) {
-        EXPECT_EQ(counters.cpu_runs, 1u);
+        EXPECT_EQ(reg.resource<GaussianDeformStats>().cpu_runs, 1u);
         EXPECT_FALSE(reg.get<DeformedGaussians>(e).on_gpu);
     } else {
-        EXPECT_EQ(counters.gpu_runs, 1u);
+        EXPECT_EQ(reg.resource<GaussianDeformStats>().gpu_runs, 1u);
         EXPECT_TRUE(reg.get<DeformedGaussians>(e).on_gpu);
     }
     gaussian_release_gpu(reg);

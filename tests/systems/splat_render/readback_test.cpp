@@ -160,7 +160,7 @@ void Readback_::gpu_deformation_frames_never_wait(RasterPath raster) {
     render_system(reg, FrameContext{.frame = 1});
     for (std::uint64_t f = 2; f < 10; ++f) frame(f);  // warm-up: programs, buffers, read-back slots
     ASSERT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
-    const FfdSettings before = reg.resource<FfdSettings>();
+    const FfdStats before = reg.resource<FfdStats>();
     const std::uint64_t stats_before = reg.get<DeformedSplats>(cloud).inverted_version;
     g_buffer_reads = g_finishes = g_blocking_waits = g_maps = 0;
     std::uint32_t render_cpu_passes = 0;
@@ -175,7 +175,7 @@ void Readback_::gpu_deformation_frames_never_wait(RasterPath raster) {
     EXPECT_EQ(g_finishes.load(), 0);
     EXPECT_EQ(g_blocking_waits.load(), 0);
     EXPECT_EQ(g_maps.load(), 0);
-    const FfdSettings& after = reg.resource<FfdSettings>();
+    const FfdStats& after = reg.resource<FfdStats>();
     EXPECT_EQ(after.gpu_runs, before.gpu_runs + 30);
     EXPECT_EQ(after.cpu_runs, before.cpu_runs);
     EXPECT_EQ(after.cpu_splat_passes, before.cpu_splat_passes);
