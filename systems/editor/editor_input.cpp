@@ -241,15 +241,31 @@ void editor_input_system(ecs::Registry& registry, const FrameContext& frame) {
     EditorState* state = registry.try_resource<EditorState>();
     if (!state) return;
     Camera* camera = camera_of(registry, *state);
-    std::vector<InputEvent> events;
-    if (state->replay) events = state->replay->take(frame.frame);
-    for (InputEvent& e : state->events) events.push_back(std::move(e));
+    state->pending_picks.clear();  // a pick the last frame's picking phase did not answer is dropped
+    std::vector<InputEvent> fresh;
+    if (state->replay) fresh = state->replay->take(frame.frame);
+    for (InputEvent& e : state->events) fresh.push_back(std::move(e));
     state->events.clear();
-    for (InputEvent& e : events) e.frame = frame.frame;
-    if (state->record) state->recorded.insert(state->recorded.end(), events.begin(), events.end());
-    for (const InputEvent& e : events) {
+    for (InputEvent& e : fresh) e.frame = frame.frame;
+    // Recorded as they arrive, so a replay of the recording defers the same events.
+    if (state->record) state->recorded.insert(state->recorded.end(), fresh.begin(), fresh.end());
+    std::vector<InputEvent> events = std::move(state->deferred);
+    state->deferred.clear();
+    events.insert(events.end(), std::make_move_iterator(fresh.begin()), std::make_move_iterator(fresh.end()));
+    std::size_t handled = 0;
+    for (; handled < events.size(); ++handled) {
+        const InputEvent& e = events[handled];
+        // After a gesture that posted a pick, the next events wait for the next frame (they may depend
+        // on what the pick selects), except the moves of a brush drag: each posts its own dab, and dabs
+        // only add to or remove from the selection.
+        if (!state->pending_picks.empty() &&
+            !(e.kind == InputKind::move && state->drag.kind == Drag::Kind::brush))
+            break;
         camera = camera_of(registry, *state);  // undo may have touched components: look it up again
-        if (!camera) break;
+        if (!camera) {
+            handled = events.size();  // no view to interpret them in: dropped
+            break;
+        }
         switch (e.kind) {
             case InputKind::move:
                 state->cursor = e.position;
@@ -266,9 +282,16 @@ void editor_input_system(ecs::Registry& registry, const FrameContext& frame) {
         state->request_frame_selection = false;
         frame_selection(registry, *state);
     }
+    state->deferred.assign(std::make_move_iterator(events.begin() + std::ptrdiff_t(handled)),
+                           std::make_move_iterator(events.end()));
+    events.resize(handled);
     adapt_quality(registry, *state, std::any_of(events.begin(), events.end(), [](const InputEvent& e) {
                       return e.kind == InputKind::scroll;
                   }));
+}
+
+void editor_pick_system(ecs::Registry& registry, const FrameContext&) {
+    if (EditorState* state = registry.try_resource<EditorState>()) apply_pending_picks(registry, *state);
 }
 
 }  // namespace sffd::editor

@@ -20,6 +20,7 @@
 #include "systems/editor/lattice_tools.h"
 #include "systems/editor/undo_stack.h"
 #include "systems/ffd/components.h"
+#include "systems/picking/selection.h"
 
 namespace sffd::editor {
 
@@ -27,6 +28,16 @@ enum class Tool : std::uint8_t { select, move, twist, brush };
 const char* tool_name(Tool tool);
 
 enum class PivotMode : std::uint8_t { centroid, picked_point };
+
+// A gesture that needs a pick: the input phase posts the pick (picking::post_pick) and this action; the
+// picking phase answers it; editor_pick_system, right after picking, applies the action to the answer.
+struct PendingPick {
+    enum class Action : std::uint8_t { click_select, brush, pivot };
+    Action action = Action::click_select;
+    std::uint64_t id = 0;                                     // picking::PickRequest::id
+    std::uint8_t modifiers = 0;                               // click_select: the click's modifiers
+    picking::SelectMode mode = picking::SelectMode::replace;  // brush: how the dab changes the selection
+};
 
 // A stretch or twist as the user last applied it (in lattice space), so "set key" can key it.
 struct LastEdit {
@@ -125,6 +136,11 @@ struct EditorState {
     std::vector<InputEvent> recorded;
     glm::dvec2 cursor{0.0};
     Drag drag;
+    // Picks posted this frame, applied after the picking phase (editor_pick_system), and the events that
+    // came after a pick-dependent one: handled in the next frame's input phase, after the pick was
+    // applied, so every event sees what the events before it did.
+    std::vector<PendingPick> pending_picks;
+    std::vector<InputEvent> deferred;
     LastEdit last_edit;
     TypedEntry typed;
 

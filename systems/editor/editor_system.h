@@ -32,6 +32,10 @@ namespace sffd::editor {
 
 void editor_input_system(ecs::Registry& registry, const FrameContext& frame);
 
+// Phase `picking`, after picking_system: applies the gestures whose picks were answered (click select,
+// brush, alt+click pivot; EditorState::pending_picks). The input phase posts them as picking requests.
+void editor_pick_system(ecs::Registry& registry, const FrameContext& frame);
+
 // Creates the EditorState resource (if absent), picks the camera (first Camera entity; creates one
 // framing every point cloud when there is none) and the first lattice as active, pauses animation
 // clips (edits of a paused clip's lattice survive; space plays). Returns the state.

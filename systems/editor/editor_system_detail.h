@@ -44,6 +44,8 @@ void finish_tool_drag(ecs::Registry& registry, EditorState& state, Drag& drag);
 void handle_move(ecs::Registry& registry, EditorState& state, Camera& camera, glm::dvec2 cursor);
 void handle_press(ecs::Registry& registry, EditorState& state, Camera& camera, const InputEvent& e);
 void handle_release(ecs::Registry& registry, EditorState& state, Camera& camera, const InputEvent& e);
+// Applies the gestures whose picks the picking phase answered (EditorState::pending_picks), in order.
+void apply_pending_picks(ecs::Registry& registry, EditorState& state);
 void cancel_drag(ecs::Registry& registry, EditorState& state);
 
 // editor_input.cpp

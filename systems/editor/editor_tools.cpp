@@ -5,20 +5,22 @@ namespace sffd::editor::detail {
 
 namespace {
 
-picking::PickHit pick_at(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor,
-                         bool control_points, bool surfaces) {
+// Posts a pick through the cursor for the picking phase, and the gesture to apply to its answer
+// (editor_pick_system, right after picking).
+void post_pick_at(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor,
+                  bool control_points, PendingPick action) {
     picking::PickQuery q = picking::query_at_pixel(screen_view(camera, state.viewport), cursor);
     q.tolerance_px = state.click_tolerance_px;
     q.xray = state.xray;
     q.control_points = control_points;
-    q.surfaces = surfaces;
-    return picking::pick(registry, picking::picking_state(registry), q);
+    q.surfaces = true;
+    action.id = picking::post_pick(registry, q);
+    state.pending_picks.push_back(action);
 }
 
-void click_select(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor,
+void click_select(ecs::Registry& registry, EditorState& state, const picking::PickHit& hit,
                   std::uint8_t modifiers) {
     const picking::SelectMode mode = picking::select_mode(modifiers & mods::shift, modifiers & mods::ctrl);
-    const picking::PickHit hit = pick_at(registry, state, camera, cursor, true, true);
     if (hit.kind == picking::PickKind::control_point) {
         state.active_lattice = hit.entity;
         state.selected_entity = hit.entity;
@@ -50,7 +52,12 @@ void box_select(ecs::Registry& registry, EditorState& state, const Camera& camer
 void brush_dab(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor,
                picking::SelectMode mode) {
     if (!active_lattice(registry, state)) return;
-    const picking::PickHit hit = pick_at(registry, state, camera, cursor, false, true);
+    post_pick_at(registry, state, camera, cursor, false, {PendingPick::Action::brush, 0, 0, mode});
+}
+
+void brush_apply(ecs::Registry& registry, EditorState& state, const picking::PickHit& hit,
+                 picking::SelectMode mode) {
+    if (!active_lattice(registry, state)) return;
     if (hit.kind != picking::PickKind::surface && hit.kind != picking::PickKind::gaussian) return;
     const auto local = picking::surface_hit_in_lattice_space(registry, state.active_lattice, hit);
     if (!local) return;
@@ -58,6 +65,14 @@ void brush_dab(ecs::Registry& registry, EditorState& state, const Camera& camera
     picking::LatticeSelection current{selection_of(registry, state.active_lattice)};
     set_selection(registry, state, state.active_lattice, picking::select(current, picked, mode).indices,
                   "brush");
+}
+
+void set_picked_pivot(EditorState& state, const picking::PickHit& hit) {
+    if (!hit) return;
+    state.picked_pivot = hit.position;
+    state.has_picked_pivot = true;
+    state.pivot_mode = PivotMode::picked_point;
+    say(state, "pivot set to the picked surface point");
 }
 
 // Pivot and axis of a tool in world space.
@@ -214,14 +229,8 @@ void handle_press(ecs::Registry& registry, EditorState& state, Camera& camera, c
         drag.kind = Drag::Kind::pan;
         return;
     }
-    if (e.modifiers & mods::alt) {  // pivot at a picked surface point
-        const picking::PickHit hit = pick_at(registry, state, camera, state.cursor, false, true);
-        if (hit) {
-            state.picked_pivot = hit.position;
-            state.has_picked_pivot = true;
-            state.pivot_mode = PivotMode::picked_point;
-            say(state, "pivot set to the picked surface point");
-        }
+    if (e.modifiers & mods::alt) {  // pivot at a picked surface point (set_picked_pivot, after picking)
+        post_pick_at(registry, state, camera, state.cursor, false, {PendingPick::Action::pivot});
         return;
     }
     const bool plain = (e.modifiers & (mods::shift | mods::ctrl)) == 0;
@@ -242,7 +251,8 @@ void handle_release(ecs::Registry& registry, EditorState& state, Camera& camera,
     if (drag.kind == Drag::Kind::none || drag.button != e.button) return;
     switch (drag.kind) {
         case Drag::Kind::pending_click:
-            click_select(registry, state, camera, drag.start, drag.modifiers);
+            post_pick_at(registry, state, camera, drag.start, true,
+                         {PendingPick::Action::click_select, 0, drag.modifiers});
             break;
         case Drag::Kind::box:
             box_select(registry, state, camera, drag.start, state.cursor, drag.modifiers);
@@ -261,6 +271,22 @@ void cancel_drag(ecs::Registry& registry, EditorState& state) {
         registry.patch<Lattice>(drag.lattice).current = drag.start_points;
     drag = Drag{};
     say(state, "cancelled");
+}
+
+void apply_pending_picks(ecs::Registry& registry, EditorState& state) {
+    std::vector<PendingPick> picks;
+    picks.swap(state.pending_picks);
+    for (const PendingPick& p : picks) {
+        // Not answered: the schedule ran no picking phase this frame (the gesture is dropped, as a click
+        // on nothing would be).
+        const picking::PickHit* hit = picking::find_pick_answer(registry, p.id);
+        if (!hit) continue;
+        switch (p.action) {
+            case PendingPick::Action::click_select: click_select(registry, state, *hit, p.modifiers); break;
+            case PendingPick::Action::brush: brush_apply(registry, state, *hit, p.mode); break;
+            case PendingPick::Action::pivot: set_picked_pivot(state, *hit); break;
+        }
+    }
 }
 
 }  // namespace sffd::editor::detail

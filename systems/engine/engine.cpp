@@ -32,8 +32,10 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
     s.add(Phase::deformation, "ffd", ffd_system);  // GPU compute when a context is current, else CPU
     s.add(Phase::deformation, "gaussian", gaussian_deform_system);  // 3D Gaussian clouds, CPU
 
-    // --- picking: only when a pick was requested (picking) ------------------------------------------
+    // --- picking: only when a pick was requested (picking); then the editor's gestures that waited for
+    // their pick (click select, brush, alt+click pivot) -------------------------------------------------
     s.add(Phase::picking, "picking", picking::picking_system);
+    s.add(Phase::picking, "editor.picks", editor::editor_pick_system);  // no-op without an EditorState
 
     // --- rendering: splat passes, overlays, UI, capture (splat_render, editor overlay) ---------------
     s.add(Phase::rendering, "splat_render", render::render_system);  // culling + HQ/preview splat passes

@@ -1,10 +1,9 @@
 // Picking components and resources: plain data. Owned by the picking system (systems/picking); the
-// editor (systems/editor) writes PickRequest and LatticeSelection, reads PickResult.
+// editor (systems/editor) posts PickRequests and writes LatticeSelection, reads PickResults.
 //
-//   registry.set_resource<picking::PickRequest>(picking::PickRequest{true, picking::query_at_pixel(view,
-//   {320.5, 240.5})});
-//   ... picking phase runs picking_system() ...
-//   const picking::PickHit& hit = registry.resource<picking::PickResult>().hit;
+//   const std::uint64_t id = picking::post_pick(registry, picking::query_at_pixel(view, {320.5, 240.5}));
+//   ... the picking phase runs picking_system() ...
+//   if (const picking::PickHit* hit = picking::find_pick_answer(registry, id)) ...
 #pragma once
 
 #include <cstdint>
@@ -55,17 +54,29 @@ struct PickQuery {
 PickQuery query_from_ray(const Ray& ray);
 PickQuery query_at_pixel(const ScreenView& view, glm::dvec2 screen);
 
-// Resource: a pick for the picking phase. `pending` is cleared by picking_system when answered.
+// One pick for the picking phase; `id` (never 0) names its answer.
 struct PickRequest {
-    bool pending = false;
+    std::uint64_t id = 0;
     PickQuery query;
 };
 
-// Resource: the last answered pick. `serial` increases by one per answered request.
-struct PickResult {
+// Resource: the picks posted (post_pick) since the last picking phase, which answers them in order and
+// empties `pending`. Several gestures of one frame may each post one.
+struct PickRequests {
+    std::vector<PickRequest> pending;
+    std::uint64_t next_id = 1;
+};
+
+struct PickAnswer {
+    std::uint64_t id = 0;  // the request's
     PickHit hit;
-    std::uint64_t serial = 0;
-    std::uint64_t frame = 0;
+};
+
+// Resource: the answers of the last picking phase that had requests, in request order (find_pick_answer).
+struct PickResults {
+    std::vector<PickAnswer> answers;
+    std::uint64_t frame = 0;   // the frame that answered them
+    std::uint64_t serial = 0;  // picks answered so far
 };
 
 // Resource: picking tunables.

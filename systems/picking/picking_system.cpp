@@ -112,15 +112,34 @@ PickHit pick(ecs::Registry& registry, PickingState& state, const PickQuery& quer
     return {};
 }
 
+std::uint64_t post_pick(ecs::Registry& registry, const PickQuery& query) {
+    PickRequests* requests = registry.try_resource<PickRequests>();
+    if (!requests) requests = &registry.set_resource<PickRequests>();
+    const std::uint64_t id = requests->next_id++;
+    requests->pending.push_back({id, query});
+    return id;
+}
+
+const PickHit* find_pick_answer(const ecs::Registry& registry, std::uint64_t id) {
+    const PickResults* results = registry.try_resource<PickResults>();
+    if (!results) return nullptr;
+    for (const PickAnswer& a : results->answers)
+        if (a.id == id) return &a.hit;
+    return nullptr;
+}
+
 void picking_system(ecs::Registry& registry, const FrameContext& frame) {
-    PickRequest* request = registry.try_resource<PickRequest>();
-    if (!request || !request->pending) return;
-    PickResult* result = registry.try_resource<PickResult>();
-    if (!result) result = &registry.set_resource<PickResult>();
-    result->hit = pick(registry, picking_state(registry), request->query);
-    result->frame = frame.frame;
-    ++result->serial;
-    request->pending = false;
+    PickRequests* requests = registry.try_resource<PickRequests>();
+    if (!requests || requests->pending.empty()) return;
+    PickResults* results = registry.try_resource<PickResults>();
+    if (!results) results = &registry.set_resource<PickResults>();
+    results->answers.clear();
+    PickingState& state = picking_state(registry);
+    for (const PickRequest& r : requests->pending)
+        results->answers.push_back({r.id, pick(registry, state, r.query)});
+    results->frame = frame.frame;
+    results->serial += requests->pending.size();
+    requests->pending.clear();
 }
 
 }  // namespace sffd::picking

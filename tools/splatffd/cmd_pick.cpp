@@ -136,9 +136,10 @@ int run_pick(sffd::cli::Args args) {
         registry.set_resource<picking::PickSettings>(settings);
     }
     // Through the engine's picking system, as the editor does: request, run the phase, read the result.
-    registry.set_resource<picking::PickRequest>(picking::PickRequest{true, query});
+    const std::uint64_t pick_id = picking::post_pick(registry, query);
     picking::picking_system(registry, FrameContext{});
-    const picking::PickHit hit = registry.resource<picking::PickResult>().hit;
+    const picking::PickHit* answer = picking::find_pick_answer(registry, pick_id);
+    const picking::PickHit hit = answer ? *answer : picking::PickHit{};
 
     if (!hit) {
         std::printf("{\"hit\":false,\"pixel\":[%.17g,%.17g]}\n", x, y);

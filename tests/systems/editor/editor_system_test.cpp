@@ -16,6 +16,7 @@
 #include "systems/ffd/deform.h"
 #include "systems/gaussian/components.h"
 #include "systems/picking/components.h"
+#include "systems/picking/picking_system.h"
 #include "systems/splat_render/splat_render.h"
 
 using namespace sffd;
@@ -62,11 +63,21 @@ struct Scene {
         return glm::dvec2(
             project_to_pixel(camera(), state->viewport, reg.get<Lattice>(lattice).current[control_point]));
     }
-    void run(std::vector<InputEvent> events) {
+    // One frame of the engine's editor steps: input, then the picking phase (picking, then the gestures
+    // that waited for their pick).
+    void frame_once(std::vector<InputEvent> events) {
         for (auto& e : events) e.frame = frame;
         state->events = std::move(events);
-        editor_input_system(reg, FrameContext{frame, frame / 60.0, 1 / 60.0});
+        const FrameContext f{frame, frame / 60.0, 1 / 60.0};
+        editor_input_system(reg, f);
+        picking::picking_system(reg, f);
+        editor_pick_system(reg, f);
         ++frame;
+    }
+    // The events, and as many frames as the events that wait for a pick need.
+    void run(std::vector<InputEvent> events) {
+        frame_once(std::move(events));
+        while (!state->deferred.empty()) frame_once({});
     }
     static InputEvent move(glm::dvec2 p) {
         InputEvent e;
@@ -127,6 +138,63 @@ TEST(EditorSystem, ClickShiftClickCtrlClickAndEmptyClick) {
     EXPECT_EQ(s.state->undo.size(), 4u);
     s.run({Scene::key("z", mods::ctrl)});
     EXPECT_EQ(s.selection(), std::vector<std::uint32_t>{b});
+}
+
+// A click posts a pick in the input phase; the picking phase answers it and the selection changes right
+// after, in the same frame.
+TEST(EditorSystem, ClickSelectsWhenThePickingPhaseAnswers) {
+    Scene s;
+    const std::uint32_t a = idx(s.lat(), 1, 1, 2);
+    s.state->events = {Scene::move(s.pixel_of(a)), Scene::press(), Scene::release()};
+    const FrameContext f{0, 0.0, 1 / 60.0};
+    editor_input_system(s.reg, f);
+    EXPECT_TRUE(s.selection().empty()) << "the input phase only posts the pick";
+    ASSERT_EQ(s.reg.resource<picking::PickRequests>().pending.size(), 1u);
+    ASSERT_EQ(s.state->pending_picks.size(), 1u);
+    picking::picking_system(s.reg, f);
+    EXPECT_TRUE(s.selection().empty());
+    editor_pick_system(s.reg, f);
+    EXPECT_EQ(s.selection(), std::vector<std::uint32_t>{a});
+    EXPECT_TRUE(s.state->pending_picks.empty());
+}
+
+// Events after a pick-dependent gesture wait for the next frame, so they see what the pick did: a click
+// and then Escape (deselect) in one frame leave nothing selected.
+TEST(EditorSystem, EventsAfterAPickRunAfterItsAnswer) {
+    Scene s;
+    const std::uint32_t a = idx(s.lat(), 1, 1, 2);
+    s.frame_once({Scene::move(s.pixel_of(a)), Scene::press(), Scene::release(), Scene::key("escape")});
+    EXPECT_EQ(s.selection(), std::vector<std::uint32_t>{a});
+    ASSERT_EQ(s.state->deferred.size(), 1u);
+    s.frame_once({});
+    EXPECT_TRUE(s.selection().empty());
+    EXPECT_TRUE(s.state->deferred.empty());
+    EXPECT_EQ(s.state->undo.size(), 2u);  // select, deselect
+}
+
+// Brush dabs of one frame each post a pick and are all answered in that frame's picking phase.
+TEST(EditorSystem, BrushDabsAreAnsweredInThePickingPhase) {
+    Scene s;
+    s.run({Scene::key("b")});
+    const glm::dvec2 centre = glm::dvec2(project_to_pixel(s.camera(), s.state->viewport, glm::dvec3(0.0)));
+    s.frame_once({Scene::move(centre), Scene::press(), Scene::move(centre + glm::dvec2(3, 0)),
+                  Scene::move(centre + glm::dvec2(-3, 0))});
+    EXPECT_TRUE(s.state->deferred.empty()) << "brush moves do not wait";
+    EXPECT_EQ(s.reg.resource<picking::PickResults>().answers.size(), 3u);
+    EXPECT_FALSE(s.selection().empty()) << "the dabs on the sphere selected the control points around it";
+    s.run({Scene::release()});
+}
+
+// Alt+click sets the twist pivot at the surface point the picking phase found.
+TEST(EditorSystem, AltClickSetsThePivotAtThePickedSurfacePoint) {
+    Scene s;
+    const glm::dvec2 centre = glm::dvec2(project_to_pixel(s.camera(), s.state->viewport, glm::dvec3(0.0)));
+    s.run({Scene::move(centre), Scene::press(mods::alt), Scene::release()});
+    ASSERT_TRUE(s.state->has_picked_pivot);
+    EXPECT_EQ(s.state->pivot_mode, PivotMode::picked_point);
+    // On the front of the sphere of radius 0.15 (splat discs: within their half-size of it).
+    EXPECT_NEAR(glm::length(s.state->picked_pivot), 0.15, 0.02);
+    EXPECT_GT(glm::dot(s.state->picked_pivot, s.camera().eye), 0.0);
 }
 
 TEST(EditorSystem, BoxSelectTakesThePointsInsideTheRectangle) {

@@ -182,7 +182,7 @@ TEST(Picking, StaleSceneIsRefreshedOnceAndOnlyWhenPicked) {
 
     // Move the splats up by 1; without a pick nothing is refreshed.
     for (glm::vec3& p : reg.patch<SplatCloud>(cloud).positions) p.z += 1.0f;
-    reg.set_resource<PickRequest>();  // present but not pending
+    reg.set_resource<PickRequests>();  // present but nothing pending
     picking_system(reg, FrameContext{});
     EXPECT_EQ(state.stats().surface_commits, commits);
 
@@ -288,23 +288,54 @@ TEST(PickingSystem, AnswersPendingRequestOnce) {
 
     picking_system(reg, FrameContext{});  // no request: nothing happens, no state is created
     EXPECT_EQ(reg.try_resource<PickingState>(), nullptr);
-    EXPECT_EQ(reg.try_resource<PickResult>(), nullptr);
+    EXPECT_EQ(reg.try_resource<PickResults>(), nullptr);
 
     const Camera cam = top_camera(4.5, 4.5, 10.0);
     const ScreenView view = make_screen_view(cam, {100, 100});
-    reg.set_resource<PickRequest>(
-        PickRequest{true, query_at_pixel(view, expected_pixel(cam, 100, {3.0, 6.0, 0.0}))});
+    const std::uint64_t id = post_pick(reg, query_at_pixel(view, expected_pixel(cam, 100, {3.0, 6.0, 0.0})));
+    EXPECT_EQ(find_pick_answer(reg, id), nullptr) << "not answered before the picking phase";
     picking_system(reg, FrameContext{7, 0.0, 0.0});
-    const PickResult& result = reg.resource<PickResult>();
-    EXPECT_FALSE(reg.resource<PickRequest>().pending);
-    EXPECT_EQ(result.serial, 1u);
-    EXPECT_EQ(result.frame, 7u);
-    EXPECT_EQ(result.hit.kind, PickKind::surface);
-    EXPECT_EQ(result.hit.index, 63u);
-    expect_near(result.hit.position, {3.0, 6.0, 0.0}, 1e-4);
+    const PickResults& results = reg.resource<PickResults>();
+    EXPECT_TRUE(reg.resource<PickRequests>().pending.empty());
+    EXPECT_EQ(results.serial, 1u);
+    EXPECT_EQ(results.frame, 7u);
+    const PickHit* hit = find_pick_answer(reg, id);
+    ASSERT_NE(hit, nullptr);
+    EXPECT_EQ(hit->kind, PickKind::surface);
+    EXPECT_EQ(hit->index, 63u);
+    expect_near(hit->position, {3.0, 6.0, 0.0}, 1e-4);
 
     picking_system(reg, FrameContext{8, 0.0, 0.0});  // answered: not again
-    EXPECT_EQ(reg.resource<PickResult>().serial, 1u);
+    EXPECT_EQ(reg.resource<PickResults>().serial, 1u);
+    EXPECT_EQ(reg.resource<PickResults>().frame, 7u);
+}
+
+// Several gestures of one frame each post a pick: one phase answers all of them, each under its own id.
+TEST(PickingSystem, AnswersEveryPickOfAFrameUnderItsId) {
+    ecs::Registry reg;
+    const ecs::Entity cloud = reg.create();
+    reg.emplace<SplatCloud>(cloud, disc_grid(10, 1.0, 0.4, 0.0));
+    const Camera cam = top_camera(4.5, 4.5, 10.0);
+    const ScreenView view = make_screen_view(cam, {100, 100});
+    const std::uint64_t a = post_pick(reg, query_at_pixel(view, expected_pixel(cam, 100, {3.0, 6.0, 0.0})));
+    const std::uint64_t miss = post_pick(reg, query_from_ray({{50.0, 50.0, 10.0}, {0.0, 0.0, -1.0}}));
+    const std::uint64_t b = post_pick(reg, query_at_pixel(view, expected_pixel(cam, 100, {7.0, 2.0, 0.0})));
+    EXPECT_NE(a, miss);
+    EXPECT_NE(a, b);
+    picking_system(reg, FrameContext{3, 0.0, 0.0});
+    ASSERT_NE(find_pick_answer(reg, a), nullptr);
+    ASSERT_NE(find_pick_answer(reg, miss), nullptr);
+    ASSERT_NE(find_pick_answer(reg, b), nullptr);
+    EXPECT_EQ(find_pick_answer(reg, a)->index, 63u);
+    EXPECT_EQ(find_pick_answer(reg, miss)->kind, PickKind::none);
+    EXPECT_EQ(find_pick_answer(reg, b)->index, 27u);
+    EXPECT_EQ(reg.resource<PickResults>().serial, 3u);
+    // The next frame's picks replace the answers: an old id is no longer answered.
+    const std::uint64_t c = post_pick(reg, query_at_pixel(view, expected_pixel(cam, 100, {3.0, 6.0, 0.0})));
+    picking_system(reg, FrameContext{4, 0.0, 0.0});
+    EXPECT_EQ(find_pick_answer(reg, a), nullptr);
+    ASSERT_NE(find_pick_answer(reg, c), nullptr);
+    EXPECT_EQ(find_pick_answer(reg, c)->index, 63u);
 }
 
 TEST(ScreenView, RayAndProjectionAgreeWithPinholeModel) {
