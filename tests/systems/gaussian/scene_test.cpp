@@ -1,7 +1,8 @@
 // 3D Gaussian entities in scene files and in `splatffd render`: a scene with a Gaussian
 // cloud, a lattice and a twist clip saves, loads and renders the deformed Gaussians (equal to deforming
-// then rendering, different from rest); bad Gaussian files in a scene name the file; the command renders
-// Gaussian files and animated Gaussian scenes to frames. Headless EGL (llvmpipe here).
+// then rendering, different from rest), also through the engine's frame (systems/engine); bad Gaussian
+// files in a scene name the file; the command renders Gaussian files to frames. Headless EGL (llvmpipe
+// here).
 #include <gtest/gtest.h>
 
 #include <sys/wait.h>
@@ -25,6 +26,8 @@
 #include "systems/animation/components.h"
 #include "systems/animation/paper_demo.h"
 #include "systems/animation/scene_extension.h"
+#include "systems/engine/engine.h"
+#include "systems/engine/engine_frame.h"
 #include "systems/ffd/lattice.h"
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_deform.h"
@@ -246,11 +249,55 @@ TEST_F(GaussianScene, BadGaussianFileInASceneNamesTheFile) {
     EXPECT_NE(missing.message().find("no such Gaussian file"), std::string::npos) << missing.message();
 }
 
-TEST_F(GaussianScene, RenderCommandOnGaussianFilesAndAnimatedScenes) {
+// Channels of the display-space (premultiplied) images that differ by more than 8 of 255.
+std::size_t differing_channels(const ReferenceImage& a, const ReferenceImage& b) {
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < a.color.size() && i < b.color.size(); ++i)
+        for (int c = 0; c < 3; ++c) n += std::abs(a.color[i][c] - b.color[i][c]) * 255.0f > 8.0f;
+    return n;
+}
+
+// The animated scene through the engine's frame (make_engine_schedule + render_engine_frame: what
+// `splatffd render` runs for each frame, without the command): frame 84 (twist peak) differs from the
+// rest frame, and frame 84 rendered alone equals frame 84 rendered after frame 83.
+TEST_F(GaussianScene, AnimatedSceneThroughTheEngineFrame) {
+    if (!context()) SFFD_GL_UNAVAILABLE("no headless GL 4.5 context");
+    const fs::path dir = fresh_dir("engine");
+    const fs::path scene = write_scene(dir, sphere_gaussians());
+    const Schedule schedule = make_engine_schedule({.present = false});
+    auto render_frames = [&](std::vector<std::uint64_t> ks) {
+        std::vector<ReferenceImage> out;
+        ecs::Registry reg;
+        const Status loaded = load_scene(reg, scene.string());
+        EXPECT_TRUE(loaded) << loaded.message();
+        render::RenderSettings s;
+        s.width = 64, s.height = 48;
+        reg.set_resource<render::RenderSettings>(s);
+        for (std::uint64_t k : ks) {
+            auto image = render_engine_frame(reg, schedule, *context(), {.frame = k, .fps = paper_demo_fps});
+            EXPECT_TRUE(image) << image.message();
+            out.push_back(image ? display_premultiplied(*image) : ReferenceImage{});
+        }
+        render::release_render_state(reg);
+        return out;
+    };
+    const std::vector<ReferenceImage> sequence = render_frames({83, 84});
+    const std::vector<ReferenceImage> rest = render_frames({0});
+    const std::vector<ReferenceImage> alone = render_frames({84});
+    ASSERT_EQ(sequence[1].color.size(), std::size_t(64 * 48));
+    const std::size_t moved = differing_channels(sequence[1], rest[0]);
+    std::printf("engine frame 84 vs rest: %zu differing channels; vs frame 83: %zu\n", moved,
+                differing_channels(sequence[1], sequence[0]));
+    EXPECT_GT(moved, 200u) << "the twist moved the colours";
+    EXPECT_EQ(differing_channels(sequence[1], alone[0]), 0u) << "frame 84 depends on its index only";
+}
+
+// The command on a Gaussian file: told apart from a surface PLY by its properties, framed, --camera and
+// --turntable (the engine's frame itself is tested above, without the command).
+TEST_F(GaussianScene, RenderCommandOnGaussianFiles) {
     if (!context()) SFFD_GL_UNAVAILABLE("no headless GL 4.5 context");
     const fs::path dir = fresh_dir("command");
-    const fs::path scene = write_scene(dir, sphere_gaussians());
-    // A Gaussian file: told apart from a surface PLY by its properties, framed, --camera and --turntable.
+    write_scene(dir, sphere_gaussians());
     std::string out;
     ASSERT_EQ(run("render " + (dir / "sphere.ply").string() + " --out " + (dir / "file").string() +
                       " --size 64x48 --turntable 2",
@@ -269,29 +316,8 @@ TEST_F(GaussianScene, RenderCommandOnGaussianFilesAndAnimatedScenes) {
                   &out),
               0)
         << out;
-    // The animated scene: frames 0 (rest) and 84 (twist peak) differ; frame 84 equals frame 84 rendered
-    // alone.
-    ASSERT_EQ(
-        run("render " + scene.string() + " --out " + (dir / "anim").string() + " --size 64x48 --frames 83:84",
-            &out),
-        0)
-        << out;
-    ASSERT_EQ(
-        run("render " + scene.string() + " --out " + (dir / "rest").string() + " --size 64x48 --frames 0:0",
-            &out),
-        0)
-        << out;
-    auto a = render::read_png(dir / "anim" / "frame_0084.png");
-    auto b = render::read_png(dir / "rest" / "frame_0000.png");
-    auto c = render::read_png(dir / "anim" / "frame_0083.png");
-    ASSERT_TRUE(a && b && c);
-    std::size_t differ = 0, step = 0;
-    for (std::size_t k = 0; k < a->pixels.size(); ++k) {
-        differ += std::abs(int(a->pixels[k]) - int(b->pixels[k])) > 8;
-        step += std::abs(int(a->pixels[k]) - int(c->pixels[k])) > 8;
-    }
-    EXPECT_GT(differ, 200u);  // the twist moved the colours
-    std::printf("frame 84 vs rest: %zu differing channels; vs frame 83: %zu\n", differ, step);
+    auto cam = render::read_png(dir / "cam" / "frame_0000.png");
+    ASSERT_TRUE(cam) << cam.message();
 }
 
 TEST_F(GaussianScene, EditorAddsALatticeToAGaussianFileAndSavesTheDeformedScene) {
@@ -321,23 +347,21 @@ TEST_F(GaussianScene, EditorAddsALatticeToAGaussianFileAndSavesTheDeformedScene)
     for (std::size_t k = 0; k < l.rest.size(); ++k)
         moved += std::abs(l.current[k].x - l.rest[k].x - 0.3) < 1e-9;
     EXPECT_EQ(moved, 729u);  // the 9^3 inner points of the default 11^3 fit
-    ASSERT_EQ(run("render " + (dir / "edited.glb").string() + " --out " + (dir / "edited").string() +
-                      " --size 96x72",
-                  &out),
-              0)
-        << out;
-    ASSERT_EQ(
-        run("render " + (dir / "g.ply").string() + " --out " + (dir / "file").string() + " --size 96x72",
-            &out),
-        0)
-        << out;
-    auto a = render::read_png(dir / "edited" / "frame_0000.png");
-    auto b = render::read_png(dir / "file" / "frame_0000.png");
-    ASSERT_TRUE(a && b);
-    std::size_t differ = 0;
-    for (std::size_t k = 0; k < a->pixels.size(); ++k)
-        differ += std::abs(int(a->pixels[k]) - int(b->pixels[k])) > 8;
-    EXPECT_GT(differ, 100u);
+    // The saved scene and the file alone through the engine's frame: the Gaussians are drawn deformed.
+    const Schedule schedule = make_engine_schedule({.present = false});
+    auto first_frame = [&](const fs::path& file) {
+        ecs::Registry r;
+        const Status loaded = load_scene(r, file.string());
+        EXPECT_TRUE(loaded) << loaded.message();
+        render::RenderSettings s;
+        s.width = 96, s.height = 72;
+        r.set_resource<render::RenderSettings>(s);
+        auto image = render_engine_frame(r, schedule, *context(), {.frame = 0, .fps = paper_demo_fps});
+        EXPECT_TRUE(image) << image.message();
+        render::release_render_state(r);
+        return image ? display_premultiplied(*image) : ReferenceImage{};
+    };
+    EXPECT_GT(differing_channels(first_frame(dir / "edited.glb"), first_frame(dir / "g.ply")), 100u);
 }
 
 TEST_F(GaussianScene, GaussianFilesAreToldApartFromSurfaceFiles) {
