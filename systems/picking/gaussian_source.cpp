@@ -19,7 +19,7 @@ namespace {
 // Centres and accumulated Jacobians of `cloud` through `lattices` in order (J = J_n ... J_1). False when a
 // lattice is refused (the cache then keeps nothing and the authored cloud is picked).
 bool deform_centres(const ecs::Registry& registry, const std::vector<ecs::Entity>& lattices,
-                    const GaussianCloud& cloud, GaussianDeformCache::Entry& entry) {
+                    const GaussianCloud& cloud, PickCache::Entry& entry) {
     const std::size_t n = cloud.size();
     entry.positions = cloud.positions;
     entry.jacobians.assign(n, glm::mat3(1.0f));
@@ -50,7 +50,7 @@ const gaussian::GpuGaussians* gpu_only_output(const ecs::Registry& registry, ecs
 }
 
 // Centres, scales and rotations of a GPU-only output (waits for the GPU).
-void read_back(const gaussian::GpuGaussians& gpu, GaussianDeformCache::Entry& entry) {
+void read_back(const gaussian::GpuGaussians& gpu, PickCache::Entry& entry) {
     const std::size_t n = gpu.count;
     std::vector<gpu::GpuGaussian> rows(n);
     // The compute pass wrote the buffer through shader storage: make those writes visible to the copy.
@@ -65,12 +65,11 @@ void read_back(const gaussian::GpuGaussians& gpu, GaussianDeformCache::Entry& en
         entry.rotations[i] = glm::quat(r.rotation[0], r.rotation[1], r.rotation[2], r.rotation[3]);
         entry.scales[i] = {r.scale[0], r.scale[1], r.scale[2]};
     }
-    entry.gpu_version = gpu.deformed_version;
 }
 
 }  // namespace
 
-GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity e, GaussianDeformCache& cache) {
+GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity e, PickCache& cache) {
     GaussianSource src;
     const GaussianCloud* cloud = registry.try_get<GaussianCloud>(e);
     if (!cloud) return src;
@@ -86,14 +85,14 @@ GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity e, GaussianD
     src.scales = cloud->scales;
     src.rotations = cloud->rotations;
     if (!registry.has<Deformers>(e)) {
-        cache.clouds.erase(e.bits());
+        cache.erase(PickCloudKind::gaussian, e);
         return src;
     }
     const ffd::DeformInputs inputs = ffd::deform_inputs<GaussianCloud>(registry, e);
     const DeformedGaussians* deformed = registry.try_get<DeformedGaussians>(e);
     if (deformed && deformed->seen == inputs.stamps && deformed->cloud.size() == n &&
         deformed->cloud.scales.size() == n && deformed->cloud.rotations.size() == n) {
-        cache.clouds.erase(e.bits());
+        cache.erase(PickCloudKind::gaussian, e);
         src.kind = GaussianSource::Kind::deformed;
         src.version = registry.version<DeformedGaussians>(e);
         src.origin = deformed->cloud.origin;
@@ -105,11 +104,11 @@ GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity e, GaussianD
     // Current output, GPU-only: read it back once per version.
     if (deformed && deformed->on_gpu && deformed->seen == inputs.stamps)
         if (const gaussian::GpuGaussians* gpu = gpu_only_output(registry, e, n)) {
-            GaussianDeformCache::Entry& entry = cache.clouds[e.bits()];
-            if (entry.gpu_version != gpu->deformed_version || !(entry.key == inputs.stamps)) {
+            PickCache::Entry& entry = cache.entry(PickCloudKind::gaussian, e);
+            if (!entry.holds_read_back(gpu->deformed_version, inputs.stamps)) {
                 read_back(*gpu, entry);
-                entry.key = inputs.stamps;
-                entry.serial = ++cache.read_backs;
+                cache.filled(entry, true, gpu->deformed_version, inputs.stamps);
+                ++cache.gaussian_read_backs;
             }
             src.kind = GaussianSource::Kind::gpu_read_back;
             src.version = entry.serial;
@@ -120,21 +119,20 @@ GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity e, GaussianD
             return src;
         }
     // Output missing, stale or not readable: picking's own centres + Jacobians.
-    auto it = cache.clouds.find(e.bits());
-    if (it == cache.clouds.end() || !(it->second.key == inputs.stamps) || it->second.gpu_version != 0) {
-        GaussianDeformCache::Entry entry;
-        entry.key = inputs.stamps;
+    PickCache::Entry& entry = cache.entry(PickCloudKind::gaussian, e);
+    if (!entry.holds_deformation(inputs.stamps)) {
         if (!deform_centres(registry, inputs.lattices, *cloud, entry)) {
-            cache.clouds.erase(e.bits());
+            cache.erase(PickCloudKind::gaussian, e);
             return src;  // a refused lattice: the authored cloud, as the deformation phase would skip it
         }
-        entry.serial = ++cache.deformations;
-        it = cache.clouds.insert_or_assign(e.bits(), std::move(entry)).first;
+        entry.scales.clear(), entry.rotations.clear();
+        cache.filled(entry, false, 0, inputs.stamps);
+        ++cache.gaussian_deformations;
     }
     src.kind = GaussianSource::Kind::cpu_deformed;
-    src.version = it->second.serial;
-    src.positions = it->second.positions;
-    src.jacobians = it->second.jacobians;
+    src.version = entry.serial;
+    src.positions = entry.positions;
+    src.jacobians = entry.jacobians;
     return src;
 }
 

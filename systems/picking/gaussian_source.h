@@ -7,11 +7,11 @@
 //      has one Gaussian per authored one;
 //   2. an entity with Deformers whose current output lives only on the GPU (GpuGaussianStore state
 //      deformed_gpu, a GL context current): read back once per GpuGaussians::deformed_version (centres,
-//      scales, rotations) into GaussianDeformCache;
+//      scales, rotations) into the PickCache;
 //   3. an entity with Deformers whose output is missing, stale or not readable: picking's own
 //      deformation of what it needs, centres and Jacobians through every lattice in order
 //      (ffd::deform with PointsOut::jacobians, the cheap part of the Gaussian deformation: no
-//      eigen-decomposition, no SH), kept in GaussianDeformCache keyed by the input stamps and computed only
+//      eigen-decomposition, no SH), kept in the PickCache keyed by the input stamps and computed only
 //      when a pick needs it; the ellipsoid is then {c' + J R S x : |x| <= k};
 //   4. the authored GaussianCloud.
 // Opacities are always the authored cloud's (a deformation does not change them and does not copy them).
@@ -35,6 +35,7 @@
 
 #include "runtime/ecs/registry.h"
 #include "systems/ffd/components.h"  // DeformInputStamps
+#include "systems/picking/pick_cache.h"
 
 namespace sffd::picking {
 
@@ -55,23 +56,7 @@ struct GaussianSource {
     std::span<const glm::mat3> jacobians;  // cpu_deformed only: the deformation's J per Gaussian
 };
 
-// Picking's own CPU deformations of Gaussian clouds (per entity bits).
-struct GaussianDeformCache {
-    struct Entry {
-        DeformInputStamps key;
-        std::uint64_t serial = 0;
-        std::vector<glm::vec3> positions;
-        std::vector<glm::mat3> jacobians;  // picking's own deformation
-        std::vector<glm::vec3> scales;     // a read-back GPU output (gpu_version != 0)
-        std::vector<glm::quat> rotations;
-        std::uint64_t gpu_version = 0;  // GpuGaussians::deformed_version read back; 0: own deformation
-    };
-    std::unordered_map<std::uint64_t, Entry> clouds;
-    std::uint64_t deformations = 0;  // CPU deformations run (tests check they stay lazy)
-    std::uint64_t read_backs = 0;    // GPU-only outputs read back (once per deformed_version)
-};
-
-GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity cloud, GaussianDeformCache& cache);
+GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity cloud, PickCache& cache);
 
 // Changes whenever GaussianCloud or DeformedGaussians storage changes.
 std::uint64_t gaussian_source_storage_version(const ecs::Registry& registry);

@@ -1,4 +1,4 @@
-// PickingState: the Embree state's owner (device, both scenes, geometry-id maps, the caches of what picking
+// PickingState: the Embree state's owner (device, both scenes, geometry-id maps, the cache of what picking
 // computes itself), its lazy refresh and the ray casts. PickingState::Impl owns the device and both scenes;
 // the geometries, their buffers and Embree's callbacks are in picking_geometry.cpp.
 #include "systems/picking/picking_state.h"
@@ -30,9 +30,7 @@ struct PickingState::Impl {
     // Registry stamps of the last refresh: when none moved, refresh() returns at once.
     std::array<std::uint64_t, 5> seen{~0ull, ~0ull, ~0ull, ~0ull, ~0ull};
     double seen_fraction = -1.0;
-    DeformCache deform_cache;  // CPU deformations of clouds whose deformed output is GPU-only
-    GaussianDeformCache
-        gaussian_cache;  // centres + Jacobians of Gaussian clouds without a current CPU output
+    PickCache cache;  // what picking read back or deformed itself, for clouds of both kinds
     Stats stats;
 
     Impl() : device(create_device()), surfaces(create_scene(device)), controls(create_scene(device)) {
@@ -68,9 +66,9 @@ std::size_t PickingState::gaussian_geometry_count() const { return m_impl->gauss
 bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
     bool changed = release_stale<GaussianCloud>(
         registry, surfaces, gaussian_records, gaussian_ids, stats.geometries_released,
-        [&](ecs::Entity e) { gaussian_cache.clouds.erase(e.bits()); });
+        [&](ecs::Entity e) { cache.erase(PickCloudKind::gaussian, e); });
     for (auto [e, cloud] : registry.view<const GaussianCloud>()) {
-        const GaussianSource src = gaussian_source(registry, e, gaussian_cache);
+        const GaussianSource src = gaussian_source(registry, e, cache);
         const glm::dmat4 model = model_matrix(registry.try_get<Transform>(e));
         if (!anchored && !src.positions.empty()) {
             anchor = glm::dvec3(model * glm::dvec4(src.origin, 1.0));
@@ -106,8 +104,8 @@ bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
         it->second->stamp = stamp;
         changed = true;
     }
-    stats.gaussian_cpu_deformations = gaussian_cache.deformations;
-    stats.gaussian_gpu_read_backs = gaussian_cache.read_backs;
+    stats.gaussian_cpu_deformations = cache.gaussian_deformations;
+    stats.gaussian_gpu_read_backs = cache.gaussian_read_backs;
     return changed;
 }
 
@@ -115,9 +113,9 @@ bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
     // Entities that died or lost their cloud: detach their geometry (its id becomes free for reuse).
     bool changed =
         release_stale<SplatCloud>(registry, surfaces, surface_records, surface_ids, stats.geometries_released,
-                                  [&](ecs::Entity e) { deform_cache.clouds.erase(e.bits()); });
+                                  [&](ecs::Entity e) { cache.erase(PickCloudKind::surface, e); });
     for (auto [e, cloud] : registry.view<const SplatCloud>()) {
-        const SplatSource src = splat_source(registry, e, deform_cache);
+        const SplatSource src = splat_source(registry, e, cache);
         if (!anchored && !src.positions.empty()) {
             anchor = glm::dvec3(model_matrix(registry.try_get<Transform>(e)) * glm::dvec4(src.origin, 1.0));
             anchored = true;
@@ -152,8 +150,8 @@ bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
         fill_surface(*it->second, src, model_matrix(registry.try_get<Transform>(e)), anchor);
         changed = true;
     }
-    stats.cpu_deformations = deform_cache.deformations;
-    stats.gpu_read_backs = deform_cache.read_backs;
+    stats.cpu_deformations = cache.deformations;
+    stats.gpu_read_backs = cache.read_backs;
     if (refresh_gaussians(registry)) changed = true;
     if (changed) {
         rtcCommitScene(surfaces);

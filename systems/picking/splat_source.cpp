@@ -20,18 +20,8 @@ std::span<const T> if_sized(const std::vector<T>& v, std::size_t n) {
     return v.size() == n ? std::span<const T>(v) : std::span<const T>();
 }
 
-// Key of the inputs of the CPU deformation: cloud, deformer list and every lattice's stamp.
-std::uint64_t deform_key(const ecs::Registry& registry, ecs::Entity cloud, const Deformers& deformers) {
-    std::uint64_t h = mix(registry.version<SplatCloud>(cloud), registry.version<Deformers>(cloud));
-    for (const ecs::Entity l : deformers.lattices) {
-        h = mix(h, l.bits());
-        h = mix(h, registry.valid(l) ? registry.version<Lattice>(l) : 0);
-    }
-    return h;
-}
-
 // The deformed splats of a GPU-only output (state deformed_gpu), read back into `out` (waits for the GPU).
-void read_back(const gfx::GpuSplats& gpu, DeformedSplats& out) {
+void read_back(const gfx::GpuSplats& gpu, PickCache::Entry& out) {
     const std::size_t n = gpu.count;
     std::vector<gpu::GpuSplat> rows(n);
     // The compute pass wrote the buffer through shader storage: make those writes visible to the copy.
@@ -62,7 +52,7 @@ const gfx::GpuSplats* gpu_only_output(const ecs::Registry& registry, ecs::Entity
 
 }  // namespace
 
-SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud_entity, DeformCache& cache) {
+SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud_entity, PickCache& cache) {
     SplatSource src;
     const SplatCloud* cloud = registry.try_get<SplatCloud>(cloud_entity);
     if (!cloud) return src;
@@ -78,45 +68,43 @@ SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud_entity
         src.normals = if_sized(deformed->normals, n);
         if (deformed->axis_u.size() == n && deformed->axis_v.size() == n)
             src.axis_u = deformed->axis_u, src.axis_v = deformed->axis_v;
-        cache.clouds.erase(cloud_entity.bits());
+        cache.erase(PickCloudKind::surface, cloud_entity);
         return src;
     }
 
     const Deformers* deformers = registry.try_get<Deformers>(cloud_entity);
-    if (const gfx::GpuSplats* gpu = deformers && !deformers->lattices.empty()
-                                        ? gpu_only_output(registry, cloud_entity, n)
-                                        : nullptr) {
-        DeformCache::Entry& entry = cache.clouds[cloud_entity.bits()];
-        const std::uint64_t key = mix(0x9b1d5a7e3c2f4d61ull, gpu->deformed_version);
-        if (entry.key != key || entry.deformed.positions.size() != n) {
-            read_back(*gpu, entry.deformed);
-            entry.key = key;
-            ++cache.read_backs;
-        }
-        src.kind = SplatSource::Kind::gpu_read_back;
-        src.version = key;
-        const DeformedSplats& d = entry.deformed;
-        src.positions = d.positions, src.normals = d.normals, src.axis_u = d.axis_u, src.axis_v = d.axis_v;
-        return src;
-    }
     if (deformers && !deformers->lattices.empty()) {
-        DeformCache::Entry& entry = cache.clouds[cloud_entity.bits()];
-        const std::uint64_t key = deform_key(registry, cloud_entity, *deformers);
-        if (entry.key != key || entry.deformed.positions.size() != n) {
-            ffd::deform_cloud(registry, *cloud, deformers->lattices, entry.deformed, "picking");
-            entry.key = key;
-            ++cache.deformations;
+        const DeformInputStamps inputs = deformation_stamps<SplatCloud>(registry, cloud_entity, *deformers);
+        PickCache::Entry& entry = cache.entry(PickCloudKind::surface, cloud_entity);
+        if (const gfx::GpuSplats* gpu = gpu_only_output(registry, cloud_entity, n)) {
+            if (!entry.holds_read_back(gpu->deformed_version, inputs) || entry.positions.size() != n) {
+                read_back(*gpu, entry);
+                cache.filled(entry, true, gpu->deformed_version, inputs);
+                ++cache.read_backs;
+            }
+            src.kind = SplatSource::Kind::gpu_read_back;
+        } else {
+            if (!entry.holds_deformation(inputs) || entry.positions.size() != n) {
+                DeformedSplats d;
+                ffd::deform_cloud(registry, *cloud, deformers->lattices, d, "picking");
+                entry.positions = std::move(d.positions);
+                entry.normals = std::move(d.normals);
+                entry.axis_u = std::move(d.axis_u);
+                entry.axis_v = std::move(d.axis_v);
+                cache.filled(entry, false, 0, inputs);
+                ++cache.deformations;
+            }
+            src.kind = SplatSource::Kind::cpu_deformed;
         }
-        src.kind = SplatSource::Kind::cpu_deformed;
-        src.version = key;
-        const DeformedSplats& d = entry.deformed;
-        src.positions = d.positions;
-        src.normals = if_sized(d.normals, n);
-        if (d.axis_u.size() == n && d.axis_v.size() == n) src.axis_u = d.axis_u, src.axis_v = d.axis_v;
+        src.version = entry.serial;
+        src.positions = entry.positions;
+        src.normals = if_sized(entry.normals, n);
+        if (entry.axis_u.size() == n && entry.axis_v.size() == n)
+            src.axis_u = entry.axis_u, src.axis_v = entry.axis_v;
         return src;
     }
 
-    cache.clouds.erase(cloud_entity.bits());
+    cache.erase(PickCloudKind::surface, cloud_entity);
     src.kind = SplatSource::Kind::authored;
     src.version = registry.version<SplatCloud>(cloud_entity);
     src.positions = cloud->positions;

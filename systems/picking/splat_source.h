@@ -1,10 +1,10 @@
 // Which splats picking sees for a point-cloud entity, in this order:
 //   1. the deformer's CPU output (DeformedSplats with cpu_valid, written by systems/ffd);
 //   2. a cloud with Deformers whose output lives only on the GPU (GpuSplatStore state deformed_gpu, a GL
-//      context current): read back once per GpuSplats::deformed_version into `DeformCache`;
+//      context current): read back once per GpuSplats::deformed_version into the PickCache;
 //   3. otherwise a cloud with Deformers and no CPU output (no context, e.g. a headless tool): picking asks
 //      the FFD system for its CPU output (ffd::deform_cloud, the step ffd_system's CPU path runs) into
-//      `DeformCache`, keyed by the change stamps of the cloud, its Deformers and every lattice —
+//      the PickCache, keyed by the change stamps of the cloud, its Deformers and every lattice —
 //      recomputed only when a pick needs it;
 //   4. the authored SplatCloud.
 // The spans point into the components or the cache; valid until either changes.
@@ -12,13 +12,13 @@
 
 #include <cstdint>
 #include <span>
-#include <unordered_map>
 #include <vector>
 
 #include <glm/glm.hpp>
 
 #include "runtime/ecs/registry.h"
 #include "systems/ffd/components.h"
+#include "systems/picking/pick_cache.h"
 
 namespace sffd::picking {
 
@@ -30,18 +30,7 @@ struct SplatSource {
     std::span<const glm::vec3> positions, normals, axis_u, axis_v;
 };
 
-// CPU deformation results picking asked for, per cloud (entity bits).
-struct DeformCache {
-    struct Entry {
-        std::uint64_t key = 0;
-        DeformedSplats deformed;  // ffd::deform_cloud's output (only the CPU arrays and origin are used)
-    };
-    std::unordered_map<std::uint64_t, Entry> clouds;
-    std::uint64_t deformations = 0;  // CPU deformations run (tests check it stays lazy)
-    std::uint64_t read_backs = 0;    // GPU-only outputs read back (once per deformed_version)
-};
-
-SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud, DeformCache& cache);
+SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud, PickCache& cache);
 
 // Changes whenever any deformer-related storage changes (DeformedSplats, Deformers).
 std::uint64_t splat_source_storage_version(const ecs::Registry& registry);
