@@ -20,6 +20,7 @@
 #include "systems/editor/lattice_tools.h"
 #include "systems/editor/undo_stack.h"
 #include "systems/ffd/components.h"
+#include "systems/picking/screen_view.h"
 #include "systems/picking/selection.h"
 
 namespace sffd::editor {
@@ -29,14 +30,20 @@ const char* tool_name(Tool tool);
 
 enum class PivotMode : std::uint8_t { centroid, picked_point };
 
-// A gesture that needs a pick: the input phase posts the pick (picking::post_pick) and this action; the
+// A gesture that needs picking: the input phase posts the pick (picking::post_pick) and this action; the
 // picking phase answers it; editor_pick_system, right after picking, applies the action to the answer.
+// A box select needs no ray: it is applied in the same step, with picking's visibility test.
 struct PendingPick {
-    enum class Action : std::uint8_t { click_select, brush, pivot };
+    enum class Action : std::uint8_t { click_select, brush, pivot, box_select };
     Action action = Action::click_select;
-    std::uint64_t id = 0;                                     // picking::PickRequest::id
-    std::uint8_t modifiers = 0;                               // click_select: the click's modifiers
+    std::uint64_t id = 0;                                     // picking::PickRequest::id (not box_select)
+    std::uint8_t modifiers = 0;                               // click_select, box_select: the modifiers
     picking::SelectMode mode = picking::SelectMode::replace;  // brush: how the dab changes the selection
+    // box_select: the rectangle's corners (pixels), the view it was drawn in, and whether only the control
+    // points visible from the eye count (not in x-ray).
+    glm::dvec2 from{0.0}, to{0.0};
+    picking::ScreenView view{};
+    bool visible_only = true;
 };
 
 // A stretch or twist as the user last applied it (in lattice space), so "set key" can key it.

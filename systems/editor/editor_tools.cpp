@@ -36,13 +36,15 @@ void click_select(ecs::Registry& registry, EditorState& state, const picking::Pi
         set_selection(registry, state, state.active_lattice, {}, "deselect");
 }
 
-void box_select(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 a, glm::dvec2 b,
-                std::uint8_t modifiers) {
+// Runs in the picking phase (editor_pick_system): the visibility test refreshes picking's scenes with
+// this frame's deformed clouds.
+void box_select(ecs::Registry& registry, EditorState& state, const PendingPick& box) {
     if (!active_lattice(registry, state)) return;
-    const picking::SelectMode mode = picking::select_mode(modifiers & mods::shift, modifiers & mods::ctrl);
-    const std::vector<std::uint32_t> inside = picking::control_points_in_rect(
-        registry, picking::picking_state(registry), state.active_lattice, screen_view(camera, state.viewport),
-        picking::ScreenRect{a, b}, !state.xray);
+    const picking::SelectMode mode =
+        picking::select_mode(box.modifiers & mods::shift, box.modifiers & mods::ctrl);
+    const std::vector<std::uint32_t> inside =
+        picking::control_points_in_rect(registry, picking::picking_state(registry), state.active_lattice,
+                                        box.view, picking::ScreenRect{box.from, box.to}, box.visible_only);
     picking::LatticeSelection current{selection_of(registry, state.active_lattice)};
     set_selection(registry, state, state.active_lattice, picking::select(current, inside, mode).indices,
                   "box select");
@@ -255,7 +257,14 @@ void handle_release(ecs::Registry& registry, EditorState& state, Camera& camera,
                          {PendingPick::Action::click_select, 0, drag.modifiers});
             break;
         case Drag::Kind::box:
-            box_select(registry, state, camera, drag.start, state.cursor, drag.modifiers);
+            if (active_lattice(registry, state)) {
+                PendingPick box{PendingPick::Action::box_select};
+                box.modifiers = drag.modifiers;
+                box.from = drag.start, box.to = state.cursor;
+                box.view = screen_view(camera, state.viewport);
+                box.visible_only = !state.xray;
+                state.pending_picks.push_back(box);
+            }
             break;
         case Drag::Kind::move:
         case Drag::Kind::twist: finish_tool_drag(registry, state, drag); break;
@@ -277,6 +286,10 @@ void apply_pending_picks(ecs::Registry& registry, EditorState& state) {
     std::vector<PendingPick> picks;
     picks.swap(state.pending_picks);
     for (const PendingPick& p : picks) {
+        if (p.action == PendingPick::Action::box_select) {
+            box_select(registry, state, p);
+            continue;
+        }
         // Not answered: the schedule ran no picking phase this frame (the gesture is dropped, as a click
         // on nothing would be).
         const picking::PickHit* hit = picking::find_pick_answer(registry, p.id);
@@ -285,6 +298,7 @@ void apply_pending_picks(ecs::Registry& registry, EditorState& state) {
             case PendingPick::Action::click_select: click_select(registry, state, *hit, p.modifiers); break;
             case PendingPick::Action::brush: brush_apply(registry, state, *hit, p.mode); break;
             case PendingPick::Action::pivot: set_picked_pivot(state, *hit); break;
+            case PendingPick::Action::box_select: break;
         }
     }
 }

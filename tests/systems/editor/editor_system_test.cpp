@@ -213,6 +213,21 @@ TEST(EditorSystem, BoxSelectTakesThePointsInsideTheRectangle) {
     }
 }
 
+// The box select's visibility test is picking's too: it runs in the picking phase, not in the input phase.
+TEST(EditorSystem, BoxSelectIsAppliedInThePickingPhase) {
+    Scene s;
+    const std::uint32_t a = idx(s.lat(), 1, 1, 2);
+    const glm::dvec2 p = s.pixel_of(a);
+    s.state->events = {Scene::move(p - 3.0), Scene::press(), Scene::move(p + 3.0), Scene::release()};
+    const FrameContext f{0, 0.0, 1 / 60.0};
+    editor_input_system(s.reg, f);
+    EXPECT_TRUE(s.selection().empty());
+    EXPECT_EQ(s.reg.try_resource<picking::PickingState>(), nullptr) << "the input phase casts no ray";
+    picking::picking_system(s.reg, f);
+    editor_pick_system(s.reg, f);
+    EXPECT_EQ(s.selection(), std::vector<std::uint32_t>{a});
+}
+
 TEST(EditorSystem, StretchDragMovesTheSelectionAlongXAndUndoRedoAreBitExact) {
     Scene s;
     const std::uint32_t a = idx(s.lat(), 1, 1, 2), b = idx(s.lat(), 2, 1, 2);

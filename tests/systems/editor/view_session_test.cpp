@@ -18,6 +18,7 @@
 #include "runtime/assets/scene.h"
 #include "systems/editor/editor_system.h"
 #include "systems/ffd/components.h"
+#include "systems/picking/picking_system.h"
 #include "systems/splat_render/image_io.h"
 
 using namespace sffd;
@@ -74,8 +75,12 @@ TEST(ViewSession, ReplayedEditsShowInTheScreenshotAndTheSavedLatticeIsBitExact) 
     auto events = editor::load_input_recording(session);
     ASSERT_TRUE(events.ok()) << events.message();
     state.replay.emplace(*events);
-    for (std::uint64_t f = 0; f < frames; ++f)
-        editor::editor_input_system(expected, FrameContext{f, f / 60.0, 1 / 60.0});
+    for (std::uint64_t f = 0; f < frames; ++f) {  // the editor's steps of the engine's frame, in order
+        const FrameContext frame{f, f / 60.0, 1 / 60.0};
+        editor::editor_input_system(expected, frame);
+        picking::picking_system(expected, frame);
+        editor::editor_pick_system(expected, frame);
+    }
     ASSERT_EQ(state.undo.size(), 3u);      // box select, stretch, twist
     ASSERT_EQ(state.undo.position(), 3u);  // undone and redone: all applied
     EXPECT_EQ(state.undo.at(2).label(), "twist");
