@@ -30,6 +30,15 @@ TEST(EngineSchedule, HeadlessScheduleHasNoPresentAndNoEditor) {
     EXPECT_FALSE(has(s, Phase::rendering, "editor.overlay"));
 }
 
+// The editor's gestures that need picking are applied right after the picking system, in its phase.
+TEST(EngineSchedule, EditorPicksRunRightAfterPicking) {
+    const Schedule s = make_engine_schedule({.present = false});
+    const auto& picking = s.systems(Phase::picking);
+    ASSERT_EQ(picking.size(), 2u);
+    EXPECT_EQ(picking[0].name, "picking");
+    EXPECT_EQ(picking[1].name, "editor.picks");
+}
+
 TEST(EngineSchedule, EditorScheduleAddsOverlayAndUi) {
     const Schedule s = make_engine_schedule({.present = true, .editor = true});
     EXPECT_TRUE(has(s, Phase::rendering, "editor.overlay"));
