@@ -20,6 +20,8 @@
 #define SFFD_GAUSS_SSBO_TILE_VALUES 9 // uint[]: Gaussian index of each entry (payload)
 #define SFFD_GAUSS_SSBO_RANGES    10  // uvec2[tile]: the tile's entries [begin, end) after the sort
 #define SFFD_GAUSS_IMAGE_COLOR    0   // image unit: rgba32f target of the tile blend (rgb premultiplied, a = 1 − T)
+#define SFFD_GAUSS_IMAGE_DEPTH    1   // image unit: rgba32f Σ T α view depth (x), coverage (w) (render system)
+#define SFFD_GAUSS_SSBO_TILE_STATS 11 // uint: entries the tile blend's groups staged before they stopped
 // The GPU deformation (shaders/gaussian/deform.comp, its own program: points 7-9 below mean something
 // else there than in the tile passes) reads SFFD_GAUSS_SSBO_IN, writes SFFD_GAUSS_SSBO_DEFORMED and
 // SFFD_GAUSS_SSBO_FRAMES; it also uses the ffd pass's points 2 (control points) and 6 (statistics).

@@ -13,7 +13,12 @@ layout(std430, binding = SFFD_GAUSS_SSBO_FRAMES) readonly buffer Frames { vec4 f
 layout(std430, binding = SFFD_GAUSS_SSBO_DEPTH) writeonly buffer Depth { uint depth_keys[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_ORDER) writeonly buffer Order { uint order[]; };  // payloads for the GPU sort
 // DrawArraysIndirectCommand; instance_count counts the drawn Gaussians (zeroed by the CPU before the pass).
-layout(std430, binding = SFFD_GAUSS_SSBO_DRAW) buffer Draw { uint vertex_count, instance_count, first, base_instance; };
+// Then the pixels the drawn Gaussians' clipped pixel boxes cover, summed (the quad path's fragments), and
+// a flag set when that sum wrapped: gl_render's draw_gaussians picks quads or tiles from them.
+layout(std430, binding = SFFD_GAUSS_SSBO_DRAW) buffer Draw {
+    uint vertex_count, instance_count, first, base_instance;
+    uint covered_pixels, covered_wrapped;
+};
 
 uniform mat4 u_view;        // cloud (origin-relative) -> camera, composed in double on the CPU
 uniform vec3 u_eye;         // camera position relative to the cloud origin
@@ -63,8 +68,10 @@ bool finite4(vec4 v) {
     return all(notEqual(floatBitsToUint(v) & 0x7f800000u, uvec4(0x7f800000u)));
 }
 
-// Projects Gaussian i; true when it is drawn. Writes its projected record, sort key and payload.
-bool project(uint i) {
+// Projects Gaussian i; true when it is drawn. Writes its projected record, sort key and payload, and the
+// pixels of its pixel box clipped to the image (tile_common.glsl's pixel_box).
+bool project(uint i, out uint pixels) {
+    pixels = 0u;
     order[i] = i;
     GpuProjected o;
     o.center_depth_radius = vec4(0.0);
@@ -115,6 +122,8 @@ bool project(uint i) {
     const vec2 lo = floor(center - radius), hi = ceil(center + radius);
     if (any(lessThan(hi, vec2(0.0))) || any(greaterThan(lo, u_size - 1.0))) { projected[i] = o; return false; }
     depth_keys[i] = floatBitsToUint(depth);
+    const uvec2 box = uvec2(min(hi, u_size - 1.0)) - uvec2(max(lo, vec2(0.0))) + 1u;
+    pixels = box.x * box.y;
     o.center_depth_radius = vec4(center, depth, radius);
     o.conic_opacity = vec4(c / det, -b / det, a / det, g.pos_opacity.w);
     vec3 dir = normalize(g.pos_opacity.xyz - u_eye);
@@ -124,16 +133,31 @@ bool project(uint i) {
     return true;
 }
 
-shared uint s_drawn;
+shared uint s_drawn, s_pixels, s_wrapped;
 
 void main() {
     // 2D grid of groups for clouds over 64 x 65,535 Gaussians (the guaranteed groups per dimension).
     const uint i = sffd_dispatch_index();
-    const bool drawn = i < u_count && project(i);
-    // The drawn count reaches the indirect draw without a readback: one global atomic per group.
-    if (gl_LocalInvocationID.x == 0u) s_drawn = 0u;
+    uint pixels = 0u;
+    const bool drawn = i < u_count && project(i, pixels);
+    // The drawn count reaches the indirect draw without a readback: one global atomic per group; so do the
+    // covered pixels. Their sums may wrap 32 bits: the addition that wraps one says so (atomicAdd returns
+    // the value before it).
+    if (gl_LocalInvocationID.x == 0u) {
+        s_drawn = 0u;
+        s_pixels = 0u;
+        s_wrapped = 0u;
+    }
     barrier();
-    if (drawn) atomicAdd(s_drawn, 1u);
+    if (drawn) {
+        atomicAdd(s_drawn, 1u);
+        const uint before = atomicAdd(s_pixels, pixels);
+        if (before + pixels < before) atomicOr(s_wrapped, 1u);
+    }
     barrier();
-    if (gl_LocalInvocationID.x == 0u && s_drawn > 0u) atomicAdd(instance_count, s_drawn);
+    if (gl_LocalInvocationID.x == 0u && s_drawn > 0u) {
+        atomicAdd(instance_count, s_drawn);
+        const uint before = atomicAdd(covered_pixels, s_pixels);
+        if (before + s_pixels < before || s_wrapped != 0u) atomicOr(covered_wrapped, 1u);
+    }
 }

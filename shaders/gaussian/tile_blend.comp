@@ -3,7 +3,11 @@
 // (front to back) are staged 256 at a time in shared memory and blended exactly like the CPU reference:
 // only inside each Gaussian's pixel box, α = min(0.99, o·exp(power)), skipped below 1/255, and the pixel
 // stops at the Gaussian that would take its transmittance below 1e-4 (3DGS's early termination). The
-// whole group stops once every pixel has. Writes rgb premultiplied and a = 1 − T, like the quad path.
+// whole group stops once every pixel has. Blends into what the target holds (rgb premultiplied, a = 1 − T:
+// earlier clouds of the frame, or zero), like the quad path's (GL_ONE_MINUS_DST_ALPHA, GL_ONE).
+// The render system's options, as its quads do (splat.vert, gaussian_accum.frag): a depth test against
+// the surface splats (each Gaussian at its centre's depth, GL_LESS), and Σ T α view depth into a second
+// target (x; w = coverage).
 #include "gaussian/gaussian_layout.h"
 
 layout(local_size_x = SFFD_GAUSS_TILE, local_size_y = SFFD_GAUSS_TILE) in;
@@ -11,10 +15,18 @@ layout(local_size_x = SFFD_GAUSS_TILE, local_size_y = SFFD_GAUSS_TILE) in;
 layout(std430, binding = SFFD_GAUSS_SSBO_PROJECTED) readonly buffer Projected { GpuProjected projected[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_TILE_VALUES) readonly buffer TileValues { uint tile_values[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_RANGES) readonly buffer Ranges { uvec2 ranges[]; };
-layout(binding = SFFD_GAUSS_IMAGE_COLOR, rgba32f) uniform writeonly image2D u_color;
+// Entries the groups staged before they stopped, summed over the frame (the work early termination left).
+layout(std430, binding = SFFD_GAUSS_SSBO_TILE_STATS) buffer TileStats { uint staged_entries; };
+// Each pixel is read and written by its own invocation only.
+layout(binding = SFFD_GAUSS_IMAGE_COLOR, rgba32f) uniform image2D u_color;
+layout(binding = SFFD_GAUSS_IMAGE_DEPTH, rgba32f) uniform image2D u_depth_sum;
+layout(binding = 0) uniform sampler2D u_surface_depth;
 
 uniform vec2 u_size;
 uniform uvec2 u_tiles;
+uniform int u_depth_test;   // 1: a Gaussian is hidden where u_surface_depth <= its window depth
+uniform int u_write_depth;  // 1: accumulate u_depth_sum
+uniform vec2 u_ndc_depth;   // NDC z = x + y / view depth, as splat.vert (clamped the same way)
 
 #include "gaussian/tile_common.glsl"
 
@@ -23,17 +35,23 @@ shared vec2 s_center[kBatch];
 shared ivec4 s_box[kBatch];  // the Gaussian's clipped pixel box, computed once per batch, not per pixel
 shared vec4 s_conic_opacity[kBatch];
 shared vec3 s_color[kBatch];
+shared vec2 s_depth[kBatch];  // window depth (the depth test's), view depth from the clamped NDC z
 shared uint s_done;
 
 void main() {
     const uint tile = gl_WorkGroupID.y * u_tiles.x + gl_WorkGroupID.x;
     const uvec2 pixel = gl_GlobalInvocationID.xy;  // y down
     const bool inside = pixel.x < uint(u_size.x) && pixel.y < uint(u_size.y);
+    const ivec2 texel = ivec2(pixel.x, int(u_size.y) - 1 - int(pixel.y));  // GL rows bottom-up
     const uint tid = gl_LocalInvocationIndex;
     const uvec2 range = ranges[tile];
-    bool done = !inside;
-    vec3 color = vec3(0.0);
-    float t = 1.0;
+    vec4 prior = inside ? imageLoad(u_color, texel) : vec4(0.0);
+    vec3 color = prior.rgb;
+    float t = 1.0 - prior.a;
+    float depth_sum = inside && u_write_depth != 0 ? imageLoad(u_depth_sum, texel).x : 0.0;
+    const float surface = inside && u_depth_test != 0 ? texelFetch(u_surface_depth, texel, 0).r : 2.0;
+    bool done = !inside || t < 1e-4;
+    uint staged = 0u;
     for (uint begin = range.x; begin < range.y; begin += kBatch) {
         // Every invocation reaches these barriers: the loop bounds are uniform over the group.
         if (tid == 0u) s_done = 0u;
@@ -45,13 +63,17 @@ void main() {
             s_box[tid] = pixel_box(p.center_depth_radius);
             s_conic_opacity[tid] = p.conic_opacity;
             s_color[tid] = p.color.rgb;
+            const float z = clamp(u_ndc_depth.x + u_ndc_depth.y / p.center_depth_radius.z, -1.0, 0.999999);
+            s_depth[tid] = vec2(0.5 * z + 0.5, u_ndc_depth.y / (z - u_ndc_depth.x));
         }
         barrier();
         if (s_done == kBatch) break;  // uniform: every invocation read the same count after the barrier
         const uint batch = min(kBatch, range.y - begin);
+        staged += batch;
         for (uint j = 0u; j < batch && !done; ++j) {
             const ivec4 box = s_box[j];
             if (int(pixel.x) < box.x || int(pixel.x) > box.z || int(pixel.y) < box.y || int(pixel.y) > box.w) continue;
+            if (s_depth[j].x >= surface) continue;
             const vec2 d = vec2(pixel) + 0.5 - s_center[j];
             const vec4 k = s_conic_opacity[j];
             const float power = -0.5 * (k.x * d.x * d.x + k.z * d.y * d.y) - k.y * d.x * d.y;
@@ -64,9 +86,13 @@ void main() {
                 break;
             }
             color += s_color[j] * (alpha * t);
+            depth_sum += s_depth[j].y * (alpha * t);
             t = next;
         }
         barrier();  // the batch is read before the next one overwrites it
     }
-    if (inside) imageStore(u_color, ivec2(pixel.x, int(u_size.y) - 1 - int(pixel.y)), vec4(color, 1.0 - t));
+    if (tid == 0u && staged > 0u) atomicAdd(staged_entries, staged);
+    if (!inside) return;
+    imageStore(u_color, texel, vec4(color, 1.0 - t));
+    if (u_write_depth != 0) imageStore(u_depth_sum, texel, vec4(depth_sum, 0.0, 0.0, 1.0 - t));
 }

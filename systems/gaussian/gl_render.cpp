@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <string>
 
@@ -52,11 +53,15 @@ Result<GlRenderer> create_gl_renderer() {
     r.frames = gfx::Buffer::create("gaussian.sh_frames");
     r.depth = gfx::Buffer::create("gaussian.depth_keys");
     r.draw = gfx::Buffer::create("gaussian.draw_indirect");
-    glNamedBufferData(r.draw.id(), 16, nullptr, GL_DYNAMIC_DRAW);
+    // The indirect command, then the covered pixels and their wrap flag (project.comp).
+    glNamedBufferData(r.draw.id(), 24, nullptr, GL_DYNAMIC_DRAW);
     r.tile_touched = gfx::Buffer::create("gaussian.tile_touched");
     r.tile_keys = gfx::Buffer::create("gaussian.tile_keys");
     r.tile_values = gfx::Buffer::create("gaussian.tile_values");
     r.tile_ranges_buffer = gfx::Buffer::create("gaussian.tile_ranges");
+    r.tile_stats = gfx::Buffer::create("gaussian.tile_stats");
+    glNamedBufferData(r.tile_stats.id(), 16, nullptr, GL_DYNAMIC_DRAW);
+    reset_tile_stats(r);
     return r;
 }
 
@@ -159,7 +164,8 @@ Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v
     // The scratch buffers may have been read by the previous draw (another cloud this frame): its reads
     // first.
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
-    const GLuint command[4] = {4, 0, 0, 0};  // 4 strip vertices per quad, drawn count accumulated on the GPU
+    // 4 strip vertices per quad, drawn count accumulated on the GPU; covered pixels, wrap flag.
+    const GLuint command[6] = {4, 0, 0, 0, 0, 0};
     glNamedBufferSubData(r.draw.id(), 0, sizeof(command), command);
     const double tan_half = std::tan(glm::radians(v.fov_y_degrees) * 0.5);
     const GLuint pp = r.project.id();
@@ -238,7 +244,7 @@ void blend_quads(GlRenderer& r, const GaussianView& v, std::size_t n, const gfx:
     glUseProgram(0);
 }
 
-void tile_uniforms(GLuint program, const ReferenceOptions& o, glm::uvec2 tiles) {
+void tile_uniforms(GLuint program, const TileTargets& o, glm::uvec2 tiles) {
     set(program, "u_size", glm::vec2(float(o.width), float(o.height)));
     glProgramUniform2ui(program, glGetUniformLocation(program, "u_tiles"), tiles.x, tiles.y);
 }
@@ -265,8 +271,10 @@ Status project_and_sort(GlRenderer& r, const GaussianBuffers& b, const GaussianV
 // Step 3, tiles (3DGS's rasterizer in compute): per drawn Gaussian in depth order the tiles it touches,
 // their exclusive scan, one (tile id, Gaussian) entry per overlap in depth order, a stable radix sort by
 // tile id (so (tile, depth) order), per-tile ranges, and a 16x16 group per tile blending front to back.
-// One readback: the entry count (4 bytes), to size the entry buffers, as 3DGS does.
-Status blend_tiles(GlRenderer& r, const ReferenceOptions& o, std::size_t n) {
+// One readback: the entry count (4 bytes), to size the entry buffers, as 3DGS does. Blends into what
+// o.color holds (GL_TEXTURE_FETCH, framebuffer and image accesses after it see the result).
+// With `over_capacity`, more entries than kMaxTileEntries set it and return before blending (no error).
+Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* over_capacity = nullptr) {
     const glm::uvec2 tiles((unsigned(o.width) + SFFD_GAUSS_TILE - 1) / SFFD_GAUSS_TILE,
                            (unsigned(o.height) + SFFD_GAUSS_TILE - 1) / SFFD_GAUSS_TILE);
     const std::uint64_t tile_count = std::uint64_t(tiles.x) * tiles.y;
@@ -294,7 +302,11 @@ Status blend_tiles(GlRenderer& r, const ReferenceOptions& o, std::size_t n) {
     r.tile_entries = entries;
     // 8 bytes per entry; past 2^28 entries (2 GiB) the quad path is the one to use. (A true total past
     // 2^32 would wrap; the emit pass never writes past the capacity, so that is a wrong image at worst.)
-    if (entries > (1u << 28))
+    if (entries > kMaxTileEntries && over_capacity) {
+        *over_capacity = true;
+        return {};
+    }
+    if (entries > kMaxTileEntries)
         return make_error("draw_gl(): " + std::to_string(entries) +
                           " tile entries exceed the tile path's 2^28; use BlendPath::quads");
     if (entries > r.tile_entry_capacity) {
@@ -331,13 +343,25 @@ Status blend_tiles(GlRenderer& r, const ReferenceOptions& o, std::size_t n) {
     if (Status st = gfx::dispatch_1d(entries, 64, max_x); !st) return st.error();
     glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
     r.tile_prepare_ms = stage_ms(r, t);
-    tile_uniforms(r.tile_blend.id(), o, tiles);
+    const GLuint bp = r.tile_blend.id();
+    tile_uniforms(bp, o, tiles);
+    glProgramUniform1i(bp, glGetUniformLocation(bp, "u_depth_test"), o.surface_depth ? 1 : 0);
+    glProgramUniform1i(bp, glGetUniformLocation(bp, "u_write_depth"), o.depth_sum ? 1 : 0);
+    set(bp, "u_ndc_depth", glm::vec2(o.ndc_depth));
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
-    glBindImageTexture(SFFD_GAUSS_IMAGE_COLOR, r.color.id(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
-    glUseProgram(r.tile_blend.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_STATS, r.tile_stats.id());
+    glBindImageTexture(SFFD_GAUSS_IMAGE_COLOR, o.color, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
+    // Unused units stay bound to the colour (never accessed then: the uniforms above say so).
+    glBindImageTexture(SFFD_GAUSS_IMAGE_DEPTH, o.depth_sum ? o.depth_sum : o.color, 0, GL_FALSE, 0,
+                       GL_READ_WRITE, GL_RGBA32F);
+    glBindTextureUnit(0, o.surface_depth);
+    glUseProgram(bp);
     glDispatchCompute(tiles.x, tiles.y, 1);
     glUseProgram(0);
-    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    glBindTextureUnit(0, 0);
+    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                    GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    r.tile_entries_total += entries;
     return {};
 }
 
@@ -373,12 +397,44 @@ double stage_ms(const GlRenderer& r, std::chrono::steady_clock::time_point& t) {
 }  // namespace
 
 Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v,
-                      const gfx::Program* splat_program) {
+                      const gfx::Program* splat_program, const TileTargets* tiles) {
     if (b.count >= (std::size_t(1) << 31))
         return make_error("draw_gaussians(): more than 2^31 Gaussians in one draw");
     if (Status st = project_and_sort(r, b, v); !st) return st.error();
+    r.covered_pixels = 0;
+    r.last_blend = BlendPath::quads;
+    if (tiles) {
+        // The covered pixels (8 bytes; waits for the projection only): quads up to the budget, where
+        // their image is the one the reference tests compare; past it, the tile blend, whose work stops at
+        // saturation (unless its entries outgrow their buffers: quads then, unbounded but right).
+        GLuint covered[2] = {0, 0};
+        glGetNamedBufferSubData(r.draw.id(), 16, sizeof(covered), covered);
+        r.covered_pixels = covered[1] != 0 ? std::numeric_limits<std::uint64_t>::max() : covered[0];
+        if (r.covered_pixels > kQuadCoverageBudget * std::uint64_t(v.width) * std::uint64_t(v.height)) {
+            TileTargets t = *tiles;
+            t.width = v.width, t.height = v.height, t.ndc_depth = v.ndc_depth;
+            bool over_capacity = false;
+            if (Status st = blend_tiles(r, t, b.count, &over_capacity); !st) return st.error();
+            if (!over_capacity) {
+                r.last_blend = BlendPath::tiles;
+                return {};
+            }
+        }
+    }
     blend_quads(r, v, b.count, splat_program);
     return {};
+}
+
+void reset_tile_stats(GlRenderer& r) {
+    const GLuint zero = 0;
+    glNamedBufferSubData(r.tile_stats.id(), 0, sizeof(zero), &zero);
+    r.tile_entries_total = 0;
+}
+
+TileStats tile_stats(const GlRenderer& r) {
+    GLuint staged = 0;
+    glGetNamedBufferSubData(r.tile_stats.id(), 0, sizeof(staged), &staged);
+    return {r.tile_entries_total, staged};
 }
 
 Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const ReferenceOptions& o) {
@@ -396,7 +452,11 @@ Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const Reference
     auto t = std::chrono::steady_clock::now();
     r.tile_entries = 0, r.tile_prepare_ms = 0.0;
     if (r.blend_path == BlendPath::tiles) {
-        if (Status st = blend_tiles(r, o, b.count); !st) return st.error();
+        const float clear[4] = {0, 0, 0, 0};
+        glClearTexImage(r.color.id(), 0, GL_RGBA, GL_FLOAT, clear);
+        TileTargets target;
+        target.color = r.color.id(), target.width = o.width, target.height = o.height;
+        if (Status st = blend_tiles(r, target, b.count); !st) return st.error();
     } else {
         glBindFramebuffer(GL_FRAMEBUFFER, r.framebuffer.id());
         glViewport(0, 0, o.width, o.height);

@@ -9,6 +9,8 @@
 //      pixel boxes (splat.{vert,frag}, hardware blending, drawn through the indirect command), or the
 //      3DGS tile renderer in compute (tile_*.comp: (tile, Gaussian) entries in depth order, a stable
 //      radix sort by tile id, per-tile ranges, a 16x16 group per tile with early termination);
+//      draw_gaussians (the render system) takes the quads unless the cloud covers too many pixels for them
+//      (kQuadCoverageBudget, measured by the projection), then the tiles;
 //   4. the image read back.
 // The images match the CPU reference renderer (reference_render.h: same conventions, same pixel boxes)
 // within the PSNR the GL test states; both sort paths give identical images.
@@ -16,6 +18,7 @@
 // context.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "runtime/core/result.h"
@@ -33,6 +36,36 @@ enum class SortPath { automatic, cpu, gpu };
 // How the sorted Gaussians are blended: instanced quads (raster blending) or the compute tile renderer.
 enum class BlendPath { quads, tiles };
 
+// Quad blending has no early termination (fixed-function blending cannot stop a pixel at saturated
+// alpha on every GL 4.5 implementation), so its fragment work is the screen area the Gaussians cover:
+// 20,000 screen-filling Gaussians are 6e9 fragments at 640x480. draw_gaussians() sums that area (the
+// pixel boxes clipped to the image) during the projection and, past this many images, blends the cloud
+// with the tile renderer instead, which stops each pixel at transmittance 1e-4 and each tile once all of
+// its pixels have (its preparation is per covered 16x16 tile, up to 256 times less than per pixel).
+// 128 images keep dense test scenes on the quads (3,000 random Gaussians at 200x150 cover ~63) and bound
+// a quad frame at 640x480 to 39M fragments (llvmpipe here: about 110M fragments per CPU second).
+inline constexpr std::uint64_t kQuadCoverageBudget = 128;
+// The tile path's entry buffers: 8 bytes per (tile, Gaussian) entry, 2 GiB at most.
+inline constexpr std::uint64_t kMaxTileEntries = std::uint64_t(1) << 28;
+
+// Where draw_gaussians() blends a cloud it routes to the tile renderer: the render system's accumulation
+// targets, blended into (the same result as its quads, gaussian_accum.frag).
+struct TileTargets {
+    GLuint color = 0;           // RGBA32F: premultiplied colour, coverage (read and written)
+    GLuint depth_sum = 0;       // RGBA32F: Σ T α view depth (x), coverage (w); 0: none
+    GLuint surface_depth = 0;   // depth texture: a Gaussian is hidden where it is <= the Gaussian's
+                                // window depth (the quads' GL_LESS test); 0: no test
+    int width = 1, height = 1;  // set by draw_gaussians from the view
+    glm::dvec2 ndc_depth{0.0};  // set by draw_gaussians from the view (GaussianView::ndc_depth)
+};
+
+// Tile blends since reset_tile_stats(): (tile, Gaussian) entries prepared, and entries the tile groups
+// staged before every pixel of their tile stopped (the blending work early termination left).
+struct TileStats {
+    std::uint64_t entries = 0;
+    std::uint64_t staged = 0;
+};
+
 struct GlRenderer {
     gfx::Program project;
     gfx::Program splat;
@@ -42,6 +75,8 @@ struct GlRenderer {
     gfx::Buffer gaussians, sh, projected, order, frames, depth;
     gfx::Buffer draw;  // DrawArraysIndirectCommand; its instance count is the drawn count, written on the GPU
     gfx::Buffer tile_touched, tile_keys, tile_values, tile_ranges_buffer;  // tile path, grow-only
+    gfx::Buffer tile_stats;                // uint: entries staged by the tile blend (TileStats::staged)
+    std::uint64_t tile_entries_total = 0;  // TileStats::entries
     std::uint64_t tile_entry_capacity = 0, tile_ranges_buffer_tiles = 0;
     gfx::Texture color;
     gfx::Framebuffer framebuffer;
@@ -65,6 +100,10 @@ struct GlRenderer {
     // blend_ms includes, on the tile path, tile_prepare_ms: tile counts, scan, entries, their sort, ranges.
     double project_ms = 0.0, sort_ms = 0.0, blend_ms = 0.0, readback_ms = 0.0, tile_prepare_ms = 0.0;
     std::uint64_t tile_entries = 0;
+    // Last draw_gaussians(): the pixels its Gaussians' clipped pixel boxes cover (UINT64_MAX past 2^32;
+    // measured only when it was given TileTargets), and the blend it used.
+    std::uint64_t covered_pixels = 0;
+    BlendPath last_blend = BlendPath::quads;
     // Work groups per row of every 1D dispatch (projection, GPU sort blocks, tile passes). GL guarantees
     // only 65,535 groups per dimension (64 × 65,535 = 4.19M Gaussians), so larger clouds are dispatched
     // as a 2D grid; tests lower this to exercise the grid with small clouds.
@@ -103,9 +142,13 @@ struct GaussianView {
 // blended front to back (GL_ONE_MINUS_DST_ALPHA, GL_ONE) into the framebuffer bound now, through the
 // viewport the caller set. Depth test state is the caller's (the render system tests against the surface
 // splats' depth); `splat_program` replaces the renderer's splat program (same vertex shader, its own
-// fragment shader), null: the renderer's.
+// fragment shader), null: the renderer's. With `tiles`, a cloud covering more than kQuadCoverageBudget
+// images is blended by the tile renderer into those targets instead (last_blend says which).
 Status draw_gaussians(GlRenderer& renderer, const GaussianBuffers& buffers, const GaussianView& view,
-                      const gfx::Program* splat_program = nullptr);
+                      const gfx::Program* splat_program = nullptr, const TileTargets* tiles = nullptr);
+void reset_tile_stats(GlRenderer& renderer);
+// Reads the staged count back (a sync): call it when the numbers are wanted, not every frame.
+TileStats tile_stats(const GlRenderer& renderer);
 // The renderer's own resident cloud (upload_gl) as GaussianBuffers.
 GaussianBuffers resident_buffers(const GlRenderer& renderer);
 

@@ -40,6 +40,8 @@ struct GaussianPassState {
     gfx::Framebuffer accum_fbo;
     GLuint depth_attached = 0;  // the render system's depth texture attached to accum_fbo
     std::unordered_map<ecs::Entity, CloudState> clouds;
+    std::uint32_t quad_clouds = 0, tile_clouds = 0;  // last frame, GaussianPassStats
+    std::uint64_t covered_pixels = 0;
     bool failed = false;
 };
 
@@ -184,6 +186,13 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
     const glm::dvec2 ndc_depth(-f.projection[2][2], f.projection[3][2]);
     std::uint32_t submitted = 0;
     Status status;
+    s.quad_clouds = s.tile_clouds = 0;
+    s.covered_pixels = 0;
+    gaussian::reset_tile_stats(s.renderer);
+    // A cloud that covers too much of the image for quads (gl_render.h: kQuadCoverageBudget) goes to the
+    // tile renderer, into the same targets with the same depth test.
+    gaussian::TileTargets tiles;
+    tiles.color = s.gauss_color.id(), tiles.depth_sum = s.gauss_depth.id(), tiles.surface_depth = f.depth;
     for (const Item& item : items) {
         const GaussianCloud& cloud = reg.get<GaussianCloud>(item.entity);
         const gaussian::GpuGaussians& gpu = store->clouds.at(item.entity);
@@ -198,7 +207,10 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
         v.min_footprint_px = f.preview ? kPreviewMinFootprintPx : 0.0f;
         const gaussian::GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(), gpu.frames.id(),
                                                 gpu.count,         gpu.sh_degree,   gpu.has_frames()};
-        if (Status st = gaussian::draw_gaussians(s.renderer, buffers, v, &s.accum); !st) status = st;
+        if (Status st = gaussian::draw_gaussians(s.renderer, buffers, v, &s.accum, &tiles); !st) status = st;
+        (s.renderer.last_blend == gaussian::BlendPath::tiles ? s.tile_clouds : s.quad_clouds) += 1;
+        constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();  // "past 2^32" stays so
+        s.covered_pixels += std::min(s.renderer.covered_pixels, kMax - s.covered_pixels);
         submitted += gpu.count;
     }
     glDepthMask(GL_TRUE);
@@ -227,6 +239,13 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     if (!status) return status.error();
     return submitted;
+}
+
+GaussianPassStats gaussian_pass_stats(ecs::Registry& registry) {
+    auto* s = registry.try_resource<GaussianPassState>();
+    if (!s || s->failed) return {};
+    const gaussian::TileStats t = gaussian::tile_stats(s->renderer);
+    return {s->quad_clouds, s->tile_clouds, s->covered_pixels, t.entries, t.staged};
 }
 
 void release_gaussian_pass(ecs::Registry& registry) { registry.erase_resource<GaussianPassState>(); }

@@ -7,11 +7,12 @@
 //   writes  GaussianPassState (resource: programs, targets, per-cloud bounds)
 //
 // Per cloud: the gaussian GL renderer (systems/gaussian/gl_render.h: projection, front-to-back order,
-// instanced quads) into an RGBA32F accumulation target (premultiplied colour, coverage) whose quads are
-// depth-tested against the surface splats' depth buffer (each quad at its centre's depth; no depth
-// writes); then one full-screen pass composites it over the surface colour: C = G + (1 − A) S (the
-// output target keeps straight colour and coverage, so the stored colour is C / coverage). Clouds are
-// drawn nearest first (front-to-back blending across clouds is exact when they do not overlap in depth).
+// instanced quads, or its tile renderer for a cloud covering too much of the image) into an RGBA32F
+// accumulation target (premultiplied colour, coverage) whose quads are depth-tested against the surface
+// splats' depth buffer (each quad at its centre's depth; no depth writes); then one full-screen pass
+// composites it over the surface colour: C = G + (1 − A) S (the output target keeps straight colour and
+// coverage, so the stored colour is C / coverage). Clouds are drawn nearest first (front-to-back blending
+// across clouds is exact when they do not overlap in depth).
 #pragma once
 
 #include <cstdint>
@@ -51,6 +52,16 @@ BoundingSphere cached_gaussian_bounds(ecs::Registry& registry, ecs::Entity entit
 
 // Uploads what changed and draws every Gaussian cloud; returns the number of Gaussians submitted.
 Result<std::uint32_t> gaussian_pass(ecs::Registry& registry, const GaussianPassFrame& frame);
+
+// The last frame's blend per cloud (quads, or the tile renderer past gl_render.h's kQuadCoverageBudget)
+// and the tile renderer's work: (tile, Gaussian) entries prepared, entries staged before the tiles'
+// pixels saturated. Reads a counter back (a sync): for tests and diagnostics, not every frame.
+struct GaussianPassStats {
+    std::uint32_t quad_clouds = 0, tile_clouds = 0;
+    std::uint64_t covered_pixels = 0;  // the clouds' clipped pixel boxes, summed (the quads' fragments)
+    std::uint64_t tile_entries = 0, tile_entries_staged = 0;
+};
+GaussianPassStats gaussian_pass_stats(ecs::Registry& registry);
 
 // Frees the pass's GL objects (while the context is current).
 void release_gaussian_pass(ecs::Registry& registry);

@@ -1,7 +1,8 @@
 // libFuzzer targets for the Gaussian readers, one executable per format (SFFD_FUZZ_FORMAT picks it, so
 // each target has its own corpus and dictionary): 3DGS PLY, .splat, .spz, KHR_gaussian_splatting glTF
-// (the first byte picks .gltf or .glb) and the Gaussian scene reader (load_scene on a glTF whose
-// SFFD_scene extension holds Gaussian entries, plus the file loader on every format). Nothing may crash,
+// (the first byte picks .gltf or .glb), the Gaussian scene reader (load_scene on a glTF whose
+// SFFD_scene extension holds Gaussian entries, plus the file loader on every format), the PlayCanvas
+// compressed PLY (a .ply like the first, with its own seeds) and .ksplat. Nothing may crash,
 // hang or leak; an error must name the file; an accepted cloud must pass validate().
 #include <unistd.h>
 #include <zlib.h>
@@ -16,7 +17,7 @@
 #include "systems/gaussian/gaussian_scene.h"
 
 #ifndef SFFD_FUZZ_FORMAT
-#error "SFFD_FUZZ_FORMAT (1 ply, 2 splat, 3 spz, 4 gltf, 5 scene) must be defined"
+#error "SFFD_FUZZ_FORMAT (1 ply, 2 splat, 3 spz, 4 gltf, 5 scene, 6 compressed ply, 7 ksplat) must be defined"
 #endif
 
 namespace {
@@ -41,8 +42,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }();
     (void)once;
     const int format = SFFD_FUZZ_FORMAT;
-    const char* ext = format == 1 ? ".ply" : format == 2 ? ".splat" : format == 3 ? ".spz" : ".gltf";
-    if (format >= 4) {
+    const char* ext = format == 1 || format == 6 ? ".ply"
+                      : format == 2              ? ".splat"
+                      : format == 3              ? ".spz"
+                      : format == 7              ? ".ksplat"
+                                                 : ".gltf";
+    if (format == 4 || format == 5) {
         if (size < 1) return 0;
         ext = (data[0] & 1) ? ".glb" : ".gltf";
         ++data, --size;
@@ -73,7 +78,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     const std::string path = write_input(data, size, ext);
     if (path.empty()) return 0;
-    if (format <= 4) {
+    if (format != 5) {
         auto g = gaussian::read_gaussians(path);
         if (!g && g.message().find(path) == std::string::npos) __builtin_trap();  // errors name the file
         if (g && !gaussian::validate(*g, path)) __builtin_trap();                 // accepted clouds are sane

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <limits>
 #include <optional>
 #include <random>
 
@@ -21,6 +22,7 @@
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"
 #include "systems/residency/residency_system.h"
+#include "systems/splat_render/gaussian_pass.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_render.h"
 #include "tests/systems/splat_render/test_scenes.h"
@@ -144,6 +146,10 @@ TEST_F(GaussianRenderSystem, ImageEqualsGaussianRendererAndReference) {
     EXPECT_NEAR(double(covered(sys)), double(covered(ref)), 0.01 * double(covered(ref)) + 5);
     const auto& stats = reg.resource<render::RenderStats>();
     EXPECT_EQ(stats.gaussians, 3000u);
+    const render::GaussianPassStats pass = render::gaussian_pass_stats(reg);
+    EXPECT_EQ(pass.quad_clouds, 1u);  // a dense but ordinary scene keeps the quads
+    EXPECT_LT(pass.covered_pixels, kQuadCoverageBudget * w * h);
+    EXPECT_GT(pass.covered_pixels, std::uint64_t(w * h));
     ASSERT_TRUE(reg.try_resource<GpuGaussianStore>());
     EXPECT_EQ(reg.resource<GpuGaussianStore>().clouds.at(e).count, 3000u);
 }
@@ -292,3 +298,112 @@ TEST_F(GaussianRenderSystem, DrawsWhatTheGpuDeformationWroteIntoTheStore) {
 }
 
 }  // namespace
+
+// Bounded work: quads blend every covered pixel (no early termination), so a cloud covering more than
+// kQuadCoverageBudget images goes to the tile renderer, which stops at saturated transmittance.
+
+// `n` Gaussians of colour `rgb`, isotropic `sigma`, centres spread over z in [z0, z0 + 1] near the axis.
+GaussianCloud wall(std::size_t n, float z0, float sigma, float opacity, glm::vec3 rgb) {
+    std::mt19937 rng(7);
+    std::uniform_real_distribution<float> u(0, 1);
+    GaussianCloud g;
+    for (std::size_t i = 0; i < n; ++i) {
+        const GaussianCloud one =
+            blob({0.2f * u(rng) - 0.1f, 0.2f * u(rng) - 0.1f, z0 + u(rng)}, sigma, opacity, rgb);
+        g.positions.push_back(one.positions[0]);
+        g.scales.push_back(one.scales[0]);
+        g.rotations.push_back(one.rotations[0]);
+        g.opacities.push_back(opacity);
+        g.sh.insert(g.sh.end(), one.sh.begin(), one.sh.end());
+    }
+    return g;
+}
+
+TEST_F(GaussianRenderSystem, ScreenFillingCloudIsBlendedByTilesThatStopAtSaturation) {
+    add_camera();
+    const std::size_t n = 20000;
+    const glm::vec3 red(0.9f, 0.1f, 0.1f);
+    reg.emplace<GaussianCloud>(reg.create(), wall(n, -0.5f, 10.0f, 0.5f, red));
+    const int w = 640, h = 480;
+    const render::FrameImage f = frame(w, h);
+    const render::GaussianPassStats s = render::gaussian_pass_stats(reg);
+    EXPECT_EQ(s.tile_clouds, 1u);
+    EXPECT_EQ(s.quad_clouds, 0u);
+    EXPECT_EQ(s.covered_pixels, std::numeric_limits<std::uint64_t>::max());  // 6.1e9: past 2^32
+    // Every Gaussian covers every 16x16 tile (40 x 30): 24M entries prepared, but each tile's pixels
+    // saturate within the first 256 (0.5^14 < 1e-4), so the groups stage one batch each: quads would
+    // have blended 20,000 x 640 x 480 = 6.1e9 fragments.
+    const std::uint64_t tiles = 40 * 30;
+    EXPECT_EQ(s.tile_entries, n * tiles);
+    EXPECT_LE(s.tile_entries_staged, 256 * tiles);
+    EXPECT_GT(s.tile_entries_staged, 0u);
+    float worst = 0.0f;
+    for (const glm::vec4& c : f.color) {
+        worst = std::max(worst, glm::length(srgb(glm::vec3(c)) - red));
+        EXPECT_NEAR(c.w, 1.0f, 1e-3f);
+    }
+    std::printf("20,000 screen-filling Gaussians: %llu entries, %llu staged, worst colour error %.2e\n",
+                static_cast<unsigned long long>(s.tile_entries),
+                static_cast<unsigned long long>(s.tile_entries_staged), double(worst));
+    EXPECT_LT(worst, 4e-3f);  // RGBA16F
+}
+
+TEST_F(GaussianRenderSystem, TileRouteMatchesTheReference) {
+    // Large overlapping Gaussians of different colours (order matters), past the quads' budget.
+    add_camera();
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<float> u(0, 1);
+    GaussianCloud g;
+    for (int i = 0; i < 1000; ++i) {
+        const GaussianCloud one = blob({2 * u(rng) - 1, 2 * u(rng) - 1, 2 * u(rng) - 1}, 0.3f + 0.3f * u(rng),
+                                       0.1f + 0.3f * u(rng), {u(rng), u(rng), u(rng)});
+        g.positions.push_back(one.positions[0]);
+        g.scales.push_back(one.scales[0] * glm::vec3(1.0f, 0.5f + u(rng), 1.0f));
+        g.rotations.push_back(glm::normalize(glm::quat(u(rng), u(rng), u(rng), u(rng))));
+        g.opacities.push_back(one.opacities[0]);
+        g.sh.insert(g.sh.end(), one.sh.begin(), one.sh.end());
+    }
+    reg.emplace<GaussianCloud>(reg.create(), g);
+    const int w = 160, h = 120;
+    const ReferenceImage sys = as_reference(frame(w, h));
+    const render::GaussianPassStats pass = render::gaussian_pass_stats(reg);
+    EXPECT_EQ(pass.tile_clouds, 1u);
+    EXPECT_GT(pass.covered_pixels, kQuadCoverageBudget * w * h);
+    ReferenceOptions o;
+    o.width = w, o.height = h, o.near_plane = camera().near_plane;
+    const double p = psnr(render_reference(g, camera(), o), sys);
+    std::printf("tile route vs reference: PSNR %.1f dB\n", p);
+    EXPECT_GT(p, 40.0);
+}
+
+TEST_F(GaussianRenderSystem, TileRouteKeepsTheDepthTestAndTheAuxDepth) {
+    // Screen-filling Gaussians behind an opaque sphere: hidden where it is, saturated elsewhere, and the
+    // aux depth there is their mean view depth.
+    add_camera();
+    reg.emplace<DirectionalLight>(reg.create(), DirectionalLight{glm::vec3(0, 0, -1), glm::vec3(1.0f), 1.0f});
+    const ecs::Entity sphere = reg.create();
+    reg.emplace<SplatCloud>(sphere, render::test::fibonacci_sphere(20000, 1.0));
+    const int w = 160, h = 120;
+    const render::FrameImage surface = frame(w, h);
+    const glm::vec3 blue(0.1f, 0.2f, 0.9f);
+    reg.emplace<GaussianCloud>(reg.create(), wall(2000, -3.0f, 5.0f, 0.6f, blue));
+    const render::FrameImage both = frame(w, h);
+    EXPECT_EQ(render::gaussian_pass_stats(reg).tile_clouds, 1u);
+    std::size_t sphere_pixels = 0, differing = 0, background = 0;
+    for (std::size_t k = 0; k < surface.color.size(); ++k) {
+        if (surface.color[k].w >= 1.0f) {
+            ++sphere_pixels;
+            differing += glm::length(both.color[k] - surface.color[k]) > 1e-6f;
+            continue;
+        }
+        if (surface.color[k].w > 0.0f) continue;  // the sphere's soft rim
+        ++background;
+        EXPECT_LT(glm::length(srgb(glm::vec3(both.color[k])) - blue), 4e-3f);
+        // The camera is 4 from the origin, the Gaussians at z in [-3, -2]: view depth 6..7.
+        EXPECT_GT(both.depth[k], 5.9f);
+        EXPECT_LT(both.depth[k], 7.1f);
+    }
+    EXPECT_GT(sphere_pixels, std::size_t(w * h / 10));
+    EXPECT_GT(background, std::size_t(w * h / 4));
+    EXPECT_EQ(differing, 0u) << "a Gaussian behind the opaque sphere shows through on the tile path";
+}
