@@ -136,7 +136,7 @@ Result<Geometry> read_ply_geometry(const fs::path& path) {
     columns.has_axes = has_axes, columns.has_uv_frame = has_uv_frame;
     // Binary little-endian rows are decoded in place from the mapped file; other files go through the
     // columns.
-    const auto mapped = read_ply_vertices_mapped(path, columns, g);
+    const auto mapped = read_ply_vertices_mapped(path, h, columns, g);
     if (mapped && !*mapped) return mapped->error();
     if (!mapped)
         if (auto s = reader->seek_element("vertex"); !s) return s.error();

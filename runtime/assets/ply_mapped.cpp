@@ -13,7 +13,7 @@ namespace sffd::ply {
 
 namespace {
 
-// parse_header() needs the header's text only; ply::Reader refuses headers longer than this as well.
+// ply::Reader refuses headers longer than this as well.
 constexpr std::size_t kMaxHeaderBytes = 64 * 1024;
 
 struct Fd {
@@ -23,9 +23,29 @@ struct Fd {
     }
 };
 
+// Bytes up to and including the end_header line (the first line whose first word is end_header, as
+// parse_header reads it), or 0 when there is none within kMaxHeaderBytes.
+std::size_t header_end(std::string_view text) {
+    std::size_t pos = 0;
+    while (pos < text.size()) {
+        const std::size_t nl = text.find('\n', pos);
+        if (nl == std::string_view::npos) return 0;
+        std::string_view line = text.substr(pos, nl - pos);
+        const std::size_t first = line.find_first_not_of(" \t\r");
+        if (first != std::string_view::npos) {
+            line.remove_prefix(first);
+            const std::string_view word = line.substr(0, line.find_first_of(" \t\r"));
+            if (word == "end_header") return nl + 1;
+        }
+        pos = nl + 1;
+    }
+    return 0;
+}
+
 }  // namespace
 
-Result<MappedElement> MappedElement::map(const std::filesystem::path& path, std::string_view element) {
+Result<MappedElement> MappedElement::map(const std::filesystem::path& path, const Header& header,
+                                         std::string_view element) {
     const std::string name = path.string();
     Fd f;
     f.fd = ::open(name.c_str(), O_RDONLY | O_CLOEXEC);
@@ -34,6 +54,7 @@ Result<MappedElement> MappedElement::map(const std::filesystem::path& path, std:
     if (::fstat(f.fd, &st) != 0 || !S_ISREG(st.st_mode) || st.st_size <= 0)
         return make_error(name + ": not a regular file");
     const std::size_t size = std::size_t(st.st_size);
+    if (header.format != Format::binary_little_endian) return make_error(name + ": not binary little endian");
     // MAP_POPULATE reads the whole file in ahead (one pass through the page cache) instead of a page fault
     // per 4 KiB in the decoding threads.
     void* p = ::mmap(nullptr, size, PROT_READ, MAP_PRIVATE | MAP_POPULATE, f.fd, 0);
@@ -41,12 +62,10 @@ Result<MappedElement> MappedElement::map(const std::filesystem::path& path, std:
     MappedElement m;
     m.m_base = static_cast<const unsigned char*>(p);
     m.m_size = size;
-    std::size_t header_bytes = 0;
-    auto header = parse_header(
-        std::string_view(reinterpret_cast<const char*>(m.m_base), std::min(size, kMaxHeaderBytes)), name,
-        header_bytes);
-    if (!header) return header.error();
-    m.m_header = std::move(*header);
+    const std::size_t header_bytes = header_end(
+        std::string_view(reinterpret_cast<const char*>(m.m_base), std::min(size, kMaxHeaderBytes)));
+    if (header_bytes == 0) return make_error(name + ": no end_header");
+    m.m_header = header;
     if (m.m_header.format != Format::binary_little_endian)
         return make_error(name + ": not binary little endian");
     const int at = m.m_header.find(element);

@@ -21,7 +21,10 @@ namespace sffd::ply {
 // Owns the mapping (move-only): unmapped on destruction.
 class MappedElement {
 public:
-    static Result<MappedElement> map(const std::filesystem::path& path, std::string_view element);
+    // `header` is the file's, as ply::Reader::open (or parse_header) read it: it is not parsed a second time
+    // (that would repeat its warnings); the data starts after the end_header line.
+    static Result<MappedElement> map(const std::filesystem::path& path, const Header& header,
+                                     std::string_view element);
     MappedElement(MappedElement&& o) noexcept;
     MappedElement& operator=(MappedElement&& o) noexcept;
     MappedElement(const MappedElement&) = delete;

@@ -47,9 +47,9 @@ inline double value(const unsigned char* row, const Field& f) {
 
 }  // namespace
 
-std::optional<Status> read_ply_vertices_mapped(const std::filesystem::path& path, const PlyVertexColumns& c,
-                                               Geometry& g) {
-    auto m = ply::MappedElement::map(path, "vertex");
+std::optional<Status> read_ply_vertices_mapped(const std::filesystem::path& path, const ply::Header& header,
+                                               const PlyVertexColumns& c, Geometry& g) {
+    auto m = ply::MappedElement::map(path, header, "vertex");
     if (!m) return std::nullopt;
     const ply::Element& e = m->element();
     auto field = [&](int p) {

@@ -7,6 +7,7 @@
 #include <optional>
 
 #include "runtime/assets/import.h"
+#include "runtime/assets/ply.h"
 #include "runtime/core/result.h"
 
 namespace sffd::assets::detail {
@@ -26,7 +27,7 @@ struct PlyVertexColumns {
 // Empty when the vertex rows cannot be mapped (the caller reads them through ply::Reader); otherwise the
 // outcome, with g.positions (and normals, colors, uvs, axes, uv_axes as present) filled. Errors as the
 // column path's: "file: vertex N has a non-finite colour".
-std::optional<Status> read_ply_vertices_mapped(const std::filesystem::path& path, const PlyVertexColumns& c,
-                                               Geometry& g);
+std::optional<Status> read_ply_vertices_mapped(const std::filesystem::path& path, const ply::Header& header,
+                                               const PlyVertexColumns& c, Geometry& g);
 
 }  // namespace sffd::assets::detail

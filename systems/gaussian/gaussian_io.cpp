@@ -200,7 +200,7 @@ Result<GaussianCloud> read_ply(const fs::path& path) {
     g.sh_degree = layout->degree;
     InfinityCount mapped;
     // float32 binary rows (what trainers write) are decoded in place; other files go through the columns.
-    if (auto fast = detail::read_ply_float32(path, *layout, g, mapped)) {
+    if (auto fast = detail::read_ply_float32(path, reader->header(), *layout, g, mapped)) {
         if (!*fast) return fast->error();
         report_infinities(name, mapped);
         return g;

@@ -67,9 +67,9 @@ Status convert(const unsigned char* row, const Offsets& o, const PlyLayout& l, c
 
 }  // namespace
 
-std::optional<Status> read_ply_float32(const std::filesystem::path& path, const PlyLayout& l,
-                                       GaussianCloud& out, InfinityCount& mapped) {
-    auto m = ply::MappedElement::map(path, "vertex");
+std::optional<Status> read_ply_float32(const std::filesystem::path& path, const ply::Header& header,
+                                       const PlyLayout& l, GaussianCloud& out, InfinityCount& mapped) {
+    auto m = ply::MappedElement::map(path, header, "vertex");
     if (!m) return std::nullopt;
     const ply::Element& e = m->element();
     std::vector<int> used = {l.x, l.y, l.z, l.opacity};

@@ -16,7 +16,7 @@ namespace sffd::gaussian::detail {
 
 // Empty when the file does not qualify (the caller reads it through ply::Reader); otherwise the read's
 // outcome, `out` filled (sh_degree = layout.degree) and `mapped` counted.
-std::optional<Status> read_ply_float32(const std::filesystem::path& path, const PlyLayout& layout,
-                                       GaussianCloud& out, InfinityCount& mapped);
+std::optional<Status> read_ply_float32(const std::filesystem::path& path, const ply::Header& header,
+                                       const PlyLayout& layout, GaussianCloud& out, InfinityCount& mapped);
 
 }  // namespace sffd::gaussian::detail

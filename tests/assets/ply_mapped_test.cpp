@@ -11,6 +11,7 @@
 
 #include "runtime/assets/export.h"
 #include "runtime/assets/import.h"
+#include "runtime/assets/ply.h"
 #include "runtime/assets/ply_mapped.h"
 #include "tests/assets/test_util.h"
 
@@ -18,6 +19,15 @@ namespace {
 
 using namespace sffd;
 namespace fs = std::filesystem;
+
+// The file's header as ply::Reader reads it, then the mapping.
+Result<ply::MappedElement> map(const fs::path& p, std::string_view element) {
+    const std::string text = test::slurp(p);
+    std::size_t header_bytes = 0;
+    auto h = ply::parse_header(text, p.string(), header_bytes);
+    if (!h) return h.error();
+    return ply::MappedElement::map(p, *h, element);
+}
 
 template <class T>
 void put(std::string& s, T v) {
@@ -32,7 +42,7 @@ TEST(PlyMapped, FindsTheElementAfterListFreeOnes) {
     for (int i = 0; i < 3; ++i) put(s, std::int16_t(i)), put(s, double(i));
     put(s, 1.5f), put(s, std::uint8_t(200)), put(s, -2.5f), put(s, std::uint8_t(7));
     test::write(dir / "a.ply", s);
-    auto m = ply::MappedElement::map(dir / "a.ply", "vertex");
+    auto m = map(dir / "a.ply", "vertex");
     ASSERT_TRUE(m) << m.message();
     EXPECT_EQ(m->count(), 2u);
     EXPECT_EQ(m->row_size(), 5u);
@@ -55,10 +65,17 @@ TEST(PlyMapped, RefusesWhatItCannotMap) {
                     std::string(1, '\0') + one);
     test::write(dir / "short.ply", "ply\nformat binary_little_endian 1.0\n" + vertex + "ab");
     for (const char* name : {"ascii.ply", "big.ply", "list_first.ply", "short.ply", "absent.ply"})
-        EXPECT_FALSE(ply::MappedElement::map(dir / name, "vertex")) << name;
+        EXPECT_FALSE(map(dir / name, "vertex")) << name;
+    // The header says binary, the file has none (changed since it was read): refused, not read past its end.
+    test::write(dir / "changed.ply", "ply\nformat ascii 1.0\n" + vertex + "1\n");
+    std::size_t header_bytes = 0;
+    auto stale =
+        ply::parse_header("ply\nformat binary_little_endian 1.0\n" + vertex, "changed.ply", header_bytes);
+    ASSERT_TRUE(stale) << stale.message();
+    EXPECT_FALSE(ply::MappedElement::map(dir / "changed.ply", *stale, "vertex"));
     test::write(dir / "fine.ply", "ply\nformat binary_little_endian 1.0\n" + vertex + one);
-    EXPECT_TRUE(ply::MappedElement::map(dir / "fine.ply", "vertex"));
-    EXPECT_FALSE(ply::MappedElement::map(dir / "fine.ply", "face"));
+    EXPECT_TRUE(map(dir / "fine.ply", "vertex"));
+    EXPECT_FALSE(map(dir / "fine.ply", "face"));
 }
 
 // A splat cloud with every attribute the PLY layout stores, 20,000 splats (several parallel ranges).

@@ -26,51 +26,57 @@ namespace {
 using namespace sffd;
 namespace fs = std::filesystem;
 
-// The generated files, removed when the process ends.
-struct Files {
-    fs::path gaussians, surface_ply, surface_glb;
+// Splats on a unit Fibonacci sphere with normals, colours and tangent axes (what the editor saves).
+SplatCloud surface_cloud(std::size_t n) {
+    SplatCloud c;
+    c.positions.resize(n), c.normals.resize(n), c.axis_u.resize(n), c.axis_v.resize(n), c.colors.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const glm::vec3 p(bench::fibonacci_sphere(i, n));
+        const glm::vec3 t =
+            glm::normalize(glm::cross(p, std::abs(p.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0)));
+        c.positions[i] = p, c.normals[i] = p;
+        c.axis_u[i] = 0.002f * t, c.axis_v[i] = 0.002f * glm::cross(p, t);
+        c.colors[i] = 0xff000000u | std::uint32_t(i * 2654435761u & 0xffffffu);
+    }
+    return c;
+}
+
+// One generated file, written on first use (a filtered run makes only its own) and removed at exit.
+struct File {
+    fs::path path;
     std::string error;
-    Files() {
-        const fs::path dir = fs::temp_directory_path();
-        const std::string tag = std::to_string(getpid());
-        gaussians = dir / ("sffd_bench_read_" + tag + "_3dgs.ply");
-        surface_ply = dir / ("sffd_bench_read_" + tag + "_surface.ply");
-        surface_glb = dir / ("sffd_bench_read_" + tag + "_surface.glb");
-        if (auto s = gaussian::write_ply(gaussians, bench::sphere_gaussians(1000000, 3)); !s)
-            error = s.message();
-        const SplatCloud c = surface_cloud(4500000);
-        if (auto s = assets::save_splat_ply(c, surface_ply); !s) error = s.message();
-        if (auto s = assets::save_splat_glb(c, surface_glb); !s) error = s.message();
+    template <class Write>
+    File(const char* name, Write write)
+        : path(fs::temp_directory_path() / ("sffd_bench_read_" + std::to_string(getpid()) + "_" + name)) {
+        if (Status s = write(path); !s) error = s.message();
     }
-    ~Files() {
+    ~File() {
         std::error_code ec;
-        for (const fs::path& p : {gaussians, surface_ply, surface_glb}) fs::remove(p, ec);
-    }
-    // Splats on a unit Fibonacci sphere with normals, colours and tangent axes (what the editor saves).
-    static SplatCloud surface_cloud(std::size_t n) {
-        SplatCloud c;
-        c.positions.resize(n), c.normals.resize(n), c.axis_u.resize(n), c.axis_v.resize(n),
-            c.colors.resize(n);
-        for (std::size_t i = 0; i < n; ++i) {
-            const glm::vec3 p(bench::fibonacci_sphere(i, n));
-            const glm::vec3 t =
-                glm::normalize(glm::cross(p, std::abs(p.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0)));
-            c.positions[i] = p, c.normals[i] = p;
-            c.axis_u[i] = 0.002f * t, c.axis_v[i] = 0.002f * glm::cross(p, t);
-            c.colors[i] = 0xff000000u | std::uint32_t(i * 2654435761u & 0xffffffu);
-        }
-        return c;
+        fs::remove(path, ec);
     }
 };
 
-const Files& files() {
-    static const Files f;
+const File& gaussian_ply() {
+    static const File f("3dgs.ply", [](const fs::path& p) {
+        return gaussian::write_ply(p, bench::sphere_gaussians(1000000, 3));
+    });
+    return f;
+}
+const File& surface_ply() {
+    static const File f("surface.ply",
+                        [](const fs::path& p) { return assets::save_splat_ply(surface_cloud(4500000), p); });
+    return f;
+}
+const File& surface_glb() {
+    static const File f("surface.glb",
+                        [](const fs::path& p) { return assets::save_splat_glb(surface_cloud(4500000), p); });
     return f;
 }
 
 template <class Read>
-void run(benchmark::State& state, const fs::path& path, Read read) {
-    if (!files().error.empty()) return state.SkipWithError(files().error.c_str());
+void run(benchmark::State& state, const File& file, Read read) {
+    if (!file.error.empty()) return state.SkipWithError(file.error.c_str());
+    const fs::path& path = file.path;
     const double cpu0 = bench::process_cpu_s();
     for (auto _ : state)
         if (std::string why = read(path); !why.empty()) return state.SkipWithError(why.c_str());
@@ -83,7 +89,7 @@ void run(benchmark::State& state, const fs::path& path, Read read) {
 void BM_Read3dgsPly(benchmark::State& state) {
     const bool columns = state.range(0) != 0;
     state.SetLabel(columns ? "ply::Reader columns" : "read_gaussians");
-    run(state, files().gaussians, [&](const fs::path& p) -> std::string {
+    run(state, gaussian_ply(), [&](const fs::path& p) -> std::string {
         if (!columns) {
             auto g = gaussian::read_gaussians(p);
             return g ? std::string() : g.message();
@@ -111,7 +117,7 @@ void BM_Read3dgsPly(benchmark::State& state) {
 BENCHMARK(BM_Read3dgsPly)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_ReadSurfacePly(benchmark::State& state) {
-    run(state, files().surface_ply, [](const fs::path& p) -> std::string {
+    run(state, surface_ply(), [](const fs::path& p) -> std::string {
         auto g = assets::read_ply_geometry(p);
         return g ? std::string() : g.message();
     });
@@ -119,7 +125,7 @@ void BM_ReadSurfacePly(benchmark::State& state) {
 BENCHMARK(BM_ReadSurfacePly)->Unit(benchmark::kMillisecond)->UseRealTime();
 
 void BM_ReadSurfaceGlb(benchmark::State& state) {
-    run(state, files().surface_glb, [](const fs::path& p) -> std::string {
+    run(state, surface_glb(), [](const fs::path& p) -> std::string {
         auto g = assets::read_gltf(p);
         return g ? std::string() : g.message();
     });
