@@ -10,6 +10,7 @@
 #include "runtime/assets/gltf_io.h"
 #include "runtime/assets/import_detail.h"
 #include "runtime/assets/ply.h"
+#include "runtime/assets/ply_vertices.h"
 #include "runtime/assets/splat_estimation.h"
 #include "runtime/core/file_io.h"
 #include "runtime/core/log.h"
@@ -122,9 +123,25 @@ Result<Geometry> read_ply_geometry(const fs::path& path) {
         g.axis_v.reserve(n);
     }
     if (has_uv_frame) g.uv_axes.reserve(n);
-    if (auto s = reader->seek_element("vertex"); !s) return s.error();
+    PlyVertexColumns columns;
+    columns.pos[0] = px, columns.pos[1] = py, columns.pos[2] = pz;
+    columns.normal[0] = nx, columns.normal[1] = ny, columns.normal[2] = nz;
+    columns.color[0] = cr, columns.color[1] = cg, columns.color[2] = cb, columns.color[3] = ca;
+    for (int c = 0; c < 4; ++c)
+        if (columns.color[c] >= 0)
+            columns.color_scale[c] = channel_scale(ve.properties[columns.color[c]].type);
+    columns.uv[0] = tu, columns.uv[1] = tv;
+    std::copy(ax, ax + 6, columns.axes), std::copy(uf, uf + 4, columns.uv_frame);
+    columns.has_normals = has_normals, columns.has_colors = has_colors, columns.has_uvs = has_uvs;
+    columns.has_axes = has_axes, columns.has_uv_frame = has_uv_frame;
+    // Binary little-endian rows are decoded in place from the mapped file; other files go through the
+    // columns.
+    const auto mapped = read_ply_vertices_mapped(path, h, columns, g);
+    if (mapped && !*mapped) return mapped->error();
+    if (!mapped)
+        if (auto s = reader->seek_element("vertex"); !s) return s.error();
     ply::Chunk chunk;
-    while (true) {
+    while (!mapped) {
         auto rows = reader->read_rows(1 << 16, chunk);
         if (!rows) return rows.error();
         if (*rows == 0) break;

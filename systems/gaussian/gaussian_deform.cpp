@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -26,8 +28,15 @@ bool finite_result(const GaussianCloud& g, std::size_t i, int K, bool frames) {
     if (!finite3(g.positions[i]) || !finite3(g.scales[i]) || !std::isfinite(q.w + q.x + q.y + q.z))
         return false;
     if (!(std::abs(glm::dot(q, q) - 1.0f) < 1e-3f)) return false;  // a zero or overflowed quaternion
-    for (std::size_t k = 0; k < std::size_t(K) * 3; ++k)
-        if (!std::isfinite(g.sh[i * std::size_t(K) * 3 + k])) return false;
+    // On the exponent bits without an early exit, so the loop over the 48 coefficients is vector code.
+    const float* sh = &g.sh[i * std::size_t(K) * 3];
+    std::uint32_t all = 0;
+    for (std::size_t k = 0; k < std::size_t(K) * 3; ++k) {
+        std::uint32_t bits;
+        std::memcpy(&bits, sh + k, sizeof bits);
+        all |= std::uint32_t((bits & 0x7f800000u) == 0x7f800000u);
+    }
+    if (all) return false;
     if (frames)
         for (int c = 0; c < 3; ++c)
             if (!finite3(g.sh_frames[i][c])) return false;

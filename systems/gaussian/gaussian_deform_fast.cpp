@@ -10,6 +10,10 @@
 #include <cmath>
 #include <cstring>
 
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
+
 #include "systems/gaussian/sh.h"
 
 namespace sffd::gaussian::detail {
@@ -243,6 +247,61 @@ void rotate_sh(int degree, const M3& r, V3* c) {
     }
 }
 
+// The SH coefficients of a whole group of degree-3 Gaussians (16 rows of 48 floats) to lanes and back:
+// three 16x16 transposes in registers instead of 768 scalar moves each way.
+#if defined(__AVX512F__)
+constexpr bool kTransposeBlocks = true;
+// Stage s swaps bit s between row and lane index: rows i and i + s exchange their off-diagonal s-blocks.
+struct TransposeIndex {
+    alignas(64) int lo[4][16], hi[4][16];
+    constexpr TransposeIndex() : lo{}, hi{} {
+        for (int stage = 0; stage < 4; ++stage) {
+            const int s = 1 << stage;
+            for (int l = 0; l < 16; ++l) {
+                lo[stage][l] = (l & s) ? l - s + 16 : l;  // row i: its own lanes, row i + s's lanes - s
+                hi[stage][l] = (l & s) ? l + 16 : l + s;  // row i + s: row i's lanes + s, its own lanes
+            }
+        }
+    }
+};
+constexpr TransposeIndex kTranspose;
+__attribute__((always_inline)) inline void transpose16(__m512 m[16]) {
+#pragma GCC unroll 4
+    for (int stage = 0; stage < 4; ++stage) {
+        const int s = 1 << stage;
+        const __m512i lo = _mm512_load_si512(kTranspose.lo[stage]),
+                      hi = _mm512_load_si512(kTranspose.hi[stage]);
+#pragma GCC unroll 16
+        for (int i = 0; i < 16; ++i) {
+            if (i & s) continue;
+            const __m512 a = m[i], b = m[i + s];
+            m[i] = _mm512_permutex2var_ps(a, lo, b);
+            m[i + s] = _mm512_permutex2var_ps(a, hi, b);
+        }
+    }
+}
+void to_lanes(const float* rows, float (&soa)[48][W]) {
+    for (int b = 0; b < 3; ++b) {
+        __m512 m[16];
+        for (int l = 0; l < 16; ++l) m[l] = _mm512_loadu_ps(rows + l * 48 + b * 16);
+        transpose16(m);
+        for (int k = 0; k < 16; ++k) _mm512_store_ps(soa[b * 16 + k], m[k]);
+    }
+}
+void to_rows(const float (&soa)[48][W], float (*rows)[48]) {
+    for (int b = 0; b < 3; ++b) {
+        __m512 m[16];
+        for (int k = 0; k < 16; ++k) m[k] = _mm512_load_ps(soa[b * 16 + k]);
+        transpose16(m);
+        for (int l = 0; l < 16; ++l) _mm512_storeu_ps(rows[l] + b * 16, m[l]);
+    }
+}
+#else
+constexpr bool kTransposeBlocks = false;
+void to_lanes(const float*, float (&)[48][W]) {}
+void to_rows(const float (&)[48][W], float (*)[48]) {}
+#endif
+
 // One vector of Gaussians first .. first + n - 1 (n <= W). Returns the near-singular count.
 std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
     const GaussianCloud& in = *a.in;
@@ -321,12 +380,18 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
         if (K > 1) R = polar_rotation(J, moved & ~singular, rotated);
         alignas(64) float sh_soa[48][W];
         const bool rotate_coeffs = K > 1 && !a.view_mode && any(rotated);
-        if (rotate_coeffs) {
+        const bool blocks = kTransposeBlocks && n == W && stride == 48;  // whole groups of degree 3
+        alignas(64) float sh_rows[W][48];
+        if (rotate_coeffs && blocks) {
+            to_lanes(&in.sh[first * stride], sh_soa);
+        } else if (rotate_coeffs) {
             if (n < W) std::memset(sh_soa, 0, sizeof sh_soa);  // padding lanes: defined values
             for (int l = 0; l < n; ++l) {
                 const float* src = &in.sh[(first + std::size_t(l)) * stride];
                 for (std::size_t k = 0; k < stride; ++k) sh_soa[k][l] = src[k];
             }
+        }
+        if (rotate_coeffs) {
             V3 c[16];
             for (int k = 0; k < K; ++k)
                 c[k] = {load(sh_soa[3 * k]), load(sh_soa[3 * k + 1]), load(sh_soa[3 * k + 2])};
@@ -336,6 +401,7 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
                 std::memcpy(sh_soa[3 * k + 1], &c[k].y, sizeof(vf));
                 std::memcpy(sh_soa[3 * k + 2], &c[k].z, sizeof(vf));
             }
+            if (blocks) to_rows(sh_soa, sh_rows);
         }
         for (int l = 0; l < n; ++l) {
             const std::size_t i = first + std::size_t(l);
@@ -352,7 +418,9 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
             out.scales[i] = glm::vec3(out_s[0][l], out_s[1][l], out_s[2][l]);
             out.rotations[i] = glm::quat(out_q[0][l], out_q[1][l], out_q[2][l], out_q[3][l]);
             if (rotate_coeffs && rotated[l]) {
-                for (std::size_t k = 3; k < stride; ++k) sh_out[k] = sh_soa[k][l];
+                if (blocks) std::memcpy(sh_out + 3, sh_rows[l] + 3, (stride - 3) * sizeof(float));
+                else
+                    for (std::size_t k = 3; k < stride; ++k) sh_out[k] = sh_soa[k][l];
                 if (copy) std::copy(sh_in, sh_in + 3, sh_out);
                 continue;
             }

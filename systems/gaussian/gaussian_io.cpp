@@ -15,6 +15,7 @@
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_infinity.h"
 #include "systems/gaussian/gaussian_ksplat.h"
+#include "systems/gaussian/gaussian_ply_fast.h"
 #include "systems/gaussian/gaussian_spz.h"
 #include "systems/gaussian/sh.h"
 
@@ -197,13 +198,19 @@ Result<GaussianCloud> read_ply(const fs::path& path) {
                           std::to_string(kMaxGaussians) + "-Gaussian limit");
     GaussianCloud g;
     g.sh_degree = layout->degree;
+    InfinityCount mapped;
+    // float32 binary rows (what trainers write) are decoded in place; other files go through the columns.
+    if (auto fast = detail::read_ply_float32(path, reader->header(), *layout, g, mapped)) {
+        if (!*fast) return fast->error();
+        report_infinities(name, mapped);
+        return g;
+    }
     // ply::Reader::open() refused counts the file cannot hold, so reserving the declared count is safe.
     g.positions.reserve(ve.count), g.scales.reserve(ve.count), g.rotations.reserve(ve.count);
     g.opacities.reserve(ve.count), g.sh.reserve(ve.count * std::uint64_t(sh_coeffs(g.sh_degree)) * 3);
     if (auto s = reader->seek_element("vertex"); !s) return s.error();
     ply::Chunk chunk;
     std::uint64_t row = 0;
-    InfinityCount mapped;
     while (true) {
         auto rows = reader->read_rows(kChunkRows, chunk);
         if (!rows) return rows.error();
@@ -331,6 +338,52 @@ bool normalize_quaternion(double w, double x, double y, double z, glm::quat& out
     return true;
 }
 
+namespace {
+
+// validate()'s checks of Gaussian i, in the order they report.
+Status check_gaussian(const GaussianCloud& g, std::size_t i, const std::string& what,
+                      std::uint64_t first_index) {
+    static const char* const kAxis[] = {"x", "y", "z"};
+    const std::size_t K3 = std::size_t(sh_coeffs(g.sh_degree)) * 3;
+    const auto fail = [&](const std::string& field, double v, const char* why) {
+        char value[32];
+        std::snprintf(value, sizeof value, "%.9g", v);
+        return make_error(what + ": Gaussian " + std::to_string(first_index + i) + ": " + field + " = " +
+                          value + ": " + why);
+    };
+    for (int c = 0; c < 3; ++c) {
+        const double p = g.origin[c] + double(g.positions[i][c]);
+        if (!std::isfinite(p)) return fail(std::string("position.") + kAxis[c], p, "not finite");
+        if (std::abs(p) > kMaxCoordinate)
+            return fail(std::string("position.") + kAxis[c], p, "beyond the +-1e10 coordinate bound");
+        const double s = double(g.scales[i][c]);
+        if (!std::isfinite(s)) return fail(std::string("scale.") + kAxis[c], s, "not finite");
+        if (!(s >= 0.0)) return fail(std::string("scale.") + kAxis[c], s, "negative");
+        if (s > kMaxScale) return fail(std::string("scale.") + kAxis[c], s, "beyond the 1e10 scale bound");
+    }
+    if (!(g.opacities[i] >= 0.0f && g.opacities[i] <= 1.0f))
+        return fail("opacity", double(g.opacities[i]), "outside [0, 1]");
+    const glm::quat q = g.rotations[i];
+    const float q2 = glm::dot(q, q);
+    if (!(std::abs(q2 - 1.0f) < 1e-3f))
+        return fail("rotation (squared length)", double(q2), "not a unit quaternion");
+    const float* sh = &g.sh[i * K3];
+    // One pass without branches first (the common case: all fine), the per-value messages only when not.
+    bool all_ok = true;
+    for (std::size_t k = 0; k < K3; ++k)
+        all_ok &= std::abs(double(sh[k])) <= kMaxShMagnitude;  // false for NaN
+    if (all_ok) return {};
+    for (std::size_t k = 0; k < K3; ++k) {
+        const double v = double(sh[k]);
+        if (!std::isfinite(v) || std::abs(v) > kMaxShMagnitude)
+            return fail("sh[" + std::to_string(k / 3) + "]." + "rgb"[k % 3], v,
+                        std::isfinite(v) ? "beyond the 1e6 SH bound" : "not finite");
+    }
+    return {};
+}
+
+}  // namespace
+
 Status validate(const GaussianCloud& g, const std::string& what, std::uint64_t first_index) {
     const std::size_t n = g.size();
     if (g.sh_degree < 0 || g.sh_degree > 3)
@@ -340,39 +393,20 @@ Status validate(const GaussianCloud& g, const std::string& what, std::uint64_t f
         return make_error(what + ": array sizes differ from the " + std::to_string(n) + " positions");
     if (!std::isfinite(g.origin.x + g.origin.y + g.origin.z))
         return make_error(what + ": the cloud's origin is not finite");
-    static const char* const kAxis[] = {"x", "y", "z"};
-    const std::size_t K3 = std::size_t(sh_coeffs(g.sh_degree)) * 3;
-    for (std::size_t i = 0; i < n; ++i) {
-        const auto fail = [&](const std::string& field, double v, const char* why) {
-            char value[32];
-            std::snprintf(value, sizeof value, "%.9g", v);
-            return make_error(what + ": Gaussian " + std::to_string(first_index + i) + ": " + field + " = " +
-                              value + ": " + why);
-        };
-        for (int c = 0; c < 3; ++c) {
-            const double p = g.origin[c] + double(g.positions[i][c]);
-            if (!std::isfinite(p)) return fail(std::string("position.") + kAxis[c], p, "not finite");
-            if (std::abs(p) > kMaxCoordinate)
-                return fail(std::string("position.") + kAxis[c], p, "beyond the +-1e10 coordinate bound");
-            const double s = double(g.scales[i][c]);
-            if (!std::isfinite(s)) return fail(std::string("scale.") + kAxis[c], s, "not finite");
-            if (!(s >= 0.0)) return fail(std::string("scale.") + kAxis[c], s, "negative");
-            if (s > kMaxScale)
-                return fail(std::string("scale.") + kAxis[c], s, "beyond the 1e10 scale bound");
-        }
-        if (!(g.opacities[i] >= 0.0f && g.opacities[i] <= 1.0f))
-            return fail("opacity", double(g.opacities[i]), "outside [0, 1]");
-        const glm::quat q = g.rotations[i];
-        const float q2 = glm::dot(q, q);
-        if (!(std::abs(q2 - 1.0f) < 1e-3f))
-            return fail("rotation (squared length)", double(q2), "not a unit quaternion");
-        for (std::size_t k = 0; k < K3; ++k) {
-            const double v = double(g.sh[i * K3 + k]);
-            if (!std::isfinite(v) || std::abs(v) > kMaxShMagnitude)
-                return fail("sh[" + std::to_string(k / 3) + "]." + "rgb"[k % 3], v,
-                            std::isfinite(v) ? "beyond the 1e6 SH bound" : "not finite");
-        }
-    }
+    // In parallel; the first bad Gaussian in order is the one reported (each range stops at its own first).
+    std::atomic<std::size_t> first_bad{n};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, 8192),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin();
+                               i != r.end() && i < first_bad.load(std::memory_order_relaxed); ++i)
+                              if (!check_gaussian(g, i, what, first_index)) {
+                                  std::size_t seen = first_bad.load();
+                                  while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {
+                                  }
+                                  break;
+                              }
+                      });
+    if (const std::size_t i = first_bad.load(); i < n) return check_gaussian(g, i, what, first_index);
     if (!g.sh_frames.empty())
         return make_error(
             what +

@@ -7,7 +7,9 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
+#include <vector>
 
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/sh.h"
@@ -232,6 +234,113 @@ TEST(GaussianIo, SplatFileKnownValues) {
     write_text(nanp, bad);
     expect_error(nanp, "splat 1: non-finite scale");
     expect_error(temp_path("absent.splat"), "no such file");
+}
+
+// Binary float32 files are decoded in place from the mapped file, ASCII ones through ply::Reader's
+// columns: the same rows must give the same cloud, bit for bit, every degree, with more rows than one
+// parallel range and a property order that is not the writer's (extra columns between).
+TEST(GaussianIo, MappedRowsMatchTheColumnPath) {
+    for (int degree : {0, 1, 3}) {
+        const GaussianCloud g = random_cloud(degree, 20000, unsigned(degree + 30));
+        const fs::path bin = temp_path("mapped_" + std::to_string(degree) + ".ply");
+        const fs::path text = temp_path("columns_" + std::to_string(degree) + ".ply");
+        ASSERT_TRUE(write_ply(bin, g));
+        ASSERT_TRUE(write_ply(text, g, ply::Format::ascii));
+        auto a = read_gaussians(bin);
+        auto b = read_gaussians(text);
+        ASSERT_TRUE(a) << a.message();
+        ASSERT_TRUE(b) << b.message();
+        ASSERT_EQ(a->size(), g.size());
+        EXPECT_EQ(a->sh_degree, degree);
+        EXPECT_EQ(a->positions, b->positions);
+        EXPECT_EQ(a->scales, b->scales);
+        EXPECT_EQ(a->rotations, b->rotations);
+        EXPECT_EQ(a->opacities, b->opacities);
+        EXPECT_EQ(a->sh, b->sh);
+    }
+}
+
+// One binary little-endian degree-1 row per vector (x y z, an int column, f_dc, f_rest, opacity, scale, rot),
+// a list-free element before the vertices.
+void write_binary_rows(const fs::path& p, const std::vector<std::vector<float>>& rows) {
+    std::string h =
+        "ply\nformat binary_little_endian 1.0\nelement camera 2\nproperty uchar id\n"
+        "element vertex " +
+        std::to_string(rows.size()) +
+        "\nproperty float x\nproperty float y\nproperty float z\nproperty int tag\n"
+        "property float f_dc_0\nproperty float f_dc_1\nproperty float f_dc_2\n";
+    for (int i = 0; i < 9; ++i) h += "property float f_rest_" + std::to_string(i) + "\n";
+    h += "property float opacity\nproperty float scale_0\nproperty float scale_1\nproperty float scale_2\n"
+         "property float rot_0\nproperty float rot_1\nproperty float rot_2\nproperty float "
+         "rot_3\nend_header\n";
+    std::ofstream f(p, std::ios::binary);
+    f << h << char(7) << char(9);  // the camera element's two rows
+    for (const auto& r : rows) {
+        f.write(reinterpret_cast<const char*>(r.data()), 3 * 4);
+        const std::int32_t tag = -5;
+        f.write(reinterpret_cast<const char*>(&tag), 4);
+        f.write(reinterpret_cast<const char*>(r.data() + 3), std::streamsize((r.size() - 3) * 4));
+    }
+}
+
+std::vector<float> good_row(float x) {
+    // x y z, f_dc 0..2, f_rest 0..8, opacity, scale 0..2, rot 0..3
+    std::vector<float> r = {x, 2, 3, 0.1f, 0.2f, 0.3f};
+    for (int i = 0; i < 9; ++i) r.push_back(float(i) * 0.25f - 1.0f);
+    for (float v : {0.0f, -1.0f, 0.0f, 0.5f, 2.0f, 0.0f, 0.0f, 0.0f}) r.push_back(v);
+    return r;
+}
+
+TEST(GaussianIo, MappedRowsValues) {
+    const fs::path p = temp_path("mapped_values.ply");
+    write_binary_rows(p, {good_row(1), good_row(-4)});
+    auto g = read_gaussians(p);
+    ASSERT_TRUE(g) << g.message();
+    ASSERT_EQ(g->size(), 2u);
+    EXPECT_EQ(g->positions[1], glm::vec3(-4, 2, 3));
+    EXPECT_EQ(g->sh_degree, 1);
+    // Coefficient k of channel c comes from f_rest_{c*3 + k-1}: R, G, B blocks.
+    EXPECT_EQ(g->sh[0], 0.1f);
+    EXPECT_EQ(g->sh[3 * 1 + 0], -1.0f);   // k=1 R: f_rest_0
+    EXPECT_EQ(g->sh[3 * 1 + 1], -0.25f);  // k=1 G: f_rest_3
+    EXPECT_EQ(g->sh[3 * 3 + 2], 1.0f);    // k=3 B: f_rest_8
+    EXPECT_FLOAT_EQ(g->scales[0].x, std::exp(-1.0f));
+    EXPECT_EQ(g->rotations[0], glm::quat(1, 0, 0, 0));  // (2, 0, 0, 0) normalised
+    EXPECT_EQ(g->opacities[0], 0.5f);
+}
+
+TEST(GaussianIo, MappedRowsBadValues) {
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    struct Case {
+        int field;  // index into good_row
+        float value;
+        const char* message;
+    };
+    for (const Case& c :
+         {Case{1, nan, "vertex 5000: non-finite 'y'"}, Case{6 + 4, inf, "vertex 5000: non-finite 'f_rest_4'"},
+          Case{16, inf, "vertex 5000: scale overflows (log scale too large) in 'scale_0'"},
+          Case{17, nan, "vertex 5000: non-finite 'scale_1'"},
+          Case{15, nan, "vertex 5000: non-finite 'opacity'"}}) {
+        std::vector<std::vector<float>> rows(9000, good_row(1));
+        rows[5000][std::size_t(c.field)] = c.value;
+        rows[7000][1] = nan;  // a later bad row in another range: the first in file order is reported
+        const fs::path p = temp_path("mapped_bad.ply");
+        write_binary_rows(p, rows);
+        expect_error(p, c.message);
+    }
+    // A zero quaternion is refused, an opacity of -inf and a log scale of -inf are read as limits.
+    std::vector<std::vector<float>> rows(3, good_row(1));
+    rows[1][15] = -inf, rows[1][18] = -inf;
+    const fs::path limits = temp_path("mapped_limits.ply");
+    write_binary_rows(limits, rows);
+    auto g = read_gaussians(limits);
+    ASSERT_TRUE(g) << g.message();
+    EXPECT_EQ(g->opacities[1], 0.0f);
+    EXPECT_EQ(g->scales[1].z, 0.0f);
+    for (int k = 19; k < 23; ++k) rows[2][std::size_t(k)] = 0.0f;
+    const fs::path zero = temp_path("mapped_zero_rotation.ply");
+    write_binary_rows(zero, rows);
+    expect_error(zero, "vertex 2: zero-length rotation quaternion at 'rot_0'");
 }
 
 }  // namespace
