@@ -8,7 +8,8 @@
 // reader turns it 180 degrees about x into the internal frame. A file that was stored in RUB anyway
 // (a y-up PLY; or an SPZ written by splat-transform 3.7.0, which writes SPZ in its PLY space without
 // the conversion, by its own source comment) is turned by the user: `splatffd convert IN OUT
-// --turn-x180`.
+// --turn-x180`. KHR_gaussian_splatting glTF (y up, +z the front, x left) is the internal frame turned
+// 180 degrees about z: read_gltf and write_glb turn it (gaussian_gltf.h); SOG is read as stored.
 //
 // A turn of 180 degrees about a coordinate axis is a proper rotation R = diag(±1, ±1, ±1) with det +1,
 // so it maps every part of a Gaussian exactly: centres p -> R p, rotations q -> q_R q (covariance
@@ -22,7 +23,7 @@ namespace sffd::gaussian {
 
 enum class AxisTurn {
     x180,  // (x, y, z) -> (x, -y, -z): RDF <-> RUB (3DGS PLY <-> SPZ, OpenCV <-> OpenGL camera axes)
-    z180,  // (x, y, z) -> (-x, -y, z): splat-transform's PLY space <-> its engine (GLB) space
+    z180,  // (x, y, z) -> (-x, -y, z): 3DGS PLY <-> glTF (splat-transform's PLY <-> engine/GLB space)
 };
 
 // Applies the turn to centres (and origin), rotations and SH coefficients in place. Its own inverse.

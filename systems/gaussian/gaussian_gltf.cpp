@@ -17,6 +17,7 @@
 #include "runtime/assets/gltf_io.h"
 #include "runtime/core/atomic_file.h"
 #include "runtime/core/file_io.h"
+#include "systems/gaussian/gaussian_axes.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/sh.h"
@@ -261,6 +262,9 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
     GaussianCloud out;
     out.sh_degree = degree;
     for (const GaussianCloud& p : parts) append(out, p, degree);
+    // glTF's frame (y up, +z the front, x left) is the 3DGS PLY frame turned 180 degrees about z
+    // (gaussian_axes.h): the world-space cloud is turned into the internal frame.
+    turn_axes(out, AxisTurn::z180);
     return out;
 }
 
@@ -366,7 +370,11 @@ Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianClo
     return {};
 }
 
-Status write_glb(const fs::path& path, const GaussianCloud& g) {
+Status write_glb(const fs::path& path, const GaussianCloud& cloud) {
+    // Written in glTF's frame: the internal (3DGS PLY) frame turned 180 degrees about z, as read_gltf
+    // turns it back.
+    GaussianCloud g = cloud;
+    turn_axes(g, AxisTurn::z180);
     nlohmann::json doc = nlohmann::json::object();
     std::string bin;
     nlohmann::json prim;

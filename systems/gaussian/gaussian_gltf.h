@@ -20,8 +20,12 @@
 // file and the problem (missing attribute, count mismatch, partial SH degree, a degree present without
 // the one below it, more than kMaxGaussians, negative scale, opacity
 // outside [0,1], non-finite values, accessors outside their buffers).
-// Coordinates are taken as they are: note that splat-transform treats PLY data as rotated 180° about
-// Z relative to glTF (its PLY -> GLB conversion turns x, y into −x, −y); we read both files as stored.
+// Axes: glTF is y up with +z the asset's front (x left); the internal frame is the 3DGS PLY one (x right,
+// y down, z forward), the same axes turned 180° about z, which is also how splat-transform converts PLY
+// to GLB. read_gltf turns the placed cloud into the internal frame and write_glb back (positions,
+// rotations and SH signs together, exact: gaussian_axes.h). Scene files are not turned:
+// read_primitive/append_primitive keep a cloud as stored, because a scene's clouds are placed against
+// its lattices by the same nodes, so both are in the scene's one frame (gaussian_scene.h).
 #pragma once
 
 #include <filesystem>
@@ -51,7 +55,8 @@ struct GltfDeclaration {
     bool sffd_scene = false;
 };
 GltfDeclaration gltf_declaration(const std::filesystem::path& path);
-// One node (translation = cloud.origin) with one POINTS primitive; written atomically. .glb only.
+// One node (translation = the turned cloud.origin) with one POINTS primitive, in glTF's frame (above);
+// written atomically. .glb only.
 Status write_glb(const std::filesystem::path& path, const GaussianCloud& cloud);
 
 // The halves behind read_gltf / write_glb, for glTF documents that hold more than one cloud (scene files,

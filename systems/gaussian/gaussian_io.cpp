@@ -16,6 +16,7 @@
 #include "systems/gaussian/gaussian_infinity.h"
 #include "systems/gaussian/gaussian_ksplat.h"
 #include "systems/gaussian/gaussian_ply_fast.h"
+#include "systems/gaussian/gaussian_sog.h"
 #include "systems/gaussian/gaussian_spz.h"
 #include "systems/gaussian/sh.h"
 
@@ -316,13 +317,15 @@ Result<GaussianCloud> read_gaussians(const fs::path& path) {
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return char(std::tolower(c)); });
-    Result<GaussianCloud> g = make_error(path.string() + ": unknown Gaussian splat format '" + ext +
-                                         "' (expected .ply, .splat, .spz, .ksplat, .glb or .gltf)");
+    Result<GaussianCloud> g =
+        make_error(path.string() + ": unknown Gaussian splat format '" + ext +
+                   "' (expected .ply, .splat, .spz, .ksplat, .sog, a SOG folder's meta.json, .glb or .gltf)");
     if (ext == ".ply") g = read_ply(path);
     else if (ext == ".splat") g = read_splat(path);
     else if (ext == ".glb" || ext == ".gltf") g = read_gltf(path);
     else if (ext == ".spz") g = read_spz(path);
     else if (ext == ".ksplat") g = read_ksplat(path);
+    else if (ext == ".sog" || ext == ".json") g = read_sog(path);
     if (!g) return g;
     // The one validation every cloud from a file passes, after the readers' transforms.
     if (Status s = validate(*g, path.string()); !s) return s.error();

@@ -156,7 +156,7 @@ GaussianCloud read_embedded(const tinygltf::Model& m, int entry, const std::stri
 
 bool is_gaussian_scene_file(const fs::path& path) {
     const std::string e = lower_ext(path);
-    if (e == ".splat" || e == ".spz" || e == ".ksplat") return true;
+    if (e == ".splat" || e == ".spz" || e == ".ksplat" || e == ".sog") return true;
     if (e == ".ply") {
         auto r = ply::Reader::open(path);
         if (!r) return false;

@@ -9,19 +9,21 @@
 #include <memory>
 #include <vector>
 
+#include "runtime/core/log.h"
 #include "systems/gaussian/gaussian_axes.h"
 #include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_spz_detail.h"
 
 namespace sffd::gaussian {
 namespace fs = std::filesystem;
 
 namespace {
 
-constexpr std::uint32_t kMagic = 0x5053474e;  // "NGSP"
+using spz_detail::kMagic;
+using spz_detail::u32;
 constexpr double kColorScale = 0.15;
-// Budgets (the messages quote them): the compressed file and the decoded attribute data.
-constexpr std::uint64_t kMaxSpzFileBytes = std::uint64_t(2) << 30;
-constexpr std::uint64_t kMaxSpzDecodedBytes = std::uint64_t(4) << 30;
+constexpr std::uint64_t kMaxSpzFileBytes = spz_detail::kMaxFileBytes;
+constexpr std::uint64_t kMaxSpzDecodedBytes = spz_detail::kMaxDecodedBytes;
 
 struct Inflater {
     z_stream z{};
@@ -31,12 +33,76 @@ struct Inflater {
     }
 };
 
-std::uint32_t u32(const unsigned char* p) {
-    return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 |
-           std::uint32_t(p[3]) << 24;
+}  // namespace
+
+namespace spz_detail {
+
+Arrays array_sizes(std::uint32_t version, std::uint64_t n, int degree) {
+    return {{n * 9, n, n * 3, n * 3, n * (version == 2 ? 3 : 4), n * 3 * rest_coeffs(degree)}};
 }
 
-}  // namespace
+GaussianCloud decode(std::uint32_t version, std::uint32_t n, int file_degree, int frac,
+                     const std::vector<unsigned char>& data) {
+    const int degree = std::min(file_degree, 3);
+    const Arrays sizes = array_sizes(version, n, file_degree);
+    const unsigned char* at[6];
+    at[0] = data.data();
+    for (int a = 1; a < 6; ++a) at[a] = at[a - 1] + sizes.bytes[a - 1];
+    const unsigned char *pos = at[0], *alpha = at[1], *color = at[2], *scale = at[3], *rot = at[4],
+                        *sh = at[5];
+    // Per splat the file holds 3·rest_coeffs(file_degree) SH bytes; the first 3·(K − 1) are bands 1..3.
+    const std::size_t stride = 3 * rest_coeffs(file_degree);
+    GaussianCloud g;
+    g.sh_degree = degree;
+    const int K = sh_coeffs(degree);
+    g.positions.resize(n), g.scales.resize(n), g.rotations.resize(n), g.opacities.resize(n);
+    g.sh.assign(std::size_t(n) * std::size_t(K) * 3, 0.0f);
+    const std::size_t rest = std::size_t(3 * (K - 1));
+    const double unit = 1.0 / double(1u << frac);
+    for (std::size_t i = 0; i < n; ++i) {
+        for (int c = 0; c < 3; ++c) {
+            const unsigned char* p = pos + i * 9 + std::size_t(c) * 3;
+            std::int32_t v =
+                std::int32_t(std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16);
+            if (v & 0x800000) v -= 0x1000000;  // sign-extend 24 bits
+            g.positions[i][c] = float(v * unit);
+            g.scales[i][c] = float(std::exp(scale[i * 3 + std::size_t(c)] / 16.0 - 10.0));
+            g.sh[i * std::size_t(K) * 3 + std::size_t(c)] =
+                float((color[i * 3 + std::size_t(c)] / 255.0 - 0.5) / kColorScale);
+        }
+        g.opacities[i] = float(alpha[i] / 255.0);
+        double q[4] = {0, 0, 0, 0};  // x y z w
+        if (version == 2) {
+            for (int c = 0; c < 3; ++c) q[c] = rot[i * 3 + std::size_t(c)] / 127.5 - 1.0;
+            q[3] = std::sqrt(std::max(0.0, 1.0 - (q[0] * q[0] + q[1] * q[1] + q[2] * q[2])));
+        } else {
+            std::uint32_t packed = u32(rot + i * 4);
+            const unsigned largest = packed >> 30;
+            double sum = 0.0;
+            for (int j = 3; j >= 0; --j) {
+                if (unsigned(j) == largest) continue;
+                const double mag = double(packed & 511u) / 511.0 * std::sqrt(0.5);
+                const bool negative = (packed >> 9) & 1u;
+                packed >>= 10;
+                q[j] = negative ? -mag : mag;
+                sum += mag * mag;
+            }
+            q[largest] = std::sqrt(std::max(0.0, 1.0 - sum));
+        }
+        const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        g.rotations[i] =
+            len > 0.0 ? glm::quat(float(q[3] / len), float(q[0] / len), float(q[1] / len), float(q[2] / len))
+                      : glm::quat(1, 0, 0, 0);
+        for (std::size_t k = 0; k < rest;
+             ++k)  // (k/3 + 1) coefficient, k%3 channel: our layout shifted by one triple
+            g.sh[i * std::size_t(K) * 3 + 3 + k] = float((sh[i * stride + k] - 128) / 128.0);
+    }
+    // SPZ is stored x right, y up, z back; the internal frame is the 3DGS PLY one (gaussian_axes.h).
+    turn_axes(g, AxisTurn::x180);
+    return g;
+}
+
+}  // namespace spz_detail
 
 Result<GaussianCloud> read_spz(const fs::path& path) {
     const std::string name = path.string();
@@ -58,10 +124,8 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
     // version's payload that was never gzipped: say which, from the version the header states.
     if (file.size() >= 8 && u32(file.data()) == kMagic) {
         const std::uint32_t v = u32(file.data() + 4);
-        if (v >= 4)
-            return fail("SPZ version " + std::to_string(v) +
-                        " (uncompressed container, zstd streams) is not supported: re-encode as version 3 "
-                        "(splat-transform in.spz --spz-version 3 out.spz)");
+        if (v == 4) return spz_detail::read_v4(name, file);
+        if (v > 4) return fail("unsupported SPZ version " + std::to_string(v) + " (2, 3 and 4 are read)");
         return fail("uncompressed SPZ version " + std::to_string(v) +
                     " data: versions 2 and 3 are one gzip stream (gzip the file, or re-encode it with "
                     "splat-transform in.spz --spz-version 3 out.spz)");
@@ -102,11 +166,11 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
     const std::uint32_t version = u32(h + 4), n = u32(h + 8);
     const int degree = h[12], frac = h[13];
     if (version < 2 || version > 3)
-        return fail("unsupported SPZ version " + std::to_string(version) + " (2 and 3 are read)");
-    if (degree > 3) return fail("unsupported SH degree " + std::to_string(degree) + " (0..3)");
+        return fail("unsupported SPZ version " + std::to_string(version) +
+                    " in a gzip stream (2 and 3 are gzipped; version 4 is not)");
+    if (degree > 4) return fail("unsupported SH degree " + std::to_string(degree) + " (0..4)");
     if (frac > 30) return fail("fractional bits " + std::to_string(frac) + " out of range");
-    const std::size_t rest = std::size_t(3 * (sh_coeffs(degree) - 1));
-    const std::size_t per = 9 + 1 + 3 + 3 + (version == 2 ? 3 : 4) + rest;
+    const std::size_t per = 9 + 1 + 3 + 3 + (version == 2 ? 3 : 4) + 3 * spz_detail::rest_coeffs(degree);
     // Deflate expands at most ~1032:1: refuse counts the compressed file cannot hold before allocating.
     if (double(n) * double(per) > double(file.size()) * 1032.0 + 1024.0)
         return fail("declares " + std::to_string(n) + " splats, more than its " +
@@ -147,59 +211,8 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
         }
     }
 
-    GaussianCloud g;
-    g.sh_degree = degree;
-    const int K = sh_coeffs(degree);
-    g.positions.resize(n), g.scales.resize(n), g.rotations.resize(n), g.opacities.resize(n);
-    g.sh.assign(std::size_t(n) * std::size_t(K) * 3, 0.0f);
-    const unsigned char* pos = data.data();
-    const unsigned char* alpha = pos + std::size_t(n) * 9;
-    const unsigned char* color = alpha + n;
-    const unsigned char* scale = color + std::size_t(n) * 3;
-    const unsigned char* rot = scale + std::size_t(n) * 3;
-    const unsigned char* sh = rot + std::size_t(n) * (version == 2 ? 3 : 4);
-    const double unit = 1.0 / double(1u << frac);
-    for (std::size_t i = 0; i < n; ++i) {
-        for (int c = 0; c < 3; ++c) {
-            const unsigned char* p = pos + i * 9 + std::size_t(c) * 3;
-            std::int32_t v =
-                std::int32_t(std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16);
-            if (v & 0x800000) v -= 0x1000000;  // sign-extend 24 bits
-            g.positions[i][c] = float(v * unit);
-            g.scales[i][c] = float(std::exp(scale[i * 3 + std::size_t(c)] / 16.0 - 10.0));
-            g.sh[i * std::size_t(K) * 3 + std::size_t(c)] =
-                float((color[i * 3 + std::size_t(c)] / 255.0 - 0.5) / kColorScale);
-        }
-        g.opacities[i] = float(alpha[i] / 255.0);
-        double q[4] = {0, 0, 0, 0};  // x y z w
-        if (version == 2) {
-            for (int c = 0; c < 3; ++c) q[c] = rot[i * 3 + std::size_t(c)] / 127.5 - 1.0;
-            q[3] = std::sqrt(std::max(0.0, 1.0 - (q[0] * q[0] + q[1] * q[1] + q[2] * q[2])));
-        } else {
-            std::uint32_t packed = u32(rot + i * 4);
-            const unsigned largest = packed >> 30;
-            double sum = 0.0;
-            for (int j = 3; j >= 0; --j) {
-                if (unsigned(j) == largest) continue;
-                const double mag = double(packed & 511u) / 511.0 * std::sqrt(0.5);
-                const bool negative = (packed >> 9) & 1u;
-                packed >>= 10;
-                q[j] = negative ? -mag : mag;
-                sum += mag * mag;
-            }
-            q[largest] = std::sqrt(std::max(0.0, 1.0 - sum));
-        }
-        const double len = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-        g.rotations[i] =
-            len > 0.0 ? glm::quat(float(q[3] / len), float(q[0] / len), float(q[1] / len), float(q[2] / len))
-                      : glm::quat(1, 0, 0, 0);
-        for (std::size_t k = 0; k < rest;
-             ++k)  // (k/3 + 1) coefficient, k%3 channel: our layout shifted by one triple
-            g.sh[i * std::size_t(K) * 3 + 3 + k] = float((sh[i * rest + k] - 128) / 128.0);
-    }
-    // SPZ is stored x right, y up, z back; the internal frame is the 3DGS PLY one (gaussian_axes.h).
-    turn_axes(g, AxisTurn::x180);
-    return g;
+    if (degree == 4) log::info(name, ": SH degree 4 read as degree 3 (band 4 dropped)");
+    return spz_detail::decode(version, n, degree, frac, data);
 }
 
 }  // namespace sffd::gaussian

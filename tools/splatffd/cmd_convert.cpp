@@ -31,7 +31,8 @@ namespace {
 constexpr const char* kUsage =
     "usage: splatffd convert IN OUT [--splats N] [--normals] [--radii] [--neighbours K] [--seed S] "
     "[--ascii]\n"
-    "                        [--progress] [--gaussians [--turn-x180]] [--lattice SRC [--lattice-name N]]\n"
+    "                        [--progress] [--gaussians [--turn-x180] [--spz-version 3|4]]\n"
+    "                        [--lattice SRC [--lattice-name N]]\n"
     "  IN   .ply .obj .off .gltf .glb, or a built-in scene name (sphere, face)\n"
     "  OUT  .ply (binary little-endian; --ascii for text) .glb .gltf, or .json: a lattice (see below)\n"
     "  --splats N       exactly N splats (meshes: sampled on the surface; points: thinned evenly; default:\n"
@@ -47,8 +48,11 @@ constexpr const char* kUsage =
     "                   is a terminal, for steps over a second); the timing summary is always printed\n"
     "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .compressed.ply PlayCanvas's quantised "
     "layout,\n"
-    "                   .spz v3, .glb KHR_gaussian_splatting; default: surface splats); IN may also be a\n"
-    "                   Gaussian file (.splat, .spz, .ksplat, 3DGS or compressed .ply, KHR .glb)\n"
+    "                   .spz, .glb KHR_gaussian_splatting; default: surface splats); IN may also be a\n"
+    "                   Gaussian file (.splat, .spz, .ksplat, .sog, a SOG folder's meta.json, 3DGS or\n"
+    "                   compressed .ply, KHR .glb)\n"
+    "  --spz-version V  with --gaussians: the SPZ version written, 3 (gzip, every reader) or 4 (zstd\n"
+    "                   streams, the SPZ library's current default) (default 3)\n"
     "  --turn-x180      with --gaussians: turn the Gaussians 180 degrees about x, (x, y, z) -> (x, -y, -z),\n"
     "                   for a file stored y-up (RUB) that should be y-down like a 3DGS PLY, or back (default "
     "off)\n"
@@ -160,6 +164,7 @@ int run_convert(sffd::cli::Args args) {
     std::string in, out;
     assets::ImportOptions opt;
     bool ascii = false, gaussians = false, progress = false, turn_x180 = false;
+    int spz_version = 3;
     LatticeRequest lattice;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
@@ -210,6 +215,10 @@ int run_convert(sffd::cli::Args args) {
             gaussians = true;
         } else if (a == "--turn-x180") {
             turn_x180 = true;
+        } else if (a == "--spz-version") {
+            auto v = value(3, 4);
+            if (!v) return 2;
+            spz_version = static_cast<int>(*v);
         } else if (!a.empty() && a[0] == '-') {
             return cli::usage_error("convert", "unknown option '" + a + "'", kUsage);
         } else if (in.empty()) {
@@ -224,7 +233,7 @@ int run_convert(sffd::cli::Args args) {
     if (turn_x180 && !gaussians)
         return cli::usage_error("convert", "--turn-x180 applies to Gaussians: add --gaussians", "");
     if (gaussians && in != "sphere" && cli::is_gaussian_file(in))
-        return cli::write_gaussians(in, nullptr, out, ascii, turn_x180);
+        return cli::write_gaussians(in, nullptr, out, ascii, turn_x180, spz_version);
     if (cli::is_json_path(out)) return export_lattice_json(in, out, lattice);
     if (!lattice.source.empty() && !cli::is_scene_path(out)) {
         std::fprintf(stderr,
@@ -304,7 +313,7 @@ int run_convert(sffd::cli::Args args) {
         std::fprintf(stderr, "splatffd convert: %s\n", cloud.message().c_str());
         return 1;
     }
-    if (gaussians) return cli::write_gaussians(in, &*cloud, out, ascii, turn_x180);
+    if (gaussians) return cli::write_gaussians(in, &*cloud, out, ascii, turn_x180, spz_version);
     const auto t2 = std::chrono::steady_clock::now();
     std::string lattice_note;
     printer.report("writing", 0.0);

@@ -238,7 +238,7 @@ constexpr const char* kUsage =
     "  FILE   .ply (point cloud, 3DGS or compressed Gaussians: header, counts, bounds), .obj .off (mesh or\n"
     "         points), .gltf .glb (scene: clouds, Gaussians, lattices, clips, camera, lights), .spz .splat "
     ".ksplat\n"
-    "         (Gaussians: count, SH degree, bounds)\n"
+    "         .sog, a SOG folder's meta.json (Gaussians: count, SH degree, bounds)\n"
     "  sphere, face   the built-in scenes\n";
 
 int run_info(cli::Args args) {
@@ -253,11 +253,14 @@ int run_info(cli::Args args) {
     if (ext == ".spz") return info_gaussians(file, "SPZ (Niantic)");
     if (ext == ".splat") return info_gaussians(file, ".splat (antimatter15)");
     if (ext == ".ksplat") return info_gaussians(file, ".ksplat (GaussianSplats3D)");
+    if (ext == ".sog") return info_gaussians(file, "SOG (PlayCanvas)");
+    if (std::filesystem::path(file).filename() == "meta.json")
+        return info_gaussians(file, "SOG folder (PlayCanvas)");
     if (ext != ".obj" && ext != ".off" && ext != ".gltf" && ext != ".glb" &&
         !assets::is_builtin_scene(file)) {
         std::fprintf(stderr,
                      "splatffd info: %s: unknown file type '%s' (expected .ply, .obj, .off, .gltf, .glb, "
-                     ".spz, .splat or .ksplat)\n",
+                     ".spz, .splat, .ksplat, .sog or a SOG folder's meta.json)\n",
                      file.c_str(), ext.c_str());
         return 1;
     }

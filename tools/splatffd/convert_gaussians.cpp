@@ -26,7 +26,8 @@ std::string lower_ext(const std::string& p) {
 
 bool is_gaussian_file(const std::string& in) {
     const std::string e = lower_ext(in);
-    if (e == ".splat" || e == ".spz" || e == ".ksplat") return true;
+    if (e == ".splat" || e == ".spz" || e == ".ksplat" || e == ".sog") return true;
+    if (std::filesystem::path(in).filename() == "meta.json") return true;  // a SOG folder
     if (e == ".ply") {
         auto r = ply::Reader::open(in);
         const int v = r ? r->header().find("vertex") : -1;
@@ -40,7 +41,7 @@ bool is_gaussian_file(const std::string& in) {
 }
 
 int write_gaussians(const std::string& in, const SplatCloud* surface, const std::string& out, bool ascii,
-                    bool turn_x180) {
+                    bool turn_x180, int spz_version) {
     const auto t0 = std::chrono::steady_clock::now();
     Result<GaussianCloud> g = surface ? Result<GaussianCloud>(gaussian::gaussians_from_splats(*surface))
                                       : gaussian::read_gaussians(in);
@@ -56,9 +57,10 @@ int write_gaussians(const std::string& in, const SplatCloud* surface, const std:
         : e == ".ply"
             ? gaussian::write_ply(out, *g, ascii ? ply::Format::ascii : ply::Format::binary_little_endian)
         : e == ".glb" ? gaussian::write_glb(out, *g)
-        : e == ".spz" ? gaussian::write_spz(out, *g)
-                      : Status(make_error(out + ": Gaussians are written as .ply (3DGS), .compressed.ply "
-                                                "(PlayCanvas), .spz (v3) or .glb (KHR_gaussian_splatting)"));
+        : e == ".spz"
+            ? gaussian::write_spz(out, *g, spz_version)
+            : Status(make_error(out + ": Gaussians are written as .ply (3DGS), .compressed.ply "
+                                      "(PlayCanvas), .spz (v3 or v4) or .glb (KHR_gaussian_splatting)"));
     if (!s) {
         std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
         return 1;

@@ -263,7 +263,8 @@ TEST(GaussianConvertCommand, BuiltinSphereToGaussiansAndBetweenFormats) {
     r = run("sphere " + temp("x.obj").string() + " --gaussians", "convert");
     EXPECT_EQ(r.code, 1);
     EXPECT_NE(
-        r.err.find("Gaussians are written as .ply (3DGS), .compressed.ply (PlayCanvas), .spz (v3) or .glb"),
+        r.err.find(
+            "Gaussians are written as .ply (3DGS), .compressed.ply (PlayCanvas), .spz (v3 or v4) or .glb"),
         std::string::npos)
         << r.err;
 }
