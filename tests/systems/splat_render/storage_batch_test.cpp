@@ -100,6 +100,29 @@ TEST_F(StorageBatch_, CloudIsSkippedNamingTheLimitWhenNotOneSplatFits) {
         std::count_if(img.color.begin(), img.color.end(), [](const glm::vec4& c) { return c.w > 0.0f; }), 0);
 }
 
+// The compute rasteriser reads the CPU cull's records (2 x 96 bytes a splat) as storage blocks: when they
+// exceed the limit and its per-pixel buffers do not, the frame stays on the raster path with a warning
+// naming the buffer and the limit.
+TEST_F(StorageBatch_, ComputeRasteriserFallsBackWhenTheRecordsExceedTheBlockSize) {
+    scene(false);
+    RenderSettings s;
+    s.quality = Quality::hq, s.width = 40, s.height = 30, s.time_passes = true;
+    s.cull_path = CullPath::cpu, s.raster_path = RasterPath::compute;
+    reg.set_resource<RenderSettings>(s);
+    residency_system(reg, FrameContext{});
+    render_system(reg, FrameContext{});
+    ASSERT_EQ(reg.resource<RenderStats>().compute_rastered_clouds, 1u);  // the real limit allows it
+    gfx::GlLimits small = gfx::limits();
+    small.max_ssbo_block_size = 100'000;  // sums 40 x 30 x 36 = 43,200 fit; records 2 x 5000 x 96 do not
+    log::ScopedLogCapture capture;
+    gfx::ScopedLimits scope(small);
+    render_system(reg, FrameContext{});
+    EXPECT_EQ(reg.resource<RenderStats>().compute_rastered_clouds, 0u);
+    EXPECT_TRUE(
+        capture.contains("render.visible_splats: " + std::to_string(2 * 5000 * SFFD_SPLAT_RECORD_BYTES) +
+                         " bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (100000)"));
+}
+
 // CPU only: quads regrouped per range, relative to its first splat, each group aligned.
 TEST(StorageBatchLayout, QuadsRegroupedPerRangeAlignedAndRelative) {
     const std::vector<std::uint32_t> quads = {0, 3, 4, 9, 10, 11, 25, 29};
