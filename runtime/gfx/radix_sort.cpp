@@ -3,8 +3,10 @@
 #include <string>
 #include <utility>
 
+#include "runtime/gfx/barrier.h"
 #include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl.h"
+#include "runtime/gfx/limits.h"
 #include "runtime/gfx/shader.h"
 #include "shaders/common/radix_sort_layout.h"
 
@@ -33,6 +35,12 @@ Result<RadixSorter> create_radix_sorter() {
 
 namespace {
 
+// What the callers do next with a sort's or a scan's results: SSBO reads (the tile passes), read-backs and
+// copies (the tile entry count, the odd-pass copy home), and indirect commands built from them. A caller
+// that fetches them as vertex attributes or indices adds its own barrier.
+constexpr GLbitfield kResultBarrier =
+    GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT;
+
 // Grow-only storage (reallocating drops the contents, which are scratch).
 void grow(const Buffer& b, std::uint64_t need) {
     glNamedBufferData(b.id(), GLsizeiptr(need * sizeof(std::uint32_t)), nullptr, GL_DYNAMIC_COPY);
@@ -48,10 +56,11 @@ Status block_scan_round(const RadixSorter& s, GLuint per_block, GLuint apply, st
     glUseProgram(per_block);
     if (Status st = dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x); !st)
         return st;
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    // The per-block entries are read by the scan as SSBOs, and the scan's results by `apply`.
+    memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "radix.blocks");
     glUseProgram(s.scan.id());
     glDispatchCompute(1, 1, 1);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "radix.scan");
     glUseProgram(apply);
     return dispatch_1d(std::uint64_t(blocks) * SFFD_RADIX_THREADS, SFFD_RADIX_THREADS, max_x);
 }
@@ -62,6 +71,11 @@ Status radix_sort(RadixSorter& s, GLuint keys, GLuint values, std::uint32_t coun
     if (key_bits < 1 || key_bits > 32)
         return make_error("radix_sort(): key_bits " + std::to_string(key_bits) + " is not in 1..32");
     if (count <= 1) return {};
+    // Every pass reads and writes whole key and value arrays as storage blocks (random scatter): no
+    // ranges, so arrays past GL_MAX_SHADER_STORAGE_BLOCK_SIZE are refused, not read past its end.
+    if (!ssbo_fits(std::uint64_t(count) * sizeof(std::uint32_t)))
+        return make_error("radix_sort(): " +
+                          ssbo_too_large("keys", std::uint64_t(count) * sizeof(std::uint32_t)));
     const std::uint32_t blocks = (count + SFFD_RADIX_BLOCK - 1) / SFFD_RADIX_BLOCK;
     if (count > s.scratch_elements) {
         grow(s.keys_scratch, count), grow(s.values_scratch, count);
@@ -91,16 +105,18 @@ Status radix_sort(RadixSorter& s, GLuint keys, GLuint values, std::uint32_t coun
         glProgramUniform1ui(s.count.id(), SFFD_RADIX_LOC_SHIFT, shift);
         glProgramUniform1ui(s.scatter.id(), SFFD_RADIX_LOC_SHIFT, shift);
         if (Status st = block_scan_round(s, s.count.id(), s.scatter.id(), blocks, max_x); !st) return st;
-        glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+        // The next pass reads the scattered keys as SSBOs, and its count overwrites the histogram this
+        // scatter read (write-after-read): both are SHADER_STORAGE.
+        memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "radix.pass");
         std::swap(keys_in, keys_out), std::swap(values_in, values_out);
     }
     glUseProgram(0);
     if (passes % 2 == 1) {  // the result is in the scratch buffers: copy it home
-        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        memory_barrier(GL_BUFFER_UPDATE_BARRIER_BIT, "radix.copy");  // a copy reads shader writes
         glCopyNamedBufferSubData(keys_in, keys, 0, 0, GLsizeiptr(count) * 4);
         glCopyNamedBufferSubData(values_in, values, 0, 0, GLsizeiptr(count) * 4);
     }
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    memory_barrier(kResultBarrier, "radix.sort");
     return {};
 }
 
@@ -113,6 +129,9 @@ Status exclusive_scan(RadixSorter& s, GLuint buffer, std::uint32_t count) {
                                   &zero);
         return {};
     }
+    if (!ssbo_fits((std::uint64_t(count) + 1) * sizeof(std::uint32_t)))
+        return make_error("exclusive_scan(): " +
+                          ssbo_too_large("values", (std::uint64_t(count) + 1) * sizeof(std::uint32_t)));
     const std::uint32_t blocks = (count + SFFD_RADIX_BLOCK - 1) / SFFD_RADIX_BLOCK;
     if (blocks + 1u > s.scan_sum_entries) {
         grow(s.scan_sums, blocks + 1u);
@@ -128,7 +147,7 @@ Status exclusive_scan(RadixSorter& s, GLuint buffer, std::uint32_t count) {
     bind(SFFD_RADIX_SSBO_HISTOGRAM, s.scan_sums.id());
     if (Status st = block_scan_round(s, s.scan_reduce.id(), s.scan_add.id(), blocks, max_x); !st) return st;
     glUseProgram(0);
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    memory_barrier(kResultBarrier, "radix.scan_result");
     return {};
 }
 

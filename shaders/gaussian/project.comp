@@ -27,6 +27,7 @@ uniform float u_focal;      // pixels
 uniform vec2 u_limit;       // 1.3 x tan(half fov) per axis (3DGS clamps x/z, y/z for the Jacobian)
 uniform float u_near;
 uniform uint u_count;
+uniform uint u_base;        // index of this range's first Gaussian (every buffer is bound from it)
 uniform int u_degree;
 uniform int u_frames;       // 1: evaluate the SH at frameᵀ d (GaussianCloud::sh_frames)
 uniform float u_min_footprint;  // > 0 (preview): skip Gaussians whose unfiltered 3σ radius is below it, px
@@ -72,7 +73,7 @@ bool finite4(vec4 v) {
 // pixels of its pixel box clipped to the image (tile_common.glsl's pixel_box).
 bool project(uint i, out uint pixels) {
     pixels = 0u;
-    order[i] = i;
+    order[i] = u_base + i;  // the sort payload: the Gaussian's index in the whole cloud
     GpuProjected o;
     o.center_depth_radius = vec4(0.0);
     o.conic_opacity = vec4(0.0);

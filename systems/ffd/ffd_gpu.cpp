@@ -64,14 +64,21 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
     Impl& m = *m_impl;
     auto bound = m.programs.bind(lattice, key, stamp, cloud_origin, count);
     if (!bound) return bound.error();
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_IN, in);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_OUT, out);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
     // Write-after-read across frames: the last frame's passes read `out` (the cull's SSBO loads, vertex
     // fetches) and this dispatch overwrites it.
     gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "ffd.dispatch.reuse");
-    // A 2D grid beyond 65,535 groups (4.19M splats): runtime/gfx/dispatch.h.
-    if (Status s = gfx::dispatch_1d(count, bound->local_size); !s) return s;
+    // Clouds past GL_MAX_SHADER_STORAGE_BLOCK_SIZE (64 bytes a splat) run in element ranges; in place
+    // (in == out) each batch reads and writes only its own range.
+    const std::uint64_t strides[] = {sizeof(gpu::GpuSplat), sizeof(gpu::GpuSplat)};
+    if (Status s = m.programs.dispatch_batches(
+            *bound, count, strides,
+            [&](const gfx::SsboBatch& batch) {
+                gfx::bind_ssbo_range(SFFD_SSBO_SPLATS_IN, in, batch, sizeof(gpu::GpuSplat));
+                gfx::bind_ssbo_range(SFFD_SSBO_SPLATS_OUT, out, batch, sizeof(gpu::GpuSplat));
+            });
+        !s)
+        return s;
     // Read next as SSBOs (cull), vertex attributes, and by copies and read-backs (statistics, deform()).
     gfx::memory_barrier(
         GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT,

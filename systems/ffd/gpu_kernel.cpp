@@ -1,9 +1,11 @@
 #include "systems/ffd/gpu_kernel.h"
 
 #include <algorithm>
+#include <cstddef>
 #include <utility>
 
 #include "runtime/gfx/context.h"
+#include "runtime/gfx/dispatch.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/deform_kernels.h"
 #include "systems/ffd/gpu_block.h"
@@ -83,6 +85,23 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
         glBindBufferRange(GL_UNIFORM_BUFFER, SFFD_UBO_FFD_CONTROL, cp.buffer.id(), 0,
                           GLsizeiptr(lattice.size() * 16));
     return b;
+}
+
+Status DeformPrograms::dispatch_batches(const Bound& bound, std::uint32_t count,
+                                        std::span<const std::uint64_t> strides,
+                                        const std::function<void(const gfx::SsboBatch&)>& bind_batch) {
+    auto batches = gfx::ssbo_batches(count, strides);
+    if (!batches) return batches.error();
+    for (const gfx::SsboBatch& batch : *batches) {
+        bind_batch(batch);
+        if (batches->size() > 1) {
+            const std::uint32_t n = std::uint32_t(batch.count);
+            glNamedBufferSubData(ubo.id(), GLintptr(offsetof(FfdBlock, count)), sizeof n, &n);
+        }
+        // A 2D grid beyond 65,535 groups (4.19M points at 64 wide): runtime/gfx/dispatch.h.
+        if (Status s = gfx::dispatch_1d(batch.count, bound.local_size); !s) return s;
+    }
+    return {};
 }
 
 void DeformPrograms::retain_keys(const std::vector<std::uint64_t>& live) {

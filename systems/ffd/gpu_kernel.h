@@ -6,7 +6,9 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
 #include <glm/vec3.hpp>
+#include <span>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -15,6 +17,7 @@
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/gl_object.h"
 #include "runtime/gfx/shader.h"
+#include "runtime/gfx/ssbo_batch.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/ffd_gpu.h"
 
@@ -52,6 +55,13 @@ struct DeformPrograms {
     // SFFD_SSBO_CONTROL_POINTS, SFFD_UBO_FFD_CONTROL). The lattice must be valid.
     Result<Bound> bind(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp,
                        const glm::dvec3& cloud_origin, std::uint32_t count);
+    // After bind(): the dispatch of `count` points in batches of element ranges (runtime/gfx/ssbo_batch.h;
+    // more than one only when a buffer of byte `strides` per point exceeds GL_MAX_SHADER_STORAGE_BLOCK_SIZE).
+    // `bind_batch` binds the per-point buffers for each batch; the block's count is rewritten per batch (an
+    // ordinary buffer update, ordered after the dispatches already issued). Fails, dispatching nothing,
+    // when no batch fits (the message names the limit).
+    Status dispatch_batches(const Bound& bound, std::uint32_t count, std::span<const std::uint64_t> strides,
+                            const std::function<void(const gfx::SsboBatch&)>& bind_batch);
     void retain_keys(const std::vector<std::uint64_t>& live);
 };
 

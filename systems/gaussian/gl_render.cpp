@@ -13,10 +13,13 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include "runtime/gfx/barrier.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl.h"
+#include "runtime/gfx/limits.h"
 #include "runtime/gfx/shader.h"
+#include "runtime/gfx/ssbo_batch.h"
 #include "shaders/gaussian/gaussian_layout.h"
 
 namespace sffd::gaussian {
@@ -161,9 +164,10 @@ void ensure_scratch(GlRenderer& r, std::size_t n) {
 Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v) {
     const std::size_t n = b.count;
     ensure_scratch(r, n);
-    // The scratch buffers may have been read by the previous draw (another cloud this frame): its reads
-    // first.
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    // Write-after-read: the previous draw (another cloud this frame, or the last frame) read the scratch
+    // buffers as SSBOs and the command as an indirect draw; SHADER_STORAGE makes this dispatch's writes
+    // wait for every access issued before it (GL 4.5 §7.12.2), the command read included.
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.project.reuse");
     // 4 strip vertices per quad, drawn count accumulated on the GPU; covered pixels, wrap flag.
     const GLuint command[6] = {4, 0, 0, 0, 0, 0};
     glNamedBufferSubData(r.draw.id(), 0, sizeof(command), command);
@@ -177,22 +181,40 @@ Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v
     set(pp, "u_limit", glm::vec2(float(1.3 * tan_half * v.width / v.height), float(1.3 * tan_half)));
     set(pp, "u_near", float(v.near_plane));
     set(pp, "u_min_footprint", v.min_footprint_px);
-    glProgramUniform1ui(pp, glGetUniformLocation(pp, "u_count"), GLuint(n));
     glProgramUniform1i(pp, glGetUniformLocation(pp, "u_degree"), b.sh_degree);
     glProgramUniform1i(pp, glGetUniformLocation(pp, "u_frames"), b.has_frames ? 1 : 0);
-    // A buffer with no store cannot be bound: the frames slot falls back to the Gaussians (never read).
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, b.gaussians);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, b.sh);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES,
-                     b.has_frames && b.frames ? b.frames : b.gaussians);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEPTH, r.depth.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
+    // Per Gaussian, every buffer here is indexed by its own index: clouds whose SH (12 K bytes a Gaussian)
+    // or other arrays exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE are projected in element ranges bound with
+    // glBindBufferRange, the sort payload offset by the range's first Gaussian (u_base).
+    const std::uint64_t sh_stride = std::uint64_t(sh_coeffs(b.sh_degree)) * 3 * sizeof(float);
+    const std::uint64_t strides[] = {sizeof(gpu::GpuGaussian), sh_stride, 3 * sizeof(glm::vec4),
+                                     sizeof(gpu::GpuProjected), sizeof(std::uint32_t)};
+    auto batches = gfx::ssbo_batches(n, strides);
+    if (!batches) return make_error("draw_gaussians(): " + batches.message());
+    // A buffer with no store cannot be bound: the frames slot falls back to the Gaussians (never read).
+    const GLuint frames = b.has_frames && b.frames ? b.frames : b.gaussians;
+    const std::uint64_t frame_stride =
+        frames == b.gaussians ? sizeof(gpu::GpuGaussian) : 3 * sizeof(glm::vec4);
     glUseProgram(pp);
-    if (Status st = gfx::dispatch_1d(n, 64, std::max(1u, r.max_groups_x)); !st) return st.error();
+    for (const gfx::SsboBatch& batch : *batches) {
+        glProgramUniform1ui(pp, glGetUniformLocation(pp, "u_count"), GLuint(batch.count));
+        glProgramUniform1ui(pp, glGetUniformLocation(pp, "u_base"), GLuint(batch.first));
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_IN, b.gaussians, batch, sizeof(gpu::GpuGaussian));
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_SH, b.sh, batch, sh_stride);
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJECTED, r.projected.id(), batch, sizeof(gpu::GpuProjected));
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_FRAMES, frames, batch, frame_stride);
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_DEPTH, r.depth.id(), batch, sizeof(std::uint32_t));
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_ORDER, r.order.id(), batch, sizeof(std::uint32_t));
+        if (Status st = gfx::dispatch_1d(batch.count, 64, std::max(1u, r.max_groups_x)); !st)
+            return st.error();
+    }
     glUseProgram(0);
-    glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
+    // Next: the depth keys read back (CPU sort: BUFFER_UPDATE) or sorted as SSBOs, the projections read
+    // as SSBOs by the quads and tile passes, the draw command's atomically counted instances drawn
+    // indirectly (COMMAND).
+    gfx::memory_barrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT,
+                        "gaussian.project");
     return {};
 }
 
@@ -293,7 +315,7 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     }
     glUseProgram(r.tile_count.id());
     if (Status st = gfx::dispatch_1d(n, 64, max_x); !st) return st.error();
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.tiles.count");  // the scan reads them
     if (Status st = gfx::exclusive_scan(r.sorter, r.tile_touched.id(), std::uint32_t(n)); !st)
         return st.error();
     GLuint entries = 0;
@@ -309,6 +331,12 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     if (entries > kMaxTileEntries)
         return make_error("draw_gl(): " + std::to_string(entries) +
                           " tile entries exceed the tile path's 2^28; use BlendPath::quads");
+    // The emit, sort and ranges passes index the entry arrays at random: no ranges, one storage block each.
+    if (!gfx::ssbo_fits(std::uint64_t(entries) * sizeof(std::uint32_t)))
+        return make_error(
+            "draw_gl(): " +
+            gfx::ssbo_too_large("gaussian.tile_keys", std::uint64_t(entries) * sizeof(std::uint32_t)) +
+            "; use BlendPath::quads");
     if (entries > r.tile_entry_capacity) {
         upload(r.tile_keys, nullptr, std::size_t(entries) * sizeof(std::uint32_t));
         upload(r.tile_values, nullptr, std::size_t(entries) * sizeof(std::uint32_t));
@@ -329,7 +357,7 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     glProgramUniform1ui(r.tile_emit.id(), glGetUniformLocation(r.tile_emit.id(), "u_capacity"), entries);
     glUseProgram(r.tile_emit.id());
     if (Status st = gfx::dispatch_1d(n, 64, max_x); !st) return st.error();
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.tiles.emit");  // the sort reads the entries
     int key_bits = 1;
     while (key_bits < 32 && (std::uint64_t(1) << key_bits) < tile_count) ++key_bits;
     if (Status st = gfx::radix_sort(r.sorter, r.tile_keys.id(), r.tile_values.id(), entries, key_bits); !st)
@@ -341,7 +369,7 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     glProgramUniform1ui(rp, glGetUniformLocation(rp, "u_entries"), entries);
     glUseProgram(rp);
     if (Status st = gfx::dispatch_1d(entries, 64, max_x); !st) return st.error();
-    glMemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT);
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.tiles.ranges");  // the blend reads them
     r.tile_prepare_ms = stage_ms(r, t);
     const GLuint bp = r.tile_blend.id();
     tile_uniforms(bp, o, tiles);
@@ -359,8 +387,13 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     glDispatchCompute(tiles.x, tiles.y, 1);
     glUseProgram(0);
     glBindTextureUnit(0, 0);
-    glMemoryBarrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
-                    GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT);
+    // The image is read back (glGetTextureImage: TEXTURE_UPDATE) or sampled/drawn by the composite
+    // (TEXTURE_FETCH, FRAMEBUFFER), the next blend writes it again (SHADER_IMAGE_ACCESS), and the tile
+    // statistics are read back (BUFFER_UPDATE).
+    gfx::memory_barrier(GL_TEXTURE_UPDATE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                            GL_TEXTURE_FETCH_BARRIER_BIT | GL_FRAMEBUFFER_BARRIER_BIT |
+                            GL_BUFFER_UPDATE_BARRIER_BIT,
+                        "gaussian.tiles.blend");
     r.tile_entries_total += entries;
     return {};
 }

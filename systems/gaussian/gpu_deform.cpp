@@ -11,6 +11,7 @@
 #include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/shader.h"
+#include "runtime/gfx/ssbo_batch.h"
 #include "shaders/common/bindings.h"
 #include "shaders/gaussian/gaussian_layout.h"
 #include "systems/ffd/deform_kernels.h"
@@ -127,20 +128,33 @@ Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, 
     glProgramUniform1ui(
         program, 0, (b.frames ? 1u : 0u) | (b.frames && b.compose_frames ? 2u : 0u) | (b.sh_out ? 4u : 0u));
     glProgramUniform1i(program, 1, b.sh_degree);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_IN, b.in);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED, b.out);
     // Unused bindings still get a buffer (the statistics stand in): nothing reads or writes them.
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, b.frames ? b.frames : m.stats.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH,
-                     b.sh_out && b.sh_in ? b.sh_in : m.stats.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED_SH,
-                     b.sh_out && b.sh_in ? b.sh_out : m.stats.id());
+    const bool with_sh = b.sh_out && b.sh_in;
+    if (!b.frames) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, m.stats.id());
+    if (!with_sh) {
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, m.stats.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED_SH, m.stats.id());
+    }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH_TABLES, m.sh_tables.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
     // Write-after-read across frames: the last frame's projection read the deformed buffers overwritten here.
     gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.deform.reuse");
-    // Beyond 65,535 groups (4.19M Gaussians at 64 wide): a 2D grid (runtime/gfx/dispatch.h).
-    if (Status s = gfx::dispatch_1d(count, bound->local_size); !s) return s;
+    // Clouds whose Gaussians, frames or SH exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE run in element ranges
+    // (every buffer here is indexed by the Gaussian's own index); in place, each batch touches only its
+    // range.
+    const std::uint64_t gaussian = sizeof(gpu::GpuGaussian), frame = 3 * 4 * sizeof(float);
+    const std::uint64_t sh = with_sh ? std::uint64_t(sh_coeffs(b.sh_degree)) * 3 * sizeof(float) : 0;
+    const std::uint64_t strides[] = {gaussian, b.frames ? frame : 0, sh};
+    const auto bind_batch = [&](const gfx::SsboBatch& batch) {
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_IN, b.in, batch, gaussian);
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_DEFORMED, b.out, batch, gaussian);
+        if (b.frames) gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_FRAMES, b.frames, batch, frame);
+        if (with_sh) {
+            gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_SH, b.sh_in, batch, sh);
+            gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_DEFORMED_SH, b.sh_out, batch, sh);
+        }
+    };
+    if (Status s = m.programs.dispatch_batches(*bound, count, strides, bind_batch); !s) return s;
     gfx::memory_barrier(
         GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT,
         "gaussian.deform");

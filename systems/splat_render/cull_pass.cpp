@@ -3,6 +3,43 @@
 
 namespace sffd::render::detail {
 
+namespace {
+
+// The CPU cull's quad list into `gpu.quads`: as it is when the splats the quad pass reads fit one storage
+// block; else regrouped per range of splats (storage_limits.h), the quad pass then drawing range by range.
+Status upload_quads(CloudGpu& gpu) {
+    const CpuCullResult& r = gpu.cpu_cull;
+    gpu.quad_batches.clear();
+    const std::uint64_t strides[] = {sizeof(gpu::GpuSplat), gpu.texture ? sizeof(glm::vec4) : 0};
+    auto batches = gfx::ssbo_batches(gpu.count, strides);
+    if (!batches) return batches.error();
+    if (batches->size() <= 1) {
+        CpuCullResult::for_each_run(
+            r.quads, r.quad_counts, r.block, [&](std::size_t at, const std::uint32_t* p, std::size_t k) {
+                glNamedBufferSubData(gpu.quads.id(), GLintptr(at * sizeof(std::uint32_t)),
+                                     GLsizeiptr(k * sizeof(std::uint32_t)), p);
+            });
+        return {};
+    }
+    std::vector<std::uint32_t> quads, laid_out;
+    quads.reserve(r.visible_quads);
+    CpuCullResult::for_each_run(
+        r.quads, r.quad_counts, r.block,
+        [&](std::size_t, const std::uint32_t* p, std::size_t k) { quads.insert(quads.end(), p, p + k); });
+    const auto align_words = std::uint32_t(std::max(gfx::limits().ssbo_offset_alignment, 4) / 4);
+    gpu.quad_batches = layout_quad_batches(quads, *batches, align_words, laid_out);
+    // The alignment padding can outgrow the capacity-sized list: grow it (rare: clouds past the limit).
+    GLint64 size = 0;
+    glGetNamedBufferParameteri64v(gpu.quads.id(), GL_BUFFER_SIZE, &size);
+    const std::size_t bytes = laid_out.size() * sizeof(std::uint32_t);
+    if (std::uint64_t(size) < bytes)
+        glNamedBufferData(gpu.quads.id(), GLsizeiptr(bytes), nullptr, GL_DYNAMIC_DRAW);
+    if (!laid_out.empty()) glNamedBufferSubData(gpu.quads.id(), 0, GLsizeiptr(bytes), laid_out.data());
+    return {};
+}
+
+}  // namespace
+
 // Per-cloud uniforms, then culling and compaction of every cloud (the compute pass, or cpu_cull.h).
 void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderStats& stats) {
     const RenderSettings& settings = plan.settings;
@@ -41,11 +78,10 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
                                                                  GLintptr(at * sizeof(SplatRecord)),
                                                                  GLsizeiptr(k * sizeof(SplatRecord)), p);
                                         });
-            CpuCullResult::for_each_run(
-                r.quads, r.quad_counts, r.block, [&](std::size_t at, const std::uint32_t* p, std::size_t k) {
-                    glNamedBufferSubData(gpu.quads.id(), GLintptr(at * sizeof(std::uint32_t)),
-                                         GLsizeiptr(k * sizeof(std::uint32_t)), p);
-                });
+            if (Status st = upload_quads(gpu); !st) {
+                warn_once("render_system(): " + st.message() + "; the cloud is not drawn");
+                return;
+            }
             CpuCullResult::for_each_run(r.flat_records, r.flat_counts, r.block,
                                         [&](std::size_t at, const SplatRecord* p, std::size_t k) {
                                             glNamedBufferSubData(

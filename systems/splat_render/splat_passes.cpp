@@ -5,6 +5,24 @@ namespace sffd::render::detail {
 
 namespace {
 
+// The quad pass range by range (CloudGpu::quad_batches: splats past one storage block): each range's splats,
+// uv axes and quads bound from its start, the quads' indices being relative to it; the counts are the CPU
+// cull's. Leaves the whole buffers bound again for the passes after it.
+void draw_quad_batches(const CloudGpu& gpu) {
+    for (const QuadBatch& b : gpu.quad_batches) {
+        if (b.quad_count == 0) continue;
+        gfx::bind_ssbo_range(SFFD_SSBO_SPLATS_DRAW, gpu.splats, b.splats, sizeof(gpu::GpuSplat));
+        gfx::bind_ssbo_range(SFFD_SSBO_VISIBLE, gpu.quads.id(), {b.quad_first, b.quad_count},
+                             sizeof(std::uint32_t));
+        if (gpu.texture)
+            gfx::bind_ssbo_range(SFFD_SSBO_UV_AXES, gpu.uv_axes.id(), b.splats, sizeof(glm::vec4));
+        glDrawArraysInstanced(GL_TRIANGLES, 0, 6, GLsizei(b.quad_count));
+    }
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
+    if (gpu.texture) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
+}
+
 // programs: [sprites, quads] for the cloud; flat: the program for a textured cloud's flat-coloured sprites
 // (CpuCullResult::flat_records: the untextured variant of the pass; null for passes without colour).
 // big: the HQ passes of the compute rasteriser's frame draw only the sprites it left to them (indexed
@@ -31,7 +49,9 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     }
     glBindVertexArray(s.vao.id());
     glUseProgram(programs[1].id());
-    glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(4 * sizeof(std::uint32_t)));
+    if (gpu.quad_batches.empty())
+        glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(4 * sizeof(std::uint32_t)));
+    else draw_quad_batches(gpu);
     if (gpu.texture) {
         glBindVertexArray(s.records_vao.id());
         glUseProgram(flat ? flat->id() : programs[0].id());
@@ -120,6 +140,9 @@ void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, R
     }
     if (Status st = compute_raster_fits(plan.width, plan.height); !st)
         return warn_once("render_system(): " + st.message());
+    for (const CloudGpu* gpu : plan.drawn)
+        if (Status st = compute_raster_records_fit(gpu->capacity); !st)
+            return warn_once("render_system(): " + st.message());
     if (Status st = init_compute_raster(s.compute_raster); !st) {
         log::error("render_system(): ", st.message());
         return;

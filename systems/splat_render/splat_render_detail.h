@@ -74,6 +74,9 @@ struct CloudGpu {
     std::uint64_t cpu_own_version = 0;  // SplatCloud change stamp cpu_own holds
     const std::vector<gpu::GpuSplat>* cpu_current = nullptr;
     CpuCullResult cpu_cull;
+    // The CPU cull's quad pass per range of splats when the splats (or uv axes) exceed one storage block
+    // (storage_limits.h); empty: one indirect draw over the whole cloud.
+    std::vector<QuadBatch> quad_batches;
 };
 
 // Owner of a fence sync object (GLsync is not a GL name, so gfx::GlObject does not cover it): move-only,

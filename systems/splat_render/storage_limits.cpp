@@ -1,6 +1,7 @@
 #include "systems/splat_render/storage_limits.h"
 
 #include <algorithm>
+#include <cassert>
 #include <mutex>
 #include <set>
 #include <string>
@@ -34,6 +35,36 @@ Status compute_cull_fits(std::size_t splats) {
     if (!gfx::ssbo_fits(records)) return make_error(gfx::ssbo_too_large("render.visible_splats", records));
     if (!gfx::ssbo_fits(cloud)) return make_error(gfx::ssbo_too_large("splats", cloud));
     return {};
+}
+
+Status compute_raster_records_fit(std::size_t capacity) {
+    const std::uint64_t records = 2 * std::max<std::uint64_t>(capacity, 1) * SFFD_SPLAT_RECORD_BYTES;
+    if (!gfx::ssbo_fits(records))
+        return make_error(gfx::ssbo_too_large("render.visible_splats", records) + "; using the raster path");
+    return {};
+}
+
+std::vector<QuadBatch> layout_quad_batches(std::span<const std::uint32_t> quads,
+                                           std::span<const gfx::SsboBatch> batches, std::uint32_t align_words,
+                                           std::vector<std::uint32_t>& out) {
+    align_words = std::max<std::uint32_t>(align_words, 1);
+    out.clear();
+    std::vector<QuadBatch> result;
+    result.reserve(batches.size());
+    std::size_t q = 0;
+    for (const gfx::SsboBatch& b : batches) {
+        out.resize((out.size() + align_words - 1) / align_words * align_words, 0u);
+        QuadBatch qb;
+        qb.splats = b;
+        qb.quad_first = std::uint32_t(out.size());
+        for (; q < quads.size() && quads[q] < b.first + b.count; ++q) {
+            assert(quads[q] >= b.first && "quads must ascend");
+            out.push_back(std::uint32_t(quads[q] - b.first));
+        }
+        qb.quad_count = std::uint32_t(out.size()) - qb.quad_first;
+        result.push_back(qb);
+    }
+    return result;
 }
 
 void warn_once(const std::string& message) {

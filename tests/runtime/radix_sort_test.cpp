@@ -9,9 +9,11 @@
 #include <numeric>
 #include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "runtime/gfx/context.h"
+#include "runtime/gfx/limits.h"
 #include "runtime/gfx/radix_sort.h"
 #include "tests/test_util/headless_gl.h"
 
@@ -172,6 +174,23 @@ TEST_F(RadixSort, BadKeyWidthIsAnError) {
     auto s = gfx::radix_sort(*sorter, b.id(), b.id(), 4, 33);
     ASSERT_FALSE(s);
     EXPECT_EQ(s.message(), "radix_sort(): key_bits 33 is not in 1..32");
+}
+
+// Keys past GL_MAX_SHADER_STORAGE_BLOCK_SIZE (simulated): the sort and the scan refuse, naming the limit,
+// instead of reading past the block (their passes index the arrays at random: no ranges).
+TEST_F(RadixSort, KeysOverTheBlockSizeAreRefusedNamingTheLimit) {
+    gfx::Buffer b = gfx::Buffer::create("test.large");
+    glNamedBufferData(b.id(), 4 * 2001, nullptr, GL_DYNAMIC_COPY);
+    gfx::GlLimits small = gfx::limits();
+    small.max_ssbo_block_size = 4000;  // 1,000 keys
+    gfx::ScopedLimits scope(small);
+    auto s = gfx::radix_sort(*sorter, b.id(), b.id(), 2000);
+    ASSERT_FALSE(s);
+    EXPECT_EQ(s.message(), "radix_sort(): keys: 8000 bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (4000)");
+    auto scan = gfx::exclusive_scan(*sorter, b.id(), 2000);
+    ASSERT_FALSE(scan);
+    EXPECT_NE(scan.message().find("GL_MAX_SHADER_STORAGE_BLOCK_SIZE (4000)"), std::string::npos)
+        << scan.message();
 }
 
 }  // namespace

@@ -17,6 +17,7 @@
 #include "runtime/assets/builtin_scenes.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
+#include "runtime/gfx/limits.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/from_splats.h"
@@ -140,6 +141,38 @@ TEST_F(GaussianGl, LargeCloudsAreDispatchedAsAGrid) {
             EXPECT_EQ(grid->color, one_row->color);
             EXPECT_GT(psnr(*grid, render_reference(g, cam, o)), 40.0);
         }
+}
+
+TEST_F(GaussianGl, ProjectionOverTheBlockSizeRunsInRanges) {
+    // Degree 3: 192 bytes of SH a Gaussian. Under a 200,000-byte GL_MAX_SHADER_STORAGE_BLOCK_SIZE the
+    // projection binds its per-Gaussian buffers range by range (the sort payload offset by the range's
+    // first Gaussian); the projections, sort and tiles still fit whole. Each Gaussian is projected by the
+    // same program from the same inputs, so the image is exactly the unlimited one, on every path.
+    ReferenceOptions o;
+    o.width = 96, o.height = 72;
+    const GaussianCloud g = random_cloud(3000, 3);
+    const Camera cam = camera_at({0.2, 0.3, 3.5});
+    gfx::GlLimits small = gfx::limits();
+    small.max_ssbo_block_size = 200'000;
+    for (BlendPath blend : {BlendPath::quads, BlendPath::tiles})
+        for (SortPath sort : {SortPath::cpu, SortPath::gpu}) {
+            renderer->sort_path = sort, renderer->blend_path = blend;
+            auto whole = render_gl(*renderer, g, cam, o);
+            ASSERT_TRUE(whole) << whole.message();
+            auto ranged = [&] {
+                gfx::ScopedLimits scope(small);
+                return render_gl(*renderer, g, cam, o);
+            }();
+            ASSERT_TRUE(ranged) << ranged.message();
+            EXPECT_EQ(ranged->color, whole->color);
+            EXPECT_GT(psnr(*ranged, render_reference(g, cam, o)), 40.0);
+        }
+    small.max_ssbo_block_size = 100;  // not one Gaussian's SH: refused, naming the limit
+    gfx::ScopedLimits scope(small);
+    auto refused = render_gl(*renderer, g, cam, o);
+    ASSERT_FALSE(refused);
+    EXPECT_NE(refused.message().find("GL_MAX_SHADER_STORAGE_BLOCK_SIZE (100)"), std::string::npos)
+        << refused.message();
 }
 
 TEST_F(GaussianGl, OffscreenGaussiansAreCulledBeforeTheSort) {
