@@ -3,6 +3,9 @@
 // lattice_commands.cpp lattice settings).
 #include "systems/editor/editor_system_detail.h"
 
+#include "systems/editor/lattice_tools.h"
+#include "systems/gaussian/components.h"
+
 namespace sffd::editor {
 
 const char* tool_name(Tool tool) {
@@ -91,7 +94,31 @@ bool scene_bounds(const ecs::Registry& registry, glm::dvec3& lo, glm::dvec3& hi)
         }
         if (!cloud.positions.empty()) lo = glm::min(lo, a), hi = glm::max(hi, b), any = true;
     });
+    // Gaussians count as the object too: a lattice added to a Gaussian file has them inside.
+    registry.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& g) {
+        const glm::dmat4 model = model_matrix(registry.try_get<Transform>(e));
+        for (const glm::vec3& p : g.positions) {
+            const glm::dvec3 w = glm::dvec3(model * glm::dvec4(g.origin + glm::dvec3(p), 1.0));
+            lo = glm::min(lo, w), hi = glm::max(hi, w), any = true;
+        }
+    });
     return any;
+}
+
+std::size_t control_points_inside_object(const ecs::Registry& registry, const Lattice& lattice) {
+    glm::dvec3 lo, hi;
+    if (!scene_bounds(registry, lo, hi)) return 0;
+    const auto mask = inside_box_mask(lattice, lo, hi);
+    return std::size_t(std::count(mask.begin(), mask.end(), std::uint8_t(1)));
+}
+
+const char* entity_kind(const ecs::Registry& registry, ecs::Entity e) {
+    if (registry.has<SplatCloud>(e)) return "surface";
+    if (registry.has<GaussianCloud>(e)) return "Gaussians";
+    if (registry.has<Lattice>(e)) return "lattice";
+    if (registry.has<Camera>(e)) return "camera";
+    if (registry.has<DirectionalLight>(e) || registry.has<AmbientLight>(e)) return "light";
+    return "";
 }
 
 EditorState& setup_editor(ecs::Registry& registry, const Viewport& viewport) {

@@ -27,6 +27,7 @@
 #include "runtime/app/frame_loop.h"
 #include "runtime/ecs/registry.h"
 #include "systems/editor/editor_state.h"
+#include "systems/ffd/components.h"
 
 namespace sffd::editor {
 
@@ -52,8 +53,14 @@ bool apply_stretch(ecs::Registry& registry, EditorState& state, const glm::dvec3
 bool apply_twist(ecs::Registry& registry, EditorState& state, double degrees);
 void reset_lattice(ecs::Registry& registry, EditorState& state);  // current = rest
 void frame_selection(ecs::Registry& registry, EditorState& state);
-// World-space box of every point cloud (authored positions); false when there is none.
+// World-space box of every point cloud, surface splats and Gaussians (authored positions); false when
+// there is none.
 bool scene_bounds(const ecs::Registry& registry, glm::dvec3& lo, glm::dvec3& hi);
+// Control points of `lattice` (current positions) inside scene_bounds: the Lattice panel's "N inside the
+// object's box" and the add-lattice status line (0 when the scene has no cloud).
+std::size_t control_points_inside_object(const ecs::Registry& registry, const Lattice& lattice);
+// The Outliner's type tag: "surface", "Gaussians", "lattice", "camera", "light", or "" for anything else.
+const char* entity_kind(const ecs::Registry& registry, ecs::Entity e);
 // Keys the last stretch/twist at the clip's current time (adds a track bound to its points when
 // needed, and a clip when the lattice has none); delete_keys_at_time removes every key at the current time.
 bool key_last_edit(ecs::Registry& registry, EditorState& state);

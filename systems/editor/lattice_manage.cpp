@@ -1,10 +1,13 @@
 #include "systems/editor/lattice_manage.h"
 
 #include <algorithm>
+#include <cctype>
+#include <filesystem>
 #include <memory>
 
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
+#include "systems/editor/editor_system.h"
 #include "systems/ffd/lattice_io.h"
 #include "systems/gaussian/components.h"
 #include "systems/picking/components.h"
@@ -102,7 +105,9 @@ bool add_bound_lattice(ecs::Registry& r, EditorState& state, ecs::Entity cloud, 
     state.undo.push(std::move(group));
     state.active_lattice = e;
     state.last_edit = {};
-    say(state, std::string(label) + ": '" + name + "' on '" + name_of(r, cloud, "cloud") + "'");
+    say(state, std::string(label) + ": '" + name + "' on '" + name_of(r, cloud, "cloud") + "', " +
+                   std::to_string(control_points_inside_object(r, r.get<Lattice>(e))) +
+                   " control points inside the object's box");
     return true;
 }
 
@@ -241,6 +246,17 @@ bool cycle_active_lattice(ecs::Registry& r, EditorState& state, int delta) {
     return true;
 }
 
+std::string lattice_json_path(ecs::Registry& r, const EditorState& state) {
+    const LatticeFitSettings& settings = lattice_fit_settings(r);
+    if (settings.json_folder.empty() || !is_lattice(r, state.active_lattice)) return settings.json_path;
+    // Names are any text: characters a file name cannot safely hold become '_'.
+    std::string file = name_of(r, state.active_lattice, "lattice");
+    for (char& c : file)
+        if (!std::isalnum(static_cast<unsigned char>(c)) && c != '.' && c != '-' && c != '_') c = '_';
+    if (file.empty() || file[0] == '.') file = "lattice" + file;
+    return (std::filesystem::path(settings.json_folder) / (file + ".json")).string();
+}
+
 bool export_lattice_json(ecs::Registry& r, EditorState& state, const std::string& path) {
     if (!is_lattice(r, state.active_lattice)) return say(state, "export lattice: no active lattice"), false;
     if (Status s = ffd::save_lattice(path, r.get<Lattice>(state.active_lattice)); !s)
@@ -274,10 +290,8 @@ bool handle_lattice_key(ecs::Registry& r, EditorState& state, const InputEvent& 
                alt = ev.modifiers & mods::alt;
     const std::string& k = ev.key;
     if (alt) return false;
-    if (ctrl && !shift && k == "e")
-        return export_lattice_json(r, state, lattice_fit_settings(r).json_path), true;
-    if (ctrl && !shift && k == "i")
-        return import_lattice_json(r, state, lattice_fit_settings(r).json_path), true;
+    if (ctrl && !shift && k == "e") return export_lattice_json(r, state, lattice_json_path(r, state)), true;
+    if (ctrl && !shift && k == "i") return import_lattice_json(r, state, lattice_json_path(r, state)), true;
     if (ctrl) return false;
     if (shift && k == "a") return add_lattice(r, state), true;
     if (shift && k == "f") return refit_lattice(r, state), true;

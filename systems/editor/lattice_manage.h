@@ -11,7 +11,7 @@
 //   shift+f          refit the active lattice to its clouds with the fit settings (a rest lattice)
 //   tab              make the next lattice active (shift+tab: previous)
 //   pageup/pagedown  move the active lattice earlier / later in its cloud's order
-//   ctrl+e           export the active lattice as JSON (LatticeFitSettings::json_path)
+//   ctrl+e           export the active lattice as JSON (lattice_json_path: named after the lattice)
 //   ctrl+i           import that JSON into the active lattice (or as a new lattice on the target cloud
 //                    when there is none)
 // Panel: the "lattices" section of the Lattice panel (lattice_manager_section, window builds): the same
@@ -26,13 +26,17 @@
 
 namespace sffd::editor {
 
-// Registry resource (created on first use): the fit used by add and refit, and the JSON file of export
-// and import (default "lattice.json"; `splatffd view` sets it next to the scene: <scene>.lattice.json).
+// Registry resource (created on first use): the fit used by add and refit, and where export and import
+// put the JSON: with `json_folder` set (`splatffd view` sets the scene's folder), <folder>/<active
+// lattice's name>.json, so two lattices never share a file; else `json_path` (default "lattice.json").
 struct LatticeFitSettings {
     ffd::FitOptions fit;
     std::string json_path = "lattice.json";
+    std::string json_folder;
 };
 LatticeFitSettings& lattice_fit_settings(ecs::Registry& registry);
+// The file ctrl+e / ctrl+i use now (see LatticeFitSettings).
+std::string lattice_json_path(ecs::Registry& registry, const EditorState& state);
 
 // The cloud add/import work on: the selected entity when it is a cloud, else the first cloud the active
 // lattice deforms, else the first cloud (null when the scene has none).

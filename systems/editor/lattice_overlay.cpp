@@ -1,5 +1,8 @@
 #include "systems/editor/lattice_overlay.h"
 
+#include "systems/editor/panel_layout.h"
+
+#include <algorithm>
 #include <cstddef>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -150,6 +153,16 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
     const GLenum draw0 = GL_COLOR_ATTACHMENT0;
     glNamedFramebufferDrawBuffers(fbo, 1, &draw0);  // only the colour: normals/depth stay the surface's
     glViewport(0, 0, width, height);
+    // Clipped to the part of the window no panel covers (panel_layout.h; the whole window without
+    // panels). Panel rectangles are window pixels from the top; GL's scissor counts from the bottom.
+    if (const EditorViewRect* v = registry.try_resource<EditorViewRect>();
+        v && v->width > 0 && v->height > 0) {
+        const float sx = float(width) / v->width, sy = float(height) / v->height;
+        const PanelRect& r = v->rect;
+        glEnable(GL_SCISSOR_TEST);
+        glScissor(GLint(r.x * sx), GLint(float(height) - (r.y + r.h) * sy), GLsizei(std::max(0.0f, r.w * sx)),
+                  GLsizei(std::max(0.0f, r.h * sy)));
+    }
     // Opacity comes from a constant blend factor and the result is opaque (alpha 1): the colour target
     // holds straight alpha, and captures treat alpha > 0 as covered, so the lattice also shows where
     // there is no surface behind it.
@@ -196,6 +209,7 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
     glDisable(GL_DEPTH_TEST);
     glDisable(GL_BLEND);
     glDisable(GL_PROGRAM_POINT_SIZE);
+    glDisable(GL_SCISSOR_TEST);
     // Restore the render system's draw buffers (every colour attachment it has).
     GLint max_attach = 0;
     glGetIntegerv(GL_MAX_COLOR_ATTACHMENTS, &max_attach);

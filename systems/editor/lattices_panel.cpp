@@ -67,12 +67,18 @@ void lattice_manager_section(ecs::Registry& registry, EditorState& state) {
         same_line_if_fits("down (pgdn)");
         if (ImGui::Button("down (pgdn)")) move_lattice_in_order(registry, state, +1);
         ImGui::Separator();
-        char path[512];
-        std::snprintf(path, sizeof path, "%s", settings.json_path.c_str());
-        if (ImGui::InputText("json", path, sizeof path)) settings.json_path = path;
-        if (ImGui::Button("export (ctrl+e)")) export_lattice_json(registry, state, settings.json_path);
+        if (settings.json_folder.empty()) {
+            char path[512];
+            std::snprintf(path, sizeof path, "%s", settings.json_path.c_str());
+            if (ImGui::InputText("json", path, sizeof path)) settings.json_path = path;
+        } else {  // named after the active lattice (lattice_json_path)
+            ImGui::TextWrapped("json: %s", lattice_json_path(registry, state).c_str());
+        }
+        if (ImGui::Button("export (ctrl+e)"))
+            export_lattice_json(registry, state, lattice_json_path(registry, state));
         same_line_if_fits("import (ctrl+i)");
-        if (ImGui::Button("import (ctrl+i)")) import_lattice_json(registry, state, settings.json_path);
+        if (ImGui::Button("import (ctrl+i)"))
+            import_lattice_json(registry, state, lattice_json_path(registry, state));
         ImGui::Separator();
     }
 }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 #include <vector>
 
 namespace sffd::editor {
@@ -87,6 +88,26 @@ std::array<PanelRect, panel_count> layout_panels(const LayoutInput& in) {
         std::min(in.collapsed[std::size_t(Panel::timeline)] ? in.title : 64.0f, std::max(0.0f, y1 - y0));
     out[std::size_t(Panel::timeline)] = PanelRect{mid_x, y1 - th, mid_w, th};
     return out;
+}
+
+bool panels_start_collapsed(float width, float height) { return width < 1100.0f || height < 650.0f; }
+
+PanelRect view_rect(const std::array<PanelRect, panel_count>& p, const LayoutInput& in) {
+    auto all_collapsed = [&](std::initializer_list<Panel> column) {
+        for (Panel x : column)
+            if (!in.collapsed[std::size_t(x)]) return false;
+        return true;
+    };
+    const PanelRect& outliner = p[std::size_t(Panel::outliner)];
+    const PanelRect& tools = p[std::size_t(Panel::tools)];
+    const PanelRect& timeline = p[std::size_t(Panel::timeline)];
+    const float x0 = all_collapsed({Panel::outliner, Panel::inspector, Panel::frame_time})
+                         ? 0.0f
+                         : outliner.x + outliner.w + gap;
+    const float x1 = all_collapsed({Panel::tools, Panel::lattice}) ? std::max(in.width, 1.0f) : tools.x - gap;
+    const float y0 = std::min(in.top + gap, std::max(in.height, 1.0f));
+    const float y1 = std::max(y0, timeline.y - gap);
+    return PanelRect{x0, y0, std::max(0.0f, x1 - x0), y1 - y0};
 }
 
 float graph_scale(std::span<const float> ms) {

@@ -31,6 +31,22 @@ struct LayoutInput {
 
 std::array<PanelRect, panel_count> layout_panels(const LayoutInput& in);
 
+// Below this window size the panels start collapsed to their title bars (a user's choice, remembered
+// in imgui.ini, wins): expanded, the columns would cover the middle of the model and cut their labels.
+bool panels_start_collapsed(float width, float height);
+
+// The part of the window no expanded panel covers: between the columns (a column whose panels are all
+// collapsed gives its width back), below the menu bar, above the Timeline. The lattice overlay is
+// clipped to it, so it is never drawn under a (translucent) panel.
+PanelRect view_rect(const std::array<PanelRect, panel_count>& panels, const LayoutInput& in);
+
+// Registry resource: the view rectangle of the last frame whose panels were drawn (absent without
+// panels: the whole window is the view). Written by the panels, read by the lattice overlay.
+struct EditorViewRect {
+    PanelRect rect;
+    float width = 0, height = 0;  // the window it is in (a framebuffer of another size scales it)
+};
+
 // Top of the frame-time graph: 1.5 x the 90th percentile of `ms` (at least 1 ms), so one slow frame (the
 // first, which compiles shaders and uploads: seconds) does not flatten every other frame to the bottom line.
 float graph_scale(std::span<const float> ms);

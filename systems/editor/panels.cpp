@@ -71,6 +71,9 @@ bool begin_panel(ecs::Registry& registry, Panel p) {
     const PanelRect& r = ls.rects[std::size_t(p)];
     ImGui::SetNextWindowPos(ImVec2(r.x, r.y), ImGuiCond_Always);
     ImGui::SetNextWindowSize(ImVec2(r.w, r.h), ImGuiCond_Always);
+    const ImVec2 window = ImGui::GetMainViewport()->Size;
+    if (panels_start_collapsed(window.x, window.y))
+        ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
     const bool open =
         ImGui::Begin(panel_title(p), nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
     ls.collapsed[std::size_t(p)] = ImGui::IsWindowCollapsed();
@@ -129,11 +132,7 @@ bool drag_dvec3(const char* label, glm::dvec3& v, float speed = 0.01f) {
 std::string entity_label(const ecs::Registry& registry, ecs::Entity e) {
     std::string name = "entity " + std::to_string(e.index);
     if (const Name* n = registry.try_get<Name>(e); n && !n->value.empty()) name = n->value;
-    std::string kind;
-    if (registry.has<SplatCloud>(e)) kind = "cloud";
-    else if (registry.has<Lattice>(e)) kind = "lattice";
-    else if (registry.has<Camera>(e)) kind = "camera";
-    else if (registry.has<DirectionalLight>(e) || registry.has<AmbientLight>(e)) kind = "light";
+    const std::string kind = entity_kind(registry, e);
     return kind.empty() ? name : name + "  [" + kind + "]";
 }
 
@@ -360,12 +359,7 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
             ImGui::Text("%s", entity_label(registry, state.active_lattice).c_str());
             ImGui::Text("%d x %d x %d divisions, %s", l->divisions.x, l->divisions.y, l->divisions.z,
                         l->basis == LatticeBasis::bernstein ? "Bernstein" : "B-spline");
-            glm::dvec3 lo, hi;
-            std::size_t inside = 0;
-            if (scene_bounds(registry, lo, hi)) {
-                const auto mask = inside_box_mask(*l, lo, hi);
-                inside = std::size_t(std::count(mask.begin(), mask.end(), std::uint8_t(1)));
-            }
+            const std::size_t inside = control_points_inside_object(registry, *l);
             const auto outer = outer_layer_mask(*l);
             ImGui::TextWrapped("%zu inside the object's box (white), %zu outer (pinned: %s)", inside,
                                std::size_t(std::count(outer.begin(), outer.end(), std::uint8_t(1))),
@@ -579,6 +573,7 @@ void draw_panels(ecs::Registry& registry, const FrameContext&) {
     in.title = ImGui::GetFrameHeight();
     in.collapsed = ls.collapsed;
     ls.rects = layout_panels(in);
+    registry.set_resource<EditorViewRect>(EditorViewRect{view_rect(ls.rects, in), in.width, in.height});
     menu_bar(registry, *state);
     outliner(registry, *state);
     inspector(registry, *state);

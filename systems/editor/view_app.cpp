@@ -394,9 +394,14 @@ int run_view(const ViewOptions& options, Schedule schedule) {
             if (!state.last_folder.empty() && !std::filesystem::path(session.save_path).has_parent_path())
                 session.save_path = (std::filesystem::path(state.last_folder) / session.save_path).string();
         }
-        // Lattice JSON export/import (ctrl+e / ctrl+i) next to the scene's save: <save>.lattice.json.
+        // Lattice JSON export/import (ctrl+e / ctrl+i) next to the scene's save, named after the lattice
+        // (<folder>/<lattice name>.json); <save>.lattice.json while no lattice is active.
         lattice_fit_settings(registry).json_path =
             std::filesystem::path(session.save_path).replace_extension(".lattice.json").string();
+        {
+            const std::filesystem::path folder = std::filesystem::path(session.save_path).parent_path();
+            lattice_fit_settings(registry).json_folder = folder.empty() ? "." : folder.string();
+        }
         session.ui = options.ui && !headless;
 
         CallbackLink link{&registry, session.ui};

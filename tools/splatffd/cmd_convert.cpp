@@ -21,6 +21,7 @@
 #include "runtime/assets/scene.h"
 #include "systems/ffd/lattice_io.h"
 #include "systems/ffd/operations.h"
+#include "systems/gaussian/components.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/convert_gaussians.h"
 #include "tools/splatffd/lattice_source.h"
@@ -48,9 +49,10 @@ constexpr const char* kUsage =
     "                   is a terminal, for steps over a second); the timing summary is always printed\n"
     "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .compressed.ply PlayCanvas's quantised "
     "layout,\n"
-    "                   .spz, .glb KHR_gaussian_splatting; default: surface splats); IN may also be a\n"
-    "                   Gaussian file (.splat, .spz, .ksplat, .sog, a SOG folder's meta.json, 3DGS or\n"
-    "                   compressed .ply, KHR .glb)\n"
+    "                   .spz, .glb KHR_gaussian_splatting; default: surface splats, or Gaussians when\n"
+    "                   IN is a Gaussian file: .splat, .spz, .ksplat, .sog, a SOG folder's meta.json,\n"
+    "                   3DGS or compressed .ply, KHR .glb); with --lattice, OUT .glb/.gltf holds the\n"
+    "                   Gaussians and their lattice\n"
     "  --spz-version V  with --gaussians: the SPZ version written, 3 (gzip, every reader) or 4 (zstd\n"
     "                   streams, the SPZ library's current default) (default 3)\n"
     "  --turn-x180      with --gaussians: turn the Gaussians 180 degrees about x, (x, y, z) -> (x, -y, -z),\n"
@@ -100,8 +102,10 @@ int export_lattice_json(const std::string& in, const std::string& out, const Lat
             r.each_entity([&](ecs::Entity e) {
                 if (const SplatCloud* c = r.try_get<SplatCloud>(e); c && pts.empty())
                     pts = c->positions, origin = c->origin;
+                if (const GaussianCloud* g = r.try_get<GaussianCloud>(e); g && pts.empty())
+                    pts = g->positions, origin = g->origin;
             });
-            auto l = fit ? ffd::fit_lattice(pts, origin, *fit) : Result<Lattice>(fit.error());
+            auto l = fit ? cli::fit_lattice_for("convert", pts, origin, *fit) : Result<Lattice>(fit.error());
             if (!l) {
                 std::fprintf(stderr, "splatffd convert: %s\n", l.message().c_str());
                 return 1;
@@ -147,7 +151,7 @@ sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const std::string&
     if (ffd::is_fit_spec(req.source)) {
         auto fit = ffd::parse_fit_spec(req.source);
         if (!fit) return fit.error();
-        auto l = ffd::fit_lattice(cloud.positions, cloud.origin, *fit);
+        auto l = cli::fit_lattice_for("convert", cloud.positions, cloud.origin, *fit);
         if (!l) return l.error();
         chain.lattices.push_back(std::move(*l));
         note = ", lattice " + ffd::fit_spec_string(*fit) + " bound to it";
@@ -230,18 +234,22 @@ int run_convert(sffd::cli::Args args) {
         }
     }
     if (in.empty() || out.empty()) return cli::usage_error("convert", "expected IN and OUT", kUsage);
+    // A Gaussian input stays Gaussian: read as points it would lose colour, opacity and SH.
+    const bool gaussian_in = !assets::is_builtin_scene(in) && cli::is_gaussian_file(in);
+    gaussians = gaussians || gaussian_in;
     if (turn_x180 && !gaussians)
         return cli::usage_error("convert", "--turn-x180 applies to Gaussians: add --gaussians", "");
-    if (gaussians && in != "sphere" && cli::is_gaussian_file(in))
-        return cli::write_gaussians(in, nullptr, out, ascii, turn_x180, spz_version);
     if (cli::is_json_path(out)) return export_lattice_json(in, out, lattice);
     if (!lattice.source.empty() && !cli::is_scene_path(out)) {
         std::fprintf(stderr,
-                     "splatffd convert: %s: a PLY file cannot hold a lattice; write a scene (.glb/.gltf) or "
+                     "splatffd convert: %s: a %s file cannot hold a lattice; write a scene (.glb/.gltf) or "
                      "the lattice alone (.json)\n",
-                     out.c_str());
+                     out.c_str(), std::filesystem::path(out).extension().string().c_str());
         return 2;
     }
+    // A Gaussian scene (a saved scene or an earlier convert --lattice) keeps its lattices into a scene OUT.
+    if (gaussian_in && lattice.source.empty() && cli::is_scene_path(in) && cli::is_scene_path(out))
+        if (cli::load_lattice_source(in, lattice.name)) lattice.source = in;
     if (!lattice.name.empty() && lattice.source.empty()) {
         std::fprintf(stderr, "splatffd convert: --lattice-name needs --lattice SCENE.glb (or OUT .json)\n");
         return 2;
@@ -261,6 +269,9 @@ int run_convert(sffd::cli::Args args) {
         }
         loaded = std::move(*c);
     }
+    const cli::GaussianLatticeRequest gaussian_lattice{lattice.source, &loaded};
+    if (gaussian_in)
+        return cli::write_gaussians(in, nullptr, out, ascii, turn_x180, spz_version, gaussian_lattice);
     cli::ProgressPrinter printer("convert", cli::ProgressPrinter::mode_for(progress));
     opt.progress = printer.fn();
     const auto t0 = std::chrono::steady_clock::now();
@@ -313,7 +324,8 @@ int run_convert(sffd::cli::Args args) {
         std::fprintf(stderr, "splatffd convert: %s\n", cloud.message().c_str());
         return 1;
     }
-    if (gaussians) return cli::write_gaussians(in, &*cloud, out, ascii, turn_x180, spz_version);
+    if (gaussians)
+        return cli::write_gaussians(in, &*cloud, out, ascii, turn_x180, spz_version, gaussian_lattice);
     const auto t2 = std::chrono::steady_clock::now();
     std::string lattice_note;
     printer.report("writing", 0.0);

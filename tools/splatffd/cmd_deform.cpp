@@ -40,6 +40,7 @@
 #include "systems/ffd/ffd_gpu.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/lattice_io.h"
+#include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "tools/splatffd/command.h"
@@ -158,6 +159,7 @@ struct ChunkDeformer {
     ffd::GpuDeformer* gpu = nullptr;
     std::vector<glm::vec3> p, n, u, v, op, on, ou, ov;
     std::size_t inverted = 0;
+    std::vector<std::size_t> inside;  // points inside each lattice (same order)
     ply::Chunk scratch;
 
     Result<double> run(ply::Chunk& c, const VertexColumns& cols, bool write) {
@@ -167,15 +169,16 @@ struct ChunkDeformer {
             target = &scratch;
         }
         double ms = 0.0;
-        for (const Lattice& l : lattices) {
-            auto t = run_one(l, *target, cols, write);
+        for (std::size_t i = 0; i < lattices.size(); ++i) {
+            auto t = run_one(lattices[i], *target, cols, write, inside[i]);
             if (!t) return t.error();
             ms += *t;
         }
         return ms;
     }
 
-    Result<double> run_one(const Lattice& lattice, ply::Chunk& c, const VertexColumns& cols, bool count) {
+    Result<double> run_one(const Lattice& lattice, ply::Chunk& c, const VertexColumns& cols, bool count,
+                           std::size_t& inside_count) {
         const std::size_t rows = c.rows;
         const int xyz[3] = {cols.x, cols.y, cols.z};
         const bool normals = cols.normals(), axes = cols.axes();
@@ -186,6 +189,7 @@ struct ChunkDeformer {
             for (std::size_t r = 0; r < rows; ++r) {
                 const ffd::ReferencePoint rp = ffd::reference_point(lattice, get3(c, xyz, r));
                 if (!rp.inside) continue;
+                inside_count += count;
                 set3(c, xyz, r, rp.position);
                 const glm::dmat3& J = rp.jacobian;
                 if (normals) {
@@ -226,7 +230,7 @@ struct ChunkDeformer {
             backend == "gpu" ? gpu->deform(lattice, in, out) : ffd::deform(lattice, in, out);
         const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
         if (!stats) return stats.error();
-        if (count) inverted += stats->inverted;
+        if (count) inverted += stats->inverted, inside_count += stats->inside;
         for (std::size_t r = 0; r < rows; ++r) {
             // Unchanged points keep their exact double values.
             if (op[r] == p[r] && (!normals || on[r] == n[r]) && (!axes || (ou[r] == u[r] && ov[r] == v[r])))
@@ -312,7 +316,7 @@ Result<cli::LatticeChain> lattice_chain(const Options& o, const std::vector<glm:
     if (ffd::is_fit_spec(o.lattice_source)) {
         auto fit = ffd::parse_fit_spec(o.lattice_source);
         if (!fit) return fit.error();
-        auto l = ffd::fit_lattice(positions, origin, *fit);
+        auto l = cli::fit_lattice_for("deform", positions, origin, *fit);
         if (!l) return make_error(o.files[0] + ": " + l.message());
         return cli::LatticeChain{{std::move(*l)}, {ffd::fit_spec_string(*fit)}, {}};
     }
@@ -349,6 +353,19 @@ void print_summary(const char* what, std::size_t points, const std::string& back
                  points, backend.c_str(), first_ms, first_ms > 0 ? double(points) / (first_ms * 1e-3) : 0.0,
                  total_s, total_s > 0 ? double(points) / total_s : 0.0, inverted);
     std::fprintf(stderr, "splatffd deform: wrote %s\n", what);
+}
+
+// "deformed by 1 lattice" must not hide a lattice that moved nothing: one warning per lattice that holds
+// none of the points (a lattice of another scan, or fitted to another cloud).
+void warn_empty_lattices(const cli::LatticeChain& chain, const std::vector<std::size_t>& inside,
+                         std::size_t points) {
+    for (std::size_t i = 0; i < chain.lattices.size() && i < inside.size(); ++i)
+        if (inside[i] == 0 && points > 0)
+            std::fprintf(
+                stderr,
+                "splatffd deform: warning: lattice '%s' contains none of the %zu points: it deformed "
+                "nothing (is it the lattice of another cloud?)\n",
+                i < chain.names.size() ? chain.names[i].c_str() : "?", points);
 }
 
 // Outputs must be finite: a lattice that overflows fails the run instead of writing inf (index of the
@@ -431,7 +448,8 @@ int deform_ply_stream(const Options& o) {
     if (!writer) return fail(writer.message());
 
     ChunkDeformer deformer{
-        chain->lattices, o.backend, gpu ? &*gpu : nullptr, {}, {}, {}, {}, {}, {}, {}, {}, 0, {}};
+        chain->lattices, o.backend, gpu ? &*gpu : nullptr, {}, {}, {}, {}, {}, {}, {}, {}, 0, {}, {}};
+    deformer.inside.assign(chain->lattices.size(), 0);
     std::vector<double> rep_ms(std::size_t(o.bench), 0.0);
     double first_ms = 0.0;
     std::size_t points = 0;
@@ -487,6 +505,7 @@ int deform_ply_stream(const Options& o) {
     what += " deformed by " + std::to_string(chain->lattices.size()) + " lattice" +
             (chain->lattices.size() == 1 ? " " : "s ") + joined(chain->names);
     print_summary(what.c_str(), points, o.backend, first_ms, total_s, deformer.inverted);
+    warn_empty_lattices(*chain, deformer.inside, points);
     if (o.bench > 0) {
         std::sort(rep_ms.begin(), rep_ms.end());
         const double median = rep_ms.size() % 2
@@ -524,7 +543,22 @@ int deform_in_memory(const Options& o) {
         scene.each_entity([&](ecs::Entity e) {
             if (scene.has<SplatCloud>(e)) clouds.push_back(e);
         });
-        if (clouds.empty()) return fail(in_path + ": no point cloud");
+        if (clouds.empty()) {
+            // A Gaussian scene: its Gaussians follow the lattices as in render and view.
+            std::vector<ecs::Entity> gs;
+            scene.each_entity([&](ecs::Entity e) {
+                if (scene.has<GaussianCloud>(e)) gs.push_back(e);
+            });
+            if (gs.size() != 1) return fail(in_path + ": no point cloud (deform works on one)");
+            const GaussianCloud& g = scene.get<GaussianCloud>(gs[0]);
+            auto chain = early ? Result<cli::LatticeChain>(std::move(*early))
+                               : lattice_chain(o, g.positions, g.origin, &scene);
+            if (!chain) return fail(chain.message());
+            return cli::deform_gaussian_cloud(
+                g, chain->lattices, chain->names,
+                std::to_string(chain->lattices.size()) + " lattice(s) " + joined(chain->names), o.files[1],
+                o.ascii);
+        }
         ecs::Entity chosen = clouds.size() == 1 ? clouds[0] : ecs::null_entity;
         if (!chosen && o.lattice_source.empty()) {
             auto own = cli::pick_scene_lattices(scene, in_path, o.lattice_name);
@@ -557,6 +591,7 @@ int deform_in_memory(const Options& o) {
     }
     double ms = 0.0;
     std::size_t inverted = 0;
+    std::vector<std::size_t> inside;
     auto ptr = [](std::vector<glm::vec3>& v) { return v.empty() ? nullptr : v.data(); };
     for (const Lattice& l : chain->lattices) {
         const ffd::PointsIn in{cloud.positions.data(),
@@ -575,6 +610,7 @@ int deform_in_memory(const Options& o) {
         if (!stats)
             return fail((o.lattice_source.empty() ? in_path : o.lattice_source) + ": " + stats.message());
         inverted += stats->inverted;
+        inside.push_back(stats->inside);
     }
     for (std::size_t i = 0; i < n; ++i)
         if (!std::isfinite(cloud.positions[i].x) || !std::isfinite(cloud.positions[i].y) ||
@@ -593,6 +629,7 @@ int deform_in_memory(const Options& o) {
     what += " deformed by " + std::to_string(chain->lattices.size()) + " lattice" +
             (chain->lattices.size() == 1 ? " " : "s ") + joined(chain->names) + estimated;
     print_summary(what.c_str(), n, o.backend, ms, total_s, inverted);
+    warn_empty_lattices(*chain, inside, n);
     return 0;
 }
 

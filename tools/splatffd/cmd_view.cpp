@@ -28,13 +28,15 @@ constexpr const char* kUsage =
     "  --size WxH         window size (default 1280x720)\n"
     "  --quality Q        hq (three-pass surface splatting, default) or preview (opaque discs, faster)\n"
     "  --no-ui            no ImGui panels (default: panels shown)\n"
-    "  --headless         no window (EGL); input only from --replay (default: a window)\n"
+    "  --headless         no window (EGL); input only from --replay; needs --frames or --replay\n"
+    "                     (default: a window)\n"
     "  --json F           write frame-time statistics (all frames, frames with a live drag) (old spelling:\n"
     "                     --timing-json)\n"
     "  --sync-timing      finish the GL queue around every system and pass, so each one's time includes its "
     "GL\n"
     "                     work (a true per-system split; frames get slower; default off)\n"
-    "  --window-screenshot PATH  with --frames: the last frame's whole window (panels too), PNG\n"
+    "  --window-screenshot PATH  with --frames: the last frame's whole window (panels too), PNG; not\n"
+    "                     with --headless\n"
     "  --panel-rects-json PATH   with --frames: the panels' rectangles in the last frame, JSON\n"
     "Runs under X (use `xvfb-run -a` without a display). Keys and mouse: systems/editor/README.md\n";
 
@@ -123,6 +125,18 @@ int run_view_command(sffd::cli::Args args) {
             return 2;
         }
     }
+    // Refused rather than run silently: a headless session takes input only from a replay, so without
+    // --frames or --replay it would run forever with nothing to see; it has no window to capture.
+    if (o.headless && o.frames == 0 && o.replay.empty())
+        return sffd::cli::usage_error("view",
+                                      "--headless needs --frames N or --replay FILE (it has no window to "
+                                      "close, so it would run until interrupted)",
+                                      "");
+    if (o.headless && !o.window_screenshot.empty())
+        return sffd::cli::usage_error("view",
+                                      "--window-screenshot captures the window, and --headless has none; use "
+                                      "--out PATH for the rendered frame",
+                                      "");
     return sffd::editor::run_view(o, sffd::make_engine_schedule({.present = true, .editor = true}));
 }
 

@@ -6,7 +6,9 @@
 #include <filesystem>
 
 #include "runtime/assets/ply.h"
+#include "runtime/assets/scene.h"
 #include "runtime/scene/components.h"
+#include "systems/ffd/operations.h"
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_axes.h"
 #include "systems/gaussian/gaussian_compressed_ply.h"
@@ -40,8 +42,45 @@ bool is_gaussian_file(const std::string& in) {
     return false;
 }
 
+namespace {
+
+// The Gaussians and their lattice chain as one scene: the layout the editor saves (named lattices
+// "<cloud>.lattice", ".lattice2", ..., bound in order), embedded because the cloud has no source file.
+Status save_gaussian_scene(GaussianCloud g, const std::string& cloud_name, const GaussianLatticeRequest& req,
+                           const std::string& out, std::string& note) {
+    std::vector<Lattice> lattices;
+    if (ffd::is_fit_spec(req.source)) {
+        auto fit = ffd::parse_fit_spec(req.source);
+        if (!fit) return fit.error();
+        auto l = fit_lattice_for("convert", g.positions, g.origin, *fit);
+        if (!l) return l.error();
+        lattices.push_back(std::move(*l));
+        note = ", lattice " + ffd::fit_spec_string(*fit) + " bound to them";
+    } else {
+        lattices = req.loaded ? req.loaded->lattices : std::vector<Lattice>{};
+        note = ", " + std::to_string(lattices.size()) + " lattice(s) from " + req.source + " bound to them";
+    }
+    ecs::Registry r;
+    const ecs::Entity c = r.create();
+    r.emplace<Name>(c, Name{cloud_name});
+    r.emplace<Transform>(c, Transform{});
+    r.emplace<GaussianCloud>(c, std::move(g));
+    Deformers d;
+    for (std::size_t i = 0; i < lattices.size(); ++i) {
+        const ecs::Entity l = r.create();
+        r.emplace<Name>(l, Name{cloud_name + ".lattice" + (i ? std::to_string(i + 1) : std::string())});
+        r.emplace<Transform>(l, Transform{});
+        r.emplace<Lattice>(l, std::move(lattices[i]));
+        d.lattices.push_back(l);
+    }
+    if (!d.lattices.empty()) r.emplace<Deformers>(c, std::move(d));
+    return save_scene(r, out);
+}
+
+}  // namespace
+
 int write_gaussians(const std::string& in, const SplatCloud* surface, const std::string& out, bool ascii,
-                    bool turn_x180, int spz_version) {
+                    bool turn_x180, int spz_version, const GaussianLatticeRequest& lattice) {
     const auto t0 = std::chrono::steady_clock::now();
     Result<GaussianCloud> g = surface ? Result<GaussianCloud>(gaussian::gaussians_from_splats(*surface))
                                       : gaussian::read_gaussians(in);
@@ -51,6 +90,21 @@ int write_gaussians(const std::string& in, const SplatCloud* surface, const std:
     }
     if (turn_x180) gaussian::turn_axes(*g, gaussian::AxisTurn::x180);
     const std::string e = lower_ext(out);
+    if (!lattice.source.empty()) {
+        const std::size_t count = g->size();
+        const int degree = g->sh_degree;
+        std::string note;
+        if (Status s = save_gaussian_scene(std::move(*g), std::filesystem::path(in).stem().string(), lattice,
+                                           out, note);
+            !s) {
+            std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
+            return 1;
+        }
+        std::fprintf(stderr, "wrote %s: %zu Gaussians, SH degree %d%s (%.2f s)\n", out.c_str(), count, degree,
+                     note.c_str(),
+                     std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+        return 0;
+    }
     const bool compressed = out.size() >= 15 && lower_ext(out.substr(0, out.size() - 4)) == ".compressed";
     Status s =
         compressed ? gaussian::write_compressed_ply(out, *g)

@@ -6,18 +6,30 @@
 
 #include <string>
 
+#include "tools/splatffd/lattice_source.h"
+
 namespace sffd {
 struct SplatCloud;
 }
 
 namespace sffd::cli {
 
-// True when `in` is a file whose contents are already Gaussians (convert then skips the surface path).
+// True when `in` is a file whose contents are already Gaussians (convert then keeps them Gaussians).
 bool is_gaussian_file(const std::string& in);
+
+// --lattice for a Gaussian output: `source` a fit spec (fitted around the Gaussians' centres) or the lattice
+// JSON / scene whose `loaded` chain binds; empty `source`: no lattice.
+struct GaussianLatticeRequest {
+    std::string source;
+    const LatticeChain* loaded = nullptr;
+};
+
 // Writes `out` from the Gaussian file `in` (when `surface` is null) or from `surface`. Returns the exit code.
-// `turn_x180`: turn the cloud 180 degrees about x before writing (gaussian_axes.h; a y-up file).
+// `turn_x180`: turn the cloud 180 degrees about x before writing (gaussian_axes.h; a y-up file). With a
+// lattice, `out` is a scene (.glb/.gltf): the Gaussians embedded as KHR_gaussian_splatting, the lattice
+// bound to them as in the editor's save, so render/view deform the Gaussians by it.
 // `spz_version`: 3 or 4 for an `.spz` OUT (gaussian_spz.h).
 int write_gaussians(const std::string& in, const SplatCloud* surface, const std::string& out, bool ascii,
-                    bool turn_x180 = false, int spz_version = 3);
+                    bool turn_x180 = false, int spz_version = 3, const GaussianLatticeRequest& lattice = {});
 
 }  // namespace sffd::cli

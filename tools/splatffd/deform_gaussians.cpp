@@ -10,8 +10,10 @@
 #include "tools/splatffd/deform_gaussians.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <optional>
 #include <vector>
 
@@ -19,6 +21,7 @@
 #include "runtime/gfx/context.h"
 #include "systems/ffd/components.h"
 #include "systems/gaussian/gaussian_deform.h"
+#include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gpu_deform.h"
 
@@ -34,6 +37,14 @@ int fail(const std::string& message) {
 }
 double ms_since(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+// A lattice that holds none of the Gaussians deformed nothing: said once, not hidden behind "deformed".
+void warn_if_empty(const std::string& lattice, std::size_t inside, std::size_t count) {
+    if (inside == 0 && count > 0)
+        std::fprintf(stderr,
+                     "splatffd deform: warning: lattice '%s' contains none of the %zu Gaussians: it deformed "
+                     "nothing (is it the lattice of another cloud?)\n",
+                     lattice.c_str(), count);
 }
 }  // namespace
 
@@ -132,6 +143,7 @@ int deform_gaussian_ply(const std::string& in_path, const std::string& out_path,
         "%.2f s\n",
         static_cast<unsigned long long>(row), layout->degree, backend_name.c_str(), total.inside,
         total.inverted, total.degenerate, not_finite, deform_ms, read_ms, total_s);
+    warn_if_empty(lattice_path, total.inside, std::size_t(row));
     if (bench > 0) {
         std::sort(rep_ms.begin(), rep_ms.end());
         const double median = rep_ms.size() % 2
@@ -144,6 +156,38 @@ int deform_gaussian_ply(const std::string& in_path, const std::string& out_path,
             static_cast<unsigned long long>(row), layout->degree, backend_name.c_str(), median,
             rep_ms.front(), bench, median > 0 ? double(row) / (median * 1e-3) : 0.0, read_ms, total_s);
     }
+    return 0;
+}
+
+int deform_gaussian_cloud(GaussianCloud cloud, const std::vector<Lattice>& lattices,
+                          const std::vector<std::string>& names, const std::string& what,
+                          const std::string& out, bool ascii) {
+    std::string ext = std::filesystem::path(out).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+    if (ext != ".ply" && ext != ".glb")
+        return fail(out + ": deformed Gaussians are written as .ply (3DGS) or .glb (KHR_gaussian_splatting)");
+    const auto t0 = Clock::now();
+    std::size_t inverted = 0, not_finite = 0;
+    std::vector<std::size_t> inside;
+    for (const Lattice& l : lattices) {
+        auto stats = gaussian::deform(l, cloud, cloud);
+        if (!stats) return fail(what + ": " + stats.message());
+        inverted += stats->inverted;
+        not_finite += stats->not_finite;
+        inside.push_back(stats->inside);
+    }
+    gaussian::bake_sh_frames(cloud);
+    const double ms = ms_since(t0);
+    Status s =
+        ext == ".glb"
+            ? gaussian::write_glb(out, cloud)
+            : gaussian::write_ply(out, cloud, ascii ? ply::Format::ascii : ply::Format::binary_little_endian);
+    if (!s) return fail(s.message());
+    std::fprintf(stderr,
+                 "%s: %zu Gaussians deformed by %s on the CPU in %.1f ms (%zu inverted, %zu not finite)\n",
+                 out.c_str(), cloud.size(), what.c_str(), ms, inverted, not_finite);
+    for (std::size_t i = 0; i < inside.size(); ++i)
+        warn_if_empty(i < names.size() ? names[i] : what, inside[i], cloud.size());
     return 0;
 }
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <filesystem>
 
 #include "runtime/assets/scene.h"
@@ -37,6 +38,21 @@ bool is_scene_path(const std::string& path) {
 
 bool is_json_path(const std::string& path) { return lower_ext(path) == ".json"; }
 
+Result<Lattice> fit_lattice_for(const std::string& command, const std::vector<glm::vec3>& positions,
+                                const glm::dvec3& origin, const ffd::FitOptions& fit) {
+    auto l = ffd::fit_lattice(positions, origin, fit);
+    if (!l || fit.shape != ffd::FitShape::oriented) return l;
+    const auto& a = l->axes;
+    const bool aligned =
+        a[0].y == 0 && a[0].z == 0 && a[1].x == 0 && a[1].z == 0 && a[2].x == 0 && a[2].y == 0;
+    if (aligned)
+        std::fprintf(stderr,
+                     "splatffd %s: warning: obb: the cloud's principal axes give no box at least 5%% smaller "
+                     "than the axis-aligned one (a near-isotropic cloud), so the lattice is axis-aligned\n",
+                     command.c_str());
+    return l;
+}
+
 Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::string& file,
                                          const std::string& name) {
     std::vector<ecs::Entity> all;
@@ -63,7 +79,7 @@ Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::stri
         chain.names.push_back(name);
         r.each_entity([&](ecs::Entity c) {
             if (const Deformers* d = r.try_get<Deformers>(c);
-                d && r.has<SplatCloud>(c) && !chain.cloud &&
+                d && !chain.cloud &&
                 std::find(d->lattices.begin(), d->lattices.end(), hits[0]) != d->lattices.end())
                 chain.cloud = c;
         });
@@ -72,7 +88,7 @@ Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::stri
     // The deformed clouds and their chains.
     std::vector<ecs::Entity> bound_clouds;
     r.each_entity([&](ecs::Entity c) {
-        if (const Deformers* d = r.try_get<Deformers>(c); d && r.has<SplatCloud>(c) && !d->lattices.empty())
+        if (const Deformers* d = r.try_get<Deformers>(c); d && !d->lattices.empty())
             bound_clouds.push_back(c);
     });
     if (bound_clouds.size() == 1) {

@@ -14,6 +14,7 @@
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
+#include "systems/ffd/operations.h"
 
 namespace sffd::cli {
 
@@ -32,6 +33,12 @@ Result<LatticeChain> pick_scene_lattices(const ecs::Registry& registry, const st
 // Loads `source` when it is a lattice JSON or a scene file (not a fit spec: the caller fits, it has the
 // points). `name` (--lattice-name) applies to scene files only.
 Result<LatticeChain> load_lattice_source(const std::string& source, const std::string& name);
+
+// ffd::fit_lattice for a command's `--lattice fit:...`: an ",obb" request that comes back axis-aligned
+// (a near-isotropic cloud: its principal axes give no box 5% smaller) says so on stderr, once, instead of
+// letting the printed spec claim an oriented box.
+Result<Lattice> fit_lattice_for(const std::string& command, const std::vector<glm::vec3>& positions,
+                                const glm::dvec3& origin, const ffd::FitOptions& fit);
 
 bool is_scene_path(const std::string& path);  // .glb / .gltf (any case)
 bool is_json_path(const std::string& path);   // .json (any case)

@@ -84,6 +84,7 @@ TEST(LatticeManage, AddSeveralReorderRefitRemoveEachOneUndoStep) {
     const ecs::Entity first = ed.state->active_lattice;
     ASSERT_EQ(ed.order(), std::vector<ecs::Entity>{first});
     const SplatCloud& c = ed.reg.get<SplatCloud>(ed.cloud);
+    EXPECT_STREQ(entity_kind(ed.reg, ed.cloud), "surface");
     auto want = ffd::fit_lattice(c.positions, c.origin, ffd::FitOptions{});
     ASSERT_TRUE(want.ok());
     EXPECT_TRUE(same(ed.reg.get<Lattice>(first), *want));
@@ -256,6 +257,22 @@ TEST(LatticeManage, GaussianCloudGetsAFittedLatticeThatDeformsIt) {
             EXPECT_LE(s, 1.0);
         }
     }
+    // The Lattice panel counts the control points inside the Gaussians' box (not 0: Gaussians are the
+    // object too), and the Outliner tags each entity with its type.
+    const std::size_t inside = control_points_inside_object(reg, lat);
+    EXPECT_GT(inside, 0u);
+    EXPECT_LT(inside, lat.size());
+    EXPECT_STREQ(entity_kind(reg, g), "Gaussians");
+    EXPECT_STREQ(entity_kind(reg, l), "lattice");
+    EXPECT_STREQ(entity_kind(reg, state.camera), "camera");
+    // Export is named after the active lattice once a folder is set (two lattices, two files).
+    lattice_fit_settings(reg).json_folder = "dir";
+    EXPECT_EQ(lattice_json_path(reg, state), (fs::path("dir") / "gaussians.lattice.json").string());
+    state.events = {e};
+    editor_input_system(reg, FrameContext{1, 1 / 60.0, 1 / 60.0});
+    ASSERT_EQ(reg.count<Lattice>(), 2u);
+    EXPECT_EQ(lattice_json_path(reg, state), (fs::path("dir") / "gaussians.lattice2.json").string());
+    reg.patch<Deformers>(g).lattices.pop_back();  // back to one lattice for the deformation below
     // Moving every control point by +y moves every Gaussian by +y.
     gaussian_deform_system(reg, {});
     for (glm::dvec3& p : reg.patch<Lattice>(l).current) p.y += 0.5;

@@ -64,7 +64,8 @@ TEST(LatticeViewSession, AddExportImportThroughTheWindow) {
     if (run_shell("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run not installed";
     const fs::path dir = fs::temp_directory_path() / ("sffd_lattice_view_" + std::to_string(::getpid()));
     fs::create_directories(dir);
-    const fs::path ply = dir / "copy.ply", scene = dir / "edited.glb", json = dir / "edited.lattice.json";
+    const fs::path ply = dir / "copy.ply", scene = dir / "edited.glb",
+                   json = dir / "copy.lattice.json";  // named after the lattice
     const std::string data = std::string(SFFD_TEST_DATA_DIR) + "/editor/";
     ASSERT_EQ(run_shell(splatffd() + " convert sphere " + ply.string() + " --splats 3000 > /dev/null 2>&1"),
               0);

@@ -79,6 +79,38 @@ TEST(PanelLayout, CollapsingGivesTheHeightToTheColumn) {
     EXPECT_GE(open[std::size_t(Panel::frame_time)].h, 150.0f);
 }
 
+// The lattice overlay is clipped to the view rectangle: inside the window, below the menu, under no
+// expanded panel; a column whose panels are all collapsed gives its width back.
+TEST(PanelLayout, TheViewRectangleIsWhereNoPanelCovers) {
+    for (const auto& s : {std::pair{1280.0f, 720.0f}, {800.0f, 600.0f}, {1920.0f, 1080.0f}})
+        for (unsigned mask = 0; mask < (1u << panel_count); mask += 5) {
+            LayoutInput in;
+            in.width = s.first, in.height = s.second;
+            for (std::size_t i = 0; i < panel_count; ++i) in.collapsed[i] = (mask >> i) & 1u;
+            const auto panels = layout_panels(in);
+            const PanelRect v = view_rect(panels, in);
+            EXPECT_GE(v.x, 0.0f);
+            EXPECT_GE(v.y, in.top);
+            EXPECT_LE(v.x + v.w, in.width);
+            EXPECT_LE(v.y + v.h, in.height - in.bottom);
+            EXPECT_GT(v.w, 0.0f);
+            EXPECT_GT(v.h, 0.0f);
+            for (std::size_t i = 0; i < panel_count; ++i)
+                if (!in.collapsed[i] || Panel(i) == Panel::timeline)
+                    EXPECT_FALSE(overlaps(v, panels[i])) << panel_title(Panel(i)) << " mask " << mask;
+        }
+    LayoutInput in;
+    const PanelRect open = view_rect(layout_panels(in), in);
+    for (Panel p : {Panel::tools, Panel::lattice}) in.collapsed[std::size_t(p)] = true;
+    const PanelRect right_folded = view_rect(layout_panels(in), in);
+    EXPECT_FLOAT_EQ(right_folded.x, open.x);
+    EXPECT_FLOAT_EQ(right_folded.x + right_folded.w, in.width);
+    // Small windows start with their panels collapsed; the usual sizes do not.
+    EXPECT_TRUE(panels_start_collapsed(800, 600));
+    EXPECT_FALSE(panels_start_collapsed(1280, 720));
+    EXPECT_FALSE(panels_start_collapsed(1920, 1080));
+}
+
 TEST(PanelLayout, GraphScaleIgnoresTheFirstSlowFrame) {
     std::vector<float> ms(120, 12.0f);
     ms[0] = 2400.0f;  // shader compilation

@@ -147,20 +147,22 @@ TEST(InfoGaussians, InfinitiesAreCountedAndUnknownTypesListEveryFormat) {
         << r.err;
 }
 
-TEST(InfoGaussians, CompressedPlyAsAPointCloudSaysWhatItIs) {
-    // Before: "vertex element has no x, y, z properties". Now the message names the format and the way.
+TEST(InfoGaussians, CompressedPlyConvertsToGaussiansWithoutAsking) {
+    // A Gaussian input stays Gaussian (read as a point cloud it would lose colour, opacity and SH): the
+    // compressed PLY is expanded to a 3DGS PLY without --gaussians.
     const fs::path comp = temp("p.compressed.ply");
     ASSERT_TRUE(gaussian::write_compressed_ply(comp, cloud(10, 0)));
     const std::string o = temp("pc.txt").string();
     const int status = std::system(
         (kTool + " convert '" + comp.string() + "' '" + temp("pc.ply").string() + "' >" + o + " 2>&1")
             .c_str());
-    EXPECT_NE(WEXITSTATUS(status), 0);
+    EXPECT_EQ(WEXITSTATUS(status), 0);
     std::stringstream so;
     so << std::ifstream(o).rdbuf();
-    EXPECT_NE(so.str().find(comp.string() + ": a compressed (PlayCanvas) Gaussian PLY, not a point cloud"),
-              std::string::npos)
-        << so.str();
+    EXPECT_NE(so.str().find(": 10 Gaussians"), std::string::npos) << so.str();
+    auto back = gaussian::read_gaussians(temp("pc.ply"));
+    ASSERT_TRUE(back) << back.message();
+    EXPECT_EQ(back->size(), 10u);
 }
 
 }  // namespace
