@@ -39,11 +39,12 @@ bool is_gaussian_file(const std::string& in) {
     return false;
 }
 
-int write_gaussians(const std::string& in, const SplatCloud* surface, const std::string& out, bool ascii,
-                    bool turn_x180) {
+int write_gaussians(const std::string& in, const SplatCloud* surface, const SplatMaterial& material,
+                    const std::string& out, bool ascii, bool turn_x180) {
     const auto t0 = std::chrono::steady_clock::now();
-    Result<GaussianCloud> g = surface ? Result<GaussianCloud>(gaussian::gaussians_from_splats(*surface))
-                                      : gaussian::read_gaussians(in);
+    Result<GaussianCloud> g =
+        surface ? Result<GaussianCloud>(gaussian::gaussians_from_splats(*surface, {.material = material}))
+                : gaussian::read_gaussians(in);
     if (!g) {
         std::fprintf(stderr, "splatffd convert: %s\n", g.message().c_str());
         return 1;

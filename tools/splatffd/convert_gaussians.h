@@ -16,7 +16,7 @@ namespace sffd::cli {
 bool is_gaussian_file(const std::string& in);
 // Writes `out` from the Gaussian file `in` (when `surface` is null) or from `surface`. Returns the exit code.
 // `turn_x180`: turn the cloud 180 degrees about x before writing (gaussian_axes.h; a y-up file).
-int write_gaussians(const std::string& in, const SplatCloud* surface, const std::string& out, bool ascii,
-                    bool turn_x180 = false);
+int write_gaussians(const std::string& in, const SplatCloud* surface, const SplatMaterial& material,
+                    const std::string& out, bool ascii, bool turn_x180 = false);
 
 }  // namespace sffd::cli
