@@ -502,7 +502,7 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
             s.center = glm::dvec3(m * glm::dvec4(sphere.center, 1.0));
             s.radius = sphere.radius;
             s.texture = &c.texture;
-            if (const SplatMaterial* m = reg.try_get<SplatMaterial>(e)) s.material = *m;
+            if (const SplatMaterial* mat = reg.try_get<SplatMaterial>(e)) s.material = *mat;
             if (const Deformers* d = reg.try_get<Deformers>(e))
                 for (ecs::Entity l : d->lattices)
                     if (reg.valid(l) && reg.has<Lattice>(l)) {
@@ -518,7 +518,7 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
                 s.mesh = &mesh;
                 s.mesh_model = model_matrix(reg.try_get<Transform>(e), c.origin);
                 s.texture = &c.texture;
-                if (const SplatMaterial* m = reg.try_get<SplatMaterial>(e)) s.material = *m;
+                if (const SplatMaterial* mat = reg.try_get<SplatMaterial>(e)) s.material = *mat;
                 if (c.texture.rgba8.empty() && c.colors.size() == c.size() && c.size() > 0)
                     problem =
                         "the mesh's colours are baked per splat (vertex colours, or a tinted or "

@@ -8,6 +8,7 @@
 
 namespace sffd {
 struct SplatCloud;
+struct SplatMaterial;
 }
 
 namespace sffd::cli {
