@@ -40,9 +40,11 @@ trap 'rm -rf "$tmp"' EXIT
         for s in 1 2 3 4 5 6; do echo "$((f + 1 + s)) move $((80 + 2 * s)) $((60 - s))"; done
         echo "$((f + 8)) release left"
         c=$((f / 20))
-        echo "$((f + 9)) set material.specular 0.$((c % 9 + 1))"
-        echo "$((f + 10)) set material.shininess $((4 + 8 * (c % 16)))"
-        echo "$((f + 11)) set material.base_color.r 0.$((c % 10))"
+        # off the 0.1 grid: a value equal to the current one is no undo step, and each undo below must
+        # undo one of this cycle's steps
+        echo "$((f + 9)) set material.specular 0.$((c % 9))5"
+        echo "$((f + 10)) set material.shininess $((5 + 8 * (c % 16)))"
+        echo "$((f + 11)) set material.base_color.r 0.$((c % 9))5"
         echo "$((f + 12)) key z ctrl"
         echo "$((f + 13)) key y ctrl"
         for s in 14 15 16 17; do echo "$((f + s)) key z ctrl"; done

@@ -50,9 +50,11 @@ std::string session(std::uint64_t frames) {
         for (int k = 1; k <= 6; ++k)
             line(1 + k, "move " + std::to_string(80 + 2 * k) + " " + std::to_string(60 - k));
         line(8, "release left");
+        // Values off the 0.1 grid: a value equal to the current one is no edit (and no undo step), and the
+        // undos below must each undo one of this cycle's steps.
         line(9, "set material.specular " + std::to_string(0.05 + 0.1 * double(cycle % 9)));
-        line(10, "set material.shininess " + std::to_string(4 + 8 * (cycle % 16)));
-        line(11, "set material.base_color.r " + std::to_string(0.1 * double(cycle % 10)));
+        line(10, "set material.shininess " + std::to_string(5 + 8 * (cycle % 16)));
+        line(11, "set material.base_color.r " + std::to_string(0.05 + 0.1 * double(cycle % 9)));
         line(12, "key z ctrl");
         line(13, "key y ctrl");
         for (int k = 14; k <= 17; ++k) line(std::uint64_t(k), "key z ctrl");  // three materials, the drag
