@@ -9,7 +9,7 @@
 namespace sffd {
 struct SplatCloud;
 struct SplatMaterial;
-}
+}  // namespace sffd
 
 namespace sffd::cli {
 
