@@ -1,14 +1,14 @@
 #!/usr/bin/env bash
-# A long editing session stays flat. Replays FRAMES frames (default 10,000) of lattice drags and
-# undo/redo on the face scan (content/cache/face.glb; the built-in sphere, with a message, when it is
+# A long editing session stays flat. Replays FRAMES frames (default 10,000) of lattice drags, material
+# slider edits (`set material.*` replay lines) and undo/redo on the face scan (content/cache/face.glb; the built-in sphere, with a message, when it is
 # absent) in the headless editor at a small target, and compares the peak resident memory of the whole
 # run with that of a run of its first 500 frames (the same replay, cut). Prints both; exits 1 when the
 # long run's peak is more than 50 MB above the short run's.
 #
 #   tools/editing_memory.sh [FRAMES]        SPLATFFD=path/to/splatffd overrides the binary
 #
-# Material slider edits need the ImGui panels, which a headless replay does not have: they are not part
-# of this session.
+# The ctest editor_editing_memory_test does the same in-process and compares the resident set at frame 500
+# with its peak after (SFFD_EDITING_MEMORY_FRAMES=10000 for the long run).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 bin=${SPLATFFD:-$root/build/release/tools/splatffd}
@@ -27,7 +27,8 @@ fi
 tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 
-# Every 20 frames: a drag of the selected control points (6 moves), undo, redo, undo.
+# Every 20 frames: a drag of the selected control points (6 moves), three material slider edits, and
+# undo/redo of both (the drag and the materials end undone).
 {
     echo "1 key a shift"  # add a lattice fitted around the cloud (an imported scan has none)
     echo "3 key a ctrl"   # select every control point (the pinned outer layer stays put)
@@ -38,9 +39,17 @@ trap 'rm -rf "$tmp"' EXIT
         echo "$((f + 1)) press left"
         for s in 1 2 3 4 5 6; do echo "$((f + 1 + s)) move $((80 + 2 * s)) $((60 - s))"; done
         echo "$((f + 8)) release left"
-        echo "$((f + 10)) key z ctrl"
-        echo "$((f + 12)) key y ctrl"
-        echo "$((f + 14)) key z ctrl"
+        c=$((f / 20))
+        # off the 0.1 grid: a value equal to the current one is no undo step, and each undo below must
+        # undo one of this cycle's steps
+        echo "$((f + 9)) set material.specular 0.$((c % 9))5"
+        echo "$((f + 10)) set material.shininess $((5 + 8 * (c % 16)))"
+        echo "$((f + 11)) set material.base_color.r 0.$((c % 9))5"
+        echo "$((f + 12)) key z ctrl"
+        echo "$((f + 13)) key y ctrl"
+        for s in 14 15 16 17; do echo "$((f + s)) key z ctrl"; done
+        echo "$((f + 18)) key y ctrl"
+        echo "$((f + 19)) key z ctrl"
         f=$((f + 20))
     done
 } >"$tmp/session.txt"

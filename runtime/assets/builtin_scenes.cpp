@@ -118,23 +118,23 @@ SplatCloud make_sphere_cloud(std::size_t n) {
                                  float(glm::dot(grad_u, av)), float(glm::dot(grad_v, av)));
     }
     Image tex = make_sphere_texture();
-    c.material.texture_width = tex.width;
-    c.material.texture_height = tex.height;
-    c.material.texture_rgba8 = std::move(tex.rgba8);
-    c.material.texture_path = "";  // procedural
+    c.texture.width = tex.width;
+    c.texture.height = tex.height;
+    c.texture.rgba8 = std::move(tex.rgba8);
+    c.texture.path = "";  // procedural
     // Per-splat colours too (the texel under each splat), for renderers or tools that ignore textures.
     c.colors.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
-        const int x = std::clamp(static_cast<int>(c.uvs[i].x * static_cast<float>(c.material.texture_width)),
-                                 0, c.material.texture_width - 1);
-        const int y = std::clamp(static_cast<int>(c.uvs[i].y * static_cast<float>(c.material.texture_height)),
-                                 0, c.material.texture_height - 1);
-        std::memcpy(&c.colors[i],
-                    &c.material.texture_rgba8[(static_cast<std::size_t>(y) *
-                                                   static_cast<std::size_t>(c.material.texture_width) +
-                                               static_cast<std::size_t>(x)) *
-                                              4],
-                    4);
+        const int x = std::clamp(static_cast<int>(c.uvs[i].x * static_cast<float>(c.texture.width)), 0,
+                                 c.texture.width - 1);
+        const int y = std::clamp(static_cast<int>(c.uvs[i].y * static_cast<float>(c.texture.height)), 0,
+                                 c.texture.height - 1);
+        std::memcpy(
+            &c.colors[i],
+            &c.texture.rgba8[(static_cast<std::size_t>(y) * static_cast<std::size_t>(c.texture.width) +
+                              static_cast<std::size_t>(x)) *
+                             4],
+            4);
     }
     return c;
 }
@@ -190,7 +190,7 @@ bool is_builtin_scene(const std::string& name) { return name == "sphere" || name
 namespace {
 
 ecs::Entity add_cloud_with_lattice(ecs::Registry& r, const std::string& name, SplatCloud cloud,
-                                   const glm::dvec3& view_dir) {
+                                   const SplatMaterial& material, const glm::dvec3& view_dir) {
     glm::dvec3 lo(1e300), hi(-1e300);
     for (const auto& p : cloud.positions) {
         lo = glm::min(lo, cloud.origin + glm::dvec3(p));
@@ -207,6 +207,7 @@ ecs::Entity add_cloud_with_lattice(ecs::Registry& r, const std::string& name, Sp
     r.emplace<Name>(e, Name{name});
     r.emplace<Transform>(e, Transform{});
     r.emplace<SplatCloud>(e, std::move(cloud));
+    r.emplace<SplatMaterial>(e, material);
     r.emplace<Deformers>(e, Deformers{{lat}});
     add_default_view(r, lo - pad, hi + pad, view_dir);
     return e;
@@ -216,8 +217,8 @@ ecs::Entity add_cloud_with_lattice(ecs::Registry& r, const std::string& name, Sp
 
 Status load_builtin_scene(ecs::Registry& r, const std::string& name) {
     if (name == "sphere") {
-        const ecs::Entity sphere =
-            add_cloud_with_lattice(r, "sphere", make_sphere_cloud(), glm::dvec3(0.35, 0.3, 1.0));
+        const ecs::Entity sphere = add_cloud_with_lattice(r, "sphere", make_sphere_cloud(), SplatMaterial{},
+                                                          glm::dvec3(0.35, 0.3, 1.0));
         // make_sphere_cloud samples the unit sphere at the origin: the ground-truth renderer traces it.
         r.emplace<ExactSphere>(sphere, ExactSphere{});
         return {};
@@ -228,7 +229,8 @@ Status load_builtin_scene(ecs::Registry& r, const std::string& name) {
         if (!fs::exists(cache, ec))
             return make_error("face: the face scan is not in the content cache (" + cache.string() +
                               "); run " + fetch_script() + " once to download and convert it");
-        auto cloud = import_splat_cloud(cache);
+        SplatMaterial material;
+        auto cloud = import_splat_cloud(cache, {}, &material);
         if (!cloud)
             return make_error("face: " + cloud.message() + " (run " + fetch_script() +
                               " again to rebuild the cache)");
@@ -236,7 +238,7 @@ Status load_builtin_scene(ecs::Registry& r, const std::string& name) {
             return make_error("face: " + cache.string() + " has " + std::to_string(cloud->size()) +
                               " splats, expected " + std::to_string(kFaceSplats) + "; run " + fetch_script() +
                               " again");
-        add_cloud_with_lattice(r, "face", std::move(*cloud), glm::dvec3(0.25, 0.1, 1.0));
+        add_cloud_with_lattice(r, "face", std::move(*cloud), material, glm::dvec3(0.25, 0.1, 1.0));
         return {};
     }
     return make_error(name + ": not a built-in scene (built-ins: sphere, face)");

@@ -42,22 +42,22 @@ Status save_splat_ply(const SplatCloud& c, const fs::path& path, ply::Format for
         std::snprintf(buf, sizeof buf, "sffd_origin %.17g %.17g %.17g", c.origin.x, c.origin.y, c.origin.z);
         h.comments.push_back(buf);
     }
-    if (!c.material.texture_path.empty()) {
-        h.comments.push_back("TextureFile " + c.material.texture_path);
-    } else if (!c.material.texture_rgba8.empty()) {
+    if (!c.texture.path.empty()) {
+        h.comments.push_back("TextureFile " + c.texture.path);
+    } else if (!c.texture.rgba8.empty()) {
         // Texels without a file (a built-in scene's procedural texture, a mesh's texture kept by convert):
         // PLY cannot hold them, so they go into <stem>_texture.png beside it, named by the TextureFile
         // comment (read_ply_geometry loads it from the PLY's folder).
-        const int w = c.material.texture_width, th = c.material.texture_height;
-        if (w <= 0 || th <= 0 || c.material.texture_rgba8.size() != std::size_t(w) * std::size_t(th) * 4)
+        const int w = c.texture.width, th = c.texture.height;
+        if (w <= 0 || th <= 0 || c.texture.rgba8.size() != std::size_t(w) * std::size_t(th) * 4)
             return make_error(path.string() + ": the cloud's texture has " +
-                              std::to_string(c.material.texture_rgba8.size()) + " bytes for " +
-                              std::to_string(w) + "x" + std::to_string(th) + " RGBA8 texels");
+                              std::to_string(c.texture.rgba8.size()) + " bytes for " + std::to_string(w) +
+                              "x" + std::to_string(th) + " RGBA8 texels");
         std::string png;
         auto append = [](void* ctx, void* data, int size) {
             static_cast<std::string*>(ctx)->append(static_cast<const char*>(data), std::size_t(size));
         };
-        if (!stbi_write_png_to_func(append, &png, w, th, 4, c.material.texture_rgba8.data(), w * 4))
+        if (!stbi_write_png_to_func(append, &png, w, th, 4, c.texture.rgba8.data(), w * 4))
             return make_error(path.string() + ": could not encode the texture as PNG");
         const std::string name = path.stem().string() + "_texture.png";
         if (Status st = write_file_atomic(path.parent_path() / name, png); !st) return st;
@@ -105,20 +105,23 @@ Status save_splat_ply(const SplatCloud& c, const fs::path& path, ply::Format for
     return writer->finish();
 }
 
-Status save_splat_glb(const SplatCloud& cloud, const fs::path& path, const std::string& name) {
+Status save_splat_glb(const SplatCloud& cloud, const fs::path& path, const std::string& name,
+                      const SplatMaterial& material) {
     GltfCloudOut out;
     out.name = name;
     out.id = 0;
     out.cloud = &cloud;
+    out.material = &material;
     return write_gltf(path, {out});
 }
 
-Status save_splat_cloud(const SplatCloud& cloud, const fs::path& path, const std::string& name) {
+Status save_splat_cloud(const SplatCloud& cloud, const fs::path& path, const std::string& name,
+                        const SplatMaterial& material) {
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
     if (ext == ".ply") return save_splat_ply(cloud, path);
-    if (ext == ".glb" || ext == ".gltf") return save_splat_glb(cloud, path, name);
+    if (ext == ".glb" || ext == ".gltf") return save_splat_glb(cloud, path, name, material);
     return make_error(path.string() + ": unknown output type '" + ext + "' (expected .ply, .glb or .gltf)");
 }
 

@@ -104,7 +104,7 @@ Result<Image> gltf_image(const tinygltf::Model& m, int texture, const std::strin
 // the stored arrays untouched instead.
 Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim, const glm::dmat4& world,
                       const std::string& src, Geometry& g, std::unordered_map<int, int>& material_map,
-                      SplatCloud* exact) {
+                      SplatCloud* exact, SplatMaterial* exact_material) {
     if (prim.mode != TINYGLTF_MODE_POINTS && prim.mode != TINYGLTF_MODE_TRIANGLES &&
         prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP && prim.mode != TINYGLTF_MODE_TRIANGLE_FAN) {
         log::warn(src, ": skipping a primitive with mode ", prim.mode, " (lines)");
@@ -180,6 +180,7 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
 
     if (exact) {
         SplatCloud& c = *exact;
+        SplatMaterial& cm = *exact_material;
         c.positions.resize(n);
         for (std::size_t i = 0; i < n; ++i)
             c.positions[i] =
@@ -207,23 +208,23 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
             const tinygltf::Material& mat = m.materials[static_cast<std::size_t>(prim.material)];
             const auto& f = mat.pbrMetallicRoughness.baseColorFactor;
             if (f.size() == 4)
-                c.material.base_color = glm::vec4(static_cast<float>(f[0]), static_cast<float>(f[1]),
-                                                  static_cast<float>(f[2]), static_cast<float>(f[3]));
+                cm.base_color = glm::vec4(static_cast<float>(f[0]), static_cast<float>(f[1]),
+                                          static_cast<float>(f[2]), static_cast<float>(f[3]));
             const json extras = to_json(mat.extras);
             if (extras.is_object()) {
                 if (extras.contains("sffd_specular") && extras["sffd_specular"].is_number())
-                    c.material.specular = extras["sffd_specular"].get<float>();
+                    cm.specular = extras["sffd_specular"].get<float>();
                 if (extras.contains("sffd_shininess") && extras["sffd_shininess"].is_number())
-                    c.material.shininess = extras["sffd_shininess"].get<float>();
+                    cm.shininess = extras["sffd_shininess"].get<float>();
                 if (extras.contains("sffd_texture_path") && extras["sffd_texture_path"].is_string())
-                    c.material.texture_path = extras["sffd_texture_path"].get<std::string>();
+                    c.texture.path = extras["sffd_texture_path"].get<std::string>();
             }
             if (mat.pbrMetallicRoughness.baseColorTexture.index >= 0) {
                 auto img = gltf_image(m, mat.pbrMetallicRoughness.baseColorTexture.index, src);
                 if (!img) return img.error();
-                c.material.texture_width = img->width;
-                c.material.texture_height = img->height;
-                c.material.texture_rgba8 = std::move(img->rgba8);
+                c.texture.width = img->width;
+                c.texture.height = img->height;
+                c.texture.rgba8 = std::move(img->rgba8);
             }
         }
         return {};
@@ -442,8 +443,8 @@ Result<GltfContents> read_gltf(const fs::path& path) {
                     return make_error(src + ": splat node '" + node.name +
                                       "' must hold one POINTS primitive");
                 Geometry unused;
-                if (auto s =
-                        read_primitive(m, prims[0], glm::dmat4(1.0), src, unused, material_map, &cloud.cloud);
+                if (auto s = read_primitive(m, prims[0], glm::dmat4(1.0), src, unused, material_map,
+                                            &cloud.cloud, &cloud.material);
                     !s)
                     return s;
             }
@@ -466,7 +467,9 @@ Result<GltfContents> read_gltf(const fs::path& path) {
                 for (const auto& prim : m.meshes[static_cast<std::size_t>(node.mesh)].primitives) {
                     if (scene_file && prim.extensions.count("KHR_gaussian_splatting"))
                         continue;  // systems/gaussian's
-                    if (auto s = read_primitive(m, prim, world, src, out.other, material_map, nullptr); !s)
+                    if (auto s =
+                            read_primitive(m, prim, world, src, out.other, material_map, nullptr, nullptr);
+                        !s)
                         return s;
                 }
             }
@@ -530,7 +533,8 @@ Result<Geometry> read_gltf_geometry(const fs::path& path) {
         extend(
             g.uv_axes, c.cloud.uv_axes, [](const glm::vec4& v) { return v; }, glm::vec4(0.0f));
         if (single) {
-            g.splat_material = c.cloud.material;
+            g.splat_texture = c.cloud.texture;
+            g.splat_material = c.material;
             const bool identity = t.translation == glm::dvec3(0.0) && t.rotation == glm::dquat(1, 0, 0, 0) &&
                                   t.scale == glm::dvec3(1.0);
             if (identity) {

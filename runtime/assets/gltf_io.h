@@ -36,6 +36,7 @@ struct GltfCloudOut {
     int id = -1;  // written as extras.sffd_cloud (scene files refer to clouds by it)
     const Transform* transform = nullptr;
     const SplatCloud* cloud = nullptr;
+    const SplatMaterial* material = nullptr;  // nullptr: the defaults
 };
 
 // More content for the document write_gltf() builds (systems/gaussian: Gaussian clouds embedded in a scene
@@ -54,6 +55,7 @@ struct GltfCloudIn {
     int id = -1;
     Transform transform;
     SplatCloud cloud;
+    SplatMaterial material;  // the cloud's material (the defaults when the file stores none)
 };
 
 struct GltfContents {

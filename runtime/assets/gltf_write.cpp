@@ -91,6 +91,7 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
     json roots = json::array();
     for (const GltfCloudOut& out : clouds) {
         const SplatCloud& c = *out.cloud;
+        const SplatMaterial cm = out.material ? *out.material : SplatMaterial{};
         const std::size_t n = c.size();
         auto sized = [&](std::size_t s) { return s == 0 || s == n; };
         if (!sized(c.normals.size()) || !sized(c.colors.size()) || !sized(c.uvs.size()) ||
@@ -137,23 +138,19 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
         json material = {
             {"name", out.name + ".material"},
             {"pbrMetallicRoughness",
-             {{"baseColorFactor",
-               {c.material.base_color.x, c.material.base_color.y, c.material.base_color.z,
-                c.material.base_color.w}},
+             {{"baseColorFactor", {cm.base_color.x, cm.base_color.y, cm.base_color.z, cm.base_color.w}},
               {"metallicFactor", 0.0},
               {"roughnessFactor", 1.0}}},
-            {"extras", {{"sffd_specular", c.material.specular}, {"sffd_shininess", c.material.shininess}}}};
-        if (!c.material.texture_path.empty())
-            material["extras"]["sffd_texture_path"] = c.material.texture_path;
-        if (!c.material.texture_rgba8.empty()) {
-            const int w = c.material.texture_width, h = c.material.texture_height;
+            {"extras", {{"sffd_specular", cm.specular}, {"sffd_shininess", cm.shininess}}}};
+        if (!c.texture.path.empty()) material["extras"]["sffd_texture_path"] = c.texture.path;
+        if (!c.texture.rgba8.empty()) {
+            const int w = c.texture.width, h = c.texture.height;
             if (w <= 0 || h <= 0 ||
-                c.material.texture_rgba8.size() !=
-                    static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4)
+                c.texture.rgba8.size() != static_cast<std::size_t>(w) * static_cast<std::size_t>(h) * 4)
                 return make_error(path.string() + ": cloud '" + out.name +
                                   "' has a texture of the wrong size");
             std::string png;
-            if (!stbi_write_png_to_func(png_append, &png, w, h, 4, c.material.texture_rgba8.data(), w * 4))
+            if (!stbi_write_png_to_func(png_append, &png, w, h, 4, c.texture.rgba8.data(), w * 4))
                 return make_error(path.string() + ": cannot encode the texture as PNG");
             const int v = b.view(png.data(), png.size(), 0);
             images.push_back({{"bufferView", v}, {"mimeType", "image/png"}});

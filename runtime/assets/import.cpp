@@ -109,7 +109,7 @@ Result<Geometry> read_ply_geometry(const fs::path& path) {
                 return make_error(g.source + ": malformed 'sffd_origin' comment");
             }
         } else if (c.rfind("TextureFile ", 0) == 0) {
-            g.splat_material.texture_path = c.substr(12);
+            g.splat_texture.path = c.substr(12);
         }
     }
 
@@ -211,14 +211,13 @@ Result<Geometry> read_ply_geometry(const fs::path& path) {
     } else if (fi >= 0) {
         log::warn(g.source, ": face element comes before the vertex element; faces ignored");
     }
-    if (!g.splat_material.texture_path.empty()) {
+    if (!g.splat_texture.path.empty()) {
         std::uint64_t budget = kDecodedTextureBudget;
         bool missing = false;
-        if (auto img = load_named_image(path, g.splat_material.texture_path, g.source, &budget, missing);
-            img) {
-            g.splat_material.texture_width = img->width;
-            g.splat_material.texture_height = img->height;
-            g.splat_material.texture_rgba8 = std::move(img->rgba8);
+        if (auto img = load_named_image(path, g.splat_texture.path, g.source, &budget, missing); img) {
+            g.splat_texture.width = img->width;
+            g.splat_texture.height = img->height;
+            g.splat_texture.rgba8 = std::move(img->rgba8);
         } else if (missing) {
             log::warn(g.source, ": texture not loaded: ", img.message());
         } else {
@@ -319,6 +318,7 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
         const bool file_normals = input.normals.size() == input.positions.size();
         resampled.source = input.source;
         resampled.attributes = input.attributes;
+        resampled.splat_texture = input.splat_texture;
         resampled.splat_material = input.splat_material;
         resampled.has_origin = input.has_origin;
         resampled.origin = input.origin;
@@ -352,9 +352,9 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
         }
         if (texture >= 0) {
             const Image& img = input.textures[static_cast<std::size_t>(texture)];
-            resampled.splat_material.texture_width = img.width;
-            resampled.splat_material.texture_height = img.height;
-            resampled.splat_material.texture_rgba8 = img.rgba8;
+            resampled.splat_texture.width = img.width;
+            resampled.splat_texture.height = img.height;
+            resampled.splat_texture.rgba8 = img.rgba8;
         }
         // Degenerate faces only: let PCA decide.
         if (std::any_of(resampled.normals.begin(), resampled.normals.end(),
@@ -384,6 +384,7 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
         const auto kept = eliminate(input.positions, options.splats, area, options.progress);
         resampled.source = input.source;
         resampled.attributes = input.attributes;
+        resampled.splat_texture = input.splat_texture;
         resampled.splat_material = input.splat_material;
         resampled.has_origin = input.has_origin;
         resampled.origin = input.origin;
@@ -418,7 +419,7 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
         }
     }
     cloud.colors = g->colors;
-    cloud.material = g->splat_material;
+    cloud.texture = g->splat_texture;
     if (g->uvs.size() == g->positions.size()) cloud.uvs = g->uvs;
     const bool axes_ok = !resampled_points && g->axis_u.size() == g->positions.size();
     if (axes_ok) {
@@ -452,7 +453,8 @@ Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& 
     return cloud;
 }
 
-Result<SplatCloud> import_splat_cloud(const fs::path& path, const ImportOptions& options) {
+Result<SplatCloud> import_splat_cloud(const fs::path& path, const ImportOptions& options,
+                                      SplatMaterial* material) {
     // Our own single-cloud glTF/GLB files come back exactly as stored (no float re-centring).
     const std::string ext = lower_ext(path);
     const bool defaults = options.splats == 0 && !options.estimate_normals && !options.estimate_radii;
@@ -464,12 +466,15 @@ Result<SplatCloud> import_splat_cloud(const fs::path& path, const ImportOptions&
             const GltfCloudIn& c = contents->clouds[0];
             if (c.transform.translation == identity.translation &&
                 c.transform.rotation == identity.rotation && c.transform.scale == identity.scale &&
-                c.cloud.axis_u.size() == c.cloud.size() && c.cloud.normals.size() == c.cloud.size())
+                c.cloud.axis_u.size() == c.cloud.size() && c.cloud.normals.size() == c.cloud.size()) {
+                if (material) *material = c.material;
                 return c.cloud;
+            }
         }
     }
     auto g = read_geometry(path);
     if (!g) return g.error();
+    if (material) *material = g->splat_material;
     return make_splat_cloud(*g, options);
 }
 

@@ -54,7 +54,8 @@ struct Geometry {
     std::vector<std::int32_t> triangle_material;  // empty or one per triangle, index into materials
     std::vector<MeshMaterial> materials;
     std::vector<Image> textures;
-    SplatMaterial splat_material;  // stored material of a splat file (texture kept, not baked)
+    SplatTexture splat_texture;    // stored texture of a splat file (kept, not baked)
+    SplatMaterial splat_material;  // stored material of a splat file (our GLB), else the defaults
     bool has_origin = false;       // file recorded the cloud's origin (our PLY/GLB)
     glm::dvec3 origin{0.0};
     std::vector<std::string> attributes;  // per-point attribute names found (for `splatffd info`)
@@ -82,7 +83,10 @@ struct ImportOptions {
 };
 
 Result<SplatCloud> make_splat_cloud(const Geometry& geometry, const ImportOptions& options);
-Result<SplatCloud> import_splat_cloud(const std::filesystem::path& path, const ImportOptions& options = {});
+// `material`, when given, receives the file's stored material (the defaults when it stores none): the cloud
+// and its material are separate components (runtime/scene/components.h).
+Result<SplatCloud> import_splat_cloud(const std::filesystem::path& path, const ImportOptions& options = {},
+                                      SplatMaterial* material = nullptr);
 
 // Mesh surface sampling used by make_splat_cloud: exactly `count` points, area-weighted, thinned from
 // 4x candidates by weighted sample elimination (Yuksel 2015) so they are evenly spread.

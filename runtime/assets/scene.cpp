@@ -158,6 +158,7 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
             r.emplace<Name>(e, Name{c.name});
             r.emplace<Transform>(e, c.transform);
             r.emplace<SplatCloud>(e, std::move(c.cloud));
+            r.emplace<SplatMaterial>(e, c.material);
             remember(c.id, e);
         }
         if (!contents->other.positions.empty()) {
@@ -169,6 +170,7 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
             r.emplace<Name>(e, Name{path.stem().string()});
             r.emplace<Transform>(e, Transform{});
             r.emplace<SplatCloud>(e, std::move(*cloud));
+            r.emplace<SplatMaterial>(e, contents->other.splat_material);
         }
         if (scene.contains("lattices")) {
             if (!scene["lattices"].is_array())
@@ -379,7 +381,8 @@ Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
     for (const auto& [key, loader] : file_loaders())
         if (loader.claims && loader.load && loader.claims(path)) return loader.load(r, path);
     if (ext == ".gltf" || ext == ".glb") return load_scene_file(r, path);
-    auto cloud = assets::import_splat_cloud(path);
+    SplatMaterial material;
+    auto cloud = assets::import_splat_cloud(path, {}, &material);
     if (!cloud) return cloud.error();
     glm::dvec3 lo(1e300), hi(-1e300);
     for (const auto& p : cloud->positions) {
@@ -390,6 +393,7 @@ Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
     r.emplace<Name>(e, Name{path.stem().string()});
     r.emplace<Transform>(e, Transform{});
     r.emplace<SplatCloud>(e, std::move(*cloud));
+    r.emplace<SplatMaterial>(e, material);
     if (r.count<Camera>() == 0) assets::add_default_view(r, lo, hi, glm::dvec3(0.3, 0.3, 1.0));
     return {};
 }
@@ -485,6 +489,7 @@ Status save_scene(const ecs::Registry& r, const fs::path& path) {
         c.id = ids[e];
         c.transform = r.try_get<Transform>(e);
         c.cloud = &r.get<SplatCloud>(e);
+        c.material = r.try_get<SplatMaterial>(e);
         out.push_back(c);
     }
     return assets::write_gltf(path, out, scene.dump(-1, ' ', false, json::error_handler_t::replace), append);

@@ -216,9 +216,9 @@ Result<Geometry> sample_surface(const Geometry& mesh, std::size_t count, std::ui
     const int texture = single_texture(mesh);
     if (texture >= 0) {
         const Image& img = mesh.textures[static_cast<std::size_t>(texture)];
-        out.splat_material.texture_width = img.width;
-        out.splat_material.texture_height = img.height;
-        out.splat_material.texture_rgba8 = img.rgba8;
+        out.splat_texture.width = img.width;
+        out.splat_texture.height = img.height;
+        out.splat_texture.rgba8 = img.rgba8;
         out.uvs.reserve(count);
         out.uv_grad_u.reserve(count);
         out.uv_grad_v.reserve(count);

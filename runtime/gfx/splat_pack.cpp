@@ -15,12 +15,6 @@ std::uint8_t encode_srgb8(float linear) {
 
 namespace {
 
-std::uint32_t pack_base_color(const glm::vec4& linear) {
-    const std::uint32_t r = encode_srgb8(linear.x), g = encode_srgb8(linear.y), b = encode_srgb8(linear.z);
-    const auto a = static_cast<std::uint32_t>(std::lround(std::clamp(linear.w, 0.0f, 1.0f) * 255.0f));
-    return r | (g << 8) | (b << 16) | (a << 24);
-}
-
 // A unit tangent perpendicular to n (used when a cloud has normals but no axes).
 glm::vec3 any_tangent(const glm::vec3& n) {
     const glm::vec3 a = std::abs(n.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
@@ -36,7 +30,6 @@ std::vector<gpu::GpuSplat> pack_splats(const SplatCloud& cloud) {
     const bool has_axes = cloud.axis_u.size() == n && cloud.axis_v.size() == n;
     const bool has_colors = cloud.colors.size() == n;
     const bool has_uvs = cloud.uvs.size() == n;
-    const std::uint32_t base = pack_base_color(cloud.material.base_color);
     for (std::size_t i = 0; i < n; ++i) {
         gpu::GpuSplat& s = out[i];
         const glm::vec3 p = cloud.positions[i];
@@ -51,7 +44,7 @@ std::vector<gpu::GpuSplat> pack_splats(const SplatCloud& cloud) {
         }
         const glm::vec2 uv = has_uvs ? cloud.uvs[i] : glm::vec2(0.0f);
         s.center[0] = p.x, s.center[1] = p.y, s.center[2] = p.z;
-        s.center[3] = std::bit_cast<float>(has_colors ? cloud.colors[i] : base);
+        s.center[3] = std::bit_cast<float>(has_colors ? cloud.colors[i] : uncoloured_splat);
         s.normal[0] = nrm.x, s.normal[1] = nrm.y, s.normal[2] = nrm.z, s.normal[3] = 1.0f;
         s.axis_u[0] = u.x, s.axis_u[1] = u.y, s.axis_u[2] = u.z, s.axis_u[3] = uv.x;
         s.axis_v[0] = v.x, s.axis_v[1] = v.y, s.axis_v[2] = v.z, s.axis_v[3] = uv.y;

@@ -1,6 +1,7 @@
 // Packs an authored SplatCloud into the 64-byte GpuSplat layout of shaders/common/bindings.h (CPU side of
-// the uploads into GpuSplatStore, splat_store.h). Colour: per-splat RGBA8 when present, else the
-// material's base colour (sRGB-encoded); uv in axis_u.w / axis_v.w; normal.w = 1.
+// the uploads into GpuSplatStore, splat_store.h). Colour: per-splat RGBA8 when present, else white, which
+// the render passes multiply by the material's base colour (a uniform: a material edit re-uploads nothing);
+// uv in axis_u.w / axis_v.w; normal.w = 1.
 #pragma once
 
 #include <cstdint>
@@ -15,5 +16,8 @@ std::vector<gpu::GpuSplat> pack_splats(const SplatCloud& cloud);
 
 // Linear [0, 1] -> 8-bit sRGB (the image writers use the same encoding).
 std::uint8_t encode_srgb8(float linear);
+
+// The packed colour of a splat without colours (white: the base colour is applied when drawing).
+inline constexpr std::uint32_t uncoloured_splat = 0xffffffffu;
 
 }  // namespace sffd::gfx

@@ -23,7 +23,6 @@ void upload_deformed_splats(GpuSplats& gpu, const SplatCloud& authored, const De
     moved.axis_v = d.axis_v.size() == n ? d.axis_v : authored.axis_v;
     moved.colors = authored.colors;
     moved.uvs = authored.uvs;
-    moved.material.base_color = authored.material.base_color;
     std::vector<gpu::GpuSplat> packed = pack_splats(moved);
     fill_buffer(gpu.deformed, "splats.deformed", packed.data(), packed.size() * sizeof(gpu::GpuSplat));
     set_deformed(gpu, Residency::deformed_cpu);

@@ -24,14 +24,23 @@ struct Transform {
     glm::dvec3 scale{1.0};
 };
 
-// Material of a splat cloud: flat per-splat colours, or a texture looked up at each splat's uv.
+// Texture of a splat cloud, looked up at each splat's uv. Authored with the cloud (its uvs index it, and
+// nothing edits it), so it lives in SplatCloud; empty: per-splat colours (or the material's base colour).
+struct SplatTexture {
+    std::string path;  // the file it came from (empty: embedded or procedural)
+    int width = 0, height = 0;
+    std::vector<std::uint8_t> rgba8;  // decoded texels, row 0 at v = 0, sRGB-encoded
+};
+
+// Shading of a splat cloud: its own component on the cloud's entity (absent: these defaults), apart from
+// SplatCloud so that editing it changes only the render: the cloud's change stamp, its deformation, its
+// GPU upload and its picking scene stay as they are, and an undo step holds two of these, not the cloud.
 struct SplatMaterial {
-    std::string texture_path;  // empty: use per-splat colours (or `base_color`)
-    int texture_width = 0, texture_height = 0;
-    std::vector<std::uint8_t> texture_rgba8;       // decoded texels, row 0 at v = 0, sRGB-encoded
     glm::vec4 base_color{0.8f, 0.8f, 0.8f, 1.0f};  // linear RGBA when no texture and no colours
     float specular = 0.3f;
     float shininess = 32.0f;
+
+    bool operator==(const SplatMaterial&) const = default;
 };
 
 // Authored point cloud: one splat per point. Arrays are structure-of-arrays and either empty or of
@@ -44,12 +53,12 @@ struct SplatCloud {
     std::vector<glm::vec3> axis_u;      // tangent axis scaled by radius
     std::vector<glm::vec3> axis_v;      // bitangent axis scaled by radius (normal x axis_u direction)
     std::vector<std::uint32_t> colors;  // RGBA8, sRGB-encoded, R in the low byte
-    std::vector<glm::vec2> uvs;         // texture coordinates (when the material has a texture)
+    std::vector<glm::vec2> uvs;         // texture coordinates (when there is a texture)
     // uv derivatives along the splat's axes: the point positions[i] + s * axis_u[i] + t * axis_v[i] has
     // uv = uvs[i] + s * uv_axes[i].xy + t * uv_axes[i].zw (first order). Per axis, so they hold for the
     // deformed axes too (FFD maps the axes by the Jacobian). Empty: one texture lookup per splat.
     std::vector<glm::vec4> uv_axes;
-    SplatMaterial material;
+    SplatTexture texture;
 
     std::size_t size() const { return positions.size(); }
 };
@@ -64,8 +73,8 @@ struct ExactSphere {
 
 // On a point-cloud entity whose splats sample a triangle mesh (`splatffd reference` attaches it to a mesh
 // file's cloud): the mesh in cloud space (relative to SplatCloud::origin), read by the ground-truth ray
-// tracer, which renders these triangles (textured through `uvs` with the cloud's material) instead of the
-// splats. Authored data.
+// tracer, which renders these triangles (textured through `uvs` with the cloud's texture and material)
+// instead of the splats. Authored data.
 struct ExactMesh {
     std::vector<glm::dvec3> positions;
     std::vector<glm::vec3> normals;        // empty: the triangles' own normals; else one per position

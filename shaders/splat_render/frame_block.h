@@ -30,11 +30,13 @@ layout(std140, binding = SFFD_UBO_FRAME) uniform FrameBlock {
     SFFD_VEC4 light_dir[SFFD_MAX_LIGHTS];    // world space, pointing towards the light
     SFFD_VEC4 light_color[SFFD_MAX_LIGHTS];  // linear rgb * intensity
     SFFD_VEC4 material;       // x: specular, y: shininess
+    SFFD_VEC4 base_color;     // linear rgb that packed splat colours are multiplied by: the material's base
+                              // colour for a cloud without colours (packed white), else 1
     SFFD_VEC4 background;     // linear rgba written where no splat covers the pixel
     SFFD_UVEC4 counts;        // x: splats in the draw buffer, y: lights, w: 1 = preview (colours are lit)
 #ifdef __cplusplus
 };
-static_assert(sizeof(FrameBlock) == 4 * 64 + 7 * 16 + 2 * SFFD_MAX_LIGHTS * 16);
+static_assert(sizeof(FrameBlock) == 4 * 64 + 8 * 16 + 2 * SFFD_MAX_LIGHTS * 16);
 }  // namespace sffd::gpu
 #else
 } frame;

@@ -1,5 +1,5 @@
-// Colour of a splat: the material texture at its uv (sRGB texture: sampled linear) or its packed RGBA8
-// sRGB colour; in preview (frame.counts.w == 1) lit once per splat with its normal (Blinn-Phong).
+// Colour of a splat: the texture at its uv (sRGB texture: sampled linear) or its packed RGBA8 sRGB colour
+// times frame.base_color; in preview (frame.counts.w == 1) lit once per splat with its normal (Blinn-Phong).
 #ifndef SFFD_SPLAT_COLOR_GLSL
 #define SFFD_SPLAT_COLOR_GLSL
 
@@ -27,7 +27,7 @@ vec4 splat_color(GpuSplat s, SplatView o, vec3 world_n) {
         color = textureLod(material_texture, vec2(s.axis_u.w, s.axis_v.w), 0.0);
     else {
         color = unpackUnorm4x8(floatBitsToUint(s.center.w));
-        color.rgb = srgb_to_linear(color.rgb);
+        color.rgb = srgb_to_linear(color.rgb) * frame.base_color.rgb;
     }
     if (lit) color.rgb = shade_blinn_phong(color.rgb, world_n, -normalize(mat3(frame.view_to_world) * o.c));
     return color;

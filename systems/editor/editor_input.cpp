@@ -1,6 +1,8 @@
 // The editor's keyboard input (shortcuts, typed values), the adaptive render quality and the input system.
 #include "systems/editor/editor_system_detail.h"
 
+#include "systems/editor/material_edit.h"
+
 namespace sffd::editor {
 
 namespace detail {
@@ -124,6 +126,14 @@ bool handle_typed_key(ecs::Registry& registry, EditorState& state, const InputEv
     }
     state.typed = {};
     return false;
+}
+
+// A replayed slider gesture (`set material.<field> <value>`); the parser accepted only known fields.
+void handle_set(ecs::Registry& registry, EditorState& state, const InputEvent& e) {
+    const std::optional<MaterialFieldInfo> field = material_field(e.key);
+    const ecs::Entity target = material_target(registry, state);
+    if (!field || !set_material_value(registry, state, target, field->field, static_cast<float>(e.value)))
+        log::warn("editor: 'set ", e.key, "': no cloud with a material in the scene");
 }
 
 void handle_text(ecs::Registry& registry, EditorState& state, const std::string& text) {
@@ -276,6 +286,7 @@ void editor_input_system(ecs::Registry& registry, const FrameContext& frame) {
             case InputKind::scroll: zoom(*camera, e.scroll); break;
             case InputKind::key: handle_key(registry, *state, e); break;
             case InputKind::text: handle_text(registry, *state, e.key); break;
+            case InputKind::set: handle_set(registry, *state, e); break;
         }
     }
     if (state->request_frame_selection) {

@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "runtime/core/file_io.h"
+#include "systems/editor/material_edit.h"
 
 namespace sffd::editor {
 
@@ -147,6 +148,14 @@ Result<std::vector<InputEvent>> parse_input_recording(std::string_view text, std
             if (!is_known_key(w[2])) return fail("unknown key '" + std::string(w[2]) + "'");
             e.key = std::string(w[2]);
             mods_at = 3;
+        } else if (kind == "set") {
+            e.kind = InputKind::set;
+            if (w.size() != 4) return fail("'set' takes a field and a value");
+            if (!material_field(w[2]))
+                return fail("unknown field '" + std::string(w[2]) + "' (" +
+                            std::string(material_field_names()) + ")");
+            if (!parse_double(w[3], e.value)) return fail("bad value '" + std::string(w[3]) + "'");
+            e.key = std::string(w[2]);
         } else if (kind == "text") {
             e.kind = InputKind::text;
             // Rest of the line after the word "text", one separating space dropped.
@@ -158,7 +167,7 @@ Result<std::vector<InputEvent>> parse_input_recording(std::string_view text, std
             e.key = std::string(rest);
         } else {
             return fail("unknown event '" + std::string(kind) +
-                        "' (move, press, release, scroll, key, text)");
+                        "' (move, press, release, scroll, key, text, set)");
         }
         if (mods_at && w.size() > mods_at && !parse_mods(w[mods_at], e.modifiers))
             return fail("bad modifiers '" + std::string(w[mods_at]) + "' (shift, ctrl, alt joined by +)");
@@ -189,6 +198,10 @@ std::string format_input_recording(std::span<const InputEvent> events) {
             case InputKind::key: out += " key " + e.key; break;
             case InputKind::text:
                 out += " text " + e.key;
+                m.clear();
+                break;
+            case InputKind::set:
+                out += " set " + e.key + " " + format_number(e.value);
                 m.clear();
                 break;
         }

@@ -10,6 +10,9 @@
 //   <frame> scroll <dy> [mods]                 wheel notches (positive: away from the user, zoom in)
 //   <frame> key <name> [mods]                  key pressed (and released) in that frame
 //   <frame> text <string>                      typed text (numeric entry), rest of the line
+//   <frame> set <field> <value>                what an inspector slider does, as one whole gesture:
+//                                              material.specular, material.shininess,
+//                                              material.base_color.r/g/b/a (material_edit.h)
 // mods: any of shift ctrl alt joined by '+', e.g. `12 key z ctrl+shift`.
 // Key names: a..z, 0..9, escape, enter, tab, backspace, delete, space, left, right, up, down, home,
 // end, f1..f12, minus, equal, period. Frames must not decrease.
@@ -27,7 +30,7 @@
 
 namespace sffd::editor {
 
-enum class InputKind : std::uint8_t { move, press, release, scroll, key, text };
+enum class InputKind : std::uint8_t { move, press, release, scroll, key, text, set };
 enum class MouseButton : std::uint8_t { left, right, middle };
 
 namespace mods {
@@ -40,7 +43,8 @@ struct InputEvent {
     glm::dvec2 position{0.0};                // move
     MouseButton button = MouseButton::left;  // press, release
     double scroll = 0.0;                     // scroll
-    std::string key;                         // key: canonical name (lower case); text: the typed string
+    std::string key;     // key: canonical name (lower case); text: the typed string; set: the field
+    double value = 0.0;  // set
     std::uint8_t modifiers = 0;
 
     bool operator==(const InputEvent&) const = default;

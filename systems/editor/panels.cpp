@@ -18,6 +18,7 @@
 #include "systems/editor/editor_system.h"
 #include "systems/editor/file_browser.h"
 #include "systems/editor/lattice_manage.h"
+#include "systems/editor/material_edit.h"
 #include "systems/editor/panel_layout.h"
 #include "systems/editor/selection_edit.h"
 #include "systems/ffd/components.h"
@@ -223,29 +224,21 @@ void inspector(ecs::Registry& registry, EditorState& state) {
     if (SplatCloud* c = registry.try_get<SplatCloud>(e);
         c && ImGui::CollapsingHeader("SplatCloud", ImGuiTreeNodeFlags_DefaultOpen)) {
         ImGui::Text("%zu splats%s%s", c->size(), c->colors.empty() ? "" : ", colours",
-                    c->material.texture_path.empty() ? "" : ", textured");
+                    c->texture.path.empty() ? "" : ", textured");
         ImGui::Text("origin %.3f %.3f %.3f", c->origin.x, c->origin.y, c->origin.z);
-        // Material only: the splats themselves are authored data, edited through lattices.
-        SplatMaterial& m = c->material;
-        const SplatMaterial before_m = m;
-        const auto material_edit = [&](bool changed, const char* label) {
-            // The undo step stores the whole cloud (one undo mechanism for every component); it is copied
-            // only when a widget is grabbed, never per frame.
-            track_edit_fn<SplatCloud>(
-                registry, state, e,
-                [&] {
-                    SplatCloud b = *c;
-                    b.material = before_m;
-                    return b;
-                },
-                changed, label);
-        };
-        bool ch = ImGui::ColorEdit4("base colour", &m.base_color.x);
-        material_edit(ch, "material colour");
-        ch = ImGui::SliderFloat("specular", &m.specular, 0.0f, 1.0f);
-        material_edit(ch, "material specular");
-        ch = ImGui::SliderFloat("shininess", &m.shininess, 1.0f, 256.0f);
-        material_edit(ch, "material shininess");
+    }
+    if (SplatMaterial* m = registry.try_get<SplatMaterial>(e);
+        m && ImGui::CollapsingHeader("Material", ImGuiTreeNodeFlags_DefaultOpen)) {
+        // Its own component (material_edit.h): a drag re-renders only, and its undo step holds two
+        // materials. Replays set the same fields through set_material_value().
+        const SplatMaterial before = *m;
+        bool ch = ImGui::ColorEdit4("base colour", &m->base_color.x);
+        track_edit<SplatMaterial>(registry, state, e, before, ch, "material colour");
+        for (MaterialField f : {MaterialField::specular, MaterialField::shininess}) {
+            const MaterialFieldInfo& info = material_field_info(f);
+            ch = ImGui::SliderFloat(info.widget, &material_value(*m, f), info.min, info.max);
+            track_edit<SplatMaterial>(registry, state, e, before, ch, info.label);
+        }
     }
     if (Camera* cam = registry.try_get<Camera>(e);
         cam && ImGui::CollapsingHeader("Camera", ImGuiTreeNodeFlags_DefaultOpen)) {

@@ -25,7 +25,7 @@ GaussianCloud gaussians_from_splats(const SplatCloud& c, const FromSplatsOptions
     }
     // The material's linear base colour to display (sRGB-like) values, when there are no colours.
     const glm::vec3 base =
-        glm::pow(glm::clamp(glm::vec3(c.material.base_color), 0.0f, 1.0f), glm::vec3(1.0f / 2.2f));
+        glm::pow(glm::clamp(glm::vec3(o.material.base_color), 0.0f, 1.0f), glm::vec3(1.0f / 2.2f));
     for (std::size_t i = 0; i < n; ++i) {
         if (axes && glm::length(c.axis_u[i]) > 0.0f && glm::length(c.axis_v[i]) > 0.0f) {
             const glm::dvec3 u(c.axis_u[i]), v(c.axis_v[i]);

@@ -11,6 +11,7 @@ struct FromSplatsOptions {
     double sigma_per_radius = 0.7;  // in-plane standard deviation = this × the splat's radius per axis
     double thickness = 0.1;         // normal-axis standard deviation = this × the smaller in-plane one
     float opacity = 0.95f;
+    SplatMaterial material;  // the cloud's material (its base colour colours a cloud without colours)
 };
 
 // One Gaussian per splat: rotation columns (û, n × û, n) with û = axis_u/|axis_u| (normals from the cross

@@ -79,6 +79,7 @@ gpu::FrameBlock camera_frame_block(const glm::dmat4& view, const glm::dmat4& pro
                           float(2.0 / (double(height) * projection[1][1])), float(-1.0 / projection[0][0]),
                           float(-1.0 / projection[1][1]));
     b.params = glm::vec4(visibility_epsilon, max_point_size, culling ? 1.0f : 0.0f, 0.0f);
+    b.base_color = glm::vec4(1.0f);
     return b;
 }
 

@@ -35,7 +35,8 @@ Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBou
 // The camera's part of the splat passes' FrameBlock (shaders/splat_render/frame_block.h) for a
 // width x height frame: projection, view_to_world, viewport, the pixel-ray map, and model_view /
 // normal_view for a cloud whose positions are world positions (render_system replaces those two per cloud).
-// params = (visibility_epsilon, max_point_size, culling, 0); lights, material and counts are left zero.
+// params = (visibility_epsilon, max_point_size, culling, 0); lights, material and counts are left zero,
+// base_color one (packed colours drawn as they are).
 gpu::FrameBlock camera_frame_block(const glm::dmat4& view, const glm::dmat4& projection, int width,
                                    int height, float visibility_epsilon, float max_point_size, bool culling);
 

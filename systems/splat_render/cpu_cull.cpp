@@ -254,7 +254,8 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 glm::vec3 color;
                 const std::uint32_t bits = std::bit_cast<std::uint32_t>(s.center[3]);
                 color = glm::vec3(splat_lut[bits & 255u], splat_lut[(bits >> 8) & 255u],
-                                  splat_lut[(bits >> 16) & 255u]);
+                                  splat_lut[(bits >> 16) & 255u]) *
+                        glm::vec3(f.base_color);
                 if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
                 rec.normal = glm::vec4(world_n, pack_color(color));
                 rec.uv = glm::vec4(0.0f);

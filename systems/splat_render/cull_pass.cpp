@@ -1,6 +1,8 @@
 // Splat render system: the cull pass (compute cull or CPU cull) that fills the draw lists.
 #include "systems/splat_render/splat_render_detail.h"
 
+#include "runtime/gfx/splat_pack.h"
+
 namespace sffd::render::detail {
 
 namespace {
@@ -38,6 +40,15 @@ Status upload_quads(CloudGpu& gpu) {
     return {};
 }
 
+// The base colour as 8-bit sRGB, decoded as the shaders decode packed colours: what a cloud without
+// colours drew when its base colour was packed into every splat, so its images stay the same.
+glm::vec4 quantised_base_color(const glm::vec4& linear) {
+    glm::vec4 out(1.0f);
+    for (int k = 0; k < 3; ++k)
+        out[k] = std::pow((float(gfx::encode_srgb8(linear[k])) / 255.0f + 0.055f) * (1.0f / 1.055f), 2.4f);
+    return out;
+}
+
 }  // namespace
 
 // Per-cloud uniforms, then culling and compaction of every cloud (the compute pass, or cpu_cull.h).
@@ -58,7 +69,8 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
                                               plan.view.projection[1][1], plan.height);
         gpu.flat_list = false;
         b.params.w = gpu.texture ? 1.0f : 0.0f;
-        b.material = glm::vec4(gpu.material->specular, gpu.material->shininess, 0.0f, 0.0f);
+        b.material = glm::vec4(gpu.material.specular, gpu.material.shininess, 0.0f, 0.0f);
+        b.base_color = gpu.colored ? glm::vec4(1.0f) : quantised_base_color(gpu.material.base_color);
         b.counts.x = gpu.count;
         b.counts.w = settings.quality == Quality::preview ? 1u : 0u;  // cull pass lights sprites in preview
         glNamedBufferSubData(gpu.frame_ubo.id(), 0, sizeof b, &b);
@@ -66,8 +78,8 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             // CPU cull (cpu_cull.h): the same records, uploaded run by run into the buffers the draws read.
             TexelView texels;
             if (gpu.texture)
-                texels = {gpu.material->texture_rgba8.data(), gpu.material->texture_width,
-                          gpu.material->texture_height, gpu.uv_axes_cpu ? gpu.uv_axes_cpu->data() : nullptr,
+                texels = {gpu.texture_texels->rgba8.data(), gpu.texture_texels->width,
+                          gpu.texture_texels->height, gpu.uv_axes_cpu ? gpu.uv_axes_cpu->data() : nullptr,
                           gpu.uniform_radius.empty() ? nullptr : gpu.uniform_radius.data()};
             CpuCullResult& r = gpu.cpu_cull;
             cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);

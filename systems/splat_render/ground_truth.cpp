@@ -374,17 +374,16 @@ glm::dvec2 sphere_uv(const glm::dvec3& d) {
     return {lon / (2.0 * std::numbers::pi), std::acos(std::clamp(d.y, -1.0, 1.0)) / std::numbers::pi};
 }
 
-ReferenceTexture::ReferenceTexture(const SplatMaterial& m) {
-    if (m.texture_width <= 0 || m.texture_height <= 0 ||
-        m.texture_rgba8.size() < std::size_t(m.texture_width) * std::size_t(m.texture_height) * 4)
+ReferenceTexture::ReferenceTexture(const SplatTexture& m) {
+    if (m.width <= 0 || m.height <= 0 || m.rgba8.size() < std::size_t(m.width) * std::size_t(m.height) * 4)
         return;
     Level base;
-    base.width = m.texture_width, base.height = m.texture_height;
+    base.width = m.width, base.height = m.height;
     base.texels.resize(std::size_t(base.width) * std::size_t(base.height));
     std::array<float, 256> lut{};
     for (int i = 0; i < 256; ++i) lut[std::size_t(i)] = float(srgb_decode(i / 255.0));
     for (std::size_t k = 0; k < base.texels.size(); ++k) {
-        const std::uint8_t* p = &m.texture_rgba8[4 * k];
+        const std::uint8_t* p = &m.rgba8[4 * k];
         base.texels[k] = glm::vec4(lut[p[0]], lut[p[1]], lut[p[2]], float(p[3]) / 255.0f);
     }
     levels_.push_back(std::move(base));
@@ -502,7 +501,8 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
                 problem = "the sphere's Transform rotates or scales it (not supported)";
             s.center = glm::dvec3(m * glm::dvec4(sphere.center, 1.0));
             s.radius = sphere.radius;
-            s.material = &c.material;
+            s.texture = &c.texture;
+            if (const SplatMaterial* mat = reg.try_get<SplatMaterial>(e)) s.material = *mat;
             if (const Deformers* d = reg.try_get<Deformers>(e))
                 for (ecs::Entity l : d->lattices)
                     if (reg.valid(l) && reg.has<Lattice>(l)) {
@@ -517,8 +517,9 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
                 cloud = &c;
                 s.mesh = &mesh;
                 s.mesh_model = model_matrix(reg.try_get<Transform>(e), c.origin);
-                s.material = &c.material;
-                if (c.material.texture_rgba8.empty() && c.colors.size() == c.size() && c.size() > 0)
+                s.texture = &c.texture;
+                if (const SplatMaterial* mat = reg.try_get<SplatMaterial>(e)) s.material = *mat;
+                if (c.texture.rgba8.empty() && c.colors.size() == c.size() && c.size() > 0)
                     problem =
                         "the mesh's colours are baked per splat (vertex colours, or a tinted or "
                         "multi-texture material): "
@@ -545,7 +546,7 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
 }
 
 Result<FrameImage> render_reference(const ReferenceScene& scene, const ReferenceSettings& settings) {
-    if (scene.width < 1 || scene.height < 1 || !scene.material)
+    if (scene.width < 1 || scene.height < 1 || !scene.texture)
         return make_error("render_reference(): incomplete scene");
     std::optional<DeformedSphere> deformed;
     std::optional<MeshTracer> mesh;
@@ -556,9 +557,9 @@ Result<FrameImage> render_reference(const ReferenceScene& scene, const Reference
         deformed.emplace(scene, settings);
         if (!deformed->error().empty()) return make_error(deformed->error());
     }
-    const ReferenceTexture texture(*scene.material);
-    const glm::dvec3 base = glm::dvec3(glm::vec3(scene.material->base_color));
-    const double specular = scene.material->specular, shininess = scene.material->shininess;
+    const ReferenceTexture texture(*scene.texture);
+    const glm::dvec3 base = glm::dvec3(glm::vec3(scene.material.base_color));
+    const double specular = scene.material.specular, shininess = scene.material.shininess;
     const glm::dmat4 inv_view = glm::inverse(scene.view);
     const glm::dvec3 eye = glm::dvec3(inv_view[3]);
     const glm::dmat3 to_world(inv_view);

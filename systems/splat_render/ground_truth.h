@@ -52,8 +52,9 @@ struct ReferenceScene {
     glm::dmat4 view{1.0}, projection{1.0};  // camera_math.h's view_matrix / projection_matrix
     glm::dvec3 center{0.0};                 // world space sphere
     double radius = 1.0;
-    std::vector<Lattice> lattices;            // deformers in order (world space); empty: the rest sphere
-    const SplatMaterial* material = nullptr;  // texture (sRGB, row 0 at v = 0), base colour, specular
+    std::vector<Lattice> lattices;          // deformers in order (world space); empty: the rest sphere
+    const SplatTexture* texture = nullptr;  // the cloud's texture (sRGB, row 0 at v = 0), maybe empty
+    SplatMaterial material;                 // base colour, specular, shininess
     ReferenceLights lights;
     // Instead of the sphere: a cloud's ExactMesh (deformed by `lattices` like the sphere), and the
     // cloud's model matrix (Transform and origin) that places it in the world.
@@ -87,7 +88,7 @@ glm::dvec2 sphere_uv(const glm::dvec3& d);
 // u, clamp in v, mip levels by 2x2 averaging in linear space).
 class ReferenceTexture {
 public:
-    explicit ReferenceTexture(const SplatMaterial& material);
+    explicit ReferenceTexture(const SplatTexture& texture);
     bool empty() const { return levels_.empty(); }
     glm::dvec4 bilinear(const glm::dvec2& uv, int level = 0) const;
     // GL_LINEAR_MIPMAP_LINEAR with explicit derivatives of uv along window x and y (GL 4.5 section 8.14).

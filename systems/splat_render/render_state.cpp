@@ -18,19 +18,19 @@ Result<gfx::Program> splat_program(const char* fragment, const char* label, int 
                              label, defines);
 }
 
-void upload_texture(CloudGpu& gpu, const SplatMaterial& m) {
-    if (m.texture_rgba8.empty() || m.texture_width <= 0 || m.texture_height <= 0 ||
-        m.texture_rgba8.size() < std::size_t(m.texture_width) * std::size_t(m.texture_height) * 4) {
+void upload_texture(CloudGpu& gpu, const SplatTexture& m) {
+    if (m.rgba8.empty() || m.width <= 0 || m.height <= 0 ||
+        m.rgba8.size() < std::size_t(m.width) * std::size_t(m.height) * 4) {
         gpu.texture.reset();
         return;
     }
     gpu.texture = gfx::Texture::create("render.material", GL_TEXTURE_2D);
-    const int levels = 1 + int(std::floor(std::log2(std::max(m.texture_width, m.texture_height))));
-    glTextureStorage2D(gpu.texture.id(), levels, GL_SRGB8_ALPHA8, m.texture_width, m.texture_height);
+    const int levels = 1 + int(std::floor(std::log2(std::max(m.width, m.height))));
+    glTextureStorage2D(gpu.texture.id(), levels, GL_SRGB8_ALPHA8, m.width, m.height);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
     // Row 0 of the texels is v = 0, which is also GL's first row (t = 0).
-    glTextureSubImage2D(gpu.texture.id(), 0, 0, 0, m.texture_width, m.texture_height, GL_RGBA,
-                        GL_UNSIGNED_BYTE, m.texture_rgba8.data());
+    glTextureSubImage2D(gpu.texture.id(), 0, 0, 0, m.width, m.height, GL_RGBA, GL_UNSIGNED_BYTE,
+                        m.rgba8.data());
     glGenerateTextureMipmap(gpu.texture.id());
     // Mipmapped: the HQ attribute pass filters per pixel with textureGrad (the cull's per-splat lookups ask
     // for level 0 explicitly).
@@ -48,8 +48,8 @@ void upload_uv_axes(CloudGpu& gpu, const SplatCloud& cloud) {
         gpu.uv_axes.reset();
         return;
     }
-    const SplatMaterial& m = cloud.material;
-    gpu.uniform_radius = uniform_texel_radius(m.texture_rgba8.data(), m.texture_width, m.texture_height);
+    const SplatTexture& m = cloud.texture;
+    gpu.uniform_radius = uniform_texel_radius(m.rgba8.data(), m.width, m.height);
     std::vector<glm::vec4> zeros;
     const std::vector<glm::vec4>* data = &cloud.uv_axes;
     if (cloud.uv_axes.size() != cloud.size()) zeros.assign(cloud.size(), glm::vec4(0.0f)), data = &zeros;
@@ -140,18 +140,22 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatSto
                               nullptr, GL_DYNAMIC_DRAW);
         }
         if (gpu.texture_version != version) {
-            upload_texture(gpu, cloud.material);
+            upload_texture(gpu, cloud.texture);
             upload_uv_axes(gpu, cloud);
             gpu.texture_version = version;
         }
         gpu.uv_axes_cpu = gpu.texture && cloud.uv_axes.size() == n ? &cloud.uv_axes : nullptr;
+        gpu.texture_texels = &cloud.texture;
         if (gpu.bounds_version != version) {
             gpu.bounds = bounding_sphere(cloud);
             gpu.mean_radius = mean_splat_radius(cloud);
             ++s.cpu_splat_passes;
             gpu.bounds_version = version;
         }
-        gpu.material = &cloud.material;
+        // Read every frame, never uploaded: a material edit changes this cloud's uniforms only.
+        const SplatMaterial* material = reg.try_get<SplatMaterial>(e);
+        gpu.material = material ? *material : SplatMaterial{};
+        gpu.colored = cloud.colors.size() == n;
         gpu.count = std::min(n, splats.count);
         gpu.splats = splats.draw_buffer();
         // The CPU copy of the draw buffer: the store's mirror (rest, or the CPU deformation's output);

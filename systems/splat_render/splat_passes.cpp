@@ -163,8 +163,8 @@ void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, R
 // materials); one material for every cloud is a uniform, as cheap as before.
 bool clouds_differ_in_material(const FramePlan& plan) {
     return std::any_of(plan.drawn.begin(), plan.drawn.end(), [&](const CloudGpu* g) {
-        return g->material->specular != plan.drawn.front()->material->specular ||
-               g->material->shininess != plan.drawn.front()->material->shininess;
+        return g->material.specular != plan.drawn.front()->material.specular ||
+               g->material.shininess != plan.drawn.front()->material.shininess;
     });
 }
 

@@ -53,10 +53,11 @@ struct CloudGpu {
     gfx::Buffer commands;   // three DrawArraysIndirectCommands: sprites, quads, flat-coloured sprites
     gfx::Buffer frame_ubo;  // FrameBlock for this cloud
     std::uint32_t capacity = 0;
-    gfx::Texture texture;  // material texture (sRGB), when the material has one
+    gfx::Texture texture;  // the cloud's texture (sRGB), when it has one
     gfx::Buffer uv_axes;   // vec4[count]: SplatCloud::uv_axes (zeros when absent), when textured
     std::vector<std::uint16_t> uniform_radius;            // uniform_texel_radius() of the texture (CPU cull)
     const std::vector<glm::vec4>* uv_axes_cpu = nullptr;  // the cloud's, valid during one render_system call
+    const SplatTexture* texture_texels = nullptr;         // the cloud's, valid during one render_system call
     std::uint64_t texture_version = 0;
     BoundingSphere bounds;   // cloud space, for the framing camera
     double mean_radius = 0;  // mean_splat_radius(), for the automatic raster path
@@ -64,7 +65,8 @@ struct CloudGpu {
     double footprint_px = 0;    // splat_footprint_px() this frame (cull_pass)
     bool flat_list = false;     // the CPU cull filled the flat-coloured sprite list this frame
     ComputeRasterCloud raster;  // sprites the compute rasteriser leaves to the rasteriser (compute_raster.h)
-    const SplatMaterial* material = nullptr;  // valid during one render_system call
+    SplatMaterial material;     // the cloud's SplatMaterial this frame (the defaults when it has none)
+    bool colored = false;       // per-splat colours (else the packed colour is white, times the base colour)
     std::uint32_t count = 0;
     GLuint splats = 0;  // draw buffer this frame
 

@@ -49,15 +49,15 @@ SplatCloud sample_cloud(std::size_t n, glm::dvec3 origin = glm::dvec3(0.0)) {
     }
     // A smaller texture keeps the GLB small; odd size checks the PNG row handling.
     Image tex = make_sphere_texture(37, 19);
-    c.material.texture_width = tex.width;
-    c.material.texture_height = tex.height;
-    c.material.texture_rgba8 = tex.rgba8;
-    c.material.texture_rgba8[3] = 17;  // one translucent texel
-    c.material.specular = 0.7f;
-    c.material.shininess = 12.5f;
-    c.material.base_color = glm::vec4(0.25f, 0.5f, 0.75f, 1.0f);
+    c.texture.width = tex.width;
+    c.texture.height = tex.height;
+    c.texture.rgba8 = tex.rgba8;
+    c.texture.rgba8[3] = 17;  // one translucent texel
     return c;
 }
+
+// A material unlike the defaults, stored beside the cloud (its own component).
+const SplatMaterial sample_material{glm::vec4(0.25f, 0.5f, 0.75f, 1.0f), 0.7f, 12.5f};
 
 template <class T>
 bool same_bytes(const std::vector<T>& a, const std::vector<T>& b) {
@@ -74,12 +74,9 @@ void expect_same_cloud(const SplatCloud& a, const SplatCloud& b, bool texture) {
     EXPECT_TRUE(same_bytes(a.uvs, b.uvs));
     EXPECT_TRUE(same_bytes(a.uv_axes, b.uv_axes));
     if (texture) {
-        EXPECT_EQ(a.material.texture_width, b.material.texture_width);
-        EXPECT_EQ(a.material.texture_height, b.material.texture_height);
-        EXPECT_TRUE(same_bytes(a.material.texture_rgba8, b.material.texture_rgba8));
-        EXPECT_EQ(a.material.specular, b.material.specular);
-        EXPECT_EQ(a.material.shininess, b.material.shininess);
-        EXPECT_EQ(a.material.base_color, b.material.base_color);
+        EXPECT_EQ(a.texture.width, b.texture.width);
+        EXPECT_EQ(a.texture.height, b.texture.height);
+        EXPECT_TRUE(same_bytes(a.texture.rgba8, b.texture.rgba8));
     }
 }
 
@@ -100,20 +97,24 @@ TEST(RoundTrip, GlbAndGltfStoreEveryArrayExactly) {
     const SplatCloud c = sample_cloud(1000);
     for (const char* name : {"rt.glb", "rt.gltf"}) {
         const fs::path p = temp_dir() / name;
-        ASSERT_TRUE(save_splat_cloud(c, p).ok());
-        auto back = import_splat_cloud(p);
+        ASSERT_TRUE(save_splat_cloud(c, p, "cloud", sample_material).ok());
+        SplatMaterial material;
+        auto back = import_splat_cloud(p, {}, &material);
         ASSERT_TRUE(back.ok()) << back.message();
         expect_same_cloud(c, *back, true);
+        EXPECT_EQ(material, sample_material);
     }
 }
 
 TEST(RoundTrip, GlbKeepsAFarOriginInDoublePrecision) {
     const SplatCloud c = sample_cloud(300, glm::dvec3(4.0e6 + 0.123456789, -2.5e6, 1234.5));
     const fs::path p = temp_dir() / "far.glb";
-    ASSERT_TRUE(save_splat_glb(c, p).ok());
-    auto back = import_splat_cloud(p);
+    ASSERT_TRUE(save_splat_glb(c, p, "cloud", sample_material).ok());
+    SplatMaterial material;
+    auto back = import_splat_cloud(p, {}, &material);
     ASSERT_TRUE(back.ok()) << back.message();
     expect_same_cloud(c, *back, true);
+    EXPECT_EQ(material, sample_material);
 }
 
 TEST(RoundTrip, PlyBinaryAndAsciiStoreEveryArrayExactly) {
@@ -387,7 +388,7 @@ TEST(AssimpTestModels, TexturedBoxImportsWithTextureColours) {
         distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
         EXPECT_GT(distinct.size(), 50u);
         // One untinted texture: kept as the cloud's material, with a uv frame per splat.
-        EXPECT_EQ(c->material.texture_width, g->textures[0].width);
+        EXPECT_EQ(c->texture.width, g->textures[0].width);
         EXPECT_EQ(c->uv_axes.size(), 2000u);
     }
     const fs::path bad = dir / "IndexOutOfRange/IndexOutOfRange.gltf";
@@ -589,9 +590,9 @@ TEST(TexturedMesh, SampledSplatsCarryTheTextureAndTheAnalyticUvFrame) {
     ASSERT_TRUE(c.ok()) << c.message();
     ASSERT_EQ(c->size(), 3000u);
     // The mesh's one texture becomes the cloud's material, pixel for pixel (not baked into colours only).
-    EXPECT_EQ(c->material.texture_width, 256);
-    EXPECT_EQ(c->material.texture_height, 256);
-    EXPECT_TRUE(same_bytes(c->material.texture_rgba8, sffd::test::checker_texels(256, 16)));
+    EXPECT_EQ(c->texture.width, 256);
+    EXPECT_EQ(c->texture.height, 256);
+    EXPECT_TRUE(same_bytes(c->texture.rgba8, sffd::test::checker_texels(256, 16)));
     EXPECT_EQ(c->colors.size(), c->size());  // baked as well: the untextured fallback
     expect_box_uv_frame(*c, "sampled");
 
@@ -601,7 +602,7 @@ TEST(TexturedMesh, SampledSplatsCarryTheTextureAndTheAnalyticUvFrame) {
     auto v = make_splat_cloud(*g, opt);
     ASSERT_TRUE(v.ok()) << v.message();
     ASSERT_EQ(v->size(), 24u);
-    EXPECT_EQ(v->material.texture_width, 256);
+    EXPECT_EQ(v->texture.width, 256);
     expect_box_uv_frame(*v, "per vertex");
 }
 
@@ -616,7 +617,7 @@ TEST(TexturedMesh, TintedOrMultiTextureMeshesStayBakedIntoColours) {
     opt.splats = 500;
     auto c = make_splat_cloud(*g, opt);
     ASSERT_TRUE(c.ok()) << c.message();
-    EXPECT_TRUE(c->material.texture_rgba8.empty());
+    EXPECT_TRUE(c->texture.rgba8.empty());
     EXPECT_TRUE(c->uv_axes.empty());
     ASSERT_EQ(c->colors.size(), 500u);
     for (std::uint32_t col : c->colors)
@@ -640,8 +641,8 @@ TEST(TexturedMesh, UvFrameAndTextureRoundTripThroughPlyAndGltf) {
         ASSERT_TRUE(back.ok()) << back.message();
         expect_same_cloud(*c, *back, false);
         // PLY keeps the texels in <stem>_texture.png beside it (TextureFile comment); glTF embeds them.
-        EXPECT_EQ(back->material.texture_width, 256) << name;
-        EXPECT_TRUE(same_bytes(back->material.texture_rgba8, c->material.texture_rgba8)) << name;
+        EXPECT_EQ(back->texture.width, 256) << name;
+        EXPECT_TRUE(same_bytes(back->texture.rgba8, c->texture.rgba8)) << name;
         if (p.extension() == ".ply") {
             EXPECT_TRUE(fs::exists(dir / (p.stem().string() + "_texture.png"))) << name;
             auto geom = read_geometry(p);

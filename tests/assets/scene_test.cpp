@@ -78,6 +78,8 @@ TEST(Scene, SaveLoadRoundTripKeepsEverything) {
     SplatCloud ball = assets::make_sphere_cloud(500);
     ball.origin = glm::dvec3(1e6 + 0.25, 0, -3);
     a.emplace<SplatCloud>(c1, ball);
+    const SplatMaterial shiny{glm::vec4(0.25f, 0.5f, 0.75f, 0.5f), 0.875f, 77.5f};
+    a.emplace<SplatMaterial>(c1, shiny);
     a.emplace<Deformers>(c1, Deformers{{l2, l1}});
     const ecs::Entity c2 = a.create();
     a.emplace<Name>(c2, Name{"plain"});
@@ -136,7 +138,11 @@ TEST(Scene, SaveLoadRoundTripKeepsEverything) {
     EXPECT_TRUE(same_bytes(got.axis_v, ball.axis_v));
     EXPECT_TRUE(same_bytes(got.colors, ball.colors));
     EXPECT_TRUE(same_bytes(got.uvs, ball.uvs));
-    EXPECT_TRUE(same_bytes(got.material.texture_rgba8, ball.material.texture_rgba8));
+    EXPECT_TRUE(same_bytes(got.texture.rgba8, ball.texture.rgba8));
+    // The material is its own component; a cloud saved without one loads with the defaults.
+    ASSERT_TRUE(b.has<SplatMaterial>(bc1) && b.has<SplatMaterial>(bc2));
+    EXPECT_EQ(b.get<SplatMaterial>(bc1), shiny);
+    EXPECT_EQ(b.get<SplatMaterial>(bc2), SplatMaterial{});
     EXPECT_TRUE(same_bytes(b.get<SplatCloud>(bc2).positions, plain.positions));
     EXPECT_TRUE(b.get<SplatCloud>(bc2).colors.empty());
     const Transform& t = b.get<Transform>(bc1);
@@ -194,8 +200,7 @@ TEST(Scene, BuiltinSphereHasThePapersCounts) {
     const SplatCloud& c = r.get<SplatCloud>(clouds[0]);
     EXPECT_EQ(c.size(), 59650u);
     EXPECT_EQ(c.uvs.size(), c.size());
-    EXPECT_EQ(c.material.texture_rgba8.size(),
-              static_cast<std::size_t>(c.material.texture_width * c.material.texture_height * 4));
+    EXPECT_EQ(c.texture.rgba8.size(), static_cast<std::size_t>(c.texture.width * c.texture.height * 4));
     for (const auto& uv : c.uvs) {
         ASSERT_GE(uv.x, 0.0f);
         ASSERT_LE(uv.x, 1.0f);

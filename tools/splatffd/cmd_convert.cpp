@@ -143,9 +143,10 @@ int export_lattice_json(const std::string& in, const std::string& out, const Lat
 
 // OUT .glb/.gltf with --lattice: the cloud and its lattice(s), bound in order. `loaded`: the JSON or
 // scene source, read before the import (a bad file fails before the work).
-sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const std::string& name,
-                               const LatticeRequest& req, const sffd::cli::LatticeChain& loaded,
-                               const std::string& out, std::string& note) {
+sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const sffd::SplatMaterial& material,
+                               const std::string& name, const LatticeRequest& req,
+                               const sffd::cli::LatticeChain& loaded, const std::string& out,
+                               std::string& note) {
     using namespace sffd;
     cli::LatticeChain chain;
     if (ffd::is_fit_spec(req.source)) {
@@ -160,7 +161,7 @@ sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const std::string&
         note =
             ", " + std::to_string(chain.lattices.size()) + " lattice(s) from " + req.source + " bound to it";
     }
-    return cli::save_cloud_with_lattices(cloud, name, chain.lattices, out);
+    return cli::save_cloud_with_lattices(cloud, name, chain.lattices, out, material);
 }
 
 int run_convert(sffd::cli::Args args) {
@@ -271,11 +272,13 @@ int run_convert(sffd::cli::Args args) {
     }
     const cli::GaussianLatticeRequest gaussian_lattice{lattice.source, &loaded};
     if (gaussian_in)
-        return cli::write_gaussians(in, nullptr, out, ascii, turn_x180, spz_version, gaussian_lattice);
+        return cli::write_gaussians(in, nullptr, SplatMaterial{}, out, ascii, turn_x180, spz_version,
+                                    gaussian_lattice);
     cli::ProgressPrinter printer("convert", cli::ProgressPrinter::mode_for(progress));
     opt.progress = printer.fn();
     const auto t0 = std::chrono::steady_clock::now();
     Result<SplatCloud> cloud = make_error("");
+    SplatMaterial material;  // the input's, carried into a .glb output
     if (in == "sphere") {
         cloud = assets::make_sphere_cloud(opt.splats ? opt.splats : assets::kSphereSplats);
     } else if (assets::is_builtin_scene(in)) {
@@ -286,7 +289,10 @@ int run_convert(sffd::cli::Args args) {
             return 1;
         }
         r.each_entity([&](ecs::Entity e) {
-            if (const SplatCloud* c = r.try_get<SplatCloud>(e); c && !cloud) cloud = *c;
+            if (const SplatCloud* c = r.try_get<SplatCloud>(e); c && !cloud) {
+                cloud = *c;
+                if (const SplatMaterial* m = r.try_get<SplatMaterial>(e)) material = *m;
+            }
         });
         if (!cloud) cloud = make_error(in + ": built-in scene has no point cloud");
     } else {
@@ -319,22 +325,24 @@ int run_convert(sffd::cli::Args args) {
             }
         }
         cloud = assets::make_splat_cloud(*g, opt);
+        material = g->splat_material;
     }
     if (!cloud) {
         std::fprintf(stderr, "splatffd convert: %s\n", cloud.message().c_str());
         return 1;
     }
     if (gaussians)
-        return cli::write_gaussians(in, &*cloud, out, ascii, turn_x180, spz_version, gaussian_lattice);
+        return cli::write_gaussians(in, &*cloud, material, out, ascii, turn_x180, spz_version,
+                                    gaussian_lattice);
     const auto t2 = std::chrono::steady_clock::now();
     std::string lattice_note;
     printer.report("writing", 0.0);
-    Status s =
-        lattice.source.empty()
-            ? (ascii ? assets::save_splat_ply(*cloud, out, ply::Format::ascii)
-                     : assets::save_splat_cloud(*cloud, out, std::filesystem::path(in).stem().string()))
-            : save_with_lattice(*cloud, std::filesystem::path(in).stem().string(), lattice, loaded, out,
-                                lattice_note);
+    Status s = lattice.source.empty()
+                   ? (ascii ? assets::save_splat_ply(*cloud, out, ply::Format::ascii)
+                            : assets::save_splat_cloud(*cloud, out, std::filesystem::path(in).stem().string(),
+                                                       material))
+                   : save_with_lattice(*cloud, material, std::filesystem::path(in).stem().string(), lattice,
+                                       loaded, out, lattice_note);
     if (!s) {
         std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
         return 1;

@@ -534,6 +534,7 @@ int deform_in_memory(const Options& o) {
     }
     ecs::Registry scene;
     SplatCloud cloud;
+    SplatMaterial material;  // the input's, carried into a .glb output
     std::string cloud_name = std::filesystem::path(in_path).stem().string();
     const bool in_scene = cli::is_scene_path(in_path);
     std::string estimated;
@@ -568,9 +569,10 @@ int deform_in_memory(const Options& o) {
             return fail(in_path + ": " + std::to_string(clouds.size()) +
                         " point clouds; deform works on one (the one bound to the chosen lattice)");
         cloud = scene.get<SplatCloud>(chosen);
+        if (const SplatMaterial* m = scene.try_get<SplatMaterial>(chosen)) material = *m;
         if (const Name* n = scene.try_get<Name>(chosen)) cloud_name = n->value;
     } else {
-        auto c = assets::import_splat_cloud(in_path);
+        auto c = assets::import_splat_cloud(in_path, {}, &material);
         if (!c) return fail(c.message());
         cloud = std::move(*c);
         estimated = " (normals/radii estimated by import where the input had none)";
@@ -619,8 +621,9 @@ int deform_in_memory(const Options& o) {
                         std::to_string(i) + " of " + in_path + " is not finite; nothing was written to " +
                         o.files[1]);
     const std::string ext = lower_ext(o.files[1]);
-    Status saved = o.ascii && ext == ".ply" ? assets::save_splat_ply(cloud, o.files[1], ply::Format::ascii)
-                                            : assets::save_splat_cloud(cloud, o.files[1], cloud_name);
+    Status saved = o.ascii && ext == ".ply"
+                       ? assets::save_splat_ply(cloud, o.files[1], ply::Format::ascii)
+                       : assets::save_splat_cloud(cloud, o.files[1], cloud_name, material);
     if (!saved) return fail(saved.message());
     const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
     std::string what = o.files[1] + ": positions";

@@ -146,9 +146,9 @@ void summarise_registry(const ecs::Registry& reg) {
         if (!c.colors.empty()) attrs += ", color";
         if (!c.uvs.empty()) attrs += ", uv";
         std::printf("    attributes %s\n", attrs.c_str());
-        if (!c.material.texture_rgba8.empty())
-            std::printf("    texture  %dx%d%s%s\n", c.material.texture_width, c.material.texture_height,
-                        c.material.texture_path.empty() ? "" : " ", c.material.texture_path.c_str());
+        if (!c.texture.rgba8.empty())
+            std::printf("    texture  %dx%d%s%s\n", c.texture.width, c.texture.height,
+                        c.texture.path.empty() ? "" : " ", c.texture.path.c_str());
         if (c.size()) {
             glm::dvec3 lo(INFINITY), hi(-INFINITY);
             double rmin = INFINITY, rmax = 0, rsum = 0;

@@ -79,11 +79,13 @@ Status save_gaussian_scene(GaussianCloud g, const std::string& cloud_name, const
 
 }  // namespace
 
-int write_gaussians(const std::string& in, const SplatCloud* surface, const std::string& out, bool ascii,
-                    bool turn_x180, int spz_version, const GaussianLatticeRequest& lattice) {
+int write_gaussians(const std::string& in, const SplatCloud* surface, const SplatMaterial& material,
+                    const std::string& out, bool ascii, bool turn_x180, int spz_version,
+                    const GaussianLatticeRequest& lattice) {
     const auto t0 = std::chrono::steady_clock::now();
-    Result<GaussianCloud> g = surface ? Result<GaussianCloud>(gaussian::gaussians_from_splats(*surface))
-                                      : gaussian::read_gaussians(in);
+    Result<GaussianCloud> g =
+        surface ? Result<GaussianCloud>(gaussian::gaussians_from_splats(*surface, {.material = material}))
+                : gaussian::read_gaussians(in);
     if (!g) {
         std::fprintf(stderr, "splatffd convert: %s\n", g.message().c_str());
         return 1;

@@ -10,7 +10,8 @@
 
 namespace sffd {
 struct SplatCloud;
-}
+struct SplatMaterial;
+}  // namespace sffd
 
 namespace sffd::cli {
 
@@ -29,7 +30,9 @@ struct GaussianLatticeRequest {
 // lattice, `out` is a scene (.glb/.gltf): the Gaussians embedded as KHR_gaussian_splatting, the lattice
 // bound to them as in the editor's save, so render/view deform the Gaussians by it.
 // `spz_version`: 3 or 4 for an `.spz` OUT (gaussian_spz.h).
-int write_gaussians(const std::string& in, const SplatCloud* surface, const std::string& out, bool ascii,
-                    bool turn_x180 = false, int spz_version = 3, const GaussianLatticeRequest& lattice = {});
+// `material`: the surface cloud's material (its base colour for splats without colours).
+int write_gaussians(const std::string& in, const SplatCloud* surface, const SplatMaterial& material,
+                    const std::string& out, bool ascii, bool turn_x180 = false, int spz_version = 3,
+                    const GaussianLatticeRequest& lattice = {});
 
 }  // namespace sffd::cli

@@ -128,12 +128,14 @@ Result<LatticeChain> load_lattice_source(const std::string& source, const std::s
 }
 
 Status save_cloud_with_lattices(SplatCloud cloud, const std::string& cloud_name,
-                                const std::vector<Lattice>& lattices, const std::string& path) {
+                                const std::vector<Lattice>& lattices, const std::string& path,
+                                const SplatMaterial& material) {
     ecs::Registry r;
     const ecs::Entity c = r.create();
     r.emplace<Name>(c, Name{cloud_name});
     r.emplace<Transform>(c, Transform{});
     r.emplace<SplatCloud>(c, std::move(cloud));
+    r.emplace<SplatMaterial>(c, material);
     Deformers d;
     for (std::size_t i = 0; i < lattices.size(); ++i) {
         const ecs::Entity l = r.create();

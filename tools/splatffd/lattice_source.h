@@ -46,6 +46,7 @@ bool is_json_path(const std::string& path);   // .json (any case)
 // A scene holding `cloud` (Name `cloud_name`) and, when given, `lattices` bound to it in order (Name
 // "<cloud_name>.lattice", then ".lattice2", …), saved atomically as .glb/.gltf.
 Status save_cloud_with_lattices(SplatCloud cloud, const std::string& cloud_name,
-                                const std::vector<Lattice>& lattices, const std::string& path);
+                                const std::vector<Lattice>& lattices, const std::string& path,
+                                const SplatMaterial& material = {});
 
 }  // namespace sffd::cli

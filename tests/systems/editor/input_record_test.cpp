@@ -15,11 +15,12 @@ TEST(InputRecord, ParsesEveryEventKind) {
         "3 scroll -2 ctrl\n"
         "4 key z ctrl+shift\n"
         "5 text 0.25, 1, -3\n"
-        "5 key f12\n";
+        "5 key f12\n"
+        "6 set material.specular 0.75\n";
     auto parsed = parse_input_recording(text, "session.txt");
     ASSERT_TRUE(parsed.ok()) << parsed.message();
     const auto& e = *parsed;
-    ASSERT_EQ(e.size(), 8u);
+    ASSERT_EQ(e.size(), 9u);
     EXPECT_EQ(e[0].kind, InputKind::move);
     EXPECT_EQ(e[0].position, glm::dvec2(10.5, 20));
     EXPECT_EQ(e[1].kind, InputKind::press);
@@ -33,6 +34,9 @@ TEST(InputRecord, ParsesEveryEventKind) {
     EXPECT_EQ(e[6].kind, InputKind::text);
     EXPECT_EQ(e[6].key, "0.25, 1, -3");
     EXPECT_EQ(e[7].frame, 5u);
+    EXPECT_EQ(e[8].kind, InputKind::set);
+    EXPECT_EQ(e[8].key, "material.specular");
+    EXPECT_EQ(e[8].value, 0.75);
 }
 
 TEST(InputRecord, RoundTripsExactly) {
@@ -57,6 +61,12 @@ TEST(InputRecord, RoundTripsExactly) {
     t.kind = InputKind::text;
     t.key = "45";
     events.push_back(t);
+    InputEvent v;
+    v.frame = 10;
+    v.kind = InputKind::set;
+    v.key = "material.base_color.b";
+    v.value = 0.1;
+    events.push_back(v);
     auto back = parse_input_recording(format_input_recording(events), "x");
     ASSERT_TRUE(back.ok()) << back.message();
     EXPECT_EQ(*back, events);
@@ -74,7 +84,12 @@ TEST(InputRecord, ErrorsNameTheFileAndLine) {
         {"0 key hyper\n", "bad.txt:1: unknown key 'hyper'"},
         {"0 key a super\n", "bad.txt:1: bad modifiers 'super' (shift, ctrl, alt joined by +)"},
         {"0 move nan 3\n", "bad.txt:1: bad cursor position"},
-        {"0 jump\n", "bad.txt:1: unknown event 'jump' (move, press, release, scroll, key, text)"},
+        {"0 jump\n", "bad.txt:1: unknown event 'jump' (move, press, release, scroll, key, text, set)"},
+        {"0 set material.roughness 1\n",
+         "bad.txt:1: unknown field 'material.roughness' (material.specular, material.shininess, "
+         "material.base_color.r, material.base_color.g, material.base_color.b, material.base_color.a)"},
+        {"0 set material.specular\n", "bad.txt:1: 'set' takes a field and a value"},
+        {"0 set material.specular x\n", "bad.txt:1: bad value 'x'"},
         {"0\n", "bad.txt:1: expected '<frame> <event> ...'"},
     };
     for (const auto& c : cases) {

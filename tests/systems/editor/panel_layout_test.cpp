@@ -157,6 +157,7 @@ void scene_with_lattice(ecs::Registry& reg) {
     SplatCloud& cloud = reg.emplace<SplatCloud>(c);
     cloud.positions = {glm::vec3(0.5f), glm::vec3(0.25f)};
     cloud.normals = {glm::vec3(0, 0, 1), glm::vec3(0, 0, 1)};
+    reg.emplace<SplatMaterial>(c);
     reg.emplace<Deformers>(c, Deformers{{l}});
     EditorState& s = setup_editor(reg, Viewport{1280, 720});
     s.selected_entity = c;  // the inspector shows the cloud's material rows

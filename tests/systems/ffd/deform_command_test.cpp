@@ -397,8 +397,7 @@ TEST_F(DeformCommand, UvFrameOfATexturedCloudRidesOnTheDeformedAxes) {
         ASSERT_TRUE(d.ok()) << d.message();
         ASSERT_EQ(d->size(), cloud->size()) << out;
         ASSERT_EQ(d->uv_axes.size(), cloud->size()) << out;
-        EXPECT_EQ(d->material.texture_width, 256)
-            << out;  // the texture still found (PLY: the TextureFile beside it)
+        EXPECT_EQ(d->texture.width, 256) << out;  // the texture still found (PLY: the TextureFile beside it)
         std::size_t bad = 0;
         for (std::size_t i = 0; i < d->size(); ++i) {
             // Axes doubled along x, the frame and uv unchanged: the point x' + s J a_u has the uv of x + s

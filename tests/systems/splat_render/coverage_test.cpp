@@ -179,17 +179,16 @@ TEST_F(Coverage_, TextureColoursLandWhereTheUvSays) {
     reg.emplace<Camera>(ce, cam);
     reg.emplace<AmbientLight>(reg.create(), AmbientLight{glm::vec3(1.0f), 1.0f});
     SplatCloud sphere = fibonacci_sphere(paper_splats);
-    sphere.material.specular = 0.0f;
     const int tw = 64, th = 32;
     const std::uint8_t quad_colors[4][3] = {{230, 20, 20}, {20, 200, 20}, {20, 20, 230}, {230, 230, 20}};
-    sphere.material.texture_width = tw, sphere.material.texture_height = th;
+    sphere.texture.width = tw, sphere.texture.height = th;
     for (int y = 0; y < th; ++y)
         for (int x = 0; x < tw; ++x) {
             const int q = (x >= tw / 2 ? 1 : 0) + (y >= th / 2 ? 2 : 0);
-            for (int c = 0; c < 3; ++c) sphere.material.texture_rgba8.push_back(quad_colors[q][c]);
-            sphere.material.texture_rgba8.push_back(255);
+            for (int c = 0; c < 3; ++c) sphere.texture.rgba8.push_back(quad_colors[q][c]);
+            sphere.texture.rgba8.push_back(255);
         }
-    add_cloud(std::move(sphere));
+    add_cloud(std::move(sphere), SplatMaterial{.specular = 0.0f});
     for (Quality q : {Quality::hq, Quality::preview}) {
         const FrameImage img = render(q, 384, 384);
         int checked = 0, wrong = 0;

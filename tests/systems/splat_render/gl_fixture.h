@@ -50,9 +50,10 @@ protected:
         reg.emplace<DirectionalLight>(reg.create(), DirectionalLight{direction, glm::vec3(1.0f), 1.0f});
         reg.emplace<AmbientLight>(reg.create(), AmbientLight{glm::vec3(1.0f), ambient});
     }
-    ecs::Entity add_cloud(SplatCloud cloud) {
+    ecs::Entity add_cloud(SplatCloud cloud, const SplatMaterial& material = {}) {
         const ecs::Entity e = reg.create();
         reg.emplace<SplatCloud>(e, std::move(cloud));
+        reg.emplace<SplatMaterial>(e, material);
         return e;
     }
     // A Bernstein lattice of `divisions`³ around the unit sphere (box [-1.1, 1.1]³) deforming `cloud`.

@@ -68,12 +68,12 @@ TEST_F(Golden, TexturedSphereStretchedByALattice) {
     add_light({-0.5f, -0.4f, -0.6f}, 0.2f);
     SplatCloud sphere = fibonacci_sphere(59650);
     const int tw = 64, th = 32;
-    sphere.material.texture_width = tw, sphere.material.texture_height = th;
+    sphere.texture.width = tw, sphere.texture.height = th;
     for (int y = 0; y < th; ++y)
         for (int x = 0; x < tw; ++x) {
             const bool check = ((x / 8) + (y / 8)) % 2 == 0;
             const std::uint8_t r = check ? 230 : 40, g = std::uint8_t(40 + 6 * y), b = check ? 40 : 220;
-            sphere.material.texture_rgba8.insert(sphere.material.texture_rgba8.end(), {r, g, b, 255});
+            sphere.texture.rgba8.insert(sphere.texture.rgba8.end(), {r, g, b, 255});
         }
     Lattice lattice = ffd::make_lattice(glm::dvec3(-1.2),
                                         {glm::dvec3(2.4, 0, 0), glm::dvec3(0, 2.4, 0), glm::dvec3(0, 0, 2.4)},

@@ -22,7 +22,7 @@ namespace {
 
 // Unit sphere at the origin seen from +Z at distance `d`, 45 deg vertical field of view, one light from
 // the eye's direction (white, intensity 1) and ambient 0.2.
-ReferenceScene axis_scene(int w, int h, double d, const SplatMaterial& material) {
+ReferenceScene axis_scene(int w, int h, double d, const SplatTexture& texture) {
     ReferenceScene s;
     s.width = w, s.height = h;
     Camera cam;
@@ -33,7 +33,7 @@ ReferenceScene axis_scene(int w, int h, double d, const SplatMaterial& material)
     cam.far_plane = 100.0f;
     s.view = view_matrix(cam);
     s.projection = projection_matrix(cam, double(w) / double(h));
-    s.material = &material;
+    s.texture = &texture;  // and SplatMaterial's defaults
     s.lights.ambient = glm::dvec3(0.2);
     s.lights.to_light = {glm::dvec3(0.0, 0.0, 1.0)};
     s.lights.color = {glm::dvec3(1.0)};
@@ -41,12 +41,12 @@ ReferenceScene axis_scene(int w, int h, double d, const SplatMaterial& material)
 }
 
 // A 4 x 2 texture of distinct colours (sRGB bytes).
-SplatMaterial four_by_two() {
-    SplatMaterial m;
-    m.texture_width = 4, m.texture_height = 2;
+SplatTexture four_by_two() {
+    SplatTexture m;
+    m.width = 4, m.height = 2;
     for (int i = 0; i < 8; ++i) {
         const auto b = std::uint8_t(20 + 28 * i);
-        m.texture_rgba8.insert(m.texture_rgba8.end(), {b, std::uint8_t(255 - b), std::uint8_t(7 * i), 255});
+        m.rgba8.insert(m.rgba8.end(), {b, std::uint8_t(255 - b), std::uint8_t(7 * i), 255});
     }
     return m;
 }
@@ -57,7 +57,7 @@ double decode(std::uint8_t c) {
 }
 
 TEST(GroundTruth, CentrePixelSeesTheExpectedUvNormalDepthAndShade) {
-    const SplatMaterial m = four_by_two();
+    const SplatTexture m = four_by_two();
     const ReferenceScene s = axis_scene(65, 65, 4.0, m);  // odd size: pixel (32, 32) is on the view axis
     auto img = render_reference(s);
     ASSERT_TRUE(img) << img.message();
@@ -71,9 +71,10 @@ TEST(GroundTruth, CentrePixelSeesTheExpectedUvNormalDepthAndShade) {
     EXPECT_NEAR(sphere_uv(glm::dvec3(0, 0, 1)).y, 0.5, 1e-12);
     for (int c = 0; c < 3; ++c) {
         double albedo = 0.0;
-        for (int t : {0, 1, 4, 5}) albedo += 0.25 * decode(m.texture_rgba8[std::size_t(4 * t + c)]);
+        for (int t : {0, 1, 4, 5}) albedo += 0.25 * decode(m.rgba8[std::size_t(4 * t + c)]);
         // n = l = to_eye: ndl = 1, n.h = 1 -> spec = specular. colour = albedo (ambient + 1) + specular.
-        EXPECT_NEAR(img->color[k][c], albedo * 1.2 + double(m.specular), 2e-5) << "channel " << c;
+        EXPECT_NEAR(img->color[k][c], albedo * 1.2 + double(SplatMaterial{}.specular), 2e-5)
+            << "channel " << c;
     }
 }
 
@@ -82,7 +83,7 @@ TEST(GroundTruth, CentrePixelSeesTheExpectedUvNormalDepthAndShade) {
 // so it must get the same colour; its coverage is the square's image exactly; its far corners' uvs follow
 // the affine map.
 TEST(GroundTruth, MeshPathMatchesTheAnalyticSquare) {
-    const SplatMaterial m = four_by_two();
+    const SplatTexture m = four_by_two();
     ReferenceScene s = axis_scene(65, 65, 4.0, m);
     ExactMesh mesh;
     mesh.positions = {{-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}};
@@ -129,7 +130,7 @@ TEST(GroundTruth, MeshPathMatchesTheAnalyticSquare) {
 // subdivided, deformed square; it must look like the square built stretched (same uvs per vertex), traced
 // at rest, up to the tessellation's float rounding.
 TEST(GroundTruth, DeformedMeshPathMatchesThePreStretchedMesh) {
-    const SplatMaterial m = four_by_two();
+    const SplatTexture m = four_by_two();
     ExactMesh square, stretched;
     square.positions = {{-1, -1, 1}, {1, -1, 1}, {1, 1, 1}, {-1, 1, 1}};
     for (const glm::dvec3& p : square.positions) square.uvs.emplace_back(0.25 + p.x / 8.0, 0.5 + p.y / 4.0);
@@ -163,15 +164,14 @@ TEST(GroundTruth, DeformedMeshPathMatchesThePreStretchedMesh) {
 // long axis runs along v, over a texture constant along v (columns of random colours), filters at the
 // short axis's level: equal to trilinear with the long derivative divided by 4, sharper than trilinear.
 TEST(GroundTruth, AnisotropicReferenceFilterProbesAlongTheMajorAxis) {
-    SplatMaterial m;
-    m.texture_width = m.texture_height = 64;
+    SplatTexture m;
+    m.width = m.height = 64;
     std::mt19937 rng(7);
     std::vector<std::uint8_t> column(64 * 3);
     for (auto& c : column) c = std::uint8_t(rng() & 255u);
     for (int y = 0; y < 64; ++y)
         for (int x = 0; x < 64; ++x)
-            m.texture_rgba8.insert(m.texture_rgba8.end(),
-                                   {column[3 * x], column[3 * x + 1], column[3 * x + 2], 255});
+            m.rgba8.insert(m.rgba8.end(), {column[3 * x], column[3 * x + 1], column[3 * x + 2], 255});
     const ReferenceTexture t(m);
     const glm::dvec2 uv(0.4137, 0.61), dx(3.0 / 64, 0.0), dy(0.0, 12.0 / 64);
     const glm::dvec4 iso = t.anisotropic(uv, dx, glm::dvec2(0.0, 3.0 / 64), 16),
@@ -188,7 +188,7 @@ TEST(GroundTruth, AnisotropicReferenceFilterProbesAlongTheMajorAxis) {
 }
 
 TEST(GroundTruth, SilhouetteIsTheAnalyticDisc) {
-    SplatMaterial m;  // untextured: base colour
+    SplatTexture m;  // untextured: base colour
     const int w = 201, h = 201;
     const double d = 3.0;
     const ReferenceScene s = axis_scene(w, h, d, m);
@@ -215,10 +215,10 @@ TEST(GroundTruth, SilhouetteIsTheAnalyticDisc) {
 // exactly: the traced tessellation of F(sphere) must match the analytic sphere of radius 1.5, texture
 // coordinates included (the uv of a deformed point is the uv of its rest point).
 TEST(GroundTruth, DeformedPathMatchesTheAnalyticScaledSphere) {
-    const SplatMaterial tex = [] {
-        SplatMaterial m;
+    const SplatTexture tex = [] {
+        SplatTexture m;
         const assets::Image img = assets::make_sphere_texture(256, 128);
-        m.texture_width = img.width, m.texture_height = img.height, m.texture_rgba8 = img.rgba8;
+        m.width = img.width, m.height = img.height, m.rgba8 = img.rgba8;
         return m;
     }();
     ReferenceScene scaled = axis_scene(160, 120, 6.0, tex);
@@ -445,12 +445,12 @@ TEST(TextureRegions, CpuCullDrawsOneColourFootprintsFlat) {
     f.counts.y = 1;
     f.light_dir[0] = glm::vec4(0, 0, 1, 0);
     f.light_color[0] = glm::vec4(1.0f);
-    const std::vector<std::uint16_t> radius = uniform_texel_radius(
-        cloud.material.texture_rgba8.data(), cloud.material.texture_width, cloud.material.texture_height);
+    const std::vector<std::uint16_t> radius =
+        uniform_texel_radius(cloud.texture.rgba8.data(), cloud.texture.width, cloud.texture.height);
     for (bool lit : {false, true}) {
         f.counts.w = lit ? 1u : 0u;
-        TexelView texels{cloud.material.texture_rgba8.data(), cloud.material.texture_width,
-                         cloud.material.texture_height, cloud.uv_axes.data(), radius.data()};
+        TexelView texels{cloud.texture.rgba8.data(), cloud.texture.width, cloud.texture.height,
+                         cloud.uv_axes.data(), radius.data()};
         CpuCullResult with, without;
         cull_splats_cpu(splats, f, texels, with);
         texels.uniform_radius = nullptr;

@@ -154,7 +154,6 @@ TEST_F(Quality_, ConvertedTexturedMeshShowsItsCheckerPerPixel) {
     auto converted = assets::make_splat_cloud(*g, opt);
     ASSERT_TRUE(converted.ok()) << converted.message();
     ASSERT_EQ(converted->uv_axes.size(), converted->size());
-    converted->material.specular = 0.0f;
     const sffd::test::BoxFace front = sffd::test::textured_box_faces()[0];  // z = 0.25, facing +z
     Camera cam;
     cam.eye = glm::dvec3(0.0, 0.0, 2.0);
@@ -191,7 +190,7 @@ TEST_F(Quality_, ConvertedTexturedMeshShowsItsCheckerPerPixel) {
         EXPECT_GT(checked, 15000) << what;
         return checked ? double(wrong) / checked : 1.0;
     };
-    const ecs::Entity e = add_cloud(*converted);
+    const ecs::Entity e = add_cloud(*converted, SplatMaterial{.specular = 0.0f});
     for (Quality q : {Quality::hq, Quality::preview}) {
         const char* name = q == Quality::hq ? "hq, per-pixel texture" : "preview, per-pixel texture";
         EXPECT_LT(wrong_fraction(render(q, w, h), name), 0.002) << name;

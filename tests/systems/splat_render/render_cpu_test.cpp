@@ -146,12 +146,13 @@ TEST(RenderPack, GpuSplatLayoutCarriesEveryAttribute) {
     EXPECT_EQ(s.axis_v[3], c.uvs[3].y);
 }
 
-TEST(RenderPack, BaseColourWhenTheCloudHasNoColours) {
+// The base colour is the material's, applied when drawing (FrameBlock::base_color): packing does not
+// depend on the material, so a material edit re-uploads nothing.
+TEST(RenderPack, SplatsWithoutColoursPackWhite) {
     SplatCloud c = test::fibonacci_sphere(4);
     c.colors.clear();
-    c.material.base_color = glm::vec4(1.0f, 0.0f, 0.2158605f, 1.0f);
     const auto packed = pack_splats(c);
-    EXPECT_EQ(std::bit_cast<std::uint32_t>(packed[0].center[3]), 0xff8000ffu);
+    for (const gpu::GpuSplat& s : packed) EXPECT_EQ(std::bit_cast<std::uint32_t>(s.center[3]), 0xffffffffu);
 }
 
 TEST(RenderCamera, FramingCameraSeesTheWholeSphere) {

@@ -127,7 +127,7 @@ TEST_F(SphereImage, HqShadingIsSmoothAndMatchesTheAnalyticSphere) {
     const glm::dvec3 light_travel = glm::normalize(glm::dvec3(-0.5, -0.4, -0.6));
     add_light(glm::vec3(light_travel), 0.1f);
     const ecs::Entity e = add_cloud(fibonacci_sphere(paper_splats, 1.0, 0.8, 0xffb4b4b4u));
-    const SplatMaterial material = reg.get<SplatCloud>(e).material;
+    const SplatMaterial material = reg.get<SplatMaterial>(e);
     const int w = 384, h = 384;
     const FrameImage hq = render(Quality::hq, w, h);
     const FrameImage preview = render(Quality::preview, w, h);
@@ -190,8 +190,7 @@ TEST_F(SphereImage, DeferredShadingKeepsEachCloudsMaterial) {
     for (int k = 0; k < 2; ++k) {
         SplatCloud c = fibonacci_sphere(20000, 1.0, 0.8, 0xffb4b4b4u);
         c.origin = centres[k];
-        c.material.specular = specular[k], c.material.shininess = shininess[k];
-        add_cloud(std::move(c));
+        add_cloud(std::move(c), SplatMaterial{.specular = specular[k], .shininess = shininess[k]});
     }
     const int w = 400, h = 240;
     const FrameImage hq = render(Quality::hq, w, h);

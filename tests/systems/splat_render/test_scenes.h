@@ -44,13 +44,13 @@ inline SplatCloud fibonacci_sphere(std::size_t n, double radius = 1.0, double k 
 // textured clouds sample something that shows misplaced or misfiltered texels.
 inline void add_checker(SplatCloud& s) {
     const int tw = 64, th = 32;
-    s.material.texture_width = tw, s.material.texture_height = th;
+    s.texture.width = tw, s.texture.height = th;
     for (int y = 0; y < th; ++y)
         for (int x = 0; x < tw; ++x) {
             const bool check = ((x / 8) + (y / 8)) % 2 == 0;
-            s.material.texture_rgba8.insert(s.material.texture_rgba8.end(),
-                                            {std::uint8_t(check ? 230 : 40), std::uint8_t(40 + 6 * y),
-                                             std::uint8_t(check ? 40 : 220), 255});
+            s.texture.rgba8.insert(s.texture.rgba8.end(),
+                                   {std::uint8_t(check ? 230 : 40), std::uint8_t(40 + 6 * y),
+                                    std::uint8_t(check ? 40 : 220), 255});
         }
 }
 
