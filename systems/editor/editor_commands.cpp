@@ -148,11 +148,21 @@ bool key_last_edit(ecs::Registry& registry, EditorState& state) {
     const double time = registry.get<AnimationState>(e).time;
     AnimationClip& clip = registry.patch<AnimationClip>(e);
     const TrackKind kind = edit.kind == LastEdit::Kind::stretch ? TrackKind::stretch : TrackKind::twist;
+    // A twist keys the track of the same points, axis and pivot. The pivot is the selection's centroid,
+    // recomputed after each edit, so a rotation moves it by rounding: equal within a millionth of the
+    // lattice's diagonal (the unit axis within 1e-9), or keys at two times would land on two one-key tracks
+    // that never animate.
+    const Lattice& lattice = registry.get<Lattice>(e);
+    const double size = glm::length(lattice.axes[0] + lattice.axes[1] + lattice.axes[2]);
+    const auto near = [](const glm::dvec3& a, const glm::dvec3& b, double tolerance) {
+        return glm::length(a - b) <= tolerance;
+    };
     std::size_t track = clip.tracks.size();
     for (std::size_t t = 0; t < clip.tracks.size(); ++t) {
         const AnimationTrack& tr = clip.tracks[t];
         if (tr.kind == kind && tr.points == edit.points &&
-            (kind == TrackKind::stretch || (tr.axis == edit.axis && tr.has_pivot && tr.pivot == edit.pivot)))
+            (kind == TrackKind::stretch ||
+             (near(tr.axis, edit.axis, 1e-9) && tr.has_pivot && near(tr.pivot, edit.pivot, 1e-6 * size))))
             track = t;
     }
     if (track == clip.tracks.size()) {

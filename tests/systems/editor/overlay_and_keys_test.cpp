@@ -4,6 +4,7 @@
 
 #include "runtime/scene/components.h"
 #include "systems/animation/components.h"
+#include "systems/animation/editing.h"
 #include "systems/editor/editor_system.h"
 #include "systems/editor/lattice_overlay.h"
 #include "systems/editor/selection_edit.h"
@@ -111,4 +112,31 @@ TEST(EditorKeys, SetKeyRecordsTheLastStretchAndUndoRemovesIt) {
     undo(s.reg, *s.state);
     EXPECT_FALSE(s.reg.has<AnimationClip>(s.lattice));
     EXPECT_FALSE(s.reg.has<AnimationState>(s.lattice));
+}
+
+// Keying a twist at two times must give one track with two keys, even though the pivot (the selection's
+// centroid, recomputed after the first twist) comes back a rounding error away: two one-key tracks would
+// never animate.
+TEST(EditorKeys, TwistKeyedAtTwoTimesIsOneTrackWithTwoKeys) {
+    Scene s;
+    const Lattice& l = s.reg.get<Lattice>(s.lattice);
+    const std::vector<std::uint32_t> top = {
+        static_cast<std::uint32_t>(l.index(1, 3, 1)), static_cast<std::uint32_t>(l.index(3, 3, 1)),
+        static_cast<std::uint32_t>(l.index(1, 3, 3)), static_cast<std::uint32_t>(l.index(3, 3, 3))};
+    set_selection(s.reg, *s.state, s.lattice, top, "select");
+    ASSERT_TRUE(apply_twist(s.reg, *s.state, 30.0));
+    ASSERT_TRUE(key_last_edit(s.reg, *s.state));
+    scrub(s.reg.patch<AnimationState>(s.lattice), 1.0);
+    ASSERT_TRUE(apply_twist(s.reg, *s.state, 45.0));
+    // What a drifted centroid looks like, should this platform's rounding happen to cancel.
+    s.state->last_edit.pivot += glm::dvec3(1e-13, -1e-13, 0.0);
+    ASSERT_TRUE(key_last_edit(s.reg, *s.state));
+    const AnimationClip& clip = s.reg.get<AnimationClip>(s.lattice);
+    ASSERT_EQ(clip.tracks.size(), 1u);
+    EXPECT_EQ(clip.tracks[0].kind, TrackKind::twist);
+    EXPECT_EQ(clip.tracks[0].keys.size(), 2u);
+    // A twist about another pivot (well beyond rounding) is another track.
+    s.state->last_edit.pivot += glm::dvec3(0.5, 0.0, 0.0);
+    ASSERT_TRUE(key_last_edit(s.reg, *s.state));
+    EXPECT_EQ(s.reg.get<AnimationClip>(s.lattice).tracks.size(), 2u);
 }
