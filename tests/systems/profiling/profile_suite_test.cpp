@@ -92,9 +92,11 @@ TEST_F(ProfileSuite, QuickWritesOneValidRowPerClaim) {
                            "gaussians.moving.100k", "read.3dgs_ply", "read.surface_ply", "read.glb"})
         EXPECT_TRUE(ids.count(id)) << id;
     // The anchor row says what became of Blender (a time, or why it did not run).
-    for (const auto& row : j["rows"])
-        if (row["id"] == "deform.cpu.100k")
+    for (const auto& row : j["rows"]) {
+        if (row["id"] == "deform.cpu.100k") {
             EXPECT_NE(row["anchor"].get<std::string>().find("Blender"), std::string::npos);
+        }
+    }
 }
 
 TEST_F(ProfileSuite, UnknownSuiteIsAUsageError) {
