@@ -24,7 +24,7 @@ constexpr const char* usage_text =
     "F]\n"
     "                        [--trace F] [--compare BASE.json] [--sweep K=V,..] [--plot-sweep F.json] "
     "[--paper]\n"
-    "                        [--naive-frames N]\n"
+    "                        [--naive-frames N] [--suite quick|full]\n"
     "  SCENE                 built-in name (sphere, face), a scene/point-cloud file, or synthetic:N\n"
     "                        (a sphere of N splats with an 11^3 lattice), synthetic-gaussians:N (that\n"
     "                        sphere as N 3D Gaussians; Gaussian files work as SCENE too). Default: sphere\n"
@@ -52,7 +52,12 @@ constexpr const char* usage_text =
     "                        naive paper CPU algorithm vs ffd_system's CPU and GPU paths, paper mode\n"
     "                        (minutes: progress is shown on a terminal)\n"
     "  --naive-frames N      frames of the naive paper algorithm per case (default 1; about a minute\n"
-    "                        each; 0 skips it)\n";
+    "                        each; 0 skips it)\n"
+    "  --suite quick|full    every performance claim of the project side by side: target, value measured\n"
+    "                        here, met/missed, Blender's lattice modifier as anchor when installed, the\n"
+    "                        machine; --json F writes it. quick: small sizes (CI, under 2 minutes); full:\n"
+    "                        1M-16M splats, 1M/4M Gaussians, editor replays (needs a display: xvfb-run -a);\n"
+    "                        GPU rows are measured on a hardware GPU only\n";
 
 }  // namespace
 
@@ -171,6 +176,9 @@ int run_profile_command(cli::Args args) {
             o.sync = true;
         } else if (a == "--paper") {
             o.paper = true;
+        } else if (a == "--suite") {
+            if (!value(o.suite) || (o.suite != "quick" && o.suite != "full"))
+                return usage_error("--suite quick|full");
         } else if (a == "--json" || a == "--csv" || a == "--svg" || a == "--trace" || a == "--compare") {
             std::string& target = a == "--json"    ? o.json
                                   : a == "--csv"   ? o.csv
@@ -198,6 +206,7 @@ int run_profile_command(cli::Args args) {
         return plot_sweep(o.plot_sweep, o.svg);
     }
     if (o.paper) return run_paper(o);
+    if (!o.suite.empty()) return run_suite(o);
     if (!o.sweep.empty()) return run_sweep(o);
 
     RunSetup s;

@@ -80,14 +80,33 @@ Status load(ecs::Registry& registry, const std::string& scene, bool* synthetic) 
     if (scene.rfind("synthetic-gaussians:", 0) == 0) {
         // The synthetic sphere as 3D Gaussians (gaussians_from_splats: flat Gaussians, SH degree 0) in the
         // same 11^3 lattice: gaussian_deform_system deforms it, render_system's Gaussian pass draws it.
+        // synthetic-gaussians:N:sh3 adds SH degree 3 (the size of trained 3DGS files, whose SH rotation is
+        // most of a CPU deformation's cost), with fixed small higher-order coefficients.
+        std::string spec = scene.substr(20);
+        int degree = 0;
+        if (const auto colon = spec.find(':'); colon != std::string::npos) {
+            const std::string sh = spec.substr(colon + 1);
+            if (sh.size() != 3 || sh.rfind("sh", 0) != 0 || sh[2] < '0' || sh[2] > '3')
+                return make_error(scene + ": the SH suffix is :sh0 .. :sh3");
+            degree = sh[2] - '0';
+            spec.resize(colon);
+        }
         double count = 0.0;
-        if (!parse_count(scene.substr(20), count))
-            return make_error(scene + ": bad synthetic Gaussian count");
+        if (!parse_count(spec, count)) return make_error(scene + ": bad synthetic Gaussian count");
         *synthetic = true;
         const SplatCloud sphere = synthetic_sphere(static_cast<std::size_t>(count));
         const ecs::Entity cloud = registry.create();
         registry.emplace<Name>(cloud, Name{"synthetic Gaussian sphere"});
-        registry.emplace<GaussianCloud>(cloud, gaussian::gaussians_from_splats(sphere));
+        GaussianCloud& g = registry.emplace<GaussianCloud>(cloud, gaussian::gaussians_from_splats(sphere));
+        if (degree > 0) {
+            const std::size_t k = std::size_t(sh_coeffs(degree));
+            std::vector<float> sh(g.size() * k * 3);
+            for (std::size_t i = 0; i < g.size(); ++i)
+                for (std::size_t j = 0; j < k * 3; ++j)
+                    sh[i * k * 3 + j] = j < 3 ? g.sh[i * 3 + j] : 0.05f * float((i + j) % 7) - 0.15f;
+            g.sh = std::move(sh);
+            g.sh_degree = degree;
+        }
         const ecs::Entity lattice = registry.create();
         registry.emplace<Lattice>(lattice, paper_lattice(sphere, 10));
         registry.emplace<Deformers>(cloud, Deformers{{lattice}});
@@ -184,6 +203,7 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     } else {
         schedule.add(Phase::residency, "residency", residency_system);  // the compute path's input
         schedule.add(Phase::deformation, "ffd", ffd_system);
+        schedule.add(Phase::deformation, "gaussian", gaussian_deform_system);  // the same for Gaussian clouds
         schedule_kind = "deformation";
     }
     if (s.drive != "none") {

@@ -32,6 +32,7 @@ struct Options {
     std::string plot_sweep;
     bool paper = false;
     int naive_frames = 1;
+    std::string suite;  // "quick" or "full": the performance suite (profile_suite.cpp)
 };
 
 struct RunSetup {
@@ -63,6 +64,7 @@ Status load(ecs::Registry& registry, const std::string& scene, bool* synthetic);
 int run_sweep(const Options& o);
 int plot_sweep(const std::string& path, const std::string& prefix);
 int run_paper(const Options& o);
+int run_suite(const Options& o);
 
 // Helpers.
 int usage_error(const std::string& message);  // cmd_profile.cpp: message + usage, exit code 2
