@@ -142,7 +142,7 @@ TEST_F(MaterialEditFrame, AReplayedSliderEditReRendersOnlyAndUndoRestoresIt) {
         gfx::Residency residency;
         std::uint64_t pick_version;
     };
-    picking::DeformCache pick_cache;
+    picking::PickCache pick_cache;
     auto stamps = [&] {
         const gfx::GpuSplats& gpu = reg.resource<gfx::GpuSplatStore>().clouds.at(cloud);
         const auto& uploads = reg.resource<gfx::ResidencyStats>();

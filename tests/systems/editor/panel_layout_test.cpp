@@ -95,9 +95,11 @@ TEST(PanelLayout, TheViewRectangleIsWhereNoPanelCovers) {
             EXPECT_LE(v.y + v.h, in.height - in.bottom);
             EXPECT_GT(v.w, 0.0f);
             EXPECT_GT(v.h, 0.0f);
-            for (std::size_t i = 0; i < panel_count; ++i)
-                if (!in.collapsed[i] || Panel(i) == Panel::timeline)
+            for (std::size_t i = 0; i < panel_count; ++i) {
+                if (!in.collapsed[i] || Panel(i) == Panel::timeline) {
                     EXPECT_FALSE(overlaps(v, panels[i])) << panel_title(Panel(i)) << " mask " << mask;
+                }
+            }
         }
     LayoutInput in;
     const PanelRect open = view_rect(layout_panels(in), in);
