@@ -18,6 +18,7 @@
 #include "systems/gaussian/gaussian_spz.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"
+#include "tests/systems/gaussian/splat_transform_fixture.h"
 #include "tests/systems/gaussian/test_math.h"
 
 namespace {
@@ -26,70 +27,15 @@ namespace fs = std::filesystem;
 using namespace sffd;
 using namespace sffd::gaussian;
 
-std::string tool() {
-    if (const char* env = std::getenv("SPLAT_TRANSFORM")) return env;
-    const char* cache = std::getenv("SPLATFFD_CACHE_DIR");
-    const fs::path base =
-        cache ? fs::path(cache) : fs::path(SFFD_TEST_DATA_DIR) / ".." / ".." / "content" / "cache";
-    return (base / "splat-transform" / "node_modules" / ".bin" / "splat-transform").string();
-}
+namespace splat_transform = sffd::test::splat_transform;
+using splat_transform::tool;
 
-fs::path temp(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("sffd_st_sog_" + std::to_string(getpid()));
-    fs::create_directories(d);
-    return d / name;
-}
+fs::path temp(const std::string& name) { return splat_transform::temp("sffd_st_sog", name); }
+std::string run(const std::string& args) { return splat_transform::run("sffd_st_sog", "-g cpu ", args); }
 
-// `-g cpu`: SOG's k-means runs on the CPU (no WebGPU adapter on a build machine).
-std::string run(const std::string& args) {
-    const std::string log = temp("log.txt").string();
-    const int rc = std::system((tool() + " -w -g cpu " + args + " >" + log + " 2>&1").c_str());
-    if (rc == 0) return "";
-    std::ifstream f(log);
-    return "splat-transform " + args + " failed:\n" + std::string(std::istreambuf_iterator<char>(f), {});
-}
-
-class SplatTransformSog : public ::testing::Test {
-protected:
-    void SetUp() override {
-        if (std::system("node --version >/dev/null 2>&1") != 0) GTEST_SKIP() << "node is not installed";
-        if (!fs::exists(tool()))
-            GTEST_SKIP() << "splat-transform not installed at " << tool()
-                         << " (run tools/fetch_splat_transform.sh)";
-    }
-};
-
-GaussianCloud capture(std::size_t n, float sh_amplitude, unsigned seed = 5) {
-    std::mt19937 rng(seed);
-    std::uniform_real_distribution<float> u(-1, 1);
-    GaussianCloud g;
-    g.sh_degree = 3;
-    for (std::size_t i = 0; i < n; ++i) {
-        glm::vec3 p(u(rng), u(rng), u(rng));
-        if (glm::length(p) > 1.0f) p = glm::normalize(p);
-        g.positions.push_back(p);
-        g.scales.emplace_back(0.04f + 0.03f * u(rng), 0.03f + 0.02f * u(rng), 0.06f + 0.03f * u(rng));
-        g.rotations.push_back(glm::normalize(glm::quat(u(rng), u(rng), u(rng), u(rng))));
-        g.opacities.push_back(0.6f + 0.35f * u(rng));
-        for (int k = 0; k < 16; ++k)
-            for (int c = 0; c < 3; ++c) g.sh.push_back(k == 0 ? 1.2f * u(rng) : sh_amplitude * u(rng));
-    }
-    return g;
-}
-
-// Gaussian by Gaussian within `tol` (covariance relative): the same quantised file decoded twice.
-void expect_close(const GaussianCloud& a, const GaussianCloud& b, double tol) {
-    ASSERT_EQ(a.size(), b.size());
-    ASSERT_EQ(a.sh_degree, b.sh_degree);
-    for (std::size_t i = 0; i < a.size(); ++i) {
-        EXPECT_LT(glm::length(glm::dvec3(a.positions[i]) - glm::dvec3(b.positions[i])), tol) << i;
-        const glm::dmat3 sa = covariance(glm::dvec3(a.scales[i]), glm::dquat(a.rotations[i]));
-        const glm::dmat3 sb = covariance(glm::dvec3(b.scales[i]), glm::dquat(b.rotations[i]));
-        EXPECT_LT(test::max_abs(sa - sb), tol * test::max_abs(sa)) << i;
-        EXPECT_NEAR(a.opacities[i], b.opacities[i], tol) << i;
-    }
-    for (std::size_t k = 0; k < a.sh.size(); ++k) EXPECT_NEAR(a.sh[k], b.sh[k], tol) << k;
-}
+class SplatTransformSog : public splat_transform::Fixture {};
+using splat_transform::capture;
+using splat_transform::expect_close;
 
 ReferenceImage render(const GaussianCloud& g) {
     Camera cam;

@@ -25,6 +25,7 @@
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/gaussian_spz.h"
 #include "systems/gaussian/sh.h"
+#include "tests/systems/gaussian/splat_transform_fixture.h"
 #include "tests/systems/gaussian/test_math.h"
 
 namespace {
@@ -33,38 +34,13 @@ namespace fs = std::filesystem;
 using namespace sffd;
 using namespace sffd::gaussian;
 
-std::string tool() {
-    if (const char* env = std::getenv("SPLAT_TRANSFORM")) return env;
-    const char* cache = std::getenv("SPLATFFD_CACHE_DIR");
-    const fs::path base =
-        cache ? fs::path(cache) : fs::path(SFFD_TEST_DATA_DIR) / ".." / ".." / "content" / "cache";
-    return (base / "splat-transform" / "node_modules" / ".bin" / "splat-transform").string();
-}
+namespace splat_transform = sffd::test::splat_transform;
+using splat_transform::tool;
 
-fs::path temp(const std::string& name) {
-    const fs::path d = fs::temp_directory_path() / ("sffd_splat_transform_" + std::to_string(getpid()));
-    fs::create_directories(d);
-    return d / name;
-}
+fs::path temp(const std::string& name) { return splat_transform::temp("sffd_splat_transform", name); }
+std::string run(const std::string& args) { return splat_transform::run("sffd_splat_transform", "", args); }
 
-// Runs splat-transform; returns "" on success, else its output.
-std::string run(const std::string& args) {
-    const std::string log = temp("log.txt").string();
-    const int rc = std::system((tool() + " -w " + args + " >" + log + " 2>&1").c_str());
-    if (rc == 0) return "";
-    std::ifstream f(log);
-    return "splat-transform " + args + " failed:\n" + std::string(std::istreambuf_iterator<char>(f), {});
-}
-
-class SplatTransform : public ::testing::Test {
-protected:
-    void SetUp() override {
-        if (std::system("node --version >/dev/null 2>&1") != 0) GTEST_SKIP() << "node is not installed";
-        if (!fs::exists(tool()))
-            GTEST_SKIP() << "splat-transform not installed at " << tool()
-                         << " (run tools/fetch_splat_transform.sh)";
-    }
-};
+class SplatTransform : public splat_transform::Fixture {};
 
 GaussianCloud cloud(std::size_t n, int degree) {
     std::mt19937 rng(42);
