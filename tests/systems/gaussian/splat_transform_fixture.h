@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include "systems/gaussian/components.h"
@@ -89,6 +90,68 @@ inline void expect_close(const GaussianCloud& a, const GaussianCloud& b, double 
         EXPECT_NEAR(a.opacities[i], b.opacities[i], tol) << i;
     }
     for (std::size_t k = 0; k < a.sh.size(); ++k) EXPECT_NEAR(a.sh[k], b.sh[k], tol) << k;
+}
+
+// Writes `g` (SH degree 3) to `out` with the official SPZ library (the WebAssembly build inside
+// splat-transform, through niantic_spz.mjs, told the input is the 3DGS PLY frame), version `version` ("" the
+// library's default), its JSON input in `json`. Returns the script's exit status.
+inline int write_with_official_spz(const GaussianCloud& g, const fs::path& json, const fs::path& out,
+                                   const std::string& version = "") {
+    std::ostringstream j;
+    j.precision(9);
+    auto list = [&](const char* key, auto&& value, std::size_t count) {
+        j << '"' << key << "\":[";
+        for (std::size_t k = 0; k < count; ++k) j << (k ? "," : "") << value(k);
+        j << "],";
+    };
+    const std::size_t n = g.size();
+    list(
+        "positions", [&](std::size_t k) { return g.positions[k / 3][int(k % 3)]; }, n * 3);
+    list(
+        "scales", [&](std::size_t k) { return std::log(g.scales[k / 3][int(k % 3)]); }, n * 3);
+    list(
+        "rotations",
+        [&](std::size_t k) {
+            const glm::quat q = g.rotations[k / 4];
+            return k % 4 == 0 ? q.w : q[int(k % 4 - 1)];
+        },
+        n * 4);
+    list(
+        "alphas", [&](std::size_t k) { return gaussian::logit(g.opacities[k]); }, n);
+    list(
+        "colors", [&](std::size_t k) { return g.sh[(k / 3) * 48 + k % 3]; }, n * 3);
+    list(
+        "sh", [&](std::size_t k) { return g.sh[(k / 45) * 48 + 3 + k % 45]; }, n * 45);
+    // Appended piecewise: GCC 12 flags operator+(const char*, string&&) with a false -Wrestrict.
+    std::string text = "{";
+    text += j.str();
+    text += "\"n\":";
+    text += std::to_string(n);
+    text += ",\"degree\":3}";
+    std::ofstream(json) << text;
+    const fs::path dist =
+        fs::path(tool()).parent_path().parent_path() / "@playcanvas" / "splat-transform" / "dist";
+    const std::string script = std::string(SFFD_TEST_DATA_DIR) + "/../systems/gaussian/niantic_spz.mjs";
+    std::string command = "node " + script + " " + dist.string() + " " + json.string() + " " + out.string();
+    if (!version.empty()) command += " " + version;
+    return std::system(command.c_str());
+}
+
+// `back` (read from an SPZ the official library wrote from `g`) is `g` within SPZ's quantisation. The library
+// turns a rotation R into S R S (S = diag(1, -1, -1)), we into S R: the same covariance (S D S = D for a
+// diagonal D), so covariances are compared, not quaternions.
+inline void expect_official_spz_reads_as(const GaussianCloud& back, const GaussianCloud& g) {
+    ASSERT_EQ(back.size(), g.size());
+    for (std::size_t i = 0; i < g.size(); ++i) {
+        EXPECT_LT(glm::length(back.positions[i] - g.positions[i]), 2e-3f) << i;
+        const glm::dmat3 sa = gaussian::covariance(glm::dvec3(back.scales[i]), glm::dquat(back.rotations[i]));
+        const glm::dmat3 sb = gaussian::covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i]));
+        EXPECT_LT(test::max_abs(sa - sb), 0.1 * test::max_abs(sb)) << i;  // log scales in steps of 1/16
+        EXPECT_NEAR(back.opacities[i], g.opacities[i], 1.0 / 255 + 1e-6) << i;
+        for (int k = 0; k < 48; ++k)  // DC in steps of 1/(255·0.15), SH in steps of 1/128
+            EXPECT_NEAR(back.sh[i * 48 + std::size_t(k)], g.sh[i * 48 + std::size_t(k)], k < 3 ? 0.02 : 0.01)
+                << i << " " << k;
+    }
 }
 
 }  // namespace sffd::test::splat_transform
