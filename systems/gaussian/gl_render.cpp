@@ -483,9 +483,9 @@ Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianVie
                       const gfx::Program* splat_program, const TileTargets* tiles) {
     if (b.count >= (std::size_t(1) << 31))
         return make_error("draw_gaussians(): more than 2^31 Gaussians in one draw");
-    if (Status st = project_and_sort(r, b, v); !st) return st.error();
     r.covered_pixels = 0;
     r.last_blend = BlendPath::quads;
+    if (Status st = project_and_sort(r, b, v); !st) return st.error();
     if (tiles) {
         // The covered pixels (8 bytes; waits for the projection only): quads up to the budget, where
         // their image is the one the reference tests compare; past it, the tile blend, whose work stops at
