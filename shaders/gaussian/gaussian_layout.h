@@ -6,8 +6,13 @@
 
 #define SFFD_GAUSS_SSBO_IN        0   // GpuGaussian[]: centre (relative to the cloud origin), rotation, scale
 #define SFFD_GAUSS_SSBO_SH        1   // float[]: SH coefficients, GaussianCloud::sh layout
-#define SFFD_GAUSS_SSBO_PROJECTED 2   // GpuProjected[]: written by project.comp, read by the splat pass
-#define SFFD_GAUSS_SSBO_ORDER     3   // uint[]: visible Gaussians, front to back
+// The projection, written by project.comp, read at random by the blend (splat.vert, tile_*.comp): three
+// vec4 arrays, not one array of 48-byte records, so that each storage block holds 16 bytes a Gaussian and
+// 3x more Gaussians fit GL_MAX_SHADER_STORAGE_BLOCK_SIZE (gl_render refuses a cloud past it).
+#define SFFD_GAUSS_SSBO_PROJ_CENTER 2 // vec4[]: pixel centre (x right, y DOWN, pixel (i,j) centred at
+                                      // i+0.5, j+0.5), view depth, footprint radius in pixels (0 = not drawn)
+#define SFFD_GAUSS_SSBO_ORDER     3   // uint[]: visible Gaussians, front to back (the quads fetch it as the
+                                      // instanced attribute SFFD_GAUSS_ATTR_ORDER: no storage block)
 #define SFFD_GAUSS_SSBO_FRAMES    4   // vec4[3] per Gaussian: columns of its SH frame (view-direction mode)
 #define SFFD_GAUSS_SSBO_DEPTH     5   // uint[]: sort key of each Gaussian: floatBitsToUint(view depth) when drawn
                                       // (positive floats order like their bits), SFFD_GAUSS_NOT_DRAWN when not
@@ -22,6 +27,13 @@
 #define SFFD_GAUSS_IMAGE_COLOR    0   // image unit: rgba32f target of the tile blend (rgb premultiplied, a = 1 − T)
 #define SFFD_GAUSS_IMAGE_DEPTH    1   // image unit: rgba32f Σ T α view depth (x), coverage (w) (render system)
 #define SFFD_GAUSS_SSBO_TILE_STATS 11 // uint: entries the tile blend's groups staged before they stopped
+// The other two projection arrays share points 7 and 8 with the tile preparation's TOUCHED and TILE_KEYS:
+// no program binds both (project.comp, splat.vert and tile_blend.comp read these; tile_count/emit.comp
+// read only the centres), so every Gaussian program stays within GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS
+// and the blocks per stage runtime/gfx/limits.h requires (splat.vert: 3; project.comp: 8).
+#define SFFD_GAUSS_SSBO_PROJ_CONIC 7  // vec4[]: inverse 2D covariance (a, b, c) of [[a b][b c]], opacity
+#define SFFD_GAUSS_SSBO_PROJ_COLOR 8  // vec4[]: rgb from the SH, w unused
+#define SFFD_GAUSS_ATTR_ORDER      0  // vertex attribute (uint, divisor 1) of splat.vert: SFFD_GAUSS_SSBO_ORDER
 // The GPU deformation (shaders/gaussian/deform.comp, its own program: points 7-9 below mean something
 // else there than in the tile passes) reads SFFD_GAUSS_SSBO_IN, writes SFFD_GAUSS_SSBO_DEFORMED and
 // SFFD_GAUSS_SSBO_FRAMES; it also uses the ffd pass's points 2 (control points) and 6 (statistics).
@@ -33,13 +45,10 @@
 //   vec4 pos_opacity;  // xyz centre relative to the origin, w linear opacity
 //   vec4 rotation;     // unit quaternion (w, x, y, z)
 //   vec4 scale;        // xyz linear standard deviations, w unused
-// GpuProjected, std430, 48 bytes:
-//   vec4 center_depth_radius;  // pixel centre (x right, y DOWN, pixel (i,j) centred at i+0.5, j+0.5),
-//                              // view depth, footprint radius in pixels (0 = not drawn)
-//   vec4 conic_opacity;        // inverse 2D covariance (a, b, c) of [[a b][b c]], opacity
-//   vec4 color;                // rgb from the SH, w unused
+// The projection: one vec4 per Gaussian in each of the SFFD_GAUSS_SSBO_PROJ_* arrays (std430, 16 bytes).
 #define SFFD_GPU_GAUSSIAN_BYTES 48
-#define SFFD_GPU_PROJECTED_BYTES 48
+#define SFFD_GPU_PROJECTED_ARRAYS 3
+#define SFFD_GPU_PROJECTED_STRIDE 16
 
 #ifdef __cplusplus
 namespace sffd::gpu {
@@ -48,24 +57,18 @@ struct alignas(16) GpuGaussian {
     float rotation[4];
     float scale[4];
 };
-struct alignas(16) GpuProjected {
-    float center_depth_radius[4];
-    float conic_opacity[4];
-    float color[4];
+// One element of a projection array.
+struct alignas(16) GpuProjectedVec4 {
+    float v[4];
 };
 static_assert(sizeof(GpuGaussian) == SFFD_GPU_GAUSSIAN_BYTES);
-static_assert(sizeof(GpuProjected) == SFFD_GPU_PROJECTED_BYTES);
+static_assert(sizeof(GpuProjectedVec4) == SFFD_GPU_PROJECTED_STRIDE);
 }  // namespace sffd::gpu
 #else
 struct GpuGaussian {
     vec4 pos_opacity;
     vec4 rotation;
     vec4 scale;
-};
-struct GpuProjected {
-    vec4 center_depth_radius;
-    vec4 conic_opacity;
-    vec4 color;
 };
 #endif
 

@@ -8,10 +8,12 @@ layout(local_size_x = 64) in;
 
 layout(std430, binding = SFFD_GAUSS_SSBO_IN) readonly buffer Gaussians { GpuGaussian gaussians[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_SH) readonly buffer Sh { float sh[]; };
-layout(std430, binding = SFFD_GAUSS_SSBO_PROJECTED) writeonly buffer Projected { GpuProjected projected[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_CENTER) writeonly buffer ProjCenter { vec4 proj_center[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_CONIC) writeonly buffer ProjConic { vec4 proj_conic[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_COLOR) writeonly buffer ProjColor { vec4 proj_color[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_FRAMES) readonly buffer Frames { vec4 frames[]; };
+// The GPU sort's payloads are written by sort_payload.comp: one more block here would be a ninth.
 layout(std430, binding = SFFD_GAUSS_SSBO_DEPTH) writeonly buffer Depth { uint depth_keys[]; };
-layout(std430, binding = SFFD_GAUSS_SSBO_ORDER) writeonly buffer Order { uint order[]; };  // payloads for the GPU sort
 // DrawArraysIndirectCommand; instance_count counts the drawn Gaussians (zeroed by the CPU before the pass).
 // Then the pixels the drawn Gaussians' clipped pixel boxes cover, summed (the quad path's fragments), and
 // a flag set when that sum wrapped: gl_render's draw_gaussians picks quads or tiles from them.
@@ -27,7 +29,6 @@ uniform float u_focal;      // pixels
 uniform vec2 u_limit;       // 1.3 x tan(half fov) per axis (3DGS clamps x/z, y/z for the Jacobian)
 uniform float u_near;
 uniform uint u_count;
-uniform uint u_base;        // index of this range's first Gaussian (every buffer is bound from it)
 uniform int u_degree;
 uniform int u_frames;       // 1: evaluate the SH at frameᵀ d (GaussianCloud::sh_frames)
 uniform float u_min_footprint;  // > 0 (preview): skip Gaussians whose unfiltered 3σ radius is below it, px
@@ -69,12 +70,24 @@ bool finite4(vec4 v) {
     return all(notEqual(floatBitsToUint(v) & 0x7f800000u, uvec4(0x7f800000u)));
 }
 
-// Projects Gaussian i; true when it is drawn. Writes its projected record, sort key and payload, and the
+// One Gaussian's projection, stored in the three SFFD_GAUSS_SSBO_PROJ_* arrays (gaussian_layout.h).
+struct Projection {
+    vec4 center_depth_radius;
+    vec4 conic_opacity;
+    vec4 color;
+};
+
+void store(uint i, Projection o) {
+    proj_center[i] = o.center_depth_radius;
+    proj_conic[i] = o.conic_opacity;
+    proj_color[i] = o.color;
+}
+
+// Projects Gaussian i; true when it is drawn. Writes its projection and sort key, and the
 // pixels of its pixel box clipped to the image (tile_common.glsl's pixel_box).
 bool project(uint i, out uint pixels) {
     pixels = 0u;
-    order[i] = u_base + i;  // the sort payload: the Gaussian's index in the whole cloud
-    GpuProjected o;
+    Projection o;
     o.center_depth_radius = vec4(0.0);
     o.conic_opacity = vec4(0.0);
     o.color = vec4(0.0);
@@ -83,15 +96,15 @@ bool project(uint i, out uint pixels) {
     // Culled: non-finite centres, opacities, rotations or scales (the loaders refuse them; a deformation
     // can still produce them).
     if (!finite4(g.pos_opacity) || !finite4(g.rotation) || !finite4(vec4(g.scale.xyz, 0.0))) {
-        projected[i] = o;
+        store(i, o);
         return false;
     }
     const vec3 t = (u_view * vec4(g.pos_opacity.xyz, 1.0)).xyz;
     const float depth = -t.z;
-    if (!finite4(vec4(t, 0.0)) || depth < u_near) { projected[i] = o; return false; }
+    if (!finite4(vec4(t, 0.0)) || depth < u_near) { store(i, o); return false; }
     // Culled too: opacity below 1/255 (every α = min(0.99, o·exp(power ≤ 0)) ≤ o would be skipped, as in
     // the reference).
-    if (g.pos_opacity.w < 1.0 / 255.0) { projected[i] = o; return false; }
+    if (g.pos_opacity.w < 1.0 / 255.0) { store(i, o); return false; }
     // Σ = R S Sᵀ Rᵀ from the quaternion (w, x, y, z).
     const float w = g.rotation.x, x = g.rotation.y, y = g.rotation.z, z = g.rotation.w;
     const mat3 r = mat3(1.0 - 2.0 * (y * y + z * z), 2.0 * (x * y + w * z), 2.0 * (x * z - w * y),
@@ -107,21 +120,21 @@ bool project(uint i, out uint pixels) {
     const float a = dot(jx, v * jx) + 0.3, b = dot(jx, v * jy), c = dot(jy, v * jy) + 0.3;
     const float det = a * c - b * b;
     // Overflow (inf - inf) can still make NaN from finite inputs: test the bits before comparing.
-    if (!finite4(vec4(a, b, c, det)) || det <= 0.0) { projected[i] = o; return false; }
+    if (!finite4(vec4(a, b, c, det)) || det <= 0.0) { store(i, o); return false; }
     const float mid = 0.5 * (a + c), lmax = mid + sqrt(max(0.1, mid * mid - det));
     if (u_min_footprint > 0.0) {
         // Largest eigenvalue of the footprint without the low-pass (trace - 0.6 = 2 mid - 0.6, det of the
         // unfiltered 2x2): a Gaussian under a pixel only blurs its neighbours in a moving preview.
         const float a0 = a - 0.3, c0 = c - 0.3, mid0 = 0.5 * (a0 + c0);
         const float lmax0 = mid0 + sqrt(max(0.0, mid0 * mid0 - (a0 * c0 - b * b)));
-        if (9.0 * max(lmax0, 0.0) < u_min_footprint * u_min_footprint) { projected[i] = o; return false; }
+        if (9.0 * max(lmax0, 0.0) < u_min_footprint * u_min_footprint) { store(i, o); return false; }
     }
     const vec2 center = vec2(0.5 * u_size.x + u_focal * t.x / depth, 0.5 * u_size.y - u_focal * t.y / depth);
     const float radius = ceil(3.0 * sqrt(lmax));
     // Culling before the sort: a pixel box (floor(c - r) .. ceil(c + r), the reference's) entirely off
     // the image is not drawn, like the reference's empty clipped box.
     const vec2 lo = floor(center - radius), hi = ceil(center + radius);
-    if (any(lessThan(hi, vec2(0.0))) || any(greaterThan(lo, u_size - 1.0))) { projected[i] = o; return false; }
+    if (any(lessThan(hi, vec2(0.0))) || any(greaterThan(lo, u_size - 1.0))) { store(i, o); return false; }
     depth_keys[i] = floatBitsToUint(depth);
     const uvec2 box = uvec2(min(hi, u_size - 1.0)) - uvec2(max(lo, vec2(0.0))) + 1u;
     pixels = box.x * box.y;
@@ -130,7 +143,7 @@ bool project(uint i, out uint pixels) {
     vec3 dir = normalize(g.pos_opacity.xyz - u_eye);
     if (u_frames != 0) dir = transpose(mat3(frames[3u * i].xyz, frames[3u * i + 1u].xyz, frames[3u * i + 2u].xyz)) * dir;
     o.color = vec4(sh_color(i, dir), 0.0);
-    projected[i] = o;
+    store(i, o);
     return true;
 }
 

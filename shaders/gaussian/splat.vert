@@ -3,8 +3,13 @@
 // pixels floor(c - r) .. ceil(c + r) per axis (y down), clipped to the image by the viewport.
 #include "gaussian/gaussian_layout.h"
 
-layout(std430, binding = SFFD_GAUSS_SSBO_PROJECTED) readonly buffer Projected { GpuProjected projected[]; };
-layout(std430, binding = SFFD_GAUSS_SSBO_ORDER) readonly buffer Order { uint order[]; };
+// Three storage blocks, what runtime/gfx/limits.h requires of the vertex stage (GL 4.5 guarantees none).
+layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_CENTER) readonly buffer ProjCenter { vec4 proj_center[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_CONIC) readonly buffer ProjConic { vec4 proj_conic[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_COLOR) readonly buffer ProjColor { vec4 proj_color[]; };
+// This instance's Gaussian: order[gl_InstanceID], fetched as an instanced attribute (divisor 1), which
+// needs no storage block.
+layout(location = SFFD_GAUSS_ATTR_ORDER) in uint a_gaussian;
 
 uniform vec2 u_size;
 // NDC depth of the quad: u_ndc_depth.x + u_ndc_depth.y / view depth (the render system's projection, so
@@ -17,15 +22,15 @@ flat out vec4 v_conic_opacity;
 flat out vec3 v_color;
 
 void main() {
-    const GpuProjected p = projected[order[gl_InstanceID]];
-    const vec2 c = p.center_depth_radius.xy;
-    const float r = p.center_depth_radius.w;
+    const vec4 center_depth_radius = proj_center[a_gaussian];
+    const vec2 c = center_depth_radius.xy;
+    const float r = center_depth_radius.w;
     const vec2 lo = floor(c - r), hi = ceil(c + r) + 1.0;  // pixel edges
     const vec2 corner = vec2(float(gl_VertexID & 1), float(gl_VertexID >> 1));
     const vec2 pix = mix(lo, hi, corner);
-    const float z = clamp(u_ndc_depth.x + u_ndc_depth.y / p.center_depth_radius.z, -1.0, 0.999999);
+    const float z = clamp(u_ndc_depth.x + u_ndc_depth.y / center_depth_radius.z, -1.0, 0.999999);
     gl_Position = vec4(pix.x / u_size.x * 2.0 - 1.0, 1.0 - pix.y / u_size.y * 2.0, z, 1.0);
     v_center = c;
-    v_conic_opacity = p.conic_opacity;
-    v_color = p.color.rgb;
+    v_conic_opacity = proj_conic[a_gaussian];
+    v_color = proj_color[a_gaussian].rgb;
 }

@@ -12,7 +12,9 @@
 
 layout(local_size_x = SFFD_GAUSS_TILE, local_size_y = SFFD_GAUSS_TILE) in;
 
-layout(std430, binding = SFFD_GAUSS_SSBO_PROJECTED) readonly buffer Projected { GpuProjected projected[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_CENTER) readonly buffer ProjCenter { vec4 proj_center[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_CONIC) readonly buffer ProjConic { vec4 proj_conic[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_COLOR) readonly buffer ProjColor { vec4 proj_color[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_TILE_VALUES) readonly buffer TileValues { uint tile_values[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_RANGES) readonly buffer Ranges { uvec2 ranges[]; };
 // Entries the groups staged before they stopped, summed over the frame (the work early termination left).
@@ -58,12 +60,13 @@ void main() {
         barrier();
         if (done) atomicAdd(s_done, 1u);
         if (begin + tid < range.y) {
-            const GpuProjected p = projected[tile_values[begin + tid]];
-            s_center[tid] = p.center_depth_radius.xy;
-            s_box[tid] = pixel_box(p.center_depth_radius);
-            s_conic_opacity[tid] = p.conic_opacity;
-            s_color[tid] = p.color.rgb;
-            const float z = clamp(u_ndc_depth.x + u_ndc_depth.y / p.center_depth_radius.z, -1.0, 0.999999);
+            const uint g = tile_values[begin + tid];
+            const vec4 center_depth_radius = proj_center[g];
+            s_center[tid] = center_depth_radius.xy;
+            s_box[tid] = pixel_box(center_depth_radius);
+            s_conic_opacity[tid] = proj_conic[g];
+            s_color[tid] = proj_color[g].rgb;
+            const float z = clamp(u_ndc_depth.x + u_ndc_depth.y / center_depth_radius.z, -1.0, 0.999999);
             s_depth[tid] = vec2(0.5 * z + 0.5, u_ndc_depth.y / (z - u_ndc_depth.x));
         }
         barrier();

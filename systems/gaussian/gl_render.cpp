@@ -37,7 +37,8 @@ Result<GlRenderer> create_gl_renderer() {
     const std::pair<gfx::Program*, const char*> tiles[] = {{&r.tile_count, "tile_count"},
                                                            {&r.tile_emit, "tile_emit"},
                                                            {&r.tile_ranges, "tile_ranges"},
-                                                           {&r.tile_blend, "tile_blend"}};
+                                                           {&r.tile_blend, "tile_blend"},
+                                                           {&r.sort_payload, "sort_payload"}};
     for (const auto& [program, name] : tiles) {
         auto made = gfx::load_compute_program(std::string("gaussian/") + name + ".comp",
                                               std::string("gaussian.") + name);
@@ -51,8 +52,17 @@ Result<GlRenderer> create_gl_renderer() {
     r.vao = gfx::VertexArray::create("gaussian.quads");
     r.gaussians = gfx::Buffer::create("gaussian.in");
     r.sh = gfx::Buffer::create("gaussian.sh");
-    r.projected = gfx::Buffer::create("gaussian.projected");
+    r.proj_center = gfx::Buffer::create("gaussian.proj_center");
+    r.proj_conic = gfx::Buffer::create("gaussian.proj_conic");
+    r.proj_color = gfx::Buffer::create("gaussian.proj_color");
     r.order = gfx::Buffer::create("gaussian.order");
+    // The quads read their Gaussian from `order` as an instanced attribute, not a storage block: the
+    // vertex stage keeps to the 3 blocks the engine requires (runtime/gfx/limits.h).
+    glVertexArrayVertexBuffer(r.vao.id(), 0, r.order.id(), 0, sizeof(std::uint32_t));
+    glVertexArrayAttribIFormat(r.vao.id(), SFFD_GAUSS_ATTR_ORDER, 1, GL_UNSIGNED_INT, 0);
+    glVertexArrayAttribBinding(r.vao.id(), SFFD_GAUSS_ATTR_ORDER, 0);
+    glVertexArrayBindingDivisor(r.vao.id(), 0, 1);
+    glEnableVertexArrayAttrib(r.vao.id(), SFFD_GAUSS_ATTR_ORDER);
     r.frames = gfx::Buffer::create("gaussian.sh_frames");
     r.depth = gfx::Buffer::create("gaussian.depth_keys");
     r.draw = gfx::Buffer::create("gaussian.draw_indirect");
@@ -153,14 +163,38 @@ Status ensure_target(GlRenderer& r, const ReferenceOptions& o) {
 // The per-draw scratch buffers (projections, sort keys and payloads, tile counts) hold `n` Gaussians.
 void ensure_scratch(GlRenderer& r, std::size_t n) {
     if (r.scratch >= n && r.scratch > 0) return;
-    upload(r.projected, nullptr, n * sizeof(gpu::GpuProjected));
+    for (const gfx::Buffer* b : {&r.proj_center, &r.proj_conic, &r.proj_color})
+        upload(*b, nullptr, n * SFFD_GPU_PROJECTED_STRIDE);
     upload(r.depth, nullptr, n * sizeof(std::uint32_t));
-    upload(r.order, nullptr, n * sizeof(std::uint32_t));  // payloads written by the projection (GPU sort)
+    upload(r.order, nullptr, n * sizeof(std::uint32_t));  // payloads (sort_payload.comp) or the CPU order
     upload(r.tile_touched, nullptr, (n + 1) * sizeof(std::uint32_t));  // + the scan's total
     r.scratch = std::max<std::size_t>(n, 1);
 }
 
-// Step 1: projection of one cloud's Gaussians; resets and fills the indirect draw command.
+// The projection arrays each hold 16 bytes a Gaussian and the blend reads them at random, indexed by the
+// Gaussian's index in the whole cloud: they cannot be cut into ranges, so a cloud whose arrays exceed
+// one storage block is refused before anything is drawn (the rest of the blend's per-Gaussian buffers,
+// the 4-byte order and keys, fit whenever these do).
+Status check_projection_fits(std::size_t n) {
+    const std::uint64_t bytes = std::uint64_t(std::max<std::size_t>(n, 1)) * SFFD_GPU_PROJECTED_STRIDE;
+    if (gfx::ssbo_fits(bytes)) return {};
+    return make_error("draw_gaussians(): " + std::to_string(n) +
+                      " Gaussians: " + gfx::ssbo_too_large("gaussian.proj_center", bytes) +
+                      " (each of the 3 projection arrays, read whole by the blend); the cloud is not drawn");
+}
+
+// Binds the projection arrays a blend pass reads (the centres alone: `all` false), each as the range of
+// this cloud's `n` Gaussians: the grow-only buffers may be larger, from a larger cloud.
+void bind_projection(const GlRenderer& r, std::size_t n, bool all) {
+    const gfx::SsboBatch whole{0, std::max<std::size_t>(n, 1)};
+    gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CENTER, r.proj_center.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
+    if (!all) return;
+    gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CONIC, r.proj_conic.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
+    gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_COLOR, r.proj_color.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
+}
+
+// Step 1: projection of one cloud's Gaussians; resets and fills the indirect draw command. With the GPU
+// sort (r.gpu_sort_used), also its payloads.
 Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v) {
     const std::size_t n = b.count;
     ensure_scratch(r, n);
@@ -186,10 +220,10 @@ Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
     // Per Gaussian, every buffer here is indexed by its own index: clouds whose SH (12 K bytes a Gaussian)
     // or other arrays exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE are projected in element ranges bound with
-    // glBindBufferRange, the sort payload offset by the range's first Gaussian (u_base).
+    // glBindBufferRange (the sort payloads offset by the range's first Gaussian, u_base).
     const std::uint64_t sh_stride = std::uint64_t(sh_coeffs(b.sh_degree)) * 3 * sizeof(float);
     const std::uint64_t strides[] = {sizeof(gpu::GpuGaussian), sh_stride, 3 * sizeof(glm::vec4),
-                                     sizeof(gpu::GpuProjected), sizeof(std::uint32_t)};
+                                     SFFD_GPU_PROJECTED_STRIDE, sizeof(std::uint32_t)};
     auto batches = gfx::ssbo_batches(n, strides);
     if (!batches) return make_error("draw_gaussians(): " + batches.message());
     // A buffer with no store cannot be bound: the frames slot falls back to the Gaussians (never read).
@@ -199,12 +233,24 @@ Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v
     glUseProgram(pp);
     for (const gfx::SsboBatch& batch : *batches) {
         glProgramUniform1ui(pp, glGetUniformLocation(pp, "u_count"), GLuint(batch.count));
-        glProgramUniform1ui(pp, glGetUniformLocation(pp, "u_base"), GLuint(batch.first));
         gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_IN, b.gaussians, batch, sizeof(gpu::GpuGaussian));
         gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_SH, b.sh, batch, sh_stride);
-        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJECTED, r.projected.id(), batch, sizeof(gpu::GpuProjected));
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CENTER, r.proj_center.id(), batch,
+                             SFFD_GPU_PROJECTED_STRIDE);
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CONIC, r.proj_conic.id(), batch, SFFD_GPU_PROJECTED_STRIDE);
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_COLOR, r.proj_color.id(), batch, SFFD_GPU_PROJECTED_STRIDE);
         gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_FRAMES, frames, batch, frame_stride);
         gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_DEPTH, r.depth.id(), batch, sizeof(std::uint32_t));
+        if (Status st = gfx::dispatch_1d(batch.count, 64, std::max(1u, r.max_groups_x)); !st)
+            return st.error();
+    }
+    // The GPU sort's payloads, the Gaussians' indices in the whole cloud (the CPU sort uploads its order).
+    const GLuint op = r.sort_payload.id();
+    if (r.gpu_sort_used) glUseProgram(op);
+    for (std::size_t k = 0; r.gpu_sort_used && k < batches->size(); ++k) {
+        const gfx::SsboBatch& batch = (*batches)[k];
+        glProgramUniform1ui(op, glGetUniformLocation(op, "u_count"), GLuint(batch.count));
+        glProgramUniform1ui(op, glGetUniformLocation(op, "u_base"), GLuint(batch.first));
         gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_ORDER, r.order.id(), batch, sizeof(std::uint32_t));
         if (Status st = gfx::dispatch_1d(batch.count, 64, std::max(1u, r.max_groups_x)); !st)
             return st.error();
@@ -241,7 +287,10 @@ void sort_cpu(GlRenderer& r, std::size_t n) {
 // first `drawn count` entries of `order` are the drawn Gaussians front to back. No readback.
 Status sort_gpu(GlRenderer& r, std::size_t n) {
     r.sorter.max_groups_x = std::max(1u, r.max_groups_x);
-    return gfx::radix_sort(r.sorter, r.depth.id(), r.order.id(), std::uint32_t(n));
+    if (Status st = gfx::radix_sort(r.sorter, r.depth.id(), r.order.id(), std::uint32_t(n)); !st) return st;
+    // The quads fetch the sorted order as a vertex attribute (the sort's own barrier covers SSBO reads).
+    gfx::memory_barrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT, "gaussian.sort");
+    return {};
 }
 
 // Step 3, quads: one instanced quad per drawn Gaussian, the count from the indirect command, blended
@@ -254,8 +303,7 @@ void blend_quads(GlRenderer& r, const GaussianView& v, std::size_t n, const gfx:
     const GLuint sp = splat_program ? splat_program->id() : r.splat.id();
     set(sp, "u_size", glm::vec2(float(v.width), float(v.height)));
     set(sp, "u_ndc_depth", glm::vec2(v.ndc_depth));
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
+    bind_projection(r, n, true);
     glUseProgram(sp);
     glBindVertexArray(r.vao.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, r.draw.id());
@@ -275,11 +323,12 @@ double stage_ms(const GlRenderer& r, std::chrono::steady_clock::time_point& t);
 
 // Steps 1 and 2 (projection and depth sort) of one cloud, with the stage times of benchmarks.
 Status project_and_sort(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v) {
+    if (Status st = check_projection_fits(b.count); !st) return st;
     auto t = std::chrono::steady_clock::now();
-    if (Status st = project_gl(r, b, v); !st) return st.error();
-    r.project_ms = stage_ms(r, t);
     r.gpu_sort_used =
         r.sort_path == SortPath::gpu || (r.sort_path == SortPath::automatic && gpu_sort_preferred(r));
+    if (Status st = project_gl(r, b, v); !st) return st.error();
+    r.project_ms = stage_ms(r, t);
     if (r.gpu_sort_used) {
         if (Status st = sort_gpu(r, b.count); !st) return st.error();
         r.sort_ms = stage_ms(r, t);
@@ -305,7 +354,7 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     const std::uint32_t max_x = std::max(1u, r.max_groups_x);
     r.sorter.max_groups_x = max_x;
     auto t = std::chrono::steady_clock::now();
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
+    bind_projection(r, n, false);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TOUCHED, r.tile_touched.id());
@@ -348,7 +397,7 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     }
     glClearNamedBufferData(r.tile_ranges_buffer.id(), GL_RG32UI, GL_RG_INTEGER, GL_UNSIGNED_INT, nullptr);
     // gfx::exclusive_scan bound its own buffers (points 0 and 4): bind every buffer the emit pass reads.
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
+    bind_projection(r, n, false);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_KEYS, r.tile_keys.id());
@@ -376,7 +425,8 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     glProgramUniform1i(bp, glGetUniformLocation(bp, "u_depth_test"), o.surface_depth ? 1 : 0);
     glProgramUniform1i(bp, glGetUniformLocation(bp, "u_write_depth"), o.depth_sum ? 1 : 0);
     set(bp, "u_ndc_depth", glm::vec2(o.ndc_depth));
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJECTED, r.projected.id());
+    // After the ranges pass: points 7 and 8 are the projection's again (gaussian_layout.h).
+    bind_projection(r, n, true);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_STATS, r.tile_stats.id());
     glBindImageTexture(SFFD_GAUSS_IMAGE_COLOR, o.color, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
     // Unused units stay bound to the colour (never accessed then: the uniforms above say so).
@@ -433,9 +483,9 @@ Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianVie
                       const gfx::Program* splat_program, const TileTargets* tiles) {
     if (b.count >= (std::size_t(1) << 31))
         return make_error("draw_gaussians(): more than 2^31 Gaussians in one draw");
-    if (Status st = project_and_sort(r, b, v); !st) return st.error();
     r.covered_pixels = 0;
     r.last_blend = BlendPath::quads;
+    if (Status st = project_and_sort(r, b, v); !st) return st.error();
     if (tiles) {
         // The covered pixels (8 bytes; waits for the projection only): quads up to the budget, where
         // their image is the one the reference tests compare; past it, the tile blend, whose work stops at

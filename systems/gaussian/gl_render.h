@@ -2,9 +2,11 @@
 //   1. project (shaders/gaussian/project.comp): EWA conic, SH colour, a sortable depth key per Gaussian
 //      (0xffffffff when not drawn: behind the near plane, opacity below 1/255, degenerate, or its pixel
 //      box off the image: culled before the sort),
-//      and the drawn count accumulated on the GPU into an indirect draw command;
+//      and the drawn count accumulated on the GPU into an indirect draw command; the projection is
+//      stored as three vec4 arrays (centre, conic, colour: 16 bytes a Gaussian per storage block);
 //   2. depth sort (SortPath): a stable GPU radix sort of (key, index) (runtime/gfx/radix_sort.h; no
-//      readback, the drawn Gaussians come first), or the keys read back and sorted on the CPU (TBB);
+//      readback, the drawn Gaussians come first; the indices from sort_payload.comp), or the keys read
+//      back and sorted on the CPU (TBB);
 //   3. blend front to back (BlendPath) into an RGBA32F target: instanced quads over the reference's
 //      pixel boxes (splat.{vert,frag}, hardware blending, drawn through the indirect command), or the
 //      3DGS tile renderer in compute (tile_*.comp: (tile, Gaussian) entries in depth order, a stable
@@ -70,9 +72,13 @@ struct GlRenderer {
     gfx::Program project;
     gfx::Program splat;
     gfx::Program tile_count, tile_emit, tile_ranges, tile_blend;
+    gfx::Program sort_payload;  // the GPU sort's payloads (indices), its own pass (sort_payload.comp)
     gfx::RadixSorter sorter;
-    gfx::VertexArray vao;
-    gfx::Buffer gaussians, sh, projected, order, frames, depth;
+    gfx::VertexArray vao;  // the quads' one attribute: `order`, per instance
+    gfx::Buffer gaussians, sh, order, frames, depth;
+    // The projection, three vec4 arrays (gaussian_layout.h: SFFD_GAUSS_SSBO_PROJ_*), each read whole and
+    // at random by the blend: a cloud needs 16 bytes a Gaussian within GL_MAX_SHADER_STORAGE_BLOCK_SIZE.
+    gfx::Buffer proj_center, proj_conic, proj_color;
     gfx::Buffer draw;  // DrawArraysIndirectCommand; its instance count is the drawn count, written on the GPU
     gfx::Buffer tile_touched, tile_keys, tile_values, tile_ranges_buffer;  // tile path, grow-only
     gfx::Buffer tile_stats;                // uint: entries staged by the tile blend (TileStats::staged)
@@ -108,7 +114,7 @@ struct GlRenderer {
     // only 65,535 groups per dimension (64 × 65,535 = 4.19M Gaussians), so larger clouds are dispatched
     // as a 2D grid; tests lower this to exercise the grid with small clouds.
     unsigned max_groups_x = 65535;
-    std::size_t scratch = 0;  // Gaussians the per-draw buffers (projected, depth keys) hold
+    std::size_t scratch = 0;  // Gaussians the per-draw buffers (projection, depth keys) hold
 };
 
 // What one draw reads: a cloud's GPU buffers, either the renderer's own (upload_gl) or a
@@ -144,6 +150,9 @@ struct GaussianView {
 // splats' depth); `splat_program` replaces the renderer's splat program (same vertex shader, its own
 // fragment shader), null: the renderer's. With `tiles`, a cloud covering more than kQuadCoverageBudget
 // images is blended by the tile renderer into those targets instead (last_blend says which).
+// Refused before anything is drawn, naming the limit, the count and the buffer, when the projection
+// arrays (16 bytes a Gaussian each, read at random by the blend) exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE:
+// a cloud of up to limit / 16 Gaussians (1M at GL's guaranteed 2^24 bytes, 8.4M at 2^27).
 Status draw_gaussians(GlRenderer& renderer, const GaussianBuffers& buffers, const GaussianView& view,
                       const gfx::Program* splat_program = nullptr, const TileTargets* tiles = nullptr);
 void reset_tile_stats(GlRenderer& renderer);

@@ -74,7 +74,12 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
         b.counts.x = gpu.count;
         b.counts.w = settings.quality == Quality::preview ? 1u : 0u;  // cull pass lights sprites in preview
         glNamedBufferSubData(gpu.frame_ubo.id(), 0, sizeof b, &b);
-        if (gpu.cpu_current && cpu_cull_wanted(s, settings.cull_path)) {
+        // A cloud whose compute-cull records exceed one storage block takes the CPU cull on every path
+        // (its splats read back when they exist only on the GPU: sync_clouds).
+        const Status fits = compute_cull_fits(gpu.count);
+        if (gpu.cpu_current && (!fits || cpu_cull_wanted(s, settings.cull_path))) {
+            if (!fits && settings.cull_path != CullPath::cpu)
+                warn_once("render_system(): " + fits.message() + "; the CPU cull takes the cloud");
             // CPU cull (cpu_cull.h): the same records, uploaded run by run into the buffers the draws read.
             TexelView texels;
             if (gpu.texture)
@@ -112,9 +117,8 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             // Reset the counts on the GPU (a copy from an immutable buffer): a CPU upload into a buffer the
             // GPU writes every frame makes drivers move it to host memory (NVIDIA's performance warning).
             // The third command (flat-coloured sprites) stays empty: only the CPU cull fills it.
-            if (Status st = compute_cull_fits(gpu.count); !st) {
-                warn_once("render_system(): " + st.message() +
-                          "; the cloud is not drawn (the automatic cull path takes the CPU cull)");
+            if (!fits) {  // no CPU copy of the splats could be made (not resident as this version yet)
+                warn_once("render_system(): " + fits.message() + "; the cloud is not drawn");
                 return;
             }
             glCopyNamedBufferSubData(s.command_reset.id(), gpu.commands.id(), 0, 0,

@@ -174,6 +174,18 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatSto
             }
             if (gpu.cpu_own.size() == gpu.count) gpu.cpu_current = &gpu.cpu_own;
         }
+        if (!gpu.cpu_current && splats.is_deformed() && !compute_cull_fits(gpu.count).ok()) {
+            if (gpu.readback_version != splats.deformed_version || gpu.cpu_readback.size() != gpu.count) {
+                warn_once("render_system(): " + compute_cull_fits(gpu.count).message() +
+                          ": a deformed cloud is read back from the GPU and culled on the CPU");
+                gpu.cpu_readback.resize(gpu.count);
+                // The deformation's barrier made its writes visible to read-backs (BUFFER_UPDATE).
+                glGetNamedBufferSubData(gpu.splats, 0, GLsizeiptr(gpu.count * sizeof(gpu::GpuSplat)),
+                                        gpu.cpu_readback.data());
+                gpu.readback_version = splats.deformed_version;
+            }
+            gpu.cpu_current = &gpu.cpu_readback;
+        }
     });
 }
 

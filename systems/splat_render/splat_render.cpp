@@ -28,7 +28,9 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     s.cull_over_limit = false;
     reg.view<const SplatCloud>().each(
         [&](const SplatCloud& c) { s.cull_over_limit |= !compute_cull_fits(c.size()).ok(); });
-    sync_clouds(reg, s, store ? *store : no_clouds, cpu_cull_wanted(s, plan.settings.cull_path));
+    // CPU copies are kept also where a cloud is over the limit on a forced compute cull (it falls back).
+    sync_clouds(reg, s, store ? *store : no_clouds,
+                cpu_cull_wanted(s, plan.settings.cull_path) || s.cull_over_limit);
     plan.view = choose_camera(reg, s, double(plan.width) / double(plan.height));
     plan.common = frame_block(reg, plan.settings, plan.view, s.max_point_size);
 

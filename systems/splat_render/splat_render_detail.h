@@ -75,6 +75,11 @@ struct CloudGpu {
     std::vector<gpu::GpuSplat> cpu_own;
     std::uint64_t cpu_own_version = 0;  // SplatCloud change stamp cpu_own holds
     const std::vector<gpu::GpuSplat>* cpu_current = nullptr;
+    // A deformed cloud whose compute-cull records exceed one storage block and that has no CPU copy (the
+    // FFD compute pass wrote it, or no mirror was kept): its draw buffer read back for the CPU cull, once
+    // per rewrite of `deformed` (GpuSplats::deformed_version; storage_limits.h).
+    std::vector<gpu::GpuSplat> cpu_readback;
+    std::uint64_t readback_version = 0;
     CpuCullResult cpu_cull;
     // The CPU cull's quad pass per range of splats when the splats (or uv axes) exceed one storage block
     // (storage_limits.h); empty: one indirect draw over the whole cloud.

@@ -9,6 +9,9 @@
 
 #include "runtime/core/log.h"
 #include "runtime/gfx/limits.h"
+#include "systems/ffd/components.h"
+#include "systems/ffd/ffd_system.h"
+#include "systems/ffd/operations.h"
 #include "systems/splat_render/splat_render_detail.h"
 #include "systems/splat_render/storage_limits.h"
 #include "tests/systems/splat_render/gl_fixture.h"
@@ -43,11 +46,12 @@ protected:
         if (textured) add_checker(c);
         return add_cloud(std::move(c));
     }
-    // CPU cull and the raster path (the compute rasteriser would fall back under the small limit only).
-    FrameImage frame(Quality q, int w, int h) {
+    // CPU cull (unless `cull` says otherwise) and the raster path (the compute rasteriser would fall back
+    // under the small limit only).
+    FrameImage frame(Quality q, int w, int h, CullPath cull = CullPath::cpu) {
         RenderSettings s;
         s.quality = q, s.width = w, s.height = h, s.time_passes = true;
-        s.cull_path = CullPath::cpu, s.raster_path = RasterPath::raster;
+        s.cull_path = cull, s.raster_path = RasterPath::raster;
         reg.set_resource<RenderSettings>(s);
         residency_system(reg, FrameContext{});
         render_system(reg, FrameContext{});
@@ -121,6 +125,72 @@ TEST_F(StorageBatch_, ComputeRasteriserFallsBackWhenTheRecordsExceedTheBlockSize
     EXPECT_TRUE(
         capture.contains("render.visible_splats: " + std::to_string(2 * 5000 * SFFD_SPLAT_RECORD_BYTES) +
                          " bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (100000)"));
+}
+
+// The compute cull's records (2 x 192 bytes a splat) over the limit, on the forced compute cull: the CPU
+// cull takes the cloud (its quad pass in ranges), saying why once, and the image is the unlimited CPU
+// cull's, not an empty frame.
+TEST_F(StorageBatch_, ForcedComputeCullOverTheLimitFallsBackToTheCpuCull) {
+    const ecs::Entity e = scene(false);
+    const FrameImage whole = frame(Quality::hq, 160, 120, CullPath::cpu);
+    gfx::GlLimits small = gfx::limits();
+    small.max_ssbo_block_size = 829 * 64;  // a limit no other test uses: its warning is new here
+    log::ScopedLogCapture capture;
+    gfx::ScopedLimits scope(small);
+    for (int k = 0; k < 2; ++k) {
+        const FrameImage limited = frame(Quality::hq, 160, 120, CullPath::compute);
+        EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 0u);
+        EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, 1u);
+        EXPECT_GE(quad_ranges(e), 6u);
+        expect_same_image(whole, limited, "forced compute cull over the limit, frame " + std::to_string(k));
+    }
+    const auto entries = capture.entries();
+    EXPECT_EQ(std::count_if(entries.begin(), entries.end(),
+                            [](const log::ScopedLogCapture::Entry& m) {
+                                return m.message.find(
+                                           "GL_MAX_SHADER_STORAGE_BLOCK_SIZE (53056); the CPU "
+                                           "cull takes the cloud") != std::string::npos;
+                            }),
+              1);
+}
+
+// A cloud the FFD compute pass deformed exists only on the GPU, so its cull is the compute pass; with its
+// records over the limit the splats are read back and CPU-culled (quads in ranges) instead of the cloud
+// going undrawn. The image is the compute cull's within the two culls' tolerance (cull_path_test.cpp:
+// float rounding can flip a splat at a pixel's edge; llvmpipe agrees exactly).
+TEST_F(StorageBatch_, GpuDeformedCloudOverTheLimitIsReadBackAndCpuCulled) {
+    const ecs::Entity e = scene(false);
+    const ecs::Entity le = add_lattice(e);
+    ffd::twist_graded(reg.patch<Lattice>(le), ffd::all_control_points(reg.get<Lattice>(le)), {0, 1, 0}, 0.9,
+                      glm::dvec3(0.0));
+    reg.set_resource<FfdSettings>().force_gpu = true;
+    residency_system(reg, FrameContext{});
+    ffd_system(reg, {});
+    ASSERT_TRUE(reg.get<DeformedSplats>(e).gpu_valid);
+    for (const Quality q : {Quality::preview, Quality::hq}) {
+        const std::string what = q == Quality::hq ? "hq" : "preview";
+        const FrameImage computed = frame(q, 160, 120, CullPath::automatic);
+        ASSERT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 1u) << what;
+        gfx::GlLimits small = gfx::limits();
+        small.max_ssbo_block_size = 997 * 64;
+        log::ScopedLogCapture capture;
+        FrameImage limited;
+        {
+            gfx::ScopedLimits scope(small);
+            limited = frame(q, 160, 120, CullPath::automatic);
+        }
+        EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 0u) << what;
+        EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, 1u) << what;
+        EXPECT_GE(quad_ranges(e), 6u) << what;
+        if (q == Quality::preview) {  // read back once: the hq frame reuses the copy
+            EXPECT_TRUE(capture.contains("read back from the GPU")) << what;
+        }
+        const ImageDiff d = image_diff(computed, limited);
+        EXPECT_GT(d.covered_a, 160 * 120 / 2) << what;
+        EXPECT_LE(d.coverage_mismatch, 4) << what;
+        EXPECT_LT(d.mean_color, 1e-3) << what;
+    }
+    ffd_release_gpu(reg);
 }
 
 // CPU only: quads regrouped per range, relative to its first splat, each group aligned.
