@@ -13,8 +13,11 @@
 #include <glm/gtc/type_ptr.hpp>
 #include <glm/gtx/quaternion.hpp>
 #include <nlohmann/json.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tiny_gltf.h>
 
+#include "runtime/assets/fresh_array.h"
 #include "runtime/assets/gltf_detail.h"
 #include "runtime/core/file_io.h"
 #include "runtime/core/log.h"
@@ -100,6 +103,29 @@ Result<Image> gltf_image(const tinygltf::Model& m, int texture, const std::strin
     return out;
 }
 
+// An attribute's values: floats for our splat nodes (copied to float arrays as stored: no double copy of
+// a 4.5M-splat cloud), doubles for everything transformed to world space.
+struct Attr {
+    std::vector<double> d;
+    std::vector<float> f;
+    std::size_t size() const { return f.empty() ? d.size() : f.size(); }
+    bool empty() const { return size() == 0; }
+    double operator[](std::size_t i) const { return f.empty() ? d[i] : double(f[i]); }
+};
+
+// Copies float triples / pairs / quads into an array of glm vectors, in parallel into fresh memory.
+template <class V>
+void fill_vectors(const std::vector<float>& src, std::vector<V>& dst) {
+    constexpr std::size_t k = sizeof(V) / sizeof(float);
+    dst.clear();
+    resize_for_overwrite(dst, src.size() / k);
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, dst.size(), 65536),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          std::memcpy(static_cast<void*>(dst.data() + r.begin()), src.data() + r.begin() * k,
+                                      (r.end() - r.begin()) * sizeof(V));
+                      });
+}
+
 // Appends one primitive's data to `g` (world transform `world`); for our splat nodes `exact` receives
 // the stored arrays untouched instead.
 Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim, const glm::dmat4& world,
@@ -116,17 +142,31 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     };
     const int ip = attr("POSITION");
     if (ip < 0) return make_error(src + ": primitive without POSITION");
-    auto pos = read_gltf_accessor(m, ip, 3, src, "POSITION");
+    auto read = [&](int index, int comps, const char* name) -> Result<Attr> {
+        Attr a;
+        if (exact) {
+            auto r = read_gltf_accessor_float(m, index, comps, src, name);
+            if (!r) return r.error();
+            a.f = std::move(*r);
+        } else {
+            auto r = read_gltf_accessor(m, index, comps, src, name);
+            if (!r) return r.error();
+            a.d = std::move(*r);
+        }
+        return a;
+    };
+    auto pos = read(ip, 3, "POSITION");
     if (!pos) return pos.error();
     const std::size_t n = pos->size() / 3;
     const std::size_t base = g.positions.size();
     const glm::dmat3 normal_matrix = glm::transpose(glm::inverse(glm::dmat3(world)));
     const glm::dmat3 linear(world);
 
-    std::vector<double> nrm, col, uv, au, av, uvf;
+    Attr nrm, uv, au, av, uvf;
+    std::vector<double> col;
     int col_components = 0;
     if (int i = attr("NORMAL"); i >= 0) {
-        auto r = read_gltf_accessor(m, i, 3, src, "NORMAL");
+        auto r = read(i, 3, "NORMAL");
         if (!r) return r.error();
         nrm = std::move(*r);
     }
@@ -141,24 +181,24 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
         col_components = comps;
     }
     if (int i = attr("TEXCOORD_0"); i >= 0) {
-        auto r = read_gltf_accessor(m, i, 2, src, "TEXCOORD_0");
+        auto r = read(i, 2, "TEXCOORD_0");
         if (!r) return r.error();
         uv = std::move(*r);
     }
     if (int iu = attr("_AXIS_U"), iv = attr("_AXIS_V"); iu >= 0 && iv >= 0) {
-        auto ru = read_gltf_accessor(m, iu, 3, src, "_AXIS_U");
+        auto ru = read(iu, 3, "_AXIS_U");
         if (!ru) return ru.error();
-        auto rv = read_gltf_accessor(m, iv, 3, src, "_AXIS_V");
+        auto rv = read(iv, 3, "_AXIS_V");
         if (!rv) return rv.error();
         au = std::move(*ru);
         av = std::move(*rv);
         // The uv frame along those axes (SplatCloud::uv_axes): du/ds, dv/ds, du/dt, dv/dt.
         if (int i = attr("_UV_AXES"); i >= 0) {
-            auto r = read_gltf_accessor(m, i, 4, src, "_UV_AXES");
+            auto r = read(i, 4, "_UV_AXES");
             if (!r) return r.error();
             uvf = std::move(*r);
-            for (double d : uvf)
-                if (!std::isfinite(d)) return make_error(src + ": _UV_AXES has a non-finite value");
+            for (std::size_t k = 0; k < uvf.size(); ++k)
+                if (!std::isfinite(uvf[k])) return make_error(src + ": _UV_AXES has a non-finite value");
             if (uvf.size() / 4 != n) return make_error(src + ": attribute counts differ from POSITION");
         }
     }
@@ -181,29 +221,18 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     if (exact) {
         SplatCloud& c = *exact;
         SplatMaterial& cm = *exact_material;
-        c.positions.resize(n);
-        for (std::size_t i = 0; i < n; ++i)
-            c.positions[i] =
-                glm::vec3(static_cast<float>((*pos)[3 * i]), static_cast<float>((*pos)[3 * i + 1]),
-                          static_cast<float>((*pos)[3 * i + 2]));
-        auto fill3 = [&](const std::vector<double>& src3, std::vector<glm::vec3>& dst) {
-            dst.resize(src3.size() / 3);
-            for (std::size_t i = 0; i < dst.size(); ++i)
-                dst[i] = glm::vec3(static_cast<float>(src3[3 * i]), static_cast<float>(src3[3 * i + 1]),
-                                   static_cast<float>(src3[3 * i + 2]));
-        };
-        fill3(nrm, c.normals);
-        fill3(au, c.axis_u);
-        fill3(av, c.axis_v);
-        c.uvs.resize(uv.size() / 2);
-        for (std::size_t i = 0; i < c.uvs.size(); ++i)
-            c.uvs[i] = glm::vec2(static_cast<float>(uv[2 * i]), static_cast<float>(uv[2 * i + 1]));
-        c.uv_axes.resize(uvf.size() / 4);
-        for (std::size_t i = 0; i < c.uv_axes.size(); ++i)
-            c.uv_axes[i] = glm::vec4(float(uvf[4 * i]), float(uvf[4 * i + 1]), float(uvf[4 * i + 2]),
-                                     float(uvf[4 * i + 3]));
-        c.colors.resize(col.empty() ? 0 : n);
-        for (std::size_t i = 0; i < c.colors.size(); ++i) c.colors[i] = colour(i);
+        fill_vectors(pos->f, c.positions);
+        fill_vectors(nrm.f, c.normals);
+        fill_vectors(au.f, c.axis_u);
+        fill_vectors(av.f, c.axis_v);
+        fill_vectors(uv.f, c.uvs);
+        fill_vectors(uvf.f, c.uv_axes);
+        c.colors.clear();
+        resize_for_overwrite(c.colors, col.empty() ? 0 : n);
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, c.colors.size(), 16384),
+                          [&](const tbb::blocked_range<std::size_t>& r) {
+                              for (std::size_t i = r.begin(); i != r.end(); ++i) c.colors[i] = colour(i);
+                          });
         if (prim.material >= 0 && static_cast<std::size_t>(prim.material) < m.materials.size()) {
             const tinygltf::Material& mat = m.materials[static_cast<std::size_t>(prim.material)];
             const auto& f = mat.pbrMetallicRoughness.baseColorFactor;

@@ -81,5 +81,8 @@ Status load_gltf_model(const std::filesystem::path& path, tinygltf::Model& model
 // (unsigned) byte, (unsigned) short and unsigned int components. Errors read "src: what: problem".
 Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& model, int index, int components,
                                                const std::string& src, const std::string& what);
+// The same checks and messages, as floats (what splat arrays hold: no double copy of large attributes).
+Result<std::vector<float>> read_gltf_accessor_float(const tinygltf::Model& model, int index, int components,
+                                                    const std::string& src, const std::string& what);
 
 }  // namespace sffd::assets

@@ -3,15 +3,20 @@
 #include "runtime/assets/gltf_io.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <unordered_map>
 
 #include <nlohmann/json.hpp>
 #include <stb/stb_image.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tiny_gltf.h>
 
+#include "runtime/assets/fresh_array.h"
 #include "runtime/assets/gltf_detail.h"
+#include "runtime/assets/mapped_file.h"
 #include "runtime/core/file_io.h"
 
 namespace sffd::assets {
@@ -151,8 +156,46 @@ Status decode_images(tinygltf::Model& m, const std::string& src) {
 }
 }  // namespace
 
-Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& m, int index, int components,
-                                               const std::string& src, const std::string& what) {
+namespace {
+
+// One component as a double: the same value for either output type (a float output then rounds it).
+inline double component(const unsigned char* p, int type, bool normalized) {
+    switch (type) {
+        case kFloat: {
+            float f;
+            std::memcpy(&f, p, 4);
+            return static_cast<double>(f);
+        }
+        case kUByte: return normalized ? *p / 255.0 : double(*p);
+        case kByte: {
+            std::int8_t x;
+            std::memcpy(&x, p, 1);
+            return normalized ? std::max(x / 127.0, -1.0) : double(x);
+        }
+        case kUShort: {
+            std::uint16_t x;
+            std::memcpy(&x, p, 2);
+            return normalized ? x / 65535.0 : double(x);
+        }
+        case kShort: {
+            std::int16_t x;
+            std::memcpy(&x, p, 2);
+            return normalized ? std::max(x / 32767.0, -1.0) : double(x);
+        }
+        case kUInt: {
+            std::uint32_t x;
+            std::memcpy(&x, p, 4);
+            return double(x);
+        }
+        default: return 0.0;
+    }
+}
+
+// The checks and the decode behind both read_gltf_accessor()s. Elements are decoded in parallel into
+// fresh memory; each range stops at its first non-finite element, and the first in order is reported.
+template <class T>
+Result<std::vector<T>> decode_accessor(const tinygltf::Model& m, int index, int components,
+                                       const std::string& src, const std::string& what) {
     auto fail = [&](const std::string& why) { return make_error(src + ": " + what + ": " + why); };
     if (index < 0 || static_cast<std::size_t>(index) >= m.accessors.size())
         return fail("accessor index out of range");
@@ -163,7 +206,7 @@ Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& m, int ind
     const std::size_t csize = component_size(a.componentType);
     if (csize == 0) return fail("unsupported component type " + std::to_string(a.componentType));
     const std::size_t elem = csize * static_cast<std::size_t>(components);
-    std::vector<double> out;
+    std::vector<T> out;
     if (a.count == 0) return out;
     if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= m.bufferViews.size())
         return fail("accessor has no valid bufferView");
@@ -179,56 +222,45 @@ Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& m, int ind
     const std::size_t avail = bv.byteLength - a.byteOffset;
     if (a.count > avail / stride + 1 || (a.count - 1) * stride + elem > avail)
         return fail("accessor exceeds its bufferView");
-    out.resize(a.count * static_cast<std::size_t>(components));
+    const std::size_t comps = static_cast<std::size_t>(components);
+    resize_for_overwrite(out, a.count * comps);
     const unsigned char* base = data.data() + bv.byteOffset + a.byteOffset;
-    for (std::size_t i = 0; i < a.count; ++i) {
-        const unsigned char* p = base + i * stride;
-        for (int c = 0; c < components; ++c, p += csize) {
-            double v = 0.0;
-            switch (a.componentType) {
-                case kFloat: {
-                    float f;
-                    std::memcpy(&f, p, 4);
-                    v = static_cast<double>(f);
-                    break;
-                }
-                case kUByte:
-                    v = *p;
-                    if (a.normalized) v /= 255.0;
-                    break;
-                case kByte: {
-                    std::int8_t x;
-                    std::memcpy(&x, p, 1);
-                    v = x;
-                    if (a.normalized) v = std::max(v / 127.0, -1.0);
-                    break;
-                }
-                case kUShort: {
-                    std::uint16_t x;
-                    std::memcpy(&x, p, 2);
-                    v = x;
-                    if (a.normalized) v /= 65535.0;
-                    break;
-                }
-                case kShort: {
-                    std::int16_t x;
-                    std::memcpy(&x, p, 2);
-                    v = x;
-                    if (a.normalized) v = std::max(v / 32767.0, -1.0);
-                    break;
-                }
-                case kUInt: {
-                    std::uint32_t x;
-                    std::memcpy(&x, p, 4);
-                    v = x;
-                    break;
-                }
-            }
-            if (!std::isfinite(v)) return fail("non-finite value at element " + std::to_string(i));
-            out[i * static_cast<std::size_t>(components) + static_cast<std::size_t>(c)] = v;
-        }
-    }
+    const int type = a.componentType;
+    const bool normalized = a.normalized;
+    std::atomic<std::size_t> first_bad{a.count};
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, a.count, 16384),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                          for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                              const unsigned char* p = base + i * stride;
+                              bool finite = true;
+                              for (std::size_t c = 0; c < comps; ++c, p += csize) {
+                                  const double v = component(p, type, normalized);
+                                  finite &= std::isfinite(v);
+                                  out[i * comps + c] = static_cast<T>(v);
+                              }
+                              if (!finite) {
+                                  std::size_t seen = first_bad.load();
+                                  while (i < seen && !first_bad.compare_exchange_weak(seen, i)) {
+                                  }
+                                  return;
+                              }
+                          }
+                      });
+    if (const std::size_t i = first_bad.load(); i < a.count)
+        return fail("non-finite value at element " + std::to_string(i));
     return out;
+}
+
+}  // namespace
+
+Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& m, int index, int components,
+                                               const std::string& src, const std::string& what) {
+    return decode_accessor<double>(m, index, components, src, what);
+}
+
+Result<std::vector<float>> read_gltf_accessor_float(const tinygltf::Model& m, int index, int components,
+                                                    const std::string& src, const std::string& what) {
+    return decode_accessor<float>(m, index, components, src, what);
 }
 
 namespace {
@@ -261,8 +293,11 @@ Status refuse_gltf1(const std::string& src, const std::string& version) {
 
 Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
     const std::string src = path.string();
-    auto bytes = read_file(path, kMaxGltfBytes);
-    if (!bytes) return bytes.error();
+    // Mapped, not copied: tinygltf copies the BIN chunk it needs, so a GLB is copied once, not twice.
+    auto file = MappedFile::open(path, kMaxGltfBytes);
+    if (!file) return file.error();
+    const std::string_view all = file->bytes();
+    const std::string_view* bytes = &all;
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
@@ -272,7 +307,7 @@ Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
     if (binary && bytes->size() >= 20) {
         std::uint32_t len = 0;
         std::memcpy(&len, bytes->data() + 12, 4);
-        json_text = std::string_view(*bytes).substr(20, std::min<std::size_t>(len, bytes->size() - 20));
+        json_text = all.substr(20, std::min<std::size_t>(len, bytes->size() - 20));
     }
     if (Status s = check_json_depth(json_text, src); !s) return s;
     if (binary &&

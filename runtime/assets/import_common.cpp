@@ -2,33 +2,68 @@
 // resource resolver (runtime/core/file_io.h) with the decoded-size budgets.
 #include "runtime/assets/import_detail.h"
 
+#include <atomic>
+
 #include <stb/stb_image.h>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include "runtime/core/file_io.h"
 
 namespace sffd::assets {
 namespace fs = std::filesystem;
 
+namespace {
+
+// The smallest i < n with bad(i), or n. Millions of points are checked in parallel; each range stops at its
+// own first bad point, so the one reported is the first in order, as a serial loop reports it.
+template <class Bad>
+std::size_t first_bad(std::size_t n, const Bad& bad) {
+    std::atomic<std::size_t> first{n};
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, n, 16384), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i != r.end() && i < first.load(std::memory_order_relaxed); ++i)
+                if (bad(i)) {
+                    std::size_t seen = first.load();
+                    while (i < seen && !first.compare_exchange_weak(seen, i)) {
+                    }
+                    return;
+                }
+        });
+    return first.load();
+}
+
+}  // namespace
+
 namespace detail {
 
 Status check_geometry(const Geometry& g) {
     const std::size_t n = g.positions.size();
-    for (std::size_t i = 0; i < n; ++i)
-        if (!finite3(g.positions[i]))
-            return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite coordinate");
-    for (std::size_t i = 0; i < g.normals.size(); ++i)
-        if (!finite3(glm::dvec3(g.normals[i])))
-            return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite normal");
-    for (std::size_t i = 0; i < g.uvs.size(); ++i)
-        if (!std::isfinite(g.uvs[i].x) || !std::isfinite(g.uvs[i].y))
-            return make_error(g.source + ": point " + std::to_string(i) +
-                              " has a non-finite texture coordinate");
-    for (std::size_t i = 0; i < g.axis_u.size(); ++i)
-        if (!finite3(glm::dvec3(g.axis_u[i])) || !finite3(glm::dvec3(g.axis_v[i])))
-            return make_error(g.source + ": point " + std::to_string(i) + " has non-finite splat axes");
-    for (std::size_t i = 0; i < g.uv_axes.size(); ++i)
-        if (!std::isfinite(g.uv_axes[i].x + g.uv_axes[i].y + g.uv_axes[i].z + g.uv_axes[i].w))
-            return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite uv frame");
+    if (const std::size_t i = first_bad(n, [&](std::size_t k) { return !finite3(g.positions[k]); }); i < n)
+        return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite coordinate");
+    if (const std::size_t i =
+            first_bad(g.normals.size(), [&](std::size_t k) { return !finite3(glm::dvec3(g.normals[k])); });
+        i < g.normals.size())
+        return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite normal");
+    if (const std::size_t i = first_bad(
+            g.uvs.size(),
+            [&](std::size_t k) { return !std::isfinite(g.uvs[k].x) || !std::isfinite(g.uvs[k].y); });
+        i < g.uvs.size())
+        return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite texture coordinate");
+    if (const std::size_t i = first_bad(g.axis_u.size(),
+                                        [&](std::size_t k) {
+                                            return !finite3(glm::dvec3(g.axis_u[k])) ||
+                                                   !finite3(glm::dvec3(g.axis_v[k]));
+                                        });
+        i < g.axis_u.size())
+        return make_error(g.source + ": point " + std::to_string(i) + " has non-finite splat axes");
+    if (const std::size_t i = first_bad(g.uv_axes.size(),
+                                        [&](std::size_t k) {
+                                            const glm::vec4& f = g.uv_axes[k];
+                                            return !std::isfinite(f.x + f.y + f.z + f.w);
+                                        });
+        i < g.uv_axes.size())
+        return make_error(g.source + ": point " + std::to_string(i) + " has a non-finite uv frame");
     if ((!g.uv_axes.empty() && (g.uv_axes.size() != n || g.axis_u.size() != n)) ||
         (!g.uv_grad_u.empty() && (g.uv_grad_u.size() != n || g.uv_grad_v.size() != n)))
         return make_error(g.source + ": attribute arrays do not match the point count");

@@ -9,6 +9,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "runtime/assets/fresh_array.h"
 #include "runtime/assets/import_detail.h"
 #include "runtime/assets/ply_mapped.h"
 
@@ -63,12 +64,13 @@ std::optional<Status> read_ply_vertices_mapped(const std::filesystem::path& path
     const bool alpha = c.color[3] >= 0;
 
     const std::size_t n = std::size_t(m->count()), stride = m->row_size();
-    g.positions.resize(n);
-    if (c.has_normals) g.normals.resize(n);
-    if (c.has_colors) g.colors.resize(n);
-    if (c.has_uvs) g.uvs.resize(n);
-    if (c.has_axes) g.axis_u.resize(n), g.axis_v.resize(n);
-    if (c.has_uv_frame) g.uv_axes.resize(n);
+    // Every element is written below: the arrays are prefaulted in parallel rather than on first touch.
+    resize_for_overwrite(g.positions, n);
+    if (c.has_normals) resize_for_overwrite(g.normals, n);
+    if (c.has_colors) resize_for_overwrite(g.colors, n);
+    if (c.has_uvs) resize_for_overwrite(g.uvs, n);
+    if (c.has_axes) resize_for_overwrite(g.axis_u, n), resize_for_overwrite(g.axis_v, n);
+    if (c.has_uv_frame) resize_for_overwrite(g.uv_axes, n);
     const unsigned char* rows = m->rows();
     std::atomic<std::size_t> first_bad{n};
     tbb::parallel_for(

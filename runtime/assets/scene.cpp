@@ -28,6 +28,7 @@ struct Extension {
 struct FileLoader {
     SceneFileClaim claims;
     SceneFileLoader load;
+    std::string types;
 };
 
 std::map<std::string, FileLoader>& file_loaders() {
@@ -336,8 +337,16 @@ void register_scene_gltf_extension(const std::string& key, SceneGltfSaveFn save_
     extensions()[key] = Extension{std::move(save_fn), std::move(load_fn)};
 }
 
-void register_scene_file_loader(const std::string& key, SceneFileClaim claims, SceneFileLoader load) {
-    file_loaders()[key] = FileLoader{std::move(claims), std::move(load)};
+void register_scene_file_loader(const std::string& key, SceneFileClaim claims, SceneFileLoader load,
+                                std::string types) {
+    file_loaders()[key] = FileLoader{std::move(claims), std::move(load), std::move(types)};
+}
+
+std::string scene_file_types() {
+    std::string all = ".ply, .obj, .off, .gltf, .glb";
+    for (const auto& [key, loader] : file_loaders())
+        if (!loader.types.empty()) all += ", " + loader.types;
+    return all;
 }
 
 void unregister_scene_file_loader(const std::string& key) { file_loaders().erase(key); }
@@ -381,6 +390,10 @@ Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
     for (const auto& [key, loader] : file_loaders())
         if (loader.claims && loader.load && loader.claims(path)) return loader.load(r, path);
     if (ext == ".gltf" || ext == ".glb") return load_scene_file(r, path);
+    // Refused here rather than by the importer, whose list knows only its own formats.
+    if (ext != ".ply" && ext != ".obj" && ext != ".off")
+        return make_error(name_or_path + ": unknown file type '" + ext + "' (expected " + scene_file_types() +
+                          ")");
     SplatMaterial material;
     auto cloud = assets::import_splat_cloud(path, {}, &material);
     if (!cloud) return cloud.error();

@@ -65,11 +65,16 @@ void register_scene_gltf_extension(const std::string& key, SceneGltfSaveFn save_
 // Files assets cannot import itself (3D Gaussian files: 3DGS PLY, .splat, .spz, KHR_gaussian_splatting
 // glTF; registered by systems/gaussian): load_scene(registry, path) asks every registered loader, in key
 // order, before its own importers; the first whose `claims(path)` is true loads the file (its entities,
-// and a default Camera when the registry has none, like an imported point cloud).
+// and a default Camera when the registry has none, like an imported point cloud). `types` names what the
+// loader opens (e.g. ".spz, .sog"): the one list a refused file's message gives.
 using SceneFileClaim = std::function<bool(const std::filesystem::path&)>;
 using SceneFileLoader = std::function<Status(ecs::Registry&, const std::filesystem::path&)>;
-void register_scene_file_loader(const std::string& key, SceneFileClaim claims, SceneFileLoader load);
+void register_scene_file_loader(const std::string& key, SceneFileClaim claims, SceneFileLoader load,
+                                std::string types = {});
 void unregister_scene_file_loader(const std::string& key);
+
+// Every file type load_scene opens: assets' own importers, then each registered loader's `types`.
+std::string scene_file_types();
 
 // Built-in scenes have no file for an extension to read, so a system that adds defaults to them (the
 // animation engineer's paper demo clip) registers a hook that runs after a built-in scene's entities

@@ -9,6 +9,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "runtime/assets/fresh_array.h"
 #include "runtime/assets/ply_mapped.h"
 #include "systems/gaussian/sh.h"
 
@@ -92,8 +93,10 @@ std::optional<Status> read_ply_float32(const std::filesystem::path& path, const 
     const std::size_t n = std::size_t(m->count()), stride = m->row_size();
     const std::string name = path.string();
     out.sh_degree = l.degree;
-    out.positions.resize(n), out.scales.resize(n), out.rotations.resize(n), out.opacities.resize(n);
-    out.sh.resize(n * std::size_t(K) * 3);
+    // Every element is written below: the arrays are prefaulted in parallel rather than on first touch.
+    assets::resize_for_overwrite(out.positions, n), assets::resize_for_overwrite(out.scales, n);
+    assets::resize_for_overwrite(out.rotations, n), assets::resize_for_overwrite(out.opacities, n);
+    assets::resize_for_overwrite(out.sh, n * std::size_t(K) * 3);
     const unsigned char* rows = m->rows();
     // As append_from_chunk: each range stops at its first bad row, the smallest is re-run for its message.
     std::atomic<std::size_t> first_bad{n}, opacity_inf{0}, scale_inf{0};

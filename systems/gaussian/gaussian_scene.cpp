@@ -154,9 +154,20 @@ GaussianCloud read_embedded(const tinygltf::Model& m, int entry, const std::stri
 
 }  // namespace
 
-bool is_gaussian_scene_file(const fs::path& path) {
+namespace {
+// A SOG folder is opened through its meta.json (what read_gaussians reads); other paths as they are.
+fs::path gaussian_file_of(const fs::path& path) {
+    std::error_code ec;
+    if (fs::is_directory(path, ec) && fs::is_regular_file(path / "meta.json", ec)) return path / "meta.json";
+    return path;
+}
+}  // namespace
+
+bool is_gaussian_scene_file(const fs::path& given) {
+    const fs::path path = gaussian_file_of(given);
     const std::string e = lower_ext(path);
     if (e == ".splat" || e == ".spz" || e == ".ksplat" || e == ".sog") return true;
+    if (path.filename() == "meta.json") return true;  // a SOG folder's
     if (e == ".ply") {
         auto r = ply::Reader::open(path);
         if (!r) return false;
@@ -171,14 +182,17 @@ bool is_gaussian_scene_file(const fs::path& path) {
     return false;
 }
 
-Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const fs::path& path) {
+Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const fs::path& given) {
+    const fs::path path = gaussian_file_of(given);
     auto cloud = read_gaussians(path);
     if (!cloud) return cloud.error();
     std::error_code ec;
     fs::path absolute = fs::absolute(path, ec);
     if (ec) absolute = path;
     const ecs::Entity e = registry.create();
-    registry.emplace<Name>(e, Name{path.stem().string()});
+    // A SOG folder is named after the folder, not "meta".
+    const fs::path named = path.filename() == "meta.json" ? path.parent_path() : path;
+    registry.emplace<Name>(e, Name{named.stem().string()});
     registry.emplace<Transform>(e, Transform{});
     registry.emplace<GaussianSource>(e, GaussianSource{absolute.lexically_normal()});
     registry.emplace<GaussianCloud>(e, std::move(*cloud));
@@ -337,7 +351,9 @@ void register_gaussian_scene_hooks() {
                 if (lo.x <= hi.x) assets::add_default_view(registry, lo, hi, glm::dvec3(0.3, 0.3, 1.0));
             }
             return {};
-        });
+        },
+        ".spz, .splat, .ksplat, .sog, a SOG folder or its meta.json, a 3DGS .ply, a KHR_gaussian_splatting "
+        ".glb/.gltf");
 }
 
 void unregister_gaussian_scene_hooks() {

@@ -10,10 +10,14 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
+#include "runtime/assets/scene.h"
+#include "runtime/scene/components.h"
 #include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_scene.h"
 #include "systems/gaussian/gaussian_sog.h"
 
 namespace {
@@ -194,6 +198,35 @@ TEST(Sog, HandBuiltArchiveAndFolderDecodeToKnownValues) {
                 EXPECT_NEAR(g->sh[std::size_t(12 + (1 + j) * 3 + c)], (100 - 128) / 256.0f, 1e-6f) << j;
             }
     }
+}
+
+// What `render` and `view` open (load_scene): a SOG archive, a SOG folder given as the folder or as its
+// meta.json; and a refused type's message lists the Gaussian formats too.
+TEST(Sog, SceneLoaderOpensArchiveFolderAndMetaJson) {
+    register_gaussian_scene_hooks();
+    const Sog s;
+    const fs::path meta = s.folder("scene_folder");
+    for (const fs::path& p : {s.archive("scene.sog"), meta, meta.parent_path()}) {
+        ecs::Registry r;
+        ASSERT_TRUE(load_scene(r, p.string())) << p;
+        ASSERT_EQ(r.count<GaussianCloud>(), 1u) << p;
+        EXPECT_EQ(r.count<Camera>(), 1u) << p;
+        r.view<const GaussianCloud, const Name>().each(
+            [&](ecs::Entity, const GaussianCloud& g, const Name& n) {
+                EXPECT_EQ(g.size(), 3u);
+                EXPECT_EQ(n.value, p.extension() == ".sog" ? "scene" : "scene_folder") << p;
+            });
+    }
+    const fs::path odd = temp("odd.xyz");
+    std::ofstream(odd) << "1 2 3\n";
+    ecs::Registry r;
+    const Status refused = load_scene(r, odd.string());
+    ASSERT_FALSE(refused);
+    for (const std::string& type :
+         std::vector<std::string>{odd.string(), "unknown file type '.xyz'", ".ply", ".glb", ".spz", ".splat",
+                                  ".ksplat", ".sog", "meta.json"})
+        EXPECT_NE(refused.message().find(type), std::string::npos) << type << " in " << refused.message();
+    unregister_gaussian_scene_hooks();
 }
 
 TEST(Sog, RefusesBadFiles) {
