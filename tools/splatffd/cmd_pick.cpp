@@ -37,7 +37,7 @@ using namespace sffd;
 constexpr const char* kUsage =
     "usage: splatffd pick [SCENE] --at X,Y [--size WxH] [--xray] [--tolerance PX] [--first-gaussian]\n"
     "  SCENE         built-in name (sphere, face), a scene/point-cloud file or a 3D Gaussian file\n"
-    "                (3DGS .ply, .splat, .spz, KHR .glb; default: sphere)\n"
+    "                (3DGS .ply, .splat, .spz, .ksplat, .sog, a SOG folder, KHR .glb; default: sphere)\n"
     "  --at X,Y      pixel to pick (origin top-left, y down; picks the pixel's centre)\n"
     "  --size WxH    viewport in pixels (default 1280x720, as `splatffd render`)\n"
     "  --xray        control points hidden behind the surface can be picked (default: only visible ones)\n"
