@@ -54,7 +54,8 @@ void present_blit_system(ecs::Registry& registry, const FrameContext& /*frame*/)
     const PresentSource* source = registry.try_resource<PresentSource>();
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
     glViewport(0, 0, size.width, size.height);
-    if (!source || source->framebuffer == 0 || size.width <= 0 || size.height <= 0) return;
+    if (!source || source->in_window || source->framebuffer == 0 || size.width <= 0 || size.height <= 0)
+        return;
     glNamedFramebufferReadBuffer(source->framebuffer, source->read_buffer);
     const bool same = source->width == size.width && source->height == size.height;
     glBlitNamedFramebuffer(source->framebuffer, 0, 0, 0, source->width, source->height, 0, 0, size.width,

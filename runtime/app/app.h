@@ -9,8 +9,8 @@
 //   app::RunResult r = app::run(registry, schedule, clock, &*ctx, {.max_frames = 10});
 //
 // Per frame: poll window events (window only) -> clock.tick() -> schedule.run_frame(). Presenting is the
-// present phase's job: present_blit_system() blits the PresentSource to the window,
-// present_swap_system() swaps.
+// present phase's job: present_blit_system() blits the PresentSource to the window (unless a display
+// pass already drew it there), present_swap_system() swaps.
 #pragma once
 
 #include <cstdint>
@@ -33,13 +33,16 @@ struct AppContext {
     bool quit_requested = false;
 };
 
-// Registry resource written by the rendering phase: the framebuffer and colour attachment the present
-// phase shows in the window (ignored headless). framebuffer 0 = nothing to show.
+// Registry resource written by the rendering phase or the start of the present phase: the framebuffer and
+// colour attachment the present phase shows in the window (ignored headless). framebuffer 0 = nothing to
+// show; in_window = the frame is already in the window's back buffer (a display pass wrote it there), so
+// there is nothing to copy.
 struct PresentSource {
     GLuint framebuffer = 0;
     GLenum read_buffer = GL_COLOR_ATTACHMENT0;
     int width = 0;
     int height = 0;
+    bool in_window = false;
 };
 
 struct RunOptions {
@@ -62,8 +65,8 @@ RunResult run(ecs::Registry& registry, const Schedule& schedule, Clock& clock, g
               const RunOptions& options);
 
 // Present phase, two systems so window UI (the editor's ImGui) can draw between them:
-//   present_blit_system  with a window, blits PresentSource (if any) to the default framebuffer,
-//                        scaled to the window;
+//   present_blit_system  with a window, binds the default framebuffer at the window's size and blits
+//                        PresentSource (if any, and not already in_window) to it, scaled to the window;
 //   present_swap_system  with a window, swaps.
 // Headless both do nothing (frame capture belongs to the rendering phase and the commands).
 void present_blit_system(ecs::Registry& registry, const FrameContext& frame);

@@ -9,8 +9,8 @@
 //               whose output is uploaded); writes the deformed buffers and their state
 //   picking     only when a pick was requested: refresh the ray-casting scene, cast, store the hit
 //   rendering   culling, splat passes, shading, overlays, UI, frame capture
-//   present     sRGB display copy (after every overlay), blit and swap the window, or read back and write
-//               files when headless
+//   present     sRGB display pass into the window (after every overlay), window UI, swap; or read back
+//               and write files when headless
 //
 // Systems are free functions `void system(ecs::Registry&, const FrameContext&)`; a Schedule holds them
 // per phase in registration order. Deferred structural changes are flushed after every phase.

@@ -44,8 +44,8 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
         s.add(Phase::rendering, "editor.requests", editor::requests_system);        // save, screenshot, quit
     }
 
-    // --- present: sRGB display copy (after every overlay), blit it to the window, window UI on top
-    // (editor), swap ----------------------------------------------------------------------------------
+    // --- present: sRGB display pass straight into the window (after every overlay; the blit only copies
+    // when the window's size differs from the frame's), window UI on top (editor), swap ----------------
     if (options.present) {
         s.add(Phase::present, "render.display", render::display_system);
         s.add(Phase::present, "present.blit", app::present_blit_system);

@@ -89,7 +89,12 @@ void display_system(ecs::Registry& reg, const FrameContext&) {
     const auto* app_ctx = reg.try_resource<app::AppContext>();
     if (!app_ctx || !app_ctx->context || app_ctx->context->is_headless()) return;
     const int w = s->width, h = s->height;
-    if (!s->display_fbo || s->display_width != w || s->display_height != h) {
+    // Straight into the window's back buffer when it has the frame's size: no second full-size copy (the
+    // blit) after this one. A window of another size (resized since the targets were made) gets the
+    // encoded image in a texture that present_blit_system scales.
+    const gfx::FramebufferSize window = app_ctx->context->framebuffer_size();
+    const bool direct = window.width == w && window.height == h;
+    if (!direct && (!s->display_fbo || s->display_width != w || s->display_height != h)) {
         s->display_color = make_target(GL_RGBA8, w, h, "render.display");
         s->display_fbo = gfx::Framebuffer::create("render.display");
         glNamedFramebufferTexture(s->display_fbo.id(), GL_COLOR_ATTACHMENT0, s->display_color.id(), 0);
@@ -98,15 +103,21 @@ void display_system(ecs::Registry& reg, const FrameContext&) {
     if (!s->display_ubo) {
         s->display_ubo = gfx::Buffer::create("render.display_block");
         glNamedBufferData(s->display_ubo.id(), sizeof(gpu::FrameBlock), nullptr, GL_DYNAMIC_DRAW);
+        s->display_background = glm::vec4(-1.0f);  // never a background: the first frame uploads
     }
-    gpu::FrameBlock b{};
-    b.background = s->last_background;
-    glNamedBufferSubData(s->display_ubo.id(), 0, sizeof b, &b);
-    glBindFramebuffer(GL_FRAMEBUFFER, s->display_fbo.id());
+    if (s->display_background != s->last_background) {
+        gpu::FrameBlock b{};
+        b.background = s->last_background;
+        glNamedBufferSubData(s->display_ubo.id(), 0, sizeof b, &b);
+        s->display_background = s->last_background;
+    }
+    const GLuint target = direct ? 0 : s->display_fbo.id();
+    glBindFramebuffer(GL_FRAMEBUFFER, target);
     glViewport(0, 0, w, h);
     glDisable(GL_DEPTH_TEST);
     glDisable(GL_BLEND);
     glDisable(GL_SCISSOR_TEST);
+    glColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, s->display_ubo.id());
     glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s->color.id());
     glBindVertexArray(s->vao.id());  // empty: the triangle comes from gl_VertexID
@@ -115,10 +126,11 @@ void display_system(ecs::Registry& reg, const FrameContext&) {
     glEnable(GL_DEPTH_TEST);
     glBindVertexArray(0);
     glUseProgram(0);
-    glBindFramebuffer(GL_FRAMEBUFFER, 0);
     auto& present = reg.try_resource<app::PresentSource>() ? reg.resource<app::PresentSource>()
                                                            : reg.set_resource<app::PresentSource>();
-    present = app::PresentSource{s->display_fbo.id(), GL_COLOR_ATTACHMENT0, w, h};
+    present = direct ? app::PresentSource{.in_window = true}
+                     : app::PresentSource{s->display_fbo.id(), GL_COLOR_ATTACHMENT0, w, h};
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
 Result<FrameImage> capture_frame(ecs::Registry& registry) {

@@ -147,12 +147,15 @@ struct SplatRenderState {
     bool aux_valid = false;  // the last frame wrote the normal + depth target
     gfx::Texture color, aux, depth, accum_color, accum_normal, accum_material;
     gfx::Framebuffer output_fbo, accum_fbo, depth_fbo;
-    gfx::Texture display_color;  // RGBA8 sRGB-encoded, only when presenting to a window
+    // RGBA8 sRGB-encoded: only when presenting to a window of another size than the frame (the display
+    // pass writes the window itself otherwise)
+    gfx::Texture display_color;
     gfx::Framebuffer display_fbo;
     int display_width = 0, display_height = 0;
 
-    gfx::Buffer display_ubo;          // FrameBlock with the background, for the display copy
-    glm::vec4 last_background{0.0f};  // of the last rendered frame
+    gfx::Buffer display_ubo;             // FrameBlock with the background, for the display copy
+    glm::vec4 display_background{0.0f};  // the background display_ubo holds
+    glm::vec4 last_background{0.0f};     // of the last rendered frame
 
     // The compute cull's visible counts come back through this ring, never by waiting (the frame must not
     // stall on a read-back): a persistently mapped buffer of counts_slot_count slots x counts_ring_clouds

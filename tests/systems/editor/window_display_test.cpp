@@ -1,0 +1,57 @@
+// Under xvfb-run, what the editor's window shows is the rendered frame (overlay included) over the view's
+// background, sRGB-encoded: the display pass writes it straight into the window's back buffer. The window
+// screenshot's pixels in the middle of the view (where no panel is) are compared with the same frame's
+// linear capture (EXR), encoded on the CPU.
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "systems/splat_render/image_io.h"
+#include "tests/assets/test_util.h"
+#include "tests/test_util/run_tool.h"
+
+using namespace sffd;
+namespace fs = std::filesystem;
+
+TEST(WindowDisplay, TheWindowShowsTheFrameEncodedOverTheBackground) {
+    using sffd::test::run_shell;
+    using sffd::test::slurp;
+    if (run_shell("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run not installed";
+    const fs::path dir = fs::temp_directory_path() / ("sffd_window_display_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const fs::path window = dir / "window.png", frame = dir / "frame.exr", log = dir / "view.log";
+    ASSERT_EQ(run_shell("XDG_CONFIG_HOME=" + dir.string() + " xvfb-run -a -s '-screen 0 1280x720x24' " +
+                        std::string(SFFD_BINARY_DIR) +
+                        "/tools/splatffd view sphere --size 1280x720 --quality preview --frames 3 --out " +
+                        frame.string() + " --window-screenshot " + window.string() + " > " + log.string() +
+                        " 2>&1"),
+              0)
+        << slurp(log);
+    auto shown = render::read_png(window);
+    auto linear = render::read_exr(frame);
+    ASSERT_TRUE(shown.ok()) << shown.message();
+    ASSERT_TRUE(linear.ok()) << linear.message();
+    ASSERT_EQ(shown->width, linear->width);
+    ASSERT_EQ(shown->height, linear->height);
+    // The view's background (view_app.cpp) where nothing was drawn; the capture keeps alpha 0 there.
+    const glm::vec3 background(0.045f, 0.05f, 0.06f);
+    int compared = 0, covered = 0, off = 0, worst = 0;
+    // Between the panel columns, below the menu and above the Timeline (1280x720 layout).
+    for (int y = 40; y < 600; ++y)
+        for (int x = 280; x < 940; ++x) {
+            const glm::vec4 c = linear->color[linear->index(x, y)];
+            const glm::vec3 want = glm::mix(background, glm::vec3(c), glm::clamp(c.w, 0.0f, 1.0f));
+            const std::uint8_t* p =
+                &shown->pixels[(std::size_t(y) * std::size_t(shown->width) + std::size_t(x)) * 4];
+            int d = 0;
+            for (int k = 0; k < 3; ++k)
+                d = std::max(d, std::abs(int(p[k]) - int(render::encode_srgb8(want[k]))));
+            ++compared, covered += c.w > 0.0f, off += d > 1, worst = std::max(worst, d);
+        }
+    EXPECT_GT(covered, compared / 10) << "the sphere is not in the middle of the window";
+    // One level of rounding between the GPU's and the CPU's encoding; nothing more anywhere.
+    EXPECT_EQ(off, 0) << "worst difference " << worst << " levels";
+    fs::remove_all(dir);
+}
