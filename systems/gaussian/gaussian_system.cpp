@@ -1,6 +1,7 @@
 #include "systems/gaussian/gaussian_system.h"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include <tbb/parallel_for.h>
@@ -43,12 +44,14 @@ void collect_gpu_stats(ecs::Registry& reg) {
     });
 }
 
-// The Gaussians `indices` of `cloud` (opacities and SH with them), their scales enlarged so the fewer
-// Gaussians cover the surface the whole cloud covers (preview_radius_scale).
+// The Gaussians `indices` of `cloud` (opacities and SH with them), their scales enlarged by sqrt(n / k) so
+// the fewer Gaussians cover the area the whole cloud covers. Without the surface splats' margin
+// (preview_radius_scale): a Gaussian's edge fades instead of leaving a hard hole, and the blending's cost
+// is its area (measured: 1.4x the scale took the 1M preview's Gaussian pass from 0.8 to 3.5 s here).
 GaussianCloud preview_gaussians(const GaussianCloud& cloud, const std::vector<std::uint32_t>& indices) {
     const std::size_t k = indices.size(), n = cloud.size();
     const auto coeffs = std::size_t(sh_coeffs(cloud.sh_degree)) * 3;
-    const float scale = preview_radius_scale(n, k);
+    const float scale = k == 0 || k >= n ? 1.0f : float(std::sqrt(double(n) / double(k)));
     GaussianCloud out;
     out.origin = cloud.origin;
     out.sh_degree = cloud.sh_degree;
