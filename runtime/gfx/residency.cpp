@@ -43,4 +43,10 @@ void set_deformed(ResidentCloud& cloud, Residency how) {
     ++cloud.deformed_version;
 }
 
+void set_preview(ResidentCloud& cloud, std::uint32_t preview_count) {
+    cloud.state = Residency::preview_cpu;
+    cloud.preview_count = preview_count;
+    ++cloud.deformed_version;
+}
+
 }  // namespace sffd::gfx

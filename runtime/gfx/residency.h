@@ -4,7 +4,10 @@
 //   rest          residency_system (phase `residency`) uploaded the authored cloud into `rest` when its
 //                 change stamp moved, or the cloud has no deformers: draw `rest`;
 //   deformed_gpu  a deformation system's compute pass wrote `deformed` (no CPU copy exists);
-//   deformed_cpu  a deformation system's CPU path wrote its output and uploaded it into `deformed`.
+//   deformed_cpu  a deformation system's CPU path wrote its output and uploaded it into `deformed`;
+//   preview_cpu   a deformation system's CPU path deformed only a budgeted preview subset of the cloud
+//                 (systems/ffd/preview_budget.h) and uploaded it into `deformed`: `preview_count`
+//                 elements, enlarged; drawn only by preview frames, replaced by the next full output.
 // Render and picking only read: draw_buffer() and `deformed_version` (bumped on every rewrite of
 // `deformed`, so caches of the deformed data key on it).
 #pragma once
@@ -16,7 +19,7 @@
 
 namespace sffd::gfx {
 
-enum class Residency : std::uint8_t { rest, deformed_gpu, deformed_cpu };
+enum class Residency : std::uint8_t { rest, deformed_gpu, deformed_cpu, preview_cpu };
 
 // The part of a resident cloud that does not depend on its kind (the kinds derive from it and add the
 // buffers their data needs).
@@ -27,8 +30,11 @@ struct ResidentCloud {
     std::uint64_t rest_version = 0;  // change stamp of the authored component that `rest` holds
     Residency state = Residency::rest;
     std::uint64_t deformed_version = 0;  // bumped whenever `deformed` is rewritten
+    std::uint32_t preview_count = 0;     // elements in `deformed` in state preview_cpu
 
     bool is_deformed() const { return state != Residency::rest; }
+    // Elements of draw_buffer(): a preview subset holds fewer than the cloud.
+    std::uint32_t drawn_count() const { return state == Residency::preview_cpu ? preview_count : count; }
     GLuint draw_buffer() const { return is_deformed() ? deformed.id() : rest.id(); }
 };
 
@@ -43,6 +49,7 @@ void reserve_buffer(Buffer& b, const char* label, std::size_t bytes);
 // deformed from an older rest is drawn. set_deformed: `deformed` was just rewritten by `how`.
 void set_rest(ResidentCloud& cloud, std::uint64_t version, std::uint32_t count);
 void set_deformed(ResidentCloud& cloud, Residency how);
+void set_preview(ResidentCloud& cloud, std::uint32_t preview_count);
 inline void drop_deformed(ResidentCloud& cloud) { cloud.state = Residency::rest; }
 
 // True when a GL context (EGL or GLFW) is current on the calling thread: the stores exist only then.

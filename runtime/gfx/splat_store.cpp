@@ -30,4 +30,38 @@ void upload_deformed_splats(GpuSplats& gpu, const SplatCloud& authored, const De
     else gpu.cpu_deformed = {};
 }
 
+void upload_preview_splats(GpuSplats& gpu, const SplatCloud& authored, std::span<const std::uint32_t> indices,
+                           const DeformedSplatArrays& d, float radius_scale, bool keep_cpu) {
+    const std::size_t n = authored.size(), k = indices.size();
+    auto pick = [&](const std::vector<glm::vec3>& deformed, const std::vector<glm::vec3>& rest,
+                    std::vector<glm::vec3>& to) {
+        if (deformed.size() == k) to = deformed;
+        else if (rest.size() == n) {
+            to.resize(k);
+            for (std::size_t i = 0; i < k; ++i) to[i] = rest[indices[i]];
+        }
+    };
+    SplatCloud moved;
+    moved.positions = d.positions;
+    pick(d.normals, authored.normals, moved.normals);
+    pick(d.axis_u, authored.axis_u, moved.axis_u);
+    pick(d.axis_v, authored.axis_v, moved.axis_v);
+    // Fewer, larger splats cover the same surface: each stands for about n / k of them.
+    for (glm::vec3& a : moved.axis_u) a *= radius_scale;
+    for (glm::vec3& a : moved.axis_v) a *= radius_scale;
+    if (authored.colors.size() == n) {
+        moved.colors.resize(k);
+        for (std::size_t i = 0; i < k; ++i) moved.colors[i] = authored.colors[indices[i]];
+    }
+    if (authored.uvs.size() == n) {
+        moved.uvs.resize(k);
+        for (std::size_t i = 0; i < k; ++i) moved.uvs[i] = authored.uvs[indices[i]];
+    }
+    std::vector<gpu::GpuSplat> packed = pack_splats(moved);
+    fill_buffer(gpu.deformed, "splats.deformed", packed.data(), packed.size() * sizeof(gpu::GpuSplat));
+    set_preview(gpu, static_cast<std::uint32_t>(k));
+    if (keep_cpu) gpu.cpu_deformed = std::move(packed);
+    else gpu.cpu_deformed = {};
+}
+
 }  // namespace sffd::gfx

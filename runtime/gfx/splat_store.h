@@ -9,6 +9,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <unordered_map>
 #include <vector>
 
@@ -32,6 +33,8 @@ struct GpuSplats : ResidentCloud {
         if (state == Residency::rest) return cpu_rest.size() == count && count ? &cpu_rest : nullptr;
         if (state == Residency::deformed_cpu)
             return cpu_deformed.size() == count && count ? &cpu_deformed : nullptr;
+        if (state == Residency::preview_cpu)
+            return cpu_deformed.size() == preview_count && preview_count ? &cpu_deformed : nullptr;
         return nullptr;
     }
 };
@@ -55,5 +58,10 @@ struct DeformedSplatArrays {
 };
 void upload_deformed_splats(GpuSplats& gpu, const SplatCloud& authored, const DeformedSplatArrays& deformed,
                             bool keep_cpu);
+
+// A budgeted preview's output (state preview_cpu): `deformed` holds the splats `indices` of `authored`
+// (arrays compacted in that order; normals and axes as above), their axes scaled by `radius_scale`.
+void upload_preview_splats(GpuSplats& gpu, const SplatCloud& authored, std::span<const std::uint32_t> indices,
+                           const DeformedSplatArrays& deformed, float radius_scale, bool keep_cpu);
 
 }  // namespace sffd::gfx

@@ -2,6 +2,7 @@
 #include "systems/editor/editor_system_detail.h"
 
 #include "systems/editor/material_edit.h"
+#include "systems/ffd/preview_budget.h"
 
 namespace sffd::editor {
 
@@ -239,6 +240,7 @@ void adapt_quality(ecs::Registry& registry, EditorState& state, bool scrolled) {
     state.previewing = state.preview_while_moving && rest != render::Quality::preview &&
                        state.still_frames < state.refine_after;
     settings->quality = state.previewing ? render::Quality::preview : rest;
+    set_preview_active(registry, state.previewing);  // the point budget of large clouds while moving
 }
 
 }  // namespace

@@ -9,6 +9,7 @@
 
 #include "runtime/ecs/entity.h"
 #include "runtime/scene/lattice.h"
+#include "systems/ffd/preview_budget.h"
 
 namespace sffd {
 
@@ -53,6 +54,12 @@ struct DeformedSplats {
     // Inputs this output was computed from (change stamps), so the system skips unchanged clouds.
     DeformInputStamps seen;
     bool seen_force_cpu = false;
+
+    // Budgeted preview (preview_budget.h): when `preview` is true the last run deformed only
+    // `subset.indices` (the arrays above hold those, compacted; cpu_valid and gpu_valid are false), so the
+    // next frame that is not a budgeted preview deforms every point again.
+    bool preview = false;
+    PreviewSubset subset;
 };
 
 }  // namespace sffd

@@ -1,26 +1,26 @@
 #include "systems/ffd/deform_cloud.h"
 
+#include <tbb/parallel_for.h>
+
 #include "runtime/core/log.h"
 #include "systems/ffd/deform.h"
 
 namespace sffd::ffd {
 
-void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud,
-                  const std::vector<ecs::Entity>& lattices, DeformedSplats& out, const char* who) {
-    const std::size_t n = cloud.size();
-    out.origin = cloud.origin;
-    out.positions = cloud.positions;
-    out.normals = cloud.normals;
-    out.axis_u = cloud.axis_u;
-    out.axis_v = cloud.axis_v;
+namespace {
+
+// Each lattice in turn deforms out's arrays (n points) in place.
+void deform_arrays(const ecs::Registry& registry, const glm::dvec3& origin,
+                   const std::vector<ecs::Entity>& lattices, DeformedSplats& out, std::size_t n,
+                   const char* who) {
     out.inverted = 0;
     auto ptr = [n](std::vector<glm::vec3>& v) { return v.size() == n ? v.data() : nullptr; };
     for (const ecs::Entity le : lattices) {
         const Lattice* lattice = registry.valid(le) ? registry.try_get<Lattice>(le) : nullptr;
         if (!lattice) continue;
         // In place: each lattice deforms the previous one's output (allowed by ffd::deform).
-        const PointsIn in{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v), n,
-                          cloud.origin};
+        const PointsIn in{
+            out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v), n, origin};
         const PointsOut o{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v)};
         const auto stats = deform(*lattice, in, o);
         if (!stats) {
@@ -29,7 +29,45 @@ void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud,
         }
         out.inverted += stats->inverted;
     }
+}
+
+template <class T>
+void gather(const std::vector<T>& from, std::span<const std::uint32_t> indices, std::size_t n,
+            std::vector<T>& to) {
+    if (from.size() != n) {
+        to.clear();
+        return;
+    }
+    to.resize(indices.size());
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, indices.size(), 1 << 14), [&](const auto& r) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) to[i] = from[indices[i]];
+    });
+}
+
+}  // namespace
+
+void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud,
+                  const std::vector<ecs::Entity>& lattices, DeformedSplats& out, const char* who) {
+    out.origin = cloud.origin;
+    out.positions = cloud.positions;
+    out.normals = cloud.normals;
+    out.axis_u = cloud.axis_u;
+    out.axis_v = cloud.axis_v;
+    deform_arrays(registry, cloud.origin, lattices, out, cloud.size(), who);
     out.cpu_valid = true;
+}
+
+void deform_cloud_subset(const ecs::Registry& registry, const SplatCloud& cloud,
+                         const std::vector<ecs::Entity>& lattices, std::span<const std::uint32_t> indices,
+                         DeformedSplats& out, const char* who) {
+    const std::size_t n = cloud.size();
+    out.origin = cloud.origin;
+    gather(cloud.positions, indices, n, out.positions);
+    gather(cloud.normals, indices, n, out.normals);
+    gather(cloud.axis_u, indices, n, out.axis_u);
+    gather(cloud.axis_v, indices, n, out.axis_v);
+    deform_arrays(registry, cloud.origin, lattices, out, indices.size(), who);
+    out.cpu_valid = false;
 }
 
 }  // namespace sffd::ffd

@@ -4,6 +4,8 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
+#include <span>
 #include <vector>
 
 #include "runtime/ecs/registry.h"
@@ -20,5 +22,11 @@ namespace sffd::ffd {
 // change-detection stamps are the caller's.
 void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud,
                   const std::vector<ecs::Entity>& lattices, DeformedSplats& out, const char* who = "ffd");
+
+// The same step for the points `indices` only (a budgeted preview, preview_budget.h): out's arrays hold
+// them compacted, in the order of `indices`. Leaves cpu_valid false (the arrays are not the cloud).
+void deform_cloud_subset(const ecs::Registry& registry, const SplatCloud& cloud,
+                         const std::vector<ecs::Entity>& lattices, std::span<const std::uint32_t> indices,
+                         DeformedSplats& out, const char* who = "ffd");
 
 }  // namespace sffd::ffd

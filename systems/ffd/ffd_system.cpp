@@ -17,6 +17,7 @@
 #include "systems/ffd/deform_inputs.h"
 #include "systems/ffd/ffd_gpu.h"
 #include "systems/ffd/lattice.h"
+#include "systems/ffd/preview_budget.h"
 
 namespace sffd {
 
@@ -69,9 +70,14 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
                 splats = &it->second;
         }
         const DeformedSplats* seen = reg.try_get<DeformedSplats>(e);
+        // A budgeted preview (preview_budget.h) on the CPU path of a resident cloud (textured clouds index
+        // their uv frames per splat, so they are always drawn whole).
+        const std::uint32_t budget =
+            splats && (force_cpu || !have_gl) && cloud.texture.rgba8.empty() ? preview_budget_for(reg, n) : 0;
         // A resident cloud at rest has no deformed data yet (its entry is new): deform even if nothing moved.
+        // A full output serves every frame; a preview one only preview frames.
         if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu &&
-            (!splats || splats->is_deformed()))
+            (!splats || splats->is_deformed()) && (!seen->preview || budget > 0))
             continue;  // nothing this cloud depends on moved
 
         if (!seen) reg.emplace<DeformedSplats>(e);
@@ -95,6 +101,21 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
             if (ffd::validate(reg.get<Lattice>(le)).ok())
                 box = ffd::deformed_bounds(reg.get<Lattice>(le), box);
         out.bounds_min = box.lo, out.bounds_max = box.hi;
+
+        out.preview = budget > 0;
+        if (budget > 0) {
+            // Only the subset, its splats enlarged; the rest is deformed by the next full frame.
+            update_preview_subset(out.subset, cloud.positions, cloud_v, budget);
+            const std::vector<std::uint32_t>& kept = out.subset.indices;
+            ffd::deform_cloud_subset(reg, cloud, lattices, kept, out, "ffd_system");
+            out.gpu_valid = false;
+            gfx::upload_preview_splats(*splats, cloud, kept,
+                                       {out.positions, out.normals, out.axis_u, out.axis_v},
+                                       preview_radius_scale(n, kept.size()), store->keep_cpu);
+            if (auto* rs = reg.try_resource<gfx::ResidencyStats>()) ++rs->deformed_uploads;
+            ++stats->preview_runs;
+            continue;
+        }
 
         ffd::GpuDeformer* gpu =
             splats && !force_cpu ? ffd::gpu_deformer<ffd::GpuDeformer>(reg, "ffd_system") : nullptr;

@@ -34,8 +34,9 @@ struct FfdSettings {
 // Resource written by ffd_system (created on its first run), read by tests and `profile`: what the
 // system did so far. Kept apart from FfdSettings, which only the user writes.
 struct FfdStats {
-    std::uint64_t cpu_runs = 0;  // clouds deformed on the CPU so far
-    std::uint64_t gpu_runs = 0;  // clouds deformed on the GPU so far
+    std::uint64_t cpu_runs = 0;      // clouds deformed on the CPU so far
+    std::uint64_t gpu_runs = 0;      // clouds deformed on the GPU so far
+    std::uint64_t preview_runs = 0;  // budgeted previews (a subset deformed on the CPU, preview_budget.h)
     // GPU-resident frame, checked by tests: passes of the system over a cloud's splats on the CPU (the
     // rest box when a cloud changes, each CPU deformation) and synchronous GPU read-backs by its deformer.
     // In GPU mode both stay flat while only lattices change.

@@ -68,6 +68,12 @@ struct DeformedGaussians {
 
     // Change stamps this output was computed from (the system skips unchanged clouds).
     DeformInputStamps seen;
+
+    // Budgeted preview (systems/ffd/preview_budget.h): the last run deformed only `subset.indices` into
+    // the GPU store (state preview_cpu); `cloud` is then EMPTY and the next frame that is not a budgeted
+    // preview deforms every Gaussian again.
+    bool preview = false;
+    PreviewSubset subset;
 };
 
 }  // namespace sffd

@@ -39,6 +39,7 @@ struct GaussianDeformSettings {
 struct GaussianDeformStats {
     std::uint64_t cpu_runs = 0;            // clouds deformed on the CPU
     std::uint64_t gpu_runs = 0;            // clouds deformed on the GPU
+    std::uint64_t preview_runs = 0;        // budgeted previews (a subset on the CPU, ffd/preview_budget.h)
     std::uint64_t gpu_sync_readbacks = 0;  // synchronous read-backs by the system's GPU deformer (stays 0)
 };
 

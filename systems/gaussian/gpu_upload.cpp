@@ -58,4 +58,13 @@ void upload_cpu_deformed(GpuGaussians& gpu, const DeformedGaussians& d, const Ga
     gfx::set_deformed(gpu, gfx::Residency::deformed_cpu);
 }
 
+void upload_preview(GpuGaussians& gpu, const GaussianCloud& subset) {
+    const std::vector<gpu::GpuGaussian> packed = pack_gaussians(subset, subset.opacities);
+    fill_buffer(gpu.deformed, "gaussian.deformed", packed.data(), packed.size() * sizeof(gpu::GpuGaussian));
+    // The authored `sh` is indexed by the whole cloud: the subset reads its own coefficients.
+    fill_buffer(gpu.deformed_sh, "gaussian.deformed_sh", subset.sh.data(), subset.sh.size() * sizeof(float));
+    gpu.sh_source = ShSource::rotated;
+    gfx::set_preview(gpu, std::uint32_t(subset.size()));
+}
+
 }  // namespace sffd::gaussian

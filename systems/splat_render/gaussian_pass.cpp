@@ -206,12 +206,12 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
         v.ndc_depth = ndc_depth;
         v.min_footprint_px = f.preview ? kPreviewMinFootprintPx : 0.0f;
         const gaussian::GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(), gpu.frames.id(),
-                                                gpu.count,         gpu.sh_degree,   gpu.has_frames()};
+                                                gpu.drawn_count(), gpu.sh_degree,   gpu.has_frames()};
         if (Status st = gaussian::draw_gaussians(s.renderer, buffers, v, &s.accum, &tiles); !st) status = st;
         (s.renderer.last_blend == gaussian::BlendPath::tiles ? s.tile_clouds : s.quad_clouds) += 1;
         constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();  // "past 2^32" stays so
         s.covered_pixels += std::min(s.renderer.covered_pixels, kMax - s.covered_pixels);
-        submitted += gpu.count;
+        submitted += gpu.drawn_count();
     }
     glDepthMask(GL_TRUE);
     glDisable(GL_DEPTH_TEST);

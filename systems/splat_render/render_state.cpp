@@ -156,7 +156,7 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatSto
         const SplatMaterial* material = reg.try_get<SplatMaterial>(e);
         gpu.material = material ? *material : SplatMaterial{};
         gpu.colored = cloud.colors.size() == n;
-        gpu.count = std::min(n, splats.count);
+        gpu.count = std::min(n, splats.drawn_count());  // a budgeted preview draws a subset
         gpu.splats = splats.draw_buffer();
         // The CPU copy of the draw buffer: the store's mirror (rest, or the CPU deformation's output);
         // none when the FFD compute pass wrote `deformed` (those splats exist only on the GPU).

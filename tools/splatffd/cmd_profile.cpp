@@ -30,7 +30,10 @@ constexpr const char* usage_text =
     "                        sphere as N 3D Gaussians; Gaussian files work as SCENE too). Default: sphere\n"
     "  --frames N|0:B        measured frames, after the warm-up (default 120)\n"
     "  --warmup W            frames run before measuring (default 10)\n"
-    "  --quality hq|preview  render quality (default hq)\n"
+    "  --quality hq|preview  render quality (default hq); preview frames are the editor's frames while\n"
+    "                        moving: a cloud over the preview budget is deformed and drawn as a spread\n"
+    "                        subset of that many points, enlarged (systems/ffd README, Preview budget)\n"
+    "  --preview-budget N    points per cloud in preview frames (default 100000; 0: every point)\n"
     "  --raster auto|raster|compute  HQ splat rasteriser: the fixed-function one, the compute one\n"
     "                        (hybrid: sprites > 8 px stay on the rasteriser), or by splat size (default)\n"
     "  --backend auto|cpu|gpu  deformation backend (default auto: the engine's own choice, the CPU on a\n"
@@ -162,6 +165,9 @@ int run_profile_command(cli::Args args) {
         } else if (a == "--quality") {
             if (!value(o.quality) || (o.quality != "hq" && o.quality != "preview"))
                 return usage_error("--quality hq|preview");
+        } else if (a == "--preview-budget") {
+            if (!int_value(o.preview_budget))
+                return usage_error("--preview-budget takes a non-negative integer");
         } else if (a == "--raster") {
             if (!value(o.raster) || (o.raster != "auto" && o.raster != "raster" && o.raster != "compute"))
                 return usage_error("--raster auto|raster|compute");
@@ -216,6 +222,7 @@ int run_profile_command(cli::Args args) {
     s.quality = o.quality;
     s.backend = o.backend;
     s.raster = o.raster;
+    s.preview_budget = o.preview_budget;
     s.sync = o.sync;
     s.drive = o.drive;
     auto r = run_profile(s);

@@ -18,6 +18,7 @@
 #include "runtime/gfx/splat_store.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/ffd_system.h"
+#include "systems/ffd/preview_budget.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_system.h"
@@ -218,6 +219,12 @@ Result<RunOutput> run_profile(const RunSetup& s) {
                          : s.raster == "raster" ? render::RasterPath::raster
                                                 : render::RasterPath::automatic;
     }
+    // Every frame moves the lattice (the drive), so a preview frame is the editor's frame while moving: the
+    // deformation and the renderer keep to the point budget (systems/ffd/preview_budget.h).
+    PreviewBudget budget;
+    if (s.preview_budget >= 0) budget.points = std::uint32_t(s.preview_budget);
+    budget.active = want_render && s.quality == "preview";
+    registry.set_resource<PreviewBudget>(budget);
     // The FFD system picks its CPU path on a software rasterizer (auto); --backend cpu|gpu forces either
     // path. The Gaussian system's counters (its default settings) say which path it took.
     registry.set_resource<FfdSettings>(
@@ -242,10 +249,11 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     // Deformations per path so far: the first frames may take the CPU path before the render upload.
     auto runs = [&registry] {
         std::pair<std::uint64_t, std::uint64_t> r{0, 0};
+        // A budgeted preview deforms its subset on the CPU (preview_budget.h).
         if (const auto* fs = registry.try_resource<FfdStats>())
-            r.first += fs->cpu_runs, r.second += fs->gpu_runs;
+            r.first += fs->cpu_runs + fs->preview_runs, r.second += fs->gpu_runs;
         if (const auto* gs = registry.try_resource<GaussianDeformStats>())
-            r.first += gs->cpu_runs, r.second += gs->gpu_runs;
+            r.first += gs->cpu_runs + gs->preview_runs, r.second += gs->gpu_runs;
         return r;
     };
     const auto runs_before = runs();
@@ -265,6 +273,7 @@ Result<RunOutput> run_profile(const RunSetup& s) {
                   {"warmup", static_cast<double>(s.warmup)},
                   {"quality", s.quality},
                   {"raster", want_render ? s.raster : std::string("none")},
+                  {"preview_budget", budget.active ? static_cast<double>(budget.points) : 0.0},
                   {"backend", s.backend},
                   {"drive", s.drive},
                   {"schedule", schedule_kind},
@@ -273,10 +282,12 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     if (const auto* fs = registry.try_resource<FfdStats>()) {
         config.emplace_back("ffd_cpu_runs", static_cast<double>(fs->cpu_runs));
         config.emplace_back("ffd_gpu_runs", static_cast<double>(fs->gpu_runs));
+        config.emplace_back("ffd_preview_runs", static_cast<double>(fs->preview_runs));
     }
     if (const auto* gs = registry.try_resource<GaussianDeformStats>()) {
         config.emplace_back("gaussian_cpu_runs", static_cast<double>(gs->cpu_runs));
         config.emplace_back("gaussian_gpu_runs", static_cast<double>(gs->gpu_runs));
+        config.emplace_back("gaussian_preview_runs", static_cast<double>(gs->preview_runs));
     }
     out.backend_used = deformation_backend_name(runs_after.first - runs_before.first,
                                                 runs_after.second - runs_before.second);

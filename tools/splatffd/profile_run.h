@@ -25,6 +25,7 @@ struct Options {
     std::string quality = "hq";
     std::string backend = "auto";  // auto: the engine's own choice (ffd/deform_backend.h), cpu, gpu
     std::string raster = "auto";   // HQ rasteriser: auto, raster, compute (render::RasterPath)
+    int preview_budget = -1;       // points per cloud in preview frames (PreviewBudget); -1: the default
     bool sync = false;
     std::string drive = "global twist";
     std::string json, csv, svg, trace, compare;
@@ -40,6 +41,7 @@ struct RunSetup {
     int frames = 120, warmup = 10;
     std::string quality = "hq", backend = "auto", drive = "global twist", raster = "auto";
     bool sync = false;
+    int preview_budget = -1;        // as Options::preview_budget
     int lattice_points = 0;         // > 0: replace every lattice's divisions (control points per axis)
     std::string basis;              // "": keep
     bool deformation_only = false;  // sweeps: no renderer
