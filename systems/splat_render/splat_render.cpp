@@ -65,8 +65,13 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         gf.width = plan.width, gf.height = plan.height, gf.aux_outputs = plan.settings.aux_outputs;
         gf.preview = plan.settings.quality == Quality::preview;
         auto drawn = gaussian_pass(reg, gf);
-        if (!drawn) log::error("render_system(): ", drawn.message());
-        else stats.gaussians = *drawn;
+        if (!drawn) {
+            if (drawn.message() != s.gaussian_refusal) log::error("render_system(): ", drawn.message());
+            s.gaussian_refusal = drawn.message();
+        } else {
+            stats.gaussians = *drawn;
+            s.gaussian_refusal.clear();
+        }
         laps.lap(stats.gaussian_ms);
     }
     // Visible counts of the newest frame whose read-back has landed (with time_passes: this frame, the

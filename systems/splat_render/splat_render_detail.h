@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <span>
+#include <string>
 #include <utility>
 #include <unordered_map>
 #include <vector>
@@ -156,6 +157,9 @@ struct SplatRenderState {
     gfx::Buffer display_ubo;             // FrameBlock with the background, for the display copy
     glm::vec4 display_background{0.0f};  // the background display_ubo holds
     glm::vec4 last_background{0.0f};     // of the last rendered frame
+    // The Gaussian pass's last refusal, logged once: a cloud past a GPU limit is refused every frame, and
+    // repeating the same line at 60 Hz would bury everything else in the log.
+    std::string gaussian_refusal;
 
     // The compute cull's visible counts come back through this ring, never by waiting (the frame must not
     // stall on a read-back): a persistently mapped buffer of counts_slot_count slots x counts_ring_clouds

@@ -24,7 +24,7 @@ constexpr const char* usage_text =
     "F]\n"
     "                        [--trace F] [--compare BASE.json] [--sweep K=V,..] [--plot-sweep F.json] "
     "[--paper]\n"
-    "                        [--naive-frames N] [--suite quick|full]\n"
+    "                        [--preview-budget N] [--naive-frames N] [--suite quick|full]\n"
     "  SCENE                 built-in name (sphere, face), a scene/point-cloud file, or synthetic:N\n"
     "                        (a sphere of N splats with an 11^3 lattice), synthetic-gaussians:N (that\n"
     "                        sphere as N 3D Gaussians; Gaussian files work as SCENE too). Default: sphere\n"

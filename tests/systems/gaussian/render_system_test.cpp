@@ -4,6 +4,7 @@
 // Headless EGL (llvmpipe here).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <limits>
 #include <optional>
@@ -11,7 +12,9 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#include "runtime/core/log.h"
 #include "runtime/gfx/context.h"
+#include "runtime/gfx/limits.h"
 #include "runtime/gfx/residency.h"
 #include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
@@ -406,4 +409,31 @@ TEST_F(GaussianRenderSystem, TileRouteKeepsTheDepthTestAndTheAuxDepth) {
     EXPECT_GT(sphere_pixels, std::size_t(w * h / 10));
     EXPECT_GT(background, std::size_t(w * h / 4));
     EXPECT_EQ(differing, 0u) << "a Gaussian behind the opaque sphere shows through on the tile path";
+}
+
+// A cloud past the storage-block limit is refused every frame; the log says so once, not once a frame,
+// and the cloud is drawn again when it fits.
+TEST_F(GaussianRenderSystem, CloudPastTheStorageLimitIsLoggedOnceAndDrawnWhenItFits) {
+    add_camera();
+    reg.emplace<GaussianCloud>(reg.create(), random_cloud(3000, 1));
+    gfx::GlLimits small = gfx::limits();
+    small.max_ssbo_block_size = 3000 * 16 - 16;  // each 16-byte projection array is one entry too large
+    {
+        log::ScopedLogCapture capture;
+        gfx::ScopedLimits scope(small);
+        for (int k = 0; k < 3; ++k) {
+            frame(64, 48);
+            EXPECT_EQ(reg.resource<render::RenderStats>().gaussians, 0u) << "frame " << k;
+        }
+        const auto entries = capture.entries();
+        EXPECT_EQ(std::count_if(entries.begin(), entries.end(),
+                                [](const log::ScopedLogCapture::Entry& m) {
+                                    return m.level == log::Level::error &&
+                                           m.message.find("GL_MAX_SHADER_STORAGE_BLOCK_SIZE") !=
+                                               std::string::npos;
+                                }),
+                  1);
+    }
+    frame(64, 48);
+    EXPECT_EQ(reg.resource<render::RenderStats>().gaussians, 3000u);
 }
