@@ -54,7 +54,14 @@ struct LoadContext {
     std::string error;                                   // first refusal
     std::unordered_map<std::string, fs::path> resolved;  // tinygltf's joined path -> checked path
     std::uint64_t declared_bytes = 0;                    // decoded RGBA8 size of all images so far
+    std::string_view bin;                                // a GLB's BIN chunk (fast path), in the mapping
+    std::size_t bin_bytes = 0;                           // buffer 0's byteLength
+    std::string bin_joined;                              // the path tinygltf asks for buffer 0's bytes
 };
+
+// A GLB's buffer 0 is handed to tinygltf under this name (see glb_json_for_ascii()); no real URI is read
+// for it, whatever the folder holds.
+constexpr const char* kBinChunkUri = "glb-bin-chunk.sffd-internal";
 
 void refuse(LoadContext& ctx, const std::string& message) {
     if (ctx.error.empty()) ctx.error = message;
@@ -69,6 +76,10 @@ bool fs_exists(const std::string& joined, void* user) {
         uri = joined;  // the glTF is in the current folder: both candidates are relative to it
     else if (joined.rfind(prefix, 0) == 0) uri = joined.substr(prefix.size());
     else return false;  // tinygltf's current-directory fallback: never
+    if (!ctx.bin.empty() && uri == kBinChunkUri) {
+        ctx.bin_joined = joined;
+        return true;
+    }
     auto r = resolve_resource(ctx.owner, uri);
     if (!r) {
         refuse(ctx, r.message());
@@ -82,6 +93,18 @@ std::string fs_expand(const std::string& path, void*) { return path; }  // no ~ 
 
 bool fs_read(std::vector<unsigned char>* out, std::string* err, const std::string& joined, void* user) {
     auto& ctx = *static_cast<LoadContext*>(user);
+    if (!ctx.bin.empty() && joined == ctx.bin_joined) {
+        // Parallel copy into prefaulted memory: one thread copying ~250 MB into fresh pages was the
+        // largest cost of reading a large GLB.
+        out->clear();
+        resize_for_overwrite(*out, ctx.bin_bytes);
+        constexpr std::size_t kBlock = std::size_t(1) << 22;
+        tbb::parallel_for(std::size_t(0), (ctx.bin_bytes + kBlock - 1) / kBlock, [&](std::size_t b) {
+            const std::size_t begin = b * kBlock;
+            std::memcpy(out->data() + begin, ctx.bin.data() + begin, std::min(kBlock, ctx.bin_bytes - begin));
+        });
+        return true;
+    }
     auto it = ctx.resolved.find(joined);
     if (it == ctx.resolved.end()) {
         if (err) *err += "not a checked resource";
@@ -284,6 +307,48 @@ std::string gltf1_version(std::string_view json_text) {
     return {};
 }
 
+// The fast path for a well-formed GLB: tinygltf's binary loader copies the whole BIN chunk on one thread
+// into freshly faulted memory. When the container is valid (magic, version 2, lengths within the file, a
+// JSON chunk padded to 4 bytes followed by a BIN chunk) and buffer 0 is the BIN chunk, the JSON is handed
+// to tinygltf's text loader with buffer 0 renamed to kBinChunkUri, whose bytes fs_read() copies in
+// parallel. Returns "" for anything else: such files take tinygltf's binary loader, with its messages.
+std::string glb_json_for_ascii(std::string_view all, std::string_view& bin, std::size_t& bin_bytes) {
+    auto u32 = [&](std::size_t at) {
+        std::uint32_t v = 0;
+        std::memcpy(&v, all.data() + at, 4);
+        return v;
+    };
+    if (all.size() < 28 || all.compare(0, 4, "glTF") != 0 || u32(4) != 2) return {};
+    const std::size_t total = u32(8);
+    const std::size_t json_len = u32(12);
+    if (total > all.size() || u32(16) != 0x4E4F534Au || json_len == 0 || json_len % 4 != 0) return {};
+    if (json_len > total - 28) return {};  // room for the JSON chunk and a BIN chunk header
+    const std::size_t bin_at = 20 + json_len;
+    const std::size_t bin_len = u32(bin_at);
+    if (u32(bin_at + 4) != 0x004E4942u || bin_len == 0 || bin_len > total - bin_at - 8) return {};
+    try {
+        json doc = json::parse(all.substr(20, json_len), nullptr, false);
+        if (doc.is_discarded() || !doc.is_object()) return {};
+        auto buffers = doc.find("buffers");
+        if (buffers == doc.end() || !buffers->is_array() || buffers->empty()) return {};
+        json& b0 = (*buffers)[0];
+        if (!b0.is_object() || b0.contains("uri")) return {};
+        // tinygltf's binary loader binds every buffer without a uri to the BIN chunk, not only buffer 0.
+        for (std::size_t i = 1; i < buffers->size(); ++i)
+            if (!(*buffers)[i].is_object() || !(*buffers)[i].contains("uri")) return {};
+        auto length = b0.find("byteLength");
+        if (length == b0.end() || !length->is_number_unsigned()) return {};
+        const std::uint64_t n = length->get<std::uint64_t>();
+        if (n == 0 || n > bin_len) return {};
+        b0["uri"] = kBinChunkUri;
+        bin = all.substr(bin_at + 8, bin_len);
+        bin_bytes = static_cast<std::size_t>(n);
+        return doc.dump();
+    } catch (const std::exception&) {  // e.g. invalid UTF-8 in a string: tinygltf's loader reports it
+        return {};
+    }
+}
+
 Status refuse_gltf1(const std::string& src, const std::string& version) {
     return make_error(src + ": glTF 1.0 is not supported (asset.version \"" + version +
                       "\"); convert it to glTF 2.0");
@@ -293,7 +358,7 @@ Status refuse_gltf1(const std::string& src, const std::string& version) {
 
 Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
     const std::string src = path.string();
-    // Mapped, not copied: tinygltf copies the BIN chunk it needs, so a GLB is copied once, not twice.
+    // Mapped, not copied: a GLB's BIN chunk is copied once, into buffer 0 (fs_read()).
     auto file = MappedFile::open(path, kMaxGltfBytes);
     if (!file) return file.error();
     const std::string_view all = file->bytes();
@@ -318,6 +383,9 @@ Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
             const std::string v = gltf1_version(json_text);
             return refuse_gltf1(src, v.empty() ? "1.0" : v);
         }
+        if (container != 2 && bytes->compare(0, 4, "glTF") == 0)  // tinygltf reads any other as 2
+            return make_error(src + ": GLB container version " + std::to_string(container) +
+                              " is not supported (expected 2)");
     }
 
     LoadContext ctx;
@@ -330,10 +398,15 @@ Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
     bool ok = false;
     try {
         const auto* data = reinterpret_cast<const unsigned char*>(bytes->data());
-        ok = binary ? loader.LoadBinaryFromMemory(&m, &err, &warn, data,
-                                                  static_cast<unsigned int>(bytes->size()), ctx.basedir)
-                    : loader.LoadASCIIFromString(&m, &err, &warn, bytes->data(),
-                                                 static_cast<unsigned int>(bytes->size()), ctx.basedir);
+        const std::string glb_json = binary ? glb_json_for_ascii(all, ctx.bin, ctx.bin_bytes) : std::string();
+        if (!glb_json.empty())
+            ok = loader.LoadASCIIFromString(&m, &err, &warn, glb_json.data(),
+                                            static_cast<unsigned int>(glb_json.size()), ctx.basedir);
+        else
+            ok = binary ? loader.LoadBinaryFromMemory(&m, &err, &warn, data,
+                                                      static_cast<unsigned int>(bytes->size()), ctx.basedir)
+                        : loader.LoadASCIIFromString(&m, &err, &warn, bytes->data(),
+                                                     static_cast<unsigned int>(bytes->size()), ctx.basedir);
     } catch (const std::bad_alloc&) {
         return make_error(src + ": out of memory while parsing the glTF");
     } catch (const std::exception& e) {  // tinygltf's JSON parser may throw on hostile input
