@@ -384,7 +384,7 @@ Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
             return refuse_gltf1(src, v.empty() ? "1.0" : v);
         }
         if (container != 2 && bytes->compare(0, 4, "glTF") == 0)  // tinygltf reads any other as 2
-            return make_error(src + ": GLB container version " + std::to_string(container) +
+            return make_error(src + ": invalid glTF: GLB container version " + std::to_string(container) +
                               " is not supported (expected 2)");
     }
 
