@@ -112,7 +112,8 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         const bool gpu_path = backend.gpu();
         const auto sh_mode = std::uint8_t(gpu_path ? gpu_sh : cpu_sh);
         // A budgeted preview (ffd/preview_budget.h) on the CPU path of a resident cloud.
-        const std::uint32_t budget = resident && !gpu_path ? preview_budget_for(reg, cloud.size()) : 0;
+        const std::uint32_t budget =
+            resident && !gpu_path ? gaussian_preview_budget_for(reg, cloud.size()) : 0;
         // A resident cloud at rest has no deformed data yet (its entry is new): deform even if nothing moved.
         // A full output serves every frame; a preview one only preview frames.
         if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu &&
