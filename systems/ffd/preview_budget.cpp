@@ -14,6 +14,13 @@ std::uint32_t preview_budget_for(const ecs::Registry& registry, std::size_t n) {
     return b->points;
 }
 
+std::uint32_t gaussian_preview_budget_for(const ecs::Registry& registry, std::size_t n) {
+    const PreviewBudget* b = registry.try_resource<PreviewBudget>();
+    if (!b || !b->active || b->points == 0) return 0;
+    const std::uint32_t budget = b->gaussians == 0 ? b->points : std::min(b->points, b->gaussians);
+    return n <= budget ? 0 : budget;
+}
+
 void set_preview_active(ecs::Registry& registry, bool active) {
     PreviewBudget* b = registry.try_resource<PreviewBudget>();
     if (!b && !active) return;

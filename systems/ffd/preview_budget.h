@@ -26,16 +26,27 @@ namespace sffd {
 // a 2-core machine with a software rasterizer (README, "Preview budget").
 inline constexpr std::uint32_t kDefaultPreviewBudget = 100'000;
 
+// Gaussians cost far more to blend than surface splats to draw, and the blend dominates their preview:
+// a 1M-Gaussian preview frame on the same 2-core machine (loaded) took p50 585 ms at 100,000 kept and
+// 427 ms at 30,000 (README, "Preview budget"). Their own, smaller cap; the kept ones are enlarged by
+// sqrt(N / kept) all the same, so the surface stays covered.
+inline constexpr std::uint32_t kDefaultGaussianPreviewBudget = 30'000;
+
 // Registry resource (optional: absent means no budget). `points` is the user's setting (0 = off);
-// `active` is set per frame by the interactive front end.
+// `gaussians` caps it for Gaussian clouds (0 = no cap of their own); `active` is set per frame by the
+// interactive front end.
 struct PreviewBudget {
     std::uint32_t points = kDefaultPreviewBudget;
     bool active = false;
+    std::uint32_t gaussians = kDefaultGaussianPreviewBudget;  // last: {points, active} keeps its meaning
 };
 
 // The budget that applies to a cloud of `n` points this frame: 0 when there is none (no resource, not
 // active, off, or the cloud fits it).
 std::uint32_t preview_budget_for(const ecs::Registry& registry, std::size_t n);
+
+// The same for a cloud of `n` Gaussians: the smaller of `points` and `gaussians` (0 when `points` is 0).
+std::uint32_t gaussian_preview_budget_for(const ecs::Registry& registry, std::size_t n);
 
 // Marks whether this frame is an interactive preview (creates the resource with the default budget when
 // absent and `active`).

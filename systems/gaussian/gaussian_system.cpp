@@ -48,15 +48,19 @@ void collect_gpu_stats(ecs::Registry& reg) {
 // the fewer Gaussians cover the area the whole cloud covers. Without the surface splats' margin
 // (preview_radius_scale): a Gaussian's edge fades instead of leaving a hard hole, and the blending's cost
 // is its area (measured: 1.4x the scale took the 1M preview's Gaussian pass from 0.8 to 3.5 s here).
+// Only the DC term of the SH is kept (degree 0): a moving preview shows each Gaussian's base colour, and
+// neither the deformation (no SH rotation), the upload (3 floats instead of up to 48) nor the projection
+// evaluates the view-dependent terms; the next still frame draws the full degree again.
 GaussianCloud preview_gaussians(const GaussianCloud& cloud, const std::vector<std::uint32_t>& indices) {
     const std::size_t k = indices.size(), n = cloud.size();
     const auto coeffs = std::size_t(sh_coeffs(cloud.sh_degree)) * 3;
+    constexpr std::size_t kDc = 3;  // sh[(i*K + 0)*3 + c]: the DC term's RGB leads each Gaussian's block
     const float scale = k == 0 || k >= n ? 1.0f : float(std::sqrt(double(n) / double(k)));
     GaussianCloud out;
     out.origin = cloud.origin;
-    out.sh_degree = cloud.sh_degree;
+    out.sh_degree = 0;
     out.positions.resize(k), out.scales.resize(k), out.rotations.resize(k), out.opacities.resize(k);
-    out.sh.resize(cloud.sh.size() == n * coeffs ? k * coeffs : 0);
+    out.sh.resize(cloud.sh.size() == n * coeffs ? k * kDc : 0);
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, k, 1 << 13), [&](const auto& r) {
         for (std::size_t i = r.begin(); i < r.end(); ++i) {
             const std::size_t j = indices[i];
@@ -65,8 +69,8 @@ GaussianCloud preview_gaussians(const GaussianCloud& cloud, const std::vector<st
             out.rotations[i] = cloud.rotations[j];
             out.opacities[i] = cloud.opacities[j];
             if (!out.sh.empty())
-                std::copy_n(cloud.sh.begin() + std::ptrdiff_t(j * coeffs), coeffs,
-                            out.sh.begin() + std::ptrdiff_t(i * coeffs));
+                std::copy_n(cloud.sh.begin() + std::ptrdiff_t(j * coeffs), kDc,
+                            out.sh.begin() + std::ptrdiff_t(i * kDc));
         }
     });
     return out;
@@ -108,7 +112,8 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         const bool gpu_path = backend.gpu();
         const auto sh_mode = std::uint8_t(gpu_path ? gpu_sh : cpu_sh);
         // A budgeted preview (ffd/preview_budget.h) on the CPU path of a resident cloud.
-        const std::uint32_t budget = resident && !gpu_path ? preview_budget_for(reg, cloud.size()) : 0;
+        const std::uint32_t budget =
+            resident && !gpu_path ? gaussian_preview_budget_for(reg, cloud.size()) : 0;
         // A resident cloud at rest has no deformed data yet (its entry is new): deform even if nothing moved.
         // A full output serves every frame; a preview one only preview frames.
         if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu &&

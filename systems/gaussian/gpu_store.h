@@ -32,9 +32,16 @@ struct GpuGaussians : gfx::ResidentCloud {
     gfx::Buffer deformed_sh;  // float[count * K * 3], read when sh_source == rotated
     gfx::Buffer frames;       // vec4[3 * count], read when sh_source == frames
     int sh_degree = 0;
+    // Degree of `deformed_sh` in state preview_cpu: a moving preview carries only the DC term (0), so the
+    // subset's colour costs no SH rotation, upload or evaluation; the still frame draws `sh_degree`.
+    int preview_sh_degree = 0;
     ShSource sh_source = ShSource::authored;
 
     bool has_frames() const { return is_deformed() && sh_source == ShSource::frames; }
+    // The SH degree of what sh_buffer() holds now.
+    int drawn_sh_degree() const {
+        return state == gfx::Residency::preview_cpu ? preview_sh_degree : sh_degree;
+    }
     GLuint sh_buffer() const {
         return is_deformed() && sh_source == ShSource::rotated ? deformed_sh.id() : sh.id();
     }

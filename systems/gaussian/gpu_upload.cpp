@@ -64,6 +64,7 @@ void upload_preview(GpuGaussians& gpu, const GaussianCloud& subset) {
     // The authored `sh` is indexed by the whole cloud: the subset reads its own coefficients.
     fill_buffer(gpu.deformed_sh, "gaussian.deformed_sh", subset.sh.data(), subset.sh.size() * sizeof(float));
     gpu.sh_source = ShSource::rotated;
+    gpu.preview_sh_degree = subset.sh_degree;
     gfx::set_preview(gpu, std::uint32_t(subset.size()));
 }
 

@@ -30,8 +30,8 @@ Status upload_rest(GpuGaussians& gpu, const GaussianCloud& cloud, std::uint64_t 
 void upload_cpu_deformed(GpuGaussians& gpu, const DeformedGaussians& deformed, const GaussianCloud& authored);
 
 // A budgeted preview's output (systems/ffd/preview_budget.h): `subset`, a deformed subset of the cloud
-// with its own opacities and SH (rotated coefficients), into `deformed` and `deformed_sh`. State
-// preview_cpu with subset.size() elements.
+// with its own opacities and SH (rotated coefficients, of its own degree: preview_sh_degree), into
+// `deformed` and `deformed_sh`. State preview_cpu with subset.size() elements.
 void upload_preview(GpuGaussians& gpu, const GaussianCloud& subset);
 
 }  // namespace sffd::gaussian

@@ -205,8 +205,8 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
         v.width = f.width, v.height = f.height;
         v.ndc_depth = ndc_depth;
         v.min_footprint_px = f.preview ? kPreviewMinFootprintPx : 0.0f;
-        const gaussian::GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(), gpu.frames.id(),
-                                                gpu.drawn_count(), gpu.sh_degree,   gpu.has_frames()};
+        const gaussian::GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(),       gpu.frames.id(),
+                                                gpu.drawn_count(), gpu.drawn_sh_degree(), gpu.has_frames()};
         if (Status st = gaussian::draw_gaussians(s.renderer, buffers, v, &s.accum, &tiles); !st) status = st;
         (s.renderer.last_blend == gaussian::BlendPath::tiles ? s.tile_clouds : s.quad_clouds) += 1;
         constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();  // "past 2^32" stays so

@@ -18,6 +18,7 @@
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_system.h"
+#include "systems/gaussian/gpu_store.h"
 #include "systems/picking/gaussian_source.h"
 #include "systems/picking/pick_cache.h"
 #include "systems/picking/splat_source.h"
@@ -190,6 +191,49 @@ TEST_F(PreviewBudget_, GaussiansPreviewASubsetAndTheStillFrameIsUnchanged) {
     const FrameImage still = frame(reg, Quality::hq, false);
     EXPECT_EQ(reg.get<DeformedGaussians>(g).cloud.size(), n);
 
+    ecs::Registry other;
+    const auto [g2, l2] = scene(other, gaussians);
+    nudge(other, l2, 0.02);
+    const FrameImage plain = frame(other, Quality::hq, false);
+    release_render_state(other);
+    const ImageDiff d = image_diff(still, plain);
+    EXPECT_EQ(d.coverage_mismatch, 0);
+    EXPECT_GT(d.psnr, 60.0);
+}
+
+// A moving preview draws the subset's DC colour only (degree 0: no SH rotation, upload or evaluation);
+// the still frame after it draws every Gaussian at the cloud's full degree, exactly as without a preview.
+TEST_F(PreviewBudget_, GaussianPreviewDrawsDegreeZeroAndTheStillFrameTheFullDegree) {
+    const std::size_t n = kSplats / 4;
+    GaussianCloud gaussians = gaussian::gaussians_from_splats(fibonacci_sphere(n));
+    ASSERT_EQ(gaussians.sh_degree, 0);
+    // Degree 3 with strong view-dependent terms: the DC term kept, the others varying per Gaussian.
+    constexpr int kDegree = 3;
+    const auto K = std::size_t(sh_coeffs(kDegree));
+    std::vector<float> sh(n * K * 3, 0.0f);
+    for (std::size_t i = 0; i < n; ++i)
+        for (std::size_t k = 0; k < K; ++k)
+            for (std::size_t c = 0; c < 3; ++c)
+                sh[(i * K + k) * 3 + c] =
+                    k == 0 ? gaussians.sh[i * 3 + c] : 0.3f * float(std::sin(double(i * 7 + k * 3 + c)));
+    gaussians.sh = std::move(sh);
+    gaussians.sh_degree = kDegree;
+    const auto [g, le] = scene(reg, gaussians);
+    (void)frame(reg, Quality::preview, true);
+    nudge(reg, le, 0.02);
+    const FrameImage moving = frame(reg, Quality::preview, true);
+    const gaussian::GpuGaussians& gpu = reg.resource<gaussian::GpuGaussianStore>().clouds.at(g);
+    EXPECT_EQ(gpu.state, gfx::Residency::preview_cpu);
+    EXPECT_EQ(gpu.drawn_sh_degree(), 0);
+    EXPECT_EQ(reg.resource<RenderStats>().gaussians, kBudget);
+    int covered = 0;
+    for (int y = 0; y < moving.height; ++y)
+        for (int x = 0; x < moving.width; ++x) covered += moving.covered(x, y);
+    EXPECT_GT(covered, 10000);
+
+    const FrameImage still = frame(reg, Quality::hq, false);
+    EXPECT_NE(gpu.state, gfx::Residency::preview_cpu);
+    EXPECT_EQ(gpu.drawn_sh_degree(), kDegree);
     ecs::Registry other;
     const auto [g2, l2] = scene(other, gaussians);
     nudge(other, l2, 0.02);

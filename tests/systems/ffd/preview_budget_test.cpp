@@ -79,3 +79,23 @@ TEST(PreviewBudget, AppliesOnlyToActiveFramesOfCloudsOverTheBudget) {
     EXPECT_GE(preview_radius_scale(1'000'000, 10'000), 10.0f);  // at least the same area in all
     EXPECT_LE(preview_radius_scale(1'000'000, 10'000), 15.0f);
 }
+
+TEST(PreviewBudget, GaussianCloudsGetTheSmallerOfTheirOwnCapAndTheSetting) {
+    ecs::Registry reg;
+    EXPECT_EQ(gaussian_preview_budget_for(reg, 1'000'000), 0u);  // no resource: no budget
+    set_preview_active(reg, true);
+    static_assert(kDefaultGaussianPreviewBudget < kDefaultPreviewBudget);
+    EXPECT_EQ(gaussian_preview_budget_for(reg, 1'000'000), kDefaultGaussianPreviewBudget);
+    EXPECT_EQ(preview_budget_for(reg, 1'000'000), kDefaultPreviewBudget);  // surface splats unchanged
+    EXPECT_EQ(gaussian_preview_budget_for(reg, kDefaultGaussianPreviewBudget), 0u);  // fits
+    auto& b = reg.resource<PreviewBudget>();
+    b.points = 10'000;  // a smaller setting wins
+    EXPECT_EQ(gaussian_preview_budget_for(reg, 1'000'000), 10'000u);
+    b.points = 200'000, b.gaussians = 0;  // no cap of their own: the setting
+    EXPECT_EQ(gaussian_preview_budget_for(reg, 1'000'000), 200'000u);
+    b.points = 0;  // the setting's "off" turns Gaussians' off too
+    EXPECT_EQ(gaussian_preview_budget_for(reg, 1'000'000), 0u);
+    b.points = 10'000;
+    set_preview_active(reg, false);
+    EXPECT_EQ(gaussian_preview_budget_for(reg, 1'000'000), 0u);
+}
