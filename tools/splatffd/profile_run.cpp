@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <sstream>
 
 #include "runtime/app/clock.h"
@@ -274,6 +275,8 @@ Result<RunOutput> run_profile(const RunSetup& s) {
                   {"quality", s.quality},
                   {"raster", want_render ? s.raster : std::string("none")},
                   {"preview_budget", budget.active ? static_cast<double>(budget.points) : 0.0},
+                  {"gaussian_preview_budget", static_cast<double>(gaussian_preview_budget_for(
+                                                  registry, std::numeric_limits<std::size_t>::max()))},
                   {"backend", s.backend},
                   {"drive", s.drive},
                   {"schedule", schedule_kind},
