@@ -12,8 +12,18 @@
 // bits (all_finite), never by NaN comparisons.
 //
 // Cheap tests first (back face from centre and normal only, then the frustum), so the two thirds of a
-// closed surface that face away cost little. One global atomic per kept splat: per-workgroup slot
-// reservation needs barrier(), which llvmpipe runs as coroutines (measured: the pass became ~1.5x slower).
+// closed surface that face away cost little.
+//
+// The lists keep splat order, so a frame is the same image every time it is drawn: the draws blend and
+// depth-test their sprites in list order, and an atomic append would order them by whichever invocation
+// got there first, which varies from run to run on a GPU (ties in the depth test and the order of float
+// sums then change pixels: a farm's shards would not match one run). Two dispatches of this program with an
+// exclusive scan between them (cull_pass.cpp): the count pass (u_count_pass = 1) writes each work group's
+// kept sprites and quads into groups[g] and groups[G + g] (G groups); gfx::exclusive_scan() turns that into
+// each group's first slot; the write pass classifies again and writes every kept splat at its group's first
+// slot plus its rank in the group (a scan in shared memory). The commands' counts are the scan's totals.
+// Both passes run the same compiled program, so they classify every splat alike (two compilations could
+// contract floating-point operations differently and disagree on a splat at a frustum plane).
 #include "splat_render/splat_color.glsl"
 
 layout(local_size_x = SFFD_CULL_GROUP_SIZE) in;
@@ -29,6 +39,13 @@ layout(std430, binding = SFFD_SSBO_DRAW_INDIRECT) buffer Commands {
     uint point_count, point_instances, point_first, point_base;
     uint quad_vertices, quad_count, quad_first, quad_base;
 };
+// Count pass: per group kept sprites [0, G) and quads [G, 2G). Write pass: their exclusive scan, the total
+// at [2G].
+layout(std430, binding = SFFD_SSBO_CULL_GROUPS) buffer Groups { uint groups[]; };
+
+layout(location = SFFD_LOC_CULL_PASS) uniform uint u_count_pass;
+
+shared uint s_rank[SFFD_CULL_GROUP_SIZE];  // sprites in the low 16 bits, quads in the high 16 bits
 
 const uint KEEP_NONE = 0u, KEEP_SPRITE = 1u, KEEP_QUAD = 2u;
 
@@ -81,8 +98,35 @@ void main() {
         if (box.z < 0.0 || box.z > frame.params.y || any(greaterThan(abs(box.xy), vec2(1.0)))) keep = KEEP_QUAD;
     }
 
+    // Inclusive scan of the kept flags over the work group (every invocation reaches each barrier: no early
+    // return above). A group holds at most SFFD_CULL_GROUP_SIZE < 2^16 of either kind.
+    const uint lid = gl_LocalInvocationID.x;
+    const uint flag = keep == KEEP_SPRITE ? 1u : keep == KEEP_QUAD ? 0x10000u : 0u;
+    s_rank[lid] = flag;
+    barrier();
+    for (uint d = 1u; d < SFFD_CULL_GROUP_SIZE; d <<= 1u) {
+        const uint before = lid >= d ? s_rank[lid - d] : 0u;
+        barrier();
+        s_rank[lid] += before;
+        barrier();
+    }
+    const uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    const uint group_count = (frame.counts.x + SFFD_CULL_GROUP_SIZE - 1u) / SFFD_CULL_GROUP_SIZE;
+    if (u_count_pass != 0u) {
+        if (lid == SFFD_CULL_GROUP_SIZE - 1u && group < group_count) {
+            groups[group] = s_rank[lid] & 0xffffu;
+            groups[group_count + group] = s_rank[lid] >> 16u;
+        }
+        return;
+    }
+    const uint rank = s_rank[lid] - flag;  // kept splats of this group before this one
+    const uint sprites = groups[group_count];  // the sprites' total: the quads' scan starts from it
+    if (group == 0u && lid == 0u) {
+        point_count = sprites;
+        quad_count = groups[2u * group_count] - sprites;
+    }
     if (keep == KEEP_QUAD) {
-        quads[atomicAdd(quad_count, 1u)] = i;
+        quads[groups[group_count + group] - sprites + (rank >> 16u)] = i;
     } else if (keep == KEEP_SPRITE) {
         SplatView o = splat_view(s);
         SplatRecord rec;
@@ -113,6 +157,6 @@ void main() {
 #else
         rec.uv = vec4(0.0);
 #endif
-        records[atomicAdd(point_count, 1u)] = rec;
+        records[groups[group] + (rank & 0xffffu)] = rec;
     }
 }

@@ -9,6 +9,11 @@
 // local_size_x of shaders/splat_render/cull.comp; render_system dispatches ceil(count / this) groups.
 #define SFFD_CULL_GROUP_SIZE 128
 
+// The cull pass's per-group counts and their scan (cull.comp): the stats binding, which the cull does not use.
+#define SFFD_SSBO_CULL_GROUPS SFFD_SSBO_STATS
+// uint uniform of cull.comp: 1 for its count pass, 0 for the pass that writes the lists.
+#define SFFD_LOC_CULL_PASS 0
+
 // A visible sprite splat, prepared by the cull pass (or its CPU twin, cpu_cull.h) so the vertex shaders of
 // both HQ passes only copy it (llvmpipe spends its time per primitive: vertex work runs once, in the cull).
 // std430, 96 bytes, bound as a vertex buffer (attributes 0..5). The ray through a pixel is d = (x, y, -1)

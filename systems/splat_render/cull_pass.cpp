@@ -49,6 +49,44 @@ glm::vec4 quantised_base_color(const glm::vec4& linear) {
     return out;
 }
 
+// The compute cull of one cloud (cull.comp), with its frame block bound: a count pass, the exclusive scan
+// of the work groups' counts, and the pass that writes the lists in splat order at the scanned offsets.
+Status compute_cull(SplatRenderState& s, CloudGpu& gpu, GLuint program, bool textured) {
+    if (!s.scan) {
+        auto scan = gfx::create_radix_sorter();
+        if (!scan) return make_error(scan.message());
+        s.scan = std::move(*scan);
+    }
+    const std::uint32_t groups = (gpu.count + SFFD_CULL_GROUP_SIZE - 1) / SFFD_CULL_GROUP_SIZE;
+    if (!gpu.cull_groups || gpu.cull_group_capacity < groups) {
+        gpu.cull_groups = gfx::Buffer::create("render.cull_groups");
+        glNamedBufferStorage(gpu.cull_groups.id(),
+                             GLsizeiptr((2 * std::size_t(groups) + 1) * sizeof(std::uint32_t)), nullptr, 0);
+        gpu.cull_group_capacity = groups;
+    }
+    // The scan binds its own buffers: both passes bind theirs.
+    const auto bind = [&](std::uint32_t count_pass) {
+        glUseProgram(program);
+        glProgramUniform1ui(program, SFFD_LOC_CULL_PASS, count_pass);
+        glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, gpu.commands.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CULL_GROUPS, gpu.cull_groups.id());
+        if (textured) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
+        glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
+    };
+    // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its worker
+    // threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread time).
+    bind(1);
+    if (Status st = gfx::dispatch_1d(gpu.count, SFFD_CULL_GROUP_SIZE); !st) return st;
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "render.cull.count");
+    if (Status st = gfx::exclusive_scan(*s.scan, gpu.cull_groups.id(), 2 * groups); !st) return st;
+    bind(0);
+    return gfx::dispatch_1d(gpu.count, SFFD_CULL_GROUP_SIZE);
+}
+
 }  // namespace
 
 // Per-cloud uniforms, then culling and compaction of every cloud (the compute pass, or cpu_cull.h).
@@ -126,19 +164,9 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             const bool textured = bool(gpu.texture), lit = b.counts.w == 1u;
             if (Status st = cull_program(s, textured, lit, b.counts.y); !st)
                 log::error("render_system(): ", st.message());
-            glUseProgram(
-                s.cull[textured][lit][lit ? std::min<std::uint32_t>(b.counts.y, SFFD_MAX_LIGHTS) : 0].id());
-            glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
-            glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, gpu.commands.id());
-            if (textured) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
-            glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
-            // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its
-            // worker threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread
-            // time).
-            if (Status st = gfx::dispatch_1d(gpu.count, SFFD_CULL_GROUP_SIZE); !st)
+            const GLuint program =
+                s.cull[textured][lit][lit ? std::min<std::uint32_t>(b.counts.y, SFFD_MAX_LIGHTS) : 0].id();
+            if (Status st = compute_cull(s, gpu, program, textured); !st)
                 log::error("render_system(): ", st.message());
             ++stats.compute_culled_clouds;
             plan.gpu_counts.push_back({&gpu, counts_cull});

@@ -9,6 +9,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -24,6 +25,7 @@
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl_object.h"
+#include "runtime/gfx/radix_sort.h"
 #include "runtime/gfx/shader.h"
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
@@ -48,10 +50,13 @@ constexpr std::size_t draw_command_words = 12;
 
 // Per point cloud GPU objects owned by the renderer (the splats themselves live in GpuSplatStore).
 struct CloudGpu {
-    gfx::Buffer records;    // SplatRecord[2 capacity]: visible sprites, prepared by the cull pass; from
-                            // `capacity` on, a textured cloud's sprites of one texture colour (CPU cull)
-    gfx::Buffer quads;      // uint[capacity]: indices of visible splats drawn as quads
-    gfx::Buffer commands;   // three DrawArraysIndirectCommands: sprites, quads, flat-coloured sprites
+    gfx::Buffer records;   // SplatRecord[2 capacity]: visible sprites, prepared by the cull pass; from
+                           // `capacity` on, a textured cloud's sprites of one texture colour (CPU cull)
+    gfx::Buffer quads;     // uint[capacity]: indices of visible splats drawn as quads
+    gfx::Buffer commands;  // three DrawArraysIndirectCommands: sprites, quads, flat-coloured sprites
+    gfx::Buffer
+        cull_groups;  // uint[2 G + 1]: the compute cull's per-group counts, then their scan (cull.comp)
+    std::uint32_t cull_group_capacity = 0;
     gfx::Buffer frame_ubo;  // FrameBlock for this cloud
     std::uint32_t capacity = 0;
     gfx::Texture texture;  // the cloud's texture (sRGB), when it has one
@@ -132,6 +137,7 @@ struct SplatRenderState {
     // [textured][lit][lights]: cull pass variants (TEXTURED, LIT, LIGHTS in splat_color.glsl), compiled on
     // first use (cull_program)
     std::array<std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2>, 2> cull;
+    std::optional<gfx::RadixSorter> scan;    // the compute cull's exclusive scan, made on its first use
     std::array<gfx::Program, 2> visibility;  // [0] sprites, [1] quads
     // [textured: per-pixel texture lookups][clouds differ in material][sprites, quads]
     std::array<std::array<std::array<gfx::Program, 2>, 2>, 2> attribute;

@@ -48,20 +48,18 @@ void collect_counts(SplatRenderState& s) {
     }
 }
 
-// Copies this frame's GPU-side draw commands into a free slot of the ring and fences it (the oldest slot
-// when every one is still in flight: its counts are dropped, never waited for).
+// Copies this frame's GPU-side draw commands into a free slot of the ring and fences it. With every slot
+// still in flight this frame's counts are not taken (never waited for). Dropping the oldest slot instead
+// starved the ring: a headless loop with no swap to hold it back ran more than four frames ahead of an
+// NVIDIA H200, so each slot was overwritten before its fence signalled and no counts ever came back.
 void issue_counts(SplatRenderState& s, const std::vector<CountsSource>& computed, std::uint32_t cpu_points,
                   std::uint32_t cpu_quads, std::uint64_t frame) {
     ensure_counts_ring(s, computed.size());
-    std::size_t at = 0;
-    for (std::size_t i = 0; i < s.counts_slots.size(); ++i) {
-        if (!s.counts_slots[i].fence) {
-            at = i;
-            break;
-        }
-        if (s.counts_slots[i].serial < s.counts_slots[at].serial) at = i;
-    }
-    CountsSlot& slot = s.counts_slots[at];
+    const auto free_slot = std::find_if(s.counts_slots.begin(), s.counts_slots.end(),
+                                        [](const CountsSlot& slot) { return !slot.fence; });
+    if (free_slot == s.counts_slots.end()) return;
+    const auto at = std::size_t(free_slot - s.counts_slots.begin());
+    CountsSlot& slot = *free_slot;
     slot.parts.assign(computed.size(), 0);
     // The copies read counters that shader atomics wrote (cull.comp, compute_visibility.comp).
     if (!computed.empty()) gfx::memory_barrier(GL_BUFFER_UPDATE_BARRIER_BIT, "render.counts");

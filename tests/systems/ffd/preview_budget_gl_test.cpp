@@ -46,8 +46,11 @@ Camera camera() {
 // A scene in `r`: the camera, a light, and `cloud` (a SplatCloud or a GaussianCloud) in a 2x2x2
 // Bernstein lattice stretched kStretch times along x (linear maps are reproduced exactly, so the analytic
 // ellipsoid is the reference). Returns the cloud and the lattice.
+// The deformation runs on the CPU path, the only one with a preview budget (a GPU deforms every point):
+// what the engine picks on a software rasterizer, forced so that a hardware GPU tests the same thing.
 template <class Cloud>
 std::pair<ecs::Entity, ecs::Entity> scene(ecs::Registry& r, Cloud cloud) {
+    r.set_resource<FfdSettings>(FfdSettings{.force_cpu = true});
     r.emplace<Camera>(r.create(), camera());
     r.emplace<DirectionalLight>(r.create(), DirectionalLight{{-1.0f, -0.3f, -0.5f}, glm::vec3(1.0f), 1.0f});
     r.emplace<AmbientLight>(r.create(), AmbientLight{glm::vec3(1.0f), 0.1f});

@@ -126,7 +126,7 @@ TEST_F(Quality_, FlatColouredSpritesLookLikeTexturedOnes) {
         FrameImage img[2];
         for (int compute = 0; compute < 2; ++compute) {
             release_render_state(reg);
-            img[compute] = render(q, 640, 360, true, compute ? CullPath::compute : CullPath::automatic);
+            img[compute] = render(q, 640, 360, true, compute ? CullPath::compute : CullPath::cpu);
             const RenderStats& stats = reg.resource<RenderStats>();
             EXPECT_EQ(stats.cpu_culled_clouds, compute ? 0u : 1u);
         }
