@@ -10,6 +10,9 @@
 #define SFFD_SSBO_RASTER_SUMS         10   // uint[w*h*8]: per-pixel fixed-point attribute sums (below)
 #define SFFD_SSBO_RASTER_BIG          11   // uint[2 capacity]: record indices of sprites left to the rasteriser
 #define SFFD_SSBO_RASTER_BIG_COMMANDS 12   // two DrawElementsIndirectCommands over RASTER_BIG
+// uint[G + 1] per record list: compute_visibility.comp's large sprites per work group, then their scan (the
+// stats binding of common/bindings.h, which these passes do not use)
+#define SFFD_SSBO_RASTER_GROUPS        6
 
 // local_size_x of compute_visibility.comp and compute_attribute.comp (one invocation per sprite record).
 #define SFFD_RASTER_GROUP_SIZE 64

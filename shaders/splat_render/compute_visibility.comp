@@ -7,7 +7,12 @@
 // rasteriser, whose cost follows their pixels). u_list selects the record list: x = its first record
 // (0: the sprites; capacity: the CPU cull's flat-coloured sprites of a textured cloud), y = the word of the
 // cull's draw commands holding its length, z = the list (0, 1: which DrawElementsIndirectCommand of
-// RASTER_BIG_COMMANDS it appends to; its indices start at x).
+// RASTER_BIG_COMMANDS it appends to; its indices start at x), w = the invocations dispatched.
+//
+// The large sprites' list keeps record order, as the cull's lists do (cull.comp: the rasteriser blends
+// them in list order, so an order that changes from run to run changes the float sums): this pass counts
+// them per work group into `groups`, gfx::exclusive_scan() gives each group its first slot, and a second
+// dispatch of this program (u_write_pass = 1) writes each at its group's slot plus its rank in the group.
 #include "splat_render/compute_raster.glsl"
 
 layout(local_size_x = SFFD_RASTER_GROUP_SIZE) in;
@@ -18,16 +23,41 @@ layout(std430, binding = SFFD_SSBO_DRAW_INDIRECT) readonly buffer Commands { uin
 layout(std430, binding = SFFD_SSBO_RASTER_BIG) writeonly buffer Big { uint big[]; };
 layout(std430, binding = SFFD_SSBO_RASTER_BIG_COMMANDS) buffer BigCommands { uint big_commands[]; };
 layout(location = 0) uniform uvec4 u_list;
+layout(std430, binding = SFFD_SSBO_RASTER_GROUPS) buffer Groups { uint groups[]; };
+layout(location = 1) uniform uint u_write_pass;
+
+shared uint s_rank[SFFD_RASTER_GROUP_SIZE];
 
 void main() {
-    uint i = sffd_dispatch_index();
-    if (i >= commands[u_list.y]) return;
-    uint r = u_list.x + i;
-    SplatRecord rec = records[r];
-    if (rec.center.w > SFFD_RASTER_MAX_SPRITE) {
-        big[u_list.x + atomicAdd(big_commands[5u * u_list.z], 1u)] = r;
+    const uint i = sffd_dispatch_index();
+    const uint r = u_list.x + i;
+    const bool listed = i < commands[u_list.y];
+    SplatRecord rec;
+    bool big_sprite = false;
+    if (listed) {
+        rec = records[r];
+        big_sprite = rec.center.w > SFFD_RASTER_MAX_SPRITE;
+    }
+    // Inclusive scan of the large-sprite flags over the work group (every invocation reaches each barrier).
+    const uint lid = gl_LocalInvocationID.x;
+    const uint flag = big_sprite ? 1u : 0u;
+    s_rank[lid] = flag;
+    barrier();
+    for (uint d = 1u; d < SFFD_RASTER_GROUP_SIZE; d <<= 1u) {
+        const uint before = lid >= d ? s_rank[lid - d] : 0u;
+        barrier();
+        s_rank[lid] += before;
+        barrier();
+    }
+    const uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
+    const uint group_count = (u_list.w + SFFD_RASTER_GROUP_SIZE - 1u) / SFFD_RASTER_GROUP_SIZE;
+    if (u_write_pass != 0u) {
+        if (group == 0u && lid == 0u) big_commands[5u * u_list.z] = groups[group_count];
+        if (big_sprite) big[u_list.x + groups[group] + s_rank[lid] - flag] = r;
         return;
     }
+    if (lid == SFFD_RASTER_GROUP_SIZE - 1u && group < group_count) groups[group] = s_rank[lid];
+    if (!listed || big_sprite) return;
     ivec4 box = raster_sprite_pixels(rec.center);
     float eps = rec.plane.w;
     for (int y = box.y; y <= box.w; ++y)

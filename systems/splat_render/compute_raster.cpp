@@ -18,14 +18,15 @@ namespace {
 
 constexpr GLint list_uniform = 0;            // u_list in compute_visibility.comp / compute_attribute.comp
 constexpr GLint rect_uniform = 1;            // u_rect in compute_attribute.comp
+constexpr GLint write_pass_uniform = 1;      // u_write_pass in compute_visibility.comp
 constexpr std::uint32_t command_words = 10;  // two DrawElementsIndirectCommands
 constexpr std::uint32_t depth_clear = 0x3f800000u;  // 1.0f: RASTER_DEPTH_CLEAR
 
 // The record lists of a cloud: {first record, word of the cull's commands with the length, list id}.
 template <class Fn>
 void for_each_list(const ComputeRasterDraw& d, Fn&& fn) {
-    fn(glm::uvec4(0u, 0u, 0u, 0u));
-    if (d.flat_list) fn(glm::uvec4(d.capacity, 8u, 1u, 0u));
+    fn(glm::uvec4(0u, 0u, 0u, d.count));
+    if (d.flat_list) fn(glm::uvec4(d.capacity, 8u, 1u, d.count));
 }
 
 void bind_cloud(const ComputeRasterDraw& d) {
@@ -55,6 +56,9 @@ Status init_compute_raster(ComputeRaster& raster) {
                                       {GL_FRAGMENT_SHADER, "splat_render/compute_resolve.frag"}},
                                      "render.compute.resolve");
     if (!resolve) return make_error(resolve.message());
+    auto scan = gfx::create_radix_sorter();
+    if (!scan) return make_error(scan.message());
+    raster.scan = std::move(*scan);
     raster.merge = std::move(merge.value());
     raster.resolve = std::move(resolve.value());
     raster.visibility = std::move(vis.value());
@@ -73,6 +77,12 @@ void ensure_compute_raster_cloud(ComputeRasterCloud& cloud, std::uint32_t capaci
     const std::uint32_t init[command_words] = {0, 1, 0, 0, 0, 0, 1, cloud.capacity, 0, 0};
     cloud.commands = gfx::Buffer::create("render.compute.big_commands");
     glNamedBufferStorage(cloud.commands.id(), sizeof init, init, GL_DYNAMIC_STORAGE_BIT);
+    const std::size_t groups =
+        (std::size_t(cloud.capacity) + SFFD_RASTER_GROUP_SIZE - 1) / SFFD_RASTER_GROUP_SIZE;
+    for (gfx::Buffer& g : cloud.groups) {
+        g = gfx::Buffer::create("render.compute.big_groups");
+        glNamedBufferStorage(g.id(), GLsizeiptr((groups + 1) * sizeof(std::uint32_t)), nullptr, 0);
+    }
 }
 
 void compute_raster_visibility(ComputeRaster& raster, std::span<const ComputeRasterDraw> draws, int width,
@@ -95,19 +105,35 @@ void compute_raster_visibility(ComputeRaster& raster, std::span<const ComputeRas
     gfx::memory_barrier(GL_BUFFER_UPDATE_BARRIER_BIT | GL_SHADER_STORAGE_BARRIER_BIT,
                         "render.compute.visibility.reuse");
     glClearNamedBufferData(raster.depth.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, &depth_clear);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_RASTER_DEPTH, raster.depth.id());
-    glUseProgram(raster.visibility.id());
     for (const ComputeRasterDraw& d : draws) {
         const std::uint32_t zero = 0;
         glClearNamedBufferSubData(d.cloud->commands.id(), GL_R32UI, 0, sizeof zero, GL_RED_INTEGER,
                                   GL_UNSIGNED_INT, &zero);
         glClearNamedBufferSubData(d.cloud->commands.id(), GL_R32UI, 5 * sizeof zero, sizeof zero,
                                   GL_RED_INTEGER, GL_UNSIGNED_INT, &zero);
-        bind_cloud(d);
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_RASTER_BIG, d.cloud->big.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_RASTER_BIG_COMMANDS, d.cloud->commands.id());
         for_each_list(d, [&](const glm::uvec4& list) {
-            glUniform4ui(list_uniform, list.x, list.y, list.z, list.w);
+            // The scan binds its own buffers: both dispatches bind theirs.
+            const auto bind = [&](std::uint32_t write_pass) {
+                glUseProgram(raster.visibility.id());
+                glUniform4ui(list_uniform, list.x, list.y, list.z, list.w);
+                glUniform1ui(write_pass_uniform, write_pass);
+                bind_cloud(d);
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_RASTER_DEPTH, raster.depth.id());
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_RASTER_BIG, d.cloud->big.id());
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_RASTER_BIG_COMMANDS,
+                                 d.cloud->commands.id());
+                glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_RASTER_GROUPS,
+                                 d.cloud->groups[list.z].id());
+            };
+            bind(0);
+            if (Status st = gfx::dispatch_1d(d.count, SFFD_RASTER_GROUP_SIZE); !st)
+                log::error("render_system(): ", st.message());
+            gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "render.compute.visibility.count");
+            const auto groups =
+                std::uint32_t((d.count + SFFD_RASTER_GROUP_SIZE - 1) / SFFD_RASTER_GROUP_SIZE);
+            if (Status st = gfx::exclusive_scan(*raster.scan, d.cloud->groups[list.z].id(), groups); !st)
+                log::error("render_system(): ", st.message());
+            bind(1);
             if (Status st = gfx::dispatch_1d(d.count, SFFD_RASTER_GROUP_SIZE); !st)
                 log::error("render_system(): ", st.message());
         });

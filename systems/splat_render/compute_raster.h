@@ -25,12 +25,14 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
 
 #include <glm/glm.hpp>
 
 #include "runtime/core/result.h"
 #include "runtime/gfx/gl_object.h"
+#include "runtime/gfx/radix_sort.h"
 #include "runtime/scene/components.h"
 
 namespace sffd::render {
@@ -41,6 +43,7 @@ struct ComputeRasterCloud {
                       // [capacity, 2 capacity) from the flat-coloured list (values = record indices)
     gfx::Buffer
         commands;  // two DrawElementsIndirectCommands over `big`: {n, 1, 0, 0, 0}, {n, 1, capacity, 0, 0}
+    std::array<gfx::Buffer, 2> groups;  // per list: large sprites per work group, then their scan (G + 1)
     std::uint32_t capacity = 0;
 };
 
@@ -49,8 +52,9 @@ struct ComputeRaster {
     gfx::Program visibility;
     std::array<gfx::Program, 2> attribute;  // [textured]
     gfx::Program merge, resolve;
-    gfx::Buffer depth;  // uint[w h]: window depth bits, cleared to 1.0 every frame
-    gfx::Buffer sums;   // uint[w h 8]: zero between frames (the resolve pass re-zeroes what it reads)
+    std::optional<gfx::RadixSorter> scan;  // the large-sprite lists' exclusive scan (compute_visibility.comp)
+    gfx::Buffer depth;                     // uint[w h]: window depth bits, cleared to 1.0 every frame
+    gfx::Buffer sums;  // uint[w h 8]: zero between frames (the resolve pass re-zeroes what it reads)
     int width = 0, height = 0;
 };
 

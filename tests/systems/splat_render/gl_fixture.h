@@ -68,11 +68,11 @@ protected:
     }
 
     // path: automatic is the CPU cull on llvmpipe; CullPath::compute runs the compute pass.
-    FrameImage render(Quality quality, int w, int h, bool culling = true,
-                      CullPath path = CullPath::automatic) {
+    FrameImage render(Quality quality, int w, int h, bool culling = true, CullPath path = CullPath::automatic,
+                      RasterPath raster = RasterPath::automatic) {
         RenderSettings s;
         s.quality = quality, s.width = w, s.height = h, s.culling = culling, s.time_passes = true;
-        s.cull_path = path;
+        s.cull_path = path, s.raster_path = raster;
         s.aux_outputs = true;
         reg.set_resource<RenderSettings>(s);
         residency_system(reg, FrameContext{});
