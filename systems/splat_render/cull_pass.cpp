@@ -71,7 +71,9 @@ Status compute_cull(SplatRenderState& s, CloudGpu& gpu, GLuint program, bool tex
         glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
-        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
+        // Only the sprites' run of the records (compute_cull_fits: the whole buffer may exceed one block).
+        glBindBufferRange(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id(), 0,
+                          GLsizeiptr(std::size_t(gpu.count) * sizeof(SplatRecord)));
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, gpu.commands.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CULL_GROUPS, gpu.cull_groups.id());
         if (textured) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());

@@ -29,8 +29,9 @@ Status compute_raster_fits(int width, int height) {
 
 Status compute_cull_fits(std::size_t splats) {
     const std::uint64_t n = std::max<std::uint64_t>(splats, 1);
-    // Sprite records then the flat-coloured records: two runs of `capacity` (splat_render.cpp).
-    const std::uint64_t records = 2 * n * SFFD_SPLAT_RECORD_BYTES;
+    // The cull binds the first of the records buffer's two runs of `capacity` (the sprites; the second, the
+    // flat-coloured sprites, is the CPU cull's alone): 16M splats' records fit a 2 GiB block that way.
+    const std::uint64_t records = n * SFFD_SPLAT_RECORD_BYTES;
     const std::uint64_t cloud = n * SFFD_GPU_SPLAT_BYTES;
     if (!gfx::ssbo_fits(records)) return make_error(gfx::ssbo_too_large("render.visible_splats", records));
     if (!gfx::ssbo_fits(cloud)) return make_error(gfx::ssbo_too_large("splats", cloud));

@@ -2,7 +2,8 @@
 // A shader sees at most that many bytes of one bound buffer; beyond it reads and writes are undefined, so
 // passes whose buffers outgrow it take the path that needs no such block instead:
 //   - the compute rasteriser (depth and 36-byte sums per pixel): the raster path (plan_compute_raster);
-//   - the compute cull (192-byte records per splat): the CPU cull, whatever the cull path, its splats read
+//   - the compute cull (96-byte sprite records per splat): the CPU cull, whatever the cull path, its splats
+//   read
 //     back once per deformation when only the GPU holds them (the FFD compute pass wrote them);
 //   - the splats (64 bytes each) and uv axes of the CPU cull's quad pass: drawn per range of splats
 //     (runtime/gfx/ssbo_batch.h), each range's quads uploaded as indices relative to its first splat

@@ -160,13 +160,14 @@ TEST_F(Barriers_, ComputeRasteriserFallsBackWhenItsBuffersExceedTheBlockSize) {
     EXPECT_EQ(reg.resource<RenderStats>().compute_rastered_clouds, 1u);  // the real limit allows it
 }
 
-// Records of 192 bytes per splat over the limit: the automatic cull path takes the CPU cull on any
-// renderer; a forced compute cull skips the cloud with a warning instead of writing past the block.
+// The sprite records the compute cull writes (96 bytes per splat) over the limit: the automatic cull path
+// takes the CPU cull on any renderer; a forced compute cull skips the cloud with a warning instead of
+// writing past the block.
 TEST_F(Barriers_, ComputeCullFallsBackWhenItsRecordsExceedTheBlockSize) {
     add_camera(3.0);
     add_cloud(fibonacci_sphere(2345, 1.0, 0.8));
     gfx::GlLimits small = gfx::limits();
-    small.max_ssbo_block_size = 200 * 1000;  // records: 2 x 2345 x 96 = 450,240 bytes
+    small.max_ssbo_block_size = 200 * 1000;  // records: 2345 x 96 = 225,120 bytes
     log::ScopedLogCapture capture;
     gfx::ScopedLimits scope(small);
     frame(Quality::hq, CullPath::automatic, RasterPath::raster);
@@ -175,7 +176,22 @@ TEST_F(Barriers_, ComputeCullFallsBackWhenItsRecordsExceedTheBlockSize) {
     frame(Quality::hq, CullPath::compute, RasterPath::raster);
     EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 0u);
     EXPECT_TRUE(capture.contains(
-        "render.visible_splats: 450240 bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (200000)"));
+        "render.visible_splats: 225120 bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (200000)"));
+}
+
+// The records buffer holds two runs (the sprites, then the CPU cull's flat-coloured sprites) and the
+// compute cull binds only the first: a limit between one run and both keeps the cloud on the compute cull.
+TEST_F(Barriers_, ComputeCullTakesACloudWhoseSpriteRecordsFitTheBlock) {
+    add_camera(3.0);
+    add_cloud(fibonacci_sphere(2345, 1.0, 0.8));
+    gfx::GlLimits small = gfx::limits();
+    small.max_ssbo_block_size = 300 * 1000;  // sprite records 225,120 bytes; both runs 450,240
+    log::ScopedLogCapture capture;
+    gfx::ScopedLimits scope(small);
+    frame(Quality::hq, CullPath::compute, RasterPath::raster);
+    EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 1u);
+    EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, 0u);
+    EXPECT_FALSE(capture.contains("render.visible_splats"));
 }
 
 }  // namespace

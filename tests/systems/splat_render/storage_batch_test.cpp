@@ -127,7 +127,7 @@ TEST_F(StorageBatch_, ComputeRasteriserFallsBackWhenTheRecordsExceedTheBlockSize
                          " bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (100000)"));
 }
 
-// The compute cull's records (2 x 192 bytes a splat) over the limit, on the forced compute cull: the CPU
+// The compute cull's sprite records (96 bytes a splat) over the limit, on the forced compute cull: the CPU
 // cull takes the cloud (its quad pass in ranges), saying why once, and the image is the unlimited CPU
 // cull's, not an empty frame.
 TEST_F(StorageBatch_, ForcedComputeCullOverTheLimitFallsBackToTheCpuCull) {
