@@ -8,10 +8,12 @@
 
 #include "common/bindings.h"
 
-// The C++ side compiles one program per lattice shape with FFD_L/FFD_M/FFD_N (divisions) and FFD_MAXB
-// (largest + 1) defined: constant loop bounds and small arrays let the driver unroll and keep the basis in
-// registers (llvmpipe otherwise spills 65-float arrays to memory: ~15x slower). Without them, any lattice
-// up to kMaxDivisions works with the UBO's divisions.
+// The C++ side compiles one program per lattice shape and basis with FFD_L/FFD_M/FFD_N (divisions),
+// FFD_MAXB (largest + 1) and FFD_BASIS (0 Bernstein, 1 B-spline) defined: constant loop bounds and small
+// arrays let the driver unroll and keep the basis in registers (llvmpipe otherwise spills 65-float arrays
+// to memory: ~15x slower), and the other basis's code is not compiled at all (the B-spline program would
+// otherwise carry the Bernstein sum's 65-float arrays and its branch). Without them, any lattice up to
+// kMaxDivisions works with the UBO's divisions and basis.
 #ifdef FFD_MAXB
 #define FFD_MAX_B FFD_MAXB
 #else
@@ -33,13 +35,17 @@ layout(std430, binding = SFFD_SSBO_CONTROL_POINTS) readonly buffer FfdControlPoi
     vec4 ffd_dp[];
 };
 
-// Where the dense Bernstein sum reads ΔP_i (FFD_DP(i), a vec3). Three kernels of the same arithmetic:
+// Where the sums read ΔP_i (FFD_DP(i), a vec3). Three kernels of the same arithmetic:
 // - FFD_CP_SHARED (compute only, GpuBernsteinKernel::shared): deform.comp copies the lattice's control
 //   points into shared memory once per work group (xyz only: 11³ points = 15,972 bytes, within GL's
 //   guaranteed 32 KB), so the (l+1)(m+1)(n+1) reads per point hit on-chip memory (every lane reads the same
 //   element: a broadcast) instead of the UBO's constant cache, which an 11³ lattice (21 KB) overflows.
-// - FFD_CP_UBO: read from a UBO: every invocation reads the same element, which llvmpipe turns into one
-//   scalar load instead of a per-lane gather (llvmpipe's best: barrier() costs it coroutine switches).
+//   B-spline: the zero-bordered grid (13³ points for 11³ control points = 26,364 bytes), so each point's
+//   64 scattered reads hit shared memory instead of 64 uncoalesced 16-byte global loads; the copy is 9
+//   coalesced loads per invocation of a 256-wide group.
+// - FFD_CP_UBO (Bernstein only): read from a UBO: every invocation reads the same element, which llvmpipe
+//   turns into one scalar load instead of a per-lane gather (llvmpipe's best: barrier() costs it coroutine
+//   switches). B-spline lanes read different elements: the UBO would gain nothing.
 // - neither: the SSBO (any lattice size).
 #if defined(FFD_CP_SHARED)
 shared float ffd_dp_shared[3 * FFD_CP_SHARED];
@@ -106,7 +112,11 @@ void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
 #endif
     D = vec3(0.0);
     vec3 Fs = vec3(0.0), Ft = vec3(0.0), Fu = vec3(0.0);
-    if (ffd_div.w == 0) {
+#if !defined(FFD_BASIS)
+    if (ffd_div.w == 0)
+#endif
+#if !defined(FFD_BASIS) || FFD_BASIS == 0
+    {
         float bs[FFD_MAX_B], dbs[FFD_MAX_B], bt[FFD_MAX_B], dbt[FFD_MAX_B], bu[FFD_MAX_B], dbu[FFD_MAX_B];
         ffd_bernstein(stu.x, L, bs, dbs);
         ffd_bernstein(stu.y, M, bt, dbt);
@@ -130,7 +140,13 @@ void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
             Ft += Rt * bs[i];
             Fu += Ru * bs[i];
         }
-    } else {
+    }
+#endif
+#if !defined(FFD_BASIS)
+    else
+#endif
+#if !defined(FFD_BASIS) || FFD_BASIS == 1
+    {
         vec3 g = stu * vec3(L, M, N);
         ivec3 c = min(ivec3(g), ivec3(L, M, N) - 1);
         vec3 f = g - vec3(c);
@@ -144,7 +160,7 @@ void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
                 int base = ((c.x + a) * PM + (c.y + b)) * PK + c.z;
                 vec3 q = vec3(0.0), w = vec3(0.0);
                 for (int k = 0; k < 4; ++k) {
-                    vec3 d = ffd_dp[base + k].xyz;
+                    vec3 d = FFD_DP(base + k);
                     q += wu[k] * d;
                     w += dwu[k] * d;
                 }
@@ -154,6 +170,7 @@ void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
                 Fu += w * (ws[a] * wt[b]);
             }
     }
+#endif
     G = mat3(Fs, Ft, Fu);
 }
 

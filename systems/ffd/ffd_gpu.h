@@ -16,8 +16,9 @@
 
 namespace sffd::ffd {
 
-// How the compute pass's dense Bernstein sum reads the control points (shaders/ffd/ffd_common.glsl,
-// FFD_DP): the same arithmetic in the same order either way.
+// How the compute pass reads the control points (shaders/ffd/ffd_common.glsl, FFD_DP): the same
+// arithmetic in the same order either way. Named for the dense Bernstein sum, where it matters most; the
+// B-spline follows the same choice with its zero-bordered grid (shared, or the SSBO when direct).
 enum class GpuBernsteinKernel {
     automatic,  // shared on hardware GPUs, direct on a software rasterizer (llvmpipe: barrier() is costly)
     direct,  // every invocation reads them from a UBO (when they fit GL_MAX_UNIFORM_BLOCK_SIZE) or the SSBO
@@ -72,8 +73,8 @@ public:
     // How many times dispatch() uploaded control points (tests check edits upload, unchanged frames don't).
     std::uint64_t upload_count() const;
 
-    // Bernstein kernel choice for later dispatches (default automatic), and the kernel the last Bernstein
-    // dispatch ran (direct or shared; automatic before any).
+    // Kernel choice for later dispatches (default automatic), and the kernel the last dispatch ran (direct
+    // or shared; automatic before any).
     void set_bernstein_kernel(GpuBernsteinKernel kernel);
     GpuBernsteinKernel last_bernstein_kernel() const;
 

@@ -41,43 +41,45 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
         cp.stamp = stamp;
         ++uploads;
     }
-    // Bernstein: a program specialised for this lattice shape and kernel (compiled once each; constant
-    // loop bounds, small arrays), control points in shared memory on hardware GPUs, in a UBO on a software
-    // rasterizer. B-spline reads 4 neighbours per axis whatever the size: generic program.
+    // A program specialised for this lattice shape, basis and kernel (compiled once each; constant loop
+    // bounds, small arrays, the other basis's code left out). Control points in shared memory on hardware
+    // GPUs when their xyz fit (Bernstein: the lattice; B-spline: its zero-bordered grid), else Bernstein
+    // reads a UBO when the lattice fits one and B-spline the SSBO (its lanes read different points).
     const bool bernstein = lattice.basis == LatticeBasis::bernstein;
-    const bool fits_shared = lattice.size() * 3 * sizeof(float) <= std::size_t(max_shared);
-    const bool cp_shared =
-        bernstein && fits_shared &&
-        (kernel == GpuBernsteinKernel::shared || (kernel == GpuBernsteinKernel::automatic && !software));
+    const std::size_t points = bernstein ? lattice.size()
+                                         : std::size_t(lattice.divisions.x + 3) *
+                                               std::size_t(lattice.divisions.y + 3) *
+                                               std::size_t(lattice.divisions.z + 3);
+    const bool fits_shared = points * 3 * sizeof(float) <= std::size_t(max_shared);
+    const bool cp_shared = fits_shared && (kernel == GpuBernsteinKernel::shared ||
+                                           (kernel == GpuBernsteinKernel::automatic && !software));
     const bool cp_ubo = bernstein && !cp_shared && lattice.size() * 16 <= std::size_t(max_ubo);
     Bound b;
     b.local_size = cp_shared ? 256 : 64;
-    b.program = program.id();
-    if (bernstein) {
-        last_kernel = cp_shared ? GpuBernsteinKernel::shared : GpuBernsteinKernel::direct;
-        const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) |
-                                    (std::uint64_t(lattice.divisions.y) << 12) |
-                                    std::uint64_t(lattice.divisions.z) | (std::uint64_t(cp_shared) << 44) |
-                                    (std::uint64_t(cp_ubo) << 45);
-        auto sp = specialised.find(shape);
-        if (sp == specialised.end()) {
-            const int maxb = std::max({lattice.divisions.x, lattice.divisions.y, lattice.divisions.z}) + 1;
-            gfx::Defines defines = {{"FFD_L", std::to_string(lattice.divisions.x)},
-                                    {"FFD_M", std::to_string(lattice.divisions.y)},
-                                    {"FFD_N", std::to_string(lattice.divisions.z)},
-                                    {"FFD_MAXB", std::to_string(maxb)}};
-            if (cp_shared) {
-                defines.push_back({"FFD_CP_SHARED", std::to_string(lattice.size())});
-                defines.push_back({"FFD_LOCAL_SIZE", std::to_string(b.local_size)});
-            }
-            if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});
-            auto prog = gfx::load_compute_program(
-                shader, program_label + (cp_shared ? ".shared" : ".specialised"), defines);
-            if (!prog) return prog.error();
-            sp = specialised.emplace(shape, std::move(*prog)).first;
+    last_kernel = cp_shared ? GpuBernsteinKernel::shared : GpuBernsteinKernel::direct;
+    const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) |
+                                (std::uint64_t(lattice.divisions.y) << 12) |
+                                std::uint64_t(lattice.divisions.z) | (std::uint64_t(cp_shared) << 44) |
+                                (std::uint64_t(cp_ubo) << 45) | (std::uint64_t(!bernstein) << 46);
+    auto sp = specialised.find(shape);
+    if (sp == specialised.end()) {
+        const int maxb = std::max({lattice.divisions.x, lattice.divisions.y, lattice.divisions.z}) + 1;
+        gfx::Defines defines = {{"FFD_L", std::to_string(lattice.divisions.x)},
+                                {"FFD_M", std::to_string(lattice.divisions.y)},
+                                {"FFD_N", std::to_string(lattice.divisions.z)},
+                                {"FFD_MAXB", std::to_string(maxb)},
+                                {"FFD_BASIS", bernstein ? "0" : "1"}};
+        if (cp_shared) {
+            defines.push_back({"FFD_CP_SHARED", std::to_string(points)});
+            defines.push_back({"FFD_LOCAL_SIZE", std::to_string(b.local_size)});
         }
-        b.program = sp->second.id();
+        if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});
+        auto prog = gfx::load_compute_program(
+            shader, program_label + (cp_shared ? ".shared" : ".specialised"), defines);
+        if (!prog) return prog.error();
+        sp = specialised.emplace(shape, std::move(*prog)).first;
     }
+    b.program = sp->second.id();
     glUseProgram(b.program);
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, cp.buffer.id());

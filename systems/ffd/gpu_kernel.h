@@ -1,7 +1,8 @@
 // Shared by the two compute deformers, ffd::GpuDeformer (ffd_gpu.cpp, splats) and
 // gaussian::GpuGaussianDeformer (systems/gaussian/gpu_deform.cpp, Gaussians): they run the same FFD over
 // different point layouts, so the lattice set-up (block UBO, control points uploaded when edited, the
-// Bernstein kernel choice and its specialised programs) and the non-blocking statistics read-back are
+// kernel choice and the programs specialised per lattice shape and basis) and the non-blocking statistics
+// read-back are
 // written once here. Each deformer binds its own point buffers and dispatches.
 #pragma once
 
@@ -23,13 +24,15 @@
 
 namespace sffd::ffd::detail {
 
-// One deform shader's programs (generic; Bernstein specialised per lattice shape and kernel) and the
+// One deform shader's programs (generic; specialised per lattice shape, basis and kernel) and the
 // lattice state they read. Labels: `program_label` (+ ".shared" / ".specialised"), `prefix` +
 // ".lattice_block" / ".control_points".
 struct DeformPrograms {
     std::string shader, program_label, prefix;
-    gfx::Program program;                                         // generic (any divisions, B-spline)
-    std::unordered_map<std::uint64_t, gfx::Program> specialised;  // Bernstein, per (l, m, n, kernel)
+    // Generic (any divisions and basis): compiled by create(), so a broken shader fails there and the
+    // caller stays on the CPU path; bind() runs the specialised ones.
+    gfx::Program program;
+    std::unordered_map<std::uint64_t, gfx::Program> specialised;  // per (l, m, n, basis, kernel): what runs
     gfx::Buffer ubo;                                              // FfdBlock
     struct Controls {
         gfx::Buffer buffer;

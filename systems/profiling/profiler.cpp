@@ -35,6 +35,7 @@ Profiler::Profiler(ProfilerSettings settings)
     : m_settings(settings), m_t0(std::chrono::steady_clock::now()) {}
 
 Profiler::~Profiler() {
+    for (GLsync f : m_frame_fences) glDeleteSync(f);
     if (!m_query_names.empty())
         glDeleteQueries(static_cast<GLsizei>(m_query_names.size()), m_query_names.data());
 }
@@ -88,7 +89,7 @@ void Profiler::detach(Schedule& schedule, ecs::Registry& registry) {
 }
 
 void Profiler::on_frame_begin(const FrameContext& ctx) {
-    if (m_settings.gpu == GpuTiming::queries) poll_queries(false);
+    if (m_settings.gpu == GpuTiming::queries) pace_frames(), poll_queries(false);
     if (m_settings.gpu == GpuTiming::sync) glFinish();  // the previous frame's GL work is not ours
     m_frame_no = ctx.frame;
     if (m_settings.keep_frames) m_frames.emplace_back();
@@ -102,8 +103,23 @@ void Profiler::on_frame_begin(const FrameContext& ctx) {
 void Profiler::on_frame_end(const FrameContext&) {
     FrameRecord& r = current();
     r.total_ms = now_ms() - r.begin_ms;
+    if (m_settings.gpu == GpuTiming::queries && m_settings.max_frames_in_flight > 0)
+        if (GLsync f = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0)) m_frame_fences.push_back(f);
     m_in_frame = false;
     update_overlay(r);
+}
+
+// Outside every timed scope: the wait a swap chain would have put into present.
+void Profiler::pace_frames() {
+    const std::size_t max = std::size_t(std::max(m_settings.max_frames_in_flight, 0));
+    while (max > 0 && m_frame_fences.size() >= max) {
+        GLsync oldest = m_frame_fences.front();
+        // The flush bit makes sure the fence reaches the GPU; loop over timeouts (1 s each).
+        while (glClientWaitSync(oldest, GL_SYNC_FLUSH_COMMANDS_BIT, 1'000'000'000) == GL_TIMEOUT_EXPIRED) {
+        }
+        glDeleteSync(oldest);
+        m_frame_fences.erase(m_frame_fences.begin());
+    }
 }
 
 void Profiler::on_phase_begin(Phase phase) {

@@ -16,6 +16,12 @@
 //     pipeline, so CPU times of surrounding code shift, but it is the only trustworthy method on Mesa
 //     llvmpipe, whose timer queries report 0-1.6 ms for passes that take 67-95 ms.
 //   - none: no GL calls at all (no context, or CPU-only runs).
+// Frames in flight (queries mode, `max_frames_in_flight` > 0): a headless run has no swap chain, so nothing
+// stops the CPU from queueing frames faster than the GPU runs them, and the driver then blocks in whichever
+// GL call finds its queue full, charging the GPU's time to that system's CPU time (the deformation-only
+// run's ffd system measured ~its GPU time as CPU time, growing with the cloud). The profiler paces such
+// runs as a swap chain would: a fence at each frame's end, and each frame begins (before its clock starts)
+// once no more than max - 1 earlier frames are unfinished.
 #pragma once
 
 #include <chrono>
@@ -28,6 +34,9 @@
 
 #include "runtime/app/frame_loop.h"
 #include "runtime/ecs/registry.h"
+
+// GLsync's pointee, as the GL headers declare it (this header includes none).
+struct __GLsync;
 
 namespace sffd::profiling {
 
@@ -58,8 +67,9 @@ struct FrameRecord {
 
 struct ProfilerSettings {
     GpuTiming gpu = GpuTiming::none;
-    int query_latency = 3;    // frames before a query result is polled (never waited for)
-    bool keep_frames = true;  // false: only the live overlay is updated (editor), no history kept
+    int query_latency = 3;         // frames before a query result is polled (never waited for)
+    bool keep_frames = true;       // false: only the live overlay is updated (editor), no history kept
+    int max_frames_in_flight = 0;  // queries mode: pace headless runs to this many frames (0: no pacing)
 };
 
 class Profiler {
@@ -88,6 +98,8 @@ public:
     std::size_t name_count() const { return m_names.size(); }
     GpuTiming gpu_timing() const { return m_settings.gpu; }
     std::size_t pending_queries() const { return m_pending.size(); }
+    // Earlier frames whose GL work may be unfinished (their fences not yet waited for); always 0 unpaced.
+    std::size_t frames_in_flight() const { return m_frame_fences.size(); }
 
 private:
     struct OpenPass {
@@ -114,6 +126,7 @@ private:
     void on_system_end(Phase phase, std::string_view system);
     std::uint32_t acquire_query();
     void poll_queries(bool wait);
+    void pace_frames();
     void deliver_gpu(const Pending& p, double gpu_ms);
     void update_overlay(const FrameRecord& record);
 
@@ -139,6 +152,7 @@ private:
     std::vector<std::uint32_t> m_query_names;
     std::vector<std::uint32_t> m_free_queries;
     std::vector<Pending> m_pending;
+    std::vector<::__GLsync*> m_frame_fences;  // GLsync, oldest first (max_frames_in_flight)
 
     // Overlay bookkeeping: name id -> row in ProfileOverlay::systems / passes.
     std::unordered_map<std::uint32_t, std::size_t> m_overlay_system_rows, m_overlay_pass_rows;

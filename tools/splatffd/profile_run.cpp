@@ -234,7 +234,9 @@ Result<RunOutput> run_profile(const RunSetup& s) {
 
     GpuTiming timing = GpuTiming::none;
     if (have_gl) timing = s.sync ? GpuTiming::sync : GpuTiming::queries;
-    out.profiler = std::make_unique<Profiler>(ProfilerSettings{.gpu = timing});
+    // Headless: no present paces the frames, so the profiler does (two in flight, as a double-buffered swap
+    // chain); otherwise the GPU's backlog is charged to whichever system's GL call blocks on a full queue.
+    out.profiler = std::make_unique<Profiler>(ProfilerSettings{.gpu = timing, .max_frames_in_flight = 2});
     out.profiler->attach(schedule, registry);
     Clock clock({.fixed_dt = 1.0 / 60.0});
     // Says what it runs before it starts (a profile can run for minutes), and shows a percentage on a

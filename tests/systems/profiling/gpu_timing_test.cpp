@@ -2,7 +2,9 @@
 // profiler ever waiting during frames; --sync brackets each pass with glFinish so real GPU work shows.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <chrono>
+#include <vector>
 
 #include "runtime/app/clock.h"
 #include "runtime/gfx/context.h"
@@ -117,6 +119,44 @@ TEST_F(GpuTiming, QueriesResolveForEveryPassWithoutWaitingDuringFrames) {
         ASSERT_EQ(r.systems.size(), 1u);
         EXPECT_TRUE(r.systems[0].gpu_ms.has_value());
         profiler.detach(schedule, registry);
+    }
+    EXPECT_EQ(glGetError(), GLenum(GL_NO_ERROR));
+}
+
+// A headless run is paced as a swap chain would be: when a frame's systems run, at most max - 1 earlier
+// frames may still be on the GPU, and the frame max frames back has finished (its GL work, here a fence the
+// frame's system put in after its dispatch, is signalled: asked without flushing or waiting). Unpaced
+// (the default, for windows whose present paces them) the profiler keeps no fences.
+TEST_F(GpuTiming, PacedQueriesKeepAtMostMaxFramesInFlight) {
+    Burner burner;
+    const int iterations = burner.calibrate(2.0);
+    for (int max : {0, 1, 2, 3}) {
+        SCOPED_TRACE(max);
+        ecs::Registry registry;
+        Profiler profiler({.gpu = profiling::GpuTiming::queries, .max_frames_in_flight = max});
+        std::vector<GLsync> fences;  // one per frame, after the frame's GPU work
+        std::vector<std::size_t> in_flight;
+        std::vector<GLint> status;  // of the fence max frames back, as the frame's system sees it
+        Schedule schedule;
+        schedule.add(Phase::deformation, "burn", [&](ecs::Registry&, const FrameContext&) {
+            in_flight.push_back(profiler.frames_in_flight());
+            GLint st = GL_SIGNALED;
+            if (max > 0 && fences.size() >= std::size_t(max))
+                glGetSynciv(fences[fences.size() - std::size_t(max)], GL_SYNC_STATUS, 1, nullptr, &st);
+            status.push_back(st);
+            burner.run(iterations);
+            fences.push_back(glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0));
+        });
+        profiler.attach(schedule, registry);
+        Clock clock({.fixed_dt = 1.0 / 60.0});
+        for (int i = 0; i < 6; ++i) schedule.run_frame(registry, clock.tick());
+        profiler.detach(schedule, registry);
+        ASSERT_EQ(in_flight.size(), 6u);
+        for (std::size_t i = 0; i < in_flight.size(); ++i) {
+            EXPECT_EQ(in_flight[i], max == 0 ? 0u : std::min<std::size_t>(i, std::size_t(max - 1))) << i;
+            EXPECT_EQ(status[i], GL_SIGNALED) << i;
+        }
+        for (GLsync f : fences) glDeleteSync(f);
     }
     EXPECT_EQ(glGetError(), GLenum(GL_NO_ERROR));
 }
