@@ -33,7 +33,7 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
     // Same preparation as the CPU kernels (float displacements, M⁻¹, origin offset in double).
     const Prepared P = prepare(lattice, cloud_origin);
     const FfdBlock block = make_ffd_block(lattice, P, count);
-    glNamedBufferSubData(ubo.id(), 0, sizeof block, &block);
+    orphan_upload(ubo.id(), sizeof block, &block);
     Controls& cp = controls[key];
     if (!cp.buffer) cp.buffer = gfx::Buffer::create(prefix + ".control_points");
     if (stamp == 0 || stamp != cp.stamp) {  // control points only when edited

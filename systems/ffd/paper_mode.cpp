@@ -48,7 +48,7 @@ Status PaperModeRenderer::draw(const Lattice& lattice, std::uint64_t stamp, cons
     Impl& m = *m_impl;
     const detail::Prepared P = detail::prepare(lattice, cloud_origin);
     const detail::FfdBlock block = detail::make_ffd_block(lattice, P, count);
-    glNamedBufferSubData(m.ubo.id(), 0, sizeof block, &block);
+    detail::orphan_upload(m.ubo.id(), sizeof block, &block);
     if (stamp == 0 || stamp != m.stamp) {
         detail::upload_control_points(m.controls.id(), m.controls_capacity, lattice, P);
         m.stamp = stamp;

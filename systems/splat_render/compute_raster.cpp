@@ -11,6 +11,7 @@
 #include "runtime/gfx/shader.h"
 #include "shaders/common/bindings.h"
 #include "shaders/splat_render/compute_raster.h"
+#include "shaders/splat_render/splat_record.h"
 
 namespace sffd::render {
 
@@ -31,7 +32,11 @@ void for_each_list(const ComputeRasterDraw& d, Fn&& fn) {
 
 void bind_cloud(const ComputeRasterDraw& d) {
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, d.frame_ubo);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, d.records);
+    // The sprites' run of the records, and the flat-coloured run when there is one (the whole buffer may
+    // exceed one storage block: compute_raster_records_fit).
+    const std::size_t runs = d.flat_list ? 2 : 1;
+    glBindBufferRange(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, d.records, 0,
+                      GLsizeiptr(runs * std::max<std::size_t>(d.capacity, 1) * SFFD_SPLAT_RECORD_BYTES));
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, d.commands);
 }
 

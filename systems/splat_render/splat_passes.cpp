@@ -141,7 +141,7 @@ void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, R
     if (Status st = compute_raster_fits(plan.width, plan.height); !st)
         return warn_once("render_system(): " + st.message());
     for (const CloudGpu* gpu : plan.drawn)
-        if (Status st = compute_raster_records_fit(gpu->capacity); !st)
+        if (Status st = compute_raster_records_fit(gpu->capacity, gpu->flat_list); !st)
             return warn_once("render_system(): " + st.message());
     if (Status st = init_compute_raster(s.compute_raster); !st) {
         log::error("render_system(): ", st.message());

@@ -38,8 +38,10 @@ Status compute_cull_fits(std::size_t splats) {
     return {};
 }
 
-Status compute_raster_records_fit(std::size_t capacity) {
-    const std::uint64_t records = 2 * std::max<std::uint64_t>(capacity, 1) * SFFD_SPLAT_RECORD_BYTES;
+Status compute_raster_records_fit(std::size_t capacity, bool flat_list) {
+    // The passes bind the records from the first to the end of the last list they read.
+    const std::uint64_t records =
+        (flat_list ? 2 : 1) * std::max<std::uint64_t>(capacity, 1) * SFFD_SPLAT_RECORD_BYTES;
     if (!gfx::ssbo_fits(records))
         return make_error(gfx::ssbo_too_large("render.visible_splats", records) + "; using the raster path");
     return {};

@@ -29,8 +29,9 @@ Status compute_raster_fits(int width, int height);
 // Whether the compute cull's buffers for a cloud of `splats` (records, quads, splats) fit.
 Status compute_cull_fits(std::size_t splats);
 
-// Whether the compute rasteriser's read of a cloud's records (2 x `capacity` sprites) fits one block.
-Status compute_raster_records_fit(std::size_t capacity);
+// Whether the compute rasteriser's read of a cloud's records (`capacity` sprites, twice that with the CPU
+// cull's flat-coloured list) fits one block.
+Status compute_raster_records_fit(std::size_t capacity, bool flat_list);
 
 // One draw of the quad pass over a range of splats: the splats (and uv axes) bound from `splats.first`,
 // `quad_count` quads at element `quad_first` of the uploaded list, relative to that first splat.

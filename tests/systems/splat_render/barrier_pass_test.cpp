@@ -191,7 +191,7 @@ TEST_F(Barriers_, ComputeCullTakesACloudWhoseSpriteRecordsFitTheBlock) {
     frame(Quality::hq, CullPath::compute, RasterPath::raster);
     EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 1u);
     EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, 0u);
-    EXPECT_FALSE(capture.contains("render.visible_splats"));
+    EXPECT_FALSE(capture.contains("GL_MAX_SHADER_STORAGE_BLOCK_SIZE"));  // (drivers' messages name buffers)
 }
 
 }  // namespace

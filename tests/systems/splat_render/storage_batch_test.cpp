@@ -104,9 +104,9 @@ TEST_F(StorageBatch_, CloudIsSkippedNamingTheLimitWhenNotOneSplatFits) {
         std::count_if(img.color.begin(), img.color.end(), [](const glm::vec4& c) { return c.w > 0.0f; }), 0);
 }
 
-// The compute rasteriser reads the CPU cull's records (2 x 96 bytes a splat) as storage blocks: when they
-// exceed the limit and its per-pixel buffers do not, the frame stays on the raster path with a warning
-// naming the buffer and the limit.
+// The compute rasteriser reads the CPU cull's records (96 bytes a splat; twice that for a textured cloud's
+// flat-coloured list) as storage blocks: when they exceed the limit and its per-pixel buffers do not, the
+// frame stays on the raster path with a warning naming the buffer and the limit.
 TEST_F(StorageBatch_, ComputeRasteriserFallsBackWhenTheRecordsExceedTheBlockSize) {
     scene(false);
     RenderSettings s;
@@ -116,15 +116,23 @@ TEST_F(StorageBatch_, ComputeRasteriserFallsBackWhenTheRecordsExceedTheBlockSize
     residency_system(reg, FrameContext{});
     render_system(reg, FrameContext{});
     ASSERT_EQ(reg.resource<RenderStats>().compute_rastered_clouds, 1u);  // the real limit allows it
+    {
+        // The sprites' run fits, the whole records buffer (both runs) would not: an untextured cloud has
+        // no flat-coloured list, so the compute rasteriser binds only the first run and takes the cloud.
+        gfx::GlLimits limit = gfx::limits();
+        limit.max_ssbo_block_size = 600'000;  // records 480,000 of 960,000; splats 320,000
+        gfx::ScopedLimits scope(limit);
+        render_system(reg, FrameContext{});
+        EXPECT_EQ(reg.resource<RenderStats>().compute_rastered_clouds, 1u);
+    }
     gfx::GlLimits small = gfx::limits();
-    small.max_ssbo_block_size = 100'000;  // sums 40 x 30 x 36 = 43,200 fit; records 2 x 5000 x 96 do not
+    small.max_ssbo_block_size = 100'000;  // sums 40 x 30 x 36 = 43,200 fit; records 5000 x 96 do not
     log::ScopedLogCapture capture;
     gfx::ScopedLimits scope(small);
     render_system(reg, FrameContext{});
     EXPECT_EQ(reg.resource<RenderStats>().compute_rastered_clouds, 0u);
-    EXPECT_TRUE(
-        capture.contains("render.visible_splats: " + std::to_string(2 * 5000 * SFFD_SPLAT_RECORD_BYTES) +
-                         " bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (100000)"));
+    EXPECT_TRUE(capture.contains("render.visible_splats: " + std::to_string(5000 * SFFD_SPLAT_RECORD_BYTES) +
+                                 " bytes exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE (100000)"));
 }
 
 // The compute cull's sprite records (96 bytes a splat) over the limit, on the forced compute cull: the CPU
