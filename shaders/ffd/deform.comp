@@ -16,31 +16,20 @@ layout(std430, binding = SFFD_SSBO_SPLATS_IN) readonly buffer SplatsIn { GpuSpla
 layout(std430, binding = SFFD_SSBO_SPLATS_OUT) writeonly buffer SplatsOut { GpuSplat splats_out[]; };
 layout(std430, binding = SFFD_SSBO_STATS) buffer Stats { uint stats[]; };  // [0] inverted, [1] inside
 
-void main() {
-    uint id = sffd_dispatch_index();
-#ifdef FFD_CP_SHARED
-    // Every invocation of the group copies its share, then all wait (uniform control flow: before any
-    // return). Only the displacements' xyz travel.
-    for (uint c = gl_LocalInvocationIndex; c < uint(FFD_CP_SHARED); c += gl_WorkGroupSize.x) {
-        vec3 d = ffd_dp[c].xyz;
-        ffd_dp_shared[3u * c] = d.x;
-        ffd_dp_shared[3u * c + 1u] = d.y;
-        ffd_dp_shared[3u * c + 2u] = d.z;
-    }
-    memoryBarrierShared();
-    barrier();
-#endif
-    if (id >= ffd_count.x) return;
+// The group's counts, added to `stats` once per group: one global atomic per splat on the same two words
+// serialised every splat of the dispatch on the GPU.
+shared uint s_inverted, s_inside;
+
+// Deforms splat `id`; returns bit 0: inside the lattice, bit 1: in an inverted cell.
+uint deform_splat(uint id) {
     GpuSplat s = splats_in[id];
     vec3 stu = ffd_local(s.center.xyz);
     bool culled = ffd_count.y != 0u || !ffd_inside(stu) ||
                   (ffd_div.w == 1 && (any(lessThanEqual(stu, ffd_cull_lo.xyz)) || any(greaterThanEqual(stu, ffd_cull_hi.xyz))));
     if (culled) {
-        if (ffd_inside(stu)) atomicAdd(stats[1], 1u);
         splats_out[id] = s;
-        return;
+        return ffd_inside(stu) ? 1u : 0u;
     }
-    atomicAdd(stats[1], 1u);
     vec3 D;
     mat3 G;
     ffd_eval(stu, true, D, G);
@@ -51,6 +40,35 @@ void main() {
     o.normal = vec4(ffd_cofactor_normal(J, s.normal.xyz), det < 0.0 ? 1.0 - s.normal.w : s.normal.w);
     o.axis_u = vec4(J * s.axis_u.xyz, s.axis_u.w);
     o.axis_v = vec4(J * s.axis_v.xyz, s.axis_v.w);
-    if (det < 0.0) atomicAdd(stats[0], 1u);
     splats_out[id] = o;
+    return det < 0.0 ? 3u : 1u;
+}
+
+void main() {
+    uint id = sffd_dispatch_index();
+    if (gl_LocalInvocationIndex == 0u) {
+        s_inverted = 0u;
+        s_inside = 0u;
+    }
+#ifdef FFD_CP_SHARED
+    // Every invocation of the group copies its share, then all wait (uniform control flow). Only the
+    // displacements' xyz travel.
+    for (uint c = gl_LocalInvocationIndex; c < uint(FFD_CP_SHARED); c += gl_WorkGroupSize.x) {
+        vec3 d = ffd_dp[c].xyz;
+        ffd_dp_shared[3u * c] = d.x;
+        ffd_dp_shared[3u * c + 1u] = d.y;
+        ffd_dp_shared[3u * c + 2u] = d.z;
+    }
+#endif
+    memoryBarrierShared();
+    barrier();
+    const uint flags = id < ffd_count.x ? deform_splat(id) : 0u;
+    if ((flags & 1u) != 0u) atomicAdd(s_inside, 1u);
+    if ((flags & 2u) != 0u) atomicAdd(s_inverted, 1u);
+    memoryBarrierShared();
+    barrier();
+    if (gl_LocalInvocationIndex == 0u) {
+        if (s_inside != 0u) atomicAdd(stats[1], s_inside);
+        if (s_inverted != 0u) atomicAdd(stats[0], s_inverted);
+    }
 }

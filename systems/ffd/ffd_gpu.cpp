@@ -40,7 +40,9 @@ Result<GpuDeformer> GpuDeformer::create() {
     impl->programs = std::move(*programs);
     impl->stats = gfx::Buffer::create("ffd.stats");
     const std::uint32_t zero[2] = {0, 0};
-    glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_READ);
+    // Written by the GPU (atomics) and cleared and copied on the GPU every frame; the CPU reads only the
+    // copies (StatsReadbacks). A READ hint puts a buffer in host memory on NVIDIA's driver.
+    glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_COPY);
     return GpuDeformer(std::move(impl));
 }
 

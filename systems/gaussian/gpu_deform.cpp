@@ -53,7 +53,9 @@ Result<GpuGaussianDeformer> GpuGaussianDeformer::create() {
     impl->programs = std::move(*programs);
     impl->stats = gfx::Buffer::create("gaussian.deform.stats");
     const std::uint32_t zero[kStats] = {};
-    glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_READ);
+    // Written by the GPU (atomics) and cleared and copied on the GPU every frame; the CPU reads only the
+    // copies (StatsReadbacks). A READ hint puts a buffer in host memory on NVIDIA's driver.
+    glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_COPY);
     // deform.comp's sh_tab[]: the CPU rotation's sample directions and inverse evaluation matrices.
     std::vector<float> tables;
     for (int band = 1; band <= 3; ++band) {
