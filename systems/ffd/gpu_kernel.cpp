@@ -120,6 +120,7 @@ StatsReadbacks::~StatsReadbacks() {
 bool StatsReadbacks::queue(GLuint stats, std::size_t words, std::uint64_t tag, const std::string& label) {
     const std::size_t bytes = words * sizeof(std::uint32_t);
     auto slot = std::find_if(m_slots.begin(), m_slots.end(), [](const Slot& r) { return !r.fence; });
+    if (slot == m_slots.end() && m_slots.size() >= kMaxSlots) return false;
     if (slot == m_slots.end()) {
         Slot r;
         r.buffer = gfx::Buffer::create(label);

@@ -80,7 +80,10 @@ public:
     StatsReadbacks& operator=(const StatsReadbacks&) = delete;
     ~StatsReadbacks();
 
-    // false: no slot (mapping failed, the GL error callback has said why): these statistics are lost.
+    // false: no slot, and these statistics are lost: every one of the kMaxSlots is still in flight (a
+    // loop with no swap to hold it back, far ahead of the GPU) or mapping failed (the GL error callback
+    // has said why). Capped, so such a loop neither maps a buffer every frame nor grows without bound.
+    static constexpr std::size_t kMaxSlots = 8;
     bool queue(GLuint stats, std::size_t words, std::uint64_t tag, const std::string& label);
     // Calls done(tag, counters) for each queued copy whose fence has signalled; never waits.
     template <class Done>

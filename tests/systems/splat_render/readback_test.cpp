@@ -183,7 +183,11 @@ void Readback_::gpu_deformation_frames_never_wait(RasterPath raster) {
     };
     residency_system(reg, FrameContext{.frame = 1});  // the rest buffer the compute pass reads
     render_system(reg, FrameContext{.frame = 1});
-    for (std::uint64_t f = 2; f < 10; ++f) frame(f);  // warm-up: programs, buffers, read-back slots
+    SwapThrottle swap;
+    for (std::uint64_t f = 2; f < 10; ++f) {  // warm-up: programs, buffers, read-back slots
+        frame(f);
+        swap.frame_done();
+    }
     ASSERT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
     const FfdStats before = reg.resource<FfdStats>();
     const std::uint64_t stats_before = reg.get<DeformedSplats>(cloud).inverted_version;
@@ -191,6 +195,7 @@ void Readback_::gpu_deformation_frames_never_wait(RasterPath raster) {
     std::uint32_t render_cpu_passes = 0;
     for (std::uint64_t f = 10; f < 40; ++f) {
         frame(f);
+        swap.frame_done();
         const RenderStats& st = reg.resource<RenderStats>();
         render_cpu_passes += st.cpu_splat_passes;
         EXPECT_EQ(st.compute_rastered_clouds, raster == RasterPath::compute ? 1u : 0u);
