@@ -158,6 +158,13 @@ void BM_GpuCompute_Bernstein11_1M_Full_Direct(benchmark::State& s) {
 void BM_GpuCompute_Bernstein11_1M_Full_Shared(benchmark::State& s) {
     compute(s, LatticeBasis::bernstein, 1000000, ffd::GpuBernsteinKernel::shared);
 }
+// The B-spline grid read through the same two kernels (set_bernstein_kernel picks for both bases).
+void BM_GpuCompute_BSpline11_1M_Full_Direct(benchmark::State& s) {
+    compute(s, LatticeBasis::bspline, 1000000, ffd::GpuBernsteinKernel::direct);
+}
+void BM_GpuCompute_BSpline11_1M_Full_Shared(benchmark::State& s) {
+    compute(s, LatticeBasis::bspline, 1000000, ffd::GpuBernsteinKernel::shared);
+}
 // A frame of 3 splat passes (visibility, attributes, shading in the HQ renderer): paper mode deforms in
 // every pass; skinning-style reads the compute output (deformation cost paid once per edit).
 void BM_PaperMode_Frame_3Passes(benchmark::State& s) { paper_frame(s, 3); }
@@ -179,6 +186,8 @@ BENCHMARK(BM_GpuCompute_Bernstein11_1M_Full_Shared)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(1);
+BENCHMARK(BM_GpuCompute_BSpline11_1M_Full_Direct)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GpuCompute_BSpline11_1M_Full_Shared)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_PaperMode_Frame_1Pass)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Skinning_Frame_1Pass)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_PaperMode_Frame_3Passes)->Unit(benchmark::kMillisecond)->UseRealTime();
