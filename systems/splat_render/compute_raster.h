@@ -63,11 +63,12 @@ struct ComputeRaster {
 // bench_raster_path on a quiet machine, RESULTS.md): compute 1.08x faster at 1.7 px (1M-splat sphere: 147
 // vs 159 ms), 1.13x slower at 2.1 px (600k: bench_render's HQ row, 124 vs 110 ms), 1.85x slower at 3.3 px
 // (250k) and 2x at 6.7 px (59,650). (Runs on the machine loaded by other builds had put the break-even near
-// 3 px: llvmpipe's raster threads suffer more from the load.) Hardware GPU: the hybrid bound itself (not
-// measured: no GPU was at hand; Schuetz et al. report their compute path 2-3x faster than GL points for
-// small splats).
+// 3 px: llvmpipe's raster threads suffer more from the load.) Hardware GPU (NVIDIA H200,
+// bench_raster_break_even, HQ at 1280x720): compute 3.6-4.8x faster at 1 px, 2.4x at 2 px, 1.9x at 3 px,
+// 1.7x at 4 px, 1.13x at 6 px, then 0.89-0.92x at 8 px and 0.90-0.96x from 12 to 24 px: the largest
+// footprint measured still at >= 1 is 6 px.
 inline constexpr double compute_raster_software_max_footprint = 1.8;
-inline constexpr double compute_raster_hardware_max_footprint = 8.0;
+inline constexpr double compute_raster_hardware_max_footprint = 6.0;
 
 // One cloud's inputs for a frame (the cull pass's outputs; buffers owned by the renderer).
 struct ComputeRasterDraw {

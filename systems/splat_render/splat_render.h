@@ -40,7 +40,7 @@ enum class CullPath : std::uint8_t { automatic, compute, cpu };
 // Who rasterises the HQ passes' sprites (compute_raster.h). raster: point sprites and quads through the
 // fixed-function pipeline. compute: sprites up to SFFD_RASTER_MAX_SPRITE pixels by compute shaders with
 // 32-bit atomics, larger ones and quads by the rasteriser in the same frame (hybrid). automatic: compute when
-// the splats are on average small on screen: at most 8 px on a hardware GPU, 1.8 px on a software rasterizer
+// the splats are on average small on screen: at most 6 px on a hardware GPU, 1.8 px on a software rasterizer
 // (llvmpipe's measured break-even, compute_raster.h). Preview and frames whose clouds differ in material
 // always rasterise.
 enum class RasterPath : std::uint8_t { automatic, raster, compute };

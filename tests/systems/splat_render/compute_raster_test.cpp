@@ -223,7 +223,7 @@ TEST_F(ComputeRaster_, MatchesTheRasterPathOnGpuDeformedSplats) {
     ffd_release_gpu(reg);
 }
 
-// automatic: the compute rasteriser when the splats' mean on-screen diameter is at most 8 px on a hardware
+// automatic: the compute rasteriser when the splats' mean on-screen diameter is at most 6 px on a hardware
 // GPU, 1.8 px on a software rasterizer (llvmpipe's measured break-even); else the rasteriser.
 TEST_F(ComputeRaster_, AutomaticChoiceFollowsTheSplatSize) {
     const bool software = gfx::software_rasterizer();
