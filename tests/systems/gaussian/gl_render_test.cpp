@@ -23,6 +23,7 @@
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gl_render.h"
+#include "tests/systems/gaussian/random_cloud.h"
 #include "tests/systems/gaussian/gl_renderer_fixture.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"
@@ -40,20 +41,7 @@ Camera camera_at(glm::dvec3 eye, glm::dvec3 target = glm::dvec3(0.0), float fov 
     return c;
 }
 
-GaussianCloud random_cloud(std::size_t n, int degree) {
-    std::mt19937 rng(17);
-    std::uniform_real_distribution<float> u(-1, 1);
-    GaussianCloud g;
-    g.sh_degree = degree;
-    for (std::size_t i = 0; i < n; ++i) {
-        g.positions.emplace_back(u(rng), u(rng), u(rng));
-        g.scales.emplace_back(0.08f + 0.06f * u(rng), 0.03f + 0.02f * u(rng), 0.05f);
-        g.rotations.push_back(glm::normalize(glm::quat(u(rng), u(rng), u(rng), u(rng))));
-        g.opacities.push_back(0.6f + 0.35f * u(rng));
-        for (int k = 0; k < sh_coeffs(degree) * 3; ++k) g.sh.push_back(0.6f * u(rng));
-    }
-    return g;
-}
+GaussianCloud random_cloud(std::size_t n, int degree) { return test::seeded_random_cloud(17, n, degree); }
 
 void compare(GlRenderer& r, const GaussianCloud& g, const Camera& cam, ReferenceOptions o, const char* what) {
     const ReferenceImage ref = render_reference(g, cam, o);

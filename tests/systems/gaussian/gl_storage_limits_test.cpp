@@ -21,6 +21,7 @@
 #include "systems/gaussian/gl_render.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"
+#include "tests/systems/gaussian/random_cloud.h"
 #include "tests/systems/gaussian/gl_renderer_fixture.h"
 
 namespace {
@@ -36,20 +37,7 @@ Camera camera_at(glm::dvec3 eye) {
     return c;
 }
 
-GaussianCloud random_cloud(std::size_t n, int degree) {
-    std::mt19937 rng(23);
-    std::uniform_real_distribution<float> u(-1, 1);
-    GaussianCloud g;
-    g.sh_degree = degree;
-    for (std::size_t i = 0; i < n; ++i) {
-        g.positions.emplace_back(u(rng), u(rng), u(rng));
-        g.scales.emplace_back(0.08f + 0.06f * u(rng), 0.03f + 0.02f * u(rng), 0.05f);
-        g.rotations.push_back(glm::normalize(glm::quat(u(rng), u(rng), u(rng), u(rng))));
-        g.opacities.push_back(0.6f + 0.35f * u(rng));
-        for (int k = 0; k < sh_coeffs(degree) * 3; ++k) g.sh.push_back(0.6f * u(rng));
-    }
-    return g;
-}
+GaussianCloud random_cloud(std::size_t n, int degree) { return test::seeded_random_cloud(23, n, degree); }
 
 constexpr std::size_t kCount = 3000;
 // 48 bytes a Gaussian (the projection as one array of records) would be 144,000 bytes in one block;

@@ -28,6 +28,7 @@
 #include "systems/splat_render/gaussian_pass.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_render.h"
+#include "tests/systems/gaussian/random_cloud.h"
 #include "tests/systems/splat_render/test_scenes.h"
 #include "tests/test_util/gl_required.h"
 
@@ -74,18 +75,7 @@ protected:
 };
 
 GaussianCloud random_cloud(std::size_t n, int degree, float extent = 1.0f) {
-    std::mt19937 rng(29);
-    std::uniform_real_distribution<float> u(-1, 1);
-    GaussianCloud g;
-    g.sh_degree = degree;
-    for (std::size_t i = 0; i < n; ++i) {
-        g.positions.emplace_back(extent * u(rng), extent * u(rng), extent * u(rng));
-        g.scales.emplace_back(0.08f + 0.06f * u(rng), 0.03f + 0.02f * u(rng), 0.05f);
-        g.rotations.push_back(glm::normalize(glm::quat(u(rng), u(rng), u(rng), u(rng))));
-        g.opacities.push_back(0.6f + 0.35f * u(rng));
-        for (int k = 0; k < sh_coeffs(degree) * 3; ++k) g.sh.push_back(0.6f * u(rng));
-    }
-    return g;
+    return test::seeded_random_cloud(29, n, degree, extent);
 }
 
 // One Gaussian of a flat colour (DC only), isotropic scale `sigma`.
