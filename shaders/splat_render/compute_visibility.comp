@@ -26,7 +26,8 @@ layout(location = 0) uniform uvec4 u_list;
 layout(std430, binding = SFFD_SSBO_RASTER_GROUPS) buffer Groups { uint groups[]; };
 layout(location = 1) uniform uint u_write_pass;
 
-shared uint s_rank[SFFD_RASTER_GROUP_SIZE];
+#define SFFD_GROUP_SCAN_SIZE SFFD_RASTER_GROUP_SIZE
+#include "common/group_scan.glsl"
 
 void main() {
     const uint i = sffd_dispatch_index();
@@ -38,25 +39,18 @@ void main() {
         rec = records[r];
         big_sprite = rec.center.w > SFFD_RASTER_MAX_SPRITE;
     }
-    // Inclusive scan of the large-sprite flags over the work group (every invocation reaches each barrier).
+    // Inclusive scan of the large-sprite flags over the work group (every invocation reaches it).
     const uint lid = gl_LocalInvocationID.x;
     const uint flag = big_sprite ? 1u : 0u;
-    s_rank[lid] = flag;
-    barrier();
-    for (uint d = 1u; d < SFFD_RASTER_GROUP_SIZE; d <<= 1u) {
-        const uint before = lid >= d ? s_rank[lid - d] : 0u;
-        barrier();
-        s_rank[lid] += before;
-        barrier();
-    }
+    const uint scanned = sffd_inclusive_group_scan(flag);
     const uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
     const uint group_count = (u_list.w + SFFD_RASTER_GROUP_SIZE - 1u) / SFFD_RASTER_GROUP_SIZE;
     if (u_write_pass != 0u) {
         if (group == 0u && lid == 0u) big_commands[5u * u_list.z] = groups[group_count];
-        if (big_sprite) big[u_list.x + groups[group] + s_rank[lid] - flag] = r;
+        if (big_sprite) big[u_list.x + groups[group] + scanned - flag] = r;
         return;
     }
-    if (lid == SFFD_RASTER_GROUP_SIZE - 1u && group < group_count) groups[group] = s_rank[lid];
+    if (lid == SFFD_RASTER_GROUP_SIZE - 1u && group < group_count) groups[group] = scanned;
     if (!listed || big_sprite) return;
     ivec4 box = raster_sprite_pixels(rec.center);
     float eps = rec.plane.w;

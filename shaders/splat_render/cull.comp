@@ -45,7 +45,8 @@ layout(std430, binding = SFFD_SSBO_CULL_GROUPS) buffer Groups { uint groups[]; }
 
 layout(location = SFFD_LOC_CULL_PASS) uniform uint u_count_pass;
 
-shared uint s_rank[SFFD_CULL_GROUP_SIZE];  // sprites in the low 16 bits, quads in the high 16 bits
+#define SFFD_GROUP_SCAN_SIZE SFFD_CULL_GROUP_SIZE
+#include "common/group_scan.glsl"
 
 const uint KEEP_NONE = 0u, KEEP_SPRITE = 1u, KEEP_QUAD = 2u;
 
@@ -98,28 +99,22 @@ void main() {
         if (box.z < 0.0 || box.z > frame.params.y || any(greaterThan(abs(box.xy), vec2(1.0)))) keep = KEEP_QUAD;
     }
 
-    // Inclusive scan of the kept flags over the work group (every invocation reaches each barrier: no early
-    // return above). A group holds at most SFFD_CULL_GROUP_SIZE < 2^16 of either kind.
+    // Inclusive scan of the kept flags over the work group (every invocation reaches it: no early return
+    // above), sprites in the low 16 bits, quads in the high 16: a group holds at most
+    // SFFD_CULL_GROUP_SIZE < 2^16 of either kind.
     const uint lid = gl_LocalInvocationID.x;
     const uint flag = keep == KEEP_SPRITE ? 1u : keep == KEEP_QUAD ? 0x10000u : 0u;
-    s_rank[lid] = flag;
-    barrier();
-    for (uint d = 1u; d < SFFD_CULL_GROUP_SIZE; d <<= 1u) {
-        const uint before = lid >= d ? s_rank[lid - d] : 0u;
-        barrier();
-        s_rank[lid] += before;
-        barrier();
-    }
+    const uint scanned = sffd_inclusive_group_scan(flag);
     const uint group = gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x;
     const uint group_count = (frame.counts.x + SFFD_CULL_GROUP_SIZE - 1u) / SFFD_CULL_GROUP_SIZE;
     if (u_count_pass != 0u) {
         if (lid == SFFD_CULL_GROUP_SIZE - 1u && group < group_count) {
-            groups[group] = s_rank[lid] & 0xffffu;
-            groups[group_count + group] = s_rank[lid] >> 16u;
+            groups[group] = scanned & 0xffffu;
+            groups[group_count + group] = scanned >> 16u;
         }
         return;
     }
-    const uint rank = s_rank[lid] - flag;  // kept splats of this group before this one
+    const uint rank = scanned - flag;  // kept splats of this group before this one
     const uint sprites = groups[group_count];  // the sprites' total: the quads' scan starts from it
     if (group == 0u && lid == 0u) {
         point_count = sprites;

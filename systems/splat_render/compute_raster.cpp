@@ -61,9 +61,6 @@ Status init_compute_raster(ComputeRaster& raster) {
                                       {GL_FRAGMENT_SHADER, "splat_render/compute_resolve.frag"}},
                                      "render.compute.resolve");
     if (!resolve) return make_error(resolve.message());
-    auto scan = gfx::create_radix_sorter();
-    if (!scan) return make_error(scan.message());
-    raster.scan = std::move(*scan);
     raster.merge = std::move(merge.value());
     raster.resolve = std::move(resolve.value());
     raster.visibility = std::move(vis.value());
@@ -90,8 +87,8 @@ void ensure_compute_raster_cloud(ComputeRasterCloud& cloud, std::uint32_t capaci
     }
 }
 
-void compute_raster_visibility(ComputeRaster& raster, std::span<const ComputeRasterDraw> draws, int width,
-                               int height) {
+void compute_raster_visibility(ComputeRaster& raster, gfx::RadixSorter& scan,
+                               std::span<const ComputeRasterDraw> draws, int width, int height) {
     if (!raster.depth || raster.width != width || raster.height != height) {
         const std::size_t pixels = std::size_t(std::max(width, 1)) * std::size_t(std::max(height, 1));
         raster.depth = gfx::Buffer::create("render.compute.depth");
@@ -136,7 +133,7 @@ void compute_raster_visibility(ComputeRaster& raster, std::span<const ComputeRas
             gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "render.compute.visibility.count");
             const auto groups =
                 std::uint32_t((d.count + SFFD_RASTER_GROUP_SIZE - 1) / SFFD_RASTER_GROUP_SIZE);
-            if (Status st = gfx::exclusive_scan(*raster.scan, d.cloud->groups[list.z].id(), groups); !st)
+            if (Status st = gfx::exclusive_scan(scan, d.cloud->groups[list.z].id(), groups); !st)
                 log::error("render_system(): ", st.message());
             bind(1);
             if (Status st = gfx::dispatch_1d(d.count, SFFD_RASTER_GROUP_SIZE); !st)

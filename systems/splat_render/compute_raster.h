@@ -25,7 +25,6 @@
 
 #include <array>
 #include <cstdint>
-#include <optional>
 #include <span>
 
 #include <glm/glm.hpp>
@@ -52,9 +51,8 @@ struct ComputeRaster {
     gfx::Program visibility;
     std::array<gfx::Program, 2> attribute;  // [textured]
     gfx::Program merge, resolve;
-    std::optional<gfx::RadixSorter> scan;  // the large-sprite lists' exclusive scan (compute_visibility.comp)
-    gfx::Buffer depth;                     // uint[w h]: window depth bits, cleared to 1.0 every frame
-    gfx::Buffer sums;  // uint[w h 8]: zero between frames (the resolve pass re-zeroes what it reads)
+    gfx::Buffer depth;  // uint[w h]: window depth bits, cleared to 1.0 every frame
+    gfx::Buffer sums;   // uint[w h 8]: zero between frames (the resolve pass re-zeroes what it reads)
     int width = 0, height = 0;
 };
 
@@ -90,8 +88,8 @@ void ensure_compute_raster_cloud(ComputeRasterCloud& cloud, std::uint32_t capaci
 
 // Pass 1 for every cloud: clears the depth words (and sizes them for w x h), resets each cloud's big lists,
 // dispatches compute_visibility.comp per record list.
-void compute_raster_visibility(ComputeRaster& raster, std::span<const ComputeRasterDraw> draws, int width,
-                               int height);
+void compute_raster_visibility(ComputeRaster& raster, gfx::RadixSorter& scan,
+                               std::span<const ComputeRasterDraw> draws, int width, int height);
 
 // After the raster visibility pass, with the depth-only framebuffer bound and depth test LESS, writes on:
 // the compute depths into the depth target (inside the current scissor/viewport).

@@ -52,11 +52,8 @@ glm::vec4 quantised_base_color(const glm::vec4& linear) {
 // The compute cull of one cloud (cull.comp), with its frame block bound: a count pass, the exclusive scan
 // of the work groups' counts, and the pass that writes the lists in splat order at the scanned offsets.
 Status compute_cull(SplatRenderState& s, CloudGpu& gpu, GLuint program, bool textured) {
-    if (!s.scan) {
-        auto scan = gfx::create_radix_sorter();
-        if (!scan) return make_error(scan.message());
-        s.scan = std::move(*scan);
-    }
+    gfx::RadixSorter* scan = scan_programs(s);
+    if (!scan) return make_error("the compute cull has no scan programs");
     const std::uint32_t groups = (gpu.count + SFFD_CULL_GROUP_SIZE - 1) / SFFD_CULL_GROUP_SIZE;
     if (!gpu.cull_groups || gpu.cull_group_capacity < groups) {
         gpu.cull_groups = gfx::Buffer::create("render.cull_groups");
@@ -84,7 +81,7 @@ Status compute_cull(SplatRenderState& s, CloudGpu& gpu, GLuint program, bool tex
     bind(1);
     if (Status st = gfx::dispatch_1d(gpu.count, SFFD_CULL_GROUP_SIZE); !st) return st;
     gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "render.cull.count");
-    if (Status st = gfx::exclusive_scan(*s.scan, gpu.cull_groups.id(), 2 * groups); !st) return st;
+    if (Status st = gfx::exclusive_scan(*scan, gpu.cull_groups.id(), 2 * groups); !st) return st;
     bind(0);
     return gfx::dispatch_1d(gpu.count, SFFD_CULL_GROUP_SIZE);
 }

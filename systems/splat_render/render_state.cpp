@@ -203,6 +203,18 @@ Status cull_program(SplatRenderState& s, bool textured, bool lit, std::uint32_t 
     return {};
 }
 
+gfx::RadixSorter* scan_programs(SplatRenderState& s) {
+    if (!s.scan) {
+        auto scan = gfx::create_radix_sorter();
+        if (!scan) {
+            log::error("render_system(): ", scan.message());
+            return nullptr;
+        }
+        s.scan = std::move(*scan);
+    }
+    return &*s.scan;
+}
+
 // The deferred shading program for `lights` directional lights (LIGHTS in lighting.glsl), with one
 // material for the frame or blended ones (MATERIALS), compiled once.
 Status shade_program(SplatRenderState& s, bool materials, std::uint32_t lights) {

@@ -110,7 +110,7 @@ void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& p
     glDepthFunc(GL_LESS);
     auto scope = profiling::gpu_scope(reg, "render.hq.visibility");
     const bool big = !plan.compute.empty();
-    if (big) compute_raster_visibility(s.compute_raster, plan.compute, plan.width, plan.height);
+    if (big) compute_raster_visibility(s.compute_raster, *s.scan, plan.compute, plan.width, plan.height);
     for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.visibility, *gpu, nullptr, big);
     if (big) {
         glEnable(GL_SCISSOR_TEST);
@@ -147,6 +147,7 @@ void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, R
         log::error("render_system(): ", st.message());
         return;
     }
+    if (!scan_programs(s)) return;  // its large-sprite lists are scanned (compute_visibility.comp)
     for (CloudGpu* gpu : plan.drawn) {
         ensure_compute_raster_cloud(gpu->raster, gpu->capacity);
         plan.compute.push_back({&gpu->raster, gpu->frame_ubo.id(), gpu->records.id(), gpu->commands.id(),

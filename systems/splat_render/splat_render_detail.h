@@ -137,7 +137,8 @@ struct SplatRenderState {
     // [textured][lit][lights]: cull pass variants (TEXTURED, LIT, LIGHTS in splat_color.glsl), compiled on
     // first use (cull_program)
     std::array<std::array<std::array<gfx::Program, SFFD_MAX_LIGHTS + 1>, 2>, 2> cull;
-    std::optional<gfx::RadixSorter> scan;    // the compute cull's exclusive scan, made on its first use
+    // The exclusive scan of the compute cull's and the compute rasteriser's ordered lists (scan_programs)
+    std::optional<gfx::RadixSorter> scan;
     std::array<gfx::Program, 2> visibility;  // [0] sprites, [1] quads
     // [textured: per-pixel texture lookups][clouds differ in material][sprites, quads]
     std::array<std::array<std::array<gfx::Program, 2>, 2>, 2> attribute;
@@ -245,6 +246,8 @@ void ensure_targets(SplatRenderState& s, int w, int h);
 bool cpu_cull_wanted(const SplatRenderState& s, CullPath path);
 void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatStore& store, bool keep_cpu);
 Status cull_program(SplatRenderState& s, bool textured, bool lit, std::uint32_t lights);
+// The scan programs (SplatRenderState::scan), compiled on first use; null with the error logged.
+gfx::RadixSorter* scan_programs(SplatRenderState& s);
 Status shade_program(SplatRenderState& s, bool materials, std::uint32_t lights);
 SplatRenderState& render_state(ecs::Registry& reg);
 
