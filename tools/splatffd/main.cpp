@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/core/allocator.h"
 #include "runtime/core/atomic_file.h"
 #include "runtime/core/file_io.h"
 #include "runtime/core/paths.h"
@@ -77,6 +78,7 @@ void print_help(std::FILE* to) {
 }  // namespace
 
 int main(int argc, char** argv) {
+    sffd::keep_freed_frame_memory();
     std::vector<std::string> args(argv + 1, argv + argc);
     // Global option: resources (textures, buffers, material libraries) may lie outside the folder of the
     // file that names them. Off by default: a scene from the web must not read local files.
