@@ -7,14 +7,15 @@
 // TEXTURED 1: the colour is the material texture at this pixel's uv, from the splat's uv frame (v_uv,
 // splat_uv_frame) at the fragment's splat coordinates, filtered trilinearly at the splat's mip level
 // (splat_texture_lod): texture detail finer than the splats survives. TEXTURED 0: the splat's
-// one colour (v_plane.w).
+// one colour (v_plane.w, packed).
 #include "splat_render/raycast.glsl"
 
 #include "splat_render/splat_common.glsl"
 
 layout(location = 3) flat in vec3 v_normal;
 #if TEXTURED
-layout(location = 4) flat in vec4 v_uv;
+layout(location = 5) flat in vec3 v_uv;        // uv at the centre, mip level (splat.vert)
+layout(location = 6) flat in vec4 v_uv_axes;   // d(uv)/ds, d(uv)/dt
 layout(binding = SFFD_TEX_MATERIAL) uniform sampler2D material_texture;
 #endif
 
@@ -35,10 +36,9 @@ void main() {
     // Smooth radial kernel that reaches 0 at the ellipse's edge: no visible disc borders.
     float w = (1.0 - r2) * (1.0 - r2) + 1e-6;
 #if TEXTURED
-    // uv at this pixel from the splat's uv frame; the mip level is the splat's (v_plane.w, set up once per
+    // uv at this pixel from the splat's uv frame; the mip level is the splat's (v_uv.z, set up once per
     // splat by the cull pass: splat_texture_lod), trilinear between levels.
-    vec2 du = unpack_halves(v_uv.z), dv = unpack_halves(v_uv.w);
-    vec3 albedo = textureLod(material_texture, v_uv.xy + st.x * du + st.y * dv, v_plane.w).rgb;
+    vec3 albedo = textureLod(material_texture, v_uv.xy + st.x * v_uv_axes.xy + st.y * v_uv_axes.zw, v_uv.z).rgb;
 #else
     vec3 albedo = unpack_color(v_plane.w);
 #endif

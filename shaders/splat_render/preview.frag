@@ -1,7 +1,7 @@
 #version 450
 // Preview: one pass of opaque ray-cast ellipses with true depth; the cull pass (or the quad vertex shader)
-// lit each splat once. TEXTURED 1: the texture is sampled per pixel through the splat's uv frame at its
-// mip level rounded to one level (one bilinear lookup: 5-10% of the textured preview frame on llvmpipe,
+// lit each splat once (splat.vert unpacks its values). TEXTURED 1: the texture is sampled per pixel through
+// the splat's uv frame at its mip level rounded to one level (one bilinear lookup: 5-10% of the textured preview frame on llvmpipe,
 // 47.3 -> 36.8 dB against the ground truth at rest) and lit with the splat's factors (colour = texture *
 // diffuse + specular), so texture edges are not the splats' disc outlines.
 #include "splat_render/raycast.glsl"
@@ -11,9 +11,11 @@
 #if AUX
 layout(location = 3) flat in vec3 v_normal;
 #endif
+layout(location = 4) flat in vec3 v_color;  // lit colour, or TEXTURED: the diffuse factor
 #if TEXTURED
-layout(location = 4) flat in vec4 v_uv;
-layout(location = 5) flat in vec2 v_light;  // packed specular term, mip level
+layout(location = 5) flat in vec3 v_uv;        // uv at the centre, mip level
+layout(location = 6) flat in vec4 v_uv_axes;   // d(uv)/ds, d(uv)/dt
+layout(location = 7) flat in vec3 v_specular;
 layout(binding = SFFD_TEX_MATERIAL) uniform sampler2D material_texture;
 #endif
 
@@ -30,11 +32,10 @@ void main() {
     float t = raycast_splat(ray, r2, st);
     gl_FragDepth = window_depth_inv(dot(v_plane.xyz, ray));
 #if TEXTURED
-    vec2 du = unpack_halves(v_uv.z), dv = unpack_halves(v_uv.w);
-    vec3 albedo = textureLod(material_texture, v_uv.xy + st.x * du + st.y * dv, round(v_light.y)).rgb;
-    out_color = vec4(albedo * unpack_light(v_plane.w) + unpack_light(v_light.x), 1.0);
+    vec3 albedo = textureLod(material_texture, v_uv.xy + st.x * v_uv_axes.xy + st.y * v_uv_axes.zw, v_uv.z).rgb;
+    out_color = vec4(albedo * v_color + v_specular, 1.0);
 #else
-    out_color = vec4(unpack_color(v_plane.w), 1.0);
+    out_color = vec4(v_color, 1.0);
 #endif
 #if AUX
     out_aux = vec4(v_normal, t);

@@ -36,20 +36,34 @@ layout(location = 5) in vec4 a_uv;      // splat_uv_frame
 #endif
 #endif
 
-// PASS 0: v_plane.w = eps; PASS 1, 2: v_plane.w = packed colour (HQ albedo, preview lit; pack_color);
-// PASS 1 TEXTURED: v_plane.w = the splat's mip level (splat_texture_lod); PASS 2 TEXTURED: v_plane.w =
-// the packed diffuse factor, v_light = (packed specular term, mip level) (SplatRecord).
+// v_plane.w: PASS 0 the visibility offset eps; PASS 1 untextured the packed albedo (pack_color); otherwise
+// unused. The other values the records carry packed (pack_color, pack_light, pack_halves) are unpacked
+// here, once per splat, into flat outputs: the fragment shaders, which run per covered pixel of every
+// overlapping sprite, only read them (unpacking there was a quarter of the face's preview on llvmpipe).
+// The HQ attribute pass of an untextured cloud still unpacks per pixel: one more output measured slower
+// there (llvmpipe sets up every output per primitive).
 layout(location = 0) flat out vec4 v_plane;
 layout(location = 1) flat out vec4 v_dual_u;
 layout(location = 2) flat out vec4 v_dual_v;
 #if PASS == 1 || AUX
 layout(location = 3) flat out vec3 v_normal;  // world space shading normal
 #endif
+#if PASS == 2
+layout(location = 4) flat out vec3 v_color;  // lit colour, or TEXTURED: the diffuse factor
+#endif
 #if UV_FRAME
-layout(location = 4) flat out vec4 v_uv;  // splat_uv_frame
+layout(location = 5) flat out vec3 v_uv;        // uv at the centre, mip level (splat_texture_lod)
+layout(location = 6) flat out vec4 v_uv_axes;   // d(uv)/ds, d(uv)/dt (splat_uv_frame)
 #endif
 #if PASS == 2 && TEXTURED
-layout(location = 5) flat out vec2 v_light;
+layout(location = 7) flat out vec3 v_specular;  // the specular term added to texture * diffuse
+#endif
+
+#if UV_FRAME
+void set_uv_frame(vec4 frame_packed, float lod) {
+    v_uv = vec3(frame_packed.xy, lod);
+    v_uv_axes = vec4(unpack_halves(frame_packed.z), unpack_halves(frame_packed.w));
+}
 #endif
 
 void main() {
@@ -61,18 +75,19 @@ void main() {
         v_plane.xyz = vec3(0.0);  // back-facing with culling off: hidden (splat_record.h), every fragment discards
 #if PASS != 0
     vec3 world_n = normalize(mat3(frame.view_to_world) * o.shading_n);
+    // Quantised as the records are (pack then unpack), so a splat looks the same drawn as either shape.
 #if UV_FRAME
     vec4 uv_axes_i = uv_axes[quads[gl_InstanceID]];
-    v_uv = splat_uv_frame(s, uv_axes_i);
-    float lod = splat_texture_lod(o.c, v_plane, v_dual_u, v_dual_v, uv_axes_i, vec2(textureSize(material_texture, 0)));
-#if PASS == 1
-    v_plane.w = lod;
-#else
+    set_uv_frame(splat_uv_frame(s, uv_axes_i),
+                 splat_texture_lod(o.c, v_plane, v_dual_u, v_dual_v, uv_axes_i, vec2(textureSize(material_texture, 0))));
+#if PASS == 2
     vec3 diffuse, specular;
     splat_light_factors(o, world_n, diffuse, specular);
-    v_plane.w = pack_light(diffuse);
-    v_light = vec2(pack_light(specular), lod);
+    v_color = unpack_light(pack_light(diffuse));
+    v_specular = unpack_light(pack_light(specular));
 #endif
+#elif PASS == 2
+    v_color = unpack_color(pack_color(splat_color(s, o, world_n).rgb));
 #else
     v_plane.w = pack_color(splat_color(s, o, world_n).rgb);
 #endif
@@ -88,17 +103,20 @@ void main() {
     v_plane = a_plane;
     v_dual_u = a_dual_u;
     v_dual_v = a_dual_v;
-#if PASS != 0
-    v_plane.w = a_normal.w;
 #if PASS == 1 || AUX
     v_normal = a_normal.xyz;
 #endif
-#endif
-#if UV_FRAME
-    v_uv = a_uv;
-#endif
-#if PASS == 2 && TEXTURED
-    v_light = vec2(a_plane.w, a_center.z);
+    // The record's fields: SplatRecord (splat_record.h).
+#if PASS == 1 && TEXTURED
+    set_uv_frame(a_uv, a_normal.w);  // mip level
+#elif PASS == 2 && TEXTURED
+    set_uv_frame(a_uv, round(a_center.z));  // the preview samples one level
+    v_color = unpack_light(a_normal.w);
+    v_specular = unpack_light(a_plane.w);
+#elif PASS == 2
+    v_color = unpack_color(a_normal.w);
+#elif PASS == 1
+    v_plane.w = a_normal.w;
 #endif
     // The sprite's centre in NDC. Its depth is irrelevant (every splat fragment shader writes gl_FragDepth)
     // and z = 0 keeps the point inside the clip volume (near-crossing splats are quads).
