@@ -29,6 +29,8 @@
 // --- Uniform locations (explicit, so C++ never looks uniforms up by name) --------------------------
 #define SFFD_LOC_OVERLAY_VIEW_PROJ 0   // mat4 (locations 0..3): editor lattice overlay, anchor -> clip
 #define SFFD_LOC_OVERLAY_POINTS    4   // int: 1 round point sprites, 0 lines
+#define SFFD_LOC_OVERLAY_PIXEL     5   // float: frame pixels per window pixel (a reduced preview: < 1)
+#define SFFD_LOC_DISPLAY_SCALE     0   // vec2: splat_render display copy, window pixel -> frame pixel
 
 // GpuSplat, std430, 64 bytes; the same layout for rest and deformed splats, so a render pass reads
 // either one. Positions are relative to the cloud's origin (SplatCloud::origin).

@@ -9,6 +9,7 @@ layout(location = 1) in vec4 a_color;
 layout(location = 2) in float a_size;
 
 layout(location = SFFD_LOC_OVERLAY_VIEW_PROJ) uniform mat4 u_view_proj;
+layout(location = SFFD_LOC_OVERLAY_PIXEL) uniform float u_pixel;  // sizes are in window pixels
 
 out vec4 v_color;
 
@@ -16,6 +17,6 @@ void main() {
     gl_Position = u_view_proj * vec4(a_position, 1.0);
     // Pull the overlay a hair towards the camera so points sitting on the surface win the depth test.
     gl_Position.z -= 1e-4 * gl_Position.w;
-    gl_PointSize = a_size;
+    gl_PointSize = max(a_size * u_pixel, 1.0);
     v_color = a_color;  // opacity is the blend constant (lattice_overlay.cpp)
 }

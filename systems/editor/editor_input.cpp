@@ -240,6 +240,7 @@ void adapt_quality(ecs::Registry& registry, EditorState& state, bool scrolled) {
     state.previewing = state.preview_while_moving && rest != render::Quality::preview &&
                        state.still_frames < state.refine_after;
     settings->quality = state.previewing ? render::Quality::preview : rest;
+    settings->preview_divider = state.previewing && state.half_resolution_preview ? 2 : 1;
     set_preview_active(registry, state.previewing);  // the point budget of large clouds while moving
 }
 

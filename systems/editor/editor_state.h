@@ -115,6 +115,10 @@ struct EditorState {
     // the quality the view started with (RenderSettings::quality; `--quality preview` stays preview).
     bool preview_while_moving = true;
     int refine_after = 8;
+    // Those preview frames at half the window's resolution (RenderSettings::preview_divider 2): a quarter of
+    // the fill. The view turns it on where the GL is a CPU rasteriser, whose frame time is mostly fill;
+    // View > "Half-resolution preview" toggles it.
+    bool half_resolution_preview = false;
     int still_frames = 1 << 20;  // frames since the last movement
     int rest_quality = -1;       // render::Quality the view started with (-1: not read yet)
     bool previewing = false;     // this frame renders in preview because of movement (status bar)

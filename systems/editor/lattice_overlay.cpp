@@ -138,15 +138,19 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
     LatticeOverlayState& s = registry.resource<LatticeOverlayState>();
     if (s.failed) return;
 
-    GLint width = 0, height = 0;
-    GLint color_tex = 0;
+    // The frame's pixels in the targets (fewer than the targets hold for a reduced preview frame), with
+    // the projection of the full frame's aspect, as the render system draws it.
+    const glm::ivec2 frame_size = render::output_frame_size(registry);
+    const int width = frame_size.x, height = frame_size.y;
+    if (width <= 0 || height <= 0) return;
+    GLint target_width = 0, target_height = 0, color_tex = 0;
     glGetNamedFramebufferAttachmentParameteriv(fbo, GL_COLOR_ATTACHMENT0,
                                                GL_FRAMEBUFFER_ATTACHMENT_OBJECT_NAME, &color_tex);
     if (color_tex == 0) return;
-    glGetTextureLevelParameteriv(GLuint(color_tex), 0, GL_TEXTURE_WIDTH, &width);
-    glGetTextureLevelParameteriv(GLuint(color_tex), 0, GL_TEXTURE_HEIGHT, &height);
+    glGetTextureLevelParameteriv(GLuint(color_tex), 0, GL_TEXTURE_WIDTH, &target_width);
+    glGetTextureLevelParameteriv(GLuint(color_tex), 0, GL_TEXTURE_HEIGHT, &target_height);
     const Camera& camera = registry.get<Camera>(state->camera);
-    const Viewport vp{width, height};
+    const Viewport vp{target_width, target_height};
     const glm::dmat4 view_proj = projection_matrix(camera, vp) * view_matrix(camera);
 
     glBindFramebuffer(GL_FRAMEBUFFER, fbo);
@@ -189,6 +193,7 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
         glVertexArrayVertexBuffer(s.vao.id(), 0, s.buffer.id(), 0, sizeof(OverlayVertex));
         const glm::mat4 m = glm::mat4(view_proj * glm::translate(glm::dmat4(1.0), g.anchor));
         glUniformMatrix4fv(SFFD_LOC_OVERLAY_VIEW_PROJ, 1, GL_FALSE, &m[0][0]);
+        glUniform1f(SFFD_LOC_OVERLAY_PIXEL, float(width) / float(std::max(target_width, 1)));
         // Pass 1: everything (faint unless x-ray); pass 2: the visible part at full strength.
         for (int pass = 0; pass < (state->xray ? 1 : 2); ++pass) {
             if (pass == 0) glDisable(GL_DEPTH_TEST);

@@ -165,6 +165,8 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
             ImGui::MenuItem("Lattice", nullptr, &state.show_lattice);
             ImGui::MenuItem("Lattice cage only", "Shift+T", &state.lattice_cage_only);
             ImGui::MenuItem("Preview while moving", nullptr, &state.preview_while_moving);
+            ImGui::MenuItem("Half-resolution preview", nullptr, &state.half_resolution_preview,
+                            state.preview_while_moving);
             ImGui::MenuItem("Auto-key", "N", &state.auto_key);
             if (ImGui::MenuItem("Frame selection", "F")) frame_selection(registry, state);
             ImGui::EndMenu();
@@ -566,7 +568,10 @@ void draw_panels(ecs::Registry& registry, const FrameContext&) {
     in.title = ImGui::GetFrameHeight();
     in.collapsed = ls.collapsed;
     ls.rects = layout_panels(in);
-    registry.set_resource<EditorViewRect>(EditorViewRect{view_rect(ls.rects, in), in.width, in.height});
+    const PanelRect view = view_rect(ls.rects, in);
+    registry.set_resource<EditorViewRect>(EditorViewRect{view, in.width, in.height});
+    registry.set_resource<render::DisplayViewport>(
+        render::DisplayViewport{view.x, view.y, view.w, view.h, in.width, in.height});
     menu_bar(registry, *state);
     outliner(registry, *state);
     inspector(registry, *state);

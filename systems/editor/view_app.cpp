@@ -190,13 +190,11 @@ Status write_screenshot(ecs::Registry& registry, const std::filesystem::path& pa
     if (!frame) return make_error(frame.message());
     // capture_frame keeps colour only where a splat was hit; the lattice overlay is also drawn where no
     // surface is behind it (opaque, alpha 1), so take those pixels from the colour target itself.
-    if (const GLuint tex = render::output_color_texture(registry); tex != 0) {
+    if (auto color = render::capture_output_color(registry); color) {
         const int w = frame->width, h = frame->height;
-        std::vector<glm::vec4> color(std::size_t(w) * std::size_t(h));
-        glGetTextureImage(tex, 0, GL_RGBA, GL_FLOAT, GLsizei(color.size() * sizeof(glm::vec4)), color.data());
         for (int y = 0; y < h; ++y)
             for (int x = 0; x < w; ++x) {
-                const glm::vec4& c = color[std::size_t(h - 1 - y) * std::size_t(w) + std::size_t(x)];
+                const glm::vec4& c = (*color)[std::size_t(y) * std::size_t(w) + std::size_t(x)];
                 glm::vec4& dst = frame->color[frame->index(x, y)];
                 if (dst.w <= 0.0f && c.w >= 1.0f) dst = c;  // overlay over background
             }
@@ -360,6 +358,7 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         }
 
         EditorState& state = setup_editor(registry, viewport);
+        state.half_resolution_preview = gfx::software_rasterizer();
         if (!options.replay.empty()) {
             auto events = load_input_recording(options.replay);
             if (!events) {
@@ -454,6 +453,14 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         }
         // Frame times: all frames, and the frames in which a stretch/twist drag was live.
         std::vector<double> all, drag;
+        for (const auto& f : profiler.frames()) {
+            std::fprintf(stderr, "F %llu %d %.1f:", (unsigned long long)f.frame,
+                         int(f.frame < session.dragging.size() && session.dragging[f.frame]), f.total_ms);
+            for (const auto& sc : f.scopes)
+                if (sc.cpu_ms > 0.8)
+                    std::fprintf(stderr, " %s=%.1f", profiler.name(sc.name).c_str(), sc.cpu_ms);
+            std::fprintf(stderr, "\n");
+        }
         for (const auto& f : profiler.frames()) {
             if (f.frame == 0) continue;  // first frame: uploads and shader warm-up
             all.push_back(f.total_ms);

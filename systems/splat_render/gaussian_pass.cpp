@@ -85,12 +85,13 @@ Result<GaussianPassState*> pass_state(ecs::Registry& reg) {
 }
 
 void ensure_targets(GaussianPassState& s, const GaussianPassFrame& f) {
-    if (s.width != f.width || s.height != f.height || !s.accum_fbo) {
-        s.width = f.width, s.height = f.height;
-        s.gauss_color = make_texture(GL_RGBA32F, f.width, f.height, "render.gaussian_color");
-        s.gauss_depth = make_texture(GL_RGBA32F, f.width, f.height, "render.gaussian_depth");
-        s.surface_color = make_texture(GL_RGBA16F, f.width, f.height, "render.surface_color_copy");
-        s.surface_aux = make_texture(GL_RGBA32F, f.width, f.height, "render.surface_aux_copy");
+    const int w = std::max(f.target_width, f.width), h = std::max(f.target_height, f.height);
+    if (s.width != w || s.height != h || !s.accum_fbo) {
+        s.width = w, s.height = h;
+        s.gauss_color = make_texture(GL_RGBA32F, w, h, "render.gaussian_color");
+        s.gauss_depth = make_texture(GL_RGBA32F, w, h, "render.gaussian_depth");
+        s.surface_color = make_texture(GL_RGBA16F, w, h, "render.surface_color_copy");
+        s.surface_aux = make_texture(GL_RGBA32F, w, h, "render.surface_aux_copy");
         s.accum_fbo = gfx::Framebuffer::create("render.gaussian_accum");
         glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT0, s.gauss_color.id(), 0);
         glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT1, s.gauss_depth.id(), 0);

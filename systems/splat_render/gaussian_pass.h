@@ -35,8 +35,10 @@ struct GaussianPassFrame {
     glm::dmat4 view{1.0}, projection{1.0};
     GLuint output_fbo = 0;  // colour attachment 0 (linear RGBA16F, straight colour + coverage), 1 (aux)
     GLuint color = 0, aux = 0, depth = 0;
-    int width = 1, height = 1;
-    bool aux_outputs = false;  // attachment 1 is written this frame (normal + view depth)
+    int width = 1, height = 1;                // the pixels drawn, from the targets' lower-left corner
+    int target_width = 1, target_height = 1;  // the render system's targets (>= width, height: a reduced
+                                              // preview; the pass's own targets follow them, not the frame)
+    bool aux_outputs = false;                 // attachment 1 is written this frame (normal + view depth)
     // Preview quality (the editor while moving): Gaussians whose own footprint is under a pixel are not
     // drawn (GaussianView::min_footprint_px); the HQ (still) frame draws every Gaussian.
     bool preview = false;

@@ -102,6 +102,27 @@ void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan
         draw_cloud(s, s.preview[gpu->texture ? 1 : 0][aux], *gpu, &s.preview[0][aux][0]);
 }
 
+// Drivers may compile a program's fragment code for the state it first draws with (llvmpipe does, at
+// the draw): the first preview of an editor that opened in HQ then took 19-24 ms instead of 9-10 (the
+// sphere's first drag frame, 2-core machine). One preview draw of the clouds into a single scissored pixel of
+// the output, in the same state, at the first HQ frame moves that cost to start-up; the pixel is cleared
+// again before HQ draws.
+void warm_preview_programs(SplatRenderState& s, const FramePlan& plan) {
+    if (s.preview_warm || plan.drawn.empty()) return;
+    s.preview_warm = true;
+    glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
+    glDepthFunc(GL_LESS);
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(0, 0, 1, 1);
+    const int aux = plan.settings.aux_outputs ? 1 : 0;
+    for (const CloudGpu* gpu : plan.drawn)
+        draw_cloud(s, s.preview[gpu->texture ? 1 : 0][aux], *gpu, &s.preview[0][aux][0]);
+    const float far_depth = 1.0f;
+    glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 0, &plan.common.background.x);
+    glClearNamedFramebufferfv(s.output_fbo.id(), GL_DEPTH, 0, &far_depth);
+    glDisable(GL_SCISSOR_TEST);
+}
+
 // HQ 1. visibility: eps-offset depth only.
 // With the compute rasteriser (plan.compute): its visibility pass first, the rasteriser draws only what it
 // left over, then its depths are merged into the depth target inside `rect` (where the accumulation runs).

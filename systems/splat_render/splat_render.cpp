@@ -21,8 +21,15 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     FramePlan plan;
     plan.settings = reg.resource<RenderSettings>();
     PassLaps laps(plan.settings.time_passes);
-    plan.width = std::max(plan.settings.width, 1), plan.height = std::max(plan.settings.height, 1);
-    ensure_targets(s, plan.width, plan.height);
+    const int full_width = std::max(plan.settings.width, 1), full_height = std::max(plan.settings.height, 1);
+    ensure_targets(s, full_width, full_height);
+    // A reduced preview renders into the targets' lower-left corner with the full frame's projection (the
+    // aspect of the full size): scaling x and y back up by their own ratios undoes the viewport's squeeze.
+    const int divider =
+        plan.settings.quality == Quality::preview ? std::clamp(plan.settings.preview_divider, 1, 8) : 1;
+    plan.width = std::max(full_width / divider, 1), plan.height = std::max(full_height / divider, 1);
+    plan.settings.width = plan.width, plan.settings.height = plan.height;
+    s.frame_width = plan.width, s.frame_height = plan.height;
     static const gfx::GpuSplatStore no_clouds;  // nothing resident: residency_system has not run
     const auto* store = reg.try_resource<gfx::GpuSplatStore>();
     s.cull_over_limit = false;
@@ -31,7 +38,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     // CPU copies are kept also where a cloud is over the limit on a forced compute cull (it falls back).
     sync_clouds(reg, s, store ? *store : no_clouds,
                 cpu_cull_wanted(s, plan.settings.cull_path) || s.cull_over_limit);
-    plan.view = choose_camera(reg, s, double(plan.width) / double(plan.height));
+    plan.view = choose_camera(reg, s, double(full_width) / double(full_height));
     plan.common = frame_block(reg, plan.settings, plan.view, s.max_point_size);
 
     cull_pass(reg, s, plan, stats);
@@ -45,6 +52,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         preview_pass(reg, s, plan);
         laps.lap(stats.preview_ms);
     } else {
+        warm_preview_programs(s, plan);
         const glm::ivec4 rect = screen_rect(reg, plan.view, plan.width, plan.height);
         visibility_pass(reg, s, plan, rect);
         if (!plan.compute.empty())
@@ -63,6 +71,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         gf.output_fbo = s.output_fbo.id(), gf.color = s.color.id(), gf.aux = s.aux.id(),
         gf.depth = s.depth.id();
         gf.width = plan.width, gf.height = plan.height, gf.aux_outputs = plan.settings.aux_outputs;
+        gf.target_width = full_width, gf.target_height = full_height;
         gf.preview = plan.settings.quality == Quality::preview;
         auto drawn = gaussian_pass(reg, gf);
         if (!drawn) {
@@ -85,6 +94,20 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     stats.cpu_splat_passes = s.cpu_splat_passes;
     s.last_background = plan.common.background;
     if (plan.settings.time_passes) stats.total_ms = laps.total_ms();
+}
+
+glm::ivec4 display_viewport_pixels(const DisplayViewport& v, int width, int height) {
+    if (!(v.window_width > 0.0f) || !(v.window_height > 0.0f)) return {0, 0, width, height};
+    const double sx = width / double(v.window_width), sy = height / double(v.window_height);
+    auto clamp_to = [](double value, int lo, int hi) {
+        return value <= lo ? lo : value >= hi ? hi : int(value);  // NaN: lo
+    };
+    const double x = v.x, y = v.y, w = v.width, h = v.height;
+    const int x0 = clamp_to(std::floor(x * sx), 0, width);
+    const int x1 = clamp_to(std::ceil((x + w) * sx), x0, width);
+    const int y1 = clamp_to(height - std::floor(y * sy), 0, height);  // GL rows count from the bottom
+    const int y0 = clamp_to(height - std::ceil((y + h) * sy), 0, y1);
+    return {x0, y0, x1 - x0, y1 - y0};
 }
 
 void display_system(ecs::Registry& reg, const FrameContext&) {
@@ -126,8 +149,22 @@ void display_system(ecs::Registry& reg, const FrameContext&) {
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, s->display_ubo.id());
     glBindTextureUnit(SFFD_TEX_ACCUM_COLOR, s->color.id());
     glBindVertexArray(s->vao.id());  // empty: the triangle comes from gl_VertexID
+    // Outside the part of the window the frame is seen in, a clear to the background costs a small part
+    // of the copy (a CPU rasteriser runs the copy per pixel: the editor's panels cover half the window).
+    if (const auto* dv = reg.try_resource<DisplayViewport>()) {
+        const glm::ivec4 r = display_viewport_pixels(*dv, w, h);
+        if (r != glm::ivec4(0, 0, w, h)) {
+            const glm::vec4& bg = s->last_background;
+            glClearColor(linear_to_srgb(bg.x), linear_to_srgb(bg.y), linear_to_srgb(bg.z), 1.0f);
+            glClear(GL_COLOR_BUFFER_BIT);
+            glEnable(GL_SCISSOR_TEST);
+            glScissor(r.x, r.y, r.z, r.w);
+        }
+    }
     glUseProgram(s->display.id());
+    glUniform2f(SFFD_LOC_DISPLAY_SCALE, float(s->frame_width) / float(w), float(s->frame_height) / float(h));
     glDrawArrays(GL_TRIANGLES, 0, 3);
+    glDisable(GL_SCISSOR_TEST);
     glEnable(GL_DEPTH_TEST);
     glBindVertexArray(0);
     glUseProgram(0);
@@ -138,29 +175,55 @@ void display_system(ecs::Registry& reg, const FrameContext&) {
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
+namespace {
+
+// Reads `texture` (the targets' size) into a top-down image of that size, scaling the last frame's
+// rectangle up as the display copy does (display.frag: nearest).
+std::vector<glm::vec4> read_frame(const SplatRenderState& s, GLuint texture) {
+    const int w = s.width, h = s.height;
+    std::vector<glm::vec4> raw(std::size_t(w) * std::size_t(h)), out(raw.size());
+    glGetTextureImage(texture, 0, GL_RGBA, GL_FLOAT, GLsizei(raw.size() * sizeof(glm::vec4)), raw.data());
+    const float sx = float(s.frame_width) / float(w), sy = float(s.frame_height) / float(h);
+    for (int y = 0; y < h; ++y) {  // GL rows are bottom-up, images top-down
+        const int gl_y = h - 1 - y;
+        const int src_y = std::min(int((float(gl_y) + 0.5f) * sy), h - 1);
+        for (int x = 0; x < w; ++x) {
+            const int src_x = std::min(int((float(x) + 0.5f) * sx), w - 1);
+            out[std::size_t(y) * std::size_t(w) + std::size_t(x)] =
+                raw[std::size_t(src_y) * std::size_t(w) + std::size_t(src_x)];
+        }
+    }
+    return out;
+}
+
+}  // namespace
+
+Result<std::vector<glm::vec4>> capture_output_color(ecs::Registry& registry) {
+    const SplatRenderState* s = registry.try_resource<SplatRenderState>();
+    if (!s || s->failed || !s->output_fbo) return make_error("capture_output_color(): nothing rendered yet");
+    return read_frame(*s, s->color.id());
+}
+
 Result<FrameImage> capture_frame(ecs::Registry& registry) {
     const SplatRenderState* s = registry.try_resource<SplatRenderState>();
     if (!s || s->failed || !s->output_fbo) return make_error("capture_frame(): nothing rendered yet");
     const int w = s->width, h = s->height;
     const std::size_t n = std::size_t(w) * std::size_t(h);
-    std::vector<glm::vec4> color(n), aux(n);
-    glGetTextureImage(s->color.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(n * sizeof(glm::vec4)), color.data());
-    if (s->aux_valid)
-        glGetTextureImage(s->aux.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(n * sizeof(glm::vec4)), aux.data());
+    const std::vector<glm::vec4> color = read_frame(*s, s->color.id());
+    const std::vector<glm::vec4> aux = s->aux_valid ? read_frame(*s, s->aux.id()) : std::vector<glm::vec4>(n);
     FrameImage img;
     img.width = w, img.height = h;
     img.color.resize(n), img.depth.resize(n), img.normal.resize(n);
-    for (int y = 0; y < h; ++y) {  // GL rows are bottom-up, images top-down
-        const std::size_t src_row = std::size_t(h - 1 - y) * std::size_t(w),
-                          dst_row = std::size_t(y) * std::size_t(w);
+    for (int y = 0; y < h; ++y) {
+        const std::size_t row = std::size_t(y) * std::size_t(w);
         for (int x = 0; x < w; ++x) {
-            const glm::vec4& c = color[src_row + std::size_t(x)];
-            const glm::vec4& a = aux[src_row + std::size_t(x)];
+            const glm::vec4& c = color[row + std::size_t(x)];
+            const glm::vec4& a = aux[row + std::size_t(x)];
             const bool hit = c.w > 0.0f && (!s->aux_valid || a.w >= 0.0f);
-            img.color[dst_row + std::size_t(x)] = hit ? c : glm::vec4(0.0f);
-            img.depth[dst_row + std::size_t(x)] =
+            img.color[row + std::size_t(x)] = hit ? c : glm::vec4(0.0f);
+            img.depth[row + std::size_t(x)] =
                 hit && s->aux_valid ? a.w : std::numeric_limits<float>::infinity();
-            img.normal[dst_row + std::size_t(x)] = hit && s->aux_valid ? glm::vec3(a) : glm::vec3(0.0f);
+            img.normal[row + std::size_t(x)] = hit && s->aux_valid ? glm::vec3(a) : glm::vec3(0.0f);
         }
     }
     return img;
@@ -174,6 +237,11 @@ GLuint output_framebuffer(const ecs::Registry& registry) {
 GLuint output_color_texture(const ecs::Registry& registry) {
     const SplatRenderState* s = registry.try_resource<SplatRenderState>();
     return s ? s->color.id() : 0;
+}
+
+glm::ivec2 output_frame_size(const ecs::Registry& registry) {
+    const SplatRenderState* s = registry.try_resource<SplatRenderState>();
+    return s ? glm::ivec2(s->frame_width, s->frame_height) : glm::ivec2(0);
 }
 
 }  // namespace sffd::render

@@ -18,6 +18,7 @@
 
 #include <cstdint>
 #include <optional>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -58,7 +59,24 @@ struct RenderSettings {
     bool time_passes = false;         // glFinish after each pass and record CPU times in RenderStats
     bool aux_outputs = false;         // also write the normal + depth target (EXR Z, N; capture_frame's
                                       // depth/normal); off for interaction: it costs the preview ~10%
+    // Preview frames render width/d x height/d pixels (d = preview_divider, 1..8) into the corner of the
+    // full-size targets, and everything that reads the frame (the display copy, capture_frame, overlays
+    // through output_frame_size) scales it up, nearest: 1/d^2 of the fill for interaction where fill is
+    // what a frame costs (a CPU rasteriser). HQ frames always render at full size.
+    int preview_divider = 1;
 };
+
+// Registry resource (optional), kept by an application whose own UI covers part of the window (the
+// editor's panels): the rectangle where the frame is seen, in the UI's window units from the top left, of
+// a window window_width x window_height in those units (scaled to the framebuffer). display_system fills
+// the rest of the window with the background and copies only this rectangle: the UI draws over the rest.
+struct DisplayViewport {
+    float x = 0, y = 0, width = 0, height = 0;
+    float window_width = 0, window_height = 0;
+};
+// The framebuffer pixels (x, y, width, height; GL's lower-left origin) of a `width` x `height` window that
+// `v` covers: every pixel it touches, clipped to the window; the whole window when v has no window size.
+glm::ivec4 display_viewport_pixels(const DisplayViewport& v, int width, int height);
 
 // Registry resource written by render_system; pass times only when RenderSettings::time_passes.
 // The visible counts come from the GPU without waiting for it: they are those of frame `counts_frame`, the
@@ -92,7 +110,8 @@ void render_system(ecs::Registry& registry, const FrameContext& frame);
 
 // Display copy for a window (present phase, after every overlay has drawn into the output target): the
 // linear colour target over the background, sRGB-encoded into an RGBA8 texture, published as the
-// app::PresentSource that present_blit_system shows. Headless contexts skip it.
+// app::PresentSource that present_blit_system shows; only inside the DisplayViewport when there is one.
+// Headless contexts skip it.
 void display_system(ecs::Registry& registry, const FrameContext& frame);
 
 // Reads the last rendered frame back (call after render_system, same context). Depth and normals only
@@ -103,6 +122,12 @@ Result<FrameImage> capture_frame(ecs::Registry& registry);
 // normal+depth, depth attachment), for overlays and presenting; 0 before the first frame.
 GLuint output_framebuffer(const ecs::Registry& registry);
 GLuint output_color_texture(const ecs::Registry& registry);
+// The pixels of those targets the last frame covers, from their lower-left corner: the targets' size, or
+// less for a preview frame with RenderSettings::preview_divider > 1. Overlays draw into this rectangle.
+glm::ivec2 output_frame_size(const ecs::Registry& registry);
+// The output colour target as the window shows it before the display copy (straight linear colour, the
+// overlays included, alpha > 0 where anything was drawn), top row first, scaled up to the targets' size.
+Result<std::vector<glm::vec4>> capture_output_color(ecs::Registry& registry);
 
 // Frees the state's GL objects (while the context is current): erases the SplatRenderState resource.
 void release_render_state(ecs::Registry& registry);

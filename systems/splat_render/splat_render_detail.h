@@ -151,8 +151,9 @@ struct SplatRenderState {
     gfx::VertexArray records_vao;  // SplatRecord[] as vertex attributes 0..5 (buffer bound per cloud)
     float max_point_size = 1.0f;
 
-    int width = 0, height = 0;
-    bool aux_valid = false;  // the last frame wrote the normal + depth target
+    int width = 0, height = 0;              // the targets
+    int frame_width = 0, frame_height = 0;  // what the last frame covered of them (preview_divider)
+    bool aux_valid = false;                 // the last frame wrote the normal + depth target
     gfx::Texture color, aux, depth, accum_color, accum_normal, accum_material;
     gfx::Framebuffer output_fbo, accum_fbo, depth_fbo;
     // RGBA8 sRGB-encoded: only when presenting to a window of another size than the frame (the display
@@ -185,7 +186,8 @@ struct SplatRenderState {
     ComputeRaster compute_raster;  // compute rasteriser (compute_raster.h), compiled on first use
 
     std::unordered_map<ecs::Entity, CloudGpu> clouds;
-    bool software = false;  // the context is a software rasterizer (gfx::software_rasterizer)
+    bool software = false;      // the context is a software rasterizer (gfx::software_rasterizer)
+    bool preview_warm = false;  // the preview programs have drawn once (warm_preview_programs)
     bool cull_over_limit =
         false;  // some cloud's compute-cull buffers exceed the storage block size (storage_limits.h)
     std::uint32_t cpu_splat_passes = 0;  // this frame's loops over a cloud's splats on the CPU (RenderStats)
@@ -268,6 +270,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
 // splat_passes.cpp: the preview pass and the three HQ passes.
 void begin_splat_passes(SplatRenderState& s, const FramePlan& plan);
 void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan);
+void warm_preview_programs(SplatRenderState& s, const FramePlan& plan);
 void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect);
 void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, RenderStats& stats);
 bool clouds_differ_in_material(const FramePlan& plan);

@@ -524,6 +524,35 @@ TEST(EditorSystem, PreviewWhileDraggingRefinesToHqAtRest) {
     EXPECT_EQ(ps.quality, render::Quality::preview);
 }
 
+// Half-resolution preview: the divider is 2 only in the frames that preview because of movement, never at
+// rest and never for a view whose rest quality is preview (that would halve every frame).
+TEST(EditorSystem, HalfResolutionPreviewOnlyWhileMoving) {
+    Scene s;
+    auto& settings = s.reg.set_resource<render::RenderSettings>();
+    settings.quality = render::Quality::hq;
+    s.state->half_resolution_preview = true;
+    s.run({});
+    EXPECT_EQ(settings.preview_divider, 1) << "still";
+    s.run({Scene::move({300, 300}), Scene::press(0, MouseButton::right)});
+    s.run({Scene::move({340, 310})});
+    ASSERT_EQ(settings.quality, render::Quality::preview);
+    EXPECT_EQ(settings.preview_divider, 2) << "orbiting";
+    s.state->half_resolution_preview = false;
+    s.run({Scene::move({360, 310})});
+    EXPECT_EQ(settings.preview_divider, 1) << "switched off while moving";
+    s.state->half_resolution_preview = true;
+    s.run({Scene::release(MouseButton::right)});
+    for (int f = 0; f <= s.state->refine_after; ++f) s.run({});
+    EXPECT_EQ(settings.quality, render::Quality::hq);
+    EXPECT_EQ(settings.preview_divider, 1) << "refined at rest";
+    Scene p;
+    auto& ps = p.reg.set_resource<render::RenderSettings>();
+    ps.quality = render::Quality::preview;
+    p.state->half_resolution_preview = true;
+    p.run({Scene::move({300, 300}), Scene::press(0, MouseButton::right), Scene::move({350, 300})});
+    EXPECT_EQ(ps.preview_divider, 1) << "a view that rests in preview keeps its resolution";
+}
+
 // A click on a 3D Gaussian selects its cloud entity, through the same picking phase.
 TEST(EditorSystem, ClickOnAGaussianSelectsItsCloud) {
     Scene s;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <utility>
 #include <vector>
 
 #include "runtime/gfx/splat_store.h"
@@ -58,6 +59,47 @@ TEST_F(Coverage_, SphereStretchedTwiceByALatticeStaysClosed) {
         EXPECT_EQ(c.holes, 0) << (q == Quality::hq ? "hq" : "preview");
         EXPECT_EQ(c.far_side, 0) << (q == Quality::hq ? "hq" : "preview");
     }
+}
+
+// A half-resolution preview (RenderSettings::preview_divider 2) renders a quarter of the pixels and is read
+// back at full size, each frame pixel as a 2x2 block: the same closed sphere in the same place, depth and
+// normals scaled up with the colour, and HQ frames unaffected by the setting.
+TEST_F(Coverage_, HalfResolutionPreviewShowsTheSameSphereAtFullSize) {
+    const Camera cam = add_camera(6.0);
+    add_light({-1.0f, -0.3f, -0.5f});
+    add_cloud(fibonacci_sphere(paper_splats));
+    const FrameImage full = render(Quality::preview, 512, 384);
+    const FrameImage hq = render(Quality::hq, 512, 384);
+    preview_divider = 2;
+    const FrameImage half = render(Quality::preview, 512, 384);
+    ASSERT_EQ(half.width, 512);
+    ASSERT_EQ(half.height, 384);
+    const Coverage c = ellipsoid_coverage(half, cam, glm::dvec3(1.0));
+    const Coverage full_c = ellipsoid_coverage(full, cam, glm::dvec3(1.0));
+    EXPECT_GT(c.inside, 15000);
+    EXPECT_NEAR(c.inside, full_c.inside, 0.01 * full_c.inside) << "the sphere's pixels, at full size";
+    EXPECT_EQ(c.holes, 0);
+    EXPECT_EQ(c.far_side, 0);
+    int blocks = 0, uniform = 0, covered_both = 0, covered_either = 0;
+    for (int y = 0; y + 1 < half.height; y += 2)
+        for (int x = 0; x + 1 < half.width; x += 2) {
+            const std::size_t i = half.index(x, y);
+            bool same = true;
+            for (const auto& [dx, dy] : {std::pair{1, 0}, std::pair{0, 1}, std::pair{1, 1}}) {
+                const std::size_t j = half.index(x + dx, y + dy);
+                same &= half.color[j] == half.color[i] && half.normal[j] == half.normal[i] &&
+                        (half.depth[j] == half.depth[i]);
+            }
+            ++blocks, uniform += same ? 1 : 0;
+        }
+    EXPECT_EQ(uniform, blocks) << "every frame pixel is a 2x2 block";
+    for (std::size_t i = 0; i < half.color.size(); ++i) {
+        const bool a = full.color[i].w > 0.0f, b = half.color[i].w > 0.0f;
+        covered_both += a && b ? 1 : 0, covered_either += a || b ? 1 : 0;
+    }
+    EXPECT_GT(double(covered_both) / covered_either, 0.99) << "the same silhouette, to its edge pixels";
+    const FrameImage hq_divided = render(Quality::hq, 512, 384);
+    EXPECT_EQ(hq_divided.color, hq.color) << "HQ frames always render at full size";
 }
 
 TEST_F(Coverage_, FixedRadiusSplatsWouldOpenHolesUnderTheSameStretch) {

@@ -74,6 +74,7 @@ protected:
         s.quality = quality, s.width = w, s.height = h, s.culling = culling, s.time_passes = true;
         s.cull_path = path, s.raster_path = raster;
         s.aux_outputs = true;
+        s.preview_divider = preview_divider;
         reg.set_resource<RenderSettings>(s);
         residency_system(reg, FrameContext{});
         render_system(reg, FrameContext{});
@@ -91,6 +92,7 @@ protected:
     }
 
     ecs::Registry reg;
+    int preview_divider = 1;  // RenderSettings::preview_divider of the frames render() draws
 };
 
 // World-space ray through the centre of pixel (x, y) (row 0 at the top), scaled so that its component

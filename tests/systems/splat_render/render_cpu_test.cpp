@@ -16,6 +16,7 @@
 #include "systems/splat_render/cpu_cull.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_pack.h"
+#include "systems/splat_render/splat_render.h"
 #include "tests/systems/splat_render/test_scenes.h"
 
 namespace fs = std::filesystem;
@@ -55,6 +56,22 @@ TEST(RenderSrgb, MatchesTheStandardCurve) {
     EXPECT_NEAR(linear_to_srgb(0.5f), 0.735357f, 1e-5);  // IEC 61966-2-1
     EXPECT_EQ(encode_srgb8(0.2158605f), 128);
     for (float v = 0.0f; v <= 1.0f; v += 0.01f) EXPECT_NEAR(srgb_to_linear(linear_to_srgb(v)), v, 1e-5);
+}
+
+// The window part the display copy fills: UI units scaled to framebuffer pixels (a HiDPI window has two per
+// unit), every touched pixel, rows flipped to GL's bottom-up order, clipped; no window size: everything.
+TEST(RenderDisplayViewport, ScalesFlipsAndClipsToTheWindow) {
+    // The editor's layout at 1280x720: columns 258 and 320 wide, menu 19 high, the Timeline from y = 622.
+    const DisplayViewport view{258.0f, 19.0f, 702.0f, 603.0f, 1280.0f, 720.0f};
+    EXPECT_EQ(display_viewport_pixels(view, 1280, 720), glm::ivec4(258, 98, 702, 603));
+    EXPECT_EQ(display_viewport_pixels(view, 2560, 1440), glm::ivec4(516, 196, 1404, 1206)) << "HiDPI";
+    const DisplayViewport fractional{10.5f, 0.25f, 20.0f, 10.0f, 100.0f, 50.0f};
+    EXPECT_EQ(display_viewport_pixels(fractional, 100, 50), glm::ivec4(10, 39, 21, 11)) << "touched pixels";
+    const DisplayViewport outside{-20.0f, 40.0f, 200.0f, 30.0f, 100.0f, 50.0f};
+    EXPECT_EQ(display_viewport_pixels(outside, 100, 50), glm::ivec4(0, 0, 100, 10)) << "clipped";
+    EXPECT_EQ(display_viewport_pixels(DisplayViewport{}, 64, 32), glm::ivec4(0, 0, 64, 32)) << "no UI";
+    const DisplayViewport nan_size{0.0f, 0.0f, 10.0f, 10.0f, std::numeric_limits<float>::quiet_NaN(), 50.0f};
+    EXPECT_EQ(display_viewport_pixels(nan_size, 64, 32), glm::ivec4(0, 0, 64, 32));
 }
 
 TEST(RenderImageIo, PngRoundTripKeepsSrgbBytesAndAlpha) {
