@@ -412,6 +412,8 @@ Status load_gltf_model(const fs::path& path, tinygltf::Model& m) {
     } catch (const std::exception& e) {  // tinygltf's JSON parser may throw on hostile input
         return make_error(src + ": invalid glTF: " + e.what());
     }
+    // Everything tinygltf keeps was copied out of the mapping by now (buffers, images' bytes).
+    if (file->changed()) return make_error(src + ": " + kChangedWhileRead);
     if (!ok || m.asset.version.rfind('1', 0) == 0) {
         if (const std::string v = gltf1_version(json_text); !v.empty()) return refuse_gltf1(src, v);
     }

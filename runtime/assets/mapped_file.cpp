@@ -20,7 +20,10 @@ Result<MappedFile> MappedFile::open(const std::filesystem::path& path, std::uint
         std::uint64_t(st.st_size) <= limit) {
         // MAP_POPULATE: the file's pages are mapped in one pass instead of a fault per 4 KiB while parsing.
         void* p = ::mmap(nullptr, std::size_t(st.st_size), PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
-        if (p != MAP_FAILED) f.m_map = static_cast<const char*>(p), f.m_size = std::size_t(st.st_size);
+        if (p != MAP_FAILED) {
+            f.m_map = static_cast<const char*>(p), f.m_size = std::size_t(st.st_size);
+            f.m_guard = MappingGuard(p, f.m_size);
+        }
     }
     if (fd >= 0) ::close(fd);
     if (f.m_map) return f;
@@ -31,6 +34,7 @@ Result<MappedFile> MappedFile::open(const std::filesystem::path& path, std::uint
 }
 
 void MappedFile::release() {
+    m_guard = MappingGuard();
     if (m_map) ::munmap(const_cast<char*>(m_map), m_size);
     m_map = nullptr, m_size = 0;
 }
@@ -38,12 +42,14 @@ void MappedFile::release() {
 MappedFile::MappedFile(MappedFile&& o) noexcept
     : m_map(std::exchange(o.m_map, nullptr)),
       m_size(std::exchange(o.m_size, 0)),
+      m_guard(std::move(o.m_guard)),
       m_copy(std::move(o.m_copy)) {}
 
 MappedFile& MappedFile::operator=(MappedFile&& o) noexcept {
     if (this != &o) {
         release();
         m_map = std::exchange(o.m_map, nullptr), m_size = std::exchange(o.m_size, 0);
+        m_guard = std::move(o.m_guard);
         m_copy = std::move(o.m_copy);
     }
     return *this;

@@ -7,6 +7,7 @@
 #include <string>
 #include <string_view>
 
+#include "runtime/assets/mapping_guard.h"
 #include "runtime/core/result.h"
 
 namespace sffd::assets {
@@ -20,6 +21,9 @@ public:
     std::string_view bytes() const {
         return m_map ? std::string_view(m_map, m_size) : std::string_view(m_copy);
     }
+    // The mapped file shrank while it was read (mapping_guard.h): the bytes read past its new end were
+    // zeros. Ask once the parse is done; a reader then refuses the file.
+    bool changed() const { return m_guard.changed(); }
 
     MappedFile() = default;
     MappedFile(MappedFile&& o) noexcept;
@@ -32,6 +36,7 @@ private:
     void release();
     const char* m_map = nullptr;
     std::size_t m_size = 0;
+    MappingGuard m_guard;
     std::string m_copy;
 };
 

@@ -61,6 +61,7 @@ Result<MappedElement> MappedElement::map(const std::filesystem::path& path, cons
     if (p == MAP_FAILED) return make_error(name + ": cannot map");
     MappedElement m;
     m.m_base = static_cast<const unsigned char*>(p);
+    m.m_guard = assets::MappingGuard(p, size);
     m.m_size = size;
     const std::size_t header_bytes = header_end(
         std::string_view(reinterpret_cast<const char*>(m.m_base), std::min(size, kMaxHeaderBytes)));
@@ -95,6 +96,7 @@ std::size_t MappedElement::property_offset(int property) const {
 }
 
 void MappedElement::release() {
+    m_guard = assets::MappingGuard();
     if (m_base) ::munmap(const_cast<unsigned char*>(m_base), m_size);
     m_base = nullptr, m_size = 0;
 }
@@ -105,7 +107,8 @@ MappedElement::MappedElement(MappedElement&& o) noexcept
       m_base(std::exchange(o.m_base, nullptr)),
       m_size(std::exchange(o.m_size, 0)),
       m_offset(o.m_offset),
-      m_row_size(o.m_row_size) {}
+      m_row_size(o.m_row_size),
+      m_guard(std::move(o.m_guard)) {}
 
 MappedElement& MappedElement::operator=(MappedElement&& o) noexcept {
     if (this != &o) {
@@ -113,6 +116,7 @@ MappedElement& MappedElement::operator=(MappedElement&& o) noexcept {
         m_header = std::move(o.m_header), m_index = o.m_index;
         m_base = std::exchange(o.m_base, nullptr), m_size = std::exchange(o.m_size, 0);
         m_offset = o.m_offset, m_row_size = o.m_row_size;
+        m_guard = std::move(o.m_guard);
     }
     return *this;
 }

@@ -13,6 +13,7 @@
 #include <filesystem>
 #include <string_view>
 
+#include "runtime/assets/mapping_guard.h"
 #include "runtime/assets/ply.h"
 #include "runtime/core/result.h"
 
@@ -39,6 +40,9 @@ public:
     std::uint64_t count() const { return element().count; }
     // Byte offset of each property in a row (properties in element order).
     std::size_t property_offset(int property) const;
+    // The file shrank while it was read (mapping_guard.h): rows past its new end read as zeros. Ask once
+    // the decode is done; the reader then refuses the file.
+    bool changed() const { return m_guard.changed(); }
 
 private:
     MappedElement() = default;
@@ -49,6 +53,7 @@ private:
     std::size_t m_size = 0;
     std::size_t m_offset = 0;  // first byte of the element's rows
     std::size_t m_row_size = 0;
+    assets::MappingGuard m_guard;
 };
 
 }  // namespace sffd::ply

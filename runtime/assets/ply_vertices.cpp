@@ -102,6 +102,7 @@ std::optional<Status> read_ply_vertices_mapped(const std::filesystem::path& path
                         glm::vec4(value(row, uf[0]), value(row, uf[1]), value(row, uf[2]), value(row, uf[3]));
             }
         });
+    if (m->changed()) return make_error(g.source + ": " + kChangedWhileRead);
     if (const std::size_t r = first_bad.load(); r < n)
         return make_error(g.source + ": vertex " + std::to_string(r) + " has a non-finite colour");
     return Status{};

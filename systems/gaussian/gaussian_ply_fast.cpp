@@ -113,6 +113,7 @@ std::optional<Status> read_ply_float32(const std::filesystem::path& path, const 
                           opacity_inf += inf.opacity;
                           scale_inf += inf.scale;
                       });
+    if (m->changed()) return make_error(name + ": " + assets::kChangedWhileRead);
     if (const std::size_t r = first_bad.load(); r < n) {
         InfinityCount ignored;
         return convert(rows + r * stride, o, l, e, r, name, out, r, ignored);
