@@ -3,9 +3,9 @@
 // machine, a table on stdout and JSON (--json). The claims are listed once, in the top README's
 // "Performance" section and in make_rows() below. Nothing here times code itself: frame and deformation rows
 // are profiled runs (run_profile, the engine's own schedule and the profiler's scopes), editor rows are
-// `splatffd view --replay --json` child processes, read rows time load_scene three times per file, and the anchor
-// is Blender's lattice modifier timing itself. Speed is reported, never asserted: the suite's test checks
-// the JSON's shape and that every row has a value or a reason.
+// `splatffd view --replay --json` child processes, read rows time load_scene three times per file, and the
+// anchor is Blender's lattice modifier timing itself. Speed is reported, never asserted: the suite's test
+// checks the JSON's shape and that every row has a value or a reason.
 #include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
