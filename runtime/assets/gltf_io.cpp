@@ -105,26 +105,16 @@ Result<Image> gltf_image(const tinygltf::Model& m, int texture, const std::strin
 
 // An attribute's values: floats for our splat nodes (copied to float arrays as stored: no double copy of
 // a 4.5M-splat cloud), doubles for everything transformed to world space.
+// Our splat nodes' attributes are decoded straight into the cloud's arrays: `direct` counts their floats
+// and the Attr itself holds none.
 struct Attr {
     std::vector<double> d;
     std::vector<float> f;
-    std::size_t size() const { return f.empty() ? d.size() : f.size(); }
+    std::size_t direct = 0;
+    std::size_t size() const { return direct ? direct : f.empty() ? d.size() : f.size(); }
     bool empty() const { return size() == 0; }
     double operator[](std::size_t i) const { return f.empty() ? d[i] : double(f[i]); }
 };
-
-// Copies float triples / pairs / quads into an array of glm vectors, in parallel into fresh memory.
-template <class V>
-void fill_vectors(const std::vector<float>& src, std::vector<V>& dst) {
-    constexpr std::size_t k = sizeof(V) / sizeof(float);
-    dst.clear();
-    resize_for_overwrite(dst, src.size() / k);
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, dst.size(), 65536),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                          std::memcpy(static_cast<void*>(dst.data() + r.begin()), src.data() + r.begin() * k,
-                                      (r.end() - r.begin()) * sizeof(V));
-                      });
-}
 
 // Appends one primitive's data to `g` (world transform `world`); for our splat nodes `exact` receives
 // the stored arrays untouched instead.
@@ -142,12 +132,18 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     };
     const int ip = attr("POSITION");
     if (ip < 0) return make_error(src + ": primitive without POSITION");
-    auto read = [&](int index, int comps, const char* name) -> Result<Attr> {
+    if (exact) {  // what the primitive lacks stays empty
+        SplatCloud& c = *exact;
+        c.positions.clear(), c.normals.clear(), c.axis_u.clear(), c.axis_v.clear(), c.uvs.clear();
+        c.uv_axes.clear();
+    }
+    // `into`: the exact cloud's array for this attribute (decoded there, the first-open cost of a large GLB
+    // being mostly fresh memory); unused for other nodes.
+    auto read = [&](int index, int comps, const char* name, auto* into) -> Result<Attr> {
         Attr a;
         if (exact) {
-            auto r = read_gltf_accessor_float(m, index, comps, src, name);
-            if (!r) return r.error();
-            a.f = std::move(*r);
+            if (Status st = read_gltf_accessor_into(m, index, src, name, *into); !st) return st.error();
+            a.direct = into->size() * static_cast<std::size_t>(comps);
         } else {
             auto r = read_gltf_accessor(m, index, comps, src, name);
             if (!r) return r.error();
@@ -155,7 +151,8 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
         }
         return a;
     };
-    auto pos = read(ip, 3, "POSITION");
+    SplatCloud* const x = exact;
+    auto pos = read(ip, 3, "POSITION", x ? &x->positions : nullptr);
     if (!pos) return pos.error();
     const std::size_t n = pos->size() / 3;
     const std::size_t base = g.positions.size();
@@ -166,7 +163,7 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     std::vector<double> col;
     int col_components = 0;
     if (int i = attr("NORMAL"); i >= 0) {
-        auto r = read(i, 3, "NORMAL");
+        auto r = read(i, 3, "NORMAL", x ? &x->normals : nullptr);
         if (!r) return r.error();
         nrm = std::move(*r);
     }
@@ -181,24 +178,25 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
         col_components = comps;
     }
     if (int i = attr("TEXCOORD_0"); i >= 0) {
-        auto r = read(i, 2, "TEXCOORD_0");
+        auto r = read(i, 2, "TEXCOORD_0", x ? &x->uvs : nullptr);
         if (!r) return r.error();
         uv = std::move(*r);
     }
     if (int iu = attr("_AXIS_U"), iv = attr("_AXIS_V"); iu >= 0 && iv >= 0) {
-        auto ru = read(iu, 3, "_AXIS_U");
+        auto ru = read(iu, 3, "_AXIS_U", x ? &x->axis_u : nullptr);
         if (!ru) return ru.error();
-        auto rv = read(iv, 3, "_AXIS_V");
+        auto rv = read(iv, 3, "_AXIS_V", x ? &x->axis_v : nullptr);
         if (!rv) return rv.error();
         au = std::move(*ru);
         av = std::move(*rv);
         // The uv frame along those axes (SplatCloud::uv_axes): du/ds, dv/ds, du/dt, dv/dt.
         if (int i = attr("_UV_AXES"); i >= 0) {
-            auto r = read(i, 4, "_UV_AXES");
+            auto r = read(i, 4, "_UV_AXES", x ? &x->uv_axes : nullptr);
             if (!r) return r.error();
             uvf = std::move(*r);
-            for (std::size_t k = 0; k < uvf.size(); ++k)
-                if (!std::isfinite(uvf[k])) return make_error(src + ": _UV_AXES has a non-finite value");
+            if (!uvf.direct)  // a direct decode refuses non-finite values itself
+                for (std::size_t k = 0; k < uvf.size(); ++k)
+                    if (!std::isfinite(uvf[k])) return make_error(src + ": _UV_AXES has a non-finite value");
             if (uvf.size() / 4 != n) return make_error(src + ": attribute counts differ from POSITION");
         }
     }
@@ -221,12 +219,6 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     if (exact) {
         SplatCloud& c = *exact;
         SplatMaterial& cm = *exact_material;
-        fill_vectors(pos->f, c.positions);
-        fill_vectors(nrm.f, c.normals);
-        fill_vectors(au.f, c.axis_u);
-        fill_vectors(av.f, c.axis_v);
-        fill_vectors(uv.f, c.uvs);
-        fill_vectors(uvf.f, c.uv_axes);
         c.colors.clear();
         resize_for_overwrite(c.colors, col.empty() ? 0 : n);
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, c.colors.size(), 16384),

@@ -81,8 +81,14 @@ Status load_gltf_model(const std::filesystem::path& path, tinygltf::Model& model
 // (unsigned) byte, (unsigned) short and unsigned int components. Errors read "src: what: problem".
 Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& model, int index, int components,
                                                const std::string& src, const std::string& what);
-// The same checks and messages, as floats (what splat arrays hold: no double copy of large attributes).
-Result<std::vector<float>> read_gltf_accessor_float(const tinygltf::Model& model, int index, int components,
-                                                    const std::string& src, const std::string& what);
+// The same checks and messages, as floats decoded straight into `dst` (replaced) as vectors of 2, 3 or 4
+// floats: what splat arrays hold, with no array in between (nor a double copy).
+// On an error `dst` holds no meaningful values.
+Status read_gltf_accessor_into(const tinygltf::Model& model, int index, const std::string& src,
+                               const std::string& what, std::vector<glm::vec2>& dst);
+Status read_gltf_accessor_into(const tinygltf::Model& model, int index, const std::string& src,
+                               const std::string& what, std::vector<glm::vec3>& dst);
+Status read_gltf_accessor_into(const tinygltf::Model& model, int index, const std::string& src,
+                               const std::string& what, std::vector<glm::vec4>& dst);
 
 }  // namespace sffd::assets

@@ -214,11 +214,12 @@ inline double component(const unsigned char* p, int type, bool normalized) {
     }
 }
 
-// The checks and the decode behind both read_gltf_accessor()s. Elements are decoded in parallel into
-// fresh memory; each range stops at its first non-finite element, and the first in order is reported.
-template <class T>
-Result<std::vector<T>> decode_accessor(const tinygltf::Model& m, int index, int components,
-                                       const std::string& src, const std::string& what) {
+// The checks and the decode behind read_gltf_accessor() and read_gltf_accessor_into(). Elements are decoded
+// in parallel into the memory `storage(values)` gives for `values` Ts (called once, only when there are
+// elements); each range stops at its first non-finite element, and the first in order is reported.
+template <class T, class Storage>
+Status decode_accessor_to(const tinygltf::Model& m, int index, int components, const std::string& src,
+                          const std::string& what, Storage&& storage) {
     auto fail = [&](const std::string& why) { return make_error(src + ": " + what + ": " + why); };
     if (index < 0 || static_cast<std::size_t>(index) >= m.accessors.size())
         return fail("accessor index out of range");
@@ -229,8 +230,7 @@ Result<std::vector<T>> decode_accessor(const tinygltf::Model& m, int index, int 
     const std::size_t csize = component_size(a.componentType);
     if (csize == 0) return fail("unsupported component type " + std::to_string(a.componentType));
     const std::size_t elem = csize * static_cast<std::size_t>(components);
-    std::vector<T> out;
-    if (a.count == 0) return out;
+    if (a.count == 0) return {};
     if (a.bufferView < 0 || static_cast<std::size_t>(a.bufferView) >= m.bufferViews.size())
         return fail("accessor has no valid bufferView");
     const tinygltf::BufferView& bv = m.bufferViews[static_cast<std::size_t>(a.bufferView)];
@@ -246,7 +246,7 @@ Result<std::vector<T>> decode_accessor(const tinygltf::Model& m, int index, int 
     if (a.count > avail / stride + 1 || (a.count - 1) * stride + elem > avail)
         return fail("accessor exceeds its bufferView");
     const std::size_t comps = static_cast<std::size_t>(components);
-    resize_for_overwrite(out, a.count * comps);
+    T* const out = storage(a.count * comps);
     const unsigned char* base = data.data() + bv.byteOffset + a.byteOffset;
     const int type = a.componentType;
     const bool normalized = a.normalized;
@@ -271,7 +271,31 @@ Result<std::vector<T>> decode_accessor(const tinygltf::Model& m, int index, int 
                       });
     if (const std::size_t i = first_bad.load(); i < a.count)
         return fail("non-finite value at element " + std::to_string(i));
+    return {};
+}
+
+template <class T>
+Result<std::vector<T>> decode_accessor(const tinygltf::Model& m, int index, int components,
+                                       const std::string& src, const std::string& what) {
+    std::vector<T> out;
+    const Status st = decode_accessor_to<T>(m, index, components, src, what, [&](std::size_t values) {
+        resize_for_overwrite(out, values);
+        return out.data();
+    });
+    if (!st) return st.error();
     return out;
+}
+
+// Into glm vectors of float components (tightly packed: the layout fill_vectors relied on too).
+template <class V>
+Status decode_accessor_vectors(const tinygltf::Model& m, int index, const std::string& src,
+                               const std::string& what, std::vector<V>& dst) {
+    static_assert(sizeof(V) == V::length() * sizeof(float));
+    dst.clear();
+    return decode_accessor_to<float>(m, index, V::length(), src, what, [&](std::size_t values) {
+        resize_for_overwrite(dst, values / std::size_t(V::length()));
+        return reinterpret_cast<float*>(dst.data());
+    });
 }
 
 }  // namespace
@@ -281,9 +305,17 @@ Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& m, int ind
     return decode_accessor<double>(m, index, components, src, what);
 }
 
-Result<std::vector<float>> read_gltf_accessor_float(const tinygltf::Model& m, int index, int components,
-                                                    const std::string& src, const std::string& what) {
-    return decode_accessor<float>(m, index, components, src, what);
+Status read_gltf_accessor_into(const tinygltf::Model& m, int index, const std::string& src,
+                               const std::string& what, std::vector<glm::vec2>& dst) {
+    return decode_accessor_vectors(m, index, src, what, dst);
+}
+Status read_gltf_accessor_into(const tinygltf::Model& m, int index, const std::string& src,
+                               const std::string& what, std::vector<glm::vec3>& dst) {
+    return decode_accessor_vectors(m, index, src, what, dst);
+}
+Status read_gltf_accessor_into(const tinygltf::Model& m, int index, const std::string& src,
+                               const std::string& what, std::vector<glm::vec4>& dst) {
+    return decode_accessor_vectors(m, index, src, what, dst);
 }
 
 namespace {
