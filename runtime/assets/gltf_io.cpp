@@ -103,17 +103,15 @@ Result<Image> gltf_image(const tinygltf::Model& m, int texture, const std::strin
     return out;
 }
 
-// An attribute's values: floats for our splat nodes (copied to float arrays as stored: no double copy of
-// a 4.5M-splat cloud), doubles for everything transformed to world space.
-// Our splat nodes' attributes are decoded straight into the cloud's arrays: `direct` counts their floats
-// and the Attr itself holds none.
+// An attribute's values: doubles for everything transformed to world space. Our splat nodes' attributes
+// are decoded as stored, floats straight into the cloud's arrays (no copy of a 4.5M-splat cloud): then
+// `direct` counts their floats and `d` stays empty.
 struct Attr {
     std::vector<double> d;
-    std::vector<float> f;
     std::size_t direct = 0;
-    std::size_t size() const { return direct ? direct : f.empty() ? d.size() : f.size(); }
+    std::size_t size() const { return direct ? direct : d.size(); }
     bool empty() const { return size() == 0; }
-    double operator[](std::size_t i) const { return f.empty() ? d[i] : double(f[i]); }
+    double operator[](std::size_t i) const { return d[i]; }
 };
 
 // Appends one primitive's data to `g` (world transform `world`); for our splat nodes `exact` receives

@@ -23,6 +23,7 @@ struct Slot {
 Slot g_slots[kSlots];
 std::atomic<bool> g_claim[kSlots];  // slot ownership, taken by registration only
 struct sigaction g_previous {};
+std::uintptr_t g_page = 4096;  // set before the handler is installed (sysconf is not for signal handlers)
 
 void on_sigbus(int sig, siginfo_t* info, void* context) {
     const auto addr = reinterpret_cast<std::uintptr_t>(info->si_addr);
@@ -31,9 +32,8 @@ void on_sigbus(int sig, siginfo_t* info, void* context) {
         if (end == 0 || addr < s.begin.load(std::memory_order_relaxed) || addr >= end) continue;
         // mmap is a plain system call (async-signal-safe in practice on Linux, as sigaction's users rely
         // on): the page becomes private zeros and the faulting load is retried against it.
-        const auto page = std::uintptr_t(::sysconf(_SC_PAGESIZE));
-        void* at = reinterpret_cast<void*>(addr / page * page);
-        if (::mmap(at, page, PROT_READ, MAP_PRIVATE | MAP_ANONYMOUS | MAP_FIXED, -1, 0) != MAP_FAILED) {
+        void* at = reinterpret_cast<void*>(addr / g_page * g_page);
+        if (::mmap(at, g_page, PROT_READ, MAP_PRIVATE | MAP_ANONYMOUS | MAP_FIXED, -1, 0) != MAP_FAILED) {
             s.hit.store(true, std::memory_order_release);
             return;
         }
@@ -51,6 +51,7 @@ void on_sigbus(int sig, siginfo_t* info, void* context) {
 void install_once() {
     static std::once_flag once;
     std::call_once(once, [] {
+        g_page = std::uintptr_t(::sysconf(_SC_PAGESIZE));
         struct sigaction sa {};
         sa.sa_sigaction = on_sigbus;
         sa.sa_flags = SA_SIGINFO;

@@ -65,6 +65,15 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     }
 }
 
+// The preview programs over every drawn cloud, into the output targets (preview_pass, the warm-up).
+void draw_preview_clouds(const SplatRenderState& s, const FramePlan& plan) {
+    glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
+    glDepthFunc(GL_LESS);
+    const int aux = plan.settings.aux_outputs ? 1 : 0;
+    for (const CloudGpu* gpu : plan.drawn)
+        draw_cloud(s, s.preview[gpu->texture ? 1 : 0][aux], *gpu, &s.preview[0][aux][0]);
+}
+
 }  // namespace
 
 // Clears the output targets and sets the state every splat pass shares.
@@ -94,12 +103,8 @@ void begin_splat_passes(SplatRenderState& s, const FramePlan& plan) {
 
 // Preview: one pass of opaque ray-cast ellipses into the output targets.
 void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan) {
-    glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
-    glDepthFunc(GL_LESS);
     auto scope = profiling::gpu_scope(reg, "render.preview");
-    const int aux = plan.settings.aux_outputs ? 1 : 0;
-    for (const CloudGpu* gpu : plan.drawn)
-        draw_cloud(s, s.preview[gpu->texture ? 1 : 0][aux], *gpu, &s.preview[0][aux][0]);
+    draw_preview_clouds(s, plan);
 }
 
 // Drivers may compile a program's fragment code for the state it first draws with (llvmpipe does, at
@@ -110,13 +115,9 @@ void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan
 void warm_preview_programs(SplatRenderState& s, const FramePlan& plan) {
     if (s.preview_warm || plan.drawn.empty()) return;
     s.preview_warm = true;
-    glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
-    glDepthFunc(GL_LESS);
     glEnable(GL_SCISSOR_TEST);
     glScissor(0, 0, 1, 1);
-    const int aux = plan.settings.aux_outputs ? 1 : 0;
-    for (const CloudGpu* gpu : plan.drawn)
-        draw_cloud(s, s.preview[gpu->texture ? 1 : 0][aux], *gpu, &s.preview[0][aux][0]);
+    draw_preview_clouds(s, plan);
     const float far_depth = 1.0f;
     glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 0, &plan.common.background.x);
     glClearNamedFramebufferfv(s.output_fbo.id(), GL_DEPTH, 0, &far_depth);

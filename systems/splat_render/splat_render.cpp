@@ -234,11 +234,6 @@ GLuint output_framebuffer(const ecs::Registry& registry) {
     return s ? s->output_fbo.id() : 0;
 }
 
-GLuint output_color_texture(const ecs::Registry& registry) {
-    const SplatRenderState* s = registry.try_resource<SplatRenderState>();
-    return s ? s->color.id() : 0;
-}
-
 glm::ivec2 output_frame_size(const ecs::Registry& registry) {
     const SplatRenderState* s = registry.try_resource<SplatRenderState>();
     return s ? glm::ivec2(s->frame_width, s->frame_height) : glm::ivec2(0);

@@ -121,7 +121,6 @@ Result<FrameImage> capture_frame(ecs::Registry& registry);
 // The offscreen framebuffer holding the last frame (colour attachment 0 linear RGBA16F, attachment 1
 // normal+depth, depth attachment), for overlays and presenting; 0 before the first frame.
 GLuint output_framebuffer(const ecs::Registry& registry);
-GLuint output_color_texture(const ecs::Registry& registry);
 // The pixels of those targets the last frame covers, from their lower-left corner: the targets' size, or
 // less for a preview frame with RenderSettings::preview_divider > 1. Overlays draw into this rectangle.
 glm::ivec2 output_frame_size(const ecs::Registry& registry);
