@@ -19,6 +19,7 @@
 
 #include "runtime/assets/fresh_array.h"
 #include "runtime/assets/gltf_detail.h"
+#include "runtime/assets/gltf_model.h"
 #include "runtime/core/file_io.h"
 #include "runtime/core/log.h"
 #include "runtime/scene/camera.h"
@@ -116,9 +117,10 @@ struct Attr {
 
 // Appends one primitive's data to `g` (world transform `world`); for our splat nodes `exact` receives
 // the stored arrays untouched instead.
-Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim, const glm::dmat4& world,
+Status read_primitive(const GltfModel& model, const tinygltf::Primitive& prim, const glm::dmat4& world,
                       const std::string& src, Geometry& g, std::unordered_map<int, int>& material_map,
                       SplatCloud* exact, SplatMaterial* exact_material) {
+    const tinygltf::Model& m = model.gltf;
     if (prim.mode != TINYGLTF_MODE_POINTS && prim.mode != TINYGLTF_MODE_TRIANGLES &&
         prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP && prim.mode != TINYGLTF_MODE_TRIANGLE_FAN) {
         log::warn(src, ": skipping a primitive with mode ", prim.mode, " (lines)");
@@ -140,10 +142,10 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     auto read = [&](int index, int comps, const char* name, auto* into) -> Result<Attr> {
         Attr a;
         if (exact) {
-            if (Status st = read_gltf_accessor_into(m, index, src, name, *into); !st) return st.error();
+            if (Status st = read_gltf_accessor_into(model, index, src, name, *into); !st) return st.error();
             a.direct = into->size() * static_cast<std::size_t>(comps);
         } else {
-            auto r = read_gltf_accessor(m, index, comps, src, name);
+            auto r = read_gltf_accessor(model, index, comps, src, name);
             if (!r) return r.error();
             a.d = std::move(*r);
         }
@@ -165,15 +167,22 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
         if (!r) return r.error();
         nrm = std::move(*r);
     }
+    bool colours_read = false;  // into exact->colors
     if (int i = attr("COLOR_0"); i >= 0) {
         const int comps = m.accessors.size() > static_cast<std::size_t>(i) &&
                                   m.accessors[static_cast<std::size_t>(i)].type == TINYGLTF_TYPE_VEC3
                               ? 3
                               : 4;
-        auto r = read_gltf_accessor(m, i, comps, src, "COLOR_0");
-        if (!r) return r.error();
-        col = std::move(*r);
-        col_components = comps;
+        if (exact) {
+            if (Status st = read_gltf_colors_into(model, i, comps, src, "COLOR_0", exact->colors); !st)
+                return st;
+            colours_read = true;
+        } else {
+            auto r = read_gltf_accessor(model, i, comps, src, "COLOR_0");
+            if (!r) return r.error();
+            col = std::move(*r);
+            col_components = comps;
+        }
     }
     if (int i = attr("TEXCOORD_0"); i >= 0) {
         auto r = read(i, 2, "TEXCOORD_0", x ? &x->uvs : nullptr);
@@ -203,6 +212,8 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
             return make_error(src + ": attribute counts differ from POSITION");
     if (!col.empty() && col.size() / static_cast<std::size_t>(col_components) != n)
         return make_error(src + ": COLOR_0 count differs from POSITION");
+    if (colours_read && !exact->colors.empty() && exact->colors.size() != n)
+        return make_error(src + ": COLOR_0 count differs from POSITION");
 
     auto colour = [&](std::size_t i) {
         const std::size_t k = i * static_cast<std::size_t>(col_components);
@@ -217,12 +228,7 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     if (exact) {
         SplatCloud& c = *exact;
         SplatMaterial& cm = *exact_material;
-        c.colors.clear();
-        resize_for_overwrite(c.colors, col.empty() ? 0 : n);
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, c.colors.size(), 16384),
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                              for (std::size_t i = r.begin(); i != r.end(); ++i) c.colors[i] = colour(i);
-                          });
+        if (!colours_read) c.colors.clear();
         if (prim.material >= 0 && static_cast<std::size_t>(prim.material) < m.materials.size()) {
             const tinygltf::Material& mat = m.materials[static_cast<std::size_t>(prim.material)];
             const auto& f = mat.pbrMetallicRoughness.baseColorFactor;
@@ -332,7 +338,7 @@ Status read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
     }
     std::vector<std::uint32_t> idx;
     if (prim.indices >= 0) {
-        auto r = read_gltf_accessor(m, prim.indices, 1, src, "indices");
+        auto r = read_gltf_accessor(model, prim.indices, 1, src, "indices");
         if (!r) return r.error();
         idx.reserve(r->size());
         for (double d : *r) {
@@ -390,9 +396,9 @@ void pad_attributes(Geometry& g) {
 
 Result<GltfContents> read_gltf(const fs::path& path) {
     const std::string src = path.string();
-    auto model = std::make_shared<tinygltf::Model>();
-    tinygltf::Model& m = *model;
-    if (Status s = load_gltf_model(path, m); !s) return s.error();
+    auto model = std::make_shared<GltfModel>();
+    if (Status s = load_gltf_model(path, *model); !s) return s.error();
+    const tinygltf::Model& m = model->gltf;
     GltfContents out;
     out.model = model;
     out.other.source = src;
@@ -462,7 +468,7 @@ Result<GltfContents> read_gltf(const fs::path& path) {
                     return make_error(src + ": splat node '" + node.name +
                                       "' must hold one POINTS primitive");
                 Geometry unused;
-                if (auto s = read_primitive(m, prims[0], glm::dmat4(1.0), src, unused, material_map,
+                if (auto s = read_primitive(*model, prims[0], glm::dmat4(1.0), src, unused, material_map,
                                             &cloud.cloud, &cloud.material);
                     !s)
                     return s;
@@ -486,8 +492,8 @@ Result<GltfContents> read_gltf(const fs::path& path) {
                 for (const auto& prim : m.meshes[static_cast<std::size_t>(node.mesh)].primitives) {
                     if (scene_file && prim.extensions.count("KHR_gaussian_splatting"))
                         continue;  // systems/gaussian's
-                    if (auto s =
-                            read_primitive(m, prim, world, src, out.other, material_map, nullptr, nullptr);
+                    if (auto s = read_primitive(*model, prim, world, src, out.other, material_map, nullptr,
+                                                nullptr);
                         !s)
                         return s;
                 }

@@ -13,6 +13,7 @@
 // Reading such a file back gives the same bytes for every stored array (round-trip tests).
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -25,11 +26,9 @@
 #include "runtime/core/result.h"
 #include "runtime/scene/components.h"
 
-namespace tinygltf {
-class Model;
-}
-
 namespace sffd::assets {
+
+struct GltfModel;  // gltf_model.h
 
 struct GltfCloudOut {
     std::string name;
@@ -59,11 +58,10 @@ struct GltfCloudIn {
 };
 
 struct GltfContents {
-    std::vector<GltfCloudIn> clouds;  // our splat nodes, exactly as stored
-    Geometry other;                   // every other mesh/point primitive, in world space
-    std::string sffd_scene_json;      // extensions.SFFD_scene as JSON text (empty when absent)
-    std::shared_ptr<const tinygltf::Model>
-        model;  // the whole file, for scene extensions that store glTF content
+    std::vector<GltfCloudIn> clouds;         // our splat nodes, exactly as stored
+    Geometry other;                          // every other mesh/point primitive, in world space
+    std::string sffd_scene_json;             // extensions.SFFD_scene as JSON text (empty when absent)
+    std::shared_ptr<const GltfModel> model;  // the whole file, for scene extensions that store glTF content
 };
 // In a scene file (one with SFFD_scene), KHR_gaussian_splatting primitives are not surface geometry:
 // read_gltf() leaves them out of `other` (systems/gaussian reads them through `model`).
@@ -73,22 +71,28 @@ Result<GltfContents> read_gltf(const std::filesystem::path& path);
 // The guarded tinygltf load behind read_gltf(), for every reader of glTF (also systems/gaussian): the file
 // size limit, the JSON nesting check before tinygltf's recursive parser, buffer and image URIs resolved
 // inside the glTF's folder only (resolve_resource), an image pixel budget, images decoded to RGBA8.
-// Errors read "file: problem".
-Status load_gltf_model(const std::filesystem::path& path, tinygltf::Model& model);
+// Errors read "file: problem". A GLB's BIN chunk stays in the file's mapping (gltf_model.h).
+Status load_gltf_model(const std::filesystem::path& path, GltfModel& model);
 
 // Accessor `index` of `model` as `components` doubles per element, every offset checked against its
 // buffer (hostile files point accessors past the end). Normalised integers map to [0,1] / [-1,1]; float,
-// (unsigned) byte, (unsigned) short and unsigned int components. Errors read "src: what: problem".
-Result<std::vector<double>> read_gltf_accessor(const tinygltf::Model& model, int index, int components,
+// (unsigned) byte, (unsigned) short and unsigned int components. Errors read "src: what: problem", or
+// "src: <kChangedWhileRead>" when the mapped file was shortened while the accessor was read.
+Result<std::vector<double>> read_gltf_accessor(const GltfModel& model, int index, int components,
                                                const std::string& src, const std::string& what);
 // The same checks and messages, as floats decoded straight into `dst` (replaced) as vectors of 2, 3 or 4
 // floats: what splat arrays hold, with no array in between (nor a double copy).
 // On an error `dst` holds no meaningful values.
-Status read_gltf_accessor_into(const tinygltf::Model& model, int index, const std::string& src,
+Status read_gltf_accessor_into(const GltfModel& model, int index, const std::string& src,
                                const std::string& what, std::vector<glm::vec2>& dst);
-Status read_gltf_accessor_into(const tinygltf::Model& model, int index, const std::string& src,
+Status read_gltf_accessor_into(const GltfModel& model, int index, const std::string& src,
                                const std::string& what, std::vector<glm::vec3>& dst);
-Status read_gltf_accessor_into(const tinygltf::Model& model, int index, const std::string& src,
+Status read_gltf_accessor_into(const GltfModel& model, int index, const std::string& src,
                                const std::string& what, std::vector<glm::vec4>& dst);
+// COLOR_0 (VEC3 or VEC4, linear) as the cloud's sRGB bytes, R | G << 8 | B << 16 | A << 24 (alpha 255 for
+// VEC3), into `dst` (replaced): the same checks and messages, and the same bytes as converting each
+// read_gltf_accessor() value with the writer's mapping (gltf_detail.h), without the array of doubles.
+Status read_gltf_colors_into(const GltfModel& model, int index, int components, const std::string& src,
+                             const std::string& what, std::vector<std::uint32_t>& dst);
 
 }  // namespace sffd::assets

@@ -329,7 +329,7 @@ void register_scene_extension(const std::string& key, SceneSaveFn save_fn, Scene
     if (load_fn)
         e.load = [f = std::move(load_fn)](ecs::Registry& r, std::string_view text,
                                           const SceneEntityOf& entity_of, const fs::path&,
-                                          const tinygltf::Model&) { return f(r, text, entity_of); };
+                                          const assets::GltfModel&) { return f(r, text, entity_of); };
     extensions()[key] = std::move(e);
 }
 

@@ -52,14 +52,14 @@ void unregister_scene_extension(const std::string& key);
 // An extension that also stores glTF content in the scene file (systems/gaussian: clouds embedded as
 // KHR_gaussian_splatting primitives) gets the scene file's path; saving, it may add GltfAppend functions
 // (runtime/assets/gltf_io.h) that write nodes, meshes and accessors into the document; loading, it gets the
-// file's parsed tinygltf model (never null there). Its JSON must find its content again without indices
+// file's parsed model (gltf_model.h; never null there). Its JSON must find its content again without indices
 // known at save time (systems/gaussian marks its nodes with extras). Same key space as above.
 using SceneGltfSaveFn = std::function<Result<std::string>(const ecs::Registry&, const SceneIdOf& id_of,
                                                           const std::filesystem::path& scene_path,
                                                           std::vector<assets::GltfAppend>& append)>;
 using SceneGltfLoadFn =
     std::function<Status(ecs::Registry&, std::string_view json, const SceneEntityOf& entity_of,
-                         const std::filesystem::path& scene_path, const tinygltf::Model& model)>;
+                         const std::filesystem::path& scene_path, const assets::GltfModel& model)>;
 void register_scene_gltf_extension(const std::string& key, SceneGltfSaveFn save_fn, SceneGltfLoadFn load_fn);
 
 // Files assets cannot import itself (3D Gaussian files: 3DGS PLY, .splat, .spz, KHR_gaussian_splatting

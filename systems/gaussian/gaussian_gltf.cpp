@@ -15,6 +15,7 @@
 #include <tiny_gltf.h>
 
 #include "runtime/assets/gltf_io.h"
+#include "runtime/assets/gltf_model.h"
 #include "runtime/core/atomic_file.h"
 #include "runtime/core/file_io.h"
 #include "systems/gaussian/gaussian_axes.h"
@@ -32,12 +33,13 @@ const std::string kExt = "KHR_gaussian_splatting";
 
 // The attributes KHR_gaussian_splatting allows: float or normalised (unsigned) byte / short, never
 // unsigned int (which the shared reader also accepts, for indices).
-Result<std::vector<double>> read_accessor(const tinygltf::Model& m, int index, int components,
+Result<std::vector<double>> read_accessor(const assets::GltfModel& model, int index, int components,
                                           const std::string& where, const std::string& name) {
+    const tinygltf::Model& m = model.gltf;
     if (index >= 0 && std::size_t(index) < m.accessors.size() &&
         m.accessors[std::size_t(index)].componentType == kUInt)
         return make_error(where + ": " + name + ": unsupported component type " + std::to_string(kUInt));
-    return assets::read_gltf_accessor(m, index, components, where, name);
+    return assets::read_gltf_accessor(model, index, components, where, name);
 }
 
 glm::dmat4 node_matrix(const tinygltf::Node& n) {
@@ -57,8 +59,9 @@ std::string sh_name(int l, int n) {
 
 }  // namespace
 
-Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::Primitive& prim,
+Result<GaussianCloud> read_primitive(const assets::GltfModel& model, const tinygltf::Primitive& prim,
                                      const std::string& where) {
+    const tinygltf::Model& m = model.gltf;
     auto attr = [&](const std::string& name) {
         auto it = prim.attributes.find(name);
         return it == prim.attributes.end() ? -1 : it->second;
@@ -70,11 +73,11 @@ Result<GaussianCloud> read_primitive(const tinygltf::Model& m, const tinygltf::P
         std::size_t(a) < m.accessors.size() && m.accessors[std::size_t(a)].count > kMaxGaussians)
         return make_error(where + ": POSITION declares " + std::to_string(m.accessors[std::size_t(a)].count) +
                           " Gaussians, more than the " + std::to_string(kMaxGaussians) + "-Gaussian limit");
-    auto pos = read_accessor(m, attr("POSITION"), 3, where, "POSITION");
+    auto pos = read_accessor(model, attr("POSITION"), 3, where, "POSITION");
     if (!pos) return pos.error();
     const std::size_t n = pos->size() / 3;
     auto get = [&](const std::string& name, int comps) -> Result<std::vector<double>> {
-        auto v = read_accessor(m, attr(name), comps, where, name);
+        auto v = read_accessor(model, attr(name), comps, where, name);
         if (v && v->size() != n * std::size_t(comps))
             return make_error(where + ": " + name + " has " + std::to_string(v->size() / std::size_t(comps)) +
                               " elements, POSITION " + std::to_string(n));
@@ -194,8 +197,9 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
     const std::string src = path.string();
     std::error_code ec;
     if (!fs::is_regular_file(path, ec)) return make_error(src + ": no such file");
-    tinygltf::Model m;
-    if (Status s = assets::load_gltf_model(path, m); !s) return s.error();
+    assets::GltfModel model;
+    if (Status s = assets::load_gltf_model(path, model); !s) return s.error();
+    const tinygltf::Model& m = model.gltf;
     std::vector<GaussianCloud> parts;
     // glTF node graphs are forests: a node listed as a child twice (two parents, or twice by one) would
     // be visited once per path, exponentially often in a DAG. Refused up front; each node is then
@@ -233,7 +237,7 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
                     src + ": mesh " + std::to_string(node.mesh) + " primitive " + std::to_string(p);
                 if (prims[p].mode != TINYGLTF_MODE_POINTS)
                     return make_error(where + ": KHR_gaussian_splatting needs mode POINTS");
-                auto g = read_primitive(m, prims[p], where);
+                auto g = read_primitive(model, prims[p], where);
                 if (!g) return g.error();
                 if (world != glm::dmat4(1.0)) apply_affine(*g, glm::dmat3(world), glm::dvec3(world[3]));
                 parts.push_back(std::move(*g));

@@ -37,9 +37,11 @@
 #include "systems/gaussian/components.h"
 
 namespace tinygltf {
-class Model;
 struct Primitive;
 }  // namespace tinygltf
+namespace sffd::assets {
+struct GltfModel;
+}  // namespace sffd::assets
 
 namespace sffd::gaussian {
 
@@ -67,7 +69,7 @@ Status write_glb(const std::filesystem::path& path, const GaussianCloud& cloud);
 // errors read "where: problem".
 Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianCloud& cloud,
                         nlohmann::json& primitive, const std::string& where);
-Result<GaussianCloud> read_primitive(const tinygltf::Model& model, const tinygltf::Primitive& primitive,
+Result<GaussianCloud> read_primitive(const assets::GltfModel& model, const tinygltf::Primitive& primitive,
                                      const std::string& where);
 
 // Applies x -> A x + t (world space, double) to a cloud in place: centres, Σ' = A Σ Aᵀ, SH rotated by the

@@ -10,6 +10,7 @@
 #include <tiny_gltf.h>
 
 #include "runtime/assets/builtin_scenes.h"
+#include "runtime/assets/gltf_model.h"
 #include "runtime/assets/ply.h"
 #include "runtime/assets/scene.h"
 #include "runtime/core/file_io.h"
@@ -114,7 +115,8 @@ assets::GltfAppend embed(std::shared_ptr<const GaussianCloud> cloud, std::string
 }
 
 // The cloud embedded for clouds[entry], with every check read_gltf makes on a KHR_gaussian_splatting file.
-GaussianCloud read_embedded(const tinygltf::Model& m, int entry, const std::string& where) {
+GaussianCloud read_embedded(const assets::GltfModel& model, int entry, const std::string& where) {
+    const tinygltf::Model& m = model.gltf;
     int found = -1;
     for (std::size_t i = 0; i < m.nodes.size(); ++i) {
         const tinygltf::Value& x = m.nodes[i].extras;
@@ -142,7 +144,7 @@ GaussianCloud read_embedded(const tinygltf::Model& m, int entry, const std::stri
         !prims[0].extensions.count("KHR_gaussian_splatting"))
         throw std::runtime_error(at + ": mesh " + std::to_string(child.mesh) +
                                  " must hold one KHR_gaussian_splatting POINTS primitive");
-    auto g = read_primitive(m, prims[0], at + " mesh " + std::to_string(child.mesh));
+    auto g = read_primitive(model, prims[0], at + " mesh " + std::to_string(child.mesh));
     if (!g) throw std::runtime_error(g.message());
     if (child.translation.size() == 3)
         g->origin = glm::dvec3(child.translation[0], child.translation[1], child.translation[2]);
@@ -250,7 +252,7 @@ Result<std::string> save_gaussian_extension(const ecs::Registry& registry,
 
 Status load_gaussian_extension(ecs::Registry& registry, std::string_view text,
                                const std::function<ecs::Entity(int)>& entity_of, const fs::path& scene_path,
-                               const tinygltf::Model& model) {
+                               const assets::GltfModel& model) {
     const json j = json::parse(text, nullptr, false);
     if (j.is_discarded() || !j.is_object()) return make_error("not a JSON object");
     if (!j.contains("version") || !j["version"].is_number_integer() || j["version"].get<int>() != 1)

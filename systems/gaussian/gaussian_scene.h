@@ -60,7 +60,7 @@ Result<std::string> save_gaussian_extension(const ecs::Registry& registry,
                                             std::vector<assets::GltfAppend>& append);
 Status load_gaussian_extension(ecs::Registry& registry, std::string_view json,
                                const std::function<ecs::Entity(int)>& entity_of,
-                               const std::filesystem::path& scene_path, const tinygltf::Model& model);
+                               const std::filesystem::path& scene_path, const assets::GltfModel& model);
 
 }  // namespace gaussian
 }  // namespace sffd
