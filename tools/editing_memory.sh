@@ -7,7 +7,7 @@
 #
 #   tools/editing_memory.sh [FRAMES]        SPLATFFD=path/to/splatffd overrides the binary
 #
-# The ctest editor_editing_memory_test does the same in-process and compares the resident set at frame 500
+# The ctest editor_editing_memory_tests does the same in-process and compares the resident set at frame 500
 # with its peak after (SFFD_EDITING_MEMORY_FRAMES=10000 for the long run).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)

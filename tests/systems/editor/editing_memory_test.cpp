@@ -5,7 +5,7 @@
 // after every frame. Passes when its peak after frame 500 stays within 50 MB of its size at frame 500.
 //
 // SFFD_EDITING_MEMORY_FRAMES sets the length (default 2,000; the long check is 10,000):
-//   SFFD_EDITING_MEMORY_FRAMES=10000 build/release/tests/systems/editor/editor_editing_memory_test
+//   SFFD_EDITING_MEMORY_FRAMES=10000 build/release/tests/systems/editor/editor_editing_memory_tests
 #include <gtest/gtest.h>
 
 #include <algorithm>
