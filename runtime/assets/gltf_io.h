@@ -89,6 +89,12 @@ Status read_gltf_accessor_into(const GltfModel& model, int index, const std::str
                                const std::string& what, std::vector<glm::vec3>& dst);
 Status read_gltf_accessor_into(const GltfModel& model, int index, const std::string& src,
                                const std::string& what, std::vector<glm::vec4>& dst);
+// The same checks and messages, as floats written element by element into memory the caller owns: element
+// i's `components` values at dst + i * stride (stride >= components), for interleaving attributes into one
+// array (a Gaussian's SH coefficients). The accessor must hold exactly `count` elements (the caller checks
+// the count first, model.gltf.accessors[index].count, with its own message; a mismatch here is refused).
+Status read_gltf_accessor_strided(const GltfModel& model, int index, int components, const std::string& src,
+                                  const std::string& what, float* dst, std::size_t stride, std::size_t count);
 // COLOR_0 (VEC3 or VEC4, linear) as the cloud's sRGB bytes, R | G << 8 | B << 16 | A << 24 (alpha 255 for
 // VEC3), into `dst` (replaced): the same checks and messages, and the same bytes as converting each
 // read_gltf_accessor() value with the writer's mapping (gltf_detail.h), without the array of doubles.

@@ -412,6 +412,50 @@ Status read_gltf_accessor_into(const GltfModel& m, int index, const std::string&
     return decode_accessor_vectors(m, index, src, what, dst);
 }
 
+Status read_gltf_accessor_strided(const GltfModel& m, int index, int components, const std::string& src,
+                                  const std::string& what, float* dst, std::size_t stride,
+                                  std::size_t count) {
+    if (components < 1 || components > 4)  // scalars and vectors only
+        return make_error(src + ": " + what + ": " + std::to_string(components) + " components per element");
+    auto at = locate_accessor(m, index, components, src, what);
+    if (!at) return at.error();
+    if (at->count != count)
+        return make_error(src + ": " + what + ": " + std::to_string(at->count) + " elements, expected " +
+                          std::to_string(count));
+    if (count == 0) return {};
+    if (stride < static_cast<std::size_t>(components))
+        return make_error(src + ": " + what + ": stride " + std::to_string(stride) +
+                          " is less than an element");
+    // Floats as stored (finite when no exponent is all ones), with the element size known to the compiler
+    // (a copy of a run-time size is a library call per element).
+    auto floats = [&]<std::size_t N>() {
+        return first_failing(count, [&](std::size_t i) {
+            std::uint32_t bits[N];
+            std::memcpy(bits, at->base + i * at->stride, sizeof bits);
+            std::memcpy(dst + i * stride, bits, sizeof bits);
+            std::uint32_t inf = 0;
+            for (std::size_t c = 0; c < N; ++c) inf |= (bits[c] & 0x7f800000u) == 0x7f800000u;
+            return inf == 0;
+        });
+    };
+    std::size_t bad = count;
+    if (at->f.type == kFloat && components == 3) bad = floats.template operator()<3>();
+    else if (at->f.type == kFloat && components == 4) bad = floats.template operator()<4>();
+    else
+        bad = first_failing(count, [&](std::size_t i) {
+            const unsigned char* p = at->base + i * at->stride;
+            float* out = dst + i * stride;
+            bool finite = true;
+            for (std::size_t c = 0; c < at->f.comps; ++c, p += at->f.csize) {
+                const double v = component(p, at->f.type, at->f.normalized);
+                finite &= std::isfinite(v);
+                out[c] = static_cast<float>(v);
+            }
+            return finite;
+        });
+    return decode_status(m, *at, bad, src, what);
+}
+
 Status read_gltf_colors_into(const GltfModel& m, int index, int components, const std::string& src,
                              const std::string& what, std::vector<std::uint32_t>& dst) {
     dst.clear();
@@ -527,7 +571,8 @@ Result<std::string> glb_json_for_ascii(std::string_view all, const std::string& 
     const std::size_t json_len = u32(12);
     if (total > all.size() || u32(16) != 0x4E4F534Au || json_len == 0 || json_len % 4 != 0)
         return std::string();
-    if (json_len > total - 28) return std::string();  // room for the JSON chunk and a BIN chunk header
+    // Room for the JSON chunk and a BIN chunk header (a declared total under 28 bytes has none).
+    if (total < 28 || json_len > total - 28) return std::string();
     const std::size_t bin_at = 20 + json_len;
     const std::size_t bin_len = u32(bin_at);
     if (u32(bin_at + 4) != 0x004E4942u || bin_len == 0 || bin_len > total - bin_at - 8) return std::string();

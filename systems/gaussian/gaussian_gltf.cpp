@@ -1,6 +1,7 @@
 #include "systems/gaussian/gaussian_gltf.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -14,6 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
+#include "runtime/assets/fresh_array.h"
 #include "runtime/assets/gltf_io.h"
 #include "runtime/assets/gltf_model.h"
 #include "runtime/core/atomic_file.h"
@@ -73,9 +75,20 @@ Result<GaussianCloud> read_primitive(const assets::GltfModel& model, const tinyg
         std::size_t(a) < m.accessors.size() && m.accessors[std::size_t(a)].count > kMaxGaussians)
         return make_error(where + ": POSITION declares " + std::to_string(m.accessors[std::size_t(a)].count) +
                           " Gaussians, more than the " + std::to_string(kMaxGaussians) + "-Gaussian limit");
-    auto pos = read_accessor(model, attr("POSITION"), 3, where, "POSITION");
-    if (!pos) return pos.error();
-    const std::size_t n = pos->size() / 3;
+    // Positions and SH coefficients (most of a file) are decoded as floats straight into the cloud; the
+    // values are those of the doubles the rest is read as, rounded to float as the cloud stores them.
+    GaussianCloud g;
+    auto no_uint = [&](int index, const std::string& name) -> Status {
+        if (index >= 0 && std::size_t(index) < m.accessors.size() &&
+            m.accessors[std::size_t(index)].componentType == kUInt)
+            return make_error(where + ": " + name + ": unsupported component type " + std::to_string(kUInt));
+        return {};
+    };
+    if (Status s = no_uint(attr("POSITION"), "POSITION"); !s) return s.error();
+    if (Status s = assets::read_gltf_accessor_into(model, attr("POSITION"), where, "POSITION", g.positions);
+        !s)
+        return s.error();
+    const std::size_t n = g.positions.size();
     auto get = [&](const std::string& name, int comps) -> Result<std::vector<double>> {
         auto v = read_accessor(model, attr(name), comps, where, name);
         if (v && v->size() != n * std::size_t(comps))
@@ -104,16 +117,23 @@ Result<GaussianCloud> read_primitive(const assets::GltfModel& model, const tinyg
                               std::to_string(degree + 1));
         degree = l;
     }
-    GaussianCloud g;
     g.sh_degree = degree;
     const int K = sh_coeffs(degree);
-    g.sh.assign(n * std::size_t(K) * 3, 0.0f);
+    // Every coefficient is written below (the DC term from SH or COLOR_0, every band up to the degree).
+    assets::resize_for_overwrite(g.sh, n * std::size_t(K) * 3);
+    // Coefficient k of every Gaussian, into its place in the interleaved array.
+    auto coefficient = [&](const std::string& name, std::size_t k) -> Status {
+        const int a = attr(name);
+        if (Status s = no_uint(a, name); !s) return s;
+        if (a >= 0 && std::size_t(a) < m.accessors.size() && m.accessors[std::size_t(a)].count != n)
+            return make_error(where + ": " + name + " has " +
+                              std::to_string(m.accessors[std::size_t(a)].count) + " elements, POSITION " +
+                              std::to_string(n));
+        return assets::read_gltf_accessor_strided(model, a, 3, where, name, g.sh.data() + k * 3,
+                                                  std::size_t(K) * 3, n);
+    };
     if (attr(sh_name(0, 0)) >= 0) {
-        auto dc = get(sh_name(0, 0), 3);
-        if (!dc) return dc.error();
-        for (std::size_t i = 0; i < n; ++i)
-            for (int c = 0; c < 3; ++c)
-                g.sh[i * std::size_t(K) * 3 + std::size_t(c)] = float((*dc)[i * 3 + std::size_t(c)]);
+        if (Status s = coefficient(sh_name(0, 0), 0); !s) return s.error();
     } else if (attr("COLOR_0") >= 0) {
         const std::size_t ci = std::size_t(attr("COLOR_0"));
         const int comps = ci < m.accessors.size() && m.accessors[ci].type == TINYGLTF_TYPE_VEC3 ? 3 : 4;
@@ -127,19 +147,15 @@ Result<GaussianCloud> read_primitive(const assets::GltfModel& model, const tinyg
         return make_error(where + ": missing attribute " + sh_name(0, 0) + " (and no COLOR_0)");
     }
     for (int l = 1; l <= degree; ++l)
-        for (int c = 0; c <= 2 * l; ++c) {
-            auto v = get(sh_name(l, c), 3);
-            if (!v) return v.error();
-            const std::size_t k = std::size_t(l * l + c);
-            for (std::size_t i = 0; i < n; ++i)
-                for (std::size_t ch = 0; ch < 3; ++ch)
-                    g.sh[(i * std::size_t(K) + k) * 3 + ch] = float((*v)[i * 3 + ch]);
-        }
+        for (int c = 0; c <= 2 * l; ++c)
+            if (Status s = coefficient(sh_name(l, c), std::size_t(l * l + c)); !s) return s.error();
+    g.scales.reserve(n);
+    g.opacities.reserve(n);
+    g.rotations.reserve(n);
     for (std::size_t i = 0; i < n; ++i) {
         const auto fail = [&](const char* why) {
             return make_error(where + ": Gaussian " + std::to_string(i) + ": " + why);
         };
-        g.positions.emplace_back(float((*pos)[i * 3]), float((*pos)[i * 3 + 1]), float((*pos)[i * 3 + 2]));
         const glm::dvec3 s((*scale)[i * 3], (*scale)[i * 3 + 1], (*scale)[i * 3 + 2]);
         if (s.x < 0 || s.y < 0 || s.z < 0)
             return fail(
@@ -265,7 +281,9 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
     for (const GaussianCloud& p : parts) degree = std::min(degree, p.sh_degree);
     GaussianCloud out;
     out.sh_degree = degree;
-    for (const GaussianCloud& p : parts) append(out, p, degree);
+    if (parts.size() == 1) out = std::move(parts.front());  // the usual file: nothing to merge or copy
+    else
+        for (const GaussianCloud& p : parts) append(out, p, degree);
     // glTF's frame (y up, +z the front, x left) is the 3DGS PLY frame turned 180 degrees about z
     // (gaussian_axes.h): the world-space cloud is turned into the internal frame.
     turn_axes(out, AxisTurn::z180);
@@ -316,6 +334,9 @@ Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianClo
     nlohmann::json& views = doc["bufferViews"];
     nlohmann::json& accessors = doc["accessors"];
     nlohmann::json attributes = nlohmann::json::object();
+    // Every attribute below is a multiple of 4 bytes: the buffer grows once, not by doubling (each
+    // doubling copied everything before it; most of writing a large cloud was those copies).
+    bin.reserve(bin.size() + 3 + n * (12 + 4 + 16 + 12 + 4 + std::size_t(K) * 12));
     auto add = [&](const std::string& name, const void* data, std::size_t bytes, int component,
                    const char* type, bool normalized, const nlohmann::json& lo = {},
                    const nlohmann::json& hi = {}) {
@@ -395,15 +416,18 @@ Status write_glb(const fs::path& path, const GaussianCloud& cloud) {
     while (text.size() % 4) text.push_back(' ');
     const std::uint64_t total = 12 + 8 + text.size() + 8 + bin.size();
     if (total > 0xffffffffu) return make_error(path.string() + ": too many Gaussians for a GLB file (4 GiB)");
-    std::string glb;
-    glb.reserve(std::size_t(total));
-    auto u32 = [&](std::uint32_t v) { glb.append(reinterpret_cast<const char*>(&v), 4); };
-    u32(0x46546C67u), u32(2), u32(std::uint32_t(total));
-    u32(std::uint32_t(text.size())), u32(0x4E4F534Au);
-    glb += text;
-    u32(std::uint32_t(bin.size())), u32(0x004E4942u);
-    glb += bin;
-    return write_file_atomic(path, glb);
+    const std::uint32_t header[5] = {0x46546C67u, 2, std::uint32_t(total), std::uint32_t(text.size()),
+                                     0x4E4F534Au};
+    const std::uint32_t bin_header[2] = {std::uint32_t(bin.size()), 0x004E4942u};
+    // Written piece by piece: the container is never assembled in memory (a second copy of the cloud).
+    return write_file_atomic(path, [&](std::FILE* f) -> Status {
+        const bool ok = std::fwrite(header, sizeof header, 1, f) == 1 &&
+                        std::fwrite(text.data(), 1, text.size(), f) == text.size() &&
+                        std::fwrite(bin_header, sizeof bin_header, 1, f) == 1 &&
+                        std::fwrite(bin.data(), 1, bin.size(), f) == bin.size();
+        if (!ok) return make_error(path.string() + ": write failed: " + std::strerror(errno));
+        return {};
+    });
 }
 
 }  // namespace sffd::gaussian

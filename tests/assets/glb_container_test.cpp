@@ -95,6 +95,16 @@ TEST(GlbContainer, BrokenContainersAreRefusedNamingTheFile) {
              return g;
          }()},
         {"truncated.glb", glb(two_points_json(), bin).substr(0, 40)},
+        // A declared total length under the headers' 28 bytes: the chunk checks subtracted past zero and
+        // read far beyond the file.
+        {"total_zero.glb",
+         [&] {
+             std::string g = glb(two_points_json(), bin);
+             std::memset(g.data() + 8, 0, 4);
+             const std::uint32_t huge_json = 0x40000000u;
+             std::memcpy(g.data() + 12, &huge_json, 4);
+             return g;
+         }()},
     };
     for (const auto& [name, bytes] : cases) {
         const fs::path p = dir / name;
@@ -219,6 +229,40 @@ TEST(GlbContainer, ColoursDecodeToTheWritersSrgbBytes) {
     const Status bad = read_gltf_colors_into(fm, 0, 3, f.string(), "COLOR_0", got);
     ASSERT_FALSE(bad.ok());
     EXPECT_EQ(bad.message(), f.string() + ": COLOR_0: non-finite value at element 1");
+}
+
+TEST(GlbContainer, StridedReadsInterleaveAttributes) {
+    // Two VEC3 attributes (floats; normalised shorts) interleaved into one array of 7 floats per element.
+    const fs::path dir = test::fresh_dir("glb", "strided");
+    std::string bin = floats({1, 2, 3, 4, 5, 6});
+    const std::int16_t shorts[6] = {32767, -32767, 0, 16384, -32768, 1};
+    bin.append(reinterpret_cast<const char*>(shorts), sizeof shorts);
+    const std::string json =
+        R"({"asset":{"version":"2.0"},"buffers":[{"byteLength":36}],"bufferViews":[{"buffer":0,"byteLength":24},)"
+        R"({"buffer":0,"byteOffset":24,"byteLength":12}],"accessors":[)"
+        R"({"bufferView":0,"componentType":5126,"count":2,"type":"VEC3"},)"
+        R"({"bufferView":1,"componentType":5122,"normalized":true,"count":2,"type":"VEC3"}]})";
+    const fs::path p = dir / "strided.glb";
+    test::write(p, glb(json, bin));
+    GltfModel m;
+    ASSERT_TRUE(load_gltf_model(p, m).ok());
+    std::vector<float> out(14, -9.0f);
+    ASSERT_TRUE(read_gltf_accessor_strided(m, 0, 3, p.string(), "A", out.data(), 7, 2).ok());
+    ASSERT_TRUE(read_gltf_accessor_strided(m, 1, 3, p.string(), "B", out.data() + 3, 7, 2).ok());
+    auto b = read_gltf_accessor(m, 1, 3, p.string(), "B");
+    ASSERT_TRUE(b.ok());
+    const std::vector<float> want = {1, 2, 3, float((*b)[0]), float((*b)[1]), float((*b)[2]), -9,
+                                     4, 5, 6, float((*b)[3]), float((*b)[4]), float((*b)[5]), -9};
+    EXPECT_EQ(out, want);
+    EXPECT_EQ(out[4], -1.0f);   // -32767 / 32767
+    EXPECT_EQ(out[11], -1.0f);  // -32768 clamps to -1
+
+    const Status count = read_gltf_accessor_strided(m, 0, 3, p.string(), "A", out.data(), 7, 3);
+    EXPECT_EQ(count.message(), p.string() + ": A: 2 elements, expected 3");
+    const Status narrow = read_gltf_accessor_strided(m, 0, 3, p.string(), "A", out.data(), 2, 2);
+    EXPECT_FALSE(narrow.ok());
+    const Status matrix = read_gltf_accessor_strided(m, 0, 16, p.string(), "A", out.data(), 16, 2);
+    EXPECT_FALSE(matrix.ok());
 }
 
 TEST(GlbContainer, AGlbShortenedAfterLoadingIsRefusedByItsAccessors) {
