@@ -34,6 +34,7 @@
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/limits.h"
 #include "systems/gaussian/from_splats.h"
+#include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/profiling/synthetic.h"
 #include "tools/splatffd/profile_run.h"
@@ -397,7 +398,8 @@ void make_rows(Suite& suite) {
         const fs::path g = suite.tmp() / ("gaussians_" + n + ".ply");
         const fs::path p = suite.tmp() / ("splats_" + n + ".ply");
         const fs::path b = suite.tmp() / ("splats_" + n + ".glb");
-        auto write_g = [&] {
+        const fs::path gg = suite.tmp() / ("gaussians_" + n + ".glb");
+        auto gaussians = [&] {
             GaussianCloud c = gaussian::gaussians_from_splats(profiling::synthetic_sphere(count));
             const std::size_t k = 16;
             std::vector<float> sh(c.size() * k * 3, 0.01f);
@@ -405,8 +407,10 @@ void make_rows(Suite& suite) {
                 for (std::size_t ch = 0; ch < 3; ++ch) sh[i * k * 3 + ch] = c.sh[i * 3 + ch];
             c.sh = std::move(sh);
             c.sh_degree = 3;
-            return gaussian::write_ply(g, c);
+            return c;
         };
+        auto write_g = [&] { return gaussian::write_ply(g, gaussians()); };
+        auto write_gg = [&] { return gaussian::write_glb(gg, gaussians()); };
         auto write_p = [&] { return assets::save_splat_ply(profiling::synthetic_sphere(count), p); };
         auto write_b = [&] { return assets::save_splat_glb(profiling::synthetic_sphere(count), b); };
         read_row(suite, mb_per_s("read.3dgs_ply", n + " Gaussians SH 3, 3DGS PLY read", readme, 400.0), g,
@@ -418,6 +422,10 @@ void make_rows(Suite& suite) {
         read_row(suite, mb_per_s("read.surface_ply", n + " splats, surface PLY read", readme, 400.0), p,
                  write_p, false);
         read_row(suite, mb_per_s("read.glb", n + " splats, GLB read", readme, 400.0), b, write_b, false);
+        read_row(suite,
+                 mb_per_s("read.gaussian_glb", n + " Gaussians SH 3, KHR_gaussian_splatting GLB read", readme,
+                          400.0),
+                 gg, write_gg, false);
     }
     if (!full) return;
 

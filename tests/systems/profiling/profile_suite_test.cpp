@@ -88,8 +88,9 @@ TEST_F(ProfileSuite, QuickWritesOneValidRowPerClaim) {
         }
     }
     // The claims the quick suite covers: a frame of the sphere, CPU deformation, Gaussians, reading files.
-    for (const char* id : {"sphere.preview", "sphere.hq", "deform.cpu.100k", "gaussians.deform_cpu.100k",
-                           "gaussians.moving.100k", "read.3dgs_ply", "read.surface_ply", "read.glb"})
+    for (const char* id :
+         {"sphere.preview", "sphere.hq", "deform.cpu.100k", "gaussians.deform_cpu.100k",
+          "gaussians.moving.100k", "read.3dgs_ply", "read.surface_ply", "read.glb", "read.gaussian_glb"})
         EXPECT_TRUE(ids.count(id)) << id;
     // The anchor row says what became of Blender (a time, or why it did not run).
     for (const auto& row : j["rows"]) {
