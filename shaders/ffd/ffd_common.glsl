@@ -46,7 +46,8 @@ layout(std430, binding = SFFD_SSBO_CONTROL_POINTS) readonly buffer FfdControlPoi
 // - FFD_CP_UBO (Bernstein only): read from a UBO: every invocation reads the same element, which llvmpipe
 //   turns into one scalar load instead of a per-lane gather (llvmpipe's best: barrier() costs it coroutine
 //   switches). B-spline lanes read different elements: the UBO would gain nothing.
-// - neither: the SSBO (any lattice size).
+// - neither: the SSBO (any lattice size); with FFD_BSPLINE_RUNS the B-spline's grid arrives as runs of
+//   4 points along u, packed as their x, y, z (GpuBernsteinKernel::packed).
 #if defined(FFD_CP_SHARED)
 shared float ffd_dp_shared[3 * FFD_CP_SHARED];
 #define FFD_DP(i) vec3(ffd_dp_shared[3 * (i)], ffd_dp_shared[3 * (i) + 1], ffd_dp_shared[3 * (i) + 2])
@@ -157,6 +158,13 @@ void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
         int PM = M + 3, PK = N + 3;
         for (int a = 0; a < 4; ++a)
             for (int b = 0; b < 4; ++b) {
+#ifdef FFD_BSPLINE_RUNS
+                // The run of 4 points along u as their x, y and z (gpu_block.h bspline_runs).
+                int run = 3 * (((c.x + a) * PM + (c.y + b)) * N + c.z);
+                vec4 X = ffd_dp[run], Y = ffd_dp[run + 1], Z = ffd_dp[run + 2];
+                vec3 q = vec3(dot(wu, X), dot(wu, Y), dot(wu, Z));
+                vec3 w = vec3(dot(dwu, X), dot(dwu, Y), dot(dwu, Z));
+#else
                 int base = ((c.x + a) * PM + (c.y + b)) * PK + c.z;
                 vec3 q = vec3(0.0), w = vec3(0.0);
                 for (int k = 0; k < 4; ++k) {
@@ -164,6 +172,7 @@ void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
                     q += wu[k] * d;
                     w += dwu[k] * d;
                 }
+#endif
                 D += q * (ws[a] * wt[b]);
                 Fs += q * (dws[a] * wt[b]);
                 Ft += q * (ws[a] * dwt[b]);

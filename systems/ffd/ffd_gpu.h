@@ -17,13 +17,17 @@
 namespace sffd::ffd {
 
 // How the compute pass reads the control points (shaders/ffd/ffd_common.glsl, FFD_DP): the same
-// arithmetic in the same order either way. Named for the dense Bernstein sum, where it matters most; the
-// B-spline follows the same choice with its zero-bordered grid (shared, or the SSBO when direct).
+// arithmetic either way. Named for the dense Bernstein sum, where it matters most; the B-spline reads its
+// zero-bordered grid the same ways (shared, or the SSBO when direct), or packed.
 enum class GpuBernsteinKernel {
-    automatic,  // shared on hardware GPUs, direct on a software rasterizer (llvmpipe: barrier() is costly)
+    automatic,  // Bernstein: shared on hardware GPUs, direct on a software rasterizer (llvmpipe: barrier()
+                // is costly); B-spline: packed
     direct,  // every invocation reads them from a UBO (when they fit GL_MAX_UNIFORM_BLOCK_SIZE) or the SSBO
     shared,  // copied into shared memory once per 256-wide work group (when xyz fit
-             // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, >= 32 KB: up to 2,730 points; direct otherwise)
+             // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, >= 32 KB: up to 2,730 points; otherwise direct, and
+             // packed for a B-spline)
+    packed,  // B-spline: each run of 4 grid points along the third axis stored as three vec4 (their x, y,
+             // z), so a splat's 64 points take 48 loads instead of 64; Bernstein: direct
 };
 
 class GpuDeformer {

@@ -34,19 +34,13 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
     const Prepared P = prepare(lattice, cloud_origin);
     const FfdBlock block = make_ffd_block(lattice, P, count);
     orphan_upload(ubo.id(), sizeof block, &block);
-    Controls& cp = controls[key];
-    if (!cp.buffer) cp.buffer = gfx::Buffer::create(prefix + ".control_points");
-    if (stamp == 0 || stamp != cp.stamp) {  // control points only when edited
-        upload_control_points(cp.buffer.id(), cp.capacity, lattice, P);
-        cp.stamp = stamp;
-        ++uploads;
-    }
     // A program specialised for this lattice shape, basis and kernel (compiled once each; constant loop
     // bounds, small arrays, the other basis's code left out). Bernstein's control points go into shared
     // memory on hardware GPUs when their xyz fit (each splat reads all of them), else into a UBO when they
-    // fit one; the B-spline reads its zero-bordered grid from the SSBO by default (64 points per splat,
-    // cached: on an NVIDIA H200 at 1M splats, 0.153 ms direct against 0.176 ms copying the 26 KB grid into
-    // every group's shared memory, bench_ffd_gpu) and from shared memory only when asked.
+    // fit one. The B-spline reads its grid from the SSBO, packed in runs along u by default (bspline_runs:
+    // 48 loads per splat instead of 64, all served by the cache): on an NVIDIA H100 at 1M splats 0.115 ms
+    // against 0.129 ms point by point and 0.134 ms copying the 26 KB grid into every group's shared memory
+    // (bench_ffd_gpu, GPU time), so shared memory serves it only when asked.
     const bool bernstein = lattice.basis == LatticeBasis::bernstein;
     const std::size_t points = bernstein ? lattice.size()
                                          : std::size_t(lattice.divisions.x + 3) *
@@ -57,13 +51,24 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
         fits_shared && (kernel == GpuBernsteinKernel::shared ||
                         (kernel == GpuBernsteinKernel::automatic && !software && bernstein));
     const bool cp_ubo = bernstein && !cp_shared && lattice.size() * 16 <= std::size_t(max_ubo);
+    const bool runs = !bernstein && !cp_shared && kernel != GpuBernsteinKernel::direct;
+    Controls& cp = controls[key];
+    if (!cp.buffer) cp.buffer = gfx::Buffer::create(prefix + ".control_points");
+    if (stamp == 0 || stamp != cp.stamp || runs != cp.runs) {  // only when edited or the layout changes
+        upload_control_points(cp.buffer.id(), cp.capacity, lattice, P, runs);
+        cp.stamp = stamp;
+        cp.runs = runs;
+        ++uploads;
+    }
     Bound b;
     b.local_size = cp_shared ? 256 : 64;
-    last_kernel = cp_shared ? GpuBernsteinKernel::shared : GpuBernsteinKernel::direct;
-    const std::uint64_t shape = (std::uint64_t(lattice.divisions.x) << 24) |
-                                (std::uint64_t(lattice.divisions.y) << 12) |
-                                std::uint64_t(lattice.divisions.z) | (std::uint64_t(cp_shared) << 44) |
-                                (std::uint64_t(cp_ubo) << 45) | (std::uint64_t(!bernstein) << 46);
+    last_kernel = cp_shared ? GpuBernsteinKernel::shared
+                  : runs    ? GpuBernsteinKernel::packed
+                            : GpuBernsteinKernel::direct;
+    const std::uint64_t shape =
+        (std::uint64_t(lattice.divisions.x) << 24) | (std::uint64_t(lattice.divisions.y) << 12) |
+        std::uint64_t(lattice.divisions.z) | (std::uint64_t(cp_shared) << 44) |
+        (std::uint64_t(cp_ubo) << 45) | (std::uint64_t(!bernstein) << 46) | (std::uint64_t(runs) << 47);
     auto sp = specialised.find(shape);
     if (sp == specialised.end()) {
         const int maxb = std::max({lattice.divisions.x, lattice.divisions.y, lattice.divisions.z}) + 1;
@@ -77,8 +82,12 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
             defines.push_back({"FFD_LOCAL_SIZE", std::to_string(b.local_size)});
         }
         if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});
-        auto prog = gfx::load_compute_program(
-            shader, program_label + (cp_shared ? ".shared" : ".specialised"), defines);
+        if (runs) defines.push_back({"FFD_BSPLINE_RUNS", "1"});
+        auto prog = gfx::load_compute_program(shader,
+                                              program_label + (cp_shared ? ".shared"
+                                                               : runs    ? ".packed"
+                                                                         : ".specialised"),
+                                              defines);
         if (!prog) return prog.error();
         sp = specialised.emplace(shape, std::move(*prog)).first;
     }

@@ -38,6 +38,7 @@ struct DeformPrograms {
         gfx::Buffer buffer;
         std::size_t capacity = 0;
         std::uint64_t stamp = 0;
+        bool runs = false;  // holds bspline_runs() (gpu_block.h), not the grid
     };
     std::unordered_map<std::uint64_t, Controls> controls;  // per key (lattice entity)
     std::uint64_t uploads = 0;

@@ -98,11 +98,24 @@ void compute(benchmark::State& state, LatticeBasis basis, std::size_t n,
     // for this lattice shape.
     (void)g.deformer->dispatch(l, 1, 1, {}, s.rest.id(), s.deformed.id(), s.count);
     glFinish();
+    // The wall time includes glFinish's round trip (tens of microseconds on a GPU, more than the kernels'
+    // differences at 1M splats); gpu_ms is the dispatch alone, from a timer query (on a GPU: llvmpipe's
+    // queries do not time its compute work, read the wall time there).
+    GLuint query = 0;
+    glCreateQueries(GL_TIME_ELAPSED, 1, &query);
+    double gpu_ns = 0.0;
     for (auto _ : state) {
+        glBeginQuery(GL_TIME_ELAPSED, query);
         (void)g.deformer->dispatch(l, 1, 1, {}, s.rest.id(), s.deformed.id(), s.count);
+        glEndQuery(GL_TIME_ELAPSED);
         glFinish();
+        GLuint64 ns = 0;
+        glGetQueryObjectui64v(query, GL_QUERY_RESULT, &ns);
+        gpu_ns += double(ns);
     }
+    glDeleteQueries(1, &query);
     state.counters["points/s"] = benchmark::Counter(double(n), benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["gpu_ms"] = benchmark::Counter(gpu_ns * 1e-6, benchmark::Counter::kAvgIterations);
 }
 
 const glm::mat4 kViewProj = glm::scale(glm::mat4(1.0f), glm::vec3(0.6f, 0.6f, -0.3f));
@@ -158,12 +171,16 @@ void BM_GpuCompute_Bernstein11_1M_Full_Direct(benchmark::State& s) {
 void BM_GpuCompute_Bernstein11_1M_Full_Shared(benchmark::State& s) {
     compute(s, LatticeBasis::bernstein, 1000000, ffd::GpuBernsteinKernel::shared);
 }
-// The B-spline grid read through the same two kernels (set_bernstein_kernel picks for both bases).
+// The B-spline grid read through the same kernels (set_bernstein_kernel picks for both bases), and packed
+// in runs along u (automatic's choice).
 void BM_GpuCompute_BSpline11_1M_Full_Direct(benchmark::State& s) {
     compute(s, LatticeBasis::bspline, 1000000, ffd::GpuBernsteinKernel::direct);
 }
 void BM_GpuCompute_BSpline11_1M_Full_Shared(benchmark::State& s) {
     compute(s, LatticeBasis::bspline, 1000000, ffd::GpuBernsteinKernel::shared);
+}
+void BM_GpuCompute_BSpline11_1M_Full_Packed(benchmark::State& s) {
+    compute(s, LatticeBasis::bspline, 1000000, ffd::GpuBernsteinKernel::packed);
 }
 // A frame of 3 splat passes (visibility, attributes, shading in the HQ renderer): paper mode deforms in
 // every pass; skinning-style reads the compute output (deformation cost paid once per edit).
@@ -188,6 +205,7 @@ BENCHMARK(BM_GpuCompute_Bernstein11_1M_Full_Shared)
     ->Iterations(1);
 BENCHMARK(BM_GpuCompute_BSpline11_1M_Full_Direct)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_GpuCompute_BSpline11_1M_Full_Shared)->Unit(benchmark::kMillisecond)->UseRealTime();
+BENCHMARK(BM_GpuCompute_BSpline11_1M_Full_Packed)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_PaperMode_Frame_1Pass)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_Skinning_Frame_1Pass)->Unit(benchmark::kMillisecond)->UseRealTime();
 BENCHMARK(BM_PaperMode_Frame_3Passes)->Unit(benchmark::kMillisecond)->UseRealTime();

@@ -2,6 +2,8 @@
 // GpuSplatStore buffers, control points uploaded only when edited, nothing dispatched when nothing changed.
 #include <gtest/gtest.h>
 
+#include <optional>
+
 #include "runtime/ecs/registry.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
@@ -94,10 +96,13 @@ TEST_F(FfdGl, GridDispatchDeformsExactlyAsOneRow) {
     auto gpu = ffd::GpuDeformer::create();
     ASSERT_TRUE(gpu.ok()) << gpu.message();
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(5000);
-    for (int variant = 0; variant < 3; ++variant) {
-        const LatticeBasis basis = variant == 2 ? LatticeBasis::bspline : LatticeBasis::bernstein;
-        gpu->set_bernstein_kernel(variant == 1 ? ffd::GpuBernsteinKernel::shared
-                                               : ffd::GpuBernsteinKernel::direct);
+    // Bernstein direct and shared, B-spline direct and packed.
+    for (int variant = 0; variant < 4; ++variant) {
+        const LatticeBasis basis = variant >= 2 ? LatticeBasis::bspline : LatticeBasis::bernstein;
+        const ffd::GpuBernsteinKernel kernel = variant == 1   ? ffd::GpuBernsteinKernel::shared
+                                               : variant == 3 ? ffd::GpuBernsteinKernel::packed
+                                                              : ffd::GpuBernsteinKernel::direct;
+        gpu->set_bernstein_kernel(kernel);
         Lattice l = ffd::make_lattice(c.origin + glm::dvec3(-1.1),
                                       {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
                                       {5, 4, 6}, basis);
@@ -112,8 +117,7 @@ TEST_F(FfdGl, GridDispatchDeformsExactlyAsOneRow) {
             return gpu->deform(l, in, {p2.data(), n2.data(), u2.data(), v2.data()});
         }();
         ASSERT_TRUE(grid.ok()) << grid.message();
-        EXPECT_EQ(gpu->last_bernstein_kernel(),
-                  variant == 1 ? ffd::GpuBernsteinKernel::shared : ffd::GpuBernsteinKernel::direct);
+        EXPECT_EQ(gpu->last_bernstein_kernel(), kernel);
         EXPECT_EQ(row->inside, n);  // the lattice holds the whole sphere: each splat counted once
         EXPECT_EQ(grid->inside, row->inside);
         EXPECT_EQ(grid->inverted, row->inverted);
@@ -131,16 +135,18 @@ TEST_F(FfdGl, GridDispatchDeformsExactlyAsOneRow) {
 
 // The kernels (GpuBernsteinKernel): control points from shared memory (copied once per work group: the
 // lattice for Bernstein, its zero-bordered grid for B-spline) or read directly (Bernstein: a UBO, or the
-// SSBO when too large for a UBO; B-spline: the SSBO) run the same arithmetic in the same order: the same
-// statistics, and both within 1e-5 of the double-precision CPU reference. Not bit-identical
+// SSBO when too large for a UBO; B-spline: the SSBO, point by point or packed in runs along u) run the
+// same arithmetic: the same statistics, and each within 1e-5 of the double-precision CPU reference (the
+// packed runs' sums over u are dot products, which a driver may add in any order). Not bit-identical
 // outputs: they are two differently compiled programs, and GLSL lets each contract a * b + c into an fma
 // and round its divisions (the binomials) and inversesqrt within 2.5 ULP; llvmpipe happens to give equal
 // bits. The reference bound holds on any conforming implementation (float rounding of sums of at most
-// 7³ weights of unit scale); so the kernels agree within twice it.
+// 7³ weights of unit scale); so the kernels agree within twice it. A wrong run layout moves points by
+// the lattice's displacements (tenths here), far beyond these bounds.
 // Shapes: uneven 6x5x7 and 4x3x5 (the paper's 11³ compiles for minutes on llvmpipe as a shared-memory
 // program, whose barrier() llvmpipe splits into coroutines; it runs only in bench_ffd_gpu). Lattices over
 // the shared-memory limit fall back to direct (not tested: same reason).
-TEST_F(FfdGl, SharedMemoryKernelMatchesTheDirectKernelForBothBases) {
+TEST_F(FfdGl, EveryControlPointKernelMatchesTheReferenceForBothBases) {
     auto gpu = ffd::GpuDeformer::create();
     ASSERT_TRUE(gpu.ok()) << gpu.message();
     GLint max_shared = 0;
@@ -157,34 +163,41 @@ TEST_F(FfdGl, SharedMemoryKernelMatchesTheDirectKernelForBothBases) {
         ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.6, c.origin);
         const std::size_t n = c.size();
         const ffd::PointsIn in{c.p.data(), c.n.data(), c.u.data(), c.v.data(), n, c.origin};
-        std::vector<glm::vec3> p[3], nn[3], u[3], v[3];
-        for (int k = 0; k < 3; ++k) p[k].resize(n), nn[k].resize(n), u[k].resize(n), v[k].resize(n);
-        gpu->set_bernstein_kernel(ffd::GpuBernsteinKernel::direct);
-        auto d = gpu->deform(l, in, {p[0].data(), nn[0].data(), u[0].data(), v[0].data()});
-        ASSERT_TRUE(d.ok()) << d.message();
-        EXPECT_EQ(gpu->last_bernstein_kernel(), ffd::GpuBernsteinKernel::direct);
-        gpu->set_bernstein_kernel(ffd::GpuBernsteinKernel::shared);
-        auto s = gpu->deform(l, in, {p[1].data(), nn[1].data(), u[1].data(), v[1].data()});
-        ASSERT_TRUE(s.ok()) << s.message();
+        // Kernels 0..2: direct, shared, packed (B-spline runs; Bernstein runs direct); 3: the reference.
+        const ffd::GpuBernsteinKernel kernels[3] = {ffd::GpuBernsteinKernel::direct,
+                                                    ffd::GpuBernsteinKernel::shared,
+                                                    ffd::GpuBernsteinKernel::packed};
+        std::vector<glm::vec3> p[4], nn[4], u[4], v[4];
+        for (int k = 0; k < 4; ++k) p[k].resize(n), nn[k].resize(n), u[k].resize(n), v[k].resize(n);
         ASSERT_GE(max_shared, 32768);  // GL 4.5's minimum: these lattices' xyz fit
-        EXPECT_EQ(gpu->last_bernstein_kernel(), ffd::GpuBernsteinKernel::shared);
-        auto r = ffd::deform(l, in, {p[2].data(), nn[2].data(), u[2].data(), v[2].data()},
+        std::optional<ffd::DeformStats> stats[3];
+        for (int k = 0; k < 3; ++k) {
+            gpu->set_bernstein_kernel(kernels[k]);
+            auto d = gpu->deform(l, in, {p[k].data(), nn[k].data(), u[k].data(), v[k].data()});
+            ASSERT_TRUE(d.ok()) << d.message();
+            const bool direct =
+                kernels[k] == ffd::GpuBernsteinKernel::packed && basis == LatticeBasis::bernstein;
+            EXPECT_EQ(gpu->last_bernstein_kernel(), direct ? ffd::GpuBernsteinKernel::direct : kernels[k]);
+            stats[k] = *d;
+        }
+        auto r = ffd::deform(l, in, {p[3].data(), nn[3].data(), u[3].data(), v[3].data()},
                              ffd::Backend::reference);
         ASSERT_TRUE(r.ok());
-        EXPECT_EQ(s->inside, d->inside);
-        EXPECT_EQ(s->inverted, d->inverted);
-        EXPECT_EQ(s->inside, r->inside);
-        EXPECT_EQ(s->inverted, r->inverted);
+        for (int k = 0; k < 3; ++k) {
+            EXPECT_EQ(stats[k]->inside, r->inside) << "kernel " << k;
+            EXPECT_EQ(stats[k]->inverted, r->inverted) << "kernel " << k;
+        }
         for (std::size_t i = 0; i < n; ++i) {
-            for (int k = 0; k < 2; ++k) {  // shared, then direct, against the reference
-                ASSERT_LT(glm::length(p[k][i] - p[2][i]), 1e-5f * 2.2f) << i << " kernel " << k;
-                ASSERT_LT(glm::length(nn[k][i] - nn[2][i]), 1e-5f) << i << " kernel " << k;
-                ASSERT_LT(glm::length(u[k][i] - u[2][i]), 1e-5f * glm::length(u[2][i]) + 1e-9f)
+            for (int k = 0; k < 3; ++k) {  // each kernel against the reference
+                ASSERT_LT(glm::length(p[k][i] - p[3][i]), 1e-5f * 2.2f) << i << " kernel " << k;
+                ASSERT_LT(glm::length(nn[k][i] - nn[3][i]), 1e-5f) << i << " kernel " << k;
+                ASSERT_LT(glm::length(u[k][i] - u[3][i]), 1e-5f * glm::length(u[3][i]) + 1e-9f)
                     << i << " kernel " << k;
-                ASSERT_LT(glm::length(v[k][i] - v[2][i]), 1e-5f * glm::length(v[2][i]) + 1e-9f)
+                ASSERT_LT(glm::length(v[k][i] - v[3][i]), 1e-5f * glm::length(v[3][i]) + 1e-9f)
                     << i << " kernel " << k;
             }
             ASSERT_LT(glm::length(p[1][i] - p[0][i]), 2e-5f * 2.2f) << i;
+            ASSERT_LT(glm::length(p[2][i] - p[0][i]), 2e-5f * 2.2f) << i;
         }
     }
 }

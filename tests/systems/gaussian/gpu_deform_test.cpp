@@ -183,16 +183,24 @@ TEST_F(GaussianGpuDeform, MatchesCpuOnBernsteinAndBsplineLatticesWithSeveralDefo
     }
 }
 
-TEST_F(GaussianGpuDeform, BothBernsteinKernelsAgree) {
+TEST_F(GaussianGpuDeform, EveryControlPointKernelAgreesForBothBases) {
     const GaussianCloud cloud = random_cloud(1500, 1, 0.95f, 5);
-    const Lattice l = twisted(LatticeBasis::bernstein, {4, 3, 5});
-    const GaussianCloud cpu = cpu_deform({&l}, cloud);
-    for (ffd::GpuBernsteinKernel k : {ffd::GpuBernsteinKernel::direct, ffd::GpuBernsteinKernel::shared}) {
-        deformer->set_bernstein_kernel(k);
-        auto gpu = deform_on_gpu(*deformer, {&l}, cloud, ShMode::rotate_view);
-        ASSERT_TRUE(gpu) << gpu.message();
-        EXPECT_EQ(deformer->last_bernstein_kernel(), k);
-        compare(*gpu, cpu, k == ffd::GpuBernsteinKernel::direct ? "direct kernel" : "shared-memory kernel");
+    for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline}) {
+        const Lattice l = twisted(basis, {4, 3, 5});
+        const GaussianCloud cpu = cpu_deform({&l}, cloud);
+        for (ffd::GpuBernsteinKernel k : {ffd::GpuBernsteinKernel::direct, ffd::GpuBernsteinKernel::shared,
+                                          ffd::GpuBernsteinKernel::packed}) {
+            deformer->set_bernstein_kernel(k);
+            auto gpu = deform_on_gpu(*deformer, {&l}, cloud, ShMode::rotate_view);
+            ASSERT_TRUE(gpu) << gpu.message();
+            // Bernstein has no packed layout: it reads its points directly.
+            const bool direct = basis == LatticeBasis::bernstein && k == ffd::GpuBernsteinKernel::packed;
+            EXPECT_EQ(deformer->last_bernstein_kernel(), direct ? ffd::GpuBernsteinKernel::direct : k);
+            const char* names[] = {"automatic", "direct kernel", "shared-memory kernel", "packed kernel"};
+            const std::string what =
+                std::string(basis == LatticeBasis::bernstein ? "bernstein " : "bspline ") + names[int(k)];
+            compare(*gpu, cpu, what.c_str());
+        }
     }
 }
 
@@ -321,7 +329,8 @@ TEST_F(GaussianGpuDeform, TwoDimensionalDispatchGridCoversEveryGaussian) {
     const GaussianCloud cloud = random_cloud(2000, 1, 0.9f, 13);
     const Lattice l = twisted(LatticeBasis::bernstein, {4, 3, 5});
     const Lattice b = twisted(LatticeBasis::bspline, {4, 4, 4});
-    for (ffd::GpuBernsteinKernel k : {ffd::GpuBernsteinKernel::direct, ffd::GpuBernsteinKernel::shared}) {
+    for (ffd::GpuBernsteinKernel k : {ffd::GpuBernsteinKernel::direct, ffd::GpuBernsteinKernel::shared,
+                                      ffd::GpuBernsteinKernel::packed}) {
         deformer->set_bernstein_kernel(k);
         auto full = deform_on_gpu(*deformer, {&l, &b}, cloud, ShMode::rotate_view);
         ASSERT_TRUE(full) << full.message();
