@@ -399,9 +399,7 @@ TEST(RenderCommand, VideoNamesFfmpegWhenItIsMissing) {
 
 TEST(RenderCommand, VideoOfATurntableHasOneFramePerImage) {
     if (std::system("command -v ffmpeg > /dev/null 2>&1 && command -v ffprobe > /dev/null 2>&1") != 0)
-        GTEST_SKIP() << "ffmpeg/ffprobe not installed: --video is optional (apt-get install ffmpeg: 91 "
-                        "packages, 157 MB, so "
-                        "tools/bootstrap.sh does not install it)";
+        GTEST_SKIP() << "ffmpeg/ffprobe not installed (tools/bootstrap.sh installs them; --video needs them)";
     const fs::path out = fresh_dir("video");
     fs::create_directories(out.parent_path());  // the videos go next to the frames' folder
     for (const char* name : {"turn clip.mp4", "turn.gif"}) {
