@@ -64,7 +64,9 @@ struct ComputeRaster {
 // 3 px: llvmpipe's raster threads suffer more from the load.) Hardware GPU (NVIDIA H200,
 // bench_raster_break_even, HQ at 1280x720): compute 3.6-4.8x faster at 1 px, 2.4x at 2 px, 1.9x at 3 px,
 // 1.7x at 4 px, 1.13x at 6 px, then 0.89-0.92x at 8 px and 0.90-0.96x from 12 to 24 px: the largest
-// footprint measured still at >= 1 is 6 px.
+// footprint measured still at >= 1 is 6 px. An NVIDIA H100 gives the same threshold: 3.4-4.4x at 1 px,
+// 2.3-2.4x at 2 px, 1.9x at 3 px, 1.7x at 4 px, 1.12-1.15x at 6 px, 0.88-0.91x at 8 px, 0.89-0.93x from 12
+// to 24 px.
 inline constexpr double compute_raster_software_max_footprint = 1.8;
 inline constexpr double compute_raster_hardware_max_footprint = 6.0;
 
