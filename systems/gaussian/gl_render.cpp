@@ -493,7 +493,8 @@ Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianVie
         GLuint covered[2] = {0, 0};
         glGetNamedBufferSubData(r.draw.id(), 16, sizeof(covered), covered);
         r.covered_pixels = covered[1] != 0 ? std::numeric_limits<std::uint64_t>::max() : covered[0];
-        if (r.covered_pixels > kQuadCoverageBudget * std::uint64_t(v.width) * std::uint64_t(v.height)) {
+        if (r.covered_pixels >
+            quad_coverage_budget(r.software) * std::uint64_t(v.width) * std::uint64_t(v.height)) {
             TileTargets t = *tiles;
             t.width = v.width, t.height = v.height, t.ndc_depth = v.ndc_depth;
             bool over_capacity = false;

@@ -12,7 +12,7 @@
 //      3DGS tile renderer in compute (tile_*.comp: (tile, Gaussian) entries in depth order, a stable
 //      radix sort by tile id, per-tile ranges, a 16x16 group per tile with early termination);
 //      draw_gaussians (the render system) takes the quads unless the cloud covers too many pixels for them
-//      (kQuadCoverageBudget, measured by the projection), then the tiles;
+//      (quad_coverage_budget(), measured by the projection), then the tiles;
 //   4. the image read back.
 // The images match the CPU reference renderer (reference_render.h: same conventions, same pixel boxes)
 // within the PSNR the GL test states; both sort paths give identical images.
@@ -44,9 +44,22 @@ enum class BlendPath { quads, tiles };
 // pixel boxes clipped to the image) during the projection and, past this many images, blends the cloud
 // with the tile renderer instead, which stops each pixel at transmittance 1e-4 and each tile once all of
 // its pixels have (its preparation is per covered 16x16 tile, up to 256 times less than per pixel).
-// 128 images keep dense test scenes on the quads (3,000 random Gaussians at 200x150 cover ~63) and bound
-// a quad frame at 640x480 to 39M fragments (llvmpipe here: about 110M fragments per CPU second).
+// On a software rasterizer, 128 images keep dense test scenes on the quads (3,000 random Gaussians at
+// 200x150 cover ~63) and bound a quad frame at 640x480 to 39M fragments (llvmpipe here: about 110M
+// fragments per CPU second).
 inline constexpr std::uint64_t kQuadCoverageBudget = 128;
+// On a hardware GPU the quads are bound by its blending units, which compute-oriented GPUs have few of.
+// NVIDIA H100 (bench_gaussian_gl, 1200x797, GPU sort; counters covered_images and blend_ms): quads blend
+// 2-3.5G fragments/s, so 23 images took 10.6 ms against 1.0 ms for the tiles, 71 images 26.6 against
+// 3.2 ms, 401 images 112 against 35 ms; the tiles' fixed cost (counts, scan, sort) is under a
+// millisecond there, so they win past about 3 images. 4 images: a GPU with several times the blending
+// rate loses at most a fraction of a millisecond to the tiles between 4 images and its own break-even.
+inline constexpr std::uint64_t kQuadCoverageBudgetHardware = 4;
+// The budget draw_gaussians() applies, in images of the view's size: kQuadCoverageBudget on a software
+// rasterizer (gfx::software_rasterizer()), kQuadCoverageBudgetHardware on a hardware GPU.
+constexpr std::uint64_t quad_coverage_budget(bool software) {
+    return software ? kQuadCoverageBudget : kQuadCoverageBudgetHardware;
+}
 // The tile path's entry buffers: 8 bytes per (tile, Gaussian) entry, 2 GiB at most.
 inline constexpr std::uint64_t kMaxTileEntries = std::uint64_t(1) << 28;
 

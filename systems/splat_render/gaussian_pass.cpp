@@ -190,7 +190,7 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
     s.quad_clouds = s.tile_clouds = 0;
     s.covered_pixels = 0;
     gaussian::reset_tile_stats(s.renderer);
-    // A cloud that covers too much of the image for quads (gl_render.h: kQuadCoverageBudget) goes to the
+    // A cloud that covers too much of the image for quads (gl_render.h: quad_coverage_budget) goes to the
     // tile renderer, into the same targets with the same depth test.
     gaussian::TileTargets tiles;
     tiles.color = s.gauss_color.id(), tiles.depth_sum = s.gauss_depth.id(), tiles.surface_depth = f.depth;

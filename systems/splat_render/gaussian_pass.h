@@ -55,7 +55,7 @@ BoundingSphere cached_gaussian_bounds(ecs::Registry& registry, ecs::Entity entit
 // Uploads what changed and draws every Gaussian cloud; returns the number of Gaussians submitted.
 Result<std::uint32_t> gaussian_pass(ecs::Registry& registry, const GaussianPassFrame& frame);
 
-// The last frame's blend per cloud (quads, or the tile renderer past gl_render.h's kQuadCoverageBudget)
+// The last frame's blend per cloud (quads, or the tile renderer past gl_render.h's quad_coverage_budget)
 // and the tile renderer's work: (tile, Gaussian) entries prepared, entries staged before the tiles'
 // pixels saturated. Reads a counter back (a sync): for tests and diagnostics, not every frame.
 struct GaussianPassStats {

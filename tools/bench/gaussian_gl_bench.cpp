@@ -65,6 +65,13 @@ void BM_GaussianGlFrame(benchmark::State& state) {
     state.counters["readback_ms"] = readback_ms / runs;
     state.counters["tile_prepare_ms"] = tile_prepare_ms / runs;  // part of blend_ms
     state.counters["tile_entries"] = double(r->tile_entries);
+    // The quads' fragment work: the Gaussians' clipped pixel boxes (project.comp sums them; the second
+    // word flags a sum past 2^32), in images of this size: what draw_gaussians weighs against
+    // quad_coverage_budget().
+    GLuint covered[2] = {0, 0};
+    glGetNamedBufferSubData(r->draw.id(), 16, sizeof(covered), covered);
+    state.counters["covered_images"] =
+        covered[1] != 0 ? -1.0 : double(covered[0]) / (double(o.width) * double(o.height));
     state.SetLabel(ctx->renderer());
     r.reset();
 }

@@ -140,8 +140,11 @@ TEST_F(GaussianRenderSystem, ImageEqualsGaussianRendererAndReference) {
     const auto& stats = reg.resource<render::RenderStats>();
     EXPECT_EQ(stats.gaussians, 3000u);
     const render::GaussianPassStats pass = render::gaussian_pass_stats(reg);
-    EXPECT_EQ(pass.quad_clouds, 1u);  // a dense but ordinary scene keeps the quads
+    // A dense but ordinary scene: within the software rasterizer's budget (quads there), past a hardware
+    // GPU's (tiles there).
     EXPECT_LT(pass.covered_pixels, kQuadCoverageBudget * w * h);
+    EXPECT_GT(pass.covered_pixels, kQuadCoverageBudgetHardware * w * h);
+    EXPECT_EQ(gfx::software_rasterizer() ? pass.quad_clouds : pass.tile_clouds, 1u);
     EXPECT_GT(pass.covered_pixels, std::uint64_t(w * h));
     ASSERT_TRUE(reg.try_resource<GpuGaussianStore>());
     EXPECT_EQ(reg.resource<GpuGaussianStore>().clouds.at(e).count, 3000u);
@@ -293,7 +296,7 @@ TEST_F(GaussianRenderSystem, DrawsWhatTheGpuDeformationWroteIntoTheStore) {
 }  // namespace
 
 // Bounded work: quads blend every covered pixel (no early termination), so a cloud covering more than
-// kQuadCoverageBudget images goes to the tile renderer, which stops at saturated transmittance.
+// quad_coverage_budget() images goes to the tile renderer, which stops at saturated transmittance.
 
 // `n` Gaussians of colour `rgb`, isotropic `sigma`, centres spread over z in [z0, z0 + 1] near the axis.
 GaussianCloud wall(std::size_t n, float z0, float sigma, float opacity, glm::vec3 rgb) {
