@@ -15,6 +15,7 @@
 #include "runtime/assets/scene.h"
 #include "runtime/core/atomic_file.h"
 #include "runtime/core/file_io.h"
+#include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/splat_store.h"
 #include "systems/ffd/components.h"
@@ -25,6 +26,8 @@
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/profiling/synthetic.h"
 #include "systems/residency/residency_system.h"
+#include "systems/gaussian/gl_render.h"
+#include "systems/splat_render/gaussian_pass.h"
 #include "systems/splat_render/splat_render.h"
 #include "tools/splatffd/command.h"
 #include "systems/engine/engine.h"
@@ -297,6 +300,24 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     out.backend_used = deformation_backend_name(runs_after.first - runs_before.first,
                                                 runs_after.second - runs_before.second);
     config.emplace_back("backend_used", out.backend_used);
+    // Which blend the Gaussian pass took in the last frame (systems/gaussian/gl_render.h: quads up to
+    // quad_coverage_budget() images of coverage, the tile renderer past it, where a GPU's blending units
+    // would bound the quads) and the coverage it weighed, in images of the frame's size.
+    if (have_gl && want_render && gaussians > 0) {
+        const render::GaussianPassStats g = render::gaussian_pass_stats(registry);
+        config.emplace_back("gaussian_blend", std::string(g.tile_clouds == 0   ? "quads"
+                                                          : g.quad_clouds == 0 ? "tiles"
+                                                                               : "mixed"));
+        const auto& rs = registry.resource<render::RenderSettings>();
+        const double pixels = double(rs.width) * double(rs.height);
+        // Past 2^32 pixels the pass keeps only that the sum overflowed: -1.
+        config.emplace_back("gaussian_covered_images",
+                            g.covered_pixels == std::numeric_limits<std::uint64_t>::max()
+                                ? -1.0
+                                : double(g.covered_pixels) / pixels);
+        config.emplace_back("gaussian_quad_budget_images",
+                            double(gaussian::quad_coverage_budget(gfx::software_rasterizer())));
+    }
     if (s.lattice_points > 0) config.emplace_back("lattice", static_cast<double>(s.lattice_points));
     if (!s.basis.empty()) config.emplace_back("basis", s.basis);
     out.report = build_report(*out.profiler, std::move(config), machine_info(have_gl));

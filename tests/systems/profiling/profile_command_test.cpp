@@ -167,4 +167,24 @@ TEST_F(ProfileCommand, DefaultsToTheEnginesOwnBackendAndSaysWhichRan) {
     EXPECT_EQ(profile("--backend tpu").code, 2);
 }
 
+TEST_F(ProfileCommand, SaysWhichBlendTheGaussianPassTookAndTheCoverageItWeighed) {
+    // A small Gaussian sphere, rendered: the report names the blend of its last frame, the coverage and the
+    // budget (4 images on a GPU, 128 on a software rasterizer), and the blend is the one they ask for.
+    const CmdResult r =
+        profile("synthetic-gaussians:3k --quality hq --frames 2 --warmup 1 --json " + path("g.json"));
+    ASSERT_EQ(r.code, 0) << r.out;
+    const auto config = nlohmann::json::parse(read_text(path("g.json")))["config"];
+    ASSERT_TRUE(config.contains("gaussian_blend")) << config.dump();
+    const double covered = config["gaussian_covered_images"].get<double>();
+    const double budget = config["gaussian_quad_budget_images"].get<double>();
+    EXPECT_TRUE(budget == 4.0 || budget == 128.0) << budget;
+    EXPECT_GT(covered, 0.01);  // a sphere of 3,000 Gaussians in a 1280x720 frame covers part of it
+    EXPECT_EQ(config["gaussian_blend"], covered > budget ? "tiles" : "quads") << covered << " / " << budget;
+    EXPECT_NE(r.out.find("gaussian_blend="), std::string::npos) << r.out;
+    // No Gaussians, no such entries.
+    const CmdResult p = profile("synthetic:5k --backend cpu --frames 2 --warmup 0 --json " + path("s.json"));
+    ASSERT_EQ(p.code, 0) << p.out;
+    EXPECT_FALSE(nlohmann::json::parse(read_text(path("s.json")))["config"].contains("gaussian_blend"));
+}
+
 }  // namespace
