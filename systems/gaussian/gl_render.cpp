@@ -490,9 +490,7 @@ Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianVie
         // The covered pixels (8 bytes; waits for the projection only): quads up to the budget, where
         // their image is the one the reference tests compare; past it, the tile blend, whose work stops at
         // saturation (unless its entries outgrow their buffers: quads then, unbounded but right).
-        GLuint covered[2] = {0, 0};
-        glGetNamedBufferSubData(r.draw.id(), 16, sizeof(covered), covered);
-        r.covered_pixels = covered[1] != 0 ? std::numeric_limits<std::uint64_t>::max() : covered[0];
+        r.covered_pixels = read_covered_pixels(r);
         if (r.covered_pixels >
             quad_coverage_budget(r.software) * std::uint64_t(v.width) * std::uint64_t(v.height)) {
             TileTargets t = *tiles;
@@ -507,6 +505,12 @@ Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianVie
     }
     blend_quads(r, v, b.count, splat_program);
     return {};
+}
+
+std::uint64_t read_covered_pixels(const GlRenderer& r) {
+    GLuint covered[2] = {0, 0};  // the sum, and its wrap flag (project.comp)
+    glGetNamedBufferSubData(r.draw.id(), 16, sizeof(covered), covered);
+    return covered[1] != 0 ? std::numeric_limits<std::uint64_t>::max() : covered[0];
 }
 
 void reset_tile_stats(GlRenderer& r) {

@@ -168,6 +168,10 @@ struct GaussianView {
 // a cloud of up to limit / 16 Gaussians (1M at GL's guaranteed 2^24 bytes, 8.4M at 2^27).
 Status draw_gaussians(GlRenderer& renderer, const GaussianBuffers& buffers, const GaussianView& view,
                       const gfx::Program* splat_program = nullptr, const TileTargets* tiles = nullptr);
+// The pixels the last projection's Gaussians cover (their pixel boxes clipped to the image, summed;
+// UINT64_MAX past 2^32): the quads' fragment work that draw_gaussians() weighs against
+// quad_coverage_budget(). Reads 8 bytes back: waits for the projection.
+std::uint64_t read_covered_pixels(const GlRenderer& renderer);
 void reset_tile_stats(GlRenderer& renderer);
 // Reads the staged count back (a sync): call it when the numbers are wanted, not every frame.
 TileStats tile_stats(const GlRenderer& renderer);

@@ -246,7 +246,8 @@ GaussianPassStats gaussian_pass_stats(ecs::Registry& registry) {
     auto* s = registry.try_resource<GaussianPassState>();
     if (!s || s->failed) return {};
     const gaussian::TileStats t = gaussian::tile_stats(s->renderer);
-    return {s->quad_clouds, s->tile_clouds, s->covered_pixels, t.entries, t.staged};
+    return {s->quad_clouds, s->tile_clouds, s->covered_pixels,
+            t.entries,      t.staged,       gaussian::quad_coverage_budget(s->renderer.software)};
 }
 
 void release_gaussian_pass(ecs::Registry& registry) { registry.erase_resource<GaussianPassState>(); }

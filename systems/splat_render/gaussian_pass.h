@@ -62,6 +62,7 @@ struct GaussianPassStats {
     std::uint32_t quad_clouds = 0, tile_clouds = 0;
     std::uint64_t covered_pixels = 0;  // the clouds' clipped pixel boxes, summed (the quads' fragments)
     std::uint64_t tile_entries = 0, tile_entries_staged = 0;
+    std::uint64_t quad_budget_images = 0;  // the budget the blend choice used (gl_render.h)
 };
 GaussianPassStats gaussian_pass_stats(ecs::Registry& registry);
 

@@ -10,6 +10,7 @@
 #include <benchmark/benchmark.h>
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <vector>
 
@@ -65,13 +66,12 @@ void BM_GaussianGlFrame(benchmark::State& state) {
     state.counters["readback_ms"] = readback_ms / runs;
     state.counters["tile_prepare_ms"] = tile_prepare_ms / runs;  // part of blend_ms
     state.counters["tile_entries"] = double(r->tile_entries);
-    // The quads' fragment work: the Gaussians' clipped pixel boxes (project.comp sums them; the second
-    // word flags a sum past 2^32), in images of this size: what draw_gaussians weighs against
-    // quad_coverage_budget().
-    GLuint covered[2] = {0, 0};
-    glGetNamedBufferSubData(r->draw.id(), 16, sizeof(covered), covered);
-    state.counters["covered_images"] =
-        covered[1] != 0 ? -1.0 : double(covered[0]) / (double(o.width) * double(o.height));
+    // The quads' fragment work in images of this size (-1: past 2^32 pixels): what draw_gaussians weighs
+    // against quad_coverage_budget().
+    const std::uint64_t covered = gaussian::read_covered_pixels(*r);
+    state.counters["covered_images"] = covered == std::numeric_limits<std::uint64_t>::max()
+                                           ? -1.0
+                                           : double(covered) / (double(o.width) * double(o.height));
     state.SetLabel(ctx->renderer());
     r.reset();
 }

@@ -15,7 +15,6 @@
 #include "runtime/assets/scene.h"
 #include "runtime/core/atomic_file.h"
 #include "runtime/core/file_io.h"
-#include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/splat_store.h"
 #include "systems/ffd/components.h"
@@ -26,7 +25,6 @@
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/profiling/synthetic.h"
 #include "systems/residency/residency_system.h"
-#include "systems/gaussian/gl_render.h"
 #include "systems/splat_render/gaussian_pass.h"
 #include "systems/splat_render/splat_render.h"
 #include "tools/splatffd/command.h"
@@ -315,8 +313,7 @@ Result<RunOutput> run_profile(const RunSetup& s) {
                             g.covered_pixels == std::numeric_limits<std::uint64_t>::max()
                                 ? -1.0
                                 : double(g.covered_pixels) / pixels);
-        config.emplace_back("gaussian_quad_budget_images",
-                            double(gaussian::quad_coverage_budget(gfx::software_rasterizer())));
+        config.emplace_back("gaussian_quad_budget_images", double(g.quad_budget_images));
     }
     if (s.lattice_points > 0) config.emplace_back("lattice", static_cast<double>(s.lattice_points));
     if (!s.basis.empty()) config.emplace_back("basis", s.basis);
