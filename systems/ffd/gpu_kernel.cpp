@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstring>
 #include <utility>
+#include <vector>
 
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
@@ -21,6 +23,9 @@ Result<DeformPrograms> DeformPrograms::create(std::string shader, std::string pr
     p.shader = std::move(shader), p.program_label = std::move(program_label), p.prefix = std::move(prefix);
     glGetIntegerv(GL_MAX_UNIFORM_BLOCK_SIZE, &p.max_ubo);
     glGetIntegerv(GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, &p.max_shared);
+    GLint align = 0;
+    glGetIntegerv(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT, &align);
+    if (align > 0) p.ubo_align = align;
     p.software = gfx::software_rasterizer();
     p.ubo = gfx::Buffer::create(p.prefix + ".lattice_block");
     glNamedBufferData(p.ubo.id(), sizeof(FfdBlock), nullptr, GL_DYNAMIC_DRAW);
@@ -32,8 +37,6 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
                                                    std::uint32_t count) {
     // Same preparation as the CPU kernels (float displacements, M⁻¹, origin offset in double).
     const Prepared P = prepare(lattice, cloud_origin);
-    const FfdBlock block = make_ffd_block(lattice, P, count);
-    orphan_upload(ubo.id(), sizeof block, &block);
     // A program specialised for this lattice shape, basis and kernel (compiled once each; constant loop
     // bounds, small arrays, the other basis's code left out). Bernstein's control points go into shared
     // memory on hardware GPUs when their xyz fit (each splat reads all of them), else into a UBO when they
@@ -61,6 +64,7 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
         ++uploads;
     }
     Bound b;
+    b.block = make_ffd_block(lattice, P, count);
     b.local_size = cp_shared ? 256 : 64;
     last_kernel = cp_shared ? GpuBernsteinKernel::shared
                   : runs    ? GpuBernsteinKernel::packed
@@ -93,7 +97,6 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
     }
     b.program = sp->second.id();
     glUseProgram(b.program);
-    glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CONTROL_POINTS, cp.buffer.id());
     if (cp_ubo)
         glBindBufferRange(GL_UNIFORM_BUFFER, SFFD_UBO_FFD_CONTROL, cp.buffer.id(), 0,
@@ -106,12 +109,24 @@ Status DeformPrograms::dispatch_batches(const Bound& bound, std::uint32_t count,
                                         const std::function<void(const gfx::SsboBatch&)>& bind_batch) {
     auto batches = gfx::ssbo_batches(count, strides);
     if (!batches) return batches.error();
-    for (const gfx::SsboBatch& batch : *batches) {
+    if (batches->empty()) return {};
+    // Rewriting one block's count between batches would write into storage the previous batch's dispatch
+    // reads: an update the driver must order behind that dispatch, which on an NVIDIA H200 made the CPU
+    // wait for it (orphan_upload). So each batch gets its own block, all in one upload.
+    const std::size_t align = std::size_t(std::max(ubo_align, 1));
+    const std::size_t stride = (sizeof(FfdBlock) + align - 1) / align * align;
+    std::vector<std::byte> blocks(stride * batches->size());
+    for (std::size_t i = 0; i < batches->size(); ++i) {
+        FfdBlock block = bound.block;
+        block.count[0] = std::uint32_t((*batches)[i].count);
+        std::memcpy(blocks.data() + i * stride, &block, sizeof block);
+    }
+    orphan_upload(ubo.id(), blocks.size(), blocks.data());
+    for (std::size_t i = 0; i < batches->size(); ++i) {
+        const gfx::SsboBatch& batch = (*batches)[i];
+        glBindBufferRange(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, ubo.id(), GLintptr(i * stride),
+                          GLsizeiptr(sizeof(FfdBlock)));
         bind_batch(batch);
-        if (batches->size() > 1) {
-            const std::uint32_t n = std::uint32_t(batch.count);
-            glNamedBufferSubData(ubo.id(), GLintptr(offsetof(FfdBlock, count)), sizeof n, &n);
-        }
         // A 2D grid beyond 65,535 groups (4.19M points at 64 wide): runtime/gfx/dispatch.h.
         if (Status s = gfx::dispatch_1d(batch.count, bound.local_size); !s) return s;
     }
@@ -150,9 +165,9 @@ bool StatsReadbacks::queue(GLuint stats, std::size_t words, std::uint64_t tag, c
     return slot->fence != nullptr;
 }
 
-bool StatsReadbacks::signalled(Slot& r) {
-    // Zero timeout: asks, never waits. The flush bit makes sure the fence reaches the GPU.
-    const GLenum state = glClientWaitSync(r.fence, GL_SYNC_FLUSH_COMMANDS_BIT, 0);
+bool StatsReadbacks::signalled(Slot& r, bool flush) {
+    // Zero timeout: asks, never waits.
+    const GLenum state = glClientWaitSync(r.fence, flush ? GL_SYNC_FLUSH_COMMANDS_BIT : 0, 0);
     if (state != GL_ALREADY_SIGNALED && state != GL_CONDITION_SATISFIED) return false;
     glDeleteSync(r.fence);
     r.fence = nullptr;

@@ -21,6 +21,7 @@
 #include "runtime/gfx/ssbo_batch.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/ffd_gpu.h"
+#include "systems/ffd/gpu_block.h"
 
 namespace sffd::ffd::detail {
 
@@ -44,6 +45,7 @@ struct DeformPrograms {
     std::uint64_t uploads = 0;
     GLint max_ubo = 0;      // GL_MAX_UNIFORM_BLOCK_SIZE, queried once (a glGet can stall a threaded driver)
     GLint max_shared = 0;   // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, same
+    GLint ubo_align = 256;  // GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT, same (GL 4.5's largest allowed value)
     bool software = false;  // gfx::software_rasterizer(), for GpuBernsteinKernel::automatic
     GpuBernsteinKernel kernel = GpuBernsteinKernel::automatic, last_kernel = GpuBernsteinKernel::automatic;
 
@@ -53,17 +55,19 @@ struct DeformPrograms {
     struct Bound {
         GLuint program = 0;
         std::uint32_t local_size = 64;  // deform.comp's FFD_LOCAL_SIZE
+        FfdBlock block{};               // uploaded by dispatch_batches(), one copy per batch
     };
-    // Fills the block UBO for `count` points, uploads the control points of `key` when `stamp` moved (0:
-    // always), picks the program and binds it with the lattice bindings (SFFD_UBO_FFD,
-    // SFFD_SSBO_CONTROL_POINTS, SFFD_UBO_FFD_CONTROL). The lattice must be valid.
+    // Prepares the block for `count` points, uploads the control points of `key` when `stamp` moved (0:
+    // always), picks the program and binds it with the control points (SFFD_SSBO_CONTROL_POINTS,
+    // SFFD_UBO_FFD_CONTROL). The lattice must be valid.
     Result<Bound> bind(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp,
                        const glm::dvec3& cloud_origin, std::uint32_t count);
     // After bind(): the dispatch of `count` points in batches of element ranges (runtime/gfx/ssbo_batch.h;
     // more than one only when a buffer of byte `strides` per point exceeds GL_MAX_SHADER_STORAGE_BLOCK_SIZE).
-    // `bind_batch` binds the per-point buffers for each batch; the block's count is rewritten per batch (an
-    // ordinary buffer update, ordered after the dispatches already issued). Fails, dispatching nothing,
-    // when no batch fits (the message names the limit).
+    // Every batch's block (its own count) goes into fresh UBO storage in one upload, each bound by range
+    // at SFFD_UBO_FFD: no write lands in storage that an issued dispatch reads. `bind_batch` binds the
+    // per-point buffers for each batch. Fails, dispatching nothing, when no batch fits (the message names
+    // the limit).
     Status dispatch_batches(const Bound& bound, std::uint32_t count, std::span<const std::uint64_t> strides,
                             const std::function<void(const gfx::SsboBatch&)>& bind_batch);
     void retain_keys(const std::vector<std::uint64_t>& live);
@@ -86,11 +90,13 @@ public:
     // has said why). Capped, so such a loop neither maps a buffer every frame nor grows without bound.
     static constexpr std::size_t kMaxSlots = 8;
     bool queue(GLuint stats, std::size_t words, std::uint64_t tag, const std::string& label);
-    // Calls done(tag, counters) for each queued copy whose fence has signalled; never waits.
+    // Calls done(tag, counters) for each queued copy whose fence has signalled; never waits, and flushes
+    // the command stream only when every slot is in flight (see signalled()).
     template <class Done>
     void poll(Done&& done) {
+        const bool flush = pending() >= kMaxSlots;
         for (Slot& r : m_slots)
-            if (r.fence && signalled(r)) done(r.tag, r.mapped);
+            if (r.fence && signalled(r, flush)) done(r.tag, r.mapped);
     }
     std::size_t pending() const;
 
@@ -101,7 +107,11 @@ private:
         GLsync fence = nullptr;
         std::uint64_t tag = 0;
     };
-    static bool signalled(Slot& r);  // deletes the fence (frees the slot) when it has signalled
+    // Deletes the fence (frees the slot) when it has signalled. A fence reaches the GPU with the frame's
+    // next flush (a swap, a read-back, the profiler's frame pacing); asking with the flush bit every frame
+    // made the deformation's own CPU time pay for a flush, so only a loop that never flushes (every slot
+    // in flight) gets one, or its fences might never signal.
+    static bool signalled(Slot& r, bool flush);
     std::vector<Slot> m_slots;
 };
 

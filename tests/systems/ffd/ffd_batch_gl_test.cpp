@@ -1,9 +1,16 @@
 // The FFD compute pass over a cloud larger than GL_MAX_SHADER_STORAGE_BLOCK_SIZE (simulated with a small
 // limit, gfx::ScopedLimits): it runs in element ranges (runtime/gfx/ssbo_batch.h) and deforms exactly as
 // one dispatch does. Exact equality holds on any implementation: the same program computes each splat
-// from the same inputs; only which range a splat is bound in differs.
+// from the same inputs; only which range a splat is bound in differs. The batches make no buffer writes of
+// their own (each has its block in the one upload): a write between two dispatches lands in storage the
+// first one reads, and a driver may make the CPU wait for it.
+//
+// glNamedBufferSubData and glBufferSubData are interposed in this executable (counted, then passed to the
+// driver through RTLD_NEXT), as tests/systems/splat_render/readback_test.cpp does for the render's waits.
+#include <dlfcn.h>
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <string>
 #include <vector>
 
@@ -16,6 +23,27 @@
 #include "systems/ffd/operations.h"
 #include "tests/systems/ffd/test_util.h"
 #include "tests/test_util/headless_gl.h"
+
+namespace {
+std::atomic<int> g_buffer_writes{0};
+template <class Fn>
+Fn real(const char* name) {
+    return reinterpret_cast<Fn>(dlsym(RTLD_NEXT, name));
+}
+}  // namespace
+
+extern "C" {
+void APIENTRY glNamedBufferSubData(GLuint buffer, GLintptr offset, GLsizeiptr size, const void* data) {
+    ++g_buffer_writes;
+    static const auto fn = real<PFNGLNAMEDBUFFERSUBDATAPROC>("glNamedBufferSubData");
+    fn(buffer, offset, size, data);
+}
+void APIENTRY glBufferSubData(GLenum target, GLintptr offset, GLsizeiptr size, const void* data) {
+    ++g_buffer_writes;
+    static const auto fn = real<PFNGLBUFFERSUBDATAPROC>("glBufferSubData");
+    fn(target, offset, size, data);
+}
+}
 
 namespace sffd {
 namespace {
@@ -48,8 +76,12 @@ TEST_F(FfdBatchGl, CloudOverTheBlockSizeDeformsInRangesExactlyAsOneDispatch) {
                                   {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
                                   {4, 5, 3}, LatticeBasis::bspline);
     ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.6, c.origin);
+    (void)deform(*gpu, l, c);  // warm-up: the program and the scratch buffers
+    g_buffer_writes = 0;
     auto whole = deform(*gpu, l, c);
     ASSERT_TRUE(whole) << whole.message();
+    const int whole_writes = g_buffer_writes.exchange(0);
+    EXPECT_GT(whole_writes, 0) << "the interposed entry points saw no call";
 
     gfx::GlLimits small = gfx::limits();
     small.max_ssbo_block_size = 997 * 64;  // about 1,000 splats a batch: 6 batches, the last one short
@@ -60,6 +92,7 @@ TEST_F(FfdBatchGl, CloudOverTheBlockSizeDeformsInRangesExactlyAsOneDispatch) {
         return deform(*gpu, l, c);
     }();
     ASSERT_TRUE(batched) << batched.message();
+    EXPECT_EQ(g_buffer_writes.load(), whole_writes) << "writes between the batches' dispatches";
     EXPECT_EQ(gfx::debug_error_count(), errors) << "a range bound past the buffer or misaligned";
     // One dispatch's barriers, whatever the number of batches (the ranges are disjoint).
     EXPECT_EQ(log.count("ffd.dispatch"), 1u);

@@ -14,6 +14,7 @@
 #include "shaders/common/bindings.h"
 #include "systems/ffd/deform.h"
 #include "systems/ffd/ffd_gpu.h"
+#include "systems/ffd/gpu_kernel.h"
 #include "systems/ffd/ffd_system.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/operations.h"
@@ -243,6 +244,33 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     ffd_system(reg, {});
     EXPECT_EQ(reg.resource<FfdStats>().gpu_runs, 2u);
     EXPECT_GT(s.deformed_version, version);
+    ffd_release_gpu(reg);
+    reg.erase_resource<gfx::GpuSplatStore>();
+}
+
+// The statistics' fences are polled without flushing (a flush a frame would be CPU time charged to the
+// deformation; a frame loop's swap carries them to the GPU). A loop that never flushes still gets its
+// counts: once every read-back slot is in flight, the poll flushes. (llvmpipe signals a fence that was never
+// flushed, so only a hardware driver can fail this without that fallback.)
+TEST_F(FfdGl, StatisticsArriveInALoopThatNeverFlushes) {
+    ecs::Registry reg;
+    const ffd::test::Cloud c = ffd::test::fibonacci_sphere(2000);
+    const auto [cloud, le] = add_cloud_and_lattice(
+        reg, c,
+        ffd::make_lattice({-1.1, -1.1, -1.1},
+                          {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {3, 3, 3}));
+    reg.set_resource<FfdSettings>().force_gpu = true;
+    upload_rest(reg, cloud, c);
+    std::uint64_t arrived_at = 0;
+    for (std::uint64_t frame = 1; frame <= 40 && arrived_at == 0; ++frame) {
+        ffd::stretch(reg.patch<Lattice>(le), {0}, {0.001, 0, 0});
+        ffd_system(reg, {});
+        if (reg.get<DeformedSplats>(cloud).inverted_version > 0) arrived_at = frame;
+    }
+    EXPECT_EQ(reg.resource<FfdStats>().gpu_sync_readbacks, 0u);
+    ASSERT_GT(arrived_at, 0u) << "no statistics in 40 frames";
+    EXPECT_LE(arrived_at, ffd::detail::StatsReadbacks::kMaxSlots + 2);
+    EXPECT_EQ(reg.get<DeformedSplats>(cloud).inverted, 0u);  // a small stretch inverts nothing
     ffd_release_gpu(reg);
     reg.erase_resource<gfx::GpuSplatStore>();
 }
