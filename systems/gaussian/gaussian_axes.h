@@ -17,6 +17,11 @@
 // coordinate), no resampling and no rounding.
 #pragma once
 
+#include <array>
+
+#include <glm/gtc/quaternion.hpp>
+#include <glm/vec3.hpp>
+
 #include "systems/gaussian/components.h"
 
 namespace sffd::gaussian {
@@ -28,5 +33,14 @@ enum class AxisTurn {
 
 // Applies the turn to centres (and origin), rotations and SH coefficients in place. Its own inverse.
 void turn_axes(GaussianCloud& cloud, AxisTurn turn);
+
+// The turn as turn_axes applies it, for a writer that turns each row as it streams it (no turned copy of
+// the cloud): p -> scale * p, q -> rotation * q, SH coefficient k (of 16, degree <= 3) times sh_sign[k].
+struct AxisTurnParts {
+    glm::vec3 scale{1.0f};
+    glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
+    std::array<float, 16> sh_sign = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};  // default: no turn
+};
+AxisTurnParts axis_turn_parts(AxisTurn turn);
 
 }  // namespace sffd::gaussian

@@ -324,107 +324,216 @@ GltfDeclaration gltf_declaration(const fs::path& path) {
     return d;
 }
 
-Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianCloud& g,
-                        nlohmann::json& primitive, const std::string& where) {
-    if (Status s = validate(g, where); !s) return s;
+namespace {
+
+// One attribute of a primitive: its accessor's description and a fill of its rows [first, first + count)
+// (row_bytes each, a multiple of 4) into `out`, so the binary buffer is either assembled in memory
+// (append_primitive) or streamed to the file a block of rows at a time (write_glb), turned on the way when
+// the file's axes differ from the cloud's.
+struct AttributeSource {
+    std::string name;
+    int component = kFloat;
+    const char* type = "VEC3";
+    bool normalized = false;
+    nlohmann::json lo, hi;
+    std::size_t row_bytes = 12;
+    std::function<void(std::size_t first, std::size_t count, unsigned char* out)> fill;
+};
+
+std::vector<AttributeSource> attribute_sources(const GaussianCloud& g, const AxisTurnParts& t) {
     const std::size_t n = g.size();
-    const int K = sh_coeffs(g.sh_degree);
+    const std::size_t K = std::size_t(sh_coeffs(g.sh_degree));
+    std::vector<AttributeSource> a;
+    glm::vec3 lo(0.0f), hi(0.0f);
+    if (n > 0) lo = hi = g.positions[0] * t.scale;
+    for (const glm::vec3& p : g.positions) lo = glm::min(lo, p * t.scale), hi = glm::max(hi, p * t.scale);
+    a.push_back({"POSITION",
+                 kFloat,
+                 "VEC3",
+                 false,
+                 {lo.x, lo.y, lo.z},
+                 {hi.x, hi.y, hi.z},
+                 12,
+                 [&g, t](std::size_t first, std::size_t count, unsigned char* out) {
+                     for (std::size_t i = 0; i < count; ++i) {
+                         const glm::vec3 p = g.positions[first + i] * t.scale;
+                         std::memcpy(out + i * 12, &p[0], 12);
+                     }
+                 }});
+    a.push_back({"COLOR_0",
+                 kUByte,
+                 "VEC4",
+                 true,
+                 {},
+                 {},
+                 4,
+                 [&g, K](std::size_t first, std::size_t count, unsigned char* out) {
+                     for (std::size_t i = 0; i < count; ++i) {
+                         const std::size_t j = first + i;
+                         for (std::size_t c = 0; c < 3; ++c)
+                             out[i * 4 + c] = static_cast<unsigned char>(std::lround(
+                                 std::clamp(0.5 + kShC0 * double(g.sh[j * K * 3 + c]), 0.0, 1.0) * 255.0));
+                         out[i * 4 + 3] =
+                             static_cast<unsigned char>(std::lround(double(g.opacities[j]) * 255.0));
+                     }
+                 }});
+    a.push_back({kExt + ":ROTATION",
+                 kFloat,
+                 "VEC4",
+                 false,
+                 {},
+                 {},
+                 16,
+                 [&g, t](std::size_t first, std::size_t count, unsigned char* out) {
+                     for (std::size_t i = 0; i < count; ++i) {
+                         const glm::quat q = t.rotation * g.rotations[first + i];
+                         const float xyzw[4] = {q.x, q.y, q.z, q.w};
+                         std::memcpy(out + i * 16, xyzw, 16);
+                     }
+                 }});
+    a.push_back({kExt + ":SCALE",
+                 kFloat,
+                 "VEC3",
+                 false,
+                 {},
+                 {},
+                 12,
+                 [&g](std::size_t first, std::size_t count, unsigned char* out) {
+                     std::memcpy(out, &g.scales[first], count * 12);
+                 }});
+    a.push_back({kExt + ":OPACITY",
+                 kFloat,
+                 "SCALAR",
+                 false,
+                 {},
+                 {},
+                 4,
+                 [&g](std::size_t first, std::size_t count, unsigned char* out) {
+                     std::memcpy(out, &g.opacities[first], count * 4);
+                 }});
+    for (int l = 0; l <= g.sh_degree; ++l)
+        for (int c = 0; c <= 2 * l; ++c) {
+            const std::size_t k = std::size_t(l * l + c);
+            a.push_back(
+                {sh_name(l, c),
+                 kFloat,
+                 "VEC3",
+                 false,
+                 {},
+                 {},
+                 12,
+                 [&g, K, k, sign = t.sh_sign[k]](std::size_t first, std::size_t count, unsigned char* out) {
+                     for (std::size_t i = 0; i < count; ++i) {
+                         const float* src = &g.sh[((first + i) * K + k) * 3];
+                         const float v[3] = {src[0] * sign, src[1] * sign, src[2] * sign};
+                         std::memcpy(out + i * 12, v, 12);
+                     }
+                 }});
+        }
+    return a;
+}
+
+// Adds the attributes' buffer views (from byte `offset` of buffer 0, back to back: every row size is a
+// multiple of 4) and accessors to `doc`, and returns the POINTS primitive, `doc` listing the extension.
+nlohmann::json add_primitive(nlohmann::json& doc, const std::vector<AttributeSource>& attributes,
+                             std::size_t offset, std::size_t n) {
     if (!doc.contains("bufferViews")) doc["bufferViews"] = nlohmann::json::array();
     if (!doc.contains("accessors")) doc["accessors"] = nlohmann::json::array();
     nlohmann::json& views = doc["bufferViews"];
     nlohmann::json& accessors = doc["accessors"];
-    nlohmann::json attributes = nlohmann::json::object();
-    // Every attribute below is a multiple of 4 bytes: the buffer grows once, not by doubling (each
-    // doubling copied everything before it; most of writing a large cloud was those copies).
-    bin.reserve(bin.size() + 3 + n * (12 + 4 + 16 + 12 + 4 + std::size_t(K) * 12));
-    auto add = [&](const std::string& name, const void* data, std::size_t bytes, int component,
-                   const char* type, bool normalized, const nlohmann::json& lo = {},
-                   const nlohmann::json& hi = {}) {
-        while (bin.size() % 4) bin.push_back('\0');
-        views.push_back(
-            {{"buffer", 0}, {"byteOffset", bin.size()}, {"byteLength", bytes}, {"target", 34962}});
-        bin.append(static_cast<const char*>(data), bytes);
-        nlohmann::json a = {
-            {"bufferView", views.size() - 1}, {"componentType", component}, {"count", n}, {"type", type}};
-        if (normalized) a["normalized"] = true;
-        if (!lo.is_null()) a["min"] = lo, a["max"] = hi;
-        accessors.push_back(a);
-        attributes[name] = accessors.size() - 1;
-    };
-    glm::vec3 lo(0.0f), hi(0.0f);
-    if (n > 0) lo = hi = g.positions[0];
-    for (const glm::vec3& p : g.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
-    add("POSITION", g.positions.data(), n * 12, kFloat, "VEC3", false, {lo.x, lo.y, lo.z},
-        {hi.x, hi.y, hi.z});
-    std::vector<unsigned char> color(n * 4);
-    std::vector<float> rot(n * 4), tmp(n * 3);
-    for (std::size_t i = 0; i < n; ++i) {
-        for (std::size_t c = 0; c < 3; ++c)
-            color[i * 4 + c] = static_cast<unsigned char>(std::lround(
-                std::clamp(0.5 + kShC0 * double(g.sh[i * std::size_t(K) * 3 + c]), 0.0, 1.0) * 255.0));
-        color[i * 4 + 3] = static_cast<unsigned char>(std::lround(double(g.opacities[i]) * 255.0));
-        const glm::quat q = g.rotations[i];
-        rot[i * 4] = q.x, rot[i * 4 + 1] = q.y, rot[i * 4 + 2] = q.z, rot[i * 4 + 3] = q.w;
+    nlohmann::json names = nlohmann::json::object();
+    for (const AttributeSource& a : attributes) {
+        const std::size_t bytes = a.row_bytes * n;
+        views.push_back({{"buffer", 0}, {"byteOffset", offset}, {"byteLength", bytes}, {"target", 34962}});
+        offset += bytes;
+        nlohmann::json acc = {
+            {"bufferView", views.size() - 1}, {"componentType", a.component}, {"count", n}, {"type", a.type}};
+        if (a.normalized) acc["normalized"] = true;
+        if (!a.lo.is_null()) acc["min"] = a.lo, acc["max"] = a.hi;
+        accessors.push_back(acc);
+        names[a.name] = accessors.size() - 1;
     }
-    add("COLOR_0", color.data(), color.size(), kUByte, "VEC4", true);
-    add(kExt + ":ROTATION", rot.data(), rot.size() * 4, kFloat, "VEC4", false);
-    add(kExt + ":SCALE", g.scales.data(), n * 12, kFloat, "VEC3", false);
-    add(kExt + ":OPACITY", g.opacities.data(), n * 4, kFloat, "SCALAR", false);
-    for (int l = 0; l <= g.sh_degree; ++l)
-        for (int c = 0; c <= 2 * l; ++c) {
-            const std::size_t k = std::size_t(l * l + c);
-            for (std::size_t i = 0; i < n; ++i)
-                for (std::size_t ch = 0; ch < 3; ++ch)
-                    tmp[i * 3 + ch] = g.sh[(i * std::size_t(K) + k) * 3 + ch];
-            add(sh_name(l, c), tmp.data(), n * 12, kFloat, "VEC3", false);
-        }
-    while (bin.size() % 4) bin.push_back('\0');
-    primitive = {{"attributes", attributes},
-                 {"mode", 0},
-                 {"extensions",
-                  {{kExt,
-                    {{"kernel", "ellipse"},
-                     {"colorSpace", "srgb_rec709_display"},
-                     {"sortingMethod", "cameraDistance"},
-                     {"projection", "perspective"}}}}}};
     if (!doc.contains("extensionsUsed")) doc["extensionsUsed"] = nlohmann::json::array();
     bool listed = false;
     for (const auto& e : doc["extensionsUsed"])
         listed = listed || (e.is_string() && e.get<std::string>() == kExt);
     if (!listed) doc["extensionsUsed"].push_back(kExt);
+    return {{"attributes", names},
+            {"mode", 0},
+            {"extensions",
+             {{kExt,
+               {{"kernel", "ellipse"},
+                {"colorSpace", "srgb_rec709_display"},
+                {"sortingMethod", "cameraDistance"},
+                {"projection", "perspective"}}}}}};
+}
+
+std::size_t primitive_bytes(const std::vector<AttributeSource>& attributes, std::size_t n) {
+    std::size_t bytes = 0;
+    for (const AttributeSource& a : attributes) bytes += a.row_bytes * n;
+    return bytes;
+}
+
+}  // namespace
+
+Status append_primitive(nlohmann::json& doc, std::string& bin, const GaussianCloud& g,
+                        nlohmann::json& primitive, const std::string& where) {
+    if (Status s = validate(g, where); !s) return s;
+    const std::size_t n = g.size();
+    const std::vector<AttributeSource> attributes = attribute_sources(g, AxisTurnParts{});
+    while (bin.size() % 4) bin.push_back('\0');
+    std::size_t offset = bin.size();
+    primitive = add_primitive(doc, attributes, offset, n);
+    // Grown once and filled in place: no per-attribute temporaries, no copies.
+    bin.resize(offset + primitive_bytes(attributes, n));
+    for (const AttributeSource& a : attributes) {
+        a.fill(0, n, reinterpret_cast<unsigned char*>(bin.data()) + offset);
+        offset += a.row_bytes * n;
+    }
     return {};
 }
 
-Status write_glb(const fs::path& path, const GaussianCloud& cloud) {
+Status write_glb(const fs::path& path, const GaussianCloud& g) {
+    if (Status s = validate(g, path.string()); !s) return s;
     // Written in glTF's frame: the internal (3DGS PLY) frame turned 180 degrees about z, as read_gltf
-    // turns it back.
-    GaussianCloud g = cloud;
-    turn_axes(g, AxisTurn::z180);
+    // turns it back. Each block of rows is turned as it is written: no turned copy of the cloud and no
+    // binary chunk assembled in memory (writing 1M Gaussians of degree 3 spent most of its 4 s on those
+    // two copies of 250 MB and the page faults of their fresh memory).
+    const AxisTurnParts turn = axis_turn_parts(AxisTurn::z180);
+    const std::vector<AttributeSource> attributes = attribute_sources(g, turn);
+    const std::size_t n = g.size();
     nlohmann::json doc = nlohmann::json::object();
-    std::string bin;
-    nlohmann::json prim;
-    if (Status s = append_primitive(doc, bin, g, prim, path.string()); !s) return s;
+    const nlohmann::json prim = add_primitive(doc, attributes, 0, n);
+    const std::uint64_t bin_bytes = primitive_bytes(attributes, n);
     nlohmann::json node = {{"mesh", 0}, {"name", "gaussians"}};
-    if (g.origin != glm::dvec3(0.0)) node["translation"] = {g.origin.x, g.origin.y, g.origin.z};
+    const glm::dvec3 origin = g.origin * glm::dvec3(turn.scale);
+    if (origin != glm::dvec3(0.0)) node["translation"] = {origin.x, origin.y, origin.z};
     doc["asset"] = {{"version", "2.0"}, {"generator", "splatffd"}};
     doc["scene"] = 0;
     doc["scenes"] = {{{"nodes", {0}}}};
     doc["nodes"] = {node};
     doc["meshes"] = {{{"primitives", {prim}}}};
-    doc["buffers"] = {{{"byteLength", bin.size()}}};
+    doc["buffers"] = {{{"byteLength", bin_bytes}}};
     std::string text = doc.dump();
     while (text.size() % 4) text.push_back(' ');
-    const std::uint64_t total = 12 + 8 + text.size() + 8 + bin.size();
+    const std::uint64_t total = 12 + 8 + text.size() + 8 + bin_bytes;
     if (total > 0xffffffffu) return make_error(path.string() + ": too many Gaussians for a GLB file (4 GiB)");
     const std::uint32_t header[5] = {0x46546C67u, 2, std::uint32_t(total), std::uint32_t(text.size()),
                                      0x4E4F534Au};
-    const std::uint32_t bin_header[2] = {std::uint32_t(bin.size()), 0x004E4942u};
-    // Written piece by piece: the container is never assembled in memory (a second copy of the cloud).
+    const std::uint32_t bin_header[2] = {std::uint32_t(bin_bytes), 0x004E4942u};
     return write_file_atomic(path, [&](std::FILE* f) -> Status {
-        const bool ok = std::fwrite(header, sizeof header, 1, f) == 1 &&
-                        std::fwrite(text.data(), 1, text.size(), f) == text.size() &&
-                        std::fwrite(bin_header, sizeof bin_header, 1, f) == 1 &&
-                        std::fwrite(bin.data(), 1, bin.size(), f) == bin.size();
+        bool ok = std::fwrite(header, sizeof header, 1, f) == 1 &&
+                  std::fwrite(text.data(), 1, text.size(), f) == text.size() &&
+                  std::fwrite(bin_header, sizeof bin_header, 1, f) == 1;
+        constexpr std::size_t kRows = 1 << 16;
+        std::vector<unsigned char> block;
+        for (const AttributeSource& a : attributes)
+            for (std::size_t first = 0; ok && first < n; first += kRows) {
+                const std::size_t rows = std::min(kRows, n - first);
+                block.resize(rows * a.row_bytes);
+                a.fill(first, rows, block.data());
+                ok = std::fwrite(block.data(), 1, block.size(), f) == block.size();
+            }
         if (!ok) return make_error(path.string() + ": write failed: " + std::strerror(errno));
         return {};
     });

@@ -158,28 +158,38 @@ ply::Element ply_element(int degree, std::uint64_t count) {
 }
 
 void fill_chunk(const GaussianCloud& g, std::size_t first, std::size_t count, ply::Chunk& chunk) {
-    const int K = sh_coeffs(g.sh_degree);
-    chunk.reset(ply_element(g.sh_degree, count));
+    const std::size_t K = std::size_t(sh_coeffs(g.sh_degree));
+    // The columns are kept from the last chunk (same layout): reallocated per chunk, their fresh pages
+    // were a large part of writing a big cloud. Filled column by column: sequential stores.
+    ply::Element e = ply_element(g.sh_degree, count);
+    if (chunk.columns.size() != e.properties.size()) chunk.reset(e);
+    else chunk.element = std::move(e);
     chunk.rows = count;
     for (ply::Column& c : chunk.columns) c.values.resize(count);
-    auto col = [&](int i) -> std::vector<double>& { return chunk.columns[std::size_t(i)].values; };
-    const int rest0 = 9, opacity = rest0 + 3 * (K - 1), scale0 = opacity + 1, rot0 = scale0 + 3;
-    for (std::size_t r = 0; r < count; ++r) {
-        const std::size_t i = first + r;
-        const glm::dvec3 p = g.origin + glm::dvec3(g.positions[i]);
-        for (int c = 0; c < 3; ++c) {
-            col(c)[r] = p[c];
-            col(3 + c)[r] = 0.0;
-            col(6 + c)[r] = g.sh[(i * std::size_t(K)) * 3 + std::size_t(c)];
-            for (int k = 1; k < K; ++k)
-                col(rest0 + c * (K - 1) + (k - 1))[r] =
-                    g.sh[(i * std::size_t(K) + std::size_t(k)) * 3 + std::size_t(c)];
+    auto col = [&](std::size_t i) { return chunk.columns[i].values.data(); };
+    const std::size_t rest0 = 9, opacity = rest0 + 3 * (K - 1), scale0 = opacity + 1, rot0 = scale0 + 3;
+    for (std::size_t c = 0; c < 3; ++c) {
+        double* pos = col(c);
+        double* normal = col(3 + c);
+        double* scale = col(scale0 + c);
+        for (std::size_t r = 0; r < count; ++r) {
+            pos[r] = g.origin[int(c)] + double(g.positions[first + r][int(c)]);
+            normal[r] = 0.0;
             // log(0) is -inf: a flat Gaussian keeps a tiny finite log scale instead.
-            col(scale0 + c)[r] = std::log(std::max(double(g.scales[i][c]), 1e-30));
+            scale[r] = std::log(std::max(double(g.scales[first + r][int(c)]), 1e-30));
         }
-        col(opacity)[r] = logit(g.opacities[i]);
-        const glm::quat q = g.rotations[i];
-        col(rot0)[r] = q.w, col(rot0 + 1)[r] = q.x, col(rot0 + 2)[r] = q.y, col(rot0 + 3)[r] = q.z;
+        for (std::size_t k = 0; k < K; ++k) {
+            double* v = col(k == 0 ? 6 + c : rest0 + c * (K - 1) + (k - 1));
+            const float* sh = g.sh.data() + (first * K + k) * 3 + c;
+            for (std::size_t r = 0; r < count; ++r) v[r] = sh[r * K * 3];
+        }
+    }
+    double* op = col(opacity);
+    double* rot[4] = {col(rot0), col(rot0 + 1), col(rot0 + 2), col(rot0 + 3)};
+    for (std::size_t r = 0; r < count; ++r) {
+        op[r] = logit(g.opacities[first + r]);
+        const glm::quat q = g.rotations[first + r];
+        rot[0][r] = q.w, rot[1][r] = q.x, rot[2][r] = q.y, rot[3][r] = q.z;
     }
 }
 

@@ -376,18 +376,25 @@ TEST(Ply, WriterRejectsWrongCountsAndLeavesOldFile) {
 }
 
 TEST(Ply, WriterRefusesValuesThatDoNotFitTheType) {
-    const fs::path p = temp_dir() / "range.ply";
-    ply::Header h;
-    h.elements = {{"vertex", 1, {{"red", ply::Type::uint8}}}};
-    auto w = ply::Writer::create(p, h);
-    ASSERT_TRUE(w.ok());
-    ply::Chunk c;
-    c.reset(h.elements[0]);
-    c.rows = 1;
-    c.columns[0].values = {256};
-    auto st = w->write_rows(c);
-    ASSERT_FALSE(st.ok());
-    EXPECT_NE(st.message().find("does not fit type uchar"), std::string::npos) << st.message();
+    // Binary elements without lists are encoded column by column, the others value by value: the same
+    // refusal, naming the value and the property, in every format.
+    for (auto fmt : {ply::Format::ascii, ply::Format::binary_little_endian, ply::Format::binary_big_endian}) {
+        const fs::path p = temp_dir() / "range.ply";
+        ply::Header h;
+        h.format = fmt;
+        h.elements = {{"vertex", 3, {{"x", ply::Type::float32}, {"red", ply::Type::uint8}}}};
+        auto w = ply::Writer::create(p, h);
+        ASSERT_TRUE(w.ok());
+        ply::Chunk c;
+        c.reset(h.elements[0]);
+        c.rows = 3;
+        c.columns[0].values = {1, 2, 3};
+        c.columns[1].values = {0, 255, 256};
+        auto st = w->write_rows(c);
+        ASSERT_FALSE(st.ok()) << ply::format_name(fmt);
+        EXPECT_NE(st.message().find("value 256.000000 of 'red' does not fit type uchar"), std::string::npos)
+            << st.message();
+    }
 }
 
 TEST(Ply, NanSurvivesFloatRoundTrip) {

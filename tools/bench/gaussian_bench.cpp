@@ -29,8 +29,10 @@
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/gaussian_deform.h"
+#include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_spz.h"
 #include "tools/bench/gaussian_case.h"
 
 namespace {
@@ -228,6 +230,40 @@ void BM_GaussianImport(benchmark::State& state) {
 }
 BENCHMARK(BM_GaussianImport)
     ->ArgsProduct({{1000000}, {0, 1, 2, 3, 4}})
+    ->Unit(benchmark::kMillisecond)
+    ->UseRealTime()
+    ->Iterations(2);
+
+// Export of 1M Gaussians of SH degree 3 per format (state.range(1)): 0 3DGS PLY, 1 glTF
+// KHR_gaussian_splatting .glb, 2 SPZ v3, 3 PlayCanvas compressed PLY; each write is the command's (a
+// temporary file renamed). Counter: MB_per_s of the file written.
+//   build/release/tools/bench/bench_gaussian --benchmark_filter='Export'
+void BM_GaussianExport(benchmark::State& state) {
+    const std::size_t n = std::size_t(state.range(0));
+    const int format = int(state.range(1));
+    static const char* const names[] = {"ply_deg3", "glb_deg3", "spz_deg3", "compressed_ply_deg3"};
+    static const char* const exts[] = {".ply", ".glb", ".spz", ".compressed.ply"};
+    state.SetLabel(names[format]);
+    const auto path = std::filesystem::temp_directory_path() /
+                      ("sffd_bench_export_" + std::to_string(getpid()) + exts[format]);
+    const GaussianCloud g = sphere_gaussians(n, 3);
+    for (auto _ : state) {
+        const Status s = format == 0   ? gaussian::write_ply(path, g)
+                         : format == 1 ? gaussian::write_glb(path, g)
+                         : format == 2 ? gaussian::write_spz(path, g)
+                                       : gaussian::write_compressed_ply(path, g);
+        if (!s) {
+            state.SkipWithError(s.message().c_str());
+            break;
+        }
+    }
+    const double mb = double(std::filesystem::file_size(path)) / 1e6;
+    state.counters["MB_per_s"] =
+        benchmark::Counter(mb * double(state.iterations()), benchmark::Counter::kIsRate);
+    std::filesystem::remove(path);
+}
+BENCHMARK(BM_GaussianExport)
+    ->ArgsProduct({{1000000}, {0, 1, 2, 3}})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime()
     ->Iterations(2);

@@ -11,6 +11,9 @@
 
 #include <glm/gtc/quaternion.hpp>
 
+#include <nlohmann/json.hpp>
+
+#include "systems/gaussian/gaussian_axes.h"
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_math.h"
@@ -64,6 +67,51 @@ TEST(GaussianGltf, GlbRoundTripsEveryDegree) {
         }
         EXPECT_EQ(back->sh, g.sh);
     }
+}
+
+// append_primitive (scene files hold several clouds) stores a cloud as given, in the buffer it is handed
+// (here after 2 bytes that are not the cloud's); read as a plain GLB, the file's axes turn it as read_gltf
+// turns every GLB, exactly.
+TEST(GaussianGltf, AppendedPrimitiveStoresTheCloudAsGiven) {
+    GaussianCloud g = random_cloud(3, 150);
+    nlohmann::json doc = nlohmann::json::object();
+    std::string bin = "xy";
+    nlohmann::json prim;
+    ASSERT_TRUE(append_primitive(doc, bin, g, prim, "test cloud"));
+    EXPECT_EQ(bin.size() % 4, 0u);
+    doc["asset"] = {{"version", "2.0"}};
+    doc["scene"] = 0;
+    doc["scenes"] = {{{"nodes", {0}}}};
+    doc["nodes"] = {{{"mesh", 0}}};
+    doc["meshes"] = {{{"primitives", {prim}}}};
+    doc["buffers"] = {{{"byteLength", bin.size()}}};
+    std::string text = doc.dump();
+    while (text.size() % 4) text.push_back(' ');
+    const std::uint32_t header[5] = {0x46546C67u, 2, std::uint32_t(12 + 8 + text.size() + 8 + bin.size()),
+                                     std::uint32_t(text.size()), 0x4E4F534Au};
+    const std::uint32_t bin_header[2] = {std::uint32_t(bin.size()), 0x004E4942u};
+    const fs::path p = temp("appended.glb");
+    {
+        std::ofstream f(p, std::ios::binary);
+        f.write(reinterpret_cast<const char*>(header), sizeof header);
+        f.write(text.data(), std::streamsize(text.size()));
+        f.write(reinterpret_cast<const char*>(bin_header), sizeof bin_header);
+        f.write(bin.data(), std::streamsize(bin.size()));
+    }
+    auto back = read_gaussians(p);
+    ASSERT_TRUE(back) << back.message();
+    turn_axes(g, AxisTurn::z180);
+    ASSERT_EQ(back->size(), g.size());
+    EXPECT_EQ(back->positions, g.positions);
+    EXPECT_EQ(back->scales, g.scales);
+    EXPECT_EQ(back->opacities, g.opacities);
+    EXPECT_EQ(back->sh, g.sh);
+    for (std::size_t i = 0; i < g.size(); ++i)
+        EXPECT_LT(glm::length(glm::vec4(
+                      back->rotations[i].x - g.rotations[i].x, back->rotations[i].y - g.rotations[i].y,
+                      back->rotations[i].z - g.rotations[i].z, back->rotations[i].w - g.rotations[i].w)),
+                  1e-6f)
+            << i;
 }
 
 std::string base64(const std::string& in) {
