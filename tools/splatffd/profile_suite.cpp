@@ -223,7 +223,13 @@ void deform_row(Suite& suite, Row r, RunSetup s, const std::string& system, Meas
     const profiling::TimingRow* t = find_row(rep->systems, system);
     if (!t) return not_measured(row, "the run has no system '" + system + "'");
     if (m == Measure::gpu && !t->gpu_ms) return not_measured(row, "no GPU time was measured");
-    finish(row, m == Measure::gpu ? t->gpu_ms->p50 : t->cpu_ms.p50);
+    // The spread beside the median: one run of the CPU-time row once read 3x its other runs.
+    const profiling::Stats& st = m == Measure::gpu ? *t->gpu_ms : t->cpu_ms;
+    char note[128];
+    std::snprintf(note, sizeof note, "%zu frames: min %.3g, p95 %.3g, max %.3g ms", st.n, st.min, st.p95,
+                  st.max);
+    row.note = note;
+    finish(row, st.p50);
 }
 
 // A read row: a file written once, then opened through load_scene as every command opens it, three times;
