@@ -68,8 +68,8 @@ Status save_splat_ply(const SplatCloud& c, const fs::path& path, ply::Format for
     if (!writer) return writer.error();
     constexpr std::size_t kRows = 1 << 16;
     ply::Chunk chunk;
+    chunk.reset(v);  // once: the columns keep their storage from chunk to chunk
     for (std::size_t start = 0; start < n; start += kRows) {
-        chunk.reset(v);
         const std::size_t rows = std::min(kRows, n - start);
         chunk.rows = rows;
         std::size_t col = 0;

@@ -3,6 +3,8 @@
 #include "runtime/assets/gltf_io.h"
 
 #include <algorithm>
+#include <cerrno>
+#include <cstdio>
 #include <cstring>
 
 #include <nlohmann/json.hpp>
@@ -86,6 +88,15 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
     if (!binary && ext != ".gltf") return make_error(path.string() + ": expected a .gltf or .glb file name");
 
     BinBuilder b;
+    // The buffer grows once for the clouds' attributes (each doubling copied all before it).
+    std::size_t attribute_bytes = 0;
+    for (const GltfCloudOut& out : clouds) {
+        const SplatCloud& c = *out.cloud;
+        attribute_bytes += c.positions.size() * 12 + c.normals.size() * 12 + c.colors.size() * 8 +
+                           c.uvs.size() * 8 + (c.axis_u.size() + c.axis_v.size()) * 12 +
+                           c.uv_axes.size() * 16 + 8 * 4;  // alignment
+    }
+    b.bin.reserve(attribute_bytes);
     json nodes = json::array(), meshes = json::array(), materials = json::array(), textures = json::array(),
          images = json::array();
     json roots = json::array();
@@ -207,23 +218,21 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
     if (!binary) return write_file_atomic(path, text + "\n");
 
     while (text.size() % 4) text.push_back(' ');
-    std::string glb;
-    auto u32 = [&](std::uint32_t v) { glb.append(reinterpret_cast<const char*>(&v), 4); };
     const std::size_t total = 12 + 8 + text.size() + (b.bin.empty() ? 0 : 8 + b.bin.size());
     if (total > 0xffffffffu) return make_error(path.string() + ": scene too large for a GLB file (4 GiB)");
-    glb.reserve(total);
-    u32(0x46546C67u);  // "glTF"
-    u32(2);
-    u32(static_cast<std::uint32_t>(total));
-    u32(static_cast<std::uint32_t>(text.size()));
-    u32(0x4E4F534Au);  // "JSON"
-    glb += text;
-    if (!b.bin.empty()) {
-        u32(static_cast<std::uint32_t>(b.bin.size()));
-        u32(0x004E4942u);  // "BIN\0"
-        glb += b.bin;
-    }
-    return write_file_atomic(path, glb);
+    const std::uint32_t header[5] = {0x46546C67u /* glTF */, 2, std::uint32_t(total),
+                                     std::uint32_t(text.size()), 0x4E4F534Au /* JSON */};
+    const std::uint32_t bin_header[2] = {std::uint32_t(b.bin.size()), 0x004E4942u /* BIN\0 */};
+    // Written piece by piece: the container is never assembled in memory (a second copy of the buffer).
+    return write_file_atomic(path, [&](std::FILE* f) -> Status {
+        bool ok = std::fwrite(header, sizeof header, 1, f) == 1 &&
+                  std::fwrite(text.data(), 1, text.size(), f) == text.size();
+        if (ok && !b.bin.empty())
+            ok = std::fwrite(bin_header, sizeof bin_header, 1, f) == 1 &&
+                 std::fwrite(b.bin.data(), 1, b.bin.size(), f) == b.bin.size();
+        if (!ok) return make_error(path.string() + ": write failed: " + std::strerror(errno));
+        return {};
+    });
 }
 
 }  // namespace sffd::assets
