@@ -4,7 +4,10 @@
 #include <zlib.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstdio>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -45,6 +48,9 @@ Result<Encoded> encode(const GaussianCloud& g) {
     e.n = std::uint32_t(n), e.degree = g.sh_degree, e.frac = frac;
     const int K = sh_coeffs(g.sh_degree);
     const std::size_t rest = std::size_t(3 * (K - 1));
+    // Each array grows once (appending byte by byte doubled and copied them).
+    const std::size_t bytes[6] = {9, 1, 3, 3, 4, rest};
+    for (std::size_t a = 0; a < 6; ++a) e.arrays[a].reserve(n * bytes[a]);
     std::string& pos = e.arrays[0];
     for (std::size_t i = 0; i < n; ++i)
         for (int c = 0; c < 3; ++c) {
@@ -102,28 +108,46 @@ Status write_spz(const fs::path& path, const GaussianCloud& cloud, int version) 
         if (!bytes) return make_error(name + ": " + bytes.message());
         return write_file_atomic(path, *bytes);
     }
-    std::string raw;
-    put32(raw, spz_detail::kMagic), put32(raw, 3), put32(raw, e->n);
-    raw += char(e->degree), raw += char(e->frac), raw += char(0), raw += char(0);
-    for (const std::string& a : e->arrays) raw += a;
+    std::string header;
+    put32(header, spz_detail::kMagic), put32(header, 3), put32(header, e->n);
+    header += char(e->degree), header += char(e->frac), header += char(0), header += char(0);
 
-    // One deflate call: zlib's counters are 32-bit (a 4 GiB payload is ~50M degree-3 Gaussians).
-    if (raw.size() > 0xffff0000u)
-        return make_error(name + ": " + std::to_string(raw.size()) +
-                          " bytes of SPZ data exceed one 4 GiB gzip call");
+    // One gzip stream, fed the header and each array in turn and written as it comes out: neither the
+    // payload nor the compressed file is assembled in memory (those copies and their fresh pages were
+    // half of writing 1M degree-3 Gaussians).
     z_stream z{};
     if (deflateInit2(&z, 6, Z_DEFLATED, 16 + MAX_WBITS, 8, Z_DEFAULT_STRATEGY) != Z_OK)
         return make_error(name + ": zlib initialisation failed");
-    std::string gz(deflateBound(&z, uLong(raw.size())), '\0');
-    z.next_in = reinterpret_cast<Bytef*>(raw.data());
-    z.avail_in = uInt(raw.size());
-    z.next_out = reinterpret_cast<Bytef*>(gz.data());
-    z.avail_out = uInt(gz.size());
-    const int rc = deflate(&z, Z_FINISH);
-    gz.resize(z.total_out);
+    std::vector<unsigned char> out(1 << 20);
+    const Status written = write_file_atomic(path, [&](std::FILE* f) -> Status {
+        std::vector<const std::string*> pieces = {&header};
+        for (const std::string& a : e->arrays) pieces.push_back(&a);
+        for (std::size_t p = 0; p < pieces.size(); ++p) {
+            const bool last = p + 1 == pieces.size();
+            const std::string& in = *pieces[p];
+            std::size_t at = 0;
+            int rc = Z_OK;
+            do {  // zlib counts in 32 bits: a piece goes in up to 1 GiB at a time
+                const std::size_t take = std::min<std::size_t>(in.size() - at, std::size_t(1) << 30);
+                z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(in.data() + at));
+                z.avail_in = uInt(take);
+                at += take;
+                const int flush = last && at == in.size() ? Z_FINISH : Z_NO_FLUSH;
+                do {
+                    z.next_out = out.data();
+                    z.avail_out = uInt(out.size());
+                    rc = deflate(&z, flush);
+                    if (rc == Z_STREAM_ERROR) return make_error(name + ": gzip compression failed");
+                    const std::size_t produced = out.size() - z.avail_out;
+                    if (std::fwrite(out.data(), 1, produced, f) != produced)
+                        return make_error(name + ": write failed: " + std::strerror(errno));
+                } while (z.avail_out == 0 || (flush == Z_FINISH && rc != Z_STREAM_END));
+            } while (at < in.size());
+        }
+        return {};
+    });
     deflateEnd(&z);
-    if (rc != Z_STREAM_END) return make_error(name + ": gzip compression failed");
-    return write_file_atomic(path, gz);
+    return written;
 }
 
 }  // namespace sffd::gaussian
