@@ -20,6 +20,7 @@
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_ksplat.h"
 #include "systems/gaussian/gaussian_spz.h"
+#include "systems/gaussian/gaussian_spz_detail.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/sh.h"
 #include "tests/systems/gaussian/test_math.h"
@@ -422,6 +423,37 @@ TEST(SpzWrite, RoundTripsWithinSpzQuantisationAndKeepsTheFrame) {
                         k < 3 ? 0.5 / (255 * 0.15) + 1e-5 : 0.5 / 128 + 1e-6)
                 << i << " " << k;
     }
+}
+
+// A payload of several compression segments (the writer deflates 4 MB segments on every core and joins
+// them): the file is one gzip stream whose content, length and CRC are the payload's, byte for byte.
+TEST(SpzWrite, ALargeFileIsOneGzipStreamOfItsPayload) {
+    const GaussianCloud g = cloud(100000, 3, 5);  // 6.5 MB of payload, 45 bytes of SH rest each
+    const fs::path p = temp("large.spz");
+    ASSERT_TRUE(write_spz(p, g));
+    GaussianCloud rub = g;
+    turn_axes(rub, AxisTurn::x180);
+    auto e = spz_detail::encode(rub);
+    ASSERT_TRUE(e) << e.message();
+    std::string want;
+    for (std::uint32_t v : {0x5053474eu, 3u, e->n})
+        for (int b = 0; b < 4; ++b) want += char((v >> (8 * b)) & 0xff);
+    want += char(e->degree), want += char(e->frac), want += char(0), want += char(0);
+    for (const std::string& a : e->arrays) want += a;
+    ASSERT_GT(want.size(), std::size_t(6) << 20);
+    std::string got(want.size() + 1, '\0');
+    gzFile f = gzopen(p.c_str(), "rb");
+    ASSERT_NE(f, nullptr);
+    gzbuffer(f, 1 << 20);
+    std::size_t at = 0;
+    int n = 0;
+    while ((n = gzread(f, got.data() + at, unsigned(got.size() - at))) > 0) at += std::size_t(n);
+    int err = Z_OK;
+    const std::string why = n < 0 ? gzerror(f, &err) : "";
+    gzclose(f);
+    ASSERT_EQ(n, 0) << why;  // gzread checks the trailer's CRC and length
+    got.resize(at);
+    EXPECT_TRUE(got == want) << got.size() << " vs " << want.size() << " bytes";
 }
 
 TEST(SpzWrite, StoresRubOnDisk) {
