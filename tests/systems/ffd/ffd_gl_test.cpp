@@ -42,6 +42,12 @@ std::pair<ecs::Entity, ecs::Entity> add_cloud_and_lattice(ecs::Registry& reg, co
     return {cloud, le};
 }
 
+// A Bernstein lattice over the box [-1.1, 1.1]^3 around the test points (a unit sphere).
+Lattice box_lattice(glm::ivec3 divisions) {
+    return ffd::make_lattice(
+        {-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, divisions);
+}
+
 // What residency_system does: upload the authored splats as the cloud's `rest` buffer (state rest).
 gfx::GpuSplatStore& upload_rest(ecs::Registry& reg, ecs::Entity cloud, const ffd::test::Cloud& c) {
     auto& store = reg.set_resource<gfx::GpuSplatStore>();
@@ -206,10 +212,7 @@ TEST_F(FfdGl, EveryControlPointKernelMatchesTheReferenceForBothBases) {
 TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     ecs::Registry reg;
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(5000);
-    const auto [cloud, le] = add_cloud_and_lattice(
-        reg, c,
-        ffd::make_lattice({-1.1, -1.1, -1.1},
-                          {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {5, 5, 5}));
+    const auto [cloud, le] = add_cloud_and_lattice(reg, c, box_lattice({5, 5, 5}));
     auto& settings = reg.set_resource<FfdSettings>();
     settings.force_gpu = true;  // llvmpipe would otherwise pick the (faster) CPU path
     auto& store = upload_rest(reg, cloud, c);
@@ -255,10 +258,7 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
 TEST_F(FfdGl, StatisticsArriveInALoopThatNeverFlushes) {
     ecs::Registry reg;
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(2000);
-    const auto [cloud, le] = add_cloud_and_lattice(
-        reg, c,
-        ffd::make_lattice({-1.1, -1.1, -1.1},
-                          {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {3, 3, 3}));
+    const auto [cloud, le] = add_cloud_and_lattice(reg, c, box_lattice({3, 3, 3}));
     reg.set_resource<FfdSettings>().force_gpu = true;
     upload_rest(reg, cloud, c);
     std::uint64_t arrived_at = 0;
@@ -348,10 +348,7 @@ TEST_F(FfdGl, SoftwareRasterizerGetsTheCpuPathUnlessTheGpuIsForced) {
         GTEST_SKIP() << "hardware renderer: " << renderer;
     ecs::Registry reg;
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(2000);
-    const auto [cloud, le] = add_cloud_and_lattice(
-        reg, c,
-        ffd::make_lattice({-1.1, -1.1, -1.1},
-                          {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)}, {3, 3, 3}));
+    const auto [cloud, le] = add_cloud_and_lattice(reg, c, box_lattice({3, 3, 3}));
     auto& settings = reg.set_resource<FfdSettings>();
     auto& store = reg.set_resource<gfx::GpuSplatStore>();
     gfx::GpuSplats& s = store.clouds[cloud];
