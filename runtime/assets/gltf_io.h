@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <cstdio>
 #include <filesystem>
 #include <functional>
 #include <memory>
@@ -48,6 +49,14 @@ using GltfAppend = std::function<Status(nlohmann::json& doc, std::string& bin)>;
 // `sffd_scene_json`, when not empty, becomes the top-level extensions.SFFD_scene object.
 Status write_gltf(const std::filesystem::path& path, const std::vector<GltfCloudOut>& clouds,
                   const std::string& sffd_scene_json = {}, const std::vector<GltfAppend>& append = {});
+
+// A GLB container written atomically and piece by piece (never assembled in memory): the header, `text`
+// (the JSON, padded to 4 bytes with spaces) and, when `write_bin` is set, a BIN chunk of `bin_bytes` (a
+// multiple of 4) that write_bin puts into the file (false: a write failed). Past GLB's 4 GiB it writes
+// nothing and says "`path`: `what` too large for a GLB file (4 GiB)". Shared by write_gltf() and the Gaussian
+// writer.
+Status write_glb_file(const std::filesystem::path& path, std::string text, std::uint64_t bin_bytes,
+                      const std::function<bool(std::FILE*)>& write_bin, const std::string& what);
 
 struct GltfCloudIn {
     std::string name;

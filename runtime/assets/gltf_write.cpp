@@ -217,19 +217,26 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
     std::string text = doc.dump(binary ? -1 : 1, ' ', false, json::error_handler_t::replace);
     if (!binary) return write_file_atomic(path, text + "\n");
 
+    const auto write_bin = [&](std::FILE* f) {
+        return std::fwrite(b.bin.data(), 1, b.bin.size(), f) == b.bin.size();
+    };
+    return write_glb_file(path, std::move(text), b.bin.size(),
+                          b.bin.empty() ? std::function<bool(std::FILE*)>() : write_bin, "scene");
+}
+
+Status write_glb_file(const fs::path& path, std::string text, std::uint64_t bin_bytes,
+                      const std::function<bool(std::FILE*)>& write_bin, const std::string& what) {
     while (text.size() % 4) text.push_back(' ');
-    const std::size_t total = 12 + 8 + text.size() + (b.bin.empty() ? 0 : 8 + b.bin.size());
-    if (total > 0xffffffffu) return make_error(path.string() + ": scene too large for a GLB file (4 GiB)");
+    const std::uint64_t total = 12 + 8 + text.size() + (write_bin ? 8 + bin_bytes : 0);
+    if (total > 0xffffffffu)
+        return make_error(path.string() + ": " + what + " too large for a GLB file (4 GiB)");
     const std::uint32_t header[5] = {0x46546C67u /* glTF */, 2, std::uint32_t(total),
                                      std::uint32_t(text.size()), 0x4E4F534Au /* JSON */};
-    const std::uint32_t bin_header[2] = {std::uint32_t(b.bin.size()), 0x004E4942u /* BIN\0 */};
-    // Written piece by piece: the container is never assembled in memory (a second copy of the buffer).
+    const std::uint32_t bin_header[2] = {std::uint32_t(bin_bytes), 0x004E4942u /* BIN\0 */};
     return write_file_atomic(path, [&](std::FILE* f) -> Status {
         bool ok = std::fwrite(header, sizeof header, 1, f) == 1 &&
                   std::fwrite(text.data(), 1, text.size(), f) == text.size();
-        if (ok && !b.bin.empty())
-            ok = std::fwrite(bin_header, sizeof bin_header, 1, f) == 1 &&
-                 std::fwrite(b.bin.data(), 1, b.bin.size(), f) == b.bin.size();
+        if (ok && write_bin) ok = std::fwrite(bin_header, sizeof bin_header, 1, f) == 1 && write_bin(f);
         if (!ok) return make_error(path.string() + ": write failed: " + std::strerror(errno));
         return {};
     });

@@ -1,7 +1,6 @@
 #include "systems/gaussian/gaussian_gltf.h"
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -18,7 +17,6 @@
 #include "runtime/assets/fresh_array.h"
 #include "runtime/assets/gltf_io.h"
 #include "runtime/assets/gltf_model.h"
-#include "runtime/core/atomic_file.h"
 #include "runtime/core/file_io.h"
 #include "systems/gaussian/gaussian_axes.h"
 #include "systems/gaussian/gaussian_io.h"
@@ -514,29 +512,19 @@ Status write_glb(const fs::path& path, const GaussianCloud& g) {
     doc["nodes"] = {node};
     doc["meshes"] = {{{"primitives", {prim}}}};
     doc["buffers"] = {{{"byteLength", bin_bytes}}};
-    std::string text = doc.dump();
-    while (text.size() % 4) text.push_back(' ');
-    const std::uint64_t total = 12 + 8 + text.size() + 8 + bin_bytes;
-    if (total > 0xffffffffu) return make_error(path.string() + ": too many Gaussians for a GLB file (4 GiB)");
-    const std::uint32_t header[5] = {0x46546C67u, 2, std::uint32_t(total), std::uint32_t(text.size()),
-                                     0x4E4F534Au};
-    const std::uint32_t bin_header[2] = {std::uint32_t(bin_bytes), 0x004E4942u};
-    return write_file_atomic(path, [&](std::FILE* f) -> Status {
-        bool ok = std::fwrite(header, sizeof header, 1, f) == 1 &&
-                  std::fwrite(text.data(), 1, text.size(), f) == text.size() &&
-                  std::fwrite(bin_header, sizeof bin_header, 1, f) == 1;
+    const auto write_bin = [&](std::FILE* f) {
         constexpr std::size_t kRows = 1 << 16;
         std::vector<unsigned char> block;
         for (const AttributeSource& a : attributes)
-            for (std::size_t first = 0; ok && first < n; first += kRows) {
+            for (std::size_t first = 0; first < n; first += kRows) {
                 const std::size_t rows = std::min(kRows, n - first);
                 block.resize(rows * a.row_bytes);
                 a.fill(first, rows, block.data());
-                ok = std::fwrite(block.data(), 1, block.size(), f) == block.size();
+                if (std::fwrite(block.data(), 1, block.size(), f) != block.size()) return false;
             }
-        if (!ok) return make_error(path.string() + ": write failed: " + std::strerror(errno));
-        return {};
-    });
+        return true;
+    };
+    return assets::write_glb_file(path, doc.dump(), bin_bytes, write_bin, "a Gaussian cloud");
 }
 
 }  // namespace sffd::gaussian
