@@ -39,11 +39,25 @@ layout(std430, binding = SFFD_GAUSS_SSBO_DEFORMED_SH) writeonly buffer ShOut { f
 // (54..78), A_3⁻¹ (79..127), row-major.
 layout(std430, binding = SFFD_GAUSS_SSBO_SH_TABLES) readonly buffer ShTables { float sh_tab[]; };
 layout(std430, binding = SFFD_SSBO_STATS) buffer Stats { uint stats[]; };  // [0] inverted, [1] inside, [2] not finite, [3] singular
+// The group's counts, added to `stats` once per group (as the ffd pass does): one global atomic per
+// Gaussian on the same word serialises the dispatch on GPUs that do not combine a warp's atomics.
+shared uint s_counts[4];
 
-// Bit 0: write frames; bit 1: the frames buffer holds the previous deformer's frames (compose), else start
-// at I; bit 2: rotate the SH coefficients sh_in -> sh_out (the same buffer after the first deformer).
-layout(location = 0) uniform uint u_flags;
-layout(location = 1) uniform int u_sh_degree;
+// What a dispatch writes is fixed when the program is made (GpuGaussianDeformer specialises it), so the
+// code of the outputs it does not write is left out:
+//   GAUSS_FRAMES     1: write frames (compose onto the previous deformer's when u_compose, else start at I)
+//   GAUSS_SH         1: rotate the SH coefficients (degree u_sh_degree, 1..3) sh_in -> sh_out (the same
+//                    buffer after the first deformer); 0: coefficients not written
+// The degree stays a uniform: a constant degree 3 unrolled the rotation, which made it slower on llvmpipe.
+// Without them (the generic program, compiled to check the shader): both written.
+#ifndef GAUSS_FRAMES
+#define GAUSS_FRAMES 1
+#endif
+#ifndef GAUSS_SH
+#define GAUSS_SH 1
+#endif
+uniform uint u_compose;
+uniform int u_sh_degree;
 
 // Band l (1..3) of the 3DGS SH basis at d (systems/gaussian/sh.h, same constants and order).
 void sh_band(int l, vec3 d, out float y[7]) {
@@ -220,34 +234,24 @@ void write_frame(uint id, mat3 r) {
     frames[3u * id + 2u] = vec4(r[2], 0.0);
 }
 
-void main() {
-    uint id = sffd_dispatch_index();
-#ifdef FFD_CP_SHARED
-    for (uint c = gl_LocalInvocationIndex; c < uint(FFD_CP_SHARED); c += gl_WorkGroupSize.x) {
-        vec3 d = ffd_dp[c].xyz;
-        ffd_dp_shared[3u * c] = d.x;
-        ffd_dp_shared[3u * c + 1u] = d.y;
-        ffd_dp_shared[3u * c + 2u] = d.z;
-    }
-    memoryBarrierShared();
-    barrier();
-#endif
-    if (id >= ffd_count.x) return;
-    const bool want_frames = (u_flags & 1u) != 0u;
-    const bool compose = (u_flags & 2u) != 0u;
-    const bool want_coefficients = (u_flags & 4u) != 0u;
+// Deforms Gaussian `id`; returns its counts as bits (bit k adds 1 to stats[k]).
+uint deform_gaussian(uint id) {
+    uint counts = 0u;
+    const bool want_frames = GAUSS_FRAMES != 0;
+    const bool compose = want_frames && u_compose != 0u;
+    const bool want_coefficients = GAUSS_SH != 0;
     GpuGaussian g = g_in[id];
     mat3 prev_frame = mat3(1.0);
     if (want_frames && compose) prev_frame = mat3(frames[3u * id].xyz, frames[3u * id + 1u].xyz, frames[3u * id + 2u].xyz);
     vec3 stu = ffd_local(g.pos_opacity.xyz);
     bool culled = ffd_count.y != 0u || !ffd_inside(stu) ||
                   (ffd_div.w == 1 && (any(lessThanEqual(stu, ffd_cull_lo.xyz)) || any(greaterThanEqual(stu, ffd_cull_hi.xyz))));
-    if (ffd_inside(stu)) atomicAdd(stats[1], 1u);
+    if (ffd_inside(stu)) counts |= 2u;
     if (culled) {  // not moved: copied unchanged, frames start at identity
         g_out[id] = g;
         if (want_frames && !compose) write_frame(id, mat3(1.0));
         if (want_coefficients) sh_write(id, u_sh_degree, false, mat3(1.0));
-        return;
+        return counts;
     }
     vec3 D;
     mat3 G;
@@ -260,10 +264,10 @@ void main() {
     mat3 polar = mat3(1.0);
     if (J != mat3(1.0)) {  // J = I exactly (as the CPU tests it): shape and frame unchanged
         float det = determinant(J);
-        if (det < 0.0) atomicAdd(stats[0], 1u);
+        if (det < 0.0) counts |= 1u;
         float n2 = dot(J[0], J[0]) + dot(J[1], J[1]) + dot(J[2], J[2]);
         bool singular = !(abs(det) > 1e-12 * n2 * sqrt(n2));  // the CPU's polar_decomposition rule
-        if (singular) atomicAdd(stats[3], 1u);
+        if (singular) counts |= 8u;
         mat3 rq = quat_to_mat3(g.rotation);
         vec3 s = g.scale.xyz;
         mat3 a = J * mat3(rq[0] * s.x, rq[1] * s.y, rq[2] * s.z);
@@ -288,7 +292,7 @@ void main() {
               finite_v(o.pos_opacity) && finite_v(o.rotation) && finite_v(o.scale) &&
               finite_v(vec4(frame[0], frame[1].x)) && finite_v(vec4(frame[1].yz, frame[2].xy)) && finite_f(frame[2].z);
     if (!ok) {
-        atomicAdd(stats[2], 1u);
+        counts |= 4u;
         o.pos_opacity = vec4(finite_v(vec4(g.pos_opacity.xyz, 0.0)) ? g.pos_opacity.xyz : vec3(0.0), 0.0);
         o.rotation = vec4(1.0, 0.0, 0.0, 0.0);
         o.scale = vec4(0.0);
@@ -297,4 +301,27 @@ void main() {
     g_out[id] = o;
     if (want_frames) write_frame(id, frame);
     if (want_coefficients) sh_write(id, u_sh_degree, rotated && ok, polar);
+    return counts;
+}
+
+void main() {
+    uint id = sffd_dispatch_index();
+    if (gl_LocalInvocationIndex < 4u) s_counts[gl_LocalInvocationIndex] = 0u;
+#ifdef FFD_CP_SHARED
+    for (uint c = gl_LocalInvocationIndex; c < uint(FFD_CP_SHARED); c += gl_WorkGroupSize.x) {
+        vec3 d = ffd_dp[c].xyz;
+        ffd_dp_shared[3u * c] = d.x;
+        ffd_dp_shared[3u * c + 1u] = d.y;
+        ffd_dp_shared[3u * c + 2u] = d.z;
+    }
+#endif
+    memoryBarrierShared();
+    barrier();
+    const uint counts = id < ffd_count.x ? deform_gaussian(id) : 0u;
+    for (uint k = 0u; k < 4u; ++k)
+        if ((counts & (1u << k)) != 0u) atomicAdd(s_counts[k], 1u);
+    memoryBarrierShared();
+    barrier();
+    if (gl_LocalInvocationIndex < 4u && s_counts[gl_LocalInvocationIndex] != 0u)
+        atomicAdd(stats[gl_LocalInvocationIndex], s_counts[gl_LocalInvocationIndex]);
 }

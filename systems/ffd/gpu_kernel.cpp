@@ -34,7 +34,9 @@ Result<DeformPrograms> DeformPrograms::create(std::string shader, std::string pr
 
 Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::uint64_t key,
                                                    std::uint64_t stamp, const glm::dvec3& cloud_origin,
-                                                   std::uint32_t count) {
+                                                   std::uint32_t count, const Variant* variant) {
+    if (variant && variant->id >= (1u << 16))
+        return make_error(program_label + ": shader variant id past 2^16");
     // Same preparation as the CPU kernels (float displacements, M⁻¹, origin offset in double).
     const Prepared P = prepare(lattice, cloud_origin);
     // A program specialised for this lattice shape, basis and kernel (compiled once each; constant loop
@@ -72,7 +74,8 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
     const std::uint64_t shape =
         (std::uint64_t(lattice.divisions.x) << 24) | (std::uint64_t(lattice.divisions.y) << 12) |
         std::uint64_t(lattice.divisions.z) | (std::uint64_t(cp_shared) << 44) |
-        (std::uint64_t(cp_ubo) << 45) | (std::uint64_t(!bernstein) << 46) | (std::uint64_t(runs) << 47);
+        (std::uint64_t(cp_ubo) << 45) | (std::uint64_t(!bernstein) << 46) | (std::uint64_t(runs) << 47) |
+        (std::uint64_t(variant ? variant->id : 0) << 48);
     auto sp = specialised.find(shape);
     if (sp == specialised.end()) {
         const int maxb = std::max({lattice.divisions.x, lattice.divisions.y, lattice.divisions.z}) + 1;
@@ -87,10 +90,13 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
         }
         if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});
         if (runs) defines.push_back({"FFD_BSPLINE_RUNS", "1"});
+        if (variant) defines.insert(defines.end(), variant->defines.begin(), variant->defines.end());
         auto prog = gfx::load_compute_program(shader,
-                                              program_label + (cp_shared ? ".shared"
-                                                               : runs    ? ".packed"
-                                                                         : ".specialised"),
+                                              program_label +
+                                                  (cp_shared ? ".shared"
+                                                   : runs    ? ".packed"
+                                                             : ".specialised") +
+                                                  (variant ? variant->label : std::string()),
                                               defines);
         if (!prog) return prog.error();
         sp = specialised.emplace(shape, std::move(*prog)).first;

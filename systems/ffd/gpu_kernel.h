@@ -33,7 +33,7 @@ struct DeformPrograms {
     // Generic (any divisions and basis): compiled by create(), so a broken shader fails there and the
     // caller stays on the CPU path; bind() runs the specialised ones.
     gfx::Program program;
-    std::unordered_map<std::uint64_t, gfx::Program> specialised;  // per (l, m, n, basis, kernel): what runs
+    std::unordered_map<std::uint64_t, gfx::Program> specialised;  // per (l, m, n, basis, kernel, variant)
     gfx::Buffer ubo;                                              // FfdBlock
     struct Controls {
         gfx::Buffer buffer;
@@ -52,6 +52,14 @@ struct DeformPrograms {
     // Compiles the generic program and creates the block UBO (context current).
     static Result<DeformPrograms> create(std::string shader, std::string program_label, std::string prefix);
 
+    // What one deform shader specialises beyond the lattice (the Gaussian deformer: which outputs a
+    // dispatch writes; none: nullptr): `id` (< 2^16) tells the programs apart, `defines` make them, `label`
+    // is appended to the program's label.
+    struct Variant {
+        std::uint32_t id = 0;
+        gfx::Defines defines;
+        std::string label;
+    };
     struct Bound {
         GLuint program = 0;
         std::uint32_t local_size = 64;  // deform.comp's FFD_LOCAL_SIZE
@@ -61,7 +69,7 @@ struct DeformPrograms {
     // always), picks the program and binds it with the control points (SFFD_SSBO_CONTROL_POINTS,
     // SFFD_UBO_FFD_CONTROL). The lattice must be valid.
     Result<Bound> bind(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp,
-                       const glm::dvec3& cloud_origin, std::uint32_t count);
+                       const glm::dvec3& cloud_origin, std::uint32_t count, const Variant* variant = nullptr);
     // After bind(): the dispatch of `count` points in batches of element ranges (runtime/gfx/ssbo_batch.h;
     // more than one only when a buffer of byte `strides` per point exceeds GL_MAX_SHADER_STORAGE_BLOCK_SIZE).
     // Every batch's block (its own count) goes into fresh UBO storage in one upload, each bound by range

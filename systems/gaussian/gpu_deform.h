@@ -47,7 +47,9 @@ public:
     // The buffers of one dispatch. `in`/`out` GpuGaussian[count] (may be the same buffer: in place).
     // `frames` (vec4[3 * count], 0 = none) receives the polar rotations, composed onto what it holds when
     // `compose_frames`, else starting from identity. `sh_out` (0 = none): the coefficients of `sh_in`
-    // (GaussianCloud::sh layout, degree `sh_degree`) rotated by the polar rotation (may equal `sh_in`).
+    // (GaussianCloud::sh layout, degree `sh_degree`, 1..3) rotated by the polar rotation (may equal `sh_in`).
+    // Each combination of frames and coefficients runs its own program (the code of unwritten outputs left
+    // out).
     struct Buffers {
         GLuint in = 0, out = 0;
         GLuint frames = 0;

@@ -1,6 +1,7 @@
 // Deformation of 3D Gaussians at 1M and 6M: the CPU path (gaussian::deform, TBB) in both SH
 // modes and the GPU compute pass (gaussian::GpuGaussianDeformer, shaders/gaussian/deform.comp) in both SH
-// modes, on N flat degree-3 Gaussians tangent to a unit Fibonacci sphere through the twisted 11³ Bernstein
+// modes and at SH degree 0 (nothing to rotate: no frames, no coefficients, a program of its own), on N
+// flat degree-3 Gaussians tangent to a unit Fibonacci sphere through the twisted 11³ Bernstein
 // lattice of gaussian_bench. GPU: the cloud is uploaded once (GpuGaussianStore entry), a run is the
 // dispatch plus glFinish (no read-back: the frame path), control points uploaded on the first run only
 // (stamp fixed). On a software rasterizer (llvmpipe) the "GPU" is these CPU cores; the label says which.
@@ -25,11 +26,14 @@ using namespace sffd;
 using bench::process_cpu_s;
 using bench::sphere_gaussians;
 
-// One cloud per size for the whole run (6M degree-3 Gaussians take 1.4 GB and seconds to make).
-const GaussianCloud& cloud(std::size_t n) {
+// One cloud per size and SH degree for the whole run (6M degree-3 Gaussians take 1.4 GB and seconds to
+// make).
+const GaussianCloud& cloud(std::size_t n, int degree = 3) {
     static std::size_t made_n = 0;
+    static int made_degree = -1;
     static GaussianCloud g;
-    if (made_n != n) g = GaussianCloud{}, g = sphere_gaussians(n, 3), made_n = n;
+    if (made_n != n || made_degree != degree)
+        g = GaussianCloud{}, g = sphere_gaussians(n, degree), made_n = n, made_degree = degree;
     return g;
 }
 
@@ -53,6 +57,8 @@ BENCHMARK(BM_GaussianDeformCpu)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
+// Args: Gaussians, SH mode (as above), SH degree (0: no view-dependent colour, nothing to rotate, the
+// profile's synthetic-gaussians scenes).
 void BM_GaussianDeformGpu(benchmark::State& state) {
     auto ctx = bench::made_or_skip(
         state, gfx::create_context({.headless = true, .width = 16, .height = 16, .debug = false}));
@@ -61,7 +67,7 @@ void BM_GaussianDeformGpu(benchmark::State& state) {
         bench::made_or_skip(state, gaussian::GpuGaussianDeformer::create());
     if (!deformer) return;
     std::optional<gaussian::GpuGaussians> store;
-    const GaussianCloud& g = cloud(std::size_t(state.range(0)));
+    const GaussianCloud& g = cloud(std::size_t(state.range(0)), int(state.range(2)));
     const Lattice l = bench::twisted_gaussian_lattice();
     store.emplace();
     if (auto s = gaussian::upload_rest(*store, g, 1); !s) state.SkipWithError(s.message().c_str());
@@ -84,10 +90,11 @@ void BM_GaussianDeformGpu(benchmark::State& state) {
     deformer.reset();
 }
 BENCHMARK(BM_GaussianDeformGpu)
-    ->Args({1000000, 0})
-    ->Args({1000000, 1})
-    ->Args({6000000, 0})
-    ->Args({6000000, 1})
+    ->Args({1000000, 0, 3})
+    ->Args({1000000, 1, 3})
+    ->Args({1000000, 1, 0})
+    ->Args({6000000, 0, 3})
+    ->Args({6000000, 1, 3})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 

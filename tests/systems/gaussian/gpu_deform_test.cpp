@@ -221,6 +221,35 @@ TEST_F(GaussianGpuDeform, RotatedCoefficientsMatchCpuRotation) {
     }
 }
 
+TEST_F(GaussianGpuDeform, EachCombinationOfOutputsRunsItsOwnProgram) {
+    // One deformer, one lattice shape: the program is specialised by what a dispatch writes (frames; the
+    // coefficients of one degree), so a program reused across combinations would leave frames or
+    // coefficients unwritten or rotate the wrong number of them. Degree 0 writes neither; it runs first
+    // and last, around the others.
+    const Lattice tw = twisted(LatticeBasis::bernstein, {4, 3, 5});
+    const std::pair<int, ShMode> cases[] = {
+        {0, ShMode::rotate_view},         {1, ShMode::rotate_view}, {1, ShMode::rotate_coefficients},
+        {3, ShMode::rotate_coefficients}, {2, ShMode::rotate_view}, {0, ShMode::rotate_view}};
+    unsigned seed = 41;
+    for (const auto& [degree, mode] : cases) {
+        const GaussianCloud cloud = random_cloud(1200, degree, 1.1f, seed++);
+        auto gpu = deform_on_gpu(*deformer, {&tw}, cloud, mode);
+        ASSERT_TRUE(gpu) << gpu.message();
+        const bool frames = mode == ShMode::rotate_view && degree > 0;
+        const std::string what = "degree " + std::to_string(degree) + (frames ? ", frames" : "") +
+                                 (mode == ShMode::rotate_coefficients ? ", coefficients" : "");
+        if (frames) {
+            EXPECT_EQ(gpu->sh_frames.size(), cloud.size()) << what;
+        }
+        if (mode == ShMode::rotate_coefficients) {
+            EXPECT_NE(gpu->sh, cloud.sh) << what;
+        }
+        GaussianCloud cpu = cpu_deform({&tw}, cloud, mode);
+        if (degree == 0) cpu.sh_frames.clear();  // no view-dependent colour: the GPU keeps no frames
+        compare(*gpu, cpu, what.c_str());
+    }
+}
+
 TEST_F(GaussianGpuDeform, RigidLatticeMotionMovesGaussiansRigidly) {
     // Every control point turned by Q about the origin and moved by t: the Bernstein map is exactly
     // x -> Q x + t, so every Gaussian inside must come out as Q μ + t, Q Σ Qᵀ, frame Q.
