@@ -10,10 +10,10 @@
 //           Gaussians (σ_min/σ_max = 1e-3 loses the small axis to rounding); orthogonalising A keeps it.
 //           Repeated singular values need no rotation (the columns are already orthogonal); a singular
 //           J leaves zero columns, whose axes are completed by cross products (scale 0: a flat Gaussian).
-//   frames  (FFD_GAUSS_FRAMES) the rotation R_p of the polar decomposition J = R_p U, composed onto the
+//   frames  (GAUSS_FRAMES) the rotation R_p of the polar decomposition J = R_p U, composed onto the
 //           previous deformer's frame: frames[3i + c] = column c (the SH are evaluated at frameᵀ d).
 //           Near-singular J (|det J| <= 1e-12 ‖J‖_F³, the CPU's rule) keeps the previous frame.
-//   SH      (ShMode::rotate_coefficients, flag 4) the coefficients rotated by R_p per band, as the CPU's
+//   SH      (ShMode::rotate_coefficients, GAUSS_SH) the coefficients rotated by R_p per band, as the CPU's
 //           sh_rotation (systems/gaussian/sh.cpp): band l's function is evaluated at its 2l+1 sample
 //           directions turned by R_pᵀ and mapped back to coefficients by A_l⁻¹ (tables in sh_tab[]).
 //           Unmoved and near-singular Gaussians keep their coefficients.
