@@ -471,6 +471,18 @@ void make_rows(Suite& suite) {
                          readme, 0.1, true),
                    s, "ffd", Measure::cpu_time);
     }
+    // Gaussians deformed on the GPU (information, no target): SH degree 0, which writes neither frames nor
+    // coefficients, and degree 3 with frames (the engine's default mode), each its own program.
+    for (const std::string sh : {"", ":sh3"}) {
+        RunSetup s = setup("synthetic-gaussians:1m" + sh, 30, "hq", "global twist");
+        s.backend = "gpu";
+        deform_row(suite,
+                   claim("gpu.gaussians.deform.1m" + std::string(sh.empty() ? "" : ".sh3"),
+                         "1M Gaussians" + std::string(sh.empty() ? "" : " SH 3") +
+                             ", GPU deformation 11^3 Bernstein",
+                         readme, none, true),
+                   s, "gaussian", Measure::gpu);
+    }
 }
 
 std::string fmt(std::optional<double> v) {
