@@ -14,6 +14,30 @@
 
 namespace sffd::ffd::detail {
 
+namespace {
+
+// The points a shared-memory kernel copies: the lattice (Bernstein) or its zero-bordered grid (B-spline).
+std::size_t shared_points(const Lattice& lattice) {
+    if (lattice.basis == LatticeBasis::bernstein) return lattice.size();
+    return std::size_t(lattice.divisions.x + 3) * std::size_t(lattice.divisions.y + 3) *
+           std::size_t(lattice.divisions.z + 3);
+}
+
+}  // namespace
+
+KernelChoice choose_kernel(const Lattice& lattice, GpuBernsteinKernel kernel, bool software,
+                           std::size_t max_shared, std::size_t max_ubo) {
+    const bool bernstein = lattice.basis == LatticeBasis::bernstein;
+    const bool fits_shared =
+        shared_points(lattice) * 3 * sizeof(float) + kDeformShaderSharedBytes <= max_shared;
+    KernelChoice c;
+    c.shared = fits_shared && (kernel == GpuBernsteinKernel::shared ||
+                               (kernel == GpuBernsteinKernel::automatic && !software && bernstein));
+    c.ubo = bernstein && !c.shared && lattice.size() * 16 <= max_ubo;
+    c.runs = !bernstein && !c.shared && kernel != GpuBernsteinKernel::direct;
+    return c;
+}
+
 Result<DeformPrograms> DeformPrograms::create(std::string shader, std::string program_label,
                                               std::string prefix) {
     DeformPrograms p;
@@ -47,16 +71,9 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
     // against 0.129 ms point by point and 0.134 ms copying the 26 KB grid into every group's shared memory
     // (bench_ffd_gpu, GPU time), so shared memory serves it only when asked.
     const bool bernstein = lattice.basis == LatticeBasis::bernstein;
-    const std::size_t points = bernstein ? lattice.size()
-                                         : std::size_t(lattice.divisions.x + 3) *
-                                               std::size_t(lattice.divisions.y + 3) *
-                                               std::size_t(lattice.divisions.z + 3);
-    const bool fits_shared = points * 3 * sizeof(float) <= std::size_t(max_shared);
-    const bool cp_shared =
-        fits_shared && (kernel == GpuBernsteinKernel::shared ||
-                        (kernel == GpuBernsteinKernel::automatic && !software && bernstein));
-    const bool cp_ubo = bernstein && !cp_shared && lattice.size() * 16 <= std::size_t(max_ubo);
-    const bool runs = !bernstein && !cp_shared && kernel != GpuBernsteinKernel::direct;
+    const KernelChoice choice = choose_kernel(lattice, kernel, software, std::size_t(std::max(max_shared, 0)),
+                                              std::size_t(std::max(max_ubo, 0)));
+    const bool cp_shared = choice.shared, cp_ubo = choice.ubo, runs = choice.runs;
     Controls& cp = controls[key];
     if (!cp.buffer) cp.buffer = gfx::Buffer::create(prefix + ".control_points");
     if (stamp == 0 || stamp != cp.stamp || runs != cp.runs) {  // only when edited or the layout changes
@@ -85,7 +102,7 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
                                 {"FFD_MAXB", std::to_string(maxb)},
                                 {"FFD_BASIS", bernstein ? "0" : "1"}};
         if (cp_shared) {
-            defines.push_back({"FFD_CP_SHARED", std::to_string(points)});
+            defines.push_back({"FFD_CP_SHARED", std::to_string(shared_points(lattice))});
             defines.push_back({"FFD_LOCAL_SIZE", std::to_string(b.local_size)});
         }
         if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});

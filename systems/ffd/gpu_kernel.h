@@ -25,6 +25,21 @@
 
 namespace sffd::ffd::detail {
 
+// Which control-point kernel a dispatch runs (GpuBernsteinKernel, resolved): their xyz in shared memory,
+// Bernstein's in a UBO, or the SSBO (the B-spline's packed in runs along u, or point by point).
+struct KernelChoice {
+    bool shared = false, ubo = false, runs = false;
+};
+// The deform shaders' own shared words beside the control points (ffd: 2 counters, Gaussians: 4),
+// rounded up: a program whose shared memory passes GL_MAX_COMPUTE_SHARED_MEMORY_SIZE fails to link, and
+// lattices whose points fill the limit exactly exist (16^3 points: 48 KB, NVIDIA's limit).
+inline constexpr std::size_t kDeformShaderSharedBytes = 64;
+// The choice for `lattice` under the implementation's limits (bytes): shared memory when asked or, on a
+// hardware GPU, for Bernstein, when the points' xyz and the shader's own words fit; else a UBO for
+// Bernstein when it fits one; the B-spline reads packed runs unless `direct` is asked.
+KernelChoice choose_kernel(const Lattice& lattice, GpuBernsteinKernel kernel, bool software,
+                           std::size_t max_shared, std::size_t max_ubo);
+
 // One deform shader's programs (generic; specialised per lattice shape, basis and kernel) and the
 // lattice state they read. Labels: `program_label` (+ ".shared" / ".specialised"), `prefix` +
 // ".lattice_block" / ".control_points".

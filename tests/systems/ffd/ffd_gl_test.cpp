@@ -152,7 +152,7 @@ TEST_F(FfdGl, GridDispatchDeformsExactlyAsOneRow) {
 // the lattice's displacements (tenths here), far beyond these bounds.
 // Shapes: uneven 6x5x7 and 4x3x5 (the paper's 11³ compiles for minutes on llvmpipe as a shared-memory
 // program, whose barrier() llvmpipe splits into coroutines; it runs only in bench_ffd_gpu). Lattices over
-// the shared-memory limit fall back to direct (not tested: same reason).
+// the shared-memory limit fall back to the UBO or the SSBO (KernelChoice.*, without compiling them).
 TEST_F(FfdGl, EveryControlPointKernelMatchesTheReferenceForBothBases) {
     auto gpu = ffd::GpuDeformer::create();
     ASSERT_TRUE(gpu.ok()) << gpu.message();
