@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <fstream>
-#include <regex>
 #include <sstream>
 #include <string>
 
@@ -65,23 +64,25 @@ TEST(KernelChoice, EachKernelWhereItIsChosen) {
     EXPECT_TRUE(!c.shared && !c.ubo && !c.runs);
 }
 
-// The room kept for the shaders' own shared words covers what they declare beside the control points.
+// The room kept for the shaders' own shared words covers what they declare beside the control points
+// (declarations `shared uint|int|float a, b[N];` on one line; the control points' array is in ffd_common).
 TEST(KernelChoice, TheDeformShadersOwnSharedWordsFitTheRoomKept) {
-    const std::regex decl(R"(^\s*shared\s+(uint|int|float)\s+([^;]+);)");
-    const std::regex name(R"(\s*(\w+)\s*(\[\s*(\d+)\s*\])?\s*)");
     for (const char* file : {"ffd/deform.comp", "gaussian/deform.comp"}) {
         std::ifstream in(paths::shader_dir() / file);
         ASSERT_TRUE(in) << file;
         std::size_t bytes = 0, declarations = 0;
         for (std::string line; std::getline(in, line);) {
-            std::smatch m;
-            if (!std::regex_search(line, m, decl)) continue;
+            std::istringstream words(line);
+            std::string keyword, type;
+            if (!(words >> keyword >> type) || keyword != "shared") continue;
+            ASSERT_TRUE(type == "uint" || type == "int" || type == "float") << file << ": " << line;
             ++declarations;
-            std::stringstream names(m[2].str());
-            for (std::string one; std::getline(names, one, ',');) {
-                std::smatch n;
-                ASSERT_TRUE(std::regex_match(one, n, name)) << file << ": " << line;
-                bytes += 4 * (n[3].matched ? std::stoul(n[3].str()) : 1);
+            std::string names;
+            std::getline(words, names, ';');
+            std::istringstream list(names);
+            for (std::string one; std::getline(list, one, ',');) {
+                const auto open = one.find('[');
+                bytes += 4 * (open == std::string::npos ? 1 : std::stoul(one.substr(open + 1)));
             }
         }
         EXPECT_GT(declarations, 0u) << file;  // both count per work group in shared memory
