@@ -4,6 +4,7 @@
 #include <pthread.h>
 #include <signal.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -33,6 +34,14 @@ struct Slot {
     char path[kPathMax];
 };
 Slot g_slots[kSlots];
+// Temporaries being created and registered, and whether a handler is removing them. The creating thread
+// holds SIGINT/SIGTERM meanwhile, but a signal sent to the process goes to any thread that does not (the
+// deformers' worker threads), and the other threads run on while that handler does: it found temporaries
+// that existed but were not registered yet, or were created after it looked, and left them behind. Now
+// the handler says it is exiting, then waits for the creations under way; a creation that starts after
+// it never creates (g_creating and g_exiting are sequentially consistent: one side sees the other).
+std::atomic<int> g_creating{0};
+std::atomic<bool> g_exiting{false};
 std::atomic<const char*> g_program{"splatffd"};
 std::once_flag g_handlers_once;
 
@@ -59,8 +68,21 @@ void write_stderr(const char* s) {
     (void)r;
 }
 
+// Waits, up to 2 s (a creation stuck in the file system must not hold the exit forever), for the
+// temporaries being created to be registered. Never on the creating thread: it holds the signals.
+void wait_for_creations() {
+    timespec start{}, now{};
+    ::clock_gettime(CLOCK_MONOTONIC, &start);
+    while (g_creating.load() != 0) {
+        ::clock_gettime(CLOCK_MONOTONIC, &now);
+        if (now.tv_sec - start.tv_sec >= 2) break;
+    }
+}
+
 extern "C" void on_interrupt(int sig) {
-    // Async-signal-safe only: unlink, write, _exit.
+    // Async-signal-safe only: clock_gettime, unlink, write, _exit.
+    g_exiting.store(true);
+    wait_for_creations();
     int removed = 0;
     for (Slot& s : g_slots)
         if (s.state.load() == 2 && ::unlink(s.path) == 0) ++removed;
@@ -263,16 +285,23 @@ Result<AtomicFile> AtomicFile::create(const fs::path& path) {
     base += std::to_string(::getpid());
     base += "-XXXXXX";
     std::string templ = (folder / base).string();
-    // SIGINT/SIGTERM are held while the temporary is created and registered, so a signal never finds a
-    // temporary it does not know about (it is delivered, and the temporary removed, right after).
+    // SIGINT/SIGTERM are held in this thread while the temporary is created and registered, and a
+    // handler on any other thread waits for g_creating: a signal never finds a temporary it does not know
+    // about (here it is delivered, and the temporary removed, right after).
     sigset_t hold, previous;
     sigemptyset(&hold);
     sigaddset(&hold, SIGINT);
     sigaddset(&hold, SIGTERM);
     pthread_sigmask(SIG_BLOCK, &hold, &previous);
+    g_creating.fetch_add(1);
+    if (g_exiting.load()) {  // a handler is removing the temporaries and ends the process: create none
+        g_creating.fetch_sub(1);
+        for (;;) ::pause();  // the signals are held here: only the handler's _exit ends this
+    }
     const int fd = ::mkostemp(templ.data(), O_CLOEXEC);
     const int mkstemp_errno = errno;
     if (fd >= 0) impl->slot = register_temporary(templ);
+    g_creating.fetch_sub(1);
     pthread_sigmask(SIG_SETMASK, &previous, nullptr);
     if (fd < 0) return impl->fail(std::string("cannot write: ") + std::strerror(mkstemp_errno));
     impl->tmp = templ;

@@ -9,7 +9,9 @@
 //   - commit() flushes, fsyncs and renames over the output; anything else (an error, the destructor,
 //     SIGINT/SIGTERM) removes the temporary and leaves the old output untouched;
 //   - SIGINT/SIGTERM: the temporaries of this process are removed, a message is printed and the process
-//     exits 130/143 (handlers installed by the first AtomicFile);
+//     exits 130/143 (handlers installed by the first AtomicFile), on whichever thread the signal lands:
+//     the handler waits for temporaries being created and no new one is created after it starts
+//     (test AtomicFile.ASignalOnAnyThreadNeverLeavesATemporaryBehind);
 //   - stale temporaries of the same output left by a process that no longer exists (SIGKILL, power
 //     loss) are removed when the next save of that output starts (`.<name>.sffd-tmp-<pid>-*` and the
 //     older `<name>.tmp-<pid>`, only regular files or links, only when <pid> is not running; each folder
