@@ -56,8 +56,8 @@ shared uint s_counts[4];
 #ifndef GAUSS_SH
 #define GAUSS_SH 1
 #endif
-uniform uint u_compose;
-uniform int u_sh_degree;
+layout(location = 0) uniform uint u_compose;   // set only for programs with frames (they use it)
+layout(location = 1) uniform int u_sh_degree;  // set only for programs with coefficients
 
 // Band l (1..3) of the 3DGS SH basis at d (systems/gaussian/sh.h, same constants and order).
 void sh_band(int l, vec3 d, out float y[7]) {

@@ -134,11 +134,11 @@ Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, 
     variant.label = std::string(b.frames ? ".frames" : "") + (with_sh ? ".sh" : "");
     auto bound = m.programs.bind(lattice, key, stamp, cloud_origin, count, &variant);
     if (!bound) return bound.error();
-    // Uniforms a program without frames or coefficients does not have: location -1, ignored.
+    // Each uniform only where the program has it (explicit locations: no name lookup, a glGet that can
+    // stall a threaded driver, on the frame's path).
     const GLuint program = bound->program;
-    glProgramUniform1ui(program, glGetUniformLocation(program, "u_compose"),
-                        b.frames && b.compose_frames ? 1u : 0u);
-    glProgramUniform1i(program, glGetUniformLocation(program, "u_sh_degree"), b.sh_degree);
+    if (b.frames) glProgramUniform1ui(program, 0, b.compose_frames ? 1u : 0u);
+    if (with_sh) glProgramUniform1i(program, 1, b.sh_degree);
     // Unused bindings still get a buffer (the statistics stand in): nothing reads or writes them.
     if (!b.frames) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, m.stats.id());
     if (!with_sh) {
