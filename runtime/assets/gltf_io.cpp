@@ -52,18 +52,6 @@ json to_json(const tinygltf::Value& v, int depth = 0) {
     return nullptr;
 }
 
-glm::dmat4 node_matrix(const tinygltf::Node& n) {
-    if (n.matrix.size() == 16) return glm::make_mat4(n.matrix.data());
-    glm::dmat4 m(1.0);
-    if (n.translation.size() == 3)
-        m = glm::translate(m, glm::dvec3(n.translation[0], n.translation[1], n.translation[2]));
-    if (n.rotation.size() == 4)
-        m = m * glm::mat4_cast(
-                    glm::normalize(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2])));
-    if (n.scale.size() == 3) m = glm::scale(m, glm::dvec3(n.scale[0], n.scale[1], n.scale[2]));
-    return m;
-}
-
 Transform node_trs(const tinygltf::Node& n) {
     Transform t;
     if (n.translation.size() == 3)
@@ -431,7 +419,7 @@ Result<GltfContents> read_gltf(const fs::path& path) {
         if (depth > 256 || !visiting.insert(index).second)
             return make_error(src + ": node hierarchy has a cycle");
         const tinygltf::Node& node = m.nodes[static_cast<std::size_t>(index)];
-        const glm::dmat4 world = parent * node_matrix(node);
+        const glm::dmat4 world = parent * gltf_node_matrix(node);
         const json extras = to_json(node.extras);
         if (extras.is_object() && extras.contains("sffd_cloud") && node.children.size() == 1) {
             // One of our splat nodes: keep the arrays exactly as stored, Transform and origin apart.

@@ -10,6 +10,9 @@
 #include <cstring>
 #include <unordered_map>
 
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/type_ptr.hpp>
+#include <glm/gtx/quaternion.hpp>
 #include <nlohmann/json.hpp>
 #include <stb/stb_image.h>
 #include <tbb/blocked_range.h>
@@ -718,6 +721,18 @@ Status load_gltf_model(const fs::path& path, GltfModel& model) {
         model.bin = bin;
     }
     return decode_images(m, src);
+}
+
+glm::dmat4 gltf_node_matrix(const tinygltf::Node& n) {
+    if (n.matrix.size() == 16) return glm::make_mat4(n.matrix.data());
+    glm::dmat4 m(1.0);
+    if (n.translation.size() == 3)
+        m = glm::translate(m, glm::dvec3(n.translation[0], n.translation[1], n.translation[2]));
+    if (n.rotation.size() == 4)
+        m = m * glm::mat4_cast(
+                    glm::normalize(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2])));
+    if (n.scale.size() == 3) m = glm::scale(m, glm::dvec3(n.scale[0], n.scale[1], n.scale[2]));
+    return m;
 }
 
 }  // namespace sffd::assets

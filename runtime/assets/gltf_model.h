@@ -10,6 +10,7 @@
 #include <span>
 #include <string_view>
 
+#include <glm/glm.hpp>
 #include <tiny_gltf.h>
 
 #include "runtime/assets/mapped_file.h"
@@ -32,5 +33,9 @@ inline std::span<const unsigned char> gltf_buffer(const GltfModel& m, std::size_
 // The mapped file was shortened while it was read (MappedFile::changed()): bytes read from `bin` may have
 // been zeros instead of the file's.
 inline bool gltf_changed(const GltfModel& m) { return m.file && m.file->changed(); }
+
+// A node's local matrix: `matrix` when it has 16 numbers, else T * R * S, the rotation normalised (a zero
+// quaternion reads as none). Every glTF reader places its nodes with this one definition.
+glm::dmat4 gltf_node_matrix(const tinygltf::Node& node);
 
 }  // namespace sffd::assets

@@ -8,9 +8,7 @@
 #include <string>
 #include <vector>
 
-#include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
-#include <glm/gtc/type_ptr.hpp>
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
@@ -40,17 +38,6 @@ Result<std::vector<double>> read_accessor(const assets::GltfModel& model, int in
         m.accessors[std::size_t(index)].componentType == kUInt)
         return make_error(where + ": " + name + ": unsupported component type " + std::to_string(kUInt));
     return assets::read_gltf_accessor(model, index, components, where, name);
-}
-
-glm::dmat4 node_matrix(const tinygltf::Node& n) {
-    if (n.matrix.size() == 16) return glm::make_mat4(n.matrix.data());
-    glm::dmat4 m(1.0);
-    if (n.translation.size() == 3)
-        m = glm::translate(m, glm::dvec3(n.translation[0], n.translation[1], n.translation[2]));
-    if (n.rotation.size() == 4)
-        m = m * glm::mat4_cast(glm::dquat(n.rotation[3], n.rotation[0], n.rotation[1], n.rotation[2]));
-    if (n.scale.size() == 3) m = glm::scale(m, glm::dvec3(n.scale[0], n.scale[1], n.scale[2]));
-    return m;
 }
 
 std::string sh_name(int l, int n) {
@@ -242,7 +229,7 @@ Result<GaussianCloud> read_gltf(const fs::path& path) {
         visited[std::size_t(index)] = 1;
         ++depth;
         const tinygltf::Node& node = m.nodes[std::size_t(index)];
-        const glm::dmat4 world = parent * node_matrix(node);
+        const glm::dmat4 world = parent * assets::gltf_node_matrix(node);
         if (node.mesh >= 0 && std::size_t(node.mesh) < m.meshes.size()) {
             const auto& prims = m.meshes[std::size_t(node.mesh)].primitives;
             for (std::size_t p = 0; p < prims.size(); ++p) {

@@ -36,9 +36,16 @@ Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBou
         if (!found) camera = c, found = true;
     });
     if (found) return camera;
-    // Frame every cloud: union of their world-space bounding spheres (same as render_system's framing).
+    const SceneSphere s = scene_sphere(registry, bounds, gaussian_bounds);
+    return framing_camera(s.center, s.radius, aspect);
+}
+
+SceneSphere scene_sphere(const ecs::Registry& registry, const CloudBounds& bounds,
+                         const GaussianBounds& gaussian_bounds) {
     glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
     std::vector<std::pair<glm::dvec3, double>> balls;
+    // A cloud's sphere `b` (cloud space) in world space: centre through the model matrix, radius by its
+    // largest axis scale.
     auto add = [&](ecs::Entity e, const glm::dvec3& origin, const BoundingSphere& b) {
         if (b.radius < 0.0) return;
         const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), origin);
@@ -57,14 +64,13 @@ Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBou
             add(e, cloud.origin,
                 gaussian_bounds ? gaussian_bounds(e, cloud) : gaussian_bounding_sphere(cloud));
     });
-    glm::dvec3 center(0.0);
-    double radius = 1.0;
-    if (!balls.empty()) {
-        center = 0.5 * (lo + hi);
-        radius = 0.0;
-        for (const auto& [c, r] : balls) radius = std::max(radius, glm::length(c - center) + r);
-    }
-    return framing_camera(center, radius, aspect);
+    SceneSphere out;
+    if (balls.empty()) return out;
+    out.center = 0.5 * (lo + hi);
+    out.radius = 0.0;
+    for (const auto& [c, r] : balls) out.radius = std::max(out.radius, glm::length(c - out.center) + r);
+    out.radius = std::max(out.radius, 1e-9);
+    return out;
 }
 
 gpu::FrameBlock camera_frame_block(const glm::dmat4& view, const glm::dmat4& projection, int width,

@@ -32,6 +32,15 @@ using GaussianBounds = std::function<BoundingSphere(ecs::Entity, const GaussianC
 Camera scene_camera(const ecs::Registry& registry, double aspect, const CloudBounds& bounds = {},
                     const GaussianBounds& gaussian_bounds = {});
 
+// The sphere scene_camera() frames: around the union of every non-empty cloud's world-space bounding
+// sphere (splat and Gaussian clouds), radius at least 1e-9; a unit sphere at the origin when there is none.
+struct SceneSphere {
+    glm::dvec3 center{0.0};
+    double radius = 1.0;
+};
+SceneSphere scene_sphere(const ecs::Registry& registry, const CloudBounds& bounds = {},
+                         const GaussianBounds& gaussian_bounds = {});
+
 // The camera's part of the splat passes' FrameBlock (shaders/splat_render/frame_block.h) for a
 // width x height frame: projection, view_to_world, viewport, the pixel-ray map, and model_view /
 // normal_view for a cloud whose positions are world positions (render_system replaces those two per cloud).

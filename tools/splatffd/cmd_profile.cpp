@@ -24,7 +24,7 @@ constexpr const char* usage_text =
     "F]\n"
     "                        [--trace F] [--compare BASE.json] [--sweep K=V,..] [--plot-sweep F.json] "
     "[--paper]\n"
-    "                        [--preview-budget N] [--naive-frames N] [--suite quick|full]\n"
+    "                        [--preview-budget N] [--naive-frames N] [--suite quick|full [--only ID,..]]\n"
     "  SCENE                 built-in name (sphere, face), a scene/point-cloud file, or synthetic:N\n"
     "                        (a sphere of N splats with an 11^3 lattice), synthetic-gaussians:N (that\n"
     "                        sphere as N 3D Gaussians; Gaussian files work as SCENE too). Default: sphere\n"
@@ -60,7 +60,9 @@ constexpr const char* usage_text =
     "                        here, met/missed, Blender's lattice modifier as anchor when installed, the\n"
     "                        machine; --json F writes it. quick: small sizes (CI, under 2 minutes); full:\n"
     "                        1M-16M splats, 1M/4M Gaussians, editor replays (needs a display: xvfb-run -a);\n"
-    "                        GPU rows are measured on a hardware GPU only\n";
+    "                        GPU rows are measured on a hardware GPU only\n"
+    "  --only ID,..          with --suite: only the rows whose ids start with one of these (e.g.\n"
+    "                        gpu.deform.cpu_time, read.): measure one claim again without the rest\n";
 
 }  // namespace
 
@@ -185,6 +187,17 @@ int run_profile_command(cli::Args args) {
         } else if (a == "--suite") {
             if (!value(o.suite) || (o.suite != "quick" && o.suite != "full"))
                 return usage_error("--suite quick|full");
+        } else if (a == "--only") {
+            std::string list;
+            if (!value(list))
+                return usage_error("--only takes row ids (or their beginnings), comma-separated");
+            for (std::size_t at = 0; at <= list.size();) {
+                const std::size_t comma = std::min(list.find(',', at), list.size());
+                if (comma > at) o.only.push_back(list.substr(at, comma - at));
+                at = comma + 1;
+            }
+            if (o.only.empty())
+                return usage_error("--only takes row ids (or their beginnings), comma-separated");
         } else if (a == "--json" || a == "--csv" || a == "--svg" || a == "--trace" || a == "--compare") {
             std::string& target = a == "--json"    ? o.json
                                   : a == "--csv"   ? o.csv
@@ -206,6 +219,7 @@ int run_profile_command(cli::Args args) {
             return usage_error("more than one scene given ('" + o.scene + "', '" + a + "')");
         }
     }
+    if (!o.only.empty() && o.suite.empty()) return usage_error("--only selects rows of --suite quick|full");
     if (int rc = check_paths_before_work(o); rc != 0) return rc;
     if (!o.plot_sweep.empty()) {
         if (o.svg.empty()) return usage_error("--plot-sweep needs --svg PREFIX");

@@ -135,45 +135,9 @@ Result<Camera> parse_camera(const std::string& text) {
     return c;
 }
 
-struct SceneBounds {
-    glm::dvec3 center{0.0};
-    double radius = 1.0;
-};
-
-// The union of every non-empty cloud's world-space bounding sphere (as render::scene_camera frames it).
-SceneBounds scene_bounds(const ecs::Registry& registry) {
-    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-    std::vector<std::pair<glm::dvec3, double>> balls;
-    // A cloud's local bounding sphere `b` in world space (centre through the model matrix, radius by its
-    // largest axis scale).
-    const auto add = [&](ecs::Entity e, const render::BoundingSphere& b, const glm::dvec3& origin) {
-        const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), origin);
-        const double scale = std::max(
-            {glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
-        const glm::dvec3 c = glm::dvec3(m * glm::dvec4(b.center, 1.0));
-        balls.emplace_back(c, b.radius * scale);
-        lo = glm::min(lo, c - b.radius * scale);
-        hi = glm::max(hi, c + b.radius * scale);
-    };
-    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
-        if (cloud.size() > 0) add(e, render::bounding_sphere(cloud), cloud.origin);
-    });
-    registry.view<const GaussianCloud>().each(
-        [&](ecs::Entity e, const GaussianCloud& cloud) {  // 3D Gaussians too
-            if (cloud.size() > 0) add(e, render::gaussian_bounding_sphere(cloud), cloud.origin);
-        });
-    SceneBounds out;
-    if (balls.empty()) return out;
-    out.center = 0.5 * (lo + hi);
-    out.radius = 0.0;
-    for (const auto& [c, r] : balls) out.radius = std::max(out.radius, glm::length(c - out.center) + r);
-    out.radius = std::max(out.radius, 1e-9);
-    return out;
-}
-
 // Near and far planes that hold the whole scene from wherever the eye is (a camera given on the command
 // line has none of its own).
-void fit_clip_planes(Camera& c, const SceneBounds& b) {
+void fit_clip_planes(Camera& c, const render::SceneSphere& b) {
     const double d = glm::length(c.eye - b.center);
     c.near_plane = static_cast<float>(std::max(d - 2.0 * b.radius, 1e-3 * std::max(d, b.radius)));
     c.far_plane = static_cast<float>(d + 2.0 * b.radius);
@@ -190,7 +154,7 @@ void use_camera(ecs::Registry& registry, const Camera& c) {
 
 // Frame k of n of the turntable: the scene camera's eye turned by 2 pi k / n about the axis through the
 // bounds centre along the camera's up; it looks at the centre (the orbit keeps distance and height).
-Camera turntable_camera(const Camera& scene, const SceneBounds& b, long k, long n) {
+Camera turntable_camera(const Camera& scene, const render::SceneSphere& b, long k, long n) {
     const glm::dvec3 up = glm::normalize(scene.up);
     const glm::dvec3 offset = scene.eye - b.center;
     const double height = glm::dot(offset, up);
@@ -433,7 +397,7 @@ nlohmann::ordered_json settings_json(const RenderOptions& o) {
 struct RenderScene {
     ecs::Registry registry;
     render::RenderSettings settings;
-    SceneBounds bounds;
+    render::SceneSphere bounds;
     Camera scene_view;  // the scene camera the turntable orbits from
 };
 
@@ -450,7 +414,7 @@ Status set_up_scene(const RenderOptions& o, gfx::GlContext& ctx, RenderScene& s)
     s.settings.aux_outputs = o.exr;  // Z and N channels
     s.registry.set_resource<render::RenderSettings>(s.settings);
     // --camera / --turntable replace the scene camera (its clip planes are fitted to the scene).
-    s.bounds = o.camera || o.turntable > 0 ? scene_bounds(s.registry) : SceneBounds{};
+    s.bounds = o.camera || o.turntable > 0 ? render::scene_sphere(s.registry) : render::SceneSphere{};
     s.scene_view =
         o.turntable > 0 ? render::scene_camera(s.registry, double(o.width) / double(o.height)) : Camera{};
     if (o.camera) {

@@ -33,7 +33,8 @@ struct Options {
     std::string plot_sweep;
     bool paper = false;
     int naive_frames = 1;
-    std::string suite;  // "quick" or "full": the performance suite (profile_suite.cpp)
+    std::string suite;              // "quick" or "full": the performance suite (profile_suite.cpp)
+    std::vector<std::string> only;  // --only: the suite rows whose ids start with one of these
 };
 
 struct RunSetup {

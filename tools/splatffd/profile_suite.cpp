@@ -107,7 +107,13 @@ const profiling::TimingRow* find_row(const std::vector<profiling::TimingRow>& ro
 
 class Suite {
 public:
-    Suite(bool full, fs::path tmp) : m_full(full), m_tmp(std::move(tmp)) {}
+    // dry: wants() says no to every row, so make_rows() only lists the ids (nothing is measured or written).
+    Suite(bool full, fs::path tmp, std::vector<std::string> only, bool dry = false)
+        : m_full(full),
+          m_dry(dry),
+          m_tmp(std::move(tmp)),
+          m_only(std::move(only)),
+          m_only_matched(m_only.size(), 0) {}
 
     bool full() const { return m_full; }
     bool hardware_gpu() const { return m_hardware_gpu; }
@@ -122,6 +128,25 @@ public:
         m_machine = profiling::machine_info(bool(ctx));
         m_hardware_gpu = ctx && !gfx::software_renderer_name(ctx->renderer());
     }
+
+    // Whether row `id` runs (--only: its id starts with one of the given beginnings). Asked once per row,
+    // before anything is measured for it; remembers every id for the message when a beginning matched none.
+    bool wants(const std::string& id) {
+        m_ids.push_back(id);
+        bool wanted = m_only.empty();
+        for (std::size_t i = 0; i < m_only.size(); ++i)
+            if (id.rfind(m_only[i], 0) == 0) wanted = true, ++m_only_matched[i];
+        return wanted && !m_dry;
+    }
+    // The --only beginnings no row id starts with (a typo would otherwise measure nothing, silently).
+    std::vector<std::string> unmatched() const {
+        std::vector<std::string> out;
+        for (std::size_t i = 0; i < m_only.size(); ++i)
+            if (m_only_matched[i] == 0) out.push_back(m_only[i]);
+        return out;
+    }
+    const std::vector<std::string>& ids() const { return m_ids; }
+    const std::vector<std::string>& only() const { return m_only; }
 
     Row& add(Row row) {
         m_rows.push_back(std::move(row));
@@ -145,8 +170,11 @@ public:
     }
 
 private:
-    bool m_full;
+    bool m_full, m_dry;
     fs::path m_tmp;
+    std::vector<std::string> m_only;
+    std::vector<int> m_only_matched;
+    std::vector<std::string> m_ids;
     bool m_hardware_gpu = false;
     profiling::MachineInfo m_machine;
     std::vector<Row> m_rows;
@@ -186,6 +214,7 @@ RunSetup setup(std::string scene, int frames, std::string quality, std::string d
 // queries, trustworthy on hardware), with no glFinish between passes. Synchronised, each of a frame's
 // dozen passes waits a driver round trip: on an NVIDIA H200 that made the 59,650-splat sphere 1.9 ms.
 void frame_row(Suite& suite, Row r, RunSetup s, bool p95 = false) {
+    if (!suite.wants(r.id)) return;
     if (r.gpu_only) s.sync = false;
     r.how = "profile " + s.scene + " --quality " + s.quality + " --backend " + s.backend + " --drive '" +
             s.drive + "'" + (s.sync ? " --sync" : "") + " --frames " + std::to_string(s.frames) +
@@ -209,13 +238,7 @@ void frame_row(Suite& suite, Row r, RunSetup s, bool p95 = false) {
 // A deformation row: the median time of one system in a deformation-only run (residency + deformers).
 // gpu: the system's GPU time (timer queries); cpu_time: its CPU time with the GPU path (submission cost).
 enum class Measure { cpu, gpu, cpu_time };
-void deform_row(Suite& suite, Row r, RunSetup s, const std::string& system, Measure m) {
-    s.deformation_only = true;
-    s.sync = false;  // CPU rows have no GL context; GPU rows read timer queries (trustworthy on hardware)
-    r.how = "profile --sweep points=" + s.scene.substr(s.scene.find(':') + 1) +
-            " basis=" + (s.basis.empty() ? std::string("bernstein") : s.basis) + " backend=" + s.backend +
-            " (" + system + " " + (m == Measure::gpu ? "GPU" : "CPU") + " p50)";
-    Row& row = suite.add(std::move(r));
+void measure_deformation(Suite& suite, Row& row, const RunSetup& s, const std::string& system, Measure m) {
     if (m != Measure::cpu && !suite.hardware_gpu()) return not_measured(row, "not measured (no GPU)");
     std::string error;
     const ProfileReport* rep = suite.profile(s, &error);
@@ -232,10 +255,24 @@ void deform_row(Suite& suite, Row r, RunSetup s, const std::string& system, Meas
     finish(row, st.p50);
 }
 
+// Returns the row, or nullptr when --only left it out.
+Row* deform_row(Suite& suite, Row r, RunSetup s, const std::string& system, Measure m) {
+    if (!suite.wants(r.id)) return nullptr;
+    s.deformation_only = true;
+    s.sync = false;  // CPU rows have no GL context; GPU rows read timer queries (trustworthy on hardware)
+    r.how = "profile --sweep points=" + s.scene.substr(s.scene.find(':') + 1) +
+            " basis=" + (s.basis.empty() ? std::string("bernstein") : s.basis) + " backend=" + s.backend +
+            " (" + system + " " + (m == Measure::gpu ? "GPU" : "CPU") + " p50)";
+    Row& row = suite.add(std::move(r));
+    measure_deformation(suite, row, s, system, m);
+    return &row;
+}
+
 // A read row: a file written once, then opened through load_scene as every command opens it, three times;
 // the median counts. One open alone varied 2-3x between runs of the suite on the 2-core machine (the
 // same binary, surface PLY 84 vs 215 ms), more than any change it was meant to show.
 void read_row(Suite& suite, Row r, const fs::path& file, const std::function<Status()>& write, bool ms) {
+    if (!suite.wants(r.id)) return;
     r.how = "load_scene(" + file.filename().string() + "), median of 3";
     Row& row = suite.add(std::move(r));
     std::error_code ec;
@@ -261,6 +298,8 @@ void read_row(Suite& suite, Row r, const fs::path& file, const std::function<Sta
 // An editor row: `splatffd view SCENE --replay FILE` in a window (a display is needed: xvfb-run -a), the
 // frames in which a stretch or twist drag was live.
 void editor_rows(Suite& suite, const std::string& scene, const std::string& replay_name, Row p50, Row p95) {
+    const bool want_p50 = suite.wants(p50.id), want_p95 = suite.wants(p95.id);
+    if (!want_p50 && !want_p95) return;  // one replay measures both
     const fs::path replay = paths::data_root() / "tests" / "data" / "editor" / replay_name;
     const fs::path json = suite.tmp() / ("view_" + scene + ".json");
     const fs::path log = suite.tmp() / ("view_" + scene + ".log");
@@ -379,9 +418,10 @@ void make_rows(Suite& suite) {
         RunSetup s = setup("synthetic:" + n, full ? 10 : 8, "hq", "global twist");
         s.backend = "cpu";
         s.basis = "bspline";
-        deform_row(suite, claim("deform.cpu." + n, n + " splats, CPU deformation 11^3 B-spline", readme), s,
-                   "ffd", Measure::cpu);
-        blender_anchor(suite.rows().back(), full ? 1'000'000 : 100'000, suite.tmp());
+        if (Row* r = deform_row(
+                suite, claim("deform.cpu." + n, n + " splats, CPU deformation 11^3 B-spline", readme), s,
+                "ffd", Measure::cpu))
+            blender_anchor(*r, full ? 1'000'000 : 100'000, suite.tmp());
     }
 
     // Gaussians: deformation (J S J^T and SH degree 3 on the CPU) and the frame while moving (preview).
@@ -494,7 +534,10 @@ std::string fmt(std::optional<double> v) {
 
 std::string to_table(Suite& suite, const std::string& kind) {
     const auto& m = suite.machine();
-    std::string out = "performance suite (" + kind + ")\nmachine: " + m.cpu + ", " + std::to_string(m.cores) +
+    std::string only;
+    for (const std::string& o : suite.only()) only += (only.empty() ? "" : ",") + o;
+    std::string out = "performance suite (" + kind + (only.empty() ? "" : ", --only " + only) +
+                      ")\nmachine: " + m.cpu + ", " + std::to_string(m.cores) +
                       " cores; GL: " + (m.gl_renderer.empty() ? "none" : m.gl_renderer) + " (" +
                       (suite.hardware_gpu() ? "GPU" : "software: GPU rows not measured") + ")\n";
     char line[512];
@@ -524,8 +567,11 @@ std::string to_json(Suite& suite, const std::string& kind) {
         std::snprintf(b, sizeof b, "%.6g", *v);
         return std::string(b);
     };
+    std::string only;  // a partial suite says which rows it ran, so it is not read as the whole suite
+    for (const std::string& o : suite.only()) only += (only.empty() ? "" : ", ") + json_quote(o);
     std::string out =
         "{\n  \"format\": \"splatffd-suite\",\n  \"version\": 1,\n  \"suite\": " + json_quote(kind) +
+        (suite.only().empty() ? std::string() : ",\n  \"only\": [" + only + "]") +
         ",\n  \"machine\": {\"cpu\": " + json_quote(m.cpu) + ", \"cores\": " + std::to_string(m.cores) +
         ", \"os\": " + json_quote(m.os) + ", \"gl_renderer\": " + json_quote(m.gl_renderer) +
         ", \"gl_version\": " + json_quote(m.gl_version) +
@@ -557,7 +603,21 @@ int run_suite(const Options& o) {
                      ec.message().c_str());
         return 1;
     }
-    Suite suite(full, tmp);
+    // --only is checked against the rows' ids before anything runs: a beginning that matches no row is a
+    // typo (or a row of the other suite), and the message lists the ids.
+    if (!o.only.empty()) {
+        Suite list(full, tmp, o.only, true);
+        make_rows(list);
+        if (const std::vector<std::string> none = list.unmatched(); !none.empty()) {
+            fs::remove_all(tmp, ec);
+            std::string ids;
+            for (const std::string& id : list.ids()) ids += "\n  " + id;
+            std::fprintf(stderr, "profile --suite %s: --only %s: no row id starts with it; the rows are:%s\n",
+                         o.suite.c_str(), none.front().c_str(), ids.c_str());
+            return 2;
+        }
+    }
+    Suite suite(full, tmp, o.only);
     suite.probe_machine();
     std::fprintf(stderr, "profile --suite %s: GL %s (%s)\n", o.suite.c_str(),
                  suite.machine().gl_renderer.empty() ? "none" : suite.machine().gl_renderer.c_str(),

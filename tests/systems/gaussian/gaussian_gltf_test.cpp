@@ -173,29 +173,35 @@ const std::string K = "KHR_gaussian_splatting:";
 
 TEST(GaussianGltf, HandWrittenFileWithNodeRotationAndColorFallback) {
     // One Gaussian at (1,0,0), identity rotation (x,y,z,w) = (0,0,0,1), linear scales, opacity 0.25,
-    // no SH_DEGREE_0_COEF_0 but COLOR_0 (0.75, 0.5, 0.25, 1); node rotated 90° about +z.
-    const fs::path p = temp("hand.gltf");
-    write_gltf_text(p,
-                    {{"POSITION", "VEC3", {1, 0, 0}},
-                     {K + "ROTATION", "VEC4", {0, 0, 0, 1}},
-                     {K + "SCALE", "VEC3", {0.1f, 0.2f, 0.3f}},
-                     {K + "OPACITY", "SCALAR", {0.25f}},
-                     {"COLOR_0", "VEC4", {0.75f, 0.5f, 0.25f, 1.0f}}},
-                    ",\"rotation\":[0,0,0.7071067811865476,0.7071067811865476]");
-    auto g = read_gltf(p);
-    ASSERT_TRUE(g) << g.message();
-    ASSERT_EQ(g->size(), 1u);
-    // (0, 1, 0) in glTF's frame, (0, -1, 0) in the internal one (turned 180 degrees about z).
-    EXPECT_LT(glm::length(g->positions[0] - glm::vec3(0, -1, 0)), 1e-6f);
-    EXPECT_EQ(g->opacities[0], 0.25f);
-    // Σ' = Rz Σ Rzᵀ: the 0.1 axis now along y, the 0.2 axis along −x.
-    const glm::dmat3 s = covariance(glm::dvec3(g->scales[0]), glm::dquat(g->rotations[0]));
-    EXPECT_NEAR(s[0][0], 0.04, 1e-7);
-    EXPECT_NEAR(s[1][1], 0.01, 1e-7);
-    EXPECT_NEAR(s[2][2], 0.09, 1e-7);
-    EXPECT_NEAR(s[1][0], 0.0, 1e-7);
-    const glm::vec3 col = sh_color(0, g->sh.data(), {0, 0, 1});
-    EXPECT_LT(glm::length(col - glm::vec3(0.75f, 0.5f, 0.25f)), 1e-6f);
+    // no SH_DEGREE_0_COEF_0 but COLOR_0 (0.75, 0.5, 0.25, 1); node rotated 90° about +z. The same node
+    // rotation written unnormalised (twice as long) reads the same, as surface glTF nodes do: taken as a
+    // matrix, that quaternion would scale by 4 and shear.
+    for (const std::string rotation :
+         {"0.7071067811865476,0.7071067811865476", "1.4142135623730951,1.4142135623730951"}) {
+        SCOPED_TRACE(rotation);
+        const fs::path p = temp("hand.gltf");
+        write_gltf_text(p,
+                        {{"POSITION", "VEC3", {1, 0, 0}},
+                         {K + "ROTATION", "VEC4", {0, 0, 0, 1}},
+                         {K + "SCALE", "VEC3", {0.1f, 0.2f, 0.3f}},
+                         {K + "OPACITY", "SCALAR", {0.25f}},
+                         {"COLOR_0", "VEC4", {0.75f, 0.5f, 0.25f, 1.0f}}},
+                        ",\"rotation\":[0,0," + rotation + "]");
+        auto g = read_gltf(p);
+        ASSERT_TRUE(g) << g.message();
+        ASSERT_EQ(g->size(), 1u);
+        // (0, 1, 0) in glTF's frame, (0, -1, 0) in the internal one (turned 180 degrees about z).
+        EXPECT_LT(glm::length(g->positions[0] - glm::vec3(0, -1, 0)), 1e-6f);
+        EXPECT_EQ(g->opacities[0], 0.25f);
+        // Σ' = Rz Σ Rzᵀ: the 0.1 axis now along y, the 0.2 axis along −x.
+        const glm::dmat3 s = covariance(glm::dvec3(g->scales[0]), glm::dquat(g->rotations[0]));
+        EXPECT_NEAR(s[0][0], 0.04, 1e-7);
+        EXPECT_NEAR(s[1][1], 0.01, 1e-7);
+        EXPECT_NEAR(s[2][2], 0.09, 1e-7);
+        EXPECT_NEAR(s[1][0], 0.0, 1e-7);
+        const glm::vec3 col = sh_color(0, g->sh.data(), {0, 0, 1});
+        EXPECT_LT(glm::length(col - glm::vec3(0.75f, 0.5f, 0.25f)), 1e-6f);
+    }
 }
 
 TEST(GaussianGltf, BadFiles) {

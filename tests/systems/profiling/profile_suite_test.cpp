@@ -100,6 +100,40 @@ TEST_F(ProfileSuite, QuickWritesOneValidRowPerClaim) {
     }
 }
 
+// --only measures the rows whose ids begin so, and nothing else; the JSON says which rows it ran.
+TEST_F(ProfileSuite, OnlyRunsTheRowsItNames) {
+    const fs::path json = dir / "only.json";
+    const CmdResult r = profile("--suite quick --only read.glb,read.surface --json " + json.string(), dir);
+    ASSERT_EQ(r.code, 0) << r.out;
+    const auto errors = sffd::profiling::validate_json(read_text(SFFD_SUITE_SCHEMA), read_text(json));
+    ASSERT_TRUE(errors.empty()) << errors.front();
+    const auto j = nlohmann::json::parse(read_text(json));
+    EXPECT_EQ(j["only"], nlohmann::json::array({"read.glb", "read.surface"}));
+    std::set<std::string> ids;
+    for (const auto& row : j["rows"]) {
+        ids.insert(row["id"].get<std::string>());
+        EXPECT_TRUE(row["value"].is_number()) << row["id"] << ": " << row["note"];
+    }
+    EXPECT_EQ(ids, (std::set<std::string>{"read.glb", "read.surface_ply"}));
+    // Nothing else ran: no frame was profiled, no deformation measured.
+    EXPECT_EQ(r.out.find("profile: sphere"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("sphere.preview"), std::string::npos) << r.out;
+}
+
+// A beginning that no row id has (a typo, or a row of the full suite only) is refused before anything is
+// measured, with the ids to choose from.
+TEST_F(ProfileSuite, OnlyWithAnUnknownRowListsTheRows) {
+    const CmdResult r = profile("--suite quick --only read.glb,gpu.deform.cpu_time", dir);
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find("--only gpu.deform.cpu_time: no row id starts with it"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("\n  sphere.preview"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("performance suite"), std::string::npos) << r.out;
+    EXPECT_EQ(r.out.find("profile --suite: read.glb"), std::string::npos) << "measured before refusing";
+    const CmdResult alone = profile("sphere --only read.glb", dir);
+    EXPECT_EQ(alone.code, 2) << alone.out;
+    EXPECT_NE(alone.out.find("--only selects rows of --suite"), std::string::npos) << alone.out;
+}
+
 TEST_F(ProfileSuite, UnknownSuiteIsAUsageError) {
     const CmdResult r = profile("--suite medium", dir);
     EXPECT_EQ(r.code, 2) << r.out;
