@@ -253,6 +253,7 @@ using namespace detail;
 void editor_input_system(ecs::Registry& registry, const FrameContext& frame) {
     EditorState* state = registry.try_resource<EditorState>();
     if (!state) return;
+    update_scene_bounds_cache(registry);  // the overlay and the panels read the scene's box every frame
     Camera* camera = camera_of(registry, *state);
     state->pending_picks.clear();  // a pick the last frame's picking phase did not answer is dropped
     std::vector<InputEvent> fresh;

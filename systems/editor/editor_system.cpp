@@ -3,6 +3,9 @@
 // lattice_commands.cpp lattice settings).
 #include "systems/editor/editor_system_detail.h"
 
+#include <limits>
+#include <type_traits>
+
 #include "systems/editor/lattice_tools.h"
 #include "systems/gaussian/components.h"
 
@@ -81,28 +84,78 @@ std::vector<std::uint32_t> editable_selection(const ecs::Registry& registry, con
     return editable_points(*lattice, sel, state.scope, state.pin_outer_layer);
 }
 
+namespace {
+
+// One cloud's world box: every authored point through its model matrix (exact, O(points)).
+template <class Cloud>
+SceneBoundsCache::Entry cloud_box(const ecs::Registry& registry, ecs::Entity e, const Cloud& cloud) {
+    SceneBoundsCache::Entry box;
+    box.entity = e;
+    box.cloud_version = registry.version<Cloud>(e);
+    box.transform_version = registry.version<Transform>(e);
+    box.gaussian = std::is_same_v<Cloud, GaussianCloud>;
+    const glm::dmat4 model = model_matrix(registry.try_get<Transform>(e));
+    glm::dvec3 a(std::numeric_limits<double>::max()), b(-std::numeric_limits<double>::max());
+    for (const glm::vec3& p : cloud.positions) {
+        const glm::dvec3 w = glm::dvec3(model * glm::dvec4(cloud.origin + glm::dvec3(p), 1.0));
+        a = glm::min(a, w), b = glm::max(b, w);
+    }
+    box.any = !cloud.positions.empty();
+    box.lo = a, box.hi = b;
+    return box;
+}
+
+template <class Cloud>
+const SceneBoundsCache::Entry* cached_box(const SceneBoundsCache* cache, const ecs::Registry& registry,
+                                          ecs::Entity e) {
+    if (!cache) return nullptr;
+    const bool gaussian = std::is_same_v<Cloud, GaussianCloud>;
+    for (const SceneBoundsCache::Entry& c : cache->entries)
+        if (c.entity == e && c.gaussian == gaussian)
+            return c.cloud_version == registry.version<Cloud>(e) &&
+                           c.transform_version == registry.version<Transform>(e)
+                       ? &c
+                       : nullptr;
+    return nullptr;
+}
+
+}  // namespace
+
 bool scene_bounds(const ecs::Registry& registry, glm::dvec3& lo, glm::dvec3& hi) {
     bool any = false;
     lo = glm::dvec3(std::numeric_limits<double>::max());
     hi = -lo;
+    const SceneBoundsCache* cache = registry.try_resource<SceneBoundsCache>();
+    auto add = [&](const SceneBoundsCache::Entry& box) {
+        if (box.any) lo = glm::min(lo, box.lo), hi = glm::max(hi, box.hi), any = true;
+    };
     registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
-        const glm::dmat4 model = model_matrix(registry.try_get<Transform>(e));
-        glm::dvec3 a(std::numeric_limits<double>::max()), b(-std::numeric_limits<double>::max());
-        for (const glm::vec3& p : cloud.positions) {
-            const glm::dvec3 w = glm::dvec3(model * glm::dvec4(cloud.origin + glm::dvec3(p), 1.0));
-            a = glm::min(a, w), b = glm::max(b, w);
-        }
-        if (!cloud.positions.empty()) lo = glm::min(lo, a), hi = glm::max(hi, b), any = true;
+        const auto* c = cached_box<SplatCloud>(cache, registry, e);
+        add(c ? *c : cloud_box(registry, e, cloud));
     });
     // Gaussians count as the object too: a lattice added to a Gaussian file has them inside.
     registry.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& g) {
-        const glm::dmat4 model = model_matrix(registry.try_get<Transform>(e));
-        for (const glm::vec3& p : g.positions) {
-            const glm::dvec3 w = glm::dvec3(model * glm::dvec4(g.origin + glm::dvec3(p), 1.0));
-            lo = glm::min(lo, w), hi = glm::max(hi, w), any = true;
-        }
+        const auto* c = cached_box<GaussianCloud>(cache, registry, e);
+        add(c ? *c : cloud_box(registry, e, g));
     });
     return any;
+}
+
+void update_scene_bounds_cache(ecs::Registry& registry) {
+    SceneBoundsCache* cache = registry.try_resource<SceneBoundsCache>();
+    if (!cache) cache = &registry.set_resource<SceneBoundsCache>();
+    std::vector<SceneBoundsCache::Entry> entries;
+    auto keep = [&]<class Cloud>(ecs::Entity e, const Cloud& cloud) {
+        if (const auto* c = cached_box<Cloud>(cache, registry, e)) {
+            entries.push_back(*c);
+        } else {
+            entries.push_back(cloud_box(registry, e, cloud));
+            ++cache->computed;
+        }
+    };
+    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& c) { keep(e, c); });
+    registry.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& g) { keep(e, g); });
+    cache->entries = std::move(entries);  // gone clouds drop out
 }
 
 std::size_t control_points_inside_object(const ecs::Registry& registry, const Lattice& lattice) {

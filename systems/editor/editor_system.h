@@ -21,8 +21,10 @@
 // `r x 45 enter` (EditorState::typed; number keys and space go to the entry while it is active).
 #pragma once
 
+#include <cstdint>
 #include <span>
 #include <string>
+#include <vector>
 
 #include "runtime/app/frame_loop.h"
 #include "runtime/ecs/registry.h"
@@ -54,8 +56,25 @@ bool apply_twist(ecs::Registry& registry, EditorState& state, double degrees);
 void reset_lattice(ecs::Registry& registry, EditorState& state);  // current = rest
 void frame_selection(ecs::Registry& registry, EditorState& state);
 // World-space box of every point cloud, surface splats and Gaussians (authored positions); false when
-// there is none.
+// there is none. Each cloud's box comes from SceneBoundsCache when its entry is current (same change
+// stamps of the cloud and its Transform), else from a pass over its points: always exact.
 bool scene_bounds(const ecs::Registry& registry, glm::dvec3& lo, glm::dvec3& hi);
+
+// Registry resource: each cloud's world box, with the change stamps it was computed at. The overlay and
+// the Lattice panel ask for the scene's box every frame; a pass over every point of a large cloud there
+// cost as much as the frame's rendering. update_scene_bounds_cache() recomputes only clouds whose stamps
+// moved (and drops gone ones); the editor's input system runs it at the start of each frame.
+struct SceneBoundsCache {
+    struct Entry {
+        ecs::Entity entity;
+        std::uint64_t cloud_version = 0, transform_version = 0;
+        bool gaussian = false, any = false;
+        glm::dvec3 lo{0.0}, hi{0.0};
+    };
+    std::vector<Entry> entries;
+    std::uint64_t computed = 0;  // clouds passed over by update_scene_bounds_cache(), for tests
+};
+void update_scene_bounds_cache(ecs::Registry& registry);
 // Control points of `lattice` (current positions) inside scene_bounds: the Lattice panel's "N inside the
 // object's box" and the add-lattice status line (0 when the scene has no cloud).
 std::size_t control_points_inside_object(const ecs::Registry& registry, const Lattice& lattice);

@@ -567,3 +567,51 @@ TEST(EditorSystem, ClickOnAGaussianSelectsItsCloud) {
     EXPECT_EQ(s.state->selected_entity, blob);
     EXPECT_TRUE(s.selection().empty());
 }
+
+// The scene's box, asked every frame by the overlay and the Lattice panel, comes from a cache that is
+// recomputed only for clouds whose stamps moved, and is exact whether the cache is current or not.
+TEST(EditorSceneBounds, CacheFollowsEditsTransformsAndRemovalsAndPassesOverOnlyWhatChanged) {
+    ecs::Registry reg;
+    const ecs::Entity a = reg.create(), b = reg.create();
+    SplatCloud& ca = reg.emplace<SplatCloud>(a);
+    ca.positions = {{-1, 0, 0}, {2, 1, 0}};
+    GaussianCloud& gb = reg.emplace<GaussianCloud>(b);
+    gb.origin = glm::dvec3(10, 0, 0);
+    gb.positions = {{0, -3, 0}, {1, 0, 5}};
+    auto expect_box = [&](glm::dvec3 want_lo, glm::dvec3 want_hi, const char* what) {
+        glm::dvec3 lo, hi;
+        ASSERT_TRUE(scene_bounds(reg, lo, hi)) << what;
+        EXPECT_EQ(lo, want_lo) << what;
+        EXPECT_EQ(hi, want_hi) << what;
+    };
+    expect_box({-1, -3, 0}, {11, 1, 5}, "no cache yet");
+    update_scene_bounds_cache(reg);
+    const SceneBoundsCache& cache = reg.resource<SceneBoundsCache>();
+    EXPECT_EQ(cache.computed, 2u);
+    expect_box({-1, -3, 0}, {11, 1, 5}, "cached");
+    update_scene_bounds_cache(reg);
+    EXPECT_EQ(cache.computed, 2u) << "nothing moved: nothing passed over again";
+
+    // An edit through patch: exact before the cache catches up, then only that cloud is passed over.
+    reg.patch<SplatCloud>(a).positions.push_back({-4, 0, 0});
+    expect_box({-4, -3, 0}, {11, 1, 5}, "edited, cache stale");
+    update_scene_bounds_cache(reg);
+    EXPECT_EQ(cache.computed, 3u);
+    expect_box({-4, -3, 0}, {11, 1, 5}, "edited, cached");
+
+    // A Transform added to the Gaussians moves their box.
+    Transform t;
+    t.translation = glm::dvec3(0, 0, 100);
+    reg.emplace<Transform>(b, t);
+    expect_box({-4, -3, 0}, {11, 1, 105}, "moved, cache stale");
+    update_scene_bounds_cache(reg);
+    EXPECT_EQ(cache.computed, 4u);
+    expect_box({-4, -3, 0}, {11, 1, 105}, "moved, cached");
+
+    // A removed cloud leaves the box and the cache.
+    reg.destroy(b);
+    reg.flush();
+    expect_box({-4, 0, 0}, {2, 1, 0}, "Gaussians removed");
+    update_scene_bounds_cache(reg);
+    EXPECT_EQ(cache.entries.size(), 1u);
+}
