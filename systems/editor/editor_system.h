@@ -60,10 +60,11 @@ void frame_selection(ecs::Registry& registry, EditorState& state);
 // stamps of the cloud and its Transform), else from a pass over its points: always exact.
 bool scene_bounds(const ecs::Registry& registry, glm::dvec3& lo, glm::dvec3& hi);
 
-// Registry resource: each cloud's world box, with the change stamps it was computed at. The overlay and
-// the Lattice panel ask for the scene's box every frame; a pass over every point of a large cloud there
-// cost as much as the frame's rendering. update_scene_bounds_cache() recomputes only clouds whose stamps
-// moved (and drops gone ones); the editor's input system runs it at the start of each frame.
+// Registry resource: each cloud's world box, with the change stamps it was computed at. The overlay (per
+// lattice) and the Lattice panel ask for the scene's box every frame, so without it each frame passed over
+// every point of every cloud several times, growing with the clouds. update_scene_bounds_cache()
+// recomputes only clouds whose stamps moved (and drops gone ones); the editor's input system runs it at
+// the start of each frame.
 struct SceneBoundsCache {
     struct Entry {
         ecs::Entity entity;
