@@ -22,21 +22,10 @@ constexpr std::size_t kBlock = 1 << 16;
 
 bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
-// Whether Gaussian i of a deformed cloud is finite everywhere a renderer reads it.
-bool finite_result(const GaussianCloud& g, std::size_t i, int K, bool frames) {
-    const glm::quat q = g.rotations[i];
-    if (!finite3(g.positions[i]) || !finite3(g.scales[i]) || !std::isfinite(q.w + q.x + q.y + q.z))
-        return false;
-    if (!(std::abs(glm::dot(q, q) - 1.0f) < 1e-3f)) return false;  // a zero or overflowed quaternion
-    // On the exponent bits without an early exit, so the loop over the 48 coefficients is vector code.
-    const float* sh = &g.sh[i * std::size_t(K) * 3];
-    std::uint32_t all = 0;
-    for (std::size_t k = 0; k < std::size_t(K) * 3; ++k) {
-        std::uint32_t bits;
-        std::memcpy(&bits, sh + k, sizeof bits);
-        all |= std::uint32_t((bits & 0x7f800000u) == 0x7f800000u);
-    }
-    if (all) return false;
+// Whether Gaussian i of a deformed cloud is finite everywhere a renderer reads it; `shape_ok`: its scale,
+// rotation and SH passed detail::finite_shape().
+bool finite_result(const GaussianCloud& g, std::size_t i, bool shape_ok, bool frames) {
+    if (!shape_ok || !finite3(g.positions[i])) return false;
     if (frames)
         for (int c = 0; c < 3; ++c)
             if (!finite3(g.sh_frames[i][c])) return false;
@@ -90,6 +79,7 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
     std::vector<glm::vec3> centres(
         std::min(n, kBlock));  // the block's input centres (in-place overwrites them)
     const bool drop_opacity = out.opacities.size() == n;
+    std::vector<std::uint8_t> not_finite_shape(options.reference_shapes ? 0 : std::min(n, kBlock));
     for (std::size_t first = 0; first < n; first += kBlock) {
         const std::size_t count = std::min(kBlock, n - first);
         std::copy(in.positions.begin() + std::ptrdiff_t(first),
@@ -144,9 +134,9 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
         // As the GPU pass does (deform.comp): a result that is not finite is never left for the renderer; the
         // Gaussian keeps its input centre with scale 0 and opacity 0, and is counted. Both CPU kernels pass
         // here. J is tested too, as the shader does: a non-finite J can still give a finite-looking shape.
-        auto drop_if_not_finite = [&](std::size_t i, std::size_t b) -> std::size_t {
+        auto drop_if_not_finite = [&](std::size_t i, std::size_t b, bool shape_ok) -> std::size_t {
             const glm::mat3& j = jac[b];
-            if (finite3(j[0]) && finite3(j[1]) && finite3(j[2]) && finite_result(out, i, K, view_mode))
+            if (finite3(j[0]) && finite3(j[1]) && finite3(j[2]) && finite_result(out, i, shape_ok, view_mode))
                 return 0;
             out.positions[i] = centres[b];
             out.scales[i] = glm::vec3(0.0f);
@@ -158,7 +148,8 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
         };
         if (!options.reference_shapes) {
             // The vectorised float kernel (the GPU pass's arithmetic); ranges split on whole vectors.
-            const detail::FastShapeArgs args{&in, &out, jac.data(), first, view_mode, frames_in};
+            const detail::FastShapeArgs args{
+                &in, &out, jac.data(), first, view_mode, frames_in, not_finite_shape.data()};
             const std::size_t w = std::size_t(detail::shape_lane_width());
             const std::size_t groups = (count + w - 1) / w;
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 64),
@@ -167,7 +158,7 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
                                   degenerate += detail::deform_shapes_fast(args, b0, b1);
                                   std::size_t dropped = 0;
                                   for (std::size_t b = b0; b < b1; ++b)
-                                      dropped += drop_if_not_finite(first + b, b);
+                                      dropped += drop_if_not_finite(first + b, b, !not_finite_shape[b]);
                                   not_finite += dropped;
                               });
             total.degenerate += degenerate.load();
@@ -176,17 +167,20 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
         }
         // The reference: double precision per Gaussian (the fast kernel and the GPU pass are tested against
         // it).
-        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, count, 1024),
-                          [&](const tbb::blocked_range<std::size_t>& r) {
-                              std::size_t bad = 0, dropped = 0;
-                              for (std::size_t b = r.begin(); b != r.end(); ++b) {
-                                  const std::size_t i = first + b;
-                                  deform_one(i, b, bad);
-                                  dropped += drop_if_not_finite(i, b);
-                              }
-                              degenerate += bad;
-                              not_finite += dropped;
-                          });
+        tbb::parallel_for(
+            tbb::blocked_range<std::size_t>(0, count, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+                std::size_t bad = 0, dropped = 0;
+                for (std::size_t b = r.begin(); b != r.end(); ++b) {
+                    const std::size_t i = first + b;
+                    deform_one(i, b, bad);
+                    const float* sh = &out.sh[i * std::size_t(K) * 3];
+                    const bool shape_ok =
+                        detail::finite_shape(out.scales[i], out.rotations[i], sh, std::size_t(K) * 3);
+                    dropped += drop_if_not_finite(i, b, shape_ok);
+                }
+                degenerate += bad;
+                not_finite += dropped;
+            });
         total.degenerate += degenerate.load();
         total.not_finite += not_finite.load();
     }

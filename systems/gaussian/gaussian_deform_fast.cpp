@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstring>
 
 #if defined(__AVX512F__)
@@ -296,10 +297,25 @@ void to_rows(const float (&soa)[48][W], float (*rows)[48]) {
         for (int l = 0; l < 16; ++l) _mm512_storeu_ps(rows[l] + b * 16, m[l]);
     }
 }
+// Copies count floats from src to dst: the 64-byte lines wholly inside dst with streaming stores (no read of the
+// line before it is written, and it does not push the working set out of the caches), the partial lines
+// at either end with plain stores. deform_shapes_fast() fences before it returns.
+void stream_floats(const float* src, float* dst, std::size_t count) {
+    const auto addr = reinterpret_cast<std::uintptr_t>(dst);
+    std::size_t head = addr % sizeof(float) ? count : ((64 - addr % 64) % 64) / sizeof(float);
+    head = std::min(head, count);
+    std::memcpy(dst, src, head * sizeof(float));
+    std::size_t k = head;
+    for (; k + 16 <= count; k += 16) _mm512_stream_ps(dst + k, _mm512_loadu_ps(src + k));
+    std::memcpy(dst + k, src + k, (count - k) * sizeof(float));
+}
+void fence() { _mm_sfence(); }
 #else
 constexpr bool kTransposeBlocks = false;
 void to_lanes(const float*, float (&)[48][W]) {}
 void to_rows(const float (&)[48][W], float (*)[48]) {}
+void stream_floats(const float*, float*, std::size_t) {}
+void fence() {}
 #endif
 
 // One vector of Gaussians first .. first + n - 1 (n <= W). Returns the near-singular count.
@@ -335,6 +351,15 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
         moved |= J.c[c].z != (c == 2 ? 1.0f : 0.0f);
     }
     std::size_t singular_count = 0;
+    // Whole groups of degree 3 move their coefficients as 16x16 blocks (to_lanes, to_rows). Copied to another
+    // cloud, their 3 KB of output rows are one run, written with streaming stores: the SH are most of a
+    // Gaussian's bytes, and a plain store first reads each line it fills from memory.
+    const bool whole = kTransposeBlocks && n == W && stride == 48;
+    const bool stream = whole && copy;
+    const float* sh_in_rows = &in.sh[first * stride];
+    alignas(64) float sh_rows[W][48];
+    bool rotate_coeffs = false;
+    vm rows_rotated = vm{};  // lanes whose sh_rows hold rotated coefficients
     if (any(moved)) {
         // polar_decomposition's rule, in double as there: a J singular in exact arithmetic (a flattened cell)
         // has a float determinant of rounding size, far above the 1e-12 threshold.
@@ -379,11 +404,9 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
         M3 R = identity();
         if (K > 1) R = polar_rotation(J, moved & ~singular, rotated);
         alignas(64) float sh_soa[48][W];
-        const bool rotate_coeffs = K > 1 && !a.view_mode && any(rotated);
-        const bool blocks = kTransposeBlocks && n == W && stride == 48;  // whole groups of degree 3
-        alignas(64) float sh_rows[W][48];
-        if (rotate_coeffs && blocks) {
-            to_lanes(&in.sh[first * stride], sh_soa);
+        rotate_coeffs = K > 1 && !a.view_mode && any(rotated);
+        if (rotate_coeffs && whole) {
+            to_lanes(sh_in_rows, sh_soa);
         } else if (rotate_coeffs) {
             if (n < W) std::memset(sh_soa, 0, sizeof sh_soa);  // padding lanes: defined values
             for (int l = 0; l < n; ++l) {
@@ -401,7 +424,8 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
                 std::memcpy(sh_soa[3 * k + 1], &c[k].y, sizeof(vf));
                 std::memcpy(sh_soa[3 * k + 2], &c[k].z, sizeof(vf));
             }
-            if (blocks) to_rows(sh_soa, sh_rows);
+            if (whole) to_rows(sh_soa, sh_rows);  // every lane, the band 0 colour included
+            rows_rotated = rotated;
         }
         for (int l = 0; l < n; ++l) {
             const std::size_t i = first + std::size_t(l);
@@ -410,7 +434,7 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
             if (!moved[l]) {  // outside the lattice or not moved by it
                 if (copy) {
                     out.scales[i] = in.scales[i], out.rotations[i] = in.rotations[i];
-                    std::copy(sh_in, sh_in + stride, sh_out);
+                    if (!stream) std::copy(sh_in, sh_in + stride, sh_out);
                 }
                 continue;
             }
@@ -418,13 +442,14 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
             out.scales[i] = glm::vec3(out_s[0][l], out_s[1][l], out_s[2][l]);
             out.rotations[i] = glm::quat(out_q[0][l], out_q[1][l], out_q[2][l], out_q[3][l]);
             if (rotate_coeffs && rotated[l]) {
-                if (blocks) std::memcpy(sh_out + 3, sh_rows[l] + 3, (stride - 3) * sizeof(float));
+                if (stream) continue;  // the row in sh_rows is written below
+                if (whole) std::memcpy(sh_out + 3, sh_rows[l] + 3, (stride - 3) * sizeof(float));
                 else
                     for (std::size_t k = 3; k < stride; ++k) sh_out[k] = sh_soa[k][l];
                 if (copy) std::copy(sh_in, sh_in + 3, sh_out);
                 continue;
             }
-            if (copy) std::copy(sh_in, sh_in + stride, sh_out);
+            if (copy && !stream) std::copy(sh_in, sh_in + stride, sh_out);
             if (a.view_mode && rotated[l]) {
                 glm::mat3 p;
                 for (int c = 0; c < 3; ++c) p[c] = glm::vec3(R.c[c].x[l], R.c[c].y[l], R.c[c].z[l]);
@@ -435,9 +460,23 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
         for (int l = 0; l < n; ++l) {
             const std::size_t i = first + std::size_t(l);
             out.scales[i] = in.scales[i], out.rotations[i] = in.rotations[i];
-            std::copy(&in.sh[i * stride], &in.sh[i * stride] + stride, &out.sh[i * stride]);
+            if (!stream) std::copy(&in.sh[i * stride], &in.sh[i * stride] + stride, &out.sh[i * stride]);
         }
     }
+    // The group's output rows, whole: the rotated ones from sh_rows, the others the input's.
+    const float* rows_out = sh_in_rows;
+    if (stream && rotate_coeffs) {
+        for (int l = 0; l < W; ++l)
+            if (!rows_rotated[l]) std::memcpy(sh_rows[l], sh_in_rows + l * 48, 48 * sizeof(float));
+        rows_out = &sh_rows[0][0];
+    }
+    if (stream) stream_floats(rows_out, &out.sh[first * stride], std::size_t(W) * 48);
+    if (a.not_finite)
+        for (int l = 0; l < n; ++l) {
+            const std::size_t i = first + std::size_t(l);
+            const float* row = stream ? rows_out + std::size_t(l) * 48 : &out.sh[i * stride];
+            a.not_finite[i - a.first] = !finite_shape(out.scales[i], out.rotations[i], row, stride);
+        }
     return singular_count;
 }
 
@@ -449,6 +488,7 @@ std::size_t deform_shapes_fast(const FastShapeArgs& a, std::size_t begin, std::s
     std::size_t singular = 0;
     for (std::size_t b = begin; b < end; b += W)
         singular += group(a, a.first + b, int(std::min<std::size_t>(W, end - b)));
+    fence();  // streamed rows are visible to whichever thread reads them next
     return singular;
 }
 

@@ -4,7 +4,10 @@
 // sample-direction tables. Internal to the gaussian system; gaussian_deform.cpp calls it per range.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
+#include <cstdint>
+#include <cstring>
 
 #include <glm/glm.hpp>
 
@@ -19,10 +22,33 @@ struct FastShapeArgs {
     std::size_t first = 0;
     bool view_mode = false;  // store the polar rotation in out->sh_frames instead of rotating coefficients
     bool frames_in = false;  // in->sh_frames holds a frame per Gaussian (composed onto)
+    // not_finite[b] = 1 where the scale, rotation or SH written for Gaussian first + b fail finite_shape(),
+    // else 0. The kernel checks what it writes while it still holds it: the rows of a large cloud are
+    // streamed past the caches, and reading them back would be a second trip to memory.
+    std::uint8_t* not_finite = nullptr;
 };
+
+// Whether a Gaussian's shape and colour are fit for a renderer: scale, rotation and the `count` SH
+// coefficients finite, the quaternion unit (a zero or overflowed one is not). The coefficients are tested
+// on their exponent bits without an early exit, so the loop is vector code and no fast-math rewrite of
+// isfinite can remove it.
+inline bool finite_shape(const glm::vec3& s, const glm::quat& q, const float* sh, std::size_t count) {
+    if (!std::isfinite(s.x) || !std::isfinite(s.y) || !std::isfinite(s.z) ||
+        !std::isfinite(q.w + q.x + q.y + q.z))
+        return false;
+    if (!(std::abs(glm::dot(q, q) - 1.0f) < 1e-3f)) return false;
+    std::uint32_t all = 0;
+    for (std::size_t k = 0; k < count; ++k) {
+        std::uint32_t bits;
+        std::memcpy(&bits, sh + k, sizeof bits);
+        all |= std::uint32_t((bits & 0x7f800000u) == 0x7f800000u);
+    }
+    return all == 0;
+}
 
 // Writes scales, rotations and sh (or sh_frames) of Gaussians first + [begin, end) (begin a multiple of the
 // lane width, or the whole range). Gaussians with J = I are copied. Returns how many had a near-singular J.
+// Rows written with streaming stores are fenced before it returns.
 std::size_t deform_shapes_fast(const FastShapeArgs& a, std::size_t begin, std::size_t end);
 
 // Lanes per vector of the kernel (16 with AVX-512, 8 with AVX, else 4): ranges are split on multiples of it.

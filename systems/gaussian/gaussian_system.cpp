@@ -179,28 +179,38 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
 
         // CPU path (TBB).
         out.on_gpu = false;
-        // Opacities are not copied (a deformation never changes them): readers use the authored cloud's.
-        out.cloud.origin = cloud.origin;
-        out.cloud.sh_degree = cloud.sh_degree;
-        out.cloud.positions = cloud.positions;
-        out.cloud.scales = cloud.scales;
-        out.cloud.rotations = cloud.rotations;
-        out.cloud.sh = cloud.sh;
-        // Carried through the deformation only so that Gaussians whose result is not finite can be made
-        // transparent (as the GPU pass does); dropped again when none was.
-        out.cloud.opacities = cloud.opacities;
-        out.cloud.sh_frames.clear();
+        // The first lattice reads the authored cloud and writes the output, with no copy of the cloud before
+        // it: the SH coefficients are most of a Gaussian's bytes (192 of 236 at degree 3), and the copy was a
+        // whole extra read and write of them, in memory for a large cloud. Later lattices deform the output
+        // in place. Opacities are carried only so that Gaussians whose result is
+        // not finite can be made transparent (as the GPU pass does); dropped again when none was (readers
+        // use the authored cloud's: a deformation never changes them).
+        auto copy_authored = [&] {  // the output before any lattice, where the first one failed
+            out.cloud.origin = cloud.origin;
+            out.cloud.sh_degree = cloud.sh_degree;
+            out.cloud.positions = cloud.positions;
+            out.cloud.scales = cloud.scales;
+            out.cloud.rotations = cloud.rotations;
+            out.cloud.sh = cloud.sh;
+            out.cloud.opacities = cloud.opacities;
+            out.cloud.sh_frames.clear();
+        };
+        bool written = false;
         for (ecs::Entity le : lattices) {
-            auto stats = gaussian::deform(reg.get<Lattice>(le), out.cloud, out.cloud,
-                                          {ffd::Backend::automatic, false, cpu_sh});
+            auto stats = gaussian::deform(reg.get<Lattice>(le), written ? out.cloud : cloud, out.cloud,
+                                          {ffd::Backend::automatic, true, cpu_sh});
             if (!stats) {
                 log::warn("gaussian_deform_system: ", stats.message(), " (lattice skipped)");
+                if (!written) copy_authored();  // it may have written part of the output
+                written = true;
                 continue;
             }
+            written = true;
             out.inverted += stats->inverted;
             out.degenerate += stats->degenerate;
             out.not_finite += stats->not_finite;
         }
+        if (!written) copy_authored();
         if (out.not_finite)
             log::warn("gaussian_deform_system: ", out.not_finite,
                       " Gaussians deformed to non-finite values (drawn transparent)");

@@ -4,8 +4,12 @@
 // lattice, in place and chained, and on a lattice that flattens its cells.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
+#include <string>
+#include <vector>
 
 #include <glm/gtc/quaternion.hpp>
 
@@ -102,11 +106,14 @@ TEST(GaussianDeformFast, MatchesTheDoublePrecisionReference) {
             EXPECT_GT(rs->inside, 300u);
             EXPECT_LT(rs->inside, g.size());
             expect_match(fast, ref, degree == 3 ? "degree 3" : "degree < 3");
-            // Outside Gaussians are copied bit for bit.
+            // Outside Gaussians are copied bit for bit (their SH rows too: whole vector groups of degree 3
+            // write every row, the input's where nothing was rotated).
+            const std::size_t row = std::size_t(sh_coeffs(degree)) * 3;
             for (std::size_t i = 0; i < g.size(); ++i)
                 if (glm::any(glm::greaterThan(glm::abs(g.positions[i]), glm::vec3(1.0f)))) {
                     EXPECT_EQ(fast.scales[i], g.scales[i]);
                     EXPECT_EQ(fast.rotations[i], g.rotations[i]);
+                    EXPECT_TRUE(std::equal(&g.sh[i * row], &g.sh[i * row] + row, &fast.sh[i * row])) << i;
                 }
         }
 }
@@ -159,6 +166,45 @@ TEST(GaussianDeformFast, FlattenedCellsCountAsDegenerateWithoutNaN) {
         }
     }
     EXPECT_EQ(fast.sh, g.sh);
+}
+
+// Coefficients that are not finite (a cloud made in memory: readers refuse them) are dropped by both
+// kernels, into another cloud (whole vector groups of degree 3 are checked before their rows are streamed
+// out) and in place, whether the lattice moves the Gaussian or not: the same ones, transparent, no
+// colour left, counted.
+TEST(GaussianDeformFast, NonFiniteCoefficientsAreDroppedIntoAnotherCloudAndInPlace) {
+    const Lattice l = twisted(LatticeBasis::bernstein, 4);
+    GaussianCloud g = cloud(16 * 4 + 5, 3, 5);  // whole groups at every lane width, and a partial one
+    const std::size_t row = 48;
+    const std::vector<std::size_t> bad = {3, 17, 40, 41, 63, 66};
+    for (std::size_t b = 0; b < bad.size(); ++b) {
+        const std::size_t i = bad[b];
+        // Half inside the lattice (rotated), half outside (copied).
+        g.positions[i] = b % 2 ? glm::vec3(0.1f, -0.2f, 0.3f) : glm::vec3(1.5f, 0.0f, 0.0f);
+        g.sh[i * row + 3 + 7 * b] =
+            b % 3 ? std::numeric_limits<float>::quiet_NaN() : std::numeric_limits<float>::infinity();
+    }
+    for (bool in_place : {false, true})
+        for (bool reference : {false, true}) {
+            const std::string what = std::string(in_place ? "in place" : "into another cloud") +
+                                     (reference ? ", reference kernel" : ", vectorised kernel");
+            DeformOptions options;
+            options.reference_shapes = reference;
+            options.copy_opacities = true;
+            GaussianCloud out = in_place ? g : GaussianCloud{};
+            auto st = in_place ? deform(l, out, out, options) : deform(l, g, out, options);
+            ASSERT_TRUE(st) << st.message();
+            EXPECT_EQ(st->not_finite, bad.size()) << what;
+            for (std::size_t i = 0; i < g.size(); ++i) {
+                const bool dropped = std::find(bad.begin(), bad.end(), i) != bad.end();
+                EXPECT_EQ(out.opacities[i], dropped ? 0.0f : 0.5f) << what << " " << i;
+                for (std::size_t k = 0; k < row; ++k) {
+                    const float c = out.sh[i * row + k];
+                    if (dropped) EXPECT_EQ(c, 0.0f) << what << " " << i << " " << k;
+                    else EXPECT_TRUE(std::isfinite(c)) << what << " " << i << " " << k;
+                }
+            }
+        }
 }
 
 }  // namespace

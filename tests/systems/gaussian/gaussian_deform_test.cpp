@@ -276,6 +276,35 @@ TEST(GaussianDeform, SystemRunsOnlyWhenSomethingChanged) {
               reg.get<GaussianCloud>(cloud).positions);  // rest lattice
 }
 
+// Two lattices on one cloud: the first reads the authored cloud into the output, the second deforms that
+// output in place; the result is the two deformations chained, and the authored cloud is left as it was.
+TEST(GaussianDeform, SystemChainsItsLatticesFromTheAuthoredCloud) {
+    ecs::Registry reg;
+    const ecs::Entity cloud = reg.create(), a = reg.create(), b = reg.create();
+    const GaussianCloud authored = random_cloud(1000, 3, 0.9, 0.03, 11);
+    reg.emplace<GaussianCloud>(cloud, authored);
+    reg.emplace<Lattice>(a, twisted_lattice());
+    Lattice stretched = ffd::make_lattice(
+        {-1.5, -1.5, -1.5}, {glm::dvec3(3, 0, 0), glm::dvec3(0, 3, 0), glm::dvec3(0, 0, 3)}, {2, 2, 2});
+    for (glm::dvec3& p : stretched.current) p.x *= 1.0 + 0.2 * p.y;
+    reg.emplace<Lattice>(b, stretched);
+    reg.emplace<Deformers>(cloud, Deformers{{a, b}});
+    gaussian_deform_system(reg, {});
+    GaussianCloud direct;
+    ASSERT_TRUE(deform(reg.get<Lattice>(a), authored, direct));
+    ASSERT_TRUE(deform(reg.get<Lattice>(b), direct, direct));
+    const DeformedGaussians& d = reg.get<DeformedGaussians>(cloud);
+    EXPECT_EQ(d.cloud.positions, direct.positions);
+    EXPECT_EQ(d.cloud.scales, direct.scales);
+    EXPECT_EQ(d.cloud.rotations, direct.rotations);
+    EXPECT_EQ(d.cloud.sh, direct.sh);
+    EXPECT_NE(d.cloud.sh, authored.sh);  // the twist rotated the colours
+    EXPECT_TRUE(d.cloud.opacities.empty());
+    const GaussianCloud& now = reg.get<GaussianCloud>(cloud);
+    EXPECT_EQ(now.positions, authored.positions);
+    EXPECT_EQ(now.sh, authored.sh);
+}
+
 TEST(GaussianDeform, AnimatedLatticeMovesTheGaussiansEveryFrame) {
     // A clip twisting every control point about +y through the lattice centre (a rigid rotation, angle
     // 90° × t) drives the lattice; the Gaussian system follows frame by frame: at t the Gaussians are the
