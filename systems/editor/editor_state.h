@@ -119,6 +119,11 @@ struct EditorState {
     // the fill. The view turns it on where the GL is a CPU rasteriser, whose frame time is mostly fill;
     // View > "Half-resolution preview" toggles it.
     bool half_resolution_preview = false;
+    // While those frames preview, the lattice overlay's faint pass (the part behind the surface) shows
+    // the hidden control points but not the hidden cell edges: on a CPU rasteriser those edges cost more
+    // than the rest of the overlay (overlay_draws()). Set with half_resolution_preview; View > "Light
+    // overlay while moving" toggles it.
+    bool light_overlay_while_moving = false;
     int still_frames = 1 << 20;  // frames since the last movement
     int rest_quality = -1;       // render::Quality the view started with (-1: not read yet)
     bool previewing = false;     // this frame renders in preview because of movement (status bar)

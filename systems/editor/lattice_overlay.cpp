@@ -101,6 +101,16 @@ OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const Edito
     return g;
 }
 
+std::vector<OverlayDraw> overlay_draws(const EditorState& state) {
+    if (state.xray) return {{true, false, 1.0f}, {false, false, 1.0f}};
+    std::vector<OverlayDraw> draws;
+    if (!(state.light_overlay_while_moving && state.previewing)) draws.push_back({true, false, 0.3f});
+    draws.push_back({false, false, 0.3f});
+    draws.push_back({true, true, 1.0f});
+    draws.push_back({false, true, 1.0f});
+    return draws;
+}
+
 Status init_lattice_overlay(ecs::Registry& registry) {
     if (registry.try_resource<LatticeOverlayState>()) return {};
     auto program = gfx::load_program(
@@ -177,6 +187,7 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
     glUseProgram(s.program.id());
     glBindVertexArray(s.vao.id());
 
+    const std::vector<OverlayDraw> draws = overlay_draws(*state);
     registry.view<const Lattice>().each([&](ecs::Entity e, const Lattice&) {
         const OverlayGeometry g = build_lattice_overlay(registry, *state, e);
         if (g.points.empty() || g.lines.empty()) return;
@@ -194,17 +205,14 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
         const glm::mat4 m = glm::mat4(view_proj * glm::translate(glm::dmat4(1.0), g.anchor));
         glUniformMatrix4fv(SFFD_LOC_OVERLAY_VIEW_PROJ, 1, GL_FALSE, &m[0][0]);
         glUniform1f(SFFD_LOC_OVERLAY_PIXEL, float(width) / float(std::max(target_width, 1)));
-        // Pass 1: everything (faint unless x-ray); pass 2: the visible part at full strength.
-        for (int pass = 0; pass < (state->xray ? 1 : 2); ++pass) {
-            if (pass == 0) glDisable(GL_DEPTH_TEST);
-            else glEnable(GL_DEPTH_TEST), glDepthFunc(GL_LEQUAL);
-            const float strength = state->xray || pass == 1 ? 1.0f : 0.3f;
-            glUniform1i(SFFD_LOC_OVERLAY_POINTS, 0);
-            glBlendColor(0.0f, 0.0f, 0.0f, strength * g.lines.front().color.w);
-            glDrawArrays(GL_LINES, 0, GLsizei(g.lines.size()));
-            glUniform1i(SFFD_LOC_OVERLAY_POINTS, 1);
-            glBlendColor(0.0f, 0.0f, 0.0f, strength * g.points.front().color.w);
-            glDrawArrays(GL_POINTS, GLint(g.lines.size()), GLsizei(g.points.size()));
+        for (const OverlayDraw& d : draws) {
+            if (d.depth_test) glEnable(GL_DEPTH_TEST), glDepthFunc(GL_LEQUAL);
+            else glDisable(GL_DEPTH_TEST);
+            const OverlayVertex& first = d.lines ? g.lines.front() : g.points.front();
+            glUniform1i(SFFD_LOC_OVERLAY_POINTS, d.lines ? 0 : 1);
+            glBlendColor(0.0f, 0.0f, 0.0f, d.strength * first.color.w);
+            if (d.lines) glDrawArrays(GL_LINES, 0, GLsizei(g.lines.size()));
+            else glDrawArrays(GL_POINTS, GLint(g.lines.size()), GLsizei(g.points.size()));
         }
     });
 

@@ -2,7 +2,9 @@
 // and control points into the render system's output framebuffer, so the window and screenshots show
 // it. Selected points are orange and larger; pinned outer-layer points (local edits) blue-grey; points
 // inside the object's bounding box white; the rest cyan. Without x-ray, hidden parts are drawn faintly
-// and visible parts (depth-tested against the splats) fully; with x-ray everything is drawn fully.
+// and visible parts (depth-tested against the splats) fully; with x-ray everything is drawn fully. While
+// the view previews (moving) with EditorState::light_overlay_while_moving, the faint pass shows the hidden
+// control points only, not the hidden cell edges (overlay_draws()).
 //   reads   Lattice, Transform, picking::LatticeSelection, EditorState (resource), Camera, SplatCloud
 //           (bounds), render output framebuffer (systems/splat_render)
 //   writes  the colour attachment of that framebuffer; LatticeOverlayState (resource: program, buffers)
@@ -40,6 +42,20 @@ inline constexpr glm::vec4 overlay_outside{0.25f, 0.8f, 0.9f, 1.0f};
 
 OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const EditorState& state,
                                       ecs::Entity lattice);
+
+// One draw of a lattice's overlay, in order: its cell edges or its control points, depth-tested against
+// the splats or not, at `strength` times their opacity.
+struct OverlayDraw {
+    bool lines = false;
+    bool depth_test = false;
+    float strength = 1.0f;
+};
+// This frame's draws: x-ray, everything at full strength untested; otherwise a faint untested pass (the
+// part behind the surface shows through), then the visible part at full strength. On a CPU rasteriser
+// the faint pass's edges cost most of the overlay: most of them lie behind the surface, and every
+// fragment of that pass is shaded and blended (2-core machine, sphere, drag frame: 3 of 3.5 ms). While
+// the view previews with light_overlay_while_moving, the faint pass draws the control points only.
+std::vector<OverlayDraw> overlay_draws(const EditorState& state);
 
 Status init_lattice_overlay(ecs::Registry& registry);
 void lattice_overlay_system(ecs::Registry& registry, const FrameContext& frame);

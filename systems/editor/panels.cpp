@@ -167,6 +167,8 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
             ImGui::MenuItem("Preview while moving", nullptr, &state.preview_while_moving);
             ImGui::MenuItem("Half-resolution preview", nullptr, &state.half_resolution_preview,
                             state.preview_while_moving);
+            ImGui::MenuItem("Light overlay while moving", nullptr, &state.light_overlay_while_moving,
+                            state.preview_while_moving);
             ImGui::MenuItem("Auto-key", "N", &state.auto_key);
             if (ImGui::MenuItem("Frame selection", "F")) frame_selection(registry, state);
             ImGui::EndMenu();

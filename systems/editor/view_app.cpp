@@ -358,7 +358,7 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         }
 
         EditorState& state = setup_editor(registry, viewport);
-        state.half_resolution_preview = gfx::software_rasterizer();
+        state.half_resolution_preview = state.light_overlay_while_moving = gfx::software_rasterizer();
         if (!options.replay.empty()) {
             auto events = load_input_recording(options.replay);
             if (!events) {

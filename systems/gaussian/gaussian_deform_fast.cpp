@@ -297,8 +297,8 @@ void to_rows(const float (&soa)[48][W], float (*rows)[48]) {
         for (int l = 0; l < 16; ++l) _mm512_storeu_ps(rows[l] + b * 16, m[l]);
     }
 }
-// Copies count floats from src to dst: the 64-byte lines wholly inside dst with streaming stores (no read of the
-// line before it is written, and it does not push the working set out of the caches), the partial lines
+// Copies count floats from src to dst: the 64-byte lines wholly inside dst with streaming stores (no read of
+// the line before it is written, and it does not push the working set out of the caches), the partial lines
 // at either end with plain stores. deform_shapes_fast() fences before it returns.
 void stream_floats(const float* src, float* dst, std::size_t count) {
     const auto addr = reinterpret_cast<std::uintptr_t>(dst);

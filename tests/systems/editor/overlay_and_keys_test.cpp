@@ -2,6 +2,8 @@
 // the timeline's set key / delete key through the editor (undoable), without a window.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "runtime/scene/components.h"
 #include "systems/animation/components.h"
 #include "systems/animation/editing.h"
@@ -86,6 +88,40 @@ TEST(LatticeOverlay, CageOnlyDrawsTheBoxEdgesAndTheSelection) {
     for (const OverlayVertex& v : g.points)
         if (glm::vec3(v.color) == glm::vec3(overlay_selected) && v.size == 3.0f && v.color.w < 0.5f) ++faint;
     EXPECT_EQ(faint, 1);
+}
+
+// The overlay's draws: the faint pass through the surface, then the visible part; with x-ray one pass at
+// full strength; while the view previews with a light overlay, no hidden edges, and they are back at rest.
+TEST(LatticeOverlay, LightOverlayDropsOnlyTheHiddenEdgesAndOnlyWhilePreviewing) {
+    Scene s;
+    auto count = [](const std::vector<OverlayDraw>& draws, bool lines, bool depth_test) {
+        return std::count_if(draws.begin(), draws.end(), [&](const OverlayDraw& d) {
+            return d.lines == lines && d.depth_test == depth_test;
+        });
+    };
+    EditorState& st = *s.state;
+    for (bool light : {false, true})
+        for (bool previewing : {false, true}) {
+            st.light_overlay_while_moving = light, st.previewing = previewing;
+            const std::vector<OverlayDraw> d = overlay_draws(st);
+            const bool hidden_edges = !(light && previewing);
+            EXPECT_EQ(count(d, true, false), hidden_edges ? 1 : 0) << light << previewing;
+            EXPECT_EQ(count(d, false, false), 1) << "hidden points stay";
+            EXPECT_EQ(count(d, true, true), 1) << "visible edges stay";
+            EXPECT_EQ(count(d, false, true), 1) << "visible points stay";
+            for (const OverlayDraw& x : d) EXPECT_FLOAT_EQ(x.strength, x.depth_test ? 1.0f : 0.3f);
+            // Each faint draw comes before the full-strength draws, which cover it where the part is seen.
+            ASSERT_FALSE(d.empty());
+            EXPECT_TRUE(
+                std::is_partitioned(d.begin(), d.end(), [](const OverlayDraw& x) { return !x.depth_test; }));
+        }
+    st.xray = true;
+    st.light_overlay_while_moving = st.previewing = true;
+    const std::vector<OverlayDraw> x = overlay_draws(st);
+    EXPECT_EQ(count(x, true, false), 1) << "x-ray shows every edge, moving or not";
+    EXPECT_EQ(count(x, false, false), 1);
+    EXPECT_EQ(x.size(), 2u);
+    for (const OverlayDraw& d : x) EXPECT_EQ(d.strength, 1.0f);
 }
 
 TEST(EditorKeys, SetKeyRecordsTheLastStretchAndUndoRemovesIt) {
