@@ -298,6 +298,41 @@ TEST_F(GaussianGl, EmptyCloudGivesTheBackground) {
         }
 }
 
+// The quads cover only the bounding box of the part of each Gaussian that can reach α >= 1/255 (splat.vert):
+// thin Gaussians turned every 15 degrees in the image plane, at opacities down to 0.01 (where that part
+// is far inside the 3σ square), must cover exactly the reference's pixels, tips included.
+TEST_F(GaussianGl, QuadsCoverEveryPixelOfThinGaussiansAtEveryAngleAndOpacity) {
+    GaussianCloud g;
+    g.sh_degree = 0;
+    const float opacity[4] = {0.01f, 0.05f, 0.3f, 0.99f};
+    for (int row = 0; row < 4; ++row)
+        for (int col = 0; col < 12; ++col) {
+            const float angle = glm::radians(15.0f * float(col));
+            g.positions.emplace_back(-1.21f + 0.22f * float(col), -0.36f + 0.24f * float(row), 0.0f);
+            g.scales.emplace_back(0.035f, 0.002f + 0.002f * float(row), 0.01f);
+            g.rotations.emplace_back(std::cos(0.5f * angle), 0.0f, 0.0f, std::sin(0.5f * angle));
+            g.opacities.push_back(opacity[row]);
+            for (float c : {0.9f, 0.5f, 0.2f}) g.sh.push_back(c);
+        }
+    ReferenceOptions o;
+    o.width = 720, o.height = 360;  // 3σ along a Gaussian: 17 pixels
+    const Camera cam = camera_at({0, 0, 3});
+    const ReferenceImage ref = render_reference(g, cam, o);
+    renderer->blend_path = BlendPath::quads;
+    auto img = render_gl(*renderer, g, cam, o);
+    ASSERT_TRUE(img) << img.message();
+    std::size_t covered = 0, missed = 0, extra = 0;
+    for (std::size_t k = 0; k < ref.transmittance.size(); ++k) {
+        const bool in_ref = ref.transmittance[k] < 1.0f, in_gl = img->transmittance[k] < 1.0f;
+        covered += in_ref, missed += in_ref && !in_gl, extra += in_gl && !in_ref;
+    }
+    std::printf("thin Gaussians: %zu pixels covered, %zu missed, %zu extra\n", covered, missed, extra);
+    EXPECT_GT(covered, 5000u);
+    EXPECT_LE(missed, 2u);  // a pixel on the α = 1/255 edge may fall either way in float
+    EXPECT_LE(extra, 2u);
+    EXPECT_GT(psnr(ref, *img), 50.0);
+}
+
 TEST_F(GaussianGl, OneGaussianOnEveryPath) {
     // One element: the sorts' trivial case; the tile path with a Gaussian spanning several tiles.
     ReferenceOptions o;
