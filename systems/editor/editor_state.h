@@ -120,9 +120,9 @@ struct EditorState {
     // View > "Half-resolution preview" toggles it.
     bool half_resolution_preview = false;
     // While those frames preview, the lattice overlay's faint pass (the part behind the surface) shows
-    // the hidden control points but not the hidden cell edges: on a CPU rasteriser those edges cost more
-    // than the rest of the overlay (overlay_draws()). Set with half_resolution_preview; View > "Light
-    // overlay while moving" toggles it.
+    // the hidden control points but not the hidden cell edges: on a CPU rasteriser those edges are
+    // nearly half of the overlay's cost (overlay_draws()). Set with half_resolution_preview; View >
+    // "Light overlay while moving" toggles it.
     bool light_overlay_while_moving = false;
     int still_frames = 1 << 20;  // frames since the last movement
     int rest_quality = -1;       // render::Quality the view started with (-1: not read yet)
