@@ -41,6 +41,14 @@ Status validate_lattice(const Lattice& l, const std::string& what) {
     if (l.current.size() != n)
         return make_error(what + ": expected " + std::to_string(n) + " control points, got " +
                           std::to_string(l.current.size()));
+    // Every frame validates every moving lattice: one pass with no early exit (it vectorises), then the
+    // search for the culprit only when there is one.
+    bool all_finite = true;
+    for (std::size_t c = 0; c < n; ++c) {
+        const glm::dvec3 a = l.current[c], b = l.rest[c];
+        all_finite &= std::isfinite(a.x + a.y + a.z + b.x + b.y + b.z);
+    }
+    if (all_finite) return {};
     for (std::size_t c = 0; c < n; ++c) {
         if (!finite(l.current[c]))
             return make_error(what + ": control point " + std::to_string(c) + " is not finite");

@@ -408,7 +408,50 @@ int finish_group(const Prepared& P, const Group& g, const PointsIn& in, const Po
 
 }  // namespace
 
-Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin) {
+namespace {
+
+// The B-spline's cull box from the moved points' index range: control point i influences l·s in
+// (i-2, i+2), so points outside the moved points' support are unchanged and skipped.
+void set_cull_box(Prepared& P, const Lattice& l, const glm::ivec3& lo, const glm::ivec3& hi) {
+    if (!P.any_moved) {
+        for (int a = 0; a < 3; ++a) P.cull_lo[a] = 2.0f, P.cull_hi[a] = -1.0f;  // nothing inside
+        return;
+    }
+    for (int a = 0; a < 3; ++a) {
+        const float n = float(l.divisions[a]);
+        P.cull_lo[a] = (float(lo[a]) - 2.0f) / n;
+        P.cull_hi[a] = (float(hi[a]) + 2.0f) / n;
+    }
+}
+
+// PrepareFor::gpu_controls: ΔP in one pass over the control points in flat order, none of the CPU
+// kernels' tables. The same values as the full preparation (a point that did not move keeps zeros).
+void prepare_gpu_controls(Prepared& P, const Lattice& l) {
+    const int L = P.L, M = P.M, N = P.N;
+    const bool bspline = l.basis == LatticeBasis::bspline;
+    const int PM = M + 3, PK = N + 3;
+    if (bspline) P.grid.assign(std::size_t(L + 3) * PM * PK * 4, 0.0f);
+    else P.dp4.assign(l.size() * 4, 0.0f);
+    glm::ivec3 lo(1 << 30), hi(-1);
+    std::size_t c = 0;
+    for (int i = 0; i <= L; ++i)
+        for (int j = 0; j <= M; ++j)
+            for (int k = 0; k <= N; ++k, ++c) {
+                const glm::dvec3 d = l.current[c] - l.rest[c];
+                if (d == glm::dvec3(0.0)) continue;
+                float* out = bspline ? &P.grid[((std::size_t(i + 1) * PM + (j + 1)) * PK + (k + 1)) * 4]
+                                     : &P.dp4[c * 4];
+                out[0] = float(d.x), out[1] = float(d.y), out[2] = float(d.z);
+                lo = glm::min(lo, glm::ivec3(i, j, k));
+                hi = glm::max(hi, glm::ivec3(i, j, k));
+                P.any_moved = true;
+            }
+    if (bspline) set_cull_box(P, l, lo, hi);
+}
+
+}  // namespace
+
+Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin, PrepareFor use) {
     Prepared P;
     P.L = l.divisions.x, P.M = l.divisions.y, P.N = l.divisions.z;
     P.basis = l.basis;
@@ -417,13 +460,19 @@ Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin) {
         for (int c = 0; c < 3; ++c) P.minv[r * 3 + c] = float(minv[c][r]);
     const glm::dvec3 stu0 = minv * (cloud_origin - l.origin);
     for (int a = 0; a < 3; ++a) P.stu0[a] = float(stu0[a]);
+    if (use == PrepareFor::gpu_controls) {
+        prepare_gpu_controls(P, l);
+        return P;
+    }
     const int L = P.L, M = P.M, N = P.N;
     glm::ivec3 lo(1 << 30), hi(-1);
+    P.moved.reserve(l.size());  // a global edit moves every point: one allocation, not a dozen regrowths
     for_each_moved(l, [&](int i, int j, int k, const glm::dvec3& d) {
         P.moved.push_back({i, j, k, {float(d.x), float(d.y), float(d.z)}});
         lo = glm::min(lo, glm::ivec3(i, j, k));
         hi = glm::max(hi, glm::ivec3(i, j, k));
     });
+    P.any_moved = !P.moved.empty();
     for (int a = 0; a < 3; ++a) {
         const int n = l.divisions[a];
         P.need[a].assign(std::size_t(n) + 1, 0);
@@ -453,17 +502,7 @@ Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin) {
             float* d = &P.grid[((std::size_t(m.i + 1) * PM + (m.j + 1)) * PK + (m.k + 1)) * 4];
             d[0] = m.d[0], d[1] = m.d[1], d[2] = m.d[2];
         }
-        // Control point i influences l·s in (i-2, i+2): points outside the moved points' support are
-        // unchanged and skipped.
-        if (P.moved.empty()) {
-            for (int a = 0; a < 3; ++a) P.cull_lo[a] = 2.0f, P.cull_hi[a] = -1.0f;  // nothing inside
-        } else {
-            for (int a = 0; a < 3; ++a) {
-                const float n = float(l.divisions[a]);
-                P.cull_lo[a] = (float(lo[a]) - 2.0f) / n;
-                P.cull_hi[a] = (float(hi[a]) + 2.0f) / n;
-            }
-        }
+        set_cull_box(P, l, lo, hi);
     }
     return P;
 }

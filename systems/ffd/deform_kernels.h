@@ -29,9 +29,16 @@ struct Prepared {
     float stu0[3] = {};                      // M⁻¹ (cloud origin − lattice origin)
     float cull_lo[3] = {0, 0, 0};            // local box outside which ΔP has no influence (B-spline)
     float cull_hi[3] = {1, 1, 1};
+    bool any_moved = false;  // some control point is off its rest position
 };
 
-Prepared prepare(const Lattice& lattice, const glm::dvec3& cloud_origin);
+// What the preparation is for. The GPU kernels read only ΔP (dp4 or grid), M⁻¹, the origin offset, the
+// cull box and any_moved; building the CPU kernels' tables as well cost the GPU path's submission, which
+// runs every frame a lattice moves, more than its GL calls.
+enum class PrepareFor : std::uint8_t { cpu_kernels, gpu_controls };
+
+Prepared prepare(const Lattice& lattice, const glm::dvec3& cloud_origin,
+                 PrepareFor use = PrepareFor::cpu_kernels);
 
 // Runs the fast (dense Bernstein / B-spline) or sparse kernel over all points with TBB.
 DeformStats run_fast(const Prepared& prepared, const PointsIn& in, const PointsOut& out, bool sparse);

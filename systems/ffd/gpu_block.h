@@ -35,7 +35,7 @@ inline FfdBlock make_ffd_block(const Lattice& lattice, const Prepared& P, std::u
     }
     block.div[3] = lattice.basis == LatticeBasis::bspline ? 1 : 0;
     block.count[0] = count;
-    block.count[1] = P.moved.empty() ? 1u : 0u;
+    block.count[1] = P.any_moved ? 0u : 1u;
     return block;
 }
 

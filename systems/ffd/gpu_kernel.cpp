@@ -61,8 +61,8 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
                                                    std::uint32_t count, const Variant* variant) {
     if (variant && variant->id >= (1u << 16))
         return make_error(program_label + ": shader variant id past 2^16");
-    // Same preparation as the CPU kernels (float displacements, M⁻¹, origin offset in double).
-    const Prepared P = prepare(lattice, cloud_origin);
+    // The CPU kernels' values (float displacements, M⁻¹, origin offset in double), without their tables.
+    const Prepared P = prepare(lattice, cloud_origin, PrepareFor::gpu_controls);
     // A program specialised for this lattice shape, basis and kernel (compiled once each; constant loop
     // bounds, small arrays, the other basis's code left out). Bernstein's control points go into shared
     // memory on hardware GPUs when their xyz fit (each splat reads all of them), else into a UBO when they

@@ -1,5 +1,6 @@
 #include "systems/ffd/lattice.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace sffd::ffd {
@@ -17,26 +18,40 @@ glm::dvec3 local_coords(const Lattice& l, const glm::dvec3& world) {
 }
 
 bool rest_is_uniform(const Lattice& l) {
-    const auto grid = rest_grid(l.origin, l.axes, l.divisions);
-    if (grid.size() != l.rest.size()) return false;
+    const glm::ivec3 d = l.divisions;
+    if (d.x < 1 || d.y < 1 || d.z < 1 || l.rest.size() != l.size()) return false;
     const double scale = glm::length(l.axes[0]) + glm::length(l.axes[1]) + glm::length(l.axes[2]);
-    for (std::size_t c = 0; c < grid.size(); ++c)
-        if (glm::length(grid[c] - l.rest[c]) > 1e-12 * scale) return false;
-    return true;
+    const double tolerance = 1e-12 * scale;
+    // The grid point by rest_grid()'s arithmetic, computed in place, and squared distances (no square
+    // roots): this runs every frame a lattice moves (deformed_bounds), and building the grid first cost
+    // more than the GPU path's submission itself.
+    double worst = 0.0;
+    std::size_t c = 0;
+    for (int i = 0; i <= d.x; ++i)
+        for (int j = 0; j <= d.y; ++j) {
+            const glm::dvec3 row = l.origin + (double(i) / d.x) * l.axes[0] + (double(j) / d.y) * l.axes[1];
+            for (int k = 0; k <= d.z; ++k, ++c) {
+                const glm::dvec3 e = row + (double(k) / d.z) * l.axes[2] - l.rest[c];
+                worst = std::max(worst, glm::dot(e, e));
+            }
+        }
+    return worst <= tolerance * tolerance;
 }
 
 Box deformed_bounds(const Lattice& l, const Box& in) {
     if (in.empty) return in;
     glm::dvec3 dlo(0.0), dhi(0.0);
     Box hull;
+    if (!l.current.empty()) hull = Box{l.current[0], l.current[0], false};
     for (std::size_t c = 0; c < l.current.size(); ++c) {
         const glm::dvec3 d = l.current[c] - l.rest[c];
         dlo = glm::min(dlo, d);
         dhi = glm::max(dhi, d);
-        hull.add(l.current[c]);
+        hull.lo = glm::min(hull.lo, l.current[c]);
+        hull.hi = glm::max(hull.hi, l.current[c]);
     }
     Box out{in.lo + dlo, in.hi + dhi, false};
-    if (l.basis == LatticeBasis::bernstein && rest_is_uniform(l)) {
+    if (!hull.empty && l.basis == LatticeBasis::bernstein && rest_is_uniform(l)) {
         // Inside points land in the control points' convex hull; outside points stay in `in`.
         // Pad by the inside slack: a point up to kInsideSlack outside is deformed as if on the face.
         const glm::dvec3 pad(kInsideSlack *

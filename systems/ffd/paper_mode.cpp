@@ -46,7 +46,7 @@ Status PaperModeRenderer::draw(const Lattice& lattice, std::uint64_t stamp, cons
                                float point_size) {
     if (Status s = validate(lattice); !s) return s;
     Impl& m = *m_impl;
-    const detail::Prepared P = detail::prepare(lattice, cloud_origin);
+    const detail::Prepared P = detail::prepare(lattice, cloud_origin, detail::PrepareFor::gpu_controls);
     const detail::FfdBlock block = detail::make_ffd_block(lattice, P, count);
     detail::orphan_upload(m.ubo.id(), sizeof block, &block);
     if (stamp == 0 || stamp != m.stamp) {

@@ -4,8 +4,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 #include "systems/ffd/deform.h"
+#include "systems/ffd/deform_kernels.h"
 #include "systems/ffd/lattice.h"
 #include "tests/systems/ffd/test_util.h"
 
@@ -372,6 +374,73 @@ TEST(FfdDeform, BoundsFromControlPointsContainEveryDeformedPoint) {
             ASSERT_TRUE(glm::all(glm::greaterThanEqual(glm::dvec3(p), b.lo - 1e-6)));
             ASSERT_TRUE(glm::all(glm::lessThanEqual(glm::dvec3(p), b.hi + 1e-6)));
         }
+    }
+}
+
+TEST(FfdDeform, GpuControlPreparationEqualsTheFullOneInWhatTheGpuReads) {
+    // The GPU path prepares only ΔP, M⁻¹, the origin offset, the cull box and whether anything moved, in
+    // one pass of its own; the shaders must see exactly what the full preparation gives the CPU kernels.
+    const glm::dvec3 origin(0.3, -0.2, 1e3);
+    for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline})
+        for (int shape = 0; shape < 5; ++shape) {
+            Lattice l = skewed_lattice({4, 5, 3}, basis);
+            if (shape == 1) l.current[l.index(2, 3, 1)] += glm::dvec3(0.1, -0.2, 0.05);  // one point
+            if (shape == 2) test::jitter(l, 0.3, 4, 7);                                  // scattered
+            if (shape == 3) test::twist_about_t(l, 0.8);                                 // every point
+            if (shape == 4) l.rest[0].y = 0.0, l.current[0].y = -0.0;  // ΔP.y = -0.0: not a move
+            const detail::Prepared full = detail::prepare(l, origin);
+            const detail::Prepared gpu = detail::prepare(l, origin, detail::PrepareFor::gpu_controls);
+            const std::string what = std::string(basis == LatticeBasis::bspline ? "bspline" : "bernstein") +
+                                     " shape " + std::to_string(shape);
+            EXPECT_EQ(gpu.any_moved, shape == 1 || shape == 2 || shape == 3) << what;
+            EXPECT_EQ(full.any_moved, gpu.any_moved) << what;
+            ASSERT_EQ(full.dp4.size(), gpu.dp4.size()) << what;
+            ASSERT_EQ(full.grid.size(), gpu.grid.size()) << what;
+            EXPECT_EQ(basis == LatticeBasis::bspline ? gpu.grid.empty() : gpu.dp4.empty(), false) << what;
+            // Bit for bit, signed zeros included.
+            EXPECT_EQ(std::memcmp(full.dp4.data(), gpu.dp4.data(), full.dp4.size() * sizeof(float)), 0)
+                << what;
+            EXPECT_EQ(std::memcmp(full.grid.data(), gpu.grid.data(), full.grid.size() * sizeof(float)), 0)
+                << what;
+            EXPECT_EQ(std::memcmp(full.minv, gpu.minv, sizeof full.minv), 0) << what;
+            EXPECT_EQ(std::memcmp(full.stu0, gpu.stu0, sizeof full.stu0), 0) << what;
+            for (int a = 0; a < 3; ++a) {
+                EXPECT_EQ(full.cull_lo[a], gpu.cull_lo[a]) << what << " axis " << a;
+                EXPECT_EQ(full.cull_hi[a], gpu.cull_hi[a]) << what << " axis " << a;
+            }
+        }
+}
+
+TEST(FfdDeform, RestIsUniformOnlyWithinItsTolerance) {
+    Lattice l = skewed_lattice({3, 4, 5});
+    EXPECT_TRUE(rest_is_uniform(l));
+    const double scale = glm::length(l.axes[0]) + glm::length(l.axes[1]) + glm::length(l.axes[2]);
+    for (std::size_t c : {std::size_t(0), l.index(2, 1, 3), l.size() - 1}) {
+        Lattice near = l, off = l;
+        near.rest[c].z += 0.5e-12 * scale;  // inside the 1e-12 relative tolerance
+        off.rest[c].z += 2e-12 * scale;
+        EXPECT_TRUE(rest_is_uniform(near)) << c;
+        EXPECT_FALSE(rest_is_uniform(off)) << c;
+    }
+    Lattice fewer = l;
+    fewer.rest.pop_back();
+    EXPECT_FALSE(rest_is_uniform(fewer));
+}
+
+TEST(FfdDeform, HugeButFiniteControlPointsAreValidAndEachNonFiniteOneIsNamed) {
+    // Validation sums each point's coordinates to test them all at once: a sum that overflows to
+    // infinity must not turn finite points into an error.
+    Lattice big = skewed_lattice({2, 2, 2});
+    big.current[4] = glm::dvec3(1.5e308, 1.5e308, 1.5e308);
+    EXPECT_TRUE(validate(big).ok()) << validate(big).message();
+    for (std::size_t c : {std::size_t(0), std::size_t(13), std::size_t(26)}) {
+        Lattice rest = skewed_lattice({2, 2, 2}), current = rest;
+        rest.rest[c].x = -INFINITY;
+        current.current[c].z = std::nan("");
+        EXPECT_EQ(validate(rest).message(),
+                  "lattice: rest control point " + std::to_string(c) + " is not finite");
+        EXPECT_EQ(validate(current).message(),
+                  "lattice: control point " + std::to_string(c) + " is not finite");
     }
 }
 
