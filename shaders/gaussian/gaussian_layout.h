@@ -29,10 +29,13 @@
 #define SFFD_GAUSS_SSBO_TILE_STATS 11 // uint: entries the tile blend's groups staged before they stopped
 // The other two projection arrays share points 7 and 8 with the tile preparation's TOUCHED and TILE_KEYS:
 // no program binds both (project.comp, splat.vert and tile_blend.comp read these; tile_count/emit.comp
-// read only the centres), so every Gaussian program stays within GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS
+// read the conics at SFFD_GAUSS_SSBO_TILE_CONIC), so every Gaussian program stays within GL_MAX_SHADER_STORAGE_BUFFER_BINDINGS
 // and the blocks per stage runtime/gfx/limits.h requires (splat.vert: 3; project.comp: 8).
 #define SFFD_GAUSS_SSBO_PROJ_CONIC 7  // vec4[]: inverse 2D covariance (a, b, c) of [[a b][b c]], opacity
 #define SFFD_GAUSS_SSBO_PROJ_COLOR 8  // vec4[]: rgb from the SH, w unused
+// The tile preparation (tile_count/emit.comp) reads the conics too (their pixel boxes are narrowed by
+// them, footprint.glsl), at point 4: point 7 is its TOUCHED there, and FRAMES is the projection's alone.
+#define SFFD_GAUSS_SSBO_TILE_CONIC 4
 #define SFFD_GAUSS_ATTR_ORDER      0  // vertex attribute (uint, divisor 1) of splat.vert: SFFD_GAUSS_SSBO_ORDER
 // The GPU deformation (shaders/gaussian/deform.comp, its own program: points 7-9 below mean something
 // else there than in the tile passes) reads SFFD_GAUSS_SSBO_IN, writes SFFD_GAUSS_SSBO_DEFORMED and

@@ -5,6 +5,7 @@
 
 layout(local_size_x = 64) in;
 #include "common/dispatch.glsl"
+#include "gaussian/footprint.glsl"
 
 layout(std430, binding = SFFD_GAUSS_SSBO_IN) readonly buffer Gaussians { GpuGaussian gaussians[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_SH) readonly buffer Sh { float sh[]; };
@@ -84,7 +85,7 @@ void store(uint i, Projection o) {
 }
 
 // Projects Gaussian i; true when it is drawn. Writes its projection and sort key, and the
-// pixels of its pixel box clipped to the image (tile_common.glsl's pixel_box).
+// pixels of its pixel box clipped to the image (tile_common.glsl's pixel_box, the narrowed box).
 bool project(uint i, out uint pixels) {
     pixels = 0u;
     Projection o;
@@ -136,10 +137,13 @@ bool project(uint i, out uint pixels) {
     const vec2 lo = floor(center - radius), hi = ceil(center + radius);
     if (any(lessThan(hi, vec2(0.0))) || any(greaterThan(lo, u_size - 1.0))) { store(i, o); return false; }
     depth_keys[i] = floatBitsToUint(depth);
-    const uvec2 box = uvec2(min(hi, u_size - 1.0)) - uvec2(max(lo, vec2(0.0))) + 1u;
-    pixels = box.x * box.y;
     o.center_depth_radius = vec4(center, depth, radius);
     o.conic_opacity = vec4(c / det, -b / det, a / det, g.pos_opacity.w);
+    // The coverage counts the pixels the quads and tiles visit: the box narrowed to where the Gaussian can
+    // be seen (footprint.glsl), which may lie wholly off the image even where the square does not.
+    const vec2 h = footprint_half_size(radius, o.conic_opacity);
+    const vec2 box = min(ceil(center + h), u_size - 1.0) - max(floor(center - h), vec2(0.0)) + 1.0;
+    pixels = all(greaterThan(box, vec2(0.0))) ? uint(box.x) * uint(box.y) : 0u;
     vec3 dir = normalize(g.pos_opacity.xyz - u_eye);
     if (u_frames != 0) dir = transpose(mat3(frames[3u * i].xyz, frames[3u * i + 1u].xyz, frames[3u * i + 2u].xyz)) * dir;
     o.color = vec4(sh_color(i, dir), 0.0);

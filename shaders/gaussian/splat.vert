@@ -1,7 +1,9 @@
 #version 450 core
 // One instanced quad per visible Gaussian, over the pixels of the box the CPU reference visits (pixels
-// floor(c - r) .. ceil(c + r) per axis, y down, clipped to the image by the viewport) where it can be seen.
+// floor(c - r) .. ceil(c + r) per axis, y down, clipped to the image by the viewport) narrowed to where it
+// can be seen (footprint.glsl).
 #include "gaussian/gaussian_layout.h"
+#include "gaussian/footprint.glsl"
 
 // Three storage blocks, what runtime/gfx/limits.h requires of the vertex stage (GL 4.5 guarantees none).
 layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_CENTER) readonly buffer ProjCenter { vec4 proj_center[]; };
@@ -26,18 +28,7 @@ void main() {
     const vec4 q = proj_conic[a_gaussian];  // the conic Q = Σ⁻¹ (xx, xy, yy) and the opacity o
     const vec2 c = center_depth_radius.xy;
     const float r = center_depth_radius.w;
-    // Within that box only the ellipse dᵀ Q d <= 2 ln(255 o) can pass the fragment stage's α >= 1/255:
-    // the quad covers its bounding box, half-widths sqrt(2 ln(255 o) Σxx) and sqrt(.. Σyy), Σ = Q⁻¹, with
-    // a margin for rounding. The same pixels are drawn; a thin Gaussian seen across the image's axes costs
-    // a fraction of the square (the fill is the quads' cost). Where Q is nearly singular relative to its
-    // diagonal (thin and near 45°, where the box is close to the square anyway) Σ is not taken from it.
-    vec2 half_size = vec2(r);
-    const float qdet = q.x * q.z - q.y * q.y;
-    if (qdet > 1e-2 * q.x * q.z) {
-        const float k = 2.0 * log(255.0 * q.w);
-        const vec2 e = sqrt(max(k, 0.0) * vec2(q.z, q.x) / qdet) * 1.001 + 0.01;
-        half_size = min(half_size, e);
-    }
+    const vec2 half_size = footprint_half_size(r, q);  // footprint.glsl: the visible part's box
     const vec2 lo = floor(c - half_size), hi = ceil(c + half_size) + 1.0;  // pixel edges
     const vec2 corner = vec2(float(gl_VertexID & 1), float(gl_VertexID >> 1));
     const vec2 pix = mix(lo, hi, corner);

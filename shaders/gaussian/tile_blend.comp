@@ -63,8 +63,8 @@ void main() {
             const uint g = tile_values[begin + tid];
             const vec4 center_depth_radius = proj_center[g];
             s_center[tid] = center_depth_radius.xy;
-            s_box[tid] = pixel_box(center_depth_radius);
             s_conic_opacity[tid] = proj_conic[g];
+            s_box[tid] = pixel_box(center_depth_radius, s_conic_opacity[tid]);
             s_color[tid] = proj_color[g].rgb;
             const float z = clamp(u_ndc_depth.x + u_ndc_depth.y / center_depth_radius.z, -1.0, 0.999999);
             s_depth[tid] = vec2(0.5 * z + 0.5, u_ndc_depth.y / (z - u_ndc_depth.x));

@@ -1,15 +1,17 @@
 // Tile range of a projected Gaussian (gl_render's tile path): the tiles its pixel box
-// floor(c − r) .. ceil(c + r) (y down; the reference's box) covers after clipping to the image.
-// Needs u_size (vec2) and u_tiles (uvec2: tiles per row, rows) declared by the including shader.
+// floor(c − h) .. ceil(c + h) (y down; h the half-size of footprint.glsl, at most the reference's 3σ
+// radius) covers after clipping to the image. Needs u_size (vec2) declared by the including shader.
 #ifndef SFFD_GAUSS_TILE_COMMON_GLSL
 #define SFFD_GAUSS_TILE_COMMON_GLSL
 
+#include "gaussian/footprint.glsl"
+
 // Inclusive pixel box clipped to the image: (x0, y0, x1, y1); empty when x0 > x1 or y0 > y1.
-ivec4 pixel_box(vec4 center_depth_radius) {
+ivec4 pixel_box(vec4 center_depth_radius, vec4 conic_opacity) {
     const vec2 c = center_depth_radius.xy;
-    const float r = center_depth_radius.w;
-    const ivec2 lo = ivec2(max(floor(c - r), vec2(0.0)));
-    const ivec2 hi = ivec2(min(ceil(c + r), u_size - 1.0));
+    const vec2 h = footprint_half_size(center_depth_radius.w, conic_opacity);
+    const ivec2 lo = ivec2(max(floor(c - h), vec2(0.0)));
+    const ivec2 hi = ivec2(min(ceil(c + h), u_size - 1.0));
     return ivec4(lo, hi);
 }
 

@@ -8,6 +8,7 @@ layout(local_size_x = 64) in;
 #include "common/dispatch.glsl"
 
 layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_CENTER) readonly buffer ProjCenter { vec4 proj_center[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_TILE_CONIC) readonly buffer ProjConic { vec4 proj_conic[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_ORDER) readonly buffer Order { uint order[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_DRAW) readonly buffer Draw { uint vertex_count, instance_count, first, base_instance; };
 layout(std430, binding = SFFD_GAUSS_SSBO_TOUCHED) writeonly buffer Touched { uint touched[]; };
@@ -23,7 +24,7 @@ void main() {
     if (p >= u_count) return;
     uint n = 0u;
     if (p < instance_count) {
-        const ivec4 box = pixel_box(proj_center[order[p]]);
+        const ivec4 box = pixel_box(proj_center[order[p]], proj_conic[order[p]]);
         if (box.x <= box.z && box.y <= box.w) {
             const uvec4 t = tile_rect(box);
             n = (t.z - t.x + 1u) * (t.w - t.y + 1u);

@@ -9,6 +9,7 @@ layout(local_size_x = 64) in;
 #include "common/dispatch.glsl"
 
 layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_CENTER) readonly buffer ProjCenter { vec4 proj_center[]; };
+layout(std430, binding = SFFD_GAUSS_SSBO_TILE_CONIC) readonly buffer ProjConic { vec4 proj_conic[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_ORDER) readonly buffer Order { uint order[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_DRAW) readonly buffer Draw { uint vertex_count, instance_count, first, base_instance; };
 layout(std430, binding = SFFD_GAUSS_SSBO_TOUCHED) readonly buffer Offsets { uint offsets[]; };
@@ -26,7 +27,7 @@ void main() {
     const uint p = sffd_dispatch_index();
     if (p >= u_count || p >= instance_count) return;
     const uint i = order[p];
-    const ivec4 box = pixel_box(proj_center[i]);
+    const ivec4 box = pixel_box(proj_center[i], proj_conic[i]);
     if (box.x > box.z || box.y > box.w) return;
     const uvec4 t = tile_rect(box);
     uint o = offsets[p];

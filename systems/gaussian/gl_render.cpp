@@ -183,12 +183,16 @@ Status check_projection_fits(std::size_t n) {
                       " (each of the 3 projection arrays, read whole by the blend); the cloud is not drawn");
 }
 
-// Binds the projection arrays a blend pass reads (the centres alone: `all` false), each as the range of
-// this cloud's `n` Gaussians: the grow-only buffers may be larger, from a larger cloud.
+// Binds the projection arrays a blend pass reads (the tile preparation's centres and conics, the latter at
+// its own point: `all` false), each as the range of this cloud's `n` Gaussians: the grow-only buffers
+// may be larger, from a larger cloud.
 void bind_projection(const GlRenderer& r, std::size_t n, bool all) {
     const gfx::SsboBatch whole{0, std::max<std::size_t>(n, 1)};
     gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CENTER, r.proj_center.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
-    if (!all) return;
+    if (!all) {
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_TILE_CONIC, r.proj_conic.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
+        return;
+    }
     gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CONIC, r.proj_conic.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
     gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_COLOR, r.proj_color.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
 }

@@ -27,6 +27,7 @@
 #include "tests/systems/gaussian/gl_renderer_fixture.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"
+#include "shaders/gaussian/gaussian_layout.h"
 
 namespace {
 
@@ -298,10 +299,11 @@ TEST_F(GaussianGl, EmptyCloudGivesTheBackground) {
         }
 }
 
-// The quads cover only the bounding box of the part of each Gaussian that can reach α >= 1/255 (splat.vert):
-// thin Gaussians turned every 15 degrees in the image plane, at opacities down to 0.01 (where that part
-// is far inside the 3σ square), must cover exactly the reference's pixels, tips included.
-TEST_F(GaussianGl, QuadsCoverEveryPixelOfThinGaussiansAtEveryAngleAndOpacity) {
+// Quads and tiles visit only the bounding box of the part of each Gaussian that can reach α >= 1/255
+// (footprint.glsl): thin Gaussians turned every 15 degrees in the image plane, at opacities down to 0.01
+// (where that part is far inside the 3σ square), must cover exactly the reference's pixels, tips included,
+// on both blend paths.
+TEST_F(GaussianGl, QuadsAndTilesCoverEveryPixelOfThinGaussiansAtEveryAngleAndOpacity) {
     GaussianCloud g;
     g.sh_degree = 0;
     const float opacity[4] = {0.01f, 0.05f, 0.3f, 0.99f};
@@ -318,19 +320,73 @@ TEST_F(GaussianGl, QuadsCoverEveryPixelOfThinGaussiansAtEveryAngleAndOpacity) {
     o.width = 720, o.height = 360;  // 3σ along a Gaussian: 17 pixels
     const Camera cam = camera_at({0, 0, 3});
     const ReferenceImage ref = render_reference(g, cam, o);
+    for (BlendPath blend : {BlendPath::quads, BlendPath::tiles}) {
+        renderer->blend_path = blend;
+        auto img = render_gl(*renderer, g, cam, o);
+        ASSERT_TRUE(img) << img.message();
+        std::size_t covered = 0, missed = 0, extra = 0;
+        for (std::size_t k = 0; k < ref.transmittance.size(); ++k) {
+            const bool in_ref = ref.transmittance[k] < 1.0f, in_gl = img->transmittance[k] < 1.0f;
+            covered += in_ref, missed += in_ref && !in_gl, extra += in_gl && !in_ref;
+        }
+        const char* path = blend == BlendPath::tiles ? "tiles" : "quads";
+        std::printf("thin Gaussians, %s: %zu pixels covered, %zu missed, %zu extra; %llu tile entries\n",
+                    path, covered, missed, extra, (unsigned long long)renderer->tile_entries);
+        EXPECT_GT(covered, 5000u) << path;
+        EXPECT_LE(missed, 2u) << path;  // a pixel on the α = 1/255 edge may fall either way in float
+        EXPECT_LE(extra, 2u) << path;
+        EXPECT_GT(psnr(ref, *img), 50.0) << path;
+    }
+    renderer->blend_path = BlendPath::quads;
+}
+
+// The coverage that chooses between quads and tiles (gl_render.h: quad_coverage_budget) counts the pixels
+// the passes visit, not the 3σ squares: faint axis-aligned Gaussians, whose visible part (α >= 1/255) is
+// 1.4σ wide where the square is 3σ of the longer axis, count a small part of their squares but never
+// fewer pixels than they are seen in.
+TEST_F(GaussianGl, CoverageCountsTheVisitedPixelsNotTheSquares) {
+    GaussianCloud g;
+    g.sh_degree = 0;
+    for (int col = 0; col < 10; ++col) {
+        g.positions.emplace_back(-1.0f + 0.22f * float(col), 0.0f, 0.0f);
+        g.scales.emplace_back(0.03f, 0.01f, 0.01f);
+        g.rotations.emplace_back(1.0f, 0.0f, 0.0f, 0.0f);
+        g.opacities.push_back(0.01f);
+        for (float c : {0.9f, 0.5f, 0.2f}) g.sh.push_back(c);
+    }
+    ReferenceOptions o;
+    o.width = 720, o.height = 360;
+    const Camera cam = camera_at({0, 0, 3});
+    const ReferenceImage ref = render_reference(g, cam, o);
+    std::size_t seen = 0;
+    for (float t : ref.transmittance) seen += t < 1.0f;
+    // Each square: side 2·ceil(3σ) + 1 at least, σ = 0.03 at distance 3 with the focal length below.
+    const double focal = 0.5 * o.height / std::tan(glm::radians(20.0));
+    const double side = 2.0 * std::ceil(3.0 * 0.03 * focal / 3.0) + 1.0;
+    const double squares = 10.0 * side * side;
     renderer->blend_path = BlendPath::quads;
     auto img = render_gl(*renderer, g, cam, o);
     ASSERT_TRUE(img) << img.message();
-    std::size_t covered = 0, missed = 0, extra = 0;
-    for (std::size_t k = 0; k < ref.transmittance.size(); ++k) {
-        const bool in_ref = ref.transmittance[k] < 1.0f, in_gl = img->transmittance[k] < 1.0f;
-        covered += in_ref, missed += in_ref && !in_gl, extra += in_gl && !in_ref;
-    }
-    std::printf("thin Gaussians: %zu pixels covered, %zu missed, %zu extra\n", covered, missed, extra);
-    EXPECT_GT(covered, 5000u);
-    EXPECT_LE(missed, 2u);  // a pixel on the α = 1/255 edge may fall either way in float
-    EXPECT_LE(extra, 2u);
-    EXPECT_GT(psnr(ref, *img), 50.0);
+    const std::uint64_t counted = read_covered_pixels(*renderer);  // the last projection's count
+    std::printf("faint Gaussians: %zu pixels seen, %llu counted, squares %.0f\n", seen,
+                (unsigned long long)counted, squares);
+    EXPECT_GT(seen, 100u);
+    EXPECT_GE(counted, seen);
+    EXPECT_LT(double(counted), 0.25 * squares);
+    // The tile path sorts and blends one entry per (tile, Gaussian) its box touches: a square 31 pixels
+    // wide touches at least 2 x 2 tiles of 16, the visible part of these fewer; the same pixels are drawn.
+    ASSERT_GE(side, 2.0 * SFFD_GAUSS_TILE - 1.0);
+    renderer->blend_path = BlendPath::tiles;
+    auto tiled = render_gl(*renderer, g, cam, o);
+    renderer->blend_path = BlendPath::quads;
+    ASSERT_TRUE(tiled) << tiled.message();
+    std::printf("faint Gaussians: %llu tile entries (squares: at least 40)\n",
+                (unsigned long long)renderer->tile_entries);
+    EXPECT_LT(renderer->tile_entries, 40u);
+    EXPECT_GT(psnr(ref, *tiled), 50.0);
+    std::size_t seen_tiled = 0;
+    for (float t : tiled->transmittance) seen_tiled += t < 1.0f;
+    EXPECT_EQ(seen_tiled, seen);
 }
 
 TEST_F(GaussianGl, OneGaussianOnEveryPath) {
