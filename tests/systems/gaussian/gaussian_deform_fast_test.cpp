@@ -118,6 +118,35 @@ TEST(GaussianDeformFast, MatchesTheDoublePrecisionReference) {
         }
 }
 
+TEST(GaussianDeformFast, PolarRotationsAreWithinFloatRoundingOfTheReference) {
+    // The vectorised Newton iteration (polar_rotation) must give the double-precision reference's rotations
+    // to float rounding, under a strong shear where it needs most steps (the other tests allow 1e-5).
+    Lattice l = twisted(LatticeBasis::bernstein, 4);
+    for (glm::dvec3& p : l.current) p.y += 0.6 * p.x * p.z, p.x *= 1.0 + 0.5 * p.y * p.y;
+    const GaussianCloud g = cloud(2000, 1, 5);
+    DeformOptions view, view_ref;
+    view.sh = view_ref.sh = ShMode::rotate_view;
+    view_ref.reference_shapes = true;
+    GaussianCloud fv = g, rv = g;
+    ASSERT_TRUE(deform(l, fv, fv, view));
+    ASSERT_TRUE(deform(l, rv, rv, view_ref));
+    ASSERT_EQ(fv.sh_frames.size(), g.size());
+    double worst = 0.0, worst_orthogonality = 0.0;
+    std::size_t rotated = 0;
+    for (std::size_t i = 0; i < g.size(); ++i) {
+        const glm::dmat3 f(fv.sh_frames[i]);
+        if (f == glm::dmat3(1.0)) continue;  // outside, or not moved
+        ++rotated;
+        worst = std::max(worst, max_abs(f - glm::dmat3(rv.sh_frames[i])));
+        worst_orthogonality = std::max(worst_orthogonality, max_abs(glm::transpose(f) * f - glm::dmat3(1.0)));
+    }
+    std::printf("polar rotations: %zu, worst entry error %.2e, worst |RᵀR - I| %.2e\n", rotated, worst,
+                worst_orthogonality);
+    EXPECT_GT(rotated, 1000u);
+    EXPECT_LT(worst, 1e-6);
+    EXPECT_LT(worst_orthogonality, 1e-6);
+}
+
 TEST(GaussianDeformFast, ViewModeAndChainedInPlaceDeformationsMatchTheReference) {
     const Lattice a = twisted(LatticeBasis::bernstein, 4), b = twisted(LatticeBasis::bspline, 6);
     const GaussianCloud g = cloud(777, 3, 21);
