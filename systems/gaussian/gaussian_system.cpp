@@ -182,9 +182,9 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         // The first lattice reads the authored cloud and writes the output, with no copy of the cloud before
         // it: the SH coefficients are most of a Gaussian's bytes (192 of 236 at degree 3), and the copy was a
         // whole extra read and write of them, in memory for a large cloud. Later lattices deform the output
-        // in place. Opacities are carried only so that Gaussians whose result is
-        // not finite can be made transparent (as the GPU pass does); dropped again when none was (readers
-        // use the authored cloud's: a deformation never changes them).
+        // in place. Opacities are carried only so that Gaussians whose result is not finite can be made
+        // transparent (as the GPU pass does); dropped again when none was (readers use the authored
+        // cloud's: a deformation never changes them).
         auto copy_authored = [&] {  // the output before any lattice, where the first one failed
             out.cloud.origin = cloud.origin;
             out.cloud.sh_degree = cloud.sh_degree;
