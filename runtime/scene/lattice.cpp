@@ -11,9 +11,7 @@ std::vector<glm::dvec3> rest_grid(const glm::dvec3& origin, const std::array<glm
     grid.reserve(std::size_t(d.x + 1) * (d.y + 1) * (d.z + 1));
     for (int i = 0; i <= d.x; ++i)
         for (int j = 0; j <= d.y; ++j)
-            for (int k = 0; k <= d.z; ++k)
-                grid.push_back(origin + (double(i) / d.x) * axes[0] + (double(j) / d.y) * axes[1] +
-                               (double(k) / d.z) * axes[2]);
+            for (int k = 0; k <= d.z; ++k) grid.push_back(rest_grid_point(origin, axes, d, i, j, k));
     return grid;
 }
 

@@ -46,7 +46,12 @@ struct Deformers {
 };
 
 // The uniform rest grid P0[i][j][k] = X0 + (i/l) S + (j/m) T + (k/n) U, flat index (i*(m+1)+j)*(n+1)+k.
-// The one place the grid is built (FFD operations, lattice files, built-in scenes, profiling).
+// The one place the grid is built (FFD operations, lattice files, built-in scenes, profiling); one point
+// of it, in the same arithmetic, for checks that must not allocate the grid (rest_is_uniform).
+inline glm::dvec3 rest_grid_point(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes,
+                                  const glm::ivec3& d, int i, int j, int k) {
+    return origin + (double(i) / d.x) * axes[0] + (double(j) / d.y) * axes[1] + (double(k) / d.z) * axes[2];
+}
 std::vector<glm::dvec3> rest_grid(const glm::dvec3& origin, const std::array<glm::dvec3, 3>& axes,
                                   const glm::ivec3& divisions);
 

@@ -410,6 +410,12 @@ int finish_group(const Prepared& P, const Group& g, const PointsIn& in, const Po
 
 namespace {
 
+// Control point (i, j, k)'s x, y, z, 0 in the B-spline's zero-bordered grid ((L+3)(M+3)(N+3) points).
+float* padded_point(Prepared& P, int i, int j, int k) {
+    const std::size_t PM = std::size_t(P.M) + 3, PK = std::size_t(P.N) + 3;
+    return &P.grid[((std::size_t(i + 1) * PM + std::size_t(j + 1)) * PK + std::size_t(k + 1)) * 4];
+}
+
 // The B-spline's cull box from the moved points' index range: control point i influences l·s in
 // (i-2, i+2), so points outside the moved points' support are unchanged and skipped.
 void set_cull_box(Prepared& P, const Lattice& l, const glm::ivec3& lo, const glm::ivec3& hi) {
@@ -429,8 +435,7 @@ void set_cull_box(Prepared& P, const Lattice& l, const glm::ivec3& lo, const glm
 void prepare_gpu_controls(Prepared& P, const Lattice& l) {
     const int L = P.L, M = P.M, N = P.N;
     const bool bspline = l.basis == LatticeBasis::bspline;
-    const int PM = M + 3, PK = N + 3;
-    if (bspline) P.grid.assign(std::size_t(L + 3) * PM * PK * 4, 0.0f);
+    if (bspline) P.grid.assign(std::size_t(L + 3) * (M + 3) * (N + 3) * 4, 0.0f);
     else P.dp4.assign(l.size() * 4, 0.0f);
     glm::ivec3 lo(1 << 30), hi(-1);
     std::size_t c = 0;
@@ -439,8 +444,7 @@ void prepare_gpu_controls(Prepared& P, const Lattice& l) {
             for (int k = 0; k <= N; ++k, ++c) {
                 const glm::dvec3 d = l.current[c] - l.rest[c];
                 if (d == glm::dvec3(0.0)) continue;
-                float* out = bspline ? &P.grid[((std::size_t(i + 1) * PM + (j + 1)) * PK + (k + 1)) * 4]
-                                     : &P.dp4[c * 4];
+                float* out = bspline ? padded_point(P, i, j, k) : &P.dp4[c * 4];
                 out[0] = float(d.x), out[1] = float(d.y), out[2] = float(d.z);
                 lo = glm::min(lo, glm::ivec3(i, j, k));
                 hi = glm::max(hi, glm::ivec3(i, j, k));
@@ -496,10 +500,9 @@ Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin, PrepareFor us
             P.row_nonzero[std::size_t(m.i) * (M + 1) + m.j] = 1;
         }
     } else {
-        const int PM = M + 3, PK = N + 3;
-        P.grid.assign(std::size_t(L + 3) * PM * PK * 4, 0.0f);
+        P.grid.assign(std::size_t(L + 3) * (M + 3) * (N + 3) * 4, 0.0f);
         for (const auto& m : P.moved) {
-            float* d = &P.grid[((std::size_t(m.i + 1) * PM + (m.j + 1)) * PK + (m.k + 1)) * 4];
+            float* d = padded_point(P, m.i, m.j, m.k);
             d[0] = m.d[0], d[1] = m.d[1], d[2] = m.d[2];
         }
         set_cull_box(P, l, lo, hi);

@@ -183,13 +183,16 @@ Status check_projection_fits(std::size_t n) {
                       " (each of the 3 projection arrays, read whole by the blend); the cloud is not drawn");
 }
 
-// Binds the projection arrays a blend pass reads (the tile preparation's centres and conics, the latter at
-// its own point: `all` false), each as the range of this cloud's `n` Gaussians: the grow-only buffers
-// may be larger, from a larger cloud.
-void bind_projection(const GlRenderer& r, std::size_t n, bool all) {
+// Who reads the projection: the tile preparation (centres, and conics at its own point) or a blend pass
+// (all three arrays).
+enum class ProjectionReader { tile_preparation, blend };
+
+// Binds the projection arrays `reader` reads, each as the range of this cloud's `n` Gaussians: the
+// grow-only buffers may be larger, from a larger cloud.
+void bind_projection(const GlRenderer& r, std::size_t n, ProjectionReader reader) {
     const gfx::SsboBatch whole{0, std::max<std::size_t>(n, 1)};
     gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CENTER, r.proj_center.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
-    if (!all) {
+    if (reader == ProjectionReader::tile_preparation) {
         gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_TILE_CONIC, r.proj_conic.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
         return;
     }
@@ -307,7 +310,7 @@ void blend_quads(GlRenderer& r, const GaussianView& v, std::size_t n, const gfx:
     const GLuint sp = splat_program ? splat_program->id() : r.splat.id();
     set(sp, "u_size", glm::vec2(float(v.width), float(v.height)));
     set(sp, "u_ndc_depth", glm::vec2(v.ndc_depth));
-    bind_projection(r, n, true);
+    bind_projection(r, n, ProjectionReader::blend);
     glUseProgram(sp);
     glBindVertexArray(r.vao.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, r.draw.id());
@@ -358,7 +361,7 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     const std::uint32_t max_x = std::max(1u, r.max_groups_x);
     r.sorter.max_groups_x = max_x;
     auto t = std::chrono::steady_clock::now();
-    bind_projection(r, n, false);
+    bind_projection(r, n, ProjectionReader::tile_preparation);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TOUCHED, r.tile_touched.id());
@@ -401,7 +404,7 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     }
     glClearNamedBufferData(r.tile_ranges_buffer.id(), GL_RG32UI, GL_RG_INTEGER, GL_UNSIGNED_INT, nullptr);
     // gfx::exclusive_scan bound its own buffers (points 0 and 4): bind every buffer the emit pass reads.
-    bind_projection(r, n, false);
+    bind_projection(r, n, ProjectionReader::tile_preparation);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_KEYS, r.tile_keys.id());
@@ -430,7 +433,7 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     glProgramUniform1i(bp, glGetUniformLocation(bp, "u_write_depth"), o.depth_sum ? 1 : 0);
     set(bp, "u_ndc_depth", glm::vec2(o.ndc_depth));
     // After the ranges pass: points 7 and 8 are the projection's again (gaussian_layout.h).
-    bind_projection(r, n, true);
+    bind_projection(r, n, ProjectionReader::blend);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_STATS, r.tile_stats.id());
     glBindImageTexture(SFFD_GAUSS_IMAGE_COLOR, o.color, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
     // Unused units stay bound to the colour (never accessed then: the uniforms above say so).
