@@ -175,11 +175,14 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
 
     auto scope = profiling::gpu_scope(reg, "render.gaussians");
     const float zero[4] = {0, 0, 0, 0};
+    // Only the frame's pixels (a reduced preview's corner), as begin_splat_passes clears.
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(0, 0, f.width, f.height);
     glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 0, zero);
     glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 1, zero);
+    glDisable(GL_SCISSOR_TEST);
     glBindFramebuffer(GL_FRAMEBUFFER, s.accum_fbo.id());
     glViewport(0, 0, f.width, f.height);
-    glDisable(GL_SCISSOR_TEST);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
     glDepthMask(GL_FALSE);  // test against the surface splats, never write: Gaussians are blended

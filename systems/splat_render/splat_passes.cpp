@@ -82,9 +82,14 @@ void begin_splat_passes(SplatRenderState& s, const FramePlan& plan) {
     const glm::vec4 background = plan.common.background;
     const glm::vec4 no_hit(0.0f, 0.0f, 0.0f, -1.0f);
     const float far_depth = 1.0f;
+    // Only the frame's pixels: a reduced preview reads nothing outside its corner, and on a CPU rasteriser
+    // clearing the whole RGBA32F + depth targets was 1.6 ms of a half-size preview of the sphere.
+    glEnable(GL_SCISSOR_TEST);
+    glScissor(0, 0, plan.width, plan.height);
     glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 0, &background.x);
     if (settings.aux_outputs) glClearNamedFramebufferfv(s.output_fbo.id(), GL_COLOR, 1, &no_hit.x);
     glClearNamedFramebufferfv(s.output_fbo.id(), GL_DEPTH, 0, &far_depth);
+    glDisable(GL_SCISSOR_TEST);
     glViewport(0, 0, plan.width, plan.height);
     glBindVertexArray(s.vao.id());
     glEnable(GL_PROGRAM_POINT_SIZE);
