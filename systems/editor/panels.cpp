@@ -41,6 +41,7 @@ struct LayoutState {
     std::array<PanelRect, panel_count> rects{};
     float menu_height = 0.0f;
     std::vector<NamedPanelRect> drawn;
+    std::vector<PanelRect> backgrounds;  // panel_backgrounds()
 };
 LayoutState& layout_state(ecs::Registry& registry) {
     if (LayoutState* s = registry.try_resource<LayoutState>()) return *s;
@@ -76,9 +77,11 @@ bool begin_panel(ecs::Registry& registry, Panel p) {
     if (panels_start_collapsed(window.x, window.y))
         ImGui::SetNextWindowCollapsed(true, ImGuiCond_FirstUseEver);
     const bool open =
-        ImGui::Begin(panel_title(p), nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize);
+        ImGui::Begin(panel_title(p), nullptr,
+                     ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoResize | ImGuiWindowFlags_NoBackground);
     ls.collapsed[std::size_t(p)] = ImGui::IsWindowCollapsed();
     record_current_window(registry, panel_title(p));
+    if (!ls.collapsed[std::size_t(p)]) ls.backgrounds.push_back(ls.drawn.back().rect);
     return open;
 }
 
@@ -552,6 +555,11 @@ void same_line_if_fits(const char* next_label) {
     if (ImGui::GetItemRectMax().x + style.ItemSpacing.x + w <= right) ImGui::SameLine();
 }
 
+std::vector<PanelRect> panel_backgrounds(const ecs::Registry& registry) {
+    const LayoutState* ls = registry.try_resource<LayoutState>();
+    return ls ? ls->backgrounds : std::vector<PanelRect>{};
+}
+
 std::vector<NamedPanelRect> panel_rects(const ecs::Registry& registry) {
     const LayoutState* ls = registry.try_resource<LayoutState>();
     return ls ? ls->drawn : std::vector<NamedPanelRect>{};
@@ -562,6 +570,7 @@ void draw_panels(ecs::Registry& registry, const FrameContext&) {
     if (!state) return;
     LayoutState& ls = layout_state(registry);
     ls.drawn.clear();
+    ls.backgrounds.clear();
     const ImGuiViewport* vp = ImGui::GetMainViewport();
     LayoutInput in;
     in.width = vp->Size.x, in.height = vp->Size.y;

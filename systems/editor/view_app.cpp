@@ -1,6 +1,7 @@
 #include "systems/editor/view_app.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -246,6 +247,29 @@ void requests_system(ecs::Registry& registry, const FrameContext& frame) {
     // What the window shows is render::display_system's (present phase): the encoded frame, overlay included.
 }
 
+namespace {
+
+// The open panels' backgrounds (panel_backgrounds()), into the bound framebuffer (the window's).
+void clear_panel_backgrounds(const ecs::Registry& registry, const ImDrawData& data) {
+    const int fb_height = int(data.DisplaySize.y * data.FramebufferScale.y);
+    const ImVec4 c = ImGui::GetStyle().Colors[ImGuiCol_WindowBg];
+    const float color[4] = {c.x, c.y, c.z, 1.0f};
+    const ImVec2 o = data.DisplayPos, k = data.FramebufferScale;
+    glEnable(GL_SCISSOR_TEST);
+    for (const PanelRect& r : panel_backgrounds(registry)) {
+        // ImGui places windows at whole units; rounding keeps a fractional scale's edges on its pixels.
+        const int x0 = int(std::lround((r.x - o.x) * k.x)), x1 = int(std::lround((r.x + r.w - o.x) * k.x));
+        const int top = int(std::lround((r.y - o.y) * k.y)),
+                  bottom = int(std::lround((r.y + r.h - o.y) * k.y));
+        if (x1 <= x0 || bottom <= top) continue;
+        glScissor(x0, fb_height - bottom, x1 - x0, bottom - top);
+        glClearBufferfv(GL_COLOR, 0, color);
+    }
+    glDisable(GL_SCISSOR_TEST);
+}
+
+}  // namespace
+
 void ui_system(ecs::Registry& registry, const FrameContext& frame) {
     ViewSession* session = registry.try_resource<ViewSession>();
     if (!session || !session->ui) return;
@@ -254,6 +278,7 @@ void ui_system(ecs::Registry& registry, const FrameContext& frame) {
     ImGui::NewFrame();
     draw_panels(registry, frame);
     ImGui::Render();
+    clear_panel_backgrounds(registry, *ImGui::GetDrawData());
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     const ViewOptions& o = session->options;
     if (!o.panel_rects_json.empty() && o.frames > 0 && frame.frame + 1 == o.frames) {
@@ -413,6 +438,9 @@ int run_view(const ViewOptions& options, Schedule schedule) {
             ini_path = options.replay.empty() ? user_config_file("imgui.ini") : std::string();
             ImGui::GetIO().IniFilename = ini_path.empty() ? nullptr : ini_path.c_str();
             ImGui::StyleColorsDark();
+            // Opaque panels (the dark style's are 94% opaque): their backgrounds are clears of one colour
+            // (panel_backgrounds()), whatever lies under them.
+            ImGui::GetStyle().Colors[ImGuiCol_WindowBg].w = 1.0f;
             ImGui_ImplGlfw_InitForOpenGL(window, true);
             ImGui_ImplOpenGL3_Init("#version 450");
             // Nearest sampling of the font atlas: the default font is a pixel font drawn 1:1 at whole

@@ -90,6 +90,13 @@ TEST(PanelsView, PanelsFitTheWindowWithoutOverlap) {
             EXPECT_TRUE(near(p, 10, 10, 10) || near(p, 41, 74, 122))
                 << r.name << " title bar not at " << x << "," << y << " (" << size << "): " << int(p[0])
                 << " " << int(p[1]) << " " << int(p[2]);
+            // Inside the border, left of the content (ImGui's 8-unit padding): the opaque panel colour
+            // (WindowBg 0.06 grey, 15 of 255), whatever the window shows behind the panel.
+            const int bx = int(r.r.x) + 3, by = int(r.r.y + r.r.h * 0.6f);
+            const std::uint8_t* q = &img->pixels[(std::size_t(by) * std::size_t(w) + std::size_t(bx)) * 4];
+            EXPECT_TRUE(q[0] == 15 && q[1] == 15 && q[2] == 15)
+                << r.name << " background at " << bx << "," << by << " (" << size << "): " << int(q[0]) << " "
+                << int(q[1]) << " " << int(q[2]);
         }
     }
     fs::remove_all(dir);
