@@ -25,6 +25,7 @@
 #define SFFD_TEX_ACCUM_NORMAL      2
 #define SFFD_TEX_DEPTH             3
 #define SFFD_TEX_ACCUM_MATERIAL    4   // splat_render: sum(w * specular), sum(w * shininess) per pixel
+#define SFFD_TEX_OVERLAY_CACHE     0   // editor: the lattice overlay's cached edges (lattice_cache.frag)
 
 // --- Uniform locations (explicit, so C++ never looks uniforms up by name) --------------------------
 #define SFFD_LOC_OVERLAY_VIEW_PROJ 0   // mat4 (locations 0..3): editor lattice overlay, anchor -> clip

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cstddef>
+#include <cstring>
 
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -21,12 +22,41 @@
 
 namespace sffd::editor {
 
+// The edges of a lattice drawn untested at one opacity (x-ray, or the faint hidden edges of a still frame)
+// that did not move since they were drawn into `color`: while a few control points are dragged, the frame
+// puts the cached edges over the surface in one pass and draws only the moving points' edges. On a CPU
+// rasteriser every edge costs its whole length in fragments: the sphere's 3,630 edges took about 4 ms of a
+// half-resolution drag frame.
+struct OverlayLineCache {
+    // What the cached pixels depend on besides the edges themselves.
+    struct Key {
+        glm::mat4 view_proj{0.0f};
+        glm::ivec4 viewport{0}, scissor{0};
+        glm::ivec2 target{0};
+        float pixel = 0.0f, opacity = 0.0f;
+        std::size_t lines = 0;
+        bool operator==(const Key&) const = default;
+    };
+    gfx::Texture color;  // RGBA16F: premultiplied edge colour, coverage
+    gfx::Framebuffer framebuffer;
+    gfx::Program composite;
+    gfx::Buffer indices;  // vertex indices: the cached edges', then the others'
+    Key key;
+    bool valid = false;                            // `color` holds the edges marked in `cached` under `key`
+    std::vector<OverlayVertex> previous;           // last frame's edge vertices
+    std::vector<std::uint8_t> cached;              // per edge
+    std::size_t cached_count = 0, live_count = 0;  // index counts
+    glm::ivec2 size{0};                            // of `color`
+    OverlayCacheStats stats;
+};
+
 struct LatticeOverlayState {
     gfx::Program program;
     gfx::VertexArray vao;
     gfx::Buffer buffer;
     std::size_t capacity = 0;  // vertices
     bool failed = false;
+    OverlayLineCache lines;
 };
 
 OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const EditorState& state,
@@ -137,6 +167,104 @@ Status init_lattice_overlay(ecs::Registry& registry) {
 
 void release_lattice_overlay(ecs::Registry& registry) { registry.erase_resource<LatticeOverlayState>(); }
 
+OverlayCacheStats overlay_cache_stats(const ecs::Registry& registry) {
+    const auto* s = registry.try_resource<LatticeOverlayState>();
+    return s ? s->lines.stats : OverlayCacheStats{};
+}
+
+namespace {
+
+bool same_vertex(const OverlayVertex& a, const OverlayVertex& b) {
+    return std::memcmp(&a, &b, sizeof a) == 0;
+}
+
+// The edges (vertex pairs from offset 0 of the bound vertex buffer) of one untested draw, through the
+// line cache. The overlay's program, vertex array, scissor, blend state (constant opacity) and target
+// framebuffer are bound by the caller and left so.
+void draw_lines_cached(LatticeOverlayState& s, const std::vector<OverlayVertex>& lines,
+                       const OverlayLineCache::Key& key, GLuint target_fbo) {
+    OverlayLineCache& c = s.lines;
+    const std::size_t n = lines.size() / 2;
+    auto direct = [&] {
+        c.valid = false;
+        ++c.stats.direct;
+        glDrawArrays(GL_LINES, 0, GLsizei(lines.size()));
+    };
+    if (!c.indices) {  // first use
+        c.indices = gfx::Buffer::create("editor.lattice_cache.indices");
+        glVertexArrayElementBuffer(s.vao.id(), c.indices.id());
+        auto program = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
+                                          {GL_FRAGMENT_SHADER, "editor/lattice_cache.frag"}},
+                                         "editor.lattice_cache");
+        if (program) c.composite = std::move(*program);
+        else log::error("lattice overlay: ", program.message(), " (edges are drawn without the cache)");
+    }
+    // A view that changed this frame (an orbit) is drawn directly: caching it would cost a pass more.
+    if (!c.composite || !(c.key == key) || c.previous.size() != lines.size()) {
+        c.key = key;
+        c.previous = lines;
+        return direct();
+    }
+    std::vector<std::uint8_t> moved(n);
+    bool cached_moved = false;
+    for (std::size_t e = 0; e < n; ++e) {
+        moved[e] = !same_vertex(lines[2 * e], c.previous[2 * e]) ||
+                   !same_vertex(lines[2 * e + 1], c.previous[2 * e + 1]);
+        cached_moved |= c.valid && moved[e] && c.cached[e];
+    }
+    c.previous = lines;
+    if (!c.valid || cached_moved) {
+        // Cache what did not move since last frame; the rest is drawn every frame until the next rebuild.
+        c.cached.assign(n, 0);
+        std::vector<GLuint> order;
+        order.reserve(lines.size());
+        for (int pass = 0; pass < 2; ++pass)
+            for (std::size_t e = 0; e < n; ++e)
+                if (bool(moved[e]) == bool(pass)) {
+                    c.cached[e] = pass == 0;
+                    order.push_back(GLuint(2 * e)), order.push_back(GLuint(2 * e + 1));
+                }
+        c.live_count = std::size_t(std::count(moved.begin(), moved.end(), 1)) * 2;
+        c.cached_count = order.size() - c.live_count;
+        if (c.cached_count == 0) return direct();
+        glNamedBufferData(c.indices.id(), GLsizeiptr(order.size() * sizeof(GLuint)), order.data(),
+                          GL_DYNAMIC_DRAW);
+        if (!c.color || c.size != key.target) {
+            c.color = gfx::Texture::create("editor.lattice_cache", GL_TEXTURE_2D);
+            glTextureStorage2D(c.color.id(), 1, GL_RGBA16F, key.target.x, key.target.y);
+            c.framebuffer = gfx::Framebuffer::create("editor.lattice_cache");
+            glNamedFramebufferTexture(c.framebuffer.id(), GL_COLOR_ATTACHMENT0, c.color.id(), 0);
+            c.size = key.target;
+        }
+        // Premultiplied: every edge blends colour and coverage at the constant opacity over transparent.
+        glBindFramebuffer(GL_FRAMEBUFFER, c.framebuffer.id());
+        const float transparent[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+        glClearNamedFramebufferfv(c.framebuffer.id(), GL_COLOR, 0, transparent);  // inside the scissor
+        glBlendFuncSeparate(GL_CONSTANT_ALPHA, GL_ONE_MINUS_CONSTANT_ALPHA, GL_CONSTANT_ALPHA,
+                            GL_ONE_MINUS_CONSTANT_ALPHA);
+        glDrawElements(GL_LINES, GLsizei(c.cached_count), GL_UNSIGNED_INT, nullptr);
+        glBindFramebuffer(GL_FRAMEBUFFER, target_fbo);
+        c.valid = true;
+        ++c.stats.rebuilt;
+    } else {
+        ++c.stats.reused;
+    }
+    GLint program = 0;
+    glGetIntegerv(GL_CURRENT_PROGRAM, &program);
+    glUseProgram(c.composite.id());
+    glBindTextureUnit(SFFD_TEX_OVERLAY_CACHE, c.color.id());
+    glBlendFuncSeparate(GL_ONE, GL_SRC1_COLOR, GL_ONE, GL_ZERO);
+    glDrawArrays(GL_TRIANGLES, 0, 3);
+    glBlendFuncSeparate(GL_CONSTANT_ALPHA, GL_ONE_MINUS_CONSTANT_ALPHA, GL_ONE, GL_ZERO);
+    glUseProgram(GLuint(program));
+    if (c.live_count > 0)
+        glDrawElements(GL_LINES, GLsizei(c.live_count), GL_UNSIGNED_INT,
+                       reinterpret_cast<const void*>(c.cached_count * sizeof(GLuint)));
+    c.stats.cached_edges += c.cached_count / 2, c.stats.live_edges += c.live_count / 2;
+}
+
+}  // namespace
+
 void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
     const EditorState* state = registry.try_resource<EditorState>();
     if (!state || !state->show_lattice) return;
@@ -169,13 +297,15 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
     glViewport(0, 0, width, height);
     // Clipped to the part of the window no panel covers (panel_layout.h; the whole window without
     // panels). Panel rectangles are window pixels from the top; GL's scissor counts from the bottom.
+    glm::ivec4 scissor(0, 0, width, height);
     if (const EditorViewRect* v = registry.try_resource<EditorViewRect>();
         v && v->width > 0 && v->height > 0) {
         const float sx = float(width) / v->width, sy = float(height) / v->height;
         const PanelRect& r = v->rect;
+        scissor = glm::ivec4(GLint(r.x * sx), GLint(float(height) - (r.y + r.h) * sy),
+                             GLsizei(std::max(0.0f, r.w * sx)), GLsizei(std::max(0.0f, r.h * sy)));
         glEnable(GL_SCISSOR_TEST);
-        glScissor(GLint(r.x * sx), GLint(float(height) - (r.y + r.h) * sy), GLsizei(std::max(0.0f, r.w * sx)),
-                  GLsizei(std::max(0.0f, r.h * sy)));
+        glScissor(scissor.x, scissor.y, scissor.z, scissor.w);
     }
     // Opacity comes from a constant blend factor and the result is opaque (alpha 1): the colour target
     // holds straight alpha, and captures treat alpha > 0 as covered, so the lattice also shows where
@@ -188,6 +318,9 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
     glBindVertexArray(s.vao.id());
 
     const std::vector<OverlayDraw> draws = overlay_draws(*state);
+    // One lattice only: with several, a cached edge of one would land over the points of one drawn before.
+    const auto* options = registry.try_resource<OverlayOptions>();
+    const bool line_cache = (!options || options->line_cache) && registry.count<Lattice>() == 1;
     registry.view<const Lattice>().each([&](ecs::Entity e, const Lattice&) {
         const OverlayGeometry g = build_lattice_overlay(registry, *state, e);
         if (g.points.empty() || g.lines.empty()) return;
@@ -204,15 +337,29 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
         glVertexArrayVertexBuffer(s.vao.id(), 0, s.buffer.id(), 0, sizeof(OverlayVertex));
         const glm::mat4 m = glm::mat4(view_proj * glm::translate(glm::dmat4(1.0), g.anchor));
         glUniformMatrix4fv(SFFD_LOC_OVERLAY_VIEW_PROJ, 1, GL_FALSE, &m[0][0]);
-        glUniform1f(SFFD_LOC_OVERLAY_PIXEL, float(width) / float(std::max(target_width, 1)));
+        const float pixel = float(width) / float(std::max(target_width, 1));
+        glUniform1f(SFFD_LOC_OVERLAY_PIXEL, pixel);
         for (const OverlayDraw& d : draws) {
             if (d.depth_test) glEnable(GL_DEPTH_TEST), glDepthFunc(GL_LEQUAL);
             else glDisable(GL_DEPTH_TEST);
             const OverlayVertex& first = d.lines ? g.lines.front() : g.points.front();
             glUniform1i(SFFD_LOC_OVERLAY_POINTS, d.lines ? 0 : 1);
-            glBlendColor(0.0f, 0.0f, 0.0f, d.strength * first.color.w);
-            if (d.lines) glDrawArrays(GL_LINES, 0, GLsizei(g.lines.size()));
-            else glDrawArrays(GL_POINTS, GLint(g.lines.size()), GLsizei(g.points.size()));
+            const float opacity = d.strength * first.color.w;
+            glBlendColor(0.0f, 0.0f, 0.0f, opacity);
+            if (d.lines && !d.depth_test && line_cache) {
+                const OverlayLineCache::Key key{m,
+                                                glm::ivec4(0, 0, width, height),
+                                                scissor,
+                                                glm::ivec2(target_width, target_height),
+                                                pixel,
+                                                opacity,
+                                                g.lines.size()};
+                draw_lines_cached(s, g.lines, key, fbo);
+            } else if (d.lines) {
+                glDrawArrays(GL_LINES, 0, GLsizei(g.lines.size()));
+            } else {
+                glDrawArrays(GL_POINTS, GLint(g.lines.size()), GLsizei(g.points.size()));
+            }
         }
     });
 

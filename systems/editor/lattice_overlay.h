@@ -7,7 +7,8 @@
 // control points only, not the hidden cell edges (overlay_draws()).
 //   reads   Lattice, Transform, picking::LatticeSelection, EditorState (resource), Camera, SplatCloud
 //           (bounds), render output framebuffer (systems/splat_render)
-//   writes  the colour attachment of that framebuffer; LatticeOverlayState (resource: program, buffers)
+//   writes  the colour attachment of that framebuffer; LatticeOverlayState (resource: program, buffers,
+//           the cache of the untested edges that did not move: OverlayOptions, OverlayCacheStats)
 // Needs a current GL 4.5 context; does nothing without EditorState or before the first rendered frame.
 #pragma once
 
@@ -57,6 +58,19 @@ struct OverlayDraw {
 // 8.0-8.5 ms with them, 4.3-4.9 ms without). While the view previews with light_overlay_while_moving,
 // the faint pass draws the control points only.
 std::vector<OverlayDraw> overlay_draws(const EditorState& state);
+
+// Registry resource (optional): the line cache of x-ray edges (lattice_overlay.cpp, OverlayLineCache) is
+// used unless line_cache is false (`splatffd view --no-overlay-cache`, for comparisons).
+struct OverlayOptions {
+    bool line_cache = true;
+};
+// Frames whose untested edges of a single lattice went through the cache: rebuilt (the cache drawn
+// again, then used), reused as it was, or drawn directly (the view or the edges' layout changed).
+struct OverlayCacheStats {
+    std::uint64_t rebuilt = 0, reused = 0, direct = 0;
+    std::uint64_t cached_edges = 0, live_edges = 0;  // summed over the frames that used the cache
+};
+OverlayCacheStats overlay_cache_stats(const ecs::Registry& registry);
 
 Status init_lattice_overlay(ecs::Registry& registry);
 void lattice_overlay_system(ecs::Registry& registry, const FrameContext& frame);

@@ -377,6 +377,7 @@ int run_view(const ViewOptions& options, Schedule schedule) {
             std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
             return 1;
         }
+        registry.set_resource<OverlayOptions>(OverlayOptions{.line_cache = options.overlay_cache});
         if (Status st = init_lattice_overlay(registry); !st) {
             std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
             return 1;
@@ -466,6 +467,10 @@ int run_view(const ViewOptions& options, Schedule schedule) {
                           : app::make_clock(&*ctx);
         const app::RunResult run = app::run(registry, schedule, clock, &*ctx, {.max_frames = options.frames});
         log::info("view: ", run.frames, " frames in ", run.seconds, " s");
+        if (const OverlayCacheStats c = overlay_cache_stats(registry); c.rebuilt + c.reused > 0)
+            log::info("view: lattice edges cached in ", c.rebuilt + c.reused, " frames (", c.rebuilt,
+                      " drew the cache again), drawn directly in ", c.direct, "; ", c.cached_edges,
+                      " cached and ", c.live_edges, " live edges over the cached frames");
 
         if (!options.screenshot.empty()) {
             if (Status st = write_screenshot(registry, options.screenshot); !st) {

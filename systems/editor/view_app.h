@@ -29,10 +29,11 @@ struct ViewOptions {
     int width = 1280;
     int height = 720;
     bool headless = false;
-    bool ui = true;            // ImGui panels (window only)
-    bool preview = false;      // render quality preview instead of hq
-    std::string timing_json;   // write frame-time statistics (all frames / frames with a tool drag) here
-    bool sync_timing = false;  // glFinish after every system: each system's time includes its own GL work
+    bool ui = true;             // ImGui panels (window only)
+    bool overlay_cache = true;  // the lattice overlay's cache of unchanged x-ray edges (OverlayOptions)
+    bool preview = false;       // render quality preview instead of hq
+    std::string timing_json;    // write frame-time statistics (all frames / frames with a tool drag) here
+    bool sync_timing = false;   // glFinish after every system: each system's time includes its own GL work
     std::string
         window_screenshot;         // with --frames: the whole window (panels included) of the last frame, PNG
     std::string panel_rects_json;  // with --frames: the panels' rectangles in the last frame (panels.h), JSON
