@@ -58,6 +58,7 @@ for f in gaussian/project.comp:comp gaussian/splat.vert:vert gaussian/splat.frag
 done
 check editor/lattice.vert vert
 check editor/lattice.frag frag
+check editor/lattice_cache.frag frag
 for d in 0 1; do check ffd/paper_mode.vert vert PAPER_DEFORM=$d; done
 check ffd/paper_mode.frag frag
 # The deform shaders as DeformPrograms compiles them (systems/ffd/gpu_kernel.cpp): generic, and per lattice
