@@ -45,6 +45,7 @@ struct OverlayLineCache {
     bool valid = false;                            // `color` holds the edges marked in `cached` under `key`
     std::vector<OverlayVertex> previous;           // last frame's edge vertices
     std::vector<std::uint8_t> cached;              // per edge
+    std::vector<std::uint8_t> moved;               // per edge, this frame (kept: no allocation per frame)
     std::size_t cached_count = 0, live_count = 0;  // index counts
     glm::ivec2 size{0};                            // of `color`
     OverlayCacheStats stats;
@@ -205,7 +206,8 @@ void draw_lines_cached(LatticeOverlayState& s, const std::vector<OverlayVertex>&
         c.previous = lines;
         return direct();
     }
-    std::vector<std::uint8_t> moved(n);
+    std::vector<std::uint8_t>& moved = c.moved;
+    moved.assign(n, 0);
     bool cached_moved = false;
     for (std::size_t e = 0; e < n; ++e) {
         moved[e] = !same_vertex(lines[2 * e], c.previous[2 * e]) ||
@@ -249,14 +251,12 @@ void draw_lines_cached(LatticeOverlayState& s, const std::vector<OverlayVertex>&
     } else {
         ++c.stats.reused;
     }
-    GLint program = 0;
-    glGetIntegerv(GL_CURRENT_PROGRAM, &program);
     glUseProgram(c.composite.id());
     glBindTextureUnit(SFFD_TEX_OVERLAY_CACHE, c.color.id());
     glBlendFuncSeparate(GL_ONE, GL_SRC1_COLOR, GL_ONE, GL_ZERO);
     glDrawArrays(GL_TRIANGLES, 0, 3);
     glBlendFuncSeparate(GL_CONSTANT_ALPHA, GL_ONE_MINUS_CONSTANT_ALPHA, GL_ONE, GL_ZERO);
-    glUseProgram(GLuint(program));
+    glUseProgram(s.program.id());
     if (c.live_count > 0)
         glDrawElements(GL_LINES, GLsizei(c.live_count), GL_UNSIGNED_INT,
                        reinterpret_cast<const void*>(c.cached_count * sizeof(GLuint)));
