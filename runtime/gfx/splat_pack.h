@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "runtime/scene/components.h"
@@ -13,6 +14,17 @@
 namespace sffd::gfx {
 
 std::vector<gpu::GpuSplat> pack_splats(const SplatCloud& cloud);
+
+// The per-splat columns pack_splats reads, each either empty (its default) or positions.size() long: a
+// deformation's output packs straight from its arrays and the authored colours, without a SplatCloud copy.
+struct SplatColumns {
+    std::span<const glm::vec3> positions, normals, axis_u, axis_v;
+    std::span<const std::uint32_t> colors;
+    std::span<const glm::vec2> uvs;
+};
+// Into `out` (resized; its memory is reused: every frame of an interactive CPU deformation packs the whole
+// cloud again), across the cores.
+void pack_splats(const SplatColumns& columns, std::vector<gpu::GpuSplat>& out);
 
 // Linear [0, 1] -> 8-bit sRGB (the image writers use the same encoding).
 std::uint8_t encode_srgb8(float linear);

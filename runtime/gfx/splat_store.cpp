@@ -16,14 +16,13 @@ void upload_rest_splats(GpuSplats& gpu, const SplatCloud& cloud, std::uint64_t v
 void upload_deformed_splats(GpuSplats& gpu, const SplatCloud& authored, const DeformedSplatArrays& d,
                             bool keep_cpu) {
     const std::size_t n = authored.size();
-    SplatCloud moved;
-    moved.positions = d.positions;
-    moved.normals = d.normals.size() == n ? d.normals : authored.normals;
-    moved.axis_u = d.axis_u.size() == n ? d.axis_u : authored.axis_u;
-    moved.axis_v = d.axis_v.size() == n ? d.axis_v : authored.axis_v;
-    moved.colors = authored.colors;
-    moved.uvs = authored.uvs;
-    std::vector<gpu::GpuSplat> packed = pack_splats(moved);
+    // Packed where the last deformation was kept (its memory, already touched), uploaded, kept again.
+    std::vector<gpu::GpuSplat> packed = std::move(gpu.cpu_deformed);
+    pack_splats(
+        SplatColumns{d.positions, d.normals.size() == n ? d.normals : authored.normals,
+                     d.axis_u.size() == n ? d.axis_u : authored.axis_u,
+                     d.axis_v.size() == n ? d.axis_v : authored.axis_v, authored.colors, authored.uvs},
+        packed);
     fill_buffer(gpu.deformed, "splats.deformed", packed.data(), packed.size() * sizeof(gpu::GpuSplat));
     set_deformed(gpu, Residency::deformed_cpu);
     if (keep_cpu) gpu.cpu_deformed = std::move(packed);
