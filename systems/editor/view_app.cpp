@@ -28,6 +28,7 @@
 #include "systems/editor/lattice_manage.h"
 #include "systems/editor/lattice_overlay.h"
 #include "systems/editor/panels.h"
+#include "systems/editor/ui_cache.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_render.h"
 #include "systems/profiling/profiler.h"
@@ -247,29 +248,6 @@ void requests_system(ecs::Registry& registry, const FrameContext& frame) {
     // What the window shows is render::display_system's (present phase): the encoded frame, overlay included.
 }
 
-namespace {
-
-// The open panels' backgrounds (panel_backgrounds()), into the bound framebuffer (the window's).
-void clear_panel_backgrounds(const ecs::Registry& registry, const ImDrawData& data) {
-    const int fb_height = int(data.DisplaySize.y * data.FramebufferScale.y);
-    const ImVec4 c = ImGui::GetStyle().Colors[ImGuiCol_WindowBg];
-    const float color[4] = {c.x, c.y, c.z, 1.0f};
-    const ImVec2 o = data.DisplayPos, k = data.FramebufferScale;
-    glEnable(GL_SCISSOR_TEST);
-    for (const PanelRect& r : panel_backgrounds(registry)) {
-        // ImGui places windows at whole units; rounding keeps a fractional scale's edges on its pixels.
-        const int x0 = int(std::lround((r.x - o.x) * k.x)), x1 = int(std::lround((r.x + r.w - o.x) * k.x));
-        const int top = int(std::lround((r.y - o.y) * k.y)),
-                  bottom = int(std::lround((r.y + r.h - o.y) * k.y));
-        if (x1 <= x0 || bottom <= top) continue;
-        glScissor(x0, fb_height - bottom, x1 - x0, bottom - top);
-        glClearBufferfv(GL_COLOR, 0, color);
-    }
-    glDisable(GL_SCISSOR_TEST);
-}
-
-}  // namespace
-
 void ui_system(ecs::Registry& registry, const FrameContext& frame) {
     ViewSession* session = registry.try_resource<ViewSession>();
     if (!session || !session->ui) return;
@@ -278,8 +256,7 @@ void ui_system(ecs::Registry& registry, const FrameContext& frame) {
     ImGui::NewFrame();
     draw_panels(registry, frame);
     ImGui::Render();
-    clear_panel_backgrounds(registry, *ImGui::GetDrawData());
-    ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
+    draw_ui(registry, *ImGui::GetDrawData(), panel_backgrounds(registry));
     const ViewOptions& o = session->options;
     if (!o.panel_rects_json.empty() && o.frames > 0 && frame.frame + 1 == o.frames) {
         // {"window": [w, h], "panels": [{"name": .., "x": .., "y": .., "w": .., "h": ..}, ..]}
@@ -378,6 +355,7 @@ int run_view(const ViewOptions& options, Schedule schedule) {
             return 1;
         }
         registry.set_resource<OverlayOptions>(OverlayOptions{.line_cache = options.overlay_cache});
+        registry.set_resource<UiCacheOptions>(UiCacheOptions{.enabled = options.ui_cache});
         if (Status st = init_lattice_overlay(registry); !st) {
             std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
             return 1;
@@ -471,6 +449,10 @@ int run_view(const ViewOptions& options, Schedule schedule) {
             log::info("view: lattice edges cached in ", c.rebuilt + c.reused, " frames (", c.rebuilt,
                       " drew the cache again), drawn directly in ", c.direct, "; ", c.cached_edges,
                       " cached and ", c.live_edges, " live edges over the cached frames");
+        if (const UiCacheStats u = ui_cache_stats(registry); u.frames + u.direct_frames > 0)
+            log::info("view: panels through the cache in ", u.frames, " frames (", u.reused,
+                      " copied as they were, ", u.cached, " drawn into it, ", u.drawn,
+                      " drawn directly), every panel drawn directly in ", u.direct_frames);
 
         if (!options.screenshot.empty()) {
             if (Status st = write_screenshot(registry, options.screenshot); !st) {
@@ -543,6 +525,7 @@ int run_view(const ViewOptions& options, Schedule schedule) {
             if (Status st = write_file_atomic(options.timing_json, json); !st)
                 std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
         }
+        release_ui_cache(registry);
         if (session.ui) {
             ImGui_ImplOpenGL3_Shutdown();
             ImGui_ImplGlfw_Shutdown();

@@ -31,6 +31,7 @@ struct ViewOptions {
     bool headless = false;
     bool ui = true;             // ImGui panels (window only)
     bool overlay_cache = true;  // the lattice overlay's cache of unchanged x-ray edges (OverlayOptions)
+    bool ui_cache = true;       // unchanged panels copied from an image (ui_cache.h, UiCacheOptions)
     bool preview = false;       // render quality preview instead of hq
     std::string timing_json;    // write frame-time statistics (all frames / frames with a tool drag) here
     bool sync_timing = false;   // glFinish after every system: each system's time includes its own GL work

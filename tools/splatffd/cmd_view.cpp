@@ -15,7 +15,7 @@ constexpr const char* kUsage =
     "[--size WxH]\n"
     "                     [--quality hq|preview] [--no-ui] [--headless] [--json F] [--sync-timing] "
     "[--window-screenshot PATH]\n"
-    "                     [--panel-rects-json PATH] [--no-overlay-cache]\n"
+    "                     [--panel-rects-json PATH] [--no-overlay-cache] [--no-ui-cache]\n"
     "  SCENE              built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj "
     ".off,\n"
     "                     3D Gaussians .ply (3DGS) .splat .spz .ksplat .sog, a SOG folder or its\n"
@@ -31,6 +31,8 @@ constexpr const char* kUsage =
     "  --no-ui            no ImGui panels (default: panels shown)\n"
     "  --no-overlay-cache draw every lattice edge every frame (default: edges drawn over the surface\n"
     "                     that did not move are kept in an image and only the moving ones drawn again)\n"
+    "  --no-ui-cache      draw every panel every frame (default: a panel that did not change is copied from\n"
+    "                     an image of it)\n"
     "  --headless         no window (EGL); input only from --replay; needs --frames or --replay\n"
     "                     (default: a window)\n"
     "  --json F           write frame-time statistics (all frames, frames with a live drag) (old spelling:\n"
@@ -116,6 +118,8 @@ int run_view_command(sffd::cli::Args args) {
             o.ui = false;
         } else if (a == "--no-overlay-cache") {
             o.overlay_cache = false;
+        } else if (a == "--no-ui-cache") {
+            o.ui_cache = false;
         } else if (a == "--sync-timing") {
             o.sync_timing = true;
         } else if (a == "--headless") {
