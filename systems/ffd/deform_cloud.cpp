@@ -9,25 +9,50 @@ namespace sffd::ffd {
 
 namespace {
 
-// Each lattice in turn deforms out's arrays (n points) in place.
+// Each lattice in turn deforms out's arrays (n points): the first one that runs reads `first` (the
+// authored arrays, so they are not copied first) when given, the later ones deform out's arrays in place.
+// When no lattice ran, out's arrays get `first` as they are.
 void deform_arrays(const ecs::Registry& registry, const glm::dvec3& origin,
                    const std::vector<ecs::Entity>& lattices, DeformedSplats& out, std::size_t n,
-                   const char* who) {
+                   const SplatCloud* first, const char* who) {
     out.inverted = 0;
     auto ptr = [n](std::vector<glm::vec3>& v) { return v.size() == n ? v.data() : nullptr; };
+    auto src = [n](const std::vector<glm::vec3>& v) { return v.size() == n ? v.data() : nullptr; };
+    if (first) {  // outputs sized as their inputs (an output without its input is not written)
+        auto fit = [n](std::vector<glm::vec3>& to, const std::vector<glm::vec3>& from) {
+            if (from.size() == n) to.resize(n);
+            else to.clear();
+        };
+        fit(out.positions, first->positions), fit(out.normals, first->normals);
+        fit(out.axis_u, first->axis_u), fit(out.axis_v, first->axis_v);
+    }
+    bool read_first = first != nullptr;
     for (const ecs::Entity le : lattices) {
         const Lattice* lattice = registry.valid(le) ? registry.try_get<Lattice>(le) : nullptr;
         if (!lattice) continue;
-        // In place: each lattice deforms the previous one's output (allowed by ffd::deform).
-        const PointsIn in{
-            out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v), n, origin};
+        // In place after the first: each lattice deforms the previous one's output (allowed by ffd::deform).
+        const PointsIn in =
+            read_first
+                ? PointsIn{first->positions.data(),
+                           src(first->normals),
+                           src(first->axis_u),
+                           src(first->axis_v),
+                           n,
+                           origin}
+                : PointsIn{
+                      out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v), n, origin};
         const PointsOut o{out.positions.data(), ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v)};
         const auto stats = deform(*lattice, in, o);
         if (!stats) {
             log::warn(who, ": ", stats.message(), " (lattice skipped)");
             continue;
         }
+        read_first = false;
         out.inverted += stats->inverted;
+    }
+    if (read_first) {
+        out.positions = first->positions, out.normals = first->normals;
+        out.axis_u = first->axis_u, out.axis_v = first->axis_v;
     }
 }
 
@@ -49,11 +74,7 @@ void gather(const std::vector<T>& from, std::span<const std::uint32_t> indices, 
 void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud,
                   const std::vector<ecs::Entity>& lattices, DeformedSplats& out, const char* who) {
     out.origin = cloud.origin;
-    out.positions = cloud.positions;
-    out.normals = cloud.normals;
-    out.axis_u = cloud.axis_u;
-    out.axis_v = cloud.axis_v;
-    deform_arrays(registry, cloud.origin, lattices, out, cloud.size(), who);
+    deform_arrays(registry, cloud.origin, lattices, out, cloud.size(), &cloud, who);
     out.cpu_valid = true;
 }
 
@@ -66,7 +87,7 @@ void deform_cloud_subset(const ecs::Registry& registry, const SplatCloud& cloud,
     gather(cloud.normals, indices, n, out.normals);
     gather(cloud.axis_u, indices, n, out.axis_u);
     gather(cloud.axis_v, indices, n, out.axis_v);
-    deform_arrays(registry, cloud.origin, lattices, out, indices.size(), who);
+    deform_arrays(registry, cloud.origin, lattices, out, indices.size(), nullptr, who);
     out.cpu_valid = false;
 }
 
