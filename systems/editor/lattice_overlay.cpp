@@ -3,6 +3,7 @@
 #include "systems/editor/panel_layout.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <cstring>
 
@@ -265,6 +266,40 @@ void draw_lines_cached(LatticeOverlayState& s, const std::vector<OverlayVertex>&
 
 }  // namespace
 
+namespace {
+
+// The frame pixels (x, y, width, height from the lower left) the overlay's points and lines may touch
+// (render::include_drawn_pixels): their projections, grown by the largest point's radius and a pixel;
+// the whole frame when a vertex is not in front of the camera (its line may cross any pixel).
+glm::ivec4 overlay_pixels(const OverlayGeometry& g, const glm::mat4& view_proj, int width, int height,
+                          float pixel) {
+    glm::vec2 lo(1e30f), hi(-1e30f);
+    float radius = 1.0f;
+    bool behind = false;
+    auto add = [&](const OverlayVertex& v, bool point) {
+        const glm::vec4 clip = view_proj * glm::vec4(v.position, 1.0f);
+        if (!(clip.w > 1e-6f)) {  // (also NaN)
+            behind = true;
+            return;
+        }
+        const glm::vec2 p = (glm::vec2(clip) / clip.w * 0.5f + 0.5f) * glm::vec2(width, height);
+        lo = glm::min(lo, p), hi = glm::max(hi, p);
+        if (point) radius = std::max(radius, 0.5f * v.size * pixel);
+    };
+    for (const OverlayVertex& v : g.lines) add(v, false);
+    for (const OverlayVertex& v : g.points) add(v, true);
+    if (behind || !std::isfinite(lo.x) || !std::isfinite(lo.y) || !std::isfinite(hi.x) ||
+        !std::isfinite(hi.y))
+        return glm::ivec4(0, 0, width, height);
+    if (lo.x > hi.x) return glm::ivec4(0);
+    const glm::vec2 size(width, height);
+    const glm::vec2 a = glm::clamp(glm::floor(lo - radius - 1.0f), glm::vec2(0.0f), size),
+                    b = glm::clamp(glm::ceil(hi + radius + 1.0f), glm::vec2(0.0f), size);
+    return glm::ivec4(int(a.x), int(a.y), int(b.x - a.x), int(b.y - a.y));
+}
+
+}  // namespace
+
 void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
     const EditorState* state = registry.try_resource<EditorState>();
     if (!state || !state->show_lattice) return;
@@ -336,6 +371,8 @@ void lattice_overlay_system(ecs::Registry& registry, const FrameContext&) {
                              GLsizeiptr(g.points.size() * sizeof(OverlayVertex)), g.points.data());
         glVertexArrayVertexBuffer(s.vao.id(), 0, s.buffer.id(), 0, sizeof(OverlayVertex));
         const glm::mat4 m = glm::mat4(view_proj * glm::translate(glm::dmat4(1.0), g.anchor));
+        render::include_drawn_pixels(
+            registry, overlay_pixels(g, m, width, height, float(width) / float(std::max(target_width, 1))));
         glUniformMatrix4fv(SFFD_LOC_OVERLAY_VIEW_PROJ, 1, GL_FALSE, &m[0][0]);
         const float pixel = float(width) / float(std::max(target_width, 1));
         glUniform1f(SFFD_LOC_OVERLAY_PIXEL, pixel);

@@ -134,6 +134,7 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     out.record_counts.assign(blocks, 0u);
     out.quad_counts.assign(blocks, 0u);
     out.flat_counts.assign(blocks, 0u);
+    out.block_pixels.assign(blocks, glm::vec4(1e30f, 1e30f, -1e30f, -1e30f));
 
     const glm::mat3 mv3(f.model_view), nv3(f.normal_view), v2w3(f.view_to_world);
     const bool culling = f.params.z != 0.0f,
@@ -156,6 +157,7 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
             std::uint32_t* quads = out.quads.data() + begin;
             SplatRecord* flat_records = flat_ok ? out.flat_records.data() + begin : nullptr;
             std::uint32_t kept = 0, kept_quads = 0, kept_flat = 0;
+            glm::vec2 lo(1e30f), hi(-1e30f);
             for (std::size_t i = begin; i < end; ++i) {
                 const gpu::GpuSplat& s = splats[i];
                 // Back face from centre and normal only (a flipped splat, normal.w == 0, is two-sided).
@@ -182,6 +184,12 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 if (box.z < 0.0f || box.z > f.params.y || std::abs(box.x) > 1.0f || std::abs(box.y) > 1.0f) {
                     quads[kept_quads++] = std::uint32_t(i);
                     continue;
+                }
+                {  // the sprite's square (the point's size is its side) in frame pixels, one pixel wider
+                    const glm::vec2 centre((box.x + 1.0f) * 0.5f * f.viewport.x,
+                                           (box.y + 1.0f) * 0.5f * f.viewport.y);
+                    const float half = 0.5f * box.z + 1.0f;
+                    lo = glm::min(lo, centre - half), hi = glm::max(hi, centre + half);
                 }
                 // splat_view + splat_raycast_setup
                 SplatView o{c, u, v, glm::normalize(nv3 * xyz(s.normal)), r};
@@ -261,14 +269,20 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 rec.uv = glm::vec4(0.0f);
             }
             out.record_counts[b] = kept;
+            out.block_pixels[b] = glm::vec4(lo, hi);
             out.quad_counts[b] = kept_quads;
             out.flat_counts[b] = kept_flat;
         }
     });
     out.visible_records = out.visible_quads = out.visible_flat = 0;
-    for (std::size_t b = 0; b < blocks; ++b)
+    out.pixels_lo = glm::vec2(1e30f), out.pixels_hi = glm::vec2(-1e30f);
+    for (std::size_t b = 0; b < blocks; ++b) {
         out.visible_records += out.record_counts[b], out.visible_quads += out.quad_counts[b],
             out.visible_flat += out.flat_counts[b];
+        out.pixels_lo = glm::min(out.pixels_lo, glm::vec2(out.block_pixels[b]));
+        out.pixels_hi = glm::max(out.pixels_hi, glm::vec2(out.block_pixels[b].z, out.block_pixels[b].w));
+    }
+    out.pixels_bounded = out.visible_quads == 0;
 }
 
 std::vector<std::uint16_t> uniform_texel_radius(const std::uint8_t* rgba8, int w, int h) {

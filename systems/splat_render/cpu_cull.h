@@ -56,6 +56,12 @@ struct CpuCullResult {
     std::uint32_t visible_records = 0;       // sums of the counts
     std::uint32_t visible_quads = 0;
     std::uint32_t visible_flat = 0;
+    // The frame pixels the kept sprites may touch (GL's lower-left origin, [lo, hi) in x and y; lo > hi
+    // when none was kept): every sprite's square, a pixel wider on each side. Quads carry no such square:
+    // `pixels_bounded` is false when any was kept.
+    glm::vec2 pixels_lo{0.0f}, pixels_hi{0.0f};
+    bool pixels_bounded = true;
+    std::vector<glm::vec4> block_pixels;  // per block: lo.xy, hi.xy
 
     // Calls fn(first_output_index, pointer, count) for each non-empty run, in order.
     template <class T, class Fn>

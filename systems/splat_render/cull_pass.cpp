@@ -146,6 +146,9 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             const std::uint32_t commands[draw_command_words] = {
                 r.visible_records, 1, 0, 0, 6, r.visible_quads, 0, 0, r.visible_flat, 1, gpu.capacity, 0};
             glNamedBufferSubData(gpu.commands.id(), 0, sizeof commands, commands);
+            plan.drawn_lo = glm::min(plan.drawn_lo, r.pixels_lo);
+            plan.drawn_hi = glm::max(plan.drawn_hi, r.pixels_hi);
+            plan.drawn_known = plan.drawn_known && r.pixels_bounded;
             plan.cpu_points += r.visible_records + r.visible_flat;
             plan.cpu_quads += r.visible_quads;
             gpu.flat_list = bool(gpu.texture);
@@ -158,6 +161,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
                 warn_once("render_system(): " + fits.message() + "; the cloud is not drawn");
                 return;
             }
+            plan.drawn_known = false;  // the sprites' squares stay on the GPU
             glCopyNamedBufferSubData(s.command_reset.id(), gpu.commands.id(), 0, 0,
                                      draw_command_words * sizeof(std::uint32_t));
             const bool textured = bool(gpu.texture), lit = b.counts.w == 1u;

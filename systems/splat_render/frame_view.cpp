@@ -1,6 +1,8 @@
 // Splat render system: the camera, the per-frame uniforms and the screen rectangle the clouds cover.
 #include "systems/splat_render/splat_render_detail.h"
 
+#include <cmath>
+
 namespace sffd::render::detail {
 
 ViewSetup choose_camera(ecs::Registry& reg, const SplatRenderState& s, double aspect) {
@@ -104,6 +106,23 @@ glm::ivec4 screen_rect(ecs::Registry& reg, const ViewSetup& view, int w, int h) 
     const int y0 = std::clamp(int(std::floor((lo.y * 0.5 + 0.5) * h)) - 1, 0, h);
     const int y1 = std::clamp(int(std::ceil((hi.y * 0.5 + 0.5) * h)) + 1, 0, h);
     return glm::ivec4(x0, y0, x1 - x0, y1 - y0);
+}
+
+glm::ivec4 intersect_rects(const glm::ivec4& a, const glm::ivec4& b) {
+    const int x0 = std::max(a.x, b.x), y0 = std::max(a.y, b.y);
+    const int x1 = std::min(a.x + a.z, b.x + b.z), y1 = std::min(a.y + a.w, b.y + b.w);
+    return x1 > x0 && y1 > y0 ? glm::ivec4(x0, y0, x1 - x0, y1 - y0) : glm::ivec4(x0, y0, 0, 0);
+}
+
+glm::ivec4 plan_drawn_rect(const FramePlan& plan) {
+    const glm::ivec4 frame(0, 0, plan.width, plan.height);
+    const auto finite = [](const glm::vec2& v) { return std::isfinite(v.x) && std::isfinite(v.y); };
+    if (!plan.drawn_known || !finite(plan.drawn_lo) || !finite(plan.drawn_hi)) return frame;
+    if (plan.drawn_lo.x > plan.drawn_hi.x || plan.drawn_lo.y > plan.drawn_hi.y) return glm::ivec4(0);  // none
+    // Whole pixels around the squares; clamped in float first (a far sprite's square may be huge).
+    const glm::vec2 lo = glm::clamp(glm::floor(plan.drawn_lo), glm::vec2(0.0f), glm::vec2(frame.z, frame.w));
+    const glm::vec2 hi = glm::clamp(glm::ceil(plan.drawn_hi), glm::vec2(0.0f), glm::vec2(frame.z, frame.w));
+    return intersect_rects(frame, glm::ivec4(int(lo.x), int(lo.y), int(hi.x - lo.x), int(hi.y - lo.y)));
 }
 
 }  // namespace sffd::render::detail

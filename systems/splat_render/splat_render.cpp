@@ -53,7 +53,8 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         laps.lap(stats.preview_ms);
     } else {
         warm_preview_programs(s, plan);
-        const glm::ivec4 rect = screen_rect(reg, plan.view, plan.width, plan.height);
+        const glm::ivec4 rect =
+            intersect_rects(screen_rect(reg, plan.view, plan.width, plan.height), plan_drawn_rect(plan));
         visibility_pass(reg, s, plan, rect);
         if (!plan.compute.empty())
             issue_counts(s, plan.gpu_counts, plan.cpu_points, plan.cpu_quads, stats.frame);
@@ -64,8 +65,10 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         laps.lap(stats.shade_ms);
     }
     end_splat_passes();
+    s.drawn = plan_drawn_rect(plan);
     // 3D Gaussians over the surface splats, depth-tested against them (gaussian_pass.h).
     if (reg.count<GaussianCloud>() > 0) {
+        s.drawn = glm::ivec4(0, 0, plan.width, plan.height);
         GaussianPassFrame gf;
         gf.camera = plan.view.camera, gf.view = plan.view.view, gf.projection = plan.view.projection;
         gf.output_fbo = s.output_fbo.id(), gf.color = s.color.id(), gf.aux = s.aux.id(),
@@ -151,15 +154,25 @@ void display_system(ecs::Registry& reg, const FrameContext&) {
     glBindVertexArray(s->vao.id());  // empty: the triangle comes from gl_VertexID
     // Outside the part of the window the frame is seen in, a clear to the background costs a small part
     // of the copy (a CPU rasteriser runs the copy per pixel: the editor's panels cover half the window).
-    if (const auto* dv = reg.try_resource<DisplayViewport>()) {
-        const glm::ivec4 r = display_viewport_pixels(*dv, w, h);
-        if (r != glm::ivec4(0, 0, w, h)) {
-            const glm::vec4& bg = s->last_background;
-            glClearColor(linear_to_srgb(bg.x), linear_to_srgb(bg.y), linear_to_srgb(bg.z), 1.0f);
-            glClear(GL_COLOR_BUFFER_BIT);
-            glEnable(GL_SCISSOR_TEST);
-            glScissor(r.x, r.y, r.z, r.w);
-        }
+    // Likewise where the frame holds only the background (drawn_pixels(), scaled up as the copy scales).
+    glm::ivec4 r(0, 0, w, h);
+    if (const auto* dv = reg.try_resource<DisplayViewport>()) r = display_viewport_pixels(*dv, w, h);
+    {
+        const glm::ivec4 d = s->drawn;
+        const double sx = double(w) / double(std::max(s->frame_width, 1)),
+                     sy = double(h) / double(std::max(s->frame_height, 1));
+        const int x0 = std::max(int(std::floor(d.x * sx)) - 1, 0),
+                  y0 = std::max(int(std::floor(d.y * sy)) - 1, 0);
+        const int x1 = std::min(int(std::ceil((d.x + d.z) * sx)) + 1, w),
+                  y1 = std::min(int(std::ceil((d.y + d.w) * sy)) + 1, h);
+        r = intersect_rects(r, glm::ivec4(x0, y0, std::max(x1 - x0, 0), std::max(y1 - y0, 0)));
+    }
+    if (r != glm::ivec4(0, 0, w, h)) {
+        const glm::vec4& bg = s->last_background;
+        glClearColor(linear_to_srgb(bg.x), linear_to_srgb(bg.y), linear_to_srgb(bg.z), 1.0f);
+        glClear(GL_COLOR_BUFFER_BIT);
+        glEnable(GL_SCISSOR_TEST);
+        glScissor(r.x, r.y, r.z, r.w);
     }
     glUseProgram(s->display.id());
     glUniform2f(SFFD_LOC_DISPLAY_SCALE, float(s->frame_width) / float(w), float(s->frame_height) / float(h));
@@ -237,6 +250,25 @@ GLuint output_framebuffer(const ecs::Registry& registry) {
 glm::ivec2 output_frame_size(const ecs::Registry& registry) {
     const SplatRenderState* s = registry.try_resource<SplatRenderState>();
     return s ? glm::ivec2(s->frame_width, s->frame_height) : glm::ivec2(0);
+}
+
+glm::ivec4 drawn_pixels(const ecs::Registry& registry) {
+    const SplatRenderState* s = registry.try_resource<SplatRenderState>();
+    return s ? s->drawn : glm::ivec4(0);
+}
+
+void include_drawn_pixels(ecs::Registry& registry, const glm::ivec4& pixels) {
+    SplatRenderState* s = registry.try_resource<SplatRenderState>();
+    if (!s || pixels.z <= 0 || pixels.w <= 0) return;
+    const glm::ivec4 d = s->drawn;
+    if (d.z <= 0 || d.w <= 0) {
+        s->drawn = intersect_rects(pixels, glm::ivec4(0, 0, s->frame_width, s->frame_height));
+        return;
+    }
+    const int x0 = std::min(d.x, pixels.x), y0 = std::min(d.y, pixels.y);
+    const int x1 = std::max(d.x + d.z, pixels.x + pixels.z), y1 = std::max(d.y + d.w, pixels.y + pixels.w);
+    s->drawn = intersect_rects(glm::ivec4(x0, y0, x1 - x0, y1 - y0),
+                               glm::ivec4(0, 0, s->frame_width, s->frame_height));
 }
 
 }  // namespace sffd::render

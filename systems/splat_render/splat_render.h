@@ -124,6 +124,14 @@ GLuint output_framebuffer(const ecs::Registry& registry);
 // The pixels of those targets the last frame covers, from their lower-left corner: the targets' size, or
 // less for a preview frame with RenderSettings::preview_divider > 1. Overlays draw into this rectangle.
 glm::ivec2 output_frame_size(const ecs::Registry& registry);
+// The pixels of that frame that may differ from the cleared background (x, y, width, height from its
+// lower-left corner, inside output_frame_size()): the squares of the splats' sprites when the CPU culled
+// every cloud and nothing else was drawn, else the whole frame. A system that draws into
+// output_framebuffer() after the render system adds its own pixels (include_drawn_pixels), since the
+// display copies only this part of the frame into the window and clears the rest to the background: on a
+// CPU rasteriser the copy costs per pixel, and a model seldom fills the view.
+glm::ivec4 drawn_pixels(const ecs::Registry& registry);
+void include_drawn_pixels(ecs::Registry& registry, const glm::ivec4& pixels);
 // The output colour target as the window shows it before the display copy (straight linear colour, the
 // overlays included, alpha > 0 where anything was drawn), top row first, scaled up to the targets' size.
 Result<std::vector<glm::vec4>> capture_output_color(ecs::Registry& registry);

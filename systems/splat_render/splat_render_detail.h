@@ -153,6 +153,7 @@ struct SplatRenderState {
 
     int width = 0, height = 0;              // the targets
     int frame_width = 0, frame_height = 0;  // what the last frame covered of them (preview_divider)
+    glm::ivec4 drawn{0};                    // drawn_pixels() of the last frame
     bool aux_valid = false;                 // the last frame wrote the normal + depth target
     gfx::Texture color, aux, depth, accum_color, accum_normal, accum_material;
     gfx::Framebuffer output_fbo, accum_fbo, depth_fbo;
@@ -219,7 +220,17 @@ struct FramePlan {
     std::vector<CountsSource> gpu_counts;
     std::uint32_t cpu_points = 0, cpu_quads = 0;
     std::vector<ComputeRasterDraw> compute;  // clouds on the compute rasteriser this frame (HQ)
+    // The frame pixels the splats may cover (cull_pass; lo > hi: none), and whether that is known: only
+    // the CPU cull gives the sprites' squares.
+    glm::vec2 drawn_lo{1e30f}, drawn_hi{-1e30f};
+    bool drawn_known = true;
 };
+
+// The plan's drawn pixels as a rectangle (x, y, width, height) inside its frame: the whole frame when not
+// known.
+glm::ivec4 plan_drawn_rect(const FramePlan& plan);
+// The common part of two rectangles (x, y, width, height); width and height 0 when they do not meet.
+glm::ivec4 intersect_rects(const glm::ivec4& a, const glm::ivec4& b);
 
 // CPU time per pass for RenderStats, only with RenderSettings::time_passes (glFinish after each pass).
 class PassLaps {

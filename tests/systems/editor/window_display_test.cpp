@@ -55,3 +55,55 @@ TEST(WindowDisplay, TheWindowShowsTheFrameEncodedOverTheBackground) {
     EXPECT_EQ(off, 0) << "worst difference " << worst << " levels";
     fs::remove_all(dir);
 }
+
+// While a drag previews at half resolution with x-ray on, the lattice reaches past the sphere: the display
+// copies only the frame's drawn pixels (render::drawn_pixels(), which the overlay widens with its own), so
+// an overlay that did not report its pixels would leave background where the capture shows edges. Mid-twist
+// (frame 40 of the sphere session): no pixel the capture covers may show the plain background in the
+// window, and all but the gizmo's (ImGui draws it over the view) match the capture encoded.
+TEST(WindowDisplay, WhileDraggingTheWindowShowsTheLatticeBeyondTheSurface) {
+    using sffd::test::run_shell;
+    using sffd::test::slurp;
+    if (run_shell("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run not installed";
+    const fs::path dir = fs::temp_directory_path() / ("sffd_window_drag_" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    const fs::path window = dir / "window.png", frame = dir / "frame.exr", log = dir / "view.log";
+    ASSERT_EQ(run_shell("XDG_CONFIG_HOME=" + dir.string() + " xvfb-run -a -s '-screen 0 1280x720x24' " +
+                        std::string(SFFD_BINARY_DIR) + "/tools/splatffd view sphere --replay " +
+                        (fs::path(SFFD_TEST_DATA_DIR) / "editor/session.txt").string() +
+                        " --frames 40 --save " + (dir / "saved.glb").string() + " --out " + frame.string() +
+                        " --window-screenshot " + window.string() + " > " + log.string() + " 2>&1"),
+              0)
+        << slurp(log);
+    auto shown = render::read_png(window);
+    auto linear = render::read_exr(frame);
+    ASSERT_TRUE(shown.ok()) << shown.message();
+    ASSERT_TRUE(linear.ok()) << linear.message();
+    ASSERT_EQ(shown->width, linear->width);
+    ASSERT_EQ(shown->height, linear->height);
+    const glm::vec3 background(0.045f, 0.05f, 0.06f);
+    std::uint8_t bg8[3];
+    for (int k = 0; k < 3; ++k) bg8[k] = render::encode_srgb8(background[k]);
+    int compared = 0, covered = 0, lost = 0, off = 0;
+    for (int y = 40; y < 600; ++y)
+        for (int x = 280; x < 940; ++x) {
+            const glm::vec4 c = linear->color[linear->index(x, y)];
+            const glm::vec3 want = glm::mix(background, glm::vec3(c), glm::clamp(c.w, 0.0f, 1.0f));
+            const std::uint8_t* p =
+                &shown->pixels[(std::size_t(y) * std::size_t(shown->width) + std::size_t(x)) * 4];
+            int d = 0, from_bg = 0, want_bg = 0;
+            for (int k = 0; k < 3; ++k) {
+                const int e = render::encode_srgb8(want[k]);
+                d = std::max(d, std::abs(int(p[k]) - e));
+                from_bg = std::max(from_bg, std::abs(int(p[k]) - int(bg8[k])));
+                want_bg = std::max(want_bg, std::abs(e - int(bg8[k])));
+            }
+            ++compared, covered += c.w > 0.0f;
+            lost += c.w > 0.0f && want_bg > 2 && from_bg <= 1 ? 1 : 0;
+            off += d > 1;
+        }
+    EXPECT_GT(covered, compared / 5) << "the sphere and its lattice are not in the view";
+    EXPECT_EQ(lost, 0) << "drawn pixels the window shows as background";
+    EXPECT_LT(off, compared / 100) << "more differences than the gizmo's";
+    fs::remove_all(dir);
+}

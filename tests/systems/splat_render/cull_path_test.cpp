@@ -150,6 +150,53 @@ TEST_F(CullPath_, GridDispatchCullsTheSameSplatsAsOneRow) {
 // automatic = CPU cull on a software rasterizer while the splats are on the CPU: at rest, and when the
 // FFD system deformed them on the CPU; the compute cull when the FFD compute pass wrote them (force_gpu),
 // and always on a hardware GPU (gfx::software_rasterizer() false). Both deformations render the same image.
+// The CPU cull knows the square of every sprite it keeps, so the frame's drawn pixels (drawn_pixels(),
+// what the display copies; the rest of the window is cleared) are their union: every covered pixel lies
+// inside it, and it hugs them (a pixel of margin, and a square's corners past a disc seen at a slant).
+// The sphere sits off the frame's centre, so a centred guess would miss it. The compute cull keeps the
+// squares on the GPU: the whole frame. include_drawn_pixels() widens the rectangle, within the frame.
+TEST_F(CullPath_, DrawnPixelsHoldEveryCoveredPixelAndHugThem) {
+    add_camera(5.0);
+    add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
+    SplatCloud sphere = fibonacci_sphere(20000);
+    for (glm::vec3& p : sphere.positions) p += glm::vec3(0.9f, 0.5f, 0.0f);
+    add_cloud(std::move(sphere));
+    const int w = 320, h = 240;
+    for (const Quality q : {Quality::preview, Quality::hq}) {
+        const FrameImage img = render(q, w, h, true, CullPath::cpu);
+        const glm::ivec4 d = drawn_pixels(reg);
+        int covered = 0, outside = 0;
+        glm::ivec2 lo(w, h), hi(-1, -1);  // covered pixels' box, GL rows (from the bottom)
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x) {
+                if (!(img.color[img.index(x, y)].w > 0.0f)) continue;
+                const int gl_y = h - 1 - y;
+                ++covered;
+                outside += x < d.x || x >= d.x + d.z || gl_y < d.y || gl_y >= d.y + d.w ? 1 : 0;
+                lo = glm::min(lo, glm::ivec2(x, gl_y)), hi = glm::max(hi, glm::ivec2(x, gl_y));
+            }
+        const char* name = q == Quality::hq ? "hq" : "preview";
+        ASSERT_GT(covered, 3000) << name;
+        EXPECT_EQ(outside, 0) << name << ": covered pixels outside the drawn rectangle";
+        EXPECT_LE(lo.x - d.x, 4) << name;
+        EXPECT_LE(lo.y - d.y, 4) << name;
+        EXPECT_LE(d.x + d.z - 1 - hi.x, 4) << name;
+        EXPECT_LE(d.y + d.w - 1 - hi.y, 4) << name;
+        EXPECT_GT(d.x, w / 3) << name << ": the sphere is right of the middle";
+    }
+    const glm::ivec4 sprites = drawn_pixels(reg);
+    include_drawn_pixels(reg, glm::ivec4(10, 20, 30, 40));
+    EXPECT_EQ(drawn_pixels(reg),
+              glm::ivec4(10, 20, sprites.x + sprites.z - 10, std::max(sprites.y + sprites.w, 60) - 20));
+    include_drawn_pixels(reg, glm::ivec4(300, 200, 100, 100));
+    const glm::ivec4 clamped = drawn_pixels(reg);
+    EXPECT_EQ(clamped.x + clamped.z, w);
+    EXPECT_EQ(clamped.y + clamped.w, h);
+
+    render(Quality::hq, w, h, true, CullPath::compute);
+    EXPECT_EQ(drawn_pixels(reg), glm::ivec4(0, 0, w, h));
+}
+
 TEST_F(CullPath_, AutomaticPathFollowsWhereTheSplatsAre) {
     const bool software =
         gfx::software_rasterizer();  // llvmpipe: the CPU cull while the splats are on the CPU
