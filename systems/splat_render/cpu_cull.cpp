@@ -12,6 +12,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "runtime/gfx/splat_pack.h"
+
 namespace sffd::render {
 
 namespace {
@@ -146,7 +148,8 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     const float side_x = 1.0f / std::sqrt(p00 * p00 + 1.0f), side_y = 1.0f / std::sqrt(p11 * p11 + 1.0f);
     const std::array<float, 256>& splat_lut = splat_srgb_table();
     const std::array<float, 256>& texel_lut = srgb8_table();
-    const bool flat_ok = textured && texture.uniform_radius;
+    const bool flat_all = textured && texture.pyramid;
+    const bool flat_ok = textured && (texture.uniform_radius || flat_all);
     if (flat_ok && out.flat_records.size() < n) out.flat_records.resize(n);
 
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const tbb::blocked_range<
@@ -223,19 +226,31 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                     if (flat_ok && lod < 16.0f && std::abs(rec.uv.x) < 1e6f &&
                         std::abs(rec.uv.y) < 1e6f) {  // (false for NaN)
                         // One colour under the whole footprint (|s|, |t| <= 1) and the filter's reach (two
-                        // texels of the coarser level, in level-0 texels): draw it flat
+                        // texels of the coarser level, in level-0 texels), or a reduced preview's one
+                        // lookup at the centre (TexelView::pyramid): draw it flat
                         // (CpuCullResult::flat_records).
-                        const float reach = (std::abs(a.x) + std::abs(a.z)) * size.x,
-                                    reach_v = (std::abs(a.y) + std::abs(a.w)) * size.y;
-                        const float margin = 2.0f * std::exp2(std::ceil(std::max(lod, 0.0f))) + 1.0f;
-                        const float fu = rec.uv.x - std::floor(rec.uv.x);
-                        const int tx = std::min(int(fu * size.x), texture.width - 1);
-                        const int ty = std::clamp(int(std::floor(rec.uv.y * size.y)), 0, texture.height - 1);
-                        const std::size_t texel =
-                            std::size_t(ty) * std::size_t(texture.width) + std::size_t(tx);
-                        if (std::max(reach, reach_v) + margin < float(texture.uniform_radius[texel])) {
+                        bool one_colour = flat_all;
+                        glm::vec3 color(0.0f);
+                        if (flat_all) {  // the level the preview samples (round(lod), at least 0)
+                            color = sample_texture(texture, glm::vec2(rec.uv),
+                                                   int(std::lround(std::max(lod, 0.0f))));
+                        } else {
+                            const float reach = (std::abs(a.x) + std::abs(a.z)) * size.x,
+                                        reach_v = (std::abs(a.y) + std::abs(a.w)) * size.y;
+                            const float margin = 2.0f * std::exp2(std::ceil(std::max(lod, 0.0f))) + 1.0f;
+                            const float fu = rec.uv.x - std::floor(rec.uv.x);
+                            const int tx = std::min(int(fu * size.x), texture.width - 1);
+                            const int ty =
+                                std::clamp(int(std::floor(rec.uv.y * size.y)), 0, texture.height - 1);
+                            const std::size_t texel =
+                                std::size_t(ty) * std::size_t(texture.width) + std::size_t(tx);
+                            one_colour =
+                                std::max(reach, reach_v) + margin < float(texture.uniform_radius[texel]);
                             const std::uint8_t* p = texture.rgba8 + 4 * texel;
-                            glm::vec3 color(texel_lut[p[0]], texel_lut[p[1]], texel_lut[p[2]]);
+                            if (one_colour)
+                                color = glm::vec3(texel_lut[p[0]], texel_lut[p[1]], texel_lut[p[2]]);
+                        }
+                        if (one_colour) {
                             if (lit)
                                 color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
                             SplatRecord& flat = flat_records[kept_flat++];
@@ -283,6 +298,59 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
         out.pixels_hi = glm::max(out.pixels_hi, glm::vec2(out.block_pixels[b].z, out.block_pixels[b].w));
     }
     out.pixels_bounded = out.visible_quads == 0;
+}
+
+TexturePyramid build_texture_pyramid(const std::uint8_t* rgba8, int width, int height) {
+    TexturePyramid p;
+    if (!rgba8 || width <= 0 || height <= 0) return p;
+    const std::array<float, 256>& lut = srgb8_table();
+    const std::uint8_t* above = rgba8;
+    glm::ivec2 size(width, height);
+    while (size.x > 1 || size.y > 1) {
+        const glm::ivec2 next(std::max(size.x / 2, 1), std::max(size.y / 2, 1));
+        std::vector<std::uint8_t> level(std::size_t(next.x) * std::size_t(next.y) * 4);
+        for (int y = 0; y < next.y; ++y)
+            for (int x = 0; x < next.x; ++x) {
+                glm::vec4 sum(0.0f);
+                for (int dy = 0; dy < 2; ++dy)
+                    for (int dx = 0; dx < 2; ++dx) {
+                        const int sx = std::min(2 * x + dx, size.x - 1),
+                                  sy = std::min(2 * y + dy, size.y - 1);
+                        const std::uint8_t* t =
+                            above + 4 * (std::size_t(sy) * std::size_t(size.x) + std::size_t(sx));
+                        sum += glm::vec4(lut[t[0]], lut[t[1]], lut[t[2]], float(t[3]) / 255.0f);
+                    }
+                std::uint8_t* o = &level[4 * (std::size_t(y) * std::size_t(next.x) + std::size_t(x))];
+                for (int c = 0; c < 3; ++c) o[c] = gfx::encode_srgb8(0.25f * sum[c]);
+                o[3] = std::uint8_t(std::lround(std::clamp(0.25f * sum.w, 0.0f, 1.0f) * 255.0f));
+            }
+        p.levels.push_back(std::move(level));
+        p.sizes.push_back(next);
+        above = p.levels.back().data();
+        size = next;
+    }
+    return p;
+}
+
+glm::vec3 sample_texture(const TexelView& t, glm::vec2 uv, int level) {
+    const std::array<float, 256>& lut = srgb8_table();
+    const int levels = t.pyramid ? int(t.pyramid->levels.size()) : 0;
+    level = std::clamp(level, 0, levels);
+    const std::uint8_t* texels = level == 0 ? t.rgba8 : t.pyramid->levels[std::size_t(level - 1)].data();
+    const glm::ivec2 size =
+        level == 0 ? glm::ivec2(t.width, t.height) : t.pyramid->sizes[std::size_t(level - 1)];
+    const float x = uv.x * float(size.x) - 0.5f, y = uv.y * float(size.y) - 0.5f;
+    const float fx = std::floor(x), fy = std::floor(y);
+    const float ax = x - fx, ay = y - fy;
+    auto wrap = [](long i, int n) { return int(((i % n) + n) % n); };
+    const int x0 = wrap(long(fx), size.x), x1 = wrap(long(fx) + 1, size.x);
+    const int y0 = std::clamp(int(fy), 0, size.y - 1), y1 = std::clamp(int(fy) + 1, 0, size.y - 1);
+    auto texel = [&](int tx, int ty) {
+        const std::uint8_t* p = texels + 4 * (std::size_t(ty) * std::size_t(size.x) + std::size_t(tx));
+        return glm::vec3(lut[p[0]], lut[p[1]], lut[p[2]]);
+    };
+    return glm::mix(glm::mix(texel(x0, y0), texel(x1, y0), ax), glm::mix(texel(x0, y1), texel(x1, y1), ax),
+                    ay);
 }
 
 std::vector<std::uint16_t> uniform_texel_radius(const std::uint8_t* rgba8, int w, int h) {

@@ -24,12 +24,27 @@ namespace sffd::render {
 
 // The material texture as the shader samples it (sRGB RGBA8, row 0 at v = 0, repeat in u, clamp in v,
 // bilinear at level 0). Null texels: untextured (per-splat colours).
+struct TexturePyramid;
 struct TexelView {
     const std::uint8_t* rgba8 = nullptr;
     int width = 0, height = 0;
     const glm::vec4* uv_axes = nullptr;  // SplatCloud::uv_axes, one per splat (null: zero derivatives)
     const std::uint16_t* uniform_radius = nullptr;  // uniform_texel_radius() of the texels (null: none)
+    // Non-null (reduced previews, RenderSettings::reduced_preview_flat_texture): every textured sprite is
+    // drawn flat, coloured by one lookup at its centre at its mip level (sample_texture).
+    const TexturePyramid* pyramid = nullptr;
 };
+
+// A texture's mip levels 1.. on the CPU (level 0 is the texture itself): each the mean of 2x2 texels of
+// the level above in linear light, sRGB-encoded RGBA8, sizes halved and rounded down to 1 as GL's.
+struct TexturePyramid {
+    std::vector<std::vector<std::uint8_t>> levels;  // levels[k - 1] is level k
+    std::vector<glm::ivec2> sizes;                  // sizes[k - 1] is level k's
+};
+TexturePyramid build_texture_pyramid(const std::uint8_t* rgba8, int width, int height);
+// The texture's linear RGB at uv (repeat in u, clamp in v), bilinear at `level` (clamped to the levels
+// there are), as the preview's textureLod reads it; |uv| < 1e6.
+glm::vec3 sample_texture(const TexelView& texture, glm::vec2 uv, int level);
 
 // For each texel (row-major, level 0): its Chebyshev distance to the nearest texel whose 8-neighbourhood
 // holds another colour (border texels count as such, so u's wrap needs no special case). Every texel

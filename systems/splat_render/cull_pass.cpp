@@ -123,6 +123,16 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
                 texels = {gpu.texture_texels->rgba8.data(), gpu.texture_texels->width,
                           gpu.texture_texels->height, gpu.uv_axes_cpu ? gpu.uv_axes_cpu->data() : nullptr,
                           gpu.uniform_radius.empty() ? nullptr : gpu.uniform_radius.data()};
+            if (gpu.texture && settings.quality == Quality::preview && settings.preview_divider > 1 &&
+                settings.reduced_preview_flat_texture) {
+                if (!gpu.pyramid_made) {
+                    gpu.pyramid =
+                        build_texture_pyramid(gpu.texture_texels->rgba8.data(), gpu.texture_texels->width,
+                                              gpu.texture_texels->height);
+                    gpu.pyramid_made = true;
+                }
+                texels.pyramid = &gpu.pyramid;
+            }
             CpuCullResult& r = gpu.cpu_cull;
             cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
             ++s.cpu_splat_passes;

@@ -44,6 +44,7 @@ void upload_texture(CloudGpu& gpu, const SplatTexture& m) {
 // fragment samples the splat's centre uv at level 0).
 void upload_uv_axes(CloudGpu& gpu, const SplatCloud& cloud) {
     gpu.uniform_radius.clear();
+    gpu.pyramid = {}, gpu.pyramid_made = false;
     if (!gpu.texture) {
         gpu.uv_axes.reset();
         return;

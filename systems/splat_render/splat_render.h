@@ -64,6 +64,11 @@ struct RenderSettings {
     // through output_frame_size) scales it up, nearest: 1/d^2 of the fill for interaction where fill is
     // what a frame costs (a CPU rasteriser). HQ frames always render at full size.
     int preview_divider = 1;
+    // A reduced preview (preview_divider > 1, CPU cull) colours each textured splat once, by a lookup at
+    // its centre at the mip level its footprint picks, instead of per pixel: at that size a splat spans
+    // a few pixels and about as many texels of its level, and on a CPU rasteriser the per-pixel lookups
+    // were a fifth of the frame. Full-size previews and HQ frames always filter per pixel.
+    bool reduced_preview_flat_texture = true;
 };
 
 // Registry resource (optional), kept by an application whose own UI covers part of the window (the

@@ -61,7 +61,9 @@ struct CloudGpu {
     std::uint32_t capacity = 0;
     gfx::Texture texture;  // the cloud's texture (sRGB), when it has one
     gfx::Buffer uv_axes;   // vec4[count]: SplatCloud::uv_axes (zeros when absent), when textured
-    std::vector<std::uint16_t> uniform_radius;            // uniform_texel_radius() of the texture (CPU cull)
+    std::vector<std::uint16_t> uniform_radius;  // uniform_texel_radius() of the texture (CPU cull)
+    TexturePyramid pyramid;                     // its mip levels, made when a reduced preview asks
+    bool pyramid_made = false;
     const std::vector<glm::vec4>* uv_axes_cpu = nullptr;  // the cloud's, valid during one render_system call
     const SplatTexture* texture_texels = nullptr;         // the cloud's, valid during one render_system call
     std::uint64_t texture_version = 0;

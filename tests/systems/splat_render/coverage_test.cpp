@@ -102,6 +102,30 @@ TEST_F(Coverage_, HalfResolutionPreviewShowsTheSameSphereAtFullSize) {
     EXPECT_EQ(hq_divided.color, hq.color) << "HQ frames always render at full size";
 }
 
+// A reduced preview of a textured sphere colours each splat once (RenderSettings::
+// reduced_preview_flat_texture): the same pixels covered as with per-pixel lookups, no holes, and
+// colours within a small mean of them (a splat spans about two of the frame's pixels and as many texels
+// of its level); the per-pixel frame differs from it, so the setting took effect.
+TEST_F(Coverage_, ReducedPreviewColoursTexturedSplatsOnceWithoutChangingCoverage) {
+    const Camera cam = add_camera(6.0);
+    add_light({-1.0f, -0.3f, -0.5f});
+    SplatCloud sphere = fibonacci_sphere(paper_splats);
+    add_checker(sphere);
+    add_cloud(std::move(sphere));
+    preview_divider = 2;
+    const FrameImage flat = render(Quality::preview, 512, 384);
+    reduced_preview_flat_texture = false;
+    const FrameImage per_pixel = render(Quality::preview, 512, 384);
+    const Coverage c = ellipsoid_coverage(flat, cam, glm::dvec3(1.0));
+    EXPECT_GT(c.inside, 15000);
+    EXPECT_EQ(c.holes, 0);
+    EXPECT_EQ(c.far_side, 0);
+    const ImageDiff d = image_diff(flat, per_pixel);
+    EXPECT_EQ(d.coverage_mismatch, 0);
+    EXPECT_GT(d.mean_color, 1e-4) << "the per-pixel frame is the same: the setting did nothing";
+    EXPECT_LT(d.mean_color, 0.03);
+}
+
 TEST_F(Coverage_, FixedRadiusSplatsWouldOpenHolesUnderTheSameStretch) {
     const Camera cam = add_camera(6.0);
     add_light({-1.0f, -0.3f, -0.5f});

@@ -75,6 +75,7 @@ protected:
         s.cull_path = path, s.raster_path = raster;
         s.aux_outputs = true;
         s.preview_divider = preview_divider;
+        s.reduced_preview_flat_texture = reduced_preview_flat_texture;
         reg.set_resource<RenderSettings>(s);
         residency_system(reg, FrameContext{});
         render_system(reg, FrameContext{});
@@ -92,7 +93,8 @@ protected:
     }
 
     ecs::Registry reg;
-    int preview_divider = 1;  // RenderSettings::preview_divider of the frames render() draws
+    int preview_divider = 1;                   // RenderSettings::preview_divider of the frames render() draws
+    bool reduced_preview_flat_texture = true;  // and RenderSettings::reduced_preview_flat_texture
 };
 
 // World-space ray through the centre of pixel (x, y) (row 0 at the top), scaled so that its component

@@ -387,3 +387,100 @@ TEST(RenderCpuCull, CullingOffMarksBackFacesHiddenWithFiniteValuesOnly) {
         EXPECT_EQ(hidden, back_sprites);
     }
 }
+
+// The CPU mip levels of a texture (the reduced preview's per-splat lookups): each level is the 2x2 mean of
+// the one above in linear light, sRGB-encoded, with GL's sizes (halved, rounded down, to 1); a lookup at a
+// texel's centre gives that texel, half-way between two gives their mean, u wraps and v clamps.
+TEST(RenderTexturePyramid, LevelsAreLinearMeansAndLookupsFilterLikeGl) {
+    const auto srgb = [](float linear) { return gfx::encode_srgb8(linear); };
+    const auto linear = [](std::uint8_t c) {
+        const double x = c / 255.0;
+        return float(x <= 0.04045 ? x / 12.92 : std::pow((x + 0.055) / 1.055, 2.4));
+    };
+    // 5x3 texels, red ramps with x, green with y; blue 255 in column 0 only.
+    const int w = 5, h = 3;
+    std::vector<std::uint8_t> rgba(std::size_t(w * h) * 4);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            std::uint8_t* p = &rgba[std::size_t(y * w + x) * 4];
+            p[0] = std::uint8_t(40 * x), p[1] = std::uint8_t(100 * y), p[2] = x == 0 ? 255 : 0, p[3] = 255;
+        }
+    const TexturePyramid pyramid = build_texture_pyramid(rgba.data(), w, h);
+    ASSERT_EQ(pyramid.levels.size(), 2u);  // 2x1, then 1x1
+    EXPECT_EQ(pyramid.sizes[0], glm::ivec2(2, 1));
+    EXPECT_EQ(pyramid.sizes[1], glm::ivec2(1, 1));
+    // Level 1 texel (1, 0): the mean of level-0 texels x 2..3, y 0..1.
+    const float red = 0.25f * (2.0f * linear(80) + 2.0f * linear(120)),
+                green = 0.25f * (2.0f * linear(0) + 2.0f * linear(100));
+    EXPECT_EQ(pyramid.levels[0][4 + 0], srgb(red));
+    EXPECT_EQ(pyramid.levels[0][4 + 1], srgb(green));
+    EXPECT_EQ(pyramid.levels[0][4 + 2], 0);
+
+    const TexelView t{rgba.data(), w, h, nullptr, nullptr, &pyramid};
+    const auto at = [&](float u, float v, int level) { return sample_texture(t, glm::vec2(u, v), level); };
+    // The centre of texel (3, 1) at level 0.
+    EXPECT_NEAR(at(3.5f / w, 1.5f / h, 0).x, linear(120), 1e-6);
+    EXPECT_NEAR(at(3.5f / w, 1.5f / h, 0).y, linear(100), 1e-6);
+    // Half-way between texels (1, 1) and (2, 1): the mean of their linear values.
+    EXPECT_NEAR(at(2.0f / w, 1.5f / h, 0).x, 0.5f * (linear(40) + linear(80)), 1e-6);
+    // u wraps: half-way between the last column and the first (blue 0 and 255).
+    EXPECT_NEAR(at(0.0f, 1.5f / h, 0).z, 0.5f, 1e-6);
+    EXPECT_NEAR(at(1.0f, 1.5f / h, 0).z, 0.5f, 1e-6);
+    // v clamps: above the first row reads the first row.
+    EXPECT_NEAR(at(3.5f / w, -0.4f, 0).y, 0.0f, 1e-6);
+    // Level 1 at its texel (1, 0)'s centre; levels past the last read the last.
+    EXPECT_NEAR(at(0.75f, 0.5f, 1).x, linear(srgb(red)), 1e-6);
+    EXPECT_EQ(at(0.3f, 0.7f, 9), at(0.9f, 0.1f, 2));
+}
+
+// With a pyramid (reduced previews) every textured sprite is drawn flat: no sprite is left in the per-pixel
+// textured list, and each flat colour is the lookup at the splat's centre uv at its mip level, lit.
+TEST(RenderCpuCull, ReducedPreviewColoursEveryTexturedSpriteOnce) {
+    SplatCloud cloud = test::fibonacci_sphere(3000);
+    // uv from x and y, so the uv frame along the splat's axes is half their x and y.
+    cloud.uvs.resize(cloud.size());
+    std::vector<glm::vec4> uv_axes(cloud.size());
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        cloud.uvs[i] = glm::vec2(0.5f + 0.5f * cloud.positions[i].x, 0.5f + 0.5f * cloud.positions[i].y);
+        uv_axes[i] =
+            0.5f * glm::vec4(cloud.axis_u[i].x, cloud.axis_u[i].y, cloud.axis_v[i].x, cloud.axis_v[i].y);
+    }
+    const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
+    const int w = 1024, h = 512;
+    std::vector<std::uint8_t> rgba(std::size_t(w * h) * 4);
+    for (std::size_t k = 0; k < rgba.size(); ++k) rgba[k] = std::uint8_t((k * 37) % 251);
+    const TexturePyramid pyramid = build_texture_pyramid(rgba.data(), w, h);
+    gpu::FrameBlock f = test_frame();
+    f.params.w = 1.0f;  // textured
+    f.counts.w = 0u;    // unlit: the flat colour is the texture's
+    CpuCullResult per_pixel, flat;
+    cull_splats_cpu(splats, f, TexelView{rgba.data(), w, h, uv_axes.data()}, per_pixel);
+    cull_splats_cpu(splats, f, TexelView{rgba.data(), w, h, uv_axes.data(), nullptr, &pyramid}, flat);
+    ASSERT_GT(per_pixel.visible_records, 500u);
+    EXPECT_EQ(per_pixel.visible_flat, 0u);
+    EXPECT_EQ(flat.visible_records, 0u);
+    EXPECT_EQ(flat.visible_flat, per_pixel.visible_records);
+    std::vector<SplatRecord> textured, coloured;
+    CpuCullResult::for_each_run(
+        per_pixel.records, per_pixel.record_counts, per_pixel.block,
+        [&](std::size_t, const SplatRecord* p, std::size_t k) { textured.insert(textured.end(), p, p + k); });
+    CpuCullResult::for_each_run(
+        flat.flat_records, flat.flat_counts, flat.block,
+        [&](std::size_t, const SplatRecord* p, std::size_t k) { coloured.insert(coloured.end(), p, p + k); });
+    ASSERT_EQ(textured.size(), coloured.size());
+    const TexelView view{rgba.data(), w, h, nullptr, nullptr, &pyramid};
+    int lowest = 99, highest = -1;
+    for (std::size_t k = 0; k < textured.size(); k += 7) {
+        // The per-pixel record carries the uv and the level (HQ: normal.w); the flat one its colour.
+        const glm::vec2 uv(textured[k].uv.x, textured[k].uv.y);
+        const int level = int(std::lround(std::max(textured[k].normal.w, 0.0f)));
+        lowest = std::min(lowest, level), highest = std::max(highest, level);
+        const glm::vec3 want = sample_texture(view, uv, level);
+        const std::uint32_t bits = std::bit_cast<std::uint32_t>(coloured[k].normal.w) - (1u << 23);
+        const glm::vec3 got(float(bits & 1023u), float((bits >> 10) & 1023u), float((bits >> 20) & 1023u));
+        for (int c = 0; c < 3; ++c)  // pack_color: sqrt of the linear value in 10 bits
+            EXPECT_NEAR(got[c] / 1023.0f, std::sqrt(std::clamp(want[c], 0.0f, 1.0f)), 1.0f / 1023.0f) << k;
+        EXPECT_EQ(coloured[k].center, textured[k].center) << k;
+    }
+    EXPECT_LT(lowest, highest) << "the splats' mip levels differ (the silhouette's are coarser)";
+}
