@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -430,25 +431,57 @@ void timeline_panel(ecs::Registry& registry, EditorState& state) {
     ImGui::End();
 }
 
+// What the frame-time panel shows: the profile overlay's numbers as they were at the last refresh. Five
+// times a second, as frame-rate readouts usually refresh: numbers that change every frame cannot be read,
+// and between refreshes the panel draws the same triangles, which the UI's panel cache then copies
+// instead of drawing (ui_cache.h).
+struct FrameTimeShown {
+    std::chrono::steady_clock::time_point at{};
+    bool valid = false;
+    float last_ms = 0.0f, avg_ms = 0.0f;
+    std::vector<float> graph;  // oldest first
+    float scale = 0.0f;
+    struct Bar {
+        std::string name;
+        float avg_ms = 0.0f;
+    };
+    std::vector<Bar> bars;
+};
+constexpr std::chrono::milliseconds kFrameTimeRefresh{200};
+
 void profiler_panel(ecs::Registry& registry, EditorState&) {
     if (begin_panel(registry, Panel::frame_time)) {
-        if (const auto* o = registry.try_resource<profiling::ProfileOverlay>(); o && o->count > 0) {
-            ImGui::Text("%.1f ms (avg %.1f, %.1f FPS)", double(o->frame_last_ms), double(o->frame_avg_ms),
-                        o->frame_avg_ms > 0 ? 1000.0 / double(o->frame_avg_ms) : 0.0);
+        FrameTimeShown* shown = registry.try_resource<FrameTimeShown>();
+        if (!shown) shown = &registry.set_resource<FrameTimeShown>();
+        const auto now = std::chrono::steady_clock::now();
+        if (const auto* o = registry.try_resource<profiling::ProfileOverlay>();
+            o && o->count > 0 && (!shown->valid || now - shown->at >= kFrameTimeRefresh)) {
+            shown->at = now, shown->valid = true;
+            shown->last_ms = o->frame_last_ms, shown->avg_ms = o->frame_avg_ms;
+            shown->graph.resize(o->count);
+            for (std::size_t k = 0; k < o->count; ++k)
+                shown->graph[k] = o->frame_ms[(o->oldest() + k) % profiling::ProfileOverlay::history];
             // Scaled to the typical frame, not the ring's maximum: the first frame (shader compilation,
             // uploads: seconds) made every later frame a flat line at the bottom of the graph.
-            const float scale = graph_scale(std::span<const float>(o->frame_ms.data(), o->count));
+            shown->scale = graph_scale(std::span<const float>(o->frame_ms.data(), o->count));
+            shown->bars.clear();
+            for (const auto& e : o->systems) shown->bars.push_back({e.name, e.avg_ms});
+        }
+        if (shown->valid) {
+            ImGui::Text("%.1f ms (avg %.1f, %.1f FPS)", double(shown->last_ms), double(shown->avg_ms),
+                        shown->avg_ms > 0 ? 1000.0 / double(shown->avg_ms) : 0.0);
             char overlay[48];
-            std::snprintf(overlay, sizeof overlay, "0..%.0f ms, %zu frames", double(scale), o->count);
-            ImGui::PlotLines("##frame", o->frame_ms.data(), int(o->count), int(o->oldest()), overlay, 0.0f,
-                             scale,
+            std::snprintf(overlay, sizeof overlay, "0..%.0f ms, %zu frames", double(shown->scale),
+                          shown->graph.size());
+            ImGui::PlotLines("##frame", shown->graph.data(), int(shown->graph.size()), 0, overlay, 0.0f,
+                             shown->scale,
                              ImVec2(ImGui::GetContentRegionAvail().x,
                                     50));  // PlotLines (1.86) takes no -1 width: it drew a 1-px line
-            const float total = std::max(o->frame_avg_ms, 1e-3f);
-            for (const auto& s : o->systems) {
+            const float total = std::max(shown->avg_ms, 1e-3f);
+            for (const auto& b : shown->bars) {
                 char text[128];
-                std::snprintf(text, sizeof text, "%s %.2f ms", s.name.c_str(), double(s.avg_ms));
-                ImGui::ProgressBar(std::clamp(s.avg_ms / total, 0.0f, 1.0f), ImVec2(-1, 0), text);
+                std::snprintf(text, sizeof text, "%s %.2f ms", b.name.c_str(), double(b.avg_ms));
+                ImGui::ProgressBar(std::clamp(b.avg_ms / total, 0.0f, 1.0f), ImVec2(-1, 0), text);
             }
         } else {
             ImGui::TextDisabled("no profile yet");

@@ -169,27 +169,28 @@ void draw_ui(ecs::Registry& registry, ImDrawData& data, const std::vector<PanelR
     st->list_rects.assign(std::size_t(n), PixelRect{});
     for (int i = 0; i < n; ++i) {
         const ImDrawList* l = data.CmdLists[i];
+        // Per command, its clip rectangle meets its triangles' box: window decorations are drawn under a
+        // full-display clip rectangle, and a panel's scrolled-out content lies outside it but is clipped.
         PixelRect box{fb_w, fb_h, 0, 0};
+        const ImVec2 o = data.DisplayPos, scale = data.FramebufferScale;
         for (const ImDrawCmd& c : l->CmdBuffer) {
             if (c.UserCallback) return direct();  // the callback's effect is unknown
             if (c.ElemCount == 0) continue;
-            const PixelRect p = clip_pixels(c.ClipRect, data, fb_w, fb_h);
+            PixelRect p = clip_pixels(c.ClipRect, data, fb_w, fb_h);
             if (p.empty()) continue;
-            box = {std::min(box.x0, p.x0), std::min(box.y0, p.y0), std::max(box.x1, p.x1),
-                   std::max(box.y1, p.y1)};
-        }
-        // Window decorations are drawn under a full-display clip rectangle: the vertices bound the rest.
-        if (!box.empty() && l->VtxBuffer.Size > 0) {
-            ImVec2 lo = l->VtxBuffer[0].pos, hi = lo;
-            for (const ImDrawVert& v : l->VtxBuffer) {
+            ImVec2 lo(1e30f, 1e30f), hi(-1e30f, -1e30f);
+            for (unsigned e = 0; e < c.ElemCount; ++e) {
+                const ImDrawVert& v = l->VtxBuffer[int(c.VtxOffset + l->IdxBuffer[int(c.IdxOffset + e)])];
                 lo = ImVec2(std::min(lo.x, v.pos.x), std::min(lo.y, v.pos.y));
                 hi = ImVec2(std::max(hi.x, v.pos.x), std::max(hi.y, v.pos.y));
             }
-            const ImVec2 o = data.DisplayPos, k = data.FramebufferScale;
-            box.x0 = std::max(box.x0, int(std::floor((lo.x - o.x) * k.x)));
-            box.y0 = std::max(box.y0, int(std::floor((lo.y - o.y) * k.y)));
-            box.x1 = std::min(box.x1, int(std::ceil((hi.x - o.x) * k.x)));
-            box.y1 = std::min(box.y1, int(std::ceil((hi.y - o.y) * k.y)));
+            p.x0 = std::max(p.x0, int(std::floor((lo.x - o.x) * scale.x)));
+            p.y0 = std::max(p.y0, int(std::floor((lo.y - o.y) * scale.y)));
+            p.x1 = std::min(p.x1, int(std::ceil((hi.x - o.x) * scale.x)));
+            p.y1 = std::min(p.y1, int(std::ceil((hi.y - o.y) * scale.y)));
+            if (p.empty()) continue;
+            box = {std::min(box.x0, p.x0), std::min(box.y0, p.y0), std::max(box.x1, p.x1),
+                   std::max(box.y1, p.y1)};
         }
         st->list_rects[std::size_t(i)] = box;
         if (box.empty()) continue;
