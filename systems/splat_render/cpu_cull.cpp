@@ -1,6 +1,7 @@
 // CPU twin of shaders/splat_render/cull.comp. Every function mirrors the GLSL function of the same name
 // (splat_common.glsl, splat_color.glsl, lighting.glsl), in float, so both paths produce the same records.
 #include "systems/splat_render/cpu_cull.h"
+#include "systems/splat_render/texture_lookup.h"
 
 #include <algorithm>
 #include <array>
@@ -307,22 +308,18 @@ TexturePyramid build_texture_pyramid(const std::uint8_t* rgba8, int width, int h
     const std::uint8_t* above = rgba8;
     glm::ivec2 size(width, height);
     while (size.x > 1 || size.y > 1) {
-        const glm::ivec2 next(std::max(size.x / 2, 1), std::max(size.y / 2, 1));
+        const glm::ivec2 next = next_level_size(size);
         std::vector<std::uint8_t> level(std::size_t(next.x) * std::size_t(next.y) * 4);
+        const auto texel = [&](int tx, int ty) {
+            const std::uint8_t* t = above + 4 * (std::size_t(ty) * std::size_t(size.x) + std::size_t(tx));
+            return glm::vec4(lut[t[0]], lut[t[1]], lut[t[2]], float(t[3]) / 255.0f);
+        };
         for (int y = 0; y < next.y; ++y)
             for (int x = 0; x < next.x; ++x) {
-                glm::vec4 sum(0.0f);
-                for (int dy = 0; dy < 2; ++dy)
-                    for (int dx = 0; dx < 2; ++dx) {
-                        const int sx = std::min(2 * x + dx, size.x - 1),
-                                  sy = std::min(2 * y + dy, size.y - 1);
-                        const std::uint8_t* t =
-                            above + 4 * (std::size_t(sy) * std::size_t(size.x) + std::size_t(sx));
-                        sum += glm::vec4(lut[t[0]], lut[t[1]], lut[t[2]], float(t[3]) / 255.0f);
-                    }
+                const glm::vec4 mean = mean_2x2(x, y, size.x, size.y, texel);
                 std::uint8_t* o = &level[4 * (std::size_t(y) * std::size_t(next.x) + std::size_t(x))];
-                for (int c = 0; c < 3; ++c) o[c] = gfx::encode_srgb8(0.25f * sum[c]);
-                o[3] = std::uint8_t(std::lround(std::clamp(0.25f * sum.w, 0.0f, 1.0f) * 255.0f));
+                for (int c = 0; c < 3; ++c) o[c] = gfx::encode_srgb8(mean[c]);
+                o[3] = std::uint8_t(std::lround(std::clamp(mean.w, 0.0f, 1.0f) * 255.0f));
             }
         p.levels.push_back(std::move(level));
         p.sizes.push_back(next);
@@ -339,18 +336,13 @@ glm::vec3 sample_texture(const TexelView& t, glm::vec2 uv, int level) {
     const std::uint8_t* texels = level == 0 ? t.rgba8 : t.pyramid->levels[std::size_t(level - 1)].data();
     const glm::ivec2 size =
         level == 0 ? glm::ivec2(t.width, t.height) : t.pyramid->sizes[std::size_t(level - 1)];
-    const float x = uv.x * float(size.x) - 0.5f, y = uv.y * float(size.y) - 0.5f;
-    const float fx = std::floor(x), fy = std::floor(y);
-    const float ax = x - fx, ay = y - fy;
-    auto wrap = [](long i, int n) { return int(((i % n) + n) % n); };
-    const int x0 = wrap(long(fx), size.x), x1 = wrap(long(fx) + 1, size.x);
-    const int y0 = std::clamp(int(fy), 0, size.y - 1), y1 = std::clamp(int(fy) + 1, 0, size.y - 1);
+    const BilinearTaps<float> b = bilinear_taps(uv.x, uv.y, size.x, size.y);
     auto texel = [&](int tx, int ty) {
         const std::uint8_t* p = texels + 4 * (std::size_t(ty) * std::size_t(size.x) + std::size_t(tx));
         return glm::vec3(lut[p[0]], lut[p[1]], lut[p[2]]);
     };
-    return glm::mix(glm::mix(texel(x0, y0), texel(x1, y0), ax), glm::mix(texel(x0, y1), texel(x1, y1), ax),
-                    ay);
+    return glm::mix(glm::mix(texel(b.x0, b.y0), texel(b.x1, b.y0), b.ax),
+                    glm::mix(texel(b.x0, b.y1), texel(b.x1, b.y1), b.ax), b.ay);
 }
 
 std::vector<std::uint16_t> uniform_texel_radius(const std::uint8_t* rgba8, int w, int h) {

@@ -1,5 +1,6 @@
 // Ground-truth ray tracer (see ground_truth.h). Embree stays in this file.
 #include "systems/splat_render/ground_truth.h"
+#include "systems/splat_render/texture_lookup.h"
 
 #include <algorithm>
 #include <cmath>
@@ -390,34 +391,28 @@ ReferenceTexture::ReferenceTexture(const SplatTexture& m) {
     while (levels_.back().width > 1 || levels_.back().height > 1) {
         const Level& prev = levels_.back();
         Level next;
-        next.width = std::max(prev.width / 2, 1), next.height = std::max(prev.height / 2, 1);
+        const glm::ivec2 size = next_level_size({prev.width, prev.height});
+        next.width = size.x, next.height = size.y;
         next.texels.resize(std::size_t(next.width) * std::size_t(next.height));
+        const auto texel = [&](int tx, int ty) {
+            return prev.texels[std::size_t(ty) * std::size_t(prev.width) + std::size_t(tx)];
+        };
         for (int y = 0; y < next.height; ++y)
-            for (int x = 0; x < next.width; ++x) {
-                glm::vec4 sum(0.0f);
-                for (int dy = 0; dy < 2; ++dy)
-                    for (int dx = 0; dx < 2; ++dx) {
-                        const int sx = std::min(2 * x + dx, prev.width - 1),
-                                  sy = std::min(2 * y + dy, prev.height - 1);
-                        sum += prev.texels[std::size_t(sy) * std::size_t(prev.width) + std::size_t(sx)];
-                    }
-                next.texels[std::size_t(y) * std::size_t(next.width) + std::size_t(x)] = sum * 0.25f;
-            }
+            for (int x = 0; x < next.width; ++x)
+                next.texels[std::size_t(y) * std::size_t(next.width) + std::size_t(x)] =
+                    mean_2x2(x, y, prev.width, prev.height, texel);
         levels_.push_back(std::move(next));
     }
 }
 
 glm::dvec4 ReferenceTexture::bilinear(const glm::dvec2& uv, int level) const {
     const Level& l = levels_[std::size_t(std::clamp(level, 0, int(levels_.size()) - 1))];
-    const double x = uv.x * l.width - 0.5, y = uv.y * l.height - 0.5;
-    const double fx = std::floor(x), fy = std::floor(y), ax = x - fx, ay = y - fy;
-    auto wrap = [](long i, int n) { return int(((i % n) + n) % n); };
-    const int x0 = wrap(long(fx), l.width), x1 = wrap(long(fx) + 1, l.width);
-    const int y0 = std::clamp(int(fy), 0, l.height - 1), y1 = std::clamp(int(fy) + 1, 0, l.height - 1);
+    const BilinearTaps<double> b = bilinear_taps(uv.x, uv.y, l.width, l.height);
     auto t = [&](int tx, int ty) {
         return glm::dvec4(l.texels[std::size_t(ty) * std::size_t(l.width) + std::size_t(tx)]);
     };
-    return glm::mix(glm::mix(t(x0, y0), t(x1, y0), ax), glm::mix(t(x0, y1), t(x1, y1), ax), ay);
+    return glm::mix(glm::mix(t(b.x0, b.y0), t(b.x1, b.y0), b.ax),
+                    glm::mix(t(b.x0, b.y1), t(b.x1, b.y1), b.ax), b.ay);
 }
 
 glm::dvec4 ReferenceTexture::anisotropic(const glm::dvec2& uv, const glm::dvec2& dx, const glm::dvec2& dy,
