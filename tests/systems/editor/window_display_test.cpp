@@ -15,36 +15,58 @@
 using namespace sffd;
 namespace fs = std::filesystem;
 
-TEST(WindowDisplay, TheWindowShowsTheFrameEncodedOverTheBackground) {
-    using sffd::test::run_shell;
-    using sffd::test::slurp;
-    if (run_shell("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run not installed";
-    const fs::path dir = fs::temp_directory_path() / ("sffd_window_display_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    const fs::path window = dir / "window.png", frame = dir / "frame.exr", log = dir / "view.log";
-    ASSERT_EQ(run_shell("XDG_CONFIG_HOME=" + dir.string() + " xvfb-run -a -s '-screen 0 1280x720x24' " +
-                        std::string(SFFD_BINARY_DIR) +
-                        "/tools/splatffd view sphere --size 1280x720 --quality preview --frames 3 --out " +
-                        frame.string() + " --window-screenshot " + window.string() + " > " + log.string() +
-                        " 2>&1"),
-              0)
-        << slurp(log);
-    auto shown = render::read_png(window);
-    auto linear = render::read_exr(frame);
-    ASSERT_TRUE(shown.ok()) << shown.message();
-    ASSERT_TRUE(linear.ok()) << linear.message();
-    ASSERT_EQ(shown->width, linear->width);
-    ASSERT_EQ(shown->height, linear->height);
+namespace {
+
+// `splatffd view sphere ARGS` under xvfb-run at 1280x720, its last frame both as the window shows it
+// (--window-screenshot, PNG) and as captured (--out, linear EXR).
+class WindowDisplay : public testing::Test {
+protected:
+    void SetUp() override {
+        if (test::run_shell("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run not installed";
+        dir = fs::temp_directory_path() / ("sffd_window_display_" + std::to_string(::getpid()) + "_" +
+                                           testing::UnitTest::GetInstance()->current_test_info()->name());
+        fs::create_directories(dir);
+    }
+    void TearDown() override {
+        if (!dir.empty()) fs::remove_all(dir);
+    }
+    // False (with a failure) when the run or a file failed.
+    bool view(const std::string& args) {
+        const fs::path window = dir / "window.png", frame = dir / "frame.exr", log = dir / "view.log";
+        const int code = test::run_shell(
+            "XDG_CONFIG_HOME=" + dir.string() + " xvfb-run -a -s '-screen 0 1280x720x24' " +
+            std::string(SFFD_BINARY_DIR) + "/tools/splatffd view sphere " + args + " --out " +
+            frame.string() + " --window-screenshot " + window.string() + " > " + log.string() + " 2>&1");
+        EXPECT_EQ(code, 0) << test::slurp(log);
+        auto png = render::read_png(window);
+        auto exr = render::read_exr(frame);
+        EXPECT_TRUE(png.ok()) << png.message();
+        EXPECT_TRUE(exr.ok()) << exr.message();
+        if (code != 0 || !png || !exr) return false;
+        shown = std::move(*png), linear = std::move(*exr);
+        EXPECT_EQ(shown.width, linear.width);
+        EXPECT_EQ(shown.height, linear.height);
+        return shown.width == linear.width && shown.height == linear.height;
+    }
+    fs::path dir;
+    render::Rgba8Image shown;
+    render::FrameImage linear;
+};
+
+}  // namespace
+
+TEST_F(WindowDisplay, TheWindowShowsTheFrameEncodedOverTheBackground) {
+    ASSERT_TRUE(view("--size 1280x720 --quality preview --frames 3"));
     // The view's background (view_app.cpp) where nothing was drawn; the capture keeps alpha 0 there.
     const glm::vec3 background(0.045f, 0.05f, 0.06f);
     int compared = 0, covered = 0, off = 0, worst = 0;
     // Between the panel columns, below the menu and above the Timeline (1280x720 layout).
     for (int y = 40; y < 600; ++y)
         for (int x = 280; x < 940; ++x) {
-            const glm::vec4 c = linear->color[linear->index(x, y)];
+            const glm::vec4 c = linear.color[linear.index(x, y)];
             const glm::vec3 want = glm::mix(background, glm::vec3(c), glm::clamp(c.w, 0.0f, 1.0f));
             const std::uint8_t* p =
-                &shown->pixels[(std::size_t(y) * std::size_t(shown->width) + std::size_t(x)) * 4];
+                &shown.pixels[(std::size_t(y) * std::size_t(shown.width) + std::size_t(x)) * 4];
             int d = 0;
             for (int k = 0; k < 3; ++k)
                 d = std::max(d, std::abs(int(p[k]) - int(render::encode_srgb8(want[k]))));
@@ -53,7 +75,6 @@ TEST(WindowDisplay, TheWindowShowsTheFrameEncodedOverTheBackground) {
     EXPECT_GT(covered, compared / 10) << "the sphere is not in the middle of the window";
     // One level of rounding between the GPU's and the CPU's encoding; nothing more anywhere.
     EXPECT_EQ(off, 0) << "worst difference " << worst << " levels";
-    fs::remove_all(dir);
 }
 
 // While a drag previews at half resolution with x-ray on, the lattice reaches past the sphere: the display
@@ -61,36 +82,19 @@ TEST(WindowDisplay, TheWindowShowsTheFrameEncodedOverTheBackground) {
 // an overlay that did not report its pixels would leave background where the capture shows edges. Mid-twist
 // (frame 40 of the sphere session): no pixel the capture covers may show the plain background in the
 // window, and all but the gizmo's (ImGui draws it over the view) match the capture encoded.
-TEST(WindowDisplay, WhileDraggingTheWindowShowsTheLatticeBeyondTheSurface) {
-    using sffd::test::run_shell;
-    using sffd::test::slurp;
-    if (run_shell("command -v xvfb-run > /dev/null") != 0) GTEST_SKIP() << "xvfb-run not installed";
-    const fs::path dir = fs::temp_directory_path() / ("sffd_window_drag_" + std::to_string(::getpid()));
-    fs::create_directories(dir);
-    const fs::path window = dir / "window.png", frame = dir / "frame.exr", log = dir / "view.log";
-    ASSERT_EQ(run_shell("XDG_CONFIG_HOME=" + dir.string() + " xvfb-run -a -s '-screen 0 1280x720x24' " +
-                        std::string(SFFD_BINARY_DIR) + "/tools/splatffd view sphere --replay " +
-                        (fs::path(SFFD_TEST_DATA_DIR) / "editor/session.txt").string() +
-                        " --frames 40 --save " + (dir / "saved.glb").string() + " --out " + frame.string() +
-                        " --window-screenshot " + window.string() + " > " + log.string() + " 2>&1"),
-              0)
-        << slurp(log);
-    auto shown = render::read_png(window);
-    auto linear = render::read_exr(frame);
-    ASSERT_TRUE(shown.ok()) << shown.message();
-    ASSERT_TRUE(linear.ok()) << linear.message();
-    ASSERT_EQ(shown->width, linear->width);
-    ASSERT_EQ(shown->height, linear->height);
+TEST_F(WindowDisplay, WhileDraggingTheWindowShowsTheLatticeBeyondTheSurface) {
+    ASSERT_TRUE(view("--replay " + (fs::path(SFFD_TEST_DATA_DIR) / "editor/session.txt").string() +
+                     " --frames 40 --save " + (dir / "saved.glb").string()));
     const glm::vec3 background(0.045f, 0.05f, 0.06f);
     std::uint8_t bg8[3];
     for (int k = 0; k < 3; ++k) bg8[k] = render::encode_srgb8(background[k]);
     int compared = 0, covered = 0, lost = 0, off = 0;
     for (int y = 40; y < 600; ++y)
         for (int x = 280; x < 940; ++x) {
-            const glm::vec4 c = linear->color[linear->index(x, y)];
+            const glm::vec4 c = linear.color[linear.index(x, y)];
             const glm::vec3 want = glm::mix(background, glm::vec3(c), glm::clamp(c.w, 0.0f, 1.0f));
             const std::uint8_t* p =
-                &shown->pixels[(std::size_t(y) * std::size_t(shown->width) + std::size_t(x)) * 4];
+                &shown.pixels[(std::size_t(y) * std::size_t(shown.width) + std::size_t(x)) * 4];
             int d = 0, from_bg = 0, want_bg = 0;
             for (int k = 0; k < 3; ++k) {
                 const int e = render::encode_srgb8(want[k]);
@@ -105,5 +109,4 @@ TEST(WindowDisplay, WhileDraggingTheWindowShowsTheLatticeBeyondTheSurface) {
     EXPECT_GT(covered, compared / 5) << "the sphere and its lattice are not in the view";
     EXPECT_EQ(lost, 0) << "drawn pixels the window shows as background";
     EXPECT_LT(off, compared / 100) << "more differences than the gizmo's";
-    fs::remove_all(dir);
 }
