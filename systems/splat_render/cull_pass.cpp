@@ -105,6 +105,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
         gpu.footprint_px = splat_footprint_px(mv, gpu.bounds.center, gpu.mean_radius,
                                               plan.view.projection[1][1], plan.height);
         gpu.flat_list = false;
+        gpu.cpu_preview = false;
         b.params.w = gpu.texture ? 1.0f : 0.0f;
         b.material = glm::vec4(gpu.material.specular, gpu.material.shininess, 0.0f, 0.0f);
         b.base_color = gpu.colored ? glm::vec4(1.0f) : quantised_base_color(gpu.material.base_color);
@@ -123,38 +124,58 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
                 texels = {gpu.texture_texels->rgba8.data(), gpu.texture_texels->width,
                           gpu.texture_texels->height, gpu.uv_axes_cpu ? gpu.uv_axes_cpu->data() : nullptr,
                           gpu.uniform_radius.empty() ? nullptr : gpu.uniform_radius.data()};
-            if (gpu.texture && settings.quality == Quality::preview && settings.preview_divider > 1 &&
-                settings.reduced_preview_flat_texture) {
+            const bool reduced_flat = settings.quality == Quality::preview && settings.preview_divider > 1 &&
+                                      settings.reduced_preview_flat_texture;
+            // The CPU preview samples the texture's levels itself; a reduced preview colours sprites once.
+            if (gpu.texture && (reduced_flat || plan.cpu_preview)) {
                 if (!gpu.pyramid_made) {
                     gpu.pyramid =
                         build_texture_pyramid(gpu.texture_texels->rgba8.data(), gpu.texture_texels->width,
                                               gpu.texture_texels->height);
                     gpu.pyramid_made = true;
                 }
-                texels.pyramid = &gpu.pyramid;
+                if (reduced_flat) texels.pyramid = &gpu.pyramid;
             }
+            gpu.preview_texels = texels;
+            gpu.preview_texels.pyramid = gpu.pyramid_made ? &gpu.pyramid : nullptr;
             CpuCullResult& r = gpu.cpu_cull;
             cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
             ++s.cpu_splat_passes;
-            CpuCullResult::for_each_run(r.records, r.record_counts, r.block,
-                                        [&](std::size_t at, const SplatRecord* p, std::size_t k) {
-                                            glNamedBufferSubData(gpu.records.id(),
-                                                                 GLintptr(at * sizeof(SplatRecord)),
-                                                                 GLsizeiptr(k * sizeof(SplatRecord)), p);
-                                        });
+            // A CPU preview draws the flat-coloured sprites itself (preview_pass): only what GL draws is
+            // uploaded, and the commands count only that.
+            gpu.cpu_preview = plan.cpu_preview;
+            const bool gl_records = !gpu.cpu_preview, gl_flat = !gpu.cpu_preview;
+            if (gl_records)
+                CpuCullResult::for_each_run(r.records, r.record_counts, r.block,
+                                            [&](std::size_t at, const SplatRecord* p, std::size_t k) {
+                                                glNamedBufferSubData(gpu.records.id(),
+                                                                     GLintptr(at * sizeof(SplatRecord)),
+                                                                     GLsizeiptr(k * sizeof(SplatRecord)), p);
+                                            });
             if (Status st = upload_quads(gpu); !st) {
                 warn_once("render_system(): " + st.message() + "; the cloud is not drawn");
                 return;
             }
-            CpuCullResult::for_each_run(r.flat_records, r.flat_counts, r.block,
-                                        [&](std::size_t at, const SplatRecord* p, std::size_t k) {
-                                            glNamedBufferSubData(
-                                                gpu.records.id(),
-                                                GLintptr((gpu.capacity + at) * sizeof(SplatRecord)),
-                                                GLsizeiptr(k * sizeof(SplatRecord)), p);
-                                        });
-            const std::uint32_t commands[draw_command_words] = {
-                r.visible_records, 1, 0, 0, 6, r.visible_quads, 0, 0, r.visible_flat, 1, gpu.capacity, 0};
+            if (gl_flat)
+                CpuCullResult::for_each_run(r.flat_records, r.flat_counts, r.block,
+                                            [&](std::size_t at, const SplatRecord* p, std::size_t k) {
+                                                glNamedBufferSubData(
+                                                    gpu.records.id(),
+                                                    GLintptr((gpu.capacity + at) * sizeof(SplatRecord)),
+                                                    GLsizeiptr(k * sizeof(SplatRecord)), p);
+                                            });
+            const std::uint32_t commands[draw_command_words] = {gl_records ? r.visible_records : 0u,
+                                                                1,
+                                                                0,
+                                                                0,
+                                                                6,
+                                                                r.visible_quads,
+                                                                0,
+                                                                0,
+                                                                gl_flat ? r.visible_flat : 0u,
+                                                                1,
+                                                                gpu.capacity,
+                                                                0};
             glNamedBufferSubData(gpu.commands.id(), 0, sizeof commands, commands);
             plan.drawn_lo = glm::min(plan.drawn_lo, r.pixels_lo);
             plan.drawn_hi = glm::max(plan.drawn_hi, r.pixels_hi);

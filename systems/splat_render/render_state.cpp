@@ -291,6 +291,7 @@ Status init_render_state(ecs::Registry& registry) {
     GLfloat range[2] = {1.0f, 1.0f};
     glGetFloatv(GL_POINT_SIZE_RANGE, range);
     s.max_point_size = range[1];
+    s.min_point_size = range[0];
     s.software = gfx::software_rasterizer();
     registry.set_resource<SplatRenderState>(std::move(s));
     return {};

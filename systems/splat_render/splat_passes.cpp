@@ -70,8 +70,11 @@ void draw_preview_clouds(const SplatRenderState& s, const FramePlan& plan) {
     glBindFramebuffer(GL_FRAMEBUFFER, s.output_fbo.id());
     glDepthFunc(GL_LESS);
     const int aux = plan.settings.aux_outputs ? 1 : 0;
-    for (const CloudGpu* gpu : plan.drawn)
+    for (const CloudGpu* gpu : plan.drawn) {
+        // Nothing left for GL when the CPU drew the sprites and no quad was kept.
+        if (gpu->cpu_preview && gpu->cpu_cull.visible_quads == 0) continue;
         draw_cloud(s, s.preview[gpu->texture ? 1 : 0][aux], *gpu, &s.preview[0][aux][0]);
+    }
 }
 
 }  // namespace
@@ -106,9 +109,46 @@ void begin_splat_passes(SplatRenderState& s, const FramePlan& plan) {
     s.aux_valid = settings.aux_outputs;
 }
 
-// Preview: one pass of opaque ray-cast ellipses into the output targets.
-void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan) {
+// The sprites of the clouds the CPU cull took, rasterised on the CPU (cpu_preview.h) and uploaded into the
+// output targets over the cleared frame; returns the sprites drawn.
+std::uint32_t cpu_preview_sprites(SplatRenderState& s, const FramePlan& plan) {
+    std::vector<SpriteRun> runs;
+    for (const CloudGpu* gpu : plan.drawn) {
+        if (!gpu->cpu_preview) continue;
+        const CpuCullResult& r = gpu->cpu_cull;
+        const TexelView* texture = gpu->texture ? &gpu->preview_texels : nullptr;
+        CpuCullResult::for_each_run(r.records, r.record_counts, r.block,
+                                    [&](std::size_t, const SplatRecord* p, std::size_t k) {
+                                        runs.push_back({p, k, texture});
+                                    });
+        CpuCullResult::for_each_run(r.flat_records, r.flat_counts, r.block,
+                                    [&](std::size_t, const SplatRecord* p, std::size_t k) {
+                                        runs.push_back({p, k});
+                                    });
+    }
+    if (runs.empty()) return 0;
+    CpuPreviewImage& image = s.cpu_preview;
+    rasterize_preview_cpu(runs, plan.common, plan.width, plan.height, plan.common.background,
+                          {s.min_point_size, s.max_point_size}, plan.settings.aux_outputs, image);
+    const glm::ivec4 r = image.rect;
+    if (r.z <= 0 || r.w <= 0) return 0;
+    glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+    glPixelStorei(GL_UNPACK_ROW_LENGTH, 0);
+    glPixelStorei(GL_UNPACK_SKIP_ROWS, 0);
+    glPixelStorei(GL_UNPACK_SKIP_PIXELS, 0);
+    glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
+    glTextureSubImage2D(s.color.id(), 0, r.x, r.y, r.z, r.w, GL_RGBA, GL_HALF_FLOAT, image.color.data());
+    glTextureSubImage2D(s.depth.id(), 0, r.x, r.y, r.z, r.w, GL_DEPTH_COMPONENT, GL_FLOAT,
+                        image.depth.data());
+    if (plan.settings.aux_outputs)
+        glTextureSubImage2D(s.aux.id(), 0, r.x, r.y, r.z, r.w, GL_RGBA, GL_FLOAT, image.aux.data());
+    return image.sprites;
+}
+
+// Preview: one pass of opaque ray-cast ellipses into the output targets (the CPU's part first).
+void preview_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, RenderStats& stats) {
     auto scope = profiling::gpu_scope(reg, "render.preview");
+    if (plan.cpu_preview) stats.cpu_preview_sprites = cpu_preview_sprites(s, plan);
     draw_preview_clouds(s, plan);
 }
 

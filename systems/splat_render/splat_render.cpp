@@ -40,6 +40,9 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
                 cpu_cull_wanted(s, plan.settings.cull_path) || s.cull_over_limit);
     plan.view = choose_camera(reg, s, double(full_width) / double(full_height));
     plan.common = frame_block(reg, plan.settings, plan.view, s.max_point_size);
+    plan.cpu_preview = plan.settings.quality == Quality::preview &&
+                       (plan.settings.preview_path == PreviewPath::cpu ||
+                        (plan.settings.preview_path == PreviewPath::automatic && s.software));
 
     cull_pass(reg, s, plan, stats);
     const bool materials = plan.settings.quality == Quality::hq && clouds_differ_in_material(plan);
@@ -49,7 +52,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     laps.lap(stats.cull_ms);
     begin_splat_passes(s, plan);
     if (plan.settings.quality == Quality::preview) {
-        preview_pass(reg, s, plan);
+        preview_pass(reg, s, plan, stats);
         laps.lap(stats.preview_ms);
     } else {
         warm_preview_programs(s, plan);

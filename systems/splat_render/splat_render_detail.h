@@ -38,6 +38,7 @@
 #include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/compute_raster.h"
 #include "systems/splat_render/cpu_cull.h"
+#include "systems/splat_render/cpu_preview.h"
 #include "systems/splat_render/gaussian_pass.h"
 #include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/storage_limits.h"
@@ -70,8 +71,12 @@ struct CloudGpu {
     BoundingSphere bounds;   // cloud space, for the framing camera
     double mean_radius = 0;  // mean_splat_radius(), for the automatic raster path
     std::uint64_t bounds_version = 0;
-    double footprint_px = 0;    // splat_footprint_px() this frame (cull_pass)
-    bool flat_list = false;     // the CPU cull filled the flat-coloured sprite list this frame
+    double footprint_px = 0;  // splat_footprint_px() this frame (cull_pass)
+    bool flat_list = false;   // the CPU cull filled the flat-coloured sprite list this frame
+    // This frame's preview draws the cloud's sprites on the CPU (PreviewPath): their draw commands are
+    // empty, GL draws only its quads. preview_texels: its texture for that (pyramid included).
+    bool cpu_preview = false;
+    TexelView preview_texels;
     ComputeRasterCloud raster;  // sprites the compute rasteriser leaves to the rasteriser (compute_raster.h)
     SplatMaterial material;     // the cloud's SplatMaterial this frame (the defaults when it has none)
     bool colored = false;       // per-splat colours (else the packed colour is white, times the base colour)
@@ -152,6 +157,8 @@ struct SplatRenderState {
     gfx::VertexArray vao;          // empty: quads read their splats from SSBOs
     gfx::VertexArray records_vao;  // SplatRecord[] as vertex attributes 0..5 (buffer bound per cloud)
     float max_point_size = 1.0f;
+    float min_point_size = 1.0f;  // GL_POINT_SIZE_RANGE, for the CPU preview's sprite squares
+    CpuPreviewImage cpu_preview;  // the CPU-rasterised part of the last preview (PreviewPath)
 
     int width = 0, height = 0;              // the targets
     int frame_width = 0, frame_height = 0;  // what the last frame covered of them (preview_divider)
@@ -226,6 +233,8 @@ struct FramePlan {
     // the CPU cull gives the sprites' squares.
     glm::vec2 drawn_lo{1e30f}, drawn_hi{-1e30f};
     bool drawn_known = true;
+    // The preview's CPU-culled clouds rasterise their flat-coloured sprites on the CPU (PreviewPath).
+    bool cpu_preview = false;
 };
 
 // The plan's drawn pixels as a rectangle (x, y, width, height) inside its frame: the whole frame when not
@@ -282,7 +291,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
 
 // splat_passes.cpp: the preview pass and the three HQ passes.
 void begin_splat_passes(SplatRenderState& s, const FramePlan& plan);
-void preview_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan);
+void preview_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, RenderStats& stats);
 void warm_preview_programs(SplatRenderState& s, const FramePlan& plan);
 void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect);
 void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, RenderStats& stats);

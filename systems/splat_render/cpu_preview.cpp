@@ -1,0 +1,203 @@
+// CPU rasteriser of the preview's sprites (cpu_preview.h).
+#include "systems/splat_render/cpu_preview.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include <glm/gtc/packing.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+namespace sffd::render {
+
+namespace {
+
+// Rows per band: the unit of parallel work. A band holds every sprite that reaches it, in draw order, so
+// the first of equal depths wins inside each band as it does in GL.
+constexpr int band_rows = 16;
+
+std::uint64_t pack_rgba16f(glm::vec4 c) {
+    return std::uint64_t(glm::packHalf1x16(c.x)) | std::uint64_t(glm::packHalf1x16(c.y)) << 16 |
+           std::uint64_t(glm::packHalf1x16(c.z)) << 32 | std::uint64_t(glm::packHalf1x16(c.w)) << 48;
+}
+
+// The pixels [lo, hi) whose centres p + 0.5 satisfy centre - half <= p + 0.5 < centre + half.
+void covered(float centre, float half, int limit, int& lo, int& hi) {
+    const float a = std::ceil(centre - half - 0.5f), b = std::ceil(centre + half - 0.5f);
+    lo = int(std::clamp(a, 0.0f, float(limit)));
+    hi = int(std::clamp(b, 0.0f, float(limit)));
+}
+
+struct Depths {
+    float ray_x, ray_y, ray_dx,
+        ray_dy;      // ray_map: ray = ((x + 0.5) ray_x + ray_dx, (y + 0.5) ray_y + ray_dy, -1)
+    float p32, p22;  // window_depth_inv's projection terms
+};
+
+// Every sprite of one band (rows [row0, row1) of the frame) into the image.
+template <bool Aux>
+void draw_band(const CpuPreviewImage& img, const std::uint32_t* list, std::size_t n, int row0, int row1,
+               const Depths& f, std::uint64_t* color, float* depth, glm::vec4* aux) {
+    const int rx = img.rect.x, ry = img.rect.y, stride = img.rect.z;
+    for (std::size_t k = 0; k < n; ++k) {
+        const PreviewSprite& s = img.setup[list[k]];
+        const int y0 = std::max(s.y0, row0), y1 = std::min(s.y1, row1);
+        for (int y = y0; y < y1; ++y) {
+            // raycast_splat(): inv_t = dot(plane, ray), s = t dot(dual_u, ray) - dual_u.w (likewise q).
+            const float ray_y = (float(y) + 0.5f) * f.ray_y + f.ray_dy;
+            const float plane_row = s.plane.y * ray_y - s.plane.z;
+            const float u_row = s.dual_u.y * ray_y - s.dual_u.z, v_row = s.dual_v.y * ray_y - s.dual_v.z;
+            float* drow = depth + std::size_t(y - ry) * std::size_t(stride) - rx;
+            std::uint64_t* crow = color + std::size_t(y - ry) * std::size_t(stride) - rx;
+            glm::vec4* arow = Aux ? aux + std::size_t(y - ry) * std::size_t(stride) - rx : nullptr;
+            for (int x = s.x0; x < s.x1; ++x) {
+                const float ray_x = (float(x) + 0.5f) * f.ray_x + f.ray_dx;
+                const float inv_t = s.plane.x * ray_x + plane_row;
+                if (!(inv_t > 0.0f)) continue;
+                const float t = 1.0f / inv_t;
+                const float su = t * (s.dual_u.x * ray_x + u_row) - s.dual_u.w;
+                const float sv = t * (s.dual_v.x * ray_x + v_row) - s.dual_v.w;
+                if (su * su + sv * sv > 1.0f) continue;
+                const float d = std::clamp(0.5f * (f.p32 * inv_t - f.p22) + 0.5f, 0.0f, 1.0f);
+                if (!(d < drow[x])) continue;
+                drow[x] = d;
+                if (s.texture) {
+                    const glm::vec2 uv =
+                        s.uv + su * glm::vec2(s.uv_axes) + sv * glm::vec2(s.uv_axes.z, s.uv_axes.w);
+                    const glm::vec3 albedo = sample_texture(*s.texture, uv, s.level);
+                    crow[x] = pack_rgba16f(glm::vec4(albedo * s.diffuse + s.specular, 1.0f));
+                } else {
+                    crow[x] = s.color;
+                }
+                if constexpr (Aux) arow[x] = glm::vec4(s.normal, t);
+            }
+        }
+    }
+}
+
+}  // namespace
+
+glm::vec2 unpack_halves(float packed) {
+    std::uint32_t stored;
+    std::memcpy(&stored, &packed, sizeof stored);
+    const std::uint32_t bits = (stored & 0x7fffffu) + (((stored >> 23) - 1u) << 23);
+    const std::uint32_t halves = ((bits & 0x7fffu) << 1) | ((bits >> 15) << 17);
+    return {glm::unpackHalf1x16(std::uint16_t(halves)), glm::unpackHalf1x16(std::uint16_t(halves >> 16))};
+}
+
+glm::vec3 unpack_color(float packed) {
+    std::uint32_t stored;
+    std::memcpy(&stored, &packed, sizeof stored);
+    const std::uint32_t bits = (stored & 0x7fffffu) + (((stored >> 23) - 1u) << 23);
+    const glm::vec3 c =
+        glm::vec3(float(bits & 1023u), float((bits >> 10) & 1023u), float((bits >> 20) & 1023u)) *
+        (1.0f / 1023.0f);
+    return c * c;
+}
+
+void rasterize_preview_cpu(std::span<const SpriteRun> runs, const gpu::FrameBlock& frame, int width,
+                           int height, glm::vec4 background, PointSizeRange sizes, bool aux,
+                           CpuPreviewImage& out) {
+    std::size_t n = 0;
+    std::vector<std::size_t> run_first;
+    run_first.reserve(runs.size());
+    for (const SpriteRun& r : runs) run_first.push_back(n), n += r.count;
+    out.setup.resize(n);
+    out.sprites = 0;
+    // Each sprite's covered pixels and unpacked values, in parallel (run by run).
+    for (std::size_t r = 0; r < runs.size(); ++r) {
+        const SpriteRun run = runs[r];
+        PreviewSprite* setup = out.setup.data() + run_first[r];
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, run.count, 2048),
+                          [&](const tbb::blocked_range<std::size_t>& range) {
+                              for (std::size_t i = range.begin(); i != range.end(); ++i) {
+                                  const SplatRecord& rec = run.records[i];
+                                  PreviewSprite& s = setup[i];
+                                  // The hidden mark (plane 0) discards every fragment: nothing to draw.
+                                  if (rec.plane.x == 0.0f && rec.plane.y == 0.0f && rec.plane.z == 0.0f) {
+                                      s.x0 = s.x1 = s.y0 = s.y1 = 0;
+                                      continue;
+                                  }
+                                  const float side = std::clamp(rec.center.w, sizes.min, sizes.max);
+                                  const float cx = (rec.center.x + 1.0f) * 0.5f * float(width);
+                                  const float cy = (rec.center.y + 1.0f) * 0.5f * float(height);
+                                  covered(cx, 0.5f * side, width, s.x0, s.x1);
+                                  covered(cy, 0.5f * side, height, s.y0, s.y1);
+                                  s.plane = rec.plane, s.dual_u = rec.dual_u, s.dual_v = rec.dual_v;
+                                  s.normal = glm::vec3(rec.normal);
+                                  s.texture = run.texture;
+                                  if (!run.texture) {
+                                      s.color = pack_rgba16f(glm::vec4(unpack_color(rec.normal.w), 1.0f));
+                                      continue;
+                                  }
+                                  // splat.vert's preview set-up of a textured record: the level rounded,
+                                  // the factors unpacked (unpack_light: a quarter scale).
+                                  s.uv = glm::vec2(rec.uv);
+                                  s.uv_axes = glm::vec4(unpack_halves(rec.uv.z), unpack_halves(rec.uv.w));
+                                  s.level = int(std::round(rec.center.z));
+                                  s.diffuse = unpack_color(rec.normal.w) * 4.0f;
+                                  s.specular = unpack_color(rec.plane.w) * 4.0f;
+                              }
+                          });
+    }
+    // Bands: the sprites that reach each, in draw order; the bounds of every covered pixel.
+    const int bands = (height + band_rows - 1) / band_rows;
+    out.bin_first.assign(std::size_t(bands) + 1, 0u);
+    glm::ivec2 lo(width, height), hi(0, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        const PreviewSprite& s = out.setup[i];
+        if (s.x0 >= s.x1 || s.y0 >= s.y1) continue;
+        ++out.sprites;
+        lo = glm::min(lo, glm::ivec2(s.x0, s.y0)), hi = glm::max(hi, glm::ivec2(s.x1, s.y1));
+        for (int b = s.y0 / band_rows; b <= (s.y1 - 1) / band_rows; ++b) ++out.bin_first[std::size_t(b) + 1];
+    }
+    for (int b = 0; b < bands; ++b) out.bin_first[std::size_t(b) + 1] += out.bin_first[std::size_t(b)];
+    out.bins.resize(out.bin_first[std::size_t(bands)]);
+    {
+        std::vector<std::uint32_t> fill(out.bin_first.begin(), out.bin_first.end() - 1);
+        for (std::size_t i = 0; i < n; ++i) {
+            const PreviewSprite& s = out.setup[i];
+            if (s.x0 >= s.x1 || s.y0 >= s.y1) continue;
+            for (int b = s.y0 / band_rows; b <= (s.y1 - 1) / band_rows; ++b)
+                out.bins[fill[std::size_t(b)]++] = std::uint32_t(i);
+        }
+    }
+    if (out.sprites == 0) {
+        out.rect = glm::ivec4(0);
+        out.color.clear(), out.depth.clear(), out.aux.clear();
+        return;
+    }
+    out.rect = glm::ivec4(lo, hi - lo);
+    const std::size_t pixels = std::size_t(out.rect.z) * std::size_t(out.rect.w);
+    out.color.resize(pixels), out.depth.resize(pixels);
+    if (aux) out.aux.resize(pixels);
+    else out.aux.clear();
+    const std::uint64_t clear_color = pack_rgba16f(background);
+    const Depths f{frame.ray_map.x, frame.ray_map.y,        frame.ray_map.z,
+                   frame.ray_map.w, frame.projection[3][2], frame.projection[2][2]};
+    tbb::parallel_for(
+        tbb::blocked_range<int>(lo.y / band_rows, (hi.y - 1) / band_rows + 1, 1),
+        [&](const tbb::blocked_range<int>& range) {
+            for (int b = range.begin(); b != range.end(); ++b) {
+                const int row0 = std::max(b * band_rows, lo.y);
+                const int row1 = std::min((b + 1) * band_rows, hi.y);
+                const std::size_t first = std::size_t(row0 - lo.y) * std::size_t(out.rect.z);
+                const std::size_t count = std::size_t(row1 - row0) * std::size_t(out.rect.z);
+                std::fill_n(out.color.data() + first, count, clear_color);
+                std::fill_n(out.depth.data() + first, count, 1.0f);
+                const std::uint32_t* list = out.bins.data() + out.bin_first[std::size_t(b)];
+                const std::size_t listed = out.bin_first[std::size_t(b) + 1] - out.bin_first[std::size_t(b)];
+                if (aux) {
+                    std::fill_n(out.aux.data() + first, count, glm::vec4(0.0f, 0.0f, 0.0f, -1.0f));
+                    draw_band<true>(out, list, listed, row0, row1, f, out.color.data(), out.depth.data(),
+                                    out.aux.data());
+                } else {
+                    draw_band<false>(out, list, listed, row0, row1, f, out.color.data(), out.depth.data(),
+                                     nullptr);
+                }
+            }
+        });
+}
+
+}  // namespace sffd::render

@@ -1,0 +1,271 @@
+// The CPU preview rasteriser (cpu_preview.h) against geometry computed here: discs in view space, the ray
+// of each pixel centre intersected with their planes in double precision.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/packing.hpp>
+
+#include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/cpu_preview.h"
+
+using namespace sffd;
+using namespace sffd::render;
+
+namespace {
+
+constexpr int W = 80, H = 60;
+
+// The packing splat_common.glsl documents: 10 bits of sqrt(linear) per channel, the 30 bits made a normal
+// float by adding one to the exponent field.
+float pack_color(glm::vec3 linear) {
+    const glm::uvec3 q(glm::round(glm::sqrt(glm::clamp(linear, 0.0f, 1.0f)) * 1023.0f));
+    const std::uint32_t bits = q.x | (q.y << 10) | (q.z << 20);
+    const std::uint32_t stored = (bits & 0x7fffffu) + (((bits >> 23) + 1u) << 23);
+    float f;
+    std::memcpy(&f, &stored, sizeof f);
+    return f;
+}
+
+glm::vec4 half4(std::uint64_t c) {
+    return {glm::unpackHalf1x16(std::uint16_t(c)), glm::unpackHalf1x16(std::uint16_t(c >> 16)),
+            glm::unpackHalf1x16(std::uint16_t(c >> 32)), glm::unpackHalf1x16(std::uint16_t(c >> 48))};
+}
+
+struct Disc {
+    glm::dvec3 c, u, v;  // view space: centre and orthogonal axes
+    glm::vec3 color;
+};
+
+class CpuPreview : public ::testing::Test {
+protected:
+    glm::dmat4 projection = glm::perspective(glm::radians(45.0), double(W) / H, 0.1, 10.0);
+    gpu::FrameBlock frame = camera_frame_block(glm::dmat4(1.0), projection, W, H, 1.0f, 64.0f, true);
+
+    // The record the CPU cull writes for a disc (splat_record.h), with a square of `side` pixels around its
+    // projected centre.
+    SplatRecord record(const Disc& d, float side) const {
+        const glm::dvec3 n = glm::normalize(glm::cross(d.u, d.v));
+        const glm::dvec3 du = d.u / glm::dot(d.u, d.u), dv = d.v / glm::dot(d.v, d.v);
+        const glm::dvec4 clip = projection * glm::dvec4(d.c, 1.0);
+        SplatRecord r{};
+        r.center = glm::vec4(float(clip.x / clip.w), float(clip.y / clip.w), float(d.c.z), side);
+        r.plane = glm::vec4(glm::vec3(n / glm::dot(d.c, n)), 0.0f);
+        r.dual_u = glm::vec4(glm::vec3(du), float(glm::dot(du, d.c)));
+        r.dual_v = glm::vec4(glm::vec3(dv), float(glm::dot(dv, d.c)));
+        r.normal = glm::vec4(glm::vec3(n), pack_color(d.color));
+        return r;
+    }
+
+    // The ray through pixel (x, y) (lower-left origin) hits the disc: its view-axis depth t and squared
+    // elliptical radius there.
+    bool hit(const Disc& d, int x, int y, double& t, double& r2) const {
+        const glm::dvec3 ray(((x + 0.5) / W * 2.0 - 1.0) / projection[0][0],
+                             ((y + 0.5) / H * 2.0 - 1.0) / projection[1][1], -1.0);
+        const glm::dvec3 n = glm::cross(d.u, d.v);
+        if (glm::dot(n, ray) == 0.0) return false;
+        t = glm::dot(n, d.c) / glm::dot(n, ray);
+        if (t <= 0.0) return false;
+        const glm::dvec3 p = t * ray - d.c;
+        const double s = glm::dot(p, d.u) / glm::dot(d.u, d.u), q = glm::dot(p, d.v) / glm::dot(d.v, d.v);
+        r2 = s * s + q * q;
+        return true;
+    }
+    double window_depth(double t) const {
+        return 0.5 * ((projection[2][2] * -t + projection[3][2]) / t) + 0.5;
+    }
+
+    CpuPreviewImage draw(const std::vector<SplatRecord>& records, bool aux = false) const {
+        CpuPreviewImage img;
+        const SpriteRun run{records.data(), records.size()};
+        rasterize_preview_cpu({&run, 1}, frame, W, H, background, {1.0f, 64.0f}, aux, img);
+        return img;
+    }
+    static bool inside(const CpuPreviewImage& img, int x, int y) {
+        return x >= img.rect.x && x < img.rect.x + img.rect.z && y >= img.rect.y &&
+               y < img.rect.y + img.rect.w;
+    }
+    static std::size_t at(const CpuPreviewImage& img, int x, int y) {
+        return std::size_t(y - img.rect.y) * std::size_t(img.rect.z) + std::size_t(x - img.rect.x);
+    }
+    // Outside the rectangle the frame keeps its clear colour: the background, as the RGBA16F target holds it.
+    glm::vec4 color(const CpuPreviewImage& img, int x, int y) const {
+        return inside(img, x, y) ? half4(img.color[at(img, x, y)]) : background_half();
+    }
+    glm::vec4 background_half() const {
+        return {glm::unpackHalf1x16(glm::packHalf1x16(background.x)),
+                glm::unpackHalf1x16(glm::packHalf1x16(background.y)),
+                glm::unpackHalf1x16(glm::packHalf1x16(background.z)),
+                glm::unpackHalf1x16(glm::packHalf1x16(background.w))};
+    }
+    float depth(const CpuPreviewImage& img, int x, int y) const {
+        return inside(img, x, y) ? img.depth[at(img, x, y)] : 1.0f;
+    }
+
+    glm::vec4 background{0.1f, 0.2f, 0.3f, 0.0f};
+};
+
+TEST_F(CpuPreview, UnpacksColoursAsTheShaderDoes) {
+    for (glm::vec3 c :
+         {glm::vec3(0.0f), glm::vec3(1.0f), glm::vec3(0.25f, 0.5f, 0.75f), glm::vec3(0.01f, 0.9f, 0.3f)}) {
+        const glm::vec3 expected = glm::pow(glm::round(glm::sqrt(c) * 1023.0f) / 1023.0f, glm::vec3(2.0f));
+        const glm::vec3 got = unpack_color(pack_color(c));
+        for (int k = 0; k < 3; ++k) EXPECT_FLOAT_EQ(got[k], expected[k]);
+    }
+}
+
+// A tilted elliptical disc: the drawn pixels are those whose ray meets it (away from its rim by float
+// rounding), each with the disc's colour, its window depth, and with aux outputs its normal and view depth.
+TEST_F(CpuPreview, DrawsTheDiscEveryPixelRayMeets) {
+    const Disc d{{0.1, -0.05, -3.0}, {0.5, 0.0, 0.25}, {0.0, 0.3, 0.0}, {0.9f, 0.4f, 0.1f}};
+    const std::vector<SplatRecord> rec{record(d, 60.0f)};
+    const CpuPreviewImage img = draw(rec, true);
+    EXPECT_EQ(img.sprites, 1u);
+    const glm::vec3 expected = unpack_color(rec[0].normal.w);
+    int drawn = 0, checked = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            double t = 0, r2 = 2;
+            const bool on = hit(d, x, y, t, r2) && r2 <= 1.0;
+            const bool got = depth(img, x, y) < 1.0f;
+            drawn += got;
+            if (std::abs(r2 - 1.0) < 1e-4) continue;  // the rim: float rounding may go either way
+            ++checked;
+            ASSERT_EQ(got, on) << x << ", " << y << " r2 " << r2;
+            const glm::vec4 c = color(img, x, y);
+            if (!on) {
+                EXPECT_EQ(c, background_half());
+                continue;
+            }
+            for (int k = 0; k < 3; ++k) EXPECT_NEAR(c[k], expected[k], 1e-3);
+            EXPECT_EQ(c.w, 1.0f);
+            EXPECT_NEAR(depth(img, x, y), window_depth(t), 2e-6);
+            const glm::vec4 a = img.aux[at(img, x, y)];
+            EXPECT_NEAR(a.w, t, 1e-4 * t);
+            EXPECT_NEAR(a.y, 0.0, 1e-6);
+            EXPECT_NEAR(glm::length(glm::vec3(a)), 1.0, 1e-5);
+        }
+    EXPECT_GT(drawn, 200);  // 282 with this camera
+    EXPECT_GT(checked, W * H - 100);
+    // The rectangle is the square's pixels: it holds every drawn pixel and no more than the square.
+    EXPECT_LE(img.rect.z, 61);
+    EXPECT_LE(img.rect.w, 61);
+}
+
+// GL_LESS in draw order: the nearer disc wins wherever both are; at an exact tie the first drawn stays.
+TEST_F(CpuPreview, NearerWinsAndTheFirstDrawnKeepsATie) {
+    const Disc back{{0.0, 0.0, -3.0}, {0.4, 0.0, 0.0}, {0.0, 0.4, 0.0}, {1.0f, 0.0f, 0.0f}};
+    Disc front = back;
+    front.c.z = -2.9, front.color = {0.0f, 1.0f, 0.0f};
+    Disc twin = back;
+    twin.color = {0.0f, 0.0f, 1.0f};
+    const CpuPreviewImage a = draw({record(back, 40.0f), record(front, 40.0f)});
+    const CpuPreviewImage b = draw({record(front, 40.0f), record(back, 40.0f)});
+    const CpuPreviewImage tie = draw({record(back, 40.0f), record(twin, 40.0f)});
+    int front_pixels = 0, tie_pixels = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            double t, r2 = 2, tb, rb = 2;
+            const bool in_front = hit(front, x, y, t, r2) && r2 < 0.999;
+            const bool in_back = hit(back, x, y, tb, rb) && rb < 0.999;
+            if (in_front) {
+                ++front_pixels;
+                EXPECT_EQ(color(a, x, y).y, 1.0f) << x << ", " << y;
+                EXPECT_EQ(color(b, x, y).y, 1.0f) << x << ", " << y;
+            }
+            if (in_back) {
+                ++tie_pixels;
+                EXPECT_EQ(color(tie, x, y).x, 1.0f) << x << ", " << y;
+                EXPECT_EQ(color(tie, x, y).z, 0.0f) << x << ", " << y;
+            }
+        }
+    EXPECT_GT(front_pixels, 100);
+    EXPECT_GT(tie_pixels, 100);
+}
+
+// A sprite covers the pixels whose centres lie in its square: a square smaller than the disc clips it,
+// and a side under GL's smallest point size is drawn at that size.
+TEST_F(CpuPreview, SpritesCoverTheirSquaresOnly) {
+    const Disc d{{0.0, 0.0, -3.0}, {0.6, 0.0, 0.0}, {0.0, 0.6, 0.0}, {1.0f, 1.0f, 1.0f}};
+    SplatRecord r = record(d, 10.0f);
+    const CpuPreviewImage img = draw({r});
+    const double cx = (double(r.center.x) + 1.0) * 0.5 * W, cy = (double(r.center.y) + 1.0) * 0.5 * H;
+    int drawn = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            const bool in_square = std::abs(x + 0.5 - cx) < 4.99 && std::abs(y + 0.5 - cy) < 4.99;
+            const bool out_square = std::abs(x + 0.5 - cx) > 5.01 || std::abs(y + 0.5 - cy) > 5.01;
+            const bool got = depth(img, x, y) < 1.0f;
+            drawn += got;
+            if (in_square) {
+                EXPECT_TRUE(got) << x << ", " << y;  // the whole square lies inside the disc
+            }
+            if (out_square) {
+                EXPECT_FALSE(got) << x << ", " << y;
+            }
+        }
+    EXPECT_EQ(drawn, 100);
+
+    // A 0.2 px side drawn with a smallest point size of 3: the 3x3 pixels around the centre.
+    r.center.x = float((40.0 + 0.5) / W * 2.0 - 1.0), r.center.y = float((30.0 + 0.5) / H * 2.0 - 1.0);
+    r.center.w = 0.2f;
+    CpuPreviewImage small;
+    const SpriteRun run{&r, 1};
+    rasterize_preview_cpu({&run, 1}, frame, W, H, background, {3.0f, 64.0f}, false, small);
+    EXPECT_EQ(small.rect, glm::ivec4(39, 29, 3, 3));
+}
+
+// The hidden mark (plane 0: back-facing, kept with culling off) draws nothing, and sprites outside the
+// frame leave it untouched: no rectangle to upload.
+TEST_F(CpuPreview, HiddenAndOffFrameSpritesDrawNothing) {
+    const Disc d{{0.0, 0.0, -3.0}, {0.4, 0.0, 0.0}, {0.0, 0.4, 0.0}, {1.0f, 1.0f, 1.0f}};
+    SplatRecord hidden = record(d, 40.0f);
+    hidden.plane = glm::vec4(0.0f);
+    SplatRecord outside = record(d, 10.0f);
+    outside.center.x = 1.5f;
+    const CpuPreviewImage img = draw({hidden, outside});
+    EXPECT_EQ(img.sprites, 0u);
+    EXPECT_EQ(img.rect.z * img.rect.w, 0);
+    EXPECT_TRUE(img.color.empty());
+}
+
+// Many sprites across every band boundary (16 rows): the image is the same as each band drawn alone would
+// give, i.e. every sprite is found by each band it reaches. Compared against drawing the sprites one by
+// one and keeping the nearest per pixel.
+TEST_F(CpuPreview, SpritesAcrossBandsMatchOneByOne) {
+    std::vector<SplatRecord> recs;
+    std::vector<Disc> discs;
+    for (int i = 0; i < 60; ++i) {
+        const double a = i * 0.7, z = -3.0 - 0.01 * i;
+        discs.push_back({{0.9 * std::cos(a), 0.6 * std::sin(1.3 * a), z},
+                         {0.15, 0.05, 0.0},
+                         {-0.05, 0.15, 0.02},
+                         {float(i % 3 == 0), float(i % 3 == 1), float(i % 3 == 2)}});
+        recs.push_back(record(discs.back(), 24.0f));
+    }
+    const CpuPreviewImage all = draw(recs);
+    std::vector<float> best(std::size_t(W * H), 1.0f);
+    std::vector<glm::vec4> best_color(std::size_t(W * H), background_half());
+    for (const SplatRecord& r : recs) {
+        const CpuPreviewImage one = draw({r});
+        for (int y = 0; y < H; ++y)
+            for (int x = 0; x < W; ++x) {
+                const float d = depth(one, x, y);
+                if (d < best[std::size_t(y * W + x)])
+                    best[std::size_t(y * W + x)] = d, best_color[std::size_t(y * W + x)] = color(one, x, y);
+            }
+    }
+    int drawn = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            EXPECT_EQ(depth(all, x, y), best[std::size_t(y * W + x)]) << x << ", " << y;
+            EXPECT_EQ(color(all, x, y), best_color[std::size_t(y * W + x)]) << x << ", " << y;
+            drawn += depth(all, x, y) < 1.0f;
+        }
+    EXPECT_GT(drawn, 1000);
+}
+
+}  // namespace
