@@ -33,8 +33,10 @@ struct ViewOptions {
     bool overlay_cache = true;  // the lattice overlay's cache of unchanged x-ray edges (OverlayOptions)
     bool ui_cache = true;       // unchanged panels copied from an image (ui_cache.h, UiCacheOptions)
     bool preview = false;       // render quality preview instead of hq
-    std::string timing_json;    // write frame-time statistics (all frames / frames with a tool drag) here
-    bool sync_timing = false;   // glFinish after every system: each system's time includes its own GL work
+    // Who rasterises preview frames (render::PreviewPath): "auto", "raster" (GL point sprites) or "cpu".
+    std::string preview_raster = "auto";
+    std::string timing_json;   // write frame-time statistics (all frames / frames with a tool drag) here
+    bool sync_timing = false;  // glFinish after every system: each system's time includes its own GL work
     std::string
         window_screenshot;         // with --frames: the whole window (panels included) of the last frame, PNG
     std::string panel_rects_json;  // with --frames: the panels' rectangles in the last frame (panels.h), JSON
