@@ -350,9 +350,9 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         settings.quality = options.preview ? render::Quality::preview : render::Quality::hq;
         settings.background = glm::vec3(0.045f, 0.05f, 0.06f);
         settings.aux_outputs = !options.screenshot.empty();  // depth + normals for EXR screenshots
-        settings.preview_path = options.preview_raster == "cpu"      ? render::PreviewPath::cpu
-                                : options.preview_raster == "raster" ? render::PreviewPath::raster
-                                                                     : render::PreviewPath::automatic;
+        settings.sprite_path = options.sprite_raster == "cpu"      ? render::SpritePath::cpu
+                               : options.sprite_raster == "raster" ? render::SpritePath::raster
+                                                                   : render::SpritePath::automatic;
         if (Status st = render::init_render_state(registry); !st) {
             std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
             return 1;

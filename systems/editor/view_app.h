@@ -33,8 +33,9 @@ struct ViewOptions {
     bool overlay_cache = true;  // the lattice overlay's cache of unchanged x-ray edges (OverlayOptions)
     bool ui_cache = true;       // unchanged panels copied from an image (ui_cache.h, UiCacheOptions)
     bool preview = false;       // render quality preview instead of hq
-    // Who rasterises preview frames (render::PreviewPath): "auto", "raster" (GL point sprites) or "cpu".
-    std::string preview_raster = "auto";
+    // Who rasterises the sprites of CPU-culled clouds (render::SpritePath): "auto", "raster" (GL point
+    // sprites) or "cpu".
+    std::string sprite_raster = "auto";
     std::string timing_json;   // write frame-time statistics (all frames / frames with a tool drag) here
     bool sync_timing = false;  // glFinish after every system: each system's time includes its own GL work
     std::string

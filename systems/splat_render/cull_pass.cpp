@@ -105,7 +105,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
         gpu.footprint_px = splat_footprint_px(mv, gpu.bounds.center, gpu.mean_radius,
                                               plan.view.projection[1][1], plan.height);
         gpu.flat_list = false;
-        gpu.cpu_preview = false;
+        gpu.cpu_raster = false;
         b.params.w = gpu.texture ? 1.0f : 0.0f;
         b.material = glm::vec4(gpu.material.specular, gpu.material.shininess, 0.0f, 0.0f);
         b.base_color = gpu.colored ? glm::vec4(1.0f) : quantised_base_color(gpu.material.base_color);
@@ -127,7 +127,8 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             const bool reduced_flat = settings.quality == Quality::preview && settings.preview_divider > 1 &&
                                       settings.reduced_preview_flat_texture;
             // The CPU preview samples the texture's levels itself; a reduced preview colours sprites once.
-            if (gpu.texture && (reduced_flat || plan.cpu_preview)) {
+            const bool cpu_preview = plan.cpu_raster && settings.quality == Quality::preview;
+            if (gpu.texture && (reduced_flat || cpu_preview)) {
                 if (!gpu.pyramid_made) {
                     gpu.pyramid =
                         build_texture_pyramid(gpu.texture_texels->rgba8.data(), gpu.texture_texels->width,
@@ -136,15 +137,16 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
                 }
                 if (reduced_flat) texels.pyramid = &gpu.pyramid;
             }
-            gpu.preview_texels = texels;
-            gpu.preview_texels.pyramid = gpu.pyramid_made ? &gpu.pyramid : nullptr;
+            gpu.raster_texels = texels;
+            gpu.raster_texels.pyramid = gpu.pyramid_made ? &gpu.pyramid : nullptr;
             CpuCullResult& r = gpu.cpu_cull;
             cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
             ++s.cpu_splat_passes;
             // A CPU preview draws the flat-coloured sprites itself (preview_pass): only what GL draws is
             // uploaded, and the commands count only that.
-            gpu.cpu_preview = plan.cpu_preview;
-            const bool gl_records = !gpu.cpu_preview, gl_flat = !gpu.cpu_preview;
+            gpu.cpu_raster = plan.cpu_raster;
+            // A preview's sprites are all the CPU's; an HQ frame's attribute pass still draws them on GL.
+            const bool gl_records = !cpu_preview, gl_flat = !cpu_preview;
             if (gl_records)
                 CpuCullResult::for_each_run(r.records, r.record_counts, r.block,
                                             [&](std::size_t at, const SplatRecord* p, std::size_t k) {

@@ -27,8 +27,9 @@ void draw_quad_batches(const CloudGpu& gpu) {
 // (CpuCullResult::flat_records: the untextured variant of the pass; null for passes without colour).
 // big: the HQ passes of the compute rasteriser's frame draw only the sprites it left to them (indexed
 // draws over ComputeRasterCloud::big) and the quads.
+// sprites false: only the quads (the CPU drew the sprites of this pass).
 void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& programs, const CloudGpu& gpu,
-                const gfx::Program* flat = nullptr, bool big = false) {
+                const gfx::Program* flat = nullptr, bool big = false, bool sprites = true) {
     glBindBufferBase(GL_UNIFORM_BUFFER, SFFD_UBO_FRAME, gpu.frame_ubo.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
@@ -40,7 +41,8 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     if (big) glVertexArrayElementBuffer(s.records_vao.id(), gpu.raster.big.id());
     glBindVertexArray(s.records_vao.id());
     glUseProgram(programs[0].id());
-    if (big) {
+    if (!sprites) {
+    } else if (big) {
         glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.raster.commands.id());
         glDrawElementsIndirect(GL_POINTS, GL_UNSIGNED_INT, nullptr);
         glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
@@ -52,7 +54,7 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     if (gpu.quad_batches.empty())
         glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(4 * sizeof(std::uint32_t)));
     else draw_quad_batches(gpu);
-    if (gpu.texture) {
+    if (gpu.texture && sprites) {
         glBindVertexArray(s.records_vao.id());
         glUseProgram(flat ? flat->id() : programs[0].id());
         if (big) {
@@ -72,7 +74,7 @@ void draw_preview_clouds(const SplatRenderState& s, const FramePlan& plan) {
     const int aux = plan.settings.aux_outputs ? 1 : 0;
     for (const CloudGpu* gpu : plan.drawn) {
         // Nothing left for GL when the CPU drew the sprites and no quad was kept.
-        if (gpu->cpu_preview && gpu->cpu_cull.visible_quads == 0) continue;
+        if (gpu->cpu_raster && gpu->cpu_cull.visible_quads == 0) continue;
         draw_cloud(s, s.preview[gpu->texture ? 1 : 0][aux], *gpu, &s.preview[0][aux][0]);
     }
 }
@@ -109,14 +111,15 @@ void begin_splat_passes(SplatRenderState& s, const FramePlan& plan) {
     s.aux_valid = settings.aux_outputs;
 }
 
-// The sprites of the clouds the CPU cull took, rasterised on the CPU (cpu_preview.h) and uploaded into the
-// output targets over the cleared frame; returns the sprites drawn.
-std::uint32_t cpu_preview_sprites(SplatRenderState& s, const FramePlan& plan) {
+// The sprites of the clouds the CPU cull took, rasterised on the CPU (cpu_raster.h) for `pass` and
+// uploaded into the targets over the cleared frame (the visibility pass: its depth only); returns the
+// sprites drawn.
+std::uint32_t cpu_sprites(SplatRenderState& s, const FramePlan& plan, SpritePass pass) {
     std::vector<SpriteRun> runs;
     for (const CloudGpu* gpu : plan.drawn) {
-        if (!gpu->cpu_preview) continue;
+        if (!gpu->cpu_raster) continue;
         const CpuCullResult& r = gpu->cpu_cull;
-        const TexelView* texture = gpu->texture ? &gpu->preview_texels : nullptr;
+        const TexelView* texture = gpu->texture ? &gpu->raster_texels : nullptr;
         CpuCullResult::for_each_run(r.records, r.record_counts, r.block,
                                     [&](std::size_t, const SplatRecord* p, std::size_t k) {
                                         runs.push_back({p, k, texture});
@@ -127,9 +130,9 @@ std::uint32_t cpu_preview_sprites(SplatRenderState& s, const FramePlan& plan) {
                                     });
     }
     if (runs.empty()) return 0;
-    CpuPreviewImage& image = s.cpu_preview;
-    rasterize_preview_cpu(runs, plan.common, plan.width, plan.height, plan.common.background,
-                          {s.min_point_size, s.max_point_size}, plan.settings.aux_outputs, image);
+    CpuRasterImage& image = s.cpu_raster;
+    rasterize_sprites_cpu(runs, plan.common, plan.width, plan.height, plan.common.background,
+                          {s.min_point_size, s.max_point_size}, pass, plan.settings.aux_outputs, image);
     const glm::ivec4 r = image.rect;
     if (r.z <= 0 || r.w <= 0) return 0;
     glBindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
@@ -137,9 +140,10 @@ std::uint32_t cpu_preview_sprites(SplatRenderState& s, const FramePlan& plan) {
     glPixelStorei(GL_UNPACK_SKIP_ROWS, 0);
     glPixelStorei(GL_UNPACK_SKIP_PIXELS, 0);
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
-    glTextureSubImage2D(s.color.id(), 0, r.x, r.y, r.z, r.w, GL_RGBA, GL_HALF_FLOAT, image.color.data());
     glTextureSubImage2D(s.depth.id(), 0, r.x, r.y, r.z, r.w, GL_DEPTH_COMPONENT, GL_FLOAT,
                         image.depth.data());
+    if (pass == SpritePass::visibility) return image.sprites;
+    glTextureSubImage2D(s.color.id(), 0, r.x, r.y, r.z, r.w, GL_RGBA, GL_HALF_FLOAT, image.color.data());
     if (plan.settings.aux_outputs)
         glTextureSubImage2D(s.aux.id(), 0, r.x, r.y, r.z, r.w, GL_RGBA, GL_FLOAT, image.aux.data());
     return image.sprites;
@@ -148,7 +152,7 @@ std::uint32_t cpu_preview_sprites(SplatRenderState& s, const FramePlan& plan) {
 // Preview: one pass of opaque ray-cast ellipses into the output targets (the CPU's part first).
 void preview_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, RenderStats& stats) {
     auto scope = profiling::gpu_scope(reg, "render.preview");
-    if (plan.cpu_preview) stats.cpu_preview_sprites = cpu_preview_sprites(s, plan);
+    if (plan.cpu_raster) stats.cpu_sprites = cpu_sprites(s, plan, SpritePass::preview);
     draw_preview_clouds(s, plan);
 }
 
@@ -172,13 +176,20 @@ void warm_preview_programs(SplatRenderState& s, const FramePlan& plan) {
 // HQ 1. visibility: eps-offset depth only.
 // With the compute rasteriser (plan.compute): its visibility pass first, the rasteriser draws only what it
 // left over, then its depths are merged into the depth target inside `rect` (where the accumulation runs).
-void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect) {
+// On the CPU sprite path (plan.cpu_raster) the CPU-culled clouds' sprites are the CPU's (cpu_sprites), GL
+// draws their quads over that depth.
+void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect,
+                     RenderStats& stats) {
     glBindFramebuffer(GL_FRAMEBUFFER, s.depth_fbo.id());
     glDepthFunc(GL_LESS);
     auto scope = profiling::gpu_scope(reg, "render.hq.visibility");
     const bool big = !plan.compute.empty();
     if (big) compute_raster_visibility(s.compute_raster, *s.scan, plan.compute, plan.width, plan.height);
-    for (const CloudGpu* gpu : plan.drawn) draw_cloud(s, s.visibility, *gpu, nullptr, big);
+    if (plan.cpu_raster) stats.cpu_sprites = cpu_sprites(s, plan, SpritePass::visibility);
+    for (const CloudGpu* gpu : plan.drawn) {
+        if (gpu->cpu_raster && gpu->cpu_cull.visible_quads == 0) continue;
+        draw_cloud(s, s.visibility, *gpu, nullptr, big, !gpu->cpu_raster);
+    }
     if (big) {
         glEnable(GL_SCISSOR_TEST);
         glScissor(rect.x, rect.y, rect.z, rect.w);

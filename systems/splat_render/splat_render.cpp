@@ -40,13 +40,16 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
                 cpu_cull_wanted(s, plan.settings.cull_path) || s.cull_over_limit);
     plan.view = choose_camera(reg, s, double(full_width) / double(full_height));
     plan.common = frame_block(reg, plan.settings, plan.view, s.max_point_size);
-    plan.cpu_preview = plan.settings.quality == Quality::preview &&
-                       (plan.settings.preview_path == PreviewPath::cpu ||
-                        (plan.settings.preview_path == PreviewPath::automatic && s.software));
+    plan.cpu_raster = plan.settings.sprite_path == SpritePath::cpu ||
+                      (plan.settings.sprite_path == SpritePath::automatic && s.software);
 
     cull_pass(reg, s, plan, stats);
     const bool materials = plan.settings.quality == Quality::hq && clouds_differ_in_material(plan);
     plan_compute_raster(s, plan, materials, stats);
+    if (!plan.compute.empty()) {  // the compute rasteriser's HQ visibility pass covers the sprites
+        plan.cpu_raster = false;
+        for (CloudGpu* gpu : plan.drawn) gpu->cpu_raster = false;
+    }
     // The counts ring's copies follow the passes that write the counts (cull; compute visibility).
     if (plan.compute.empty()) issue_counts(s, plan.gpu_counts, plan.cpu_points, plan.cpu_quads, stats.frame);
     laps.lap(stats.cull_ms);
@@ -58,7 +61,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         warm_preview_programs(s, plan);
         const glm::ivec4 rect =
             intersect_rects(screen_rect(reg, plan.view, plan.width, plan.height), plan_drawn_rect(plan));
-        visibility_pass(reg, s, plan, rect);
+        visibility_pass(reg, s, plan, rect, stats);
         if (!plan.compute.empty())
             issue_counts(s, plan.gpu_counts, plan.cpu_points, plan.cpu_quads, stats.frame);
         laps.lap(stats.visibility_ms);

@@ -46,12 +46,13 @@ enum class CullPath : std::uint8_t { automatic, compute, cpu };
 // always rasterise.
 enum class RasterPath : std::uint8_t { automatic, raster, compute };
 
-// Who rasterises the preview's sprites. raster: point sprites through the fixed-function pipeline. cpu:
-// the CPU (cpu_preview.h) for the clouds the CPU cull took, whose records it holds: their sprites, the
-// same ray casts and texture lookups as the preview program, uploaded into the targets before GL draws the
-// rest (quads, compute-culled clouds) depth-tested over them.
+// Who rasterises the sprites of the clouds the CPU cull took (it holds their records). raster: point
+// sprites through the fixed-function pipeline. cpu: the CPU (cpu_raster.h), with the same ray casts and
+// texture lookups as the programs: a preview frame's sprites (colour, depth, aux), and an HQ frame's
+// visibility pass (depth) unless the compute rasteriser takes it; the images are uploaded into the targets
+// and GL draws the rest (quads, compute-culled clouds, the HQ attribute and shade passes) over them.
 // automatic: cpu on a software rasterizer, raster on a hardware GPU.
-enum class PreviewPath : std::uint8_t { automatic, raster, cpu };
+enum class SpritePath : std::uint8_t { automatic, raster, cpu };
 
 // Registry resource; zero-initialised fields are the defaults.
 struct RenderSettings {
@@ -62,7 +63,7 @@ struct RenderSettings {
     bool culling = true;                  // back-face + frustum culling (off: classify only)
     CullPath cull_path = CullPath::automatic;
     RasterPath raster_path = RasterPath::automatic;
-    PreviewPath preview_path = PreviewPath::automatic;
+    SpritePath sprite_path = SpritePath::automatic;
     float visibility_epsilon = 1.0f;  // HQ depth offset along the view ray, in units of each splat's radius
     bool time_passes = false;         // glFinish after each pass and record CPU times in RenderStats
     bool aux_outputs = false;         // also write the normal + depth target (EXR Z, N; capture_frame's
@@ -108,10 +109,11 @@ struct RenderStats {
     std::uint32_t raster_sprites = 0;  // of those clouds' sprites, the ones too large for it, drawn by the
                                        // rasteriser (frame counts_frame; included in visible_points)
     std::uint32_t cpu_splat_passes =
-        0;  // loops over a cloud's splats on the CPU this frame (uploads of
-            // changed clouds, their bounds, the CPU cull): 0 in a GPU-resident frame
-    std::uint32_t cpu_preview_sprites = 0;  // preview sprites the CPU rasterised this frame (PreviewPath)
-    std::uint32_t gaussians = 0;            // 3D Gaussians submitted (all GaussianClouds), this frame
+        0;                          // loops over a cloud's splats on the CPU this frame (uploads of
+                                    // changed clouds, their bounds, the CPU cull): 0 in a GPU-resident frame
+    std::uint32_t cpu_sprites = 0;  // sprites the CPU rasterised this frame (SpritePath): preview or HQ
+                                    // visibility
+    std::uint32_t gaussians = 0;    // 3D Gaussians submitted (all GaussianClouds), this frame
     double cull_ms = 0, visibility_ms = 0, attribute_ms = 0, shade_ms = 0, preview_ms = 0, total_ms = 0;
     double gaussian_ms = 0;  // the Gaussian pass (gaussian_pass.h), with time_passes
 };

@@ -38,7 +38,7 @@
 #include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/compute_raster.h"
 #include "systems/splat_render/cpu_cull.h"
-#include "systems/splat_render/cpu_preview.h"
+#include "systems/splat_render/cpu_raster.h"
 #include "systems/splat_render/gaussian_pass.h"
 #include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/storage_limits.h"
@@ -73,10 +73,11 @@ struct CloudGpu {
     std::uint64_t bounds_version = 0;
     double footprint_px = 0;  // splat_footprint_px() this frame (cull_pass)
     bool flat_list = false;   // the CPU cull filled the flat-coloured sprite list this frame
-    // This frame's preview draws the cloud's sprites on the CPU (PreviewPath): their draw commands are
-    // empty, GL draws only its quads. preview_texels: its texture for that (pyramid included).
-    bool cpu_preview = false;
-    TexelView preview_texels;
+    // The CPU rasterises this frame's sprites of the cloud (SpritePath): a preview's, whose draw commands
+    // are then empty (GL draws only its quads), or an HQ frame's visibility pass. raster_texels: its
+    // texture for that (pyramid included).
+    bool cpu_raster = false;
+    TexelView raster_texels;
     ComputeRasterCloud raster;  // sprites the compute rasteriser leaves to the rasteriser (compute_raster.h)
     SplatMaterial material;     // the cloud's SplatMaterial this frame (the defaults when it has none)
     bool colored = false;       // per-splat colours (else the packed colour is white, times the base colour)
@@ -158,7 +159,7 @@ struct SplatRenderState {
     gfx::VertexArray records_vao;  // SplatRecord[] as vertex attributes 0..5 (buffer bound per cloud)
     float max_point_size = 1.0f;
     float min_point_size = 1.0f;  // GL_POINT_SIZE_RANGE, for the CPU preview's sprite squares
-    CpuPreviewImage cpu_preview;  // the CPU-rasterised part of the last preview (PreviewPath)
+    CpuRasterImage cpu_raster;    // the CPU-rasterised part of the last frame (SpritePath)
 
     int width = 0, height = 0;              // the targets
     int frame_width = 0, frame_height = 0;  // what the last frame covered of them (preview_divider)
@@ -233,8 +234,9 @@ struct FramePlan {
     // the CPU cull gives the sprites' squares.
     glm::vec2 drawn_lo{1e30f}, drawn_hi{-1e30f};
     bool drawn_known = true;
-    // The preview's CPU-culled clouds rasterise their flat-coloured sprites on the CPU (PreviewPath).
-    bool cpu_preview = false;
+    // The CPU-culled clouds' sprites are rasterised on the CPU (SpritePath): the preview's, or the HQ
+    // visibility pass's.
+    bool cpu_raster = false;
 };
 
 // The plan's drawn pixels as a rectangle (x, y, width, height) inside its frame: the whole frame when not
@@ -293,7 +295,8 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
 void begin_splat_passes(SplatRenderState& s, const FramePlan& plan);
 void preview_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, RenderStats& stats);
 void warm_preview_programs(SplatRenderState& s, const FramePlan& plan);
-void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect);
+void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& plan, const glm::ivec4& rect,
+                     RenderStats& stats);
 void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, RenderStats& stats);
 bool clouds_differ_in_material(const FramePlan& plan);
 void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePlan& plan,

@@ -24,7 +24,7 @@ constexpr const char* usage_text =
     "F]\n"
     "                        [--trace F] [--compare BASE.json] [--sweep K=V,..] [--plot-sweep F.json] "
     "[--paper]\n"
-    "                        [--preview-budget N] [--preview-raster auto|raster|cpu] [--naive-frames N]\n"
+    "                        [--preview-budget N] [--sprite-raster auto|raster|cpu] [--naive-frames N]\n"
     "                        [--suite quick|full [--only ID,..]]\n"
     "  SCENE                 built-in name (sphere, face), a scene/point-cloud file, or synthetic:N\n"
     "                        (a sphere of N splats with an 11^3 lattice), synthetic-gaussians:N (that\n"
@@ -37,8 +37,9 @@ constexpr const char* usage_text =
     "  --preview-budget N    points per cloud in preview frames (default 100000; 0: every point)\n"
     "  --raster auto|raster|compute  HQ splat rasteriser: the fixed-function one, the compute one\n"
     "                        (hybrid: sprites > 8 px stay on the rasteriser), or by splat size (default)\n"
-    "  --preview-raster auto|raster|cpu  preview rasteriser: GL point sprites, the CPU's ray casts\n"
-    "                        (uploaded), or cpu on a software rasterizer (default)\n"
+    "  --sprite-raster auto|raster|cpu  who draws the splats' sprites (preview frames, the HQ\n"
+    "                        visibility pass): GL point sprites, the CPU's ray casts (uploaded), or cpu on\n"
+    "                        a software rasterizer (default)\n"
     "  --backend auto|cpu|gpu  deformation backend (default auto: the engine's own choice, the CPU on a\n"
     "                        software rasterizer; the one used is printed; cpu runs without a GL context\n"
     "                        when the renderer is not wanted)\n"
@@ -176,10 +177,10 @@ int run_profile_command(cli::Args args) {
         } else if (a == "--raster") {
             if (!value(o.raster) || (o.raster != "auto" && o.raster != "raster" && o.raster != "compute"))
                 return usage_error("--raster auto|raster|compute");
-        } else if (a == "--preview-raster") {
-            if (!value(o.preview_raster) ||
-                (o.preview_raster != "auto" && o.preview_raster != "raster" && o.preview_raster != "cpu"))
-                return usage_error("--preview-raster auto|raster|cpu");
+        } else if (a == "--sprite-raster") {
+            if (!value(o.sprite_raster) ||
+                (o.sprite_raster != "auto" && o.sprite_raster != "raster" && o.sprite_raster != "cpu"))
+                return usage_error("--sprite-raster auto|raster|cpu");
         } else if (a == "--backend") {
             if (!value(o.backend) || (o.backend != "auto" && o.backend != "cpu" && o.backend != "gpu"))
                 return usage_error("--backend auto|cpu|gpu");
@@ -243,7 +244,7 @@ int run_profile_command(cli::Args args) {
     s.quality = o.quality;
     s.backend = o.backend;
     s.raster = o.raster;
-    s.preview_raster = o.preview_raster;
+    s.sprite_raster = o.sprite_raster;
     s.preview_budget = o.preview_budget;
     s.sync = o.sync;
     s.drive = o.drive;

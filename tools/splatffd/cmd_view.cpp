@@ -16,7 +16,7 @@ constexpr const char* kUsage =
     "                     [--quality hq|preview] [--no-ui] [--headless] [--json F] [--sync-timing] "
     "[--window-screenshot PATH]\n"
     "                     [--panel-rects-json PATH] [--no-overlay-cache] [--no-ui-cache]\n"
-    "                     [--preview-raster auto|raster|cpu]\n"
+    "                     [--sprite-raster auto|raster|cpu]\n"
     "  SCENE              built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj "
     ".off,\n"
     "                     3D Gaussians .ply (3DGS) .splat .spz .ksplat .sog, a SOG folder or its\n"
@@ -34,9 +34,9 @@ constexpr const char* kUsage =
     "                     that did not move are kept in an image and only the moving ones drawn again)\n"
     "  --no-ui-cache      draw every panel every frame (default: a panel that did not change is copied from\n"
     "                     an image of it)\n"
-    "  --preview-raster R who draws preview frames (the editor's frames while moving): raster (GL point\n"
-    "                     sprites), cpu (the CPU's ray casts, uploaded), auto (default: cpu on a software\n"
-    "                     rasterizer)\n"
+    "  --sprite-raster R  who draws the splats' sprites (preview frames, the HQ visibility pass): raster\n"
+    "                     (GL point sprites), cpu (the CPU's ray casts, uploaded), auto (default: cpu on a\n"
+    "                     software rasterizer)\n"
     "  --headless         no window (EGL); input only from --replay; needs --frames or --replay\n"
     "                     (default: a window)\n"
     "  --json F           write frame-time statistics (all frames, frames with a live drag) (old spelling:\n"
@@ -118,13 +118,13 @@ int run_view_command(sffd::cli::Args args) {
                 return 2;
             }
             o.preview = *v == "preview";
-        } else if (a == "--preview-raster") {
-            const auto* v = value("--preview-raster");
+        } else if (a == "--sprite-raster") {
+            const auto* v = value("--sprite-raster");
             if (!v || (*v != "auto" && *v != "raster" && *v != "cpu")) {
-                std::fprintf(stderr, "splatffd view: --preview-raster takes auto, raster or cpu\n");
+                std::fprintf(stderr, "splatffd view: --sprite-raster takes auto, raster or cpu\n");
                 return 2;
             }
-            o.preview_raster = *v;
+            o.sprite_raster = *v;
         } else if (a == "--no-ui") {
             o.ui = false;
         } else if (a == "--no-overlay-cache") {

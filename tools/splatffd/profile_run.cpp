@@ -220,9 +220,9 @@ Result<RunOutput> run_profile(const RunSetup& s) {
         rs.raster_path = s.raster == "compute"  ? render::RasterPath::compute
                          : s.raster == "raster" ? render::RasterPath::raster
                                                 : render::RasterPath::automatic;
-        rs.preview_path = s.preview_raster == "cpu"      ? render::PreviewPath::cpu
-                          : s.preview_raster == "raster" ? render::PreviewPath::raster
-                                                         : render::PreviewPath::automatic;
+        rs.sprite_path = s.sprite_raster == "cpu"      ? render::SpritePath::cpu
+                         : s.sprite_raster == "raster" ? render::SpritePath::raster
+                                                       : render::SpritePath::automatic;
     }
     // Every frame moves the lattice (the drive), so a preview frame is the editor's frame while moving: the
     // deformation and the renderer keep to the point budget (systems/ffd/preview_budget.h).
@@ -280,7 +280,7 @@ Result<RunOutput> run_profile(const RunSetup& s) {
                   {"warmup", static_cast<double>(s.warmup)},
                   {"quality", s.quality},
                   {"raster", want_render ? s.raster : std::string("none")},
-                  {"preview_raster", want_render ? s.preview_raster : std::string("none")},
+                  {"sprite_raster", want_render ? s.sprite_raster : std::string("none")},
                   {"preview_budget", budget.active ? static_cast<double>(budget.points) : 0.0},
                   {"gaussian_preview_budget", static_cast<double>(gaussian_preview_budget_for(
                                                   registry, std::numeric_limits<std::size_t>::max()))},

@@ -23,9 +23,9 @@ struct Options {
     int frames = 120;
     int warmup = 10;
     std::string quality = "hq";
-    std::string backend = "auto";         // auto: the engine's own choice (ffd/deform_backend.h), cpu, gpu
-    std::string raster = "auto";          // HQ rasteriser: auto, raster, compute (render::RasterPath)
-    std::string preview_raster = "auto";  // preview rasteriser: auto, raster, cpu (render::PreviewPath)
+    std::string backend = "auto";        // auto: the engine's own choice (ffd/deform_backend.h), cpu, gpu
+    std::string raster = "auto";         // HQ rasteriser: auto, raster, compute (render::RasterPath)
+    std::string sprite_raster = "auto";  // preview rasteriser: auto, raster, cpu (render::SpritePath)
     int preview_budget = -1;  // points per cloud in preview frames (PreviewBudget); -1: the default
     bool sync = false;
     std::string drive = "global twist";
@@ -42,7 +42,7 @@ struct RunSetup {
     std::string scene;
     int frames = 120, warmup = 10;
     std::string quality = "hq", backend = "auto", drive = "global twist", raster = "auto";
-    std::string preview_raster = "auto";
+    std::string sprite_raster = "auto";
     bool sync = false;
     int preview_budget = -1;        // as Options::preview_budget
     int lattice_points = 0;         // > 0: replace every lattice's divisions (control points per axis)

@@ -76,7 +76,7 @@ protected:
         s.aux_outputs = true;
         s.preview_divider = preview_divider;
         s.reduced_preview_flat_texture = reduced_preview_flat_texture;
-        s.preview_path = preview_path;
+        s.sprite_path = sprite_path;
         reg.set_resource<RenderSettings>(s);
         residency_system(reg, FrameContext{});
         render_system(reg, FrameContext{});
@@ -96,7 +96,7 @@ protected:
     ecs::Registry reg;
     int preview_divider = 1;                   // RenderSettings::preview_divider of the frames render() draws
     bool reduced_preview_flat_texture = true;  // and RenderSettings::reduced_preview_flat_texture
-    PreviewPath preview_path = PreviewPath::automatic;  // and RenderSettings::preview_path
+    SpritePath sprite_path = SpritePath::automatic;  // and RenderSettings::sprite_path
 };
 
 // World-space ray through the centre of pixel (x, y) (row 0 at the top), scaled so that its component

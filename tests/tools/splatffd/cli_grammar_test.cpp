@@ -179,23 +179,23 @@ TEST(CliGrammar, FramesMeansTheSameInEveryCommand) {
 // profile says how many frames it runs, warm-up included, and its config line names the rasterisers.
 TEST(CliGrammar, ProfileSaysWhatItRuns) {
     const auto r = sffd::test::run_headless(
-        "profile synthetic:2k --frames 0:3 --warmup 2 --quality preview --raster compute --preview-raster "
+        "profile synthetic:2k --frames 0:3 --warmup 2 --quality preview --raster compute --sprite-raster "
         "cpu");
     ASSERT_EQ(r.code, 0) << r.out;
     EXPECT_NE(r.out.find("2 warm-up + 4 measured frames (6 in all)"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find(" raster=compute"), std::string::npos) << r.out;
-    EXPECT_NE(r.out.find(" preview_raster=cpu"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find(" sprite_raster=cpu"), std::string::npos) << r.out;
     EXPECT_NE(r.out.find(" frames=4"), std::string::npos) << r.out;
 }
 
 // The preview rasteriser is auto, raster or cpu, for the editor and the profiler alike.
 TEST(CliGrammar, PreviewRasterTakesAutoRasterOrCpu) {
-    const auto view = sffd::test::run_headless("view --headless --frames 2 --preview-raster gpu");
+    const auto view = sffd::test::run_headless("view --headless --frames 2 --sprite-raster gpu");
     EXPECT_EQ(view.code, 2) << view.out;
-    EXPECT_NE(view.out.find("--preview-raster takes auto, raster or cpu"), std::string::npos) << view.out;
-    const auto profile = sffd::test::run_headless("profile synthetic:2k --frames 2 --preview-raster");
+    EXPECT_NE(view.out.find("--sprite-raster takes auto, raster or cpu"), std::string::npos) << view.out;
+    const auto profile = sffd::test::run_headless("profile synthetic:2k --frames 2 --sprite-raster");
     EXPECT_EQ(profile.code, 2) << profile.out;
-    EXPECT_NE(profile.out.find("--preview-raster auto|raster|cpu"), std::string::npos) << profile.out;
+    EXPECT_NE(profile.out.find("--sprite-raster auto|raster|cpu"), std::string::npos) << profile.out;
 }
 
 // Progress rewrites a line with \r on a terminal; a log file gets the result line and no \r.

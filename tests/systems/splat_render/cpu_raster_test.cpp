@@ -1,4 +1,4 @@
-// The CPU preview rasteriser (cpu_preview.h) against geometry computed here: discs in view space, the ray
+// The CPU preview rasteriser (cpu_raster.h) against geometry computed here: discs in view space, the ray
 // of each pixel centre intersected with their planes in double precision.
 #include <gtest/gtest.h>
 
@@ -10,7 +10,7 @@
 #include <glm/gtc/packing.hpp>
 
 #include "systems/splat_render/camera_math.h"
-#include "systems/splat_render/cpu_preview.h"
+#include "systems/splat_render/cpu_raster.h"
 
 using namespace sffd;
 using namespace sffd::render;
@@ -40,7 +40,7 @@ struct Disc {
     glm::vec3 color;
 };
 
-class CpuPreview : public ::testing::Test {
+class CpuRaster : public ::testing::Test {
 protected:
     glm::dmat4 projection = glm::perspective(glm::radians(45.0), double(W) / H, 0.1, 10.0);
     gpu::FrameBlock frame = camera_frame_block(glm::dmat4(1.0), projection, W, H, 1.0f, 64.0f, true);
@@ -78,21 +78,22 @@ protected:
         return 0.5 * ((projection[2][2] * -t + projection[3][2]) / t) + 0.5;
     }
 
-    CpuPreviewImage draw(const std::vector<SplatRecord>& records, bool aux = false) const {
-        CpuPreviewImage img;
+    CpuRasterImage draw(const std::vector<SplatRecord>& records, bool aux = false) const {
+        CpuRasterImage img;
         const SpriteRun run{records.data(), records.size()};
-        rasterize_preview_cpu({&run, 1}, frame, W, H, background, {1.0f, 64.0f}, aux, img);
+        rasterize_sprites_cpu({&run, 1}, frame, W, H, background, {1.0f, 64.0f}, SpritePass::preview, aux,
+                              img);
         return img;
     }
-    static bool inside(const CpuPreviewImage& img, int x, int y) {
+    static bool inside(const CpuRasterImage& img, int x, int y) {
         return x >= img.rect.x && x < img.rect.x + img.rect.z && y >= img.rect.y &&
                y < img.rect.y + img.rect.w;
     }
-    static std::size_t at(const CpuPreviewImage& img, int x, int y) {
+    static std::size_t at(const CpuRasterImage& img, int x, int y) {
         return std::size_t(y - img.rect.y) * std::size_t(img.rect.z) + std::size_t(x - img.rect.x);
     }
     // Outside the rectangle the frame keeps its clear colour: the background, as the RGBA16F target holds it.
-    glm::vec4 color(const CpuPreviewImage& img, int x, int y) const {
+    glm::vec4 color(const CpuRasterImage& img, int x, int y) const {
         return inside(img, x, y) ? half4(img.color[at(img, x, y)]) : background_half();
     }
     glm::vec4 background_half() const {
@@ -101,14 +102,14 @@ protected:
                 glm::unpackHalf1x16(glm::packHalf1x16(background.z)),
                 glm::unpackHalf1x16(glm::packHalf1x16(background.w))};
     }
-    float depth(const CpuPreviewImage& img, int x, int y) const {
+    float depth(const CpuRasterImage& img, int x, int y) const {
         return inside(img, x, y) ? img.depth[at(img, x, y)] : 1.0f;
     }
 
     glm::vec4 background{0.1f, 0.2f, 0.3f, 0.0f};
 };
 
-TEST_F(CpuPreview, UnpacksColoursAsTheShaderDoes) {
+TEST_F(CpuRaster, UnpacksColoursAsTheShaderDoes) {
     for (glm::vec3 c :
          {glm::vec3(0.0f), glm::vec3(1.0f), glm::vec3(0.25f, 0.5f, 0.75f), glm::vec3(0.01f, 0.9f, 0.3f)}) {
         const glm::vec3 expected = glm::pow(glm::round(glm::sqrt(c) * 1023.0f) / 1023.0f, glm::vec3(2.0f));
@@ -119,10 +120,10 @@ TEST_F(CpuPreview, UnpacksColoursAsTheShaderDoes) {
 
 // A tilted elliptical disc: the drawn pixels are those whose ray meets it (away from its rim by float
 // rounding), each with the disc's colour, its window depth, and with aux outputs its normal and view depth.
-TEST_F(CpuPreview, DrawsTheDiscEveryPixelRayMeets) {
+TEST_F(CpuRaster, DrawsTheDiscEveryPixelRayMeets) {
     const Disc d{{0.1, -0.05, -3.0}, {0.5, 0.0, 0.25}, {0.0, 0.3, 0.0}, {0.9f, 0.4f, 0.1f}};
     const std::vector<SplatRecord> rec{record(d, 60.0f)};
-    const CpuPreviewImage img = draw(rec, true);
+    const CpuRasterImage img = draw(rec, true);
     EXPECT_EQ(img.sprites, 1u);
     const glm::vec3 expected = unpack_color(rec[0].normal.w);
     int drawn = 0, checked = 0;
@@ -155,16 +156,47 @@ TEST_F(CpuPreview, DrawsTheDiscEveryPixelRayMeets) {
     EXPECT_LE(img.rect.w, 61);
 }
 
+// The HQ visibility pass: depth only, each hit pushed back by the record's eps (plane.w) along the unit
+// view ray (visibility.frag), so that splats within eps of the surface pass the attribute pass's test.
+TEST_F(CpuRaster, VisibilityPassWritesTheHitPushedBackByEps) {
+    const Disc d{{0.1, -0.05, -3.0}, {0.5, 0.0, 0.25}, {0.0, 0.3, 0.0}, {0.9f, 0.4f, 0.1f}};
+    SplatRecord rec = record(d, 60.0f);
+    const float eps = 0.02f;
+    rec.plane.w = eps;
+    CpuRasterImage img;
+    const SpriteRun run{&rec, 1};
+    rasterize_sprites_cpu({&run, 1}, frame, W, H, background, {1.0f, 64.0f}, SpritePass::visibility, true,
+                          img);
+    EXPECT_TRUE(img.color.empty());
+    EXPECT_TRUE(img.aux.empty());
+    int drawn = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            double t = 0, r2 = 2;
+            const bool on = hit(d, x, y, t, r2) && r2 <= 1.0;
+            if (std::abs(r2 - 1.0) < 1e-4) continue;
+            ASSERT_EQ(depth(img, x, y) < 1.0f, on) << x << ", " << y;
+            if (!on) continue;
+            ++drawn;
+            const glm::dvec3 ray(((x + 0.5) / W * 2.0 - 1.0) / projection[0][0],
+                                 ((y + 0.5) / H * 2.0 - 1.0) / projection[1][1], -1.0);
+            EXPECT_NEAR(depth(img, x, y), window_depth(t + double(eps) / glm::length(ray)), 2e-6)
+                << x << ", " << y;
+            EXPECT_GT(depth(img, x, y), window_depth(t) + 1e-6);  // behind the hit itself
+        }
+    EXPECT_GT(drawn, 200);
+}
+
 // GL_LESS in draw order: the nearer disc wins wherever both are; at an exact tie the first drawn stays.
-TEST_F(CpuPreview, NearerWinsAndTheFirstDrawnKeepsATie) {
+TEST_F(CpuRaster, NearerWinsAndTheFirstDrawnKeepsATie) {
     const Disc back{{0.0, 0.0, -3.0}, {0.4, 0.0, 0.0}, {0.0, 0.4, 0.0}, {1.0f, 0.0f, 0.0f}};
     Disc front = back;
     front.c.z = -2.9, front.color = {0.0f, 1.0f, 0.0f};
     Disc twin = back;
     twin.color = {0.0f, 0.0f, 1.0f};
-    const CpuPreviewImage a = draw({record(back, 40.0f), record(front, 40.0f)});
-    const CpuPreviewImage b = draw({record(front, 40.0f), record(back, 40.0f)});
-    const CpuPreviewImage tie = draw({record(back, 40.0f), record(twin, 40.0f)});
+    const CpuRasterImage a = draw({record(back, 40.0f), record(front, 40.0f)});
+    const CpuRasterImage b = draw({record(front, 40.0f), record(back, 40.0f)});
+    const CpuRasterImage tie = draw({record(back, 40.0f), record(twin, 40.0f)});
     int front_pixels = 0, tie_pixels = 0;
     for (int y = 0; y < H; ++y)
         for (int x = 0; x < W; ++x) {
@@ -188,10 +220,10 @@ TEST_F(CpuPreview, NearerWinsAndTheFirstDrawnKeepsATie) {
 
 // A sprite covers the pixels whose centres lie in its square: a square smaller than the disc clips it,
 // and a side under GL's smallest point size is drawn at that size.
-TEST_F(CpuPreview, SpritesCoverTheirSquaresOnly) {
+TEST_F(CpuRaster, SpritesCoverTheirSquaresOnly) {
     const Disc d{{0.0, 0.0, -3.0}, {0.6, 0.0, 0.0}, {0.0, 0.6, 0.0}, {1.0f, 1.0f, 1.0f}};
     SplatRecord r = record(d, 10.0f);
-    const CpuPreviewImage img = draw({r});
+    const CpuRasterImage img = draw({r});
     const double cx = (double(r.center.x) + 1.0) * 0.5 * W, cy = (double(r.center.y) + 1.0) * 0.5 * H;
     int drawn = 0;
     for (int y = 0; y < H; ++y)
@@ -212,21 +244,22 @@ TEST_F(CpuPreview, SpritesCoverTheirSquaresOnly) {
     // A 0.2 px side drawn with a smallest point size of 3: the 3x3 pixels around the centre.
     r.center.x = float((40.0 + 0.5) / W * 2.0 - 1.0), r.center.y = float((30.0 + 0.5) / H * 2.0 - 1.0);
     r.center.w = 0.2f;
-    CpuPreviewImage small;
+    CpuRasterImage small;
     const SpriteRun run{&r, 1};
-    rasterize_preview_cpu({&run, 1}, frame, W, H, background, {3.0f, 64.0f}, false, small);
+    rasterize_sprites_cpu({&run, 1}, frame, W, H, background, {3.0f, 64.0f}, SpritePass::preview, false,
+                          small);
     EXPECT_EQ(small.rect, glm::ivec4(39, 29, 3, 3));
 }
 
 // The hidden mark (plane 0: back-facing, kept with culling off) draws nothing, and sprites outside the
 // frame leave it untouched: no rectangle to upload.
-TEST_F(CpuPreview, HiddenAndOffFrameSpritesDrawNothing) {
+TEST_F(CpuRaster, HiddenAndOffFrameSpritesDrawNothing) {
     const Disc d{{0.0, 0.0, -3.0}, {0.4, 0.0, 0.0}, {0.0, 0.4, 0.0}, {1.0f, 1.0f, 1.0f}};
     SplatRecord hidden = record(d, 40.0f);
     hidden.plane = glm::vec4(0.0f);
     SplatRecord outside = record(d, 10.0f);
     outside.center.x = 1.5f;
-    const CpuPreviewImage img = draw({hidden, outside});
+    const CpuRasterImage img = draw({hidden, outside});
     EXPECT_EQ(img.sprites, 0u);
     EXPECT_EQ(img.rect.z * img.rect.w, 0);
     EXPECT_TRUE(img.color.empty());
@@ -235,7 +268,7 @@ TEST_F(CpuPreview, HiddenAndOffFrameSpritesDrawNothing) {
 // Many sprites across every band boundary (16 rows): the image is the same as each band drawn alone would
 // give, i.e. every sprite is found by each band it reaches. Compared against drawing the sprites one by
 // one and keeping the nearest per pixel.
-TEST_F(CpuPreview, SpritesAcrossBandsMatchOneByOne) {
+TEST_F(CpuRaster, SpritesAcrossBandsMatchOneByOne) {
     std::vector<SplatRecord> recs;
     std::vector<Disc> discs;
     for (int i = 0; i < 60; ++i) {
@@ -246,11 +279,11 @@ TEST_F(CpuPreview, SpritesAcrossBandsMatchOneByOne) {
                          {float(i % 3 == 0), float(i % 3 == 1), float(i % 3 == 2)}});
         recs.push_back(record(discs.back(), 24.0f));
     }
-    const CpuPreviewImage all = draw(recs);
+    const CpuRasterImage all = draw(recs);
     std::vector<float> best(std::size_t(W * H), 1.0f);
     std::vector<glm::vec4> best_color(std::size_t(W * H), background_half());
     for (const SplatRecord& r : recs) {
-        const CpuPreviewImage one = draw({r});
+        const CpuRasterImage one = draw({r});
         for (int y = 0; y < H; ++y)
             for (int x = 0; x < W; ++x) {
                 const float d = depth(one, x, y);

@@ -1,9 +1,13 @@
-// CPU rasteriser of the preview's sprites (cpu_preview.h).
-#include "systems/splat_render/cpu_preview.h"
+// CPU rasteriser of the splats' sprites (cpu_raster.h).
+#include "systems/splat_render/cpu_raster.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+
+#if defined(__AVX512F__)
+#include <immintrin.h>
+#endif
 
 #include <glm/gtc/packing.hpp>
 #include <tbb/blocked_range.h>
@@ -35,13 +39,20 @@ struct Depths {
     float p32, p22;  // window_depth_inv's projection terms
 };
 
+// What a band writes: the preview's colour and depth (and aux), or the HQ visibility pass's depth only.
+enum class Write { color, color_aux, visibility };
+
+// GCC 12's AVX-512 intrinsics (sqrt, min, max) pass _mm512_undefined_ps() as their unused merge source,
+// which -Wmaybe-uninitialized reports at every use.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
 // Every sprite of one band (rows [row0, row1) of the frame) into the image.
-template <bool Aux>
-void draw_band(const CpuPreviewImage& img, const std::uint32_t* list, std::size_t n, int row0, int row1,
+template <Write Mode>
+void draw_band(const CpuRasterImage& img, const std::uint32_t* list, std::size_t n, int row0, int row1,
                const Depths& f, std::uint64_t* color, float* depth, glm::vec4* aux) {
     const int rx = img.rect.x, ry = img.rect.y, stride = img.rect.z;
     for (std::size_t k = 0; k < n; ++k) {
-        const PreviewSprite& s = img.setup[list[k]];
+        const CpuSprite& s = img.setup[list[k]];
         const int y0 = std::max(s.y0, row0), y1 = std::min(s.y1, row1);
         for (int y = y0; y < y1; ++y) {
             // raycast_splat(): inv_t = dot(plane, ray), s = t dot(dual_u, ray) - dual_u.w (likewise q).
@@ -50,17 +61,20 @@ void draw_band(const CpuPreviewImage& img, const std::uint32_t* list, std::size_
             const float u_row = s.dual_u.y * ray_y - s.dual_u.z, v_row = s.dual_v.y * ray_y - s.dual_v.z;
             float* drow = depth + std::size_t(y - ry) * std::size_t(stride) - rx;
             std::uint64_t* crow = color + std::size_t(y - ry) * std::size_t(stride) - rx;
-            glm::vec4* arow = Aux ? aux + std::size_t(y - ry) * std::size_t(stride) - rx : nullptr;
-            for (int x = s.x0; x < s.x1; ++x) {
-                const float ray_x = (float(x) + 0.5f) * f.ray_x + f.ray_dx;
-                const float inv_t = s.plane.x * ray_x + plane_row;
-                if (!(inv_t > 0.0f)) continue;
-                const float t = 1.0f / inv_t;
-                const float su = t * (s.dual_u.x * ray_x + u_row) - s.dual_u.w;
-                const float sv = t * (s.dual_v.x * ray_x + v_row) - s.dual_v.w;
-                if (su * su + sv * sv > 1.0f) continue;
+            glm::vec4* arow =
+                Mode == Write::color_aux ? aux + std::size_t(y - ry) * std::size_t(stride) - rx : nullptr;
+            const float ray_y2 = ray_y * ray_y + 1.0f;
+            // One pixel of the row: after the ray cast, its depth test and writes.
+            auto write = [&](int x, float inv_t, float t, float su, float sv, float ray_x) {
+                if constexpr (Mode == Write::visibility) {
+                    // visibility.frag: the hit pushed back by eps (plane.w) along the unit view ray.
+                    const float pushed = t + s.plane.w / std::sqrt(ray_x * ray_x + ray_y2);
+                    const float d = std::clamp(0.5f * (f.p32 / pushed - f.p22) + 0.5f, 0.0f, 1.0f);
+                    if (d < drow[x]) drow[x] = d;
+                    return;
+                }
                 const float d = std::clamp(0.5f * (f.p32 * inv_t - f.p22) + 0.5f, 0.0f, 1.0f);
-                if (!(d < drow[x])) continue;
+                if (!(d < drow[x])) return;
                 drow[x] = d;
                 if (s.texture) {
                     const glm::vec2 uv =
@@ -70,11 +84,86 @@ void draw_band(const CpuPreviewImage& img, const std::uint32_t* list, std::size_
                 } else {
                     crow[x] = s.color;
                 }
-                if constexpr (Aux) arow[x] = glm::vec4(s.normal, t);
+                if constexpr (Mode == Write::color_aux) arow[x] = glm::vec4(s.normal, t);
+            };
+#if defined(__AVX512F__)
+            // Sixteen pixels of the row at once, the ray cast's rejections as a lane mask; the pixels that
+            // pass are written one by one (few: a sprite row is a few pixels wide).
+            const __m512 lanes = _mm512_setr_ps(0.5f, 1.5f, 2.5f, 3.5f, 4.5f, 5.5f, 6.5f, 7.5f, 8.5f, 9.5f,
+                                                10.5f, 11.5f, 12.5f, 13.5f, 14.5f, 15.5f);
+            for (int x0 = s.x0; x0 < s.x1; x0 += 16) {
+                const int count = std::min(16, s.x1 - x0);
+                __mmask16 m = __mmask16(count == 16 ? 0xffffu : (1u << count) - 1u);
+                const __m512 ray_x = _mm512_add_ps(
+                    _mm512_mul_ps(_mm512_add_ps(_mm512_set1_ps(float(x0)), lanes), _mm512_set1_ps(f.ray_x)),
+                    _mm512_set1_ps(f.ray_dx));
+                const __m512 inv_t =
+                    _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(s.plane.x), ray_x), _mm512_set1_ps(plane_row));
+                m &= _mm512_cmp_ps_mask(inv_t, _mm512_setzero_ps(), _CMP_GT_OQ);
+                if (!m) continue;
+                const __m512 t = _mm512_div_ps(_mm512_set1_ps(1.0f), inv_t);
+                const __m512 su = _mm512_sub_ps(
+                    _mm512_mul_ps(t, _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(s.dual_u.x), ray_x),
+                                                   _mm512_set1_ps(u_row))),
+                    _mm512_set1_ps(s.dual_u.w));
+                const __m512 sv = _mm512_sub_ps(
+                    _mm512_mul_ps(t, _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(s.dual_v.x), ray_x),
+                                                   _mm512_set1_ps(v_row))),
+                    _mm512_set1_ps(s.dual_v.w));
+                const __m512 r2 = _mm512_add_ps(_mm512_mul_ps(su, su), _mm512_mul_ps(sv, sv));
+                m &= _mm512_cmp_ps_mask(r2, _mm512_set1_ps(1.0f), _CMP_LE_OQ);
+                if (!m) continue;
+                // Depth test and writes in the vector where no per-pixel texture lookup or aux output is
+                // needed: the visibility pass and flat-coloured sprites.
+                if (Mode != Write::color_aux && !s.texture) {
+                    __m512 d;
+                    if constexpr (Mode == Write::visibility) {
+                        const __m512 len = _mm512_sqrt_ps(
+                            _mm512_add_ps(_mm512_mul_ps(ray_x, ray_x), _mm512_set1_ps(ray_y2)));
+                        const __m512 pushed = _mm512_add_ps(t, _mm512_div_ps(_mm512_set1_ps(s.plane.w), len));
+                        d = _mm512_div_ps(_mm512_set1_ps(f.p32), pushed);
+                    } else {
+                        d = _mm512_mul_ps(_mm512_set1_ps(f.p32), inv_t);
+                    }
+                    d = _mm512_add_ps(
+                        _mm512_mul_ps(_mm512_set1_ps(0.5f), _mm512_sub_ps(d, _mm512_set1_ps(f.p22))),
+                        _mm512_set1_ps(0.5f));
+                    d = _mm512_min_ps(_mm512_max_ps(d, _mm512_setzero_ps()), _mm512_set1_ps(1.0f));
+                    const __m512 old = _mm512_maskz_loadu_ps(m, drow + x0);
+                    m &= _mm512_cmp_ps_mask(d, old, _CMP_LT_OQ);
+                    _mm512_mask_storeu_ps(drow + x0, m, d);
+                    if constexpr (Mode == Write::color) {
+                        const __m512i c = _mm512_set1_epi64(std::int64_t(s.color));
+                        _mm512_mask_storeu_epi64(crow + x0, __mmask8(m), c);
+                        _mm512_mask_storeu_epi64(crow + x0 + 8, __mmask8(m >> 8), c);
+                    }
+                    continue;
+                }
+                alignas(64) float l_inv_t[16], l_t[16], l_su[16], l_sv[16], l_ray_x[16];
+                _mm512_store_ps(l_inv_t, inv_t), _mm512_store_ps(l_t, t), _mm512_store_ps(l_su, su);
+                _mm512_store_ps(l_sv, sv), _mm512_store_ps(l_ray_x, ray_x);
+                for (unsigned bits = m; bits; bits &= bits - 1) {
+                    const int l = __builtin_ctz(bits);
+                    write(x0 + l, l_inv_t[l], l_t[l], l_su[l], l_sv[l], l_ray_x[l]);
+                }
             }
+#else
+            for (int x = s.x0; x < s.x1; ++x) {
+                const float ray_x = (float(x) + 0.5f) * f.ray_x + f.ray_dx;
+                const float inv_t = s.plane.x * ray_x + plane_row;
+                if (!(inv_t > 0.0f)) continue;
+                const float t = 1.0f / inv_t;
+                const float su = t * (s.dual_u.x * ray_x + u_row) - s.dual_u.w;
+                const float sv = t * (s.dual_v.x * ray_x + v_row) - s.dual_v.w;
+                if (su * su + sv * sv > 1.0f) continue;
+                write(x, inv_t, t, su, sv, ray_x);
+            }
+#endif
         }
     }
 }
+
+#pragma GCC diagnostic pop
 
 }  // namespace
 
@@ -96,9 +185,11 @@ glm::vec3 unpack_color(float packed) {
     return c * c;
 }
 
-void rasterize_preview_cpu(std::span<const SpriteRun> runs, const gpu::FrameBlock& frame, int width,
-                           int height, glm::vec4 background, PointSizeRange sizes, bool aux,
-                           CpuPreviewImage& out) {
+void rasterize_sprites_cpu(std::span<const SpriteRun> runs, const gpu::FrameBlock& frame, int width,
+                           int height, glm::vec4 background, PointSizeRange sizes, SpritePass pass, bool aux,
+                           CpuRasterImage& out) {
+    const bool visibility = pass == SpritePass::visibility;
+    aux = aux && !visibility;
     std::size_t n = 0;
     std::vector<std::size_t> run_first;
     run_first.reserve(runs.size());
@@ -108,12 +199,12 @@ void rasterize_preview_cpu(std::span<const SpriteRun> runs, const gpu::FrameBloc
     // Each sprite's covered pixels and unpacked values, in parallel (run by run).
     for (std::size_t r = 0; r < runs.size(); ++r) {
         const SpriteRun run = runs[r];
-        PreviewSprite* setup = out.setup.data() + run_first[r];
+        CpuSprite* setup = out.setup.data() + run_first[r];
         tbb::parallel_for(tbb::blocked_range<std::size_t>(0, run.count, 2048),
                           [&](const tbb::blocked_range<std::size_t>& range) {
                               for (std::size_t i = range.begin(); i != range.end(); ++i) {
                                   const SplatRecord& rec = run.records[i];
-                                  PreviewSprite& s = setup[i];
+                                  CpuSprite& s = setup[i];
                                   // The hidden mark (plane 0) discards every fragment: nothing to draw.
                                   if (rec.plane.x == 0.0f && rec.plane.y == 0.0f && rec.plane.z == 0.0f) {
                                       s.x0 = s.x1 = s.y0 = s.y1 = 0;
@@ -127,6 +218,7 @@ void rasterize_preview_cpu(std::span<const SpriteRun> runs, const gpu::FrameBloc
                                   s.plane = rec.plane, s.dual_u = rec.dual_u, s.dual_v = rec.dual_v;
                                   s.normal = glm::vec3(rec.normal);
                                   s.texture = run.texture;
+                                  if (visibility) continue;
                                   if (!run.texture) {
                                       s.color = pack_rgba16f(glm::vec4(unpack_color(rec.normal.w), 1.0f));
                                       continue;
@@ -146,7 +238,7 @@ void rasterize_preview_cpu(std::span<const SpriteRun> runs, const gpu::FrameBloc
     out.bin_first.assign(std::size_t(bands) + 1, 0u);
     glm::ivec2 lo(width, height), hi(0, 0);
     for (std::size_t i = 0; i < n; ++i) {
-        const PreviewSprite& s = out.setup[i];
+        const CpuSprite& s = out.setup[i];
         if (s.x0 >= s.x1 || s.y0 >= s.y1) continue;
         ++out.sprites;
         lo = glm::min(lo, glm::ivec2(s.x0, s.y0)), hi = glm::max(hi, glm::ivec2(s.x1, s.y1));
@@ -157,7 +249,7 @@ void rasterize_preview_cpu(std::span<const SpriteRun> runs, const gpu::FrameBloc
     {
         std::vector<std::uint32_t> fill(out.bin_first.begin(), out.bin_first.end() - 1);
         for (std::size_t i = 0; i < n; ++i) {
-            const PreviewSprite& s = out.setup[i];
+            const CpuSprite& s = out.setup[i];
             if (s.x0 >= s.x1 || s.y0 >= s.y1) continue;
             for (int b = s.y0 / band_rows; b <= (s.y1 - 1) / band_rows; ++b)
                 out.bins[fill[std::size_t(b)]++] = std::uint32_t(i);
@@ -170,7 +262,9 @@ void rasterize_preview_cpu(std::span<const SpriteRun> runs, const gpu::FrameBloc
     }
     out.rect = glm::ivec4(lo, hi - lo);
     const std::size_t pixels = std::size_t(out.rect.z) * std::size_t(out.rect.w);
-    out.color.resize(pixels), out.depth.resize(pixels);
+    out.depth.resize(pixels);
+    if (visibility) out.color.clear();
+    else out.color.resize(pixels);
     if (aux) out.aux.resize(pixels);
     else out.aux.clear();
     const std::uint64_t clear_color = pack_rgba16f(background);
@@ -184,17 +278,20 @@ void rasterize_preview_cpu(std::span<const SpriteRun> runs, const gpu::FrameBloc
                 const int row1 = std::min((b + 1) * band_rows, hi.y);
                 const std::size_t first = std::size_t(row0 - lo.y) * std::size_t(out.rect.z);
                 const std::size_t count = std::size_t(row1 - row0) * std::size_t(out.rect.z);
-                std::fill_n(out.color.data() + first, count, clear_color);
+                if (!visibility) std::fill_n(out.color.data() + first, count, clear_color);
                 std::fill_n(out.depth.data() + first, count, 1.0f);
                 const std::uint32_t* list = out.bins.data() + out.bin_first[std::size_t(b)];
                 const std::size_t listed = out.bin_first[std::size_t(b) + 1] - out.bin_first[std::size_t(b)];
-                if (aux) {
+                if (visibility) {
+                    draw_band<Write::visibility>(out, list, listed, row0, row1, f, nullptr, out.depth.data(),
+                                                 nullptr);
+                } else if (aux) {
                     std::fill_n(out.aux.data() + first, count, glm::vec4(0.0f, 0.0f, 0.0f, -1.0f));
-                    draw_band<true>(out, list, listed, row0, row1, f, out.color.data(), out.depth.data(),
-                                    out.aux.data());
+                    draw_band<Write::color_aux>(out, list, listed, row0, row1, f, out.color.data(),
+                                                out.depth.data(), out.aux.data());
                 } else {
-                    draw_band<false>(out, list, listed, row0, row1, f, out.color.data(), out.depth.data(),
-                                     nullptr);
+                    draw_band<Write::color>(out, list, listed, row0, row1, f, out.color.data(),
+                                            out.depth.data(), nullptr);
                 }
             }
         });

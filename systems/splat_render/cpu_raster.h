@@ -33,8 +33,8 @@ struct SpriteRun {
     const TexelView* texture = nullptr;
 };
 
-// One sprite as the rasteriser reads it (scratch of CpuPreviewImage).
-struct PreviewSprite {
+// One sprite as the rasteriser reads it (scratch of CpuRasterImage).
+struct CpuSprite {
     int x0 = 0, x1 = 0, y0 = 0, y1 = 0;  // the pixels whose centres its square holds: [x0, x1) x [y0, y1)
     glm::vec4 plane{0.0f}, dual_u{0.0f}, dual_v{0.0f};
     glm::vec3 normal{0.0f};   // world-space shading normal (the aux output)
@@ -51,7 +51,7 @@ struct PreviewSprite {
 // The rasterised part of the frame: `rect` (x, y, width, height from the frame's lower-left corner, inside
 // the frame) holds every pixel a sprite covered; rows bottom first, as glTextureSubImage2D reads them.
 // Outside it the frame is the background. The vectors keep their capacity between frames.
-struct CpuPreviewImage {
+struct CpuRasterImage {
     glm::ivec4 rect{0};
     std::vector<std::uint64_t> color;  // RGBA16F (four IEEE halves, r in the low bits): linear rgb, alpha 1
     std::vector<float> depth;          // window depth in [0, 1], 1 where nothing was drawn
@@ -60,9 +60,13 @@ struct CpuPreviewImage {
     std::vector<glm::vec4> aux;
     std::uint32_t sprites = 0;  // sprites that covered at least one pixel centre of the frame
     // Scratch of the rasteriser, kept for the next frame.
-    std::vector<PreviewSprite> setup;
+    std::vector<CpuSprite> setup;
     std::vector<std::uint32_t> bins, bin_first;
 };
+
+// Which pass's fragment code the sprites run: the preview's (colour, true depth) or the HQ visibility
+// pass's (visibility.frag: depth only, pushed back by the record's eps in plane.w along the view ray).
+enum class SpritePass { preview, visibility };
 
 // The sizes GL clamps gl_PointSize to (GL_POINT_SIZE_RANGE), so that a sprite covers the pixels it would
 // cover as a point.
@@ -74,10 +78,10 @@ struct PointSizeRange {
 // program's uniforms): for each pixel whose centre lies in a sprite's square (its side the clamped point
 // size), the ray-cast of preview.frag (raycast.glsl), kept where its window depth is less than what the
 // pixel holds (GL_LESS: the first of equal depths stays). Colours are unpack_color() of normal.w, or the
-// texture lit as SpriteRun says; `aux` also writes CpuPreviewImage::aux.
-void rasterize_preview_cpu(std::span<const SpriteRun> runs, const gpu::FrameBlock& frame, int width,
-                           int height, glm::vec4 background, PointSizeRange sizes, bool aux,
-                           CpuPreviewImage& out);
+// texture lit as SpriteRun says; `aux` also writes CpuRasterImage::aux.
+void rasterize_sprites_cpu(std::span<const SpriteRun> runs, const gpu::FrameBlock& frame, int width,
+                           int height, glm::vec4 background, PointSizeRange sizes, SpritePass pass, bool aux,
+                           CpuRasterImage& out);
 
 // unpack_color() of splat_common.glsl: the 10-10-10 bit square roots of a packed colour, squared.
 glm::vec3 unpack_color(float packed);
