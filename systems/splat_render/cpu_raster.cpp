@@ -60,7 +60,7 @@ void draw_band(const CpuRasterImage& img, const std::uint32_t* list, std::size_t
             const float plane_row = s.plane.y * ray_y - s.plane.z;
             const float u_row = s.dual_u.y * ray_y - s.dual_u.z, v_row = s.dual_v.y * ray_y - s.dual_v.z;
             float* drow = depth + std::size_t(y - ry) * std::size_t(stride) - rx;
-            std::uint64_t* crow = color + std::size_t(y - ry) * std::size_t(stride) - rx;
+            std::uint64_t* crow = color ? color + std::size_t(y - ry) * std::size_t(stride) - rx : nullptr;
             glm::vec4* arow =
                 Mode == Write::color_aux ? aux + std::size_t(y - ry) * std::size_t(stride) - rx : nullptr;
             const float ray_y2 = ray_y * ray_y + 1.0f;
