@@ -40,7 +40,18 @@ struct Depths {
 };
 
 // What a band writes: the preview's colour and depth (and aux), or the HQ visibility pass's depth only.
-enum class Write { color, color_aux, visibility };
+enum class Write { color, color_aux, visibility, attribute };
+
+// textureLod() of a mipmapped texture filtered GL_LINEAR_MIPMAP_LINEAR (magnified: GL_LINEAR at level 0):
+// bilinear in the two levels around lod, mixed by its fraction; past the last level, that level.
+glm::vec3 sample_texture_lod(const TexelView& t, glm::vec2 uv, float lod) {
+    if (!(lod > 0.0f)) return sample_texture(t, uv, 0);
+    const int levels = t.pyramid ? int(t.pyramid->levels.size()) : 0;
+    const float lo = std::floor(lod);
+    if (lo >= float(levels)) return sample_texture(t, uv, levels);
+    const int l = int(lo);
+    return glm::mix(sample_texture(t, uv, l), sample_texture(t, uv, l + 1), lod - lo);
+}
 
 // GCC 12's AVX-512 intrinsics (sqrt, min, max) pass _mm512_undefined_ps() as their unused merge source,
 // which -Wmaybe-uninitialized reports at every use.
@@ -49,7 +60,8 @@ enum class Write { color, color_aux, visibility };
 // Every sprite of one band (rows [row0, row1) of the frame) into the image.
 template <Write Mode>
 void draw_band(const CpuRasterImage& img, const std::uint32_t* list, std::size_t n, int row0, int row1,
-               const Depths& f, std::uint64_t* color, float* depth, glm::vec4* aux) {
+               const Depths& f, std::uint64_t* color, float* depth, glm::vec4* aux,
+               glm::vec4* accum_color = nullptr, glm::vec4* accum_normal = nullptr) {
     const int rx = img.rect.x, ry = img.rect.y, stride = img.rect.z;
     for (std::size_t k = 0; k < n; ++k) {
         const CpuSprite& s = img.setup[list[k]];
@@ -63,6 +75,12 @@ void draw_band(const CpuRasterImage& img, const std::uint32_t* list, std::size_t
             std::uint64_t* crow = color ? color + std::size_t(y - ry) * std::size_t(stride) - rx : nullptr;
             glm::vec4* arow =
                 Mode == Write::color_aux ? aux + std::size_t(y - ry) * std::size_t(stride) - rx : nullptr;
+            glm::vec4* acrow = Mode == Write::attribute
+                                   ? accum_color + std::size_t(y - ry) * std::size_t(stride) - rx
+                                   : nullptr;
+            glm::vec4* anrow = Mode == Write::attribute
+                                   ? accum_normal + std::size_t(y - ry) * std::size_t(stride) - rx
+                                   : nullptr;
             const float ray_y2 = ray_y * ray_y + 1.0f;
             // One pixel of the row: after the ray cast, its depth test and writes.
             auto write = [&](int x, float inv_t, float t, float su, float sv, float ray_x) {
@@ -74,6 +92,19 @@ void draw_band(const CpuRasterImage& img, const std::uint32_t* list, std::size_t
                     return;
                 }
                 const float d = std::clamp(0.5f * (f.p32 * inv_t - f.p22) + 0.5f, 0.0f, 1.0f);
+                if constexpr (Mode == Write::attribute) {
+                    if (!(d <= drow[x])) return;  // LEQUAL against the visibility pass, no depth write
+                    const float r2 = su * su + sv * sv, w = (1.0f - r2) * (1.0f - r2) + 1e-6f;
+                    glm::vec3 albedo = s.albedo;
+                    if (s.texture)
+                        albedo = sample_texture_lod(
+                            *s.texture,
+                            s.uv + su * glm::vec2(s.uv_axes) + sv * glm::vec2(s.uv_axes.z, s.uv_axes.w),
+                            s.lod);
+                    acrow[x] += glm::vec4(w * albedo, w);
+                    anrow[x] += glm::vec4(w * s.normal, w * t);
+                    return;
+                }
                 if (!(d < drow[x])) return;
                 drow[x] = d;
                 if (s.texture) {
@@ -115,7 +146,7 @@ void draw_band(const CpuRasterImage& img, const std::uint32_t* list, std::size_t
                 if (!m) continue;
                 // Depth test and writes in the vector where no per-pixel texture lookup or aux output is
                 // needed: the visibility pass and flat-coloured sprites.
-                if (Mode != Write::color_aux && !s.texture) {
+                if (Mode != Write::color_aux && Mode != Write::attribute && !s.texture) {
                     __m512 d;
                     if constexpr (Mode == Write::visibility) {
                         const __m512 len = _mm512_sqrt_ps(
@@ -188,7 +219,7 @@ glm::vec3 unpack_color(float packed) {
 void rasterize_sprites_cpu(std::span<const SpriteRun> runs, const gpu::FrameBlock& frame, int width,
                            int height, glm::vec4 background, PointSizeRange sizes, SpritePass pass, bool aux,
                            CpuRasterImage& out) {
-    const bool visibility = pass == SpritePass::visibility;
+    const bool visibility = pass != SpritePass::preview, hq = pass == SpritePass::hq;
     aux = aux && !visibility;
     std::size_t n = 0;
     std::vector<std::size_t> run_first;
@@ -218,6 +249,16 @@ void rasterize_sprites_cpu(std::span<const SpriteRun> runs, const gpu::FrameBloc
                                   s.plane = rec.plane, s.dual_u = rec.dual_u, s.dual_v = rec.dual_v;
                                   s.normal = glm::vec3(rec.normal);
                                   s.texture = run.texture;
+                                  if (hq) {  // splat.vert's attribute set-up: albedo or uv frame, level
+                                      if (!run.texture) {
+                                          s.albedo = unpack_color(rec.normal.w);
+                                          continue;
+                                      }
+                                      s.uv = glm::vec2(rec.uv);
+                                      s.uv_axes = glm::vec4(unpack_halves(rec.uv.z), unpack_halves(rec.uv.w));
+                                      s.lod = rec.normal.w;
+                                      continue;
+                                  }
                                   if (visibility) continue;
                                   if (!run.texture) {
                                       s.color = pack_rgba16f(glm::vec4(unpack_color(rec.normal.w), 1.0f));
@@ -258,6 +299,7 @@ void rasterize_sprites_cpu(std::span<const SpriteRun> runs, const gpu::FrameBloc
     if (out.sprites == 0) {
         out.rect = glm::ivec4(0);
         out.color.clear(), out.depth.clear(), out.aux.clear();
+        out.accum_color.clear(), out.accum_normal.clear();
         return;
     }
     out.rect = glm::ivec4(lo, hi - lo);
@@ -267,6 +309,8 @@ void rasterize_sprites_cpu(std::span<const SpriteRun> runs, const gpu::FrameBloc
     else out.color.resize(pixels);
     if (aux) out.aux.resize(pixels);
     else out.aux.clear();
+    if (hq) out.accum_color.resize(pixels), out.accum_normal.resize(pixels);
+    else out.accum_color.clear(), out.accum_normal.clear();
     const std::uint64_t clear_color = pack_rgba16f(background);
     const Depths f{frame.ray_map.x, frame.ray_map.y,        frame.ray_map.z,
                    frame.ray_map.w, frame.projection[3][2], frame.projection[2][2]};
@@ -285,6 +329,14 @@ void rasterize_sprites_cpu(std::span<const SpriteRun> runs, const gpu::FrameBloc
                 if (visibility) {
                     draw_band<Write::visibility>(out, list, listed, row0, row1, f, nullptr, out.depth.data(),
                                                  nullptr);
+                    // The band's visible depths are final: its attribute pass can run at once.
+                    if (hq) {
+                        std::fill_n(out.accum_color.data() + first, count, glm::vec4(0.0f));
+                        std::fill_n(out.accum_normal.data() + first, count, glm::vec4(0.0f));
+                        draw_band<Write::attribute>(out, list, listed, row0, row1, f, nullptr,
+                                                    out.depth.data(), nullptr, out.accum_color.data(),
+                                                    out.accum_normal.data());
+                    }
                 } else if (aux) {
                     std::fill_n(out.aux.data() + first, count, glm::vec4(0.0f, 0.0f, 0.0f, -1.0f));
                     draw_band<Write::color_aux>(out, list, listed, row0, row1, f, out.color.data(),

@@ -46,6 +46,9 @@ struct CpuSprite {
     glm::vec4 uv_axes{0.0f};
     int level = 0;
     glm::vec3 diffuse{0.0f}, specular{0.0f};
+    // HQ attribute pass: the flat albedo, or a textured sprite's (fractional) mip level.
+    glm::vec3 albedo{0.0f};
+    float lod = 0.0f;
 };
 
 // The rasterised part of the frame: `rect` (x, y, width, height from the frame's lower-left corner, inside
@@ -58,15 +61,21 @@ struct CpuRasterImage {
     // With aux outputs: the world normal and view-axis depth (preview.frag's out_aux), (0, 0, 0, -1)
     // where nothing was drawn; empty without.
     std::vector<glm::vec4> aux;
+    // SpritePass::hq: the attribute pass's sums (attribute.frag), Σw·rgb, Σw and Σw·normal, Σw·t; 0 where
+    // nothing was drawn.
+    std::vector<glm::vec4> accum_color, accum_normal;
     std::uint32_t sprites = 0;  // sprites that covered at least one pixel centre of the frame
     // Scratch of the rasteriser, kept for the next frame.
     std::vector<CpuSprite> setup;
     std::vector<std::uint32_t> bins, bin_first;
 };
 
-// Which pass's fragment code the sprites run: the preview's (colour, true depth) or the HQ visibility
-// pass's (visibility.frag: depth only, pushed back by the record's eps in plane.w along the view ray).
-enum class SpritePass { preview, visibility };
+// Which pass's fragment code the sprites run: the preview's (colour, true depth), the HQ visibility pass's
+// (visibility.frag: depth only, pushed back by the record's eps in plane.w along the view ray), or hq: that
+// visibility pass, then the attribute pass (attribute.frag: every hit whose true depth is within the
+// visible one, LEQUAL, adds its weight (1 - r²)² + 1e-6 times albedo, normal and view depth; textured
+// albedo filtered trilinearly at the record's level).
+enum class SpritePass { preview, visibility, hq };
 
 // The sizes GL clamps gl_PointSize to (GL_POINT_SIZE_RANGE), so that a sprite covers the pixels it would
 // cover as a point.

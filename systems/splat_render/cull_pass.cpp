@@ -126,9 +126,9 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
                           gpu.uniform_radius.empty() ? nullptr : gpu.uniform_radius.data()};
             const bool reduced_flat = settings.quality == Quality::preview && settings.preview_divider > 1 &&
                                       settings.reduced_preview_flat_texture;
-            // The CPU preview samples the texture's levels itself; a reduced preview colours sprites once.
+            // The CPU rasteriser samples the texture's levels itself; a reduced preview colours sprites once.
             const bool cpu_preview = plan.cpu_raster && settings.quality == Quality::preview;
-            if (gpu.texture && (reduced_flat || cpu_preview)) {
+            if (gpu.texture && (reduced_flat || plan.cpu_raster)) {
                 if (!gpu.pyramid_made) {
                     gpu.pyramid =
                         build_texture_pyramid(gpu.texture_texels->rgba8.data(), gpu.texture_texels->width,

@@ -129,8 +129,12 @@ std::uint32_t cpu_sprites(SplatRenderState& s, const FramePlan& plan, SpritePass
                                         runs.push_back({p, k});
                                     });
     }
-    if (runs.empty()) return 0;
     CpuRasterImage& image = s.cpu_raster;
+    if (runs.empty()) {  // nothing of last frame's image may be uploaded again (attribute_pass reads it)
+        image.rect = glm::ivec4(0);
+        image.sprites = 0;
+        return 0;
+    }
     rasterize_sprites_cpu(runs, plan.common, plan.width, plan.height, plan.common.background,
                           {s.min_point_size, s.max_point_size}, pass, plan.settings.aux_outputs, image);
     const glm::ivec4 r = image.rect;
@@ -142,7 +146,7 @@ std::uint32_t cpu_sprites(SplatRenderState& s, const FramePlan& plan, SpritePass
     glPixelStorei(GL_UNPACK_ALIGNMENT, 4);
     glTextureSubImage2D(s.depth.id(), 0, r.x, r.y, r.z, r.w, GL_DEPTH_COMPONENT, GL_FLOAT,
                         image.depth.data());
-    if (pass == SpritePass::visibility) return image.sprites;
+    if (pass != SpritePass::preview) return image.sprites;  // HQ: depth only (the sums go to attribute_pass)
     glTextureSubImage2D(s.color.id(), 0, r.x, r.y, r.z, r.w, GL_RGBA, GL_HALF_FLOAT, image.color.data());
     if (plan.settings.aux_outputs)
         glTextureSubImage2D(s.aux.id(), 0, r.x, r.y, r.z, r.w, GL_RGBA, GL_FLOAT, image.aux.data());
@@ -185,7 +189,8 @@ void visibility_pass(ecs::Registry& reg, SplatRenderState& s, const FramePlan& p
     auto scope = profiling::gpu_scope(reg, "render.hq.visibility");
     const bool big = !plan.compute.empty();
     if (big) compute_raster_visibility(s.compute_raster, *s.scan, plan.compute, plan.width, plan.height);
-    if (plan.cpu_raster) stats.cpu_sprites = cpu_sprites(s, plan, SpritePass::visibility);
+    if (plan.cpu_raster)
+        stats.cpu_sprites = cpu_sprites(s, plan, plan.cpu_hq ? SpritePass::hq : SpritePass::visibility);
     for (const CloudGpu* gpu : plan.drawn) {
         if (gpu->cpu_raster && gpu->cpu_cull.visible_quads == 0) continue;
         draw_cloud(s, s.visibility, *gpu, nullptr, big, !gpu->cpu_raster);
@@ -269,9 +274,19 @@ void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePl
     {
         auto scope = profiling::gpu_scope(reg, "render.hq.attribute");
         const bool big = !plan.compute.empty();
-        for (const CloudGpu* gpu : plan.drawn)
+        // The CPU's sums (made with its visibility pass) are the whole pass: nothing is left for GL.
+        if (plan.cpu_hq && s.cpu_raster.rect.z > 0 && s.cpu_raster.rect.w > 0) {
+            const glm::ivec4 r = s.cpu_raster.rect;
+            glTextureSubImage2D(s.accum_color.id(), 0, r.x, r.y, r.z, r.w, GL_RGBA, GL_FLOAT,
+                                s.cpu_raster.accum_color.data());
+            glTextureSubImage2D(s.accum_normal.id(), 0, r.x, r.y, r.z, r.w, GL_RGBA, GL_FLOAT,
+                                s.cpu_raster.accum_normal.data());
+        }
+        for (const CloudGpu* gpu : plan.drawn) {
+            if (plan.cpu_hq) break;
             draw_cloud(s, s.attribute[gpu->texture ? 1 : 0][materials], *gpu, &s.attribute[0][materials][0],
                        big);
+        }
         if (big) {
             compute_raster_attribute(s.compute_raster, plan.compute, rect, s.depth.id());
             glDepthFunc(GL_NOTEQUAL);  // the resolve runs where a surface is visible (not the cleared 1.0)

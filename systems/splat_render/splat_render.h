@@ -113,6 +113,7 @@ struct RenderStats {
                                     // changed clouds, their bounds, the CPU cull): 0 in a GPU-resident frame
     std::uint32_t cpu_sprites = 0;  // sprites the CPU rasterised this frame (SpritePath): preview or HQ
                                     // visibility
+    bool cpu_attribute = false;     // the HQ attribute pass ran on the CPU too (SpritePath)
     std::uint32_t gaussians = 0;    // 3D Gaussians submitted (all GaussianClouds), this frame
     double cull_ms = 0, visibility_ms = 0, attribute_ms = 0, shade_ms = 0, preview_ms = 0, total_ms = 0;
     double gaussian_ms = 0;  // the Gaussian pass (gaussian_pass.h), with time_passes

@@ -237,6 +237,9 @@ struct FramePlan {
     // The CPU-culled clouds' sprites are rasterised on the CPU (SpritePath): the preview's, or the HQ
     // visibility pass's.
     bool cpu_raster = false;
+    // HQ: the CPU also runs the attribute pass (SpritePass::hq), every cloud's sprites being its own and
+    // no quads left to GL (whose depth it would not see); GL only shades.
+    bool cpu_hq = false;
 };
 
 // The plan's drawn pixels as a rectangle (x, y, width, height) inside its frame: the whole frame when not

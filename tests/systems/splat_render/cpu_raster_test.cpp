@@ -187,6 +187,40 @@ TEST_F(CpuRaster, VisibilityPassWritesTheHitPushedBackByEps) {
     EXPECT_GT(drawn, 200);
 }
 
+// HQ: the visibility pass, then the attribute sums of every hit within eps of the visible depth: a disc
+// just behind the front one (within eps) adds to the sums, one further back does not.
+TEST_F(CpuRaster, HqSumsTheHitsWithinEpsOfTheVisibleSurface) {
+    const Disc front{{0.0, 0.0, -3.0}, {0.4, 0.0, 0.0}, {0.0, 0.4, 0.0}, {1.0f, 0.0f, 0.0f}};
+    Disc near = front, far = front;
+    near.c.z = -3.01, near.color = {0.0f, 1.0f, 0.0f};
+    far.c.z = -3.2, far.color = {0.0f, 0.0f, 1.0f};
+    std::vector<SplatRecord> recs{record(front, 40.0f), record(near, 40.0f), record(far, 40.0f)};
+    for (SplatRecord& r : recs) r.plane.w = 0.05f;  // eps, view units
+    CpuRasterImage img;
+    const SpriteRun run{recs.data(), recs.size()};
+    rasterize_sprites_cpu({&run, 1}, frame, W, H, background, {1.0f, 64.0f}, SpritePass::hq, false, img);
+    ASSERT_EQ(img.accum_color.size(), img.depth.size());
+    int checked = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            double t[3], r2[3] = {2, 2, 2};
+            const bool on[3] = {hit(front, x, y, t[0], r2[0]) && r2[0] < 0.999,
+                                hit(near, x, y, t[1], r2[1]) && r2[1] < 0.999,
+                                hit(far, x, y, t[2], r2[2]) && r2[2] < 0.999};
+            if (!on[0] || !on[1] || !on[2]) continue;
+            ++checked;
+            const glm::vec4 c = img.accum_color[at(img, x, y)], n = img.accum_normal[at(img, x, y)];
+            const double w0 = (1.0 - r2[0]) * (1.0 - r2[0]) + 1e-6, w1 = (1.0 - r2[1]) * (1.0 - r2[1]) + 1e-6;
+            EXPECT_NEAR(c.x, w0, 1e-4) << x << ", " << y;  // red: the front disc
+            EXPECT_NEAR(c.y, w1, 1e-4) << x << ", " << y;  // green: within eps behind it
+            EXPECT_EQ(c.z, 0.0f) << x << ", " << y;        // blue: too far behind
+            EXPECT_NEAR(c.w, w0 + w1, 1e-4);
+            EXPECT_NEAR(n.z, w0 + w1, 1e-4);  // both face the camera: normal (0, 0, 1)
+            EXPECT_NEAR(n.w, w0 * t[0] + w1 * t[1], 1e-3);
+        }
+    EXPECT_GT(checked, 100);
+}
+
 // GL_LESS in draw order: the nearer disc wins wherever both are; at an exact tie the first drawn stays.
 TEST_F(CpuRaster, NearerWinsAndTheFirstDrawnKeepsATie) {
     const Disc back{{0.0, 0.0, -3.0}, {0.4, 0.0, 0.0}, {0.0, 0.4, 0.0}, {1.0f, 0.0f, 0.0f}};

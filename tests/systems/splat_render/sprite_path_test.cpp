@@ -1,6 +1,8 @@
 // The preview's two rasterisers (RenderSettings::sprite_path): point sprites through GL and the CPU
 // rasteriser (cpu_raster.h) give the same frames, with GL drawing what the CPU leaves (quads, textured
 // sprites) depth-tested over the CPU's part; the automatic choice takes the CPU on software GL only.
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "tests/systems/splat_render/gl_fixture.h"
@@ -12,8 +14,9 @@ using namespace sffd::render::test;
 
 namespace {
 
-// A sphere of per-splat colours (a hue ramp, so a misplaced splat shows), some splats enlarged into quads.
-SplatCloud colored_sphere(bool textured) {
+// A sphere of per-splat colours (a hue ramp, so a misplaced splat shows), some splats enlarged into quads
+// (unless `quads` is false); `fine`: a texture fine enough to be minified.
+SplatCloud colored_sphere(bool textured, bool quads = true, bool fine = false) {
     SplatCloud s = fibonacci_sphere(20000, 1.0, 0.8);
     for (std::size_t i = 0; i < s.size(); ++i) {
         const auto r = std::uint32_t(40 + (i * 7) % 200), g = std::uint32_t(40 + (i * 13) % 200),
@@ -21,7 +24,31 @@ SplatCloud colored_sphere(bool textured) {
         s.colors[i] = r | (g << 8) | (b << 16) | 0xff000000u;
     }
     if (textured) add_checker(s);
-    for (std::size_t i = 0; i < s.size(); i += 211)
+    if (textured && fine) {  // 1024 x 512 texels, 4-texel squares: minified, so lookups blend mip levels
+        const int tw = 1024, th = 512;
+        s.texture.width = tw, s.texture.height = th;
+        s.texture.rgba8.clear();
+        for (int y = 0; y < th; ++y)
+            for (int x = 0; x < tw; ++x) {
+                const bool check = ((x / 4) + (y / 4)) % 2 == 0;
+                s.texture.rgba8.insert(s.texture.rgba8.end(),
+                                       {std::uint8_t(check ? 230 : 30), std::uint8_t(x / 4),
+                                        std::uint8_t(check ? 40 : 220), 255});
+            }
+        // The uv frame of the longitude / latitude map (its gradients along each splat's axes), so the
+        // lookups follow the texture across a splat and pick their mip level from it.
+        s.uv_axes.resize(s.size());
+        for (std::size_t i = 0; i < s.size(); ++i) {
+            const glm::vec3 p = s.positions[i];
+            const float rxz2 = std::max(p.x * p.x + p.z * p.z, 1e-6f);
+            const glm::vec3 gu = glm::vec3(-p.z, 0.0f, p.x) / (2.0f * 3.14159265f * rxz2);
+            const glm::vec3 gv(0.0f, 1.0f / (3.14159265f * std::sqrt(std::max(1.0f - p.y * p.y, 1e-6f))),
+                               0.0f);
+            s.uv_axes[i] = glm::vec4(glm::dot(gu, s.axis_u[i]), glm::dot(gv, s.axis_u[i]),
+                                     glm::dot(gu, s.axis_v[i]), glm::dot(gv, s.axis_v[i]));
+        }
+    }
+    for (std::size_t i = 0; quads && i < s.size(); i += 211)
         if (s.normals[i].z > 0.5f) s.axis_u[i] *= 25.0f, s.axis_v[i] *= 25.0f;
     return s;
 }
@@ -115,6 +142,36 @@ void compare_hq(SpritePath_& t, bool textured) {
 
 TEST_F(SpritePath_, CpuVisibilityPassGivesTheSameUntexturedHqFrame) { compare_hq(*this, false); }
 TEST_F(SpritePath_, CpuVisibilityPassGivesTheSameTexturedHqFrame) { compare_hq(*this, true); }
+
+// Without quads the CPU runs the attribute pass too (its sums uploaded, GL only shades): the same HQ frame,
+// textured (trilinear lookups) or not, culling on and off.
+void compare_cpu_hq(SpritePath_& t, bool textured) {
+    t.add_camera(3.2);  // the whole sphere in the frame: no sprite centred outside it (those are quads)
+    t.add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
+    t.add_cloud(colored_sphere(textured, false, true));
+    for (bool culling : {true, false}) {
+        SCOPED_TRACE(culling ? "culling" : "no culling");
+        t.sprite_path = SpritePath::raster;
+        const FrameImage gl = t.render(Quality::hq, 480, 320, culling, CullPath::cpu, RasterPath::raster);
+        const RenderStats gs = t.reg.resource<RenderStats>();
+        t.sprite_path = SpritePath::cpu;
+        const FrameImage cpu = t.render(Quality::hq, 480, 320, culling, CullPath::cpu, RasterPath::raster);
+        const RenderStats cs = t.reg.resource<RenderStats>();
+        EXPECT_FALSE(gs.cpu_attribute);
+        EXPECT_TRUE(cs.cpu_attribute);
+        EXPECT_EQ(cs.visible_quads, 0u);
+        const ImageDiff d = image_diff(gl, cpu);
+        EXPECT_GT(d.covered_a, 15000);
+        EXPECT_LE(d.coverage_mismatch, d.covered_a / 1000 + 2);
+        EXPECT_LE(d.over_2_percent, d.covered_a / 1000 + 2);
+        // Textured: the CPU's float-weight trilinear filter against llvmpipe's (see the previews above).
+        EXPECT_LT(d.mean_color, textured ? 2e-3 : 1e-3);
+        EXPECT_LT(d.max_depth, 1e-3);
+    }
+}
+
+TEST_F(SpritePath_, CpuAttributePassGivesTheSameUntexturedHqFrame) { compare_cpu_hq(*this, false); }
+TEST_F(SpritePath_, CpuAttributePassGivesTheSameTexturedHqFrame) { compare_cpu_hq(*this, true); }
 
 // automatic: the CPU on a software rasteriser (llvmpipe), GL on a hardware GPU, in preview and HQ frames.
 TEST_F(SpritePath_, AutomaticTakesTheCpuOnSoftwareGlOnly) {
