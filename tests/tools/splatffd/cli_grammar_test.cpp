@@ -188,8 +188,8 @@ TEST(CliGrammar, ProfileSaysWhatItRuns) {
     EXPECT_NE(r.out.find(" frames=4"), std::string::npos) << r.out;
 }
 
-// The preview rasteriser is auto, raster or cpu, for the editor and the profiler alike.
-TEST(CliGrammar, PreviewRasterTakesAutoRasterOrCpu) {
+// The sprite rasteriser is auto, raster or cpu, for the editor and the profiler alike.
+TEST(CliGrammar, SpriteRasterTakesAutoRasterOrCpu) {
     const auto view = sffd::test::run_headless("view --headless --frames 2 --sprite-raster gpu");
     EXPECT_EQ(view.code, 2) << view.out;
     EXPECT_NE(view.out.find("--sprite-raster takes auto, raster or cpu"), std::string::npos) << view.out;
