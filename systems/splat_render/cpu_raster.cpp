@@ -1,6 +1,8 @@
 // CPU rasteriser of the splats' sprites (cpu_raster.h).
 #include "systems/splat_render/cpu_raster.h"
 
+#include "systems/splat_render/texture_lookup.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -45,12 +47,9 @@ enum class Write { color, color_aux, visibility, attribute };
 // textureLod() of a mipmapped texture filtered GL_LINEAR_MIPMAP_LINEAR (magnified: GL_LINEAR at level 0):
 // bilinear in the two levels around lod, mixed by its fraction; past the last level, that level.
 glm::vec3 sample_texture_lod(const TexelView& t, glm::vec2 uv, float lod) {
-    if (!(lod > 0.0f)) return sample_texture(t, uv, 0);
-    const int levels = t.pyramid ? int(t.pyramid->levels.size()) : 0;
-    const float lo = std::floor(lod);
-    if (lo >= float(levels)) return sample_texture(t, uv, levels);
-    const int l = int(lo);
-    return glm::mix(sample_texture(t, uv, l), sample_texture(t, uv, l + 1), lod - lo);
+    const LevelBlend<float> b = trilinear_levels(lod, t.pyramid ? int(t.pyramid->levels.size()) : 0);
+    const glm::vec3 lo = sample_texture(t, uv, b.lo);
+    return b.hi == b.lo ? lo : glm::mix(lo, sample_texture(t, uv, b.hi), b.f);
 }
 
 // GCC 12's AVX-512 intrinsics (sqrt, min, max) pass _mm512_undefined_ps() as their unused merge source,

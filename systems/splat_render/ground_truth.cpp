@@ -436,13 +436,10 @@ glm::dvec4 ReferenceTexture::trilinear(const glm::dvec2& uv, const glm::dvec2& d
                                        const glm::dvec2& dy) const {
     const glm::dvec2 size(levels_[0].width, levels_[0].height);
     const double rho = std::max(glm::length(dx * size), glm::length(dy * size));
-    const double lambda = rho > 0.0 ? std::log2(rho) : -1.0;
-    if (!(lambda > 0.0)) return bilinear(uv, 0);  // magnification (and NaN derivatives): level 0
-    const double q = double(levels_.size() - 1);
-    if (lambda >= q) return bilinear(uv, int(q));
-    const int d1 = int(std::floor(lambda));
-    const double f = lambda - d1;
-    return glm::mix(bilinear(uv, d1), bilinear(uv, d1 + 1), f);
+    const double lambda = rho > 0.0 ? std::log2(rho) : -1.0;  // NaN derivatives: level 0
+    const LevelBlend<double> b = trilinear_levels(lambda, int(levels_.size()) - 1);
+    const glm::dvec4 lo = bilinear(uv, b.lo);
+    return b.hi == b.lo ? lo : glm::mix(lo, bilinear(uv, b.hi), b.f);
 }
 
 glm::dvec3 shade_reference(const ReferenceLights& lights, const glm::dvec3& albedo, const glm::dvec3& n,

@@ -1,7 +1,7 @@
 // Texel addressing shared by the CPU's texture lookups (the reduced preview's per-splat colours,
-// cpu_cull.h, and the ground truth's, ground_truth.h), as GL samples the material texture
-// (render_state.cpp): mip levels halve, rounded down, to 1; bilinear between texel centres with u
-// repeating and v clamped to the edge.
+// cpu_cull.h, the CPU sprite rasteriser's, cpu_raster.h, and the ground truth's, ground_truth.h), as GL
+// samples the material texture (render_state.cpp): mip levels halve, rounded down, to 1; bilinear between
+// texel centres with u repeating and v clamped to the edge; trilinear between levels.
 #pragma once
 
 #include <algorithm>
@@ -29,6 +29,22 @@ BilinearTaps<T> bilinear_taps(T u, T v, int width, int height) {
     t.y0 = std::clamp(int(fy), 0, height - 1), t.y1 = std::clamp(int(fy) + 1, 0, height - 1);
     t.ax = x - fx, t.ay = y - fy;
     return t;
+}
+
+// The levels GL_LINEAR_MIPMAP_LINEAR blends at level of detail lambda in a texture whose last level is
+// `last`: level 0 alone when magnified (lambda <= 0, or NaN), the last alone past it, else the two around
+// lambda mixed by its fraction (lo's weight 1 - f, hi's f).
+template <class T>
+struct LevelBlend {
+    int lo = 0, hi = 0;
+    T f = 0;
+};
+template <class T>
+LevelBlend<T> trilinear_levels(T lambda, int last) {
+    if (!(lambda > T(0))) return {};
+    if (lambda >= T(last)) return {last, last, T(0)};
+    const T lo = std::floor(lambda);
+    return {int(lo), int(lo) + 1, lambda - lo};
 }
 
 // The next mip level's size.
