@@ -2,6 +2,7 @@
 // background, sRGB-encoded: the display pass writes it straight into the window's back buffer. The window
 // screenshot's pixels in the middle of the view (where no panel is) are compared with the same frame's
 // linear capture (EXR), encoded on the CPU.
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
@@ -48,6 +49,25 @@ protected:
         EXPECT_EQ(shown.height, linear.height);
         return shown.width == linear.width && shown.height == linear.height;
     }
+    // The view's background (view_app.cpp) where nothing was drawn; the capture keeps alpha 0 there.
+    static glm::vec3 background() { return {0.045f, 0.05f, 0.06f}; }
+    // fn(capture's colour, the capture encoded over the background (8-bit sRGB), the window's pixel) for
+    // each pixel in the middle of the view: between the panel columns, below the menu and above the
+    // Timeline of the 1280x720 layout.
+    template <class Fn>
+    void for_each_view_pixel(Fn&& fn) const {
+        for (int y = 40; y < 600; ++y)
+            for (int x = 280; x < 940; ++x) {
+                const glm::vec4 c = linear.color[linear.index(x, y)];
+                const glm::vec3 want = glm::mix(background(), glm::vec3(c), glm::clamp(c.w, 0.0f, 1.0f));
+                const std::uint8_t* p =
+                    &shown.pixels[(std::size_t(y) * std::size_t(shown.width) + std::size_t(x)) * 4];
+                fn(c,
+                   glm::ivec3(render::encode_srgb8(want.x), render::encode_srgb8(want.y),
+                              render::encode_srgb8(want.z)),
+                   glm::ivec3(p[0], p[1], p[2]));
+            }
+    }
     fs::path dir;
     render::Rgba8Image shown;
     render::FrameImage linear;
@@ -57,21 +77,12 @@ protected:
 
 TEST_F(WindowDisplay, TheWindowShowsTheFrameEncodedOverTheBackground) {
     ASSERT_TRUE(view("--size 1280x720 --quality preview --frames 3"));
-    // The view's background (view_app.cpp) where nothing was drawn; the capture keeps alpha 0 there.
-    const glm::vec3 background(0.045f, 0.05f, 0.06f);
     int compared = 0, covered = 0, off = 0, worst = 0;
-    // Between the panel columns, below the menu and above the Timeline (1280x720 layout).
-    for (int y = 40; y < 600; ++y)
-        for (int x = 280; x < 940; ++x) {
-            const glm::vec4 c = linear.color[linear.index(x, y)];
-            const glm::vec3 want = glm::mix(background, glm::vec3(c), glm::clamp(c.w, 0.0f, 1.0f));
-            const std::uint8_t* p =
-                &shown.pixels[(std::size_t(y) * std::size_t(shown.width) + std::size_t(x)) * 4];
-            int d = 0;
-            for (int k = 0; k < 3; ++k)
-                d = std::max(d, std::abs(int(p[k]) - int(render::encode_srgb8(want[k]))));
-            ++compared, covered += c.w > 0.0f, off += d > 1, worst = std::max(worst, d);
-        }
+    for_each_view_pixel([&](glm::vec4 c, glm::ivec3 want, glm::ivec3 got) {
+        const glm::ivec3 e = glm::abs(got - want);
+        const int d = std::max({e.x, e.y, e.z});
+        ++compared, covered += c.w > 0.0f, off += d > 1, worst = std::max(worst, d);
+    });
     EXPECT_GT(covered, compared / 10) << "the sphere is not in the middle of the window";
     // One level of rounding between the GPU's and the CPU's encoding; nothing more anywhere.
     EXPECT_EQ(off, 0) << "worst difference " << worst << " levels";
@@ -85,27 +96,19 @@ TEST_F(WindowDisplay, TheWindowShowsTheFrameEncodedOverTheBackground) {
 TEST_F(WindowDisplay, WhileDraggingTheWindowShowsTheLatticeBeyondTheSurface) {
     ASSERT_TRUE(view("--replay " + (fs::path(SFFD_TEST_DATA_DIR) / "editor/session.txt").string() +
                      " --frames 40 --save " + (dir / "saved.glb").string()));
-    const glm::vec3 background(0.045f, 0.05f, 0.06f);
-    std::uint8_t bg8[3];
-    for (int k = 0; k < 3; ++k) bg8[k] = render::encode_srgb8(background[k]);
+    const glm::ivec3 bg8(render::encode_srgb8(background().x), render::encode_srgb8(background().y),
+                         render::encode_srgb8(background().z));
     int compared = 0, covered = 0, lost = 0, off = 0;
-    for (int y = 40; y < 600; ++y)
-        for (int x = 280; x < 940; ++x) {
-            const glm::vec4 c = linear.color[linear.index(x, y)];
-            const glm::vec3 want = glm::mix(background, glm::vec3(c), glm::clamp(c.w, 0.0f, 1.0f));
-            const std::uint8_t* p =
-                &shown.pixels[(std::size_t(y) * std::size_t(shown.width) + std::size_t(x)) * 4];
-            int d = 0, from_bg = 0, want_bg = 0;
-            for (int k = 0; k < 3; ++k) {
-                const int e = render::encode_srgb8(want[k]);
-                d = std::max(d, std::abs(int(p[k]) - e));
-                from_bg = std::max(from_bg, std::abs(int(p[k]) - int(bg8[k])));
-                want_bg = std::max(want_bg, std::abs(e - int(bg8[k])));
-            }
-            ++compared, covered += c.w > 0.0f;
-            lost += c.w > 0.0f && want_bg > 2 && from_bg <= 1 ? 1 : 0;
-            off += d > 1;
-        }
+    for_each_view_pixel([&](glm::vec4 c, glm::ivec3 want, glm::ivec3 got) {
+        const glm::ivec3 d = glm::abs(got - want), from_bg = glm::abs(got - bg8),
+                         want_bg = glm::abs(want - bg8);
+        ++compared, covered += c.w > 0.0f;
+        lost += c.w > 0.0f && std::max({want_bg.x, want_bg.y, want_bg.z}) > 2 &&
+                        std::max({from_bg.x, from_bg.y, from_bg.z}) <= 1
+                    ? 1
+                    : 0;
+        off += std::max({d.x, d.y, d.z}) > 1;
+    });
     EXPECT_GT(covered, compared / 5) << "the sphere and its lattice are not in the view";
     EXPECT_EQ(lost, 0) << "drawn pixels the window shows as background";
     EXPECT_LT(off, compared / 100) << "more differences than the gizmo's";

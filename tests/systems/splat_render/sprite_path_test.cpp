@@ -57,6 +57,21 @@ class SpritePath_ : public GlRenderTest {
 public:
     using GlRenderTest::add_camera, GlRenderTest::add_light, GlRenderTest::add_cloud;
     using GlRenderTest::preview_divider, GlRenderTest::sprite_path, GlRenderTest::render, GlRenderTest::reg;
+    // One HQ frame through GL's point sprites and one through the CPU's, with their stats.
+    struct HqPair {
+        FrameImage gl, cpu;
+        RenderStats gl_stats, cpu_stats;
+    };
+    HqPair hq_both(bool culling) {
+        HqPair p;
+        sprite_path = SpritePath::raster;
+        p.gl = render(Quality::hq, 480, 320, culling, CullPath::cpu, RasterPath::raster);
+        p.gl_stats = reg.resource<RenderStats>();
+        sprite_path = SpritePath::cpu;
+        p.cpu = render(Quality::hq, 480, 320, culling, CullPath::cpu, RasterPath::raster);
+        p.cpu_stats = reg.resource<RenderStats>();
+        return p;
+    }
     FrameImage preview(SpritePath path, bool culling, RenderStats& stats) {
         sprite_path = path;
         FrameImage img = render(Quality::preview, 480, 320, culling, CullPath::cpu);
@@ -118,12 +133,7 @@ void compare_hq(SpritePath_& t, bool textured) {
     t.add_cloud(colored_sphere(textured));
     for (bool culling : {true, false}) {
         SCOPED_TRACE(culling ? "culling" : "no culling");
-        t.sprite_path = SpritePath::raster;
-        const FrameImage gl = t.render(Quality::hq, 480, 320, culling, CullPath::cpu, RasterPath::raster);
-        const RenderStats gs = t.reg.resource<RenderStats>();
-        t.sprite_path = SpritePath::cpu;
-        const FrameImage cpu = t.render(Quality::hq, 480, 320, culling, CullPath::cpu, RasterPath::raster);
-        const RenderStats cs = t.reg.resource<RenderStats>();
+        const auto [gl, cpu, gs, cs] = t.hq_both(culling);
         EXPECT_EQ(gs.cpu_sprites, 0u);
         EXPECT_GT(cs.cpu_sprites, culling ? cs.visible_points * 9 / 10 : cs.visible_points / 4);
         EXPECT_GE(cs.visible_quads, 5u);
@@ -151,12 +161,7 @@ void compare_cpu_hq(SpritePath_& t, bool textured) {
     t.add_cloud(colored_sphere(textured, false, true));
     for (bool culling : {true, false}) {
         SCOPED_TRACE(culling ? "culling" : "no culling");
-        t.sprite_path = SpritePath::raster;
-        const FrameImage gl = t.render(Quality::hq, 480, 320, culling, CullPath::cpu, RasterPath::raster);
-        const RenderStats gs = t.reg.resource<RenderStats>();
-        t.sprite_path = SpritePath::cpu;
-        const FrameImage cpu = t.render(Quality::hq, 480, 320, culling, CullPath::cpu, RasterPath::raster);
-        const RenderStats cs = t.reg.resource<RenderStats>();
+        const auto [gl, cpu, gs, cs] = t.hq_both(culling);
         EXPECT_FALSE(gs.cpu_attribute);
         EXPECT_TRUE(cs.cpu_attribute);
         EXPECT_EQ(cs.visible_quads, 0u);
