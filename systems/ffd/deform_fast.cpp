@@ -1,12 +1,13 @@
 // Fast float kernels (compiled with -O3 -ffp-contract=fast; the vector width follows the build: 16 lanes
 // with AVX-512 (-march=native on this machine), 8 with AVX2).
 //
-// Bernstein (dense): W points in the W lanes of one vector; the u-basis (and its derivative) stays in
+// Bernstein (dense): W points in the W lanes of one vector; the u-basis (and the degree below it) stays in
 // registers while every control point's displacement is broadcast, and the sum is factorised
-// Q[i][j] = Σ_k ΔP B_k(u), R[i] = Σ_j Q B_j(t), D = Σ_i R B_i(s): ~9.2k multiply-adds per point for an
-// 11³ lattice with normals and axes. Sparse: the same lanes, but only moved control points are summed.
-// B-spline: one point at a time; ΔP lives in a zero-bordered grid stored x,y,z,0 so the four k-neighbours
-// of one (i,j) are 16 contiguous floats (one vector load), 16 loads per point.
+// Q[i][j] = Σ_k ΔP B_k(u), R[i] = Σ_j Q B_j(t), D = Σ_i R B_i(s), the u-derivative over the rows' forward
+// differences: ~8.8k multiply-adds per point for an 11³ lattice with normals and axes. Sparse: the same
+// lanes, but only moved control points are summed. B-spline: one point at a time; ΔP lives in a zero-bordered
+// grid stored x,y,z,0 so the four k-neighbours of one (i,j) are 16 contiguous floats (one vector load), 16
+// loads per point.
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -124,17 +125,35 @@ inline void bernstein(vf s, int L, vf* b, vf* db) {
     b[0] = r * b[0];
 }
 
+// Bernstein basis of degree L (b[0..L]) and of degree L-1 (lower[0..L-1]), the step before it.
+inline void bernstein_with_lower(vf s, int L, vf* b, vf* lower) {
+    const vf one = splat(1.0f), r = one - s;
+    b[0] = one;
+    for (int d = 1; d < L; ++d) {
+        b[d] = s * b[d - 1];
+        for (int i = d - 1; i >= 1; --i) b[i] = r * b[i] + s * b[i - 1];
+        b[0] = r * b[0];
+    }
+    for (int i = 0; i < L; ++i) lower[i] = b[i];
+    b[L] = s * b[L - 1];
+    for (int i = L - 1; i >= 1; --i) b[i] = r * b[i] + s * b[i - 1];
+    b[0] = r * b[0];
+}
+
+// The u-derivative is summed over the rows' forward differences (du4: N (ΔP[k+1] − ΔP[k])) against the
+// degree N-1 basis: dB(N,k)/du = N (B(N-1,k-1) − B(N-1,k)) regrouped, N terms a row instead of N+1.
 template <int KC, bool Full>
 void bernstein_group(const Prepared& P, Group& g) {
     const int L = P.L, M = P.M;
     const int K = KC ? KC : P.N + 1;
     constexpr int KA = KC ? KC : kMaxB;
-    vf bs[kMaxB], dbs[kMaxB], bt[kMaxB], dbt[kMaxB], bu[KA], dbu[KA];
+    vf bs[kMaxB], dbs[kMaxB], bt[kMaxB], dbt[kMaxB], bu[KA], bl[KA];
     bernstein(loadv(g.s), L, bs, dbs);
     bernstein(loadv(g.t), M, bt, dbt);
-    bernstein(loadv(g.u), K - 1, bu, dbu);
+    bernstein_with_lower(loadv(g.u), K - 1, bu, bl);
     vf X[3] = {}, Fs[3] = {}, Ft[3] = {}, Fu[3] = {};
     const float* dp = P.dp4.data();
+    const float* du = P.du4.data();
     const std::uint8_t* nz = P.row_nonzero.data();
     for (int i = 0; i <= L; ++i) {
         vf R[3] = {}, Rt[3] = {}, Ru[3] = {};
@@ -142,16 +161,18 @@ void bernstein_group(const Prepared& P, Group& g) {
             const int row = i * (M + 1) + j;
             if (!nz[row]) continue;
             const float* c = dp + std::size_t(row) * K * 4;
+            const float* e = du + std::size_t(row) * (K - 1) * 4;
             vf q0 = {}, q1 = {}, q2 = {}, w0 = {}, w1 = {}, w2 = {};
             for (int k = 0; k < K; ++k) {
                 q0 += bu[k] * c[4 * k + 0];
                 q1 += bu[k] * c[4 * k + 1];
                 q2 += bu[k] * c[4 * k + 2];
-                if constexpr (Full) {
-                    w0 += dbu[k] * c[4 * k + 0];
-                    w1 += dbu[k] * c[4 * k + 1];
-                    w2 += dbu[k] * c[4 * k + 2];
-                }
+                if constexpr (Full)
+                    if (k < K - 1) {
+                        w0 += bl[k] * e[4 * k + 0];
+                        w1 += bl[k] * e[4 * k + 1];
+                        w2 += bl[k] * e[4 * k + 2];
+                    }
             }
             R[0] += q0 * bt[j], R[1] += q1 * bt[j], R[2] += q2 * bt[j];
             if constexpr (Full) {
@@ -499,6 +520,19 @@ Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin, PrepareFor us
             d[0] = m.d[0], d[1] = m.d[1], d[2] = m.d[2];
             P.row_nonzero[std::size_t(m.i) * (M + 1) + m.j] = 1;
         }
+        // The differences from the double displacements (not the rounded floats).
+        P.du4.assign(std::size_t(L + 1) * (M + 1) * N * 4, 0.0f);
+        for (int i = 0; i <= L; ++i)
+            for (int j = 0; j <= M; ++j) {
+                if (!P.row_nonzero[std::size_t(i) * (M + 1) + j]) continue;
+                float* row = &P.du4[(std::size_t(i) * (M + 1) + j) * N * 4];
+                for (int k = 0; k < N; ++k) {
+                    const std::size_t a = l.index(i, j, k), b = l.index(i, j, k + 1);
+                    const glm::dvec3 d =
+                        double(N) * ((l.current[b] - l.rest[b]) - (l.current[a] - l.rest[a]));
+                    row[k * 4 + 0] = float(d.x), row[k * 4 + 1] = float(d.y), row[k * 4 + 2] = float(d.z);
+                }
+            }
     } else {
         P.grid.assign(std::size_t(L + 3) * (M + 3) * (N + 3) * 4, 0.0f);
         for (const auto& m : P.moved) {

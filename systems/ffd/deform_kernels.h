@@ -17,6 +17,7 @@ struct Prepared {
     LatticeBasis basis = LatticeBasis::bernstein;
     std::vector<float> dp4;                 // Bernstein: ΔP as x,y,z,0 per control point, flat index
     std::vector<std::uint8_t> row_nonzero;  // Bernstein: (i,j) rows with any nonzero ΔP
+    std::vector<float> du4;  // Bernstein: N (ΔP[k+1] − ΔP[k]), k < N, as x,y,z,0 per (i,j) row
     struct Moved {
         int i, j, k;
         float d[3];
