@@ -9,6 +9,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/gtc/quaternion.hpp>
@@ -197,22 +198,30 @@ TEST(GaussianDeformFast, FlattenedCellsCountAsDegenerateWithoutNaN) {
     EXPECT_EQ(fast.sh, g.sh);
 }
 
-// Coefficients that are not finite (a cloud made in memory: readers refuse them) are dropped by both
-// kernels, into another cloud (whole vector groups of degree 3 are checked before their rows are streamed
-// out) and in place, whether the lattice moves the Gaussian or not: the same ones, transparent, no
-// colour left, counted.
+// Coefficients that are not finite (a cloud made in memory: readers refuse them), or a rotation that is not
+// a unit quaternion, are dropped by both kernels, into another cloud (whole vector groups of degree 3 are
+// checked before their rows are streamed out) and in place, whether the lattice moves the Gaussian or not:
+// the same ones, transparent, no colour left, counted.
 TEST(GaussianDeformFast, NonFiniteCoefficientsAreDroppedIntoAnotherCloudAndInPlace) {
     const Lattice l = twisted(LatticeBasis::bernstein, 4);
     GaussianCloud g = cloud(16 * 4 + 5, 3, 5);  // whole groups at every lane width, and a partial one
     const std::size_t row = 48;
-    const std::vector<std::size_t> bad = {3, 17, 40, 41, 63, 66};
-    for (std::size_t b = 0; b < bad.size(); ++b) {
-        const std::size_t i = bad[b];
+    // Gaussian, coefficient: bands 1-3, and the band 0 colour (never rotated) of one inside and one outside.
+    const std::vector<std::pair<std::size_t, std::size_t>> bad_at = {{3, 3},  {17, 10}, {40, 17}, {41, 24},
+                                                                     {50, 1}, {51, 2},  {63, 31}, {66, 38}};
+    std::vector<std::size_t> bad;
+    for (std::size_t b = 0; b < bad_at.size(); ++b) {
+        const auto [i, k] = bad_at[b];
+        bad.push_back(i);
         // Half inside the lattice (rotated), half outside (copied).
         g.positions[i] = b % 2 ? glm::vec3(0.1f, -0.2f, 0.3f) : glm::vec3(1.5f, 0.0f, 0.0f);
-        g.sh[i * row + 3 + 7 * b] =
+        g.sh[i * row + k] =
             b % 3 ? std::numeric_limits<float>::quiet_NaN() : std::numeric_limits<float>::infinity();
     }
+    // A zero rotation outside the lattice is copied as it is, not a unit quaternion: dropped too.
+    g.positions[25] = glm::vec3(0.0f, 1.5f, 0.0f);
+    g.rotations[25] = glm::quat(0.0f, 0.0f, 0.0f, 0.0f);
+    bad.push_back(25);
     for (bool in_place : {false, true})
         for (bool reference : {false, true}) {
             const std::string what = std::string(in_place ? "in place" : "into another cloud") +
