@@ -97,13 +97,13 @@ inline M3 sel(vm m, const M3& a, const M3& b) {
 }
 inline M3 identity() { return {{splat3(1, 0, 0), splat3(0, 1, 0), splat3(0, 0, 1)}}; }
 
-// One Hestenes rotation of columns p, q where `go`: makes them orthogonal (no-op where they already are to
-// float precision, or either is zero).
-inline void orthogonalise(vm go, V3& bp, V3& bq) {
+// One Hestenes rotation of columns p, q: makes them orthogonal where they are not yet to float precision
+// (|γ| > 1e-7 sqrt(αβ), squared; columns too small to tell are left), and adds those lanes to `rotated`.
+inline void orthogonalise(V3& bp, V3& bq, vm& rotated) {
     const vf alpha = dot(bp, bp), beta = dot(bq, bq), gamma = dot(bp, bq);
-    // |γ| > 1e-7 sqrt(αβ), squared: no square root.
-    const vm act = go & (gamma * gamma > 1e-14f * (alpha * beta)) & (gamma != 0.0f);
+    const vm act = (gamma * gamma > 1e-14f * vmax(alpha * beta, splat(1e-37f))) & (gamma != 0.0f);
     if (!any(act)) return;
+    rotated |= act;
     const vf g2 = 2.0f * sel(act, gamma, splat(1.0f));
     vf zeta = (beta - alpha) * rcp(g2);
     const vm tiny = vabs(g2) < 1e-30f;  // outside rcp()'s range: divide
@@ -125,16 +125,14 @@ inline void orthogonalise(vm go, V3& bp, V3& bq) {
 // Axes (a proper rotation) and scales (descending) of A Aᵀ: one-sided Jacobi on the columns of A.
 void decompose(const M3& a, M3& axes, V3& scale) {
     V3 b0 = a.c[0], b1 = a.c[1], b2 = a.c[2];
+    // Sweeps until one rotates nothing: each pair tests its own columns, so no separate test of all three
+    // (deform.comp tests all three first; the criterion is the same, |γ| ≤ 1e-7 sqrt(αβ) for every pair).
     for (int sweep = 0; sweep < 12; ++sweep) {
-        const vf n0 = dot(b0, b0), n1 = dot(b1, b1), n2 = dot(b2, b2);
-        const vf off = vmax(vmax(vabs(dot(b0, b1)) * rsqrt(vmax(n0 * n1, splat(1e-37f))),
-                                 vabs(dot(b0, b2)) * rsqrt(vmax(n0 * n2, splat(1e-37f)))),
-                            vabs(dot(b1, b2)) * rsqrt(vmax(n1 * n2, splat(1e-37f))));
-        const vm go = off > 1e-7f;
-        if (!any(go)) break;
-        orthogonalise(go, b0, b1);
-        orthogonalise(go, b0, b2);
-        orthogonalise(go, b1, b2);
+        vm rotated = vm{};
+        orthogonalise(b0, b1, rotated);
+        orthogonalise(b0, b2, rotated);
+        orthogonalise(b1, b2, rotated);
+        if (!any(rotated)) break;
     }
     vf s0 = vsqrt(dot(b0, b0)), s1 = vsqrt(dot(b1, b1)), s2 = vsqrt(dot(b2, b2));
     auto swap_if = [](vm m, V3& p, V3& q, vf& sp, vf& sq) {
