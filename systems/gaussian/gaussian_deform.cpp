@@ -79,7 +79,7 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
     std::vector<glm::vec3> centres(
         std::min(n, kBlock));  // the block's input centres (in-place overwrites them)
     const bool drop_opacity = out.opacities.size() == n;
-    std::vector<std::uint8_t> not_finite_shape(options.reference_shapes ? 0 : std::min(n, kBlock));
+    std::vector<std::uint8_t> to_drop(options.reference_shapes ? 0 : std::min(n, kBlock));
     for (std::size_t first = 0; first < n; first += kBlock) {
         const std::size_t count = std::min(kBlock, n - first);
         std::copy(in.positions.begin() + std::ptrdiff_t(first),
@@ -132,24 +132,28 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
         };
         std::atomic<std::size_t> degenerate{0}, not_finite{0};
         // As the GPU pass does (deform.comp): a result that is not finite is never left for the renderer; the
-        // Gaussian keeps its input centre with scale 0 and opacity 0, and is counted. Both CPU kernels pass
-        // here. J is tested too, as the shader does: a non-finite J can still give a finite-looking shape.
-        auto drop_if_not_finite = [&](std::size_t i, std::size_t b, bool shape_ok) -> std::size_t {
-            const glm::mat3& j = jac[b];
-            if (finite3(j[0]) && finite3(j[1]) && finite3(j[2]) && finite_result(out, i, shape_ok, view_mode))
-                return 0;
-            out.positions[i] = centres[b];
+        // Gaussian keeps its input centre (the origin if that is not finite) with scale 0 and opacity 0, and
+        // is counted. Both CPU kernels pass here. J is tested too, as the shader does: a non-finite J can
+        // still give a finite-looking shape.
+        auto drop = [&](std::size_t i, std::size_t b) {
+            out.positions[i] = finite3(centres[b]) ? centres[b] : glm::vec3(0.0f);  // never a NaN to sort
             out.scales[i] = glm::vec3(0.0f);
             out.rotations[i] = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
             std::fill_n(&out.sh[i * std::size_t(K) * 3], K * 3, 0.0f);
             if (view_mode) out.sh_frames[i] = glm::mat3(1.0f);
             if (drop_opacity) out.opacities[i] = 0.0f;
+        };
+        auto drop_if_not_finite = [&](std::size_t i, std::size_t b, bool shape_ok) -> std::size_t {
+            const glm::mat3& j = jac[b];
+            if (finite3(j[0]) && finite3(j[1]) && finite3(j[2]) && finite_result(out, i, shape_ok, view_mode))
+                return 0;
+            drop(i, b);
             return 1;
         };
         if (!options.reference_shapes) {
             // The vectorised float kernel (the GPU pass's arithmetic); ranges split on whole vectors.
-            const detail::FastShapeArgs args{
-                &in, &out, jac.data(), first, view_mode, frames_in, not_finite_shape.data()};
+            const detail::FastShapeArgs args{&in,       &out,      jac.data(),    first,
+                                             view_mode, frames_in, to_drop.data()};
             const std::size_t w = std::size_t(detail::shape_lane_width());
             const std::size_t groups = (count + w - 1) / w;
             tbb::parallel_for(tbb::blocked_range<std::size_t>(0, groups, 64),
@@ -158,7 +162,7 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
                                   degenerate += detail::deform_shapes_fast(args, b0, b1);
                                   std::size_t dropped = 0;
                                   for (std::size_t b = b0; b < b1; ++b)
-                                      dropped += drop_if_not_finite(first + b, b, !not_finite_shape[b]);
+                                      if (to_drop[b]) drop(first + b, b), ++dropped;
                                   not_finite += dropped;
                               });
             total.degenerate += degenerate.load();

@@ -366,6 +366,10 @@ inline vm near_singular(const M3& j) {
     return __builtin_convertvector(~regular, vm);
 }
 
+inline bool finite3(const glm::vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
 // Lanes where x is not finite, OR-ed over `count` vectors of p.
 inline vm not_finite_any(const float (*p)[W], int count) {
     vm bad = vm{};
@@ -543,14 +547,22 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
         rows_out = &sh_rows[0][0];
     }
     if (stream) stream_floats(rows_out, &out.sh[first * stride], std::size_t(W) * 48);
-    if (a.not_finite && checked)
-        for (int l = 0; l < n; ++l) a.not_finite[first + std::size_t(l) - a.first] = not_finite[l] != 0;
-    else if (a.not_finite)
+    if (a.not_finite) {
+        // J itself too, as the shader tests it: a J that is not finite can still give a finite-looking shape.
+        vm bad = checked ? not_finite : vm{};
+        for (int c = 0; c < 3; ++c) bad |= ~finite(J.c[c].x) | ~finite(J.c[c].y) | ~finite(J.c[c].z);
         for (int l = 0; l < n; ++l) {
             const std::size_t i = first + std::size_t(l);
-            const float* row = stream ? rows_out + std::size_t(l) * 48 : &out.sh[i * stride];
-            a.not_finite[i - a.first] = !finite_shape(out.scales[i], out.rotations[i], row, stride);
+            bool drop = bad[l] != 0 || !finite3(out.positions[i]);
+            if (!checked) {
+                const float* row = stream ? rows_out + std::size_t(l) * 48 : &out.sh[i * stride];
+                drop = drop || !finite_shape(out.scales[i], out.rotations[i], row, stride);
+            }
+            if (a.view_mode)
+                for (int c = 0; c < 3; ++c) drop = drop || !finite3(out.sh_frames[i][c]);
+            a.not_finite[i - a.first] = drop;
         }
+    }
     return singular_count;
 }
 

@@ -22,9 +22,10 @@ struct FastShapeArgs {
     std::size_t first = 0;
     bool view_mode = false;  // store the polar rotation in out->sh_frames instead of rotating coefficients
     bool frames_in = false;  // in->sh_frames holds a frame per Gaussian (composed onto)
-    // not_finite[b] = 1 where the scale, rotation or SH written for Gaussian first + b fail finite_shape(),
-    // else 0. The kernel checks what it writes while it still holds it: the rows of a large cloud are
-    // streamed past the caches, and reading them back would be a second trip to memory.
+    // not_finite[b] = 1 where Gaussian first + b is to be dropped: its J, or what is written for it and a
+    // renderer reads (position, and scale, rotation and SH by finite_shape(); the frame in view mode), is
+    // not finite; else 0. The kernel checks what it writes while it still holds it: the rows of a large
+    // cloud are streamed past the caches, and reading them back would be a second trip to memory.
     std::uint8_t* not_finite = nullptr;
 };
 

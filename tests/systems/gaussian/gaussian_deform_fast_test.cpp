@@ -198,10 +198,10 @@ TEST(GaussianDeformFast, FlattenedCellsCountAsDegenerateWithoutNaN) {
     EXPECT_EQ(fast.sh, g.sh);
 }
 
-// Coefficients that are not finite (a cloud made in memory: readers refuse them), or a rotation that is not
-// a unit quaternion, are dropped by both kernels, into another cloud (whole vector groups of degree 3 are
-// checked before their rows are streamed out) and in place, whether the lattice moves the Gaussian or not:
-// the same ones, transparent, no colour left, counted.
+// Coefficients or a centre that are not finite (a cloud made in memory: readers refuse them), or a rotation
+// that is not a unit quaternion, are dropped by both kernels, into another cloud (whole vector groups of
+// degree 3 are checked before their rows are streamed out) and in place, whether the lattice moves the
+// Gaussian or not: the same ones, transparent, no colour left, counted.
 TEST(GaussianDeformFast, NonFiniteCoefficientsAreDroppedIntoAnotherCloudAndInPlace) {
     const Lattice l = twisted(LatticeBasis::bernstein, 4);
     GaussianCloud g = cloud(16 * 4 + 5, 3, 5);  // whole groups at every lane width, and a partial one
@@ -222,6 +222,9 @@ TEST(GaussianDeformFast, NonFiniteCoefficientsAreDroppedIntoAnotherCloudAndInPla
     g.positions[25] = glm::vec3(0.0f, 1.5f, 0.0f);
     g.rotations[25] = glm::quat(0.0f, 0.0f, 0.0f, 0.0f);
     bad.push_back(25);
+    // A centre that is not finite: dropped at the origin, as the GPU pass does, instead of at its centre.
+    g.positions[30] = glm::vec3(std::numeric_limits<float>::quiet_NaN(), 0.0f, 0.0f);
+    bad.push_back(30);
     for (bool in_place : {false, true})
         for (bool reference : {false, true}) {
             const std::string what = std::string(in_place ? "in place" : "into another cloud") +
@@ -236,6 +239,12 @@ TEST(GaussianDeformFast, NonFiniteCoefficientsAreDroppedIntoAnotherCloudAndInPla
             for (std::size_t i = 0; i < g.size(); ++i) {
                 const bool dropped = std::find(bad.begin(), bad.end(), i) != bad.end();
                 EXPECT_EQ(out.opacities[i], dropped ? 0.0f : 0.5f) << what << " " << i;
+                const glm::vec3 p = out.positions[i];
+                EXPECT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))
+                    << what << " " << i;
+                if (i == 30) {
+                    EXPECT_EQ(p, glm::vec3(0.0f)) << what;
+                }
                 for (std::size_t k = 0; k < row; ++k) {
                     const float c = out.sh[i * row + k];
                     if (dropped) EXPECT_EQ(c, 0.0f) << what << " " << i << " " << k;
