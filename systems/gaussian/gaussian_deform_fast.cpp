@@ -381,6 +381,38 @@ inline vm not_finite_any(const float (*p)[W], int count) {
     return bad;
 }
 
+// A whole group's J, rotation (w, x, y, z) and scale into lanes: one hardware gather per entry instead of
+// a load and a store per entry and Gaussian (masked gathers: GCC 12 warns that the plain one's undefined
+// source may be used).
+#if defined(__AVX512F__)
+constexpr bool kGatherWhole = true;
+void gather_whole(const glm::mat3* j, const glm::quat* q, const glm::vec3* s, float (&jl)[9][W],
+                  float (&ql)[4][W], float (&sl)[3][W]) {
+    const __m512i lane = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+    const __m512i by9 = _mm512_mullo_epi32(lane, _mm512_set1_epi32(9)), by4 = _mm512_slli_epi32(lane, 2),
+                  by3 = _mm512_mullo_epi32(lane, _mm512_set1_epi32(3));
+    const auto* jf = reinterpret_cast<const float*>(j);
+    for (int e = 0; e < 9; ++e)
+        _mm512_store_ps(jl[e], _mm512_mask_i32gather_ps(_mm512_setzero_ps(), 0xffff,
+                                                        _mm512_add_epi32(by9, _mm512_set1_epi32(e)), jf, 4));
+    // glm's member order, whichever it is.
+    const auto* qf = reinterpret_cast<const float*>(q);
+    const float* member[4] = {&q->w, &q->x, &q->y, &q->z};
+    for (int k = 0; k < 4; ++k)
+        _mm512_store_ps(ql[k], _mm512_mask_i32gather_ps(
+                                   _mm512_setzero_ps(), 0xffff,
+                                   _mm512_add_epi32(by4, _mm512_set1_epi32(int(member[k] - qf))), qf, 4));
+    const auto* sf = reinterpret_cast<const float*>(s);
+    for (int c = 0; c < 3; ++c)
+        _mm512_store_ps(sl[c], _mm512_mask_i32gather_ps(_mm512_setzero_ps(), 0xffff,
+                                                        _mm512_add_epi32(by3, _mm512_set1_epi32(c)), sf, 4));
+}
+#else
+constexpr bool kGatherWhole = false;
+void gather_whole(const glm::mat3*, const glm::quat*, const glm::vec3*, float (&)[9][W], float (&)[4][W],
+                  float (&)[3][W]) {}
+#endif
+
 // One vector of Gaussians first .. first + n - 1 (n <= W). Returns the near-singular count.
 std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
     const GaussianCloud& in = *a.in;
@@ -390,16 +422,19 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
     const std::size_t stride = std::size_t(K) * 3;
     // Gather: J, rotation, scale per lane; padding lanes get J = I (not moved).
     alignas(64) float jl[9][W], ql[4][W], sl[3][W];
-    for (int l = 0; l < W; ++l) {
-        const bool real = l < n;
-        const glm::mat3 j = real ? a.jacobians[first - a.first + std::size_t(l)] : glm::mat3(1.0f);
-        for (int c = 0; c < 3; ++c)
-            for (int r = 0; r < 3; ++r) jl[c * 3 + r][l] = j[c][r];
-        const glm::quat q = real ? in.rotations[first + std::size_t(l)] : glm::quat(1, 0, 0, 0);
-        ql[0][l] = q.w, ql[1][l] = q.x, ql[2][l] = q.y, ql[3][l] = q.z;
-        const glm::vec3 s = real ? in.scales[first + std::size_t(l)] : glm::vec3(0.0f);
-        sl[0][l] = s.x, sl[1][l] = s.y, sl[2][l] = s.z;
-    }
+    if (kGatherWhole && n == W)
+        gather_whole(&a.jacobians[first - a.first], &in.rotations[first], &in.scales[first], jl, ql, sl);
+    else
+        for (int l = 0; l < W; ++l) {
+            const bool real = l < n;
+            const glm::mat3 j = real ? a.jacobians[first - a.first + std::size_t(l)] : glm::mat3(1.0f);
+            for (int c = 0; c < 3; ++c)
+                for (int r = 0; r < 3; ++r) jl[c * 3 + r][l] = j[c][r];
+            const glm::quat q = real ? in.rotations[first + std::size_t(l)] : glm::quat(1, 0, 0, 0);
+            ql[0][l] = q.w, ql[1][l] = q.x, ql[2][l] = q.y, ql[3][l] = q.z;
+            const glm::vec3 s = real ? in.scales[first + std::size_t(l)] : glm::vec3(0.0f);
+            sl[0][l] = s.x, sl[1][l] = s.y, sl[2][l] = s.z;
+        }
     auto load = [](const float* p) {
         vf v;
         std::memcpy(&v, p, sizeof v);
