@@ -86,7 +86,45 @@ Status compute_cull(SplatRenderState& s, CloudGpu& gpu, GLuint program, bool tex
     return gfx::dispatch_1d(gpu.count, SFFD_CULL_GROUP_SIZE);
 }
 
+// The CPU cull's draw commands, and with `sprites` its sprite records (a textured cloud's flat-coloured ones
+// after the capacity) uploaded run by run into the buffer the draws read; without, the commands draw only
+// the quads.
+void upload_cpu_culled(CloudGpu& gpu, bool sprites) {
+    const CpuCullResult& r = gpu.cpu_cull;
+    auto upload = [&](const auto& records, const auto& counts, std::size_t offset) {
+        CpuCullResult::for_each_run(
+            records, counts, r.block, [&](std::size_t at, const SplatRecord* p, std::size_t k) {
+                glNamedBufferSubData(gpu.records.id(), GLintptr((offset + at) * sizeof(SplatRecord)),
+                                     GLsizeiptr(k * sizeof(SplatRecord)), p);
+            });
+    };
+    if (sprites) {
+        upload(r.records, r.record_counts, 0);
+        upload(r.flat_records, r.flat_counts, gpu.capacity);
+    }
+    const std::uint32_t commands[draw_command_words] = {sprites ? r.visible_records : 0u,
+                                                        1,
+                                                        0,
+                                                        0,
+                                                        6,
+                                                        r.visible_quads,
+                                                        0,
+                                                        0,
+                                                        sprites ? r.visible_flat : 0u,
+                                                        1,
+                                                        gpu.capacity,
+                                                        0};
+    glNamedBufferSubData(gpu.commands.id(), 0, sizeof commands, commands);
+    gpu.gl_sprites = sprites;
+}
+
 }  // namespace
+
+void upload_gl_sprites(const FramePlan& plan) {
+    const bool hq = plan.settings.quality == Quality::hq;
+    for (CloudGpu* gpu : plan.drawn)
+        if (!gpu->gl_sprites && (!gpu->cpu_raster || (hq && !plan.cpu_hq))) upload_cpu_culled(*gpu, true);
+}
 
 // Per-cloud uniforms, then culling and compaction of every cloud (the compute pass, or cpu_cull.h).
 void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderStats& stats) {
@@ -106,6 +144,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
                                               plan.view.projection[1][1], plan.height);
         gpu.flat_list = false;
         gpu.cpu_raster = false;
+        gpu.gl_sprites = true;  // the compute cull writes them; a CPU cull says (upload_cpu_culled)
         b.params.w = gpu.texture ? 1.0f : 0.0f;
         b.material = glm::vec4(gpu.material.specular, gpu.material.shininess, 0.0f, 0.0f);
         b.base_color = gpu.colored ? glm::vec4(1.0f) : quantised_base_color(gpu.material.base_color);
@@ -127,7 +166,6 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             const bool reduced_flat = settings.quality == Quality::preview && settings.preview_divider > 1 &&
                                       settings.reduced_preview_flat_texture;
             // The CPU rasteriser samples the texture's levels itself; a reduced preview colours sprites once.
-            const bool cpu_preview = plan.cpu_raster && settings.quality == Quality::preview;
             if (gpu.texture && (reduced_flat || plan.cpu_raster)) {
                 if (!gpu.pyramid_made) {
                     gpu.pyramid =
@@ -142,43 +180,14 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             CpuCullResult& r = gpu.cpu_cull;
             cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
             ++s.cpu_splat_passes;
-            // A CPU preview draws the flat-coloured sprites itself (preview_pass): only what GL draws is
-            // uploaded, and the commands count only that.
+            // On the CPU sprite path the sprites are the CPU's (preview_pass, visibility_pass): they reach
+            // GL only if the frame turns out to need them there (upload_gl_sprites).
             gpu.cpu_raster = plan.cpu_raster;
-            // A preview's sprites are all the CPU's; an HQ frame's attribute pass still draws them on GL.
-            const bool gl_records = !cpu_preview, gl_flat = !cpu_preview;
-            if (gl_records)
-                CpuCullResult::for_each_run(r.records, r.record_counts, r.block,
-                                            [&](std::size_t at, const SplatRecord* p, std::size_t k) {
-                                                glNamedBufferSubData(gpu.records.id(),
-                                                                     GLintptr(at * sizeof(SplatRecord)),
-                                                                     GLsizeiptr(k * sizeof(SplatRecord)), p);
-                                            });
             if (Status st = upload_quads(gpu); !st) {
                 warn_once("render_system(): " + st.message() + "; the cloud is not drawn");
                 return;
             }
-            if (gl_flat)
-                CpuCullResult::for_each_run(r.flat_records, r.flat_counts, r.block,
-                                            [&](std::size_t at, const SplatRecord* p, std::size_t k) {
-                                                glNamedBufferSubData(
-                                                    gpu.records.id(),
-                                                    GLintptr((gpu.capacity + at) * sizeof(SplatRecord)),
-                                                    GLsizeiptr(k * sizeof(SplatRecord)), p);
-                                            });
-            const std::uint32_t commands[draw_command_words] = {gl_records ? r.visible_records : 0u,
-                                                                1,
-                                                                0,
-                                                                0,
-                                                                6,
-                                                                r.visible_quads,
-                                                                0,
-                                                                0,
-                                                                gl_flat ? r.visible_flat : 0u,
-                                                                1,
-                                                                gpu.capacity,
-                                                                0};
-            glNamedBufferSubData(gpu.commands.id(), 0, sizeof commands, commands);
+            upload_cpu_culled(gpu, !gpu.cpu_raster);
             plan.drawn_lo = glm::min(plan.drawn_lo, r.pixels_lo);
             plan.drawn_hi = glm::max(plan.drawn_hi, r.pixels_hi);
             plan.drawn_known = plan.drawn_known && r.pixels_bounded;

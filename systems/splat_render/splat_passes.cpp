@@ -41,12 +41,11 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     if (big) glVertexArrayElementBuffer(s.records_vao.id(), gpu.raster.big.id());
     glBindVertexArray(s.records_vao.id());
     glUseProgram(programs[0].id());
-    if (!sprites) {
-    } else if (big) {
+    if (sprites && big) {
         glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.raster.commands.id());
         glDrawElementsIndirect(GL_POINTS, GL_UNSIGNED_INT, nullptr);
         glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
-    } else {
+    } else if (sprites) {
         glDrawArraysIndirect(GL_POINTS, nullptr);
     }
     glBindVertexArray(s.vao.id());
@@ -282,11 +281,10 @@ void attribute_pass(ecs::Registry& reg, const SplatRenderState& s, const FramePl
             glTextureSubImage2D(s.accum_normal.id(), 0, r.x, r.y, r.z, r.w, GL_RGBA, GL_FLOAT,
                                 s.cpu_raster.accum_normal.data());
         }
-        for (const CloudGpu* gpu : plan.drawn) {
-            if (plan.cpu_hq) break;
-            draw_cloud(s, s.attribute[gpu->texture ? 1 : 0][materials], *gpu, &s.attribute[0][materials][0],
-                       big);
-        }
+        if (!plan.cpu_hq)
+            for (const CloudGpu* gpu : plan.drawn)
+                draw_cloud(s, s.attribute[gpu->texture ? 1 : 0][materials], *gpu,
+                           &s.attribute[0][materials][0], big);
         if (big) {
             compute_raster_attribute(s.compute_raster, plan.compute, rect, s.depth.id());
             glDepthFunc(GL_NOTEQUAL);  // the resolve runs where a surface is visible (not the cleared 1.0)

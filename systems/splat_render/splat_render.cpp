@@ -55,6 +55,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         std::all_of(plan.drawn.begin(), plan.drawn.end(),
                     [](const CloudGpu* gpu) { return gpu->cpu_raster && gpu->cpu_cull.visible_quads == 0; });
     stats.cpu_attribute = plan.cpu_hq;
+    upload_gl_sprites(plan);
     // The counts ring's copies follow the passes that write the counts (cull; compute visibility).
     if (plan.compute.empty()) issue_counts(s, plan.gpu_counts, plan.cpu_points, plan.cpu_quads, stats.frame);
     laps.lap(stats.cull_ms);

@@ -78,6 +78,9 @@ struct CloudGpu {
     // texture for that (pyramid included).
     bool cpu_raster = false;
     TexelView raster_texels;
+    // This frame's CPU-culled sprite records are in `records` and counted by `commands`: always off the
+    // CPU sprite path; on it only once the frame knows GL draws them (upload_gl_sprites).
+    bool gl_sprites = false;
     ComputeRasterCloud raster;  // sprites the compute rasteriser leaves to the rasteriser (compute_raster.h)
     SplatMaterial material;     // the cloud's SplatMaterial this frame (the defaults when it has none)
     bool colored = false;       // per-splat colours (else the packed colour is white, times the base colour)
@@ -293,6 +296,9 @@ void issue_counts(SplatRenderState& s, const std::vector<CountsSource>& computed
 
 // cull_pass.cpp
 void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderStats& stats);
+// After the frame's choices (compute rasteriser, cpu_hq): uploads the CPU-culled sprites GL still draws,
+// those of an HQ frame whose attribute pass is GL's or whose sprites went back to GL.
+void upload_gl_sprites(const FramePlan& plan);
 
 // splat_passes.cpp: the preview pass and the three HQ passes.
 void begin_splat_passes(SplatRenderState& s, const FramePlan& plan);
