@@ -107,29 +107,11 @@ inline void store_xyz(glm::vec3* p, vf x, vf y, vf z) {
 #endif
 }
 
-// Bernstein basis of degree L (b[0..L]) and its derivative (db) for W parameters at once.
-inline void bernstein(vf s, int L, vf* b, vf* db) {
-    const vf one = splat(1.0f), r = one - s;
-    b[0] = one;
-    for (int d = 1; d < L; ++d) {  // degree d-1 -> d
-        b[d] = s * b[d - 1];
-        for (int i = d - 1; i >= 1; --i) b[i] = r * b[i] + s * b[i - 1];
-        b[0] = r * b[0];
-    }
-    const float fl = float(L);  // b holds degree L-1 now: dB(L,i) = L (B(L-1,i-1) - B(L-1,i))
-    db[0] = -fl * b[0];
-    for (int i = 1; i < L; ++i) db[i] = fl * (b[i - 1] - b[i]);
-    db[L] = fl * b[L - 1];
-    b[L] = s * b[L - 1];
-    for (int i = L - 1; i >= 1; --i) b[i] = r * b[i] + s * b[i - 1];
-    b[0] = r * b[0];
-}
-
 // Bernstein basis of degree L (b[0..L]) and of degree L-1 (lower[0..L-1]), the step before it.
 inline void bernstein_with_lower(vf s, int L, vf* b, vf* lower) {
     const vf one = splat(1.0f), r = one - s;
     b[0] = one;
-    for (int d = 1; d < L; ++d) {
+    for (int d = 1; d < L; ++d) {  // degree d-1 -> d
         b[d] = s * b[d - 1];
         for (int i = d - 1; i >= 1; --i) b[i] = r * b[i] + s * b[i - 1];
         b[0] = r * b[0];
@@ -138,6 +120,17 @@ inline void bernstein_with_lower(vf s, int L, vf* b, vf* lower) {
     b[L] = s * b[L - 1];
     for (int i = L - 1; i >= 1; --i) b[i] = r * b[i] + s * b[i - 1];
     b[0] = r * b[0];
+}
+
+// Bernstein basis of degree L (b[0..L]) and its derivative (db) for W parameters at once:
+// dB(L,i) = L (B(L-1,i-1) - B(L-1,i)).
+inline void bernstein(vf s, int L, vf* b, vf* db) {
+    vf lower[kMaxB];
+    bernstein_with_lower(s, L, b, lower);
+    const float fl = float(L);
+    db[0] = -fl * lower[0];
+    for (int i = 1; i < L; ++i) db[i] = fl * (lower[i - 1] - lower[i]);
+    db[L] = fl * lower[L - 1];
 }
 
 // The u-derivative is summed over the rows' forward differences (du4: N (ΔP[k+1] − ΔP[k])) against the

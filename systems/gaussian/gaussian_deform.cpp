@@ -20,7 +20,7 @@ namespace {
 // Jacobians are produced per block so the scratch stays small (36 bytes per Gaussian per block).
 constexpr std::size_t kBlock = 1 << 16;
 
-bool finite3(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+using detail::finite3;
 
 // Whether Gaussian i of a deformed cloud is finite everywhere a renderer reads it; `shape_ok`: its scale,
 // rotation and SH passed detail::finite_shape().

@@ -366,10 +366,6 @@ inline vm near_singular(const M3& j) {
     return __builtin_convertvector(~regular, vm);
 }
 
-inline bool finite3(const glm::vec3& v) {
-    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
-}
-
 // Lanes where x is not finite, OR-ed over `count` vectors of p.
 inline vm not_finite_any(const float (*p)[W], int count) {
     vm bad = vm{};

@@ -29,6 +29,10 @@ struct FastShapeArgs {
     std::uint8_t* not_finite = nullptr;
 };
 
+inline bool finite3(const glm::vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
 // Whether a Gaussian's shape and colour are fit for a renderer: scale, rotation and the `count` SH
 // coefficients finite, the quaternion unit (a zero or overflowed one is not). The coefficients are tested
 // on their exponent bits without an early exit, so the loop is vector code and no fast-math rewrite of
