@@ -135,7 +135,9 @@ inline void bernstein(vf s, int L, vf* b, vf* db) {
 
 // The u-derivative is summed over the rows' forward differences (du4: N (ΔP[k+1] − ΔP[k])) against the
 // degree N-1 basis: dB(N,k)/du = N (B(N-1,k-1) − B(N-1,k)) regrouped, N terms a row instead of N+1.
-template <int KC, bool Full>
+// Only the NC coordinates that move (Prepared::coord) are summed: a twist leaves its axis's coordinate,
+// a stretch the other two, and each coordinate is a third of the work.
+template <int KC, int NC, bool Full>
 void bernstein_group(const Prepared& P, Group& g) {
     const int L = P.L, M = P.M;
     const int K = KC ? KC : P.N + 1;
@@ -144,45 +146,45 @@ void bernstein_group(const Prepared& P, Group& g) {
     bernstein(loadv(g.s), L, bs, dbs);
     bernstein(loadv(g.t), M, bt, dbt);
     bernstein_with_lower(loadv(g.u), K - 1, bu, bl);
-    vf X[3] = {}, Fs[3] = {}, Ft[3] = {}, Fu[3] = {};
-    const float* dp = P.dp4.data();
+    vf X[NC] = {}, Fs[NC] = {}, Ft[NC] = {}, Fu[NC] = {};
+    const float* dp = P.dk4.data();
     const float* du = P.du4.data();
     const std::uint8_t* nz = P.row_nonzero.data();
     for (int i = 0; i <= L; ++i) {
-        vf R[3] = {}, Rt[3] = {}, Ru[3] = {};
+        vf R[NC] = {}, Rt[NC] = {}, Ru[NC] = {};
         for (int j = 0; j <= M; ++j) {
             const int row = i * (M + 1) + j;
             if (!nz[row]) continue;
             const float* c = dp + std::size_t(row) * K * 4;
             const float* e = du + std::size_t(row) * (K - 1) * 4;
-            vf q0 = {}, q1 = {}, q2 = {}, w0 = {}, w1 = {}, w2 = {};
-            for (int k = 0; k < K; ++k) {
-                q0 += bu[k] * c[4 * k + 0];
-                q1 += bu[k] * c[4 * k + 1];
-                q2 += bu[k] * c[4 * k + 2];
-                if constexpr (Full)
-                    if (k < K - 1) {
-                        w0 += bl[k] * e[4 * k + 0];
-                        w1 += bl[k] * e[4 * k + 1];
-                        w2 += bl[k] * e[4 * k + 2];
-                    }
-            }
-            R[0] += q0 * bt[j], R[1] += q1 * bt[j], R[2] += q2 * bt[j];
-            if constexpr (Full) {
-                Rt[0] += q0 * dbt[j], Rt[1] += q1 * dbt[j], Rt[2] += q2 * dbt[j];
-                Ru[0] += w0 * bt[j], Ru[1] += w1 * bt[j], Ru[2] += w2 * bt[j];
+            vf q[NC] = {}, w[NC] = {};
+            for (int k = 0; k < K; ++k)
+                for (int a = 0; a < NC; ++a) {
+                    q[a] += bu[k] * c[4 * k + a];
+                    if constexpr (Full)
+                        if (k < K - 1) w[a] += bl[k] * e[4 * k + a];
+                }
+            for (int a = 0; a < NC; ++a) {
+                R[a] += q[a] * bt[j];
+                if constexpr (Full) Rt[a] += q[a] * dbt[j], Ru[a] += w[a] * bt[j];
             }
         }
-        for (int c = 0; c < 3; ++c) {
-            X[c] += R[c] * bs[i];
+        for (int a = 0; a < NC; ++a) {
+            X[a] += R[a] * bs[i];
             if constexpr (Full) {
-                Fs[c] += R[c] * dbs[i];
-                Ft[c] += Rt[c] * bs[i];
-                Fu[c] += Ru[c] * bs[i];
+                Fs[a] += R[a] * dbs[i];
+                Ft[a] += Rt[a] * bs[i];
+                Fu[a] += Ru[a] * bs[i];
             }
         }
     }
-    store_group<Full>(g, X, Fs, Ft, Fu);
+    // The coordinates that do not move get exact zeros.
+    vf Xc[3] = {}, Fsc[3] = {}, Ftc[3] = {}, Fuc[3] = {};
+    for (int a = 0; a < NC; ++a) {
+        const int c = P.coord[a];
+        Xc[c] = X[a], Fsc[c] = Fs[a], Ftc[c] = Ft[a], Fuc[c] = Fu[a];
+    }
+    store_group<Full>(g, Xc, Fsc, Ftc, Fuc);
 }
 
 // Bernstein basis values B(L,i,s) and derivatives for the indices flagged in `need` only, from powers
@@ -328,22 +330,28 @@ void bspline_group(const Prepared& P, Group& g) {
 
 using GroupFn = void (*)(const Prepared&, Group&);
 
-template <bool Full>
+template <int NC, bool Full>
 GroupFn pick_bernstein(int K) {
     switch (K) {
-        case 2: return bernstein_group<2, Full>;
-        case 3: return bernstein_group<3, Full>;
-        case 4: return bernstein_group<4, Full>;
-        case 5: return bernstein_group<5, Full>;
-        case 6: return bernstein_group<6, Full>;
-        case 7: return bernstein_group<7, Full>;
-        case 8: return bernstein_group<8, Full>;
-        case 9: return bernstein_group<9, Full>;
-        case 10: return bernstein_group<10, Full>;
-        case 11: return bernstein_group<11, Full>;
-        case 12: return bernstein_group<12, Full>;
-        default: return bernstein_group<0, Full>;
+        case 2: return bernstein_group<2, NC, Full>;
+        case 3: return bernstein_group<3, NC, Full>;
+        case 4: return bernstein_group<4, NC, Full>;
+        case 5: return bernstein_group<5, NC, Full>;
+        case 6: return bernstein_group<6, NC, Full>;
+        case 7: return bernstein_group<7, NC, Full>;
+        case 8: return bernstein_group<8, NC, Full>;
+        case 9: return bernstein_group<9, NC, Full>;
+        case 10: return bernstein_group<10, NC, Full>;
+        case 11: return bernstein_group<11, NC, Full>;
+        case 12: return bernstein_group<12, NC, Full>;
+        default: return bernstein_group<0, NC, Full>;
     }
+}
+template <bool Full>
+GroupFn pick_bernstein(int K, int coords) {
+    return coords == 1   ? pick_bernstein<1, Full>(K)
+           : coords == 2 ? pick_bernstein<2, Full>(K)
+                         : pick_bernstein<3, Full>(K);
 }
 
 // Writes one group back: X' = X + D, J = I + G M⁻¹, n' = cof(J) n / |.|, axes J a. Returns inverted count.
@@ -444,6 +452,20 @@ void set_cull_box(Prepared& P, const Lattice& l, const glm::ivec3& lo, const glm
     }
 }
 
+// The coordinates the dense Bernstein kernel sums: those whose displacement somewhere exceeds 1e-12 of the
+// lattice's size. A twist computed in double leaves its axis's coordinate off by rounding (1e-16 of the
+// size): far below what a float result can show, and a third of the kernel's work. At least one.
+void set_moving_coordinates(Prepared& P, const Lattice& l, const glm::dvec3& largest) {
+    const double floor = 1e-12 * (glm::length(l.axes[0]) + glm::length(l.axes[1]) + glm::length(l.axes[2]));
+    P.coords = 0;
+    for (int a = 0; a < 3; ++a)
+        if (largest[a] > floor) P.coord[P.coords++] = a;
+    if (P.coords == 0)
+        P.coords = 1, P.coord[0] = largest.y > largest.x ? (largest.z > largest.y ? 2 : 1)
+                                                         : (largest.z > largest.x ? 2 : 0);
+    for (int a = P.coords; a < 3; ++a) P.coord[a] = 0;
+}
+
 // PrepareFor::gpu_controls: ΔP in one pass over the control points in flat order, none of the CPU
 // kernels' tables. The same values as the full preparation (a point that did not move keeps zeros).
 void prepare_gpu_controls(Prepared& P, const Lattice& l) {
@@ -485,12 +507,15 @@ Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin, PrepareFor us
     const int L = P.L, M = P.M, N = P.N;
     glm::ivec3 lo(1 << 30), hi(-1);
     P.moved.reserve(l.size());  // a global edit moves every point: one allocation, not a dozen regrowths
+    glm::dvec3 largest(0.0);    // per coordinate, the largest |ΔP|
     for_each_moved(l, [&](int i, int j, int k, const glm::dvec3& d) {
+        largest = glm::max(largest, glm::abs(d));
         P.moved.push_back({i, j, k, {float(d.x), float(d.y), float(d.z)}});
         lo = glm::min(lo, glm::ivec3(i, j, k));
         hi = glm::max(hi, glm::ivec3(i, j, k));
     });
     P.any_moved = !P.moved.empty();
+    set_moving_coordinates(P, l, largest);
     for (int a = 0; a < 3; ++a) {
         const int n = l.divisions[a];
         P.need[a].assign(std::size_t(n) + 1, 0);
@@ -507,10 +532,13 @@ Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin, PrepareFor us
     for (const auto& m : P.moved) P.need[0][m.i] = P.need[1][m.j] = P.need[2][m.k] = 1;
     if (l.basis == LatticeBasis::bernstein) {
         P.dp4.assign(l.size() * 4, 0.0f);
+        P.dk4.assign(l.size() * 4, 0.0f);
         P.row_nonzero.assign(std::size_t(L + 1) * (M + 1), 0);
         for (const auto& m : P.moved) {
             float* d = &P.dp4[l.index(m.i, m.j, m.k) * 4];
             d[0] = m.d[0], d[1] = m.d[1], d[2] = m.d[2];
+            float* kd = &P.dk4[l.index(m.i, m.j, m.k) * 4];
+            for (int a = 0; a < P.coords; ++a) kd[a] = m.d[P.coord[a]];
             P.row_nonzero[std::size_t(m.i) * (M + 1) + m.j] = 1;
         }
         // The differences from the double displacements (not the rounded floats).
@@ -523,7 +551,7 @@ Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin, PrepareFor us
                     const std::size_t a = l.index(i, j, k), b = l.index(i, j, k + 1);
                     const glm::dvec3 d =
                         double(N) * ((l.current[b] - l.rest[b]) - (l.current[a] - l.rest[a]));
-                    row[k * 4 + 0] = float(d.x), row[k * 4 + 1] = float(d.y), row[k * 4 + 2] = float(d.z);
+                    for (int s = 0; s < P.coords; ++s) row[k * 4 + s] = float(d[P.coord[s]]);
                 }
             }
     } else {
@@ -543,7 +571,7 @@ DeformStats run_fast(const Prepared& P, const PointsIn& in, const PointsOut& out
     GroupFn fn;
     if (P.basis == LatticeBasis::bspline) fn = full ? bspline_group<true> : bspline_group<false>;
     else if (sparse) fn = full ? sparse_group<true> : sparse_group<false>;
-    else fn = full ? pick_bernstein<true>(P.N + 1) : pick_bernstein<false>(P.N + 1);
+    else fn = full ? pick_bernstein<true>(P.N + 1, P.coords) : pick_bernstein<false>(P.N + 1, P.coords);
     const bool nothing_moved = P.moved.empty();
     std::atomic<std::size_t> inside_total{0}, inverted_total{0};
     const float lo = float(-kInsideSlack), hi = float(1.0 + kInsideSlack);

@@ -17,7 +17,12 @@ struct Prepared {
     LatticeBasis basis = LatticeBasis::bernstein;
     std::vector<float> dp4;                 // Bernstein: ΔP as x,y,z,0 per control point, flat index
     std::vector<std::uint8_t> row_nonzero;  // Bernstein: (i,j) rows with any nonzero ΔP
-    std::vector<float> du4;  // Bernstein: N (ΔP[k+1] − ΔP[k]), k < N, as x,y,z,0 per (i,j) row
+    // The dense Bernstein kernel's tables hold only the coordinates of ΔP that move, coord[0..coords-1], in
+    // that order (x,y,z,0 when all three do):
+    int coords = 3;
+    int coord[3] = {0, 1, 2};
+    std::vector<float> dk4;  // ΔP per control point, flat index
+    std::vector<float> du4;  // N (ΔP[k+1] − ΔP[k]), k < N, per (i,j) row
     struct Moved {
         int i, j, k;
         float d[3];

@@ -253,6 +253,78 @@ TEST(FfdDeform, PaperCaseAgreesTo1e5) {
     }
 }
 
+TEST(FfdDeform, DenseBernsteinSumsOnlyTheCoordinatesThatMove) {
+    // The dense kernel leaves out each coordinate of ΔP that stays within 1e-12 of the lattice's size
+    // everywhere (a twist's axis: rounding). Each edit below is checked against the double-precision
+    // evaluator, positions and whole Jacobians, so a coordinate summed into the wrong output shows.
+    const Cloud c = test::random_cloud(3000, -1.05, 1.05, 4);
+    const double size = 3 * 2.2;  // the sum of the axes' lengths
+    struct Edit {
+        const char* what;
+        int coords;
+        int coord[3];
+        void (*apply)(Lattice&);
+    };
+    const Edit edits[] = {
+        {"stretch along z",
+         1,
+         {2, 0, 0},
+         [](Lattice& l) {
+             for (std::size_t i = 0; i < l.size(); i += 3) l.current[i].z += 0.15;
+         }},
+        {"stretch along y",
+         1,
+         {1, 0, 0},
+         [](Lattice& l) {
+             for (std::size_t i = 1; i < l.size(); i += 2) l.current[i].y -= 0.1;
+         }},
+        {"x and z",
+         2,
+         {0, 2, 0},
+         [](Lattice& l) {
+             for (std::size_t i = 0; i < l.size(); i += 2) l.current[i] += glm::dvec3(0.1, 0.0, -0.12);
+         }},
+        {"twist about y, y off by rounding",
+         2,
+         {0, 2, 0},
+         [](Lattice& l) {
+             test::twist_about_t(l, 0.6);
+             l.current[5].y += 1e-14;  // below the floor, as a double rotation's rounding is
+         }},
+        {"twist about y, y moved by 1e-9 of the size",
+         3,
+         {0, 1, 2},
+         [](Lattice& l) {
+             test::twist_about_t(l, 0.6);
+             l.current[5].y += 1e-9 * 3 * 2.2;
+         }},
+        {"every coordinate", 3, {0, 1, 2}, [](Lattice& l) { test::jitter(l, 0.05, 3); }},
+    };
+    for (const Edit& e : edits) {
+        SCOPED_TRACE(e.what);
+        Lattice l = make_lattice({-1.1, -1.1, -1.1},
+                                 {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                                 {4, 6, 5}, LatticeBasis::bernstein);
+        e.apply(l);
+        const detail::Prepared P = detail::prepare(l, c.origin);
+        ASSERT_EQ(P.coords, e.coords);
+        for (int a = 0; a < e.coords; ++a) EXPECT_EQ(P.coord[a], e.coord[a]) << "slot " << a;
+        std::vector<glm::vec3> p(c.size());
+        std::vector<glm::mat3> jac(c.size());
+        PointsIn in{c.p.data(), nullptr, nullptr, nullptr, c.size(), c.origin};
+        PointsOut out{p.data(), nullptr, nullptr, nullptr};
+        out.jacobians = jac.data();
+        ASSERT_TRUE(deform(l, in, out, Backend::fast).ok());
+        for (std::size_t i = 0; i < c.size(); ++i) {
+            const ReferencePoint r = reference_point(l, c.origin + glm::dvec3(c.p[i]));
+            ASSERT_LT(glm::length(glm::dvec3(p[i]) + c.origin - r.position), 1e-6 * size) << "point " << i;
+            for (int col = 0; col < 3; ++col)
+                ASSERT_LT(glm::length(glm::dvec3(jac[i][col]) - r.jacobian[col]), 1e-5)
+                    << "point " << i << " column " << col;
+        }
+    }
+}
+
 TEST(FfdDeform, AutomaticPicksSparseForLocalEdits) {
     Lattice l = skewed_lattice({10, 10, 10});
     EXPECT_EQ(choose_backend(l), Backend::sparse);
