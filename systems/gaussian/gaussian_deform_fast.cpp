@@ -122,18 +122,18 @@ inline void orthogonalise(V3& bp, V3& bq, vm& rotated) {
     bq = nq;
 }
 
-// Axes (a proper rotation) and scales (descending) of A Aᵀ: one-sided Jacobi on the columns of A.
-void decompose(const M3& a, M3& axes, V3& scale) {
-    V3 b0 = a.c[0], b1 = a.c[1], b2 = a.c[2];
-    // Sweeps until one rotates nothing: each pair tests its own columns, so no separate test of all three
-    // (deform.comp tests all three first; the criterion is the same, |γ| ≤ 1e-7 sqrt(αβ) for every pair).
-    for (int sweep = 0; sweep < 12; ++sweep) {
-        vm rotated = vm{};
-        orthogonalise(b0, b1, rotated);
-        orthogonalise(b0, b2, rotated);
-        orthogonalise(b1, b2, rotated);
-        if (!any(rotated)) break;
-    }
+// Axes (a proper rotation) and scales (descending) of A Aᵀ: one-sided Jacobi on the columns b of A, a sweep
+// at a time (jacobi_sweep), then decompose_finish(). Sweeps until one rotates nothing: each pair tests its
+// own columns, so no separate test of all three (deform.comp tests all three first; the criterion is the
+// same, |γ| ≤ 1e-7 sqrt(αβ) for every pair). Returns whether the sweep rotated anything.
+inline bool jacobi_sweep(V3 (&b)[3]) {
+    vm rotated = vm{};
+    orthogonalise(b[0], b[1], rotated);
+    orthogonalise(b[0], b[2], rotated);
+    orthogonalise(b[1], b[2], rotated);
+    return any(rotated);
+}
+inline void decompose_finish(V3 b0, V3 b1, V3 b2, M3& axes, V3& scale) {
     vf s0 = vsqrt(dot(b0, b0)), s1 = vsqrt(dot(b1, b1)), s2 = vsqrt(dot(b2, b2));
     auto swap_if = [](vm m, V3& p, V3& q, vf& sp, vf& sq) {
         const V3 t = p;
@@ -180,31 +180,30 @@ void to_quat(const M3& m, vf q[4]) {
     q[0] = w * sign, q[1] = x * sign, q[2] = y * sign, q[3] = z * sign;
 }
 
-// Orthogonal factor of J = R U where `need` (scaled Newton, Higham: the GPU's polar_rotation); `ok` false
-// where the result is not finite. Lanes not needed iterate on I (its own fixed point).
-M3 polar_rotation(const M3& j, vm need, vm& ok) {
-    M3 x = sel(need, j, identity());
-    vm active = need;
-    for (int it = 0; it < 20 && any(active); ++it) {
-        const V3 c0 = cross(x.c[1], x.c[2]), c1 = cross(x.c[2], x.c[0]), c2 = cross(x.c[0], x.c[1]);
-        const vf inv_det = 1.0f / dot(x.c[0], c0);
-        const M3 inv_t = {{inv_det * c0, inv_det * c1, inv_det * c2}};  // (X⁻¹)ᵀ: cofactors / det
-        const vf nx = dot(x.c[0], x.c[0]) + dot(x.c[1], x.c[1]) + dot(x.c[2], x.c[2]);
-        const vf ni = dot(inv_t.c[0], inv_t.c[0]) + dot(inv_t.c[1], inv_t.c[1]) + dot(inv_t.c[2], inv_t.c[2]);
-        const vf zeta = vsqrt(vsqrt(ni / nx)), half_zeta = 0.5f * zeta, half_inv = 0.5f / zeta;
-        M3 next;
-        vf change = splat(0.0f);
-        for (int c = 0; c < 3; ++c) {
-            next.c[c] = half_zeta * x.c[c] + half_inv * inv_t.c[c];
-            const V3 d = next.c[c] - x.c[c];
-            change += dot(d, d);
-        }
-        x = sel(active, next, x);
-        active &= ~(change <= 1e-13f * 3.0f);
+// Orthogonal factor of J = R U where `need` (scaled Newton, Higham: the GPU's polar_rotation): x starts
+// at J (I where not needed: its own fixed point), newton_step() until no lane is active, then polar_ok()
+// (false where the result is not finite).
+inline void newton_step(M3& x, vm& active) {
+    const V3 c0 = cross(x.c[1], x.c[2]), c1 = cross(x.c[2], x.c[0]), c2 = cross(x.c[0], x.c[1]);
+    const vf inv_det = 1.0f / dot(x.c[0], c0);
+    const M3 inv_t = {{inv_det * c0, inv_det * c1, inv_det * c2}};  // (X⁻¹)ᵀ: cofactors / det
+    const vf nx = dot(x.c[0], x.c[0]) + dot(x.c[1], x.c[1]) + dot(x.c[2], x.c[2]);
+    const vf ni = dot(inv_t.c[0], inv_t.c[0]) + dot(inv_t.c[1], inv_t.c[1]) + dot(inv_t.c[2], inv_t.c[2]);
+    const vf zeta = vsqrt(vsqrt(ni / nx)), half_zeta = 0.5f * zeta, half_inv = 0.5f / zeta;
+    M3 next;
+    vf change = splat(0.0f);
+    for (int c = 0; c < 3; ++c) {
+        next.c[c] = half_zeta * x.c[c] + half_inv * inv_t.c[c];
+        const V3 d = next.c[c] - x.c[c];
+        change += dot(d, d);
     }
-    ok = need;
+    x = sel(active, next, x);
+    active &= ~(change <= 1e-13f * 3.0f);
+}
+inline vm polar_ok(const M3& x, vm need) {
+    vm ok = need;
     for (int c = 0; c < 3; ++c) ok &= finite(x.c[c].x) & finite(x.c[c].y) & finite(x.c[c].z);
-    return x;
+    return ok;
 }
 
 // Band l (1..3) of the 3DGS SH basis at d (systems/gaussian/sh.h: same constants and order).
@@ -478,9 +477,25 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
         for (int c = 0; c < 3; ++c) m = vmax(m, vmax(vabs(A.c[c].x), vmax(vabs(A.c[c].y), vabs(A.c[c].z))));
         const vm mpos = m > 0.0f;
         const vf minv = 1.0f / sel(mpos, m, splat(1.0f));
+        // The shape's Jacobi sweeps and the colour's Newton steps are independent chains of dependent
+        // operations (each rotation needs the previous one's columns): one loop runs both, so that each
+        // fills the other's waiting. Same sweeps and steps, same results, as running them one after the
+        // other.
+        V3 b[3] = {minv * A.c[0], minv * A.c[1], minv * A.c[2]};
+        const vm need = moved & ~singular;
+        M3 R = sel(need, J, identity());
+        vm active = need;
+        bool sweeping = true, stepping = K > 1 && any(active);
+        for (int it = 0; sweeping || stepping; ++it) {
+            if (sweeping) sweeping = jacobi_sweep(b) && it + 1 < 12;
+            if (stepping) {
+                newton_step(R, active);
+                stepping = it + 1 < 20 && any(active);
+            }
+        }
         M3 axes;
         V3 scale;
-        decompose({{minv * A.c[0], minv * A.c[1], minv * A.c[2]}}, axes, scale);
+        decompose_finish(b[0], b[1], b[2], axes, scale);
         axes = sel(mpos, axes, identity());
         scale = sel(mpos, m * scale, splat3(0, 0, 0));
         vf q[4];
@@ -491,9 +506,8 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
         for (int k = 0; k < 4; ++k) std::memcpy(out_q[k], &q[k], sizeof(vf));
 
         // Colour: the polar rotation where J is regular (coefficients rotated, or the frame stored).
-        vm rotated = vm{};
-        M3 R = identity();
-        if (K > 1) R = polar_rotation(J, moved & ~singular, rotated);
+        const vm rotated = K > 1 ? polar_ok(R, need) : vm{};
+        if (K == 1) R = identity();
         alignas(64) float sh_soa[48][W];
         rotate_coeffs = K > 1 && !a.view_mode && any(rotated);
         if (rotate_coeffs && whole) {
@@ -508,7 +522,8 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
         if (rotate_coeffs) {
             // A lane's output row is its input row where nothing was rotated: both are checked.
             const vm band0_bad = whole ? not_finite_any(sh_soa, 3) : vm{};
-            const vm input_bad = whole ? not_finite_any(sh_soa + 3, 45) : vm{};
+            // Rotated lanes need no input test: a non-finite coefficient makes its whole band non-finite.
+            const vm input_bad = whole && any(~rotated) ? not_finite_any(sh_soa + 3, 45) : vm{};
             V3 c[16];
             for (int k = 0; k < K; ++k)
                 c[k] = {load(sh_soa[3 * k]), load(sh_soa[3 * k + 1]), load(sh_soa[3 * k + 2])};
