@@ -11,7 +11,9 @@ flat in vec4 v_conic_opacity;
 flat in vec3 v_color;
 
 layout(location = 0) out vec4 out_color;
+#ifndef SFFD_GAUSS_COLOUR_ONLY  // defined for frames without aux outputs: no depth sum is blended
 layout(location = 1) out vec4 out_depth;
+#endif
 
 void main() {
     const vec2 pix = vec2(gl_FragCoord.x, u_size.y - gl_FragCoord.y);  // y down, pixel centres at +0.5
@@ -22,7 +24,9 @@ void main() {
     const float alpha = min(0.99, v_conic_opacity.w * exp(power));
     if (alpha < 1.0 / 255.0) discard;
     out_color = vec4(v_color * alpha, alpha);
+#ifndef SFFD_GAUSS_COLOUR_ONLY
     const float z_ndc = 2.0 * gl_FragCoord.z - 1.0;
     const float depth = u_ndc_depth.y / (z_ndc - u_ndc_depth.x);
     out_depth = vec4(depth * alpha, 0.0, 0.0, alpha);
+#endif
 }

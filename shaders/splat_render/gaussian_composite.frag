@@ -38,6 +38,6 @@ void main() {
     const float a = g.a + (1.0 - g.a) * sa;
     const vec3 display = g.rgb + (1.0 - g.a) * sa * to_srgb(s.rgb);
     out_color = vec4(to_linear(display / a), a);
-    if (aux.w < 0.0) aux = vec4(0.0, 0.0, 0.0, texelFetch(gauss_depth, p, 0).x / g.a);
+    if (u_aux != 0 && aux.w < 0.0) aux = vec4(0.0, 0.0, 0.0, texelFetch(gauss_depth, p, 0).x / g.a);
     out_aux = aux;
 }

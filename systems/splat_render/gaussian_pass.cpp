@@ -33,6 +33,7 @@ struct CloudState {
 struct GaussianPassState {
     gaussian::GlRenderer renderer;  // projection program, per-draw scratch buffers, the quad VAO
     gfx::Program accum;             // shaders/gaussian/splat.vert + splat_render/gaussian_accum.frag
+    gfx::Program accum_colour;      // the same without the depth sum (frames without aux outputs)
     gfx::Program composite;         // fullscreen + splat_render/gaussian_composite.frag
     gfx::VertexArray empty_vao;
     int width = 0, height = 0;
@@ -74,11 +75,16 @@ Result<GaussianPassState*> pass_state(ecs::Registry& reg) {
         {{GL_VERTEX_SHADER, "gaussian/splat.vert"}, {GL_FRAGMENT_SHADER, "splat_render/gaussian_accum.frag"}},
         "render.gaussian_accum");
     if (!accum) return fail(accum.message());
+    auto accum_colour = gfx::load_program(
+        {{GL_VERTEX_SHADER, "gaussian/splat.vert"}, {GL_FRAGMENT_SHADER, "splat_render/gaussian_accum.frag"}},
+        "render.gaussian_accum_colour", {{"SFFD_GAUSS_COLOUR_ONLY", ""}});
+    if (!accum_colour) return fail(accum_colour.message());
     auto composite = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
                                         {GL_FRAGMENT_SHADER, "splat_render/gaussian_composite.frag"}},
                                        "render.gaussian_composite");
     if (!composite) return fail(composite.message());
     s.accum = std::move(*accum);
+    s.accum_colour = std::move(*accum_colour);
     s.composite = std::move(*composite);
     s.empty_vao = gfx::VertexArray::create("render.gaussian_composite");
     return &reg.set_resource<GaussianPassState>(std::move(s));
@@ -178,8 +184,13 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
     // Only the frame's pixels (a reduced preview's corner), as begin_splat_passes clears.
     glEnable(GL_SCISSOR_TEST);
     glScissor(0, 0, f.width, f.height);
+    // The depth sum feeds only the aux output: without one, a Gaussian fragment blends into one target, not
+    // two (on a CPU rasteriser the blending is most of the pass; measured below).
+    const GLenum with_depth[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1},
+                 colour_only[2] = {GL_COLOR_ATTACHMENT0, GL_NONE};
+    glNamedFramebufferDrawBuffers(s.accum_fbo.id(), 2, f.aux_outputs ? with_depth : colour_only);
     glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 0, zero);
-    glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 1, zero);
+    if (f.aux_outputs) glClearNamedFramebufferfv(s.accum_fbo.id(), GL_COLOR, 1, zero);
     glDisable(GL_SCISSOR_TEST);
     glBindFramebuffer(GL_FRAMEBUFFER, s.accum_fbo.id());
     glViewport(0, 0, f.width, f.height);
@@ -196,7 +207,8 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
     // A cloud that covers too much of the image for quads (gl_render.h: quad_coverage_budget) goes to the
     // tile renderer, into the same targets with the same depth test.
     gaussian::TileTargets tiles;
-    tiles.color = s.gauss_color.id(), tiles.depth_sum = s.gauss_depth.id(), tiles.surface_depth = f.depth;
+    tiles.color = s.gauss_color.id(), tiles.surface_depth = f.depth;
+    tiles.depth_sum = f.aux_outputs ? s.gauss_depth.id() : 0;
     for (const Item& item : items) {
         const GaussianCloud& cloud = reg.get<GaussianCloud>(item.entity);
         const gaussian::GpuGaussians& gpu = store->clouds.at(item.entity);
@@ -211,7 +223,10 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
         v.min_footprint_px = f.preview ? kPreviewMinFootprintPx : 0.0f;
         const gaussian::GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(),       gpu.frames.id(),
                                                 gpu.drawn_count(), gpu.drawn_sh_degree(), gpu.has_frames()};
-        if (Status st = gaussian::draw_gaussians(s.renderer, buffers, v, &s.accum, &tiles); !st) status = st;
+        if (Status st = gaussian::draw_gaussians(s.renderer, buffers, v,
+                                                 f.aux_outputs ? &s.accum : &s.accum_colour, &tiles);
+            !st)
+            status = st;
         (s.renderer.last_blend == gaussian::BlendPath::tiles ? s.tile_clouds : s.quad_clouds) += 1;
         constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();  // "past 2^32" stays so
         s.covered_pixels += std::min(s.renderer.covered_pixels, kMax - s.covered_pixels);

@@ -61,9 +61,9 @@ protected:
     }
     void add_camera() { reg.emplace<Camera>(reg.create(), camera()); }
 
-    render::FrameImage frame(int w, int h, render::Quality q = render::Quality::hq) {
+    render::FrameImage frame(int w, int h, render::Quality q = render::Quality::hq, bool aux = true) {
         render::RenderSettings s;
-        s.width = w, s.height = h, s.quality = q, s.aux_outputs = true;
+        s.width = w, s.height = h, s.quality = q, s.aux_outputs = aux;
         reg.set_resource<render::RenderSettings>(s);
         residency_system(reg, FrameContext{});
         render::render_system(reg, FrameContext{});
@@ -370,6 +370,48 @@ TEST_F(GaussianRenderSystem, TileRouteMatchesTheReference) {
     const double p = psnr(render_reference(g, camera(), o), sys);
     std::printf("tile route vs reference: PSNR %.1f dB\n", p);
     EXPECT_GT(p, 40.0);
+}
+
+TEST_F(GaussianRenderSystem, FramesWithoutAuxOutputsBlendTheSameColours) {
+    // Without aux outputs the pass blends only the colour target (no depth sum): the same colours, on both
+    // routes (quads: a small ordinary cloud; tiles: large overlapping Gaussians past the quads' budget).
+    add_camera();
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(0, 1);
+    GaussianCloud big;
+    for (int i = 0; i < 600; ++i) {
+        const GaussianCloud one = blob({2 * u(rng) - 1, 2 * u(rng) - 1, 2 * u(rng) - 1}, 0.3f + 0.3f * u(rng),
+                                       0.1f + 0.3f * u(rng), {u(rng), u(rng), u(rng)});
+        big.positions.push_back(one.positions[0]);
+        big.scales.push_back(one.scales[0]);
+        big.rotations.push_back(one.rotations[0]);
+        big.opacities.push_back(one.opacities[0]);
+        big.sh.insert(big.sh.end(), one.sh.begin(), one.sh.end());
+    }
+    const int w = 160, h = 120;
+    for (const bool tiles : {false, true}) {
+        SCOPED_TRACE(tiles ? "tiles" : "quads");
+        // A fresh entity per route (the first one's is destroyed): nothing of the last frame is reused.
+        std::vector<ecs::Entity> old;
+        reg.view<const GaussianCloud>().each([&](ecs::Entity x, const GaussianCloud&) { old.push_back(x); });
+        for (ecs::Entity x : old) reg.destroy(x);
+        reg.emplace<GaussianCloud>(reg.create(), tiles ? big : random_cloud(2000, 3));
+        const render::FrameImage with_aux = frame(w, h, render::Quality::hq, true);
+        const render::FrameImage without = frame(w, h, render::Quality::hq, false);
+        const render::GaussianPassStats pass = render::gaussian_pass_stats(reg);
+        EXPECT_EQ(tiles ? pass.tile_clouds : pass.quad_clouds, 1u);
+        ASSERT_EQ(with_aux.color.size(), std::size_t(w * h));
+        ASSERT_EQ(without.color.size(), with_aux.color.size());
+        std::size_t seen = 0;
+        float worst = 0.0f;
+        for (std::size_t i = 0; i < with_aux.color.size(); ++i) {
+            seen += with_aux.color[i].w > 0.0f;
+            for (int c = 0; c < 4; ++c)
+                worst = std::max(worst, std::abs(with_aux.color[i][c] - without.color[i][c]));
+        }
+        EXPECT_GT(seen, std::size_t(w * h / 10));
+        EXPECT_EQ(worst, 0.0f);
+    }
 }
 
 TEST_F(GaussianRenderSystem, TileRouteKeepsTheDepthTestAndTheAuxDepth) {
