@@ -158,12 +158,16 @@ vec4 mat3_to_quat(mat3 m) {
 void orthogonalise(inout vec3 bp, inout vec3 bq) {
     float alpha = dot(bp, bp), beta = dot(bq, bq), gamma = dot(bp, bq);
     if (!(abs(gamma) > 1e-7 * sqrt(alpha * beta)) || gamma == 0.0) return;
-    float zeta = (beta - alpha) / (2.0 * gamma);
-    // t = sign(ζ) / (|ζ| + sqrt(1 + ζ²)), the smaller root; 1/(2ζ) where ζ² would overflow.
-    float az = abs(zeta);
-    float t = az < 1e18 ? 1.0 / (az + sqrt(1.0 + az * az)) : 0.5 / az;
-    t = zeta < 0.0 ? -t : t;
-    float c = inversesqrt(1.0 + t * t), s = c * t;
+    // The angle from its double, as the CPU kernel: cos 2θ = |d| / r, sin 2θ = sign(d) g / r
+    // (d = β − α, g = 2γ, r = |(d, g)|, |θ| ≤ π/4), then c = sqrt((1 + cos 2θ) / 2), s = sin 2θ / (2c).
+    // d and g are divided by the larger first: no square under- or overflows (g is not 0 here).
+    float d = beta - alpha, g = 2.0 * gamma;
+    const float m = max(abs(d), abs(g));
+    d /= m, g /= m;
+    const float rr = inversesqrt(d * d + g * g);
+    const float cos2 = abs(d) * rr, sin2 = (d < 0.0 ? -g : g) * rr;
+    const float h = 0.5 + 0.5 * cos2, rh = inversesqrt(h);
+    float c = h * rh, s = (0.5 * sin2) * rh;
     vec3 np = c * bp - s * bq;
     vec3 nq = s * bp + c * bq;
     bp = np;

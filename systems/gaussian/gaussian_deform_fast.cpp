@@ -104,17 +104,23 @@ inline void orthogonalise(V3& bp, V3& bq, vm& rotated) {
     const vm act = (gamma * gamma > 1e-14f * vmax(alpha * beta, splat(1e-37f))) & (gamma != 0.0f);
     if (!any(act)) return;
     rotated |= act;
-    const vf g2 = 2.0f * sel(act, gamma, splat(1.0f));
-    vf zeta = (beta - alpha) * rcp(g2);
-    const vm tiny = vabs(g2) < 1e-30f;  // outside rcp()'s range: divide
-    if (any(tiny)) zeta = sel(tiny, (beta - alpha) / g2, zeta);
-    // t = sign(ζ) / (|ζ| + sqrt(1 + ζ²)), the smaller root; 1/(2ζ) where ζ² would overflow.
-    const vf az = vabs(zeta), v = 1.0f + az * az;
-    vf t = rcp(az + v * rsqrt(v));
-    const vm huge = !(az < 1e18f);
-    if (any(huge)) t = sel(huge, 0.5f / az, t);
-    t = sel(zeta < 0.0f, -t, t);
-    vf c = rsqrt(1.0f + t * t), s = c * t;
+    // The angle from its double: cos 2θ = |d| / r, sin 2θ = sign(d) g / r (d = β − α, g = 2γ, r = |(d, g)|,
+    // |θ| ≤ π/4), then the half angle: c = sqrt((1 + cos 2θ) / 2), s = sin 2θ / (2c). Two reciprocal square
+    // roots in a row where tan θ = sign(ζ) / (|ζ| + sqrt(1 + ζ²)) takes a reciprocal, a root and another
+    // reciprocal; the sweeps' chain of rotations is the kernel's longest wait.
+    vf d = beta - alpha, g = 2.0f * gamma;
+    vf r2 = d * d + g * g;
+    // Near rsqrt()'s range both are scaled by 2^50: exact, the angle unchanged (deform.comp divides both by
+    // the larger: one division is cheap there).
+    const vm small = r2 < 1e-30f;
+    if (any(small)) {
+        d = sel(small, d * 0x1p50f, d), g = sel(small, g * 0x1p50f, g);
+        r2 = d * d + g * g;
+    }
+    const vf rr = rsqrt(sel(act, r2, splat(1.0f)));
+    const vf cos2 = vabs(d) * rr, sin2 = sel(d < 0.0f, -g, g) * rr;
+    const vf h = 0.5f + 0.5f * cos2, rh = rsqrt(h);
+    vf c = h * rh, s = (0.5f * sin2) * rh;
     c = sel(act, c, splat(1.0f));
     s = sel(act, s, splat(0.0f));
     const V3 np = c * bp - s * bq, nq = s * bp + c * bq;

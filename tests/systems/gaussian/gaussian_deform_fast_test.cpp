@@ -198,6 +198,31 @@ TEST(GaussianDeformFast, FlattenedCellsCountAsDegenerateWithoutNaN) {
     EXPECT_EQ(fast.sh, g.sh);
 }
 
+TEST(GaussianDeformFast, NeedlesWithTwoTinyAxesKeepThemFiniteAndSmall) {
+    // Two axes 1e-10 of the third: their columns' dot products are under float's normal range (the
+    // rotation's angle is then taken from them scaled up). Every Gaussian keeps a finite shape, is not
+    // dropped, and its two small axes stay of their size (|J| is within [0.5, 2] on this lattice).
+    const Lattice l = twisted(LatticeBasis::bernstein, 4);
+    GaussianCloud g = cloud(2003, 3, 17);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(1.0f, 1.5f);
+    for (glm::vec3& s : g.scales) s = glm::vec3(0.05f, 0.05e-10f * u(rng), 0.05e-10f * u(rng));
+    GaussianCloud fast;
+    auto fs = deform(l, g, fast);
+    ASSERT_TRUE(fs);
+    EXPECT_EQ(fs->not_finite, 0u);
+    EXPECT_GT(fs->inside, 1000u);
+    for (std::size_t i = 0; i < g.size(); ++i) {
+        glm::vec3 s = fast.scales[i];
+        for (int c = 0; c < 3; ++c) ASSERT_TRUE(std::isfinite(s[c])) << i;
+        ASSERT_EQ(fast.opacities[i], g.opacities[i]) << i;
+        std::sort(&s[0], &s[0] + 3);
+        EXPECT_GT(s.x, 0.05e-10f * 0.2f) << i;
+        EXPECT_LT(s.y, 0.05e-10f * 1.5f * 3.0f) << i;
+        EXPECT_GT(s.z, 0.05f * 0.3f) << i;
+    }
+}
+
 // Coefficients or a centre that are not finite (a cloud made in memory: readers refuse them), or a rotation
 // that is not a unit quaternion, are dropped by both kernels, into another cloud (whole vector groups of
 // degree 3 are checked before their rows are streamed out) and in place, whether the lattice moves the

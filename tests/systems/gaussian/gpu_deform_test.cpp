@@ -6,6 +6,7 @@
 // at most 6e-7, 4e-6 and 4e-7: the margin is for GPUs' less exact inversesqrt/division).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <optional>
@@ -180,6 +181,31 @@ TEST_F(GaussianGpuDeform, MatchesCpuOnBernsteinAndBsplineLatticesWithSeveralDefo
             EXPECT_EQ(stats.not_finite, 0u);
             EXPECT_TRUE(all_finite(*gpu));
         }
+    }
+}
+
+TEST_F(GaussianGpuDeform, NeedlesWithTwoTinyAxesKeepThemFiniteAndSmall) {
+    // Two axes 1e-10 of the third: their columns' dot products are under float's normal range (the pass
+    // takes the rotation's angle from them divided by the larger first; a GPU may flush what stays
+    // subnormal). Every Gaussian finite, none dropped, the small axes of their size, Σ as on the CPU.
+    GaussianCloud cloud = random_cloud(3000, 2, 1.0f, 9);
+    std::mt19937 rng(3);
+    std::uniform_real_distribution<float> u(1.0f, 1.5f);
+    for (glm::vec3& s : cloud.scales) s = glm::vec3(0.05f, 0.05e-10f * u(rng), 0.05e-10f * u(rng));
+    const Lattice tw = twisted(LatticeBasis::bernstein, {4, 3, 5});
+    GpuDeformStats stats;
+    auto gpu = deform_on_gpu(*deformer, {&tw}, cloud, ShMode::rotate_view, &stats);
+    ASSERT_TRUE(gpu) << gpu.message();
+    EXPECT_EQ(stats.not_finite, 0u);
+    EXPECT_GT(stats.inside, 1000u);
+    ASSERT_TRUE(all_finite(*gpu));
+    compare(*gpu, cpu_deform({&tw}, cloud), "needles");
+    for (std::size_t i = 0; i < gpu->size(); ++i) {
+        glm::vec3 s = gpu->scales[i];
+        std::sort(&s[0], &s[0] + 3);
+        EXPECT_GT(s.x, 0.05e-10f * 0.2f) << i;
+        EXPECT_LT(s.y, 0.05e-10f * 1.5f * 3.0f) << i;
+        EXPECT_GT(s.z, 0.05f * 0.3f) << i;
     }
 }
 
