@@ -408,8 +408,46 @@ void gather_whole(const glm::mat3* j, const glm::quat* q, const glm::vec3* s, fl
         _mm512_store_ps(sl[c], _mm512_mask_i32gather_ps(_mm512_setzero_ps(), 0xffff,
                                                         _mm512_add_epi32(by3, _mm512_set1_epi32(c)), sf, 4));
 }
+// The same layout back: a whole group's scales and rotations (w, x, y, z) with one scatter per entry.
+void scatter_whole(const V3& sv, const vf (&qv)[4], glm::vec3* s, glm::quat* q) {
+    const __m512i lane = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
+    const __m512i by4 = _mm512_slli_epi32(lane, 2), by3 = _mm512_mullo_epi32(lane, _mm512_set1_epi32(3));
+    auto* sf = reinterpret_cast<float*>(s);
+    const vf sc[3] = {sv.x, sv.y, sv.z};
+    for (int c = 0; c < 3; ++c)
+        _mm512_i32scatter_ps(sf, _mm512_add_epi32(by3, _mm512_set1_epi32(c)), (__m512)sc[c], 4);
+    auto* qf = reinterpret_cast<float*>(q);
+    const float* member[4] = {&q->w, &q->x, &q->y, &q->z};
+    for (int k = 0; k < 4; ++k)
+        _mm512_i32scatter_ps(qf, _mm512_add_epi32(by4, _mm512_set1_epi32(int(member[k] - qf))), (__m512)qv[k],
+                             4);
+}
+inline int count(vm m) { return __builtin_popcount(_mm512_test_epi32_mask((__m512i)m, (__m512i)m)); }
+// W consecutive vec3 into lanes; a mask as W bytes 1 (true) or 0.
+V3 gather_xyz(const glm::vec3* p) {
+    const __m512i by3 = _mm512_mullo_epi32(
+        _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0), _mm512_set1_epi32(3));
+    const auto* f = reinterpret_cast<const float*>(p);
+    vf c[3];
+    for (int k = 0; k < 3; ++k)
+        c[k] = (vf)_mm512_mask_i32gather_ps(_mm512_setzero_ps(), 0xffff,
+                                            _mm512_add_epi32(by3, _mm512_set1_epi32(k)), f, 4);
+    return {c[0], c[1], c[2]};
+}
+void store_flags(vm m, std::uint8_t* out) {
+    _mm_storeu_si128(reinterpret_cast<__m128i*>(out),
+                     _mm512_maskz_cvtepi32_epi8(0xffff, _mm512_and_si512((__m512i)m, _mm512_set1_epi32(1))));
+}
 #else
 constexpr bool kGatherWhole = false;
+void scatter_whole(const V3&, const vf (&)[4], glm::vec3*, glm::quat*) {}
+V3 gather_xyz(const glm::vec3*) { return {}; }
+void store_flags(vm, std::uint8_t*) {}
+inline int count(vm m) {
+    int k = 0;
+    for (int l = 0; l < W; ++l) k += m[l] != 0;
+    return k;
+}
 void gather_whole(const glm::mat3*, const glm::quat*, const glm::vec3*, float (&)[9][W], float (&)[4][W],
                   float (&)[3][W]) {}
 #endif
@@ -555,20 +593,32 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
             }
             rows_rotated = rotated;
         }
-        for (int l = 0; l < n; ++l) {
+        // Whole groups store their shapes with scatters (the input's where not moved); with their SH rows
+        // streamed below and no frames to write, no lane has anything left to do one at a time.
+        const bool scattered = kGatherWhole && n == W;
+        if (scattered) {
+            vf q_out[4];
+            for (int k = 0; k < 4; ++k) q_out[k] = sel(moved, q[k], load(ql[k]));
+            scatter_whole(sel(moved, scale, V3{load(sl[0]), load(sl[1]), load(sl[2])}), q_out,
+                          &out.scales[first], &out.rotations[first]);
+            singular_count += std::size_t(count(singular));
+        }
+        for (int l = 0; l < n && !(scattered && stream && !a.view_mode); ++l) {
             const std::size_t i = first + std::size_t(l);
             const float* sh_in = &in.sh[i * stride];
             float* sh_out = &out.sh[i * stride];
             if (!moved[l]) {  // outside the lattice or not moved by it
                 if (copy) {
-                    out.scales[i] = in.scales[i], out.rotations[i] = in.rotations[i];
+                    if (!scattered) out.scales[i] = in.scales[i], out.rotations[i] = in.rotations[i];
                     if (!stream) std::copy(sh_in, sh_in + stride, sh_out);
                 }
                 continue;
             }
-            singular_count += singular[l] != 0;
-            out.scales[i] = glm::vec3(out_s[0][l], out_s[1][l], out_s[2][l]);
-            out.rotations[i] = glm::quat(out_q[0][l], out_q[1][l], out_q[2][l], out_q[3][l]);
+            if (!scattered) {
+                singular_count += singular[l] != 0;
+                out.scales[i] = glm::vec3(out_s[0][l], out_s[1][l], out_s[2][l]);
+                out.rotations[i] = glm::quat(out_q[0][l], out_q[1][l], out_q[2][l], out_q[3][l]);
+            }
             if (rotate_coeffs && rotated[l]) {
                 if (stream) continue;  // the row in sh_rows is written below
                 if (whole) std::memcpy(sh_out + 3, sh_rows[l] + 3, (stride - 3) * sizeof(float));
@@ -603,6 +653,13 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
         // J itself too, as the shader tests it: a J that is not finite can still give a finite-looking shape.
         vm bad = checked ? not_finite : vm{};
         for (int c = 0; c < 3; ++c) bad |= ~finite(J.c[c].x) | ~finite(J.c[c].y) | ~finite(J.c[c].z);
+        // A whole group checked in the lanes tests its centres there too and stores its 16 answers at once.
+        if (kGatherWhole && checked && n == W && !a.view_mode) {
+            const V3 p = gather_xyz(&out.positions[first]);
+            bad |= ~finite(p.x) | ~finite(p.y) | ~finite(p.z);
+            store_flags(bad, &a.not_finite[first - a.first]);
+            return singular_count;
+        }
         for (int l = 0; l < n; ++l) {
             const std::size_t i = first + std::size_t(l);
             bool drop = bad[l] != 0 || !finite3(out.positions[i]);
