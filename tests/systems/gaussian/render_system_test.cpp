@@ -89,6 +89,24 @@ GaussianCloud blob(glm::vec3 at, float sigma, float opacity, glm::vec3 rgb) {
     return g;
 }
 
+// `count` large overlapping Gaussians of different colours (order matters), stretched and turned at random:
+// past the quads' coverage budget of a small frame.
+GaussianCloud overlapping_blobs(unsigned seed, int count) {
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(0, 1);
+    GaussianCloud g;
+    for (int i = 0; i < count; ++i) {
+        const GaussianCloud one = blob({2 * u(rng) - 1, 2 * u(rng) - 1, 2 * u(rng) - 1}, 0.3f + 0.3f * u(rng),
+                                       0.1f + 0.3f * u(rng), {u(rng), u(rng), u(rng)});
+        g.positions.push_back(one.positions[0]);
+        g.scales.push_back(one.scales[0] * glm::vec3(1.0f, 0.5f + u(rng), 1.0f));
+        g.rotations.push_back(glm::normalize(glm::quat(u(rng), u(rng), u(rng), u(rng))));
+        g.opacities.push_back(one.opacities[0]);
+        g.sh.insert(g.sh.end(), one.sh.begin(), one.sh.end());
+    }
+    return g;
+}
+
 glm::vec3 srgb(glm::vec3 linear) {
     return {render::linear_to_srgb(linear.x), render::linear_to_srgb(linear.y),
             render::linear_to_srgb(linear.z)};
@@ -347,18 +365,7 @@ TEST_F(GaussianRenderSystem, ScreenFillingCloudIsBlendedByTilesThatStopAtSaturat
 TEST_F(GaussianRenderSystem, TileRouteMatchesTheReference) {
     // Large overlapping Gaussians of different colours (order matters), past the quads' budget.
     add_camera();
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<float> u(0, 1);
-    GaussianCloud g;
-    for (int i = 0; i < 1000; ++i) {
-        const GaussianCloud one = blob({2 * u(rng) - 1, 2 * u(rng) - 1, 2 * u(rng) - 1}, 0.3f + 0.3f * u(rng),
-                                       0.1f + 0.3f * u(rng), {u(rng), u(rng), u(rng)});
-        g.positions.push_back(one.positions[0]);
-        g.scales.push_back(one.scales[0] * glm::vec3(1.0f, 0.5f + u(rng), 1.0f));
-        g.rotations.push_back(glm::normalize(glm::quat(u(rng), u(rng), u(rng), u(rng))));
-        g.opacities.push_back(one.opacities[0]);
-        g.sh.insert(g.sh.end(), one.sh.begin(), one.sh.end());
-    }
+    const GaussianCloud g = overlapping_blobs(11, 1000);
     reg.emplace<GaussianCloud>(reg.create(), g);
     const int w = 160, h = 120;
     const ReferenceImage sys = as_reference(frame(w, h));
@@ -376,18 +383,7 @@ TEST_F(GaussianRenderSystem, FramesWithoutAuxOutputsBlendTheSameColours) {
     // Without aux outputs the pass blends only the colour target (no depth sum): the same colours, on both
     // routes (quads: a small ordinary cloud; tiles: large overlapping Gaussians past the quads' budget).
     add_camera();
-    std::mt19937 rng(5);
-    std::uniform_real_distribution<float> u(0, 1);
-    GaussianCloud big;
-    for (int i = 0; i < 600; ++i) {
-        const GaussianCloud one = blob({2 * u(rng) - 1, 2 * u(rng) - 1, 2 * u(rng) - 1}, 0.3f + 0.3f * u(rng),
-                                       0.1f + 0.3f * u(rng), {u(rng), u(rng), u(rng)});
-        big.positions.push_back(one.positions[0]);
-        big.scales.push_back(one.scales[0]);
-        big.rotations.push_back(one.rotations[0]);
-        big.opacities.push_back(one.opacities[0]);
-        big.sh.insert(big.sh.end(), one.sh.begin(), one.sh.end());
-    }
+    const GaussianCloud big = overlapping_blobs(5, 600);
     const int w = 160, h = 120;
     for (const bool tiles : {false, true}) {
         SCOPED_TRACE(tiles ? "tiles" : "quads");
