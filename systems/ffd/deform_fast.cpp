@@ -158,12 +158,15 @@ void bernstein_group(const Prepared& P, Group& g) {
             const float* c = dp + std::size_t(row) * K * 4;
             const float* e = du + std::size_t(row) * (K - 1) * 4;
             vf q[NC] = {}, w[NC] = {};
-            for (int k = 0; k < K; ++k)
+#pragma GCC unroll 16
+            for (int k = 0; k < K - 1; ++k)
+#pragma GCC unroll 3
                 for (int a = 0; a < NC; ++a) {
                     q[a] += bu[k] * c[4 * k + a];
-                    if constexpr (Full)
-                        if (k < K - 1) w[a] += bl[k] * e[4 * k + a];
+                    if constexpr (Full) w[a] += bl[k] * e[4 * k + a];
                 }
+#pragma GCC unroll 3
+            for (int a = 0; a < NC; ++a) q[a] += bu[K - 1] * c[4 * (K - 1) + a];
             for (int a = 0; a < NC; ++a) {
                 R[a] += q[a] * bt[j];
                 if constexpr (Full) Rt[a] += q[a] * dbt[j], Ru[a] += w[a] * bt[j];
