@@ -147,7 +147,7 @@ void bernstein_group(const Prepared& P, Group& g) {
     bernstein(loadv(g.t), M, bt, dbt);
     bernstein_with_lower(loadv(g.u), K - 1, bu, bl);
     vf X[NC] = {}, Fs[NC] = {}, Ft[NC] = {}, Fu[NC] = {};
-    const float* dp = P.dk4.data();
+    const float* dp = P.coords == 3 ? P.dp4.data() : P.dk4.data();
     const float* du = P.du4.data();
     const std::uint8_t* nz = P.row_nonzero.data();
     for (int i = 0; i <= L; ++i) {
@@ -535,13 +535,15 @@ Prepared prepare(const Lattice& l, const glm::dvec3& cloud_origin, PrepareFor us
     for (const auto& m : P.moved) P.need[0][m.i] = P.need[1][m.j] = P.need[2][m.k] = 1;
     if (l.basis == LatticeBasis::bernstein) {
         P.dp4.assign(l.size() * 4, 0.0f);
-        P.dk4.assign(l.size() * 4, 0.0f);
+        if (P.coords < 3) P.dk4.assign(l.size() * 4, 0.0f);
         P.row_nonzero.assign(std::size_t(L + 1) * (M + 1), 0);
         for (const auto& m : P.moved) {
             float* d = &P.dp4[l.index(m.i, m.j, m.k) * 4];
             d[0] = m.d[0], d[1] = m.d[1], d[2] = m.d[2];
-            float* kd = &P.dk4[l.index(m.i, m.j, m.k) * 4];
-            for (int a = 0; a < P.coords; ++a) kd[a] = m.d[P.coord[a]];
+            if (P.coords < 3) {
+                float* kd = &P.dk4[l.index(m.i, m.j, m.k) * 4];
+                for (int a = 0; a < P.coords; ++a) kd[a] = m.d[P.coord[a]];
+            }
             P.row_nonzero[std::size_t(m.i) * (M + 1) + m.j] = 1;
         }
         // The differences from the double displacements (not the rounded floats).

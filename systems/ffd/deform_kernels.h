@@ -17,12 +17,12 @@ struct Prepared {
     LatticeBasis basis = LatticeBasis::bernstein;
     std::vector<float> dp4;                 // Bernstein: ΔP as x,y,z,0 per control point, flat index
     std::vector<std::uint8_t> row_nonzero;  // Bernstein: (i,j) rows with any nonzero ΔP
-    // The dense Bernstein kernel's tables hold only the coordinates of ΔP that move, coord[0..coords-1], in
-    // that order (x,y,z,0 when all three do):
+    // The dense Bernstein kernel sums only the coordinates of ΔP that move, coord[0..coords-1], in that
+    // order: from dp4 when all three do, else from dk4 (those coordinates first, per control point).
     int coords = 3;
     int coord[3] = {0, 1, 2};
-    std::vector<float> dk4;  // ΔP per control point, flat index
-    std::vector<float> du4;  // N (ΔP[k+1] − ΔP[k]), k < N, per (i,j) row
+    std::vector<float> dk4;  // empty when coords == 3
+    std::vector<float> du4;  // N (ΔP[k+1] − ΔP[k]), k < N, per (i,j) row, the coordinates in coord order
     struct Moved {
         int i, j, k;
         float d[3];

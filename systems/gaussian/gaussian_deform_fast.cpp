@@ -387,11 +387,21 @@ inline vm not_finite_any(const float (*p)[W], int count) {
 // source may be used).
 #if defined(__AVX512F__)
 constexpr bool kGatherWhole = true;
+// W consecutive vec3 into lanes.
+V3 gather_xyz(const glm::vec3* p) {
+    const __m512i by3 = _mm512_mullo_epi32(
+        _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0), _mm512_set1_epi32(3));
+    const auto* f = reinterpret_cast<const float*>(p);
+    vf c[3];
+    for (int k = 0; k < 3; ++k)
+        c[k] = (vf)_mm512_mask_i32gather_ps(_mm512_setzero_ps(), 0xffff,
+                                            _mm512_add_epi32(by3, _mm512_set1_epi32(k)), f, 4);
+    return {c[0], c[1], c[2]};
+}
 void gather_whole(const glm::mat3* j, const glm::quat* q, const glm::vec3* s, float (&jl)[9][W],
                   float (&ql)[4][W], float (&sl)[3][W]) {
     const __m512i lane = _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0);
-    const __m512i by9 = _mm512_mullo_epi32(lane, _mm512_set1_epi32(9)), by4 = _mm512_slli_epi32(lane, 2),
-                  by3 = _mm512_mullo_epi32(lane, _mm512_set1_epi32(3));
+    const __m512i by9 = _mm512_mullo_epi32(lane, _mm512_set1_epi32(9)), by4 = _mm512_slli_epi32(lane, 2);
     const auto* jf = reinterpret_cast<const float*>(j);
     for (int e = 0; e < 9; ++e)
         _mm512_store_ps(jl[e], _mm512_mask_i32gather_ps(_mm512_setzero_ps(), 0xffff,
@@ -403,10 +413,9 @@ void gather_whole(const glm::mat3* j, const glm::quat* q, const glm::vec3* s, fl
         _mm512_store_ps(ql[k], _mm512_mask_i32gather_ps(
                                    _mm512_setzero_ps(), 0xffff,
                                    _mm512_add_epi32(by4, _mm512_set1_epi32(int(member[k] - qf))), qf, 4));
-    const auto* sf = reinterpret_cast<const float*>(s);
-    for (int c = 0; c < 3; ++c)
-        _mm512_store_ps(sl[c], _mm512_mask_i32gather_ps(_mm512_setzero_ps(), 0xffff,
-                                                        _mm512_add_epi32(by3, _mm512_set1_epi32(c)), sf, 4));
+    const V3 sv = gather_xyz(s);
+    _mm512_store_ps(sl[0], (__m512)sv.x), _mm512_store_ps(sl[1], (__m512)sv.y),
+        _mm512_store_ps(sl[2], (__m512)sv.z);
 }
 // The same layout back: a whole group's scales and rotations (w, x, y, z) with one scatter per entry.
 void scatter_whole(const V3& sv, const vf (&qv)[4], glm::vec3* s, glm::quat* q) {
@@ -423,17 +432,7 @@ void scatter_whole(const V3& sv, const vf (&qv)[4], glm::vec3* s, glm::quat* q) 
                              4);
 }
 inline int count(vm m) { return __builtin_popcount(_mm512_test_epi32_mask((__m512i)m, (__m512i)m)); }
-// W consecutive vec3 into lanes; a mask as W bytes 1 (true) or 0.
-V3 gather_xyz(const glm::vec3* p) {
-    const __m512i by3 = _mm512_mullo_epi32(
-        _mm512_set_epi32(15, 14, 13, 12, 11, 10, 9, 8, 7, 6, 5, 4, 3, 2, 1, 0), _mm512_set1_epi32(3));
-    const auto* f = reinterpret_cast<const float*>(p);
-    vf c[3];
-    for (int k = 0; k < 3; ++k)
-        c[k] = (vf)_mm512_mask_i32gather_ps(_mm512_setzero_ps(), 0xffff,
-                                            _mm512_add_epi32(by3, _mm512_set1_epi32(k)), f, 4);
-    return {c[0], c[1], c[2]};
-}
+// A mask as W bytes 1 (true) or 0.
 void store_flags(vm m, std::uint8_t* out) {
     _mm_storeu_si128(reinterpret_cast<__m128i*>(out),
                      _mm512_maskz_cvtepi32_epi8(0xffff, _mm512_and_si512((__m512i)m, _mm512_set1_epi32(1))));
@@ -544,6 +543,10 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
         scale = sel(mpos, m * scale, splat3(0, 0, 0));
         vf q[4];
         to_quat(axes, q);
+        // What is written for each lane: the new shape where moved, else the input's.
+        const V3 s_out = sel(moved, scale, V3{load(sl[0]), load(sl[1]), load(sl[2])});
+        vf q_out[4];
+        for (int k = 0; k < 4; ++k) q_out[k] = sel(moved, q[k], load(ql[k]));
         alignas(64) float out_s[3][W], out_q[4][W];
         std::memcpy(out_s[0], &scale.x, sizeof(vf)), std::memcpy(out_s[1], &scale.y, sizeof(vf));
         std::memcpy(out_s[2], &scale.z, sizeof(vf));
@@ -580,10 +583,7 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
             if (whole) {
                 to_rows(sh_soa, sh_rows);  // every lane, the band 0 colour included
                 const vm rotated_bad = not_finite_any(sh_soa + 3, 45);
-                // finite_shape() of what is written: the new shape where moved, else the input's.
-                const V3 s_out = sel(moved, scale, V3{load(sl[0]), load(sl[1]), load(sl[2])});
-                vf q_out[4];
-                for (int k = 0; k < 4; ++k) q_out[k] = sel(moved, q[k], load(ql[k]));
+                // finite_shape() of what is written.
                 const vf q2 =
                     q_out[1] * q_out[1] + q_out[2] * q_out[2] + q_out[3] * q_out[3] + q_out[0] * q_out[0];
                 not_finite = band0_bad | (rotated & rotated_bad) | (~rotated & input_bad) | ~finite(s_out.x) |
@@ -597,10 +597,7 @@ std::size_t group(const FastShapeArgs& a, std::size_t first, int n) {
         // streamed below and no frames to write, no lane has anything left to do one at a time.
         const bool scattered = kGatherWhole && n == W;
         if (scattered) {
-            vf q_out[4];
-            for (int k = 0; k < 4; ++k) q_out[k] = sel(moved, q[k], load(ql[k]));
-            scatter_whole(sel(moved, scale, V3{load(sl[0]), load(sl[1]), load(sl[2])}), q_out,
-                          &out.scales[first], &out.rotations[first]);
+            scatter_whole(s_out, q_out, &out.scales[first], &out.rotations[first]);
             singular_count += std::size_t(count(singular));
         }
         for (int l = 0; l < n && !(scattered && stream && !a.view_mode); ++l) {

@@ -101,8 +101,7 @@ void ensure_targets(GaussianPassState& s, const GaussianPassFrame& f) {
         s.accum_fbo = gfx::Framebuffer::create("render.gaussian_accum");
         glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT0, s.gauss_color.id(), 0);
         glNamedFramebufferTexture(s.accum_fbo.id(), GL_COLOR_ATTACHMENT1, s.gauss_depth.id(), 0);
-        const GLenum two[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-        glNamedFramebufferDrawBuffers(s.accum_fbo.id(), 2, two);
+        // Its draw buffers are set each frame (gaussian_pass: the depth sum only with aux outputs).
         s.depth_attached = 0;
     }
     if (s.depth_attached != f.depth) {  // the render system recreates its targets on a resize
