@@ -64,9 +64,13 @@ check ffd/paper_mode.frag frag
 # The deform shaders as DeformPrograms compiles them (systems/ffd/gpu_kernel.cpp): generic, and per lattice
 # shape (11^3 here) for each control-point kernel: Bernstein from shared memory (256 wide), a UBO or the
 # SSBO; B-spline in runs along u, from shared memory or point by point. The Gaussian one also per output
-# combination (frames, coefficients).
+# combination (frames, coefficients). Bernstein also summing one or two moving coordinates (FFD_MOVE).
 lattice="FFD_L=10 FFD_M=10 FFD_N=10 FFD_MAXB=11"
+one="FFD_MOVE=y FFD_MOVE_N=1 FFD_MOVE_A=1"
+two="FFD_MOVE=xz FFD_MOVE_N=2 FFD_MOVE_A=0 FFD_MOVE_B=2"
 kernels=("FFD_BASIS=0 FFD_CP_SHARED=1331 FFD_LOCAL_SIZE=256" "FFD_BASIS=0 FFD_CP_UBO=1331" "FFD_BASIS=0"
+         "FFD_BASIS=0 FFD_CP_SHARED=1331 FFD_LOCAL_SIZE=256 $one" "FFD_BASIS=0 FFD_CP_UBO=1331 $two"
+         "FFD_BASIS=0 $one" "FFD_BASIS=0 FFD_CP_SHARED=1331 FFD_LOCAL_SIZE=256 $two"
          "FFD_BASIS=1 FFD_BSPLINE_RUNS=1" "FFD_BASIS=1 FFD_CP_SHARED=2197 FFD_LOCAL_SIZE=256" "FFD_BASIS=1")
 for shader in ffd/deform.comp gaussian/deform.comp; do
     check $shader comp

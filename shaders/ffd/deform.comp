@@ -51,14 +51,7 @@ void main() {
         s_inside = 0u;
     }
 #ifdef FFD_CP_SHARED
-    // Every invocation of the group copies its share, then all wait (uniform control flow). Only the
-    // displacements' xyz travel.
-    for (uint c = gl_LocalInvocationIndex; c < uint(FFD_CP_SHARED); c += gl_WorkGroupSize.x) {
-        vec3 d = ffd_dp[c].xyz;
-        ffd_dp_shared[3u * c] = d.x;
-        ffd_dp_shared[3u * c + 1u] = d.y;
-        ffd_dp_shared[3u * c + 2u] = d.z;
-    }
+    ffd_share_control_points(gl_LocalInvocationIndex, gl_WorkGroupSize.x);
 #endif
     memoryBarrierShared();
     barrier();

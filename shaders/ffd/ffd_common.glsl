@@ -48,17 +48,75 @@ layout(std430, binding = SFFD_SSBO_CONTROL_POINTS) readonly buffer FfdControlPoi
 //   switches). B-spline lanes read different elements: the UBO would gain nothing.
 // - neither: the SSBO (any lattice size); with FFD_BSPLINE_RUNS the B-spline's grid arrives as runs of
 //   4 points along u, packed as their x, y, z (GpuBernsteinKernel::packed).
+//
+// The Bernstein sums run over the coordinates of ΔP that move, as the CPU kernel's do (a twist leaves its
+// axis's coordinate still, a stretch two: a third or two of the arithmetic): FFD_MOVE is their swizzle
+// (x, xz, ...), FFD_MOVE_N their number, FFD_MOVE_A and FFD_MOVE_B where the first two go in the vec3
+// (GpuDeformer defines them when fewer than three move). FFD_DPM(i) reads those coordinates of ΔP_i as an
+// FFD_MVEC; shared memory holds only them.
+#ifndef FFD_MOVE
+#define FFD_MOVE xyz
+#define FFD_MOVE_N 3
+#endif
+#if FFD_MOVE_N == 1
+#define FFD_MVEC float
+#elif FFD_MOVE_N == 2
+#define FFD_MVEC vec2
+#else
+#define FFD_MVEC vec3
+#endif
 #if defined(FFD_CP_SHARED)
-shared float ffd_dp_shared[3 * FFD_CP_SHARED];
+shared float ffd_dp_shared[FFD_MOVE_N * FFD_CP_SHARED];
 #define FFD_DP(i) vec3(ffd_dp_shared[3 * (i)], ffd_dp_shared[3 * (i) + 1], ffd_dp_shared[3 * (i) + 2])
+#if FFD_MOVE_N == 1
+#define FFD_DPM(i) ffd_dp_shared[i]
+#elif FFD_MOVE_N == 2
+#define FFD_DPM(i) vec2(ffd_dp_shared[2 * (i)], ffd_dp_shared[2 * (i) + 1])
+#else
+#define FFD_DPM(i) FFD_DP(i)
+#endif
 #elif defined(FFD_CP_UBO)
 layout(std140, binding = SFFD_UBO_FFD_CONTROL) uniform FfdControlBlock {
     vec4 ffd_dp_ubo[FFD_CP_UBO];
 };
 #define FFD_DP(i) ffd_dp_ubo[i].xyz
+#define FFD_DPM(i) ffd_dp_ubo[i].FFD_MOVE
 #else
 #define FFD_DP(i) ffd_dp[i].xyz
+#define FFD_DPM(i) ffd_dp[i].FFD_MOVE
 #endif
+
+#ifdef FFD_CP_SHARED
+// Every invocation of the work group copies its share of the control points' moving coordinates
+// (`invocation` of `group_size`; a header included before the shader declares its size cannot name
+// gl_WorkGroupSize); the caller then waits at a barrier (uniform control flow).
+void ffd_share_control_points(uint invocation, uint group_size) {
+    for (uint c = invocation; c < uint(FFD_CP_SHARED); c += group_size) {
+        FFD_MVEC d = ffd_dp[c].FFD_MOVE;
+#if FFD_MOVE_N == 1
+        ffd_dp_shared[c] = d;
+#else
+        for (uint a = 0u; a < uint(FFD_MOVE_N); ++a) ffd_dp_shared[uint(FFD_MOVE_N) * c + a] = d[a];
+#endif
+    }
+}
+#endif
+
+// The moving coordinates back in a vec3, zeros for the still ones.
+vec3 ffd_unpack_moving(FFD_MVEC v) {
+#if FFD_MOVE_N == 3
+    return v;
+#else
+    vec3 r = vec3(0.0);
+#if FFD_MOVE_N == 1
+    r[FFD_MOVE_A] = v;
+#else
+    r[FFD_MOVE_A] = v.x;
+    r[FFD_MOVE_B] = v.y;
+#endif
+    return r;
+#endif
+}
 
 const float FFD_SLACK = 1e-6;
 
@@ -122,13 +180,14 @@ void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
         ffd_bernstein(stu.x, L, bs, dbs);
         ffd_bernstein(stu.y, M, bt, dbt);
         ffd_bernstein(stu.z, N, bu, dbu);
+        FFD_MVEC Dm = FFD_MVEC(0.0), Fsm = FFD_MVEC(0.0), Ftm = FFD_MVEC(0.0), Fum = FFD_MVEC(0.0);
         for (int i = 0; i <= L; ++i) {
-            vec3 R = vec3(0.0), Rt = vec3(0.0), Ru = vec3(0.0);
+            FFD_MVEC R = FFD_MVEC(0.0), Rt = FFD_MVEC(0.0), Ru = FFD_MVEC(0.0);
             for (int j = 0; j <= M; ++j) {
                 int base = (i * (M + 1) + j) * (N + 1);
-                vec3 q = vec3(0.0), w = vec3(0.0);
+                FFD_MVEC q = FFD_MVEC(0.0), w = FFD_MVEC(0.0);
                 for (int k = 0; k <= N; ++k) {
-                    vec3 d = FFD_DP(base + k);
+                    FFD_MVEC d = FFD_DPM(base + k);
                     q += bu[k] * d;
                     w += dbu[k] * d;
                 }
@@ -136,11 +195,15 @@ void ffd_eval(vec3 stu, bool full, out vec3 D, out mat3 G) {
                 Rt += q * dbt[j];
                 Ru += w * bt[j];
             }
-            D += R * bs[i];
-            Fs += R * dbs[i];
-            Ft += Rt * bs[i];
-            Fu += Ru * bs[i];
+            Dm += R * bs[i];
+            Fsm += R * dbs[i];
+            Ftm += Rt * bs[i];
+            Fum += Ru * bs[i];
         }
+        D = ffd_unpack_moving(Dm);
+        Fs = ffd_unpack_moving(Fsm);
+        Ft = ffd_unpack_moving(Ftm);
+        Fu = ffd_unpack_moving(Fum);
     }
 #endif
 #if !defined(FFD_BASIS)

@@ -312,12 +312,7 @@ void main() {
     uint id = sffd_dispatch_index();
     if (gl_LocalInvocationIndex < 4u) s_counts[gl_LocalInvocationIndex] = 0u;
 #ifdef FFD_CP_SHARED
-    for (uint c = gl_LocalInvocationIndex; c < uint(FFD_CP_SHARED); c += gl_WorkGroupSize.x) {
-        vec3 d = ffd_dp[c].xyz;
-        ffd_dp_shared[3u * c] = d.x;
-        ffd_dp_shared[3u * c + 1u] = d.y;
-        ffd_dp_shared[3u * c + 2u] = d.z;
-    }
+    ffd_share_control_points(gl_LocalInvocationIndex, gl_WorkGroupSize.x);
 #endif
     memoryBarrierShared();
     barrier();

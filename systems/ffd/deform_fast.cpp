@@ -470,25 +470,29 @@ void set_moving_coordinates(Prepared& P, const Lattice& l, const glm::dvec3& lar
 }
 
 // PrepareFor::gpu_controls: ΔP in one pass over the control points in flat order, none of the CPU
-// kernels' tables. The same values as the full preparation (a point that did not move keeps zeros).
+// kernels' tables. The same values as the full preparation (a point that did not move keeps zeros), and
+// the same moving coordinates (the GPU's Bernstein sums skip the others too).
 void prepare_gpu_controls(Prepared& P, const Lattice& l) {
     const int L = P.L, M = P.M, N = P.N;
     const bool bspline = l.basis == LatticeBasis::bspline;
     if (bspline) P.grid.assign(std::size_t(L + 3) * (M + 3) * (N + 3) * 4, 0.0f);
     else P.dp4.assign(l.size() * 4, 0.0f);
     glm::ivec3 lo(1 << 30), hi(-1);
+    glm::dvec3 largest(0.0);
     std::size_t c = 0;
     for (int i = 0; i <= L; ++i)
         for (int j = 0; j <= M; ++j)
             for (int k = 0; k <= N; ++k, ++c) {
                 const glm::dvec3 d = l.current[c] - l.rest[c];
                 if (d == glm::dvec3(0.0)) continue;
+                largest = glm::max(largest, glm::abs(d));
                 float* out = bspline ? padded_point(P, i, j, k) : &P.dp4[c * 4];
                 out[0] = float(d.x), out[1] = float(d.y), out[2] = float(d.z);
                 lo = glm::min(lo, glm::ivec3(i, j, k));
                 hi = glm::max(hi, glm::ivec3(i, j, k));
                 P.any_moved = true;
             }
+    set_moving_coordinates(P, l, largest);
     if (bspline) set_cull_box(P, l, lo, hi);
 }
 

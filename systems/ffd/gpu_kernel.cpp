@@ -88,9 +88,15 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
     last_kernel = cp_shared ? GpuBernsteinKernel::shared
                   : runs    ? GpuBernsteinKernel::packed
                             : GpuBernsteinKernel::direct;
+    // Bernstein sums only the coordinates of ΔP that move (ffd_common.glsl, FFD_MOVE): one program per
+    // set of them, compiled the first time an edit moves that set (at most 7 per shape). A lattice at rest
+    // (every splat copied unchanged) keeps the program of all three.
+    const bool moving = bernstein && P.any_moved && P.coords < 3;
+    std::uint64_t moving_mask = 0;
+    for (int a = 0; moving && a < P.coords; ++a) moving_mask |= 1u << P.coord[a];
     const std::uint64_t shape =
         (std::uint64_t(lattice.divisions.x) << 24) | (std::uint64_t(lattice.divisions.y) << 12) |
-        std::uint64_t(lattice.divisions.z) | (std::uint64_t(cp_shared) << 44) |
+        std::uint64_t(lattice.divisions.z) | (moving_mask << 36) | (std::uint64_t(cp_shared) << 44) |
         (std::uint64_t(cp_ubo) << 45) | (std::uint64_t(!bernstein) << 46) | (std::uint64_t(runs) << 47) |
         (std::uint64_t(variant ? variant->id : 0) << 48);
     auto sp = specialised.find(shape);
@@ -107,6 +113,14 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
         }
         if (cp_ubo) defines.push_back({"FFD_CP_UBO", std::to_string(lattice.size())});
         if (runs) defines.push_back({"FFD_BSPLINE_RUNS", "1"});
+        if (moving) {
+            std::string swizzle;
+            for (int a = 0; a < P.coords; ++a) swizzle += "xyz"[P.coord[a]];
+            defines.push_back({"FFD_MOVE", swizzle});
+            defines.push_back({"FFD_MOVE_N", std::to_string(P.coords)});
+            defines.push_back({"FFD_MOVE_A", std::to_string(P.coord[0])});
+            if (P.coords > 1) defines.push_back({"FFD_MOVE_B", std::to_string(P.coord[1])});
+        }
         if (variant) defines.insert(defines.end(), variant->defines.begin(), variant->defines.end());
         auto prog = gfx::load_compute_program(shader,
                                               program_label +

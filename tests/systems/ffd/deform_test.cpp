@@ -450,22 +450,30 @@ TEST(FfdDeform, BoundsFromControlPointsContainEveryDeformedPoint) {
 }
 
 TEST(FfdDeform, GpuControlPreparationEqualsTheFullOneInWhatTheGpuReads) {
-    // The GPU path prepares only ΔP, M⁻¹, the origin offset, the cull box and whether anything moved, in
-    // one pass of its own; the shaders must see exactly what the full preparation gives the CPU kernels.
+    // The GPU path prepares only ΔP, M⁻¹, the origin offset, the cull box, whether anything moved and
+    // which coordinates move, in one pass of its own; the shaders must see exactly what the full
+    // preparation gives the CPU kernels.
     const glm::dvec3 origin(0.3, -0.2, 1e3);
     for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline})
-        for (int shape = 0; shape < 5; ++shape) {
+        for (int shape = 0; shape < 7; ++shape) {
             Lattice l = skewed_lattice({4, 5, 3}, basis);
             if (shape == 1) l.current[l.index(2, 3, 1)] += glm::dvec3(0.1, -0.2, 0.05);  // one point
             if (shape == 2) test::jitter(l, 0.3, 4, 7);                                  // scattered
             if (shape == 3) test::twist_about_t(l, 0.8);                                 // every point
             if (shape == 4) l.rest[0].y = 0.0, l.current[0].y = -0.0;  // ΔP.y = -0.0: not a move
+            if (shape == 5)  // z only, in two points: one moving coordinate
+                l.current[l.index(1, 1, 1)].z += 0.2, l.current[l.index(3, 2, 0)].z -= 0.1;
+            if (shape == 6)  // x and y, y in a point of its own: two
+                l.current[l.index(0, 4, 2)].x += 0.1, l.current[l.index(2, 0, 3)].y += 1e-3;
             const detail::Prepared full = detail::prepare(l, origin);
             const detail::Prepared gpu = detail::prepare(l, origin, detail::PrepareFor::gpu_controls);
             const std::string what = std::string(basis == LatticeBasis::bspline ? "bspline" : "bernstein") +
                                      " shape " + std::to_string(shape);
-            EXPECT_EQ(gpu.any_moved, shape == 1 || shape == 2 || shape == 3) << what;
+            EXPECT_EQ(gpu.any_moved, shape != 0 && shape != 4) << what;
             EXPECT_EQ(full.any_moved, gpu.any_moved) << what;
+            EXPECT_EQ(gpu.coords, shape == 5 ? 1 : shape == 6 ? 2 : shape == 0 || shape == 4 ? 1 : 3) << what;
+            EXPECT_EQ(full.coords, gpu.coords) << what;
+            for (int a = 0; a < 3; ++a) EXPECT_EQ(full.coord[a], gpu.coord[a]) << what << " slot " << a;
             ASSERT_EQ(full.dp4.size(), gpu.dp4.size()) << what;
             ASSERT_EQ(full.grid.size(), gpu.grid.size()) << what;
             EXPECT_EQ(basis == LatticeBasis::bspline ? gpu.grid.empty() : gpu.dp4.empty(), false) << what;

@@ -209,6 +209,86 @@ TEST_F(FfdGl, EveryControlPointKernelMatchesTheReferenceForBothBases) {
     }
 }
 
+// The Bernstein programs sum only the coordinates of ΔP that move (FFD_MOVE: one program per set of
+// them), as the CPU kernel does. Each edit, from a UBO and from shared memory, against the
+// double-precision reference: a coordinate summed into the wrong output, or a moving one left out, moves
+// points by tenths. The still coordinate of a twist is off by rounding only (1e-14 here), below the floor.
+// The SSBO's reads are the UBO's swizzle on another block; a lattice past the UBO's size (17³ points
+// where it holds 64 KB) takes llvmpipe minutes to compile, so tests/check_shaders.sh compiles that
+// program, and only on a GPU does it run.
+TEST_F(FfdGl, BernsteinSumsOnlyTheCoordinatesThatMoveOnEveryKernel) {
+    auto gpu = ffd::GpuDeformer::create();
+    ASSERT_TRUE(gpu.ok()) << gpu.message();
+    ffd::test::Cloud c = ffd::test::random_cloud(2000, -1.05, 1.05, 4);
+    for (glm::vec3& u : c.u) u.y = 0.0f;  // so a y residue in J would show in J u (below)
+    struct Edit {
+        const char* what;
+        void (*apply)(Lattice&);
+        bool y_still = false;  // y's residue is below the floor: every y stays exactly as it was
+    };
+    const Edit edits[] = {
+        {"stretch along z",
+         [](Lattice& l) {
+             for (std::size_t i = 0; i < l.size(); i += 3) l.current[i].z += 0.15;
+         }},
+        {"stretch along y",
+         [](Lattice& l) {
+             for (std::size_t i = 1; i < l.size(); i += 2) l.current[i].y -= 0.1;
+         }},
+        {"x and z",
+         [](Lattice& l) {
+             for (std::size_t i = 0; i < l.size(); i += 2) l.current[i] += glm::dvec3(0.1, 0.0, -0.12);
+         }},
+        {"y and z",
+         [](Lattice& l) {
+             for (std::size_t i = 0; i < l.size(); i += 5) l.current[i] += glm::dvec3(0.0, 0.08, 0.1);
+         }},
+        {"twist about y, y off by rounding",
+         [](Lattice& l) {
+             ffd::test::twist_about_t(l, 0.6);
+             l.current[5].y += 1e-14;
+         },
+         true},
+        {"every coordinate", [](Lattice& l) { ffd::test::jitter(l, 0.05, 3); }},
+    };
+    const std::size_t n = c.size();
+    const ffd::PointsIn in{c.p.data(), c.n.data(), c.u.data(), c.v.data(), n, c.origin};
+    auto check = [&](const Lattice& l, ffd::GpuBernsteinKernel kernel, bool y_still) {
+        gpu->set_bernstein_kernel(kernel);
+        std::vector<glm::vec3> gp(n), gn(n), gu(n), gv(n), rp(n), rn(n), ru(n), rv(n);
+        auto gs = gpu->deform(l, in, {gp.data(), gn.data(), gu.data(), gv.data()});
+        ASSERT_TRUE(gs.ok()) << gs.message();
+        EXPECT_EQ(gpu->last_bernstein_kernel(), kernel);
+        auto rs = ffd::deform(l, in, {rp.data(), rn.data(), ru.data(), rv.data()}, ffd::Backend::reference);
+        ASSERT_TRUE(rs.ok());
+        EXPECT_EQ(gs->inside, rs->inside);
+        EXPECT_EQ(gs->inverted, rs->inverted);
+        for (std::size_t i = 0; i < n; ++i) {
+            ASSERT_LT(glm::length(gp[i] - rp[i]), 1e-5f * 2.2f) << i;
+            ASSERT_LT(glm::length(gn[i] - rn[i]), 1e-5f) << i;
+            ASSERT_LT(glm::length(gu[i] - ru[i]), 1e-5f * glm::length(ru[i]) + 1e-9f) << i;
+            ASSERT_LT(glm::length(gv[i] - rv[i]), 1e-5f * glm::length(rv[i]) + 1e-9f) << i;
+            // A program that summed y too would add its 1e-14 residue: invisible beside most positions
+            // in float, but not beside a zero.
+            if (y_still) {
+                ASSERT_EQ(gp[i].y, c.p[i].y) << i;
+                ASSERT_EQ(gu[i].y, 0.0f) << i;
+            }
+        }
+    };
+    for (const Edit& e : edits)
+        for (ffd::GpuBernsteinKernel kernel :
+             {ffd::GpuBernsteinKernel::direct, ffd::GpuBernsteinKernel::shared}) {
+            SCOPED_TRACE(std::string(e.what) +
+                         (kernel == ffd::GpuBernsteinKernel::shared ? " (shared)" : " (uniform block)"));
+            Lattice l = ffd::make_lattice(
+                {-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                {4, 6, 5}, LatticeBasis::bernstein);
+            e.apply(l);
+            check(l, kernel, e.y_still);
+        }
+}
+
 TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     ecs::Registry reg;
     const ffd::test::Cloud c = ffd::test::fibonacci_sphere(5000);
