@@ -50,9 +50,9 @@ layout(std430, binding = SFFD_SSBO_CONTROL_POINTS) readonly buffer FfdControlPoi
 //   4 points along u, packed as their x, y, z (GpuBernsteinKernel::packed).
 //
 // The Bernstein sums run over the coordinates of ΔP that move, as the CPU kernel's do (a twist leaves its
-// axis's coordinate still, a stretch two: a third or two of the arithmetic): FFD_MOVE is their swizzle
-// (x, xz, ...), FFD_MOVE_N their number, FFD_MOVE_A and FFD_MOVE_B where the first two go in the vec3
-// (GpuDeformer defines them when fewer than three move). FFD_DPM(i) reads those coordinates of ΔP_i as an
+// axis's coordinate still, a stretch along an axis two: a third or two thirds of the arithmetic saved):
+// FFD_MOVE is their swizzle (x, xz, ...), FFD_MOVE_N their number, FFD_MOVE_A and FFD_MOVE_B where the
+// first two go in the vec3 (DeformPrograms::bind defines them when fewer than three move). FFD_DPM(i) reads those coordinates of ΔP_i as an
 // FFD_MVEC; shared memory holds only them.
 #ifndef FFD_MOVE
 #define FFD_MOVE xyz
