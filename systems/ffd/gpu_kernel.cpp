@@ -8,6 +8,7 @@
 
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
+#include "runtime/gfx/limits.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/deform_kernels.h"
 #include "systems/ffd/gpu_block.h"
@@ -45,7 +46,6 @@ Result<DeformPrograms> DeformPrograms::create(std::string shader, std::string pr
     if (!program) return program.error();
     p.program = std::move(*program);
     p.shader = std::move(shader), p.program_label = std::move(program_label), p.prefix = std::move(prefix);
-    glGetIntegerv(GL_MAX_UNIFORM_BLOCK_SIZE, &p.max_ubo);
     glGetIntegerv(GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, &p.max_shared);
     GLint align = 0;
     glGetIntegerv(GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT, &align);
@@ -72,7 +72,7 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
     // (bench_ffd_gpu, GPU time), so shared memory serves it only when asked.
     const bool bernstein = lattice.basis == LatticeBasis::bernstein;
     const KernelChoice choice = choose_kernel(lattice, kernel, software, std::size_t(std::max(max_shared, 0)),
-                                              std::size_t(std::max(max_ubo, 0)));
+                                              std::size_t(std::max(gfx::limits().max_uniform_block_size, 0)));
     const bool cp_shared = choice.shared, cp_ubo = choice.ubo, runs = choice.runs;
     Controls& cp = controls[key];
     if (!cp.buffer) cp.buffer = gfx::Buffer::create(prefix + ".control_points");

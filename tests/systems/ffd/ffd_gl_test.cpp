@@ -8,6 +8,7 @@
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl.h"
+#include "runtime/gfx/limits.h"
 #include "runtime/gfx/render_target.h"
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
@@ -225,12 +226,11 @@ TEST_F(FfdGl, EveryControlPointKernelMatchesTheReferenceForBothBases) {
 }
 
 // The Bernstein programs sum only the coordinates of ΔP that move (FFD_MOVE: one program per set of
-// them), as the CPU kernel does. Each edit, from a UBO and from shared memory, against the
-// double-precision reference: a coordinate summed into the wrong output, or a moving one left out, moves
-// points by tenths. The still coordinate of a twist is off by rounding only (1e-14 here), below the floor.
-// The SSBO's reads are the UBO's swizzle on another block; a lattice past the UBO's size (17³ points
-// where it holds 64 KB) takes llvmpipe minutes to compile, so tests/check_shaders.sh compiles that
-// program, and only on a GPU does it run.
+// them), as the CPU kernel does. Each edit, from a UBO, from shared memory and from the SSBO (what
+// lattices past GL_MAX_UNIFORM_BLOCK_SIZE read; a smaller limit, simulated, sends this one there), against
+// the double-precision reference: a coordinate summed into the wrong output, or a moving one left out,
+// moves points by tenths. The still coordinate of a twist is off by rounding only (1e-14 here), below the
+// floor.
 TEST_F(FfdGl, BernsteinSumsOnlyTheCoordinatesThatMoveOnEveryKernel) {
     auto gpu = ffd::GpuDeformer::create();
     ASSERT_TRUE(gpu.ok()) << gpu.message();
@@ -281,11 +281,17 @@ TEST_F(FfdGl, BernsteinSumsOnlyTheCoordinatesThatMoveOnEveryKernel) {
             ASSERT_EQ(g.u[i].y, 0.0f) << i;
         }
     };
+    gfx::GlLimits small = gfx::limits();
+    small.max_uniform_block_size = 1024;  // 64 points; the lattice below has 210
     for (const Edit& e : edits)
-        for (ffd::GpuBernsteinKernel kernel :
-             {ffd::GpuBernsteinKernel::direct, ffd::GpuBernsteinKernel::shared}) {
-            SCOPED_TRACE(std::string(e.what) +
-                         (kernel == ffd::GpuBernsteinKernel::shared ? " (shared)" : " (uniform block)"));
+        for (int kind = 0; kind < 3; ++kind) {
+            const ffd::GpuBernsteinKernel kernel =
+                kind == 1 ? ffd::GpuBernsteinKernel::shared : ffd::GpuBernsteinKernel::direct;
+            std::optional<gfx::ScopedLimits> ssbo;
+            if (kind == 2) ssbo.emplace(small);
+            SCOPED_TRACE(std::string(e.what) + (kind == 0   ? " (uniform block)"
+                                                : kind == 1 ? " (shared)"
+                                                            : " (storage buffer)"));
             Lattice l = ffd::make_lattice(
                 {-1.1, -1.1, -1.1}, {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
                 {4, 6, 5}, LatticeBasis::bernstein);
