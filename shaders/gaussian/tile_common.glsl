@@ -6,12 +6,15 @@
 
 #include "gaussian/footprint.glsl"
 
-// Inclusive pixel box clipped to the image: (x0, y0, x1, y1); empty when x0 > x1 or y0 > y1.
+// Inclusive pixel box clipped to the image: (x0, y0, x1, y1); empty when x0 > x1 or y0 > y1. Clamped
+// in float on both sides before the conversion, since a float outside int's range converts to an
+// undefined value: a box wholly past one side of the image (should the projection ever pass one)
+// comes out empty, never wrapped into a huge one.
 ivec4 pixel_box(vec4 center_depth_radius, vec4 conic_opacity) {
     const vec2 c = center_depth_radius.xy;
     const vec2 h = footprint_half_size(center_depth_radius.w, conic_opacity);
-    const ivec2 lo = ivec2(max(floor(c - h), vec2(0.0)));
-    const ivec2 hi = ivec2(min(ceil(c + h), u_size - 1.0));
+    const ivec2 lo = ivec2(clamp(floor(c - h), vec2(0.0), u_size));
+    const ivec2 hi = ivec2(clamp(ceil(c + h), vec2(-1.0), u_size - 1.0));
     return ivec4(lo, hi);
 }
 

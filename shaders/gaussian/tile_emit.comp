@@ -3,6 +3,12 @@
 // tile it touches, from its scanned offset. Entries are laid out in depth order, so the stable radix sort
 // by tile id that follows leaves every tile's entries front to back (the (tile, depth) order of 3DGS's
 // 64-bit keys, from two 32-bit sorts).
+// It writes exactly the slots tile_count.comp gave it, offsets[p] .. offsets[p + 1]: the two programs
+// compute the box from the same source, but GLSL does not promise two programs the same float results
+// (no `precise`: a driver may contract one and not the other). A larger box would write into the next
+// Gaussian's slots; a smaller one leaves slots unwritten (undefined contents after the buffers grow, a
+// tile id past the ranges). Slots its box does not fill get the tile id u_tiles.x * u_tiles.y, past every
+// tile: sorted last and skipped by the ranges pass.
 #include "gaussian/gaussian_layout.h"
 
 layout(local_size_x = 64) in;
@@ -27,14 +33,20 @@ void main() {
     const uint p = sffd_dispatch_index();
     if (p >= u_count || p >= instance_count) return;
     const uint i = order[p];
-    const ivec4 box = pixel_box(proj_center[i], proj_conic[i]);
-    if (box.x > box.z || box.y > box.w) return;
-    const uvec4 t = tile_rect(box);
     uint o = offsets[p];
-    for (uint ty = t.y; ty <= t.w; ++ty)
-        for (uint tx = t.x; tx <= t.z; ++tx, ++o) {
-            if (o >= u_capacity) return;
-            tile_keys[o] = ty * u_tiles.x + tx;
-            tile_values[o] = i;
-        }
+    const uint end = min(offsets[p + 1u], u_capacity);
+    if (o >= end) return;
+    const ivec4 box = pixel_box(proj_center[i], proj_conic[i]);
+    if (box.x <= box.z && box.y <= box.w) {
+        const uvec4 t = tile_rect(box);
+        for (uint ty = t.y; ty <= t.w && o < end; ++ty)
+            for (uint tx = t.x; tx <= t.z && o < end; ++tx, ++o) {
+                tile_keys[o] = ty * u_tiles.x + tx;
+                tile_values[o] = i;
+            }
+    }
+    for (; o < end; ++o) {
+        tile_keys[o] = u_tiles.x * u_tiles.y;
+        tile_values[o] = i;
+    }
 }

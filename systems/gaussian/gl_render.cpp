@@ -414,8 +414,9 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     glUseProgram(r.tile_emit.id());
     if (Status st = gfx::dispatch_1d(n, 64, max_x); !st) return st.error();
     gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.tiles.emit");  // the sort reads the entries
+    // Keys run to tile_count itself (tile_emit.comp's unfilled slots), so the sort covers it too.
     int key_bits = 1;
-    while (key_bits < 32 && (std::uint64_t(1) << key_bits) < tile_count) ++key_bits;
+    while (key_bits < 32 && (std::uint64_t(1) << key_bits) <= tile_count) ++key_bits;
     if (Status st = gfx::radix_sort(r.sorter, r.tile_keys.id(), r.tile_values.id(), entries, key_bits); !st)
         return st.error();
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_KEYS, r.tile_keys.id());
@@ -423,6 +424,7 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_RANGES, r.tile_ranges_buffer.id());
     const GLuint rp = r.tile_ranges.id();
     glProgramUniform1ui(rp, glGetUniformLocation(rp, "u_entries"), entries);
+    glProgramUniform1ui(rp, glGetUniformLocation(rp, "u_tile_count"), GLuint(tile_count));
     glUseProgram(rp);
     if (Status st = gfx::dispatch_1d(entries, 64, max_x); !st) return st.error();
     gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.tiles.ranges");  // the blend reads them

@@ -17,6 +17,8 @@
 #include "runtime/assets/builtin_scenes.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
+#include "runtime/gfx/shader.h"
+#include "runtime/gfx/gl_object.h"
 #include "runtime/gfx/limits.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/operations.h"
@@ -421,6 +423,74 @@ TEST_F(GaussianGl, AutomaticSortFollowsTheRasterizer) {
     if (!renderer->software) {
         EXPECT_TRUE(renderer->gpu_sort_used) << "hardware GPUs sort on the GPU";
     }
+}
+
+// The tile path's emit pass writes exactly the slots the count pass gave each Gaussian, whatever box it
+// computes itself: GLSL lets two programs round the same expressions differently, so the two may
+// disagree. Here the slots are given directly: Gaussian 0 (box in tile 0) gets three, Gaussian 1 (box
+// over tiles 0 and 1) one, Gaussian 2 (tile 6) one. Unfilled slots take tile id 8 (one past the 4x2
+// tiles), the one slot of Gaussian 1 its first tile, and nothing is written past a Gaussian's slots or
+// the capacity. The ranges pass then gives tile id 8 no range and writes nothing past the 8 tiles.
+TEST_F(GaussianGl, TileEmitWritesExactlyItsSlotsAndRangesSkipTheUnfilledOnes) {
+    auto emit = gfx::load_compute_program("gaussian/tile_emit.comp", "test.tile_emit");
+    ASSERT_TRUE(emit) << emit.message();
+    auto ranges = gfx::load_compute_program("gaussian/tile_ranges.comp", "test.tile_ranges");
+    ASSERT_TRUE(ranges) << ranges.message();
+    auto buffer = [](const auto& data, const char* label) {
+        gfx::Buffer b = gfx::Buffer::create(label);
+        glNamedBufferData(b.id(), GLsizeiptr(data.size() * sizeof(data[0])), data.data(), GL_DYNAMIC_COPY);
+        return b;
+    };
+    auto read = [](const gfx::Buffer& b, std::size_t count) {
+        std::vector<std::uint32_t> out(count);
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        glGetNamedBufferSubData(b.id(), 0, GLsizeiptr(count * sizeof(std::uint32_t)), out.data());
+        return out;
+    };
+    // 64x32 pixels: 4x2 tiles. Pixel centres, 3σ radius 3: boxes 5..11, 13..19 and 37..43 x 21..27.
+    const std::vector<glm::vec4> centres = {{8, 8, 1, 3}, {16, 8, 1, 3}, {40, 24, 1, 3}};
+    const std::vector<glm::vec4> conics(3, glm::vec4(1, 0, 1, 1));  // unit conic, opaque: the box is 3σ
+    const std::vector<std::uint32_t> order = {0, 1, 2}, draw = {4, 3, 0, 0}, offsets = {0, 3, 4, 5};
+    const std::uint32_t guard = 0xDEADBEEFu;
+    const std::vector<std::uint32_t> blank(7, guard);  // 5 slots and 2 past the capacity
+    gfx::Buffer c = buffer(centres, "test.centres"), q = buffer(conics, "test.conics"),
+                o = buffer(order, "test.order"), d = buffer(draw, "test.draw"),
+                t = buffer(offsets, "test.offsets"), keys = buffer(blank, "test.keys"),
+                values = buffer(blank, "test.values");
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_PROJ_CENTER, c.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_CONIC, q.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, o.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, d.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TOUCHED, t.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_KEYS, keys.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_VALUES, values.id());
+    const GLuint e = emit->id();
+    glProgramUniform1ui(e, glGetUniformLocation(e, "u_count"), 3);
+    glProgramUniform1ui(e, glGetUniformLocation(e, "u_capacity"), 5);
+    glProgramUniform2f(e, glGetUniformLocation(e, "u_size"), 64.0f, 32.0f);
+    glProgramUniform2ui(e, glGetUniformLocation(e, "u_tiles"), 4, 2);
+    glUseProgram(e);
+    glDispatchCompute(1, 1, 1);
+    EXPECT_EQ(read(keys, 7), (std::vector<std::uint32_t>{0, 8, 8, 0, 6, guard, guard}));
+    EXPECT_EQ(read(values, 7), (std::vector<std::uint32_t>{0, 0, 0, 1, 2, guard, guard}));
+
+    // The entries sorted by tile id, as the radix sort leaves them; 8 tiles cleared to empty, 2 guards.
+    const std::vector<std::uint32_t> sorted = {0, 0, 6, 8, 8};
+    std::vector<std::uint32_t> cleared(2 * 10, 0);
+    for (std::size_t k = 16; k < 20; ++k) cleared[k] = guard;
+    gfx::Buffer sk = buffer(sorted, "test.sorted"), rb = buffer(cleared, "test.ranges");
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_KEYS, sk.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_RANGES, rb.id());
+    const GLuint r = ranges->id();
+    glProgramUniform1ui(r, glGetUniformLocation(r, "u_entries"), 5);
+    glProgramUniform1ui(r, glGetUniformLocation(r, "u_tile_count"), 8);
+    glUseProgram(r);
+    glDispatchCompute(1, 1, 1);
+    std::vector<std::uint32_t> expected(2 * 10, 0);
+    expected[1] = 2, expected[12] = 2, expected[13] = 3;  // tile 0: [0, 2), tile 6: [2, 3)
+    for (std::size_t k = 16; k < 20; ++k) expected[k] = guard;
+    EXPECT_EQ(read(rb, 20), expected);
+    glUseProgram(0);
 }
 
 }  // namespace
