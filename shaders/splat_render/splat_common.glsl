@@ -127,12 +127,17 @@ SplatView splat_view(GpuSplat s) {
 }
 
 // Ray-cast coefficients (see SplatRecord) of a splat; the plane normal is oriented like the shading normal.
+// A splat seen edge-on (the eye in its plane, to 1e-6 of |c| |n|: far below float's rounding of c · n
+// would be 6e-8) covers no area, and n / (c · n) would be infinite, every pixel's ray cast NaN: it is
+// hidden as a back face is (plane.xyz = 0, splat_record.h). The CPU cull does the same (cpu_cull.cpp).
 void splat_raycast_setup(SplatView o, out vec4 plane, out vec4 dual_u, out vec4 dual_v) {
     vec3 n = cross(o.u, o.v);
     n = dot(n, o.shading_n) < 0.0 ? -n : n;
     vec3 du = cross(o.v, n) / dot(cross(o.v, n), o.u);
     vec3 dv = cross(n, o.u) / dot(cross(n, o.u), o.v);
-    plane = vec4(n / dot(o.c, n), frame.params.x * o.r);
+    const float cn = dot(o.c, n);
+    const bool edge_on = abs(cn) <= 1e-6 * length(o.c) * length(n);
+    plane = vec4(edge_on ? vec3(0.0) : n / cn, frame.params.x * o.r);
     dual_u = vec4(du, dot(du, o.c));
     dual_v = vec4(dv, dot(dv, o.c));
 }

@@ -202,7 +202,10 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 const glm::vec3 cu = glm::cross(o.v, pn), cv = glm::cross(pn, o.u);
                 const glm::vec3 du = cu / glm::dot(cu, o.u), dv = cv / glm::dot(cv, o.v);
                 SplatRecord& rec = records[kept++];
-                rec.plane = glm::vec4(pn / glm::dot(o.c, pn), f.params.x * o.r);
+                // Seen edge-on: hidden, as splat_raycast_setup does (no infinite plane).
+                const float cn = glm::dot(o.c, pn);
+                const bool edge_on = std::abs(cn) <= 1e-6f * glm::length(o.c) * glm::length(pn);
+                rec.plane = glm::vec4(edge_on ? glm::vec3(0.0f) : pn / cn, f.params.x * o.r);
                 rec.dual_u = glm::vec4(du, glm::dot(du, o.c));
                 rec.dual_v = glm::vec4(dv, glm::dot(dv, o.c));
                 if (back)

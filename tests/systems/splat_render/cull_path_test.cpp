@@ -3,6 +3,7 @@
 // CPU (a cloud deformed by the FFD compute pass falls back to the compute cull).
 #include <algorithm>
 #include <cmath>
+#include <string>
 #include <vector>
 
 #include "runtime/gfx/dispatch.h"
@@ -11,6 +12,7 @@
 #include "systems/ffd/ffd_system.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/operations.h"
+#include "systems/splat_render/splat_render_detail.h"
 #include "tests/systems/splat_render/gl_fixture.h"
 #include "tests/systems/splat_render/test_scenes.h"
 
@@ -106,6 +108,66 @@ TEST_F(CullPath_, FramesAreBitIdenticalOnBothPaths) {
                 EXPECT_TRUE(a.color == b.color);
                 EXPECT_TRUE(a.depth == b.depth);
             }
+}
+
+// Splats that cover no area draw nothing: one seen exactly edge-on (the eye in its plane: the camera at
+// y = 0, its normal along y) and two whose axes collapsed (one axis zero, two parallel axes: what a
+// lattice that flattens a cell does to them; the cull drops these as degenerate). The edge-on one's
+// ray-cast plane n / (c · n) would divide by zero: every pixel of its sprite would cast against an
+// infinite plane and write a NaN depth, which llvmpipe's depth test happens to reject and a GPU may clamp
+// to the nearest depth. They sit in front of the sphere, so any such pixel would cover it. Each path,
+// culling on and off: the same image as the sphere alone, and the compute cull's records all finite.
+TEST_F(CullPath_, SplatsSeenEdgeOnOrWithNoAreaDrawNothing) {
+    add_camera(2.6);
+    add_light({-0.5f, -0.4f, -0.6f}, 0.15f);
+    const SplatCloud sphere = fibonacci_sphere(5000, 1.0, 0.8);
+    SplatCloud with = sphere;
+    const glm::vec3 centres[] = {{0.0f, 0.0f, 1.5f}, {0.25f, 0.1f, 1.5f}, {-0.25f, -0.1f, 1.5f}};
+    const glm::vec3 us[] = {{0.3f, 0.0f, 0.0f}, {0.3f, 0.0f, 0.0f}, {0.2f, 0.1f, 0.0f}};
+    const glm::vec3 vs[] = {{0.0f, 0.0f, 0.3f}, {0.0f, 0.0f, 0.0f}, {0.2f, 0.1f, 0.0f}};
+    const glm::vec3 ns[] = {{0.0f, 1.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 1.0f}};
+    for (int k = 0; k < 3; ++k) {
+        with.positions.push_back(centres[k]), with.normals.push_back(ns[k]);
+        with.axis_u.push_back(us[k]), with.axis_v.push_back(vs[k]);
+        with.colors.push_back(0xff0000ffu), with.uvs.push_back(glm::vec2(0.0f));
+    }
+    const ecs::Entity cloud = add_cloud(sphere);
+    for (bool culling : {true, false})
+        for (CullPath path : {CullPath::cpu, CullPath::compute})
+            for (RasterPath raster : {RasterPath::raster, RasterPath::compute})
+                for (Quality q : {Quality::hq, Quality::preview}) {
+                    if (q == Quality::preview && raster == RasterPath::compute) continue;
+                    SCOPED_TRACE(std::string(culling ? "culling" : "no culling") +
+                                 (path == CullPath::cpu ? ", cpu cull" : ", compute cull") +
+                                 (raster == RasterPath::raster ? ", rasteriser" : ", compute rasteriser") +
+                                 (q == Quality::hq ? ", hq" : ", preview"));
+                    reg.patch<SplatCloud>(cloud) = sphere;
+                    const FrameImage a = render(q, 240, 160, culling, path, raster);
+                    reg.patch<SplatCloud>(cloud) = with;
+                    const FrameImage b = render(q, 240, 160, culling, path, raster);
+                    if (path == CullPath::compute) {
+                        // Every sprite record finite (llvmpipe happens to drop NaN depths; a GPU may not).
+                        const detail::CloudGpu& gpu =
+                            reg.resource<detail::SplatRenderState>().clouds.at(cloud);
+                        std::vector<std::uint32_t> commands(detail::draw_command_words);
+                        glGetNamedBufferSubData(gpu.commands.id(), 0, GLsizeiptr(commands.size() * 4),
+                                                commands.data());
+                        std::vector<SplatRecord> records(commands[0]);
+                        glGetNamedBufferSubData(gpu.records.id(), 0,
+                                                GLsizeiptr(records.size() * sizeof(SplatRecord)),
+                                                records.data());
+                        std::size_t not_finite = 0;
+                        for (const SplatRecord& r : records)
+                            for (int j = 0; j < 20; ++j) not_finite += !std::isfinite((&r.center.x)[j]);
+                        EXPECT_EQ(not_finite, 0u);
+                    }
+                    ASSERT_EQ(a.color.size(), b.color.size());
+                    const ImageDiff d = image_diff(a, b);
+                    EXPECT_GT(d.covered_a, 5000);
+                    EXPECT_EQ(d.coverage_mismatch, 0);
+                    EXPECT_EQ(d.over_2_percent, 0);
+                    EXPECT_LT(d.max_depth, 1e-6);
+                }
 }
 
 // Clouds beyond 65,535 work groups (8.4M splats at 128 per group) are culled over a 2D grid

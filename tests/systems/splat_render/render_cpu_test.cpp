@@ -388,6 +388,41 @@ TEST(RenderCpuCull, CullingOffMarksBackFacesHiddenWithFiniteValuesOnly) {
     }
 }
 
+// A splat seen edge-on (the eye in its plane) covers no area: its record is hidden (plane.xyz = 0) with
+// every field finite, where n / (c . n) would be infinite and every pixel's ray cast NaN. One at a grazing
+// angle of 0.01 rad is kept with its real plane, and one facing the camera is untouched. The compute cull
+// runs the same set-up (splat_raycast_setup).
+TEST(RenderCpuCull, SplatSeenEdgeOnIsHiddenWithFiniteValues) {
+    SplatCloud cloud = test::fibonacci_sphere(3);  // three splats, replaced below
+    const double a = 0.01;
+    // The camera is at (0, 0, 3) looking down -z (test_frame): view = world up to that translation.
+    cloud.positions = {{0.0f, 0.0f, 0.0f}, {0.4f, 0.0f, 0.0f}, {-0.4f, 0.0f, 0.0f}};
+    cloud.axis_u = {{0.3f, 0.0f, 0.0f}, {0.3f, 0.0f, 0.0f}, {0.3f, 0.0f, 0.0f}};
+    cloud.axis_v = {
+        {0.0f, 0.0f, 0.3f}, glm::vec3(0.0, 0.3 * std::sin(a), 0.3 * std::cos(a)), {0.0f, 0.3f, 0.0f}};
+    cloud.normals = {{0.0f, 1.0f, 0.0f}, glm::vec3(0.0, -std::cos(a), std::sin(a)), {0.0f, 0.0f, 1.0f}};
+    const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
+    for (bool culling : {true, false}) {
+        gpu::FrameBlock f = test_frame();
+        f.params.z = culling ? 1.0f : 0.0f;
+        CpuCullResult out;
+        cull_splats_cpu(splats, f, {}, out);
+        std::vector<SplatRecord> got;
+        CpuCullResult::for_each_run(
+            out.records, out.record_counts, out.block,
+            [&](std::size_t, const SplatRecord* p, std::size_t k) { got.insert(got.end(), p, p + k); });
+        ASSERT_EQ(got.size(), 3u) << "culling " << culling;
+        for (const SplatRecord& r : got) {
+            const float* v = &r.center.x;
+            for (int j = 0; j < 20; ++j) ASSERT_TRUE(std::isfinite(v[j])) << "field " << j;
+        }
+        EXPECT_EQ(glm::vec3(got[0].plane), glm::vec3(0.0f));
+        EXPECT_NE(glm::vec3(got[1].plane), glm::vec3(0.0f));
+        // Facing the camera at z = 0, seen from z = 3: the plane z = 0 is p . (0, 0, -1/3) = 1 in view space.
+        EXPECT_NEAR(got[2].plane.z, -1.0f / 3.0f, 1e-6f);
+    }
+}
+
 // The CPU mip levels of a texture (the reduced preview's per-splat lookups): each level is the 2x2 mean of
 // the one above in linear light, sRGB-encoded, with GL's sizes (halved, rounded down, to 1); a lookup at a
 // texel's centre gives that texel, half-way between two gives their mean, u wraps and v clamps.
