@@ -35,7 +35,10 @@
 
 // GpuSplat, std430, 64 bytes; the same layout for rest and deformed splats, so a render pass reads
 // either one. Positions are relative to the cloud's origin (SplatCloud::origin).
-//   vec4 center;   // xyz position; w = colour, RGBA8 packed (uintBitsToFloat)
+//   vec3 center;   // position
+//   uint color;    // RGBA8 (packUnorm4x8's layout; 0xffffffff: uncoloured). A uint in GLSL, not the float
+//                  // slot's bits: as a float most colours are NaNs, infinities or denormals, which a
+//                  // driver may canonicalise or flush on the way through a shader. C++: center[3]
 //   vec4 normal;   // xyz unit normal; w = 1 (0 marks a splat flipped by an inverted lattice cell)
 //   vec4 axis_u;   // xyz tangent axis scaled by its radius; w = texture u
 //   vec4 axis_v;   // xyz bitangent axis scaled by its radius; w = texture v
@@ -53,7 +56,8 @@ static_assert(sizeof(GpuSplat) == SFFD_GPU_SPLAT_BYTES);
 }  // namespace sffd::gpu
 #else
 struct GpuSplat {
-    vec4 center;
+    vec3 center;
+    uint color;
     vec4 normal;
     vec4 axis_u;
     vec4 axis_v;

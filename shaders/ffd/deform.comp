@@ -23,7 +23,7 @@ shared uint s_inverted, s_inside;
 // Deforms splat `id`; returns bit 0: inside the lattice, bit 1: in an inverted cell.
 uint deform_splat(uint id) {
     GpuSplat s = splats_in[id];
-    vec3 stu = ffd_local(s.center.xyz);
+    vec3 stu = ffd_local(s.center);
     bool culled = ffd_count.y != 0u || !ffd_inside(stu) ||
                   (ffd_div.w == 1 && (any(lessThanEqual(stu, ffd_cull_lo.xyz)) || any(greaterThanEqual(stu, ffd_cull_hi.xyz))));
     if (culled) {
@@ -36,7 +36,8 @@ uint deform_splat(uint id) {
     mat3 J = ffd_jacobian(G);
     float det = determinant(J);
     GpuSplat o;
-    o.center = vec4(s.center.xyz + D, s.center.w);
+    o.center = s.center + D;
+    o.color = s.color;
     o.normal = vec4(ffd_cofactor_normal(J, s.normal.xyz), det < 0.0 ? 1.0 - s.normal.w : s.normal.w);
     o.axis_u = vec4(J * s.axis_u.xyz, s.axis_u.w);
     o.axis_v = vec4(J * s.axis_v.xyz, s.axis_v.w);

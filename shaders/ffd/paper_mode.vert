@@ -13,7 +13,7 @@ out vec3 v_normal;
 
 void main() {
     GpuSplat s = splats_in[gl_VertexID];
-    vec3 p = s.center.xyz;
+    vec3 p = s.center;
     vec3 n = s.normal.xyz;
 #if PAPER_DEFORM
     vec3 stu = ffd_local(p);

@@ -61,12 +61,13 @@ void main() {
     if (i < frame.counts.x) {
         // Centre and normal first: the back-face test needs only them (llvmpipe loads SSBOs per lane).
         s.center = splats[i].center;
+        s.color = splats[i].color;
         s.normal = splats[i].normal;
-        c = (frame.model_view * vec4(s.center.xyz, 1.0)).xyz;
+        c = (frame.model_view * vec4(s.center, 1.0)).xyz;
         // Back-facing (a splat flipped by an inverted lattice cell, normal.w == 0, is drawn two-sided).
         back = s.normal.w != 0.0 && dot(mat3(frame.normal_view) * s.normal.xyz, c) > 0.0;
         keep = back && frame.params.z != 0.0 ? KEEP_NONE : KEEP_SPRITE;
-        if (!all_finite(s.center.xyz) || !all_finite(s.normal.xyz) || !all_finite(c))
+        if (!all_finite(s.center) || !all_finite(s.normal.xyz) || !all_finite(c))
             keep = KEEP_NONE;  // nothing to draw (the CPU cull agrees)
     }
     float r = 0.0;

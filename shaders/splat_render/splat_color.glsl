@@ -26,7 +26,7 @@ vec4 splat_color(GpuSplat s, SplatView o, vec3 world_n) {
     if (textured)
         color = textureLod(material_texture, vec2(s.axis_u.w, s.axis_v.w), 0.0);
     else {
-        color = unpackUnorm4x8(floatBitsToUint(s.center.w));
+        color = unpackUnorm4x8(s.color);
         color.rgb = srgb_to_linear(color.rgb) * frame.base_color.rgb;
     }
     if (lit) color.rgb = shade_blinn_phong(color.rgb, world_n, -normalize(mat3(frame.view_to_world) * o.c));

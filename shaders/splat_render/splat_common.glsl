@@ -118,7 +118,7 @@ struct SplatView {
 
 SplatView splat_view(GpuSplat s) {
     SplatView o;
-    o.c = (frame.model_view * vec4(s.center.xyz, 1.0)).xyz;
+    o.c = (frame.model_view * vec4(s.center, 1.0)).xyz;
     o.u = mat3(frame.model_view) * s.axis_u.xyz;
     o.v = mat3(frame.model_view) * s.axis_v.xyz;
     o.shading_n = normalize(mat3(frame.normal_view) * s.normal.xyz);

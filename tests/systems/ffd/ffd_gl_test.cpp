@@ -2,6 +2,7 @@
 // GpuSplatStore buffers, control points uploaded only when edited, nothing dispatched when nothing changed.
 #include <gtest/gtest.h>
 
+#include <bit>
 #include <optional>
 
 #include "runtime/ecs/registry.h"
@@ -299,6 +300,46 @@ TEST_F(FfdGl, BernsteinSumsOnlyTheCoordinatesThatMoveOnEveryKernel) {
             check(l, kernel, e.y_still);
             if (HasFatalFailure()) return;
         }
+}
+
+// A splat's colour word (GpuSplat::color, RGBA8) passes the compute pass bit for bit, moved or not and
+// inside the lattice or not, whatever it would mean as a float: uncoloured (0xffffffff) and opaque colours
+// with blue >= 128 are NaN or infinity patterns, transparent dark ones denormals. The shader declares the
+// word a uint, so no driver may canonicalise or flush it (llvmpipe keeps float bits anyway; a GPU need not).
+TEST_F(FfdGl, ColourWordsPassTheComputePassBitForBit) {
+    auto gpu = ffd::GpuDeformer::create();
+    ASSERT_TRUE(gpu.ok()) << gpu.message();
+    const std::uint32_t colours[] = {0xffffffffu, 0xff800000u, 0x7f800000u, 0x7fc00001u,
+                                     0x00000001u, 0x0000ff00u, 0x80000000u, 0xff8040c0u};
+    std::vector<gpu::GpuSplat> splats;
+    for (int k = 0; k < 64; ++k) {
+        const float x = -1.5f + 3.0f * float(k) / 63.0f;  // some outside the lattice's [-1.1, 1.1]
+        gpu::GpuSplat g{{x, 0.3f, -0.2f, std::bit_cast<float>(colours[k % 8])},
+                        {0, 0, 1, 1},
+                        {0.01f, 0, 0, 0},
+                        {0, 0.01f, 0, 0}};
+        splats.push_back(g);
+    }
+    const GLsizeiptr bytes = GLsizeiptr(splats.size() * sizeof(gpu::GpuSplat));
+    gfx::Buffer in = gfx::Buffer::create("test.in"), out = gfx::Buffer::create("test.out");
+    glNamedBufferData(in.id(), bytes, splats.data(), GL_STATIC_DRAW);
+    glNamedBufferData(out.id(), bytes, nullptr, GL_DYNAMIC_COPY);
+    Lattice l = box_lattice({3, 4, 2});
+    for (bool moved : {false, true}) {
+        SCOPED_TRACE(moved ? "twisted" : "at rest");
+        if (moved) ffd::twist_graded(l, ffd::all_control_points(l), {0, 1, 0}, 0.6, glm::dvec3(0.0));
+        ASSERT_TRUE(
+            gpu->dispatch(l, 0, glm::dvec3(0.0), in.id(), out.id(), std::uint32_t(splats.size())).ok());
+        glMemoryBarrier(GL_BUFFER_UPDATE_BARRIER_BIT);
+        std::vector<gpu::GpuSplat> got(splats.size());
+        glGetNamedBufferSubData(out.id(), 0, bytes, got.data());
+        std::size_t moved_splats = 0;
+        for (std::size_t k = 0; k < got.size(); ++k) {
+            EXPECT_EQ(std::bit_cast<std::uint32_t>(got[k].center[3]), colours[k % 8]) << k;
+            moved_splats += got[k].center[0] != splats[k].center[0];
+        }
+        EXPECT_EQ(moved_splats > 0, moved);
+    }
 }
 
 TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
