@@ -58,11 +58,10 @@ struct DeformPrograms {
     };
     std::unordered_map<std::uint64_t, Controls> controls;  // per key (lattice entity)
     std::uint64_t uploads = 0;
-    // GL_MAX_UNIFORM_BLOCK_SIZE comes from gfx::limits() (queried once per context; tests shrink it
-    // with gfx::ScopedLimits to run the SSBO kernel on small lattices).
-    GLint max_shared =
-        0;  // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE, queried once (a glGet can stall a threaded driver)
-    GLint ubo_align = 256;  // GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT, same (GL 4.5's largest allowed value)
+    // Limits queried once (a glGet can stall a threaded driver). GL_MAX_UNIFORM_BLOCK_SIZE is read from
+    // gfx::limits() instead, which tests shrink (gfx::ScopedLimits) to run the SSBO kernel on small lattices.
+    GLint max_shared = 0;   // GL_MAX_COMPUTE_SHARED_MEMORY_SIZE
+    GLint ubo_align = 256;  // GL_UNIFORM_BUFFER_OFFSET_ALIGNMENT (GL 4.5's largest allowed value)
     bool software = false;  // gfx::software_rasterizer(), for GpuBernsteinKernel::automatic
     GpuBernsteinKernel kernel = GpuBernsteinKernel::automatic, last_kernel = GpuBernsteinKernel::automatic;
 
