@@ -1,4 +1,5 @@
-# Shared compile settings for every SplatFFD target: strict warnings, native vector width, sanitizers.
+# Shared compile settings for every SplatFFD target: strict warnings, sanitizers, -march=native when
+# SFFD_NATIVE asks for it.
 function(sffd_target_defaults target)
   target_compile_features(${target} PUBLIC cxx_std_20)
   target_compile_options(${target} PRIVATE

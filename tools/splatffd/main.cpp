@@ -10,6 +10,7 @@
 #include "runtime/core/atomic_file.h"
 #include "runtime/core/file_io.h"
 #include "runtime/core/paths.h"
+#include "runtime/simd/simd.h"
 #include "systems/engine/engine_frame.h"
 #include "tools/splatffd/command.h"
 
@@ -69,10 +70,12 @@ void print_help(std::FILE* to) {
     }
     std::fprintf(
         to,
-        "\noptions:\n  --help     this text\n  --version  print the version\n"
+        "\noptions:\n  --help     this text\n  --version  print the version and the SIMD target the CPU kernels run on\n"
         "  --paths    print where shaders, content and the cache are found\n"
         "  --allow-outside-resources  (with any command) let trusted files name textures, buffers and\n"
-        "             material libraries outside their own folder (refused by default)\n");
+        "             material libraries outside their own folder (refused by default)\n"
+        "\nenvironment:\n  SFFD_SIMD=<target>  pin the CPU kernels to one compiled SIMD target (see --version),\n"
+        "             or scalar; a target this CPU cannot run is refused (exit 2)\n");
 }
 
 }  // namespace
@@ -90,8 +93,14 @@ int main(int argc, char** argv) {
         print_help(args.empty() ? stderr : stdout);
         return args.empty() ? 2 : 0;
     }
+    // SFFD_SIMD pins the CPU kernels' target for the whole run; a name this binary or CPU cannot run is
+    // refused before any work, so a farm node never renders with a target it was not asked for.
+    if (sffd::Status st = sffd::simd::pin_from_environment(); !st) {
+        std::fprintf(stderr, "splatffd: %s\n", st.message().c_str());
+        return 2;
+    }
     if (args[0] == "--version") {
-        std::printf("splatffd %s\n", SFFD_VERSION);
+        std::printf("splatffd %s\n%s\n", SFFD_VERSION, sffd::simd::version_line().c_str());
         return 0;
     }
     if (args[0] == "--paths") {  // shaders and content are found relative to the executable (paths.h)
