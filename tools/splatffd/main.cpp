@@ -70,11 +70,13 @@ void print_help(std::FILE* to) {
     }
     std::fprintf(
         to,
-        "\noptions:\n  --help     this text\n  --version  print the version and the SIMD target the CPU kernels run on\n"
+        "\noptions:\n  --help     this text\n  --version  print the version and the SIMD target the CPU "
+        "kernels run on\n"
         "  --paths    print where shaders, content and the cache are found\n"
         "  --allow-outside-resources  (with any command) let trusted files name textures, buffers and\n"
         "             material libraries outside their own folder (refused by default)\n"
-        "\nenvironment:\n  SFFD_SIMD=<target>  pin the CPU kernels to one compiled SIMD target (see --version),\n"
+        "\nenvironment:\n  SFFD_SIMD=<target>  pin the CPU kernels to one compiled SIMD target (see "
+        "--version),\n"
         "             or scalar; a target this CPU cannot run is refused (exit 2)\n");
 }
 
