@@ -33,3 +33,33 @@ std::optional<T> made_or_skip(benchmark::State& state, Result<T> made) {
 }
 
 }  // namespace sffd::bench
+
+#include <map>
+#include <mutex>
+#include <string>
+
+#include "runtime/simd/fma_peak.h"
+
+namespace sffd::bench {
+
+// The host's FMA floor for one SIMD target (multiply-adds a second on every core), measured once per
+// process and target (runtime/simd/fma_peak.h; bench_simd_floor prints it alone).
+inline double fma_floor(const simd::Target& target) {
+    static std::mutex m;
+    static std::map<std::string, double> floors;
+    const std::lock_guard<std::mutex> lock(m);
+    auto it = floors.find(target.name);
+    if (it == floors.end()) it = floors.emplace(target.name, simd::measure_fma_peak(target).per_second).first;
+    return it->second;
+}
+
+// Sets the counters a compute-bound kernel's per-target benchmark reports: floor_frac, its multiply-adds a
+// second as a fraction of the floor, and gfma_s; `fmas` is the work of one iteration, `seconds` its time.
+inline void report_floor_fraction(benchmark::State& state, const simd::Target& target, double fmas,
+                                  double seconds) {
+    const double rate = fmas / seconds;
+    state.counters["gfma_s"] = rate * 1e-9;
+    state.counters["floor_frac"] = rate / fma_floor(target);
+}
+
+}  // namespace sffd::bench
