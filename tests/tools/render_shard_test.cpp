@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "runtime/simd/simd.h"
 #include "tests/test_util/run_tool.h"
 #include "tools/splatffd/render_manifest.h"
 
@@ -129,6 +130,49 @@ TEST(RenderShard, ShardsWriteTheSameBytesAsOneRunAndAssemble) {
               manifest(one / "render_manifest.json")["files"]);  // same bytes, same fingerprints
 }
 
+// A farm of mixed CPUs: shards pinned to one SIMD target are byte-identical to a single run pinned the same,
+// the manifests say which target and GL renderer made them, and assemble warns (naming the frames) when a
+// shard ran on another target, though the clip is still whole.
+TEST(RenderShard, ShardsPinnedToOneSimdTargetMatchAndMixedTargetsAreNamed) {
+    const std::string portable = sffd::simd::runnable().back().name,
+                      best = sffd::simd::runnable().front().name;
+    const fs::path one = fresh_dir("pinned_one"), farm = fresh_dir("pinned_farm");
+    auto pinned = [](const std::string& target, const std::string& args, std::string* log) {
+        const sffd::test::CliRun r =
+            sffd::test::run_command("env -u DISPLAY -u WAYLAND_DISPLAY SFFD_SIMD=" + target + " " +
+                                    std::string(SFFD_BINARY_DIR) + "/tools/splatffd render " + args);
+        *log = r.out;
+        return r.code;
+    };
+    std::string log;
+    const std::string clip = " --frames 80:83" + kClip;  // the twist: the CPU kernels move every splat
+    ASSERT_EQ(pinned(portable, "sphere --out " + one.string() + clip, &log), 0) << log;
+    for (int k = 0; k < 2; ++k)
+        ASSERT_EQ(
+            pinned(portable, "sphere --out " + farm.string() + clip + " --shard " + std::to_string(k) + "/2",
+                   &log),
+            0)
+            << log;
+    ASSERT_EQ(assemble(farm, &log), 0) << log;
+    EXPECT_EQ(log.find("warning"), std::string::npos) << log;
+    for (int k = 80; k <= 83; ++k) {
+        const std::string name = "frame_00" + std::to_string(k) + ".png";
+        EXPECT_EQ(slurp(one / name), slurp(farm / name)) << name;
+    }
+    const nlohmann::json m = manifest(farm / "render_manifest.shard-1-of-2.json");
+    EXPECT_EQ(m["machine"]["simd"], portable);
+    EXPECT_FALSE(m["machine"]["gl_renderer"].get<std::string>().empty());
+    if (best == portable) GTEST_SKIP() << "this CPU runs one SIMD target only: no mixed farm to assemble";
+    ASSERT_EQ(pinned(best, "sphere --out " + farm.string() + clip + " --shard 1/2", &log), 0) << log;
+    ASSERT_EQ(assemble(farm, &log), 0) << log;
+    EXPECT_NE(log.find("warning: the shards of frames 80..83 ran on 2 different machines"), std::string::npos)
+        << log;
+    EXPECT_NE(log.find("shard 0/2 (frames 80, 82): simd " + portable + ", GL renderer "), std::string::npos)
+        << log;
+    EXPECT_NE(log.find("shard 1/2 (frames 81, 83): simd " + best + ", GL renderer "), std::string::npos)
+        << log;
+}
+
 TEST(RenderShard, AssembleRefusesOtherSettingsFailedShardsAndForeignFrames) {
     const fs::path farm = fresh_dir("mixed");
     std::string log;
@@ -143,6 +187,15 @@ TEST(RenderShard, AssembleRefusesOtherSettingsFailedShardsAndForeignFrames) {
     EXPECT_NE(
         log.find("render_manifest.shard-1-of-2.json: settings differ from render_manifest.shard-0-of-2.json"),
         std::string::npos)
+        << log;
+    // The odd shard is named with what differs, and re-rendered with the kept settings (shard 0's on a tie),
+    // not with its own.
+    EXPECT_NE(log.find("settings differ from render_manifest.shard-0-of-2.json (size 48x27 against 32x18)"),
+              std::string::npos)
+        << log;
+    EXPECT_NE(log.find("re-render it with: splatffd render sphere --out " + farm.string() +
+                       " --frames 0:3 --shard 1/2 --size 32x18"),
+              std::string::npos)
         << log;
     // Shard 1 again with the right settings, but frame 3's name is taken by a folder: the shard fails.
     fs::remove(farm / "frame_0003.png");
@@ -163,6 +216,34 @@ TEST(RenderShard, AssembleRefusesOtherSettingsFailedShardsAndForeignFrames) {
     EXPECT_NE(log.find("frame_0050.png: not a frame of this clip (frames 0..3, png)"), std::string::npos)
         << log;
     EXPECT_NE(log.find("frame_0002.png: not the bytes shard 0/2 wrote"), std::string::npos) << log;
+}
+
+// With three shards, the settings two of them share are kept, even when shard 0 is the odd one.
+TEST(RenderShard, AssembleKeepsTheMajoritysSettings) {
+    const fs::path farm = fresh_dir("majority");
+    std::string log;
+    ASSERT_EQ(render("sphere --out " + farm.string() +
+                         " --frames 0:2 --shard 0/3 --size 40x20 --quality preview --format png",
+                     &log),
+              0)
+        << log;
+    for (int k = 1; k < 3; ++k)
+        ASSERT_EQ(render("sphere --out " + farm.string() + " --frames 0:2 --shard " + std::to_string(k) +
+                             "/3" + kClip,
+                         &log),
+                  0)
+            << log;
+    EXPECT_EQ(assemble(farm, &log), 1) << log;
+    EXPECT_NE(
+        log.find("render_manifest.shard-0-of-3.json: settings differ from render_manifest.shard-1-of-3.json "
+                 "(size 40x20 against 32x18)"),
+        std::string::npos)
+        << log;
+    EXPECT_NE(log.find("re-render it with: splatffd render sphere --out " + farm.string() +
+                       " --frames 0:2 --shard 0/3 --size 32x18"),
+              std::string::npos)
+        << log;
+    EXPECT_EQ(log.find("shard-1-of-3.json: settings differ"), std::string::npos) << log;
 }
 
 TEST(RenderShard, BadShardOptionsAreRefused) {

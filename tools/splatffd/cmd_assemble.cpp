@@ -7,7 +7,9 @@
 // binary's version...); every frame of the clip was written by exactly one shard; every frame file on
 // disk has the bytes its shard recorded (a file rewritten by another run is caught); no frame file in DIR
 // lies outside the clip. Each problem is printed on its own line, and a shard that must run again is named
-// with the command that re-renders it. Exit 0 assembled, 1 a problem (listed), 2 usage.
+// with the command that re-renders it. Shards made on different machines (another SIMD target of the CPU
+// kernels, another GL renderer) are assembled with a warning that names their frames: equal settings give
+// equal bytes only on equal machines. Exit 0 assembled, 1 a problem (listed), 2 usage.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -28,9 +30,9 @@ namespace {
 using namespace sffd;
 namespace fs = std::filesystem;
 
-void usage() {
+void usage(std::FILE* to) {
     std::fprintf(
-        stderr,
+        to,
         "usage: splatffd assemble DIR [--video FILE]\n"
         "  DIR           the folder the shards (`splatffd render ... --shard K/N --out DIR`) wrote\n"
         "  --video FILE  also encode the assembled PNG frames (.mp4 or .gif) at the clip's --fps; needs "
@@ -44,16 +46,34 @@ struct ShardFile {
     cli::RunRecord run;
 };
 
+// Shard `r`'s command with its --shard changed to K/N, or "" when the command has no --shard.
+std::string command_for_shard(const cli::RunRecord& r, long k, long n) {
+    std::string c = r.command;
+    const std::string from = " --shard " + std::to_string(r.shard.index) + "/" + std::to_string(n);
+    if (auto at = c.find(from); at != std::string::npos)
+        return c.replace(at, from.size(), " --shard " + std::to_string(k) + "/" + std::to_string(n));
+    return {};
+}
+
 // The command that re-renders shard `k` of `n`: the shard's own, or another shard's with --shard changed.
 std::string rerender_command(const std::map<long, ShardFile>& shards, long k, long n) {
     if (auto it = shards.find(k); it != shards.end()) return it->second.run.command;
-    for (const auto& [index, s] : shards) {
-        std::string c = s.run.command;
-        const std::string from = " --shard " + std::to_string(index) + "/" + std::to_string(n);
-        if (auto at = c.find(from); at != std::string::npos)
-            return c.replace(at, from.size(), " --shard " + std::to_string(k) + "/" + std::to_string(n));
-    }
+    for (const auto& [index, s] : shards)
+        if (std::string c = command_for_shard(s.run, k, n); !c.empty()) return c;
     return "splatffd render ... --shard " + std::to_string(k) + "/" + std::to_string(n);
+}
+
+// The shard whose settings the clip keeps: those most shards share, ties going to the lowest shard (shard 0
+// when present). A shard with other settings is the odd one, re-rendered with the kept settings.
+const ShardFile& kept_settings(const std::map<long, ShardFile>& shards) {
+    const ShardFile* best = nullptr;
+    long best_count = 0;
+    for (const auto& [k, s] : shards) {
+        long count = 0;
+        for (const auto& [k2, s2] : shards) count += s2.run.settings == s.run.settings;
+        if (count > best_count) best = &s, best_count = count;  // strict: the lowest shard wins a tie
+    }
+    return *best;
 }
 
 // The single-run form of a shard's command (its --shard removed), for the assembled manifest.
@@ -64,11 +84,65 @@ std::string whole_clip_command(const cli::RunRecord& r) {
     return c;
 }
 
+// " (size 160x90 against 200x90, ...)": which settings differ, as the user typed them.
+std::string differing_settings(const nlohmann::ordered_json& odd, const nlohmann::ordered_json& kept) {
+    std::string s;
+    for (const auto& [key, value] : kept.items()) {
+        const auto o = odd.find(key);
+        if (o != odd.end() && *o == value) continue;
+        auto show = [&](const nlohmann::ordered_json& v) {
+            if (key == "size" && v.is_array() && v.size() == 2) return v[0].dump() + "x" + v[1].dump();
+            return v.is_string() ? v.get<std::string>() : v.dump();
+        };
+        s += (s.empty() ? " (" : ", ") + key + " " + (o == odd.end() ? std::string("missing") : show(*o)) +
+             " against " + show(value);
+    }
+    return s.empty() ? s : s + ")";
+}
+
+// "frames 0, 2, 4" or "frames 0..94, one in 2" for a shard's share of the clip.
+std::string frames_of(const cli::RunRecord& r) {
+    if (r.frames.count <= 6) {
+        std::string s = r.frames.count == 1 ? "frame " : "frames ";
+        for (long i = 0; i < r.frames.count; ++i) s += (i ? ", " : "") + std::to_string(r.frames.at(i));
+        return s;
+    }
+    return "frames " + std::to_string(r.frames.first) + ".." +
+           std::to_string(r.frames.at(r.frames.count - 1)) +
+           (r.frames.step > 1 ? ", one in " + std::to_string(r.frames.step) : "");
+}
+
+// Shards that agree on the settings but ran on another SIMD target or GL renderer: the clip is whole, but
+// its frames may differ in the last bits from a single run's. One line per machine, naming its frames.
+void warn_mixed_machines(const std::map<long, ShardFile>& shards, long first, long last) {
+    std::vector<std::pair<cli::MachineRecord, std::vector<long>>> groups;
+    for (const auto& [k, s] : shards) {
+        auto g = std::find_if(groups.begin(), groups.end(),
+                              [&](const auto& e) { return e.first == s.run.machine; });
+        if (g == groups.end()) groups.push_back({s.run.machine, {}}), g = groups.end() - 1;
+        g->second.push_back(k);
+    }
+    if (groups.size() < 2) return;
+    const long n = long(shards.size());
+    std::fprintf(stderr,
+                 "splatffd assemble: warning: the shards of frames %ld..%ld ran on %zu different machines; "
+                 "their frames may differ from a single run's (pin SFFD_SIMD and use one GL renderer for "
+                 "identical bytes):\n",
+                 first, last, groups.size());
+    for (const auto& [m, ks] : groups)
+        for (long k : ks) {
+            const cli::RunRecord& r = shards.at(k).run;
+            std::fprintf(stderr, "splatffd assemble:   shard %ld/%ld (%s): simd %s, GL renderer %s\n", k, n,
+                         frames_of(r).c_str(), m.simd.empty() ? "(not recorded)" : m.simd.c_str(),
+                         m.gl_renderer.empty() ? "(not recorded)" : m.gl_renderer.c_str());
+        }
+}
+
 int run_assemble(cli::Args args) {
     std::string dir_text, video;
     for (std::size_t i = 0; i < args.size(); ++i) {
         if (args[i] == "--help" || args[i] == "-h") {
-            usage();
+            usage(stdout);
             return 0;
         } else if (args[i] == "--video" && i + 1 < args.size()) {
             video = args[++i];
@@ -76,12 +150,12 @@ int run_assemble(cli::Args args) {
             dir_text = args[i];
         } else {
             std::fprintf(stderr, "splatffd assemble: unknown or incomplete option '%s'\n", args[i].c_str());
-            usage();
+            usage(stderr);
             return 2;
         }
     }
     if (dir_text.empty()) {
-        usage();
+        usage(stderr);
         return 2;
     }
     std::string ffmpeg;
@@ -145,7 +219,7 @@ int run_assemble(cli::Args args) {
     }
     const long n = by_count.begin()->first;
     const std::map<long, ShardFile>& shards = by_count.begin()->second;
-    const ShardFile& reference = shards.begin()->second;
+    const ShardFile& reference = kept_settings(shards);
     const auto& settings = reference.run.settings;
     const long first = settings.at("first").get<long>(), last = settings.at("last").get<long>();
     const std::string formats = settings.at("formats").get<std::string>();
@@ -162,9 +236,13 @@ int run_assemble(cli::Args args) {
         }
         const cli::RunRecord& r = it->second.run;
         if (r.settings != settings) {
-            problems.push_back(it->second.path.string() + ": settings differ from " +
-                               reference.path.filename().string() +
-                               " (another run's shard, or another version of splatffd)" + again);
+            // Re-rendered with the kept settings (the reference shard's command), not its own odd ones.
+            std::string fix = command_for_shard(reference.run, k, n);
+            if (fix.empty()) fix = rerender_command(shards, k, n);
+            problems.push_back(
+                it->second.path.string() + ": settings differ from " + reference.path.filename().string() +
+                differing_settings(r.settings, settings) +
+                " (another run's shard, or another version of splatffd); re-render it with: " + fix);
             continue;
         }
         if (r.state != "complete") {
@@ -236,6 +314,8 @@ int run_assemble(cli::Args args) {
         return 1;
     }
 
+    warn_mixed_machines(shards, first, last);
+
     cli::RunRecord whole;
     whole.state = "complete";
     whole.started_unix = reference.run.started_unix;
@@ -270,6 +350,12 @@ int run_assemble(cli::Args args) {
             return 1;
         }
         std::fprintf(stderr, "wrote %s: %ld frames at %g fps\n", video.c_str(), last - first + 1, fps);
+        if (const auto size = settings.find("size");
+            size != settings.end() && size->is_array() && size->size() == 2)
+            if (const std::string note =
+                    cli::video_size_note(video, (*size)[0].get<long>(), (*size)[1].get<long>());
+                !note.empty())
+                std::fprintf(stderr, "splatffd assemble: note: %s\n", note.c_str());
     }
     return 0;
 }

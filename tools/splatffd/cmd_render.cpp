@@ -40,6 +40,7 @@
 #include "runtime/core/atomic_file.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/gfx/context.h"
+#include "runtime/simd/simd.h"
 #include "systems/gaussian/components.h"
 #include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/gaussian_pass.h"
@@ -563,6 +564,7 @@ int run_render(sffd::cli::Args args) {
         std::fprintf(stderr, "splatffd render: %s\n", ctx.message().c_str());
         return 1;
     }
+    run.machine = cli::MachineRecord{simd::chosen(), ctx.value().renderer()};
     int status = 0;
     {
         RenderScene scene;
@@ -582,6 +584,9 @@ int run_render(sffd::cli::Args args) {
         }
         std::fprintf(stderr, "wrote %s: %ld frames at %g fps\n", o.video.c_str(), o.last - o.first + 1,
                      o.fps);
+        if (const std::string note = cli::video_size_note(o.video, long(o.width), long(o.height));
+            !note.empty())
+            std::fprintf(stderr, "splatffd render: note: %s\n", note.c_str());
     }
     return status;
 }

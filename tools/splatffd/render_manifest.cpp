@@ -77,6 +77,7 @@ ojson to_json(const RunRecord& r) {
     j["started_unix"] = r.started_unix;
     j["command"] = r.command;
     j["settings"] = r.settings;
+    j["machine"] = ojson{{"simd", r.machine.simd}, {"gl_renderer", r.machine.gl_renderer}};
     j["shard"] = ojson{{"index", r.shard.index}, {"count", r.shard.count}, {"sharded", r.sharded}};
     j["frames"] = ojson{{"first", r.frames.first}, {"step", r.frames.step}, {"count", r.frames.count}};
     // The frames on disk are the first `count` of the sequence above; `last` says which one ends them.
@@ -109,6 +110,10 @@ Result<RunRecord> read_manifest(const std::filesystem::path& path) {
         r.started_unix = j.at("started_unix").get<long long>();
         r.command = j.at("command").get<std::string>();
         r.settings = j.at("settings");
+        if (const auto m = j.find("machine"); m != j.end()) {
+            r.machine.simd = m->at("simd").get<std::string>();
+            r.machine.gl_renderer = m->at("gl_renderer").get<std::string>();
+        }
         // What `assemble` reads from the settings, checked here so a hand-edited manifest is named.
         (void)r.settings.at("first").get<long>(), (void)r.settings.at("last").get<long>();
         (void)r.settings.at("formats").get<std::string>(), (void)r.settings.at("fps").get<double>();

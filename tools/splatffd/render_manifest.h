@@ -60,11 +60,21 @@ struct FramePrint {
 // The manifest's contents. `settings` holds everything that decides the pixels (scene, range, size,
 // quality, formats, fps, culling, background, camera, turntable) and the binary's version: shards of one
 // clip have equal settings.
+// What made the pixels besides the settings: the CPU kernels' SIMD target (runtime/simd) and the GL
+// renderer. Equal settings give equal bytes only on equal machines: `assemble` warns when shards differ
+// here, and pinning SFFD_SIMD makes the CPU side equal across a farm's mixed nodes.
+struct MachineRecord {
+    std::string simd;         // e.g. "avx2"; empty in manifests from before it was recorded
+    std::string gl_renderer;  // GL_RENDERER, e.g. "llvmpipe (LLVM 15.0.6, 256 bits)"
+    bool operator==(const MachineRecord&) const = default;
+};
+
 struct RunRecord {
     std::string state = "running";  // running | complete | failed
     long long started_unix = 0;
     std::string command;  // the shell line that re-runs this run (shard)
     nlohmann::ordered_json settings;
+    MachineRecord machine;
     Shard shard;
     bool sharded = false;
     FrameSequence frames;

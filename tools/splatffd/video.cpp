@@ -71,8 +71,10 @@ Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir,
                      flatten + ",split[a][b];[a]palettegen=reserve_transparent=0[p];[b][p]paletteuse",
                      "-loop", "0", "-f", "gif"});
     } else {
-        argv.insert(argv.end(), {"-filter_complex", flatten + ",pad=ceil(iw/2)*2:ceil(ih/2)*2", "-c:v",
-                                 "libx264", "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4"});
+        // The padding is the background too, so the extra column or row is not a black line.
+        argv.insert(argv.end(),
+                    {"-filter_complex", flatten + ",pad=ceil(iw/2)*2:ceil(ih/2)*2:color=" + colour, "-c:v",
+                     "libx264", "-pix_fmt", "yuv420p", "-movflags", "+faststart", "-f", "mp4"});
     }
     argv.push_back(tmp.string());
     std::vector<char*> args;
@@ -98,6 +100,15 @@ Status encode_video(const std::string& ffmpeg, const std::filesystem::path& dir,
         return make_error(video.string() + ": cannot write: " + ec.message());
     }
     return {};
+}
+
+std::string video_size_note(const std::filesystem::path& video, long width, long height) {
+    if (video.extension() != ".mp4" || (width % 2 == 0 && height % 2 == 0)) return {};
+    const long w = width + width % 2, h = height + height % 2;
+    return video.string() + ": " + std::to_string(width) + "x" + std::to_string(height) + " padded to " +
+           std::to_string(w) + "x" + std::to_string(h) +
+           " with the background colour (H.264 needs an even width and height; the frames keep " +
+           std::to_string(width) + "x" + std::to_string(height) + ", and so would a .gif)";
 }
 
 Result<std::string> check_video_output(const std::string& video, bool& usage) {

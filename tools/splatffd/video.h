@@ -19,7 +19,13 @@ std::string find_on_path(const std::string& name);
 // returns ffmpeg's path. `usage` is set when the mistake is the option's (exit 2) rather than the machine's.
 Result<std::string> check_video_output(const std::string& video, bool& usage);
 
-// Encodes DIR/frame_FIRST..LAST.png into `video` (.mp4: H.264 yuv420p, even size; .gif: per-clip palette)
+// What a user must be told about the video's size, or "": H.264 in yuv420p needs an even width and height,
+// so an MP4 of an odd WIDTHxHEIGHT is padded by one column and/or row of the background colour (the frames
+// and a GIF keep the size). Printed by `render --video` and `assemble --video`.
+std::string video_size_note(const std::filesystem::path& video, long width, long height);
+
+// Encodes DIR/frame_FIRST..LAST.png into `video` (.mp4: H.264 yuv420p, padded to an even size with the
+// background colour; .gif: per-clip palette)
 // through a temporary file renamed at the end, so a failed encode leaves no half video. ffmpeg runs with
 // an argument vector (no shell): paths with spaces or quotes are safe. Both formats are laid over the same
 // opaque `background` (sRGB 0..1; black by default), blended in display space.

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "tests/test_util/run_tool.h"
@@ -90,4 +91,43 @@ TEST(RenderVideo, Mp4AndGifAgreeOnTheBackgroundAndTheObject) {
         EXPECT_GE(channel(mp4, 2, 2, c), 243) << "mp4 corner channel " << c;
         EXPECT_GE(channel(gif, 2, 2, c), 243) << "gif corner channel " << c;
     }
+}
+
+// An odd size: the MP4 is padded to even with the background colour, and the command says so; a GIF keeps
+// the size and says nothing.
+TEST(RenderVideo, OddSizeMp4IsPaddedWithTheBackgroundAndSaysSo) {
+    if (sffd::test::run_shell("command -v ffmpeg >/dev/null 2>&1") != 0)
+        GTEST_SKIP() << "ffmpeg is not installed (tools/bootstrap.sh installs it)";
+    const fs::path dir = temp_dir("odd");
+    const std::string common =
+        "render sphere --frames 2 --size 61x31 --format png --quality preview "
+        "--background 0,1,0 --out ";
+    auto r =
+        sffd::test::run_headless(common + (dir / "mp4").string() + " --video " + (dir / "odd.mp4").string());
+    ASSERT_EQ(r.code, 0) << r.out;
+    EXPECT_NE(r.out.find(
+                  "splatffd render: note: " + (dir / "odd.mp4").string() +
+                  ": 61x31 padded to 62x32 with the background colour (H.264 needs an even width and height"),
+              std::string::npos)
+        << r.out;
+    r = sffd::test::run_command(
+        "ffprobe -v error -select_streams v:0 -show_entries stream=width,height -of csv=p=0 " +
+        (dir / "odd.mp4").string());
+    EXPECT_EQ(r.out, "62,32\n");
+    // The padded column and row are the background (green), not black.
+    const fs::path raw = dir / "odd.rgb";
+    ASSERT_EQ(sffd::test::run_shell("ffmpeg -nostdin -loglevel error -y -i " + (dir / "odd.mp4").string() +
+                                    " -frames:v 1 -f rawvideo -pix_fmt rgb24 " + raw.string()),
+              0);
+    std::ifstream in(raw, std::ios::binary);
+    const std::vector<std::uint8_t> rgb{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+    ASSERT_EQ(rgb.size(), std::size_t(62 * 32 * 3));
+    for (const auto& [x, y] : {std::pair{61, 5}, std::pair{5, 31}, std::pair{61, 31}}) {
+        const std::size_t at = std::size_t((y * 62 + x) * 3);
+        EXPECT_LE(rgb[at], 40) << x << "," << y;
+        EXPECT_GE(rgb[at + 1], 200) << x << "," << y;
+    }
+    r = sffd::test::run_headless(common + (dir / "gif").string() + " --video " + (dir / "odd.gif").string());
+    ASSERT_EQ(r.code, 0) << r.out;
+    EXPECT_EQ(r.out.find("note:"), std::string::npos) << r.out;
 }
