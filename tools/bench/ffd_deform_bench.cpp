@@ -3,11 +3,16 @@
 // angle proportional to its height, as ../shared/peers/blender_lattice.py does), plus 1M points.
 //   build/<dir>/tools/bench/bench_ffd_deform --benchmark_repetitions=5
 //   --benchmark_report_aggregates_only=true
+// BM_Bernstein11_Full/simd:<target> is the paper case once per SIMD target this CPU runs, side by side
+// (BM_Bernstein11_Full itself runs on the best one, or on SFFD_SIMD's):
+//   bench_ffd_deform --benchmark_filter='BM_Bernstein11_Full'
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <string>
 #include <vector>
 
+#include "runtime/simd/simd.h"
 #include "systems/ffd/deform.h"
 #include "tools/bench/paper_case.h"
 
@@ -75,6 +80,11 @@ Points& million_points() {
 void BM_Bernstein11_Full(benchmark::State& st) {
     run(st, twisted(LatticeBasis::bernstein), paper_points(), true, ffd::Backend::fast);
 }
+// The same, pinned to one SIMD target.
+void bernstein11_full_on(benchmark::State& st, const simd::Target& target) {
+    const simd::ScopedTarget pin(target);
+    run(st, twisted(LatticeBasis::bernstein), paper_points(), true, ffd::Backend::fast);
+}
 void BM_Bernstein11_PositionsOnly(benchmark::State& st) {
     run(st, twisted(LatticeBasis::bernstein), paper_points(), false, ffd::Backend::fast);
 }
@@ -108,6 +118,14 @@ void BM_BSpline11_1M_PositionsOnly(benchmark::State& st) {
 }
 
 BENCHMARK(BM_Bernstein11_Full)->Unit(benchmark::kMillisecond)->MeasureProcessCPUTime()->UseRealTime();
+const int registered_per_target = [] {
+    for (const simd::Target& t : simd::runnable())
+        benchmark::RegisterBenchmark(("BM_Bernstein11_Full/simd:" + t.name).c_str(), bernstein11_full_on, t)
+            ->Unit(benchmark::kMillisecond)
+            ->MeasureProcessCPUTime()
+            ->UseRealTime();
+    return 0;
+}();
 BENCHMARK(BM_Bernstein11_PositionsOnly)
     ->Unit(benchmark::kMillisecond)
     ->MeasureProcessCPUTime()

@@ -1,15 +1,21 @@
 // FFD deformation: exactness against independent references (affine maps, finite differences, PyGeM),
 // agreement of the reference / fast / sparse paths, B-spline properties, boundary and robustness cases.
+// The tests that run the float kernels (FfdDeformKernel) run once per SIMD target this CPU runs, the target
+// pinned (names end in /avx3, /avx2, /sse4, /scalar): every target meets the same tolerances.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
+#include <map>
+#include <string>
 
 #include "systems/ffd/deform.h"
 #include "systems/ffd/deform_kernels.h"
 #include "systems/ffd/lattice.h"
 #include "tests/systems/ffd/test_util.h"
+#include "tests/test_util/simd_targets.h"
 
 namespace sffd::ffd {
 namespace {
@@ -59,7 +65,9 @@ Lattice skewed_lattice(glm::ivec3 div, LatticeBasis basis = LatticeBasis::bernst
                         div, basis);
 }
 
-TEST(FfdDeform, IdentityLatticeIsExact) {
+class FfdDeformKernel : public sffd::test::EverySimdTarget {};
+
+TEST_P(FfdDeformKernel, IdentityLatticeIsExact) {
     const Cloud c = test::random_cloud(3000, -1.5, 1.5);
     for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline}) {
         const Lattice l = skewed_lattice({4, 5, 3}, basis);
@@ -101,18 +109,18 @@ void check_affine(const glm::dmat3& A, bool expect_inverted) {
     }
 }
 
-TEST(FfdDeform, AffineMapOfControlPointsIsReproduced) {
+TEST_P(FfdDeformKernel, AffineMapOfControlPointsIsReproduced) {
     check_affine(
         glm::dmat3(glm::dvec3(1.2, 0.1, -0.3), glm::dvec3(0.2, 0.8, 0.1), glm::dvec3(-0.1, 0.4, 1.5)), false);
 }
 
-TEST(FfdDeform, MirroredLatticeFlipsNormalsConsistentlyAndCountsInverted) {
+TEST_P(FfdDeformKernel, MirroredLatticeFlipsNormalsConsistentlyAndCountsInverted) {
     // A reflection (det < 0): cof(A) n = det(A) A^-T n, the orientation follows the map.
     check_affine(glm::dmat3(glm::dvec3(-1.0, 0.0, 0.0), glm::dvec3(0.0, 1.1, 0.0), glm::dvec3(0.1, 0.0, 0.9)),
                  true);
 }
 
-TEST(FfdDeform, MirroredAxesAtRestAreNotInverted) {
+TEST_P(FfdDeformKernel, MirroredAxesAtRestAreNotInverted) {
     // A left-handed box (S pointing down x) at rest is the identity: nothing flips.
     const Lattice l = make_lattice(
         {1, -1, -1}, {glm::dvec3(-2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3});
@@ -124,7 +132,7 @@ TEST(FfdDeform, MirroredAxesAtRestAreNotInverted) {
     }
 }
 
-TEST(FfdDeform, NormalsAgreeWithFiniteDifferences) {
+TEST_P(FfdDeformKernel, NormalsAgreeWithFiniteDifferences) {
     for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline}) {
         Lattice l = skewed_lattice({5, 4, 6}, basis);
         test::twist_about_t(l, 0.8);
@@ -147,7 +155,7 @@ TEST(FfdDeform, NormalsAgreeWithFiniteDifferences) {
     }
 }
 
-TEST(FfdDeform, PyGeMSphereCase) {
+TEST_P(FfdDeformKernel, PyGeMSphereCase) {
     std::vector<double> orig, mod;
     std::vector<std::size_t> shape, shape2;
     ASSERT_TRUE(test::read_npy_f64(SFFD_TEST_DATA_DIR "/pygem/meshpoints_sphere_orig.npy", orig, shape));
@@ -186,36 +194,56 @@ TEST(FfdDeform, PyGeMSphereCase) {
     }
 }
 
-// Relative agreement: positions relative to the lattice size, normals absolute, axes relative to length.
-// Normals are compared where the reference Jacobian is well conditioned (cond_F(J) <= 20): near a singular
-// J the normal is ill-defined and any float evaluation drifts; `normal_tol` grows for very fine lattices,
-// where float derivative sums cancel (error ~ divisions * |ΔP| * 6e-8, see README "Precision").
-void expect_agree(const Output& a, const Output& b, double size, const char* what, const Lattice& l,
-                  const Cloud& c, double normal_tol = 1e-5) {
-    ASSERT_EQ(a.p.size(), b.p.size());
+// The double-precision reference of a case with, per point, the Frobenius norms of its Jacobian and of the
+// inverse. Each case is evaluated once and kept for every SIMD target's run of the test (key: the case).
+struct Reference {
+    Output out;
+    std::vector<double> fro_j, fro_inverse;
+};
+const Reference& reference_of(const std::string& key, const Lattice& l, const Cloud& c) {
+    static std::map<std::string, Reference> cache;
+    if (auto it = cache.find(key); it != cache.end()) return it->second;
     auto fro = [](const glm::dmat3& m) {
         double s = 0;
         for (int x = 0; x < 3; ++x)
             for (int y = 0; y < 3; ++y) s += m[x][y] * m[x][y];
         return std::sqrt(s);
     };
+    Reference r;
+    r.out = run(l, c, Backend::reference);
+    for (std::size_t i = 0; i < c.size(); ++i) {
+        const glm::dmat3 J = reference_point(l, c.origin + glm::dvec3(c.p[i])).jacobian;
+        r.fro_j.push_back(fro(J));
+        r.fro_inverse.push_back(fro(glm::inverse(J)));
+    }
+    return cache.emplace(key, std::move(r)).first->second;
+}
+
+// Relative agreement: positions relative to the lattice size, normals absolute, axes relative to length.
+// Normals are compared where the reference Jacobian is well conditioned (cond_F(J) <= 20): near a singular
+// J the normal is ill-defined and any float evaluation drifts; `normal_tol` grows for very fine lattices,
+// where float derivative sums cancel (error ~ divisions * |ΔP| * 6e-8, see README "Precision").
+void expect_agree(const Reference& ref, const Output& b, double size, const char* what, const Cloud& c,
+                  double normal_tol = 1e-5) {
+    const Output& a = ref.out;
+    ASSERT_EQ(a.p.size(), b.p.size());
     for (std::size_t i = 0; i < a.p.size(); ++i) {
         ASSERT_LT(glm::length(a.p[i] - b.p[i]), 1e-5 * size) << what << " position " << i;
-        const glm::dmat3 J = reference_point(l, c.origin + glm::dvec3(c.p[i])).jacobian;
-        if (fro(J) * fro(glm::inverse(J)) <= 20.0) {
+        const double fro_j = ref.fro_j[i];
+        if (fro_j * ref.fro_inverse[i] <= 20.0) {
             ASSERT_LT(glm::length(a.n[i] - b.n[i]), normal_tol) << what << " normal " << i;
         }
         // Axes relative to |J| |axis| (a nearly singular J shrinks an axis; its error does not shrink).
-        ASSERT_LT(double(glm::length(a.u[i] - b.u[i])), normal_tol * fro(J) * double(glm::length(c.u[i])))
+        ASSERT_LT(double(glm::length(a.u[i] - b.u[i])), normal_tol * fro_j * double(glm::length(c.u[i])))
             << what << " axis_u " << i;
-        ASSERT_LT(double(glm::length(a.v[i] - b.v[i])), normal_tol * fro(J) * double(glm::length(c.v[i])))
+        ASSERT_LT(double(glm::length(a.v[i] - b.v[i])), normal_tol * fro_j * double(glm::length(c.v[i])))
             << what << " axis_v " << i;
     }
     EXPECT_EQ(a.stats.inside, b.stats.inside) << what;
     EXPECT_EQ(a.stats.inverted, b.stats.inverted) << what;
 }
 
-TEST(FfdDeform, FastSparseAndReferenceAgree) {
+TEST_P(FfdDeformKernel, FastSparseAndReferenceAgree) {
     const Cloud c = test::random_cloud(4000, -1.3, 1.3, 9);
     for (glm::ivec3 div : {glm::ivec3(1, 1, 1), glm::ivec3(3, 5, 2), glm::ivec3(10, 10, 10),
                            glm::ivec3(4, 3, 14), glm::ivec3(20, 6, 33)}) {
@@ -227,11 +255,14 @@ TEST(FfdDeform, FastSparseAndReferenceAgree) {
             // Jitter a fraction of the cell size: keeps J well conditioned (float normals of a nearly
             // singular J are ill-defined whatever the algorithm).
             test::jitter(l, 0.2 * 2.3 / std::max({div.x, div.y, div.z}), 5, 7);
-            const Output ref = run(l, c, Backend::reference);
+            const Reference& ref =
+                reference_of("agree " + std::to_string(div.x) + " " + std::to_string(div.y) + " " +
+                                 std::to_string(div.z) + " " + std::to_string(int(basis)),
+                             l, c);
             const Output fast = run(l, c, Backend::fast);
             const double ntol = std::max({div.x, div.y, div.z}) > 12 ? 1e-4 : 1e-5;
-            expect_agree(ref, fast, 2.3, "fast", l, c, ntol);
-            expect_agree(ref, run(l, c, Backend::sparse), 2.3, "sparse", l, c, ntol);
+            expect_agree(ref, fast, 2.3, "fast", c, ntol);
+            expect_agree(ref, run(l, c, Backend::sparse), 2.3, "sparse", c, ntol);
             // Positions-only mode gives the same positions.
             const Output po = run(l, c, Backend::fast, false);
             for (std::size_t i = 0; i < c.size(); ++i) ASSERT_EQ(po.p[i], fast.p[i]);
@@ -239,7 +270,7 @@ TEST(FfdDeform, FastSparseAndReferenceAgree) {
     }
 }
 
-TEST(FfdDeform, PaperCaseAgreesTo1e5) {
+TEST_P(FfdDeformKernel, PaperCaseAgreesTo1e5) {
     // The benchmark case: Fibonacci sphere in an 11x11x11 lattice, global twist; every normal compared.
     const Cloud c = test::fibonacci_sphere(59650);
     for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline}) {
@@ -247,13 +278,13 @@ TEST(FfdDeform, PaperCaseAgreesTo1e5) {
                                  {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
                                  {10, 10, 10}, basis);
         test::twist_about_t(l, 0.6);
-        const Output ref = run(l, c, Backend::reference);
-        expect_agree(ref, run(l, c, Backend::fast), 2.2, "fast", l, c);
-        expect_agree(ref, run(l, c, Backend::sparse), 2.2, "sparse", l, c);
+        const Reference& ref = reference_of("paper " + std::to_string(int(basis)), l, c);
+        expect_agree(ref, run(l, c, Backend::fast), 2.2, "fast", c);
+        expect_agree(ref, run(l, c, Backend::sparse), 2.2, "sparse", c);
     }
 }
 
-TEST(FfdDeform, DenseBernsteinSumsOnlyTheCoordinatesThatMove) {
+TEST_P(FfdDeformKernel, DenseBernsteinSumsOnlyTheCoordinatesThatMove) {
     // The dense kernel leaves out each coordinate of ΔP that stays within 1e-12 of the lattice's size
     // everywhere (a twist's axis: rounding). Each edit below is checked against the double-precision
     // evaluator, positions and whole Jacobians, so a coordinate summed into the wrong output shows.
@@ -338,7 +369,7 @@ TEST(FfdDeform, AutomaticPicksSparseForLocalEdits) {
     EXPECT_EQ(choose_backend(l), Backend::sparse);
 }
 
-TEST(FfdDeform, BSplineAffinePrecisionAwayFromBoundary) {
+TEST_P(FfdDeformKernel, BSplineAffinePrecisionAwayFromBoundary) {
     const glm::dmat3 A(glm::dvec3(1.1, 0.2, 0.0), glm::dvec3(-0.1, 0.9, 0.1), glm::dvec3(0.0, 0.3, 1.2));
     const glm::dvec3 b(0.1, 0.2, -0.1);
     Lattice l = make_lattice({-2, -2, -2}, {glm::dvec3(4, 0, 0), glm::dvec3(0, 4, 0), glm::dvec3(0, 0, 4)},
@@ -359,7 +390,7 @@ TEST(FfdDeform, BSplineAffinePrecisionAwayFromBoundary) {
     EXPECT_GT(glm::length(rp.position - (A * glm::dvec3(-1.95, 0, 0) + b)), 1e-3);
 }
 
-TEST(FfdDeform, BSplineIsLocal) {
+TEST_P(FfdDeformKernel, BSplineIsLocal) {
     Lattice l = make_lattice({0, 0, 0}, {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)},
                              {10, 10, 10}, LatticeBasis::bspline);
     const int ci = 5, cj = 4, ck = 6;
@@ -381,7 +412,7 @@ TEST(FfdDeform, BSplineIsLocal) {
     }
 }
 
-TEST(FfdDeform, PointsOnFacesEdgesAndCornersDeform) {
+TEST_P(FfdDeformKernel, PointsOnFacesEdgesAndCornersDeform) {
     Lattice l = skewed_lattice({3, 2, 4});
     test::jitter(l, 0.1, 3);
     Cloud c;
@@ -409,7 +440,7 @@ TEST(FfdDeform, PointsOnFacesEdgesAndCornersDeform) {
     EXPECT_LT(glm::length(reference_point(l, corner).position - l.current[l.index(3, 2, 4)]), 1e-12);
 }
 
-TEST(FfdDeform, FarFromOriginNoJitter) {
+TEST_P(FfdDeformKernel, FarFromOriginNoJitter) {
     // A scan at 1e6: cloud origin and lattice there, positions relative. The result equals the same
     // deformation computed at the world origin.
     const glm::dvec3 far(1.0e6, -2.0e6, 3.0e6);
@@ -432,7 +463,7 @@ TEST(FfdDeform, FarFromOriginNoJitter) {
     }
 }
 
-TEST(FfdDeform, BoundsFromControlPointsContainEveryDeformedPoint) {
+TEST_P(FfdDeformKernel, BoundsFromControlPointsContainEveryDeformedPoint) {
     const Cloud c = test::random_cloud(20000, -1.6, 1.6, 12);
     Box in;
     for (const auto& p : c.p) in.add(glm::dvec3(p));
@@ -445,6 +476,118 @@ TEST(FfdDeform, BoundsFromControlPointsContainEveryDeformedPoint) {
         for (const auto& p : o.p) {
             ASSERT_TRUE(glm::all(glm::greaterThanEqual(glm::dvec3(p), b.lo - 1e-6)));
             ASSERT_TRUE(glm::all(glm::lessThanEqual(glm::dvec3(p), b.hi + 1e-6)));
+        }
+    }
+}
+
+// Bit-for-bit equality of two vectors (NaN payloads included).
+bool same_bits(const glm::vec3& a, const glm::vec3& b) { return std::memcmp(&a, &b, sizeof a) == 0; }
+
+TEST_P(FfdDeformKernel, NonFinitePointsStayPutWhereverTheyFall) {
+    // NaN fails every comparison, infinite and huge coordinates fail the inside test: such a point is
+    // copied through and not counted inside, whether it sits among inside points of a whole vector block,
+    // in a compacted group or in the tail. A NaN normal or axis on an inside point only spoils that output; a
+    // zero normal stays zero (no division by its zero length).
+    Lattice l = skewed_lattice({4, 5, 3});
+    const Cloud c0 = inside_only(l, test::random_cloud(4000, -1.0, 1.0, 21));
+    ASSERT_GT(c0.size(), 2100u);
+    const float nan = std::numeric_limits<float>::quiet_NaN(), inf = std::numeric_limits<float>::infinity();
+    const std::size_t bad[] = {0, 17, 40, 41, 63, 100, 1001, 1500, 2047, 2048, c0.size() - 2, c0.size() - 1};
+    const glm::vec3 hostile[] = {{nan, 0, 0},      {0, nan, 0},     {0, 0, nan},        {inf, 0, 0},
+                                 {0, -inf, 0},     {nan, nan, nan}, {1e30f, 0, 0},      {0, 0, -1e30f},
+                                 {inf, -inf, nan}, {0, 0, inf},     {-nan, 0.1f, 0.2f}, {0.1f, inf, 0.3f}};
+    const std::size_t nan_normal = 5, nan_axis = 6, zero_normal = 7;
+    for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline}) {
+        SCOPED_TRACE(basis == LatticeBasis::bspline ? "bspline" : "bernstein");
+        l = skewed_lattice({4, 5, 3}, basis);
+        test::twist_about_t(l, 0.7);
+        test::jitter(l, 0.05, 4, 3);
+        Cloud c = c0;
+        for (std::size_t b = 0; b < std::size(bad); ++b) c.p[bad[b]] = hostile[b];
+        c.n[nan_normal] = glm::vec3(nan, 0, 0);
+        c.u[nan_axis] = glm::vec3(0, nan, 0);
+        c.n[zero_normal] = glm::vec3(0.0f);
+        const Output ref = run(l, c, Backend::reference);
+        EXPECT_EQ(ref.stats.inside, c.size() - std::size(bad));
+        for (Backend be : {Backend::fast, Backend::sparse}) {
+            SCOPED_TRACE(backend_name(be));
+            const Output o = run(l, c, be);
+            EXPECT_EQ(o.stats.inside, ref.stats.inside);
+            EXPECT_EQ(o.stats.inverted, ref.stats.inverted);
+            for (std::size_t b : bad) {
+                ASSERT_TRUE(same_bits(o.p[b], c.p[b])) << "point " << b;
+                ASSERT_TRUE(same_bits(o.n[b], c.n[b])) << "point " << b;
+                ASSERT_TRUE(same_bits(o.u[b], c.u[b])) << "point " << b;
+                ASSERT_TRUE(same_bits(o.v[b], c.v[b])) << "point " << b;
+            }
+            for (std::size_t i = 0; i < c.size(); ++i) {
+                if (std::find(std::begin(bad), std::end(bad), i) != std::end(bad)) continue;
+                ASSERT_LT(glm::length(o.p[i] - ref.p[i]), 1e-5f * 2.3f) << "point " << i;
+                if (i == nan_normal) {
+                    EXPECT_TRUE(std::isnan(o.n[i].x) && std::isnan(o.n[i].y) && std::isnan(o.n[i].z));
+                    EXPECT_TRUE(std::isnan(ref.n[i].x) && std::isnan(ref.n[i].y) && std::isnan(ref.n[i].z));
+                } else if (i == zero_normal) {
+                    EXPECT_EQ(o.n[i], glm::vec3(0.0f));
+                    EXPECT_EQ(ref.n[i], glm::vec3(0.0f));
+                } else {
+                    ASSERT_LT(glm::length(o.n[i] - ref.n[i]), 1e-4f) << "point " << i;
+                }
+                if (i == nan_axis) {
+                    EXPECT_TRUE(std::isnan(o.u[i].x) && std::isnan(o.u[i].y) && std::isnan(o.u[i].z));
+                } else {
+                    ASSERT_LT(glm::length(o.u[i] - ref.u[i]), 1e-6f) << "point " << i;
+                }
+                ASSERT_LT(glm::length(o.v[i] - ref.v[i]), 1e-6f) << "point " << i;
+            }
+        }
+    }
+}
+
+TEST_P(FfdDeformKernel, FoldedCellsAreInvertedWhereTheReferenceSaysSo) {
+    // Layer i = 1 pushed 1.5 S along S, past layers 2 and 3: the map folds over a slab of the box (det J < 0
+    // there, ∂X'/∂s reversed) and the normals flip with the cell. Each point's Jacobian (and so the sign of
+    // its determinant), normal and the inverted count follow the reference; a float det within 1e-3 of
+    // zero may take either sign, and the count may differ by those points only.
+    const Cloud c = inside_only(skewed_lattice({4, 3, 5}), test::random_cloud(3000, -1.0, 1.0, 31));
+    for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline}) {
+        SCOPED_TRACE(basis == LatticeBasis::bspline ? "bspline" : "bernstein");
+        Lattice l = skewed_lattice({4, 3, 5}, basis);
+        for (int j = 0; j <= 3; ++j)
+            for (int k = 0; k <= 5; ++k) l.current[l.index(1, j, k)] += 1.5 * l.axes[0];
+        std::vector<double> det(c.size());
+        std::size_t surely = 0, maybe = 0;
+        for (std::size_t i = 0; i < c.size(); ++i) {
+            det[i] = glm::determinant(reference_point(l, c.origin + glm::dvec3(c.p[i])).jacobian);
+            surely += det[i] < -1e-3;
+            maybe += det[i] < 1e-3;
+        }
+        EXPECT_GT(surely, c.size() / 10);
+        EXPECT_LT(maybe, c.size() - c.size() / 10);
+        const Output ref = run(l, c, Backend::reference);
+        for (Backend be : {Backend::fast, Backend::sparse}) {
+            SCOPED_TRACE(backend_name(be));
+            Output o;
+            o.p.resize(c.size()), o.n.resize(c.size()), o.u.resize(c.size()), o.v.resize(c.size());
+            std::vector<glm::mat3> jac(c.size());
+            PointsIn in{c.p.data(), c.n.data(), c.u.data(), c.v.data(), c.size(), c.origin};
+            PointsOut out{o.p.data(), o.n.data(), o.u.data(), o.v.data()};
+            out.jacobians = jac.data();
+            auto r = deform(l, in, out, be);
+            ASSERT_TRUE(r.ok()) << r.message();
+            EXPECT_GE(r->inverted, surely);
+            EXPECT_LE(r->inverted, maybe);
+            for (std::size_t i = 0; i < c.size(); ++i) {
+                const ReferencePoint rp = reference_point(l, c.origin + glm::dvec3(c.p[i]));
+                for (int col = 0; col < 3; ++col)
+                    ASSERT_LT(glm::length(glm::dvec3(jac[i][col]) - rp.jacobian[col]), 1e-4)
+                        << "point " << i << " column " << col;
+                if (std::abs(det[i]) > 1e-3) {
+                    ASSERT_EQ(glm::determinant(glm::dmat3(jac[i])) < 0.0, det[i] < 0.0) << "point " << i;
+                    // The normal's orientation follows the cofactor: the reference's, away from det ≈ 0.
+                    ASSERT_GT(glm::dot(o.n[i], ref.n[i]), 0.99f) << "point " << i << " det " << det[i];
+                }
+                ASSERT_LT(glm::length(o.p[i] - ref.p[i]), 1e-5f * 2.3f) << "point " << i;
+            }
         }
     }
 }
@@ -550,6 +693,8 @@ TEST(FfdDeform, DegenerateLatticesAreRefused) {
     inf_axis.axes[2].x = INFINITY;
     EXPECT_NE(message(inf_axis).find("axis U is not finite"), std::string::npos) << message(inf_axis);
 }
+
+SFFD_INSTANTIATE_EVERY_SIMD_TARGET(FfdDeformKernel);
 
 }  // namespace
 }  // namespace sffd::ffd
