@@ -3,6 +3,7 @@
 #include "runtime/core/log.h"
 #include "systems/animation/components.h"
 #include "systems/animation/evaluate.h"
+#include "systems/animation/unkeyed_edit.h"
 #include "systems/ffd/components.h"
 
 namespace sffd {
@@ -27,6 +28,11 @@ void animation_system(ecs::Registry& registry, const FrameContext& frame) {
             }
             state.error.clear();
             evaluate_pose(clip, lattice, state.time, pose);
+            // An un-keyed edit stands in for the clip's pose at its own time only, so a frame's pose
+            // still depends on its time alone (render's frame k is the same alone or in a sequence).
+            if (const UnkeyedEdit* edit = registry.try_get<UnkeyedEdit>(e);
+                edit && edit->points.size() == pose.size() && shows_unkeyed_edit(*edit, state.time))
+                pose = edit->points;
             if (pose == state.last_pose && lattice.current.size() == pose.size()) return;
             registry.patch<Lattice>(e).current = pose;
             state.last_pose.swap(pose);

@@ -1,11 +1,11 @@
 // animation_system: the animation phase (runtime/app/frame_loop.h).
-//   reads   AnimationClip, Lattice::rest (lattice entities), FrameContext::time
+//   reads   AnimationClip, UnkeyedEdit, Lattice::rest (lattice entities), FrameContext::time
 //   writes  AnimationState (derived fields; anchor_clock when a play/scrub is pending),
 //           Lattice::current via registry.patch<Lattice>(e), only when the evaluated pose differs from the
 //           pose this system last wrote (so the deformation phase re-runs only on change, and an editor
 //           edit of a paused clip's lattice survives until the pose changes).
-// The pose is a pure function of the frame time and the clip (evaluate.h), so frame k of a fixed-step run
-// is the same whether rendered alone or in a sequence.
+// The pose is a pure function of the frame time, the clip (evaluate.h) and an un-keyed edit (shown at its
+// own clip time only), so frame k of a fixed-step run is the same whether rendered alone or in a sequence.
 #pragma once
 
 #include "runtime/app/frame_loop.h"

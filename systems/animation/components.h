@@ -88,4 +88,15 @@ struct AnimationState {
     std::string error;                  // why the clip is not applied (invalid for this lattice), or empty
 };
 
+// A pose edited by hand and not keyed, on a lattice with a clip (authored, like the clip). It belongs to
+// one clip time: wherever the clip time is `time` (within key_time_epsilon, editing.h) the lattice shows
+// `points` instead of the clip's pose, and the clip's pose at every other time. Every command follows
+// the same rule because the animation system applies it: render shows it at that time's frames, view
+// opens there, and a scene file keeps it with its time (scene_extension.h). One per lattice; keying the
+// edit removes it.
+struct UnkeyedEdit {
+    double time = 0.0;               // clip time (mapped, in [0, duration])
+    std::vector<glm::dvec3> points;  // the whole lattice's control points at that time
+};
+
 }  // namespace sffd

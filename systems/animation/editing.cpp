@@ -94,6 +94,8 @@ void set_speed(AnimationState& state, double speed) {
 void attach_clip(ecs::Registry& registry, ecs::Entity lattice_entity, AnimationClip clip, bool playing) {
     if (registry.has<AnimationClip>(lattice_entity)) registry.remove<AnimationClip>(lattice_entity);
     if (registry.has<AnimationState>(lattice_entity)) registry.remove<AnimationState>(lattice_entity);
+    // An un-keyed edit was made over the old clip's pose; it means nothing over another clip.
+    if (registry.has<UnkeyedEdit>(lattice_entity)) registry.remove<UnkeyedEdit>(lattice_entity);
     registry.emplace<AnimationClip>(lattice_entity, std::move(clip));
     AnimationState state;
     state.playing = playing;

@@ -45,7 +45,8 @@ void scrub(AnimationState& state, double clip_time);
 // Changes the playback speed from the current frame on (the clip time does not jump).
 void set_speed(AnimationState& state, double speed);
 
-// Puts a clip and a fresh playing state on a lattice entity (replacing any previous clip).
+// Puts a clip and a fresh playing state on a lattice entity (replacing any previous clip and its
+// un-keyed edit).
 void attach_clip(ecs::Registry& registry, ecs::Entity lattice_entity, AnimationClip clip,
                  bool playing = true);
 

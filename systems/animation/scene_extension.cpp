@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -12,6 +13,7 @@
 #include "systems/animation/editing.h"
 #include "systems/animation/evaluate.h"
 #include "systems/animation/paper_demo.h"
+#include "systems/animation/unkeyed_edit.h"
 #include "systems/ffd/components.h"
 
 namespace sffd {
@@ -37,7 +39,15 @@ Result<std::string> save_animation_extension(const ecs::Registry& registry,
             // Not `playing`: the editor's pause is view state, not scene content, so a saved scene animates
             // wherever it is rendered (`view` pauses clips on load by itself).
             entry["speed"] = state ? state->speed : 1.0;
+            // The clip time the file's control points were shown at: commands without a clock (deform,
+            // convert, pick, info) use those points, and `view` opens there.
+            entry["time"] = state ? state->time : 0.0;
             entry["clip"] = clip_to_json(clip);
+            if (std::optional<UnkeyedEdit> edit = current_unkeyed_edit(registry, e)) {
+                json points = json::array();
+                for (const glm::dvec3& p : edit->points) points.push_back(json::array({p.x, p.y, p.z}));
+                entry["unkeyed_edit"] = json{{"time", edit->time}, {"control_points", std::move(points)}};
+            }
             entries.emplace_back(id, std::move(entry));
         });
     if (entries.empty()) return std::string();
@@ -67,6 +77,8 @@ Status load_animation_extension(ecs::Registry& registry, std::string_view text,
         AnimationClip clip;
         bool playing;
         double speed;
+        double time;
+        std::optional<UnkeyedEdit> edit;
     };
     std::vector<Pending> pending;
     for (std::size_t i = 0; i < clips.size(); ++i) {
@@ -91,16 +103,61 @@ Status load_animation_extension(ecs::Registry& registry, std::string_view text,
                 return make_error(where + ".speed: expected a finite number");
             speed = c["speed"].get<double>();
         }
+        const auto clip_time = [&](const json& t, const std::string& path, double& out) -> Status {
+            if (!t.is_number() || !std::isfinite(t.get<double>()) || t.get<double>() < 0.0)
+                return make_error(path + ": expected a clip time in seconds (a finite number >= 0)");
+            out = t.get<double>();
+            return {};
+        };
+        double time = 0.0;
+        if (c.contains("time"))
+            if (Status st = clip_time(c["time"], where + ".time", time); !st) return st;
         if (!c.contains("clip")) return make_error(where + ".clip: missing");
         Result<AnimationClip> clip = clip_from_json(c["clip"], where + ".clip");
         if (!clip) return clip.error();
-        if (Status valid = validate_clip(*clip, registry.get<Lattice>(e).rest.size()); !valid)
+        const Lattice& lattice = registry.get<Lattice>(e);
+        if (Status valid = validate_clip(*clip, lattice.rest.size()); !valid)
             return make_error(where + ": " + valid.message());
-        pending.push_back({e, std::move(*clip), playing, speed});
+        std::optional<UnkeyedEdit> edit;
+        if (c.contains("unkeyed_edit")) {
+            const json& u = c["unkeyed_edit"];
+            const std::string at = where + ".unkeyed_edit";
+            if (!u.is_object() || !u.contains("time") || !u.contains("control_points"))
+                return make_error(at + ": expected an object with 'time' and 'control_points'");
+            edit.emplace();
+            if (Status st = clip_time(u["time"], at + ".time", edit->time); !st) return st;
+            const json& points = u["control_points"];
+            if (!points.is_array() || points.size() != lattice.rest.size())
+                return make_error(
+                    at + ".control_points: expected " + std::to_string(lattice.rest.size()) +
+                    " points (the lattice's), got " +
+                    (points.is_array() ? std::to_string(points.size()) : std::string("no array")));
+            for (std::size_t k = 0; k < points.size(); ++k) {
+                const json& p = points[k];
+                const auto finite = [](const json& v) {
+                    return v.is_number() && std::isfinite(v.get<double>());
+                };
+                if (!p.is_array() || p.size() != 3 || !finite(p[0]) || !finite(p[1]) || !finite(p[2]))
+                    return make_error(at + ".control_points[" + std::to_string(k) +
+                                      "]: expected [x, y, z] (finite numbers)");
+                edit->points.emplace_back(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
+            }
+        } else if (!c.contains("time") && lattice.current.size() == lattice.rest.size() &&
+                   lattice.current != evaluate_pose(*clip, lattice, 0.0)) {
+            // Files from before the time was saved: their editor opened clips at 0 s, so control points
+            // off the clip's pose there are an un-keyed edit made at 0 s.
+            edit = UnkeyedEdit{0.0, lattice.current};
+        }
+        pending.push_back({e, std::move(*clip), playing, speed, time, std::move(edit)});
     }
     for (Pending& p : pending) {
         attach_clip(registry, p.lattice, std::move(p.clip), p.playing);
-        registry.get<AnimationState>(p.lattice).speed = p.speed;
+        AnimationState& state = registry.get<AnimationState>(p.lattice);
+        state.speed = p.speed;
+        // The loaded control points are the pose at the saved time (a pause there, e.g. the editor's on
+        // opening, holds it); playing still starts the clip at 0 s.
+        state.time = state.raw_time = p.time;
+        if (p.edit) registry.emplace<UnkeyedEdit>(p.lattice, std::move(*p.edit));
     }
     return {};
 }

@@ -4,8 +4,14 @@
 //   - a scene extension: save_scene writes every lattice's clip into the glTF file's
 //     SFFD_scene.extensions.animation object, load_scene reads it back (exact round trip):
 //       { "version": 1,
-//         "clips": [ { "lattice": <scene id of the lattice entity>, "playing": true, "speed": 1.0,
-//                      "clip": { ...clip_io.h schema... } } ] }
+//         "clips": [ { "lattice": <scene id of the lattice entity>, "speed": 1.0,
+//                      "time": <clip time the lattice's saved control points were shown at>,
+//                      "clip": { ...clip_io.h schema... },
+//                      "unkeyed_edit": { "time": t, "control_points": [[x, y, z], ...] } } ] }
+//     "unkeyed_edit" (only when there is one, components.h UnkeyedEdit) holds every control point. A
+//     file without "time" (older versions) was saved at 0 s: control points off the clip's pose there
+//     load as an un-keyed edit at 0 s. Loading sets AnimationState::time to the saved time; the clip
+//     still plays from 0 s.
 //   - a built-in scene hook: `sphere` and `face` get make_paper_demo_clip() on their lattice, playing.
 // Call it once at start-up (tools/splatffd/main.cpp does; tests call it themselves).
 #pragma once

@@ -2,6 +2,8 @@
 // animation keys and playback.
 #include "systems/editor/editor_system_detail.h"
 
+#include "systems/animation/unkeyed_edit.h"
+
 namespace sffd::editor {
 
 using namespace detail;
@@ -112,9 +114,13 @@ void toggle_play(ecs::Registry& registry, EditorState& state) {
         registry.has<Lattice>(unkeyed)) {
         if (!state.play_warned) {
             const Name* n = registry.try_get<Name>(unkeyed);
-            say(state, "playing would discard the un-keyed edit of " +
+            const UnkeyedEdit* held = registry.try_get<UnkeyedEdit>(unkeyed);
+            const AnimationState* s = registry.try_get<AnimationState>(unkeyed);
+            const double unkeyed_time = held ? held->time : s ? s->time : 0.0;
+            say(state, "playing shows the clip's pose: the un-keyed edit of " +
                            (n && !n->value.empty() ? n->value : std::string("the lattice")) +
-                           ": k keys it, n turns auto-key on, space again plays anyway");
+                           log::str(" shows at ", unkeyed_time,
+                                    " s only; k keys it, n turns auto-key on, space again plays anyway"));
             state.play_warned = true;
             return;
         }
@@ -179,6 +185,13 @@ bool key_last_edit(ecs::Registry& registry, EditorState& state) {
     clip.duration = std::max(clip.duration, time);
     group->add(clip_edit.finish(registry));
     group->add(state_edit.finish(registry));
+    // Keyed, the edit is the clip's pose at this time: a held un-keyed pose there would hide later key
+    // changes.
+    if (const UnkeyedEdit* held = registry.try_get<UnkeyedEdit>(e); held && shows_unkeyed_edit(*held, time)) {
+        ComponentEdit<UnkeyedEdit> held_edit(registry, e, "set key");
+        registry.remove<UnkeyedEdit>(e);
+        group->add(held_edit.finish(registry));
+    }
     state.undo.push(std::move(group));
     if (state.unkeyed == e) state.unkeyed = ecs::null_entity, state.play_warned = false;
     say(state, log::str("key set at ", time, " s on track ", clip.tracks[track].name));

@@ -199,7 +199,12 @@ EditorState& setup_editor(ecs::Registry& registry, const Viewport& viewport) {
         state->active_lattice = ecs::null_entity;
         registry.view<Lattice>().each([&](ecs::Entity e, Lattice&) { state->active_lattice = e; });
     }
-    registry.view<AnimationState>().each([&](ecs::Entity, AnimationState& s) { sffd::pause(s); });
+    // Paused where the scene was saved (AnimationState::time on loading), so the editor opens on the pose
+    // the file holds; a loaded un-keyed edit is the editor's own from here on (status bar, play warning).
+    registry.view<AnimationState>().each([&](ecs::Entity e, AnimationState& s) {
+        sffd::pause(s);
+        if (registry.has<UnkeyedEdit>(e)) state->unkeyed = e;
+    });
     return *state;
 }
 

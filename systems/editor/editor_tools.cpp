@@ -151,8 +151,22 @@ bool begin_tool_drag(ecs::Registry& registry, EditorState& state, const Camera& 
 void finish_tool_drag(ecs::Registry& registry, EditorState& state, Drag& drag) {
     if (!registry.valid(drag.lattice) || !registry.has<Lattice>(drag.lattice)) return;
     const bool is_move = drag.kind == Drag::Kind::move;
-    auto change = std::make_unique<ComponentChange<Lattice>>(
-        is_move ? "stretch" : "twist", drag.lattice, drag.before, registry.get<Lattice>(drag.lattice));
+    const char* label = is_move ? "stretch" : "twist";
+    std::unique_ptr<Command> change = std::make_unique<ComponentChange<Lattice>>(
+        label, drag.lattice, drag.before, registry.get<Lattice>(drag.lattice));
+    const AnimationState* clip_state = registry.try_get<AnimationState>(drag.lattice);
+    if (!state.auto_key && clip_state && registry.has<AnimationClip>(drag.lattice) && !change->empty()) {
+        // Un-keyed over a clip: the pose belongs to the clip time it was made at (UnkeyedEdit), as it will
+        // once saved, so scrubbing away and back shows it again; undone with the stretch or twist.
+        auto group = std::make_unique<CommandGroup>(label);
+        group->add(std::move(change));
+        ComponentEdit<UnkeyedEdit> held(registry, drag.lattice, label);
+        const UnkeyedEdit edit{clip_state->time, registry.get<Lattice>(drag.lattice).current};
+        if (registry.has<UnkeyedEdit>(drag.lattice)) registry.patch<UnkeyedEdit>(drag.lattice) = edit;
+        else registry.emplace<UnkeyedEdit>(drag.lattice, edit);
+        group->add(held.finish(registry));
+        change = std::move(group);
+    }
     if (state.undo.push(std::move(change))) {
         remember_edit(registry, state, drag);
         say(state, is_move ? log::str("stretched ", drag.points.size(), " control points")

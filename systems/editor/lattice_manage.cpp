@@ -174,6 +174,7 @@ bool remove_lattice(ecs::Registry& r, EditorState& state) {
             auto& list = r.patch<Deformers>(cloud).lattices;
             list.erase(std::remove(list.begin(), list.end(), e), list.end());
         });
+    remove_recorded<UnkeyedEdit>(r, *group, e, "remove lattice");
     remove_recorded<AnimationState>(r, *group, e, "remove lattice");
     remove_recorded<AnimationClip>(r, *group, e, "remove lattice");
     remove_recorded<picking::LatticeSelection>(r, *group, e, "remove lattice");

@@ -23,6 +23,7 @@
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/render_target.h"
+#include "systems/animation/unkeyed_edit.h"
 #include "systems/editor/editor_system.h"
 #include "systems/editor/file_browser.h"
 #include "systems/editor/lattice_manage.h"
@@ -227,6 +228,13 @@ void requests_system(ecs::Registry& registry, const FrameContext& frame) {
         if (Status st = save_scene(registry, session->save_path); st) {
             state->status = "saved " + session->save_path;
             log::info("editor: ", state->status);
+            // The file keeps an un-keyed edit at its clip time only; every other time shows the clip.
+            for (const UnkeyedEditReport& edit : unkeyed_edits(registry)) {
+                const std::string warning =
+                    edit.name + " has an " + describe_unkeyed_edit(edit) + " (k keys it)";
+                state->status += "; " + warning;
+                log::warn("editor: ", session->save_path, ": ", warning);
+            }
         } else {
             state->status = "save failed: " + st.message();
             log::error("editor: ", state->status);

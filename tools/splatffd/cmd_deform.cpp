@@ -47,6 +47,7 @@
 #include "tools/splatffd/deform_gaussians.h"
 #include "tools/splatffd/lattice_source.h"
 #include "tools/splatffd/progress.h"
+#include "tools/splatffd/unkeyed_note.h"
 
 namespace {
 
@@ -64,7 +65,9 @@ constexpr const char* kUsage =
     "           IN also .obj .off\n"
     "  --lattice SOURCE  L.json | scene.glb (the lattices bound to its cloud) | "
     "fit[:L,M,N][,pad=P][,obb][,bspline]\n"
-    "           (default: the lattices stored in IN when IN is a scene file)\n"
+    "           (default: the lattices stored in IN when IN is a scene file); a scene's lattices deform\n"
+    "           as saved: their clip's pose at the clip time the scene was saved at (an un-keyed edit made\n"
+    "           there included; `splatffd info` lists both)\n"
     "  --lattice-name NAME  the lattice of that name in a scene file (default: every lattice bound to the "
     "cloud)\n"
     "  --backend B  cpu (float, every core; default), gpu (compute shader on a headless GL context) or\n"
@@ -540,6 +543,7 @@ int deform_in_memory(const Options& o) {
     std::string estimated;
     if (in_scene) {
         if (Status s = load_scene(scene, in_path); !s) return fail(s.message());
+        cli::note_unkeyed_edits("deform", scene);
         std::vector<ecs::Entity> clouds;
         scene.each_entity([&](ecs::Entity e) {
             if (scene.has<SplatCloud>(e)) clouds.push_back(e);

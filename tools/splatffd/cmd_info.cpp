@@ -14,6 +14,8 @@
 #include "runtime/assets/scene.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
+#include "systems/animation/components.h"
+#include "systems/animation/unkeyed_edit.h"
 #include "systems/ffd/components.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_compressed_ply.h"
@@ -41,6 +43,26 @@ void print_deformers(const ecs::Registry& reg, ecs::Entity e) {
         std::printf(" '%s'", ln ? ln->value.c_str() : "?");
     }
     std::printf("\n");
+}
+
+// "    clip     'paper demo': 4 tracks, 16 keys, 4 s, loop; saved at clip time 0 s" for a lattice with a
+// clip, then its un-keyed edit if it has one (the rule every command follows: systems/animation).
+void print_clip(const ecs::Registry& reg, ecs::Entity e) {
+    const AnimationClip* clip = reg.try_get<AnimationClip>(e);
+    if (!clip) return;
+    std::size_t keys = 0;
+    for (const AnimationTrack& t : clip->tracks) keys += t.keys.size();
+    const char* mode = clip->mode == PlayMode::loop   ? "loop"
+                       : clip->mode == PlayMode::once ? "once"
+                                                      : "ping_pong";
+    const AnimationState* state = reg.try_get<AnimationState>(e);
+    std::printf("    clip     '%s': %zu tracks, %zu keys, %.6g s, %s, speed %g; saved at clip time %.6g s\n",
+                clip->name.c_str(), clip->tracks.size(), keys, clip->duration, mode,
+                clip->speed * (state ? state->speed : 1.0), state ? state->time : 0.0);
+    for (const UnkeyedEditReport& edit : unkeyed_edits(reg))
+        if (edit.lattice == e) {
+            std::printf("    WARNING  %s\n", describe_unkeyed_edit(edit).c_str());
+        }
 }
 
 // Gaussian files without a header to list: read whole (the readers' budgets apply), then summarised.
@@ -211,6 +233,7 @@ void summarise_registry(const ecs::Registry& reg) {
                             l.axes[std::size_t(a)].x, l.axes[std::size_t(a)].y, l.axes[std::size_t(a)].z,
                             glm::length(l.axes[std::size_t(a)]));
         }
+        print_clip(reg, e);
     });
     if (reg.count<Lattice>() == 0 && (reg.count<SplatCloud>() > 0 || reg.count<GaussianCloud>() > 0))
         std::printf(

@@ -51,6 +51,7 @@
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/frame_files.h"
 #include "tools/splatffd/render_manifest.h"
+#include "tools/splatffd/unkeyed_note.h"
 #include "tools/splatffd/video.h"
 
 namespace {
@@ -69,7 +70,8 @@ constexpr const char* kUsage =
     "                   .glb (KHR_gaussian_splatting) (default: sphere)\n"
     "  --out DIR        output folder (created; required); files frame_NNNN.png / frame_NNNN.exr\n"
     "  --frames N|A:B   N: frames 0..N-1; A:B: frames A..B inclusive (default 1: frame 0); frame k is at\n"
-    "                   time k / fps, and the scene's clips play\n"
+    "                   time k / fps, and the scene's clips play (an un-keyed edit saved with the scene\n"
+    "                   shows at its own clip time only, the clip's pose at every other)\n"
     "  --size WxH       image size in pixels (default 1280x720)\n"
     "  --quality Q      hq (three-pass surface splatting, default) or preview (opaque discs)\n"
     "  --format LIST    png, exr or png,exr (default png,exr)\n"
@@ -572,6 +574,7 @@ int run_render(sffd::cli::Args args) {
             std::fprintf(stderr, "%s\n", st.message().c_str());
             return 1;
         }
+        cli::note_unkeyed_edits("render", scene.registry, o.fps);
         status = render_frames(o, scene, run);
         render::release_render_state(scene.registry);
     }

@@ -7,8 +7,10 @@
 #include "systems/animation/clip_io.h"
 #include "systems/animation/components.h"
 #include "systems/animation/editing.h"
+#include "systems/animation/evaluate.h"
 #include "systems/animation/paper_demo.h"
 #include "systems/animation/scene_extension.h"
+#include "systems/animation/unkeyed_edit.h"
 #include "systems/ffd/components.h"
 
 namespace sffd {
@@ -88,6 +90,67 @@ TEST(AnimationScene, ClipsRoundTripThroughSceneFilesExactly) {
         EXPECT_EQ(back.get<AnimationState>(b).speed, 1.7);
         std::filesystem::remove(path);
     }
+}
+
+// An un-keyed edit is saved with its clip time and loads as the same UnkeyedEdit, the lattice's control
+// points as they were shown; a file of an older version (no "time") with control points off the clip's
+// pose at 0 s loads them as an edit at 0 s, which is when its editor showed them.
+TEST(AnimationScene, UnkeyedEditsRoundTripWithTheirClipTime) {
+    Hooks hooks;
+    ecs::Registry reg;
+    ASSERT_TRUE(load_scene(reg, "sphere").ok());
+    const ecs::Entity e = only_lattice(reg);
+    pause(reg.patch<AnimationState>(e));
+    reg.patch<AnimationState>(e).time = 0.5;  // the editor's timeline stood there
+    const std::vector<glm::dvec3> pose = evaluate_pose(reg.get<AnimationClip>(e), reg.get<Lattice>(e), 0.5);
+    std::vector<glm::dvec3> edited = pose;
+    edited[600] += glm::dvec3(0.0, 1.0 / 3.0, 0.0);
+    reg.patch<Lattice>(e).current = edited;
+    const auto path = std::filesystem::path(SFFD_BINARY_DIR) / "animation_scene_unkeyed.glb";
+    ASSERT_TRUE(save_scene(reg, path).ok());
+
+    ecs::Registry back;
+    ASSERT_TRUE(load_scene(back, path.string()).ok());
+    const ecs::Entity b = only_lattice(back);
+    ASSERT_TRUE(back.has<UnkeyedEdit>(b));
+    EXPECT_EQ(back.get<UnkeyedEdit>(b).time, 0.5);
+    EXPECT_EQ(back.get<UnkeyedEdit>(b).points, edited);
+    EXPECT_EQ(back.get<Lattice>(b).current, edited);
+    EXPECT_EQ(back.get<AnimationState>(b).time, 0.5) << "loaded at the time it was saved at";
+    EXPECT_TRUE(back.get<AnimationState>(b).playing) << "and still plays from 0 s";
+    const auto reports = unkeyed_edits(back);
+    ASSERT_EQ(reports.size(), 1u);
+    EXPECT_EQ(reports[0].points, 1u);
+    EXPECT_EQ(reports[0].name, "'sphere.lattice'");
+
+    // Saved again at another time (scrubbed away): the edit keeps its own time and points.
+    back.patch<AnimationState>(b).time = 1.0;
+    back.patch<Lattice>(b).current = evaluate_pose(back.get<AnimationClip>(b), back.get<Lattice>(b), 1.0);
+    ASSERT_TRUE(save_scene(back, path).ok());
+    ecs::Registry again;
+    ASSERT_TRUE(load_scene(again, path.string()).ok());
+    const ecs::Entity a = only_lattice(again);
+    ASSERT_TRUE(again.has<UnkeyedEdit>(a));
+    EXPECT_EQ(again.get<UnkeyedEdit>(a).time, 0.5);
+    EXPECT_EQ(again.get<UnkeyedEdit>(a).points, edited);
+    EXPECT_EQ(again.get<AnimationState>(a).time, 1.0);
+    std::filesystem::remove(path);
+
+    // An older file: no "time", control points off the clip's pose at 0 s.
+    ecs::Registry old;
+    const ecs::Entity lat = old.create();
+    Lattice l = reg.get<Lattice>(e);
+    l.current = l.rest;
+    l.current[3] += glm::dvec3(0.25, 0.0, 0.0);
+    old.emplace<Lattice>(lat, l);
+    AnimationClip clip = reg.get<AnimationClip>(e);
+    const std::string text =
+        "{\"version\": 1, \"clips\": [{\"lattice\": 0, \"clip\": " + clip_to_string(clip) + "}]}";
+    ASSERT_TRUE(
+        load_animation_extension(old, text, [&](int id) { return id == 0 ? lat : ecs::null_entity; }).ok());
+    ASSERT_TRUE(old.has<UnkeyedEdit>(lat));
+    EXPECT_EQ(old.get<UnkeyedEdit>(lat).time, 0.0);
+    EXPECT_EQ(old.get<UnkeyedEdit>(lat).points, l.current);
 }
 
 TEST(AnimationScene, BadExtensionDataIsRefused) {

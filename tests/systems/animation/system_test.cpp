@@ -47,6 +47,35 @@ TEST(AnimationSystem, PatchesTheLatticeOnlyWhenThePoseChanges) {
     EXPECT_EQ(reg.get<Lattice>(e).current[13], rest13 + glm::dvec3(1, 0, 0));
 }
 
+// An un-keyed edit is shown at its own clip time only, whatever frames came before (frame k alone is
+// frame k of a sequence), and comes back whenever the clip reaches that time again.
+TEST(AnimationSystem, AnUnkeyedEditShowsAtItsClipTimeOnly) {
+    const auto run = [](const std::vector<double>& times) {
+        ecs::Registry reg;
+        const ecs::Entity e = reg.create();
+        reg.emplace<Lattice>(e, test::make_lattice({2, 2, 2}));
+        attach_clip(reg, e, ramp_clip(PlayMode::loop));
+        UnkeyedEdit edit{0.25, reg.get<Lattice>(e).rest};
+        edit.points[4] += glm::dvec3(0, 0, 0.5);
+        reg.emplace<UnkeyedEdit>(e, edit);
+        std::vector<std::vector<glm::dvec3>> poses;
+        std::uint64_t frame = 0;
+        for (double t : times) {
+            animation_system(reg, {frame++, t, 0.0});
+            poses.push_back(reg.get<Lattice>(e).current);
+        }
+        return std::make_pair(poses, edit.points);
+    };
+    const auto [sequence, edited] = run({0.0, 0.25, 0.5, 1.25});
+    const auto [alone, ignored] = run({1.25});
+    const glm::dvec3 rest4 = test::make_lattice({2, 2, 2}).rest[4];
+    EXPECT_EQ(sequence[0][4], rest4) << "another time: the clip's pose";
+    EXPECT_EQ(sequence[1], edited) << "its time: the edit";
+    EXPECT_EQ(sequence[2][4], rest4);
+    EXPECT_EQ(sequence[3], edited) << "the loop's next pass of 0.25 s shows it again";
+    EXPECT_EQ(alone[0], sequence[3]) << "the same alone as in the sequence";
+}
+
 TEST(AnimationSystem, KeyEditsShowWhilePausedAndManualEditsSurviveAStillPose) {
     ecs::Registry reg;
     const ecs::Entity e = reg.create();

@@ -457,6 +457,37 @@ TEST(EditorSystem, PlayWarnsBeforeDiscardingAnUnkeyedEdit) {
     EXPECT_TRUE(s.reg.get<AnimationState>(s.lattice).playing) << s.state->status;
 }
 
+// An un-keyed edit belongs to the clip time it was made at: scrubbing away shows the clip's pose, back
+// shows the edit; undo takes it back with the stretch, keying it hands the time back to the clip.
+TEST(EditorSystem, AnUnkeyedEditComesBackAtItsClipTime) {
+    Scene s;
+    const auto animate = [&] { animation_system(s.reg, FrameContext{s.frame, s.frame / 60.0, 1 / 60.0}); };
+    s.run({Scene::key("a")});
+    s.run(keys({"g", "z", "0", "period", "2", "enter", "k"}));  // keyed: the lattice gets a clip
+    animate();
+    s.run(keys({"right"}));
+    animate();
+    const std::vector<glm::dvec3> clip_pose = s.lat().current;
+    s.run(keys({"g", "z", "0", "period", "1", "enter"}));  // un-keyed at 1/24 s
+    animate();
+    ASSERT_TRUE(s.reg.has<UnkeyedEdit>(s.lattice));
+    EXPECT_NEAR(s.reg.get<UnkeyedEdit>(s.lattice).time, 1.0 / 24.0, 1e-12);
+    const std::vector<glm::dvec3> edited = s.lat().current;
+    ASSERT_NE(edited, clip_pose);
+    s.run(keys({"right"}));
+    animate();
+    EXPECT_NE(s.lat().current, edited) << "another time: the clip's pose";
+    s.run(keys({"left"}));
+    animate();
+    EXPECT_EQ(s.lat().current, edited) << "back at its time: the edit";
+    s.run({Scene::key("z", mods::ctrl)});
+    EXPECT_FALSE(s.reg.has<UnkeyedEdit>(s.lattice)) << "undone with the stretch";
+    s.run({Scene::key("z", mods::ctrl | mods::shift)});
+    ASSERT_TRUE(s.reg.has<UnkeyedEdit>(s.lattice));
+    s.run(keys({"k"}));
+    EXPECT_FALSE(s.reg.has<UnkeyedEdit>(s.lattice)) << "keyed: the clip's pose from now on";
+}
+
 TEST(EditorSystem, AutoKeyKeysEveryEditAtTheClipTime) {
     Scene s;
     s.run({Scene::key("a")});

@@ -1,0 +1,115 @@
+// One scene, the same story from every command, through the built binary as a user runs it: a saved
+// un-keyed edit shows in `view`, `render`, `deform` and `info` alike.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <string>
+
+#include "tests/test_util/run_tool.h"
+
+namespace fs = std::filesystem;
+using sffd::test::CliRun;
+
+namespace {
+
+fs::path temp_dir(const std::string& name) {
+    const fs::path d = fs::temp_directory_path() / ("sffd_scene_story_" + std::to_string(::getpid())) / name;
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+}
+
+CliRun tool(const std::string& args) { return sffd::test::run_headless(args); }
+
+bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+const std::string kCamera = " --camera 1.5,1.3,4.3,0,0,0,0,1,0,40";
+
+// Frame FRAME of `scene` as EXR (HQ: the same image every run), with a fixed camera.
+fs::path render_exr(const std::string& scene, const fs::path& out, int frame = 0,
+                    std::string* log = nullptr) {
+    const CliRun r =
+        tool("render " + scene + " --out " + out.string() + " --frames " + std::to_string(frame) + ":" +
+             std::to_string(frame) + " --size 160x120 --format exr" + kCamera);
+    EXPECT_EQ(r.code, 0) << r.out;
+    if (log) *log = r.out;
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%04d.exr", frame);
+    return out / name;
+}
+
+// psnr_db of `compare A B` (inf for identical images; NaN when compare failed).
+double psnr(const fs::path& a, const fs::path& b) {
+    const CliRun r = tool("compare " + a.string() + " " + b.string());
+    const auto at = r.out.find("psnr_db=");
+    if (r.code != 0 || at == std::string::npos) {
+        ADD_FAILURE() << r.out;
+        return std::nan("");
+    }
+    return std::strtod(r.out.c_str() + at + 8, nullptr);
+}
+
+// The editor session of the issue: stretch and twist the sphere's inner control points without keying
+// them, and save at the clip time 0 s.
+fs::path saved_edit(const fs::path& dir, std::string* log = nullptr) {
+    const fs::path v2 = dir / "v2.glb";
+    const CliRun r = tool("view sphere --headless --replay " + std::string(SFFD_TEST_DATA_DIR) +
+                          "/editor/session.txt --frames 66 --no-ui --save " + v2.string());
+    EXPECT_EQ(r.code, 0) << r.out;
+    if (log) *log = r.out;
+    return v2;
+}
+
+}  // namespace
+
+// The rule: an un-keyed edit belongs to the clip time it was made at. The editor warns when saving it;
+// `info` lists the clip and the edit; `render` shows it at that time's frame and the clip's pose at every
+// other, and says so; `deform` uses the control points as saved (the edit) and says so; `view` opens on it.
+TEST(SceneStory, AnUnkeyedEditShowsAtItsClipTimeInEveryCommand) {
+    const fs::path dir = temp_dir("unkeyed");
+    std::string log;
+    const fs::path v2 = saved_edit(dir, &log);
+    EXPECT_TRUE(has(log, "un-keyed edit at clip time 0 s (48 control points off the clip's pose")) << log;
+
+    const CliRun info = tool("info " + v2.string());
+    ASSERT_EQ(info.code, 0) << info.out;
+    EXPECT_TRUE(has(info.out, "clip     'paper demo': ")) << info.out;
+    EXPECT_TRUE(has(info.out, "saved at clip time 0 s")) << info.out;
+    EXPECT_TRUE(has(info.out, "WARNING  un-keyed edit at clip time 0 s (48 control points")) << info.out;
+
+    // render: frame 0 (0 s) shows the edit, frame 1 the clip's pose, the same as the untouched sphere's.
+    const fs::path sphere0 = render_exr("sphere", dir / "sphere0");
+    const fs::path sphere1 = render_exr("sphere", dir / "sphere1", 1);
+    std::string note;
+    const fs::path edit0 = render_exr(v2.string(), dir / "edit0", 0, &note);
+    EXPECT_TRUE(has(note, "splatffd render: note: 'sphere.lattice' has an un-keyed edit at clip time 0 s"))
+        << note;
+    EXPECT_TRUE(has(note, "(frame 0 at 24 fps)")) << note;
+    const fs::path edit1 = render_exr(v2.string(), dir / "edit1", 1);
+    EXPECT_LT(psnr(edit0, sphere0), 30.0) << "the saved edit is shown at its frame";
+    EXPECT_GT(psnr(edit1, sphere1), 60.0) << "every other frame is the clip's";
+
+    // deform: the control points as saved, the edit; its render without a lattice is the scene's frame 0.
+    const fs::path deformed = dir / "deformed.glb";
+    const CliRun d = tool("deform " + v2.string() + " " + deformed.string());
+    ASSERT_EQ(d.code, 0) << d.out;
+    EXPECT_TRUE(has(d.out, "splatffd deform: note: 'sphere.lattice' has an un-keyed edit")) << d.out;
+    EXPECT_TRUE(has(d.out, "so this uses the edit")) << d.out;
+    const fs::path deformed0 = render_exr(deformed.string(), dir / "deformed0");
+    EXPECT_GT(psnr(deformed0, edit0), 30.0) << "deform and render tell the same story";
+    EXPECT_LT(psnr(deformed0, sphere0), 30.0);
+
+    // view: opens paused at the saved time, on the edit.
+    const fs::path view_edit = dir / "view_edit.exr", view_sphere = dir / "view_sphere.exr";
+    for (const auto& [scene, shot] :
+         {std::pair{v2.string(), view_edit}, std::pair{std::string("sphere"), view_sphere}}) {
+        const CliRun v =
+            tool("view " + scene + " --headless --frames 2 --no-ui --size 320x240 --out " + shot.string());
+        ASSERT_EQ(v.code, 0) << v.out;
+    }
+    EXPECT_LT(psnr(view_edit, view_sphere), 30.0) << "view shows the edit on opening";
+}
