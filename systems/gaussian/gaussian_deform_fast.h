@@ -56,7 +56,8 @@ inline bool finite_shape(const glm::vec3& s, const glm::quat& q, const float* sh
 // Rows written with streaming stores are fenced before it returns.
 std::size_t deform_shapes_fast(const FastShapeArgs& a, std::size_t begin, std::size_t end);
 
-// Lanes per vector of the kernel (16 with AVX-512, 8 with AVX, else 4): ranges are split on multiples of it.
+// Lanes per vector of the SIMD target the kernel dispatches to (runtime/simd/simd.h: 16 avx3, 8 avx2, 4 sse4
+// and neon, 1 scalar): ranges are split on multiples of it.
 int shape_lane_width();
 
 }  // namespace sffd::gaussian::detail

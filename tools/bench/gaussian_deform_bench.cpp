@@ -5,14 +5,18 @@
 // lattice of gaussian_bench. GPU: the cloud is uploaded once (GpuGaussianStore entry), a run is the
 // dispatch plus glFinish (no read-back: the frame path), control points uploaded on the first run only
 // (stamp fixed). On a software rasterizer (llvmpipe) the "GPU" is these CPU cores; the label says which.
+// The 1M case of the README's CPU claim (SH 3, coefficients rotated, vectorised kernel) also runs once per
+// SIMD target this CPU runs, pinned (BM_GaussianDeformCpu/1000000/0/0/simd:avx2, ...; runtime/simd/simd.h).
 //   build/release/tools/bench/bench_gaussian_deform --benchmark_min_time=0.01
 #include <benchmark/benchmark.h>
 
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/gl.h"
+#include "runtime/simd/simd.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/gaussian_deform.h"
@@ -56,6 +60,21 @@ BENCHMARK(BM_GaussianDeformCpu)
     ->Args({6000000, 1, 0})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// The same run as BM_GaussianDeformCpu/1000000/0/0 with the kernels pinned to one SIMD target.
+void BM_GaussianDeformCpuSimd(benchmark::State& state, const simd::Target& target) {
+    const simd::ScopedTarget pin(target);
+    bench::run_cpu_deform(state, cloud(1000000), mode(0));
+    state.SetLabel(simd::chosen());
+}
+const bool kSimdRegistered = [] {
+    for (const simd::Target& t : simd::runnable())
+        benchmark::RegisterBenchmark(("BM_GaussianDeformCpu/1000000/0/0/simd:" + t.name).c_str(),
+                                     BM_GaussianDeformCpuSimd, t)
+            ->Unit(benchmark::kMillisecond)
+            ->UseRealTime();
+    return true;
+}();
 
 // Args: Gaussians, SH mode (as above), SH degree (0: no view-dependent colour, nothing to rotate, the
 // profile's synthetic-gaussians scenes).

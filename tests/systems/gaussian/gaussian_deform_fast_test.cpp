@@ -1,11 +1,13 @@
 // The vectorised shape/colour kernel of gaussian::deform against the double-precision per-Gaussian path
 // (DeformOptions::reference_shapes), both from the same Jacobians: covariances, SH colours, view-mode
 // frames and statistics, on clouds whose sizes are not a multiple of the vector width, partly outside the
-// lattice, in place and chained, and on a lattice that flattens its cells.
+// lattice, in place and chained, and on a lattice that flattens its cells. Every case runs once per SIMD
+// target this CPU runs (names end in /avx3, /avx2, /sse4, /scalar), with the same tolerances on each.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <random>
 #include <string>
@@ -18,9 +20,11 @@
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
+#include "systems/gaussian/gaussian_deform_fast.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/sh.h"
 #include "tests/systems/gaussian/test_math.h"
+#include "tests/test_util/simd_targets.h"
 
 namespace {
 
@@ -89,7 +93,9 @@ void expect_match(const GaussianCloud& fast, const GaussianCloud& ref, const cha
     EXPECT_LT(worst_colour, 5e-5f) << what;
 }
 
-TEST(GaussianDeformFast, MatchesTheDoublePrecisionReference) {
+class GaussianDeformFast : public sffd::test::EverySimdTarget {};
+
+TEST_P(GaussianDeformFast, MatchesTheDoublePrecisionReference) {
     for (LatticeBasis basis : {LatticeBasis::bernstein, LatticeBasis::bspline})
         for (int degree : {0, 1, 3}) {
             const Lattice l = twisted(basis, 5);
@@ -119,7 +125,7 @@ TEST(GaussianDeformFast, MatchesTheDoublePrecisionReference) {
         }
 }
 
-TEST(GaussianDeformFast, PolarRotationsAreWithinFloatRoundingOfTheReference) {
+TEST_P(GaussianDeformFast, PolarRotationsAreWithinFloatRoundingOfTheReference) {
     // The vectorised Newton iteration (polar_rotation) must give the double-precision reference's rotations
     // to float rounding, under a strong shear where it needs most steps (the other tests allow 1e-5).
     Lattice l = twisted(LatticeBasis::bernstein, 4);
@@ -148,7 +154,7 @@ TEST(GaussianDeformFast, PolarRotationsAreWithinFloatRoundingOfTheReference) {
     EXPECT_LT(worst_orthogonality, 1e-6);
 }
 
-TEST(GaussianDeformFast, ViewModeAndChainedInPlaceDeformationsMatchTheReference) {
+TEST_P(GaussianDeformFast, ViewModeAndChainedInPlaceDeformationsMatchTheReference) {
     const Lattice a = twisted(LatticeBasis::bernstein, 4), b = twisted(LatticeBasis::bspline, 6);
     const GaussianCloud g = cloud(777, 3, 21);
     DeformOptions view, view_ref, ref;
@@ -170,35 +176,39 @@ TEST(GaussianDeformFast, ViewModeAndChainedInPlaceDeformationsMatchTheReference)
     expect_match(fv, rc, "view mode against rotated coefficients");
 }
 
-TEST(GaussianDeformFast, FlattenedCellsCountAsDegenerateWithoutNaN) {
+TEST_P(GaussianDeformFast, FlattenedCellsCountAsDegenerateWithoutNaN) {
     // Every control point's y set to 0: J has a zero row, Σ' is flat, the SH stay unrotated. The reference
-    // lattice evaluator for both (the fast one leaves rounding-size entries in that row).
+    // lattice evaluator for both (the fast one leaves rounding-size entries in that row). Degree 3 moves
+    // its whole groups' rows as vectors, degree 2 one Gaussian at a time.
     Lattice l = ffd::make_lattice({-1, -1, -1},
                                   {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)}, {3, 3, 3});
     for (glm::dvec3& p : l.current) p.y = 0.0;
-    const GaussianCloud g = cloud(133, 2, 5);
-    GaussianCloud fast, ref;
-    DeformOptions fo, ro;
-    fo.backend = ro.backend = ffd::Backend::reference;
-    ro.reference_shapes = true;
-    auto fs = deform(l, g, fast, fo);
-    auto rs = deform(l, g, ref, ro);
-    ASSERT_TRUE(fs && rs);
-    EXPECT_EQ(fs->degenerate, rs->degenerate);
-    EXPECT_EQ(fs->degenerate, rs->inside);
-    for (std::size_t i = 0; i < g.size(); ++i) {
-        for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(fast.scales[i][c])) << i;
-        EXPECT_TRUE(std::isfinite(glm::dot(fast.rotations[i], fast.rotations[i]))) << i;
-        if (glm::all(glm::lessThanEqual(glm::abs(g.positions[i]), glm::vec3(1.0f)))) {
-            EXPECT_LT(fast.scales[i].z, 1e-6f * fast.scales[i].x) << i;  // the collapsed axis, last
-            const glm::dmat3 s = sigma(ref, i);
-            EXPECT_LT(max_abs(sigma(fast, i) - s), 1e-4 * max_abs(s)) << i;
+    for (int degree : {2, 3}) {
+        const GaussianCloud g = cloud(133, degree, 5);
+        GaussianCloud fast, ref;
+        DeformOptions fo, ro;
+        fo.backend = ro.backend = ffd::Backend::reference;
+        ro.reference_shapes = true;
+        auto fs = deform(l, g, fast, fo);
+        auto rs = deform(l, g, ref, ro);
+        ASSERT_TRUE(fs && rs);
+        EXPECT_EQ(fs->degenerate, rs->degenerate) << degree;
+        EXPECT_EQ(fs->degenerate, rs->inside) << degree;
+        EXPECT_GT(rs->inside, 50u) << degree;
+        for (std::size_t i = 0; i < g.size(); ++i) {
+            for (int c = 0; c < 3; ++c) EXPECT_TRUE(std::isfinite(fast.scales[i][c])) << i;
+            EXPECT_TRUE(std::isfinite(glm::dot(fast.rotations[i], fast.rotations[i]))) << i;
+            if (glm::all(glm::lessThanEqual(glm::abs(g.positions[i]), glm::vec3(1.0f)))) {
+                EXPECT_LT(fast.scales[i].z, 1e-6f * fast.scales[i].x) << i;  // the collapsed axis, last
+                const glm::dmat3 s = sigma(ref, i);
+                EXPECT_LT(max_abs(sigma(fast, i) - s), 1e-4 * max_abs(s)) << i;
+            }
         }
+        EXPECT_EQ(fast.sh, g.sh) << degree;
     }
-    EXPECT_EQ(fast.sh, g.sh);
 }
 
-TEST(GaussianDeformFast, NeedlesWithTwoTinyAxesKeepThemFiniteAndSmall) {
+TEST_P(GaussianDeformFast, NeedlesWithTwoTinyAxesKeepThemFiniteAndSmall) {
     // Two axes 1e-10 of the third: their columns' dot products are under float's normal range (the
     // rotation's angle is then taken from them scaled up). Every Gaussian keeps a finite shape, is not
     // dropped, and its two small axes stay of their size (|J| is within [0.5, 2] on this lattice).
@@ -227,7 +237,7 @@ TEST(GaussianDeformFast, NeedlesWithTwoTinyAxesKeepThemFiniteAndSmall) {
 // that is not a unit quaternion, are dropped by both kernels, into another cloud (whole vector groups of
 // degree 3 are checked before their rows are streamed out) and in place, whether the lattice moves the
 // Gaussian or not: the same ones, transparent, no colour left, counted.
-TEST(GaussianDeformFast, NonFiniteCoefficientsAreDroppedIntoAnotherCloudAndInPlace) {
+TEST_P(GaussianDeformFast, NonFiniteCoefficientsAreDroppedIntoAnotherCloudAndInPlace) {
     const Lattice l = twisted(LatticeBasis::bernstein, 4);
     GaussianCloud g = cloud(16 * 4 + 5, 3, 5);  // whole groups at every lane width, and a partial one
     const std::size_t row = 48;
@@ -278,5 +288,69 @@ TEST(GaussianDeformFast, NonFiniteCoefficientsAreDroppedIntoAnotherCloudAndInPla
             }
         }
 }
+
+// A Jacobian past the float range (a 1e-12 box with a control point moved by 1e29: J ~1e41) is not finite:
+// those Gaussians are dropped and counted by both kernels alike, in whole vector groups and in the partial
+// one, at every degree's row layout; the others keep finite shapes and colours.
+TEST_P(GaussianDeformFast, JacobiansPastTheFloatRangeAreDroppedAndCountedAsByTheReference) {
+    Lattice l = ffd::make_lattice(
+        {0, 0, 0}, {glm::dvec3(1e-12, 0, 0), glm::dvec3(0, 1e-12, 0), glm::dvec3(0, 0, 1e-12)}, {1, 1, 1});
+    l.current[l.index(1, 1, 1)] += glm::dvec3(1e29, -1e29, 1e29);
+    for (int degree : {1, 3}) {
+        GaussianCloud g;
+        g.sh_degree = degree;
+        const std::size_t row = std::size_t(sh_coeffs(degree)) * 3;
+        const std::size_t n = 16 * 2 + 5;  // whole groups at every lane width, and a partial one
+        for (std::size_t i = 0; i < n; ++i) {
+            // Every other one in the box's interior (J overflows), the others near its origin corner, where
+            // the moved point's weight barely changes (J ~1e35: finite, near-singular by the 1e-12 rule).
+            const float t = float(i) / float(n);
+            g.positions.push_back(i % 2
+                                      ? glm::vec3(1e-12f * t, 1e-12f * (1.0f - t), 1e-12f * (0.5f + 0.4f * t))
+                                      : glm::vec3(1e-15f * (1.0f + t), 1e-15f * (2.0f - t), 1.5e-15f));
+            g.scales.emplace_back(1e-13f);
+            g.rotations.emplace_back(1.0f, 0.0f, 0.0f, 0.0f);
+            g.opacities.push_back(0.8f);
+            for (std::size_t k = 0; k < row; ++k) g.sh.push_back(0.1f);
+        }
+        std::vector<std::uint8_t> dropped[2];
+        std::size_t counted[2] = {}, degenerate[2] = {};
+        for (bool reference : {false, true}) {
+            GaussianCloud out;
+            DeformOptions options;
+            options.backend = ffd::Backend::reference, options.copy_opacities = true;
+            options.reference_shapes = reference;
+            auto st = deform(l, g, out, options);
+            ASSERT_TRUE(st) << st.message();
+            counted[reference] = st->not_finite, degenerate[reference] = st->degenerate;
+            for (std::size_t i = 0; i < out.size(); ++i) {
+                const glm::quat q = out.rotations[i];
+                EXPECT_TRUE(std::isfinite(q.w + q.x + q.y + q.z)) << i;
+                EXPECT_TRUE(std::isfinite(out.scales[i].x + out.scales[i].y + out.scales[i].z)) << i;
+                EXPECT_TRUE(std::isfinite(out.positions[i].x + out.positions[i].y + out.positions[i].z)) << i;
+                for (std::size_t k = 0; k < row; ++k) EXPECT_TRUE(std::isfinite(out.sh[i * row + k])) << i;
+                dropped[reference].push_back(out.opacities[i] == 0.0f);
+            }
+        }
+        EXPECT_EQ(counted[1], n / 2) << degree;
+        EXPECT_EQ(counted[0], counted[1]) << degree;
+        EXPECT_EQ(degenerate[0], degenerate[1]) << degree;
+        EXPECT_EQ(dropped[0], dropped[1]) << degree;
+        EXPECT_EQ(std::size_t(std::count(dropped[0].begin(), dropped[0].end(), 1)), counted[0]) << degree;
+    }
+}
+
+// The kernel that runs is the pinned target's (so the cases above test each target's code).
+TEST_P(GaussianDeformFast, KernelRunsThePinnedTargetsLaneWidth) {
+    const std::string t = GetParam().name;
+    const int expected = t == "avx3" || t == "avx3_dl" ? 16
+                         : t == "avx2"                 ? 8
+                         : t == "sse4" || t == "neon"  ? 4
+                                                       : 1;
+    EXPECT_EQ(simd::chosen(), t);
+    EXPECT_EQ(detail::shape_lane_width(), expected) << t;
+}
+
+SFFD_INSTANTIATE_EVERY_SIMD_TARGET(GaussianDeformFast);
 
 }  // namespace

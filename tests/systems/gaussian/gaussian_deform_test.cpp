@@ -1,5 +1,6 @@
 // Deforming Gaussians through a lattice: the ffd Jacobian output, Σ' = J Σ Jᵀ against finite differences
-// and a Monte Carlo fit of the pushed-forward density, rigid lattice motions, the ECS system.
+// and a Monte Carlo fit of the pushed-forward density, rigid lattice motions, the ECS system. The cases of
+// the CPU deformation itself (GaussianDeformCpu) run once per SIMD target this CPU runs.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -23,6 +24,7 @@
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/gaussian/sh.h"
 #include "tests/systems/gaussian/test_math.h"
+#include "tests/test_util/simd_targets.h"
 
 namespace {
 
@@ -88,12 +90,14 @@ TEST(GaussianDeform, FfdJacobianOutputMatchesReferenceOnEveryBackend) {
     }
 }
 
+class GaussianDeformCpu : public sffd::test::EverySimdTarget {};
+
 // Σ' of Gaussian i from the output's scale + rotation.
 glm::dmat3 out_sigma(const GaussianCloud& g, std::size_t i) {
     return covariance(glm::dvec3(g.scales[i]), glm::dquat(g.rotations[i]));
 }
 
-TEST(GaussianDeform, CovarianceMatchesCentralDifferencesOfTheLatticeMap) {
+TEST_P(GaussianDeformCpu, CovarianceMatchesCentralDifferencesOfTheLatticeMap) {
     // Σ' = Σ_a (J a)(J a)ᵀ over the scaled principal axes a of Σ; J a from central differences of the
     // double-precision lattice map along a (independent of the float kernels' Jacobian).
     const Lattice l = twisted_lattice();
@@ -120,7 +124,7 @@ TEST(GaussianDeform, CovarianceMatchesCentralDifferencesOfTheLatticeMap) {
     }
 }
 
-TEST(GaussianDeform, CovarianceMatchesMonteCarloFitOfTheDeformedDensity) {
+TEST_P(GaussianDeformCpu, CovarianceMatchesMonteCarloFitOfTheDeformedDensity) {
     // Sample a small Gaussian, push the samples through the actual lattice (fast float path), fit their
     // covariance: it must match J Σ Jᵀ up to sampling noise (~sqrt(2/N) = 0.3%) and curvature (~scale).
     const Lattice l = twisted_lattice();
@@ -150,7 +154,7 @@ TEST(GaussianDeform, CovarianceMatchesMonteCarloFitOfTheDeformedDensity) {
     }
 }
 
-TEST(GaussianDeform, RigidLatticeMotionMovesGaussiansRigidly) {
+TEST_P(GaussianDeformCpu, RigidLatticeMotionMovesGaussiansRigidly) {
     // Every control point moved by x -> Q x + t: linear precision makes the FFD exactly that map, so
     // centres, covariances and the colours seen from rotated view directions must follow it.
     Lattice l = ffd::make_lattice({-1, -1, -1},
@@ -179,7 +183,7 @@ TEST(GaussianDeform, RigidLatticeMotionMovesGaussiansRigidly) {
     }
 }
 
-TEST(GaussianDeform, OutsideGaussiansAreUnchangedAndInversionIsCounted) {
+TEST_P(GaussianDeformCpu, OutsideGaussiansAreUnchangedAndInversionIsCounted) {
     Lattice l = twisted_lattice();
     GaussianCloud g = random_cloud(200, 2, 0.5, 0.05, 5);
     for (glm::vec3& p : g.positions) p += glm::vec3(5, 0, 0);  // all outside
@@ -210,7 +214,7 @@ TEST(GaussianDeform, OutsideGaussiansAreUnchangedAndInversionIsCounted) {
     }
 }
 
-TEST(GaussianDeform, ViewDirectionModeEqualsCoefficientRotation) {
+TEST_P(GaussianDeformCpu, ViewDirectionModeEqualsCoefficientRotation) {
     // rotate_view keeps the coefficients and stores the polar rotation R per splat; evaluating at Rᵀd
     // must give the colours of rotate_coefficients, also after two chained (in-place) deformations.
     const Lattice l = twisted_lattice();
@@ -359,5 +363,7 @@ TEST(GaussianDeform, AnimatedLatticeMovesTheGaussiansEveryFrame) {
     gaussian_deform_system(reg, {5, 1.0, 0.0});
     EXPECT_EQ(reg.get<DeformedGaussians>(cloud).version, last_version);
 }
+
+SFFD_INSTANTIATE_EVERY_SIMD_TARGET(GaussianDeformCpu);
 
 }  // namespace
