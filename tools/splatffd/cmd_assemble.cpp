@@ -171,7 +171,7 @@ int run_assemble(cli::Args args) {
     const fs::path dir(dir_text);
     std::error_code ec;
     if (!fs::is_directory(dir, ec)) {
-        std::fprintf(stderr, "%s: not a folder\n", dir_text.c_str());
+        cli::command_error("assemble", dir_text + ": not a folder");
         return 1;
     }
 
@@ -196,7 +196,7 @@ int run_assemble(cli::Args args) {
         }
     }
     if (ec) {
-        std::fprintf(stderr, "%s: cannot list the folder (%s)\n", dir_text.c_str(), ec.message().c_str());
+        cli::command_error("assemble", dir_text + ": cannot list the folder (" + ec.message() + ")");
         return 1;
     }
     if (by_count.empty()) {

@@ -43,17 +43,17 @@ int run_compare(sffd::cli::Args args) {
                                 kUsage);
     auto a = render::read_exr(files[0]);
     if (!a) {
-        std::fprintf(stderr, "%s\n", a.message().c_str());
+        cli::command_error("compare", a.message());
         return 1;
     }
     auto b = render::read_exr(files[1]);
     if (!b) {
-        std::fprintf(stderr, "%s\n", b.message().c_str());
+        cli::command_error("compare", b.message());
         return 1;
     }
     auto r = render::compare_images(*a, *b, object_only);
     if (!r) {
-        std::fprintf(stderr, "%s vs %s: %s\n", files[0].c_str(), files[1].c_str(), r.message().c_str());
+        cli::command_error("compare", files[0] + " vs " + files[1] + ": " + r.message());
         return 1;
     }
     std::printf(

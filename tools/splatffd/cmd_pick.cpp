@@ -118,8 +118,7 @@ int run_pick(sffd::cli::Args args) {
     // Surface scenes and Gaussian files alike (splatffd's main registers the Gaussian scene hooks): the
     // camera is the one `render` sees them through.
     if (const Status st = load_scene(registry, scene); !st) {
-        std::fprintf(stderr, "%s\n", st.message().c_str());
-        return 1;
+        return cli::command_error("pick", st.message());
     }
     camera = render::scene_camera(registry, w / h);
     const glm::ivec2 size{int(w), int(h)};

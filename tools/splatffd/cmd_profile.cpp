@@ -77,12 +77,12 @@ namespace {
 int compare_with(const ProfileReport& current, const std::string& base_path) {
     const auto text = read_text(base_path);
     if (!text) {
-        std::fprintf(stderr, "%s: cannot read the baseline report\n", base_path.c_str());
+        cli::command_error("profile", base_path + ": cannot read the baseline report");
         return 1;
     }
     auto base = report_from_json(*text, base_path);
     if (!base) {
-        std::fprintf(stderr, "%s\n", base.message().c_str());
+        cli::command_error("profile", base.message());
         return 1;
     }
     const auto rows = compare_reports(*base, current);
@@ -101,7 +101,7 @@ int write_outputs(const Options& o, const RunOutput& r) {
     auto save = [](const std::string& path, const std::string& text) {
         if (path.empty()) return true;
         if (Status st = write_text(path, text); !st) {
-            std::fprintf(stderr, "%s\n", st.message().c_str());
+            cli::command_error("profile", st.message());
             return false;
         }
         std::printf("wrote %s\n", path.c_str());
@@ -120,11 +120,11 @@ int check_paths_before_work(const Options& o) {
     if (!o.compare.empty()) {
         const auto text = read_text(o.compare);
         if (!text) {
-            std::fprintf(stderr, "%s: cannot read the baseline report\n", o.compare.c_str());
+            cli::command_error("profile", o.compare + ": cannot read the baseline report");
             return 1;
         }
         if (auto base = report_from_json(*text, o.compare); !base) {
-            std::fprintf(stderr, "%s\n", base.message().c_str());
+            cli::command_error("profile", base.message());
             return 1;
         }
     }
@@ -132,7 +132,7 @@ int check_paths_before_work(const Options& o) {
         if (out->empty()) continue;
         const std::filesystem::path folder = std::filesystem::path(*out).parent_path();
         if (!folder.empty() && !std::filesystem::is_directory(folder)) {
-            std::fprintf(stderr, "%s: folder %s does not exist\n", out->c_str(), folder.string().c_str());
+            cli::command_error("profile", *out + ": folder " + folder.string() + " does not exist");
             return 1;
         }
     }
@@ -250,7 +250,7 @@ int run_profile_command(cli::Args args) {
     s.drive = o.drive;
     auto r = run_profile(s);
     if (!r) {
-        std::fprintf(stderr, "%s\n", r.message().c_str());
+        cli::command_error("profile", r.message());
         return 1;
     }
     std::printf("%s", to_text(r->report).c_str());

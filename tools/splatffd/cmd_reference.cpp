@@ -120,7 +120,7 @@ int run_reference(sffd::cli::Args args) {
     if (!cli::create_output_folder(out_dir)) return 1;
     ecs::Registry registry;
     if (Status st = load_scene(registry, scene); !st) {
-        std::fprintf(stderr, "%s\n", st.message().c_str());
+        cli::command_error("reference", st.message());
         return 1;
     }
     if (Status st = attach_exact_mesh(registry, scene); !st) {
@@ -140,24 +140,24 @@ int run_reference(sffd::cli::Args args) {
         animation_system(registry, frame);
         auto ref = render::reference_scene(registry, int(width), int(height));
         if (!ref) {
-            std::fprintf(stderr, "%s: %s\n", scene.c_str(), ref.message().c_str());
+            cli::command_error("reference", scene + ": " + ref.message());
             return 1;
         }
         auto image = render::render_reference(*ref, settings);
         if (!image) {
-            std::fprintf(stderr, "%s: %s\n", scene.c_str(), image.message().c_str());
+            cli::command_error("reference", scene + ": " + image.message());
             return 1;
         }
         const std::filesystem::path base = cli::frame_file_base(out_dir, k);
         if (png) {
             if (Status st = render::write_png(base.string() + ".png", render::to_rgba8(*image)); !st) {
-                std::fprintf(stderr, "%s\n", st.message().c_str());
+                cli::command_error("reference", st.message());
                 return 1;
             }
         }
         if (exr) {
             if (Status st = render::write_exr(base.string() + ".exr", *image); !st) {
-                std::fprintf(stderr, "%s\n", st.message().c_str());
+                cli::command_error("reference", st.message());
                 return 1;
             }
         }

@@ -488,7 +488,7 @@ int render_frames(const RenderOptions& o, RenderScene& s, cli::RunRecord& run) {
         auto print = render_frame(o, s, schedule, k);
         if (!print) {
             end_line();
-            std::fprintf(stderr, "%s\n", print.message().c_str());
+            cli::command_error("render", print.message());
             status = 1;
             break;
         }
@@ -571,8 +571,7 @@ int run_render(sffd::cli::Args args) {
     {
         RenderScene scene;
         if (Status st = set_up_scene(o, ctx.value(), scene); !st) {
-            std::fprintf(stderr, "%s\n", st.message().c_str());
-            return 1;
+            return cli::command_error("render", st.message());
         }
         cli::note_unkeyed_edits("render", scene.registry, o.fps);
         status = render_frames(o, scene, run);

@@ -44,6 +44,10 @@ int help(std::string_view usage_text);
 // A usage error: "splatffd X: MESSAGE" and then the usage text on stderr; returns 2. An empty message
 // prints the usage text alone.
 int usage_error(std::string_view command, std::string_view message, std::string_view usage_text);
+// Every command's error line on stderr: "splatffd X: MESSAGE" (Magnum's one form, `function(): reason`).
+// A message that already starts with "splatffd " is printed as it is. Returns `code` (default 1, a
+// failure: `return cli::command_error("render", st.message());`).
+int command_error(std::string_view command, std::string_view message, int code = 1);
 // An old option spelling that still works: one line on stderr,
 // "splatffd X: --screenshot is deprecated; use --out".
 void warn_deprecated(std::string_view command, std::string_view old_name, std::string_view new_name);

@@ -69,6 +69,15 @@ int usage_error(std::string_view command, std::string_view message, std::string_
     return 2;
 }
 
+int command_error(std::string_view command, std::string_view message, int code) {
+    if (message.substr(0, 9) == "splatffd ")
+        std::fprintf(stderr, "%.*s\n", int(message.size()), message.data());
+    else
+        std::fprintf(stderr, "splatffd %.*s: %.*s\n", int(command.size()), command.data(),
+                     int(message.size()), message.data());
+    return code;
+}
+
 void warn_deprecated(std::string_view command, std::string_view old_name, std::string_view new_name) {
     std::fprintf(stderr, "splatffd %.*s: %.*s is deprecated; use %.*s\n", int(command.size()), command.data(),
                  int(old_name.size()), old_name.data(), int(new_name.size()), new_name.data());

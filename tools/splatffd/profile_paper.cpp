@@ -16,6 +16,7 @@
 #include "systems/ffd/ffd_system.h"
 #include "systems/ffd/paper_mode.h"
 #include "systems/residency/residency_system.h"
+#include "tools/splatffd/command.h"
 #include "tools/splatffd/profile_run.h"
 #include "tools/splatffd/progress.h"
 
@@ -48,7 +49,7 @@ int run_paper(const Options& o) {
         ecs::Registry registry;
         bool synthetic = false;
         if (Status st = load(registry, object, &synthetic); !st) {
-            std::fprintf(stderr, "%s\n", st.message().c_str());
+            cli::command_error("profile", st.message());
             return 1;
         }
         // The largest cloud of the scene is the paper's object.
@@ -58,7 +59,7 @@ int run_paper(const Options& o) {
             if (!cloud || c.size() > cloud->size()) cloud = &c;
         }
         if (!cloud) {
-            std::fprintf(stderr, "%s: no point cloud in the scene\n", object);
+            cli::command_error("profile", std::string(object) + ": no point cloud in the scene");
             return 1;
         }
         const std::string label = std::string(object) + (synthetic ? " (synthetic stand-in)" : "");
@@ -117,7 +118,7 @@ int run_paper(const Options& o) {
                         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0)
                             .count();
                     if (!creg.get<DeformedSplats>(ce).cpu_valid) {
-                        std::fprintf(stderr, "profile --paper: ffd_system did not deform on the CPU\n");
+                        cli::command_error("profile", "--paper: ffd_system did not deform on the CPU");
                         return 1;
                     }
                     if (f >= 2) ms.push_back(t);  // two warm-up frames
@@ -174,7 +175,7 @@ int run_paper(const Options& o) {
                 for (const auto& pc : paper_cases) {
                     auto t = time_frames(pc, deform);
                     if (!t) {
-                        std::fprintf(stderr, "%s\n", t.message().c_str());
+                        cli::command_error("profile", t.message());
                         return 1;
                     }
                     gpu.case_ms.push_back(*t);
@@ -185,7 +186,7 @@ int run_paper(const Options& o) {
                                                          .color = {{"color", gfx::ColorFormat::rgba8}}});
                 auto paper = ffd::PaperModeRenderer::create();
                 if (!target || !paper) {
-                    std::fprintf(stderr, "%s\n", (!target ? target.message() : paper.message()).c_str());
+                    cli::command_error("profile", !target ? target.message() : paper.message());
                     return 1;
                 }
                 glm::dvec3 lo = lattice.origin,
@@ -208,7 +209,7 @@ int run_paper(const Options& o) {
                         return {};
                     });
                     if (!t) {
-                        std::fprintf(stderr, "%s\n", t.message().c_str());
+                        cli::command_error("profile", t.message());
                         return 1;
                     }
                     gpu_draw.case_ms.push_back(*t);
@@ -220,7 +221,7 @@ int run_paper(const Options& o) {
                                            buffers.rest.id(), buffers.count, view_proj, 2.0f);
                     });
                     if (!tp) {
-                        std::fprintf(stderr, "%s\n", tp.message().c_str());
+                        cli::command_error("profile", tp.message());
                         return 1;
                     }
                     paper_mode.case_ms.push_back(*tp);

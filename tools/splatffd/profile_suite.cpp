@@ -37,6 +37,7 @@
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/profiling/synthetic.h"
+#include "tools/splatffd/command.h"
 #include "tools/splatffd/profile_run.h"
 #include "tools/splatffd/video.h"
 
@@ -599,8 +600,8 @@ int run_suite(const Options& o) {
     const fs::path tmp = fs::temp_directory_path(ec) / ("splatffd_suite_" + std::to_string(::getpid()));
     fs::create_directories(tmp, ec);
     if (ec) {
-        std::fprintf(stderr, "profile --suite: cannot make the temporary folder %s: %s\n", tmp.c_str(),
-                     ec.message().c_str());
+        std::fprintf(stderr, "splatffd profile: --suite: cannot make the temporary folder %s: %s\n",
+                     tmp.c_str(), ec.message().c_str());
         return 1;
     }
     // --only is checked against the rows' ids before anything runs: a beginning that matches no row is a
@@ -612,8 +613,10 @@ int run_suite(const Options& o) {
             fs::remove_all(tmp, ec);
             std::string ids;
             for (const std::string& id : list.ids()) ids += "\n  " + id;
-            std::fprintf(stderr, "profile --suite %s: --only %s: no row id starts with it; the rows are:%s\n",
-                         o.suite.c_str(), none.front().c_str(), ids.c_str());
+            std::fprintf(
+                stderr,
+                "splatffd profile: --suite %s: --only %s: no row id starts with it; the rows are:%s\n",
+                o.suite.c_str(), none.front().c_str(), ids.c_str());
             return 2;
         }
     }
@@ -627,7 +630,7 @@ int run_suite(const Options& o) {
     std::printf("%s", to_table(suite, o.suite).c_str());
     if (!o.json.empty()) {
         if (Status st = write_text(o.json, to_json(suite, o.suite)); !st) {
-            std::fprintf(stderr, "%s\n", st.message().c_str());
+            cli::command_error("profile", st.message());
             return 1;
         }
         std::printf("wrote %s\n", o.json.c_str());

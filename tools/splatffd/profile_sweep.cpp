@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "systems/profiling/svg_plot.h"
+#include "tools/splatffd/command.h"
 #include "tools/splatffd/profile_run.h"
 
 namespace sffd::profile_cmd {
@@ -62,7 +63,7 @@ int write_sweep_plots(const std::vector<SweepRow>& rows, const std::string& pref
     for (bool by_points : {true, false}) {
         const std::string path = prefix + (by_points ? "_points.svg" : "_lattice.svg");
         if (Status st = write_text(path, chart(by_points)); !st) {
-            std::fprintf(stderr, "%s\n", st.message().c_str());
+            cli::command_error("profile", st.message());
             return 1;
         }
         std::printf("wrote %s\n", path.c_str());
@@ -76,13 +77,14 @@ int write_sweep_plots(const std::vector<SweepRow>& rows, const std::string& pref
 int plot_sweep(const std::string& path, const std::string& prefix) {
     const auto text = read_text(path);
     if (!text) {
-        std::fprintf(stderr, "%s: cannot read the sweep file\n", path.c_str());
+        cli::command_error("profile", path + ": cannot read the sweep file");
         return 1;
     }
     const auto j = nlohmann::json::parse(*text, nullptr, false);
     if (j.is_discarded() || j.value("format", "") != "splatffd-sweep" || !j.contains("rows") ||
         !j["rows"].is_array()) {
-        std::fprintf(stderr, "%s: not a sweep written by 'splatffd profile --sweep ... --json'\n",
+        std::fprintf(stderr,
+                     "splatffd profile: %s: not a sweep written by 'splatffd profile --sweep ... --json'\n",
                      path.c_str());
         return 1;
     }
@@ -100,7 +102,7 @@ int plot_sweep(const std::string& path, const std::string& prefix) {
             rows.push_back(row);
         }
     } catch (const nlohmann::json::exception& e) {
-        std::fprintf(stderr, "%s: malformed sweep row: %s\n", path.c_str(), e.what());
+        std::fprintf(stderr, "splatffd profile: %s: malformed sweep row: %s\n", path.c_str(), e.what());
         return 1;
     }
     return write_sweep_plots(rows, prefix);
@@ -208,7 +210,7 @@ int run_sweep(const Options& o) {
         }
         j += "  ]\n}\n";
         if (Status st = write_text(o.json, j); !st) {
-            std::fprintf(stderr, "%s\n", st.message().c_str());
+            cli::command_error("profile", st.message());
             return 1;
         }
         std::printf("wrote %s\n", o.json.c_str());

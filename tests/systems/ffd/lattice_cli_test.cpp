@@ -367,7 +367,7 @@ TEST_F(LatticeCli, OptionErrorsNameTheOption) {
     // profile checks its paths before measuring: one line, the file named, nothing measured.
     r = run("profile sphere --compare " + p("nosuch.json"));
     EXPECT_EQ(r.code, 1);
-    EXPECT_EQ(r.out, p("nosuch.json") + ": cannot read the baseline report\n");
+    EXPECT_EQ(r.out, "splatffd profile: " + p("nosuch.json") + ": cannot read the baseline report\n");
     r = run("profile sphere --json " + p("no/such/folder/p.json"));
     EXPECT_EQ(r.code, 1);
     EXPECT_TRUE(has(r.out, "does not exist")) << r.out;

@@ -1,5 +1,6 @@
 // One scene, the same story from every command, through the built binary as a user runs it: a saved
-// un-keyed edit shows in `view`, `render`, `deform` and `info` alike.
+// un-keyed edit shows in `view`, `render`, `deform` and `info` alike; every command's errors start with
+// its name.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -7,7 +8,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include "tests/test_util/run_tool.h"
 
@@ -112,4 +116,42 @@ TEST(SceneStory, AnUnkeyedEditShowsAtItsClipTimeInEveryCommand) {
         ASSERT_EQ(v.code, 0) << v.out;
     }
     EXPECT_LT(psnr(view_edit, view_sphere), 30.0) << "view shows the edit on opening";
+}
+
+// One message form: every error line starts with "splatffd <command>: ", whichever command meets the
+// file (the message itself names the file and the problem).
+TEST(SceneStory, EveryCommandsErrorsStartWithItsName) {
+    const fs::path dir = temp_dir("errors");
+    const std::string empty = (dir / "empty.ply").string(), exr = (dir / "empty.exr").string(),
+                      json = (dir / "empty.json").string();
+    for (const std::string& f : {empty, exr, json}) std::ofstream(f).flush();
+    const std::string out = (dir / "out").string();
+    struct Case {
+        std::string command, args, problem;
+    };
+    const std::vector<Case> cases = {
+        {"render", empty + " --out " + out, "empty.ply: not a PLY file"},
+        {"pick", empty + " --at 1,1", "empty.ply: not a PLY file"},
+        {"reference", empty + " --out " + out, "empty.ply: not a PLY file"},
+        {"profile", empty + " --frames 1", "empty.ply: not a PLY file"},
+        {"profile", "sphere --frames 1 --compare " + json, "empty.json"},
+        {"view", empty + " --headless --frames 1", "empty.ply: not a PLY file"},
+        {"deform", empty + " " + (dir / "o.ply").string() + " --lattice fit", "empty.ply: not a PLY file"},
+        {"convert", empty + " " + (dir / "o.glb").string(), "empty.ply: not a PLY file"},
+        {"info", empty, "empty.ply: not a PLY file"},
+        {"compare", exr + " " + exr, "empty.exr: not a readable EXR"},
+        {"assemble", (dir / "nothere").string(), "nothere: not a folder"},
+    };
+    for (const Case& c : cases) {
+        const CliRun r = tool(c.command + " " + c.args);
+        EXPECT_NE(r.code, 0) << c.command << ": " << r.out;
+        bool found = false;
+        std::istringstream lines(r.out);
+        for (std::string line; std::getline(lines, line);) {
+            if (!has(line, c.problem)) continue;
+            found = true;
+            EXPECT_EQ(line.rfind("splatffd " + c.command + ": ", 0), 0u) << line;
+        }
+        EXPECT_TRUE(found) << c.command << " " << c.args << ":\n" << r.out;
+    }
 }
