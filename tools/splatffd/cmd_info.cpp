@@ -1,10 +1,13 @@
-// splatffd info FILE|SCENE: counts, bounds, attributes and lattices of a file or built-in scene.
+// splatffd info FILE|SCENE: counts, bounds, attributes and lattices of a file or built-in scene. A scene's
+// deformed clouds get two bounds, rest and deformed (by their lattices as saved); each lattice its transform
+// and its clip (with an un-keyed edit, if any).
 // PLY files are streamed (any size); glTF scene files and built-ins are loaded into a registry and
 // every cloud, lattice, binding, camera and light is listed. Gaussian splat files (3DGS and compressed
 // PLY, .spz, .splat, .ksplat) end with an "N Gaussians, SH degree D" line.
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -17,6 +20,7 @@
 #include "systems/animation/components.h"
 #include "systems/animation/unkeyed_edit.h"
 #include "systems/ffd/components.h"
+#include "systems/ffd/deform.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_gltf.h"
@@ -28,9 +32,56 @@ namespace {
 
 using namespace sffd;
 
-void print_bounds(const char* indent, const glm::dvec3& lo, const glm::dvec3& hi) {
-    std::printf("%sbounds   [%.6g, %.6g, %.6g] .. [%.6g, %.6g, %.6g]  (size %.6g x %.6g x %.6g)\n", indent,
-                lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, hi.x - lo.x, hi.y - lo.y, hi.z - lo.z);
+void print_bounds(const char* indent, const glm::dvec3& lo, const glm::dvec3& hi,
+                  const char* label = "bounds", const std::string& after = "") {
+    std::printf("%s%-8s [%.6g, %.6g, %.6g] .. [%.6g, %.6g, %.6g]  (size %.6g x %.6g x %.6g)%s\n", indent,
+                label, lo.x, lo.y, lo.z, hi.x, hi.y, hi.z, hi.x - lo.x, hi.y - lo.y, hi.z - lo.z,
+                after.c_str());
+}
+
+void print_transform(const ecs::Registry& reg, ecs::Entity e) {
+    const Transform* t = reg.try_get<Transform>(e);
+    const Transform identity;
+    const Transform& x = t ? *t : identity;
+    std::printf(
+        "    transform translation [%.6g, %.6g, %.6g], rotation (x y z w) [%.6g, %.6g, %.6g, %.6g], scale "
+        "[%.6g, %.6g, %.6g]%s\n",
+        x.translation.x, x.translation.y, x.translation.z, x.rotation.x, x.rotation.y, x.rotation.z,
+        x.rotation.w, x.scale.x, x.scale.y, x.scale.z, t ? "" : " (none: identity)");
+}
+
+// The cloud's bounds twice when lattices deform it: as authored (rest) and as its lattices deform it as
+// saved (the pose render shows at the saved clip time, deform and convert write). Positions only, CPU.
+void print_rest_and_deformed(const ecs::Registry& reg, ecs::Entity e, std::vector<glm::vec3> positions,
+                             const glm::dvec3& origin) {
+    glm::dvec3 lo(INFINITY), hi(-INFINITY);
+    for (const glm::vec3& p : positions) {
+        lo = glm::min(lo, origin + glm::dvec3(p));
+        hi = glm::max(hi, origin + glm::dvec3(p));
+    }
+    const Deformers* d = reg.try_get<Deformers>(e);
+    if (!d || d->lattices.empty()) return print_bounds("    ", lo, hi);
+    print_bounds("    ", lo, hi, "rest");
+    std::string names;
+    for (ecs::Entity l : d->lattices) {
+        const Lattice* lattice = reg.try_get<Lattice>(l);
+        if (!lattice) continue;
+        const Name* n = reg.try_get<Name>(l);
+        names += (names.empty() ? "'" : ", '") + (n ? n->value : std::string("?")) + "'";
+        if (lattice->current == lattice->rest) continue;
+        const ffd::PointsIn in{positions.data(), nullptr, nullptr, nullptr, positions.size(), origin};
+        const ffd::PointsOut out{positions.data(), nullptr, nullptr, nullptr};
+        if (auto st = ffd::deform(*lattice, in, out); !st) {
+            std::printf("    deformed (not computed: %s)\n", st.message().c_str());
+            return;
+        }
+    }
+    lo = glm::dvec3(INFINITY), hi = glm::dvec3(-INFINITY);
+    for (const glm::vec3& p : positions) {
+        lo = glm::min(lo, origin + glm::dvec3(p));
+        hi = glm::max(hi, origin + glm::dvec3(p));
+    }
+    print_bounds("    ", lo, hi, "deformed", "  by " + names + " as saved");
 }
 
 // "    deformed by 'a' 'b'" for a cloud with Deformers (lattice names, in order).
@@ -45,8 +96,8 @@ void print_deformers(const ecs::Registry& reg, ecs::Entity e) {
     std::printf("\n");
 }
 
-// "    clip     'paper demo': 4 tracks, 16 keys, 4 s, loop; saved at clip time 0 s" for a lattice with a
-// clip, then its un-keyed edit if it has one (the rule every command follows: systems/animation).
+// "    clip     'paper demo': 24 tracks, 96 keys, 4 s, loop, speed 1; opens at clip time 0 s" for a lattice
+// with a clip, then its un-keyed edit if it has one (the rule every command follows: systems/animation).
 void print_clip(const ecs::Registry& reg, ecs::Entity e) {
     const AnimationClip* clip = reg.try_get<AnimationClip>(e);
     if (!clip) return;
@@ -56,7 +107,7 @@ void print_clip(const ecs::Registry& reg, ecs::Entity e) {
                        : clip->mode == PlayMode::once ? "once"
                                                       : "ping_pong";
     const AnimationState* state = reg.try_get<AnimationState>(e);
-    std::printf("    clip     '%s': %zu tracks, %zu keys, %.6g s, %s, speed %g; saved at clip time %.6g s\n",
+    std::printf("    clip     '%s': %zu tracks, %zu keys, %.6g s, %s, speed %g; opens at clip time %.6g s\n",
                 clip->name.c_str(), clip->tracks.size(), keys, clip->duration, mode,
                 clip->speed * (state ? state->speed : 1.0), state ? state->time : 0.0);
     for (const UnkeyedEditReport& edit : unkeyed_edits(reg))
@@ -172,12 +223,8 @@ void summarise_registry(const ecs::Registry& reg) {
             std::printf("    texture  %dx%d%s%s\n", c.texture.width, c.texture.height,
                         c.texture.path.empty() ? "" : " ", c.texture.path.c_str());
         if (c.size()) {
-            glm::dvec3 lo(INFINITY), hi(-INFINITY);
             double rmin = INFINITY, rmax = 0, rsum = 0;
             for (std::size_t i = 0; i < c.size(); ++i) {
-                const glm::dvec3 p = c.origin + glm::dvec3(c.positions[i]);
-                lo = glm::min(lo, p);
-                hi = glm::max(hi, p);
                 if (!c.axis_u.empty()) {
                     const double rr = static_cast<double>(glm::length(c.axis_u[i]));
                     rmin = std::min(rmin, rr);
@@ -185,7 +232,7 @@ void summarise_registry(const ecs::Registry& reg) {
                     rsum += rr;
                 }
             }
-            print_bounds("    ", lo, hi);
+            print_rest_and_deformed(reg, e, c.positions, c.origin);
             if (!c.axis_u.empty())
                 std::printf("    radius   min %.4g, mean %.4g, max %.4g\n", rmin,
                             rsum / static_cast<double>(c.size()), rmax);
@@ -199,14 +246,7 @@ void summarise_registry(const ecs::Registry& reg) {
         gaussians += g.size();
         std::printf("  gaussians '%s': %zu Gaussians, SH degree %d%s%s\n", n ? n->value.c_str() : "?",
                     g.size(), g.sh_degree, src ? "; file " : "", src ? src->path.string().c_str() : "");
-        if (g.size()) {
-            glm::dvec3 lo(INFINITY), hi(-INFINITY);
-            for (const glm::vec3& p : g.positions) {
-                lo = glm::min(lo, g.origin + glm::dvec3(p));
-                hi = glm::max(hi, g.origin + glm::dvec3(p));
-            }
-            print_bounds("    ", lo, hi);
-        }
+        if (g.size()) print_rest_and_deformed(reg, e, g.positions, g.origin);
         print_deformers(reg, e);
     });
     reg.view<const Lattice>().each([&](ecs::Entity e, const Lattice& l) {
@@ -233,6 +273,7 @@ void summarise_registry(const ecs::Registry& reg) {
                             l.axes[std::size_t(a)].x, l.axes[std::size_t(a)].y, l.axes[std::size_t(a)].z,
                             glm::length(l.axes[std::size_t(a)]));
         }
+        print_transform(reg, e);
         print_clip(reg, e);
     });
     if (reg.count<Lattice>() == 0 && (reg.count<SplatCloud>() > 0 || reg.count<GaussianCloud>() > 0))
@@ -259,7 +300,9 @@ void summarise_registry(const ecs::Registry& reg) {
 constexpr const char* kUsage =
     "usage: splatffd info FILE|sphere|face\n"
     "  FILE   .ply (point cloud, 3DGS or compressed Gaussians: header, counts, bounds), .obj .off (mesh or\n"
-    "         points), .gltf .glb (scene: clouds, Gaussians, lattices, clips, camera, lights), .spz .splat "
+    "         points), .gltf .glb (scene: clouds, Gaussians, lattices with their transform and clip, "
+    "camera,\n"
+    "         lights; a deformed cloud's bounds at rest and deformed by its lattices as saved), .spz .splat "
     ".ksplat\n"
     "         .sog, a SOG folder's meta.json (Gaussians: count, SH degree, bounds)\n"
     "  sphere, face   the built-in scenes\n";

@@ -1,6 +1,6 @@
 // One scene, the same story from every command, through the built binary as a user runs it: a saved
 // un-keyed edit shows in `view`, `render`, `deform` and `info` alike; every command's errors start with
-// its name.
+// its name; `info` lists clips, a deformed cloud's bounds at rest and deformed, and lattice transforms.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -12,6 +12,8 @@
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include <nlohmann/json.hpp>
 
 #include "tests/test_util/run_tool.h"
 
@@ -30,6 +32,30 @@ fs::path temp_dir(const std::string& name) {
 CliRun tool(const std::string& args) { return sffd::test::run_headless(args); }
 
 bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
+
+struct glm_free_size {
+    double x, y, z;
+};
+
+// The first line of `text` whose words start with `start` (leading spaces skipped), or "".
+std::string line_of(const std::string& text, const std::string& start) {
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);)
+        if (line.find_first_not_of(' ') != std::string::npos &&
+            line.compare(line.find_first_not_of(' '), start.size(), start) == 0)
+            return line;
+    return "";
+}
+
+// The three sizes of a bounds line "... (size X x Y x Z)".
+glm_free_size size_of(const std::string& line) {
+    glm_free_size s{};
+    const auto at = line.find("(size ");
+    if (at == std::string::npos ||
+        std::sscanf(line.c_str() + at, "(size %lf x %lf x %lf)", &s.x, &s.y, &s.z) != 3)
+        ADD_FAILURE() << "no size in '" << line << "'";
+    return s;
+}
 
 const std::string kCamera = " --camera 1.5,1.3,4.3,0,0,0,0,1,0,40";
 
@@ -82,7 +108,7 @@ TEST(SceneStory, AnUnkeyedEditShowsAtItsClipTimeInEveryCommand) {
     const CliRun info = tool("info " + v2.string());
     ASSERT_EQ(info.code, 0) << info.out;
     EXPECT_TRUE(has(info.out, "clip     'paper demo': ")) << info.out;
-    EXPECT_TRUE(has(info.out, "saved at clip time 0 s")) << info.out;
+    EXPECT_TRUE(has(info.out, "opens at clip time 0 s")) << info.out;
     EXPECT_TRUE(has(info.out, "WARNING  un-keyed edit at clip time 0 s (48 control points")) << info.out;
 
     // render: frame 0 (0 s) shows the edit, frame 1 the clip's pose, the same as the untouched sphere's.
@@ -154,4 +180,42 @@ TEST(SceneStory, EveryCommandsErrorsStartWithItsName) {
         }
         EXPECT_TRUE(found) << c.command << " " << c.args << ":\n" << r.out;
     }
+}
+
+// info says what the other commands will do with a scene: every clip (a built-in's too), a deformed cloud's
+// bounds at rest and as its lattices deform it as saved, and each lattice's transform.
+TEST(SceneStory, InfoListsClipsBothBoundsAndLatticeTransforms) {
+    const fs::path dir = temp_dir("info");
+    const CliRun sphere = tool("info sphere");
+    ASSERT_EQ(sphere.code, 0) << sphere.out;
+    EXPECT_TRUE(has(sphere.out,
+                    "clip     'paper demo': 24 tracks, 96 keys, 4 s, loop, speed 1; opens at clip time 0 s"))
+        << sphere.out;
+    EXPECT_TRUE(
+        has(sphere.out, "transform translation [0, 0, 0], rotation (x y z w) [0, 0, 0, 1], scale [1, 1, 1]"))
+        << sphere.out;
+
+    // A scene whose lattice is displaced (its top middle control point raised) and moved by its transform.
+    const fs::path gltf = dir / "s.gltf";
+    const CliRun c = tool("convert sphere " + gltf.string() + " --lattice fit:2 --splats 2000");
+    ASSERT_EQ(c.code, 0) << c.out;
+    nlohmann::json doc;
+    std::ifstream(gltf) >> doc;
+    nlohmann::json& lattice = doc["extensions"]["SFFD_scene"]["lattices"][0];
+    lattice["control_points"][16][1] = lattice["control_points"][16][1].get<double>() + 0.5;
+    lattice["transform"]["translation"] = {0.5, 0.0, 0.0};
+    lattice["transform"]["rotation"] = {0.0, 0.70710678118654757, 0.0, 0.70710678118654757};
+    std::ofstream(gltf) << doc.dump();
+    const CliRun info = tool("info " + gltf.string());
+    ASSERT_EQ(info.code, 0) << info.out;
+    const std::string rest = line_of(info.out, "rest "), deformed = line_of(info.out, "deformed [");
+    ASSERT_FALSE(rest.empty()) << info.out;
+    ASSERT_FALSE(deformed.empty()) << info.out;
+    EXPECT_TRUE(has(deformed, "by 'sphere.lattice' as saved")) << deformed;
+    EXPECT_GT(size_of(deformed).y, size_of(rest).y + 0.1) << info.out;
+    EXPECT_NEAR(size_of(deformed).x, size_of(rest).x, 0.05) << info.out;
+    EXPECT_TRUE(
+        has(info.out, "transform translation [0.5, 0, 0], rotation (x y z w) [0, 0.707107, 0, 0.707107]"))
+        << info.out;
+    EXPECT_TRUE(has(info.out, "1 displaced (max 0.5)")) << info.out;
 }
