@@ -9,6 +9,7 @@
 // (a scene file; --lattice-name picks one of several) or the --lattice one.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <optional>
@@ -21,11 +22,16 @@
 #include "runtime/assets/scene.h"
 #include "systems/ffd/lattice_io.h"
 #include "systems/ffd/operations.h"
+#include "systems/animation/components.h"
+#include "systems/ffd/deform.h"
 #include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_deform.h"
+#include "systems/gaussian/gaussian_gltf.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/convert_gaussians.h"
 #include "tools/splatffd/lattice_source.h"
 #include "tools/splatffd/progress.h"
+#include "tools/splatffd/unkeyed_note.h"
 
 namespace {
 
@@ -33,7 +39,7 @@ constexpr const char* kUsage =
     "usage: splatffd convert IN OUT [--splats N] [--normals] [--radii] [--neighbours K] [--seed S] "
     "[--ascii]\n"
     "                        [--progress] [--gaussians [--turn-x180] [--spz-version 3|4]]\n"
-    "                        [--lattice SRC [--lattice-name N]]\n"
+    "                        [--lattice SRC [--lattice-name N]] [--rest]\n"
     "  IN   .ply .obj .off .gltf .glb, or a built-in scene name (sphere, face)\n"
     "  OUT  .ply (binary little-endian; --ascii for text) .glb .gltf, or .json: a lattice (see below)\n"
     "  --splats N       exactly N splats (meshes: sampled on the surface; points: thinned evenly; default:\n"
@@ -64,7 +70,12 @@ constexpr const char* kUsage =
     "                   (principal axes), bspline: cubic B-spline basis (default Bernstein);\n"
     "                   L.json or scene.glb: that lattice (a scene's lattices bound to its cloud)\n"
     "  --lattice-name N the lattice of that name in a scene file (IN for OUT .json, or --lattice)\n"
-    "  OUT .json without --lattice exports IN's lattice (IN a scene file or a built-in scene)\n";
+    "  OUT .json without --lattice exports IN's lattice (IN a scene file or a built-in scene)\n"
+    "  IN a scene file (the editor's save, convert --lattice; surface splats or Gaussians, embedded or\n"
+    "  beside it): OUT .glb/.gltf is the scene as loaded (every lattice, clip and un-keyed edit); any\n"
+    "  other OUT gets its one cloud deformed by its lattices as saved (the pose render shows at the clip\n"
+    "  time the scene was saved at, and deform uses), or:\n"
+    "  --rest           with a scene IN: the cloud as authored, without its lattices (default: deformed)\n";
 
 struct LatticeRequest {
     std::string source;  // --lattice
@@ -164,11 +175,126 @@ sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const sffd::SplatM
     return cli::save_cloud_with_lattices(cloud, name, chain.lattices, out, material);
 }
 
+// What a scene IN is converted with (the command's options that apply to it).
+struct SceneConvert {
+    bool rest = false, gaussians = false, ascii = false, turn_x180 = false;
+    int spz_version = 3;
+    LatticeRequest lattice;
+    const sffd::cli::LatticeChain* loaded = nullptr;  // --lattice SRC, read before
+};
+
+// IN a scene file (the editor's save, `convert --lattice`): loaded as render, deform and info load it, so
+// its Gaussians are where those commands show them however they are stored (embedded KHR primitives, a
+// .sog beside it). OUT a scene without --lattice: the scene as loaded (lattices, clips, un-keyed edits).
+// OUT a cloud file: the scene's one cloud deformed by its lattices as saved (what render's frame at the
+// saved clip time and deform show), or as authored with --rest; with --lattice, at rest under that lattice.
+int convert_scene(const std::string& in, const std::string& out, const SceneConvert& o) {
+    using namespace sffd;
+    const auto t0 = std::chrono::steady_clock::now();
+    ecs::Registry r;
+    if (Status st = load_scene(r, in); !st) return cli::command_error("convert", st.message());
+    if (!o.rest) cli::note_unkeyed_edits("convert", r);
+    std::vector<ecs::Entity> clouds;
+    r.each_entity([&](ecs::Entity e) {
+        if (r.has<SplatCloud>(e) || r.has<GaussianCloud>(e)) clouds.push_back(e);
+    });
+    const bool scene_out = cli::is_scene_path(out);
+    const bool surface_to_gaussians = o.gaussians && clouds.size() == 1 && r.has<SplatCloud>(clouds[0]);
+    if (scene_out && o.lattice.source.empty() && !surface_to_gaussians) {
+        if (Status st = save_scene(r, out); !st) return cli::command_error("convert", st.message());
+        std::fprintf(stderr, "wrote %s: the scene as loaded (%zu cloud(s), %zu lattice(s), %zu clip(s))\n",
+                     out.c_str(), clouds.size(), r.count<Lattice>(), r.count<AnimationClip>());
+        return 0;
+    }
+    if (clouds.size() != 1)
+        return cli::command_error("convert",
+                                  in + ": " + std::to_string(clouds.size()) +
+                                      " clouds; a cloud file holds one (convert writes a scene with "
+                                      "all of them to .glb/.gltf)");
+    const ecs::Entity cloud_entity = clouds[0];
+    const Name* cloud_name = r.try_get<Name>(cloud_entity);
+    const std::string name = cloud_name ? cloud_name->value : std::filesystem::path(in).stem().string();
+    // A scene OUT keeps the scene's own lattices, bound to the cloud at rest, as they were.
+    cli::LatticeChain own;
+    cli::GaussianLatticeRequest keep{o.lattice.source, o.loaded};
+    if (scene_out && o.lattice.source.empty()) {
+        auto c = cli::pick_scene_lattices(r, in, o.lattice.name);
+        if (c) own = std::move(*c), keep = {in, &own};
+    }
+    // The cloud's lattices, in order, as saved (Lattice::current: the scene's saved pose).
+    std::vector<const Lattice*> chain;
+    std::string names;
+    if (const Deformers* d = r.try_get<Deformers>(cloud_entity))
+        for (ecs::Entity l : d->lattices)
+            if (const Lattice* lattice = r.try_get<Lattice>(l)) {
+                chain.push_back(lattice);
+                const Name* n = r.try_get<Name>(l);
+                names += (names.empty() ? "'" : ", '") + (n ? n->value : std::string("lattice")) + "'";
+            }
+    const bool deform = !o.rest && keep.source.empty() && !chain.empty();
+    const auto moved = [](const Lattice& l) { return l.current != l.rest; };
+    std::string pose;
+    if (!keep.source.empty()) pose = "";
+    else if (chain.empty()) pose = ", no lattice";
+    else if (std::none_of(chain.begin(), chain.end(), [&](const Lattice* l) { return moved(*l); }))
+        pose = ", its lattices " + names + " at rest";
+    else if (o.rest) pose = ", at rest (without --rest: deformed by " + names + " as saved)";
+    else pose = ", deformed by " + names + " as saved (--rest: the cloud at rest)";
+
+    if (GaussianCloud* g = r.try_get<GaussianCloud>(cloud_entity)) {
+        GaussianCloud posed = *g;
+        if (deform) {
+            for (const Lattice* l : chain) {
+                if (!moved(*l)) continue;
+                auto st = gaussian::deform(*l, posed, posed);
+                if (!st) return cli::command_error("convert", in + ": " + st.message());
+            }
+            gaussian::bake_sh_frames(posed);
+        }
+        return cli::write_gaussian_cloud(std::move(posed), name, out, o.ascii, o.turn_x180, o.spz_version,
+                                         keep, pose, t0);
+    }
+    SplatCloud cloud = r.get<SplatCloud>(cloud_entity);
+    SplatMaterial material;
+    if (const SplatMaterial* m = r.try_get<SplatMaterial>(cloud_entity)) material = *m;
+    if (deform) {
+        const std::size_t n = cloud.size();
+        if (cloud.axis_u.size() != n || cloud.axis_v.size() != n) cloud.axis_u.clear(), cloud.axis_v.clear();
+        if (cloud.normals.size() != n) cloud.normals.clear();
+        auto ptr = [](std::vector<glm::vec3>& v) { return v.empty() ? nullptr : v.data(); };
+        for (const Lattice* l : chain) {
+            if (!moved(*l)) continue;
+            const ffd::PointsIn pin{cloud.positions.data(),
+                                    ptr(cloud.normals),
+                                    ptr(cloud.axis_u),
+                                    ptr(cloud.axis_v),
+                                    n,
+                                    cloud.origin};
+            const ffd::PointsOut pout{cloud.positions.data(), ptr(cloud.normals), ptr(cloud.axis_u),
+                                      ptr(cloud.axis_v)};
+            if (auto st = ffd::deform(*l, pin, pout); !st)
+                return cli::command_error("convert", in + ": " + st.message());
+        }
+    }
+    if (o.gaussians)
+        return cli::write_gaussians(in, &cloud, material, out, o.ascii, o.turn_x180, o.spz_version, keep);
+    std::string lattice_note;
+    Status s = !o.lattice.source.empty()
+                   ? save_with_lattice(cloud, material, name, o.lattice, *o.loaded, out, lattice_note)
+               : o.ascii ? assets::save_splat_ply(cloud, out, ply::Format::ascii)
+                         : assets::save_splat_cloud(cloud, out, name, material);
+    if (!s) return cli::command_error("convert", s.message());
+    std::fprintf(stderr, "wrote %s: %zu splats%s%s (%.2f s)\n", out.c_str(), cloud.size(),
+                 lattice_note.c_str(), pose.c_str(),
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    return 0;
+}
+
 int run_convert(sffd::cli::Args args) {
     using namespace sffd;
     std::string in, out;
     assets::ImportOptions opt;
-    bool ascii = false, gaussians = false, progress = false, turn_x180 = false;
+    bool ascii = false, gaussians = false, progress = false, turn_x180 = false, rest = false;
     int spz_version = 3;
     LatticeRequest lattice;
     for (std::size_t i = 0; i < args.size(); ++i) {
@@ -220,6 +346,8 @@ int run_convert(sffd::cli::Args args) {
             gaussians = true;
         } else if (a == "--turn-x180") {
             turn_x180 = true;
+        } else if (a == "--rest") {
+            rest = true;
         } else if (a == "--spz-version") {
             auto v = value(3, 4);
             if (!v) return 2;
@@ -235,6 +363,11 @@ int run_convert(sffd::cli::Args args) {
         }
     }
     if (in.empty() || out.empty()) return cli::usage_error("convert", "expected IN and OUT", kUsage);
+    const bool scene_in =
+        !assets::is_builtin_scene(in) && cli::is_scene_path(in) && gaussian::gltf_declaration(in).sffd_scene;
+    if (rest && !scene_in)
+        return cli::usage_error("convert", "--rest applies to a scene IN (its cloud without its lattices)",
+                                "");
     // A Gaussian input stays Gaussian: read as points it would lose colour, opacity and SH.
     const bool gaussian_in = !assets::is_builtin_scene(in) && cli::is_gaussian_file(in);
     gaussians = gaussians || gaussian_in;
@@ -248,10 +381,7 @@ int run_convert(sffd::cli::Args args) {
                      out.c_str(), std::filesystem::path(out).extension().string().c_str());
         return 2;
     }
-    // A Gaussian scene (a saved scene or an earlier convert --lattice) keeps its lattices into a scene OUT.
-    if (gaussian_in && lattice.source.empty() && cli::is_scene_path(in) && cli::is_scene_path(out))
-        if (cli::load_lattice_source(in, lattice.name)) lattice.source = in;
-    if (!lattice.name.empty() && lattice.source.empty()) {
+    if (!lattice.name.empty() && lattice.source.empty() && !scene_in) {
         std::fprintf(stderr, "splatffd convert: --lattice-name needs --lattice SCENE.glb (or OUT .json)\n");
         return 2;
     }
@@ -270,6 +400,9 @@ int run_convert(sffd::cli::Args args) {
         }
         loaded = std::move(*c);
     }
+    if (scene_in)
+        return convert_scene(in, out,
+                             SceneConvert{rest, gaussians, ascii, turn_x180, spz_version, lattice, &loaded});
     const cli::GaussianLatticeRequest gaussian_lattice{lattice.source, &loaded};
     if (gaussian_in)
         return cli::write_gaussians(in, nullptr, SplatMaterial{}, out, ascii, turn_x180, spz_version,

@@ -90,20 +90,26 @@ int write_gaussians(const std::string& in, const SplatCloud* surface, const Spla
         std::fprintf(stderr, "splatffd convert: %s\n", g.message().c_str());
         return 1;
     }
+    return write_gaussian_cloud(std::move(*g), std::filesystem::path(in).stem().string(), out, ascii,
+                                turn_x180, spz_version, lattice, "", t0);
+}
+
+int write_gaussian_cloud(GaussianCloud cloud, const std::string& name, const std::string& out, bool ascii,
+                         bool turn_x180, int spz_version, const GaussianLatticeRequest& lattice,
+                         const std::string& note_after, std::chrono::steady_clock::time_point t0) {
+    GaussianCloud* g = &cloud;
     if (turn_x180) gaussian::turn_axes(*g, gaussian::AxisTurn::x180);
     const std::string e = lower_ext(out);
     if (!lattice.source.empty()) {
         const std::size_t count = g->size();
         const int degree = g->sh_degree;
         std::string note;
-        if (Status s = save_gaussian_scene(std::move(*g), std::filesystem::path(in).stem().string(), lattice,
-                                           out, note);
-            !s) {
+        if (Status s = save_gaussian_scene(std::move(*g), name, lattice, out, note); !s) {
             std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
             return 1;
         }
-        std::fprintf(stderr, "wrote %s: %zu Gaussians, SH degree %d%s (%.2f s)\n", out.c_str(), count, degree,
-                     note.c_str(),
+        std::fprintf(stderr, "wrote %s: %zu Gaussians, SH degree %d%s%s (%.2f s)\n", out.c_str(), count,
+                     degree, note.c_str(), note_after.c_str(),
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
         return 0;
     }
@@ -121,8 +127,9 @@ int write_gaussians(const std::string& in, const SplatCloud* surface, const Spla
         std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
         return 1;
     }
-    std::fprintf(stderr, "wrote %s: %zu Gaussians, SH degree %d (%.2f s)\n", out.c_str(), g->size(),
-                 g->sh_degree, std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+    std::fprintf(stderr, "wrote %s: %zu Gaussians, SH degree %d%s (%.2f s)\n", out.c_str(), g->size(),
+                 g->sh_degree, note_after.c_str(),
+                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
     return 0;
 }
 

@@ -4,11 +4,13 @@
 // 0.7 × radius).
 #pragma once
 
+#include <chrono>
 #include <string>
 
 #include "tools/splatffd/lattice_source.h"
 
 namespace sffd {
+struct GaussianCloud;
 struct SplatCloud;
 struct SplatMaterial;
 }  // namespace sffd
@@ -34,5 +36,11 @@ struct GaussianLatticeRequest {
 int write_gaussians(const std::string& in, const SplatCloud* surface, const SplatMaterial& material,
                     const std::string& out, bool ascii, bool turn_x180 = false, int spz_version = 3,
                     const GaussianLatticeRequest& lattice = {});
+// The same for a cloud already in memory (a scene's, posed by the caller); `name` names it in a scene OUT,
+// `note_after` ends the summary line ("wrote OUT: N Gaussians, SH degree D<note_after> (T s)"), `t0` starts
+// its time.
+int write_gaussian_cloud(GaussianCloud cloud, const std::string& name, const std::string& out, bool ascii,
+                         bool turn_x180, int spz_version, const GaussianLatticeRequest& lattice,
+                         const std::string& note_after, std::chrono::steady_clock::time_point t0);
 
 }  // namespace sffd::cli

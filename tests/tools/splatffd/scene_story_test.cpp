@@ -1,6 +1,7 @@
 // One scene, the same story from every command, through the built binary as a user runs it: a saved
 // un-keyed edit shows in `view`, `render`, `deform` and `info` alike; every command's errors start with
-// its name; `info` lists clips, a deformed cloud's bounds at rest and deformed, and lattice transforms.
+// its name; `info` lists clips, a deformed cloud's bounds at rest and deformed, and lattice transforms;
+// `convert` of a scene writes what render and deform show.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -218,4 +219,81 @@ TEST(SceneStory, InfoListsClipsBothBoundsAndLatticeTransforms) {
         has(info.out, "transform translation [0.5, 0, 0], rotation (x y z w) [0, 0.707107, 0, 0.707107]"))
         << info.out;
     EXPECT_TRUE(has(info.out, "1 displaced (max 0.5)")) << info.out;
+}
+
+namespace {
+
+// The x range of the first bounds line of `info FILE` whose label is `label` ("bounds", "deformed").
+std::pair<double, double> x_range(const std::string& file, const std::string& label = "bounds") {
+    const CliRun r = tool("info " + file);
+    EXPECT_EQ(r.code, 0) << r.out;
+    const std::string line = line_of(r.out, label + " ");
+    double lo[3] = {0, 0, 0}, hi[3] = {0, 0, 0};
+    const auto at = line.find('[');
+    if (at == std::string::npos || std::sscanf(line.c_str() + at, "[%lf, %lf, %lf] .. [%lf, %lf, %lf]",
+                                               &lo[0], &lo[1], &lo[2], &hi[0], &hi[1], &hi[2]) != 6)
+        ADD_FAILURE() << file << ": no '" << label << "' line in\n" << r.out;
+    return {lo[0], hi[0]};
+}
+
+}  // namespace
+
+// convert of a scene tells the same story as render and deform: the Gaussians where render shows them in
+// every Gaussian format (a scene of embedded Gaussians used to come out turned 180 degrees about z),
+// deformed by the scene's lattices as saved unless --rest asks for the cloud at rest, and a scene the
+// editor saved with its Gaussians in a file beside it converts like any other (it used to be refused).
+TEST(SceneStory, ConvertOfASceneWritesWhatRenderAndDeformShow) {
+    const fs::path dir = temp_dir("convert");
+    const std::string g = (dir / "g.ply").string();
+    ASSERT_EQ(tool("convert sphere " + g + " --gaussians --splats 4000").code, 0);
+    // Off centre in x, so a turn about z shows in the x range.
+    const fs::path shifted = dir / "shifted.json";
+    {
+        std::ofstream(shifted) << R"({"origin": [-2, -2, -2], "axes": [[4, 0, 0], [0, 4, 0], [0, 0, 4]],
+            "divisions": [1, 1, 1], "control_points": [[-0.5, -2, -2], [-0.5, -2, 2], [-0.5, 2, -2], [-0.5, 2, 2],
+            [3.5, -2, -2], [3.5, -2, 2], [3.5, 2, -2], [3.5, 2, 2]]})";
+    }
+    const std::string capture = (dir / "capture.ply").string();
+    ASSERT_EQ(tool("deform " + g + " " + capture + " --lattice " + shifted.string()).code, 0);
+    const auto rest = x_range(capture);
+    ASSERT_GT(rest.first, 0.4) << "the capture lies at x > 0";
+
+    const std::string fruit = (dir / "fruit.glb").string();
+    ASSERT_EQ(tool("convert " + capture + " " + fruit + " --lattice fit:3,3,3").code, 0);
+    for (const std::string out : {"o.ply", "o.spz", "o.compressed.ply"}) {
+        const std::string path = (dir / out).string();
+        const CliRun c = tool("convert " + fruit + " " + path + " --gaussians");
+        ASSERT_EQ(c.code, 0) << c.out;
+        EXPECT_TRUE(has(c.out, "its lattices 'capture.lattice' at rest")) << c.out;
+        const auto x = x_range(path);
+        EXPECT_NEAR(x.first, rest.first, 2e-3) << out;
+        EXPECT_NEAR(x.second, rest.second, 2e-3) << out;
+    }
+
+    // The editor's save: lattice added, stretched along x, the Gaussians left in capture.ply.
+    const std::string edited = (dir / "edited.glb").string();
+    const CliRun v = tool("view " + capture + " --headless --replay " + std::string(SFFD_TEST_DATA_DIR) +
+                          "/editor/lattice_add.txt --frames 14 --no-ui --save " + edited);
+    ASSERT_EQ(v.code, 0) << v.out;
+    const auto shown = x_range(edited, "deformed");
+    ASSERT_GT(shown.second, rest.second + 0.05) << "the saved lattice moves the capture";
+    const std::string deformed = (dir / "deformed.ply").string(), at_rest = (dir / "rest.ply").string(),
+                      by_deform = (dir / "by_deform.ply").string();
+    const CliRun c = tool("convert " + edited + " " + deformed);
+    ASSERT_EQ(c.code, 0) << c.out;
+    EXPECT_TRUE(has(c.out, "deformed by 'capture.lattice' as saved (--rest: the cloud at rest)")) << c.out;
+    const CliRun r = tool("convert " + edited + " " + at_rest + " --rest");
+    ASSERT_EQ(r.code, 0) << r.out;
+    EXPECT_TRUE(has(r.out, "at rest (without --rest: deformed by 'capture.lattice' as saved)")) << r.out;
+    ASSERT_EQ(tool("deform " + edited + " " + by_deform).code, 0);
+    const auto x_deformed = x_range(deformed), x_rest = x_range(at_rest), x_by_deform = x_range(by_deform);
+    EXPECT_NEAR(x_deformed.second, shown.second, 1e-4) << "what info says the lattice does";
+    EXPECT_NEAR(x_deformed.second, x_by_deform.second, 1e-4) << "what deform writes";
+    EXPECT_NEAR(x_rest.first, rest.first, 1e-6);
+    EXPECT_NEAR(x_rest.second, rest.second, 1e-6);
+    // A scene OUT is the scene as loaded: its lattice still bound, still displaced.
+    const std::string copy = (dir / "copy.glb").string();
+    const CliRun s = tool("convert " + edited + " " + copy);
+    ASSERT_EQ(s.code, 0) << s.out;
+    EXPECT_NEAR(x_range(copy, "deformed").second, shown.second, 1e-9);
 }
