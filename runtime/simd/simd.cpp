@@ -91,9 +91,11 @@ Status pin(std::string_view name) {
         }
     bool known = false;
     for (const Target& t : compiled()) known |= t.name == want;
-    return make_error("SIMD target '" + std::string(name) + "' " +
-                      (known ? "is compiled in but this CPU cannot run it" : "is not compiled into this binary") +
-                      "; this CPU runs: " + join(runnable()) + " (or scalar)");
+    return make_error(
+        "SIMD target '" + std::string(name) + "' " +
+        (known ? "is compiled in but this CPU cannot run it" : "is not compiled into this binary") +
+        "; this CPU runs: " + join(runnable()) +
+        (compiled().back().name == "scalar" ? "" : " (or scalar, the portable one)"));
 }
 
 void unpin() { set_pin(0); }
