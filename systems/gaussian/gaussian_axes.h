@@ -9,7 +9,8 @@
 // (a y-up PLY; or an SPZ written by splat-transform 3.7.0, which writes SPZ in its PLY space without
 // the conversion, by its own source comment) is turned by the user: `splatffd convert IN OUT
 // --turn-x180`. KHR_gaussian_splatting glTF (y up, +z the front, x left) is the internal frame turned
-// 180 degrees about z: read_gltf and write_glb turn it (gaussian_gltf.h); SOG is read as stored.
+// 180 degrees about z: read_gltf and write_glb turn it (gaussian_gltf.h); SOG is read as stored. How a
+// capture in this frame is shown upright in the engine's y-up world is capture_up.h's.
 //
 // A turn of 180 degrees about a coordinate axis is a proper rotation R = diag(±1, ±1, ±1) with det +1,
 // so it maps every part of a Gaussian exactly: centres p -> R p, rotations q -> q_R q (covariance

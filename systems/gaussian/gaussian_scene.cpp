@@ -16,6 +16,7 @@
 #include "runtime/core/file_io.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
+#include "systems/gaussian/capture_up.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_gltf.h"
@@ -195,7 +196,8 @@ Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const fs::path
     // A SOG folder is named after the folder, not "meta".
     const fs::path named = path.filename() == "meta.json" ? path.parent_path() : path;
     registry.emplace<Name>(e, Name{named.stem().string()});
-    registry.emplace<Transform>(e, Transform{});
+    // Shown upright: the capture's up (y down unless --up says otherwise) turned onto the world's +y.
+    registry.emplace<Transform>(e, capture_transform());
     registry.emplace<GaussianSource>(e, GaussianSource{absolute.lexically_normal()});
     registry.emplace<GaussianCloud>(e, std::move(*cloud));
     return e;

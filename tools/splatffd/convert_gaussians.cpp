@@ -9,6 +9,7 @@
 #include "runtime/assets/scene.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/operations.h"
+#include "systems/gaussian/capture_up.h"
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_axes.h"
 #include "systems/gaussian/gaussian_compressed_ply.h"
@@ -60,16 +61,19 @@ Status save_gaussian_scene(GaussianCloud g, const std::string& cloud_name, const
         lattices = req.loaded ? req.loaded->lattices : std::vector<Lattice>{};
         note = ", " + std::to_string(lattices.size()) + " lattice(s) from " + req.source + " bound to them";
     }
+    // Shown as the Gaussian file would be (capture_up.h), the lattices in the cloud's frame with it, as the
+    // editor places a lattice it adds.
+    const Transform shown = gaussian::capture_transform();
     ecs::Registry r;
     const ecs::Entity c = r.create();
     r.emplace<Name>(c, Name{cloud_name});
-    r.emplace<Transform>(c, Transform{});
+    r.emplace<Transform>(c, shown);
     r.emplace<GaussianCloud>(c, std::move(g));
     Deformers d;
     for (std::size_t i = 0; i < lattices.size(); ++i) {
         const ecs::Entity l = r.create();
         r.emplace<Name>(l, Name{cloud_name + ".lattice" + (i ? std::to_string(i + 1) : std::string())});
-        r.emplace<Transform>(l, Transform{});
+        r.emplace<Transform>(l, shown);
         r.emplace<Lattice>(l, std::move(lattices[i]));
         d.lattices.push_back(l);
     }
@@ -89,6 +93,18 @@ int write_gaussians(const std::string& in, const SplatCloud* surface, const Spla
     if (!g) {
         std::fprintf(stderr, "splatffd convert: %s\n", g.message().c_str());
         return 1;
+    }
+    // Surface splats live in the engine's y-up world; a Gaussian file is a capture, y down (capture_up.h),
+    // so it opens upright here and in every other viewer. The turn is exact, and loading turns it back.
+    if (surface && gaussian::capture_up() == gaussian::CaptureUp::minus_y)
+        gaussian::turn_axes(*g, gaussian::AxisTurn::x180);
+    else if (surface && gaussian::capture_up() != gaussian::CaptureUp::plus_y) {
+        std::fprintf(
+            stderr,
+            "splatffd convert: --up %s: surface splats are written as Gaussians y down (the default) "
+            "or, with --up y, y up\n",
+            gaussian::capture_up_name(gaussian::capture_up()));
+        return 2;
     }
     return write_gaussian_cloud(std::move(*g), std::filesystem::path(in).stem().string(), out, ascii,
                                 turn_x180, spz_version, lattice, "", t0);

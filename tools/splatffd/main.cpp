@@ -12,6 +12,7 @@
 #include "runtime/core/paths.h"
 #include "runtime/simd/simd.h"
 #include "systems/engine/engine_frame.h"
+#include "systems/gaussian/capture_up.h"
 #include "tools/splatffd/command.h"
 
 namespace sffd::cli {
@@ -75,6 +76,12 @@ void print_help(std::FILE* to) {
         "  --paths    print where shaders, content and the cache are found\n"
         "  --allow-outside-resources  (with any command) let trusted files name textures, buffers and\n"
         "             material libraries outside their own folder (refused by default)\n"
+        "  --up AXIS  (with any command) the up axis of Gaussian captures: -y (y down, as 3DGS, COLMAP,\n"
+        "             SuperSplat and splat-transform store them: the default), y, z or -z; the same for "
+        "every\n"
+        "             Gaussian format (SPZ and KHR glTF are read into the PLY frame first); scene files "
+        "keep\n"
+        "             their own transform (systems/gaussian/README.md)\n"
         "\nenvironment:\n  SFFD_SIMD=<target>  pin the CPU kernels to one compiled SIMD target (see "
         "--version),\n"
         "             or scalar; a target this CPU cannot run is refused (exit 2)\n");
@@ -90,6 +97,18 @@ int main(int argc, char** argv) {
     if (auto it = std::find(args.begin(), args.end(), "--allow-outside-resources"); it != args.end()) {
         sffd::set_allow_outside_resources(true);
         args.erase(it);
+    }
+    // Global option: the up axis of Gaussian captures that are loaded (systems/gaussian/capture_up.h).
+    if (auto it = std::find(args.begin(), args.end(), "--up"); it != args.end()) {
+        auto up = it + 1 != args.end() ? sffd::gaussian::parse_capture_up(*(it + 1))
+                                       : sffd::Result<sffd::gaussian::CaptureUp>(
+                                             sffd::make_error("--up: expected -y, y, z or -z after it"));
+        if (!up) {
+            std::fprintf(stderr, "splatffd: %s\n", up.message().c_str());
+            return 2;
+        }
+        sffd::gaussian::set_capture_up(*up);
+        args.erase(it, it + 2);
     }
     if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
         print_help(args.empty() ? stderr : stdout);

@@ -17,6 +17,7 @@
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_gltf.h"
+#include "systems/gaussian/gaussian_axes.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_math.h"
@@ -250,7 +251,9 @@ TEST(GaussianConvertCommand, BuiltinSphereToGaussiansAndBetweenFormats) {
     ASSERT_EQ(r.code, 0) << r.err;
     auto g = gaussian::read_ply(ply);
     ASSERT_TRUE(g) << g.message();
-    const GaussianCloud expect = gaussian::gaussians_from_splats(assets::make_sphere_cloud(1000));
+    // Written as a capture is stored, y down (systems/gaussian/capture_up.h): the sphere turned about x.
+    GaussianCloud expect = gaussian::gaussians_from_splats(assets::make_sphere_cloud(1000));
+    gaussian::turn_axes(expect, gaussian::AxisTurn::x180);
     ASSERT_EQ(g->size(), 1000u);
     for (std::size_t i = 0; i < g->size(); ++i) EXPECT_EQ(g->positions[i], expect.positions[i]);
     EXPECT_EQ(g->sh, expect.sh);

@@ -89,6 +89,9 @@ fs::path write_scene(const fs::path& dir, const GaussianCloud& g) {
     ecs::Registry reg;
     auto e = load_gaussian_entity(reg, ply);
     EXPECT_TRUE(e) << e.message();
+    // Written in the engine's orientation (y up), so stored in the scene as shown, without the turn a
+    // y-down capture gets on loading (capture_up.h): the references below render the file's coordinates.
+    if (e) reg.get<Transform>(*e) = Transform{};
     const ecs::Entity lat = reg.create();
     const Lattice l = ffd::make_lattice(
         {-1.3, -1.3, -1.3}, {glm::dvec3(2.6, 0, 0), glm::dvec3(0, 2.6, 0), glm::dvec3(0, 0, 2.6)}, {4, 4, 4});

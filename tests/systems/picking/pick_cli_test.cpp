@@ -16,6 +16,7 @@
 #include "runtime/assets/scene.h"
 #include "runtime/ecs/registry.h"
 #include "systems/ffd/components.h"
+#include "systems/gaussian/capture_up.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_scene.h"
@@ -32,8 +33,9 @@ struct CliRun {
     std::string out;  // stdout and stderr
 };
 
-CliRun run_pick(const std::string& args) {
-    const std::string cmd = std::string(SFFD_BINARY_DIR) + "/tools/splatffd pick " + args + " 2>&1";
+CliRun run_pick(const std::string& global, const std::string& args) {
+    const std::string cmd =
+        std::string(SFFD_BINARY_DIR) + "/tools/splatffd " + global + " pick " + args + " 2>&1";
     CliRun r;
     FILE* p = popen(cmd.c_str(), "r");
     if (!p) return r;
@@ -43,6 +45,7 @@ CliRun run_pick(const std::string& args) {
     r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
     return r;
 }
+CliRun run_pick(const std::string& args) { return run_pick("", args); }
 
 struct Sphere {
     ecs::Registry reg;
@@ -146,8 +149,10 @@ TEST(PickCli, BadInputExitCodesAndMessages) {
     EXPECT_NE(r.out.find("outside the 320x240 viewport"), std::string::npos) << r.out;
 }
 
-// A 3DGS PLY of four Gaussians written here: picked through `splatffd pick FILE`, seen from the camera
-// `render` frames a Gaussian file with (load_scene's default view of it).
+// A 3DGS PLY of four Gaussians written here: picked through `splatffd --up y pick FILE`, seen from the
+// camera `render` frames a Gaussian file with (load_scene's default view of it). Written y up, and read
+// so (--up y: not turned, systems/gaussian/capture_up.h), so the reference below works in the file's
+// coordinates.
 struct GaussianFile {
     std::filesystem::path path;
     GaussianCloud cloud;
@@ -174,8 +179,10 @@ struct GaussianFile {
         // The camera `render` and `pick` see the file through: load_scene's default view of a Gaussian file
         // (the Gaussian scene hooks, which splatffd's main registers).
         gaussian::register_gaussian_scene_hooks();
+        gaussian::set_capture_up(gaussian::CaptureUp::plus_y);
         ecs::Registry reg;
         const Status st = load_scene(reg, path.string());
+        gaussian::set_capture_up(gaussian::CaptureUp::minus_y);
         gaussian::unregister_gaussian_scene_hooks();
         EXPECT_TRUE(st) << (st ? "" : st.message());
         view = make_screen_view(render::scene_camera(reg, 320.0 / 240.0), {320, 240});
@@ -235,8 +242,9 @@ TEST(PickCli, GaussianFileHitsTheGaussianOnThePixelRay) {
             const auto px = project(f.view, glm::dvec3(f.cloud.positions[target]));
             ASSERT_TRUE(px.has_value());
             const glm::ivec2 pixel(glm::floor(px->screen));
-            const CliRun r = run_pick(f.path.string() + " --size 320x240 --at " + std::to_string(pixel.x) +
-                                      "," + std::to_string(pixel.y) + (first ? " --first-gaussian" : ""));
+            const CliRun r =
+                run_pick("--up y", f.path.string() + " --size 320x240 --at " + std::to_string(pixel.x) + "," +
+                                       std::to_string(pixel.y) + (first ? " --first-gaussian" : ""));
             ASSERT_EQ(r.exit_code, 0) << r.out;
             const auto j = nlohmann::json::parse(r.out);
             ASSERT_TRUE(j["hit"].get<bool>()) << r.out;
@@ -258,7 +266,7 @@ TEST(PickCli, GaussianFileHitsTheGaussianOnThePixelRay) {
     }
     EXPECT_GT(differ, 0) << "the scene no longer tells the two rules apart";
     // A corner pixel sees nothing.
-    const CliRun miss = run_pick(f.path.string() + " --size 320x240 --at 0,0");
+    const CliRun miss = run_pick("--up y", f.path.string() + " --size 320x240 --at 0,0");
     ASSERT_EQ(miss.exit_code, 0) << miss.out;
     EXPECT_FALSE(nlohmann::json::parse(miss.out)["hit"].get<bool>());
 }

@@ -1,11 +1,13 @@
 // One scene, the same story from every command, through the built binary as a user runs it: a saved
 // un-keyed edit shows in `view`, `render`, `deform` and `info` alike; every command's errors start with
 // its name; `info` lists clips, a deformed cloud's bounds at rest and deformed, and lattice transforms;
-// `convert` of a scene writes what render and deform show.
+// `convert` of a scene writes what render and deform show; Gaussian captures open upright from every
+// format.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -16,6 +18,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "systems/splat_render/image_io.h"
 #include "tests/test_util/run_tool.h"
 
 namespace fs = std::filesystem;
@@ -296,4 +299,71 @@ TEST(SceneStory, ConvertOfASceneWritesWhatRenderAndDeformShow) {
     const CliRun s = tool("convert " + edited + " " + copy);
     ASSERT_EQ(s.code, 0) << s.out;
     EXPECT_NEAR(x_range(copy, "deformed").second, shown.second, 1e-9);
+}
+
+namespace {
+
+// How much redder than blue the top third of the object's pixels is, minus the same for the bottom third:
+// the sphere's north cap is red and its south cap blue, so upright is > 0 and upside down < 0.
+double red_on_top(const fs::path& png) {
+    auto image = sffd::render::read_png(png);
+    if (!image) {
+        ADD_FAILURE() << image.message();
+        return 0.0;
+    }
+    int top = image->height, bottom = -1;
+    for (int y = 0; y < image->height; ++y)
+        for (int x = 0; x < image->width; ++x)
+            if (image->at(x, y)[3] > 128) top = std::min(top, y), bottom = std::max(bottom, y);
+    const auto redness = [&](int y0, int y1) {
+        double sum = 0.0, n = 0.0;
+        for (int y = y0; y < y1; ++y)
+            for (int x = 0; x < image->width; ++x)
+                if (const std::uint8_t* p = image->at(x, y); p[3] > 128)
+                    sum += double(p[0]) - double(p[2]), n += 1;
+        return n > 0 ? sum / n : 0.0;
+    };
+    const int third = (bottom - top + 1) / 3;
+    return redness(top, top + third) - redness(bottom + 1 - third, bottom + 1);
+}
+
+// Frame 0 of `scene` with the automatic camera (the scene has none), as PNG.
+fs::path auto_camera_png(const std::string& scene, const fs::path& out, const std::string& global = "") {
+    const CliRun r =
+        tool(global + "render " + scene + " --out " + out.string() + " --size 160x120 --format png");
+    EXPECT_EQ(r.code, 0) << r.out;
+    return out / "frame_0000.png";
+}
+
+}  // namespace
+
+// Gaussian captures are stored y down (3DGS, COLMAP, SuperSplat); they open upright, the same from every
+// Gaussian format and from a scene made of them, and `--up` names another up for a file stored otherwise.
+// The built-in sphere converted to Gaussians is written as such a capture (its north cap at -y in the file).
+TEST(SceneStory, GaussianCapturesOpenUprightFromEveryFormat) {
+    const fs::path dir = temp_dir("up");
+    const std::string capture = (dir / "capture.ply").string();
+    ASSERT_EQ(tool("convert sphere " + capture + " --gaussians --splats 20000").code, 0);
+    const CliRun info = tool("info " + capture);
+    ASSERT_EQ(info.code, 0) << info.out;
+
+    const double ply = red_on_top(auto_camera_png(capture, dir / "ply"));
+    EXPECT_GT(ply, 20.0) << "upright";
+    EXPECT_LT(red_on_top(auto_camera_png(capture, dir / "ply_up_y", "--up y ")), -20.0)
+        << "--up y: the file taken as stored y up, so upside down";
+    // The same capture from every Gaussian format, and from a scene with a lattice around it.
+    for (const std::string out : {"c.spz", "c.compressed.ply", "c.glb"}) {
+        const std::string path = (dir / out).string();
+        ASSERT_EQ(tool("convert " + capture + " " + path).code, 0);
+        EXPECT_NEAR(red_on_top(auto_camera_png(path, dir / ("r_" + out))), ply, 5.0) << out;
+    }
+    const std::string scene = (dir / "scene.glb").string();
+    ASSERT_EQ(tool("convert " + capture + " " + scene + " --lattice fit:3").code, 0);
+    EXPECT_GT(red_on_top(auto_camera_png(scene, dir / "scene")), 20.0) << "a scene of it (its own framing)";
+    // The surface sphere it came from, through the same automatic camera: the same way up.
+    EXPECT_GT(red_on_top(auto_camera_png("sphere", dir / "surface")), 20.0);
+    // A bad --up is refused before any work.
+    const CliRun bad = tool("--up q render " + capture + " --out " + (dir / "bad").string());
+    EXPECT_EQ(bad.code, 2) << bad.out;
+    EXPECT_TRUE(has(bad.out, "--up: expected -y")) << bad.out;
 }
