@@ -3,6 +3,7 @@
 #include <sys/utsname.h>
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -388,6 +389,11 @@ std::string to_chrome_trace(const Profiler& p, const std::string& process_name) 
          {"tid", 2},
          {"args", {{"name", std::string("GPU passes (") + gpu_timing_name(p.gpu_timing()) + ")"}}}});
     auto us = [](double ms) { return ms * 1000.0; };
+    // The GPU runs passes one after another in submission order, and a pass cannot start before the CPU
+    // issued it: each GPU slice starts at its pass's CPU start or at the end of the slice before, whichever
+    // is later, so the GPU track's slices follow one another (Perfetto needs a track's slices to nest or be
+    // apart; placed at the CPU starts, long GPU passes overlapped the next ones).
+    double gpu_free_ms = -std::numeric_limits<double>::infinity();
     for (const auto& f : p.frames()) {
         events.push_back({{"name", "frame " + std::to_string(f.frame)},
                           {"cat", "frame"},
@@ -410,15 +416,20 @@ std::string to_chrome_trace(const Profiler& p, const std::string& process_name) 
                               {"ts", us(s.begin_ms)},
                               {"dur", us(s.cpu_ms)},
                               {"args", args}});
-            if (s.kind == ScopeKind::pass && s.gpu_ms >= 0.0)
+            if (s.kind == ScopeKind::pass && s.gpu_ms >= 0.0) {
+                const double start_ms = std::max(s.begin_ms, gpu_free_ms);
+                gpu_free_ms = start_ms + s.gpu_ms;
+                json gpu_args = args;
+                gpu_args["issued_ms"] = s.begin_ms;  // the CPU start, where the slice would have been
                 events.push_back({{"name", p.name(s.name)},
                                   {"cat", "gpu"},
                                   {"ph", "X"},
                                   {"pid", 1},
                                   {"tid", 2},
-                                  {"ts", us(s.begin_ms)},
+                                  {"ts", us(start_ms)},
                                   {"dur", us(s.gpu_ms)},
-                                  {"args", args}});
+                                  {"args", gpu_args}});
+            }
         }
     }
     return json{{"traceEvents", events}, {"displayTimeUnit", "ms"}}.dump() + "\n";

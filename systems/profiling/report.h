@@ -70,7 +70,9 @@ std::string to_text(const ProfileReport& report);
 // One row per frame: frame, frame_ms, then one column per phase, system and pass (cpu, gpu).
 std::string to_csv(const Profiler& profiler);
 // Chrome trace-event JSON (chrome://tracing, ui.perfetto.dev): complete ("X") events, CPU scopes on
-// thread 1, GPU pass times on thread 2 (placed at the pass's CPU start; the GPU clock is not aligned).
+// thread 1, GPU pass times on thread 2, one after another in submission order: each starts at its pass's
+// CPU start or where the one before ended (the GPU clock is not aligned; args.issued_ms keeps the CPU
+// start), so no two slices of a track overlap.
 std::string to_chrome_trace(const Profiler& profiler, const std::string& process_name);
 // Frame-time chart: total per frame and each phase, in ms.
 std::string frame_svg(const Profiler& profiler, const std::string& title);

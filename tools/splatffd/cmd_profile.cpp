@@ -6,6 +6,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <utility>
+#include <variant>
 
 #include "systems/profiling/report.h"
 #include "tools/splatffd/command.h"
@@ -20,7 +22,8 @@ using namespace profiling;
 constexpr const char* usage_text =
     "usage: splatffd profile [SCENE] [--frames N] [--warmup W] [--quality hq|preview] [--raster "
     "auto|raster|compute]\n"
-    "                        [--backend cpu|gpu] [--sync] [--drive CASE|none] [--json F] [--csv F] [--svg "
+    "                        [--backend auto|cpu|gpu] [--sync] [--drive CASE|none] [--json F] [--csv F] "
+    "[--svg "
     "F]\n"
     "                        [--trace F] [--compare BASE.json] [--sweep K=V,..] [--plot-sweep F.json] "
     "[--paper]\n"
@@ -50,7 +53,9 @@ constexpr const char* usage_text =
     "  --json F --csv F --svg F --trace F   write the report / per-frame CSV / frame-time chart /\n"
     "                        Chrome trace-event JSON (open in ui.perfetto.dev)\n"
     "  --compare BASE.json   exit 3 when a system or pass is slower than in BASE by more than the\n"
-    "                        measured spread (see systems/profiling/README.md)\n"
+    "                        measured spread (see systems/profiling/README.md); a BASE of another scene,\n"
+    "                        quality, backend, drive, rasteriser, budget or GPU timing is refused (exit 1),\n"
+    "                        naming what differs\n"
     "  --sweep K=V,.. ..     sweep points=60k,250k,1m lattice=4,11,21 backend=cpu,gpu\n"
     "                        basis=bernstein,bspline (any subset); prints a table; --svg PREFIX writes\n"
     "                        PREFIX_points.svg and PREFIX_lattice.svg; --json F writes all rows\n"
@@ -74,6 +79,52 @@ int usage_error(const std::string& message) { return cli::usage_error("profile",
 
 namespace {
 
+// A setting of a report as text ("" when the report has none).
+std::string setting(const ProfileReport& r, const std::string& key) {
+    for (const auto& [k, v] : r.config) {
+        if (k != key) continue;
+        if (const auto* t = std::get_if<std::string>(&v)) return *t;
+        if (const auto* b = std::get_if<bool>(&v)) return *b ? "true" : "false";
+        char n[32];
+        std::snprintf(n, sizeof n, "%.17g", std::get<double>(v));
+        return n;
+    }
+    return "";
+}
+
+// The settings that decide what a frame does: a baseline that differs in one measured something else, so
+// its times say nothing about a regression. "" when they agree, else what differs, named.
+std::string different_settings(const ProfileReport& base, const ProfileReport& current) {
+    static const char* const keys[] = {
+        "scene",   "points",        "gaussians",      "quality",
+        "raster",  "sprite_raster", "preview_budget", "gaussian_preview_budget",
+        "backend", "drive",         "schedule"};
+    std::string out;
+    const auto add = [&](const std::string& key, const std::string& b, const std::string& c) {
+        out += (out.empty() ? "" : ", ") + key + " '" + b + "' (this run '" + c + "')";
+    };
+    for (const char* key : keys)
+        if (const std::string b = setting(base, key), c = setting(current, key); b != c) add(key, b, c);
+    if (base.gpu_timing != current.gpu_timing) add("gpu_timing", base.gpu_timing, current.gpu_timing);
+    return out;
+}
+
+// The same check before measuring, for the settings the options already decide.
+std::string different_options(const ProfileReport& base, const Options& o) {
+    std::string out;
+    const std::pair<const char*, std::string> given[] = {
+        {"scene", o.scene}, {"quality", o.quality}, {"backend", o.backend}, {"drive", o.drive}};
+    for (const auto& [key, value] : given)
+        if (const std::string b = setting(base, key); !b.empty() && b != value)
+            out += (out.empty() ? "" : ", ") + std::string(key) + " '" + b + "' (this run '" + value + "')";
+    return out;
+}
+
+int refuse_baseline(const std::string& base_path, const std::string& differs) {
+    return cli::command_error("profile", base_path + ": a baseline of another run: " + differs +
+                                             "; measure the baseline with the same scene and options");
+}
+
 int compare_with(const ProfileReport& current, const std::string& base_path) {
     const auto text = read_text(base_path);
     if (!text) {
@@ -85,6 +136,8 @@ int compare_with(const ProfileReport& current, const std::string& base_path) {
         cli::command_error("profile", base.message());
         return 1;
     }
+    if (const std::string differs = different_settings(*base, current); !differs.empty())
+        return refuse_baseline(base_path, differs);
     const auto rows = compare_reports(*base, current);
     std::printf("\ncompare with %s:\n%s", base_path.c_str(), to_text(rows).c_str());
     const auto slower = std::count_if(rows.begin(), rows.end(), [](const Regression& r) { return r.slower; });
@@ -123,10 +176,13 @@ int check_paths_before_work(const Options& o) {
             cli::command_error("profile", o.compare + ": cannot read the baseline report");
             return 1;
         }
-        if (auto base = report_from_json(*text, o.compare); !base) {
+        auto base = report_from_json(*text, o.compare);
+        if (!base) {
             cli::command_error("profile", base.message());
             return 1;
         }
+        if (const std::string differs = different_options(*base, o); !differs.empty())
+            return refuse_baseline(o.compare, differs);
     }
     for (const std::string* out : {&o.json, &o.csv, &o.trace}) {
         if (out->empty()) continue;

@@ -182,7 +182,6 @@ Result<RunOutput> run_profile(const RunSetup& s) {
         (void)e;
         gaussians += g.size();
     }
-    out.points += gaussians;
     if (s.lattice_points > 0 || !s.basis.empty()) {
         std::vector<ecs::Entity> ls;
         for (auto [e, l] : registry.view<const Lattice>()) {

@@ -55,7 +55,7 @@ struct RunOutput {
     gfx::GlContext context;
     std::unique_ptr<profiling::Profiler> profiler;
     profiling::ProfileReport report;
-    std::size_t points = 0;
+    std::size_t points = 0;    // surface splats (the report's "gaussians" counts the Gaussians)
     std::string backend_used;  // deformation path of the measured frames: cpu, gpu, mixed or none
 };
 

@@ -2,7 +2,7 @@
 // un-keyed edit shows in `view`, `render`, `deform` and `info` alike; every command's errors start with
 // its name; `info` lists clips, a deformed cloud's bounds at rest and deformed, and lattice transforms;
 // `convert` of a scene writes what render and deform show; Gaussian captures open upright from every
-// format.
+// format; the profiler's numbers say what they measured.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
@@ -366,4 +366,67 @@ TEST(SceneStory, GaussianCapturesOpenUprightFromEveryFormat) {
     const CliRun bad = tool("--up q render " + capture + " --out " + (dir / "bad").string());
     EXPECT_EQ(bad.code, 2) << bad.out;
     EXPECT_TRUE(has(bad.out, "--up: expected -y")) << bad.out;
+}
+
+// Numbers a profiler can trust: the GPU track of a trace has no two slices that overlap without nesting
+// (timer queries, no --sync), a baseline of another run is refused naming what differs, a Gaussian scene
+// is not counted as surface splats, the usage line and the option text agree, and `deform --backend gpu`
+// times the programs' compilation apart from the deformation.
+TEST(SceneStory, ProfilerNumbersSayWhatTheyMeasured) {
+    const fs::path dir = temp_dir("profile");
+    const std::string trace = (dir / "trace.json").string(), base = (dir / "base.json").string();
+    const CliRun run = tool("profile sphere --frames 6 --warmup 1 --trace " + trace + " --json " + base);
+    ASSERT_EQ(run.code, 0) << run.out;
+    nlohmann::json events;
+    std::ifstream(trace) >> events;
+    for (const int track : {1, 2}) {
+        std::vector<std::pair<double, double>> slices;  // start, end in microseconds
+        for (const auto& e : events["traceEvents"])
+            if (e.value("ph", "") == "X" && e.value("tid", 0) == track)
+                slices.emplace_back(e["ts"].get<double>(), e["ts"].get<double>() + e["dur"].get<double>());
+        if (track == 2 && slices.empty()) continue;  // no GPU times on this machine
+        std::sort(slices.begin(), slices.end(), [](const auto& a, const auto& b) {
+            return a.first < b.first || (a.first == b.first && a.second > b.second);
+        });
+        std::vector<double> open;  // ends of the enclosing slices
+        int crossing = 0;
+        for (const auto& [start, end] : slices) {
+            while (!open.empty() && open.back() <= start + 1e-3) open.pop_back();
+            if (!open.empty() && end > open.back() + 1e-3) ++crossing;
+            open.push_back(end);
+        }
+        EXPECT_EQ(crossing, 0) << "track " << track << ": slices that overlap without nesting";
+    }
+
+    const CliRun other = tool("profile sphere --quality preview --frames 2 --warmup 0 --compare " + base);
+    EXPECT_EQ(other.code, 1) << other.out;
+    EXPECT_TRUE(has(other.out, "splatffd profile: " + base +
+                                   ": a baseline of another run: quality 'hq' (this run "
+                                   "'preview')"))
+        << other.out;
+    const CliRun same = tool("profile sphere --frames 3 --warmup 1 --compare " + base);
+    EXPECT_TRUE(same.code == 0 || same.code == 3) << same.out;
+    EXPECT_FALSE(has(same.out, "a baseline of another run")) << same.out;
+
+    const std::string g = (dir / "g.ply").string();
+    ASSERT_EQ(tool("convert sphere " + g + " --gaussians --splats 3000").code, 0);
+    const CliRun gaussians = tool("profile " + g + " --frames 2 --warmup 0");
+    ASSERT_EQ(gaussians.code, 0) << gaussians.out;
+    EXPECT_TRUE(has(gaussians.out, "points=0")) << gaussians.out;
+    EXPECT_TRUE(has(gaussians.out, "gaussians=3000")) << gaussians.out;
+    const CliRun scene_of_gaussians = tool("profile " + g + " --frames 2 --warmup 0 --compare " + base);
+    EXPECT_EQ(scene_of_gaussians.code, 1) << scene_of_gaussians.out;
+    EXPECT_TRUE(has(scene_of_gaussians.out, "scene 'sphere' (this run '" + g + "')"))
+        << scene_of_gaussians.out;
+
+    const CliRun help = tool("profile --help");
+    EXPECT_TRUE(has(line_of(help.out, "[--backend"), "[--backend auto|cpu|gpu]")) << help.out;
+    EXPECT_TRUE(has(help.out, "--backend auto|cpu|gpu  deformation backend")) << help.out;
+
+    const CliRun gpu =
+        tool("deform " + g + " " + (dir / "gd.ply").string() + " --lattice fit:3 --backend gpu");
+    ASSERT_EQ(gpu.code, 0) << gpu.out;
+    const auto at = gpu.out.find("deformation ");
+    ASSERT_NE(at, std::string::npos) << gpu.out;
+    EXPECT_TRUE(has(gpu.out, "GPU program set-up (shader compilation, first dispatch) ")) << gpu.out;
 }
