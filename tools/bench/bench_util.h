@@ -34,9 +34,11 @@ std::optional<T> made_or_skip(benchmark::State& state, Result<T> made) {
 
 }  // namespace sffd::bench
 
+#include <algorithm>
 #include <map>
 #include <mutex>
 #include <string>
+#include <thread>
 
 #include "runtime/simd/fma_peak.h"
 
@@ -53,13 +55,17 @@ inline double fma_floor(const simd::Target& target) {
     return it->second;
 }
 
-// Sets the counters a compute-bound kernel's per-target benchmark reports: floor_frac, its multiply-adds a
-// second as a fraction of the floor, and gfma_s; `fmas` is the work of one iteration, `seconds` its time.
+// Sets the counters of a compute-bound kernel's per-target benchmark, for `fmas` multiply-adds done in
+// `wall` seconds and `cpu` seconds of process CPU time: gfma_s; floor_frac, the rate by wall time against
+// every core's floor; floor_frac_cpu, the rate per CPU second against one core's floor (the same on a quiet
+// machine, and the steadier of the two on a loaded one).
 inline void report_floor_fraction(benchmark::State& state, const simd::Target& target, double fmas,
-                                  double seconds) {
-    const double rate = fmas / seconds;
-    state.counters["gfma_s"] = rate * 1e-9;
-    state.counters["floor_frac"] = rate / fma_floor(target);
+                                  double wall, double cpu) {
+    const double floor = fma_floor(target);
+    const double cores = double(std::max(1u, std::thread::hardware_concurrency()));
+    state.counters["gfma_s"] = fmas / wall * 1e-9;
+    state.counters["floor_frac"] = fmas / wall / floor;
+    state.counters["floor_frac_cpu"] = fmas / cpu / (floor / cores);
 }
 
 }  // namespace sffd::bench

@@ -8,12 +8,15 @@
 //   bench_ffd_deform --benchmark_filter='BM_Bernstein11_Full'
 #include <benchmark/benchmark.h>
 
+#include <chrono>
 #include <cmath>
 #include <string>
 #include <vector>
 
 #include "runtime/simd/simd.h"
 #include "systems/ffd/deform.h"
+#include "tools/bench/bench_util.h"
+#include "tools/bench/fma_model.h"
 #include "tools/bench/paper_case.h"
 
 namespace {
@@ -80,10 +83,22 @@ Points& million_points() {
 void BM_Bernstein11_Full(benchmark::State& st) {
     run(st, twisted(LatticeBasis::bernstein), paper_points(), true, ffd::Backend::fast);
 }
-// The same, pinned to one SIMD target.
+// The same, pinned to one SIMD target, with its speed as a fraction of that target's FMA floor on this host
+// (floor_frac: by wall time against every core's floor; floor_frac_cpu: by CPU time against one core's,
+// the steadier figure on a loaded machine).
 void bernstein11_full_on(benchmark::State& st, const simd::Target& target) {
     const simd::ScopedTarget pin(target);
-    run(st, twisted(LatticeBasis::bernstein), paper_points(), true, ffd::Backend::fast);
+    const Lattice l = twisted(LatticeBasis::bernstein);
+    Points& s = paper_points();
+    (void)bench::fma_floor(target);  // measured before the timed runs
+    const double cpu0 = bench::process_cpu_s();
+    const auto t0 = std::chrono::steady_clock::now();
+    run(st, l, s, true, ffd::Backend::fast);
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double per = bench::bernstein_multiply_adds(l, true);
+    bench::report_floor_fraction(st, target, per * double(s.p.size()) * double(st.iterations()), wall,
+                                 bench::process_cpu_s() - cpu0);
+    st.counters["madds_per_point"] = per;
 }
 void BM_Bernstein11_PositionsOnly(benchmark::State& st) {
     run(st, twisted(LatticeBasis::bernstein), paper_points(), false, ffd::Backend::fast);

@@ -10,6 +10,7 @@
 //   build/release/tools/bench/bench_gaussian_deform --benchmark_min_time=0.01
 #include <benchmark/benchmark.h>
 
+#include <chrono>
 #include <optional>
 #include <string>
 #include <vector>
@@ -21,6 +22,8 @@
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gpu_deform.h"
+#include "tools/bench/bench_util.h"
+#include "tools/bench/fma_model.h"
 #include "tools/bench/gaussian_case.h"
 
 namespace {
@@ -61,11 +64,33 @@ BENCHMARK(BM_GaussianDeformCpu)
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
 
-// The same run as BM_GaussianDeformCpu/1000000/0/0 with the kernels pinned to one SIMD target.
+// The same run as BM_GaussianDeformCpu/1000000/0/0 with the kernels pinned to one SIMD target, and its
+// counted work as a fraction of that target's FMA floor (tools/bench/fma_model.h: a lower bound).
 void BM_GaussianDeformCpuSimd(benchmark::State& state, const simd::Target& target) {
     const simd::ScopedTarget pin(target);
-    bench::run_cpu_deform(state, cloud(1000000), mode(0));
+    const GaussianCloud& g = cloud(1000000);
+    const Lattice l = bench::twisted_gaussian_lattice();
+    GaussianCloud out;
+    gaussian::DeformOptions options;
+    options.sh = mode(0);
+    // Untimed: sizes `out` (as run_cpu_deform does) and measures the floor before the timed runs.
+    if (auto s = gaussian::deform(l, g, out, options); !s) return state.SkipWithError(s.message().c_str());
+    (void)bench::fma_floor(target);
+    const double cpu0 = process_cpu_s();
+    const auto t0 = std::chrono::steady_clock::now();
+    for (auto _ : state) {
+        auto s = gaussian::deform(l, g, out, options);
+        if (!s) state.SkipWithError(s.message().c_str());
+        benchmark::DoNotOptimize(out.positions.data());
+    }
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const double cpu = process_cpu_s() - cpu0, runs = double(state.iterations());
+    state.SetItemsProcessed(int64_t(state.iterations()) * int64_t(g.size()));
+    state.counters["process_cpu_ms_per_run"] = 1e3 * cpu / runs;
     state.SetLabel(simd::chosen());
+    const double per = bench::bernstein_multiply_adds(l, false) + bench::gaussian_extra_multiply_adds(3);
+    bench::report_floor_fraction(state, target, per * double(g.size()) * runs, wall, cpu);
+    state.counters["madds_per_gaussian"] = per;
 }
 const bool kSimdRegistered = [] {
     for (const simd::Target& t : simd::runnable())
