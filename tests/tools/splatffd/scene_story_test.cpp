@@ -429,4 +429,14 @@ TEST(SceneStory, ProfilerNumbersSayWhatTheyMeasured) {
     const auto at = gpu.out.find("deformation ");
     ASSERT_NE(at, std::string::npos) << gpu.out;
     EXPECT_TRUE(has(gpu.out, "GPU program set-up (shader compilation, first dispatch) ")) << gpu.out;
+    // Surface splats, streamed and in memory, the same.
+    const std::string splats = (dir / "s.ply").string();
+    ASSERT_EQ(tool("convert sphere " + splats + " --splats 3000").code, 0);
+    for (const std::string out : {"sd.ply", "sd.glb"}) {
+        const CliRun d =
+            tool("deform " + splats + " " + (dir / out).string() + " --lattice fit:3 --backend gpu");
+        ASSERT_EQ(d.code, 0) << d.out;
+        EXPECT_TRUE(has(d.out, "GPU program set-up (shader compilation, first dispatch) "))
+            << out << ": " << d.out;
+    }
 }
