@@ -7,11 +7,19 @@
 #pragma once
 
 #include <memory>
+#include <ostream>
 #include <string>
 
 #include <gtest/gtest.h>
 
 #include "runtime/simd/simd.h"
+
+namespace sffd::simd {
+
+// gtest prints a parameter through PrintTo: the target's name, not its bytes (ctest's test list shows it).
+inline void PrintTo(const Target& t, std::ostream* os) { *os << t.name; }
+
+}  // namespace sffd::simd
 
 namespace sffd::test {
 
