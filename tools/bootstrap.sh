@@ -19,6 +19,7 @@ PACKAGES=(
   libimgui-dev                                    # editor UI
   libgtest-dev libgmock-dev libbenchmark-dev      # tests, benchmarks
   libzstd-dev libwebp-dev                         # SPZ version 4 (zstd streams), SOG (WebP images)
+  libhwy-dev                                      # Highway: the CPU kernels' SIMD targets, chosen at run time
   assimp-testmodels                               # glTF samples for the import tests (tests/assets)
   munge slurmctld slurmd slurm-client            # a single-node Slurm the render farm test starts (tests/tools)
   ffmpeg                                          # render --video: MP4 (H.264) and GIF encoding
