@@ -1,19 +1,28 @@
-// CPU rasteriser of the splats' sprites (cpu_raster.h).
-#include "systems/splat_render/cpu_raster.h"
-
-#include "systems/splat_render/texture_lookup.h"
+// CPU rasteriser of the splats' sprites (cpu_raster.h). Compiled once per SIMD target (runtime/simd/simd.h),
+// one dispatch per call: the set-up, the binning and the bands, whose ray casts run a sprite's row a vector
+// of pixels at a time. Every target draws the same image, bit for bit: each lane runs the sequence of IEEE
+// operations the scalar code runs (separate multiplies and adds: sse4 and the scalar target have no FMA,
+// so none is contracted, see CMakeLists.txt), and a NaN depth fails the depth test on every target.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "systems/splat_render/cpu_raster.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 
-#if defined(__AVX512F__)
-#include <immintrin.h>
-#endif
-
 #include <glm/gtc/packing.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+
+#include "runtime/simd/simd.h"
+#include "systems/splat_render/cpu_raster.h"
+#include "systems/splat_render/texture_lookup.h"
+
+// What the set-up and every target's bands share, compiled once.
+#ifndef SFFD_SPLAT_RENDER_CPU_RASTER_SHARED
+#define SFFD_SPLAT_RENDER_CPU_RASTER_SHARED
 
 namespace sffd::render {
 
@@ -52,172 +61,298 @@ glm::vec3 sample_texture_lod(const TexelView& t, glm::vec2 uv, float lod) {
     return b.hi == b.lo ? lo : glm::mix(lo, sample_texture(t, uv, b.hi), b.f);
 }
 
-// GCC 12's AVX-512 intrinsics (sqrt, min, max) pass _mm512_undefined_ps() as their unused merge source,
-// which -Wmaybe-uninitialized reports at every use.
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"
-// Every sprite of one band (rows [row0, row1) of the frame) into the image.
-template <Write Mode>
-void draw_band(const CpuRasterImage& img, const std::uint32_t* list, std::size_t n, int row0, int row1,
-               const Depths& f, std::uint64_t* color, float* depth, glm::vec4* aux,
-               glm::vec4* accum_color = nullptr, glm::vec4* accum_normal = nullptr) {
-    const int rx = img.rect.x, ry = img.rect.y, stride = img.rect.z;
-    for (std::size_t k = 0; k < n; ++k) {
-        const CpuSprite& s = img.setup[list[k]];
-        const int y0 = std::max(s.y0, row0), y1 = std::min(s.y1, row1);
-        for (int y = y0; y < y1; ++y) {
-            // raycast_splat(): inv_t = dot(plane, ray), s = t dot(dual_u, ray) - dual_u.w (likewise q).
-            const float ray_y = (float(y) + 0.5f) * f.ray_y + f.ray_dy;
-            const float plane_row = s.plane.y * ray_y - s.plane.z;
-            const float u_row = s.dual_u.y * ray_y - s.dual_u.z, v_row = s.dual_v.y * ray_y - s.dual_v.z;
-            float* drow = depth + std::size_t(y - ry) * std::size_t(stride) - rx;
-            std::uint64_t* crow = color ? color + std::size_t(y - ry) * std::size_t(stride) - rx : nullptr;
-            glm::vec4* arow =
-                Mode == Write::color_aux ? aux + std::size_t(y - ry) * std::size_t(stride) - rx : nullptr;
-            glm::vec4* acrow = Mode == Write::attribute
-                                   ? accum_color + std::size_t(y - ry) * std::size_t(stride) - rx
-                                   : nullptr;
-            glm::vec4* anrow = Mode == Write::attribute
-                                   ? accum_normal + std::size_t(y - ry) * std::size_t(stride) - rx
-                                   : nullptr;
-            const float ray_y2 = ray_y * ray_y + 1.0f;
-            // One pixel of the row: after the ray cast, its depth test and writes.
-            auto write = [&](int x, float inv_t, float t, float su, float sv, float ray_x) {
-                if constexpr (Mode == Write::visibility) {
-                    // visibility.frag: the hit pushed back by eps (plane.w) along the unit view ray.
-                    const float pushed = t + s.plane.w / std::sqrt(ray_x * ray_x + ray_y2);
-                    const float d = std::clamp(0.5f * (f.p32 / pushed - f.p22) + 0.5f, 0.0f, 1.0f);
-                    if (d < drow[x]) drow[x] = d;
-                    return;
-                }
-                const float d = std::clamp(0.5f * (f.p32 * inv_t - f.p22) + 0.5f, 0.0f, 1.0f);
-                if constexpr (Mode == Write::attribute) {
-                    if (!(d <= drow[x])) return;  // LEQUAL against the visibility pass, no depth write
-                    const float r2 = su * su + sv * sv, w = (1.0f - r2) * (1.0f - r2) + 1e-6f;
-                    glm::vec3 albedo = s.albedo;
-                    if (s.texture)
-                        albedo = sample_texture_lod(
-                            *s.texture,
-                            s.uv + su * glm::vec2(s.uv_axes) + sv * glm::vec2(s.uv_axes.z, s.uv_axes.w),
-                            s.lod);
-                    acrow[x] += glm::vec4(w * albedo, w);
-                    anrow[x] += glm::vec4(w * s.normal, w * t);
-                    return;
-                }
-                if (!(d < drow[x])) return;
-                drow[x] = d;
-                if (s.texture) {
-                    const glm::vec2 uv =
-                        s.uv + su * glm::vec2(s.uv_axes) + sv * glm::vec2(s.uv_axes.z, s.uv_axes.w);
-                    const glm::vec3 albedo = sample_texture(*s.texture, uv, s.level);
-                    crow[x] = pack_rgba16f(glm::vec4(albedo * s.diffuse + s.specular, 1.0f));
-                } else {
-                    crow[x] = s.color;
-                }
-                if constexpr (Mode == Write::color_aux) arow[x] = glm::vec4(s.normal, t);
+}  // namespace
+
+}  // namespace sffd::render
+
+#endif  // SFFD_SPLAT_RENDER_CPU_RASTER_SHARED
+
+HWY_BEFORE_NAMESPACE();
+namespace sffd::render::HWY_NAMESPACE {
+namespace hn = hwy::HWY_NAMESPACE;
+
+namespace {
+
+using DF = hn::ScalableTag<float>;
+constexpr std::size_t max_lanes = hn::MaxLanes(DF());
+
+// Whether MaskedLoad and BlendedStore of 4- and 8-byte lanes touch no lane outside the mask: AVX2's and
+// AVX-512's masked moves, and the scalar target's one lane (always a pixel of the row). Highway 1.0.3's
+// sse4 and neon MaskedLoad read the whole vector (sse4's with an aligned load) and neon's BlendedStore
+// writes it back: past the image row's last pixel that memory is the next band's (another thread's) or
+// outside the image, so there a vector that crosses the row's end goes through a copy of its pixels.
+constexpr bool masked_moves = HWY_TARGET == HWY_SCALAR || (HWY_ARCH_X86 && HWY_TARGET <= HWY_AVX2);
+// Whether masks are bit masks (AVX-512's mask registers, smaller than a vector) rather than vectors of
+// all-ones lanes: the mask of 64-bit lanes then comes from the float lanes' mask bits through a general
+// register instead of widening its lanes.
+constexpr bool bit_masks = sizeof(hn::Mask<DF>) < sizeof(hn::Vec<DF>);
+// Whether a vector of pixels that lies inside the image row is written whole: loaded, blended and stored,
+// the lanes outside the mask written back as they were (safe: every pixel of a band's rows is its own
+// thread's). Where masks are vectors the masked stores are emulated (sse4, neon) or slow (AVX2's vmaskmov
+// stores on AMD's cores); AVX-512's are as fast as a store.
+constexpr bool whole_vectors = !bit_masks;
+
+// std::clamp(v, 0, 1) in every lane, a NaN kept (it then fails every depth test). x86's min and max
+// return their second operand when either is NaN, so min(1, max(0, v)) is exactly std::clamp's
+// `v < 0 ? 0 : v` and `1 < v ? 1 : v`; elsewhere (the scalar target's hn::Max returns the number, NEON's
+// the NaN) the comparisons are written out.
+template <class D>
+hn::Vec<D> clamp01(D d, hn::Vec<D> v) {
+    const auto zero = hn::Zero(d), one = hn::Set(d, 1.0f);
+    if constexpr (HWY_ARCH_X86 && HWY_TARGET != HWY_SCALAR && HWY_TARGET != HWY_EMU128) {
+        return hn::Min(one, hn::Max(zero, v));
+    } else {
+        v = hn::IfThenElse(hn::Lt(v, zero), zero, v);
+        return hn::IfThenElse(hn::Lt(one, v), one, v);
+    }
+}
+
+// The lanes of mask m (a subset of the first `count`) of the pixels at p (`count` of them there), zero
+// elsewhere; `whole` (the vector lies inside the image row): every lane, read whole. Otherwise masked
+// moves where they are exact, else a copy of the `count` pixels.
+template <class D, typename T = hn::TFromD<D>>
+hn::Vec<D> load_lanes(D d, hn::Mask<D> m, const T* p, int count, bool whole) {
+    if (whole) return hn::LoadU(d, p);
+    if constexpr (masked_moves) {
+        (void)count;
+        return hn::MaskedLoad(m, d, p);
+    } else {
+        alignas(64) T copy[max_lanes] = {};
+        std::copy_n(p, count, copy);
+        return hn::IfThenElseZero(m, hn::Load(d, copy));
+    }
+}
+// v into the lanes of mask m of the pixels at p (as load_lanes reads them); the others keep their values.
+// Written whole, the lanes outside the mask are written back as they were.
+template <class D, typename T = hn::TFromD<D>>
+void store_lanes(hn::Vec<D> v, hn::Mask<D> m, D d, T* p, int count, bool whole) {
+    if (whole) return hn::StoreU(hn::IfThenElse(m, v, hn::LoadU(d, p)), d, p);
+    if constexpr (masked_moves) {
+        (void)count;
+        hn::BlendedStore(v, m, d, p);
+    } else {
+        alignas(64) T copy[max_lanes] = {};
+        std::copy_n(p, count, copy);
+        hn::Store(hn::IfThenElse(m, v, hn::Load(d, copy)), d, copy);
+        std::copy_n(copy, count, p);
+    }
+}
+
+// The mask of 64-bit lanes (d64) holding the float lanes' mask bits from bit `first` on.
+template <class D64>
+hn::Mask<D64> mask_from_bits(D64 d64, std::uint64_t bits, std::size_t first) {
+    std::uint8_t bytes[8];
+    const std::uint64_t b = bits >> first;
+    std::memcpy(bytes, &b, sizeof bytes);
+    return hn::LoadMaskBits(d64, bytes);
+}
+// The same lanes of mask m (float lanes) as 64-bit lanes (d64, as many lanes), through the vector of
+// all-ones lanes widened.
+template <class D, class D64>
+hn::Mask<D64> widen_mask(D d, D64 d64, hn::Mask<D> m) {
+    const hn::RebindToSigned<D> di;
+    const hn::Rebind<std::int64_t, D> di64;
+    return hn::RebindMask(d64, hn::MaskFromVec(hn::PromoteTo(di64, hn::BitCast(di, hn::VecFromMask(d, m)))));
+}
+
+// The colour into the pixels of mask m (float lanes, a subset of the first `count`) of the 64-bit colour
+// row p. Twice as wide as the floats, the colours take one 64-bit-lane vector when the floats fill at most
+// half a vector (the one-lane scalar target included), else two: the lower and the upper half of the
+// float lanes (the upper one stored only when the vector holds pixels there).
+template <class D>
+void store_color(D d, hn::Mask<D> m, std::uint64_t color, std::uint64_t* p, int count, bool whole) {
+    constexpr int n = int(hn::MaxLanes(D()));
+    std::uint64_t bits = 0;
+    if constexpr (bit_masks) {
+        std::uint8_t bytes[8] = {};
+        hn::StoreMaskBits(d, m, bytes);
+        std::memcpy(&bits, bytes, sizeof bits);
+    }
+    if constexpr (n * sizeof(std::uint64_t) <= HWY_MAX_BYTES) {
+        const hn::Rebind<std::uint64_t, D> d64;
+        store_lanes(hn::Set(d64, color), bit_masks ? mask_from_bits(d64, bits, 0) : widen_mask(d, d64, m),
+                    d64, p, count, whole);
+    } else {
+        const hn::Repartition<std::uint64_t, D> d64;  // n / 2 lanes
+        const auto c = hn::Set(d64, color);
+        const int lo = std::min(count, n / 2), hi = count - lo;
+        if constexpr (bit_masks) {
+            store_lanes(c, mask_from_bits(d64, bits, 0), d64, p, lo, whole);
+            if (hi > 0) store_lanes(c, mask_from_bits(d64, bits, n / 2), d64, p + n / 2, hi, whole);
+        } else {
+#if HWY_TARGET != HWY_SCALAR  // one lane: never here (it has no halves)
+            const hn::Half<hn::RebindToSigned<D>> dih;
+            const hn::Repartition<std::int64_t, D> di64;
+            const auto lanes = hn::BitCast(hn::RebindToSigned<D>(), hn::VecFromMask(d, m));
+            const auto widen = [&](auto half) {
+                return hn::RebindMask(d64, hn::MaskFromVec(hn::PromoteTo(di64, half)));
             };
-#if defined(__AVX512F__)
-            // Sixteen pixels of the row at once, the ray cast's rejections as a lane mask; the pixels that
-            // pass are written one by one (few: a sprite row is a few pixels wide).
-            const __m512 lanes = _mm512_setr_ps(0.5f, 1.5f, 2.5f, 3.5f, 4.5f, 5.5f, 6.5f, 7.5f, 8.5f, 9.5f,
-                                                10.5f, 11.5f, 12.5f, 13.5f, 14.5f, 15.5f);
-            for (int x0 = s.x0; x0 < s.x1; x0 += 16) {
-                const int count = std::min(16, s.x1 - x0);
-                __mmask16 m = __mmask16(count == 16 ? 0xffffu : (1u << count) - 1u);
-                const __m512 ray_x = _mm512_add_ps(
-                    _mm512_mul_ps(_mm512_add_ps(_mm512_set1_ps(float(x0)), lanes), _mm512_set1_ps(f.ray_x)),
-                    _mm512_set1_ps(f.ray_dx));
-                const __m512 inv_t =
-                    _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(s.plane.x), ray_x), _mm512_set1_ps(plane_row));
-                m &= _mm512_cmp_ps_mask(inv_t, _mm512_setzero_ps(), _CMP_GT_OQ);
-                if (!m) continue;
-                const __m512 t = _mm512_div_ps(_mm512_set1_ps(1.0f), inv_t);
-                const __m512 su = _mm512_sub_ps(
-                    _mm512_mul_ps(t, _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(s.dual_u.x), ray_x),
-                                                   _mm512_set1_ps(u_row))),
-                    _mm512_set1_ps(s.dual_u.w));
-                const __m512 sv = _mm512_sub_ps(
-                    _mm512_mul_ps(t, _mm512_add_ps(_mm512_mul_ps(_mm512_set1_ps(s.dual_v.x), ray_x),
-                                                   _mm512_set1_ps(v_row))),
-                    _mm512_set1_ps(s.dual_v.w));
-                const __m512 r2 = _mm512_add_ps(_mm512_mul_ps(su, su), _mm512_mul_ps(sv, sv));
-                m &= _mm512_cmp_ps_mask(r2, _mm512_set1_ps(1.0f), _CMP_LE_OQ);
-                if (!m) continue;
-                // Depth test and writes in the vector where no per-pixel texture lookup or aux output is
-                // needed: the visibility pass and flat-coloured sprites.
-                if (Mode != Write::color_aux && Mode != Write::attribute && !s.texture) {
-                    __m512 d;
-                    if constexpr (Mode == Write::visibility) {
-                        const __m512 len = _mm512_sqrt_ps(
-                            _mm512_add_ps(_mm512_mul_ps(ray_x, ray_x), _mm512_set1_ps(ray_y2)));
-                        const __m512 pushed = _mm512_add_ps(t, _mm512_div_ps(_mm512_set1_ps(s.plane.w), len));
-                        d = _mm512_div_ps(_mm512_set1_ps(f.p32), pushed);
-                    } else {
-                        d = _mm512_mul_ps(_mm512_set1_ps(f.p32), inv_t);
-                    }
-                    d = _mm512_add_ps(
-                        _mm512_mul_ps(_mm512_set1_ps(0.5f), _mm512_sub_ps(d, _mm512_set1_ps(f.p22))),
-                        _mm512_set1_ps(0.5f));
-                    d = _mm512_min_ps(_mm512_max_ps(d, _mm512_setzero_ps()), _mm512_set1_ps(1.0f));
-                    const __m512 old = _mm512_maskz_loadu_ps(m, drow + x0);
-                    m &= _mm512_cmp_ps_mask(d, old, _CMP_LT_OQ);
-                    _mm512_mask_storeu_ps(drow + x0, m, d);
-                    if constexpr (Mode == Write::color) {
-                        const __m512i c = _mm512_set1_epi64(std::int64_t(s.color));
-                        _mm512_mask_storeu_epi64(crow + x0, __mmask8(m), c);
-                        _mm512_mask_storeu_epi64(crow + x0 + 8, __mmask8(m >> 8), c);
-                    }
-                    continue;
-                }
-                alignas(64) float l_inv_t[16], l_t[16], l_su[16], l_sv[16], l_ray_x[16];
-                _mm512_store_ps(l_inv_t, inv_t), _mm512_store_ps(l_t, t), _mm512_store_ps(l_su, su);
-                _mm512_store_ps(l_sv, sv), _mm512_store_ps(l_ray_x, ray_x);
-                for (unsigned bits = m; bits; bits &= bits - 1) {
-                    const int l = __builtin_ctz(bits);
-                    write(x0 + l, l_inv_t[l], l_t[l], l_su[l], l_sv[l], l_ray_x[l]);
-                }
-            }
-#else
-            for (int x = s.x0; x < s.x1; ++x) {
-                const float ray_x = (float(x) + 0.5f) * f.ray_x + f.ray_dx;
-                const float inv_t = s.plane.x * ray_x + plane_row;
-                if (!(inv_t > 0.0f)) continue;
-                const float t = 1.0f / inv_t;
-                const float su = t * (s.dual_u.x * ray_x + u_row) - s.dual_u.w;
-                const float sv = t * (s.dual_v.x * ray_x + v_row) - s.dual_v.w;
-                if (su * su + sv * sv > 1.0f) continue;
-                write(x, inv_t, t, su, sv, ray_x);
-            }
+            store_lanes(c, widen(hn::LowerHalf(dih, lanes)), d64, p, lo, whole);
+            if (hi > 0) store_lanes(c, widen(hn::UpperHalf(dih, lanes)), d64, p + n / 2, hi, whole);
 #endif
         }
     }
 }
 
-#pragma GCC diagnostic pop
+// The rows of the image a band writes (null: not written by this pass), addressed by frame row.
+struct BandImage {
+    std::uint64_t* color = nullptr;
+    float* depth = nullptr;
+    glm::vec4 *aux = nullptr, *accum_color = nullptr, *accum_normal = nullptr;
+    int rx = 0, ry = 0, stride = 0;  // the image rectangle's corner and width
+    template <class T>
+    T* row(T* p, int y) const {
+        return p ? p + std::size_t(y - ry) * std::size_t(stride) - rx : nullptr;
+    }
+};
+
+// What a pixel (x, y) that passed a sprite's ray cast and depth test writes besides its depth, as the
+// pass's fragment code does: the colour (a textured sprite's looked up and lit) and the aux output, or
+// the attribute sums with weight w.
+template <Write Mode>
+void write_pixel(const CpuSprite& s, const BandImage& img, int x, int y, float t, float su, float sv,
+                 float w) {
+    if constexpr (Mode == Write::attribute) {
+        glm::vec3 albedo = s.albedo;
+        if (s.texture)
+            albedo = sample_texture_lod(
+                *s.texture, s.uv + su * glm::vec2(s.uv_axes) + sv * glm::vec2(s.uv_axes.z, s.uv_axes.w),
+                s.lod);
+        img.row(img.accum_color, y)[x] += glm::vec4(w * albedo, w);
+        img.row(img.accum_normal, y)[x] += glm::vec4(w * s.normal, w * t);
+        return;
+    }
+    std::uint64_t& color = img.row(img.color, y)[x];
+    if (s.texture) {
+        const glm::vec2 uv = s.uv + su * glm::vec2(s.uv_axes) + sv * glm::vec2(s.uv_axes.z, s.uv_axes.w);
+        const glm::vec3 albedo = sample_texture(*s.texture, uv, s.level);
+        color = pack_rgba16f(glm::vec4(albedo * s.diffuse + s.specular, 1.0f));
+    } else {
+        color = s.color;
+    }
+    if constexpr (Mode == Write::color_aux) img.row(img.aux, y)[x] = glm::vec4(s.normal, t);
+}
+
+// Rows [y0, y1) of one sprite, in vectors of d's lanes: the ray casts and depth tests in the vector, then
+// the depths stored; a flat sprite's colour too (the visibility pass has none), else each pixel that
+// passed is written by write_pixel (few: a sprite row is a few pixels wide). `ray_xs`: the x component of
+// every column's view ray.
+template <Write Mode, bool Flat, class D>
+void draw_sprite(D d, const CpuSprite& s, int y0, int y1, const Depths& f, const float* ray_xs,
+                 const BandImage& img) {
+    using V = hn::Vec<D>;
+    using M = hn::Mask<D>;
+    const int lanes = int(hn::Lanes(d));
+    const int row_end = img.rx + img.stride;  // past the image row's last pixel
+    const V zero = hn::Zero(d), one = hn::Set(d, 1.0f), half = hn::Set(d, 0.5f);
+    const V p32 = hn::Set(d, f.p32), p22 = hn::Set(d, f.p22);
+    const V plane_x = hn::Set(d, s.plane.x), eps = hn::Set(d, s.plane.w);
+    const V u_x = hn::Set(d, s.dual_u.x), u_w = hn::Set(d, s.dual_u.w);
+    const V v_x = hn::Set(d, s.dual_v.x), v_w = hn::Set(d, s.dual_v.w);
+    for (int y = y0; y < y1; ++y) {
+        // raycast_splat(): inv_t = dot(plane, ray), s = t dot(dual_u, ray) - dual_u.w (likewise q).
+        const float ray_y = (float(y) + 0.5f) * f.ray_y + f.ray_dy;
+        const float plane_row = s.plane.y * ray_y - s.plane.z;
+        const float u_row = s.dual_u.y * ray_y - s.dual_u.z, v_row = s.dual_v.y * ray_y - s.dual_v.z;
+        float* drow = img.row(img.depth, y);
+        std::uint64_t* crow = img.row(img.color, y);
+        const V plane_rows = hn::Set(d, plane_row), u_rows = hn::Set(d, u_row), v_rows = hn::Set(d, v_row);
+        const V ray_y2 = hn::Set(d, ray_y * ray_y + 1.0f);
+        // A vector of pixels of the row at once, the ray cast's rejections as a lane mask.
+        for (int x0 = s.x0; x0 < s.x1; x0 += lanes) {
+            const int count = std::min(lanes, s.x1 - x0);
+            M m = hn::FirstN(d, std::size_t(count));
+            const V ray_x = hn::LoadU(d, ray_xs + x0);
+            const V inv_t = hn::Add(hn::Mul(plane_x, ray_x), plane_rows);
+            m = hn::And(m, hn::Gt(inv_t, zero));
+            if (hn::AllFalse(d, m)) continue;
+            const V t = hn::Div(one, inv_t);
+            const V su = hn::Sub(hn::Mul(t, hn::Add(hn::Mul(u_x, ray_x), u_rows)), u_w);
+            const V sv = hn::Sub(hn::Mul(t, hn::Add(hn::Mul(v_x, ray_x), v_rows)), v_w);
+            const V r2 = hn::Add(hn::Mul(su, su), hn::Mul(sv, sv));
+            m = hn::And(m, hn::Le(r2, one));  // a NaN radius misses
+            if (hn::AllFalse(d, m)) continue;
+            V dd;
+            if constexpr (Mode == Write::visibility) {
+                // visibility.frag: the hit pushed back by eps (plane.w) along the unit view ray.
+                const V len = hn::Sqrt(hn::Add(hn::Mul(ray_x, ray_x), ray_y2));
+                dd = hn::Div(p32, hn::Add(t, hn::Div(eps, len)));
+            } else {
+                dd = hn::Mul(p32, inv_t);
+            }
+            dd = clamp01(d, hn::Add(hn::Mul(half, hn::Sub(dd, p22)), half));
+            const bool whole = whole_vectors && x0 + lanes <= row_end;
+            const V held = load_lanes(d, m, drow + x0, count, whole);
+            if constexpr (Mode == Write::attribute) {
+                m = hn::And(m, hn::Le(dd, held));  // LEQUAL against the visibility pass, no depth write
+            } else {
+                m = hn::And(m, hn::Lt(dd, held));  // GL_LESS
+                store_lanes(dd, m, d, drow + x0, count, whole);
+            }
+            if constexpr (Flat) {
+                if constexpr (Mode == Write::color) store_color(d, m, s.color, crow + x0, count, whole);
+            } else {
+                if (hn::AllFalse(d, m)) continue;
+                alignas(64) float l_t[max_lanes], l_su[max_lanes], l_sv[max_lanes], l_w[max_lanes];
+                hn::Store(t, d, l_t), hn::Store(su, d, l_su), hn::Store(sv, d, l_sv);
+                if constexpr (Mode == Write::attribute) {
+                    // attribute.frag's weight, (1 - r²)² + 1e-6.
+                    const V rest = hn::Sub(one, r2);
+                    hn::Store(hn::Add(hn::Mul(rest, rest), hn::Set(d, 1e-6f)), d, l_w);
+                }
+                std::uint8_t mask_bytes[8] = {};
+                hn::StoreMaskBits(d, m, mask_bytes);
+                std::uint64_t bits = 0;
+                std::memcpy(&bits, mask_bytes, sizeof bits);
+                for (; bits; bits &= bits - 1) {
+                    const std::size_t l = hwy::Num0BitsBelowLS1Bit_Nonzero64(bits);
+                    write_pixel<Mode>(s, img, x0 + int(l), y, l_t[l], l_su[l], l_sv[l],
+                                      Mode == Write::attribute ? l_w[l] : 0.0f);
+                }
+            }
+        }
+    }
+}
+
+// Rows [y0, y1) of one sprite in the narrowest vectors, down to 128 bits, that hold its rows: most
+// sprites are a few pixels wide, and a narrower vector does their work for less (AMD's Zen 4 runs a
+// 512-bit operation as two 256-bit ones; division and square roots cost more the wider they are).
+template <Write Mode, bool Flat, class D>
+void draw_narrowest(D d, const CpuSprite& s, int y0, int y1, const Depths& f, const float* ray_xs,
+                    const BandImage& img) {
+    using DH = hn::Half<D>;
+    if constexpr (hn::MaxLanes(DH()) * sizeof(float) >= 16) {
+        if (s.x1 - s.x0 <= int(hn::Lanes(DH())))
+            return draw_narrowest<Mode, Flat>(DH(), s, y0, y1, f, ray_xs, img);
+    }
+    draw_sprite<Mode, Flat>(d, s, y0, y1, f, ray_xs, img);
+}
+
+// Every sprite of one band (rows [row0, row1) of the frame) into the image, in draw order.
+template <Write Mode>
+void draw_band(const CpuRasterImage& out, const std::uint32_t* list, std::size_t n, int row0, int row1,
+               const Depths& f, const float* ray_xs, const BandImage& img) {
+    for (std::size_t k = 0; k < n; ++k) {
+        const CpuSprite& s = out.setup[list[k]];
+        const int y0 = std::max(s.y0, row0), y1 = std::min(s.y1, row1);
+        // The visibility pass writes depths only; the preview without aux outputs a flat sprite's colour.
+        if constexpr (Mode == Write::visibility) {
+            draw_narrowest<Mode, true>(DF(), s, y0, y1, f, ray_xs, img);
+        } else if constexpr (Mode == Write::color) {
+            if (s.texture) draw_narrowest<Mode, false>(DF(), s, y0, y1, f, ray_xs, img);
+            else draw_narrowest<Mode, true>(DF(), s, y0, y1, f, ray_xs, img);
+        } else {
+            draw_narrowest<Mode, false>(DF(), s, y0, y1, f, ray_xs, img);
+        }
+    }
+}
 
 }  // namespace
 
-glm::vec2 unpack_halves(float packed) {
-    std::uint32_t stored;
-    std::memcpy(&stored, &packed, sizeof stored);
-    const std::uint32_t bits = (stored & 0x7fffffu) + (((stored >> 23) - 1u) << 23);
-    const std::uint32_t halves = ((bits & 0x7fffu) << 1) | ((bits >> 15) << 17);
-    return {glm::unpackHalf1x16(std::uint16_t(halves)), glm::unpackHalf1x16(std::uint16_t(halves >> 16))};
-}
-
-glm::vec3 unpack_color(float packed) {
-    std::uint32_t stored;
-    std::memcpy(&stored, &packed, sizeof stored);
-    const std::uint32_t bits = (stored & 0x7fffffu) + (((stored >> 23) - 1u) << 23);
-    const glm::vec3 c =
-        glm::vec3(float(bits & 1023u), float((bits >> 10) & 1023u), float((bits >> 20) & 1023u)) *
-        (1.0f / 1023.0f);
-    return c * c;
-}
-
-void rasterize_sprites_cpu(std::span<const SpriteRun> runs, const gpu::FrameBlock& frame, int width,
-                           int height, glm::vec4 background, PointSizeRange sizes, SpritePass pass, bool aux,
-                           CpuRasterImage& out) {
+// rasterize_sprites_cpu() compiled for this target: the sprites set up and binned, then the bands filled
+// and drawn in parallel.
+void Rasterize(std::span<const SpriteRun> runs, const gpu::FrameBlock& frame, int width, int height,
+               glm::vec4 background, PointSizeRange sizes, SpritePass pass, bool aux, CpuRasterImage& out) {
     const bool visibility = pass != SpritePass::preview, hq = pass == SpritePass::hq;
     aux = aux && !visibility;
     std::size_t n = 0;
@@ -313,6 +448,17 @@ void rasterize_sprites_cpu(std::span<const SpriteRun> runs, const gpu::FrameBloc
     const std::uint64_t clear_color = pack_rgba16f(background);
     const Depths f{frame.ray_map.x, frame.ray_map.y,        frame.ray_map.z,
                    frame.ray_map.w, frame.projection[3][2], frame.projection[2][2]};
+    // The x component of each column's view ray, as the scalar code computes it; a vector past the last
+    // column reads padding.
+    std::vector<float> ray_xs(std::size_t(hi.x) + max_lanes);
+    for (std::size_t x = 0; x < ray_xs.size(); ++x) ray_xs[x] = (float(x) + 0.5f) * f.ray_x + f.ray_dx;
+    BandImage img;
+    img.color = visibility ? nullptr : out.color.data();
+    img.depth = out.depth.data();
+    img.aux = aux ? out.aux.data() : nullptr;
+    img.accum_color = hq ? out.accum_color.data() : nullptr;
+    img.accum_normal = hq ? out.accum_normal.data() : nullptr;
+    img.rx = out.rect.x, img.ry = out.rect.y, img.stride = out.rect.z;
     tbb::parallel_for(
         tbb::blocked_range<int>(lo.y / band_rows, (hi.y - 1) / band_rows + 1, 1),
         [&](const tbb::blocked_range<int>& range) {
@@ -326,26 +472,57 @@ void rasterize_sprites_cpu(std::span<const SpriteRun> runs, const gpu::FrameBloc
                 const std::uint32_t* list = out.bins.data() + out.bin_first[std::size_t(b)];
                 const std::size_t listed = out.bin_first[std::size_t(b) + 1] - out.bin_first[std::size_t(b)];
                 if (visibility) {
-                    draw_band<Write::visibility>(out, list, listed, row0, row1, f, nullptr, out.depth.data(),
-                                                 nullptr);
+                    draw_band<Write::visibility>(out, list, listed, row0, row1, f, ray_xs.data(), img);
                     // The band's visible depths are final: its attribute pass can run at once.
                     if (hq) {
                         std::fill_n(out.accum_color.data() + first, count, glm::vec4(0.0f));
                         std::fill_n(out.accum_normal.data() + first, count, glm::vec4(0.0f));
-                        draw_band<Write::attribute>(out, list, listed, row0, row1, f, nullptr,
-                                                    out.depth.data(), nullptr, out.accum_color.data(),
-                                                    out.accum_normal.data());
+                        draw_band<Write::attribute>(out, list, listed, row0, row1, f, ray_xs.data(), img);
                     }
                 } else if (aux) {
                     std::fill_n(out.aux.data() + first, count, glm::vec4(0.0f, 0.0f, 0.0f, -1.0f));
-                    draw_band<Write::color_aux>(out, list, listed, row0, row1, f, out.color.data(),
-                                                out.depth.data(), out.aux.data());
+                    draw_band<Write::color_aux>(out, list, listed, row0, row1, f, ray_xs.data(), img);
                 } else {
-                    draw_band<Write::color>(out, list, listed, row0, row1, f, out.color.data(),
-                                            out.depth.data(), nullptr);
+                    draw_band<Write::color>(out, list, listed, row0, row1, f, ray_xs.data(), img);
                 }
             }
         });
 }
 
+}  // namespace sffd::render::HWY_NAMESPACE
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+
+namespace sffd::render {
+
+HWY_EXPORT(Rasterize);
+
+glm::vec2 unpack_halves(float packed) {
+    std::uint32_t stored;
+    std::memcpy(&stored, &packed, sizeof stored);
+    const std::uint32_t bits = (stored & 0x7fffffu) + (((stored >> 23) - 1u) << 23);
+    const std::uint32_t halves = ((bits & 0x7fffu) << 1) | ((bits >> 15) << 17);
+    return {glm::unpackHalf1x16(std::uint16_t(halves)), glm::unpackHalf1x16(std::uint16_t(halves >> 16))};
+}
+
+glm::vec3 unpack_color(float packed) {
+    std::uint32_t stored;
+    std::memcpy(&stored, &packed, sizeof stored);
+    const std::uint32_t bits = (stored & 0x7fffffu) + (((stored >> 23) - 1u) << 23);
+    const glm::vec3 c =
+        glm::vec3(float(bits & 1023u), float((bits >> 10) & 1023u), float((bits >> 20) & 1023u)) *
+        (1.0f / 1023.0f);
+    return c * c;
+}
+
+void rasterize_sprites_cpu(std::span<const SpriteRun> runs, const gpu::FrameBlock& frame, int width,
+                           int height, glm::vec4 background, PointSizeRange sizes, SpritePass pass, bool aux,
+                           CpuRasterImage& out) {
+    simd::honour_environment();
+    HWY_DYNAMIC_DISPATCH(Rasterize)(runs, frame, width, height, background, sizes, pass, aux, out);
+}
+
 }  // namespace sffd::render
+
+#endif  // HWY_ONCE

@@ -5,7 +5,9 @@
 // spheres whose discs overlap about twice).
 // Each iteration renders one frame and waits for it (glFinish) and is timed with a CPU clock
 // (UseManualTime): llvmpipe's GL_TIME_ELAPSED under-reports point rasterisation. Counters: visible splats
-// and per-pass milliseconds (a separate timed frame with glFinish between passes).
+// and per-pass milliseconds (a separate timed frame with glFinish between passes). bench_cpu_cull and
+// bench_cpu_raster time the CPU cull and the CPU sprite rasteriser alone (no GL), the rasteriser also once
+// per SIMD target this machine runs (bench_cpu_raster/.../simd:avx2).
 //   build/<dir>/tools/bench/bench_render_splat --benchmark_repetitions=5
 //   --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
@@ -16,6 +18,7 @@
 #include <cstdio>
 #include <numbers>
 #include <optional>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -27,8 +30,10 @@
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/gl_object.h"
 #include "runtime/scene/components.h"
+#include "runtime/simd/simd.h"
 #include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/cpu_cull.h"
+#include "systems/splat_render/cpu_raster.h"
 #include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/splat_render.h"
 #include "systems/residency/residency_system.h"
@@ -286,7 +291,77 @@ void bench_cpu_cull(benchmark::State& state) {
     state.SetItemsProcessed(std::int64_t(state.iterations() * n));
 }
 
+// The CPU sprite rasteriser alone (cpu_raster.h, no GL): the sprites the CPU cull makes of the sphere
+// from distance 3 at 1280x720, drawn by one pass: preview (lit flat colours), the HQ visibility pass
+// (depths pushed back by eps) or hq (that pass and the attribute sums). `target`: the SIMD target pinned
+// for the body (null: the dispatch's own choice). Counters: sprites drawn, pixels of the rectangle.
+void cpu_raster_frames(benchmark::State& state, std::size_t n, SpritePass pass, const simd::Target* target) {
+    const SplatCloud cloud = sphere(n);
+    const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
+    Camera cam;
+    cam.eye = glm::dvec3(0, 0, 3);
+    gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 1280.0 / 720.0), 1280,
+                                           720, 1.0f, 255.0f, true);
+    f.light_dir[0] = glm::vec4(glm::normalize(glm::vec3(1, 1, 1)), 0);
+    f.light_color[0] = glm::vec4(1.0f);
+    f.material = glm::vec4(0.3f, 32.0f, 0, 0);
+    f.counts = glm::uvec4(std::uint32_t(n), 1u, 0u, pass == SpritePass::preview ? 1u : 0u);
+    CpuCullResult cull;
+    cull_splats_cpu(splats, f, {}, cull);
+    std::vector<SpriteRun> runs;
+    CpuCullResult::for_each_run(cull.records, cull.record_counts, cull.block,
+                                [&](std::size_t, const SplatRecord* p, std::size_t k) {
+                                    runs.push_back({p, k});
+                                });
+    std::optional<simd::ScopedTarget> pin;
+    if (target) pin.emplace(*target);
+    CpuRasterImage img;
+    rasterize_sprites_cpu(runs, f, 1280, 720, f.background, {1.0f, 255.0f}, pass, false, img);  // warm up
+    for (auto _ : state) {
+        rasterize_sprites_cpu(runs, f, 1280, 720, f.background, {1.0f, 255.0f}, pass, false, img);
+        benchmark::DoNotOptimize(img.depth.data());
+    }
+    state.counters["sprites"] = double(img.sprites);
+    state.counters["pixels"] = double(img.rect.z) * double(img.rect.w);
+    state.SetItemsProcessed(std::int64_t(state.iterations()) * std::int64_t(img.sprites));
+}
+
+// Args: splats, pass (0 preview, 1 the HQ visibility pass, 2 hq: visibility and attribute sums).
+void bench_cpu_raster(benchmark::State& state) {
+    const SpritePass passes[] = {SpritePass::preview, SpritePass::visibility, SpritePass::hq};
+    cpu_raster_frames(state, std::size_t(state.range(0)), passes[state.range(1)], nullptr);
+}
+
 }  // namespace
+
+// The CPU rasteriser once as dispatched and once per SIMD target this machine runs
+// (bench_cpu_raster/splats:59650/pass:0/simd:avx2).
+BENCHMARK(bench_cpu_raster)
+    ->ArgNames({"splats", "pass"})
+    ->Args({59650, 0})
+    ->Args({59650, 1})
+    ->Args({59650, 2})
+    ->Args({600000, 0})
+    ->Args({600000, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->MeasureProcessCPUTime()
+    ->UseRealTime();
+const int cpu_raster_per_target = [] {
+    const SpritePass passes[] = {SpritePass::preview, SpritePass::visibility, SpritePass::hq};
+    const std::pair<std::size_t, int> args[] = {{59650, 0}, {59650, 1}, {59650, 2}, {600000, 0}, {600000, 1}};
+    for (const simd::Target& t : simd::runnable())
+        for (const auto& [n, pass] : args)
+            benchmark::RegisterBenchmark(("bench_cpu_raster/splats:" + std::to_string(n) +
+                                          "/pass:" + std::to_string(pass) + "/simd:" + t.name)
+                                             .c_str(),
+                                         [t, n = n, pass = passes[pass]](benchmark::State& state) {
+                                             cpu_raster_frames(state, n, pass, &t);
+                                         })
+                ->Unit(benchmark::kMillisecond)
+                ->MeasureProcessCPUTime()
+                ->UseRealTime();
+    return 0;
+}();
 
 BENCHMARK(bench_cpu_cull)
     ->ArgNames({"splats", "hq"})
