@@ -34,8 +34,8 @@ std::string chosen();
 // "simd: avx3 (compiled: avx3, avx2, sse4, scalar)", the line `splatffd --version` prints.
 std::string version_line();
 
-// Pins the kernels to one compiled target the CPU runs ("scalar": the portable one, the last compiled). Refuses an unknown name or one
-// this CPU cannot run; the message lists what it can run.
+// Pins the kernels to one compiled target the CPU runs ("scalar": the portable one, the last compiled).
+// Refuses an unknown name or one this CPU cannot run; the message lists what it can run.
 Status pin(std::string_view name);
 // Back to the best runnable target.
 void unpin();

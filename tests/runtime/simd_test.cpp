@@ -65,8 +65,10 @@ TEST(Simd, UnknownOrUnrunnableTargetsAreRefusedWithWhatTheCpuRuns) {
     unpin();
     const Status st = pin("avx9000");
     ASSERT_FALSE(st);
-    EXPECT_NE(st.message().find("'avx9000' is not compiled into this binary"), std::string::npos) << st.message();
-    for (const Target& t : runnable()) EXPECT_NE(st.message().find(t.name), std::string::npos) << st.message();
+    EXPECT_NE(st.message().find("'avx9000' is not compiled into this binary"), std::string::npos)
+        << st.message();
+    for (const Target& t : runnable())
+        EXPECT_NE(st.message().find(t.name), std::string::npos) << st.message();
     EXPECT_EQ(chosen(), runnable().front().name);  // a refusal changes nothing
     for (const Target& t : compiled()) {
         if (has(runnable(), t.name)) continue;

@@ -38,6 +38,6 @@ inline std::string simd_target_name(const ::testing::TestParamInfo<simd::Target>
 
 }  // namespace sffd::test
 
-#define SFFD_INSTANTIATE_EVERY_SIMD_TARGET(suite)                                                    \
-    INSTANTIATE_TEST_SUITE_P(Simd, suite, ::testing::ValuesIn(::sffd::simd::runnable()),             \
+#define SFFD_INSTANTIATE_EVERY_SIMD_TARGET(suite)                                        \
+    INSTANTIATE_TEST_SUITE_P(Simd, suite, ::testing::ValuesIn(::sffd::simd::runnable()), \
                              ::sffd::test::simd_target_name)
