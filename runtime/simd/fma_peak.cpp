@@ -1,3 +1,5 @@
+#include "runtime/simd/fma_peak.h"
+
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "runtime/simd/fma_peak.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
@@ -8,9 +10,10 @@ namespace sffd::simd::HWY_NAMESPACE {
 namespace hn = hwy::HWY_NAMESPACE;
 
 // kChains independent accumulators hide the FMA latency (4-5 cycles on two pipes needs 8-10 in flight);
-// 12 fit in the 16 registers of sse4/avx2 with the two constants. Returns the lane count; the sum is
+// 12 fit in the 16 registers of sse4/avx2 with the two constants. Returns the multiply-adds of one
+// iteration (chains times lanes); the sum is
 // written out so the chains are not optimised away.
-constexpr int kChains = 12;
+constexpr int kChains = kFmaPeakChains;
 int FmaChains(std::uint64_t iterations, float* sink) {
     const hn::ScalableTag<float> d;
     const auto m = hn::Set(d, 0.9999999f), c = hn::Set(d, 1e-7f);
@@ -51,7 +54,7 @@ int FmaChains(std::uint64_t iterations, float* sink) {
         hn::Add(hn::Add(a0, a1), hn::Add(a2, a3)),
         hn::Add(hn::Add(hn::Add(a4, a5), hn::Add(a6, a7)), hn::Add(hn::Add(a8, a9), hn::Add(a10, a11))));
     *sink = hn::GetLane(hn::SumOfLanes(d, s));
-    return int(hn::Lanes(d));
+    return kChains * int(hn::Lanes(d));
 }
 
 }  // namespace sffd::simd::HWY_NAMESPACE
@@ -65,15 +68,11 @@ HWY_AFTER_NAMESPACE();
 #include <thread>
 #include <vector>
 
-#include "runtime/simd/fma_peak.h"
-
 namespace sffd::simd {
 
 HWY_EXPORT(FmaChains);
 
 namespace {
-
-constexpr double kChainsOnce = 12.0;  // FmaChains's kChains
 
 double thread_cpu_seconds() {
     timespec ts{};
@@ -89,10 +88,10 @@ FmaPeak measure_fma_peak(const Target& target, int threads, double seconds) {
     float sink = 0;
     // Calibrate one thread's iterations to a tenth of the time, then run every thread that long ten times.
     std::uint64_t iters = 1 << 16;
-    int lanes = 1;
+    int per_iteration = 1;
     for (;;) {
         const auto t0 = std::chrono::steady_clock::now();
-        lanes = HWY_DYNAMIC_DISPATCH(FmaChains)(iters, &sink);
+        per_iteration = HWY_DYNAMIC_DISPATCH(FmaChains)(iters, &sink);
         const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         if (dt > seconds / 10 || iters > (std::uint64_t(1) << 40)) {
             iters = std::uint64_t(double(iters) * seconds / std::max(dt, 1e-9) / 2.0) + 1;
@@ -109,13 +108,13 @@ FmaPeak measure_fma_peak(const Target& target, int threads, double seconds) {
         pool.emplace_back([&, t] {
             const double c0 = thread_cpu_seconds();
             HWY_DYNAMIC_DISPATCH(FmaChains)(iters, &sinks[std::size_t(t)]);
-            rate[std::size_t(t)] = double(iters) * kChainsOnce * double(lanes) / (thread_cpu_seconds() - c0);
+            rate[std::size_t(t)] = double(iters) * double(per_iteration) / (thread_cpu_seconds() - c0);
         });
     for (auto& th : pool) th.join();
     FmaPeak p;
     p.target = target.name;
     p.threads = n;
-    p.lanes = lanes;
+    p.lanes = per_iteration / kFmaPeakChains;
     for (double r : rate) p.per_second += r;
     return p;
 }

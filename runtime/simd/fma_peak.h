@@ -9,6 +9,9 @@
 
 namespace sffd::simd {
 
+// Independent multiply-add chains the measurement keeps in flight (fma_peak.cpp).
+inline constexpr int kFmaPeakChains = 12;
+
 struct FmaPeak {
     std::string target;
     int threads = 0;

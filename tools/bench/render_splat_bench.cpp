@@ -269,11 +269,9 @@ void bench_reference_points(benchmark::State& state) {
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
-// The CPU cull alone (cpu_cull.h, no GL): the sphere from distance 3, preview (lit) or HQ colours.
-void bench_cpu_cull(benchmark::State& state) {
-    const auto n = std::size_t(state.range(0));
-    const SplatCloud cloud = sphere(n);
-    const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
+// The frame the CPU benchmarks cull and draw: the sphere of n splats from distance 3 at 1280x720, one
+// white light; `lit` for preview's lit colours, else HQ's.
+gpu::FrameBlock sphere_frame(std::size_t n, bool lit) {
     Camera cam;
     cam.eye = glm::dvec3(0, 0, 3);
     gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 1280.0 / 720.0), 1280,
@@ -281,7 +279,16 @@ void bench_cpu_cull(benchmark::State& state) {
     f.light_dir[0] = glm::vec4(glm::normalize(glm::vec3(1, 1, 1)), 0);
     f.light_color[0] = glm::vec4(1.0f);
     f.material = glm::vec4(0.3f, 32.0f, 0, 0);
-    f.counts = glm::uvec4(std::uint32_t(n), 1u, 0u, state.range(1) ? 0u : 1u);
+    f.counts = glm::uvec4(std::uint32_t(n), 1u, 0u, lit ? 1u : 0u);
+    return f;
+}
+
+// The CPU cull alone (cpu_cull.h, no GL): the sphere from distance 3, preview (lit) or HQ colours.
+void bench_cpu_cull(benchmark::State& state) {
+    const auto n = std::size_t(state.range(0));
+    const SplatCloud cloud = sphere(n);
+    const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
+    const gpu::FrameBlock f = sphere_frame(n, state.range(1) == 0);
     CpuCullResult out;
     for (auto _ : state) {
         cull_splats_cpu(splats, f, {}, out);
@@ -298,14 +305,7 @@ void bench_cpu_cull(benchmark::State& state) {
 void cpu_raster_frames(benchmark::State& state, std::size_t n, SpritePass pass, const simd::Target* target) {
     const SplatCloud cloud = sphere(n);
     const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
-    Camera cam;
-    cam.eye = glm::dvec3(0, 0, 3);
-    gpu::FrameBlock f = camera_frame_block(view_matrix(cam), projection_matrix(cam, 1280.0 / 720.0), 1280,
-                                           720, 1.0f, 255.0f, true);
-    f.light_dir[0] = glm::vec4(glm::normalize(glm::vec3(1, 1, 1)), 0);
-    f.light_color[0] = glm::vec4(1.0f);
-    f.material = glm::vec4(0.3f, 32.0f, 0, 0);
-    f.counts = glm::uvec4(std::uint32_t(n), 1u, 0u, pass == SpritePass::preview ? 1u : 0u);
+    const gpu::FrameBlock f = sphere_frame(n, pass == SpritePass::preview);
     CpuCullResult cull;
     cull_splats_cpu(splats, f, {}, cull);
     std::vector<SpriteRun> runs;
