@@ -24,6 +24,7 @@ using spz_detail::u32;
 constexpr double kColorScale = 0.15;
 constexpr std::uint64_t kMaxSpzFileBytes = spz_detail::kMaxFileBytes;
 constexpr std::uint64_t kMaxSpzDecodedBytes = spz_detail::kMaxDecodedBytes;
+using spz_detail::kMaxRatio;
 
 struct Inflater {
     z_stream z{};
@@ -171,18 +172,23 @@ Result<GaussianCloud> read_spz(const fs::path& path) {
     if (degree > 4) return fail("unsupported SH degree " + std::to_string(degree) + " (0..4)");
     if (frac > 30) return fail("fractional bits " + std::to_string(frac) + " out of range");
     const std::size_t per = 9 + 1 + 3 + 3 + (version == 2 ? 3 : 4) + 3 * spz_detail::rest_coeffs(degree);
-    // Deflate expands at most ~1032:1: refuse counts the compressed file cannot hold before allocating.
-    if (double(n) * double(per) > double(file.size()) * 1032.0 + 1024.0)
-        return fail("declares " + std::to_string(n) + " splats, more than its " +
-                    std::to_string(file.size()) + " compressed bytes can hold");
+    // Deflate expands at most 1032:1, which a stream of zeros reaches: a file of under 1 MB could then
+    // declare 50M splats and, being valid, take gigabytes before anything looked wrong. Real captures
+    // compress a few to one, so the count is held to the 1024:1 bound version 4 uses (gaussian_spz4.cpp)
+    // on the whole decoded size, before anything is inflated or allocated.
+    const std::uint64_t declared = std::uint64_t(n) * per;
+    if (declared > std::uint64_t(file.size()) * kMaxRatio + 1024)
+        return fail("declares " + std::to_string(n) + " splats (" + std::to_string(declared) +
+                    " decoded bytes), more than its " + std::to_string(file.size()) +
+                    " compressed bytes can hold at the " + std::to_string(kMaxRatio) + ":1 limit");
     if (n > kMaxGaussians || std::uint64_t(n) * per > kMaxSpzDecodedBytes)
-        return fail("declares " + std::to_string(n) + " splats (" + std::to_string(std::uint64_t(n) * per) +
+        return fail("declares " + std::to_string(n) + " splats (" + std::to_string(declared) +
                     " decoded bytes), more than the " + std::to_string(kMaxGaussians) + "-Gaussian / " +
                     std::to_string(kMaxSpzDecodedBytes) + "-byte limit");
     // The buffer grows with the data actually inflated, so a small file that merely declares a large
     // count fails as truncated before the memory is taken.
     std::vector<unsigned char> data;
-    const std::size_t want = std::size_t(n) * per;
+    const std::size_t want = std::size_t(declared);
     for (std::size_t have = 0; have < want;) {
         const std::size_t step =
             std::min<std::size_t>(want - have, std::max<std::size_t>(have, std::size_t(1) << 20));

@@ -19,10 +19,9 @@ namespace {
 
 constexpr std::size_t kHeaderBytes = 32;
 constexpr std::uint8_t kFlagExtensions = 0x2;
-// The reference's bound on the zstd ratio, so a header cannot claim more splats than the file could
-// hold: at most size · 1024 / 9 splats (9 bytes of positions each, the smallest array that is always
-// present).
-constexpr std::uint64_t kMaxRatio = 1024;
+// kMaxRatio (gaussian_spz_detail.h) is the reference's bound on the zstd ratio, so a header cannot claim
+// more splats than the file could hold: at most size · 1024 / 9 splats (9 bytes of positions each, the
+// smallest array that is always present).
 // SPZ_ADOBE_coordinate_system: the data is stored in another frame than RUB (extensions/README.md).
 constexpr std::uint32_t kCoordinateSystemExtension = 0xADBE0003u;
 

@@ -16,6 +16,9 @@ inline constexpr std::uint32_t kMagic = 0x5053474e;  // "NGSP"
 // Budgets (the messages quote them): the file and the decoded attribute data.
 inline constexpr std::uint64_t kMaxFileBytes = std::uint64_t(2) << 30;
 inline constexpr std::uint64_t kMaxDecodedBytes = std::uint64_t(4) << 30;
+// The most decoded bytes a compressed byte may stand for (the reference loader's bound for version 4;
+// version 3 holds its whole decoded size to it as well).
+inline constexpr std::uint64_t kMaxRatio = 1024;
 
 inline std::uint32_t u32(const unsigned char* p) {
     return std::uint32_t(p[0]) | std::uint32_t(p[1]) << 8 | std::uint32_t(p[2]) << 16 |

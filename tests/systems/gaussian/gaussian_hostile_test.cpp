@@ -3,6 +3,8 @@
 // truncated at every byte (an error naming the file or a valid cloud, never a crash).
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+#include <sys/wait.h>
 #include <unistd.h>
 #include <zlib.h>
 
@@ -269,6 +271,121 @@ TEST(GaussianHostile, SpzChecksCrcLengthAndBudgetBeforeAllocating) {
     // A count the data does not hold.
     write_bytes(temp("short.spz"), gzip(spz_payload(4, 3)));
     expect_refused(temp("short.spz"), "truncated");
+}
+
+// Raw deflate of `bytes` ending in a full flush: byte-aligned, non-final blocks that refer to nothing
+// before them, so such pieces concatenate into one valid stream.
+std::string deflate_piece(const std::string& bytes, int flush) {
+    z_stream z{};
+    EXPECT_EQ(deflateInit2(&z, 9, Z_DEFLATED, -MAX_WBITS, 9, Z_DEFAULT_STRATEGY), Z_OK);
+    std::string out(deflateBound(&z, uLong(bytes.size())) + 64, '\0');
+    z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(bytes.data()));
+    z.avail_in = uInt(bytes.size());
+    z.next_out = reinterpret_cast<Bytef*>(out.data());
+    z.avail_out = uInt(out.size());
+    EXPECT_EQ(deflate(&z, flush), flush == Z_FINISH ? Z_STREAM_END : Z_OK);
+    out.resize(z.total_out);
+    deflateEnd(&z);
+    return out;
+}
+
+// A valid gzipped SPZ v3 of degree 0 declaring `n` splats, all zeros (20 bytes each): the deflate
+// stream of `pieces` identical runs of zeros, built from one compressed piece so the test does not
+// deflate a gigabyte.
+std::string zero_spz_v3(std::uint32_t n, std::uint32_t pieces) {
+    std::string header;
+    put32(header, 0x5053474e), put32(header, 3), put32(header, n);
+    header += std::string("\0\x0c\0\0", 4);
+    const std::uint64_t total = std::uint64_t(n) * 20;
+    EXPECT_EQ(total % pieces, 0u);
+    const std::string zeros(std::size_t(total / pieces), '\0');
+    const std::string piece = deflate_piece(zeros, Z_FULL_FLUSH);
+    std::string out("\x1f\x8b\x08\0\0\0\0\0\0\x03", 10);
+    out += deflate_piece(header, Z_FULL_FLUSH);
+    uLong crc = crc32(0, reinterpret_cast<const Bytef*>(header.data()), uInt(header.size()));
+    const uLong piece_crc = crc32(0, reinterpret_cast<const Bytef*>(zeros.data()), uInt(zeros.size()));
+    for (std::uint32_t i = 0; i < pieces; ++i)
+        out += piece, crc = crc32_combine(crc, piece_crc, z_off_t(zeros.size()));
+    out += deflate_piece("", Z_FINISH);
+    put32(out, std::uint32_t(crc)), put32(out, std::uint32_t(header.size() + total));
+    return out;
+}
+
+// What gunzip says of `gz`: the decoded length, or -1 when the stream or its trailer is bad.
+std::int64_t gunzipped_size(const std::string& gz) {
+    z_stream z{};
+    EXPECT_EQ(inflateInit2(&z, 16 + MAX_WBITS), Z_OK);
+    z.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(gz.data()));
+    z.avail_in = uInt(gz.size());
+    std::vector<unsigned char> sink(1 << 20);
+    int rc = Z_OK;
+    while (rc == Z_OK) {
+        z.next_out = sink.data(), z.avail_out = uInt(sink.size());
+        rc = inflate(&z, Z_NO_FLUSH);
+    }
+    const std::int64_t out = rc == Z_STREAM_END ? std::int64_t(z.total_out) : -1;
+    inflateEnd(&z);
+    return out;
+}
+
+TEST(GaussianHostile, SpzOfZerosDeclaringFiftyMillionSplatsIsRefusedUnderThreeGigabytes) {
+    // 50M splats of zeros: 1e9 decoded bytes in under 1 MB of valid gzip (deflate's ratio on zeros is
+    // ~1030:1). Decoded, the cloud alone would take 2.8 GB.
+    const std::string gz = zero_spz_v3(50'000'000, 20);
+    ASSERT_EQ(gunzipped_size(gz), std::int64_t(16) + 1'000'000'000);
+    ASSERT_LT(gz.size(), std::size_t(1) << 20);
+    const fs::path p = temp("zeros50m.spz");
+    write_bytes(p, gz);
+    // Read in a child under a 3 GB address-space limit, as the review ran it; the child reports the
+    // message through a pipe. (ASan reserves terabytes of address space: no limit under it.)
+    int fds[2];
+    ASSERT_EQ(pipe(fds), 0);
+    const pid_t pid = fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        close(fds[0]);
+#if !defined(__SANITIZE_ADDRESS__)
+        const rlimit limit{rlim_t(3) << 30, rlim_t(3) << 30};
+        if (setrlimit(RLIMIT_AS, &limit) != 0) _exit(4);
+#endif
+        // Nothing may return to gtest from here: an exception would run the remaining tests in the child.
+        std::string msg = "accepted";
+        int rc = 3;
+        try {
+            auto g = read_gaussians(p);
+            if (!g) msg = g.message(), rc = 0;
+        } catch (const std::exception& e) {
+            msg = std::string("threw ") + e.what(), rc = 6;
+        }
+        if (write(fds[1], msg.data(), msg.size()) < 0) _exit(5);
+        _exit(rc);
+    }
+    close(fds[1]);
+    std::string msg;
+    char buf[512];
+    for (ssize_t got; (got = read(fds[0], buf, sizeof buf)) > 0;) msg.append(buf, std::size_t(got));
+    close(fds[0]);
+    int status = 0;
+    ASSERT_EQ(waitpid(pid, &status, 0), pid);
+    ASSERT_TRUE(WIFEXITED(status)) << "the reader died (signal " << WTERMSIG(status) << ")";
+    EXPECT_EQ(WEXITSTATUS(status), 0) << msg;
+    EXPECT_NE(msg.find(p.string()), std::string::npos) << msg;
+    EXPECT_NE(msg.find("declares 50000000 splats (1000000000 decoded bytes)"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("1024:1 limit"), std::string::npos) << msg;
+}
+
+TEST(GaussianHostile, SpzRatioBoundRefusesZerosAndReadsRealData) {
+    // The bound from both sides: incompressible splats are read, 1M splats of zeros (20 MB in ~19 KB,
+    // past 1024:1) are refused before anything is inflated.
+    std::string varied;
+    put32(varied, 0x5053474e), put32(varied, 3), put32(varied, 100'000);
+    varied += std::string("\0\x0c\0\0", 4);
+    std::mt19937 rng(5);
+    for (std::size_t i = 0; i < std::size_t(100'000) * 20; ++i) varied += char(rng() & 0xff);
+    write_bytes(temp("varied.spz"), gzip(varied));
+    EXPECT_TRUE(read_gaussians(temp("varied.spz")));
+    write_bytes(temp("zeros1m.spz"), zero_spz_v3(1'000'000, 1));
+    expect_refused(temp("zeros1m.spz"), "1024:1 limit");
 }
 
 // --- deformation: the CPU path agrees with the GPU path on non-finite results -----------------------
