@@ -50,7 +50,7 @@ check splat_render/display.frag frag
 SPIRV="-G --aml -o $tmp/out.spv"
 for f in gaussian/project.comp:comp gaussian/splat.vert:vert gaussian/splat.frag:frag \
          gaussian/tile_count.comp:comp gaussian/tile_emit.comp:comp gaussian/tile_ranges.comp:comp \
-         gaussian/tile_blend.comp:comp gaussian/deform.comp:comp gaussian/sort_payload.comp:comp \
+         gaussian/tile_blend.comp:comp gaussian/deform.comp:comp gaussian/sort_payload.comp:comp gaussian/gather.comp:comp \
          common/radix_sort_count.comp:comp common/radix_sort_scan.comp:comp common/radix_sort_scatter.comp:comp \
          common/scan_reduce.comp:comp common/scan_add.comp:comp \
          splat_render/gaussian_accum.frag:frag splat_render/gaussian_composite.frag:frag; do

@@ -9,9 +9,8 @@
 layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_CENTER) readonly buffer ProjCenter { vec4 proj_center[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_CONIC) readonly buffer ProjConic { vec4 proj_conic[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_COLOR) readonly buffer ProjColor { vec4 proj_color[]; };
-// This instance's Gaussian: order[gl_InstanceID], fetched as an instanced attribute (divisor 1), which
-// needs no storage block.
-layout(location = SFFD_GAUSS_ATTR_ORDER) in uint a_gaussian;
+// The arrays are the depth-ordered projection (gather.comp), bound from the first position of the range
+// this draw covers: instance i is that range's i-th Gaussian front to back.
 
 uniform vec2 u_size;
 // NDC depth of the quad: u_ndc_depth.x + u_ndc_depth.y / view depth (the render system's projection, so
@@ -24,6 +23,7 @@ flat out vec4 v_conic_opacity;
 flat out vec3 v_color;
 
 void main() {
+    const uint a_gaussian = uint(gl_InstanceID);
     const vec4 center_depth_radius = proj_center[a_gaussian];
     const vec4 q = proj_conic[a_gaussian];  // the conic Q = Σ⁻¹ (xx, xy, yy) and the opacity o
     const vec2 c = center_depth_radius.xy;

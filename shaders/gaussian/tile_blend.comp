@@ -8,6 +8,10 @@
 // The render system's options, as its quads do (splat.vert, gaussian_accum.frag): a depth test against
 // the surface splats (each Gaussian at its centre's depth, GL_LESS), and Σ T α view depth into a second
 // target (x; w = coverage).
+// Run once per range of the depth order, front to back (gl_render: the depth-ordered projection bound from
+// u_src_first, so no block holds more than one range): each tile blends the part of its entries whose
+// values (depth-order positions, ascending within a tile) fall in the range, carrying colour, transmittance
+// and the stopped flag (u_state) in the images from one range to the next.
 #include "gaussian/gaussian_layout.h"
 
 layout(local_size_x = SFFD_GAUSS_TILE, local_size_y = SFFD_GAUSS_TILE) in;
@@ -22,6 +26,7 @@ layout(std430, binding = SFFD_GAUSS_SSBO_TILE_STATS) buffer TileStats { uint sta
 // Each pixel is read and written by its own invocation only.
 layout(binding = SFFD_GAUSS_IMAGE_COLOR, rgba32f) uniform image2D u_color;
 layout(binding = SFFD_GAUSS_IMAGE_DEPTH, rgba32f) uniform image2D u_depth_sum;
+layout(binding = SFFD_GAUSS_IMAGE_STATE, rg32f) uniform image2D u_state;
 layout(binding = 0) uniform sampler2D u_surface_depth;
 
 uniform vec2 u_size;
@@ -29,6 +34,8 @@ uniform uvec2 u_tiles;
 uniform int u_depth_test;   // 1: a Gaussian is hidden where u_surface_depth <= its window depth
 uniform int u_write_depth;  // 1: accumulate u_depth_sum
 uniform vec2 u_ndc_depth;   // NDC z = x + y / view depth, as splat.vert (clamped the same way)
+uniform uint u_src_first;   // depth-order position of the bound range's first Gaussian
+uniform uint u_src_count;   // Gaussians in the bound range
 
 #include "gaussian/tile_common.glsl"
 
@@ -40,19 +47,37 @@ shared vec3 s_color[kBatch];
 shared vec2 s_depth[kBatch];  // window depth (the depth test's), view depth from the clamped NDC z
 shared uint s_done;
 
+// The first entry of `entries` whose value is at least `value` (the values ascend within a tile).
+uint lower_bound(uvec2 entries, uint value) {
+    uint lo = entries.x, hi = entries.y;
+    while (lo < hi) {
+        const uint mid = lo + (hi - lo) / 2u;
+        if (tile_values[mid] < value) lo = mid + 1u;
+        else hi = mid;
+    }
+    return lo;
+}
+
+// The tile's entries whose Gaussians lie in the bound range (uniform over the group).
+uvec2 entries_in_source(uvec2 entries) {
+    const uint begin = lower_bound(entries, u_src_first);
+    return uvec2(begin, lower_bound(uvec2(begin, entries.y), u_src_first + u_src_count));
+}
+
 void main() {
     const uint tile = gl_WorkGroupID.y * u_tiles.x + gl_WorkGroupID.x;
     const uvec2 pixel = gl_GlobalInvocationID.xy;  // y down
     const bool inside = pixel.x < uint(u_size.x) && pixel.y < uint(u_size.y);
     const ivec2 texel = ivec2(pixel.x, int(u_size.y) - 1 - int(pixel.y));  // GL rows bottom-up
     const uint tid = gl_LocalInvocationIndex;
-    const uvec2 range = ranges[tile];
+    const uvec2 range = entries_in_source(ranges[tile]);
     vec4 prior = inside ? imageLoad(u_color, texel) : vec4(0.0);
     vec3 color = prior.rgb;
-    float t = 1.0 - prior.a;
+    const vec2 state = inside ? imageLoad(u_state, texel).xy : vec2(0.0);
+    float t = state.y > 0.5 ? state.x : 1.0 - prior.a;
     float depth_sum = inside && u_write_depth != 0 ? imageLoad(u_depth_sum, texel).x : 0.0;
     const float surface = inside && u_depth_test != 0 ? texelFetch(u_surface_depth, texel, 0).r : 2.0;
-    bool done = !inside || t < 1e-4;
+    bool done = !inside || t < 1e-4 || state.y > 1.5;
     uint staged = 0u;
     for (uint begin = range.x; begin < range.y; begin += kBatch) {
         // Every invocation reaches these barriers: the loop bounds are uniform over the group.
@@ -60,7 +85,7 @@ void main() {
         barrier();
         if (done) atomicAdd(s_done, 1u);
         if (begin + tid < range.y) {
-            const uint g = tile_values[begin + tid];
+            const uint g = tile_values[begin + tid] - u_src_first;
             const vec4 center_depth_radius = proj_center[g];
             s_center[tid] = center_depth_radius.xy;
             s_conic_opacity[tid] = proj_conic[g];
@@ -97,5 +122,6 @@ void main() {
     if (tid == 0u && staged > 0u) atomicAdd(staged_entries, staged);
     if (!inside) return;
     imageStore(u_color, texel, vec4(color, 1.0 - t));
+    imageStore(u_state, texel, vec4(t, done ? 2.0 : 1.0, 0.0, 0.0));
     if (u_write_depth != 0) imageStore(u_depth_sum, texel, vec4(depth_sum, 0.0, 0.0, 1.0 - t));
 }

@@ -13,6 +13,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/type_ptr.hpp>
 
+#include "runtime/core/log.h"
 #include "runtime/gfx/barrier.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
@@ -34,11 +35,9 @@ Result<GlRenderer> create_gl_renderer() {
     if (!splat) return splat.error();
     r.project = std::move(*project);
     r.splat = std::move(*splat);
-    const std::pair<gfx::Program*, const char*> tiles[] = {{&r.tile_count, "tile_count"},
-                                                           {&r.tile_emit, "tile_emit"},
-                                                           {&r.tile_ranges, "tile_ranges"},
-                                                           {&r.tile_blend, "tile_blend"},
-                                                           {&r.sort_payload, "sort_payload"}};
+    const std::pair<gfx::Program*, const char*> tiles[] = {
+        {&r.tile_count, "tile_count"}, {&r.tile_emit, "tile_emit"},       {&r.tile_ranges, "tile_ranges"},
+        {&r.tile_blend, "tile_blend"}, {&r.sort_payload, "sort_payload"}, {&r.gather, "gather"}};
     for (const auto& [program, name] : tiles) {
         auto made = gfx::load_compute_program(std::string("gaussian/") + name + ".comp",
                                               std::string("gaussian.") + name);
@@ -55,19 +54,15 @@ Result<GlRenderer> create_gl_renderer() {
     r.proj_center = gfx::Buffer::create("gaussian.proj_center");
     r.proj_conic = gfx::Buffer::create("gaussian.proj_conic");
     r.proj_color = gfx::Buffer::create("gaussian.proj_color");
+    r.sorted_center = gfx::Buffer::create("gaussian.sorted_center");
+    r.sorted_conic = gfx::Buffer::create("gaussian.sorted_conic");
+    r.sorted_color = gfx::Buffer::create("gaussian.sorted_color");
     r.order = gfx::Buffer::create("gaussian.order");
-    // The quads read their Gaussian from `order` as an instanced attribute, not a storage block: the
-    // vertex stage keeps to the 3 blocks the engine requires (runtime/gfx/limits.h).
-    glVertexArrayVertexBuffer(r.vao.id(), 0, r.order.id(), 0, sizeof(std::uint32_t));
-    glVertexArrayAttribIFormat(r.vao.id(), SFFD_GAUSS_ATTR_ORDER, 1, GL_UNSIGNED_INT, 0);
-    glVertexArrayAttribBinding(r.vao.id(), SFFD_GAUSS_ATTR_ORDER, 0);
-    glVertexArrayBindingDivisor(r.vao.id(), 0, 1);
-    glEnableVertexArrayAttrib(r.vao.id(), SFFD_GAUSS_ATTR_ORDER);
     r.frames = gfx::Buffer::create("gaussian.sh_frames");
     r.depth = gfx::Buffer::create("gaussian.depth_keys");
     r.draw = gfx::Buffer::create("gaussian.draw_indirect");
-    // The indirect command, then the covered pixels and their wrap flag (project.comp).
-    glNamedBufferData(r.draw.id(), 24, nullptr, GL_DYNAMIC_DRAW);
+    // The indirect command, the covered pixels and their wrap flag (project.comp), the range commands.
+    glNamedBufferData(r.draw.id(), SFFD_GAUSS_DRAW_RANGE_COMMANDS, nullptr, GL_DYNAMIC_DRAW);
     r.tile_touched = gfx::Buffer::create("gaussian.tile_touched");
     r.tile_keys = gfx::Buffer::create("gaussian.tile_keys");
     r.tile_values = gfx::Buffer::create("gaussian.tile_values");
@@ -163,7 +158,8 @@ Status ensure_target(GlRenderer& r, const ReferenceOptions& o) {
 // The per-draw scratch buffers (projections, sort keys and payloads, tile counts) hold `n` Gaussians.
 void ensure_scratch(GlRenderer& r, std::size_t n) {
     if (r.scratch >= n && r.scratch > 0) return;
-    for (const gfx::Buffer* b : {&r.proj_center, &r.proj_conic, &r.proj_color})
+    for (const gfx::Buffer* b :
+         {&r.proj_center, &r.proj_conic, &r.proj_color, &r.sorted_center, &r.sorted_conic, &r.sorted_color})
         upload(*b, nullptr, n * SFFD_GPU_PROJECTED_STRIDE);
     upload(r.depth, nullptr, n * sizeof(std::uint32_t));
     upload(r.order, nullptr, n * sizeof(std::uint32_t));  // payloads (sort_payload.comp) or the CPU order
@@ -171,39 +167,56 @@ void ensure_scratch(GlRenderer& r, std::size_t n) {
     r.scratch = std::max<std::size_t>(n, 1);
 }
 
-// The projection arrays each hold 16 bytes a Gaussian and the blend reads them at random, indexed by the
-// Gaussian's index in the whole cloud: they cannot be cut into ranges, so a cloud whose arrays exceed
-// one storage block is refused before anything is drawn (the rest of the blend's per-Gaussian buffers,
-// the 4-byte order and keys, fit whenever these do).
-Status check_projection_fits(std::size_t n) {
-    const std::uint64_t bytes = std::uint64_t(std::max<std::size_t>(n, 1)) * SFFD_GPU_PROJECTED_STRIDE;
-    if (gfx::ssbo_fits(bytes)) return {};
-    return make_error("draw_gaussians(): " + std::to_string(n) +
-                      " Gaussians: " + gfx::ssbo_too_large("gaussian.proj_center", bytes) +
-                      " (each of the 3 projection arrays, read whole by the blend); the cloud is not drawn");
+// The ranges of the depth order every pass after the projection works in: the projection arrays (16
+// bytes a Gaussian, per Gaussian and depth-ordered), the order and the tile counts (4 bytes) bound from
+// each range's first element. One range when they all fit one storage block, the same loops either way.
+Result<std::vector<gfx::SsboBatch>> blend_ranges(std::size_t n) {
+    const std::uint64_t strides[] = {SFFD_GPU_PROJECTED_STRIDE, sizeof(std::uint32_t)};
+    auto ranges = gfx::ssbo_batches(n, strides);
+    if (!ranges)
+        return make_error("draw_gaussians(): " + std::to_string(n) +
+                          " Gaussians: the projection (gaussian.proj_center) cannot be cut into ranges: " +
+                          ranges.message() + "; the cloud is not drawn");
+    return ranges;
 }
 
-// Who reads the projection: the tile preparation (centres, and conics at its own point) or a blend pass
-// (all three arrays).
+// Binds the three arrays of `centers`..`colors` (one range of them) at the projection's points; the tile
+// preparation reads only centres and conics, the conics at its own point.
 enum class ProjectionReader { tile_preparation, blend };
-
-// Binds the projection arrays `reader` reads, each as the range of this cloud's `n` Gaussians: the
-// grow-only buffers may be larger, from a larger cloud.
-void bind_projection(const GlRenderer& r, std::size_t n, ProjectionReader reader) {
-    const gfx::SsboBatch whole{0, std::max<std::size_t>(n, 1)};
-    gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CENTER, r.proj_center.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
+void bind_projection(GLuint center, GLuint conic, GLuint color, const gfx::SsboBatch& range,
+                     ProjectionReader reader) {
+    gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CENTER, center, range, SFFD_GPU_PROJECTED_STRIDE);
     if (reader == ProjectionReader::tile_preparation) {
-        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_TILE_CONIC, r.proj_conic.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_TILE_CONIC, conic, range, SFFD_GPU_PROJECTED_STRIDE);
         return;
     }
-    gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CONIC, r.proj_conic.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
-    gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_COLOR, r.proj_color.id(), whole, SFFD_GPU_PROJECTED_STRIDE);
+    gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CONIC, conic, range, SFFD_GPU_PROJECTED_STRIDE);
+    gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_COLOR, color, range, SFFD_GPU_PROJECTED_STRIDE);
+}
+void bind_sorted(const GlRenderer& r, const gfx::SsboBatch& range, ProjectionReader reader) {
+    bind_projection(r.sorted_center.id(), r.sorted_conic.id(), r.sorted_color.id(), range, reader);
+}
+
+// The draw buffer holds one command per range (the quads' draws, written by gather.comp).
+void ensure_draw_ranges(GlRenderer& r, std::size_t ranges) {
+    if (r.draw_ranges >= ranges) return;
+    glNamedBufferData(r.draw.id(), GLsizeiptr(SFFD_GAUSS_DRAW_RANGE_COMMANDS + 16 * ranges), nullptr,
+                      GL_DYNAMIC_DRAW);
+    r.draw_ranges = ranges;
 }
 
 // Step 1: projection of one cloud's Gaussians; resets and fills the indirect draw command. With the GPU
 // sort (r.gpu_sort_used), also its payloads.
 Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v) {
     const std::size_t n = b.count;
+    // Per Gaussian, every buffer here is indexed by its own index: clouds whose SH (12 K bytes a Gaussian)
+    // or other arrays exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE are projected in element ranges bound with
+    // glBindBufferRange (the sort payloads offset by the range's first Gaussian, u_base).
+    const std::uint64_t sh_stride = std::uint64_t(sh_coeffs(b.sh_degree)) * 3 * sizeof(float);
+    const std::uint64_t strides[] = {sizeof(gpu::GpuGaussian), sh_stride, 3 * sizeof(glm::vec4),
+                                     SFFD_GPU_PROJECTED_STRIDE, sizeof(std::uint32_t)};
+    auto batches = gfx::ssbo_batches(n, strides);
+    if (!batches) return make_error("draw_gaussians(): " + batches.message());
     ensure_scratch(r, n);
     // Write-after-read: the previous draw (another cloud this frame, or the last frame) read the scratch
     // buffers as SSBOs and the command as an indirect draw; SHADER_STORAGE makes this dispatch's writes
@@ -225,14 +238,6 @@ Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v
     glProgramUniform1i(pp, glGetUniformLocation(pp, "u_degree"), b.sh_degree);
     glProgramUniform1i(pp, glGetUniformLocation(pp, "u_frames"), b.has_frames ? 1 : 0);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
-    // Per Gaussian, every buffer here is indexed by its own index: clouds whose SH (12 K bytes a Gaussian)
-    // or other arrays exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE are projected in element ranges bound with
-    // glBindBufferRange (the sort payloads offset by the range's first Gaussian, u_base).
-    const std::uint64_t sh_stride = std::uint64_t(sh_coeffs(b.sh_degree)) * 3 * sizeof(float);
-    const std::uint64_t strides[] = {sizeof(gpu::GpuGaussian), sh_stride, 3 * sizeof(glm::vec4),
-                                     SFFD_GPU_PROJECTED_STRIDE, sizeof(std::uint32_t)};
-    auto batches = gfx::ssbo_batches(n, strides);
-    if (!batches) return make_error("draw_gaussians(): " + batches.message());
     // A buffer with no store cannot be bound: the frames slot falls back to the Gaussians (never read).
     const GLuint frames = b.has_frames && b.frames ? b.frames : b.gaussians;
     const std::uint64_t frame_stride =
@@ -294,15 +299,50 @@ void sort_cpu(GlRenderer& r, std::size_t n) {
 // first `drawn count` entries of `order` are the drawn Gaussians front to back. No readback.
 Status sort_gpu(GlRenderer& r, std::size_t n) {
     r.sorter.max_groups_x = std::max(1u, r.max_groups_x);
-    if (Status st = gfx::radix_sort(r.sorter, r.depth.id(), r.order.id(), std::uint32_t(n)); !st) return st;
-    // The quads fetch the sorted order as a vertex attribute (the sort's own barrier covers SSBO reads).
-    gfx::memory_barrier(GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT, "gaussian.sort");
+    return gfx::radix_sort(r.sorter, r.depth.id(), r.order.id(), std::uint32_t(n));
+}
+
+// Step 2b: the projection gathered into depth order (gather.comp), one dispatch per (destination range,
+// source range): each destination range takes its Gaussians from every source range in turn, so no pass
+// binds more than one range of any array. The first dispatch of each destination range also writes its
+// quads' draw command.
+Status gather_gl(GlRenderer& r, const std::vector<gfx::SsboBatch>& ranges) {
+    const GLuint gp = r.gather.id();
+    glUseProgram(gp);
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
+    for (std::size_t j = 0; j < ranges.size(); ++j) {
+        const gfx::SsboBatch& dst = ranges[j];
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_ORDER, r.order.id(), dst, sizeof(std::uint32_t));
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_SORTED_CENTER, r.sorted_center.id(), dst,
+                             SFFD_GPU_PROJECTED_STRIDE);
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_SORTED_CONIC, r.sorted_conic.id(), dst,
+                             SFFD_GPU_PROJECTED_STRIDE);
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_SORTED_COLOR, r.sorted_color.id(), dst,
+                             SFFD_GPU_PROJECTED_STRIDE);
+        glProgramUniform1ui(gp, glGetUniformLocation(gp, "u_count"), GLuint(dst.count));
+        glProgramUniform1ui(gp, glGetUniformLocation(gp, "u_first"), GLuint(dst.first));
+        glProgramUniform1ui(gp, glGetUniformLocation(gp, "u_range"), GLuint(j));
+        for (std::size_t k = 0; k < ranges.size(); ++k) {
+            const gfx::SsboBatch& src = ranges[k];
+            bind_projection(r.proj_center.id(), r.proj_conic.id(), r.proj_color.id(), src,
+                            ProjectionReader::blend);
+            glProgramUniform1ui(gp, glGetUniformLocation(gp, "u_src_first"), GLuint(src.first));
+            glProgramUniform1ui(gp, glGetUniformLocation(gp, "u_src_count"), GLuint(src.count));
+            glProgramUniform1i(gp, glGetUniformLocation(gp, "u_write_command"), k == 0 ? 1 : 0);
+            if (Status st = gfx::dispatch_1d(dst.count, 64, std::max(1u, r.max_groups_x)); !st) return st;
+        }
+    }
+    glUseProgram(0);
+    // The blend reads the depth-ordered arrays as storage blocks and the range commands as indirect draws.
+    gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_COMMAND_BARRIER_BIT, "gaussian.gather");
     return {};
 }
 
-// Step 3, quads: one instanced quad per drawn Gaussian, the count from the indirect command, blended
-// into the framebuffer and viewport bound now (depth test state is the caller's).
-void blend_quads(GlRenderer& r, const GaussianView& v, std::size_t n, const gfx::Program* splat_program) {
+// Step 3, quads: one instanced quad per drawn Gaussian, range by range of the depth order (front to
+// back), each range's count from its indirect command, blended into the framebuffer and viewport bound
+// now (depth test state is the caller's).
+void blend_quads(GlRenderer& r, const GaussianView& v, const std::vector<gfx::SsboBatch>& ranges,
+                 const gfx::Program* splat_program) {
     glDisable(GL_CULL_FACE);
     glEnable(GL_BLEND);
     glBlendEquation(GL_FUNC_ADD);
@@ -310,11 +350,14 @@ void blend_quads(GlRenderer& r, const GaussianView& v, std::size_t n, const gfx:
     const GLuint sp = splat_program ? splat_program->id() : r.splat.id();
     set(sp, "u_size", glm::vec2(float(v.width), float(v.height)));
     set(sp, "u_ndc_depth", glm::vec2(v.ndc_depth));
-    bind_projection(r, n, ProjectionReader::blend);
     glUseProgram(sp);
     glBindVertexArray(r.vao.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, r.draw.id());
-    if (n > 0) glDrawArraysIndirect(GL_TRIANGLE_STRIP, nullptr);
+    for (std::size_t j = 0; j < ranges.size(); ++j) {
+        bind_sorted(r, ranges[j], ProjectionReader::blend);
+        glDrawArraysIndirect(GL_TRIANGLE_STRIP,
+                             reinterpret_cast<const void*>(SFFD_GAUSS_DRAW_RANGE_COMMANDS + 16 * j));
+    }
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
     glDisable(GL_BLEND);
     glBindVertexArray(0);
@@ -328,49 +371,107 @@ void tile_uniforms(GLuint program, const TileTargets& o, glm::uvec2 tiles) {
 
 double stage_ms(const GlRenderer& r, std::chrono::steady_clock::time_point& t);
 
-// Steps 1 and 2 (projection and depth sort) of one cloud, with the stage times of benchmarks.
-Status project_and_sort(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v) {
-    if (Status st = check_projection_fits(b.count); !st) return st;
+// Says once per renderer (and `said` flag) why a frame took another way than the one asked for.
+void warn_fallback(bool& said, const std::string& message) {
+    if (said) return;
+    said = true;
+    log::warn(message);
+}
+
+// Steps 1 and 2 (projection, depth sort, gather) of one cloud, with the stage times of benchmarks; the
+// ranges of the depth order into `ranges`. Refused before any GL work when not one range fits.
+Status project_and_sort(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v,
+                        std::vector<gfx::SsboBatch>& ranges) {
+    auto made = blend_ranges(b.count);
+    if (!made) return made.error();
+    ranges = std::move(*made);
+    ensure_draw_ranges(r, ranges.size());  // before the projection writes the command's count into it
     auto t = std::chrono::steady_clock::now();
     r.gpu_sort_used =
         r.sort_path == SortPath::gpu || (r.sort_path == SortPath::automatic && gpu_sort_preferred(r));
+    // The radix sort scatters at random: its keys and payloads are one storage block each, or the keys are
+    // read back and sorted on the CPU.
+    const std::uint64_t key_bytes = std::uint64_t(b.count) * sizeof(std::uint32_t);
+    if (r.gpu_sort_used && !gfx::ssbo_fits(key_bytes)) {
+        warn_fallback(r.sort_fallback_warned,
+                      "draw_gaussians(): " + gfx::ssbo_too_large("gaussian.depth_keys", key_bytes) +
+                          " (the GPU sort binds them whole); sorting on the CPU");
+        r.gpu_sort_used = false;
+    }
     if (Status st = project_gl(r, b, v); !st) return st.error();
     r.project_ms = stage_ms(r, t);
     if (r.gpu_sort_used) {
         if (Status st = sort_gpu(r, b.count); !st) return st.error();
-        r.sort_ms = stage_ms(r, t);
     } else {
         sort_cpu(r, b.count);
-        stage_ms(r, t);
     }
+    if (Status st = gather_gl(r, ranges); !st) return st.error();
+    const double ms = stage_ms(r, t);
+    if (r.gpu_sort_used) r.sort_ms = ms;
     return {};
 }
 
+// Whether the tile path's whole-bound buffers fit one storage block: the counts' scan (n + 1 uints), and
+// once known the entries (tile keys, values: the emit pass writes them at random, the sort scatters).
+Status tile_buffers_fit(std::size_t n, std::uint64_t entries) {
+    const std::uint64_t counts = (std::uint64_t(n) + 1) * sizeof(std::uint32_t);
+    if (!gfx::ssbo_fits(counts)) return make_error(gfx::ssbo_too_large("gaussian.tile_touched", counts));
+    const std::uint64_t keys = entries * sizeof(std::uint32_t);
+    if (!gfx::ssbo_fits(keys)) return make_error(gfx::ssbo_too_large("gaussian.tile_keys", keys));
+    return {};
+}
+
+// The tile blend's per-pixel state carried between ranges, at the target's size, cleared (one blend of
+// one cloud).
+void clear_tile_state(GlRenderer& r, int width, int height) {
+    if (r.tile_state_width < width || r.tile_state_height < height || !r.tile_state) {
+        r.tile_state = gfx::Texture::create("gaussian.tile_state", GL_TEXTURE_2D);
+        glTextureStorage2D(r.tile_state.id(), 1, GL_RG32F, width, height);
+        r.tile_state_width = width, r.tile_state_height = height;
+    }
+    const float zero[2] = {0.0f, 0.0f};
+    glClearTexImage(r.tile_state.id(), 0, GL_RG, GL_FLOAT, zero);
+}
+
 // Step 3, tiles (3DGS's rasterizer in compute): per drawn Gaussian in depth order the tiles it touches,
-// their exclusive scan, one (tile id, Gaussian) entry per overlap in depth order, a stable radix sort by
-// tile id (so (tile, depth) order), per-tile ranges, and a 16x16 group per tile blending front to back.
-// One readback: the entry count (4 bytes), to size the entry buffers, as 3DGS does. Blends into what
-// o.color holds (GL_TEXTURE_FETCH, framebuffer and image accesses after it see the result).
-// With `over_capacity`, more entries than kMaxTileEntries set it and return before blending (no error).
-Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* over_capacity = nullptr) {
+// their exclusive scan, one (tile id, depth position) entry per overlap in depth order, a stable radix
+// sort by tile id (so (tile, depth) order), per-tile ranges, and a 16x16 group per tile blending front to
+// back. The counts and entries are written range by range of the depth order, and the blend runs once
+// per range, front to back, the images carrying each pixel's state across. One readback: the entry count
+// (4 bytes), to size the entry buffers, as 3DGS does. Blends into what o.color holds (GL_TEXTURE_FETCH,
+// framebuffer and image accesses after it see the result).
+// With `over_capacity`, more entries than kMaxTileEntries, or counts or entries past one storage block,
+// set it and return before blending (no error).
+Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n,
+                   const std::vector<gfx::SsboBatch>& ranges, bool* over_capacity = nullptr) {
     const glm::uvec2 tiles((unsigned(o.width) + SFFD_GAUSS_TILE - 1) / SFFD_GAUSS_TILE,
                            (unsigned(o.height) + SFFD_GAUSS_TILE - 1) / SFFD_GAUSS_TILE);
     const std::uint64_t tile_count = std::uint64_t(tiles.x) * tiles.y;
     if (tiles.x > gfx::kMinMaxComputeGroups || tiles.y > gfx::kMinMaxComputeGroups)
         return make_error("draw_gl(): image too large for one tile group per tile");
+    const auto refuse = [&](const Status& st) -> Status {
+        if (!over_capacity) return make_error("draw_gl(): " + st.message() + "; use BlendPath::quads");
+        warn_fallback(r.tile_fallback_warned, "draw_gaussians(): " + st.message() +
+                                                  " (the tile path binds it whole); blending with quads");
+        *over_capacity = true;
+        return {};
+    };
+    if (Status st = tile_buffers_fit(n, 0); !st) return refuse(st);
     const std::uint32_t max_x = std::max(1u, r.max_groups_x);
     r.sorter.max_groups_x = max_x;
     auto t = std::chrono::steady_clock::now();
-    bind_projection(r, n, ProjectionReader::tile_preparation);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TOUCHED, r.tile_touched.id());
-    for (GLuint p : {r.tile_count.id(), r.tile_emit.id()}) {
-        tile_uniforms(p, o, tiles);
-        glProgramUniform1ui(p, glGetUniformLocation(p, "u_count"), GLuint(n));
-    }
+    for (GLuint p : {r.tile_count.id(), r.tile_emit.id()}) tile_uniforms(p, o, tiles);
     glUseProgram(r.tile_count.id());
-    if (Status st = gfx::dispatch_1d(n, 64, max_x); !st) return st.error();
+    for (const gfx::SsboBatch& range : ranges) {
+        bind_sorted(r, range, ProjectionReader::tile_preparation);
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_TOUCHED, r.tile_touched.id(), range, sizeof(std::uint32_t));
+        glProgramUniform1ui(r.tile_count.id(), glGetUniformLocation(r.tile_count.id(), "u_count"),
+                            GLuint(range.count));
+        glProgramUniform1ui(r.tile_count.id(), glGetUniformLocation(r.tile_count.id(), "u_base"),
+                            GLuint(range.first));
+        if (Status st = gfx::dispatch_1d(range.count, 64, max_x); !st) return st.error();
+    }
     gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.tiles.count");  // the scan reads them
     if (Status st = gfx::exclusive_scan(r.sorter, r.tile_touched.id(), std::uint32_t(n)); !st)
         return st.error();
@@ -388,11 +489,7 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
         return make_error("draw_gl(): " + std::to_string(entries) +
                           " tile entries exceed the tile path's 2^28; use BlendPath::quads");
     // The emit, sort and ranges passes index the entry arrays at random: no ranges, one storage block each.
-    if (!gfx::ssbo_fits(std::uint64_t(entries) * sizeof(std::uint32_t)))
-        return make_error(
-            "draw_gl(): " +
-            gfx::ssbo_too_large("gaussian.tile_keys", std::uint64_t(entries) * sizeof(std::uint32_t)) +
-            "; use BlendPath::quads");
+    if (Status st = tile_buffers_fit(n, entries); !st) return refuse(st);
     if (entries > r.tile_entry_capacity) {
         upload(r.tile_keys, nullptr, std::size_t(entries) * sizeof(std::uint32_t));
         upload(r.tile_values, nullptr, std::size_t(entries) * sizeof(std::uint32_t));
@@ -404,15 +501,21 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     }
     glClearNamedBufferData(r.tile_ranges_buffer.id(), GL_RG32UI, GL_RG_INTEGER, GL_UNSIGNED_INT, nullptr);
     // gfx::exclusive_scan bound its own buffers (points 0 and 4): bind every buffer the emit pass reads.
-    bind_projection(r, n, ProjectionReader::tile_preparation);
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_ORDER, r.order.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DRAW, r.draw.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_KEYS, r.tile_keys.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_VALUES, r.tile_values.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TOUCHED, r.tile_touched.id());
-    glProgramUniform1ui(r.tile_emit.id(), glGetUniformLocation(r.tile_emit.id(), "u_capacity"), entries);
-    glUseProgram(r.tile_emit.id());
-    if (Status st = gfx::dispatch_1d(n, 64, max_x); !st) return st.error();
+    const GLuint ep = r.tile_emit.id();
+    glProgramUniform1ui(ep, glGetUniformLocation(ep, "u_capacity"), entries);
+    glUseProgram(ep);
+    for (const gfx::SsboBatch& range : ranges) {
+        bind_sorted(r, range, ProjectionReader::tile_preparation);
+        // The range's offsets and the next range's first (its end), the scan's total after the last.
+        gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_TOUCHED, r.tile_touched.id(), {range.first, range.count + 1},
+                             sizeof(std::uint32_t));
+        glProgramUniform1ui(ep, glGetUniformLocation(ep, "u_count"), GLuint(range.count));
+        glProgramUniform1ui(ep, glGetUniformLocation(ep, "u_base"), GLuint(range.first));
+        if (Status st = gfx::dispatch_1d(range.count, 64, max_x); !st) return st.error();
+    }
     gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.tiles.emit");  // the sort reads the entries
     // Keys run to tile_count itself (tile_emit.comp's unfilled slots), so the sort covers it too.
     int key_bits = 1;
@@ -429,21 +532,28 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n, bool* ove
     if (Status st = gfx::dispatch_1d(entries, 64, max_x); !st) return st.error();
     gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.tiles.ranges");  // the blend reads them
     r.tile_prepare_ms = stage_ms(r, t);
+    clear_tile_state(r, o.width, o.height);
     const GLuint bp = r.tile_blend.id();
     tile_uniforms(bp, o, tiles);
     glProgramUniform1i(bp, glGetUniformLocation(bp, "u_depth_test"), o.surface_depth ? 1 : 0);
     glProgramUniform1i(bp, glGetUniformLocation(bp, "u_write_depth"), o.depth_sum ? 1 : 0);
     set(bp, "u_ndc_depth", glm::vec2(o.ndc_depth));
-    // After the ranges pass: points 7 and 8 are the projection's again (gaussian_layout.h).
-    bind_projection(r, n, ProjectionReader::blend);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_TILE_STATS, r.tile_stats.id());
     glBindImageTexture(SFFD_GAUSS_IMAGE_COLOR, o.color, 0, GL_FALSE, 0, GL_READ_WRITE, GL_RGBA32F);
     // Unused units stay bound to the colour (never accessed then: the uniforms above say so).
     glBindImageTexture(SFFD_GAUSS_IMAGE_DEPTH, o.depth_sum ? o.depth_sum : o.color, 0, GL_FALSE, 0,
                        GL_READ_WRITE, GL_RGBA32F);
+    glBindImageTexture(SFFD_GAUSS_IMAGE_STATE, r.tile_state.id(), 0, GL_FALSE, 0, GL_READ_WRITE, GL_RG32F);
     glBindTextureUnit(0, o.surface_depth);
     glUseProgram(bp);
-    glDispatchCompute(tiles.x, tiles.y, 1);
+    for (std::size_t k = 0; k < ranges.size(); ++k) {
+        // The previous range's pass wrote the pixels this one continues from.
+        if (k > 0) gfx::memory_barrier(GL_SHADER_IMAGE_ACCESS_BARRIER_BIT, "gaussian.tiles.blend_range");
+        bind_sorted(r, ranges[k], ProjectionReader::blend);
+        glProgramUniform1ui(bp, glGetUniformLocation(bp, "u_src_first"), GLuint(ranges[k].first));
+        glProgramUniform1ui(bp, glGetUniformLocation(bp, "u_src_count"), GLuint(ranges[k].count));
+        glDispatchCompute(tiles.x, tiles.y, 1);
+    }
     glUseProgram(0);
     glBindTextureUnit(0, 0);
     // The image is read back (glGetTextureImage: TEXTURE_UPDATE) or sampled/drawn by the composite
@@ -494,7 +604,8 @@ Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianVie
         return make_error("draw_gaussians(): more than 2^31 Gaussians in one draw");
     r.covered_pixels = 0;
     r.last_blend = BlendPath::quads;
-    if (Status st = project_and_sort(r, b, v); !st) return st.error();
+    std::vector<gfx::SsboBatch> ranges;
+    if (Status st = project_and_sort(r, b, v, ranges); !st) return st.error();
     if (tiles) {
         // The covered pixels (8 bytes; waits for the projection only): quads up to the budget, where
         // their image is the one the reference tests compare; past it, the tile blend, whose work stops at
@@ -505,14 +616,14 @@ Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianVie
             TileTargets t = *tiles;
             t.width = v.width, t.height = v.height, t.ndc_depth = v.ndc_depth;
             bool over_capacity = false;
-            if (Status st = blend_tiles(r, t, b.count, &over_capacity); !st) return st.error();
+            if (Status st = blend_tiles(r, t, b.count, ranges, &over_capacity); !st) return st.error();
             if (!over_capacity) {
                 r.last_blend = BlendPath::tiles;
                 return {};
             }
         }
     }
-    blend_quads(r, v, b.count, splat_program);
+    blend_quads(r, v, ranges, splat_program);
     return {};
 }
 
@@ -545,7 +656,8 @@ Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const Reference
     v.width = o.width, v.height = o.height;
     v.min_footprint_px = r.min_footprint_px;
     const GaussianBuffers b = resident_buffers(r);
-    if (Status st = project_and_sort(r, b, v); !st) return st.error();
+    std::vector<gfx::SsboBatch> ranges;
+    if (Status st = project_and_sort(r, b, v, ranges); !st) return st.error();
     auto t = std::chrono::steady_clock::now();
     r.tile_entries = 0, r.tile_prepare_ms = 0.0;
     if (r.blend_path == BlendPath::tiles) {
@@ -553,14 +665,14 @@ Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const Reference
         glClearTexImage(r.color.id(), 0, GL_RGBA, GL_FLOAT, clear);
         TileTargets target;
         target.color = r.color.id(), target.width = o.width, target.height = o.height;
-        if (Status st = blend_tiles(r, target, b.count); !st) return st.error();
+        if (Status st = blend_tiles(r, target, b.count, ranges); !st) return st.error();
     } else {
         glBindFramebuffer(GL_FRAMEBUFFER, r.framebuffer.id());
         glViewport(0, 0, o.width, o.height);
         const float clear[4] = {0, 0, 0, 0};
         glClearNamedFramebufferfv(r.framebuffer.id(), GL_COLOR, 0, clear);
         glDisable(GL_DEPTH_TEST);
-        blend_quads(r, v, b.count, nullptr);
+        blend_quads(r, v, ranges, nullptr);
         glBindFramebuffer(GL_FRAMEBUFFER, 0);
     }
     r.blend_ms = stage_ms(r, t);

@@ -6,7 +6,8 @@
 //      stored as three vec4 arrays (centre, conic, colour: 16 bytes a Gaussian per storage block);
 //   2. depth sort (SortPath): a stable GPU radix sort of (key, index) (runtime/gfx/radix_sort.h; no
 //      readback, the drawn Gaussians come first; the indices from sort_payload.comp), or the keys read
-//      back and sorted on the CPU (TBB);
+//      back and sorted on the CPU (TBB); then the projection gathered into depth order (gather.comp),
+//      which the blend reads sequentially, so it can be bound and drawn in element ranges;
 //   3. blend front to back (BlendPath) into an RGBA32F target: instanced quads over the reference's
 //      pixel boxes (splat.{vert,frag}, hardware blending, drawn through the indirect command), or the
 //      3DGS tile renderer in compute (tile_*.comp: (tile, Gaussian) entries in depth order, a stable
@@ -15,7 +16,9 @@
 //      (quad_coverage_budget(), measured by the projection), then the tiles;
 //   4. the image read back.
 // The images match the CPU reference renderer (reference_render.h: same conventions, same pixel boxes)
-// within the PSNR the GL test states; both sort paths give identical images.
+// within the PSNR the GL test states; both sort paths give identical images. Every pass binds the
+// per-Gaussian buffers in element ranges within GL_MAX_SHADER_STORAGE_BLOCK_SIZE (one range when they fit,
+// the same loops): the image is the same, bit for bit, however many ranges a cloud takes.
 // Owns its GL objects (move-only); create and use it with a GL context current, destroy it before the
 // context.
 #pragma once
@@ -86,13 +89,23 @@ struct GlRenderer {
     gfx::Program splat;
     gfx::Program tile_count, tile_emit, tile_ranges, tile_blend;
     gfx::Program sort_payload;  // the GPU sort's payloads (indices), its own pass (sort_payload.comp)
+    gfx::Program gather;        // the projection into depth order (gather.comp)
     gfx::RadixSorter sorter;
-    gfx::VertexArray vao;  // the quads' one attribute: `order`, per instance
+    gfx::VertexArray vao;  // the quads: no attributes (instances index the depth-ordered arrays)
     gfx::Buffer gaussians, sh, order, frames, depth;
-    // The projection, three vec4 arrays (gaussian_layout.h: SFFD_GAUSS_SSBO_PROJ_*), each read whole and
-    // at random by the blend: a cloud needs 16 bytes a Gaussian within GL_MAX_SHADER_STORAGE_BLOCK_SIZE.
+    // The projection, three vec4 arrays (gaussian_layout.h: SFFD_GAUSS_SSBO_PROJ_*) per Gaussian, and the
+    // same gathered into depth order for the blend. Every pass binds them in element ranges of at most
+    // GL_MAX_SHADER_STORAGE_BLOCK_SIZE (blend_ranges() in gl_render.cpp): no cloud needs one block for all.
     gfx::Buffer proj_center, proj_conic, proj_color;
-    gfx::Buffer draw;  // DrawArraysIndirectCommand; its instance count is the drawn count, written on the GPU
+    gfx::Buffer sorted_center, sorted_conic, sorted_color;
+    // DrawArraysIndirectCommand (its instance count is the drawn count, written on the GPU), the covered
+    // pixels, then one command per range of the depth-ordered arrays (gaussian_layout.h).
+    gfx::Buffer draw;
+    std::size_t draw_ranges = 0;  // range commands `draw` holds
+    gfx::Texture tile_state;      // rg32f: the tile blend's transmittance and stop, range to range
+    int tile_state_width = 0, tile_state_height = 0;
+    bool tile_fallback_warned = false;  // draw_gaussians said once why a cloud took the quads,
+    bool sort_fallback_warned = false;  // or the CPU sort
     gfx::Buffer tile_touched, tile_keys, tile_values, tile_ranges_buffer;  // tile path, grow-only
     gfx::Buffer tile_stats;                // uint: entries staged by the tile blend (TileStats::staged)
     std::uint64_t tile_entries_total = 0;  // TileStats::entries
@@ -163,9 +176,12 @@ struct GaussianView {
 // splats' depth); `splat_program` replaces the renderer's splat program (same vertex shader, its own
 // fragment shader), null: the renderer's. With `tiles`, a cloud covering more than kQuadCoverageBudget
 // images is blended by the tile renderer into those targets instead (last_blend says which).
-// Refused before anything is drawn, naming the limit, the count and the buffer, when the projection
-// arrays (16 bytes a Gaussian each, read at random by the blend) exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE:
-// a cloud of up to limit / 16 Gaussians (1M at GL's guaranteed 2^24 bytes, 8.4M at 2^27).
+// Per-Gaussian buffers past GL_MAX_SHADER_STORAGE_BLOCK_SIZE are bound in element ranges, the blend run
+// range by range of the depth order (front to back: the image does not depend on the ranges). Buffers
+// that cannot be cut are checked and the frame takes another way, logged once naming the buffer and the
+// limit: the GPU sort's keys (sorted on the CPU instead) and the tile path's counts and entries (the
+// quads instead). Refused before anything is drawn, naming the limit, only when not one aligned range
+// of Gaussians fits a block.
 Status draw_gaussians(GlRenderer& renderer, const GaussianBuffers& buffers, const GaussianView& view,
                       const gfx::Program* splat_program = nullptr, const TileTargets* tiles = nullptr);
 // The pixels the last projection's Gaussians cover (their pixel boxes clipped to the image, summed;

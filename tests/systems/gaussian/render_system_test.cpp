@@ -442,13 +442,14 @@ TEST_F(GaussianRenderSystem, TileRouteKeepsTheDepthTestAndTheAuxDepth) {
     EXPECT_EQ(differing, 0u) << "a Gaussian behind the opaque sphere shows through on the tile path";
 }
 
-// A cloud past the storage-block limit is refused every frame; the log says so once, not once a frame,
-// and the cloud is drawn again when it fits.
+// A limit under which not one aligned range of Gaussians fits a storage block: the cloud is refused
+// every frame, the log says so once, not once a frame, and the cloud is drawn again when it fits. (A
+// cloud merely larger than one block is drawn in ranges: render_system_limits_test.cpp.)
 TEST_F(GaussianRenderSystem, CloudPastTheStorageLimitIsLoggedOnceAndDrawnWhenItFits) {
     add_camera();
     reg.emplace<GaussianCloud>(reg.create(), random_cloud(3000, 1));
     gfx::GlLimits small = gfx::limits();
-    small.max_ssbo_block_size = 3000 * 16 - 16;  // each 16-byte projection array is one entry too large
+    small.max_ssbo_block_size = 32;  // not one aligned range of Gaussians
     {
         log::ScopedLogCapture capture;
         gfx::ScopedLimits scope(small);
