@@ -1,5 +1,5 @@
 // PlayCanvas SOG ("spatially ordered Gaussians", version 2 as splat-transform 3.x and the PlayCanvas
-// engine read and write it), read only: a `.sog` ZIP archive, or a folder, holding `meta.json` and
+// engine read and write it), read and written: a `.sog` ZIP archive, or a folder, holding `meta.json` and
 // lossless WebP images. Gaussian i is texel i of every image (row-major, RGBA):
 //   meta.json  {"version": 2, "count": N, "means": {"mins": [3], "maxs": [3], "files": [lo, hi]},
 //              "scales": {"codebook": [256], "files": [..]}, "quats": {"files": [..]},
@@ -43,5 +43,19 @@ namespace sffd::gaussian {
 
 // `path` is a `.sog` archive or a SOG folder's `meta.json`.
 Result<GaussianCloud> read_sog(const std::filesystem::path& path);
+
+// Writes `cloud` as SOG version 2 (gaussian_sog_write.cpp): `path` ending in `.sog` is a ZIP archive of
+// stored entries; a path named `meta.json` writes the folder (meta.json and the .webp images beside it).
+// Texel i is Gaussian i (the cloud's order is kept). Positions are written absolute (origin + position)
+// in double; positions, rotation components and opacity are rounded to their nearest step (the bounds
+// above); scales (log) and DC coefficients index codebooks of 256 (up to 256 distinct values are kept
+// exactly, more are clustered as splat-transform does, gaussian_sog_quantize.h; a zero scale gets an
+// entry e^−20 below the smallest); the SH bands share a palette of min(65536, 2^⌊log2 n⌋) entries (up to
+// that many distinct band vectors are kept exactly, else k-means), whose coefficients index one more
+// codebook of 256. Refused with "path: problem": another file name, clouds validate() refuses (values
+// not finite or out of range, per-splat SH frames: bake_sh_frames() first), more than kMaxGaussians.
+// An empty cloud is written (4×4 images, "count": 0). The archive is written through a temporary and
+// renamed; the folder's files each so, all written before any is renamed, meta.json last.
+Status write_sog(const std::filesystem::path& path, const GaussianCloud& cloud);
 
 }  // namespace sffd::gaussian
