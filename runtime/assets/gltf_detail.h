@@ -1,15 +1,29 @@
 // Internal to the glTF reader and writer (gltf_io.cpp reads clouds, gltf_load.cpp is the guarded tinygltf
-// load and accessor reader, gltf_write.cpp writes): the accessor component types, and the sRGB <-> linear
-// 16-bit colour mapping both directions must agree on.
+// load, gltf_accessor.cpp the checked accessor readers, gltf_write.cpp writes): the accessor component types,
+// and the sRGB <-> linear 16-bit colour mapping both directions must agree on.
 #pragma once
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 namespace sffd::assets::gltf_detail {
 
 constexpr int kFloat = 5126, kUByte = 5121, kUShort = 5123, kUInt = 5125, kByte = 5120, kShort = 5122;
+
+// Bytes of one component of `type`; 0 for a type glTF does not define.
+inline std::size_t component_size(int type) {
+    switch (type) {
+        case kByte:
+        case kUByte: return 1;
+        case kShort:
+        case kUShort: return 2;
+        case kUInt:
+        case kFloat: return 4;
+        default: return 0;
+    }
+}
 
 // sRGB bytes <-> linear unsigned short: 16 bits are enough for every one of the 256 sRGB levels to
 // come back exactly (tested), so COLOR_0 is both standard (linear) and lossless.
