@@ -22,7 +22,7 @@
 #include "systems/animation/evaluate.h"
 #include "systems/ffd/components.h"
 #include "systems/gaussian/components.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_sog.h"
 #include "systems/splat_render/camera_math.h"
 
 namespace sffd::cli {
@@ -259,12 +259,12 @@ Status check_output_dir(const Options& o) {
     return {};
 }
 
-// The capture as bytes for PlayCanvas: a 3DGS PLY written through a temporary file (the writer's own
-// atomic path), read back.
+// The capture as SOG bytes (PlayCanvas's own compressed format: about a tenth of a 3DGS PLY), written
+// through the writer's atomic path into a hidden temporary beside the output, read back, removed.
 Result<std::string> capture_bytes(const GaussianCloud& cloud, const fs::path& dir, std::string& format) {
-    const fs::path tmp = dir / ".capture.tmp.ply";
-    format = "ply";
-    if (Status st = gaussian::write_ply(tmp, cloud); !st) return st.error();
+    const fs::path tmp = dir / ".capture.tmp.sog";
+    format = "sog";
+    if (Status st = gaussian::write_sog(tmp, cloud); !st) return st.error();
     auto bytes = slurp(tmp);
     std::error_code ec;
     fs::remove(tmp, ec);
@@ -287,6 +287,11 @@ int run_export_web(Args args) {
     if (!parsed) return usage_error("export", parsed.message(), kUsage);
     const Options& o = *parsed;
 
+    if (Status st = check_output_dir(o); !st) return command_error("export", st.message());
+    ecs::Registry registry;
+    if (Status st = load_scene(registry, o.scene); !st) return command_error("export", st.message());
+    auto scene = pick_scene(registry, o);
+    if (!scene) return command_error("export", scene.message());
     const auto engine = find_web_engine();
     if (!engine)
         return command_error("export", "the PlayCanvas engine is not installed (" + std::string(kEngineName) +
@@ -295,12 +300,6 @@ int run_export_web(Args args) {
     if (!player)
         return command_error("export", "the player's files (content/web/player) are missing from " +
                                            paths::content_dir().string());
-    if (Status st = check_output_dir(o); !st) return command_error("export", st.message());
-
-    ecs::Registry registry;
-    if (Status st = load_scene(registry, o.scene); !st) return command_error("export", st.message());
-    auto scene = pick_scene(registry, o);
-    if (!scene) return command_error("export", scene.message());
     for (const std::string& n : scene->notes) std::fprintf(stderr, "splatffd export: note: %s\n", n.c_str());
 
     std::error_code ec;
@@ -314,7 +313,7 @@ int run_export_web(Args args) {
     // Classic scripts, not fetched files: file:// pages may not fetch, and may not load modules.
     const std::string capture_js =
         "window.SFFD_CAPTURE = {format: \"" + format + "\", base64: \"" + base64(*bytes) + "\"};\n";
-    const std::string scene_js = "window.SFFD_SCENE = " + scene_json(*scene, o, format).dump(1) + ";\n";
+    const std::string scene_js = "window.SFFD_SCENE = " + scene_json(*scene, o, format).dump() + ";\n";
     if (Status st = write_file_atomic(dir / "capture.js", capture_js); !st)
         return command_error("export", st.message());
     if (Status st = write_file_atomic(dir / "scene.js", scene_js); !st)
