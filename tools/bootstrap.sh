@@ -23,6 +23,7 @@ PACKAGES=(
   assimp-testmodels                               # glTF samples for the import tests (tests/assets)
   munge slurmctld slurmd slurm-client            # a single-node Slurm the render farm test starts (tests/tools)
   ffmpeg                                          # render --video: MP4 (H.264) and GIF encoding
+  chromium                                        # the web player's browser test (tests/tools/splatffd)
 )
 
 if ! command -v dpkg >/dev/null 2>&1; then
@@ -40,8 +41,16 @@ done
 command -v node >/dev/null 2>&1 || missing+=(nodejs)
 command -v npm >/dev/null 2>&1 || missing+=(npm)
 
+# The PlayCanvas engine that `export --web` copies, and the browser test's driver (npm; without a registry
+# export --web says to run the script, and the browser test skips).
+fetch_web() {
+  "$(dirname "${BASH_SOURCE[0]}")/fetch_web_engine.sh" --test >/dev/null 2>&1 ||
+    echo "bootstrap: tools/fetch_web_engine.sh failed (no npm registry?): export --web and its test need it"
+}
+
 if ((${#missing[@]} == 0)); then
   echo "bootstrap: all $((${#PACKAGES[@]} + 2)) required packages are present"
+  fetch_web
   exit 0
 fi
 
@@ -58,4 +67,5 @@ fi
 export DEBIAN_FRONTEND=noninteractive
 "${sudo[@]}" apt-get update -qq
 "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+fetch_web
 echo "bootstrap: done"
