@@ -14,12 +14,15 @@
 namespace sffd {
 
 // Change stamps of the inputs a deformation output was computed from: the authored cloud, its Deformers,
-// and per live lattice (in Deformers order) its Lattice version mixed with its entity bits, so that
-// swapping one lattice for another also counts as a change. Kept by DeformedSplats and
-// DeformedGaussians (systems/gaussian); filled by ffd::deform_inputs() (systems/ffd/deform_inputs.h).
+// its Transform (the output's world bounds, and the frame its lattices are mapped into), and per live
+// lattice (in Deformers order) its Lattice version mixed with its entity bits, so that swapping one
+// lattice for another also counts as a change, and with both entities' Transform versions. Kept by
+// DeformedSplats and DeformedGaussians (systems/gaussian); filled by ffd::deform_inputs()
+// (systems/ffd/deform_inputs.h).
 struct DeformInputStamps {
     std::uint64_t cloud = 0;
     std::uint64_t deformers = 0;
+    std::uint64_t transform = 0;
     std::vector<std::uint64_t> lattices;
     bool operator==(const DeformInputStamps&) const = default;
 };
@@ -38,14 +41,15 @@ struct DeformedSplats {
     std::vector<glm::vec3> axis_v;
     bool cpu_valid = false;              // the arrays above hold the current deformation
     bool gpu_valid = false;              // GpuSplatStore's `deformed` buffer holds it
-    glm::dvec3 bounds_min{0.0};          // world-space box that never under-covers the deformed splats
-    glm::dvec3 bounds_max{0.0};          // (from the control points' displacement hull, see README)
+    glm::dvec3 bounds_min{0.0};          // world-space box (through the cloud's Transform) that never
+    glm::dvec3 bounds_max{0.0};          // under-covers the deformed splats (displacement hull, README)
     std::size_t inverted = 0;            // inside splats whose Jacobian has det < 0 (normal flipped)
     std::uint64_t inverted_version = 0;  // the `version` whose splats `inverted` counts
     std::uint64_t version = 0;           // bumped every time the output is rewritten
 
-    // World box of the authored cloud, cached: computed once per SplatCloud change (the only per-splat
-    // CPU work of the GPU path), then grown by the lattices' control points every run.
+    // Box of the authored cloud in its own frame (origin + positions), cached: computed once per
+    // SplatCloud change (the only per-splat CPU work of the GPU path), then grown by the lattices' control
+    // points (in the same frame) every run and mapped to the world.
     glm::dvec3 rest_box_lo{0.0}, rest_box_hi{0.0};
     bool rest_box_empty = true;
     bool has_rest_box = false;

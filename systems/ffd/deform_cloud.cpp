@@ -12,9 +12,8 @@ namespace {
 // Each lattice in turn deforms out's arrays (n points): the first one that runs reads `first` (the
 // authored arrays, so they are not copied first) when given, the later ones deform out's arrays in place.
 // When no lattice ran, out's arrays get `first` as they are.
-void deform_arrays(const ecs::Registry& registry, const glm::dvec3& origin,
-                   const std::vector<ecs::Entity>& lattices, DeformedSplats& out, std::size_t n,
-                   const SplatCloud* first, const char* who) {
+void deform_arrays(const glm::dvec3& origin, std::span<const Lattice* const> lattices, DeformedSplats& out,
+                   std::size_t n, const SplatCloud* first, const char* who) {
     out.inverted = 0;
     auto ptr = [n](std::vector<glm::vec3>& v) { return v.size() == n ? v.data() : nullptr; };
     auto src = [n](const std::vector<glm::vec3>& v) { return v.size() == n ? v.data() : nullptr; };
@@ -27,8 +26,7 @@ void deform_arrays(const ecs::Registry& registry, const glm::dvec3& origin,
         fit(out.axis_u, first->axis_u), fit(out.axis_v, first->axis_v);
     }
     bool read_first = first != nullptr;
-    for (const ecs::Entity le : lattices) {
-        const Lattice* lattice = registry.valid(le) ? registry.try_get<Lattice>(le) : nullptr;
+    for (const Lattice* lattice : lattices) {
         if (!lattice) continue;
         // In place after the first: each lattice deforms the previous one's output (allowed by ffd::deform).
         const PointsIn in =
@@ -71,23 +69,22 @@ void gather(const std::vector<T>& from, std::span<const std::uint32_t> indices, 
 
 }  // namespace
 
-void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud,
-                  const std::vector<ecs::Entity>& lattices, DeformedSplats& out, const char* who) {
+void deform_cloud(const SplatCloud& cloud, std::span<const Lattice* const> lattices, DeformedSplats& out,
+                  const char* who) {
     out.origin = cloud.origin;
-    deform_arrays(registry, cloud.origin, lattices, out, cloud.size(), &cloud, who);
+    deform_arrays(cloud.origin, lattices, out, cloud.size(), &cloud, who);
     out.cpu_valid = true;
 }
 
-void deform_cloud_subset(const ecs::Registry& registry, const SplatCloud& cloud,
-                         const std::vector<ecs::Entity>& lattices, std::span<const std::uint32_t> indices,
-                         DeformedSplats& out, const char* who) {
+void deform_cloud_subset(const SplatCloud& cloud, std::span<const Lattice* const> lattices,
+                         std::span<const std::uint32_t> indices, DeformedSplats& out, const char* who) {
     const std::size_t n = cloud.size();
     out.origin = cloud.origin;
     gather(cloud.positions, indices, n, out.positions);
     gather(cloud.normals, indices, n, out.normals);
     gather(cloud.axis_u, indices, n, out.axis_u);
     gather(cloud.axis_v, indices, n, out.axis_v);
-    deform_arrays(registry, cloud.origin, lattices, out, indices.size(), nullptr, who);
+    deform_arrays(cloud.origin, lattices, out, indices.size(), nullptr, who);
     out.cpu_valid = false;
 }
 

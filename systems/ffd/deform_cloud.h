@@ -8,7 +8,6 @@
 #include <span>
 #include <vector>
 
-#include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
 
@@ -16,17 +15,18 @@ namespace sffd::ffd {
 
 // Writes out.positions/normals/axis_u/axis_v (the authored arrays deformed by each lattice in `lattices`,
 // in order: the first reads the authored cloud, the next ones work in place), out.origin and
-// out.inverted; sets cpu_valid. Entities without a valid Lattice are skipped; a lattice that fails
-// validation is skipped with a warning "`who`: problem (lattice skipped)". Normals and splat axes are
-// deformed when they have the cloud's size (else copied as authored). Bounds, versions and the
-// change-detection stamps are the caller's.
-void deform_cloud(const ecs::Registry& registry, const SplatCloud& cloud,
-                  const std::vector<ecs::Entity>& lattices, DeformedSplats& out, const char* who = "ffd");
+// out.inverted; sets cpu_valid. `lattices` are in the cloud's frame: ffd::cloud_lattices()
+// (lattice_frame.h) prepares them from the cloud's Deformers. A lattice that fails validation is skipped
+// with a warning "`who`: problem (lattice skipped)". Normals and splat axes are deformed when they have
+// the cloud's size (else copied as authored). Bounds, versions and the change-detection stamps are the
+// caller's.
+void deform_cloud(const SplatCloud& cloud, std::span<const Lattice* const> lattices, DeformedSplats& out,
+                  const char* who = "ffd");
 
 // The same step for the points `indices` only (a budgeted preview, preview_budget.h): out's arrays hold
 // them compacted, in the order of `indices`. Leaves cpu_valid false (the arrays are not the cloud).
-void deform_cloud_subset(const ecs::Registry& registry, const SplatCloud& cloud,
-                         const std::vector<ecs::Entity>& lattices, std::span<const std::uint32_t> indices,
-                         DeformedSplats& out, const char* who = "ffd");
+void deform_cloud_subset(const SplatCloud& cloud, std::span<const Lattice* const> lattices,
+                         std::span<const std::uint32_t> indices, DeformedSplats& out,
+                         const char* who = "ffd");
 
 }  // namespace sffd::ffd

@@ -9,6 +9,7 @@
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/residency.h"
 #include "runtime/gfx/splat_store.h"
+#include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/components.h"
@@ -17,6 +18,7 @@
 #include "systems/ffd/deform_inputs.h"
 #include "systems/ffd/ffd_gpu.h"
 #include "systems/ffd/lattice.h"
+#include "systems/ffd/lattice_frame.h"
 #include "systems/ffd/preview_budget.h"
 
 namespace sffd {
@@ -56,7 +58,6 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
     for (ecs::Entity e : clouds) {
         const SplatCloud& cloud = reg.get<SplatCloud>(e);
         const ffd::DeformInputs inputs = ffd::deform_inputs<SplatCloud>(reg, e);
-        const std::vector<ecs::Entity>& lattices = inputs.lattices;
         const std::uint64_t cloud_v = inputs.stamps.cloud;
         const std::size_t n = cloud.size();
         // The cloud's residency (residency_system uploaded its rest splats this frame when they changed):
@@ -82,13 +83,18 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
 
         if (!seen) reg.emplace<DeformedSplats>(e);
         DeformedSplats& out = reg.patch<DeformedSplats>(e);
+        // Every path below reads the lattices in the cloud's frame (lattice_frame.h).
+        const ffd::CloudLattices framed = ffd::cloud_lattices(reg, e, inputs.lattices);
+        const std::span<const Lattice* const> lattices = framed.span();
         out.origin = cloud.origin;
         out.seen = inputs.stamps;
         out.seen_force_cpu = force_cpu;
         ++out.version;
 
         // Bounds from the control points only: the rest box (one pass over the splats when the cloud
-        // changes, cached) grown by each lattice's displacement hull, in order (never under-covers).
+        // changes, cached) grown by each lattice's displacement hull, in order (never under-covers), in the
+        // cloud's frame, then mapped to the world by the cloud's Transform (the renderer's screen rectangle
+        // reads them there).
         if (!out.has_rest_box || out.rest_box_cloud != cloud_v) {
             ffd::Box rest;
             for (const glm::vec3& p : cloud.positions) rest.add(cloud.origin + glm::dvec3(p));
@@ -97,9 +103,9 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
             ++stats->cpu_splat_passes;
         }
         ffd::Box box{out.rest_box_lo, out.rest_box_hi, out.rest_box_empty};
-        for (ecs::Entity le : lattices)
-            if (ffd::validate(reg.get<Lattice>(le)).ok())
-                box = ffd::deformed_bounds(reg.get<Lattice>(le), box);
+        for (const Lattice* l : lattices)
+            if (ffd::validate(*l).ok()) box = ffd::deformed_bounds(*l, box);
+        box = ffd::world_box(box, model_matrix(reg.try_get<Transform>(e)));
         out.bounds_min = box.lo, out.bounds_max = box.hi;
 
         out.preview = budget > 0;
@@ -107,7 +113,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
             // Only the subset, its splats enlarged; the rest is deformed by the next full frame.
             update_preview_subset(out.subset, cloud.positions, cloud_v, budget);
             const std::vector<std::uint32_t>& kept = out.subset.indices;
-            ffd::deform_cloud_subset(reg, cloud, lattices, kept, out, "ffd_system");
+            ffd::deform_cloud_subset(cloud, lattices, kept, out, "ffd_system");
             out.gpu_valid = false;
             gfx::upload_preview_splats(*splats, cloud, kept,
                                        {out.positions, out.normals, out.axis_u, out.axis_v},
@@ -130,9 +136,9 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
                 glCopyNamedBufferSubData(in, splats->deformed.id(), 0, 0,
                                          GLsizeiptr(n * sizeof(gpu::GpuSplat)));
             for (std::size_t d = 0; d < lattices.size(); ++d) {
-                const Lattice& l = reg.get<Lattice>(lattices[d]);
-                if (Status s = gpu->dispatch(l, lattices[d].bits(), inputs.stamps.lattices[d], cloud.origin,
-                                             in, splats->deformed.id(), std::uint32_t(n));
+                if (Status s =
+                        gpu->dispatch(*lattices[d], framed.entities[d].bits(), inputs.stamps.lattices[d],
+                                      cloud.origin, in, splats->deformed.id(), std::uint32_t(n));
                     !s) {
                     log::warn("ffd_system: ", s.message(), " (lattice skipped)");
                     if (d == 0 && n > 0)
@@ -158,7 +164,7 @@ void ffd_system(ecs::Registry& reg, const FrameContext&) {
         }
 
         // CPU path: the one CPU deformation step (also what picking asks for).
-        ffd::deform_cloud(reg, cloud, lattices, out, "ffd_system");
+        ffd::deform_cloud(cloud, lattices, out, "ffd_system");
         out.inverted_version = out.version;
         out.gpu_valid = false;
         if (splats) {  // the resident cloud draws this output from now on (state deformed_cpu)

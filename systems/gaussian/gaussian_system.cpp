@@ -13,6 +13,7 @@
 #include "systems/ffd/deform_backend.h"
 #include "systems/ffd/deform_inputs.h"
 #include "systems/ffd/ffd_system.h"
+#include "systems/ffd/lattice_frame.h"
 #include "systems/ffd/preview_budget.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
@@ -97,7 +98,6 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
     for (ecs::Entity e : clouds) {
         const GaussianCloud& cloud = reg.get<GaussianCloud>(e);
         const ffd::DeformInputs inputs = ffd::deform_inputs<GaussianCloud>(reg, e);
-        const std::vector<ecs::Entity>& lattices = inputs.lattices;
         // The cloud's residency (residency_system uploaded its rest cloud this frame when it changed): the
         // GPU path needs it current, the CPU path uploads its output there.
         gaussian::GpuGaussianStore* store =
@@ -122,6 +122,8 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
             continue;  // nothing moved
         if (!seen) reg.emplace<DeformedGaussians>(e);
         DeformedGaussians& out = reg.patch<DeformedGaussians>(e);
+        // Every path below reads the lattices in the cloud's frame (systems/ffd/lattice_frame.h).
+        const ffd::CloudLattices framed = ffd::cloud_lattices(reg, e, inputs.lattices);
         out.seen = inputs.stamps;
         out.seen_force_cpu = force_cpu;
         out.seen_sh_mode = sh_mode;
@@ -134,9 +136,9 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
             // Only the subset, enlarged; every Gaussian is deformed again by the next full frame.
             update_preview_subset(out.subset, cloud.positions, inputs.stamps.cloud, budget);
             GaussianCloud kept = preview_gaussians(cloud, out.subset.indices);
-            for (ecs::Entity le : lattices)
+            for (const Lattice* l : framed.lattices)
                 if (auto st = gaussian::deform(
-                        reg.get<Lattice>(le), kept, kept,
+                        *l, kept, kept,
                         {ffd::Backend::automatic, true, gaussian::ShMode::rotate_coefficients});
                     !st)
                     log::warn("gaussian_deform_system: ", st.message(), " (lattice skipped)");
@@ -157,10 +159,9 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
         if (gpu_path && resident) {
             if (gaussian::GpuGaussianDeformer* gpu =
                     ffd::gpu_deformer<gaussian::GpuGaussianDeformer>(reg, "gaussian_deform_system")) {
-                std::vector<const Lattice*> ls;
+                const std::vector<const Lattice*>& ls = framed.lattices;
                 std::vector<std::uint64_t> keys;
-                for (ecs::Entity le : lattices)
-                    ls.push_back(&reg.get<Lattice>(le)), keys.push_back(le.bits());
+                for (ecs::Entity le : framed.entities) keys.push_back(le.bits());
                 auto pass_scope = profiling::gpu_scope(reg, "gaussian.deform");
                 gpu->reset_stats();
                 if (Status s = gpu->deform(*resident, cloud.origin, ls, keys, inputs.stamps.lattices, gpu_sh);
@@ -196,8 +197,8 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
             out.cloud.sh_frames.clear();
         };
         bool written = false;
-        for (ecs::Entity le : lattices) {
-            auto stats = gaussian::deform(reg.get<Lattice>(le), written ? out.cloud : cloud, out.cloud,
+        for (const Lattice* l : framed.lattices) {
+            auto stats = gaussian::deform(*l, written ? out.cloud : cloud, out.cloud,
                                           {ffd::Backend::automatic, true, cpu_sh});
             if (!stats) {
                 log::warn("gaussian_deform_system: ", stats.message(), " (lattice skipped)");

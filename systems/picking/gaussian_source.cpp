@@ -9,6 +9,7 @@
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform.h"
 #include "systems/ffd/deform_inputs.h"
+#include "systems/ffd/lattice_frame.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gpu_store.h"
 
@@ -16,20 +17,22 @@ namespace sffd::picking {
 
 namespace {
 
-// Centres and accumulated Jacobians of `cloud` through `lattices` in order (J = J_n ... J_1). False when a
-// lattice is refused (the cache then keeps nothing and the authored cloud is picked).
-bool deform_centres(const ecs::Registry& registry, const std::vector<ecs::Entity>& lattices,
+// Centres and accumulated Jacobians of `cloud` (entity e) through `lattices` in order (J = J_n ... J_1),
+// each in the cloud's frame (systems/ffd/lattice_frame.h). False when a lattice is refused (the cache then
+// keeps nothing and the authored cloud is picked).
+bool deform_centres(const ecs::Registry& registry, ecs::Entity e, const std::vector<ecs::Entity>& lattices,
                     const GaussianCloud& cloud, PickCache::Entry& entry) {
     const std::size_t n = cloud.size();
     entry.positions = cloud.positions;
     entry.jacobians.assign(n, glm::mat3(1.0f));
     std::vector<glm::vec3> moved(n);
     std::vector<glm::mat3> step(n);
-    for (ecs::Entity le : lattices) {
+    const ffd::CloudLattices framed = ffd::cloud_lattices(registry, e, lattices);
+    for (const Lattice* l : framed.lattices) {
         const ffd::PointsIn in{entry.positions.data(), nullptr, nullptr, nullptr, n, cloud.origin};
         ffd::PointsOut out{moved.data(), nullptr, nullptr, nullptr};
         out.jacobians = step.data();
-        if (!ffd::deform(registry.get<Lattice>(le), in, out)) return false;
+        if (!ffd::deform(*l, in, out)) return false;
         entry.positions.swap(moved);
         for (std::size_t i = 0; i < n; ++i) entry.jacobians[i] = step[i] * entry.jacobians[i];
     }
@@ -121,7 +124,7 @@ GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity e, PickCache
     // Output missing, stale or not readable: picking's own centres + Jacobians.
     PickCache::Entry& entry = cache.entry(PickCloudKind::gaussian, e);
     if (!entry.holds_deformation(inputs.stamps)) {
-        if (!deform_centres(registry, inputs.lattices, *cloud, entry)) {
+        if (!deform_centres(registry, e, inputs.lattices, *cloud, entry)) {
             cache.erase(PickCloudKind::gaussian, e);
             return src;  // a refused lattice: the authored cloud, as the deformation phase would skip it
         }

@@ -61,18 +61,4 @@ struct PickCache {
     std::uint64_t gaussian_deformations = 0, gaussian_read_backs = 0;
 };
 
-// The change stamps of what a cloud's deformation reads (as ffd::deform_inputs, on a const registry): the
-// authored cloud Cloud, its Deformers and each live lattice in order.
-template <class Cloud>
-DeformInputStamps deformation_stamps(const ecs::Registry& registry, ecs::Entity e,
-                                     const Deformers& deformers) {
-    DeformInputStamps s;
-    for (ecs::Entity le : deformers.lattices)
-        if (registry.valid(le) && registry.has<Lattice>(le))
-            s.lattices.push_back(registry.version<Lattice>(le) ^ (le.bits() << 1));
-    s.cloud = registry.version<Cloud>(e);
-    s.deformers = registry.version<Deformers>(e);
-    return s;
-}
-
 }  // namespace sffd::picking

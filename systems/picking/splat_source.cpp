@@ -6,6 +6,8 @@
 #include "runtime/scene/components.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform_cloud.h"
+#include "systems/ffd/deform_inputs.h"
+#include "systems/ffd/lattice_frame.h"
 
 namespace sffd::picking {
 namespace {
@@ -74,7 +76,8 @@ SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud_entity
 
     const Deformers* deformers = registry.try_get<Deformers>(cloud_entity);
     if (deformers && !deformers->lattices.empty()) {
-        const DeformInputStamps inputs = deformation_stamps<SplatCloud>(registry, cloud_entity, *deformers);
+        const ffd::DeformInputs deform_inputs = ffd::deform_inputs<SplatCloud>(registry, cloud_entity);
+        const DeformInputStamps& inputs = deform_inputs.stamps;
         PickCache::Entry& entry = cache.entry(PickCloudKind::surface, cloud_entity);
         if (const gfx::GpuSplats* gpu = gpu_only_output(registry, cloud_entity, n)) {
             if (!entry.holds_read_back(gpu->deformed_version, inputs) || entry.positions.size() != n) {
@@ -86,7 +89,9 @@ SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud_entity
         } else {
             if (!entry.holds_deformation(inputs) || entry.positions.size() != n) {
                 DeformedSplats d;
-                ffd::deform_cloud(registry, *cloud, deformers->lattices, d, "picking");
+                const ffd::CloudLattices framed =
+                    ffd::cloud_lattices(registry, cloud_entity, deform_inputs.lattices);
+                ffd::deform_cloud(*cloud, framed.span(), d, "picking");
                 entry.positions = std::move(d.positions);
                 entry.normals = std::move(d.normals);
                 entry.axis_u = std::move(d.axis_u);

@@ -13,6 +13,7 @@
 #include <tbb/parallel_for.h>
 
 #include "systems/ffd/deform.h"
+#include "systems/ffd/lattice_frame.h"
 #include "systems/splat_render/camera_math.h"
 #include "systems/splat_render/splat_pack.h"
 
@@ -495,11 +496,13 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
             s.radius = sphere.radius;
             s.texture = &c.texture;
             if (const SplatMaterial* mat = reg.try_get<SplatMaterial>(e)) s.material = *mat;
+            // The sphere is traced in the world: each lattice placed there by its own Transform.
             if (const Deformers* d = reg.try_get<Deformers>(e))
                 for (ecs::Entity l : d->lattices)
                     if (reg.valid(l) && reg.has<Lattice>(l)) {
                         const Lattice& lat = reg.get<Lattice>(l);
-                        if (ffd::moved_count(lat) > 0) s.lattices.push_back(lat);
+                        const glm::dmat4 world = model_matrix(reg.try_get<Transform>(l));
+                        if (ffd::moved_count(lat) > 0) s.lattices.push_back(ffd::map_lattice(lat, world));
                     }
         });
     if (!cloud) {
@@ -516,11 +519,16 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
                         "the mesh's colours are baked per splat (vertex colours, or a tinted or "
                         "multi-texture material): "
                         "no texture to trace";
+                // The mesh is deformed in its own space (mesh_model maps it to the world): each lattice
+                // mapped there from its own frame, as the splats' deformation does (lattice_frame.h).
+                const glm::dmat4 to_mesh = glm::inverse(s.mesh_model);
                 if (const Deformers* d = reg.try_get<Deformers>(e))
                     for (ecs::Entity l : d->lattices)
                         if (reg.valid(l) && reg.has<Lattice>(l)) {
                             const Lattice& lat = reg.get<Lattice>(l);
-                            if (ffd::moved_count(lat) > 0) s.lattices.push_back(lat);
+                            if (ffd::moved_count(lat) > 0)
+                                s.lattices.push_back(
+                                    ffd::map_lattice(lat, to_mesh * model_matrix(reg.try_get<Transform>(l))));
                         }
             });
     }

@@ -52,7 +52,8 @@ struct ReferenceScene {
     glm::dmat4 view{1.0}, projection{1.0};  // camera_math.h's view_matrix / projection_matrix
     glm::dvec3 center{0.0};                 // world space sphere
     double radius = 1.0;
-    std::vector<Lattice> lattices;          // deformers in order (world space); empty: the rest sphere
+    std::vector<Lattice> lattices;          // deformers in order (world space; a mesh's: its space, below);
+                                            // empty: the rest sphere
     const SplatTexture* texture = nullptr;  // the cloud's texture (sRGB, row 0 at v = 0), maybe empty
     SplatMaterial material;                 // base colour, specular, shininess
     ReferenceLights lights;

@@ -21,6 +21,7 @@
 #include "systems/animation/unkeyed_edit.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform.h"
+#include "systems/ffd/lattice_frame.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_gltf.h"
@@ -51,7 +52,8 @@ void print_transform(const ecs::Registry& reg, ecs::Entity e) {
 }
 
 // The cloud's bounds twice when lattices deform it: as authored (rest) and as its lattices deform it as
-// saved (the pose render shows at the saved clip time, deform and convert write). Positions only, CPU.
+// saved (the pose render shows at the saved clip time, deform and convert write). Positions only, CPU; both
+// in the cloud's own frame (origin + positions, before its Transform), where the lattices deform it.
 void print_rest_and_deformed(const ecs::Registry& reg, ecs::Entity e, std::vector<glm::vec3> positions,
                              const glm::dvec3& origin) {
     glm::dvec3 lo(INFINITY), hi(-INFINITY);
@@ -63,10 +65,11 @@ void print_rest_and_deformed(const ecs::Registry& reg, ecs::Entity e, std::vecto
     if (!d || d->lattices.empty()) return print_bounds("    ", lo, hi);
     print_bounds("    ", lo, hi, "rest");
     std::string names;
-    for (ecs::Entity l : d->lattices) {
-        const Lattice* lattice = reg.try_get<Lattice>(l);
-        if (!lattice) continue;
-        const Name* n = reg.try_get<Name>(l);
+    // Each lattice in the cloud's frame (both Transforms), as the engine deforms it.
+    const ffd::CloudLattices framed = ffd::cloud_lattices(reg, e, d->lattices);
+    for (std::size_t i = 0; i < framed.lattices.size(); ++i) {
+        const Lattice* lattice = framed.lattices[i];
+        const Name* n = reg.try_get<Name>(framed.entities[i]);
         names += (names.empty() ? "'" : ", '") + (n ? n->value : std::string("?")) + "'";
         if (lattice->current == lattice->rest) continue;
         const ffd::PointsIn in{positions.data(), nullptr, nullptr, nullptr, positions.size(), origin};

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "runtime/assets/scene.h"
+#include "systems/ffd/lattice_frame.h"
 #include "systems/ffd/lattice_io.h"
 
 namespace sffd::cli {
@@ -75,7 +76,6 @@ Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::stri
         if (hits.size() > 1)
             return make_error(file + ": " + std::to_string(hits.size()) + " lattices are named '" + name +
                               "'");
-        chain.lattices.push_back(r.get<Lattice>(hits[0]));
         chain.names.push_back(name);
         r.each_entity([&](ecs::Entity c) {
             if (const Deformers* d = r.try_get<Deformers>(c);
@@ -83,6 +83,10 @@ Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::stri
                 std::find(d->lattices.begin(), d->lattices.end(), hits[0]) != d->lattices.end())
                 chain.cloud = c;
         });
+        // In the cloud's frame, as the engine deforms it (systems/ffd/lattice_frame.h); an unbound one
+        // in the world.
+        chain.lattices.push_back(
+            ffd::map_lattice(r.get<Lattice>(hits[0]), ffd::lattice_to_cloud(r, chain.cloud, hits[0])));
         return chain;
     }
     // The deformed clouds and their chains.
@@ -92,16 +96,18 @@ Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::stri
             bound_clouds.push_back(c);
     });
     if (bound_clouds.size() == 1) {
+        chain.cloud = bound_clouds[0];
         for (ecs::Entity l : r.get<Deformers>(bound_clouds[0]).lattices)
             if (r.valid(l) && r.has<Lattice>(l)) {
-                chain.lattices.push_back(r.get<Lattice>(l));
+                chain.lattices.push_back(
+                    ffd::map_lattice(r.get<Lattice>(l), ffd::lattice_to_cloud(r, chain.cloud, l)));
                 chain.names.push_back(name_of(r, l));
             }
-        chain.cloud = bound_clouds[0];
         return chain;
     }
     if (bound_clouds.empty() && all.size() == 1) {
-        chain.lattices.push_back(r.get<Lattice>(all[0]));
+        chain.lattices.push_back(
+            ffd::map_lattice(r.get<Lattice>(all[0]), ffd::lattice_to_cloud(r, {}, all[0])));
         chain.names.push_back(all_names[0]);
         return chain;
     }

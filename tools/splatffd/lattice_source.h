@@ -19,7 +19,8 @@
 namespace sffd::cli {
 
 struct LatticeChain {
-    std::vector<Lattice> lattices;   // applied in order (a cloud's Deformers order)
+    std::vector<Lattice> lattices;   // applied in order (a cloud's Deformers order), in the frame of
+                                     // `cloud`'s points (ffd::lattice_to_cloud: both Transforms)
     std::vector<std::string> names;  // same order
     ecs::Entity cloud{};             // the cloud they are bound to in the scene (null when none)
 };

@@ -169,7 +169,8 @@ TEST_F(PreviewBudget_, PickingAndTheDeformedOutputSeeEveryPointAfterAMovingPrevi
     ASSERT_EQ(reg.resource<FfdStats>().preview_runs, 1u);
     // The reference: every point through the current lattice.
     DeformedSplats want;
-    ffd::deform_cloud(reg, reg.get<SplatCloud>(cloud), {le}, want);
+    const Lattice* lattices[] = {&reg.get<Lattice>(le)};
+    ffd::deform_cloud(reg.get<SplatCloud>(cloud), lattices, want);
     EXPECT_FALSE(reg.get<DeformedSplats>(cloud).cpu_valid);  // holds the subset: nobody reads it as the cloud
     picking::PickCache cache;
     const picking::SplatSource src = picking::splat_source(reg, cloud, cache);
