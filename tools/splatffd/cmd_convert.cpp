@@ -24,6 +24,7 @@
 #include "systems/ffd/operations.h"
 #include "systems/animation/components.h"
 #include "systems/ffd/deform.h"
+#include "systems/ffd/lattice_frame.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_gltf.h"
@@ -221,16 +222,17 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
         auto c = cli::pick_scene_lattices(r, in, o.lattice.name);
         if (c) own = std::move(*c), keep = {in, &own};
     }
-    // The cloud's lattices, in order, as saved (Lattice::current: the scene's saved pose).
-    std::vector<const Lattice*> chain;
-    std::string names;
+    // The cloud's lattices, in order, as saved (Lattice::current: the scene's saved pose), in the cloud's
+    // frame as the engine deforms it (both Transforms: systems/ffd/lattice_frame.h).
+    ffd::CloudLattices framed;
     if (const Deformers* d = r.try_get<Deformers>(cloud_entity))
-        for (ecs::Entity l : d->lattices)
-            if (const Lattice* lattice = r.try_get<Lattice>(l)) {
-                chain.push_back(lattice);
-                const Name* n = r.try_get<Name>(l);
-                names += (names.empty() ? "'" : ", '") + (n ? n->value : std::string("lattice")) + "'";
-            }
+        framed = ffd::cloud_lattices(r, cloud_entity, d->lattices);
+    const std::vector<const Lattice*>& chain = framed.lattices;
+    std::string names;
+    for (ecs::Entity l : framed.entities) {
+        const Name* n = r.try_get<Name>(l);
+        names += (names.empty() ? "'" : ", '") + (n ? n->value : std::string("lattice")) + "'";
+    }
     const bool deform = !o.rest && keep.source.empty() && !chain.empty();
     const auto moved = [](const Lattice& l) { return l.current != l.rest; };
     std::string pose;
