@@ -14,8 +14,10 @@
 //       ... set the batch's count, dispatch b.count invocations ...
 //   }
 //
-// Passes that index a buffer at random (the splat quads through the quad list, the sort and tile passes)
-// cannot be cut this way; they check ssbo_fits() and refuse or fall back (storage_limits.h).
+// A pass that indexes a buffer at random cannot be cut this way as it stands: it reorders its input first
+// (the CPU cull's quad list regrouped per range of splats, storage_limits.h; the Gaussian projection
+// gathered into depth order, gaussian/gl_render.cpp, one dispatch per pair of ranges), or it checks
+// ssbo_fits() and falls back (the radix sort's scatter, the tile entries, the compute cull).
 #pragma once
 
 #include <cstdint>
