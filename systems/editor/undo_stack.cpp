@@ -11,6 +11,12 @@ bool UndoStack::push(std::unique_ptr<Command> command) {
     return true;
 }
 
+std::size_t UndoStack::bytes() const {
+    std::size_t n = sizeof(*this) + m_commands.capacity() * sizeof(m_commands[0]);
+    for (const auto& c : m_commands) n += c->bytes();
+    return n;
+}
+
 bool UndoStack::undo(ecs::Registry& registry) {
     if (!can_undo()) return false;
     m_commands[--m_next]->undo(registry);

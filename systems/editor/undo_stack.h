@@ -1,6 +1,8 @@
 // One undo stack for everything the editor changes: selections, lattice edits, pins, keyframes.
-// A command stores the state before and after (not a diff, not a closure over live pointers), so
-// undo/redo restore exactly the bits that were there: a lattice undone and redone is bit-identical.
+// A command stores the state before and after (never a closure over live pointers), so undo/redo
+// restore exactly the bits that were there: a lattice undone and redone is bit-identical. A step's memory
+// is what it changed: lattice and un-keyed-pose changes keep only the control points that moved
+// (undo_delta.h), every other component a before/after snapshot; UndoStack::bytes() adds them up.
 //
 //   UndoStack& undo = registry.resource<EditorState>().undo;
 //   undo.record<Lattice>(registry, lattice_entity, "stretch", [&](Lattice& l) { ... });   // one step
@@ -23,6 +25,7 @@
 #include <vector>
 
 #include "runtime/ecs/registry.h"
+#include "systems/editor/undo_delta.h"
 
 namespace sffd::editor {
 
@@ -33,6 +36,8 @@ public:
     virtual void redo(ecs::Registry& registry) const = 0;
     // True when undo and redo would both leave the registry as it is (nothing worth a step).
     virtual bool empty() const { return false; }
+    // Memory the step holds (the command and what it stores).
+    virtual std::size_t bytes() const = 0;
     const std::string& label() const { return m_label; }
 
 protected:
@@ -66,28 +71,54 @@ void restore(ecs::Registry& registry, ecs::Entity e, const std::optional<C>& sta
 }
 }  // namespace detail
 
-// Before/after snapshots of one component of one entity.
+// The change of one component of one entity: whole before/after snapshots (absent = the entity had no
+// C then), or, for SparseUndo components whose frame stayed, only the entries that changed.
 template <class C>
 class ComponentChange final : public Command {
 public:
     ComponentChange(std::string label, ecs::Entity entity, std::optional<C> before, std::optional<C> after)
-        : Command(std::move(label)),
-          m_entity(entity),
-          m_before(std::move(before)),
-          m_after(std::move(after)) {}
+        : Command(std::move(label)), m_entity(entity) {
+        if constexpr (SparseUndo<C>::enabled)
+            if (before && after)
+                if ((m_delta = SparseUndo<C>::diff(*before, *after))) return;
+        m_whole = std::make_unique<Whole>(Whole{std::move(before), std::move(after)});
+    }
 
-    void undo(ecs::Registry& registry) const override { detail::restore(registry, m_entity, m_before); }
-    void redo(ecs::Registry& registry) const override { detail::restore(registry, m_entity, m_after); }
-    bool empty() const override { return detail::same_state(m_before, m_after); }
+    void undo(ecs::Registry& registry) const override { apply(registry, false); }
+    void redo(ecs::Registry& registry) const override { apply(registry, true); }
+    bool empty() const override {
+        if (!m_whole) return SparseUndo<C>::empty(*m_delta);
+        return detail::same_state(m_whole->before, m_whole->after);
+    }
+    std::size_t bytes() const override {
+        std::size_t n = sizeof(*this) + label().capacity();
+        if (!m_whole) return n + SparseUndo<C>::bytes(*m_delta);
+        n += sizeof(Whole);
+        for (const auto* s : {&m_whole->before, &m_whole->after})
+            if (*s) n += undo_heap_bytes(**s);
+        return n;
+    }
 
     ecs::Entity entity() const { return m_entity; }
-    const std::optional<C>& before() const { return m_before; }
-    const std::optional<C>& after() const { return m_after; }
+    bool sparse() const { return !m_whole; }
 
 private:
+    void apply(ecs::Registry& registry, bool forward) const {
+        if (m_whole) return detail::restore(registry, m_entity, forward ? m_whole->after : m_whole->before);
+        if constexpr (SparseUndo<C>::enabled)
+            if (registry.valid(m_entity) && registry.has<C>(m_entity))
+                SparseUndo<C>::apply(registry.patch<C>(m_entity), *m_delta, forward);
+    }
+
+    struct Whole {
+        std::optional<C> before;
+        std::optional<C> after;
+    };
+    using Delta = typename SparseUndo<C>::Delta;
+
     ecs::Entity m_entity;
-    std::optional<C> m_before;
-    std::optional<C> m_after;
+    std::unique_ptr<Whole> m_whole;  // null when the step is a delta
+    std::optional<Delta> m_delta;
 };
 
 // Several changes undone and redone as one step (e.g. resampling a lattice also clears its selection).
@@ -105,6 +136,11 @@ public:
         for (const auto& p : m_parts) p->redo(registry);
     }
     bool empty() const override { return m_parts.empty(); }
+    std::size_t bytes() const override {
+        std::size_t n = sizeof(*this) + label().capacity() + m_parts.capacity() * sizeof(m_parts[0]);
+        for (const auto& p : m_parts) n += p->bytes();
+        return n;
+    }
     std::size_t size() const { return m_parts.size(); }
 
 private:
@@ -167,6 +203,8 @@ public:
     }
 
     std::size_t size() const { return m_commands.size(); }
+    // Memory held by every step (done and undone).
+    std::size_t bytes() const;
     std::size_t position() const { return m_next; }  // commands [0, position) are applied
     const Command& at(std::size_t i) const { return *m_commands[i]; }
     std::size_t limit() const { return m_limit; }

@@ -1,9 +1,12 @@
 #include "systems/editor/undo_stack.h"
 
+#include <cmath>
 #include <cstring>
 
 #include <gtest/gtest.h>
 
+#include "runtime/scene/components.h"
+#include "systems/animation/components.h"
 #include "systems/ffd/components.h"
 
 using namespace sffd;
@@ -148,4 +151,94 @@ TEST(UndoStack, DestroyedEntityIsSkipped) {
     reg.emplace<Tag>(reused, Tag{5});
     EXPECT_TRUE(undo.undo(reg));
     EXPECT_EQ(reg.get<Tag>(reused).value, 5);
+}
+
+// A step holds what it changed: moving 8 control points of an 11³ lattice deforming a 1M-point cloud is
+// a few hundred bytes (two snapshots of the lattice would be 4 · 1331 · 24 = 128 KB), and undo/redo of
+// the compact step are as exact as of snapshots.
+TEST(UndoStack, MovingEightControlPointsOfAMillionPointCloudCostsUnderOneKilobyte) {
+    ecs::Registry reg;
+    const ecs::Entity lattice = reg.create();
+    reg.emplace<Lattice>(lattice, sffd::make_lattice({-1, -1, -1},
+                                               {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)},
+                                               {10, 10, 10}));
+    const ecs::Entity cloud = reg.create();
+    SplatCloud& points = reg.emplace<SplatCloud>(cloud);
+    points.positions.assign(1'000'000, glm::vec3(0.25f));
+    reg.emplace<Deformers>(cloud, Deformers{{lattice}});
+    const Lattice original = reg.get<Lattice>(lattice);
+
+    UndoStack undo;
+    const std::size_t empty_stack = undo.bytes();
+    const std::uint32_t moved[8] = {0, 17, 121, 500, 665, 666, 1000, 1330};
+    ASSERT_TRUE(undo.record<Lattice>(reg, lattice, "stretch", [&](Lattice& l) {
+        for (std::uint32_t i : moved) l.current[i] += glm::dvec3(0.1, -1.0 / 3.0, 0.7);
+    }));
+    const std::size_t step = undo.bytes() - empty_stack;
+    RecordProperty("step_bytes", int(step));
+    EXPECT_LT(step, 1024u);
+    EXPECT_GT(step, 8u * 2u * sizeof(glm::dvec3)) << "the step must still hold the 8 points before and after";
+    const auto& change = dynamic_cast<const ComponentChange<Lattice>&>(undo.at(0));
+    EXPECT_TRUE(change.sparse());
+
+    const Lattice edited = reg.get<Lattice>(lattice);
+    ASSERT_TRUE(undo.undo(reg));
+    EXPECT_TRUE(bit_equal(reg.get<Lattice>(lattice).current, original.current));
+    EXPECT_TRUE(bit_equal(reg.get<Lattice>(lattice).rest, original.rest));
+    ASSERT_TRUE(undo.redo(reg));
+    EXPECT_TRUE(bit_equal(reg.get<Lattice>(lattice).current, edited.current));
+}
+
+// A change of the lattice's frame (a refit, a resample: new divisions) cannot be a list of moved points:
+// it keeps both snapshots, and undo brings the old grid back whole.
+TEST(UndoStack, ResampledLatticeKeepsWholeSnapshots) {
+    ecs::Registry reg;
+    const ecs::Entity e = reg.create();
+    reg.emplace<Lattice>(e, make_lattice());
+    const Lattice original = reg.get<Lattice>(e);
+    UndoStack undo;
+    ASSERT_TRUE(undo.record<Lattice>(reg, e, "resample", [](Lattice& l) {
+        l = sffd::make_lattice(glm::dvec3(0.0), {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)},
+                               {3, 3, 3});
+    }));
+    const auto& change = dynamic_cast<const ComponentChange<Lattice>&>(undo.at(0));
+    EXPECT_FALSE(change.sparse());
+    EXPECT_GT(undo.bytes(), (27u + 64u) * 2u * sizeof(glm::dvec3));
+    undo.undo(reg);
+    EXPECT_EQ(reg.get<Lattice>(e).divisions, original.divisions);
+    EXPECT_TRUE(bit_equal(reg.get<Lattice>(e).current, original.current));
+    undo.redo(reg);
+    EXPECT_EQ(reg.get<Lattice>(e).divisions, glm::ivec3(3));
+}
+
+// Bit-for-bit comparison: a point moved from 0.0 to -0.0 is a change, kept and undone exactly.
+TEST(UndoStack, SignOfZeroIsAChange) {
+    ecs::Registry reg;
+    const ecs::Entity e = reg.create();
+    reg.emplace<Lattice>(e, make_lattice());
+    UndoStack undo;
+    ASSERT_TRUE(undo.record<Lattice>(reg, e, "nudge", [](Lattice& l) { l.current[0].x = -0.0; }));
+    EXPECT_TRUE(std::signbit(reg.get<Lattice>(e).current[0].x));
+    undo.undo(reg);
+    EXPECT_FALSE(std::signbit(reg.get<Lattice>(e).current[0].x));
+}
+
+// An un-keyed pose (the whole lattice's points at a clip time) is stored as what moved, with its time.
+TEST(UndoStack, UnkeyedPoseChangeKeepsTheMovedPointsAndTheTime) {
+    ecs::Registry reg;
+    const ecs::Entity e = reg.create();
+    const Lattice l = make_lattice();
+    reg.emplace<UnkeyedEdit>(e, UnkeyedEdit{0.5, l.current});
+    UndoStack undo;
+    ASSERT_TRUE(undo.record<UnkeyedEdit>(reg, e, "set pose", [](UnkeyedEdit& u) {
+        u.time = 1.25;
+        u.points[4].y += 0.5;
+    }));
+    EXPECT_LT(undo.bytes(), 1024u);
+    undo.undo(reg);
+    EXPECT_EQ(reg.get<UnkeyedEdit>(e).time, 0.5);
+    EXPECT_TRUE(bit_equal(reg.get<UnkeyedEdit>(e).points, l.current));
+    undo.redo(reg);
+    EXPECT_EQ(reg.get<UnkeyedEdit>(e).time, 1.25);
+    EXPECT_EQ(reg.get<UnkeyedEdit>(e).points[4].y, l.current[4].y + 0.5);
 }
