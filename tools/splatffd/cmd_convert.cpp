@@ -56,7 +56,8 @@ constexpr const char* kUsage =
     "                   is a terminal, for steps over a second); the timing summary is always printed\n"
     "  --gaussians      write 3D Gaussians (.ply 3DGS layout, .compressed.ply PlayCanvas's quantised "
     "layout,\n"
-    "                   .spz, .glb KHR_gaussian_splatting; default: surface splats, or Gaussians when\n"
+    "                   .spz, .sog or DIR/meta.json PlayCanvas SOG, .glb KHR_gaussian_splatting; default:\n"
+    "                   surface splats, or Gaussians when\n"
     "                   IN is a Gaussian file: .splat, .spz, .ksplat, .sog, a SOG folder's meta.json,\n"
     "                   3DGS or compressed .ply, KHR .glb); with --lattice, OUT .glb/.gltf holds the\n"
     "                   Gaussians and their lattice\n"
@@ -375,7 +376,9 @@ int run_convert(sffd::cli::Args args) {
     gaussians = gaussians || gaussian_in;
     if (turn_x180 && !gaussians)
         return cli::usage_error("convert", "--turn-x180 applies to Gaussians: add --gaussians", "");
-    if (cli::is_json_path(out)) return export_lattice_json(in, out, lattice);
+    // A SOG folder's meta.json is the Gaussians' file, not a lattice.
+    const bool sog_folder = gaussians && std::filesystem::path(out).filename() == "meta.json";
+    if (cli::is_json_path(out) && !sog_folder) return export_lattice_json(in, out, lattice);
     if (!lattice.source.empty() && !cli::is_scene_path(out)) {
         std::fprintf(stderr,
                      "splatffd convert: %s: a %s file cannot hold a lattice; write a scene (.glb/.gltf) or "
