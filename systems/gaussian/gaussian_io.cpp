@@ -336,6 +336,8 @@ Result<GaussianCloud> read_gaussians(const fs::path& path) {
     else if (ext == ".spz") g = read_spz(path);
     else if (ext == ".ksplat") g = read_ksplat(path);
     else if (ext == ".sog" || ext == ".json") g = read_sog(path);
+    else if (std::error_code ec; fs::is_regular_file(path / "meta.json", ec))
+        g = read_sog(path / "meta.json");
     if (!g) return g;
     // The one validation every cloud from a file passes, after the readers' transforms.
     if (Status s = validate(*g, path.string()); !s) return s.error();

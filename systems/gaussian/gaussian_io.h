@@ -63,7 +63,7 @@ Status write_ply(const std::filesystem::path& path, const GaussianCloud& cloud,
                  ply::Format format = ply::Format::binary_little_endian);
 Result<GaussianCloud> read_splat(const std::filesystem::path& path);
 // By extension: .ply (3DGS or compressed, gaussian_compressed_ply.h), .splat, .spz (v2/v3, gaussian_spz.h),
-// .ksplat (gaussian_ksplat.h), .sog or a SOG folder's meta.json (any .json; gaussian_sog.h) or .glb/.gltf
+// .ksplat (gaussian_ksplat.h), .sog, a SOG folder or its meta.json (any .json; gaussian_sog.h) or .glb/.gltf
 // (KHR_gaussian_splatting, gaussian_gltf.h).
 Result<GaussianCloud> read_gaussians(const std::filesystem::path& path);
 

@@ -41,7 +41,6 @@
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/lattice_io.h"
 #include "systems/gaussian/components.h"
-#include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/deform_gaussians.h"
@@ -62,7 +61,8 @@ constexpr const char* kUsage =
     "[--bench N] [--ascii]\n"
     "                              [--estimate-radii]\n"
     "  IN, OUT  .ply (streamed, every property kept; 3DGS Gaussians too) or .glb .gltf (OUT also .ply);\n"
-    "           IN also .obj .off\n"
+    "           IN also .obj .off and every Gaussian format (.compressed.ply .spz .sog meta.json .splat\n"
+    "           .ksplat KHR .glb: read whole, CPU), written as OUT names (.ply .compressed.ply .spz .sog)\n"
     "  --lattice SOURCE  L.json | scene.glb (the lattices bound to its cloud) | "
     "fit[:L,M,N][,pad=P][,obb][,bspline]\n"
     "           (default: the lattices stored in IN when IN is a scene file); a scene's lattices deform\n"
@@ -409,10 +409,6 @@ int deform_ply_stream(const Options& o) {
     if (vi < 0) return fail(in_path + ": no vertex element");
     const ply::Element& ve = in_header.elements[std::size_t(vi)];
     VertexColumns cols = find_columns(ve);
-    if (gaussian::is_compressed_ply(in_header))
-        return fail(in_path +
-                    ": a compressed (PlayCanvas) Gaussian PLY: deform streams 3DGS PLY; expand it first with "
-                    "splatffd convert IN OUT.ply --gaussians");
     if (cols.x < 0 || cols.y < 0 || cols.z < 0)
         return fail(in_path + ": vertex element has no x, y, z properties");
     for (int k : {cols.x, cols.y, cols.z})
@@ -671,13 +667,14 @@ int run_deform(sffd::cli::Args args) {
         return usage();
     }
     const bool ply_in = lower_ext(o.files[0]) == ".ply", ply_out = lower_ext(o.files[1]) == ".ply";
-    if (cli::is_json_path(o.files[1]))
+    if (cli::is_json_path(o.files[1]) && std::filesystem::path(o.files[1]).filename() != "meta.json")
         return fail(o.files[1] +
                     ": deform writes a point cloud (.ply .glb .gltf); to export a lattice: splatffd convert "
                     "SCENE.glb L.json");
     // The output's format follows its extension; anything else would put bytes under a misleading name.
-    if (const std::string ext = lower_ext(o.files[1]); ext != ".ply" && ext != ".glb" && ext != ".gltf")
-        return fail(o.files[1] + ": deform writes .ply, .glb or .gltf files (got '" + ext + "')");
+    if (const std::string ext = lower_ext(o.files[1]); ext != ".gltf" && !cli::is_gaussian_output(o.files[1]))
+        return fail(o.files[1] + ": deform writes .ply, .glb or .gltf files (got '" + ext +
+                    "'); Gaussians also .compressed.ply, .spz, .sog or meta.json");
     // Writing over the input while streaming it would destroy the input on success.
     {
         std::error_code ec;
@@ -686,6 +683,12 @@ int run_deform(sffd::cli::Args args) {
                               std::filesystem::weakly_canonical(o.files[1], ec);
         if (same) return fail(o.files[1] + ": output is the input file; choose another output name");
     }
+    // Every Gaussian format import reads, read whole (tools/splatffd/deform_gaussians.h).
+    if (!cli::is_scene_path(o.files[0]) && cli::deform_reads_gaussians_whole(o.files[0], o.files[1]))
+        return cli::deform_gaussian_file(
+            o.files[0], o.files[1],
+            [&](const GaussianCloud& g) { return lattice_chain(o, g.positions, g.origin, nullptr); },
+            o.backend, o.bench, o.ascii);
     return ply_in && ply_out ? deform_ply_stream(o) : deform_in_memory(o);
 }
 

@@ -323,7 +323,9 @@ int run_info(cli::Args args) {
     if (ext == ".splat") return info_gaussians(file, ".splat (antimatter15)");
     if (ext == ".ksplat") return info_gaussians(file, ".ksplat (GaussianSplats3D)");
     if (ext == ".sog") return info_gaussians(file, "SOG (PlayCanvas)");
-    if (std::filesystem::path(file).filename() == "meta.json")
+    std::error_code ec;
+    if (std::filesystem::path(file).filename() == "meta.json" ||
+        std::filesystem::is_regular_file(std::filesystem::path(file) / "meta.json", ec))
         return info_gaussians(file, "SOG folder (PlayCanvas)");
     if (ext != ".obj" && ext != ".off" && ext != ".gltf" && ext != ".glb" &&
         !assets::is_builtin_scene(file)) {

@@ -21,10 +21,15 @@
 #include "runtime/assets/ply.h"
 #include "runtime/gfx/context.h"
 #include "systems/ffd/components.h"
+#include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_sog.h"
+#include "systems/gaussian/gaussian_spz.h"
 #include "systems/gaussian/gpu_deform.h"
+#include "tools/splatffd/convert_gaussians.h"
+#include "tools/splatffd/lattice_source.h"
 
 namespace sffd::cli {
 
@@ -35,6 +40,18 @@ constexpr std::size_t kChunkRows = 1 << 16;
 int fail(const std::string& message) {
     std::fprintf(stderr, "splatffd deform: %s\n", message.c_str());
     return 1;
+}
+std::string lower(std::string s) {
+    for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+}
+bool ends_with(const std::string& s, const std::string& tail) {
+    return s.size() >= tail.size() && s.compare(s.size() - tail.size(), tail.size(), tail) == 0;
+}
+// A 3DGS PLY by name: .ply but not PlayCanvas's .compressed.ply.
+bool is_plain_ply(const std::string& path) {
+    const std::string l = lower(path);
+    return ends_with(l, ".ply") && !ends_with(l, ".compressed.ply");
 }
 double ms_since(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
@@ -176,13 +193,46 @@ int deform_gaussian_ply(const std::string& in_path, const std::string& out_path,
     return 0;
 }
 
+bool is_gaussian_output(const std::string& out) {
+    const std::string l = lower(out);
+    return ends_with(l, ".ply") || ends_with(l, ".glb") || ends_with(l, ".spz") || ends_with(l, ".sog") ||
+           std::filesystem::path(out).filename() == "meta.json";
+}
+
+bool deform_reads_gaussians_whole(const std::string& in, const std::string& out) {
+    std::error_code ec;
+    if (std::filesystem::is_regular_file(std::filesystem::path(in) / "meta.json", ec)) return true;  // SOG
+    if (!is_gaussian_file(in)) return false;
+    if (!is_plain_ply(in) || !is_plain_ply(out)) return true;
+    // A .ply IN by content: PlayCanvas's compressed layout is read whole, 3DGS streamed.
+    auto r = ply::Reader::open(in);
+    return r && gaussian::is_compressed_ply(r->header());
+}
+
+int deform_gaussian_file(const std::string& in, const std::string& out,
+                         const std::function<Result<LatticeChain>(const GaussianCloud&)>& chain_for,
+                         const std::string& backend, int bench, bool ascii) {
+    if (bench > 0) return fail("--bench works on a 3DGS PLY deformed into a 3DGS PLY (streamed) only");
+    if (backend == "gpu")
+        return fail(in +
+                    ": Gaussians read whole are deformed on the CPU; --backend gpu streams 3DGS PLY only");
+    auto g = gaussian::read_gaussians(in);
+    if (!g) return fail(g.message());
+    auto chain = chain_for(*g);
+    if (!chain) return fail(chain.message());
+    std::string names;
+    for (const std::string& n : chain->names) names += (names.empty() ? "'" : ", '") + n + "'";
+    return deform_gaussian_cloud(std::move(*g), chain->lattices, chain->names,
+                                 std::to_string(chain->lattices.size()) + " lattice(s) " + names, out, ascii);
+}
+
 int deform_gaussian_cloud(GaussianCloud cloud, const std::vector<Lattice>& lattices,
                           const std::vector<std::string>& names, const std::string& what,
                           const std::string& out, bool ascii) {
-    std::string ext = std::filesystem::path(out).extension().string();
-    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
-    if (ext != ".ply" && ext != ".glb")
-        return fail(out + ": deformed Gaussians are written as .ply (3DGS) or .glb (KHR_gaussian_splatting)");
+    if (!is_gaussian_output(out))
+        return fail(out +
+                    ": deformed Gaussians are written as .ply (3DGS), .compressed.ply (PlayCanvas), .spz, "
+                    ".glb (KHR_gaussian_splatting), .sog or a SOG folder's meta.json");
     const auto t0 = Clock::now();
     std::size_t inverted = 0, not_finite = 0;
     std::vector<std::size_t> inside;
@@ -195,10 +245,14 @@ int deform_gaussian_cloud(GaussianCloud cloud, const std::vector<Lattice>& latti
     }
     gaussian::bake_sh_frames(cloud);
     const double ms = ms_since(t0);
+    const std::string l = lower(out);
     Status s =
-        ext == ".glb"
-            ? gaussian::write_glb(out, cloud)
-            : gaussian::write_ply(out, cloud, ascii ? ply::Format::ascii : ply::Format::binary_little_endian);
+        ends_with(l, ".compressed.ply") ? gaussian::write_compressed_ply(out, cloud)
+        : ends_with(l, ".ply")
+            ? gaussian::write_ply(out, cloud, ascii ? ply::Format::ascii : ply::Format::binary_little_endian)
+        : ends_with(l, ".glb") ? gaussian::write_glb(out, cloud)
+        : ends_with(l, ".spz") ? gaussian::write_spz(out, cloud)
+                               : gaussian::write_sog(out, cloud);
     if (!s) return fail(s.message());
     std::fprintf(stderr,
                  "%s: %zu Gaussians deformed by %s on the CPU in %.1f ms (%zu inverted, %zu not finite)\n",

@@ -1,9 +1,14 @@
-// `splatffd deform` on 3DGS PLY files: cmd_deform.cpp hands a file whose vertex element has
-// the 3DGS properties (f_dc_0, opacity, scale_0, rot_0) to this path.
+// `splatffd deform` on Gaussian files: cmd_deform.cpp streams a 3DGS PLY (a vertex element with f_dc_0,
+// opacity, scale_0, rot_0) into a 3DGS PLY through deform_gaussian_ply; every other Gaussian input
+// (compressed PLY, SOG, SPZ v2-v4, .splat, .ksplat, KHR glTF; or a 3DGS PLY written to another format) is
+// read whole, deformed on the CPU and written by OUT's extension (deform_gaussian_file).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
+
+#include "runtime/core/result.h"
 
 namespace sffd {
 struct Lattice;
@@ -12,12 +17,29 @@ struct GaussianCloud;
 
 namespace sffd::cli {
 
+struct LatticeChain;
+
+// The Gaussian formats deform writes, by OUT's name: .ply (3DGS), .compressed.ply (PlayCanvas), .spz (v3),
+// .glb (KHR_gaussian_splatting), .sog or a SOG folder's meta.json.
+bool is_gaussian_output(const std::string& out);
+
+// True when IN (not a scene file) holds Gaussians that deform reads whole: every Gaussian format except a
+// 3DGS PLY going to a 3DGS PLY, which deform_gaussian_ply streams.
+bool deform_reads_gaussians_whole(const std::string& in, const std::string& out);
+
+// IN read whole (gaussian::read_gaussians: the file's frame, as the streamed path deforms it), the lattices
+// `chain` gives for its centres applied in order on the CPU, OUT written by its extension. backend and bench
+// are checked (only the CPU runs here; --bench is the streamed path's). Returns the exit code.
+int deform_gaussian_file(const std::string& in, const std::string& out,
+                         const std::function<Result<LatticeChain>(const GaussianCloud&)>& chain,
+                         const std::string& backend, int bench, bool ascii);
+
 // backend: "cpu" or "reference" (there is no GPU Gaussian deformer yet). Returns the exit code.
 int deform_gaussian_ply(const std::string& in, const std::string& out, const Lattice& lattice,
                         const std::string& lattice_path, const std::string& backend, int bench, bool ascii);
 
 // A scene's Gaussian cloud (a saved editor scene, `convert g.ply s.glb --lattice fit`) deformed by
-// `lattices` in order on the CPU and written as Gaussians (OUT .ply 3DGS or .glb KHR_gaussian_splatting).
+// `lattices` in order on the CPU and written as Gaussians (OUT as is_gaussian_output() lists).
 // `names` (the lattices') and `what` (all of them) name them in the summary and warnings. Returns the exit
 // code.
 int deform_gaussian_cloud(GaussianCloud cloud, const std::vector<Lattice>& lattices,
