@@ -15,6 +15,7 @@
 #include "systems/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_sog.h"
 #include "systems/gaussian/gaussian_spz.h"
 
 namespace sffd::cli {
@@ -133,14 +134,17 @@ int write_gaussian_cloud(GaussianCloud cloud, const std::string& name, const std
     }
     const bool compressed = out.size() >= 15 && lower_ext(out.substr(0, out.size() - 4)) == ".compressed";
     Status s =
-        compressed ? gaussian::write_compressed_ply(out, *g)
-        : e == ".ply"
-            ? gaussian::write_ply(out, *g, ascii ? ply::Format::ascii : ply::Format::binary_little_endian)
-        : e == ".glb" ? gaussian::write_glb(out, *g)
-        : e == ".spz"
-            ? gaussian::write_spz(out, *g, spz_version)
-            : Status(make_error(out + ": Gaussians are written as .ply (3DGS), .compressed.ply "
-                                      "(PlayCanvas), .spz (v3 or v4) or .glb (KHR_gaussian_splatting)"));
+        make_error(out +
+                   ": Gaussians are written as .ply (3DGS), .compressed.ply (PlayCanvas), .spz (v3 or v4) "
+                   "or .glb (KHR_gaussian_splatting), and as PlayCanvas SOG: .sog or a folder's "
+                   "meta.json");
+    if (compressed) s = gaussian::write_compressed_ply(out, *g);
+    else if (e == ".ply")
+        s = gaussian::write_ply(out, *g, ascii ? ply::Format::ascii : ply::Format::binary_little_endian);
+    else if (e == ".glb") s = gaussian::write_glb(out, *g);
+    else if (e == ".spz") s = gaussian::write_spz(out, *g, spz_version);
+    else if (e == ".sog" || std::filesystem::path(out).filename() == "meta.json")
+        s = gaussian::write_sog(out, *g);
     if (!s) {
         std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
         return 1;
