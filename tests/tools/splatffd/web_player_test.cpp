@@ -83,25 +83,96 @@ std::string num(double v) {
     return s;
 }
 
-}  // namespace
+// The browser and its driver, or why the test cannot run (the skip message).
+struct Browser {
+    std::string chromium, why_not;
+    fs::path driver;
+};
 
-TEST(WebPlayer, BrowserFramesMatchRenderAtRestAndAtTheStrongestTwist) {
+Browser find_browser() {
+    Browser b;
     const auto chromium = run_command("command -v chromium || command -v chromium-browser");
     if (chromium.code != 0)
-        GTEST_SKIP() << "chromium is not installed (tools/bootstrap.sh installs Debian's)";
+        return {{}, "chromium is not installed (tools/bootstrap.sh installs Debian's)", {}};
     if (run_command("command -v node").code != 0)
-        GTEST_SKIP() << "node is not installed (tools/bootstrap.sh)";
+        return {{}, "node is not installed (tools/bootstrap.sh)", {}};
     const char* cache_env = std::getenv("SPLATFFD_CACHE_DIR");
     const fs::path cache =
         cache_env && *cache_env ? fs::path(cache_env) : source_root() / "content" / "cache";
-    const fs::path driver = cache / "web-test" / "node_modules";
-    if (!fs::is_directory(driver / "puppeteer-core"))
-        GTEST_SKIP() << "puppeteer-core is not installed in " << driver
-                     << " (tools/fetch_web_engine.sh --test)";
+    b.driver = cache / "web-test" / "node_modules";
+    if (!fs::is_directory(b.driver / "puppeteer-core"))
+        return {
+            {},
+            "puppeteer-core is not installed in " + b.driver.string() + " (tools/fetch_web_engine.sh --test)",
+            {}};
     if (!fs::is_regular_file(fs::path(SFFD_BINARY_DIR) / "tools" / "web" / "playcanvas.min.js"))
-        GTEST_SKIP() << "the PlayCanvas engine is not installed (tools/fetch_web_engine.sh, then build)";
-    const std::string browser = chromium.out.substr(0, chromium.out.find('\n'));
+        return {{}, "the PlayCanvas engine is not installed (tools/fetch_web_engine.sh, then build)", {}};
+    b.chromium = chromium.out.substr(0, chromium.out.find('\n'));
+    return b;
+}
 
+// Screenshots of the player in FOLDER at TIMES (seconds, space-separated): DIR/PREFIX_<i>.png.
+sffd::test::CliRun screenshots(const Browser& b, const fs::path& dir, const fs::path& folder,
+                               const std::string& prefix, const std::string& times) {
+    const fs::path script = source_root() / "tests" / "tools" / "splatffd" / "web_player_shot.js";
+    return run_command("NODE_PATH=" + b.driver.string() + " node " + script.string() + " " + b.chromium +
+                       " " + folder.string() + " " + (dir / prefix).string() + " " + std::to_string(W) + " " +
+                       std::to_string(H) + " " + times);
+}
+
+// `render SCENE` frame K through the camera of the player's scene.js, over black, into DIR/ours.
+void render_frame(const fs::path& scene, const fs::path& web, const fs::path& dir, long k) {
+    std::string text = slurp(web / "scene.js");
+    const auto s0 = text.find('{'), s1 = text.rfind('}');
+    const nlohmann::json cam = nlohmann::json::parse(text.substr(s0, s1 - s0 + 1))["camera"];
+    std::string camera;
+    for (const char* key : {"eye", "target", "up"})
+        for (int c = 0; c < 3; ++c) camera += num(cam[key][c].get<double>()) + ",";
+    camera += num(cam["fov_y_degrees"].get<double>());
+    const auto r = sffd::test::run_headless("render " + scene.string() + " --frames " + std::to_string(k) +
+                                            ":" + std::to_string(k) + " --size " + std::to_string(W) + "x" +
+                                            std::to_string(H) + " --fps 24 --background 0,0,0 --format png " +
+                                            "--camera " + camera + " --out " + (dir / "ours").string());
+    ASSERT_EQ(r.code, 0) << r.out;
+}
+
+sffd::render::Rgba8Image ours(const fs::path& dir, long k) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%04ld.png", k);
+    return load(dir / "ours" / name);
+}
+
+}  // namespace
+
+TEST(WebPlayer, BsplineLatticeTwistMatchesRender) {
+    const Browser browser = find_browser();
+    if (!browser.why_not.empty()) GTEST_SKIP() << browser.why_not;
+    const fs::path dir = fs::temp_directory_path() / ("sffd_web_bspline_" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    ASSERT_EQ(sffd::test::make_web_test_scenes(dir), "");
+    const fs::path scene = dir / "twist_bspline.glb", web = dir / "web";
+    const auto ex = run("export " + scene.string() + " --web " + web.string() + " --size " +
+                        std::to_string(W) + "x" + std::to_string(H));
+    ASSERT_EQ(ex.code, 0) << ex.out;
+    EXPECT_NE(ex.out.find("B-spline"), std::string::npos) << ex.out;
+    render_frame(scene, web, dir, 0);
+    render_frame(scene, web, dir, 24);
+    const auto shot = screenshots(browser, dir, web, "shot", "1");
+    ASSERT_EQ(shot.code, 0) << shot.out;
+    const auto web_twist = load(dir / "shot_0.png");
+    ASSERT_EQ(web_twist.width, W);
+    const double twist = psnr(web_twist, ours(dir, 24)), vs_rest = psnr(web_twist, ours(dir, 0));
+    std::printf("B-spline: PSNR browser vs render at the twist's peak %.2f dB (vs render at rest %.2f dB)\n",
+                twist, vs_rest);
+    EXPECT_GT(twist, 20.0);
+    EXPECT_GT(twist - vs_rest, 5.0);
+    if (!HasFailure()) fs::remove_all(dir);
+}
+
+TEST(WebPlayer, BrowserFramesMatchRenderAtRestAndAtTheStrongestTwist) {
+    const Browser browser = find_browser();
+    if (!browser.why_not.empty()) GTEST_SKIP() << browser.why_not;
     const fs::path dir = fs::temp_directory_path() / ("sffd_web_player_" + std::to_string(::getpid()));
     fs::remove_all(dir);
     fs::create_directories(dir);
@@ -136,31 +207,12 @@ TEST(WebPlayer, BrowserFramesMatchRenderAtRestAndAtTheStrongestTwist) {
     for (const auto& e : fs::directory_iterator(web)) bytes += e.file_size();
     std::printf("web player folder: %.2f MB\n", double(bytes) / 1e6);
 
-    // Our render through the page's camera (scene.js), over black as the page is.
     std::string text = slurp(web / "scene.js");
     const auto s0 = text.find('{'), s1 = text.rfind('}');
     const nlohmann::json cam = nlohmann::json::parse(text.substr(s0, s1 - s0 + 1))["camera"];
-    std::string camera;
-    for (const char* key : {"eye", "target", "up"})
-        for (int c = 0; c < 3; ++c) camera += num(cam[key][c].get<double>()) + ",";
-    camera += num(cam["fov_y_degrees"].get<double>());
-    for (long k : {0L, strongest}) {
-        const auto r = sffd::test::run_headless("render " + scene.string() + " --frames " +
-                                                std::to_string(k) + ":" + std::to_string(k) + " --size " +
-                                                std::to_string(W) + "x" + std::to_string(H) +
-                                                " --fps 24 --background 0,0,0 --format png "
-                                                "--camera " +
-                                                camera + " --out " + (dir / "ours").string());
-        ASSERT_EQ(r.code, 0) << r.out;
-    }
-
-    const fs::path script = source_root() / "tests" / "tools" / "splatffd" / "web_player_shot.js";
-    auto screenshots = [&](const fs::path& folder, const std::string& prefix, const std::string& times) {
-        return run_command("NODE_PATH=" + driver.string() + " node " + script.string() + " " + browser + " " +
-                           folder.string() + " " + (dir / prefix).string() + " " + std::to_string(W) + " " +
-                           std::to_string(H) + " " + times);
-    };
-    const auto shot = screenshots(web, "shot", "0 " + num(double(strongest) / kFps));
+    render_frame(scene, web, dir, 0);
+    render_frame(scene, web, dir, strongest);
+    const auto shot = screenshots(browser, dir, web, "shot", "0 " + num(double(strongest) / kFps));
     ASSERT_EQ(shot.code, 0) << shot.out;
     std::printf("%s", shot.out.c_str());
 
@@ -179,15 +231,11 @@ TEST(WebPlayer, BrowserFramesMatchRenderAtRestAndAtTheStrongestTwist) {
     const auto ex2 = run("export " + (dir / "baked.glb").string() + " --web " + web_baked.string() +
                          " --size " + std::to_string(W) + "x" + std::to_string(H) + " --fps 24");
     ASSERT_EQ(ex2.code, 0) << ex2.out;
-    const auto shot2 = screenshots(web_baked, "baked", "0");
+    const auto shot2 = screenshots(browser, dir, web_baked, "baked", "0");
     ASSERT_EQ(shot2.code, 0) << shot2.out;
 
     const auto web_rest = load(dir / "shot_0.png"), web_twist = load(dir / "shot_1.png");
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%04ld.png", 0L);
-    const auto ours_rest = load(dir / "ours" / name);
-    std::snprintf(name, sizeof name, "frame_%04ld.png", strongest);
-    const auto ours_twist = load(dir / "ours" / name);
+    const auto ours_rest = ours(dir, 0), ours_twist = ours(dir, strongest);
     ASSERT_EQ(web_rest.width, W);
     ASSERT_EQ(web_rest.height, H);
     ASSERT_EQ(web_twist.width, W);
@@ -217,4 +265,5 @@ TEST(WebPlayer, BrowserFramesMatchRenderAtRestAndAtTheStrongestTwist) {
     EXPECT_GT(control, kFloor);
     EXPECT_LE(std::abs(twist - control), 1.0);  // the lattice adds no error beyond the renderers' difference
     EXPECT_GT(twist - twist_vs_rest, 5.0);      // the browser shows the twist, not the rest pose
+    if (!HasFailure()) fs::remove_all(dir);
 }

@@ -20,8 +20,8 @@
 
 namespace sffd::test {
 
-// Writes DIR/g.ply (no lattice), DIR/gs.glb (a lattice, no clip) and DIR/twist.glb (the clip); returns
-// an error text, empty on success.
+// Writes DIR/g.ply (no lattice), DIR/gs.glb (a lattice, no clip), DIR/twist.glb (the clip) and
+// DIR/twist_bspline.glb (the same with a B-spline lattice); returns an error text, empty on success.
 inline std::string make_web_test_scenes(const std::filesystem::path& dir) {
     const std::string g = (dir / "g.ply").string(), gs = (dir / "gs.glb").string();
     if (auto r = run("convert sphere " + g + " --gaussians"); r.code != 0) return r.out;
@@ -52,6 +52,8 @@ inline std::string make_web_test_scenes(const std::filesystem::path& dir) {
     });
     if (lattices != 1) return gs + ": expected one lattice, found " + std::to_string(lattices);
     if (Status st = save_scene(reg, dir / "twist.glb"); !st) return st.message();
+    reg.view<Lattice>().each([](Lattice& l) { l.basis = LatticeBasis::bspline; });
+    if (Status st = save_scene(reg, dir / "twist_bspline.glb"); !st) return st.message();
     return {};
 }
 
