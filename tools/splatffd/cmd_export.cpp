@@ -31,6 +31,7 @@
 #include "tools/splatffd/frame_files.h"
 #include "tools/splatffd/render_manifest.h"
 #include "tools/splatffd/unkeyed_note.h"
+#include "tools/splatffd/web_export.h"
 
 namespace {
 
@@ -41,6 +42,8 @@ using ojson = nlohmann::ordered_json;
 constexpr const char* kUsage =
     "usage: splatffd export SCENE --format ply|compressed-ply|sog|spz|glb --out DIR [--frames N|A:B] [--fps F]\n"
     "                       [--shard K/N] [--cloud NAME] [--force]\n"
+    "       splatffd export SCENE --web DIR [--force] [--size WxH] [--fps F]   (a web player folder:\n"
+    "                       splatffd export SCENE --web DIR --help)\n"
     "  SCENE            built-in name (sphere, face) or a scene file (.glb .gltf: the editor's save,\n"
     "                   `convert ... --lattice fit`) whose cloud is bound to a lattice\n"
     "  --format F       ply (3DGS PLY for Gaussians; surface splats: PLY with normals and splat axes),\n"
@@ -387,6 +390,7 @@ int export_frames(const ExportOptions& o, cli::ExportScene& s, ExportRun& run) {
 }
 
 int run_export(sffd::cli::Args args) {
+    if (std::find(args.begin(), args.end(), "--web") != args.end()) return cli::run_export_web(args);
     ExportOptions o;
     if (auto rc = parse_export_args(args, o)) return *rc;
     cli::ExportScene scene;
@@ -398,10 +402,6 @@ int run_export(sffd::cli::Args args) {
                                                 " is for 3D Gaussians: surface splats export as ply or glb "
                                                 "(or convert them first: splatffd convert " +
                                                 o.scene + " g.glb --gaussians --lattice fit)");
-    if (*o.format == cli::ExportFormat::sog)
-        return cli::command_error("export",
-                                  "--format sog: this build reads SOG but cannot write it yet "
-                                  "(systems/gaussian/gaussian_sog.h); export ply, compressed-ply, spz or glb");
     if (auto rc = check_clips(o, scene)) return *rc;
     cli::note_unkeyed_edits("export", scene.registry, o.fps);
 

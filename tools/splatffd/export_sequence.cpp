@@ -20,6 +20,7 @@
 #include "systems/gaussian/gaussian_deform.h"
 #include "systems/gaussian/gaussian_gltf.h"
 #include "systems/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_sog.h"
 #include "systems/gaussian/gaussian_spz.h"
 
 namespace sffd::cli {
@@ -223,9 +224,7 @@ Result<ExportedFrame> write_gaussians(const ExportScene& scene, ExportFormat for
         case ExportFormat::compressed_ply: saved = gaussian::write_compressed_ply(path, cloud); break;
         case ExportFormat::spz: saved = gaussian::write_spz(path, cloud); break;
         case ExportFormat::glb: saved = gaussian::write_glb(path, cloud); break;
-        case ExportFormat::sog:
-            saved = make_error(path.string() + ": writing SOG is not available in this build");
-            break;
+        case ExportFormat::sog: saved = gaussian::write_sog(path, cloud); break;
     }
     if (!saved) return saved.error();
     done.files.push_back(path);
