@@ -41,7 +41,7 @@ struct GlRequirements {
                                    // gaussian/splat.vert: the projection's three arrays)
     int fragment_ssbo_blocks = 2;  // splat_render/compute_resolve.frag: raster depth and sums
     int compute_ssbo_blocks = 8;   // gaussian/deform.comp: 7 of its own plus the lattice's control points
-                                   // (and gaussian/project.comp: 8)
+                                   // (and gaussian/project.comp, gaussian/gather.comp: 8)
     int combined_ssbo_blocks = 8;  // the largest program (gaussian/deform.comp)
     int ssbo_bindings = 13;        // binding points 0..12 (shaders/splat_render/compute_raster.h)
 };
