@@ -7,10 +7,11 @@
 //     −∞ (the log of a zero scale) gets its own first entry, 20 below the finite minimum (splat-transform's
 //     sentinel: e^−20 of the smallest scale, flat for any renderer).
 //   - palette: k-means over vectors (the SH bands of every Gaussian). Up to k distinct vectors are kept
-//     exactly; otherwise Lloyd iterations, on all points when n·k is small, else two levels: a coarse
-//     k-means (256 clusters, trained on a sample) splits the points, and each coarse cluster gets its
-//     share of the k centroids (by its point count) and its own Lloyd iterations. Each point's label is
-//     then its nearest centroid within its coarse cluster. Seeded: the same input gives the same output.
+//     exactly; otherwise Lloyd iterations (5 assignments), on all points when n·k is small, else two
+//     levels: a coarse k-means of about √(5k) clusters (trained on a sample) splits the points, and each
+//     coarse cluster gets its share of the k centroids (by its point count) and its own Lloyd iterations
+//     (again in two levels if still large). Each point's label is then its nearest centroid within its
+//     coarse cluster. Seeded: the same input gives the same output.
 #pragma once
 
 #include <cstddef>
