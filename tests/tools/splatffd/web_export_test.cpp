@@ -1,19 +1,24 @@
 // `splatffd export SCENE --web DIR` through the built binary, without a browser: what it refuses (no
 // lattice, a clip without keys, surface splats, a folder that holds other files, no engine) and what the
 // folder holds (the capture as SOG that reads back, the lattice and the clip as the scene has them).
-// The browser test is web_player_test.cpp (label slow).
+// The page's clip evaluation (clip.js, run by node) equals systems/animation/evaluate.cpp on a clip with
+// every interpolation, easing and play-mode path. The browser test is web_player_test.cpp (label slow).
 #include <gtest/gtest.h>
 
 #include <unistd.h>
 
+#include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
 #include "systems/animation/clip_io.h"
+#include "systems/animation/evaluate.h"
 #include "systems/gaussian/gaussian_sog.h"
 #include "tests/tools/splatffd/web_test_scene.h"
 
@@ -172,4 +177,78 @@ TEST(WebExport, FolderHoldsThePlayerTheSogCaptureTheLatticeAndTheClip) {
     ASSERT_TRUE(cloud) << cloud.message();
     EXPECT_EQ(cloud->size(), 59650u);
     EXPECT_EQ(scene["capture"]["count"], 59650);
+}
+
+TEST(WebExport, PlayerClipEvaluationEqualsTheEngines) {
+    if (run_command("command -v node").code != 0)
+        GTEST_SKIP() << "node is not installed (tools/bootstrap.sh)";
+    if (!engine_installed())
+        GTEST_SKIP() << "the PlayCanvas engine is not installed (tools/fetch_web_engine.sh)";
+    using namespace sffd;
+    register_engine_scene_hooks();
+    ecs::Registry reg;
+    ASSERT_TRUE(load_scene(reg, (scenes() / "gs.glb").string()));
+    const Lattice* lattice = nullptr;
+    reg.view<const Lattice>().each([&](ecs::Entity e, const Lattice& l) {
+        lattice = &l;
+        AnimationClip clip;
+        clip.name = "every path";
+        clip.duration = 1.6;
+        clip.mode = PlayMode::ping_pong;
+        clip.speed = 1.5;
+        std::vector<std::uint32_t> low, high;
+        for (std::uint32_t i = 0; i < 40; ++i) low.push_back(i);
+        for (std::uint32_t i = 30; i < 90; ++i) high.push_back(i);
+        const std::size_t a = add_stretch_track(clip, "stretch", low);
+        set_key(clip.tracks[a], {0.0, glm::dvec3(0.0), Interpolation::step, Easing::none});
+        set_key(clip.tracks[a], {0.3, glm::dvec3(0.1, 0.2, -0.1), Interpolation::smooth, Easing::ease_in});
+        set_key(clip.tracks[a], {0.7, glm::dvec3(0.3, 0.0, 0.05), Interpolation::smooth, Easing::ease_out});
+        set_key(clip.tracks[a], {1.2, glm::dvec3(0.0, 0.1, 0.0), Interpolation::linear, Easing::ease_in_out});
+        set_key(clip.tracks[a], {1.6, glm::dvec3(0.0), Interpolation::smooth, Easing::none});
+        const std::size_t b =
+            add_twist_track(clip, "twist pivot", high, {0.3, 1.0, 0.2}, glm::dvec3(0.1, -0.2, 0.3));
+        set_key(clip.tracks[b], {0.0, glm::dvec3(0.0), Interpolation::smooth, Easing::none});
+        set_key(clip.tracks[b], {0.5, glm::dvec3(90.0, 0, 0), Interpolation::linear, Easing::none});
+        set_key(clip.tracks[b], {1.0, glm::dvec3(450.0, 0, 0), Interpolation::step, Easing::none});
+        set_key(clip.tracks[b], {1.3, glm::dvec3(-30.0, 0, 0), Interpolation::smooth, Easing::ease_in_out});
+        const std::size_t c = add_twist_track(clip, "twist centroid", low, {1.0, 0.0, 0.0});
+        set_key(clip.tracks[c], {0.2, glm::dvec3(0.0), Interpolation::smooth, Easing::none});
+        set_key(clip.tracks[c], {1.4, glm::dvec3(200.0, 0, 0), Interpolation::smooth, Easing::none});
+        reg.emplace<AnimationClip>(e, std::move(clip));
+        AnimationState state;
+        state.speed = 0.75;
+        reg.emplace<AnimationState>(e, state);
+    });
+    ASSERT_NE(lattice, nullptr);
+    const fs::path scene = scenes() / "every_path.glb";
+    ASSERT_TRUE(save_scene(reg, scene));
+    const fs::path out = out_dir("clip");
+    const auto ex = run("export " + scene.string() + " --web " + out.string());
+    ASSERT_EQ(ex.code, 0) << ex.out;
+
+    const std::vector<double> times = {
+        -0.7, 0.0, 0.1, 0.2666666666666667, 0.45, 0.8888888888888888, 1.0, 1.1, 1.4222222222222223, 1.9,
+        2.5,  3.3, 7.77};
+    std::string args;
+    for (double t : times) args += " " + std::to_string(t);
+    const fs::path js =
+        fs::path(SFFD_TEST_DATA_DIR).parent_path() / "tools" / "splatffd" / "web_clip_eval.js";
+    const auto r = run_command("node " + js.string() + " " + out.string() + args);
+    ASSERT_EQ(r.code, 0) << r.out;
+    const nlohmann::json got = nlohmann::json::parse(r.out);
+    ASSERT_EQ(got.size(), times.size());
+    const AnimationClip* c = nullptr;
+    reg.view<const AnimationClip>().each([&](const AnimationClip& x) { c = &x; });
+    for (std::size_t i = 0; i < times.size(); ++i) {
+        const double t = got[i]["t"].get<double>();  // as node read it
+        const double clip_time = map_clip_time(*c, t * 0.75 * c->speed);
+        EXPECT_DOUBLE_EQ(got[i]["clip_time"].get<double>(), clip_time) << "t " << t;
+        const auto pose = evaluate_pose(*c, *lattice, clip_time);
+        ASSERT_EQ(got[i]["points"].size(), pose.size());
+        double worst = 0.0;
+        for (std::size_t p = 0; p < pose.size(); ++p)
+            for (int k = 0; k < 3; ++k)
+                worst = std::max(worst, std::abs(got[i]["points"][p][k].get<double>() - pose[p][k]));
+        EXPECT_LT(worst, 1e-12) << "t " << t << " (clip time " << clip_time << ")";
+    }
 }
