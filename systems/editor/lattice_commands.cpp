@@ -1,5 +1,6 @@
 // The editor's lattice settings: resample, basis, fit, apply as rest (each one undo step).
 #include "systems/editor/editor_system_detail.h"
+#include "systems/ffd/lattice_frame.h"
 
 namespace sffd::editor {
 
@@ -114,18 +115,20 @@ bool apply_lattice_as_rest(ecs::Registry& registry, EditorState& state) {
         ffd::BakeTarget bake{&cloud.positions, cloud.normals.empty() ? nullptr : &cloud.normals,
                              cloud.axis_u.empty() ? nullptr : &cloud.axis_u,
                              cloud.axis_v.empty() ? nullptr : &cloud.axis_v, cloud.origin};
-        Lattice scratch = *lattice;  // apply_as_rest resets the lattice: bake each cloud from the same one
+        // Each cloud is baked by the lattice in its own frame (both Transforms, as the deformation reads it);
+        // apply_as_rest resets the lattice, so every cloud starts from the same one.
+        Lattice scratch =
+            ffd::map_lattice(*lattice, ffd::lattice_to_cloud(registry, clouds[c], state.active_lattice));
         if (Status st = ffd::apply_as_rest(scratch, &bake); !st) {
             group->add(cloud_edit.finish(registry));
             group->undo(registry);
             return say(state, "apply as rest: " + st.message()), false;
         }
-        next = std::move(scratch);
         group->add(cloud_edit.finish(registry));
     }
-    if (clouds.empty()) {
-        if (Status st = ffd::apply_as_rest(next); !st)
-            return say(state, "apply as rest: " + st.message()), false;
+    if (Status st = ffd::apply_as_rest(next); !st) {  // the lattice itself, in its own frame
+        if (!clouds.empty()) group->undo(registry);
+        return say(state, "apply as rest: " + st.message()), false;
     }
     registry.patch<Lattice>(state.active_lattice) = std::move(next);
     group->add(lattice_edit.finish(registry));

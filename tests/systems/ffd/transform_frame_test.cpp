@@ -457,3 +457,24 @@ TEST(TransformFrame, ASavedSceneKeepsBothTransformsAndItsDeformation) {
         worst = std::max(worst, double(glm::length(a.positions[i] - b.positions[i])));
     EXPECT_LT(worst, 1e-5);
 }
+
+// The editor's "apply as rest" bakes each cloud by the lattice where the deformation uses it: the baked
+// cloud is the deformed one, and with the lattice now at rest it stays so.
+TEST(TransformFrame, ApplyAsRestBakesTheCloudWhereItWasDrawn) {
+    Scene s;
+    build(s, sphere_cloud(), kPlacements[2], Edit::twist);
+    run(s);
+    const std::vector<glm::vec3> deformed = s.reg.get<DeformedSplats>(s.cloud).positions;
+    s.reg.emplace<Camera>(s.reg.create());
+    editor::EditorState& state = editor::setup_editor(s.reg, Viewport{320, 240});
+    state.active_lattice = s.lattice;
+    ASSERT_TRUE(editor::apply_lattice_as_rest(s.reg, state));
+    const SplatCloud& baked = s.reg.get<SplatCloud>(s.cloud);
+    double worst = 0;
+    for (std::size_t i = 0; i < deformed.size(); ++i)
+        worst = std::max(worst, double(glm::length(baked.positions[i] - deformed[i])));
+    EXPECT_LT(worst, 1e-5);
+    EXPECT_EQ(s.reg.get<Lattice>(s.lattice).rest, s.reg.get<Lattice>(s.lattice).current);
+    run(s);
+    EXPECT_EQ(s.reg.get<DeformedSplats>(s.cloud).positions, baked.positions);  // at rest: nothing moves
+}
