@@ -86,9 +86,11 @@ bool fit_lattice_to(ecs::Registry& registry, EditorState& state, bool to_selecti
     bool have_origin = false;
     for (ecs::Entity e : clouds_of(registry, state.active_lattice, false)) {
         const SplatCloud& cloud = registry.get<SplatCloud>(e);
-        if (!have_origin) origin = cloud.origin, have_origin = true;
+        // The points in the lattice's own frame (both Transforms), where its box and control points live.
+        const glm::dmat4 to_lattice = glm::inverse(ffd::lattice_to_cloud(registry, e, state.active_lattice));
+        if (!have_origin) origin = glm::dvec3(to_lattice * glm::dvec4(cloud.origin, 1.0)), have_origin = true;
         for (const glm::vec3& p : cloud.positions) {
-            const glm::dvec3 w = cloud.origin + glm::dvec3(p);
+            const glm::dvec3 w = glm::dvec3(to_lattice * glm::dvec4(cloud.origin + glm::dvec3(p), 1.0));
             if (glm::all(glm::greaterThanEqual(w, lo)) && glm::all(glm::lessThanEqual(w, hi)))
                 points.push_back(glm::vec3(w - origin));
         }

@@ -478,3 +478,20 @@ TEST(TransformFrame, ApplyAsRestBakesTheCloudWhereItWasDrawn) {
     run(s);
     EXPECT_EQ(s.reg.get<DeformedSplats>(s.cloud).positions, baked.positions);  // at rest: nothing moves
 }
+
+// The editor's "fit to object" fits the lattice around the cloud where it is drawn: the fitted box, placed
+// by the lattice's Transform, holds every splat of the moved cloud.
+TEST(TransformFrame, FitToObjectFitsTheLatticeAroundTheCloudWhereItIsDrawn) {
+    Scene s;
+    build(s, sphere_cloud(), kPlacements[2], Edit::rest);
+    s.reg.emplace<Camera>(s.reg.create());
+    editor::EditorState& state = editor::setup_editor(s.reg, Viewport{320, 240});
+    state.active_lattice = s.lattice;
+    ASSERT_TRUE(editor::fit_lattice_to(s.reg, state, false));
+    const ffd::CloudLattices framed = ffd::cloud_lattices(s.reg, s.cloud, std::vector{s.lattice});
+    const SplatCloud& c = s.reg.get<SplatCloud>(s.cloud);
+    std::size_t outside = 0;
+    for (const glm::vec3& p : c.positions)
+        outside += !ffd::inside(ffd::local_coords(*framed.lattices[0], c.origin + glm::dvec3(p)));
+    EXPECT_EQ(outside, 0u);
+}
