@@ -14,6 +14,7 @@
 #include "runtime/assets/ply.h"
 #include "runtime/assets/scene.h"
 #include "runtime/core/file_io.h"
+#include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
 #include "systems/gaussian/capture_up.h"
@@ -331,7 +332,39 @@ Status load_gaussian_extension(ecs::Registry& registry, std::string_view text,
     } catch (const std::exception& ex) {
         return undo(make_error(ex.what()));
     }
+    // A scene saved without a camera (convert IN OUT.glb --lattice fit) opens with the camera IN opens with.
+    if (!created.empty()) add_default_gaussian_view(registry);
     return {};
+}
+
+void add_default_gaussian_view(ecs::Registry& registry) {
+    if (registry.count<Camera>() > 0) return;
+    // World-space bounds (through each cloud's Transform: a capture's up turn, a scene's placement), so a
+    // capture and the scene made from it frame the same box. They hold each Gaussian's 3-sigma extent, not
+    // only its centre: the camera (and its near plane) then sits outside every Gaussian, also when the
+    // centres coincide. Surface clouds of the same scene are framed with them.
+    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    auto add = [&](const glm::dmat4& m, const glm::dvec3& p, double reach) {
+        const glm::dvec3 w = glm::dvec3(m * glm::dvec4(p, 1.0));
+        lo = glm::min(lo, w - reach), hi = glm::max(hi, w + reach);
+    };
+    auto scale_of = [](const glm::dmat4& m) {
+        return std::max(
+            {glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
+    };
+    registry.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& g) {
+        const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), g.origin);
+        const double k = scale_of(m);
+        for (std::size_t i = 0; i < g.size(); ++i) {
+            const glm::dvec3 s = glm::dvec3(g.scales[i]);
+            add(m, glm::dvec3(g.positions[i]), 3.0 * k * std::max({s.x, s.y, s.z}));
+        }
+    });
+    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& c) {
+        const glm::dmat4 m = model_matrix(registry.try_get<Transform>(e), c.origin);
+        for (const glm::vec3& p : c.positions) add(m, glm::dvec3(p), 0.0);
+    });
+    if (lo.x <= hi.x) assets::add_default_view(registry, lo, hi, glm::dvec3(0.3, 0.3, 1.0));
 }
 
 void register_gaussian_scene_hooks() {
@@ -341,19 +374,7 @@ void register_gaussian_scene_hooks() {
         [](ecs::Registry& registry, const fs::path& p) -> Status {
             auto e = load_gaussian_entity(registry, p);
             if (!e) return e.error();
-            if (registry.count<Camera>() == 0) {
-                const GaussianCloud& g = registry.get<GaussianCloud>(*e);
-                // The bounds hold each Gaussian's 3-sigma extent, not only its centre: the default camera
-                // (and its near plane) then sits outside every Gaussian, also when the centres coincide.
-                glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-                for (std::size_t i = 0; i < g.size(); ++i) {
-                    const glm::dvec3 s = glm::dvec3(g.scales[i]);
-                    const double reach = 3.0 * std::max({s.x, s.y, s.z});
-                    lo = glm::min(lo, g.origin + glm::dvec3(g.positions[i]) - reach);
-                    hi = glm::max(hi, g.origin + glm::dvec3(g.positions[i]) + reach);
-                }
-                if (lo.x <= hi.x) assets::add_default_view(registry, lo, hi, glm::dvec3(0.3, 0.3, 1.0));
-            }
+            add_default_gaussian_view(registry);
             return {};
         },
         ".spz, .splat, .ksplat, .sog, a SOG folder or its meta.json, a 3DGS .ply, a KHR_gaussian_splatting "

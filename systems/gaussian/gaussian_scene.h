@@ -50,6 +50,11 @@ bool is_gaussian_scene_file(const std::filesystem::path& path);
 // Reads the file and creates its entity (Name, Transform, GaussianCloud, GaussianSource).
 Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const std::filesystem::path& path);
 
+// The camera a Gaussian file opens with, added when `registry` has no Camera: assets::add_default_view
+// around every cloud's world-space bounds (Gaussians to 3 sigma). Loading a Gaussian file and loading a
+// scene whose Gaussians come without a camera both add it, so the two open alike.
+void add_default_gaussian_view(ecs::Registry& registry);
+
 void register_gaussian_scene_hooks();
 void unregister_gaussian_scene_hooks();
 
