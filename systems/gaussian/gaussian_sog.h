@@ -46,16 +46,22 @@ Result<GaussianCloud> read_sog(const std::filesystem::path& path);
 
 // Writes `cloud` as SOG version 2 (gaussian_sog_write.cpp): `path` ending in `.sog` is a ZIP archive of
 // stored entries; a path named `meta.json` writes the folder (meta.json and the .webp images beside it).
-// Texel i is Gaussian i (the cloud's order is kept). Positions are written absolute (origin + position)
-// in double; positions, rotation components and opacity are rounded to their nearest step (the bounds
-// above); scales (log) and DC coefficients index codebooks of 256 (up to 256 distinct values are kept
-// exactly, more are clustered as splat-transform does, gaussian_sog_quantize.h; a zero scale gets an
-// entry e^−20 below the smallest); the SH bands share a palette of min(65536, 2^⌊log2 n⌋) entries (up to
-// that many distinct band vectors are kept exactly, else k-means), whose coefficients index one more
-// codebook of 256. Refused with "path: problem": another file name, clouds validate() refuses (values
-// not finite or out of range, per-splat SH frames: bake_sh_frames() first), more than kMaxGaussians.
+// Texel i is Gaussian i (the cloud's order is kept) unless options.morton_order. Positions are written
+// absolute (origin + position) in double; positions, rotation components and opacity are rounded to their
+// nearest step (the bounds above); scales (log) and DC coefficients index codebooks of 256 (up to 256
+// distinct values are kept exactly, more are clustered as splat-transform does, gaussian_sog_quantize.h; a
+// zero scale gets an entry e^−20 below the smallest); the SH bands share a palette of min(65536, 2^⌊log2 n⌋)
+// entries (up to that many distinct band vectors are kept exactly, else k-means), whose coefficients index
+// one more codebook of 256. Refused with "path: problem": another file name, clouds validate() refuses
+// (values not finite or out of range, per-splat SH frames: bake_sh_frames() first), more than kMaxGaussians.
 // An empty cloud is written (4×4 images, "count": 0). The archive is written through a temporary and
 // renamed; the folder's files each so, all written before any is renamed, meta.json last.
-Status write_sog(const std::filesystem::path& path, const GaussianCloud& cloud);
+struct SogWriteOptions {
+    // Texels along the Morton curve of the 16-bit centres, as splat-transform orders them: smaller images
+    // (neighbours share high bytes, and often colours), but texel i is then no longer Gaussian i.
+    bool morton_order = false;
+};
+Status write_sog(const std::filesystem::path& path, const GaussianCloud& cloud,
+                 const SogWriteOptions& options = {});
 
 }  // namespace sffd::gaussian

@@ -18,6 +18,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_sort.h>
 
 #include "runtime/core/atomic_file.h"
 #include "systems/gaussian/gaussian_io.h"
@@ -78,7 +79,7 @@ struct Encoded {
     std::vector<Image> images;
 };
 
-Encoded encode_cloud(const GaussianCloud& g) {
+Encoded encode_cloud(const GaussianCloud& g, const SogWriteOptions& options) {
     const std::size_t n = g.size();
     const int K = sh_coeffs(g.sh_degree);
     // splat-transform's sizes: a near-square, both sides multiples of 4 (4×4 for an empty cloud).
@@ -126,21 +127,48 @@ Encoded encode_cloud(const GaussianCloud& g) {
             if (K > 1) pal = sog_detail::palette(g.sh.data() + 3, n, std::size_t(K) * 3, dims, palette_size);
         });
 
+    // The 16-bit centres, and where each Gaussian goes: texel i, or its place along the Morton curve of
+    // those centres (48-bit codes, ties in cloud order).
+    std::vector<std::uint16_t> q16(n * 3);
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
+            for (std::size_t i = r.begin(); i != r.end(); ++i)
+                for (int a = 0; a < 3; ++a) {
+                    const double range = maxs[a] - mins[a];
+                    const double v = log_transform(g.origin[a] + double(g.positions[i][a]));
+                    q16[i * 3 + std::size_t(a)] = std::uint16_t(
+                        range > 0 ? std::clamp(std::lround((v - mins[a]) / range * 65535.0), 0L, 65535L)
+                                  : 0L);
+                }
+        });
+    std::vector<std::uint32_t> slot;
+    if (options.morton_order) {
+        std::vector<std::pair<std::uint64_t, std::uint32_t>> codes(n);
+        tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+            std::uint64_t code = 0;
+            for (int bit = 15; bit >= 0; --bit)
+                for (int a = 0; a < 3; ++a) code = code << 1 | ((q16[i * 3 + std::size_t(a)] >> bit) & 1u);
+            codes[i] = {code, std::uint32_t(i)};
+        });
+        tbb::parallel_sort(codes.begin(), codes.end());
+        slot.resize(n);
+        for (std::size_t t = 0; t < n; ++t) slot[codes[t].second] = std::uint32_t(t);
+    }
+    const auto texel_of = [&](std::size_t i) { return slot.empty() ? i : std::size_t(slot[i]); };
+
     static const int kOthers[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
     tbb::parallel_for(
         tbb::blocked_range<std::size_t>(0, n, 4096), [&](const tbb::blocked_range<std::size_t>& r) {
             for (std::size_t i = r.begin(); i != r.end(); ++i) {
+                const std::size_t t = texel_of(i);
                 for (int a = 0; a < 3; ++a) {
-                    const double range = maxs[a] - mins[a];
-                    const double v = log_transform(g.origin[a] + double(g.positions[i][a]));
-                    const long q =
-                        range > 0 ? std::clamp(std::lround((v - mins[a]) / range * 65535.0), 0L, 65535L) : 0L;
-                    lo.texel(i)[a] = std::uint8_t(q & 0xff), hi.texel(i)[a] = std::uint8_t(q >> 8);
-                    scales.texel(i)[a] = scale_book.labels[std::size_t(a) * n + i];
-                    sh0.texel(i)[a] = dc_book.labels[std::size_t(a) * n + i];
+                    const unsigned q = q16[i * 3 + std::size_t(a)];
+                    lo.texel(t)[a] = std::uint8_t(q & 0xff), hi.texel(t)[a] = std::uint8_t(q >> 8);
+                    scales.texel(t)[a] = scale_book.labels[std::size_t(a) * n + i];
+                    sh0.texel(t)[a] = dc_book.labels[std::size_t(a) * n + i];
                 }
-                lo.texel(i)[3] = hi.texel(i)[3] = scales.texel(i)[3] = 255;
-                sh0.texel(i)[3] = byte(double(g.opacities[i]) * 255.0);
+                lo.texel(t)[3] = hi.texel(t)[3] = scales.texel(t)[3] = 255;
+                sh0.texel(t)[3] = byte(double(g.opacities[i]) * 255.0);
                 // Smallest three: the largest component (w x y z order) made positive and dropped.
                 const glm::quat& q = g.rotations[i];
                 double wxyz[4] = {q.w, q.x, q.y, q.z};
@@ -151,8 +179,8 @@ Encoded encode_cloud(const GaussianCloud& g) {
                     if (std::abs(wxyz[c]) > std::abs(wxyz[largest])) largest = c;
                 const double s = (wxyz[largest] < 0 ? -1.0 : 1.0) * std::sqrt(2.0) / len;
                 for (int k = 0; k < 3; ++k)
-                    quats.texel(i)[k] = byte((wxyz[kOthers[largest][k]] * s * 0.5 + 0.5) * 255.0);
-                quats.texel(i)[3] = std::uint8_t(252 + largest);
+                    quats.texel(t)[k] = byte((wxyz[kOthers[largest][k]] * s * 0.5 + 0.5) * 255.0);
+                quats.texel(t)[3] = std::uint8_t(252 + largest);
             }
         });
 
@@ -183,7 +211,7 @@ Encoded encode_cloud(const GaussianCloud& g) {
             }
         Image& labels = im.emplace_back("shN_labels.webp", w, h);
         for (std::size_t i = 0; i < n; ++i) {
-            std::uint8_t* t = labels.texel(i);
+            std::uint8_t* t = labels.texel(texel_of(i));
             t[0] = std::uint8_t(pal.labels[i] & 0xff), t[1] = std::uint8_t(pal.labels[i] >> 8), t[3] = 255;
         }
         m["shN"] = {{"count", pal.count},
@@ -198,7 +226,7 @@ Encoded encode_cloud(const GaussianCloud& g) {
 
 }  // namespace
 
-Status write_sog(const fs::path& path, const GaussianCloud& cloud) {
+Status write_sog(const fs::path& path, const GaussianCloud& cloud, const SogWriteOptions& options) {
     const std::string name = path.string();
     const bool archive = path.extension() == ".sog", folder = path.filename() == "meta.json";
     if (!archive && !folder)
@@ -207,7 +235,7 @@ Status write_sog(const fs::path& path, const GaussianCloud& cloud) {
         return make_error(name + ": " + std::to_string(cloud.size()) + " Gaussians, more than the " +
                           std::to_string(kMaxGaussians) + " limit");
     if (Status s = validate(cloud, name); !s) return s;
-    Encoded e = encode_cloud(cloud);
+    Encoded e = encode_cloud(cloud, options);
     for (const Image& im : e.images)
         if (!im.ok) return make_error(name + ": " + im.name + ": WebP encoding failed");
     const std::string meta = e.meta.dump();

@@ -144,7 +144,7 @@ int write_gaussian_cloud(GaussianCloud cloud, const std::string& name, const std
     else if (e == ".glb") s = gaussian::write_glb(out, *g);
     else if (e == ".spz") s = gaussian::write_spz(out, *g, spz_version);
     else if (e == ".sog" || std::filesystem::path(out).filename() == "meta.json")
-        s = gaussian::write_sog(out, *g);
+        s = gaussian::write_sog(out, *g, {.morton_order = true});  // splat-transform's order: smaller
     if (!s) {
         std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
         return 1;
