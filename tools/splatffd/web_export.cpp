@@ -21,6 +21,7 @@
 #include "systems/animation/components.h"
 #include "systems/animation/evaluate.h"
 #include "systems/ffd/components.h"
+#include "systems/ffd/lattice_frame.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_sog.h"
 #include "systems/splat_render/camera_math.h"
@@ -140,12 +141,9 @@ struct WebScene {
     const AnimationClip* clip = nullptr;
     double playback_speed = 1.0;
     Camera camera;
+    glm::dmat4 to_cloud{1.0};  // the lattice's frame to the cloud's (ffd::lattice_to_cloud)
     std::vector<std::string> notes;
 };
-
-bool same_transform(const Transform& a, const Transform& b) {
-    return a.translation == b.translation && a.rotation == b.rotation && a.scale == b.scale;
-}
 
 Result<WebScene> pick_scene(const ecs::Registry& r, const Options& o) {
     WebScene s;
@@ -186,10 +184,9 @@ Result<WebScene> pick_scene(const ecs::Registry& r, const Options& o) {
         return make_error(name + ": the lattice has " + std::to_string(div.x + 1) + "x" +
                           std::to_string(div.y + 1) + "x" + std::to_string(div.z + 1) +
                           " control points; the web player takes at most 11 per axis");
-    if (const Transform* lt = r.try_get<Transform>(le); lt && !same_transform(*lt, s.transform))
-        return make_error(name +
-                          ": the lattice is placed apart from its cloud (their transforms differ); the "
-                          "web player deforms in the cloud's own frame");
+    // Deformed in the cloud's frame with the lattice mapped there, as the engine does (lattice_frame.h);
+    // the clip still runs in the lattice's own frame, so its poses are mapped by the page.
+    s.to_cloud = ffd::lattice_to_cloud(r, ce, le);
     s.clip = r.try_get<AnimationClip>(le);
     std::size_t keys = 0;
     if (s.clip)
@@ -225,11 +222,19 @@ json scene_json(const WebScene& s, const Options& o, const std::string& capture_
     const Lattice& l = *s.lattice;
     json rest = json::array();
     for (const glm::dvec3& p : l.rest) rest.push_back(vec3(p));
-    j["lattice"] = {{"origin", vec3(l.origin)},
-                    {"axes", json::array({vec3(l.axes[0]), vec3(l.axes[1]), vec3(l.axes[2])})},
-                    {"divisions", json::array({l.divisions.x, l.divisions.y, l.divisions.z})},
-                    {"basis", l.basis == LatticeBasis::bspline ? "bspline" : "bernstein"},
-                    {"rest", std::move(rest)}};
+    // origin and axes in the cloud's frame (what the shader reads), rest points in the lattice's (what the
+    // clip transforms); to_cloud (rows of the affine map) takes each pose's displacements across.
+    const glm::dmat4& m = s.to_cloud;
+    const glm::dmat3 lin(m);
+    json to_cloud = json::array();
+    for (int row = 0; row < 3; ++row) to_cloud.push_back({m[0][row], m[1][row], m[2][row], m[3][row]});
+    j["lattice"] = {
+        {"origin", vec3(glm::dvec3(m * glm::dvec4(l.origin, 1.0)))},
+        {"axes", json::array({vec3(lin * l.axes[0]), vec3(lin * l.axes[1]), vec3(lin * l.axes[2])})},
+        {"to_cloud", std::move(to_cloud)},
+        {"divisions", json::array({l.divisions.x, l.divisions.y, l.divisions.z})},
+        {"basis", l.basis == LatticeBasis::bspline ? "bspline" : "bernstein"},
+        {"rest", std::move(rest)}};
     j["clip"] = clip_to_json(*s.clip);
     j["playback_speed"] = s.playback_speed;
     j["camera"] = {{"eye", vec3(s.camera.eye)},   {"target", vec3(s.camera.target)},

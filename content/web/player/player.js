@@ -90,14 +90,20 @@
   });
   const dp = new Float64Array(rest.length * 3);  // current displacements, for the CPU centres too
 
+  // The clip runs in the lattice's frame; the displacements go to the cloud's through to_cloud's linear
+  // part (the identity when the lattice sits with its cloud).
+  const toCloud = lattice.to_cloud || [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0]];
   function setPose(pose) {
     const texels = points.lock();
     texels.fill(0);
-    for (let i = 0; i < rest.length; ++i)
+    for (let i = 0; i < rest.length; ++i) {
+      const d = [pose[i][0] - rest[i][0], pose[i][1] - rest[i][1], pose[i][2] - rest[i][2]];
       for (let c = 0; c < 3; ++c) {
-        dp[3 * i + c] = pose[i][c] - rest[i][c];
+        const r = toCloud[c];
+        dp[3 * i + c] = r[0] * d[0] + r[1] * d[1] + r[2] * d[2];
         texels[4 * i + c] = dp[3 * i + c];
       }
+    }
     points.unlock();
   }
 

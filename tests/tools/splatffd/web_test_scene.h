@@ -11,6 +11,7 @@
 
 #include "runtime/assets/scene.h"
 #include "runtime/scene/components.h"
+#include <glm/gtc/quaternion.hpp>
 #include "runtime/scene/lattice.h"
 #include "systems/animation/components.h"
 #include "systems/animation/editing.h"
@@ -21,7 +22,8 @@
 namespace sffd::test {
 
 // Writes DIR/g.ply (no lattice), DIR/gs.glb (a lattice, no clip), DIR/twist.glb (the clip) and
-// DIR/twist_bspline.glb (the same with a B-spline lattice); returns an error text, empty on success.
+// DIR/twist_bspline.glb (the same with a B-spline lattice) and DIR/twist_moved.glb (the lattice in the same
+// place with a Transform of its own); returns an error text, empty on success.
 inline std::string make_web_test_scenes(const std::filesystem::path& dir) {
     const std::string g = (dir / "g.ply").string(), gs = (dir / "gs.glb").string();
     if (auto r = run("convert sphere " + g + " --gaussians"); r.code != 0) return r.out;
@@ -52,6 +54,32 @@ inline std::string make_web_test_scenes(const std::filesystem::path& dir) {
     });
     if (lattices != 1) return gs + ": expected one lattice, found " + std::to_string(lattices);
     if (Status st = save_scene(reg, dir / "twist.glb"); !st) return st.message();
+    // The same lattice in the same place in the world, but given its own Transform: the cloud's turned by
+    // 30 degrees about y and moved, with box, points, twist axes and pivots mapped back by its inverse.
+    {
+        ecs::Registry moved;
+        if (Status st = load_scene(moved, (dir / "twist.glb").string()); !st) return st.message();
+        const glm::dquat q = glm::angleAxis(glm::radians(30.0), glm::dvec3(0.0, 1.0, 0.0));
+        const glm::dvec3 t(0.2, -0.1, 0.15);
+        const glm::dquat qi = glm::inverse(q);
+        auto back = [&](const glm::dvec3& p) { return qi * (p - t); };  // T^-1, T = translate(t) rotate(q)
+        moved.view<Lattice, AnimationClip, Transform>().each(
+            [&](Lattice& l, AnimationClip& c, Transform& tr) {
+                l.origin = back(l.origin);
+                for (glm::dvec3& a : l.axes) a = qi * a;
+                for (glm::dvec3& p : l.rest) p = back(p);
+                for (glm::dvec3& p : l.current) p = back(p);
+                for (AnimationTrack& k : c.tracks) {
+                    k.axis = qi * k.axis;
+                    if (k.has_pivot) k.pivot = back(k.pivot);
+                    for (Keyframe& key : k.keys)
+                        if (k.kind == TrackKind::stretch) key.value = qi * key.value;
+                }
+                tr.translation = tr.translation + tr.rotation * (tr.scale * t);  // C T
+                tr.rotation = tr.rotation * q;
+            });
+        if (Status st = save_scene(moved, dir / "twist_moved.glb"); !st) return st.message();
+    }
     reg.view<Lattice>().each([](Lattice& l) { l.basis = LatticeBasis::bspline; });
     if (Status st = save_scene(reg, dir / "twist_bspline.glb"); !st) return st.message();
     return {};
