@@ -8,6 +8,7 @@
 
 #include <unistd.h>
 
+#include <bit>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -240,6 +241,30 @@ TEST(SogWrite, AZeroScaleGetsItsOwnCodebookEntry) {
     EXPECT_NEAR(m["scales"]["codebook"][0].get<double>(), smallest - 20.0, 1e-9);
     EXPECT_LT(back->scales[7].z, 1e-8 * std::exp(smallest));
     EXPECT_NEAR(std::log(back->scales[8].x), std::log(g.scales[8].x), 0.05);
+}
+
+TEST(SogWrite, SmallCloudsReadBackWithinTheQuantisation) {
+    // Image sides and palette sizes at their edges: 1 and 2 Gaussians (a palette entry each), 3 (palette 2),
+    // 17 (images 8×4, palette 16), 1025 (palette 1024).
+    for (const std::size_t n : {1u, 2u, 3u, 17u, 1025u}) {
+        SCOPED_TRACE(n);
+        const GaussianCloud g = cloud(n, 3, unsigned(n));
+        const fs::path p = temp("small_" + std::to_string(n) + ".sog");
+        ASSERT_TRUE(write_sog(p, g, {.morton_order = false}));
+        auto back = read_gaussians(p);
+        ASSERT_TRUE(back) << back.message();
+        const json m = meta_of(p);
+        expect_within_quantisation(g, *back, m);
+        EXPECT_EQ(m["shN"]["count"].get<std::size_t>(), std::bit_floor(n));
+        if (std::bit_floor(n) ==
+            n) {  // each band vector its own entry: only the SH codebook's rounding is left
+            for (std::size_t k = 0; k < back->sh.size(); ++k)
+                if (k % 48 >= 3) {
+                    EXPECT_LE(std::abs(back->sh[k] - g.sh[k]), nearest(m["shN"]["codebook"], g.sh[k]) + 1e-6)
+                        << k;
+                }
+        }
+    }
 }
 
 TEST(SogWrite, AnEmptyCloudIsAValidFile) {
