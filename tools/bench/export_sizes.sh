@@ -15,7 +15,7 @@ mkdir -p "$W"
 rows=()
 
 # total_bytes DIR: the bytes of DIR's frame files (not the manifest).
-total_bytes() { find "$1" -maxdepth 1 -type f -name 'frame*' -printf '%s\n' | awk '{s += $1} END {print s + 0}'; }
+total_bytes() { find "$1" -maxdepth 1 -type f -name 'frame*' -printf '%s\n' | awk '{s += $1} END {printf "%.0f\n", s}'; }
 
 # measure LABEL SCENE FORMAT: exports frames 0..95 and records the total.
 measure() {
@@ -28,6 +28,7 @@ measure() {
   fi
   local bytes; bytes=$(total_bytes "$dir")
   rows+=("$label|$format|$bytes|$((bytes / 96))|$((SECONDS - t0))")
+  echo "export_sizes: ${rows[-1]}" >&2
   [[ "${KEEP:-0}" == 1 ]] || rm -rf "$dir"
 }
 

@@ -28,6 +28,7 @@
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_io.h"
 #include "tests/test_util/run_tool.h"
+#include "tests/tools/splatffd/export_scenes.h"
 
 namespace fs = std::filesystem;
 using sffd::test::CliRun;
@@ -41,7 +42,10 @@ fs::path temp_dir(const std::string& name) {
     return d;
 }
 
-CliRun tool(const std::string& args) { return sffd::test::run_headless(args); }
+using sffd::test::export_scenes::gaussian_scene;
+using sffd::test::export_scenes::kFps;
+using sffd::test::export_scenes::save_at_frame;
+using sffd::test::export_scenes::tool;
 bool has(const std::string& text, const std::string& part) { return text.find(part) != std::string::npos; }
 
 std::string bytes_of(const fs::path& p) {
@@ -57,54 +61,6 @@ std::string fnv1a64(const fs::path& p) {
     char s[17];
     std::snprintf(s, sizeof s, "%016llx", static_cast<unsigned long long>(h));
     return s;
-}
-
-constexpr double kFps = 24.0;
-
-// `in` loaded, every lattice posed by its clip at the clip time of frame `frame` (render's clock time
-// for the frame, then evaluate.h directly, not the animation system export runs), saved as `out`: the scene a user saves in the editor at that time.
-// `demo_clip`: lattices without a clip get the paper demo clip first; `empty_clip`: a clip without keys.
-void save_at_frame(const std::string& in, const fs::path& out, long frame, bool demo_clip = false,
-                   bool empty_clip = false) {
-    sffd::register_engine_scene_hooks();
-    sffd::ecs::Registry r;
-    ASSERT_TRUE(sffd::load_scene(r, in)) << in;
-    std::vector<sffd::ecs::Entity> lattices;
-    r.each_entity([&](sffd::ecs::Entity e) {
-        if (r.has<sffd::Lattice>(e)) lattices.push_back(e);
-    });
-    for (sffd::ecs::Entity e : lattices) {
-        if (empty_clip) {
-            sffd::AnimationClip c;
-            c.name = "empty";
-            c.duration = 2.0;
-            sffd::attach_clip(r, e, c);
-        } else if (demo_clip && !r.has<sffd::AnimationClip>(e)) {
-            sffd::attach_clip(r, e, sffd::make_paper_demo_clip(r.get<sffd::Lattice>(e)));
-        }
-        if (!r.has<sffd::AnimationClip>(e)) continue;
-        const sffd::AnimationClip& clip = r.get<sffd::AnimationClip>(e);
-        sffd::Clock clock(sffd::ClockSettings{.fixed_dt = 1.0 / kFps});
-        clock.seek(double(frame) / kFps);
-        const double clock_time = clock.tick().time;
-        const double t =
-            sffd::map_clip_time(clip, sffd::clip_raw_time(clip, r.get<sffd::AnimationState>(e), clock_time));
-        r.patch<sffd::Lattice>(e).current = sffd::evaluate_pose(clip, r.get<sffd::Lattice>(e), t);
-        r.patch<sffd::AnimationState>(e).time = t;
-    }
-    ASSERT_TRUE(sffd::save_scene(r, out)) << out;
-}
-
-// A small Gaussian scene with the paper demo clip: the sphere as 6000 Gaussians in a fitted 10^3 lattice.
-fs::path gaussian_scene(const fs::path& dir) {
-    const fs::path g = dir / "g.ply", fitted = dir / "g_fit.glb", scene = dir / "g_clip.glb";
-    if (fs::exists(scene)) return scene;
-    CliRun r = tool("convert sphere " + g.string() + " --gaussians --splats 6000");
-    EXPECT_EQ(r.code, 0) << r.out;
-    r = tool("convert " + g.string() + " " + fitted.string() + " --lattice fit");
-    EXPECT_EQ(r.code, 0) << r.out;
-    save_at_frame(fitted.string(), scene, 0, true);
-    return scene;
 }
 
 const fs::path& shared_dir() {
