@@ -1,7 +1,8 @@
-// Streams a 3DGS PLY through a lattice: chunks of vertex rows become GaussianClouds, are deformed
-// (centres, Σ' = J Σ Jᵀ as scale + rotation, SH rotated by the polar rotation of J) and written back
-// into the same columns; every other property and element is copied as read. --bench N re-runs the
-// deformation of every chunk N more times and prints one JSON line:
+// deform_gaussian_file: any Gaussian format read whole (read_gaussians), deformed on the CPU, written by
+// OUT's name. deform_gaussian_ply streams a 3DGS PLY through a lattice: chunks of vertex rows become
+// GaussianClouds, are deformed (centres, Σ' = J Σ Jᵀ as scale + rotation, SH rotated by the polar rotation of
+// J) and written back into the same columns; every other property and element is copied as read. --bench N
+// re-runs the deformation of every chunk N more times and prints one JSON line:
 // {"gaussians":..,"sh_degree":..,"backend":..,"median_ms":..,"min_ms":..,"runs":N,"gaussians_per_s":..,
 //  "read_ms":..,"total_s":..}  (median/min: deformation only; read_ms: parse + convert of the input).
 // --backend gpu: each chunk goes through the GPU deformation (systems/gaussian/gpu_deform.h) on a headless
