@@ -40,7 +40,8 @@ namespace fs = std::filesystem;
 using ojson = nlohmann::ordered_json;
 
 constexpr const char* kUsage =
-    "usage: splatffd export SCENE --format ply|compressed-ply|sog|spz|glb --out DIR [--frames N|A:B] [--fps F]\n"
+    "usage: splatffd export SCENE --format ply|compressed-ply|sog|spz|glb --out DIR [--frames N|A:B] [--fps "
+    "F]\n"
     "                       [--shard K/N] [--cloud NAME] [--force]\n"
     "       splatffd export SCENE --web DIR [--force] [--size WxH] [--fps F]   (a web player folder:\n"
     "                       splatffd export SCENE --web DIR --help)\n"
@@ -123,7 +124,8 @@ std::optional<int> parse_export_args(cli::Args args, ExportOptions& o) {
     if (o.scene.empty()) return cli::usage_error("export", "SCENE is required", kUsage);
     if (o.out_dir.empty()) return cli::usage_error("export", "--out DIR is required", kUsage);
     if (!o.format)
-        return cli::usage_error("export", "--format is required (ply, compressed-ply, sog, spz or glb)", kUsage);
+        return cli::usage_error("export", "--format is required (ply, compressed-ply, sog, spz or glb)",
+                                kUsage);
     return std::nullopt;
 }
 
@@ -141,7 +143,8 @@ std::optional<int> check_clips(ExportOptions& o, const cli::ExportScene& s) {
         // Without a clip every frame is the saved pose: one frame says all of it, more would be copies.
         if (o.frames_given && o.last > o.first)
             return cli::command_error(
-                "export", o.scene + ": no clip on " + (s.clips.size() == 1 ? "the lattice '" : "the lattices of '") +
+                "export", o.scene + ": no clip on " +
+                              (s.clips.size() == 1 ? "the lattice '" : "the lattices of '") +
                               (s.clips.size() == 1 ? s.clips[0].lattice : s.cloud_name) +
                               "': every frame would be the saved pose; export one frame (--frames " +
                               std::to_string(o.first) + ":" + std::to_string(o.first) +
@@ -190,10 +193,13 @@ std::optional<int> check_output_folder(const ExportOptions& o, const std::set<st
         if (ours.count(name)) earlier.push_back(name);
         else if (!(o.shard && looks_like_export_file(name, *o.format))) other.push_back(name);
     }
-    if (ec) return cli::command_error("export", o.out_dir + ": cannot list the output folder (" + ec.message() + ")");
+    if (ec)
+        return cli::command_error("export",
+                                  o.out_dir + ": cannot list the output folder (" + ec.message() + ")");
     if (o.force) {
         if (!other.empty())
-            std::fprintf(stderr, "splatffd export: note: %s holds %zu other files (e.g. '%s'); left as they are\n",
+            std::fprintf(stderr,
+                         "splatffd export: note: %s holds %zu other files (e.g. '%s'); left as they are\n",
                          o.out_dir.c_str(), other.size(), other.front().c_str());
         return std::nullopt;
     }
@@ -241,9 +247,8 @@ ojson manifest_json(const ExportOptions& o, const cli::ExportScene& s, const Exp
     j["started_unix"] = run.started_unix;
     j["command"] = o.command;
     j["scene"] = run.scene_file;
-    j["cloud"] = ojson{{"name", s.cloud_name},
-                       {"kind", s.gaussians ? "gaussians" : "surface splats"},
-                       {"count", s.count}};
+    j["cloud"] = ojson{
+        {"name", s.cloud_name}, {"kind", s.gaussians ? "gaussians" : "surface splats"}, {"count", s.count}};
     j["format"] = std::string(cli::export_format_name(*o.format));
     j["fps"] = o.fps;
     j["first"] = o.first, j["last"] = o.last;
@@ -282,8 +287,9 @@ ojson manifest_json(const ExportOptions& o, const cli::ExportScene& s, const Exp
 }
 
 Status write_manifest(const ExportOptions& o, const cli::ExportScene& s, const ExportRun& run) {
-    return write_file_atomic(manifest_path(o),
-                             manifest_json(o, s, run).dump(2, ' ', false, ojson::error_handler_t::replace) + "\n");
+    return write_file_atomic(
+        manifest_path(o),
+        manifest_json(o, s, run).dump(2, ' ', false, ojson::error_handler_t::replace) + "\n");
 }
 
 std::string gigabytes(double bytes) {
@@ -299,8 +305,8 @@ Status check_free_space(const std::string& out_dir, long frames, double bytes_pe
     if (ec) return {};
     const double need = double(frames) * bytes_per_frame;
     if (need <= double(space.available)) return {};
-    return make_error(out_dir + ": " + std::to_string(frames) + " frames need about " + gigabytes(need) + " (" +
-                      basis + ") but the file system has " + gigabytes(double(space.available)) +
+    return make_error(out_dir + ": " + std::to_string(frames) + " frames need about " + gigabytes(need) +
+                      " (" + basis + ") but the file system has " + gigabytes(double(space.available)) +
                       " free; export fewer frames (--frames, --shard) or free some space");
 }
 
@@ -346,7 +352,8 @@ int export_frames(const ExportOptions& o, cli::ExportScene& s, ExportRun& run) {
         if (i == 0 && count > 1) {
             double bytes = 0.0;
             for (const auto& f : run.files.back().files) bytes += double(f.second.bytes);
-            if (Status st = check_free_space(o.out_dir, count - 1, bytes, "at the size of the first frame"); !st) {
+            if (Status st = check_free_space(o.out_dir, count - 1, bytes, "at the size of the first frame");
+                !st) {
                 end_line();
                 cli::command_error("export", st.message());
                 status = 1;
@@ -361,10 +368,11 @@ int export_frames(const ExportOptions& o, cli::ExportScene& s, ExportRun& run) {
             break;
         }
         if (show_progress) {
-            const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const double elapsed =
+                std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             const long done = i + 1;
-            std::fprintf(stderr, "\rsplatffd export: frame %ld (%ld/%ld, %.0f%%) %.2f s/frame, ETA %.0f s   ", k,
-                         done, count, 100.0 * double(done) / double(count), elapsed / double(done),
+            std::fprintf(stderr, "\rsplatffd export: frame %ld (%ld/%ld, %.0f%%) %.2f s/frame, ETA %.0f s   ",
+                         k, done, count, 100.0 * double(done) / double(count), elapsed / double(done),
                          elapsed / double(done) * double(count - done));
             std::fflush(stderr);
             line_open = true;
@@ -377,14 +385,17 @@ int export_frames(const ExportOptions& o, cli::ExportScene& s, ExportRun& run) {
         return status;
     }
     if (count > 0)
-        std::fprintf(stderr, "splatffd export: wrote frames %ld..%ld (%ld %s files, %zu %s each) to %s in %.1f s\n",
+        std::fprintf(stderr,
+                     "splatffd export: wrote frames %ld..%ld (%ld %s files, %zu %s each) to %s in %.1f s\n",
                      run.frames.at(0), run.frames.at(count - 1), count,
                      std::string(cli::export_format_name(*o.format)).c_str(), s.count,
                      s.gaussians ? "Gaussians" : "splats", o.out_dir.c_str(),
                      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     if (not_finite > 0)
-        std::fprintf(stderr, "splatffd export: warning: %zu deformed Gaussians were not finite (written transparent)\n",
-                     not_finite);
+        std::fprintf(
+            stderr,
+            "splatffd export: warning: %zu deformed Gaussians were not finite (written transparent)\n",
+            not_finite);
     (void)inverted;
     return 0;
 }
@@ -397,7 +408,8 @@ int run_export(sffd::cli::Args args) {
     if (Status st = cli::open_export_scene(o.scene, o.cloud, scene); !st)
         return cli::command_error("export", st.message());
     if (!scene.gaussians && cli::gaussian_only(*o.format))
-        return cli::command_error("export", o.scene + ": '" + scene.cloud_name + "' is surface splats; --format " +
+        return cli::command_error("export", o.scene + ": '" + scene.cloud_name +
+                                                "' is surface splats; --format " +
                                                 std::string(cli::export_format_name(*o.format)) +
                                                 " is for 3D Gaussians: surface splats export as ply or glb "
                                                 "(or convert them first: splatffd convert " +
@@ -441,4 +453,5 @@ int run_export(sffd::cli::Args args) {
 
 }  // namespace
 
-SFFD_COMMAND(export, "bake a scene's lattice clip into numbered deformed clouds (ply, spz, glb, ...)", run_export);
+SFFD_COMMAND(export, "bake a scene's lattice clip into numbered deformed clouds (ply, spz, glb, ...)",
+             run_export);

@@ -70,7 +70,8 @@ std::string_view export_format_name(ExportFormat format) {
 }
 
 bool gaussian_only(ExportFormat format) {
-    return format == ExportFormat::compressed_ply || format == ExportFormat::sog || format == ExportFormat::spz;
+    return format == ExportFormat::compressed_ply || format == ExportFormat::sog ||
+           format == ExportFormat::spz;
 }
 
 std::string_view export_extension(ExportFormat format) {
@@ -180,9 +181,14 @@ Result<ExportedFrame> write_surface(const ExportScene& scene, ExportFormat forma
     for (std::size_t li = 0; li < frame.lattices.size(); ++li) {
         const ecs::Entity e = frame.entities[li];
         const Lattice& l = *frame.lattices[li];
-        const ffd::PointsIn in{cloud.positions.data(), ptr(cloud.normals), ptr(cloud.axis_u),
-                               ptr(cloud.axis_v),      n,                  cloud.origin};
-        const ffd::PointsOut o{cloud.positions.data(), ptr(cloud.normals), ptr(cloud.axis_u), ptr(cloud.axis_v)};
+        const ffd::PointsIn in{cloud.positions.data(),
+                               ptr(cloud.normals),
+                               ptr(cloud.axis_u),
+                               ptr(cloud.axis_v),
+                               n,
+                               cloud.origin};
+        const ffd::PointsOut o{cloud.positions.data(), ptr(cloud.normals), ptr(cloud.axis_u),
+                               ptr(cloud.axis_v)};
         auto stats = ffd::deform(l, in, o);
         if (!stats) return make_error(name_of(r, e, "lattice") + ": " + stats.message());
         done.inverted += stats->inverted;
@@ -190,8 +196,8 @@ Result<ExportedFrame> write_surface(const ExportScene& scene, ExportFormat forma
     for (std::size_t i = 0; i < n; ++i)
         if (!std::isfinite(cloud.positions[i].x) || !std::isfinite(cloud.positions[i].y) ||
             !std::isfinite(cloud.positions[i].z))
-            return make_error("deformed point " + std::to_string(i) + " is not finite; nothing was written to " +
-                              path.string());
+            return make_error("deformed point " + std::to_string(i) +
+                              " is not finite; nothing was written to " + path.string());
     const SplatMaterial* m = r.try_get<SplatMaterial>(scene.cloud);
     Status saved = format == ExportFormat::glb
                        ? assets::save_splat_glb(cloud, path, scene.cloud_name, m ? *m : SplatMaterial{})

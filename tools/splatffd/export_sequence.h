@@ -42,8 +42,8 @@ struct ExportClip {
     bool has_clip = false;
     std::string name;
     double duration = 0.0;
-    std::string mode;   // loop | once | ping_pong
-    double speed = 1.0; // clip speed times the state's playback speed
+    std::string mode;    // loop | once | ping_pong
+    double speed = 1.0;  // clip speed times the state's playback speed
     std::size_t keys = 0;
 };
 

@@ -27,10 +27,11 @@ inline CliRun tool(const std::string& args) { return run_headless(args); }
 constexpr double kFps = 24.0;
 
 // `in` loaded, every lattice posed by its clip at the clip time of frame `frame` (render's clock time
-// for the frame, then evaluate.h directly, not the animation system export runs), saved as `out`: the scene a user saves in the editor at that time.
-// `demo_clip`: lattices without a clip get the paper demo clip first; `empty_clip`: a clip without keys.
+// for the frame, then evaluate.h directly, not the animation system export runs), saved as `out`: the scene a
+// user saves in the editor at that time. `demo_clip`: lattices without a clip get the paper demo clip first;
+// `empty_clip`: a clip without keys.
 inline void save_at_frame(const std::string& in, const fs::path& out, long frame, bool demo_clip = false,
-                   bool empty_clip = false) {
+                          bool empty_clip = false) {
     sffd::register_engine_scene_hooks();
     sffd::ecs::Registry r;
     ASSERT_TRUE(sffd::load_scene(r, in)) << in;

@@ -32,26 +32,30 @@ TEST_F(ExportSplatTransform, ReadsEveryFrameOfEveryFormatWithinItsQuantisation) 
     };
     // As export_test.cpp's read-back by our own readers: compressed PLY's 11/10-bit positions in chunk
     // bounds, SPZ's 12 fractional bits, SOG's 16-bit log-space positions and 256-entry codebooks.
-    const Format formats[] = {{"ply", ".ply", 1e-6, 1e-6, 1e-6, 1e-6},
-                              {"compressed-ply", ".compressed.ply", 1.5 * 2.4 / 1023.0, 0.1, 1.0 / 255.0, 0.02},
-                              {"sog", ".sog", 2e-4, 0.1, 1.0 / 255.0, 0.05},
-                              {"spz", ".spz", 1.5 / 4096.0, 1.0 / 32.0 + 1e-4, 1.0 / 255.0, 0.04}};
+    const Format formats[] = {
+        {"ply", ".ply", 1e-6, 1e-6, 1e-6, 1e-6},
+        {"compressed-ply", ".compressed.ply", 1.5 * 2.4 / 1023.0, 0.1, 1.0 / 255.0, 0.02},
+        {"sog", ".sog", 2e-4, 0.1, 1.0 / 255.0, 0.05},
+        {"spz", ".spz", 1.5 / 4096.0, 1.0 / 32.0 + 1e-4, 1.0 / 255.0, 0.04}};
     const fs::path exact_dir = dir / "ply";
     for (const Format& f : formats) {
         SCOPED_TRACE(f.name);
         const fs::path out = dir / f.name;
-        const auto r = tool("export " + scene.string() + " --format " + f.name + " --frames 70:73 --out " + out.string());
+        const auto r = tool("export " + scene.string() + " --format " + f.name + " --frames 70:73 --out " +
+                            out.string());
         ASSERT_EQ(r.code, 0) << r.out;
         for (long k = 70; k <= 73; ++k) {
             const std::string stem = "frame00" + std::to_string(k);
             const fs::path decoded = dir / (f.name + "_" + stem + "_decoded.ply");
-            ASSERT_EQ(st::run("sffd_export_st", "", (out / (stem + f.ext)).string() + " " + decoded.string()), "");
+            ASSERT_EQ(st::run("sffd_export_st", "", (out / (stem + f.ext)).string() + " " + decoded.string()),
+                      "");
             auto theirs = sffd::gaussian::read_ply(decoded);
             auto exact = sffd::gaussian::read_ply(exact_dir / (stem + ".ply"));
             ASSERT_TRUE(theirs) << theirs.message();
             ASSERT_TRUE(exact) << exact.message();
             ASSERT_EQ(theirs->size(), exact->size());
-            // splat-transform decodes SPZ as stored, without SPZ's RUB turn (systems/gaussian/gaussian_axes.h).
+            // splat-transform decodes SPZ as stored, without SPZ's RUB turn
+            // (systems/gaussian/gaussian_axes.h).
             if (f.name == "spz") sffd::gaussian::turn_axes(*theirs, sffd::gaussian::AxisTurn::x180);
             double pos = 0, scale = 0, opacity = 0, dc = 0;
             const std::size_t kt = std::size_t(sffd::sh_coeffs(theirs->sh_degree)) * 3,
@@ -62,7 +66,8 @@ TEST_F(ExportSplatTransform, ReadsEveryFrameOfEveryFormatWithinItsQuantisation) 
                 for (int c = 0; c < 3; ++c) {
                     scale = std::max(scale, std::abs(std::log(double(theirs->scales[i][c])) -
                                                      std::log(double(exact->scales[i][c]))));
-                    dc = std::max(dc, double(std::abs(theirs->sh[i * kt + std::size_t(c)] - exact->sh[i * ke + std::size_t(c)])));
+                    dc = std::max(dc, double(std::abs(theirs->sh[i * kt + std::size_t(c)] -
+                                                      exact->sh[i * ke + std::size_t(c)])));
                 }
                 opacity = std::max(opacity, double(std::abs(theirs->opacities[i] - exact->opacities[i])));
             }

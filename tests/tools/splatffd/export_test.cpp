@@ -87,16 +87,18 @@ TEST(Export, FrameKIsDeformOfTheSceneSavedAtThatClipTime) {
     struct Case {
         std::string scene, saved, format, ext;
     };
-    for (const Case& c : {Case{"sphere", "sphere_at40.glb", "ply", ".ply"}, Case{"sphere", "sphere_at40.glb", "glb", ".glb"},
-                          // The saved file itself: a Gaussian cloud embedded in a scene reads back with its
-                          // quaternions renormalised, so another file's cloud may differ in the last bits.
-                          Case{(dir / "g_at40.glb").string(), "g_at40.glb", "ply", ".ply"},
-                          Case{(dir / "g_at40.glb").string(), "g_at40.glb", "glb", ".glb"}}) {
+    for (const Case& c :
+         {Case{"sphere", "sphere_at40.glb", "ply", ".ply"}, Case{"sphere", "sphere_at40.glb", "glb", ".glb"},
+          // The saved file itself: a Gaussian cloud embedded in a scene reads back with its
+          // quaternions renormalised, so another file's cloud may differ in the last bits.
+          Case{(dir / "g_at40.glb").string(), "g_at40.glb", "ply", ".ply"},
+          Case{(dir / "g_at40.glb").string(), "g_at40.glb", "glb", ".glb"}}) {
         SCOPED_TRACE(c.scene + " " + c.format);
         const std::string tag = fs::path(c.saved).stem().string() + "_" + c.format;
         const fs::path ex = dir / ("ex_" + tag), de = dir / ("de_" + tag);
         fs::create_directories(de);
-        CliRun r = tool("export " + c.scene + " --format " + c.format + " --frames 40:40 --out " + ex.string());
+        CliRun r =
+            tool("export " + c.scene + " --format " + c.format + " --frames 40:40 --out " + ex.string());
         ASSERT_EQ(r.code, 0) << r.out;
         // The same file name, so a PLY's TextureFile comment names the same side file.
         r = tool("deform " + (dir / c.saved).string() + " " + (de / frame_name(k, c.ext)).string());
@@ -147,7 +149,8 @@ TEST(Export, EveryGaussianFormatReadsBackWithinItsQuantisation) {
     const long k = 80;  // the global twist
     auto exported = [&](const std::string& format, const std::string& ext) {
         const fs::path out = dir / format;
-        const CliRun r = tool("export " + gs.string() + " --format " + format + " --frames 80:80 --out " + out.string());
+        const CliRun r =
+            tool("export " + gs.string() + " --format " + format + " --frames 80:80 --out " + out.string());
         EXPECT_EQ(r.code, 0) << r.out;
         auto g = sffd::gaussian::read_gaussians(out / frame_name(k, ext));
         EXPECT_TRUE(g) << g.message();
@@ -163,21 +166,27 @@ TEST(Export, EveryGaussianFormatReadsBackWithinItsQuantisation) {
     // are spread: up to its extent, 2.4, over 1023 steps); SPZ: 12 fractional bits, log scales in 1/16,
     // colours in 1/255 of 1/0.15; SOG: 16-bit positions in a log space, codebooks of 256 for log scales
     // and colours; GLB: float.
-    for (const Tolerance& t : {Tolerance{"compressed-ply", ".compressed.ply", 2.4 / 1023.0, 0.1, 1.0 / 255.0, 0.02},
-                               Tolerance{"spz", ".spz", 1.0 / 4096.0, 1.0 / 32.0 + 1e-4, 1.0 / 255.0, 0.04},
-                               Tolerance{"sog", ".sog", 2e-4, 0.1, 1.0 / 255.0, 0.05},
-                               Tolerance{"glb", ".glb", 1e-6, 1e-6, 1e-6, 1e-6}}) {
+    for (const Tolerance& t :
+         {Tolerance{"compressed-ply", ".compressed.ply", 2.4 / 1023.0, 0.1, 1.0 / 255.0, 0.02},
+          Tolerance{"spz", ".spz", 1.0 / 4096.0, 1.0 / 32.0 + 1e-4, 1.0 / 255.0, 0.04},
+          Tolerance{"sog", ".sog", 2e-4, 0.1, 1.0 / 255.0, 0.05},
+          Tolerance{"glb", ".glb", 1e-6, 1e-6, 1e-6, 1e-6}}) {
         SCOPED_TRACE(t.format);
         const sffd::GaussianCloud g = exported(t.format, t.ext);
         ASSERT_EQ(g.size(), exact.size());
         double pos = 0, scale = 0, opacity = 0, dc = 0;
         for (std::size_t i = 0; i < g.size(); ++i) {
-            const glm::dvec3 a = g.origin + glm::dvec3(g.positions[i]), b = exact.origin + glm::dvec3(exact.positions[i]);
+            const glm::dvec3 a = g.origin + glm::dvec3(g.positions[i]),
+                             b = exact.origin + glm::dvec3(exact.positions[i]);
             pos = std::max(pos, glm::length(a - b));
             for (int c = 0; c < 3; ++c) {
-                scale = std::max(scale, std::abs(std::log(double(g.scales[i][c])) - std::log(double(exact.scales[i][c]))));
-                dc = std::max(dc, double(std::abs(g.sh[i * 3 * std::size_t(sffd::sh_coeffs(g.sh_degree)) + std::size_t(c)] -
-                                                  exact.sh[i * 3 * std::size_t(sffd::sh_coeffs(exact.sh_degree)) + std::size_t(c)])));
+                scale = std::max(
+                    scale, std::abs(std::log(double(g.scales[i][c])) - std::log(double(exact.scales[i][c]))));
+                dc = std::max(
+                    dc,
+                    double(std::abs(
+                        g.sh[i * 3 * std::size_t(sffd::sh_coeffs(g.sh_degree)) + std::size_t(c)] -
+                        exact.sh[i * 3 * std::size_t(sffd::sh_coeffs(exact.sh_degree)) + std::size_t(c)])));
             }
             opacity = std::max(opacity, double(std::abs(g.opacities[i] - exact.opacities[i])));
         }
@@ -194,9 +203,10 @@ TEST(Export, SurfaceFramesReadBackWithNormalsAndAxes) {
     for (const std::string format : {"ply", "glb"}) {
         SCOPED_TRACE(format);
         const fs::path out = dir / format;
-        const CliRun r = tool("export sphere --format " + format + " --frames 0:0 --out " + out.string() +
-                              " && " + std::string(SFFD_BINARY_DIR) + "/tools/splatffd export sphere --format " +
-                              format + " --frames 84:84 --out " + out.string() + " --force");
+        const CliRun r =
+            tool("export sphere --format " + format + " --frames 0:0 --out " + out.string() + " && " +
+                 std::string(SFFD_BINARY_DIR) + "/tools/splatffd export sphere --format " + format +
+                 " --frames 84:84 --out " + out.string() + " --force");
         ASSERT_EQ(r.code, 0) << r.out;
         auto rest = sffd::assets::import_splat_cloud(out / ("frame0000." + format));
         auto twisted = sffd::assets::import_splat_cloud(out / ("frame0084." + format));
@@ -224,7 +234,8 @@ TEST(Export, ManifestSaysWhatWasWritten) {
     const fs::path dir = temp_dir("manifest");
     const fs::path gs = gaussian_scene(shared_dir());
     const fs::path out = dir / "out";
-    const CliRun r = tool("export " + gs.string() + " --format spz --frames 3:6 --fps 30 --out " + out.string());
+    const CliRun r =
+        tool("export " + gs.string() + " --format spz --frames 3:6 --fps 30 --out " + out.string());
     ASSERT_EQ(r.code, 0) << r.out;
     const auto j = nlohmann::json::parse(bytes_of(out / "export_manifest.json"));
     EXPECT_EQ(j["state"], "complete");
@@ -265,7 +276,8 @@ TEST(Export, ShardsAddUpToTheWhole) {
     const fs::path whole = dir / "whole", sharded = dir / "sharded";
     ASSERT_EQ(tool("export sphere --format ply --frames 0:6 --out " + whole.string()).code, 0);
     for (const char* s : {"2/3", "0/3", "1/3"}) {
-        const CliRun r = tool("export sphere --format ply --frames 0:6 --out " + sharded.string() + " --shard " + s);
+        const CliRun r =
+            tool("export sphere --format ply --frames 0:6 --out " + sharded.string() + " --shard " + s);
         ASSERT_EQ(r.code, 0) << r.out;
     }
     std::set<std::string> frames;
@@ -296,13 +308,15 @@ TEST(Export, RefusalsSayWhatIsWrong) {
 
     CliRun r = tool("export " + g.string() + " --format ply --out " + (dir / "a").string());
     EXPECT_EQ(r.code, 1) << r.out;
-    EXPECT_TRUE(has(r.out, "splatffd export: " + g.string() + ": no lattice bound to the cloud; nothing to export"))
+    EXPECT_TRUE(
+        has(r.out, "splatffd export: " + g.string() + ": no lattice bound to the cloud; nothing to export"))
         << r.out;
 
     // A scene without a clip: one frame, its saved pose; more are refused.
     r = tool("export " + fitted.string() + " --format ply --frames 0:3 --out " + (dir / "b").string());
     EXPECT_EQ(r.code, 1) << r.out;
-    EXPECT_TRUE(has(r.out, "no clip on the lattice 'g.lattice': every frame would be the saved pose")) << r.out;
+    EXPECT_TRUE(has(r.out, "no clip on the lattice 'g.lattice': every frame would be the saved pose"))
+        << r.out;
     r = tool("export " + fitted.string() + " --format ply --out " + (dir / "c").string());
     EXPECT_EQ(r.code, 0) << r.out;
     EXPECT_TRUE(has(r.out, "has no clip: frame 0 is the pose as saved")) << r.out;
@@ -311,12 +325,14 @@ TEST(Export, RefusalsSayWhatIsWrong) {
 
     // A clip without keys: exported with a warning, every frame the rest pose.
     save_at_frame(fitted.string(), dir / "empty.glb", 0, false, true);
-    r = tool("export " + (dir / "empty.glb").string() + " --format ply --frames 0:2 --out " + (dir / "d").string());
+    r = tool("export " + (dir / "empty.glb").string() + " --format ply --frames 0:2 --out " +
+             (dir / "d").string());
     EXPECT_EQ(r.code, 0) << r.out;
     EXPECT_TRUE(has(r.out, "warning: " + (dir / "empty.glb").string() +
                                ": the clip has no keys: every frame is the rest pose"))
         << r.out;
-    ASSERT_EQ(tool("deform " + (dir / "empty.glb").string() + " " + (dir / "empty_rest.ply").string()).code, 0);
+    ASSERT_EQ(tool("deform " + (dir / "empty.glb").string() + " " + (dir / "empty_rest.ply").string()).code,
+              0);
     for (const char* f : {"frame0000.ply", "frame0001.ply", "frame0002.ply"})
         EXPECT_TRUE(bytes_of(dir / "d" / f) == bytes_of(dir / "empty_rest.ply")) << f;
 
@@ -340,11 +356,14 @@ TEST(Export, RefusalsSayWhatIsWrong) {
 
     r = tool("export sphere --format obj --out " + (dir / "f").string());
     EXPECT_EQ(r.code, 2) << r.out;
-    EXPECT_TRUE(has(r.out, "splatffd export: --format expects ply, compressed-ply, sog, spz or glb, got 'obj'")) << r.out;
+    EXPECT_TRUE(
+        has(r.out, "splatffd export: --format expects ply, compressed-ply, sog, spz or glb, got 'obj'"))
+        << r.out;
 
     r = tool("export sphere --format spz --out " + (dir / "g").string());
     EXPECT_EQ(r.code, 1) << r.out;
-    EXPECT_TRUE(has(r.out, "is surface splats; --format spz is for 3D Gaussians: surface splats export as ply or glb"))
+    EXPECT_TRUE(has(
+        r.out, "is surface splats; --format spz is for 3D Gaussians: surface splats export as ply or glb"))
         << r.out;
     EXPECT_FALSE(fs::exists(dir / "g"));
 
