@@ -371,8 +371,14 @@ TEST(Export, RefusalsSayWhatIsWrong) {
     EXPECT_EQ(r.code, 2) << r.out;
     EXPECT_TRUE(has(r.out, "--format is required")) << r.out;
 
+    // --web goes to the web player, whatever else is on the line: its own refusal of surface splats.
+    r = tool("export sphere --web " + (dir / "web").string());
+    EXPECT_EQ(r.code, 1) << r.out;
+    EXPECT_TRUE(has(r.out, "the web player plays 3D Gaussians only")) << r.out;
+
     r = tool("export --help");
     EXPECT_EQ(r.code, 0);
     EXPECT_TRUE(has(r.out, "usage: splatffd export SCENE")) << r.out;
     EXPECT_TRUE(has(r.out, "its play mode decides")) << r.out;
+    EXPECT_TRUE(has(r.out, "--web DIR")) << r.out;
 }
