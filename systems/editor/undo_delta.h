@@ -48,7 +48,8 @@ struct PointsDelta {
     }
     bool empty() const { return index.empty(); }
     std::size_t bytes() const {
-        return index.capacity() * sizeof(std::uint32_t) + (before.capacity() + after.capacity()) * sizeof(glm::dvec3);
+        return index.capacity() * sizeof(std::uint32_t) +
+               (before.capacity() + after.capacity()) * sizeof(glm::dvec3);
     }
 };
 
@@ -69,7 +70,8 @@ inline std::size_t undo_heap_bytes(const UnkeyedEdit& u) { return u.points.capac
 inline std::size_t undo_heap_bytes(const AnimationClip& c) {
     std::size_t n = c.name.capacity() + c.tracks.capacity() * sizeof(AnimationTrack);
     for (const AnimationTrack& t : c.tracks)
-        n += t.name.capacity() + t.points.capacity() * sizeof(std::uint32_t) + t.keys.capacity() * sizeof(Keyframe);
+        n += t.name.capacity() + t.points.capacity() * sizeof(std::uint32_t) +
+             t.keys.capacity() * sizeof(Keyframe);
     return n;
 }
 inline std::size_t undo_heap_bytes(const SplatCloud& c) {

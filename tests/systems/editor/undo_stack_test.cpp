@@ -159,9 +159,10 @@ TEST(UndoStack, DestroyedEntityIsSkipped) {
 TEST(UndoStack, MovingEightControlPointsOfAMillionPointCloudCostsUnderOneKilobyte) {
     ecs::Registry reg;
     const ecs::Entity lattice = reg.create();
-    reg.emplace<Lattice>(lattice, sffd::make_lattice({-1, -1, -1},
-                                               {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)},
-                                               {10, 10, 10}));
+    reg.emplace<Lattice>(
+        lattice,
+        sffd::make_lattice({-1, -1, -1}, {glm::dvec3(2, 0, 0), glm::dvec3(0, 2, 0), glm::dvec3(0, 0, 2)},
+                           {10, 10, 10}));
     const ecs::Entity cloud = reg.create();
     SplatCloud& points = reg.emplace<SplatCloud>(cloud);
     points.positions.assign(1'000'000, glm::vec3(0.25f));
@@ -198,8 +199,8 @@ TEST(UndoStack, ResampledLatticeKeepsWholeSnapshots) {
     const Lattice original = reg.get<Lattice>(e);
     UndoStack undo;
     ASSERT_TRUE(undo.record<Lattice>(reg, e, "resample", [](Lattice& l) {
-        l = sffd::make_lattice(glm::dvec3(0.0), {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)},
-                               {3, 3, 3});
+        l = sffd::make_lattice(glm::dvec3(0.0),
+                               {glm::dvec3(1, 0, 0), glm::dvec3(0, 1, 0), glm::dvec3(0, 0, 1)}, {3, 3, 3});
     }));
     const auto& change = dynamic_cast<const ComponentChange<Lattice>&>(undo.at(0));
     EXPECT_FALSE(change.sparse());
