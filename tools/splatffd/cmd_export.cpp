@@ -292,24 +292,6 @@ Status write_manifest(const ExportOptions& o, const cli::ExportScene& s, const E
         manifest_json(o, s, run).dump(2, ' ', false, ojson::error_handler_t::replace) + "\n");
 }
 
-std::string gigabytes(double bytes) {
-    char s[32];
-    std::snprintf(s, sizeof s, "%.3g GB", bytes / 1e9);
-    return s;
-}
-
-// As render: a range whose output would not fit the free space stops at once instead of filling the disk.
-Status check_free_space(const std::string& out_dir, long frames, double bytes_per_frame, const char* basis) {
-    std::error_code ec;
-    const fs::space_info space = fs::space(out_dir, ec);
-    if (ec) return {};
-    const double need = double(frames) * bytes_per_frame;
-    if (need <= double(space.available)) return {};
-    return make_error(out_dir + ": " + std::to_string(frames) + " frames need about " + gigabytes(need) +
-                      " (" + basis + ") but the file system has " + gigabytes(double(space.available)) +
-                      " free; export fewer frames (--frames, --shard) or free some space");
-}
-
 int export_frames(const ExportOptions& o, cli::ExportScene& s, ExportRun& run) {
     const long count = run.frames.count;
     if (count == 0) run.state = "complete";
@@ -352,7 +334,8 @@ int export_frames(const ExportOptions& o, cli::ExportScene& s, ExportRun& run) {
         if (i == 0 && count > 1) {
             double bytes = 0.0;
             for (const auto& f : run.files.back().files) bytes += double(f.second.bytes);
-            if (Status st = check_free_space(o.out_dir, count - 1, bytes, "at the size of the first frame");
+            if (Status st = cli::check_free_space(o.out_dir, count - 1, bytes,
+                                                  "at the size of the first frame", "export");
                 !st) {
                 end_line();
                 cli::command_error("export", st.message());
@@ -444,8 +427,8 @@ int run_export(sffd::cli::Args args) {
     if (auto rc = check_output_folder(o, ours)) return *rc;
     // A low estimate before the first frame (the smallest format, SPZ, is about 10 bytes a Gaussian at
     // SH degree 0), so no export that fits is refused; the first frame's real size is used after it.
-    if (Status st = check_free_space(o.out_dir, run.frames.count, 4.0 * double(scene.count),
-                                     "a low estimate of 4 bytes a splat");
+    if (Status st = cli::check_free_space(o.out_dir, run.frames.count, 4.0 * double(scene.count),
+                                          "a low estimate of 4 bytes a splat", "export");
         !st)
         return cli::command_error("export", st.message());
     return export_frames(o, scene, run);

@@ -346,25 +346,6 @@ std::optional<int> check_render_options(RenderOptions& o, std::string& ffmpeg) {
     return std::nullopt;
 }
 
-std::string gigabytes(double bytes) {
-    char s[32];
-    std::snprintf(s, sizeof s, "%.3g GB", bytes / 1e9);
-    return s;
-}
-
-// Refuses `frames` frames of `bytes_per_frame` each when DIR's file system has less free space, so a
-// mistyped range (--frames 0:99999999) stops at once instead of filling the disk.
-Status check_free_space(const std::string& out_dir, long frames, double bytes_per_frame, const char* basis) {
-    std::error_code ec;
-    const std::filesystem::space_info space = std::filesystem::space(out_dir, ec);
-    if (ec) return {};  // unknown (a file system that does not say): nothing to check against
-    const double need = double(frames) * bytes_per_frame;
-    if (need <= double(space.available)) return {};
-    return make_error(out_dir + ": " + std::to_string(frames) + " frames need about " + gigabytes(need) +
-                      " (" + basis + ") but the file system has " + gigabytes(double(space.available)) +
-                      " free; render fewer frames (--frames, --shard) or free some space");
-}
-
 // Before the first frame, the estimate is deliberately low (0.05 bytes per pixel of PNG, 0.5 of EXR; the
 // sphere at 1280x720 writes 0.16 and 1.65), so no run that fits is refused; after the first frame the
 // real size is used.
@@ -499,7 +480,8 @@ int render_frames(const RenderOptions& o, RenderScene& s, cli::RunRecord& run) {
             // The first frame's real size, for the rest of the run.
             const double bytes =
                 double((print->png ? print->png->bytes : 0) + (print->exr ? print->exr->bytes : 0));
-            if (Status st = check_free_space(o.out_dir, count - 1, bytes, "at the size of the first frame");
+            if (Status st = cli::check_free_space(o.out_dir, count - 1, bytes,
+                                                  "at the size of the first frame", "render");
                 !st) {
                 end_line();
                 std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
@@ -553,8 +535,8 @@ int run_render(sffd::cli::Args args) {
     run.sharded = o.shard.has_value();
     run.shard = o.shard.value_or(cli::Shard{});
     run.frames = cli::shard_frames(o.first, o.last, run.shard);
-    if (Status st = check_free_space(o.out_dir, run.frames.count, estimated_frame_bytes(o),
-                                     "a low estimate for this size and format");
+    if (Status st = cli::check_free_space(o.out_dir, run.frames.count, estimated_frame_bytes(o),
+                                          "a low estimate for this size and format", "render");
         !st) {
         std::fprintf(stderr, "splatffd render: %s\n", st.message().c_str());
         return 1;

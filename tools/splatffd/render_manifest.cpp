@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <memory>
+#include <system_error>
 
 #include "runtime/core/atomic_file.h"
 #include "tools/splatffd/command.h"
@@ -153,6 +154,23 @@ std::string shell_quote(const std::string& s) {
     std::string q = "'";
     for (char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
     return q + "'";
+}
+
+Status check_free_space(const std::string& out_dir, long frames, double bytes_per_frame, const char* basis,
+                        const char* verb) {
+    std::error_code ec;
+    const std::filesystem::space_info space = std::filesystem::space(out_dir, ec);
+    if (ec) return {};
+    const auto gigabytes = [](double bytes) {
+        char s[32];
+        std::snprintf(s, sizeof s, "%.3g GB", bytes / 1e9);
+        return std::string(s);
+    };
+    const double need = double(frames) * bytes_per_frame;
+    if (need <= double(space.available)) return {};
+    return make_error(out_dir + ": " + std::to_string(frames) + " frames need about " + gigabytes(need) +
+                      " (" + basis + ") but the file system has " + gigabytes(double(space.available)) +
+                      " free; " + verb + " fewer frames (--frames, --shard) or free some space");
 }
 
 }  // namespace sffd::cli

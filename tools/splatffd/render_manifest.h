@@ -52,6 +52,13 @@ struct FilePrint {
 Result<FilePrint> fingerprint(const std::filesystem::path& file);
 std::string hex64(std::uint64_t v);
 
+// Refuses `frames` frames of `bytes_per_frame` each when DIR's file system has less free space, so a
+// mistyped range (--frames 0:99999999) stops at once instead of filling the disk. `basis` says where the
+// size comes from; `verb` ("render", "export") goes into the advice. A file system that does not say
+// passes.
+Status check_free_space(const std::string& out_dir, long frames, double bytes_per_frame, const char* basis,
+                        const char* verb);
+
 struct FramePrint {
     long frame = 0;
     std::optional<FilePrint> png, exr;

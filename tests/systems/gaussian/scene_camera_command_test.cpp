@@ -2,14 +2,12 @@
 // automatic camera: the same Camera once loaded, and the same image from `splatffd render`.
 #include <gtest/gtest.h>
 
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <random>
-#include <sstream>
 
 #include "runtime/assets/scene.h"
 #include "runtime/scene/camera.h"
@@ -18,13 +16,12 @@
 #include "systems/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_scene.h"
 #include "tests/test_util/gl_required.h"
+#include "tests/test_util/run_tool.h"
 
 namespace {
 
 namespace fs = std::filesystem;
 using namespace sffd;
-
-const std::string kTool = SFFD_BINARY_DIR "/tools/splatffd";
 
 fs::path temp(const std::string& name) {
     const fs::path d = fs::temp_directory_path() / ("sffd_scene_camera_" + std::to_string(getpid()));
@@ -34,11 +31,8 @@ fs::path temp(const std::string& name) {
 
 // Exit code and stdout + stderr of `splatffd ARGS`.
 std::pair<int, std::string> run(const std::string& args) {
-    const std::string o = temp("out.txt").string();
-    const int status = std::system((kTool + " " + args + " >" + o + " 2>&1").c_str());
-    std::stringstream s;
-    s << std::ifstream(o).rdbuf();
-    return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, s.str()};
+    const test::CliRun r = test::run(args);
+    return {r.code, r.out};
 }
 
 // An off-centre, lopsided cloud (a half shell around (0.5, 2, -1), y down as captures are stored), so the
