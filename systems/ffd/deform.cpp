@@ -100,9 +100,11 @@ ReferencePoint reference_point(const Lattice& l, const glm::dvec3& world) {
     return r;
 }
 
-static glm::dvec3 cofactor_times(const glm::dmat3& J, const glm::dvec3& n) {
+glm::dvec3 deformed_normal(const glm::dmat3& J, const glm::dvec3& n) {
     const glm::dvec3 a = J[0], b = J[1], c = J[2];
-    return glm::cross(b, c) * n.x + glm::cross(c, a) * n.y + glm::cross(a, b) * n.z;
+    const glm::dvec3 nn = glm::cross(b, c) * n.x + glm::cross(c, a) * n.y + glm::cross(a, b) * n.z;
+    const double len = glm::length(nn);
+    return len > 0.0 ? nn / len : nn;
 }
 
 static DeformStats run_reference(const Lattice& l, const PointsIn& in, const PointsOut& out) {
@@ -127,9 +129,8 @@ static DeformStats run_reference(const Lattice& l, const PointsIn& in, const Poi
                               const double det = glm::determinant(rp.jacobian);
                               n_inv += det < 0.0;
                               if (in.normals && out.normals) {
-                                  glm::dvec3 nn = cofactor_times(rp.jacobian, glm::dvec3(in.normals[p]));
-                                  const double len = glm::length(nn);
-                                  out.normals[p] = glm::vec3(len > 0.0 ? nn / len : nn);
+                                  out.normals[p] =
+                                      glm::vec3(deformed_normal(rp.jacobian, glm::dvec3(in.normals[p])));
                               }
                               if (in.axis_u && out.axis_u)
                                   out.axis_u[p] = glm::vec3(rp.jacobian * glm::dvec3(in.axis_u[p]));

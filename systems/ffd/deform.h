@@ -73,4 +73,9 @@ struct ReferencePoint {
 };
 ReferencePoint reference_point(const Lattice& lattice, const glm::dvec3& world);
 
+// A normal n carried by the Jacobian J: cof(J) n = (J⁻ᵀ det J) n, normalised (left as is when zero). The
+// one copy of that rule for the double paths (the reference backend, streamed `deform --backend
+// reference`); the float kernels inline it.
+glm::dvec3 deformed_normal(const glm::dmat3& J, const glm::dvec3& n);
+
 }  // namespace sffd::ffd
