@@ -11,11 +11,16 @@
 //
 // Change detection: patch<C>(e) returns a mutable reference and stamps the component as changed;
 // version<C>(e) and storage_version<C>() let a system skip work when nothing it depends on moved.
+//
+// Signals: on_construct<C>() / on_destroy<C>() (runtime/ecs/signal.h) tell listeners when a C is added
+// or removed (destroy included), so state kept per entity elsewhere is cleaned up in one place.
+// Context: the resources are the registry's context, per-registry services (scene loaders, GPU state).
+// Declared access: with SFFD_CHECK_ACCESS defined, every accessor checks the running system's declared
+// access (runtime/ecs/access.h); without it the checks compile to nothing.
 #pragma once
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cassert>
 #include <cstdint>
 #include <functional>
@@ -24,22 +29,13 @@
 #include <type_traits>
 #include <vector>
 
+#include "runtime/ecs/access.h"
 #include "runtime/ecs/entity.h"
+#include "runtime/ecs/signal.h"
 #include "runtime/ecs/storage.h"
+#include "runtime/ecs/type_info.h"
 
 namespace sffd::ecs {
-
-namespace detail {
-inline std::uint32_t next_type_id() {
-    static std::atomic<std::uint32_t> counter{0};
-    return counter++;
-}
-template <class T>
-std::uint32_t type_id() {
-    static const std::uint32_t id = next_type_id();
-    return id;
-}
-}  // namespace detail
 
 class Registry;
 
@@ -188,34 +184,41 @@ public:
     template <class C, class... Args>
     C& emplace(Entity e, Args&&... args) {
         assert(valid(e));
-        return storage<C>().emplace(e, std::forward<Args>(args)...);
+        check_write<C>();
+        return storage_of<C>().emplace(e, std::forward<Args>(args)...);
     }
     template <class C>
     void remove(Entity e) {
+        check_write<C>();
         if (auto* s = find_storage<C>()) s->remove(e);
     }
     template <class C>
     bool has(Entity e) const {
+        check_read<C>();
         const auto* s = find_storage<C>();
         return s && s->contains(e);
     }
     template <class C>
     C& get(Entity e) {
-        return storage<C>().get(e);
+        check_write<C>();
+        return storage_of<C>().get(e);
     }
     template <class C>
     const C& get(Entity e) const {
+        check_read<C>();
         const auto* s = find_storage<C>();
         assert(s);
         return s->get(e);
     }
     template <class C>
     C* try_get(Entity e) {
+        check_write<C>();
         auto* s = find_storage<C>();
         return s ? s->try_get(e) : nullptr;
     }
     template <class C>
     const C* try_get(Entity e) const {
+        check_read<C>();
         const auto* s = find_storage<C>();
         return s ? s->try_get(e) : nullptr;
     }
@@ -223,54 +226,86 @@ public:
     // Mutable access that records a change (use it for edits other systems must react to).
     template <class C>
     C& patch(Entity e) {
-        auto& s = storage<C>();
+        check_write<C>();
+        auto& s = storage_of<C>();
         s.mark_changed(e);
         return s.get(e);
     }
     template <class C>
     void mark_changed(Entity e) {
-        storage<C>().mark_changed(e);
+        check_write<C>();
+        storage_of<C>().mark_changed(e);
     }
     // Change stamp of e's C (0 if absent), and the latest stamp of any C.
     template <class C>
     std::uint64_t version(Entity e) const {
+        check_read<C>();
         const auto* s = find_storage<C>();
         return s ? s->version(e) : 0;
     }
     template <class C>
     std::uint64_t storage_version() const {
+        check_read<C>();
         const auto* s = find_storage<C>();
         return s ? s->version() : 0;
     }
     std::uint64_t tick() const { return m_tick; }
 
+    // `const C` in the list is read access, plain C write access.
     template <class... C>
     View<C...> view() {
-        return View<C...>(std::make_tuple(&storage<std::remove_const_t<C>>()...));
+        (check_view<C>(), ...);
+        return View<C...>(std::make_tuple(&storage_of<std::remove_const_t<C>>()...));
     }
     template <class... C>
     View<const C...> view() const {
+        (check_read<std::remove_const_t<C>>(), ...);
         return View<const C...>(
-            std::make_tuple(&const_cast<Registry*>(this)->storage<std::remove_const_t<C>>()...));
+            std::make_tuple(&const_cast<Registry*>(this)->storage_of<std::remove_const_t<C>>()...));
     }
 
     template <class C>
     std::size_t count() const {
+        check_read<C>();
         const auto* s = find_storage<C>();
         return s ? s->size() : 0;
     }
 
     template <class C>
     Storage<C>& storage() {
-        const std::uint32_t id = detail::type_id<C>();
-        if (id >= m_storages.size()) m_storages.resize(id + 1);
-        if (!m_storages[id]) m_storages[id] = std::make_unique<Storage<C>>(&m_tick);
-        return static_cast<Storage<C>&>(*m_storages[id]);
+        check_write<C>();
+        return storage_of<C>();
+    }
+
+    // Listeners fn(Registry&, Entity) for a C being added / about to be removed (destroy included).
+    template <class C>
+    Signal& on_construct() {
+        return storage_of<C>().on_construct();
+    }
+    template <class C>
+    Signal& on_destroy() {
+        return storage_of<C>().on_destroy();
+    }
+
+    // The running system's declared access; the frame loop sets it (ecs::AccessScope) around each
+    // system. Does nothing unless SFFD_CHECK_ACCESS is defined.
+    void set_active_access([[maybe_unused]] const ActiveAccess* active) {
+#if defined(SFFD_CHECK_ACCESS)
+        m_active = active;
+#endif
+    }
+    const ActiveAccess* active_access() const {
+#if defined(SFFD_CHECK_ACCESS)
+        return m_active;
+#else
+        return nullptr;
+#endif
     }
 
     // --- singleton resources (camera settings, editor state, GPU state objects...) --------------
     template <class R, class... Args>
     R& set_resource(Args&&... args) {
+        check_write<R>();
         const std::uint32_t id = detail::type_id<R>();
         if (id >= m_resources.size()) m_resources.resize(id + 1);
         auto holder = std::make_unique<Holder<R>>(std::forward<Args>(args)...);
@@ -280,13 +315,13 @@ public:
     }
     template <class R>
     R* try_resource() {
-        const std::uint32_t id = detail::type_id<R>();
-        return id < m_resources.size() && m_resources[id] ? &static_cast<Holder<R>&>(*m_resources[id]).value
-                                                          : nullptr;
+        check_write<R>();
+        return find_resource<R>();
     }
     template <class R>
     const R* try_resource() const {
-        return const_cast<Registry*>(this)->try_resource<R>();
+        check_read<R>();
+        return const_cast<Registry*>(this)->find_resource<R>();
     }
     template <class R>
     R& resource() {
@@ -302,6 +337,7 @@ public:
     }
     template <class R>
     void erase_resource() {
+        check_write<R>();
         const std::uint32_t id = detail::type_id<R>();
         if (id < m_resources.size()) m_resources[id].reset();
     }
@@ -317,6 +353,19 @@ private:
         R value;
     };
 
+    template <class R>
+    R* find_resource() {
+        const std::uint32_t id = detail::type_id<R>();
+        return id < m_resources.size() && m_resources[id] ? &static_cast<Holder<R>&>(*m_resources[id]).value
+                                                          : nullptr;
+    }
+    template <class C>
+    Storage<C>& storage_of() {
+        const std::uint32_t id = detail::type_id<C>();
+        if (id >= m_storages.size()) m_storages.resize(id + 1);
+        if (!m_storages[id]) m_storages[id] = std::make_unique<Storage<C>>(this, &m_tick);
+        return static_cast<Storage<C>&>(*m_storages[id]);
+    }
     template <class C>
     Storage<C>* find_storage() {
         const std::uint32_t id = detail::type_id<C>();
@@ -335,6 +384,47 @@ private:
     std::vector<Entity> m_pending_destroy;
     std::vector<std::function<void(Registry&)>> m_deferred;
     std::uint64_t m_tick = 0;
+
+    template <class T>
+    void check_read() const {
+#if defined(SFFD_CHECK_ACCESS)
+        if (m_active && m_active->access && m_active->access->declared() &&
+            !m_active->access->can_read(detail::type_id<T>()))
+            detail::access_violation(m_active->system, "reads", detail::type_name<T>());
+#endif
+    }
+    template <class T>
+    void check_write() const {
+#if defined(SFFD_CHECK_ACCESS)
+        if (m_active && m_active->access && m_active->access->declared() &&
+            !m_active->access->can_write(detail::type_id<T>()))
+            detail::access_violation(m_active->system, "writes", detail::type_name<T>());
+#endif
+    }
+    template <class T>
+    void check_view() const {
+        if constexpr (std::is_const_v<T>) check_read<std::remove_const_t<T>>();
+        else check_write<T>();
+    }
+#if defined(SFFD_CHECK_ACCESS)
+    const ActiveAccess* m_active = nullptr;
+#endif
+};
+
+// Declares `access` as the running system's for as long as it lives (restores the previous one).
+class AccessScope {
+public:
+    AccessScope(Registry& registry, const ActiveAccess& active)
+        : m_registry(registry), m_previous(registry.active_access()) {
+        registry.set_active_access(&active);
+    }
+    ~AccessScope() { m_registry.set_active_access(m_previous); }
+    AccessScope(const AccessScope&) = delete;
+    AccessScope& operator=(const AccessScope&) = delete;
+
+private:
+    Registry& m_registry;
+    const ActiveAccess* m_previous;
 };
 
 }  // namespace sffd::ecs

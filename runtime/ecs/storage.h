@@ -6,6 +6,9 @@
 // the component with a new tick, and the storage remembers its latest tick, so a system can ask "did
 // anything of this type change since I last looked?" in O(1), then compare per-entity stamps only for
 // the few entities it cares about (e.g. the deformer re-runs only for point clouds whose lattice moved).
+//
+// Signals: on_construct runs after a component is added (not when emplace replaces one), on_destroy
+// before one is removed (remove, clear, or its entity's destroy), so a listener still reads it.
 #pragma once
 
 #include <cassert>
@@ -15,6 +18,7 @@
 #include <vector>
 
 #include "runtime/ecs/entity.h"
+#include "runtime/ecs/signal.h"
 
 namespace sffd::ecs {
 
@@ -32,7 +36,7 @@ class StorageBase {
 public:
     static constexpr std::uint32_t npos = 0xffffffffu;
 
-    explicit StorageBase(std::uint64_t* tick) : m_tick(tick) {}
+    StorageBase(Registry* owner, std::uint64_t* tick) : m_owner(owner), m_tick(tick) {}
     virtual ~StorageBase() = default;
     StorageBase(const StorageBase&) = delete;
     StorageBase& operator=(const StorageBase&) = delete;
@@ -52,6 +56,9 @@ public:
     }
     virtual void remove(Entity e) = 0;
     virtual void clear() = 0;
+
+    Signal& on_construct() { return m_on_construct; }
+    Signal& on_destroy() { return m_on_destroy; }
 
 protected:
     std::uint32_t position(Entity e) const { return m_sparse[e.index]; }
@@ -83,7 +90,10 @@ protected:
     std::vector<Entity> m_dense;
     std::vector<std::uint64_t> m_stamps;
     std::uint64_t m_version = 0;
+    Registry* m_owner;
     std::uint64_t* m_tick;
+    Signal m_on_construct;
+    Signal m_on_destroy;
 };
 
 template <class C>
@@ -102,17 +112,27 @@ public:
         // Construct before touching the bookkeeping, so a throwing constructor leaves the storage intact.
         C value = detail::make<C>(std::forward<Args>(args)...);
         push_entity(e);
-        return m_data.emplace_back(std::move(value));
+        m_data.emplace_back(std::move(value));
+        if (m_on_construct.empty()) return m_data.back();
+        m_on_construct.publish(*m_owner, e);
+        return get(e);  // a listener may have added components of this type, moving the data
     }
 
     void remove(Entity e) override {
         if (!contains(e)) return;
+        m_on_destroy.publish(*m_owner, e);
+        if (!contains(e)) return;  // a listener removed it already
         const std::uint32_t pos = pop_entity(e);
         if (pos != m_data.size() - 1) m_data[pos] = std::move(m_data.back());
         m_data.pop_back();
     }
 
     void clear() override {
+        if (!m_on_destroy.empty()) {
+            const std::vector<Entity> doomed = m_dense;
+            for (const Entity e : doomed)
+                if (contains(e)) m_on_destroy.publish(*m_owner, e);
+        }
         for (const Entity e : m_dense) m_sparse[e.index] = npos;
         m_dense.clear();
         m_stamps.clear();

@@ -262,3 +262,98 @@ TEST(Ecs, MoveOnlyComponentsAndSwapRemoveKeepData) {
     for (int i = 2; i < 5; ++i) EXPECT_EQ(*reg.get<std::unique_ptr<int>>(es[std::size_t(i)]), i);
     EXPECT_EQ(reg.count<std::unique_ptr<int>>(), 3u);
 }
+
+// --- storage signals --------------------------------------------------------------------------------
+
+TEST(EcsSignals, ConstructFiresOnAddNotOnReplaceAndDestroyFiresBeforeRemoval) {
+    Registry reg;
+    std::vector<std::pair<char, float>> log;  // ('c' | 'd', the component's x when told)
+    reg.on_construct<Position>().connect([&](Registry& r, Entity e) {
+        log.push_back({'c', r.get<Position>(e).x});
+    });
+    reg.on_destroy<Position>().connect([&](Registry& r, Entity e) {
+        ASSERT_TRUE(r.has<Position>(e));  // still there: a listener reads what goes away
+        log.push_back({'d', r.get<Position>(e).x});
+    });
+    const Entity a = reg.create();
+    reg.emplace<Position>(a, 1.f, 0.f);
+    reg.emplace<Position>(a, 2.f, 0.f);  // replaces: no second construct
+    reg.emplace<Velocity>(a);            // another type: not told
+    reg.remove<Position>(a);
+    reg.remove<Position>(a);  // absent: not told
+    const std::vector<std::pair<char, float>> want{{'c', 1.f}, {'d', 2.f}};
+    EXPECT_EQ(log, want);
+}
+
+TEST(EcsSignals, DestroyAndClearTellEveryComponentsListener) {
+    Registry reg;
+    std::vector<std::uint32_t> pos_gone, vel_gone;
+    reg.on_destroy<Position>().connect([&](Registry&, Entity e) { pos_gone.push_back(e.index); });
+    reg.on_destroy<Velocity>().connect([&](Registry&, Entity e) { vel_gone.push_back(e.index); });
+    const Entity a = reg.create(), b = reg.create(), c = reg.create();
+    reg.emplace<Position>(a);
+    reg.emplace<Velocity>(a);
+    reg.emplace<Position>(b);
+    reg.emplace<Velocity>(c);
+    reg.destroy(a);
+    EXPECT_EQ(pos_gone, std::vector<std::uint32_t>{a.index});
+    EXPECT_EQ(vel_gone, std::vector<std::uint32_t>{a.index});
+    reg.destroy_later(c);
+    reg.flush();
+    EXPECT_EQ(vel_gone, (std::vector<std::uint32_t>{a.index, c.index}));
+    reg.storage<Position>().clear();
+    EXPECT_EQ(pos_gone, (std::vector<std::uint32_t>{a.index, b.index}));
+    EXPECT_EQ(reg.count<Position>(), 0u);
+}
+
+TEST(EcsSignals, DisconnectStopsAListenerEvenFromInsideACall) {
+    Registry reg;
+    int first = 0, second = 0;
+    Connection c1;
+    c1 = reg.on_construct<Tag>().connect([&](Registry&, Entity) {
+        ++first;
+        c1.disconnect();  // itself, during the call
+    });
+    Connection c2 = reg.on_construct<Tag>().connect([&](Registry&, Entity) { ++second; });
+    EXPECT_TRUE(c2.connected());
+    reg.emplace<Tag>(reg.create());
+    reg.emplace<Tag>(reg.create());
+    EXPECT_EQ(first, 1);
+    EXPECT_EQ(second, 2);
+    EXPECT_FALSE(c1.connected());
+    c2.disconnect();
+    EXPECT_FALSE(c2.connected());
+    reg.emplace<Tag>(reg.create());
+    EXPECT_EQ(second, 2);
+    {
+        ScopedConnection scoped = reg.on_construct<Tag>().connect([&](Registry&, Entity) { ++second; });
+        reg.emplace<Tag>(reg.create());
+    }
+    reg.emplace<Tag>(reg.create());
+    EXPECT_EQ(second, 3);
+}
+
+TEST(EcsSignals, ListenersMayChangeTheRegistryAndOutliveIt) {
+    Connection late;
+    {
+        Registry reg;
+        // A side component cleaned up by its owner's destroy signal: one clean-up place, no loop.
+        reg.on_destroy<Position>().connect([](Registry& r, Entity e) { r.remove<Velocity>(e); });
+        // A listener that adds components of its own type moves the packed data: emplace still
+        // returns the right one.
+        reg.on_construct<Position>().connect([](Registry& r, Entity e) {
+            if (r.get<Position>(e).x > 0) r.emplace<Position>(r.create(), -1.f, 0.f);
+        });
+        const Entity a = reg.create();
+        Position& p = reg.emplace<Position>(a, 5.f, 0.f);
+        EXPECT_EQ(p.x, 5.f);
+        EXPECT_EQ(reg.count<Position>(), 2u);
+        reg.emplace<Velocity>(a);
+        reg.remove<Position>(a);
+        EXPECT_FALSE(reg.has<Velocity>(a));
+        late = reg.on_destroy<Tag>().connect([](Registry&, Entity) {});
+        EXPECT_TRUE(late.connected());
+    }
+    EXPECT_FALSE(late.connected());
+    late.disconnect();  // the registry is gone: nothing to do, nothing to crash
+}
