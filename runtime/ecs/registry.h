@@ -411,6 +411,14 @@ private:
 #endif
 };
 
+inline void Signal::publish(Registry& registry, Entity e) const {
+    if (empty()) return;
+    const ActiveAccess* running = registry.active_access();
+    registry.set_active_access(nullptr);
+    publish_unchecked(registry, e);
+    registry.set_active_access(running);
+}
+
 // Declares `access` as the running system's for as long as it lives (restores the previous one).
 class AccessScope {
 public:

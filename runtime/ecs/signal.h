@@ -92,9 +92,12 @@ public:
         return Connection(m_slots, id);
     }
     bool empty() const { return m_slots->slots.empty(); }
-    void publish(Registry& registry, Entity e) const {
+    // Calls every listener. Defined in registry.h: listeners run outside the running system's declared
+    // access (runtime/ecs/access.h), since they belong to whoever connected them, not to the system whose
+    // emplace, remove or destroy set them off.
+    void publish(Registry& registry, Entity e) const;
+    void publish_unchecked(Registry& registry, Entity e) const {
         detail::Slots& s = *m_slots;
-        if (s.slots.empty()) return;
         const std::size_t n = s.slots.size();  // listeners connected during the call wait for the next
         ++s.running;
         for (std::size_t i = 0; i < n; ++i) {

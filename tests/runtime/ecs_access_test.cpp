@@ -112,3 +112,18 @@ TEST(EcsAccess, ScopesNestAndRestore) {
     }
     EXPECT_EQ(reg.active_access(), nullptr);
 }
+
+// A signal's listener belongs to whoever connected it: it runs outside the declared access of the system
+// whose remove set it off (a clean-up listener must not need every system to declare its types).
+TEST(EcsAccess, SignalListenersRunOutsideTheSystemsAccess) {
+    Registry reg;
+    const Entity e = reg.create();
+    reg.emplace<Cloud>(e);
+    reg.emplace<Deformed>(e);
+    reg.on_destroy<Cloud>().connect([](Registry& r, Entity x) { r.remove<Deformed>(x); });
+    as_system(reg, "editor", writes<Cloud>(), [&] {
+        reg.remove<Cloud>(e);
+        EXPECT_NE(reg.active_access(), nullptr);  // restored after the listener
+    });
+    EXPECT_FALSE(reg.has<Deformed>(e));
+}
