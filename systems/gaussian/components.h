@@ -1,21 +1,5 @@
-// 3D Gaussian splat components: plain data. Owned by systems/gaussian; other systems read them.
-//
-// A GaussianCloud is the authored cloud as loaded (3DGS PLY, .splat, or converted from a surface cloud);
-// the deformation writes a separate DeformedGaussians, the authored cloud is never overwritten.
-//
-// Conventions (every importer and exporter converts to and from these, see gaussian_io.h):
-// - positions relative to `origin` (double), like SplatCloud, so far-away scenes keep float precision;
-// - scales: LINEAR standard deviations along the Gaussian's local x, y, z axes (3DGS PLY stores log);
-// - rotations: unit quaternions, glm::quat (construct with glm::quat(w, x, y, z); 3DGS PLY stores
-//   rot_0..3 = w, x, y, z; glTF stores x, y, z, w). The covariance is Σ = R S Sᵀ Rᵀ with R = mat3_cast(q)
-//   and S = diag(scale);
-// - opacities: LINEAR in [0, 1] (3DGS PLY stores the logit);
-// - sh: spherical-harmonic colour coefficients in the 3DGS basis (systems/gaussian/sh.h), degree
-//   `sh_degree` (0..3), K = (sh_degree+1)² coefficients per channel, stored per splat coefficient-major
-//   with RGB interleaved: sh[(i*K + k)*3 + c] for splat i, coefficient k (k = 0 is the DC term), channel c.
-//   The colour seen along direction d (from the camera to the splat) is max(0, 0.5 + Σ_k sh_k Y_k(d)).
-//   (3DGS PLY stores f_dc_0..2 = k 0 for R,G,B, then f_rest per CHANNEL: all R coefficients k=1..K-1,
-//   then G, then B.)
+// 3D Gaussian splat components: plain data. Owned by systems/gaussian; other systems read them. The
+// authored GaussianCloud itself lives with SplatCloud in runtime/scene/components.h.
 #pragma once
 
 #include <cstdint>
@@ -24,29 +8,10 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "systems/ffd/components.h"  // DeformInputStamps
+#include "runtime/scene/components.h"  // GaussianCloud
+#include "systems/ffd/components.h"    // DeformInputStamps
 
 namespace sffd {
-
-struct GaussianCloud {
-    glm::dvec3 origin{0.0};
-    std::vector<glm::vec3> positions;
-    std::vector<glm::vec3> scales;
-    std::vector<glm::quat> rotations;
-    std::vector<float> opacities;
-    int sh_degree = 0;
-    std::vector<float> sh;  // size() * sh_coeffs(sh_degree) * 3
-    // Derived clouds only (deformation with ShMode::rotate_view): when not empty, the colour of splat i
-    // along d is evaluated at sh_frames[i]ᵀ d (its SH coefficients were left unrotated; the frame is the
-    // orthogonal polar factor of the deformation, a reflection when the cell inverted). Authored clouds
-    // and files never carry frames (writers refuse them: bake_sh_frames() first).
-    std::vector<glm::mat3> sh_frames;
-
-    std::size_t size() const { return positions.size(); }
-};
-
-// Coefficients per channel for a degree: 1, 4, 9, 16.
-constexpr int sh_coeffs(int degree) { return (degree + 1) * (degree + 1); }
 
 // Derived output of the Gaussian deformation (gaussian_deform_system) on a GaussianCloud entity that has
 // Deformers: same layout as GaussianCloud (opacities are unchanged by a deformation and not copied).
