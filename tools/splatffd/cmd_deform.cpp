@@ -30,9 +30,9 @@
 #include <string>
 #include <vector>
 
-#include "runtime/assets/export.h"
+#include "runtime/assets/formats/surface/export.h"
 #include "runtime/assets/import.h"
-#include "runtime/assets/ply.h"
+#include "runtime/assets/formats/surface/ply.h"
 #include "runtime/assets/scene.h"
 #include "runtime/assets/splat_estimation.h"
 #include "systems/ffd/operations.h"
@@ -40,8 +40,9 @@
 #include "systems/ffd/ffd_gpu.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/lattice_io.h"
+#include "systems/ffd/stream_deform.h"
 #include "systems/gaussian/components.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/deform_gaussians.h"
 #include "tools/splatffd/lattice_source.h"
@@ -53,7 +54,6 @@ namespace {
 using namespace sffd;
 using Clock = std::chrono::steady_clock;
 
-constexpr std::size_t kChunkRows = 1 << 17;  // ~131k rows: ~10 MB of double columns for 10 properties
 constexpr std::uint64_t kEstimateMaxPoints = 4'000'000;  // default limit of the in-memory radius estimate
 
 constexpr const char* kUsage =
@@ -85,166 +85,6 @@ int fail(const std::string& message) {
     std::fprintf(stderr, "splatffd deform: %s\n", message.c_str());
     return 1;
 }
-
-// Vertex columns the deformation reads and writes (-1: absent).
-struct VertexColumns {
-    int x = -1, y = -1, z = -1;
-    int n[3] = {-1, -1, -1};
-    int u[3] = {-1, -1, -1}, v[3] = {-1, -1, -1};
-    int radius = -1;
-    bool normals() const { return n[0] >= 0 && n[1] >= 0 && n[2] >= 0; }
-    bool axes() const { return u[0] >= 0 && u[1] >= 0 && u[2] >= 0 && v[0] >= 0 && v[1] >= 0 && v[2] >= 0; }
-};
-
-int scalar_property(const ply::Element& e, const char* name) {
-    const int i = e.find(name);
-    return i >= 0 && !e.properties[std::size_t(i)].is_list ? i : -1;
-}
-
-VertexColumns find_columns(const ply::Element& ve) {
-    VertexColumns c;
-    c.x = ve.find("x"), c.y = ve.find("y"), c.z = ve.find("z");
-    const char* n[3] = {"nx", "ny", "nz"};
-    const char* u[3] = {"axis_ux", "axis_uy", "axis_uz"};
-    const char* v[3] = {"axis_vx", "axis_vy", "axis_vz"};
-    for (int a = 0; a < 3; ++a)
-        c.n[a] = scalar_property(ve, n[a]), c.u[a] = scalar_property(ve, u[a]),
-        c.v[a] = scalar_property(ve, v[a]);
-    if (!c.normals()) c.n[0] = c.n[1] = c.n[2] = -1;
-    if (!c.axes()) c.u[0] = c.u[1] = c.u[2] = c.v[0] = c.v[1] = c.v[2] = -1;
-    c.radius = scalar_property(ve, "radius");
-    return c;
-}
-
-// Appends float axis_u*/axis_v* properties to the vertex element (created from normals and radius).
-void add_axis_properties(ply::Element& ve, VertexColumns& c) {
-    const char* names[6] = {"axis_ux", "axis_uy", "axis_uz", "axis_vx", "axis_vy", "axis_vz"};
-    for (int a = 0; a < 6; ++a) {
-        (a < 3 ? c.u[a] : c.v[a - 3]) = int(ve.properties.size());
-        ve.properties.push_back({names[a], ply::Type::float32});
-    }
-}
-
-glm::dvec3 get3(const ply::Chunk& c, const int* cols, std::size_t r) {
-    return {c.columns[std::size_t(cols[0])].values[r], c.columns[std::size_t(cols[1])].values[r],
-            c.columns[std::size_t(cols[2])].values[r]};
-}
-void set3(ply::Chunk& c, const int* cols, std::size_t r, const glm::dvec3& w) {
-    for (int a = 0; a < 3; ++a) c.columns[std::size_t(cols[a])].values[r] = w[a];
-}
-
-// Circular axes from the chunk's normals and its radius column (or `estimated` radii, one per vertex of
-// the file, this chunk's from row `first`), in the columns add_axis_properties() made (same convention
-// as import: assets::make_circular_axes).
-void create_axes(ply::Chunk& c, const VertexColumns& cols, const std::vector<float>& estimated,
-                 std::size_t first) {
-    for (const int a : {cols.u[0], cols.u[1], cols.u[2], cols.v[0], cols.v[1], cols.v[2]})
-        c.columns[std::size_t(a)].values.resize(c.rows);
-    std::vector<glm::vec3> n(c.rows), u, v;
-    std::vector<float> radius(c.rows);
-    for (std::size_t r = 0; r < c.rows; ++r) {
-        const glm::dvec3 nn = get3(c, cols.n, r);
-        const double len = glm::length(nn);
-        n[r] = len > 0.0 ? glm::vec3(nn / len) : glm::vec3(0, 0, 1);
-        radius[r] =
-            cols.radius >= 0 ? float(c.columns[std::size_t(cols.radius)].values[r]) : estimated[first + r];
-    }
-    assets::make_circular_axes(n, radius, u, v);
-    for (std::size_t r = 0; r < c.rows; ++r)
-        set3(c, cols.u, r, glm::dvec3(u[r])), set3(c, cols.v, r, glm::dvec3(v[r]));
-}
-
-// Deforms one chunk's vertex rows in place (double columns) through every lattice in order. Returns the
-// deformation time in ms.
-struct ChunkDeformer {
-    const std::vector<Lattice>& lattices;
-    std::string backend;  // cpu | gpu | reference
-    ffd::GpuDeformer* gpu = nullptr;
-    std::vector<glm::vec3> p, n, u, v, op, on, ou, ov;
-    std::size_t inverted = 0;
-    std::vector<std::size_t> inside;  // points inside each lattice (same order)
-    ply::Chunk scratch;
-
-    Result<double> run(ply::Chunk& c, const VertexColumns& cols, bool write) {
-        ply::Chunk* target = &c;
-        if (!write) {  // timing run: deform a copy, the chunk stays the input
-            scratch = c;
-            target = &scratch;
-        }
-        double ms = 0.0;
-        for (std::size_t i = 0; i < lattices.size(); ++i) {
-            auto t = run_one(lattices[i], *target, cols, write, inside[i]);
-            if (!t) return t.error();
-            ms += *t;
-        }
-        return ms;
-    }
-
-    Result<double> run_one(const Lattice& lattice, ply::Chunk& c, const VertexColumns& cols, bool count,
-                           std::size_t& inside_count) {
-        const std::size_t rows = c.rows;
-        const int xyz[3] = {cols.x, cols.y, cols.z};
-        const bool normals = cols.normals(), axes = cols.axes();
-        if (backend == "reference") {
-            // Double in, double out: no float rounding at all.
-            const auto t0 = Clock::now();
-            std::size_t inv = 0;
-            for (std::size_t r = 0; r < rows; ++r) {
-                const ffd::ReferencePoint rp = ffd::reference_point(lattice, get3(c, xyz, r));
-                if (!rp.inside) continue;
-                inside_count += count;
-                set3(c, xyz, r, rp.position);
-                const glm::dmat3& J = rp.jacobian;
-                if (normals) {
-                    const glm::dvec3 nin = get3(c, cols.n, r);
-                    glm::dvec3 nn = glm::cross(J[1], J[2]) * nin.x + glm::cross(J[2], J[0]) * nin.y +
-                                    glm::cross(J[0], J[1]) * nin.z;
-                    const double len = glm::length(nn);
-                    if (len > 0) nn /= len;
-                    set3(c, cols.n, r, nn);
-                }
-                if (axes)
-                    set3(c, cols.u, r, J * get3(c, cols.u, r)), set3(c, cols.v, r, J * get3(c, cols.v, r));
-                inv += glm::determinant(J) < 0.0;
-            }
-            if (count) inverted += inv;
-            return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-        }
-        // Float paths work relative to the lattice origin (far-away scans keep their precision).
-        const glm::dvec3 o = lattice.origin;
-        auto size = [rows](std::vector<glm::vec3>& a, bool used) { a.resize(used ? rows : 0); };
-        size(p, true), size(op, true), size(n, normals), size(on, normals);
-        size(u, axes), size(v, axes), size(ou, axes), size(ov, axes);
-        for (std::size_t r = 0; r < rows; ++r) {
-            p[r] = glm::vec3(get3(c, xyz, r) - o);
-            if (normals) n[r] = glm::vec3(get3(c, cols.n, r));
-            if (axes) u[r] = glm::vec3(get3(c, cols.u, r)), v[r] = glm::vec3(get3(c, cols.v, r));
-        }
-        const ffd::PointsIn in{p.data(),
-                               normals ? n.data() : nullptr,
-                               axes ? u.data() : nullptr,
-                               axes ? v.data() : nullptr,
-                               rows,
-                               o};
-        const ffd::PointsOut out{op.data(), normals ? on.data() : nullptr, axes ? ou.data() : nullptr,
-                                 axes ? ov.data() : nullptr};
-        const auto t0 = Clock::now();
-        Result<ffd::DeformStats> stats =
-            backend == "gpu" ? gpu->deform(lattice, in, out) : ffd::deform(lattice, in, out);
-        const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-        if (!stats) return stats.error();
-        if (count) inverted += stats->inverted, inside_count += stats->inside;
-        for (std::size_t r = 0; r < rows; ++r) {
-            // Unchanged points keep their exact double values.
-            if (op[r] == p[r] && (!normals || on[r] == n[r]) && (!axes || (ou[r] == u[r] && ov[r] == v[r])))
-                continue;
-            set3(c, xyz, r, o + glm::dvec3(op[r]));
-            if (normals) set3(c, cols.n, r, glm::dvec3(on[r]));
-            if (axes) set3(c, cols.u, r, glm::dvec3(ou[r])), set3(c, cols.v, r, glm::dvec3(ov[r]));
-        }
-        return ms;
-    }
-};
 
 struct Options {
     std::vector<std::string> files;
@@ -326,40 +166,6 @@ Result<cli::LatticeChain> lattice_chain(const Options& o, const std::vector<glm:
     return cli::load_lattice_source(o.lattice_source, o.lattice_name);
 }
 
-// x y z of a PLY's vertices relative to the first one (for a fit spec on a streamed file).
-Result<std::vector<glm::vec3>> read_ply_positions(const std::string& file, glm::dvec3& origin) {
-    auto reader = ply::Reader::open(file);
-    if (!reader) return reader.error();
-    const ply::Element& ve = reader->header().elements[std::size_t(reader->header().find("vertex"))];
-    const int xyz[3] = {ve.find("x"), ve.find("y"), ve.find("z")};
-    if (auto s = reader->seek_element("vertex"); !s) return s.error();
-    std::vector<glm::vec3> out;
-    ply::Chunk chunk;
-    while (true) {
-        auto rows = reader->read_rows(kChunkRows, chunk);
-        if (!rows) return rows.error();
-        if (*rows == 0) break;
-        for (std::size_t r = 0; r < *rows; ++r) {
-            const glm::dvec3 w = get3(chunk, xyz, r);
-            if (out.empty()) origin = w;
-            out.push_back(glm::vec3(w - origin));
-        }
-    }
-    return out;
-}
-
-// The GPU's programs are specialised per lattice shape and compiled at their first dispatch (seconds with a
-// cold shader cache): one point through each lattice before the timed work, timed apart, so the
-// deformation time is the deformation's. Returns its milliseconds.
-double set_up_gpu_programs(ffd::GpuDeformer& gpu, const std::vector<Lattice>& lattices) {
-    const auto t0 = Clock::now();
-    for (const Lattice& l : lattices) {
-        glm::vec3 p(0.0f), n(0.0f, 0.0f, 1.0f), u(0.0f), v(0.0f);
-        (void)gpu.deform(l, ffd::PointsIn{&p, &n, &u, &v, 1, l.origin}, ffd::PointsOut{&p, &n, &u, &v});
-    }
-    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
-}
-
 // `set_up_ms` < 0: no GPU programs were set up (CPU backends).
 void print_summary(const char* what, std::size_t points, const std::string& backend, double first_ms,
                    double total_s, std::size_t inverted, double set_up_ms = -1.0) {
@@ -389,143 +195,74 @@ void warn_empty_lattices(const cli::LatticeChain& chain, const std::vector<std::
                 i < chain.names.size() ? chain.names[i].c_str() : "?", points);
 }
 
-// Outputs must be finite: a lattice that overflows fails the run instead of writing inf (index of the
-// first bad row, or -1).
-long first_non_finite_row(const ply::Chunk& c, const VertexColumns& cols) {
-    for (std::size_t r = 0; r < c.rows; ++r)
-        for (int k : {cols.x, cols.y, cols.z, cols.n[0], cols.n[1], cols.n[2], cols.u[0], cols.u[1],
-                      cols.u[2], cols.v[0], cols.v[1], cols.v[2]})
-            if (k >= 0 && !std::isfinite(c.columns[std::size_t(k)].values[r])) return static_cast<long>(r);
-    return -1;
-}
-
-// PLY in, PLY out, streamed.
+// PLY in, PLY out, streamed by the library (systems/ffd/stream_deform.h); this prints what it did.
 int deform_ply_stream(const Options& o) {
     const std::string& in_path = o.files[0];
-    auto reader = ply::Reader::open(in_path);
-    if (!reader) return fail(reader.message());
-    const ply::Header& in_header = reader->header();
-    const int vi = in_header.find("vertex");
-    if (vi < 0) return fail(in_path + ": no vertex element");
-    const ply::Element& ve = in_header.elements[std::size_t(vi)];
-    VertexColumns cols = find_columns(ve);
-    if (cols.x < 0 || cols.y < 0 || cols.z < 0)
-        return fail(in_path + ": vertex element has no x, y, z properties");
-    for (int k : {cols.x, cols.y, cols.z})
-        if (ve.properties[std::size_t(k)].is_list)
-            return fail(in_path + ": x, y, z must be scalar properties");
-
+    auto input = ffd::inspect_stream_input(in_path);
+    if (!input) return fail(input.message());
     std::vector<glm::vec3> fit_points;
     glm::dvec3 fit_origin(0.0);
     if (ffd::is_fit_spec(o.lattice_source)) {
-        auto pts = read_ply_positions(in_path, fit_origin);
+        auto pts = ffd::read_ply_positions(in_path, fit_origin);
         if (!pts) return fail(pts.message());
         fit_points = std::move(*pts);
     }
     auto chain = lattice_chain(o, fit_points, fit_origin, nullptr);
     if (!chain) return fail(chain.message());
-    // 3D Gaussian splats (3DGS PLY): covariances and SH follow the lattice too
-    // (tools/splatffd/deform_gaussians.cpp).
-    if (gaussian::is_gaussian_element(ve)) {
-        if (chain->lattices.size() != 1)
-            return fail(in_path + ": 3D Gaussian files are deformed by one lattice at a time (got " +
-                        std::to_string(chain->lattices.size()) + "); choose one with --lattice-name");
-        return cli::deform_gaussian_ply(in_path, o.files[1], chain->lattices[0], o.lattice_source, o.backend,
-                                        o.bench, o.ascii);
-    }
-    // Normals but neither axes nor a radius: radii from neighbour spacing, exactly as import estimates
-    // them (6th nearest neighbour, clamped to 4x the median). Needs every position in memory (~60 bytes
-    // per point: positions and a 6-neighbour table), unlike the rest of the stream: done by default up to
-    // kEstimateMaxPoints (~300 MB), beyond that only with --estimate-radii (a 20M-point scan keeps
-    // streaming in ~32 MB and is told how to get axes).
-    std::vector<float> estimated_radii;
-    const bool wants_estimate = !cols.axes() && cols.normals() && cols.radius < 0;
-    const bool estimate = wants_estimate && (o.estimate_radii || ve.count <= kEstimateMaxPoints);
-    if (estimate) {
-        glm::dvec3 o_unused(0.0);
-        auto pts = fit_points.empty() ? read_ply_positions(in_path, o_unused)
-                                      : Result<std::vector<glm::vec3>>(std::move(fit_points));
-        if (!pts) return fail(pts.message());
-        if (pts->size() >= 2)
-            estimated_radii = assets::estimate_radii(assets::find_neighbours(*pts, 6), 6, 1.0f);
-    }
-
-    std::optional<ffd::GpuDeformer> gpu;
-    double set_up_ms = -1.0;
-    if (o.backend == "gpu") {
-        auto g = ffd::GpuDeformer::create_headless();
-        if (!g) return fail(g.message());
-        gpu.emplace(std::move(*g));
-        set_up_ms = set_up_gpu_programs(*gpu, chain->lattices);
-    }
-
-    ply::Header out_header = in_header;
-    out_header.format = o.ascii ? ply::Format::ascii : ply::Format::binary_little_endian;
-    const bool create = !cols.axes() && cols.normals() && (cols.radius >= 0 || !estimated_radii.empty());
-    if (create) add_axis_properties(out_header.elements[std::size_t(vi)], cols);
-    auto writer = ply::Writer::create(o.files[1], out_header);
-    if (!writer) return fail(writer.message());
-
-    ChunkDeformer deformer{
-        chain->lattices, o.backend, gpu ? &*gpu : nullptr, {}, {}, {}, {}, {}, {}, {}, {}, 0, {}, {}};
-    deformer.inside.assign(chain->lattices.size(), 0);
-    std::vector<double> rep_ms(std::size_t(o.bench), 0.0);
-    double first_ms = 0.0;
-    std::size_t points = 0;
-    const auto t_start = Clock::now();
-    ply::Chunk chunk;
-    const std::string lattice_label = o.lattice_source.empty() ? in_path : o.lattice_source;
+    // 3D Gaussian splats (3DGS PLY): covariances and SH follow the lattice too.
+    const bool gaussians = input->kind == ffd::StreamKind::gaussians;
+    if (gaussians && chain->lattices.size() != 1)
+        return fail(in_path + ": 3D Gaussian files are deformed by one lattice at a time (got " +
+                    std::to_string(chain->lattices.size()) + "); choose one with --lattice-name");
+    ffd::StreamDeformRequest req;
+    req.input = in_path;
+    req.output = o.files[1];
+    req.lattices = chain->lattices;
+    req.backend = o.backend == "gpu"         ? ffd::StreamBackend::gpu
+                  : o.backend == "reference" ? ffd::StreamBackend::reference
+                                             : ffd::StreamBackend::cpu;
+    req.timing_runs = o.bench;
+    req.ascii = o.ascii;
+    req.estimate_always = o.estimate_radii;
+    req.estimate_max_points = kEstimateMaxPoints;
+    req.positions = std::move(fit_points);
+    req.lattice_label = gaussians || !o.lattice_source.empty() ? o.lattice_source : in_path;
     // A percentage line on a terminal for a stream that runs over a second; nothing in logs or pipes.
     cli::ProgressPrinter progress("splatffd deform", cli::ProgressPrinter::mode_for(false));
-    for (const ply::Element& e : in_header.elements) {
-        if (auto s = reader->seek_element(e.name); !s) return fail(s.message());
-        while (true) {
-            auto rows = reader->read_rows(kChunkRows, chunk);
-            if (!rows) return fail(rows.message());
-            if (*rows == 0) break;
-            if (e.name == "vertex") {
-                if (create) {
-                    chunk.element = out_header.elements[std::size_t(vi)];
-                    chunk.columns.resize(chunk.element.properties.size());
-                    create_axes(chunk, cols, estimated_radii, points);
-                }
-                for (int r = 0; r < o.bench; ++r) {  // timing runs first (on a copy of the input)
-                    auto ms = deformer.run(chunk, cols, false);
-                    if (!ms) return fail(lattice_label + ": " + ms.message());
-                    rep_ms[std::size_t(r)] += *ms;
-                }
-                auto ms = deformer.run(chunk, cols, true);
-                if (!ms) return fail(lattice_label + ": " + ms.message());
-                if (const long bad = first_non_finite_row(chunk, cols); bad >= 0)
-                    return fail(lattice_label + ": deformed point " +
-                                std::to_string(points + std::size_t(bad)) + " of " + in_path +
-                                " is not finite; nothing was written to " + o.files[1]);
-                first_ms += *ms;
-                points += *rows;
-                progress.report("deforming " + std::to_string(ve.count) + " points",
-                                ve.count > 0 ? double(points) / double(ve.count) : 1.0);
-            }
-            if (auto s = writer->write_rows(chunk); !s) return fail(s.message());
-        }
-    }
-    if (auto s = writer->finish(); !s) return fail(s.message());
-    const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
+    auto report = [&](std::uint64_t done, std::uint64_t total) {
+        progress.report("deforming " + std::to_string(total) + " points",
+                        total > 0 ? double(done) / double(total) : 1.0);
+    };
+    auto done = ffd::stream_deform(req, gaussians ? ffd::StreamProgress{} : ffd::StreamProgress{report});
+    if (!done) return fail(done.message());
+    if (gaussians) return cli::report_gaussian_stream(*done, o.lattice_source, o.backend, o.bench);
+
+    const std::size_t points = std::size_t(done->points);
     std::string what = o.files[1] + ": positions";
-    what += cols.normals() ? ", normals" : " (no normals in the input)";
-    if (cols.axes())
-        what += !create    ? ", splat axes"
-                : estimate ? ", splat axes (created from normals and radii estimated from neighbour spacing)"
-                           : ", splat axes (created from normals and radius)";
-    else if (wants_estimate)
-        what += "; no splat axes (no radius property, and " + std::to_string(ve.count) +
+    what += done->normals ? ", normals" : " (no normals in the input)";
+    switch (done->axes) {
+        case ffd::StreamAxes::deformed: what += ", splat axes"; break;
+        case ffd::StreamAxes::from_estimate:
+            what += ", splat axes (created from normals and radii estimated from neighbour spacing)";
+            break;
+        case ffd::StreamAxes::from_radius: what += ", splat axes (created from normals and radius)"; break;
+        case ffd::StreamAxes::absent_too_many:
+            what +=
+                "; no splat axes (no radius property, and " + std::to_string(input->points) +
                 " points are more than deform estimates radii for while streaming: pass --estimate-radii, "
                 "~75 bytes per point)";
-    else what += "; no splat axes (the input has no normals: `splatffd convert IN OUT` estimates them)";
+            break;
+        case ffd::StreamAxes::absent_no_normals:
+            what += "; no splat axes (the input has no normals: `splatffd convert IN OUT` estimates them)";
+            break;
+    }
     what += " deformed by " + std::to_string(chain->lattices.size()) + " lattice" +
             (chain->lattices.size() == 1 ? " " : "s ") + joined(chain->names);
-    print_summary(what.c_str(), points, o.backend, first_ms, total_s, deformer.inverted, set_up_ms);
-    warn_empty_lattices(*chain, deformer.inside, points);
+    print_summary(what.c_str(), points, o.backend, done->deform_ms, done->total_s, done->inverted,
+                  done->set_up_ms);
+    warn_empty_lattices(*chain, done->inside, points);
     if (o.bench > 0) {
+        std::vector<double> rep_ms = done->timing_ms;
         std::sort(rep_ms.begin(), rep_ms.end());
         const double median = rep_ms.size() % 2
                                   ? rep_ms[rep_ms.size() / 2]
@@ -611,7 +348,7 @@ int deform_in_memory(const Options& o) {
         auto g = ffd::GpuDeformer::create_headless();
         if (!g) return fail(g.message());
         gpu.emplace(std::move(*g));
-        set_up_ms = set_up_gpu_programs(*gpu, chain->lattices);
+        set_up_ms = ffd::set_up_gpu_programs(*gpu, chain->lattices);
     }
     double ms = 0.0;
     std::size_t inverted = 0;

@@ -1,7 +1,7 @@
-// `splatffd deform` on Gaussian files: cmd_deform.cpp streams a 3DGS PLY (a vertex element with f_dc_0,
-// opacity, scale_0, rot_0) into a 3DGS PLY through deform_gaussian_ply; every other Gaussian input
-// (compressed PLY, SOG, SPZ v2-v4, .splat, .ksplat, KHR glTF; or a 3DGS PLY written to another format) is
-// read whole, deformed on the CPU and written by OUT's extension (deform_gaussian_file).
+// `splatffd deform` on Gaussian files: a 3DGS PLY (a vertex element with f_dc_0, opacity, scale_0, rot_0)
+// into a 3DGS PLY is streamed by ffd::stream_deform (report_gaussian_stream prints it); every other Gaussian
+// input (compressed PLY, SOG, SPZ v2-v4, .splat, .ksplat, KHR glTF; or a 3DGS PLY written to another format)
+// is read whole, deformed on the CPU and written by OUT's extension (deform_gaussian_file).
 #pragma once
 
 #include <functional>
@@ -14,6 +14,9 @@ namespace sffd {
 struct Lattice;
 struct GaussianCloud;
 }  // namespace sffd
+namespace sffd::ffd {
+struct StreamDeformResult;
+}  // namespace sffd::ffd
 
 namespace sffd::cli {
 
@@ -34,9 +37,10 @@ int deform_gaussian_file(const std::string& in, const std::string& out,
                          const std::function<Result<LatticeChain>(const GaussianCloud&)>& chain,
                          const std::string& backend, int bench, bool ascii);
 
-// backend: "cpu" or "reference" (there is no GPU Gaussian deformer yet). Returns the exit code.
-int deform_gaussian_ply(const std::string& in, const std::string& out, const Lattice& lattice,
-                        const std::string& lattice_path, const std::string& backend, int bench, bool ascii);
+// Prints the summary (and with bench > 0 the JSON timing line) of a 3DGS PLY that ffd::stream_deform
+// streamed through the lattice `lattice_path` names. Returns the exit code.
+int report_gaussian_stream(const ffd::StreamDeformResult& result, const std::string& lattice_path,
+                           const std::string& backend, int bench);
 
 // A scene's Gaussian cloud (a saved editor scene, `convert g.ply s.glb --lattice fit`) deformed by
 // `lattices` in order on the CPU and written as Gaussians (OUT as is_gaussian_output() lists).
