@@ -7,14 +7,13 @@
 // fitted around IN: the identity, useful to add splat axes). Without --lattice, IN must be a scene file
 // holding a lattice (the editor's save): its own lattices are used.
 //
-// PLY in, PLY out: streams the file through the lattices in chunks (peak memory stays far below 256 MB
-// whatever the file size): every element is copied in order, `vertex` rows get deformed x y z, nx ny nz
-// and the splat axes axis_u* axis_v* (J·axis) when present; a file with normals but no axes gets circular
-// axes created (then deformed), appended as float properties: from its `radius` property, or from radii
-// estimated from neighbour spacing as import does (this case holds every position in memory: by default
-// up to 4M points, beyond that with --estimate-radii). All
-// other properties are copied with their types. Points outside the lattice are unchanged, points on its
-// faces are inside. The output is binary little-endian (or ASCII with --ascii) and atomic.
+// PLY in, PLY out: ffd::stream_deform (systems/ffd/stream_deform.h) streams the file through the lattices
+// in chunks (peak memory stays far below 256 MB whatever the file size) with the engine's own kernels:
+// `vertex` rows get deformed x y z, nx ny nz and the splat axes (created from normals and a radius, or
+// radii estimated from neighbour spacing: by default up to 4M points, beyond that with --estimate-radii),
+// 3DGS rows their covariances and SH; every other property and element is copied with its type. Points
+// outside the lattice are unchanged, points on its faces are inside. The output is binary little-endian
+// (or ASCII with --ascii) and atomic. This file parses the arguments and prints what was done.
 // Any other input or output (.glb/.gltf/.obj/.off): the cloud is loaded whole (import estimates normals
 // and radii where missing), deformed (positions, normals, axes) and saved by OUT's extension.
 // The last line on stderr says what was written (positions, normals, axes: deformed / created / absent).
@@ -31,10 +30,9 @@
 #include <vector>
 
 #include "runtime/assets/formats/surface/export.h"
-#include "runtime/assets/import.h"
 #include "runtime/assets/formats/surface/ply.h"
+#include "runtime/assets/import.h"
 #include "runtime/assets/scene.h"
-#include "runtime/assets/splat_estimation.h"
 #include "systems/ffd/operations.h"
 #include "systems/ffd/deform.h"
 #include "systems/ffd/ffd_gpu.h"
@@ -42,7 +40,6 @@
 #include "systems/ffd/lattice_io.h"
 #include "systems/ffd/stream_deform.h"
 #include "systems/gaussian/components.h"
-#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/deform_gaussians.h"
 #include "tools/splatffd/lattice_source.h"
