@@ -2,6 +2,7 @@
 // that scene loading needs no system; DeformedSplats, the FFD system's output, is defined here.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -27,12 +28,25 @@ struct DeformInputStamps {
     bool operator==(const DeformInputStamps&) const = default;
 };
 
+// What a page-wise CPU output was computed from beyond its stamps, so the next run can redo only the pages
+// an edit reaches (deform_staleness.h): the page record's clock, the lattices as they were (in the cloud's
+// frame: the changed control points are found by comparing), and per-page statistics, summed over the
+// lattices, so the totals stay right when only some pages are redone. `points == 0`: nothing to build on
+// (no output yet, the GPU path, a preview).
+struct DeformPageRecord {
+    std::size_t points = 0;
+    std::uint64_t pages_clock = 0;
+    std::vector<Lattice> lattices;
+    std::vector<std::array<std::uint32_t, 3>> counts;  // per page; the kind says what each slot counts
+};
+
 // Derived output of the deformation phase on a point-cloud entity (authored SplatCloud stays as loaded).
 // Written by ffd_system only. Positions are relative to `origin` (= the cloud's SplatCloud::origin).
 // When the GPU path ran, the deformed splats live in GpuSplatStore::clouds[e].deformed and the CPU arrays
-// are left empty (`cpu_valid == false`); bounds and version are always valid. The inverted count is the
-// one of output `inverted_version`: on the CPU path the current one, on the GPU path it arrives a few
-// frames later (read back through a fence, never waited for).
+// are left empty (`cpu_valid == false`); bounds and version are always valid. Whether the output is on the
+// GPU is the residency's answer (state deformed_gpu; ffd::output_on_gpu() in ffd_system.h). The inverted
+// count is the one of output `inverted_version`: on the CPU path the current one, on the GPU path it arrives
+// a few frames later (read back through a fence, never waited for).
 struct DeformedSplats {
     glm::dvec3 origin{0.0};
     std::vector<glm::vec3> positions;
@@ -40,7 +54,6 @@ struct DeformedSplats {
     std::vector<glm::vec3> axis_u;
     std::vector<glm::vec3> axis_v;
     bool cpu_valid = false;              // the arrays above hold the current deformation
-    bool gpu_valid = false;              // GpuSplatStore's `deformed` buffer holds it
     glm::dvec3 bounds_min{0.0};          // world-space box (through the cloud's Transform) that never
     glm::dvec3 bounds_max{0.0};          // under-covers the deformed splats (displacement hull, README)
     std::size_t inverted = 0;            // inside splats whose Jacobian has det < 0 (normal flipped)
@@ -58,9 +71,10 @@ struct DeformedSplats {
     // Inputs this output was computed from (change stamps), so the system skips unchanged clouds.
     DeformInputStamps seen;
     bool seen_force_cpu = false;
+    DeformPageRecord paged;  // counts[p][0]: inverted splats of page p
 
     // Budgeted preview (preview_budget.h): when `preview` is true the last run deformed only
-    // `subset.indices` (the arrays above hold those, compacted; cpu_valid and gpu_valid are false), so the
+    // `subset.indices` (the arrays above hold those, compacted; cpu_valid is false), so the
     // next frame that is not a budgeted preview deforms every point again.
     bool preview = false;
     PreviewSubset subset;

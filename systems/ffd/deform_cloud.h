@@ -23,6 +23,14 @@ namespace sffd::ffd {
 void deform_cloud(const SplatCloud& cloud, std::span<const Lattice* const> lattices, DeformedSplats& out,
                   const char* who = "ffd");
 
+// The same step for the pages `pages` only (runtime/scene/point_pages.h), in place in out's arrays, which
+// hold the whole cloud's output already (sized as deform_cloud() sizes them): the pages' points are written
+// exactly as deform_cloud() writes them (a page is a whole number of the kernels' blocks), the others are
+// left as they are. out.paged.counts[p][0] gets page p's inverted count and out.inverted their sum.
+// deform_cloud() is this over every page.
+void deform_cloud_pages(const SplatCloud& cloud, std::span<const Lattice* const> lattices,
+                        std::span<const std::uint32_t> pages, DeformedSplats& out, const char* who = "ffd");
+
 // The same step for the points `indices` only (a budgeted preview, preview_budget.h): out's arrays hold
 // them compacted, in the order of `indices`. Leaves cpu_valid false (the arrays are not the cloud).
 void deform_cloud_subset(const SplatCloud& cloud, std::span<const Lattice* const> lattices,

@@ -42,9 +42,22 @@ struct FfdStats {
     // In GPU mode both stay flat while only lattices change.
     std::uint64_t cpu_splat_passes = 0;
     std::uint64_t gpu_sync_readbacks = 0;
+    // Pages (runtime/scene/point_pages.h) deformed so far, and by the last run of a cloud (with that cloud's
+    // page count): a control-point edit redoes only the pages its support reaches on the CPU path; the GPU
+    // path and previews redo every page.
+    std::uint64_t pages_redeformed = 0;
+    struct LastPages {
+        std::uint64_t redone = 0, total = 0;
+    } last_pages;
 };
 
 void ffd_system(ecs::Registry& registry, const FrameContext& frame);
+
+namespace ffd {
+// Whether e's current deformed splats live on the GPU only (the residency's state deformed_gpu): the one
+// answer, read from GpuSplatStore.
+bool output_on_gpu(const ecs::Registry& registry, ecs::Entity e);
+}  // namespace ffd
 
 // Drops the system's GPU state (call while the GL context is still current, before destroying it).
 void ffd_release_gpu(ecs::Registry& registry);

@@ -18,9 +18,9 @@ namespace sffd {
 // Covariance Σ' = J Σ Jᵀ stored back as scale + rotation; SH rotated by the polar rotation of J.
 struct DeformedGaussians {
     GaussianCloud cloud;            // opacities left empty (read the authored cloud's) unless some
-                                    // results were not finite (then theirs are 0); EMPTY when on_gpu
-    bool on_gpu = false;            // the GPU pass wrote GpuGaussianStore::clouds[e].deformed (+ frames)
-                                    // and no CPU copy exists (gpu_deform.h read_back() makes one)
+                                    // results were not finite (then theirs are 0); EMPTY when the GPU pass
+                                    // wrote GpuGaussianStore::clouds[e].deformed (state deformed_gpu, the
+                                    // one answer: gaussian::output_on_gpu(); read_back() makes a copy)
     bool seen_force_cpu = false;    // the backend choice this output was made with (a switch re-runs)
     std::uint8_t seen_sh_mode = 0;  // the gaussian::ShMode it used (GaussianDeformSettings; a switch re-runs)
     // Statistics (summed over the deformers). GPU path: they arrive a few frames after the deformation
@@ -33,6 +33,7 @@ struct DeformedGaussians {
 
     // Change stamps this output was computed from (the system skips unchanged clouds).
     DeformInputStamps seen;
+    DeformPageRecord paged;  // counts[p]: inverted, degenerate, not finite of page p (CPU path)
 
     // Budgeted preview (systems/ffd/preview_budget.h): the last run deformed only `subset.indices` into
     // the GPU store (state preview_cpu); `cloud` is then EMPTY and the next frame that is not a budgeted

@@ -10,6 +10,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "runtime/scene/point_pages.h"
 #include "systems/gaussian/gaussian_deform_fast.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/sh.h"
@@ -18,7 +19,10 @@ namespace sffd::gaussian {
 
 namespace {
 // Jacobians are produced per block so the scratch stays small (36 bytes per Gaussian per block).
+// A page (runtime/scene/point_pages.h) is one block, so deform_range() over a page computes exactly what
+// deform() computes there.
 constexpr std::size_t kBlock = 1 << 16;
+static_assert(kBlock == kPagePoints);
 
 using detail::finite3;
 
@@ -52,36 +56,25 @@ void bake_sh_frames(GaussianCloud& g) {
     g.sh_frames.clear();
 }
 
-Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out,
-                           const DeformOptions& options) {
+namespace {
+
+// Gaussians [begin, end) of `in` into `out` (sized, set up for the range), in blocks of kBlock from `begin`.
+Result<DeformStats> deform_blocks(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out,
+                                  const DeformOptions& options, std::size_t begin, std::size_t end) {
     const ffd::Backend backend = options.backend;
-    const bool copy_opacities = options.copy_opacities;
     const bool view_mode = options.sh == ShMode::rotate_view;
-    if (!view_mode && !in.sh_frames.empty())
-        return make_error(
-            "gaussian::deform(): the cloud carries SH frames (view-direction mode): bake_sh_frames() first");
     const std::size_t n = in.size();
     const int K = sh_coeffs(in.sh_degree);
-    if (in.scales.size() != n || in.rotations.size() != n || in.sh.size() != n * std::size_t(K) * 3)
-        return make_error("gaussian::deform(): cloud arrays differ in size");
-    if (&out != &in) {
-        out.origin = in.origin;
-        out.sh_degree = in.sh_degree;
-        out.positions.resize(n), out.scales.resize(n), out.rotations.resize(n), out.sh.resize(in.sh.size());
-        if (copy_opacities) out.opacities = in.opacities;
-        out.sh_frames = in.sh_frames;
-    }
-    // Frames are kept when present; the view mode starts them at identity.
-    if (view_mode && out.sh_frames.size() != n) out.sh_frames.assign(n, glm::mat3(1.0f));
     const bool frames_in = in.sh_frames.size() == n;
     DeformStats total;
-    std::vector<glm::mat3> jac(std::min(n, kBlock));
+    const std::size_t span = end - begin;
+    std::vector<glm::mat3> jac(std::min(span, kBlock));
     std::vector<glm::vec3> centres(
-        std::min(n, kBlock));  // the block's input centres (in-place overwrites them)
+        std::min(span, kBlock));  // the block's input centres (in-place overwrites them)
     const bool drop_opacity = out.opacities.size() == n;
-    std::vector<std::uint8_t> to_drop(options.reference_shapes ? 0 : std::min(n, kBlock));
-    for (std::size_t first = 0; first < n; first += kBlock) {
-        const std::size_t count = std::min(kBlock, n - first);
+    std::vector<std::uint8_t> to_drop(options.reference_shapes ? 0 : std::min(span, kBlock));
+    for (std::size_t first = begin; first < end; first += kBlock) {
+        const std::size_t count = std::min(kBlock, end - first);
         std::copy(in.positions.begin() + std::ptrdiff_t(first),
                   in.positions.begin() + std::ptrdiff_t(first + count), centres.begin());
         const ffd::PointsIn pin{in.positions.data() + first, nullptr, nullptr, nullptr, count, in.origin};
@@ -189,6 +182,58 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
         total.not_finite += not_finite.load();
     }
     return total;
+}
+
+}  // namespace
+
+Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out,
+                           const DeformOptions& options) {
+    const bool copy_opacities = options.copy_opacities;
+    const bool view_mode = options.sh == ShMode::rotate_view;
+    if (!view_mode && !in.sh_frames.empty())
+        return make_error(
+            "gaussian::deform(): the cloud carries SH frames (view-direction mode): bake_sh_frames() first");
+    const std::size_t n = in.size();
+    const int K = sh_coeffs(in.sh_degree);
+    if (in.scales.size() != n || in.rotations.size() != n || in.sh.size() != n * std::size_t(K) * 3)
+        return make_error("gaussian::deform(): cloud arrays differ in size");
+    if (&out != &in) {
+        out.origin = in.origin;
+        out.sh_degree = in.sh_degree;
+        out.positions.resize(n), out.scales.resize(n), out.rotations.resize(n), out.sh.resize(in.sh.size());
+        if (copy_opacities) out.opacities = in.opacities;
+        out.sh_frames = in.sh_frames;
+    }
+    // Frames are kept when present; the view mode starts them at identity.
+    if (view_mode && out.sh_frames.size() != n) out.sh_frames.assign(n, glm::mat3(1.0f));
+    return deform_blocks(lattice, in, out, options, 0, n);
+}
+
+Result<DeformStats> deform_range(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out,
+                                 const DeformOptions& options, std::size_t first, std::size_t count) {
+    const bool view_mode = options.sh == ShMode::rotate_view;
+    if (!view_mode && !in.sh_frames.empty())
+        return make_error(
+            "gaussian::deform(): the cloud carries SH frames (view-direction mode): bake_sh_frames() first");
+    const std::size_t n = in.size();
+    const std::size_t K3 = std::size_t(sh_coeffs(in.sh_degree)) * 3;
+    if (in.scales.size() != n || in.rotations.size() != n || in.sh.size() != n * K3)
+        return make_error("gaussian::deform(): cloud arrays differ in size");
+    if (out.positions.size() != n || out.scales.size() != n || out.rotations.size() != n ||
+        out.sh.size() != n * K3 || (view_mode && out.sh_frames.size() != n) || first % kBlock != 0 ||
+        first + count > n)
+        return make_error(
+            "gaussian::deform_range(): the output is not sized as the cloud, or the range is "
+            "not on a block boundary");
+    if (&out != &in) {  // what deform() sets up for the whole cloud, for the range
+        if (view_mode)
+            for (std::size_t i = first; i < first + count; ++i)
+                out.sh_frames[i] = in.sh_frames.size() == n ? in.sh_frames[i] : glm::mat3(1.0f);
+        if (options.copy_opacities && out.opacities.size() == n && in.opacities.size() == n)
+            std::copy_n(in.opacities.begin() + std::ptrdiff_t(first), count,
+                        out.opacities.begin() + std::ptrdiff_t(first));
+    }
+    return deform_blocks(lattice, in, out, options, first, first + count);
 }
 
 }  // namespace sffd::gaussian

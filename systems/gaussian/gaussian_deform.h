@@ -51,6 +51,13 @@ Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, Gaus
 Result<DeformStats> deform(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out,
                            ffd::Backend backend = ffd::Backend::automatic, bool copy_opacities = true);
 
+// Gaussians [first, first + count) only, written exactly as deform() writes them (first on a page boundary,
+// runtime/scene/point_pages.h): `out` already holds a whole output of `in`'s size (a previous deform() of
+// the same cloud, or `in` itself); the rest of it is left alone. The deformation system redoes the pages a
+// control-point edit reaches with it.
+Result<DeformStats> deform_range(const Lattice& lattice, const GaussianCloud& in, GaussianCloud& out,
+                                 const DeformOptions& options, std::size_t first, std::size_t count);
+
 // Rotates each splat's coefficients by its sh_frames entry and clears the frames (before writing a file).
 void bake_sh_frames(GaussianCloud& cloud);
 

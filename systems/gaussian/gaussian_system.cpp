@@ -12,6 +12,8 @@
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform_backend.h"
 #include "systems/ffd/deform_inputs.h"
+#include "systems/ffd/deform_skeleton.h"
+#include "systems/ffd/lattice.h"
 #include "systems/ffd/ffd_system.h"
 #include "systems/ffd/lattice_frame.h"
 #include "systems/ffd/preview_budget.h"
@@ -81,137 +83,174 @@ GaussianCloud preview_gaussians(const GaussianCloud& cloud, const std::vector<st
 
 void gaussian_release_gpu(ecs::Registry& registry) { registry.erase_resource<GaussianGpuState>(); }
 
-void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
-    // The backend choice of ffd_system (systems/ffd/deform_backend.h).
-    const ffd::DeformBackend backend = ffd::choose_deform_backend(reg.try_resource<FfdSettings>());
-    const bool have_gl = backend.have_gl, force_cpu = backend.force_cpu;
-    const GaussianDeformSettings* settings = reg.try_resource<GaussianDeformSettings>();
-    const gaussian::ShMode gpu_sh = settings ? settings->gpu_sh : gaussian::ShMode::rotate_view;
-    const gaussian::ShMode cpu_sh = settings ? settings->cpu_sh : gaussian::ShMode::rotate_coefficients;
-    GaussianDeformStats* counters = reg.try_resource<GaussianDeformStats>();
-    if (!counters) counters = &reg.set_resource<GaussianDeformStats>();
-    if (have_gl) collect_gpu_stats(reg);
-    // Collect first: emplacing DeformedGaussians while iterating is a structural change.
-    std::vector<ecs::Entity> clouds;
-    reg.view<const GaussianCloud, const Deformers>().each(
-        [&](ecs::Entity e, const GaussianCloud&, const Deformers&) { clouds.push_back(e); });
-    for (ecs::Entity e : clouds) {
-        const GaussianCloud& cloud = reg.get<GaussianCloud>(e);
-        const ffd::DeformInputs inputs = ffd::deform_inputs<GaussianCloud>(reg, e);
-        // The cloud's residency (residency_system uploaded its rest cloud this frame when it changed): the
-        // GPU path needs it current, the CPU path uploads its output there.
-        gaussian::GpuGaussianStore* store =
-            have_gl ? reg.try_resource<gaussian::GpuGaussianStore>() : nullptr;
-        gaussian::GpuGaussians* resident = nullptr;
-        if (store)
-            if (auto it = store->clouds.find(e); it != store->clouds.end() && it->second.rest &&
-                                                 it->second.rest_version == inputs.stamps.cloud &&
-                                                 it->second.count == cloud.size())
-                resident = &it->second;
-        const DeformedGaussians* seen = reg.try_get<DeformedGaussians>(e);
-        const bool gpu_path = backend.gpu();
-        const auto sh_mode = std::uint8_t(gpu_path ? gpu_sh : cpu_sh);
-        // A budgeted preview (ffd/preview_budget.h) on the CPU path of a resident cloud.
-        const std::uint32_t budget =
-            resident && !gpu_path ? gaussian_preview_budget_for(reg, cloud.size()) : 0;
-        // A resident cloud at rest has no deformed data yet (its entry is new): deform even if nothing moved.
-        // A full output serves every frame; a preview one only preview frames.
-        if (seen && seen->seen == inputs.stamps && seen->seen_force_cpu == force_cpu &&
-            seen->seen_sh_mode == sh_mode && (!resident || resident->is_deformed()) &&
-            (!seen->preview || budget > 0))
-            continue;  // nothing moved
-        if (!seen) reg.emplace<DeformedGaussians>(e);
-        DeformedGaussians& out = reg.patch<DeformedGaussians>(e);
-        // Every path below reads the lattices in the cloud's frame (systems/ffd/lattice_frame.h).
-        const ffd::CloudLattices framed = ffd::cloud_lattices(reg, e, inputs.lattices);
-        out.seen = inputs.stamps;
-        out.seen_force_cpu = force_cpu;
-        out.seen_sh_mode = sh_mode;
+namespace {
+
+struct GaussianSettings {
+    ffd::DeformBackend backend;
+    gaussian::ShMode gpu_sh = gaussian::ShMode::rotate_view;
+    gaussian::ShMode cpu_sh = gaussian::ShMode::rotate_coefficients;
+    gaussian::GpuGaussianStore* store = nullptr;  // when a GL context is current
+    std::uint8_t sh_mode() const { return std::uint8_t(backend.gpu() ? gpu_sh : cpu_sh); }
+};
+
+// Page p's statistics slots in DeformPageRecord::counts.
+enum : std::size_t { kInverted, kDegenerate, kNotFinite };
+
+// The Gaussian kind of the deformation skeleton (systems/ffd/deform_skeleton.h).
+struct GaussianKind {
+    using Cloud = GaussianCloud;
+    using Output = DeformedGaussians;
+    using Resident = gaussian::GpuGaussians;
+    using Stats = GaussianDeformStats;
+
+    static constexpr PointColumn kReads[] = {PointColumn::position, PointColumn::scale, PointColumn::rotation,
+                                             PointColumn::sh};
+    static std::span<const PointColumn> reads() { return kReads; }
+    // The cloud's residency when residency_system uploaded its current rest cloud (the GPU path reads it,
+    // the CPU path uploads its output there).
+    static Resident* resident(ecs::Registry&, ecs::Entity e, const GaussianCloud& cloud,
+                              std::uint64_t version, const GaussianSettings& st) {
+        if (!st.store) return nullptr;
+        auto it = st.store->clouds.find(e);
+        if (it != st.store->clouds.end() && it->second.rest && it->second.rest_version == version &&
+            it->second.count == cloud.size())
+            return &it->second;
+        return nullptr;
+    }
+    static bool options_match(const Output& out, const GaussianSettings& st) {
+        return out.seen_force_cpu == st.backend.force_cpu && out.seen_sh_mode == st.sh_mode();
+    }
+    // A budgeted preview (ffd/preview_budget.h) on the CPU path of a resident cloud.
+    static std::uint32_t budget(ecs::Registry& reg, const GaussianCloud& cloud, const Resident* resident,
+                                const GaussianSettings& st) {
+        return resident && !st.backend.gpu() ? gaussian_preview_budget_for(reg, cloud.size()) : 0;
+    }
+    static void begin(ecs::Registry&, ecs::Entity, Output& out, const GaussianCloud&,
+                      const ffd::CloudLattices&, const GaussianSettings& st, GaussianDeformStats&) {
+        out.seen_force_cpu = st.backend.force_cpu;
+        out.seen_sh_mode = st.sh_mode();
         out.inverted = out.degenerate = out.not_finite = 0;
         out.stats_arrived = false;
-        ++out.version;
+    }
+    static void empty_output(Output& out, const GaussianCloud& cloud) {
+        out.cloud = GaussianCloud{};
+        out.cloud.origin = cloud.origin;
+        out.cloud.sh_degree = cloud.sh_degree;
+    }
 
-        out.preview = budget > 0;
-        if (budget > 0) {
-            // Only the subset, enlarged; every Gaussian is deformed again by the next full frame.
-            update_preview_subset(out.subset, cloud.positions, inputs.stamps.cloud, budget);
-            GaussianCloud kept = preview_gaussians(cloud, out.subset.indices);
-            for (const Lattice* l : framed.lattices)
-                if (auto st = gaussian::deform(
-                        *l, kept, kept,
-                        {ffd::Backend::automatic, true, gaussian::ShMode::rotate_coefficients});
-                    !st)
-                    log::warn("gaussian_deform_system: ", st.message(), " (lattice skipped)");
-            out.on_gpu = false;
-            out.cloud = GaussianCloud{};
-            out.cloud.origin = cloud.origin;
-            out.cloud.sh_degree = cloud.sh_degree;
-            out.stats_arrived = false;
-            gaussian::upload_preview(*resident, kept);
-            if (auto* rs = reg.try_resource<gfx::ResidencyStats>()) ++rs->deformed_uploads;
-            ++counters->preview_runs;
-            continue;
-        }
+    // Only the subset, enlarged; every Gaussian is deformed again by the next full frame.
+    static void preview(ecs::Registry& reg, ecs::Entity, Output& out, const GaussianCloud& cloud,
+                        const ffd::CloudLattices& framed, std::uint32_t budget, Resident& resident,
+                        const GaussianSettings&, GaussianDeformStats& stats) {
+        update_preview_subset(out.subset, cloud.positions, out.seen.cloud, budget);
+        GaussianCloud kept = preview_gaussians(cloud, out.subset.indices);
+        for (const Lattice* l : framed.lattices)
+            if (auto st = gaussian::deform(
+                    *l, kept, kept, {ffd::Backend::automatic, true, gaussian::ShMode::rotate_coefficients});
+                !st)
+                log::warn("gaussian_deform_system: ", st.message(), " (lattice skipped)");
+        empty_output(out, cloud);
+        gaussian::upload_preview(resident, kept);
+        if (auto* rs = reg.try_resource<gfx::ResidencyStats>()) ++rs->deformed_uploads;
+        ++stats.preview_runs;
+    }
 
-        // GPU path: residency_system uploaded the authored cloud into GpuGaussianStore::rest this frame
-        // when its change stamp moved; one dispatch per lattice into `deformed` (+ `frames` or
-        // `deformed_sh` when the SH have view-dependent terms). No read-back.
-        if (gpu_path && resident) {
-            if (gaussian::GpuGaussianDeformer* gpu =
-                    ffd::gpu_deformer<gaussian::GpuGaussianDeformer>(reg, "gaussian_deform_system")) {
-                const std::vector<const Lattice*>& ls = framed.lattices;
-                std::vector<std::uint64_t> keys;
-                for (ecs::Entity le : framed.entities) keys.push_back(le.bits());
-                auto pass_scope = profiling::gpu_scope(reg, "gaussian.deform");
-                gpu->reset_stats();
-                if (Status s = gpu->deform(*resident, cloud.origin, ls, keys, inputs.stamps.lattices, gpu_sh);
-                    !s)
-                    log::warn("gaussian_deform_system: ", s.message(), " (lattice skipped)");
-                // The counts arrive a few frames later (collect_gpu_stats); nothing waits for them.
-                reg.resource<GaussianGpuState>().queue_stats(*gpu, e, out.version);
-                out.on_gpu = true;
-                out.cloud = GaussianCloud{};
-                out.cloud.origin = cloud.origin;
-                out.cloud.sh_degree = cloud.sh_degree;
-                ++counters->gpu_runs, counters->gpu_sync_readbacks = gpu->sync_readbacks();
-                continue;
+    // GPU path: residency_system uploaded the authored cloud into GpuGaussianStore::rest this frame when its
+    // change stamp moved; one dispatch per lattice over the whole cloud into `deformed` (+ `frames` or
+    // `deformed_sh` when the SH have view-dependent terms). No read-back.
+    static bool gpu(ecs::Registry& reg, ecs::Entity e, Output& out, const GaussianCloud& cloud,
+                    const ffd::CloudLattices& framed, const ffd::DeformInputs& inputs, Resident* resident,
+                    const GaussianSettings& st, GaussianDeformStats& stats) {
+        if (!st.backend.gpu() || !resident) return false;
+        gaussian::GpuGaussianDeformer* gpu =
+            ffd::gpu_deformer<gaussian::GpuGaussianDeformer>(reg, "gaussian_deform_system");
+        if (!gpu) return false;
+        std::vector<std::uint64_t> keys;
+        for (ecs::Entity le : framed.entities) keys.push_back(le.bits());
+        auto pass_scope = profiling::gpu_scope(reg, "gaussian.deform");
+        gpu->reset_stats();
+        if (Status s = gpu->deform(*resident, cloud.origin, framed.lattices, keys, inputs.stamps.lattices,
+                                   st.gpu_sh);
+            !s)
+            log::warn("gaussian_deform_system: ", s.message(), " (lattice skipped)");
+        // The counts arrive a few frames later (collect_gpu_stats); nothing waits for them.
+        reg.resource<GaussianGpuState>().queue_stats(*gpu, e, out.version);
+        empty_output(out, cloud);
+        ++stats.gpu_runs, stats.gpu_sync_readbacks = gpu->sync_readbacks();
+        stats.pages_redeformed += page_count(cloud.size());
+        stats.last_pages = {page_count(cloud.size()), page_count(cloud.size())};
+        return true;
+    }
+
+    // CPU path (TBB), page by page. The first lattice reads the authored cloud and writes the output, with no
+    // copy of the cloud before it: the SH coefficients are most of a Gaussian's bytes (192 of 236 at degree
+    // 3), and the copy was a whole extra read and write of them. Later lattices deform the output in place.
+    // Opacities are carried only so that Gaussians whose result is not finite can be made transparent (as
+    // the GPU pass does); dropped again when none was (readers use the authored cloud's).
+    static std::size_t cpu(ecs::Registry& reg, ecs::Entity, Output& out, const GaussianCloud& cloud,
+                           const ffd::CloudLattices& framed, const ffd::RedoPlan& plan, Resident* resident,
+                           const GaussianSettings& st, GaussianDeformStats& stats) {
+        const std::size_t n = cloud.size(), np = page_count(n);
+        std::vector<const Lattice*> ok;
+        for (const Lattice* l : framed.lattices)
+            if (Status s = ffd::validate(*l); !s)
+                log::warn("gaussian_deform_system: ", s.message(), " (lattice skipped)");
+            else ok.push_back(l);
+        const gaussian::DeformOptions options{ffd::Backend::automatic, true, st.cpu_sh};
+        // A page-wise redo builds on an output with every Gaussian finite (no opacities carried).
+        bool everything =
+            plan.what == ffd::Redo::everything || !out.cloud.opacities.empty() || out.cloud.size() != n;
+        auto run = [&](std::span<const std::uint32_t> pages) -> bool {
+            out.paged.counts.resize(np, {0, 0, 0});
+            for (std::uint32_t p : pages) {
+                const PageRange r = page_range(p, n);
+                auto& c = out.paged.counts[p];
+                c = {0, 0, 0};
+                bool written = false;
+                for (const Lattice* l : ok) {
+                    auto ds = gaussian::deform_range(*l, written ? out.cloud : cloud, out.cloud, options,
+                                                     r.first, r.count);
+                    if (!ds) {
+                        log::warn("gaussian_deform_system: ", ds.message(), " (lattice skipped)");
+                        return false;
+                    }
+                    written = true;
+                    c[kInverted] += std::uint32_t(ds->inverted);
+                    c[kDegenerate] += std::uint32_t(ds->degenerate);
+                    c[kNotFinite] += std::uint32_t(ds->not_finite);
+                }
             }
-        }
-
-        // CPU path (TBB).
-        out.on_gpu = false;
-        // The first lattice reads the authored cloud and writes the output, with no copy of the cloud before
-        // it: the SH coefficients are most of a Gaussian's bytes (192 of 236 at degree 3), and the copy was a
-        // whole extra read and write of them, in memory for a large cloud. Later lattices deform the output
-        // in place. Opacities are carried only so that Gaussians whose result is not finite can be made
-        // transparent (as the GPU pass does); dropped again when none was (readers use the authored
-        // cloud's: a deformation never changes them).
-        auto copy_authored = [&] {  // the output before any lattice, where the first one failed
-            out.cloud.origin = cloud.origin;
-            out.cloud.sh_degree = cloud.sh_degree;
-            out.cloud.positions = cloud.positions;
-            out.cloud.scales = cloud.scales;
-            out.cloud.rotations = cloud.rotations;
-            out.cloud.sh = cloud.sh;
-            out.cloud.opacities = cloud.opacities;
-            out.cloud.sh_frames.clear();
+            return true;
         };
-        bool written = false;
-        for (const Lattice* l : framed.lattices) {
-            auto stats = gaussian::deform(*l, written ? out.cloud : cloud, out.cloud,
-                                          {ffd::Backend::automatic, true, cpu_sh});
-            if (!stats) {
-                log::warn("gaussian_deform_system: ", stats.message(), " (lattice skipped)");
-                if (!written) copy_authored();  // it may have written part of the output
-                written = true;
-                continue;
-            }
-            written = true;
-            out.inverted += stats->inverted;
-            out.degenerate += stats->degenerate;
-            out.not_finite += stats->not_finite;
+        bool done = false;
+        std::size_t redone = 0;
+        if (!everything && !ok.empty()) {
+            done = run(plan.pages);
+            redone = plan.pages.size();
+            std::uint64_t bad = 0;
+            for (const auto& c : out.paged.counts) bad += c[kNotFinite];
+            if (bad) done = false;  // carry opacities: redo the whole cloud
         }
-        if (!written) copy_authored();
+        if (!done && !ok.empty()) {
+            // The output set up as gaussian::deform() sets it up, then every page.
+            out.cloud.origin = cloud.origin;
+            out.cloud.sh_degree = cloud.sh_degree;
+            out.cloud.positions.resize(n), out.cloud.scales.resize(n), out.cloud.rotations.resize(n);
+            out.cloud.sh.resize(cloud.sh.size());
+            out.cloud.opacities = cloud.opacities;
+            out.cloud.sh_frames = cloud.sh_frames;
+            if (st.cpu_sh == gaussian::ShMode::rotate_view) out.cloud.sh_frames.assign(n, glm::mat3(1.0f));
+            std::vector<std::uint32_t> all(np);
+            for (std::size_t p = 0; p < np; ++p) all[p] = std::uint32_t(p);
+            done = run(all);
+            redone = np;
+        }
+        if (!done) {  // no lattice ran: the output is the authored cloud
+            out.cloud = cloud;
+            out.paged.counts.assign(np, {0, 0, 0});
+        }
+        for (const auto& c : out.paged.counts)
+            out.inverted += c[kInverted], out.degenerate += c[kDegenerate], out.not_finite += c[kNotFinite];
         if (out.not_finite)
             log::warn("gaussian_deform_system: ", out.not_finite,
                       " Gaussians deformed to non-finite values (drawn transparent)");
@@ -222,8 +261,33 @@ void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
             gaussian::upload_cpu_deformed(*resident, out, cloud);
             if (auto* rs = reg.try_resource<gfx::ResidencyStats>()) ++rs->deformed_uploads;
         }
-        ++counters->cpu_runs;
+        ++stats.cpu_runs;
+        return redone;
     }
+};
+
+}  // namespace
+
+bool gaussian::output_on_gpu(const ecs::Registry& reg, ecs::Entity e) {
+    const auto* store = reg.try_resource<gaussian::GpuGaussianStore>();
+    if (!store) return false;
+    auto it = store->clouds.find(e);
+    return it != store->clouds.end() && it->second.state == gfx::Residency::deformed_gpu;
+}
+
+void gaussian_deform_system(ecs::Registry& reg, const FrameContext&) {
+    // The backend choice of ffd_system (systems/ffd/deform_backend.h).
+    GaussianSettings st;
+    st.backend = ffd::choose_deform_backend(reg.try_resource<FfdSettings>());
+    if (const auto* settings = reg.try_resource<GaussianDeformSettings>())
+        st.gpu_sh = settings->gpu_sh, st.cpu_sh = settings->cpu_sh;
+    GaussianDeformStats* counters = reg.try_resource<GaussianDeformStats>();
+    if (!counters) counters = &reg.set_resource<GaussianDeformStats>();
+    if (st.backend.have_gl) {
+        collect_gpu_stats(reg);
+        st.store = reg.try_resource<gaussian::GpuGaussianStore>();
+    }
+    ffd::run_deformation<GaussianKind>(reg, st, *counters);
 }
 
 }  // namespace sffd

@@ -11,7 +11,7 @@
 // Backend: ffd_system's rule and settings (FfdSettings::force_cpu / force_gpu): GPU when a GL context is
 // current on this thread and it is not a software rasterizer (there the TBB path is faster; force_gpu
 // keeps the compute pass), CPU otherwise. GPU path: GaussianDeformSettings::gpu_sh (default frames:
-// has_frames when sh_degree > 0; or deformed_sh), DeformedGaussians::on_gpu with empty CPU arrays, no
+// has_frames when sh_degree > 0; or deformed_sh), state deformed_gpu with empty CPU arrays, no
 // per-Gaussian CPU work and no read-back while only lattices change. CPU path: cpu_sh (default the
 // coefficients rotated), CPU arrays, uploaded into the store when the cloud is resident (a GL context).
 #pragma once
@@ -41,9 +41,21 @@ struct GaussianDeformStats {
     std::uint64_t gpu_runs = 0;            // clouds deformed on the GPU
     std::uint64_t preview_runs = 0;        // budgeted previews (a subset on the CPU, ffd/preview_budget.h)
     std::uint64_t gpu_sync_readbacks = 0;  // synchronous read-backs by the system's GPU deformer (stays 0)
+    // Pages (runtime/scene/point_pages.h) deformed so far, and by the last run of a cloud (of that cloud's
+    // pages), as FfdStats counts them.
+    std::uint64_t pages_redeformed = 0;
+    struct LastPages {
+        std::uint64_t redone = 0, total = 0;
+    } last_pages;
 };
 
 void gaussian_deform_system(ecs::Registry& registry, const FrameContext& frame);
+
+namespace gaussian {
+// Whether e's current deformed Gaussians live on the GPU only (the residency's state deformed_gpu in
+// GpuGaussianStore): the one answer.
+bool output_on_gpu(const ecs::Registry& registry, ecs::Entity e);
+}  // namespace gaussian
 
 // Drops the system's GPU state (call while the GL context is still current, before destroying it).
 void gaussian_release_gpu(ecs::Registry& registry);

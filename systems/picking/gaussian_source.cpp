@@ -11,6 +11,7 @@
 #include "systems/ffd/deform_inputs.h"
 #include "systems/ffd/lattice_frame.h"
 #include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_system.h"
 #include "systems/gaussian/gpu_store.h"
 
 namespace sffd::picking {
@@ -105,7 +106,7 @@ GaussianSource gaussian_source(ecs::Registry& registry, ecs::Entity e, PickCache
         return src;
     }
     // Current output, GPU-only: read it back once per version.
-    if (deformed && deformed->on_gpu && deformed->seen == inputs.stamps)
+    if (deformed && deformed->seen == inputs.stamps && gaussian::output_on_gpu(registry, e))
         if (const gaussian::GpuGaussians* gpu = gpu_only_output(registry, e, n)) {
             PickCache::Entry& entry = cache.entry(PickCloudKind::gaussian, e);
             if (!entry.holds_read_back(gpu->deformed_version, inputs.stamps)) {

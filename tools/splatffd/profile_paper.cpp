@@ -152,7 +152,7 @@ int run_paper(const Options& o) {
                 residency_system(*greg, {});  // the rest splats the compute path reads
                 auto deform = [&]() -> Status {
                     ffd_system(*greg, {});
-                    if (!greg->get<DeformedSplats>(ce).gpu_valid)
+                    if (!ffd::output_on_gpu(*greg, ce))
                         return make_error("profile --paper: ffd_system did not deform on the GPU");
                     return {};
                 };

@@ -355,7 +355,7 @@ TEST_F(FfdGl, SystemWritesDeformedBufferAndUploadsOnlyOnEdit) {
     EXPECT_EQ(reg.resource<FfdStats>().gpu_runs, 1u);
     const gfx::GpuSplats& s = store.clouds[cloud];
     ASSERT_EQ(s.state, gfx::Residency::deformed_gpu);
-    EXPECT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
+    EXPECT_TRUE(ffd::output_on_gpu(reg, cloud));
     EXPECT_FALSE(reg.get<DeformedSplats>(cloud).cpu_valid);
     std::vector<gpu::GpuSplat> back(c.size());
     glGetNamedBufferSubData(s.deformed.id(), 0, GLsizeiptr(back.size() * sizeof(gpu::GpuSplat)), back.data());
@@ -499,7 +499,7 @@ TEST_F(FfdGl, SoftwareRasterizerGetsTheCpuPathUnlessTheGpuIsForced) {
     settings.force_gpu = true;  // a policy change re-runs the cloud on the compute pass
     ffd_system(reg, {});
     EXPECT_EQ(reg.resource<FfdStats>().gpu_runs, 1u);
-    EXPECT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
+    EXPECT_TRUE(ffd::output_on_gpu(reg, cloud));
     EXPECT_EQ(s.state, gfx::Residency::deformed_gpu);
     EXPECT_EQ(s.deformed_version, 2u);
     ffd_release_gpu(reg);

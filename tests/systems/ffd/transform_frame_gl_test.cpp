@@ -133,7 +133,7 @@ TEST_F(TransformFrame_, GpuDeformationOfAMovedSplatCloudEqualsTheCpuPath) {
     const ecs::Entity b = moved_scene(gpu, fibonacci_sphere(4000));
     deform(cpu, false);
     deform(gpu, true);
-    ASSERT_TRUE(gpu.get<DeformedSplats>(b).gpu_valid);
+    ASSERT_TRUE(ffd::output_on_gpu(gpu, b));
     const DeformedSplats& want = cpu.get<DeformedSplats>(a);
     picking::PickCache cache;
     const picking::SplatSource got = picking::splat_source(gpu, b, cache);
@@ -163,7 +163,7 @@ TEST_F(TransformFrame_, GpuDeformationOfMovedGaussiansEqualsTheCpuPath) {
     const ecs::Entity b = moved_scene(gpu, gaussian::gaussians_from_splats(fibonacci_sphere(4000)));
     deform(cpu, false);
     deform(gpu, true);
-    ASSERT_TRUE(gpu.get<DeformedGaussians>(b).on_gpu);
+    ASSERT_TRUE(gaussian::output_on_gpu(gpu, b));
     const GaussianCloud& want = cpu.get<DeformedGaussians>(a).cloud;
     picking::PickCache cache;
     const picking::GaussianSource got = picking::gaussian_source(gpu, b, cache);

@@ -184,7 +184,7 @@ void expect_splats_match_reference(const Scene& s, const std::string& what) {
 void expect_gaussians_match_reference(const Scene& s, const std::string& what) {
     const GaussianCloud& a = s.reg.get<GaussianCloud>(s.cloud);
     const DeformedGaussians& d = s.reg.get<DeformedGaussians>(s.cloud);
-    ASSERT_FALSE(d.on_gpu) << what;
+    ASSERT_FALSE(gaussian::output_on_gpu(s.reg, s.cloud)) << what;
     ASSERT_EQ(d.cloud.size(), a.size()) << what;
     const glm::dmat4 c = model_matrix(s.reg.try_get<Transform>(s.cloud));
     const Lattice world =

@@ -417,7 +417,7 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
     const auto frame = [&] { residency_system(reg, {}), gaussian_deform_system(reg, {}); };
     frame();
     const DeformedGaussians& d = reg.get<DeformedGaussians>(e);
-    EXPECT_TRUE(d.on_gpu);
+    EXPECT_TRUE(gaussian::output_on_gpu(reg, e));
     EXPECT_TRUE(d.cloud.positions.empty());  // no CPU copy
     auto& store = reg.resource<GpuGaussianStore>();
     GpuGaussians& g = store.clouds.at(e);
@@ -484,7 +484,7 @@ TEST_F(GaussianGpuDeform, SystemGpuPathWritesTheStoreWithoutReadBack) {
     // Forced CPU: DeformedGaussians carries the arrays and the store draws their upload, not a GPU result.
     reg.resource<FfdSettings>() = FfdSettings{.force_cpu = true};
     frame();
-    EXPECT_FALSE(reg.get<DeformedGaussians>(e).on_gpu);
+    EXPECT_FALSE(gaussian::output_on_gpu(reg, e));
     EXPECT_EQ(reg.get<DeformedGaussians>(e).cloud.size(), cloud.size());
     EXPECT_EQ(g.state, gfx::Residency::deformed_cpu);
     EXPECT_EQ(g.deformed_version, v0 + 5);
@@ -517,10 +517,10 @@ TEST_F(GaussianGpuDeform, SystemAutomaticChoiceFollowsFfdSystem) {
     gaussian_deform_system(reg, {});
     if (gfx::software_rasterizer()) {
         EXPECT_EQ(reg.resource<GaussianDeformStats>().cpu_runs, 1u);
-        EXPECT_FALSE(reg.get<DeformedGaussians>(e).on_gpu);
+        EXPECT_FALSE(gaussian::output_on_gpu(reg, e));
     } else {
         EXPECT_EQ(reg.resource<GaussianDeformStats>().gpu_runs, 1u);
-        EXPECT_TRUE(reg.get<DeformedGaussians>(e).on_gpu);
+        EXPECT_TRUE(gaussian::output_on_gpu(reg, e));
     }
     gaussian_release_gpu(reg);
 }

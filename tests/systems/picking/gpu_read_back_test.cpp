@@ -61,7 +61,7 @@ TEST_F(PickingGpuReadBack, SurfaceSplatsAreReadBackOncePerVersion) {
     };
     stretch_middle_layer({0.2, 0.0, 0.3});  // splats move by (0.1, 0, 0.15)
     deform();
-    ASSERT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
+    ASSERT_TRUE(ffd::output_on_gpu(reg, cloud));
     ASSERT_FALSE(reg.get<DeformedSplats>(cloud).cpu_valid);
     ASSERT_EQ(reg.resource<gfx::GpuSplatStore>().clouds.at(cloud).state, gfx::Residency::deformed_gpu);
 
@@ -107,7 +107,7 @@ TEST_F(PickingGpuReadBack, GaussiansAreReadBackOncePerVersion) {
     reg.emplace<Deformers>(e, Deformers{{lattice}});
     for (glm::dvec3& p : reg.patch<Lattice>(lattice).current) p.x *= 2.0;
     deform();
-    ASSERT_TRUE(reg.get<DeformedGaussians>(e).on_gpu);
+    ASSERT_TRUE(gaussian::output_on_gpu(reg, e));
     ASSERT_EQ(reg.resource<gaussian::GpuGaussianStore>().clouds.at(e).state, gfx::Residency::deformed_gpu);
 
     const double k1 = std::sqrt(2.0 * std::log(255.0));

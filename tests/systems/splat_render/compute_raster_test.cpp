@@ -210,7 +210,7 @@ TEST_F(ComputeRaster_, MatchesTheRasterPathOnGpuDeformedSplats) {
     reg.set_resource<FfdSettings>().force_gpu = true;
     residency_system(reg, {});  // the rest splats the compute pass reads
     ffd_system(reg, {});
-    ASSERT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
+    ASSERT_TRUE(ffd::output_on_gpu(reg, cloud));
     const FrameImage raster = render_path(RasterPath::raster);
     const FrameImage compute = render_path(RasterPath::compute);
     EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 1u);

@@ -282,7 +282,7 @@ TEST_F(CullPath_, AutomaticPathFollowsWhereTheSplatsAre) {
     reg.resource<FfdSettings>().force_cpu = false;
     reg.resource<FfdSettings>().force_gpu = true;
     ffd_system(reg, {});
-    ASSERT_TRUE(reg.get<DeformedSplats>(cloud).gpu_valid);
+    ASSERT_TRUE(ffd::output_on_gpu(reg, cloud));
     const FrameImage on_gpu = render(Quality::hq, 320, 240);
     EXPECT_EQ(reg.resource<RenderStats>().cpu_culled_clouds, 0u);
     EXPECT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 1u);

@@ -174,7 +174,7 @@ TEST_F(StorageBatch_, GpuDeformedCloudOverTheLimitIsReadBackAndCpuCulled) {
     reg.set_resource<FfdSettings>().force_gpu = true;
     residency_system(reg, FrameContext{});
     ffd_system(reg, {});
-    ASSERT_TRUE(reg.get<DeformedSplats>(e).gpu_valid);
+    ASSERT_TRUE(ffd::output_on_gpu(reg, e));
     for (const Quality q : {Quality::preview, Quality::hq}) {
         const std::string what = q == Quality::hq ? "hq" : "preview";
         const FrameImage computed = frame(q, 160, 120, CullPath::automatic);
@@ -226,7 +226,7 @@ TEST_F(StorageBatch_, OddGpuDeformedCloudInRangesDrawsTheUnlimitedImage) {
         residency_system(reg, FrameContext{});
         ffd_system(reg, {});
         EXPECT_EQ(reg.resource<FfdStats>().gpu_runs, runs + 1);
-        EXPECT_TRUE(reg.get<DeformedSplats>(e).gpu_valid);
+        EXPECT_TRUE(ffd::output_on_gpu(reg, e));
     };
     residency_system(reg, FrameContext{});
     ffd_system(reg, {});

@@ -1,0 +1,87 @@
+// Page-bounded re-deformation (systems/ffd/deform_staleness.h): one control point dragged on a 1M-point
+// cloud (the Fibonacci sphere, whose order makes its pages latitude bands, as `profile synthetic:1m`
+// makes it), through ffd_system's CPU path, one drag step per iteration. Counters: pages redone per step,
+// the cloud's pages, and their ratio. BM_Drag_Full is the same drag with the page record dropped before
+// each step, i.e. what every drag step cost before (every page).
+//   build/<dir>/tools/bench/bench_page_redeform --benchmark_repetitions=3
+//   --benchmark_report_aggregates_only=true
+// Arguments: divisions per axis, the dragged control point's index along y (x and z at the middle).
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <vector>
+
+#include "runtime/scene/point_pages.h"
+#include "systems/ffd/components.h"
+#include "systems/ffd/ffd_system.h"
+#include "tools/bench/paper_case.h"
+
+namespace {
+
+using namespace sffd;
+
+SplatCloud sphere(std::size_t count) {
+    SplatCloud s;
+    for (std::size_t i = 0; i < count; ++i) {
+        const glm::dvec3 n = bench::fibonacci_sphere(i, count);
+        const glm::dvec3 t =
+            glm::normalize(glm::cross(n, std::abs(n.x) < 0.9 ? glm::dvec3(1, 0, 0) : glm::dvec3(0, 1, 0)));
+        s.positions.push_back(glm::vec3(n));
+        s.normals.push_back(glm::vec3(n));
+        s.axis_u.push_back(glm::vec3(t * 0.003));
+        s.axis_v.push_back(glm::vec3(glm::cross(n, t) * 0.003));
+    }
+    return s;
+}
+
+void drag(benchmark::State& state, bool full) {
+    const int div = int(state.range(0)), j = int(state.range(1));
+    static const SplatCloud cloud = sphere(1000000);
+    ecs::Registry reg;
+    reg.set_resource<FfdSettings>().force_cpu = true;
+    const ecs::Entity c = reg.create(), le = reg.create();
+    reg.emplace<SplatCloud>(c, cloud);
+    reg.emplace<Lattice>(
+        le,
+        make_lattice(glm::dvec3(-1.1), {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                     glm::ivec3(div), LatticeBasis::bspline));
+    reg.emplace<Deformers>(c, Deformers{{le}});
+    ffd_system(reg, {});  // the first, whole deformation
+    const std::size_t cp = reg.get<Lattice>(le).index(div / 2, j, div / 2);
+    double step = 0.0, redone = 0.0, total = 0.0;
+    std::uint64_t steps = 0;
+    for (auto _ : state) {
+        if (full) {
+            state.PauseTiming();
+            reg.get<DeformedSplats>(c).paged = {};
+            state.ResumeTiming();
+        }
+        step += 1.0;
+        Lattice& l = reg.patch<Lattice>(le);
+        l.current[cp] = l.rest[cp] + glm::dvec3(0.02 * std::sin(step), 0.03 * std::cos(step), 0.01);
+        ffd_system(reg, {});
+        redone += double(reg.resource<FfdStats>().last_pages.redone);
+        total = double(reg.resource<FfdStats>().last_pages.total);
+        ++steps;
+    }
+    state.counters["pages_redone"] = redone / double(steps);
+    state.counters["pages_total"] = total;
+    state.counters["fraction"] = redone / double(steps) / total;
+    // Share of the lattice's height the point's support (l·t in [j-2, j+2], clipped to the box) covers.
+    state.counters["support_height"] = (std::min(div, j + 2) - std::max(0, j - 2)) / double(div);
+}
+
+void BM_Drag_Pages(benchmark::State& state) { drag(state, false); }
+void BM_Drag_Full(benchmark::State& state) { drag(state, true); }
+
+// 21^3 lattice: points 2 (support below y = -0.66, 1/5 of the height) and 10 (the middle); 11^3: points
+// 1 and 5 (the middle, 2/5 of the height).
+BENCHMARK(BM_Drag_Pages)
+    ->Args({20, 2})
+    ->Args({20, 10})
+    ->Args({10, 1})
+    ->Args({10, 5})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Drag_Full)->Args({20, 2})->Args({10, 5})->Unit(benchmark::kMillisecond);
+
+}  // namespace
