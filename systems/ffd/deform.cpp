@@ -109,37 +109,36 @@ glm::dvec3 deformed_normal(const glm::dmat3& J, const glm::dvec3& n) {
 
 static DeformStats run_reference(const Lattice& l, const PointsIn& in, const PointsOut& out) {
     std::atomic<std::size_t> inside_count{0}, inverted{0};
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, in.count, 1024),
-                      [&](const tbb::blocked_range<std::size_t>& r) {
-                          std::size_t n_in = 0, n_inv = 0;
-                          for (std::size_t p = r.begin(); p != r.end(); ++p) {
-                              const glm::dvec3 local(in.positions[p]);
-                              const ReferencePoint rp = reference_point(l, in.origin + local);
-                              const glm::dvec3 moved = local + (rp.position - (in.origin + local));
-                              out.positions[p] = glm::vec3(moved);
-                              if (!rp.inside) {
-                                  if (in.normals && out.normals) out.normals[p] = in.normals[p];
-                                  if (in.axis_u && out.axis_u) out.axis_u[p] = in.axis_u[p];
-                                  if (in.axis_v && out.axis_v) out.axis_v[p] = in.axis_v[p];
-                                  if (out.jacobians) out.jacobians[p] = glm::mat3(1.0f);
-                                  continue;
-                              }
-                              ++n_in;
-                              if (out.jacobians) out.jacobians[p] = glm::mat3(rp.jacobian);
-                              const double det = glm::determinant(rp.jacobian);
-                              n_inv += det < 0.0;
-                              if (in.normals && out.normals) {
-                                  out.normals[p] =
-                                      glm::vec3(deformed_normal(rp.jacobian, glm::dvec3(in.normals[p])));
-                              }
-                              if (in.axis_u && out.axis_u)
-                                  out.axis_u[p] = glm::vec3(rp.jacobian * glm::dvec3(in.axis_u[p]));
-                              if (in.axis_v && out.axis_v)
-                                  out.axis_v[p] = glm::vec3(rp.jacobian * glm::dvec3(in.axis_v[p]));
-                          }
-                          inside_count += n_in;
-                          inverted += n_inv;
-                      });
+    tbb::parallel_for(
+        tbb::blocked_range<std::size_t>(0, in.count, 1024), [&](const tbb::blocked_range<std::size_t>& r) {
+            std::size_t n_in = 0, n_inv = 0;
+            for (std::size_t p = r.begin(); p != r.end(); ++p) {
+                const glm::dvec3 local(in.positions[p]);
+                const ReferencePoint rp = reference_point(l, in.origin + local);
+                const glm::dvec3 moved = local + (rp.position - (in.origin + local));
+                out.positions[p] = glm::vec3(moved);
+                if (!rp.inside) {
+                    if (in.normals && out.normals) out.normals[p] = in.normals[p];
+                    if (in.axis_u && out.axis_u) out.axis_u[p] = in.axis_u[p];
+                    if (in.axis_v && out.axis_v) out.axis_v[p] = in.axis_v[p];
+                    if (out.jacobians) out.jacobians[p] = glm::mat3(1.0f);
+                    continue;
+                }
+                ++n_in;
+                if (out.jacobians) out.jacobians[p] = glm::mat3(rp.jacobian);
+                const double det = glm::determinant(rp.jacobian);
+                n_inv += det < 0.0;
+                if (in.normals && out.normals) {
+                    out.normals[p] = glm::vec3(deformed_normal(rp.jacobian, glm::dvec3(in.normals[p])));
+                }
+                if (in.axis_u && out.axis_u)
+                    out.axis_u[p] = glm::vec3(rp.jacobian * glm::dvec3(in.axis_u[p]));
+                if (in.axis_v && out.axis_v)
+                    out.axis_v[p] = glm::vec3(rp.jacobian * glm::dvec3(in.axis_v[p]));
+            }
+            inside_count += n_in;
+            inverted += n_inv;
+        });
     return DeformStats{inside_count.load(), inverted.load(), Backend::reference};
 }
 
