@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <string_view>
+#include <utility>
 #include <vector>
 
 #include "runtime/app/pass_timer.h"
@@ -11,6 +12,7 @@
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
+#include "runtime/scene/point_pages.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform_backend.h"
@@ -85,18 +87,22 @@ struct SurfaceKind {
                    : 0;
     }
 
-    // Bounds from the control points only: the rest box (one pass over the splats when the cloud changes,
-    // cached) grown by each lattice's displacement hull, in order (never under-covers), in the cloud's
-    // frame, then mapped to the world by the cloud's Transform (the renderer's screen rectangle reads them
-    // there).
+    // Bounds from the control points only: the rest box (the pages' boxes, from one pass over the splats
+    // when the cloud changes, cached) grown by each lattice's displacement hull, in order (never
+    // under-covers), in the cloud's frame, then mapped to the world by the cloud's Transform (the renderer's
+    // screen rectangle reads them there).
     static void begin(ecs::Registry& reg, ecs::Entity e, Output& out, const SplatCloud& cloud,
                       const ffd::CloudLattices& framed, const SurfaceSettings& st, FfdStats& stats) {
         out.origin = cloud.origin;
         out.seen_force_cpu = st.backend.force_cpu;
         const std::uint64_t cloud_v = out.seen.cloud;
         if (!out.has_rest_box || out.rest_box_cloud != cloud_v) {
+            // The union of the pages' rest boxes (refresh_point_pages() computed them this frame, in the
+            // same pass over the positions), finite points only.
             ffd::Box rest;
-            for (const glm::vec3& p : cloud.positions) rest.add(cloud.origin + glm::dvec3(p));
+            const PointPages& pages = std::as_const(reg).get<PointPages>(e);
+            for (std::size_t p = 0; p < pages.rest_lo.size(); ++p)
+                if (!page_box_empty(pages, p)) rest.add(pages.rest_lo[p]), rest.add(pages.rest_hi[p]);
             out.rest_box_lo = rest.lo, out.rest_box_hi = rest.hi, out.rest_box_empty = rest.empty;
             out.has_rest_box = true, out.rest_box_cloud = cloud_v;
             ++stats.cpu_splat_passes;
