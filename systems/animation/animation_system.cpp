@@ -1,5 +1,7 @@
 #include "systems/animation/animation_system.h"
 
+#include <cstring>
+
 #include "runtime/core/log.h"
 #include "systems/animation/components.h"
 #include "systems/animation/evaluate.h"
@@ -7,6 +9,15 @@
 #include "systems/ffd/components.h"
 
 namespace sffd {
+
+namespace {
+
+bool same_bits(const std::vector<glm::dvec3>& a, const std::vector<glm::dvec3>& b) {
+    return a.size() == b.size() &&
+           (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(a[0])) == 0);
+}
+
+}  // namespace
 
 void animation_system(ecs::Registry& registry, const FrameContext& frame) {
     std::vector<glm::dvec3> pose;
@@ -33,9 +44,11 @@ void animation_system(ecs::Registry& registry, const FrameContext& frame) {
             if (const UnkeyedEdit* edit = registry.try_get<UnkeyedEdit>(e);
                 edit && edit->points.size() == pose.size() && shows_unkeyed_edit(*edit, state.time))
                 pose = edit->points;
-            if (pose == state.last_pose && lattice.current.size() == pose.size()) return;
-            registry.patch<Lattice>(e).current = pose;
-            state.last_pose.swap(pose);
+            // The one writer of an animated lattice's current: it always shows the pose (a write by anyone
+            // else is replaced here; edits go through the clip or the un-keyed edit), and is patched
+            // only when it differs bit for bit, so the deformation re-runs only on change.
+            if (!same_bits(lattice.current, pose)) registry.patch<Lattice>(e).current = pose;
+            if (!same_bits(state.last_pose, pose)) state.last_pose.swap(pose);
         });
 }
 

@@ -3,16 +3,29 @@
 #include "systems/editor/editor_system_detail.h"
 
 #include "systems/animation/unkeyed_edit.h"
+#include "systems/editor/unkeyed_undo.h"
 
 namespace sffd::editor {
 
 using namespace detail;
+
+namespace {
+
+// An undo or redo may have re-created entities (entity_undo.h): the editor's own references follow them.
+void follow_recreated(EditorState& state) {
+    for (ecs::Entity* e :
+         {&state.active_lattice, &state.selected_entity, &state.unkeyed, &state.last_edit.lattice})
+        *e = state.undo.resolve(*e);
+}
+
+}  // namespace
 
 void undo(ecs::Registry& registry, EditorState& state) {
     if (state.drag.kind != Drag::Kind::none) return;
     const std::size_t at = state.undo.position();
     if (state.undo.undo(registry)) say(state, "undo " + state.undo.at(at - 1).label());
     else say(state, "nothing to undo");
+    follow_recreated(state);
     keep_an_active_lattice(registry, state);
 }
 
@@ -21,6 +34,7 @@ void redo(ecs::Registry& registry, EditorState& state) {
     const std::size_t at = state.undo.position();
     if (state.undo.redo(registry)) say(state, "redo " + state.undo.at(at).label());
     else say(state, "nothing to redo");
+    follow_recreated(state);
     keep_an_active_lattice(registry, state);
 }
 
@@ -68,8 +82,19 @@ bool apply_twist(ecs::Registry& registry, EditorState& state, double degrees) {
 
 void reset_lattice(ecs::Registry& registry, EditorState& state) {
     if (!active_lattice(registry, state)) return;
-    if (state.undo.record<Lattice>(registry, state.active_lattice, "reset",
-                                   [](Lattice& l) { l.current = l.rest; }))
+    const ecs::Entity e = state.active_lattice;
+    if (animated_lattice(registry, e)) {  // the animation owns current: the rest pose is an un-keyed edit
+        const std::optional<UnkeyedEdit> before = ComponentEdit<UnkeyedEdit>::snapshot(registry, e);
+        set_unkeyed_pose(registry, e,
+                         UnkeyedEdit{registry.get<AnimationState>(e).time, registry.get<Lattice>(e).rest});
+        if (state.undo.push(unkeyed_edit_change("reset", registry, e, before,
+                                                ComponentEdit<UnkeyedEdit>::snapshot(registry, e)))) {
+            state.unkeyed = e, state.play_warned = false;
+            say(state, "lattice reset to rest at this clip time (un-keyed)");
+        }
+        return;
+    }
+    if (state.undo.record<Lattice>(registry, e, "reset", [](Lattice& l) { l.current = l.rest; }))
         say(state, "lattice reset to rest");
 }
 
@@ -144,6 +169,16 @@ bool key_last_edit(ecs::Registry& registry, EditorState& state) {
     }
     const ecs::Entity e = edit.lattice;
     auto group = std::make_unique<CommandGroup>("set key");
+    // Keyed, the edit is the clip's pose at this time: a held un-keyed pose there would hide later key
+    // changes, so it goes. Its part of the step is made first, against the clip before the key (undo
+    // restores the clip before it brings the edit back: unkeyed_undo.h).
+    bool drop_held = false;
+    if (const UnkeyedEdit* held = registry.try_get<UnkeyedEdit>(e);
+        held && registry.has<AnimationState>(e) &&
+        shows_unkeyed_edit(*held, registry.get<AnimationState>(e).time)) {
+        group->add(unkeyed_edit_change("set key", registry, e, *held, std::nullopt));
+        drop_held = true;
+    }
     ComponentEdit<AnimationClip> clip_edit(registry, e, "clip");
     ComponentEdit<AnimationState> state_edit(registry, e, "animation state");
     if (!registry.has<AnimationClip>(e)) {
@@ -185,13 +220,7 @@ bool key_last_edit(ecs::Registry& registry, EditorState& state) {
     clip.duration = std::max(clip.duration, time);
     group->add(clip_edit.finish(registry));
     group->add(state_edit.finish(registry));
-    // Keyed, the edit is the clip's pose at this time: a held un-keyed pose there would hide later key
-    // changes.
-    if (const UnkeyedEdit* held = registry.try_get<UnkeyedEdit>(e); held && shows_unkeyed_edit(*held, time)) {
-        ComponentEdit<UnkeyedEdit> held_edit(registry, e, "set key");
-        registry.remove<UnkeyedEdit>(e);
-        group->add(held_edit.finish(registry));
-    }
+    if (drop_held) registry.remove<UnkeyedEdit>(e);
     state.undo.push(std::move(group));
     if (state.unkeyed == e) state.unkeyed = ecs::null_entity, state.play_warned = false;
     say(state, log::str("key set at ", time, " s on track ", clip.tracks[track].name));

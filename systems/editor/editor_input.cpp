@@ -1,5 +1,6 @@
 // The editor's keyboard input (shortcuts, typed values), the adaptive render quality and the input system.
 #include "systems/editor/editor_system_detail.h"
+#include "systems/editor/pending_edits.h"
 
 #include "systems/editor/material_edit.h"
 #include "systems/ffd/preview_budget.h"
@@ -253,6 +254,9 @@ using namespace detail;
 void editor_input_system(ecs::Registry& registry, const FrameContext& frame) {
     EditorState* state = registry.try_resource<EditorState>();
     if (!state) return;
+    // What the panels posted in the last frame's present phase (pending_edits.h): they came before this
+    // frame's events.
+    apply_pending_edits(registry, *state);
     update_scene_bounds_cache(registry);  // the overlay and the panels read the scene's box every frame
     Camera* camera = camera_of(registry, *state);
     state->pending_picks.clear();  // a pick the last frame's picking phase did not answer is dropped

@@ -14,6 +14,7 @@
 #include <glm/glm.hpp>
 
 #include "runtime/ecs/entity.h"
+#include "systems/animation/components.h"
 #include "systems/editor/camera_controller.h"
 #include "systems/editor/gizmo.h"
 #include "systems/editor/input_record.h"
@@ -75,9 +76,14 @@ struct Drag {
     glm::dvec2 last{0.0};   // cursor at the previous event
     Camera camera;          // the camera when the tool drag began (tools drag in its view)
     ecs::Entity lattice = ecs::null_entity;
-    std::vector<glm::dvec3> start_points;  // lattice current at press (tools apply from it: no drift)
+    std::vector<glm::dvec3> start_points;  // the pose shown at press (tools apply from it: no drift)
     std::optional<Lattice> before;         // undo snapshot
-    std::vector<std::uint32_t> points;     // edited control points
+    // The lattice plays a clip (animated_lattice()): the animation owns Lattice::current, so the drag
+    // writes its pose as the clip's UnkeyedEdit at the clip time instead; the edit's state at press.
+    bool animated = false;
+    double clip_time = 0.0;
+    std::optional<UnkeyedEdit> before_unkeyed;
+    std::vector<std::uint32_t> points;  // edited control points
     glm::dvec3 pivot_world{0.0};
     glm::dvec3 axis_world{0.0, 0.0, 1.0};
     double angle = 0.0;  // accumulated twist (unbounded)

@@ -37,6 +37,17 @@ const Lattice* active_lattice(const ecs::Registry& registry, const EditorState& 
 void keep_an_active_lattice(ecs::Registry& registry, EditorState& state);
 std::vector<std::uint32_t> selection_of(const ecs::Registry& registry, ecs::Entity lattice);
 
+// One writer of Lattice::current per lattice (systems/editor/README.md, "Edits and the animation"): a
+// lattice with a clip that fits it is animated, and animation_system writes its current; the editor's
+// stretch, twist and reset of it write the clip's UnkeyedEdit (the pose at the clip time), which the
+// animation shows at that time, or key it (auto-key). Any other lattice's current is the editor's.
+bool animated_lattice(const ecs::Registry& registry, ecs::Entity lattice);
+// The control points the lattice shows this frame: an animated lattice's un-keyed edit when the clip
+// time shows it, else Lattice::current.
+std::vector<glm::dvec3> shown_pose(const ecs::Registry& registry, ecs::Entity lattice);
+// Emplaces or patches the un-keyed edit of an animated lattice.
+void set_unkeyed_pose(ecs::Registry& registry, ecs::Entity lattice, UnkeyedEdit edit);
+
 // editor_tools.cpp: mouse gestures (selection clicks and boxes, the brush, tool drags).
 void apply_drag(ecs::Registry& registry, const Drag& drag);
 bool begin_tool_drag(ecs::Registry& registry, EditorState& state, const Camera& camera, Drag& drag);

@@ -1,6 +1,10 @@
 // The editor's mouse gestures: picking, click and box selection, the brush, move/twist drags.
 #include "systems/editor/editor_system_detail.h"
 
+#include "systems/animation/evaluate.h"
+#include "systems/animation/unkeyed_edit.h"
+#include "systems/editor/unkeyed_undo.h"
+
 namespace sffd::editor::detail {
 
 namespace {
@@ -89,21 +93,47 @@ glm::dvec3 tool_pivot(const ecs::Registry& registry, const EditorState& state,
 
 }  // namespace
 
-// Applies the drag's current displacement / angle to the lattice, from the snapshot.
+bool animated_lattice(const ecs::Registry& registry, ecs::Entity e) {
+    if (!registry.valid(e)) return false;
+    const Lattice* lattice = registry.try_get<Lattice>(e);
+    const AnimationClip* clip = registry.try_get<AnimationClip>(e);
+    return lattice && clip && registry.has<AnimationState>(e) && validate_clip(*clip, lattice->rest.size());
+}
+
+std::vector<glm::dvec3> shown_pose(const ecs::Registry& registry, ecs::Entity e) {
+    const Lattice& lattice = registry.get<Lattice>(e);
+    if (animated_lattice(registry, e))
+        if (const UnkeyedEdit* edit = registry.try_get<UnkeyedEdit>(e);
+            edit && edit->points.size() == lattice.rest.size() &&
+            shows_unkeyed_edit(*edit, registry.get<AnimationState>(e).time))
+            return edit->points;
+    return lattice.current;
+}
+
+void set_unkeyed_pose(ecs::Registry& registry, ecs::Entity e, UnkeyedEdit edit) {
+    if (registry.has<UnkeyedEdit>(e)) registry.patch<UnkeyedEdit>(e) = std::move(edit);
+    else registry.emplace<UnkeyedEdit>(e, std::move(edit));
+}
+
+// Applies the drag's current displacement / angle to the lattice, from the snapshot: into its current,
+// or, animated, into its un-keyed edit (the animation phase then shows it, in this frame).
 void apply_drag(ecs::Registry& registry, const Drag& drag) {
     if (!registry.valid(drag.lattice) || !registry.has<Lattice>(drag.lattice)) return;
     const glm::dmat4 model = lattice_model(registry, drag.lattice);
     const glm::dmat4 inverse = glm::inverse(model);
-    Lattice& lattice = registry.patch<Lattice>(drag.lattice);
-    if (lattice.current.size() != drag.start_points.size()) return;
+    std::vector<glm::dvec3> pose = drag.start_points;
     if (drag.kind == Drag::Kind::move) {
         const glm::dvec3 d = glm::dvec3(inverse * glm::dvec4(drag.displacement_world, 0.0));
-        stretch_points(drag.start_points, lattice.current, drag.points, d);
+        stretch_points(drag.start_points, pose, drag.points, d);
     } else {
         const glm::dvec3 pivot = glm::dvec3(inverse * glm::dvec4(drag.pivot_world, 1.0));
         const glm::dvec3 axis = glm::dvec3(inverse * glm::dvec4(drag.axis_world, 0.0));
-        twist_points(drag.start_points, lattice.current, drag.points, pivot, axis, drag.angle);
+        twist_points(drag.start_points, pose, drag.points, pivot, axis, drag.angle);
     }
+    if (drag.animated)
+        return set_unkeyed_pose(registry, drag.lattice, UnkeyedEdit{drag.clip_time, std::move(pose)});
+    Lattice& lattice = registry.patch<Lattice>(drag.lattice);
+    if (lattice.current.size() == pose.size()) lattice.current = std::move(pose);
 }
 
 namespace {
@@ -139,8 +169,20 @@ bool begin_tool_drag(ecs::Registry& registry, EditorState& state, const Camera& 
     drag.kind = state.tool == Tool::move ? Drag::Kind::move : Drag::Kind::twist;
     drag.camera = camera;
     drag.lattice = state.active_lattice;
-    drag.start_points = lattice->current;
-    drag.before = *lattice;
+    drag.animated = animated_lattice(registry, drag.lattice);
+    if (drag.animated) {
+        // An edit while the clip plays pauses it at the frame shown (README.md, "Edits and the
+        // animation"): the edit then belongs to that clip time.
+        AnimationState& clip_state = registry.patch<AnimationState>(drag.lattice);
+        if (clip_state.playing) {
+            pause(clip_state);
+            say(state, "paused the clip to edit at " + log::str(clip_state.time) + " s");
+        }
+        drag.clip_time = clip_state.time;
+        drag.before_unkeyed = ComponentEdit<UnkeyedEdit>::snapshot(registry, drag.lattice);
+    }
+    drag.start_points = shown_pose(registry, drag.lattice);
+    if (!drag.animated) drag.before = *lattice;
     drag.pivot_world = tool_pivot(registry, state, drag.points);
     drag.axis_world = axis_direction(state.twist_axis, camera, state.custom_axis);
     drag.angle = 0.0;
@@ -152,21 +194,15 @@ void finish_tool_drag(ecs::Registry& registry, EditorState& state, Drag& drag) {
     if (!registry.valid(drag.lattice) || !registry.has<Lattice>(drag.lattice)) return;
     const bool is_move = drag.kind == Drag::Kind::move;
     const char* label = is_move ? "stretch" : "twist";
-    std::unique_ptr<Command> change = std::make_unique<ComponentChange<Lattice>>(
-        label, drag.lattice, drag.before, registry.get<Lattice>(drag.lattice));
-    const AnimationState* clip_state = registry.try_get<AnimationState>(drag.lattice);
-    if (!state.auto_key && clip_state && registry.has<AnimationClip>(drag.lattice) && !change->empty()) {
-        // Un-keyed over a clip: the pose belongs to the clip time it was made at (UnkeyedEdit), as it will
-        // once saved, so scrubbing away and back shows it again; undone with the stretch or twist.
-        auto group = std::make_unique<CommandGroup>(label);
-        group->add(std::move(change));
-        ComponentEdit<UnkeyedEdit> held(registry, drag.lattice, label);
-        const UnkeyedEdit edit{clip_state->time, registry.get<Lattice>(drag.lattice).current};
-        if (registry.has<UnkeyedEdit>(drag.lattice)) registry.patch<UnkeyedEdit>(drag.lattice) = edit;
-        else registry.emplace<UnkeyedEdit>(drag.lattice, edit);
-        group->add(held.finish(registry));
-        change = std::move(group);
-    }
+    // Animated: the step is the un-keyed edit's change (the moved points, and its time), the lattice's
+    // current being the animation's; otherwise the lattice's change.
+    std::unique_ptr<Command> change;
+    if (drag.animated)
+        change = unkeyed_edit_change(label, registry, drag.lattice, drag.before_unkeyed,
+                                     ComponentEdit<UnkeyedEdit>::snapshot(registry, drag.lattice));
+    else
+        change = std::make_unique<ComponentChange<Lattice>>(label, drag.lattice, drag.before,
+                                                            registry.get<Lattice>(drag.lattice));
     if (state.undo.push(std::move(change))) {
         remember_edit(registry, state, drag);
         say(state, is_move ? log::str("stretched ", drag.points.size(), " control points")
@@ -290,8 +326,11 @@ void handle_release(ecs::Registry& registry, EditorState& state, Camera& camera,
 void cancel_drag(ecs::Registry& registry, EditorState& state) {
     Drag& drag = state.drag;
     if ((drag.kind == Drag::Kind::move || drag.kind == Drag::Kind::twist) && registry.valid(drag.lattice) &&
-        registry.has<Lattice>(drag.lattice))
-        registry.patch<Lattice>(drag.lattice).current = drag.start_points;
+        registry.has<Lattice>(drag.lattice)) {
+        if (!drag.animated) registry.patch<Lattice>(drag.lattice).current = drag.start_points;
+        else if (drag.before_unkeyed) set_unkeyed_pose(registry, drag.lattice, *drag.before_unkeyed);
+        else registry.remove<UnkeyedEdit>(drag.lattice);
+    }
     drag = Drag{};
     say(state, "cancelled");
 }

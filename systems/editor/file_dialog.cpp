@@ -11,6 +11,7 @@
 #include "systems/editor/editor_system.h"
 #include "systems/editor/file_browser.h"
 #include "systems/editor/panels.h"
+#include "systems/editor/pending_edits.h"
 
 namespace sffd::editor {
 
@@ -126,7 +127,9 @@ void file_dialog_window(ecs::Registry& registry, EditorState& state) {
     if (!chosen.empty()) {
         const std::filesystem::path p(chosen);
         if (p.has_parent_path()) remember_folder(state, p.parent_path());
-        if (d.mode == FileDialog::Mode::open) open_scene_file(registry, state, chosen);
+        if (d.mode == FileDialog::Mode::open)  // replaces the scene: in the next input phase
+            post_edit(registry, "open scene",
+                      [chosen](ecs::Registry& r, EditorState& s) { open_scene_file(r, s, chosen); });
         else state.save_as = chosen, state.request_save = true;
         ImGui::CloseCurrentPopup();
     }

@@ -123,13 +123,15 @@ bool apply_lattice_as_rest(ecs::Registry& registry, EditorState& state) {
             ffd::map_lattice(*lattice, ffd::lattice_to_cloud(registry, clouds[c], state.active_lattice));
         if (Status st = ffd::apply_as_rest(scratch, &bake); !st) {
             group->add(cloud_edit.finish(registry));
-            group->undo(registry);
+            EntityMap none;  // not on the stack: nothing was re-created
+            group->undo(registry, none);
             return say(state, "apply as rest: " + st.message()), false;
         }
         group->add(cloud_edit.finish(registry));
     }
     if (Status st = ffd::apply_as_rest(next); !st) {  // the lattice itself, in its own frame
-        if (!clouds.empty()) group->undo(registry);
+        EntityMap none;
+        if (!clouds.empty()) group->undo(registry, none);
         return say(state, "apply as rest: " + st.message()), false;
     }
     registry.patch<Lattice>(state.active_lattice) = std::move(next);

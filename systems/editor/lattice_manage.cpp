@@ -8,6 +8,7 @@
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
 #include "systems/editor/editor_system.h"
+#include "systems/editor/entity_undo.h"
 #include "systems/ffd/lattice_io.h"
 #include "systems/gaussian/components.h"
 #include "systems/picking/components.h"
@@ -82,25 +83,22 @@ void change(ecs::Registry& r, CommandGroup& group, ecs::Entity e, const char* la
     group.add(before.finish(r));
 }
 
-template <class C>
-void remove_recorded(ecs::Registry& r, CommandGroup& group, ecs::Entity e, const char* label) {
-    if (r.has<C>(e)) change<C>(r, group, e, label, [&] { r.remove<C>(e); });
-}
-
 // A lattice entity bound last to `cloud` (placed like the cloud), active, as one undo step.
 bool add_bound_lattice(ecs::Registry& r, EditorState& state, ecs::Entity cloud, Lattice lattice,
                        const char* label) {
     // Never leave a cloud without Deformers once it had a lattice: the deformation phase only rewrites
     // DeformedSplats for clouds that have it (an empty list gives the authored splats back).
     if (!r.has<Deformers>(cloud)) r.emplace<Deformers>(cloud);
-    const ecs::Entity e = r.create();
-    auto group = std::make_unique<CommandGroup>(label);
     const std::string name = unique_name(r, name_of(r, cloud, "cloud") + ".lattice");
-    change<Name>(r, *group, e, label, [&] { r.emplace<Name>(e, Name{name}); });
     const Transform* t = r.try_get<Transform>(cloud);
     const Transform placed = t ? *t : Transform{};
-    change<Transform>(r, *group, e, label, [&] { r.emplace<Transform>(e, placed); });
-    change<Lattice>(r, *group, e, label, [&] { r.emplace<Lattice>(e, std::move(lattice)); });
+    const ecs::Entity e = r.create();
+    r.emplace<Name>(e, Name{name});
+    r.emplace<Transform>(e, placed);
+    r.emplace<Lattice>(e, std::move(lattice));
+    auto group = std::make_unique<CommandGroup>(label);
+    // Undo destroys the entity (its components kept in the step); redo creates it again (entity_undo.h).
+    group->add(std::make_unique<LatticeLife>(label, r, e, LatticeLife::Kind::created));
     change<Deformers>(r, *group, cloud, label, [&] { r.patch<Deformers>(cloud).lattices.push_back(e); });
     state.undo.push(std::move(group));
     state.active_lattice = e;
@@ -174,13 +172,9 @@ bool remove_lattice(ecs::Registry& r, EditorState& state) {
             auto& list = r.patch<Deformers>(cloud).lattices;
             list.erase(std::remove(list.begin(), list.end(), e), list.end());
         });
-    remove_recorded<UnkeyedEdit>(r, *group, e, "remove lattice");
-    remove_recorded<AnimationState>(r, *group, e, "remove lattice");
-    remove_recorded<AnimationClip>(r, *group, e, "remove lattice");
-    remove_recorded<picking::LatticeSelection>(r, *group, e, "remove lattice");
-    remove_recorded<Lattice>(r, *group, e, "remove lattice");
-    remove_recorded<Transform>(r, *group, e, "remove lattice");
-    remove_recorded<Name>(r, *group, e, "remove lattice");
+    // The entity goes; the step keeps its components (clip, selection, un-keyed edit included) and undo
+    // creates it again, the clouds' Deformers mapped to the new id (entity_undo.h).
+    group->add(LatticeLife::destroy("remove lattice", r, e));
     state.undo.push(std::move(group));
     const auto rest = all_lattices(r);
     state.active_lattice = rest.empty() ? ecs::null_entity : rest.front();

@@ -1,8 +1,9 @@
 // Lattice management in the editor: add a lattice fitted around any cloud (box or oriented
 // box, padding, divisions, basis: ffd::fit_lattice, the same code as `splatffd convert --lattice fit`),
 // remove it, refit it, reorder a cloud's lattices, switch the active one, export / import lattice JSON.
-// Every change is one undo step (the entity a removed or un-added lattice lived on stays, without
-// components, so undo/redo can bring it back bit for bit).
+// Every change is one undo step. Removing a lattice destroys its entity and keeps its components in the
+// step; undo creates a new entity with them and maps the clouds' Deformers to it (entity_undo.h), so the
+// deformation comes back bit for bit.
 //
 // Keys (handle_lattice_key, called first by the input system's key handler):
 //   shift+a          add a lattice around the target cloud (the selected cloud, else the active lattice's,

@@ -1,8 +1,8 @@
 // The "lattices" section at the top of the Lattice panel (lattice_manage.h): the clouds and the lattices
 // each follows, in order (click one to make it active); add / remove / refit with the fit settings (shape,
 // padding, divisions, basis); order; export / import JSON. Every button calls the same function as its
-// key, so each action is one undo step. (A section, not a window of its own: the right column
-// (panel_layout.h) holds Tools and Lattice.)
+// key, posted to the input phase (pending_edits.h), so each action is one undo step. (A section, not a window
+// of its own: the right column (panel_layout.h) holds Tools and Lattice.)
 #include <cstdio>
 #include <string>
 
@@ -11,6 +11,7 @@
 #include "runtime/scene/components.h"
 #include "systems/editor/lattice_manage.h"
 #include "systems/editor/panels.h"
+#include "systems/editor/pending_edits.h"
 
 namespace sffd::editor {
 
@@ -58,14 +59,23 @@ void lattice_manager_section(ecs::Registry& registry, EditorState& state) {
         settings.fit.divisions = glm::clamp(settings.fit.divisions, glm::ivec3(1), glm::ivec3(64));
         float pad = float(settings.fit.padding);
         if (ImGui::SliderFloat("padding", &pad, 0.0f, 0.5f, "%.3f")) settings.fit.padding = double(pad);
-        if (ImGui::Button("add (shift+a)")) add_lattice(registry, state);
+        if (ImGui::Button("add (shift+a)"))
+            post_edit(registry, "add lattice", [](ecs::Registry& r, EditorState& s) { add_lattice(r, s); });
         same_line_if_fits("refit (shift+f)");
-        if (ImGui::Button("refit (shift+f)")) refit_lattice(registry, state);
-        if (ImGui::Button("remove (del)")) remove_lattice(registry, state);
+        if (ImGui::Button("refit (shift+f)"))
+            post_edit(registry, "refit lattice",
+                      [](ecs::Registry& r, EditorState& s) { refit_lattice(r, s); });
+        if (ImGui::Button("remove (del)"))
+            post_edit(registry, "remove lattice",
+                      [](ecs::Registry& r, EditorState& s) { remove_lattice(r, s); });
         same_line_if_fits("up (pgup)");
-        if (ImGui::Button("up (pgup)")) move_lattice_in_order(registry, state, -1);
+        if (ImGui::Button("up (pgup)"))
+            post_edit(registry, "lattice order",
+                      [](ecs::Registry& r, EditorState& s) { move_lattice_in_order(r, s, -1); });
         same_line_if_fits("down (pgdn)");
-        if (ImGui::Button("down (pgdn)")) move_lattice_in_order(registry, state, +1);
+        if (ImGui::Button("down (pgdn)"))
+            post_edit(registry, "lattice order",
+                      [](ecs::Registry& r, EditorState& s) { move_lattice_in_order(r, s, +1); });
         ImGui::Separator();
         if (settings.json_folder.empty()) {
             char path[512];
@@ -75,10 +85,14 @@ void lattice_manager_section(ecs::Registry& registry, EditorState& state) {
             ImGui::TextWrapped("json: %s", lattice_json_path(registry, state).c_str());
         }
         if (ImGui::Button("export (ctrl+e)"))
-            export_lattice_json(registry, state, lattice_json_path(registry, state));
+            post_edit(registry, "export lattice", [](ecs::Registry& r, EditorState& s) {
+                export_lattice_json(r, s, lattice_json_path(r, s));
+            });
         same_line_if_fits("import (ctrl+i)");
         if (ImGui::Button("import (ctrl+i)"))
-            import_lattice_json(registry, state, lattice_json_path(registry, state));
+            post_edit(registry, "import lattice", [](ecs::Registry& r, EditorState& s) {
+                import_lattice_json(r, s, lattice_json_path(r, s));
+            });
         ImGui::Separator();
     }
 }

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <glm/gtc/quaternion.hpp>
@@ -21,6 +22,7 @@
 #include "systems/editor/lattice_manage.h"
 #include "systems/editor/material_edit.h"
 #include "systems/editor/panel_layout.h"
+#include "systems/editor/pending_edits.h"
 #include "systems/editor/selection_edit.h"
 #include "systems/ffd/components.h"
 #include "systems/picking/components.h"
@@ -86,45 +88,21 @@ bool begin_panel(ecs::Registry& registry, Panel p) {
     return open;
 }
 
-// One inspector edit = one undo step: the value before the widget became active is kept, and the step is
-// recorded when the widget is released (continuous widgets change the component live in between).
+// One inspector edit = one undo step, and no panel writes a component (pending_edits.h): each widget edits
+// a copy of the component and posts it while it changes; the value the component had when the widget
+// became active is kept in PendingEdits (so a half-done edit dies with the editor's registry) and posted
+// with the last value on release, where the input phase records it as one step.
 template <class C>
-struct PendingEdit {
-    ecs::Entity entity = ecs::null_entity;
-    std::optional<C> before;
-};
-
-// A registry resource per edited component type, so a half-done edit dies with the editor's registry.
-template <class C>
-PendingEdit<C>& pending(ecs::Registry& registry) {
-    if (PendingEdit<C>* p = registry.try_resource<PendingEdit<C>>()) return *p;
-    return registry.set_resource<PendingEdit<C>>();
+void post_widget(ecs::Registry& registry, ecs::Entity e, const C& shown, const C& value, bool changed,
+                 const char* label) {
+    post_widget_gesture<C>(registry, e, shown, value, ImGui::IsItemActivated(), changed,
+                           ImGui::IsItemDeactivatedAfterEdit(), label);
 }
 
-// Call right after a widget that edits C of `e` in place; `changed` is the widget's return value and
-// `before` yields the value the component had before this frame's widget call (called only on activation).
-template <class C, class BeforeFn>
-void track_edit_fn(ecs::Registry& registry, EditorState& state, ecs::Entity e, BeforeFn&& before,
-                   bool changed, const char* label) {
-    PendingEdit<C>& p = pending<C>(registry);
-    if (ImGui::IsItemActivated()) {
-        p.entity = e;
-        p.before = before();
-    }
-    if (changed) registry.mark_changed<C>(e);
-    if (ImGui::IsItemDeactivatedAfterEdit() && p.before && p.entity == e && registry.valid(e) &&
-        registry.has<C>(e)) {
-        state.undo.push(
-            std::make_unique<ComponentChange<C>>(label, e, std::move(p.before), registry.get<C>(e)));
-        p.before.reset();
-    }
-}
-
-template <class C>
-void track_edit(ecs::Registry& registry, EditorState& state, ecs::Entity e, const C& before_value,
-                bool changed, const char* label) {
-    track_edit_fn<C>(
-        registry, state, e, [&] { return before_value; }, changed, label);
+// Posts an operation of editor_system.h / lattice_manage.h (each records its own undo step).
+template <class Fn>
+void post(ecs::Registry& registry, const char* label, Fn&& fn) {
+    post_edit(registry, label, std::forward<Fn>(fn));
 }
 
 bool input_dvec3(const char* label, glm::dvec3& v, const char* format = "%.4f") {
@@ -156,12 +134,18 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
             ImGui::EndMenu();
         }
         if (ImGui::BeginMenu("Edit")) {
-            if (ImGui::MenuItem("Undo", "Ctrl+Z", false, state.undo.can_undo())) undo(registry, state);
-            if (ImGui::MenuItem("Redo", "Ctrl+Shift+Z", false, state.undo.can_redo())) redo(registry, state);
+            if (ImGui::MenuItem("Undo", "Ctrl+Z", false, state.undo.can_undo()))
+                post(registry, "undo", [](ecs::Registry& r, EditorState& s) { undo(r, s); });
+            if (ImGui::MenuItem("Redo", "Ctrl+Shift+Z", false, state.undo.can_redo()))
+                post(registry, "redo", [](ecs::Registry& r, EditorState& s) { redo(r, s); });
             ImGui::Separator();
-            if (ImGui::MenuItem("Select all", "A")) select_all(registry, state);
-            if (ImGui::MenuItem("Deselect", "Esc")) clear_selection(registry, state);
-            if (ImGui::MenuItem("Reset lattice", "Home")) reset_lattice(registry, state);
+            if (ImGui::MenuItem("Select all", "A"))
+                post(registry, "select all", [](ecs::Registry& r, EditorState& s) { select_all(r, s); });
+            if (ImGui::MenuItem("Deselect", "Esc"))
+                post(registry, "deselect", [](ecs::Registry& r, EditorState& s) { clear_selection(r, s); });
+            if (ImGui::MenuItem("Reset lattice", "Home"))
+                post(registry, "reset lattice",
+                     [](ecs::Registry& r, EditorState& s) { reset_lattice(r, s); });
             ImGui::EndMenu();
         }
         if (ImGui::BeginMenu("View")) {
@@ -174,7 +158,9 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
             ImGui::MenuItem("Light overlay while moving", nullptr, &state.light_overlay_while_moving,
                             state.preview_while_moving);
             ImGui::MenuItem("Auto-key", "N", &state.auto_key);
-            if (ImGui::MenuItem("Frame selection", "F")) frame_selection(registry, state);
+            if (ImGui::MenuItem("Frame selection", "F"))
+                post(registry, "frame selection",
+                     [](ecs::Registry& r, EditorState& s) { frame_selection(r, s); });
             ImGui::EndMenu();
         }
         ImGui::EndMainMenuBar();
@@ -202,103 +188,104 @@ void inspector(ecs::Registry& registry, EditorState& state) {
         ImGui::End();
         return;
     }
+    const ecs::Registry& cr = registry;  // the panel reads components; its edits are posted
     const ecs::Entity e = state.selected_entity;
-    if (!registry.valid(e)) {
+    if (!cr.valid(e)) {
         ImGui::TextDisabled("select an entity in the outliner");
         ImGui::End();
         return;
     }
-    if (Name* n = registry.try_get<Name>(e);
+    if (const Name* n = cr.try_get<Name>(e);
         n && ImGui::CollapsingHeader("Name", ImGuiTreeNodeFlags_DefaultOpen)) {
         char buf[256];
         std::snprintf(buf, sizeof buf, "%s", n->value.c_str());
-        const Name before = *n;
+        Name value = *n;
         const bool changed = ImGui::InputText("name", buf, sizeof buf);
-        if (changed) n->value = buf;
-        track_edit<Name>(registry, state, e, before, changed, "rename");
+        if (changed) value.value = buf;
+        post_widget<Name>(registry, e, *n, value, changed, "rename");
     }
-    if (Transform* t = registry.try_get<Transform>(e);
+    if (const Transform* t = cr.try_get<Transform>(e);
         t && ImGui::CollapsingHeader("Transform", ImGuiTreeNodeFlags_DefaultOpen)) {
-        const Transform before = *t;
-        bool changed = drag_dvec3("translation", t->translation);
-        track_edit<Transform>(registry, state, e, before, changed, "move entity");
+        Transform value = *t;
+        bool changed = drag_dvec3("translation", value.translation);
+        post_widget<Transform>(registry, e, *t, value, changed, "move entity");
         glm::dvec3 euler = glm::degrees(glm::eulerAngles(t->rotation));
         changed = drag_dvec3("rotation (deg)", euler, 0.5f);
-        if (changed) t->rotation = glm::dquat(glm::radians(euler));
-        track_edit<Transform>(registry, state, e, before, changed, "rotate entity");
-        changed = drag_dvec3("scale", t->scale);
-        track_edit<Transform>(registry, state, e, before, changed, "scale entity");
+        if (changed) value.rotation = glm::dquat(glm::radians(euler));
+        post_widget<Transform>(registry, e, *t, value, changed, "rotate entity");
+        changed = drag_dvec3("scale", value.scale);
+        post_widget<Transform>(registry, e, *t, value, changed, "scale entity");
     }
-    if (SplatCloud* c = registry.try_get<SplatCloud>(e);
+    if (const SplatCloud* c = cr.try_get<SplatCloud>(e);
         c && ImGui::CollapsingHeader("SplatCloud", ImGuiTreeNodeFlags_DefaultOpen)) {
         ImGui::Text("%zu splats%s%s", c->size(), c->colors.empty() ? "" : ", colours",
                     c->texture.path.empty() ? "" : ", textured");
         ImGui::Text("origin %.3f %.3f %.3f", c->origin.x, c->origin.y, c->origin.z);
     }
-    if (SplatMaterial* m = registry.try_get<SplatMaterial>(e);
+    if (const SplatMaterial* m = cr.try_get<SplatMaterial>(e);
         m && ImGui::CollapsingHeader("Material", ImGuiTreeNodeFlags_DefaultOpen)) {
         // Its own component (material_edit.h): a drag re-renders only, and its undo step holds two
         // materials. Replays set the same fields through set_material_value().
-        const SplatMaterial before = *m;
-        bool ch = ImGui::ColorEdit4("base colour", &m->base_color.x);
-        track_edit<SplatMaterial>(registry, state, e, before, ch, "material colour");
+        SplatMaterial value = *m;
+        bool ch = ImGui::ColorEdit4("base colour", &value.base_color.x);
+        post_widget<SplatMaterial>(registry, e, *m, value, ch, "material colour");
         for (MaterialField f : {MaterialField::specular, MaterialField::shininess}) {
             const MaterialFieldInfo& info = material_field_info(f);
-            ch = ImGui::SliderFloat(info.widget, &material_value(*m, f), info.min, info.max);
-            track_edit<SplatMaterial>(registry, state, e, before, ch, info.label);
+            ch = ImGui::SliderFloat(info.widget, &material_value(value, f), info.min, info.max);
+            post_widget<SplatMaterial>(registry, e, *m, value, ch, info.label);
         }
     }
-    if (Camera* cam = registry.try_get<Camera>(e);
+    if (const Camera* cam = cr.try_get<Camera>(e);
         cam && ImGui::CollapsingHeader("Camera", ImGuiTreeNodeFlags_DefaultOpen)) {
-        const Camera before = *cam;
-        bool ch = drag_dvec3("eye", cam->eye);
-        track_edit<Camera>(registry, state, e, before, ch, "camera eye");
-        ch = drag_dvec3("target", cam->target);
-        track_edit<Camera>(registry, state, e, before, ch, "camera target");
-        ch = ImGui::SliderFloat("fov y", &cam->fov_y_degrees, 5.0f, 120.0f);
-        track_edit<Camera>(registry, state, e, before, ch, "camera fov");
+        Camera value = *cam;
+        bool ch = drag_dvec3("eye", value.eye);
+        post_widget<Camera>(registry, e, *cam, value, ch, "camera eye");
+        ch = drag_dvec3("target", value.target);
+        post_widget<Camera>(registry, e, *cam, value, ch, "camera target");
+        ch = ImGui::SliderFloat("fov y", &value.fov_y_degrees, 5.0f, 120.0f);
+        post_widget<Camera>(registry, e, *cam, value, ch, "camera fov");
     }
-    if (DirectionalLight* l = registry.try_get<DirectionalLight>(e);
+    if (const DirectionalLight* l = cr.try_get<DirectionalLight>(e);
         l && ImGui::CollapsingHeader("DirectionalLight", ImGuiTreeNodeFlags_DefaultOpen)) {
-        const DirectionalLight before = *l;
-        bool ch = ImGui::DragFloat3("direction", &l->direction.x, 0.01f);
-        track_edit<DirectionalLight>(registry, state, e, before, ch, "light direction");
-        ch = ImGui::ColorEdit3("colour", &l->color.x);
-        track_edit<DirectionalLight>(registry, state, e, before, ch, "light colour");
-        ch = ImGui::SliderFloat("intensity", &l->intensity, 0.0f, 10.0f);
-        track_edit<DirectionalLight>(registry, state, e, before, ch, "light intensity");
+        DirectionalLight value = *l;
+        bool ch = ImGui::DragFloat3("direction", &value.direction.x, 0.01f);
+        post_widget<DirectionalLight>(registry, e, *l, value, ch, "light direction");
+        ch = ImGui::ColorEdit3("colour", &value.color.x);
+        post_widget<DirectionalLight>(registry, e, *l, value, ch, "light colour");
+        ch = ImGui::SliderFloat("intensity", &value.intensity, 0.0f, 10.0f);
+        post_widget<DirectionalLight>(registry, e, *l, value, ch, "light intensity");
     }
-    if (AmbientLight* a = registry.try_get<AmbientLight>(e);
+    if (const AmbientLight* a = cr.try_get<AmbientLight>(e);
         a && ImGui::CollapsingHeader("AmbientLight", ImGuiTreeNodeFlags_DefaultOpen)) {
-        const AmbientLight before = *a;
-        bool ch = ImGui::ColorEdit3("ambient colour", &a->color.x);
-        track_edit<AmbientLight>(registry, state, e, before, ch, "ambient colour");
-        ch = ImGui::SliderFloat("ambient intensity", &a->intensity, 0.0f, 2.0f);
-        track_edit<AmbientLight>(registry, state, e, before, ch, "ambient intensity");
+        AmbientLight value = *a;
+        bool ch = ImGui::ColorEdit3("ambient colour", &value.color.x);
+        post_widget<AmbientLight>(registry, e, *a, value, ch, "ambient colour");
+        ch = ImGui::SliderFloat("ambient intensity", &value.intensity, 0.0f, 2.0f);
+        post_widget<AmbientLight>(registry, e, *a, value, ch, "ambient intensity");
     }
-    if (const Lattice* l = registry.try_get<Lattice>(e);
+    if (const Lattice* l = cr.try_get<Lattice>(e);
         l && ImGui::CollapsingHeader("Lattice", ImGuiTreeNodeFlags_DefaultOpen)) {
         ImGui::Text("divisions %d x %d x %d (%zu points), %s", l->divisions.x, l->divisions.y, l->divisions.z,
                     l->size(), l->basis == LatticeBasis::bernstein ? "Bernstein" : "B-spline");
         ImGui::Text("origin %.3f %.3f %.3f", l->origin.x, l->origin.y, l->origin.z);
-        if (const auto* sel = registry.try_get<picking::LatticeSelection>(e))
+        if (const auto* sel = cr.try_get<picking::LatticeSelection>(e))
             ImGui::Text("%zu selected", sel->indices.size());
         ImGui::TextDisabled("edit shape and resolution in the Lattice panel");
     }
-    if (const Deformers* d = registry.try_get<Deformers>(e); d && ImGui::CollapsingHeader("Deformers")) {
+    if (const Deformers* d = cr.try_get<Deformers>(e); d && ImGui::CollapsingHeader("Deformers")) {
         for (ecs::Entity l : d->lattices) ImGui::BulletText("%s", entity_label(registry, l).c_str());
     }
-    if (AnimationClip* clip = registry.try_get<AnimationClip>(e);
+    if (const AnimationClip* clip = cr.try_get<AnimationClip>(e);
         clip && ImGui::CollapsingHeader("AnimationClip")) {
-        const AnimationClip before = *clip;
+        AnimationClip value = *clip;
         double duration = clip->duration;
         const bool ch = ImGui::InputDouble("duration (s)", &duration, 0.1, 1.0, "%.3f");
-        if (ch && duration > 0.0) clip->duration = duration;
-        track_edit<AnimationClip>(registry, state, e, before, ch && duration > 0.0, "clip duration");
+        if (ch && duration > 0.0) value.duration = duration;
+        post_widget<AnimationClip>(registry, e, *clip, value, ch && duration > 0.0, "clip duration");
         int mode = int(clip->mode);
         const bool mch = ImGui::Combo("mode", &mode, "loop\0once\0ping-pong\0");
-        if (mch) clip->mode = PlayMode(mode);
-        track_edit<AnimationClip>(registry, state, e, before, mch, "clip mode");
+        if (mch) value.mode = PlayMode(mode);
+        post_widget<AnimationClip>(registry, e, *clip, value, mch, "clip mode");
         ImGui::Text("%zu tracks", clip->tracks.size());
     }
     ImGui::End();
@@ -337,13 +324,20 @@ void tools_panel(ecs::Registry& registry, EditorState& state) {
         double& twist_by = panel_entries(registry).twist_by;
         input_dvec3("##move", move_by, "%.3f");
         ImGui::SameLine();
-        if (ImGui::Button("stretch")) apply_stretch(registry, state, move_by);
+        if (ImGui::Button("stretch"))
+            post(registry, "stretch",
+                 [by = move_by](ecs::Registry& r, EditorState& s) { apply_stretch(r, s, by); });
         ImGui::InputDouble("##twist", &twist_by, 5.0, 45.0, "%.1f deg");
         ImGui::SameLine();
-        if (ImGui::Button("twist")) apply_twist(registry, state, twist_by);
-        if (ImGui::Button("reset lattice")) reset_lattice(registry, state);
+        if (ImGui::Button("twist"))
+            post(registry, "twist",
+                 [by = twist_by](ecs::Registry& r, EditorState& s) { apply_twist(r, s, by); });
+        if (ImGui::Button("reset lattice"))
+            post(registry, "reset lattice", [](ecs::Registry& r, EditorState& s) { reset_lattice(r, s); });
         ImGui::SameLine();
-        if (ImGui::Button("frame (F)")) frame_selection(registry, state);
+        if (ImGui::Button("frame (F)"))
+            post(registry, "frame selection",
+                 [](ecs::Registry& r, EditorState& s) { frame_selection(r, s); });
         ImGui::Text("editable: %zu points", editable_selection(registry, state).size());
     }
     ImGui::End();
@@ -352,8 +346,9 @@ void tools_panel(ecs::Registry& registry, EditorState& state) {
 void lattice_panel(ecs::Registry& registry, EditorState& state) {
     if (begin_panel(registry, Panel::lattice)) {
         lattice_manager_section(registry, state);  // add / remove / order / JSON (lattice_manage.h)
-        const Lattice* l =
-            registry.valid(state.active_lattice) ? registry.try_get<Lattice>(state.active_lattice) : nullptr;
+        const Lattice* l = registry.valid(state.active_lattice)
+                               ? std::as_const(registry).try_get<Lattice>(state.active_lattice)
+                               : nullptr;
         if (!l) {
             ImGui::TextDisabled("no lattice: shift+a adds one");
         } else {
@@ -368,7 +363,9 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
             if (ImGui::Button(state.pin_outer_layer ? "unpin outer layer" : "pin outer layer"))
                 state.pin_outer_layer = !state.pin_outer_layer;
             ImGui::SameLine();
-            if (ImGui::Button("reset")) reset_lattice(registry, state);
+            if (ImGui::Button("reset"))
+                post(registry, "reset lattice",
+                     [](ecs::Registry& r, EditorState& s) { reset_lattice(r, s); });
             ImGui::Separator();
             // Resolution: edits a pending value; "resample" applies it keeping the current shape.
             glm::ivec3& divisions = panel_entries(registry).divisions;
@@ -382,17 +379,26 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
             divisions = glm::clamp(divisions, glm::ivec3(1), glm::ivec3(64));
             same_line_if_fits("resample");
             if (ImGui::Button("resample")) {
-                resample_lattice(registry, state, divisions);
+                post(registry, "resample",
+                     [d = divisions](ecs::Registry& r, EditorState& s) { resample_lattice(r, s, d); });
                 divisions = glm::ivec3(0);
             }
             int basis = int(l->basis);
             if (ImGui::Combo("basis", &basis, "Bernstein\0cubic B-spline\0"))
-                set_lattice_basis(registry, state, LatticeBasis(basis));
-            if (ImGui::Button("fit to object")) fit_lattice_to(registry, state, false);
+                post(registry, "basis", [b = LatticeBasis(basis)](ecs::Registry& r, EditorState& s) {
+                    set_lattice_basis(r, s, b);
+                });
+            if (ImGui::Button("fit to object"))
+                post(registry, "fit to object",
+                     [](ecs::Registry& r, EditorState& s) { fit_lattice_to(r, s, false); });
             same_line_if_fits("fit to selection");
-            if (ImGui::Button("fit to selection")) fit_lattice_to(registry, state, true);
+            if (ImGui::Button("fit to selection"))
+                post(registry, "fit to selection",
+                     [](ecs::Registry& r, EditorState& s) { fit_lattice_to(r, s, true); });
             same_line_if_fits("apply as rest");
-            if (ImGui::Button("apply as rest")) apply_lattice_as_rest(registry, state);
+            if (ImGui::Button("apply as rest"))
+                post(registry, "apply as rest",
+                     [](ecs::Registry& r, EditorState& s) { apply_lattice_as_rest(r, s); });
         }
     }
     ImGui::End();
@@ -401,13 +407,17 @@ void lattice_panel(ecs::Registry& registry, EditorState& state) {
 void timeline_panel(ecs::Registry& registry, EditorState& state) {
     if (begin_panel(registry, Panel::timeline)) {
         const ecs::Entity e = state.active_lattice;
-        AnimationClip* clip = registry.valid(e) ? registry.try_get<AnimationClip>(e) : nullptr;
-        AnimationState* anim = registry.valid(e) ? registry.try_get<AnimationState>(e) : nullptr;
-        if (ImGui::Button(anim && anim->playing ? "pause" : "play")) toggle_play(registry, state);
+        const ecs::Registry& cr = registry;
+        const AnimationClip* clip = cr.valid(e) ? cr.try_get<AnimationClip>(e) : nullptr;
+        const AnimationState* anim = cr.valid(e) ? cr.try_get<AnimationState>(e) : nullptr;
+        if (ImGui::Button(anim && anim->playing ? "pause" : "play"))
+            post(registry, "play", [](ecs::Registry& r, EditorState& s) { toggle_play(r, s); });
         ImGui::SameLine();
-        if (ImGui::Button("set key (K)")) key_last_edit(registry, state);
+        if (ImGui::Button("set key (K)"))
+            post(registry, "set key", [](ecs::Registry& r, EditorState& s) { key_last_edit(r, s); });
         ImGui::SameLine();
-        if (ImGui::Button("delete key")) delete_keys_at_time(registry, state);
+        if (ImGui::Button("delete key"))
+            post(registry, "delete key", [](ecs::Registry& r, EditorState& s) { delete_keys_at_time(r, s); });
         ImGui::SameLine();
         ImGui::Checkbox("auto-key (N)", &state.auto_key);
         if (clip && anim) {
@@ -415,7 +425,7 @@ void timeline_panel(ecs::Registry& registry, EditorState& state) {
             float t = float(anim->time);
             ImGui::SetNextItemWidth(-1);
             if (ImGui::SliderFloat("##time", &t, 0.0f, float(clip->duration), "%.3f s"))
-                scrub_to(registry, state, t);
+                post(registry, "scrub", [t](ecs::Registry& r, EditorState& s) { scrub_to(r, s, t); });
             // Key markers under the slider.
             const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
             ImDrawList* dl = ImGui::GetWindowDrawList();
@@ -508,7 +518,7 @@ void status_bar(ecs::Registry& registry, EditorState& state) {
     record_current_window(registry, "##status");
     std::size_t selected = 0;
     if (registry.valid(state.active_lattice))
-        if (const auto* s = registry.try_get<picking::LatticeSelection>(state.active_lattice))
+        if (const auto* s = std::as_const(registry).try_get<picking::LatticeSelection>(state.active_lattice))
             selected = s->indices.size();
     const char* render = state.previewing                                      ? "preview while moving"
                          : state.rest_quality == int(render::Quality::preview) ? "preview"
@@ -540,15 +550,16 @@ void gizmo(ecs::Registry& registry, EditorState& state) {
     }
     if (state.tool != Tool::move && state.tool != Tool::twist) return;
     if (!registry.valid(state.camera) || !registry.has<Camera>(state.camera)) return;
-    const Camera& cam = registry.get<Camera>(state.camera);
+    const ecs::Registry& cr = registry;
+    const Camera& cam = cr.get<Camera>(state.camera);
     const std::vector<std::uint32_t> pts = editable_selection(registry, state);
     if (pts.empty() && d.kind == Drag::Kind::none) return;
     glm::dvec3 pivot = d.kind != Drag::Kind::none ? d.pivot_world : glm::dvec3(0.0);
     if (d.kind == Drag::Kind::none) {
         if (state.pivot_mode == PivotMode::picked_point && state.has_picked_pivot) {
             pivot = state.picked_pivot;
-        } else if (const Lattice* l = registry.try_get<Lattice>(state.active_lattice)) {
-            pivot = glm::dvec3(model_matrix(registry.try_get<Transform>(state.active_lattice)) *
+        } else if (const Lattice* l = cr.try_get<Lattice>(state.active_lattice)) {
+            pivot = glm::dvec3(model_matrix(cr.try_get<Transform>(state.active_lattice)) *
                                glm::dvec4(centroid(*l, pts), 1.0));
         }
     }

@@ -85,6 +85,9 @@ inline std::size_t undo_heap_bytes(const picking::LatticeSelection& s) {
 }
 inline std::size_t undo_heap_bytes(const Deformers& d) { return d.lattices.capacity() * sizeof(ecs::Entity); }
 inline std::size_t undo_heap_bytes(const Name& n) { return n.value.capacity(); }
+inline std::size_t undo_heap_bytes(const AnimationState& s) {
+    return s.last_pose.capacity() * sizeof(glm::dvec3) + s.error.capacity();
+}
 template <class C>
 std::size_t undo_heap_bytes(const C&) {
     return 0;

@@ -15,12 +15,18 @@
 // generic over what it stores. A component that is absent before (or after) is stored as "absent", so
 // adding or removing a component is undoable too. Restoring goes through registry.patch<C>() so other
 // systems (deformer, picking) see the change stamp move.
+//
+// Entities come and go too (entity_undo.h: EntityLife): undoing a deletion creates a new entity with the
+// stored components. The registry gives a re-used index a new generation, so the new entity cannot have
+// the old id; the stack's EntityMap records old id -> new id, and every command resolves the entity it
+// names (and the ids inside the values it restores, remap_entities) through it.
 #pragma once
 
 #include <cstddef>
 #include <memory>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -29,11 +35,41 @@
 
 namespace sffd::editor {
 
+// Old entity id -> the entity that stands for it now (an undone deletion or a redone creation made a new
+// one). Chains resolve to the end: deleted, undone, redone and undone again is old -> 2nd -> 3rd.
+class EntityMap {
+public:
+    ecs::Entity operator()(ecs::Entity e) const {
+        for (std::size_t guard = 0; guard <= m_to.size(); ++guard) {
+            const auto it = m_to.find(e.bits());
+            if (it == m_to.end()) return e;
+            e = it->second;
+        }
+        return e;
+    }
+    void map(ecs::Entity from, ecs::Entity to) {
+        if (from != to) m_to[from.bits()] = to;
+    }
+    std::size_t size() const { return m_to.size(); }
+    void clear() { m_to.clear(); }
+
+private:
+    std::unordered_map<std::uint64_t, ecs::Entity> m_to;
+};
+
+// Entity ids held inside a component's value (a cloud's Deformers list its lattices): restored values are
+// mapped so they name the entities that stand for them now.
+inline void remap_entities(Deformers& d, const EntityMap& map) {
+    for (ecs::Entity& e : d.lattices) e = map(e);
+}
+template <class C>
+void remap_entities(C&, const EntityMap&) {}
+
 class Command {
 public:
     virtual ~Command() = default;
-    virtual void undo(ecs::Registry& registry) const = 0;
-    virtual void redo(ecs::Registry& registry) const = 0;
+    virtual void undo(ecs::Registry& registry, EntityMap& map) const = 0;
+    virtual void redo(ecs::Registry& registry, EntityMap& map) const = 0;
     // True when undo and redo would both leave the registry as it is (nothing worth a step).
     virtual bool empty() const { return false; }
     // Memory the step holds (the command and what it stores).
@@ -60,11 +96,13 @@ bool same_state(const std::optional<C>& a, const std::optional<C>& b) {
 }
 
 template <class C>
-void restore(ecs::Registry& registry, ecs::Entity e, const std::optional<C>& state) {
+void restore(ecs::Registry& registry, ecs::Entity e, const std::optional<C>& state, const EntityMap& map) {
     if (!registry.valid(e)) return;  // entity deleted since: nothing to restore into
     if (state) {
-        if (registry.has<C>(e)) registry.patch<C>(e) = *state;
-        else registry.emplace<C>(e, *state);
+        C value = *state;
+        remap_entities(value, map);
+        if (registry.has<C>(e)) registry.patch<C>(e) = std::move(value);
+        else registry.emplace<C>(e, std::move(value));
     } else {
         registry.remove<C>(e);
     }
@@ -84,8 +122,8 @@ public:
         m_whole = std::make_unique<Whole>(Whole{std::move(before), std::move(after)});
     }
 
-    void undo(ecs::Registry& registry) const override { apply(registry, false); }
-    void redo(ecs::Registry& registry) const override { apply(registry, true); }
+    void undo(ecs::Registry& registry, EntityMap& map) const override { apply(registry, map, false); }
+    void redo(ecs::Registry& registry, EntityMap& map) const override { apply(registry, map, true); }
     bool empty() const override {
         if (!m_whole) return SparseUndo<C>::empty(*m_delta);
         return detail::same_state(m_whole->before, m_whole->after);
@@ -103,11 +141,12 @@ public:
     bool sparse() const { return !m_whole; }
 
 private:
-    void apply(ecs::Registry& registry, bool forward) const {
-        if (m_whole) return detail::restore(registry, m_entity, forward ? m_whole->after : m_whole->before);
+    void apply(ecs::Registry& registry, const EntityMap& map, bool forward) const {
+        const ecs::Entity e = map(m_entity);
+        if (m_whole) return detail::restore(registry, e, forward ? m_whole->after : m_whole->before, map);
         if constexpr (SparseUndo<C>::enabled)
-            if (registry.valid(m_entity) && registry.has<C>(m_entity))
-                SparseUndo<C>::apply(registry.patch<C>(m_entity), *m_delta, forward);
+            if (registry.valid(e) && registry.has<C>(e))
+                SparseUndo<C>::apply(registry.patch<C>(e), *m_delta, forward);
     }
 
     struct Whole {
@@ -129,11 +168,11 @@ public:
     void add(std::unique_ptr<Command> part) {
         if (part && !part->empty()) m_parts.push_back(std::move(part));
     }
-    void undo(ecs::Registry& registry) const override {
-        for (std::size_t i = m_parts.size(); i-- > 0;) m_parts[i]->undo(registry);
+    void undo(ecs::Registry& registry, EntityMap& map) const override {
+        for (std::size_t i = m_parts.size(); i-- > 0;) m_parts[i]->undo(registry, map);
     }
-    void redo(ecs::Registry& registry) const override {
-        for (const auto& p : m_parts) p->redo(registry);
+    void redo(ecs::Registry& registry, EntityMap& map) const override {
+        for (const auto& p : m_parts) p->redo(registry, map);
     }
     bool empty() const override { return m_parts.empty(); }
     std::size_t bytes() const override {
@@ -200,7 +239,11 @@ public:
     void clear() {
         m_commands.clear();
         m_next = 0;
+        m_map.clear();
     }
+    // The entity that stands for `e` now (itself unless an undo or redo re-created it).
+    ecs::Entity resolve(ecs::Entity e) const { return m_map(e); }
+    const EntityMap& entity_map() const { return m_map; }
 
     std::size_t size() const { return m_commands.size(); }
     // Memory held by every step (done and undone).
@@ -213,6 +256,7 @@ private:
     std::vector<std::unique_ptr<Command>> m_commands;
     std::size_t m_next = 0;
     std::size_t m_limit = 256;
+    EntityMap m_map;
 };
 
 }  // namespace sffd::editor

@@ -76,7 +76,9 @@ TEST(AnimationSystem, AnUnkeyedEditShowsAtItsClipTimeOnly) {
     EXPECT_EQ(alone[0], sequence[3]) << "the same alone as in the sequence";
 }
 
-TEST(AnimationSystem, KeyEditsShowWhilePausedAndManualEditsSurviveAStillPose) {
+// The animation is the one writer of an animated lattice's current: a write by anyone else is replaced by
+// the clip's pose in the next animation phase (edits go through keys or the un-keyed edit), while paused too.
+TEST(AnimationSystem, KeyEditsShowWhilePausedAndOtherWritesOfThePoseAreReplaced) {
     ecs::Registry reg;
     const ecs::Entity e = reg.create();
     reg.emplace<Lattice>(e, test::make_lattice({2, 2, 2}));
@@ -86,13 +88,26 @@ TEST(AnimationSystem, KeyEditsShowWhilePausedAndManualEditsSurviveAStillPose) {
     animation_system(reg, {1, 0.6, 0.1});
     const glm::dvec3 rest13 = reg.get<Lattice>(e).rest[13];
     EXPECT_EQ(reg.get<Lattice>(e).current[13], rest13 + glm::dvec3(0.5, 0, 0));
-    // A manual edit of another point is kept while the animated pose does not change...
+    // A write of another point straight into current does not survive the next frame, paused as it is...
+    const std::uint64_t before = reg.version<Lattice>(e);
     reg.patch<Lattice>(e).current[0] += glm::dvec3(0.1);
     animation_system(reg, {2, 0.7, 0.1});
-    EXPECT_NE(reg.get<Lattice>(e).current[0], reg.get<Lattice>(e).rest[0]);
+    EXPECT_EQ(reg.get<Lattice>(e).current[0], reg.get<Lattice>(e).rest[0]);
+    EXPECT_EQ(reg.get<Lattice>(e).current[13], rest13 + glm::dvec3(0.5, 0, 0));
+    EXPECT_GT(reg.version<Lattice>(e), before + 1) << "the pose was written back";
+    const std::uint64_t restored = reg.version<Lattice>(e);
+    animation_system(reg, {3, 0.75, 0.05});
+    EXPECT_EQ(reg.version<Lattice>(e), restored) << "and then left alone";
+    // ...the same edit as an un-keyed edit at the paused time is shown (and the clip's pose elsewhere).
+    UnkeyedEdit edit{0.5, reg.get<Lattice>(e).current};
+    edit.points[0] += glm::dvec3(0.1);
+    reg.emplace<UnkeyedEdit>(e, edit);
+    animation_system(reg, {4, 0.8, 0.05});
+    EXPECT_EQ(reg.get<Lattice>(e).current, edit.points);
+    reg.remove<UnkeyedEdit>(e);
     // ...a key edit changes the pose and is applied at once (from the rest lattice).
     set_key(reg.patch<AnimationClip>(e).tracks[0], {1.0, {3, 0, 0}, Interpolation::linear, Easing::none});
-    animation_system(reg, {3, 0.8, 0.1});
+    animation_system(reg, {5, 0.85, 0.05});
     EXPECT_EQ(reg.get<Lattice>(e).current[13], rest13 + glm::dvec3(1.5, 0, 0));
     EXPECT_EQ(reg.get<Lattice>(e).current[0], reg.get<Lattice>(e).rest[0]);
 }

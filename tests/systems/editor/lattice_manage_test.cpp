@@ -96,7 +96,7 @@ TEST(LatticeManage, AddSeveralReorderRefitRemoveEachOneUndoStep) {
     LatticeFitSettings& fit = lattice_fit_settings(ed.reg);
     fit.fit = ffd::FitOptions{{3, 2, 1}, LatticeBasis::bspline, 0.1, ffd::FitShape::oriented};
     ed.key("a", mods::shift);
-    const ecs::Entity second = ed.state->active_lattice;
+    ecs::Entity second = ed.state->active_lattice;
     ASSERT_NE(second, first);
     EXPECT_EQ(ed.order(), (std::vector<ecs::Entity>{first, second}));
     EXPECT_EQ(ed.reg.get<Name>(second).value, "scan.lattice2");
@@ -109,12 +109,18 @@ TEST(LatticeManage, AddSeveralReorderRefitRemoveEachOneUndoStep) {
     EXPECT_NEAR(s.y, std::sin(0.5235987755982988), 1e-3);
     EXPECT_EQ(ed.state->undo.size(), 2u);
 
-    // Undoing the second add makes the first active again (not "no lattice"); redo brings it back.
+    // Undoing the second add destroys its entity and makes the first active again (not "no lattice"); redo
+    // brings it back as a new entity (a new generation), which the undo stack maps the old id to.
+    const std::size_t alive = ed.reg.alive();
     ed.key("z", mods::ctrl);
     EXPECT_EQ(ed.lattice_count(), 1u);
+    EXPECT_FALSE(ed.reg.valid(second));
+    EXPECT_EQ(ed.reg.alive(), alive - 1);
     EXPECT_EQ(ed.state->active_lattice, first);
     ed.key("z", mods::ctrl | mods::shift);
     EXPECT_EQ(ed.lattice_count(), 2u);
+    second = ed.state->undo.resolve(second);
+    ASSERT_TRUE(ed.reg.valid(second));
     EXPECT_EQ(ed.order(), (std::vector<ecs::Entity>{first, second}));
     EXPECT_EQ(ed.reg.get<Name>(second).value, "scan.lattice2");
     ed.state->active_lattice = second;
@@ -150,15 +156,18 @@ TEST(LatticeManage, AddSeveralReorderRefitRemoveEachOneUndoStep) {
     // delete removes the active lattice and unbinds it; undo brings it back bit for bit, in its place.
     ed.key("delete");
     EXPECT_EQ(ed.lattice_count(), 1u);
+    EXPECT_FALSE(ed.reg.valid(second)) << "the entity goes with its components";
     EXPECT_EQ(ed.order(), std::vector<ecs::Entity>{first});
     EXPECT_EQ(ed.state->active_lattice, first);
     ed.key("z", mods::ctrl);
     EXPECT_EQ(ed.lattice_count(), 2u);
+    second = ed.state->undo.resolve(second);
     EXPECT_EQ(ed.order(), (std::vector<ecs::Entity>{second, first}));
     EXPECT_TRUE(same(ed.reg.get<Lattice>(second), *box));
     EXPECT_EQ(ed.reg.get<Name>(second).value, "scan.lattice2");
 
-    // Undo everything: no lattice left, the cloud follows none (Deformers stays, empty).
+    // Undo everything: no lattice left (and no empty entity), the cloud follows none (Deformers stays,
+    // empty).
     while (ed.state->undo.can_undo()) ed.key("z", mods::ctrl);
     EXPECT_EQ(ed.lattice_count(), 0u);
     EXPECT_TRUE(ed.order().empty());

@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "runtime/assets/scene.h"
+#include "systems/animation/animation_system.h"
 #include "systems/editor/editor_system.h"
 #include "systems/ffd/components.h"
 #include "systems/picking/picking_system.h"
@@ -78,6 +79,7 @@ TEST(ViewSession, ReplayedEditsShowInTheScreenshotAndTheSavedLatticeIsBitExact) 
     for (std::uint64_t f = 0; f < frames; ++f) {  // the editor's steps of the engine's frame, in order
         const FrameContext frame{f, f / 60.0, 1 / 60.0};
         editor::editor_input_system(expected, frame);
+        animation_system(expected, frame);  // the sphere's clip: the animation shows the edits (its pose)
         picking::picking_system(expected, frame);
         editor::editor_pick_system(expected, frame);
     }
