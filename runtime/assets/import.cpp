@@ -7,10 +7,10 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "runtime/assets/gltf_io.h"
+#include "runtime/assets/formats/surface/gltf_io.h"
 #include "runtime/assets/import_detail.h"
-#include "runtime/assets/ply.h"
-#include "runtime/assets/ply_vertices.h"
+#include "runtime/assets/formats/surface/ply.h"
+#include "runtime/assets/formats/surface/ply_vertices.h"
 #include "runtime/assets/splat_estimation.h"
 #include "runtime/core/file_io.h"
 #include "runtime/core/log.h"

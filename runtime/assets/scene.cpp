@@ -8,7 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "runtime/assets/builtin_scenes.h"
-#include "runtime/assets/gltf_io.h"
+#include "runtime/assets/formats/surface/gltf_io.h"
 #include "runtime/assets/import.h"
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"

@@ -28,7 +28,7 @@
 #include <string_view>
 #include <vector>
 
-#include "runtime/assets/gltf_io.h"
+#include "runtime/assets/formats/surface/gltf_io.h"
 #include "runtime/core/result.h"
 #include "runtime/ecs/entity.h"
 #include "runtime/ecs/registry.h"
@@ -51,7 +51,7 @@ void unregister_scene_extension(const std::string& key);
 
 // An extension that also stores glTF content in the scene file (systems/gaussian: clouds embedded as
 // KHR_gaussian_splatting primitives) gets the scene file's path; saving, it may add GltfAppend functions
-// (runtime/assets/gltf_io.h) that write nodes, meshes and accessors into the document; loading, it gets the
+// (formats/surface/gltf_io.h) that write nodes, meshes and accessors into the document; loading, it gets the
 // file's parsed model (gltf_model.h; never null there). Its JSON must find its content again without indices
 // known at save time (systems/gaussian marks its nodes with extras). Same key space as above.
 using SceneGltfSaveFn = std::function<Result<std::string>(const ecs::Registry&, const SceneIdOf& id_of,

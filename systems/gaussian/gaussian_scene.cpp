@@ -10,8 +10,8 @@
 #include <tiny_gltf.h>
 
 #include "runtime/assets/builtin_scenes.h"
-#include "runtime/assets/gltf_model.h"
-#include "runtime/assets/ply.h"
+#include "runtime/assets/formats/surface/gltf_model.h"
+#include "runtime/assets/formats/surface/ply.h"
 #include "runtime/assets/scene.h"
 #include "runtime/core/file_io.h"
 #include "runtime/scene/camera.h"
@@ -20,9 +20,10 @@
 #include "systems/gaussian/capture_up.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
-#include "systems/gaussian/gaussian_gltf.h"
-#include "systems/gaussian/gaussian_compressed_ply.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_gltf.h"
+#include "systems/gaussian/gaussian_read.h"
+#include "runtime/assets/formats/gaussian/gaussian_compressed_ply.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 
 namespace sffd::gaussian {
 

@@ -31,7 +31,7 @@
 #include <string_view>
 #include <vector>
 
-#include "runtime/assets/gltf_io.h"
+#include "runtime/assets/formats/surface/gltf_io.h"
 #include "runtime/core/result.h"
 #include "runtime/ecs/registry.h"
 

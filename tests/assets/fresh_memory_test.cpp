@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "runtime/assets/fresh_array.h"
-#include "runtime/assets/mapped_file.h"
+#include "runtime/assets/formats/archive/fresh_array.h"
+#include "runtime/assets/formats/archive/mapped_file.h"
 #include "runtime/core/file_io.h"
 
 namespace {

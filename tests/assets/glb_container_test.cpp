@@ -10,10 +10,10 @@
 #include <string>
 #include <vector>
 
-#include "runtime/assets/gltf_detail.h"
-#include "runtime/assets/gltf_io.h"
-#include "runtime/assets/gltf_model.h"
-#include "runtime/assets/mapping_guard.h"
+#include "runtime/assets/formats/surface/gltf_detail.h"
+#include "runtime/assets/formats/surface/gltf_io.h"
+#include "runtime/assets/formats/surface/gltf_model.h"
+#include "runtime/assets/formats/archive/mapping_guard.h"
 #include "tests/assets/test_util.h"
 
 namespace sffd::assets {

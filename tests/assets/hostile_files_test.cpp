@@ -18,7 +18,7 @@
 #include <string>
 #include <vector>
 
-#include "runtime/assets/gltf_io.h"
+#include "runtime/assets/formats/surface/gltf_io.h"
 #include "runtime/assets/import.h"
 #include "runtime/assets/scene.h"
 #include "runtime/core/atomic_file.h"

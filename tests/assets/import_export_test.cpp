@@ -10,8 +10,8 @@
 #include <random>
 
 #include "runtime/assets/builtin_scenes.h"
-#include "runtime/assets/export.h"
-#include "runtime/assets/gltf_io.h"
+#include "runtime/assets/formats/surface/export.h"
+#include "runtime/assets/formats/surface/gltf_io.h"
 #include "runtime/assets/import.h"
 #include "runtime/core/log.h"
 #include "tests/assets/test_util.h"

@@ -11,7 +11,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "runtime/assets/gltf_io.h"
+#include "runtime/assets/formats/surface/gltf_io.h"
 #include "runtime/assets/scene.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"

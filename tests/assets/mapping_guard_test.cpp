@@ -11,10 +11,10 @@
 #include <cstring>
 #include <string>
 
-#include "runtime/assets/mapped_file.h"
-#include "runtime/assets/mapping_guard.h"
-#include "runtime/assets/ply.h"
-#include "runtime/assets/ply_mapped.h"
+#include "runtime/assets/formats/archive/mapped_file.h"
+#include "runtime/assets/formats/archive/mapping_guard.h"
+#include "runtime/assets/formats/surface/ply.h"
+#include "runtime/assets/formats/surface/ply_mapped.h"
 #include "tests/assets/test_util.h"
 
 namespace {

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "runtime/assets/export.h"
+#include "runtime/assets/formats/surface/export.h"
 #include "runtime/assets/import.h"
-#include "runtime/assets/ply.h"
-#include "runtime/assets/ply_mapped.h"
+#include "runtime/assets/formats/surface/ply.h"
+#include "runtime/assets/formats/surface/ply_mapped.h"
 #include "tests/assets/test_util.h"
 
 namespace {

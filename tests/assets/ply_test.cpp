@@ -11,7 +11,7 @@
 #include <random>
 #include <string>
 
-#include "runtime/assets/ply.h"
+#include "runtime/assets/formats/surface/ply.h"
 
 namespace fs = std::filesystem;
 using namespace sffd;

@@ -29,10 +29,11 @@
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/gaussian_deform.h"
-#include "systems/gaussian/gaussian_compressed_ply.h"
-#include "systems/gaussian/gaussian_gltf.h"
-#include "systems/gaussian/gaussian_io.h"
-#include "systems/gaussian/gaussian_spz.h"
+#include "runtime/assets/formats/gaussian/gaussian_compressed_ply.h"
+#include "systems/gaussian/gaussian_read.h"
+#include "runtime/assets/formats/gaussian/gaussian_gltf.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_spz.h"
 #include "tools/bench/gaussian_case.h"
 
 namespace {

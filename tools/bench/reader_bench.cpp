@@ -13,11 +13,12 @@
 #include <filesystem>
 #include <string>
 
-#include "runtime/assets/export.h"
-#include "runtime/assets/gltf_io.h"
+#include "runtime/assets/formats/surface/export.h"
+#include "runtime/assets/formats/surface/gltf_io.h"
 #include "runtime/assets/import.h"
-#include "runtime/assets/ply.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/surface/ply.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_read.h"
 #include "tools/bench/bench_util.h"
 #include "tools/bench/gaussian_case.h"
 

@@ -13,7 +13,8 @@
 
 #include "runtime/assets/scene.h"
 #include "runtime/core/log.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_read.h"
 #include "systems/gaussian/gaussian_scene.h"
 
 #ifndef SFFD_FUZZ_FORMAT

@@ -14,7 +14,8 @@
 #include <string>
 
 #include "runtime/core/log.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_read.h"
 
 namespace {
 

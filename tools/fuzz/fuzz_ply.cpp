@@ -8,7 +8,7 @@
 #include <string>
 
 #include "runtime/assets/import.h"
-#include "runtime/assets/ply.h"
+#include "runtime/assets/formats/surface/ply.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     using namespace sffd;

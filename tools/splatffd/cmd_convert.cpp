@@ -17,7 +17,7 @@
 #include <string>
 
 #include "runtime/assets/builtin_scenes.h"
-#include "runtime/assets/export.h"
+#include "runtime/assets/formats/surface/export.h"
 #include "runtime/assets/import.h"
 #include "runtime/assets/scene.h"
 #include "systems/ffd/lattice_io.h"
@@ -27,7 +27,7 @@
 #include "systems/ffd/lattice_frame.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
-#include "systems/gaussian/gaussian_gltf.h"
+#include "runtime/assets/formats/gaussian/gaussian_gltf.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/convert_gaussians.h"
 #include "tools/splatffd/lattice_source.h"

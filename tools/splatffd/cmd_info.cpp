@@ -13,7 +13,7 @@
 
 #include "runtime/assets/builtin_scenes.h"
 #include "runtime/assets/import.h"
-#include "runtime/assets/ply.h"
+#include "runtime/assets/formats/surface/ply.h"
 #include "runtime/assets/scene.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
@@ -23,9 +23,10 @@
 #include "systems/ffd/deform.h"
 #include "systems/ffd/lattice_frame.h"
 #include "systems/gaussian/components.h"
-#include "systems/gaussian/gaussian_compressed_ply.h"
-#include "systems/gaussian/gaussian_gltf.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_compressed_ply.h"
+#include "systems/gaussian/gaussian_read.h"
+#include "runtime/assets/formats/gaussian/gaussian_gltf.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_scene.h"
 #include "tools/splatffd/command.h"
 

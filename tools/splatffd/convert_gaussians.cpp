@@ -5,18 +5,19 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "runtime/assets/ply.h"
+#include "runtime/assets/formats/surface/ply.h"
 #include "runtime/assets/scene.h"
 #include "runtime/scene/components.h"
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/capture_up.h"
 #include "systems/gaussian/from_splats.h"
-#include "systems/gaussian/gaussian_axes.h"
-#include "systems/gaussian/gaussian_compressed_ply.h"
-#include "systems/gaussian/gaussian_gltf.h"
-#include "systems/gaussian/gaussian_io.h"
-#include "systems/gaussian/gaussian_sog.h"
-#include "systems/gaussian/gaussian_spz.h"
+#include "runtime/assets/formats/gaussian/gaussian_axes.h"
+#include "systems/gaussian/gaussian_read.h"
+#include "runtime/assets/formats/gaussian/gaussian_compressed_ply.h"
+#include "runtime/assets/formats/gaussian/gaussian_gltf.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_sog.h"
+#include "runtime/assets/formats/gaussian/gaussian_spz.h"
 
 namespace sffd::cli {
 

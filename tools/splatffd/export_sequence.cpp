@@ -5,7 +5,7 @@
 #include <string>
 
 #include "runtime/app/clock.h"
-#include "runtime/assets/export.h"
+#include "runtime/assets/formats/surface/export.h"
 #include "runtime/assets/scene.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
@@ -16,12 +16,12 @@
 #include "systems/ffd/deform.h"
 #include "systems/ffd/lattice_frame.h"
 #include "systems/gaussian/components.h"
-#include "systems/gaussian/gaussian_compressed_ply.h"
+#include "runtime/assets/formats/gaussian/gaussian_compressed_ply.h"
 #include "systems/gaussian/gaussian_deform.h"
-#include "systems/gaussian/gaussian_gltf.h"
-#include "systems/gaussian/gaussian_io.h"
-#include "systems/gaussian/gaussian_sog.h"
-#include "systems/gaussian/gaussian_spz.h"
+#include "runtime/assets/formats/gaussian/gaussian_gltf.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_sog.h"
+#include "runtime/assets/formats/gaussian/gaussian_spz.h"
 
 namespace sffd::cli {
 
@@ -204,7 +204,8 @@ Result<ExportedFrame> write_surface(const ExportScene& scene, ExportFormat forma
                        : assets::save_splat_ply(cloud, path);
     if (!saved) return saved.error();
     done.files.push_back(path);
-    // A PLY cannot hold texels without a file: save_splat_ply wrote them beside it (runtime/assets/export.h).
+    // A PLY cannot hold texels without a file: save_splat_ply wrote them beside it
+    // (runtime/assets/formats/surface/export.h).
     if (format == ExportFormat::ply && cloud.texture.path.empty() && !cloud.texture.rgba8.empty())
         done.files.push_back(path.parent_path() / (path.stem().string() + "_texture.png"));
     return done;

@@ -27,15 +27,15 @@
 
 #include <nlohmann/json.hpp>
 
-#include "runtime/assets/export.h"
+#include "runtime/assets/formats/surface/export.h"
 #include "runtime/assets/scene.h"
 #include "runtime/core/json_text.h"
 #include "runtime/core/paths.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/limits.h"
 #include "systems/gaussian/from_splats.h"
-#include "systems/gaussian/gaussian_gltf.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_gltf.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/profiling/synthetic.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/profile_run.h"

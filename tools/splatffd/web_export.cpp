@@ -23,7 +23,7 @@
 #include "systems/ffd/components.h"
 #include "systems/ffd/lattice_frame.h"
 #include "systems/gaussian/components.h"
-#include "systems/gaussian/gaussian_sog.h"
+#include "runtime/assets/formats/gaussian/gaussian_sog.h"
 #include "systems/splat_render/camera_math.h"
 
 namespace sffd::cli {

@@ -15,9 +15,9 @@
 #include <string>
 #include <tuple>
 
-#include "runtime/assets/export.h"
+#include "runtime/assets/formats/surface/export.h"
 #include "runtime/assets/import.h"
-#include "runtime/assets/ply.h"
+#include "runtime/assets/formats/surface/ply.h"
 #include "tests/assets/textured_box.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/lattice_io.h"

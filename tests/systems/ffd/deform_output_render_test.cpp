@@ -9,9 +9,9 @@
 #include <filesystem>
 #include <string>
 
-#include "runtime/assets/export.h"
+#include "runtime/assets/formats/surface/export.h"
 #include "runtime/assets/import.h"
-#include "runtime/assets/ply.h"
+#include "runtime/assets/formats/surface/ply.h"
 #include "runtime/assets/scene.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/lattice_io.h"

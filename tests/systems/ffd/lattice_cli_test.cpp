@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "runtime/assets/export.h"
-#include "runtime/assets/ply.h"
+#include "runtime/assets/formats/surface/export.h"
+#include "runtime/assets/formats/surface/ply.h"
 #include "runtime/assets/scene.h"
 #include "runtime/assets/splat_estimation.h"
 #include "runtime/scene/components.h"

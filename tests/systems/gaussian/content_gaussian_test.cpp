@@ -20,7 +20,8 @@
 #include "runtime/assets/builtin_scenes.h"
 #include "systems/ffd/lattice.h"
 #include "systems/gaussian/gaussian_deform.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_read.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/splat_render/camera_math.h"
 

@@ -10,16 +10,17 @@
 #include <random>
 #include <sstream>
 
-#include "runtime/assets/ply.h"
+#include "runtime/assets/formats/surface/ply.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/lattice_io.h"
 #include "runtime/assets/builtin_scenes.h"
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/from_splats.h"
-#include "systems/gaussian/gaussian_gltf.h"
-#include "systems/gaussian/gaussian_axes.h"
+#include "runtime/assets/formats/gaussian/gaussian_gltf.h"
+#include "systems/gaussian/gaussian_read.h"
+#include "runtime/assets/formats/gaussian/gaussian_axes.h"
 #include "systems/gaussian/gaussian_deform.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/splat_render/image_io.h"
 #include "tests/systems/gaussian/test_math.h"

@@ -18,7 +18,7 @@
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/gaussian_system.h"

@@ -13,14 +13,15 @@
 #include <fstream>
 #include <random>
 
-#include "runtime/assets/ply.h"
+#include "runtime/assets/formats/surface/ply.h"
 #include "runtime/core/log.h"
-#include "systems/gaussian/gaussian_axes.h"
-#include "systems/gaussian/gaussian_compressed_ply.h"
-#include "systems/gaussian/gaussian_io.h"
-#include "systems/gaussian/gaussian_ksplat.h"
-#include "systems/gaussian/gaussian_spz.h"
-#include "systems/gaussian/gaussian_spz_detail.h"
+#include "runtime/assets/formats/gaussian/gaussian_axes.h"
+#include "systems/gaussian/gaussian_read.h"
+#include "runtime/assets/formats/gaussian/gaussian_compressed_ply.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_ksplat.h"
+#include "runtime/assets/formats/gaussian/gaussian_spz.h"
+#include "runtime/assets/formats/gaussian/gaussian_spz_detail.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/sh.h"
 #include "tests/systems/gaussian/test_math.h"

@@ -13,9 +13,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "systems/gaussian/gaussian_axes.h"
-#include "systems/gaussian/gaussian_gltf.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_axes.h"
+#include "systems/gaussian/gaussian_read.h"
+#include "runtime/assets/formats/gaussian/gaussian_gltf.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/sh.h"
 

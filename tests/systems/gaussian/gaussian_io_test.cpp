@@ -11,7 +11,8 @@
 #include <random>
 #include <vector>
 
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_read.h"
 #include "systems/gaussian/sh.h"
 
 namespace {

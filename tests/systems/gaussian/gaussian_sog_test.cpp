@@ -16,9 +16,10 @@
 
 #include "runtime/assets/scene.h"
 #include "runtime/scene/components.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_read.h"
 #include "systems/gaussian/gaussian_scene.h"
-#include "systems/gaussian/gaussian_sog.h"
+#include "runtime/assets/formats/gaussian/gaussian_sog.h"
 
 namespace {
 

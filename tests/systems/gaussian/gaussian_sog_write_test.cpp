@@ -18,9 +18,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "systems/gaussian/gaussian_io.h"
-#include "systems/gaussian/gaussian_sog.h"
-#include "systems/gaussian/gaussian_sog_quantize.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_read.h"
+#include "runtime/assets/formats/gaussian/gaussian_sog.h"
+#include "runtime/assets/formats/gaussian/gaussian_sog_quantize.h"
 #include "tests/systems/gaussian/sog_bounds.h"
 
 namespace {

@@ -11,8 +11,9 @@
 #include <random>
 #include <sstream>
 
-#include "systems/gaussian/gaussian_io.h"
-#include "systems/gaussian/gaussian_spz.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_read.h"
+#include "runtime/assets/formats/gaussian/gaussian_spz.h"
 #include "systems/gaussian/sh.h"
 
 namespace {

@@ -13,7 +13,7 @@
 #include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
 #include "systems/gaussian/components.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_scene.h"
 #include "tests/test_util/gl_required.h"
 #include "tests/test_util/run_tool.h"

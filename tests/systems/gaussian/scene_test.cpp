@@ -16,7 +16,7 @@
 
 #include <glm/gtc/quaternion.hpp>
 
-#include "runtime/assets/export.h"
+#include "runtime/assets/formats/surface/export.h"
 #include "runtime/assets/scene.h"
 #include "runtime/core/file_io.h"
 #include "runtime/gfx/context.h"
@@ -31,8 +31,8 @@
 #include "systems/ffd/lattice.h"
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_deform.h"
-#include "systems/gaussian/gaussian_gltf.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_gltf.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_scene.h"
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/gaussian/reference_render.h"

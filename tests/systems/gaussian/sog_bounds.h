@@ -16,7 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "systems/gaussian/components.h"
-#include "systems/gaussian/gaussian_zip.h"
+#include "runtime/assets/formats/archive/gaussian_zip.h"
 
 namespace sffd::test::sog {
 

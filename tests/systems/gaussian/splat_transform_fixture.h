@@ -15,7 +15,7 @@
 #include <string>
 
 #include "systems/gaussian/components.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "tests/systems/gaussian/test_math.h"
 

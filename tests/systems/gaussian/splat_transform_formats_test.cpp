@@ -14,11 +14,12 @@
 #include <sstream>
 
 #include "runtime/core/log.h"
-#include "systems/gaussian/gaussian_axes.h"
-#include "systems/gaussian/gaussian_compressed_ply.h"
-#include "systems/gaussian/gaussian_gltf.h"
-#include "systems/gaussian/gaussian_io.h"
-#include "systems/gaussian/gaussian_spz.h"
+#include "runtime/assets/formats/gaussian/gaussian_axes.h"
+#include "systems/gaussian/gaussian_read.h"
+#include "runtime/assets/formats/gaussian/gaussian_compressed_ply.h"
+#include "runtime/assets/formats/gaussian/gaussian_gltf.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_spz.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"

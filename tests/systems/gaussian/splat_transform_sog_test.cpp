@@ -13,11 +13,12 @@
 #include <random>
 #include <sstream>
 
-#include "systems/gaussian/gaussian_axes.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_axes.h"
+#include "systems/gaussian/gaussian_read.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_math.h"
-#include "systems/gaussian/gaussian_sog.h"
-#include "systems/gaussian/gaussian_spz.h"
+#include "runtime/assets/formats/gaussian/gaussian_sog.h"
+#include "runtime/assets/formats/gaussian/gaussian_spz.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/gaussian/sh.h"
 #include "tests/systems/gaussian/sog_bounds.h"

@@ -18,12 +18,13 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "systems/ffd/lattice.h"
-#include "systems/gaussian/gaussian_axes.h"
+#include "runtime/assets/formats/gaussian/gaussian_axes.h"
+#include "systems/gaussian/gaussian_read.h"
 #include "systems/gaussian/gaussian_deform.h"
-#include "systems/gaussian/gaussian_gltf.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_gltf.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_math.h"
-#include "systems/gaussian/gaussian_spz.h"
+#include "runtime/assets/formats/gaussian/gaussian_spz.h"
 #include "systems/gaussian/sh.h"
 #include "tests/systems/gaussian/splat_transform_fixture.h"
 #include "tests/systems/gaussian/test_math.h"

@@ -18,7 +18,7 @@
 #include "systems/ffd/components.h"
 #include "systems/gaussian/capture_up.h"
 #include "systems/gaussian/components.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_scene.h"
 #include "systems/picking/gaussian_source.h"
 #include "systems/picking/screen_view.h"

@@ -9,8 +9,8 @@
 #include <filesystem>
 #include <string>
 
-#include "systems/gaussian/gaussian_axes.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_axes.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "tests/systems/gaussian/splat_transform_fixture.h"
 #include "tests/tools/splatffd/export_scenes.h"
 
@@ -55,7 +55,7 @@ TEST_F(ExportSplatTransform, ReadsEveryFrameOfEveryFormatWithinItsQuantisation) 
             ASSERT_TRUE(exact) << exact.message();
             ASSERT_EQ(theirs->size(), exact->size());
             // splat-transform decodes SPZ as stored, without SPZ's RUB turn
-            // (systems/gaussian/gaussian_axes.h).
+            // (runtime/assets/formats/gaussian/gaussian_axes.h).
             if (f.name == "spz") sffd::gaussian::turn_axes(*theirs, sffd::gaussian::AxisTurn::x180);
             double pos = 0, scale = 0, opacity = 0, dc = 0;
             const std::size_t kt = std::size_t(sffd::sh_coeffs(theirs->sh_degree)) * 3,

@@ -26,7 +26,8 @@
 #include "systems/animation/paper_demo.h"
 #include "systems/engine/engine_frame.h"
 #include "systems/gaussian/components.h"
-#include "systems/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "systems/gaussian/gaussian_read.h"
 #include "tests/test_util/run_tool.h"
 #include "tests/tools/splatffd/export_scenes.h"
 

@@ -19,7 +19,7 @@
 
 #include "systems/animation/clip_io.h"
 #include "systems/animation/evaluate.h"
-#include "systems/gaussian/gaussian_sog.h"
+#include "runtime/assets/formats/gaussian/gaussian_sog.h"
 #include "tests/tools/splatffd/web_test_scene.h"
 
 namespace fs = std::filesystem;
