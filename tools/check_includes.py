@@ -14,7 +14,9 @@ belongs to the libraries whose folder it is in (the folders of their sources, or
 header-only libraries). Headers outside every library folder (tests/, shaders/, tools/bench/) are free.
 What a target may include: its own headers and those of every library in its link closure: its direct
 link libraries, then their interface link libraries, transitively ($<LINK_ONLY:...> entries are link
-order only, their headers are not visible). Prints one line per violation and exits 1 if there is any.
+order only, their headers are not visible). Layers: a file under runtime/ never includes a header under
+systems/ (the runtime, formats included, is below every system), linked or not.
+Prints one line per violation and exits 1 if there is any.
 """
 import os
 import re
@@ -120,6 +122,9 @@ def main():
                 header = os.path.normpath(inc)
             else:
                 header = os.path.relpath(os.path.normpath(os.path.join(os.path.dirname(full), inc)), root)
+            if path.startswith("runtime/") and header.startswith("systems/"):
+                violations.append(f"{path}: includes {header}: runtime/ is below systems/ and includes none of it")
+                continue
             own = owners(header)
             if own and not (own & visible):
                 who = " or ".join(sorted(names))
@@ -128,7 +133,7 @@ def main():
     for v in violations:
         print(v)
     if violations:
-        print(f"check_includes: {len(violations)} include(s) cross a library boundary without a link")
+        print(f"check_includes: {len(violations)} include(s) cross a library boundary without a link or a layer downwards")
         return 1
     print(f"check_includes: {len(checked)} files of {len(targets)} targets include only what they link")
     return 0

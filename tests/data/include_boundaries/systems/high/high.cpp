@@ -1,0 +1,1 @@
+// Fixture: the system library.

@@ -1,0 +1,2 @@
+// Fixture: a system's header.
+#pragma once
