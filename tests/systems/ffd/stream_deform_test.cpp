@@ -322,6 +322,25 @@ TEST_F(StreamDeformTest, ErrorsLeaveAnOldOutputUntouched) {
     EXPECT_NE(missing.message().find("nope.ply"), std::string::npos);
 }
 
+// Progress after each vertex chunk: rows done so far, rising to the element's count.
+TEST_F(StreamDeformTest, ProgressFollowsTheVertexChunks) {
+    const std::string in = path("in.ply");
+    write_surface_ply(in, 1000, true, false);
+    const Lattice l = bent_lattice();
+    ffd::StreamDeformRequest req;
+    req.input = in;
+    req.output = path("out.ply");
+    req.lattices = std::span<const Lattice>(&l, 1);
+    req.chunk_rows = 300;
+    std::vector<std::uint64_t> seen;
+    auto r = ffd::stream_deform(req, [&](std::uint64_t done, std::uint64_t total) {
+        EXPECT_EQ(total, 1000u);
+        seen.push_back(done);
+    });
+    ASSERT_TRUE(r) << r.message();
+    EXPECT_EQ(seen, (std::vector<std::uint64_t>{300, 600, 900, 1000}));
+}
+
 // Two lattices both run (the first sees the file as it is), and a 3DGS file refuses more than one.
 TEST_F(StreamDeformTest, LatticesApplyInOrder) {
     const std::size_t n = 400;
