@@ -2,7 +2,8 @@
 // cloud (the Fibonacci sphere, whose order makes its pages latitude bands, as `profile synthetic:1m`
 // makes it), through ffd_system's CPU path, one drag step per iteration. Counters: pages redone per step,
 // the cloud's pages, and their ratio. BM_Drag_Full is the same drag with the page record dropped before
-// each step, i.e. what every drag step cost before (every page).
+// each step, i.e. what every drag step cost before (every page). BM_GaussianDrag_* are the same for 1M
+// Gaussians.
 //   build/<dir>/tools/bench/bench_page_redeform --benchmark_repetitions=3
 //   --benchmark_report_aggregates_only=true
 // Arguments: divisions per axis, the dragged control point's index along y (x and z at the middle).
@@ -14,6 +15,8 @@
 #include "runtime/scene/point_pages.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/ffd_system.h"
+#include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_system.h"
 #include "tools/bench/paper_case.h"
 
 namespace {
@@ -71,7 +74,55 @@ void drag(benchmark::State& state, bool full) {
     state.counters["support_height"] = (std::min(div, j + 2) - std::max(0, j - 2)) / double(div);
 }
 
+// The same drag on 1M Gaussians (SH degree 0) on the sphere, in the same order, through
+// gaussian_deform_system's CPU path.
+void drag_gaussians(benchmark::State& state, bool full) {
+    const int div = int(state.range(0)), j = int(state.range(1));
+    static const GaussianCloud cloud = [] {
+        const SplatCloud s = sphere(1000000);
+        GaussianCloud g;
+        g.positions = s.positions;
+        g.scales.assign(s.size(), glm::vec3(0.003f, 0.003f, 0.0005f));
+        g.rotations.assign(s.size(), glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+        g.opacities.assign(s.size(), 0.8f);
+        g.sh.assign(s.size() * 3, 0.2f);
+        return g;
+    }();
+    ecs::Registry reg;
+    reg.set_resource<FfdSettings>().force_cpu = true;
+    const ecs::Entity c = reg.create(), le = reg.create();
+    reg.emplace<GaussianCloud>(c, cloud);
+    reg.emplace<Lattice>(
+        le,
+        make_lattice(glm::dvec3(-1.1), {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                     glm::ivec3(div), LatticeBasis::bspline));
+    reg.emplace<Deformers>(c, Deformers{{le}});
+    gaussian_deform_system(reg, {});
+    const std::size_t cp = reg.get<Lattice>(le).index(div / 2, j, div / 2);
+    double step = 0.0, redone = 0.0, total = 0.0;
+    std::uint64_t steps = 0;
+    for (auto _ : state) {
+        if (full) {
+            state.PauseTiming();
+            reg.get<DeformedGaussians>(c).paged = {};
+            state.ResumeTiming();
+        }
+        step += 1.0;
+        Lattice& l = reg.patch<Lattice>(le);
+        l.current[cp] = l.rest[cp] + glm::dvec3(0.02 * std::sin(step), 0.03 * std::cos(step), 0.01);
+        gaussian_deform_system(reg, {});
+        redone += double(reg.resource<GaussianDeformStats>().last_pages.redone);
+        total = double(reg.resource<GaussianDeformStats>().last_pages.total);
+        ++steps;
+    }
+    state.counters["pages_redone"] = redone / double(steps);
+    state.counters["pages_total"] = total;
+    state.counters["fraction"] = redone / double(steps) / total;
+}
+
 void BM_Drag_Pages(benchmark::State& state) { drag(state, false); }
+void BM_GaussianDrag_Pages(benchmark::State& state) { drag_gaussians(state, false); }
+void BM_GaussianDrag_Full(benchmark::State& state) { drag_gaussians(state, true); }
 void BM_Drag_Full(benchmark::State& state) { drag(state, true); }
 
 // 21^3 lattice: points 2 (support below y = -0.66, 1/5 of the height) and 10 (the middle); 11^3: points
@@ -83,5 +134,7 @@ BENCHMARK(BM_Drag_Pages)
     ->Args({10, 5})
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_Drag_Full)->Args({20, 2})->Args({10, 5})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GaussianDrag_Pages)->Args({20, 2})->Args({20, 10})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GaussianDrag_Full)->Args({20, 2})->Unit(benchmark::kMillisecond);
 
 }  // namespace
