@@ -20,27 +20,6 @@ using nlohmann::json;
 
 namespace {
 
-struct Extension {
-    SceneGltfSaveFn save;
-    SceneGltfLoadFn load;
-};
-
-struct FileLoader {
-    SceneFileClaim claims;
-    SceneFileLoader load;
-    std::string types;
-};
-
-std::map<std::string, FileLoader>& file_loaders() {
-    static std::map<std::string, FileLoader> all;
-    return all;
-}
-
-std::map<std::string, Extension>& extensions() {
-    static std::map<std::string, Extension> all;
-    return all;
-}
-
 constexpr int kSceneVersion = 1;
 
 json vec3(const glm::dvec3& v) { return json::array({v.x, v.y, v.z}); }
@@ -285,8 +264,9 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
             if (!scene["extensions"].is_object())
                 throw std::runtime_error(src + ": SFFD_scene: 'extensions' must be an object");
             for (const auto& [key, value] : scene["extensions"].items()) {
-                auto it = extensions().find(key);
-                if (it == extensions().end() || !it->second.load) {
+                const auto extensions = SceneHooks::of(r).extensions;  // a copy: a loader may change it
+                auto it = extensions.find(key);
+                if (it == extensions.end() || !it->second.load) {
                     log::debug(src, ": scene extension '", key, "' has no registered loader; skipped");
                     continue;
                 }
@@ -321,7 +301,7 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
 
 std::vector<std::string> builtin_scene_names() { return {"sphere", "face"}; }
 
-void register_scene_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn) {
+void SceneHooks::add_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn) {
     Extension e;
     if (save_fn)
         e.save = [f = std::move(save_fn)](const ecs::Registry& r, const SceneIdOf& id_of, const fs::path&,
@@ -330,35 +310,71 @@ void register_scene_extension(const std::string& key, SceneSaveFn save_fn, Scene
         e.load = [f = std::move(load_fn)](ecs::Registry& r, std::string_view text,
                                           const SceneEntityOf& entity_of, const fs::path&,
                                           const assets::GltfModel&) { return f(r, text, entity_of); };
-    extensions()[key] = std::move(e);
+    extensions[key] = std::move(e);
 }
 
-void register_scene_gltf_extension(const std::string& key, SceneGltfSaveFn save_fn, SceneGltfLoadFn load_fn) {
-    extensions()[key] = Extension{std::move(save_fn), std::move(load_fn)};
+void SceneHooks::add_gltf_extension(const std::string& key, SceneGltfSaveFn save_fn,
+                                    SceneGltfLoadFn load_fn) {
+    extensions[key] = Extension{std::move(save_fn), std::move(load_fn)};
 }
 
-void register_scene_file_loader(const std::string& key, SceneFileClaim claims, SceneFileLoader load,
-                                std::string types) {
-    file_loaders()[key] = FileLoader{std::move(claims), std::move(load), std::move(types)};
+void SceneHooks::add_file_loader(const std::string& key, SceneFileClaim claims, SceneFileLoader load,
+                                 std::string types) {
+    file_loaders[key] = FileLoader{std::move(claims), std::move(load), std::move(types)};
 }
 
-std::string scene_file_types() {
+void SceneHooks::add_builtin_hook(const std::string& key, BuiltinSceneHook hook) {
+    builtin_hooks[key] = std::move(hook);
+}
+
+void SceneHooks::remove(const std::string& key) {
+    extensions.erase(key);
+    file_loaders.erase(key);
+    builtin_hooks.erase(key);
+}
+
+std::string SceneHooks::file_types() const {
     std::string all = ".ply, .obj, .off, .gltf, .glb";
-    for (const auto& [key, loader] : file_loaders())
+    for (const auto& [key, loader] : file_loaders)
         if (!loader.types.empty()) all += ", " + loader.types;
     return all;
 }
 
-void unregister_scene_file_loader(const std::string& key) { file_loaders().erase(key); }
-
-void unregister_scene_extension(const std::string& key) { extensions().erase(key); }
-
-namespace {
-std::map<std::string, BuiltinSceneHook>& builtin_hooks() {
-    static std::map<std::string, BuiltinSceneHook> all;
-    return all;
+SceneHooks& SceneHooks::process_default() {
+    static SceneHooks hooks;
+    return hooks;
 }
 
+const SceneHooks& SceneHooks::of(const ecs::Registry& registry) {
+    const SceneHooks* own = registry.try_resource<SceneHooks>();
+    return own ? *own : process_default();
+}
+
+void register_scene_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn) {
+    SceneHooks::process_default().add_extension(key, std::move(save_fn), std::move(load_fn));
+}
+
+void register_scene_gltf_extension(const std::string& key, SceneGltfSaveFn save_fn, SceneGltfLoadFn load_fn) {
+    SceneHooks::process_default().add_gltf_extension(key, std::move(save_fn), std::move(load_fn));
+}
+
+void register_scene_file_loader(const std::string& key, SceneFileClaim claims, SceneFileLoader load,
+                                std::string types) {
+    SceneHooks::process_default().add_file_loader(key, std::move(claims), std::move(load), std::move(types));
+}
+
+std::string scene_file_types() { return SceneHooks::process_default().file_types(); }
+std::string scene_file_types(const ecs::Registry& registry) { return SceneHooks::of(registry).file_types(); }
+
+void unregister_scene_file_loader(const std::string& key) {
+    SceneHooks::process_default().file_loaders.erase(key);
+}
+
+void unregister_scene_extension(const std::string& key) {
+    SceneHooks::process_default().extensions.erase(key);
+}
+
+namespace {
 Status load_builtin_with_hooks(ecs::Registry& r, const std::string& name) {
     std::vector<ecs::Entity> before;
     r.each_entity([&](ecs::Entity e) { before.push_back(e); });
@@ -367,16 +383,20 @@ Status load_builtin_with_hooks(ecs::Registry& r, const std::string& name) {
     r.each_entity([&](ecs::Entity e) {
         if (std::find(before.begin(), before.end(), e) == before.end()) created.push_back(e);
     });
-    for (const auto& [key, hook] : builtin_hooks())
+    // A copy: a hook may replace the registry's SceneHooks.
+    const auto hooks = SceneHooks::of(r).builtin_hooks;
+    for (const auto& [key, hook] : hooks)
         if (hook) hook(r, name, created);
     return {};
 }
 }  // namespace
 
 void register_builtin_scene_hook(const std::string& key, BuiltinSceneHook hook) {
-    builtin_hooks()[key] = std::move(hook);
+    SceneHooks::process_default().add_builtin_hook(key, std::move(hook));
 }
-void unregister_builtin_scene_hook(const std::string& key) { builtin_hooks().erase(key); }
+void unregister_builtin_scene_hook(const std::string& key) {
+    SceneHooks::process_default().builtin_hooks.erase(key);
+}
 
 Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
     if (assets::is_builtin_scene(name_or_path)) return load_builtin_with_hooks(r, name_or_path);
@@ -387,13 +407,14 @@ Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    for (const auto& [key, loader] : file_loaders())
+    const auto loaders = SceneHooks::of(r).file_loaders;  // a copy: a loader may change the registry
+    for (const auto& [key, loader] : loaders)
         if (loader.claims && loader.load && loader.claims(path)) return loader.load(r, path);
     if (ext == ".gltf" || ext == ".glb") return load_scene_file(r, path);
     // Refused here rather than by the importer, whose list knows only its own formats.
     if (ext != ".ply" && ext != ".obj" && ext != ".off")
-        return make_error(name_or_path + ": unknown file type '" + ext + "' (expected " + scene_file_types() +
-                          ")");
+        return make_error(name_or_path + ": unknown file type '" + ext + "' (expected " +
+                          scene_file_types(r) + ")");
     SplatMaterial material;
     auto cloud = assets::import_splat_cloud(path, {}, &material);
     if (!cloud) return cloud.error();
@@ -483,7 +504,7 @@ Status save_scene(const ecs::Registry& r, const fs::path& path) {
     scene["ambient_lights"] = aj;
     json ext = json::object();
     std::vector<assets::GltfAppend> append;
-    for (const auto& [key, fns] : extensions()) {
+    for (const auto& [key, fns] : SceneHooks::of(r).extensions) {
         if (!fns.save) continue;
         auto text = fns.save(r, id_of, path, append);
         if (!text) return make_error(path.string() + ": scene extension '" + key + "': " + text.message());

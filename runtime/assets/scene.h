@@ -14,8 +14,10 @@
 // AmbientLight. Loading adds to the registry; it does not clear it.
 //
 // Extensions: a system that cannot be a dependency of assets (animation, editor) stores its own data in
-// the scene file by registering a pair of functions, explicitly, at start-up (no static initialisers):
-//     register_scene_extension("animation", save_clips, load_clips);
+// the scene file through a pair of functions kept in a SceneHooks object (below), which lives in the
+// registry's context: load_scene and save_scene use the registry's own SceneHooks resource, so what a
+// registry opens is decided where it is set up (systems/engine: use_engine_scene_hooks(registry)):
+//     hooks.add_extension("animation", save_clips, load_clips);
 // save_fn returns a JSON text (or an empty string for "nothing to store"); it refers to entities through
 // `id_of(entity)` (-1 for entities the file does not hold). load_fn receives that JSON text and
 // `entity_of(id)` to find the loaded entities again. It runs after all clouds, lattices, cameras and
@@ -24,6 +26,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -75,6 +78,8 @@ void unregister_scene_file_loader(const std::string& key);
 
 // Every file type load_scene opens: assets' own importers, then each registered loader's `types`.
 std::string scene_file_types();
+// The same for a registry: its own SceneHooks' loaders when it has one.
+std::string scene_file_types(const ecs::Registry& registry);
 
 // Built-in scenes have no file for an extension to read, so a system that adds defaults to them (the
 // animation engineer's paper demo clip) registers a hook that runs after a built-in scene's entities
@@ -83,5 +88,38 @@ using BuiltinSceneHook =
     std::function<void(ecs::Registry&, const std::string& scene, const std::vector<ecs::Entity>& created)>;
 void register_builtin_scene_hook(const std::string& key, BuiltinSceneHook hook);
 void unregister_builtin_scene_hook(const std::string& key);
+
+// Everything above that a system registers (extensions, file loaders, built-in scene hooks), as one
+// value. A registry holds one as a resource (its context): load_scene/save_scene use it, in key order.
+// A registry without one uses the process-wide set that the register_* functions above fill, a
+// transition for callers that set up no registry context yet (SceneHooks::process_default()).
+struct SceneHooks {
+    struct Extension {
+        SceneGltfSaveFn save;
+        SceneGltfLoadFn load;
+    };
+    struct FileLoader {
+        SceneFileClaim claims;
+        SceneFileLoader load;
+        std::string types;
+    };
+    std::map<std::string, Extension> extensions;
+    std::map<std::string, FileLoader> file_loaders;
+    std::map<std::string, BuiltinSceneHook> builtin_hooks;
+
+    // Each adds (or replaces) what is stored under `key`; the forms match the register_* functions.
+    void add_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn);
+    void add_gltf_extension(const std::string& key, SceneGltfSaveFn save_fn, SceneGltfLoadFn load_fn);
+    void add_file_loader(const std::string& key, SceneFileClaim claims, SceneFileLoader load,
+                         std::string types = {});
+    void add_builtin_hook(const std::string& key, BuiltinSceneHook hook);
+    // Drops every kind stored under `key`.
+    void remove(const std::string& key);
+    std::string file_types() const;
+
+    static SceneHooks& process_default();
+    // The registry's SceneHooks resource, else process_default().
+    static const SceneHooks& of(const ecs::Registry& registry);
+};
 
 }  // namespace sffd

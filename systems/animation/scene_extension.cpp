@@ -162,9 +162,11 @@ Status load_animation_extension(ecs::Registry& registry, std::string_view text,
     return {};
 }
 
-void register_animation_scene_hooks() {
-    register_scene_extension(kKey, save_animation_extension, load_animation_extension);
-    register_builtin_scene_hook(
+void register_animation_scene_hooks() { register_animation_scene_hooks(SceneHooks::process_default()); }
+
+void register_animation_scene_hooks(SceneHooks& hooks) {
+    hooks.add_extension(kKey, save_animation_extension, load_animation_extension);
+    hooks.add_builtin_hook(
         kKey, [](ecs::Registry& registry, const std::string&, const std::vector<ecs::Entity>& created) {
             for (ecs::Entity e : created) {
                 const Lattice* lattice = registry.try_get<Lattice>(e);

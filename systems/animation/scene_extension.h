@@ -25,7 +25,9 @@
 
 namespace sffd {
 
-void register_animation_scene_hooks();
+struct SceneHooks;
+void register_animation_scene_hooks(SceneHooks& hooks);  // into a registry's context (runtime/assets/scene.h)
+void register_animation_scene_hooks();                   // into the process-wide default set
 void unregister_animation_scene_hooks();
 
 // The extension's two halves, usable without the hook registry (tests, tools).

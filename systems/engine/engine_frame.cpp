@@ -1,6 +1,7 @@
 #include "systems/engine/engine_frame.h"
 
 #include "runtime/app/app.h"
+#include "runtime/assets/scene.h"
 #include "runtime/app/clock.h"
 #include "systems/animation/scene_extension.h"
 #include "systems/gaussian/gaussian_scene.h"
@@ -8,9 +9,21 @@
 
 namespace sffd {
 
+SceneHooks engine_scene_hooks() {
+    SceneHooks hooks;
+    register_animation_scene_hooks(hooks);
+    gaussian::register_gaussian_scene_hooks(
+        hooks);  // Gaussian files as entities, Gaussian entities in scenes
+    return hooks;
+}
+
+void use_engine_scene_hooks(ecs::Registry& registry) {
+    registry.set_resource<SceneHooks>(engine_scene_hooks());
+}
+
 void register_engine_scene_hooks() {
     register_animation_scene_hooks();
-    gaussian::register_gaussian_scene_hooks();  // Gaussian files as entities, Gaussian entities in scenes
+    gaussian::register_gaussian_scene_hooks();
 }
 
 Result<render::FrameImage> render_engine_frame(ecs::Registry& registry, const Schedule& schedule,

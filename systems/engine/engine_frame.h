@@ -21,9 +21,16 @@ class GlContext;
 
 namespace sffd {
 
-// The start-up registrations of the systems that keep data in scene files (animation clips, Gaussian
-// files and entities: runtime/assets/scene.h hooks), so load_scene() opens what the command opens. Call
-// once before loading; calling again re-registers the same hooks.
+struct SceneHooks;  // runtime/assets/scene.h
+
+// The scene-file hooks of the systems that keep data in scene files (animation clips, Gaussian files and
+// entities: runtime/assets/scene.h SceneHooks), as one value.
+SceneHooks engine_scene_hooks();
+// Makes them the registry's own (a SceneHooks resource, its context), so load_scene(registry, ...) and
+// save_scene(registry, ...) open and write what the command does whatever else ran in the process.
+void use_engine_scene_hooks(ecs::Registry& registry);
+// The same hooks in the process-wide default set, used by registries without their own (the transition
+// for callers that do not set up a registry context yet). Calling again re-registers the same hooks.
 void register_engine_scene_hooks();
 
 struct EngineFrameOptions {

@@ -368,9 +368,11 @@ void add_default_gaussian_view(ecs::Registry& registry) {
     if (lo.x <= hi.x) assets::add_default_view(registry, lo, hi, glm::dvec3(0.3, 0.3, 1.0));
 }
 
-void register_gaussian_scene_hooks() {
-    register_scene_gltf_extension(kKey, save_gaussian_extension, load_gaussian_extension);
-    register_scene_file_loader(
+void register_gaussian_scene_hooks() { register_gaussian_scene_hooks(SceneHooks::process_default()); }
+
+void register_gaussian_scene_hooks(SceneHooks& hooks) {
+    hooks.add_gltf_extension(kKey, save_gaussian_extension, load_gaussian_extension);
+    hooks.add_file_loader(
         kKey, [](const fs::path& p) { return is_gaussian_scene_file(p); },
         [](ecs::Registry& registry, const fs::path& p) -> Status {
             auto e = load_gaussian_entity(registry, p);

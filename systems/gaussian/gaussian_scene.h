@@ -36,6 +36,7 @@
 #include "runtime/ecs/registry.h"
 
 namespace sffd {
+struct SceneHooks;  // runtime/assets/scene.h
 
 // The file a GaussianCloud entity was loaded from (absolute), so a saved scene can refer to it.
 struct GaussianSource {
@@ -55,7 +56,8 @@ Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const std::fil
 // scene whose Gaussians come without a camera both add it, so the two open alike.
 void add_default_gaussian_view(ecs::Registry& registry);
 
-void register_gaussian_scene_hooks();
+void register_gaussian_scene_hooks(SceneHooks& hooks);  // into a registry's context (runtime/assets/scene.h)
+void register_gaussian_scene_hooks();                   // into the process-wide default set
 void unregister_gaussian_scene_hooks();
 
 // The extension's two halves, usable without the hook registry (register_scene_gltf_extension's forms).

@@ -32,8 +32,8 @@ constexpr double kFps = 24.0;
 // `empty_clip`: a clip without keys.
 inline void save_at_frame(const std::string& in, const fs::path& out, long frame, bool demo_clip = false,
                           bool empty_clip = false) {
-    sffd::register_engine_scene_hooks();
     sffd::ecs::Registry r;
+    sffd::use_engine_scene_hooks(r);
     ASSERT_TRUE(sffd::load_scene(r, in)) << in;
     std::vector<sffd::ecs::Entity> lattices;
     r.each_entity([&](sffd::ecs::Entity e) {

@@ -185,8 +185,8 @@ TEST(WebExport, PlayerClipEvaluationEqualsTheEngines) {
     if (!engine_installed())
         GTEST_SKIP() << "the PlayCanvas engine is not installed (tools/fetch_web_engine.sh)";
     using namespace sffd;
-    register_engine_scene_hooks();
     ecs::Registry reg;
+    use_engine_scene_hooks(reg);
     ASSERT_TRUE(load_scene(reg, (scenes() / "gs.glb").string()));
     const Lattice* lattice = nullptr;
     reg.view<const Lattice>().each([&](ecs::Entity e, const Lattice& l) {

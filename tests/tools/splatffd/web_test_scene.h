@@ -28,8 +28,8 @@ inline std::string make_web_test_scenes(const std::filesystem::path& dir) {
     const std::string g = (dir / "g.ply").string(), gs = (dir / "gs.glb").string();
     if (auto r = run("convert sphere " + g + " --gaussians"); r.code != 0) return r.out;
     if (auto r = run("convert " + g + " " + gs + " --lattice fit:4,4,4"); r.code != 0) return r.out;
-    register_engine_scene_hooks();
     ecs::Registry reg;
+    use_engine_scene_hooks(reg);
     if (Status st = load_scene(reg, gs); !st) return st.message();
     int lattices = 0;
     reg.view<Lattice>().each([&](ecs::Entity e, Lattice& l) {
@@ -92,9 +92,9 @@ inline std::string make_web_test_scenes(const std::filesystem::path& dir) {
 // follow the baked bounds). Writes DIR/baked.glb; returns an error text, or empty.
 inline std::string make_web_baked_scene(const std::filesystem::path& dir, double clip_time,
                                         const Camera& camera) {
-    register_engine_scene_hooks();
     {
         ecs::Registry reg;
+        use_engine_scene_hooks(reg);
         if (Status st = load_scene(reg, (dir / "twist.glb").string()); !st) return st.message();
         std::vector<ecs::Entity> posed;
         reg.view<Lattice, const AnimationClip>().each([&](ecs::Entity e, Lattice& l, const AnimationClip& c) {
@@ -110,6 +110,7 @@ inline std::string make_web_baked_scene(const std::filesystem::path& dir, double
     if (auto r = run("convert " + (dir / "posed.glb").string() + " " + baked); r.code != 0) return r.out;
     if (auto r = run("convert " + baked + " " + fitted + " --lattice fit:4,4,4"); r.code != 0) return r.out;
     ecs::Registry reg;
+    use_engine_scene_hooks(reg);
     if (Status st = load_scene(reg, fitted); !st) return st.message();
     int lattices = 0;
     reg.view<Lattice>().each([&](ecs::Entity e, Lattice& l) {
