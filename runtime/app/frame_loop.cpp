@@ -1,5 +1,7 @@
 #include "runtime/app/frame_loop.h"
 
+#include <cstdlib>
+
 namespace sffd {
 
 const char* phase_name(Phase phase) {
@@ -15,8 +17,24 @@ const char* phase_name(Phase phase) {
     return "?";
 }
 
-void Schedule::add(Phase phase, std::string name, SystemFn fn) {
-    m_phases[static_cast<std::size_t>(phase)].push_back({std::move(name), std::move(fn)});
+namespace {
+// With SFFD_ACCESS_WARN=1 (each violation printed once, not fatal) a system without a declaration is
+// checked as one that declares nothing: the run lists every type it touches, to write its declaration.
+bool listing_undeclared() {
+    static const bool on = [] {
+        const char* v = std::getenv("SFFD_ACCESS_WARN");
+        return v && *v && *v != '0';
+    }();
+    return on;
+}
+const ecs::Access& nothing_declared() {
+    static const ecs::Access none = ecs::no_access();
+    return none;
+}
+}  // namespace
+
+void Schedule::add(Phase phase, std::string name, SystemFn fn, ecs::Access access) {
+    m_phases[static_cast<std::size_t>(phase)].push_back({std::move(name), std::move(fn), std::move(access)});
 }
 
 void Schedule::run_frame(ecs::Registry& registry, const FrameContext& frame) const {
@@ -26,7 +44,13 @@ void Schedule::run_frame(ecs::Registry& registry, const FrameContext& frame) con
         if (m_observer.phase_begin) m_observer.phase_begin(phase);
         for (const Entry& system : m_phases[p]) {
             if (m_observer.system_begin) m_observer.system_begin(phase, system.name);
-            system.fn(registry, frame);
+            {
+                const ecs::ActiveAccess active{system.name, listing_undeclared() && !system.access.declared()
+                                                                ? &nothing_declared()
+                                                                : &system.access};
+                const ecs::AccessScope scope(registry, active);
+                system.fn(registry, frame);
+            }
             if (m_observer.system_end) m_observer.system_end(phase, system.name);
         }
         registry.flush();

@@ -13,7 +13,10 @@
 //               and write files when headless
 //
 // Systems are free functions `void system(ecs::Registry&, const FrameContext&)`; a Schedule holds them
-// per phase in registration order. Deferred structural changes are flushed after every phase.
+// per phase in registration order, each with the components and resources it declares it reads and
+// writes (ecs::reads<...>().writes<...>(), runtime/ecs/access.h). While a system runs its declaration is
+// the registry's active access, which builds with SFFD_CHECK_ACCESS enforce. Deferred structural
+// changes are flushed after every phase.
 // A FrameObserver sees every system and phase start and end (the profiling harness times from outside).
 #pragma once
 
@@ -53,7 +56,9 @@ struct FrameObserver {
 
 class Schedule {
 public:
-    void add(Phase phase, std::string name, SystemFn fn);
+    // `access` is what the system reads and writes; a default (undeclared) Access is not checked, for
+    // ad hoc schedules in tests; the engine's schedule declares every system.
+    void add(Phase phase, std::string name, SystemFn fn, ecs::Access access = {});
     // Runs every phase in order; flushes the registry's deferred commands after each phase.
     void run_frame(ecs::Registry& registry, const FrameContext& frame) const;
     void set_observer(FrameObserver observer) { m_observer = std::move(observer); }
@@ -61,6 +66,7 @@ public:
     struct Entry {
         std::string name;
         SystemFn fn;
+        ecs::Access access;
     };
     const std::vector<Entry>& systems(Phase phase) const { return m_phases[static_cast<std::size_t>(phase)]; }
 

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "runtime/app/app.h"
@@ -76,4 +77,57 @@ TEST(AppRun, PhasesRunInOrderAndDeferredDestroysFlushBetweenPhases) {
     Clock clock = app::make_clock(nullptr);
     (void)app::run(registry, schedule, clock, nullptr, {.max_frames = 1});
     EXPECT_EQ(order, (std::vector<std::string>{"input", "deform:gone", "render:gone", "present"}));
+}
+
+namespace {
+struct Mesh {
+    int points = 0;
+};
+struct Hidden {};
+}  // namespace
+
+// The schedule makes each system's declaration the registry's active access while it runs, and only then.
+TEST(ScheduleAccess, DeclarationIsActiveWhileItsSystemRuns) {
+    ecs::Registry registry;
+    Schedule schedule;
+    std::vector<std::string> seen;
+    schedule.add(
+        Phase::input, "reader",
+        [&](ecs::Registry& r, const FrameContext&) {
+            const ecs::ActiveAccess* a = r.active_access();
+#if defined(SFFD_CHECK_ACCESS)
+            ASSERT_NE(a, nullptr);
+            seen.push_back(std::string(a->system));
+            EXPECT_TRUE(a->access->can_read(ecs::detail::type_id<Mesh>()));
+#else
+            EXPECT_EQ(a, nullptr);  // compiled out: nothing is recorded
+            seen.push_back("reader");
+#endif
+        },
+        ecs::reads<Mesh>());
+    schedule.run_frame(registry, {});
+    EXPECT_EQ(seen, std::vector<std::string>{"reader"});
+    EXPECT_EQ(registry.active_access(), nullptr);
+    ASSERT_EQ(schedule.systems(Phase::input).size(), 1u);
+    EXPECT_EQ(schedule.systems(Phase::input)[0].access.read_types().size(), 1u);
+}
+
+// A system touching a component it did not declare dies, naming itself and the type (check builds).
+TEST(ScheduleAccessDeathTest, UndeclaredComponentKillsTheFrame) {
+#if !defined(SFFD_CHECK_ACCESS)
+    GTEST_SKIP() << "SFFD_CHECK_ACCESS is off in this build (on in Debug and sanitizer builds)";
+#else
+    ecs::Registry registry;
+    const ecs::Entity e = registry.create();
+    registry.emplace<Mesh>(e, 4);
+    Schedule schedule;
+    schedule.add(
+        Phase::deformation, "deform",
+        [e](ecs::Registry& r, const FrameContext&) {
+            (void)std::as_const(r).get<Mesh>(e);  // declared
+            r.emplace<Hidden>(e);                 // not declared
+        },
+        ecs::reads<Mesh>());
+    EXPECT_DEATH(schedule.run_frame(registry, {}), "system 'deform' writes \\{anonymous\\}::Hidden");
+#endif
 }

@@ -43,6 +43,7 @@ constexpr Known known_commands[] = {
     {"pick", "ray-pick a control point or surface point and print it as JSON"},
     {"convert", "convert point clouds and meshes between formats, estimating normals and radii"},
     {"info", "print counts, bounds, attributes and lattices of a file"},
+    {"schedule", "list the frame's systems with what each reads and writes"},
 };
 
 const sffd::cli::Command* find(const std::string& name) {
