@@ -1,12 +1,14 @@
 // The editor's input system (phase `input`, runtime/app/frame_loop.h).
+//   first   applies PendingEdits (pending_edits.h): what the panels posted in the last present phase
 //   reads   EditorState::events (resource; the window or the replayer fills it), Camera, Lattice,
 //           Transform, SplatCloud / DeformedSplats (through picking), AnimationClip/State (timeline keys)
 //   writes  Camera (orbit, pan, zoom, frame), Lattice::current (stretch, twist, reset; via patch so the
-//           deformer re-runs), picking::LatticeSelection, AnimationClip (set/delete key), AnimationState
-//           (play/pause/scrub), EditorState (tools, drag, undo stack, requests); through lattice_manage.h
-//           lattice entities (Name, Transform, Lattice: add/remove/refit/import) and clouds' Deformers
-//           render::RenderSettings::quality (resource; preview while the view moves,
-//           EditorState::preview_while_moving)
+//           deformer re-runs) of a lattice without a clip, UnkeyedEdit of an animated one (the animation
+//           writes its current), the components posted edits set, picking::LatticeSelection, AnimationClip
+//           (set/delete key), AnimationState (play/pause/scrub), EditorState (tools, drag, undo stack,
+//           requests); through lattice_manage.h lattice entities (Name, Transform, Lattice:
+//           add/remove/refit/import) and clouds' Deformers render::RenderSettings::quality (resource; preview
+//           while the view moves, EditorState::preview_while_moving)
 // Does nothing when the registry has no EditorState. Picks synchronously through the picking library
 // (picking::pick on the PickingState resource): a click is answered in the frame it happens in, so a
 // replayed session is deterministic frame by frame.
