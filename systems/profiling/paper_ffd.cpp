@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "systems/ffd/deform.h"
+
 namespace sffd::profiling {
 
 namespace {
@@ -125,11 +127,10 @@ void paper_ffd_naive(const Lattice& l, const SplatCloud& cloud, std::vector<glm:
         // J = [Fs Ft Fu] M^-1: column c of J is Fs*r0[c] + Ft*r1[c] + Fu*r2[c].
         glm::dmat3 J;
         for (int col = 0; col < 3; ++col) J[col] = Fs * r0[col] + Ft * r1[col] + Fu * r2[col];
-        const glm::dvec3 a = J[0], b = J[1], c = J[2];
+        // cof(J) N through the one copy of that rule; a zero result (singular J) keeps the input normal.
         const glm::dvec3 n = glm::dvec3(n_in);
-        glm::dvec3 n1 = glm::cross(b, c) * n.x + glm::cross(c, a) * n.y + glm::cross(a, b) * n.z;  // cof(J) N
-        const double len = glm::length(n1);
-        n1 = len > 0.0 ? n1 / len : n;
+        glm::dvec3 n1 = ffd::deformed_normal(J, n);
+        if (n1 == glm::dvec3(0.0)) n1 = n;
         out_positions[p] = glm::vec3(X1 - cloud.origin);
         out_normals[p] = glm::vec3(n1);
     }
