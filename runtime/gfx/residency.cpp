@@ -1,5 +1,7 @@
 #include "runtime/gfx/residency.h"
 
+#include "runtime/gfx/context.h"
+
 #include <EGL/egl.h>
 #include <GLFW/glfw3.h>
 
@@ -15,6 +17,19 @@ void fill_buffer(Buffer& b, const char* label, const void* data, std::size_t byt
     if (std::size_t(have) != want) glNamedBufferData(b.id(), GLsizeiptr(want), nullptr, GL_DYNAMIC_DRAW);
     if (bytes > 0 && data) glNamedBufferSubData(b.id(), 0, GLsizeiptr(bytes), data);
 }
+
+void* map_for_fill(Buffer& b, const char* label, std::size_t bytes) {
+    fill_buffer(b, label, nullptr, bytes);
+    if (bytes == 0) return nullptr;
+    // Invalidating: the old contents are not read, so the implementation need not wait for draws that
+    // still read them (it may hand out fresh memory instead).
+    return glMapNamedBufferRange(b.id(), 0, GLsizeiptr(bytes),
+                                 GL_MAP_WRITE_BIT | GL_MAP_INVALIDATE_BUFFER_BIT);
+}
+
+bool unmap_fill(Buffer& b) { return glUnmapNamedBuffer(b.id()) == GL_TRUE; }
+
+bool cpu_reads_in_place() { return software_rasterizer(); }
 
 void reserve_buffer(Buffer& b, const char* label, std::size_t bytes) {
     const std::size_t want = std::max<std::size_t>(bytes, 16);

@@ -42,6 +42,29 @@ struct ResidentCloud {
 // another size, then uploads `data` (none when null). The one upload primitive both kinds use.
 void fill_buffer(Buffer& b, const char* label, const void* data, std::size_t bytes);
 
+// Allocates `b` as fill_buffer() does and lets `write(void* dst)` fill its `bytes` in place, through a
+// mapping: the data is packed straight into the buffer, so no CPU-side copy of it exists beside the
+// buffer, not even for the time of the upload (on a software rasterizer GL buffers are host memory).
+// A mapping the implementation reports lost (glUnmapNamedBuffer false) is written again.
+void* map_for_fill(Buffer& b, const char* label, std::size_t bytes);
+bool unmap_fill(Buffer& b);  // false: the contents were lost, write them again
+template <class Write>
+void fill_buffer_in_place(Buffer& b, const char* label, std::size_t bytes, Write&& write) {
+    for (int attempt = 0; attempt < 3; ++attempt) {
+        void* dst = map_for_fill(b, label, bytes);
+        if (!dst) return;  // nothing to write (0 bytes), or the map failed (logged by the GL debug output)
+        write(dst);
+        if (unmap_fill(b)) return;
+    }
+}
+
+// How the CPU reads a resident buffer: decided here, once, for every kind and every reader (the CPU cull
+// of surface splats). True on a software rasterizer, whose GL buffers are host memory: the buffer is
+// mapped for reading and read in place, so no CPU mirror of any GPU buffer is kept. False on a hardware
+// GPU: a copy read back once per version of the buffer (mapping device memory every frame would read it
+// across the bus every frame).
+bool cpu_reads_in_place();
+
 // Grows `b` (labelled) to hold at least `bytes` without uploading (the deformation's output buffers).
 void reserve_buffer(Buffer& b, const char* label, std::size_t bytes);
 

@@ -35,8 +35,12 @@ std::vector<gpu::GpuSplat> pack_splats(const SplatCloud& cloud) {
 }
 
 void pack_splats(const SplatColumns& c, std::vector<gpu::GpuSplat>& out) {
-    const std::size_t n = c.positions.size();
-    out.resize(n);
+    out.resize(c.positions.size());
+    pack_splats(c, std::span(out));
+}
+
+void pack_splats(const SplatColumns& c, std::span<gpu::GpuSplat> out) {
+    const std::size_t n = std::min(c.positions.size(), out.size());
     const bool has_normals = c.normals.size() == n;
     const bool has_axes = c.axis_u.size() == n && c.axis_v.size() == n;
     const bool has_colors = c.colors.size() == n;

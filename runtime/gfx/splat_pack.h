@@ -25,6 +25,8 @@ struct SplatColumns {
 // Into `out` (resized; its memory is reused: every frame of an interactive CPU deformation packs the whole
 // cloud again), across the cores.
 void pack_splats(const SplatColumns& columns, std::vector<gpu::GpuSplat>& out);
+// Into `out` (columns.positions.size() elements: a mapped GL buffer, say), across the cores.
+void pack_splats(const SplatColumns& columns, std::span<gpu::GpuSplat> out);
 
 // Linear [0, 1] -> 8-bit sRGB (the image writers use the same encoding).
 std::uint8_t encode_srgb8(float linear);

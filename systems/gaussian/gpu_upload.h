@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "runtime/core/result.h"
@@ -17,6 +18,9 @@ namespace sffd::gaussian {
 // cloud's geometry with `opacities` (a DeformedGaussians carries none: pass the authored cloud's).
 std::vector<gpu::GpuGaussian> pack_gaussians(const GaussianCloud& geometry,
                                              const std::vector<float>& opacities);
+// The same into `out` (geometry.size() records: a mapped GL buffer, say).
+void pack_gaussians(const GaussianCloud& geometry, const std::vector<float>& opacities,
+                    std::span<gpu::GpuGaussian> out);
 
 // Uploads `cloud` into rest + sh and records `version` (its change stamp, registry.version<GaussianCloud>,
 // the same for every caller) in rest_version. State rest: nothing deformed from an older rest is drawn

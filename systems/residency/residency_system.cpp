@@ -3,9 +3,8 @@
 #include <vector>
 
 #include "runtime/core/log.h"
-#include "runtime/gfx/context.h"
+#include "runtime/ecs/signal.h"
 #include "runtime/gfx/residency.h"
-#include "runtime/gfx/splat_pack.h"
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
@@ -23,19 +22,26 @@ T& resource(ecs::Registry& reg) {
     return reg.set_resource<T>();
 }
 
-// The machinery both kinds share: drop entries whose entity or authored component is gone, upload each
-// authored cloud whose change stamp moved (upload(gpu, cloud, version) -> bool), and send a cloud that lost
-// its deformers back to its rest data. The kinds differ only in their upload function.
+// A store entry goes with its cloud's authored component (removed, or the entity destroyed): the
+// registry's destroy signals, connected once per registry (this resource holds the connections).
+struct ResidencyCleanup {
+    ecs::ScopedConnection splats, gaussians;
+};
+
+template <class Cloud, class Store>
+ecs::ScopedConnection drop_with(ecs::Registry& reg) {
+    return reg.on_destroy<Cloud>().connect([](ecs::Registry& r, ecs::Entity e) {
+        auto* store = r.try_resource<Store>();
+        if (!store || store->clouds.erase(e) == 0) return;
+        if (auto* stats = r.try_resource<gfx::ResidencyStats>()) ++stats->dropped;
+    });
+}
+
+// The machinery both kinds share: upload each authored cloud whose change stamp moved
+// (upload(gpu, cloud, version)), and send a cloud that lost its deformers back to its rest data. The kinds
+// differ only in their upload function.
 template <class Cloud, class Store, class Upload>
 void sync(ecs::Registry& reg, Store& store, gfx::ResidencyStats& stats, Upload&& upload) {
-    for (auto it = store.clouds.begin(); it != store.clouds.end();) {
-        if (reg.valid(it->first) && reg.has<Cloud>(it->first)) {
-            ++it;
-        } else {
-            it = store.clouds.erase(it);
-            ++stats.dropped;
-        }
-    }
     reg.template view<const Cloud>().each([&](ecs::Entity e, const Cloud& cloud) {
         auto& gpu = store.clouds[e];
         const std::uint64_t version = reg.version<Cloud>(e);
@@ -52,14 +58,18 @@ void sync(ecs::Registry& reg, Store& store, gfx::ResidencyStats& stats, Upload&&
 void residency_system(ecs::Registry& reg, const FrameContext&) {
     if (!gfx::context_current()) return;
     auto& stats = resource<gfx::ResidencyStats>(reg);
+    if (!reg.try_resource<ResidencyCleanup>())
+        reg.set_resource<ResidencyCleanup>(
+            ResidencyCleanup{drop_with<SplatCloud, gfx::GpuSplatStore>(reg),
+                             drop_with<GaussianCloud, gaussian::GpuGaussianStore>(reg)});
 
-    // Surface splats. CPU mirrors of what the buffers hold are kept where the cull runs on the CPU (a
-    // software rasterizer: splat_render's automatic cull path); the upload packed them anyway.
+    // Surface splats: the splats, and a textured cloud's texture and uv frames, each by its one upload
+    // function. No CPU mirror of them is kept: the CPU reads the buffers (gfx::read_splats_on_cpu).
     auto& splats = resource<gfx::GpuSplatStore>(reg);
-    splats.keep_cpu = gfx::software_rasterizer();
     sync<SplatCloud>(reg, splats, stats,
                      [&](gfx::GpuSplats& gpu, const SplatCloud& cloud, std::uint64_t version) {
-                         gfx::upload_rest_splats(gpu, cloud, version, splats.keep_cpu);
+                         gfx::upload_rest_splats(gpu, cloud, version);
+                         gfx::upload_splat_texture(gpu, cloud, version);
                      });
 
     // 3D Gaussians: rest + SH. A cloud whose arrays disagree is refused once per change (nothing drawn).

@@ -11,7 +11,11 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
+#include <new>
 #include <span>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -54,19 +58,43 @@ glm::vec3 sample_texture(const TexelView& texture, glm::vec2 uv, int level);
 // attribute pass.
 std::vector<std::uint16_t> uniform_texel_radius(const std::uint8_t* rgba8, int width, int height);
 
+// An allocator whose resize() leaves new elements default-initialised (uninitialised for the records): the
+// cull writes only the visible splats' slots, so the memory of culled ones is never touched (and, on
+// Linux, never made resident) instead of being zero-filled every time the cloud grows.
+template <class T>
+struct UninitAllocator : std::allocator<T> {
+    template <class U>
+    struct rebind {
+        using other = UninitAllocator<U>;
+    };
+    UninitAllocator() = default;
+    template <class U>
+    UninitAllocator(const UninitAllocator<U>&) noexcept {}
+    template <class U>
+    void construct(U* p) noexcept(std::is_nothrow_default_constructible_v<U>) {
+        ::new (static_cast<void*>(p)) U;
+    }
+    template <class U, class... Args>
+    void construct(U* p, Args&&... args) {
+        ::new (static_cast<void*>(p)) U(std::forward<Args>(args)...);
+    }
+};
+template <class T>
+using UninitVector = std::vector<T, UninitAllocator<T>>;
+
 // Output of cull_splats_cpu. The splats are processed in fixed blocks of `block` splats; block b's
 // visible sprites are records[b * block, b * block + record_counts[b]) (and likewise its quad indices), so
 // each block is one contiguous run to upload and nothing is copied twice. The vectors keep their capacity
 // between frames.
 struct CpuCullResult {
     std::size_t block = 0;
-    std::vector<SplatRecord> records;          // size: the splat count (runs per block)
-    std::vector<std::uint32_t> quads;          // size: the splat count (runs per block)
+    UninitVector<SplatRecord> records;         // size: the splat count (runs per block)
+    UninitVector<std::uint32_t> quads;         // size: the splat count (runs per block)
     std::vector<std::uint32_t> record_counts;  // per block
     std::vector<std::uint32_t> quad_counts;    // per block
     // Textured clouds: sprites whose texture footprint is one colour (TexelView::uniform_radius) are not
     // in `records` but here, with that colour packed like an untextured splat's (runs per block).
-    std::vector<SplatRecord> flat_records;
+    UninitVector<SplatRecord> flat_records;
     std::vector<std::uint32_t> flat_counts;  // per block
     std::uint32_t visible_records = 0;       // sums of the counts
     std::uint32_t visible_quads = 0;
@@ -79,9 +107,9 @@ struct CpuCullResult {
     std::vector<glm::vec4> block_pixels;  // per block: lo.xy, hi.xy
 
     // Calls fn(first_output_index, pointer, count) for each non-empty run, in order.
-    template <class T, class Fn>
-    static void for_each_run(const std::vector<T>& data, const std::vector<std::uint32_t>& counts,
-                             std::size_t block, Fn&& fn) {
+    template <class Data, class Fn>
+    static void for_each_run(const Data& data, const std::vector<std::uint32_t>& counts, std::size_t block,
+                             Fn&& fn) {
         std::size_t out = 0;
         for (std::size_t b = 0; b < counts.size(); ++b) {
             if (counts[b] == 0) continue;

@@ -73,8 +73,8 @@ Status compute_cull(SplatRenderState& s, CloudGpu& gpu, GLuint program, bool tex
                           GLsizeiptr(std::size_t(gpu.count) * sizeof(SplatRecord)));
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, gpu.commands.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CULL_GROUPS, gpu.cull_groups.id());
-        if (textured) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
-        glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
+        if (textured) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes);
+        glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture);
     };
     // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its worker
     // threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread time).
@@ -134,8 +134,9 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
     // pass overwrites, by shader stores (compute cull) or by copies and sub-data uploads (CPU cull).
     gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT, "render.cull.reuse");
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
-        CloudGpu& gpu = s.clouds[e];
-        if (gpu.count == 0 || gpu.splats == 0) return;
+        CloudGpu* made = reg.try_get<CloudGpu>(e);
+        if (!made || made->count == 0 || made->splats == 0) return;
+        CloudGpu& gpu = *made;
         gpu::FrameBlock b = plan.common;
         const glm::dmat4 mv = plan.view.view * model_matrix(reg.try_get<Transform>(e), cloud.origin);
         b.model_view = glm::mat4(mv);
@@ -154,7 +155,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
         // A cloud whose compute-cull records exceed one storage block takes the CPU cull on every path
         // (its splats read back when they exist only on the GPU: sync_clouds).
         const Status fits = compute_cull_fits(gpu.count);
-        if (gpu.cpu_current && (!fits || cpu_cull_wanted(s, settings.cull_path))) {
+        if (gpu.cpu_source && (!fits || cpu_cull_wanted(s, settings.cull_path))) {
             if (!fits && settings.cull_path != CullPath::cpu)
                 warn_once("render_system(): " + fits.message() + "; the CPU cull takes the cloud");
             // CPU cull (cpu_cull.h): the same records, uploaded run by run into the buffers the draws read.
@@ -178,7 +179,15 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
             gpu.raster_texels = texels;
             gpu.raster_texels.pyramid = gpu.pyramid_made ? &gpu.pyramid : nullptr;
             CpuCullResult& r = gpu.cpu_cull;
-            cull_splats_cpu(std::span(gpu.cpu_current->data(), gpu.count), b, texels, r);
+            {
+                // Read in place (mapped) or from the residency's copy; released before GL draws it.
+                const gfx::CpuSplatRead read = gfx::read_splats_on_cpu(*gpu.cpu_source);
+                if (read.splats().size() != gpu.count) {
+                    warn_once("render_system(): a cloud's splats could not be read on the CPU; not drawn");
+                    return;
+                }
+                cull_splats_cpu(read.splats(), b, texels, r);
+            }
             ++s.cpu_splat_passes;
             // On the CPU sprite path the sprites are the CPU's (preview_pass, visibility_pass): they reach
             // GL only if the frame turns out to need them there (upload_gl_sprites).

@@ -2,17 +2,18 @@
 #include "systems/splat_render/splat_render_detail.h"
 
 #include <cmath>
+#include <utility>
 
 namespace sffd::render::detail {
 
-ViewSetup choose_camera(ecs::Registry& reg, const SplatRenderState& s, double aspect) {
+ViewSetup choose_camera(ecs::Registry& reg, const SplatRenderState& /*s*/, double aspect) {
     ViewSetup v;
     // The one default-camera rule (camera_math.h), fed with the bounds cached per uploaded cloud.
     v.camera = scene_camera(
         reg, aspect,
         [&](ecs::Entity e, const SplatCloud&) {
-            auto it = s.clouds.find(e);
-            return it == s.clouds.end() ? BoundingSphere{glm::dvec3(0.0), -1.0} : it->second.bounds;
+            const CloudGpu* gpu = std::as_const(reg).try_get<CloudGpu>(e);
+            return gpu ? gpu->bounds : BoundingSphere{glm::dvec3(0.0), -1.0};
         },
         [&](ecs::Entity e, const GaussianCloud&) { return cached_gaussian_bounds(reg, e); });
     v.view = view_matrix(v.camera);
@@ -72,7 +73,6 @@ glm::ivec4 screen_rect(ecs::Registry& reg, const ViewSetup& view, int w, int h) 
         hi = glm::max(hi, ndc + half);
     };
     const auto* store = reg.try_resource<gfx::GpuSplatStore>();
-    const auto* state = reg.try_resource<SplatRenderState>();
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         if (everything || cloud.size() == 0) return;
         const auto sit = store ? store->clouds.find(e) : decltype(store->clouds.end()){};
@@ -85,19 +85,18 @@ glm::ivec4 screen_rect(ecs::Registry& reg, const ViewSetup& view, int w, int h) 
             }
             // Box -> ball around it, grown by 4x the largest rest splat radius (the box holds the centres;
             // deformed axes are longer by the local stretch).
-            const auto cit = state->clouds.find(e);
-            const double splat_r = cit != state->clouds.end() ? cit->second.bounds.max_splat_radius : 0.0;
+            const CloudGpu* drawn = std::as_const(reg).try_get<CloudGpu>(e);
+            const double splat_r = drawn ? drawn->bounds.max_splat_radius : 0.0;
             add_ball(0.5 * (d->bounds_min + d->bounds_max),
                      0.5 * glm::length(d->bounds_max - d->bounds_min) + 4.0 * splat_r);
             return;
         }
-        const auto cit = state->clouds.find(e);
-        if (cit == state->clouds.end()) return;
+        const CloudGpu* drawn = std::as_const(reg).try_get<CloudGpu>(e);
+        if (!drawn) return;
         const glm::dmat4 m = model_matrix(reg.try_get<Transform>(e), cloud.origin);
         const double scale = std::max(
             {glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])), glm::length(glm::dvec3(m[2]))});
-        add_ball(glm::dvec3(m * glm::dvec4(cit->second.bounds.center, 1.0)),
-                 cit->second.bounds.radius * scale);
+        add_ball(glm::dvec3(m * glm::dvec4(drawn->bounds.center, 1.0)), drawn->bounds.radius * scale);
     });
     if (everything) return full;
     if (hi.x < lo.x) return glm::ivec4(0, 0, 0, 0);

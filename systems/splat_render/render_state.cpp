@@ -18,48 +18,6 @@ Result<gfx::Program> splat_program(const char* fragment, const char* label, int 
                              label, defines);
 }
 
-void upload_texture(CloudGpu& gpu, const SplatTexture& m) {
-    if (m.rgba8.empty() || m.width <= 0 || m.height <= 0 ||
-        m.rgba8.size() < std::size_t(m.width) * std::size_t(m.height) * 4) {
-        gpu.texture.reset();
-        return;
-    }
-    gpu.texture = gfx::Texture::create("render.material", GL_TEXTURE_2D);
-    const int levels = 1 + int(std::floor(std::log2(std::max(m.width, m.height))));
-    glTextureStorage2D(gpu.texture.id(), levels, GL_SRGB8_ALPHA8, m.width, m.height);
-    glPixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    // Row 0 of the texels is v = 0, which is also GL's first row (t = 0).
-    glTextureSubImage2D(gpu.texture.id(), 0, 0, 0, m.width, m.height, GL_RGBA, GL_UNSIGNED_BYTE,
-                        m.rgba8.data());
-    glGenerateTextureMipmap(gpu.texture.id());
-    // Mipmapped: the HQ attribute pass filters per pixel with textureGrad (the cull's per-splat lookups ask
-    // for level 0 explicitly).
-    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_MIN_FILTER, GL_LINEAR_MIPMAP_LINEAR);
-    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_WRAP_S, GL_REPEAT);
-    glTextureParameteri(gpu.texture.id(), GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-}
-
-// The uv frames the textured passes read (SFFD_SSBO_UV_AXES), zeros for a cloud without them (then every
-// fragment samples the splat's centre uv at level 0).
-void upload_uv_axes(CloudGpu& gpu, const SplatCloud& cloud) {
-    gpu.uniform_radius.clear();
-    gpu.pyramid = {}, gpu.pyramid_made = false;
-    if (!gpu.texture) {
-        gpu.uv_axes.reset();
-        return;
-    }
-    const SplatTexture& m = cloud.texture;
-    gpu.uniform_radius = uniform_texel_radius(m.rgba8.data(), m.width, m.height);
-    std::vector<glm::vec4> zeros;
-    const std::vector<glm::vec4>* data = &cloud.uv_axes;
-    if (cloud.uv_axes.size() != cloud.size()) zeros.assign(cloud.size(), glm::vec4(0.0f)), data = &zeros;
-    gpu.uv_axes = gfx::Buffer::create("render.uv_axes");
-    glNamedBufferData(gpu.uv_axes.id(),
-                      GLsizeiptr(std::max<std::size_t>(data->size(), 1) * sizeof(glm::vec4)),
-                      data->empty() ? nullptr : data->data(), GL_STATIC_DRAW);
-}
-
 }  // namespace
 
 namespace detail {
@@ -106,22 +64,23 @@ bool cpu_cull_wanted(const SplatRenderState& s, CullPath path) {
     return path == CullPath::cpu || (path == CullPath::automatic && (s.software || s.cull_over_limit));
 }
 
-// Refreshes the renderer's own per-cloud objects (cull buffers, texture, bounds) for the clouds that are
-// resident in GpuSplatStore (residency_system uploads them; this only reads the store) and drops objects
-// of clouds that no longer exist. keep_cpu: the CPU cull may run, so point cpu_current at a CPU copy of
-// the draw buffer.
-void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatStore& store, bool keep_cpu) {
-    for (auto it = s.clouds.begin(); it != s.clouds.end();)
-        it = reg.valid(it->first) && reg.has<SplatCloud>(it->first) && store.clouds.contains(it->first)
-                 ? std::next(it)
-                 : s.clouds.erase(it);
-
+// Refreshes the renderer's own per-cloud objects (cull buffers, bounds) for the clouds that are resident
+// in GpuSplatStore (residency_system uploads them and their textures; this only reads the store) and
+// drops objects of clouds that no longer exist. cpu_cull: the CPU cull may run, so name the resident
+// cloud whose draw buffer it reads (cpu_source).
+void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore* store, bool cpu_cull) {
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
-        const auto sit = store.clouds.find(e);
-        if (sit == store.clouds.end()) return;  // not resident (no residency phase ran): not drawn
-        const gfx::GpuSplats& splats = sit->second;
+        gfx::GpuSplats* resident = nullptr;
+        if (store)
+            if (auto it = store->clouds.find(e); it != store->clouds.end()) resident = &it->second;
+        if (!resident) {  // not resident (no residency phase ran): not drawn
+            reg.remove<CloudGpu>(e);
+            return;
+        }
+        gfx::GpuSplats& splats = *resident;
         const std::uint64_t version = reg.version<SplatCloud>(e);
-        CloudGpu& gpu = s.clouds[e];
+        CloudGpu* made = reg.try_get<CloudGpu>(e);
+        CloudGpu& gpu = made ? *made : reg.emplace<CloudGpu>(e);
         const auto n = static_cast<std::uint32_t>(cloud.size());
         if (!gpu.frame_ubo) {
             gpu.frame_ubo = gfx::Buffer::create("render.frame_block");
@@ -140,10 +99,16 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatSto
             glNamedBufferData(gpu.quads.id(), GLsizeiptr(std::size_t(gpu.capacity) * sizeof(std::uint32_t)),
                               nullptr, GL_DYNAMIC_DRAW);
         }
-        if (gpu.texture_version != version) {
-            upload_texture(gpu, cloud.texture);
-            upload_uv_axes(gpu, cloud);
-            gpu.texture_version = version;
+        gpu.texture = splats.texture.id();
+        gpu.uv_axes = gpu.texture ? splats.uv_axes.id() : 0;
+        if (gpu.texture_version != splats.texture_version) {
+            // The CPU cull's per-texture data (derived on the CPU, never uploaded).
+            gpu.uniform_radius.clear();
+            gpu.pyramid = {}, gpu.pyramid_made = false;
+            if (gpu.texture)
+                gpu.uniform_radius = uniform_texel_radius(cloud.texture.rgba8.data(), cloud.texture.width,
+                                                          cloud.texture.height);
+            gpu.texture_version = splats.texture_version;
         }
         gpu.uv_axes_cpu = gpu.texture && cloud.uv_axes.size() == n ? &cloud.uv_axes : nullptr;
         gpu.texture_texels = &cloud.texture;
@@ -159,33 +124,21 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatSto
         gpu.colored = cloud.colors.size() == n;
         gpu.count = std::min(n, splats.drawn_count());  // a budgeted preview draws a subset
         gpu.splats = splats.draw_buffer();
-        // The CPU copy of the draw buffer: the store's mirror (rest, or the CPU deformation's output);
-        // none when the FFD compute pass wrote `deformed` (those splats exist only on the GPU).
-        gpu.cpu_current = nullptr;
-        if (!keep_cpu) {
-            gpu.cpu_own = {}, gpu.cpu_cull = {};
+        // What the CPU cull may read: the rest splats, or the CPU deformation's output; the FFD compute
+        // pass's output only when its compute-cull records exceed one storage block (it has no other way).
+        gpu.cpu_source = nullptr;
+        if (!cpu_cull) {
+            gpu.cpu_cull = {};
             return;
         }
-        gpu.cpu_current = splats.cpu_current();
-        if (!gpu.cpu_current && splats.state == gfx::Residency::rest && splats.rest_version == version) {
-            if (gpu.cpu_own_version != version || gpu.cpu_own.size() != n) {
-                gpu.cpu_own = pack_splats(cloud),
-                gpu.cpu_own_version = version;  // the CPU cull was just chosen
-                ++s.cpu_splat_passes;
-            }
-            if (gpu.cpu_own.size() == gpu.count) gpu.cpu_current = &gpu.cpu_own;
-        }
-        if (!gpu.cpu_current && splats.is_deformed() && !compute_cull_fits(gpu.count).ok()) {
-            if (gpu.readback_version != splats.deformed_version || gpu.cpu_readback.size() != gpu.count) {
-                warn_once("render_system(): " + compute_cull_fits(gpu.count).message() +
-                          ": a deformed cloud is read back from the GPU and culled on the CPU");
-                gpu.cpu_readback.resize(gpu.count);
-                // The deformation's barrier made its writes visible to read-backs (BUFFER_UPDATE).
-                glGetNamedBufferSubData(gpu.splats, 0, GLsizeiptr(gpu.count * sizeof(gpu::GpuSplat)),
-                                        gpu.cpu_readback.data());
-                gpu.readback_version = splats.deformed_version;
-            }
-            gpu.cpu_current = &gpu.cpu_readback;
+        const bool current = splats.rest_version == version && gpu.count == splats.drawn_count();
+        if (!current) return;
+        if (splats.state != gfx::Residency::deformed_gpu) {
+            gpu.cpu_source = &splats;
+        } else if (const Status fits = compute_cull_fits(gpu.count); !fits) {
+            warn_once("render_system(): " + fits.message() +
+                      ": a deformed cloud is read back from the GPU and culled on the CPU");
+            gpu.cpu_source = &splats;
         }
     });
 }
@@ -293,12 +246,17 @@ Status init_render_state(ecs::Registry& registry) {
     s.max_point_size = range[1];
     s.min_point_size = range[0];
     s.software = gfx::software_rasterizer();
+    s.cloud_gone = registry.on_destroy<SplatCloud>().connect(
+        [](ecs::Registry& reg, ecs::Entity e) { reg.remove<CloudGpu>(e); });
     registry.set_resource<SplatRenderState>(std::move(s));
     return {};
 }
 
 void release_render_state(ecs::Registry& registry) {
     release_gaussian_pass(registry);
+    std::vector<ecs::Entity> drawn;
+    registry.view<const CloudGpu>().each([&](ecs::Entity e, const CloudGpu&) { drawn.push_back(e); });
+    for (ecs::Entity e : drawn) registry.remove<CloudGpu>(e);
     registry.erase_resource<SplatRenderState>();
 }
 

@@ -14,13 +14,12 @@ void draw_quad_batches(const CloudGpu& gpu) {
         gfx::bind_ssbo_range(SFFD_SSBO_SPLATS_DRAW, gpu.splats, b.splats, sizeof(gpu::GpuSplat));
         gfx::bind_ssbo_range(SFFD_SSBO_VISIBLE, gpu.quads.id(), {b.quad_first, b.quad_count},
                              sizeof(std::uint32_t));
-        if (gpu.texture)
-            gfx::bind_ssbo_range(SFFD_SSBO_UV_AXES, gpu.uv_axes.id(), b.splats, sizeof(glm::vec4));
+        if (gpu.texture) gfx::bind_ssbo_range(SFFD_SSBO_UV_AXES, gpu.uv_axes, b.splats, sizeof(glm::vec4));
         glDrawArraysInstanced(GL_TRIANGLES, 0, 6, GLsizei(b.quad_count));
     }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
-    if (gpu.texture) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
+    if (gpu.texture) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes);
 }
 
 // programs: [sprites, quads] for the cloud; flat: the program for a textured cloud's flat-coloured sprites
@@ -35,8 +34,8 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
-    glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture.id());
-    if (gpu.texture) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes.id());
+    glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture);
+    if (gpu.texture) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes);
     glVertexArrayVertexBuffer(s.records_vao.id(), 0, gpu.records.id(), 0, GLsizei(SFFD_SPLAT_RECORD_BYTES));
     if (big) glVertexArrayElementBuffer(s.records_vao.id(), gpu.raster.big.id());
     glBindVertexArray(s.records_vao.id());
@@ -233,7 +232,7 @@ void plan_compute_raster(SplatRenderState& s, FramePlan& plan, bool materials, R
     for (CloudGpu* gpu : plan.drawn) {
         ensure_compute_raster_cloud(gpu->raster, gpu->capacity);
         plan.compute.push_back({&gpu->raster, gpu->frame_ubo.id(), gpu->records.id(), gpu->commands.id(),
-                                gpu->texture.id(), gpu->count, gpu->capacity, gpu->flat_list});
+                                gpu->texture, gpu->count, gpu->capacity, gpu->flat_list});
         auto it = std::find_if(plan.gpu_counts.begin(), plan.gpu_counts.end(),
                                [&](const CountsSource& c) { return c.gpu == gpu; });
         if (it == plan.gpu_counts.end()) plan.gpu_counts.push_back({gpu, counts_big});

@@ -30,14 +30,12 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     plan.width = std::max(full_width / divider, 1), plan.height = std::max(full_height / divider, 1);
     plan.settings.width = plan.width, plan.settings.height = plan.height;
     s.frame_width = plan.width, s.frame_height = plan.height;
-    static const gfx::GpuSplatStore no_clouds;  // nothing resident: residency_system has not run
-    const auto* store = reg.try_resource<gfx::GpuSplatStore>();
+    auto* store = reg.try_resource<gfx::GpuSplatStore>();  // null: residency_system has not run
     s.cull_over_limit = false;
     reg.view<const SplatCloud>().each(
         [&](const SplatCloud& c) { s.cull_over_limit |= !compute_cull_fits(c.size()).ok(); });
-    // CPU copies are kept also where a cloud is over the limit on a forced compute cull (it falls back).
-    sync_clouds(reg, s, store ? *store : no_clouds,
-                cpu_cull_wanted(s, plan.settings.cull_path) || s.cull_over_limit);
+    // The CPU cull also takes a cloud over the limit on a forced compute cull (it falls back).
+    sync_clouds(reg, s, store, cpu_cull_wanted(s, plan.settings.cull_path) || s.cull_over_limit);
     plan.view = choose_camera(reg, s, double(full_width) / double(full_height));
     plan.common = frame_block(reg, plan.settings, plan.view, s.max_point_size);
     plan.cpu_raster = plan.settings.sprite_path == SpritePath::cpu ||

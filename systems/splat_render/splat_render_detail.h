@@ -21,6 +21,7 @@
 
 #include "runtime/app/app.h"
 #include "runtime/core/log.h"
+#include "runtime/ecs/signal.h"
 #include "runtime/gfx/barrier.h"
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
@@ -49,7 +50,9 @@ namespace sffd::render::detail {
 // cloud's flat-coloured sprites {n, 1, capacity, 0} (CPU cull only; the compute cull leaves n = 0).
 constexpr std::size_t draw_command_words = 12;
 
-// Per point cloud GPU objects owned by the renderer (the splats themselves live in GpuSplatStore).
+// The renderer's per-cloud objects (the splats and textures themselves live in GpuSplatStore): a component
+// on the cloud entity, made by sync_clouds for a resident cloud and removed with its SplatCloud
+// (SplatRenderState::cloud_gone) or when the cloud is no longer resident.
 struct CloudGpu {
     gfx::Buffer records;   // SplatRecord[2 capacity]: visible sprites, prepared by the cull pass; from
                            // `capacity` on, a textured cloud's sprites of one texture colour (CPU cull)
@@ -60,15 +63,16 @@ struct CloudGpu {
     std::uint32_t cull_group_capacity = 0;
     gfx::Buffer frame_ubo;  // FrameBlock for this cloud
     std::uint32_t capacity = 0;
-    gfx::Texture texture;  // the cloud's texture (sRGB), when it has one
-    gfx::Buffer uv_axes;   // vec4[count]: SplatCloud::uv_axes (zeros when absent), when textured
+    // The cloud's texture (sRGB) and uv frames (vec4[count]) this frame, when it has one: the residency's
+    // (GpuSplats::texture, uv_axes), never uploaded here.
+    GLuint texture = 0;
+    GLuint uv_axes = 0;
     std::vector<std::uint16_t> uniform_radius;  // uniform_texel_radius() of the texture (CPU cull)
     TexturePyramid pyramid;                     // its mip levels, made when a reduced preview asks
     bool pyramid_made = false;
     const std::vector<glm::vec4>* uv_axes_cpu = nullptr;  // the cloud's, valid during one render_system call
     const SplatTexture* texture_texels = nullptr;         // the cloud's, valid during one render_system call
-    std::uint64_t texture_version = 0;
-    BoundingSphere bounds;   // cloud space, for the framing camera
+    BoundingSphere bounds;                                // cloud space, for the framing camera
     double mean_radius = 0;  // mean_splat_radius(), for the automatic raster path
     std::uint64_t bounds_version = 0;
     double footprint_px = 0;  // splat_footprint_px() this frame (cull_pass)
@@ -87,16 +91,12 @@ struct CloudGpu {
     std::uint32_t count = 0;
     GLuint splats = 0;  // draw buffer this frame
 
-    // The CPU copy of the draw buffer for the CPU cull (cpu_cull.h): the store's mirror, or on a hardware
-    // GPU with the CPU cull forced (no mirrors kept there) the renderer's own copy of the rest splats.
-    std::vector<gpu::GpuSplat> cpu_own;
-    std::uint64_t cpu_own_version = 0;  // SplatCloud change stamp cpu_own holds
-    const std::vector<gpu::GpuSplat>* cpu_current = nullptr;
-    // A deformed cloud whose compute-cull records exceed one storage block and that has no CPU copy (the
-    // FFD compute pass wrote it, or no mirror was kept): its draw buffer read back for the CPU cull, once
-    // per rewrite of `deformed` (GpuSplats::deformed_version; storage_limits.h).
-    std::vector<gpu::GpuSplat> cpu_readback;
-    std::uint64_t readback_version = 0;
+    // The resident cloud, when the CPU cull may read its draw buffer this frame (gfx::read_splats_on_cpu:
+    // the residency decides how, in place or from its copy; the renderer keeps none): its rest or its CPU
+    // deformation's output where the CPU cull is wanted, any deformed buffer whose compute-cull records
+    // exceed one storage block (storage_limits.h). Null: the compute cull only.
+    gfx::GpuSplats* cpu_source = nullptr;
+    std::uint64_t texture_version = 0;  // GpuSplats::texture_version uniform_radius was made from
     CpuCullResult cpu_cull;
     // The CPU cull's quad pass per range of splats when the splats (or uv axes) exceed one storage block
     // (storage_limits.h); empty: one indirect draw over the whole cloud.
@@ -199,7 +199,8 @@ struct SplatRenderState {
     std::uint32_t counts_points = 0, counts_quads = 0, counts_raster_sprites = 0;
     ComputeRaster compute_raster;  // compute rasteriser (compute_raster.h), compiled on first use
 
-    std::unordered_map<ecs::Entity, CloudGpu> clouds;
+    // Removes an entity's CloudGpu when its SplatCloud goes (component removed or entity destroyed).
+    ecs::ScopedConnection cloud_gone;
     bool software = false;      // the context is a software rasterizer (gfx::software_rasterizer)
     bool preview_warm = false;  // the preview programs have drawn once (warm_preview_programs)
     bool cull_over_limit =
@@ -276,7 +277,7 @@ private:
 gfx::Texture make_target(GLenum format, int w, int h, const char* label);
 void ensure_targets(SplatRenderState& s, int w, int h);
 bool cpu_cull_wanted(const SplatRenderState& s, CullPath path);
-void sync_clouds(ecs::Registry& reg, SplatRenderState& s, const gfx::GpuSplatStore& store, bool keep_cpu);
+void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore* store, bool cpu_cull);
 Status cull_program(SplatRenderState& s, bool textured, bool lit, std::uint32_t lights);
 // The scan programs (SplatRenderState::scan), compiled on first use; null with the error logged.
 gfx::RadixSorter* scan_programs(SplatRenderState& s);

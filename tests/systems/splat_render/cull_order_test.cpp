@@ -63,7 +63,7 @@ TEST_F(CullOrder_, ComputeCullListsKeepSplatOrder) {
         gfx::ScopedDispatchLimit limit(groups_per_row ? groups_per_row : gfx::dispatch_group_limit());
         (void)render(Quality::hq, 320, 240, true, CullPath::compute);
         ASSERT_EQ(reg.resource<RenderStats>().compute_culled_clouds, 1u);
-        const detail::CloudGpu& gpu = reg.resource<detail::SplatRenderState>().clouds.at(e);
+        const detail::CloudGpu& gpu = reg.get<detail::CloudGpu>(e);
         const auto commands = read<std::uint32_t>(gpu.commands.id(), detail::draw_command_words);
         const std::uint32_t sprites = commands[0], quads = commands[5];
         // Facing the camera: 4 of every 5 splats; the quads: those of the enlarged ones that face it.

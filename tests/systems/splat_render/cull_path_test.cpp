@@ -147,8 +147,7 @@ TEST_F(CullPath_, SplatsSeenEdgeOnOrWithNoAreaDrawNothing) {
                     const FrameImage b = render(q, 240, 160, culling, path, raster);
                     if (path == CullPath::compute) {
                         // Every sprite record finite (llvmpipe happens to drop NaN depths; a GPU may not).
-                        const detail::CloudGpu& gpu =
-                            reg.resource<detail::SplatRenderState>().clouds.at(cloud);
+                        const detail::CloudGpu& gpu = reg.get<detail::CloudGpu>(cloud);
                         std::vector<std::uint32_t> commands(detail::draw_command_words);
                         glGetNamedBufferSubData(gpu.commands.id(), 0, GLsizeiptr(commands.size() * 4),
                                                 commands.data());

@@ -80,8 +80,8 @@ protected:
         }
     }
     std::size_t quad_ranges(ecs::Entity e) {
-        auto& s = reg.resource<detail::SplatRenderState>();
-        return s.clouds[e].quad_batches.size();
+        const detail::CloudGpu* gpu = reg.try_get<detail::CloudGpu>(e);
+        return gpu ? gpu->quad_batches.size() : 0u;
     }
 };
 
