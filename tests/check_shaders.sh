@@ -48,12 +48,12 @@ check splat_render/display.frag frag
 # The Gaussian shaders use plain (location-less) uniforms, which SPIR-V for OpenGL (-G) refuses unless
 # locations are assigned automatically (--aml; the GL driver assigns its own).
 SPIRV="-G --aml -o $tmp/out.spv"
-for f in gaussian/project.comp:comp gaussian/splat.vert:vert gaussian/splat.frag:frag \
-         gaussian/tile_count.comp:comp gaussian/tile_emit.comp:comp gaussian/tile_ranges.comp:comp \
-         gaussian/tile_blend.comp:comp gaussian/deform.comp:comp gaussian/sort_payload.comp:comp gaussian/gather.comp:comp \
+for f in splat_render/gaussian/project.comp:comp splat_render/gaussian/splat.vert:vert splat_render/gaussian/splat.frag:frag \
+         splat_render/gaussian/tile_count.comp:comp splat_render/gaussian/tile_emit.comp:comp splat_render/gaussian/tile_ranges.comp:comp \
+         splat_render/gaussian/tile_blend.comp:comp gaussian/deform.comp:comp splat_render/gaussian/sort_payload.comp:comp splat_render/gaussian/gather.comp:comp \
          common/radix_sort_count.comp:comp common/radix_sort_scan.comp:comp common/radix_sort_scatter.comp:comp \
          common/scan_reduce.comp:comp common/scan_add.comp:comp \
-         splat_render/gaussian_accum.frag:frag splat_render/gaussian_composite.frag:frag; do
+         splat_render/gaussian/accum.frag:frag splat_render/gaussian/composite.frag:frag; do
     check "${f%%:*}" "${f##*:}"
 done
 check editor/lattice.vert vert

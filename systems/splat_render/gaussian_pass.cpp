@@ -4,43 +4,42 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <unordered_map>
 #include <utility>
 #include <vector>
 
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "runtime/app/pass_timer.h"
+#include "runtime/ecs/signal.h"
 #include "runtime/gfx/gl_object.h"
 #include "runtime/gfx/shader.h"
 #include "runtime/scene/camera.h"
-#include "systems/gaussian/gl_render.h"
+#include "systems/splat_render/gaussian_draw.h"
 #include "systems/gaussian/gpu_store.h"
 
 namespace sffd::render {
 
-namespace {
+namespace {}  // namespace
 
-struct CloudState {
+// A Gaussian cloud's bounds cached for the framing camera: a component on the cloud entity, removed with
+// its GaussianCloud (GaussianPassState::cloud_gone).
+struct GaussianBoundsCache {
     BoundingSphere bounds;
     std::uint64_t bounds_version = 0;
-    bool bounds_valid = false;
 };
-
-}  // namespace
 
 // Registry resource: the pass's GL objects (the clouds themselves live in GpuGaussianStore).
 struct GaussianPassState {
-    gaussian::GlRenderer renderer;  // projection program, per-draw scratch buffers, the quad VAO
-    gfx::Program accum;             // shaders/gaussian/splat.vert + splat_render/gaussian_accum.frag
-    gfx::Program accum_colour;      // the same without the depth sum (frames without aux outputs)
-    gfx::Program composite;         // fullscreen + splat_render/gaussian_composite.frag
+    GlRenderer renderer;        // projection program, per-draw scratch buffers, the quad VAO
+    gfx::Program accum;         // shaders/splat_render/gaussian/splat.vert + accum.frag
+    gfx::Program accum_colour;  // the same without the depth sum (frames without aux outputs)
+    gfx::Program composite;     // fullscreen + splat_render/gaussian/composite.frag
     gfx::VertexArray empty_vao;
     int width = 0, height = 0;
     gfx::Texture gauss_color, gauss_depth, surface_color, surface_aux;
     gfx::Framebuffer accum_fbo;
-    GLuint depth_attached = 0;  // the render system's depth texture attached to accum_fbo
-    std::unordered_map<ecs::Entity, CloudState> clouds;
+    GLuint depth_attached = 0;         // the render system's depth texture attached to accum_fbo
+    ecs::ScopedConnection cloud_gone;  // removes a GaussianBoundsCache with its GaussianCloud
     std::uint32_t quad_clouds = 0, tile_clouds = 0;  // last frame, GaussianPassStats
     std::uint64_t covered_pixels = 0;
     bool failed = false;
@@ -68,25 +67,27 @@ Result<GaussianPassState*> pass_state(ecs::Registry& reg) {
         reg.set_resource<GaussianPassState>(std::move(failed));
         return make_error(message);
     };
-    auto renderer = gaussian::create_gl_renderer();
+    auto renderer = create_gl_renderer();
     if (!renderer) return fail(renderer.message());
     s.renderer = std::move(*renderer);
-    auto accum = gfx::load_program(
-        {{GL_VERTEX_SHADER, "gaussian/splat.vert"}, {GL_FRAGMENT_SHADER, "splat_render/gaussian_accum.frag"}},
-        "render.gaussian_accum");
+    auto accum = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/gaussian/splat.vert"},
+                                    {GL_FRAGMENT_SHADER, "splat_render/gaussian/accum.frag"}},
+                                   "render.gaussian_accum");
     if (!accum) return fail(accum.message());
-    auto accum_colour = gfx::load_program(
-        {{GL_VERTEX_SHADER, "gaussian/splat.vert"}, {GL_FRAGMENT_SHADER, "splat_render/gaussian_accum.frag"}},
-        "render.gaussian_accum_colour", {{"SFFD_GAUSS_COLOUR_ONLY", ""}});
+    auto accum_colour = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/gaussian/splat.vert"},
+                                           {GL_FRAGMENT_SHADER, "splat_render/gaussian/accum.frag"}},
+                                          "render.gaussian_accum_colour", {{"SFFD_GAUSS_COLOUR_ONLY", ""}});
     if (!accum_colour) return fail(accum_colour.message());
     auto composite = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/fullscreen.vert"},
-                                        {GL_FRAGMENT_SHADER, "splat_render/gaussian_composite.frag"}},
+                                        {GL_FRAGMENT_SHADER, "splat_render/gaussian/composite.frag"}},
                                        "render.gaussian_composite");
     if (!composite) return fail(composite.message());
     s.accum = std::move(*accum);
     s.accum_colour = std::move(*accum_colour);
     s.composite = std::move(*composite);
     s.empty_vao = gfx::VertexArray::create("render.gaussian_composite");
+    s.cloud_gone = reg.on_destroy<GaussianCloud>().connect(
+        [](ecs::Registry& r, ecs::Entity e) { r.remove<GaussianBoundsCache>(e); });
     return &reg.set_resource<GaussianPassState>(std::move(s));
 }
 
@@ -108,12 +109,6 @@ void ensure_targets(GaussianPassState& s, const GaussianPassFrame& f) {
         glNamedFramebufferTexture(s.accum_fbo.id(), GL_DEPTH_ATTACHMENT, f.depth, 0);
         s.depth_attached = f.depth;
     }
-}
-
-// Drops the pass's per-cloud caches of clouds that no longer exist.
-void prune(ecs::Registry& reg, GaussianPassState& s) {
-    for (auto it = s.clouds.begin(); it != s.clouds.end();)
-        it = reg.valid(it->first) && reg.has<GaussianCloud>(it->first) ? std::next(it) : s.clouds.erase(it);
 }
 
 }  // namespace
@@ -140,15 +135,17 @@ BoundingSphere gaussian_bounding_sphere(const GaussianCloud& cloud) {
 BoundingSphere cached_gaussian_bounds(ecs::Registry& reg, ecs::Entity e) {
     const GaussianCloud* cloud = reg.try_get<GaussianCloud>(e);
     if (!cloud) return {glm::dvec3(0.0), -1.0, 0.0};
-    auto* s = reg.try_resource<GaussianPassState>();
-    if (!s) return gaussian_bounding_sphere(*cloud);
-    CloudState& cs = s->clouds[e];
+    // Cached only while the pass exists (its signal removes the cache with the cloud).
+    if (!reg.try_resource<GaussianPassState>()) return gaussian_bounding_sphere(*cloud);
     const std::uint64_t version = reg.version<GaussianCloud>(e);
-    if (!cs.bounds_valid || cs.bounds_version != version) {
-        cs.bounds = gaussian_bounding_sphere(*cloud);
-        cs.bounds_version = version, cs.bounds_valid = true;
-    }
-    return cs.bounds;
+    if (const GaussianBoundsCache* c = std::as_const(reg).try_get<GaussianBoundsCache>(e);
+        c && c->bounds_version == version)
+        return c->bounds;
+    GaussianBoundsCache* c = reg.try_get<GaussianBoundsCache>(e);
+    if (!c) c = &reg.emplace<GaussianBoundsCache>(e);
+    c->bounds = gaussian_bounding_sphere(*cloud);
+    c->bounds_version = version;
+    return c->bounds;
 }
 
 Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame& f) {
@@ -159,7 +156,6 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
     // residency_system keeps the clouds resident; without it (no residency phase ran) nothing is drawn.
     const auto* store = reg.try_resource<gaussian::GpuGaussianStore>();
     if (!store) return std::uint32_t(0);
-    prune(reg, s);
     ensure_targets(s, f);
 
     // Clouds nearest first (front-to-back blending), by the view depth of their bounding sphere's centre.
@@ -202,17 +198,17 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
     Status status;
     s.quad_clouds = s.tile_clouds = 0;
     s.covered_pixels = 0;
-    gaussian::reset_tile_stats(s.renderer);
+    reset_tile_stats(s.renderer);
     // A cloud that covers too much of the image for quads (gl_render.h: quad_coverage_budget) goes to the
     // tile renderer, into the same targets with the same depth test.
-    gaussian::TileTargets tiles;
+    TileTargets tiles;
     tiles.color = s.gauss_color.id(), tiles.surface_depth = f.depth;
     tiles.depth_sum = f.aux_outputs ? s.gauss_depth.id() : 0;
     for (const Item& item : items) {
         const GaussianCloud& cloud = reg.get<GaussianCloud>(item.entity);
         const gaussian::GpuGaussians& gpu = store->clouds.at(item.entity);
         const glm::dmat4 model = model_matrix(reg.try_get<Transform>(item.entity), cloud.origin);
-        gaussian::GaussianView v;
+        GaussianView v;
         v.view = f.view * model;
         v.eye = glm::dvec3(glm::inverse(model) * glm::dvec4(f.camera.eye, 1.0));
         v.fov_y_degrees = double(f.camera.fov_y_degrees);
@@ -220,13 +216,13 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
         v.width = f.width, v.height = f.height;
         v.ndc_depth = ndc_depth;
         v.min_footprint_px = f.preview ? kPreviewMinFootprintPx : 0.0f;
-        const gaussian::GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(),       gpu.frames.id(),
-                                                gpu.drawn_count(), gpu.drawn_sh_degree(), gpu.has_frames()};
-        if (Status st = gaussian::draw_gaussians(s.renderer, buffers, v,
-                                                 f.aux_outputs ? &s.accum : &s.accum_colour, &tiles);
+        const GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(),       gpu.frames.id(),
+                                      gpu.drawn_count(), gpu.drawn_sh_degree(), gpu.has_frames()};
+        if (Status st =
+                draw_gaussians(s.renderer, buffers, v, f.aux_outputs ? &s.accum : &s.accum_colour, &tiles);
             !st)
             status = st;
-        (s.renderer.last_blend == gaussian::BlendPath::tiles ? s.tile_clouds : s.quad_clouds) += 1;
+        (s.renderer.last_blend == BlendPath::tiles ? s.tile_clouds : s.quad_clouds) += 1;
         constexpr std::uint64_t kMax = std::numeric_limits<std::uint64_t>::max();  // "past 2^32" stays so
         s.covered_pixels += std::min(s.renderer.covered_pixels, kMax - s.covered_pixels);
         submitted += gpu.drawn_count();
@@ -262,11 +258,23 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
 GaussianPassStats gaussian_pass_stats(ecs::Registry& registry) {
     auto* s = registry.try_resource<GaussianPassState>();
     if (!s || s->failed) return {};
-    const gaussian::TileStats t = gaussian::tile_stats(s->renderer);
+    const TileStats t = tile_stats(s->renderer);
     return {s->quad_clouds, s->tile_clouds, s->covered_pixels,
-            t.entries,      t.staged,       gaussian::quad_coverage_budget(s->renderer.software)};
+            t.entries,      t.staged,       quad_coverage_budget(s->renderer.software)};
 }
 
-void release_gaussian_pass(ecs::Registry& registry) { registry.erase_resource<GaussianPassState>(); }
+Result<GlRenderer*> gaussian_pass_renderer(ecs::Registry& registry) {
+    auto state = pass_state(registry);
+    if (!state) return state.error();
+    return &(*state)->renderer;
+}
+
+void release_gaussian_pass(ecs::Registry& registry) {
+    std::vector<ecs::Entity> cached;
+    registry.view<const GaussianBoundsCache>().each(
+        [&](ecs::Entity e, const GaussianBoundsCache&) { cached.push_back(e); });
+    for (ecs::Entity e : cached) registry.remove<GaussianBoundsCache>(e);
+    registry.erase_resource<GaussianPassState>();
+}
 
 }  // namespace sffd::render

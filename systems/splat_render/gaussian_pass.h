@@ -6,7 +6,7 @@
 //           camera and targets (its depth: surface splats hide the Gaussians behind them)
 //   writes  GaussianPassState (resource: programs, targets, per-cloud bounds)
 //
-// Per cloud: the gaussian GL renderer (systems/gaussian/gl_render.h: projection, front-to-back order,
+// Per cloud: the gaussian GL renderer (systems/splat_render/gaussian_draw.h: projection, front-to-back order,
 // instanced quads, or its tile renderer for a cloud covering too much of the image) into an RGBA32F
 // accumulation target (premultiplied colour, coverage) whose quads are depth-tested against the surface
 // splats' depth buffer (each quad at its centre's depth; no depth writes); then one full-screen pass
@@ -25,6 +25,7 @@
 #include "runtime/gfx/gl.h"
 #include "runtime/scene/components.h"
 #include "systems/gaussian/components.h"
+#include "systems/splat_render/gaussian_draw.h"
 #include "systems/splat_render/splat_pack.h"
 
 namespace sffd::render {
@@ -65,6 +66,10 @@ struct GaussianPassStats {
     std::uint64_t quad_budget_images = 0;  // the budget the blend choice used (gl_render.h)
 };
 GaussianPassStats gaussian_pass_stats(ecs::Registry& registry);
+
+// The pass's renderer (made on first use; needs the context current): benchmarks and tests choose its
+// sort and blend paths and its stage timing there, and read its last draw's counters.
+Result<GlRenderer*> gaussian_pass_renderer(ecs::Registry& registry);
 
 // Frees the pass's GL objects (while the context is current).
 void release_gaussian_pass(ecs::Registry& registry);

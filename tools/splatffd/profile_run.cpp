@@ -301,7 +301,7 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     out.backend_used = deformation_backend_name(runs_after.first - runs_before.first,
                                                 runs_after.second - runs_before.second);
     config.emplace_back("backend_used", out.backend_used);
-    // Which blend the Gaussian pass took in the last frame (systems/gaussian/gl_render.h: quads up to
+    // Which blend the Gaussian pass took in the last frame (systems/splat_render/gaussian_draw.h: quads up to
     // quad_coverage_budget() images of coverage, the tile renderer past it, where a GPU's blending units
     // would bound the quads) and the coverage it weighed, in images of the frame's size.
     if (have_gl && want_render && gaussians > 0) {

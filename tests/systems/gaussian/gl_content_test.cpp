@@ -19,7 +19,7 @@
 #include "systems/gaussian/gaussian_deform.h"
 #include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_read.h"
-#include "systems/gaussian/gl_render.h"
+#include "systems/splat_render/gaussian_draw.h"
 #include "tests/systems/gaussian/gl_renderer_fixture.h"
 #include "systems/gaussian/reference_render.h"
 #include "systems/splat_render/camera_math.h"
@@ -29,6 +29,8 @@ namespace {
 namespace fs = std::filesystem;
 using namespace sffd;
 using namespace sffd::gaussian;
+using test::GaussianHarness;
+using test::render_gl;
 
 const std::string kTool = SFFD_BINARY_DIR "/tools/splatffd";
 
@@ -41,7 +43,7 @@ fs::path source_of(const std::string& name) {
 class GaussianGlContent
     : public sffd::test::GaussianGlRendererTest<sffd::test::HeadlessGlTestWithParam<const char*>> {};
 
-void compare(GlRenderer& r, const GaussianCloud& g, const Camera& cam, const ReferenceOptions& o,
+void compare(GaussianHarness& r, const GaussianCloud& g, const Camera& cam, const ReferenceOptions& o,
              const std::string& what) {
     auto gl = render_gl(r, g, cam, o);
     ASSERT_TRUE(gl) << gl.message();

@@ -24,7 +24,7 @@
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_deform.h"
-#include "systems/gaussian/gl_render.h"
+#include "systems/splat_render/gaussian_draw.h"
 #include "tests/systems/gaussian/random_cloud.h"
 #include "tests/systems/gaussian/gl_renderer_fixture.h"
 #include "systems/gaussian/reference_render.h"
@@ -35,6 +35,13 @@ namespace {
 
 using namespace sffd;
 using namespace sffd::gaussian;
+using render::BlendPath;
+using render::gpu_sort_preferred;
+using render::quad_coverage_budget;
+using render::read_covered_pixels;
+using render::SortPath;
+using test::GaussianHarness;
+using test::render_gl;
 
 class GaussianGl : public sffd::test::GaussianGlRendererTest<sffd::test::HeadlessGlTest> {};
 
@@ -46,7 +53,8 @@ Camera camera_at(glm::dvec3 eye, glm::dvec3 target = glm::dvec3(0.0), float fov 
 
 GaussianCloud random_cloud(std::size_t n, int degree) { return test::seeded_random_cloud(17, n, degree); }
 
-void compare(GlRenderer& r, const GaussianCloud& g, const Camera& cam, ReferenceOptions o, const char* what) {
+void compare(GaussianHarness& r, const GaussianCloud& g, const Camera& cam, ReferenceOptions o,
+             const char* what) {
     const ReferenceImage ref = render_reference(g, cam, o);
     std::optional<ReferenceImage> cpu_quads;
     for (BlendPath blend : {BlendPath::quads, BlendPath::tiles})
@@ -432,9 +440,9 @@ TEST_F(GaussianGl, AutomaticSortFollowsTheRasterizer) {
 // tiles), the one slot of Gaussian 1 its first tile, and nothing is written past a Gaussian's slots or
 // the capacity. The ranges pass then gives tile id 8 no range and writes nothing past the 8 tiles.
 TEST_F(GaussianGl, TileEmitWritesExactlyItsSlotsAndRangesSkipTheUnfilledOnes) {
-    auto emit = gfx::load_compute_program("gaussian/tile_emit.comp", "test.tile_emit");
+    auto emit = gfx::load_compute_program("splat_render/gaussian/tile_emit.comp", "test.tile_emit");
     ASSERT_TRUE(emit) << emit.message();
-    auto ranges = gfx::load_compute_program("gaussian/tile_ranges.comp", "test.tile_ranges");
+    auto ranges = gfx::load_compute_program("splat_render/gaussian/tile_ranges.comp", "test.tile_ranges");
     ASSERT_TRUE(ranges) << ranges.message();
     auto buffer = [](const auto& data, const char* label) {
         gfx::Buffer b = gfx::Buffer::create(label);

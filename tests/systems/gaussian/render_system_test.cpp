@@ -19,7 +19,8 @@
 #include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
 #include "systems/gaussian/gaussian_system.h"
-#include "systems/gaussian/gl_render.h"
+#include "systems/splat_render/gaussian_draw.h"
+#include "tests/systems/gaussian/gl_renderer_fixture.h"
 #include "systems/gaussian/gpu_store.h"
 #include "systems/gaussian/gpu_upload.h"
 #include "systems/gaussian/reference_render.h"
@@ -36,6 +37,10 @@ namespace {
 
 using namespace sffd;
 using namespace sffd::gaussian;
+using render::kQuadCoverageBudget;
+using render::kQuadCoverageBudgetHardware;
+using render::quad_coverage_budget;
+using test::render_gl;
 
 class GaussianRenderSystem : public testing::Test {
 protected:
@@ -139,7 +144,7 @@ TEST_F(GaussianRenderSystem, ImageEqualsGaussianRendererAndReference) {
     const int w = 200, h = 150;
     const ReferenceImage sys = as_reference(frame(w, h));
 
-    auto renderer = create_gl_renderer();
+    auto renderer = test::create_gaussian_harness();
     ASSERT_TRUE(renderer) << renderer.message();
     ReferenceOptions o;
     o.width = w, o.height = h, o.near_plane = camera().near_plane;

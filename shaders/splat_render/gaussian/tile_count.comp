@@ -18,7 +18,7 @@ uniform uint u_base;  // depth-order position of the range's first Gaussian
 uniform vec2 u_size;
 uniform uvec2 u_tiles;
 
-#include "gaussian/tile_common.glsl"
+#include "splat_render/gaussian/tile_common.glsl"
 
 void main() {
     const uint p = sffd_dispatch_index();

@@ -31,7 +31,7 @@ uniform uint u_capacity;  // entries the entry buffers hold: never written past 
 uniform vec2 u_size;
 uniform uvec2 u_tiles;
 
-#include "gaussian/tile_common.glsl"
+#include "splat_render/gaussian/tile_common.glsl"
 
 void main() {
     const uint p = sffd_dispatch_index();

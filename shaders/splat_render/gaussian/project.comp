@@ -5,7 +5,7 @@
 
 layout(local_size_x = 64) in;
 #include "common/dispatch.glsl"
-#include "gaussian/footprint.glsl"
+#include "splat_render/gaussian/footprint.glsl"
 
 layout(std430, binding = SFFD_GAUSS_SSBO_IN) readonly buffer Gaussians { GpuGaussian gaussians[]; };
 layout(std430, binding = SFFD_GAUSS_SSBO_SH) readonly buffer Sh { float sh[]; };

@@ -3,7 +3,7 @@
 // floor(c - r) .. ceil(c + r) per axis, y down, clipped to the image by the viewport) narrowed to where it
 // can be seen (footprint.glsl).
 #include "gaussian/gaussian_layout.h"
-#include "gaussian/footprint.glsl"
+#include "splat_render/gaussian/footprint.glsl"
 
 // Three storage blocks, what runtime/gfx/limits.h requires of the vertex stage (GL 4.5 guarantees none).
 layout(std430, binding = SFFD_GAUSS_SSBO_PROJ_CENTER) readonly buffer ProjCenter { vec4 proj_center[]; };

@@ -1,6 +1,6 @@
 #version 450 core
 // Render system's Gaussian pass (systems/splat_render/gaussian_pass.h): the Gaussian renderer's splat
-// fragment (shaders/gaussian/splat.frag: same conic, same 0.99 / (1/255) clamps), blended front to back
+// fragment (shaders/splat_render/gaussian/splat.frag: same conic, same 0.99 / (1/255) clamps), blended front to back
 // (GL_ONE_MINUS_DST_ALPHA, GL_ONE) into two targets: premultiplied colour + coverage, and
 // Σ T α view-depth (x) + coverage (w) for the aux output's depth where no surface splat is.
 uniform vec2 u_size;

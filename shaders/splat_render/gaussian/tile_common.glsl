@@ -4,7 +4,7 @@
 #ifndef SFFD_GAUSS_TILE_COMMON_GLSL
 #define SFFD_GAUSS_TILE_COMMON_GLSL
 
-#include "gaussian/footprint.glsl"
+#include "splat_render/gaussian/footprint.glsl"
 
 // Inclusive pixel box clipped to the image: (x0, y0, x1, y1); empty when x0 > x1 or y0 > y1. Clamped
 // in float on both sides before the conversion, since a float outside int's range converts to an

@@ -37,7 +37,7 @@ uniform vec2 u_ndc_depth;   // NDC z = x + y / view depth, as splat.vert (clampe
 uniform uint u_src_first;   // depth-order position of the bound range's first Gaussian
 uniform uint u_src_count;   // Gaussians in the bound range
 
-#include "gaussian/tile_common.glsl"
+#include "splat_render/gaussian/tile_common.glsl"
 
 const uint kBatch = SFFD_GAUSS_TILE * SFFD_GAUSS_TILE;
 shared vec2 s_center[kBatch];

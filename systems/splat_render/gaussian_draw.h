@@ -1,5 +1,8 @@
-// GL 4.5 renderer of 3D Gaussians. A frame (draw_gl):
-//   1. project (shaders/gaussian/project.comp): EWA conic, SH colour, a sortable depth key per Gaussian
+// The drawing of 3D Gaussians (GL 4.5): what the render system's Gaussian pass (gaussian_pass.h) runs for
+// each cloud, from the buffers the residency keeps (gaussian::GpuGaussians: draw_buffer(), sh_buffer(),
+// frames; this renderer uploads no cloud). One draw (draw_gaussians):
+//   1. project (shaders/splat_render/gaussian/project.comp): EWA conic, SH colour, a sortable depth key per
+//   Gaussian
 //      (0xffffffff when not drawn: behind the near plane, opacity below 1/255, degenerate, or its pixel
 //      box off the image: culled before the sort),
 //      and the drawn count accumulated on the GPU into an indirect draw command; the projection is
@@ -12,15 +15,14 @@
 //      pixel boxes (splat.{vert,frag}, hardware blending, drawn through the indirect command), or the
 //      3DGS tile renderer in compute (tile_*.comp: (tile, Gaussian) entries in depth order, a stable
 //      radix sort by tile id, per-tile ranges, a 16x16 group per tile with early termination);
-//      draw_gaussians (the render system) takes the quads unless the cloud covers too many pixels for them
-//      (quad_coverage_budget(), measured by the projection), then the tiles;
-//   4. the image read back.
+//      draw_gaussians takes the quads unless the cloud covers too many pixels for them
+//      (quad_coverage_budget(), measured by the projection), then the tiles.
 // The images match the CPU reference renderer (reference_render.h: same conventions, same pixel boxes)
 // within the PSNR the GL test states; both sort paths give identical images. Every pass binds the
 // per-Gaussian buffers in element ranges within GL_MAX_SHADER_STORAGE_BLOCK_SIZE (one range when they fit,
 // the same loops): the image is the same, bit for bit, however many ranges a cloud takes.
-// Owns its GL objects (move-only); create and use it with a GL context current, destroy it before the
-// context.
+// Owns its per-draw GL objects (move-only); create and use it with a GL context current, destroy it before
+// the context.
 #pragma once
 
 #include <cstdint>
@@ -30,15 +32,16 @@
 #include "runtime/gfx/gl_object.h"
 #include "runtime/gfx/radix_sort.h"
 #include "runtime/scene/components.h"
-#include "systems/gaussian/components.h"
-#include "systems/gaussian/reference_render.h"
+#include "systems/gaussian/gpu_store.h"
 
-namespace sffd::gaussian {
+namespace sffd::render {
 
 // Which depth sort a frame uses. automatic: the GPU sort on hardware GPUs; on a software rasterizer
 // (gfx::software_rasterizer(): llvmpipe) the faster one there, see gpu_sort_preferred().
 enum class SortPath { automatic, cpu, gpu };
 // How the sorted Gaussians are blended: instanced quads (raster blending) or the compute tile renderer.
+// As GlRenderer::blend_path, `tiles` makes draw_gaussians take the tile renderer whenever it is given
+// TileTargets, whatever the coverage; `quads` leaves the choice to the coverage budget.
 enum class BlendPath { quads, tiles };
 
 // Quad blending has no early termination (fixed-function blending cannot stop a pixel at saturated
@@ -92,10 +95,11 @@ struct GlRenderer {
     gfx::Program gather;        // the projection into depth order (gather.comp)
     gfx::RadixSorter sorter;
     gfx::VertexArray vao;  // the quads: no attributes (instances index the depth-ordered arrays)
-    gfx::Buffer gaussians, sh, order, frames, depth;
+    gfx::Buffer order, depth;
     // The projection, three vec4 arrays (gaussian_layout.h: SFFD_GAUSS_SSBO_PROJ_*) per Gaussian, and the
     // same gathered into depth order for the blend. Every pass binds them in element ranges of at most
-    // GL_MAX_SHADER_STORAGE_BLOCK_SIZE (blend_ranges() in gl_render.cpp): no cloud needs one block for all.
+    // GL_MAX_SHADER_STORAGE_BLOCK_SIZE (blend_ranges() in gaussian_draw.cpp): no cloud needs one block for
+    // all.
     gfx::Buffer proj_center, proj_conic, proj_color;
     gfx::Buffer sorted_center, sorted_conic, sorted_color;
     // DrawArraysIndirectCommand (its instance count is the drawn count, written on the GPU), the covered
@@ -110,27 +114,18 @@ struct GlRenderer {
     gfx::Buffer tile_stats;                // uint: entries staged by the tile blend (TileStats::staged)
     std::uint64_t tile_entries_total = 0;  // TileStats::entries
     std::uint64_t tile_entry_capacity = 0, tile_ranges_buffer_tiles = 0;
-    gfx::Texture color;
-    gfx::Framebuffer framebuffer;
-    int width = 0, height = 0;
-    std::size_t count = 0;  // Gaussians resident (upload_gl)
-    int sh_degree = 0;
-    bool has_frames = false;  // the resident cloud carries SH frames
-    glm::dvec3 origin{0.0};
     SortPath sort_path = SortPath::automatic;
     BlendPath blend_path = BlendPath::quads;
     bool software = false;  // gfx::software_rasterizer() when created
     // Benchmarks: glFinish after each stage so that the stage wall times below mean something (GL timer
     // queries do not on llvmpipe: 0 ms for compute, nonsense for draws). Off: no extra waits.
     bool stage_timing = false;
-    // draw_gl's GaussianView::min_footprint_px (0: every Gaussian; the render system sets its own per draw).
-    float min_footprint_px = 0.0f;
     // Last frame: which sort ran; stage wall times in ms (with stage_timing; sort_ms of the CPU path is
     // always measured: key readback, which waits for the projection, + sort + upload); (tile path) the
     // number of (tile, Gaussian) entries.
     bool gpu_sort_used = false;
     // blend_ms includes, on the tile path, tile_prepare_ms: tile counts, scan, entries, their sort, ranges.
-    double project_ms = 0.0, sort_ms = 0.0, blend_ms = 0.0, readback_ms = 0.0, tile_prepare_ms = 0.0;
+    double project_ms = 0.0, sort_ms = 0.0, blend_ms = 0.0, tile_prepare_ms = 0.0;
     std::uint64_t tile_entries = 0;
     // Last draw_gaussians(): the pixels its Gaussians' clipped pixel boxes cover (UINT64_MAX past 2^32;
     // measured only when it was given TileTargets), and the blend it used.
@@ -143,9 +138,8 @@ struct GlRenderer {
     std::size_t scratch = 0;  // Gaussians the per-draw buffers (projection, depth keys) hold
 };
 
-// What one draw reads: a cloud's GPU buffers, either the renderer's own (upload_gl) or a
-// GpuGaussianStore entry's (gpu_store.h: draw_buffer(), sh_buffer(), frames), so the render system draws
-// clouds it (or the GPU deformation) keeps resident without copying them.
+// What one draw reads: a resident cloud's GPU buffers (systems/gaussian/gpu_store.h: draw_buffer(),
+// sh_buffer(), frames; gaussian_buffers() below), drawn without copying them.
 struct GaussianBuffers {
     GLuint gaussians = 0;  // GpuGaussian[count] (shaders/gaussian/gaussian_layout.h)
     GLuint sh = 0;         // float[count * K * 3]
@@ -191,24 +185,15 @@ std::uint64_t read_covered_pixels(const GlRenderer& renderer);
 void reset_tile_stats(GlRenderer& renderer);
 // Reads the staged count back (a sync): call it when the numbers are wanted, not every frame.
 TileStats tile_stats(const GlRenderer& renderer);
-// The renderer's own resident cloud (upload_gl) as GaussianBuffers.
-GaussianBuffers resident_buffers(const GlRenderer& renderer);
+// What draw_gaussians reads of a resident cloud now (its drawn count, SH degree and buffers as the
+// residency's state says).
+GaussianBuffers gaussian_buffers(const gaussian::GpuGaussians& gpu);
 
 // Compiles the programs (errors name the shader file and line).
 Result<GlRenderer> create_gl_renderer();
 
 // The sort SortPath::automatic picks: the GPU sort except on a software rasterizer, at any cloud size
-// (see gl_render.cpp for the llvmpipe measurements behind it).
+// (see gaussian_draw.cpp for the llvmpipe measurements behind it).
 bool gpu_sort_preferred(const GlRenderer& renderer);
 
-// Uploads a cloud; it stays resident for draw_gl() until the next upload.
-Status upload_gl(GlRenderer& renderer, const GaussianCloud& cloud,
-                 const std::vector<float>* opacities = nullptr);
-// One frame of the resident cloud: projection, depth sort, blending, image readback.
-Result<ReferenceImage> draw_gl(GlRenderer& renderer, const Camera& camera, const ReferenceOptions& options);
-// upload_gl + draw_gl: renders like render_reference() (same camera model, background blended in).
-Result<ReferenceImage> render_gl(GlRenderer& renderer, const GaussianCloud& cloud, const Camera& camera,
-                                 const ReferenceOptions& options,
-                                 const std::vector<float>* opacities = nullptr);
-
-}  // namespace sffd::gaussian
+}  // namespace sffd::render

@@ -1,4 +1,4 @@
-#include "systems/gaussian/gl_render.h"
+#include "systems/splat_render/gaussian_draw.h"
 
 #include <algorithm>
 #include <chrono>
@@ -23,15 +23,15 @@
 #include "runtime/gfx/ssbo_batch.h"
 #include "shaders/gaussian/gaussian_layout.h"
 
-namespace sffd::gaussian {
+namespace sffd::render {
 
 Result<GlRenderer> create_gl_renderer() {
     GlRenderer r;
-    auto project = gfx::load_compute_program("gaussian/project.comp", "gaussian.project");
+    auto project = gfx::load_compute_program("splat_render/gaussian/project.comp", "gaussian.project");
     if (!project) return project.error();
-    auto splat = gfx::load_program(
-        {{GL_VERTEX_SHADER, "gaussian/splat.vert"}, {GL_FRAGMENT_SHADER, "gaussian/splat.frag"}},
-        "gaussian.splat");
+    auto splat = gfx::load_program({{GL_VERTEX_SHADER, "splat_render/gaussian/splat.vert"},
+                                    {GL_FRAGMENT_SHADER, "splat_render/gaussian/splat.frag"}},
+                                   "gaussian.splat");
     if (!splat) return splat.error();
     r.project = std::move(*project);
     r.splat = std::move(*splat);
@@ -39,7 +39,7 @@ Result<GlRenderer> create_gl_renderer() {
         {&r.tile_count, "tile_count"}, {&r.tile_emit, "tile_emit"},       {&r.tile_ranges, "tile_ranges"},
         {&r.tile_blend, "tile_blend"}, {&r.sort_payload, "sort_payload"}, {&r.gather, "gather"}};
     for (const auto& [program, name] : tiles) {
-        auto made = gfx::load_compute_program(std::string("gaussian/") + name + ".comp",
+        auto made = gfx::load_compute_program(std::string("splat_render/gaussian/") + name + ".comp",
                                               std::string("gaussian.") + name);
         if (!made) return made.error();
         *program = std::move(*made);
@@ -49,8 +49,6 @@ Result<GlRenderer> create_gl_renderer() {
     r.sorter = std::move(*sorter);
     r.software = gfx::software_rasterizer();
     r.vao = gfx::VertexArray::create("gaussian.quads");
-    r.gaussians = gfx::Buffer::create("gaussian.in");
-    r.sh = gfx::Buffer::create("gaussian.sh");
     r.proj_center = gfx::Buffer::create("gaussian.proj_center");
     r.proj_conic = gfx::Buffer::create("gaussian.proj_conic");
     r.proj_color = gfx::Buffer::create("gaussian.proj_color");
@@ -58,7 +56,6 @@ Result<GlRenderer> create_gl_renderer() {
     r.sorted_conic = gfx::Buffer::create("gaussian.sorted_conic");
     r.sorted_color = gfx::Buffer::create("gaussian.sorted_color");
     r.order = gfx::Buffer::create("gaussian.order");
-    r.frames = gfx::Buffer::create("gaussian.sh_frames");
     r.depth = gfx::Buffer::create("gaussian.depth_keys");
     r.draw = gfx::Buffer::create("gaussian.draw_indirect");
     // The indirect command, the covered pixels and their wrap flag (project.comp), the range commands.
@@ -93,45 +90,9 @@ void set(GLuint program, const char* name, glm::vec3 v) {
 
 }  // namespace
 
-Result<ReferenceImage> render_gl(GlRenderer& r, const GaussianCloud& g, const Camera& cam,
-                                 const ReferenceOptions& o, const std::vector<float>* opacity_override) {
-    if (Status s = upload_gl(r, g, opacity_override); !s) return s.error();
-    return draw_gl(r, cam, o);
-}
-
-Status upload_gl(GlRenderer& r, const GaussianCloud& g, const std::vector<float>* opacity_override) {
-    const std::vector<float>& opac = opacity_override ? *opacity_override : g.opacities;
-    const std::size_t n = g.size();
-    if (opac.size() != n || g.sh.size() != n * std::size_t(sh_coeffs(g.sh_degree)) * 3)
-        return make_error("upload_gl(): cloud arrays differ in size");
-    if (n >= (std::size_t(1) << 31)) return make_error("upload_gl(): more than 2^31 Gaussians in one draw");
-    // Upload (positions relative to the origin; the view matrix carries the origin, composed in double).
-    std::vector<gpu::GpuGaussian> in(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const glm::vec3 p = g.positions[i];
-        const glm::quat q = g.rotations[i];
-        in[i] = {{p.x, p.y, p.z, opac[i]},
-                 {q.w, q.x, q.y, q.z},
-                 {g.scales[i].x, g.scales[i].y, g.scales[i].z, 0.0f}};
-    }
-    upload(r.gaussians, in.data(), in.size() * sizeof(gpu::GpuGaussian));
-    upload(r.sh, g.sh.data(), g.sh.size() * sizeof(float));
-    if (g.sh_frames.size() == n && n > 0) {
-        std::vector<glm::vec4> cols(n * 3);
-        for (std::size_t i = 0; i < n; ++i)
-            for (std::size_t c = 0; c < 3; ++c) cols[i * 3 + c] = glm::vec4(g.sh_frames[i][int(c)], 0.0f);
-        upload(r.frames, cols.data(), cols.size() * sizeof(glm::vec4));
-    } else {
-        upload(r.frames, nullptr, 0);
-    }
-
-    r.count = n, r.sh_degree = g.sh_degree, r.origin = g.origin;
-    r.has_frames = g.sh_frames.size() == n && n > 0;
-    return {};
-}
-
-GaussianBuffers resident_buffers(const GlRenderer& r) {
-    return {r.gaussians.id(), r.sh.id(), r.frames.id(), r.count, r.sh_degree, r.has_frames};
+GaussianBuffers gaussian_buffers(const gaussian::GpuGaussians& gpu) {
+    return {gpu.draw_buffer(), gpu.sh_buffer(),       gpu.frames.id(),
+            gpu.drawn_count(), gpu.drawn_sh_degree(), gpu.has_frames()};
 }
 
 // Hardware GPUs: the GPU sort (no readback, no CPU work). Software rasterizers: the CPU sort, faster
@@ -142,18 +103,6 @@ GaussianBuffers resident_buffers(const GlRenderer& r) {
 bool gpu_sort_preferred(const GlRenderer& r) { return !r.software; }
 
 namespace {
-
-Status ensure_target(GlRenderer& r, const ReferenceOptions& o) {
-    if (r.width == o.width && r.height == o.height) return {};
-    r.color = gfx::Texture::create("gaussian.color", GL_TEXTURE_2D);
-    glTextureStorage2D(r.color.id(), 1, GL_RGBA32F, o.width, o.height);
-    r.framebuffer = gfx::Framebuffer::create("gaussian.target");
-    glNamedFramebufferTexture(r.framebuffer.id(), GL_COLOR_ATTACHMENT0, r.color.id(), 0);
-    if (glCheckNamedFramebufferStatus(r.framebuffer.id(), GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-        return make_error("draw_gl(): RGBA32F framebuffer incomplete");
-    r.width = o.width, r.height = o.height;
-    return {};
-}
 
 // The per-draw scratch buffers (projections, sort keys and payloads, tile counts) hold `n` Gaussians.
 void ensure_scratch(GlRenderer& r, std::size_t n) {
@@ -567,25 +516,6 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n,
     return {};
 }
 
-// Step 4: the image (GL rows bottom-up), the background blended in by the remaining transmittance.
-ReferenceImage read_image(const GlRenderer& r, const ReferenceOptions& o) {
-    std::vector<glm::vec4> pixels(std::size_t(o.width) * std::size_t(o.height));
-    glGetTextureImage(r.color.id(), 0, GL_RGBA, GL_FLOAT, GLsizei(pixels.size() * sizeof(glm::vec4)),
-                      pixels.data());
-    ReferenceImage img;
-    img.width = o.width, img.height = o.height;
-    img.color.resize(pixels.size());
-    img.transmittance.resize(pixels.size());
-    for (int y = 0; y < o.height; ++y)
-        for (int x = 0; x < o.width; ++x) {
-            const glm::vec4 p = pixels[std::size_t(o.height - 1 - y) * std::size_t(o.width) + std::size_t(x)];
-            const std::size_t k = img.index(x, y);
-            img.transmittance[k] = 1.0f - p.w;
-            img.color[k] = glm::vec3(p) + (1.0f - p.w) * o.background;
-        }
-    return img;
-}
-
 // Stage timing for benchmarks: the wall time since `t`, after waiting for the GL work (stage_timing).
 double stage_ms(const GlRenderer& r, std::chrono::steady_clock::time_point& t) {
     if (!r.stage_timing) return 0.0;
@@ -604,26 +534,31 @@ Status draw_gaussians(GlRenderer& r, const GaussianBuffers& b, const GaussianVie
         return make_error("draw_gaussians(): more than 2^31 Gaussians in one draw");
     r.covered_pixels = 0;
     r.last_blend = BlendPath::quads;
+    r.tile_entries = 0, r.tile_prepare_ms = 0.0;
     std::vector<gfx::SsboBatch> ranges;
     if (Status st = project_and_sort(r, b, v, ranges); !st) return st.error();
+    auto blend_start = std::chrono::steady_clock::now();
     if (tiles) {
         // The covered pixels (8 bytes; waits for the projection only): quads up to the budget, where
         // their image is the one the reference tests compare; past it, the tile blend, whose work stops at
         // saturation (unless its entries outgrow their buffers: quads then, unbounded but right).
         r.covered_pixels = read_covered_pixels(r);
-        if (r.covered_pixels >
-            quad_coverage_budget(r.software) * std::uint64_t(v.width) * std::uint64_t(v.height)) {
+        if (r.blend_path == BlendPath::tiles || r.covered_pixels > quad_coverage_budget(r.software) *
+                                                                       std::uint64_t(v.width) *
+                                                                       std::uint64_t(v.height)) {
             TileTargets t = *tiles;
             t.width = v.width, t.height = v.height, t.ndc_depth = v.ndc_depth;
             bool over_capacity = false;
             if (Status st = blend_tiles(r, t, b.count, ranges, &over_capacity); !st) return st.error();
             if (!over_capacity) {
                 r.last_blend = BlendPath::tiles;
+                r.blend_ms = stage_ms(r, blend_start);
                 return {};
             }
         }
     }
     blend_quads(r, v, ranges, splat_program);
+    r.blend_ms = stage_ms(r, blend_start);
     return {};
 }
 
@@ -645,40 +580,4 @@ TileStats tile_stats(const GlRenderer& r) {
     return {r.tile_entries_total, staged};
 }
 
-Result<ReferenceImage> draw_gl(GlRenderer& r, const Camera& cam, const ReferenceOptions& o) {
-    if (o.width < 1 || o.height < 1) return make_error("draw_gl(): empty image");
-    if (Status st = ensure_target(r, o); !st) return st.error();
-    GaussianView v;
-    v.view = glm::lookAt(cam.eye, cam.target, cam.up) * glm::translate(glm::dmat4(1.0), r.origin);
-    v.eye = cam.eye - r.origin;
-    v.fov_y_degrees = double(cam.fov_y_degrees);
-    v.near_plane = double(o.near_plane);
-    v.width = o.width, v.height = o.height;
-    v.min_footprint_px = r.min_footprint_px;
-    const GaussianBuffers b = resident_buffers(r);
-    std::vector<gfx::SsboBatch> ranges;
-    if (Status st = project_and_sort(r, b, v, ranges); !st) return st.error();
-    auto t = std::chrono::steady_clock::now();
-    r.tile_entries = 0, r.tile_prepare_ms = 0.0;
-    if (r.blend_path == BlendPath::tiles) {
-        const float clear[4] = {0, 0, 0, 0};
-        glClearTexImage(r.color.id(), 0, GL_RGBA, GL_FLOAT, clear);
-        TileTargets target;
-        target.color = r.color.id(), target.width = o.width, target.height = o.height;
-        if (Status st = blend_tiles(r, target, b.count, ranges); !st) return st.error();
-    } else {
-        glBindFramebuffer(GL_FRAMEBUFFER, r.framebuffer.id());
-        glViewport(0, 0, o.width, o.height);
-        const float clear[4] = {0, 0, 0, 0};
-        glClearNamedFramebufferfv(r.framebuffer.id(), GL_COLOR, 0, clear);
-        glDisable(GL_DEPTH_TEST);
-        blend_quads(r, v, ranges, nullptr);
-        glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    }
-    r.blend_ms = stage_ms(r, t);
-    ReferenceImage img = read_image(r, o);
-    r.readback_ms = stage_ms(r, t);
-    return img;
-}
-
-}  // namespace sffd::gaussian
+}  // namespace sffd::render
