@@ -63,9 +63,9 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
 
     // --- input: window events -> editor tools -> edit commands on lattices (editor) -----------------
     s.add(Phase::input, "editor", editor::editor_input_system,  // no-op without an EditorState resource
-          ecs::reads<AnimationClip, GaussianCloud, SplatCloud>()
-              .writes<AnimationState, Camera, Deformers, Lattice, Name, PreviewBudget, SplatMaterial,
-                      Transform, UnkeyedEdit, editor::EditorState, editor::LatticeFitSettings,
+          ecs::reads<GaussianCloud, SplatCloud>()
+              .writes<AnimationClip, AnimationState, Camera, Deformers, Lattice, Name, PreviewBudget,
+                      SplatMaterial, Transform, UnkeyedEdit, editor::EditorState, editor::LatticeFitSettings,
                       editor::PendingEdits, editor::SceneBoundsCache, picking::LatticeSelection,
                       picking::PickRequests, render::RenderSettings>());
 
@@ -81,7 +81,7 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
 
     // --- deformation: re-deform point clouds whose rest data or lattices changed (ffd) --------------
     s.add(Phase::deformation, "ffd", ffd_system,  // GPU compute when a context is current, else CPU
-          ecs::reads<Deformers, Lattice, SplatCloud>()
+          ecs::reads<Deformers, Lattice, PreviewBudget, SplatCloud>()
               .writes<DeformedSplats, FfdSettings, FfdStats, PointPages, Transform,
                       ffd::GpuDeformerState<ffd::GpuDeformer>, gfx::GpuSplatStore, gfx::ResidencyStats>());
     s.add(Phase::deformation, "gaussian", gaussian_deform_system,  // 3D Gaussian clouds
