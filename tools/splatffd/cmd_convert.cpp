@@ -20,6 +20,7 @@
 #include "runtime/assets/formats/surface/export.h"
 #include "runtime/assets/import.h"
 #include "runtime/assets/scene.h"
+#include "runtime/scene/point_order.h"
 #include "systems/ffd/lattice_io.h"
 #include "systems/ffd/operations.h"
 #include "systems/animation/components.h"
@@ -40,7 +41,7 @@ constexpr const char* kUsage =
     "usage: splatffd convert IN OUT [--splats N] [--normals] [--radii] [--neighbours K] [--seed S] "
     "[--ascii]\n"
     "                        [--progress] [--gaussians [--turn-x180] [--spz-version 3|4]]\n"
-    "                        [--lattice SRC [--lattice-name N]] [--rest]\n"
+    "                        [--lattice SRC [--lattice-name N]] [--rest] [--order keep|morton]\n"
     "  IN   .ply .obj .off .gltf .glb, or a built-in scene name (sphere, face)\n"
     "  OUT  .ply (binary little-endian; --ascii for text) .glb .gltf, or .json: a lattice (see below)\n"
     "  --splats N       exactly N splats (meshes: sampled on the surface; points: thinned evenly; default:\n"
@@ -76,7 +77,16 @@ constexpr const char* kUsage =
     "  beside it): OUT .glb/.gltf is the scene as loaded (every lattice, clip and un-keyed edit); any\n"
     "  other OUT gets its one cloud deformed by its lattices as saved (the pose render shows at the clip\n"
     "  time the scene was saved at, and deform uses), or:\n"
-    "  --rest           with a scene IN: the cloud as authored, without its lattices (default: deformed)\n";
+    "  --rest           with a scene IN: the cloud as authored, without its lattices (default: deformed)\n"
+    "  --order O        the order of the points in OUT: keep (as read or made) or morton (Z-order of the\n"
+    "                   positions written, 21 bits per axis in the cloud's box, ties in input order), so\n"
+    "                   each page of 65,536 points is a compact block and a local edit re-deforms few\n"
+    "                   pages; every column moves with its point, lattices are untouched (default keep)\n";
+
+// --order morton on a surface cloud: every column moved together (runtime/scene/point_order.h).
+sffd::Status reorder(sffd::SplatCloud& cloud, bool morton) {
+    return morton ? sffd::permute(cloud, sffd::morton_order(cloud.positions)) : sffd::Status{};
+}
 
 struct LatticeRequest {
     std::string source;  // --lattice
@@ -178,7 +188,7 @@ sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const sffd::SplatM
 
 // What a scene IN is converted with (the command's options that apply to it).
 struct SceneConvert {
-    bool rest = false, gaussians = false, ascii = false, turn_x180 = false;
+    bool rest = false, gaussians = false, ascii = false, turn_x180 = false, morton = false;
     int spz_version = 3;
     LatticeRequest lattice;
     const sffd::cli::LatticeChain* loaded = nullptr;  // --lattice SRC, read before
@@ -202,6 +212,16 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
     const bool scene_out = cli::is_scene_path(out);
     const bool surface_to_gaussians = o.gaussians && clouds.size() == 1 && r.has<SplatCloud>(clouds[0]);
     if (scene_out && o.lattice.source.empty() && !surface_to_gaussians) {
+        // The scene as loaded, its cloud in the order asked for (lattices do not depend on it).
+        for (ecs::Entity e : clouds) {
+            Status st;
+            if (o.morton && r.has<SplatCloud>(e)) st = reorder(r.patch<SplatCloud>(e), true);
+            if (o.morton && r.has<GaussianCloud>(e)) {
+                GaussianCloud& g = r.patch<GaussianCloud>(e);
+                st = permute(g, morton_order(g.positions));
+            }
+            if (!st) return cli::command_error("convert", in + ": " + st.message());
+        }
         if (Status st = save_scene(r, out); !st) return cli::command_error("convert", st.message());
         std::fprintf(stderr, "wrote %s: the scene as loaded (%zu cloud(s), %zu lattice(s), %zu clip(s))\n",
                      out.c_str(), clouds.size(), r.count<Lattice>(), r.count<AnimationClip>());
@@ -254,7 +274,7 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
             gaussian::bake_sh_frames(posed);
         }
         return cli::write_gaussian_cloud(std::move(posed), name, out, o.ascii, o.turn_x180, o.spz_version,
-                                         keep, pose, t0);
+                                         keep, pose, t0, o.morton);
     }
     SplatCloud cloud = r.get<SplatCloud>(cloud_entity);
     SplatMaterial material;
@@ -279,7 +299,10 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
         }
     }
     if (o.gaussians)
-        return cli::write_gaussians(in, &cloud, material, out, o.ascii, o.turn_x180, o.spz_version, keep);
+        return cli::write_gaussians(in, &cloud, material, out, o.ascii, o.turn_x180, o.spz_version, keep,
+                                    o.morton);
+    if (Status st = reorder(cloud, o.morton); !st)
+        return cli::command_error("convert", in + ": " + st.message());
     std::string lattice_note;
     Status s = !o.lattice.source.empty()
                    ? save_with_lattice(cloud, material, name, o.lattice, *o.loaded, out, lattice_note)
@@ -296,7 +319,7 @@ int run_convert(sffd::cli::Args args) {
     using namespace sffd;
     std::string in, out;
     assets::ImportOptions opt;
-    bool ascii = false, gaussians = false, progress = false, turn_x180 = false, rest = false;
+    bool ascii = false, gaussians = false, progress = false, turn_x180 = false, rest = false, morton = false;
     int spz_version = 3;
     LatticeRequest lattice;
     for (std::size_t i = 0; i < args.size(); ++i) {
@@ -336,6 +359,12 @@ int run_convert(sffd::cli::Args args) {
             auto v = text();
             if (!v) return 2;
             (a == "--lattice" ? lattice.source : lattice.name) = *v;
+        } else if (a == "--order") {
+            auto v = text();
+            if (!v) return 2;
+            if (*v != "keep" && *v != "morton")
+                return cli::usage_error("convert", "--order '" + *v + "': expected keep or morton", kUsage);
+            morton = *v == "morton";
         } else if (a == "--normals") {
             opt.estimate_normals = true;
         } else if (a == "--radii") {
@@ -405,12 +434,12 @@ int run_convert(sffd::cli::Args args) {
         loaded = std::move(*c);
     }
     if (scene_in)
-        return convert_scene(in, out,
-                             SceneConvert{rest, gaussians, ascii, turn_x180, spz_version, lattice, &loaded});
+        return convert_scene(
+            in, out, SceneConvert{rest, gaussians, ascii, turn_x180, morton, spz_version, lattice, &loaded});
     const cli::GaussianLatticeRequest gaussian_lattice{lattice.source, &loaded};
     if (gaussian_in)
         return cli::write_gaussians(in, nullptr, SplatMaterial{}, out, ascii, turn_x180, spz_version,
-                                    gaussian_lattice);
+                                    gaussian_lattice, morton);
     cli::ProgressPrinter printer("convert", cli::ProgressPrinter::mode_for(progress));
     opt.progress = printer.fn();
     const auto t0 = std::chrono::steady_clock::now();
@@ -470,7 +499,11 @@ int run_convert(sffd::cli::Args args) {
     }
     if (gaussians)
         return cli::write_gaussians(in, &*cloud, material, out, ascii, turn_x180, spz_version,
-                                    gaussian_lattice);
+                                    gaussian_lattice, morton);
+    if (Status st = reorder(*cloud, morton); !st) {
+        std::fprintf(stderr, "splatffd convert: %s: %s\n", in.c_str(), st.message().c_str());
+        return 1;
+    }
     const auto t2 = std::chrono::steady_clock::now();
     std::string lattice_note;
     printer.report("writing", 0.0);

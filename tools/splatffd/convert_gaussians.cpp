@@ -8,6 +8,7 @@
 #include "runtime/assets/formats/surface/ply.h"
 #include "runtime/assets/scene.h"
 #include "runtime/scene/components.h"
+#include "runtime/scene/point_order.h"
 #include "systems/ffd/operations.h"
 #include "systems/gaussian/capture_up.h"
 #include "systems/gaussian/from_splats.h"
@@ -89,7 +90,7 @@ Status save_gaussian_scene(GaussianCloud g, const std::string& cloud_name, const
 
 int write_gaussians(const std::string& in, const SplatCloud* surface, const SplatMaterial& material,
                     const std::string& out, bool ascii, bool turn_x180, int spz_version,
-                    const GaussianLatticeRequest& lattice) {
+                    const GaussianLatticeRequest& lattice, bool morton_order) {
     const auto t0 = std::chrono::steady_clock::now();
     Result<GaussianCloud> g =
         surface ? Result<GaussianCloud>(gaussian::gaussians_from_splats(*surface, {.material = material}))
@@ -111,14 +112,21 @@ int write_gaussians(const std::string& in, const SplatCloud* surface, const Spla
         return 2;
     }
     return write_gaussian_cloud(std::move(*g), std::filesystem::path(in).stem().string(), out, ascii,
-                                turn_x180, spz_version, lattice, "", t0);
+                                turn_x180, spz_version, lattice, "", t0, morton_order);
 }
 
 int write_gaussian_cloud(GaussianCloud cloud, const std::string& name, const std::string& out, bool ascii,
                          bool turn_x180, int spz_version, const GaussianLatticeRequest& lattice,
-                         const std::string& note_after, std::chrono::steady_clock::time_point t0) {
+                         const std::string& note_after, std::chrono::steady_clock::time_point t0,
+                         bool morton_order) {
     GaussianCloud* g = &cloud;
     if (turn_x180) gaussian::turn_axes(*g, gaussian::AxisTurn::x180);
+    if (morton_order) {
+        if (Status s = permute(*g, sffd::morton_order(g->positions)); !s) {
+            std::fprintf(stderr, "splatffd convert: %s: %s\n", out.c_str(), s.message().c_str());
+            return 1;
+        }
+    }
     const std::string e = lower_ext(out);
     if (!lattice.source.empty()) {
         const std::size_t count = g->size();

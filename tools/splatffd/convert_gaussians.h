@@ -35,12 +35,14 @@ struct GaussianLatticeRequest {
 // `material`: the surface cloud's material (its base colour for splats without colours).
 int write_gaussians(const std::string& in, const SplatCloud* surface, const SplatMaterial& material,
                     const std::string& out, bool ascii, bool turn_x180 = false, int spz_version = 3,
-                    const GaussianLatticeRequest& lattice = {});
+                    const GaussianLatticeRequest& lattice = {}, bool morton_order = false);
 // The same for a cloud already in memory (a scene's, posed by the caller); `name` names it in a scene OUT,
 // `note_after` ends the summary line ("wrote OUT: N Gaussians, SH degree D<note_after> (T s)"), `t0` starts
-// its time.
+// its time. `morton_order` (convert --order morton): the Gaussians are written in Morton order of their
+// centres as written (after any turn; runtime/scene/point_order.h), every column moved together.
 int write_gaussian_cloud(GaussianCloud cloud, const std::string& name, const std::string& out, bool ascii,
                          bool turn_x180, int spz_version, const GaussianLatticeRequest& lattice,
-                         const std::string& note_after, std::chrono::steady_clock::time_point t0);
+                         const std::string& note_after, std::chrono::steady_clock::time_point t0,
+                         bool morton_order = false);
 
 }  // namespace sffd::cli
