@@ -34,6 +34,7 @@
 #include "tools/splatffd/lattice_source.h"
 #include "tools/splatffd/progress.h"
 #include "tools/splatffd/unkeyed_note.h"
+#include "systems/engine/engine_frame.h"
 
 namespace {
 
@@ -106,6 +107,7 @@ int export_lattice_json(const std::string& in, const std::string& out, const Lat
             return 1;
         }
         ecs::Registry r;
+        sffd::use_engine_scene_hooks(r);
         if (Status s = load_scene(r, in); !s) {
             std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
             return 1;
@@ -203,6 +205,7 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
     using namespace sffd;
     const auto t0 = std::chrono::steady_clock::now();
     ecs::Registry r;
+    sffd::use_engine_scene_hooks(r);
     if (Status st = load_scene(r, in); !st) return cli::command_error("convert", st.message());
     if (!o.rest) cli::note_unkeyed_edits("convert", r);
     std::vector<ecs::Entity> clouds;
@@ -450,6 +453,7 @@ int run_convert(sffd::cli::Args args) {
     } else if (assets::is_builtin_scene(in)) {
         // Other built-in scenes (face) come from their cached file: the scene's first cloud, as stored.
         ecs::Registry r;
+        sffd::use_engine_scene_hooks(r);
         if (Status st = load_scene(r, in); !st) {
             std::fprintf(stderr, "splatffd convert: %s\n", st.message().c_str());
             return 1;

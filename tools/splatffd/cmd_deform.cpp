@@ -45,6 +45,7 @@
 #include "tools/splatffd/lattice_source.h"
 #include "tools/splatffd/progress.h"
 #include "tools/splatffd/unkeyed_note.h"
+#include "systems/engine/engine_frame.h"
 
 namespace {
 
@@ -286,6 +287,7 @@ int deform_in_memory(const Options& o) {
         early = std::move(*c);
     }
     ecs::Registry scene;
+    sffd::use_engine_scene_hooks(scene);
     SplatCloud cloud;
     SplatMaterial material;  // the input's, carried into a .glb output
     std::string cloud_name = std::filesystem::path(in_path).stem().string();

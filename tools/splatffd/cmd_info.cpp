@@ -29,6 +29,7 @@
 #include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_scene.h"
 #include "tools/splatffd/command.h"
+#include "systems/engine/engine_frame.h"
 
 namespace {
 
@@ -338,6 +339,7 @@ int run_info(cli::Args args) {
     }
     if (assets::is_builtin_scene(file) || ext == ".gltf" || ext == ".glb") {
         ecs::Registry reg;
+        sffd::use_engine_scene_hooks(reg);
         if (auto s = load_scene(reg, file); !s) {
             std::fprintf(stderr, "splatffd info: %s\n", s.message().c_str());
             return 1;

@@ -29,6 +29,7 @@
 #include "systems/picking/picking_system.h"
 #include "systems/splat_render/camera_math.h"
 #include "tools/splatffd/command.h"
+#include "systems/engine/engine_frame.h"
 
 namespace {
 
@@ -114,6 +115,7 @@ int run_pick(sffd::cli::Args args) {
     }
 
     ecs::Registry registry;
+    sffd::use_engine_scene_hooks(registry);
     Camera camera;
     // Surface scenes and Gaussian files alike (splatffd's main registers the Gaussian scene hooks): the
     // camera is the one `render` sees them through.

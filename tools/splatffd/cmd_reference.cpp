@@ -22,6 +22,7 @@
 #include "systems/splat_render/image_io.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/frame_files.h"
+#include "systems/engine/engine_frame.h"
 
 namespace {
 
@@ -119,6 +120,7 @@ int run_reference(sffd::cli::Args args) {
     }
     if (!cli::create_output_folder(out_dir)) return 1;
     ecs::Registry registry;
+    sffd::use_engine_scene_hooks(registry);
     if (Status st = load_scene(registry, scene); !st) {
         cli::command_error("reference", st.message());
         return 1;

@@ -53,6 +53,7 @@
 #include "tools/splatffd/render_manifest.h"
 #include "tools/splatffd/unkeyed_note.h"
 #include "tools/splatffd/video.h"
+#include "systems/engine/engine_frame.h"
 
 namespace {
 
@@ -388,6 +389,7 @@ struct RenderScene {
 
 // Loads the scene, applies the options to it and makes the render state (needs the GL context current).
 Status set_up_scene(const RenderOptions& o, gfx::GlContext& ctx, RenderScene& s) {
+    sffd::use_engine_scene_hooks(s.registry);
     if (Status st = load_scene(s.registry, o.scene); !st) return st;
     s.settings.quality = o.quality, s.settings.width = int(o.width), s.settings.height = int(o.height);
     s.settings.background = o.background

@@ -19,6 +19,7 @@
 #include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "runtime/assets/formats/gaussian/gaussian_sog.h"
 #include "runtime/assets/formats/gaussian/gaussian_spz.h"
+#include "systems/engine/engine_frame.h"
 
 namespace sffd::cli {
 
@@ -70,6 +71,7 @@ Status save_gaussian_scene(GaussianCloud g, const std::string& cloud_name, const
     // editor places a lattice it adds.
     const Transform shown = gaussian::capture_transform();
     ecs::Registry r;
+    sffd::use_engine_scene_hooks(r);
     const ecs::Entity c = r.create();
     r.emplace<Name>(c, Name{cloud_name});
     r.emplace<Transform>(c, shown);

@@ -22,6 +22,7 @@
 #include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "runtime/assets/formats/gaussian/gaussian_sog.h"
 #include "runtime/assets/formats/gaussian/gaussian_spz.h"
+#include "systems/engine/engine_frame.h"
 
 namespace sffd::cli {
 
@@ -99,6 +100,7 @@ std::string export_frame_name(long frame, long last, ExportFormat format) {
 
 Status open_export_scene(const std::string& scene, const std::string& cloud_name, ExportScene& out) {
     ecs::Registry& r = out.registry;
+    sffd::use_engine_scene_hooks(r);
     if (Status st = load_scene(r, scene); !st) return st;
     // The clouds the engine deforms: those with Deformers naming lattices (render shows the others at rest).
     std::vector<ecs::Entity> deformed, clouds;

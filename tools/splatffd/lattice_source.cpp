@@ -8,6 +8,7 @@
 #include "runtime/assets/scene.h"
 #include "systems/ffd/lattice_frame.h"
 #include "systems/ffd/lattice_io.h"
+#include "systems/engine/engine_frame.h"
 
 namespace sffd::cli {
 
@@ -120,6 +121,7 @@ Result<LatticeChain> pick_scene_lattices(const ecs::Registry& r, const std::stri
 Result<LatticeChain> load_lattice_source(const std::string& source, const std::string& name) {
     if (is_scene_path(source)) {
         ecs::Registry r;
+        sffd::use_engine_scene_hooks(r);
         if (Status s = load_scene(r, source); !s) return s.error();
         return pick_scene_lattices(r, source, name);
     }
@@ -137,6 +139,7 @@ Status save_cloud_with_lattices(SplatCloud cloud, const std::string& cloud_name,
                                 const std::vector<Lattice>& lattices, const std::string& path,
                                 const SplatMaterial& material) {
     ecs::Registry r;
+    sffd::use_engine_scene_hooks(r);
     const ecs::Entity c = r.create();
     r.emplace<Name>(c, Name{cloud_name});
     r.emplace<Transform>(c, Transform{});

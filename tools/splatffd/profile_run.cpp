@@ -30,6 +30,7 @@
 #include "tools/splatffd/command.h"
 #include "systems/engine/engine.h"
 #include "tools/splatffd/progress.h"
+#include "systems/engine/engine_frame.h"
 
 namespace sffd::profile_cmd {
 
@@ -115,6 +116,7 @@ Status load(ecs::Registry& registry, const std::string& scene, bool* synthetic) 
         registry.emplace<Deformers>(cloud, Deformers{{lattice}});
         return {};
     }
+    sffd::use_engine_scene_hooks(registry);
     if (scene.rfind("synthetic:", 0) != 0) return load_scene(registry, scene);
     double count = 0.0;
     if (!parse_count(scene.substr(10), count)) return make_error(scene + ": bad synthetic point count");

@@ -25,6 +25,7 @@
 #include "systems/gaussian/components.h"
 #include "runtime/assets/formats/gaussian/gaussian_sog.h"
 #include "systems/splat_render/camera_math.h"
+#include "systems/engine/engine_frame.h"
 
 namespace sffd::cli {
 
@@ -294,6 +295,7 @@ int run_export_web(Args args) {
 
     if (Status st = check_output_dir(o); !st) return command_error("export", st.message());
     ecs::Registry registry;
+    sffd::use_engine_scene_hooks(registry);
     if (Status st = load_scene(registry, o.scene); !st) return command_error("export", st.message());
     auto scene = pick_scene(registry, o);
     if (!scene) return command_error("export", scene.message());
