@@ -397,9 +397,9 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n,
                            (unsigned(o.height) + SFFD_GAUSS_TILE - 1) / SFFD_GAUSS_TILE);
     const std::uint64_t tile_count = std::uint64_t(tiles.x) * tiles.y;
     if (tiles.x > gfx::kMinMaxComputeGroups || tiles.y > gfx::kMinMaxComputeGroups)
-        return make_error("draw_gl(): image too large for one tile group per tile");
+        return make_error("draw_gaussians(): image too large for one tile group per tile");
     const auto refuse = [&](const Status& st) -> Status {
-        if (!over_capacity) return make_error("draw_gl(): " + st.message() + "; use BlendPath::quads");
+        if (!over_capacity) return make_error("draw_gaussians(): " + st.message() + "; use BlendPath::quads");
         warn_fallback(r.tile_fallback_warned, "draw_gaussians(): " + st.message() +
                                                   " (the tile path binds it whole); blending with quads");
         *over_capacity = true;
@@ -435,7 +435,7 @@ Status blend_tiles(GlRenderer& r, const TileTargets& o, std::size_t n,
         return {};
     }
     if (entries > kMaxTileEntries)
-        return make_error("draw_gl(): " + std::to_string(entries) +
+        return make_error("draw_gaussians(): " + std::to_string(entries) +
                           " tile entries exceed the tile path's 2^28; use BlendPath::quads");
     // The emit, sort and ranges passes index the entry arrays at random: no ranges, one storage block each.
     if (Status st = tile_buffers_fit(n, entries); !st) return refuse(st);
