@@ -6,12 +6,16 @@
 // Gaussians.
 //   build/<dir>/tools/bench/bench_page_redeform --benchmark_repetitions=3
 //   --benchmark_report_aggregates_only=true
-// Arguments: divisions per axis, the dragged control point's index along y (x and z at the middle).
+// Arguments: divisions per axis, the dragged control point's index along y (x and z at the middle), the
+// points' order: 0 as generated (latitude bands), 1 Morton order (runtime/scene/point_order.h, what
+// `splatffd convert --order morton` writes), whose pages are compact blocks.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <vector>
 
+#include "runtime/scene/point_order.h"
 #include "runtime/scene/point_pages.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/ffd_system.h"
@@ -37,9 +41,27 @@ SplatCloud sphere(std::size_t count) {
     return s;
 }
 
+// The 1M sphere in the order asked for by the benchmark's third argument.
+const SplatCloud& sphere_in_order(bool morton) {
+    static const SplatCloud bands = sphere(1000000);
+    static const SplatCloud zorder = [] {
+        SplatCloud s = bands;
+        if (!permute(s, morton_order(s.positions))) std::abort();
+        return s;
+    }();
+    return morton ? zorder : bands;
+}
+
+// Share of the lattice's volume the dragged point's support (l·t in [i-2, i+2] per axis, clipped to the
+// box) covers.
+double support_volume(int div, int j) {
+    const auto share = [&](int i) { return (std::min(div, i + 2) - std::max(0, i - 2)) / double(div); };
+    return share(div / 2) * share(j) * share(div / 2);
+}
+
 void drag(benchmark::State& state, bool full) {
     const int div = int(state.range(0)), j = int(state.range(1));
-    static const SplatCloud cloud = sphere(1000000);
+    const SplatCloud& cloud = sphere_in_order(state.range(2) != 0);
     ecs::Registry reg;
     reg.set_resource<FfdSettings>().force_cpu = true;
     const ecs::Entity c = reg.create(), le = reg.create();
@@ -72,14 +94,14 @@ void drag(benchmark::State& state, bool full) {
     state.counters["fraction"] = redone / double(steps) / total;
     // Share of the lattice's height the point's support (l·t in [j-2, j+2], clipped to the box) covers.
     state.counters["support_height"] = (std::min(div, j + 2) - std::max(0, j - 2)) / double(div);
+    state.counters["support_volume"] = support_volume(div, j);
 }
 
 // The same drag on 1M Gaussians (SH degree 0) on the sphere, in the same order, through
 // gaussian_deform_system's CPU path.
 void drag_gaussians(benchmark::State& state, bool full) {
     const int div = int(state.range(0)), j = int(state.range(1));
-    static const GaussianCloud cloud = [] {
-        const SplatCloud s = sphere(1000000);
+    static const auto gaussians = [](const SplatCloud& s) {
         GaussianCloud g;
         g.positions = s.positions;
         g.scales.assign(s.size(), glm::vec3(0.003f, 0.003f, 0.0005f));
@@ -87,7 +109,14 @@ void drag_gaussians(benchmark::State& state, bool full) {
         g.opacities.assign(s.size(), 0.8f);
         g.sh.assign(s.size() * 3, 0.2f);
         return g;
+    };
+    static const GaussianCloud bands = gaussians(sphere_in_order(false));
+    static const GaussianCloud zorder = [] {
+        GaussianCloud g = bands;
+        if (!permute(g, morton_order(g.positions))) std::abort();
+        return g;
     }();
+    const GaussianCloud& cloud = state.range(2) != 0 ? zorder : bands;
     ecs::Registry reg;
     reg.set_resource<FfdSettings>().force_cpu = true;
     const ecs::Entity c = reg.create(), le = reg.create();
@@ -118,6 +147,7 @@ void drag_gaussians(benchmark::State& state, bool full) {
     state.counters["pages_redone"] = redone / double(steps);
     state.counters["pages_total"] = total;
     state.counters["fraction"] = redone / double(steps) / total;
+    state.counters["support_volume"] = support_volume(div, j);
 }
 
 void BM_Drag_Pages(benchmark::State& state) { drag(state, false); }
@@ -126,15 +156,26 @@ void BM_GaussianDrag_Full(benchmark::State& state) { drag_gaussians(state, true)
 void BM_Drag_Full(benchmark::State& state) { drag(state, true); }
 
 // 21^3 lattice: points 2 (support below y = -0.66, 1/5 of the height) and 10 (the middle); 11^3: points
-// 1 and 5 (the middle, 2/5 of the height).
+// 1 and 5 (the middle, 2/5 of the height). Each in band order (0) and Morton order (1).
 BENCHMARK(BM_Drag_Pages)
-    ->Args({20, 2})
-    ->Args({20, 10})
-    ->Args({10, 1})
-    ->Args({10, 5})
+    ->Args({20, 2, 0})
+    ->Args({20, 10, 0})
+    ->Args({10, 1, 0})
+    ->Args({10, 5, 0})
+    ->Args({20, 2, 1})
+    ->Args({20, 10, 1})
+    ->Args({10, 1, 1})
+    ->Args({10, 5, 1})
     ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_Drag_Full)->Args({20, 2})->Args({10, 5})->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_GaussianDrag_Pages)->Args({20, 2})->Args({20, 10})->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_GaussianDrag_Full)->Args({20, 2})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_Drag_Full)->Args({20, 2, 0})->Args({10, 5, 0})->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GaussianDrag_Pages)
+    ->Args({20, 2, 0})
+    ->Args({20, 10, 0})
+    ->Args({20, 2, 1})
+    ->Args({20, 10, 1})
+    ->Args({10, 1, 1})
+    ->Args({10, 5, 1})
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GaussianDrag_Full)->Args({20, 2, 0})->Unit(benchmark::kMillisecond);
 
 }  // namespace
