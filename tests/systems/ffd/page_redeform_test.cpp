@@ -147,7 +147,7 @@ std::size_t pages_with_y_in(const SplatCloud& c, double lo, double hi) {
         const PageRange r = page_range(p, c.size());
         bool hit = false;
         for (std::size_t i = r.first; i < r.first + r.count && !hit; ++i)
-            hit = c.positions[i].y >= lo && c.positions[i].y <= hi;
+            hit = double(c.positions[i].y) >= lo && double(c.positions[i].y) <= hi;
         count += hit;
     }
     return count;

@@ -131,7 +131,7 @@ TEST_P(GaussianPageRedeform, ADragNearTheBottomRedoesOnlyTheBottomPages) {
     const double top = -0.77 + 2e-4 * 2.2;
     std::size_t expected = 0;
     for (std::size_t p = 0; p < page_count(cloud.size()); ++p)
-        expected += cloud.positions[page_range(p, cloud.size()).first].y <= top;
+        expected += double(cloud.positions[page_range(p, cloud.size()).first].y) <= top;
     for (int s = 1; s <= 2; ++s) {
         Lattice& l = rig.reg.patch<Lattice>(rig.lattices[0]);
         l.current[l.index(10, 1, 10)] += glm::dvec3(0.02, 0.03, 0.0);
