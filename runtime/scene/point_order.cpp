@@ -1,5 +1,7 @@
 #include "runtime/scene/point_order.h"
 
+#include "runtime/scene/point_pages.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -86,6 +88,36 @@ bool is_permutation_of(std::span<const std::uint32_t> perm, std::size_t n) {
         seen[i] = true;
     }
     return true;
+}
+
+PageCompactness page_compactness(std::span<const glm::vec3> positions) {
+    const auto box = [&](std::size_t first, std::size_t count, glm::dvec3& lo, glm::dvec3& hi) {
+        lo = glm::dvec3(std::numeric_limits<double>::infinity()), hi = -lo;
+        for (std::size_t i = first; i < first + count; ++i)
+            if (finite(positions[i]))
+                lo = glm::min(lo, glm::dvec3(positions[i])), hi = glm::max(hi, glm::dvec3(positions[i]));
+    };
+    PageCompactness r;
+    r.pages = page_count(positions.size());
+    glm::dvec3 clo, chi;
+    box(0, positions.size(), clo, chi);
+    if (r.pages == 0 || !(clo.x <= chi.x)) return r;
+    const glm::dvec3 cext = chi - clo;
+    std::size_t counted = 0;
+    for (std::size_t p = 0; p < r.pages; ++p) {
+        const PageRange pr = page_range(p, positions.size());
+        glm::dvec3 lo, hi;
+        box(pr.first, pr.count, lo, hi);
+        if (!(lo.x <= hi.x)) continue;
+        const glm::dvec3 ext = hi - lo;
+        double volume = 1.0;
+        for (int a = 0; a < 3; ++a)
+            if (cext[a] > 0) volume *= ext[a] / cext[a];
+        const double diagonal = glm::length(cext) > 0 ? glm::length(ext) / glm::length(cext) : 0.0;
+        r.mean_volume_share += volume, r.mean_diagonal_share += diagonal, ++counted;
+    }
+    if (counted) r.mean_volume_share /= double(counted), r.mean_diagonal_share /= double(counted);
+    return r;
 }
 
 Status permute(SplatCloud& c, std::span<const std::uint32_t> perm) {

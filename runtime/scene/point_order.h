@@ -36,6 +36,17 @@ std::vector<std::uint32_t> morton_order(std::span<const glm::vec3> positions);
 // True when `perm` holds each of 0..n-1 exactly once.
 bool is_permutation_of(std::span<const std::uint32_t> perm, std::size_t n);
 
+// How spatially compact the pages of a cloud of these positions are (point_pages.h: consecutive runs of
+// kPagePoints): the mean over pages of each page's box (finite points) as a share of the cloud's box, by
+// volume (axes where the cloud is flat left out) and by diagonal. Points in scan or band order give pages
+// as wide as the cloud (shares near 1 on some axis); spatially ordered points give small boxes.
+struct PageCompactness {
+    std::size_t pages = 0;
+    double mean_volume_share = 0.0;
+    double mean_diagonal_share = 0.0;
+};
+PageCompactness page_compactness(std::span<const glm::vec3> positions);
+
 // Reorders every per-point column (surface: positions, normals, axes, colours, uvs, uv axes; Gaussians:
 // positions, scales, rotations, opacities, SH, SH frames) by `perm`. Empty optional columns stay empty;
 // the texture and the origin are untouched. Fails, changing nothing, when `perm` is not a permutation of

@@ -17,6 +17,8 @@
 #include "runtime/assets/scene.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
+#include "runtime/scene/point_order.h"
+#include "runtime/scene/point_pages.h"
 #include "systems/animation/components.h"
 #include "systems/animation/unkeyed_edit.h"
 #include "systems/ffd/components.h"
@@ -211,6 +213,16 @@ int info_ply(const std::string& file) {
     return 0;
 }
 
+// How compact the cloud's pages are in space (runtime/scene/point_order.h): a file stored in scan or band
+// order has pages as wide as the cloud; `convert --order morton` makes them small blocks.
+void print_pages(const std::vector<glm::vec3>& positions) {
+    const PageCompactness p = page_compactness(positions);
+    std::printf(
+        "    pages    %zu of %zu points; mean page box %.3g%% of the cloud box's volume, %.3g%% of its "
+        "diagonal\n",
+        p.pages, kPagePoints, 100.0 * p.mean_volume_share, 100.0 * p.mean_diagonal_share);
+}
+
 void summarise_registry(const ecs::Registry& reg) {
     std::size_t total = 0;
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& c) {
@@ -238,6 +250,7 @@ void summarise_registry(const ecs::Registry& reg) {
                 }
             }
             print_rest_and_deformed(reg, e, c.positions, c.origin);
+            print_pages(c.positions);
             if (!c.axis_u.empty())
                 std::printf("    radius   min %.4g, mean %.4g, max %.4g\n", rmin,
                             rsum / static_cast<double>(c.size()), rmax);
@@ -251,7 +264,7 @@ void summarise_registry(const ecs::Registry& reg) {
         gaussians += g.size();
         std::printf("  gaussians '%s': %zu Gaussians, SH degree %d%s%s\n", n ? n->value.c_str() : "?",
                     g.size(), g.sh_degree, src ? "; file " : "", src ? src->path.string().c_str() : "");
-        if (g.size()) print_rest_and_deformed(reg, e, g.positions, g.origin);
+        if (g.size()) print_rest_and_deformed(reg, e, g.positions, g.origin), print_pages(g.positions);
         print_deformers(reg, e);
     });
     reg.view<const Lattice>().each([&](ecs::Entity e, const Lattice& l) {

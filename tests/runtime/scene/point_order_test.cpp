@@ -199,5 +199,27 @@ TEST(PointOrder, PermuteRefusesABadOrderOrAColumnOfTheWrongLengthAndChangesNothi
     EXPECT_EQ(std::memcmp(c.positions.data(), before.positions.data(), 10 * sizeof(glm::vec3)), 0);
 }
 
+TEST(PointOrder, PageCompactnessOfSlabsAndBlocks) {
+    // 4 pages of a 64 x 64 x 64 grid in x-fastest order: each page is a slab of 16 z-layers (the whole x
+    // and y). In Morton order each page is two octants (x and y halved, the whole z): a larger volume
+    // share here, a smaller diagonal.
+    std::vector<glm::vec3> p;
+    for (int z = 0; z < 64; ++z)
+        for (int y = 0; y < 64; ++y)
+            for (int x = 0; x < 64; ++x) p.push_back(glm::vec3(x, y, z));
+    const PageCompactness slabs = page_compactness(p);
+    EXPECT_EQ(slabs.pages, 4u);
+    EXPECT_NEAR(slabs.mean_volume_share, 15.0 / 63.0, 1e-12);
+    EXPECT_NEAR(slabs.mean_diagonal_share, std::sqrt(2.0 + (15.0 / 63.0) * (15.0 / 63.0)) / std::sqrt(3.0),
+                1e-12);
+    std::vector<glm::vec3> m = p;
+    const std::vector<std::uint32_t> perm = morton_order(m);
+    for (std::size_t t = 0; t < perm.size(); ++t) m[t] = p[perm[t]];
+    const PageCompactness blocks = page_compactness(m);
+    EXPECT_NEAR(blocks.mean_volume_share, 31.0 / 63.0 * 31.0 / 63.0, 1e-12);
+    EXPECT_LT(blocks.mean_diagonal_share, slabs.mean_diagonal_share);
+    EXPECT_EQ(page_compactness(std::vector<glm::vec3>{}).pages, 0u);
+}
+
 }  // namespace
 }  // namespace sffd
