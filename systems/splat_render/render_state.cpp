@@ -89,11 +89,15 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore* st
             glNamedBufferData(gpu.commands.id(), draw_command_words * sizeof(std::uint32_t), nullptr,
                               GL_DYNAMIC_DRAW);
         }
-        if (gpu.capacity < n || !gpu.records) {
+        // The flat-coloured run after the capacity is written and read for textured clouds only: an
+        // untextured cloud's buffer holds one run (96 bytes a splat instead of 192, host memory on llvmpipe).
+        const std::uint32_t runs = splats.texture.id() ? 2u : 1u;
+        if (gpu.capacity < n || !gpu.records || gpu.record_runs < runs) {
             gpu.capacity = std::max<std::uint32_t>(n, 1);
+            gpu.record_runs = runs;
             gpu.records = gfx::Buffer::create("render.visible_splats");
             glNamedBufferData(gpu.records.id(),
-                              GLsizeiptr(2 * std::size_t(gpu.capacity) * sizeof(SplatRecord)), nullptr,
+                              GLsizeiptr(runs * std::size_t(gpu.capacity) * sizeof(SplatRecord)), nullptr,
                               GL_DYNAMIC_DRAW);
             gpu.quads = gfx::Buffer::create("render.visible_quads");
             glNamedBufferData(gpu.quads.id(), GLsizeiptr(std::size_t(gpu.capacity) * sizeof(std::uint32_t)),

@@ -63,6 +63,7 @@ struct CloudGpu {
     std::uint32_t cull_group_capacity = 0;
     gfx::Buffer frame_ubo;  // FrameBlock for this cloud
     std::uint32_t capacity = 0;
+    std::uint32_t record_runs = 0;  // runs of `capacity` records in `records`: 2 with the flat run
     // The cloud's texture (sRGB) and uv frames (vec4[count]) this frame, when it has one: the residency's
     // (GpuSplats::texture, uv_axes), never uploaded here.
     GLuint texture = 0;
