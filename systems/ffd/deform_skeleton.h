@@ -60,8 +60,11 @@ void run_deformation(ecs::Registry& reg, const Settings& settings, typename Kind
         const CloudLattices framed = cloud_lattices(reg, e, inputs.lattices);
         // The one staleness rule, where there is a page-wise output to build on.
         RedoPlan plan;
-        if (same_options && !out.preview && budget == 0)
-            plan = plan_redeform(out.seen, out.paged, inputs.stamps, pages, framed.span(), Kind::reads());
+        if (same_options && !out.preview && budget == 0) {
+            const PagePoints rest{cloud.origin, cloud.positions};
+            plan =
+                plan_redeform(out.seen, out.paged, inputs.stamps, pages, framed.span(), Kind::reads(), &rest);
+        }
         out.seen = inputs.stamps;
         ++out.version;
         Kind::begin(reg, e, out, cloud, framed, settings, stats);

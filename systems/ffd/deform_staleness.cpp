@@ -84,7 +84,8 @@ bool same_topology(const Lattice& a, const Lattice& b) {
 
 std::vector<std::uint8_t> pages_touched_by_edit(const Lattice& before, const Lattice& after,
                                                 std::span<const glm::dvec3> boxes_lo,
-                                                std::span<const glm::dvec3> boxes_hi) {
+                                                std::span<const glm::dvec3> boxes_hi,
+                                                const PagePoints* points) {
     std::vector<std::uint8_t> touched(boxes_lo.size(), 0);
     glm::ivec3 lo, hi;
     index_box(after, &before, lo, hi);
@@ -108,6 +109,7 @@ std::vector<std::uint8_t> pages_touched_by_edit(const Lattice& before, const Lat
         if (!changed && !cull_changed) return touched;
     }
     const ParamBox box = inside_box();
+    const glm::dmat3 minv = inverse_axes(after);  // local_coords() without its inverse per point
     for (std::size_t p = 0; p < boxes_lo.size(); ++p) {
         if (boxes_lo[p].x > boxes_hi[p].x) continue;  // no finite point
         const ParamBox page = to_params(after, boxes_lo[p], boxes_hi[p]);
@@ -116,13 +118,29 @@ std::vector<std::uint8_t> pages_touched_by_edit(const Lattice& before, const Lat
         const double mag = std::max({1.0, std::abs(page.lo.x), std::abs(page.lo.y), std::abs(page.lo.z),
                                      std::abs(page.hi.x), std::abs(page.hi.y), std::abs(page.hi.z)});
         const double m = 1e-4 * mag;
-        const ParamBox wide = widen(page, m);
-        if (!meets(wide, widen(box, m))) continue;  // outside the lattice: copied, whatever the edit
-        bool redo = changed && meets(wide, widen(support, m));
-        if (!redo && cull_changed) {
+        // Whether points spanning `wide` (already widened by m) can come out differently.
+        const auto alters = [&](const ParamBox& wide) {
+            if (!meets(wide, widen(box, m))) return false;  // outside the lattice: copied, whatever the edit
+            if (changed && meets(wide, widen(support, m))) return true;
+            if (!cull_changed) return false;
             const bool near = meets(wide, widen(cull_old, m)) || meets(wide, widen(cull_new, m));
             const bool in_both = within(wide, shrink(cull_old, m)) && within(wide, shrink(cull_new, m));
-            redo = near && !in_both;
+            return near && !in_both;
+        };
+        bool redo = alters(widen(page, m));
+        if (redo && points) {
+            // A page's box spans far more than its points do (a band of a sphere's surface has a box through
+            // the sphere's middle), so the box only nominates: the page is redone when one of its own points,
+            // under the same rule and margin, can change. Its points at rest are what the box bounds.
+            redo = false;
+            const PageRange r = page_range(p, points->positions.size());
+            for (std::size_t i = r.first; i < r.first + r.count && !redo; ++i) {
+                const glm::dvec3 x = points->origin + glm::dvec3(points->positions[i]);
+                if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z))
+                    continue;  // not in the box
+                const glm::dvec3 st = minv * (x - after.origin);
+                redo = alters(widen(ParamBox{st, st}, m));
+            }
         }
         touched[p] = redo;
     }
@@ -131,7 +149,8 @@ std::vector<std::uint8_t> pages_touched_by_edit(const Lattice& before, const Lat
 
 RedoPlan plan_redeform(const DeformInputStamps& seen, const DeformPageRecord& record,
                        const DeformInputStamps& now, const PointPages& pages,
-                       std::span<const Lattice* const> lattices, std::span<const PointColumn> reads) {
+                       std::span<const Lattice* const> lattices, std::span<const PointColumn> reads,
+                       const PagePoints* rest) {
     RedoPlan plan;  // everything
     const std::size_t n = pages.points, np = page_count(n);
     if (record.points == 0 || record.points != n || record.counts.size() != np ||
@@ -154,7 +173,10 @@ RedoPlan plan_redeform(const DeformInputStamps& seen, const DeformPageRecord& re
         if (valid != was_valid) return plan;
         if (!valid) continue;  // skipped by every run
         if (record.lattices[d].current != now_l.current) {
-            const std::vector<std::uint8_t> t = pages_touched_by_edit(record.lattices[d], now_l, lo, hi);
+            // The first lattice reads the rest points themselves; later ones read deformed points, which
+            // only their carried boxes bound.
+            const std::vector<std::uint8_t> t =
+                pages_touched_by_edit(record.lattices[d], now_l, lo, hi, d == 0 ? rest : nullptr);
             for (std::size_t p = 0; p < np; ++p) redo[p] |= t[p];
         }
         if (d + 1 < lattices.size())

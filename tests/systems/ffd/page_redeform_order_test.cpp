@@ -108,7 +108,7 @@ Drag drag(const SplatCloud& cloud, int div, glm::ivec3 ijk) {
     return d;
 }
 
-TEST(PageRedeformMorton, OneControlPointDragRedoesThePagesWhoseBoxesMeetItsSupportCountedFromPositions) {
+TEST(PageRedeformMorton, OneControlPointDragRedoesThePagesHoldingAPointInItsSupportCountedFromPositions) {
     const SplatCloud bands = sphere_cloud(1000000, false), morton = sphere_cloud(1000000, true);
     struct Case {
         int div;
@@ -120,22 +120,26 @@ TEST(PageRedeformMorton, OneControlPointDragRedoesThePagesWhoseBoxesMeetItsSuppo
         const std::string what = std::to_string(k.div + 1) + "^3, point (" + std::to_string(k.ijk.x) + ", " +
                                  std::to_string(k.ijk.y) + ", " + std::to_string(k.ijk.z) + ")";
         const Drag m = drag(morton, k.div, k.ijk);
-        const std::size_t expected = pages_meeting_support(morton, k.div, k.ijk);
+        // The rule redoes a page when one of its points meets the support (its box only nominates it).
+        const std::size_t expected = pages_meeting_support(morton, k.div, k.ijk, 1);
         EXPECT_EQ(m.total, 16u) << what;
         EXPECT_EQ(m.redone, expected) << what;
         EXPECT_TRUE(m.same_as_scratch) << what;
         // The band order's count by the same independent rule.
         const Drag b = drag(bands, k.div, k.ijk);
-        EXPECT_EQ(b.redone, pages_meeting_support(bands, k.div, k.ijk)) << what;
+        EXPECT_EQ(b.redone, pages_meeting_support(bands, k.div, k.ijk, 1)) << what;
+        // The bound holds in the sphere's own order; Morton pages (half an octant each, reaching from
+        // the pole to the equator) can hold a point in a bottom support on 5 or 6 of 16.
+        EXPECT_LE(b.redone * 10, b.total * 3) << what;
         EXPECT_TRUE(b.same_as_scratch) << what;
-        // For the record: what boxes per 2,048-point block, or a test per point, would redo.
+        // For the record: what a test of the page boxes alone, or of boxes per 2,048-point block, would redo.
         std::printf(
             "%s: redone Morton %zu / %zu, bands %zu / %zu; with 2048-point block boxes Morton %zu, "
-            "bands %zu; pages holding a point in the support: Morton %zu, bands %zu\n",
+            "bands %zu; with page boxes alone: Morton %zu, bands %zu\n",
             what.c_str(), m.redone, m.total, b.redone, b.total,
             pages_meeting_support(morton, k.div, k.ijk, 2048),
-            pages_meeting_support(bands, k.div, k.ijk, 2048), pages_meeting_support(morton, k.div, k.ijk, 1),
-            pages_meeting_support(bands, k.div, k.ijk, 1));
+            pages_meeting_support(bands, k.div, k.ijk, 2048), pages_meeting_support(morton, k.div, k.ijk),
+            pages_meeting_support(bands, k.div, k.ijk));
     }
 }
 
