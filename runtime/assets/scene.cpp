@@ -264,7 +264,8 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
             if (!scene["extensions"].is_object())
                 throw std::runtime_error(src + ": SFFD_scene: 'extensions' must be an object");
             for (const auto& [key, value] : scene["extensions"].items()) {
-                const auto extensions = SceneHooks::of(r).extensions;  // a copy: a loader may change it
+                const SceneHooks* own = SceneHooks::of(r);  // a copy below: a loader may change it
+                const auto extensions = own ? own->extensions : SceneHooks{}.extensions;
                 auto it = extensions.find(key);
                 if (it == extensions.end() || !it->second.load) {
                     log::debug(src, ": scene extension '", key, "' has no registered loader; skipped");
@@ -340,38 +341,22 @@ std::string SceneHooks::file_types() const {
     return all;
 }
 
-SceneHooks& SceneHooks::process_default() {
-    static SceneHooks hooks;
-    return hooks;
+const SceneHooks* SceneHooks::of(const ecs::Registry& registry) {
+    return registry.try_resource<SceneHooks>();
 }
 
-const SceneHooks& SceneHooks::of(const ecs::Registry& registry) {
-    const SceneHooks* own = registry.try_resource<SceneHooks>();
-    return own ? *own : process_default();
+SceneHooks& SceneHooks::in(ecs::Registry& registry) {
+    if (SceneHooks* own = registry.try_resource<SceneHooks>()) return *own;
+    return registry.set_resource<SceneHooks>();
 }
 
-void register_scene_extension(const std::string& key, SceneSaveFn save_fn, SceneLoadFn load_fn) {
-    SceneHooks::process_default().add_extension(key, std::move(save_fn), std::move(load_fn));
+void SceneHooks::copy_to(const ecs::Registry& from, ecs::Registry& to) {
+    if (const SceneHooks* hooks = of(from)) to.set_resource<SceneHooks>(*hooks);
 }
 
-void register_scene_gltf_extension(const std::string& key, SceneGltfSaveFn save_fn, SceneGltfLoadFn load_fn) {
-    SceneHooks::process_default().add_gltf_extension(key, std::move(save_fn), std::move(load_fn));
-}
-
-void register_scene_file_loader(const std::string& key, SceneFileClaim claims, SceneFileLoader load,
-                                std::string types) {
-    SceneHooks::process_default().add_file_loader(key, std::move(claims), std::move(load), std::move(types));
-}
-
-std::string scene_file_types() { return SceneHooks::process_default().file_types(); }
-std::string scene_file_types(const ecs::Registry& registry) { return SceneHooks::of(registry).file_types(); }
-
-void unregister_scene_file_loader(const std::string& key) {
-    SceneHooks::process_default().file_loaders.erase(key);
-}
-
-void unregister_scene_extension(const std::string& key) {
-    SceneHooks::process_default().extensions.erase(key);
+std::string scene_file_types(const ecs::Registry& registry) {
+    const SceneHooks* hooks = SceneHooks::of(registry);
+    return hooks ? hooks->file_types() : SceneHooks{}.file_types();
 }
 
 namespace {
@@ -384,21 +369,25 @@ Status load_builtin_with_hooks(ecs::Registry& r, const std::string& name) {
         if (std::find(before.begin(), before.end(), e) == before.end()) created.push_back(e);
     });
     // A copy: a hook may replace the registry's SceneHooks.
-    const auto hooks = SceneHooks::of(r).builtin_hooks;
-    for (const auto& [key, hook] : hooks)
+    const auto builtin = SceneHooks::of(r)->builtin_hooks;
+    for (const auto& [key, hook] : builtin)
         if (hook) hook(r, name, created);
     return {};
 }
 }  // namespace
 
-void register_builtin_scene_hook(const std::string& key, BuiltinSceneHook hook) {
-    SceneHooks::process_default().add_builtin_hook(key, std::move(hook));
+namespace {
+// What decides which files and extensions a registry opens is set up with the registry, never found in
+// the process: a registry without hooks is refused, not opened with whatever ran before.
+std::string no_hooks_message(const std::string& what) {
+    return what +
+           ": no scene loaders registered in this registry (give it a SceneHooks resource: "
+           "use_engine_scene_hooks(registry), or an empty SceneHooks for assets' own formats)";
 }
-void unregister_builtin_scene_hook(const std::string& key) {
-    SceneHooks::process_default().builtin_hooks.erase(key);
-}
+}  // namespace
 
 Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
+    if (!SceneHooks::of(r)) return make_error(no_hooks_message(name_or_path));
     if (assets::is_builtin_scene(name_or_path)) return load_builtin_with_hooks(r, name_or_path);
     const fs::path path(name_or_path);
     std::error_code ec;
@@ -407,7 +396,7 @@ Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
     std::string ext = path.extension().string();
     std::transform(ext.begin(), ext.end(), ext.begin(),
                    [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    const auto loaders = SceneHooks::of(r).file_loaders;  // a copy: a loader may change the registry
+    const auto loaders = SceneHooks::of(r)->file_loaders;  // a copy: a loader may change the registry
     for (const auto& [key, loader] : loaders)
         if (loader.claims && loader.load && loader.claims(path)) return loader.load(r, path);
     if (ext == ".gltf" || ext == ".glb") return load_scene_file(r, path);
@@ -433,6 +422,8 @@ Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
 }
 
 Status save_scene(const ecs::Registry& r, const fs::path& path) {
+    const SceneHooks* hooks = SceneHooks::of(r);
+    if (!hooks) return make_error(no_hooks_message(path.string()));
     // Stable ids: clouds, then lattices, cameras, lights, in entity order.
     std::unordered_map<ecs::Entity, int> ids;
     std::vector<ecs::Entity> clouds, lattices, cameras, suns, ambients;
@@ -504,7 +495,7 @@ Status save_scene(const ecs::Registry& r, const fs::path& path) {
     scene["ambient_lights"] = aj;
     json ext = json::object();
     std::vector<assets::GltfAppend> append;
-    for (const auto& [key, fns] : SceneHooks::of(r).extensions) {
+    for (const auto& [key, fns] : hooks->extensions) {
         if (!fns.save) continue;
         auto text = fns.save(r, id_of, path, append);
         if (!text) return make_error(path.string() + ": scene extension '" + key + "': " + text.message());

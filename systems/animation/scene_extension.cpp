@@ -162,8 +162,6 @@ Status load_animation_extension(ecs::Registry& registry, std::string_view text,
     return {};
 }
 
-void register_animation_scene_hooks() { register_animation_scene_hooks(SceneHooks::process_default()); }
-
 void register_animation_scene_hooks(SceneHooks& hooks) {
     hooks.add_extension(kKey, save_animation_extension, load_animation_extension);
     hooks.add_builtin_hook(
@@ -176,11 +174,6 @@ void register_animation_scene_hooks(SceneHooks& hooks) {
                 attach_clip(registry, e, make_paper_demo_clip(*lattice));
             }
         });
-}
-
-void unregister_animation_scene_hooks() {
-    unregister_scene_extension(kKey);
-    unregister_builtin_scene_hook(kKey);
 }
 
 }  // namespace sffd

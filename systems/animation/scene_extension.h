@@ -1,6 +1,6 @@
 // Animation in scene files and built-in scenes (runtime/assets/scene.h hooks; assets never links animation).
 //
-// register_animation_scene_hooks() registers, under the key "animation":
+// register_animation_scene_hooks(hooks) adds to a registry's SceneHooks, under the key "animation":
 //   - a scene extension: save_scene writes every lattice's clip into the glTF file's
 //     SFFD_scene.extensions.animation object, load_scene reads it back (exact round trip):
 //       { "version": 1,
@@ -13,7 +13,7 @@
 //     load as an un-keyed edit at 0 s. Loading sets AnimationState::time to the saved time; the clip
 //     still plays from 0 s.
 //   - a built-in scene hook: `sphere` and `face` get make_paper_demo_clip() on their lattice, playing.
-// Call it once at start-up (tools/splatffd/main.cpp does; tests call it themselves).
+// Each registry that loads or saves scenes gets it in its set-up (systems/engine: use_engine_scene_hooks).
 #pragma once
 
 #include <functional>
@@ -26,9 +26,8 @@
 namespace sffd {
 
 struct SceneHooks;
-void register_animation_scene_hooks(SceneHooks& hooks);  // into a registry's context (runtime/assets/scene.h)
-void register_animation_scene_hooks();                   // into the process-wide default set
-void unregister_animation_scene_hooks();
+// Into a registry's context (runtime/assets/scene.h), e.g. register_animation_scene_hooks(SceneHooks::in(r)).
+void register_animation_scene_hooks(SceneHooks& hooks);
 
 // The extension's two halves, usable without the hook registry (tests, tools).
 Result<std::string> save_animation_extension(const ecs::Registry& registry,

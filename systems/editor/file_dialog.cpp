@@ -12,20 +12,23 @@
 #include "systems/editor/file_browser.h"
 #include "systems/editor/panels.h"
 #include "systems/editor/pending_edits.h"
+#include "systems/editor/session_state.h"
 
 namespace sffd::editor {
 
-namespace {
-
-// The open / save dialog: a folder listing (file_browser.h) with ".." and sub-folders, files filtered by
-// extension, a name field (built-in scene names such as "sphere" can be typed), Escape or Cancel closes.
-struct FileDialog {
+// The open / save dialog (named in session_state.h): a folder listing (file_browser.h) with ".." and
+// sub-folders, files filtered by extension, a name field (built-in scene names such as "sphere" can be
+// typed), Escape or Cancel closes.
+struct detail::FileDialog {
     enum class Mode { open, save } mode = Mode::open;
     std::filesystem::path folder;
     std::vector<FolderEntry> entries;
     std::string error;
     char name[512] = "";
 };
+using detail::FileDialog;
+
+namespace {
 // A registry resource, so the dialog's folder and listing live and die with the editor's registry.
 FileDialog& file_dialog(ecs::Registry& registry) {
     if (FileDialog* d = registry.try_resource<FileDialog>()) return *d;
@@ -55,6 +58,7 @@ void open_scene_file(ecs::Registry& registry, EditorState& state, const std::str
     // Replace the scene: destroy every entity, load, re-run the editor set-up. The undo history refers
     // to the old entities, so it is cleared.
     ecs::Registry probe;
+    SceneHooks::copy_to(registry, probe);  // the probe opens what the scene's registry opens
     if (Status st = load_scene(probe, path); !st) {
         state.status = st.message();
         return;

@@ -24,6 +24,7 @@
 #include "systems/editor/panel_layout.h"
 #include "systems/editor/pending_edits.h"
 #include "systems/editor/selection_edit.h"
+#include "systems/editor/session_state.h"
 #include "systems/ffd/components.h"
 #include "systems/picking/components.h"
 #include "systems/picking/world_space.h"
@@ -34,18 +35,19 @@
 
 namespace sffd::editor {
 
-namespace {
-
 // The layout of this frame (from the window size and last frame's collapsed flags) and the rectangles the
 // panels really got (what panel_rects() reports): a registry resource, so it lives and dies with the
 // editor's registry.
-struct LayoutState {
+struct detail::LayoutState {
     std::array<bool, panel_count> collapsed{};
     std::array<PanelRect, panel_count> rects{};
     float menu_height = 0.0f;
     std::vector<NamedPanelRect> drawn;
     std::vector<PanelRect> backgrounds;  // panel_backgrounds()
 };
+using detail::LayoutState;
+
+namespace {
 LayoutState& layout_state(ecs::Registry& registry) {
     if (LayoutState* s = registry.try_resource<LayoutState>()) return *s;
     return registry.set_resource<LayoutState>();
@@ -56,14 +58,19 @@ void record_current_window(ecs::Registry& registry, const char* name) {
     layout_state(registry).drawn.push_back({name, PanelRect{pos.x, pos.y, size.x, size.y}});
 }
 
+}  // namespace
+
 // Values typed into the tool and lattice panels that stay between frames until applied: a registry
 // resource, created on first use, so they live and die with the editor's registry.
-struct PanelEntries {
+struct detail::PanelEntries {
     glm::dvec3 move_by{0.0, 0.1, 0.0};
     double twist_by = 45.0;
     glm::ivec3 divisions{0};  // pending resolution of `divisions_of` (0: take the lattice's)
     ecs::Entity divisions_of = ecs::null_entity;
 };
+using detail::PanelEntries;
+
+namespace {
 PanelEntries& panel_entries(ecs::Registry& registry) {
     if (PanelEntries* e = registry.try_resource<PanelEntries>()) return *e;
     return registry.set_resource<PanelEntries>();
@@ -441,11 +448,13 @@ void timeline_panel(ecs::Registry& registry, EditorState& state) {
     ImGui::End();
 }
 
+}  // namespace
+
 // What the frame-time panel shows: the profile overlay's numbers as they were at the last refresh. Five
 // times a second, as frame-rate readouts usually refresh: numbers that change every frame cannot be read,
 // and between refreshes the panel draws the same triangles, which the UI's panel cache then copies
 // instead of drawing (ui_cache.h).
-struct FrameTimeShown {
+struct detail::FrameTimeShown {
     std::chrono::steady_clock::time_point at{};
     bool valid = false;
     float last_ms = 0.0f, avg_ms = 0.0f;
@@ -457,6 +466,9 @@ struct FrameTimeShown {
     };
     std::vector<Bar> bars;
 };
+using detail::FrameTimeShown;
+
+namespace {
 constexpr std::chrono::milliseconds kFrameTimeRefresh{200};
 
 void profiler_panel(ecs::Registry& registry, EditorState&) {

@@ -30,6 +30,7 @@
 #include "systems/editor/lattice_overlay.h"
 #include "systems/editor/panels.h"
 #include "systems/editor/ui_cache.h"
+#include "systems/editor/session_state.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_render.h"
 #include "systems/profiling/profiler.h"
@@ -177,16 +178,18 @@ std::string user_config_file(const std::string& name) {
     return (dir / name).string();
 }
 
-namespace {
-
-// View-only resource: options the request handler needs and the per-frame drag log for timing.
-struct ViewSession {
+// View-only resource (named in session_state.h): options the request handler needs and the per-frame drag
+// log for timing.
+struct detail::ViewSession {
     ViewOptions options;
     std::string save_path;
     int screenshot_count = 0;
     std::vector<std::uint8_t> dragging;  // per frame: 1 when a tool drag was active
     bool ui = false;
 };
+using detail::ViewSession;
+
+namespace {
 
 Status write_screenshot(ecs::Registry& registry, const std::filesystem::path& path) {
     auto frame = render::capture_frame(registry);
@@ -348,6 +351,7 @@ int run_view(const ViewOptions& options, Schedule schedule) {
     int exit_code = 0;
     {
         ecs::Registry registry;
+        registry.set_resource<SceneHooks>(options.scene_hooks);
         if (Status st = load_scene(registry, options.scene); !st) {
             std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
             return 1;

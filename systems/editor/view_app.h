@@ -15,6 +15,7 @@
 #include <string>
 
 #include "runtime/app/frame_loop.h"
+#include "runtime/assets/scene.h"
 #include "runtime/ecs/registry.h"
 
 namespace sffd::editor {
@@ -41,6 +42,10 @@ struct ViewOptions {
     std::string
         window_screenshot;         // with --frames: the whole window (panels included) of the last frame, PNG
     std::string panel_rects_json;  // with --frames: the panels' rectangles in the last frame (panels.h), JSON
+    // What the editor's registries open and save (runtime/assets/scene.h): the editor cannot link the
+    // engine, so the command passes its hooks (systems/engine: engine_scene_hooks()). The scene's registry
+    // gets them as its SceneHooks resource; a registry the editor makes later copies them from it.
+    SceneHooks scene_hooks;
 };
 
 // $XDG_CONFIG_HOME/splatffd/<name> (else ~/.config/splatffd/<name>), its folder created; empty when

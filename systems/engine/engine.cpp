@@ -23,6 +23,8 @@
 #include "systems/editor/lattice_overlay.h"
 #include "systems/editor/panel_layout.h"
 #include "systems/editor/pending_edits.h"
+#include "systems/editor/session_state.h"
+#include "systems/editor/ui_cache.h"
 #include "systems/editor/view_app.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform_backend.h"
@@ -115,9 +117,13 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
                          picking::LatticeSelection>()
                   .writes<Camera, editor::EditorState, editor::EditorViewRect, editor::LatticeOverlayState,
                           editor::OverlayOptions, render::detail::SplatRenderState>());
-        // No declaration yet (its session state is in an anonymous namespace of the editor's files):
-        // save, screenshot, quit; reads the scene's components and SceneHooks, writes EditorState.
-        s.add(Phase::rendering, "editor.requests", editor::requests_system);
+        // Save (every component a scene file holds, through the scene's hooks), screenshot, quit.
+        s.add(Phase::rendering, "editor.requests", editor::requests_system,
+              ecs::reads<AmbientLight, AnimationClip, AnimationState, Camera, Deformers, DirectionalLight,
+                         GaussianCloud, Lattice, Name, SceneHooks, SplatCloud, SplatMaterial, Transform,
+                         UnkeyedEdit>()
+                  .writes<app::AppContext, editor::EditorState, editor::detail::ViewSession,
+                          render::detail::SplatRenderState>());
     }
 
     // --- present: sRGB display pass straight into the window (after every overlay; the blit only copies
@@ -128,9 +134,19 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
                           render::detail::SplatRenderState>());
         s.add(Phase::present, "present.blit", app::present_blit_system,
               ecs::writes<app::AppContext, app::PresentSource>());
-        // No declaration yet (the panels keep their state in anonymous namespaces of the editor's files):
-        // the window UI reads and edits most of the scene.
-        if (options.editor) s.add(Phase::present, "editor.ui", editor::ui_system);
+        // The window UI: panels show the scene and post their edits (editor::PendingEdits) for the input
+        // phase; File > Open replaces the scene (so it writes what loading makes).
+        if (options.editor)
+            s.add(Phase::present, "editor.ui", editor::ui_system,
+                  ecs::reads<AmbientLight, AnimationClip, AnimationState, Deformers, DirectionalLight,
+                             GaussianCloud, Lattice, Name, SceneHooks, SplatCloud, Transform,
+                             editor::SceneBoundsCache, picking::LatticeSelection>()
+                      .writes<Camera, SplatMaterial, editor::EditorState, editor::EditorViewRect,
+                              editor::LatticeFitSettings, editor::UiCacheOptions, editor::UiCacheState,
+                              editor::detail::FileDialog, editor::detail::FrameTimeShown,
+                              editor::detail::LayoutState, editor::detail::PanelEntries,
+                              editor::detail::ViewSession, profiling::ProfileOverlay,
+                              render::DisplayViewport>());
         s.add(Phase::present, "present.swap", app::present_swap_system, ecs::writes<app::AppContext>());
     }
 

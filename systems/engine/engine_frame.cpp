@@ -21,11 +21,6 @@ void use_engine_scene_hooks(ecs::Registry& registry) {
     registry.set_resource<SceneHooks>(engine_scene_hooks());
 }
 
-void register_engine_scene_hooks() {
-    register_animation_scene_hooks();
-    gaussian::register_gaussian_scene_hooks();
-}
-
 Result<render::FrameImage> render_engine_frame(ecs::Registry& registry, const Schedule& schedule,
                                                gfx::GlContext& context, const EngineFrameOptions& options) {
     if (!(options.fps > 0.0)) return make_error("render_engine_frame(): fps must be positive");

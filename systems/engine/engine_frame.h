@@ -27,11 +27,10 @@ struct SceneHooks;  // runtime/assets/scene.h
 // entities: runtime/assets/scene.h SceneHooks), as one value.
 SceneHooks engine_scene_hooks();
 // Makes them the registry's own (a SceneHooks resource, its context), so load_scene(registry, ...) and
-// save_scene(registry, ...) open and write what the command does whatever else ran in the process.
+// save_scene(registry, ...) open and write what the command does. Every registry that loads or saves a
+// scene is given its hooks this way (or copies them from the registry it came from: SceneHooks::copy_to);
+// there is no process-wide set to fall back on.
 void use_engine_scene_hooks(ecs::Registry& registry);
-// The same hooks in the process-wide default set, used by registries without their own (the transition
-// for callers that do not set up a registry context yet). Calling again re-registers the same hooks.
-void register_engine_scene_hooks();
 
 struct EngineFrameOptions {
     std::uint64_t frame = 0;  // frame k runs at time k / fps and depends on k only (not on earlier frames)

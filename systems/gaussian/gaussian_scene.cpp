@@ -368,8 +368,6 @@ void add_default_gaussian_view(ecs::Registry& registry) {
     if (lo.x <= hi.x) assets::add_default_view(registry, lo, hi, glm::dvec3(0.3, 0.3, 1.0));
 }
 
-void register_gaussian_scene_hooks() { register_gaussian_scene_hooks(SceneHooks::process_default()); }
-
 void register_gaussian_scene_hooks(SceneHooks& hooks) {
     hooks.add_gltf_extension(kKey, save_gaussian_extension, load_gaussian_extension);
     hooks.add_file_loader(
@@ -382,11 +380,6 @@ void register_gaussian_scene_hooks(SceneHooks& hooks) {
         },
         ".spz, .splat, .ksplat, .sog, a SOG folder or its meta.json, a 3DGS .ply, a KHR_gaussian_splatting "
         ".glb/.gltf");
-}
-
-void unregister_gaussian_scene_hooks() {
-    unregister_scene_extension(kKey);
-    unregister_scene_file_loader(kKey);
 }
 
 }  // namespace sffd::gaussian

@@ -1,7 +1,7 @@
 // 3D Gaussian clouds as scene entities: loading a Gaussian file as an entity, and Gaussian
 // entities in our scene files (runtime/assets/scene.h hooks; assets never links this library).
 //
-// register_gaussian_scene_hooks() registers, under the key "gaussians":
+// register_gaussian_scene_hooks(hooks) adds to a registry's SceneHooks, under the key "gaussians":
 //   - a scene file loader: load_scene(registry, "x.ply" | "x.splat" | "x.spz" | "x.glb"/"x.gltf") on a
 //     Gaussian file (a PLY with f_dc_0/opacity/scale_0/rot_0, .splat, .spz, a glTF whose JSON uses
 //     KHR_gaussian_splatting and is not one of our scene files, .ksplat, .sog, a SOG folder or its
@@ -56,11 +56,10 @@ Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const std::fil
 // scene whose Gaussians come without a camera both add it, so the two open alike.
 void add_default_gaussian_view(ecs::Registry& registry);
 
-void register_gaussian_scene_hooks(SceneHooks& hooks);  // into a registry's context (runtime/assets/scene.h)
-void register_gaussian_scene_hooks();                   // into the process-wide default set
-void unregister_gaussian_scene_hooks();
+// Into a registry's context (runtime/assets/scene.h), e.g. register_gaussian_scene_hooks(SceneHooks::in(r)).
+void register_gaussian_scene_hooks(SceneHooks& hooks);
 
-// The extension's two halves, usable without the hook registry (register_scene_gltf_extension's forms).
+// The extension's two halves, usable without the hook registry (SceneHooks::add_gltf_extension's forms).
 Result<std::string> save_gaussian_extension(const ecs::Registry& registry,
                                             const std::function<int(ecs::Entity)>& id_of,
                                             const std::filesystem::path& scene_path,

@@ -380,6 +380,7 @@ Status load_edited(const std::string& name, const std::function<void(nlohmann::j
     edit(doc);
     write(dir / "s.gltf", doc.dump());
     ecs::Registry r;
+    r.set_resource<SceneHooks>();  // assets' own formats only
     return load_scene(r, (dir / "s.gltf").string());
 }
 

@@ -49,6 +49,7 @@ void expect_bit_exact(const Lattice& a, const Lattice& b, const std::string& via
 // A scene holding only `lattice` (named "L", with a transform), saved to `path`.
 Status save_lattice_scene(const fs::path& path, const Lattice& lattice) {
     ecs::Registry r;
+    r.set_resource<SceneHooks>();  // assets' own formats only
     const ecs::Entity e = r.create();
     r.emplace<Name>(e, Name{"L"});
     r.emplace<Transform>(e, Transform{glm::dvec3(0.5, 0, 0), glm::dquat(1, 0, 0, 0), glm::dvec3(1)});
@@ -58,6 +59,7 @@ Status save_lattice_scene(const fs::path& path, const Lattice& lattice) {
 
 Result<Lattice> load_lattice_scene(const fs::path& path) {
     ecs::Registry r;
+    r.set_resource<SceneHooks>();  // assets' own formats only
     if (Status s = load_scene(r, path.string()); !s) return s.error();
     std::vector<ecs::Entity> found;
     r.each_entity([&](ecs::Entity e) {
@@ -185,6 +187,7 @@ TEST(LatticeJson, UnknownKeysAndHugeNumbersAreRefusedInSceneEntriesLikeInLattice
         entry["name"] = "L";
         const fs::path p = scene_with_entry(dir, entry);
         ecs::Registry r;
+        r.set_resource<SceneHooks>();  // assets' own formats only
         const Status s = load_scene(r, p.string());
         ASSERT_FALSE(s.ok());
         // The same problem, after the scene's prefix; nothing was added.

@@ -100,7 +100,9 @@ TEST(Scene, SaveLoadRoundTripKeepsEverything) {
     a.emplace<AmbientLight>(amb, AmbientLight{glm::vec3(0.2f, 0.3f, 0.4f), 0.5f});
     a.emplace<Tag>(l2, Tag{42, c1});
 
-    register_scene_extension(
+    // The extension lives in the registries' own hooks: `a` saves with it, `b` loads with it.
+    SceneHooks tags;
+    tags.add_extension(
         "test_tags",
         [](const ecs::Registry& r, const SceneIdOf& id_of) -> Result<std::string> {
             nlohmann::json j = nlohmann::json::array();
@@ -116,6 +118,7 @@ TEST(Scene, SaveLoadRoundTripKeepsEverything) {
                                Tag{t["value"].get<int>(), entity_of(t["target"].get<int>())});
             return {};
         });
+    a.set_resource<SceneHooks>(tags);
 
     const fs::path p = temp_dir() / "scene.glb";
     auto saved = save_scene(a, p);
@@ -124,6 +127,7 @@ TEST(Scene, SaveLoadRoundTripKeepsEverything) {
         EXPECT_EQ(entry.path().string().find(".tmp-"), std::string::npos);
 
     ecs::Registry b;
+    b.set_resource<SceneHooks>(tags);
     auto loaded = load_scene(b, p.string());
     ASSERT_TRUE(loaded.ok()) << loaded.message();
 
@@ -184,7 +188,6 @@ TEST(Scene, SaveLoadRoundTripKeepsEverything) {
     std::ifstream f1(p, std::ios::binary), f2(p2, std::ios::binary);
     const std::string s1((std::istreambuf_iterator<char>(f1)), {}),
         s2((std::istreambuf_iterator<char>(f2)), {});
-    unregister_scene_extension("test_tags");
     const auto diff = std::mismatch(s1.begin(), s1.end(), s2.begin(), s2.end());
     EXPECT_TRUE(s1 == s2)
         << "files differ at byte " << (diff.first - s1.begin()) << ": "
@@ -194,6 +197,7 @@ TEST(Scene, SaveLoadRoundTripKeepsEverything) {
 
 TEST(Scene, BuiltinSphereHasThePapersCounts) {
     ecs::Registry r;
+    r.set_resource<SceneHooks>();  // assets' own formats only
     ASSERT_TRUE(load_scene(r, "sphere").ok());
     const auto clouds = with<SplatCloud>(r);
     ASSERT_EQ(clouds.size(), 1u);
@@ -227,6 +231,7 @@ TEST(Scene, BuiltinSphereHasThePapersCounts) {
 
 TEST(Scene, BuiltinFaceLoadsFromTheCacheOrSaysHowToMakeIt) {
     ecs::Registry r;
+    r.set_resource<SceneHooks>();  // assets' own formats only
     auto s = load_scene(r, "face");
     if (!fs::exists(assets::face_cache_path())) {
         ASSERT_FALSE(s.ok());
@@ -257,6 +262,7 @@ TEST_P(HostileScene, IsRefusedWithTheFileNameAndLeavesTheRegistryAlone) {
           << GetParam().extension_json << "}}";
     }
     ecs::Registry r;
+    r.set_resource<SceneHooks>();  // assets' own formats only
     auto s = load_scene(r, p.string());
     ASSERT_FALSE(s.ok());
     EXPECT_NE(s.message().find(p.string()), std::string::npos) << s.message();
@@ -314,6 +320,7 @@ INSTANTIATE_TEST_SUITE_P(
 
 TEST(Scene, UnknownNameSaysWhatExists) {
     ecs::Registry r;
+    r.set_resource<SceneHooks>();  // assets' own formats only
     auto s = load_scene(r, "teapot");
     ASSERT_FALSE(s.ok());
     EXPECT_EQ(s.message(), "teapot: no such file or built-in scene (built-ins: sphere, face)");

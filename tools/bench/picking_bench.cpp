@@ -56,6 +56,7 @@ struct Scene {
     ScreenView view;
 
     Scene() {
+        reg.set_resource<SceneHooks>();  // assets' own formats only
         const Status st = load_scene(reg, "sphere");
         if (!st) throw std::runtime_error(st.message());
         reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud&) { cloud = e; });

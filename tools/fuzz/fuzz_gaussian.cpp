@@ -38,7 +38,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     using namespace sffd;
     static const bool once = [] {
         log::set_sink([](log::Level, std::string_view) {});
-        gaussian::register_gaussian_scene_hooks();
         return true;
     }();
     (void)once;
@@ -85,6 +84,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         if (g && !gaussian::validate(*g, path)) __builtin_trap();                 // accepted clouds are sane
     } else {
         ecs::Registry registry;
+        gaussian::register_gaussian_scene_hooks(SceneHooks::in(registry));
         if (auto s = load_scene(registry, path); !s && s.message().find(path) == std::string::npos)
             __builtin_trap();
     }

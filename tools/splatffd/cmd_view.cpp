@@ -7,6 +7,7 @@
 
 #include "systems/editor/view_app.h"
 #include "systems/engine/engine.h"
+#include "systems/engine/engine_frame.h"
 
 namespace {
 
@@ -53,6 +54,7 @@ constexpr const char* kUsage =
 
 int run_view_command(sffd::cli::Args args) {
     sffd::editor::ViewOptions o;
+    o.scene_hooks = sffd::engine_scene_hooks();
     bool have_scene = false;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];

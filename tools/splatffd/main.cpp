@@ -131,8 +131,6 @@ int main(int argc, char** argv) {
         return 0;
     }
     const std::string name = args[0];
-    // Start-up registrations of systems that store data in scene files (runtime/assets/scene.h hooks).
-    sffd::register_engine_scene_hooks();
     // SIGINT/SIGTERM remove unfinished outputs (runtime/core/atomic_file.h) and exit 130/143.
     static const std::string program = "splatffd " + name;
     sffd::install_interrupt_cleanup(program.c_str());

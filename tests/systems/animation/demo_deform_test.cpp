@@ -20,9 +20,8 @@ struct Sphere {
     ecs::Registry reg;
     ecs::Entity cloud = ecs::null_entity, lattice = ecs::null_entity;
     Sphere() {
-        register_animation_scene_hooks();
+        register_animation_scene_hooks(SceneHooks::in(reg));  // the built-in sphere gets its demo clip
         EXPECT_TRUE(load_scene(reg, "sphere").ok());
-        unregister_animation_scene_hooks();
         reg.view<SplatCloud>().each([&](ecs::Entity e, SplatCloud&) { cloud = e; });
         reg.view<Lattice>().each([&](ecs::Entity e, Lattice&) { lattice = e; });
     }

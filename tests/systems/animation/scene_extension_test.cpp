@@ -16,11 +16,6 @@
 namespace sffd {
 namespace {
 
-struct Hooks {
-    Hooks() { register_animation_scene_hooks(); }
-    ~Hooks() { unregister_animation_scene_hooks(); }
-};
-
 ecs::Entity only_lattice(ecs::Registry& reg) {
     ecs::Entity found = ecs::null_entity;
     std::size_t n = 0;
@@ -33,8 +28,8 @@ ecs::Entity only_lattice(ecs::Registry& reg) {
 }
 
 TEST(AnimationScene, BuiltinSphereGetsThePaperDemoClip) {
-    Hooks hooks;
     ecs::Registry reg;
+    register_animation_scene_hooks(SceneHooks::in(reg));
     ASSERT_TRUE(load_scene(reg, "sphere").ok());
     const ecs::Entity e = only_lattice(reg);
     ASSERT_TRUE(reg.has<AnimationClip>(e));
@@ -47,14 +42,15 @@ TEST(AnimationScene, BuiltinSphereGetsThePaperDemoClip) {
 
 TEST(AnimationScene, WithoutHooksBuiltinsHaveNoClip) {
     ecs::Registry reg;
+    reg.set_resource<SceneHooks>();  // assets' own formats only
     ASSERT_TRUE(load_scene(reg, "sphere").ok());
     EXPECT_EQ(reg.count<AnimationClip>(), 0u);
 }
 
 TEST(AnimationScene, ClipsRoundTripThroughSceneFilesExactly) {
-    Hooks hooks;
     for (const char* ext : {".glb", ".gltf"}) {
         ecs::Registry reg;
+        register_animation_scene_hooks(SceneHooks::in(reg));
         ASSERT_TRUE(load_scene(reg, "sphere").ok());
         const ecs::Entity e = only_lattice(reg);
         // Make the clip awkward: an extra twist with many digits, a paused state at another speed.
@@ -74,6 +70,7 @@ TEST(AnimationScene, ClipsRoundTripThroughSceneFilesExactly) {
         Status saved = save_scene(reg, path);
         ASSERT_TRUE(saved.ok()) << saved.message();
         ecs::Registry back;
+        register_animation_scene_hooks(SceneHooks::in(back));
         Status loaded = load_scene(back, path.string());
         ASSERT_TRUE(loaded.ok()) << loaded.message();
         const ecs::Entity b = only_lattice(back);
@@ -96,8 +93,8 @@ TEST(AnimationScene, ClipsRoundTripThroughSceneFilesExactly) {
 // points as they were shown; a file of an older version (no "time") with control points off the clip's
 // pose at 0 s loads them as an edit at 0 s, which is when its editor showed them.
 TEST(AnimationScene, UnkeyedEditsRoundTripWithTheirClipTime) {
-    Hooks hooks;
     ecs::Registry reg;
+    register_animation_scene_hooks(SceneHooks::in(reg));
     ASSERT_TRUE(load_scene(reg, "sphere").ok());
     const ecs::Entity e = only_lattice(reg);
     pause(reg.patch<AnimationState>(e));
@@ -110,6 +107,7 @@ TEST(AnimationScene, UnkeyedEditsRoundTripWithTheirClipTime) {
     ASSERT_TRUE(save_scene(reg, path).ok());
 
     ecs::Registry back;
+    register_animation_scene_hooks(SceneHooks::in(back));
     ASSERT_TRUE(load_scene(back, path.string()).ok());
     const ecs::Entity b = only_lattice(back);
     ASSERT_TRUE(back.has<UnkeyedEdit>(b));
@@ -128,6 +126,7 @@ TEST(AnimationScene, UnkeyedEditsRoundTripWithTheirClipTime) {
     back.patch<Lattice>(b).current = evaluate_pose(back.get<AnimationClip>(b), back.get<Lattice>(b), 1.0);
     ASSERT_TRUE(save_scene(back, path).ok());
     ecs::Registry again;
+    register_animation_scene_hooks(SceneHooks::in(again));
     ASSERT_TRUE(load_scene(again, path.string()).ok());
     const ecs::Entity a = only_lattice(again);
     ASSERT_TRUE(again.has<UnkeyedEdit>(a));

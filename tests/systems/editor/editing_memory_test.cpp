@@ -78,13 +78,13 @@ TEST(EditingMemory, ALongSessionOfDragsSliderEditsAndUndoStaysFlat) {
     const fs::path replay = dir / "session.txt";
     std::ofstream(replay) << session(frames);
 
-    register_engine_scene_hooks();
     std::vector<double> rss;
     rss.reserve(frames);
     Schedule schedule = make_engine_schedule({.present = true, .editor = true});
     schedule.add(Phase::present, "test.resident",
                  [&](ecs::Registry&, const FrameContext&) { rss.push_back(resident_mb()); });
     ViewOptions options;
+    options.scene_hooks = engine_scene_hooks();
     options.scene = face ? "face" : "sphere";
     options.replay = replay.string();
     options.frames = frames;

@@ -47,6 +47,7 @@ struct Saved {
 Saved load_saved(const fs::path& file) {
     Saved s;
     ecs::Registry r;
+    r.set_resource<SceneHooks>();  // assets' own formats only
     auto st = load_scene(r, file.string());
     EXPECT_TRUE(st.ok()) << st.message();
     r.view<const Lattice>().each([&](ecs::Entity, const Lattice& l) { s.lattice = l, ++s.lattices; });

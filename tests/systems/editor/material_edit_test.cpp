@@ -94,7 +94,6 @@ class MaterialEditFrame : public testing::Test {
 protected:
     static constexpr int kWidth = 128, kHeight = 96;
     void SetUp() override {
-        register_engine_scene_hooks();
         auto c = gfx::create_context({.headless = true, .width = kWidth, .height = kHeight});
         if (!c) SFFD_GL_UNAVAILABLE(c.message());
         ctx.emplace(std::move(*c));
@@ -110,6 +109,7 @@ std::size_t differing(const render::FrameImage& a, const render::FrameImage& b) 
 
 TEST_F(MaterialEditFrame, AReplayedSliderEditReRendersOnlyAndUndoRestoresIt) {
     ecs::Registry reg;
+    use_engine_scene_hooks(reg);
     const Status loaded = load_scene(reg, "sphere");
     ASSERT_TRUE(loaded) << loaded.message();
     // A still scene (the sphere's demo clip would re-deform every frame) with one control point moved, so

@@ -71,6 +71,7 @@ TEST(ViewSession, ReplayedEditsShowInTheScreenshotAndTheSavedLatticeIsBitExact) 
 
     // --- the saved lattice: bit for bit what the editor's input system produces from the same events ---
     ecs::Registry expected;
+    expected.set_resource<SceneHooks>();  // assets' own formats only
     ASSERT_TRUE(load_scene(expected, "sphere").ok());
     editor::EditorState& state = editor::setup_editor(expected, Viewport{1280, 720});
     auto events = editor::load_input_recording(session);
@@ -89,6 +90,7 @@ TEST(ViewSession, ReplayedEditsShowInTheScreenshotAndTheSavedLatticeIsBitExact) 
     const Lattice& want = expected.get<Lattice>(first_lattice(expected));
 
     ecs::Registry reloaded;
+    reloaded.set_resource<SceneHooks>();  // assets' own formats only
     auto st = load_scene(reloaded, saved.string());
     ASSERT_TRUE(st.ok()) << st.message();
     const ecs::Entity le = first_lattice(reloaded);

@@ -2,7 +2,10 @@
 // through make_engine_schedule() and read back with render_engine_frame() on a headless EGL context.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <optional>
@@ -52,10 +55,10 @@ TEST(EngineSchedule, EditorScheduleAddsOverlayAndUi) {
 }
 
 // Every system of the engine's frame says what it reads and writes (checked by SFFD_CHECK_ACCESS builds),
-// except the three whose own state lives in an anonymous namespace of their .cpp files, which the
-// schedule cannot name (engine.cpp says so where they are added). The list only shrinks.
+// except the residency, whose own state lives in an anonymous namespace of its .cpp, which the schedule
+// cannot name (engine.cpp says so where it is added). The list only shrinks.
 TEST(EngineSchedule, EverySystemDeclaresItsAccess) {
-    const std::vector<std::string> not_yet{"residency", "editor.requests", "editor.ui"};
+    const std::vector<std::string> not_yet{"residency"};
     const Schedule s = make_engine_schedule({.present = true, .editor = true});
     std::size_t systems = 0;
     for (std::size_t p = 0; p < phase_count; ++p)
@@ -133,7 +136,8 @@ TEST(EngineSchedule, ReadmeFrameTableIsTheGeneratedOne) {
 bool has_clip(const ecs::Registry& registry) { return registry.count<AnimationClip>() > 0; }
 
 // What load_scene opens is the registry's own context: the engine's hooks in one registry, none in
-// another, in the same process, whatever the process-wide default set holds.
+// another, in the same process; a registry with no context at all is refused with a message, and a
+// registry the first one makes gets the same hooks by copying them.
 TEST(EngineSceneHooks, LoadSceneUsesTheRegistrysOwnHooks) {
     ecs::Registry engine;
     use_engine_scene_hooks(engine);
@@ -142,12 +146,38 @@ TEST(EngineSceneHooks, LoadSceneUsesTheRegistrysOwnHooks) {
     EXPECT_NE(scene_file_types(engine).find(".spz"), std::string::npos) << scene_file_types(engine);
 
     ecs::Registry bare;
-    bare.set_resource<SceneHooks>();  // a context with no hooks
-    register_engine_scene_hooks();    // the process-wide default set is not consulted for it
+    bare.set_resource<SceneHooks>();  // a context with no hooks: assets' own formats
     ASSERT_TRUE(load_scene(bare, "sphere"));
     EXPECT_FALSE(has_clip(bare));
     EXPECT_EQ(scene_file_types(bare), ".ply, .obj, .off, .gltf, .glb");
     EXPECT_EQ(engine_scene_hooks().file_types(), scene_file_types(engine));
+
+    ecs::Registry copied;
+    SceneHooks::copy_to(engine, copied);
+    ASSERT_TRUE(load_scene(copied, "sphere"));
+    EXPECT_TRUE(has_clip(copied));
+}
+
+// There is no process-wide set of loaders to fall back on: a registry set up without hooks is told so,
+// both loading and saving, and is left as it was.
+TEST(EngineSceneHooks, ARegistryWithoutHooksIsRefusedWithAMessage) {
+    ecs::Registry engine;
+    use_engine_scene_hooks(engine);  // hooks in another registry of the process change nothing
+    ecs::Registry none;
+    const Status loaded = load_scene(none, "sphere");
+    ASSERT_FALSE(loaded);
+    EXPECT_NE(loaded.message().find("sphere: no scene loaders registered in this registry"),
+              std::string::npos)
+        << loaded.message();
+    EXPECT_EQ(none.count<SplatCloud>(), 0u);
+    const std::filesystem::path out =
+        std::filesystem::temp_directory_path() / ("sffd_no_hooks_" + std::to_string(::getpid()) + ".glb");
+    const Status saved = save_scene(none, out);
+    ASSERT_FALSE(saved);
+    EXPECT_NE(saved.message().find(out.string() + ": no scene loaders registered in this registry"),
+              std::string::npos)
+        << saved.message();
+    EXPECT_FALSE(std::filesystem::exists(out));
 }
 
 class EngineFrame : public testing::Test {

@@ -79,6 +79,7 @@ struct LatticeCli : testing::Test {
     void save_grid_scene(const std::string& name, const std::vector<Lattice>& bound,
                          const std::vector<Lattice>& loose = {}) {
         ecs::Registry r;
+        r.set_resource<SceneHooks>();  // assets' own formats only
         const ecs::Entity c = r.create();
         r.emplace<Name>(c, Name{"grid"});
         r.emplace<Transform>(c, Transform{});
@@ -166,6 +167,7 @@ TEST_F(LatticeCli, ConvertStoresAFittedLatticeAndExportsItAsJson) {
     EXPECT_TRUE(has(r.out, "lattice fit:4,3,2,pad=0.1,bspline bound to it")) << r.out;
     // The scene holds the cloud bound to exactly the lattice fit_lattice makes around the stored cloud.
     ecs::Registry reg;
+    reg.set_resource<SceneHooks>();  // assets' own formats only
     ASSERT_TRUE(load_scene(reg, p("fit.glb")).ok());
     ecs::Entity cloud{}, lattice{};
     reg.each_entity([&](ecs::Entity e) {
@@ -255,6 +257,7 @@ TEST_F(LatticeCli, DeformTakesTheLatticeFromASceneFile) {
     r = run("deform " + p("one.glb") + " " + p("e.glb"));
     ASSERT_EQ(r.code, 0) << r.out;
     ecs::Registry reg;
+    reg.set_resource<SceneHooks>();  // assets' own formats only
     ASSERT_TRUE(load_scene(reg, p("e.glb")).ok());
     std::size_t clouds = 0;
     reg.view<const SplatCloud>().each([&](ecs::Entity, const SplatCloud& c) {

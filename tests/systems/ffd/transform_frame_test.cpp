@@ -431,6 +431,7 @@ TEST(TransformFrame, ASavedSceneKeepsBothTransformsAndItsDeformation) {
                                        ("sffd_transform_frame_" + std::to_string(::getpid()) + ".glb");
     ASSERT_TRUE(save_scene(s.reg, path).ok());
     ecs::Registry loaded;
+    loaded.set_resource<SceneHooks>();  // assets' own formats only
     const Status st = load_scene(loaded, path.string());
     std::filesystem::remove(path);
     ASSERT_TRUE(st.ok()) << st.message();

@@ -431,7 +431,6 @@ TEST(GaussianHostile, CpuDeformationDropsAndCountsNonFiniteResults) {
 // --- folder confinement of scene entries ------------------------------------------------------------
 
 TEST(GaussianHostile, SceneEntryOutsideTheFolderNeedsAllowOutsideResources) {
-    register_gaussian_scene_hooks();
     const fs::path root = temp_dir() / "confine";
     fs::create_directories(root / "scene"), fs::create_directories(root / "outside");
     write_ascii_ply(root / "outside" / "g.ply", {kRow});
@@ -439,12 +438,14 @@ TEST(GaussianHostile, SceneEntryOutsideTheFolderNeedsAllowOutsideResources) {
     // A scene that refers to ../outside/g.ply (saved with the entity loaded from there).
     {
         ecs::Registry r;
+        register_gaussian_scene_hooks(SceneHooks::in(r));
         ASSERT_TRUE(load_scene(r, (root / "outside" / "g.ply").string()));
         ASSERT_TRUE(save_scene(r, root / "scene" / "s.gltf"));
     }
     ASSERT_NE(read_bytes(root / "scene" / "s.gltf").find("../outside/g.ply"), std::string::npos);
     {
         ecs::Registry r;
+        register_gaussian_scene_hooks(SceneHooks::in(r));
         auto s = load_scene(r, (root / "scene" / "s.gltf").string());
         ASSERT_FALSE(s);
         EXPECT_NE(s.message().find("outside the file's folder"), std::string::npos) << s.message();
@@ -452,6 +453,7 @@ TEST(GaussianHostile, SceneEntryOutsideTheFolderNeedsAllowOutsideResources) {
     set_allow_outside_resources(true);
     {
         ecs::Registry r;
+        register_gaussian_scene_hooks(SceneHooks::in(r));
         auto s = load_scene(r, (root / "scene" / "s.gltf").string());
         EXPECT_TRUE(s) << s.message();
     }
@@ -464,6 +466,7 @@ TEST(GaussianHostile, SceneEntryOutsideTheFolderNeedsAllowOutsideResources) {
     write_bytes(root / "scene" / "s_link.gltf", text);
     {
         ecs::Registry r;
+        register_gaussian_scene_hooks(SceneHooks::in(r));
         auto s = load_scene(r, (root / "scene" / "s_link.gltf").string());
         ASSERT_FALSE(s);
         EXPECT_NE(s.message().find("outside the file's folder"), std::string::npos) << s.message();
@@ -472,20 +475,20 @@ TEST(GaussianHostile, SceneEntryOutsideTheFolderNeedsAllowOutsideResources) {
     write_bytes(root / "scene" / "s_inside.gltf", text);
     {
         ecs::Registry r;
+        register_gaussian_scene_hooks(SceneHooks::in(r));
         auto s = load_scene(r, (root / "scene" / "s_inside.gltf").string());
         EXPECT_TRUE(s) << s.message();
     }
-    unregister_gaussian_scene_hooks();
 }
 
 // --- automatic camera ------------------------------------------------------------------------------
 
 TEST(GaussianHostile, DefaultCameraStaysOutsideCoincidentOrHugeGaussians) {
-    register_gaussian_scene_hooks();
     // Three Gaussians at one point, sigma e^0 = 1: the camera must be further than 3 sigma away.
     write_ascii_ply(temp("coincident.ply"), {"2 3 4 0 0 0 0 0 0 0 1 0 0 0", "2 3 4 0 0 0 0 0 0 0 1 0 0 0",
                                              "2 3 4 0 0 0 0 0 0 0 1 0 0 0"});
     ecs::Registry r;
+    register_gaussian_scene_hooks(SceneHooks::in(r));
     ASSERT_TRUE(load_scene(r, temp("coincident.ply").string()));
     bool found = false;
     r.view<Camera>().each([&](const Camera& c) {
@@ -495,7 +498,6 @@ TEST(GaussianHostile, DefaultCameraStaysOutsideCoincidentOrHugeGaussians) {
         EXPECT_LT(double(c.near_plane), d - 3.0);
     });
     EXPECT_TRUE(found);
-    unregister_gaussian_scene_hooks();
 }
 
 // --- outputs: long names, UTF-8 ---------------------------------------------------------------------
@@ -583,8 +585,8 @@ TEST(GaussianHostile, EveryFormatTruncatedAtEveryByte) {
 }
 
 TEST(GaussianHostile, SceneFileTruncatedAtEveryByte) {
-    register_gaussian_scene_hooks();
     ecs::Registry r;
+    register_gaussian_scene_hooks(SceneHooks::in(r));
     const ecs::Entity e = r.create();
     r.emplace<Name>(e, Name{"g"});
     r.emplace<Transform>(e, Transform{});
@@ -596,12 +598,12 @@ TEST(GaussianHostile, SceneFileTruncatedAtEveryByte) {
     for (std::size_t n = 0; n < bytes.size(); n += 1) {
         write_bytes(cut, bytes.substr(0, n));
         ecs::Registry back;
+        register_gaussian_scene_hooks(SceneHooks::in(back));
         auto s = load_scene(back, cut.string());
         if (!s) {
             EXPECT_NE(s.message().find(cut.string()), std::string::npos) << n << ": " << s.message();
         }
     }
-    unregister_gaussian_scene_hooks();
 }
 
 }  // namespace

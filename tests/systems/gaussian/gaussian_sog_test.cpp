@@ -204,11 +204,11 @@ TEST(Sog, HandBuiltArchiveAndFolderDecodeToKnownValues) {
 // What `render` and `view` open (load_scene): a SOG archive, a SOG folder given as the folder or as its
 // meta.json; and a refused type's message lists the Gaussian formats too.
 TEST(Sog, SceneLoaderOpensArchiveFolderAndMetaJson) {
-    register_gaussian_scene_hooks();
     const Sog s;
     const fs::path meta = s.folder("scene_folder");
     for (const fs::path& p : {s.archive("scene.sog"), meta, meta.parent_path()}) {
         ecs::Registry r;
+        register_gaussian_scene_hooks(SceneHooks::in(r));
         ASSERT_TRUE(load_scene(r, p.string())) << p;
         ASSERT_EQ(r.count<GaussianCloud>(), 1u) << p;
         EXPECT_EQ(r.count<Camera>(), 1u) << p;
@@ -221,13 +221,13 @@ TEST(Sog, SceneLoaderOpensArchiveFolderAndMetaJson) {
     const fs::path odd = temp("odd.xyz");
     std::ofstream(odd) << "1 2 3\n";
     ecs::Registry r;
+    register_gaussian_scene_hooks(SceneHooks::in(r));
     const Status refused = load_scene(r, odd.string());
     ASSERT_FALSE(refused);
     for (const std::string& type :
          std::vector<std::string>{odd.string(), "unknown file type '.xyz'", ".ply", ".glb", ".spz", ".splat",
                                   ".ksplat", ".sog", "meta.json"})
         EXPECT_NE(refused.message().find(type), std::string::npos) << type << " in " << refused.message();
-    unregister_gaussian_scene_hooks();
 }
 
 TEST(Sog, RefusesBadFiles) {

@@ -56,6 +56,7 @@ GaussianCloud lopsided(std::size_t n) {
 
 Camera loaded_camera(const fs::path& p) {
     ecs::Registry r;
+    r.set_resource<SceneHooks>();  // assets' own formats only
     const Status s = load_scene(r, p.string());
     EXPECT_TRUE(s) << s.message();
     EXPECT_EQ(r.count<Camera>(), 1u) << p;
@@ -65,7 +66,6 @@ Camera loaded_camera(const fs::path& p) {
 }
 
 TEST(SceneCamera, CaptureAndItsFittedSceneOpenWithTheSameCamera) {
-    gaussian::register_gaussian_scene_hooks();
     const fs::path g = temp("g.ply"), scene = temp("s.glb");
     const GaussianCloud cloud = lopsided(3000);
     ASSERT_TRUE(gaussian::write_ply(g, cloud));
@@ -87,7 +87,6 @@ TEST(SceneCamera, CaptureAndItsFittedSceneOpenWithTheSameCamera) {
     }
     EXPECT_LT(glm::length(a.target - 0.5 * (lo + hi)), 0.2)
         << a.target.x << " " << a.target.y << " " << a.target.z;
-    gaussian::unregister_gaussian_scene_hooks();
 
     std::tie(code, out) = run("render " + g.string() + " --size 160x120 --out " + temp("A").string());
     if (code != 0 && out.find("EGL") != std::string::npos) SFFD_GL_UNAVAILABLE(out);

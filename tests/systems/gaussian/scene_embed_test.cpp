@@ -92,12 +92,10 @@ void write_glb(const fs::path& p, const Glb& g) {
 
 class GaussianSceneEmbedded : public testing::Test {
 protected:
-    static void SetUpTestSuite() { register_gaussian_scene_hooks(); }
-    static void TearDownTestSuite() { unregister_gaussian_scene_hooks(); }
-
     // Saves an in-memory cloud "made" with a transform and a 3³ lattice bound as its deformer.
     static fs::path save(const fs::path& path, const GaussianCloud& g) {
         ecs::Registry reg;
+        register_gaussian_scene_hooks(SceneHooks::in(reg));
         const ecs::Entity lat = reg.create();
         reg.emplace<Name>(lat, Name{"box"});
         reg.emplace<Lattice>(
@@ -132,6 +130,7 @@ TEST_F(GaussianSceneEmbedded, InMemoryCloudRoundTripsBitForBitFromTheSceneFileAl
         for ([[maybe_unused]] const auto& f : fs::directory_iterator(dir)) ++files;
         EXPECT_EQ(files, 1u);
         ecs::Registry reg;
+        register_gaussian_scene_hooks(SceneHooks::in(reg));
         const Status st = load_scene(reg, scene.string());
         ASSERT_TRUE(st) << st.message();
         ASSERT_EQ(reg.count<GaussianCloud>(), 1u);
@@ -226,6 +225,7 @@ TEST_F(GaussianSceneEmbedded, DeformedCloudsSHFramesAreBakedIntoTheEmbeddedCoeff
     ASSERT_NE(expected.sh, g.sh);
     const fs::path scene = save(fresh_dir("frames") / "scene.glb", g);
     ecs::Registry reg;
+    register_gaussian_scene_hooks(SceneHooks::in(reg));
     const Status st = load_scene(reg, scene.string());
     ASSERT_TRUE(st) << st.message();
     ecs::Entity e = ecs::null_entity;
@@ -248,6 +248,7 @@ TEST_F(GaussianSceneEmbedded, CorruptedEmbeddedDataNamesTheSceneFile) {
     };
     auto expect_refused = [&](const fs::path& scene, const std::string& problem) {
         ecs::Registry reg;
+        register_gaussian_scene_hooks(SceneHooks::in(reg));
         const Status st = load_scene(reg, scene.string());
         ASSERT_FALSE(st) << scene;
         std::printf("%s\n", st.message().c_str());

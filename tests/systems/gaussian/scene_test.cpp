@@ -87,6 +87,8 @@ fs::path write_scene(const fs::path& dir, const GaussianCloud& g) {
     const fs::path ply = dir / "sphere.ply";
     EXPECT_TRUE(write_ply(ply, g));
     ecs::Registry reg;
+    register_gaussian_scene_hooks(SceneHooks::in(reg));
+    register_animation_scene_hooks(SceneHooks::in(reg));
     auto e = load_gaussian_entity(reg, ply);
     EXPECT_TRUE(e) << e.message();
     // Written in the engine's orientation (y up), so stored in the scene as shown, without the turn a
@@ -110,16 +112,10 @@ fs::path write_scene(const fs::path& dir, const GaussianCloud& g) {
 class GaussianScene : public testing::Test {
 protected:
     static void SetUpTestSuite() {
-        register_animation_scene_hooks();
-        register_gaussian_scene_hooks();
         auto c = gfx::create_context({.headless = true, .width = 16, .height = 16});
         if (c) context().emplace(std::move(*c));
     }
-    static void TearDownTestSuite() {
-        context().reset();
-        unregister_gaussian_scene_hooks();
-        unregister_animation_scene_hooks();
-    }
+    static void TearDownTestSuite() { context().reset(); }
     static std::optional<gfx::GlContext>& context() {
         static std::optional<gfx::GlContext> c;
         return c;
@@ -143,6 +139,8 @@ TEST_F(GaussianScene, SavesAndLoadsTheGaussianEntityWithItsLatticeAndClip) {
     const GaussianCloud g = sphere_gaussians();
     const fs::path scene = write_scene(dir, g);
     ecs::Registry reg;
+    register_gaussian_scene_hooks(SceneHooks::in(reg));
+    register_animation_scene_hooks(SceneHooks::in(reg));
     ASSERT_TRUE(load_scene(reg, scene.string()));
     ASSERT_EQ(reg.count<GaussianCloud>(), 1u);
     ecs::Entity e = ecs::null_entity;
@@ -162,11 +160,15 @@ TEST_F(GaussianScene, SavesAndLoadsTheGaussianEntityWithItsLatticeAndClip) {
     const fs::path dir2 = fresh_dir("roundtrip2");
     ASSERT_TRUE(save_scene(reg, dir2 / "again.glb"));
     ecs::Registry refused;
+    register_gaussian_scene_hooks(SceneHooks::in(refused));
+    register_animation_scene_hooks(SceneHooks::in(refused));
     const Status outside = load_scene(refused, (dir2 / "again.glb").string());
     ASSERT_FALSE(outside);
     EXPECT_NE(outside.message().find("outside the file's folder"), std::string::npos) << outside.message();
     set_allow_outside_resources(true);
     ecs::Registry again;
+    register_gaussian_scene_hooks(SceneHooks::in(again));
+    register_animation_scene_hooks(SceneHooks::in(again));
     const Status allowed = load_scene(again, (dir2 / "again.glb").string());
     set_allow_outside_resources(false);
     ASSERT_TRUE(allowed) << allowed.message();
@@ -174,12 +176,16 @@ TEST_F(GaussianScene, SavesAndLoadsTheGaussianEntityWithItsLatticeAndClip) {
     EXPECT_EQ(again.count<Deformers>(), 1u);
     // A cloud made in memory (no file) is embedded in the scene (scene_embed_test.cpp checks the data).
     ecs::Registry mem;
+    register_gaussian_scene_hooks(SceneHooks::in(mem));
+    register_animation_scene_hooks(SceneHooks::in(mem));
     const ecs::Entity m = mem.create();
     mem.emplace<Name>(m, Name{"made"});
     mem.emplace<GaussianCloud>(m, g);
     ASSERT_TRUE(save_scene(mem, dir2 / "mem.gltf"));
     EXPECT_FALSE(fs::exists(dir2 / "made.gaussians.ply"));
     ecs::Registry mem2;
+    register_gaussian_scene_hooks(SceneHooks::in(mem2));
+    register_animation_scene_hooks(SceneHooks::in(mem2));
     ASSERT_TRUE(load_scene(mem2, (dir2 / "mem.gltf").string()));
     EXPECT_EQ(mem2.count<GaussianCloud>(), 1u);
 }
@@ -189,6 +195,8 @@ TEST_F(GaussianScene, AnimatedTwistRendersTheDeformedGaussians) {
     const fs::path dir = fresh_dir("twist");
     const fs::path scene = write_scene(dir, sphere_gaussians());
     ecs::Registry reg;
+    register_gaussian_scene_hooks(SceneHooks::in(reg));
+    register_animation_scene_hooks(SceneHooks::in(reg));
     ASSERT_TRUE(load_scene(reg, scene.string()));
     render::RenderSettings s;
     s.width = 160, s.height = 120;
@@ -235,6 +243,8 @@ TEST_F(GaussianScene, BadGaussianFileInASceneNamesTheFile) {
     const fs::path ply = dir / "sphere.ply";
     fs::resize_file(ply, fs::file_size(ply) / 2);
     ecs::Registry reg;
+    register_gaussian_scene_hooks(SceneHooks::in(reg));
+    register_animation_scene_hooks(SceneHooks::in(reg));
     const Status st = load_scene(reg, scene.string());
     ASSERT_FALSE(st);
     std::printf("%s\n", st.message().c_str());
@@ -271,6 +281,8 @@ TEST_F(GaussianScene, AnimatedSceneThroughTheEngineFrame) {
     auto render_frames = [&](std::vector<std::uint64_t> ks) {
         std::vector<ReferenceImage> out;
         ecs::Registry reg;
+        register_gaussian_scene_hooks(SceneHooks::in(reg));
+        register_animation_scene_hooks(SceneHooks::in(reg));
         const Status loaded = load_scene(reg, scene.string());
         EXPECT_TRUE(loaded) << loaded.message();
         render::RenderSettings s;
@@ -339,6 +351,8 @@ TEST_F(GaussianScene, EditorAddsALatticeToAGaussianFileAndSavesTheDeformedScene)
               0)
         << out;
     ecs::Registry reg;
+    register_gaussian_scene_hooks(SceneHooks::in(reg));
+    register_animation_scene_hooks(SceneHooks::in(reg));
     ASSERT_TRUE(load_scene(reg, (dir / "edited.glb").string()));
     ASSERT_EQ(reg.count<GaussianCloud>(), 1u);
     ASSERT_EQ(reg.count<Lattice>(), 1u);
@@ -354,6 +368,8 @@ TEST_F(GaussianScene, EditorAddsALatticeToAGaussianFileAndSavesTheDeformedScene)
     const Schedule schedule = make_engine_schedule({.present = false});
     auto first_frame = [&](const fs::path& file) {
         ecs::Registry r;
+        register_gaussian_scene_hooks(SceneHooks::in(r));
+        register_animation_scene_hooks(SceneHooks::in(r));
         const Status loaded = load_scene(r, file.string());
         EXPECT_TRUE(loaded) << loaded.message();
         render::RenderSettings s;
@@ -375,6 +391,8 @@ TEST_F(GaussianScene, GaussianFilesAreToldApartFromSurfaceFiles) {
     ASSERT_TRUE(assets::save_splat_ply(render::test::fibonacci_sphere(500), dir / "surface.ply"));
     for (const char* f : {"g.ply", "g.glb"}) {
         ecs::Registry reg;
+        register_gaussian_scene_hooks(SceneHooks::in(reg));
+        register_animation_scene_hooks(SceneHooks::in(reg));
         ASSERT_TRUE(load_scene(reg, (dir / f).string())) << f;
         EXPECT_EQ(reg.count<GaussianCloud>(), 1u) << f;
         EXPECT_EQ(reg.count<SplatCloud>(), 0u) << f;
@@ -383,6 +401,8 @@ TEST_F(GaussianScene, GaussianFilesAreToldApartFromSurfaceFiles) {
             [&](const GaussianCloud& c) { EXPECT_EQ(c.size(), g.size()) << f; });
     }
     ecs::Registry reg;
+    register_gaussian_scene_hooks(SceneHooks::in(reg));
+    register_animation_scene_hooks(SceneHooks::in(reg));
     ASSERT_TRUE(load_scene(reg, (dir / "surface.ply").string()));
     EXPECT_EQ(reg.count<GaussianCloud>(), 0u);
     EXPECT_EQ(reg.count<SplatCloud>(), 1u);
@@ -395,6 +415,8 @@ TEST_F(GaussianScene, GaussianFilesAreToldApartFromSurfaceFiles) {
     // A bad Gaussian file opened directly: `file: problem`, nothing created.
     fs::resize_file(dir / "g.ply", 300);
     ecs::Registry bad;
+    register_gaussian_scene_hooks(SceneHooks::in(bad));
+    register_animation_scene_hooks(SceneHooks::in(bad));
     const Status st = load_scene(bad, (dir / "g.ply").string());
     ASSERT_FALSE(st);
     EXPECT_EQ(st.message().rfind((dir / "g.ply").string(), 0), 0u) << st.message();

@@ -49,6 +49,7 @@ CliRun run_pick(const std::string& args) { return run_pick("", args); }
 
 struct Sphere {
     ecs::Registry reg;
+    reg.set_resource<SceneHooks>();  // assets' own formats only
     ecs::Entity lattice;
     ScreenView view;
     Sphere() {
@@ -178,12 +179,11 @@ struct GaussianFile {
         EXPECT_TRUE(gaussian::write_ply(path, cloud));
         // The camera `render` and `pick` see the file through: load_scene's default view of a Gaussian file
         // (the Gaussian scene hooks, which splatffd's main registers).
-        gaussian::register_gaussian_scene_hooks();
         gaussian::set_capture_up(gaussian::CaptureUp::plus_y);
         ecs::Registry reg;
+        gaussian::register_gaussian_scene_hooks(SceneHooks::in(reg));
         const Status st = load_scene(reg, path.string());
         gaussian::set_capture_up(gaussian::CaptureUp::minus_y);
-        gaussian::unregister_gaussian_scene_hooks();
         EXPECT_TRUE(st) << (st ? "" : st.message());
         view = make_screen_view(render::scene_camera(reg, 320.0 / 240.0), {320, 240});
     }

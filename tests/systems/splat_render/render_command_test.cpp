@@ -258,6 +258,7 @@ CameraScene camera_scene() {
     fs::create_directories(s.path);
     s.path /= "still.glb";
     sffd::ecs::Registry r;
+    r.set_resource<sffd::SceneHooks>();  // assets' own formats only
     const sffd::SplatCloud cloud = sffd::assets::make_sphere_cloud(20000);
     const sffd::render::BoundingSphere b = sffd::render::bounding_sphere(cloud);
     s.centre = cloud.origin + b.center;

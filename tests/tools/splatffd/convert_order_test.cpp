@@ -137,6 +137,7 @@ std::size_t expect_permutation(const Cloud& in, const Cloud& out, Attrs attrs, c
 
 sffd::SplatCloud load_surface(const fs::path& p, std::size_t* lattices = nullptr) {
     sffd::ecs::Registry r;
+    r.set_resource<sffd::SceneHooks>();  // assets' own formats only
     const sffd::Status s = sffd::load_scene(r, p.string());
     EXPECT_TRUE(s) << (s ? "" : s.message());
     sffd::SplatCloud c;

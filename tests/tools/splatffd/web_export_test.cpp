@@ -186,6 +186,7 @@ TEST(WebExport, PlayerClipEvaluationEqualsTheEngines) {
         GTEST_SKIP() << "the PlayCanvas engine is not installed (tools/fetch_web_engine.sh)";
     using namespace sffd;
     ecs::Registry reg;
+    reg.set_resource<SceneHooks>();  // assets' own formats only
     use_engine_scene_hooks(reg);
     ASSERT_TRUE(load_scene(reg, (scenes() / "gs.glb").string()));
     const Lattice* lattice = nullptr;
