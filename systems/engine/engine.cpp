@@ -32,6 +32,7 @@
 #include "systems/ffd/ffd_system.h"
 #include "systems/ffd/preview_budget.h"
 #include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_scene.h"
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/gaussian/gpu_deform.h"
 #include "systems/gaussian/gpu_store.h"
@@ -120,8 +121,8 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
         // Save (every component a scene file holds, through the scene's hooks), screenshot, quit.
         s.add(Phase::rendering, "editor.requests", editor::requests_system,
               ecs::reads<AmbientLight, AnimationClip, AnimationState, Camera, Deformers, DirectionalLight,
-                         GaussianCloud, Lattice, Name, SceneHooks, SplatCloud, SplatMaterial, Transform,
-                         UnkeyedEdit>()
+                         DeformedGaussians, GaussianCloud, GaussianSource, Lattice, Name, SceneHooks,
+                         SplatCloud, SplatMaterial, Transform, UnkeyedEdit>()
                   .writes<app::AppContext, editor::EditorState, editor::detail::ViewSession,
                           render::detail::SplatRenderState>());
     }

@@ -211,6 +211,7 @@ TEST(LatticeManage, ExportImportJsonAndSceneRoundTrip) {
 
     // A second lattice, then save: the scene reloads with both, bound in the same order, bit for bit.
     ed.key("a", mods::shift);
+    SceneHooks::in(ed.reg);  // assets' own formats only
     ASSERT_TRUE(save_scene(ed.reg, dir / "s.glb").ok());
     ecs::Registry back;
     back.set_resource<SceneHooks>();  // assets' own formats only
