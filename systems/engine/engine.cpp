@@ -77,10 +77,10 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
           ecs::reads<AnimationClip>().writes<AnimationState, Lattice, UnkeyedEdit>());
 
     // --- residency: upload authored clouds whose change stamp moved; owns the GPU stores (residency) ----
-    // No declaration yet: its destroy-signal connections live in a resource of its own .cpp's anonymous
-    // namespace, which no other file can name. Reads SplatCloud, GaussianCloud, Deformers; writes
-    // gfx::GpuSplatStore, gaussian::GpuGaussianStore, gfx::ResidencyStats.
-    s.add(Phase::residency, "residency", residency_system);  // no-op without a GL context
+    s.add(Phase::residency, "residency", residency_system,  // no-op without a GL context
+          ecs::reads<Deformers, GaussianCloud, SplatCloud>()
+              .writes<ResidencyConnections, gaussian::GpuGaussianStore, gfx::GpuSplatStore,
+                      gfx::ResidencyStats>());
 
     // --- deformation: re-deform point clouds whose rest data or lattices changed (ffd) --------------
     s.add(Phase::deformation, "ffd", ffd_system,  // GPU compute when a context is current, else CPU

@@ -3,7 +3,6 @@
 #include <vector>
 
 #include "runtime/core/log.h"
-#include "runtime/ecs/signal.h"
 #include "runtime/gfx/residency.h"
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
@@ -21,12 +20,6 @@ T& resource(ecs::Registry& reg) {
     if (auto* r = reg.try_resource<T>()) return *r;
     return reg.set_resource<T>();
 }
-
-// A store entry goes with its cloud's authored component (removed, or the entity destroyed): the
-// registry's destroy signals, connected once per registry (this resource holds the connections).
-struct ResidencyCleanup {
-    ecs::ScopedConnection splats, gaussians;
-};
 
 template <class Cloud, class Store>
 ecs::ScopedConnection drop_with(ecs::Registry& reg) {
@@ -58,10 +51,10 @@ void sync(ecs::Registry& reg, Store& store, gfx::ResidencyStats& stats, Upload&&
 void residency_system(ecs::Registry& reg, const FrameContext&) {
     if (!gfx::context_current()) return;
     auto& stats = resource<gfx::ResidencyStats>(reg);
-    if (!reg.try_resource<ResidencyCleanup>())
-        reg.set_resource<ResidencyCleanup>(
-            ResidencyCleanup{drop_with<SplatCloud, gfx::GpuSplatStore>(reg),
-                             drop_with<GaussianCloud, gaussian::GpuGaussianStore>(reg)});
+    if (!reg.try_resource<ResidencyConnections>())
+        reg.set_resource<ResidencyConnections>(
+            ResidencyConnections{drop_with<SplatCloud, gfx::GpuSplatStore>(reg),
+                                 drop_with<GaussianCloud, gaussian::GpuGaussianStore>(reg)});
 
     // Surface splats: the splats, and a textured cloud's texture and uv frames, each by its one upload
     // function. No CPU mirror of them is kept: the CPU reads the buffers (gfx::read_splats_on_cpu).
