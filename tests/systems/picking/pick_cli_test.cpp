@@ -49,10 +49,10 @@ CliRun run_pick(const std::string& args) { return run_pick("", args); }
 
 struct Sphere {
     ecs::Registry reg;
-    reg.set_resource<SceneHooks>();  // assets' own formats only
     ecs::Entity lattice;
     ScreenView view;
     Sphere() {
+        reg.set_resource<SceneHooks>();  // assets' own formats only
         const Status st = load_scene(reg, "sphere");
         EXPECT_TRUE(st) << (st ? "" : st.message());
         reg.view<const Lattice>().each([&](ecs::Entity e, const Lattice&) { lattice = e; });
