@@ -429,6 +429,7 @@ TEST(TransformFrame, ASavedSceneKeepsBothTransformsAndItsDeformation) {
     run(s);
     const std::filesystem::path path = std::filesystem::temp_directory_path() /
                                        ("sffd_transform_frame_" + std::to_string(::getpid()) + ".glb");
+    s.reg.set_resource<SceneHooks>();  // assets' own formats only
     ASSERT_TRUE(save_scene(s.reg, path).ok());
     ecs::Registry loaded;
     loaded.set_resource<SceneHooks>();  // assets' own formats only

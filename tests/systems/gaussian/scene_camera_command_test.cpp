@@ -13,6 +13,7 @@
 #include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
 #include "systems/gaussian/components.h"
+#include "systems/gaussian/gaussian_scene.h"
 #include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_scene.h"
 #include "tests/test_util/gl_required.h"
@@ -56,7 +57,7 @@ GaussianCloud lopsided(std::size_t n) {
 
 Camera loaded_camera(const fs::path& p) {
     ecs::Registry r;
-    r.set_resource<SceneHooks>();  // assets' own formats only
+    gaussian::register_gaussian_scene_hooks(SceneHooks::in(r));  // the fitted scene holds Gaussians
     const Status s = load_scene(r, p.string());
     EXPECT_TRUE(s) << s.message();
     EXPECT_EQ(r.count<Camera>(), 1u) << p;

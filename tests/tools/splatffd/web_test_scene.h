@@ -58,6 +58,7 @@ inline std::string make_web_test_scenes(const std::filesystem::path& dir) {
     // 30 degrees about y and moved, with box, points, twist axes and pivots mapped back by its inverse.
     {
         ecs::Registry moved;
+        use_engine_scene_hooks(moved);
         if (Status st = load_scene(moved, (dir / "twist.glb").string()); !st) return st.message();
         const glm::dquat q = glm::angleAxis(glm::radians(30.0), glm::dvec3(0.0, 1.0, 0.0));
         const glm::dvec3 t(0.2, -0.1, 0.15);
