@@ -215,7 +215,7 @@ TEST(WebPlayer, BrowserFramesMatchRenderAtRestAndAtTheStrongestTwist) {
 
     // The strongest frame: the largest control-point displacement of the clip over its frames.
     sffd::ecs::Registry reg;
-    reg.set_resource<sffd::SceneHooks>();  // assets' own formats only
+    sffd::use_engine_scene_hooks(reg);  // the scene holds a clip
     ASSERT_TRUE(sffd::load_scene(reg, scene.string()));
     const sffd::Lattice* lattice = nullptr;
     const sffd::AnimationClip* clip = nullptr;
