@@ -4,6 +4,9 @@
 #include <cmath>
 #include <limits>
 
+#include "runtime/core/log.h"
+#include "runtime/scene/point_columns.h"
+
 namespace sffd {
 
 namespace {
@@ -64,8 +67,58 @@ void mark_cloud_replaced(ecs::Registry& reg, ecs::Entity e) {
     replace(reg.get<PointPages>(e), c.positions->size(), c.version);
 }
 
+namespace {
+
+// The stamps of pages [first, first + count) of `column` at the record's clock.
+void stamp_pages(PointPages& p, PointColumn column, std::size_t first, std::size_t count) {
+    const std::size_t n = p.points;
+    if (count == 0 || first >= n) return;
+    const std::size_t last = std::min(n, first + count) - 1;
+    auto& s = p.stamps[std::size_t(column)];
+    for (std::size_t page = first >> kPageShift; page <= last >> kPageShift; ++page) s[page] = p.clock;
+}
+
+// An optional column's group: its own component is stamped, never the cloud (the header says why).
+void mark_optional_changed(ecs::Registry& reg, ecs::Entity e, PointColumn column, std::size_t first,
+                           std::size_t count) {
+    const CloudView c = cloud_of(reg, e, false);
+    if (!c.positions) return;
+    const ecs::Registry& r = reg;
+    const bool flags = column != PointColumn::weight;
+    std::size_t values = 0;
+    if (flags && r.has<PointFlags>(e)) {
+        reg.mark_changed<PointFlags>(e);
+        values = r.get<PointFlags>(e).bits.size();
+    } else if (!flags && r.has<PointWeights>(e)) {
+        reg.mark_changed<PointWeights>(e);
+        values = r.get<PointWeights>(e).values.size();
+    }
+    const std::size_t n = c.positions->size();
+    PointPages* p = reg.try_get<PointPages>(e);
+    if (!p || p->points != n || p->stamps[0].size() != page_count(n)) {
+        if (!p) p = &reg.emplace<PointPages>(e);
+        replace(*p, n, c.version);
+    } else {
+        // The cloud's stamp is left as the record has it: an unmarked change of the cloud itself must
+        // still be found by the next refresh.
+        ++p->clock;
+        if (values != 0 && values != n) {
+            log::warn("mark_points_changed(): entity ", e.index, ": ", flags ? "PointFlags" : "PointWeights",
+                      " holds ", values, " values for a cloud of ", n,
+                      " points; the column reads as absent and every page of it is stamped");
+            first = 0, count = n;
+        }
+        stamp_pages(*p, column, first, count);
+    }
+    (flags ? p->flags_version : p->weights_version) =
+        flags ? r.version<PointFlags>(e) : r.version<PointWeights>(e);
+}
+
+}  // namespace
+
 void mark_points_changed(ecs::Registry& reg, ecs::Entity e, PointColumn column, std::size_t first,
                          std::size_t count) {
+    if (optional_point_column(column)) return mark_optional_changed(reg, e, column, first, count);
     const CloudView c = cloud_of(reg, e, true);
     if (!c.positions) return;
     PointPages* p = reg.try_get<PointPages>(e);
@@ -80,10 +133,7 @@ void mark_points_changed(ecs::Registry& reg, ecs::Entity e, PointColumn column, 
     }
     p->cloud_version = c.version;
     ++p->clock;
-    if (count == 0 || first >= n) return;
-    const std::size_t last = std::min(n, first + count) - 1;
-    auto& s = p->stamps[std::size_t(column)];
-    for (std::size_t page = first >> kPageShift; page <= last >> kPageShift; ++page) s[page] = p->clock;
+    stamp_pages(*p, column, first, count);
 }
 
 const PointPages* refresh_point_pages(ecs::Registry& reg, ecs::Entity e) {

@@ -57,15 +57,34 @@ constexpr PageRange page_range(std::size_t page, std::size_t points) {
 }
 
 // Column groups with their own stamps. Surface splats use position, frame (normals, axis_u, axis_v) and
-// colour (colours, uvs, uv axes); Gaussians use position (centres), scale, rotation, opacity and sh.
-enum class PointColumn : std::uint8_t { position, frame, colour, scale, rotation, opacity, sh };
-inline constexpr std::size_t kPointColumns = 7;
+// colour (colours, uvs, uv axes); Gaussians use position (centres), scale, rotation, opacity and sh. Both
+// kinds share the optional groups (point_columns.h): selection (the kPointSelected bit of PointFlags),
+// visibility (its kPointHidden and kPointDeleted bits: one byte, two facts, so a selection change never
+// looks like a visibility change) and weight (PointWeights). Which named column belongs to which group:
+// point_columns.h, kSurfaceColumns / kGaussianColumns / kOptionalColumns.
+enum class PointColumn : std::uint8_t {
+    position,
+    frame,
+    colour,
+    scale,
+    rotation,
+    opacity,
+    sh,
+    selection,
+    visibility,
+    weight
+};
+inline constexpr std::size_t kPointColumns = 10;
 
 // Per-cloud record of its pages, a plain component beside SplatCloud or GaussianCloud.
 struct PointPages {
     std::size_t points = 0;           // the cloud's size the pages cover
     std::uint64_t cloud_version = 0;  // the cloud component's change stamp this record is in step with
-    std::uint64_t clock = 0;          // bumped by every mark; page stamps are values of it
+    // The optional components' change stamps (registry.version<PointFlags>, <PointWeights>; 0: absent) as
+    // of the last mark of their groups. A consumer that finds another stamp on the entity takes the group
+    // as changed everywhere (an unmarked edit), as an unmarked cloud change is a replacement.
+    std::uint64_t flags_version = 0, weights_version = 0;
+    std::uint64_t clock = 0;  // bumped by every mark; page stamps are values of it
     // stamps[column][page]: the clock of the last change of that column in that page.
     std::array<std::vector<std::uint64_t>, kPointColumns> stamps;
     // Rest box of each page in the cloud's frame (origin + position, double), finite points only; a page
@@ -82,8 +101,21 @@ inline bool page_box_empty(const PointPages& p, std::size_t page) {
 // GaussianCloud): stamps those pages of that column and the cloud component (registry.patch), and keeps
 // the record in step with the cloud's stamp. Call after writing. A cloud whose size changed, or with no
 // record yet, is marked replaced instead. Does nothing when e has no cloud.
+//
+// The optional groups (selection, visibility, weight) stamp their component (PointFlags or PointWeights,
+// registry.mark_changed, when present) instead of the cloud, so a selection or weight edit never makes
+// the cloud look replaced (no re-upload of its rest data, no new picking scene). The component must hold
+// one value per point or none (absent or empty: the default everywhere, e.g. after a clear). Another size
+// is a caller's bug that must not become a read past the end: it is logged as a warning naming the entity
+// and both sizes, and every page of that group is stamped (consumers then see the column as absent:
+// point_columns.h's views are empty for a column of the wrong size).
 void mark_points_changed(ecs::Registry& registry, ecs::Entity e, PointColumn column, std::size_t first,
                          std::size_t count);
+
+// True for the groups of the optional columns (selection, visibility, weight).
+constexpr bool optional_point_column(PointColumn c) {
+    return c == PointColumn::selection || c == PointColumn::visibility || c == PointColumn::weight;
+}
 // The whole cloud was replaced (loaded, resized, rebuilt): every page of every column is stamped.
 void mark_cloud_replaced(ecs::Registry& registry, ecs::Entity e);
 
