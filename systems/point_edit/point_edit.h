@@ -25,8 +25,8 @@
 // derived or exact-surface components (ExactSphere/ExactMesh describe the whole source, not the part).
 //
 // Change stamps: every flag edit goes through registry.patch<PointFlags>() (its stamp moves) and
-// mark_points_changed() on the pages it touched; a new entity is mark_cloud_replaced(). The cloud's
-// arrays are never written by these operations, so nothing is re-deformed.
+// mark_points_changed() on the pages it touched (PointColumn::selection / visibility); a new entity is
+// mark_cloud_replaced(). The cloud's arrays are never written by these operations, so nothing is re-deformed.
 //
 // Undo and redo. The steps are linear like the editor's undo stack: undo() is called on the state the
 // step left, redo() on the state before it. A step stores the points it changed (PointSet: per touched
