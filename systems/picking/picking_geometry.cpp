@@ -14,6 +14,7 @@
 
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
+#include "runtime/scene/point_columns.h"
 
 namespace sffd::picking::detail {
 namespace {
@@ -30,14 +31,19 @@ float ellipse_bounding_radius(const glm::vec3& a, const glm::vec3& b) {
     return std::sqrt(std::max(0.0f, 0.5f * (A + C) + std::sqrt(half_diff * half_diff + B * B)));
 }
 
-// Intersection/occlusion filter: Embree tested the bounding disc; keep the hit only when the hit point
-// lies in the splat's ellipse, i.e. when its least-squares coordinates (x, y) in the basis (a, b)
-// satisfy x² + y² <= 1.
+// Intersection/occlusion filter: a hidden or deleted point is never hit. Discs: Embree tested the
+// bounding disc; keep the hit only when the hit point lies in the splat's ellipse, i.e. when its
+// least-squares coordinates (x, y) in the basis (a, b) satisfy x² + y² <= 1.
 void ellipse_filter(const RTCFilterFunctionNArguments* args) {
     const auto* rec = static_cast<const GeomRecord*>(args->geometryUserPtr);
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] != -1) continue;
         const unsigned prim = RTCHitN_primID(args->hit, args->N, i);
+        if (rec->is_gone(prim)) {
+            args->valid[i] = 0;
+            continue;
+        }
+        if (!rec->discs) continue;
         const float t = RTCRayN_tfar(args->ray, args->N, i);
         const glm::vec3 org{RTCRayN_org_x(args->ray, args->N, i), RTCRayN_org_y(args->ray, args->N, i),
                             RTCRayN_org_z(args->ray, args->N, i)};
@@ -82,6 +88,7 @@ void ellipsoid_bounds(const RTCBoundsFunctionArguments* args) {
 void ellipsoid_intersect(const RTCIntersectFunctionNArguments* args) {
     const auto* rec = static_cast<const GeomRecord*>(args->geometryUserPtr);
     const GeomRecord::Ellipsoid& e = rec->ellipsoids[args->primID];
+    if (rec->is_gone(e.index)) return;  // hidden or deleted: never hit
     const PickEllipsoid pe = to_pick_ellipsoid(e);
     RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, args->N);
     RTCHitN* hit = RTCRayHitN_HitN(args->rayhit, args->N);
@@ -116,6 +123,7 @@ void ellipsoid_intersect(const RTCIntersectFunctionNArguments* args) {
 
 void ellipsoid_occluded(const RTCOccludedFunctionNArguments* args) {
     const auto* rec = static_cast<const GeomRecord*>(args->geometryUserPtr);
+    if (rec->is_gone(rec->ellipsoids[args->primID].index)) return;
     const PickEllipsoid pe = to_pick_ellipsoid(rec->ellipsoids[args->primID]);
     for (unsigned i = 0; i < args->N; ++i) {
         if (args->valid[i] != -1) continue;
@@ -269,13 +277,13 @@ void create_geometry(RTCDevice device, RTCScene scene, GeomRecord& rec, RTCGeome
     rtcSetGeometryBuildQuality(rec.geometry, RTC_BUILD_QUALITY_LOW);
     rtcSetNewGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT4, 4 * sizeof(float),
                             count);
-    if (rec.discs) {
+    if (rec.discs)
         rtcSetNewGeometryBuffer(rec.geometry, RTC_BUFFER_TYPE_NORMAL, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
                                 count);
-        rtcSetGeometryUserData(rec.geometry, &rec);
-        rtcSetGeometryIntersectFilterFunction(rec.geometry, ellipse_filter);
-        rtcSetGeometryOccludedFilterFunction(rec.geometry, ellipse_filter);
-    }
+    // Discs test their ellipse; every point geometry drops its gone points.
+    rtcSetGeometryUserData(rec.geometry, &rec);
+    rtcSetGeometryIntersectFilterFunction(rec.geometry, ellipse_filter);
+    rtcSetGeometryOccludedFilterFunction(rec.geometry, ellipse_filter);
     rec.id = rtcAttachGeometry(scene, rec.geometry);
 }
 
@@ -295,6 +303,20 @@ void create_gaussian_geometry(RTCDevice device, RTCScene scene, GeomRecord& rec)
 void release_geometry(RTCScene scene, RecordMap& map, RecordMap::iterator it) {
     rtcDetachGeometry(scene, it->second->id);
     map.erase(it);
+}
+
+void sync_gone(GeomRecord& rec, const ecs::Registry& registry, ecs::Entity e) {
+    const std::uint64_t version = registry.version<PointFlags>(e);
+    if (version == rec.flags_version && (version != 0 || rec.gone.empty())) return;
+    rec.flags_version = version;
+    rec.gone.clear();
+    const PointFlags* flags = registry.try_get<PointFlags>(e);
+    if (!flags) return;
+    bool any = false;
+    for (std::uint8_t b : flags->bits) any |= (b & kPointGone) != 0;
+    if (!any) return;
+    rec.gone.resize(flags->bits.size());
+    for (std::size_t i = 0; i < flags->bits.size(); ++i) rec.gone[i] = (flags->bits[i] & kPointGone) != 0;
 }
 
 RTCRayHit make_rayhit(const glm::dvec3& origin, const glm::dvec3& direction, double tfar) {

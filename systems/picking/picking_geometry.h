@@ -46,6 +46,12 @@ struct GeomRecord {
         float opacity;        // linear, for the blending weights of the most-visible pick
     };
     std::vector<Ellipsoid> ellipsoids;
+    // Point clouds with PointFlags: 1 for a point that is hidden or deleted (never hit), by point index
+    // (a disc's primitive id, an ellipsoid's `index`); empty when no point is gone. Of the flags at
+    // `flags_version`: a flag edit rewrites this, never the geometry.
+    std::vector<std::uint8_t> gone;
+    std::uint64_t flags_version = 0;
+    bool is_gone(std::size_t point) const { return point < gone.size() && gone[point] != 0; }
 
     GeomRecord() = default;
     GeomRecord(const GeomRecord&) = delete;
@@ -93,6 +99,8 @@ void create_geometry(RTCDevice device, RTCScene scene, GeomRecord& rec, RTCGeome
 // primitive at the scene commit and the intersect / occluded callbacks for the rays that reach its box.
 void create_gaussian_geometry(RTCDevice device, RTCScene scene, GeomRecord& rec);
 void release_geometry(RTCScene scene, RecordMap& map, RecordMap::iterator it);
+// Brings rec.gone in step with entity e's PointFlags (a copy of the gone bits, by point index).
+void sync_gone(GeomRecord& rec, const ecs::Registry& registry, ecs::Entity e);
 RTCRayHit make_rayhit(const glm::dvec3& origin, const glm::dvec3& direction, double tfar);
 
 // Detaches the geometry of every record whose entity died or lost its `C` (its id becomes free for reuse),

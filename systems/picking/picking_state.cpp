@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "runtime/scene/components.h"
+#include "runtime/scene/point_columns.h"
 #include "systems/gaussian/components.h"
 #include "systems/picking/picking_geometry.h"
 #include "systems/picking/world_space.h"
@@ -28,7 +29,7 @@ struct PickingState::Impl {
     glm::dvec3 anchor{0.0};
     bool anchored = false;
     // Registry stamps of the last refresh: when none moved, refresh() returns at once.
-    std::array<std::uint64_t, 5> seen{~0ull, ~0ull, ~0ull, ~0ull, ~0ull};
+    std::array<std::uint64_t, 6> seen{~0ull, ~0ull, ~0ull, ~0ull, ~0ull, ~0ull};
     double seen_fraction = -1.0;
     PickCache cache;  // what picking read back or deformed itself, for clouds of both kinds
     Stats stats;
@@ -76,7 +77,10 @@ bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
         }
         Stamp stamp{int(src.kind), src.version, registry.version<Transform>(e), 0.0, src.positions.size()};
         auto it = gaussian_records.find(e.bits());
-        if (it != gaussian_records.end() && it->second->stamp == stamp) continue;
+        if (it != gaussian_records.end() && it->second->stamp == stamp) {
+            sync_gone(*it->second, registry, e);
+            continue;
+        }
         std::vector<GeomRecord::Ellipsoid> ellipsoids = gaussian_ellipsoids(src, model, anchor);
         // The primitive count is that of the pickable Gaussians: a different count gets a new geometry.
         if (it != gaussian_records.end() &&
@@ -92,12 +96,14 @@ bool PickingState::Impl::refresh_gaussians(ecs::Registry& registry) {
             auto rec = std::make_unique<GeomRecord>();
             rec->entity = e;
             rec->ellipsoids = std::move(ellipsoids);
+            sync_gone(*rec, registry, e);  // before the geometry: the callbacks read it from the commit on
             create_gaussian_geometry(device, surfaces, *rec);
             gaussian_ids[rec->id] = e;
             it = gaussian_records.emplace(e.bits(), std::move(rec)).first;
             ++stats.geometries_created;
         } else {
             it->second->ellipsoids = std::move(ellipsoids);
+            sync_gone(*it->second, registry, e);
             rtcCommitGeometry(it->second->geometry);  // bounds are re-read at the scene commit
             ++stats.geometries_updated;
         }
@@ -123,7 +129,10 @@ bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
         const Stamp stamp{int(src.kind), src.version, registry.version<Transform>(e), 0.0,
                           src.positions.size()};
         auto it = surface_records.find(e.bits());
-        if (it != surface_records.end() && it->second->stamp == stamp) continue;
+        if (it != surface_records.end() && it->second->stamp == stamp) {
+            sync_gone(*it->second, registry, e);
+            continue;
+        }
         const bool discs = src.normals.size() == src.positions.size();
         if (it != surface_records.end() &&
             (it->second->stamp.count != stamp.count || it->second->discs != discs || stamp.count == 0)) {
@@ -147,6 +156,7 @@ bool PickingState::Impl::refresh_surfaces(ecs::Registry& registry) {
             ++stats.geometries_updated;
         }
         it->second->stamp = stamp;
+        sync_gone(*it->second, registry, e);
         fill_surface(*it->second, src, model_matrix(registry.try_get<Transform>(e)), anchor);
         changed = true;
     }
@@ -205,10 +215,10 @@ bool PickingState::Impl::refresh_controls(ecs::Registry& registry, double fracti
 bool PickingState::refresh(ecs::Registry& registry, const PickSettings& settings) {
     Impl& s = *m_impl;
     ++s.stats.refresh_calls;
-    const std::array<std::uint64_t, 5> now{
-        registry.storage_version<SplatCloud>(), splat_source_storage_version(registry),
-        registry.storage_version<Transform>(), registry.storage_version<Lattice>(),
-        gaussian_source_storage_version(registry)};
+    const std::array<std::uint64_t, 6> now{
+        registry.storage_version<SplatCloud>(),    splat_source_storage_version(registry),
+        registry.storage_version<Transform>(),     registry.storage_version<Lattice>(),
+        gaussian_source_storage_version(registry), registry.storage_version<PointFlags>()};
     if (now == s.seen && settings.control_point_radius_fraction == s.seen_fraction) return false;
     const bool a = s.refresh_surfaces(registry);
     const bool b = s.refresh_controls(registry, settings.control_point_radius_fraction);
