@@ -5,7 +5,8 @@
 //
 // The selection is the kPointSelected bit of the cloud's PointFlags (runtime/scene/point_columns.h), by
 // point index, so it survives deformation and animation. Hidden and deleted points (point_gone()) are
-// never selected: no tool nominates them, and every operation leaves them unselected.
+// never selected: no tool nominates them, and the operations that rewrite the selection through a mode
+// or a command (commit, all, none, invert) also clear a bit a gone point still carries.
 //
 // What the user sees is what is selected: positions are those picking sees (systems/picking's
 // splat_source / gaussian_source: the deformed CPU output when current, a GPU-only output read back, a
@@ -22,13 +23,15 @@
 //   undo.push(d);  ...  apply_delta(registry, cloud, undo.top());  // undo (and again: redo)
 //
 // Visible only: a screen tool's candidates are the points on the visible surface, decided by a CPU depth
-// buffer built from the same shown positions (not Embree): every non-gone point writes its eye depth into
-// the pixels its footprint disc covers (radius: its footprint, see below, projected, clamped to
-// kMaxFootprintPx), over the tool's screen box only, and a point is visible when its depth is within
-// `depth_tolerance` footprint radii of the buffer at its centre pixel. Why not Embree: picking's scene is
-// rebuilt after every deformation (0.7 s for 1M Gaussians) and answers one ray at a time, where a box
-// asks about up to every point; the buffer costs one pass over the points the box can see. X-ray
-// (visible_only = false): every point in the region.
+// buffer built from the same shown positions (not Embree), over the tool's screen box only: every
+// non-gone point writes its footprint (a splat's disc, or a flat Gaussian's disc across its shortest
+// axis, as a plane in 3D: the depth where each pixel's ray meets it; a round Gaussian: a screen disc of
+// its projected radius at its centre's depth; clipped to kMaxFootprintPx), and a point is visible when
+// its depth is within `depth_tolerance` footprint radii of the buffer at its centre pixel. Why not Embree:
+// picking's scene is rebuilt after every deformation (0.7 s for 1M Gaussians) and answers one ray at a
+// time, where a box asks about up to every point; the buffer costs one pass over the points the box can
+// see. X-ray (visible_only = false): every point in the region. Screen tools take only points in front
+// of the eye whose centre lies inside the viewport.
 //
 // Footprint radius r of a point (world units, through the Transform's largest scale): surface splats the
 // longer splat axis (the disc picking trims to the ellipse); Gaussians kFootprintSigmas standard
