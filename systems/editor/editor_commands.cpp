@@ -80,6 +80,35 @@ bool apply_twist(ecs::Registry& registry, EditorState& state, double degrees) {
     return true;
 }
 
+bool apply_scale(ecs::Registry& registry, EditorState& state, const glm::dmat3& scale_world) {
+    Camera* camera = camera_of(registry, state);
+    if (!camera || state.drag.kind != Drag::Kind::none) return false;
+    const Tool tool = state.tool;
+    state.tool = Tool::scale;
+    Drag drag;
+    const bool ok = begin_tool_drag(registry, state, *camera, drag);
+    state.tool = tool;
+    if (!ok) return false;
+    drag.scale_world = scale_world;
+    apply_drag(registry, drag);
+    finish_tool_drag(registry, state, drag);
+    return true;
+}
+
+void toggle_proportional(EditorState& state) {
+    state.proportional.enabled = !state.proportional.enabled;
+    say(state,
+        state.proportional.enabled
+            ? log::str("proportional editing on (", falloff_name(state.proportional.falloff), ", radius ",
+                       state.proportional.radius, "; wheel or PageUp/PageDown while dragging)")
+            : std::string("proportional editing off"));
+}
+
+void cycle_falloff(EditorState& state) {
+    state.proportional.falloff = Falloff((int(state.proportional.falloff) + 1) % falloff_count);
+    say(state, log::str("proportional falloff: ", falloff_name(state.proportional.falloff)));
+}
+
 void reset_lattice(ecs::Registry& registry, EditorState& state) {
     if (!active_lattice(registry, state)) return;
     const ecs::Entity e = state.active_lattice;
@@ -162,6 +191,10 @@ void toggle_play(ecs::Registry& registry, EditorState& state) {
 
 bool key_last_edit(ecs::Registry& registry, EditorState& state) {
     const LastEdit& edit = state.last_edit;
+    if (!edit.not_keyable.empty()) {
+        say(state, "set key: " + edit.not_keyable);
+        return false;
+    }
     if (edit.kind == LastEdit::Kind::none || !registry.valid(edit.lattice) ||
         !registry.has<Lattice>(edit.lattice)) {
         say(state, "set key: stretch or twist something first");

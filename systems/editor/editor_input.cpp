@@ -48,6 +48,11 @@ int parse_numbers(const std::string& text, double (&v)[3]) {
     return junk ? -1 : n;  // trailing junk: not a number list
 }
 
+// The scale by three factors along the world axes.
+glm::dmat3 diagonal(const double (&v)[3]) {
+    return glm::dmat3(glm::dvec3(v[0], 0.0, 0.0), glm::dvec3(0.0, v[1], 0.0), glm::dvec3(0.0, 0.0, v[2]));
+}
+
 const char* typed_char(const std::string& key) {
     static const char* digits[] = {"0", "1", "2", "3", "4", "5", "6", "7", "8", "9"};
     for (const char* d : digits)
@@ -62,8 +67,8 @@ const char* typed_char(const std::string& key) {
 std::string typed_prompt(const EditorState& state) {
     const TypedEntry& t = state.typed;
     const AxisMode axis = t.tool == Tool::twist ? state.twist_axis : state.move_axis;
-    return std::string(t.tool == Tool::twist ? "twist " : "move ") + axis_mode_name(axis) + ": " + t.text +
-           "_  (Enter applies, Esc cancels)";
+    const char* verb = t.tool == Tool::twist ? "twist " : t.tool == Tool::scale ? "scale " : "move ";
+    return std::string(verb) + axis_mode_name(axis) + ": " + t.text + "_  (Enter applies, Esc cancels)";
 }
 
 void apply_typed(ecs::Registry& registry, EditorState& state) {
@@ -79,6 +84,16 @@ void apply_typed(ecs::Registry& registry, EditorState& state) {
     const AxisMode axis = state.move_axis;
     const bool along =
         axis == AxisMode::x || axis == AxisMode::y || axis == AxisMode::z || axis == AxisMode::custom;
+    if (t.tool == Tool::scale) {
+        const Camera* camera = camera_of(registry, state);
+        if (n == 1 && camera)
+            apply_scale(registry, state, scale_matrix(axis, *camera, state.custom_axis, v[0]));
+        else if (n == 3) apply_scale(registry, state, diagonal(v));
+        else
+            say(state, "typed scale '" + t.text +
+                           "': give one factor (along x, y or z after the axis key) or sx sy sz");
+        return;
+    }
     if (n == 1 && along) {
         const Camera* camera = camera_of(registry, state);
         if (camera) apply_stretch(registry, state, axis_direction(axis, *camera, state.custom_axis) * v[0]);
@@ -132,6 +147,12 @@ bool handle_typed_key(ecs::Registry& registry, EditorState& state, const InputEv
 
 // A replayed slider gesture (`set material.<field> <value>`); the parser accepted only known fields.
 void handle_set(ecs::Registry& registry, EditorState& state, const InputEvent& e) {
+    if (is_proportional_field(e.key)) {
+        set_proportional_field(state.proportional, e.key, e.value);
+        const ProportionalSettings& p = state.proportional;
+        return say(state, log::str("proportional editing ", p.enabled ? "on" : "off", " (",
+                                   falloff_name(p.falloff), ", radius ", p.radius, ")"));
+    }
     const std::optional<MaterialFieldInfo> field = material_field(e.key);
     const ecs::Entity target = material_target(registry, state);
     if (!field || !set_material_value(registry, state, target, field->field, static_cast<float>(e.value)))
@@ -145,7 +166,11 @@ void handle_text(ecs::Registry& registry, EditorState& state, const std::string&
     const int n = scan_numbers(text, v);  // the leading numbers; what follows them is not checked here
     if (state.tool == Tool::twist && n >= 1) apply_twist(registry, state, v[0]);
     else if (state.tool == Tool::move && n == 3) apply_stretch(registry, state, {v[0], v[1], v[2]});
-    else say(state, "numeric entry '" + text + "': move takes 'dx dy dz', twist takes 'degrees'");
+    else if (state.tool == Tool::scale && n == 1) apply_scale(registry, state, glm::dmat3(v[0]));
+    else if (state.tool == Tool::scale && n == 3) apply_scale(registry, state, diagonal(v));
+    else
+        say(state, "numeric entry '" + text +
+                       "': move takes 'dx dy dz', twist takes 'degrees', scale takes 'factor' or 'sx sy sz'");
 }
 
 void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e) {
@@ -153,6 +178,9 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
     const std::string& k = e.key;
     if (state.drag.kind != Drag::Kind::none) {
         if (k == "escape") cancel_drag(registry, state);
+        // Proportional radius while dragging (Blender's transform keys): PageUp larger, PageDown smaller.
+        else if (k == "pageup") change_proportional_radius(registry, state, proportional_radius_step);
+        else if (k == "pagedown") change_proportional_radius(registry, state, 1.0 / proportional_radius_step);
         return;  // no other shortcuts mid-gesture
     }
     if (state.typed.active && handle_typed_key(registry, state, e)) return;
@@ -169,10 +197,10 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
         return;
     }
     if (k == "q") state.tool = Tool::select, say(state, "tool: select");
-    else if (k == "g" || k == "w" || k == "r") {
-        state.tool = k == "r" ? Tool::twist : Tool::move;
+    else if (k == "g" || k == "w" || k == "r" || (k == "s" && !shift)) {
+        state.tool = k == "r" ? Tool::twist : k == "s" ? Tool::scale : Tool::move;
         state.typed = TypedEntry{true, state.tool, {}};
-        say(state, std::string(k == "r" ? "tool: twist" : "tool: move") +
+        say(state, std::string("tool: ") + tool_name(state.tool) +
                        " (drag, or type a value: x/y/z axis, number, Enter)");
     } else if (k == "b") state.tool = Tool::brush, say(state, "tool: brush");
     else if (k == "x") set_axis(state, AxisMode::x);
@@ -194,9 +222,13 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
         state.lattice_cage_only = !state.lattice_cage_only,
         say(state, state.lattice_cage_only ? "lattice: outer cage only" : "lattice: all points and cells");
     else if (k == "t") state.xray = !state.xray, say(state, state.xray ? "x-ray on" : "x-ray off");
-    else if (k == "o")
+    else if (k == "o" && shift) cycle_falloff(state);
+    else if (k == "o") toggle_proportional(state);
+    else if (k == "period")  // Blender's pivot key
         state.pivot_mode =
-            state.pivot_mode == PivotMode::centroid ? PivotMode::picked_point : PivotMode::centroid;
+            state.pivot_mode == PivotMode::centroid ? PivotMode::picked_point : PivotMode::centroid,
+        say(state,
+            state.pivot_mode == PivotMode::centroid ? "pivot: selection centroid" : "pivot: picked point");
     else if (k == "home") reset_lattice(registry, state);
     else if (k == "k" && shift) delete_keys_at_time(registry, state);
     else if (k == "k") key_last_edit(registry, state);
@@ -228,7 +260,7 @@ void adapt_quality(ecs::Registry& registry, EditorState& state, bool scrolled) {
     }
     const Drag::Kind k = state.drag.kind;
     bool moving = scrolled || k == Drag::Kind::orbit || k == Drag::Kind::pan || k == Drag::Kind::move ||
-                  k == Drag::Kind::twist || k == Drag::Kind::brush;
+                  k == Drag::Kind::twist || k == Drag::Kind::brush || k == Drag::Kind::scale;
     registry.view<AnimationState>().each([&](ecs::Entity, AnimationState& a) { moving |= a.playing; });
     if (const Camera* cam = camera_of(registry, state)) {
         const Camera& l = state.last_camera;
@@ -291,7 +323,13 @@ void editor_input_system(ecs::Registry& registry, const FrameContext& frame) {
                 break;
             case InputKind::press: handle_press(registry, *state, *camera, e); break;
             case InputKind::release: handle_release(registry, *state, *camera, e); break;
-            case InputKind::scroll: zoom(*camera, e.scroll); break;
+            case InputKind::scroll:
+                // While a tool drag with proportional editing runs, the wheel sizes the radius (Blender:
+                // wheel up smaller, down larger); otherwise it zooms.
+                if (!change_proportional_radius(registry, *state,
+                                                std::pow(proportional_radius_step, -e.scroll)))
+                    zoom(*camera, e.scroll);
+                break;
             case InputKind::key: handle_key(registry, *state, e); break;
             case InputKind::text: handle_text(registry, *state, e.key); break;
             case InputKind::set: handle_set(registry, *state, e); break;

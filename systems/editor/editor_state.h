@@ -19,6 +19,7 @@
 #include "systems/editor/gizmo.h"
 #include "systems/editor/input_record.h"
 #include "systems/editor/lattice_tools.h"
+#include "systems/editor/proportional.h"
 #include "systems/editor/undo_stack.h"
 #include "systems/ffd/components.h"
 #include "systems/picking/screen_view.h"
@@ -26,7 +27,7 @@
 
 namespace sffd::editor {
 
-enum class Tool : std::uint8_t { select, move, twist, brush };
+enum class Tool : std::uint8_t { select, move, twist, brush, scale };
 const char* tool_name(Tool tool);
 
 enum class PivotMode : std::uint8_t { centroid, picked_point };
@@ -56,6 +57,9 @@ struct LastEdit {
     double angle = 0.0;  // radians
     glm::dvec3 axis{0.0, 0.0, 1.0};
     glm::dvec3 pivot{0.0};
+    // Why the last edit cannot be keyed (a scale; a proportional edit that moved neighbours by their
+    // falloff: a track keys one stretch or twist of one point set); empty when it can.
+    std::string not_keyable;
 };
 
 // What a held mouse button is doing.
@@ -68,7 +72,8 @@ struct Drag {
         pan,
         move,
         twist,
-        brush
+        brush,
+        scale
     } kind = Kind::none;
     MouseButton button = MouseButton::left;
     std::uint8_t modifiers = 0;
@@ -88,6 +93,13 @@ struct Drag {
     glm::dvec3 axis_world{0.0, 0.0, 1.0};
     double angle = 0.0;  // accumulated twist (unbounded)
     glm::dvec3 displacement_world{0.0};
+    glm::dmat3 scale_world{1.0};  // scale: the linear map about the pivot, world axes
+    // Proportional editing (proportional.h): the settings of this drag (the wheel and PageUp/PageDown
+    // change its radius), each control point's world distance to the nearest edited point at press, and
+    // the pinned points no falloff moves (empty: none).
+    ProportionalSettings proportional;
+    std::vector<double> distance;
+    std::vector<std::uint8_t> excluded;
 };
 
 // Typed values after g / r (Blender habit: `g z 0.2 Enter`, `r x 45 Enter`). Pressing g/w/r starts an
@@ -116,6 +128,7 @@ struct EditorState {
     bool xray = false;
     bool show_lattice = true;
     bool lattice_cage_only = false;
+    ProportionalSettings proportional;  // `o` toggles, shift+o cycles the falloff (proportional.h)
     // Preview while moving: while the camera or the lattice moves (orbit/pan/wheel, tool drags, brush,
     // playback) the renderer draws in preview quality; after `refine_after` still frames it refines to
     // the quality the view started with (RenderSettings::quality; `--quality preview` stays preview).

@@ -17,6 +17,7 @@ const char* tool_name(Tool tool) {
         case Tool::move: return "move";
         case Tool::twist: return "twist";
         case Tool::brush: return "brush";
+        case Tool::scale: return "scale";
     }
     return "?";
 }

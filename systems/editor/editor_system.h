@@ -55,6 +55,12 @@ void clear_selection(ecs::Registry& registry, EditorState& state);
 // settings) the editable points of the active lattice.
 bool apply_stretch(ecs::Registry& registry, EditorState& state, const glm::dvec3& displacement);
 bool apply_twist(ecs::Registry& registry, EditorState& state, double degrees);
+// Scale of the editable points about the pivot by the linear map `scale_world` (world axes: a diagonal
+// for per-axis factors), with proportional editing when it is on.
+bool apply_scale(ecs::Registry& registry, EditorState& state, const glm::dmat3& scale_world);
+// Proportional editing's settings (EditorState::proportional): `o`, shift+o, the panel and replays.
+void toggle_proportional(EditorState& state);
+void cycle_falloff(EditorState& state);
 void reset_lattice(ecs::Registry& registry, EditorState& state);  // current = rest
 void frame_selection(ecs::Registry& registry, EditorState& state);
 // World-space box of every point cloud, surface splats and Gaussians (authored positions); false when

@@ -58,6 +58,12 @@ void handle_release(ecs::Registry& registry, EditorState& state, Camera& camera,
 // Applies the gestures whose picks the picking phase answered (EditorState::pending_picks), in order.
 void apply_pending_picks(ecs::Registry& registry, EditorState& state);
 void cancel_drag(ecs::Registry& registry, EditorState& state);
+bool is_tool_drag(Drag::Kind kind);  // move, twist or scale
+// Proportional editing during a tool drag: the radius times `factor` (the wheel, PageUp/PageDown), the
+// drag applied again with it; false (nothing done) outside a tool drag or with proportional editing off.
+bool change_proportional_radius(ecs::Registry& registry, EditorState& state, double factor);
+// A scale by `factor` along the axis (x, y, z, custom), or uniform (view plane, view); world axes.
+glm::dmat3 scale_matrix(AxisMode axis, const Camera& camera, const glm::dvec3& custom_axis, double factor);
 
 // editor_input.cpp
 AnimationState* animation_state(ecs::Registry& registry, const EditorState& state);

@@ -122,13 +122,20 @@ void apply_drag(ecs::Registry& registry, const Drag& drag) {
     const glm::dmat4 model = lattice_model(registry, drag.lattice);
     const glm::dmat4 inverse = glm::inverse(model);
     std::vector<glm::dvec3> pose = drag.start_points;
+    // The edited points at weight 1 and, with proportional editing, their neighbours at their falloff.
+    const WeightedPoints moved =
+        proportional_points(drag.points, drag.distance, drag.excluded, drag.proportional);
     if (drag.kind == Drag::Kind::move) {
         const glm::dvec3 d = glm::dvec3(inverse * glm::dvec4(drag.displacement_world, 0.0));
-        stretch_points(drag.start_points, pose, drag.points, d);
+        stretch_points(drag.start_points, pose, moved.indices, moved.weights, d);
+    } else if (drag.kind == Drag::Kind::scale) {
+        const glm::dvec3 pivot = glm::dvec3(inverse * glm::dvec4(drag.pivot_world, 1.0));
+        const glm::dmat3 linear = glm::dmat3(inverse) * drag.scale_world * glm::dmat3(model);
+        scale_points(drag.start_points, pose, moved.indices, moved.weights, pivot, linear);
     } else {
         const glm::dvec3 pivot = glm::dvec3(inverse * glm::dvec4(drag.pivot_world, 1.0));
         const glm::dvec3 axis = glm::dvec3(inverse * glm::dvec4(drag.axis_world, 0.0));
-        twist_points(drag.start_points, pose, drag.points, pivot, axis, drag.angle);
+        twist_points(drag.start_points, pose, moved.indices, moved.weights, pivot, axis, drag.angle);
     }
     if (drag.animated)
         return set_unkeyed_pose(registry, drag.lattice, UnkeyedEdit{drag.clip_time, std::move(pose)});
@@ -136,14 +143,37 @@ void apply_drag(ecs::Registry& registry, const Drag& drag) {
     if (lattice.current.size() == pose.size()) lattice.current = std::move(pose);
 }
 
+bool is_tool_drag(Drag::Kind kind) {
+    return kind == Drag::Kind::move || kind == Drag::Kind::twist || kind == Drag::Kind::scale;
+}
+
+bool change_proportional_radius(ecs::Registry& registry, EditorState& state, double factor) {
+    Drag& drag = state.drag;
+    if (!is_tool_drag(drag.kind) || !drag.proportional.enabled) return false;
+    drag.proportional.radius = clamp_proportional_radius(drag.proportional.radius * factor);
+    state.proportional.radius = drag.proportional.radius;  // the next edit starts with it, as Blender's
+    apply_drag(registry, drag);
+    state.status = log::str("proportional ", falloff_name(drag.proportional.falloff), " radius ",
+                            drag.proportional.radius);
+    return true;
+}
+
 namespace {
 
 void remember_edit(ecs::Registry& registry, EditorState& state, const Drag& drag) {
     const glm::dmat4 inverse = glm::inverse(lattice_model(registry, drag.lattice));
     LastEdit& e = state.last_edit;
+    e = LastEdit{};
     e.lattice = drag.lattice;
     e.points = drag.points;
-    if (drag.kind == Drag::Kind::move) {
+    const std::size_t moved =
+        proportional_points(drag.points, drag.distance, drag.excluded, drag.proportional).indices.size();
+    if (drag.kind == Drag::Kind::scale) {
+        e.not_keyable = "a scale cannot be keyed (tracks key stretches and twists)";
+    } else if (moved != drag.points.size()) {
+        e.not_keyable = log::str("this proportional edit moved ", moved - drag.points.size(),
+                                 " neighbours by their falloff, which a track cannot key");
+    } else if (drag.kind == Drag::Kind::move) {
         e.kind = LastEdit::Kind::stretch;
         e.displacement = glm::dvec3(inverse * glm::dvec4(drag.displacement_world, 0.0));
     } else {
@@ -166,7 +196,9 @@ bool begin_tool_drag(ecs::Registry& registry, EditorState& state, const Camera& 
                        : "nothing selected to edit");
         return false;
     }
-    drag.kind = state.tool == Tool::move ? Drag::Kind::move : Drag::Kind::twist;
+    drag.kind = state.tool == Tool::move    ? Drag::Kind::move
+                : state.tool == Tool::scale ? Drag::Kind::scale
+                                            : Drag::Kind::twist;
     drag.camera = camera;
     drag.lattice = state.active_lattice;
     drag.animated = animated_lattice(registry, drag.lattice);
@@ -187,13 +219,27 @@ bool begin_tool_drag(ecs::Registry& registry, EditorState& state, const Camera& 
     drag.axis_world = axis_direction(state.twist_axis, camera, state.custom_axis);
     drag.angle = 0.0;
     drag.displacement_world = glm::dvec3(0.0);
+    drag.scale_world = glm::dmat3(1.0);
+    drag.proportional = state.proportional;
+    drag.distance.clear(), drag.excluded.clear();
+    if (drag.proportional.enabled) {
+        // World distances at the pose shown at press (Blender measures in world space); pinned points
+        // (local scope) stay where they are.
+        const glm::dmat4 model = lattice_model(registry, drag.lattice);
+        std::vector<glm::dvec3> world(drag.start_points.size());
+        for (std::size_t c = 0; c < world.size(); ++c)
+            world[c] = glm::dvec3(model * glm::dvec4(drag.start_points[c], 1.0));
+        drag.distance = nearest_edited_distance(world, drag.points);
+        if (state.scope == ToolScope::local && state.pin_outer_layer)
+            drag.excluded = outer_layer_mask(*lattice);
+    }
     return true;
 }
 
 void finish_tool_drag(ecs::Registry& registry, EditorState& state, Drag& drag) {
     if (!registry.valid(drag.lattice) || !registry.has<Lattice>(drag.lattice)) return;
     const bool is_move = drag.kind == Drag::Kind::move;
-    const char* label = is_move ? "stretch" : "twist";
+    const char* label = is_move ? "stretch" : drag.kind == Drag::Kind::scale ? "scale" : "twist";
     // Animated: the step is the un-keyed edit's change (the moved points, and its time), the lattice's
     // current being the animation's; otherwise the lattice's change.
     std::unique_ptr<Command> change;
@@ -206,8 +252,13 @@ void finish_tool_drag(ecs::Registry& registry, EditorState& state, Drag& drag) {
     if (state.undo.push(std::move(change))) {
         remember_edit(registry, state, drag);
         say(state, is_move ? log::str("stretched ", drag.points.size(), " control points")
-                           : log::str("twisted ", drag.points.size(), " control points by ",
-                                      glm::degrees(drag.angle), " degrees"));
+                   : drag.kind == Drag::Kind::scale
+                       ? log::str("scaled ", drag.points.size(), " control points")
+                       : log::str("twisted ", drag.points.size(), " control points by ",
+                                  glm::degrees(drag.angle), " degrees"));
+        if (drag.proportional.enabled)
+            state.status += log::str(" (proportional ", falloff_name(drag.proportional.falloff), ", radius ",
+                                     drag.proportional.radius, ")");
         if (state.auto_key) {
             const std::string edited = state.status;
             if (key_last_edit(registry, state)) say(state, edited + " (auto-key: " + state.status + ")");
@@ -235,7 +286,22 @@ glm::dvec3 move_displacement(const EditorState& state, const Drag& drag, glm::dv
                            axis_direction(state.move_axis, cam, state.custom_axis), drag.start, cursor);
 }
 
+// Scale from the cursor's distance to the pivot's image (Blender's scale): the distance now over the
+// distance at press; along the move axis when it is x, y, z or custom, uniform otherwise.
+glm::dmat3 scale_from_cursor(const EditorState& state, const Drag& drag, glm::dvec2 cursor) {
+    const glm::dvec2 c = glm::dvec2(project_to_pixel(drag.camera, state.viewport, drag.pivot_world));
+    const double at_press = glm::length(drag.start - c);
+    const double factor = at_press < 1.0 ? 1.0 : glm::length(cursor - c) / at_press;
+    return scale_matrix(state.move_axis, drag.camera, state.custom_axis, factor);
+}
+
 }  // namespace
+
+glm::dmat3 scale_matrix(AxisMode axis, const Camera& camera, const glm::dvec3& custom_axis, double factor) {
+    if (axis == AxisMode::view_plane || axis == AxisMode::view) return glm::dmat3(factor);
+    const glm::dvec3 a = glm::normalize(axis_direction(axis, camera, custom_axis));
+    return glm::dmat3(1.0) + (factor - 1.0) * glm::outerProduct(a, a);
+}
 
 void handle_move(ecs::Registry& registry, EditorState& state, Camera& camera, glm::dvec2 cursor) {
     Drag& drag = state.drag;
@@ -255,6 +321,10 @@ void handle_move(ecs::Registry& registry, EditorState& state, Camera& camera, gl
         case Drag::Kind::twist:
             drag.angle +=
                 drag_angle(drag.camera, state.viewport, drag.pivot_world, drag.axis_world, drag.last, cursor);
+            apply_drag(registry, drag);
+            break;
+        case Drag::Kind::scale:
+            drag.scale_world = scale_from_cursor(state, drag, cursor);
             apply_drag(registry, drag);
             break;
         case Drag::Kind::brush:
@@ -286,7 +356,7 @@ void handle_press(ecs::Registry& registry, EditorState& state, Camera& camera, c
         return;
     }
     const bool plain = (e.modifiers & (mods::shift | mods::ctrl)) == 0;
-    if (plain && (state.tool == Tool::move || state.tool == Tool::twist) &&
+    if (plain && (state.tool == Tool::move || state.tool == Tool::twist || state.tool == Tool::scale) &&
         begin_tool_drag(registry, state, camera, drag))
         return;
     if (state.tool == Tool::brush) {
@@ -317,6 +387,7 @@ void handle_release(ecs::Registry& registry, EditorState& state, Camera& camera,
             }
             break;
         case Drag::Kind::move:
+        case Drag::Kind::scale:
         case Drag::Kind::twist: finish_tool_drag(registry, state, drag); break;
         default: break;
     }
@@ -325,8 +396,7 @@ void handle_release(ecs::Registry& registry, EditorState& state, Camera& camera,
 
 void cancel_drag(ecs::Registry& registry, EditorState& state) {
     Drag& drag = state.drag;
-    if ((drag.kind == Drag::Kind::move || drag.kind == Drag::Kind::twist) && registry.valid(drag.lattice) &&
-        registry.has<Lattice>(drag.lattice)) {
+    if (is_tool_drag(drag.kind) && registry.valid(drag.lattice) && registry.has<Lattice>(drag.lattice)) {
         if (!drag.animated) registry.patch<Lattice>(drag.lattice).current = drag.start_points;
         else if (drag.before_unkeyed) set_unkeyed_pose(registry, drag.lattice, *drag.before_unkeyed);
         else registry.remove<UnkeyedEdit>(drag.lattice);

@@ -8,6 +8,7 @@
 
 #include "runtime/core/file_io.h"
 #include "systems/editor/material_edit.h"
+#include "systems/editor/proportional.h"
 
 namespace sffd::editor {
 
@@ -151,10 +152,19 @@ Result<std::vector<InputEvent>> parse_input_recording(std::string_view text, std
         } else if (kind == "set") {
             e.kind = InputKind::set;
             if (w.size() != 4) return fail("'set' takes a field and a value");
-            if (!material_field(w[2]))
+            if (!material_field(w[2]) && !is_proportional_field(w[2]))
                 return fail("unknown field '" + std::string(w[2]) + "' (" +
-                            std::string(material_field_names()) + ")");
-            if (!parse_double(w[3], e.value)) return fail("bad value '" + std::string(w[3]) + "'");
+                            std::string(material_field_names()) +
+                            ", proportional.enabled, proportional.radius, proportional.falloff)");
+            if (w[2] == "proportional.falloff") {
+                const std::optional<Falloff> f = falloff_from_name(w[3]);
+                if (!f)
+                    return fail("unknown falloff '" + std::string(w[3]) +
+                                "' (smooth, sphere, linear, sharp, constant)");
+                e.value = double(int(*f));
+            } else if (!parse_double(w[3], e.value)) {
+                return fail("bad value '" + std::string(w[3]) + "'");
+            }
             e.key = std::string(w[2]);
         } else if (kind == "text") {
             e.kind = InputKind::text;
@@ -201,7 +211,9 @@ std::string format_input_recording(std::span<const InputEvent> events) {
                 m.clear();
                 break;
             case InputKind::set:
-                out += " set " + e.key + " " + format_number(e.value);
+                out += " set " + e.key + " " +
+                       (e.key == "proportional.falloff" ? std::string(falloff_name(Falloff(int(e.value))))
+                                                        : format_number(e.value));
                 m.clear();
                 break;
         }

@@ -61,6 +61,21 @@ struct LatticeOverlayState {
     OverlayLineCache lines;
 };
 
+std::vector<glm::dvec3> proportional_circle(const Camera& camera, const glm::dvec3& centre, double radius,
+                                            int segments) {
+    const glm::dvec3 forward = glm::normalize(camera.target - camera.eye);
+    glm::dvec3 right = glm::cross(forward, camera.up);
+    if (glm::length(right) < 1e-12) right = glm::cross(forward, glm::dvec3(1.0, 0.0, 0.0));
+    right = glm::normalize(right);
+    const glm::dvec3 up = glm::cross(right, forward);
+    std::vector<glm::dvec3> out(std::size_t(std::max(segments, 3)));
+    for (std::size_t i = 0; i < out.size(); ++i) {
+        const double a = 2.0 * 3.14159265358979323846 * double(i) / double(out.size());
+        out[i] = centre + radius * (std::cos(a) * right + std::sin(a) * up);
+    }
+    return out;
+}
+
 OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const EditorState& state,
                                       ecs::Entity entity) {
     OverlayGeometry g;
@@ -130,6 +145,19 @@ OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const Edito
                 if (j < d.y && (!cage || (fi && fk))) edge(c, lattice->index(i, j + 1, k));
                 if (k < d.z && (!cage || (fi && fj))) edge(c, lattice->index(i, j, k + 1));
             }
+    // Proportional editing's radius while a tool drag of this lattice runs (Blender's circle): a circle
+    // of the radius about the pivot, facing the drag's view.
+    const Drag& drag = state.drag;
+    if (drag.lattice == entity && drag.proportional.enabled &&
+        (drag.kind == Drag::Kind::move || drag.kind == Drag::Kind::twist || drag.kind == Drag::Kind::scale)) {
+        const std::vector<glm::dvec3> circle =
+            proportional_circle(drag.camera, drag.pivot_world, drag.proportional.radius);
+        for (std::size_t i = 0; i < circle.size(); ++i) {
+            g.lines.push_back({glm::vec3(circle[i] - g.anchor), overlay_proportional, 1.0f});
+            g.lines.push_back(
+                {glm::vec3(circle[(i + 1) % circle.size()] - g.anchor), overlay_proportional, 1.0f});
+        }
+    }
     return g;
 }
 

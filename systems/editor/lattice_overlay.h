@@ -40,6 +40,12 @@ inline constexpr glm::vec4 overlay_selected{1.0f, 0.45f, 0.02f, 1.0f};
 inline constexpr glm::vec4 overlay_pinned{0.35f, 0.42f, 0.62f, 1.0f};
 inline constexpr glm::vec4 overlay_inside{0.95f, 0.95f, 0.95f, 1.0f};
 inline constexpr glm::vec4 overlay_outside{0.25f, 0.8f, 0.9f, 1.0f};
+inline constexpr glm::vec4 overlay_proportional{1.0f, 1.0f, 1.0f, 1.0f};  // the proportional radius
+
+// The proportional radius's circle: `segments` points on the circle of `radius` about `centre` in the
+// plane facing the camera (the lattice overlay draws it, as lines, while a proportional drag runs).
+std::vector<glm::dvec3> proportional_circle(const Camera& camera, const glm::dvec3& centre, double radius,
+                                            int segments = 64);
 
 OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const EditorState& state,
                                       ecs::Entity lattice);

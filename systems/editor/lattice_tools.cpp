@@ -76,4 +76,39 @@ void twist_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out,
     }
 }
 
+void stretch_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out,
+                    std::span<const std::uint32_t> indices, std::span<const double> weights,
+                    const glm::dvec3& displacement) {
+    assert(start.size() == out.size() && weights.size() == indices.size());
+    std::copy(start.begin(), start.end(), out.begin());
+    for (std::size_t i = 0; i < indices.size(); ++i)
+        out[indices[i]] = start[indices[i]] + weights[i] * displacement;
+}
+
+void twist_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out,
+                  std::span<const std::uint32_t> indices, std::span<const double> weights,
+                  const glm::dvec3& pivot, const glm::dvec3& axis, double angle) {
+    assert(start.size() == out.size() && weights.size() == indices.size());
+    std::copy(start.begin(), start.end(), out.begin());
+    if (glm::length(axis) == 0.0) return;
+    const glm::dvec3 k = glm::normalize(axis);
+    for (std::size_t i = 0; i < indices.size(); ++i) {
+        const double a = weights[i] * angle, c = std::cos(a), s = std::sin(a);
+        const glm::dvec3 v = start[indices[i]] - pivot;
+        out[indices[i]] = pivot + v * c + glm::cross(k, v) * s + k * glm::dot(k, v) * (1.0 - c);
+    }
+}
+
+void scale_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out,
+                  std::span<const std::uint32_t> indices, std::span<const double> weights,
+                  const glm::dvec3& pivot, const glm::dmat3& linear) {
+    assert(start.size() == out.size() && weights.size() == indices.size());
+    std::copy(start.begin(), start.end(), out.begin());
+    for (std::size_t i = 0; i < indices.size(); ++i) {
+        const glm::dvec3& p = start[indices[i]];
+        const glm::dvec3 scaled = pivot + linear * (p - pivot);
+        out[indices[i]] = weights[i] == 1.0 ? scaled : p + weights[i] * (scaled - p);
+    }
+}
+
 }  // namespace sffd::editor

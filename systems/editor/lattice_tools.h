@@ -41,5 +41,17 @@ void stretch_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out
 void twist_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out,
                   std::span<const std::uint32_t> indices, const glm::dvec3& pivot, const glm::dvec3& axis,
                   double angle);
+// The same with a weight per index (proportional editing, proportional.h): point indices[i] moves by
+// weights[i] times the edit (a stretch by w·d, a twist by w·angle), and scale_points moves it to
+// start + w·(pivot + L(start - pivot) - start) for the linear map L (a scale, in lattice space).
+void stretch_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out,
+                    std::span<const std::uint32_t> indices, std::span<const double> weights,
+                    const glm::dvec3& displacement);
+void twist_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out,
+                  std::span<const std::uint32_t> indices, std::span<const double> weights,
+                  const glm::dvec3& pivot, const glm::dvec3& axis, double angle);
+void scale_points(std::span<const glm::dvec3> start, std::span<glm::dvec3> out,
+                  std::span<const std::uint32_t> indices, std::span<const double> weights,
+                  const glm::dvec3& pivot, const glm::dmat3& linear);
 
 }  // namespace sffd::editor

@@ -25,6 +25,7 @@
 #include "systems/editor/pending_edits.h"
 #include "systems/editor/selection_edit.h"
 #include "systems/editor/session_state.h"
+#include "systems/editor/tool_widgets.h"
 #include "systems/ffd/components.h"
 #include "systems/picking/components.h"
 #include "systems/picking/world_space.h"
@@ -307,6 +308,7 @@ void tools_panel(ecs::Registry& registry, EditorState& state) {
         ImGui::RadioButton("twist (R)", &tool, int(Tool::twist));
         ImGui::SameLine();
         ImGui::RadioButton("brush (B)", &tool, int(Tool::brush));
+        ImGui::RadioButton("scale (S)", &tool, int(Tool::scale));
         state.tool = Tool(tool);
         int move_axis = int(state.move_axis);
         ImGui::Combo("move axis", &move_axis, "view plane\0x\0y\0z\0view\0custom\0");
@@ -326,6 +328,7 @@ void tools_panel(ecs::Registry& registry, EditorState& state) {
         ImGui::Checkbox("pin outer layer (P)", &state.pin_outer_layer);
         ImGui::SameLine();
         ImGui::Checkbox("x-ray (T)", &state.xray);
+        proportional_widgets(state);
         ImGui::Separator();
         glm::dvec3& move_by = panel_entries(registry).move_by;
         double& twist_by = panel_entries(registry).twist_by;
@@ -535,11 +538,17 @@ void status_bar(ecs::Registry& registry, EditorState& state) {
     const char* render = state.previewing                                      ? "preview while moving"
                          : state.rest_quality == int(render::Quality::preview) ? "preview"
                                                                                : "HQ";
+    const std::string proportional =
+        state.proportional.enabled
+            ? log::str(" | proportional ", falloff_name(state.proportional.falloff), " r ",
+                       state.drag.proportional.enabled ? state.drag.proportional.radius
+                                                       : state.proportional.radius)
+            : std::string();
     ImGui::Text(
-        "tool %s | axis %s | %s%s%s | %zu selected | auto-key %s%s | render %s | undo %zu/%zu | %s",
+        "tool %s | axis %s | %s%s%s%s | %zu selected | auto-key %s%s | render %s | undo %zu/%zu | %s",
         tool_name(state.tool), axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis),
         state.scope == ToolScope::local ? "local" : "global", state.pin_outer_layer ? " pinned" : "",
-        state.xray ? " x-ray" : "", selected, state.auto_key ? "ON" : "off",
+        state.xray ? " x-ray" : "", proportional.c_str(), selected, state.auto_key ? "ON" : "off",
         registry.valid(state.unkeyed) && registry.has<AnimationClip>(state.unkeyed) ? " (un-keyed edit)" : "",
         render, state.undo.position(), state.undo.size(), state.status.c_str());
     ImGui::End();
@@ -560,7 +569,7 @@ void gizmo(ecs::Registry& registry, EditorState& state) {
                     0.0f, 0, 1.0f);
         dl->AddRect(a, b, IM_COL32(255, 200, 60, 255), 0.0f, 0, 2.0f);
     }
-    if (state.tool != Tool::move && state.tool != Tool::twist) return;
+    if (state.tool != Tool::move && state.tool != Tool::twist && state.tool != Tool::scale) return;
     if (!registry.valid(state.camera) || !registry.has<Camera>(state.camera)) return;
     const ecs::Registry& cr = registry;
     const Camera& cam = cr.get<Camera>(state.camera);

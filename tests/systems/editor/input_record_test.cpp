@@ -87,7 +87,8 @@ TEST(InputRecord, ErrorsNameTheFileAndLine) {
         {"0 jump\n", "bad.txt:1: unknown event 'jump' (move, press, release, scroll, key, text, set)"},
         {"0 set material.roughness 1\n",
          "bad.txt:1: unknown field 'material.roughness' (material.specular, material.shininess, "
-         "material.base_color.r, material.base_color.g, material.base_color.b, material.base_color.a)"},
+         "material.base_color.r, material.base_color.g, material.base_color.b, material.base_color.a, "
+         "proportional.enabled, proportional.radius, proportional.falloff)"},
         {"0 set material.specular\n", "bad.txt:1: 'set' takes a field and a value"},
         {"0 set material.specular x\n", "bad.txt:1: bad value 'x'"},
         {"0\n", "bad.txt:1: expected '<frame> <event> ...'"},
