@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <list>
 #include <map>
+#include <tuple>
 #include <unordered_map>
 
 #include <nlohmann/json.hpp>
@@ -13,6 +15,7 @@
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice_json.h"
+#include "runtime/scene/point_subset.h"
 
 namespace sffd {
 namespace fs = std::filesystem;
@@ -139,6 +142,8 @@ Status load_scene_file(ecs::Registry& r, const fs::path& path) {
             r.emplace<Transform>(e, c.transform);
             r.emplace<SplatCloud>(e, std::move(c.cloud));
             r.emplace<SplatMaterial>(e, c.material);
+            if (!c.flags.bits.empty()) r.emplace<PointFlags>(e, std::move(c.flags));
+            if (!c.weights.values.empty()) r.emplace<PointWeights>(e, std::move(c.weights));
             remember(c.id, e);
         }
         if (!contents->other.positions.empty()) {
@@ -508,6 +513,9 @@ Status save_scene(const ecs::Registry& r, const fs::path& path) {
     if (!ext.empty()) scene["extensions"] = ext;
 
     std::vector<assets::GltfCloudOut> out;
+    // A saved cloud holds no deleted point (point_subset.h): a cloud with some is written from a copy
+    // without them, its flags and weights subset with it. Kept in a list so the pointers stay put.
+    std::list<std::tuple<SplatCloud, PointFlags, PointWeights>> compacted;
     for (ecs::Entity e : clouds) {
         assets::GltfCloudOut c;
         c.name = name_of(r, e, "cloud" + std::to_string(ids[e]));
@@ -515,6 +523,27 @@ Status save_scene(const ecs::Registry& r, const fs::path& path) {
         c.transform = r.try_get<Transform>(e);
         c.cloud = &r.get<SplatCloud>(e);
         c.material = r.try_get<SplatMaterial>(e);
+        c.flags = r.try_get<PointFlags>(e);
+        c.weights = r.try_get<PointWeights>(e);
+        const std::size_t n = c.cloud->size();
+        if (c.flags && !c.flags->bits.empty() && c.flags->bits.size() != n)
+            return make_error(path.string() + ": cloud '" + c.name + "': flags hold " +
+                              std::to_string(c.flags->bits.size()) + " values for " + std::to_string(n) +
+                              " points");
+        if (any_point_flagged(c.flags, n, kPointDeleted)) {
+            const auto keep = points_with(c.flags, n, 0, kPointDeleted);
+            auto cloud = subset_points(*c.cloud, keep);
+            if (!cloud) return make_error(path.string() + ": cloud '" + c.name + "': " + cloud.message());
+            auto flags = subset_points(*c.flags, n, keep);
+            auto weights =
+                c.weights ? subset_points(*c.weights, n, keep) : Result<PointWeights>(PointWeights{});
+            if (!flags || !weights)
+                return make_error(path.string() + ": cloud '" + c.name +
+                                  "': " + (!flags ? flags.message() : weights.message()));
+            auto& [sc, sf, sw] =
+                compacted.emplace_back(std::move(*cloud), std::move(*flags), std::move(*weights));
+            c.cloud = &sc, c.flags = &sf, c.weights = &sw;
+        }
         out.push_back(c);
     }
     return assets::write_gltf(path, out, scene.dump(-1, ' ', false, json::error_handler_t::replace), append);

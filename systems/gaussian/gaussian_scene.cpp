@@ -11,12 +11,14 @@
 
 #include "runtime/assets/builtin_scenes.h"
 #include "runtime/assets/formats/surface/gltf_model.h"
+#include "runtime/assets/formats/surface/gltf_point_columns.h"
 #include "runtime/assets/formats/surface/ply.h"
 #include "runtime/assets/scene.h"
 #include "runtime/core/file_io.h"
 #include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
+#include "runtime/scene/point_subset.h"
 #include "systems/gaussian/capture_up.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gaussian_deform.h"
@@ -91,34 +93,51 @@ json transform_json(const Transform& t) {
 // Embedded cloud `entry` (clouds[entry] with "embedded": true): node "<name>" (TRS = the entity's
 // Transform, extras {"sffd_gaussians": entry}) with one child "<name>.origin" (translation = origin) whose
 // mesh is one KHR_gaussian_splatting POINTS primitive.
-assets::GltfAppend embed(std::shared_ptr<const GaussianCloud> cloud, std::string name, Transform t,
-                         int entry) {
-    return
-        [cloud = std::move(cloud), name = std::move(name), t, entry](json& doc, std::string& bin) -> Status {
-            json prim;
-            if (Status s = append_primitive(doc, bin, *cloud, prim, "Gaussian cloud '" + name + "'"); !s)
+// The cloud's optional columns, written as `_FLAGS` / `_WEIGHT` on the same primitive
+// (gltf_point_columns.h); null: none.
+struct EmbeddedColumns {
+    std::shared_ptr<const PointFlags> flags;
+    std::shared_ptr<const PointWeights> weights;
+};
+
+assets::GltfAppend embed(std::shared_ptr<const GaussianCloud> cloud, std::string name, Transform t, int entry,
+                         EmbeddedColumns columns = {}) {
+    return [cloud = std::move(cloud), name = std::move(name), t, entry, columns](json& doc,
+                                                                                 std::string& bin) -> Status {
+        json prim;
+        if (Status s = append_primitive(doc, bin, *cloud, prim, "Gaussian cloud '" + name + "'"); !s)
+            return s;
+        if (columns.flags || columns.weights) {
+            if (!doc.contains("accessors")) doc["accessors"] = json::array();
+            if (!doc.contains("bufferViews")) doc["bufferViews"] = json::array();
+            if (Status s = assets::append_point_columns(
+                    doc["accessors"], doc["bufferViews"], bin, prim["attributes"], cloud->size(),
+                    columns.flags.get(), columns.weights.get(), "Gaussian cloud '" + name + "'");
+                !s)
                 return s;
-            if (!doc.contains("meshes")) doc["meshes"] = json::array();
-            if (!doc.contains("nodes")) doc["nodes"] = json::array();
-            doc["meshes"].push_back({{"name", name}, {"primitives", {prim}}});
-            const std::size_t parent = doc["nodes"].size();
-            const glm::dvec3& o = cloud->origin;
-            doc["nodes"].push_back({{"name", name},
-                                    {"translation", {t.translation.x, t.translation.y, t.translation.z}},
-                                    {"rotation", {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w}},
-                                    {"scale", {t.scale.x, t.scale.y, t.scale.z}},
-                                    {"children", {parent + 1}},
-                                    {"extras", {{"sffd_gaussians", entry}}}});
-            doc["nodes"].push_back({{"name", name + ".origin"},
-                                    {"translation", {o.x, o.y, o.z}},
-                                    {"mesh", doc["meshes"].size() - 1}});
-            doc["scenes"][0]["nodes"].push_back(parent);
-            return {};
-        };
+        }
+        if (!doc.contains("meshes")) doc["meshes"] = json::array();
+        if (!doc.contains("nodes")) doc["nodes"] = json::array();
+        doc["meshes"].push_back({{"name", name}, {"primitives", {prim}}});
+        const std::size_t parent = doc["nodes"].size();
+        const glm::dvec3& o = cloud->origin;
+        doc["nodes"].push_back({{"name", name},
+                                {"translation", {t.translation.x, t.translation.y, t.translation.z}},
+                                {"rotation", {t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w}},
+                                {"scale", {t.scale.x, t.scale.y, t.scale.z}},
+                                {"children", {parent + 1}},
+                                {"extras", {{"sffd_gaussians", entry}}}});
+        doc["nodes"].push_back({{"name", name + ".origin"},
+                                {"translation", {o.x, o.y, o.z}},
+                                {"mesh", doc["meshes"].size() - 1}});
+        doc["scenes"][0]["nodes"].push_back(parent);
+        return {};
+    };
 }
 
 // The cloud embedded for clouds[entry], with every check read_gltf makes on a KHR_gaussian_splatting file.
-GaussianCloud read_embedded(const assets::GltfModel& model, int entry, const std::string& where) {
+GaussianCloud read_embedded(const assets::GltfModel& model, int entry, const std::string& where,
+                            PointFlags& flags, PointWeights& weights) {
     const tinygltf::Model& m = model.gltf;
     int found = -1;
     for (std::size_t i = 0; i < m.nodes.size(); ++i) {
@@ -154,6 +173,10 @@ GaussianCloud read_embedded(const assets::GltfModel& model, int entry, const std
     if (!std::isfinite(g->origin.x + g->origin.y + g->origin.z))
         throw std::runtime_error(at + ": the origin node's translation is not finite");
     if (Status s = validate(*g, at); !s) throw std::runtime_error(s.message());
+    if (Status s = assets::read_point_columns(model, prims[0].attributes, g->size(),
+                                              at + " mesh " + std::to_string(child.mesh), flags, weights);
+        !s)
+        throw std::runtime_error(s.message());
     return std::move(*g);
 }
 
@@ -222,7 +245,19 @@ Result<std::string> save_gaussian_extension(const ecs::Registry& registry,
             name && !name->value.empty() ? name->value : "gaussians" + std::to_string(i);
         json c = {{"name", label}};
         const Transform* t = registry.try_get<Transform>(e);
-        if (const GaussianSource* src = registry.try_get<GaussianSource>(e); src && !src->path.empty()) {
+        // The optional columns live only in the scene file: a cloud with flags or weights is embedded with
+        // them, without its deleted points (a referenced file would bring those back).
+        const PointFlags* flags = registry.try_get<PointFlags>(e);
+        const PointWeights* weights = registry.try_get<PointWeights>(e);
+        const std::size_t n = registry.get<GaussianCloud>(e).size();
+        if (flags && !flags->bits.empty() && flags->bits.size() != n)
+            return make_error("Gaussian cloud '" + label + "': flags hold " +
+                              std::to_string(flags->bits.size()) + " values for " + std::to_string(n) +
+                              " points");
+        const bool columns =
+            any_point_flagged(flags, n, kPointSelected | kPointGone) || (weights && !weights->values.empty());
+        if (const GaussianSource* src = registry.try_get<GaussianSource>(e);
+            src && !src->path.empty() && !columns) {
             std::error_code ec;
             const fs::path base = scene_dir.empty() ? fs::current_path(ec) : fs::absolute(scene_dir, ec);
             fs::path rel = ec ? fs::path() : fs::absolute(src->path, ec).lexically_relative(base);
@@ -238,7 +273,25 @@ Result<std::string> save_gaussian_extension(const ecs::Registry& registry,
                 bake_sh_frames(*baked);
                 cloud = std::move(baked);
             }
-            append.push_back(embed(std::move(cloud), label, t ? *t : Transform{}, int(i)));
+            EmbeddedColumns kept;
+            if (flags) kept.flags = std::shared_ptr<const PointFlags>(flags, [](const PointFlags*) {});
+            if (weights)
+                kept.weights = std::shared_ptr<const PointWeights>(weights, [](const PointWeights*) {});
+            if (any_point_flagged(flags, n, kPointDeleted)) {
+                const auto keep = points_with(flags, n, 0, kPointDeleted);
+                auto sub = subset_points(*cloud, keep);
+                auto sf = subset_points(*flags, n, keep);
+                auto sw = weights ? subset_points(*weights, n, keep) : Result<PointWeights>(PointWeights{});
+                if (!sub || !sf || !sw)
+                    return make_error("Gaussian cloud '" + label + "': " +
+                                      (!sub  ? sub.message()
+                                       : !sf ? sf.message()
+                                             : sw.message()));
+                cloud = std::make_shared<GaussianCloud>(std::move(*sub));
+                kept.flags = std::make_shared<PointFlags>(std::move(*sf));
+                kept.weights = weights ? std::make_shared<PointWeights>(std::move(*sw)) : nullptr;
+            }
+            append.push_back(embed(std::move(cloud), label, t ? *t : Transform{}, int(i), std::move(kept)));
             c["embedded"] = true;
         }
         if (t) c["transform"] = transform_json(*t);
@@ -312,11 +365,15 @@ Status load_gaussian_extension(ecs::Registry& registry, std::string_view text,
             const Transform t = c.contains("transform") ? transform_from(c["transform"], where) : Transform{};
             Result<ecs::Entity> e = ecs::null_entity;
             if (embedded) {
-                GaussianCloud g = read_embedded(model, int(i), where);
+                PointFlags flags;
+                PointWeights weights;
+                GaussianCloud g = read_embedded(model, int(i), where, flags, weights);
                 const ecs::Entity x = registry.create();
                 registry.emplace<Name>(x, Name{"gaussians" + std::to_string(i)});
                 registry.emplace<Transform>(x, Transform{});
                 registry.emplace<GaussianCloud>(x, std::move(g));
+                if (!flags.bits.empty()) registry.emplace<PointFlags>(x, std::move(flags));
+                if (!weights.values.empty()) registry.emplace<PointWeights>(x, std::move(weights));
                 e = x;
             } else {
                 e = load_gaussian_entity(registry, file);

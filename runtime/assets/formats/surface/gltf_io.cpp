@@ -20,6 +20,7 @@
 #include "runtime/assets/formats/archive/fresh_array.h"
 #include "runtime/assets/formats/surface/gltf_detail.h"
 #include "runtime/assets/formats/surface/gltf_model.h"
+#include "runtime/assets/formats/surface/gltf_point_columns.h"
 #include "runtime/core/file_io.h"
 #include "runtime/core/log.h"
 #include "runtime/scene/camera.h"
@@ -458,6 +459,11 @@ Result<GltfContents> read_gltf(const fs::path& path) {
                 Geometry unused;
                 if (auto s = read_primitive(*model, prims[0], glm::dmat4(1.0), src, unused, material_map,
                                             &cloud.cloud, &cloud.material);
+                    !s)
+                    return s;
+                if (auto s = read_point_columns(*model, prims[0].attributes, cloud.cloud.size(),
+                                                src + ": splat node '" + node.name + "'", cloud.flags,
+                                                cloud.weights);
                     !s)
                     return s;
             }

@@ -26,6 +26,7 @@
 #include "runtime/assets/import.h"
 #include "runtime/core/result.h"
 #include "runtime/scene/components.h"
+#include "runtime/scene/point_columns.h"
 
 namespace sffd::assets {
 
@@ -37,6 +38,9 @@ struct GltfCloudOut {
     const Transform* transform = nullptr;
     const SplatCloud* cloud = nullptr;
     const SplatMaterial* material = nullptr;  // nullptr: the defaults
+    // The optional columns beside the cloud (gltf_point_columns.h: `_FLAGS`, `_WEIGHT`); nullptr: none.
+    const PointFlags* flags = nullptr;
+    const PointWeights* weights = nullptr;
 };
 
 // More content for the document write_gltf() builds (systems/gaussian: Gaussian clouds embedded in a scene
@@ -64,6 +68,8 @@ struct GltfCloudIn {
     Transform transform;
     SplatCloud cloud;
     SplatMaterial material;  // the cloud's material (the defaults when the file stores none)
+    PointFlags flags;        // `_FLAGS` (empty when the file stores none)
+    PointWeights weights;    // `_WEIGHT` (empty when the file stores none)
 };
 
 struct GltfContents {

@@ -11,6 +11,7 @@
 #include <stb/stb_image_write.h>
 
 #include "runtime/assets/formats/surface/gltf_detail.h"
+#include "runtime/assets/formats/surface/gltf_point_columns.h"
 #include "runtime/core/atomic_file.h"
 
 namespace sffd::assets {
@@ -145,6 +146,10 @@ Status write_gltf(const fs::path& path, const std::vector<GltfCloudOut>& clouds,
                 attributes["_AXIS_V"] = b.accessor(c.axis_v, kFloat, "VEC3", 3);
                 if (!c.uv_axes.empty()) attributes["_UV_AXES"] = b.accessor(c.uv_axes, kFloat, "VEC4", 4);
             }
+            if (Status s = append_point_columns(b.accessors, b.views, b.bin, attributes, n, out.flags,
+                                                out.weights, path.string() + ": cloud '" + out.name + "'");
+                !s)
+                return s;
         }
         json material = {
             {"name", out.name + ".material"},
