@@ -31,6 +31,11 @@ struct ResidentCloud {
     Residency state = Residency::rest;
     std::uint64_t deformed_version = 0;  // bumped whenever `deformed` is rewritten
     std::uint32_t preview_count = 0;     // elements in `deformed` in state preview_cpu
+    // The cloud's per-point weights (PointWeights, float[count]) for the compute deformations, only while it
+    // has some: uploaded and released by the deformation systems (ffd::resident_weights(), systems/ffd/
+    // ffd_gpu.h), `weights_key` the stamps they are of. A cloud without weights has no buffer here.
+    Buffer weights;
+    std::uint64_t weights_key = 0;
 
     bool is_deformed() const { return state != Residency::rest; }
     // Elements of draw_buffer(): a preview subset holds fewer than the cloud.

@@ -13,6 +13,8 @@
 #define SFFD_SSBO_STATS            6   // uint counters written by compute passes (e.g. inverted splats)
 #define SFFD_SSBO_VISIBLE_SPLATS   7   // view-space records of visible sprite splats (splat_render cull pass)
 #define SFFD_SSBO_UV_AXES          8   // vec4[]: per-splat uv derivatives along axis_u (xy) and axis_v (zw)
+#define SFFD_SSBO_WEIGHTS         13   // float[]: per-point deformation weights (PointWeights), deform passes
+                                       // of weighted clouds only (FFD_WEIGHTS; 9-12 are the raster's)
 
 // --- UBO binding points ---------------------------------------------------------------------------
 #define SFFD_UBO_FRAME             0   // camera matrices, viewport, lights

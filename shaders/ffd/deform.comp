@@ -26,6 +26,10 @@ uint deform_splat(uint id) {
     vec3 stu = ffd_local(s.center);
     bool culled = ffd_count.y != 0u || !ffd_inside(stu) ||
                   (ffd_div.w == 1 && (any(lessThanEqual(stu, ffd_cull_lo.xyz)) || any(greaterThanEqual(stu, ffd_cull_hi.xyz))));
+#ifdef FFD_WEIGHTS
+    const float weight = ffd_weights[id];
+    culled = culled || !(weight > 0.0);  // weight 0: at rest
+#endif
     if (culled) {
         splats_out[id] = s;
         return ffd_inside(stu) ? 1u : 0u;
@@ -33,6 +37,10 @@ uint deform_splat(uint id) {
     vec3 D;
     mat3 G;
     ffd_eval(stu, true, D, G);
+#ifdef FFD_WEIGHTS
+    D *= weight;  // X + w D, J_w = I + w G M⁻¹
+    G *= weight;
+#endif
     mat3 J = ffd_jacobian(G);
     float det = determinant(J);
     GpuSplat o;

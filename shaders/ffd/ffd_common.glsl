@@ -35,6 +35,13 @@ layout(std430, binding = SFFD_SSBO_CONTROL_POINTS) readonly buffer FfdControlPoi
     vec4 ffd_dp[];
 };
 
+// Per-point weights (PointWeights, runtime/scene/point_columns.h), compiled in only for clouds that have
+// them (FFD_WEIGHTS: a program of its own, so a cloud without weights runs the unweighted code): a point
+// moves by w D and its Jacobian is I + w G M⁻¹ = I + w (J − I); weight 0 (or NaN) leaves it as it is.
+#ifdef FFD_WEIGHTS
+layout(std430, binding = SFFD_SSBO_WEIGHTS) readonly buffer FfdWeights { float ffd_weights[]; };
+#endif
+
 // Where the sums read ΔP_i (FFD_DP(i), a vec3). Three kernels of the same arithmetic:
 // - FFD_CP_SHARED (compute only, GpuBernsteinKernel::shared): deform.comp copies the lattice's control
 //   points into shared memory once per work group (xyz only: 11³ points = 15,972 bytes, within GL's

@@ -19,11 +19,14 @@ namespace sffd {
 // lattice (in Deformers order) its Lattice version mixed with its entity bits, so that swapping one
 // lattice for another also counts as a change, and with both entities' Transform versions. Kept by
 // DeformedSplats and DeformedGaussians (systems/gaussian); filled by ffd::deform_inputs()
-// (systems/ffd/deform_inputs.h).
+// (systems/ffd/deform_inputs.h). `weights`: the cloud's PointWeights component stamp (0 without one): an
+// added, removed or patched weight column re-deforms the whole cloud; a range of weights edited in place
+// and marked (mark_points_changed) moves the cloud's stamp and redoes its pages.
 struct DeformInputStamps {
     std::uint64_t cloud = 0;
     std::uint64_t deformers = 0;
     std::uint64_t transform = 0;
+    std::uint64_t weights = 0;
     std::vector<std::uint64_t> lattices;
     bool operator==(const DeformInputStamps&) const = default;
 };

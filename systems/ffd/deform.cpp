@@ -64,12 +64,13 @@ static double bspline_nd(double x) {
     return 0.0;
 }
 
-ReferencePoint reference_point(const Lattice& l, const glm::dvec3& world) {
+ReferencePoint reference_point(const Lattice& l, const glm::dvec3& world, double weight) {
     ReferencePoint r;
     r.position = world;
     glm::dvec3 stu = local_coords(l, world);
     if (!inside(stu)) return r;
     r.inside = true;
+    if (!(weight > 0.0)) return r;  // a weight-0 point stays at rest (J = I)
     stu = glm::clamp(stu, glm::dvec3(0.0), glm::dvec3(1.0));
     // Per-axis weights from the closed forms (independent of the fast path's recurrences).
     std::vector<double> w[3], dw[3];
@@ -95,8 +96,9 @@ ReferencePoint reference_point(const Lattice& l, const glm::dvec3& world) {
         Dt += d * (bs * dw[1][j] * bu);
         Du += d * (bs * bt * dw[2][k]);
     });
-    r.position = world + D;
-    r.jacobian = glm::dmat3(1.0) + glm::dmat3(Ds, Dt, Du) * inverse_axes(l);
+    // Weighted (PointsIn::weights): X + w D, J_w = I + w (J - I), i.e. D and its derivatives scaled by w.
+    r.position = world + weight * D;
+    r.jacobian = glm::dmat3(1.0) + weight * (glm::dmat3(Ds, Dt, Du) * inverse_axes(l));
     return r;
 }
 
@@ -114,10 +116,12 @@ static DeformStats run_reference(const Lattice& l, const PointsIn& in, const Poi
             std::size_t n_in = 0, n_inv = 0;
             for (std::size_t p = r.begin(); p != r.end(); ++p) {
                 const glm::dvec3 local(in.positions[p]);
-                const ReferencePoint rp = reference_point(l, in.origin + local);
+                const double w = in.weights ? double(in.weights[p]) : 1.0;
+                const ReferencePoint rp = reference_point(l, in.origin + local, w);
                 const glm::dvec3 moved = local + (rp.position - (in.origin + local));
                 out.positions[p] = glm::vec3(moved);
-                if (!rp.inside) {
+                if (!rp.inside || !(w > 0.0)) {  // outside, or weight 0: unchanged
+                    n_in += rp.inside;
                     if (in.normals && out.normals) out.normals[p] = in.normals[p];
                     if (in.axis_u && out.axis_u) out.axis_u[p] = in.axis_u[p];
                     if (in.axis_v && out.axis_v) out.axis_v[p] = in.axis_v[p];

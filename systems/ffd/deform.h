@@ -38,6 +38,12 @@ struct PointsIn {
     const glm::vec3* axis_v = nullptr;
     std::size_t count = 0;
     glm::dvec3 origin{0.0};
+    // Optional per-point weight in [0, 1] (PointWeights, runtime/scene/point_columns.h): the point moves by
+    // w times its displacement and its Jacobian is J_w = I + w (J - I), which normals (cofactor of J_w),
+    // axes (J_w a) and `PointsOut::jacobians` follow. Null: weight 1 everywhere, the unweighted code. A
+    // weight of 0 (or NaN) leaves the point as it is, like a point outside. The weight is a per-point
+    // constant, so its gradient is no term of J_w.
+    const float* weights = nullptr;
 };
 struct PointsOut {
     glm::vec3* positions = nullptr;
@@ -65,13 +71,14 @@ std::size_t moved_count(const Lattice& lattice);
 Backend choose_backend(const Lattice& lattice);
 
 // Double-precision reference for one point, for tests: position (world), Jacobian (world) and whether
-// the point is inside. Unfactorised sums over all control points.
+// the point is inside. Unfactorised sums over all control points. With `weight` (PointsIn::weights):
+// position X + w D and Jacobian I + w (J - I); weight 0 (or not > 0) is the rest point and J = I.
 struct ReferencePoint {
     glm::dvec3 position{0.0};
     glm::dmat3 jacobian{1.0};
     bool inside = false;
 };
-ReferencePoint reference_point(const Lattice& lattice, const glm::dvec3& world);
+ReferencePoint reference_point(const Lattice& lattice, const glm::dvec3& world, double weight = 1.0);
 
 // A normal n carried by the Jacobian J: cof(J) n = (J⁻ᵀ det J) n, normalised (left as is when zero). The
 // one copy of that rule for the double paths (the reference backend, streamed `deform --backend

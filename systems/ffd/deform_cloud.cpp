@@ -19,7 +19,7 @@ namespace {
 // `lattices` hold valid lattices only (checked once by the caller), so nothing is reported per range.
 std::size_t deform_range(const glm::dvec3& origin, std::span<const Lattice* const> lattices,
                          DeformedSplats& out, std::size_t n, std::size_t first, std::size_t count,
-                         const SplatCloud* authored) {
+                         const SplatCloud* authored, const float* weights) {
     std::size_t inverted = 0;
     auto ptr = [n, first](std::vector<glm::vec3>& v) { return v.size() == n ? v.data() + first : nullptr; };
     auto src = [n, first](const std::vector<glm::vec3>& v) {
@@ -40,8 +40,10 @@ std::size_t deform_range(const glm::dvec3& origin, std::span<const Lattice* cons
                                                      ptr(out.axis_v),
                                                      count,
                                                      origin};
+        PointsIn weighted = in;
+        weighted.weights = weights ? weights + first : nullptr;  // the same weight for every lattice's step
         const PointsOut o{out.positions.data() + first, ptr(out.normals), ptr(out.axis_u), ptr(out.axis_v)};
-        const auto stats = deform(*lattice, in, o);
+        const auto stats = deform(*lattice, weighted, o);
         if (!stats) continue;  // validated by the caller: not reached
         read_authored = false;
         inverted += stats->inverted;
@@ -84,10 +86,15 @@ void gather(const std::vector<T>& from, std::span<const std::uint32_t> indices, 
     });
 }
 
+// The weights of a cloud of n points, or null (absent, empty, or not one per point: weight 1).
+const float* weight_column(const PointWeights* weights, std::size_t n) {
+    return weights && weights->values.size() == n && n > 0 ? weights->values.data() : nullptr;
+}
+
 }  // namespace
 
 void deform_cloud(const SplatCloud& cloud, std::span<const Lattice* const> lattices, DeformedSplats& out,
-                  const char* who) {
+                  const char* who, const PointWeights* weights) {
     const std::size_t n = cloud.size();
     // Outputs sized as their inputs (an output without its input is not written).
     auto fit = [n](std::vector<glm::vec3>& to, const std::vector<glm::vec3>& from) {
@@ -99,19 +106,21 @@ void deform_cloud(const SplatCloud& cloud, std::span<const Lattice* const> latti
     std::vector<std::uint32_t> all(page_count(n));
     for (std::size_t p = 0; p < all.size(); ++p) all[p] = std::uint32_t(p);
     out.paged.counts.assign(all.size(), {0, 0, 0});
-    deform_cloud_pages(cloud, lattices, all, out, who);
+    deform_cloud_pages(cloud, lattices, all, out, who, weights);
 }
 
 void deform_cloud_pages(const SplatCloud& cloud, std::span<const Lattice* const> lattices,
-                        std::span<const std::uint32_t> pages, DeformedSplats& out, const char* who) {
+                        std::span<const std::uint32_t> pages, DeformedSplats& out, const char* who,
+                        const PointWeights* weights) {
     const std::size_t n = cloud.size();
     out.origin = cloud.origin;
     const std::vector<const Lattice*> ok = valid_lattices(lattices, who);
+    const float* w = weight_column(weights, n);
     out.paged.counts.resize(page_count(n), {0, 0, 0});
     for (std::uint32_t p : pages) {
         const PageRange r = page_range(p, n);
         out.paged.counts[p][0] =
-            std::uint32_t(deform_range(cloud.origin, ok, out, n, r.first, r.count, &cloud));
+            std::uint32_t(deform_range(cloud.origin, ok, out, n, r.first, r.count, &cloud, w));
     }
     out.inverted = 0;
     for (const auto& c : out.paged.counts) out.inverted += c[0];
@@ -119,15 +128,22 @@ void deform_cloud_pages(const SplatCloud& cloud, std::span<const Lattice* const>
 }
 
 void deform_cloud_subset(const SplatCloud& cloud, std::span<const Lattice* const> lattices,
-                         std::span<const std::uint32_t> indices, DeformedSplats& out, const char* who) {
+                         std::span<const std::uint32_t> indices, DeformedSplats& out, const char* who,
+                         const PointWeights* weights) {
     const std::size_t n = cloud.size();
     out.origin = cloud.origin;
     gather(cloud.positions, indices, n, out.positions);
     gather(cloud.normals, indices, n, out.normals);
     gather(cloud.axis_u, indices, n, out.axis_u);
     gather(cloud.axis_v, indices, n, out.axis_v);
+    std::vector<float> kept_weights;
+    if (const float* w = weight_column(weights, n)) {
+        kept_weights.resize(indices.size());
+        for (std::size_t i = 0; i < indices.size(); ++i) kept_weights[i] = w[indices[i]];
+    }
     const std::vector<const Lattice*> ok = valid_lattices(lattices, who);
-    out.inverted = deform_range(cloud.origin, ok, out, indices.size(), 0, indices.size(), nullptr);
+    out.inverted = deform_range(cloud.origin, ok, out, indices.size(), 0, indices.size(), nullptr,
+                                kept_weights.empty() ? nullptr : kept_weights.data());
     out.cpu_valid = false;
 }
 

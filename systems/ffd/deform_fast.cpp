@@ -429,8 +429,9 @@ GroupFn pick_bernstein(int K, int coords) {
                          : pick_bernstein<3, Full>(K);
 }
 
-// Writes one group back: X' = X + D, J = I + G M⁻¹, n' = cof(J) n / |.|, axes J a. Returns inverted count.
-int finish_group(const Prepared& P, const Group& g, const PointsIn& in, const PointsOut& out, bool full) {
+// Writes one group back: X' = X + D, J = I + G M⁻¹, n' = cof(J) n / |.|, axes J a (D and G first scaled by
+// the points' weights when there are any). Returns inverted count.
+int finish_group(const Prepared& P, Group& g, const PointsIn& in, const PointsOut& out, bool full) {
     const DF d;
     const bool want_n = in.normals && out.normals, want_u = in.axis_u && out.axis_u,
                want_v = in.axis_v && out.axis_v;
@@ -449,6 +450,19 @@ int finish_group(const Prepared& P, const Group& g, const PointsIn& in, const Po
         hn::Store(x, d, nx), hn::Store(y, d, ny), hn::Store(z, d, nz);
         for (int l = 0; l < g.n; ++l) dst[g.idx[l]] = glm::vec3(nx[l], ny[l], nz[l]);
     };
+    if (in.weights) {
+        // Weighted points (PointsIn::weights): D and its derivatives G scaled by w, so X' = X + w D and
+        // J_w = I + w G M⁻¹ = I + w (J - I); w = 1 leaves both bit for bit as the unweighted code has them.
+        VF w;
+        if (g.contiguous) w = hn::LoadU(d, in.weights + g.first);
+        else {
+            for (int l = 0; l < W; ++l) nx[l] = in.weights[g.idx[l < g.n ? l : 0]];
+            w = hn::Load(d, nx);
+        }
+        for (int c = 0; c < 3; ++c) hn::Store(hn::Mul(hn::Load(d, g.D[c]), w), d, g.D[c]);
+        if (full)
+            for (int k = 0; k < 9; ++k) hn::Store(hn::Mul(hn::Load(d, g.G[k]), w), d, g.G[k]);
+    }
     VF px, py, pz;
     gather(in.positions, px, py, pz);
     scatter(out.positions, hn::Add(px, hn::Load(d, g.D[0])), hn::Add(py, hn::Load(d, g.D[1])),
@@ -543,7 +557,8 @@ DeformStats RunFast(const Prepared& P, const PointsIn& in, const PointsOut& out,
                 const bool is_inside = s >= lo && s <= hi && t >= lo && t <= hi && u >= lo && u <= hi;
                 n_in += is_inside;
                 // Unchanged points: outside, nothing moved, or (B-spline) outside the moved points' support.
-                const bool culled = !is_inside || nothing_moved ||
+                // A weight of 0 (or NaN: it fails the comparison) is a point at rest too.
+                const bool culled = !is_inside || nothing_moved || (in.weights && !(in.weights[p] > 0.0f)) ||
                                     (P.basis == LatticeBasis::bspline &&
                                      !(s > P.cull_lo[0] && s < P.cull_hi[0] && t > P.cull_lo[1] &&
                                        t < P.cull_hi[1] && u > P.cull_lo[2] && u < P.cull_hi[2]));
@@ -588,6 +603,7 @@ DeformStats RunFast(const Prepared& P, const PointsIn& in, const PointsOut& out,
                             hn::And(keep, hn::And(strictly_within(s, P.cull_lo[0], P.cull_hi[0]),
                                                   hn::And(strictly_within(t, P.cull_lo[1], P.cull_hi[1]),
                                                           strictly_within(u, P.cull_lo[2], P.cull_hi[2]))));
+                    if (in.weights) keep = hn::And(keep, hn::Gt(hn::LoadU(d, in.weights + p), zero));
                     if (!hn::AllTrue(d, keep)) {
                         for (int l = 0; l < W; ++l) one(p + std::size_t(l));
                         continue;

@@ -1,8 +1,9 @@
 // What a cloud's deformation reads, gathered once for every deforming system (ffd_system for point
 // clouds, gaussian_deform_system for Gaussians) and for picking: the live lattices of its Deformers and
-// their change stamps. A system compares the stamps with the ones its output kept and skips the cloud
-// when none moved. A lattice deforms in the world (lattice_frame.h), so both entities' Transforms are
-// inputs: moving the cloud or a lattice re-deforms, and moves the output's world bounds.
+// their change stamps (with the cloud's PointWeights stamp: the weights are an input of every deformer). A
+// system compares the stamps with the ones its output kept and skips the cloud when none moved. A lattice
+// deforms in the world (lattice_frame.h), so both entities' Transforms are inputs: moving the cloud or a
+// lattice re-deforms, and moves the output's world bounds.
 #pragma once
 
 #include <vector>
@@ -10,6 +11,7 @@
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
+#include "runtime/scene/point_columns.h"
 #include "systems/ffd/components.h"
 
 namespace sffd::ffd {
@@ -42,6 +44,7 @@ DeformInputs deform_inputs(const ecs::Registry& reg, ecs::Entity e) {
     in.stamps.cloud = reg.version<Cloud>(e);
     in.stamps.deformers = reg.version<Deformers>(e);
     in.stamps.transform = reg.version<Transform>(e);
+    in.stamps.weights = reg.version<PointWeights>(e);  // every deformer reads them (point_columns.h)
     return in;
 }
 

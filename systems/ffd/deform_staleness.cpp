@@ -154,8 +154,8 @@ RedoPlan plan_redeform(const DeformInputStamps& seen, const DeformPageRecord& re
     RedoPlan plan;  // everything
     const std::size_t n = pages.points, np = page_count(n);
     if (record.points == 0 || record.points != n || record.counts.size() != np ||
-        seen.deformers != now.deformers || record.lattices.size() != lattices.size() ||
-        pages.rest_lo.size() != np)
+        seen.deformers != now.deformers || seen.weights != now.weights ||
+        record.lattices.size() != lattices.size() || pages.rest_lo.size() != np)
         return plan;
     for (std::size_t d = 0; d < lattices.size(); ++d)
         if (!same_topology(record.lattices[d], *lattices[d])) return plan;

@@ -19,9 +19,10 @@
 //     it is redone when one of its own rest points meets the same test (a page's box can span far more
 //     than its points: a band of a sphere's surface has a box through the sphere's middle).
 // Everything: no usable record (first run, another size, another backend, a preview, the GPU path), the
-// Deformers changed, a lattice was added, removed or changed topology (a moved Transform maps the whole
-// lattice), or the cloud changed without a mark (the page record is out of step).
-// Pages outside every lattice never meet a support: deformed once (copied) and never again.
+// Deformers changed, the PointWeights component was added, removed or patched (DeformInputStamps::weights), a
+// lattice was added, removed or changed topology (a moved Transform maps the whole lattice), or the cloud
+// changed without a mark (the page record is out of step). Pages outside every lattice never meet a support:
+// deformed once (copied) and never again.
 #pragma once
 
 #include <cstdint>

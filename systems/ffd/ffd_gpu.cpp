@@ -11,6 +11,7 @@
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/gl.h"
+#include "runtime/gfx/residency.h"
 #include "runtime/gfx/shader.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/deform_kernels.h"
@@ -22,7 +23,7 @@ namespace sffd::ffd {
 struct GpuDeformer::Impl {
     std::optional<gfx::GlContext> context;  // only when created headless; destroyed last (declared first)
     detail::DeformPrograms programs;        // lattice set-up shared with the Gaussian deformer
-    gfx::Buffer stats, scratch;
+    gfx::Buffer stats, scratch, scratch_weights;
     detail::StatsReadbacks readbacks;  // queue_stats(): 2 counters each
     std::size_t scratch_capacity = 0;
     std::uint64_t sync_readbacks = 0;
@@ -61,10 +62,16 @@ GpuBernsteinKernel GpuDeformer::last_bernstein_kernel() const { return m_impl->p
 void GpuDeformer::retain_keys(const std::vector<std::uint64_t>& live) { m_impl->programs.retain_keys(live); }
 
 Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp,
-                             const glm::dvec3& cloud_origin, GLuint in, GLuint out, std::uint32_t count) {
+                             const glm::dvec3& cloud_origin, GLuint in, GLuint out, std::uint32_t count,
+                             GLuint weights) {
     if (Status s = validate(lattice); !s) return s;
     Impl& m = *m_impl;
-    auto bound = m.programs.bind(lattice, key, stamp, cloud_origin, count);
+    // A weighted cloud runs programs of its own (FFD_WEIGHTS): the unweighted ones stay as they were.
+    detail::DeformPrograms::Variant weighted;
+    weighted.id = 1;
+    weighted.defines = {{"FFD_WEIGHTS", "1"}};
+    weighted.label = ".weighted";
+    auto bound = m.programs.bind(lattice, key, stamp, cloud_origin, count, weights ? &weighted : nullptr);
     if (!bound) return bound.error();
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
     // Write-after-read across frames: the last frame's passes read `out` (the cull's SSBO loads, vertex
@@ -78,6 +85,7 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
             [&](const gfx::SsboBatch& batch) {
                 gfx::bind_ssbo_range(SFFD_SSBO_SPLATS_IN, in, batch, sizeof(gpu::GpuSplat));
                 gfx::bind_ssbo_range(SFFD_SSBO_SPLATS_OUT, out, batch, sizeof(gpu::GpuSplat));
+                if (weights) gfx::bind_ssbo_range(SFFD_SSBO_WEIGHTS, weights, batch, sizeof(float));
             });
         !s)
         return s;
@@ -146,9 +154,14 @@ Result<DeformStats> GpuDeformer::deform(const Lattice& lattice, const PointsIn& 
     if (!splats.empty())
         glNamedBufferSubData(m.scratch.id(), 0, GLsizeiptr(splats.size() * sizeof(gpu::GpuSplat)),
                              splats.data());
+    GLuint weights = 0;
+    if (in.weights && in.count > 0) {
+        gfx::fill_buffer(m.scratch_weights, "ffd.scratch_weights", in.weights, in.count * sizeof(float));
+        weights = m.scratch_weights.id();
+    }
     reset_stats();
     if (Status s = dispatch(lattice, ~std::uint64_t(0), 0, in.origin, m.scratch.id(), m.scratch.id(),
-                            std::uint32_t(in.count));
+                            std::uint32_t(in.count), weights);
         !s)
         return s.error();
     if (!splats.empty())
@@ -164,6 +177,19 @@ Result<DeformStats> GpuDeformer::deform(const Lattice& lattice, const PointsIn& 
     }
     DeformStats st = read_stats();
     return st;
+}
+
+GLuint resident_weights(gfx::ResidentCloud& cloud, std::span<const float> weights, std::uint64_t key) {
+    if (weights.empty() || weights.size() != cloud.count) {
+        cloud.weights = gfx::Buffer();  // none (or not one per point: weight 1, as the CPU path reads it)
+        cloud.weights_key = 0;
+        return 0;
+    }
+    if (!cloud.weights || cloud.weights_key != key) {
+        gfx::fill_buffer(cloud.weights, "cloud.weights", weights.data(), weights.size() * sizeof(float));
+        cloud.weights_key = key;
+    }
+    return cloud.weights.id();
 }
 
 }  // namespace sffd::ffd

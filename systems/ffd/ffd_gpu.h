@@ -8,10 +8,12 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "runtime/core/result.h"
 #include "runtime/gfx/gl_object.h"
+#include "runtime/gfx/residency.h"
 #include "systems/ffd/deform.h"
 
 namespace sffd::ffd {
@@ -44,9 +46,11 @@ public:
     // Deforms `count` GpuSplats from buffer `in` into `out` (may be the same buffer: in place) with the
     // lattice. Each `key` (e.g. the lattice entity) has its own control-point buffer, uploaded only when
     // `lattice_stamp` differs from its last upload (stamp 0 always uploads). Positions in the buffers are
-    // relative to `cloud_origin`. Does not wait for the GPU.
+    // relative to `cloud_origin`. `weights` (0 = none): float[count], the cloud's per-point weights
+    // (resident_weights()), read by a program of their own (FFD_WEIGHTS). Does not wait for the GPU.
     Status dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t lattice_stamp,
-                    const glm::dvec3& cloud_origin, GLuint in, GLuint out, std::uint32_t count);
+                    const glm::dvec3& cloud_origin, GLuint in, GLuint out, std::uint32_t count,
+                    GLuint weights = 0);
     // Single-lattice form (key 0), kept for callers written against the first version of this API.
     Status dispatch(const Lattice& lattice, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin,
                     GLuint in, GLuint out, std::uint32_t count) {
@@ -72,7 +76,8 @@ public:
     // Synchronous read-backs so far (read_stats(), deform()): ffd_system's frame path must cause none.
     std::uint64_t sync_readbacks() const;
 
-    // CPU arrays in and out (upload, dispatch, read back). Same contract as ffd::deform().
+    // CPU arrays in and out (upload, dispatch, read back). Same contract as ffd::deform(), weights
+    // included.
     Result<DeformStats> deform(const Lattice& lattice, const PointsIn& in, const PointsOut& out);
     // How many times dispatch() uploaded control points (tests check edits upload, unchanged frames don't).
     std::uint64_t upload_count() const;
@@ -87,5 +92,11 @@ private:
     explicit GpuDeformer(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> m_impl;
 };
+
+// The weight column of a resident cloud on the GPU (both kinds): `weights` (PointWeights::values, one per
+// point, or empty) in `cloud.weights`, uploaded when `key` (the stamps it is of) moved, released when the
+// cloud has no weights (a cloud without weights holds no buffer and runs the unweighted programs). Returns
+// the buffer the deform passes bind, 0 when there is none. Context current.
+GLuint resident_weights(gfx::ResidentCloud& cloud, std::span<const float> weights, std::uint64_t key);
 
 }  // namespace sffd::ffd

@@ -12,6 +12,7 @@
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
+#include "runtime/scene/point_columns.h"
 #include "runtime/scene/point_pages.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/components.h"
@@ -53,6 +54,12 @@ struct SurfaceSettings {
     ffd::DeformBackend backend;
     gfx::GpuSplatStore* store = nullptr;  // when a GL context is current
 };
+
+// The cloud's per-point weights (runtime/scene/point_columns.h), read by every path; null when it has none.
+const PointWeights* weights_of(const ecs::Registry& reg, ecs::Entity e) {
+    const PointWeights* w = reg.try_get<PointWeights>(e);
+    return w && !w->values.empty() ? w : nullptr;
+}
 
 // The surface kind of the deformation skeleton (deform_skeleton.h).
 struct SurfaceKind {
@@ -115,12 +122,12 @@ struct SurfaceKind {
     }
 
     // Only the subset, its splats enlarged; the rest is deformed by the next full frame.
-    static void preview(ecs::Registry& reg, ecs::Entity, Output& out, const SplatCloud& cloud,
+    static void preview(ecs::Registry& reg, ecs::Entity e, Output& out, const SplatCloud& cloud,
                         const ffd::CloudLattices& framed, std::uint32_t budget, Resident& splats,
                         const SurfaceSettings& st, FfdStats& stats) {
         update_preview_subset(out.subset, cloud.positions, out.seen.cloud, budget);
         const std::vector<std::uint32_t>& kept = out.subset.indices;
-        ffd::deform_cloud_subset(cloud, framed.span(), kept, out, "ffd_system");
+        ffd::deform_cloud_subset(cloud, framed.span(), kept, out, "ffd_system", weights_of(reg, e));
         gfx::upload_preview_splats(splats, cloud, kept, {out.positions, out.normals, out.axis_u, out.axis_v},
                                    preview_radius_scale(cloud.size(), kept.size()), st.store->keep_cpu);
         if (auto* rs = reg.try_resource<gfx::ResidencyStats>()) ++rs->deformed_uploads;
@@ -142,12 +149,17 @@ struct SurfaceKind {
         auto pass_scope = profiling::gpu_scope(reg, "ffd.compute");  // names the pass for the profiler
         gpu->reset_stats();
         GLuint in = splats->rest.id();
+        // The weight column, uploaded when the weights or the cloud changed (none without weights).
+        const PointWeights* weights = weights_of(reg, e);
+        const GLuint wbuf = ffd::resident_weights(
+            *splats, weights ? std::span<const float>(weights->values) : std::span<const float>(),
+            inputs.stamps.weights * 0x9E3779B97F4A7C15ull ^ inputs.stamps.cloud);
         bool ok = true;
         if (lattices.empty() && n > 0)
             glCopyNamedBufferSubData(in, splats->deformed.id(), 0, 0, GLsizeiptr(n * sizeof(gpu::GpuSplat)));
         for (std::size_t d = 0; d < lattices.size(); ++d) {
             if (Status s = gpu->dispatch(*lattices[d], framed.entities[d].bits(), inputs.stamps.lattices[d],
-                                         cloud.origin, in, splats->deformed.id(), std::uint32_t(n));
+                                         cloud.origin, in, splats->deformed.id(), std::uint32_t(n), wbuf);
                 !s) {
                 log::warn("ffd_system: ", s.message(), " (lattice skipped)");
                 if (d == 0 && n > 0)
@@ -171,7 +183,7 @@ struct SurfaceKind {
     }
 
     // The one CPU deformation step (also what picking asks for), over the pages the rule asks for.
-    static std::size_t cpu(ecs::Registry& reg, ecs::Entity, Output& out, const SplatCloud& cloud,
+    static std::size_t cpu(ecs::Registry& reg, ecs::Entity e, Output& out, const SplatCloud& cloud,
                            const ffd::CloudLattices& framed, const ffd::RedoPlan& plan, Resident* splats,
                            const SurfaceSettings& st, FfdStats& stats) {
         // Pages are redone in place only into arrays shaped as a whole run shapes them (an edit that
@@ -185,9 +197,10 @@ struct SurfaceKind {
                               shaped(out.positions, cloud.positions) && shaped(out.normals, cloud.normals) &&
                               shaped(out.axis_u, cloud.axis_u) && shaped(out.axis_v, cloud.axis_v);
         if (!in_place) {
-            ffd::deform_cloud(cloud, framed.span(), out, "ffd_system");
+            ffd::deform_cloud(cloud, framed.span(), out, "ffd_system", weights_of(reg, e));
             redo_all = true;
-        } else ffd::deform_cloud_pages(cloud, framed.span(), plan.pages, out, "ffd_system");
+        } else
+            ffd::deform_cloud_pages(cloud, framed.span(), plan.pages, out, "ffd_system", weights_of(reg, e));
         out.inverted_version = out.version;
         if (splats) {  // the resident cloud draws this output from now on (state deformed_cpu)
             gfx::upload_deformed_splats(*splats, cloud, {out.positions, out.normals, out.axis_u, out.axis_v},

@@ -35,6 +35,7 @@ struct VertexColumns {
     int n[3] = {-1, -1, -1};
     int u[3] = {-1, -1, -1}, v[3] = {-1, -1, -1};
     int radius = -1;
+    int weight = -1;  // PointWeights: the deformation's per-point weight, read and written back unchanged
     bool normals() const { return n[0] >= 0 && n[1] >= 0 && n[2] >= 0; }
     bool axes() const { return u[0] >= 0 && u[1] >= 0 && u[2] >= 0 && v[0] >= 0 && v[1] >= 0 && v[2] >= 0; }
 };
@@ -56,6 +57,7 @@ VertexColumns find_columns(const ply::Element& ve) {
     if (!c.normals()) c.n[0] = c.n[1] = c.n[2] = -1;
     if (!c.axes()) c.u[0] = c.u[1] = c.u[2] = c.v[0] = c.v[1] = c.v[2] = -1;
     c.radius = scalar_property(ve, "radius");
+    c.weight = scalar_property(ve, "weight");
     return c;
 }
 
@@ -118,6 +120,7 @@ struct ChunkDeformer {
     StreamBackend backend = StreamBackend::cpu;
     GpuDeformer* gpu = nullptr;
     std::vector<glm::vec3> p, n, u, v, op, on, ou, ov;
+    std::vector<float> wts;
     std::size_t inverted = 0;
     std::vector<std::size_t> inside;  // points inside each lattice (same order)
     ply::Chunk scratch;
@@ -148,9 +151,11 @@ struct ChunkDeformer {
         const auto t0 = Clock::now();
         std::size_t inv = 0;
         for (std::size_t r = 0; r < c.rows; ++r) {
-            const ReferencePoint rp = reference_point(lattice, get3(c, xyz, r));
+            const double w = cols.weight >= 0 ? c.columns[std::size_t(cols.weight)].values[r] : 1.0;
+            const ReferencePoint rp = reference_point(lattice, get3(c, xyz, r), w);
             if (!rp.inside) continue;
             inside_count += count;
+            if (!(w > 0.0)) continue;  // weight 0: unchanged
             set3(c, xyz, r, rp.position);
             const glm::dmat3& J = rp.jacobian;
             if (normals) set3(c, cols.n, r, deformed_normal(J, get3(c, cols.n, r)));
@@ -171,17 +176,20 @@ struct ChunkDeformer {
         auto size = [rows](std::vector<glm::vec3>& a, bool used) { a.resize(used ? rows : 0); };
         size(p, true), size(op, true), size(n, normals), size(on, normals);
         size(u, axes), size(v, axes), size(ou, axes), size(ov, axes);
+        wts.resize(cols.weight >= 0 ? rows : 0);
         for (std::size_t r = 0; r < rows; ++r) {
+            if (cols.weight >= 0) wts[r] = float(c.columns[std::size_t(cols.weight)].values[r]);
             p[r] = glm::vec3(get3(c, xyz, r) - o);
             if (normals) n[r] = glm::vec3(get3(c, cols.n, r));
             if (axes) u[r] = glm::vec3(get3(c, cols.u, r)), v[r] = glm::vec3(get3(c, cols.v, r));
         }
-        const PointsIn in{p.data(),
-                          normals ? n.data() : nullptr,
-                          axes ? u.data() : nullptr,
-                          axes ? v.data() : nullptr,
-                          rows,
-                          o};
+        PointsIn in{p.data(),
+                    normals ? n.data() : nullptr,
+                    axes ? u.data() : nullptr,
+                    axes ? v.data() : nullptr,
+                    rows,
+                    o};
+        in.weights = cols.weight >= 0 ? wts.data() : nullptr;
         const PointsOut out{op.data(), normals ? on.data() : nullptr, axes ? ou.data() : nullptr,
                             axes ? ov.data() : nullptr};
         const auto t0 = Clock::now();
@@ -247,7 +255,7 @@ Result<StreamDeformResult> stream_surface(const StreamDeformRequest& req, ply::R
         auto g = GpuDeformer::create_headless();
         if (!g) return g.error();
         gpu.emplace(std::move(*g));
-        result.set_up_ms = set_up_gpu_programs(*gpu, req.lattices);
+        result.set_up_ms = set_up_gpu_programs(*gpu, req.lattices, cols.weight >= 0);
     }
 
     ply::Header out_header = in_header;
@@ -284,6 +292,11 @@ Result<StreamDeformResult> stream_surface(const StreamDeformRequest& req, ply::R
                     chunk.columns.resize(chunk.element.properties.size());
                     create_axes(chunk, cols, estimated_radii, std::size_t(points));
                 }
+                if (cols.weight >= 0)
+                    if (Status s = check_weights(chunk.columns[std::size_t(cols.weight)].values, chunk.rows,
+                                                 points, in_path);
+                        !s)
+                        return s.error();
                 for (std::size_t r = 0; r < result.timing_ms.size(); ++r) {  // timing runs first, on a copy
                     auto ms = deformer.run(chunk, cols, false);
                     if (!ms) return make_error(label + ": " + ms.message());
@@ -321,13 +334,25 @@ const char* stream_backend_name(StreamBackend b) {
     return "?";
 }
 
-double set_up_gpu_programs(GpuDeformer& gpu, std::span<const Lattice> lattices) {
+double set_up_gpu_programs(GpuDeformer& gpu, std::span<const Lattice> lattices, bool weighted) {
     const auto t0 = Clock::now();
     for (const Lattice& l : lattices) {
         glm::vec3 p(0.0f), n(0.0f, 0.0f, 1.0f), u(0.0f), v(0.0f);
-        (void)gpu.deform(l, PointsIn{&p, &n, &u, &v, 1, l.origin}, PointsOut{&p, &n, &u, &v});
+        const float w = 1.0f;
+        PointsIn in{&p, &n, &u, &v, 1, l.origin};
+        in.weights = weighted ? &w : nullptr;  // the weighted programs (FFD_WEIGHTS) are others
+        (void)gpu.deform(l, in, PointsOut{&p, &n, &u, &v});
     }
     return ms_since(t0);
+}
+
+Status check_weights(std::span<const double> values, std::size_t rows, std::uint64_t first,
+                     const std::string& path) {
+    for (std::size_t r = 0; r < rows && r < values.size(); ++r)
+        if (!(values[r] >= 0.0 && values[r] <= 1.0))  // NaN fails both
+            return make_error(path + ": vertex " + std::to_string(first + r) + ": weight " +
+                              std::to_string(values[r]) + " is not in [0, 1]");
+    return {};
 }
 
 Result<StreamInput> inspect_stream_input(const std::string& path) {

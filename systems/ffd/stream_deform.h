@@ -94,8 +94,16 @@ struct StreamDeformResult {
 class GpuDeformer;
 // The GPU's programs are specialised per lattice shape and compiled at their first dispatch (seconds with a
 // cold shader cache): one point through each lattice before the timed work, so the deformation time is the
-// deformation's. Returns its milliseconds (the in-memory `deform` path uses it too).
-double set_up_gpu_programs(GpuDeformer& gpu, std::span<const Lattice> lattices);
+// deformation's. Returns its milliseconds (the in-memory `deform` path uses it too). `weighted`: the
+// programs of clouds with per-point weights (FFD_WEIGHTS), which are others.
+double set_up_gpu_programs(GpuDeformer& gpu, std::span<const Lattice> lattices, bool weighted = false);
+
+// A PLY vertex property `weight` (PointWeights, runtime/scene/point_columns.h) is the deformation's
+// per-point weight: X + w D, J_w = I + w (J − I) (surface splats and 3DGS rows alike), and is written back
+// unchanged. A weight that is NaN or outside [0, 1] fails the run before anything is written:
+// "IN: vertex i: weight w is not in [0, 1]". `values` are rows [first, first + rows) of the file.
+Status check_weights(std::span<const double> values, std::size_t rows, std::uint64_t first,
+                     const std::string& path);
 
 // Called after each vertex chunk with the vertex rows done so far and the element's count.
 using StreamProgress = std::function<void(std::uint64_t done, std::uint64_t total)>;
