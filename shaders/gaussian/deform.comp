@@ -250,6 +250,10 @@ uint deform_gaussian(uint id) {
     vec3 stu = ffd_local(g.pos_opacity.xyz);
     bool culled = ffd_count.y != 0u || !ffd_inside(stu) ||
                   (ffd_div.w == 1 && (any(lessThanEqual(stu, ffd_cull_lo.xyz)) || any(greaterThanEqual(stu, ffd_cull_hi.xyz))));
+#ifdef FFD_WEIGHTS
+    const float weight = ffd_weights[id];
+    culled = culled || !(weight > 0.0);  // weight 0: at rest
+#endif
     if (ffd_inside(stu)) counts |= 2u;
     if (culled) {  // not moved: copied unchanged, frames start at identity
         g_out[id] = g;
@@ -260,6 +264,10 @@ uint deform_gaussian(uint id) {
     vec3 D;
     mat3 G;
     ffd_eval(stu, true, D, G);
+#ifdef FFD_WEIGHTS
+    D *= weight;  // X + w D, J_w = I + w G M⁻¹
+    G *= weight;
+#endif
     mat3 J = ffd_jacobian(G);
     GpuGaussian o = g;
     o.pos_opacity.xyz = g.pos_opacity.xyz + D;

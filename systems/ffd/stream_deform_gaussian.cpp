@@ -48,15 +48,20 @@ Result<StreamDeformResult> stream_gaussians(const StreamDeformRequest& req, ply:
     StreamDeformResult result;
     result.kind = StreamKind::gaussians;
     std::size_t not_finite = 0;
+    // The chunk's per-Gaussian weights (a vertex property `weight`, kept in the output as read), or none.
+    std::vector<float> weights;
     // One chunk through the chosen backend; `out` may be `in` (CPU) or is replaced (GPU).
     auto run_deform = [&](const GaussianCloud& in, GaussianCloud& out) -> Result<gaussian::DeformStats> {
         if (!gpu) {
-            auto st = gaussian::deform(lattice, in, out, backend, false);
+            gaussian::DeformOptions options{backend, false, gaussian::ShMode::rotate_coefficients};
+            options.weights = weights.empty() ? nullptr : weights.data();
+            auto st = gaussian::deform(lattice, in, out, options);
             if (st && &out == &in) not_finite += st->not_finite;  // the timing copies are not counted
             return st;
         }
         gaussian::GpuDeformStats st;
-        auto got = gaussian::deform_on_gpu(*gpu, {&lattice}, in, gaussian::ShMode::rotate_coefficients, &st);
+        auto got = gaussian::deform_on_gpu(*gpu, {&lattice}, in, gaussian::ShMode::rotate_coefficients, &st,
+                                           weights);
         if (!got) return got.error();
         out = std::move(*got);
         not_finite += st.not_finite;
@@ -70,6 +75,8 @@ Result<StreamDeformResult> stream_gaussians(const StreamDeformRequest& req, ply:
     auto layout = gaussian::ply_layout(ve, in_path);
     if (!layout) return layout.error();
     result.sh_degree = layout->degree;
+    const int weight_col = ve.find("weight");
+    const bool weighted = weight_col >= 0 && !ve.properties[std::size_t(weight_col)].is_list;
     ply::Header out_header = in_header;
     out_header.format = req.ascii ? ply::Format::ascii : ply::Format::binary_little_endian;
     auto writer = ply::Writer::create(req.output, out_header);
@@ -95,6 +102,12 @@ Result<StreamDeformResult> stream_gaussians(const StreamDeformRequest& req, ply:
                     return s.error();
                 // The same validation as every cloud read whole (read_gaussians), row numbers of the file.
                 if (auto s = gaussian::validate(g, in_path, row); !s) return s.error();
+                weights.clear();
+                if (weighted) {
+                    const std::vector<double>& w = chunk.columns[std::size_t(weight_col)].values;
+                    if (Status s = check_weights(w, chunk.rows, row, in_path); !s) return s.error();
+                    weights.assign(w.begin(), w.begin() + std::ptrdiff_t(chunk.rows));
+                }
                 result.read_ms += ms_since(t0);
                 for (std::size_t r = 0; r < result.timing_ms.size();
                      ++r) {  // on a copy: g is still the input

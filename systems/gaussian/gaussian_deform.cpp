@@ -77,7 +77,8 @@ Result<DeformStats> deform_blocks(const Lattice& lattice, const GaussianCloud& i
         const std::size_t count = std::min(kBlock, end - first);
         std::copy(in.positions.begin() + std::ptrdiff_t(first),
                   in.positions.begin() + std::ptrdiff_t(first + count), centres.begin());
-        const ffd::PointsIn pin{in.positions.data() + first, nullptr, nullptr, nullptr, count, in.origin};
+        ffd::PointsIn pin{in.positions.data() + first, nullptr, nullptr, nullptr, count, in.origin};
+        pin.weights = options.weights ? options.weights + first : nullptr;  // J_w, the centre's w D
         ffd::PointsOut pout{out.positions.data() + first, nullptr, nullptr, nullptr};
         pout.jacobians = jac.data();
         auto stats = ffd::deform(lattice, pin, pout, backend);

@@ -41,6 +41,10 @@ struct DeformOptions {
     // arithmetic) unless this is set: then the double-precision per-Gaussian maths, the exact reference
     // (tests, benchmarks).
     bool reference_shapes = false;
+    // Optional per-Gaussian weight in [0, 1], one per Gaussian of `in` (PointWeights,
+    // runtime/scene/point_columns.h): the centre moves by w times its displacement and the shape and SH
+    // follow J_w = I + w (J - I) (Σ' = J_w Σ J_wᵀ, SH by the polar rotation of J_w). Null: weight 1.
+    const float* weights = nullptr;
 };
 
 // Writes `out` (positions, scales, rotations, sh or sh_frames; opacities copied when `copy_opacities`)

@@ -9,10 +9,12 @@
 #include "runtime/app/pass_timer.h"
 #include "runtime/core/log.h"
 #include "runtime/gfx/residency.h"
+#include "runtime/scene/point_columns.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform_backend.h"
 #include "systems/ffd/deform_inputs.h"
 #include "systems/ffd/deform_skeleton.h"
+#include "systems/ffd/ffd_gpu.h"
 #include "systems/ffd/lattice.h"
 #include "systems/ffd/ffd_system.h"
 #include "systems/ffd/lattice_frame.h"
@@ -79,6 +81,13 @@ GaussianCloud preview_gaussians(const GaussianCloud& cloud, const std::vector<st
     return out;
 }
 
+// The cloud's per-Gaussian weights (runtime/scene/point_columns.h) when it has one per Gaussian, else null
+// (weight 1: the unweighted code).
+const float* weights_of(const ecs::Registry& reg, ecs::Entity e, std::size_t n) {
+    const PointWeights* w = reg.try_get<PointWeights>(e);
+    return w && n > 0 && w->values.size() == n ? w->values.data() : nullptr;
+}
+
 }  // namespace
 
 void gaussian_release_gpu(ecs::Registry& registry) { registry.erase_resource<GaussianGpuState>(); }
@@ -139,15 +148,19 @@ struct GaussianKind {
     }
 
     // Only the subset, enlarged; every Gaussian is deformed again by the next full frame.
-    static void preview(ecs::Registry& reg, ecs::Entity, Output& out, const GaussianCloud& cloud,
+    static void preview(ecs::Registry& reg, ecs::Entity e, Output& out, const GaussianCloud& cloud,
                         const ffd::CloudLattices& framed, std::uint32_t budget, Resident& resident,
                         const GaussianSettings&, GaussianDeformStats& stats) {
         update_preview_subset(out.subset, cloud.positions, out.seen.cloud, budget);
         GaussianCloud kept = preview_gaussians(cloud, out.subset.indices);
+        gaussian::DeformOptions options{ffd::Backend::automatic, true, gaussian::ShMode::rotate_coefficients};
+        std::vector<float> kept_weights;  // the subset's weights, in its order
+        if (const float* w = weights_of(reg, e, cloud.size())) {
+            for (std::uint32_t i : out.subset.indices) kept_weights.push_back(w[i]);
+            options.weights = kept_weights.data();
+        }
         for (const Lattice* l : framed.lattices)
-            if (auto st = gaussian::deform(
-                    *l, kept, kept, {ffd::Backend::automatic, true, gaussian::ShMode::rotate_coefficients});
-                !st)
+            if (auto st = gaussian::deform(*l, kept, kept, options); !st)
                 log::warn("gaussian_deform_system: ", st.message(), " (lattice skipped)");
         empty_output(out, cloud);
         gaussian::upload_preview(resident, kept);
@@ -168,6 +181,11 @@ struct GaussianKind {
         std::vector<std::uint64_t> keys;
         for (ecs::Entity le : framed.entities) keys.push_back(le.bits());
         auto pass_scope = profiling::gpu_scope(reg, "gaussian.deform");
+        // The weight column, uploaded when the weights or the cloud changed (none without weights).
+        const float* w = weights_of(reg, e, cloud.size());
+        ffd::resident_weights(*resident,
+                              w ? std::span<const float>(w, cloud.size()) : std::span<const float>(),
+                              inputs.stamps.weights * 0x9E3779B97F4A7C15ull ^ inputs.stamps.cloud);
         gpu->reset_stats();
         if (Status s = gpu->deform(*resident, cloud.origin, framed.lattices, keys, inputs.stamps.lattices,
                                    st.gpu_sh);
@@ -187,7 +205,7 @@ struct GaussianKind {
     // 3), and the copy was a whole extra read and write of them. Later lattices deform the output in place.
     // Opacities are carried only so that Gaussians whose result is not finite can be made transparent (as
     // the GPU pass does); dropped again when none was (readers use the authored cloud's).
-    static std::size_t cpu(ecs::Registry& reg, ecs::Entity, Output& out, const GaussianCloud& cloud,
+    static std::size_t cpu(ecs::Registry& reg, ecs::Entity e, Output& out, const GaussianCloud& cloud,
                            const ffd::CloudLattices& framed, const ffd::RedoPlan& plan, Resident* resident,
                            const GaussianSettings& st, GaussianDeformStats& stats) {
         const std::size_t n = cloud.size(), np = page_count(n);
@@ -196,7 +214,8 @@ struct GaussianKind {
             if (Status s = ffd::validate(*l); !s)
                 log::warn("gaussian_deform_system: ", s.message(), " (lattice skipped)");
             else ok.push_back(l);
-        const gaussian::DeformOptions options{ffd::Backend::automatic, true, st.cpu_sh};
+        gaussian::DeformOptions options{ffd::Backend::automatic, true, st.cpu_sh};
+        options.weights = weights_of(reg, e, n);
         // A page-wise redo builds on an output with every Gaussian finite (no opacities carried).
         bool everything =
             plan.what == ffd::Redo::everything || !out.cloud.opacities.empty() || out.cloud.size() != n;

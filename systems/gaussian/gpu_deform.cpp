@@ -129,9 +129,11 @@ Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, 
     // (the profile's synthetic scenes) took 1.9-2.1 s on llvmpipe, against 1.0-1.4 s specialised.
     const bool with_sh = b.sh_out && b.sh_in;
     ffd::detail::DeformPrograms::Variant variant;
-    variant.id = 1u | (b.frames ? 2u : 0u) | (with_sh ? 4u : 0u);
+    variant.id = 1u | (b.frames ? 2u : 0u) | (with_sh ? 4u : 0u) | (b.weights ? 8u : 0u);
     variant.defines = {{"GAUSS_FRAMES", b.frames ? "1" : "0"}, {"GAUSS_SH", with_sh ? "1" : "0"}};
-    variant.label = std::string(b.frames ? ".frames" : "") + (with_sh ? ".sh" : "");
+    if (b.weights) variant.defines.push_back({"FFD_WEIGHTS", "1"});  // weighted clouds only
+    variant.label =
+        std::string(b.frames ? ".frames" : "") + (with_sh ? ".sh" : "") + (b.weights ? ".weighted" : "");
     auto bound = m.programs.bind(lattice, key, stamp, cloud_origin, count, &variant);
     if (!bound) return bound.error();
     // Each uniform only where the program has it (explicit locations: no name lookup, a glGet that can
@@ -163,6 +165,7 @@ Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, 
             gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_SH, b.sh_in, batch, sh);
             gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_DEFORMED_SH, b.sh_out, batch, sh);
         }
+        if (b.weights) gfx::bind_ssbo_range(SFFD_SSBO_WEIGHTS, b.weights, batch, sizeof(float));
     };
     if (Status s = m.programs.dispatch_batches(*bound, count, strides, bind_batch); !s) return s;
     gfx::memory_barrier(
@@ -199,6 +202,7 @@ Status GpuGaussianDeformer::deform(GpuGaussians& dst, const glm::dvec3& origin,
     b.sh_in = with_sh ? dst.sh.id() : 0;
     b.sh_out = with_sh ? dst.deformed_sh.id() : 0;
     b.sh_degree = dst.sh_degree;
+    b.weights = dst.weights ? dst.weights.id() : 0;
     Status first_error;
     for (std::size_t d = 0; d < lattices.size(); ++d) {
         if (Status s = dispatch(*lattices[d], keys[d], stamps[d], origin, b, n); !s) {
@@ -259,9 +263,10 @@ Result<GaussianCloud> read_back(const GpuGaussians& src, const glm::dvec3& origi
 
 Result<GaussianCloud> deform_on_gpu(GpuGaussianDeformer& deformer,
                                     const std::vector<const Lattice*>& lattices, const GaussianCloud& cloud,
-                                    ShMode sh, GpuDeformStats* stats) {
+                                    ShMode sh, GpuDeformStats* stats, std::span<const float> weights) {
     GpuGaussians scratch;
     if (Status s = upload_rest(scratch, cloud, 1); !s) return s.error();
+    ffd::resident_weights(scratch, weights, 1);
     deformer.reset_stats();
     // Stamp 0: always upload (the keys are this call's own, past the range of entity bits).
     std::vector<std::uint64_t> keys(lattices.size()), stamps(lattices.size(), 0);

@@ -13,6 +13,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "runtime/core/result.h"
@@ -56,6 +57,9 @@ public:
         bool compose_frames = false;
         GLuint sh_in = 0, sh_out = 0;
         int sh_degree = 0;
+        // float[count] per-Gaussian weights (0 = none: the unweighted program): the centre moves by w D and
+        // shape and SH follow J_w = I + w (J − I) (a program of its own, FFD_WEIGHTS).
+        GLuint weights = 0;
     };
     // One lattice over `count` Gaussians, positions relative to `cloud_origin`. Each `key` (e.g. the
     // lattice entity) keeps its control points, uploaded only when `lattice_stamp` moved (0 always
@@ -66,7 +70,8 @@ public:
     // Every lattice in order over a store entry whose `rest` (and `sh`) are current: writes `deformed`
     // (grown when needed) and, when the SH have view-dependent terms (degree > 0), `frames`
     // (ShMode::rotate_view) or `deformed_sh` (ShMode::rotate_coefficients); state deformed_gpu with
-    // the matching sh_source, bumps deformed_version. No read-back. `keys`/`stamps`
+    // the matching sh_source, bumps deformed_version. The cloud's weights, when `dst.weights` holds them
+    // (ffd::resident_weights()), weight every lattice's step. No read-back. `keys`/`stamps`
     // as in dispatch(), one per lattice. A lattice that fails validation is skipped (the first error is
     // returned after the others ran).
     Status deform(GpuGaussians& dst, const glm::dvec3& cloud_origin,
@@ -106,9 +111,10 @@ Result<GaussianCloud> read_back(const GpuGaussians& src, const glm::dvec3& origi
 
 // Upload + deform through every lattice + read back, on a scratch store entry (tests, commands, the
 // benchmark's correctness check): rotate_view gives the result sh_frames (degree > 0), rotate_coefficients
-// rotated sh.
+// rotated sh. `weights`: one per Gaussian (PointWeights::values), or empty.
 Result<GaussianCloud> deform_on_gpu(GpuGaussianDeformer& deformer,
                                     const std::vector<const Lattice*>& lattices, const GaussianCloud& cloud,
-                                    ShMode sh, GpuDeformStats* stats = nullptr);
+                                    ShMode sh, GpuDeformStats* stats = nullptr,
+                                    std::span<const float> weights = {});
 
 }  // namespace sffd::gaussian
