@@ -14,6 +14,7 @@
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
+#include "runtime/scene/point_columns.h"
 #include "runtime/scene/point_pages.h"
 #include "systems/animation/animation_system.h"
 #include "systems/animation/components.h"
@@ -84,11 +85,11 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
 
     // --- deformation: re-deform point clouds whose rest data or lattices changed (ffd) --------------
     s.add(Phase::deformation, "ffd", ffd_system,  // GPU compute when a context is current, else CPU
-          ecs::reads<Deformers, Lattice, PreviewBudget, SplatCloud>()
+          ecs::reads<Deformers, Lattice, PointWeights, PreviewBudget, SplatCloud>()
               .writes<DeformedSplats, FfdSettings, FfdStats, PointPages, Transform,
                       ffd::GpuDeformerState<ffd::GpuDeformer>, gfx::GpuSplatStore, gfx::ResidencyStats>());
     s.add(Phase::deformation, "gaussian", gaussian_deform_system,  // 3D Gaussian clouds
-          ecs::reads<Deformers, GaussianCloud, Lattice, PreviewBudget, SplatCloud, Transform>()
+          ecs::reads<Deformers, GaussianCloud, Lattice, PointWeights, PreviewBudget, SplatCloud, Transform>()
               .writes<DeformedGaussians, FfdSettings, GaussianDeformSettings, GaussianDeformStats, PointPages,
                       ffd::GpuDeformerState<gaussian::GpuGaussianDeformer>, gaussian::GpuGaussianStore,
                       gfx::ResidencyStats>());
@@ -96,12 +97,12 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
     // --- picking: only when a pick was requested (picking); then the editor's gestures that waited for
     // their pick (click select, brush, alt+click pivot) -------------------------------------------------
     s.add(Phase::picking, "picking", picking::picking_system,
-          ecs::reads<DeformedSplats, Deformers, Lattice, SplatCloud>()
+          ecs::reads<DeformedSplats, Deformers, Lattice, PointFlags, PointWeights, SplatCloud>()
               .writes<DeformedGaussians, GaussianCloud, Transform, picking::PickRequests,
                       picking::PickResults, picking::PickSettings, picking::PickingState>());
     s.add(Phase::picking, "editor.picks", editor::editor_pick_system,  // no-op without an EditorState
-          ecs::reads<DeformedGaussians, DeformedSplats, Deformers, GaussianCloud, SplatCloud, Transform,
-                     picking::PickResults>()
+          ecs::reads<DeformedGaussians, DeformedSplats, Deformers, GaussianCloud, PointFlags, PointWeights,
+                     SplatCloud, Transform, picking::PickResults>()
               .writes<Lattice, editor::EditorState, picking::LatticeSelection, picking::PickSettings,
                       picking::PickingState>());
 
@@ -121,8 +122,8 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
         // Save (every component a scene file holds, through the scene's hooks), screenshot, quit.
         s.add(Phase::rendering, "editor.requests", editor::requests_system,
               ecs::reads<AmbientLight, AnimationClip, AnimationState, Camera, Deformers, DirectionalLight,
-                         DeformedGaussians, GaussianCloud, GaussianSource, Lattice, Name, SceneHooks,
-                         SplatCloud, SplatMaterial, Transform, UnkeyedEdit>()
+                         DeformedGaussians, GaussianCloud, GaussianSource, Lattice, Name, PointFlags, PointWeights,
+                         SceneHooks, SplatCloud, SplatMaterial, Transform, UnkeyedEdit>()
                   .writes<app::AppContext, editor::EditorState, editor::detail::ViewSession,
                           render::detail::SplatRenderState>());
     }

@@ -4,6 +4,7 @@
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
+#include "runtime/scene/point_columns.h"
 #include "systems/ffd/components.h"
 #include "systems/ffd/deform_cloud.h"
 #include "systems/ffd/deform_inputs.h"
@@ -91,7 +92,7 @@ SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud_entity
                 DeformedSplats d;
                 const ffd::CloudLattices framed =
                     ffd::cloud_lattices(registry, cloud_entity, deform_inputs.lattices);
-                ffd::deform_cloud(*cloud, framed.span(), d, "picking");
+                ffd::deform_cloud(*cloud, framed.span(), d, "picking", registry.try_get<PointWeights>(cloud_entity));
                 entry.positions = std::move(d.positions);
                 entry.normals = std::move(d.normals);
                 entry.axis_u = std::move(d.axis_u);
