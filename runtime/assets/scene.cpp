@@ -11,6 +11,7 @@
 
 #include "runtime/assets/builtin_scenes.h"
 #include "runtime/assets/formats/surface/gltf_io.h"
+#include "runtime/assets/formats/surface/ply_weights.h"
 #include "runtime/assets/import.h"
 #include "runtime/core/log.h"
 #include "runtime/scene/components.h"
@@ -412,6 +413,8 @@ Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
     SplatMaterial material;
     auto cloud = assets::import_splat_cloud(path, {}, &material);
     if (!cloud) return cloud.error();
+    auto weights = assets::cloud_weights_of_file(path, cloud->size());  // a PLY's `weight` column
+    if (!weights) return weights.error();
     glm::dvec3 lo(1e300), hi(-1e300);
     for (const auto& p : cloud->positions) {
         lo = glm::min(lo, cloud->origin + glm::dvec3(p));
@@ -422,6 +425,7 @@ Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
     r.emplace<Transform>(e, Transform{});
     r.emplace<SplatCloud>(e, std::move(*cloud));
     r.emplace<SplatMaterial>(e, material);
+    if (!weights->values.empty()) r.emplace<PointWeights>(e, std::move(*weights));
     if (r.count<Camera>() == 0) assets::add_default_view(r, lo, hi, glm::dvec3(0.3, 0.3, 1.0));
     return {};
 }

@@ -10,6 +10,7 @@
 #include <optional>
 
 #include "runtime/assets/formats/surface/ply.h"
+#include "runtime/assets/formats/surface/ply_weights.h"
 #include "runtime/assets/splat_estimation.h"
 #include "systems/ffd/deform.h"
 #include "systems/ffd/ffd_gpu.h"
@@ -57,7 +58,7 @@ VertexColumns find_columns(const ply::Element& ve) {
     if (!c.normals()) c.n[0] = c.n[1] = c.n[2] = -1;
     if (!c.axes()) c.u[0] = c.u[1] = c.u[2] = c.v[0] = c.v[1] = c.v[2] = -1;
     c.radius = scalar_property(ve, "radius");
-    c.weight = scalar_property(ve, "weight");
+    c.weight = assets::ply_weight_property(ve);
     return c;
 }
 
@@ -293,8 +294,8 @@ Result<StreamDeformResult> stream_surface(const StreamDeformRequest& req, ply::R
                     create_axes(chunk, cols, estimated_radii, std::size_t(points));
                 }
                 if (cols.weight >= 0)
-                    if (Status s = check_weights(chunk.columns[std::size_t(cols.weight)].values, chunk.rows,
-                                                 points, in_path);
+                    if (Status s = assets::check_ply_weights(chunk.columns[std::size_t(cols.weight)].values,
+                                                             chunk.rows, points, in_path);
                         !s)
                         return s.error();
                 for (std::size_t r = 0; r < result.timing_ms.size(); ++r) {  // timing runs first, on a copy
@@ -344,15 +345,6 @@ double set_up_gpu_programs(GpuDeformer& gpu, std::span<const Lattice> lattices, 
         (void)gpu.deform(l, in, PointsOut{&p, &n, &u, &v});
     }
     return ms_since(t0);
-}
-
-Status check_weights(std::span<const double> values, std::size_t rows, std::uint64_t first,
-                     const std::string& path) {
-    for (std::size_t r = 0; r < rows && r < values.size(); ++r)
-        if (!(values[r] >= 0.0 && values[r] <= 1.0))  // NaN fails both
-            return make_error(path + ": vertex " + std::to_string(first + r) + ": weight " +
-                              std::to_string(values[r]) + " is not in [0, 1]");
-    return {};
 }
 
 Result<StreamInput> inspect_stream_input(const std::string& path) {

@@ -101,9 +101,8 @@ double set_up_gpu_programs(GpuDeformer& gpu, std::span<const Lattice> lattices, 
 // A PLY vertex property `weight` (PointWeights, runtime/scene/point_columns.h) is the deformation's
 // per-point weight: X + w D, J_w = I + w (J − I) (surface splats and 3DGS rows alike), and is written back
 // unchanged. A weight that is NaN or outside [0, 1] fails the run before anything is written:
-// "IN: vertex i: weight w is not in [0, 1]". `values` are rows [first, first + rows) of the file.
-Status check_weights(std::span<const double> values, std::size_t rows, std::uint64_t first,
-                     const std::string& path);
+// "IN: vertex i: weight w is not in [0, 1]". The property and its check are assets' one reader of the
+// column (runtime/assets/formats/surface/ply_weights.h), which render, view, convert and info use too.
 
 // Called after each vertex chunk with the vertex rows done so far and the element's count.
 using StreamProgress = std::function<void(std::uint64_t done, std::uint64_t total)>;

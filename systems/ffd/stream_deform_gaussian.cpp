@@ -10,6 +10,7 @@
 #include <chrono>
 #include <optional>
 
+#include "runtime/assets/formats/surface/ply_weights.h"
 #include "runtime/gfx/context.h"
 #include "systems/gaussian/gaussian_deform.h"
 #include "runtime/assets/formats/gaussian/gaussian_io.h"
@@ -75,8 +76,8 @@ Result<StreamDeformResult> stream_gaussians(const StreamDeformRequest& req, ply:
     auto layout = gaussian::ply_layout(ve, in_path);
     if (!layout) return layout.error();
     result.sh_degree = layout->degree;
-    const int weight_col = ve.find("weight");
-    const bool weighted = weight_col >= 0 && !ve.properties[std::size_t(weight_col)].is_list;
+    const int weight_col = assets::ply_weight_property(ve);
+    const bool weighted = weight_col >= 0;
     ply::Header out_header = in_header;
     out_header.format = req.ascii ? ply::Format::ascii : ply::Format::binary_little_endian;
     auto writer = ply::Writer::create(req.output, out_header);
@@ -105,7 +106,8 @@ Result<StreamDeformResult> stream_gaussians(const StreamDeformRequest& req, ply:
                 weights.clear();
                 if (weighted) {
                     const std::vector<double>& w = chunk.columns[std::size_t(weight_col)].values;
-                    if (Status s = check_weights(w, chunk.rows, row, in_path); !s) return s.error();
+                    if (Status s = assets::check_ply_weights(w, chunk.rows, row, in_path); !s)
+                        return s.error();
                     weights.assign(w.begin(), w.begin() + std::ptrdiff_t(chunk.rows));
                 }
                 result.read_ms += ms_since(t0);

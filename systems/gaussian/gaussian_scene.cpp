@@ -13,6 +13,7 @@
 #include "runtime/assets/formats/surface/gltf_model.h"
 #include "runtime/assets/formats/surface/gltf_point_columns.h"
 #include "runtime/assets/formats/surface/ply.h"
+#include "runtime/assets/formats/surface/ply_weights.h"
 #include "runtime/assets/scene.h"
 #include "runtime/core/file_io.h"
 #include "runtime/scene/camera.h"
@@ -214,6 +215,8 @@ Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const fs::path
     const fs::path path = gaussian_file_of(given);
     auto cloud = read_gaussians(path);
     if (!cloud) return cloud.error();
+    auto weights = assets::cloud_weights_of_file(path, cloud->size());  // a 3DGS PLY's `weight` column
+    if (!weights) return weights.error();
     std::error_code ec;
     fs::path absolute = fs::absolute(path, ec);
     if (ec) absolute = path;
@@ -225,6 +228,7 @@ Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const fs::path
     registry.emplace<Transform>(e, capture_transform());
     registry.emplace<GaussianSource>(e, GaussianSource{absolute.lexically_normal()});
     registry.emplace<GaussianCloud>(e, std::move(*cloud));
+    if (!weights->values.empty()) registry.emplace<PointWeights>(e, std::move(*weights));
     return e;
 }
 
