@@ -14,9 +14,11 @@
 #include "runtime/assets/builtin_scenes.h"
 #include "runtime/assets/import.h"
 #include "runtime/assets/formats/surface/ply.h"
+#include "runtime/assets/formats/surface/ply_weights.h"
 #include "runtime/assets/scene.h"
 #include "runtime/ecs/registry.h"
 #include "runtime/scene/components.h"
+#include "runtime/scene/point_columns.h"
 #include "runtime/scene/point_order.h"
 #include "runtime/scene/point_pages.h"
 #include "systems/animation/components.h"
@@ -146,6 +148,13 @@ int info_gaussians(const std::string& file, const char* format) {
     return 0;
 }
 
+// "min 0, max 1, mean 0.5" of a weight column.
+std::string weight_stats(double lo, double hi, double sum, std::size_t n) {
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "min %.6g, max %.6g, mean %.6g", lo, hi, n ? sum / double(n) : 0.0);
+    return buf;
+}
+
 int info_ply(const std::string& file) {
     auto r = ply::Reader::open(file);
     if (!r) {
@@ -181,6 +190,9 @@ int info_ply(const std::string& file) {
     }
     const int x = ve.find("x"), y = ve.find("y"), z = ve.find("z");
     if (x < 0 || y < 0 || z < 0) return 0;
+    const int weight = assets::ply_weight_property(ve);  // PointWeights, read by render, view and deform
+    double wlo = INFINITY, whi = -INFINITY, wsum = 0.0;
+    std::size_t wbad = 0;
     if (auto s = r->seek_element("vertex"); !s) {
         std::fprintf(stderr, "splatffd info: %s\n", s.message().c_str());
         return 1;
@@ -206,8 +218,20 @@ int info_ply(const std::string& file) {
             lo = glm::min(lo, p);
             hi = glm::max(hi, p);
         }
+        if (weight >= 0)
+            for (std::size_t i = 0; i < *n; ++i) {
+                const double w = c.columns[static_cast<std::size_t>(weight)].values[i];
+                if (!(w >= 0.0 && w <= 1.0)) ++wbad;
+                wlo = std::min(wlo, w), whi = std::max(whi, w), wsum += w;
+            }
     }
     if (lo.x <= hi.x) print_bounds("  ", lo, hi);
+    if (weight >= 0)
+        std::printf("  weight   %s (column weight f32: the deformation's per-point weight)\n",
+                    weight_stats(wlo, whi, wsum, std::size_t(ve.count)).c_str());
+    if (wbad)
+        std::printf("  WARNING  %zu weights are not in [0, 1] (render, view and deform refuse this file)\n",
+                    wbad);
     if (bad)
         std::printf("  WARNING  %zu vertices have non-finite coordinates (import refuses this file)\n", bad);
     return 0;
@@ -223,6 +247,44 @@ void print_pages(const std::vector<glm::vec3>& positions) {
         p.pages, kPagePoints, 100.0 * p.mean_volume_share, 100.0 * p.mean_diagonal_share);
 }
 
+// The cloud's columns (runtime/scene/point_columns.h, the one table): every present one with its type,
+// then the optional ones' contents: the flags' counts, the weights' range.
+void print_columns(const ecs::Registry& reg, ecs::Entity e) {
+    std::string line;
+    const ColumnRef* flags = nullptr;
+    const ColumnRef* weights = nullptr;
+    const std::vector<ColumnRef> columns = point_columns(reg, e);
+    for (const ColumnRef& c : columns) {
+        if (!c.present()) continue;
+        line += (line.empty() ? "" : ", ") + std::string(c.spec->name) + " " +
+                std::string(column_type_name(c.spec->type));
+        if (c.values > 1) line += " x" + std::to_string(c.values);
+        if (c.spec->name == "flags") flags = &c;
+        if (c.spec->name == "weight") weights = &c;
+    }
+    std::printf("    columns  %s\n", line.c_str());
+    if (flags) {
+        std::size_t selected = 0, hidden = 0, deleted = 0;
+        const StridedView<const std::uint8_t> bits = typed_column<const std::uint8_t>(*flags);
+        for (std::size_t i = 0; i < bits.size(); ++i) {
+            const std::uint8_t b = bits[i];
+            selected += (b & kPointSelected) != 0, hidden += (b & kPointHidden) != 0;
+            deleted += (b & kPointDeleted) != 0;
+        }
+        std::printf("    flags    %zu selected, %zu hidden, %zu deleted of %zu points\n", selected, hidden,
+                    deleted, flags->count);
+    }
+    if (weights) {
+        double lo = INFINITY, hi = -INFINITY, sum = 0.0;
+        const StridedView<const float> values = typed_column<const float>(*weights);
+        for (std::size_t i = 0; i < values.size(); ++i) {
+            const double w = double(values[i]);
+            lo = std::min(lo, w), hi = std::max(hi, w), sum += w;
+        }
+        std::printf("    weight   %s\n", weight_stats(lo, hi, sum, weights->count).c_str());
+    }
+}
+
 void summarise_registry(const ecs::Registry& reg) {
     std::size_t total = 0;
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& c) {
@@ -230,12 +292,7 @@ void summarise_registry(const ecs::Registry& reg) {
         total += c.size();
         std::printf("  cloud    '%s': %zu splats; origin [%.9g, %.9g, %.9g]\n", n ? n->value.c_str() : "?",
                     c.size(), c.origin.x, c.origin.y, c.origin.z);
-        std::string attrs = "position";
-        if (!c.normals.empty()) attrs += ", normal";
-        if (!c.axis_u.empty()) attrs += ", axis_u/axis_v";
-        if (!c.colors.empty()) attrs += ", color";
-        if (!c.uvs.empty()) attrs += ", uv";
-        std::printf("    attributes %s\n", attrs.c_str());
+        print_columns(reg, e);
         if (!c.texture.rgba8.empty())
             std::printf("    texture  %dx%d%s%s\n", c.texture.width, c.texture.height,
                         c.texture.path.empty() ? "" : " ", c.texture.path.c_str());
@@ -264,6 +321,7 @@ void summarise_registry(const ecs::Registry& reg) {
         gaussians += g.size();
         std::printf("  gaussians '%s': %zu Gaussians, SH degree %d%s%s\n", n ? n->value.c_str() : "?",
                     g.size(), g.sh_degree, src ? "; file " : "", src ? src->path.string().c_str() : "");
+        print_columns(reg, e);
         if (g.size()) print_rest_and_deformed(reg, e, g.positions, g.origin), print_pages(g.positions);
         print_deformers(reg, e);
     });
