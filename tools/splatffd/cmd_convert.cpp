@@ -21,6 +21,7 @@
 #include "runtime/assets/import.h"
 #include "runtime/assets/scene.h"
 #include "runtime/scene/point_order.h"
+#include "runtime/scene/point_subset.h"
 #include "systems/ffd/lattice_io.h"
 #include "systems/ffd/operations.h"
 #include "systems/animation/components.h"
@@ -33,6 +34,7 @@
 #include "tools/splatffd/convert_gaussians.h"
 #include "tools/splatffd/lattice_source.h"
 #include "tools/splatffd/progress.h"
+#include "tools/splatffd/scene_subset.h"
 #include "tools/splatffd/unkeyed_note.h"
 #include "systems/engine/engine_frame.h"
 
@@ -82,7 +84,13 @@ constexpr const char* kUsage =
     "  --order O        the order of the points in OUT: keep (as read or made) or morton (Z-order of the\n"
     "                   positions written, 21 bits per axis in the cloud's box, ties in input order), so\n"
     "                   each page of 65,536 points is a compact block and a local edit re-deforms few\n"
-    "                   pages; every column moves with its point, lattices are untouched (default keep)\n";
+    "                   pages; every column moves with its point, lattices are untouched (default keep)\n"
+    "  --selected       with a scene IN: only the selected points (as saved by splatffd view; hidden and\n"
+    "                   deleted ones never count), every column with them; a cloud file OUT needs them in\n"
+    "                   one cloud (or --entity), a scene OUT keeps each cloud that has some\n"
+    "  --entity NAME    with a scene IN: only the cloud named NAME (e.g. a separated part, NAME.part) and\n"
+    "                   its lattices\n"
+    "  A cloud file OUT never holds hidden or deleted points; a scene OUT keeps hidden ones, still hidden\n";
 
 // --order morton on a surface cloud: every column moved together (runtime/scene/point_order.h).
 sffd::Status reorder(sffd::SplatCloud& cloud, bool morton) {
@@ -194,7 +202,14 @@ struct SceneConvert {
     int spz_version = 3;
     LatticeRequest lattice;
     const sffd::cli::LatticeChain* loaded = nullptr;  // --lattice SRC, read before
+    sffd::cli::SceneSubset subset;                    // --selected, --entity
 };
+
+// The cloud's weights (PointWeights) when they are one a point, for the deformers; else null (weight 1).
+const float* weights_of(const sffd::ecs::Registry& r, sffd::ecs::Entity e, std::size_t n) {
+    const sffd::PointWeights* w = r.try_get<sffd::PointWeights>(e);
+    return w && w->values.size() == n && n > 0 ? w->values.data() : nullptr;
+}
 
 // IN a scene file (the editor's save, `convert --lattice`): loaded as render, deform and info load it, so
 // its Gaussians are where those commands show them however they are stored (embedded KHR primitives, a
@@ -208,26 +223,33 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
     sffd::use_engine_scene_hooks(r);
     if (Status st = load_scene(r, in); !st) return cli::command_error("convert", st.message());
     if (!o.rest) cli::note_unkeyed_edits("convert", r);
+    const bool scene_out = cli::is_scene_path(out);
+    std::string subset_note;
+    if (o.subset.active()) {
+        auto kept = cli::narrow_scene(r, in, o.subset, scene_out);
+        if (!kept) return cli::command_error("convert", kept.message());
+        if (!o.subset.entity.empty()) subset_note += ", cloud '" + o.subset.entity + "' only";
+        if (o.subset.selected) subset_note += ", selected points only";
+    }
     std::vector<ecs::Entity> clouds;
     r.each_entity([&](ecs::Entity e) {
         if (r.has<SplatCloud>(e) || r.has<GaussianCloud>(e)) clouds.push_back(e);
     });
-    const bool scene_out = cli::is_scene_path(out);
     const bool surface_to_gaussians = o.gaussians && clouds.size() == 1 && r.has<SplatCloud>(clouds[0]);
     if (scene_out && o.lattice.source.empty() && !surface_to_gaussians) {
         // The scene as loaded, its cloud in the order asked for (lattices do not depend on it).
+        // Reordered through keep_points, so the flags and weights beside the cloud move with their points.
         for (ecs::Entity e : clouds) {
-            Status st;
-            if (o.morton && r.has<SplatCloud>(e)) st = reorder(r.patch<SplatCloud>(e), true);
-            if (o.morton && r.has<GaussianCloud>(e)) {
-                GaussianCloud& g = r.patch<GaussianCloud>(e);
-                st = permute(g, morton_order(g.positions));
-            }
-            if (!st) return cli::command_error("convert", in + ": " + st.message());
+            if (!o.morton) continue;
+            const SplatCloud* sc = r.try_get<SplatCloud>(e);
+            const auto order = morton_order(sc ? sc->positions : r.try_get<GaussianCloud>(e)->positions);
+            if (auto st = keep_points(r, e, order); !st)
+                return cli::command_error("convert", in + ": " + st.message());
         }
         if (Status st = save_scene(r, out); !st) return cli::command_error("convert", st.message());
-        std::fprintf(stderr, "wrote %s: the scene as loaded (%zu cloud(s), %zu lattice(s), %zu clip(s))\n",
-                     out.c_str(), clouds.size(), r.count<Lattice>(), r.count<AnimationClip>());
+        std::fprintf(stderr, "wrote %s: the scene as loaded%s (%zu cloud(s), %zu lattice(s), %zu clip(s))\n",
+                     out.c_str(), subset_note.c_str(), clouds.size(), r.count<Lattice>(),
+                     r.count<AnimationClip>());
         return 0;
     }
     if (clouds.size() != 1)
@@ -236,6 +258,11 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
                                       " clouds; a cloud file holds one (convert writes a scene with "
                                       "all of them to .glb/.gltf)");
     const ecs::Entity cloud_entity = clouds[0];
+    // Everything below writes the cloud out of the scene: an export, which holds no point that is not
+    // drawn (point_subset.h); only a scene save keeps hidden points.
+    auto gone = drop_gone_points(r, cloud_entity, PointDrop::hidden_and_deleted);
+    if (!gone) return cli::command_error("convert", in + ": " + gone.message());
+    if (*gone) subset_note += ", " + std::to_string(*gone) + " hidden or deleted point(s) left out";
     const Name* cloud_name = r.try_get<Name>(cloud_entity);
     const std::string name = cloud_name ? cloud_name->value : std::filesystem::path(in).stem().string();
     // A scene OUT keeps the scene's own lattices, bound to the cloud at rest, as they were.
@@ -265,13 +292,16 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
         pose = ", its lattices " + names + " at rest";
     else if (o.rest) pose = ", at rest (without --rest: deformed by " + names + " as saved)";
     else pose = ", deformed by " + names + " as saved (--rest: the cloud at rest)";
+    pose = subset_note + pose;
 
     if (GaussianCloud* g = r.try_get<GaussianCloud>(cloud_entity)) {
         GaussianCloud posed = *g;
         if (deform) {
+            gaussian::DeformOptions options;
+            options.weights = weights_of(r, cloud_entity, posed.size());  // P + w (FFD(P) - P)
             for (const Lattice* l : chain) {
                 if (!moved(*l)) continue;
-                auto st = gaussian::deform(*l, posed, posed);
+                auto st = gaussian::deform(*l, posed, posed, options);
                 if (!st) return cli::command_error("convert", in + ": " + st.message());
             }
             gaussian::bake_sh_frames(posed);
@@ -289,12 +319,13 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
         auto ptr = [](std::vector<glm::vec3>& v) { return v.empty() ? nullptr : v.data(); };
         for (const Lattice* l : chain) {
             if (!moved(*l)) continue;
-            const ffd::PointsIn pin{cloud.positions.data(),
-                                    ptr(cloud.normals),
-                                    ptr(cloud.axis_u),
-                                    ptr(cloud.axis_v),
-                                    n,
-                                    cloud.origin};
+            ffd::PointsIn pin{cloud.positions.data(),
+                              ptr(cloud.normals),
+                              ptr(cloud.axis_u),
+                              ptr(cloud.axis_v),
+                              n,
+                              cloud.origin};
+            pin.weights = weights_of(r, cloud_entity, n);  // P + w (FFD(P) - P)
             const ffd::PointsOut pout{cloud.positions.data(), ptr(cloud.normals), ptr(cloud.axis_u),
                                       ptr(cloud.axis_v)};
             if (auto st = ffd::deform(*l, pin, pout); !st)
@@ -325,6 +356,7 @@ int run_convert(sffd::cli::Args args) {
     bool ascii = false, gaussians = false, progress = false, turn_x180 = false, rest = false, morton = false;
     int spz_version = 3;
     LatticeRequest lattice;
+    cli::SceneSubset subset;
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         // Every number goes through cli::parse_integer (one message format, the option named).
@@ -382,6 +414,13 @@ int run_convert(sffd::cli::Args args) {
             turn_x180 = true;
         } else if (a == "--rest") {
             rest = true;
+        } else if (a == "--selected") {
+            subset.selected = true;
+        } else if (a == "--entity") {
+            auto v = text();
+            if (!v) return 2;
+            if (v->empty()) return cli::usage_error("convert", "--entity needs a cloud's name", kUsage);
+            subset.entity = *v;
         } else if (a == "--spz-version") {
             auto v = value(3, 4);
             if (!v) return 2;
@@ -402,13 +441,25 @@ int run_convert(sffd::cli::Args args) {
     if (rest && !scene_in)
         return cli::usage_error("convert", "--rest applies to a scene IN (its cloud without its lattices)",
                                 "");
-    // A Gaussian input stays Gaussian: read as points it would lose colour, opacity and SH.
+    if (subset.active() && !scene_in)
+        return cli::usage_error("convert",
+                                std::string(subset.selected ? "--selected" : "--entity") +
+                                    " applies to a scene IN (" + in +
+                                    " is not a scene file: its points have no selection or names)",
+                                "");
+    // A Gaussian input stays Gaussian: read as points it would lose colour, opacity and SH. In a scene
+    // each cloud keeps its own kind (a surface cloud beside Gaussians stays surface splats unless
+    // --gaussians is given), so the scene is converted with the option as given.
     const bool gaussian_in = !assets::is_builtin_scene(in) && cli::is_gaussian_file(in);
+    const bool gaussians_asked = gaussians;
     gaussians = gaussians || gaussian_in;
     if (turn_x180 && !gaussians)
         return cli::usage_error("convert", "--turn-x180 applies to Gaussians: add --gaussians", "");
     // A SOG folder's meta.json is the Gaussians' file, not a lattice.
     const bool sog_folder = gaussians && std::filesystem::path(out).filename() == "meta.json";
+    if (cli::is_json_path(out) && !sog_folder && subset.active())
+        return cli::usage_error("convert", "--selected and --entity choose points; OUT .json is a lattice",
+                                "");
     if (cli::is_json_path(out) && !sog_folder) return export_lattice_json(in, out, lattice);
     if (!lattice.source.empty() && !cli::is_scene_path(out)) {
         std::fprintf(stderr,
@@ -437,8 +488,9 @@ int run_convert(sffd::cli::Args args) {
         loaded = std::move(*c);
     }
     if (scene_in)
-        return convert_scene(
-            in, out, SceneConvert{rest, gaussians, ascii, turn_x180, morton, spz_version, lattice, &loaded});
+        return convert_scene(in, out,
+                             SceneConvert{rest, gaussians_asked, ascii, turn_x180, morton, spz_version,
+                                          lattice, &loaded, subset});
     const cli::GaussianLatticeRequest gaussian_lattice{lattice.source, &loaded};
     if (gaussian_in)
         return cli::write_gaussians(in, nullptr, SplatMaterial{}, out, ascii, turn_x180, spz_version,
