@@ -31,8 +31,11 @@
 
 #include "runtime/assets/formats/surface/export.h"
 #include "runtime/assets/formats/surface/ply.h"
+#include "runtime/assets/formats/surface/ply_weights.h"
 #include "runtime/assets/import.h"
 #include "runtime/assets/scene.h"
+#include "runtime/scene/point_columns.h"
+#include "runtime/scene/point_subset.h"
 #include "systems/ffd/operations.h"
 #include "systems/ffd/deform.h"
 #include "systems/ffd/ffd_gpu.h"
@@ -289,7 +292,8 @@ int deform_in_memory(const Options& o) {
     ecs::Registry scene;
     sffd::use_engine_scene_hooks(scene);
     SplatCloud cloud;
-    SplatMaterial material;  // the input's, carried into a .glb output
+    std::vector<float> weights;  // PointWeights of the cloud (empty: weight 1)
+    SplatMaterial material;      // the input's, carried into a .glb output
     std::string cloud_name = std::filesystem::path(in_path).stem().string();
     const bool in_scene = cli::is_scene_path(in_path);
     std::string estimated;
@@ -307,14 +311,19 @@ int deform_in_memory(const Options& o) {
                 if (scene.has<GaussianCloud>(e)) gs.push_back(e);
             });
             if (gs.size() != 1) return fail(in_path + ": no point cloud (deform works on one)");
+            // An export: no hidden or deleted Gaussian is written (runtime/scene/point_subset.h).
+            if (auto gone = drop_gone_points(scene, gs[0], PointDrop::hidden_and_deleted); !gone)
+                return fail(in_path + ": " + gone.message());
             const GaussianCloud& g = scene.get<GaussianCloud>(gs[0]);
+            const PointWeights* gw = scene.try_get<PointWeights>(gs[0]);
             auto chain = early ? Result<cli::LatticeChain>(std::move(*early))
                                : lattice_chain(o, g.positions, g.origin, &scene);
             if (!chain) return fail(chain.message());
             return cli::deform_gaussian_cloud(
                 g, chain->lattices, chain->names,
                 std::to_string(chain->lattices.size()) + " lattice(s) " + joined(chain->names), o.files[1],
-                o.ascii);
+                o.ascii,
+                gw && gw->values.size() == g.size() && !gw->values.empty() ? gw->values.data() : nullptr);
         }
         ecs::Entity chosen = clouds.size() == 1 ? clouds[0] : ecs::null_entity;
         if (!chosen && o.lattice_source.empty()) {
@@ -324,13 +333,19 @@ int deform_in_memory(const Options& o) {
         if (!chosen)
             return fail(in_path + ": " + std::to_string(clouds.size()) +
                         " point clouds; deform works on one (the one bound to the chosen lattice)");
+        if (auto gone = drop_gone_points(scene, chosen, PointDrop::hidden_and_deleted); !gone)
+            return fail(in_path + ": " + gone.message());
         cloud = scene.get<SplatCloud>(chosen);
+        if (const PointWeights* w = scene.try_get<PointWeights>(chosen)) weights = w->values;
         if (const SplatMaterial* m = scene.try_get<SplatMaterial>(chosen)) material = *m;
         if (const Name* n = scene.try_get<Name>(chosen)) cloud_name = n->value;
     } else {
         auto c = assets::import_splat_cloud(in_path, {}, &material);
         if (!c) return fail(c.message());
         cloud = std::move(*c);
+        auto w = assets::cloud_weights_of_file(in_path, cloud.size());  // a PLY's `weight` column
+        if (!w) return fail(w.message());
+        weights = std::move(w->values);
         estimated = " (normals/radii estimated by import where the input had none)";
     }
     auto chain = early ? Result<cli::LatticeChain>(std::move(*early))
@@ -347,19 +362,20 @@ int deform_in_memory(const Options& o) {
         auto g = ffd::GpuDeformer::create_headless();
         if (!g) return fail(g.message());
         gpu.emplace(std::move(*g));
-        set_up_ms = ffd::set_up_gpu_programs(*gpu, chain->lattices);
+        set_up_ms = ffd::set_up_gpu_programs(*gpu, chain->lattices, weights.size() == n && n > 0);
     }
     double ms = 0.0;
     std::size_t inverted = 0;
     std::vector<std::size_t> inside;
     auto ptr = [](std::vector<glm::vec3>& v) { return v.empty() ? nullptr : v.data(); };
     for (const Lattice& l : chain->lattices) {
-        const ffd::PointsIn in{cloud.positions.data(),
-                               ptr(cloud.normals),
-                               ptr(cloud.axis_u),
-                               ptr(cloud.axis_v),
-                               n,
-                               cloud.origin};
+        ffd::PointsIn in{cloud.positions.data(),
+                         ptr(cloud.normals),
+                         ptr(cloud.axis_u),
+                         ptr(cloud.axis_v),
+                         n,
+                         cloud.origin};
+        in.weights = weights.size() == n && n > 0 ? weights.data() : nullptr;  // P + w (FFD(P) - P)
         const ffd::PointsOut out{cloud.positions.data(), ptr(cloud.normals), ptr(cloud.axis_u),
                                  ptr(cloud.axis_v)};
         const auto t0 = Clock::now();

@@ -127,7 +127,7 @@ int deform_gaussian_file(const std::string& in, const std::string& out,
 
 int deform_gaussian_cloud(GaussianCloud cloud, const std::vector<Lattice>& lattices,
                           const std::vector<std::string>& names, const std::string& what,
-                          const std::string& out, bool ascii) {
+                          const std::string& out, bool ascii, const float* weights) {
     if (!is_gaussian_output(out))
         return fail(out +
                     ": deformed Gaussians are written as .ply (3DGS), .compressed.ply (PlayCanvas), .spz, "
@@ -135,8 +135,10 @@ int deform_gaussian_cloud(GaussianCloud cloud, const std::vector<Lattice>& latti
     const auto t0 = Clock::now();
     std::size_t inverted = 0, not_finite = 0;
     std::vector<std::size_t> inside;
+    gaussian::DeformOptions options;
+    options.weights = weights;
     for (const Lattice& l : lattices) {
-        auto stats = gaussian::deform(l, cloud, cloud);
+        auto stats = gaussian::deform(l, cloud, cloud, options);
         if (!stats) return fail(what + ": " + stats.message());
         inverted += stats->inverted;
         not_finite += stats->not_finite;

@@ -45,9 +45,9 @@ int report_gaussian_stream(const ffd::StreamDeformResult& result, const std::str
 // A scene's Gaussian cloud (a saved editor scene, `convert g.ply s.glb --lattice fit`) deformed by
 // `lattices` in order on the CPU and written as Gaussians (OUT as is_gaussian_output() lists).
 // `names` (the lattices') and `what` (all of them) name them in the summary and warnings. Returns the exit
-// code.
+// code. `weights`: one per Gaussian (the cloud's PointWeights) or null (weight 1): P + w (FFD(P) - P).
 int deform_gaussian_cloud(GaussianCloud cloud, const std::vector<Lattice>& lattices,
                           const std::vector<std::string>& names, const std::string& what,
-                          const std::string& out, bool ascii);
+                          const std::string& out, bool ascii, const float* weights = nullptr);
 
 }  // namespace sffd::cli

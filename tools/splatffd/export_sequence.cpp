@@ -9,6 +9,8 @@
 #include "runtime/assets/scene.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
+#include "runtime/scene/point_columns.h"
+#include "runtime/scene/point_subset.h"
 #include "systems/animation/animation_system.h"
 #include "systems/animation/components.h"
 #include "systems/animation/evaluate.h"
@@ -131,6 +133,9 @@ Status open_export_scene(const std::string& scene, const std::string& cloud_name
     } else {
         out.cloud = deformed[0];
     }
+    // Frames are exports: no hidden or deleted point is written (runtime/scene/point_subset.h).
+    if (auto gone = drop_gone_points(r, out.cloud, PointDrop::hidden_and_deleted); !gone)
+        return make_error(scene + ": " + gone.message());
     out.gaussians = r.has<GaussianCloud>(out.cloud);
     out.cloud_name = name_of(r, out.cloud, "cloud");
     out.count = out.gaussians ? r.get<GaussianCloud>(out.cloud).size() : r.get<SplatCloud>(out.cloud).size();
@@ -168,6 +173,12 @@ void pose_export_frame(ExportScene& scene, double fps, long frame) {
 
 namespace {
 
+// The cloud's weights (PointWeights) when they are one a point; else null (weight 1).
+const float* weights_of(const ecs::Registry& r, ecs::Entity e, std::size_t n) {
+    const PointWeights* w = r.try_get<PointWeights>(e);
+    return w && w->values.size() == n && n > 0 ? w->values.data() : nullptr;
+}
+
 Result<ExportedFrame> write_surface(const ExportScene& scene, ExportFormat format,
                                     const std::filesystem::path& path) {
     const ecs::Registry& r = scene.registry;
@@ -183,12 +194,13 @@ Result<ExportedFrame> write_surface(const ExportScene& scene, ExportFormat forma
     for (std::size_t li = 0; li < frame.lattices.size(); ++li) {
         const ecs::Entity e = frame.entities[li];
         const Lattice& l = *frame.lattices[li];
-        const ffd::PointsIn in{cloud.positions.data(),
-                               ptr(cloud.normals),
-                               ptr(cloud.axis_u),
-                               ptr(cloud.axis_v),
-                               n,
-                               cloud.origin};
+        ffd::PointsIn in{cloud.positions.data(),
+                         ptr(cloud.normals),
+                         ptr(cloud.axis_u),
+                         ptr(cloud.axis_v),
+                         n,
+                         cloud.origin};
+        in.weights = weights_of(r, scene.cloud, n);  // P + w (FFD(P) - P), as the engine deforms it
         const ffd::PointsOut o{cloud.positions.data(), ptr(cloud.normals), ptr(cloud.axis_u),
                                ptr(cloud.axis_v)};
         auto stats = ffd::deform(l, in, o);
@@ -218,10 +230,12 @@ Result<ExportedFrame> write_gaussians(const ExportScene& scene, ExportFormat for
     const ecs::Registry& r = scene.registry;
     GaussianCloud cloud = r.get<GaussianCloud>(scene.cloud);
     ExportedFrame done;
+    gaussian::DeformOptions options;
+    options.weights = weights_of(r, scene.cloud, cloud.size());  // as the engine deforms them
     const ffd::CloudLattices frame = ffd::cloud_lattices(r, scene.cloud, scene.lattices);
     for (std::size_t li = 0; li < frame.lattices.size(); ++li) {
         const ecs::Entity e = frame.entities[li];
-        auto stats = gaussian::deform(*frame.lattices[li], cloud, cloud);
+        auto stats = gaussian::deform(*frame.lattices[li], cloud, cloud, options);
         if (!stats) return make_error(name_of(r, e, "lattice") + ": " + stats.message());
         done.inverted += stats->inverted;
         done.not_finite += stats->not_finite;

@@ -17,6 +17,8 @@
 #include "runtime/core/paths.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
+#include "runtime/scene/point_columns.h"
+#include "runtime/scene/point_subset.h"
 #include "systems/animation/clip_io.h"
 #include "systems/animation/components.h"
 #include "systems/animation/evaluate.h"
@@ -204,6 +206,10 @@ Result<WebScene> pick_scene(const ecs::Registry& r, const Options& o) {
     if (const AnimationState* st = r.try_get<AnimationState>(le)) s.playback_speed = st->speed;
     if (r.try_get<UnkeyedEdit>(le))
         s.notes.push_back("the lattice has an un-keyed edit; the player shows the clip's pose at every time");
+    if (const PointWeights* w = r.try_get<PointWeights>(ce); w && !w->values.empty())
+        s.notes.push_back(
+            "the cloud has per-point weights, which the player does not apply (every Gaussian "
+            "follows the lattice fully; splatffd render applies them)");
     s.camera = render::scene_camera(r, double(o.width) / double(o.height));
     return s;
 }
@@ -297,6 +303,14 @@ int run_export_web(Args args) {
     ecs::Registry registry;
     sffd::use_engine_scene_hooks(registry);
     if (Status st = load_scene(registry, o.scene); !st) return command_error("export", st.message());
+    // The capture is an export: no hidden or deleted Gaussian goes into it (runtime/scene/point_subset.h).
+    std::vector<ecs::Entity> gaussians;
+    registry.each_entity([&](ecs::Entity e) {
+        if (registry.has<GaussianCloud>(e)) gaussians.push_back(e);
+    });
+    for (ecs::Entity e : gaussians)
+        if (auto gone = drop_gone_points(registry, e, PointDrop::hidden_and_deleted); !gone)
+            return command_error("export", o.scene + ": " + gone.message());
     auto scene = pick_scene(registry, o);
     if (!scene) return command_error("export", scene.message());
     const auto engine = find_web_engine();
