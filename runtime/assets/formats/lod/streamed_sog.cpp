@@ -231,6 +231,10 @@ private:
                     if (!fs::is_regular_file(img, ec))
                         return make_error(img.string() + ": " +
                                           (fs::exists(img, ec) ? "not a regular file" : "no such file"));
+                    // Confined like the units: an image that is a symlink must stay inside the folder.
+                    const std::string rel = (fs::path(u.name).parent_path() / f.get<std::string>()).string();
+                    if (auto inside = resolve_resource(s_.path, rel); !inside)
+                        return make_error(inside.message());
                     const std::uint64_t b = fs::file_size(img, ec);
                     image_bytes += b;
                     u.parts.push_back({img, b});

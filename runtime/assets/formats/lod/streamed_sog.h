@@ -22,7 +22,8 @@
 //   environment) is a relative path to a SOG folder's meta.json or a .sog archive that resolves inside
 //   DIR (resolve_resource: no absolute path, no "..", no symlink out); no file named twice.
 //   Each unit's meta.json (at most kMaxUnitMetaBytes): its "count" (at most kMaxGaussians) and its image
-//   names (plain names of regular files beside it, whose sizes are recorded); a unit used by one level
+//   names (plain names of regular files beside it, inside DIR after symlinks like the units, whose sizes
+//   are recorded); a unit used by one level
 //   only; its runs tile [0, count) exactly (no gap, no overlap, nothing past the end); per level the
 //   runs add up to counts[level]; and the ratio budget: a unit declares at most kMaxTexelsPerByte
 //   Gaussians per byte of its images (a real capture's images are noise-like; a few bytes claiming
