@@ -32,6 +32,7 @@
 #include "runtime/assets/formats/gaussian/gaussian_gltf.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/convert_gaussians.h"
+#include "tools/splatffd/convert_lod.h"
 #include "tools/splatffd/lattice_source.h"
 #include "tools/splatffd/progress.h"
 #include "tools/splatffd/scene_subset.h"
@@ -90,7 +91,9 @@ constexpr const char* kUsage =
     "                   one cloud (or --entity), a scene OUT keeps each cloud that has some\n"
     "  --entity NAME    with a scene IN: only the cloud named NAME (e.g. a separated part, NAME.part) and\n"
     "                   its lattices\n"
-    "  A cloud file OUT never holds hidden or deleted points; a scene OUT keeps hidden ones, still hidden\n";
+    "  A cloud file OUT never holds hidden or deleted points; a scene OUT keeps hidden ones, still hidden\n"
+    "  OUT DIR/lod-meta.json  a Gaussian level-of-detail hierarchy (PlayCanvas streamed SOG), with its own\n"
+    "                   options: splatffd convert IN DIR/lod-meta.json --help\n";
 
 // --order morton on a surface cloud: every column moved together (runtime/scene/point_order.h).
 sffd::Status reorder(sffd::SplatCloud& cloud, bool morton) {
@@ -351,6 +354,7 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
 
 int run_convert(sffd::cli::Args args) {
     using namespace sffd;
+    if (cli::names_lod_output(args)) return cli::run_convert_lod(args);  // tools/splatffd/convert_lod.h
     std::string in, out;
     assets::ImportOptions opt;
     bool ascii = false, gaussians = false, progress = false, turn_x180 = false, rest = false, morton = false;

@@ -33,6 +33,7 @@
 #include "runtime/assets/formats/gaussian/gaussian_io.h"
 #include "systems/gaussian/gaussian_scene.h"
 #include "tools/splatffd/command.h"
+#include "tools/splatffd/convert_lod.h"
 #include "systems/engine/engine_frame.h"
 
 namespace {
@@ -380,7 +381,8 @@ constexpr const char* kUsage =
     "camera,\n"
     "         lights; a deformed cloud's bounds at rest and deformed by its lattices as saved), .spz .splat "
     ".ksplat\n"
-    "         .sog, a SOG folder's meta.json (Gaussians: count, SH degree, bounds)\n"
+    "         .sog, a SOG folder's meta.json (Gaussians: count, SH degree, bounds), DIR/lod-meta.json (a\n"
+    "         streamed SOG hierarchy: levels, Gaussians and units per level, tree nodes, bounds)\n"
     "  sphere, face   the built-in scenes\n";
 
 int run_info(cli::Args args) {
@@ -391,6 +393,7 @@ int run_info(cli::Args args) {
     const std::string file = args[0];
     std::string ext = std::filesystem::path(file).extension().string();
     for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    if (std::filesystem::path(file).filename() == "lod-meta.json") return cli::info_lod(file);
     if (ext == ".ply") return info_ply(file);
     if (ext == ".spz") return info_gaussians(file, "SPZ (Niantic)");
     if (ext == ".splat") return info_gaussians(file, ".splat (antimatter15)");

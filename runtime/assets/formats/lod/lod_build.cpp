@@ -464,6 +464,7 @@ Result<LodBuildStats> build_streamed_sog(const GaussianSource& source, const fs:
     };
     if (Status s = bucket_cells(scan, count, root, bo, source.name,
                                 [&](std::vector<std::byte>& r, std::size_t n, const Cell& c) -> Status {
+                                    if (built == 0) report_progress(o.progress, "building", 0.0);
                                     Status st = b.cell(r, n, c);
                                     built += n;
                                     report_progress(o.progress, "building", double(built) / double(count));
@@ -471,7 +472,10 @@ Result<LodBuildStats> build_streamed_sog(const GaussianSource& source, const fs:
                                 });
         !s)
         return s.error();
+    // The open units (the last chunks of every level) and lod-meta.json.
+    report_progress(o.progress, "writing", 0.0);
     if (Status s = b.finish(o); !s) return s.error();
+    report_progress(o.progress, "writing", 1.0);
     return b.stats;
 }
 
