@@ -7,6 +7,7 @@
 #include "runtime/assets/formats/gaussian/gaussian_ksplat.h"
 #include "runtime/assets/formats/gaussian/gaussian_sog.h"
 #include "runtime/assets/formats/gaussian/gaussian_spz.h"
+#include "runtime/assets/formats/lod/streamed_sog.h"
 #include "systems/gaussian/gaussian_math.h"
 #include "systems/gaussian/sh.h"
 
@@ -36,7 +37,11 @@ Result<GaussianCloud> read_gaussians(const fs::path& path) {
     Result<GaussianCloud> g =
         make_error(path.string() + ": unknown Gaussian splat format '" + ext +
                    "' (expected .ply, .splat, .spz, .ksplat, .sog, a SOG folder's meta.json, .glb or .gltf)");
-    if (ext == ".ply") g = read_ply(path);
+    if (path.filename() == "lod-meta.json") {
+        // A streamed SOG at full detail: every leaf's level-0 Gaussians as one cloud.
+        auto s = lod::open_streamed_sog(path);
+        g = s ? lod::read_level(*s, 0) : Result<GaussianCloud>(s.error());
+    } else if (ext == ".ply") g = read_ply(path);
     else if (ext == ".splat") g = read_splat(path);
     else if (ext == ".glb" || ext == ".gltf") g = read_gltf(path, &apply_affine);
     else if (ext == ".spz") g = read_spz(path);

@@ -16,8 +16,10 @@
 namespace sffd::gaussian {
 
 // By extension: .ply (3DGS or compressed, gaussian_compressed_ply.h), .splat, .spz (v2-v4, gaussian_spz.h),
-// .ksplat (gaussian_ksplat.h), .sog, a SOG folder or its meta.json (any .json; gaussian_sog.h) or .glb/.gltf
-// (KHR_gaussian_splatting, gaussian_gltf.h). Every cloud returned has passed validate().
+// .ksplat (gaussian_ksplat.h), .sog, a SOG folder or its meta.json (any .json; gaussian_sog.h), .glb/.gltf
+// (KHR_gaussian_splatting, gaussian_gltf.h) or a streamed SOG's lod-meta.json (its finest level, every
+// leaf's level-0 Gaussians in tree order: runtime/assets/formats/lod/streamed_sog.h read_level). Every
+// cloud returned has passed validate().
 Result<GaussianCloud> read_gaussians(const std::filesystem::path& path);
 
 // A KHR_gaussian_splatting file, each primitive placed by apply_affine (gaussian_gltf.h's reader).

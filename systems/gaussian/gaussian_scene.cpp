@@ -196,7 +196,8 @@ bool is_gaussian_scene_file(const fs::path& given) {
     const fs::path path = gaussian_file_of(given);
     const std::string e = lower_ext(path);
     if (e == ".splat" || e == ".spz" || e == ".ksplat" || e == ".sog") return true;
-    if (path.filename() == "meta.json") return true;  // a SOG folder's
+    if (path.filename() == "meta.json") return true;      // a SOG folder's
+    if (path.filename() == "lod-meta.json") return true;  // a streamed SOG, read at full detail
     if (e == ".ply") {
         auto r = ply::Reader::open(path);
         if (!r) return false;
@@ -222,7 +223,8 @@ Result<ecs::Entity> load_gaussian_entity(ecs::Registry& registry, const fs::path
     if (ec) absolute = path;
     const ecs::Entity e = registry.create();
     // A SOG folder is named after the folder, not "meta".
-    const fs::path named = path.filename() == "meta.json" ? path.parent_path() : path;
+    const fs::path named =
+        path.filename() == "meta.json" || path.filename() == "lod-meta.json" ? path.parent_path() : path;
     registry.emplace<Name>(e, Name{named.stem().string()});
     // Shown upright: the capture's up (y down unless --up says otherwise) turned onto the world's +y.
     registry.emplace<Transform>(e, capture_transform());
@@ -439,8 +441,8 @@ void register_gaussian_scene_hooks(SceneHooks& hooks) {
             add_default_gaussian_view(registry);
             return {};
         },
-        ".spz, .splat, .ksplat, .sog, a SOG folder or its meta.json, a 3DGS .ply, a KHR_gaussian_splatting "
-        ".glb/.gltf");
+        ".spz, .splat, .ksplat, .sog, a SOG folder or its meta.json, a streamed SOG's lod-meta.json, a 3DGS "
+        ".ply, a KHR_gaussian_splatting .glb/.gltf");
 }
 
 }  // namespace sffd::gaussian

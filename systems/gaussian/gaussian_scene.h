@@ -5,7 +5,7 @@
 //   - a scene file loader: load_scene(registry, "x.ply" | "x.splat" | "x.spz" | "x.glb"/"x.gltf") on a
 //     Gaussian file (a PLY with f_dc_0/opacity/scale_0/rot_0, .splat, .spz, a glTF whose JSON uses
 //     KHR_gaussian_splatting and is not one of our scene files, .ksplat, .sog, a SOG folder or its
-//     meta.json) creates one Gaussian entity (Name =
+//     meta.json, a streamed SOG's lod-meta.json at full detail) creates one Gaussian entity (Name =
 //     file stem, Transform, GaussianCloud, GaussianSource) and a default camera when there is none;
 //   - a scene extension: save_scene writes every Gaussian entity into SFFD_scene.extensions.gaussians,
 //     load_scene reads them back:

@@ -34,7 +34,8 @@ std::string lower_ext(const std::string& p) {
 bool is_gaussian_file(const std::string& in) {
     const std::string e = lower_ext(in);
     if (e == ".splat" || e == ".spz" || e == ".ksplat" || e == ".sog") return true;
-    if (std::filesystem::path(in).filename() == "meta.json") return true;  // a SOG folder
+    if (std::filesystem::path(in).filename() == "meta.json") return true;      // a SOG folder
+    if (std::filesystem::path(in).filename() == "lod-meta.json") return true;  // a streamed SOG (its level 0)
     if (std::error_code ec; std::filesystem::is_regular_file(std::filesystem::path(in) / "meta.json", ec))
         return true;  // a SOG folder given as the folder
     if (e == ".ply") {

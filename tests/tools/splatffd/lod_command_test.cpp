@@ -1,0 +1,181 @@
+// The level-of-detail hierarchy through the built binary: `convert IN DIR/lod-meta.json` (3DGS PLY,
+// another Gaussian format, synthetic-gaussians:N) with its --lod-* options and progress, `info` on it,
+// refused options, a lod-meta.json read back by convert, and `render`/`profile` of a lod-meta.json at full
+// detail: the render equals the plain render of the same Gaussians (its finest level written as a 3DGS PLY),
+// PSNR >= 40 dB, alone and deformed by a lattice from a scene that refers to the lod-meta.json.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <string>
+
+#include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/lod/streamed_sog.h"
+#include "runtime/assets/scene.h"
+#include "systems/engine/engine_frame.h"
+#include "systems/ffd/operations.h"
+#include "systems/gaussian/gaussian_read.h"
+#include "systems/splat_render/image_compare.h"
+#include "systems/splat_render/image_io.h"
+#include "tests/test_util/run_tool.h"
+
+namespace fs = std::filesystem;
+using namespace sffd;
+
+namespace {
+
+using sffd::test::CliRun;
+CliRun tool(const std::string& args) { return sffd::test::run_headless(args); }
+
+fs::path temp(const std::string& name) {
+    const fs::path d = fs::temp_directory_path() / ("sffd_lod_cmd_" + std::to_string(::getpid()));
+    fs::create_directories(d);
+    return d / name;
+}
+
+// A shell of Gaussians with colours and some view dependence, in the 3DGS frame (y down).
+GaussianCloud shell(std::size_t n) {
+    std::mt19937 rng(4);
+    std::normal_distribution<float> nd;
+    std::uniform_real_distribution<float> u(0, 1);
+    GaussianCloud g;
+    g.sh_degree = 1;
+    for (std::size_t i = 0; i < n; ++i) {
+        const glm::vec3 d = glm::normalize(glm::vec3(nd(rng), nd(rng), nd(rng)));
+        g.positions.push_back(d * (1.0f + 0.05f * u(rng)));
+        g.scales.emplace_back(0.05f + 0.02f * u(rng), 0.05f + 0.02f * u(rng), 0.01f);
+        g.rotations.push_back(glm::normalize(glm::quat(nd(rng), nd(rng), nd(rng), nd(rng))));
+        g.opacities.push_back(0.5f + 0.45f * u(rng));
+        for (int c = 0; c < 3; ++c) g.sh.push_back(1.5f * d[c]);
+        for (int k = 0; k < 9; ++k) g.sh.push_back(0.1f * nd(rng));
+    }
+    return g;
+}
+
+render::FrameImage render_exr(const std::string& scene, const std::string& name) {
+    const fs::path out = temp(name);
+    const CliRun r = tool("render " + scene + " --out " + out.string() +
+                          " --size 320x240 --format exr --camera 0.4,-0.6,3.6,0,0,0,0,1,0,40");
+    EXPECT_EQ(r.code, 0) << r.out;
+    auto img = render::read_exr(out / "frame_0000.exr");
+    EXPECT_TRUE(img) << img.message();
+    return img ? std::move(*img) : render::FrameImage{};
+}
+
+double psnr(const render::FrameImage& a, const render::FrameImage& b) {
+    auto c = render::compare_images(a, b);
+    EXPECT_TRUE(c) << c.message();
+    EXPECT_GT(c ? c->pixels : 0u, 2000u);
+    return c ? c->psnr : 0.0;
+}
+
+TEST(LodCommand, ConvertsSyntheticGaussiansWithProgressAndInfoDescribesIt) {
+    const fs::path meta = temp("syn") / "lod-meta.json";
+    const CliRun r = tool("convert synthetic-gaussians:30k " + meta.string() +
+                          " --lod-levels 3 --lod-ratio 4 --lod-chunk-count 4 --lod-memory 64 --progress");
+    ASSERT_EQ(r.code, 0) << r.out;
+    EXPECT_NE(r.out.find("convert: building"), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("wrote " + meta.string() + ": "), std::string::npos) << r.out;
+    EXPECT_NE(r.out.find("in 3 levels (30000, "), std::string::npos) << r.out;
+    auto s = lod::open_streamed_sog(meta);
+    ASSERT_TRUE(s) << s.message();
+    EXPECT_EQ(s->counts[0], 30000u);
+    const CliRun info = tool("info " + meta.string());
+    ASSERT_EQ(info.code, 0) << info.out;
+    for (const char* line : {"streamed SOG (lod-meta.json version 1, written by splatffd)", "levels: 3",
+                             "level 0: 30000 Gaussians in", "tree: ", "bounds: ["})
+        EXPECT_NE(info.out.find(line), std::string::npos) << line << "\n" << info.out;
+}
+
+TEST(LodCommand, ConvertsGaussianFilesAndReadsTheHierarchyBack) {
+    const GaussianCloud g = shell(4000);
+    const fs::path ply = temp("s.ply"), spz = temp("s.spz");
+    ASSERT_TRUE(gaussian::write_ply(ply, g));
+    ASSERT_EQ(tool("convert " + ply.string() + " " + spz.string()).code, 0);
+    for (const fs::path& in : {ply, spz}) {
+        const fs::path meta = temp("from_" + in.extension().string().substr(1)) / "lod-meta.json";
+        const CliRun r = tool("convert " + in.string() + " " + meta.string() + " --lod-chunk-count 1");
+        ASSERT_EQ(r.code, 0) << r.out;
+        // convert reads a lod-meta.json as its finest level.
+        const fs::path back = temp("back_" + in.extension().string().substr(1) + ".ply");
+        const CliRun b = tool("convert " + meta.string() + " " + back.string());
+        ASSERT_EQ(b.code, 0) << b.out;
+        auto cloud = gaussian::read_gaussians(back);
+        ASSERT_TRUE(cloud) << cloud.message();
+        EXPECT_EQ(cloud->size(), g.size());
+        EXPECT_EQ(cloud->sh_degree, 1);
+    }
+    // Refusals: options of other outputs, bad values, a surface input.
+    CliRun r =
+        tool("convert " + ply.string() + " " + (temp("x") / "lod-meta.json").string() + " --lattice fit");
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find("'--lattice' does not apply to a lod-meta.json output"), std::string::npos) << r.out;
+    r = tool("convert " + ply.string() + " " + (temp("x") / "lod-meta.json").string() + " --lod-levels 40");
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find("--lod-levels"), std::string::npos) << r.out;
+    r = tool("convert sphere " + (temp("x") / "lod-meta.json").string());
+    EXPECT_EQ(r.code, 1) << r.out;
+    EXPECT_NE(r.out.find("not a Gaussian file"), std::string::npos) << r.out;
+    r = tool("convert " + ply.string() + " " + temp("lod-meta.json").string() + " --help");
+    EXPECT_EQ(r.code, 0);
+    EXPECT_NE(r.out.find("--lod-chunk-count"), std::string::npos) << r.out;
+}
+
+TEST(LodCommand, FullDetailRendersLikeThePlainCloud) {
+    const GaussianCloud g = shell(6000);
+    const fs::path ply = temp("r.ply"), meta = temp("r") / "lod-meta.json", level0 = temp("r_level0.ply");
+    ASSERT_TRUE(gaussian::write_ply(ply, g));
+    ASSERT_EQ(tool("convert " + ply.string() + " " + meta.string() + " --lod-chunk-count 2").code, 0);
+    auto s = lod::open_streamed_sog(meta);
+    ASSERT_TRUE(s) << s.message();
+    EXPECT_GT(s->units.size(), 2u);
+    auto finest = lod::read_level(*s, 0);
+    ASSERT_TRUE(finest) << finest.message();
+    ASSERT_TRUE(gaussian::write_ply(level0, *finest));
+    const auto lod_image = render_exr(meta.string(), "img_lod");
+    const auto plain = render_exr(level0.string(), "img_level0");
+    const auto original = render_exr(ply.string(), "img_original");
+    const double same = psnr(lod_image, plain), quantised = psnr(lod_image, original);
+    std::printf(
+        "  full-detail render vs its finest level as a PLY: %.1f dB; vs the unquantised input: %.1f dB\n",
+        same, quantised);
+    EXPECT_GE(same, 40.0);
+    EXPECT_GE(quantised, 30.0);
+
+    // The same under a twisted lattice, from scenes that refer to each file.
+    const auto scene_of = [&](const fs::path& file, const fs::path& scene) {
+        ecs::Registry r;
+        sffd::use_engine_scene_hooks(r);
+        ASSERT_TRUE(load_scene(r, file.string()));
+        ecs::Entity cloud{};
+        r.each_entity([&](ecs::Entity e) {
+            if (r.has<GaussianCloud>(e)) cloud = e;
+        });
+        const GaussianCloud& c = r.get<GaussianCloud>(cloud);
+        auto l = ffd::fit_lattice(c.positions, c.origin, ffd::FitOptions{glm::ivec3(3, 3, 3)});
+        ASSERT_TRUE(l) << l.message();
+        ffd::twist_graded(*l, ffd::all_control_points(*l), glm::dvec3(0, 1, 0), 1.2);
+        const ecs::Entity le = r.create();
+        r.emplace<Transform>(le, r.get<Transform>(cloud));
+        r.emplace<Lattice>(le, std::move(*l));
+        r.emplace<Deformers>(cloud, Deformers{{le}});
+        ASSERT_TRUE(save_scene(r, scene));
+    };
+    const fs::path scene_lod = temp("lod_scene.glb"), scene_plain = temp("plain_scene.glb");
+    scene_of(meta, scene_lod);
+    scene_of(level0, scene_plain);
+    // The scene refers to the hierarchy rather than embedding its Gaussians (6,000 would be ~400 KB).
+    EXPECT_LT(fs::file_size(scene_lod), 100000u);
+    const double twisted = psnr(render_exr(scene_lod.string(), "img_lod_twist"),
+                                render_exr(scene_plain.string(), "img_plain_twist"));
+    std::printf("  twisted by a scene's lattice: %.1f dB\n", twisted);
+    EXPECT_GE(twisted, 40.0);
+
+    const CliRun p = tool("profile " + meta.string() + " --frames 2 --warmup 1 --sync");
+    EXPECT_EQ(p.code, 0) << p.out;
+}
+
+}  // namespace
