@@ -122,8 +122,8 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
         // Save (every component a scene file holds, through the scene's hooks), screenshot, quit.
         s.add(Phase::rendering, "editor.requests", editor::requests_system,
               ecs::reads<AmbientLight, AnimationClip, AnimationState, Camera, Deformers, DirectionalLight,
-                         DeformedGaussians, GaussianCloud, GaussianSource, Lattice, Name, PointFlags, PointWeights,
-                         SceneHooks, SplatCloud, SplatMaterial, Transform, UnkeyedEdit>()
+                         DeformedGaussians, GaussianCloud, GaussianSource, Lattice, Name, PointFlags,
+                         PointWeights, SceneHooks, SplatCloud, SplatMaterial, Transform, UnkeyedEdit>()
                   .writes<app::AppContext, editor::EditorState, editor::detail::ViewSession,
                           render::detail::SplatRenderState>());
     }

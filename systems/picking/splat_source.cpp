@@ -92,7 +92,8 @@ SplatSource splat_source(const ecs::Registry& registry, ecs::Entity cloud_entity
                 DeformedSplats d;
                 const ffd::CloudLattices framed =
                     ffd::cloud_lattices(registry, cloud_entity, deform_inputs.lattices);
-                ffd::deform_cloud(*cloud, framed.span(), d, "picking", registry.try_get<PointWeights>(cloud_entity));
+                ffd::deform_cloud(*cloud, framed.span(), d, "picking",
+                                  registry.try_get<PointWeights>(cloud_entity));
                 entry.positions = std::move(d.positions);
                 entry.normals = std::move(d.normals);
                 entry.axis_u = std::move(d.axis_u);
