@@ -136,4 +136,15 @@ ffd::Box lattice_node_bounds(std::span<const Lattice* const> lattices, const Box
     return b;
 }
 
+CutTree deformed_cut_tree(const CutTree& tree, std::span<const Lattice* const> lattices, bool weighted) {
+    CutTree out = tree;
+    for (CutNode& n : out.nodes) {
+        const Box b = lattice_node_bounds(lattices, Box{n.lo, n.hi, false}, weighted);
+        const double before = glm::length(n.hi - n.lo), after = glm::length(b.hi - b.lo);
+        if (before > 0.0 && after > before) n.size *= after / before;
+        n.lo = b.lo, n.hi = b.hi;
+    }
+    return out;
+}
+
 }  // namespace sffd::lod

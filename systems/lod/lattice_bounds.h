@@ -20,7 +20,7 @@
 // Per-point weights (PointWeights: X + w D, w in [0, 1]) move a point part of the way: `weighted` adds 0 to
 // the displacement hull and the box to the control-point hull. A chain of lattices is bounded one after
 // the other. Every box is padded by kInsideSlack times the lattice's edges (points that far outside a
-// face deform as if on it).
+// face deform as if on it). deformed_cut_tree() applies it to every node of a cut tree (cut.h).
 //
 // Covered: the FFD of every point of the box, so every Gaussian centre in it. A deformed Gaussian's extent
 // is its covariance through the Jacobian at its centre (J Σ Jᵀ), a linearisation: its 1σ ellipsoid can
@@ -31,6 +31,7 @@
 #include <span>
 
 #include "systems/ffd/lattice.h"
+#include "systems/lod/cut.h"
 
 namespace sffd::lod {
 
@@ -39,5 +40,12 @@ ffd::Box lattice_node_bounds(const Lattice& lattice, const ffd::Box& box, bool w
 // Through each lattice in order (a chain of Deformers, each already in the cloud's frame).
 ffd::Box lattice_node_bounds(std::span<const Lattice* const> lattices, const ffd::Box& box,
                              bool weighted = false);
+
+// A CutTree as its lattices deform it: every node's box replaced by its bounds under the chain, and its
+// size grown by as much as its box's diagonal grew (a stretched region shows its Gaussians stretched;
+// never shrunk, so a squeeze refines no less than at rest). Cut selection on the result sees the
+// deformed hierarchy where it is drawn.
+CutTree deformed_cut_tree(const CutTree& tree, std::span<const Lattice* const> lattices,
+                          bool weighted = false);
 
 }  // namespace sffd::lod

@@ -7,12 +7,16 @@
 #include <unistd.h>
 
 #include <filesystem>
+#include <map>
 #include <functional>
 #include <set>
 
 #include "runtime/assets/formats/lod/lod_build.h"
 #include "runtime/assets/formats/lod/streamed_sog.h"
+#include "systems/ffd/deform.h"
+#include "systems/ffd/operations.h"
 #include "systems/lod/cut.h"
+#include "systems/lod/lattice_bounds.h"
 
 namespace {
 
@@ -175,6 +179,67 @@ TEST(LodCut, StreamedSogTree) {
     EXPECT_LE(mid.splats, budget);
     EXPECT_GT(mid.splats, s->counts[1] / 2);
     EXPECT_TRUE(mid.budget_limited);
+    fs::remove_all(d);
+}
+
+// A real hierarchy under lattices: every node of the deformed cut tree holds its own Gaussians' centres
+// deformed by the reference FFD, at every level, under a twisted B-spline lattice and a stretched
+// Bernstein one (in a chain too); the cut of the deformed tree still covers it once within the budget.
+TEST(LodCut, DeformedTreeBoundsHoldTheDeformedGaussians) {
+    const fs::path d = fs::temp_directory_path() / ("sffd_lod_cut_deformed_" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    lod::LodBuildOptions o;
+    o.levels = 3, o.chunk_count = 1024;
+    ASSERT_TRUE(lod::build_streamed_sog(lod::synthetic_gaussian_source(12000), d / "lod-meta.json", o));
+    auto s = lod::open_streamed_sog(d / "lod-meta.json");
+    ASSERT_TRUE(s) << s.message();
+    const lod::CutTree tree = lod::cut_tree(*s);
+    Lattice twisted =
+        make_lattice(glm::dvec3(-12.0), {glm::dvec3(24, 0, 0), glm::dvec3(0, 24, 0), glm::dvec3(0, 0, 24)},
+                     glm::ivec3(6), LatticeBasis::bspline);
+    ffd::twist_graded(twisted, ffd::all_control_points(twisted), glm::dvec3(0, 1, 0), 0.2);
+    Lattice stretched =
+        make_lattice(glm::dvec3(-4.0, -11.0, -11.0),
+                     {glm::dvec3(15, 0, 0), glm::dvec3(0, 22, 0), glm::dvec3(0, 0, 22)}, glm::ivec3(3));
+    ffd::stretch(stretched, ffd::select_range(stretched, glm::ivec3(2, 0, 0), glm::ivec3(3)),
+                 glm::dvec3(30, 5, 0));
+    std::map<std::uint32_t, GaussianCloud> units;
+    const auto unit = [&](std::uint32_t u) -> const GaussianCloud& {
+        auto it = units.find(u);
+        if (it == units.end()) {
+            auto g = lod::read_unit(*s, u);
+            EXPECT_TRUE(g) << g.message();
+            it = units.emplace(u, g ? std::move(*g) : GaussianCloud{}).first;
+        }
+        return it->second;
+    };
+    const std::vector<std::vector<const Lattice*>> chains = {
+        {&twisted}, {&stretched}, {&twisted, &stretched}};
+    for (const auto& chain : chains) {
+        const lod::CutTree deformed = lod::deformed_cut_tree(tree, chain);
+        std::size_t checked = 0, outside = 0;
+        for (const lod::CutNode& n : deformed.nodes) {
+            if (n.level < 0) continue;
+            const auto& run = s->nodes[n.source].lods[std::size_t(n.level)];
+            ASSERT_TRUE(run);
+            const GaussianCloud part = lod::slice(unit(run->file), *run);
+            std::vector<glm::vec3> p = part.positions;
+            for (const Lattice* l : chain)
+                ASSERT_TRUE(
+                    ffd::deform(*l, ffd::PointsIn{p.data(), nullptr, nullptr, nullptr, p.size(), part.origin},
+                                ffd::PointsOut{p.data()}, ffd::Backend::reference));
+            for (const glm::vec3& q : p) {
+                const glm::dvec3 x = part.origin + glm::dvec3(q);
+                ++checked;
+                for (int a = 0; a < 3; ++a) outside += x[a] < n.lo[a] - 1e-4 || x[a] > n.hi[a] + 1e-4;
+            }
+        }
+        EXPECT_EQ(checked, s->total());
+        EXPECT_EQ(outside, 0u) << chain.size() << " lattice(s)";
+        const lod::Cut cut = lod::select_cut(deformed, view_from(glm::dvec3(5, 3, 30)), {1.0, 8000, true});
+        expect_covers_once(deformed, cut);
+        EXPECT_LE(cut.splats, 8000u);
+    }
     fs::remove_all(d);
 }
 
