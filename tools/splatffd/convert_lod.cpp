@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <optional>
+#include <set>
 #include <string>
 
 #include "runtime/assets/builtin_scenes.h"
@@ -182,11 +183,31 @@ int run_convert_lod(Args args) {
     std::optional<GaussianCloud> whole;
     auto source = open_source(in, whole);
     if (!source) return command_error("convert", source.message());
+    // A hierarchy already there is replaced: its units that the new one does not name are removed after
+    // the new lod-meta.json is written (only the files its manifest lists, inside the folder).
+    std::error_code ec;
+    auto before =
+        fs::exists(out, ec) ? lod::open_streamed_sog(out) : Result<lod::StreamedSog>(make_error(""));
     ProgressPrinter printer("convert", ProgressPrinter::mode_for(progress));
     o.progress = printer.fn();
     auto stats = lod::build_streamed_sog(*source, out, o);
     if (!stats) return command_error("convert", stats.message());
     printer.summary();
+    if (before) {
+        auto now = lod::open_streamed_sog(out);
+        std::set<fs::path> kept;
+        if (now)
+            for (const lod::LodUnit& u : now->units) kept.insert(u.path.lexically_normal());
+        std::size_t removed = 0;
+        for (const lod::LodUnit& u : before->units) {
+            if (!now || kept.count(u.path.lexically_normal())) continue;
+            for (const lod::LodPart& p : u.parts) fs::remove(p.path, ec);
+            fs::remove(u.path.parent_path(), ec);  // only when empty
+            ++removed;
+        }
+        if (removed > 0)
+            std::fprintf(stderr, "removed %zu units of the hierarchy %s held before\n", removed, out.c_str());
+    }
     std::uint64_t total = 0;
     for (const std::uint64_t c : stats->counts) total += c;
     std::fprintf(stderr,

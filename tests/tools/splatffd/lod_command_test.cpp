@@ -83,6 +83,19 @@ TEST(LodCommand, ConvertsSyntheticGaussiansWithProgressAndInfoDescribesIt) {
     auto s = lod::open_streamed_sog(meta);
     ASSERT_TRUE(s) << s.message();
     EXPECT_EQ(s->counts[0], 30000u);
+    // Built again into the same folder with fewer units: the old units it no longer names are removed.
+    const CliRun again = tool("convert synthetic-gaussians:30k " + meta.string() + " --lod-levels 2");
+    ASSERT_EQ(again.code, 0) << again.out;
+    EXPECT_NE(again.out.find("removed "), std::string::npos) << again.out;
+    EXPECT_FALSE(fs::exists(meta.parent_path() / "2_0"));
+    EXPECT_FALSE(fs::exists(meta.parent_path() / "0_1"));
+    auto s2 = lod::open_streamed_sog(meta);
+    ASSERT_TRUE(s2) << s2.message();
+    EXPECT_TRUE(lod::read_level(*s2, 1));
+    ASSERT_EQ(tool("convert synthetic-gaussians:30k " + meta.string() +
+                   " --lod-levels 3 --lod-ratio 4 --lod-chunk-count 4 --lod-memory 64")
+                  .code,
+              0);
     const CliRun info = tool("info " + meta.string());
     ASSERT_EQ(info.code, 0) << info.out;
     for (const char* line : {"streamed SOG (lod-meta.json version 1, written by splatffd)", "levels: 3",
