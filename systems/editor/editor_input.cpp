@@ -147,6 +147,7 @@ bool handle_typed_key(ecs::Registry& registry, EditorState& state, const InputEv
 
 // A replayed slider gesture (`set material.<field> <value>`); the parser accepted only known fields.
 void handle_set(ecs::Registry& registry, EditorState& state, const InputEvent& e) {
+    if (is_point_field(e.key)) return handle_point_field(state, e);
     if (is_proportional_field(e.key)) {
         set_proportional_field(state.proportional, e.key, e.value);
         const ProportionalSettings& p = state.proportional;
@@ -183,7 +184,10 @@ void handle_key(ecs::Registry& registry, EditorState& state, const InputEvent& e
         else if (k == "pagedown") change_proportional_radius(registry, state, 1.0 / proportional_radius_step);
         return;  // no other shortcuts mid-gesture
     }
+    if (k == "tab" && ctrl && !shift) return toggle_edit_mode(registry, state);  // point_mode.h
     if (state.typed.active && handle_typed_key(registry, state, e)) return;
+    // Point mode's keys first (point_mode.h); what it leaves is every mode's (undo, save, lattices, view).
+    if (state.mode == EditMode::points && handle_point_key(registry, state, e)) return;
     if (handle_lattice_key(registry, state, e))
         return;  // add/remove/refit/order/export/import (lattice_manage.h)
     if (ctrl) {
@@ -309,7 +313,8 @@ void editor_input_system(ecs::Registry& registry, const FrameContext& frame) {
         // on what the pick selects), except the moves of a brush drag: each posts its own dab, and dabs
         // only add to or remove from the selection.
         if (!state->pending_picks.empty() &&
-            !(e.kind == InputKind::move && state->drag.kind == Drag::Kind::brush))
+            !(e.kind == InputKind::move &&
+              (state->drag.kind == Drag::Kind::brush || state->drag.kind == Drag::Kind::point_brush)))
             break;
         camera = camera_of(registry, *state);  // undo may have touched components: look it up again
         if (!camera) {

@@ -19,6 +19,7 @@
 #include "systems/editor/gizmo.h"
 #include "systems/editor/input_record.h"
 #include "systems/editor/lattice_tools.h"
+#include "systems/editor/point_mode.h"
 #include "systems/editor/proportional.h"
 #include "systems/editor/undo_stack.h"
 #include "systems/ffd/components.h"
@@ -36,7 +37,20 @@ enum class PivotMode : std::uint8_t { centroid, picked_point };
 // picking phase answers it; editor_pick_system, right after picking, applies the action to the answer.
 // A box select needs no ray: it is applied in the same step, with picking's visibility test.
 struct PendingPick {
-    enum class Action : std::uint8_t { click_select, brush, pivot, box_select };
+    // point_*: point mode's gestures (point_tools.cpp). point_click, point_colour and point_sphere wait for a
+    // pick (the cloud in front, the eyedropper's point, the sphere's centre); point_region (box, lasso,
+    // polygon) and point_brush (a dab) need none: they run after this frame's deformation, as box_select.
+    enum class Action : std::uint8_t {
+        click_select,
+        brush,
+        pivot,
+        box_select,
+        point_click,
+        point_colour,
+        point_sphere,
+        point_region,
+        point_brush
+    };
     Action action = Action::click_select;
     std::uint64_t id = 0;                                     // picking::PickRequest::id (not box_select)
     std::uint8_t modifiers = 0;                               // click_select, box_select: the modifiers
@@ -46,6 +60,9 @@ struct PendingPick {
     glm::dvec2 from{0.0}, to{0.0};
     picking::ScreenView view{};
     bool visible_only = true;
+    // Point gestures: the region (point_region, point_brush), the mode, the cursor (point_click: `from`).
+    point_select::ScreenRegion region{};
+    PointMode point_mode = PointMode::set;
 };
 
 // A stretch or twist as the user last applied it (in lattice space), so "set key" can key it.
@@ -73,7 +90,14 @@ struct Drag {
         move,
         twist,
         brush,
-        scale
+        scale,
+        // Point mode (point_tools.cpp): a press not yet a drag (click, or a box once it moves), a box, a
+        // lasso path, a brush stroke, a sphere's radius.
+        point_click,
+        point_box,
+        point_lasso,
+        point_brush,
+        point_sphere
     } kind = Kind::none;
     MouseButton button = MouseButton::left;
     std::uint8_t modifiers = 0;
@@ -115,6 +139,10 @@ struct TypedEntry {
 };
 
 struct EditorState {
+    // --- edit mode (ctrl+tab): the lattice's control points, or the points of the clouds (point_mode.h) ---
+    EditMode mode = EditMode::lattice;
+    PointEditing points;
+
     // --- tool settings (panels and shortcuts change them) ---
     Tool tool = Tool::select;
     AxisMode move_axis = AxisMode::view_plane;

@@ -65,6 +65,20 @@ bool change_proportional_radius(ecs::Registry& registry, EditorState& state, dou
 // A scale by `factor` along the axis (x, y, z, custom), or uniform (view plane, view); world axes.
 glm::dmat3 scale_matrix(AxisMode axis, const Camera& camera, const glm::dvec3& custom_axis, double factor);
 
+// Posts a pick through the cursor for the picking phase (surfaces; control points too when asked) and the
+// gesture to apply to its answer (editor_pick_system, right after picking).
+void post_pick_at(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor,
+                  bool control_points, PendingPick action);
+
+// point_tools.cpp: point mode's mouse gestures (point_mode.h).
+bool is_point_drag(Drag::Kind kind);
+void point_press(ecs::Registry& registry, EditorState& state, const Camera& camera, const InputEvent& e);
+void point_move(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor);
+void point_release(ecs::Registry& registry, EditorState& state, const Camera& camera, const InputEvent& e);
+void cancel_point_drag(ecs::Registry& registry, EditorState& state);
+// Applies a point gesture in the picking phase (its pick answered, or needing none).
+void apply_point_pick(ecs::Registry& registry, EditorState& state, const PendingPick& pick);
+
 // editor_input.cpp
 AnimationState* animation_state(ecs::Registry& registry, const EditorState& state);
 

@@ -7,10 +7,6 @@
 
 namespace sffd::editor::detail {
 
-namespace {
-
-// Posts a pick through the cursor for the picking phase, and the gesture to apply to its answer
-// (editor_pick_system, right after picking).
 void post_pick_at(ecs::Registry& registry, EditorState& state, const Camera& camera, glm::dvec2 cursor,
                   bool control_points, PendingPick action) {
     picking::PickQuery q = picking::query_at_pixel(screen_view(camera, state.viewport), cursor);
@@ -19,8 +15,10 @@ void post_pick_at(ecs::Registry& registry, EditorState& state, const Camera& cam
     q.control_points = control_points;
     q.surfaces = true;
     action.id = picking::post_pick(registry, q);
-    state.pending_picks.push_back(action);
+    state.pending_picks.push_back(std::move(action));
 }
+
+namespace {
 
 void click_select(ecs::Registry& registry, EditorState& state, const picking::PickHit& hit,
                   std::uint8_t modifiers) {
@@ -331,6 +329,11 @@ void handle_move(ecs::Registry& registry, EditorState& state, Camera& camera, gl
             brush_dab(registry, state, camera, cursor,
                       drag.modifiers & mods::ctrl ? picking::SelectMode::remove : picking::SelectMode::add);
             break;
+        case Drag::Kind::point_click:
+        case Drag::Kind::point_box:
+        case Drag::Kind::point_lasso:
+        case Drag::Kind::point_brush:
+        case Drag::Kind::point_sphere: point_move(registry, state, camera, cursor); break;
     }
     drag.last = cursor;
 }
@@ -355,6 +358,7 @@ void handle_press(ecs::Registry& registry, EditorState& state, Camera& camera, c
         post_pick_at(registry, state, camera, state.cursor, false, {PendingPick::Action::pivot});
         return;
     }
+    if (state.mode == EditMode::points) return point_press(registry, state, camera, e);
     const bool plain = (e.modifiers & (mods::shift | mods::ctrl)) == 0;
     if (plain && (state.tool == Tool::move || state.tool == Tool::twist || state.tool == Tool::scale) &&
         begin_tool_drag(registry, state, camera, drag))
@@ -389,6 +393,11 @@ void handle_release(ecs::Registry& registry, EditorState& state, Camera& camera,
         case Drag::Kind::move:
         case Drag::Kind::scale:
         case Drag::Kind::twist: finish_tool_drag(registry, state, drag); break;
+        case Drag::Kind::point_click:
+        case Drag::Kind::point_box:
+        case Drag::Kind::point_lasso:
+        case Drag::Kind::point_brush:
+        case Drag::Kind::point_sphere: point_release(registry, state, camera, e); break;
         default: break;
     }
     drag = Drag{};
@@ -401,6 +410,7 @@ void cancel_drag(ecs::Registry& registry, EditorState& state) {
         else if (drag.before_unkeyed) set_unkeyed_pose(registry, drag.lattice, *drag.before_unkeyed);
         else registry.remove<UnkeyedEdit>(drag.lattice);
     }
+    if (is_point_drag(drag.kind)) cancel_point_drag(registry, state);
     drag = Drag{};
     say(state, "cancelled");
 }
@@ -409,6 +419,10 @@ void apply_pending_picks(ecs::Registry& registry, EditorState& state) {
     std::vector<PendingPick> picks;
     picks.swap(state.pending_picks);
     for (const PendingPick& p : picks) {
+        if (p.action >= PendingPick::Action::point_click) {  // point mode's (point_tools.cpp)
+            apply_point_pick(registry, state, p);
+            continue;
+        }
         if (p.action == PendingPick::Action::box_select) {
             box_select(registry, state, p);
             continue;
@@ -421,7 +435,7 @@ void apply_pending_picks(ecs::Registry& registry, EditorState& state) {
             case PendingPick::Action::click_select: click_select(registry, state, *hit, p.modifiers); break;
             case PendingPick::Action::brush: brush_apply(registry, state, *hit, p.mode); break;
             case PendingPick::Action::pivot: set_picked_pivot(state, *hit); break;
-            case PendingPick::Action::box_select: break;
+            default: break;
         }
     }
 }

@@ -8,15 +8,16 @@
 
 #include "runtime/core/file_io.h"
 #include "systems/editor/material_edit.h"
+#include "systems/editor/point_settings.h"
 #include "systems/editor/proportional.h"
 
 namespace sffd::editor {
 
 namespace {
 
-constexpr std::array<std::string_view, 20> named_keys = {
-    "escape", "enter", "tab",   "backspace", "delete", "space",  "left",     "right",  "up",    "down",
-    "home",   "end",   "minus", "equal",     "period", "pageup", "pagedown", "insert", "comma", "slash"};
+constexpr std::array<std::string_view, 21> named_keys = {
+    "escape", "enter",  "tab",      "backspace", "delete", "space", "left",  "right", "up",   "down", "home",
+    "end",    "minus",  "equal",    "period",    "pageup", "pagedown", "insert", "comma", "slash", "plus"};
 
 std::vector<std::string_view> split_words(std::string_view line) {
     std::vector<std::string_view> words;
@@ -152,11 +153,21 @@ Result<std::vector<InputEvent>> parse_input_recording(std::string_view text, std
         } else if (kind == "set") {
             e.kind = InputKind::set;
             if (w.size() != 4) return fail("'set' takes a field and a value");
-            if (!material_field(w[2]) && !is_proportional_field(w[2]))
+            if (!material_field(w[2]) && !is_proportional_field(w[2]) && !is_point_field(w[2]))
                 return fail("unknown field '" + std::string(w[2]) + "' (" +
                             std::string(material_field_names()) +
-                            ", proportional.enabled, proportional.radius, proportional.falloff)");
-            if (w[2] == "proportional.falloff") {
+                            ", proportional.enabled, proportional.radius, proportional.falloff, point.mode, "
+                            "point.brush_radius, point.sphere_radius, point.colour_tolerance, "
+                            "point.grow_distance, weight.radius, weight.falloff, view.lattice)");
+            if (w[2] == "point.mode" || w[2] == "weight.falloff") {
+                const std::optional<double> v = parse_point_field_value(w[2], w[3]);
+                if (!v)
+                    return fail("unknown " + std::string(w[2] == "point.mode" ? "mode" : "falloff") + " '" +
+                                std::string(w[3]) +
+                                (w[2] == "point.mode" ? "' (set, add, remove, intersect)"
+                                                      : "' (smooth, sphere, linear, sharp, constant)"));
+                e.value = *v;
+            } else if (w[2] == "proportional.falloff") {
                 const std::optional<Falloff> f = falloff_from_name(w[3]);
                 if (!f)
                     return fail("unknown falloff '" + std::string(w[3]) +
@@ -212,8 +223,9 @@ std::string format_input_recording(std::span<const InputEvent> events) {
                 break;
             case InputKind::set:
                 out += " set " + e.key + " " +
-                       (e.key == "proportional.falloff" ? std::string(falloff_name(Falloff(int(e.value))))
-                                                        : format_number(e.value));
+                       (e.key == "proportional.falloff"               ? std::string(falloff_name(Falloff(int(e.value))))
+                        : !point_field_word(e.key, e.value).empty() ? std::string(point_field_word(e.key, e.value))
+                                                                     : format_number(e.value));
                 m.clear();
                 break;
         }

@@ -12,10 +12,13 @@
 //   <frame> text <string>                      typed text (numeric entry), rest of the line
 //   <frame> set <field> <value>                what an inspector slider does, as one whole gesture:
 //                                              material.specular, material.shininess,
-//                                              material.base_color.r/g/b/a (material_edit.h)
+//                                              material.base_color.r/g/b/a (material_edit.h),
+//                                              proportional.*, point.*, weight.*, view.lattice
+//                                              (proportional.h, point_settings.h)
 // mods: any of shift ctrl alt joined by '+', e.g. `12 key z ctrl+shift`.
 // Key names: a..z, 0..9, escape, enter, tab, backspace, delete, space, left, right, up, down, home,
-// end, f1..f12, minus, equal, period. Frames must not decrease.
+// end, f1..f12, minus, equal, plus (the keypad's +), period, pageup, pagedown, insert, comma, slash.
+// Frames must not decrease.
 #pragma once
 
 #include <cstdint>

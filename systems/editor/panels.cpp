@@ -300,7 +300,10 @@ void inspector(ecs::Registry& registry, EditorState& state) {
 }
 
 void tools_panel(ecs::Registry& registry, EditorState& state) {
-    if (begin_panel(registry, Panel::tools)) {
+    const bool open = begin_panel(registry, Panel::tools);
+    if (open) edit_mode_widgets(registry, state);
+    if (open && state.mode == EditMode::points) point_tools_widgets(registry, state);  // tool_widgets.cpp
+    if (open && state.mode != EditMode::points) {
         int tool = int(state.tool);
         ImGui::RadioButton("select (Q)", &tool, int(Tool::select));
         ImGui::SameLine();
@@ -544,8 +547,13 @@ void status_bar(ecs::Registry& registry, EditorState& state) {
                        state.drag.proportional.enabled ? state.drag.proportional.radius
                                                        : state.proportional.radius)
             : std::string();
+    if (state.mode == EditMode::points) {
+        ImGui::Text("%s | render %s | undo %zu/%zu | %s", point_status_text(registry, state).c_str(), render,
+                    state.undo.position(), state.undo.size(), state.status.c_str());
+        return ImGui::End();
+    }
     ImGui::Text(
-        "tool %s | axis %s | %s%s%s%s | %zu selected | auto-key %s%s | render %s | undo %zu/%zu | %s",
+        "LATTICE | tool %s | axis %s | %s%s%s%s | %zu selected | auto-key %s%s | render %s | undo %zu/%zu | %s",
         tool_name(state.tool), axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis),
         state.scope == ToolScope::local ? "local" : "global", state.pin_outer_layer ? " pinned" : "",
         state.xray ? " x-ray" : "", proportional.c_str(), selected, state.auto_key ? "ON" : "off",
@@ -555,6 +563,8 @@ void status_bar(ecs::Registry& registry, EditorState& state) {
 }
 
 void gizmo(ecs::Registry& registry, EditorState& state) {
+    point_gizmo(registry, state);  // point mode's box, lasso, polygon, brush and sphere
+    if (state.mode == EditMode::points) return;
     ImDrawList* dl = ImGui::GetForegroundDrawList();
     const Drag& d = state.drag;
     if (d.kind == Drag::Kind::box) {

@@ -68,6 +68,7 @@ std::string glfw_key_name(int key) {
         case GLFW_KEY_KP_ENTER: return "enter";
         case GLFW_KEY_KP_DECIMAL: return "period";
         case GLFW_KEY_KP_SUBTRACT: return "minus";
+        case GLFW_KEY_KP_ADD: return "plus";  // ctrl+keypad + grows the point selection
         case GLFW_KEY_TAB: return "tab";
         case GLFW_KEY_BACKSPACE: return "backspace";
         case GLFW_KEY_DELETE: return "delete";

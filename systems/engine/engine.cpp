@@ -66,12 +66,15 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
     Schedule s;
 
     // --- input: window events -> editor tools -> edit commands on lattices (editor) -----------------
+    // Point mode (point_mode.h): the selection reads the shown points (picking's sources: the deformed
+    // outputs, a GPU output read back); hide/delete/separate write the flags and make or destroy clouds.
     s.add(Phase::input, "editor", editor::editor_input_system,  // no-op without an EditorState resource
-          ecs::reads<GaussianCloud, SplatCloud>()
-              .writes<AnimationClip, AnimationState, Camera, Deformers, Lattice, Name, PreviewBudget,
-                      SplatMaterial, Transform, UnkeyedEdit, editor::EditorState, editor::LatticeFitSettings,
-                      editor::PendingEdits, editor::SceneBoundsCache, picking::LatticeSelection,
-                      picking::PickRequests, render::RenderSettings>());
+          ecs::reads<DeformedSplats, gfx::GpuSplatStore>()
+              .writes<AnimationClip, AnimationState, Camera, DeformedGaussians, Deformers, GaussianCloud, Lattice,
+                      Name, PointFlags, PointPages, PointWeights, PreviewBudget, SplatCloud, SplatMaterial,
+                      Transform, UnkeyedEdit, editor::EditorState, editor::LatticeFitSettings,
+                      editor::PendingEdits, editor::SceneBoundsCache, gaussian::GpuGaussianStore,
+                      picking::LatticeSelection, picking::PickRequests, render::RenderSettings>());
 
     // --- animation: clips write lattice control points at the frame time (animation) ----------------
     s.add(Phase::animation, "animation", animation_system,
@@ -101,9 +104,10 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
               .writes<DeformedGaussians, GaussianCloud, Transform, picking::PickRequests,
                       picking::PickResults, picking::PickSettings, picking::PickingState>());
     s.add(Phase::picking, "editor.picks", editor::editor_pick_system,  // no-op without an EditorState
-          ecs::reads<DeformedGaussians, DeformedSplats, Deformers, GaussianCloud, PointFlags, PointWeights,
-                     SplatCloud, Transform, picking::PickResults>()
-              .writes<Lattice, editor::EditorState, picking::LatticeSelection, picking::PickSettings,
+          ecs::reads<DeformedSplats, Deformers, PointWeights, SplatCloud, SplatMaterial, Transform,
+                     gfx::GpuSplatStore, picking::PickResults>()
+              .writes<DeformedGaussians, GaussianCloud, Lattice, PointFlags, PointPages, editor::EditorState,
+                      gaussian::GpuGaussianStore, picking::LatticeSelection, picking::PickSettings,
                       picking::PickingState>());
 
     // --- rendering: splat passes, overlays, UI, capture (splat_render, editor overlay) ---------------
@@ -141,7 +145,7 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
         if (options.editor)
             s.add(Phase::present, "editor.ui", editor::ui_system,
                   ecs::reads<AmbientLight, AnimationClip, AnimationState, Deformers, DirectionalLight,
-                             GaussianCloud, Lattice, Name, SceneHooks, SplatCloud, Transform,
+                             GaussianCloud, Lattice, Name, PointFlags, SceneHooks, SplatCloud, Transform,
                              editor::SceneBoundsCache, picking::LatticeSelection>()
                       .writes<Camera, SplatMaterial, editor::EditorState, editor::EditorViewRect,
                               editor::LatticeFitSettings, editor::UiCacheOptions, editor::UiCacheState,
