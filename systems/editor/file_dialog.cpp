@@ -71,6 +71,9 @@ void open_scene_file(ecs::Registry& registry, EditorState& state, const std::str
     state.camera = state.active_lattice = state.selected_entity = ecs::null_entity;
     state.last_edit = {};
     state.unkeyed = ecs::null_entity;
+    // Point mode's gesture and caches name the old clouds; its settings stay.
+    state.points.path.clear(), state.points.stroke.clear(), state.points.has_centre = false;
+    state.points.select = point_select::PointSelectState{};
     setup_editor(registry, state.viewport);
     state.status = "opened " + path;
 }

@@ -16,8 +16,8 @@ namespace sffd::editor {
 namespace {
 
 constexpr std::array<std::string_view, 21> named_keys = {
-    "escape", "enter",  "tab",      "backspace", "delete", "space", "left",  "right", "up",   "down", "home",
-    "end",    "minus",  "equal",    "period",    "pageup", "pagedown", "insert", "comma", "slash", "plus"};
+    "escape", "enter", "tab",   "backspace", "delete", "space",    "left",   "right", "up",    "down", "home",
+    "end",    "minus", "equal", "period",    "pageup", "pagedown", "insert", "comma", "slash", "plus"};
 
 std::vector<std::string_view> split_words(std::string_view line) {
     std::vector<std::string_view> words;
@@ -223,9 +223,10 @@ std::string format_input_recording(std::span<const InputEvent> events) {
                 break;
             case InputKind::set:
                 out += " set " + e.key + " " +
-                       (e.key == "proportional.falloff"               ? std::string(falloff_name(Falloff(int(e.value))))
-                        : !point_field_word(e.key, e.value).empty() ? std::string(point_field_word(e.key, e.value))
-                                                                     : format_number(e.value));
+                       (e.key == "proportional.falloff" ? std::string(falloff_name(Falloff(int(e.value))))
+                        : !point_field_word(e.key, e.value).empty()
+                            ? std::string(point_field_word(e.key, e.value))
+                            : format_number(e.value));
                 m.clear();
                 break;
         }

@@ -553,7 +553,8 @@ void status_bar(ecs::Registry& registry, EditorState& state) {
         return ImGui::End();
     }
     ImGui::Text(
-        "LATTICE | tool %s | axis %s | %s%s%s%s | %zu selected | auto-key %s%s | render %s | undo %zu/%zu | %s",
+        "LATTICE | tool %s | axis %s | %s%s%s%s | %zu selected | auto-key %s%s | render %s | undo %zu/%zu | "
+        "%s",
         tool_name(state.tool), axis_mode_name(state.tool == Tool::twist ? state.twist_axis : state.move_axis),
         state.scope == ToolScope::local ? "local" : "global", state.pin_outer_layer ? " pinned" : "",
         state.xray ? " x-ray" : "", proportional.c_str(), selected, state.auto_key ? "ON" : "off",

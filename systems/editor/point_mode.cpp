@@ -106,8 +106,8 @@ void set_edit_mode(ecs::Registry& registry, EditorState& state, EditMode mode) {
     state.mode = mode;
     if (mode == EditMode::points) {
         const point_edit::PointCounts t = point_totals(registry);
-        say(state, log::str("point mode (", point_tool_name(state.points.settings.tool), "): ", t.selected, " of ",
-                            t.points, " points selected; ctrl+tab: lattice mode"));
+        say(state, log::str("point mode (", point_tool_name(state.points.settings.tool), "): ", t.selected,
+                            " of ", t.points, " points selected; ctrl+tab: lattice mode"));
     } else {
         say(state, "lattice mode: control points; ctrl+tab: point mode");
     }
@@ -123,7 +123,8 @@ void push_selection_step(ecs::Registry& registry, EditorState& state, std::strin
                          std::vector<PointSelectionChange::Part> parts) {
     const std::size_t n = changed(parts);
     if (state.undo.push(std::make_unique<PointSelectionChange>(label, std::move(parts))))
-        say(state, log::str(label, ": ", n, " points changed, ", point_totals(registry).selected, " selected"));
+        say(state,
+            log::str(label, ": ", n, " points changed, ", point_totals(registry).selected, " selected"));
     else say(state, label + ": the selection did not change");
 }
 
@@ -135,18 +136,21 @@ void select_each(ecs::Registry& registry, EditorState& state, const char* label,
     for (ecs::Entity e : point_clouds(registry)) parts.emplace_back(e, fn(e));
     const std::size_t n = changed(parts);
     if (state.undo.push(std::make_unique<PointSelectionChange>(label, std::move(parts))))
-        say(state, log::str(label, ": ", n, " points changed, ", point_totals(registry).selected, " selected"));
+        say(state,
+            log::str(label, ": ", n, " points changed, ", point_totals(registry).selected, " selected"));
     else say(state, std::string(label) + ": the selection did not change");
 }
 
 }  // namespace
 
 void points_select_all(ecs::Registry& registry, EditorState& state) {
-    select_each(registry, state, "select all points", [&](ecs::Entity e) { return point_select::select_all(registry, e); });
+    select_each(registry, state, "select all points",
+                [&](ecs::Entity e) { return point_select::select_all(registry, e); });
 }
 
 void points_select_none(ecs::Registry& registry, EditorState& state) {
-    select_each(registry, state, "deselect points", [&](ecs::Entity e) { return point_select::select_none(registry, e); });
+    select_each(registry, state, "deselect points",
+                [&](ecs::Entity e) { return point_select::select_none(registry, e); });
 }
 
 void points_invert(ecs::Registry& registry, EditorState& state) {
@@ -175,7 +179,8 @@ std::vector<PointSelectionChange::Part> points_select_region(ecs::Registry& regi
     options.visible_only = !state.xray;
     std::vector<PointSelectionChange::Part> parts;
     for (ecs::Entity e : point_clouds(registry))
-        parts.emplace_back(e, point_select::select_region(registry, state.points.select, e, view, region, options));
+        parts.emplace_back(
+            e, point_select::select_region(registry, state.points.select, e, view, region, options));
     return parts;
 }
 
@@ -261,7 +266,8 @@ void close_polygon(ecs::Registry& registry, EditorState& state);
 }  // namespace
 
 bool handle_point_key(ecs::Registry& registry, EditorState& state, const InputEvent& e) {
-    const bool ctrl = e.modifiers & mods::ctrl, shift = e.modifiers & mods::shift, alt = e.modifiers & mods::alt;
+    const bool ctrl = e.modifiers & mods::ctrl, shift = e.modifiers & mods::shift,
+               alt = e.modifiers & mods::alt;
     const std::string& k = e.key;
     PointEditing& p = state.points;
     if (p.settings.tool == PointTool::polygon && !p.path.empty() && !ctrl && !alt) {
@@ -322,9 +328,10 @@ void handle_point_field(EditorState& state, const InputEvent& e) {
     }
     set_point_field(state.points.settings, e.key, e.value);
     const PointToolSettings& s = state.points.settings;
-    say(state, log::str("point settings: mode ", point_mode_name(s.mode), ", brush ", s.brush_radius_px,
-                        " px, sphere ", s.sphere_radius, ", colour tolerance ", s.colour_tolerance, ", grow ",
-                        s.grow_distance, ", weights ", falloff_name(s.weight_falloff), " r ", s.weight_radius));
+    say(state,
+        log::str("point settings: mode ", point_mode_name(s.mode), ", brush ", s.brush_radius_px,
+                 " px, sphere ", s.sphere_radius, ", colour tolerance ", s.colour_tolerance, ", grow ",
+                 s.grow_distance, ", weights ", falloff_name(s.weight_falloff), " r ", s.weight_radius));
 }
 
 namespace {

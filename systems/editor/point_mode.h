@@ -36,7 +36,7 @@ struct InputEvent;
 // What point mode keeps between events: the settings, the gesture in progress, point_select's caches.
 struct PointEditing {
     PointToolSettings settings;
-    std::vector<glm::dvec2> path;     // lasso: the drag's path so far; polygon: the clicked vertices
+    std::vector<glm::dvec2> path;             // lasso: the drag's path so far; polygon: the clicked vertices
     PointMode gesture_mode = PointMode::set;  // of the polygon being clicked
     // A brush stroke's dabs so far, per cloud (composed into one undo step on release).
     std::vector<std::pair<ecs::Entity, point_select::SelectionDelta>> stroke;

@@ -46,9 +46,9 @@ PointMode point_mode_for(std::uint8_t modifiers, PointMode plain) {
 
 namespace {
 
-constexpr std::string_view fields[] = {"point.mode",          "point.brush_radius",  "point.sphere_radius",
-                                       "point.colour_tolerance", "point.grow_distance", "weight.radius",
-                                       "weight.falloff",      "view.lattice"};
+constexpr std::string_view fields[] = {
+    "point.mode",          "point.brush_radius", "point.sphere_radius", "point.colour_tolerance",
+    "point.grow_distance", "weight.radius",      "weight.falloff",      "view.lattice"};
 
 double positive(double v) { return std::clamp(v, 1e-6, 1e6); }
 
@@ -83,7 +83,8 @@ void set_point_field(PointToolSettings& s, std::string_view field, double value)
     else if (field == "point.colour_tolerance") s.colour_tolerance = std::clamp(value, 0.0, 2.0);
     else if (field == "point.grow_distance") s.grow_distance = positive(value);
     else if (field == "weight.radius") s.weight_radius = positive(value);
-    else if (field == "weight.falloff") s.weight_falloff = Falloff(std::clamp(int(value), 0, falloff_count - 1));
+    else if (field == "weight.falloff")
+        s.weight_falloff = Falloff(std::clamp(int(value), 0, falloff_count - 1));
 }
 
 }  // namespace sffd::editor

@@ -51,8 +51,9 @@ void add_to_stroke(EditorState& state, std::vector<PointSelectionChange::Part> d
 }  // namespace
 
 bool is_point_drag(Drag::Kind kind) {
-    return kind == Drag::Kind::point_click || kind == Drag::Kind::point_box || kind == Drag::Kind::point_lasso ||
-           kind == Drag::Kind::point_brush || kind == Drag::Kind::point_sphere;
+    return kind == Drag::Kind::point_click || kind == Drag::Kind::point_box ||
+           kind == Drag::Kind::point_lasso || kind == Drag::Kind::point_brush ||
+           kind == Drag::Kind::point_sphere;
 }
 
 void point_press(ecs::Registry& registry, EditorState& state, const Camera& camera, const InputEvent& e) {
@@ -111,11 +112,13 @@ void point_move(ecs::Registry&, EditorState& state, const Camera& camera, glm::d
             break;
         case Drag::Kind::point_brush: {
             const PointMode mode = point_mode_for(drag.modifiers, p.settings.mode);
-            post_brush_dab(state, camera, cursor, mode == PointMode::remove ? PointMode::remove : PointMode::add);
+            post_brush_dab(state, camera, cursor,
+                           mode == PointMode::remove ? PointMode::remove : PointMode::add);
             break;
         }
         case Drag::Kind::point_sphere:
-            if (p.has_centre) p.dragged_radius = sphere_radius_at(drag.camera, state.viewport, p.centre, cursor);
+            if (p.has_centre)
+                p.dragged_radius = sphere_radius_at(drag.camera, state.viewport, p.centre, cursor);
             break;
         default: break;
     }
@@ -129,7 +132,8 @@ void point_release(ecs::Registry& registry, EditorState& state, const Camera& ca
         case Drag::Kind::point_click: {
             const bool colour = p.settings.tool == PointTool::colour;
             PendingPick pick = point_pick(
-                state, camera, colour ? PendingPick::Action::point_colour : PendingPick::Action::point_click, mode);
+                state, camera, colour ? PendingPick::Action::point_colour : PendingPick::Action::point_click,
+                mode);
             pick.from = drag.start;
             post_pick_at(registry, state, camera, drag.start, false, std::move(pick));
             break;
@@ -187,7 +191,8 @@ void cancel_point_drag(ecs::Registry& registry, EditorState& state) {
 
 namespace {
 
-void point_click(ecs::Registry& registry, EditorState& state, const PendingPick& pick, const picking::PickHit* hit) {
+void point_click(ecs::Registry& registry, EditorState& state, const PendingPick& pick,
+                 const picking::PickHit* hit) {
     point_select::PointSelectState& sel = state.points.select;
     const auto mode = point_select::Mode(int(pick.point_mode));
     const point_select::ClickOptions options{pick.visible_only, state.click_tolerance_px};
@@ -204,13 +209,17 @@ void point_click(ecs::Registry& registry, EditorState& state, const PendingPick&
             }
     std::vector<PointSelectionChange::Part> parts;
     for (ecs::Entity e : clouds) {
-        if (e == target) parts.emplace_back(e, point_select::select_click(registry, sel, e, pick.view, pick.from, mode, options));
-        else if (mode == point_select::Mode::set) parts.emplace_back(e, point_select::select_none(registry, e));
+        if (e == target)
+            parts.emplace_back(
+                e, point_select::select_click(registry, sel, e, pick.view, pick.from, mode, options));
+        else if (mode == point_select::Mode::set)
+            parts.emplace_back(e, point_select::select_none(registry, e));
     }
     push_selection_step(registry, state, "click select points", std::move(parts));
 }
 
-void colour_select(ecs::Registry& registry, EditorState& state, const PendingPick& pick, const picking::PickHit* hit) {
+void colour_select(ecs::Registry& registry, EditorState& state, const PendingPick& pick,
+                   const picking::PickHit* hit) {
     if (!hit || (hit->kind != picking::PickKind::surface && hit->kind != picking::PickKind::gaussian))
         return say(state, "colour: no point under the cursor");
     const std::optional<glm::vec3> colour = point_select::point_colour(registry, hit->entity, hit->index);
@@ -221,8 +230,8 @@ void colour_select(ecs::Registry& registry, EditorState& state, const PendingPic
         parts.emplace_back(e, point_select::select_by_colour(registry, e, *colour, tolerance,
                                                              point_select::Mode(int(pick.point_mode))));
     push_selection_step(registry, state,
-                        log::str("colour select points (", colour->x, " ", colour->y, " ", colour->z, " within ",
-                                 tolerance, ")"),
+                        log::str("colour select points (", colour->x, " ", colour->y, " ", colour->z,
+                                 " within ", tolerance, ")"),
                         std::move(parts));
 }
 
@@ -241,16 +250,19 @@ void apply_point_pick(ecs::Registry& registry, EditorState& state, const Pending
             }
             break;
         case PendingPick::Action::point_region: {
-            const char* label = pick.region.shape == point_select::ScreenRegion::Shape::rect ? "box select points"
-                                : state.points.settings.tool == PointTool::polygon        ? "polygon select points"
-                                                                                          : "lasso select points";
-            push_selection_step(registry, state, label,
-                                points_select_region(registry, state, pick.view, pick.region, pick.point_mode));
+            const char* label = pick.region.shape == point_select::ScreenRegion::Shape::rect
+                                    ? "box select points"
+                                : state.points.settings.tool == PointTool::polygon ? "polygon select points"
+                                                                                   : "lasso select points";
+            push_selection_step(
+                registry, state, label,
+                points_select_region(registry, state, pick.view, pick.region, pick.point_mode));
             break;
         }
         case PendingPick::Action::point_brush:
             if (state.drag.kind == Drag::Kind::point_brush)
-                add_to_stroke(state, points_select_region(registry, state, pick.view, pick.region, pick.point_mode));
+                add_to_stroke(state,
+                              points_select_region(registry, state, pick.view, pick.region, pick.point_mode));
             break;
         default: break;
     }

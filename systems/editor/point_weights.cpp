@@ -68,7 +68,8 @@ std::vector<double> distance_to_selection(std::span<const glm::dvec3> world,
     auto cell_of = [&](const glm::dvec3& p) { return glm::ivec3(glm::floor(p / cell)); };
     auto key = [](glm::ivec3 c) {
         return (std::uint64_t(std::uint32_t(c.x) & 0x1FFFFF) << 42) |
-               (std::uint64_t(std::uint32_t(c.y) & 0x1FFFFF) << 21) | std::uint64_t(std::uint32_t(c.z) & 0x1FFFFF);
+               (std::uint64_t(std::uint32_t(c.y) & 0x1FFFFF) << 21) |
+               std::uint64_t(std::uint32_t(c.z) & 0x1FFFFF);
     };
     std::unordered_map<std::uint64_t, std::vector<std::uint32_t>> grid;
     grid.reserve(selected.size());
@@ -89,7 +90,8 @@ std::vector<double> distance_to_selection(std::span<const glm::dvec3> world,
                         if (std::max({std::abs(dx), std::abs(dy), std::abs(dz)}) != ring) continue;
                         const auto it = grid.find(key(c + glm::ivec3(dx, dy, dz)));
                         if (it == grid.end()) continue;
-                        for (std::uint32_t s : it->second) best = std::min(best, glm::distance(world[i], world[s]));
+                        for (std::uint32_t s : it->second)
+                            best = std::min(best, glm::distance(world[i], world[s]));
                     }
         }
         out[i] = best <= radius ? best : inf;
@@ -130,8 +132,8 @@ void set_weights(ecs::Registry& registry, CommandGroup& group, ecs::Entity e, co
         indices.push_back(std::uint32_t(i));
         before.push_back(b), after.push_back(a);
     }
-    auto step = std::make_unique<PointWeightChange>(label, e, n, before_empty, after_empty, std::move(indices),
-                                                    std::move(before), std::move(after));
+    auto step = std::make_unique<PointWeightChange>(label, e, n, before_empty, after_empty,
+                                                    std::move(indices), std::move(before), std::move(after));
     if (step->empty()) return;
     EntityMap none;
     step->redo(registry, none);
@@ -162,8 +164,8 @@ bool weights_from_selection(ecs::Registry& registry, EditorState& state, double 
         return false;
     }
     state.undo.push(std::move(group));
-    state.status = log::str("weights from the selection: ", weighted, " points weighted (", falloff_name(falloff),
-                            ", radius ", radius, "), the rest 0");
+    state.status = log::str("weights from the selection: ", weighted, " points weighted (",
+                            falloff_name(falloff), ", radius ", radius, "), the rest 0");
     log::info("editor: ", state.status);
     return true;
 }

@@ -47,8 +47,8 @@ void button(ecs::Registry& registry, const char* label, Fn fn, bool same_line = 
 void point_tools_widgets(ecs::Registry& registry, EditorState& state) {
     PointToolSettings& s = state.points.settings;
     int tool = int(s.tool);
-    static const char* const labels[point_tool_count] = {"select (Q)", "lasso (L)",         "polygon (shift+L)",
-                                                         "brush (B)",  "sphere (shift+B)", "colour (E)"};
+    static const char* const labels[point_tool_count] = {
+        "select (Q)", "lasso (L)", "polygon (shift+L)", "brush (B)", "sphere (shift+B)", "colour (E)"};
     for (int t = 0; t < point_tool_count; ++t) {
         if (t % 2) ImGui::SameLine();
         ImGui::RadioButton(labels[t], &tool, t);
@@ -66,15 +66,22 @@ void point_tools_widgets(ecs::Registry& registry, EditorState& state) {
     s.colour_tolerance = std::clamp(s.colour_tolerance, 0.0, 2.0);
     s.grow_distance = std::clamp(s.grow_distance, 1e-6, 1e6);
     const double grow = s.grow_distance;
-    button(registry, "all (A)", [](ecs::Registry& r, EditorState& e) { points_select_all(r, e); }, false);
+    button(
+        registry, "all (A)", [](ecs::Registry& r, EditorState& e) { points_select_all(r, e); }, false);
     button(registry, "none (alt+A)", [](ecs::Registry& r, EditorState& e) { points_select_none(r, e); });
     button(registry, "invert (ctrl+I)", [](ecs::Registry& r, EditorState& e) { points_invert(r, e); });
-    button(registry, "grow (ctrl+=)", [grow](ecs::Registry& r, EditorState& e) { points_grow(r, e, grow); }, false);
-    button(registry, "shrink (ctrl+-)", [grow](ecs::Registry& r, EditorState& e) { points_shrink(r, e, grow); });
-    button(registry, "hide (H)", [](ecs::Registry& r, EditorState& e) { points_hide(r, e); }, false);
+    button(
+        registry, "grow (ctrl+=)", [grow](ecs::Registry& r, EditorState& e) { points_grow(r, e, grow); },
+        false);
+    button(registry, "shrink (ctrl+-)",
+           [grow](ecs::Registry& r, EditorState& e) { points_shrink(r, e, grow); });
+    button(
+        registry, "hide (H)", [](ecs::Registry& r, EditorState& e) { points_hide(r, e); }, false);
     button(registry, "unhide (alt+H)", [](ecs::Registry& r, EditorState& e) { points_unhide(r, e); });
     button(registry, "delete (X)", [](ecs::Registry& r, EditorState& e) { points_delete(r, e); });
-    button(registry, "duplicate (shift+D)", [](ecs::Registry& r, EditorState& e) { points_duplicate(r, e); }, false);
+    button(
+        registry, "duplicate (shift+D)", [](ecs::Registry& r, EditorState& e) { points_duplicate(r, e); },
+        false);
     button(registry, "separate (P)", [](ecs::Registry& r, EditorState& e) { points_separate(r, e); });
     ImGui::Separator();
     ImGui::InputDouble("weight radius", &s.weight_radius, 0.01, 0.1, "%.3f");
@@ -84,8 +91,10 @@ void point_tools_widgets(ecs::Registry& registry, EditorState& state) {
         s.weight_falloff = Falloff(falloff);
     const double radius = s.weight_radius;
     const Falloff curve = s.weight_falloff;
-    button(registry, "weights from selection (shift+W)",
-           [radius, curve](ecs::Registry& r, EditorState& e) { weights_from_selection(r, e, radius, curve); }, false);
+    button(
+        registry, "weights from selection (shift+W)",
+        [radius, curve](ecs::Registry& r, EditorState& e) { weights_from_selection(r, e, radius, curve); },
+        false);
     button(registry, "clear (alt+W)", [](ecs::Registry& r, EditorState& e) { clear_weights(r, e); });
     const point_edit::PointCounts t = point_totals(registry);
     ImGui::Text("%zu selected, %zu hidden, %zu deleted of %zu", t.selected, t.hidden, t.deleted, t.points);
@@ -106,8 +115,10 @@ void point_gizmo(const ecs::Registry& registry, const EditorState& state) {
     const auto at = [](glm::dvec2 p) { return ImVec2(float(p.x), float(p.y)); };
     const std::vector<glm::dvec2>& path = state.points.path;
     if (d.kind == Drag::Kind::point_box) {
-        const ImVec2 a(std::min(float(d.start.x), float(state.cursor.x)), std::min(float(d.start.y), float(state.cursor.y)));
-        const ImVec2 b(std::max(float(d.start.x), float(state.cursor.x)), std::max(float(d.start.y), float(state.cursor.y)));
+        const ImVec2 a(std::min(float(d.start.x), float(state.cursor.x)),
+                       std::min(float(d.start.y), float(state.cursor.y)));
+        const ImVec2 b(std::max(float(d.start.x), float(state.cursor.x)),
+                       std::max(float(d.start.y), float(state.cursor.y)));
         dl->AddRectFilled(a, b, IM_COL32(255, 200, 60, 48));
         dl->AddRect(a, b, line, 0.0f, 0, 2.0f);
     }
@@ -127,7 +138,9 @@ void point_gizmo(const ecs::Registry& registry, const EditorState& state) {
             const double r = state.points.dragged_radius > 0 ? state.points.dragged_radius
                                                              : state.points.settings.sphere_radius;
             const glm::dvec3 e = project_to_pixel(*cam, state.viewport, state.points.centre + right * r);
-            if (c.z <= 1.0) dl->AddCircle(ImVec2(float(c.x), float(c.y)), float(glm::length(glm::dvec2(e - c))), line, 48, 2.0f);
+            if (c.z <= 1.0)
+                dl->AddCircle(ImVec2(float(c.x), float(c.y)), float(glm::length(glm::dvec2(e - c))), line, 48,
+                              2.0f);
         }
 }
 

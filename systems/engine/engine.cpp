@@ -70,9 +70,9 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
     // outputs, a GPU output read back); hide/delete/separate write the flags and make or destroy clouds.
     s.add(Phase::input, "editor", editor::editor_input_system,  // no-op without an EditorState resource
           ecs::reads<DeformedSplats, gfx::GpuSplatStore>()
-              .writes<AnimationClip, AnimationState, Camera, DeformedGaussians, Deformers, GaussianCloud, Lattice,
-                      Name, PointFlags, PointPages, PointWeights, PreviewBudget, SplatCloud, SplatMaterial,
-                      Transform, UnkeyedEdit, editor::EditorState, editor::LatticeFitSettings,
+              .writes<AnimationClip, AnimationState, Camera, DeformedGaussians, Deformers, GaussianCloud,
+                      Lattice, Name, PointFlags, PointPages, PointWeights, PreviewBudget, SplatCloud,
+                      SplatMaterial, Transform, UnkeyedEdit, editor::EditorState, editor::LatticeFitSettings,
                       editor::PendingEdits, editor::SceneBoundsCache, gaussian::GpuGaussianStore,
                       picking::LatticeSelection, picking::PickRequests, render::RenderSettings>());
 
