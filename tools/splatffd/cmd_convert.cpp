@@ -18,6 +18,7 @@
 
 #include "runtime/assets/builtin_scenes.h"
 #include "runtime/assets/formats/surface/export.h"
+#include "runtime/assets/formats/surface/ply_weights.h"
 #include "runtime/assets/import.h"
 #include "runtime/assets/scene.h"
 #include "runtime/scene/point_order.h"
@@ -95,9 +96,18 @@ constexpr const char* kUsage =
     "  OUT DIR/lod-meta.json  a Gaussian level-of-detail hierarchy (PlayCanvas streamed SOG), with its own\n"
     "                   options: splatffd convert IN DIR/lod-meta.json --help\n";
 
-// --order morton on a surface cloud: every column moved together (runtime/scene/point_order.h).
-sffd::Status reorder(sffd::SplatCloud& cloud, bool morton) {
-    return morton ? sffd::permute(cloud, sffd::morton_order(cloud.positions)) : sffd::Status{};
+// --order morton on a surface cloud: every column moved together (runtime/scene/point_order.h), and the
+// weights beside it (empty, or one a point) with them.
+sffd::Status reorder(sffd::SplatCloud& cloud, bool morton, std::vector<float>& weights) {
+    if (!morton) return {};
+    const std::vector<std::uint32_t> order = sffd::morton_order(cloud.positions);
+    if (sffd::Status s = sffd::permute(cloud, order); !s) return s;
+    if (weights.size() == order.size()) {
+        std::vector<float> moved(weights.size());
+        for (std::size_t k = 0; k < order.size(); ++k) moved[k] = weights[order[k]];
+        weights = std::move(moved);
+    }
+    return {};
 }
 
 struct LatticeRequest {
@@ -181,7 +191,7 @@ int export_lattice_json(const std::string& in, const std::string& out, const Lat
 sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const sffd::SplatMaterial& material,
                                const std::string& name, const LatticeRequest& req,
                                const sffd::cli::LatticeChain& loaded, const std::string& out,
-                               std::string& note) {
+                               std::string& note, std::span<const float> weights) {
     using namespace sffd;
     cli::LatticeChain chain;
     if (ffd::is_fit_spec(req.source)) {
@@ -196,7 +206,7 @@ sffd::Status save_with_lattice(const sffd::SplatCloud& cloud, const sffd::SplatM
         note =
             ", " + std::to_string(chain.lattices.size()) + " lattice(s) from " + req.source + " bound to it";
     }
-    return cli::save_cloud_with_lattices(cloud, name, chain.lattices, out, material);
+    return cli::save_cloud_with_lattices(cloud, name, chain.lattices, out, material, weights);
 }
 
 // What a scene IN is converted with (the command's options that apply to it).
@@ -208,7 +218,8 @@ struct SceneConvert {
     sffd::cli::SceneSubset subset;                    // --selected, --entity
 };
 
-// The cloud's weights (PointWeights) when they are one a point, for the deformers; else null (weight 1).
+// The cloud's weights (PointWeights) when they are one a point, for the deformers and the writers; else
+// null (weight 1).
 const float* weights_of(const sffd::ecs::Registry& r, sffd::ecs::Entity e, std::size_t n) {
     const sffd::PointWeights* w = r.try_get<sffd::PointWeights>(e);
     return w && w->values.size() == n && n > 0 ? w->values.data() : nullptr;
@@ -309,8 +320,10 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
             }
             gaussian::bake_sh_frames(posed);
         }
+        const float* gw = weights_of(r, cloud_entity, posed.size());
+        std::vector<float> written = gw ? std::vector<float>(gw, gw + posed.size()) : std::vector<float>{};
         return cli::write_gaussian_cloud(std::move(posed), name, out, o.ascii, o.turn_x180, o.spz_version,
-                                         keep, pose, t0, o.morton);
+                                         keep, pose, t0, o.morton, std::move(written));
     }
     SplatCloud cloud = r.get<SplatCloud>(cloud_entity);
     SplatMaterial material;
@@ -335,16 +348,18 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
                 return cli::command_error("convert", in + ": " + st.message());
         }
     }
+    const float* sw = weights_of(r, cloud_entity, cloud.size());
+    std::vector<float> weights = sw ? std::vector<float>(sw, sw + cloud.size()) : std::vector<float>{};
     if (o.gaussians)
         return cli::write_gaussians(in, &cloud, material, out, o.ascii, o.turn_x180, o.spz_version, keep,
-                                    o.morton);
-    if (Status st = reorder(cloud, o.morton); !st)
+                                    o.morton, std::move(weights));
+    if (Status st = reorder(cloud, o.morton, weights); !st)
         return cli::command_error("convert", in + ": " + st.message());
     std::string lattice_note;
-    Status s = !o.lattice.source.empty()
-                   ? save_with_lattice(cloud, material, name, o.lattice, *o.loaded, out, lattice_note)
-               : o.ascii ? assets::save_splat_ply(cloud, out, ply::Format::ascii)
-                         : assets::save_splat_cloud(cloud, out, name, material);
+    Status s = !o.lattice.source.empty() ? save_with_lattice(cloud, material, name, o.lattice, *o.loaded, out,
+                                                             lattice_note, weights)
+               : o.ascii                 ? assets::save_splat_ply(cloud, out, ply::Format::ascii, weights)
+                                         : assets::save_splat_cloud(cloud, out, name, material, weights);
     if (!s) return cli::command_error("convert", s.message());
     std::fprintf(stderr, "wrote %s: %zu splats%s%s (%.2f s)\n", out.c_str(), cloud.size(),
                  lattice_note.c_str(), pose.c_str(),
@@ -557,10 +572,20 @@ int run_convert(sffd::cli::Args args) {
         std::fprintf(stderr, "splatffd convert: %s\n", cloud.message().c_str());
         return 1;
     }
+    // A PLY's `weight` column (ply_weights.h), carried into every OUT that holds weights (PLY, glTF).
+    std::vector<float> weights;
+    if (!assets::is_builtin_scene(in)) {
+        auto w = assets::cloud_weights_of_file(in, cloud->size());
+        if (!w) {
+            std::fprintf(stderr, "splatffd convert: %s\n", w.message().c_str());
+            return 1;
+        }
+        weights = std::move(w->values);
+    }
     if (gaussians)
         return cli::write_gaussians(in, &*cloud, material, out, ascii, turn_x180, spz_version,
-                                    gaussian_lattice, morton);
-    if (Status st = reorder(*cloud, morton); !st) {
+                                    gaussian_lattice, morton, std::move(weights));
+    if (Status st = reorder(*cloud, morton, weights); !st) {
         std::fprintf(stderr, "splatffd convert: %s: %s\n", in.c_str(), st.message().c_str());
         return 1;
     }
@@ -568,11 +593,11 @@ int run_convert(sffd::cli::Args args) {
     std::string lattice_note;
     printer.report("writing", 0.0);
     Status s = lattice.source.empty()
-                   ? (ascii ? assets::save_splat_ply(*cloud, out, ply::Format::ascii)
+                   ? (ascii ? assets::save_splat_ply(*cloud, out, ply::Format::ascii, weights)
                             : assets::save_splat_cloud(*cloud, out, std::filesystem::path(in).stem().string(),
-                                                       material))
+                                                       material, weights))
                    : save_with_lattice(*cloud, material, std::filesystem::path(in).stem().string(), lattice,
-                                       loaded, out, lattice_note);
+                                       loaded, out, lattice_note, weights);
     if (!s) {
         std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
         return 1;

@@ -27,6 +27,7 @@
 #include <cstdio>
 #include <optional>
 #include <string>
+#include <span>
 #include <vector>
 
 #include "runtime/assets/formats/surface/export.h"
@@ -395,9 +396,13 @@ int deform_in_memory(const Options& o) {
                         std::to_string(i) + " of " + in_path + " is not finite; nothing was written to " +
                         o.files[1]);
     const std::string ext = lower_ext(o.files[1]);
+    // The weights go out with the points they belong to (PLY `weight`, glTF `_WEIGHT`), as streamed
+    // deform writes them back.
+    const std::span<const float> kept =
+        weights.size() == n ? std::span<const float>(weights) : std::span<const float>();
     Status saved = o.ascii && ext == ".ply"
-                       ? assets::save_splat_ply(cloud, o.files[1], ply::Format::ascii)
-                       : assets::save_splat_cloud(cloud, o.files[1], cloud_name, material);
+                       ? assets::save_splat_ply(cloud, o.files[1], ply::Format::ascii, kept)
+                       : assets::save_splat_cloud(cloud, o.files[1], cloud_name, material, kept);
     if (!saved) return fail(saved.message());
     const double total_s = std::chrono::duration<double>(Clock::now() - t_start).count();
     std::string what = o.files[1] + ": positions";

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "runtime/assets/formats/surface/ply.h"
+#include "runtime/assets/formats/surface/ply_weights.h"
 #include "runtime/assets/scene.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/point_order.h"
@@ -55,7 +56,7 @@ namespace {
 // The Gaussians and their lattice chain as one scene: the layout the editor saves (named lattices
 // "<cloud>.lattice", ".lattice2", ..., bound in order), embedded because the cloud has no source file.
 Status save_gaussian_scene(GaussianCloud g, const std::string& cloud_name, const GaussianLatticeRequest& req,
-                           const std::string& out, std::string& note) {
+                           const std::string& out, std::string& note, std::vector<float> weights) {
     std::vector<Lattice> lattices;
     if (ffd::is_fit_spec(req.source)) {
         auto fit = ffd::parse_fit_spec(req.source);
@@ -77,6 +78,7 @@ Status save_gaussian_scene(GaussianCloud g, const std::string& cloud_name, const
     r.emplace<Name>(c, Name{cloud_name});
     r.emplace<Transform>(c, shown);
     r.emplace<GaussianCloud>(c, std::move(g));
+    if (!weights.empty()) r.emplace<PointWeights>(c, PointWeights{std::move(weights)});
     Deformers d;
     for (std::size_t i = 0; i < lattices.size(); ++i) {
         const ecs::Entity l = r.create();
@@ -93,7 +95,7 @@ Status save_gaussian_scene(GaussianCloud g, const std::string& cloud_name, const
 
 int write_gaussians(const std::string& in, const SplatCloud* surface, const SplatMaterial& material,
                     const std::string& out, bool ascii, bool turn_x180, int spz_version,
-                    const GaussianLatticeRequest& lattice, bool morton_order) {
+                    const GaussianLatticeRequest& lattice, bool morton_order, std::vector<float> weights) {
     const auto t0 = std::chrono::steady_clock::now();
     Result<GaussianCloud> g =
         surface ? Result<GaussianCloud>(gaussian::gaussians_from_splats(*surface, {.material = material}))
@@ -101,6 +103,14 @@ int write_gaussians(const std::string& in, const SplatCloud* surface, const Spla
     if (!g) {
         std::fprintf(stderr, "splatffd convert: %s\n", g.message().c_str());
         return 1;
+    }
+    if (!surface) {  // a 3DGS PLY's own weights (one reader of the column: ply_weights.h)
+        auto w = assets::cloud_weights_of_file(in, g->size());
+        if (!w) {
+            std::fprintf(stderr, "splatffd convert: %s\n", w.message().c_str());
+            return 1;
+        }
+        weights = std::move(w->values);
     }
     // Surface splats live in the engine's y-up world; a Gaussian file is a capture, y down (capture_up.h),
     // so it opens upright here and in every other viewer. The turn is exact, and loading turns it back.
@@ -115,19 +125,26 @@ int write_gaussians(const std::string& in, const SplatCloud* surface, const Spla
         return 2;
     }
     return write_gaussian_cloud(std::move(*g), std::filesystem::path(in).stem().string(), out, ascii,
-                                turn_x180, spz_version, lattice, "", t0, morton_order);
+                                turn_x180, spz_version, lattice, "", t0, morton_order, std::move(weights));
 }
 
 int write_gaussian_cloud(GaussianCloud cloud, const std::string& name, const std::string& out, bool ascii,
                          bool turn_x180, int spz_version, const GaussianLatticeRequest& lattice,
                          const std::string& note_after, std::chrono::steady_clock::time_point t0,
-                         bool morton_order) {
+                         bool morton_order, std::vector<float> weights) {
     GaussianCloud* g = &cloud;
+    if (!weights.empty() && weights.size() != g->size()) weights.clear();  // not one a Gaussian: none
     if (turn_x180) gaussian::turn_axes(*g, gaussian::AxisTurn::x180);
     if (morton_order) {
-        if (Status s = permute(*g, sffd::morton_order(g->positions)); !s) {
+        const std::vector<std::uint32_t> order = sffd::morton_order(g->positions);
+        if (Status s = permute(*g, order); !s) {
             std::fprintf(stderr, "splatffd convert: %s: %s\n", out.c_str(), s.message().c_str());
             return 1;
+        }
+        if (!weights.empty()) {
+            std::vector<float> moved(weights.size());
+            for (std::size_t k = 0; k < order.size(); ++k) moved[k] = weights[order[k]];
+            weights = std::move(moved);
         }
     }
     const std::string e = lower_ext(out);
@@ -135,7 +152,7 @@ int write_gaussian_cloud(GaussianCloud cloud, const std::string& name, const std
         const std::size_t count = g->size();
         const int degree = g->sh_degree;
         std::string note;
-        if (Status s = save_gaussian_scene(std::move(*g), name, lattice, out, note); !s) {
+        if (Status s = save_gaussian_scene(std::move(*g), name, lattice, out, note, std::move(weights)); !s) {
             std::fprintf(stderr, "splatffd convert: %s\n", s.message().c_str());
             return 1;
         }
@@ -152,7 +169,8 @@ int write_gaussian_cloud(GaussianCloud cloud, const std::string& name, const std
                    "meta.json");
     if (compressed) s = gaussian::write_compressed_ply(out, *g);
     else if (e == ".ply")
-        s = gaussian::write_ply(out, *g, ascii ? ply::Format::ascii : ply::Format::binary_little_endian);
+        s = gaussian::write_ply(out, *g, ascii ? ply::Format::ascii : ply::Format::binary_little_endian,
+                                weights);
     else if (e == ".glb") s = gaussian::write_glb(out, *g);
     else if (e == ".spz") s = gaussian::write_spz(out, *g, spz_version);
     else if (e == ".sog" || std::filesystem::path(out).filename() == "meta.json")

@@ -6,6 +6,7 @@
 
 #include <chrono>
 #include <string>
+#include <vector>
 
 #include "tools/splatffd/lattice_source.h"
 
@@ -33,16 +34,22 @@ struct GaussianLatticeRequest {
 // bound to them as in the editor's save, so render/view deform the Gaussians by it.
 // `spz_version`: 3 or 4 for an `.spz` OUT (gaussian_spz.h).
 // `material`: the surface cloud's material (its base colour for splats without colours).
+// `weights`: the surface cloud's PointWeights (one per splat, or empty); a Gaussian file IN brings its own
+// (a 3DGS PLY's `weight` column, runtime/assets/formats/surface/ply_weights.h).
 int write_gaussians(const std::string& in, const SplatCloud* surface, const SplatMaterial& material,
                     const std::string& out, bool ascii, bool turn_x180 = false, int spz_version = 3,
-                    const GaussianLatticeRequest& lattice = {}, bool morton_order = false);
+                    const GaussianLatticeRequest& lattice = {}, bool morton_order = false,
+                    std::vector<float> weights = {});
 // The same for a cloud already in memory (a scene's, posed by the caller); `name` names it in a scene OUT,
 // `note_after` ends the summary line ("wrote OUT: N Gaussians, SH degree D<note_after> (T s)"), `t0` starts
 // its time. `morton_order` (convert --order morton): the Gaussians are written in Morton order of their
 // centres as written (after any turn; runtime/scene/point_order.h), every column moved together.
+// `weights` (PointWeights: empty, or one per Gaussian) move with their Gaussians and are written where the
+// format holds them: a 3DGS PLY's `weight` property, a scene's `_WEIGHT`; SPZ, SOG and compressed PLY
+// have no place for them.
 int write_gaussian_cloud(GaussianCloud cloud, const std::string& name, const std::string& out, bool ascii,
                          bool turn_x180, int spz_version, const GaussianLatticeRequest& lattice,
                          const std::string& note_after, std::chrono::steady_clock::time_point t0,
-                         bool morton_order = false);
+                         bool morton_order = false, std::vector<float> weights = {});
 
 }  // namespace sffd::cli

@@ -147,13 +147,14 @@ int deform_gaussian_cloud(GaussianCloud cloud, const std::vector<Lattice>& latti
     gaussian::bake_sh_frames(cloud);
     const double ms = ms_since(t0);
     const std::string l = lower(out);
-    Status s =
-        ends_with(l, ".compressed.ply") ? gaussian::write_compressed_ply(out, cloud)
-        : ends_with(l, ".ply")
-            ? gaussian::write_ply(out, cloud, ascii ? ply::Format::ascii : ply::Format::binary_little_endian)
-        : ends_with(l, ".glb") ? gaussian::write_glb(out, cloud)
-        : ends_with(l, ".spz") ? gaussian::write_spz(out, cloud)
-                               : gaussian::write_sog(out, cloud);
+    Status s = ends_with(l, ".compressed.ply") ? gaussian::write_compressed_ply(out, cloud)
+               : ends_with(l, ".ply")
+                   ? gaussian::write_ply(
+                         out, cloud, ascii ? ply::Format::ascii : ply::Format::binary_little_endian,
+                         weights ? std::span<const float>(weights, cloud.size()) : std::span<const float>())
+               : ends_with(l, ".glb") ? gaussian::write_glb(out, cloud)
+               : ends_with(l, ".spz") ? gaussian::write_spz(out, cloud)
+                                      : gaussian::write_sog(out, cloud);
     if (!s) return fail(s.message());
     std::fprintf(stderr,
                  "%s: %zu Gaussians deformed by %s on the CPU in %.1f ms (%zu inverted, %zu not finite)\n",

@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "runtime/assets/scene.h"
+#include "runtime/scene/point_columns.h"
 #include "systems/ffd/lattice_frame.h"
 #include "systems/ffd/lattice_io.h"
 #include "systems/engine/engine_frame.h"
@@ -137,7 +138,7 @@ Result<LatticeChain> load_lattice_source(const std::string& source, const std::s
 
 Status save_cloud_with_lattices(SplatCloud cloud, const std::string& cloud_name,
                                 const std::vector<Lattice>& lattices, const std::string& path,
-                                const SplatMaterial& material) {
+                                const SplatMaterial& material, std::span<const float> weights) {
     ecs::Registry r;
     sffd::use_engine_scene_hooks(r);
     const ecs::Entity c = r.create();
@@ -145,6 +146,7 @@ Status save_cloud_with_lattices(SplatCloud cloud, const std::string& cloud_name,
     r.emplace<Transform>(c, Transform{});
     r.emplace<SplatCloud>(c, std::move(cloud));
     r.emplace<SplatMaterial>(c, material);
+    if (!weights.empty()) r.emplace<PointWeights>(c, PointWeights{{weights.begin(), weights.end()}});
     Deformers d;
     for (std::size_t i = 0; i < lattices.size(); ++i) {
         const ecs::Entity l = r.create();

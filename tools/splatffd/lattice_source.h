@@ -7,6 +7,7 @@
 // Errors read `file: problem` and say what to do (no lattice, several without a name, unknown name).
 #pragma once
 
+#include <span>
 #include <string>
 #include <vector>
 
@@ -45,9 +46,10 @@ bool is_scene_path(const std::string& path);  // .glb / .gltf (any case)
 bool is_json_path(const std::string& path);   // .json (any case)
 
 // A scene holding `cloud` (Name `cloud_name`) and, when given, `lattices` bound to it in order (Name
-// "<cloud_name>.lattice", then ".lattice2", …), saved atomically as .glb/.gltf.
+// "<cloud_name>.lattice", then ".lattice2", …), saved atomically as .glb/.gltf. `weights` (empty, or one
+// per point): the cloud's PointWeights.
 Status save_cloud_with_lattices(SplatCloud cloud, const std::string& cloud_name,
                                 const std::vector<Lattice>& lattices, const std::string& path,
-                                const SplatMaterial& material = {});
+                                const SplatMaterial& material = {}, std::span<const float> weights = {});
 
 }  // namespace sffd::cli

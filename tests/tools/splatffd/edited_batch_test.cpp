@@ -1,15 +1,19 @@
 // The batch commands on an edited cloud, through the built binary: a scene whose cloud (surface splats, or
 // 3D Gaussians) has hidden and deleted points and per-point weights 0, 0.5, 1, bound to a lattice whose
 // control points all moved by D. `convert`, `deform` and `export` write the same cloud: no hidden or
-// deleted point, and each kept point at P + w D (the engine's P + w (FFD(P) - P)).
+// deleted point, and each kept point at P + w D (the engine's P + w (FFD(P) - P)). The weights travel
+// with their points into every file that holds them (PLY `weight`, glTF `_WEIGHT`), in any point order.
 #include <gtest/gtest.h>
 
 #include <unistd.h>
 
 #include <filesystem>
+#include <fstream>
+#include <map>
 #include <string>
 #include <vector>
 
+#include "runtime/assets/formats/surface/ply_weights.h"
 #include "runtime/assets/import.h"
 #include "runtime/assets/scene.h"
 #include "runtime/scene/components.h"
@@ -141,6 +145,96 @@ TEST(EditedBatch, GaussiansAreWrittenWithoutGonePointsAndByTheirWeights) {
         ASSERT_TRUE(g.ok()) << g.message();
         expect_weighted(g->positions, args);
     }
+}
+
+// The weights of the points of `cloud_file` (a PLY's column, or a scene's PointWeights), by position.
+std::map<std::array<float, 3>, float> weights_by_position(const fs::path& file) {
+    std::map<std::array<float, 3>, float> out;
+    ecs::Registry r;
+    use_engine_scene_hooks(r);
+    const Status s = load_scene(r, file.string());
+    EXPECT_TRUE(s.ok()) << s.message();
+    r.each_entity([&](ecs::Entity e) {
+        const PointWeights* w = r.try_get<PointWeights>(e);
+        std::vector<glm::vec3> p;
+        if (const SplatCloud* c = r.try_get<SplatCloud>(e)) p = c->positions;
+        if (const GaussianCloud* g = r.try_get<GaussianCloud>(e)) p = g->positions;
+        if (p.empty()) return;
+        EXPECT_TRUE(w && w->values.size() == p.size()) << file << ": no weights beside the cloud";
+        for (std::size_t i = 0; w && i < p.size() && i < w->values.size(); ++i)
+            out[{p[i].x, p[i].y, p[i].z}] = w->values[i];
+    });
+    return out;
+}
+
+void expect_weights(const fs::path& file, const std::vector<std::size_t>& points, const std::string& what) {
+    const auto got = weights_by_position(file);
+    ASSERT_EQ(got.size(), points.size()) << what;
+    for (std::size_t i : points) {
+        const glm::vec3 p = rest(i);
+        const auto it = got.find({p.x, p.y, p.z});
+        ASSERT_NE(it, got.end()) << what << ": point " << i;
+        EXPECT_EQ(it->second, weight(i)) << what << ": point " << i;
+    }
+}
+
+TEST(EditedBatch, WeightsTravelWithTheirPointsIntoEveryFileThatHoldsThem) {
+    // A point-cloud PLY with a weight column.
+    const fs::path ply = temp_dir() / "weighted.ply";
+    {
+        std::ofstream f(ply);
+        f.precision(9);  // every float exactly
+        f << "ply\nformat ascii 1.0\nelement vertex " << kPoints << "\n";
+        for (const char* p : {"x", "y", "z", "nx", "ny", "nz", "axis_ux", "axis_uy", "axis_uz", "axis_vx",
+                              "axis_vy", "axis_vz", "weight"})
+            f << "property float " << p << "\n";
+        f << "end_header\n";
+        for (std::size_t i = 0; i < kPoints; ++i)
+            f << rest(i).x << " " << rest(i).y << " " << rest(i).z << " 0 0 1 0.01 0 0 0 0.01 0 " << weight(i)
+              << "\n";
+    }
+    std::vector<std::size_t> all;
+    for (std::size_t i = 0; i < kPoints; ++i) all.push_back(i);
+    const std::vector<std::pair<std::string, fs::path>> plain = {
+        {"convert " + ply.string() + " " + (temp_dir() / "w.glb").string(), temp_dir() / "w.glb"},
+        {"convert " + ply.string() + " " + (temp_dir() / "wm.ply").string() + " --order morton",
+         temp_dir() / "wm.ply"},
+        {"convert " + ply.string() + " " + (temp_dir() / "wl.glb").string() + " --lattice fit:2,2,2",
+         temp_dir() / "wl.glb"},
+        {"deform " + ply.string() + " " + (temp_dir() / "wd.glb").string() + " --lattice fit:2,2,2",
+         temp_dir() / "wd.glb"},
+    };
+    for (const auto& [args, out] : plain) {
+        const sffd::test::CliRun r = tool(args);
+        ASSERT_EQ(r.code, 0) << args << "\n" << r.out;
+        expect_weights(out, all, args);
+    }
+    // A scene's cloud written out: the weights of the points kept, for both kinds (3DGS PLY, surface PLY),
+    // and a Gaussian PLY's weights into a scene with a fitted lattice.
+    const fs::path gply = temp_dir() / "gw.ply", sply = temp_dir() / "sw.ply", gscene = temp_dir() / "gw.glb";
+    for (const std::string& args :
+         {"convert " + scene_file(true).string() + " " + gply.string() + " --rest",
+          "convert " + scene_file(false).string() + " " + sply.string() + " --rest",
+          "convert " + gply.string() + " " + gscene.string() + " --lattice fit:2,2,2"}) {
+        const sffd::test::CliRun r = tool(args);
+        ASSERT_EQ(r.code, 0) << args << "\n" << r.out;
+    }
+    expect_weights(sply, shown(), "surface scene to PLY");
+    auto gw = assets::read_ply_weights(gply);
+    ASSERT_TRUE(gw.ok()) << gw.message();
+    ASSERT_EQ(gw->values.size(), shown().size());
+    for (std::size_t j = 0; j < shown().size(); ++j) EXPECT_EQ(gw->values[j], weight(shown()[j])) << j;
+    ecs::Registry r;
+    use_engine_scene_hooks(r);
+    ASSERT_TRUE(load_scene(r, gscene.string()).ok());
+    std::size_t weighted = 0;
+    r.each_entity([&](ecs::Entity e) {
+        if (const PointWeights* w = r.try_get<PointWeights>(e); w && r.has<GaussianCloud>(e)) {
+            EXPECT_EQ(w->values, gw->values);
+            ++weighted;
+        }
+    });
+    EXPECT_EQ(weighted, 1u);
 }
 
 }  // namespace

@@ -232,19 +232,31 @@ Result<GaussianCloud> read_ply(const fs::path& path) {
     return g;
 }
 
-Status write_ply(const fs::path& path, const GaussianCloud& g, ply::Format format) {
+Status write_ply(const fs::path& path, const GaussianCloud& g, ply::Format format,
+                 std::span<const float> weights) {
     if (auto s = validate(g, path.string()); !s) return s;
+    if (!weights.empty() && weights.size() != g.size())
+        return make_error(path.string() + ": " + std::to_string(weights.size()) + " weights for " +
+                          std::to_string(g.size()) + " Gaussians");
     ply::Header h;
     h.format = format;
     h.comments.push_back("3D Gaussian splats (3DGS layout) written by splatffd");
     h.elements.push_back(ply_element(g.sh_degree, g.size()));
+    if (!weights.empty()) h.elements.back().properties.push_back({"weight", ply::Type::float32});
     // ply::Writer writes `<path>.tmp-<pid>`, fsyncs and renames: the same atomic save as
     // runtime/core/atomic_file.h, streaming (no second copy of the file in memory).
     auto writer = ply::Writer::create(path, h);
     if (!writer) return writer.error();
     ply::Chunk chunk;
     for (std::size_t first = 0; first < g.size(); first += kChunkRows) {
-        fill_chunk(g, first, std::min(kChunkRows, g.size() - first), chunk);
+        const std::size_t count = std::min(kChunkRows, g.size() - first);
+        fill_chunk(g, first, count, chunk);
+        if (!weights.empty()) {  // the last column, after the 3DGS layout
+            chunk.element.properties.push_back({"weight", ply::Type::float32});
+            chunk.columns.emplace_back();
+            chunk.columns.back().values.assign(weights.begin() + std::ptrdiff_t(first),
+                                               weights.begin() + std::ptrdiff_t(first + count));
+        }
         if (auto s = writer->write_rows(chunk); !s) return s;
     }
     return writer->finish();

@@ -20,6 +20,7 @@
 #pragma once
 
 #include <filesystem>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -59,8 +60,10 @@ ply::Element ply_element(int degree, std::uint64_t count);
 void fill_chunk(const GaussianCloud& cloud, std::size_t first, std::size_t count, ply::Chunk& chunk);
 
 Result<GaussianCloud> read_ply(const std::filesystem::path& path);
+// `weights`: empty, or one per Gaussian (PointWeights), written as a last float property `weight`
+// (runtime/assets/formats/surface/ply_weights.h reads it back).
 Status write_ply(const std::filesystem::path& path, const GaussianCloud& cloud,
-                 ply::Format format = ply::Format::binary_little_endian);
+                 ply::Format format = ply::Format::binary_little_endian, std::span<const float> weights = {});
 Result<GaussianCloud> read_splat(const std::filesystem::path& path);
 // Any Gaussian file by its extension: read_gaussians() in systems/gaussian/gaussian_read.h (a glTF node's
 // matrix needs the Gaussian maths, which the formats do not link).

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <filesystem>
+#include <span>
 
 #include "runtime/assets/formats/surface/ply.h"
 #include "runtime/core/result.h"
@@ -23,13 +24,19 @@
 
 namespace sffd::assets {
 
+// `weights`: empty, or one per point (PointWeights), written as a last float property `weight`
+// (runtime/assets/formats/surface/ply_weights.h reads it back).
 Status save_splat_ply(const SplatCloud& cloud, const std::filesystem::path& path,
-                      ply::Format format = ply::Format::binary_little_endian);
+                      ply::Format format = ply::Format::binary_little_endian,
+                      std::span<const float> weights = {});
 // The material goes into the glTF material; a PLY file has none (it reads back as the defaults).
+// `weights` (empty, or one per point) as the `_WEIGHT` attribute (content/README.md).
 Status save_splat_glb(const SplatCloud& cloud, const std::filesystem::path& path,
-                      const std::string& name = "cloud", const SplatMaterial& material = {});
-// By extension: .ply, .glb, .gltf.
+                      const std::string& name = "cloud", const SplatMaterial& material = {},
+                      std::span<const float> weights = {});
+// By extension: .ply, .glb, .gltf; the weights in each as above.
 Status save_splat_cloud(const SplatCloud& cloud, const std::filesystem::path& path,
-                        const std::string& name = "cloud", const SplatMaterial& material = {});
+                        const std::string& name = "cloud", const SplatMaterial& material = {},
+                        std::span<const float> weights = {});
 
 }  // namespace sffd::assets

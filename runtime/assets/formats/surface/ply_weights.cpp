@@ -76,7 +76,7 @@ Result<PointWeights> cloud_weights_of_file(const std::filesystem::path& path, st
     const std::uint64_t vertices = header->header().elements[std::size_t(vi)].count;
     if (faces || vertices != points) {
         log::warn(path.string(), ": the vertex property 'weight' is not used: the cloud's ", points,
-                  " points are sampled from the mesh, not the file's ", vertices, " vertices");
+                  " points are not the file's ", vertices, " vertices (sampled from its faces, or thinned)");
         return PointWeights{};
     }
     return read_ply_weights(path);

@@ -36,7 +36,7 @@ Result<PointWeights> read_ply_weights(const std::filesystem::path& path);
 // The weights of a cloud of `points` points read from `path` (any file: only a PLY has them), for a
 // loader to put beside it: the file's `weight` column when the cloud is one point a vertex in file order
 // (a point cloud, a 3DGS PLY); empty without the column, or, with a warning naming the file, when the
-// cloud was sampled from a mesh's faces (its points are not the file's vertices).
+// cloud's points are not the file's vertices (sampled from a mesh's faces, or thinned by convert).
 Result<PointWeights> cloud_weights_of_file(const std::filesystem::path& path, std::size_t points);
 
 }  // namespace sffd::assets
