@@ -213,6 +213,27 @@ TEST(ConvertSubset, SelectedSurfacePointsInEveryFormatTheyAreWritten) {
     std::vector<glm::vec3> turned;  // written y down as captures are: (x, -y, -z)
     for (const glm::vec3& p : gc->positions) turned.emplace_back(p.x, -p.y, -p.z);
     match(positions_of(want, surface_position), turned, 1e-5f, "3DGS PLY of splats");
+    // The same points as SPZ Gaussians, each once.
+    const fs::path spz = temp_dir() / "surface_selected.spz";
+    convert(spz.string() + " --selected --entity body --gaussians");
+    auto sg = gaussian::read_gaussians(spz);
+    ASSERT_TRUE(sg.ok()) << sg.message();
+    std::vector<glm::vec3> spz_turned;
+    for (const glm::vec3& p : sg->positions) spz_turned.emplace_back(p.x, -p.y, -p.z);
+    match(positions_of(want, surface_position), spz_turned, 5e-3f, "SPZ of splats");
+    // A new scene with a fitted lattice: the selected points and their weights.
+    const fs::path fitted = temp_dir() / "surface_selected_fit.glb";
+    convert(fitted.string() + " --selected --entity body --lattice fit:2,2,2");
+    {
+        Loaded lf;
+        load(fitted, lf);
+        ASSERT_EQ(lf.clouds.size(), 1u);
+        EXPECT_EQ(lf.lattices, 1u);
+        const PointWeights* fw = lf.r.try_get<PointWeights>(lf.clouds[0]);
+        ASSERT_TRUE(fw);
+        ASSERT_EQ(fw->values.size(), want.size());
+        for (std::size_t k = 0; k < want.size(); ++k) EXPECT_EQ(fw->values[k], surface_weight(want[k]));
+    }
     // A scene OUT keeps the selected points with their weights and flags (all selected), and the lattice.
     const fs::path scene = temp_dir() / "surface_selected.glb";
     convert(scene.string() + " --selected --entity body");
@@ -242,8 +263,10 @@ TEST(ConvertSubset, SelectedGaussiansInEveryFormatTheyAreWritten) {
         bool ordered;
     };
     for (const Format& f : {Format{"g.ply", 1e-6f, true}, Format{"g.compressed.ply", 5e-3f, false},
-                            Format{"g.spz", 5e-3f, false}, Format{"g.sog", 5e-3f, false}}) {
+                            Format{"g.spz", 5e-3f, false}, Format{"g.sog", 5e-3f, false},
+                            Format{"sog_folder/meta.json", 5e-3f, false}}) {
         const fs::path out = temp_dir() / f.file;
+        fs::create_directories(out.parent_path());
         convert(out.string() + " --selected --entity body.part");
         auto g = gaussian::read_gaussians(out);
         ASSERT_TRUE(g.ok()) << f.file << ": " << g.message();
