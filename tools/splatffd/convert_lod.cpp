@@ -24,7 +24,7 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: splatffd convert IN DIR/lod-meta.json [--lod-levels N] [--lod-ratio R] [--lod-chunk-count K]\n"
-    "                        [--lod-chunk-extent E] [--lod-memory MB] [--progress]\n"
+    "                        [--lod-chunk-extent E] [--lod-chunk-min K] [--lod-memory MB] [--progress]\n"
     "  Builds a Gaussian level-of-detail hierarchy as PlayCanvas streamed SOG: DIR/lod-meta.json (the tree,\n"
     "  its bounds and every node's runs) and one SOG folder per unit (DIR/L_i/meta.json). Level 0 is IN's\n"
     "  Gaussians; level l + 1 merges groups of up to R level-l Gaussians (hierarchical 3DGS moments).\n"
@@ -36,7 +36,9 @@ constexpr const char* kUsage =
     "  --lod-ratio R         Gaussians merged into one per level up (2..64, default 4)\n"
     "  --lod-chunk-count K   a leaf (chunk) holds at most about K x 1024 Gaussians, and a unit file is\n"
     "                        closed past that many (splat-transform's option; default 512)\n"
-    "  --lod-chunk-extent E  a leaf wider than E (file units) is split while it holds over 256 (default 16)\n"
+    "  --lod-chunk-extent E  a leaf wider than E (file units) is split while it holds more than the chunk\n"
+    "                        minimum (default 16)\n"
+    "  --lod-chunk-min K     the chunk minimum: K x 1024 Gaussians (splat-transform's option; default 8)\n"
     "  --lod-memory MB       memory budget of the build: cells are bucketed on disk (unlinked temporaries\n"
     "                        in DIR) until each fits (64..1048576, default 1024); the SOG encoder's own\n"
     "                        work space while it writes a unit comes on top (about 200 bytes a Gaussian)\n"
@@ -157,6 +159,10 @@ int run_convert_lod(Args args) {
             auto v = parse_number(a, *t, 1e-6, 1e12);
             if (!v) return usage_error("convert", v.message(), "");
             o.chunk_extent = *v;
+        } else if (a == "--lod-chunk-min") {
+            auto v = integer(0, 16384);
+            if (!v) return 2;
+            o.chunk_min = std::uint64_t(*v) * 1024;
         } else if (a == "--lod-memory") {
             auto v = integer(64, 1 << 20);
             if (!v) return 2;
@@ -168,7 +174,8 @@ int run_convert_lod(Args args) {
                 "convert",
                 "'" + a +
                     "' does not apply to a lod-meta.json output (its options: --lod-levels, "
-                    "--lod-ratio, --lod-chunk-count, --lod-chunk-extent, --lod-memory, --progress)",
+                    "--lod-ratio, --lod-chunk-count, --lod-chunk-extent, --lod-chunk-min, --lod-memory, "
+                    "--progress)",
                 kUsage);
         } else if (in.empty()) {
             in = a;

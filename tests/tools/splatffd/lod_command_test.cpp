@@ -103,6 +103,24 @@ TEST(LodCommand, ConvertsSyntheticGaussiansWithProgressAndInfoDescribesIt) {
         EXPECT_NE(info.out.find(line), std::string::npos) << line << "\n" << info.out;
 }
 
+// splat-transform's split rule: past the extent, a node splits only while it holds more than the chunk
+// minimum (default 8K), so 20,000 Gaussians wider than 1 everywhere make 4 leaves of 5,000, and 128 of
+// 156 or 157 (down to the 256-Gaussian buckets) with a minimum of 0.
+TEST(LodCommand, ChunkExtentSplitsDownToTheChunkMinimum) {
+    const auto chunks = [](const std::string& options) -> long {
+        const CliRun r = tool("convert synthetic-gaussians:20k " + (temp("min") / "lod-meta.json").string() +
+                              " " + options);
+        EXPECT_EQ(r.code, 0) << r.out;
+        const auto at = r.out.find(" chunks,");
+        if (at == std::string::npos) return -1;
+        const auto from = r.out.rfind(' ', at - 1) + 1;
+        return std::stol(r.out.substr(from, at - from));
+    };
+    EXPECT_EQ(chunks("--lod-chunk-extent 1"), 4);
+    EXPECT_EQ(chunks("--lod-chunk-extent 1 --lod-chunk-min 0"), 128);
+    EXPECT_EQ(chunks("--lod-chunk-extent 100 --lod-chunk-min 0"), 1);
+}
+
 TEST(LodCommand, ConvertsGaussianFilesAndReadsTheHierarchyBack) {
     const GaussianCloud g = shell(4000);
     const fs::path ply = temp("s.ply"), spz = temp("s.spz");

@@ -206,7 +206,9 @@ private:
             lo = glm::min(lo, g.positions[*p]), hi = glm::max(hi, g.positions[*p]);
         const glm::vec3 ext = hi - lo;
         const float largest = std::max({ext.x, ext.y, ext.z});
-        if (n <= 256 || (n <= chunk_count && !(double(largest) > o_.chunk_extent)))
+        // splat-transform 3.7's rule: split a node of more than 256 while it holds more than the chunk
+        // count, or is wider than the extent and holds more than the chunk minimum.
+        if (n <= 256 || (n <= chunk_count && !(double(largest) > o_.chunk_extent && n > o_.chunk_min)))
             return chunk(g, first, last, status);
         const int axis = ext.x >= ext.y && ext.x >= ext.z ? 0 : (ext.y >= ext.z ? 1 : 2);
         std::uint32_t* mid = first + n / 2;

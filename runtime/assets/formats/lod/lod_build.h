@@ -6,7 +6,8 @@
 //      output), every cell at most as large as the budget allows;
 //   3. each cell is built in memory: split as splat-transform splits its tree (the median of the
 //      centres along the box's longest side, while a node holds more than chunk_count Gaussians or is
-//      wider than chunk_extent, buckets of 256 never split), each leaf ("chunk") gets its levels:
+//      wider than chunk_extent and holds more than chunk_min, buckets of 256 never split), each leaf
+//      ("chunk") gets its levels:
 //      level 0 its own Gaussians, level l + 1 the merges (lod_merge.h) of groups of at most `ratio`
 //      level-l Gaussians, the groups split at the median of the longest side as well;
 //   4. each level's runs go to that level's current unit ("L_i/meta.json", Morton-ordered per run as
@@ -53,6 +54,7 @@ struct LodBuildOptions {
     int ratio = 4;                           // level l + 1 merges groups of up to this many (>= 2)
     std::uint64_t chunk_count = 512 * 1024;  // splat-transform's --lod-chunk-count (K) · 1024
     double chunk_extent = 16.0;              // splat-transform's --lod-chunk-extent
+    std::uint64_t chunk_min = 8 * 1024;      // splat-transform's --lod-chunk-min (K) · 1024
     std::uint64_t memory_budget = std::uint64_t(1) << 30;
     std::filesystem::path temp_dir;  // default: the output's folder
     ProgressFn progress;
