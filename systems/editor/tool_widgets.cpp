@@ -55,12 +55,12 @@ void point_tools_widgets(ecs::Registry& registry, EditorState& state) {
     }
     if (tool != int(s.tool)) s.tool = PointTool(tool), state.points.path.clear();
     int mode = int(s.mode);
-    if (ImGui::Combo("mode (shift/ctrl)", &mode, "set\0add\0remove\0intersect\0")) s.mode = PointMode(mode);
-    ImGui::Checkbox("x-ray: every point, not only the visible (T)", &state.xray);
-    ImGui::InputDouble("brush px (PgUp/PgDn)", &s.brush_radius_px, 1.0, 8.0, "%.0f");
-    ImGui::InputDouble("sphere radius", &s.sphere_radius, 0.01, 0.1, "%.3f");
-    ImGui::InputDouble("colour tolerance", &s.colour_tolerance, 0.01, 0.05, "%.3f");
-    ImGui::InputDouble("grow distance", &s.grow_distance, 0.005, 0.05, "%.3f");
+    if (ImGui::Combo("mode", &mode, "set\0add\0remove\0intersect\0")) s.mode = PointMode(mode);
+    ImGui::Checkbox("x-ray (T): not only the visible", &state.xray);
+    ImGui::InputDouble("brush px", &s.brush_radius_px, 1.0, 8.0, "%.0f");
+    ImGui::InputDouble("sphere r", &s.sphere_radius, 0.01, 0.1, "%.3f");
+    ImGui::InputDouble("colour tol", &s.colour_tolerance, 0.01, 0.05, "%.3f");
+    ImGui::InputDouble("grow by", &s.grow_distance, 0.005, 0.05, "%.3f");
     s.brush_radius_px = std::clamp(s.brush_radius_px, 1.0, 4096.0);
     s.sphere_radius = std::clamp(s.sphere_radius, 1e-6, 1e6);
     s.colour_tolerance = std::clamp(s.colour_tolerance, 0.0, 2.0);
@@ -84,10 +84,10 @@ void point_tools_widgets(ecs::Registry& registry, EditorState& state) {
         false);
     button(registry, "separate (P)", [](ecs::Registry& r, EditorState& e) { points_separate(r, e); });
     ImGui::Separator();
-    ImGui::InputDouble("weight radius", &s.weight_radius, 0.01, 0.1, "%.3f");
+    ImGui::InputDouble("weight r", &s.weight_radius, 0.01, 0.1, "%.3f");
     s.weight_radius = std::clamp(s.weight_radius, 1e-6, 1e6);
     int falloff = int(s.weight_falloff);
-    if (ImGui::Combo("weight curve", &falloff, "smooth\0sphere\0linear\0sharp\0constant\0"))
+    if (ImGui::Combo("curve", &falloff, "smooth\0sphere\0linear\0sharp\0constant\0"))
         s.weight_falloff = Falloff(falloff);
     const double radius = s.weight_radius;
     const Falloff curve = s.weight_falloff;

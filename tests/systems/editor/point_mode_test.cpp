@@ -272,6 +272,9 @@ TEST(PointMode, SeparationWithALatticeOnThePartUndoesAndRedoes) {
     s.replay(
         "0 key p\n1 key a shift\n2 key tab ctrl\n3 key a\n4 key r\n5 key y\n6 key 4\n7 key 5\n8 key enter\n");
     ASSERT_EQ(s.state->undo.size(), steps + 4);  // separate, add lattice, select all, twist
+    // The separation's step: at most 2 bytes a separated point (point_edit's bound) and a constant.
+    EXPECT_LE(s.state->undo.at(steps).bytes(), 2 * top + 1024);
+    EXPECT_LE(s.state->undo.at(steps - 1).bytes(), 2 * top + 1024);  // the lasso's selection step
     const ecs::Entity part = s.state->selected_entity;
     ASSERT_TRUE(s.reg.valid(part));
     EXPECT_EQ(s.reg.get<Name>(part).value, "sphere.part");

@@ -20,6 +20,7 @@
 #include "runtime/assets/scene.h"
 #include "runtime/scene/camera.h"
 #include "runtime/scene/components.h"
+#include "runtime/scene/point_columns.h"
 #include "systems/editor/editor_system.h"
 #include "systems/engine/engine_frame.h"
 #include "systems/splat_render/image_io.h"
@@ -164,4 +165,42 @@ TEST(PointView, SameOnTheGaussianSphere) {
     const test::CliRun r = test::run("convert sphere " + g.string() + " --gaussians --splats 20000");
     ASSERT_EQ(r.code, 0) << r.out;
     separate_and_twist(g.string(), dir, 0.05);
+}
+
+// Weights from a selection and hidden points are kept by ctrl+s (the scene's _WEIGHT and _FLAGS): a box,
+// shift+w, then h hides the same points, which all have weight 1.
+TEST(PointView, SavedSceneKeepsPaintedWeightsAndHiddenPoints) {
+    Dir dir("weights");
+    const fs::path replay = dir.path / "weights.txt", saved = dir.path / "weights.glb",
+                   exr = dir.path / "w.exr";
+    std::ofstream(replay) << "1 key tab ctrl\n2 key t\n3 move 600 320\n4 press left\n5 move 680 400\n"
+                             "6 release left\n8 set weight.radius 0.3\n9 set weight.falloff linear\n"
+                             "10 key w shift\n12 key h\n14 key s ctrl\n";
+    const test::CliRun r = test::run_headless(
+        "view sphere --headless --size 1280x720 --quality preview --frames 18 "
+        "--replay " +
+        replay.string() + " --save " + saved.string() + " --out " + exr.string());
+    ASSERT_EQ(r.code, 0) << r.out;
+    ecs::Registry reg;
+    reg.set_resource<SceneHooks>(engine_scene_hooks());
+    ASSERT_TRUE(load_scene(reg, saved.string()).ok());
+    std::size_t clouds = 0, hidden = 0, ones = 0, zeros = 0, between = 0, hidden_not_one = 0;
+    reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& c) {
+        ++clouds;
+        const PointWeights* w = reg.try_get<PointWeights>(e);
+        const PointFlags* f = reg.try_get<PointFlags>(e);
+        ASSERT_TRUE(w && w->values.size() == c.positions.size());
+        ASSERT_TRUE(f && f->bits.size() == c.positions.size());
+        for (std::size_t i = 0; i < c.positions.size(); ++i) {
+            const float v = w->values[i];
+            ones += v == 1.0f, zeros += v == 0.0f, between += v > 0.0f && v < 1.0f;
+            if (f->bits[i] & kPointHidden) ++hidden, hidden_not_one += v != 1.0f;
+        }
+    });
+    EXPECT_EQ(clouds, 1u);
+    EXPECT_GT(hidden, 500u);
+    EXPECT_EQ(hidden_not_one, 0u);
+    EXPECT_EQ(ones, hidden);
+    EXPECT_GT(between, 500u);
+    EXPECT_GT(zeros, 30000u);
 }
