@@ -63,7 +63,7 @@ std::vector<double> distance_to_selection(std::span<const glm::dvec3> world,
         for (std::uint32_t s : selected) out[s] = 0.0;
         return out;
     }
-    constexpr int rings = 4;  // cells of radius/4: a query reads at most 9^3 cells
+    constexpr int rings = 4;  // cells of radius/4: a query reads at most 11^3 cells
     const double cell = radius / rings;
     auto cell_of = [&](const glm::dvec3& p) { return glm::ivec3(glm::floor(p / cell)); };
     auto key = [](glm::ivec3 c) {
@@ -81,7 +81,9 @@ std::vector<double> distance_to_selection(std::span<const glm::dvec3> world,
         if (out[i] == 0.0) continue;
         const glm::ivec3 c = cell_of(world[i]);
         double best = inf;
-        for (int ring = 0; ring <= rings; ++ring) {
+        // A point within the radius (rings cells) may lie one ring further: the query sits anywhere in its
+        // cell.
+        for (int ring = 0; ring <= rings + 1; ++ring) {
             // Every point of ring `ring` is at least (ring - 1) cells away.
             if (best <= (ring - 1) * cell) break;
             for (int dx = -ring; dx <= ring; ++dx)

@@ -351,6 +351,24 @@ TEST(PointMode, WeightsFromTheSelectionFallOffAndUndo) {
     EXPECT_EQ(s.reg.get<PointWeights>(s.sphere).values, painted);
 }
 
+TEST(PointMode, DistanceToTheSelectionIsTheBruteForceOne) {
+    std::vector<glm::dvec3> world;
+    std::uint32_t seed = 12345;
+    auto next = [&] { return (seed = seed * 1664525u + 1013904223u) / 4294967296.0; };
+    for (int i = 0; i < 3000; ++i) world.emplace_back(next() * 2 - 1, next() * 2 - 1, next() * 2 - 1);
+    std::vector<std::uint32_t> selected;
+    for (std::uint32_t i = 0; i < world.size(); i += 37) selected.push_back(i);
+    for (double radius : {0.05, 0.3, 1.0}) {
+        const std::vector<double> d = distance_to_selection(world, selected, radius);
+        for (std::size_t i = 0; i < world.size(); ++i) {
+            double best = 1e300;
+            for (std::uint32_t k : selected) best = std::min(best, glm::distance(world[i], world[k]));
+            if (best <= radius) EXPECT_EQ(d[i], best) << i << " radius " << radius;
+            else EXPECT_TRUE(std::isinf(d[i])) << i << " radius " << radius;
+        }
+    }
+}
+
 TEST(PointMode, ReplayFieldsAndKeysRoundTrip) {
     const char* text =
         "1 set point.mode intersect\n2 set weight.falloff sharp\n3 set view.lattice 0\n4 key plus ctrl\n"
