@@ -14,8 +14,11 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <vector>
 
 #include "runtime/gfx/gl_object.h"
+#include "runtime/scene/point_columns.h"
+#include "runtime/scene/point_pages.h"
 
 namespace sffd::gfx {
 
@@ -36,6 +39,27 @@ struct ResidentCloud {
     // ffd_gpu.h), `weights_key` the stamps they are of. A cloud without weights has no buffer here.
     Buffer weights;
     std::uint64_t weights_key = 0;
+    // The cloud's per-point marks for drawing (point_marks.h: flags and weight, 16 bits a point), only
+    // while it has PointFlags or PointWeights: written by residency_system alone (sync_point_marks), page
+    // by page. `marks_state` says what they hold.
+    Buffer marks;
+    struct MarksState {
+        std::uint64_t flags_version = 0, weights_version = 0;  // the columns' stamps the marks hold (0: none)
+        std::uint64_t clock = 0;                               // PointPages::clock as of the last upload
+        std::uint64_t rest_version = 0;                        // the rest upload they were made beside
+        std::uint32_t count = 0;
+        bool flags = false, weights = false;
+        std::vector<std::uint32_t> page_selected;  // per page: points selected and not gone
+        std::vector<std::uint32_t> page_gone;      // per page: points hidden or deleted
+        bool any_selected() const;
+        bool any_gone() const;
+    } marks_state;
+    // In state preview_cpu: the authored index of each drawn element (preview_count of them), set by the
+    // preview uploads; on the GPU (`preview_index`, uint[]) only while the cloud has marks, uploaded by
+    // sync_preview_index() once per preview (the draw passes read a subset's marks through it).
+    std::vector<std::uint32_t> preview_indices;
+    Buffer preview_index;
+    std::uint64_t preview_index_key = 0;  // deformed_version + 1 of the subset `preview_index` holds
 
     bool is_deformed() const { return state != Residency::rest; }
     // Elements of draw_buffer(): a preview subset holds fewer than the cloud.
@@ -80,6 +104,27 @@ void set_deformed(ResidentCloud& cloud, Residency how);
 void set_preview(ResidentCloud& cloud, std::uint32_t preview_count);
 inline void drop_deformed(ResidentCloud& cloud) { cloud.state = Residency::rest; }
 
+// The columns a cloud's marks are made of (any may be null) and their change stamps
+// (registry.version<PointFlags>, <PointWeights>); `pages`: the cloud's PointPages, whose selection,
+// visibility and weight stamps bound an upload to the pages that changed (null: every page).
+struct PointMarkSources {
+    const PointFlags* flags = nullptr;
+    const PointWeights* weights = nullptr;
+    const PointPages* pages = nullptr;
+    std::uint64_t flags_version = 0, weights_version = 0;
+};
+// Brings `cloud.marks` in step with the columns of its `points` points: released when the cloud has
+// neither column (nor a non-empty one of the right size); else the pages whose stamps moved since the last
+// upload (all of them after a rest upload, a size change or an unmarked edit) packed and uploaded. Touches
+// no other buffer. Returns the points uploaded (0: the marks were current).
+std::size_t sync_point_marks(ResidentCloud& cloud, std::size_t points, const PointMarkSources& sources);
+// Uploads `preview_indices` into `preview_index` when the cloud has marks and is in state preview_cpu
+// with a subset not uploaded yet (the preview uploads call it, and sync_point_marks when marks appear).
+void sync_preview_index(ResidentCloud& cloud);
+// The draw passes' marks mode bits (bindings.h SFFD_MARKS_*) for the buffers the cloud holds now: present
+// (indexed in a preview subset) when it has marks, 0 without (or when a subset's indices are missing).
+std::uint32_t resident_marks_mode(const ResidentCloud& cloud);
+
 // True when a GL context (EGL or GLFW) is current on the calling thread: the stores exist only then.
 bool context_current();
 
@@ -89,6 +134,8 @@ struct ResidencyStats {
     std::uint64_t rest_uploads = 0;      // authored clouds uploaded (per-element CPU work each)
     std::uint64_t deformed_uploads = 0;  // CPU deformation outputs uploaded
     std::uint64_t dropped = 0;           // store entries removed with their entity or component
+    std::uint64_t marks_uploads = 0;     // uploads of per-point marks (flags, weights), whole or by page
+    std::uint64_t marks_points = 0;      // points those uploads packed
 };
 
 }  // namespace sffd::gfx

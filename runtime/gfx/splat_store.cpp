@@ -108,6 +108,8 @@ void upload_preview_splats(GpuSplats& gpu, const SplatCloud& authored, std::span
         gpu.deformed, "splats.deformed",
         SplatColumns{moved.positions, moved.normals, moved.axis_u, moved.axis_v, moved.colors, moved.uvs});
     set_preview(gpu, static_cast<std::uint32_t>(k));
+    gpu.preview_indices.assign(indices.begin(), indices.end());  // whose marks each drawn splat shows
+    sync_preview_index(gpu);
 }
 
 CpuSplatRead read_splats_on_cpu(GpuSplats& gpu) {

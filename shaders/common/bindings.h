@@ -15,6 +15,8 @@
 #define SFFD_SSBO_UV_AXES          8   // vec4[]: per-splat uv derivatives along axis_u (xy) and axis_v (zw)
 #define SFFD_SSBO_WEIGHTS         13   // float[]: per-point deformation weights (PointWeights), deform passes
                                        // of weighted clouds only (FFD_WEIGHTS; 9-12 are the raster's)
+#define SFFD_SSBO_POINT_MARKS     14   // uint[]: per-point marks, two 16-bit marks a word (below), draw passes
+#define SFFD_SSBO_PREVIEW_INDEX   15   // uint[]: the authored index of each drawn element of a preview subset
 
 // --- UBO binding points ---------------------------------------------------------------------------
 #define SFFD_UBO_FRAME             0   // camera matrices, viewport, lights
@@ -34,6 +36,21 @@
 #define SFFD_LOC_OVERLAY_POINTS    4   // int: 1 round point sprites, 0 lines
 #define SFFD_LOC_OVERLAY_PIXEL     5   // float: frame pixels per window pixel (a reduced preview: < 1)
 #define SFFD_LOC_DISPLAY_SCALE     0   // vec2: splat_render display copy, window pixel -> frame pixel
+
+// Per-point marks (runtime/gfx/point_marks.h): what the draw passes know of PointFlags and PointWeights
+// (runtime/scene/point_columns.h), one 16-bit mark a point, point j in bits 16 (j & 1) .. of word j >> 1:
+//   bits 0..7   the PointFlags byte (SFFD_MARK_SELECTED, SFFD_MARK_HIDDEN, SFFD_MARK_DELETED)
+//   bits 8..15  the weight as unorm8 (255: weight 1, also for a cloud without weights)
+// The draw passes read them only when their mode says so (a uint of bits below: FrameBlock counts.z for
+// surface splats, a uniform for Gaussians): a cloud without marks binds no marks buffer and reads none.
+#define SFFD_MARK_SELECTED         1u
+#define SFFD_MARK_HIDDEN           2u
+#define SFFD_MARK_DELETED          4u
+#define SFFD_MARK_GONE             6u  // hidden or deleted: never drawn
+#define SFFD_MARKS_PRESENT         1u  // mode: the marks buffer is bound; gone points are not drawn
+#define SFFD_MARKS_INDEXED         2u  // mode: drawn element i is point preview_index[i] (a preview subset)
+#define SFFD_MARKS_SELECTION       4u  // mode: selected points are drawn tinted (mark_overlay)
+#define SFFD_MARKS_WEIGHTS         8u  // mode: every point is drawn in the weight ramp's colour
 
 // GpuSplat, std430, 64 bytes; the same layout for rest and deformed splats, so a render pass reads
 // either one. Positions are relative to the cloud's origin (SplatCloud::origin).

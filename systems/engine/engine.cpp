@@ -82,7 +82,7 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
 
     // --- residency: upload authored clouds whose change stamp moved; owns the GPU stores (residency) ----
     s.add(Phase::residency, "residency", residency_system,  // no-op without a GL context
-          ecs::reads<Deformers, GaussianCloud, SplatCloud>()
+          ecs::reads<Deformers, GaussianCloud, PointFlags, PointPages, PointWeights, SplatCloud>()
               .writes<ResidencyConnections, gaussian::GpuGaussianStore, gfx::GpuSplatStore,
                       gfx::ResidencyStats>());
 
@@ -112,7 +112,7 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
 
     // --- rendering: splat passes, overlays, UI, capture (splat_render, editor overlay) ---------------
     s.add(Phase::rendering, "splat_render", render::render_system,  // culling + HQ/preview splat passes
-          ecs::reads<AmbientLight, Camera, DirectionalLight, SplatCloud>()
+          ecs::reads<AmbientLight, Camera, DirectionalLight, PointFlags, PointWeights, SplatCloud>()
               .writes<DeformedSplats, GaussianCloud, SplatMaterial, Transform, gaussian::GpuGaussianStore,
                       gfx::GpuSplatStore, profiling::PassTimer, render::GaussianBoundsCache,
                       render::GaussianPassState, render::RenderSettings, render::RenderStats,

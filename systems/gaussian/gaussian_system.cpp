@@ -163,7 +163,7 @@ struct GaussianKind {
             if (auto st = gaussian::deform(*l, kept, kept, options); !st)
                 log::warn("gaussian_deform_system: ", st.message(), " (lattice skipped)");
         empty_output(out, cloud);
-        gaussian::upload_preview(resident, kept);
+        gaussian::upload_preview(resident, kept, out.subset.indices);
         if (auto* rs = reg.try_resource<gfx::ResidencyStats>()) ++rs->deformed_uploads;
         ++stats.preview_runs;
     }

@@ -74,13 +74,15 @@ void upload_cpu_deformed(GpuGaussians& gpu, const DeformedGaussians& d, const Ga
     gfx::set_deformed(gpu, gfx::Residency::deformed_cpu);
 }
 
-void upload_preview(GpuGaussians& gpu, const GaussianCloud& subset) {
+void upload_preview(GpuGaussians& gpu, const GaussianCloud& subset, std::span<const std::uint32_t> indices) {
     fill_gaussians(gpu.deformed, "gaussian.deformed", subset, subset.opacities);
     // The authored `sh` is indexed by the whole cloud: the subset reads its own coefficients.
     fill_buffer(gpu.deformed_sh, "gaussian.deformed_sh", subset.sh.data(), subset.sh.size() * sizeof(float));
     gpu.sh_source = ShSource::rotated;
     gpu.preview_sh_degree = subset.sh_degree;
     gfx::set_preview(gpu, std::uint32_t(subset.size()));
+    gpu.preview_indices.assign(indices.begin(), indices.end());  // whose marks each drawn Gaussian shows
+    gfx::sync_preview_index(gpu);
 }
 
 }  // namespace sffd::gaussian

@@ -35,7 +35,8 @@ void upload_cpu_deformed(GpuGaussians& gpu, const DeformedGaussians& deformed, c
 
 // A budgeted preview's output (systems/ffd/preview_budget.h): `subset`, a deformed subset of the cloud
 // with its own opacities and SH (rotated coefficients, of its own degree: preview_sh_degree), into
-// `deformed` and `deformed_sh`. State preview_cpu with subset.size() elements.
-void upload_preview(GpuGaussians& gpu, const GaussianCloud& subset);
+// `deformed` and `deformed_sh`. State preview_cpu with subset.size() elements; `indices`: the authored
+// index of each (the subset's marks are read through them, runtime/gfx/residency.h).
+void upload_preview(GpuGaussians& gpu, const GaussianCloud& subset, std::span<const std::uint32_t> indices);
 
 }  // namespace sffd::gaussian

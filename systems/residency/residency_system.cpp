@@ -7,6 +7,8 @@
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/components.h"
 #include "runtime/scene/lattice.h"
+#include "runtime/scene/point_columns.h"
+#include "runtime/scene/point_pages.h"
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/gpu_store.h"
 #include "systems/gaussian/gpu_upload.h"
@@ -43,6 +45,16 @@ void sync(ecs::Registry& reg, Store& store, gfx::ResidencyStats& stats, Upload&&
             ++stats.rest_uploads;
         }
         if (gpu.is_deformed() && !reg.has<Deformers>(e)) gfx::drop_deformed(gpu);
+        // The per-point marks (flags and weights for drawing), page by page; nothing else is uploaded
+        // for an edit of them, and a cloud without either column gets no buffer.
+        const ecs::Registry& r = reg;  // read-only
+        const gfx::PointMarkSources marks{r.try_get<PointFlags>(e), r.try_get<PointWeights>(e),
+                                          r.try_get<PointPages>(e), r.version<PointFlags>(e),
+                                          r.version<PointWeights>(e)};
+        if (const std::size_t packed = gfx::sync_point_marks(gpu, cloud.size(), marks); packed > 0) {
+            ++stats.marks_uploads;
+            stats.marks_points += packed;
+        }
     });
 }
 
