@@ -50,7 +50,7 @@ check splat_render/display.frag frag
 SPIRV="-G --aml -o $tmp/out.spv"
 for f in splat_render/gaussian/project.comp:comp splat_render/gaussian/splat.vert:vert splat_render/gaussian/splat.frag:frag \
          splat_render/gaussian/tile_count.comp:comp splat_render/gaussian/tile_emit.comp:comp splat_render/gaussian/tile_ranges.comp:comp \
-         splat_render/gaussian/tile_blend.comp:comp gaussian/deform.comp:comp splat_render/gaussian/sort_payload.comp:comp splat_render/gaussian/gather.comp:comp \
+         splat_render/gaussian/tile_blend.comp:comp gaussian/deform.comp:comp splat_render/gaussian/sort_payload.comp:comp splat_render/gaussian/gather.comp:comp splat_render/gaussian/marks.comp:comp \
          common/radix_sort_count.comp:comp common/radix_sort_scan.comp:comp common/radix_sort_scatter.comp:comp \
          common/scan_reduce.comp:comp common/scan_add.comp:comp \
          splat_render/gaussian/accum.frag:frag splat_render/gaussian/composite.frag:frag; do

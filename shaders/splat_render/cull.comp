@@ -22,6 +22,9 @@
 // kept sprites and quads into groups[g] and groups[G + g] (G groups); gfx::exclusive_scan() turns that into
 // each group's first slot; the write pass classifies again and writes every kept splat at its group's first
 // slot plus its rank in the group (a scan in shared memory). The commands' counts are the scan's totals.
+// Hidden and deleted points (their marks, point_marks.glsl, when frame.counts.z says the cloud has some)
+// are dropped first, like a culled splat; the kept ones' colours show the marks' overlays (splat_color).
+//
 // Both passes run the same compiled program, so they classify every splat alike (two compilations could
 // contract floating-point operations differently and disagree on a splat at a frustum plane).
 #include "splat_render/splat_color.glsl"
@@ -58,7 +61,9 @@ void main() {
     bool back = false;
     vec3 u = vec3(0.0), v = vec3(0.0);
     vec3 box = vec3(0.0);  // sprite: NDC centre (xy) and side in pixels (z), ellipse_sprite()
-    if (i < frame.counts.x) {
+    uint mark = SFFD_MARK_DEFAULT;
+    if (i < frame.counts.x) mark = point_mark(i, frame.counts.z);
+    if (i < frame.counts.x && !mark_gone(mark)) {
         // Centre and normal first: the back-face test needs only them (llvmpipe loads SSBOs per lane).
         s.center = splats[i].center;
         s.color = splats[i].color;
@@ -139,7 +144,7 @@ void main() {
 #elif TEXTURED
         rec.normal = vec4(world_n, 0.0);  // HQ samples the texture per pixel: the mip level goes here below
 #else
-        rec.normal = vec4(world_n, pack_color(splat_color(s, o, world_n).rgb));
+        rec.normal = vec4(world_n, pack_color(splat_color(s, o, world_n, mark).rgb));
 #endif
 #if TEXTURED
         vec4 uv_axes_i = uv_axes[i];

@@ -21,6 +21,9 @@ layout(std430, binding = SFFD_SSBO_VISIBLE) readonly buffer QuadList { uint quad
 #if UV_FRAME
 layout(std430, binding = SFFD_SSBO_UV_AXES) readonly buffer UvAxes { vec4 uv_axes[]; };
 #endif
+// The first splat of the range the quad list's indices count from (CloudGpu::quad_batches; 0 without):
+// the point marks are indexed by the whole cloud.
+layout(location = SFFD_LOC_QUAD_MARK_BASE) uniform uint u_quad_mark_base;
 #else
 // The SplatRecord array of the cull pass, bound as a vertex buffer (stride SFFD_SPLAT_RECORD_BYTES): the vertex fetcher reads
 // it far faster than per-lane SSBO loads on llvmpipe.
@@ -87,9 +90,9 @@ void main() {
     v_specular = unpack_light(pack_light(specular));
 #endif
 #elif PASS == 2
-    v_color = unpack_color(pack_color(splat_color(s, o, world_n).rgb));
+    v_color = unpack_color(pack_color(splat_color(s, o, world_n, point_mark(u_quad_mark_base + quads[gl_InstanceID], frame.counts.z)).rgb));
 #else
-    v_plane.w = pack_color(splat_color(s, o, world_n).rgb);
+    v_plane.w = pack_color(splat_color(s, o, world_n, point_mark(u_quad_mark_base + quads[gl_InstanceID], frame.counts.z)).rgb);
 #endif
 #if PASS == 1 || AUX
     v_normal = world_n;

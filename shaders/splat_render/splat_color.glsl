@@ -5,13 +5,16 @@
 
 #include "splat_render/splat_common.glsl"
 #include "splat_render/lighting.glsl"
+#include "common/point_marks.glsl"
 
 layout(binding = SFFD_TEX_MATERIAL) uniform sampler2D material_texture;
 
 // TEXTURED and LIT (0 or 1) fix the two choices at compile time (the cull pass compiles a variant per
 // combination: llvmpipe would otherwise sample the texture and light every splat whatever the branch
 // says); left undefined, they are read per draw from frame.params.w and frame.counts.w.
-vec4 splat_color(GpuSplat s, SplatView o, vec3 world_n) {
+// `mark`: the splat's point mark (point_marks.glsl), shown as frame.counts.z's mode asks (weight ramp,
+// selection tint) before the lighting.
+vec4 splat_color(GpuSplat s, SplatView o, vec3 world_n, uint mark) {
     vec4 color;
 #if defined(TEXTURED)
     const bool textured = TEXTURED != 0;
@@ -29,6 +32,7 @@ vec4 splat_color(GpuSplat s, SplatView o, vec3 world_n) {
         color = unpackUnorm4x8(s.color);
         color.rgb = srgb_to_linear(color.rgb) * frame.base_color.rgb;
     }
+    color.rgb = mark_overlay(color.rgb, mark, frame.counts.z);
     if (lit) color.rgb = shade_blinn_phong(color.rgb, world_n, -normalize(mat3(frame.view_to_world) * o.c));
     return color;
 }

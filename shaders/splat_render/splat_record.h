@@ -13,6 +13,8 @@
 #define SFFD_SSBO_CULL_GROUPS SFFD_SSBO_STATS
 // uint uniform of cull.comp: 1 for its count pass, 0 for the pass that writes the lists.
 #define SFFD_LOC_CULL_PASS 0
+// uint uniform of splat.vert's quads (SHAPE_QUAD): the first splat of the range their indices count from.
+#define SFFD_LOC_QUAD_MARK_BASE 0
 
 // A visible sprite splat, prepared by the cull pass (or its CPU twin, cpu_cull.h) so the vertex shaders of
 // both HQ passes only copy it (llvmpipe spends its time per primitive: vertex work runs once, in the cull).

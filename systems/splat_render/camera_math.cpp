@@ -57,12 +57,15 @@ SceneSphere scene_sphere(const ecs::Registry& registry, const CloudBounds& bound
         hi = glm::max(hi, c + b.radius * scale);
     };
     registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
-        if (cloud.size() > 0) add(e, cloud.origin, bounds ? bounds(e, cloud) : bounding_sphere(cloud));
+        if (cloud.size() > 0)
+            add(e, cloud.origin,
+                bounds ? bounds(e, cloud) : bounding_sphere(cloud, registry.try_get<PointFlags>(e)));
     });
     registry.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud& cloud) {
         if (cloud.size() > 0)
             add(e, cloud.origin,
-                gaussian_bounds ? gaussian_bounds(e, cloud) : gaussian_bounding_sphere(cloud));
+                gaussian_bounds ? gaussian_bounds(e, cloud)
+                                : gaussian_bounding_sphere(cloud, registry.try_get<PointFlags>(e)));
     });
     SceneSphere out;
     if (balls.empty()) return out;

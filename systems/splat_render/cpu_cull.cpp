@@ -13,6 +13,7 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "runtime/gfx/point_marks.h"
 #include "runtime/gfx/splat_pack.h"
 
 namespace sffd::render {
@@ -128,7 +129,7 @@ glm::vec3 ellipse_sprite(const gpu::FrameBlock& f, const glm::vec3& c, const glm
 }
 
 void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBlock& f,
-                     const TexelView& texture, CpuCullResult& out) {
+                     const TexelView& texture, CpuCullResult& out, const MarksView& marks) {
     const std::size_t n = splats.size();
     const std::size_t blocks = (n + block_splats - 1) / block_splats;
     out.block = block_splats;
@@ -149,6 +150,21 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     const float side_x = 1.0f / std::sqrt(p00 * p00 + 1.0f), side_y = 1.0f / std::sqrt(p11 * p11 + 1.0f);
     const std::array<float, 256>& splat_lut = splat_srgb_table();
     const std::array<float, 256>& texel_lut = srgb8_table();
+    // point_mark() of point_marks.glsl: element i's mark, the default without marks.
+    const std::uint32_t marks_mode = f.counts.z;
+    const bool marked = (marks_mode & SFFD_MARKS_PRESENT) != 0;
+    const bool indexed = (marks_mode & SFFD_MARKS_INDEXED) != 0;
+    const auto mark_of = [&](std::size_t i) -> std::uint16_t {
+        if (!marked) return gfx::kDefaultPointMark;
+        std::size_t j = i;
+        if (indexed) {
+            if (!marks.index || i >= marks.index_count) return gfx::kDefaultPointMark;
+            j = marks.index[i];
+        }
+        if (j >= marks.points) return gfx::kDefaultPointMark;
+        return gfx::pack_point_mark(marks.flags ? marks.flags[j] : 0,
+                                    marks.weights ? marks.weights[j] : 1.0f);
+    };
     const bool flat_all = textured && texture.pyramid;
     const bool flat_ok = textured && (texture.uniform_radius || flat_all);
     if (flat_ok && out.flat_records.size() < n) out.flat_records.resize(n);
@@ -164,6 +180,8 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
             glm::vec2 lo(1e30f), hi(-1e30f);
             for (std::size_t i = begin; i < end; ++i) {
                 const gpu::GpuSplat& s = splats[i];
+                const std::uint16_t mark = mark_of(i);
+                if (gfx::mark_gone(mark)) continue;  // hidden or deleted: never drawn
                 // Back face from centre and normal only (a flipped splat, normal.w == 0, is two-sided).
                 const glm::vec3 c = glm::vec3(f.model_view * glm::vec4(xyz(s.center), 1.0f));
                 if (!all_finite(xyz(s.center)) || !all_finite(xyz(s.normal)) || !all_finite(c))
@@ -283,6 +301,7 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 color = glm::vec3(splat_lut[bits & 255u], splat_lut[(bits >> 8) & 255u],
                                   splat_lut[(bits >> 16) & 255u]) *
                         glm::vec3(f.base_color);
+                color = gfx::mark_overlay(color, mark, marks_mode);
                 if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
                 rec.normal = glm::vec4(world_n, pack_color(color));
                 rec.uv = glm::vec4(0.0f);

@@ -58,6 +58,18 @@ glm::vec3 sample_texture(const TexelView& texture, glm::vec2 uv, int level);
 // attribute pass.
 std::vector<std::uint16_t> uniform_texel_radius(const std::uint8_t* rgba8, int width, int height);
 
+// A cloud's point marks as the CPU cull reads them (runtime/gfx/point_marks.h; the compute cull reads the
+// residency's marks buffer, made from the same columns): drawn element i is point index[i] (a preview
+// subset) or i; its flags and weight come from the columns (null, or `points` not their size: the
+// defaults). frame.counts.z's mode (SFFD_MARKS_*) says what to do with them, as in cull.comp.
+struct MarksView {
+    const std::uint8_t* flags = nullptr;  // PointFlags::bits
+    const float* weights = nullptr;       // PointWeights::values
+    const std::uint32_t* index = nullptr;
+    std::size_t index_count = 0;
+    std::size_t points = 0;
+};
+
 // An allocator whose resize() leaves new elements default-initialised (uninitialised for the records): the
 // cull writes only the visible splats' slots, so the memory of culled ones is never touched (and, on
 // Linux, never made resident) instead of being zero-filled every time the cloud grows.
@@ -123,8 +135,10 @@ struct CpuCullResult {
 // counts.w = 1 lights the colours for preview, ...). frame.counts.x is ignored: the span's size counts.
 // One difference: with TexelView::uniform_radius, a textured cloud's one-colour sprites go to
 // flat_records (cull.comp keeps every textured sprite in the textured list).
+// Hidden and deleted points (`marks`, when frame.counts.z has SFFD_MARKS_PRESENT) are dropped as cull.comp
+// drops them, and the kept ones' colours show the mode's overlays.
 void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBlock& frame,
-                     const TexelView& texture, CpuCullResult& out);
+                     const TexelView& texture, CpuCullResult& out, const MarksView& marks = {});
 
 // Screen box of a splat's projected ellipse, the twin of ellipse_sprite() in splat_common.glsl: NDC centre
 // (xy) and the side in pixels of the square sprite around it (z, -1 when the ellipse reaches the near plane).

@@ -74,6 +74,7 @@ Status compute_cull(SplatRenderState& s, CloudGpu& gpu, GLuint program, bool tex
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_DRAW_INDIRECT, gpu.commands.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CULL_GROUPS, gpu.cull_groups.id());
         if (textured) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes);
+        bind_marks(s, gpu);
         glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture);
     };
     // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its worker
@@ -150,6 +151,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
         b.material = glm::vec4(gpu.material.specular, gpu.material.shininess, 0.0f, 0.0f);
         b.base_color = gpu.colored ? glm::vec4(1.0f) : quantised_base_color(gpu.material.base_color);
         b.counts.x = gpu.count;
+        b.counts.z = gpu.marks_mode;  // point marks: gone points dropped, overlays (point_marks.glsl)
         b.counts.w = settings.quality == Quality::preview ? 1u : 0u;  // cull pass lights sprites in preview
         glNamedBufferSubData(gpu.frame_ubo.id(), 0, sizeof b, &b);
         // A cloud whose compute-cull records exceed one storage block takes the CPU cull on every path
@@ -186,7 +188,7 @@ void cull_pass(ecs::Registry& reg, SplatRenderState& s, FramePlan& plan, RenderS
                     warn_once("render_system(): a cloud's splats could not be read on the CPU; not drawn");
                     return;
                 }
-                cull_splats_cpu(read.splats(), b, texels, r);
+                cull_splats_cpu(read.splats(), b, texels, r, gpu.cpu_marks);
             }
             ++s.cpu_splat_passes;
             // On the CPU sprite path the sprites are the CPU's (preview_pass, visibility_pass): they reach

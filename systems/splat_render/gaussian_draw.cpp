@@ -21,6 +21,7 @@
 #include "runtime/gfx/limits.h"
 #include "runtime/gfx/shader.h"
 #include "runtime/gfx/ssbo_batch.h"
+#include "shaders/common/bindings.h"
 #include "shaders/gaussian/gaussian_layout.h"
 
 namespace sffd::render {
@@ -35,9 +36,13 @@ Result<GlRenderer> create_gl_renderer() {
     if (!splat) return splat.error();
     r.project = std::move(*project);
     r.splat = std::move(*splat);
-    const std::pair<gfx::Program*, const char*> tiles[] = {
-        {&r.tile_count, "tile_count"}, {&r.tile_emit, "tile_emit"},       {&r.tile_ranges, "tile_ranges"},
-        {&r.tile_blend, "tile_blend"}, {&r.sort_payload, "sort_payload"}, {&r.gather, "gather"}};
+    const std::pair<gfx::Program*, const char*> tiles[] = {{&r.tile_count, "tile_count"},
+                                                           {&r.tile_emit, "tile_emit"},
+                                                           {&r.tile_ranges, "tile_ranges"},
+                                                           {&r.tile_blend, "tile_blend"},
+                                                           {&r.sort_payload, "sort_payload"},
+                                                           {&r.gather, "gather"},
+                                                           {&r.marks, "marks"}};
     for (const auto& [program, name] : tiles) {
         auto made = gfx::load_compute_program(std::string("splat_render/gaussian/") + name + ".comp",
                                               std::string("gaussian.") + name);
@@ -91,8 +96,12 @@ void set(GLuint program, const char* name, glm::vec3 v) {
 }  // namespace
 
 GaussianBuffers gaussian_buffers(const gaussian::GpuGaussians& gpu) {
-    return {gpu.draw_buffer(), gpu.sh_buffer(),       gpu.frames.id(),
-            gpu.drawn_count(), gpu.drawn_sh_degree(), gpu.has_frames()};
+    GaussianBuffers b{gpu.draw_buffer(), gpu.sh_buffer(),       gpu.frames.id(),
+                      gpu.drawn_count(), gpu.drawn_sh_degree(), gpu.has_frames()};
+    b.marks_mode = gfx::resident_marks_mode(gpu);
+    b.marks = b.marks_mode & SFFD_MARKS_PRESENT ? gpu.marks.id() : 0;
+    b.preview_index = b.marks_mode & SFFD_MARKS_INDEXED ? gpu.preview_index.id() : 0;
+    return b;
 }
 
 // Hardware GPUs: the GPU sort (no readback, no CPU work). Software rasterizers: the CPU sort, faster
@@ -204,6 +213,26 @@ Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v
         gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_DEPTH, r.depth.id(), batch, sizeof(std::uint32_t));
         if (Status st = gfx::dispatch_1d(batch.count, 64, std::max(1u, r.max_groups_x)); !st)
             return st.error();
+    }
+    // Point marks: gone Gaussians out of the drawn ones, overlay colours (marks.comp), range by range.
+    if (b.marks_mode != 0) {
+        gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.marks");
+        const GLuint mp = r.marks.id();
+        glUseProgram(mp);
+        glProgramUniform1ui(mp, glGetUniformLocation(mp, "u_mode"), b.marks_mode);
+        // A buffer with no store cannot be bound: a missing one is never read (its mode bit is off).
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_POINT_MARKS, b.marks ? b.marks : r.draw.id());
+        glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_PREVIEW_INDEX,
+                         b.preview_index ? b.preview_index : r.draw.id());
+        for (const gfx::SsboBatch& batch : *batches) {
+            glProgramUniform1ui(mp, glGetUniformLocation(mp, "u_count"), GLuint(batch.count));
+            glProgramUniform1ui(mp, glGetUniformLocation(mp, "u_base"), GLuint(batch.first));
+            gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_COLOR, r.proj_color.id(), batch,
+                                 SFFD_GPU_PROJECTED_STRIDE);
+            gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_DEPTH, r.depth.id(), batch, sizeof(std::uint32_t));
+            if (Status st = gfx::dispatch_1d(batch.count, 64, std::max(1u, r.max_groups_x)); !st)
+                return st.error();
+        }
     }
     // The GPU sort's payloads, the Gaussians' indices in the whole cloud (the CPU sort uploads its order).
     const GLuint op = r.sort_payload.id();

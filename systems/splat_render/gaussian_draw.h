@@ -93,6 +93,7 @@ struct GlRenderer {
     gfx::Program tile_count, tile_emit, tile_ranges, tile_blend;
     gfx::Program sort_payload;  // the GPU sort's payloads (indices), its own pass (sort_payload.comp)
     gfx::Program gather;        // the projection into depth order (gather.comp)
+    gfx::Program marks;         // gone Gaussians out, overlay colours in (marks.comp), clouds with marks
     gfx::RadixSorter sorter;
     gfx::VertexArray vao;  // the quads: no attributes (instances index the depth-ordered arrays)
     gfx::Buffer order, depth;
@@ -147,6 +148,10 @@ struct GaussianBuffers {
     std::size_t count = 0;
     int sh_degree = 0;
     bool has_frames = false;
+    // Point marks (runtime/gfx/point_marks.h): the residency's buffers (0: none) and the mode bits
+    // (SFFD_MARKS_*: gone Gaussians not drawn, overlays; 0: the marks pass does not run).
+    GLuint marks = 0, preview_index = 0;
+    std::uint32_t marks_mode = 0;
 };
 
 // The camera of one draw, in the cloud's coordinates.

@@ -26,6 +26,7 @@ namespace {}  // namespace
 struct GaussianBoundsCache {
     BoundingSphere bounds;
     std::uint64_t bounds_version = 0;
+    std::uint64_t flags_version = 0;  // registry.version<PointFlags>: gone Gaussians are left out
 };
 
 // Registry resource: the pass's GL objects (the clouds themselves live in GpuGaussianStore).
@@ -113,20 +114,27 @@ void ensure_targets(GaussianPassState& s, const GaussianPassFrame& f) {
 
 }  // namespace
 
-BoundingSphere gaussian_bounding_sphere(const GaussianCloud& cloud) {
+BoundingSphere gaussian_bounding_sphere(const GaussianCloud& cloud, const PointFlags* flags) {
     BoundingSphere b;
     if (cloud.size() == 0) return b;
+    if (flags && flags->bits.size() != cloud.size()) flags = nullptr;  // of another size: none is gone
     glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
     double max_scale = 0.0;
+    bool any = false;
     for (std::size_t i = 0; i < cloud.size(); ++i) {
+        if (flags && (flags->bits[i] & kPointGone)) continue;
+        any = true;
         lo = glm::min(lo, glm::dvec3(cloud.positions[i]));
         hi = glm::max(hi, glm::dvec3(cloud.positions[i]));
         const glm::vec3 s = cloud.scales[i];
         max_scale = std::max(max_scale, double(std::max({s.x, s.y, s.z})));
     }
+    if (!any) return b;
     b.center = 0.5 * (lo + hi);
     double r = 0.0;
-    for (const glm::vec3& p : cloud.positions) r = std::max(r, glm::length(glm::dvec3(p) - b.center));
+    for (std::size_t i = 0; i < cloud.size(); ++i)
+        if (!flags || !(flags->bits[i] & kPointGone))
+            r = std::max(r, glm::length(glm::dvec3(cloud.positions[i]) - b.center));
     b.max_splat_radius = 3.0 * max_scale;
     b.radius = r + b.max_splat_radius;
     return b;
@@ -136,15 +144,18 @@ BoundingSphere cached_gaussian_bounds(ecs::Registry& reg, ecs::Entity e) {
     const GaussianCloud* cloud = reg.try_get<GaussianCloud>(e);
     if (!cloud) return {glm::dvec3(0.0), -1.0, 0.0};
     // Cached only while the pass exists (its signal removes the cache with the cloud).
-    if (!reg.try_resource<GaussianPassState>()) return gaussian_bounding_sphere(*cloud);
+    const PointFlags* flags = std::as_const(reg).try_get<PointFlags>(e);
+    if (!reg.try_resource<GaussianPassState>()) return gaussian_bounding_sphere(*cloud, flags);
     const std::uint64_t version = reg.version<GaussianCloud>(e);
+    const std::uint64_t flags_version = std::as_const(reg).version<PointFlags>(e);
     if (const GaussianBoundsCache* c = std::as_const(reg).try_get<GaussianBoundsCache>(e);
-        c && c->bounds_version == version)
+        c && c->bounds_version == version && c->flags_version == flags_version)
         return c->bounds;
     GaussianBoundsCache* c = reg.try_get<GaussianBoundsCache>(e);
     if (!c) c = &reg.emplace<GaussianBoundsCache>(e);
-    c->bounds = gaussian_bounding_sphere(*cloud);
+    c->bounds = gaussian_bounding_sphere(*cloud, flags);
     c->bounds_version = version;
+    c->flags_version = flags_version;
     return c->bounds;
 }
 
@@ -216,8 +227,10 @@ Result<std::uint32_t> gaussian_pass(ecs::Registry& reg, const GaussianPassFrame&
         v.width = f.width, v.height = f.height;
         v.ndc_depth = ndc_depth;
         v.min_footprint_px = f.preview ? kPreviewMinFootprintPx : 0.0f;
-        const GaussianBuffers buffers{gpu.draw_buffer(), gpu.sh_buffer(),       gpu.frames.id(),
-                                      gpu.drawn_count(), gpu.drawn_sh_degree(), gpu.has_frames()};
+        GaussianBuffers buffers = gaussian_buffers(gpu);
+        if (f.show_selection && (buffers.marks_mode & SFFD_MARKS_PRESENT) && gpu.marks_state.any_selected())
+            buffers.marks_mode |= SFFD_MARKS_SELECTION;
+        if (f.show_weights) buffers.marks_mode |= SFFD_MARKS_WEIGHTS;
         if (Status st =
                 draw_gaussians(s.renderer, buffers, v, f.aux_outputs ? &s.accum : &s.accum_colour, &tiles);
             !st)

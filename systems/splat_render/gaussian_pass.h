@@ -24,6 +24,7 @@
 #include "runtime/ecs/registry.h"
 #include "runtime/gfx/gl.h"
 #include "runtime/scene/components.h"
+#include "runtime/scene/point_columns.h"
 #include "systems/gaussian/components.h"
 #include "systems/splat_render/gaussian_draw.h"
 #include "systems/splat_render/splat_pack.h"
@@ -43,13 +44,16 @@ struct GaussianPassFrame {
     // Preview quality (the editor while moving): Gaussians whose own footprint is under a pixel are not
     // drawn (GaussianView::min_footprint_px); the HQ (still) frame draws every Gaussian.
     bool preview = false;
+    // RenderSettings::show_selection, show_weights: the point overlays asked for (runtime/gfx/point_marks.h).
+    bool show_selection = false, show_weights = false;
 };
 
 // The footprint (3σ radius before the 0.3 px² low-pass) under which preview frames drop a Gaussian.
 inline constexpr float kPreviewMinFootprintPx = 1.0f;
 
 // Bounding sphere of a Gaussian cloud (cloud space): the centres' box grown by 3 × the largest scale.
-BoundingSphere gaussian_bounding_sphere(const GaussianCloud& cloud);
+// With `flags`, of the Gaussians that are neither hidden nor deleted only.
+BoundingSphere gaussian_bounding_sphere(const GaussianCloud& cloud, const PointFlags* flags = nullptr);
 // Cached per entity (recomputed when the cloud's change stamp moves): for scene_camera's framing.
 BoundingSphere cached_gaussian_bounds(ecs::Registry& registry, ecs::Entity entity);
 

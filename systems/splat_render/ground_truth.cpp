@@ -1,5 +1,6 @@
 // Ground-truth ray tracer (see ground_truth.h). Embree stays in this file.
 #include "systems/splat_render/ground_truth.h"
+#include "systems/splat_render/nearest_point.h"
 #include "systems/splat_render/texture_lookup.h"
 
 #include <algorithm>
@@ -15,6 +16,8 @@
 #include "systems/ffd/deform.h"
 #include "systems/ffd/lattice_frame.h"
 #include "systems/splat_render/camera_math.h"
+#include "runtime/scene/point_columns.h"
+#include "runtime/scene/point_subset.h"
 #include "systems/splat_render/splat_pack.h"
 
 namespace sffd::render {
@@ -49,6 +52,7 @@ struct Hit {
     // Mesh hits: uv, and the triangle's uv gradients (a world displacement dq in its plane moves uv by
     // (grad_u . dq, grad_v . dq)).
     bool mesh = false;
+    glm::dvec3 rest_point{0.0};  // the hit's rest point in the world (mesh hits; the sphere's: rest_dir)
     glm::dvec2 uv{0.0};
     glm::dvec3 grad_u{0.0}, grad_v{0.0};
 };
@@ -238,6 +242,7 @@ public:
         // uv: the parent triangle's affine map at the rest point.
         const glm::dvec3 ra = rest_[tri[0]], rb = rest_[tri[1]], rc = rest_[tri[2]];
         const glm::dvec3 rest = bw * ra + bu * rb + bv * rc;
+        h.rest_point = rest;
         const std::uint32_t corner = mesh_.triangles[3 * t];
         if (mesh_.uvs.size() == mesh_.positions.size())
             h.uv = glm::dvec2(mesh_.uvs[corner]) + glm::dvec2(glm::dot(grad_u_[t], rest - world_[corner]),
@@ -537,6 +542,19 @@ Result<ReferenceScene> reference_scene(const ecs::Registry& reg, int width, int 
             "reference_scene(): no point cloud with an exact surface (ExactSphere or ExactMesh) in the "
             "scene");
     if (!problem.empty()) return make_error("reference_scene(): " + problem);
+    reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& c) {
+        if (&c != cloud) return;
+        // Hidden and deleted points: their part of the surface is not traced (ReferenceScene::point_gone).
+        const PointFlags* flags = reg.try_get<PointFlags>(e);
+        if (!any_point_flagged(flags, c.size(), kPointGone)) return;
+        const glm::dmat4 m = model_matrix(reg.try_get<Transform>(e), c.origin);
+        s.point_rest.resize(c.size());
+        s.point_gone.resize(c.size());
+        for (std::size_t i = 0; i < c.size(); ++i) {
+            s.point_rest[i] = glm::dvec3(m * glm::dvec4(glm::dvec3(c.positions[i]), 1.0));
+            s.point_gone[i] = (flags->bits[i] & kPointGone) != 0 ? 1 : 0;
+        }
+    });
     const double aspect = double(width) / double(height);
     const Camera cam = scene_camera(reg, aspect);
     s.view = view_matrix(cam);
@@ -571,10 +589,18 @@ Result<FrameImage> render_reference(const ReferenceScene& scene, const Reference
         const double nx = 2.0 * wx / w - 1.0, ny = 2.0 * wy / h - 1.0;
         return to_world * glm::dvec3(nx / p00, ny / p11, -1.0);
     };
+    // A surface point whose nearest rest splat is hidden or deleted is not there (the splats draw a hole).
+    const NearestPoint splats =
+        scene.point_gone.size() == scene.point_rest.size() ? NearestPoint(scene.point_rest) : NearestPoint();
     auto trace = [&](const glm::dvec3& dir) {
-        return mesh       ? mesh->trace(eye, dir)
-               : deformed ? deformed->trace(eye, dir)
-                          : trace_sphere(scene, eye, dir);
+        std::optional<Hit> hit = mesh       ? mesh->trace(eye, dir)
+                                 : deformed ? deformed->trace(eye, dir)
+                                            : trace_sphere(scene, eye, dir);
+        if (hit && !splats.empty() &&
+            scene.point_gone[splats.nearest(hit->mesh ? hit->rest_point
+                                                      : scene.center + scene.radius * hit->rest_dir)])
+            hit.reset();
+        return hit;
     };
     auto hit_uv = [](const Hit& hit) { return hit.mesh ? hit.uv : sphere_uv(hit.rest_dir); };
     auto shade = [&](const Hit& hit, const glm::dvec3& dir, const glm::dvec4& tex) {

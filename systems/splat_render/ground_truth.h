@@ -61,6 +61,11 @@ struct ReferenceScene {
     // cloud's model matrix (Transform and origin) that places it in the world.
     const ExactMesh* mesh = nullptr;
     glm::dmat4 mesh_model{1.0};
+    // The cloud's hidden and deleted points (PointFlags kPointGone): a surface point whose nearest rest
+    // splat (rest positions in the world, Transform and origin applied) is gone is not traced, as the
+    // splat renderer draws none there. Both empty when no point is gone.
+    std::vector<glm::dvec3> point_rest;
+    std::vector<std::uint8_t> point_gone;
 };
 
 struct ReferenceSettings {

@@ -64,11 +64,53 @@ bool cpu_cull_wanted(const SplatRenderState& s, CullPath path) {
     return path == CullPath::cpu || (path == CullPath::automatic && (s.software || s.cull_over_limit));
 }
 
+namespace {
+
+// The cloud's point marks this frame: the residency's buffers and the mode bits (frame.counts.z) for what
+// it holds and what `settings` asks to see; the columns for the CPU cull. An overlay (tint, weights) draws
+// a textured cloud untextured: its colours are the overlay's.
+void sync_marks(const ecs::Registry& reg, ecs::Entity e, const SplatCloud& cloud,
+                const gfx::GpuSplats& splats, const RenderSettings& settings, CloudGpu& gpu) {
+    std::uint32_t mode = gfx::resident_marks_mode(splats);
+    if (settings.show_selection && (mode & SFFD_MARKS_PRESENT) && splats.marks_state.any_selected())
+        mode |= SFFD_MARKS_SELECTION;
+    if (settings.show_weights) mode |= SFFD_MARKS_WEIGHTS;
+    gpu.marks_mode = mode;
+    gpu.marks = mode & SFFD_MARKS_PRESENT ? splats.marks.id() : 0;
+    gpu.preview_index = mode & SFFD_MARKS_INDEXED ? splats.preview_index.id() : 0;
+    gpu.cpu_marks = {};
+    if (mode & SFFD_MARKS_PRESENT) {
+        const std::size_t n = cloud.size();
+        const PointFlags* flags = reg.try_get<PointFlags>(e);
+        const PointWeights* weights = reg.try_get<PointWeights>(e);
+        gpu.cpu_marks.flags = flags && flags->bits.size() == n ? flags->bits.data() : nullptr;
+        gpu.cpu_marks.weights = weights && weights->values.size() == n ? weights->values.data() : nullptr;
+        gpu.cpu_marks.points = n;
+        if (mode & SFFD_MARKS_INDEXED)
+            gpu.cpu_marks.index = splats.preview_indices.data(),
+            gpu.cpu_marks.index_count = splats.preview_indices.size();
+    }
+    if (mode & (SFFD_MARKS_SELECTION | SFFD_MARKS_WEIGHTS)) {
+        gpu.texture = 0, gpu.uv_axes = 0;
+        gpu.uv_axes_cpu = nullptr;
+    }
+}
+
+}  // namespace
+
+void bind_marks(const SplatRenderState& s, const CloudGpu& gpu) {
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_POINT_MARKS,
+                     gpu.marks ? gpu.marks : s.command_reset.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_PREVIEW_INDEX,
+                     gpu.preview_index ? gpu.preview_index : s.command_reset.id());
+}
+
 // Refreshes the renderer's own per-cloud objects (cull buffers, bounds) for the clouds that are resident
 // in GpuSplatStore (residency_system uploads them and their textures; this only reads the store) and
 // drops objects of clouds that no longer exist. cpu_cull: the CPU cull may run, so name the resident
 // cloud whose draw buffer it reads (cpu_source).
-void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore* store, bool cpu_cull) {
+void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore* store, bool cpu_cull,
+                 const RenderSettings& settings) {
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& cloud) {
         gfx::GpuSplats* resident = nullptr;
         if (store)
@@ -116,8 +158,11 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore* st
         }
         gpu.uv_axes_cpu = gpu.texture && cloud.uv_axes.size() == n ? &cloud.uv_axes : nullptr;
         gpu.texture_texels = &cloud.texture;
-        if (gpu.bounds_version != version) {
-            gpu.bounds = bounding_sphere(cloud);
+        // The framing camera's bounds leave hidden and deleted points out (recomputed when the flags move).
+        const std::uint64_t flags_version = std::as_const(reg).version<PointFlags>(e);
+        if (gpu.bounds_version != version || gpu.bounds_flags_version != flags_version) {
+            gpu.bounds = bounding_sphere(cloud, std::as_const(reg).try_get<PointFlags>(e));
+            gpu.bounds_flags_version = flags_version;
             gpu.mean_radius = mean_splat_radius(cloud);
             ++s.cpu_splat_passes;
             gpu.bounds_version = version;
@@ -128,6 +173,7 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore* st
         gpu.colored = cloud.colors.size() == n;
         gpu.count = std::min(n, splats.drawn_count());  // a budgeted preview draws a subset
         gpu.splats = splats.draw_buffer();
+        sync_marks(reg, e, cloud, splats, settings, gpu);
         // What the CPU cull may read: the rest splats, or the CPU deformation's output; the FFD compute
         // pass's output only when its compute-cull records exceed one storage block (it has no other way).
         gpu.cpu_source = nullptr;

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "runtime/scene/components.h"
+#include "runtime/scene/point_columns.h"
 #include "runtime/gfx/splat_pack.h"
 #include "shaders/common/bindings.h"
 
@@ -20,6 +21,7 @@ struct BoundingSphere {
     double radius = 0.0;
     double max_splat_radius = 0.0;  // largest |axis_u|, |axis_v| (included in radius)
 };
-BoundingSphere bounding_sphere(const SplatCloud& cloud);
+// With `flags`, of the points that are neither hidden nor deleted only (none left: radius 0).
+BoundingSphere bounding_sphere(const SplatCloud& cloud, const PointFlags* flags = nullptr);
 
 }  // namespace sffd::render

@@ -8,9 +8,12 @@ namespace {
 // The quad pass range by range (CloudGpu::quad_batches: splats past one storage block): each range's splats,
 // uv axes and quads bound from its start, the quads' indices being relative to it; the counts are the CPU
 // cull's. Leaves the whole buffers bound again for the passes after it.
-void draw_quad_batches(const CloudGpu& gpu) {
+void draw_quad_batches(const CloudGpu& gpu, GLuint program) {
+    // The quads' marks are the whole cloud's: the range's first splat offsets them (passes with colour).
+    const bool marked = glGetUniformLocation(program, "u_quad_mark_base") == SFFD_LOC_QUAD_MARK_BASE;
     for (const QuadBatch& b : gpu.quad_batches) {
         if (b.quad_count == 0) continue;
+        if (marked) glProgramUniform1ui(program, SFFD_LOC_QUAD_MARK_BASE, GLuint(b.splats.first));
         gfx::bind_ssbo_range(SFFD_SSBO_SPLATS_DRAW, gpu.splats, b.splats, sizeof(gpu::GpuSplat));
         gfx::bind_ssbo_range(SFFD_SSBO_VISIBLE, gpu.quads.id(), {b.quad_first, b.quad_count},
                              sizeof(std::uint32_t));
@@ -20,6 +23,7 @@ void draw_quad_batches(const CloudGpu& gpu) {
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_SPLATS_DRAW, gpu.splats);
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
     if (gpu.texture) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes);
+    if (marked) glProgramUniform1ui(program, SFFD_LOC_QUAD_MARK_BASE, 0);
 }
 
 // programs: [sprites, quads] for the cloud; flat: the program for a textured cloud's flat-coloured sprites
@@ -36,6 +40,7 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
     glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture);
     if (gpu.texture) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes);
+    bind_marks(s, gpu);
     glVertexArrayVertexBuffer(s.records_vao.id(), 0, gpu.records.id(), 0, GLsizei(SFFD_SPLAT_RECORD_BYTES));
     if (big) glVertexArrayElementBuffer(s.records_vao.id(), gpu.raster.big.id());
     glBindVertexArray(s.records_vao.id());
@@ -51,7 +56,7 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     glUseProgram(programs[1].id());
     if (gpu.quad_batches.empty())
         glDrawArraysIndirect(GL_TRIANGLES, reinterpret_cast<const void*>(4 * sizeof(std::uint32_t)));
-    else draw_quad_batches(gpu);
+    else draw_quad_batches(gpu, programs[1].id());
     if (gpu.texture && sprites) {
         glBindVertexArray(s.records_vao.id());
         glUseProgram(flat ? flat->id() : programs[0].id());

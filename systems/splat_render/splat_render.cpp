@@ -35,7 +35,8 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
     reg.view<const SplatCloud>().each(
         [&](const SplatCloud& c) { s.cull_over_limit |= !compute_cull_fits(c.size()).ok(); });
     // The CPU cull also takes a cloud over the limit on a forced compute cull (it falls back).
-    sync_clouds(reg, s, store, cpu_cull_wanted(s, plan.settings.cull_path) || s.cull_over_limit);
+    sync_clouds(reg, s, store, cpu_cull_wanted(s, plan.settings.cull_path) || s.cull_over_limit,
+                plan.settings);
     plan.view = choose_camera(reg, s, double(full_width) / double(full_height));
     plan.common = frame_block(reg, plan.settings, plan.view, s.max_point_size);
     plan.cpu_raster = plan.settings.sprite_path == SpritePath::cpu ||
@@ -86,6 +87,7 @@ void render_system(ecs::Registry& reg, const FrameContext& frame) {
         gf.width = plan.width, gf.height = plan.height, gf.aux_outputs = plan.settings.aux_outputs;
         gf.target_width = full_width, gf.target_height = full_height;
         gf.preview = plan.settings.quality == Quality::preview;
+        gf.show_selection = plan.settings.show_selection, gf.show_weights = plan.settings.show_weights;
         auto drawn = gaussian_pass(reg, gf);
         if (!drawn) {
             if (drawn.message() != s.gaussian_refusal) log::error("render_system(): ", drawn.message());

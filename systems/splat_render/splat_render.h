@@ -78,6 +78,14 @@ struct RenderSettings {
     // a few pixels and about as many texels of its level, and on a CPU rasteriser the per-pixel lookups
     // were a fifth of the frame. Full-size previews and HQ frames always filter per pixel.
     bool reduced_preview_flat_texture = true;
+    // Point overlays (runtime/gfx/point_marks.h), surface splats and Gaussians alike, on every path:
+    // selected points (PointFlags kPointSelected, not hidden or deleted) drawn half way to yellow; every
+    // point in the colour of its PointWeights value (blue 0, green 0.5, red 1; 1 without weights), lit as
+    // its own colour would be. Either draws a textured surface cloud untextured. Off by default (`render`
+    // shows the scene as it is); the editor turns the selection on. Hidden and deleted points are never
+    // drawn, whatever these say.
+    bool show_selection = false;
+    bool show_weights = false;
 };
 
 // Registry resource (optional), kept by an application whose own UI covers part of the window (the

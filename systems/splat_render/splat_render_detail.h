@@ -76,6 +76,8 @@ struct CloudGpu {
     BoundingSphere bounds;                                // cloud space, for the framing camera
     double mean_radius = 0;  // mean_splat_radius(), for the automatic raster path
     std::uint64_t bounds_version = 0;
+    std::uint64_t bounds_flags_version =
+        0;                    // registry.version<PointFlags> the bounds left gone points out of
     double footprint_px = 0;  // splat_footprint_px() this frame (cull_pass)
     bool flat_list = false;   // the CPU cull filled the flat-coloured sprite list this frame
     // The CPU rasterises this frame's sprites of the cloud (SpritePath): a preview's, whose draw commands
@@ -91,6 +93,13 @@ struct CloudGpu {
     bool colored = false;       // per-splat colours (else the packed colour is white, times the base colour)
     std::uint32_t count = 0;
     GLuint splats = 0;  // draw buffer this frame
+    // The cloud's point marks this frame (runtime/gfx/point_marks.h): the mode the passes read them by
+    // (FrameBlock counts.z: SFFD_MARKS_*), the residency's buffers (0: none; the passes then bind a
+    // placeholder they never read), and the columns the CPU cull reads them from. A frame that shows an
+    // overlay (selection tint, weights) draws a textured cloud untextured (`texture` 0 then).
+    std::uint32_t marks_mode = 0;
+    GLuint marks = 0, preview_index = 0;
+    MarksView cpu_marks;
 
     // The resident cloud, when the CPU cull may read its draw buffer this frame (gfx::read_splats_on_cpu:
     // the residency decides how, in place or from its copy; the renderer keeps none): its rest or its CPU
@@ -278,7 +287,11 @@ private:
 gfx::Texture make_target(GLenum format, int w, int h, const char* label);
 void ensure_targets(SplatRenderState& s, int w, int h);
 bool cpu_cull_wanted(const SplatRenderState& s, CullPath path);
-void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore* store, bool cpu_cull);
+void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore* store, bool cpu_cull,
+                 const RenderSettings& settings);
+// Binds a cloud's marks and preview indices (or the placeholder where it has none) for the passes that
+// read them (the cull, the quads).
+void bind_marks(const SplatRenderState& s, const CloudGpu& gpu);
 Status cull_program(SplatRenderState& s, bool textured, bool lit, std::uint32_t lights);
 // The scan programs (SplatRenderState::scan), compiled on first use; null with the error logged.
 gfx::RadixSorter* scan_programs(SplatRenderState& s);

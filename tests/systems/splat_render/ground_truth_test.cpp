@@ -16,6 +16,8 @@
 #include "systems/splat_render/splat_pack.h"
 #include "systems/splat_render/ground_truth.h"
 #include "systems/splat_render/image_compare.h"
+#include "systems/splat_render/nearest_point.h"
+#include "runtime/scene/point_columns.h"
 
 namespace sffd::render {
 namespace {
@@ -259,6 +261,71 @@ TEST(GroundTruth, ReferenceSceneOfTheBuiltinSphere) {
     auto none = reference_scene(empty, 320, 180);
     ASSERT_FALSE(none);
     EXPECT_NE(none.message().find("no point cloud with an exact surface"), std::string::npos);
+}
+
+// Hidden and deleted splats: the surface they stand for is not traced (its nearest rest splat is gone),
+// the rest of the image is unchanged.
+TEST(GroundTruth, SurfaceOfGoneSplatsIsNotTraced) {
+    ecs::Registry reg;
+    ASSERT_TRUE(assets::load_builtin_scene(reg, "sphere"));
+    auto plain_scene = reference_scene(reg, 160, 90);
+    ASSERT_TRUE(plain_scene) << plain_scene.message();
+    EXPECT_TRUE(plain_scene->point_gone.empty());
+    auto plain = render_reference(*plain_scene);
+    ASSERT_TRUE(plain) << plain.message();
+    ecs::Entity sphere;
+    reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud&) { sphere = e; });
+    const SplatCloud& cloud = reg.get<SplatCloud>(sphere);
+    PointFlags flags;
+    for (const glm::vec3& p : cloud.positions)
+        flags.bits.push_back(p.y > 0.0f ? std::uint8_t(kPointHidden) : std::uint8_t(0));
+    reg.emplace<PointFlags>(sphere, flags);
+    auto gone_scene = reference_scene(reg, 160, 90);
+    ASSERT_TRUE(gone_scene) << gone_scene.message();
+    ASSERT_EQ(gone_scene->point_gone.size(), cloud.size());
+    auto gone = render_reference(*gone_scene);
+    ASSERT_TRUE(gone) << gone.message();
+    // Top half (y > 0 on the sphere, upright camera) uncovered, the bottom half unchanged, a band between.
+    int top = 0, bottom = 0, bottom_same = 0, top_covered = 0;
+    const glm::dmat4 inv_view = glm::inverse(plain_scene->view);
+    const glm::dvec3 eye(inv_view[3]);
+    for (int y = 0; y < plain->height; ++y)
+        for (int x = 0; x < plain->width; ++x) {
+            const std::size_t k = plain->index(x, y);
+            if (plain->color[k].w == 0.0f) continue;
+            // The hit's world point from its view depth along the ray.
+            const double nx = 2.0 * (x + 0.5) / plain->width - 1.0,
+                         ny = 2.0 * (plain->height - 1 - y + 0.5) / plain->height - 1.0;
+            const glm::dvec3 dir =
+                glm::dmat3(inv_view) *
+                glm::dvec3(nx / plain_scene->projection[0][0], ny / plain_scene->projection[1][1], -1.0);
+            const glm::dvec3 p = eye + dir * double(plain->depth[k]);
+            if (p.y > 0.05) ++top, top_covered += gone->color[k].w > 0.0f;
+            if (p.y < -0.05) ++bottom, bottom_same += gone->color[k] == plain->color[k];
+        }
+    EXPECT_GT(top, 500);
+    EXPECT_GT(bottom, 500);
+    EXPECT_EQ(top_covered, 0);
+    EXPECT_EQ(bottom_same, bottom);
+}
+
+// The grid's nearest point against brute force (inside, outside, duplicates).
+TEST(GroundTruth, NearestPointIsTheBruteForceNearest) {
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    std::vector<glm::dvec3> pts(3000);
+    for (auto& p : pts) p = glm::dvec3(u(rng), 0.3 * u(rng), u(rng));
+    pts[10] = pts[11];
+    const NearestPoint grid(pts);
+    for (int q = 0; q < 2000; ++q) {
+        const glm::dvec3 x(2.5 * u(rng), 2.5 * u(rng), 2.5 * u(rng));
+        double best = 1e300;
+        for (const auto& p : pts) best = std::min(best, glm::distance(p, x));
+        const std::size_t k = grid.nearest(x);
+        ASSERT_LT(k, pts.size());
+        EXPECT_EQ(glm::distance(pts[k], x), best) << q;
+    }
+    EXPECT_EQ(NearestPoint().nearest(glm::dvec3(0.0)), std::numeric_limits<std::size_t>::max());
 }
 
 // FrameImage of w x 1 grey pixels given in sRGB (alpha 1; alpha 0 where grey < 0).

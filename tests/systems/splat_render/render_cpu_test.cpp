@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cstring>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -12,7 +13,9 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "runtime/gfx/point_marks.h"
 #include "systems/splat_render/camera_math.h"
+#include "systems/splat_render/cpu_raster.h"
 #include "systems/splat_render/cpu_cull.h"
 #include "systems/splat_render/image_io.h"
 #include "systems/splat_render/splat_pack.h"
@@ -518,4 +521,123 @@ TEST(RenderCpuCull, ReducedPreviewColoursEveryTexturedSpriteOnce) {
         EXPECT_EQ(coloured[k].center, textured[k].center) << k;
     }
     EXPECT_LT(lowest, highest) << "the splats' mip levels differ (the silhouette's are coarser)";
+}
+
+// Point marks in the CPU cull (runtime/gfx/point_marks.h): gone splats are dropped exactly like a cloud
+// without them, the records of the others unchanged; a preview subset reads its points' marks through its
+// indices; the overlays change only the colour slot: the selected splats half way to yellow, the weight
+// ramp's blue (0) and red (1).
+TEST(RenderCpuCull, MarksDropGoneSplatsAndColourTheOthers) {
+    const SplatCloud cloud = test::fibonacci_sphere(5000, 1.0, 0.8, 0xff806040u);
+    const std::vector<gpu::GpuSplat> splats = pack_splats(cloud);
+    std::vector<std::uint8_t> flags(cloud.size(), 0);
+    std::vector<float> weights(cloud.size(), 0.0f);
+    std::vector<gpu::GpuSplat> kept_splats;
+    for (std::size_t i = 0; i < cloud.size(); ++i) {
+        flags[i] = i % 3 == 0 ? kPointHidden : i % 3 == 1 ? kPointSelected : 0;
+        if (i % 5 == 0) flags[i] |= kPointDeleted;
+        weights[i] = i % 2 ? 1.0f : 0.0f;
+        if (!(flags[i] & kPointGone)) kept_splats.push_back(splats[i]);
+    }
+    const MarksView marks{flags.data(), weights.data(), nullptr, 0, cloud.size()};
+    const auto records = [](const CpuCullResult& r) {
+        std::vector<SplatRecord> out;
+        CpuCullResult::for_each_run(
+            r.records, r.record_counts, r.block,
+            [&](std::size_t, const SplatRecord* p, std::size_t k) { out.insert(out.end(), p, p + k); });
+        return out;
+    };
+    for (const bool lit : {false, true}) {
+        gpu::FrameBlock f = test_frame();
+        f.counts.w = lit ? 1u : 0u;
+        CpuCullResult plain_out, marked_out;
+        cull_splats_cpu(kept_splats, f, {}, plain_out);
+        f.counts.z = SFFD_MARKS_PRESENT;
+        cull_splats_cpu(splats, f, {}, marked_out, marks);
+        const std::vector<SplatRecord> plain = records(plain_out), marked = records(marked_out);
+        ASSERT_EQ(plain.size(), marked.size());
+        ASSERT_GT(plain.size(), 500u);
+        EXPECT_EQ(std::memcmp(plain.data(), marked.data(), plain.size() * sizeof(SplatRecord)), 0);
+
+        // Overlays: the same records but for the colour, which follows the marks.
+        CpuCullResult tinted_out, weighted_out;
+        f.counts.z = SFFD_MARKS_PRESENT | SFFD_MARKS_SELECTION;
+        cull_splats_cpu(splats, f, {}, tinted_out, marks);
+        f.counts.z = SFFD_MARKS_PRESENT | SFFD_MARKS_WEIGHTS;
+        cull_splats_cpu(splats, f, {}, weighted_out, marks);
+        const std::vector<SplatRecord> tinted = records(tinted_out), weighted = records(weighted_out);
+        ASSERT_EQ(tinted.size(), plain.size());
+        ASSERT_EQ(weighted.size(), plain.size());
+        // Kept splats in splat order: their indices, to know which is selected and what it weighs.
+        std::vector<std::size_t> kept_index;
+        {
+            CpuCullResult probe;
+            f.counts.z = 0;
+            std::vector<gpu::GpuSplat> one(1);
+            for (std::size_t i = 0; i < cloud.size(); ++i) {
+                if (flags[i] & kPointGone) continue;
+                one[0] = splats[i];
+                cull_splats_cpu(one, f, {}, probe);
+                if (probe.visible_records == 1) kept_index.push_back(i);
+            }
+        }
+        ASSERT_EQ(kept_index.size(), plain.size());
+        int tinted_selected = 0, unchanged_other = 0, selected = 0;
+        for (std::size_t k = 0; k < plain.size(); ++k) {
+            const std::size_t i = kept_index[k];
+            EXPECT_EQ(tinted[k].center, plain[k].center);
+            EXPECT_EQ(glm::vec3(tinted[k].normal), glm::vec3(plain[k].normal));
+            const glm::vec3 p = unpack_color(plain[k].normal.w), t = unpack_color(tinted[k].normal.w),
+                            w = unpack_color(weighted[k].normal.w);
+            if (flags[i] & kPointSelected) {
+                ++selected;
+                tinted_selected += lit || (t.x > p.x && t.z < p.z);  // lit colours may saturate or be black
+            } else {
+                unchanged_other += tinted[k].normal.w == plain[k].normal.w;
+            }
+            if (lit) {
+                continue;
+            } else if (weights[i] == 0.0f) {
+                EXPECT_TRUE(w.x == 0.0f && w.y == 0.0f && w.z > 0.9f) << k;
+            } else {
+                EXPECT_TRUE(w.x > 0.9f && w.y == 0.0f && w.z == 0.0f) << k;
+            }
+        }
+        EXPECT_GT(selected, 100);
+        EXPECT_EQ(tinted_selected, selected);
+        EXPECT_EQ(unchanged_other, int(plain.size()) - selected);
+    }
+    // A preview subset: element k is point index[k].
+    std::vector<std::uint32_t> index;
+    std::vector<gpu::GpuSplat> subset;
+    for (std::uint32_t i = 0; i < cloud.size(); i += 2) index.push_back(i), subset.push_back(splats[i]);
+    gpu::FrameBlock f = test_frame();
+    CpuCullResult all, indexed;
+    cull_splats_cpu(subset, f, {}, all);
+    f.counts.z = SFFD_MARKS_PRESENT | SFFD_MARKS_INDEXED;
+    cull_splats_cpu(subset, f, {}, indexed,
+                    MarksView{flags.data(), weights.data(), index.data(), index.size(), cloud.size()});
+    std::size_t gone_front = 0;
+    for (std::uint32_t i : index)
+        gone_front += (flags[i] & kPointGone) && cloud.normals[i].z > 0.4f;  // surely front-facing
+    EXPECT_GT(gone_front, 50u);
+    EXPECT_LE(indexed.visible_records + gone_front, all.visible_records);
+}
+
+// The marks' packing and colours, as the shaders compute them (point_marks.glsl).
+TEST(RenderPointMarks, PackingAndOverlayColours) {
+    EXPECT_EQ(gfx::pack_point_mark(0, 1.0f), gfx::kDefaultPointMark);
+    EXPECT_EQ(gfx::pack_point_mark(kPointSelected | kPointHidden, 0.0f), 3u);
+    EXPECT_EQ(gfx::pack_point_mark(0, 0.5f) >> 8, 128u);
+    EXPECT_EQ(gfx::pack_point_mark(0, std::numeric_limits<float>::quiet_NaN()), gfx::kDefaultPointMark);
+    EXPECT_EQ(gfx::pack_point_mark(0, 7.0f), gfx::kDefaultPointMark);
+    EXPECT_EQ(gfx::weight_ramp(0.0f), glm::vec3(0, 0, 1));
+    EXPECT_EQ(gfx::weight_ramp(0.5f), glm::vec3(0, 1, 0));
+    EXPECT_EQ(gfx::weight_ramp(1.0f), glm::vec3(1, 0, 0));
+    const glm::vec3 grey(0.5f);
+    EXPECT_EQ(gfx::mark_overlay(grey, SFFD_MARK_SELECTED, 0), grey);
+    EXPECT_EQ(gfx::mark_overlay(grey, SFFD_MARK_SELECTED, SFFD_MARKS_SELECTION),
+              glm::mix(grey, gfx::kSelectionTint, 0.5f));
+    EXPECT_EQ(gfx::mark_overlay(grey, 0, SFFD_MARKS_SELECTION), grey);
+    EXPECT_EQ(gfx::mark_overlay(grey, gfx::kDefaultPointMark, SFFD_MARKS_WEIGHTS), glm::vec3(1, 0, 0));
 }
