@@ -596,10 +596,11 @@ Result<FrameImage> render_reference(const ReferenceScene& scene, const Reference
         std::optional<Hit> hit = mesh       ? mesh->trace(eye, dir)
                                  : deformed ? deformed->trace(eye, dir)
                                             : trace_sphere(scene, eye, dir);
-        if (hit && !splats.empty() &&
-            scene.point_gone[splats.nearest(hit->mesh ? hit->rest_point
-                                                      : scene.center + scene.radius * hit->rest_dir)])
-            hit.reset();
+        if (hit && !splats.empty()) {
+            const std::size_t k =
+                splats.nearest(hit->mesh ? hit->rest_point : scene.center + scene.radius * hit->rest_dir);
+            if (k < scene.point_gone.size() && scene.point_gone[k]) hit.reset();
+        }
         return hit;
     };
     auto hit_uv = [](const Hit& hit) { return hit.mesh ? hit.uv : sphere_uv(hit.rest_dir); };

@@ -7,10 +7,18 @@
 namespace sffd::render {
 
 NearestPoint::NearestPoint(std::vector<glm::dvec3> points) : points_(std::move(points)) {
-    if (points_.empty()) return;
+    // Non-finite points are never found (and never turned into a cell index: a NaN is no integer).
+    const auto finite = [](const glm::dvec3& p) {
+        return std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z);
+    };
     glm::dvec3 hi(-std::numeric_limits<double>::infinity());
     lo_ = glm::dvec3(std::numeric_limits<double>::infinity());
-    for (const glm::dvec3& p : points_) lo_ = glm::min(lo_, p), hi = glm::max(hi, p);
+    for (const glm::dvec3& p : points_)
+        if (finite(p)) lo_ = glm::min(lo_, p), hi = glm::max(hi, p);
+    if (!(lo_.x <= hi.x)) {  // none is finite
+        points_.clear();
+        return;
+    }
     const glm::dvec3 extent = glm::max(hi - lo_, glm::dvec3(1e-12));
     // Cubic cells holding about two points each on average.
     const double side = std::cbrt(extent.x * extent.y * extent.z * 2.0 / double(points_.size()));
@@ -24,15 +32,18 @@ NearestPoint::NearestPoint(std::vector<glm::dvec3> points) : points_(std::move(p
                std::size_t(c.x);
     };
     start_.assign(cells + 1, 0);
-    for (const glm::dvec3& p : points_) ++start_[cell_of(p) + 1];
+    for (const glm::dvec3& p : points_)
+        if (finite(p)) ++start_[cell_of(p) + 1];
     for (std::size_t c = 0; c < cells; ++c) start_[c + 1] += start_[c];
-    items_.resize(points_.size());
+    items_.resize(start_[cells]);
     std::vector<std::uint32_t> fill(start_.begin(), start_.end() - 1);
-    for (std::size_t i = 0; i < points_.size(); ++i) items_[fill[cell_of(points_[i])]++] = std::uint32_t(i);
+    for (std::size_t i = 0; i < points_.size(); ++i)
+        if (finite(points_[i])) items_[fill[cell_of(points_[i])]++] = std::uint32_t(i);
 }
 
 std::size_t NearestPoint::nearest(const glm::dvec3& q) const {
-    if (points_.empty()) return std::numeric_limits<std::size_t>::max();
+    if (points_.empty() || !std::isfinite(q.x) || !std::isfinite(q.y) || !std::isfinite(q.z))
+        return std::numeric_limits<std::size_t>::max();
     const glm::ivec3 c = glm::clamp(glm::ivec3(glm::floor((q - lo_) / cell_)), glm::ivec3(0), dims_ - 1);
     const double min_cell = std::min({cell_.x, cell_.y, cell_.z});
     double best = std::numeric_limits<double>::infinity();

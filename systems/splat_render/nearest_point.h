@@ -16,7 +16,8 @@ public:
     NearestPoint() = default;
     explicit NearestPoint(std::vector<glm::dvec3> points);
     bool empty() const { return points_.empty(); }
-    // Index of the point nearest to q (the first of equally near ones in grid order); empty(): SIZE_MAX.
+    // Index of the finite point nearest to q (the first of equally near ones in grid order); SIZE_MAX when
+    // there is none or q is not finite.
     std::size_t nearest(const glm::dvec3& q) const;
 
 private:

@@ -309,13 +309,14 @@ TEST(GroundTruth, SurfaceOfGoneSplatsIsNotTraced) {
     EXPECT_EQ(bottom_same, bottom);
 }
 
-// The grid's nearest point against brute force (inside, outside, duplicates).
+// The grid's nearest point against brute force (inside, outside, duplicates, a NaN point).
 TEST(GroundTruth, NearestPointIsTheBruteForceNearest) {
     std::mt19937 rng(5);
     std::uniform_real_distribution<double> u(-1.0, 1.0);
     std::vector<glm::dvec3> pts(3000);
     for (auto& p : pts) p = glm::dvec3(u(rng), 0.3 * u(rng), u(rng));
     pts[10] = pts[11];
+    pts[20].x = std::numeric_limits<double>::quiet_NaN();  // never found
     const NearestPoint grid(pts);
     for (int q = 0; q < 2000; ++q) {
         const glm::dvec3 x(2.5 * u(rng), 2.5 * u(rng), 2.5 * u(rng));
@@ -326,6 +327,8 @@ TEST(GroundTruth, NearestPointIsTheBruteForceNearest) {
         EXPECT_EQ(glm::distance(pts[k], x), best) << q;
     }
     EXPECT_EQ(NearestPoint().nearest(glm::dvec3(0.0)), std::numeric_limits<std::size_t>::max());
+    EXPECT_EQ(grid.nearest(glm::dvec3(std::numeric_limits<double>::quiet_NaN())),
+              std::numeric_limits<std::size_t>::max());
 }
 
 // FrameImage of w x 1 grey pixels given in sRGB (alpha 1; alpha 0 where grey < 0).
