@@ -2,6 +2,8 @@
 // OBJ: obj.cpp, OFF: off.cpp, surface sampling: surface_sampling.cpp, shared helpers: import_detail.h.
 #include "runtime/assets/import.h"
 
+#include "runtime/assets/formats/surface/potree2.h"
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -232,12 +234,13 @@ Result<Geometry> read_geometry(const fs::path& path) {
     const std::string ext = lower_ext(path);
     std::error_code ec;
     if (!fs::exists(path, ec)) return make_error(path.string() + ": no such file");
+    if (path.filename() == "metadata.json") return read_potree2_geometry(path);
     if (ext == ".ply") return read_ply_geometry(path);
     if (ext == ".obj") return read_obj_geometry(path);
     if (ext == ".off") return read_off_geometry(path);
     if (ext == ".gltf" || ext == ".glb") return read_gltf_geometry(path);
     return make_error(path.string() + ": unknown file type '" + ext +
-                      "' (expected .ply, .obj, .off, .gltf or .glb)");
+                      "' (expected .ply, .obj, .off, .gltf, .glb or a Potree 2 octree's metadata.json)");
 }
 
 Result<SplatCloud> make_splat_cloud(const Geometry& input, const ImportOptions& options) {
@@ -471,6 +474,11 @@ Result<SplatCloud> import_splat_cloud(const fs::path& path, const ImportOptions&
                 return c.cloud;
             }
         }
+    }
+    if (defaults && path.filename() == "metadata.json") {  // our own Potree 2 octree, at full detail
+        auto octree = open_potree2(path);
+        if (!octree) return octree.error();
+        if (octree->attribute("sffd_axis_u")) return read_potree2(*octree);
     }
     auto g = read_geometry(path);
     if (!g) return g.error();

@@ -68,6 +68,9 @@ Result<Geometry> read_ply_geometry(const std::filesystem::path& path);
 Result<Geometry> read_obj_geometry(const std::filesystem::path& path);
 Result<Geometry> read_off_geometry(const std::filesystem::path& path);
 Result<Geometry> read_gltf_geometry(const std::filesystem::path& path);  // .gltf and .glb
+// A Potree 2 octree's metadata.json, every node (formats/surface/potree2.h); another tool's (no splat axes)
+// gives points whose normals and radii make_splat_cloud estimates.
+Result<Geometry> read_potree2_geometry(const std::filesystem::path& path);
 
 struct ImportOptions {
     std::size_t splats = 0;  // exact splat count; 0 = one per point (point sets) or per vertex (meshes)

@@ -407,7 +407,7 @@ Status load_scene(ecs::Registry& r, const std::string& name_or_path) {
         if (loader.claims && loader.load && loader.claims(path)) return loader.load(r, path);
     if (ext == ".gltf" || ext == ".glb") return load_scene_file(r, path);
     // Refused here rather than by the importer, whose list knows only its own formats.
-    if (ext != ".ply" && ext != ".obj" && ext != ".off")
+    if (ext != ".ply" && ext != ".obj" && ext != ".off" && path.filename() != "metadata.json")
         return make_error(name_or_path + ": unknown file type '" + ext + "' (expected " +
                           scene_file_types(r) + ")");
     SplatMaterial material;

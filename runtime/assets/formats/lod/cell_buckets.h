@@ -1,4 +1,4 @@
-// Out-of-core bucketing for the hierarchy builders (lod_build.h, potree.h): points as fixed-size records
+// Out-of-core bucketing for the hierarchy builders (lod_build.h, potree2_write.h): points as fixed records
 // (a double x y z at byte 0, then whatever the builder carries) are streamed from their source, sorted
 // by octree cell into an unlinked temporary file (a histogram pass, then a scatter pass through one
 // small buffer per cell, together at most scatter_bytes), and every cell small enough to build in memory is
