@@ -34,6 +34,7 @@
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/convert_gaussians.h"
 #include "tools/splatffd/convert_lod.h"
+#include "tools/splatffd/convert_potree.h"
 #include "tools/splatffd/lattice_source.h"
 #include "tools/splatffd/progress.h"
 #include "tools/splatffd/scene_subset.h"
@@ -94,7 +95,9 @@ constexpr const char* kUsage =
     "                   its lattices\n"
     "  A cloud file OUT never holds hidden or deleted points; a scene OUT keeps hidden ones, still hidden\n"
     "  OUT DIR/lod-meta.json  a Gaussian level-of-detail hierarchy (PlayCanvas streamed SOG), with its own\n"
-    "                   options: splatffd convert IN DIR/lod-meta.json --help\n";
+    "                   options: splatffd convert IN DIR/lod-meta.json --help\n"
+    "  OUT DIR/metadata.json  a Potree 2 octree of surface splats, with its own options:\n"
+    "                   splatffd convert IN DIR/metadata.json --help\n";
 
 // --order morton on a surface cloud: every column moved together (runtime/scene/point_order.h), and the
 // weights beside it (empty, or one a point) with them.
@@ -370,6 +373,8 @@ int convert_scene(const std::string& in, const std::string& out, const SceneConv
 int run_convert(sffd::cli::Args args) {
     using namespace sffd;
     if (cli::names_lod_output(args)) return cli::run_convert_lod(args);  // tools/splatffd/convert_lod.h
+    if (cli::names_potree_output(args))
+        return cli::run_convert_potree(args);  // tools/splatffd/convert_potree.h
     std::string in, out;
     assets::ImportOptions opt;
     bool ascii = false, gaussians = false, progress = false, turn_x180 = false, rest = false, morton = false;

@@ -34,6 +34,7 @@
 #include "systems/gaussian/gaussian_scene.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/convert_lod.h"
+#include "tools/splatffd/convert_potree.h"
 #include "systems/engine/engine_frame.h"
 
 namespace {
@@ -382,7 +383,9 @@ constexpr const char* kUsage =
     "         lights; a deformed cloud's bounds at rest and deformed by its lattices as saved), .spz .splat "
     ".ksplat\n"
     "         .sog, a SOG folder's meta.json (Gaussians: count, SH degree, bounds), DIR/lod-meta.json (a\n"
-    "         streamed SOG hierarchy: levels, Gaussians and units per level, tree nodes, bounds)\n"
+    "         streamed SOG hierarchy: levels, Gaussians and units per level, tree nodes, bounds),\n"
+    "         DIR/metadata.json (a Potree 2 octree: points, nodes, depth, chunks, points per level,\n"
+    "         attributes)\n"
     "  sphere, face   the built-in scenes\n";
 
 int run_info(cli::Args args) {
@@ -394,6 +397,7 @@ int run_info(cli::Args args) {
     std::string ext = std::filesystem::path(file).extension().string();
     for (char& ch : ext) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
     if (std::filesystem::path(file).filename() == "lod-meta.json") return cli::info_lod(file);
+    if (std::filesystem::path(file).filename() == "metadata.json") return cli::info_potree(file);
     if (ext == ".ply") return info_ply(file);
     if (ext == ".spz") return info_gaussians(file, "SPZ (Niantic)");
     if (ext == ".splat") return info_gaussians(file, ".splat (antimatter15)");
