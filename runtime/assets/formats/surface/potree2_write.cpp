@@ -82,7 +82,6 @@ public:
     Potree2BuildStats stats;
     std::map<Key, NodeEntry> table;
     potree2_detail::Bounds bounds;
-    std::uint64_t total = 0;
 
     // One bucketed cell: its subtree built and covered, every node but its root written; the root waits.
     Status cell(std::vector<std::byte>& records, std::size_t n, const Cell& c) {
@@ -342,9 +341,7 @@ private:
             return make_error(out_ + ": write failed");
         written_ += e.size;
         stats.octree_bytes = written_;
-        built_ += w.pts.size();
-        report_progress(o_.progress, "writing nodes",
-                        double(built_) / double(std::max<std::uint64_t>(1, total)));
+
         return {};
     }
 
@@ -352,7 +349,7 @@ private:
     const potree2_detail::Layout& layout_;
     std::FILE* f_;
     std::string out_;
-    std::uint64_t written_ = 0, built_ = 0, hold_ = 0;
+    std::uint64_t written_ = 0, hold_ = 0;
     std::map<Key, Work> waiting_;
     std::map<Key, std::vector<CoverPt>> kept_;
     std::set<Key> ancestors_;
@@ -489,7 +486,6 @@ Result<Potree2BuildStats> build_potree2(const SplatSource& source, const fs::pat
     const fs::path octree_path = dir / "octree.bin";
     Status built = write_file_atomic(octree_path, [&](std::FILE* f) -> Status {
         Builder b(o, layout, f, octree_path.string());
-        b.total = count;
         const std::uint64_t budget = o.memory_budget;
         const std::uint64_t scatter = std::min<std::uint64_t>(lod::kScatterBytes, budget / 8);
         lod::BucketOptions bo;
@@ -499,7 +495,7 @@ Result<Potree2BuildStats> build_potree2(const SplatSource& source, const fs::pat
         bo.scatter_bytes = scatter;
         bo.temp_dir = o.temp_dir.empty() ? dir : o.temp_dir;
         bo.ledger = &b.ledger;
-        std::uint64_t scattered = 0;
+        std::uint64_t scattered = 0, in_cells = 0;
         bo.scattered = [&](std::uint64_t m) {
             scattered += m;
             report_progress(o.progress, "bucketing", std::min(1.0, double(scattered) / double(count)));
@@ -515,9 +511,16 @@ Result<Potree2BuildStats> build_potree2(const SplatSource& source, const fs::pat
         };
         if (Status s = lod::bucket_cells(
                 scan, count, root, bo, source.name,
-                [&](std::vector<std::byte>& r, std::size_t n, const Cell& c) { return b.cell(r, n, c); });
+                [&](std::vector<std::byte>& r, std::size_t n, const Cell& c) -> Status {
+                    report_progress(o.progress, "building cells", double(in_cells) / double(count));
+                    Status st = b.cell(r, n, c);
+                    in_cells += n;
+                    report_progress(o.progress, "building cells", double(in_cells) / double(count));
+                    return st;
+                });
             !s)
             return s;
+        report_progress(o.progress, "building the top", 0.0);
         if (Status s = b.finish(root); !s) return s;
         stats = b.stats;
         stats.peak_bytes = b.ledger.peak();
