@@ -220,6 +220,7 @@ Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v
         const GLuint mp = r.marks.id();
         glUseProgram(mp);
         glProgramUniform1ui(mp, glGetUniformLocation(mp, "u_mode"), b.marks_mode);
+        set(mp, "u_size", glm::vec2(float(v.width), float(v.height)));
         // A buffer with no store cannot be bound: a missing one is never read (its mode bit is off).
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_POINT_MARKS, b.marks ? b.marks : r.draw.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_PREVIEW_INDEX,
@@ -227,6 +228,10 @@ Status project_gl(GlRenderer& r, const GaussianBuffers& b, const GaussianView& v
         for (const gfx::SsboBatch& batch : *batches) {
             glProgramUniform1ui(mp, glGetUniformLocation(mp, "u_count"), GLuint(batch.count));
             glProgramUniform1ui(mp, glGetUniformLocation(mp, "u_base"), GLuint(batch.first));
+            gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CENTER, r.proj_center.id(), batch,
+                                 SFFD_GPU_PROJECTED_STRIDE);
+            gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_CONIC, r.proj_conic.id(), batch,
+                                 SFFD_GPU_PROJECTED_STRIDE);
             gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_PROJ_COLOR, r.proj_color.id(), batch,
                                  SFFD_GPU_PROJECTED_STRIDE);
             gfx::bind_ssbo_range(SFFD_GAUSS_SSBO_DEPTH, r.depth.id(), batch, sizeof(std::uint32_t));

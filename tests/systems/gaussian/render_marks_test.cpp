@@ -106,11 +106,15 @@ TEST_F(GaussianMarks, GoneGaussiansDrawTheImageOfTheCloudWithoutThem) {
                                                 << (blend == render::BlendPath::tiles));
                 reset(*subset);
                 const render::FrameImage expected = frame(q, false, false, sort, blend);
+                const std::uint64_t expected_pixels = render::gaussian_pass_stats(reg()).covered_pixels;
                 reset(cloud);
                 const render::FrameImage whole = frame(q, false, false, sort, blend);
                 reg().emplace<PointFlags>(entity, flags);
                 const render::FrameImage marked = frame(q, true, false, sort, blend);
                 EXPECT_TRUE(same(marked, expected));
+                // The covered pixels that choose quads or tiles are the subset's too.
+                EXPECT_EQ(render::gaussian_pass_stats(reg()).covered_pixels, expected_pixels);
+                EXPECT_GT(expected_pixels, 0u);
                 EXPECT_FALSE(same(whole, expected));  // the hidden ones were drawn before
                 // Unhidden again: the whole cloud's image.
                 reg().remove<PointFlags>(entity);
