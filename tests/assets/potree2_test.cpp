@@ -403,3 +403,71 @@ TEST(Potree2, AnotherToolsOctreeReadsAsPoints) {
     EXPECT_EQ(g->positions.size(), 300u);
     EXPECT_EQ(g->colors.size(), 300u);
 }
+
+TEST(Potree2, PotreeConvertersOwnLayoutReads) {
+    // A one-leaf octree as PotreeConverter writes one from a LAS file: position, intensity, then rgb
+    // (16-bit), no splat attributes; hierarchy.bin is the root's one record (type 1, no children).
+    const fs::path dir = test::fresh_dir("potree2", "converter");
+    const std::int32_t pos[3][3] = {{0, 0, 0}, {1000, 2000, 3000}, {4000, 100, 50}};
+    const std::uint16_t rgb[3][3] = {{65535, 0, 0}, {0, 256 * 128, 0}, {10, 20, 30}};  // 16- and 8-bit values
+    std::string octree;
+    for (int i = 0; i < 3; ++i) {
+        octree.append(reinterpret_cast<const char*>(pos[i]), 12);
+        octree.push_back(char(7));  // intensity (uint8)
+        octree.append(reinterpret_cast<const char*>(rgb[i]), 6);
+    }
+    test::write(dir / "octree.bin", octree);
+    std::string h(22, '\0');
+    const std::uint32_t n = 3;
+    const std::int64_t off = 0, size = std::int64_t(octree.size());
+    h[0] = 1;
+    std::memcpy(&h[2], &n, 4), std::memcpy(&h[6], &off, 8), std::memcpy(&h[14], &size, 8);
+    test::write(dir / "hierarchy.bin", h);
+    nlohmann::json m = {{"version", "2.0"},
+                        {"name", "las"},
+                        {"description", ""},
+                        {"points", 3},
+                        {"projection", ""},
+                        {"hierarchy", {{"firstChunkSize", 22}, {"stepSize", 4}, {"depth", 0}}},
+                        {"offset", {10.0, 20.0, 30.0}},
+                        {"scale", {0.001, 0.001, 0.001}},
+                        {"spacing", 0.1},
+                        {"boundingBox", {{"min", {10.0, 20.0, 30.0}}, {"max", {15.0, 25.0, 35.0}}}},
+                        {"encoding", "DEFAULT"},
+                        {"attributes",
+                         {{{"name", "position"},
+                           {"description", ""},
+                           {"size", 12},
+                           {"numElements", 3},
+                           {"elementSize", 4},
+                           {"type", "int32"},
+                           {"min", {10, 20, 30}},
+                           {"max", {14, 22, 33}}},
+                          {{"name", "intensity"},
+                           {"description", ""},
+                           {"size", 1},
+                           {"numElements", 1},
+                           {"elementSize", 1},
+                           {"type", "uint8"},
+                           {"min", {7}},
+                           {"max", {7}}},
+                          {{"name", "rgb"},
+                           {"description", ""},
+                           {"size", 6},
+                           {"numElements", 3},
+                           {"elementSize", 2},
+                           {"type", "uint16"},
+                           {"min", {0, 0, 0}},
+                           {"max", {65535, 32768, 30}}}}}};
+    test::write(dir / "metadata.json", m.dump());
+    auto g = read_geometry(dir / "metadata.json");
+    ASSERT_TRUE(g) << g.message();
+    ASSERT_EQ(g->positions.size(), 3u);
+    EXPECT_NEAR(g->positions[1].x, 11.0, 1e-9);
+    EXPECT_NEAR(g->positions[1].y, 22.0, 1e-9);
+    EXPECT_NEAR(g->positions[2].z, 30.05, 1e-9);
+    EXPECT_EQ(g->colors[0], 0xff0000ffu);  // 65535 / 256 = 255
+    EXPECT_EQ(g->colors[1], 0xff008000u);  // 32768 / 256 = 128
+    EXPECT_EQ(g->colors[2], 0xff1e140au);  // 8-bit values as they are
+    EXPECT_TRUE(g->normals.empty()) << "estimated by make_splat_cloud";
+}
