@@ -484,7 +484,7 @@ Result<SplatCloud> read_potree2_nodes(const PotreeOctree& o, const std::vector<s
         std::uint64_t budget = std::uint64_t(1) << 30;
         auto img = detail::decode_image(*o.texture_path, &budget);
         if (!img) return img.error();
-        c.texture.path = o.texture_path->string();
+        // No path: it is not a file a writer could name from elsewhere (export.h writes the texels).
         c.texture.width = img->width, c.texture.height = img->height;
         c.texture.rgba8 = std::move(img->rgba8);
     }
@@ -520,7 +520,6 @@ Result<Geometry> read_potree2_geometry(const fs::path& path) {
         std::uint64_t budget = std::uint64_t(1) << 30;
         auto img = detail::decode_image(*o->texture_path, &budget);
         if (!img) return img.error();
-        g.splat_texture.path = o->texture_path->string();
         g.splat_texture.width = img->width, g.splat_texture.height = img->height;
         g.splat_texture.rgba8 = std::move(img->rgba8);
     }
