@@ -127,6 +127,50 @@ void print_clip(const ecs::Registry& reg, ecs::Entity e) {
         }
 }
 
+// "min 0, max 1, mean 0.5" of a weight column.
+std::string weight_stats(double lo, double hi, double sum, std::size_t n) {
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "min %.6g, max %.6g, mean %.6g", lo, hi, n ? sum / double(n) : 0.0);
+    return buf;
+}
+
+// The cloud's columns (runtime/scene/point_columns.h, the one table): every present one with its type,
+// then the optional ones' contents: the flags' counts, the weights' range.
+void print_columns(const std::vector<ColumnRef>& columns, const char* indent = "    ") {
+    std::string line;
+    const ColumnRef* flags = nullptr;
+    const ColumnRef* weights = nullptr;
+    for (const ColumnRef& c : columns) {
+        if (!c.present()) continue;
+        line += (line.empty() ? "" : ", ") + std::string(c.spec->name) + " " +
+                std::string(column_type_name(c.spec->type));
+        if (c.values > 1) line += " x" + std::to_string(c.values);
+        if (c.spec->name == "flags") flags = &c;
+        if (c.spec->name == "weight") weights = &c;
+    }
+    std::printf("%scolumns  %s\n", indent, line.c_str());
+    if (flags) {
+        std::size_t selected = 0, hidden = 0, deleted = 0;
+        const StridedView<const std::uint8_t> bits = typed_column<const std::uint8_t>(*flags);
+        for (std::size_t i = 0; i < bits.size(); ++i) {
+            const std::uint8_t b = bits[i];
+            selected += (b & kPointSelected) != 0, hidden += (b & kPointHidden) != 0;
+            deleted += (b & kPointDeleted) != 0;
+        }
+        std::printf("%sflags    %zu selected, %zu hidden, %zu deleted of %zu points\n", indent, selected,
+                    hidden, deleted, flags->count);
+    }
+    if (weights) {
+        double lo = INFINITY, hi = -INFINITY, sum = 0.0;
+        const StridedView<const float> values = typed_column<const float>(*weights);
+        for (std::size_t i = 0; i < values.size(); ++i) {
+            const double w = double(values[i]);
+            lo = std::min(lo, w), hi = std::max(hi, w), sum += w;
+        }
+        std::printf("%sweight   %s\n", indent, weight_stats(lo, hi, sum, weights->count).c_str());
+    }
+}
+
 // Gaussian files without a header to list: read whole (the readers' budgets apply), then summarised.
 int info_gaussians(const std::string& file, const char* format) {
     auto g = gaussian::read_gaussians(file);
@@ -139,6 +183,7 @@ int info_gaussians(const std::string& file, const char* format) {
     std::printf("%s: %s, %llu bytes\n", file.c_str(), format,
                 static_cast<unsigned long long>(ec ? 0 : bytes));
     std::printf("  %zu Gaussians, SH degree %d\n", g->size(), g->sh_degree);
+    print_columns(point_columns(*g), "  ");
     if (g->size()) {
         glm::dvec3 lo(INFINITY), hi(-INFINITY);
         for (const glm::vec3& p : g->positions) {
@@ -148,13 +193,6 @@ int info_gaussians(const std::string& file, const char* format) {
         print_bounds("  ", lo, hi);
     }
     return 0;
-}
-
-// "min 0, max 1, mean 0.5" of a weight column.
-std::string weight_stats(double lo, double hi, double sum, std::size_t n) {
-    char buf[128];
-    std::snprintf(buf, sizeof buf, "min %.6g, max %.6g, mean %.6g", lo, hi, n ? sum / double(n) : 0.0);
-    return buf;
 }
 
 int info_ply(const std::string& file) {
@@ -249,44 +287,6 @@ void print_pages(const std::vector<glm::vec3>& positions) {
         p.pages, kPagePoints, 100.0 * p.mean_volume_share, 100.0 * p.mean_diagonal_share);
 }
 
-// The cloud's columns (runtime/scene/point_columns.h, the one table): every present one with its type,
-// then the optional ones' contents: the flags' counts, the weights' range.
-void print_columns(const ecs::Registry& reg, ecs::Entity e) {
-    std::string line;
-    const ColumnRef* flags = nullptr;
-    const ColumnRef* weights = nullptr;
-    const std::vector<ColumnRef> columns = point_columns(reg, e);
-    for (const ColumnRef& c : columns) {
-        if (!c.present()) continue;
-        line += (line.empty() ? "" : ", ") + std::string(c.spec->name) + " " +
-                std::string(column_type_name(c.spec->type));
-        if (c.values > 1) line += " x" + std::to_string(c.values);
-        if (c.spec->name == "flags") flags = &c;
-        if (c.spec->name == "weight") weights = &c;
-    }
-    std::printf("    columns  %s\n", line.c_str());
-    if (flags) {
-        std::size_t selected = 0, hidden = 0, deleted = 0;
-        const StridedView<const std::uint8_t> bits = typed_column<const std::uint8_t>(*flags);
-        for (std::size_t i = 0; i < bits.size(); ++i) {
-            const std::uint8_t b = bits[i];
-            selected += (b & kPointSelected) != 0, hidden += (b & kPointHidden) != 0;
-            deleted += (b & kPointDeleted) != 0;
-        }
-        std::printf("    flags    %zu selected, %zu hidden, %zu deleted of %zu points\n", selected, hidden,
-                    deleted, flags->count);
-    }
-    if (weights) {
-        double lo = INFINITY, hi = -INFINITY, sum = 0.0;
-        const StridedView<const float> values = typed_column<const float>(*weights);
-        for (std::size_t i = 0; i < values.size(); ++i) {
-            const double w = double(values[i]);
-            lo = std::min(lo, w), hi = std::max(hi, w), sum += w;
-        }
-        std::printf("    weight   %s\n", weight_stats(lo, hi, sum, weights->count).c_str());
-    }
-}
-
 void summarise_registry(const ecs::Registry& reg) {
     std::size_t total = 0;
     reg.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud& c) {
@@ -294,7 +294,7 @@ void summarise_registry(const ecs::Registry& reg) {
         total += c.size();
         std::printf("  cloud    '%s': %zu splats; origin [%.9g, %.9g, %.9g]\n", n ? n->value.c_str() : "?",
                     c.size(), c.origin.x, c.origin.y, c.origin.z);
-        print_columns(reg, e);
+        print_columns(point_columns(reg, e));
         if (!c.texture.rgba8.empty())
             std::printf("    texture  %dx%d%s%s\n", c.texture.width, c.texture.height,
                         c.texture.path.empty() ? "" : " ", c.texture.path.c_str());
@@ -323,7 +323,7 @@ void summarise_registry(const ecs::Registry& reg) {
         gaussians += g.size();
         std::printf("  gaussians '%s': %zu Gaussians, SH degree %d%s%s\n", n ? n->value.c_str() : "?",
                     g.size(), g.sh_degree, src ? "; file " : "", src ? src->path.string().c_str() : "");
-        print_columns(reg, e);
+        print_columns(point_columns(reg, e));
         if (g.size()) print_rest_and_deformed(reg, e, g.positions, g.origin), print_pages(g.positions);
         print_deformers(reg, e);
     });
