@@ -278,6 +278,10 @@ void adapt_quality(ecs::Registry& registry, EditorState& state, bool scrolled) {
                        state.still_frames < state.refine_after;
     settings->quality = state.previewing ? render::Quality::preview : rest;
     settings->preview_divider = state.previewing && state.half_resolution_preview ? 2 : 1;
+    // The selected points tinted in point mode only (Blender shows vertex selection in edit mode); the
+    // weights overlay when View > Weights (or `set view.weights 1`) asks for it.
+    settings->show_selection = state.mode == EditMode::points;
+    settings->show_weights = state.show_weights;
     set_preview_active(registry, state.previewing);  // the point budget of large clouds while moving
 }
 

@@ -155,6 +155,7 @@ struct EditorState {
     bool pin_outer_layer = true;
     bool xray = false;
     bool show_lattice = true;
+    bool show_weights = false;  // the renderer's weight colours (RenderSettings::show_weights; View menu)
     bool lattice_cage_only = false;
     ProportionalSettings proportional;  // `o` toggles, shift+o cycles the falloff (proportional.h)
     // Preview while moving: while the camera or the lattice moves (orbit/pan/wheel, tool drags, brush,

@@ -154,11 +154,11 @@ Result<std::vector<InputEvent>> parse_input_recording(std::string_view text, std
             e.kind = InputKind::set;
             if (w.size() != 4) return fail("'set' takes a field and a value");
             if (!material_field(w[2]) && !is_proportional_field(w[2]) && !is_point_field(w[2]))
-                return fail("unknown field '" + std::string(w[2]) + "' (" +
-                            std::string(material_field_names()) +
-                            ", proportional.enabled, proportional.radius, proportional.falloff, point.mode, "
-                            "point.brush_radius, point.sphere_radius, point.colour_tolerance, "
-                            "point.grow_distance, weight.radius, weight.falloff, view.lattice)");
+                return fail(
+                    "unknown field '" + std::string(w[2]) + "' (" + std::string(material_field_names()) +
+                    ", proportional.enabled, proportional.radius, proportional.falloff, point.mode, "
+                    "point.brush_radius, point.sphere_radius, point.colour_tolerance, "
+                    "point.grow_distance, weight.radius, weight.falloff, view.lattice, view.weights)");
             if (w[2] == "point.mode" || w[2] == "weight.falloff") {
                 const std::optional<double> v = parse_point_field_value(w[2], w[3]);
                 if (!v)

@@ -159,6 +159,7 @@ void menu_bar(ecs::Registry& registry, EditorState& state) {
         if (ImGui::BeginMenu("View")) {
             ImGui::MenuItem("X-ray", "T", &state.xray);
             ImGui::MenuItem("Lattice", nullptr, &state.show_lattice);
+            ImGui::MenuItem("Weights", nullptr, &state.show_weights);
             ImGui::MenuItem("Lattice cage only", "Shift+T", &state.lattice_cage_only);
             ImGui::MenuItem("Preview while moving", nullptr, &state.preview_while_moving);
             ImGui::MenuItem("Half-resolution preview", nullptr, &state.half_resolution_preview,

@@ -326,6 +326,11 @@ void handle_point_field(EditorState& state, const InputEvent& e) {
         state.show_lattice = e.value != 0.0;
         return say(state, state.show_lattice ? "lattice overlay on" : "lattice overlay off");
     }
+    if (e.key == "view.weights") {
+        state.show_weights = e.value != 0.0;
+        return say(state,
+                   state.show_weights ? "weights shown (blue 0, green 0.5, red 1)" : "weights not shown");
+    }
     set_point_field(state.points.settings, e.key, e.value);
     const PointToolSettings& s = state.points.settings;
     say(state,

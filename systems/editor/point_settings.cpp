@@ -48,7 +48,8 @@ namespace {
 
 constexpr std::string_view fields[] = {
     "point.mode",          "point.brush_radius", "point.sphere_radius", "point.colour_tolerance",
-    "point.grow_distance", "weight.radius",      "weight.falloff",      "view.lattice"};
+    "point.grow_distance", "weight.radius",      "weight.falloff",      "view.lattice",
+    "view.weights"};
 
 double positive(double v) { return std::clamp(v, 1e-6, 1e6); }
 

@@ -49,14 +49,15 @@ struct PointToolSettings {
 
 // Replay `set` fields: point.mode (set|add|remove|intersect), point.brush_radius (pixels),
 // point.sphere_radius, point.colour_tolerance, point.grow_distance, weight.radius (world units),
-// weight.falloff (smooth|sphere|linear|sharp|constant), view.lattice (0/1: the lattice overlay).
+// weight.falloff (smooth|sphere|linear|sharp|constant), view.lattice (0/1: the lattice overlay),
+// view.weights (0/1: the renderer's weight colours).
 // The enum fields carry their index in the event's value; parse_point_field_value() reads the file's word.
 bool is_point_field(std::string_view field);
 std::optional<double> parse_point_field_value(std::string_view field, std::string_view word);
 // The file's word for an event's value (format_input_recording).
 std::string_view point_field_word(std::string_view field, double value);
-// Applies a field to the settings (view.lattice is the caller's: it is no point setting). Radii and
-// distances are clamped to (0, 1e6], the tolerance to [0, 2].
+// Applies a field to the settings (view.lattice and view.weights are the caller's: no point settings). Radii
+// and distances are clamped to (0, 1e6], the tolerance to [0, 2].
 void set_point_field(PointToolSettings& settings, std::string_view field, double value);
 
 }  // namespace sffd::editor

@@ -90,7 +90,7 @@ TEST(InputRecord, ErrorsNameTheFileAndLine) {
          "material.base_color.r, material.base_color.g, material.base_color.b, material.base_color.a, "
          "proportional.enabled, proportional.radius, proportional.falloff, point.mode, point.brush_radius, "
          "point.sphere_radius, point.colour_tolerance, point.grow_distance, weight.radius, weight.falloff, "
-         "view.lattice)"},
+         "view.lattice, view.weights)"},
         {"0 set material.specular\n", "bad.txt:1: 'set' takes a field and a value"},
         {"0 set material.specular x\n", "bad.txt:1: bad value 'x'"},
         {"0\n", "bad.txt:1: expected '<frame> <event> ...'"},

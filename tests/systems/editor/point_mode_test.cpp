@@ -18,6 +18,7 @@
 #include "systems/ffd/components.h"
 #include "systems/picking/components.h"
 #include "systems/picking/picking_system.h"
+#include "systems/splat_render/splat_render.h"
 
 using namespace sffd;
 using namespace sffd::editor;
@@ -77,15 +78,21 @@ constexpr const char* point_mode_on = "0 key tab ctrl\n";
 
 TEST(PointMode, CtrlTabSwitchesAndTodaysKeysStayInLatticeMode) {
     Scene s;
+    auto& render = s.reg.set_resource<render::RenderSettings>();
     EXPECT_EQ(s.state->mode, EditMode::lattice);
     s.replay("0 key a shift\n");  // a second lattice: tab cycles them, as before
     const ecs::Entity second = s.state->active_lattice;
     s.replay("0 key tab\n");
     EXPECT_NE(s.state->active_lattice, second);
     EXPECT_EQ(s.state->mode, EditMode::lattice);
+    EXPECT_FALSE(render.show_selection);
     s.replay(point_mode_on);
     EXPECT_EQ(s.state->mode, EditMode::points);
     EXPECT_NE(s.state->status.find("point mode"), std::string::npos) << s.state->status;
+    EXPECT_TRUE(render.show_selection);  // the renderer tints the selection in point mode only
+    EXPECT_FALSE(render.show_weights);
+    s.replay("0 set view.weights 1\n");
+    EXPECT_TRUE(render.show_weights);
     s.replay("0 key g\n");  // a lattice-mode key does nothing here
     EXPECT_EQ(s.state->tool, Tool::select);
     EXPECT_NE(s.state->status.find("lattice-mode key"), std::string::npos);
@@ -94,6 +101,7 @@ TEST(PointMode, CtrlTabSwitchesAndTodaysKeysStayInLatticeMode) {
     EXPECT_EQ(s.lattice_selected(), 0u);
     s.replay("0 key tab ctrl\n1 key a\n");
     EXPECT_EQ(s.state->mode, EditMode::lattice);
+    EXPECT_FALSE(render.show_selection);
     EXPECT_EQ(s.lattice_selected(), 1331u);
     EXPECT_EQ(s.selected(s.sphere).size(), 59650u);  // the points keep theirs
 }
