@@ -106,13 +106,16 @@ OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const Edito
     const glm::ivec3 d = lattice->divisions;
     // Cage only: the 12 edges of the lattice's box (points where at least two indices are on a face);
     // selected points are still drawn so the selection stays visible.
+    // Point mode draws the cage too: the points being selected are the subject, the lattice only frames
+    // them (its x-ray edges would hide them).
+    const bool cage_only = state.lattice_cage_only || state.mode == EditMode::points;
     const auto on_cage = [&](int i, int j, int k) {
         return int(i == 0 || i == d.x) + int(j == 0 || j == d.y) + int(k == 0 || k == d.z) >= 2;
     };
     g.points.reserve(p.size());
     for (std::size_t c = 0; c < p.size(); ++c) {
         bool faint = false;  // cage only: a selected point inside the cage, small and translucent
-        if (state.lattice_cage_only) {
+        if (cage_only) {
             const int i = int(c / std::size_t((d.y + 1) * (d.z + 1)));
             const int j = int((c / std::size_t(d.z + 1)) % std::size_t(d.y + 1));
             const int k = int(c % std::size_t(d.z + 1));
@@ -139,7 +142,7 @@ OverlayGeometry build_lattice_overlay(const ecs::Registry& registry, const Edito
         for (int j = 0; j <= d.y; ++j)
             for (int k = 0; k <= d.z; ++k) {
                 const std::size_t c = lattice->index(i, j, k);
-                const bool cage = state.lattice_cage_only;
+                const bool cage = cage_only;
                 const bool fi = i == 0 || i == d.x, fj = j == 0 || j == d.y, fk = k == 0 || k == d.z;
                 if (i < d.x && (!cage || (fj && fk))) edge(c, lattice->index(i + 1, j, k));
                 if (j < d.y && (!cage || (fi && fk))) edge(c, lattice->index(i, j + 1, k));
