@@ -48,6 +48,7 @@ constexpr const char* kUsage =
     "[--ascii]\n"
     "                        [--progress] [--gaussians [--turn-x180] [--spz-version 3|4]]\n"
     "                        [--lattice SRC [--lattice-name N]] [--rest] [--order keep|morton]\n"
+    "                        [--selected] [--entity NAME]\n"
     "  IN   .ply .obj .off .gltf .glb, or a built-in scene name (sphere, face)\n"
     "  OUT  .ply (binary little-endian; --ascii for text) .glb .gltf, or .json: a lattice (see below)\n"
     "  --splats N       exactly N splats (meshes: sampled on the surface; points: thinned evenly; default:\n"
