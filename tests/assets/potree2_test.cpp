@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <filesystem>
 #include <random>
 
@@ -181,7 +182,8 @@ TEST(Potree2, EveryPointInOneNodeChildrenInsideParentsRepresentativesCover) {
             for (std::size_t k = 0; k < own[j].size(); ++k) {
                 const glm::dvec3 p = own[j].origin + glm::dvec3(own[j].positions[k]);
                 const double rp = std::max(glm::length(own[j].axis_u[k]), glm::length(own[j].axis_v[k]));
-                double worst = INFINITY;  // the least shortfall over the representatives
+                double worst =
+                    std::numeric_limits<double>::infinity();  // the least shortfall over the representatives
                 for (std::size_t q = 0; q < reps.size(); ++q) {
                     const double R = std::min(glm::length(reps.axis_u[q]), glm::length(reps.axis_v[q]));
                     worst = std::min(worst,

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 
 #include "runtime/assets/formats/surface/potree2_detail.h"
 
@@ -73,8 +74,8 @@ void finish_layout(Layout& l) {
 }
 
 Bounds::Bounds() {
-    std::fill(std::begin(lo), std::end(lo), INFINITY);
-    std::fill(std::begin(hi), std::end(hi), -INFINITY);
+    std::fill(std::begin(lo), std::end(lo), std::numeric_limits<double>::infinity());
+    std::fill(std::begin(hi), std::end(hi), -std::numeric_limits<double>::infinity());
 }
 
 namespace {
@@ -108,7 +109,7 @@ void encode(const Rec& r, const Layout& l, std::uint8_t* out, Bounds& b) {
         }
     }
     const auto floats = [&](const float* f, int n, int slot) {
-        for (int i = 0; i < n; ++i) put(out, f[i]), note(b, slot + i, f[i]);
+        for (int i = 0; i < n; ++i) put(out, f[i]), note(b, slot + i, double(f[i]));
     };
     floats(r.n, 3, kSlotNormal);
     floats(r.u, 3, kSlotU);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <limits>
 #include <map>
 #include <set>
 #include <tuple>
@@ -298,7 +299,7 @@ private:
         for (const CoverPt& p : from) {
             std::int64_t c[3];
             cell_of(p.p, c);
-            double best = INFINITY;
+            double best = std::numeric_limits<double>::infinity();
             std::uint32_t best_i = 0;
             for (std::int64_t ring = 0; ring < g; ++ring) {
                 // Cells of this ring are at least (ring - 1) cells away.
@@ -436,7 +437,8 @@ Result<Potree2BuildStats> build_potree2(const SplatSource& source, const fs::pat
     std::uint64_t count = 0;
     Columns k;
     bool first = true;
-    glm::dvec3 lo(INFINITY), hi(-INFINITY), origin(0.0);
+    const double inf = std::numeric_limits<double>::infinity();
+    glm::dvec3 lo(inf), hi(-inf), origin(0.0);
     report_progress(o.progress, "reading", 0.0);
     if (Status s = source.scan([&](const SplatCloud& c) -> Status {
             const std::size_t n = c.size();
