@@ -11,7 +11,8 @@
 // a column of ones). Saving writes the column as _WEIGHT (content/README.md).
 //
 // Nearest distances: a uniform grid of cell radius/4 over the selected points, searched ring by ring
-// outwards until the ring is farther than the best distance or the radius (at most 11^3 cells a point).
+// outwards until the ring is farther than the best distance or the radius (at most 11^3 cells a point),
+// for the points that a grid of cell radius finds near a selected one (27 cells); the others are far.
 #pragma once
 
 #include <cstddef>
