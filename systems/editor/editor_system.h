@@ -9,6 +9,8 @@
 //           requests); through lattice_manage.h lattice entities (Name, Transform, Lattice:
 //           add/remove/refit/import) and clouds' Deformers render::RenderSettings::quality (resource; preview
 //           while the view moves, EditorState::preview_while_moving)
+// Point mode (ctrl+tab, point_mode.h): point_select's tools and point_edit's operations on the clouds'
+// points (PointFlags, PointWeights; duplicate and separate create clouds), weights from the selection.
 // Does nothing when the registry has no EditorState. Picks synchronously through the picking library
 // (picking::pick on the PickingState resource): a click is answered in the frame it happens in, so a
 // replayed session is deterministic frame by frame.
