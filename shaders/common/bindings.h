@@ -51,6 +51,8 @@
 #define SFFD_MARKS_INDEXED         2u  // mode: drawn element i is point preview_index[i] (a preview subset)
 #define SFFD_MARKS_SELECTION       4u  // mode: selected points are drawn tinted (mark_overlay)
 #define SFFD_MARKS_WEIGHTS         8u  // mode: every point is drawn in the weight ramp's colour
+#define SFFD_MARKS_TEXEL          16u  // mode: a textured cloud drawn flat under an overlay: each splat's
+                                       // colour is its texel at its centre's uv (level 0, bilinear)
 
 // GpuSplat, std430, 64 bytes; the same layout for rest and deformed splats, so a render pass reads
 // either one. Positions are relative to the cloud's origin (SplatCloud::origin).

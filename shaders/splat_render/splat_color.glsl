@@ -26,7 +26,8 @@ vec4 splat_color(GpuSplat s, SplatView o, vec3 world_n, uint mark) {
 #else
     bool lit = frame.counts.w == 1u;
 #endif
-    if (textured)
+    // SFFD_MARKS_TEXEL: a textured cloud drawn by the untextured programs under an overlay.
+    if (textured || (frame.counts.z & SFFD_MARKS_TEXEL) != 0u)
         color = textureLod(material_texture, vec2(s.axis_u.w, s.axis_v.w), 0.0);
     else {
         color = unpackUnorm4x8(s.color);

@@ -154,6 +154,8 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
     const std::uint32_t marks_mode = f.counts.z;
     const bool marked = (marks_mode & SFFD_MARKS_PRESENT) != 0;
     const bool indexed = (marks_mode & SFFD_MARKS_INDEXED) != 0;
+    const bool texel_colours = (marks_mode & SFFD_MARKS_TEXEL) != 0 && marks.texels.rgba8 &&
+                               marks.texels.width > 0 && marks.texels.height > 0;
     const auto mark_of = [&](std::size_t i) -> std::uint16_t {
         if (!marked) return gfx::kDefaultPointMark;
         std::size_t j = i;
@@ -297,10 +299,14 @@ void cull_splats_cpu(std::span<const gpu::GpuSplat> splats, const gpu::FrameBloc
                 }
                 // splat_color
                 glm::vec3 color;
-                const std::uint32_t bits = std::bit_cast<std::uint32_t>(s.center[3]);
-                color = glm::vec3(splat_lut[bits & 255u], splat_lut[(bits >> 8) & 255u],
-                                  splat_lut[(bits >> 16) & 255u]) *
-                        glm::vec3(f.base_color);
+                if (texel_colours) {  // splat_color: the texel at the centre, as textureLod(uv, 0)
+                    color = sample_texture(marks.texels, glm::vec2(s.axis_u[3], s.axis_v[3]), 0);
+                } else {
+                    const std::uint32_t bits = std::bit_cast<std::uint32_t>(s.center[3]);
+                    color = glm::vec3(splat_lut[bits & 255u], splat_lut[(bits >> 8) & 255u],
+                                      splat_lut[(bits >> 16) & 255u]) *
+                            glm::vec3(f.base_color);
+                }
                 color = gfx::mark_overlay(color, mark, marks_mode);
                 if (lit) color = shade_blinn_phong(f, color, world_n, -glm::normalize(v2w3 * o.c));
                 rec.normal = glm::vec4(world_n, pack_color(color));

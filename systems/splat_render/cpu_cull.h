@@ -68,6 +68,9 @@ struct MarksView {
     const std::uint32_t* index = nullptr;
     std::size_t index_count = 0;
     std::size_t points = 0;
+    // SFFD_MARKS_TEXEL (a textured cloud drawn flat under an overlay): its texture, sampled at each splat's
+    // centre uv at level 0 (sample_texture) for the colour the overlay starts from.
+    TexelView texels;
 };
 
 // An allocator whose resize() leaves new elements default-initialised (uninitialised for the records): the

@@ -75,7 +75,7 @@ Status compute_cull(SplatRenderState& s, CloudGpu& gpu, GLuint program, bool tex
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_CULL_GROUPS, gpu.cull_groups.id());
         if (textured) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes);
         bind_marks(s, gpu);
-        glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture);
+        glBindTextureUnit(SFFD_TEX_MATERIAL, material_texture(gpu));
     };
     // A compute pass, not a vertex shader with rasterizer discard: llvmpipe runs compute on its worker
     // threads, vertex shaders on the calling thread (measured: same CPU, 2x the main-thread time).

@@ -68,7 +68,8 @@ namespace {
 
 // The cloud's point marks this frame: the residency's buffers and the mode bits (frame.counts.z) for what
 // it holds and what `settings` asks to see; the columns for the CPU cull. An overlay (tint, weights) draws
-// a textured cloud untextured: its colours are the overlay's.
+// a textured cloud flat, each splat in the texel at its centre (SFFD_MARKS_TEXEL), by the untextured
+// programs.
 void sync_marks(const ecs::Registry& reg, ecs::Entity e, const SplatCloud& cloud,
                 const gfx::GpuSplats& splats, const RenderSettings& settings, CloudGpu& gpu) {
     std::uint32_t mode = gfx::resident_marks_mode(splats);
@@ -90,7 +91,13 @@ void sync_marks(const ecs::Registry& reg, ecs::Entity e, const SplatCloud& cloud
             gpu.cpu_marks.index = splats.preview_indices.data(),
             gpu.cpu_marks.index_count = splats.preview_indices.size();
     }
-    if (mode & (SFFD_MARKS_SELECTION | SFFD_MARKS_WEIGHTS)) {
+    gpu.overlay_texture = 0;
+    if ((mode & (SFFD_MARKS_SELECTION | SFFD_MARKS_WEIGHTS)) && gpu.texture) {
+        // Drawn flat: each splat in its centre's texel, then the overlay (the tint has no slot in the
+        // per-pixel lookups' records).
+        gpu.marks_mode |= SFFD_MARKS_TEXEL;
+        gpu.cpu_marks.texels = {cloud.texture.rgba8.data(), cloud.texture.width, cloud.texture.height};
+        gpu.overlay_texture = gpu.texture;
         gpu.texture = 0, gpu.uv_axes = 0;
         gpu.uv_axes_cpu = nullptr;
     }

@@ -38,7 +38,7 @@ void draw_cloud(const SplatRenderState& s, const std::array<gfx::Program, 2>& pr
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE, gpu.quads.id());
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_VISIBLE_SPLATS, gpu.records.id());
     glBindBuffer(GL_DRAW_INDIRECT_BUFFER, gpu.commands.id());
-    glBindTextureUnit(SFFD_TEX_MATERIAL, gpu.texture);
+    glBindTextureUnit(SFFD_TEX_MATERIAL, material_texture(gpu));
     if (gpu.texture) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_UV_AXES, gpu.uv_axes);
     bind_marks(s, gpu);
     glVertexArrayVertexBuffer(s.records_vao.id(), 0, gpu.records.id(), 0, GLsizei(SFFD_SPLAT_RECORD_BYTES));

@@ -81,9 +81,9 @@ struct RenderSettings {
     // Point overlays (runtime/gfx/point_marks.h), surface splats and Gaussians alike, on every path:
     // selected points (PointFlags kPointSelected, not hidden or deleted) drawn half way to yellow; every
     // point in the colour of its PointWeights value (blue 0, green 0.5, red 1; 1 without weights), lit as
-    // its own colour would be. Either draws a textured surface cloud untextured. Off by default (`render`
-    // shows the scene as it is); the editor turns the selection on. Hidden and deleted points are never
-    // drawn, whatever these say.
+    // its own colour would be. Either draws a textured surface cloud flat (each splat in its centre's
+    // texel). Off by default (`render` shows the scene as it is); the editor turns the selection on.
+    // Hidden and deleted points are never drawn, whatever these say.
     bool show_selection = false;
     bool show_weights = false;
 };

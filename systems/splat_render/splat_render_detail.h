@@ -99,6 +99,8 @@ struct CloudGpu {
     // overlay (selection tint, weights) draws a textured cloud untextured (`texture` 0 then).
     std::uint32_t marks_mode = 0;
     GLuint marks = 0, preview_index = 0;
+    GLuint overlay_texture =
+        0;  // a textured cloud's texture while an overlay draws it flat (SFFD_MARKS_TEXEL)
     MarksView cpu_marks;
 
     // The resident cloud, when the CPU cull may read its draw buffer this frame (gfx::read_splats_on_cpu:
@@ -292,6 +294,10 @@ void sync_clouds(ecs::Registry& reg, SplatRenderState& s, gfx::GpuSplatStore* st
 // Binds a cloud's marks and preview indices (or the placeholder where it has none) for the passes that
 // read them (the cull, the quads).
 void bind_marks(const SplatRenderState& s, const CloudGpu& gpu);
+// The texture the passes sample: the cloud's, or under an overlay the one it is drawn flat from.
+inline GLuint material_texture(const CloudGpu& gpu) {
+    return gpu.texture ? gpu.texture : gpu.overlay_texture;
+}
 Status cull_program(SplatRenderState& s, bool textured, bool lit, std::uint32_t lights);
 // The scan programs (SplatRenderState::scan), compiled on first use; null with the error logged.
 gfx::RadixSorter* scan_programs(SplatRenderState& s);

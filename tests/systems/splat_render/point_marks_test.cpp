@@ -7,12 +7,14 @@
 #include <numeric>
 
 #include "runtime/gfx/residency.h"
+#include "runtime/gfx/splat_pack.h"
 #include "runtime/gfx/splat_store.h"
 #include "runtime/scene/point_columns.h"
 #include "runtime/scene/point_pages.h"
 #include "runtime/scene/point_subset.h"
 #include "systems/ffd/ffd_system.h"
 #include "systems/ffd/preview_budget.h"
+#include "systems/splat_render/cpu_cull.h"
 #include "tests/systems/splat_render/gl_fixture.h"
 #include "tests/systems/splat_render/test_scenes.h"
 
@@ -299,6 +301,51 @@ TEST_F(PointMarks_, WeightOverlayColoursByWeight) {
                 EXPECT_EQ(red, right);
             }
     }
+}
+
+// A textured cloud under an overlay is drawn flat, each splat in its centre's texel: the unselected half
+// looks like the same cloud with those texels baked into its colours, on both culls.
+TEST_F(PointMarks_, ATexturedCloudUnderAnOverlayShowsItsCentresTexels) {
+    SplatCloud textured = fibonacci_sphere(20000);
+    add_checker(textured);
+    SplatCloud baked = textured;
+    const TexelView texels{textured.texture.rgba8.data(), textured.texture.width, textured.texture.height};
+    for (std::size_t i = 0; i < baked.size(); ++i) {
+        const glm::vec3 c = sample_texture(texels, baked.uvs[i], 0);
+        baked.colors[i] = std::uint32_t(gfx::encode_srgb8(c.x)) | std::uint32_t(gfx::encode_srgb8(c.y)) << 8 |
+                          std::uint32_t(gfx::encode_srgb8(c.z)) << 16 | 0xff000000u;
+    }
+    baked.texture = {};
+    for (const CullPath path : {CullPath::cpu, CullPath::compute})
+        for (const Quality q : {Quality::hq, Quality::preview}) {
+            SCOPED_TRACE(testing::Message()
+                         << "compute " << (path == CullPath::compute) << " hq " << (q == Quality::hq));
+            FrameImage expected, overlay;
+            {
+                Scene sc;
+                sc.add(baked);
+                expected = sc.draw(q, path);
+            }
+            {
+                Scene sc;
+                const ecs::Entity e = sc.add(textured);
+                sc.reg.emplace<PointFlags>(e, right_half(textured, kPointSelected));
+                overlay = sc.draw(q, path, true);
+            }
+            double diff = 0.0;
+            int left = 0, coverage = 0;
+            for (int y = 0; y < kH; ++y)
+                for (int x = 0; x < kW / 2 - 4; ++x) {
+                    coverage += expected.covered(x, y) != overlay.covered(x, y);
+                    if (!expected.covered(x, y) || !overlay.covered(x, y)) continue;
+                    const std::size_t i = expected.index(x, y);
+                    const glm::vec3 d = glm::abs(glm::vec3(expected.color[i]) - glm::vec3(overlay.color[i]));
+                    diff += double(std::max({d.x, d.y, d.z})), ++left;
+                }
+            ASSERT_GT(left, 1000);
+            EXPECT_EQ(coverage, 0);
+            EXPECT_LT(diff / left, 4e-3);  // the baked colours are 8-bit sRGB, the texels filtered in float
+        }
 }
 
 // A budgeted preview (the subset on the GPU, state preview_cpu) reads the marks through its indices.
