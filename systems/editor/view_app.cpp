@@ -362,7 +362,6 @@ int run_view(const ViewOptions& options, Schedule schedule) {
         settings.height = viewport.height;
         settings.quality = options.preview ? render::Quality::preview : render::Quality::hq;
         settings.background = glm::vec3(0.045f, 0.05f, 0.06f);
-        settings.show_selection = true;  // point mode's selection drawn tinted (`render` shows none)
         settings.aux_outputs = !options.screenshot.empty();  // depth + normals for EXR screenshots
         settings.sprite_path = options.sprite_raster == "cpu"      ? render::SpritePath::cpu
                                : options.sprite_raster == "raster" ? render::SpritePath::raster
