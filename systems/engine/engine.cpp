@@ -104,11 +104,10 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
               .writes<DeformedGaussians, GaussianCloud, Transform, picking::PickRequests,
                       picking::PickResults, picking::PickSettings, picking::PickingState>());
     s.add(Phase::picking, "editor.picks", editor::editor_pick_system,  // no-op without an EditorState
-          ecs::reads<DeformedSplats, Deformers, PointWeights, SplatCloud, SplatMaterial, Transform,
-                     gfx::GpuSplatStore, picking::PickResults>()
-              .writes<DeformedGaussians, GaussianCloud, Lattice, PointFlags, PointPages, editor::EditorState,
-                      gaussian::GpuGaussianStore, picking::LatticeSelection, picking::PickSettings,
-                      picking::PickingState>());
+          ecs::reads<DeformedSplats, Deformers, SplatMaterial, gfx::GpuSplatStore, picking::PickResults>()
+              .writes<DeformedGaussians, GaussianCloud, Lattice, PointFlags, PointPages, PointWeights,
+                      SplatCloud, Transform, editor::EditorState, gaussian::GpuGaussianStore,
+                      picking::LatticeSelection, picking::PickSettings, picking::PickingState>());
 
     // --- rendering: splat passes, overlays, UI, capture (splat_render, editor overlay) ---------------
     s.add(Phase::rendering, "splat_render", render::render_system,  // culling + HQ/preview splat passes
