@@ -44,7 +44,8 @@
 //   declaring no children. Nodes: byteOffset + byteSize inside octree.bin, byteSize = numPoints · the
 //   point size (the ratio budget: no node claims points it has no bytes for), no two nodes' bytes
 //   overlapping, and the nodes' points adding up to "points". A node with byteSize 0 has 0 points
-//   whatever it declares (Potree's own workaround for PotreeConverter issue 1125).
+//   whatever it declares: some PotreeConverter versions write empty nodes with a non-zero count, and
+//   Potree's loader reads them as empty too.
 #pragma once
 
 #include <array>

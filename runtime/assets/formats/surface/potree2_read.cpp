@@ -227,7 +227,8 @@ public:
                     continue;
                 }
                 PotreeNode& node = o_.nodes[self];
-                node.points = size == 0 ? 0 : points;  // Potree's workaround (issue 1125)
+                node.points =
+                    size == 0 ? 0 : points;  // empty nodes may declare a count, as Potree reads them
                 node.byte_offset = std::uint64_t(off), node.byte_size = std::uint64_t(size);
                 if (type == 2) return make_error(where + ": the first node of its chunk is a proxy again");
                 const int level = node.level;  // `node` moves as children are added
