@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "runtime/assets/formats/gaussian/gaussian_io.h"
+#include "runtime/assets/formats/json_fields.h"
 #include "runtime/assets/formats/gaussian/gaussian_sog.h"
 #include "runtime/core/file_io.h"
 
@@ -20,39 +21,9 @@ namespace {
 
 using json = nlohmann::json;
 
-// The largest whole number a JSON writer in JavaScript can state exactly.
-constexpr std::uint64_t kMaxJsonInteger = (std::uint64_t(1) << 53) - 1;
-
-const json& member(const json& o, const char* key) {
-    static const json null;
-    if (!o.is_object()) return null;
-    auto it = o.find(key);
-    return it == o.end() ? null : *it;
-}
-
-bool whole(const json& j, std::uint64_t& out) {
-    if (j.is_number_unsigned() || (j.is_number_integer() && j.get<long long>() >= 0)) {
-        out = j.get<std::uint64_t>();
-        return out <= kMaxJsonInteger;
-    }
-    if (j.is_number_float()) {  // 3.0 is a whole number to a JavaScript writer
-        const double d = j.get<double>();
-        if (!(d >= 0) || d > double(kMaxJsonInteger) || std::floor(d) != d) return false;
-        out = std::uint64_t(d);
-        return true;
-    }
-    return false;
-}
-
-bool vec3(const json& j, glm::dvec3& out) {
-    if (!j.is_array() || j.size() != 3) return false;
-    for (int a = 0; a < 3; ++a) {
-        if (!j[std::size_t(a)].is_number()) return false;
-        out[a] = j[std::size_t(a)].get<double>();
-        if (!std::isfinite(out[a])) return false;
-    }
-    return true;
-}
+using assets::json_fields::member;
+using assets::json_fields::vec3;
+using assets::json_fields::whole;
 
 // A unit or environment name: relative, '/'-separated, naming a SOG folder's meta.json or a .sog.
 bool plain_relative(const std::string& name) {

@@ -12,6 +12,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "runtime/assets/formats/json_fields.h"
 #include "runtime/assets/formats/surface/potree2.h"
 #include "runtime/assets/formats/surface/potree2_detail.h"
 #include "runtime/assets/import.h"
@@ -36,36 +37,9 @@ namespace {
 
 using json = nlohmann::json;
 
-const json& member(const json& o, const char* key) {
-    static const json null;
-    if (!o.is_object()) return null;
-    auto it = o.find(key);
-    return it == o.end() ? null : *it;
-}
-
-bool whole(const json& j, std::uint64_t& out) {
-    if (j.is_number_unsigned() || (j.is_number_integer() && j.get<long long>() >= 0)) {
-        out = j.get<std::uint64_t>();
-        return true;
-    }
-    if (j.is_number_float()) {
-        const double d = j.get<double>();
-        if (!(d >= 0) || d > 9007199254740991.0 || std::floor(d) != d) return false;
-        out = std::uint64_t(d);
-        return true;
-    }
-    return false;
-}
-
-bool vec3(const json& j, glm::dvec3& out) {
-    if (!j.is_array() || j.size() != 3) return false;
-    for (int a = 0; a < 3; ++a) {
-        if (!j[std::size_t(a)].is_number()) return false;
-        out[a] = j[std::size_t(a)].get<double>();
-        if (!std::isfinite(out[a])) return false;
-    }
-    return true;
-}
+using assets::json_fields::member;
+using assets::json_fields::vec3;
+using assets::json_fields::whole;
 
 class Parser {
 public:
