@@ -353,6 +353,7 @@ int run_view(const ViewOptions& options, Schedule schedule) {
     {
         ecs::Registry registry;
         registry.set_resource<SceneHooks>(options.scene_hooks);
+        if (options.prepare) options.prepare(registry);
         if (Status st = load_scene(registry, options.scene); !st) {
             std::fprintf(stderr, "splatffd view: %s\n", st.message().c_str());
             return 1;

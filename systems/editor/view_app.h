@@ -46,6 +46,9 @@ struct ViewOptions {
     // engine, so the command passes its hooks (systems/engine: engine_scene_hooks()). The scene's registry
     // gets them as its SceneHooks resource; a registry the editor makes later copies them from it.
     SceneHooks scene_hooks;
+    // Runs on the scene's registry before the scene loads: resources its loaders read (the command's
+    // streaming settings for level-of-detail hierarchies).
+    std::function<void(ecs::Registry&)> prepare;
 };
 
 // $XDG_CONFIG_HOME/splatffd/<name> (else ~/.config/splatffd/<name>), its folder created; empty when

@@ -37,6 +37,7 @@
 #include "systems/gaussian/gaussian_system.h"
 #include "systems/gaussian/gpu_deform.h"
 #include "systems/gaussian/gpu_store.h"
+#include "systems/lod/streaming.h"
 #include "systems/picking/components.h"
 #include "systems/picking/picking_state.h"
 #include "systems/picking/picking_system.h"
@@ -80,7 +81,11 @@ Schedule make_engine_schedule(const EngineScheduleOptions& options) {
     s.add(Phase::animation, "animation", animation_system,
           ecs::reads<AnimationClip>().writes<AnimationState, Lattice, UnkeyedEdit>());
 
-    // --- residency: upload authored clouds whose change stamp moved; owns the GPU stores (residency) ----
+    // --- residency: streamed hierarchies write the cut they draw (lod), then authored clouds whose
+    // change stamp moved are uploaded; residency owns the GPU stores -----------------------------------
+    s.add(Phase::residency, "streaming", lod::streaming_system,  // no-op without streamed clouds
+          ecs::reads<Camera, Deformers, Lattice, Transform, lod::StreamSettings, render::RenderSettings>()
+              .writes<GaussianCloud, PointFlags, PointWeights, SplatCloud, lod::StreamedCloud>());
     s.add(Phase::residency, "residency", residency_system,  // no-op without a GL context
           ecs::reads<Deformers, GaussianCloud, PointFlags, PointPages, PointWeights, SplatCloud>()
               .writes<ResidencyConnections, gaussian::GpuGaussianStore, gfx::GpuSplatStore,

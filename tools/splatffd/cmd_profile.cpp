@@ -49,7 +49,11 @@ constexpr const char* usage_text =
     "  --sync                time GPU passes with glFinish + CPU clock instead of timer queries\n"
     "                        (timer queries are not trustworthy on llvmpipe; default: timer queries)\n"
     "  --drive CASE|none     deform every lattice each frame with a paper case, animated over time:\n"
-    "                        'global twist' (default), 'global stretch', 'local twist', 'local stretch'\n"
+    "                        'global twist' (default), 'global stretch', 'local twist', 'local stretch';\n"
+    "                        or orbit: the camera circles the scene's centre once every 10 s, the\n"
+    "                        lattices stay (a hierarchy's memory while its cut follows the camera)\n"
+    "                        A hierarchy (lod-meta.json, a Potree 2 metadata.json) streams, and one\n"
+    "                        without a lattice gets an 11^3 lattice around its box\n"
     "  --json F --csv F --svg F --trace F   write the report / per-frame CSV / frame-time chart /\n"
     "                        Chrome trace-event JSON (open in ui.perfetto.dev)\n"
     "  --compare BASE.json   exit 3 when a system or pass is slower than in BASE by more than the\n"
@@ -210,7 +214,9 @@ int run_profile_command(cli::Args args) {
             return value(v) && parse_int(v, out);
         };
         if (cli::is_help(a)) {
-            return cli::help(usage_text);
+            return cli::help(std::string(usage_text) + cli::kStreamUsage);
+        } else if (const int taken = cli::parse_stream_option("profile", args, i, o.stream); taken != 0) {
+            if (taken < 0) return 2;
         } else if (a == "--frames") {
             // One meaning of --frames in every command (N, or 0:B); measuring starts at frame 0.
             std::string v;
@@ -241,9 +247,11 @@ int run_profile_command(cli::Args args) {
             if (!value(o.backend) || (o.backend != "auto" && o.backend != "cpu" && o.backend != "gpu"))
                 return usage_error("--backend auto|cpu|gpu");
         } else if (a == "--drive") {
-            if (!value(o.drive) || (o.drive != "none" && !find_case(o.drive)))
+            if (!value(o.drive) || (o.drive != "none" && o.drive != "orbit" && !find_case(o.drive)))
                 return usage_error(
-                    "--drive takes 'local stretch', 'local twist', 'global stretch', 'global twist' or none");
+                    "--drive takes 'local stretch', 'local twist', 'global stretch', 'global twist', orbit "
+                    "or "
+                    "none");
         } else if (a == "--sync") {
             o.sync = true;
         } else if (a == "--paper") {
@@ -304,6 +312,7 @@ int run_profile_command(cli::Args args) {
     s.preview_budget = o.preview_budget;
     s.sync = o.sync;
     s.drive = o.drive;
+    s.stream = o.stream;
     auto r = run_profile(s);
     if (!r) {
         cli::command_error("profile", r.message());

@@ -52,6 +52,7 @@
 #include "tools/splatffd/frame_files.h"
 #include "tools/splatffd/render_manifest.h"
 #include "tools/splatffd/unkeyed_note.h"
+#include "tools/splatffd/stream_options.h"
 #include "tools/splatffd/video.h"
 #include "systems/engine/engine_frame.h"
 
@@ -68,9 +69,9 @@ constexpr const char* kUsage =
     "  SCENE            built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj "
     ".off,\n"
     "                   3D Gaussians .ply (3DGS) .splat .spz .ksplat .sog, a SOG folder or its meta.json,\n"
-    "                   .glb (KHR_gaussian_splatting), a streamed SOG's DIR/lod-meta.json (every Gaussian\n"
-    "                   of its finest level), a Potree 2 octree's DIR/metadata.json (every splat of its\n"
-    "                   finest detail) (default: sphere); Gaussian captures open upright,\n"
+    "                   .glb (KHR_gaussian_splatting), a streamed SOG's DIR/lod-meta.json or a Potree 2\n"
+    "                   octree's DIR/metadata.json (streamed: every node in view at full detail unless\n"
+    "                   the options below say otherwise) (default: sphere); Gaussian captures open upright,\n"
     "                   stored y down (another up: splatffd --up y|z|-z render ...)\n"
     "  --out DIR        output folder (created; required); files frame_NNNN.png / frame_NNNN.exr\n"
     "  --frames N|A:B   N: frames 0..N-1; A:B: frames A..B inclusive (default 1: frame 0); frame k is at\n"
@@ -219,6 +220,7 @@ struct RenderOptions {
     std::optional<glm::vec3> background;
     std::optional<Camera> camera;
     std::optional<cli::Shard> shard;
+    cli::StreamCli stream = cli::final_render_stream_defaults();
     std::string command;  // the shell line that re-runs this render (in the manifest)
 };
 
@@ -241,7 +243,9 @@ std::optional<int> parse_render_args(cli::Args args, RenderOptions& o) {
             return 2;
         };
         if (cli::is_help(a)) {
-            return cli::help(kUsage);
+            return cli::help(std::string(kUsage) + cli::kStreamUsage);
+        } else if (const int taken = cli::parse_stream_option("render", args, i, o.stream); taken != 0) {
+            if (taken < 0) return 2;
         } else if (a == "--out" && has_value) {
             o.out_dir = args[++i];
         } else if (a == "--frames" && has_value) {
@@ -392,6 +396,8 @@ struct RenderScene {
 // Loads the scene, applies the options to it and makes the render state (needs the GL context current).
 Status set_up_scene(const RenderOptions& o, gfx::GlContext& ctx, RenderScene& s) {
     sffd::use_engine_scene_hooks(s.registry);
+    // A hierarchy streams; each frame waits for its whole cut, so frame k is the same whoever renders it.
+    cli::apply_stream_options(s.registry, o.stream);
     if (Status st = load_scene(s.registry, o.scene); !st) return st;
     s.settings.quality = o.quality, s.settings.width = int(o.width), s.settings.height = int(o.height);
     s.settings.background = o.background

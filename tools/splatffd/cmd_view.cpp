@@ -8,6 +8,7 @@
 #include "systems/editor/view_app.h"
 #include "systems/engine/engine.h"
 #include "systems/engine/engine_frame.h"
+#include "tools/splatffd/stream_options.h"
 
 namespace {
 
@@ -56,6 +57,7 @@ int run_view_command(sffd::cli::Args args) {
     sffd::editor::ViewOptions o;
     o.scene_hooks = sffd::engine_scene_hooks();
     bool have_scene = false;
+    sffd::cli::StreamCli stream = sffd::cli::interactive_stream_defaults();
     for (std::size_t i = 0; i < args.size(); ++i) {
         const std::string& a = args[i];
         const auto value = [&](const char* name) -> const std::string* {
@@ -66,7 +68,7 @@ int run_view_command(sffd::cli::Args args) {
             return &args[++i];
         };
         if (sffd::cli::is_help(a)) {
-            return sffd::cli::help(kUsage);
+            return sffd::cli::help(std::string(kUsage) + sffd::cli::kStreamUsage);
         } else if (a == "--replay") {
             const auto* v = value("--replay");
             if (!v) return 2;
@@ -139,6 +141,8 @@ int run_view_command(sffd::cli::Args args) {
             o.sync_timing = true;
         } else if (a == "--headless") {
             o.headless = true;
+        } else if (const int taken = sffd::cli::parse_stream_option("view", args, i, stream); taken != 0) {
+            if (taken < 0) return 2;
         } else if (!a.empty() && a[0] == '-') {
             return sffd::cli::usage_error("view", "unknown option '" + a + "'", kUsage);
         } else if (!have_scene) {
@@ -161,6 +165,7 @@ int run_view_command(sffd::cli::Args args) {
                                       "--window-screenshot captures the window, and --headless has none; use "
                                       "--out PATH for the rendered frame",
                                       "");
+    o.prepare = [stream](sffd::ecs::Registry& r) { sffd::cli::apply_stream_options(r, stream); };
     return sffd::editor::run_view(o, sffd::make_engine_schedule({.present = true, .editor = true}));
 }
 

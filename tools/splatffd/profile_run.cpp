@@ -4,11 +4,13 @@
 
 #include <time.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "runtime/app/clock.h"
@@ -23,6 +25,7 @@
 #include "systems/gaussian/components.h"
 #include "systems/gaussian/from_splats.h"
 #include "systems/gaussian/gaussian_system.h"
+#include "systems/lod/streaming.h"
 #include "systems/profiling/synthetic.h"
 #include "systems/residency/residency_system.h"
 #include "systems/splat_render/gaussian_pass.h"
@@ -116,7 +119,9 @@ Status load(ecs::Registry& registry, const std::string& scene, bool* synthetic) 
         registry.emplace<Deformers>(cloud, Deformers{{lattice}});
         return {};
     }
-    sffd::use_engine_scene_hooks(registry);
+    // run_profile gives the registry its hooks first (with the streaming loader); a caller without them
+    // gets the engine's.
+    if (!SceneHooks::of(registry)) sffd::use_engine_scene_hooks(registry);
     if (scene.rfind("synthetic:", 0) != 0) return load_scene(registry, scene);
     double count = 0.0;
     if (!parse_count(scene.substr(10), count)) return make_error(scene + ": bad synthetic point count");
@@ -147,6 +152,46 @@ SystemFn drive_system(PaperCase c) {
     };
 }
 
+// Harness system (animation phase): the camera circles its target once every 10 s of frame time, at its
+// distance and height (the lattices stay): what a viewer orbiting the model asks of the streaming.
+SystemFn orbit_system() {
+    return [start = std::optional<Camera>()](ecs::Registry& registry, const FrameContext& frame) mutable {
+        for (auto [e, c] : registry.view<Camera>()) {
+            (void)e;
+            if (!start) start = c;
+            const glm::dvec3 d = start->eye - start->target;
+            const double a = 2.0 * M_PI * frame.time / 10.0;
+            const glm::dvec3 up = glm::normalize(start->up);
+            const glm::dvec3 along = glm::dot(d, up) * up;
+            const glm::dvec3 flat = d - along;
+            const glm::dvec3 side = glm::cross(up, flat);
+            c.eye = start->target + along + std::cos(a) * flat + std::sin(a) * side;
+            break;
+        }
+    };
+}
+
+// A streamed hierarchy without a lattice gets the paper's 11^3 lattice around its box, in its frame, so
+// the drive deforms it as it deforms the synthetic sphere.
+void add_hierarchy_lattices(ecs::Registry& registry) {
+    std::vector<ecs::Entity> bare;
+    for (auto [e, sc] : registry.view<const lod::StreamedCloud>()) {
+        (void)sc;
+        if (!registry.has<Deformers>(e)) bare.push_back(e);
+    }
+    for (const ecs::Entity e : bare) {
+        const ffd::Box b = registry.get<lod::StreamedCloud>(e).stream->bounds();
+        SplatCloud corners;
+        for (int i = 0; i < 8; ++i)
+            corners.positions.emplace_back((i & 4) ? b.hi.x : b.lo.x, (i & 2) ? b.hi.y : b.lo.y,
+                                           (i & 1) ? b.hi.z : b.lo.z);
+        const ecs::Entity lattice = registry.create();
+        registry.emplace<Lattice>(lattice, paper_lattice(corners, 10));
+        if (const Transform* t = registry.try_get<Transform>(e)) registry.emplace<Transform>(lattice, *t);
+        registry.emplace<Deformers>(e, Deformers{{lattice}});
+    }
+}
+
 }  // namespace
 
 std::string deformation_backend_name(std::uint64_t cpu_runs, std::uint64_t gpu_runs) {
@@ -174,7 +219,11 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     auto registry_owner = std::make_unique<ecs::Registry>();
     ecs::Registry& registry = *registry_owner;
     bool synthetic = false;
+    const auto load_start = std::chrono::steady_clock::now();
+    sffd::use_engine_scene_hooks(registry);
+    cli::apply_stream_options(registry, s.stream);
     if (Status st = load(registry, s.scene, &synthetic); !st) return st.error();
+    add_hierarchy_lattices(registry);
     for (auto [e, c] : registry.view<const SplatCloud>()) {
         (void)e;
         out.points += c.size();
@@ -210,7 +259,9 @@ Result<RunOutput> run_profile(const RunSetup& s) {
         schedule.add(Phase::deformation, "gaussian", gaussian_deform_system);  // the same for Gaussian clouds
         schedule_kind = "deformation";
     }
-    if (s.drive != "none") {
+    if (s.drive == "orbit") {
+        schedule.add(Phase::animation, "profile.orbit", orbit_system());
+    } else if (s.drive != "none") {
         const PaperCase* c = find_case(s.drive);
         if (!c) return make_error("profile: unknown --drive case '" + s.drive + "'");
         schedule.add(Phase::animation, "profile.drive", drive_system(*c));
@@ -249,8 +300,13 @@ Result<RunOutput> run_profile(const RunSetup& s) {
     std::fprintf(stderr, "profile: %s: %d warm-up + %d measured frames (%d in all)\n", s.scene.c_str(),
                  s.warmup, s.frames, s.warmup + s.frames);
     cli::ProgressPrinter progress("profile", cli::ProgressPrinter::mode_for(false));
+    double first_frame_ms = -1.0;  // from the start of the load to the end of the first frame
     for (int i = 0; i < s.warmup; ++i) {
         schedule.run_frame(registry, clock.tick());
+        if (i == 0)
+            first_frame_ms =
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - load_start)
+                    .count();
         progress.report("warm-up", double(i + 1) / double(s.warmup));
     }
     out.profiler->clear();
@@ -319,6 +375,21 @@ Result<RunOutput> run_profile(const RunSetup& s) {
                                 ? -1.0
                                 : double(g.covered_pixels) / pixels);
         config.emplace_back("gaussian_quad_budget_images", double(g.quad_budget_images));
+    }
+    if (first_frame_ms >= 0.0) config.emplace_back("first_frame_ms", first_frame_ms);
+    // Streamed hierarchies (systems/lod/streaming.h): what the last measured frame drew and held.
+    if (const lod::StreamSummary sum = lod::stream_summary(registry); sum.clouds > 0) {
+        const lod::StreamStats& st = sum.stats;
+        config.emplace_back("stream_splat_budget", double(s.stream.settings.options.splat_budget));
+        config.emplace_back("stream_memory_budget_mb", double(s.stream.settings.options.memory_budget >> 20));
+        config.emplace_back("stream_drawn_splats", double(st.drawn_splats));
+        config.emplace_back("stream_wanted_splats", double(st.wanted_splats));
+        config.emplace_back("stream_missing_pieces", double(st.missing_pieces));
+        config.emplace_back("stream_resident_mb", double(st.resident_bytes) / 1048576.0);
+        config.emplace_back("stream_peak_resident_mb", double(st.peak_resident_bytes) / 1048576.0);
+        config.emplace_back("stream_loads", double(st.loads));
+        config.emplace_back("stream_evictions", double(st.evictions));
+        config.emplace_back("stream_memory_limited", bool(st.memory_limited));
     }
     if (s.lattice_points > 0) config.emplace_back("lattice", static_cast<double>(s.lattice_points));
     if (!s.basis.empty()) config.emplace_back("basis", s.basis);

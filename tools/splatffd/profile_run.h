@@ -15,6 +15,7 @@
 #include "systems/profiling/paper_ffd.h"
 #include "systems/profiling/profiler.h"
 #include "systems/profiling/report.h"
+#include "tools/splatffd/stream_options.h"
 
 namespace sffd::profile_cmd {
 
@@ -36,6 +37,7 @@ struct Options {
     int naive_frames = 1;
     std::string suite;              // "quick" or "full": the performance suite (profile_suite.cpp)
     std::vector<std::string> only;  // --only: the suite rows whose ids start with one of these
+    cli::StreamCli stream = cli::interactive_stream_defaults();
 };
 
 struct RunSetup {
@@ -48,6 +50,7 @@ struct RunSetup {
     int lattice_points = 0;         // > 0: replace every lattice's divisions (control points per axis)
     std::string basis;              // "": keep
     bool deformation_only = false;  // sweeps: no renderer
+    cli::StreamCli stream = cli::interactive_stream_defaults();
 };
 
 // Member order matters: the profiler's GL queries must be deleted before the context.

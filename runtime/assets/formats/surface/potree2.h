@@ -123,6 +123,16 @@ Result<PotreeOctree> open_potree2(const std::filesystem::path& metadata);
 Result<SplatCloud> read_potree2_nodes(const PotreeOctree& octree, const std::vector<std::uint32_t>& nodes);
 // One node (its points grown when it has children).
 Result<SplatCloud> read_potree2_node(const PotreeOctree& octree, std::uint32_t node);
+// One node's points at their own radii, with each point's sffd_lod_radius (0 without the attribute), and
+// without the texture: what a streaming loader holds, growing the axes itself when it draws the node
+// without all of its children (grow_to_lod_radius, the rule read_potree2_nodes applies).
+struct PotreeNodePoints {
+    SplatCloud cloud;
+    std::vector<float> lod_radius;
+};
+Result<PotreeNodePoints> read_potree2_node_points(const PotreeOctree& octree, std::uint32_t node);
+// Splats first .. first + lod_radius.size() of `cloud`: each axis at least its lod radius long.
+void grow_to_lod_radius(SplatCloud& cloud, std::size_t first, const std::vector<float>& lod_radius);
 // The full finest detail: every node, every splat at its own radius.
 Result<SplatCloud> read_potree2(const PotreeOctree& octree);
 // The nodes of the cut that stops at `level` (every node of at most that level), breadth first.

@@ -328,8 +328,9 @@ glm::dvec3 cloud_origin(const PotreeOctree& o) {
 }
 
 // The points of `nodes` decoded: positions and colours always, the splat columns when `splats`.
+// With `radii`, no axis is grown: each point's sffd_lod_radius (0 without the attribute) is appended there.
 Status decode(const PotreeOctree& o, const std::vector<std::uint32_t>& nodes, bool splats, SplatCloud& c,
-              std::vector<glm::dvec3>* world) {
+              std::vector<glm::dvec3>* world, std::vector<float>* radii = nullptr) {
     const std::string name = o.path.string();
     const PotreeAttribute* pos = o.attribute(kPosition.name);
     const PotreeAttribute* rgb = o.attribute(kRgb.name);
@@ -369,7 +370,7 @@ Status decode(const PotreeOctree& o, const std::vector<std::uint32_t>& nodes, bo
         const PotreeNode& node = o.nodes[id];
         bool grow = false;
         for (const std::int32_t ch : node.children)
-            if (ch >= 0 && !in.count(std::uint32_t(ch))) grow = true;
+            if (ch >= 0 && !in.count(std::uint32_t(ch))) grow = !radii;
         buf.resize(std::size_t(node.byte_size));
         if (Status s = file->read(buf.data(), node.byte_size, node.byte_offset); !s) return s;
         for (std::uint32_t k = 0; k < node.points; ++k) {
@@ -397,14 +398,20 @@ Status decode(const PotreeOctree& o, const std::vector<std::uint32_t>& nodes, bo
             if (!std::isfinite(nv.x + nv.y + nv.z + u.x + u.y + u.z + v.x + v.y + v.z))
                 return make_error(o.octree_path.string() + ": node " + node.name + ", point " +
                                   std::to_string(k) + ": a normal or axis is not finite");
-            if (grow && lod) {
+            if ((grow || radii) && lod) {
                 const float r = get<float>(p + lod->offset);
                 if (!std::isfinite(r))
                     return make_error(o.octree_path.string() + ": node " + node.name + ", point " +
                                       std::to_string(k) + ": its sffd_lod_radius is not finite");
-                const float lu = glm::length(u), lv = glm::length(v);
-                if (lu > 0 && lu < r) u *= r / lu;
-                if (lv > 0 && lv < r) v *= r / lv;
+                if (radii) {
+                    radii->push_back(r);
+                } else {
+                    const float lu = glm::length(u), lv = glm::length(v);
+                    if (lu > 0 && lu < r) u *= r / lu;
+                    if (lv > 0 && lv < r) v *= r / lv;
+                }
+            } else if (radii) {
+                radii->push_back(0.0f);
             }
             c.normals.push_back(nv), c.axis_u.push_back(u), c.axis_v.push_back(v);
             if (uv) c.uvs.emplace_back(get<float>(p + uv->offset), get<float>(p + uv->offset + 4));
@@ -468,6 +475,23 @@ Result<SplatCloud> read_potree2_nodes(const PotreeOctree& o, const std::vector<s
 
 Result<SplatCloud> read_potree2_node(const PotreeOctree& o, std::uint32_t node) {
     return read_potree2_nodes(o, {node});
+}
+
+Result<PotreeNodePoints> read_potree2_node_points(const PotreeOctree& o, std::uint32_t node) {
+    PotreeNodePoints out;
+    if (Status s = decode(o, {node}, true, out.cloud, nullptr, &out.lod_radius); !s) return s.error();
+    return out;
+}
+
+void grow_to_lod_radius(SplatCloud& cloud, std::size_t first, const std::vector<float>& lod_radius) {
+    for (std::size_t k = 0; k < lod_radius.size() && first + k < cloud.size(); ++k) {
+        const float r = lod_radius[k];
+        glm::vec3& u = cloud.axis_u[first + k];
+        glm::vec3& v = cloud.axis_v[first + k];
+        const float lu = glm::length(u), lv = glm::length(v);
+        if (lu > 0 && lu < r) u *= r / lu;
+        if (lv > 0 && lv < r) v *= r / lv;
+    }
 }
 
 Result<SplatCloud> read_potree2(const PotreeOctree& o) { return read_potree2_nodes(o, all_nodes(o)); }
