@@ -553,8 +553,14 @@ Result<std::unique_ptr<HierarchyStream>> HierarchyStream::open(const fs::path& p
                               ": a Potree 2 octree without \"normal\", \"sffd_axis_u\" and \"sffd_axis_v\" "
                               "(not written by splatffd) cannot be streamed: open it whole");
         if (oc->nodes.empty()) return make_error(path.string() + ": the octree has no nodes");
-        auto empty = assets::read_potree2_nodes(*oc, {});  // the origin and the texture
+        // The origin and the texture: the reader decodes the texture only for points with uvs, so the
+        // root is read once here and its points dropped.
+        auto empty = assets::read_potree2_nodes(*oc, {0});
         if (!empty) return empty.error();
+        SplatTexture texture = std::move(empty->texture);
+        const glm::dvec3 origin = empty->origin;
+        *empty = SplatCloud{};
+        empty->origin = origin, empty->texture = std::move(texture);
         impl->source = std::make_unique<PotreeSource>(std::move(*oc), std::move(*empty));
     } else {
         return make_error(path.string() +

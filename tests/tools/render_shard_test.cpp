@@ -130,6 +130,34 @@ TEST(RenderShard, ShardsWriteTheSameBytesAsOneRunAndAssemble) {
               manifest(one / "render_manifest.json")["files"]);  // same bytes, same fingerprints
 }
 
+// A hierarchy on a farm: every frame waits for its own cut, so a shard (its loader having held other
+// pieces before, and evicted under a memory budget smaller than the turntable's whole set) writes the
+// same bytes as one run of every frame.
+TEST(RenderShard, HierarchyShardsWriteTheSameBytesAsOneRun) {
+    const fs::path data = fresh_dir("lod_data"), one = fresh_dir("lod_one"), farm = fresh_dir("lod_farm");
+    const sffd::test::CliRun conv = sffd::test::run(
+        "convert synthetic-gaussians:40k " + (data / "lod-meta.json").string() + " --lod-chunk-count 2");
+    ASSERT_EQ(conv.code, 0) << conv.out;
+    const std::string scene = (data / "lod-meta.json").string();
+    // HQ: the preview's discs drop Gaussians this small.
+    const std::string lod =
+        " --turntable 4 --splat-budget 12000 --lod-error 0.5 --memory-budget 1 --size 64x36 --format png";
+    std::string log;
+    ASSERT_EQ(render(scene + " --out " + one.string() + lod, &log), 0) << log;
+    for (int k = 0; k < 2; ++k)
+        ASSERT_EQ(
+            render(scene + " --out " + farm.string() + lod + " --shard " + std::to_string(k) + "/2", &log), 0)
+            << log;
+    ASSERT_EQ(assemble(farm, &log), 0) << log;
+    for (int k = 0; k < 4; ++k) {
+        const std::string name = "frame_000" + std::to_string(k) + ".png";
+        ASSERT_TRUE(fs::exists(one / name)) << name;
+        EXPECT_EQ(slurp(one / name), slurp(farm / name)) << name;
+    }
+    // The turntable's frames differ: the cut follows the camera.
+    EXPECT_NE(slurp(one / "frame_0000.png"), slurp(one / "frame_0001.png"));
+}
+
 // A farm of mixed CPUs: shards pinned to one SIMD target are byte-identical to a single run pinned the same,
 // the manifests say which target and GL renderer made them, and assemble warns (naming the frames) when a
 // shard ran on another target, though the clip is still whole.

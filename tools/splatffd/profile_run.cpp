@@ -389,6 +389,8 @@ Result<RunOutput> run_profile(const RunSetup& s) {
         config.emplace_back("stream_peak_resident_mb", double(st.peak_resident_bytes) / 1048576.0);
         config.emplace_back("stream_loads", double(st.loads));
         config.emplace_back("stream_evictions", double(st.evictions));
+        config.emplace_back("stream_select_ms", st.select_ms);
+        config.emplace_back("stream_cut_nodes", double(st.cut_nodes));
         config.emplace_back("stream_memory_limited", bool(st.memory_limited));
     }
     if (s.lattice_points > 0) config.emplace_back("lattice", static_cast<double>(s.lattice_points));

@@ -24,6 +24,7 @@
 #include "systems/ffd/operations.h"
 #include "systems/lod/stream.h"
 #include "systems/lod/streaming.h"
+#include "systems/picking/picking_system.h"
 #include "tests/assets/test_util.h"
 
 using namespace sffd;
@@ -350,4 +351,38 @@ TEST(LodStream, StreamingSystemDrawsTheCutInTheEngine) {
     const lod::StreamSummary sum = lod::stream_summary(registry);
     EXPECT_EQ(sum.clouds, 1u);
     EXPECT_EQ(sum.stats.drawn_splats, sog->counts[0]);
+}
+
+// Picking casts against what is drawn: the first, coarse cut of a streamed unit sphere and, once the
+// streaming system has drawn the full detail, the finest splats, both hit on the sphere's surface.
+TEST(LodStream, PickingHitsTheDrawnCut) {
+    const fs::path meta = potree_fixture("pick");
+    ecs::Registry registry;
+    use_engine_scene_hooks(registry);
+    lod::StreamSettings settings;
+    settings.options = everything();
+    settings.wait = true;
+    settings.first_cut_budget = 1;  // the root alone
+    lod::enable_streaming(registry, settings);
+    ASSERT_TRUE(load_scene(registry, meta.string()));
+    ecs::Entity cloud = ecs::null_entity;
+    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud&) { cloud = e; });
+    ASSERT_NE(cloud, ecs::null_entity);
+    const std::size_t coarse = registry.get<SplatCloud>(cloud).size();
+    const picking::PickQuery q =
+        picking::query_from_ray(Ray{glm::dvec3(0.1, 0.2, 5.0), glm::dvec3(0, 0, -1)});
+    const double surface = std::sqrt(1.0 - 0.1 * 0.1 - 0.2 * 0.2);
+    const picking::PickHit a = picking::pick(registry, picking::picking_state(registry), q);
+    ASSERT_TRUE(a);
+    EXPECT_EQ(a.entity, cloud);
+    EXPECT_LT(a.index, coarse);
+    EXPECT_NEAR(a.position.z, surface, 0.15);  // the root's splats are grown to cover the octree's detail
+    lod::streaming_system(registry, {});
+    const std::size_t fine = registry.get<SplatCloud>(cloud).size();
+    EXPECT_GT(fine, coarse);
+    const picking::PickHit b = picking::pick(registry, picking::picking_state(registry), q);
+    ASSERT_TRUE(b);
+    EXPECT_EQ(b.entity, cloud);
+    EXPECT_LT(b.index, fine);
+    EXPECT_NEAR(b.position.z, surface, 0.02);
 }
