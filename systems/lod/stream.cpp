@@ -248,7 +248,11 @@ public:
     ffd::Box bounds() const override { return m_bounds; }
     glm::dvec3 origin() const override { return m_empty.origin; }
     void rebound(std::span<const Lattice* const> lattices, bool weighted) override {
-        m_lattices.assign(lattices.begin(), lattices.end());
+        // Copies: boxes are bounded lazily, in later updates too (the caller's lattices live one update).
+        m_lattice_copies.clear();
+        for (const Lattice* l : lattices) m_lattice_copies.push_back(*l);
+        m_lattices.clear();
+        for (const Lattice& l : m_lattice_copies) m_lattices.push_back(&l);
         m_weighted = weighted;
         ++m_generation;  // boxes are bounded again when next visited
     }
@@ -352,7 +356,8 @@ private:
     std::vector<ffd::Box> m_rest_box, m_box;
     std::vector<std::uint64_t> m_stamp;
     std::uint64_t m_generation = 1;
-    std::vector<const Lattice*> m_lattices;  // valid during the update that set them
+    std::deque<Lattice> m_lattice_copies;
+    std::vector<const Lattice*> m_lattices;  // into m_lattice_copies
     bool m_weighted = false;
     std::uint64_t m_point_bytes = 0;
 };
@@ -378,7 +383,8 @@ struct HierarchyStream::Impl {
     std::vector<std::uint32_t> drawn, assembled;
     bool have_assembled = false;
     std::uint64_t lattice_stamp = 0;
-    bool bounded = false;  // rebound ran at least once
+    bool bounded = false;     // rebound ran at least once
+    double rebound_at = 0.0;  // steady-clock seconds of the last rebound
     StreamStats stats;
     std::unordered_set<std::uint32_t> failed;
     std::optional<std::string> first_error;
@@ -583,9 +589,11 @@ bool HierarchyStream::update(const CutView& view, std::span<const Lattice* const
     Impl& s = *m_impl;
     ++s.frame;
     const auto t0 = std::chrono::steady_clock::now();
-    if (!s.bounded || lattice_stamp != s.lattice_stamp) {
+    const double now = std::chrono::duration<double>(t0.time_since_epoch()).count();
+    if (!s.bounded || (lattice_stamp != s.lattice_stamp &&
+                       (now - s.rebound_at >= s.options.rebound_interval_s || lattices.empty()))) {
         s.source->rebound(lattices, weighted);
-        s.lattice_stamp = lattice_stamp, s.bounded = true;
+        s.lattice_stamp = lattice_stamp, s.bounded = true, s.rebound_at = now;
     }
     s.wanted = s.source->select(view, s.options);
     s.stats.select_ms =

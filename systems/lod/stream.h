@@ -45,6 +45,11 @@ struct StreamOptions {
     std::uint64_t memory_budget = std::uint64_t(1) << 30;  // bytes of pieces held (and being decoded)
     double tau_pixels = 1.0;                               // refine while a node projects larger
     bool cull = true;                                      // nodes outside the view stay coarse
+    // While lattices keep moving (a drag, a clip), node bounds are taken through them again at most this
+    // often, and the cut in between is chosen on the last bounds (bounding a node through an 11^3
+    // lattice costs about a millisecond); the first update after the motion stops bounds them again.
+    // 0: every update (final renders).
+    double rebound_interval_s = 0.25;
 };
 
 struct StreamStats {

@@ -150,7 +150,11 @@ void streaming_system(ecs::Registry& registry, const FrameContext&) {
         ffd::CloudLattices lattices;
         if (const Deformers* d = registry.try_get<Deformers>(e))
             lattices = ffd::cloud_lattices(registry, e, d->lattices);
-        bool changed = stream.update(view, lattices.span(), lattice_stamp(registry, e, lattices));
+        const std::uint64_t stamp = lattice_stamp(registry, e, lattices);
+        const bool deforming = stamp != sc.lattice_stamp && sc.frames_seen > 0;
+        sc.lattice_stamp = stamp;
+        ++sc.frames_seen;
+        bool changed = stream.update(view, lattices.span(), stamp);
         if (settings->wait) {
             if (Status s = stream.wait_complete(); !s) {
                 if (sc.error.empty()) {
@@ -162,6 +166,11 @@ void streaming_system(ecs::Registry& registry, const FrameContext&) {
             changed = !stream.complete();
         }
         if (!changed) continue;
+        // Kept during a drag: what is drawn covers the model (a coarser level, or the parents grown, stands
+        // for what is missing), so only an empty cloud is replaced.
+        const std::size_t drawn =
+            stream.gaussians() ? registry.get<GaussianCloud>(e).size() : registry.get<SplatCloud>(e).size();
+        if (!settings->wait && settings->hold_while_deforming && deforming && drawn > 0) continue;
         const double t = now_s();
         if (!settings->wait && !(stream.stats().missing_pieces == 0) &&
             t - sc.last_assemble < settings->assemble_interval_s)

@@ -11,8 +11,9 @@
 //           of the old set)
 // While pieces arrive the drawn set is written at most every StreamSettings::assemble_interval_s, so
 // that a frame does not copy and upload the cut for every piece; once the cut is complete it is written
-// at once. With StreamSettings::wait (final renders, farms) every frame waits for its whole cut first,
-// so frame k is the same whoever renders it.
+// at once; while the lattices move it is kept (StreamSettings::hold_while_deforming). With
+// StreamSettings::wait (final renders, farms) every frame waits for its whole cut first, so frame k is the
+// same whoever renders it.
 //
 // enable_streaming() gives a registry its StreamSettings and a scene file loader that claims hierarchies
 // (lod-meta.json; a Potree 2 metadata.json of our splats): load_scene then opens them by streaming. It
@@ -39,7 +40,9 @@ struct StreamedCloud {
     std::shared_ptr<HierarchyStream> stream;
     double last_assemble = -1.0;  // steady-clock seconds of the last write of the drawn set
     std::uint64_t frames_waited = 0;
-    std::string error;  // the first failure the system met (a load, or a cut over the budget)
+    std::string error;                // the first failure the system met (a load, or a cut over the budget)
+    std::uint64_t lattice_stamp = 0;  // the lattices' stamp in the last frame (streaming.cpp)
+    std::uint64_t frames_seen = 0;
 };
 
 struct StreamSettings {
@@ -47,6 +50,11 @@ struct StreamSettings {
     bool wait = false;                         // every frame waits for its cut (final renders)
     double assemble_interval_s = 0.25;         // while pieces arrive
     std::uint64_t first_cut_budget = 200'000;  // splats of the cut the loader waits for
+    // While a cloud's lattices move from frame to frame (a drag, a playing clip) its drawn set is kept
+    // (the deformers show the edit on it at once; rewriting it would upload and deform the whole cut
+    // again), unless it is empty; the first frame they stay still draws the cut of the deformed shape.
+    // Not with `wait`.
+    bool hold_while_deforming = true;
 };
 
 // StreamSettings (replaced when present) and the hierarchy loader in the registry's SceneHooks.

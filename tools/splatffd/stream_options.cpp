@@ -25,6 +25,7 @@ StreamCli final_render_stream_defaults() {
     StreamCli c = interactive_stream_defaults();
     c.settings.options.splat_budget = std::uint64_t(1) << 40;
     c.settings.options.tau_pixels = 0.0;
+    c.settings.options.rebound_interval_s = 0.0;  // each frame's cut on its own lattices
     c.settings.wait = true;
     return c;
 }

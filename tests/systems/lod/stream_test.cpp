@@ -87,6 +87,7 @@ lod::StreamOptions everything() {
     lod::StreamOptions o;
     o.tau_pixels = 1e-9, o.splat_budget = std::uint64_t(1) << 40, o.memory_budget = std::uint64_t(1) << 34;
     o.cull = false;
+    o.rebound_interval_s = 0.0;
     return o;
 }
 
