@@ -1,7 +1,9 @@
 #include "systems/lod/lattice_bounds.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <map>
 #include <vector>
 
 namespace sffd::lod {
@@ -138,8 +140,15 @@ ffd::Box lattice_node_bounds(std::span<const Lattice* const> lattices, const Box
 
 CutTree deformed_cut_tree(const CutTree& tree, std::span<const Lattice* const> lattices, bool weighted) {
     CutTree out = tree;
+    // A streamed SOG leaf's levels share its box: each distinct box is bounded once (a bound through an
+    // 11^3 lattice costs about a millisecond).
+    std::map<std::array<double, 6>, Box> done;
     for (CutNode& n : out.nodes) {
-        const Box b = lattice_node_bounds(lattices, Box{n.lo, n.hi, false}, weighted);
+        const std::array<double, 6> key{n.lo.x, n.lo.y, n.lo.z, n.hi.x, n.hi.y, n.hi.z};
+        auto it = done.find(key);
+        if (it == done.end())
+            it = done.emplace(key, lattice_node_bounds(lattices, Box{n.lo, n.hi, false}, weighted)).first;
+        const Box b = it->second;
         const double before = glm::length(n.hi - n.lo), after = glm::length(b.hi - b.lo);
         if (before > 0.0 && after > before) n.size *= after / before;
         n.lo = b.lo, n.hi = b.hi;

@@ -71,6 +71,8 @@ public:
     virtual std::uint64_t estimate(std::uint32_t piece) const = 0;
     virtual std::uint64_t splats(std::uint32_t piece) const = 0;
     virtual std::int64_t unit_of(std::uint32_t) const { return -1; }
+    // What decoding the piece's unit holds while it is decoded and kept (0: no units).
+    virtual std::uint64_t unit_bytes(std::uint32_t) const { return 0; }
     virtual Result<Piece> load(std::uint32_t piece) = 0;
     virtual std::uint64_t scratch_bytes() const { return 0; }
     virtual std::vector<std::uint32_t> drawn(const Wanted& wanted, const Held& held) const = 0;
@@ -138,6 +140,9 @@ public:
     }
     std::uint64_t splats(std::uint32_t piece) const override { return run(piece).count; }
     std::int64_t unit_of(std::uint32_t piece) const override { return run(piece).file; }
+    std::uint64_t unit_bytes(std::uint32_t piece) const override {
+        return m_sog.units[run(piece).file].count * m_bytes_per_gaussian.load();
+    }
     Result<Piece> load(std::uint32_t piece) override {
         const LodRun& r = run(piece);
         if (!m_unit || m_unit_file != r.file) {
@@ -416,6 +421,8 @@ struct HierarchyStream::Impl {
                 queue.erase(it);
                 busy = piece;
                 busy_estimate = source->estimate(piece);
+                const std::int64_t u = source->unit_of(piece);
+                if (u >= 0 && u != last_unit.load()) busy_estimate += source->unit_bytes(piece);
             }
             Result<Piece> r = source->load(piece);
             last_unit = source->unit_of(piece);
@@ -430,11 +437,19 @@ struct HierarchyStream::Impl {
     }
     std::atomic<std::int64_t> last_unit{-1};
 
-    void take_done() {
+    struct Loader {
+        std::uint64_t scratch = 0, in_flight = 0;
+        std::optional<std::uint32_t> busy;
+    };
+    // Takes the finished loads and, in the same moment, what the loader holds besides them: a load that
+    // finishes later is still counted as in flight here.
+    Loader take_done() {
         std::vector<std::pair<std::uint32_t, Result<Piece>>> got;
+        Loader l;
         {
             std::lock_guard lock(mutex);
             got.swap(done);
+            l.scratch = source->scratch_bytes(), l.in_flight = busy_estimate, l.busy = busy;
         }
         for (auto& [k, r] : got) {
             if (!r) {
@@ -447,16 +462,12 @@ struct HierarchyStream::Impl {
             ++stats.loads;
             held.insert_or_assign(k, std::move(*r));
         }
-    }
-
-    std::uint64_t resident() {
-        std::lock_guard lock(mutex);
-        return held_bytes + source->scratch_bytes() + busy_estimate;
+        return l;
     }
 
     // Asks the loader for what the cut lacks, within the memory budget; the drawn set from what is held.
     void refresh() {
-        take_done();
+        const Loader loader = take_done();
         std::unordered_set<std::uint32_t> wanted_set(wanted.pieces.begin(), wanted.pieces.end());
         for (const std::uint32_t k : wanted.pieces)
             if (auto it = held.find(k); it != held.end()) it->second.used = frame;
@@ -467,15 +478,11 @@ struct HierarchyStream::Impl {
         keep.insert(wanted_set.begin(), wanted_set.end());
 
         std::vector<std::uint32_t> ask;
-        std::uint64_t scratch = 0, in_flight = 0;
-        std::optional<std::uint32_t> loading;
-        {
-            std::lock_guard lock(mutex);
-            scratch = source->scratch_bytes(), in_flight = busy_estimate, loading = busy;
-        }
-        std::uint64_t used = held_bytes + scratch + in_flight;
+        const std::optional<std::uint32_t> loading = loader.busy;
+        std::uint64_t used = held_bytes + loader.scratch + loader.in_flight;
         std::vector<std::pair<std::uint64_t, std::uint32_t>> evictable;  // (last use, piece), oldest last
         bool sorted = false;
+        std::unordered_set<std::int64_t> units_counted;
         stats.memory_limited = false;
         std::size_t missing = 0;
         for (const std::uint32_t k : wanted.pieces) {
@@ -483,7 +490,12 @@ struct HierarchyStream::Impl {
             ++missing;
             if (loading && *loading == k) continue;
             if (stats.memory_limited) continue;
-            const std::uint64_t need = source->estimate(k);
+            // A piece of another unit than the loader's decoded one brings that whole unit in too (the
+            // old one is dropped first, but it is counted in `used` until then).
+            std::uint64_t need = source->estimate(k);
+            const std::int64_t unit = source->unit_of(k);
+            if (unit >= 0 && unit != last_unit.load() && !units_counted.count(unit))
+                need += source->unit_bytes(k);
             while (used + need > options.memory_budget) {
                 if (!sorted) {
                     // Least recently used first; then, as a last resort, the coarser levels drawn in
@@ -508,6 +520,7 @@ struct HierarchyStream::Impl {
                 continue;
             }
             used += need;
+            if (unit >= 0) units_counted.insert(unit);
             ask.push_back(k);
         }
         {
@@ -627,7 +640,13 @@ Status HierarchyStream::wait_complete() {
         if (s.stats.missing_pieces == 0) return {};
         for (const std::uint32_t k : s.wanted.pieces)
             if (s.failed.count(k)) return make_error(*s.first_error);
-        if (s.stats.memory_limited) {
+        bool loading = false;
+        {
+            std::lock_guard lock(s.mutex);
+            loading = s.busy.has_value() || !s.done.empty() || !s.queue.empty();
+        }
+        // A piece of an earlier cut still being decoded holds memory it will give back: wait for it.
+        if (s.stats.memory_limited && !loading) {
             std::uint64_t need = 0;
             for (const std::uint32_t k : s.wanted.pieces) need += s.source->estimate(k);
             char line[160];

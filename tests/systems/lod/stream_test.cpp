@@ -387,3 +387,48 @@ TEST(LodStream, PickingHitsTheDrawnCut) {
     EXPECT_LT(b.index, fine);
     EXPECT_NEAR(b.position.z, surface, 0.02);
 }
+
+// A drag keeps what is drawn (the deformers show the edit on it), and the first still frame draws the
+// cut of the deformed shape: a lattice that scales the model three times needs finer levels.
+TEST(LodStream, DrawnSetIsKeptWhileTheLatticeMovesAndRefinedWhenItStops) {
+    const fs::path meta = sog_fixture("hold");
+    ecs::Registry registry;
+    use_engine_scene_hooks(registry);
+    lod::StreamSettings settings;
+    settings.options = everything();
+    settings.options.tau_pixels = 10.0;  // at 1280x720 from 60 units: a cut between the levels
+    settings.assemble_interval_s = 0.0;
+    lod::enable_streaming(registry, settings);
+    ASSERT_TRUE(load_scene(registry, meta.string()));
+    ecs::Entity cloud = ecs::null_entity;
+    registry.view<const GaussianCloud>().each([&](ecs::Entity e, const GaussianCloud&) { cloud = e; });
+    ASSERT_NE(cloud, ecs::null_entity);
+    registry.view<Camera>().each([&](Camera& c) { c = view_from(glm::dvec3(0, 0, 60)).camera; });
+    Lattice rest =
+        make_lattice(glm::dvec3(-11.0), {glm::dvec3(22, 0, 0), glm::dvec3(0, 22, 0), glm::dvec3(0, 0, 22)},
+                     glm::ivec3(3), LatticeBasis::bernstein);
+    const ecs::Entity lattice = registry.create();
+    registry.emplace<Lattice>(lattice, rest);
+    if (const Transform* t = registry.try_get<Transform>(cloud)) registry.emplace<Transform>(lattice, *t);
+    registry.emplace<Deformers>(cloud, Deformers{{lattice}});
+    // Settled at rest: one frame that waits for the cut.
+    registry.resource<lod::StreamSettings>().wait = true;
+    lod::streaming_system(registry, {});
+    registry.resource<lod::StreamSettings>().wait = false;
+    const std::size_t at_rest = registry.get<GaussianCloud>(cloud).size();
+    ASSERT_LT(at_rest, 20000u) << "the rest cut must not be full detail already";
+    const std::uint64_t stamp = registry.version<GaussianCloud>(cloud);
+    // Dragged for a few frames (each frame another scale): nothing is written.
+    for (const double f : {1.5, 2.2, 3.0}) {
+        Lattice& l = registry.patch<Lattice>(lattice);
+        for (std::size_t i = 0; i < l.current.size(); ++i) l.current[i] = f * l.rest[i];
+        lod::streaming_system(registry, {});
+        EXPECT_EQ(registry.version<GaussianCloud>(cloud), stamp);
+    }
+    // Still: the deformed shape's cut, once its pieces are in.
+    const auto& sc = registry.get<lod::StreamedCloud>(cloud);
+    ASSERT_TRUE(sc.stream->wait_complete());
+    lod::streaming_system(registry, {});
+    EXPECT_GT(registry.version<GaussianCloud>(cloud), stamp);
+    EXPECT_GT(registry.get<GaussianCloud>(cloud).size(), at_rest);
+}
