@@ -56,6 +56,18 @@ std::uint64_t cloud_bytes(const SplatCloud& c) {
            bytes_of(c.colors) + bytes_of(c.uvs) + bytes_of(c.uv_axes);
 }
 
+// 10 bits per axis of `p` in `box`, interleaved: pieces near each other in space get near codes.
+std::uint32_t morton(const glm::dvec3& p, const ffd::Box& box) {
+    const glm::dvec3 e = glm::max(box.hi - box.lo, glm::dvec3(1e-30));
+    std::uint32_t code = 0;
+    std::uint32_t q[3];
+    for (int a = 0; a < 3; ++a)
+        q[a] = std::uint32_t(std::clamp((p[a] - box.lo[a]) / e[a], 0.0, 1.0) * 1023.0);
+    for (int bit = 9; bit >= 0; --bit)
+        for (int a = 0; a < 3; ++a) code = code << 1 | ((q[a] >> bit) & 1u);
+    return code;
+}
+
 // What differs between the two kinds of hierarchy. select() and drawn() run on the caller's thread, load()
 // on the loader's: load() reads only what open() made, which nothing changes afterwards.
 class Source {
@@ -76,6 +88,8 @@ public:
     virtual Result<Piece> load(std::uint32_t piece) = 0;
     virtual std::uint64_t scratch_bytes() const { return 0; }
     virtual std::vector<std::uint32_t> drawn(const Wanted& wanted, const Held& held) const = 0;
+    // The piece's rest box centre in the cloud's frame (the drawn set is laid out in space order).
+    virtual glm::dvec3 center(std::uint32_t piece) const = 0;
     virtual void assemble(const std::vector<std::uint32_t>& drawn, const Held& held, GaussianCloud& g,
                           SplatCloud& s) const = 0;
 };
@@ -167,6 +181,10 @@ public:
         return p;
     }
     std::uint64_t scratch_bytes() const override { return m_scratch.load(); }
+    glm::dvec3 center(std::uint32_t piece) const override {
+        const CutNode& n = m_rest.nodes[piece];
+        return 0.5 * (n.lo + n.hi);
+    }
     std::vector<std::uint32_t> drawn(const Wanted& wanted, const Held& held) const override {
         std::vector<std::uint32_t> out;
         std::unordered_set<std::uint32_t> leaves;
@@ -307,6 +325,9 @@ public:
         return std::uint64_t(m_octree.nodes[piece].points) * m_point_bytes;
     }
     std::uint64_t splats(std::uint32_t piece) const override { return m_octree.nodes[piece].points; }
+    glm::dvec3 center(std::uint32_t piece) const override {
+        return 0.5 * (m_octree.nodes[piece].lo + m_octree.nodes[piece].hi);
+    }
     Result<Piece> load(std::uint32_t piece) override {
         auto r = assets::read_potree2_node_points(m_octree, piece);
         if (!r) return r.error();
@@ -472,6 +493,16 @@ struct HierarchyStream::Impl {
         for (const std::uint32_t k : wanted.pieces)
             if (auto it = held.find(k); it != held.end()) it->second.used = frame;
         drawn = source->drawn(wanted, held);
+        // In space order: the cloud's pages (runtime/scene/point_pages.h) then hold nearby pieces, so a
+        // control-point edit re-deforms only the pages it reaches and the renderer culls whole pages.
+        {
+            const ffd::Box box = source->bounds();
+            std::vector<std::pair<std::uint32_t, std::uint32_t>> order;
+            order.reserve(drawn.size());
+            for (const std::uint32_t k : drawn) order.emplace_back(morton(source->center(k), box), k);
+            std::sort(order.begin(), order.end());
+            for (std::size_t i = 0; i < order.size(); ++i) drawn[i] = order[i].second;
+        }
         std::unordered_set<std::uint32_t> keep(drawn.begin(), drawn.end());
         for (const std::uint32_t k : drawn) held.at(k).used = frame;
         // What was drawn last is a copy in the cloud component: its pieces are not needed to show it.
@@ -637,9 +668,9 @@ Status HierarchyStream::wait_complete() {
     Impl& s = *m_impl;
     for (;;) {
         s.refresh();
-        if (s.stats.missing_pieces == 0) return {};
         for (const std::uint32_t k : s.wanted.pieces)
             if (s.failed.count(k)) return make_error(*s.first_error);
+        if (s.stats.missing_pieces == 0) return {};
         bool loading = false;
         {
             std::lock_guard lock(s.mutex);

@@ -21,6 +21,7 @@
 #include "runtime/scene/lattice.h"
 #include "systems/engine/engine.h"
 #include "systems/engine/engine_frame.h"
+#include "systems/ffd/ffd_system.h"
 #include "systems/ffd/operations.h"
 #include "systems/lod/stream.h"
 #include "systems/lod/streaming.h"
@@ -330,6 +331,7 @@ TEST(LodStream, StreamingSystemDrawsTheCutInTheEngine) {
     lod::StreamSettings settings;
     settings.options = everything();
     settings.wait = true;
+    settings.first_cut_budget = 2000;  // below the coarsest level's count: the coarsest level alone
     lod::enable_streaming(registry, settings);
     ASSERT_TRUE(load_scene(registry, meta.string()));
     std::vector<ecs::Entity> clouds;
@@ -341,7 +343,7 @@ TEST(LodStream, StreamingSystemDrawsTheCutInTheEngine) {
     // The first cut is small and whole; the streaming system then draws the camera's full-detail cut.
     const std::size_t first = registry.get<GaussianCloud>(clouds[0]).size();
     EXPECT_GT(first, 0u);
-    EXPECT_LE(first, settings.first_cut_budget);
+    EXPECT_EQ(first, sog->counts.back());
     const std::uint64_t before = registry.version<GaussianCloud>(clouds[0]);
     lod::streaming_system(registry, {});
     EXPECT_EQ(registry.get<GaussianCloud>(clouds[0]).size(), sog->counts[0]);
@@ -431,4 +433,44 @@ TEST(LodStream, DrawnSetIsKeptWhileTheLatticeMovesAndRefinedWhenItStops) {
     lod::streaming_system(registry, {});
     EXPECT_GT(registry.version<GaussianCloud>(cloud), stamp);
     EXPECT_GT(registry.get<GaussianCloud>(cloud).size(), at_rest);
+}
+
+// The drawn cut deforms as any cloud: moving one corner control point of a B-spline lattice re-deforms only
+// the pages (runs of the cut's nodes) its support reaches, and the cut is kept while it moves.
+TEST(LodStream, ControlPointEditRedeformsOnlyTheCutPagesItReaches) {
+    const fs::path meta = potree_fixture("pages", 700000);  // about 11 pages of 65,536
+    ecs::Registry registry;
+    use_engine_scene_hooks(registry);
+    lod::StreamSettings settings;
+    settings.options = everything();
+    settings.wait = true;
+    lod::enable_streaming(registry, settings);
+    ASSERT_TRUE(load_scene(registry, meta.string()));
+    ecs::Entity cloud = ecs::null_entity;
+    registry.view<const SplatCloud>().each([&](ecs::Entity e, const SplatCloud&) { cloud = e; });
+    ASSERT_NE(cloud, ecs::null_entity);
+    registry.set_resource<FfdSettings>(FfdSettings{.force_cpu = true});
+    const ecs::Entity lattice = registry.create();
+    registry.emplace<Lattice>(
+        lattice,
+        make_lattice(glm::dvec3(-1.1), {glm::dvec3(2.2, 0, 0), glm::dvec3(0, 2.2, 0), glm::dvec3(0, 0, 2.2)},
+                     glm::ivec3(6), LatticeBasis::bspline));
+    registry.emplace<Deformers>(cloud, Deformers{{lattice}});
+    lod::streaming_system(registry, {});  // the full-detail cut, waited for
+    registry.resource<lod::StreamSettings>().wait = false;
+    ffd_system(registry, {});
+    const std::size_t drawn = registry.get<SplatCloud>(cloud).size();
+    const std::uint64_t stamp = registry.version<SplatCloud>(cloud);
+    ASSERT_GT(registry.resource<FfdStats>().last_pages.total, 8u);
+    // One corner control point pulled out: the cut stays, and a few of its pages are deformed again.
+    ffd::stretch(registry.patch<Lattice>(lattice),
+                 ffd::select_range(registry.get<Lattice>(lattice), glm::ivec3(0), glm::ivec3(0)),
+                 glm::dvec3(-0.3, -0.3, -0.3));
+    lod::streaming_system(registry, {});
+    EXPECT_EQ(registry.version<SplatCloud>(cloud), stamp);
+    ffd_system(registry, {});
+    const FfdStats::LastPages p = registry.resource<FfdStats>().last_pages;
+    EXPECT_GT(p.redone, 0u);
+    EXPECT_LT(p.redone, p.total / 2) << p.redone << " of " << p.total;
+    EXPECT_EQ(registry.get<SplatCloud>(cloud).size(), drawn);
 }
