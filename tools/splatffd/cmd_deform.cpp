@@ -46,6 +46,7 @@
 #include "systems/gaussian/components.h"
 #include "tools/splatffd/command.h"
 #include "tools/splatffd/deform_gaussians.h"
+#include "tools/splatffd/deform_hierarchy.h"
 #include "tools/splatffd/lattice_source.h"
 #include "tools/splatffd/progress.h"
 #include "tools/splatffd/unkeyed_note.h"
@@ -64,7 +65,10 @@ constexpr const char* kUsage =
     "                              [--estimate-radii]\n"
     "  IN, OUT  .ply (streamed, every property kept; 3DGS Gaussians too) or .glb .gltf (OUT also .ply);\n"
     "           IN also .obj .off and every Gaussian format (.compressed.ply .spz .sog meta.json .splat\n"
-    "           .ksplat KHR .glb: read whole, CPU), written as OUT names (.ply .compressed.ply .spz .sog)\n"
+    "           .ksplat KHR .glb: read whole, CPU), written as OUT names (.ply .compressed.ply .spz .sog);\n"
+    "           a hierarchy (DIR/lod-meta.json, our Potree 2 DIR/metadata.json) into another folder's one "
+    "of\n"
+    "           the same kind: its finest detail deformed piece by piece and the levels built again\n"
     "  --lattice SOURCE  L.json | scene.glb (the lattices bound to its cloud) | "
     "fit[:L,M,N][,pad=P][,obb][,bspline]\n"
     "           (default: the lattices stored in IN when IN is a scene file); a scene's lattices deform\n"
@@ -423,6 +427,12 @@ int run_deform(sffd::cli::Args args) {
                      "splatffd deform: --lattice is needed unless IN is a scene file holding a lattice\n");
         return usage();
     }
+    // A hierarchy into a hierarchy, piece by piece (tools/splatffd/deform_hierarchy.h).
+    if (cli::is_hierarchy_path(o.files[0]) && cli::is_hierarchy_path(o.files[1]))
+        return cli::deform_hierarchy(o.files[0], o.files[1],
+                                     [&](const std::vector<glm::vec3>& p, const glm::dvec3& origin) {
+                                         return lattice_chain(o, p, origin, nullptr);
+                                     });
     const bool ply_in = lower_ext(o.files[0]) == ".ply", ply_out = lower_ext(o.files[1]) == ".ply";
     if (cli::is_json_path(o.files[1]) && std::filesystem::path(o.files[1]).filename() != "meta.json")
         return fail(o.files[1] +
