@@ -29,6 +29,7 @@ constexpr const char* usage_text =
     "[--paper]\n"
     "                        [--preview-budget N] [--sprite-raster auto|raster|cpu] [--naive-frames N]\n"
     "                        [--suite quick|full [--only ID,..]]\n"
+    "                        [--splat-budget N] [--memory-budget MB] [--lod-error PX] [--full-detail]\n"
     "  SCENE                 built-in name (sphere, face), a scene/point-cloud file, or synthetic:N\n"
     "                        (a sphere of N splats with an 11^3 lattice), synthetic-gaussians:N (that\n"
     "                        sphere as N 3D Gaussians; Gaussian files work as SCENE too). Default: sphere\n"

@@ -66,6 +66,7 @@ constexpr const char* kUsage =
     "                       [--background R,G,B] [--fps F] [--no-cull]\n"
     "                       [--camera EX,EY,EZ,TX,TY,TZ,UX,UY,UZ,FOV | --turntable N] [--video "
     "FILE.mp4|FILE.gif] [--shard K/N]\n"
+    "                       [--splat-budget N] [--memory-budget MB] [--lod-error PX] [--full-detail]\n"
     "  SCENE            built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj "
     ".off,\n"
     "                   3D Gaussians .ply (3DGS) .splat .spz .ksplat .sog, a SOG folder or its meta.json,\n"

@@ -19,6 +19,7 @@ constexpr const char* kUsage =
     "[--window-screenshot PATH]\n"
     "                     [--panel-rects-json PATH] [--no-overlay-cache] [--no-ui-cache]\n"
     "                     [--sprite-raster auto|raster|cpu]\n"
+    "                     [--splat-budget N] [--memory-budget MB] [--lod-error PX] [--full-detail]\n"
     "  SCENE              built-in name (sphere, face) or a file: scene .glb .gltf, point cloud .ply .obj "
     ".off,\n"
     "                     3D Gaussians .ply (3DGS) .splat .spz .ksplat .sog, a SOG folder or its\n"
