@@ -39,6 +39,10 @@ struct ResidentCloud {
     // ffd_gpu.h), `weights_key` the stamps they are of. A cloud without weights has no buffer here.
     Buffer weights;
     std::uint64_t weights_key = 0;
+    // The compute deformations' counters, per page of the cloud (shaders/ffd/page_stats.glsl; made by
+    // ffd::resident_page_stats()): a page-wise redo adds only into its pages', so the sum stays the cloud's.
+    Buffer page_stats;
+    std::size_t page_stats_words = 0;
     // The cloud's per-point marks for drawing (point_marks.h: flags and weight, 16 bits a point), only
     // while it has PointFlags or PointWeights: written by residency_system alone (sync_point_marks), page
     // by page. `marks_state` says what they hold.

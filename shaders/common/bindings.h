@@ -10,13 +10,18 @@
 #define SFFD_SSBO_VISIBLE          3   // uint[]: indices of splats that survived culling
 #define SFFD_SSBO_DRAW_INDIRECT    4   // DrawArraysIndirectCommand
 #define SFFD_SSBO_SPLATS_DRAW      5   // GpuSplat[]: the buffer a render pass reads (deformed or rest)
-#define SFFD_SSBO_STATS            6   // uint counters written by compute passes (e.g. inverted splats)
+#define SFFD_SSBO_STATS            6   // uint counters written by compute passes (e.g. inverted splats);
+                                       // the deform passes' are per page (ffd/page_stats.glsl)
 #define SFFD_SSBO_VISIBLE_SPLATS   7   // view-space records of visible sprite splats (splat_render cull pass)
 #define SFFD_SSBO_UV_AXES          8   // vec4[]: per-splat uv derivatives along axis_u (xy) and axis_v (zw)
 #define SFFD_SSBO_WEIGHTS         13   // float[]: per-point deformation weights (PointWeights), deform passes
                                        // of weighted clouds only (FFD_WEIGHTS; 9-12 are the raster's)
 #define SFFD_SSBO_POINT_MARKS     14   // uint[]: per-point marks, two 16-bit marks a word (below), draw passes
 #define SFFD_SSBO_PREVIEW_INDEX   15   // uint[]: the authored index of each drawn element of a preview subset
+
+// Points per page of a cloud, as a shift (runtime/scene/point_pages.h: kPageShift, checked equal there):
+// the deform passes count per page, so a dispatch over some pages leaves the others' counts as they were.
+#define SFFD_PAGE_SHIFT           16
 
 // --- UBO binding points ---------------------------------------------------------------------------
 #define SFFD_UBO_FRAME             0   // camera matrices, viewport, lights

@@ -1,7 +1,8 @@
 #version 450 core
 // FFD compute pass (skinning-style): reads GpuSplat[] (rest, or the previous deformer's output when
 // several deformers apply in order, in place) and writes deformed centres, normals and splat axes.
-// normal.w toggles (1 -> 0) when the splat's cell is inverted (det J < 0); stats[0] counts them.
+// normal.w toggles (1 -> 0) when the splat's cell is inverted (det J < 0); counter 0 of each page
+// counts them (ffd/page_stats.glsl).
 #include "ffd/ffd_common.glsl"
 
 // FFD_LOCAL_SIZE: 64, or 256 with FFD_CP_SHARED (the shared copy, 16 KB for 11³ points, amortised over
@@ -14,10 +15,12 @@ layout(local_size_x = FFD_LOCAL_SIZE) in;
 
 layout(std430, binding = SFFD_SSBO_SPLATS_IN) readonly buffer SplatsIn { GpuSplat splats_in[]; };
 layout(std430, binding = SFFD_SSBO_SPLATS_OUT) writeonly buffer SplatsOut { GpuSplat splats_out[]; };
-layout(std430, binding = SFFD_SSBO_STATS) buffer Stats { uint stats[]; };  // [0] inverted, [1] inside
+layout(std430, binding = SFFD_SSBO_STATS) buffer Stats { uint stats[]; };  // per page: inverted, inside
+#define SFFD_PAGE_COUNTERS 2u
+#include "ffd/page_stats.glsl"
 
-// The group's counts, added to `stats` once per group: one global atomic per splat on the same two words
-// serialised every splat of the dispatch on the GPU.
+// The group's counts, added to its page's once per group: one global atomic per splat on the same two
+// words serialised every splat of the dispatch on the GPU.
 shared uint s_inverted, s_inside;
 
 // Deforms splat `id`; returns bit 0: inside the lattice, bit 1: in an inverted cell.
@@ -65,12 +68,18 @@ void main() {
     memoryBarrierShared();
     barrier();
     const uint flags = id < ffd_count.x ? deform_splat(id) : 0u;
-    if ((flags & 1u) != 0u) atomicAdd(s_inside, 1u);
-    if ((flags & 2u) != 0u) atomicAdd(s_inverted, 1u);
+    const bool one_page = ffd_group_in_one_page(id);
+    if (one_page) {
+        if ((flags & 1u) != 0u) atomicAdd(s_inside, 1u);
+        if ((flags & 2u) != 0u) atomicAdd(s_inverted, 1u);
+    } else {  // a group across two pages counts point by point
+        ffd_count_in_page(id, 1u, flags & 1u);
+        ffd_count_in_page(id, 0u, (flags >> 1) & 1u);
+    }
     memoryBarrierShared();
     barrier();
-    if (gl_LocalInvocationIndex == 0u) {
-        if (s_inside != 0u) atomicAdd(stats[1], s_inside);
-        if (s_inverted != 0u) atomicAdd(stats[0], s_inverted);
+    if (one_page && gl_LocalInvocationIndex == 0u) {
+        ffd_count_in_page(id, 1u, s_inside);
+        ffd_count_in_page(id, 0u, s_inverted);
     }
 }

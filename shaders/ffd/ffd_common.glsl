@@ -28,7 +28,7 @@ layout(std140, binding = SFFD_UBO_FFD) uniform FfdBlock {
     ivec4 ffd_div;       // l, m, n, basis (0 bernstein, 1 bspline)
     vec4 ffd_cull_lo;    // local box outside which nothing moves (xyz)
     vec4 ffd_cull_hi;
-    uvec4 ffd_count;     // x: number of splats, y: 1 = nothing moved
+    uvec4 ffd_count;     // x: number of splats, y: 1 = nothing moved, z: the cloud index of the first
 };
 
 layout(std430, binding = SFFD_SSBO_CONTROL_POINTS) readonly buffer FfdControlPoints {

@@ -38,8 +38,11 @@ layout(std430, binding = SFFD_GAUSS_SSBO_DEFORMED_SH) writeonly buffer ShOut { f
 // sh_tab: band 1..3 sample directions (3 + 5 + 7, xyz each: floats 0..44), then A_1⁻¹ (45..53), A_2⁻¹
 // (54..78), A_3⁻¹ (79..127), row-major.
 layout(std430, binding = SFFD_GAUSS_SSBO_SH_TABLES) readonly buffer ShTables { float sh_tab[]; };
-layout(std430, binding = SFFD_SSBO_STATS) buffer Stats { uint stats[]; };  // [0] inverted, [1] inside, [2] not finite, [3] singular
-// The group's counts, added to `stats` once per group (as the ffd pass does): one global atomic per
+// Per page (ffd/page_stats.glsl): [0] inverted, [1] inside, [2] not finite, [3] singular.
+layout(std430, binding = SFFD_SSBO_STATS) buffer Stats { uint stats[]; };
+#define SFFD_PAGE_COUNTERS 4u
+#include "ffd/page_stats.glsl"
+// The group's counts, added to its page's once per group (as the ffd pass does): one global atomic per
 // Gaussian on the same word serialises the dispatch on GPUs that do not combine a warp's atomics.
 shared uint s_counts[4];
 
@@ -325,10 +328,14 @@ void main() {
     memoryBarrierShared();
     barrier();
     const uint counts = id < ffd_count.x ? deform_gaussian(id) : 0u;
-    for (uint k = 0u; k < 4u; ++k)
-        if ((counts & (1u << k)) != 0u) atomicAdd(s_counts[k], 1u);
+    const bool one_page = ffd_group_in_one_page(id);
+    for (uint k = 0u; k < 4u; ++k) {
+        const uint c = (counts >> k) & 1u;
+        if (!one_page) ffd_count_in_page(id, k, c);  // a group across two pages counts point by point
+        else if (c != 0u) atomicAdd(s_counts[k], 1u);
+    }
     memoryBarrierShared();
     barrier();
-    if (gl_LocalInvocationIndex < 4u && s_counts[gl_LocalInvocationIndex] != 0u)
-        atomicAdd(stats[gl_LocalInvocationIndex], s_counts[gl_LocalInvocationIndex]);
+    if (one_page && gl_LocalInvocationIndex < 4u)
+        ffd_count_in_page(id - gl_LocalInvocationIndex, gl_LocalInvocationIndex, s_counts[gl_LocalInvocationIndex]);
 }

@@ -40,11 +40,13 @@ struct GpuDeformerState {
     std::unordered_map<std::uint64_t, Pending> pending;
     std::uint64_t next_tag = 1;
 
-    // Queues the deformer's current statistics for the output `version` of `cloud` (collected a few
-    // frames later by collect(); nothing waits for them).
-    void queue_stats(Deformer& gpu, ecs::Entity cloud, std::uint64_t version) {
+    // Queues the statistics of the output `version` of `cloud` (collected a few frames later by
+    // collect(); nothing waits for them): `where` names them as the deformer's queue_stats() takes it (the
+    // cloud's per-page counters).
+    template <class... Where>
+    void queue_stats(Deformer& gpu, ecs::Entity cloud, std::uint64_t version, Where&&... where) {
         const std::uint64_t tag = next_tag++;
-        if (gpu.queue_stats(tag)) pending[tag] = {cloud, version};
+        if (gpu.queue_stats(tag, std::forward<Where>(where)...)) pending[tag] = {cloud, version};
     }
     // Hands each read-back that has arrived (never waits) to apply(const Pending&, const Stats&).
     template <class Apply>

@@ -4,8 +4,9 @@
 //   1. its inputs (deform_inputs.h) and its page record, brought in step (refresh_point_pages: the phase
 //      owns the pages' rest boxes);
 //   2. the one staleness rule (deform_staleness.h): nothing (skip), some pages, or everything. Page-wise
-//      redo needs a page-wise CPU output to build on (the last run on the CPU path, whole, same backend
-//      and kind options); the GPU path and budgeted previews always redo everything;
+//      redo needs an output of the same path to build on (the CPU path its own arrays, the GPU path its
+//      own resident output, with the same backend and kind options); budgeted previews always redo
+//      everything;
 //   3. the output component stamped, its version bumped, the lattices prepared in the cloud's frame
 //      (lattice_frame.h), then the kind's preview, GPU or CPU path.
 // The kind (Kind) provides:
@@ -16,7 +17,7 @@
 //   static bool options_match(const Output&, const Settings&)   // backend and the kind's own options
 //   static std::uint32_t budget(reg, cloud, resident, settings)  // preview budget, 0 = none
 //   static void begin(reg, e, Output&, cloud, framed, settings, stats)  // options seen, bounds
-//   static void preview(...), static bool gpu(...) (false: fall back to the CPU),
+//   static void preview(...), static bool gpu(..., plan, ...) (false: fall back to the CPU),
 //   static std::size_t cpu(reg, e, Output&, cloud, framed, plan, resident, settings, stats): pages redone
 // `Settings` is the kind's per-frame choice (backend, SH modes), made once per frame by the kind.
 #pragma once
@@ -75,8 +76,10 @@ void run_deformation(ecs::Registry& reg, const Settings& settings, typename Kind
             Kind::preview(reg, e, out, cloud, framed, budget, *resident, settings, stats);
             continue;
         }
-        if (Kind::gpu(reg, e, out, cloud, framed, inputs, resident, settings, stats)) {
-            out.paged = {};  // nothing on the CPU to build on
+        if (Kind::gpu(reg, e, out, cloud, framed, inputs, plan, resident, settings, stats)) {
+            // The next plan builds on this output: the GPU path redoes its pages only while its own last
+            // output is what is resident (state deformed_gpu), the CPU path only on its own arrays.
+            record_pages(out.paged, pages, framed.span());
             continue;
         }
         if (plan.what == Redo::everything) {

@@ -18,7 +18,7 @@
 //     is (tested against a deformation from scratch). For the first lattice the box only nominates a page:
 //     it is redone when one of its own rest points meets the same test (a page's box can span far more
 //     than its points: a band of a sphere's surface has a box through the sphere's middle).
-// Everything: no usable record (first run, another size, another backend, a preview, the GPU path), the
+// Everything: no usable record (first run, another size, another backend, a preview), the
 // Deformers changed, the PointWeights component was added, removed or patched (DeformInputStamps::weights), a
 // lattice was added, removed or changed topology (a moved Transform maps the whole lattice), or the cloud
 // changed without a mark (the page record is out of step). Pages outside every lattice never meet a support:

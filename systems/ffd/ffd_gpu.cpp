@@ -13,6 +13,7 @@
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/residency.h"
 #include "runtime/gfx/shader.h"
+#include "runtime/scene/point_pages.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/deform_kernels.h"
 #include "systems/ffd/gpu_kernel.h"
@@ -23,8 +24,12 @@ namespace sffd::ffd {
 struct GpuDeformer::Impl {
     std::optional<gfx::GlContext> context;  // only when created headless; destroyed last (declared first)
     detail::DeformPrograms programs;        // lattice set-up shared with the Gaussian deformer
-    gfx::Buffer stats, scratch, scratch_weights;
-    detail::StatsReadbacks readbacks;  // queue_stats(): 2 counters each
+    gfx::Buffer scratch, scratch_weights;
+    // The deformer's own per-page counters (dispatches without a cloud's, and deform()): `stats_words`
+    // held, `used_words` written since reset_stats().
+    gfx::Buffer stats;
+    std::size_t stats_words = 0, used_words = 0;
+    detail::StatsReadbacks readbacks;  // queue_stats()
     std::size_t scratch_capacity = 0;
     std::uint64_t sync_readbacks = 0;
 };
@@ -39,11 +44,6 @@ Result<GpuDeformer> GpuDeformer::create() {
     auto programs = detail::DeformPrograms::create("ffd/deform.comp", "ffd.deform", "ffd");
     if (!programs) return programs.error();
     impl->programs = std::move(*programs);
-    impl->stats = gfx::Buffer::create("ffd.stats");
-    const std::uint32_t zero[2] = {0, 0};
-    // Written by the GPU (atomics) and cleared and copied on the GPU every frame; the CPU reads only the
-    // copies (StatsReadbacks). A READ hint puts a buffer in host memory on NVIDIA's driver.
-    glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_COPY);
     return GpuDeformer(std::move(impl));
 }
 
@@ -63,7 +63,7 @@ void GpuDeformer::retain_keys(const std::vector<std::uint64_t>& live) { m_impl->
 
 Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp,
                              const glm::dvec3& cloud_origin, GLuint in, GLuint out, std::uint32_t count,
-                             GLuint weights) {
+                             GLuint weights, const DispatchPages& pages) {
     if (Status s = validate(lattice); !s) return s;
     Impl& m = *m_impl;
     // A weighted cloud runs programs of its own (FFD_WEIGHTS): the unweighted ones stay as they were.
@@ -73,7 +73,23 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
     weighted.label = ".weighted";
     auto bound = m.programs.bind(lattice, key, stamp, cloud_origin, count, weights ? &weighted : nullptr);
     if (!bound) return bound.error();
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
+    GLuint stats = pages.stats;
+    if (!stats) {  // the deformer's own counters, grown to this cloud's pages keeping what they hold
+        const std::size_t words = std::max<std::size_t>(page_count(count), 1) * kCounters;
+        if (words > m.stats_words) {
+            gfx::Buffer grown = gfx::Buffer::create("ffd.stats");
+            // Written by the GPU (atomics), cleared and copied on the GPU; the CPU reads only copies
+            // (StatsReadbacks). A READ hint puts a buffer in host memory on NVIDIA's driver.
+            glNamedBufferData(grown.id(), GLsizeiptr(words * 4), nullptr, GL_DYNAMIC_COPY);
+            glClearNamedBufferData(grown.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+            if (m.used_words)
+                glCopyNamedBufferSubData(m.stats.id(), grown.id(), 0, 0, GLsizeiptr(m.used_words * 4));
+            m.stats = std::move(grown), m.stats_words = words;
+        }
+        m.used_words = std::max(m.used_words, words);
+        stats = m.stats.id();
+    }
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, stats);
     // Write-after-read across frames: the last frame's passes read `out` (the cull's SSBO loads, vertex
     // fetches) and this dispatch overwrites it.
     gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "ffd.dispatch.reuse");
@@ -86,7 +102,8 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
                 gfx::bind_ssbo_range(SFFD_SSBO_SPLATS_IN, in, batch, sizeof(gpu::GpuSplat));
                 gfx::bind_ssbo_range(SFFD_SSBO_SPLATS_OUT, out, batch, sizeof(gpu::GpuSplat));
                 if (weights) gfx::bind_ssbo_range(SFFD_SSBO_WEIGHTS, weights, batch, sizeof(float));
-            });
+            },
+            pages.ranges);
         !s)
         return s;
     // Read next as SSBOs (cull), vertex attributes, and by copies and read-backs (statistics, deform()).
@@ -97,8 +114,8 @@ Status GpuDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uin
 }
 
 DeformStats GpuDeformer::read_stats() {
-    std::uint32_t v[2] = {0, 0};
-    glGetNamedBufferSubData(m_impl->stats.id(), 0, sizeof v, v);
+    std::uint32_t v[kCounters] = {};
+    if (m_impl->used_words) detail::read_page_counters(m_impl->stats.id(), m_impl->used_words, kCounters, v);
     ++m_impl->sync_readbacks;
     DeformStats s;
     s.inverted = v[0];
@@ -110,16 +127,24 @@ DeformStats GpuDeformer::read_stats() {
 void GpuDeformer::reset_stats() {
     // A clear in the command stream (null data = zeros): no CPU upload into a buffer that the previous
     // frame's dispatch may still be using, so no implicit wait.
-    glClearNamedBufferData(m_impl->stats.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+    if (m_impl->stats)
+        glClearNamedBufferData(m_impl->stats.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+    m_impl->used_words = 0;
 }
 
 bool GpuDeformer::queue_stats(std::uint64_t tag) {
-    return m_impl->readbacks.queue(m_impl->stats.id(), 2, tag, "ffd.stats_readback");
+    return queue_stats(tag, m_impl->stats.id(), m_impl->used_words);
+}
+
+bool GpuDeformer::queue_stats(std::uint64_t tag, GLuint page_stats, std::size_t words) {
+    return m_impl->readbacks.queue(page_stats, words, tag, "ffd.stats_readback");
 }
 
 std::vector<GpuDeformer::TaggedStats> GpuDeformer::poll_stats() {
     std::vector<TaggedStats> done;
-    m_impl->readbacks.poll([&](std::uint64_t tag, const std::uint32_t* counts) {
+    m_impl->readbacks.poll([&](std::uint64_t tag, const std::uint32_t* counters, std::size_t words) {
+        std::uint32_t counts[kCounters];
+        detail::sum_page_counters(counters, words, kCounters, counts);
         DeformStats s;
         s.inverted = counts[0];
         s.inside = counts[1];
@@ -190,6 +215,41 @@ GLuint resident_weights(gfx::ResidentCloud& cloud, std::span<const float> weight
         cloud.weights_key = key;
     }
     return cloud.weights.id();
+}
+
+std::vector<gfx::SsboBatch> page_runs(std::span<const std::uint32_t> pages, std::size_t count) {
+    std::vector<gfx::SsboBatch> runs;
+    for (std::uint32_t p : pages) {
+        const PageRange r = page_range(p, count);
+        if (r.count == 0) continue;
+        if (!runs.empty() && runs.back().first + runs.back().count == r.first) runs.back().count += r.count;
+        else runs.push_back({r.first, r.count});
+    }
+    return runs;
+}
+
+bool resident_page_stats(gfx::ResidentCloud& cloud, std::size_t pages, std::size_t per_page) {
+    const std::size_t words = std::max<std::size_t>(pages, 1) * per_page;
+    if (cloud.page_stats && cloud.page_stats_words == words) return true;
+    cloud.page_stats = gfx::Buffer::create("cloud.page_stats");
+    glNamedBufferData(cloud.page_stats.id(), GLsizeiptr(words * sizeof(std::uint32_t)), nullptr,
+                      GL_DYNAMIC_COPY);
+    glClearNamedBufferData(cloud.page_stats.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
+    cloud.page_stats_words = words;
+    return false;
+}
+
+void clear_page_stats(const gfx::ResidentCloud& cloud, std::span<const gfx::SsboBatch> ranges,
+                      std::size_t per_page) {
+    for (const gfx::SsboBatch& r : ranges) {
+        const std::size_t first = std::size_t(r.first >> kPageShift);
+        const std::size_t last = page_count(std::size_t(r.first + r.count));
+        const std::size_t words = std::min(last * per_page, cloud.page_stats_words);
+        if (first * per_page >= words) continue;
+        glClearNamedBufferSubData(cloud.page_stats.id(), GL_R32UI, GLintptr(first * per_page * 4),
+                                  GLsizeiptr(words * 4 - first * per_page * 4), GL_RED_INTEGER,
+                                  GL_UNSIGNED_INT, nullptr);
+    }
 }
 
 }  // namespace sffd::ffd

@@ -14,6 +14,7 @@
 #include "runtime/core/result.h"
 #include "runtime/gfx/gl_object.h"
 #include "runtime/gfx/residency.h"
+#include "runtime/gfx/ssbo_batch.h"
 #include "systems/ffd/deform.h"
 
 namespace sffd::ffd {
@@ -32,6 +33,14 @@ enum class GpuBernsteinKernel {
              // z), so a splat's 64 points take 48 loads instead of 64; Bernstein: direct
 };
 
+// Which points a dispatch deforms and where it counts: `ranges`, ascending point ranges that start on a
+// page (page_runs(); empty: all `count`), and `stats`, the cloud's per-page counters
+// (resident_page_stats(), GpuDeformer::kCounters a page; 0: the deformer's own, which reset_stats() clears).
+struct DispatchPages {
+    std::span<const gfx::SsboBatch> ranges;
+    GLuint stats = 0;
+};
+
 class GpuDeformer {
 public:
     // Compiles the compute program (context must be current).
@@ -43,6 +52,8 @@ public:
     GpuDeformer& operator=(GpuDeformer&&) noexcept;
     ~GpuDeformer();
 
+    static constexpr std::size_t kCounters = 2;  // per page: inverted, inside
+    using Pages = DispatchPages;
     // Deforms `count` GpuSplats from buffer `in` into `out` (may be the same buffer: in place) with the
     // lattice. Each `key` (e.g. the lattice entity) has its own control-point buffer, uploaded only when
     // `lattice_stamp` differs from its last upload (stamp 0 always uploads). Positions in the buffers are
@@ -50,7 +61,7 @@ public:
     // (resident_weights()), read by a program of their own (FFD_WEIGHTS). Does not wait for the GPU.
     Status dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t lattice_stamp,
                     const glm::dvec3& cloud_origin, GLuint in, GLuint out, std::uint32_t count,
-                    GLuint weights = 0);
+                    GLuint weights = 0, const DispatchPages& pages = DispatchPages());
     // Single-lattice form (key 0), kept for callers written against the first version of this API.
     Status dispatch(const Lattice& lattice, std::uint64_t lattice_stamp, const glm::dvec3& cloud_origin,
                     GLuint in, GLuint out, std::uint32_t count) {
@@ -71,6 +82,8 @@ public:
         DeformStats stats;
     };
     bool queue_stats(std::uint64_t tag);  // false: no read-back slot (mapping failed, reported by GL)
+    // The same for a cloud's per-page counters (`words` of them), summed over its pages.
+    bool queue_stats(std::uint64_t tag, GLuint page_stats, std::size_t words);
     std::vector<TaggedStats> poll_stats();
     std::size_t pending_stats() const;
     // Synchronous read-backs so far (read_stats(), deform()): ffd_system's frame path must cause none.
@@ -98,5 +111,16 @@ private:
 // cloud has no weights (a cloud without weights holds no buffer and runs the unweighted programs). Returns
 // the buffer the deform passes bind, 0 when there is none. Context current.
 GLuint resident_weights(gfx::ResidentCloud& cloud, std::span<const float> weights, std::uint64_t key);
+
+// The point ranges of a cloud of `count` points that `pages` (ascending page indices, point_pages.h) cover,
+// adjacent pages merged: what a page-wise GPU redo dispatches.
+std::vector<gfx::SsboBatch> page_runs(std::span<const std::uint32_t> pages, std::size_t count);
+// The cloud's per-page counters of the compute deformations (`per_page` a page for `pages` pages), made
+// zeroed when missing or of another size: false then (the counts of pages not redone are lost, so the
+// caller redoes every page). Context current.
+bool resident_page_stats(gfx::ResidentCloud& cloud, std::size_t pages, std::size_t per_page);
+// Zeros the counters of the pages `ranges` cover, before they are deformed again.
+void clear_page_stats(const gfx::ResidentCloud& cloud, std::span<const gfx::SsboBatch> ranges,
+                      std::size_t per_page);
 
 }  // namespace sffd::ffd

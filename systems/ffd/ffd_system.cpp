@@ -134,51 +134,75 @@ struct SurfaceKind {
         ++stats.preview_runs;
     }
 
-    // The compute pass over the whole cloud (a page-bounded dispatch is not done: the GPU redoes every
-    // page). False when it cannot run (no residency, forced CPU, no deformer, no lattice dispatched).
+    // The compute pass: over the pages the rule asks for when it builds on this path's own last output
+    // (state deformed_gpu, the same per-page counters, every lattice valid), else over the whole cloud.
+    // False when it cannot run (no residency, forced CPU, no deformer, no lattice dispatched).
     static bool gpu(ecs::Registry& reg, ecs::Entity e, Output& out, const SplatCloud& cloud,
-                    const ffd::CloudLattices& framed, const ffd::DeformInputs& inputs, Resident* splats,
-                    const SurfaceSettings& st, FfdStats& stats) {
+                    const ffd::CloudLattices& framed, const ffd::DeformInputs& inputs,
+                    const ffd::RedoPlan& plan, Resident* splats, const SurfaceSettings& st, FfdStats& stats) {
         if (!splats || st.backend.force_cpu) return false;
         ffd::GpuDeformer* gpu = ffd::gpu_deformer<ffd::GpuDeformer>(reg, "ffd_system");
         if (!gpu) return false;
-        const std::size_t n = cloud.size();
+        const std::size_t n = cloud.size(), np = page_count(n);
+        constexpr std::size_t K = ffd::GpuDeformer::kCounters;
         const std::span<const Lattice* const> lattices = framed.span();
+        bool paged = plan.what != ffd::Redo::everything && splats->state == gfx::Residency::deformed_gpu &&
+                     std::all_of(lattices.begin(), lattices.end(),
+                                 [](const Lattice* l) { return ffd::validate(*l).ok(); });
+        paged = ffd::resident_page_stats(*splats, np, K) && paged;
         gfx::reserve_buffer(splats->deformed, "splats.deformed",
                             std::max<std::size_t>(n, 1) * sizeof(gpu::GpuSplat));
         auto pass_scope = profiling::gpu_scope(reg, "ffd.compute");  // names the pass for the profiler
-        gpu->reset_stats();
-        GLuint in = splats->rest.id();
         // The weight column, uploaded when the weights or the cloud changed (none without weights).
         const PointWeights* weights = weights_of(reg, e);
         const GLuint wbuf = ffd::resident_weights(
             *splats, weights ? std::span<const float>(weights->values) : std::span<const float>(),
             inputs.stamps.weights * 0x9E3779B97F4A7C15ull ^ inputs.stamps.cloud);
-        bool ok = true;
-        if (lattices.empty() && n > 0)
-            glCopyNamedBufferSubData(in, splats->deformed.id(), 0, 0, GLsizeiptr(n * sizeof(gpu::GpuSplat)));
-        for (std::size_t d = 0; d < lattices.size(); ++d) {
-            if (Status s = gpu->dispatch(*lattices[d], framed.entities[d].bits(), inputs.stamps.lattices[d],
-                                         cloud.origin, in, splats->deformed.id(), std::uint32_t(n), wbuf);
-                !s) {
-                log::warn("ffd_system: ", s.message(), " (lattice skipped)");
-                if (d == 0 && n > 0)
-                    glCopyNamedBufferSubData(in, splats->deformed.id(), 0, 0,
-                                             GLsizeiptr(n * sizeof(gpu::GpuSplat)));
-                else if (d == 0) ok = false;
+        const GLuint rest = splats->rest.id(), deformed = splats->deformed.id();
+        auto copy = [&](std::span<const gfx::SsboBatch> ranges) {
+            for (const gfx::SsboBatch& r : ranges)
+                glCopyNamedBufferSubData(rest, deformed, GLintptr(r.first * sizeof(gpu::GpuSplat)),
+                                         GLintptr(r.first * sizeof(gpu::GpuSplat)),
+                                         GLsizeiptr(r.count * sizeof(gpu::GpuSplat)));
+        };
+        // Every lattice in order over `ranges`: the first reads the rest splats, the next ones the output in
+        // place. A lattice that fails is skipped (logged); false when it fails on a page-wise run (the
+        // pages left alone would no longer agree with the redone ones) or none could start the output.
+        auto run = [&](std::span<const gfx::SsboBatch> ranges, bool page_wise) -> bool {
+            if (ranges.empty()) return true;  // no page to redo (an empty range list means all to a dispatch)
+            ffd::clear_page_stats(*splats, ranges, K);
+            if (lattices.empty()) copy(ranges);
+            GLuint in = rest;
+            for (std::size_t d = 0; d < lattices.size(); ++d) {
+                const ffd::GpuDeformer::Pages pages{ranges, splats->page_stats.id()};
+                if (Status s =
+                        gpu->dispatch(*lattices[d], framed.entities[d].bits(), inputs.stamps.lattices[d],
+                                      cloud.origin, in, deformed, std::uint32_t(n), wbuf, pages);
+                    !s) {
+                    log::warn("ffd_system: ", s.message(), " (lattice skipped)");
+                    if (page_wise) return false;
+                    if (d == 0 && n == 0) return false;
+                    if (d == 0) copy(ranges);
+                }
+                in = deformed;
             }
-            in = splats->deformed.id();
-        }
-        if (!ok) return false;
+            return true;
+        };
+        const std::vector<gfx::SsboBatch> whole{{0, n}};
+        std::vector<gfx::SsboBatch> ranges = paged ? ffd::page_runs(plan.pages, n) : whole;
+        if (paged && !run(ranges, true)) paged = false, ranges = whole;
+        if (!paged && !run(ranges, false)) return false;
         // The inverted count arrives a few frames later (collect_gpu_stats); until then `inverted` keeps the
         // latest count that arrived.
-        reg.resource<FfdGpuState>().queue_stats(*gpu, e, out.version);
+        reg.resource<FfdGpuState>().queue_stats(*gpu, e, out.version, splats->page_stats.id(),
+                                                splats->page_stats_words);
         gfx::set_deformed(*splats, gfx::Residency::deformed_gpu);
         out.cpu_valid = false;
         out.positions.clear(), out.normals.clear(), out.axis_u.clear(), out.axis_v.clear();
+        const std::size_t redone = paged ? plan.pages.size() : np;
         ++stats.gpu_runs, stats.gpu_sync_readbacks = gpu->sync_readbacks();
-        stats.pages_redeformed += page_count(n);
-        stats.last_pages = {page_count(n), page_count(n)};
+        stats.pages_redeformed += redone;
+        stats.last_pages = {redone, np};
         return true;
     }
 

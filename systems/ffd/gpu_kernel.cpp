@@ -9,11 +9,14 @@
 #include "runtime/gfx/context.h"
 #include "runtime/gfx/dispatch.h"
 #include "runtime/gfx/limits.h"
+#include "runtime/scene/point_pages.h"
 #include "shaders/common/bindings.h"
 #include "systems/ffd/deform_kernels.h"
 #include "systems/ffd/gpu_block.h"
 
 namespace sffd::ffd::detail {
+
+static_assert(kPageShift == SFFD_PAGE_SHIFT, "the shaders count per page of the cloud's pages");
 
 namespace {
 
@@ -143,24 +146,34 @@ Result<DeformPrograms::Bound> DeformPrograms::bind(const Lattice& lattice, std::
 
 Status DeformPrograms::dispatch_batches(const Bound& bound, std::uint32_t count,
                                         std::span<const std::uint64_t> strides,
-                                        const std::function<void(const gfx::SsboBatch&)>& bind_batch) {
-    auto batches = gfx::ssbo_batches(count, strides);
-    if (!batches) return batches.error();
-    if (batches->empty()) return {};
+                                        const std::function<void(const gfx::SsboBatch&)>& bind_batch,
+                                        std::span<const gfx::SsboBatch> ranges) {
+    const gfx::SsboBatch whole{0, count};
+    if (ranges.empty()) ranges = std::span<const gfx::SsboBatch>(&whole, 1);
+    // A range starts on a page, a multiple of every offset alignment (2^16 elements of at least 4 bytes),
+    // so its batches, shifted to it, stay aligned.
+    std::vector<gfx::SsboBatch> batches;
+    for (const gfx::SsboBatch& r : ranges) {
+        auto cut = gfx::ssbo_batches(r.count, strides);
+        if (!cut) return cut.error();
+        for (gfx::SsboBatch b : *cut) batches.push_back({r.first + b.first, b.count});
+    }
+    if (batches.empty()) return {};
     // Rewriting one block's count between batches would write into storage the previous batch's dispatch
     // reads: an update the driver must order behind that dispatch, which on an NVIDIA H200 made the CPU
     // wait for it (orphan_upload). So each batch gets its own block, all in one upload.
     const std::size_t align = std::size_t(std::max(ubo_align, 1));
     const std::size_t stride = (sizeof(FfdBlock) + align - 1) / align * align;
-    std::vector<std::byte> blocks(stride * batches->size());
-    for (std::size_t i = 0; i < batches->size(); ++i) {
+    std::vector<std::byte> blocks(stride * batches.size());
+    for (std::size_t i = 0; i < batches.size(); ++i) {
         FfdBlock block = bound.block;
-        block.count[0] = std::uint32_t((*batches)[i].count);
+        block.count[0] = std::uint32_t(batches[i].count);
+        block.count[2] = std::uint32_t(batches[i].first);
         std::memcpy(blocks.data() + i * stride, &block, sizeof block);
     }
     orphan_upload(ubo.id(), blocks.size(), blocks.data());
-    for (std::size_t i = 0; i < batches->size(); ++i) {
-        const gfx::SsboBatch& batch = (*batches)[i];
+    for (std::size_t i = 0; i < batches.size(); ++i) {
+        const gfx::SsboBatch& batch = batches[i];
         glBindBufferRange(GL_UNIFORM_BUFFER, SFFD_UBO_FFD, ubo.id(), GLintptr(i * stride),
                           GLsizeiptr(sizeof(FfdBlock)));
         bind_batch(batch);
@@ -176,29 +189,48 @@ void DeformPrograms::retain_keys(const std::vector<std::uint64_t>& live) {
             std::find(live.begin(), live.end(), it->first) == live.end() ? controls.erase(it) : std::next(it);
 }
 
+void sum_page_counters(const std::uint32_t* counters, std::size_t words, std::size_t per_page,
+                       std::uint32_t* out) {
+    std::fill(out, out + per_page, 0u);
+    for (std::size_t w = 0; w < words; ++w) out[w % per_page] += counters[w];
+}
+
+void read_page_counters(GLuint buffer, std::size_t words, std::size_t per_page, std::uint32_t* out) {
+    std::vector<std::uint32_t> v(words);
+    if (words) glGetNamedBufferSubData(buffer, 0, GLsizeiptr(words * sizeof(std::uint32_t)), v.data());
+    sum_page_counters(v.data(), words, per_page, out);
+}
+
 StatsReadbacks::~StatsReadbacks() {
     for (Slot& r : m_slots)
         if (r.fence) glDeleteSync(r.fence);
 }
 
 bool StatsReadbacks::queue(GLuint stats, std::size_t words, std::uint64_t tag, const std::string& label) {
-    const std::size_t bytes = words * sizeof(std::uint32_t);
-    auto slot = std::find_if(m_slots.begin(), m_slots.end(), [](const Slot& r) { return !r.fence; });
+    const std::size_t bytes = std::max<std::size_t>(words, 1) * sizeof(std::uint32_t);
+    // A free slot that holds the words, else a free one made larger (a larger cloud), else a new one.
+    auto free_slot = [&](bool fits) {
+        return std::find_if(m_slots.begin(), m_slots.end(),
+                            [&](const Slot& r) { return !r.fence && (!fits || r.capacity >= words); });
+    };
+    auto slot = free_slot(true);
+    if (slot == m_slots.end()) slot = free_slot(false);
     if (slot == m_slots.end() && m_slots.size() >= kMaxSlots) return false;
-    if (slot == m_slots.end()) {
-        Slot r;
-        r.buffer = gfx::Buffer::create(label);
+    if (slot == m_slots.end()) slot = m_slots.insert(m_slots.end(), Slot{});
+    if (slot->capacity < words || !slot->buffer) {
+        slot->buffer = gfx::Buffer::create(label);  // the old storage (and its mapping) released
         const GLbitfield flags = GL_MAP_READ_BIT | GL_MAP_PERSISTENT_BIT | GL_MAP_COHERENT_BIT;
-        glNamedBufferStorage(r.buffer.id(), GLsizeiptr(bytes), nullptr, flags);
-        r.mapped = static_cast<const std::uint32_t*>(
-            glMapNamedBufferRange(r.buffer.id(), 0, GLsizeiptr(bytes), flags));
-        if (!r.mapped) return false;  // the GL error callback has reported why; these statistics are lost
-        m_slots.push_back(std::move(r));
-        slot = m_slots.end() - 1;
+        glNamedBufferStorage(slot->buffer.id(), GLsizeiptr(bytes), nullptr, flags);
+        slot->mapped = static_cast<const std::uint32_t*>(
+            glMapNamedBufferRange(slot->buffer.id(), 0, GLsizeiptr(bytes), flags));
+        slot->capacity = slot->mapped ? std::max<std::size_t>(words, 1) : 0;
+        if (!slot->mapped) return false;  // the GL error callback has reported why; these statistics are lost
     }
-    glCopyNamedBufferSubData(stats, slot->buffer.id(), 0, 0, GLsizeiptr(bytes));
+    if (words)
+        glCopyNamedBufferSubData(stats, slot->buffer.id(), 0, 0, GLsizeiptr(words * sizeof(std::uint32_t)));
     slot->fence = glFenceSync(GL_SYNC_GPU_COMMANDS_COMPLETE, 0);
     slot->tag = tag;
+    slot->words = words;
     return slot->fence != nullptr;
 }
 

@@ -88,14 +88,24 @@ struct DeformPrograms {
                        const glm::dvec3& cloud_origin, std::uint32_t count, const Variant* variant = nullptr);
     // After bind(): the dispatch of `count` points in batches of element ranges (runtime/gfx/ssbo_batch.h;
     // more than one only when a buffer of byte `strides` per point exceeds GL_MAX_SHADER_STORAGE_BLOCK_SIZE).
-    // Every batch's block (its own count) goes into fresh UBO storage in one upload, each bound by range
-    // at SFFD_UBO_FFD: no write lands in storage that an issued dispatch reads. `bind_batch` binds the
-    // per-point buffers for each batch. Fails, dispatching nothing, when no batch fits (the message names
-    // the limit).
+    // With `ranges` (ascending point ranges that start on a page, page_runs()), only their points: each is
+    // cut into batches the same way. Every batch's block (its own count, and the cloud index of its first
+    // point, which the per-page counters read) goes into fresh UBO storage in one upload, each bound by
+    // range at SFFD_UBO_FFD: no write lands in storage that an issued dispatch reads. `bind_batch` binds
+    // the per-point buffers for each batch (its `first` is the cloud index). Fails, dispatching nothing,
+    // when no batch fits (the message names the limit).
     Status dispatch_batches(const Bound& bound, std::uint32_t count, std::span<const std::uint64_t> strides,
-                            const std::function<void(const gfx::SsboBatch&)>& bind_batch);
+                            const std::function<void(const gfx::SsboBatch&)>& bind_batch,
+                            std::span<const gfx::SsboBatch> ranges = {});
     void retain_keys(const std::vector<std::uint64_t>& live);
 };
+
+// The per-page counters of the deform passes (shaders/ffd/page_stats.glsl): `words` counters, `per_page` a
+// page, summed into out[0..per_page).
+void sum_page_counters(const std::uint32_t* counters, std::size_t words, std::size_t per_page,
+                       std::uint32_t* out);
+// Reads `words` counters of `buffer` back (waits for the GPU) and sums them as sum_page_counters().
+void read_page_counters(GLuint buffer, std::size_t words, std::size_t per_page, std::uint32_t* out);
 
 // queue_stats()/poll_stats(): the statistics buffer's `words` counters copied into persistently mapped
 // host buffers behind fences (a copy to host memory, not a video-to-host migration); a slot is free when
@@ -114,13 +124,13 @@ public:
     // has said why). Capped, so such a loop neither maps a buffer every frame nor grows without bound.
     static constexpr std::size_t kMaxSlots = 8;
     bool queue(GLuint stats, std::size_t words, std::uint64_t tag, const std::string& label);
-    // Calls done(tag, counters) for each queued copy whose fence has signalled; never waits, and flushes
-    // the command stream only when every slot is in flight (see signalled()).
+    // Calls done(tag, counters, words) for each queued copy whose fence has signalled; never waits, and
+    // flushes the command stream only when every slot is in flight (see signalled()).
     template <class Done>
     void poll(Done&& done) {
         const bool flush = pending() >= kMaxSlots;
         for (Slot& r : m_slots)
-            if (r.fence && signalled(r, flush)) done(r.tag, r.mapped);
+            if (r.fence && signalled(r, flush)) done(r.tag, r.mapped, r.words);
     }
     std::size_t pending() const;
 
@@ -128,6 +138,8 @@ private:
     struct Slot {
         gfx::Buffer buffer;
         const std::uint32_t* mapped = nullptr;
+        std::size_t capacity = 0;  // words the buffer holds
+        std::size_t words = 0;     // words of the queued copy
         GLsync fence = nullptr;
         std::uint64_t tag = 0;
     };

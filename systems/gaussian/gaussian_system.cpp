@@ -169,11 +169,13 @@ struct GaussianKind {
     }
 
     // GPU path: residency_system uploaded the authored cloud into GpuGaussianStore::rest this frame when its
-    // change stamp moved; one dispatch per lattice over the whole cloud into `deformed` (+ `frames` or
-    // `deformed_sh` when the SH have view-dependent terms). No read-back.
+    // change stamp moved; one dispatch per lattice into `deformed` (+ `frames` or `deformed_sh` when the SH
+    // have view-dependent terms), over the pages the rule asks for when it builds on this path's own last
+    // output, else over the whole cloud. No read-back.
     static bool gpu(ecs::Registry& reg, ecs::Entity e, Output& out, const GaussianCloud& cloud,
-                    const ffd::CloudLattices& framed, const ffd::DeformInputs& inputs, Resident* resident,
-                    const GaussianSettings& st, GaussianDeformStats& stats) {
+                    const ffd::CloudLattices& framed, const ffd::DeformInputs& inputs,
+                    const ffd::RedoPlan& plan, Resident* resident, const GaussianSettings& st,
+                    GaussianDeformStats& stats) {
         if (!st.backend.gpu() || !resident) return false;
         gaussian::GpuGaussianDeformer* gpu =
             ffd::gpu_deformer<gaussian::GpuGaussianDeformer>(reg, "gaussian_deform_system");
@@ -186,17 +188,19 @@ struct GaussianKind {
         ffd::resident_weights(*resident,
                               w ? std::span<const float>(w, cloud.size()) : std::span<const float>(),
                               inputs.stamps.weights * 0x9E3779B97F4A7C15ull ^ inputs.stamps.cloud);
-        gpu->reset_stats();
+        const gaussian::GpuGaussianDeformer::Redo redo{plan.what != ffd::Redo::everything, plan.pages};
+        std::size_t redone = 0;
         if (Status s = gpu->deform(*resident, cloud.origin, framed.lattices, keys, inputs.stamps.lattices,
-                                   st.gpu_sh);
+                                   st.gpu_sh, redo, &redone);
             !s)
             log::warn("gaussian_deform_system: ", s.message(), " (lattice skipped)");
         // The counts arrive a few frames later (collect_gpu_stats); nothing waits for them.
-        reg.resource<GaussianGpuState>().queue_stats(*gpu, e, out.version);
+        reg.resource<GaussianGpuState>().queue_stats(*gpu, e, out.version, resident->page_stats.id(),
+                                                     resident->page_stats_words);
         empty_output(out, cloud);
         ++stats.gpu_runs, stats.gpu_sync_readbacks = gpu->sync_readbacks();
-        stats.pages_redeformed += page_count(cloud.size());
-        stats.last_pages = {page_count(cloud.size()), page_count(cloud.size())};
+        stats.pages_redeformed += redone;
+        stats.last_pages = {redone, page_count(cloud.size())};
         return true;
     }
 

@@ -12,6 +12,7 @@
 #include "runtime/gfx/gl.h"
 #include "runtime/gfx/shader.h"
 #include "runtime/gfx/ssbo_batch.h"
+#include "runtime/scene/point_pages.h"
 #include "shaders/common/bindings.h"
 #include "shaders/gaussian/gaussian_layout.h"
 #include "systems/ffd/deform_kernels.h"
@@ -23,7 +24,7 @@ namespace sffd::gaussian {
 
 namespace {
 
-constexpr int kStats = 4;  // deform.comp's stats[]: inverted, inside, not finite, degenerate
+constexpr std::size_t kStats = GpuGaussianDeformer::kCounters;
 
 // Makes `buffer` hold at least `bytes` (contents undefined when it grows).
 void ensure(gfx::Buffer& buffer, const char* label, std::size_t bytes) {
@@ -36,7 +37,7 @@ struct GpuGaussianDeformer::Impl {
     ffd::detail::DeformPrograms
         programs;  // the lattice set-up of ffd::GpuDeformer (systems/ffd/gpu_kernel.h)
     gfx::Buffer stats, sh_tables;
-    ffd::detail::StatsReadbacks readbacks;  // queue_stats(): kStats counters each
+    ffd::detail::StatsReadbacks readbacks;  // queue_stats(): kStats counters a page
     std::uint64_t sync_readbacks = 0;
 };
 
@@ -51,10 +52,9 @@ Result<GpuGaussianDeformer> GpuGaussianDeformer::create() {
         ffd::detail::DeformPrograms::create("gaussian/deform.comp", "gaussian.deform", "gaussian.deform");
     if (!programs) return programs.error();
     impl->programs = std::move(*programs);
-    impl->stats = gfx::Buffer::create("gaussian.deform.stats");
+    // Bound where a program declares a buffer it does not use (the counters are the cloud's own).
+    impl->stats = gfx::Buffer::create("gaussian.deform.unused");
     const std::uint32_t zero[kStats] = {};
-    // Written by the GPU (atomics) and cleared and copied on the GPU every frame; the CPU reads only the
-    // copies (StatsReadbacks). A READ hint puts a buffer in host memory on NVIDIA's driver.
     glNamedBufferData(impl->stats.id(), sizeof zero, zero, GL_DYNAMIC_COPY);
     // deform.comp's sh_tab[]: the CPU rotation's sample directions and inverse evaluation matrices.
     std::vector<float> tables;
@@ -88,26 +88,25 @@ void GpuGaussianDeformer::retain_keys(const std::vector<std::uint64_t>& live) {
     m_impl->programs.retain_keys(live);
 }
 
-void GpuGaussianDeformer::reset_stats() {
-    glClearNamedBufferData(m_impl->stats.id(), GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT, nullptr);
-}
-
-GpuDeformStats GpuGaussianDeformer::read_stats() {
+GpuDeformStats GpuGaussianDeformer::read_stats(const GpuGaussians& cloud) {
     std::uint32_t v[kStats] = {};
-    glGetNamedBufferSubData(m_impl->stats.id(), 0, sizeof v, v);
+    if (cloud.page_stats)
+        ffd::detail::read_page_counters(cloud.page_stats.id(), cloud.page_stats_words, kStats, v);
     ++m_impl->sync_readbacks;
     GpuDeformStats s;
     s.inverted = v[0], s.inside = v[1], s.not_finite = v[2], s.degenerate = v[3];
     return s;
 }
 
-bool GpuGaussianDeformer::queue_stats(std::uint64_t tag) {
-    return m_impl->readbacks.queue(m_impl->stats.id(), kStats, tag, "gaussian.deform.stats_readback");
+bool GpuGaussianDeformer::queue_stats(std::uint64_t tag, GLuint page_stats, std::size_t words) {
+    return m_impl->readbacks.queue(page_stats, words, tag, "gaussian.deform.stats_readback");
 }
 
 std::vector<GpuGaussianDeformer::TaggedStats> GpuGaussianDeformer::poll_stats() {
     std::vector<TaggedStats> done;
-    m_impl->readbacks.poll([&](std::uint64_t tag, const std::uint32_t* v) {
+    m_impl->readbacks.poll([&](std::uint64_t tag, const std::uint32_t* counters, std::size_t words) {
+        std::uint32_t v[kStats];
+        ffd::detail::sum_page_counters(counters, words, kStats, v);
         TaggedStats t;
         t.tag = tag;
         t.stats.inverted = v[0], t.stats.inside = v[1], t.stats.not_finite = v[2], t.stats.degenerate = v[3];
@@ -117,8 +116,10 @@ std::vector<GpuGaussianDeformer::TaggedStats> GpuGaussianDeformer::poll_stats() 
 }
 
 Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t stamp,
-                                     const glm::dvec3& cloud_origin, const Buffers& b, std::uint32_t count) {
+                                     const glm::dvec3& cloud_origin, const Buffers& b, std::uint32_t count,
+                                     std::span<const gfx::SsboBatch> ranges) {
     if (Status s = ffd::validate(lattice); !s) return s;
+    if (!b.stats) return make_error("gaussian::GpuGaussianDeformer: no per-page counters to count into");
     if (b.sh_out && (b.sh_degree < 1 || b.sh_degree > 3))  // degree 0 has no coefficient to rotate
         return make_error("gaussian::GpuGaussianDeformer: rotated SH coefficients need degree 1..3");
     Impl& m = *m_impl;
@@ -141,14 +142,14 @@ Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, 
     const GLuint program = bound->program;
     if (b.frames) glProgramUniform1ui(program, 0, b.compose_frames ? 1u : 0u);
     if (with_sh) glProgramUniform1i(program, 1, b.sh_degree);
-    // Unused bindings still get a buffer (the statistics stand in): nothing reads or writes them.
+    // Unused bindings still get a buffer (a small stand-in): nothing reads or writes them.
     if (!b.frames) glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_FRAMES, m.stats.id());
     if (!with_sh) {
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH, m.stats.id());
         glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_DEFORMED_SH, m.stats.id());
     }
     glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_GAUSS_SSBO_SH_TABLES, m.sh_tables.id());
-    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, m.stats.id());
+    glBindBufferBase(GL_SHADER_STORAGE_BUFFER, SFFD_SSBO_STATS, b.stats);
     // Write-after-read across frames: the last frame's projection read the deformed buffers overwritten here.
     gfx::memory_barrier(GL_SHADER_STORAGE_BARRIER_BIT, "gaussian.deform.reuse");
     // Clouds whose Gaussians, frames or SH exceed GL_MAX_SHADER_STORAGE_BLOCK_SIZE run in element ranges
@@ -167,7 +168,7 @@ Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, 
         }
         if (b.weights) gfx::bind_ssbo_range(SFFD_SSBO_WEIGHTS, b.weights, batch, sizeof(float));
     };
-    if (Status s = m.programs.dispatch_batches(*bound, count, strides, bind_batch); !s) return s;
+    if (Status s = m.programs.dispatch_batches(*bound, count, strides, bind_batch, ranges); !s) return s;
     gfx::memory_barrier(
         GL_SHADER_STORAGE_BARRIER_BIT | GL_VERTEX_ATTRIB_ARRAY_BARRIER_BIT | GL_BUFFER_UPDATE_BARRIER_BIT,
         "gaussian.deform");
@@ -177,21 +178,35 @@ Status GpuGaussianDeformer::dispatch(const Lattice& lattice, std::uint64_t key, 
 Status GpuGaussianDeformer::deform(GpuGaussians& dst, const glm::dvec3& origin,
                                    const std::vector<const Lattice*>& lattices,
                                    const std::vector<std::uint64_t>& keys,
-                                   const std::vector<std::uint64_t>& stamps, ShMode sh) {
+                                   const std::vector<std::uint64_t>& stamps, ShMode sh, const GpuRedo& redo,
+                                   std::size_t* pages_redone) {
     if (!dst.rest)
         return make_error("gaussian::GpuGaussianDeformer::deform(): the cloud's rest buffer is not uploaded");
     if (keys.size() != lattices.size() || stamps.size() != lattices.size())
         return make_error("gaussian::GpuGaussianDeformer::deform(): one key and one stamp per lattice");
     const std::uint32_t n = dst.count;
+    const std::size_t np = page_count(n);
     const bool view_dependent = dst.sh_degree > 0;
     const bool with_frames = view_dependent && sh == ShMode::rotate_view;
     const bool with_sh = view_dependent && sh == ShMode::rotate_coefficients;
     if (with_sh && !dst.sh)
         return make_error("gaussian::GpuGaussianDeformer::deform(): the cloud's SH buffer is not uploaded");
+    const ShSource source = with_frames ? ShSource::frames : with_sh ? ShSource::rotated : ShSource::authored;
     const std::size_t sh_bytes = std::size_t(n) * std::size_t(sh_coeffs(dst.sh_degree)) * 3 * sizeof(float);
+    // Page-wise only on top of this pass's own last output, with every lattice valid: a skipped lattice
+    // would leave the pages not redone disagreeing with the redone ones.
+    bool paged = redo.page_wise && dst.state == gfx::Residency::deformed_gpu && dst.sh_source == source &&
+                 std::all_of(lattices.begin(), lattices.end(),
+                             [](const Lattice* l) { return ffd::validate(*l).ok(); });
+    paged = ffd::resident_page_stats(dst, np, kStats) && paged;
     ensure(dst.deformed, "gaussians.deformed", std::size_t(n) * sizeof(gpu::GpuGaussian));
     if (with_frames) ensure(dst.frames, "gaussians.frames", std::size_t(n) * 3 * sizeof(float) * 4);
     if (with_sh) ensure(dst.deformed_sh, "gaussians.deformed_sh", sh_bytes);
+    const std::vector<gfx::SsboBatch> whole{{0, n}};
+    const std::vector<gfx::SsboBatch> ranges = paged ? ffd::page_runs(redo.pages, n) : whole;
+    if (pages_redone) *pages_redone = paged ? redo.pages.size() : np;
+    if (ranges.empty()) return {};  // no page to redo
+    ffd::clear_page_stats(dst, ranges, kStats);
     // The first lattice reads `rest` (and `sh`), the next ones deform `deformed` (and `deformed_sh`) in
     // place; with no lattice (or when every one fails) the outputs start as copies of the inputs and the
     // frames as identity.
@@ -203,15 +218,28 @@ Status GpuGaussianDeformer::deform(GpuGaussians& dst, const glm::dvec3& origin,
     b.sh_out = with_sh ? dst.deformed_sh.id() : 0;
     b.sh_degree = dst.sh_degree;
     b.weights = dst.weights ? dst.weights.id() : 0;
+    b.stats = dst.page_stats.id();
     Status first_error;
-    for (std::size_t d = 0; d < lattices.size(); ++d) {
-        if (Status s = dispatch(*lattices[d], keys[d], stamps[d], origin, b, n); !s) {
-            if (first_error) first_error = s;
-            continue;
+    bool failed = false;
+    const Buffers first = b;
+    auto run = [&](std::span<const gfx::SsboBatch> over) {
+        b = first;
+        for (std::size_t d = 0; d < lattices.size(); ++d) {
+            if (Status s = dispatch(*lattices[d], keys[d], stamps[d], origin, b, n, over); !s) {
+                if (first_error) first_error = s;
+                failed = true;
+                continue;
+            }
+            b.in = dst.deformed.id();
+            b.compose_frames = true;
+            if (with_sh) b.sh_in = dst.deformed_sh.id();
         }
-        b.in = dst.deformed.id();
-        b.compose_frames = true;
-        if (with_sh) b.sh_in = dst.deformed_sh.id();
+    };
+    run(ranges);
+    if (paged && failed) {  // the pages left alone would disagree with the redone ones: redo them all
+        ffd::clear_page_stats(dst, whole, kStats);
+        if (pages_redone) *pages_redone = np;
+        run(whole);
     }
     if (b.in == dst.rest.id() && n > 0) {
         glCopyNamedBufferSubData(dst.rest.id(), dst.deformed.id(), 0, 0,
@@ -225,7 +253,7 @@ Status GpuGaussianDeformer::deform(GpuGaussians& dst, const glm::dvec3& origin,
                                  identity.data());
         }
     }
-    dst.sh_source = with_frames ? ShSource::frames : with_sh ? ShSource::rotated : ShSource::authored;
+    dst.sh_source = source;
     gfx::set_deformed(dst, gfx::Residency::deformed_gpu);
     return first_error;
 }
@@ -267,12 +295,11 @@ Result<GaussianCloud> deform_on_gpu(GpuGaussianDeformer& deformer,
     GpuGaussians scratch;
     if (Status s = upload_rest(scratch, cloud, 1); !s) return s.error();
     ffd::resident_weights(scratch, weights, 1);
-    deformer.reset_stats();
     // Stamp 0: always upload (the keys are this call's own, past the range of entity bits).
     std::vector<std::uint64_t> keys(lattices.size()), stamps(lattices.size(), 0);
     for (std::size_t d = 0; d < keys.size(); ++d) keys[d] = ~std::uint64_t(0) - d;
     if (Status s = deformer.deform(scratch, cloud.origin, lattices, keys, stamps, sh); !s) return s.error();
-    if (stats) *stats = deformer.read_stats();
+    if (stats) *stats = deformer.read_stats(scratch);
     return read_back(scratch, cloud.origin);
 }
 

@@ -36,6 +36,13 @@ struct GpuDeformStats {
 
 // upload_rest() (the authored cloud into the store's rest/sh) is in gpu_upload.h.
 
+// What GpuGaussianDeformer::deform() redoes: every page, or with `page_wise` only `pages` (ascending page
+// indices, runtime/scene/point_pages.h) on top of the cloud's own last GPU output.
+struct GpuRedo {
+    bool page_wise = false;
+    std::span<const std::uint32_t> pages;
+};
+
 class GpuGaussianDeformer {
 public:
     // Compiles the compute program (context must be current).
@@ -60,12 +67,17 @@ public:
         // float[count] per-Gaussian weights (0 = none: the unweighted program): the centre moves by w D and
         // shape and SH follow J_w = I + w (J − I) (a program of its own, FFD_WEIGHTS).
         GLuint weights = 0;
+        // The cloud's per-page counters (kCounters a page, ffd::resident_page_stats()), added to.
+        GLuint stats = 0;
     };
+    static constexpr std::size_t kCounters = 4;  // per page: inverted, inside, not finite, degenerate
     // One lattice over `count` Gaussians, positions relative to `cloud_origin`. Each `key` (e.g. the
     // lattice entity) keeps its control points, uploaded only when `lattice_stamp` moved (0 always
     // uploads). Does not wait for the GPU.
+    // `ranges`: only these points (ascending, each starting on a page: ffd::page_runs()); empty: all.
     Status dispatch(const Lattice& lattice, std::uint64_t key, std::uint64_t lattice_stamp,
-                    const glm::dvec3& cloud_origin, const Buffers& buffers, std::uint32_t count);
+                    const glm::dvec3& cloud_origin, const Buffers& buffers, std::uint32_t count,
+                    std::span<const gfx::SsboBatch> ranges = {});
 
     // Every lattice in order over a store entry whose `rest` (and `sh`) are current: writes `deformed`
     // (grown when needed) and, when the SH have view-dependent terms (degree > 0), `frames`
@@ -73,22 +85,26 @@ public:
     // the matching sh_source, bumps deformed_version. The cloud's weights, when `dst.weights` holds them
     // (ffd::resident_weights()), weight every lattice's step. No read-back. `keys`/`stamps`
     // as in dispatch(), one per lattice. A lattice that fails validation is skipped (the first error is
-    // returned after the others ran).
+    // returned after the others ran). The counts go into the cloud's per-page counters (`page_stats`).
+    // With `redo.page_wise`, only `redo.pages` are deformed again, on top of what `deformed` holds: done
+    // when that is this pass's own last output (state deformed_gpu, the same SH outputs and counters) and
+    // every lattice is valid, else every page is. `pages_redone` (optional) says how many were.
+    using Redo = GpuRedo;
     Status deform(GpuGaussians& dst, const glm::dvec3& cloud_origin,
                   const std::vector<const Lattice*>& lattices, const std::vector<std::uint64_t>& keys,
-                  const std::vector<std::uint64_t>& stamps, ShMode sh);
+                  const std::vector<std::uint64_t>& stamps, ShMode sh, const GpuRedo& redo = GpuRedo(),
+                  std::size_t* pages_redone = nullptr);
 
-    // Statistics accumulated since reset_stats(). read_stats() waits for the GPU (tests, commands).
-    void reset_stats();
-    GpuDeformStats read_stats();
-    // Non-blocking statistics for the frame path (as ffd::GpuDeformer): queue_stats() copies the counts
-    // accumulated since reset_stats() into a persistently mapped buffer behind a fence, tagged;
-    // poll_stats() returns those whose fence has signalled, never waiting. false: no read-back slot.
+    // The cloud's counts, summed over its pages: read_stats() waits for the GPU (tests, commands).
+    GpuDeformStats read_stats(const GpuGaussians& cloud);
+    // Non-blocking statistics for the frame path (as ffd::GpuDeformer): queue_stats() copies `words`
+    // per-page counters of `page_stats` into a persistently mapped buffer behind a fence, tagged;
+    // poll_stats() returns their sums whose fence has signalled, never waiting. false: no read-back slot.
     struct TaggedStats {
         std::uint64_t tag = 0;
         GpuDeformStats stats;
     };
-    bool queue_stats(std::uint64_t tag);
+    bool queue_stats(std::uint64_t tag, GLuint page_stats, std::size_t words);
     std::vector<TaggedStats> poll_stats();
     // Forgets control-point buffers whose key is not in `live`.
     void retain_keys(const std::vector<std::uint64_t>& live);
