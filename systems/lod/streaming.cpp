@@ -55,8 +55,8 @@ void write_drawn(ecs::Registry& registry, ecs::Entity e, HierarchyStream& stream
 }
 
 Status load_streamed(ecs::Registry& registry, const fs::path& path) {
-    const StreamSettings settings =
-        registry.try_resource<StreamSettings>() ? *registry.try_resource<StreamSettings>() : StreamSettings{};
+    const StreamSettings* set = std::as_const(registry).try_resource<StreamSettings>();  // read only
+    const StreamSettings settings = set ? *set : StreamSettings{};
     auto opened = HierarchyStream::open(path, settings.options);
     if (!opened) return opened.error();
     std::shared_ptr<HierarchyStream> stream = std::move(*opened);
@@ -128,7 +128,7 @@ void enable_streaming(ecs::Registry& registry, const StreamSettings& settings) {
 void streaming_system(ecs::Registry& registry, const FrameContext&) {
     if (registry.count<StreamedCloud>() == 0) return;
     static const StreamSettings defaults;
-    const StreamSettings* settings = registry.try_resource<StreamSettings>();
+    const StreamSettings* settings = std::as_const(registry).try_resource<StreamSettings>();  // read only
     if (!settings) settings = &defaults;
     std::vector<ecs::Entity> streamed;
     registry.view<StreamedCloud>().each([&](ecs::Entity e, StreamedCloud&) { streamed.push_back(e); });
