@@ -146,9 +146,9 @@ void streaming_system(ecs::Registry& registry, const FrameContext&) {
             stream.options().memory_budget != settings->options.memory_budget ||
             stream.options().tau_pixels != settings->options.tau_pixels)
             stream.set_options(settings->options);
-        view.model = model_matrix(registry.try_get<Transform>(e));
+        view.model = model_matrix(std::as_const(registry).try_get<Transform>(e));
         ffd::CloudLattices lattices;
-        if (const Deformers* d = registry.try_get<Deformers>(e))
+        if (const Deformers* d = std::as_const(registry).try_get<Deformers>(e))
             lattices = ffd::cloud_lattices(registry, e, d->lattices);
         const std::uint64_t stamp = lattice_stamp(registry, e, lattices);
         const bool deforming = stamp != sc.lattice_stamp && sc.frames_seen > 0;
@@ -168,8 +168,8 @@ void streaming_system(ecs::Registry& registry, const FrameContext&) {
         if (!changed) continue;
         // Kept during a drag: what is drawn covers the model (a coarser level, or the parents grown, stands
         // for what is missing), so only an empty cloud is replaced.
-        const std::size_t drawn =
-            stream.gaussians() ? registry.get<GaussianCloud>(e).size() : registry.get<SplatCloud>(e).size();
+        const std::size_t drawn = stream.gaussians() ? std::as_const(registry).get<GaussianCloud>(e).size()
+                                                     : std::as_const(registry).get<SplatCloud>(e).size();
         if (!settings->wait && settings->hold_while_deforming && deforming && drawn > 0) continue;
         const double t = now_s();
         if (!settings->wait && !(stream.stats().missing_pieces == 0) &&
