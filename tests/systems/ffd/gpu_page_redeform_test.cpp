@@ -181,25 +181,6 @@ TEST_F(GpuPageRedeform, CountsStayRightWhenWorkGroupsStraddlePages) {
     EXPECT_EQ(cut->inverted, n);
 }
 
-// A seeded random cloud ordered by height, so that pages are horizontal slabs.
-GaussianCloud slab_cloud(std::size_t n, int degree) {
-    const GaussianCloud g = test::seeded_random_cloud(41, n, degree);
-    std::vector<std::size_t> order(n);
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t a, std::size_t b) { return g.positions[a].y < g.positions[b].y; });
-    GaussianCloud s;
-    s.sh_degree = degree;
-    const std::size_t k3 = std::size_t(sh_coeffs(degree)) * 3;
-    for (std::size_t i : order) {
-        s.positions.push_back(g.positions[i]), s.scales.push_back(g.scales[i]);
-        s.rotations.push_back(g.rotations[i]), s.opacities.push_back(g.opacities[i]);
-        s.sh.insert(s.sh.end(), g.sh.begin() + std::ptrdiff_t(i * k3),
-                    g.sh.begin() + std::ptrdiff_t((i + 1) * k3));
-    }
-    return s;
-}
-
 struct GaussianBuffers {
     std::vector<std::byte> deformed, frames, sh;
     bool operator==(const GaussianBuffers&) const = default;
@@ -222,7 +203,7 @@ class GpuPageRedeformGaussians : public test::HeadlessGlTest,
 
 TEST_P(GpuPageRedeformGaussians, DragDispatchesOnlyItsPagesAndEqualsARunFromScratch) {
     if (IsSkipped() || HasFatalFailure()) return;
-    const GaussianCloud cloud = slab_cloud(300000, 1);  // 5 pages
+    const GaussianCloud cloud = test::slab_cloud(300000, 1);  // 5 pages
     const std::size_t total = page_count(cloud.size());
     const Lattice l = box_lattice(glm::dvec3(-1.1), 2.2, 20, LatticeBasis::bspline);
     Rig<GaussianCloud> rig(cloud, l);

@@ -19,25 +19,6 @@
 namespace sffd {
 namespace {
 
-// A seeded random cloud ordered by height, so that pages are horizontal slabs.
-GaussianCloud slab_cloud(std::size_t n, int degree) {
-    const GaussianCloud g = test::seeded_random_cloud(41, n, degree);
-    std::vector<std::size_t> order(n);
-    std::iota(order.begin(), order.end(), 0);
-    std::sort(order.begin(), order.end(),
-              [&](std::size_t a, std::size_t b) { return g.positions[a].y < g.positions[b].y; });
-    GaussianCloud s;
-    s.sh_degree = degree;
-    const std::size_t k3 = std::size_t(sh_coeffs(degree)) * 3;
-    for (std::size_t i : order) {
-        s.positions.push_back(g.positions[i]), s.scales.push_back(g.scales[i]);
-        s.rotations.push_back(g.rotations[i]), s.opacities.push_back(g.opacities[i]);
-        s.sh.insert(s.sh.end(), g.sh.begin() + std::ptrdiff_t(i * k3),
-                    g.sh.begin() + std::ptrdiff_t((i + 1) * k3));
-    }
-    return s;
-}
-
 Lattice box_lattice(glm::dvec3 lo, double size, int div, LatticeBasis basis) {
     return make_lattice(lo, {glm::dvec3(size, 0, 0), glm::dvec3(0, size, 0), glm::dvec3(0, 0, size)},
                         glm::ivec3(div), basis);
@@ -93,7 +74,7 @@ TEST_P(GaussianPageRedeform, RandomEditsEqualADeformationFromScratchByteForByte)
     const gaussian::ShMode mode = GetParam();
     // 4 pages (250,000 Gaussians, SH degree 1), slabs in y; a global B-spline lattice and a local
     // Bernstein one, chained.
-    const GaussianCloud cloud = slab_cloud(250000, 1);
+    const GaussianCloud cloud = test::slab_cloud(250000, 1);
     Rig rig(cloud,
             {box_lattice(glm::dvec3(-1.1), 2.2, 10, LatticeBasis::bspline),
              box_lattice(glm::dvec3(-0.5, 0.2, -0.5), 0.9, 3, LatticeBasis::bernstein)},
@@ -124,7 +105,7 @@ TEST_P(GaussianPageRedeform, RandomEditsEqualADeformationFromScratchByteForByte)
 
 TEST_P(GaussianPageRedeform, ADragNearTheBottomRedoesOnlyTheBottomPages) {
     const gaussian::ShMode mode = GetParam();
-    const GaussianCloud cloud = slab_cloud(400000, 0);  // 7 pages
+    const GaussianCloud cloud = test::slab_cloud(400000, 0);  // 7 pages
     Rig rig(cloud, {box_lattice(glm::dvec3(-1.1), 2.2, 20, LatticeBasis::bspline)}, mode);
     gaussian_deform_system(rig.reg, {});
     // Control point (10, 1, 10) influences l·t in (-1, 3): y below -1.1 + 3 * 0.11 = -0.77, under 1/4 of

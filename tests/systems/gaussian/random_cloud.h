@@ -2,8 +2,11 @@
 // the thresholds measured on them stay the same.
 #pragma once
 
+#include <algorithm>
 #include <cstddef>
+#include <numeric>
 #include <random>
+#include <vector>
 
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -27,6 +30,25 @@ inline GaussianCloud seeded_random_cloud(unsigned seed, std::size_t n, int degre
         for (int k = 0; k < sh_coeffs(degree) * 3; ++k) g.sh.push_back(0.6f * u(rng));
     }
     return g;
+}
+
+// seeded_random_cloud(41, n, degree) ordered by height, so that pages are horizontal slabs.
+inline GaussianCloud slab_cloud(std::size_t n, int degree) {
+    const GaussianCloud g = seeded_random_cloud(41, n, degree);
+    std::vector<std::size_t> order(n);
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return g.positions[a].y < g.positions[b].y; });
+    GaussianCloud s;
+    s.sh_degree = degree;
+    const std::size_t k3 = std::size_t(sh_coeffs(degree)) * 3;
+    for (std::size_t i : order) {
+        s.positions.push_back(g.positions[i]), s.scales.push_back(g.scales[i]);
+        s.rotations.push_back(g.rotations[i]), s.opacities.push_back(g.opacities[i]);
+        s.sh.insert(s.sh.end(), g.sh.begin() + std::ptrdiff_t(i * k3),
+                    g.sh.begin() + std::ptrdiff_t((i + 1) * k3));
+    }
+    return s;
 }
 
 }  // namespace sffd::test
