@@ -112,6 +112,8 @@ struct HierarchyStream::Impl {
                 continue;
             }
             r->used = frame;
+            // A piece asked for again while its first load was finishing: the copy replaces it.
+            if (auto it = held.find(k); it != held.end()) held_bytes -= it->second.bytes;
             held_bytes += r->bytes;
             ++stats.loads;
             held.insert_or_assign(k, std::move(*r));
@@ -143,7 +145,10 @@ struct HierarchyStream::Impl {
 
         std::vector<std::uint32_t> ask;
         const std::optional<std::uint32_t> loading = state.busy;
-        std::uint64_t used = held_bytes + state.scratch + state.in_flight;
+        // The loader holds one decoded unit at a time and drops the old one before decoding the next,
+        // so the units count as the largest of them, not their sum.
+        std::uint64_t unit_reserve = state.scratch;
+        std::uint64_t used = held_bytes + state.in_flight + unit_reserve;
         std::vector<std::pair<std::uint64_t, std::uint32_t>> evictable;  // (last use, piece), oldest last
         bool sorted = false;
         std::unordered_set<std::int64_t> units_counted;
@@ -154,12 +159,13 @@ struct HierarchyStream::Impl {
             ++missing;
             if (loading && *loading == k) continue;
             if (stats.memory_limited) continue;
-            // A piece of another unit than the loader's decoded one brings that whole unit in too (the
-            // old one is dropped first, but it is counted in `used` until then).
+            // A piece of another unit than the loader's decoded one brings that whole unit in too.
             std::uint64_t need = source->estimate(k);
             const std::int64_t unit = source->unit_of(k);
+            std::uint64_t reserve = unit_reserve;
             if (unit >= 0 && unit != last_unit.load() && !units_counted.count(unit))
-                need += source->unit_bytes(k);
+                reserve = std::max(reserve, source->unit_bytes(k));
+            need += reserve - unit_reserve;
             while (used + need > options.memory_budget) {
                 if (!sorted) {
                     // Least recently used first; then, as a last resort, the coarser levels drawn in
@@ -184,11 +190,17 @@ struct HierarchyStream::Impl {
                 continue;
             }
             used += need;
+            unit_reserve = reserve;
             if (unit >= 0) units_counted.insert(unit);
             ask.push_back(k);
         }
         {
+            // What the loader finished or started since take_done is not asked for twice.
             std::lock_guard lock(mutex);
+            std::erase_if(ask, [&](std::uint32_t k) {
+                return (busy && *busy == k) ||
+                       std::any_of(done.begin(), done.end(), [&](const auto& d) { return d.first == k; });
+            });
             queue.assign(ask.begin(), ask.end());
         }
         if (!ask.empty()) wake.notify_one();
@@ -311,8 +323,11 @@ Status HierarchyStream::wait_complete() {
         }
         // A piece of an earlier cut still being decoded holds memory it will give back: wait for it.
         if (s.stats.memory_limited && !loading) {
-            std::uint64_t need = 0;
-            for (const std::uint32_t k : s.wanted.pieces) need += s.source->estimate(k);
+            // The cut's pieces and the largest unit the loader decodes them from.
+            std::uint64_t need = 0, unit = 0;
+            for (const std::uint32_t k : s.wanted.pieces)
+                need += s.source->estimate(k), unit = std::max(unit, s.source->unit_bytes(k));
+            need += unit;
             char line[160];
             std::snprintf(line, sizeof line, "needs about %.1f MB, more than the memory budget of %.1f MB",
                           double(need) / 1048576.0, double(s.options.memory_budget) / 1048576.0);

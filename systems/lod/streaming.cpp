@@ -156,12 +156,8 @@ void streaming_system(ecs::Registry& registry, const FrameContext&) {
         ++sc.frames_seen;
         bool changed = stream.update(view, lattices.span(), stamp);
         if (settings->wait) {
-            if (Status s = stream.wait_complete(); !s) {
-                if (sc.error.empty()) {
-                    sc.error = s.error().message;
-                    std::fprintf(stderr, "splatffd: %s\n", sc.error.c_str());
-                }
-            }
+            // The caller refuses the frame (stream_status): it reports the failure itself.
+            if (Status s = stream.wait_complete(); !s && sc.error.empty()) sc.error = s.error().message;
             ++sc.frames_waited;
             changed = !stream.complete();
         }
@@ -179,9 +175,18 @@ void streaming_system(ecs::Registry& registry, const FrameContext&) {
         sc.last_assemble = t;
         if (Status s = stream.error(); !s && sc.error.empty()) {
             sc.error = s.error().message;
-            std::fprintf(stderr, "splatffd: %s\n", sc.error.c_str());
+            if (!settings->wait) std::fprintf(stderr, "splatffd: %s\n", sc.error.c_str());
         }
     }
+}
+
+Status stream_status(const ecs::Registry& registry) {
+    std::string first;
+    registry.view<const StreamedCloud>().each([&](const StreamedCloud& sc) {
+        if (first.empty()) first = sc.error;
+    });
+    if (!first.empty()) return make_error(first);
+    return {};
 }
 
 StreamSummary stream_summary(const ecs::Registry& registry) {

@@ -65,6 +65,10 @@ void register_streaming_scene_hooks(SceneHooks& hooks);
 
 void streaming_system(ecs::Registry& registry, const FrameContext& frame);
 
+// The first failure any streamed cloud met (StreamedCloud::error). With StreamSettings::wait the system
+// does not print it: a final render refuses the frame and says why.
+Status stream_status(const ecs::Registry& registry);
+
 // The streams' statistics summed over the registry's streamed clouds (empty: none).
 struct StreamSummary {
     std::size_t clouds = 0;

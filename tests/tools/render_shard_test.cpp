@@ -158,6 +158,29 @@ TEST(RenderShard, HierarchyShardsWriteTheSameBytesAsOneRun) {
     EXPECT_NE(slurp(one / "frame_0000.png"), slurp(one / "frame_0001.png"));
 }
 
+// A cut that does not fit the memory budget would be drawn only in part, as far as it fits at that moment,
+// so its bytes would depend on the loader's timing: render refuses it, naming the file and the budget,
+// and writes no image. (Here the first cut, at full detail, is already over; a later frame's cut over the
+// budget is refused the same way: LodStream.WaitedCutOverTheMemoryBudgetIsReportedToTheCaller.)
+TEST(RenderShard, AHierarchyCutOverTheMemoryBudgetIsRefused) {
+    const fs::path data = fresh_dir("lod_over_data"), out = fresh_dir("lod_over_out");
+    const sffd::test::CliRun conv = sffd::test::run(
+        "convert synthetic-gaussians:40k " + (data / "lod-meta.json").string() + " --lod-chunk-count 2");
+    ASSERT_EQ(conv.code, 0) << conv.out;
+    std::string log;
+    // Full detail: 40k Gaussians, about 2 MB decoded.
+    EXPECT_NE(render((data / "lod-meta.json").string() + " --out " + out.string() +
+                         " --memory-budget 1 --size 64x36 --format png",
+                     &log),
+              0)
+        << log;
+    EXPECT_NE(log.find("splatffd render: " + (data / "lod-meta.json").string() + ": the cut of 40000 splats"),
+              std::string::npos)
+        << log;
+    EXPECT_NE(log.find("more than the memory budget of 1.0 MB"), std::string::npos) << log;
+    EXPECT_FALSE(fs::exists(out / "frame_0000.png"));
+}
+
 // A farm of mixed CPUs: shards pinned to one SIMD target are byte-identical to a single run pinned the same,
 // the manifests say which target and GL renderer made them, and assemble warns (naming the frames) when a
 // shard ran on another target, though the clip is still whole.

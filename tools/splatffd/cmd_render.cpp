@@ -52,6 +52,7 @@
 #include "tools/splatffd/frame_files.h"
 #include "tools/splatffd/render_manifest.h"
 #include "tools/splatffd/unkeyed_note.h"
+#include "systems/lod/streaming.h"
 #include "tools/splatffd/stream_options.h"
 #include "tools/splatffd/video.h"
 #include "systems/engine/engine_frame.h"
@@ -433,6 +434,10 @@ Result<cli::FramePrint> render_frame(const RenderOptions& o, RenderScene& s, con
     frame.frame = std::uint64_t(k);
     if (o.turntable > 0) use_camera(s.registry, turntable_camera(s.scene_view, s.bounds, k, o.turntable));
     schedule.run_frame(s.registry, frame);
+    // A hierarchy whose cut could not be drawn whole (a failed piece, a cut over the memory budget) would
+    // give frame k other bytes on another machine: the frame is refused.
+    if (Status st = lod::stream_status(s.registry); !st)
+        return make_error("frame " + std::to_string(k) + ": " + st.message());
     auto image = render::capture_frame(s.registry);
     if (!image) return make_error("splatffd render: " + image.message());
     const std::filesystem::path base = cli::frame_file_base(o.out_dir, k);

@@ -356,6 +356,35 @@ TEST(LodStream, StreamingSystemDrawsTheCutInTheEngine) {
     EXPECT_EQ(sum.stats.drawn_splats, sog->counts[0]);
 }
 
+// A final render's cut that does not fit the memory budget: the system keeps the failure for the caller
+// (stream_status), which refuses the frame; it prints nothing itself.
+TEST(LodStream, WaitedCutOverTheMemoryBudgetIsReportedToTheCaller) {
+    const fs::path meta = sog_fixture("over_budget");
+    auto sog = lod::open_streamed_sog(meta);
+    ASSERT_TRUE(sog);
+    ecs::Registry registry;
+    use_engine_scene_hooks(registry);
+    lod::StreamSettings settings;
+    settings.options = everything();
+    // The coarsest level fits, full detail (56 bytes a Gaussian of SH degree 0) does not.
+    settings.options.memory_budget = sog->counts[0] * 56 / 3;
+    ASSERT_LT(sog->counts.back() * 56 * 2, settings.options.memory_budget);
+    settings.wait = true;
+    settings.first_cut_budget = 2000;
+    lod::enable_streaming(registry, settings);
+    ASSERT_TRUE(load_scene(registry, meta.string()));
+    EXPECT_TRUE(lod::stream_status(registry));
+    testing::internal::CaptureStderr();
+    lod::streaming_system(registry, {});
+    EXPECT_EQ(testing::internal::GetCapturedStderr(), "");
+    const Status st = lod::stream_status(registry);
+    ASSERT_FALSE(st);
+    EXPECT_NE(st.message().find(meta.string() + ": the cut of " + std::to_string(sog->counts[0]) + " splats"),
+              std::string::npos)
+        << st.message();
+    EXPECT_NE(st.message().find("memory budget"), std::string::npos) << st.message();
+}
+
 // Picking casts against what is drawn: the first, coarse cut of a streamed unit sphere and, once the
 // streaming system has drawn the full detail, the finest splats, both hit on the sphere's surface.
 TEST(LodStream, PickingHitsTheDrawnCut) {
